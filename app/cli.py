@@ -1,0 +1,176 @@
+"""pathtrace: an interactive, progressive path tracer with OpenCL kernels."""
+
+import argparse
+import sys
+
+from app import __version__
+from app.errors import UserError
+
+EPILOG = "A scene is a .toml file or a built-in name: " \
+         "simple, simple-diffuse, spheres8k[-diffuse], spheres64k[-diffuse], demo."
+
+
+def _size(text):
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not WIDTHxHEIGHT, e.g. 1920x1080") from None
+    if not (1 <= w <= 16384 and 1 <= h <= 16384):
+        raise argparse.ArgumentTypeError(f"'{text}': width and height must be 1 to 16384")
+    return w, h
+
+
+def _int_range(low, high=None):
+    def parse(text):
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"'{text}' is not an integer") from None
+        if value < low or (high is not None and value > high):
+            bound = f"at least {low}" if high is None else f"{low} to {high}"
+            raise argparse.ArgumentTypeError(f"{value} is out of range (must be {bound})")
+        return value
+    return parse
+
+
+def _finite(text):
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a number") from None
+    if value != value or value in (float("inf"), float("-inf")):
+        raise argparse.ArgumentTypeError(f"'{text}' is not a finite number")
+    return value
+
+
+def add_render_options(p: argparse.ArgumentParser):
+    """Options shared by everything that renders a scene."""
+    p.add_argument("--device", default="auto",
+                   help="auto (first GPU that builds the kernels, else CPU), gpu, cpu, "
+                        "an index from 'pathtrace devices', or part of a device name")
+    p.add_argument("--size", type=_size, metavar="WxH", help="image size (default: the scene's)")
+    p.add_argument("--seed", type=_int_range(0, 2**32 - 1), help="random seed (default: the scene's)")
+    p.add_argument("--max-depth", type=_int_range(0), metavar="N",
+                   help="longest path in vertices, 1 = emitters seen directly; 0 = unlimited")
+    p.add_argument("--no-rr", action="store_true",
+                   help="no Russian roulette: paths run to --max-depth (the comparison mode)")
+
+
+def apply_render_options(scene, args):
+    s = scene.settings
+    width, height = args.size or (s.width, s.height)
+    max_depth = s.max_depth if args.max_depth is None else args.max_depth
+    rr = s.russian_roulette and not args.no_rr
+    if not rr and max_depth == 0:
+        raise UserError("--no-rr needs --max-depth N (N >= 1), or paths would never end")
+    changes = dict(width=width, height=height, max_depth=max_depth, russian_roulette=rr,
+                   seed=s.seed if args.seed is None else args.seed)
+    if getattr(args, "spp", None) is not None:
+        changes["spp"] = args.spp
+    return scene.with_settings(**changes)
+
+
+def cmd_devices(args):
+    from app.device import list_devices, open_device
+    import pyopencl as cl
+
+    devices = list_devices()
+    if not devices:
+        print("no OpenCL devices found (on Debian/Ubuntu: apt install pocl-opencl-icd)")
+        return 1
+    for d in devices:
+        line = f"[{d.index}] {d.describe()}, {d.device.max_compute_units} compute units"
+        if args.check:
+            try:
+                b = open_device(d)
+                line += f": builds the kernels ({b.build.seconds:.2f} s{', cached' if b.build.cached else ''})"
+            except cl.Error as e:
+                from app.device import _first_line
+                line += f": cannot build the kernels: {_first_line(e)}"
+        print(line)
+    return 0
+
+
+def cmd_scenes(args):
+    from app.builtin_scenes import BUILTIN_SCENES
+    for name in BUILTIN_SCENES:
+        print(name)
+    return 0
+
+
+def cmd_render(args):
+    from tqdm import tqdm
+
+    from app.device import choose_device
+    from app.image_io import check_writable, write_image
+    from app.render import render_samples
+    from app.renderer import Renderer
+    from app.scene import load_scene
+
+    for path in args.output:
+        check_writable(path)
+    scene = apply_render_options(load_scene(args.scene), args)
+    s = scene.settings
+    backend = choose_device(args.device)
+    print(f"device: {backend.device.describe()}", file=sys.stderr)
+    renderer = Renderer(backend, scene)
+    pixels = s.width * s.height
+    bar = tqdm(total=s.spp, unit="spp", desc=f"{scene.name} {s.width}x{s.height}",
+               file=sys.stderr, disable=args.quiet, dynamic_ncols=True)
+    try:
+        def progress(done):
+            bar.update(done - bar.n)
+            rate = bar.format_dict.get("rate") or 0
+            bar.set_postfix_str(f"{rate * pixels / 1e6:.1f} Msamples/s", refresh=False)
+        render_samples(renderer, s.spp, progress)
+    except KeyboardInterrupt:
+        bar.close()
+        print(f"interrupted at {renderer.samples}/{s.spp} spp; nothing written", file=sys.stderr)
+        return 130
+    bar.close()
+    image = renderer.mean()
+    for path in args.output:
+        write_image(path, image, args.exposure, args.tonemap)
+        print(f"wrote {path}", file=sys.stderr)
+    return 0
+
+
+def build_parser():
+    parser = argparse.ArgumentParser(prog="pathtrace", description=__doc__, epilog=EPILOG)
+    parser.add_argument("--version", action="version", version=f"pathtrace {__version__}")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    p = sub.add_parser("render", help="render a still image", epilog=EPILOG)
+    p.add_argument("scene", help="a .toml scene file or a built-in scene name")
+    p.add_argument("-o", "--output", action="append", required=True, metavar="FILE",
+                   help="output image; repeat for several (.png/.jpg tonemapped; "
+                        ".exr/.hdr/.pfm linear HDR)")
+    p.add_argument("--spp", type=_int_range(1), help="samples per pixel (default: the scene's)")
+    p.add_argument("--exposure", type=_finite, default=0.0, metavar="EV",
+                   help="exposure in stops, for .png/.jpg (default 0)")
+    from app.tonemap import TONEMAPS
+    p.add_argument("--tonemap", choices=TONEMAPS, default="standard",
+                   help="tone curve for .png/.jpg (default standard: clip at 1)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    add_render_options(p)
+    p.set_defaults(func=cmd_render)
+
+    p = sub.add_parser("devices", help="list OpenCL platforms and devices")
+    p.add_argument("--check", action="store_true", help="also build the kernels on each")
+    p.set_defaults(func=cmd_devices)
+
+    p = sub.add_parser("scenes", help="list the built-in scenes")
+    p.set_defaults(func=cmd_scenes)
+    return parser
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.func(args)
+    except UserError as e:
+        print(f"pathtrace: error: {e}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print("pathtrace: interrupted", file=sys.stderr)
+        return 130

@@ -1,0 +1,169 @@
+"""OpenCL devices: listing them, choosing one from the --device flag, and building the kernels
+(with a binary cache, so that a second start does not recompile)."""
+
+import hashlib
+import os
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import pyopencl as cl
+
+from app.errors import UserError
+from app.resources import resource_dir
+
+# The order in which the kernel files are joined into one program.
+KERNEL_FILES = ("types.h", "rng.cl", "sampling.cl", "intersect.cl", "phong.cl",
+                "environment.cl", "camera.cl", "integrator.cl")
+
+# No -cl-fast-relaxed-math: it implies finite math, and the kernels rely on INFINITY.
+BUILD_OPTIONS = ("-cl-mad-enable", "-cl-no-signed-zeros")
+
+
+def kernel_source(extra: str = "") -> str:
+    """The kernels as one source text, each file introduced by a #line marker so that compiler
+    messages name the file and line."""
+    folder = resource_dir("kernels")
+    parts = [f'#line 1 "{name}"\n{(folder / name).read_text()}' for name in KERNEL_FILES]
+    if extra:
+        parts.append(f'#line 1 "extra"\n{extra}')
+    return "\n".join(parts)
+
+
+@dataclass
+class Device:
+    index: int
+    platform: cl.Platform
+    device: cl.Device
+
+    @property
+    def name(self) -> str:
+        return self.device.name.strip()
+
+    @property
+    def kind(self) -> str:
+        return "GPU" if self.device.type & cl.device_type.GPU else "CPU" \
+            if self.device.type & cl.device_type.CPU else "other"
+
+    def describe(self) -> str:
+        return f"{self.name} ({self.kind}, {self.platform.name.strip()})"
+
+
+def list_devices() -> list[Device]:
+    devices = []
+    try:
+        platforms = cl.get_platforms()
+    except cl.Error:
+        platforms = []
+    for platform in platforms:
+        try:
+            found = platform.get_devices()
+        except cl.Error:
+            continue
+        devices.extend(Device(len(devices) + i, platform, d) for i, d in enumerate(found))
+    return devices
+
+
+def cache_dir() -> Path:
+    base = os.environ.get("PATHTRACE_CACHE") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "pathtrace")
+    return Path(base)
+
+
+@dataclass
+class BuildResult:
+    program: cl.Program
+    seconds: float
+    cached: bool
+
+
+def build_program(context: cl.Context, device: cl.Device, extra: str = "",
+                  use_cache: bool = True) -> BuildResult:
+    """Builds the kernels for one device. The binary is cached under cache_dir(), keyed by the
+    source, the options and the exact device and driver."""
+    source = kernel_source(extra)
+    options = list(BUILD_OPTIONS)
+    key = hashlib.sha256("\0".join([
+        source, " ".join(options), device.platform.name, device.platform.version, device.name,
+        device.version, device.driver_version]).encode()).hexdigest()[:32]
+    path = cache_dir() / f"{key}.bin"
+    start = time.perf_counter()
+    if use_cache and path.is_file():
+        try:
+            program = cl.Program(context, [device], [path.read_bytes()]).build(options=options)
+            return BuildResult(program, time.perf_counter() - start, True)
+        except (cl.Error, OSError):
+            pass   # a stale or foreign binary: rebuild from source below
+    program = cl.Program(context, source).build(options=options, devices=[device])
+    seconds = time.perf_counter() - start
+    if use_cache:
+        binary = program.get_info(cl.program_info.BINARIES)[0]
+        if binary:
+            try:
+                path.parent.mkdir(parents=True, exist_ok=True)
+                tmp = path.with_suffix(f".tmp{os.getpid()}")
+                tmp.write_bytes(binary)
+                os.replace(tmp, path)
+            except OSError:
+                pass   # caching is an optimisation; a read-only home still renders
+    return BuildResult(program, seconds, False)
+
+
+@dataclass
+class Backend:
+    """A chosen device with its context, queue and built program."""
+    device: Device
+    context: cl.Context
+    queue: cl.CommandQueue
+    build: BuildResult
+
+    @property
+    def program(self) -> cl.Program:
+        return self.build.program
+
+
+def open_device(device: Device, extra: str = "", use_cache: bool = True) -> Backend:
+    context = cl.Context([device.device])
+    queue = cl.CommandQueue(context, properties=cl.command_queue_properties.PROFILING_ENABLE)
+    return Backend(device, context, queue, build_program(context, device.device, extra, use_cache))
+
+
+def _first_line(error: Exception) -> str:
+    """The compiler's first error line, else the first line of the message."""
+    lines = [line.strip() for line in str(error).strip().splitlines() if line.strip()]
+    errors = [line for line in lines if line.startswith("error")]
+    return (errors or lines or [type(error).__name__])[0]
+
+
+def _matches(spec: str, d: Device) -> bool:
+    spec_l = spec.lower()
+    if spec_l in ("auto", "any"):
+        return True
+    if spec_l in ("gpu", "cpu"):
+        return d.kind.lower() == spec_l
+    if spec.isdigit():
+        return d.index == int(spec)
+    return spec_l in d.name.lower() or spec_l in d.platform.name.lower()
+
+
+def choose_device(spec: str = "auto", extra: str = "", use_cache: bool = True,
+                  log=lambda line: print(line, file=sys.stderr)) -> Backend:
+    """--device: 'auto' (the first GPU whose platform builds our kernels, else a CPU), 'gpu',
+    'cpu', an index from `pathtrace devices`, or a fragment of a device or platform name.
+    A device whose platform cannot build the kernels is skipped with one line saying why."""
+    devices = list_devices()
+    if not devices:
+        raise UserError("no OpenCL device found: install an OpenCL driver "
+                        "(on Debian/Ubuntu, 'apt install pocl-opencl-icd' runs on the CPU)")
+    candidates = [d for d in devices if _matches(spec, d)]
+    if not candidates:
+        raise UserError(f"--device: no OpenCL device matches '{spec}' "
+                        f"(see 'pathtrace devices'; {len(devices)} found)")
+    candidates.sort(key=lambda d: d.kind != "GPU")   # stable: GPUs first, then listing order
+    for d in candidates:
+        try:
+            return open_device(d, extra, use_cache)
+        except cl.Error as e:
+            log(f"skipping {d.describe()}: cannot build the kernels: {_first_line(e)}")
+    raise UserError(f"--device: no device matching '{spec}' can build the kernels")

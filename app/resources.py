@@ -1,0 +1,13 @@
+"""Where the kernels, shaders and assets are: inside the installed package (the wheel carries
+them as app/kernels, app/shaders, app/assets) or beside it in a source checkout."""
+
+from pathlib import Path
+
+_HERE = Path(__file__).resolve().parent
+
+
+def resource_dir(name: str) -> Path:
+    for candidate in (_HERE / name, _HERE.parent / name):
+        if candidate.is_dir():
+            return candidate
+    raise FileNotFoundError(f"pathtrace is incomplete: its '{name}' folder is missing")

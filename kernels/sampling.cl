@@ -1,0 +1,48 @@
+/* Warps from the unit square to directions, in a local frame whose z axis is the lobe's axis. */
+
+#define PI_F 3.14159265358979323846f
+
+/* An orthonormal basis around a unit vector n (Duff et al., "Building an Orthonormal Basis,
+ * Revisited", JCGT 6(1), 2017): branch-free and exact for every n. */
+void make_frame(float3 n, float3 *t, float3 *b)
+{
+    float sign = copysign(1.0f, n.z);
+    float a = -1.0f / (sign + n.z);
+    float c = n.x * n.y * a;
+    *t = (float3)(1.0f + sign * n.x * n.x * a, sign * c, -sign * n.x);
+    *b = (float3)(c, sign + n.y * n.y * a, -n.y);
+}
+
+float3 to_world(float3 v, float3 axis)
+{
+    float3 t, b;
+    make_frame(axis, &t, &b);
+    return v.x * t + v.y * b + v.z * axis;
+}
+
+/* Cosine-weighted hemisphere, the report's eq. (3); pdf cos(theta) / pi. */
+float3 sample_cosine_hemisphere(float r1, float r2)
+{
+    float s = sqrt(1.0f - r2);
+    return (float3)(cos(2.0f * PI_F * r1) * s, sin(2.0f * PI_F * r1) * s, sqrt(r2));
+}
+
+float pdf_cosine_hemisphere(float cos_theta)
+{
+    return cos_theta > 0.0f ? cos_theta / PI_F : 0.0f;
+}
+
+/* cos^n lobe around z, the report's eq. (4); its pdf is (n + 1) / (2 pi) cos^n(alpha).
+ * cos(alpha) = r2^(1/(n+1)) is computed as exp(log(r2') / (n + 1)) with r2' = 1 - r2 (the same
+ * distribution), so that r2 = 0 never reaches log and large n keeps precision. */
+float3 sample_cosine_power(float r1, float r2, float n)
+{
+    float cos_a = exp(log(1.0f - r2) / (n + 1.0f));
+    float sin_a = sqrt(max(0.0f, 1.0f - cos_a * cos_a));
+    return (float3)(cos(2.0f * PI_F * r1) * sin_a, sin(2.0f * PI_F * r1) * sin_a, cos_a);
+}
+
+float pdf_cosine_power(float cos_a, float n)
+{
+    return cos_a > 0.0f ? (n + 1.0f) / (2.0f * PI_F) * pow(cos_a, n) : 0.0f;
+}
