@@ -69,7 +69,13 @@ def check_writable(path: Path, what: str = "--output"):
     folder = path.parent if str(path.parent) else Path(".")
     if not folder.is_dir():
         raise UserError(f"{what}: folder '{folder}' does not exist")
-    if not os.access(folder, os.W_OK) or (path.exists() and not os.access(path, os.W_OK)):
+    try:   # the only sure test (permissions, read-only mounts, root's exceptions) is to try
+        fd, probe = tempfile.mkstemp(prefix=f".{path.name}.", dir=folder)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as e:
+        raise UserError(f"{what}: '{path}' is not writable ({e.strerror})") from None
+    if path.is_dir() or (path.exists() and not os.access(path, os.W_OK)):
         raise UserError(f"{what}: '{path}' is not writable")
 
 
@@ -83,7 +89,7 @@ def write_image(path: Path, linear: np.ndarray, exposure: float = 0.0, curve: st
         data = np.ascontiguousarray(linear[..., ::-1], np.float32)
     else:
         data = np.ascontiguousarray(to_8bit(tonemap(linear, exposure, curve))[..., ::-1])
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=suffix, dir=path.parent or ".")
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=suffix, dir=path.parent)
     os.close(fd)
     try:
         try:

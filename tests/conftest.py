@@ -31,7 +31,7 @@ class KernelRunner:
     def __call__(self, name, global_size, *args):
         bufs, outs = [], []
         for a in args:
-            if isinstance(a, np.ndarray):
+            if isinstance(a, np.ndarray) and a.ndim > 0:   # 0-d: a struct passed by value
                 flags = cl.mem_flags.READ_WRITE | cl.mem_flags.COPY_HOST_PTR
                 buf = cl.Buffer(self.ctx, flags, hostbuf=np.ascontiguousarray(a))
                 bufs.append(buf)

@@ -1,0 +1,75 @@
+"""Regenerates tests/references/*.npz: reference images of the -diffuse scenes rendered by an
+independent renderer, Mitsuba 3 (`pip install mitsuba`), in its scalar_rgb variant (its LLVM
+variant failed to compile its kernels with Debian 12's LLVM 15 on the machine this ran on).
+
+Each reference holds the mean of K independent renders and the variance of that mean (from the
+spread of the K renders), at a small size. Both renderers see the same scene: diffuse spheres,
+sphere area lights, a constant environment, a pinhole camera with a box pixel filter, and the
+comparison mode of the benchmark specification (max_depth 8, no Russian roulette before it).
+
+    python scripts/make_references.py [scene ...]
+"""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
+
+from app.scene import load_scene  # noqa: E402
+
+OUT = Path(__file__).resolve().parent.parent / "tests" / "references"
+SCENES = {  # name: (width, height, spp per render, renders)
+    "simple-diffuse": (64, 36, 1024, 16),
+    "spheres8k-diffuse": (64, 36, 512, 16),
+}
+MAX_DEPTH = 8
+
+
+def mitsuba_scene(mi, scene, width, height, spp):
+    rgb = lambda v: {"type": "rgb", "value": [float(x) for x in v]}  # noqa: E731
+    cam = scene.camera
+    d = {
+        "type": "scene",
+        "integrator": {"type": "path", "max_depth": MAX_DEPTH, "rr_depth": 1000},
+        "sensor": {
+            "type": "perspective", "fov": float(cam.vfov), "fov_axis": "y",
+            "to_world": mi.ScalarTransform4f().look_at(origin=cam.eye.tolist(), target=cam.look_at.tolist(),
+                                                       up=cam.up.tolist()),
+            "film": {"type": "hdrfilm", "width": width, "height": height,
+                     "rfilter": {"type": "box"}, "pixel_format": "rgb"},
+            "sampler": {"type": "independent", "sample_count": spp},
+        },
+        "environment": {"type": "constant", "radiance": rgb(scene.environment.image[0, 0] * scene.environment.intensity)},
+    }
+    if np.any(scene.rho_s > 0):
+        raise SystemExit(f"{scene.name}: only diffuse scenes have an exact Mitsuba counterpart")
+    for i, (s, rho, le) in enumerate(zip(scene.spheres, scene.rho_d, scene.emission)):
+        shape = {"type": "sphere", "center": s[:3].tolist(), "radius": float(s[3]),
+                 "bsdf": {"type": "diffuse", "reflectance": rgb(rho)}}
+        if np.any(le > 0):
+            shape["emitter"] = {"type": "area", "radiance": rgb(le)}
+        d[f"sphere{i}"] = shape
+    return mi.load_dict(d)
+
+
+def main(names):
+    import mitsuba as mi
+    mi.set_variant("scalar_rgb")
+    OUT.mkdir(parents=True, exist_ok=True)
+    for name in names or SCENES:
+        width, height, spp, runs = SCENES[name]
+        scene = load_scene(name)
+        m = mitsuba_scene(mi, scene, width, height, spp)
+        images = np.stack([np.array(mi.render(m, seed=k), np.float64)[..., :3] for k in range(runs)])
+        mean = images.mean(axis=0)
+        var_of_mean = images.var(axis=0, ddof=1) / runs
+        np.savez_compressed(OUT / f"{name}.npz", mean=mean.astype(np.float32),
+                            var_of_mean=var_of_mean.astype(np.float32),
+                            spp=spp * runs, max_depth=MAX_DEPTH, renderer=f"Mitsuba {mi.__version__} {mi.variant()}")
+        print(f"{name}: {width}x{height}, {spp * runs} spp, mean {mean.mean(axis=(0, 1))}")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])

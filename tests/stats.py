@@ -1,0 +1,25 @@
+"""Statistical image comparison in the manner of Mitsuba 3's render tests: a per-pixel Z-test of
+a mean image against a reference, with the Sidak correction for the number of pixels."""
+
+import numpy as np
+from scipy import stats
+
+
+def block_mean(image, block):
+    h, w = image.shape[0] // block * block, image.shape[1] // block * block
+    return image[:h, :w].reshape(h // block, block, w // block, block, -1).mean(axis=(1, 3))
+
+
+def z_test(mean, var_of_mean, ref, ref_var_of_mean=0.0, alpha=0.01, block=1, rel_floor=1e-5):
+    """Tests that `mean` and `ref` have the same expectation, pixel by pixel, given each one's
+    variance of the mean. Pixels are first averaged over block x block tiles (which makes the
+    sums closer to normal). A standard deviation floor of rel_floor * |ref| covers float32
+    rounding where the variance is zero (a sky seen directly). Returns (passed, smallest
+    p-value, Sidak-corrected threshold)."""
+    n = block * block
+    m, r = block_mean(mean, block), block_mean(ref, block)
+    v = block_mean(var_of_mean, block) / n + block_mean(np.broadcast_to(ref_var_of_mean, mean.shape), block) / n
+    z = (m - r) / np.sqrt(v + (rel_floor * np.abs(r)) ** 2 + 1e-30)
+    p = 2 * stats.norm.sf(np.abs(z))
+    threshold = 1 - (1 - alpha) ** (1 / p.size)
+    return bool(p.min() >= threshold), float(p.min()), threshold

@@ -1,0 +1,145 @@
+"""The command line: renders, and one clear message with a non-zero exit for each bad input."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def pathtrace(*args, cwd=ROOT):
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    return subprocess.run([sys.executable, "-m", "app", *map(str, args)], cwd=cwd, env=env,
+                          capture_output=True, text=True, timeout=300)
+
+
+def write(tmp_path, text, name="scene.toml"):
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+GOOD = """
+[camera]
+eye = [0, 1, 5]
+look_at = [0, 0, 0]
+[environment]
+color = 0.5
+[[spheres]]
+center = [0, 0, 0]
+radius = 1
+material = { type = "diffuse", rho_d = 0.5 }
+"""
+
+
+def test_render_writes_png_and_exr(tmp_path):
+    from app.image_io import read_hdr
+    png, exr = tmp_path / "a.png", tmp_path / "a.exr"
+    r = pathtrace("render", "simple", "-o", png, "-o", exr, "--size", "32x18", "--spp", "4", "-q")
+    assert r.returncode == 0, r.stderr
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    img = read_hdr(exr, "test")
+    assert img.shape == (18, 32, 3) and np.all(np.isfinite(img)) and img.max() > 1.0   # HDR kept
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]   # no temporary left
+
+
+BAD_FILES = [
+    ("[camera\n", "not valid TOML"),
+    (GOOD + "\nfoo = 1\n", "unknown key 'foo'"),
+    (GOOD.replace("radius = 1", "radius = -1"), "spheres[0].radius: must be positive, got -1"),
+    (GOOD.replace('rho_d = 0.5 }', 'rho_d = 0.5, rho_s = 0.7, n = 10 }').replace('"diffuse"', '"phong"'),
+     "rho_d + rho_s must not exceed 1"),
+    (GOOD.replace("radius = 1", "radius = nan"), "spheres[0].radius: must be finite"),
+    (GOOD.replace("eye = [0, 1, 5]", "eye = [0, inf, 5]"), "camera.eye: must be a list of 3 finite numbers"),
+    (GOOD.replace("color = 0.5", 'map = "missing.hdr"'), "environment map"),
+    (GOOD.replace('"diffuse"', '"metal"'), "spheres[0].material.type: must be one of"),
+    (GOOD.replace("rho_d = 0.5", "rho_d = [0.5, 0.5]"), "must be a number or a list of 3 numbers"),
+    (GOOD.replace("[environment]", "[render]\nwidth = 0\n[environment]"), "render.width: must be at least 1"),
+    (GOOD.replace("[environment]", "[render]\nrussian_roulette = false\n[environment]"), "needs a max_depth"),
+]
+
+
+@pytest.mark.parametrize("text,message", BAD_FILES)
+def test_bad_scene_file_gets_one_clear_message(tmp_path, text, message):
+    scene = write(tmp_path, text)
+    out = tmp_path / "out.png"
+    r = pathtrace("render", scene, "-o", out, "--spp", "1", "--size", "8x8")
+    assert r.returncode != 0
+    assert message in r.stderr and str(scene) in r.stderr, r.stderr
+    assert "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert not out.exists()
+
+
+def test_unreadable_environment_map(tmp_path):
+    (tmp_path / "broken.hdr").write_bytes(b"not an image")
+    scene = write(tmp_path, GOOD.replace("color = 0.5", 'map = "broken.hdr"'))
+    r = pathtrace("render", scene, "-o", tmp_path / "o.png", "--spp", "1")
+    assert r.returncode == 1 and "broken.hdr' is not a readable HDR image" in r.stderr
+    assert "environment.map" in r.stderr and "Traceback" not in r.stderr
+
+
+@pytest.mark.parametrize("args,message", [
+    (["missing.toml"], "no such scene file"),
+    (["nosuchscene"], "neither a scene file nor a built-in scene"),
+    (["simple", "--device", "no-such-device"], "--device: no OpenCL device matches 'no-such-device'"),
+    (["simple", "--size", "0x10"], "width and height must be 1 to 16384"),
+    (["simple", "--size", "big"], "is not WIDTHxHEIGHT"),
+    (["simple", "--spp", "0"], "out of range"),
+    (["simple", "--spp", "many"], "is not an integer"),
+    (["simple", "--no-rr"], "--no-rr needs --max-depth"),
+    (["simple", "--exposure", "nan"], "is not a finite number"),
+])
+def test_bad_arguments_get_one_clear_message(tmp_path, args, message):
+    out = tmp_path / "o.png"
+    r = pathtrace("render", *args, "-o", out)
+    assert r.returncode != 0 and message in r.stderr, r.stderr
+    assert "Traceback" not in r.stderr
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("output,message", [
+    ("nofolder/o.png", "folder 'nofolder' does not exist"),
+    ("o.tiff", "unknown image format"),
+])
+def test_bad_output_fails_before_rendering(tmp_path, output, message):
+    r = pathtrace("render", "simple", "-o", tmp_path / output if "/" not in output else output, "--spp", "1",
+                  cwd=tmp_path)
+    assert r.returncode == 1 and message in r.stderr, r.stderr
+
+
+def test_unwritable_output_folder(tmp_path):
+    if os.geteuid() == 0:
+        out = Path("/proc/o.png")     # root may write anywhere else
+    else:
+        folder = tmp_path / "ro"
+        folder.mkdir(mode=0o500)
+        out = folder / "o.png"
+    r = pathtrace("render", "simple", "-o", out, "--spp", "1", "--size", "8x8")
+    assert r.returncode == 1 and "not writable" in r.stderr, r.stderr
+
+
+def test_devices_lists_the_cpu():
+    r = pathtrace("devices", "--check")
+    assert r.returncode == 0 and "builds the kernels" in r.stdout, r.stdout + r.stderr
+
+
+def test_ctrl_c_stops_cleanly_and_writes_nothing(tmp_path):
+    import signal
+    import time
+    out = tmp_path / "o.png"
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    p = subprocess.Popen([sys.executable, "-m", "app", "render", "spheres8k", "-o", str(out),
+                          "--spp", "100000", "--size", "64x36"], cwd=ROOT, env=env,
+                         stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 60
+    line = ""
+    while "spp" not in line and time.time() < deadline:   # wait until rendering has begun
+        line = p.stderr.readline()
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=60)
+    assert p.returncode == 130 and "nothing written" in err and "Traceback" not in err, err
+    assert not out.exists() and not list(tmp_path.iterdir())

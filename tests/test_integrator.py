@@ -1,0 +1,141 @@
+"""The path tracer against closed-form answers: furnaces, the irradiance of a sphere light, and
+a bare view of the environment map."""
+
+import numpy as np
+import pytest
+
+from app.camera import Camera
+from app.environment import Environment
+from app.renderer import Renderer
+from app.scene import RenderSettings, SceneBuilder
+from tests.stats import z_test
+
+
+def render(backend, scene, spp):
+    r = Renderer(backend, scene)
+    for _ in range(spp // 8):
+        r.add_samples(8)
+    r.finish()
+    return r.mean(), r.variance() / r.samples, r
+
+
+def furnace_scene(albedo, env=1.0, **settings):
+    b = SceneBuilder()
+    b.add((0, 0, 0), 1.0, rho_d=albedo)
+    return b.build("furnace", camera=Camera([0, 0, 4], [0, 0, 0], [0, 1, 0], 40.0),
+                   environment=Environment.constant((env, env, env)),
+                   settings=RenderSettings(width=48, height=32, **settings))
+
+
+@pytest.mark.parametrize("settings", [dict(), dict(max_depth=8, russian_roulette=False)])
+def test_white_furnace_renders_one_everywhere(backend, settings):
+    """A diffuse sphere of albedo 1 under a uniform environment of radiance 1: every path
+    carries exactly 1 (the weight rho_d / P_d is 1 and paths end when they escape)."""
+    mean, var, _ = render(backend, furnace_scene(1.0, **settings), 32)
+    np.testing.assert_allclose(mean, 1.0, atol=1e-5)
+    assert var.max() < 1e-10
+
+
+@pytest.mark.parametrize("rr", [True, False])
+def test_grey_furnace_renders_albedo_times_environment(backend, rr):
+    """A convex sphere's reflected rays always escape, so L = albedo * L_env on the sphere and
+    L_env around it; with Russian roulette only in expectation."""
+    albedo, env = np.array([0.2, 0.5, 0.8]), 2.0
+    scene = furnace_scene(albedo, env, **({} if rr else dict(max_depth=8, russian_roulette=False)))
+    mean, var, r = render(backend, scene, 256)
+    # which pixels see the sphere, from the pixel's corners (pixels on the outline are mixed)
+    on = sphere_coverage(r, scene)
+    expected = np.where(on[..., None] == 1, albedo * env, env)
+    inside = (on == 0) | (on == 1)
+    if rr:
+        ok, p, threshold = z_test(mean[inside][:, None], var[inside][:, None], expected[inside][:, None])
+        assert ok, (p, threshold)
+    else:
+        np.testing.assert_allclose(mean[inside], expected[inside], rtol=1e-5)
+
+
+def sphere_coverage(renderer, scene):
+    """Fraction of each pixel's 3x3 sub-samples (corners, edge midpoints, centre) whose primary
+    ray hits sphere 0. The outline is convex, so 1 means the whole pixel sees the sphere."""
+    w, h = renderer.width, renderer.height
+    fwd, right, up = scene.camera.basis(w / h)
+    s = scene.spheres[0].astype(np.float64)
+    hits = np.zeros((h, w))
+    for sy in (0.0, 0.5, 1.0):
+        for sx in (0.0, 0.5, 1.0):
+            x = (np.arange(w) + sx) / w * 2 - 1
+            y = 1 - (np.arange(h) + sy) / h * 2
+            d = fwd + x[None, :, None] * right + y[:, None, None] * up
+            d /= np.linalg.norm(d, axis=-1, keepdims=True)
+            f = scene.camera.eye - s[:3]
+            b = np.sum(d * f, -1)
+            hits += (b * b - (f @ f - s[3] ** 2) > 0) & (b < 0)
+    return hits / 9
+
+
+def test_sphere_light_irradiance(backend):
+    """A diffuse floor under a sphere light in a black world, direct light only (max_depth 2).
+    A uniform sphere light of radiance Le and radius r, fully above the horizon, gives
+    irradiance E = pi Le r^2 cos(theta) / d^2 (as a point source of the same power), so the
+    floor's radiance is rho Le r^2 cos(theta) / d^2."""
+    rho, le, r_light, centre = 0.7, 50.0, 0.5, np.array([0.0, 2.0, 0.0])
+    b = SceneBuilder()
+    b.add((0, -1e4, 0), 1e4, rho_d=rho)              # a floor, flat to 1e-4 over the view
+    b.add(centre, r_light, emission=le)
+    scene = b.build("irradiance", camera=Camera([0, 6, 6], [0, 0, 0], [0, 1, 0], 50.0),
+                    environment=Environment.constant((0, 0, 0)),
+                    settings=RenderSettings(width=40, height=30, max_depth=2, russian_roulette=False))
+    mean, _, r = render(backend, scene, 1024)
+    # the floor point seen through each pixel's centre (the radiance varies slowly across a pixel)
+    w, h = r.width, r.height
+    fwd, right, up = scene.camera.basis(w / h)
+    x = (np.arange(w) + 0.5) / w * 2 - 1
+    y = 1 - (np.arange(h) + 0.5) / h * 2
+    d = fwd + x[None, :, None] * right + y[:, None, None] * up
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    floor_c, floor_r = scene.spheres[0, :3].astype(np.float64), 1e4
+    f = scene.camera.eye - floor_c
+    bq = np.sum(d * f, -1)
+    disc = bq * bq - (f @ f - floor_r ** 2)
+    t = np.where(disc > 0, -bq - np.sqrt(np.maximum(disc, 0)), -1)
+    p = scene.camera.eye + t[..., None] * d
+    normal = (p - floor_c) / floor_r
+    to_light = centre - p
+    dist = np.linalg.norm(to_light, axis=-1)
+    expected = rho * le * r_light ** 2 * np.sum(normal * to_light, -1) / dist ** 3
+    # leave out the pixels that see the light itself or lie next to it
+    light_px = sphere_coverage(r, scene.__class__(**{**scene.__dict__, "spheres": scene.spheres[1:]}))
+    floor = (t > 0) & (np.abs(np.gradient(light_px)[0]) + np.abs(np.gradient(light_px)[1]) + light_px == 0)
+    assert floor.sum() > 0.8 * w * h
+    # Each sample is rho Le (the bounce met the light) or 0: a binomial with the exact variance
+    # below, which stays right where only a few of a pixel's samples meet the light. Outside
+    # `floor` the comparison is switched off by putting the expectation there.
+    spp = r.samples
+    var_exact = np.where(floor, expected * (rho * le - expected) / spp, 0.0)
+    got = np.where(floor, mean[..., 0], expected)
+    ok, pmin, threshold = z_test(got[..., None], var_exact[..., None], expected[..., None], block=4)
+    assert ok, (pmin, threshold)
+
+
+def test_bare_environment_reproduces_the_map(backend):
+    """Looking at the sky alone (max_depth 1), each pixel shows the map at its direction, through
+    the documented lat-long mapping, with rotation and intensity applied."""
+    hmap, wmap = 32, 64
+    v, u = np.meshgrid((np.arange(hmap) + 0.5) / hmap, (np.arange(wmap) + 0.5) / wmap, indexing="ij")
+    smooth = lambda u, v: np.stack([1 + 0.5 * np.sin(2 * np.pi * u), 1 + 0.5 * np.cos(np.pi * v), 1 + 0 * u], -1)  # noqa: E731
+    env = Environment(smooth(u, v).astype(np.float32), intensity=2.0, rotation=90.0)
+    b = SceneBuilder()
+    b.add((0, 0, 50), 0.1, rho_d=0.5)                 # behind the camera, out of view
+    scene = b.build("sky", camera=Camera([0, 0, 0], [0, 0.3, -1], [0, 1, 0], 60.0), environment=env,
+                    settings=RenderSettings(width=32, height=24, max_depth=1, russian_roulette=False))
+    mean, _, r = render(backend, scene, 64)
+    fwd, right, up = scene.camera.basis(32 / 24)
+    x = (np.arange(32) + 0.5) / 32 * 2 - 1
+    y = 1 - (np.arange(24) + 0.5) / 24 * 2
+    d = fwd + x[None, :, None] * right + y[:, None, None] * up
+    d /= np.linalg.norm(d, axis=-1, keepdims=True)
+    uu = (0.5 + np.arctan2(d[..., 0], -d[..., 2]) / (2 * np.pi) + 0.25) % 1.0
+    vv = np.arccos(d[..., 1]) / np.pi
+    expected = 2.0 * smooth(uu, vv)
+    # bilinear lookup of a smooth map and jitter within the pixel: within a percent
+    np.testing.assert_allclose(mean, expected, rtol=0.015)

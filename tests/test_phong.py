@@ -1,0 +1,109 @@
+"""The modified Phong BRDF of kernels/phong.cl: its sampling against its pdf, the pdf's
+normalisation, and energy conservation."""
+
+import numpy as np
+import pytest
+from pyopencl import cltypes
+
+from app.types import pack_materials
+from tests.test_sampling import chi_square
+
+SOURCE = """
+kernel void phong_sample(global const Material *mat, float4 n, float4 wo, int rr,
+                         global const float4 *u, global float4 *wi, global float4 *weight)
+{
+    int i = get_global_id(0);
+    Material m = mat[0];
+    float3 w, f;
+    int ok = sample_phong(&m, n.xyz, wo.xyz, u[i], rr, &w, &f);
+    wi[i] = (float4)(w, 0.0f);
+    weight[i] = ok ? (float4)(f, 1.0f) : (float4)(0.0f);
+}
+kernel void phong_eval(global const Material *mat, float4 n, float4 wo, global const float4 *wi,
+                       global float4 *out)
+{
+    int i = get_global_id(0);
+    Material m = mat[0];
+    out[i] = (float4)(eval_phong(&m, n.xyz, wo.xyz, wi[i].xyz), pdf_phong(&m, n.xyz, wo.xyz, wi[i].xyz));
+}
+"""
+NORMAL = cltypes.make_float4(0, 0, 1, 0)
+
+
+def direction(theta_deg):
+    """The outgoing direction at theta degrees from the normal, as a kernel argument."""
+    t = np.radians(theta_deg)
+    return cltypes.make_float4(np.sin(t), 0, np.cos(t), 0)
+
+
+def material(rho_d, rho_s, n):
+    return pack_materials(np.broadcast_to(rho_d, 3), np.broadcast_to(rho_s, 3), [n], [[0, 0, 0]])
+
+
+def sample(kernels, m, wo, rr, count=400_000, seed=0):
+    u = np.random.default_rng(seed).random((count, 4), np.float32)
+    wi, weight = np.zeros((count, 4), np.float32), np.zeros((count, 4), np.float32)
+    kernels(SOURCE)("phong_sample", count, m, NORMAL, wo, np.int32(rr), u, wi, weight)
+    return wi[:, :3].astype(np.float64), weight
+
+
+def evaluate(kernels, m, wo, wi):
+    wi4 = np.column_stack([wi, np.zeros(len(wi))]).astype(np.float32)
+    out = np.zeros((len(wi), 4), np.float32)
+    kernels(SOURCE)("phong_eval", len(wi), m, NORMAL, wo, wi4, out)
+    return out[:, :3].astype(np.float64), out[:, 3].astype(np.float64)
+
+
+def hemisphere_grid(nz=1500, nphi=1500):
+    """Midpoints of an (z, phi) grid over the upper hemisphere; each cell has solid angle dz dphi."""
+    z = (np.arange(nz) + 0.5) / nz
+    phi = (np.arange(nphi) + 0.5) / nphi * 2 * np.pi - np.pi
+    zz, pp = np.meshgrid(z, phi, indexing="ij")
+    s = np.sqrt(1 - zz ** 2)
+    return np.stack([s * np.cos(pp), s * np.sin(pp), zz], -1).reshape(-1, 3), (1 / nz) * (2 * np.pi / nphi)
+
+
+@pytest.mark.parametrize("rho_d,rho_s,n", [(0.5, 0.5, 1.0), (0.3, 0.6, 20.0), (0.0, 1.0, 50.0), (1.0, 0.0, 1.0)])
+def test_pdf_integrates_to_one_at_normal_incidence(kernels, rho_d, rho_s, n):
+    grid, cell = hemisphere_grid()
+    _, pdf = evaluate(kernels, material(rho_d, rho_s, n), direction(0), grid)
+    assert pdf.sum() * cell == pytest.approx(1.0, abs=2e-3)
+
+
+@pytest.mark.parametrize("theta", [0, 35, 70])
+@pytest.mark.parametrize("rho_d,rho_s,n", [(0.3, 0.6, 20.0), (0.1, 0.9, 200.0)])
+def test_sampled_directions_follow_the_pdf(kernels, theta, rho_d, rho_s, n):
+    """Without Russian roulette every draw yields a direction or (glossy, below the surface)
+    ends the path; the yielded directions' histogram matches the pdf integrated over each bin."""
+    m, wo = material(rho_d, rho_s, n), direction(theta)
+    wi, weight = sample(kernels, m, wo, rr=0, seed=theta)
+    ok = weight[:, 3] > 0
+    assert np.all(wi[ok, 2] > 0)
+    # bins in (z, phi) around the normal; the pdf integrated over each on a fine grid
+    nz, nphi = 16, 16
+    grid, cell = hemisphere_grid(nz * 60, nphi * 60)
+    _, pdf = evaluate(kernels, m, wo, grid)
+    expected = (pdf * cell).reshape(nz, 60, nphi, 60).sum(axis=(1, 3)) * len(wi)
+    counts, _, _ = np.histogram2d(wi[ok, 2], np.arctan2(wi[ok, 1], wi[ok, 0]),
+                                  [np.linspace(0, 1, nz + 1), np.linspace(-np.pi, np.pi, nphi + 1)])
+    assert expected.sum() == pytest.approx(ok.sum(), rel=0.01)   # the mass below the surface
+    assert chi_square(counts.ravel(), expected.ravel()) > 1e-3
+
+
+@pytest.mark.parametrize("theta", [0, 45, 80])
+@pytest.mark.parametrize("rho_d,rho_s,n", [(0.8, 0.2, 1.0), (0.5, 0.5, 10.0), (0.0, 1.0, 100.0),
+                                           ((0.9, 0.1, 0.2), (0.1, 0.9, 0.3), 30.0)])
+def test_albedo_is_at_most_one_and_the_estimator_finds_it(kernels, theta, rho_d, rho_s, n):
+    """Directional albedo = integral of f cos over the hemisphere, by quadrature; it is at most
+    1 (energy conservation), and the mean path weight of sample_phong, with and without Russian
+    roulette, is an unbiased estimate of it."""
+    m, wo = material(rho_d, rho_s, n), direction(theta)
+    grid, cell = hemisphere_grid(3000, 1500)
+    f, _ = evaluate(kernels, m, wo, grid)
+    albedo = (f * grid[:, 2:3]).sum(axis=0) * cell
+    assert np.all(albedo <= 1.0 + 2e-3)
+    for rr in (1, 0):
+        _, weight = sample(kernels, m, wo, rr, seed=theta + rr)
+        mean = weight[:, :3].mean(axis=0)
+        err = weight[:, :3].std(axis=0) / np.sqrt(len(weight))
+        assert np.all(np.abs(mean - albedo) < 5 * err + 2e-3), (rr, mean, albedo)
