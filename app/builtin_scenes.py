@@ -1,6 +1,7 @@
 """The built-in scenes: the benchmark scenes of the report, pinned down in
 ../shared/bench/SCENES.md (copied into docs/benchmarks.md), and the HDR-lit demo."""
 
+import re
 from dataclasses import replace
 
 import numpy as np
@@ -41,11 +42,25 @@ def random_spheres(n: int, diffuse_only: bool) -> Scene:
     b.rho_s = np.where(phong[:, None], 0.6, 0.0) * np.ones((n, 3))
     b.exponent = np.where(phong, 100.0, 1.0)
     b.emission = np.where(emitter[:, None], 4.0 * albedo, 0.0)
-    count = {8000: "8k", 64000: "64k"}.get(n, str(n))
+    count = f"{n // 1000}k" if n % 1000 == 0 and n < 1_000_000 else \
+        f"{n // 1_000_000}M" if n % 1_000_000 == 0 else str(n)
     return b.build(f"spheres{count}{'-diffuse' if diffuse_only else ''}",
                    camera=Camera([28, 20, 36], [0, 0, 0], [0, 1, 0], 45.0),
                    environment=Environment.constant((1, 1, 1)),
                    settings=RenderSettings(width=1920, height=1080, spp=64))
+
+
+def builtin_scene(name: str):
+    """A built-in scene by name, or None. Besides the named ones, 'spheresN' with N a count
+    (a k or M suffix allowed, e.g. spheres512k, spheres1M) and an optional '-diffuse' gives the
+    random-spheres scene of N spheres, for scaling measurements."""
+    if name in BUILTIN_SCENES:
+        return BUILTIN_SCENES[name]()
+    m = re.fullmatch(r"spheres(\d+)([kM]?)(-diffuse)?", name)
+    if m and int(m.group(1)) > 0:
+        n = int(m.group(1)) * {"": 1, "k": 1000, "M": 1_000_000}[m.group(2)]
+        return random_spheres(n, bool(m.group(3)))
+    return None
 
 
 BUILTIN_SCENES = {

@@ -135,6 +135,22 @@ def cmd_render(args):
     return 0
 
 
+def cmd_bench(args):
+    from app import bench
+
+    bench.validate(args)
+    if args.json:
+        from app.image_io import check_json_writable
+        check_json_writable(args.json)
+    width, height = args.size
+    print(bench.HEADER)
+    results = bench.run(args.device or ["auto"], args.scenes, args.estimator, width, height, args.spp)
+    if args.json:
+        bench.write_json(args.json, results, sys.argv[1:])
+        print(f"wrote {args.json}", file=sys.stderr)
+    return 0
+
+
 def build_parser():
     parser = argparse.ArgumentParser(prog="pathtrace", description=__doc__, epilog=EPILOG)
     parser.add_argument("--version", action="version", version=f"pathtrace {__version__}")
@@ -154,6 +170,24 @@ def build_parser():
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     add_render_options(p)
     p.set_defaults(func=cmd_render)
+
+    from app.bench import TARGET_SCENES
+    p = sub.add_parser("bench", help="time renders of the benchmark scenes (the report's table)",
+                       description="Times renders of the benchmark scenes, by default at 1920x1080 "
+                                   "and 1000 spp: the report's estimator (Russian roulette) on the "
+                                   "report's scenes, the comparison mode (max depth 8, no Russian "
+                                   "roulette) on the -diffuse ones.")
+    p.add_argument("--device", action="append", metavar="DEVICE",
+                   help="as for render; repeat for several, or 'all' (default: auto)")
+    p.add_argument("--scenes", nargs="+", default=list(TARGET_SCENES), metavar="SCENE")
+    p.add_argument("--estimator", action="append", metavar="EST",
+                   help="rr (the report's) or depth8 (comparison mode); repeatable; "
+                        "default: rr for the report's scenes, depth8 for -diffuse ones")
+    p.add_argument("--size", type=_size, metavar="WxH", help="default 1920x1080")
+    p.add_argument("--spp", type=_int_range(1), help="samples per pixel (default 1000)")
+    p.add_argument("--quick", action="store_true", help="a smoke test: 320x180, 8 spp")
+    p.add_argument("--json", metavar="FILE", help="also write the results as JSON")
+    p.set_defaults(func=cmd_bench)
 
     p = sub.add_parser("devices", help="list OpenCL platforms and devices")
     p.add_argument("--check", action="store_true", help="also build the kernels on each")

@@ -6,8 +6,6 @@ from pathlib import Path
 
 import numpy as np
 
-from app.image_io import read_hdr
-
 
 @dataclass
 class Environment:
@@ -23,6 +21,7 @@ class Environment:
 
     @classmethod
     def from_file(cls, path: Path, intensity=1.0, rotation=0.0, where="environment.map"):
+        from app.image_io import read_hdr
         return cls(read_hdr(path, where), intensity, rotation, str(path))
 
     def rgba(self) -> np.ndarray:

@@ -1,15 +1,16 @@
 """Image files: HDR maps in, rendered images out. Linear HDR for .exr, .hdr and .pfm; tonemapped
 8-bit sRGB for .png and .jpg. OpenEXR's own bindings handle .exr, OpenCV the rest (its wheels
 carry no EXR codec). Every write is atomic: the image goes to a temporary file beside the
-target, which is renamed over it only once complete."""
+target, which is renamed over it only once complete.
+
+OpenCV and OpenEXR are imported where they are used, so that the core (scenes with constant
+environments, the renderer, the benchmarks) runs with NumPy and PyOpenCL alone."""
 
 import os
 import tempfile
 from pathlib import Path
 
-import cv2
 import numpy as np
-import OpenEXR
 
 from app.errors import UserError
 from app.tonemap import tonemap, to_8bit
@@ -32,6 +33,7 @@ def read_hdr(path: Path, where: str) -> np.ndarray:
 
 
 def _read_with_opencv(path: Path):
+    import cv2
     image = cv2.imread(str(path), cv2.IMREAD_UNCHANGED | cv2.IMREAD_ANYDEPTH | cv2.IMREAD_COLOR)
     if image is None or image.ndim != 3 or image.dtype not in (np.float32, np.float16):
         return None
@@ -39,6 +41,7 @@ def _read_with_opencv(path: Path):
 
 
 def _read_exr(path: Path):
+    import OpenEXR
     try:
         with OpenEXR.File(str(path)) as f:
             channels = f.channels()
@@ -54,6 +57,7 @@ def _read_exr(path: Path):
 
 
 def _write_exr(path: str, rgb: np.ndarray):
+    import OpenEXR
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     with OpenEXR.File(header, {"RGB": np.ascontiguousarray(rgb, np.float32)}) as f:
         f.write(path)
@@ -79,9 +83,32 @@ def check_writable(path: Path, what: str = "--output"):
         raise UserError(f"{what}: '{path}' is not writable")
 
 
+def check_json_writable(path, what: str = "--json"):
+    folder = Path(path).parent
+    if not folder.is_dir():
+        raise UserError(f"{what}: folder '{folder}' does not exist")
+    if not os.access(folder, os.W_OK):
+        raise UserError(f"{what}: '{path}' is not writable")
+
+
+def atomic_write_text(path, text: str, what: str = "--json"):
+    path = Path(path)
+    folder = path.parent
+    if not folder.is_dir():
+        raise UserError(f"{what}: folder '{folder}' does not exist")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=folder)
+        with os.fdopen(fd, "w") as f:
+            f.write(text)
+        os.replace(tmp, path)
+    except OSError as e:
+        raise UserError(f"{what}: cannot write '{path}' ({e.strerror})") from None
+
+
 def write_image(path: Path, linear: np.ndarray, exposure: float = 0.0, curve: str = "standard",
                 what: str = "--output"):
     """Writes (H, W, 3) linear radiance: as is for HDR formats, tonemapped for PNG and JPEG."""
+    import cv2
     path = Path(path)
     check_writable(path, what)
     suffix = path.suffix.lower()

@@ -2,6 +2,9 @@
 each add_samples() call adds samples per pixel. The command line, the benchmarks and the viewer
 all drive this API; it imports nothing from the window or the GUI."""
 
+import time
+from dataclasses import replace
+
 import numpy as np
 import pyopencl as cl
 
@@ -29,7 +32,9 @@ class Renderer:
         """Builds the BVH and uploads spheres, materials and environment; resets."""
         self.scene = scene
         self.camera = scene.camera.copy()
+        start = time.perf_counter()
         self.bvh = build_bvh(scene.spheres)
+        self.bvh_seconds = time.perf_counter() - start
         self._upload("nodes", self.bvh.nodes)
         self._upload("spheres", scene.spheres[self.bvh.order])
         self.upload_materials()
@@ -51,7 +56,6 @@ class Renderer:
         self.reset()
 
     def set_settings(self, **changes):
-        from dataclasses import replace
         self.settings = replace(self.settings, **changes)
         self.reset()
 
@@ -114,6 +118,10 @@ class Renderer:
     def mean(self) -> np.ndarray:
         """The image so far: mean radiance per pixel, (H, W, 3) float32."""
         return self._read("sum")[..., :3] / max(self.samples, 1)
+
+    def rays_traced(self) -> int:
+        """Rays traced since the last reset (camera rays and bounces), all pixels together."""
+        return int(self._read("sum_sq")[..., 3].sum(dtype=np.float64))
 
     def variance(self) -> np.ndarray:
         """The per-sample variance of each pixel and channel (of one sample, not of the mean)."""

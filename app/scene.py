@@ -266,12 +266,13 @@ def read_scene_file(path) -> Scene:
 
 def load_scene(name_or_path: str) -> Scene:
     """A scene file path or a built-in scene's name: the two are interchangeable."""
-    from app.builtin_scenes import BUILTIN_SCENES
+    from app.builtin_scenes import BUILTIN_SCENES, builtin_scene
 
     path = Path(name_or_path)
     if path.suffix == ".toml" or path.exists():
         return read_scene_file(path)
-    if name_or_path in BUILTIN_SCENES:
-        return BUILTIN_SCENES[name_or_path]()
+    scene = builtin_scene(name_or_path)
+    if scene is not None:
+        return scene
     raise UserError(f"{name_or_path}: neither a scene file nor a built-in scene "
                     f"(built-ins: {', '.join(BUILTIN_SCENES)})")

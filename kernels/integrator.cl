@@ -5,15 +5,17 @@
  * closed scene of albedo 1 could reach it. */
 #define UNLIMITED_DEPTH 1024
 
+/* Returns the radiance arriving at o from direction -d; adds the rays it traced to *rays. */
 float3 trace_path(const global BVHNode *nodes, const global Sphere *spheres,
                   const global Material *materials, const global float4 *env,
-                  const RenderParams *p, float3 o, float3 d, Rng *rng)
+                  const RenderParams *p, float3 o, float3 d, Rng *rng, int *rays)
 {
     float3 radiance = (float3)(0.0f);
     float3 throughput = (float3)(1.0f);
     int max_depth = p->max_depth > 0 ? p->max_depth : UNLIMITED_DEPTH;
     int skip = -1;
     for (int depth = 1;; ++depth) {
+        ++*rays;
         Hit hit = intersect_scene(nodes, spheres, o, d, INFINITY, skip);
         if (hit.sphere < 0)
             return radiance + throughput * lookup_environment(env, p, d);
@@ -39,7 +41,7 @@ float3 trace_path(const global BVHNode *nodes, const global Sphere *spheres,
 }
 
 /* One work-item per pixel adds p.sample_count samples to the running sums of radiance (rgb; w
- * counts samples) and of its square (for the per-pixel variance). */
+ * counts samples) and of its square (rgb, for the per-pixel variance; w counts rays traced). */
 kernel void render(const global BVHNode *nodes, const global Sphere *spheres,
                    const global Material *materials, const global float4 *env,
                    const RenderParams p, global float4 *sum, global float4 *sum_sq)
@@ -48,15 +50,16 @@ kernel void render(const global BVHNode *nodes, const global Sphere *spheres,
     if (x >= p.width || y >= p.height)
         return;
     float3 acc = (float3)(0.0f), acc_sq = (float3)(0.0f);
+    int rays = 0;
     for (uint i = 0; i < p.sample_count; ++i) {
         Rng rng = make_rng(x, y, p.sample_start + i, p.seed);
         float4 jitter = next_uniform4(&rng);
         float3 d = camera_direction(&p, x + jitter.x, y + jitter.y);
-        float3 l = trace_path(nodes, spheres, materials, env, &p, p.eye.xyz, d, &rng);
+        float3 l = trace_path(nodes, spheres, materials, env, &p, p.eye.xyz, d, &rng, &rays);
         acc += l;
         acc_sq += l * l;
     }
     int k = y * p.width + x;
     sum[k] += (float4)(acc, (float)p.sample_count);
-    sum_sq[k] += (float4)(acc_sq, 0.0f);
+    sum_sq[k] += (float4)(acc_sq, (float)rays);
 }

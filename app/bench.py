@@ -1,0 +1,119 @@
+"""`pathtrace bench`: the report's measurement (1920x1080, 1000 samples per pixel, the scenes of
+docs/benchmarks.md) on each device asked for, with both estimators.
+
+The timed region is what a user waits for once the kernels are built: the BVH build, the
+uploads, every launch, and reading the image back. Compilation is timed apart, cold (no cache)
+and warm (from the binary cache). A one-sample warm-up launch runs first, outside the timed
+region, because some drivers (PoCL among them) finish compiling a kernel at its first launch.
+"""
+
+import datetime
+import json
+import platform
+import sys
+import time
+from dataclasses import asdict, dataclass
+
+from app.device import build_program, choose_device, list_devices
+from app.errors import UserError
+from app.render import render_samples
+from app.renderer import Renderer
+from app.scene import load_scene
+
+TARGET_SCENES = ("simple", "spheres8k", "spheres64k",
+                 "simple-diffuse", "spheres8k-diffuse", "spheres64k-diffuse")
+COMPARISON_DEPTH = 8
+
+
+@dataclass
+class Result:
+    scene: str
+    device: str
+    estimator: str            # "rr": the report's (Russian roulette); "depth8": comparison mode
+    width: int
+    height: int
+    spp: int
+    seconds: float
+    msamples_per_s: float
+    mrays_per_s: float
+    bvh_seconds: float
+    build_cold_seconds: float
+    build_warm_seconds: float
+
+
+def default_estimator(scene_name: str) -> str:
+    """The report's estimator on the report's scenes, the comparison mode on -diffuse ones."""
+    return "depth8" if scene_name.endswith("-diffuse") else "rr"
+
+
+def measure(backend, scene, estimator, width, height, spp, builds) -> Result:
+    settings = dict(max_depth=COMPARISON_DEPTH, russian_roulette=False) if estimator == "depth8" \
+        else dict(max_depth=0, russian_roulette=True)
+    scene = scene.with_settings(**settings)
+    Renderer(backend, scene, 16, 16).add_samples(1)   # warm-up: lazy kernel compilation
+    backend.queue.finish()
+    start = time.perf_counter()
+    renderer = Renderer(backend, scene, width, height)
+    render_samples(renderer, spp, launch_seconds=0.5)
+    renderer.mean()
+    seconds = time.perf_counter() - start
+    rays = renderer.rays_traced()
+    return Result(scene.name, backend.device.describe(), estimator, width, height, spp, seconds,
+                  width * height * spp / seconds / 1e6, rays / seconds / 1e6,
+                  renderer.bvh_seconds, *builds)
+
+
+def kernel_build_times(backend):
+    cold = build_program(backend.context, backend.device.device, use_cache=False).seconds
+    build_program(backend.context, backend.device.device)          # fills the cache if empty
+    warm = build_program(backend.context, backend.device.device).seconds
+    return cold, warm
+
+
+def run(device_specs, scene_names, estimators, width, height, spp, log=print):
+    specs = [str(d.index) for d in list_devices()] if "all" in device_specs else device_specs
+    results = []
+    for spec in specs:
+        backend = choose_device(spec)
+        builds = kernel_build_times(backend)
+        for name in scene_names:
+            scene = load_scene(name)
+            for est in estimators or [default_estimator(name)]:
+                r = measure(backend, scene, est, width, height, spp, builds)
+                log(format_row(r))
+                results.append(r)
+    return results
+
+
+HEADER = (f"{'scene':<20} {'device':<44} {'est.':<6} {'size':>9} {'spp':>5} {'seconds':>8} "
+          f"{'Msamples/s':>10} {'Mrays/s':>8} {'BVH s':>6} {'build cold/warm s':>17}")
+
+
+def format_row(r: Result) -> str:
+    return (f"{r.scene:<20} {r.device[:44]:<44} {r.estimator:<6} {f'{r.width}x{r.height}':>9} "
+            f"{r.spp:>5} {r.seconds:>8.3f} {r.msamples_per_s:>10.1f} {r.mrays_per_s:>8.1f} "
+            f"{r.bvh_seconds:>6.3f} {r.build_cold_seconds:>8.2f}/{r.build_warm_seconds:<8.3f}")
+
+
+def write_json(path, results, argv):
+    import pyopencl as cl
+    data = {
+        "date": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+        "command": "pathtrace " + " ".join(argv),
+        "host": platform.node(), "python": sys.version.split()[0], "pyopencl": cl.VERSION_TEXT,
+        "results": [asdict(r) for r in results],
+    }
+    from app.image_io import atomic_write_text
+    atomic_write_text(path, json.dumps(data, indent=2) + "\n")
+
+
+def validate(args):
+    if args.quick:
+        args.size, args.spp = args.size or (320, 180), args.spp or 8
+    args.size = args.size or (1920, 1080)
+    args.spp = args.spp or 1000
+    for name in args.scenes:
+        load_scene(name)     # fail on a bad name before any device work
+    unknown = set(args.estimator or []) - {"rr", "depth8"}
+    if unknown:
+        raise UserError(f"--estimator: unknown '{sorted(unknown)[0]}' (use rr or depth8)")
