@@ -135,6 +135,27 @@ def cmd_render(args):
     return 0
 
 
+def cmd_view(args):
+    from app.device import choose_device
+    from app.scene import load_scene
+    from app.viewer.window import Viewer, no_display_message
+    import os
+
+    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        raise UserError(no_display_message())
+    scene = apply_render_options(load_scene(args.scene), args)
+    backend = choose_device(args.device)
+    width, height = args.size or (1280, 720)
+    viewer = Viewer(backend, scene, width, height, args.screenshot_dir)
+    try:
+        viewer.run(args.frames)
+        if args.screenshot:
+            viewer.screenshot()
+    finally:
+        viewer.close()
+    return 0
+
+
 def cmd_bench(args):
     from app import bench
 
@@ -170,6 +191,15 @@ def build_parser():
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     add_render_options(p)
     p.set_defaults(func=cmd_render)
+
+    p = sub.add_parser("view", help="open the interactive viewer", epilog=EPILOG)
+    p.add_argument("scene", nargs="?", default="simple", help="a .toml file or a built-in name (default simple)")
+    p.add_argument("--screenshot-dir", default="screenshots", metavar="DIR",
+                   help="where P / F12 / the panel's button write PNG + EXR (default ./screenshots)")
+    p.add_argument("--frames", type=_int_range(1), metavar="N", help="close after N frames (for scripts)")
+    p.add_argument("--screenshot", action="store_true", help="take a screenshot when closing")
+    add_render_options(p)
+    p.set_defaults(func=cmd_view)
 
     from app.bench import TARGET_SCENES
     p = sub.add_parser("bench", help="time renders of the benchmark scenes (the report's table)",

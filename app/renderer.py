@@ -115,6 +115,10 @@ class Renderer:
         cl.enqueue_copy(self.backend.queue, out, self._buffers[name])
         return out
 
+    def read_sum(self) -> np.ndarray:
+        """The raw accumulation buffer, (H, W, 4): radiance sums in rgb, sample count in a."""
+        return self._read("sum")
+
     def mean(self) -> np.ndarray:
         """The image so far: mean radiance per pixel, (H, W, 3) float32."""
         return self._read("sum")[..., :3] / max(self.samples, 1)

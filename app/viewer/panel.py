@@ -1,0 +1,87 @@
+"""The imgui panel. Changes that alter the rendered image go through the Renderer, which resets
+the accumulation; display-only ones (exposure, tone curve) do not reset it."""
+
+import numpy as np
+
+from app.builtin_scenes import BUILTIN_SCENES
+from app.tonemap import TONEMAPS
+
+_state = {"scene_file": ""}
+
+
+def draw_panel(v):
+    imgui = v.imgui
+    r = v.renderer
+    imgui.set_next_window_pos((10, 10), imgui.Cond_.first_use_ever)
+    imgui.set_next_window_size((330, 0), imgui.Cond_.first_use_ever)
+    imgui.begin("pathtrace")
+    imgui.text(f"device: {v.backend.device.name[:38]}")
+    imgui.text(f"{r.samples} spp   {r.width}x{r.height}{'  (preview)' if v.scale > 1 else ''}")
+    imgui.text(f"{v.samples_per_second / 1e6:.1f} Msamples/s   {v.frame_ms:.1f} ms/frame")
+    imgui.text(f"display: {v.display_path}")
+
+    if imgui.collapsing_header("Image", imgui.TreeNodeFlags_.default_open):
+        _, v.exposure = imgui.slider_float("exposure (EV)", v.exposure, -8.0, 8.0)
+        current = TONEMAPS.index(v.tonemap)
+        changed, current = imgui.combo("tone curve", current, list(TONEMAPS))
+        if changed:
+            v.tonemap = TONEMAPS[current]
+        s = r.settings
+        changed, depth = imgui.slider_int("max depth (0: none)", s.max_depth, 0, 64)
+        if changed and (depth > 0 or s.russian_roulette):
+            r.set_settings(max_depth=depth)
+        changed, rr = imgui.checkbox("Russian roulette", s.russian_roulette)
+        if changed and (rr or s.max_depth > 0):
+            r.set_settings(russian_roulette=rr)
+        env = r.environment
+        changed, value = imgui.slider_float("env intensity", env.intensity, 0.0, 10.0)
+        if changed:
+            env.intensity = value
+            r.reset()
+        changed, value = imgui.slider_float("env rotation", env.rotation, -180.0, 180.0)
+        if changed:
+            env.rotation = value
+            r.reset()
+
+    if imgui.collapsing_header("Camera", imgui.TreeNodeFlags_.default_open):
+        _, v.controls.speed = imgui.slider_float("speed", v.controls.speed, 0.01, 100.0,
+                                                 flags=imgui.SliderFlags_.logarithmic)
+        changed, fov = imgui.slider_float("vertical fov", r.camera.vfov, 5.0, 120.0)
+        if changed:
+            r.camera.vfov = fov
+            r.reset()
+        imgui.text_wrapped("WASD move, Q/E down/up, right mouse look, wheel speed, Shift fast, "
+                           "left click picks a sphere, P or F12 screenshot")
+
+    if imgui.collapsing_header("Scene"):
+        names = list(BUILTIN_SCENES)
+        current = names.index(r.scene.name) if r.scene.name in names else -1
+        changed, current = imgui.combo("built-in", current, names)
+        if changed:
+            v.load_scene(names[current])
+        _, _state["scene_file"] = imgui.input_text("file", _state["scene_file"])
+        if imgui.button("open file"):
+            v.load_scene(_state["scene_file"])
+
+    if v.selected is not None and imgui.collapsing_header("Selected sphere", imgui.TreeNodeFlags_.default_open):
+        s, i = r.scene, v.selected
+        imgui.text(f"sphere {i}: centre {np.round(s.spheres[i, :3], 2).tolist()}, r {s.spheres[i, 3]:.3g}")
+        changed_d, rho_d = imgui.color_edit3("rho_d", s.rho_d[i].tolist())
+        changed_s, rho_s = imgui.color_edit3("rho_s", s.rho_s[i].tolist())
+        changed_n, n = imgui.slider_float("n", float(s.exponent[i]), 0.0, 5000.0,
+                                          flags=imgui.SliderFlags_.logarithmic)
+        changed_e, le = imgui.input_float3("emission", s.emission[i].tolist())
+        if changed_d or changed_s or changed_n or changed_e:
+            v.edit_material(i, rho_d=np.clip(rho_d, 0, 1), rho_s=np.clip(rho_s, 0, 1),
+                            exponent=n, emission=np.maximum(le, 0))
+
+    if imgui.collapsing_header("Screenshots", imgui.TreeNodeFlags_.default_open):
+        changed, folder = imgui.input_text("folder", str(v.screenshot_dir))
+        if changed:
+            from pathlib import Path
+            v.screenshot_dir = Path(folder)
+        if imgui.button("screenshot (P)"):
+            v.screenshot()
+    if v.message:
+        imgui.text_wrapped(v.message)
+    imgui.end()
