@@ -16,7 +16,7 @@ from app.types import BVH_NODE
 
 MAX_BINS = 16
 MAX_LEAF_SIZE = 4
-MAX_DEPTH = 60              # kernels/intersect.cl keeps a 64-entry stack
+MAX_DEPTH = 30              # kernels/intersect.cl keeps a 32-entry stack
 TRAVERSAL_COST = 0.5        # relative to one sphere test, as in pbrt-v4's BVH build
 
 

@@ -13,6 +13,9 @@ float2 direction_to_latlong(float3 d, float rotation)
 
 float3 lookup_environment(const global float4 *env, const RenderParams *p, float3 d)
 {
+    /* a constant colour needs no mapping: skips atan2 and acos for most rays of most scenes */
+    if (p->env_width == 1 && p->env_height == 1)
+        return env[0].xyz * p->env_scale.xyz;
     float2 uv = direction_to_latlong(d, p->env_rotation);
     float x = uv.x * p->env_width - 0.5f;
     float y = clamp(uv.y * p->env_height - 0.5f, 0.0f, (float)(p->env_height - 1));

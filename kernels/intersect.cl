@@ -51,19 +51,20 @@ void intersect_leaf(const global Sphere *spheres, int first, int count, float3 o
     }
 }
 
-#define BVH_STACK_SIZE 64
+/* app/bvh.py keeps the tree at most 30 levels deep, and traversal pushes one node per level. */
+#define BVH_STACK_SIZE 32
 
 /* Nearest hit along o + t d, t in (0, t_max), ignoring sphere `skip` (the one the ray leaves:
  * a ray leaving a convex surface into its outer hemisphere cannot meet it again, which removes
- * self-intersection without any epsilon). Children are visited nearer-first, and a popped
- * node is dropped when the hit found meanwhile is nearer than its box. */
+ * self-intersection without any epsilon). Children are visited nearer-first. The stack holds
+ * node indices only (small private memory keeps GPU occupancy up); a popped node's children
+ * are tested against the nearest hit found meanwhile. */
 Hit intersect_scene(const global BVHNode *nodes, const global Sphere *spheres, float3 o, float3 d,
                     float t_max, int skip)
 {
     Hit hit = {t_max, -1};
     float3 inv_d = 1.0f / d;
     int stack[BVH_STACK_SIZE];
-    float stack_t[BVH_STACK_SIZE];
     int top = 0;
     int node = 0;
     for (;;) {
@@ -84,17 +85,14 @@ Hit intersect_scene(const global BVHNode *nodes, const global Sphere *spheres, f
         t1 = t1 < hit.t ? t1 : INFINITY;
         if (t0 < INFINITY && t1 < INFINITY) {
             int near = t0 <= t1 ? c0->index : c1->index;
-            stack[top] = t0 <= t1 ? c1->index : c0->index;
-            stack_t[top++] = fmax(t0, t1);
+            stack[top++] = t0 <= t1 ? c1->index : c0->index;
             node = near;
             continue;
         }
         if (t0 < INFINITY) { node = c0->index; continue; }
         if (t1 < INFINITY) { node = c1->index; continue; }
-        do {
-            if (top == 0)
-                return hit;
-            node = stack[--top];
-        } while (stack_t[top] >= hit.t);
+        if (top == 0)
+            return hit;
+        node = stack[--top];
     }
 }
