@@ -23,13 +23,15 @@ from app.scene import load_scene
 TARGET_SCENES = ("simple", "spheres8k", "spheres64k",
                  "simple-diffuse", "spheres8k-diffuse", "spheres64k-diffuse")
 COMPARISON_DEPTH = 8
+ESTIMATORS = ("rr", "depth8", "rr+nee", "depth8+nee")
 
 
 @dataclass
 class Result:
     scene: str
     device: str
-    estimator: str            # "rr": the report's (Russian roulette); "depth8": comparison mode
+    estimator: str            # "rr": the report's (Russian roulette); "depth8": comparison mode;
+                              # "+nee": with next-event estimation
     width: int
     height: int
     spp: int
@@ -47,8 +49,9 @@ def default_estimator(scene_name: str) -> str:
 
 
 def measure(backend, scene, estimator, width, height, spp, builds) -> Result:
-    settings = dict(max_depth=COMPARISON_DEPTH, russian_roulette=False) if estimator == "depth8" \
+    settings = dict(max_depth=COMPARISON_DEPTH, russian_roulette=False) if estimator.startswith("depth8") \
         else dict(max_depth=0, russian_roulette=True)
+    settings["nee"] = estimator.endswith("+nee")
     scene = scene.with_settings(**settings)
     Renderer(backend, scene, 16, 16).add_samples(1)   # warm-up: lazy kernel compilation
     backend.queue.finish()
@@ -85,12 +88,12 @@ def run(device_specs, scene_names, estimators, width, height, spp, log=print):
     return results
 
 
-HEADER = (f"{'scene':<20} {'device':<44} {'est.':<6} {'size':>9} {'spp':>5} {'seconds':>8} "
+HEADER = (f"{'scene':<20} {'device':<44} {'est.':<10} {'size':>9} {'spp':>5} {'seconds':>8} "
           f"{'Msamples/s':>10} {'Mrays/s':>8} {'BVH s':>6} {'build cold/warm s':>17}")
 
 
 def format_row(r: Result) -> str:
-    return (f"{r.scene:<20} {r.device[:44]:<44} {r.estimator:<6} {f'{r.width}x{r.height}':>9} "
+    return (f"{r.scene:<20} {r.device[:44]:<44} {r.estimator:<10} {f'{r.width}x{r.height}':>9} "
             f"{r.spp:>5} {r.seconds:>8.3f} {r.msamples_per_s:>10.1f} {r.mrays_per_s:>8.1f} "
             f"{r.bvh_seconds:>6.3f} {r.build_cold_seconds:>8.2f}/{r.build_warm_seconds:<8.3f}")
 
@@ -114,6 +117,6 @@ def validate(args):
     args.spp = args.spp or 1000
     for name in args.scenes:
         load_scene(name)     # fail on a bad name before any device work
-    unknown = set(args.estimator or []) - {"rr", "depth8"}
+    unknown = set(args.estimator or []) - set(ESTIMATORS)
     if unknown:
-        raise UserError(f"--estimator: unknown '{sorted(unknown)[0]}' (use rr or depth8)")
+        raise UserError(f"--estimator: unknown '{sorted(unknown)[0]}' (use {', '.join(ESTIMATORS)})")

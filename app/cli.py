@@ -54,6 +54,9 @@ def add_render_options(p: argparse.ArgumentParser):
                    help="longest path in vertices, 1 = emitters seen directly; 0 = unlimited")
     p.add_argument("--no-rr", action="store_true",
                    help="no Russian roulette: paths run to --max-depth (the comparison mode)")
+    p.add_argument("--nee", action=argparse.BooleanOptionalAction, default=None,
+                   help="next-event estimation: sample lights at every bounce, combined by MIS "
+                        "(default on; --no-nee gives the report's estimator)")
 
 
 def apply_render_options(scene, args):
@@ -64,7 +67,8 @@ def apply_render_options(scene, args):
     if not rr and max_depth == 0:
         raise UserError("--no-rr needs --max-depth N (N >= 1), or paths would never end")
     changes = dict(width=width, height=height, max_depth=max_depth, russian_roulette=rr,
-                   seed=s.seed if args.seed is None else args.seed)
+                   seed=s.seed if args.seed is None else args.seed,
+                   nee=s.nee if args.nee is None else args.nee)
     if getattr(args, "spp", None) is not None:
         changes["spp"] = args.spp
     return scene.with_settings(**changes)
@@ -211,8 +215,9 @@ def build_parser():
                    help="as for render; repeat for several, or 'all' (default: auto)")
     p.add_argument("--scenes", nargs="+", default=list(TARGET_SCENES), metavar="SCENE")
     p.add_argument("--estimator", action="append", metavar="EST",
-                   help="rr (the report's) or depth8 (comparison mode); repeatable; "
-                        "default: rr for the report's scenes, depth8 for -diffuse ones")
+                   help="rr (the report's), depth8 (comparison mode), or either with +nee "
+                        "(next-event estimation); repeatable; default: rr for the report's "
+                        "scenes, depth8 for -diffuse ones, both without NEE")
     p.add_argument("--size", type=_size, metavar="WxH", help="default 1920x1080")
     p.add_argument("--spp", type=_int_range(1), help="samples per pixel (default 1000)")
     p.add_argument("--quick", action="store_true", help="a smoke test: 320x180, 8 spp")

@@ -15,7 +15,7 @@ from app.resources import resource_dir
 
 # The order in which the kernel files are joined into one program.
 KERNEL_FILES = ("types.h", "rng.cl", "sampling.cl", "intersect.cl", "phong.cl",
-                "environment.cl", "camera.cl", "integrator.cl")
+                "environment.cl", "lights.cl", "camera.cl", "integrator.cl")
 
 # No -cl-fast-relaxed-math: it implies finite math, and the kernels rely on INFINITY.
 BUILD_OPTIONS = ("-cl-mad-enable", "-cl-no-signed-zeros")

@@ -24,6 +24,25 @@ class Environment:
         from app.image_io import read_hdr
         return cls(read_hdr(path, where), intensity, rotation, str(path))
 
+    def sampling_cdfs(self):
+        """The piecewise-constant distribution kernels/environment.cl samples: luminance times
+        sin(theta) per texel; a marginal CDF over rows (H + 1 values) and a conditional CDF per
+        row (H x (W + 1)). A constant environment needs none (it is sampled by cosine)."""
+        h, w, _ = self.image.shape
+        if h == 1 and w == 1:
+            return np.zeros(2, np.float32), np.zeros(2, np.float32)
+        theta = (np.arange(h) + 0.5) / h * np.pi
+        weight = (self.image @ np.array([0.2126, 0.7152, 0.0722])) * np.sin(theta)[:, None]
+        weight = np.maximum(weight, 0.0) + 1e-12     # no zero rows
+        row_sum = weight.sum(axis=1)
+        conditional = np.zeros((h, w + 1))
+        conditional[:, 1:] = np.cumsum(weight, axis=1) / row_sum[:, None]
+        conditional[:, -1] = 1.0
+        marginal = np.zeros(h + 1)
+        marginal[1:] = np.cumsum(row_sum) / row_sum.sum()
+        marginal[-1] = 1.0
+        return marginal.astype(np.float32), conditional.astype(np.float32)
+
     def rgba(self) -> np.ndarray:
         """The map as float4 texels, the layout the kernel reads."""
         h, w, _ = self.image.shape

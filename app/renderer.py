@@ -12,6 +12,7 @@ from app.bvh import build_bvh
 from app.camera import Camera
 from app.device import Backend
 from app.environment import Environment
+from app.lights import build_light_table
 from app.scene import Scene
 from app.types import RENDER_PARAMS, pack_materials
 
@@ -41,15 +42,28 @@ class Renderer:
         self.set_environment(scene.environment)
 
     def upload_materials(self):
-        """Uploads the scene's materials (after an edit of scene.rho_d etc.); resets."""
+        """Uploads the scene's materials and its light table (after an edit of scene.rho_d
+        etc.); resets."""
         s, o = self.scene, self.bvh.order
         self._upload("materials", pack_materials(s.rho_d[o], s.rho_s[o], s.exponent[o], s.emission[o]))
+        if hasattr(self, "environment"):
+            self._upload_lights()
         self.reset()
 
     def set_environment(self, environment: Environment):
         self.environment = environment
         self._upload("env", environment.rgba())
+        marginal, conditional = environment.sampling_cdfs()
+        self._upload("env_marginal", marginal)
+        self._upload("env_conditional", conditional)
+        self._upload_lights()
         self.reset()
+
+    def _upload_lights(self):
+        o = self.bvh.order
+        self.lights = build_light_table(self.scene.spheres[o], self.scene.emission[o], self.environment)
+        self._upload("lights", self.lights.lights)
+        self._upload("light_pick", self.lights.pick)
 
     def set_camera(self, camera: Camera):
         self.camera = camera.copy()
@@ -94,12 +108,16 @@ class Renderer:
         h, w, _ = self.environment.image.shape
         p["env_width"], p["env_height"] = w, h
         p["env_rotation"] = self.environment.rotation / 360.0
+        p["nee"] = int(self.settings.nee)
+        p["num_lights"] = self.lights.count
+        p["env_pick"] = self.lights.env_pick
         return p
 
     def add_samples(self, count: int = 1) -> cl.Event:
         """Queues one launch that adds `count` samples to every pixel; returns its event."""
         b = self._buffers
-        self.kernel.set_args(b["nodes"], b["spheres"], b["materials"], b["env"],
+        self.kernel.set_args(b["nodes"], b["spheres"], b["materials"], b["env"], b["lights"],
+                             b["light_pick"], b["env_marginal"], b["env_conditional"],
                              self.params(count), b["sum"], b["sum_sq"])
         local = (8, 8)
         global_size = tuple(-(-n // l) * l for n, l in zip((self.width, self.height), local))

@@ -23,6 +23,7 @@ class RenderSettings:
     max_depth: int = 0            # 0: paths end by Russian roulette alone
     russian_roulette: bool = True
     seed: int = 0
+    nee: bool = True              # next-event estimation with MIS; off: the report's estimator
 
 
 @dataclass
@@ -199,16 +200,17 @@ class _Reader:
 
     def settings(self, data):
         where = "render"
-        self.table(data, where, {"width", "height", "spp", "max_depth", "russian_roulette", "seed"})
-        rr = data.get("russian_roulette", True)
-        if not isinstance(rr, bool):
-            self.fail("render.russian_roulette", f"must be true or false, got {rr!r}")
+        self.table(data, where, {"width", "height", "spp", "max_depth", "russian_roulette", "seed", "nee"})
+        rr, nee = data.get("russian_roulette", True), data.get("nee", True)
+        for key, value in (("russian_roulette", rr), ("nee", nee)):
+            if not isinstance(value, bool):
+                self.fail(f"render.{key}", f"must be true or false, got {value!r}")
         s = RenderSettings(
             width=self.number(data, "width", where, default=960, low=1, high=16384, integer=True),
             height=self.number(data, "height", where, default=540, low=1, high=16384, integer=True),
             spp=self.number(data, "spp", where, default=64, low=1, integer=True),
             max_depth=self.number(data, "max_depth", where, default=0, low=0, integer=True),
-            russian_roulette=rr,
+            russian_roulette=rr, nee=nee,
             seed=self.number(data, "seed", where, default=0, low=0, high=2**32 - 1, integer=True))
         if not s.russian_roulette and s.max_depth == 0:
             self.fail("render.russian_roulette", "false needs a max_depth above 0, or paths never end")

@@ -29,3 +29,56 @@ float3 lookup_environment(const global float4 *env, const RenderParams *p, float
     float4 bottom = mix(env[y1 * p->env_width + x0], env[y1 * p->env_width + x1], ax);
     return mix(top, bottom, ay).xyz * p->env_scale.xyz;
 }
+
+/* The inverse of direction_to_latlong. */
+float3 latlong_to_direction(float u, float v, float rotation)
+{
+    float phi = 2.0f * PI_F * (u - rotation - 0.5f);
+    float theta = PI_F * v;
+    return (float3)(sin(theta) * sin(phi), cos(theta), -sin(theta) * cos(phi));
+}
+
+/* The interval i of a cdf of n intervals (cdf[0] = 0, cdf[n] = 1) with cdf[i] <= x < cdf[i+1];
+ * intervals of zero width are never returned. */
+int find_interval(const global float *cdf, int n, float x)
+{
+    int lo = 0, hi = n;
+    while (hi - lo > 1) {
+        int mid = (lo + hi) / 2;
+        if (cdf[mid] <= x)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* Importance sampling of the map: a piecewise-constant 2D distribution over its texels,
+ * proportional to luminance times sin(theta) (pbrt-v4, section 12.5.2), sampled row first
+ * (marginal: height + 1 values) then column (conditional: height rows of width + 1 values).
+ * The density per solid angle is pdf(u, v) / (2 pi^2 sin(theta)). */
+float pdf_environment_map(const global float *marginal, const global float *conditional,
+                          const RenderParams *p, float3 d)
+{
+    float sin_t = sqrt(max(0.0f, 1.0f - d.y * d.y));
+    if (sin_t <= 0.0f)
+        return 0.0f;
+    float2 uv = direction_to_latlong(d, p->env_rotation);
+    int w = p->env_width, h = p->env_height;
+    int row = min((int)(uv.y * h), h - 1), col = min((int)(uv.x * w), w - 1);
+    const global float *c = conditional + row * (w + 1);
+    float pdf_uv = (marginal[row + 1] - marginal[row]) * h * (c[col + 1] - c[col]) * w;
+    return pdf_uv / (2.0f * PI_F * PI_F * sin_t);
+}
+
+float3 sample_environment_map(const global float *marginal, const global float *conditional,
+                              const RenderParams *p, float u1, float u2)
+{
+    int w = p->env_width, h = p->env_height;
+    int row = find_interval(marginal, h, u1);
+    float v = (row + (u1 - marginal[row]) / (marginal[row + 1] - marginal[row])) / h;
+    const global float *c = conditional + row * (w + 1);
+    int col = find_interval(c, w, u2);
+    float u = (col + (u2 - c[col]) / (c[col + 1] - c[col])) / w;
+    return latlong_to_direction(u, v, p->env_rotation);
+}

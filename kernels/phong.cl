@@ -64,3 +64,12 @@ int sample_phong(const Material *m, float3 n, float3 wo, float4 u, int russian_r
     }
     return 0;
 }
+
+/* The density with which BSDF sampling continues the path in direction wi: pdf_phong times the
+ * probability of going on at all (P_d + P_s under Russian roulette, else 1). Multiple
+ * importance sampling weighs light samples against it. */
+float pdf_continue(const Material *m, float3 n, float3 wo, float3 wi, int russian_roulette)
+{
+    float go_on = russian_roulette ? m->diffuse.w + m->emission.w : 1.0f;
+    return go_on * pdf_phong(m, n, wo, wi);
+}

@@ -27,21 +27,24 @@ def furnace_scene(albedo, env=1.0, **settings):
                    settings=RenderSettings(width=48, height=32, **settings))
 
 
-@pytest.mark.parametrize("settings", [dict(), dict(max_depth=8, russian_roulette=False)])
+@pytest.mark.parametrize("settings", [dict(nee=False), dict(max_depth=8, russian_roulette=False, nee=False),
+                                      dict(nee=True)])
 def test_white_furnace_renders_one_everywhere(backend, settings):
     """A diffuse sphere of albedo 1 under a uniform environment of radiance 1: every path
-    carries exactly 1 (the weight rho_d / P_d is 1 and paths end when they escape)."""
+    carries exactly 1 (the weight rho_d / P_d is 1 and paths end when they escape; with NEE the
+    light sample and the escaping bounce have equal densities, so each carries half)."""
     mean, var, _ = render(backend, furnace_scene(1.0, **settings), 32)
     np.testing.assert_allclose(mean, 1.0, atol=1e-5)
     assert var.max() < 1e-10
 
 
+@pytest.mark.parametrize("nee", [False, True])
 @pytest.mark.parametrize("rr", [True, False])
-def test_grey_furnace_renders_albedo_times_environment(backend, rr):
+def test_grey_furnace_renders_albedo_times_environment(backend, rr, nee):
     """A convex sphere's reflected rays always escape, so L = albedo * L_env on the sphere and
     L_env around it; with Russian roulette only in expectation."""
     albedo, env = np.array([0.2, 0.5, 0.8]), 2.0
-    scene = furnace_scene(albedo, env, **({} if rr else dict(max_depth=8, russian_roulette=False)))
+    scene = furnace_scene(albedo, env, nee=nee, **({} if rr else dict(max_depth=8, russian_roulette=False)))
     mean, var, r = render(backend, scene, 256)
     # which pixels see the sphere, from the pixel's corners (pixels on the outline are mixed)
     on = sphere_coverage(r, scene)
@@ -73,7 +76,8 @@ def sphere_coverage(renderer, scene):
     return hits / 9
 
 
-def test_sphere_light_irradiance(backend):
+@pytest.mark.parametrize("nee", [False, True])
+def test_sphere_light_irradiance(backend, nee):
     """A diffuse floor under a sphere light in a black world, direct light only (max_depth 2).
     A uniform sphere light of radiance Le and radius r, fully above the horizon, gives
     irradiance E = pi Le r^2 cos(theta) / d^2 (as a point source of the same power), so the
@@ -84,36 +88,43 @@ def test_sphere_light_irradiance(backend):
     b.add(centre, r_light, emission=le)
     scene = b.build("irradiance", camera=Camera([0, 6, 6], [0, 0, 0], [0, 1, 0], 50.0),
                     environment=Environment.constant((0, 0, 0)),
-                    settings=RenderSettings(width=40, height=30, max_depth=2, russian_roulette=False))
-    mean, _, r = render(backend, scene, 1024)
-    # the floor point seen through each pixel's centre (the radiance varies slowly across a pixel)
+                    settings=RenderSettings(width=40, height=30, max_depth=2, russian_roulette=False, nee=nee))
+    mean, var, r = render(backend, scene, 1024)
+    # the closed form averaged over each pixel (8x8 points), as the jittered samples average it
     w, h = r.width, r.height
     fwd, right, up = scene.camera.basis(w / h)
-    x = (np.arange(w) + 0.5) / w * 2 - 1
-    y = 1 - (np.arange(h) + 0.5) / h * 2
-    d = fwd + x[None, :, None] * right + y[:, None, None] * up
-    d /= np.linalg.norm(d, axis=-1, keepdims=True)
     floor_c, floor_r = scene.spheres[0, :3].astype(np.float64), 1e4
-    f = scene.camera.eye - floor_c
-    bq = np.sum(d * f, -1)
-    disc = bq * bq - (f @ f - floor_r ** 2)
-    t = np.where(disc > 0, -bq - np.sqrt(np.maximum(disc, 0)), -1)
-    p = scene.camera.eye + t[..., None] * d
-    normal = (p - floor_c) / floor_r
-    to_light = centre - p
-    dist = np.linalg.norm(to_light, axis=-1)
-    expected = rho * le * r_light ** 2 * np.sum(normal * to_light, -1) / dist ** 3
+
+    def closed_form(sx, sy):
+        x = (np.arange(w) + sx) / w * 2 - 1
+        y = 1 - (np.arange(h) + sy) / h * 2
+        d = fwd + x[None, :, None] * right + y[:, None, None] * up
+        d /= np.linalg.norm(d, axis=-1, keepdims=True)
+        f = scene.camera.eye - floor_c
+        bq = np.sum(d * f, -1)
+        disc = bq * bq - (f @ f - floor_r ** 2)
+        t = np.where(disc > 0, -bq - np.sqrt(np.maximum(disc, 0)), -1)
+        p = scene.camera.eye + t[..., None] * d
+        to_light = centre - p
+        dist = np.linalg.norm(to_light, axis=-1)
+        return rho * le * r_light ** 2 * np.sum((p - floor_c) / floor_r * to_light, -1) / dist ** 3, t
+
+    offsets = (np.arange(8) + 0.5) / 8
+    expected = np.mean([closed_form(sx, sy)[0] for sx in offsets for sy in offsets], axis=0)
+    t = closed_form(0.5, 0.5)[1]
     # leave out the pixels that see the light itself or lie next to it
     light_px = sphere_coverage(r, scene.__class__(**{**scene.__dict__, "spheres": scene.spheres[1:]}))
     floor = (t > 0) & (np.abs(np.gradient(light_px)[0]) + np.abs(np.gradient(light_px)[1]) + light_px == 0)
     assert floor.sum() > 0.8 * w * h
-    # Each sample is rho Le (the bounce met the light) or 0: a binomial with the exact variance
-    # below, which stays right where only a few of a pixel's samples meet the light. Outside
+    # Without NEE each sample is rho Le (the bounce met the light) or 0: a binomial with the
+    # exact variance below, which stays right where only a few of a pixel's samples meet the
+    # light. With NEE every sample sees the light and the sample variance is reliable. Outside
     # `floor` the comparison is switched off by putting the expectation there.
     spp = r.samples
-    var_exact = np.where(floor, expected * (rho * le - expected) / spp, 0.0)
+    var_of_mean = var[..., 0] if nee else expected * (rho * le - expected) / spp
+    var_of_mean = np.where(floor, var_of_mean, 0.0)
     got = np.where(floor, mean[..., 0], expected)
-    ok, pmin, threshold = z_test(got[..., None], var_exact[..., None], expected[..., None], block=4)
+    ok, pmin, threshold = z_test(got[..., None], var_of_mean[..., None], expected[..., None], block=4)
     assert ok, (pmin, threshold)
 
 

@@ -17,15 +17,16 @@ def test_references_are_present():
     assert {p.stem for p in REFERENCES} >= {"simple-diffuse", "spheres8k-diffuse"}
 
 
+@pytest.mark.parametrize("nee", [True, False], ids=["nee", "no-nee"])
 @pytest.mark.parametrize("path", REFERENCES, ids=lambda p: p.stem)
-def test_matches_mitsuba(backend, path):
+def test_matches_mitsuba(backend, path, nee):
     ref = np.load(path)
     h, w, _ = ref["mean"].shape
-    scene = load_scene(path.stem).with_settings(max_depth=int(ref["max_depth"]), russian_roulette=False)
+    scene = load_scene(path.stem).with_settings(max_depth=int(ref["max_depth"]), russian_roulette=False, nee=nee)
     r = Renderer(backend, scene, w, h)
-    # Mitsuba samples the lights; we hit them by chance. Far from the lamp of `simple` a pixel
-    # meets it about once in a thousand samples, and a sample variance that has not seen it is
-    # too small. Enough samples per pixel, pooled over 4x4 blocks, see it dozens of times.
+    # Without NEE we hit the lights by chance: far from the lamp of `simple` a pixel meets it
+    # about once in a thousand samples, and a sample variance that has not seen it is too
+    # small. Enough samples per pixel, pooled over 4x4 blocks, see it dozens of times.
     for _ in range(32):
         r.add_samples(128)
     r.finish()

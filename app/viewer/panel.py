@@ -33,6 +33,9 @@ def draw_panel(v):
         changed, rr = imgui.checkbox("Russian roulette", s.russian_roulette)
         if changed and (rr or s.max_depth > 0):
             r.set_settings(russian_roulette=rr)
+        changed, nee = imgui.checkbox("next-event estimation (MIS)", s.nee)
+        if changed:
+            r.set_settings(nee=nee)
         env = r.environment
         changed, value = imgui.slider_float("env intensity", env.intensity, 0.0, 10.0)
         if changed:
