@@ -20,7 +20,8 @@ from app.types import RENDER_PARAMS, pack_materials
 class Renderer:
     def __init__(self, backend: Backend, scene: Scene, width: int = None, height: int = None):
         self.backend = backend
-        self.kernel = cl.Kernel(backend.program, "render")
+        self.kernels = {False: cl.Kernel(backend.program, "render"),
+                        True: cl.Kernel(backend.program, "render_nee")}
         self._buffers = {}
         self.width = self.height = 0
         self.samples = 0          # samples per pixel accumulated so far
@@ -108,7 +109,6 @@ class Renderer:
         h, w, _ = self.environment.image.shape
         p["env_width"], p["env_height"] = w, h
         p["env_rotation"] = self.environment.rotation / 360.0
-        p["nee"] = int(self.settings.nee)
         p["num_lights"] = self.lights.count
         p["env_pick"] = self.lights.env_pick
         return p
@@ -116,12 +116,13 @@ class Renderer:
     def add_samples(self, count: int = 1) -> cl.Event:
         """Queues one launch that adds `count` samples to every pixel; returns its event."""
         b = self._buffers
-        self.kernel.set_args(b["nodes"], b["spheres"], b["materials"], b["env"], b["lights"],
+        kernel = self.kernels[self.settings.nee]
+        kernel.set_args(b["nodes"], b["spheres"], b["materials"], b["env"], b["lights"],
                              b["light_pick"], b["env_marginal"], b["env_conditional"],
                              self.params(count), b["sum"], b["sum_sq"])
         local = (8, 8)
         global_size = tuple(-(-n // l) * l for n, l in zip((self.width, self.height), local))
-        event = cl.enqueue_nd_range_kernel(self.backend.queue, self.kernel, global_size, local)
+        event = cl.enqueue_nd_range_kernel(self.backend.queue, kernel, global_size, local)
         self.samples += count
         return event
 

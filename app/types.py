@@ -36,12 +36,12 @@ RENDER_PARAMS = np.dtype([
     ("env_width", np.int32),
     ("env_height", np.int32),
     ("env_rotation", np.float32),
-    ("nee", np.int32),
     ("num_lights", np.int32),
     ("env_pick", np.float32),
     ("pad0", np.int32),
     ("pad1", np.int32),
     ("pad2", np.int32),
+    ("pad3", np.int32),
 ])
 
 LIGHT = np.dtype([

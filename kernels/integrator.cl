@@ -1,8 +1,8 @@
 /* The path tracer: the report's Algorithm 1 (GetRadianceLi), one ray per bounce, extended by
  * next-event estimation. A path's vertex count is its depth; the camera ray's hit is depth 1.
  *
- * With p.nee off this is the report's estimator: light arrives only when a path happens to hit
- * an emitter or escape to the environment. With it on, every vertex also samples a light (an
+ * The kernel `render` is the report's estimator: light arrives only when a path happens to hit
+ * an emitter or escape to the environment. In `render_nee` every vertex also samples a light (an
  * emissive sphere, or the environment) and traces a shadow ray; both ways of reaching a light
  * are kept and weighted by multiple importance sampling (power heuristic), so the estimate is
  * unbiased and the two settings converge to the same image. */
@@ -69,9 +69,11 @@ float3 sample_direct_light(const SceneData *sc, const RenderParams *p, const Mat
     return f * cos_i * le * (w / pdf_light);
 }
 
-/* Returns the radiance arriving at o from direction -d; adds the rays it traced to *rays. */
+/* Returns the radiance arriving at o from direction -d; adds the rays it traced to *rays.
+ * `nee` is a constant in each kernel below, so the compiler builds one lean path tracer
+ * without the light sampling code and one with it. */
 float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d, Rng *rng,
-                  int *rays)
+                  int *rays, const int nee)
 {
     float3 radiance = (float3)(0.0f);
     float3 throughput = (float3)(1.0f);
@@ -86,7 +88,7 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
         Hit hit = intersect_scene(sc->nodes, sc->spheres, o, d, INFINITY, skip);
         if (hit.sphere < 0) {
             float w = 1.0f;
-            if (p->nee && pdf_bsdf > 0.0f && p->env_pick > 0.0f)
+            if (nee && pdf_bsdf > 0.0f && p->env_pick > 0.0f)
                 w = mis_weight(pdf_bsdf, p->env_pick * pdf_environment(sc, p, prev_n, d));
             return radiance + throughput * lookup_environment(sc->env, p, d) * w;
         }
@@ -100,7 +102,7 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
         Material m = sc->materials[hit.sphere];
         if (any(m.emission.xyz > 0.0f)) {
             float w = 1.0f;
-            if (p->nee && pdf_bsdf > 0.0f)
+            if (nee && pdf_bsdf > 0.0f)
                 w = mis_weight(pdf_bsdf, (1.0f - p->env_pick) * sc->light_pick[hit.sphere]
                                              * pdf_sphere_cone(s, prev_x));
             radiance += throughput * m.emission.xyz * w;
@@ -108,7 +110,7 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
         if (depth >= max_depth)
             return radiance;
         float3 x = s.xyz + s.w * n;
-        if (p->nee)
+        if (nee)
             radiance += throughput * sample_direct_light(sc, p, &m, x, n, -d, hit.sphere,
                                                          next_uniform4(rng), rays);
         float3 wi, weight;
@@ -126,27 +128,39 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
 
 /* One work-item per pixel adds p.sample_count samples to the running sums of radiance (rgb; w
  * counts samples) and of its square (rgb, for the per-pixel variance; w counts rays traced). */
-kernel void render(const global BVHNode *nodes, const global Sphere *spheres,
-                   const global Material *materials, const global float4 *env,
-                   const global Light *lights, const global float *light_pick,
-                   const global float *env_marginal, const global float *env_conditional,
-                   const RenderParams p, global float4 *sum, global float4 *sum_sq)
+void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum,
+                  global float4 *sum_sq, const int nee)
 {
     int x = get_global_id(0), y = get_global_id(1);
-    if (x >= p.width || y >= p.height)
+    if (x >= p->width || y >= p->height)
         return;
-    SceneData sc = {nodes, spheres, materials, env, lights, light_pick, env_marginal, env_conditional};
     float3 acc = (float3)(0.0f), acc_sq = (float3)(0.0f);
     int rays = 0;
-    for (uint i = 0; i < p.sample_count; ++i) {
-        Rng rng = make_rng(x, y, p.sample_start + i, p.seed);
+    for (uint i = 0; i < p->sample_count; ++i) {
+        Rng rng = make_rng(x, y, p->sample_start + i, p->seed);
         float4 jitter = next_uniform4(&rng);
-        float3 d = camera_direction(&p, x + jitter.x, y + jitter.y);
-        float3 l = trace_path(&sc, &p, p.eye.xyz, d, &rng, &rays);
+        float3 d = camera_direction(p, x + jitter.x, y + jitter.y);
+        float3 l = trace_path(sc, p, p->eye.xyz, d, &rng, &rays, nee);
         acc += l;
         acc_sq += l * l;
     }
-    int k = y * p.width + x;
-    sum[k] += (float4)(acc, (float)p.sample_count);
+    int k = y * p->width + x;
+    sum[k] += (float4)(acc, (float)p->sample_count);
     sum_sq[k] += (float4)(acc_sq, (float)rays);
 }
+
+#define RENDER_KERNEL(name, nee)                                                                 \
+    kernel void name(const global BVHNode *nodes, const global Sphere *spheres,                 \
+                     const global Material *materials, const global float4 *env,                \
+                     const global Light *lights, const global float *light_pick,                \
+                     const global float *env_marginal, const global float *env_conditional,     \
+                     const RenderParams p, global float4 *sum, global float4 *sum_sq)           \
+    {                                                                                            \
+        SceneData sc = {nodes, spheres, materials, env, lights, light_pick, env_marginal,        \
+                        env_conditional};                                                        \
+        render_pixel(&sc, &p, sum, sum_sq, nee);                                                 \
+    }
+
+/* render: the report's estimator; render_nee: with next-event estimation */
+RENDER_KERNEL(render, 0)
+RENDER_KERNEL(render_nee, 1)

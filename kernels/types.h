@@ -47,12 +47,12 @@ typedef struct {
     int env_width;
     int env_height;
     float env_rotation;  /* turn of the environment about +y, as a fraction of a full turn */
-    int nee;             /* next-event estimation with multiple importance sampling */
     int num_lights;      /* entries of the light table */
     float env_pick;      /* probability that next-event estimation samples the environment */
     int pad0;
     int pad1;
     int pad2;
+    int pad3;
 } RenderParams;
 
 /* One entry of the light table: an emissive sphere, chosen in proportion to its power through
