@@ -142,11 +142,9 @@ def cmd_render(args):
 def cmd_view(args):
     from app.device import choose_device
     from app.scene import load_scene
-    from app.viewer.window import Viewer, no_display_message
-    import os
+    from app.viewer.window import Viewer, require_display
 
-    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
-        raise UserError(no_display_message())
+    require_display()      # before any device work
     scene = apply_render_options(load_scene(args.scene), args)
     backend = choose_device(args.device)
     width, height = args.size or (1280, 720)

@@ -39,26 +39,29 @@ class Renderer:
         self.bvh_seconds = time.perf_counter() - start
         self._upload("nodes", self.bvh.nodes)
         self._upload("spheres", scene.spheres[self.bvh.order])
+        self.environment = scene.environment
+        self._upload_environment()
         self.upload_materials()
-        self.set_environment(scene.environment)
 
     def upload_materials(self):
-        """Uploads the scene's materials and its light table (after an edit of scene.rho_d
-        etc.); resets."""
+        """Uploads the scene's materials and light table (after an edit of scene.rho_d etc.);
+        resets."""
         s, o = self.scene, self.bvh.order
         self._upload("materials", pack_materials(s.rho_d[o], s.rho_s[o], s.exponent[o], s.emission[o]))
-        if hasattr(self, "environment"):
-            self._upload_lights()
+        self._upload_lights()
         self.reset()
 
     def set_environment(self, environment: Environment):
         self.environment = environment
-        self._upload("env", environment.rgba())
-        marginal, conditional = environment.sampling_cdfs()
-        self._upload("env_marginal", marginal)
-        self._upload("env_conditional", conditional)
+        self._upload_environment()
         self._upload_lights()
         self.reset()
+
+    def _upload_environment(self):
+        self._upload("env", self.environment.rgba())
+        marginal, conditional = self.environment.sampling_cdfs()
+        self._upload("env_marginal", marginal)
+        self._upload("env_conditional", conditional)
 
     def _upload_lights(self):
         o = self.bvh.order

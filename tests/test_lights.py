@@ -8,7 +8,7 @@ from scipy import stats
 
 from app.environment import Environment
 from app.lights import alias_table, build_light_table
-from app.types import LIGHT, RENDER_PARAMS
+from app.types import RENDER_PARAMS
 from tests.test_sampling import chi_square
 
 SOURCE = """

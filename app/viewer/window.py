@@ -22,16 +22,20 @@ REST_DELAY = 0.25              # seconds without a move before returning to full
 UPLOAD_INTERVAL = 1 / 30       # the host copy to the display texture runs at most this often
 
 
-def no_display_message():
-    return ("pathtrace view needs a display, and none was found (DISPLAY is not set). "
-            "Render headless with 'pathtrace render SCENE -o out.png', "
-            "or run the viewer on a virtual display: 'xvfb-run -s \"-screen 0 1280x800x24\" pathtrace view'")
+NO_DISPLAY = ("pathtrace view needs a display, and none was found. Render headless with "
+              "'pathtrace render SCENE -o out.png', or run the viewer on a virtual display: "
+              "'xvfb-run -s \"-screen 0 1280x800x24\" pathtrace view'")
+
+
+def require_display():
+    """On Linux a window needs an X11 or Wayland display; say so in one line, not a traceback."""
+    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
+        raise UserError(NO_DISPLAY)
 
 
 class Viewer:
     def __init__(self, backend, scene, width=1280, height=720, screenshot_dir="screenshots"):
-        if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
-            raise UserError(no_display_message())
+        require_display()
         import glfw
         import moderngl
         from imgui_bundle import imgui
@@ -39,7 +43,7 @@ class Viewer:
 
         self.glfw, self.imgui = glfw, imgui
         if not glfw.init():
-            raise UserError(no_display_message())
+            raise UserError(NO_DISPLAY)
         glfw.window_hint(glfw.CONTEXT_VERSION_MAJOR, 3)
         glfw.window_hint(glfw.CONTEXT_VERSION_MINOR, 3)
         glfw.window_hint(glfw.OPENGL_PROFILE, glfw.OPENGL_CORE_PROFILE)
@@ -104,7 +108,7 @@ class Viewer:
                 self.controls.scroll(dy)
 
         def on_button(window, button, action, mods):
-            gui.mouse_button_callback(window, button, action, mods) if hasattr(gui, "mouse_button_callback") else None
+            gui.mouse_button_callback(window, button, action, mods)
             self.on_mouse_button(button, action)
 
         glfw.set_key_callback(self.window, on_key)
