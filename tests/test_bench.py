@@ -1,0 +1,31 @@
+"""`pathtrace bench --quick`: the benchmark runs end to end and reports consistent figures."""
+
+import json
+
+from tests.test_cli import pathtrace
+
+
+def test_quick_bench_writes_a_table_and_json(tmp_path):
+    out = tmp_path / "bench.json"
+    r = pathtrace("bench", "--quick", "--device", "cpu", "--json", out,
+                  "--estimator", "rr", "--estimator", "depth8+nee")
+    assert r.returncode == 0, r.stderr
+    data = json.loads(out.read_text())
+    rows = data["results"]
+    assert len(rows) == 6 * 2 and {row["estimator"] for row in rows} == {"rr", "depth8+nee"}
+    for row in rows:
+        assert row["width"] == 320 and row["height"] == 180 and row["spp"] == 8
+        assert row["seconds"] > 0 and row["bvh_seconds"] < row["seconds"]
+        assert abs(row["msamples_per_s"] - 320 * 180 * 8 / row["seconds"] / 1e6) < 1e-6 * row["msamples_per_s"] + 1e-9
+        assert row["mrays_per_s"] >= row["msamples_per_s"]      # at least the camera ray
+        assert row["build_warm_seconds"] >= 0
+    assert "simple" in r.stdout and "Msamples/s" in r.stdout
+
+
+def test_bench_rejects_bad_input(tmp_path):
+    r = pathtrace("bench", "--quick", "--scenes", "nosuch")
+    assert r.returncode == 1 and "neither a scene file nor a built-in scene" in r.stderr
+    r = pathtrace("bench", "--quick", "--estimator", "fast")
+    assert r.returncode == 1 and "--estimator: unknown 'fast'" in r.stderr
+    r = pathtrace("bench", "--quick", "--json", tmp_path / "no" / "b.json")
+    assert r.returncode == 1 and "does not exist" in r.stderr
