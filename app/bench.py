@@ -109,8 +109,8 @@ def write_json(path, results, argv):
         "host": platform.node(), "python": sys.version.split()[0], "pyopencl": cl.VERSION_TEXT,
         "results": [asdict(r) for r in results],
     }
-    from app.image_io import atomic_write_text
-    atomic_write_text(path, json.dumps(data, indent=2) + "\n")
+    from app.image_io import write_text
+    write_text(path, json.dumps(data, indent=2) + "\n")
 
 
 def validate(args):

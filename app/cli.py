@@ -75,7 +75,7 @@ def apply_render_options(scene, args):
 
 
 def cmd_devices(args):
-    from app.device import list_devices, open_device
+    from app.device import build_error_line, list_devices, open_device
     import pyopencl as cl
 
     devices = list_devices()
@@ -89,8 +89,7 @@ def cmd_devices(args):
                 b = open_device(d)
                 line += f": builds the kernels ({b.build.seconds:.2f} s{', cached' if b.build.cached else ''})"
             except cl.Error as e:
-                from app.device import _first_line
-                line += f": cannot build the kernels: {_first_line(e)}"
+                line += f": cannot build the kernels: {build_error_line(e)}"
         print(line)
     return 0
 
@@ -163,8 +162,8 @@ def cmd_bench(args):
 
     bench.validate(args)
     if args.json:
-        from app.image_io import check_json_writable
-        check_json_writable(args.json)
+        from app.image_io import check_writable
+        check_writable(args.json, "--json", formats=None)
     width, height = args.size
     print(bench.HEADER)
     results = bench.run(args.device or ["auto"], args.scenes, args.estimator, width, height, args.spp)

@@ -129,7 +129,7 @@ def open_device(device: Device, extra: str = "", use_cache: bool = True) -> Back
     return Backend(device, context, queue, build_program(context, device.device, extra, use_cache))
 
 
-def _first_line(error: Exception) -> str:
+def build_error_line(error: Exception) -> str:
     """The compiler's first error line, else the first line of the message."""
     lines = [line.strip() for line in str(error).strip().splitlines() if line.strip()]
     errors = [line for line in lines if line.startswith("error")]
@@ -165,5 +165,5 @@ def choose_device(spec: str = "auto", extra: str = "", use_cache: bool = True,
         try:
             return open_device(d, extra, use_cache)
         except cl.Error as e:
-            log(f"skipping {d.describe()}: cannot build the kernels: {_first_line(e)}")
+            log(f"skipping {d.describe()}: cannot build the kernels: {build_error_line(e)}")
     raise UserError(f"--device: no device matching '{spec}' can build the kernels")

@@ -6,6 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
+LUMINANCE = np.array([0.2126, 0.7152, 0.0722])   # Rec. 709 weights of linear R, G, B
+
 
 @dataclass
 class Environment:
@@ -32,7 +34,7 @@ class Environment:
         if h == 1 and w == 1:
             return np.zeros(2, np.float32), np.zeros(2, np.float32)
         theta = (np.arange(h) + 0.5) / h * np.pi
-        weight = (self.image @ np.array([0.2126, 0.7152, 0.0722])) * np.sin(theta)[:, None]
+        weight = (self.image @ LUMINANCE) * np.sin(theta)[:, None]
         weight = np.maximum(weight, 0.0) + 1e-12     # no zero rows
         row_sum = weight.sum(axis=1)
         conditional = np.zeros((h, w + 1))

@@ -64,17 +64,16 @@ def _write_exr(path: str, rgb: np.ndarray):
     return True
 
 
-def check_writable(path: Path, what: str = "--output"):
-    """Fails early, before any rendering, if `path` cannot be written."""
+def check_writable(path: Path, what: str = "--output", formats=HDR_FORMATS + LDR_FORMATS):
+    """Fails early, before any rendering, if `path` cannot be written (or, where `formats` is
+    given, has none of those suffixes)."""
     path = Path(path)
-    if path.suffix.lower() not in HDR_FORMATS + LDR_FORMATS:
-        raise UserError(f"{what}: '{path}' has an unknown image format "
-                        f"(use one of {', '.join(HDR_FORMATS + LDR_FORMATS)})")
-    folder = path.parent if str(path.parent) else Path(".")
-    if not folder.is_dir():
-        raise UserError(f"{what}: folder '{folder}' does not exist")
+    if formats and path.suffix.lower() not in formats:
+        raise UserError(f"{what}: '{path}' has an unknown image format (use one of {', '.join(formats)})")
+    if not path.parent.is_dir():
+        raise UserError(f"{what}: folder '{path.parent}' does not exist")
     try:   # the only sure test (permissions, read-only mounts, root's exceptions) is to try
-        fd, probe = tempfile.mkstemp(prefix=f".{path.name}.", dir=folder)
+        fd, probe = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
         os.close(fd)
         os.unlink(probe)
     except OSError as e:
@@ -83,26 +82,33 @@ def check_writable(path: Path, what: str = "--output"):
         raise UserError(f"{what}: '{path}' is not writable")
 
 
-def check_json_writable(path, what: str = "--json"):
-    folder = Path(path).parent
-    if not folder.is_dir():
-        raise UserError(f"{what}: folder '{folder}' does not exist")
-    if not os.access(folder, os.W_OK):
-        raise UserError(f"{what}: '{path}' is not writable")
-
-
-def atomic_write_text(path, text: str, what: str = "--json"):
+def write_atomically(path: Path, write, what: str, errors=(OSError,)):
+    """Calls write(temporary_path) -> success for a temporary file beside `path` (same suffix,
+    so format-sniffing writers choose right), then renames it over `path`; on any failure the
+    temporary file is removed and `path` is left as it was."""
     path = Path(path)
-    folder = path.parent
-    if not folder.is_dir():
-        raise UserError(f"{what}: folder '{folder}' does not exist")
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
+    os.close(fd)
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=folder)
-        with os.fdopen(fd, "w") as f:
-            f.write(text)
+        try:
+            ok = write(tmp)
+        except errors as e:
+            raise UserError(f"{what}: cannot write '{path}': {e}") from None
+        if not ok:
+            raise UserError(f"{what}: cannot write '{path}'")
         os.replace(tmp, path)
-    except OSError as e:
-        raise UserError(f"{what}: cannot write '{path}' ({e.strerror})") from None
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+def write_text(path: Path, text: str, what: str = "--json"):
+    check_writable(path, what, formats=None)
+
+    def write(tmp):
+        Path(tmp).write_text(text)
+        return True
+    write_atomically(path, write, what)
 
 
 def write_image(path: Path, linear: np.ndarray, exposure: float = 0.0, curve: str = "standard",
@@ -112,20 +118,11 @@ def write_image(path: Path, linear: np.ndarray, exposure: float = 0.0, curve: st
     path = Path(path)
     check_writable(path, what)
     suffix = path.suffix.lower()
+    if suffix == ".exr":
+        write_atomically(path, lambda tmp: _write_exr(tmp, linear), what, errors=(OSError, RuntimeError))
+        return
     if suffix in HDR_FORMATS:
         data = np.ascontiguousarray(linear[..., ::-1], np.float32)
     else:
         data = np.ascontiguousarray(to_8bit(tonemap(linear, exposure, curve))[..., ::-1])
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=suffix, dir=path.parent)
-    os.close(fd)
-    try:
-        try:
-            ok = _write_exr(tmp, linear) if suffix == ".exr" else cv2.imwrite(tmp, data)
-        except (cv2.error, OSError) as e:
-            raise UserError(f"{what}: cannot write '{path}': {e}") from None
-        if not ok:
-            raise UserError(f"{what}: cannot write '{path}'")
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+    write_atomically(path, lambda tmp: cv2.imwrite(tmp, data), what, errors=(cv2.error, OSError))

@@ -5,9 +5,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from app.environment import LUMINANCE
 from app.types import LIGHT
-
-LUMINANCE = np.array([0.2126, 0.7152, 0.0722])   # Rec. 709
 
 
 @dataclass

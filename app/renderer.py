@@ -94,9 +94,6 @@ class Renderer:
                                        self.width * self.height * 16)
         self.samples = 0
 
-    def scene_index(self, bvh_index: int) -> int:
-        return int(self.bvh.order[bvh_index])
-
     # --- rendering -------------------------------------------------------------------------
     def params(self, sample_count: int) -> np.ndarray:
         p = np.zeros((), RENDER_PARAMS)
@@ -132,14 +129,16 @@ class Renderer:
     def finish(self):
         self.backend.queue.finish()
 
-    def _read(self, name) -> np.ndarray:
-        out = np.empty((self.height, self.width, 4), np.float32)
+    def _read(self, name, out=None) -> np.ndarray:
+        if out is None:
+            out = np.empty((self.height, self.width, 4), np.float32)
         cl.enqueue_copy(self.backend.queue, out, self._buffers[name])
         return out
 
-    def read_sum(self) -> np.ndarray:
-        """The raw accumulation buffer, (H, W, 4): radiance sums in rgb, sample count in a."""
-        return self._read("sum")
+    def read_sum(self, out=None) -> np.ndarray:
+        """The raw accumulation buffer, (H, W, 4) float32: radiance sums in rgb, sample count
+        in a; into `out` if given (the viewer reuses one array for every upload)."""
+        return self._read("sum", out)
 
     def mean(self) -> np.ndarray:
         """The image so far: mean radiance per pixel, (H, W, 3) float32."""

@@ -12,7 +12,6 @@ from app.camera import Camera
 from app.environment import Environment
 from app.errors import UserError
 from app.resources import resource_dir
-from app.types import pack_materials
 
 
 @dataclass
@@ -37,9 +36,6 @@ class Scene:
     camera: Camera = field(default_factory=Camera)
     environment: Environment = field(default_factory=lambda: Environment.constant((1, 1, 1)))
     settings: RenderSettings = field(default_factory=RenderSettings)
-
-    def materials(self) -> np.ndarray:
-        return pack_materials(self.rho_d, self.rho_s, self.exponent, self.emission)
 
     def with_settings(self, **changes) -> "Scene":
         return replace(self, settings=replace(self.settings, **changes))

@@ -6,9 +6,6 @@ import numpy as np
 from app.builtin_scenes import BUILTIN_SCENES
 from app.tonemap import TONEMAPS
 
-_state = {"scene_file": ""}
-
-
 def draw_panel(v):
     imgui = v.imgui
     r = v.renderer
@@ -62,9 +59,9 @@ def draw_panel(v):
         changed, current = imgui.combo("built-in", current, names)
         if changed:
             v.load_scene(names[current])
-        _, _state["scene_file"] = imgui.input_text("file", _state["scene_file"])
+        _, v.scene_file = imgui.input_text("file", v.scene_file)
         if imgui.button("open file"):
-            v.load_scene(_state["scene_file"])
+            v.load_scene(v.scene_file)
 
     if v.selected is not None and imgui.collapsing_header("Selected sphere", imgui.TreeNodeFlags_.default_open):
         s, i = r.scene, v.selected

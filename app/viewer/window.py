@@ -11,10 +11,12 @@ from pathlib import Path
 import numpy as np
 
 from app.errors import UserError
+from app.render import next_launch_size
 from app.renderer import Renderer
 from app.resources import resource_dir
 from app.scene import load_scene
 from app.viewer.controls import FlyControls, pick_ray, pick_sphere
+from app.viewer.panel import draw_panel
 
 FRAME_BUDGET = 1 / 40          # seconds of kernel work per frame: keeps the window above 30 fps
 PREVIEW_SCALE = 4              # while moving, render at 1/4 of the resolution (as Cycles does)
@@ -65,6 +67,7 @@ class Viewer:
         self.exposure, self.tonemap = 0.0, "standard"
         self.screenshot_dir = Path(screenshot_dir)
         self.message = ""
+        self.scene_file = ""          # the panel's "open file" field
         self.selected = None
         self.scale = 1
         self.last_move = -1.0
@@ -200,7 +203,6 @@ class Viewer:
             self.renderer.resize(max(fw // self.scale, 1), max(fh // self.scale, 1))
             self._render_samples()
             self._draw(fw, fh)
-        from app.viewer.panel import draw_panel
         self.imgui.new_frame()
         draw_panel(self)
         self.imgui.render()
@@ -209,15 +211,14 @@ class Viewer:
         self.frame_ms = 1000 * (time.perf_counter() - now)
 
     def _render_samples(self):
-        """Adds samples for about FRAME_BUDGET seconds, in launches whose size adapts so that
-        no single launch runs long (an OS GPU watchdog stops kernels after a few seconds)."""
+        """One launch, sized to take about FRAME_BUDGET seconds."""
         start = time.perf_counter()
         self.renderer.add_samples(self.launch_spp)
         self.renderer.finish()
         elapsed = time.perf_counter() - start
-        per_sample = elapsed / self.launch_spp
-        self.samples_per_second = self.renderer.width * self.renderer.height / max(per_sample, 1e-9)
-        self.launch_spp = int(np.clip(FRAME_BUDGET / max(per_sample, 1e-9), 1, 64))
+        r = self.renderer
+        self.samples_per_second = r.width * r.height * self.launch_spp / max(elapsed, 1e-9)
+        self.launch_spp = next_launch_size(self.launch_spp, elapsed, FRAME_BUDGET)
 
     def _draw(self, fw, fh):
         r = self.renderer
@@ -228,7 +229,8 @@ class Viewer:
                 if self.texture is not None:
                     self.texture.release()
                 self.texture = self.ctx.texture((r.width, r.height), 4, dtype="f4")
-            self.texture.write(r.read_sum().tobytes())
+                self._host_copy = np.empty((r.height, r.width, 4), np.float32)
+            self.texture.write(r.read_sum(out=self._host_copy))
             self._last_upload, self._uploaded_samples = now, r.samples
         self.ctx.viewport = (0, 0, fw, fh)
         self.ctx.clear(0, 0, 0)
