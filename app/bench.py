@@ -19,7 +19,7 @@ from app.device import build_program, choose_device, list_devices
 from app.errors import UserError
 from app.render import render_samples
 from app.renderer import Renderer
-from app.scene import SceneBuilder, load_scene
+from app.scene import SceneBuilder, diffuse, load_scene
 
 TARGET_SCENES = ("simple", "spheres8k", "spheres64k",
                  "simple-diffuse", "spheres8k-diffuse", "spheres64k-diffuse")
@@ -55,7 +55,7 @@ def measure(backend, scene, estimator, width, height, spp, builds) -> Result:
     settings["nee"] = estimator.endswith("+nee")
     scene = scene.with_settings(**settings)
     warm_up = SceneBuilder()
-    warm_up.add((0, 0, 0), 1.0, rho_d=0.5)
+    warm_up.add_sphere((0, 0, 0), 1.0, diffuse(0.5))
     Renderer(backend, warm_up.build("warm-up", settings=scene.settings), 16, 16).add_samples(1)
     backend.queue.finish()
     start = time.perf_counter()

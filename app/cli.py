@@ -6,8 +6,9 @@ import sys
 from app import __version__
 from app.errors import UserError
 
-EPILOG = "A scene is a .toml file or a built-in name: " \
-         "simple, simple-diffuse, spheres8k[-diffuse], spheres64k[-diffuse], demo."
+EPILOG = ("A scene is a .toml file or a built-in name (pathtrace scenes lists them): simple, "
+          "simple-diffuse, spheres8k[-diffuse], spheres64k[-diffuse], demo, teapot, teapot-sky, "
+          "cornell-box.")
 
 
 def _size(text):
@@ -95,7 +96,7 @@ def cmd_devices(args):
 
 
 def cmd_scenes(args):
-    from app.builtin_scenes import BUILTIN_SCENES
+    from app.scene.builtin import BUILTIN_SCENES
     for name in BUILTIN_SCENES:
         print(name)
     return 0

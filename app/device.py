@@ -13,9 +13,11 @@ import pyopencl as cl
 from app.errors import UserError
 from app.resources import resource_dir
 
-# The order in which the kernel files are joined into one program.
-KERNEL_FILES = ("types.h", "rng.cl", "sampling.cl", "intersect.cl", "phong.cl",
-                "environment.cl", "lights.cl", "camera.cl", "integrator.cl")
+# The order in which the kernel files are joined into one program; the BSDFs of the material
+# registry and their generated dispatch follow bsdf.cl.
+CORE_FILES = ("types.h", "rng.cl", "sampling.cl", "scene.cl", "spawn.cl", "shapes/sphere.cl",
+              "shapes/triangle.cl", "bvh.cl", "bsdf.cl")
+LATER_FILES = ("environment.cl", "lights.cl", "camera.cl", "integrator.cl")
 
 # No -cl-fast-relaxed-math: it implies finite math, and the kernels rely on INFINITY.
 BUILD_OPTIONS = ("-cl-mad-enable", "-cl-no-signed-zeros")
@@ -24,8 +26,13 @@ BUILD_OPTIONS = ("-cl-mad-enable", "-cl-no-signed-zeros")
 def kernel_source(extra: str = "") -> str:
     """The kernels as one source text, each file introduced by a #line marker so that compiler
     messages name the file and line."""
+    from app.materials import dispatch_source, kernel_files
+
     folder = resource_dir("kernels")
-    parts = [f'#line 1 "{name}"\n{(folder / name).read_text()}' for name in KERNEL_FILES]
+    parts = [f'#line 1 "{name}"\n{(folder / name).read_text()}' for name in CORE_FILES]
+    parts += [f'#line 1 "{name}"\n{(folder / name).read_text()}' for name in kernel_files()]
+    parts.append(f'#line 1 "app/materials.py: dispatch_source"\n{dispatch_source()}')
+    parts += [f'#line 1 "{name}"\n{(folder / name).read_text()}' for name in LATER_FILES]
     if extra:
         parts.append(f'#line 1 "extra"\n{extra}')
     return "\n".join(parts)

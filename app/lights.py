@@ -1,5 +1,5 @@
-"""What next-event estimation samples: the emissive spheres, chosen in proportion to their
-power through an alias table, and the environment, chosen with probability `env_pick`."""
+"""What next-event estimation samples: every emitter in one table (emissive spheres, emissive
+triangles and the environment), chosen through an alias table."""
 
 from dataclasses import dataclass
 
@@ -13,8 +13,8 @@ from app.types import LIGHT
 class LightTable:
     lights: np.ndarray        # LIGHT entries (at least one, a dummy when there are no lights)
     count: int                # real entries
-    pick: np.ndarray          # (N,) float32: per sphere, the probability of choosing it
-    env_pick: float           # probability of sampling the environment instead
+    pick: np.ndarray          # (primitives,) float32: per primitive, the probability of choosing it
+    env_pick: float           # probability of choosing the environment
 
 
 def alias_table(weights: np.ndarray):
@@ -36,22 +36,36 @@ def alias_table(weights: np.ndarray):
     return keep, alias
 
 
-def build_light_table(spheres: np.ndarray, emission: np.ndarray, environment) -> LightTable:
-    """spheres and emission in the BVH's order. A sphere of radiance Le and radius r emits the
-    power pi Le 4 pi r^2; lights are chosen in proportion to its luminance."""
-    power = (emission @ LUMINANCE) * 4 * np.pi ** 2 * spheres[:, 3].astype(np.float64) ** 2
+def emitted_power(spheres, triangles, emission_of_sphere, emission_of_triangle):
+    """Luminance power of each primitive: pi Le times its emitting area (a sphere's whole
+    surface 4 pi r^2; a triangle's front, whose area is half its edges' cross product)."""
+    r = spheres[:, 3].astype(np.float64)
+    sphere_power = (emission_of_sphere @ LUMINANCE) * np.pi * 4 * np.pi * r ** 2
+    t = triangles.astype(np.float64)
+    area = 0.5 * np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1)
+    triangle_power = (emission_of_triangle @ LUMINANCE) * np.pi * area
+    return np.concatenate([sphere_power, triangle_power])
+
+
+def build_light_table(power: np.ndarray, environment) -> LightTable:
+    """power: per primitive, in BVH order. The environment, when it is not black, is chosen as
+    often as all other lights together (half the time), or always when there are none."""
+    pick = np.zeros(len(power), np.float32)
     emitters = np.flatnonzero(power > 0)
-    pick = np.zeros(len(spheres), np.float32)
-    env_dark = not np.any(environment.image > 0) or environment.intensity == 0
-    if not len(emitters):
-        return LightTable(np.zeros(1, LIGHT), 0, pick, 1.0)
-    env_pick = 0.0 if env_dark else 0.5
+    env_lit = bool(np.any(environment.image > 0)) and environment.intensity > 0
     weights = power[emitters]
+    prims = emitters
+    if env_lit:
+        env_weight = weights.sum() if len(emitters) else 1.0
+        weights = np.append(weights, env_weight)
+        prims = np.append(prims, -1)
+    if not len(prims):
+        return LightTable(np.zeros(1, LIGHT), 0, pick, 0.0)
     keep, alias = alias_table(weights)
-    table = np.zeros(len(emitters), LIGHT)
-    table["sphere"] = emitters
+    table = np.zeros(len(prims), LIGHT)
+    table["prim"] = prims
     table["alias"] = alias
     table["keep"] = keep
     table["pick"] = weights / weights.sum()
-    pick[emitters] = table["pick"]
-    return LightTable(table, len(emitters), pick, env_pick)
+    pick[emitters] = table["pick"][:len(emitters)]
+    return LightTable(table, len(prims), pick, float(table["pick"][-1]) if env_lit else 0.0)

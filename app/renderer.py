@@ -2,59 +2,75 @@
 each add_samples() call adds samples per pixel. The command line, the benchmarks and the viewer
 all drive this API; it imports nothing from the window or the GUI."""
 
-import time
 from dataclasses import replace
 
 import numpy as np
 import pyopencl as cl
 
-from app.bvh import build_bvh
 from app.camera import Camera
+from app.compiled import CompiledScene, compile_scene
 from app.device import Backend
 from app.environment import Environment
-from app.lights import build_light_table
 from app.scene import Scene
-from app.types import RENDER_PARAMS, pack_materials
+from app.types import RENDER_PARAMS
+
+RR_ALBEDO = 1          # kernels/integrator.cl: the report's Russian roulette
+RR_DEPTH = 5           # where Russian roulette on throughput starts (Mitsuba 3's default)
 
 
 class Renderer:
-    def __init__(self, backend: Backend, scene: Scene, width: int = None, height: int = None):
+    def __init__(self, backend: Backend, scene, width: int = None, height: int = None):
+        """scene: a CompiledScene, or a Scene to compile."""
         self.backend = backend
         self.kernels = {False: cl.Kernel(backend.program, "render"),
                         True: cl.Kernel(backend.program, "render_nee")}
         self._buffers = {}
         self.width = self.height = 0
         self.samples = 0          # samples per pixel accumulated so far
-        self.settings = scene.settings
         self.set_scene(scene)
-        self.resize(width or scene.settings.width, height or scene.settings.height)
+        self.resize(width or self.scene.settings.width, height or self.scene.settings.height)
 
     # --- what is rendered ------------------------------------------------------------------
-    def set_scene(self, scene: Scene):
-        """Builds the BVH and uploads spheres, materials and environment; resets."""
-        self.scene = scene
-        self.camera = scene.camera.copy()
-        start = time.perf_counter()
-        self.bvh = build_bvh(scene.spheres)
-        self.bvh_seconds = time.perf_counter() - start
-        self._upload("nodes", self.bvh.nodes)
-        self._upload("spheres", scene.spheres[self.bvh.order])
-        self.environment = scene.environment
+    def set_scene(self, scene):
+        """Uploads a compiled scene (compiling a Scene first); takes its camera and settings;
+        resets."""
+        self.compiled = scene if isinstance(scene, CompiledScene) else compile_scene(scene)
+        self.scene: Scene = self.compiled.scene
+        self.camera = self.scene.camera.copy()
+        self.settings = self.scene.settings
+        c = self.compiled
+        self._upload("nodes", c.bvh.nodes)
+        self._upload("spheres", c.spheres)
+        self._upload("triangles", c.triangles)
+        self._upload("normals", c.normals)
+        self._upload("prim_material", c.prim_material)
         self._upload_environment()
-        self.upload_materials()
+        self._upload_materials()
+        self.reset()
+
+    @property
+    def bvh_seconds(self) -> float:
+        return self.compiled.bvh_seconds
+
+    @property
+    def environment(self) -> Environment:
+        return self.scene.environment
+
+    @property
+    def lights(self):
+        return self.compiled.lights
 
     def upload_materials(self):
-        """Uploads the scene's materials and light table (after an edit of scene.rho_d etc.);
-        resets."""
-        s, o = self.scene, self.bvh.order
-        self._upload("materials", pack_materials(s.rho_d[o], s.rho_s[o], s.exponent[o], s.emission[o]))
-        self._upload_lights()
+        """Uploads the scene's material table and the light table after an edit; resets."""
+        self.compiled.update_materials()
+        self._upload_materials()
         self.reset()
 
     def set_environment(self, environment: Environment):
-        self.environment = environment
+        self.scene.environment = environment
+        self.compiled.update_materials()
         self._upload_environment()
-        self._upload_lights()
+        self._upload_materials()
         self.reset()
 
     def _upload_environment(self):
@@ -63,11 +79,28 @@ class Renderer:
         self._upload("env_marginal", marginal)
         self._upload("env_conditional", conditional)
 
-    def _upload_lights(self):
-        o = self.bvh.order
-        self.lights = build_light_table(self.scene.spheres[o], self.scene.emission[o], self.environment)
+    def _upload_materials(self):
+        self._upload("materials", self.compiled.materials)
         self._upload("lights", self.lights.lights)
         self._upload("light_pick", self.lights.pick)
+
+    def pick(self, origin, direction):
+        """The shape seen along a ray (a ShapeRef), or None."""
+        b = self._buffers
+        out = cl.Buffer(self.backend.context, cl.mem_flags.WRITE_ONLY, 4)
+        kernel = cl.Kernel(self.backend.program, "pick")
+        kernel(self.backend.queue, (1,), None, *self._scene_args(),
+               np.int32(self.compiled.num_spheres), np.append(np.float32(origin), 0).astype(np.float32),
+               np.append(np.float32(direction), 0).astype(np.float32), out)
+        prim = np.zeros(1, np.int32)
+        cl.enqueue_copy(self.backend.queue, prim, out)
+        return self.compiled.shape(int(prim[0])) if prim[0] >= 0 else None
+
+    def _scene_args(self):
+        b = self._buffers
+        return (b["nodes"], b["spheres"], b["triangles"], b["normals"], b["prim_material"],
+                b["materials"], b["env"], b["lights"], b["light_pick"], b["env_marginal"],
+                b["env_conditional"])
 
     def set_camera(self, camera: Camera):
         self.camera = camera.copy()
@@ -105,21 +138,21 @@ class Renderer:
         p["sample_start"], p["sample_count"] = self.samples, sample_count
         p["seed"] = self.settings.seed
         p["max_depth"] = self.settings.max_depth
-        p["russian_roulette"] = int(self.settings.russian_roulette)
+        p["russian_roulette"] = RR_ALBEDO if self.settings.russian_roulette else 0
         h, w, _ = self.environment.image.shape
         p["env_width"], p["env_height"] = w, h
         p["env_rotation"] = self.environment.rotation / 360.0
         p["num_lights"] = self.lights.count
         p["env_pick"] = self.lights.env_pick
+        p["num_spheres"] = self.compiled.num_spheres
+        p["rr_depth"] = RR_DEPTH
         return p
 
     def add_samples(self, count: int = 1) -> cl.Event:
         """Queues one launch that adds `count` samples to every pixel; returns its event."""
         b = self._buffers
         kernel = self.kernels[self.settings.nee]
-        kernel.set_args(b["nodes"], b["spheres"], b["materials"], b["env"], b["lights"],
-                             b["light_pick"], b["env_marginal"], b["env_conditional"],
-                             self.params(count), b["sum"], b["sum_sq"])
+        kernel.set_args(*self._scene_args(), self.params(count), b["sum"], b["sum_sq"])
         local = (8, 8)
         global_size = tuple(-(-n // l) * l for n, l in zip((self.width, self.height), local))
         event = cl.enqueue_nd_range_kernel(self.backend.queue, kernel, global_size, local)
@@ -156,6 +189,8 @@ class Renderer:
 
     def _upload(self, name, array):
         array = np.ascontiguousarray(array)
+        if array.size == 0:       # OpenCL has no empty buffers; the kernels never read this one
+            array = np.zeros(1, array.dtype)
         self._buffers[name] = cl.Buffer(self.backend.context,
                                         cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR,
                                         hostbuf=array)

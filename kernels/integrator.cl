@@ -2,71 +2,57 @@
  * next-event estimation. A path's vertex count is its depth; the camera ray's hit is depth 1.
  *
  * The kernel `render` is the report's estimator: light arrives only when a path happens to hit
- * an emitter or escape to the environment. In `render_nee` every vertex also samples a light (an
- * emissive sphere, or the environment) and traces a shadow ray; both ways of reaching a light
- * are kept and weighted by multiple importance sampling (power heuristic), so the estimate is
- * unbiased and the two settings converge to the same image. */
+ * an emitter or escape to the environment. In `render_nee` every vertex with a non-delta BSDF
+ * also samples a light and traces a shadow ray; both ways of reaching a light are kept and
+ * weighted by multiple importance sampling (power heuristic), so the estimate is unbiased and
+ * the two settings converge to the same image. Emitters reached through a delta bounce carry
+ * no MIS weight, since light sampling could not have found them. */
 
 /* The safety bound on path length when Russian roulette alone ends paths (max_depth 0): only a
  * closed scene of albedo 1 could reach it. */
 #define UNLIMITED_DEPTH 1024
 
-typedef struct {
-    const global BVHNode *nodes;
-    const global Sphere *spheres;
-    const global Material *materials;
-    const global float4 *env;
-    const global Light *lights;
-    const global float *light_pick;       /* per sphere: probability of choosing it as a light */
-    const global float *env_marginal;
-    const global float *env_conditional;
-} SceneData;
+#define SHADOW_EPSILON 1e-4f
 
-/* Density with which next-event estimation at a vertex (p, n) samples direction d towards the
- * environment: cosine-weighted for a constant colour, the map's distribution otherwise. */
-float pdf_environment(const SceneData *sc, const RenderParams *p, float3 n, float3 d)
-{
-    if (p->env_width == 1 && p->env_height == 1)
-        return pdf_cosine_hemisphere(dot(n, d));
-    return pdf_environment_map(sc->env_marginal, sc->env_conditional, p, d);
-}
+/* RenderParams.russian_roulette */
+#define RR_OFF 0
+#define RR_ALBEDO 1        /* the report's: at every vertex, go on with the material's albedo */
+#define RR_THROUGHPUT 2    /* from rr_depth on, go on with probability min(max throughput, 0.95),
+                              as Mitsuba 3 and (without the cap) pbrt-v4 do */
 
-/* One light sample at vertex (x, n) with outgoing direction wo: its contribution
- * f cos Le / pdf, weighted against BSDF sampling. `self` is the sphere x lies on. */
+/* One light sample at surface s, whose BSDF m sees outgoing direction wo (local frame): its
+ * contribution f cos Le / pdf, weighted against BSDF sampling, whose density of continuing
+ * is `go_on` times the BSDF's pdf. */
 float3 sample_direct_light(const SceneData *sc, const RenderParams *p, const Material *m,
-                           float3 x, float3 n, float3 wo, int self, float4 u, int *rays)
+                           const Surface *s, const Frame *frame, float3 wo, float go_on,
+                           float4 u, int *rays)
 {
-    float3 wi, le;
-    float pdf_light;
-    int target;                                    /* the sphere the shadow ray must meet first */
-    if (u.x < p->env_pick) {
-        wi = (p->env_width == 1 && p->env_height == 1)
-                 ? to_world(sample_cosine_hemisphere(u.y, u.z), n)
-                 : sample_environment_map(sc->env_marginal, sc->env_conditional, p, u.y, u.z);
-        pdf_light = p->env_pick * pdf_environment(sc, p, n, wi);
-        target = -1;
-    } else {
-        int k = pick_light(sc->lights, p->num_lights, (u.x - p->env_pick) / (1.0f - p->env_pick));
-        target = sc->lights[k].sphere;
-        if (target == self)                        /* a convex sphere cannot light itself */
-            return (float3)(0.0f);
-        Sphere s = sc->spheres[target];
-        wi = sample_sphere_cone(s, x, u.y, u.z);
-        pdf_light = (1.0f - p->env_pick) * sc->lights[k].pick * pdf_sphere_cone(s, x);
-    }
-    float cos_i = dot(n, wi);
-    if (pdf_light <= 0.0f || cos_i <= 0.0f)
+    LightSample ls = sample_light(sc, p, s->p, frame->n, u);
+    float3 wi = to_local(frame, ls.wi);
+    /* the shading and geometric normals must agree on the side wi leaves on (no light leaks) */
+    if (ls.pdf <= 0.0f || dot(ls.wi, s->ng) * wi.z <= 0.0f)
         return (float3)(0.0f);
-    float3 f = eval_phong(m, n, wo, wi);
+    float3 f = eval_bsdf(m, wo, wi);
     if (all(f == 0.0f))
         return (float3)(0.0f);
+    /* The light is seen if a shadow ray from the offset origin towards the point on it meets
+     * nothing before it (stopping just short, by pbrt-v4's ShadowEpsilon: pbrt's SpawnRayTo);
+     * the environment is seen if the ray meets nothing at all. */
+    float3 o = offset_ray_origin(s->p, s->error, s->ng, ls.wi);
+    float3 dir = ls.wi;
+    float t_max = INFINITY;
+    if (ls.prim >= 0) {
+        t_max = length(ls.y - o);
+        dir = (ls.y - o) / t_max;
+        t_max *= 1.0f - SHADOW_EPSILON;
+    }
     ++*rays;
-    Hit h = intersect_scene(sc->nodes, sc->spheres, x, wi, INFINITY, self);
-    if (h.sphere != target)
+    if (intersect_scene(sc, o, dir, t_max).prim >= 0)
         return (float3)(0.0f);                     /* occluded */
-    le = target < 0 ? lookup_environment(sc->env, p, wi) : sc->materials[target].emission.xyz;
-    float w = mis_weight(pdf_light, pdf_continue(m, n, wo, wi, p->russian_roulette));
-    return f * cos_i * le * (w / pdf_light);
+    float3 le = ls.prim < 0 ? lookup_environment(sc->env, p, ls.wi)
+                            : sc->materials[sc->prim_material[ls.prim]].emission.xyz;
+    float w = mis_weight(ls.pdf, go_on * pdf_bsdf(m, wo, wi));
+    return f * fabs(wi.z) * le * (w / ls.pdf);
 }
 
 /* Returns the radiance arriving at o from direction -d; adds the rays it traced to *rays.
@@ -78,51 +64,67 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
     float3 radiance = (float3)(0.0f);
     float3 throughput = (float3)(1.0f);
     int max_depth = p->max_depth > 0 ? p->max_depth : UNLIMITED_DEPTH;
-    int skip = -1;
-    /* where the last bounce left from, and how likely BSDF sampling was to choose d there
-     * (0 for the camera ray: nothing else could have found what it hits) */
+    /* where the last bounce left from, and the density with which BSDF sampling chose d there
+     * (0 for the camera ray and delta bounces: no light sample could have found what it hits) */
     float3 prev_x = o, prev_n = (float3)(0.0f);
-    float pdf_bsdf = 0.0f;
+    float pdf_prev = 0.0f;
     for (int depth = 1;; ++depth) {
         ++*rays;
-        Hit hit = intersect_scene(sc->nodes, sc->spheres, o, d, INFINITY, skip);
-        if (hit.sphere < 0) {
+        Hit hit = intersect_scene(sc, o, d, INFINITY);
+        if (hit.prim < 0) {
             float w = 1.0f;
-            if (nee && pdf_bsdf > 0.0f && p->env_pick > 0.0f)
-                w = mis_weight(pdf_bsdf, p->env_pick * pdf_environment(sc, p, prev_n, d));
+            if (nee && pdf_prev > 0.0f && p->env_pick > 0.0f)
+                w = mis_weight(pdf_prev, p->env_pick * pdf_environment(sc, p, prev_n, d));
             return radiance + throughput * lookup_environment(sc->env, p, d) * w;
         }
-        Sphere s = sc->spheres[hit.sphere];
-        /* Project the hit back onto the sphere, removing the error of o + t d. */
-        float3 n = normalize(o + hit.t * d - s.xyz);
-        /* Spheres are solid and one-sided, as Mitsuba 3's BSDFs and area lights: their inside
-         * neither reflects nor emits. */
-        if (dot(n, d) >= 0.0f)
-            return radiance;
-        Material m = sc->materials[hit.sphere];
-        if (any(m.emission.xyz > 0.0f)) {
+        Surface s = surface_at(sc, &hit, o, d);
+        Material m = sc->materials[sc->prim_material[hit.prim]];
+        int front = dot(s.ng, d) < 0.0f;
+        if (!front) {
+            /* one-sided, as Mitsuba 3's BSDFs and area lights: a back face is black */
+            if (!(m.flags & MATERIAL_TWOSIDED))
+                return radiance;
+            s.ng = -s.ng;
+            s.ns = -s.ns;
+        }
+        if (front && any(m.emission.xyz > 0.0f)) {
             float w = 1.0f;
-            if (nee && pdf_bsdf > 0.0f)
-                w = mis_weight(pdf_bsdf, (1.0f - p->env_pick) * sc->light_pick[hit.sphere]
-                                             * pdf_sphere_cone(s, prev_x));
+            if (nee && pdf_prev > 0.0f)
+                w = mis_weight(pdf_prev, pdf_light(sc, hit.prim, prev_x, s.p));
             radiance += throughput * m.emission.xyz * w;
         }
         if (depth >= max_depth)
             return radiance;
-        float3 x = s.xyz + s.w * n;
-        if (nee)
-            radiance += throughput * sample_direct_light(sc, p, &m, x, n, -d, hit.sphere,
+        Frame frame = make_shading_frame(s.ns);
+        float3 wo = to_local(&frame, -d);
+        float go_on = p->russian_roulette == RR_ALBEDO ? m.continuation : 1.0f;
+        if (nee && p->num_lights > 0 && !(m.flags & MATERIAL_DELTA))
+            radiance += throughput * sample_direct_light(sc, p, &m, &s, &frame, wo, go_on,
                                                          next_uniform4(rng), rays);
-        float3 wi, weight;
-        if (!sample_phong(&m, n, -d, next_uniform4(rng), p->russian_roulette, &wi, &weight))
+        float4 u = next_uniform4(rng);
+        if (p->russian_roulette == RR_ALBEDO) {
+            if (u.x >= go_on)
+                return radiance;
+            u.x /= go_on;                    /* reused for the lobe choice, as in the report */
+        }
+        BSDFSample bs;
+        if (!sample_bsdf(&m, wo, u.xyz, &bs))
             return radiance;
-        pdf_bsdf = pdf_continue(&m, n, -d, wi, p->russian_roulette);
-        throughput *= weight;
-        prev_x = x;
-        prev_n = n;
-        o = x;
+        float3 wi = from_local(&frame, bs.wi);
+        if (dot(wi, s.ng) * bs.wi.z <= 0.0f)
+            return radiance;                 /* the normals disagree on wi's side */
+        throughput *= bs.weight / go_on;
+        if (p->russian_roulette == RR_THROUGHPUT && depth >= p->rr_depth) {
+            float q = fmin(fmax(fmax(throughput.x, throughput.y), throughput.z), 0.95f);
+            if (u.w >= q)
+                return radiance;
+            throughput /= q;
+        }
+        pdf_prev = (bs.lobe & LOBE_DELTA) ? 0.0f : go_on * bs.pdf;
+        prev_x = s.p;
+        prev_n = frame.n;
+        o = offset_ray_origin(s.p, s.error, s.ng, wi);
         d = wi;
-        skip = hit.sphere;
     }
 }
 
@@ -150,17 +152,20 @@ void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum
 }
 
 #define RENDER_KERNEL(name, nee)                                                                 \
-    kernel void name(const global BVHNode *nodes, const global Sphere *spheres,                 \
-                     const global Material *materials, const global float4 *env,                \
-                     const global Light *lights, const global float *light_pick,                \
-                     const global float *env_marginal, const global float *env_conditional,     \
-                     const RenderParams p, global float4 *sum, global float4 *sum_sq)           \
+    kernel void name(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *sum,                 \
+                     global float4 *sum_sq)                                                      \
     {                                                                                            \
-        SceneData sc = {nodes, spheres, materials, env, lights, light_pick, env_marginal,        \
-                        env_conditional};                                                        \
+        SceneData sc = SCENE_DATA(p.num_spheres);                                                \
         render_pixel(&sc, &p, sum, sum_sq, nee);                                                 \
     }
 
 /* render: the report's estimator; render_nee: with next-event estimation */
 RENDER_KERNEL(render, 0)
 RENDER_KERNEL(render_nee, 1)
+
+/* The nearest primitive along one ray (the viewer's picking), or -1. */
+kernel void pick(SCENE_KERNEL_ARGS, int num_spheres, float4 o, float4 d, global int *prim)
+{
+    SceneData sc = SCENE_DATA(num_spheres);
+    *prim = intersect_scene(&sc, o.xyz, normalize(d.xyz), INFINITY).prim;
+}

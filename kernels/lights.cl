@@ -1,5 +1,7 @@
-/* Light sampling for next-event estimation: choosing an emissive sphere, sampling the cone of
- * directions it subtends, and the densities multiple importance sampling needs. */
+/* Light sampling for next-event estimation. Every emitter (emissive spheres and triangles, and
+ * the environment) is one entry of one light table, chosen in proportion to its power through
+ * an alias table (app/lights.py); then a direction towards it is sampled: over the cone a sphere
+ * subtends, by area on a triangle, by importance over the environment map. */
 
 /* Power heuristic with beta = 2 (Veach, "Robust Monte Carlo Methods for Light Transport
  * Simulation", 1997, section 9.2.4): the weight of the technique with density a. */
@@ -16,32 +18,56 @@ int pick_light(const global Light *lights, int count, float u)
     return (x - i) < lights[i].keep ? i : lights[i].alias;
 }
 
-/* 1 - cos(theta_max) of the cone a sphere subtends from p, as sin^2 / (1 + cos) to keep
- * precision for small, far spheres; 0 when p is inside the sphere. */
-float cone_solid_angle_factor(Sphere s, float3 p)
+/* Density with which next-event estimation at a vertex of normal n samples direction d towards
+ * the environment, once the environment is chosen: cosine-weighted for a constant colour, the
+ * map's distribution otherwise. */
+float pdf_environment(const SceneData *sc, const RenderParams *p, float3 n, float3 d)
 {
-    float3 c = s.xyz - p;
-    float sin2 = s.w * s.w / dot(c, c);
-    if (sin2 >= 1.0f)
-        return 0.0f;
-    return sin2 / (1.0f + sqrt(1.0f - sin2));
+    if (p->env_width == 1 && p->env_height == 1)
+        return pdf_cosine_hemisphere(dot(n, d));
+    return pdf_environment_map(sc->env_marginal, sc->env_conditional, p, d);
 }
 
-/* Density (per solid angle) of sample_sphere_cone's directions: uniform over the cone. */
-float pdf_sphere_cone(Sphere s, float3 p)
+/* Density (per solid angle, the light's choice included) with which next-event estimation at x
+ * samples point y on emissive primitive `prim`. */
+float pdf_light(const SceneData *sc, int prim, float3 x, float3 y)
 {
-    float k = cone_solid_angle_factor(s, p);
-    return k > 0.0f ? 1.0f / (2.0f * PI_F * k) : 0.0f;
+    float pick = sc->light_pick[prim];
+    if (prim < sc->num_spheres)
+        return pick * pdf_sphere_cone(sc->spheres[prim], x);
+    return pick * pdf_triangle_solid_angle(&sc->triangles[prim - sc->num_spheres], x, y);
 }
 
-/* A direction from p, uniform in the cone subtended by the sphere (pbrt-v4, section 6.2.4):
- * cos(theta) = 1 - u1 (1 - cos(theta_max)). */
-float3 sample_sphere_cone(Sphere s, float3 p, float u1, float u2)
+typedef struct {
+    float3 wi;       /* unit direction from the shading point towards the light */
+    float pdf;       /* its density per solid angle, the light's choice included */
+    float3 y;        /* the point on the light (unused for the environment) */
+    int prim;        /* the emitter: a primitive, or -1 for the environment */
+} LightSample;
+
+/* Draws a light and a direction towards it from point x of shading normal n. */
+LightSample sample_light(const SceneData *sc, const RenderParams *p, float3 x, float3 n, float4 u)
 {
-    float k = cone_solid_angle_factor(s, p);
-    float one_minus_cos = u1 * k;
-    float cos_t = 1.0f - one_minus_cos;
-    float sin_t = sqrt(max(0.0f, one_minus_cos * (2.0f - one_minus_cos)));
-    float3 v = (float3)(cos(2.0f * PI_F * u2) * sin_t, sin(2.0f * PI_F * u2) * sin_t, cos_t);
-    return to_world(v, normalize(s.xyz - p));
+    Light light = sc->lights[pick_light(sc->lights, p->num_lights, u.x)];
+    LightSample ls = {(float3)(0.0f), 0.0f, (float3)(0.0f), light.prim};
+    if (light.prim < 0) {
+        ls.wi = (p->env_width == 1 && p->env_height == 1)
+                    ? to_world(sample_cosine_hemisphere(u.y, u.z), n)
+                    : sample_environment_map(sc->env_marginal, sc->env_conditional, p, u.y, u.z);
+        ls.pdf = light.pick * pdf_environment(sc, p, n, ls.wi);
+    } else if (light.prim < sc->num_spheres) {
+        Sphere s = sc->spheres[light.prim];
+        ls.wi = sample_sphere_cone(s, x, u.y, u.z);
+        ls.pdf = light.pick * pdf_sphere_cone(s, x);
+        /* the point the direction meets; on the cone's rim, where rounding may miss the
+         * sphere, the tangent point */
+        float t = intersect_sphere(s, x, ls.wi, INFINITY);
+        ls.y = x + (isinf(t) ? dot(s.xyz - x, ls.wi) : t) * ls.wi;
+    } else {
+        const global Triangle *tri = &sc->triangles[light.prim - sc->num_spheres];
+        ls.y = sample_triangle_area(tri, u.y, u.z);
+        ls.wi = normalize(ls.y - x);
+        ls.pdf = light.pick * pdf_triangle_solid_angle(tri, x, ls.y);
+    }
+    return ls;
 }

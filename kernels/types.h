@@ -1,6 +1,10 @@
 /* Structs shared by the host and the kernels. Each one is mirrored, field for field, by a NumPy
  * dtype in app/types.py; tests/test_types.py checks sizes and offsets on the device.
- * Only float4 and 4-byte scalars are used, so the layout is the same on every OpenCL device. */
+ * Only float4 and 4-byte scalars are used, so the layout is the same on every OpenCL device.
+ *
+ * Primitives have one index space, their BVH order: spheres are primitives [0, num_spheres),
+ * triangles follow, triangle j being primitive num_spheres + j. Per-primitive tables
+ * (material, light choice probability) are indexed by it. */
 
 #ifndef PATHTRACE_TYPES_H
 #define PATHTRACE_TYPES_H
@@ -8,17 +12,33 @@
 /* A sphere: centre in xyz, radius in w. */
 typedef float4 Sphere;
 
-/* The modified Phong BRDF of Lafortune & Willems (1994) plus emission.
- * f = rho_d / pi + rho_s (n + 2) / (2 pi) cos^n(theta_r). */
+/* A triangle's corners in world space, counter-clockwise seen from its front (the geometric
+ * normal is cross(v1 - v0, v2 - v0), as in Mitsuba 3). v0.w holds, as an int, the index of its
+ * first of three per-corner shading normals in the normals table, or -1 when it has none. */
 typedef struct {
-    float4 diffuse;   /* rho_d in rgb; w: probability of choosing the diffuse lobe */
-    float4 specular;  /* rho_s in rgb; w: the Phong exponent n */
-    float4 emission;  /* Le in rgb; w: probability of choosing the glossy lobe */
+    float4 v0;
+    float4 v1;
+    float4 v2;
+} Triangle;
+
+/* A material: a BSDF chosen by `type` (the BSDF_* tags of kernels/bsdf.cl) with up to twelve
+ * parameters in p0..p2, whose meaning each kernels/bsdfs/ file documents at its top, and the
+ * radiance its surface emits. */
+typedef struct {
+    float4 p0;
+    float4 p1;
+    float4 p2;
+    float4 emission;  /* Le in rgb, emitted on the front side */
+    int type;
+    int flags;            /* MATERIAL_* bits of kernels/bsdf.cl */
+    float continuation;   /* the report's Russian roulette: probability of going on from here */
+    int pad0;
 } Material;
 
-/* One child of a BVH node: its box and what it holds. A leaf has count > 0 and holds spheres
- * [index, index + count); an inner child has count == 0 and index is its node. Keeping both
- * children's boxes in the parent lets traversal test them together and go nearer-first. */
+/* One child of a BVH node: its box and what it holds. A leaf holds spheres [index, index + count)
+ * when count > 0 and triangles [index, index - count) when count < 0 (leaves hold one kind of
+ * shape); an inner child has count == 0 and index is its node. Keeping both children's boxes
+ * in the parent lets traversal test them together and go nearer-first. */
 typedef struct {
     float lo[3];
     int index;
@@ -49,17 +69,18 @@ typedef struct {
     float env_rotation;  /* turn of the environment about +y, as a fraction of a full turn */
     int num_lights;      /* entries of the light table */
     float env_pick;      /* probability that next-event estimation samples the environment */
-    int pad0;
+    int num_spheres;     /* the first triangle's primitive index */
+    int rr_depth;        /* Russian roulette on throughput starts at this depth */
     int pad1;
     int pad2;
-    int pad3;
 } RenderParams;
 
-/* One entry of the light table: an emissive sphere, chosen in proportion to its power through
- * Walker's alias method (Vose's construction): entry i is kept with probability `keep`, else
- * its `alias` is taken. `pick` is the overall probability of choosing this light. */
+/* One entry of the light table: an emitter (a primitive, or the environment when prim is -1),
+ * chosen in proportion to its power through Walker's alias method (Vose's construction):
+ * entry i is kept with probability `keep`, else its `alias` is taken. `pick` is the overall
+ * probability of choosing this light. */
 typedef struct {
-    int sphere;
+    int prim;
     int alias;
     float keep;
     float pick;

@@ -54,3 +54,14 @@ def kernels(backend):
             cache[source] = KernelRunner(backend, source)
         return cache[source]
     return make
+
+
+def scene_arrays(compiled):
+    """The arrays of a CompiledScene in the order of the kernels' SCENE_KERNEL_ARGS (empty ones
+    padded to one element, as the Renderer uploads them)."""
+    lights = compiled.lights
+    marginal, conditional = compiled.scene.environment.sampling_cdfs()
+    arrays = (compiled.bvh.nodes, compiled.spheres, compiled.triangles, compiled.normals,
+              compiled.prim_material, compiled.materials, compiled.scene.environment.rgba(),
+              lights.lights, lights.pick, marginal, conditional)
+    return [np.ascontiguousarray(a) if a.size else np.zeros(1, a.dtype) for a in arrays]

@@ -1,23 +1,29 @@
-"""The BVH: its structure, and the nearest hit it finds against brute force over all spheres."""
+"""The BVH over spheres and triangles: its structure, and the nearest hit it finds against brute
+force over all primitives (exact t), on random spheres, triangle soups, meshes with coincident
+and degenerate triangles, mixed scenes, and every primitive at one point."""
 
 import numpy as np
 import pytest
 
 from app.bvh import MAX_DEPTH, build_bvh
+from app.compiled import compile_scene
+from app.scene import Mesh, SceneBuilder, diffuse
+from tests.conftest import scene_arrays
 
 SOURCE = """
-kernel void nearest(global const BVHNode *nodes, global const Sphere *spheres, int n_spheres,
-                    global const float4 *o, global const float4 *d, int skip_first,
+kernel void nearest(SCENE_KERNEL_ARGS, int num_spheres, int num_triangles,
+                    global const float4 *o, global const float4 *d,
                     global float *t_bvh, global int *i_bvh, global float *t_all, global int *i_all)
 {
+    SceneData sc = SCENE_DATA(num_spheres);
     int k = get_global_id(0);
     float3 org = o[k].xyz, dir = normalize(d[k].xyz);
-    int skip = skip_first ? 0 : -1;
-    Hit h = intersect_scene(nodes, spheres, org, dir, INFINITY, skip);
-    t_bvh[k] = h.t; i_bvh[k] = h.sphere;
-    Hit b = {INFINITY, -1};
-    intersect_leaf(spheres, 0, n_spheres, org, dir, skip, &b);
-    t_all[k] = b.t; i_all[k] = b.sphere;
+    Hit h = intersect_scene(&sc, org, dir, INFINITY);
+    t_bvh[k] = h.t; i_bvh[k] = h.prim;
+    Hit b = {INFINITY, -1, 0.0f, 0.0f};
+    intersect_spheres(&sc, 0, num_spheres, org, dir, &b);
+    intersect_triangles(&sc, 0, num_triangles, org, dir, &b);
+    t_all[k] = b.t; i_all[k] = b.prim;
 }
 """
 
@@ -26,72 +32,111 @@ def random_spheres(rng, n, radius_range=(0.05, 1.5)):
     return np.column_stack([rng.uniform(-10, 10, (n, 3)), rng.uniform(*radius_range, n)]).astype(np.float32)
 
 
-def leaves(bvh):
-    c = bvh.nodes["child"]
-    return c["index"][c["count"] > 0], c["count"][c["count"] > 0]
+def triangle_soup(rng, n, size=1.5):
+    centres = rng.uniform(-10, 10, (n, 1, 3))
+    return (centres + rng.normal(scale=size, size=(n, 3, 3))).astype(np.float32)
 
 
-@pytest.mark.parametrize("n", [1, 2, 3, 7, 100, 5000])
-def test_every_sphere_in_one_leaf_and_inside_its_boxes(n):
-    rng = np.random.default_rng(n)
-    spheres = random_spheres(rng, n)
-    bvh = build_bvh(spheres)
-    assert sorted(bvh.order.tolist()) == list(range(n))
-    first, count = leaves(bvh)
-    covered = np.concatenate([np.arange(f, f + c) for f, c in zip(first, count)])
-    if n == 1:
-        covered = np.unique(covered)   # the lone sphere sits in both root slots
-    assert sorted(covered.tolist()) == list(range(n))
-    ordered = spheres[bvh.order]
-    for node in bvh.nodes:
-        for c in node["child"]:
-            if c["count"]:
-                s = ordered[c["index"]:c["index"] + c["count"]]
-                assert np.all(s[:, :3] - s[:, 3:] >= c["lo"]) and np.all(s[:, :3] + s[:, 3:] <= c["hi"])
-    assert bvh.depth <= MAX_DEPTH
+def scene_of(spheres=(), triangles=()):
+    """A scene of spheres and one mesh holding the given triangles ((T, 3, 3) corners)."""
+    b = SceneBuilder()
+    m = b.material(diffuse(0.5))
+    for s in spheres:
+        b.add_sphere(s[:3], s[3], m)
+    if len(triangles):
+        t = np.asarray(triangles, np.float32)
+        b.add_mesh(Mesh("soup", t.reshape(-1, 3), np.arange(3 * len(t), dtype=np.int32).reshape(-1, 3), None, m))
+    return b.build("test")
+
+
+def leaf_ranges(nodes):
+    c = nodes["child"].reshape(-1)
+    leaf = c["count"] != 0
+    return c[leaf]
+
+
+@pytest.mark.parametrize("n_spheres,n_triangles", [(1, 0), (0, 1), (2, 0), (3, 4), (7, 0), (100, 100), (0, 3000), (2000, 3000)])
+def test_every_primitive_in_one_leaf_and_inside_its_boxes(n_spheres, n_triangles):
+    rng = np.random.default_rng(n_spheres + n_triangles)
+    c = compile_scene(scene_of(random_spheres(rng, n_spheres), triangle_soup(rng, n_triangles)))
+    n = n_spheres + n_triangles
+    assert sorted(c.bvh.order.tolist()) == list(range(n))
+    covered = {"s": [], "t": []}
+    for leaf in leaf_ranges(c.bvh.nodes):
+        kind, count = ("s", leaf["count"]) if leaf["count"] > 0 else ("t", -leaf["count"])
+        idx = np.arange(leaf["index"], leaf["index"] + count)
+        covered[kind].extend(idx.tolist())
+        if kind == "s":
+            s = c.spheres[idx]
+            lo, hi = s[:, :3] - s[:, 3:], s[:, :3] + s[:, 3:]
+        else:
+            corners = np.stack([c.triangles[f][idx, :3] for f in ("v0", "v1", "v2")], axis=1)
+            lo, hi = corners.min(axis=1), corners.max(axis=1)
+        assert np.all(lo >= leaf["lo"]) and np.all(hi <= leaf["hi"])
+    if n == 1:   # the lone primitive sits in both root slots
+        covered = {k: sorted(set(v)) for k, v in covered.items()}
+    assert sorted(covered["s"]) == list(range(n_spheres))
+    assert sorted(covered["t"]) == list(range(n_triangles))
+    assert c.bvh.depth <= MAX_DEPTH
 
 
 def test_children_boxes_nest():
-    bvh = build_bvh(random_spheres(np.random.default_rng(3), 3000))
-    c = bvh.nodes["child"]
-    for k in range(len(bvh.nodes)):
+    rng = np.random.default_rng(3)
+    nodes = compile_scene(scene_of(random_spheres(rng, 1500), triangle_soup(rng, 1500))).bvh.nodes
+    c = nodes["child"]
+    for k in range(len(nodes)):
         for s in range(2):
             if c["count"][k, s] == 0:
                 inner = c[c["index"][k, s]]
                 assert np.all(inner["lo"] >= c["lo"][k, s]) and np.all(inner["hi"] <= c["hi"][k, s])
 
 
-def test_identical_centres_still_split():
-    spheres = np.tile([1.0, 2.0, 3.0, 0.5], (1000, 1)).astype(np.float32)
-    bvh = build_bvh(spheres)
-    _, count = leaves(bvh)
-    assert count.max() <= 4 and bvh.depth < 20
+def test_identical_boxes_still_split():
+    lo = np.tile([1.0, 2.0, 3.0], (1000, 1)).astype(np.float32)
+    bvh = build_bvh(lo, lo + 0.5)
+    c = bvh.nodes["child"]
+    assert c["count"].max() <= 4 and bvh.depth < 20
 
 
-def upload(kernels, spheres):
-    bvh = build_bvh(spheres)
-    return bvh, spheres[bvh.order]
-
-
-@pytest.mark.parametrize("n,seed", [(1, 0), (2, 1), (5, 2), (64, 3), (1000, 4), (8000, 5)])
-def test_nearest_hit_matches_brute_force(kernels, n, seed):
-    rng = np.random.default_rng(seed)
-    spheres = random_spheres(rng, n)
-    bvh, ordered = upload(kernels, spheres)
-    rays = 20000
-    # origins inside the cloud and outside it, all directions
+def nearest(kernels, compiled, rays, rng, aim_at):
     o = np.column_stack([rng.uniform(-15, 15, (rays, 3)), np.zeros(rays)]).astype(np.float32)
     d = rng.normal(size=(rays, 3))
-    aimed = rng.integers(0, n, rays // 2)    # half the rays aim at a sphere
-    d[: rays // 2] = spheres[aimed, :3] - o[: rays // 2, :3]
+    targets = aim_at[rng.integers(0, len(aim_at), rays // 2)]
+    d[: rays // 2] = targets - o[: rays // 2, :3]     # half the rays aim at a primitive
     d = np.column_stack([d, np.zeros(rays)]).astype(np.float32)
     out = [np.zeros(rays, np.float32), np.zeros(rays, np.int32), np.zeros(rays, np.float32), np.zeros(rays, np.int32)]
-    for skip in (0, 1):
-        kernels(SOURCE)("nearest", rays, bvh.nodes, ordered, np.int32(n), o, d, np.int32(skip), *out)
-        t_bvh, i_bvh, t_all, i_all = out
-        np.testing.assert_array_equal(t_bvh, t_all)
-        same = i_bvh == i_all
-        # different indices only where two spheres are met at exactly the same t
-        assert np.all(same | (t_bvh == t_all))
-        if not skip:
-            assert np.any(np.isfinite(t_all))
+    runner = kernels(SOURCE)
+    runner("nearest", rays, *scene_arrays(compiled), np.int32(compiled.num_spheres),
+           np.int32(compiled.num_triangles), o, d, *out)
+    return out
+
+
+@pytest.mark.parametrize("case", ["spheres", "soup", "mixed", "coincident", "one-point", "degenerate-neighbours"])
+def test_nearest_hit_matches_brute_force(kernels, case):
+    rng = np.random.default_rng(len(case))
+    spheres, tris = np.zeros((0, 4), np.float32), np.zeros((0, 3, 3), np.float32)
+    if case == "spheres":
+        spheres = random_spheres(rng, 5000)
+    elif case == "soup":
+        tris = triangle_soup(rng, 5000)
+    elif case == "mixed":
+        spheres, tris = random_spheres(rng, 2000), triangle_soup(rng, 3000)
+    elif case == "coincident":      # every triangle three times, and 100 copies of one
+        base = triangle_soup(rng, 500)
+        tris = np.concatenate([base, base, base, np.repeat(base[:1], 100, axis=0)])
+    elif case == "one-point":       # all primitives at (or around) one point
+        spheres = np.tile([1.0, 1.0, 1.0, 0.5], (300, 1)).astype(np.float32)
+        tris = np.repeat(triangle_soup(rng, 1, size=0.5) * 0 + np.array([[1, 1, 1], [2, 1, 1], [1, 2, 1]], np.float32),
+                         300, axis=0)
+    else:                           # thin slivers between ordinary triangles
+        tris = triangle_soup(rng, 2000)
+        sliver = tris[:500].copy()
+        sliver[:, 2] = sliver[:, 0] + 1e-4 * (sliver[:, 1] - sliver[:, 0])
+        tris = np.concatenate([tris, sliver])
+    c = compile_scene(scene_of(spheres, tris))
+    aim_at = np.concatenate([spheres[:, :3], tris.mean(axis=1)])
+    t_bvh, i_bvh, t_all, i_all = nearest(kernels, c, 20000, rng, aim_at)
+    np.testing.assert_array_equal(t_bvh, t_all)
+    # different primitives only where two are met at exactly the same t
+    assert np.all((i_bvh == i_all) | (t_bvh == t_all))
+    assert np.mean(np.isfinite(t_all)) > 0.3

@@ -7,7 +7,7 @@ from pyopencl import cltypes
 from scipy import stats
 
 from app.environment import Environment
-from app.lights import alias_table, build_light_table
+from app.lights import alias_table, build_light_table, emitted_power
 from app.types import RENDER_PARAMS
 from tests.test_sampling import chi_square
 
@@ -18,7 +18,7 @@ kernel void cone(float4 sphere, float4 x, global const float4 *u, global float4 
     float3 d = sample_sphere_cone(sphere, x.xyz, u[i].x, u[i].y);
     out[i] = (float4)(d, pdf_sphere_cone(sphere, x.xyz));
 }
-kernel void pick(global const Light *lights, int count, global const float4 *u, global int *out)
+kernel void pick_lights(global const Light *lights, int count, global const float4 *u, global int *out)
 {
     int i = get_global_id(0);
     out[i] = pick_light(lights, count, u[i].x);
@@ -76,12 +76,26 @@ def test_alias_table_reproduces_the_weights_exactly():
 def test_kernel_picks_lights_in_proportion_to_power(kernels):
     spheres = np.array([[0, 0, 0, 1], [5, 0, 0, 0.5], [9, 0, 0, 2], [0, 0, 4, 1]], np.float32)
     emission = np.array([[1, 1, 1], [8, 8, 8], [0, 0, 0], [0.5, 2, 0.1]], np.float32)
-    table = build_light_table(spheres, emission, Environment.constant((0, 0, 0)))
+    power = emitted_power(spheres, np.zeros((0, 3, 3)), emission, np.zeros((0, 3)))
+    table = build_light_table(power, Environment.constant((0, 0, 0)))
     assert table.count == 3 and table.env_pick == 0.0 and table.pick[2] == 0
     out = np.zeros(N, np.int32)
-    kernels(SOURCE)("pick", N, table.lights, np.int32(table.count), uniforms(3), out)
+    kernels(SOURCE)("pick_lights", N, table.lights, np.int32(table.count), uniforms(3), out)
     counts = np.bincount(out, minlength=table.count)
     assert chi_square(counts, table.lights["pick"] * N) > 1e-3
+
+
+def test_light_table_holds_spheres_triangles_and_the_environment():
+    """One structure for every emitter: power pi Le area (a triangle emits from its front only),
+    the environment chosen as often as all other lights together."""
+    spheres = np.array([[0, 0, 0, 1]], np.float32)
+    triangles = np.array([[[0, 0, 0], [2, 0, 0], [0, 2, 0]], [[0, 0, 0], [1, 0, 0], [0, 1, 0]]], np.float32)
+    power = emitted_power(spheres, triangles, np.array([[1.0, 1, 1]]), np.array([[1.0, 1, 1], [0, 0, 0]]))
+    np.testing.assert_allclose(power, [np.pi * 4 * np.pi, np.pi * 2.0, 0.0])
+    table = build_light_table(power, Environment.constant((1, 1, 1)))
+    assert table.count == 3 and table.env_pick == pytest.approx(0.5)
+    assert set(table.lights["prim"]) == {0, 1, -1}
+    assert table.pick[0] == pytest.approx(0.5 * 4 * np.pi / (4 * np.pi + 2)) and table.pick[2] == 0
 
 
 def env_params(env):

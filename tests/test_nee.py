@@ -28,9 +28,8 @@ def hdr_scene():
     quadrature covers the full-strength mapping."""
     s = load_scene("demo")
     keep = np.arange(len(s.spheres)) != 4
-    return replace(s, spheres=s.spheres[keep], rho_d=s.rho_d[keep], rho_s=s.rho_s[keep],
-                   exponent=s.exponent[keep], emission=s.emission[keep],
-                   environment=box_filtered(s.environment))
+    return replace(s, spheres=s.spheres[keep], sphere_material=s.sphere_material[keep],
+                   sphere_names=None, environment=box_filtered(s.environment))
 
 
 SCENES = {"simple": lambda: load_scene("simple"), "hdr": hdr_scene}
@@ -98,13 +97,13 @@ def test_hdr_lit_sphere_matches_quadrature(backend, nee):
     """A lone diffuse sphere (albedo a) under an HDR map, direct light only: its radiance at
     normal n is a / pi * integral of L(w) max(0, n . w) dw, summed here over the map."""
     from app.camera import Camera
-    from app.scene import RenderSettings, SceneBuilder
+    from app.scene import RenderSettings, SceneBuilder, diffuse
 
     env = box_filtered(load_scene("demo").environment)
     env = replace(env, rotation=75.0)
     albedo, w, h = 0.8, 48, 32
     b = SceneBuilder()
-    b.add((0, 0, 0), 1.0, rho_d=albedo)
+    b.add_sphere((0, 0, 0), 1.0, diffuse(albedo))
     camera = Camera([0, 0.5, 4], [0, 0, 0], [0, 1, 0], 35.0)
     scene = b.build("sphere", camera=camera, environment=env,
                     settings=RenderSettings(width=w, height=h, max_depth=2, russian_roulette=False, nee=nee))

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from app.builtin_scenes import BUILTIN_SCENES
+from app.scene.builtin import BUILTIN_SCENES
 from app.renderer import Renderer
 from app.scene import load_scene
 from tests.stats import z_test

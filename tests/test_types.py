@@ -1,32 +1,39 @@
-"""The NumPy dtypes of app/types.py match the device's layout of kernels/types.h."""
+"""The NumPy dtypes of app/types.py match the device's layout of kernels/types.h, field by field
+(so that swapped fields of equal size are caught too)."""
 
 import numpy as np
+import pytest
 
-from app.types import BVH_NODE, MATERIAL, RENDER_PARAMS
+from app.types import BVH_NODE, LIGHT, MATERIAL, RENDER_PARAMS, TRIANGLE
 
-SOURCE = """
-#define OFF(T, f) (int)__builtin_offsetof(T, f)
-kernel void layout(global int *out)
-{
-    out[0] = sizeof(Material); out[1] = OFF(Material, specular); out[2] = OFF(Material, emission);
-    out[3] = sizeof(BVHNode); out[4] = OFF(BVHNode, child[1]); out[5] = OFF(BVHChild, index);
-    out[6] = OFF(BVHChild, hi); out[7] = OFF(BVHChild, count);
-    out[8] = sizeof(RenderParams); out[9] = OFF(RenderParams, width);
-    out[10] = OFF(RenderParams, seed); out[11] = OFF(RenderParams, env_rotation);
-    out[12] = sizeof(Sphere);
+STRUCTS = {
+    "Material": MATERIAL,
+    "Triangle": TRIANGLE,
+    "RenderParams": RENDER_PARAMS,
+    "Light": LIGHT,
+    "BVHChild": BVH_NODE["child"].base,
 }
-"""
 
 
-def test_dtypes_match_device_layout(kernels):
-    out = np.zeros(13, np.int32)
-    kernels(SOURCE)("layout", 1, out)
-    child = BVH_NODE["child"].base
-    expected = [
-        MATERIAL.itemsize, MATERIAL.fields["specular"][1], MATERIAL.fields["emission"][1],
-        BVH_NODE.itemsize, child.itemsize, child.fields["index"][1],
-        child.fields["hi"][1], child.fields["count"][1],
-        RENDER_PARAMS.itemsize, RENDER_PARAMS.fields["width"][1],
-        RENDER_PARAMS.fields["seed"][1], RENDER_PARAMS.fields["env_rotation"][1], 16,
-    ]
-    assert out.tolist() == expected
+def layout_source(name, dtype):
+    lines = [f"out[0] = sizeof({name});"]
+    lines += [f"out[{i + 1}] = (int)__builtin_offsetof({name}, {field});" for i, field in enumerate(dtype.names)]
+    return f"kernel void layout_{name}(global int *out) {{ {' '.join(lines)} }}\n"
+
+
+SOURCE = "".join(layout_source(n, d) for n, d in STRUCTS.items()) + \
+    "kernel void layout_node(global int *out) { out[0] = sizeof(BVHNode); out[1] = sizeof(Sphere); }\n"
+
+
+@pytest.mark.parametrize("name", list(STRUCTS))
+def test_dtype_matches_device_layout(kernels, name):
+    dtype = STRUCTS[name]
+    out = np.zeros(len(dtype.names) + 1, np.int32)
+    kernels(SOURCE)(f"layout_{name}", 1, out)
+    assert out.tolist() == [dtype.itemsize] + [dtype.fields[f][1] for f in dtype.names]
+
+
+def test_node_and_sphere_sizes(kernels):
+    out = np.zeros(2, np.int32)
+    kernels(SOURCE)("layout_node", 1, out)
+    assert out.tolist() == [BVH_NODE.itemsize, 16]

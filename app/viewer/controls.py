@@ -70,14 +70,3 @@ def pick_ray(camera: Camera, width: int, height: int, x: float, y: float):
     forward, right, up = camera.basis(width / height)
     d = forward + (2 * x / width - 1) * right + (1 - 2 * y / height) * up
     return camera.eye, d / np.linalg.norm(d)
-
-
-def pick_sphere(spheres: np.ndarray, origin, direction):
-    """Index of the nearest sphere the ray meets from outside, or None."""
-    c = spheres[:, :3].astype(np.float64) - origin
-    b = c @ direction
-    disc = b * b - (np.sum(c * c, axis=1) - spheres[:, 3].astype(np.float64) ** 2)
-    t = np.where(disc >= 0, b - np.sqrt(np.maximum(disc, 0)), np.inf)
-    t = np.where(t > 0, t, np.inf)
-    i = int(np.argmin(t))
-    return i if np.isfinite(t[i]) else None

@@ -3,8 +3,36 @@ the accumulation; display-only ones (exposure, tone curve) do not reset it."""
 
 import numpy as np
 
-from app.builtin_scenes import BUILTIN_SCENES
+from app.materials import BSDFS
+from app.scene.builtin import BUILTIN_SCENES
 from app.tonemap import TONEMAPS
+
+
+def _material_editor(imgui, v):
+    """The picked shape and its material's parameters, as the registry declares them."""
+    shape = v.selected
+    table = v.renderer.scene.materials
+    m = table.get(shape.material)
+    label = table.name_of(shape.material) or f"#{shape.material}"
+    imgui.text_wrapped(f"{shape.kind} '{shape.name}': material {label} ({m.type})")
+    changed = False
+    for param in BSDFS[m.type].params:
+        value = m.params[param.name]
+        if param.kind == "color":
+            hit, new = imgui.color_edit3(param.name, np.broadcast_to(value, 3).tolist())
+            new = np.clip(new, param.low, param.high if param.high is not None else np.inf)
+        else:
+            high = param.high if param.high is not None else 5000.0
+            hit, new = imgui.slider_float(param.name, float(value), param.low, high,
+                                          flags=imgui.SliderFlags_.logarithmic)
+        if hit:
+            m.params[param.name], changed = np.asarray(new, np.float64), True
+    hit, le = imgui.input_float3("emission", np.asarray(m.emission, np.float64).tolist())
+    if hit:
+        m.emission, changed = np.maximum(le, 0.0), True
+    if changed and BSDFS[m.type].check({k: np.atleast_2d(x) if np.ndim(x) else np.atleast_1d(x)
+                                        for k, x in m.params.items()}) is None:
+        v.edit_material(shape.material, m)
 
 def draw_panel(v):
     imgui = v.imgui
@@ -63,17 +91,8 @@ def draw_panel(v):
         if imgui.button("open file"):
             v.load_scene(v.scene_file)
 
-    if v.selected is not None and imgui.collapsing_header("Selected sphere", imgui.TreeNodeFlags_.default_open):
-        s, i = r.scene, v.selected
-        imgui.text(f"sphere {i}: centre {np.round(s.spheres[i, :3], 2).tolist()}, r {s.spheres[i, 3]:.3g}")
-        changed_d, rho_d = imgui.color_edit3("rho_d", s.rho_d[i].tolist())
-        changed_s, rho_s = imgui.color_edit3("rho_s", s.rho_s[i].tolist())
-        changed_n, n = imgui.slider_float("n", float(s.exponent[i]), 0.0, 5000.0,
-                                          flags=imgui.SliderFlags_.logarithmic)
-        changed_e, le = imgui.input_float3("emission", s.emission[i].tolist())
-        if changed_d or changed_s or changed_n or changed_e:
-            v.edit_material(i, rho_d=np.clip(rho_d, 0, 1), rho_s=np.clip(rho_s, 0, 1),
-                            exponent=n, emission=np.maximum(le, 0))
+    if v.selected is not None and imgui.collapsing_header("Selected", imgui.TreeNodeFlags_.default_open):
+        _material_editor(imgui, v)
 
     if imgui.collapsing_header("Screenshots", imgui.TreeNodeFlags_.default_open):
         changed, folder = imgui.input_text("folder", str(v.screenshot_dir))

@@ -15,7 +15,7 @@ from app.render import next_launch_size
 from app.renderer import Renderer
 from app.resources import resource_dir
 from app.scene import load_scene
-from app.viewer.controls import FlyControls, pick_ray, pick_sphere
+from app.viewer.controls import FlyControls, pick_ray
 from app.viewer.panel import draw_panel
 
 FRAME_BUDGET = 1 / 40          # seconds of kernel work per frame: keeps the window above 30 fps
@@ -145,7 +145,7 @@ class Viewer:
             x, y = glfw.get_cursor_pos(self.window)
             w, h = glfw.get_window_size(self.window)
             o, d = pick_ray(self.renderer.camera, w, h, x, y)
-            self.selected = pick_sphere(self.renderer.scene.spheres, o, d)
+            self.selected = self.renderer.pick(o, d)
 
     def _mouse_look(self):
         glfw = self.glfw
@@ -170,15 +170,10 @@ class Viewer:
         self.glfw.set_window_title(self.window, f"pathtrace - {scene.name}")
         self.message = f"loaded {scene.name}"
 
-    def edit_material(self, index, rho_d=None, rho_s=None, exponent=None, emission=None):
-        s = self.renderer.scene
-        for array, value in ((s.rho_d, rho_d), (s.rho_s, rho_s), (s.emission, emission)):
-            if value is not None:
-                array[index] = value
-        if exponent is not None:
-            s.exponent[index] = exponent
-        total = s.rho_d[index] + s.rho_s[index]       # keep rho_d + rho_s <= 1 per channel
-        s.rho_s[index] = np.where(total > 1, np.maximum(1 - s.rho_d[index], 0), s.rho_s[index])
+    def edit_material(self, index: int, material):
+        """Replaces row `index` of the scene's material table (shared by every shape that uses
+        it) and resets."""
+        self.renderer.scene.materials.set(index, material)
         self.renderer.upload_materials()
 
     # --- the loop ---------------------------------------------------------------------------

@@ -1,35 +1,32 @@
-"""The modified Phong BRDF of kernels/phong.cl: its sampling against its pdf, the pdf's
-normalisation, and energy conservation."""
+"""The BSDFs of kernels/bsdfs/ through the dispatch of kernels/bsdf.cl: sampling against the pdf,
+the pdf's normalisation, energy conservation, and the sample weight against eval cos / pdf."""
 
 import numpy as np
 import pytest
 from pyopencl import cltypes
 
-from app.types import pack_materials
+from app.materials import pack
 from tests.test_sampling import chi_square
 
 SOURCE = """
-kernel void phong_sample(global const Material *mat, float4 n, float4 wo, int rr,
-                         global const float4 *u, global float4 *wi, global float4 *weight)
+kernel void bsdf_sample(global const Material *mat, float4 wo, global const float4 *u,
+                        global float4 *wi, global float4 *weight)
 {
     int i = get_global_id(0);
     Material m = mat[0];
-    float3 w, f;
-    int ok = sample_phong(&m, n.xyz, wo.xyz, u[i], rr, &w, &f);
-    wi[i] = (float4)(w, 0.0f);
-    weight[i] = ok ? (float4)(f, 1.0f) : (float4)(0.0f);
+    BSDFSample s;
+    int ok = sample_bsdf(&m, wo.xyz, u[i].xyz, &s);
+    wi[i] = (float4)(s.wi, ok ? s.pdf : 0.0f);
+    weight[i] = ok ? (float4)(s.weight, 1.0f) : (float4)(0.0f);
 }
-kernel void phong_eval(global const Material *mat, float4 n, float4 wo, global const float4 *wi,
-                       global float4 *out)
+kernel void bsdf_eval(global const Material *mat, float4 wo, global const float4 *wi,
+                      global float4 *out)
 {
     int i = get_global_id(0);
     Material m = mat[0];
-    out[i] = (float4)(eval_phong(&m, n.xyz, wo.xyz, wi[i].xyz), pdf_phong(&m, n.xyz, wo.xyz, wi[i].xyz));
+    out[i] = (float4)(eval_bsdf(&m, wo.xyz, wi[i].xyz), pdf_bsdf(&m, wo.xyz, wi[i].xyz));
 }
 """
-NORMAL = cltypes.make_float4(0, 0, 1, 0)
-
-
 def direction(theta_deg):
     """The outgoing direction at theta degrees from the normal, as a kernel argument."""
     t = np.radians(theta_deg)
@@ -37,20 +34,22 @@ def direction(theta_deg):
 
 
 def material(rho_d, rho_s, n):
-    return pack_materials(np.broadcast_to(rho_d, 3), np.broadcast_to(rho_s, 3), [n], [[0, 0, 0]])
+    return pack("phong", {"rho_d": rho_d, "rho_s": rho_s, "n": n})
 
 
-def sample(kernels, m, wo, rr, count=400_000, seed=0):
+def sample(kernels, m, wo, count=400_000, seed=0):
+    """Directions (with the pdf sample() reported in w) and weights (w: 1 where a direction
+    resulted)."""
     u = np.random.default_rng(seed).random((count, 4), np.float32)
     wi, weight = np.zeros((count, 4), np.float32), np.zeros((count, 4), np.float32)
-    kernels(SOURCE)("phong_sample", count, m, NORMAL, wo, np.int32(rr), u, wi, weight)
-    return wi[:, :3].astype(np.float64), weight
+    kernels(SOURCE)("bsdf_sample", count, m, wo, u, wi, weight)
+    return wi.astype(np.float64), weight
 
 
 def evaluate(kernels, m, wo, wi):
-    wi4 = np.column_stack([wi, np.zeros(len(wi))]).astype(np.float32)
+    wi4 = np.column_stack([wi[:, :3], np.zeros(len(wi))]).astype(np.float32)
     out = np.zeros((len(wi), 4), np.float32)
-    kernels(SOURCE)("phong_eval", len(wi), m, NORMAL, wo, wi4, out)
+    kernels(SOURCE)("bsdf_eval", len(wi), m, wo, wi4, out)
     return out[:, :3].astype(np.float64), out[:, 3].astype(np.float64)
 
 
@@ -73,10 +72,10 @@ def test_pdf_integrates_to_one_at_normal_incidence(kernels, rho_d, rho_s, n):
 @pytest.mark.parametrize("theta", [0, 35, 70])
 @pytest.mark.parametrize("rho_d,rho_s,n", [(0.3, 0.6, 20.0), (0.1, 0.9, 200.0)])
 def test_sampled_directions_follow_the_pdf(kernels, theta, rho_d, rho_s, n):
-    """Without Russian roulette every draw yields a direction or (glossy, below the surface)
-    ends the path; the yielded directions' histogram matches the pdf integrated over each bin."""
+    """Every draw yields a direction or (glossy, below the surface) ends the path; the yielded
+    directions' histogram matches the pdf integrated over each bin."""
     m, wo = material(rho_d, rho_s, n), direction(theta)
-    wi, weight = sample(kernels, m, wo, rr=0, seed=theta)
+    wi, weight = sample(kernels, m, wo, seed=theta)
     ok = weight[:, 3] > 0
     assert np.all(wi[ok, 2] > 0)
     # bins in (z, phi) around the normal; the pdf integrated over each on a fine grid
@@ -95,15 +94,32 @@ def test_sampled_directions_follow_the_pdf(kernels, theta, rho_d, rho_s, n):
                                            ((0.9, 0.1, 0.2), (0.1, 0.9, 0.3), 30.0)])
 def test_albedo_is_at_most_one_and_the_estimator_finds_it(kernels, theta, rho_d, rho_s, n):
     """Directional albedo = integral of f cos over the hemisphere, by quadrature; it is at most
-    1 (energy conservation), and the mean path weight of sample_phong, with and without Russian
-    roulette, is an unbiased estimate of it."""
+    1 (energy conservation), and the mean sample weight is an unbiased estimate of it."""
     m, wo = material(rho_d, rho_s, n), direction(theta)
     grid, cell = hemisphere_grid(3000, 1500)
     f, _ = evaluate(kernels, m, wo, grid)
     albedo = (f * grid[:, 2:3]).sum(axis=0) * cell
     assert np.all(albedo <= 1.0 + 2e-3)
-    for rr in (1, 0):
-        _, weight = sample(kernels, m, wo, rr, seed=theta + rr)
-        mean = weight[:, :3].mean(axis=0)
-        err = weight[:, :3].std(axis=0) / np.sqrt(len(weight))
-        assert np.all(np.abs(mean - albedo) < 5 * err + 2e-3), (rr, mean, albedo)
+    wi, weight = sample(kernels, m, wo, seed=theta)
+    mean = weight[:, :3].mean(axis=0)
+    err = weight[:, :3].std(axis=0) / np.sqrt(len(weight))
+    assert np.all(np.abs(mean - albedo) < 5 * err + 2e-3), (mean, albedo)
+
+
+@pytest.mark.parametrize("rho_d,rho_s,n", [(0.3, 0.6, 20.0), ((0.9, 0.1, 0.2), (0.1, 0.9, 0.3), 30.0)])
+def test_sample_weight_is_eval_cos_over_pdf_and_eval_is_reciprocal(kernels, rho_d, rho_s, n):
+    """For a lobe-mixture the one-sample weight is f_lobe cos / (P_lobe pdf_lobe); summed over
+    both lobes' contributions its expectation is eval cos / pdf. Here, per sample: the reported
+    pdf equals pdf_bsdf, and eval is symmetric in (wo, wi)."""
+    m = material(rho_d, rho_s, n)
+    wo = direction(40)
+    wi, weight = sample(kernels, m, wo, count=2000, seed=3)
+    ok = weight[:, 3] > 0
+    f, pdf = evaluate(kernels, m, wo, wi[ok])
+    np.testing.assert_allclose(wi[ok, 3], pdf, rtol=1e-4)
+    # reciprocity: f(wo, wi) == f(wi, wo)
+    wo_vec = np.array([wo["x"], wo["y"], wo["z"]], np.float64)
+    for k in np.flatnonzero(ok)[:50]:
+        back, _ = evaluate(kernels, m, cltypes.make_float4(*wi[k, :3], 0), wo_vec[None])
+        fwd, _ = evaluate(kernels, m, wo, wi[k:k + 1, :3])
+        np.testing.assert_allclose(back, fwd, rtol=1e-4, atol=1e-7)

@@ -1,0 +1,102 @@
+"""The compiled scene: a scene description turned into the flat, device-independent form the
+kernels read (as pbrt-v4 and Mitsuba 3 do): primitives in BVH order, the BVH, the material
+table, the light table and the environment's sampling tables. A Renderer per device only
+uploads it. Primitives have one index space (kernels/types.h); prim_shape maps each back to the
+shape of the description it came from, so that users only ever see the description's shapes."""
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from app.bvh import BVH, build_bvh, primitive_boxes
+from app.lights import LightTable, build_light_table, emitted_power
+from app.scene.description import Scene
+from app.types import TRIANGLE
+
+
+@dataclass
+class ShapeRef:
+    """A shape of the description, as picking reports it."""
+    kind: str          # "sphere" or "mesh"
+    index: int         # into scene.spheres or scene.meshes
+    name: str
+    material: int      # row of scene.materials
+
+
+class CompiledScene:
+    def __init__(self, scene: Scene):
+        self.scene = scene
+        start = time.perf_counter()
+        n_spheres = len(scene.spheres)
+        meshes = scene.meshes
+        corners = np.concatenate([m.vertices[m.faces] for m in meshes]) if meshes \
+            else np.zeros((0, 3, 3), np.float32)
+        lo, hi = primitive_boxes(scene.spheres, corners)
+        self.bvh: BVH = build_bvh(lo, hi, np.arange(len(lo)) >= n_spheres)
+        self.bvh_seconds = time.perf_counter() - start
+
+        order = self.bvh.order
+        sphere_order = order[order < n_spheres]
+        triangle_order = order[order >= n_spheres] - n_spheres
+        self.num_spheres = n_spheres
+        self.spheres = np.ascontiguousarray(scene.spheres[sphere_order], np.float32)
+
+        # per triangle (input order): its mesh and its corners' shading normals, if any
+        counts = [len(m.faces) for m in meshes]
+        mesh_of = np.repeat(np.arange(len(meshes)), counts).astype(np.int64)
+        corner_normals = np.zeros((len(corners), 3, 3), np.float32)
+        has_normals = np.zeros(len(corners), bool)
+        first = 0
+        for m, n in zip(meshes, counts):
+            if m.normals is not None:
+                corner_normals[first:first + n] = m.normals[m.faces]
+                has_normals[first:first + n] = True
+            first += n
+
+        self.triangles = np.zeros(len(triangle_order), TRIANGLE)
+        for k, field in enumerate(("v0", "v1", "v2")):
+            self.triangles[field][:, :3] = corners[triangle_order, k]
+        # shading normals per corner, in BVH order; a flat triangle's index is -1
+        with_normals = has_normals[triangle_order]
+        table = corner_normals[triangle_order[with_normals]].reshape(-1, 3)
+        self.normals = np.zeros((max(len(table), 1), 4), np.float32)
+        self.normals[:len(table), :3] = table
+        normal_index = np.full(len(triangle_order), -1, np.int32)
+        normal_index[with_normals] = np.arange(np.count_nonzero(with_normals), dtype=np.int32) * 3
+        self.triangles["v0"][:, 3] = normal_index.view(np.float32)
+
+        # one index space: spheres, then triangles, each in BVH order
+        mesh_material = np.array([m.material for m in meshes], np.int32)
+        self.prim_shape = np.concatenate([sphere_order, n_spheres + mesh_of[triangle_order]]).astype(np.int32)
+        self.prim_material = np.concatenate([scene.sphere_material[sphere_order],
+                                             mesh_material[mesh_of[triangle_order]] if meshes else []]).astype(np.int32)
+        self.update_materials()
+
+    @property
+    def num_triangles(self) -> int:
+        return len(self.triangles)
+
+    def update_materials(self):
+        """Re-reads the material table and rebuilds the light table (after a material edit or an
+        environment change)."""
+        self.materials = self.scene.materials.rows.copy()
+        emission = self.materials["emission"][:, :3].astype(np.float64)
+        prim_emission = emission[self.prim_material]
+        corners = np.stack([self.triangles[f][:, :3] for f in ("v0", "v1", "v2")], axis=1)
+        power = emitted_power(self.spheres, corners, prim_emission[:self.num_spheres],
+                              prim_emission[self.num_spheres:])
+        self.lights: LightTable = build_light_table(power, self.scene.environment)
+
+    def shape(self, prim: int) -> ShapeRef:
+        """The description's shape that primitive `prim` (BVH order) belongs to."""
+        shape = int(self.prim_shape[prim])
+        if shape < self.num_spheres:
+            return ShapeRef("sphere", shape, self.scene.sphere_name(shape),
+                            int(self.scene.sphere_material[shape]))
+        mesh = self.scene.meshes[shape - self.num_spheres]
+        return ShapeRef("mesh", shape - self.num_spheres, mesh.name, mesh.material)
+
+
+def compile_scene(scene: Scene) -> CompiledScene:
+    return CompiledScene(scene)

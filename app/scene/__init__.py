@@ -1,0 +1,25 @@
+"""Scene descriptions: what scene files say (description.py), read from pathtrace's TOML format
+(toml_reader.py) with meshes from common formats (meshes.py), or built in (builtin.py)."""
+
+from pathlib import Path
+
+from app.errors import UserError
+from app.scene.description import Mesh, RenderSettings, Scene, SceneBuilder, diffuse, emitter, phong
+
+__all__ = ["Mesh", "RenderSettings", "Scene", "SceneBuilder", "diffuse", "emitter", "phong",
+           "load_scene"]
+
+
+def load_scene(name_or_path: str) -> Scene:
+    """A scene file path or a built-in scene's name: the two are interchangeable."""
+    from app.scene.builtin import BUILTIN_SCENES, builtin_scene
+    from app.scene.toml_reader import read_scene_file
+
+    path = Path(name_or_path)
+    if path.suffix == ".toml" or path.exists():
+        return read_scene_file(path)
+    scene = builtin_scene(name_or_path)
+    if scene is not None:
+        return scene
+    raise UserError(f"{name_or_path}: neither a scene file nor a built-in scene "
+                    f"(built-ins: {', '.join(BUILTIN_SCENES)})")

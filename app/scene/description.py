@@ -1,0 +1,93 @@
+"""A scene as its file states it, in file order: spheres and triangle meshes with materials, an
+environment, a camera and render settings. app/compiled.py turns it into the flat,
+device-independent form the kernels read."""
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from app.camera import Camera
+from app.environment import Environment
+from app.materials import Material, MaterialTable
+
+
+@dataclass
+class RenderSettings:
+    width: int = 960
+    height: int = 540
+    spp: int = 64
+    max_depth: int = 0            # 0: paths end by Russian roulette alone
+    russian_roulette: bool = True
+    seed: int = 0
+    nee: bool = True              # next-event estimation with MIS; off: the report's estimator
+
+
+@dataclass
+class Mesh:
+    """A triangle mesh in world space (its transform applied)."""
+    name: str
+    vertices: np.ndarray          # (V, 3) float32
+    faces: np.ndarray             # (F, 3) int32, counter-clockwise seen from the front
+    normals: np.ndarray | None    # (V, 3) float32 shading normals, or None (flat shading)
+    material: int                 # row of the scene's MaterialTable
+    source: str = ""              # the file it came from, if any
+
+
+@dataclass
+class Scene:
+    name: str
+    spheres: np.ndarray           # (N, 4) float32: centre, radius
+    sphere_material: np.ndarray   # (N,) int32: row of `materials`
+    materials: MaterialTable
+    meshes: list = field(default_factory=list)
+    sphere_names: list = None     # None: "sphere i"
+    camera: Camera = field(default_factory=Camera)
+    environment: Environment = field(default_factory=lambda: Environment.constant((1, 1, 1)))
+    settings: RenderSettings = field(default_factory=RenderSettings)
+
+    def with_settings(self, **changes) -> "Scene":
+        return replace(self, settings=replace(self.settings, **changes))
+
+    def sphere_name(self, i: int) -> str:
+        return self.sphere_names[i] if self.sphere_names else f"sphere {i}"
+
+    @property
+    def triangle_count(self) -> int:
+        return sum(len(m.faces) for m in self.meshes)
+
+
+class SceneBuilder:
+    """Collects shapes and materials; the built-in scenes and the file readers use it."""
+
+    def __init__(self):
+        self.materials = MaterialTable()
+        self.spheres, self.sphere_material, self.sphere_names, self.meshes = [], [], [], []
+
+    def material(self, material) -> int:
+        """A row for a Material (added) or an existing row index."""
+        return material if isinstance(material, (int, np.integer)) else self.materials.add(material)
+
+    def add_sphere(self, center, radius, material, name=None):
+        self.spheres.append((*center, radius))
+        self.sphere_material.append(self.material(material))
+        self.sphere_names.append(name or f"sphere {len(self.spheres) - 1}")
+
+    def add_mesh(self, mesh: Mesh):
+        self.meshes.append(mesh)
+
+    def build(self, name, **kwargs) -> Scene:
+        return Scene(name, np.asarray(self.spheres, np.float32).reshape(-1, 4),
+                     np.asarray(self.sphere_material, np.int32).reshape(-1), self.materials,
+                     self.meshes, self.sphere_names or None, **kwargs)
+
+
+def diffuse(rho_d) -> Material:
+    return Material("diffuse", {"rho_d": rho_d})
+
+
+def phong(rho_d, rho_s, n) -> Material:
+    return Material("phong", {"rho_d": rho_d, "rho_s": rho_s, "n": n})
+
+
+def emitter(le) -> Material:
+    return Material("black", emission=np.broadcast_to(np.asarray(le, np.float64), 3).copy())

@@ -1,0 +1,319 @@
+"""Reading scene files in pathtrace's TOML format (docs/scene-format.md). Every check names
+the file and the field, e.g.
+    scenes/room.toml: spheres[3].radius: must be positive, got -1
+"""
+
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from app.camera import Camera
+from app.environment import Environment
+from app.errors import UserError
+from app.materials import BSDFS, Material
+from app.resources import resource_dir
+from app.scene import transform
+from app.scene.description import Mesh, RenderSettings, Scene, SceneBuilder
+from app.scene.meshes import check_mesh, read_mesh, triangulate
+
+# the scene-file types besides the registry's: "emitter" is a black BSDF with emission
+FILE_TYPES = {name: b for name, b in BSDFS.items() if name != "black"}
+MATERIAL_TYPES = ["emitter", *FILE_TYPES]
+MAX_INLINE = 100_000    # vertices or faces written in a scene file; larger meshes belong in files
+
+
+class _Reader:
+    def __init__(self, path: Path):
+        self.path = path
+
+    def fail(self, where, problem):
+        raise UserError(f"{self.path}: {where}: {problem}")
+
+    def table(self, data, where, allowed):
+        if not isinstance(data, dict):
+            self.fail(where, f"must be a table, got {type(data).__name__}")
+        unknown = sorted(set(data) - set(allowed))
+        if unknown:
+            self.fail(where, f"unknown key '{unknown[0]}' (allowed: {', '.join(sorted(allowed))})")
+        return data
+
+    def number(self, data, key, where, default=None, low=None, high=None, integer=False):
+        if key not in data:
+            if default is None:
+                self.fail(where, f"missing '{key}'")
+            return default
+        value = data[key]
+        kinds = (int,) if integer else (int, float)
+        if isinstance(value, bool) or not isinstance(value, kinds):
+            self.fail(f"{where}.{key}", f"must be {'an integer' if integer else 'a number'}, got {value!r}")
+        if not math.isfinite(value):
+            self.fail(f"{where}.{key}", f"must be finite, got {value}")
+        if low is not None and value < low:
+            self.fail(f"{where}.{key}", f"must be at least {low}, got {value}")
+        if high is not None and value > high:
+            self.fail(f"{where}.{key}", f"must be at most {high}, got {value}")
+        return value
+
+    def color(self, data, key, where, default=None, high=None):
+        """A colour is a number (grey) or a list of three numbers, finite and non-negative."""
+        if key not in data:
+            if default is None:
+                self.fail(where, f"missing '{key}'")
+            return np.asarray(default, np.float64)
+        value = data[key]
+        items = [value] * 3 if isinstance(value, (int, float)) and not isinstance(value, bool) else value
+        if not isinstance(items, list) or len(items) != 3:
+            self.fail(f"{where}.{key}", f"must be a number or a list of 3 numbers, got {value!r}")
+        for c in items:
+            if isinstance(c, bool) or not isinstance(c, (int, float)) or not math.isfinite(c):
+                self.fail(f"{where}.{key}", f"must hold finite numbers, got {value!r}")
+            if c < 0 or (high is not None and c > high):
+                bound = f"in [0, {high}]" if high is not None else "non-negative"
+                self.fail(f"{where}.{key}", f"must be {bound}, got {value!r}")
+        return np.asarray(items, np.float64)
+
+    def vector(self, data, key, where, default=None):
+        if key not in data:
+            if default is None:
+                self.fail(where, f"missing '{key}'")
+            return np.asarray(default, np.float64)
+        value = data[key]
+        if (not isinstance(value, list) or len(value) != 3
+                or not all(isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c)
+                           for c in value)):
+            self.fail(f"{where}.{key}", f"must be a list of 3 finite numbers, got {value!r}")
+        return np.asarray(value, np.float64)
+
+    def material(self, data, where) -> Material:
+        if not isinstance(data, dict):
+            self.fail(where, f"must be a table, got {data!r}")
+        kind = data.get("type")
+        if not isinstance(kind, str) or kind not in MATERIAL_TYPES:
+            self.fail(f"{where}.type", f"must be one of {', '.join(MATERIAL_TYPES)}, got {kind!r}")
+        if kind == "emitter":
+            self.table(data, where, {"type", "Le"})
+            return Material("black", emission=self.color(data, "Le", where))
+        bsdf = FILE_TYPES[kind]
+        self.table(data, where, {"type", "Le", "twosided", *(p.name for p in bsdf.params)})
+        values = {}
+        for param in bsdf.params:
+            if param.kind == "color":
+                values[param.name] = self.color(data, param.name, where, default=param.default,
+                                                high=param.high)
+            else:
+                values[param.name] = self.number(data, param.name, where, default=param.default,
+                                                 low=param.low, high=param.high)
+        problem = bsdf.check({k: np.atleast_2d(v) if np.ndim(v) else np.atleast_1d(v)
+                              for k, v in values.items()})
+        if problem:
+            self.fail(where, problem)
+        twosided = data.get("twosided", False)
+        if not isinstance(twosided, bool):
+            self.fail(f"{where}.twosided", f"must be true or false, got {twosided!r}")
+        emission = self.color(data, "Le", where, default=(0, 0, 0))
+        return Material(kind, values, emission, twosided)
+
+    def camera(self, data):
+        where = "camera"
+        self.table(data, where, {"eye", "look_at", "up", "vfov"})
+        cam = Camera(self.vector(data, "eye", where), self.vector(data, "look_at", where),
+                     self.vector(data, "up", where, default=(0, 1, 0)),
+                     self.number(data, "vfov", where, default=45.0))
+        if not 0 < cam.vfov < 180:
+            self.fail("camera.vfov", f"must be between 0 and 180 degrees, got {cam.vfov}")
+        forward = cam.look_at - cam.eye
+        if np.linalg.norm(forward) == 0:
+            self.fail("camera.look_at", "must differ from camera.eye")
+        if np.linalg.norm(np.cross(forward, cam.up)) < 1e-9 * np.linalg.norm(forward) * np.linalg.norm(cam.up):
+            self.fail("camera.up", "must not be parallel to the view direction")
+        return cam
+
+    def environment(self, data):
+        where = "environment"
+        self.table(data, where, {"color", "map", "intensity", "rotation"})
+        intensity = self.number(data, "intensity", where, default=1.0, low=0)
+        rotation = self.number(data, "rotation", where, default=0.0)
+        if "map" in data and "color" in data:
+            self.fail(where, "give either 'color' or 'map', not both")
+        if "map" in data:
+            name = data["map"]
+            if not isinstance(name, str):
+                self.fail("environment.map", f"must be a file name, got {name!r}")
+            return Environment.from_file(self.find_asset(name), intensity, rotation,
+                                         where=f"{self.path}: environment.map")
+        env = Environment.constant(self.color(data, "color", where, default=(1, 1, 1)), intensity)
+        env.rotation = rotation
+        return env
+
+    def find_asset(self, name):
+        """A map path is relative to the scene file; a bare name may also be a shipped map."""
+        candidate = (self.path.parent / name)
+        if candidate.exists():
+            return candidate
+        shipped = resource_dir("assets") / "envmaps" / name
+        return shipped if shipped.exists() else candidate
+
+    def settings(self, data):
+        where = "render"
+        self.table(data, where, {"width", "height", "spp", "max_depth", "russian_roulette", "seed", "nee"})
+        rr, nee = data.get("russian_roulette", True), data.get("nee", True)
+        for key, value in (("russian_roulette", rr), ("nee", nee)):
+            if not isinstance(value, bool):
+                self.fail(f"render.{key}", f"must be true or false, got {value!r}")
+        s = RenderSettings(
+            width=self.number(data, "width", where, default=960, low=1, high=16384, integer=True),
+            height=self.number(data, "height", where, default=540, low=1, high=16384, integer=True),
+            spp=self.number(data, "spp", where, default=64, low=1, integer=True),
+            max_depth=self.number(data, "max_depth", where, default=0, low=0, integer=True),
+            russian_roulette=rr, nee=nee,
+            seed=self.number(data, "seed", where, default=0, low=0, high=2**32 - 1, integer=True))
+        if not s.russian_roulette and s.max_depth == 0:
+            self.fail("render.russian_roulette", "false needs a max_depth above 0, or paths never end")
+        return s
+
+    def material_ref(self, builder, named, data, where):
+        m = data.get("material")
+        if isinstance(m, str):
+            if m not in named:
+                self.fail(f"{where}.material", f"no material named '{m}' in [materials]")
+            return named[m]
+        if m is None:
+            self.fail(where, "missing 'material'")
+        return builder.material(self.material(m, f"{where}.material"))
+
+    def name(self, data, where, default):
+        name = data.get("name", default)
+        if not isinstance(name, str) or not name or len(name) > 200:
+            self.fail(f"{where}.name", f"must be a non-empty string of at most 200 characters, got {name!r}")
+        return name
+
+    def transform(self, data, where) -> np.ndarray:
+        """scale, then rotate, then translate; or a full 4x4 matrix (row-major)."""
+        if "matrix" in data:
+            if any(k in data for k in ("translate", "rotate", "scale")):
+                self.fail(where, "give either 'matrix' or translate/rotate/scale, not both")
+            m = data["matrix"]
+            if (not isinstance(m, list) or len(m) != 4
+                    or not all(isinstance(r, list) and len(r) == 4 and all(_is_finite_number(x) for x in r) for r in m)):
+                self.fail(f"{where}.matrix", "must be 4 rows of 4 finite numbers")
+            m = np.asarray(m, np.float64)
+            if abs(np.linalg.det(m[:3, :3])) < 1e-12 or not np.allclose(m[3], [0, 0, 0, 1]):
+                self.fail(f"{where}.matrix", "must be an invertible affine transform (last row 0 0 0 1)")
+            return m
+        m = np.eye(4)
+        if "scale" in data:
+            s = data["scale"]
+            s = [s] * 3 if _is_finite_number(s) else s
+            if not isinstance(s, list) or len(s) != 3 or not all(_is_finite_number(x) and x != 0 for x in s):
+                self.fail(f"{where}.scale", f"must be a non-zero number or 3 of them, got {data['scale']!r}")
+            m = transform.scaling(s) @ m
+        if "rotate" in data:
+            r = data["rotate"]
+            if (not isinstance(r, list) or len(r) != 4 or not all(_is_finite_number(x) for x in r)
+                    or not any(r[:3])):
+                self.fail(f"{where}.rotate", f"must be [axis_x, axis_y, axis_z, degrees] with a non-zero axis, got {r!r}")
+            m = transform.rotation(r[:3], r[3]) @ m
+        if "translate" in data:
+            m = transform.translation(self.vector(data, "translate", where)) @ m
+        return m
+
+    def mesh(self, data, where, material) -> Mesh:
+        """A mesh from a file, or written inline as vertices and faces (polygons of 3 or more
+        corners, counter-clockwise seen from the front)."""
+        self.table(data, where, {"file", "vertices", "faces", "material", "name", "translate",
+                                 "rotate", "scale", "matrix"})
+        m = self.transform(data, where)
+        if "file" in data:
+            if "vertices" in data or "faces" in data:
+                self.fail(where, "give either 'file' or 'vertices' and 'faces', not both")
+            name = data["file"]
+            if not isinstance(name, str) or not name:
+                self.fail(f"{where}.file", f"must be a file name, got {name!r}")
+            source = self.path.parent / name
+            vertices, faces, normals = read_mesh(source, f"{self.path}: {where}.file")
+            default_name = Path(name).stem
+        else:
+            vertices, faces = self.inline_geometry(data, where)
+            vertices, faces, normals = check_mesh(vertices, faces, None, f"{self.path}: {where}")
+            source, default_name = "", f"mesh {where[7:-1]}"
+        vertices = transform.transform_points(m, vertices)
+        if np.any(np.abs(vertices) > 1e30):
+            self.fail(where, "the transformed vertices lie beyond 1e30, which float32 cannot trace")
+        if normals is not None:
+            normals = transform.transform_normals(m, normals)
+        if transform.flips_handedness(m):     # keep the front side where it was
+            faces = faces[:, ::-1]
+        return Mesh(self.name(data, where, default_name), vertices.astype(np.float32),
+                    faces.astype(np.int32), None if normals is None else normals.astype(np.float32),
+                    material, str(source))
+
+    def inline_geometry(self, data, where):
+        vertices, faces = data.get("vertices"), data.get("faces")
+        if (not isinstance(vertices, list) or not vertices or len(vertices) > MAX_INLINE
+                or not all(isinstance(v, list) and len(v) == 3 and all(_is_finite_number(x) for x in v)
+                           for v in vertices)):
+            self.fail(f"{where}.vertices", f"must be a list of up to {MAX_INLINE} points of 3 finite numbers")
+        if (not isinstance(faces, list) or not faces or len(faces) > MAX_INLINE
+                or not all(isinstance(f, list) and 3 <= len(f) <= 64
+                           and all(isinstance(i, int) and not isinstance(i, bool) for i in f) for f in faces)):
+            self.fail(f"{where}.faces", "must be a list of polygons, each 3 to 64 integer vertex indices")
+        if any(not 0 <= i < len(vertices) for f in faces for i in f):
+            self.fail(f"{where}.faces", f"vertex indices must lie in 0..{len(vertices) - 1}")
+        return np.asarray(vertices, np.float64), triangulate(faces)
+
+    def scene(self, data) -> Scene:
+        self.table(data, "top level", {"camera", "environment", "render", "materials", "spheres", "meshes"})
+        builder = SceneBuilder()
+        named = data.get("materials", {})
+        self.table(named, "materials", set(named) if isinstance(named, dict) else set())
+        rows = {}
+        for name, m in named.items():
+            rows[name] = builder.materials.add(self.material(m, f"materials.{name}"), name)
+        spheres, meshes = data.get("spheres", []), data.get("meshes", [])
+        for key, value in (("spheres", spheres), ("meshes", meshes)):
+            if not isinstance(value, list):
+                self.fail(key, f"must be an array of tables ([[{key}]]), got {type(value).__name__}")
+        if not spheres and not meshes:
+            self.fail("spheres", "the scene needs at least one [[spheres]] or [[meshes]] entry")
+        for i, s in enumerate(spheres):
+            where = f"spheres[{i}]"
+            self.table(s, where, {"center", "radius", "material", "name"})
+            center = self.vector(s, "center", where)
+            radius = self.number(s, "radius", where)
+            if radius <= 0:
+                self.fail(f"{where}.radius", f"must be positive, got {radius}")
+            if np.any(np.abs(center) + radius > 1e30):
+                self.fail(where, "the sphere reaches beyond 1e30, which float32 cannot trace")
+            builder.add_sphere(center, radius, self.material_ref(builder, rows, s, where),
+                               self.name(s, where, f"sphere {i}"))
+        for i, m in enumerate(meshes):
+            where = f"meshes[{i}]"
+            if not isinstance(m, dict):
+                self.fail(where, f"must be a table, got {type(m).__name__}")
+            builder.add_mesh(self.mesh(m, where, self.material_ref(builder, rows, m, where)))
+        return builder.build(
+            self.path.stem,
+            camera=self.camera(data.get("camera", {"eye": [0, 0, 5], "look_at": [0, 0, 0]})),
+            environment=self.environment(data.get("environment", {})),
+            settings=self.settings(data.get("render", {})))
+
+
+def _is_finite_number(x):
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+
+
+def read_scene_file(path) -> Scene:
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        raise UserError(f"{path}: no such scene file") from None
+    except (OSError, UnicodeDecodeError) as e:
+        raise UserError(f"{path}: cannot read the scene file ({e})") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise UserError(f"{path}: not valid TOML: {e}") from None
+    return _Reader(path).scene(data)

@@ -1,0 +1,63 @@
+/* phong: the energy-conserving modified Phong BRDF (Lafortune & Willems, "Using the Modified
+ * Phong Reflectance Model for Physically Based Rendering", 1994), the report's eq. (2):
+ *     f(wo, wi) = rho_d / pi + rho_s (n + 2) / (2 pi) cos^n(alpha),
+ * alpha the angle between wi and the mirror direction of wo.
+ *
+ * Parameters (Material):
+ *   p0.xyz  rho_d, diffuse albedo     p0.w  probability of sampling the diffuse lobe
+ *   p1.xyz  rho_s, glossy albedo      p1.w  the exponent n
+ *   p2.x    probability of sampling the glossy lobe (p0.w + p2.x = 1)
+ * with rho_d + rho_s <= 1 per channel. The lobes are chosen in the ratio max(rho_d) : max(rho_s)
+ * (app/materials.py), so that, with the report's Russian roulette continuing a path with
+ * probability max(rho_d) + max(rho_s) (Material.continuation), every channel's weight stays <= 1.
+ *
+ * Directions are in the local shading frame (z the normal); the surface is one-sided. */
+
+float3 reflect_local(float3 w)
+{
+    return (float3)(-w.x, -w.y, w.z);
+}
+
+float3 eval_phong(const Material *m, float3 wo, float3 wi)
+{
+    if (wo.z <= 0.0f || wi.z <= 0.0f)
+        return (float3)(0.0f);
+    float exponent = m->p1.w;
+    float cos_a = dot(wi, reflect_local(wo));
+    float glossy = cos_a > 0.0f ? (exponent + 2.0f) / (2.0f * PI_F) * pow(cos_a, exponent) : 0.0f;
+    return m->p0.xyz / PI_F + m->p1.xyz * glossy;
+}
+
+/* The density of the directions sample_phong draws: the lobes' densities mixed. */
+float pdf_phong(const Material *m, float3 wo, float3 wi)
+{
+    if (wo.z <= 0.0f || wi.z <= 0.0f)
+        return 0.0f;
+    float cos_a = dot(wi, reflect_local(wo));
+    return m->p0.w * pdf_cosine_hemisphere(wi.z) + m->p2.x * pdf_cosine_power(cos_a, m->p1.w);
+}
+
+/* One lobe chosen by u.x, and the weight f cos / pdf of that lobe alone divided by its choice
+ * probability (a one-sample estimator over the lobes, as in the report). A glossy direction
+ * below the surface ends the path. */
+int sample_phong(const Material *m, float3 wo, float3 u, BSDFSample *s)
+{
+    if (wo.z <= 0.0f)
+        return 0;
+    if (u.x < m->p0.w) {
+        s->wi = sample_cosine_hemisphere(u.y, u.z);
+        /* f_d cos / pdf = (rho_d / pi) cos / (cos / pi) = rho_d */
+        s->weight = m->p0.xyz / m->p0.w;
+        s->lobe = LOBE_DIFFUSE | LOBE_REFLECTION;
+    } else {
+        float exponent = m->p1.w;
+        s->wi = to_world(sample_cosine_power(u.y, u.z, exponent), reflect_local(wo));
+        if (s->wi.z <= 0.0f)
+            return 0;
+        /* f_s cos / pdf = rho_s (n + 2) / (n + 1) cos(theta_i): the cos^n factors cancel */
+        s->weight = m->p1.xyz * ((exponent + 2.0f) / (exponent + 1.0f) * s->wi.z / m->p2.x);
+        s->lobe = LOBE_GLOSSY | LOBE_REFLECTION;
+    }
+    s->pdf = pdf_phong(m, wo, s->wi);
+    return 1;
+}

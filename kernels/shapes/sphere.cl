@@ -1,0 +1,65 @@
+/* The sphere: intersection, the surface at a hit, and sampling the cone of directions it
+ * subtends (for next-event estimation). Spheres are solid: their outward normal is the front. */
+
+/* Nearest t in (0, t_max) where o + t d meets the sphere, or INFINITY; d must be unit length.
+ * The discriminant is computed as r^2 - |f - (f.d) d|^2 rather than b^2 - c, and the two roots
+ * as c / q and q, following Haines et al., "Precision Improvements for Ray/Sphere Intersection",
+ * Ray Tracing Gems, ch. 7 (2019): both stay accurate for the r = 1000 ground seen from afar. */
+float intersect_sphere(Sphere s, float3 o, float3 d, float t_max)
+{
+    float3 f = o - s.xyz;
+    float b = dot(f, d);
+    float3 l = f - b * d;
+    float disc = s.w * s.w - dot(l, l);
+    if (disc < 0.0f)
+        return INFINITY;
+    float c = dot(f, f) - s.w * s.w;
+    float q = -(b + copysign(sqrt(disc), b));
+    float t0 = c / q, t1 = q;
+    float t_near = fmin(t0, t1), t_far = fmax(t0, t1);
+    /* A ray starting inside the sphere (c < 0) meets it only on the way out. */
+    float t = t_near > 0.0f ? t_near : t_far;
+    return (t > 0.0f && t < t_max) ? t : INFINITY;
+}
+
+/* The hit point of o + t d, projected back onto the sphere, with its error bound (pbrt-v4
+ * section 6.8.5: gamma(5) |p| for the reprojected point relative to the centre, plus the
+ * rounding of adding the centre back) and outward unit normal. */
+void sphere_surface(Sphere s, float3 o, float3 d, float t, float3 *p, float3 *error, float3 *n)
+{
+    float3 rel = o + t * d - s.xyz;
+    rel *= s.w / length(rel);
+    *n = rel / s.w;
+    *p = s.xyz + rel;
+    *error = gamma_bound(5) * fabs(rel) + gamma_bound(2) * fabs(*p);
+}
+
+/* 1 - cos(theta_max) of the cone a sphere subtends from p, as sin^2 / (1 + cos) to keep
+ * precision for small, far spheres; 0 when p is inside the sphere. */
+float cone_solid_angle_factor(Sphere s, float3 p)
+{
+    float3 c = s.xyz - p;
+    float sin2 = s.w * s.w / dot(c, c);
+    if (sin2 >= 1.0f)
+        return 0.0f;
+    return sin2 / (1.0f + sqrt(1.0f - sin2));
+}
+
+/* Density (per solid angle) of sample_sphere_cone's directions: uniform over the cone. */
+float pdf_sphere_cone(Sphere s, float3 p)
+{
+    float k = cone_solid_angle_factor(s, p);
+    return k > 0.0f ? 1.0f / (2.0f * PI_F * k) : 0.0f;
+}
+
+/* A direction from p, uniform in the cone subtended by the sphere (pbrt-v4, section 6.2.4):
+ * cos(theta) = 1 - u1 (1 - cos(theta_max)). */
+float3 sample_sphere_cone(Sphere s, float3 p, float u1, float u2)
+{
+    float k = cone_solid_angle_factor(s, p);
+    float one_minus_cos = u1 * k;
+    float cos_t = 1.0f - one_minus_cos;
+    float sin_t = sqrt(max(0.0f, one_minus_cos * (2.0f - one_minus_cos)));
+    float3 v = (float3)(cos(2.0f * PI_F * u2) * sin_t, sin(2.0f * PI_F * u2) * sin_t, cos_t);
+    return to_world(v, normalize(s.xyz - p));
+}

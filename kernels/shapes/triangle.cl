@@ -1,0 +1,130 @@
+/* The triangle: watertight intersection, the surface at a hit, and sampling points by area
+ * (for next-event estimation on emissive meshes). */
+
+/* Watertight ray-triangle intersection (Woop, Benthin & Wald, "Watertight Ray/Triangle
+ * Intersection", JCGT 2(1), 2013). The triangle is moved into a space where the ray starts at
+ * the origin and runs along +z (a translation, a permutation of the axes so that the ray's
+ * largest component is z, and a shear); the 2D edge functions of the transformed corners then
+ * decide the hit. A shared edge is computed from the same transformed corners by both of its
+ * triangles, and each edge function is a difference of two products that the other triangle
+ * computes with exactly the opposite sign, so a ray can never pass between them.
+ * The shear rows are passed in (see triangle_shear): they depend on the ray only.
+ * Returns t in (0, t_max) or INFINITY, with the barycentric weights of v1 and v2. */
+#pragma OPENCL FP_CONTRACT OFF
+#ifdef cl_khr_fp64
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#endif
+float edge_function(float ax, float ay, float bx, float by)
+{
+    float p = ax * by;
+    float q = ay * bx;
+    float e = p - q;
+#ifdef cl_khr_fp64
+    /* A zero may be rounding: a ray along the line of a sliver's edge, far beyond it. Products
+     * of floats are exact in double, so the sign recomputed there is exact (the paper's
+     * fallback; devices without doubles keep the float result). */
+    if (e == 0.0f)
+        e = (float)((double)ax * (double)by - (double)ay * (double)bx);
+#endif
+    return e;
+}
+
+/* The rows of the shear: transformed x = dot(row_x, v - o), etc. Rows hold zeros in the axes
+ * they ignore, so each transformed coordinate is the paper's expression. */
+void triangle_shear(float3 d, float3 *row_x, float3 *row_y, float3 *row_z)
+{
+    float3 a = fabs(d);
+    int kz = a.x > a.y ? (a.x > a.z ? 0 : 2) : (a.y > a.z ? 1 : 2);
+    int kx = kz == 2 ? 0 : kz + 1;
+    int ky = kx == 2 ? 0 : kx + 1;
+    float dz = kz == 0 ? d.x : kz == 1 ? d.y : d.z;
+    if (dz < 0.0f) {                 /* keep the winding: swap x and y for a ray along -z */
+        int k = kx; kx = ky; ky = k;
+    }
+    float dx = kx == 0 ? d.x : kx == 1 ? d.y : d.z;
+    float dy = ky == 0 ? d.x : ky == 1 ? d.y : d.z;
+    float3 ex = (float3)(kx == 0, kx == 1, kx == 2);
+    float3 ey = (float3)(ky == 0, ky == 1, ky == 2);
+    float3 ez = (float3)(kz == 0, kz == 1, kz == 2);
+    *row_x = ex - (dx / dz) * ez;
+    *row_y = ey - (dy / dz) * ez;
+    *row_z = ez / dz;
+}
+
+float intersect_triangle(const global Triangle *tri, float3 o, float3 row_x, float3 row_y,
+                         float3 row_z, float t_max, float *b1, float *b2)
+{
+    float3 a = tri->v0.xyz - o, b = tri->v1.xyz - o, c = tri->v2.xyz - o;
+    float ax = dot(row_x, a), ay = dot(row_y, a);
+    float bx = dot(row_x, b), by = dot(row_y, b);
+    float cx = dot(row_x, c), cy = dot(row_y, c);
+    float u = edge_function(cx, cy, bx, by);    /* weight of v0 */
+    float v = edge_function(ax, ay, cx, cy);    /* weight of v1 */
+    float w = edge_function(bx, by, ax, ay);    /* weight of v2 */
+    if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f))
+        return INFINITY;
+    float det = u + v + w;
+    if (det == 0.0f)
+        return INFINITY;
+    float t_scaled = u * dot(row_z, a) + v * dot(row_z, b) + w * dot(row_z, c);
+    /* t = t_scaled / det must lie in (0, t_max); compared before dividing, as in the paper */
+    if (det < 0.0f ? (t_scaled >= 0.0f || t_scaled < t_max * det)
+                   : (t_scaled <= 0.0f || t_scaled > t_max * det))
+        return INFINITY;
+    float inv = 1.0f / det;
+    *b1 = v * inv;
+    *b2 = w * inv;
+    float t = t_scaled * inv;
+    return t < t_max ? t : INFINITY;
+}
+#pragma OPENCL FP_CONTRACT ON
+
+float3 triangle_normal(const global Triangle *tri)
+{
+    return normalize(cross(tri->v1.xyz - tri->v0.xyz, tri->v2.xyz - tri->v0.xyz));
+}
+
+float triangle_area(const global Triangle *tri)
+{
+    return 0.5f * length(cross(tri->v1.xyz - tri->v0.xyz, tri->v2.xyz - tri->v0.xyz));
+}
+
+/* The point of barycentric weights (b1, b2), its error bound (pbrt-v4 eq. 6.29: gamma(7) times
+ * the sum of |b_i v_i|), the geometric normal, and the shading normal: the corners' normals
+ * interpolated, turned to the geometric normal's side (which decides front and back). */
+void triangle_surface(const global Triangle *tri, const global float4 *normals, float b1, float b2,
+                      float3 *p, float3 *error, float3 *ng, float3 *ns)
+{
+    float b0 = 1.0f - b1 - b2;
+    float3 p0 = b0 * tri->v0.xyz, p1 = b1 * tri->v1.xyz, p2 = b2 * tri->v2.xyz;
+    *p = p0 + p1 + p2;
+    *error = gamma_bound(7) * (fabs(p0) + fabs(p1) + fabs(p2));
+    *ng = triangle_normal(tri);
+    int k = as_int(tri->v0.w);
+    *ns = *ng;
+    if (k >= 0) {
+        float3 n = b0 * normals[k].xyz + b1 * normals[k + 1].xyz + b2 * normals[k + 2].xyz;
+        float len = length(n);
+        if (len > 0.0f)
+            *ns = dot(n, *ng) < 0.0f ? -n / len : n / len;
+    }
+}
+
+/* A point uniform over the triangle's area: b1 = u2 sqrt(u1), b2 = 1 - sqrt(u1) (pbrt-v4
+ * section 6.5.4 gives the same density); its density per area is 1 / area. */
+float3 sample_triangle_area(const global Triangle *tri, float u1, float u2)
+{
+    float s = sqrt(u1);
+    float b1 = u2 * s, b2 = 1.0f - s;
+    return (1.0f - b1 - b2) * tri->v0.xyz + b1 * tri->v1.xyz + b2 * tri->v2.xyz;
+}
+
+/* Density per solid angle, seen from x, of area sampling at point y of the triangle, whose
+ * front (normal n) faces direction -w from x: pdf_area * |x - y|^2 / cos(theta_y). */
+float pdf_triangle_solid_angle(const global Triangle *tri, float3 x, float3 y)
+{
+    float3 w = y - x;
+    float dist2 = dot(w, w);
+    float cos_l = -dot(triangle_normal(tri), w) / sqrt(dist2);
+    return cos_l > 0.0f ? dist2 / (triangle_area(tri) * cos_l) : 0.0f;
+}
