@@ -22,7 +22,7 @@ from app.renderer import Renderer
 from app.scene import SceneBuilder, diffuse, load_scene
 
 TARGET_SCENES = ("simple", "spheres8k", "spheres64k",
-                 "simple-diffuse", "spheres8k-diffuse", "spheres64k-diffuse")
+                 "simple-diffuse", "spheres8k-diffuse", "spheres64k-diffuse", "teapot-sky")
 COMPARISON_DEPTH = 8
 ESTIMATORS = ("rr", "depth8", "rr+nee", "depth8+nee")
 
@@ -45,7 +45,10 @@ class Result:
 
 
 def default_estimator(scene_name: str) -> str:
-    """The report's estimator on the report's scenes, the comparison mode on -diffuse ones."""
+    """The report's estimator on the report's scenes, the comparison mode on -diffuse ones, and
+    the comparison mode with NEE on mesh scenes (as Mitsuba's side-by-side timing of them)."""
+    if scene_name.startswith(("teapot", "heightfield")):
+        return "depth8+nee"
     return "depth8" if scene_name.endswith("-diffuse") else "rr"
 
 

@@ -86,11 +86,12 @@ class BuildResult:
 
 
 def build_program(context: cl.Context, device: cl.Device, extra: str = "",
-                  use_cache: bool = True) -> BuildResult:
+                  use_cache: bool = True, defines: tuple = ()) -> BuildResult:
     """Builds the kernels for one device. The binary is cached under cache_dir(), keyed by the
-    source, the options and the exact device and driver."""
+    source, the options and the exact device and driver. `defines` specialise the kernels to a
+    scene (e.g. NO_TRIANGLES drops the triangle code from sphere-only scenes)."""
     source = kernel_source(extra)
-    options = list(BUILD_OPTIONS)
+    options = list(BUILD_OPTIONS) + [f"-D{d}" for d in defines]
     key = hashlib.sha256("\0".join([
         source, " ".join(options), device.platform.name, device.platform.version, device.name,
         device.version, device.driver_version]).encode()).hexdigest()[:32]
@@ -119,21 +120,36 @@ def build_program(context: cl.Context, device: cl.Device, extra: str = "",
 
 @dataclass
 class Backend:
-    """A chosen device with its context, queue and built program."""
+    """A chosen device with its context, queue and built program (all features), and the
+    programs specialised to scenes, built when first asked for."""
     device: Device
     context: cl.Context
     queue: cl.CommandQueue
     build: BuildResult
+    extra: str = ""
+    use_cache: bool = True
+
+    def __post_init__(self):
+        self._variants = {(): self.build.program}
 
     @property
     def program(self) -> cl.Program:
         return self.build.program
 
+    def program_for(self, defines: tuple) -> cl.Program:
+        """The kernels specialised by `defines` (sorted), built once per backend."""
+        defines = tuple(sorted(defines))
+        if defines not in self._variants:
+            self._variants[defines] = build_program(self.context, self.device.device, self.extra,
+                                                    self.use_cache, defines).program
+        return self._variants[defines]
+
 
 def open_device(device: Device, extra: str = "", use_cache: bool = True) -> Backend:
     context = cl.Context([device.device])
     queue = cl.CommandQueue(context, properties=cl.command_queue_properties.PROFILING_ENABLE)
-    return Backend(device, context, queue, build_program(context, device.device, extra, use_cache))
+    return Backend(device, context, queue, build_program(context, device.device, extra, use_cache),
+                   extra, use_cache)
 
 
 def build_error_line(error: Exception) -> str:

@@ -130,11 +130,11 @@ def dispatch_source() -> str:
         cases = "".join(f"    case BSDF_{n.upper()}: return {call.format(n)};\n" for n in with_kernel)
         return f"    switch (m->type) {{\n{cases}    default: return {default};\n    }}\n"
     return (tags
-            + "float3 eval_bsdf(const Material *m, float3 wo, float3 wi)\n{\n"
+            + "float3 eval_bsdf(const global Material *m, float3 wo, float3 wi)\n{\n"
             + switch("float3", "eval_{}(m, wo, wi)", "(float3)(0.0f)") + "}\n"
-            + "float pdf_bsdf(const Material *m, float3 wo, float3 wi)\n{\n"
+            + "float pdf_bsdf(const global Material *m, float3 wo, float3 wi)\n{\n"
             + switch("float", "pdf_{}(m, wo, wi)", "0.0f") + "}\n"
-            + "int sample_bsdf(const Material *m, float3 wo, float3 u, BSDFSample *s)\n{\n"
+            + "int sample_bsdf(const global Material *m, float3 wo, float3 u, BSDFSample *s)\n{\n"
             + switch("int", "sample_{}(m, wo, u, s)", "0") + "}\n")
 
 

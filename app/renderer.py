@@ -22,8 +22,6 @@ class Renderer:
     def __init__(self, backend: Backend, scene, width: int = None, height: int = None):
         """scene: a CompiledScene, or a Scene to compile."""
         self.backend = backend
-        self.kernels = {False: cl.Kernel(backend.program, "render"),
-                        True: cl.Kernel(backend.program, "render_nee")}
         self._buffers = {}
         self.width = self.height = 0
         self.samples = 0          # samples per pixel accumulated so far
@@ -36,6 +34,9 @@ class Renderer:
         resets."""
         self.compiled = scene if isinstance(scene, CompiledScene) else compile_scene(scene)
         self.scene: Scene = self.compiled.scene
+        # kernels without the code of shapes the scene lacks (registers matter on GPUs)
+        self.program = self.backend.program_for(() if self.compiled.num_triangles else ("NO_TRIANGLES",))
+        self.kernels = {False: cl.Kernel(self.program, "render"), True: cl.Kernel(self.program, "render_nee")}
         self.camera = self.scene.camera.copy()
         self.settings = self.scene.settings
         c = self.compiled
@@ -86,9 +87,8 @@ class Renderer:
 
     def pick(self, origin, direction):
         """The shape seen along a ray (a ShapeRef), or None."""
-        b = self._buffers
         out = cl.Buffer(self.backend.context, cl.mem_flags.WRITE_ONLY, 4)
-        kernel = cl.Kernel(self.backend.program, "pick")
+        kernel = cl.Kernel(self.program, "pick")
         kernel(self.backend.queue, (1,), None, *self._scene_args(),
                np.int32(self.compiled.num_spheres), np.append(np.float32(origin), 0).astype(np.float32),
                np.append(np.float32(direction), 0).astype(np.float32), out)

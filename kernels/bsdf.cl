@@ -41,12 +41,12 @@ Frame make_shading_frame(float3 n)
     return f;
 }
 
-float3 to_local(const Frame *f, float3 v)
+float3 to_shading(const Frame *f, float3 v)
 {
     return (float3)(dot(v, f->t), dot(v, f->b), dot(v, f->n));
 }
 
-float3 from_local(const Frame *f, float3 v)
+float3 from_shading(const Frame *f, float3 v)
 {
     return v.x * f->t + v.y * f->b + v.z * f->n;
 }

@@ -50,12 +50,17 @@ void intersect_triangles(const SceneData *sc, int first, int count, float3 o, fl
     }
 }
 
+/* NO_TRIANGLES (a build option for scenes of spheres only) leaves the triangle code out. */
 void intersect_leaf(const SceneData *sc, const global BVHChild *c, float3 o, float3 d, Hit *hit)
 {
+#ifdef NO_TRIANGLES
+    intersect_spheres(sc, c->index, c->count, o, d, hit);
+#else
     if (c->count > 0)
         intersect_spheres(sc, c->index, c->count, o, d, hit);
     else
         intersect_triangles(sc, c->index, -c->count, o, d, hit);
+#endif
 }
 
 /* app/bvh.py keeps the tree at most 30 levels deep, and traversal pushes one node per level. */
@@ -113,12 +118,14 @@ typedef struct {
 Surface surface_at(const SceneData *sc, const Hit *hit, float3 o, float3 d)
 {
     Surface s;
-    if (hit->prim < sc->num_spheres) {
-        sphere_surface(sc->spheres[hit->prim], o, d, hit->t, &s.p, &s.error, &s.ng);
-        s.ns = s.ng;
-    } else {
+#ifndef NO_TRIANGLES
+    if (hit->prim >= sc->num_spheres) {
         triangle_surface(&sc->triangles[hit->prim - sc->num_spheres], sc->normals, hit->b1,
                          hit->b2, &s.p, &s.error, &s.ng, &s.ns);
+        return s;
     }
+#endif
+    sphere_surface(sc->spheres[hit->prim], o, d, hit->t, &s.p, &s.error, &s.ng);
+    s.ns = s.ng;
     return s;
 }

@@ -23,12 +23,12 @@
 /* One light sample at surface s, whose BSDF m sees outgoing direction wo (local frame): its
  * contribution f cos Le / pdf, weighted against BSDF sampling, whose density of continuing
  * is `go_on` times the BSDF's pdf. */
-float3 sample_direct_light(const SceneData *sc, const RenderParams *p, const Material *m,
+float3 sample_direct_light(const SceneData *sc, const RenderParams *p, const global Material *m,
                            const Surface *s, const Frame *frame, float3 wo, float go_on,
                            float4 u, int *rays)
 {
     LightSample ls = sample_light(sc, p, s->p, frame->n, u);
-    float3 wi = to_local(frame, ls.wi);
+    float3 wi = to_shading(frame, ls.wi);
     /* the shading and geometric normals must agree on the side wi leaves on (no light leaks) */
     if (ls.pdf <= 0.0f || dot(ls.wi, s->ng) * wi.z <= 0.0f)
         return (float3)(0.0f);
@@ -78,28 +78,28 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
             return radiance + throughput * lookup_environment(sc->env, p, d) * w;
         }
         Surface s = surface_at(sc, &hit, o, d);
-        Material m = sc->materials[sc->prim_material[hit.prim]];
+        const global Material *m = &sc->materials[sc->prim_material[hit.prim]];
         int front = dot(s.ng, d) < 0.0f;
         if (!front) {
             /* one-sided, as Mitsuba 3's BSDFs and area lights: a back face is black */
-            if (!(m.flags & MATERIAL_TWOSIDED))
+            if (!(m->flags & MATERIAL_TWOSIDED))
                 return radiance;
             s.ng = -s.ng;
             s.ns = -s.ns;
         }
-        if (front && any(m.emission.xyz > 0.0f)) {
+        if (front && any(m->emission.xyz > 0.0f)) {
             float w = 1.0f;
             if (nee && pdf_prev > 0.0f)
                 w = mis_weight(pdf_prev, pdf_light(sc, hit.prim, prev_x, s.p));
-            radiance += throughput * m.emission.xyz * w;
+            radiance += throughput * m->emission.xyz * w;
         }
         if (depth >= max_depth)
             return radiance;
         Frame frame = make_shading_frame(s.ns);
-        float3 wo = to_local(&frame, -d);
-        float go_on = p->russian_roulette == RR_ALBEDO ? m.continuation : 1.0f;
-        if (nee && p->num_lights > 0 && !(m.flags & MATERIAL_DELTA))
-            radiance += throughput * sample_direct_light(sc, p, &m, &s, &frame, wo, go_on,
+        float3 wo = to_shading(&frame, -d);
+        float go_on = p->russian_roulette == RR_ALBEDO ? m->continuation : 1.0f;
+        if (nee && p->num_lights > 0 && !(m->flags & MATERIAL_DELTA))
+            radiance += throughput * sample_direct_light(sc, p, m, &s, &frame, wo, go_on,
                                                          next_uniform4(rng), rays);
         float4 u = next_uniform4(rng);
         if (p->russian_roulette == RR_ALBEDO) {
@@ -108,9 +108,9 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
             u.x /= go_on;                    /* reused for the lobe choice, as in the report */
         }
         BSDFSample bs;
-        if (!sample_bsdf(&m, wo, u.xyz, &bs))
+        if (!sample_bsdf(m, wo, u.xyz, &bs))
             return radiance;
-        float3 wi = from_local(&frame, bs.wi);
+        float3 wi = from_shading(&frame, bs.wi);
         if (dot(wi, s.ng) * bs.wi.z <= 0.0f)
             return radiance;                 /* the normals disagree on wi's side */
         throughput *= bs.weight / go_on;

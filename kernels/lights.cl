@@ -33,9 +33,11 @@ float pdf_environment(const SceneData *sc, const RenderParams *p, float3 n, floa
 float pdf_light(const SceneData *sc, int prim, float3 x, float3 y)
 {
     float pick = sc->light_pick[prim];
-    if (prim < sc->num_spheres)
-        return pick * pdf_sphere_cone(sc->spheres[prim], x);
-    return pick * pdf_triangle_solid_angle(&sc->triangles[prim - sc->num_spheres], x, y);
+#ifndef NO_TRIANGLES
+    if (prim >= sc->num_spheres)
+        return pick * pdf_triangle_solid_angle(&sc->triangles[prim - sc->num_spheres], x, y);
+#endif
+    return pick * pdf_sphere_cone(sc->spheres[prim], x);
 }
 
 typedef struct {
@@ -44,6 +46,12 @@ typedef struct {
     float3 y;        /* the point on the light (unused for the environment) */
     int prim;        /* the emitter: a primitive, or -1 for the environment */
 } LightSample;
+
+#ifdef NO_TRIANGLES
+#define NO_TRIANGLE_LIGHTS 1
+#else
+#define NO_TRIANGLE_LIGHTS 0
+#endif
 
 /* Draws a light and a direction towards it from point x of shading normal n. */
 LightSample sample_light(const SceneData *sc, const RenderParams *p, float3 x, float3 n, float4 u)
@@ -55,7 +63,7 @@ LightSample sample_light(const SceneData *sc, const RenderParams *p, float3 x, f
                     ? to_world(sample_cosine_hemisphere(u.y, u.z), n)
                     : sample_environment_map(sc->env_marginal, sc->env_conditional, p, u.y, u.z);
         ls.pdf = light.pick * pdf_environment(sc, p, n, ls.wi);
-    } else if (light.prim < sc->num_spheres) {
+    } else if (NO_TRIANGLE_LIGHTS || light.prim < sc->num_spheres) {
         Sphere s = sc->spheres[light.prim];
         ls.wi = sample_sphere_cone(s, x, u.y, u.z);
         ls.pdf = light.pick * pdf_sphere_cone(s, x);

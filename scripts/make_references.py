@@ -1,6 +1,7 @@
-"""Regenerates tests/references/*.npz: reference images of the -diffuse scenes rendered by an
-independent renderer, Mitsuba 3 (`pip install mitsuba`), in its scalar_rgb variant (its LLVM
-variant failed to compile its kernels with Debian 12's LLVM 15 on the machine this ran on).
+"""Regenerates tests/references/*.npz: reference images of diffuse scenes (spheres and triangle
+meshes) rendered by an independent renderer, Mitsuba 3 (`pip install mitsuba plyfile`), in its
+scalar_rgb variant (its LLVM variant failed to compile its kernels with Debian 12's LLVM 15 on
+the machine this ran on).
 
 Each reference holds the mean of K independent renders and the variance of that mean (from the
 spread of the K renders), at a small size. Both renderers see the same scene: diffuse spheres,
@@ -11,6 +12,7 @@ comparison mode of the benchmark specification (max_depth 8, no Russian roulette
 """
 
 import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -23,6 +25,7 @@ OUT = Path(__file__).resolve().parent.parent / "tests" / "references"
 SCENES = {  # name: (width, height, spp per render, renders)
     "simple-diffuse": (64, 36, 1024, 16),
     "spheres8k-diffuse": (64, 36, 512, 16),
+    "cornell-box": (48, 48, 1024, 16),
 }
 MAX_DEPTH = 8
 
@@ -41,17 +44,38 @@ def mitsuba_scene(mi, scene, width, height, spp):
                      "rfilter": {"type": "box"}, "pixel_format": "rgb"},
             "sampler": {"type": "independent", "sample_count": spp},
         },
-        "environment": {"type": "constant", "radiance": rgb(scene.environment.image[0, 0] * scene.environment.intensity)},
     }
-    if np.any(scene.rho_s > 0):
-        raise SystemExit(f"{scene.name}: only diffuse scenes have an exact Mitsuba counterpart")
-    for i, (s, rho, le) in enumerate(zip(scene.spheres, scene.rho_d, scene.emission)):
-        shape = {"type": "sphere", "center": s[:3].tolist(), "radius": float(s[3]),
-                 "bsdf": {"type": "diffuse", "reflectance": rgb(rho)}}
-        if np.any(le > 0):
-            shape["emitter"] = {"type": "area", "radiance": rgb(le)}
-        d[f"sphere{i}"] = shape
+    env = scene.environment.image[0, 0] * scene.environment.intensity
+    if np.any(env > 0):
+        d["environment"] = {"type": "constant", "radiance": rgb(env)}
+    table = scene.materials
+
+    def shape_props(row):
+        m = table.get(row)
+        if m.type not in ("diffuse", "black"):
+            raise SystemExit(f"{scene.name}: only diffuse scenes have an exact Mitsuba counterpart")
+        props = {"bsdf": {"type": "diffuse", "reflectance": rgb(m.params.get("rho_d", 0.0) * np.ones(3))}}
+        if np.any(m.emission > 0):
+            props["emitter"] = {"type": "area", "radiance": rgb(m.emission)}
+        return props
+
+    for i, s in enumerate(scene.spheres):
+        d[f"sphere{i}"] = {"type": "sphere", "center": s[:3].tolist(), "radius": float(s[3]),
+                           **shape_props(int(scene.sphere_material[i]))}
+    folder = Path(tempfile.mkdtemp())
+    for i, mesh in enumerate(scene.meshes):
+        path = folder / f"mesh{i}.ply"
+        write_ply(path, mesh.vertices, mesh.faces)
+        d[f"mesh{i}"] = {"type": "ply", "filename": str(path), "face_normals": mesh.normals is None,
+                         **shape_props(mesh.material)}
     return mi.load_dict(d)
+
+
+def write_ply(path, vertices, faces):
+    from plyfile import PlyData, PlyElement
+    v = np.array([tuple(p) for p in vertices], dtype=[("x", "f4"), ("y", "f4"), ("z", "f4")])
+    f = np.array([(tuple(t),) for t in faces], dtype=[("vertex_indices", "i4", (3,))])
+    PlyData([PlyElement.describe(v, "vertex"), PlyElement.describe(f, "face")]).write(str(path))
 
 
 def main(names):

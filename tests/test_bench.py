@@ -12,7 +12,7 @@ def test_quick_bench_writes_a_table_and_json(tmp_path):
     assert r.returncode == 0, r.stderr
     data = json.loads(out.read_text())
     rows = data["results"]
-    assert len(rows) == 6 * 2 and {row["estimator"] for row in rows} == {"rr", "depth8+nee"}
+    assert len(rows) == 7 * 2 and {row["estimator"] for row in rows} == {"rr", "depth8+nee"}
     for row in rows:
         assert row["width"] == 320 and row["height"] == 180 and row["spp"] == 8
         assert row["seconds"] > 0 and row["bvh_seconds"] < row["seconds"]

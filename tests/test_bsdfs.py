@@ -13,9 +13,8 @@ kernel void bsdf_sample(global const Material *mat, float4 wo, global const floa
                         global float4 *wi, global float4 *weight)
 {
     int i = get_global_id(0);
-    Material m = mat[0];
     BSDFSample s;
-    int ok = sample_bsdf(&m, wo.xyz, u[i].xyz, &s);
+    int ok = sample_bsdf(mat, wo.xyz, u[i].xyz, &s);
     wi[i] = (float4)(s.wi, ok ? s.pdf : 0.0f);
     weight[i] = ok ? (float4)(s.weight, 1.0f) : (float4)(0.0f);
 }
@@ -23,8 +22,7 @@ kernel void bsdf_eval(global const Material *mat, float4 wo, global const float4
                       global float4 *out)
 {
     int i = get_global_id(0);
-    Material m = mat[0];
-    out[i] = (float4)(eval_bsdf(&m, wo.xyz, wi[i].xyz), pdf_bsdf(&m, wo.xyz, wi[i].xyz));
+    out[i] = (float4)(eval_bsdf(mat, wo.xyz, wi[i].xyz), pdf_bsdf(mat, wo.xyz, wi[i].xyz));
 }
 """
 def direction(theta_deg):

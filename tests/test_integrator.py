@@ -152,3 +152,98 @@ def test_bare_environment_reproduces_the_map(backend):
     expected = 2.0 * smooth(uu, vv)
     # bilinear lookup of a smooth map and jitter within the pixel: within a percent
     np.testing.assert_allclose(mean, expected, rtol=0.015)
+
+
+def lambert_irradiance(p, corners, le):
+    """Irradiance at points p (normal +y) from a polygon of radiance le, by Lambert's formula:
+    E = le / 2 * sum over edges of theta_i (Gamma_i . n), theta_i the angle the edge subtends
+    and Gamma_i the unit normal of the plane through p and the edge."""
+    total = np.zeros(p.shape[:-1])
+    for i in range(len(corners)):
+        a, b = corners[i] - p, corners[(i + 1) % len(corners)] - p
+        cross = np.cross(a, b)
+        theta = np.arctan2(np.linalg.norm(cross, axis=-1), np.sum(a * b, -1))
+        total += theta * cross[..., 1] / np.linalg.norm(cross, axis=-1)
+    return le / 2 * np.abs(total)
+
+
+@pytest.mark.parametrize("nee", [False, True])
+def test_square_light_irradiance_matches_lambert(backend, nee):
+    """A diffuse floor (a quad) under a square emitter (a quad facing down) in a black world,
+    direct light only: the floor's radiance is rho / pi times Lambert's irradiance."""
+    from app.scene import Mesh
+    rho, le, h = 0.6, 5.0, 1.0
+    light = np.array([[-0.5, h, -0.5], [0.5, h, -0.5], [0.5, h, 0.5], [-0.5, h, 0.5]])
+    b = SceneBuilder()
+    floor = np.array([[-20, 0, -20], [-20, 0, 20], [20, 0, 20], [20, 0, -20]], np.float32)
+    quad = np.array([[0, 1, 2], [0, 2, 3]], np.int32)
+    b.add_mesh(Mesh("floor", floor, quad, None, b.material(diffuse(rho))))
+    b.add_mesh(Mesh("light", light.astype(np.float32), quad, None, b.material(emitter(le))))
+    scene = b.build("lambert", camera=Camera([0, 2.5, 2.5], [0, 0, 0], [0, 1, 0], 55.0),
+                    environment=Environment.constant((0, 0, 0)),
+                    settings=RenderSettings(width=40, height=30, max_depth=2, russian_roulette=False, nee=nee))
+    # the light faces down, so its (black) back is what the camera sees of it
+    assert np.dot(np.cross(light[1] - light[0], light[2] - light[0]), [0, 1, 0]) < 0
+    mean, var, r = render(backend, scene, 1024)
+    w, hgt = r.width, r.height
+    fwd, right, up = scene.camera.basis(w / hgt)
+
+    def floor_point(sx, sy):
+        x = (np.arange(w) + sx) / w * 2 - 1
+        y = 1 - (np.arange(hgt) + sy) / hgt * 2
+        d = fwd + x[None, :, None] * right + y[:, None, None] * up
+        t_floor = -scene.camera.eye[1] / d[..., 1]
+        t_light = (h - scene.camera.eye[1]) / d[..., 1]
+        q = scene.camera.eye + t_light[..., None] * d
+        blocked = (t_light > 0) & (np.abs(q[..., 0]) <= 0.5) & (np.abs(q[..., 2]) <= 0.5)
+        p = scene.camera.eye + t_floor[..., None] * d
+        on_floor = (t_floor > 0) & (np.abs(p[..., 0]) < 20) & (np.abs(p[..., 2]) < 20)
+        return p, on_floor & ~blocked
+
+    offsets = (np.arange(8) + 0.5) / 8
+    samples = [floor_point(sx, sy) for sx in offsets for sy in offsets]
+    expected = np.mean([rho / np.pi * lambert_irradiance(p, light, le) for p, _ in samples], axis=0)
+    floor_px = np.all([ok for _, ok in samples], axis=0)
+    spp = r.samples
+    # without NEE a sample is rho Le (its bounce met the light) or 0: keep the pixels expected
+    # to meet it often enough (30 times) for the normal approximation of the test
+    floor_px &= expected / (rho * le) * spp > 30
+    assert floor_px.sum() > 0.3 * w * hgt
+    var_of_mean = var[..., 0] if nee else expected * (rho * le - expected) / spp
+    var_of_mean = np.where(floor_px, var_of_mean, 0.0)
+    got = np.where(floor_px, mean[..., 0], expected)
+    ok, pmin, threshold = z_test(got[..., None], var_of_mean[..., None], expected[..., None], block=3)
+    assert ok, (pmin, threshold)
+
+
+@pytest.mark.parametrize("nee", [False, True])
+def test_closed_mesh_white_furnace_renders_one(backend, nee):
+    """A subdivided icosahedron of albedo 1 under a uniform environment of radiance 1: every
+    pixel converges to 1. (Flat shading: interpolated normals lose the directions that fall
+    below the geometric surface, as in Mitsuba 3, so they are not exactly lossless.)"""
+    from app.scene import Mesh
+    from tests.geometry import icosphere
+    v, f = icosphere(2)
+    b = SceneBuilder()
+    b.add_mesh(Mesh("ball", v.astype(np.float32), f.astype(np.int32), None, b.material(diffuse(1.0))))
+    scene = b.build("furnace", camera=Camera([0, 0, 4], [0, 0, 0], [0, 1, 0], 40.0),
+                    environment=Environment.constant((1, 1, 1)),
+                    settings=RenderSettings(width=32, height=24, nee=nee))
+    mean, var, _ = render(backend, scene, 64)
+    np.testing.assert_allclose(mean, 1.0, atol=2e-3)
+
+
+@pytest.mark.parametrize("nee", [False, True])
+def test_no_light_leaks_into_a_closed_box(backend, nee):
+    """A camera inside a closed cube (12 triangles, shared corners, facing in), under a bright
+    sky: no path may reach the sky, so the image is exactly black, corners included."""
+    from app.scene import Mesh
+    from tests.geometry import cube
+    v, f = cube(1.0, inward=True)
+    b = SceneBuilder()
+    b.add_mesh(Mesh("box", v.astype(np.float32), f.astype(np.int32), None, b.material(diffuse(0.9))))
+    scene = b.build("box", camera=Camera([0.3, -0.2, 0.5], [-1, 1, -1], [0, 1, 0], 90.0),
+                    environment=Environment.constant((100, 100, 100)),
+                    settings=RenderSettings(width=48, height=48, nee=nee, max_depth=16, russian_roulette=False))
+    mean, _, _ = render(backend, scene, 64)
+    assert np.all(mean == 0.0)

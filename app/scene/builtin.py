@@ -45,25 +45,49 @@ def random_spheres(n: int, diffuse_only: bool) -> Scene:
     material[diffuse] = b.materials.add_rows(pack("diffuse", {"rho_d": albedo[diffuse]}))
     material[phong] = b.materials.add_rows(pack("phong", {"rho_d": 0.3 * albedo[phong], "rho_s": 0.6, "n": 100.0}))
     material[emitter] = b.materials.add_rows(pack("black", {}, emission=4.0 * albedo[emitter]))
-    count = f"{n // 1000}k" if n % 1000 == 0 and n < 1_000_000 else \
-        f"{n // 1_000_000}M" if n % 1_000_000 == 0 else str(n)
-    return Scene(f"spheres{count}{'-diffuse' if diffuse_only else ''}",
+    return Scene(f"spheres{_count(n)}{'-diffuse' if diffuse_only else ''}",
                  np.column_stack([centres, np.full(n, radius)]).astype(np.float32), material,
                  b.materials, camera=Camera([28, 20, 36], [0, 0, 0], [0, 1, 0], 45.0),
                  environment=Environment.constant((1, 1, 1)),
                  settings=RenderSettings(width=1920, height=1080, spp=64))
 
 
+def height_field(triangles: int) -> Scene:
+    """A bumpy height field of about `triangles` triangles with a sphere on it, under a sky: the
+    scaling scene for meshes (the same field as Mitsuba's side-by-side timing of a 1M-triangle
+    mesh)."""
+    from app.scene.description import Mesh, diffuse
+    n = max(int(np.sqrt(triangles / 2)), 1)
+    x, z = np.meshgrid(np.linspace(-1, 1, n + 1), np.linspace(-1, 1, n + 1))
+    y = 0.08 * np.sin(9 * x) * np.cos(7 * z)
+    v = np.stack([x, y, z], -1).reshape(-1, 3).astype(np.float32)
+    i = np.arange(n)[:, None] * (n + 1) + np.arange(n)[None, :]
+    a, b, c, d = i, i + 1, i + n + 1, i + n + 2
+    f = np.concatenate([np.stack([a, c, b], -1).reshape(-1, 3), np.stack([b, c, d], -1).reshape(-1, 3)])
+    builder = SceneBuilder()
+    builder.add_mesh(Mesh("height field", v, f.astype(np.int32), None, builder.material(diffuse(0.6))))
+    builder.add_sphere((0.3, 0.35, 0.2), 0.25, diffuse((0.8, 0.3, 0.2)), "ball")
+    return builder.build(f"heightfield{_count(triangles)}", camera=Camera([0, 1.6, 2.4], [0, 0, 0], [0, 1, 0], 45.0),
+                         environment=Environment.constant((0.8, 0.85, 1.0)),
+                         settings=RenderSettings(width=1920, height=1080, spp=64))
+
+
+def _count(n: int) -> str:
+    return f"{n // 1000}k" if n % 1000 == 0 and n < 1_000_000 else \
+        f"{n // 1_000_000}M" if n % 1_000_000 == 0 else str(n)
+
+
 def builtin_scene(name: str):
     """A built-in scene by name, or None. Besides the named ones, 'spheresN' with N a count
     (a k or M suffix allowed, e.g. spheres512k, spheres1M) and an optional '-diffuse' gives the
-    random-spheres scene of N spheres, for scaling measurements."""
+    random-spheres scene of N spheres, and 'heightfieldN' a height field of about N triangles,
+    for scaling measurements."""
     if name in BUILTIN_SCENES:
         return BUILTIN_SCENES[name]()
-    m = re.fullmatch(r"spheres(\d+)([kM]?)(-diffuse)?", name)
-    if m and 0 < int(m.group(1)) <= 100_000_000:
-        n = int(m.group(1)) * {"": 1, "k": 1000, "M": 1_000_000}[m.group(2)]
-        return random_spheres(n, bool(m.group(3)))
+    m = re.fullmatch(r"(spheres|heightfield)(\d+)([kM]?)(-diffuse)?", name)
+    if m and 0 < int(m.group(2)) <= 100_000_000 and not (m.group(1) == "heightfield" and m.group(4)):
+        n = int(m.group(2)) * {"": 1, "k": 1000, "M": 1_000_000}[m.group(3)]
+        return random_spheres(n, bool(m.group(4))) if m.group(1) == "spheres" else height_field(n)
     return None
 
 

@@ -122,6 +122,8 @@ def _read_obj(path):
 def _read_with_trimesh(path, suffix):
     import trimesh
 
+    from app.scene.transform import transform_normals, transform_points
+
     scene = trimesh.load(str(path), file_type=suffix[1:], force="scene", process=False)
     parts = []
     for node in scene.graph.nodes_geometry:
@@ -129,11 +131,16 @@ def _read_with_trimesh(path, suffix):
         geometry = scene.geometry[name]
         if not hasattr(geometry, "faces"):
             continue
-        from app.scene.transform import transform_normals, transform_points
         has_normals = suffix != ".stl" and "vertex_normals" in geometry._cache
         normals = transform_normals(matrix, geometry.vertex_normals) if has_normals else None
         parts.append((transform_points(matrix, geometry.vertices), geometry.faces, normals))
     return _concatenate(parts)
+
+
+def _triangles(faces) -> np.ndarray:
+    """Faces as triangles: polygons (quads from an OBJ file) become fans."""
+    faces = np.asarray(faces, np.int64)
+    return faces.reshape(-1, 3) if faces.ndim == 2 and faces.shape[1] == 3 else triangulate(list(faces))
 
 
 def _concatenate(parts):
@@ -142,7 +149,7 @@ def _concatenate(parts):
         return np.zeros((0, 3)), np.zeros((0, 3), np.int64), None
     offsets = np.cumsum([0] + [len(p[0]) for p in parts[:-1]])
     vertices = np.concatenate([np.asarray(p[0], np.float64).reshape(-1, 3) for p in parts])
-    faces = np.concatenate([np.asarray(p[1], np.int64).reshape(-1, 3) + o for p, o in zip(parts, offsets)])
+    faces = np.concatenate([_triangles(p[1]) + o for p, o in zip(parts, offsets)])
     with_normals = all(p[2] is not None and len(p[2]) == len(p[0]) for p in parts)
     normals = np.concatenate([np.asarray(p[2]).reshape(-1, 3) for p in parts]) if with_normals else None
     return vertices, faces, normals

@@ -66,16 +66,29 @@ float intersect_triangle(const global Triangle *tri, float3 o, float3 row_x, flo
     float det = u + v + w;
     if (det == 0.0f)
         return INFINITY;
-    float t_scaled = u * dot(row_z, a) + v * dot(row_z, b) + w * dot(row_z, c);
+    float az = dot(row_z, a), bz = dot(row_z, b), cz = dot(row_z, c);
+    float t_scaled = u * az + v * bz + w * cz;
     /* t = t_scaled / det must lie in (0, t_max); compared before dividing, as in the paper */
     if (det < 0.0f ? (t_scaled >= 0.0f || t_scaled < t_max * det)
                    : (t_scaled <= 0.0f || t_scaled > t_max * det))
         return INFINITY;
     float inv = 1.0f / det;
+    float t = t_scaled * inv;
+    /* t must exceed its own rounding error (pbrt-v4 section 6.8.4): a ray leaving this very
+     * triangle at a grazing angle otherwise finds it again at t ~ 0 */
+    float max_z = fmax(fmax(fabs(az), fabs(bz)), fabs(cz));
+    float max_x = fmax(fmax(fabs(ax), fabs(bx)), fabs(cx));
+    float max_y = fmax(fmax(fabs(ay), fabs(by)), fabs(cy));
+    float max_e = fmax(fmax(fabs(u), fabs(v)), fabs(w));
+    float delta_z = gamma_bound(3) * max_z;
+    float delta_x = gamma_bound(5) * (max_x + max_z), delta_y = gamma_bound(5) * (max_y + max_z);
+    float delta_e = 2.0f * (gamma_bound(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    float delta_t = 3.0f * (gamma_bound(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * fabs(inv);
+    if (t <= delta_t || t >= t_max)
+        return INFINITY;
     *b1 = v * inv;
     *b2 = w * inv;
-    float t = t_scaled * inv;
-    return t < t_max ? t : INFINITY;
+    return t;
 }
 #pragma OPENCL FP_CONTRACT ON
 
@@ -97,8 +110,19 @@ void triangle_surface(const global Triangle *tri, const global float4 *normals, 
 {
     float b0 = 1.0f - b1 - b2;
     float3 p0 = b0 * tri->v0.xyz, p1 = b1 * tri->v1.xyz, p2 = b2 * tri->v2.xyz;
-    *p = p0 + p1 + p2;
     *error = gamma_bound(7) * (fabs(p0) + fabs(p1) + fabs(p2));
+    /* A hit on an edge may round to a point on or just beyond the plane of the neighbouring
+     * face; where two faces meet at a corner of a room, a ray leaving from there could slip
+     * out through the corner (or meet the neighbour closer than intersect_triangle can resolve
+     * and be let through). Moving the point towards the centroid by 1e-4 of the way (and at
+     * least a few error bounds) keeps it inside its own triangle and resolvably off the
+     * neighbours' planes, at the cost of a shift far below what an image shows. */
+    float3 centre = (tri->v0.xyz + tri->v1.xyz + tri->v2.xyz) / 3.0f;
+    *p = p0 + p1 + p2;
+    float3 inward = centre - *p;
+    float len = length(inward);
+    if (len > 0.0f)
+        *p += inward * clamp(4.0f * length(*error) / len, 1e-4f, 0.5f);
     *ng = triangle_normal(tri);
     int k = as_int(tri->v0.w);
     *ns = *ng;

@@ -1,0 +1,133 @@
+"""Loading meshes (app/scene/meshes.py) in each format, with transforms, and every bad file
+reported in one line naming the file."""
+
+import numpy as np
+import pytest
+
+from app.cli import main
+from app.errors import UserError
+from app.scene import load_scene
+from app.scene.meshes import read_mesh
+from tests.geometry import cube
+
+QUAD_OBJ = """# a unit quad in the x-y plane, facing +z, with normals, as one polygon
+v 0 0 0
+v 1 0 0
+v 1 1 0
+v 0 1 0
+vn 0 0 1
+f 1//1 2//1 3//1 4//1
+"""
+
+
+def write_ply(path, vertices, faces, normals=None, ascii=False):
+    from plyfile import PlyData, PlyElement
+    fields = [("x", "f4"), ("y", "f4"), ("z", "f4")] + ([("nx", "f4"), ("ny", "f4"), ("nz", "f4")] if normals is not None else [])
+    rows = [tuple(v) + (tuple(n) if normals is not None else ()) for v, n in zip(vertices, normals if normals is not None else vertices)]
+    v = np.array(rows, dtype=fields)
+    f = np.array([(list(t),) for t in faces], dtype=[("vertex_indices", "O")])
+    PlyData([PlyElement.describe(v, "vertex"), PlyElement.describe(f, "face")], text=ascii).write(str(path))
+
+
+@pytest.mark.parametrize("ascii", [False, True])
+def test_ply_with_normals(tmp_path, ascii):
+    v, f = cube()
+    write_ply(tmp_path / "c.ply", v, f, normals=v / np.linalg.norm(v, axis=1, keepdims=True), ascii=ascii)
+    vertices, faces, normals = read_mesh(tmp_path / "c.ply", "test")
+    np.testing.assert_allclose(vertices, v)
+    assert faces.shape == (12, 3) and normals is not None
+
+
+def test_obj_polygons_are_triangulated_with_their_normals(tmp_path):
+    (tmp_path / "q.obj").write_text(QUAD_OBJ)
+    vertices, faces, normals = read_mesh(tmp_path / "q.obj", "test")
+    assert faces.shape == (2, 3)
+    corners = vertices[faces]
+    n = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    assert np.all(n[:, 2] > 0)                 # the winding kept: front faces +z
+    np.testing.assert_allclose(normals, np.tile([0, 0, 1.0], (len(vertices), 1)))
+
+
+@pytest.mark.parametrize("suffix", [".stl", ".glb"])
+def test_stl_and_glb(tmp_path, suffix):
+    import trimesh
+    v, f = cube()
+    trimesh.Trimesh(v, f, process=False).export(str(tmp_path / f"c{suffix}"))
+    vertices, faces, _ = read_mesh(tmp_path / f"c{suffix}", "test")
+    assert len(faces) == 12
+    corners = vertices[faces]
+    n = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    assert np.all(np.sum(n * corners.mean(axis=1), axis=1) > 0)   # still facing out
+
+
+def scene_with_mesh(tmp_path, mesh_toml):
+    (tmp_path / "q.obj").write_text(QUAD_OBJ)
+    path = tmp_path / "s.toml"
+    path.write_text(f"""[camera]
+eye = [0, 0, 5]
+look_at = [0, 0, 0]
+[[meshes]]
+file = "q.obj"
+material = {{ type = "diffuse", rho_d = 0.5 }}
+{mesh_toml}
+""")
+    return path
+
+
+def test_transform_applies_scale_then_rotate_then_translate(tmp_path):
+    scene = load_scene(str(scene_with_mesh(tmp_path, 'scale = 2\nrotate = [0, 0, 1, 90]\ntranslate = [10, 0, 0]')))
+    # corner (1, 0, 0): scaled to (2, 0, 0), turned to (0, 2, 0), moved to (10, 2, 0)
+    v = scene.meshes[0].vertices
+    assert np.any(np.all(np.abs(v - [10, 2, 0]) < 1e-5, axis=1))
+    assert scene.meshes[0].name == "q"
+
+
+def test_matrix_and_mirroring_keep_the_front(tmp_path):
+    scene = load_scene(str(scene_with_mesh(tmp_path, 'matrix = [[-1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]')))
+    m = scene.meshes[0]
+    corners = m.vertices[m.faces]
+    n = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    assert np.all(n[:, 2] > 0)
+
+
+def test_degenerate_triangles_are_dropped_with_a_count(tmp_path, capsys):
+    write_ply(tmp_path / "d.ply", [[0, 0, 0], [1, 0, 0], [0, 1, 0], [2, 0, 0]], [[0, 1, 2], [0, 1, 3], [1, 1, 2]])
+    _, faces, _ = read_mesh(tmp_path / "d.ply", "test")
+    assert len(faces) == 1
+    assert "dropped 2 degenerate triangle(s) of 3" in capsys.readouterr().err
+
+
+BAD = [
+    ("garbage.ply", b"ply\nformat nonsense\n", "not a readable PLY mesh"),
+    ("garbage.obj", b"\x00\x01\x02 not an obj", "no triangles"),
+    ("empty.stl", b"", "no triangles"),
+    ("mesh.xyz", b"1 2 3", "unknown mesh format"),
+]
+
+
+@pytest.mark.parametrize("name,content,message", BAD)
+def test_bad_files_give_one_line(tmp_path, name, content, message):
+    (tmp_path / name).write_bytes(content)
+    with pytest.raises(UserError, match=message) as e:
+        read_mesh(tmp_path / name, "meshes[0].file")
+    assert str(tmp_path / name) in str(e.value) and "\n" not in str(e.value)
+
+
+def test_nan_vertices_and_bad_indices(tmp_path):
+    write_ply(tmp_path / "n.ply", [[0, 0, 0], [np.nan, 0, 0], [0, 1, 0]], [[0, 1, 2]])
+    with pytest.raises(UserError, match="vertex 1 is not finite"):
+        read_mesh(tmp_path / "n.ply", "test")
+    (tmp_path / "i.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")
+    with pytest.raises(UserError):
+        read_mesh(tmp_path / "i.obj", "test")
+    write_ply(tmp_path / "i.ply", [[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 7]])
+    with pytest.raises(UserError, match="face 0 refers to vertex"):
+        read_mesh(tmp_path / "i.ply", "test")
+
+
+def test_cli_names_the_scene_field_and_mesh_file(tmp_path, capsys):
+    path = scene_with_mesh(tmp_path, "")
+    path.write_text(path.read_text().replace('"q.obj"', '"missing.ply"'))
+    assert main(["render", str(path), "-o", str(tmp_path / "x.png")]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "meshes[0].file" in err[0] and "missing.ply: no such mesh file" in err[0]

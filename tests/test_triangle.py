@@ -1,0 +1,203 @@
+"""Ray-triangle intersection (kernels/shapes/triangle.cl) against float64 closed forms, its
+watertightness on a closed mesh, and robust ray spawning (kernels/spawn.cl) on triangles and
+spheres: a ray leaving a surface never meets that surface again by error."""
+
+import numpy as np
+import pytest
+
+from app.compiled import compile_scene
+from app.scene import Mesh, SceneBuilder, diffuse
+from tests.conftest import scene_arrays
+from tests.geometry import height_field, icosphere
+
+SOURCE = """
+kernel void hit_triangle(global const Triangle *tri, global const float4 *o, global const float4 *d,
+                         global float4 *out)
+{
+    int i = get_global_id(0);
+    float3 dir = normalize(d[i].xyz);
+    float3 rx, ry, rz;
+    triangle_shear(dir, &rx, &ry, &rz);
+    float b1 = 0.0f, b2 = 0.0f;
+    float t = intersect_triangle(&tri[i], o[i].xyz, rx, ry, rz, INFINITY, &b1, &b2);
+    out[i] = (float4)(t, b1, b2, 0.0f);
+}
+kernel void trace(SCENE_KERNEL_ARGS, int num_spheres, global const float4 *o, global const float4 *d,
+                  global float4 *out)
+{
+    SceneData sc = SCENE_DATA(num_spheres);
+    int i = get_global_id(0);
+    Hit h = intersect_scene(&sc, o[i].xyz, normalize(d[i].xyz), INFINITY);
+    out[i] = (float4)(h.t, as_float(h.prim), 0.0f, 0.0f);
+}
+/* Shoots ray i at the scene, then spawns a second ray from the hit point in direction w[i]
+ * (flipped to leave on the side of the geometric normal given by side[i]: +1 the front
+ * hemisphere, -1 the back one): returns the first prim, the second ray's hit and prim. */
+kernel void respawn(SCENE_KERNEL_ARGS, int num_spheres, global const float4 *o, global const float4 *d,
+                    global const float4 *w, float side, global float4 *out)
+{
+    SceneData sc = SCENE_DATA(num_spheres);
+    int i = get_global_id(0);
+    float3 dir = normalize(d[i].xyz);
+    Hit h = intersect_scene(&sc, o[i].xyz, dir, INFINITY);
+    if (h.prim < 0) { out[i] = (float4)(-1.0f); return; }
+    Surface s = surface_at(&sc, &h, o[i].xyz, dir);
+    float3 n = dot(s.ng, dir) < 0.0f ? s.ng : -s.ng;       /* the side the ray came from */
+    float3 wi = normalize(w[i].xyz);
+    if (dot(wi, n) * side < 0.0f) wi = -wi;
+    Hit h2 = intersect_scene(&sc, offset_ray_origin(s.p, s.error, s.ng, wi), wi, INFINITY);
+    out[i] = (float4)(as_float(h.prim), h2.t, as_float(h2.prim), 0.0f);
+}
+"""
+
+
+def f4(a):
+    a = np.asarray(a, np.float32).reshape(-1, 3)
+    return np.column_stack([a, np.zeros(len(a), np.float32)])
+
+
+def triangles(corners):
+    from app.types import TRIANGLE
+    t = np.zeros(len(corners), TRIANGLE)
+    for k, f in enumerate(("v0", "v1", "v2")):
+        t[f][:, :3] = corners[:, k]
+    t["v0"][:, 3] = np.full(len(corners), -1, np.int32).view(np.float32)
+    return t
+
+
+def reference(corners, o, d):
+    """Moller-Trumbore in float64: t (inf on a miss) and the barycentrics of v1, v2."""
+    c = corners.astype(np.float64)
+    d = d / np.linalg.norm(d, axis=1, keepdims=True)
+    e1, e2 = c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]
+    p = np.cross(d, e2)
+    det = np.sum(e1 * p, axis=1)
+    s = o - c[:, 0]
+    u = np.sum(s * p, axis=1) / det
+    q = np.cross(s, e1)
+    v = np.sum(d * q, axis=1) / det
+    t = np.sum(e2 * q, axis=1) / det
+    hit = (u >= 0) & (v >= 0) & (u + v <= 1) & (t > 0)
+    return np.where(hit, t, np.inf), u, v
+
+
+def run_triangles(kernels, corners, o, d):
+    out = np.zeros((len(corners), 4), np.float32)
+    kernels(SOURCE)("hit_triangle", len(corners), triangles(corners), f4(o), f4(d), out)
+    return out
+
+
+def test_random_rays_match_float64(kernels):
+    rng = np.random.default_rng(4)
+    n = 20000
+    corners = rng.uniform(-2, 2, (n, 3, 3)).astype(np.float32)
+    o = rng.uniform(-6, 6, (n, 3)).astype(np.float32)
+    target = corners.mean(axis=1) + rng.normal(scale=0.8, size=(n, 3))   # near misses too
+    d = (target - o).astype(np.float32)
+    out = run_triangles(kernels, corners, o.astype(np.float64), d.astype(np.float64))
+    t_ref, u, v = reference(corners, o.astype(np.float64), d.astype(np.float64))
+    # hits and misses agree except for rays within float precision of an edge
+    margin = np.minimum(np.minimum(u, v), 1 - u - v)
+    clear = np.abs(margin) > 1e-4
+    assert np.array_equal(np.isfinite(out[clear, 0]), np.isfinite(t_ref[clear]))
+    both = np.isfinite(t_ref) & np.isfinite(out[:, 0]) & clear
+    assert both.sum() > 2000
+    np.testing.assert_allclose(out[both, 0], t_ref[both], rtol=1e-4, atol=1e-5)
+    np.testing.assert_allclose(out[both, 1], u[both], atol=1e-4)
+    np.testing.assert_allclose(out[both, 2], v[both], atol=1e-4)
+
+
+def test_edges_and_vertices_are_hit_from_both_sides(kernels):
+    """Rays through an edge's midpoint and through a vertex, from the front and from behind: a
+    shared edge belongs to the triangle (inclusive test), whichever side the ray comes from."""
+    tri = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32)
+    points = np.array([[0.5, 0, 0], [0.5, 0.5, 0], [0, 0.5, 0], [0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32)
+    corners = np.repeat(tri[None], 2 * len(points), axis=0)
+    o = np.concatenate([points + [0, 0, 2], points - [0, 0, 2]])
+    d = np.concatenate([np.tile([0, 0, -1.0], (len(points), 1)), np.tile([0, 0, 1.0], (len(points), 1))])
+    out = run_triangles(kernels, corners, o, d)
+    np.testing.assert_allclose(out[:, 0], 2.0, rtol=1e-6)
+
+
+def test_misses_behind_parallel_and_beside(kernels):
+    tri = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32)
+    corners = np.repeat(tri[None], 3, axis=0)
+    o = np.array([[0.2, 0.2, -1], [0.2, 0.2, 0.5], [0.6, 0.6, 1]], np.float32)   # behind, parallel, beside
+    d = np.array([[0, 0, -1], [1, 0, 0], [0, 0, -1]], np.float32)
+    out = run_triangles(kernels, corners, o, d)
+    assert np.all(np.isinf(out[:, 0]))
+
+
+def mesh_scene(vertices, faces, spheres=()):
+    b = SceneBuilder()
+    m = b.material(diffuse(0.5))
+    b.add_mesh(Mesh("mesh", np.asarray(vertices, np.float32), np.asarray(faces, np.int32), None, m))
+    for s in spheres:
+        b.add_sphere(s[:3], s[3], m)
+    return compile_scene(b.build("test"))
+
+
+def trace(kernels, compiled, o, d):
+    out = np.zeros((len(o), 4), np.float32)
+    kernels(SOURCE)("trace", len(o), *scene_arrays(compiled), np.int32(compiled.num_spheres), f4(o), f4(d), out)
+    return out[:, 0], out[:, 1].view(np.int32)
+
+
+def test_closed_mesh_is_watertight(kernels):
+    """200,000 rays from inside a subdivided icosahedron, many aimed exactly at its vertices and
+    edge midpoints: every one meets the mesh."""
+    v, f = icosphere(3, radius=2.0)
+    compiled = mesh_scene(v, f)
+    rng = np.random.default_rng(5)
+    n = 200_000
+    o = rng.normal(size=(n, 3)) * 0.3
+    targets = np.concatenate([v[f[:, 0]], (v[f[:, 0]] + v[f[:, 1]]) / 2])
+    d = rng.normal(size=(n, 3))
+    d[: n // 2] = targets[rng.integers(0, len(targets), n // 2)] - o[: n // 2]
+    t, prim = trace(kernels, compiled, o, d)
+    assert np.all(np.isfinite(t)) and np.all(prim >= 0)
+
+
+def respawn(kernels, compiled, o, d, w, side):
+    out = np.zeros((len(o), 4), np.float32)
+    kernels(SOURCE)("respawn", len(o), *scene_arrays(compiled), np.int32(compiled.num_spheres),
+                    f4(o), f4(d), f4(w), np.float32(side), out)
+    return out[:, 0].view(np.int32), out[:, 1], out[:, 2].view(np.int32)
+
+
+@pytest.mark.parametrize("radius", [1e-3, 1.0, 1e4])
+def test_rays_leaving_a_sphere_never_meet_it_again(kernels, radius):
+    """Outward rays from points all over a sphere miss it (it is convex); inward rays meet its
+    far side, a chord away, never the point they leave."""
+    centre = np.array([3.0, -2.0, 1.0]) * radius
+    compiled = mesh_scene(*icosphere(0, 0.01, (100, 100, 100)), spheres=[np.append(centre, radius)])
+    rng = np.random.default_rng(6)
+    n = 50_000
+    u = rng.normal(size=(n, 3))
+    o = centre + 3 * radius * u / np.linalg.norm(u, axis=1, keepdims=True)
+    d = centre + rng.uniform(-0.9, 0.9, (n, 3)) * radius / np.sqrt(3) - o
+    w = rng.normal(size=(n, 3))
+    first, t, second = respawn(kernels, compiled, o, d, w, side=1.0)
+    sphere = compiled.num_spheres - 1
+    assert np.all(first == sphere)
+    assert np.all(second != sphere), f"{np.count_nonzero(second == sphere)} outward rays met the sphere again"
+    first, t, second = respawn(kernels, compiled, o, d, w, side=-1.0)
+    assert np.all(second == sphere)
+    assert t.min() > 1e-3 * radius     # a chord, not a self-hit (grazing chords are short but not 0)
+
+
+def test_rays_leaving_a_concave_mesh_never_meet_their_own_triangle(kernels):
+    """From points all over a bumpy height field, rays into the front hemisphere may meet other
+    triangles (it is concave) but never the one they leave."""
+    v, f = height_field(32)
+    compiled = mesh_scene(v * 10, f)
+    rng = np.random.default_rng(7)
+    n = 100_000
+    o = np.column_stack([rng.uniform(-9, 9, n), np.full(n, 30.0), rng.uniform(-9, 9, n)])
+    d = np.column_stack([rng.normal(scale=0.05, size=n), -np.ones(n), rng.normal(scale=0.05, size=n)])
+    w = rng.normal(size=(n, 3))
+    first, t, second = respawn(kernels, compiled, o, d, w, side=1.0)
+    hit = first >= 0
+    assert hit.mean() > 0.9
+    assert np.all(second[hit] != first[hit])
+    assert np.any(hit & (second >= 0))      # the bumps do shadow one another
