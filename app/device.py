@@ -29,13 +29,12 @@ def kernel_source(extra: str = "") -> str:
     from app.materials import dispatch_source, kernel_files
 
     folder = resource_dir("kernels")
-    parts = [f'#line 1 "{name}"\n{(folder / name).read_text()}' for name in CORE_FILES]
-    parts += [f'#line 1 "{name}"\n{(folder / name).read_text()}' for name in kernel_files()]
-    parts.append(f'#line 1 "app/materials.py: dispatch_source"\n{dispatch_source()}')
-    parts += [f'#line 1 "{name}"\n{(folder / name).read_text()}' for name in LATER_FILES]
+    texts = [(name, (folder / name).read_text()) for name in (*CORE_FILES, *kernel_files())]
+    texts.append(("app/materials.py: dispatch_source", dispatch_source()))
+    texts += [(name, (folder / name).read_text()) for name in LATER_FILES]
     if extra:
-        parts.append(f'#line 1 "extra"\n{extra}')
-    return "\n".join(parts)
+        texts.append(("extra", extra))
+    return "\n".join(f'#line 1 "{name}"\n{text}' for name, text in texts)
 
 
 @dataclass

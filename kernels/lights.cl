@@ -47,12 +47,6 @@ typedef struct {
     int prim;        /* the emitter: a primitive, or -1 for the environment */
 } LightSample;
 
-#ifdef NO_TRIANGLES
-#define NO_TRIANGLE_LIGHTS 1
-#else
-#define NO_TRIANGLE_LIGHTS 0
-#endif
-
 /* Draws a light and a direction towards it from point x of shading normal n. */
 LightSample sample_light(const SceneData *sc, const RenderParams *p, float3 x, float3 n, float4 u)
 {
@@ -63,7 +57,16 @@ LightSample sample_light(const SceneData *sc, const RenderParams *p, float3 x, f
                     ? to_world(sample_cosine_hemisphere(u.y, u.z), n)
                     : sample_environment_map(sc->env_marginal, sc->env_conditional, p, u.y, u.z);
         ls.pdf = light.pick * pdf_environment(sc, p, n, ls.wi);
-    } else if (NO_TRIANGLE_LIGHTS || light.prim < sc->num_spheres) {
+    }
+#ifndef NO_TRIANGLES
+    else if (light.prim >= sc->num_spheres) {
+        const global Triangle *tri = &sc->triangles[light.prim - sc->num_spheres];
+        ls.y = sample_triangle_area(tri, u.y, u.z);
+        ls.wi = normalize(ls.y - x);
+        ls.pdf = light.pick * pdf_triangle_solid_angle(tri, x, ls.y);
+    }
+#endif
+    else {
         Sphere s = sc->spheres[light.prim];
         ls.wi = sample_sphere_cone(s, x, u.y, u.z);
         ls.pdf = light.pick * pdf_sphere_cone(s, x);
@@ -71,11 +74,6 @@ LightSample sample_light(const SceneData *sc, const RenderParams *p, float3 x, f
          * sphere, the tangent point */
         float t = intersect_sphere(s, x, ls.wi, INFINITY);
         ls.y = x + (isinf(t) ? dot(s.xyz - x, ls.wi) : t) * ls.wi;
-    } else {
-        const global Triangle *tri = &sc->triangles[light.prim - sc->num_spheres];
-        ls.y = sample_triangle_area(tri, u.y, u.z);
-        ls.wi = normalize(ls.y - x);
-        ls.pdf = light.pick * pdf_triangle_solid_angle(tri, x, ls.y);
     }
     return ls;
 }

@@ -11,6 +11,8 @@ from app.errors import UserError, warn
 FORMATS = (".ply", ".obj", ".stl", ".gltf", ".glb")
 MAX_FILE_BYTES = 4 << 30            # a mesh file larger than this is refused before reading
 MAX_TRIANGLES = 64_000_000          # ~6 GB of device memory (docs/performance.md)
+# the largest coordinate a shape may reach: the BVH's float32 surface areas, (2 x)^2, stay finite
+MAX_COORDINATE = 1e18
 
 
 def read_mesh(path: Path, where: str):
@@ -57,7 +59,7 @@ def check_mesh(vertices, faces, normals, where):
     if not np.all(np.isfinite(vertices)):
         bad = int(np.argmax(~np.all(np.isfinite(vertices), axis=1)))
         raise UserError(f"{where}: vertex {bad} is not finite ({vertices[bad].tolist()})")
-    if np.any(np.abs(vertices) > 1e30):
+    if np.any(np.abs(vertices) > MAX_COORDINATE):
         raise UserError(f"{where}: vertex coordinates beyond 1e30 cannot be traced in float32")
     if faces.min() < 0 or faces.max() >= len(vertices):
         bad = int(np.argmax((faces < 0).any(axis=1) | (faces >= len(vertices)).any(axis=1)))

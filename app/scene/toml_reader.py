@@ -16,7 +16,7 @@ from app.materials import BSDFS, Material
 from app.resources import resource_dir
 from app.scene import transform
 from app.scene.description import Mesh, RenderSettings, Scene, SceneBuilder
-from app.scene.meshes import check_mesh, read_mesh, triangulate
+from app.scene.meshes import MAX_COORDINATE, check_mesh, read_mesh, triangulate
 
 # the scene-file types besides the registry's: "emitter" is a black BSDF with emission
 FILE_TYPES = {name: b for name, b in BSDFS.items() if name != "black"}
@@ -239,8 +239,8 @@ class _Reader:
             vertices, faces, normals = check_mesh(vertices, faces, None, f"{self.path}: {where}")
             source, default_name = "", f"mesh {where[7:-1]}"
         vertices = transform.transform_points(m, vertices)
-        if np.any(np.abs(vertices) > 1e30):
-            self.fail(where, "the transformed vertices lie beyond 1e30, which float32 cannot trace")
+        if np.any(np.abs(vertices) > MAX_COORDINATE):
+            self.fail(where, f"the transformed vertices lie beyond {MAX_COORDINATE:g}, which float32 cannot trace")
         if normals is not None:
             normals = transform.transform_normals(m, normals)
         if transform.flips_handedness(m):     # keep the front side where it was
@@ -284,8 +284,8 @@ class _Reader:
             radius = self.number(s, "radius", where)
             if radius <= 0:
                 self.fail(f"{where}.radius", f"must be positive, got {radius}")
-            if np.any(np.abs(center) + radius > 1e30):
-                self.fail(where, "the sphere reaches beyond 1e30, which float32 cannot trace")
+            if np.any(np.abs(center) + radius > MAX_COORDINATE):
+                self.fail(where, f"the sphere reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace")
             builder.add_sphere(center, radius, self.material_ref(builder, rows, s, where),
                                self.name(s, where, f"sphere {i}"))
         for i, m in enumerate(meshes):
