@@ -5,6 +5,7 @@ import sys
 
 from app import __version__
 from app.errors import UserError
+from app.scene.description import RUSSIAN_ROULETTE
 
 EPILOG = ("A scene is a .toml file or a built-in name (pathtrace scenes lists them): simple, "
           "simple-diffuse, spheres8k[-diffuse], spheres64k[-diffuse], demo, teapot, teapot-sky, "
@@ -53,8 +54,9 @@ def add_render_options(p: argparse.ArgumentParser):
     p.add_argument("--seed", type=_int_range(0, 2**32 - 1), help="random seed (default: the scene's)")
     p.add_argument("--max-depth", type=_int_range(0), metavar="N",
                    help="longest path in vertices, 1 = emitters seen directly; 0 = unlimited")
-    p.add_argument("--no-rr", action="store_true",
-                   help="no Russian roulette: paths run to --max-depth (the comparison mode)")
+    p.add_argument("--rr", choices=RUSSIAN_ROULETTE,
+                   help="how paths end: throughput (Russian roulette from depth 5, the default), "
+                        "albedo (the report's, at every bounce) or off (at --max-depth)")
     p.add_argument("--nee", action=argparse.BooleanOptionalAction, default=None,
                    help="next-event estimation: sample lights at every bounce, combined by MIS "
                         "(default on; --no-nee gives the report's estimator)")
@@ -64,9 +66,9 @@ def apply_render_options(scene, args):
     s = scene.settings
     width, height = args.size or (s.width, s.height)
     max_depth = s.max_depth if args.max_depth is None else args.max_depth
-    rr = s.russian_roulette and not args.no_rr
-    if not rr and max_depth == 0:
-        raise UserError("--no-rr needs --max-depth N (N >= 1), or paths would never end")
+    rr = args.rr or s.russian_roulette
+    if rr == "off" and max_depth == 0:
+        raise UserError("--rr off needs --max-depth N (N >= 1), or paths would never end")
     changes = dict(width=width, height=height, max_depth=max_depth, russian_roulette=rr,
                    seed=s.seed if args.seed is None else args.seed,
                    nee=s.nee if args.nee is None else args.nee)

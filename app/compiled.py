@@ -10,7 +10,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from app.bvh import BVH, build_bvh, primitive_boxes
+from app.features import Features
 from app.lights import LightTable, build_light_table, emitted_power
+from app.materials import TAGS
 from app.scene.description import Scene
 from app.types import TRIANGLE
 
@@ -87,6 +89,13 @@ class CompiledScene:
         power = emitted_power(self.spheres, corners, prim_emission[:self.num_spheres],
                               prim_emission[self.num_spheres:])
         self.lights: LightTable = build_light_table(power, self.scene.environment)
+
+    def features(self) -> Features:
+        """What the kernels need for this scene: triangles or not, and the material types its
+        primitives use."""
+        used = np.unique(self.materials["type"][np.unique(self.prim_material)])
+        return Features(triangles=self.num_triangles > 0,
+                        bsdfs=tuple(name for name, tag in TAGS.items() if tag in used))
 
     def shape(self, prim: int) -> ShapeRef:
         """The description's shape that primitive `prim` (BVH order) belongs to."""

@@ -11,26 +11,28 @@ from pathlib import Path
 import pyopencl as cl
 
 from app.errors import UserError
+from app.features import Features
 from app.resources import resource_dir
 
 # The order in which the kernel files are joined into one program; the BSDFs of the material
 # registry and their generated dispatch follow bsdf.cl.
 CORE_FILES = ("types.h", "rng.cl", "sampling.cl", "scene.cl", "spawn.cl", "shapes/sphere.cl",
-              "shapes/triangle.cl", "bvh.cl", "bsdf.cl")
+              "shapes/triangle.cl", "bvh.cl", "bsdf.cl", "fresnel.cl", "microfacet.cl")
 LATER_FILES = ("environment.cl", "lights.cl", "camera.cl", "integrator.cl")
 
 # No -cl-fast-relaxed-math: it implies finite math, and the kernels rely on INFINITY.
 BUILD_OPTIONS = ("-cl-mad-enable", "-cl-no-signed-zeros")
 
 
-def kernel_source(extra: str = "") -> str:
+def kernel_source(extra: str = "", features: Features = Features()) -> str:
     """The kernels as one source text, each file introduced by a #line marker so that compiler
     messages name the file and line."""
     from app.materials import dispatch_source, kernel_files
 
     folder = resource_dir("kernels")
-    texts = [(name, (folder / name).read_text()) for name in (*CORE_FILES, *kernel_files())]
-    texts.append(("app/materials.py: dispatch_source", dispatch_source()))
+    texts = [(name, (folder / name).read_text())
+             for name in (*CORE_FILES, *kernel_files(features.bsdfs))]
+    texts.append(("app/materials.py: dispatch_source", dispatch_source(features.bsdfs)))
     texts += [(name, (folder / name).read_text()) for name in LATER_FILES]
     if extra:
         texts.append(("extra", extra))
@@ -85,12 +87,11 @@ class BuildResult:
 
 
 def build_program(context: cl.Context, device: cl.Device, extra: str = "",
-                  use_cache: bool = True, defines: tuple = ()) -> BuildResult:
-    """Builds the kernels for one device. The binary is cached under cache_dir(), keyed by the
-    source, the options and the exact device and driver. `defines` specialise the kernels to a
-    scene (e.g. NO_TRIANGLES drops the triangle code from sphere-only scenes)."""
-    source = kernel_source(extra)
-    options = list(BUILD_OPTIONS) + [f"-D{d}" for d in defines]
+                  use_cache: bool = True, features: Features = Features()) -> BuildResult:
+    """Builds the kernels, specialised to `features`, for one device. The binary is cached under
+    cache_dir(), keyed by the source, the options and the exact device and driver."""
+    source = kernel_source(extra, features)
+    options = list(BUILD_OPTIONS) + [f"-D{d}" for d in features.defines()]
     key = hashlib.sha256("\0".join([
         source, " ".join(options), device.platform.name, device.platform.version, device.name,
         device.version, device.driver_version]).encode()).hexdigest()[:32]
@@ -120,7 +121,7 @@ def build_program(context: cl.Context, device: cl.Device, extra: str = "",
 @dataclass
 class Backend:
     """A chosen device with its context, queue and built program (all features), and the
-    programs specialised to scenes, built when first asked for."""
+    programs specialised to scenes' features, built when first asked for."""
     device: Device
     context: cl.Context
     queue: cl.CommandQueue
@@ -129,19 +130,18 @@ class Backend:
     use_cache: bool = True
 
     def __post_init__(self):
-        self._variants = {(): self.build.program}
+        self._variants = {Features(): self.build.program}
 
     @property
     def program(self) -> cl.Program:
         return self.build.program
 
-    def program_for(self, defines: tuple) -> cl.Program:
-        """The kernels specialised by `defines` (sorted), built once per backend."""
-        defines = tuple(sorted(defines))
-        if defines not in self._variants:
-            self._variants[defines] = build_program(self.context, self.device.device, self.extra,
-                                                    self.use_cache, defines).program
-        return self._variants[defines]
+    def program_for(self, features: Features) -> cl.Program:
+        """The kernels specialised to `features`, built once per backend."""
+        if features not in self._variants:
+            self._variants[features] = build_program(self.context, self.device.device, self.extra,
+                                                     self.use_cache, features).program
+        return self._variants[features]
 
 
 def open_device(device: Device, extra: str = "", use_cache: bool = True) -> Backend:

@@ -12,9 +12,9 @@ from app.compiled import CompiledScene, compile_scene
 from app.device import Backend
 from app.environment import Environment
 from app.scene import Scene
+from app.scene.description import RUSSIAN_ROULETTE
 from app.types import RENDER_PARAMS
 
-RR_ALBEDO = 1          # kernels/integrator.cl: the report's Russian roulette
 RR_DEPTH = 5           # where Russian roulette on throughput starts (Mitsuba 3's default)
 
 
@@ -34,9 +34,7 @@ class Renderer:
         resets."""
         self.compiled = scene if isinstance(scene, CompiledScene) else compile_scene(scene)
         self.scene: Scene = self.compiled.scene
-        # kernels without the code of shapes the scene lacks (registers matter on GPUs)
-        self.program = self.backend.program_for(() if self.compiled.num_triangles else ("NO_TRIANGLES",))
-        self.kernels = {False: cl.Kernel(self.program, "render"), True: cl.Kernel(self.program, "render_nee")}
+        self._select_program()
         self.camera = self.scene.camera.copy()
         self.settings = self.scene.settings
         c = self.compiled
@@ -64,8 +62,16 @@ class Renderer:
     def upload_materials(self):
         """Uploads the scene's material table and the light table after an edit; resets."""
         self.compiled.update_materials()
+        self._select_program()
         self._upload_materials()
         self.reset()
+
+    def _select_program(self):
+        """The kernels specialised to the scene's shapes and materials (app.device.Features)."""
+        program = self.backend.program_for(self.compiled.features())
+        if program is not getattr(self, "program", None):
+            self.program = program
+            self.kernels = {False: cl.Kernel(program, "render"), True: cl.Kernel(program, "render_nee")}
 
     def set_environment(self, environment: Environment):
         self.scene.environment = environment
@@ -138,7 +144,7 @@ class Renderer:
         p["sample_start"], p["sample_count"] = self.samples, sample_count
         p["seed"] = self.settings.seed
         p["max_depth"] = self.settings.max_depth
-        p["russian_roulette"] = RR_ALBEDO if self.settings.russian_roulette else 0
+        p["russian_roulette"] = RUSSIAN_ROULETTE.index(self.settings.russian_roulette)
         h, w, _ = self.environment.image.shape
         p["env_width"], p["env_height"] = w, h
         p["env_rotation"] = self.environment.rotation / 360.0

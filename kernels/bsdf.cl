@@ -1,18 +1,22 @@
 /* The BSDF interface: every material type provides eval, pdf and sample in the local shading
  * frame (z the shading normal, wo and wi pointing away from the surface);
  * eval_bsdf, pdf_bsdf and sample_bsdf dispatch on the material's type tag. Adding a material
- * means one kernels/bsdfs/ file and one entry in app/materials.py, whose registry gives each
- * type its tag (BSDF_<NAME>) and generates the dispatch (app/materials.py, dispatch_source);
- * the integrator never names a material.
+ * means one kernels/bsdfs/ file and one entry in app/materials/registry.py, which gives each
+ * type its tag (BSDF_<NAME>) and generates the dispatch (dispatch_source); the integrator never
+ * names a material.
  *
- *   eval_X(m, wo, wi)        f(wo, wi), without the cosine
- *   pdf_X(m, wo, wi)         the solid-angle density with which sample_X draws wi (0 for a
- *                            delta lobe)
+ *   eval_X(m, wo, wi)        f(wo, wi), without the cosine; 0 for delta lobes
+ *   pdf_X(m, wo, wi)         the solid-angle density with which sample_X draws wi, its lobe's
+ *                            choice included (delta lobes contribute nothing)
  *   sample_X(m, wo, u, &s)   draws wi from three uniforms; returns 0 when no direction results
- */
+ *
+ * One-sided materials see wo in the upper hemisphere (the integrator turns two-sided ones' back
+ * faces round); transmissive ones (MATERIAL_TRANSMISSIVE) see wo on either side of their
+ * front's frame and tell inside from outside by the sign of wo.z. */
 
-#define MATERIAL_TWOSIDED 1   /* the same BSDF on both sides (front-side frame mirrored) */
-#define MATERIAL_DELTA 2      /* every lobe is a delta: no light sampling here */
+#define MATERIAL_TWOSIDED 1      /* the same BSDF on both sides (front-side frame mirrored) */
+#define MATERIAL_DELTA 2         /* every lobe is a delta: no light sampling here */
+#define MATERIAL_TRANSMISSIVE 4  /* an interface seen from both sides */
 
 /* What a sampled lobe is, as pbrt-v4's BxDFFlags and Mitsuba's BSDFFlags. */
 #define LOBE_REFLECTION 1
@@ -23,30 +27,16 @@
 
 typedef struct {
     float3 wi;
-    float3 weight;   /* f cos(theta_i) / pdf; for a delta lobe, the reflectance itself */
-    float pdf;       /* density of wi; for a delta lobe, that of choosing it (no MIS there) */
+    float3 weight;   /* f cos(theta_i) / pdf; for a delta lobe, its reflectance over its choice
+                        probability */
+    float pdf;       /* density of wi, the lobe's choice included; for a delta lobe, the choice
+                        probability alone (no MIS there) */
+    float eta;       /* relative IOR across a refraction (n_t / n_i), else 1: the integrator's
+                        Russian roulette undoes the radiance scaling inside dense media with it */
     int lobe;        /* LOBE_* bits */
 } BSDFSample;
 
-/* A shading frame: t, b, n orthonormal. */
-typedef struct {
-    float3 t, b, n;
-} Frame;
-
-Frame make_shading_frame(float3 n)
+float3 reflect_local(float3 w)
 {
-    Frame f;
-    make_frame(n, &f.t, &f.b);
-    f.n = n;
-    return f;
-}
-
-float3 to_shading(const Frame *f, float3 v)
-{
-    return (float3)(dot(v, f->t), dot(v, f->b), dot(v, f->n));
-}
-
-float3 from_shading(const Frame *f, float3 v)
-{
-    return v.x * f->t + v.y * f->b + v.z * f->n;
+    return (float3)(-w.x, -w.y, w.z);
 }

@@ -66,11 +66,13 @@ void intersect_leaf(const SceneData *sc, const global BVHChild *c, float3 o, flo
 /* app/bvh.py keeps the tree at most 30 levels deep, and traversal pushes one node per level. */
 #define BVH_STACK_SIZE 32
 
-/* Nearest hit along o + t d, t in (0, t_max). Children are visited nearer-first. The stack
- * holds node indices only (small private memory keeps GPU occupancy up); a popped node's
- * children are tested against the nearest hit found meanwhile. Rays leaving a surface start at
- * an offset origin (kernels/spawn.cl), so no primitive needs to be skipped. */
-Hit intersect_scene(const SceneData *sc, float3 o, float3 d, float t_max)
+/* The hit along o + t d, t in (0, t_max): the nearest one, or with any_hit (a constant at each
+ * call, so the compiler builds two traversals) the first one found, which is all a shadow ray
+ * needs to know. Children are visited nearer-first. The stack holds node indices only (small
+ * private memory keeps GPU occupancy up); a popped node's children are tested against the
+ * nearest hit found meanwhile. Rays leaving a surface start at an offset origin
+ * (kernels/spawn.cl), so no primitive needs to be skipped. */
+Hit trace_ray(const SceneData *sc, float3 o, float3 d, float t_max, const int any_hit)
 {
     Hit hit = {t_max, -1, 0.0f, 0.0f};
     float3 inv_d = 1.0f / d;
@@ -90,6 +92,8 @@ Hit intersect_scene(const SceneData *sc, float3 o, float3 d, float t_max)
             intersect_leaf(sc, c1, o, d, &hit);
             t1 = INFINITY;
         }
+        if (any_hit && hit.prim >= 0)
+            return hit;
         /* a leaf hit may have moved the nearest hit in front of the other child */
         t0 = t0 < hit.t ? t0 : INFINITY;
         t1 = t1 < hit.t ? t1 : INFINITY;
@@ -107,25 +111,39 @@ Hit intersect_scene(const SceneData *sc, float3 o, float3 d, float t_max)
     }
 }
 
+Hit intersect_scene(const SceneData *sc, float3 o, float3 d, float t_max)
+{
+    return trace_ray(sc, o, d, t_max, 0);
+}
+
+/* Whether anything lies on o + t d for t in (0, t_max). */
+int occluded(const SceneData *sc, float3 o, float3 d, float t_max)
+{
+    return trace_ray(sc, o, d, t_max, 1).prim >= 0;
+}
+
 /* What a path needs of the surface it hit. */
 typedef struct {
     float3 p;        /* the point */
-    float3 error;    /* bound on the error of p, per axis (kernels/spawn.cl) */
     float3 ng;       /* unit geometric normal, on the front side */
     float3 ns;       /* unit shading normal, in ng's hemisphere */
+    float offset;    /* how far rays leaving p start from it along ng (kernels/spawn.cl) */
 } Surface;
 
 Surface surface_at(const SceneData *sc, const Hit *hit, float3 o, float3 d)
 {
     Surface s;
+    float3 error;
 #ifndef NO_TRIANGLES
     if (hit->prim >= sc->num_spheres) {
         triangle_surface(&sc->triangles[hit->prim - sc->num_spheres], sc->normals, hit->b1,
-                         hit->b2, &s.p, &s.error, &s.ng, &s.ns);
+                         hit->b2, &s.p, &error, &s.ng, &s.ns);
+        s.offset = error_offset(s.ng, error);
         return s;
     }
 #endif
-    sphere_surface(sc->spheres[hit->prim], o, d, hit->t, &s.p, &s.error, &s.ng);
+    sphere_surface(sc->spheres[hit->prim], o, d, hit->t, &s.p, &error, &s.ng);
     s.ns = s.ng;
+    s.offset = error_offset(s.ng, error);
     return s;
 }

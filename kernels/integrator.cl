@@ -16,29 +16,34 @@
 
 /* RenderParams.russian_roulette */
 #define RR_OFF 0
-#define RR_ALBEDO 1        /* the report's: at every vertex, go on with the material's albedo */
-#define RR_THROUGHPUT 2    /* from rr_depth on, go on with probability min(max throughput, 0.95),
-                              as Mitsuba 3 and (without the cap) pbrt-v4 do */
+#define RR_ALBEDO 1        /* the report's: at every vertex, go on with the material's albedo
+                              (Material.continuation), folded into the lobe choice */
+#define RR_THROUGHPUT 2    /* from rr_depth on, go on with probability min(max throughput, 0.95)
+                              (Mitsuba 3's; pbrt-v4 has no cap) */
 
-/* One light sample at surface s, whose BSDF m sees outgoing direction wo (local frame): its
- * contribution f cos Le / pdf, weighted against BSDF sampling, whose density of continuing
- * is `go_on` times the BSDF's pdf. */
+/* One light sample at surface s, whose BSDF m sees outgoing direction wo (local frame of the
+ * shading normal): its contribution f cos Le / pdf, weighted against BSDF sampling, whose
+ * density of continuing is `go_on` times the BSDF's pdf. Everything but visibility is computed
+ * before the shadow ray, so that only the contribution stays live while it is traced. */
 float3 sample_direct_light(const SceneData *sc, const RenderParams *p, const global Material *m,
-                           const Surface *s, const Frame *frame, float3 wo, float go_on,
-                           float4 u, int *rays)
+                           const Surface *s, float3 wo, float go_on, float4 u, int *rays)
 {
-    LightSample ls = sample_light(sc, p, s->p, frame->n, u);
-    float3 wi = to_shading(frame, ls.wi);
+    LightSample ls = sample_light(sc, p, s->p, s->ns, u);
+    float3 wi = to_local(ls.wi, s->ns);
     /* the shading and geometric normals must agree on the side wi leaves on (no light leaks) */
     if (ls.pdf <= 0.0f || dot(ls.wi, s->ng) * wi.z <= 0.0f)
         return (float3)(0.0f);
     float3 f = eval_bsdf(m, wo, wi);
     if (all(f == 0.0f))
         return (float3)(0.0f);
+    float3 le = ls.prim < 0 ? lookup_environment(sc->env, p, ls.wi)
+                            : sc->materials[sc->prim_material[ls.prim]].emission.xyz;
+    float w = mis_weight(ls.pdf, go_on * pdf_bsdf(m, wo, wi));
+    float3 contribution = f * fabs(wi.z) * le * (w / ls.pdf);
     /* The light is seen if a shadow ray from the offset origin towards the point on it meets
      * nothing before it (stopping just short, by pbrt-v4's ShadowEpsilon: pbrt's SpawnRayTo);
      * the environment is seen if the ray meets nothing at all. */
-    float3 o = offset_ray_origin(s->p, s->error, s->ng, ls.wi);
+    float3 o = offset_ray_origin(s->p, s->offset, s->ng, ls.wi);
     float3 dir = ls.wi;
     float t_max = INFINITY;
     if (ls.prim >= 0) {
@@ -47,12 +52,7 @@ float3 sample_direct_light(const SceneData *sc, const RenderParams *p, const glo
         t_max *= 1.0f - SHADOW_EPSILON;
     }
     ++*rays;
-    if (intersect_scene(sc, o, dir, t_max).prim >= 0)
-        return (float3)(0.0f);                     /* occluded */
-    float3 le = ls.prim < 0 ? lookup_environment(sc->env, p, ls.wi)
-                            : sc->materials[sc->prim_material[ls.prim]].emission.xyz;
-    float w = mis_weight(ls.pdf, go_on * pdf_bsdf(m, wo, wi));
-    return f * fabs(wi.z) * le * (w / ls.pdf);
+    return occluded(sc, o, dir, t_max) ? (float3)(0.0f) : contribution;
 }
 
 /* Returns the radiance arriving at o from direction -d; adds the rays it traced to *rays.
@@ -63,6 +63,9 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
 {
     float3 radiance = (float3)(0.0f);
     float3 throughput = (float3)(1.0f);
+    /* the product of the relative IORs of the refractions so far: throughput eta^2 is the
+     * throughput without the radiance scaling of dense media, which Russian roulette reads */
+    float eta_scale = 1.0f;
     int max_depth = p->max_depth > 0 ? p->max_depth : UNLIMITED_DEPTH;
     /* where the last bounce left from, and the density with which BSDF sampling chose d there
      * (0 for the camera ray and delta bounces: no light sample could have found what it hits) */
@@ -81,11 +84,15 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
         const global Material *m = &sc->materials[sc->prim_material[hit.prim]];
         int front = dot(s.ng, d) < 0.0f;
         if (!front) {
-            /* one-sided, as Mitsuba 3's BSDFs and area lights: a back face is black */
-            if (!(m->flags & MATERIAL_TWOSIDED))
+            /* One-sided, as Mitsuba 3's BSDFs and area lights: a back face is black. A
+             * two-sided material turns its frame round; a transmissive one (glass) keeps it
+             * and its BSDF sees wo below the surface. */
+            if (m->flags & MATERIAL_TWOSIDED) {
+                s.ng = -s.ng;
+                s.ns = -s.ns;
+            } else if (!(m->flags & MATERIAL_TRANSMISSIVE)) {
                 return radiance;
-            s.ng = -s.ng;
-            s.ns = -s.ns;
+            }
         }
         if (front && any(m->emission.xyz > 0.0f)) {
             float w = 1.0f;
@@ -95,11 +102,10 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
         }
         if (depth >= max_depth)
             return radiance;
-        Frame frame = make_shading_frame(s.ns);
-        float3 wo = to_shading(&frame, -d);
+        float3 wo = to_local(-d, s.ns);
         float go_on = p->russian_roulette == RR_ALBEDO ? m->continuation : 1.0f;
         if (nee && p->num_lights > 0 && !(m->flags & MATERIAL_DELTA))
-            radiance += throughput * sample_direct_light(sc, p, m, &s, &frame, wo, go_on,
+            radiance += throughput * sample_direct_light(sc, p, m, &s, wo, go_on,
                                                          next_uniform4(rng), rays);
         float4 u = next_uniform4(rng);
         if (p->russian_roulette == RR_ALBEDO) {
@@ -108,22 +114,25 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
             u.x /= go_on;                    /* reused for the lobe choice, as in the report */
         }
         BSDFSample bs;
+        bs.eta = 1.0f;
         if (!sample_bsdf(m, wo, u.xyz, &bs))
             return radiance;
-        float3 wi = from_shading(&frame, bs.wi);
+        float3 wi = to_world(bs.wi, s.ns);
         if (dot(wi, s.ng) * bs.wi.z <= 0.0f)
             return radiance;                 /* the normals disagree on wi's side */
         throughput *= bs.weight / go_on;
+        eta_scale *= bs.eta;
         if (p->russian_roulette == RR_THROUGHPUT && depth >= p->rr_depth) {
-            float q = fmin(fmax(fmax(throughput.x, throughput.y), throughput.z), 0.95f);
+            float q = fmin(fmax(fmax(throughput.x, throughput.y), throughput.z)
+                           * eta_scale * eta_scale, 0.95f);
             if (u.w >= q)
                 return radiance;
             throughput /= q;
         }
         pdf_prev = (bs.lobe & LOBE_DELTA) ? 0.0f : go_on * bs.pdf;
         prev_x = s.p;
-        prev_n = frame.n;
-        o = offset_ray_origin(s.p, s.error, s.ng, wi);
+        prev_n = s.ns;
+        o = offset_ray_origin(s.p, s.offset, s.ng, wi);
         d = wi;
     }
 }

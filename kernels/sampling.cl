@@ -13,11 +13,20 @@ void make_frame(float3 n, float3 *t, float3 *b)
     *b = (float3)(c, sign + n.y * n.y * a, -n.y);
 }
 
+/* v from the frame of make_frame(axis) to world space, and back. The integrator rebuilds the
+ * shading frame on each use rather than keeping it: nine floats fewer live in registers. */
 float3 to_world(float3 v, float3 axis)
 {
     float3 t, b;
     make_frame(axis, &t, &b);
     return v.x * t + v.y * b + v.z * axis;
+}
+
+float3 to_local(float3 v, float3 axis)
+{
+    float3 t, b;
+    make_frame(axis, &t, &b);
+    return (float3)(dot(v, t), dot(v, b), dot(v, axis));
 }
 
 /* Cosine-weighted hemisphere, the report's eq. (3); pdf cos(theta) / pi. */

@@ -92,7 +92,7 @@ def main():
     for name in args.scenes:
         base = load_scene(name).with_settings(width=w, height=h)
         if args.mitsuba:   # the comparison mode, in which both renderers converge to one image
-            base = base.with_settings(max_depth=8, russian_roulette=False)
+            base = base.with_settings(max_depth=8, russian_roulette="off")
         ref_r = Renderer(backend, base.with_settings(nee=True, seed=999))
         while ref_r.samples < args.ref_spp:
             ref_r.add_samples(64)

@@ -59,7 +59,7 @@ BAD_FILES = [
     (GOOD.replace('"diffuse"', '"metal"'), "spheres[0].material.type: must be one of"),
     (GOOD.replace("rho_d = 0.5", "rho_d = [0.5, 0.5]"), "must be a number or a list of 3 numbers"),
     (GOOD.replace("[environment]", "[render]\nwidth = 0\n[environment]"), "render.width: must be at least 1"),
-    (GOOD.replace("[environment]", "[render]\nrussian_roulette = false\n[environment]"), "needs a max_depth"),
+    (GOOD.replace("[environment]", "[render]\nrussian_roulette = \"off\"\n[environment]"), "needs a max_depth"),
 ]
 
 
@@ -90,7 +90,7 @@ def test_unreadable_environment_map(tmp_path):
     (["simple", "--size", "big"], "is not WIDTHxHEIGHT"),
     (["simple", "--spp", "0"], "out of range"),
     (["simple", "--spp", "many"], "is not an integer"),
-    (["simple", "--no-rr"], "--no-rr needs --max-depth"),
+    (["simple", "--rr", "off"], "--rr off needs --max-depth"),
     (["simple", "--exposure", "nan"], "is not a finite number"),
 ])
 def test_bad_arguments_get_one_clear_message(tmp_path, args, message):

@@ -29,7 +29,8 @@ def furnace_scene(albedo, env=1.0, **settings):
                    settings=RenderSettings(width=48, height=32, **settings))
 
 
-@pytest.mark.parametrize("settings", [dict(nee=False), dict(max_depth=8, russian_roulette=False, nee=False),
+@pytest.mark.parametrize("settings", [dict(nee=False), dict(nee=False, russian_roulette="albedo"),
+                                      dict(max_depth=8, russian_roulette="off", nee=False),
                                       dict(nee=True)])
 def test_white_furnace_renders_one_everywhere(backend, settings):
     """A diffuse sphere of albedo 1 under a uniform environment of radiance 1: every path
@@ -46,7 +47,7 @@ def test_grey_furnace_renders_albedo_times_environment(backend, rr, nee):
     """A convex sphere's reflected rays always escape, so L = albedo * L_env on the sphere and
     L_env around it; with Russian roulette only in expectation."""
     albedo, env = np.array([0.2, 0.5, 0.8]), 2.0
-    scene = furnace_scene(albedo, env, nee=nee, **({} if rr else dict(max_depth=8, russian_roulette=False)))
+    scene = furnace_scene(albedo, env, nee=nee, **({} if rr else dict(max_depth=8, russian_roulette="off")))
     mean, var, r = render(backend, scene, 256)
     # which pixels see the sphere, from the pixel's corners (pixels on the outline are mixed)
     on = sphere_coverage(r, scene)
@@ -90,7 +91,7 @@ def test_sphere_light_irradiance(backend, nee):
     b.add_sphere(centre, r_light, emitter(le))
     scene = b.build("irradiance", camera=Camera([0, 6, 6], [0, 0, 0], [0, 1, 0], 50.0),
                     environment=Environment.constant((0, 0, 0)),
-                    settings=RenderSettings(width=40, height=30, max_depth=2, russian_roulette=False, nee=nee))
+                    settings=RenderSettings(width=40, height=30, max_depth=2, russian_roulette="off", nee=nee))
     mean, var, r = render(backend, scene, 1024)
     # the closed form averaged over each pixel (8x8 points), as the jittered samples average it
     w, h = r.width, r.height
@@ -140,7 +141,7 @@ def test_bare_environment_reproduces_the_map(backend):
     b = SceneBuilder()
     b.add_sphere((0, 0, 50), 0.1, diffuse(0.5))       # behind the camera, out of view
     scene = b.build("sky", camera=Camera([0, 0, 0], [0, 0.3, -1], [0, 1, 0], 60.0), environment=env,
-                    settings=RenderSettings(width=32, height=24, max_depth=1, russian_roulette=False))
+                    settings=RenderSettings(width=32, height=24, max_depth=1, russian_roulette="off"))
     mean, _, r = render(backend, scene, 64)
     fwd, right, up = scene.camera.basis(32 / 24)
     x = (np.arange(32) + 0.5) / 32 * 2 - 1
@@ -181,7 +182,7 @@ def test_square_light_irradiance_matches_lambert(backend, nee):
     b.add_mesh(Mesh("light", light.astype(np.float32), quad, None, b.material(emitter(le))))
     scene = b.build("lambert", camera=Camera([0, 2.5, 2.5], [0, 0, 0], [0, 1, 0], 55.0),
                     environment=Environment.constant((0, 0, 0)),
-                    settings=RenderSettings(width=40, height=30, max_depth=2, russian_roulette=False, nee=nee))
+                    settings=RenderSettings(width=40, height=30, max_depth=2, russian_roulette="off", nee=nee))
     # the light faces down, so its (black) back is what the camera sees of it
     assert np.dot(np.cross(light[1] - light[0], light[2] - light[0]), [0, 1, 0]) < 0
     mean, var, r = render(backend, scene, 1024)
@@ -244,6 +245,6 @@ def test_no_light_leaks_into_a_closed_box(backend, nee):
     b.add_mesh(Mesh("box", v.astype(np.float32), f.astype(np.int32), None, b.material(diffuse(0.9))))
     scene = b.build("box", camera=Camera([0.3, -0.2, 0.5], [-1, 1, -1], [0, 1, 0], 90.0),
                     environment=Environment.constant((100, 100, 100)),
-                    settings=RenderSettings(width=48, height=48, nee=nee, max_depth=16, russian_roulette=False))
+                    settings=RenderSettings(width=48, height=48, nee=nee, max_depth=16, russian_roulette="off"))
     mean, _, _ = render(backend, scene, 64)
     assert np.all(mean == 0.0)

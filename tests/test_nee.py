@@ -106,7 +106,7 @@ def test_hdr_lit_sphere_matches_quadrature(backend, nee):
     b.add_sphere((0, 0, 0), 1.0, diffuse(albedo))
     camera = Camera([0, 0.5, 4], [0, 0, 0], [0, 1, 0], 35.0)
     scene = b.build("sphere", camera=camera, environment=env,
-                    settings=RenderSettings(width=w, height=h, max_depth=2, russian_roulette=False, nee=nee))
+                    settings=RenderSettings(width=w, height=h, max_depth=2, russian_roulette="off", nee=nee))
     radiance, theta, u, solid_angle = bilinear_map(env.image)
     phi = 2 * np.pi * (u - env.rotation / 360 - 0.5)
     t, f = np.meshgrid(theta, phi, indexing="ij")

@@ -22,7 +22,7 @@ def test_references_are_present():
 def test_matches_mitsuba(backend, path, nee):
     ref = np.load(path)
     h, w, _ = ref["mean"].shape
-    scene = load_scene(path.stem).with_settings(max_depth=int(ref["max_depth"]), russian_roulette=False, nee=nee)
+    scene = load_scene(path.stem).with_settings(max_depth=int(ref["max_depth"]), russian_roulette="off", nee=nee)
     r = Renderer(backend, scene, w, h)
     # Without NEE we hit the lights by chance: far from the lamp of `simple` a pixel meets it
     # about once in a thousand samples, and a sample variance that has not seen it is too

@@ -45,7 +45,7 @@ kernel void respawn(SCENE_KERNEL_ARGS, int num_spheres, global const float4 *o, 
     float3 n = dot(s.ng, dir) < 0.0f ? s.ng : -s.ng;       /* the side the ray came from */
     float3 wi = normalize(w[i].xyz);
     if (dot(wi, n) * side < 0.0f) wi = -wi;
-    Hit h2 = intersect_scene(&sc, offset_ray_origin(s.p, s.error, s.ng, wi), wi, INFINITY);
+    Hit h2 = intersect_scene(&sc, offset_ray_origin(s.p, s.offset, s.ng, wi), wi, INFINITY);
     out[i] = (float4)(as_float(h.prim), h2.t, as_float(h2.prim), 0.0f);
 }
 """

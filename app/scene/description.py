@@ -11,13 +11,19 @@ from app.environment import Environment
 from app.materials import Material, MaterialTable
 
 
+# How paths end (kernels/integrator.cl, RR_*): "throughput", Russian roulette on the path's
+# throughput from depth 5 on (Mitsuba 3's and pbrt-v4's); "albedo", the report's, at every
+# vertex with the material's albedo; "off", at max_depth only.
+RUSSIAN_ROULETTE = ("off", "albedo", "throughput")
+
+
 @dataclass
 class RenderSettings:
     width: int = 960
     height: int = 540
     spp: int = 64
     max_depth: int = 0            # 0: paths end by Russian roulette alone
-    russian_roulette: bool = True
+    russian_roulette: str = "throughput"   # one of RUSSIAN_ROULETTE
     seed: int = 0
     nee: bool = True              # next-event estimation with MIS; off: the report's estimator
 

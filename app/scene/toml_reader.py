@@ -15,7 +15,7 @@ from app.errors import UserError
 from app.materials import BSDFS, Material
 from app.resources import resource_dir
 from app.scene import transform
-from app.scene.description import Mesh, RenderSettings, Scene, SceneBuilder
+from app.scene.description import RUSSIAN_ROULETTE, Mesh, RenderSettings, Scene, SceneBuilder
 from app.scene.meshes import MAX_COORDINATE, check_mesh, read_mesh, triangulate
 
 # the scene-file types besides the registry's: "emitter" is a black BSDF with emission
@@ -158,10 +158,14 @@ class _Reader:
     def settings(self, data):
         where = "render"
         self.table(data, where, {"width", "height", "spp", "max_depth", "russian_roulette", "seed", "nee"})
-        rr, nee = data.get("russian_roulette", True), data.get("nee", True)
-        for key, value in (("russian_roulette", rr), ("nee", nee)):
-            if not isinstance(value, bool):
-                self.fail(f"render.{key}", f"must be true or false, got {value!r}")
+        rr, nee = data.get("russian_roulette", "throughput"), data.get("nee", True)
+        if rr is True or rr is False:
+            rr = "throughput" if rr else "off"
+        if rr not in RUSSIAN_ROULETTE:
+            self.fail("render.russian_roulette",
+                      f"must be one of {', '.join(RUSSIAN_ROULETTE)} (or true, false), got {rr!r}")
+        if not isinstance(nee, bool):
+            self.fail("render.nee", f"must be true or false, got {nee!r}")
         s = RenderSettings(
             width=self.number(data, "width", where, default=960, low=1, high=16384, integer=True),
             height=self.number(data, "height", where, default=540, low=1, high=16384, integer=True),
@@ -169,8 +173,8 @@ class _Reader:
             max_depth=self.number(data, "max_depth", where, default=0, low=0, integer=True),
             russian_roulette=rr, nee=nee,
             seed=self.number(data, "seed", where, default=0, low=0, high=2**32 - 1, integer=True))
-        if not s.russian_roulette and s.max_depth == 0:
-            self.fail("render.russian_roulette", "false needs a max_depth above 0, or paths never end")
+        if s.russian_roulette == "off" and s.max_depth == 0:
+            self.fail("render.russian_roulette", "off needs a max_depth above 0, or paths never end")
         return s
 
     def material_ref(self, builder, named, data, where):

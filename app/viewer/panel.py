@@ -5,6 +5,7 @@ import numpy as np
 
 from app.materials import BSDFS
 from app.scene.builtin import BUILTIN_SCENES
+from app.scene.description import RUSSIAN_ROULETTE
 from app.tonemap import TONEMAPS
 
 
@@ -53,11 +54,12 @@ def draw_panel(v):
             v.tonemap = TONEMAPS[current]
         s = r.settings
         changed, depth = imgui.slider_int("max depth (0: none)", s.max_depth, 0, 64)
-        if changed and (depth > 0 or s.russian_roulette):
+        if changed and (depth > 0 or s.russian_roulette != "off"):
             r.set_settings(max_depth=depth)
-        changed, rr = imgui.checkbox("Russian roulette", s.russian_roulette)
-        if changed and (rr or s.max_depth > 0):
-            r.set_settings(russian_roulette=rr)
+        current = RUSSIAN_ROULETTE.index(s.russian_roulette)
+        changed, current = imgui.combo("Russian roulette", current, list(RUSSIAN_ROULETTE))
+        if changed and (RUSSIAN_ROULETTE[current] != "off" or s.max_depth > 0):
+            r.set_settings(russian_roulette=RUSSIAN_ROULETTE[current])
         changed, nee = imgui.checkbox("next-event estimation (MIS)", s.nee)
         if changed:
             r.set_settings(nee=nee)

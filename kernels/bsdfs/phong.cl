@@ -13,11 +13,6 @@
  *
  * Directions are in the local shading frame (z the normal); the surface is one-sided. */
 
-float3 reflect_local(float3 w)
-{
-    return (float3)(-w.x, -w.y, w.z);
-}
-
 float3 eval_phong(const global Material *m, float3 wo, float3 wi)
 {
     if (wo.z <= 0.0f || wi.z <= 0.0f)

@@ -1,0 +1,72 @@
+"""The report's materials: black (an emitter's surface), Lambertian diffuse, modified Phong."""
+
+import numpy as np
+
+from app.materials.bsdf import BSDFType, Param
+
+
+class Black(BSDFType):
+    name = "black"
+    doc = "reflects nothing; with Le an emitter (the `emitter` type of scene files)"
+    kernel = False
+
+    def pack(self, values, rows):
+        pass
+
+    def unpack(self, row):
+        return {}
+
+    def continuation(self, values):
+        return np.zeros(1)
+
+
+class Diffuse(BSDFType):
+    name = "diffuse"
+    params = (Param("rho_d", "color", high=1.0, doc="albedo (Mitsuba: reflectance)"),)
+    doc = "Lambertian, f = rho_d / pi"
+
+    def pack(self, values, rows):
+        rows["p0"][:, :3] = values["rho_d"]
+
+    def unpack(self, row):
+        return {"rho_d": row["p0"][:3].copy()}
+
+    def continuation(self, values):
+        return np.max(values["rho_d"], axis=-1)
+
+
+class Phong(BSDFType):
+    name = "phong"
+    params = (Param("rho_d", "color", high=1.0, doc="diffuse albedo"),
+              Param("rho_s", "color", default=0.0, high=1.0, doc="glossy albedo"),
+              Param("n", "number", doc="Phong exponent"))
+    doc = ("modified Phong (Lafortune & Willems 1994), f = rho_d / pi + rho_s (n + 2) / (2 pi) "
+           "cos^n(alpha); rho_d + rho_s <= 1 in each channel")
+
+    def check(self, values):
+        total = values["rho_d"] + values["rho_s"]
+        if np.any(total > 1 + 1e-6):
+            return (f"rho_d + rho_s must not exceed 1 in any channel (energy conservation), "
+                    f"got {[round(float(x), 6) for x in np.ravel(total)[:3]]}")
+        return None
+
+    @staticmethod
+    def lobe_albedos(values):
+        return np.max(values["rho_d"], axis=-1), np.max(values["rho_s"], axis=-1)
+
+    def pack(self, values, rows):
+        p_d, p_s = self.lobe_albedos(values)
+        total = p_d + p_s
+        # a black Phong material never samples; give it a harmless diffuse choice
+        rows["p0"][:, :3] = values["rho_d"]
+        rows["p0"][:, 3] = np.where(total > 0, p_d / np.where(total > 0, total, 1), 1.0)
+        rows["p1"][:, :3] = values["rho_s"]
+        rows["p1"][:, 3] = values["n"]
+        rows["p2"][:, 0] = 1.0 - rows["p0"][:, 3]
+
+    def unpack(self, row):
+        return {"rho_d": row["p0"][:3].copy(), "rho_s": row["p1"][:3].copy(), "n": float(row["p1"][3])}
+
+    def continuation(self, values):
+        p_d, p_s = self.lobe_albedos(values)
+        return np.minimum(p_d + p_s, 1.0)

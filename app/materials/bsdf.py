@@ -1,0 +1,55 @@
+"""The interface every material type implements on the host: its parameters (Mitsuba 3's names
+where Mitsuba has the material), their checks, and how they pack into the MATERIAL struct that
+its kernel file kernels/bsdfs/<name>.cl reads (which documents the packed layout at its top)."""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+# MATERIAL.flags bits, as kernels/bsdf.cl defines them
+TWOSIDED = 1        # the same BSDF on both sides
+DELTA = 2           # every lobe is a delta: no light sampling there
+TRANSMISSIVE = 4    # an interface seen from both sides, the BSDF telling them apart
+
+
+@dataclass(frozen=True)
+class Param:
+    name: str
+    kind: str                 # "color" (a number or three), "number", "bool", or "name" (a
+                              # string of `names`, which resolve() turns into other parameters)
+    default: object = None    # None: required
+    low: float = 0.0
+    high: float = None        # None: unbounded
+    doc: str = ""
+    names: dict = None        # for "number": named values accepted too; for "name": the choices
+
+
+class BSDFType:
+    """One material type. Subclasses set name, params and doc, and define pack/unpack over
+    arrays whose leading axis is the row (so that a scene of 10^6 random spheres packs at once)."""
+    name: str
+    params: tuple = ()
+    doc: str = ""
+    flags: int = 0            # DELTA, TRANSMISSIVE
+    kernel: bool = True       # has kernels/bsdfs/<name>.cl
+
+    def resolve(self, values: dict) -> dict:
+        """Turns named choices ("name" parameters) into the numbers they stand for; values holds
+        the parameters a file gave. Raises ValueError with the problem."""
+        return values
+
+    def check(self, values: dict) -> str | None:
+        """A problem with a combination of values (every parameter present), or None."""
+        return None
+
+    def pack(self, values: dict, rows: np.ndarray):
+        raise NotImplementedError
+
+    def unpack(self, row) -> dict:
+        raise NotImplementedError
+
+    def continuation(self, values: dict) -> np.ndarray:
+        """The probability with which the report's Russian roulette goes on from this material:
+        an estimate of its albedo, at most 1. Any value in (0, 1] keeps the estimate unbiased."""
+        return np.ones(len(next(iter(values.values()))))
+

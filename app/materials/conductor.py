@@ -1,0 +1,66 @@
+"""Metals: a smooth conductor (a mirror with the Fresnel reflectance of a complex IOR) and a
+rough one (the GGX microfacet model), with Mitsuba 3's parameters."""
+
+import numpy as np
+
+from app.materials.bsdf import DELTA, BSDFType, Param
+from app.materials.optics import CONDUCTORS
+
+_CONDUCTOR_PARAMS = (
+    Param("material", "name", default="none", names=CONDUCTORS,
+          doc="a named metal (Mitsuba's: Au, Ag, Cu, Al, Cr, ... or gold, silver, copper, "
+              "aluminium), or none, a perfect mirror; instead of eta and k"),
+    Param("eta", "color", default=0.0, high=None, doc="real part of the complex IOR"),
+    Param("k", "color", default=1.0, high=None, doc="imaginary part (absorption) of the IOR"),
+    Param("specular_reflectance", "color", default=1.0, high=1.0,
+          doc="a factor on the reflectance (not physical; Mitsuba's)"),
+)
+
+
+class Conductor(BSDFType):
+    name = "conductor"
+    params = _CONDUCTOR_PARAMS
+    flags = DELTA
+    doc = "smooth metal: a mirror whose reflectance is the conductor Fresnel equations'"
+
+    def resolve(self, values):
+        values = dict(values)
+        if "material" in values:
+            if "eta" in values or "k" in values:
+                raise ValueError("give either 'material' or 'eta' and 'k', not both")
+            values["eta"], values["k"] = CONDUCTORS[values.pop("material")]
+        return values
+
+    def pack(self, values, rows):
+        rows["p0"][:, :3] = values["eta"]
+        rows["p1"][:, :3] = values["k"]
+        rows["p2"][:, :3] = values["specular_reflectance"]
+
+    def unpack(self, row):
+        return {"eta": row["p0"][:3].copy(), "k": row["p1"][:3].copy(),
+                "specular_reflectance": row["p2"][:3].copy()}
+
+
+class RoughConductor(Conductor):
+    name = "roughconductor"
+    params = _CONDUCTOR_PARAMS + (
+        Param("alpha", "number", default=0.1, low=1e-4, high=1.0,
+              doc="GGX roughness (Mitsuba's alpha: the root mean square slope)"),
+        Param("distribution", "name", default="ggx", names={"ggx": "ggx"},
+              doc="the microfacet distribution; GGX only"),
+    )
+    flags = 0
+    doc = ("rough metal: the GGX microfacet BRDF with Smith's separable shadowing, sampled by "
+           "visible normals (Heitz 2018)")
+
+    def resolve(self, values):
+        values = dict(values)
+        values.pop("distribution", None)
+        return super().resolve(values)
+
+    def pack(self, values, rows):
+        super().pack(values, rows)
+        rows["p0"][:, 3] = values["alpha"]
+
+    def unpack(self, row):
+        return {**super().unpack(row), "alpha": float(row["p0"][3])}

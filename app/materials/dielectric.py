@@ -1,0 +1,46 @@
+"""Glass: the smooth interface between two dielectrics (Fresnel reflection and refraction), and
+a thin sheet of glass (no refraction), with Mitsuba 3's parameters."""
+
+import numpy as np
+
+from app.materials.bsdf import DELTA, TRANSMISSIVE, BSDFType, Param
+from app.materials.optics import IOR
+
+_DIELECTRIC_PARAMS = (
+    Param("int_ior", "number", default=1.5046, low=1.0, high=10.0, names=IOR,
+          doc="IOR inside (the side opposite the normal): a number or a name such as bk7, water, "
+              "diamond"),
+    Param("ext_ior", "number", default=1.000277, low=1.0, high=10.0, names=IOR,
+          doc="IOR outside"),
+    Param("specular_reflectance", "color", default=1.0, high=1.0, doc="factor on reflection"),
+    Param("specular_transmittance", "color", default=1.0, high=1.0, doc="factor on transmission"),
+)
+
+
+class Dielectric(BSDFType):
+    name = "dielectric"
+    params = _DIELECTRIC_PARAMS
+    flags = DELTA | TRANSMISSIVE
+    doc = "smooth glass: Fresnel reflection and refraction, total internal reflection"
+
+    def check(self, values):
+        if np.any(values["int_ior"] == values["ext_ior"]):
+            return "int_ior and ext_ior must differ (an interface of equal IORs is invisible)"
+        return None
+
+    def pack(self, values, rows):
+        rows["p0"][:, 0] = values["int_ior"]
+        rows["p0"][:, 1] = values["ext_ior"]
+        rows["p1"][:, :3] = values["specular_reflectance"]
+        rows["p2"][:, :3] = values["specular_transmittance"]
+
+    def unpack(self, row):
+        return {"int_ior": float(row["p0"][0]), "ext_ior": float(row["p0"][1]),
+                "specular_reflectance": row["p1"][:3].copy(),
+                "specular_transmittance": row["p2"][:3].copy()}
+
+
+class ThinDielectric(Dielectric):
+    name = "thindielectric"
+    doc = ("a thin sheet of glass: light is reflected or passes straight through, with the "
+           "sheet's inner reflections summed")

@@ -1,0 +1,39 @@
+"""The registry of material types: each type's tag, and the kernels' dispatch (eval_bsdf,
+pdf_bsdf, sample_bsdf) generated from it, so that adding a material is one kernel file
+(kernels/bsdfs/<name>.cl) and one entry here."""
+
+from app.materials.basic import Black, Diffuse, Phong
+from app.materials.conductor import Conductor, RoughConductor
+from app.materials.dielectric import Dielectric, ThinDielectric
+from app.materials.plastic import Plastic
+
+BSDFS = {cls.name: cls() for cls in (Black, Diffuse, Phong, Conductor, RoughConductor,
+                                     Dielectric, ThinDielectric, Plastic)}
+TAGS = {name: i for i, name in enumerate(BSDFS)}
+
+
+def dispatch_source(names=None) -> str:
+    """The BSDF_<NAME> tags of every type, and the eval/pdf/sample dispatch of kernels/bsdf.cl
+    over the types `names` (None: all)."""
+    tags = "".join(f"#define BSDF_{name.upper()} {TAGS[name]}\n" for name in BSDFS)
+    with_kernel = _with_kernel(names)
+
+    def switch(call, default):
+        cases = "".join(f"    case BSDF_{n.upper()}: return {call.format(n)};\n" for n in with_kernel)
+        return f"    switch (m->type) {{\n{cases}    default: return {default};\n    }}\n"
+    return (tags
+            + "float3 eval_bsdf(const global Material *m, float3 wo, float3 wi)\n{\n"
+            + switch("eval_{}(m, wo, wi)", "(float3)(0.0f)") + "}\n"
+            + "float pdf_bsdf(const global Material *m, float3 wo, float3 wi)\n{\n"
+            + switch("pdf_{}(m, wo, wi)", "0.0f") + "}\n"
+            + "int sample_bsdf(const global Material *m, float3 wo, float3 u, BSDFSample *s)\n{\n"
+            + switch("sample_{}(m, wo, u, s)", "0") + "}\n")
+
+
+def _with_kernel(names):
+    return [n for n, b in BSDFS.items() if b.kernel and (names is None or n in names)]
+
+
+def kernel_files(names=None) -> list[str]:
+    """The kernel files of the types `names` (None: all), in registry order."""
+    return [f"bsdfs/{n}.cl" for n in _with_kernel(names)]
