@@ -90,12 +90,13 @@ class CompiledScene:
                               prim_emission[self.num_spheres:])
         self.lights: LightTable = build_light_table(power, self.scene.environment)
 
-    def features(self) -> Features:
-        """What the kernels need for this scene: triangles or not, and the material types its
-        primitives use."""
+    def features(self, russian_roulette: str) -> Features:
+        """What the kernels need for this scene: triangles or not, the material types its
+        primitives use, and the Russian roulette rule of its settings."""
         used = np.unique(self.materials["type"][np.unique(self.prim_material)])
         return Features(triangles=self.num_triangles > 0,
-                        bsdfs=tuple(name for name, tag in TAGS.items() if tag in used))
+                        bsdfs=tuple(name for name, tag in TAGS.items() if tag in used),
+                        russian_roulette=russian_roulette)
 
     def shape(self, prim: int) -> ShapeRef:
         """The description's shape that primitive `prim` (BVH order) belongs to."""

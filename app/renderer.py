@@ -12,7 +12,6 @@ from app.compiled import CompiledScene, compile_scene
 from app.device import Backend
 from app.environment import Environment
 from app.scene import Scene
-from app.scene.description import RUSSIAN_ROULETTE
 from app.types import RENDER_PARAMS
 
 RR_DEPTH = 5           # where Russian roulette on throughput starts (Mitsuba 3's default)
@@ -34,9 +33,9 @@ class Renderer:
         resets."""
         self.compiled = scene if isinstance(scene, CompiledScene) else compile_scene(scene)
         self.scene: Scene = self.compiled.scene
-        self._select_program()
         self.camera = self.scene.camera.copy()
         self.settings = self.scene.settings
+        self._select_program()
         c = self.compiled
         self._upload("nodes", c.bvh.nodes)
         self._upload("spheres", c.spheres)
@@ -68,7 +67,7 @@ class Renderer:
 
     def _select_program(self):
         """The kernels specialised to the scene's shapes and materials (app.device.Features)."""
-        program = self.backend.program_for(self.compiled.features())
+        program = self.backend.program_for(self.compiled.features(self.settings.russian_roulette))
         if program is not getattr(self, "program", None):
             self.program = program
             self.kernels = {False: cl.Kernel(program, "render"), True: cl.Kernel(program, "render_nee")}
@@ -114,6 +113,7 @@ class Renderer:
 
     def set_settings(self, **changes):
         self.settings = replace(self.settings, **changes)
+        self._select_program()
         self.reset()
 
     def resize(self, width: int, height: int):
@@ -144,7 +144,6 @@ class Renderer:
         p["sample_start"], p["sample_count"] = self.samples, sample_count
         p["seed"] = self.settings.seed
         p["max_depth"] = self.settings.max_depth
-        p["russian_roulette"] = RUSSIAN_ROULETTE.index(self.settings.russian_roulette)
         h, w, _ = self.environment.image.shape
         p["env_width"], p["env_height"] = w, h
         p["env_rotation"] = self.environment.rotation / 360.0

@@ -43,7 +43,6 @@ RENDER_PARAMS = np.dtype([
     ("sample_count", np.uint32),
     ("seed", np.uint32),
     ("max_depth", np.int32),
-    ("russian_roulette", np.int32),
     ("env_width", np.int32),
     ("env_height", np.int32),
     ("env_rotation", np.float32),
@@ -53,6 +52,7 @@ RENDER_PARAMS = np.dtype([
     ("rr_depth", np.int32),
     ("pad1", np.int32),
     ("pad2", np.int32),
+    ("pad3", np.int32),
 ])
 
 LIGHT = np.dtype([

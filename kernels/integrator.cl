@@ -14,7 +14,8 @@
 
 #define SHADOW_EPSILON 1e-4f
 
-/* RenderParams.russian_roulette */
+/* How paths end: the build option RUSSIAN_ROULETTE (app/features.py) picks one rule per
+ * program, so that the others cost no registers. */
 #define RR_OFF 0
 #define RR_ALBEDO 1        /* the report's: at every vertex, go on with the material's albedo
                               (Material.continuation), folded into the lobe choice */
@@ -29,7 +30,7 @@ float3 sample_direct_light(const SceneData *sc, const RenderParams *p, const glo
                            const Surface *s, float3 wo, float go_on, float4 u, int *rays)
 {
     LightSample ls = sample_light(sc, p, s->p, s->ns, u);
-    float3 wi = to_local(ls.wi, s->ns);
+    float3 wi = to_frame(ls.wi, s->ns);
     /* the shading and geometric normals must agree on the side wi leaves on (no light leaks) */
     if (ls.pdf <= 0.0f || dot(ls.wi, s->ng) * wi.z <= 0.0f)
         return (float3)(0.0f);
@@ -102,13 +103,13 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
         }
         if (depth >= max_depth)
             return radiance;
-        float3 wo = to_local(-d, s.ns);
-        float go_on = p->russian_roulette == RR_ALBEDO ? m->continuation : 1.0f;
+        float3 wo = to_frame(-d, s.ns);
+        float go_on = RUSSIAN_ROULETTE == RR_ALBEDO ? m->continuation : 1.0f;
         if (nee && p->num_lights > 0 && !(m->flags & MATERIAL_DELTA))
             radiance += throughput * sample_direct_light(sc, p, m, &s, wo, go_on,
                                                          next_uniform4(rng), rays);
         float4 u = next_uniform4(rng);
-        if (p->russian_roulette == RR_ALBEDO) {
+        if (RUSSIAN_ROULETTE == RR_ALBEDO) {
             if (u.x >= go_on)
                 return radiance;
             u.x /= go_on;                    /* reused for the lobe choice, as in the report */
@@ -122,7 +123,7 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
             return radiance;                 /* the normals disagree on wi's side */
         throughput *= bs.weight / go_on;
         eta_scale *= bs.eta;
-        if (p->russian_roulette == RR_THROUGHPUT && depth >= p->rr_depth) {
+        if (RUSSIAN_ROULETTE == RR_THROUGHPUT && depth >= p->rr_depth) {
             float q = fmin(fmax(fmax(throughput.x, throughput.y), throughput.z)
                            * eta_scale * eta_scale, 0.95f);
             if (u.w >= q)

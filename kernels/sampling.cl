@@ -22,7 +22,7 @@ float3 to_world(float3 v, float3 axis)
     return v.x * t + v.y * b + v.z * axis;
 }
 
-float3 to_local(float3 v, float3 axis)
+float3 to_frame(float3 v, float3 axis)
 {
     float3 t, b;
     make_frame(axis, &t, &b);

@@ -63,7 +63,6 @@ typedef struct {
     uint sample_count; /* samples per pixel this launch */
     uint seed;
     int max_depth;     /* longest path in vertices (1: emitters seen directly); 0: unlimited */
-    int russian_roulette;
     int env_width;
     int env_height;
     float env_rotation;  /* turn of the environment about +y, as a fraction of a full turn */
@@ -73,6 +72,7 @@ typedef struct {
     int rr_depth;        /* Russian roulette on throughput starts at this depth */
     int pad1;
     int pad2;
+    int pad3;
 } RenderParams;
 
 /* One entry of the light table: an emitter (a primitive, or the environment when prim is -1),
