@@ -1,12 +1,13 @@
-"""Regenerates tests/references/*.npz: reference images of diffuse scenes (spheres and triangle
-meshes) rendered by an independent renderer, Mitsuba 3 (`pip install mitsuba plyfile`), in its
-scalar_rgb variant (its LLVM variant failed to compile its kernels with Debian 12's LLVM 15 on
-the machine this ran on).
+"""Regenerates tests/references/*.npz: reference images of scenes (spheres and triangle meshes,
+with the materials Mitsuba has too) rendered by an independent renderer, Mitsuba 3
+(`pip install mitsuba plyfile`), in its scalar_rgb variant (its LLVM variant failed to compile
+its kernels with Debian 12's LLVM 15 on the machine this ran on).
 
 Each reference holds the mean of K independent renders and the variance of that mean (from the
-spread of the K renders), at a small size. Both renderers see the same scene: diffuse spheres,
-sphere area lights, a constant environment, a pinhole camera with a box pixel filter, and the
-comparison mode of the benchmark specification (max_depth 8, no Russian roulette before it).
+spread of the K renders), at a small size. Both renderers see the same scene: shapes with the
+same materials (Mitsuba's names and parameters, which pathtrace's share), sphere area lights, a
+constant or HDR environment, a pinhole camera with a box pixel filter, and the comparison mode
+of the benchmark specification (max_depth 8, no Russian roulette before it).
 
     python scripts/make_references.py [scene ...]
 """
@@ -26,6 +27,8 @@ SCENES = {  # name: (width, height, spp per render, renders)
     "simple-diffuse": (64, 36, 1024, 16),
     "spheres8k-diffuse": (64, 36, 512, 16),
     "cornell-box": (48, 48, 1024, 16),
+    "material-spheres": (96, 36, 1024, 16),
+    "material-spheres-hdr": (96, 36, 1024, 16),
 }
 MAX_DEPTH = 8
 
@@ -45,16 +48,23 @@ def mitsuba_scene(mi, scene, width, height, spp):
             "sampler": {"type": "independent", "sample_count": spp},
         },
     }
-    env = scene.environment.image[0, 0] * scene.environment.intensity
-    if np.any(env > 0):
-        d["environment"] = {"type": "constant", "radiance": rgb(env)}
+    environment = scene.environment
+    if environment.image.shape[:2] != (1, 1):
+        # Mitsuba's map puts u = 0 at -z where pathtrace puts u = 1/2 (kernels/environment.cl):
+        # half a turn about +y
+        if environment.rotation:
+            raise SystemExit(f"{scene.name}: rotated maps have no reference yet")
+        path = Path(tempfile.mkdtemp()) / "environment.exr"
+        mi.Bitmap(np.ascontiguousarray(environment.image[..., :3], np.float32)).write(str(path))
+        d["environment"] = {"type": "envmap", "filename": str(path), "scale": float(environment.intensity),
+                            "to_world": mi.ScalarTransform4f().rotate([0, 1, 0], 180.0)}
+    elif np.any(environment.image[0, 0] * environment.intensity > 0):
+        d["environment"] = {"type": "constant", "radiance": rgb(environment.image[0, 0] * environment.intensity)}
     table = scene.materials
 
     def shape_props(row):
         m = table.get(row)
-        if m.type not in ("diffuse", "black"):
-            raise SystemExit(f"{scene.name}: only diffuse scenes have an exact Mitsuba counterpart")
-        props = {"bsdf": {"type": "diffuse", "reflectance": rgb(m.params.get("rho_d", 0.0) * np.ones(3))}}
+        props = {"bsdf": mitsuba_bsdf(m, rgb, scene.name)}
         if np.any(m.emission > 0):
             props["emitter"] = {"type": "area", "radiance": rgb(m.emission)}
         return props
@@ -69,6 +79,24 @@ def mitsuba_scene(mi, scene, width, height, spp):
         d[f"mesh{i}"] = {"type": "ply", "filename": str(path), "face_normals": mesh.normals is None,
                          **shape_props(mesh.material)}
     return mi.load_dict(d)
+
+
+def mitsuba_bsdf(m, rgb, scene_name):
+    """The Mitsuba BSDF of a material; the parameters share Mitsuba's names and meaning."""
+    p = {k: (rgb(np.broadcast_to(v, 3)) if np.ndim(v) else float(v)) for k, v in m.params.items()}
+    if m.type == "black":
+        bsdf = {"type": "diffuse", "reflectance": rgb((0, 0, 0))}
+    elif m.type == "diffuse":
+        bsdf = {"type": "diffuse", "reflectance": p["rho_d"]}
+    elif m.type == "roughconductor":
+        bsdf = {"type": "roughconductor", "distribution": "ggx", **p}
+    elif m.type == "plastic":
+        bsdf = {"type": "plastic", **p, "nonlinear": bool(m.params["nonlinear"])}
+    elif m.type in ("conductor", "dielectric", "thindielectric"):
+        bsdf = {"type": m.type, **p}
+    else:
+        raise SystemExit(f"{scene_name}: Mitsuba has no {m.type} material")
+    return {"type": "twosided", "bsdf": bsdf} if m.twosided else bsdf
 
 
 def write_ply(path, vertices, faces):

@@ -16,7 +16,8 @@ kernel void bsdf_sample(global const Material *mat, float4 wo, global const floa
     BSDFSample s;
     int ok = sample_bsdf(mat, wo.xyz, u[i].xyz, &s);
     wi[i] = (float4)(s.wi, ok ? s.pdf : 0.0f);
-    weight[i] = ok ? (float4)(s.weight, 1.0f) : (float4)(0.0f);
+    /* w: 0 no direction, 1 a non-delta lobe, 2 a delta lobe */
+    weight[i] = ok ? (float4)(s.weight, (s.lobe & LOBE_DELTA) ? 2.0f : 1.0f) : (float4)(0.0f);
 }
 kernel void bsdf_eval(global const Material *mat, float4 wo, global const float4 *wi,
                       global float4 *out)
@@ -36,8 +37,8 @@ def material(rho_d, rho_s, n):
 
 
 def sample(kernels, m, wo, count=400_000, seed=0):
-    """Directions (with the pdf sample() reported in w) and weights (w: 1 where a direction
-    resulted)."""
+    """Directions (with the pdf sample() reported in w) and weights (w: 0 where no direction
+    resulted, 1 for a non-delta lobe, 2 for a delta one)."""
     u = np.random.default_rng(seed).random((count, 4), np.float32)
     wi, weight = np.zeros((count, 4), np.float32), np.zeros((count, 4), np.float32)
     kernels(SOURCE)("bsdf_sample", count, m, wo, u, wi, weight)

@@ -34,8 +34,17 @@ class BSDFType:
     kernel: bool = True       # has kernels/bsdfs/<name>.cl
 
     def resolve(self, values: dict) -> dict:
-        """Turns named choices ("name" parameters) into the numbers they stand for; values holds
-        the parameters a file gave. Raises ValueError with the problem."""
+        """Turns names into the numbers they stand for (a named IOR; a "name" parameter, in the
+        subclasses that have one); values holds the parameters a file gave. Raises ValueError
+        with the problem."""
+        values = dict(values)
+        for p in self.params:
+            value = values.get(p.name)
+            if p.kind == "number" and isinstance(value, str):
+                if value not in (p.names or {}):
+                    raise ValueError(f"{p.name}: unknown name {value!r}"
+                                     + (f" (known: {', '.join(sorted(p.names))})" if p.names else ""))
+                values[p.name] = p.names[value]
         return values
 
     def check(self, values: dict) -> str | None:

@@ -24,11 +24,14 @@ class Conductor(BSDFType):
     doc = "smooth metal: a mirror whose reflectance is the conductor Fresnel equations'"
 
     def resolve(self, values):
-        values = dict(values)
+        values = super().resolve(values)
         if "material" in values:
             if "eta" in values or "k" in values:
                 raise ValueError("give either 'material' or 'eta' and 'k', not both")
-            values["eta"], values["k"] = CONDUCTORS[values.pop("material")]
+            name = values.pop("material")
+            if name not in CONDUCTORS:
+                raise ValueError(f"material: unknown conductor {name!r} (known: {', '.join(sorted(CONDUCTORS))})")
+            values["eta"], values["k"] = CONDUCTORS[name]
         return values
 
     def pack(self, values, rows):
@@ -55,7 +58,8 @@ class RoughConductor(Conductor):
 
     def resolve(self, values):
         values = dict(values)
-        values.pop("distribution", None)
+        if values.pop("distribution", "ggx") != "ggx":
+            raise ValueError("distribution: only ggx is implemented")
         return super().resolve(values)
 
     def pack(self, values, rows):

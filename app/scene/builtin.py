@@ -30,6 +30,14 @@ def simple_diffuse() -> Scene:
     return s
 
 
+def material_spheres_hdr() -> Scene:
+    """`material-spheres` under the shipped HDR map instead of its constant sky."""
+    s = _shipped("material-spheres")
+    s.environment = Environment.from_file(resource_dir("assets") / "envmaps" / "studio_small_03_1k.hdr")
+    s.name = "material-spheres-hdr"
+    return s
+
+
 def random_spheres(n: int, diffuse_only: bool) -> Scene:
     """N spheres in the cube [-10, 10]^3, drawn in exactly the order docs/benchmarks.md gives."""
     rng = np.random.default_rng(2022)
@@ -102,4 +110,7 @@ BUILTIN_SCENES = {
     "teapot": lambda: _shipped("teapot"),
     "teapot-sky": lambda: _shipped("teapot-sky"),
     "cornell-box": lambda: _shipped("cornell-box"),
+    "materials": lambda: _shipped("materials"),
+    "material-spheres": lambda: _shipped("material-spheres"),
+    "material-spheres-hdr": material_spheres_hdr,
 }

@@ -18,9 +18,10 @@ from app.scene import transform
 from app.scene.description import RUSSIAN_ROULETTE, Mesh, RenderSettings, Scene, SceneBuilder
 from app.scene.meshes import MAX_COORDINATE, check_mesh, read_mesh, triangulate
 
-# the scene-file types besides the registry's: "emitter" is a black BSDF with emission
+# the scene-file types besides the registry's: "emitter" is a black BSDF with emission, and
+# "twosided" wraps another material (Mitsuba 3's plugin; `twosided = true` says the same)
 FILE_TYPES = {name: b for name, b in BSDFS.items() if name != "black"}
-MATERIAL_TYPES = ["emitter", *FILE_TYPES]
+MATERIAL_TYPES = ["emitter", "twosided", *FILE_TYPES]
 MAX_INLINE = 100_000    # vertices or faces written in a scene file; larger meshes belong in files
 
 
@@ -95,16 +96,25 @@ class _Reader:
         if kind == "emitter":
             self.table(data, where, {"type", "Le"})
             return Material("black", emission=self.color(data, "Le", where))
+        if kind == "twosided":
+            self.table(data, where, {"type", "bsdf"})
+            if "bsdf" not in data:
+                self.fail(where, "missing 'bsdf' (the material to make two-sided)")
+            inner = self.material(data["bsdf"], f"{where}.bsdf")
+            inner.twosided = True
+            return inner
         bsdf = FILE_TYPES[kind]
         self.table(data, where, {"type", "Le", "twosided", *(p.name for p in bsdf.params)})
-        values = {}
-        for param in bsdf.params:
-            if param.kind == "color":
-                values[param.name] = self.color(data, param.name, where, default=param.default,
-                                                high=param.high)
-            else:
-                values[param.name] = self.number(data, param.name, where, default=param.default,
-                                                 low=param.low, high=param.high)
+        given = {p.name: self.parameter(data, p, where) for p in bsdf.params if p.name in data}
+        try:
+            values = bsdf.resolve(given)
+        except ValueError as e:
+            self.fail(where, str(e))
+        for p in bsdf.params:
+            if p.kind != "name" and p.name not in values:
+                if p.default is None:
+                    self.fail(where, f"missing '{p.name}'")
+                values[p.name] = p.default
         problem = bsdf.check({k: np.atleast_2d(v) if np.ndim(v) else np.atleast_1d(v)
                               for k, v in values.items()})
         if problem:
@@ -114,6 +124,24 @@ class _Reader:
             self.fail(f"{where}.twosided", f"must be true or false, got {twosided!r}")
         emission = self.color(data, "Le", where, default=(0, 0, 0))
         return Material(kind, values, emission, twosided)
+
+    def parameter(self, data, param, where):
+        """One material parameter as its Param declares it (app/materials/bsdf.py)."""
+        value = data[param.name]
+        if param.kind == "color":
+            return self.color(data, param.name, where, high=param.high)
+        if param.kind == "bool":
+            if not isinstance(value, bool):
+                self.fail(f"{where}.{param.name}", f"must be true or false, got {value!r}")
+            return value
+        if isinstance(value, str) and param.names:
+            if value not in param.names:
+                self.fail(f"{where}.{param.name}",
+                          f"unknown name {value!r} (known: {', '.join(sorted(param.names))})")
+            return value             # BSDFType.resolve turns it into its number
+        if param.kind == "name":
+            self.fail(f"{where}.{param.name}", f"must be a name, got {value!r}")
+        return self.number(data, param.name, where, low=param.low, high=param.high)
 
     def camera(self, data):
         where = "camera"

@@ -18,10 +18,17 @@ def _material_editor(imgui, v):
     imgui.text_wrapped(f"{shape.kind} '{shape.name}': material {label} ({m.type})")
     changed = False
     for param in BSDFS[m.type].params:
+        if param.kind == "name":          # resolved into the numbers edited below
+            continue
         value = m.params[param.name]
-        if param.kind == "color":
+        if param.kind == "color" and param.high is not None:
             hit, new = imgui.color_edit3(param.name, np.broadcast_to(value, 3).tolist())
-            new = np.clip(new, param.low, param.high if param.high is not None else np.inf)
+            new = np.clip(new, param.low, param.high)
+        elif param.kind == "color":       # an unbounded triple, such as a conductor's eta
+            hit, new = imgui.input_float3(param.name, np.broadcast_to(value, 3).tolist())
+            new = np.maximum(new, param.low)
+        elif param.kind == "bool":
+            hit, new = imgui.checkbox(param.name, bool(value))
         else:
             high = param.high if param.high is not None else 5000.0
             hit, new = imgui.slider_float(param.name, float(value), param.low, high,
