@@ -10,6 +10,9 @@
  *                            choice included (delta lobes contribute nothing)
  *   sample_X(m, wo, u, &s)   draws wi from three uniforms; returns 0 when no direction results
  *
+ * A type whose every lobe is a delta (MATERIAL_DELTA) provides sample_X only: its eval and pdf
+ * are 0 for every pair of directions, and the dispatch says so.
+ *
  * One-sided materials see wo in the upper hemisphere (the integrator turns two-sided ones' back
  * faces round); transmissive ones (MATERIAL_TRANSMISSIVE) see wo on either side of their
  * front's frame and tell inside from outside by the sign of wo.z. */

@@ -3,6 +3,7 @@ pdf_bsdf, sample_bsdf) generated from it, so that adding a material is one kerne
 (kernels/bsdfs/<name>.cl) and one entry here."""
 
 from app.materials.basic import Black, Diffuse, Phong
+from app.materials.bsdf import DELTA
 from app.materials.conductor import Conductor, RoughConductor
 from app.materials.dielectric import Dielectric, ThinDielectric
 from app.materials.plastic import Plastic
@@ -17,17 +18,19 @@ def dispatch_source(names=None) -> str:
     over the types `names` (None: all)."""
     tags = "".join(f"#define BSDF_{name.upper()} {TAGS[name]}\n" for name in BSDFS)
     with_kernel = _with_kernel(names)
+    # a type whose every lobe is a delta has no eval or pdf (both 0): it provides sample only
+    smooth = [n for n in with_kernel if not BSDFS[n].flags & DELTA]
 
-    def switch(call, default):
-        cases = "".join(f"    case BSDF_{n.upper()}: return {call.format(n)};\n" for n in with_kernel)
+    def switch(types, call, default):
+        cases = "".join(f"    case BSDF_{n.upper()}: return {call.format(n)};\n" for n in types)
         return f"    switch (m->type) {{\n{cases}    default: return {default};\n    }}\n"
     return (tags
             + "float3 eval_bsdf(const global Material *m, float3 wo, float3 wi)\n{\n"
-            + switch("eval_{}(m, wo, wi)", "(float3)(0.0f)") + "}\n"
+            + switch(smooth, "eval_{}(m, wo, wi)", "(float3)(0.0f)") + "}\n"
             + "float pdf_bsdf(const global Material *m, float3 wo, float3 wi)\n{\n"
-            + switch("pdf_{}(m, wo, wi)", "0.0f") + "}\n"
+            + switch(smooth, "pdf_{}(m, wo, wi)", "0.0f") + "}\n"
             + "int sample_bsdf(const global Material *m, float3 wo, float3 u, BSDFSample *s)\n{\n"
-            + switch("sample_{}(m, wo, u, s)", "0") + "}\n")
+            + switch(with_kernel, "sample_{}(m, wo, u, s)", "0") + "}\n")
 
 
 def _with_kernel(names):

@@ -6,17 +6,7 @@
  *   p1.xyz  k, its imaginary part
  *   p2.xyz  specular_reflectance, a factor on the reflectance
  *
- * A delta BRDF: eval and pdf are 0 and only sampling finds it. One-sided. */
-
-float3 eval_conductor(const global Material *m, float3 wo, float3 wi)
-{
-    return (float3)(0.0f);
-}
-
-float pdf_conductor(const global Material *m, float3 wo, float3 wi)
-{
-    return 0.0f;
-}
+ * A delta BRDF (sample only: only sampling finds it). One-sided. */
 
 int sample_conductor(const global Material *m, float3 wo, float3 u, BSDFSample *s)
 {

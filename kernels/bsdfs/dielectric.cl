@@ -11,16 +11,6 @@
  * 1 - R), so the weight is the factor alone, times (n_i / n_t)^2 for refraction: radiance is
  * compressed into a smaller solid angle on entering a denser medium (Veach 1997, section 5.2). */
 
-float3 eval_dielectric(const global Material *m, float3 wo, float3 wi)
-{
-    return (float3)(0.0f);
-}
-
-float pdf_dielectric(const global Material *m, float3 wo, float3 wi)
-{
-    return 0.0f;
-}
-
 int sample_dielectric(const global Material *m, float3 wo, float3 u, BSDFSample *s)
 {
     float cos_t, eta_ti;

@@ -9,16 +9,6 @@
  *
  * Transmissive and symmetric: both sides behave alike. */
 
-float3 eval_thindielectric(const global Material *m, float3 wo, float3 wi)
-{
-    return (float3)(0.0f);
-}
-
-float pdf_thindielectric(const global Material *m, float3 wo, float3 wi)
-{
-    return 0.0f;
-}
-
 int sample_thindielectric(const global Material *m, float3 wo, float3 u, BSDFSample *s)
 {
     float cos_t, eta_ti;
