@@ -21,6 +21,7 @@ class Renderer:
     def __init__(self, backend: Backend, scene, width: int = None, height: int = None):
         """scene: a CompiledScene, or a Scene to compile."""
         self.backend = backend
+        self.program = None       # the kernels specialised to the scene (_select_program)
         self._buffers = {}
         self.width = self.height = 0
         self.samples = 0          # samples per pixel accumulated so far
@@ -68,7 +69,7 @@ class Renderer:
     def _select_program(self):
         """The kernels specialised to the scene's shapes and materials (app.device.Features)."""
         program = self.backend.program_for(self.compiled.features(self.settings.russian_roulette))
-        if program is not getattr(self, "program", None):
+        if program is not self.program:
             self.program = program
             self.kernels = {False: cl.Kernel(program, "render"), True: cl.Kernel(program, "render_nee")}
 

@@ -21,9 +21,10 @@ def render(backend, scene, spp):
     return r.mean(), r.variance() / r.samples, r
 
 
-def furnace_scene(albedo, env=1.0, **settings):
+def furnace_scene(albedo, env=1.0, material=None, **settings):
+    """A unit sphere (diffuse of `albedo`, or `material`) under a uniform environment."""
     b = SceneBuilder()
-    b.add_sphere((0, 0, 0), 1.0, diffuse(albedo))
+    b.add_sphere((0, 0, 0), 1.0, material if material is not None else diffuse(albedo))
     return b.build("furnace", camera=Camera([0, 0, 4], [0, 0, 0], [0, 1, 0], 40.0),
                    environment=Environment.constant((env, env, env)),
                    settings=RenderSettings(width=48, height=32, **settings))

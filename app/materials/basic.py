@@ -16,9 +16,6 @@ class Black(BSDFType):
     def unpack(self, row):
         return {}
 
-    def continuation(self, values):
-        return np.zeros(1)
-
 
 class Diffuse(BSDFType):
     name = "diffuse"

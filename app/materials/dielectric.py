@@ -6,6 +6,13 @@ import numpy as np
 from app.materials.bsdf import DELTA, TRANSMISSIVE, BSDFType, Param
 from app.materials.optics import IOR
 
+def check_interface(values) -> str | None:
+    """The two IORs of an interface (glass, a plastic's coating) must differ."""
+    if np.any(values["int_ior"] == values["ext_ior"]):
+        return "int_ior and ext_ior must differ (an interface of equal IORs is invisible)"
+    return None
+
+
 _DIELECTRIC_PARAMS = (
     Param("int_ior", "number", default=1.5046, low=1.0, high=10.0, names=IOR,
           doc="IOR inside (the side opposite the normal): a number or a name such as bk7, water, "
@@ -24,9 +31,7 @@ class Dielectric(BSDFType):
     doc = "smooth glass: Fresnel reflection and refraction, total internal reflection"
 
     def check(self, values):
-        if np.any(values["int_ior"] == values["ext_ior"]):
-            return "int_ior and ext_ior must differ (an interface of equal IORs is invisible)"
-        return None
+        return check_interface(values)
 
     def pack(self, values, rows):
         rows["p0"][:, 0] = values["int_ior"]

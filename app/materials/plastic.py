@@ -3,6 +3,7 @@
 import numpy as np
 
 from app.materials.bsdf import BSDFType, Param
+from app.materials.dielectric import check_interface
 from app.materials.optics import IOR, diffuse_fresnel_reflectance
 
 
@@ -23,9 +24,7 @@ class Plastic(BSDFType):
            "plus the light it lets through to the base and back out")
 
     def check(self, values):
-        if np.any(values["int_ior"] == values["ext_ior"]):
-            return "int_ior and ext_ior must differ"
-        return None
+        return check_interface(values)
 
     def pack(self, values, rows):
         eta = np.asarray(values["int_ior"], np.float64) / values["ext_ior"]

@@ -21,12 +21,12 @@ def _material_editor(imgui, v):
         if param.kind == "name":          # resolved into the numbers edited below
             continue
         value = m.params[param.name]
-        if param.kind == "color" and param.high is not None:
+        if param.kind == "color" and param.high == 1.0:
             hit, new = imgui.color_edit3(param.name, np.broadcast_to(value, 3).tolist())
             new = np.clip(new, param.low, param.high)
-        elif param.kind == "color":       # an unbounded triple, such as a conductor's eta
+        elif param.kind == "color":       # a triple beyond [0, 1], such as a conductor's eta
             hit, new = imgui.input_float3(param.name, np.broadcast_to(value, 3).tolist())
-            new = np.maximum(new, param.low)
+            new = np.clip(new, param.low, param.high)
         elif param.kind == "bool":
             hit, new = imgui.checkbox(param.name, bool(value))
         else:
