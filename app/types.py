@@ -20,6 +20,7 @@ MATERIAL = np.dtype([
     ("flags", np.int32),            # MATERIAL_* bits
     ("continuation", np.float32),   # the report's Russian roulette: probability of going on
     ("pad0", np.int32),
+    ("table", np.float32, 16),      # a function of cos(theta) a BSDF tabulates on the host
 ])
 
 BVH_CHILD = np.dtype([

@@ -22,8 +22,8 @@ typedef struct {
 } Triangle;
 
 /* A material: a BSDF chosen by `type` (the BSDF_* tags of kernels/bsdf.cl) with up to twelve
- * parameters in p0..p2, whose meaning each kernels/bsdfs/ file documents at its top, and the
- * radiance its surface emits. */
+ * parameters in p0..p2 (and a table, for those that tabulate one), whose meaning each
+ * kernels/bsdfs/ file documents at its top, and the radiance its surface emits. */
 typedef struct {
     float4 p0;
     float4 p1;
@@ -33,6 +33,8 @@ typedef struct {
     int flags;            /* MATERIAL_* bits of kernels/bsdf.cl */
     float continuation;   /* the report's Russian roulette: probability of going on from here */
     int pad0;
+    float table[16];      /* a function of cos(theta) that a BSDF tabulates on the host, at
+                             cos = (k / 15)^2 (app/materials/microfacet.py; lookup_cos_table) */
 } Material;
 
 /* One child of a BVH node: its box and what it holds. A leaf holds spheres [index, index + count)

@@ -90,8 +90,10 @@ def mitsuba_bsdf(m, rgb, scene_name):
         bsdf = {"type": "diffuse", "reflectance": p["rho_d"]}
     elif m.type == "roughconductor":
         bsdf = {"type": "roughconductor", "distribution": "ggx", **p}
-    elif m.type == "plastic":
-        bsdf = {"type": "plastic", **p, "nonlinear": bool(m.params["nonlinear"])}
+    elif m.type in ("plastic", "roughplastic"):
+        bsdf = {"type": m.type, **p, "nonlinear": bool(m.params["nonlinear"])}
+        if m.type == "roughplastic":
+            bsdf["distribution"] = "ggx"
     elif m.type in ("conductor", "dielectric", "thindielectric"):
         bsdf = {"type": m.type, **p}
     else:

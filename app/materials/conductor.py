@@ -4,6 +4,7 @@ rough one (the GGX microfacet model), with Mitsuba 3's parameters."""
 import numpy as np
 
 from app.materials.bsdf import DELTA, BSDFType, Param
+from app.materials.microfacet import GGX_PARAMS, resolve_distribution
 from app.materials.optics import CONDUCTORS
 
 _CONDUCTOR_PARAMS = (
@@ -46,21 +47,13 @@ class Conductor(BSDFType):
 
 class RoughConductor(Conductor):
     name = "roughconductor"
-    params = _CONDUCTOR_PARAMS + (
-        Param("alpha", "number", default=0.1, low=1e-4, high=1.0,
-              doc="GGX roughness (Mitsuba's alpha: the root mean square slope)"),
-        Param("distribution", "name", default="ggx", names={"ggx": "ggx"},
-              doc="the microfacet distribution; GGX only"),
-    )
+    params = _CONDUCTOR_PARAMS + GGX_PARAMS
     flags = 0
     doc = ("rough metal: the GGX microfacet BRDF with Smith's separable shadowing, sampled by "
            "visible normals (Heitz 2018)")
 
     def resolve(self, values):
-        values = dict(values)
-        if values.pop("distribution", "ggx") != "ggx":
-            raise ValueError("distribution: only ggx is implemented")
-        return super().resolve(values)
+        return super().resolve(resolve_distribution(values))
 
     def pack(self, values, rows):
         super().pack(values, rows)

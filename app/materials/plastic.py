@@ -1,9 +1,11 @@
-"""Plastic: a diffuse base under a smooth dielectric coating (Mitsuba 3's `plastic`)."""
+"""Plastics: a diffuse base under a smooth or a rough (GGX) dielectric coating (Mitsuba 3's
+`plastic` and `roughplastic`; both pack the layout of kernels/coating.cl)."""
 
 import numpy as np
 
 from app.materials.bsdf import BSDFType, Param
 from app.materials.dielectric import check_interface
+from app.materials.microfacet import GGX_PARAMS, resolve_distribution, rough_coating
 from app.materials.optics import IOR, diffuse_fresnel_reflectance
 
 
@@ -27,24 +29,53 @@ class Plastic(BSDFType):
         return check_interface(values)
 
     def pack(self, values, rows):
-        eta = np.asarray(values["int_ior"], np.float64) / values["ext_ior"]
-        eta = np.broadcast_to(eta, len(rows))
+        eta = np.broadcast_to(np.asarray(values["int_ior"], np.float64) / values["ext_ior"], len(rows))
         d, s = values["diffuse_reflectance"], values["specular_reflectance"]
         rows["p0"][:, :3] = d
         rows["p0"][:, 3] = eta
         rows["p1"][:, :3] = s
-        # the coating seen from inside, averaged over the base's cosine-weighted light
-        distinct, which = np.unique(eta, return_inverse=True)
-        rows["p1"][:, 3] = np.array([diffuse_fresnel_reflectance(1.0 / e) for e in distinct])[which]
-        # lobe choice in the ratio of the mean reflectances, as Mitsuba's plastic
+        # lobe choice in the ratio of the mean reflectances, as Mitsuba's plastics
         d_mean, s_mean = np.mean(d, axis=-1), np.mean(s, axis=-1)
         rows["p2"][:, 0] = np.where(d_mean + s_mean > 0, s_mean / np.maximum(d_mean + s_mean, 1e-30), 1.0)
         rows["p2"][:, 1] = values["nonlinear"]
-        rows["p2"][:, 2] = values["int_ior"]
-        rows["p2"][:, 3] = values["ext_ior"]
+        rows["p2"][:, 2] = values["ext_ior"]
+        # the coating seen from inside, averaged over the base's cosine-weighted light
+        self.pack_coating(values, eta, rows)
+
+    def pack_coating(self, values, eta, rows):
+        distinct, which = np.unique(eta, return_inverse=True)
+        rows["p1"][:, 3] = np.array([diffuse_fresnel_reflectance(1.0 / e) for e in distinct])[which]
 
     def unpack(self, row):
+        ext_ior = float(row["p2"][2])
         return {"diffuse_reflectance": row["p0"][:3].copy(),
                 "specular_reflectance": row["p1"][:3].copy(),
-                "int_ior": float(row["p2"][2]), "ext_ior": float(row["p2"][3]),
+                "int_ior": float(row["p0"][3]) * ext_ior, "ext_ior": ext_ior,
                 "nonlinear": bool(row["p2"][1])}
+
+
+class RoughPlastic(Plastic):
+    name = "roughplastic"
+    params = Plastic.params + GGX_PARAMS
+    doc = ("a diffuse base under a rough (GGX) dielectric coating: the coating's glossy "
+           "reflection plus the light it lets through to the base and back out")
+
+    def resolve(self, values):
+        return super().resolve(resolve_distribution(values))
+
+    def pack(self, values, rows):
+        rows["p2"][:, 3] = values["alpha"]
+        super().pack(values, rows)
+
+    def pack_coating(self, values, eta, rows):
+        """The rough coating's transmittance table and mean internal reflectance, once per
+        distinct (alpha, eta)."""
+        alpha = np.broadcast_to(values["alpha"], len(rows))
+        distinct, which = np.unique(np.stack([alpha, eta], axis=1), axis=0, return_inverse=True)
+        for k, (a, e) in enumerate(distinct):
+            table, inside = rough_coating(float(a), float(e))
+            rows["table"][which.reshape(-1) == k] = table
+            rows["p1"][which.reshape(-1) == k, 3] = inside
+
+    def unpack(self, row):
+        return {**super().unpack(row), "alpha": float(row["p2"][3])}

@@ -6,10 +6,11 @@ from app.materials.basic import Black, Diffuse, Phong
 from app.materials.bsdf import DELTA
 from app.materials.conductor import Conductor, RoughConductor
 from app.materials.dielectric import Dielectric, ThinDielectric
-from app.materials.plastic import Plastic
+from app.materials.plastic import Plastic, RoughPlastic
 
 BSDFS = {cls.name: cls() for cls in (Black, Diffuse, Phong, Conductor, RoughConductor,
-                                     Dielectric, ThinDielectric, Plastic)}
+                                     Dielectric, ThinDielectric, Plastic,
+                                     RoughPlastic)}
 TAGS = {name: i for i, name in enumerate(BSDFS)}
 
 

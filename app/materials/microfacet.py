@@ -1,0 +1,97 @@
+"""The GGX microfacet distribution on the host, mirroring kernels/microfacet.cl: the roughness
+parameters the rough materials share, and the rough dielectric interface's reflectance that
+roughplastic tabulates (Mitsuba 3 computes the same quantities at load time)."""
+
+from functools import lru_cache
+
+import numpy as np
+
+from app.materials.bsdf import Param
+from app.materials.optics import fresnel_dielectric
+
+GGX_PARAMS = (
+    Param("alpha", "number", default=0.1, low=1e-4, high=1.0,
+          doc="GGX roughness (Mitsuba's alpha: the root mean square slope)"),
+    Param("distribution", "name", default="ggx", names={"ggx": "ggx"},
+          doc="the microfacet distribution; GGX only (Mitsuba's default for the plastics is "
+              "beckmann: give ggx there)"),
+)
+
+# roughplastic's MATERIAL.table holds a function of cos(theta) at these cosines: (k / 15)^2,
+# dense at grazing angles where the coating's transmittance changes fastest (16 samples there
+# are as close to the exact curve as Mitsuba's 64 evenly spaced ones)
+TABLE_SIZE = 16
+TABLE_COSINES = np.maximum(1e-6, np.linspace(0.0, 1.0, TABLE_SIZE) ** 2)
+
+
+def resolve_distribution(values: dict) -> dict:
+    values = dict(values)
+    if values.pop("distribution", "ggx") != "ggx":
+        raise ValueError("distribution: only ggx is implemented")
+    return values
+
+
+def ggx_g1(v, m, alpha):
+    """Smith's G1(v, m) = 2 / (1 + sqrt(1 + a^2 tan^2 theta_v)); 0 where v sees m's back."""
+    cos2 = v[..., 2] ** 2
+    tan2 = np.maximum(0.0, 1.0 - cos2) / np.maximum(cos2, 1e-30)
+    g = 2.0 / (1.0 + np.sqrt(1.0 + alpha * alpha * tan2))
+    return np.where(np.sum(v * m, axis=-1) * v[..., 2] > 0, g, 0.0)
+
+
+def sample_ggx_visible(wo, alpha, u1, u2):
+    """Heitz 2018, listing 1, for one direction wo (wo.z > 0) and arrays of uniforms."""
+    vh = np.array([alpha * wo[0], alpha * wo[1], wo[2]])
+    vh /= np.linalg.norm(vh)
+    len2 = vh[0] ** 2 + vh[1] ** 2
+    t1 = np.array([-vh[1], vh[0], 0.0]) / np.sqrt(len2) if len2 > 0 else np.array([1.0, 0.0, 0.0])
+    t2 = np.cross(vh, t1)
+    r, phi = np.sqrt(u1), 2 * np.pi * u2
+    p1, p2 = r * np.cos(phi), r * np.sin(phi)
+    s = 0.5 * (1.0 + vh[2])
+    p2 = (1.0 - s) * np.sqrt(np.maximum(0.0, 1.0 - p1 * p1)) + s * p2
+    p3 = np.sqrt(np.maximum(0.0, 1.0 - p1 * p1 - p2 * p2))
+    nh = p1[..., None] * t1 + p2[..., None] * t2 + p3[..., None] * vh
+    m = np.stack([alpha * nh[..., 0], alpha * nh[..., 1], np.maximum(1e-6, nh[..., 2])], axis=-1)
+    return m / np.linalg.norm(m, axis=-1, keepdims=True)
+
+
+def rough_dielectric_albedo(cos_theta, alpha, eta, nodes=None):
+    """The fractions of light arriving at cos_theta (an array) that a rough dielectric interface
+    (GGX, relative IOR eta = n_inside / n_outside) reflects and transmits, as two arrays: over
+    visible normals m, E[F(wi.m) G1(wr, m)] and E[(1 - F(wi.m)) G1(wt, m)], wr and wt the
+    mirrored and refracted directions (none where they leave on the wrong side); their sum is
+    below 1 by what the microfacets shadow. Gauss-Legendre quadrature over the sampling square;
+    total internal reflection (eta < 1) needs the finer rule."""
+    nodes = nodes or (32 if eta > 1 else 128)
+    x, w = np.polynomial.legendre.leggauss(nodes)
+    u1, u2 = np.meshgrid(0.5 * x + 0.5, 0.5 * x + 0.5)
+    weight = np.outer(0.5 * w, 0.5 * w)
+    reflected, transmitted = np.empty(len(cos_theta)), np.empty(len(cos_theta))
+    for i, c in enumerate(cos_theta):
+        wi = np.array([np.sqrt(max(0.0, 1.0 - c * c)), 0.0, c])
+        m = sample_ggx_visible(wi, alpha, u1, u2)
+        wi_m = m @ wi
+        f = fresnel_dielectric(wi_m, eta)
+        wr = 2.0 * wi_m[..., None] * m - wi
+        reflected[i] = np.sum(np.where(wr[..., 2] > 0, f * ggx_g1(wr, m, alpha), 0.0) * weight)
+        # Snell's law about m; under total internal reflection f = 1 and nothing passes
+        cos_t = np.sqrt(np.maximum(0.0, 1.0 - (1.0 - wi_m ** 2) / eta ** 2))
+        wt = -wi / eta + (wi_m / eta - cos_t)[..., None] * m
+        passed = (1.0 - f) * ggx_g1(wt, m, alpha)
+        transmitted[i] = np.sum(np.where(wt[..., 2] < 0, passed, 0.0) * weight)
+    return reflected, transmitted
+
+
+@lru_cache(maxsize=256)
+def rough_coating(alpha: float, eta: float) -> tuple[np.ndarray, float]:
+    """A rough dielectric coating's transmittance T(cos) at TABLE_COSINES (light entering from
+    outside), and its cosine-weighted mean reflectance 2 int R(mu) mu dmu seen from inside
+    (relative IOR 1/eta) -- roughplastic's two precomputed quantities, as Mitsuba 3's. The
+    mean is Mitsuba's own rule, the average over 64 evenly spaced cosines including both ends:
+    it sits about 0.01 below the integral (R is 1 up to the critical angle), and following it
+    keeps roughplastic the same material in both renderers."""
+    _, transmittance = rough_dielectric_albedo(TABLE_COSINES, alpha, eta)
+    mu = np.maximum(1e-6, np.linspace(0.0, 1.0, 64))
+    inside, _ = rough_dielectric_albedo(mu, alpha, 1.0 / eta)
+    return transmittance, float(2.0 * np.mean(inside * mu))

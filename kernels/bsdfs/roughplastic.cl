@@ -1,0 +1,62 @@
+/* roughplastic: a diffuse base under a rough dielectric coating (Mitsuba 3's `roughplastic`
+ * with distribution ggx; the layered model of kernels/coating.cl). The coating reflects as a
+ * GGX microfacet interface; the base's light passes it twice, scaled each time by the rough
+ * interface's transmittance T (1 minus its directional albedo, tabulated on the host):
+ *     f(wo, wi) = spec F(wo.h) D(h) G1(wo, h) G1(wi, h) / (4 cos_o cos_i)
+ *               + rho' / (pi eta^2) T(cos_o) T(cos_i),
+ * rho' the base's albedo after its bounces (coated_base_albedo).
+ *
+ * Parameters (Material): those of kernels/coating.cl, F_int being the rough coating's mean
+ * internal reflectance, and
+ *   p2.w    alpha, the GGX roughness
+ *   table   T(cos), the coating's transmittance from outside
+ *
+ * The lobe is chosen as Mitsuba does, from the tabulated reflectance 1 - T(cos_o); eval and pdf
+ * hold both lobes, so a sample's weight is f cos / pdf of the whole. One-sided. */
+
+float3 eval_roughplastic(const global Material *m, float3 wo, float3 wi)
+{
+    if (wo.z <= 0.0f || wi.z <= 0.0f)
+        return (float3)(0.0f);
+    float alpha = m->p2.w, eta = m->p0.w;
+    float3 h = normalize(wo + wi);
+    float cos_t, eta_ti;
+    float f = fresnel_dielectric(dot(wo, h), eta, &cos_t, &eta_ti);
+    float g = ggx_g1(wo, h, alpha) * ggx_g1(wi, h, alpha);
+    float3 specular = m->p1.xyz * (f * ggx_d(h, alpha) * g / (4.0f * wo.z * wi.z));
+    float t = lookup_cos_table(m, wo.z) * lookup_cos_table(m, wi.z);
+    return specular + coated_base_albedo(m) * (t / (PI_F * eta * eta));
+}
+
+/* The lobe choice's mixture: D_wo(h) / (4 wo.h) for the coating (Walter et al. 2007, eq. 14),
+ * the cosine-weighted hemisphere for the base. */
+float pdf_roughplastic(const global Material *m, float3 wo, float3 wi)
+{
+    if (wo.z <= 0.0f || wi.z <= 0.0f)
+        return 0.0f;
+    float p_s = coating_choice(m, 1.0f - lookup_cos_table(m, wo.z));
+    float3 h = normalize(wo + wi);
+    float wo_h = dot(wo, h);
+    float specular = wo_h > 0.0f ? pdf_ggx_visible(wo, h, m->p2.w) / (4.0f * wo_h) : 0.0f;
+    return p_s * specular + (1.0f - p_s) * pdf_cosine_hemisphere(wi.z);
+}
+
+int sample_roughplastic(const global Material *m, float3 wo, float3 u, BSDFSample *s)
+{
+    if (wo.z <= 0.0f)
+        return 0;
+    float p_s = coating_choice(m, 1.0f - lookup_cos_table(m, wo.z));
+    int specular = u.x < p_s;
+    if (specular) {
+        float3 h = sample_ggx_visible(wo, m->p2.w, u.y, u.z);
+        s->wi = 2.0f * dot(wo, h) * h - wo;
+    } else {
+        s->wi = sample_cosine_hemisphere(u.y, u.z);
+    }
+    s->pdf = pdf_roughplastic(m, wo, s->wi);
+    if (s->pdf <= 0.0f)
+        return 0;
+    s->weight = eval_roughplastic(m, wo, s->wi) * (s->wi.z / s->pdf);
+    s->lobe = (specular ? LOBE_GLOSSY : LOBE_DIFFUSE) | LOBE_REFLECTION;
+    return 1;
+}
