@@ -2,12 +2,13 @@
 
 import argparse
 import sys
+from pathlib import Path
 
 from app import __version__
 from app.errors import UserError
 from app.scene.description import RUSSIAN_ROULETTE
 
-EPILOG = ("A scene is a .toml file or a built-in name (pathtrace scenes lists them): simple, "
+EPILOG = ("A scene is a .toml file, a Mitsuba 3 .xml file or a built-in name (pathtrace scenes lists them): simple, "
           "simple-diffuse, spheres8k[-diffuse], spheres64k[-diffuse], demo, teapot, teapot-sky, "
           "cornell-box.")
 
@@ -141,6 +142,19 @@ def cmd_render(args):
     return 0
 
 
+def cmd_convert(args):
+    from app.image_io import write_text
+    from app.scene import load_scene
+    from app.scene.toml_writer import scene_toml
+
+    out = Path(args.output)
+    if out.suffix.lower() != ".toml":
+        raise UserError(f"--output: {out}: pathtrace writes scenes as .toml")
+    write_text(out, scene_toml(load_scene(args.scene), out), "--output")
+    print(f"wrote {out}", file=sys.stderr)
+    return 0
+
+
 def cmd_view(args):
     from app.device import choose_device
     from app.scene import load_scene
@@ -182,7 +196,7 @@ def build_parser():
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     p = sub.add_parser("render", help="render a still image", epilog=EPILOG)
-    p.add_argument("scene", help="a .toml scene file or a built-in scene name")
+    p.add_argument("scene", help="a .toml or Mitsuba 3 .xml scene file, or a built-in scene name")
     p.add_argument("-o", "--output", action="append", required=True, metavar="FILE",
                    help="output image; repeat for several (.png/.jpg tonemapped; "
                         ".exr/.hdr/.pfm linear HDR)")
@@ -197,7 +211,8 @@ def build_parser():
     p.set_defaults(func=cmd_render)
 
     p = sub.add_parser("view", help="open the interactive viewer", epilog=EPILOG)
-    p.add_argument("scene", nargs="?", default="simple", help="a .toml file or a built-in name (default simple)")
+    p.add_argument("scene", nargs="?", default="simple",
+                   help="a .toml or Mitsuba 3 .xml file, or a built-in name (default simple)")
     p.add_argument("--screenshot-dir", default="screenshots", metavar="DIR",
                    help="where P / F12 / the panel's button write PNG + EXR (default ./screenshots)")
     p.add_argument("--frames", type=_int_range(1), metavar="N", help="close after N frames (for scripts)")
@@ -223,6 +238,13 @@ def build_parser():
     p.add_argument("--quick", action="store_true", help="a smoke test: 320x180, 8 spp")
     p.add_argument("--json", metavar="FILE", help="also write the results as JSON")
     p.set_defaults(func=cmd_bench)
+
+    p = sub.add_parser("convert", help="write a scene (a Mitsuba 3 .xml file, say) as pathtrace TOML",
+                       epilog=EPILOG)
+    p.add_argument("scene", help="a .xml or .toml scene file or a built-in scene name")
+    p.add_argument("-o", "--output", required=True, metavar="FILE.toml",
+                   help="the TOML file to write (mesh files stay where they are, referenced)")
+    p.set_defaults(func=cmd_convert)
 
     p = sub.add_parser("devices", help="list OpenCL platforms and devices")
     p.add_argument("--check", action="store_true", help="also build the kernels on each")

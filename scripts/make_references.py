@@ -29,7 +29,11 @@ SCENES = {  # name: (width, height, spp per render, renders)
     "cornell-box": (48, 48, 1024, 16),
     "material-spheres": (96, 36, 1024, 16),
     "material-spheres-hdr": (96, 36, 1024, 16),
+    # Mitsuba XML scenes of tests/scenes/, which Mitsuba loads itself (their size is theirs)
+    "cbox": (48, 48, 1024, 16),
+    "envmap-spheres": (96, 36, 1024, 16),
 }
+XML_SCENES = OUT.parent / "scenes"
 MAX_DEPTH = 8
 
 
@@ -114,8 +118,11 @@ def main(names):
     OUT.mkdir(parents=True, exist_ok=True)
     for name in names or SCENES:
         width, height, spp, runs = SCENES[name]
-        scene = load_scene(name)
-        m = mitsuba_scene(mi, scene, width, height, spp)
+        xml = XML_SCENES / f"{name}.xml"
+        if xml.exists():
+            m = mi.load_file(str(xml), spp=spp, width=width, height=height)
+        else:
+            m = mitsuba_scene(mi, load_scene(name), width, height, spp)
         images = np.stack([np.array(mi.render(m, seed=k), np.float64)[..., :3] for k in range(runs)])
         mean = images.mean(axis=0)
         var_of_mean = images.var(axis=0, ddof=1) / runs

@@ -11,10 +11,17 @@ from app.scene import load_scene
 from tests.stats import z_test
 
 REFERENCES = sorted((Path(__file__).parent / "references").glob("*.npz"))
+XML_SCENES = Path(__file__).parent / "scenes"    # Mitsuba XML, read by app/scene/mitsuba.py
+
+
+def reference_scene(name):
+    """A reference's scene: the Mitsuba XML file Mitsuba rendered, else a built-in scene."""
+    xml = XML_SCENES / f"{name}.xml"
+    return load_scene(str(xml) if xml.exists() else name)
 
 
 def test_references_are_present():
-    assert {p.stem for p in REFERENCES} >= {"simple-diffuse", "spheres8k-diffuse"}
+    assert {p.stem for p in REFERENCES} >= {"simple-diffuse", "spheres8k-diffuse", "cbox", "envmap-spheres"}
 
 
 @pytest.mark.parametrize("nee", [True, False], ids=["nee", "no-nee"])
@@ -22,7 +29,7 @@ def test_references_are_present():
 def test_matches_mitsuba(backend, path, nee):
     ref = np.load(path)
     h, w, _ = ref["mean"].shape
-    scene = load_scene(path.stem).with_settings(max_depth=int(ref["max_depth"]), russian_roulette="off", nee=nee)
+    scene = reference_scene(path.stem).with_settings(max_depth=int(ref["max_depth"]), russian_roulette="off", nee=nee)
     r = Renderer(backend, scene, w, h)
     # Without NEE we hit the lights by chance: far from the lamp of `simple` a pixel meets it
     # about once in a thousand samples, and a sample variance that has not seen it is too

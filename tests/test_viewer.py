@@ -204,9 +204,10 @@ def test_many_frames_leave_memory_flat(viewer):
     assert rss_mb() - start < 15
 
 
-def test_view_command_closes_cleanly(display, tmp_path):
+@pytest.mark.parametrize("scene", ["simple", str(ROOT / "tests" / "scenes" / "cbox.xml")], ids=["builtin", "mitsuba-xml"])
+def test_view_command_closes_cleanly(display, tmp_path, scene):
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    r = subprocess.run([sys.executable, "-m", "app", "view", "simple", "--size", "160x90", "--frames", "5",
+    r = subprocess.run([sys.executable, "-m", "app", "view", scene, "--size", "160x90", "--frames", "5",
                         "--screenshot", "--screenshot-dir", tmp_path], env=env, capture_output=True,
                        text=True, timeout=120)
     assert r.returncode == 0, r.stderr

@@ -13,9 +13,12 @@ __all__ = ["Mesh", "RenderSettings", "Scene", "SceneBuilder", "diffuse", "emitte
 def load_scene(name_or_path: str) -> Scene:
     """A scene file path or a built-in scene's name: the two are interchangeable."""
     from app.scene.builtin import BUILTIN_SCENES, builtin_scene
+    from app.scene.mitsuba import read_mitsuba_file
     from app.scene.toml_reader import read_scene_file
 
     path = Path(name_or_path)
+    if path.suffix.lower() == ".xml":
+        return read_mitsuba_file(path)
     if path.suffix == ".toml" or path.exists():
         return read_scene_file(path)
     scene = builtin_scene(name_or_path)

@@ -29,6 +29,15 @@ class RenderSettings:
 
 
 @dataclass
+class MeshFile:
+    """Where a mesh read from a file came from, so that a converted scene refers to the file."""
+    path: str
+    matrix: np.ndarray            # the 4x4 transform applied to the file's vertices
+    face_normals: bool = False    # the file's vertex normals were dropped
+    flip_normals: bool = False    # the front side was turned round
+
+
+@dataclass
 class Mesh:
     """A triangle mesh in world space (its transform applied)."""
     name: str
@@ -37,6 +46,7 @@ class Mesh:
     normals: np.ndarray | None    # (V, 3) float32 shading normals, or None (flat shading)
     material: int                 # row of the scene's MaterialTable
     source: str = ""              # the file it came from, if any
+    file: MeshFile | None = None  # and how it was read
 
 
 @dataclass

@@ -15,7 +15,7 @@ from app.errors import UserError
 from app.materials import BSDFS, Material
 from app.resources import resource_dir
 from app.scene import transform
-from app.scene.description import RUSSIAN_ROULETTE, Mesh, RenderSettings, Scene, SceneBuilder
+from app.scene.description import RUSSIAN_ROULETTE, Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
 from app.scene.meshes import MAX_COORDINATE, check_mesh, read_mesh, triangulate
 
 # the scene-file types besides the registry's: "emitter" is a black BSDF with emission, and
@@ -255,7 +255,12 @@ class _Reader:
         """A mesh from a file, or written inline as vertices and faces (polygons of 3 or more
         corners, counter-clockwise seen from the front)."""
         self.table(data, where, {"file", "vertices", "faces", "material", "name", "translate",
-                                 "rotate", "scale", "matrix"})
+                                 "rotate", "scale", "matrix", "face_normals", "flip_normals"})
+        flags = {}
+        for key in ("face_normals", "flip_normals"):
+            flags[key] = data.get(key, False)
+            if not isinstance(flags[key], bool):
+                self.fail(f"{where}.{key}", f"must be true or false, got {flags[key]!r}")
         m = self.transform(data, where)
         if "file" in data:
             if "vertices" in data or "faces" in data:
@@ -265,11 +270,17 @@ class _Reader:
                 self.fail(f"{where}.file", f"must be a file name, got {name!r}")
             source = self.path.parent / name
             vertices, faces, normals = read_mesh(source, f"{self.path}: {where}.file")
+            if flags["face_normals"]:
+                normals = None
+            origin = MeshFile(str(source), m, normals is None, flags["flip_normals"])
             default_name = Path(name).stem
         else:
             vertices, faces = self.inline_geometry(data, where)
             vertices, faces, normals = check_mesh(vertices, faces, None, f"{self.path}: {where}")
-            source, default_name = "", f"mesh {where[7:-1]}"
+            source, default_name, origin = "", f"mesh {where[7:-1]}", None
+        if flags["flip_normals"]:
+            faces = faces[:, ::-1]
+            normals = None if normals is None else -normals
         vertices = transform.transform_points(m, vertices)
         if np.any(np.abs(vertices) > MAX_COORDINATE):
             self.fail(where, f"the transformed vertices lie beyond {MAX_COORDINATE:g}, which float32 cannot trace")
@@ -279,7 +290,7 @@ class _Reader:
             faces = faces[:, ::-1]
         return Mesh(self.name(data, where, default_name), vertices.astype(np.float32),
                     faces.astype(np.int32), None if normals is None else normals.astype(np.float32),
-                    material, str(source))
+                    material, str(source), origin)
 
     def inline_geometry(self, data, where):
         vertices, faces = data.get("vertices"), data.get("faces")

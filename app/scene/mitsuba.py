@@ -1,0 +1,673 @@
+"""Reading Mitsuba 3 XML scenes (the subset docs/mitsuba.md lists) into the scene description
+the TOML format also produces. Every problem names the file and line, e.g.
+    cbox.xml:12: <float name="radius">: 'abc' is not a number
+and what pathtrace cannot do (textures, point lights, other integrators) is one warning line per
+element saying what it does instead.
+
+Files come from strangers, so the parser is expat with document type declarations refused (no
+entity expansion, no external entities: what defusedxml guards against), and sizes are bounded:
+the file, the element count, include depth, tessellation and the film."""
+
+import math
+import os
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from xml.parsers import expat
+
+import numpy as np
+
+from app.camera import Camera
+from app.environment import Environment
+from app.errors import UserError, warn
+from app.materials import BSDFS, Material
+from app.scene import transform
+from app.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
+from app.scene.meshes import MAX_COORDINATE, check_mesh, read_mesh
+
+MAX_XML_BYTES = 64 << 20
+MAX_ELEMENTS = 1_000_000
+MAX_INCLUDE_DEPTH = 8
+MAX_FILM = 16384
+DISK_SEGMENTS = 256       # a disk is a fan of this many triangles (area within 0.01 % of pi r^2)
+
+
+@dataclass
+class Node:
+    tag: str
+    attrs: dict
+    line: int
+    file: Path
+    children: list = field(default_factory=list)
+
+    def where(self):
+        name = self.attrs.get("name") or self.attrs.get("type") or self.attrs.get("id")
+        label = f'<{self.tag} {"name" if "name" in self.attrs else "type" if "type" in self.attrs else "id"}="{name}">' \
+            if name else f"<{self.tag}>"
+        return f"{self.file}:{self.line}: {label}"
+
+
+def parse_xml(path: Path) -> Node:
+    """The element tree of one file, each element with its line; a malformed file is one
+    UserError naming the line."""
+    try:
+        size = os.stat(path).st_size
+    except FileNotFoundError:
+        raise UserError(f"{path}: no such scene file") from None
+    except OSError as e:
+        raise UserError(f"{path}: cannot read the scene ({e.strerror})") from None
+    if size > MAX_XML_BYTES:
+        raise UserError(f"{path}: the file is larger than {MAX_XML_BYTES >> 20} MB")
+    parser = expat.ParserCreate()
+    stack, count = [Node("#document", {}, 0, path)], [0]
+
+    def refuse_dtd(*_):
+        raise UserError(f"{path}:{parser.CurrentLineNumber}: document type declarations "
+                        "(<!DOCTYPE>, <!ENTITY>) are not accepted in scene files")
+
+    def start(tag, attrs):
+        count[0] += 1
+        if count[0] > MAX_ELEMENTS:
+            raise UserError(f"{path}: more than {MAX_ELEMENTS} elements")
+        node = Node(tag, attrs, parser.CurrentLineNumber, path)
+        stack[-1].children.append(node)
+        stack.append(node)
+
+    def end(tag):
+        stack.pop()
+
+    parser.StartDoctypeDeclHandler = refuse_dtd
+    parser.EntityDeclHandler = refuse_dtd
+    parser.ExternalEntityRefHandler = refuse_dtd
+    parser.StartElementHandler = start
+    parser.EndElementHandler = end
+    try:
+        with open(path, "rb") as f:
+            parser.ParseFile(f)
+    except expat.ExpatError as e:
+        raise UserError(f"{path}:{e.lineno}: not well-formed XML ({expat.ErrorString(e.code)})") from None
+    except OSError as e:
+        raise UserError(f"{path}: cannot read the scene ({e.strerror})") from None
+    roots = stack[0].children
+    if len(roots) != 1 or roots[0].tag != "scene":
+        raise UserError(f"{path}: not a Mitsuba scene (the root element must be <scene>)")
+    return roots[0]
+
+
+# --- property values ---------------------------------------------------------------------
+
+def _fail(node, problem):
+    raise UserError(f"{node.where()}: {problem}")
+
+
+def _float(node, text, what="value"):
+    try:
+        value = float(text)
+    except (TypeError, ValueError):
+        _fail(node, f"{what} {text!r} is not a number")
+    if not math.isfinite(value) or abs(value) > 3.0e38:
+        _fail(node, f"{what} {text!r} is not a finite float32")
+    return value
+
+
+def _floats(node, text, what="value"):
+    parts = [p for p in re.split(r"[,\s]+", (text or "").strip()) if p]
+    return [_float(node, p, what) for p in parts]
+
+
+def _vector(node):
+    """<point>/<vector>/<translate>: value="x, y, z" or x= y= z= attributes."""
+    if "value" in node.attrs:
+        v = _floats(node, node.attrs["value"])
+        if len(v) == 1:
+            v = v * 3
+        if len(v) != 3:
+            _fail(node, f"value must be 1 or 3 numbers, got {node.attrs['value']!r}")
+        return np.array(v)
+    return np.array([_float(node, node.attrs.get(k, "0"), k) for k in "xyz"])
+
+
+def _color(node):
+    """<rgb value="r, g, b"> or one grey value; <spectrum value="v"> as one value (a spectrum
+    of wavelength:value pairs is averaged, with a warning)."""
+    text = node.attrs.get("value", "")
+    if node.tag == "spectrum" and ":" in text:
+        pairs = [p.split(":") for p in re.split(r"[,\s]+", text.strip()) if p]
+        values = [_float(node, v) for _, v in pairs]
+        warn(f"{node.where()}: a sampled spectrum; pathtrace renders RGB and uses its mean, {np.mean(values):.4g}")
+        return np.full(3, float(np.mean(values)))
+    v = _floats(node, text)
+    if len(v) == 1:
+        v = v * 3
+    if len(v) != 3:
+        _fail(node, f"value must be 1 or 3 numbers, got {text!r}")
+    return np.array(v)
+
+
+def _lookat(node):
+    o = np.array(_floats(node, node.attrs.get("origin", ""), "origin"))
+    t = np.array(_floats(node, node.attrs.get("target", ""), "target"))
+    up = np.array(_floats(node, node.attrs.get("up", "0, 1, 0"), "up"))
+    if len(o) != 3 or len(t) != 3 or len(up) != 3:
+        _fail(node, "origin, target and up must be 3 numbers each")
+    d = t - o
+    if np.linalg.norm(d) == 0:
+        _fail(node, "target must differ from origin")
+    d /= np.linalg.norm(d)
+    left = np.cross(up, d)
+    if np.linalg.norm(left) < 1e-9 * np.linalg.norm(up):
+        _fail(node, "up must not be parallel to the view direction")
+    left /= np.linalg.norm(left)
+    # Mitsuba's look_at: the columns are left (+x), up (+y), forward (+z) and the origin
+    m = np.eye(4)
+    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = left, np.cross(d, left), d, o
+    return m
+
+
+def _transform(node):
+    """A <transform>'s operations in file order, each applied after the ones before it."""
+    m = np.eye(4)
+    for op in node.children:
+        if op.tag == "translate":
+            step = transform.translation(_vector(op))
+        elif op.tag == "scale":
+            if "value" in op.attrs:
+                s = _floats(op, op.attrs["value"])
+                s = s * 3 if len(s) == 1 else s
+            else:
+                s = [_float(op, op.attrs.get(k, "1"), k) for k in "xyz"]
+            if len(s) != 3 or 0 in s:
+                _fail(op, "scale must be 1 or 3 non-zero numbers")
+            step = transform.scaling(s)
+        elif op.tag == "rotate":
+            axis = _vector(op) if "value" not in op.attrs else np.array(_floats(op, op.attrs["value"]))
+            if len(axis) != 3 or not np.any(axis):
+                _fail(op, "the rotation axis must be 3 numbers, not all zero")
+            step = transform.rotation(axis, _float(op, op.attrs.get("angle"), "angle"))
+        elif op.tag == "matrix":
+            v = _floats(op, op.attrs.get("value", ""))
+            if len(v) not in (9, 16):
+                _fail(op, f"a matrix has 9 or 16 numbers, got {len(v)}")
+            step = np.eye(4)
+            if len(v) == 9:
+                step[:3, :3] = np.reshape(v, (3, 3))
+            else:
+                step = np.reshape(v, (4, 4))
+            if abs(np.linalg.det(step[:3, :3])) < 1e-12 or not np.allclose(step[3], [0, 0, 0, 1]):
+                _fail(op, "must be an invertible affine transform (last row 0 0 0 1)")
+        elif op.tag == "lookat":
+            step = _lookat(op)
+        else:
+            _fail(op, "unknown transform operation (translate, rotate, scale, matrix, lookat)")
+        m = step @ m
+    return m
+
+
+class _Reader:
+    """One scene: defaults, named objects, and the description being built."""
+
+    def __init__(self, path: Path):
+        self.path = path
+        self.defaults = {}
+        self.named = {}             # id -> Node
+        self.builder = SceneBuilder()
+        self.material_rows = {}     # id(bsdf Node) -> material row
+        self.camera = None
+        self.settings = RenderSettings(width=768, height=576, spp=4)
+        self.environment = None
+        self.max_depth, self.rr = 0, "throughput"
+
+    # -- properties of an element: {name: Node} after $substitution --
+
+    def substitute(self, node, depth=0):
+        for k, v in node.attrs.items():
+            if "$" in v:
+                def value(m):
+                    if m.group(1) not in self.defaults:
+                        _fail(node, f"${m.group(1)} has no <default> value")
+                    return self.defaults[m.group(1)]
+                node.attrs[k] = re.sub(r"\$([A-Za-z_][A-Za-z0-9_]*)", value, v)
+
+    def expand(self, node, depth=0):
+        """Substitutes $names, splices <include>s and records <default>s, in file order."""
+        out = []
+        for child in node.children:
+            self.substitute(child)
+            if child.tag == "default":
+                name = child.attrs.get("name")
+                if not name or "value" not in child.attrs:
+                    _fail(child, "needs name and value")
+                self.defaults.setdefault(name, child.attrs["value"])
+                continue
+            if child.tag == "include":
+                if depth >= MAX_INCLUDE_DEPTH:
+                    _fail(child, f"includes nest deeper than {MAX_INCLUDE_DEPTH}")
+                name = child.attrs.get("filename")
+                if not name:
+                    _fail(child, "needs a filename")
+                included = parse_xml(child.file.parent / name)
+                out.extend(self.expand(included, depth + 1))
+                continue
+            child.children = self.expand(child, depth)
+            out.append(child)
+        return out
+
+    def properties(self, node):
+        props = {}
+        for c in node.children:
+            if "name" in c.attrs and c.tag in ("float", "integer", "boolean", "string", "rgb",
+                                                "spectrum", "point", "vector", "transform",
+                                                "texture", "ref", "bsdf"):
+                props[c.attrs["name"]] = c
+        return props
+
+    def value(self, node):
+        """The value of a property element."""
+        tag, text = node.tag, node.attrs.get("value")
+        if tag == "float":
+            return _float(node, text)
+        if tag == "integer":
+            try:
+                return int(text)
+            except (TypeError, ValueError):
+                _fail(node, f"{text!r} is not an integer")
+        if tag == "boolean":
+            if text not in ("true", "false"):
+                _fail(node, f"must be true or false, got {text!r}")
+            return text == "true"
+        if tag == "string":
+            if text is None:
+                _fail(node, "needs a value")
+            return text
+        if tag in ("rgb", "spectrum"):
+            return _color(node)
+        if tag in ("point", "vector"):
+            return _vector(node)
+        if tag == "transform":
+            return _transform(node)
+        _fail(node, "unexpected element here")
+
+    def get(self, props, name, default=None, kinds=None):
+        node = props.get(name)
+        if node is None:
+            return default
+        if node.tag == "ref":
+            node = self.resolve(node)
+        if kinds and node.tag not in kinds:
+            _fail(node, f"'{name}' must be a {' or '.join(kinds)}")
+        return self.value(node)
+
+    def color(self, props, name, default):
+        """A colour parameter; a texture is replaced by its mean colour, with a warning."""
+        node = props.get(name)
+        if node is None:
+            return np.asarray(default, np.float64)
+        if node.tag == "ref":
+            node = self.resolve(node)
+        if node.tag == "texture":
+            return self.texture_mean(node)
+        if node.tag == "float":
+            return np.full(3, self.value(node))
+        if node.tag not in ("rgb", "spectrum"):
+            _fail(node, f"'{name}' must be a colour (rgb, spectrum, float)")
+        return self.value(node)
+
+    def texture_mean(self, node):
+        kind = node.attrs.get("type")
+        props = self.properties(node)
+        if kind == "checkerboard":
+            mean = (self.color(props, "color0", 0.4) + self.color(props, "color1", 0.2)) / 2
+        elif kind == "bitmap" and "filename" in props:
+            from app.image_io import read_hdr
+            try:
+                mean = read_hdr(node.file.parent / self.get(props, "filename"), node.where()).reshape(-1, 3).mean(0)
+            except UserError:
+                mean = np.full(3, 0.5)
+        else:
+            mean = np.full(3, 0.5)
+        mean = np.clip(np.asarray(mean, np.float64), 0, None)
+        warn(f"{node.where()}: textures are not supported; pathtrace uses its mean colour "
+             f"({', '.join(f'{c:.3g}' for c in mean)})")
+        return mean
+
+    def resolve(self, ref):
+        target = self.named.get(ref.attrs.get("id"))
+        if target is None:
+            _fail(ref, f"no top-level element has id '{ref.attrs.get('id')}'")
+        return target
+
+    # -- the scene --
+
+    def read(self) -> Scene:
+        root = parse_xml(self.path)
+        self.substitute(root)
+        version = root.attrs.get("version", "3.0.0")
+        if not version.startswith(("2.", "3.")):
+            warn(f"{root.where()}: version {version}; pathtrace reads Mitsuba 3 scenes")
+        nodes = self.expand(root)
+        self.named = {node.attrs["id"]: node for node in nodes if "id" in node.attrs}
+        for node in nodes:
+            if node.tag == "shape":
+                self.shape(node)
+            elif node.tag == "sensor":
+                self.sensor(node)
+            elif node.tag == "integrator":
+                self.integrator(node)
+            elif node.tag == "emitter":
+                self.emitter(node)
+            elif node.tag in ("bsdf", "texture"):
+                continue                   # used where referenced
+            else:
+                warn(f"{node.where()}: not supported; pathtrace ignores it")
+        if not self.builder.spheres and not self.builder.meshes:
+            raise UserError(f"{self.path}: the scene has no shapes pathtrace can render")
+        settings = self.settings
+        settings.max_depth, settings.russian_roulette = self.max_depth, self.rr
+        return self.builder.build(self.path.stem, camera=self.camera or self.default_camera(),
+                                  environment=self.environment or Environment.constant((0, 0, 0)),
+                                  settings=settings)
+
+    def default_camera(self):
+        """Mitsuba's default sensor: at the origin, looking down +z, fov 45 on x."""
+        return Camera((0, 0, 0), (0, 0, 1), (0, 1, 0), self.vertical_fov(45.0, "x"))
+
+    def integrator(self, node):
+        kind = node.attrs.get("type")
+        props = self.properties(node)
+        if kind not in ("path", "volpath", "prb", "prbvolpath"):
+            warn(f"{node.where()}: pathtrace renders with its path tracer instead")
+        max_depth = self.get(props, "max_depth", -1, ("integer",))
+        if max_depth < -1:
+            _fail(props["max_depth"], f"must be -1 (unlimited) or more, got {max_depth}")
+        self.max_depth = 0 if max_depth == -1 else max_depth
+        rr_depth = self.get(props, "rr_depth", 5, ("integer",))
+        if max_depth == 0:
+            _fail(props["max_depth"], "0 renders nothing; pathtrace needs 1 or more (or -1)")
+        if rr_depth != 5:
+            if max_depth > 0 and rr_depth >= max_depth:
+                self.rr = "off"
+            else:
+                warn(f"{node.where()}: pathtrace starts Russian roulette at depth 5, not {rr_depth}")
+
+    def vertical_fov(self, fov, axis):
+        w, h = self.settings.width, self.settings.height
+        t = math.tan(math.radians(fov) / 2)
+        scale = {"x": h / w, "y": 1.0, "diagonal": h / math.hypot(w, h),
+                 "smaller": h / w if w < h else 1.0, "larger": h / w if w > h else 1.0}[axis]
+        return math.degrees(2 * math.atan(t * scale))
+
+    def sensor(self, node):
+        kind = node.attrs.get("type")
+        if kind not in ("perspective", "thinlens"):
+            _fail(node, "pathtrace has a perspective camera only")
+        if kind == "thinlens":
+            warn(f"{node.where()}: no depth of field in pathtrace; a pinhole camera instead")
+        props = self.properties(node)
+        for child in node.children:
+            if child.tag == "film":
+                self.film(child)
+            elif child.tag == "sampler":
+                count = self.get(self.properties(child), "sample_count", 4, ("integer",))
+                if not 1 <= count <= 1 << 24:
+                    _fail(child, f"sample_count must be in 1..{1 << 24}, got {count}")
+                self.settings.spp = count
+        axis = self.get(props, "fov_axis", "x", ("string",))
+        if axis not in ("x", "y", "diagonal", "smaller", "larger"):
+            _fail(props["fov_axis"], f"must be x, y, diagonal, smaller or larger, got {axis!r}")
+        if "fov" in props:
+            fov = self.get(props, "fov", kinds=("float",))
+        else:
+            text = self.get(props, "focal_length", "50mm", ("string",))
+            f = _float(props.get("focal_length", node), text.removesuffix("mm"), "focal_length")
+            fov, axis = math.degrees(2 * math.atan(math.hypot(36, 24) / (2 * f))), "diagonal"
+        if not 0 < fov < 180:
+            _fail(props.get("fov", node), f"the field of view must lie in (0, 180) degrees, got {fov}")
+        m = self.get(props, "to_world", np.eye(4), ("transform",))
+        eye = m[:3, 3]
+        forward, up = m[:3, :3] @ [0, 0, 1.0], m[:3, :3] @ [0, 1.0, 0]
+        left = m[:3, :3] @ [1.0, 0, 0]
+        if np.dot(np.cross(up, forward), left) < 0:
+            warn(f"{node.where()}: a mirroring camera transform; pathtrace renders it unmirrored")
+        self.camera = Camera(eye, eye + forward / np.linalg.norm(forward), up, self.vertical_fov(fov, axis))
+
+    def film(self, node):
+        props = self.properties(node)
+        w = self.get(props, "width", 768, ("integer",))
+        h = self.get(props, "height", 576, ("integer",))
+        for name, v in (("width", w), ("height", h)):
+            if not 1 <= v <= MAX_FILM:
+                _fail(props[name], f"must be in 1..{MAX_FILM}, got {v}")
+        self.settings.width, self.settings.height = w, h
+        if node.attrs.get("type") not in ("hdrfilm", "specfilm", None):
+            warn(f"{node.where()}: pathtrace writes the image format of the output file's name")
+        for child in node.children:
+            if child.tag == "rfilter" and child.attrs.get("type") != "box":
+                warn(f"{child.where()}: pathtrace averages samples over each pixel (a box filter)")
+        if not any(c.tag == "rfilter" for c in node.children):
+            warn(f"{node.where()}: Mitsuba's default filter is gaussian; pathtrace uses a box filter")
+
+    def emitter(self, node):
+        kind = node.attrs.get("type")
+        props = self.properties(node)
+        if self.environment is not None and kind in ("constant", "envmap"):
+            warn(f"{node.where()}: a second environment; pathtrace keeps the first")
+            return
+        if kind == "constant":
+            self.environment = Environment.constant(self.color(props, "radiance", 1.0))
+        elif kind == "envmap":
+            name = self.get(props, "filename", kinds=("string",))
+            if name is None:
+                _fail(node, "needs a filename")
+            scale = self.get(props, "scale", 1.0, ("float",))
+            if scale < 0:
+                _fail(props["scale"], "must not be negative")
+            self.environment = Environment.from_file(node.file.parent / name, scale,
+                                                     self.envmap_rotation(node, props),
+                                                     where=node.where())
+        else:
+            warn(f"{node.where()}: pathtrace has no {kind} emitters; it ignores this one")
+
+    def envmap_rotation(self, node, props):
+        """pathtrace's rotation about +y for a Mitsuba envmap's to_world: Mitsuba puts the map's
+        u = 0 at -z where pathtrace puts u = 1/2, half a turn apart; rotations about other axes
+        are not supported."""
+        m = self.get(props, "to_world", np.eye(4), ("transform",))
+        r = m[:3, :3]
+        if not np.allclose(r[1], [0, 1, 0], atol=1e-6) or not np.allclose(r[:, 1], [0, 1, 0], atol=1e-6) \
+                or abs(np.linalg.det(r) - 1) > 1e-6:
+            warn(f"{node.where()}: pathtrace rotates maps about +y only; it ignores this to_world")
+            return 180.0
+        return (180.0 + math.degrees(math.atan2(r[0, 2], r[0, 0]))) % 360.0
+
+    # -- materials --
+
+    def material_row(self, bsdf, emission):
+        """The material row of a shape's <bsdf> or <ref> (Mitsuba's default: diffuse 0.5) and
+        its area emitter's radiance; shapes that share a BSDF and emit nothing share a row."""
+        target = self.resolve(bsdf) if bsdf is not None and bsdf.tag == "ref" else bsdf
+        key = id(target)
+        if emission is None and key in self.material_rows:
+            return self.material_rows[key]
+        material = self.material(bsdf) if bsdf is not None else Material("diffuse", {"rho_d": np.full(3, 0.5)})
+        if emission is not None:
+            material.emission = emission
+            return self.builder.material(material)
+        name = target.attrs.get("id") if target is not None else None
+        self.material_rows[key] = self.builder.materials.add(material, name)
+        return self.material_rows[key]
+
+    def material(self, node) -> Material:
+        """The Material of a <bsdf> (or <ref> to one)."""
+        if node.tag == "ref":
+            node = self.resolve(node)
+            if node.tag != "bsdf":
+                _fail(node, "a shape's <ref> must name a <bsdf>")
+        kind = node.attrs.get("type")
+        props = self.properties(node)
+        if kind == "twosided":
+            inner = [c for c in node.children if c.tag in ("bsdf", "ref")]
+            if not inner:
+                _fail(node, "needs a nested <bsdf>")
+            m = self.material(inner[0])
+            m.twosided = True
+            return m
+        if kind in ("bumpmap", "normalmap", "mask"):
+            inner = [c for c in node.children if c.tag in ("bsdf", "ref")]
+            warn(f"{node.where()}: not supported; pathtrace uses the nested BSDF without it")
+            if inner:
+                return self.material(inner[0])
+            return Material("diffuse", {"rho_d": np.full(3, 0.5)})
+        if kind == "diffuse":
+            return Material("diffuse", {"rho_d": np.clip(self.color(props, "reflectance", 0.5), 0, 1)})
+        if kind in ("conductor", "roughconductor", "dielectric", "thindielectric", "plastic",
+                    "roughplastic"):
+            return self.mitsuba_material(node, kind, props)
+        albedo = self.color(props, "base_color", None) if "base_color" in props else \
+            self.color(props, "reflectance", 0.5) if "reflectance" in props else np.full(3, 0.5)
+        albedo = np.clip(albedo, 0, 1)
+        warn(f"{node.where()}: not supported; pathtrace uses a diffuse BSDF of albedo "
+             f"{', '.join(f'{c:.3g}' for c in albedo)}")
+        return Material("diffuse", {"rho_d": albedo})
+
+    def mitsuba_material(self, node, kind, props):
+        """The types that share Mitsuba's parameter names (app/materials)."""
+        bsdf = BSDFS[kind]
+        values = {}
+        for p in bsdf.params:
+            if p.name not in props:
+                continue
+            if p.kind == "color":
+                values[p.name] = self.color(props, p.name, p.default)
+            elif p.kind == "bool":
+                values[p.name] = self.get(props, p.name, kinds=("boolean",))
+            elif p.kind == "name":
+                values[p.name] = self.get(props, p.name, kinds=("string",))
+            else:
+                c = props[p.name]
+                values[p.name] = c.attrs.get("value") if c.tag == "string" else self.get(props, p.name, kinds=("float",))
+        if values.get("distribution", "ggx") != "ggx" or (kind.startswith("rough") and "distribution" not in props):
+            warn(f"{node.where()}: pathtrace's microfacets are GGX; the {values.get('distribution', 'beckmann')} "
+                 "distribution (Mitsuba's default) is rendered as GGX of the same alpha")
+            values["distribution"] = "ggx"
+        if kind.startswith("rough") and "alpha" not in props and ("alpha_u" in props or "alpha_v" in props):
+            a = [self.get(props, k, 0.1, ("float",)) for k in ("alpha_u", "alpha_v")]
+            warn(f"{node.where()}: anisotropic roughness is not supported; pathtrace uses alpha {np.mean(a):.3g}")
+            values["alpha"] = float(np.mean(a))
+        for name in props:
+            known = {p.name for p in bsdf.params} | {"alpha_u", "alpha_v", "sample_visible"}
+            if name not in known:
+                warn(f"{props[name].where()}: not a parameter pathtrace's {kind} has; ignored")
+        try:
+            values = bsdf.resolve(values)
+        except ValueError as e:
+            _fail(node, str(e))
+        for p in bsdf.params:
+            if p.kind == "name" or p.name in values:
+                continue
+            values[p.name] = p.default
+        for p in bsdf.params:
+            if p.kind == "name":
+                continue
+            v = np.asarray(values[p.name], np.float64)
+            if np.any(v < p.low) or (p.high is not None and np.any(v > p.high)):
+                bound = f"[{p.low}, {p.high}]" if p.high is not None else f"at least {p.low}"
+                _fail(props.get(p.name, node), f"{p.name} must lie in {bound}")
+        problem = bsdf.check({k: np.atleast_2d(v) if np.ndim(v) else np.atleast_1d(v)
+                              for k, v in values.items()})
+        if problem:
+            _fail(node, problem)
+        return Material(kind, values)
+
+    # -- shapes --
+
+    def shape(self, node):
+        kind = node.attrs.get("type")
+        props = self.properties(node)
+        bsdf, emission = None, None
+        for child in node.children:
+            if child.tag in ("bsdf", "ref") and "name" not in child.attrs:
+                bsdf = child
+            elif child.tag == "emitter":
+                if child.attrs.get("type") != "area":
+                    warn(f"{child.where()}: a shape's emitter must be area; ignored")
+                    continue
+                emission = np.clip(self.color(self.properties(child), "radiance", 1.0), 0, None)
+            elif child.tag in ("medium", "sensor"):
+                warn(f"{child.where()}: not supported; ignored")
+        material = self.material_row(bsdf, emission)
+        m = self.get(props, "to_world", np.eye(4), ("transform",))
+        name = node.attrs.get("id")
+        if kind == "sphere":
+            center = m[:3, :3] @ self.get(props, "center", np.zeros(3), ("point", "vector")) + m[:3, 3]
+            scales = np.linalg.norm(m[:3, :3], axis=0)
+            if not np.allclose(scales, scales[0], rtol=1e-5):
+                warn(f"{node.where()}: a non-uniformly scaled sphere; pathtrace renders a sphere of the mean scale")
+            radius = self.get(props, "radius", 1.0, ("float",)) * float(np.mean(scales))
+            if radius <= 0:
+                _fail(node, f"the radius must be positive, got {radius}")
+            if np.any(np.abs(center) + radius > MAX_COORDINATE):
+                _fail(node, f"the sphere reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace")
+            self.builder.add_sphere(center, radius, material, name)
+            return
+        normals = None
+        if kind == "rectangle":
+            vertices = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], np.float64)
+            faces = np.array([[0, 1, 2], [0, 2, 3]])
+        elif kind == "cube":
+            vertices, faces = _cube()
+        elif kind == "disk":
+            a = np.linspace(0, 2 * np.pi, DISK_SEGMENTS, endpoint=False)
+            vertices = np.vstack([[0, 0, 0], np.column_stack([np.cos(a), np.sin(a), np.zeros_like(a)])])
+            k = np.arange(DISK_SEGMENTS)
+            faces = np.column_stack([np.zeros_like(k), 1 + k, 1 + (k + 1) % DISK_SEGMENTS])
+        elif kind in ("obj", "ply"):
+            filename = self.get(props, "filename", kinds=("string",))
+            if filename is None:
+                _fail(node, "needs a filename")
+            vertices, faces, normals = read_mesh(node.file.parent / filename, node.where())
+            if self.get(props, "face_normals", False, ("boolean",)):
+                normals = None
+            origin = MeshFile(str(node.file.parent / filename), m, normals is None,
+                              self.get(props, "flip_normals", False, ("boolean",)))
+            name = name or Path(filename).stem
+        else:
+            warn(f"{node.where()}: pathtrace has no {kind} shape; it ignores this one")
+            return
+        if kind not in ("obj", "ply"):
+            vertices, faces, normals = check_mesh(vertices, faces, None, node.where())
+        if self.get(props, "flip_normals", False, ("boolean",)):
+            faces = faces[:, ::-1]
+            normals = None if normals is None else -normals
+        vertices = transform.transform_points(m, vertices)
+        if np.any(np.abs(vertices) > MAX_COORDINATE):
+            _fail(node, f"the transformed vertices lie beyond {MAX_COORDINATE:g}, which float32 cannot trace")
+        if normals is not None:
+            normals = transform.transform_normals(m, normals)
+        if transform.flips_handedness(m):
+            faces = faces[:, ::-1]
+        origin = origin if kind in ("obj", "ply") else None
+        self.builder.add_mesh(Mesh(name or f"{kind} {len(self.builder.meshes)}",
+                                   vertices.astype(np.float32), faces.astype(np.int32),
+                                   None if normals is None else normals.astype(np.float32),
+                                   material, origin.path if origin else "", origin))
+
+
+def _cube():
+    """Mitsuba's cube: [-1, 1]^3, faces counter-clockwise seen from outside."""
+    vertices, faces = [], []
+    for axis in range(3):
+        for sign in (-1.0, 1.0):
+            u, v = (axis + 1) % 3, (axis + 2) % 3
+            base = len(vertices)
+            for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+                p = np.zeros(3)
+                p[axis], p[u], p[v] = sign, a, b
+                vertices.append(p)
+            # (u, v, axis) is right-handed, so these corners run counter-clockwise about +axis
+            quad = [base, base + 1, base + 2, base + 3] if sign > 0 else [base, base + 3, base + 2, base + 1]
+            faces += [[quad[0], quad[1], quad[2]], [quad[0], quad[2], quad[3]]]
+    return np.array(vertices), np.array(faces)
+
+
+def read_mitsuba_file(path) -> Scene:
+    return _Reader(Path(path)).read()

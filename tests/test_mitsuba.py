@@ -1,0 +1,201 @@
+"""The Mitsuba 3 XML loader (app/scene/mitsuba.py) and `pathtrace convert`: what the scenes of
+tests/scenes/ load into, camera and transform conventions, the TOML round trip, and every
+unsupported or malformed input as one line. The images against Mitsuba's own renders of the same
+files are in test_reference.py."""
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from app.cli import main
+from app.errors import UserError
+from app.scene import load_scene
+from app.scene.mitsuba import read_mitsuba_file
+
+SCENES = Path(__file__).parent / "scenes"
+
+
+def write(tmp_path, body, name="scene.xml", header='<scene version="3.0.0">'):
+    path = tmp_path / name
+    path.write_text(f'<?xml version="1.0"?>\n{header}\n{body}\n</scene>\n')
+    return path
+
+
+SPHERE = '<shape type="sphere"><float name="radius" value="1"/></shape>'
+
+
+def camera_xml(fov_axis, width, height, up="0, 1, 0"):
+    return f"""
+    <sensor type="perspective">
+        <float name="fov" value="50"/>
+        <string name="fov_axis" value="{fov_axis}"/>
+        <transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="{up}"/></transform>
+        <film type="hdrfilm"><integer name="width" value="{width}"/><integer name="height" value="{height}"/>
+            <rfilter type="box"/></film>
+    </sensor>{SPHERE}"""
+
+
+def test_cornell_box_loads_its_shapes_materials_light_and_camera():
+    scene = read_mitsuba_file(SCENES / "cbox.xml")
+    assert len(scene.meshes) == 8 and scene.triangle_count == 6 * 2 + 2 * 12
+    lights = [m for m in scene.meshes if np.any(scene.materials.get(m.material).emission > 0)]
+    assert len(lights) == 1
+    np.testing.assert_allclose(scene.materials.get(lights[0].material).emission, [17, 12, 4])
+    # three named BSDFs shared by the walls and boxes, plus the light's own
+    assert {scene.materials.name_of(m.material) for m in scene.meshes} == {"white", "red", "green", None}
+    assert scene.camera.vfov == pytest.approx(39.3)            # fov on x of a square film
+    np.testing.assert_allclose(scene.camera.eye, [0, 1, 3.8])
+    assert (scene.settings.width, scene.settings.height, scene.settings.spp) == (48, 48, 64)
+    assert scene.settings.max_depth == 8
+
+
+@pytest.mark.parametrize("axis,width,height,expected", [
+    ("y", 200, 100, 50.0),
+    ("x", 200, 100, math.degrees(2 * math.atan(math.tan(math.radians(25)) / 2))),
+    ("diagonal", 200, 100, math.degrees(2 * math.atan(math.tan(math.radians(25)) / math.sqrt(5)))),
+    ("smaller", 200, 100, 50.0),                                  # the smaller side is y
+    ("smaller", 100, 200, math.degrees(2 * math.atan(math.tan(math.radians(25)) * 2))),
+    ("larger", 200, 100, math.degrees(2 * math.atan(math.tan(math.radians(25)) / 2))),
+    ("larger", 100, 200, 50.0),
+])
+def test_field_of_view_axes(tmp_path, axis, width, height, expected):
+    scene = read_mitsuba_file(write(tmp_path, camera_xml(axis, width, height)))
+    assert scene.camera.vfov == pytest.approx(expected)
+
+
+def test_camera_looks_as_mitsubas_lookat_says(tmp_path):
+    """Mitsuba's camera +x is the image's left: pathtrace's right vector is the lookat's
+    -left, its up the lookat's recomputed up (here a tilted one)."""
+    scene = read_mitsuba_file(write(tmp_path, camera_xml("y", 64, 64, up="1, 1, 0")))
+    forward, right, up = scene.camera.basis(1.0)
+    np.testing.assert_allclose(forward, [0, 0, -1], atol=1e-12)
+    left = np.cross([1, 1, 0], forward)            # lookat's left = cross(up, dir)
+    np.testing.assert_allclose(right / np.linalg.norm(right), -left / np.linalg.norm(left), atol=1e-12)
+    np.testing.assert_allclose(up / np.linalg.norm(up), [np.sqrt(0.5), np.sqrt(0.5), 0], atol=1e-12)
+
+
+def test_transforms_apply_in_file_order():
+    """meshes.xml turns the octahedron about y, then moves it along x: it sits at x = 1.2; the
+    other order would have put it at z = -1.2."""
+    scene = read_mitsuba_file(SCENES / "meshes.xml")
+    octahedron = next(m for m in scene.meshes if m.name == "octahedron")
+    np.testing.assert_allclose(octahedron.vertices.mean(axis=0), [1.2, 0.45, 0], atol=1e-6)
+    sphere = scene.spheres[0]
+    np.testing.assert_allclose(sphere, [0.3, 0.3, 1, 0.3], atol=1e-6)
+
+
+@pytest.mark.parametrize("shape", ["cube", "rectangle", "disk"])
+def test_generated_shapes_face_out(tmp_path, shape):
+    """Mitsuba's cube faces outward, its rectangle and disk face +z: the triangles' geometric
+    normals (counter-clockwise corners) say the same."""
+    scene = read_mitsuba_file(write(tmp_path, f'<shape type="{shape}"/>'))
+    mesh = scene.meshes[0]
+    v = mesh.vertices[mesh.faces].astype(np.float64)
+    n = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
+    if shape == "cube":
+        assert np.all(np.einsum("ij,ij->i", n, v.mean(axis=1)) > 0)
+        assert len(mesh.faces) == 12
+    else:
+        assert np.all(n[:, 2] > 0) and np.allclose(n[:, :2], 0)
+        area = np.linalg.norm(n, axis=1).sum() / 2
+        assert area == pytest.approx(4.0 if shape == "rectangle" else math.pi, rel=1e-3)
+
+
+@pytest.mark.parametrize("name", ["cbox", "meshes", "envmap-spheres"])
+def test_convert_writes_toml_that_reads_back_the_same_scene(tmp_path, name):
+    out = tmp_path / "sub" / f"{name}.toml"
+    out.parent.mkdir()
+    assert main(["convert", str(SCENES / f"{name}.xml"), "-o", str(out)]) == 0
+    a, b = read_mitsuba_file(SCENES / f"{name}.xml"), load_scene(str(out))
+    np.testing.assert_array_equal(a.spheres, b.spheres)
+    for field in a.materials.rows.dtype.names:    # IORs pass through float32 text: 1 ulp
+        np.testing.assert_allclose(a.materials.rows[field], b.materials.rows[field], rtol=1e-6, err_msg=field)
+    assert [m.name for m in a.meshes] == [m.name for m in b.meshes]
+    for ma, mb in zip(a.meshes, b.meshes):
+        np.testing.assert_allclose(ma.vertices, mb.vertices, rtol=1e-6, atol=1e-6)
+        np.testing.assert_array_equal(ma.faces, mb.faces)
+        assert (ma.normals is None) == (mb.normals is None)
+        assert ma.material == mb.material
+    if name == "meshes":     # file meshes stay references, relative to the TOML file
+        text = out.read_text()
+        assert 'file = "../' in text and "matrix = " in text
+    for attr in ("eye", "look_at", "up"):
+        np.testing.assert_allclose(getattr(a.camera, attr), getattr(b.camera, attr), rtol=1e-6)
+    assert a.camera.vfov == pytest.approx(b.camera.vfov)
+    np.testing.assert_array_equal(a.environment.image, b.environment.image)
+    assert (a.environment.intensity, a.environment.rotation) == pytest.approx(
+        (b.environment.intensity, b.environment.rotation))
+    assert a.settings == b.settings
+
+
+WARNINGS = [
+    ('<shape type="sphere"><bsdf type="diffuse"><texture type="bitmap" name="reflectance">'
+     '<string name="filename" value="missing.png"/></texture></bsdf></shape>',
+     "textures are not supported; pathtrace uses its mean colour"),
+    ('<shape type="sphere"><bsdf type="principled"><rgb name="base_color" value="0.8, 0.2, 0.1"/></bsdf></shape>',
+     "pathtrace uses a diffuse BSDF of albedo 0.8, 0.2, 0.1"),
+    ('<shape type="sphere"><bsdf type="roughconductor"/></shape>',
+     "the beckmann distribution (Mitsuba's default) is rendered as GGX"),
+    (f'<emitter type="point"/>{SPHERE}', "pathtrace has no point emitters; it ignores this one"),
+    (f'<shape type="hair"/>{SPHERE}', "pathtrace has no hair shape; it ignores this one"),
+    (f'<integrator type="direct"/>{SPHERE}', "pathtrace renders with its path tracer instead"),
+    (f'<sensor type="perspective"><film type="hdrfilm"><rfilter type="gaussian"/></film></sensor>{SPHERE}',
+     "a box filter"),
+    (f'<medium type="homogeneous" id="fog"/>{SPHERE}', "not supported; pathtrace ignores it"),
+]
+
+
+@pytest.mark.parametrize("body,message", WARNINGS, ids=[w[1][:30] for w in WARNINGS])
+def test_unsupported_elements_warn_once_and_render_anyway(tmp_path, capsys, body, message):
+    scene = read_mitsuba_file(write(tmp_path, body))
+    err = capsys.readouterr().err
+    lines = [line for line in err.splitlines() if message in line]
+    assert len(lines) == 1, err
+    assert lines[0].startswith("pathtrace: warning: ") and "scene.xml:" in lines[0]
+    assert len(scene.spheres) + len(scene.meshes) >= 1
+
+
+ERRORS = [
+    ("<shape type='sphere'><float name='radius' value='1'/>", None, "scene.xml:4: not well-formed XML"),
+    (SPHERE, '<!DOCTYPE scene [<!ENTITY a "aaaaaaaaaa"><!ENTITY b "&a;&a;&a;&a;&a;&a;">]>\n<scene version="3.0.0">',
+     "document type declarations"),
+    ('<shape type="sphere"><float name="radius" value="abc"/></shape>', None,
+     "<float name=\"radius\">: value 'abc' is not a number"),
+    ('<shape type="sphere"><float name="radius" value="1e39"/></shape>', None, "is not a finite float32"),
+    ('<shape type="sphere"><float name="radius" value="$r"/></shape>', None, "$r has no <default> value"),
+    ('<shape type="obj"><string name="filename" value="nowhere.obj"/></shape>', None, "no such mesh file"),
+    ('<shape type="sphere"><ref id="gold"/></shape>', None, "no top-level element has id 'gold'"),
+    ('<include filename="scene.xml"/>', None, "includes nest deeper than 8"),
+    (SPHERE, "<scenery>", "not well-formed XML"),
+    ('<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="100000"/></film></sensor>',
+     None, "must be in 1..16384, got 100000"),
+    ('<shape type="sphere"><bsdf type="dielectric"><float name="int_ior" value="1"/>'
+     '<float name="ext_ior" value="1"/></bsdf></shape>', None, "int_ior and ext_ior must differ"),
+    ('<shape type="sphere"><bsdf type="diffuse"><rgb name="reflectance" value="1, 2"/></bsdf></shape>',
+     None, "value must be 1 or 3 numbers"),
+    ('<emitter type="envmap"><string name="filename" value="none.exr"/></emitter>' + SPHERE, None, "none.exr"),
+    ('<bsdf type="diffuse" id="x"/>', None, "the scene has no shapes pathtrace can render"),
+]
+
+
+@pytest.mark.parametrize("body,header,message", ERRORS, ids=[e[2][:30] for e in ERRORS])
+def test_bad_files_fail_with_one_line(tmp_path, capsys, body, header, message):
+    path = write(tmp_path, body, header=header or '<scene version="3.0.0">')
+    with pytest.raises(UserError) as e:
+        read_mitsuba_file(path)
+    assert message in str(e.value) and "\n" not in str(e.value)
+    assert main(["render", str(path), "-o", str(tmp_path / "x.png")]) == 1
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and not (tmp_path / "x.png").exists()
+
+
+def test_entity_expansion_bomb_is_refused_quickly(tmp_path):
+    """A billion laughs: refused at its declaration, before any expansion."""
+    entities = '<!ENTITY l0 "ha">' + "".join(
+        f'<!ENTITY l{i} "{"".join(f"&l{i - 1};" for _ in range(10))}">' for i in range(1, 10))
+    path = write(tmp_path, '<shape type="sphere"><string name="x" value="&l9;"/></shape>',
+                 header=f"<!DOCTYPE scene [{entities}]>\n<scene>")
+    with pytest.raises(UserError, match="document type declarations"):
+        read_mitsuba_file(path)
