@@ -47,6 +47,21 @@ class BSDFType:
                 values[p.name] = p.names[value]
         return values
 
+    def complete(self, given: dict) -> dict:
+        """The full parameter values from those a file gave: names resolved, defaults filled in,
+        the combination checked. Raises ValueError with the problem."""
+        values = self.resolve(given)
+        for p in self.params:
+            if p.kind != "name" and p.name not in values:
+                if p.default is None:
+                    raise ValueError(f"missing '{p.name}'")
+                values[p.name] = p.default
+        problem = self.check({k: np.atleast_2d(v) if np.ndim(v) else np.atleast_1d(v)
+                              for k, v in values.items()})
+        if problem:
+            raise ValueError(problem)
+        return values
+
     def check(self, values: dict) -> str | None:
         """A problem with a combination of values (every parameter present), or None."""
         return None

@@ -41,9 +41,9 @@ class Node:
     children: list = field(default_factory=list)
 
     def where(self):
-        name = self.attrs.get("name") or self.attrs.get("type") or self.attrs.get("id")
-        label = f'<{self.tag} {"name" if "name" in self.attrs else "type" if "type" in self.attrs else "id"}="{name}">' \
-            if name else f"<{self.tag}>"
+        """file:line: <tag key="value">, by the first of name, type and id it has."""
+        key = next((k for k in ("name", "type", "id") if self.attrs.get(k)), None)
+        label = f'<{self.tag} {key}="{self.attrs[key]}">' if key else f"<{self.tag}>"
         return f"{self.file}:{self.line}: {label}"
 
 
@@ -141,6 +141,8 @@ def _color(node):
         v = v * 3
     if len(v) != 3:
         _fail(node, f"value must be 1 or 3 numbers, got {text!r}")
+    if min(v) < 0:
+        _fail(node, f"a colour must not be negative, got {text!r}")
     return np.array(v)
 
 
@@ -219,7 +221,7 @@ class _Reader:
 
     # -- properties of an element: {name: Node} after $substitution --
 
-    def substitute(self, node, depth=0):
+    def substitute(self, node):
         for k, v in node.attrs.items():
             if "$" in v:
                 def value(m):
@@ -518,7 +520,10 @@ class _Reader:
                 return self.material(inner[0])
             return Material("diffuse", {"rho_d": np.full(3, 0.5)})
         if kind == "diffuse":
-            return Material("diffuse", {"rho_d": np.clip(self.color(props, "reflectance", 0.5), 0, 1)})
+            rho = self.color(props, "reflectance", 0.5)
+            if np.any(rho > 1):
+                _fail(props["reflectance"], "a reflectance must lie in [0, 1]")
+            return Material("diffuse", {"rho_d": rho})
         if kind in ("conductor", "roughconductor", "dielectric", "thindielectric", "plastic",
                     "roughplastic"):
             return self.mitsuba_material(node, kind, props)
@@ -553,29 +558,21 @@ class _Reader:
             a = [self.get(props, k, 0.1, ("float",)) for k in ("alpha_u", "alpha_v")]
             warn(f"{node.where()}: anisotropic roughness is not supported; pathtrace uses alpha {np.mean(a):.3g}")
             values["alpha"] = float(np.mean(a))
+        known = {p.name for p in bsdf.params} | {"alpha_u", "alpha_v", "sample_visible"}
         for name in props:
-            known = {p.name for p in bsdf.params} | {"alpha_u", "alpha_v", "sample_visible"}
             if name not in known:
                 warn(f"{props[name].where()}: not a parameter pathtrace's {kind} has; ignored")
-        try:
-            values = bsdf.resolve(values)
-        except ValueError as e:
-            _fail(node, str(e))
-        for p in bsdf.params:
-            if p.kind == "name" or p.name in values:
-                continue
-            values[p.name] = p.default
-        for p in bsdf.params:
-            if p.kind == "name":
+        for p in bsdf.params:        # the range of what the file gave (the TOML reader's Param bounds)
+            if p.kind in ("name", "bool") or p.name not in values or isinstance(values[p.name], str):
                 continue
             v = np.asarray(values[p.name], np.float64)
             if np.any(v < p.low) or (p.high is not None and np.any(v > p.high)):
                 bound = f"[{p.low}, {p.high}]" if p.high is not None else f"at least {p.low}"
                 _fail(props.get(p.name, node), f"{p.name} must lie in {bound}")
-        problem = bsdf.check({k: np.atleast_2d(v) if np.ndim(v) else np.atleast_1d(v)
-                              for k, v in values.items()})
-        if problem:
-            _fail(node, problem)
+        try:
+            values = bsdf.complete(values)
+        except ValueError as e:
+            _fail(node, str(e))
         return Material(kind, values)
 
     # -- shapes --
@@ -591,7 +588,7 @@ class _Reader:
                 if child.attrs.get("type") != "area":
                     warn(f"{child.where()}: a shape's emitter must be area; ignored")
                     continue
-                emission = np.clip(self.color(self.properties(child), "radiance", 1.0), 0, None)
+                emission = self.color(self.properties(child), "radiance", 1.0)
             elif child.tag in ("medium", "sensor"):
                 warn(f"{child.where()}: not supported; ignored")
         material = self.material_row(bsdf, emission)

@@ -107,18 +107,9 @@ class _Reader:
         self.table(data, where, {"type", "Le", "twosided", *(p.name for p in bsdf.params)})
         given = {p.name: self.parameter(data, p, where) for p in bsdf.params if p.name in data}
         try:
-            values = bsdf.resolve(given)
+            values = bsdf.complete(given)
         except ValueError as e:
             self.fail(where, str(e))
-        for p in bsdf.params:
-            if p.kind != "name" and p.name not in values:
-                if p.default is None:
-                    self.fail(where, f"missing '{p.name}'")
-                values[p.name] = p.default
-        problem = bsdf.check({k: np.atleast_2d(v) if np.ndim(v) else np.atleast_1d(v)
-                              for k, v in values.items()})
-        if problem:
-            self.fail(where, problem)
         twosided = data.get("twosided", False)
         if not isinstance(twosided, bool):
             self.fail(f"{where}.twosided", f"must be true or false, got {twosided!r}")

@@ -9,9 +9,9 @@ from pathlib import Path
 import numpy as np
 
 from app.materials import BSDFS
+from app.errors import UserError
 from app.scene.description import Scene
-
-INLINE_LIMIT = 100_000      # the TOML reader's own limit on vertices written in a scene file
+from app.scene.toml_reader import MAX_INLINE
 
 
 def _value(v) -> str:
@@ -88,8 +88,7 @@ def scene_toml(scene: Scene, out: Path) -> str:
             if mesh.file.flip_normals:
                 lines.append("flip_normals = true")
         else:
-            if len(mesh.vertices) > INLINE_LIMIT or len(mesh.faces) > INLINE_LIMIT:
-                from app.errors import UserError
+            if len(mesh.vertices) > MAX_INLINE or len(mesh.faces) > MAX_INLINE:
                 raise UserError(f"{mesh.name}: {len(mesh.faces)} triangles is too many to write inline")
             lines += [f"vertices = {_value(mesh.vertices.astype(np.float64).tolist())}",
                       f"faces = {_value(mesh.faces.tolist())}"]
