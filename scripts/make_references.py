@@ -30,8 +30,11 @@ SCENES = {  # name: (width, height, spp per render, renders)
     "material-spheres": (96, 36, 1024, 16),
     "material-spheres-hdr": (96, 36, 1024, 16),
     # Mitsuba XML scenes of tests/scenes/, which Mitsuba loads itself (their size is theirs)
-    "cbox": (48, 48, 1024, 16),
-    "envmap-spheres": (96, 36, 1024, 16),
+    "cbox": (None, None, 1024, 16),
+    "envmap-spheres": (None, None, 1024, 16),
+    "meshes": (None, None, 1024, 16),
+    "meshes-smaller": (None, None, 1024, 16),
+    "meshes-larger": (None, None, 1024, 16),
 }
 XML_SCENES = OUT.parent / "scenes"
 MAX_DEPTH = 8
@@ -120,7 +123,8 @@ def main(names):
         width, height, spp, runs = SCENES[name]
         xml = XML_SCENES / f"{name}.xml"
         if xml.exists():
-            m = mi.load_file(str(xml), spp=spp, width=width, height=height)
+            m = mi.load_file(str(xml), spp=spp)
+            width, height = m.sensors()[0].film().size()
         else:
             m = mitsuba_scene(mi, load_scene(name), width, height, spp)
         images = np.stack([np.array(mi.render(m, seed=k), np.float64)[..., :3] for k in range(runs)])

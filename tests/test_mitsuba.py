@@ -51,6 +51,17 @@ def test_cornell_box_loads_its_shapes_materials_light_and_camera():
     assert scene.settings.max_depth == 8
 
 
+def test_default_bsdf_is_diffuse_and_black_for_emitters(tmp_path):
+    """As Mitsuba 3: a shape without a BSDF is diffuse of reflectance 0.5, a lamp without one
+    reflects nothing (meshes.xml's floor would otherwise get 0.2 % more light)."""
+    lamp = '<shape type="rectangle"><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>'
+    scene = read_mitsuba_file(write(tmp_path, SPHERE + lamp))
+    plain, emitter = (scene.materials.get(scene.sphere_material[0]), scene.materials.get(scene.meshes[0].material))
+    np.testing.assert_array_equal(plain.params["rho_d"], 0.5)
+    np.testing.assert_array_equal(emitter.params["rho_d"], 0.0)
+    np.testing.assert_array_equal(emitter.emission, 1.0)
+
+
 @pytest.mark.parametrize("axis,width,height,expected", [
     ("y", 200, 100, 50.0),
     ("x", 200, 100, math.degrees(2 * math.atan(math.tan(math.radians(25)) / 2))),
