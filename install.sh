@@ -2,7 +2,8 @@
 # Sets pathtrace up on Debian or Ubuntu: the system's OpenCL and OpenGL pieces, a virtual
 # environment in .venv, and pathtrace installed into it (a normal, non-editable install).
 #   ./install.sh          what rendering and the viewer need
-#   ./install.sh --dev    also Xvfb and xdotool (the window tests) and the test packages
+#   ./install.sh --dev    also Xvfb and xdotool (the window tests), the test packages and Ray
+#                         (the render farm, which the tests run on a local cluster)
 set -euo pipefail
 cd "$(dirname "$0")"
 
@@ -29,7 +30,7 @@ fi
 [ -x .venv/bin/python ] || python3 -m venv .venv
 .venv/bin/python -m pip install -q --upgrade pip
 if [ $dev = 1 ]; then
-    .venv/bin/python -m pip install -q ".[test]"
+    .venv/bin/python -m pip install -q ".[test,farm]"
 else
     .venv/bin/python -m pip install -q .
 fi

@@ -15,9 +15,9 @@ import sys
 import time
 from dataclasses import asdict, dataclass
 
-from app.device import build_program, choose_device, list_devices
+from app.device import build_program, choose_devices
 from app.errors import UserError
-from app.render import render_samples
+from app.multidevice import DeviceGroup
 from app.renderer import Renderer
 from app.scene import load_scene
 
@@ -52,23 +52,29 @@ def default_estimator(scene_name: str) -> str:
     return "depth8" if scene_name.endswith("-diffuse") else "rr"
 
 
-def measure(backend, scene, estimator, width, height, spp, builds) -> Result:
+def measure(backends, scene, estimator, width, height, spp, builds) -> Result:
+    """One timed render of `scene` on `backends` together (one device, or several sharing the
+    samples: app.multidevice)."""
     settings = dict(max_depth=COMPARISON_DEPTH, russian_roulette="off") if estimator.startswith("depth8") \
         else dict(max_depth=0, russian_roulette="albedo")
     settings["nee"] = estimator.endswith("+nee")
     scene = scene.with_settings(**settings)
     # the scene's own kernels (app.features), built and launched once outside the timed region
-    Renderer(backend, scene, 16, 16).add_samples(1)
-    backend.queue.finish()
+    for backend in backends:
+        Renderer(backend, scene, 16, 16).add_samples(1)
+        backend.queue.finish()
     start = time.perf_counter()
-    renderer = Renderer(backend, scene, width, height)
-    render_samples(renderer, spp, launch_seconds=0.5)
-    renderer.mean()
+    group = DeviceGroup(backends, scene, width, height)
+    group.render(spp, launch_seconds=0.5)
+    group.mean()
     seconds = time.perf_counter() - start
-    rays = renderer.rays_traced()
-    return Result(scene.name, backend.device.describe(), estimator, width, height, spp, seconds,
+    rays = group.rays_traced()
+    names = [b.device.describe() for b in backends]
+    device = names[0] if len(names) == 1 else f"{len(names)}x {names[0]}" if len(set(names)) == 1 \
+        else " + ".join(names)
+    return Result(scene.name, device, estimator, width, height, spp, seconds,
                   width * height * spp / seconds / 1e6, rays / seconds / 1e6,
-                  renderer.bvh_seconds, *builds)
+                  group.bvh_seconds, *builds)
 
 
 def kernel_build_times(backend):
@@ -78,16 +84,18 @@ def kernel_build_times(backend):
     return cold, warm
 
 
-def run(device_specs, scene_names, estimators, width, height, spp, log=print):
-    specs = [str(d.index) for d in list_devices()] if "all" in device_specs else device_specs
+def run(device_specs, scene_names, estimators, width, height, spp, together=False, log=print):
+    """A row per device and scene, or with `together` a row per scene for all the devices
+    rendering it as one (the multi-device scaling measurement)."""
+    backends = choose_devices(device_specs)
+    groups = [backends] if together else [[b] for b in backends]
     results = []
-    for spec in specs:
-        backend = choose_device(spec)
-        builds = kernel_build_times(backend)
+    for group in groups:
+        builds = kernel_build_times(group[0])
         for name in scene_names:
             scene = load_scene(name)
             for est in estimators or [default_estimator(name)]:
-                r = measure(backend, scene, est, width, height, spp, builds)
+                r = measure(group, scene, est, width, height, spp, builds)
                 log(format_row(r))
                 results.append(r)
     return results

@@ -46,11 +46,15 @@ def _finite(text):
     return value
 
 
-def add_render_options(p: argparse.ArgumentParser):
-    """Options shared by everything that renders a scene."""
-    p.add_argument("--device", default="auto",
-                   help="auto (first GPU that builds the kernels, else CPU), gpu, cpu, "
-                        "an index from 'pathtrace devices', or part of a device name")
+def add_render_options(p: argparse.ArgumentParser, device: bool = True):
+    """Options shared by everything that renders a scene (the farm's workers choose their own
+    devices: device=False)."""
+    if device:
+        p.add_argument("--device", action="append", metavar="DEVICE",
+                       help="auto (first GPU that builds the kernels, else CPU; the default), "
+                            "gpu, cpu, gpu:N or cpu:N (the Nth of that kind, from 0), an index "
+                            "from 'pathtrace devices', or part of a device name; render: repeat "
+                            "to share the samples between devices, or 'all' for every device")
     p.add_argument("--size", type=_size, metavar="WxH", help="image size (default: the scene's)")
     p.add_argument("--seed", type=_int_range(0, 2**32 - 1), help="random seed (default: the scene's)")
     p.add_argument("--max-depth", type=_int_range(0), metavar="N",
@@ -108,19 +112,19 @@ def cmd_scenes(args):
 def cmd_render(args):
     from tqdm import tqdm
 
-    from app.device import choose_device
+    from app.device import choose_devices
     from app.image_io import check_writable, write_image
-    from app.render import render_samples
-    from app.renderer import Renderer
+    from app.multidevice import DeviceGroup
     from app.scene import load_scene
 
     for path in args.output:
         check_writable(path)
     scene = apply_render_options(load_scene(args.scene), args)
     s = scene.settings
-    backend = choose_device(args.device)
-    print(f"device: {backend.device.describe()}", file=sys.stderr)
-    renderer = Renderer(backend, scene)
+    backends = choose_devices(args.device or ["auto"])
+    for backend in backends:
+        print(f"device: {backend.device.describe()}", file=sys.stderr)
+    group = DeviceGroup(backends, scene)
     pixels = s.width * s.height
     bar = tqdm(total=s.spp, unit="spp", desc=f"{scene.name} {s.width}x{s.height}",
                file=sys.stderr, disable=args.quiet, dynamic_ncols=True)
@@ -129,13 +133,13 @@ def cmd_render(args):
             bar.update(done - bar.n)
             rate = bar.format_dict.get("rate") or 0
             bar.set_postfix_str(f"{rate * pixels / 1e6:.1f} Msamples/s", refresh=False)
-        render_samples(renderer, s.spp, progress)
+        group.render(s.spp, progress)
     except KeyboardInterrupt:
         bar.close()
-        print(f"interrupted at {renderer.samples}/{s.spp} spp; nothing written", file=sys.stderr)
+        print(f"interrupted at {group.samples}/{s.spp} spp; nothing written", file=sys.stderr)
         return 130
     bar.close()
-    image = renderer.mean()
+    image = group.mean()
     for path in args.output:
         write_image(path, image, args.exposure, args.tonemap)
         print(f"wrote {path}", file=sys.stderr)
@@ -155,14 +159,69 @@ def cmd_convert(args):
     return 0
 
 
+def cmd_farm_render(args):
+    import numpy as np
+    from tqdm import tqdm
+
+    from app import farm
+    from app.compiled import compile_scene
+    from app.image_io import check_writable, write_image
+    from app.scene import load_scene
+
+    scenes = [apply_render_options(load_scene(name), args) for name in args.scene]
+    if args.frames and len(scenes) > 1:
+        raise UserError("--frames: give one scene, whose camera the frames orbit")
+    jobs = [farm.Job(i, scene.camera, scene.settings.spp) for i, scene in enumerate(scenes)]
+    if args.frames:
+        jobs = [farm.Job(0, camera, jobs[0].spp) for camera in farm.orbit(scenes[0].camera, args.frames, args.orbit)]
+    for k, job in enumerate(jobs):
+        job.output = farm_output(args.output, scenes[job.scene].name, k, len(jobs))
+        check_writable(job.output)
+    if len({job.output for job in jobs}) < len(jobs):
+        raise UserError(f"--output {args.output}: several images would share a name; put "
+                        "{name} (the scene's) or {frame} (its number) in it")
+    compiled = [compile_scene(scene) for scene in scenes]
+    ray = farm.connect(args.address, args.num_cpus)
+    try:
+        actors = farm.start_actors(ray, compiled, args.cpu_actors)
+        for _, device in actors:
+            print(f"worker: {device}", file=sys.stderr)
+        total = sum(job.spp for job in jobs)
+        bar = tqdm(total=total, unit="spp", desc=f"farm: {len(jobs)} image{'s' * (len(jobs) > 1)}",
+                   file=sys.stderr, disable=args.quiet, dynamic_ncols=True)
+        try:
+            sums, _ = farm.Farm(ray, actors, compiled).render(jobs, bar.update)
+        finally:
+            bar.close()
+    finally:
+        ray.shutdown()
+    for job, total_sum in zip(jobs, sums):
+        write_image(job.output, (total_sum[..., :3] / job.spp).astype(np.float32), args.exposure, args.tonemap)
+        print(f"wrote {job.output}", file=sys.stderr)
+    return 0
+
+
+def farm_output(pattern: str, name: str, frame: int, count: int) -> str:
+    """The output file of image `frame` of `count`: `pattern` with {name} and {frame} filled
+    in (a pattern for one image may have neither)."""
+    try:
+        return pattern.format(name=name, frame=frame)
+    except (KeyError, IndexError, ValueError) as e:
+        raise UserError(f"--output {pattern}: only {{name}} and {{frame}} may stand in braces "
+                        f"({type(e).__name__}: {e})") from None
+
+
 def cmd_view(args):
     from app.device import choose_device
     from app.scene import load_scene
     from app.viewer.window import Viewer, require_display
 
+    if args.device and len(args.device) > 1:
+        raise UserError("--device: the viewer renders on one device; give one (several are "
+                        "for 'pathtrace render')")
     require_display()      # before any device work
     scene = apply_render_options(load_scene(args.scene), args)
-    backend = choose_device(args.device)
+    backend = choose_device((args.device or ["auto"])[0])
     width, height = args.size or (1280, 720)
     viewer = Viewer(backend, scene, width, height, args.screenshot_dir)
     try:
@@ -183,7 +242,8 @@ def cmd_bench(args):
         check_writable(args.json, "--json", formats=None)
     width, height = args.size
     print(bench.HEADER)
-    results = bench.run(args.device or ["auto"], args.scenes, args.estimator, width, height, args.spp)
+    results = bench.run(args.device or ["auto"], args.scenes, args.estimator, width, height, args.spp,
+                        args.together)
     if args.json:
         bench.write_json(args.json, results, sys.argv[1:])
         print(f"wrote {args.json}", file=sys.stderr)
@@ -235,9 +295,41 @@ def build_parser():
                         "scenes, depth8 for -diffuse ones, both without NEE")
     p.add_argument("--size", type=_size, metavar="WxH", help="default 1920x1080")
     p.add_argument("--spp", type=_int_range(1), help="samples per pixel (default 1000)")
+    p.add_argument("--together", action="store_true",
+                   help="render each scene on all the --device devices at once (one row per "
+                        "scene) instead of on each in turn")
     p.add_argument("--quick", action="store_true", help="a smoke test: 320x180, 8 spp")
     p.add_argument("--json", metavar="FILE", help="also write the results as JSON")
     p.set_defaults(func=cmd_bench)
+
+    p = sub.add_parser("farm", help="render on a Ray cluster (docs/farm.md)", epilog=EPILOG)
+    farm_sub = p.add_subparsers(dest="farm_command", required=True, metavar="COMMAND")
+    p = farm_sub.add_parser("render", help="render stills, or the frames of an orbit, on every "
+                                           "device of a Ray cluster", epilog=EPILOG)
+    p.add_argument("scene", nargs="+", help="scene files or built-in names: one image each")
+    p.add_argument("-o", "--output", required=True, metavar="FILE",
+                   help="output image; with several images, put {name} (the scene's name) or "
+                        "{frame} (the image's number) in it, as in 'out/{name}-{frame:03d}.exr'")
+    p.add_argument("--spp", type=_int_range(1), help="samples per pixel (default: the scene's)")
+    p.add_argument("--frames", type=_int_range(1), metavar="N",
+                   help="render N frames of the camera orbiting its look-at point")
+    p.add_argument("--orbit", type=_finite, default=360.0, metavar="DEGREES",
+                   help="how far the --frames orbit turns (default 360)")
+    p.add_argument("--address", metavar="ADDR",
+                   help="the Ray cluster to join ('auto': the one 'ray start' began on this "
+                        "machine, or host:port); default: start a local one")
+    p.add_argument("--num-cpus", type=_int_range(1), metavar="N",
+                   help="CPUs of the local cluster started without --address (default: all)")
+    p.add_argument("--cpu-actors", type=_int_range(0), metavar="N",
+                   help="workers rendering with PoCL on CPUs (default: 1 if the cluster has no "
+                        "GPU, else 0); one actor per GPU is always started")
+    p.add_argument("--exposure", type=_finite, default=0.0, metavar="EV",
+                   help="exposure in stops, for .png/.jpg (default 0)")
+    p.add_argument("--tonemap", choices=TONEMAPS, default="standard",
+                   help="tone curve for .png/.jpg (default standard: clip at 1)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    add_render_options(p, device=False)
+    p.set_defaults(func=cmd_farm_render)
 
     p = sub.add_parser("convert", help="write a scene (a Mitsuba 3 .xml file, say) as pathtrace TOML",
                        epilog=EPILOG)

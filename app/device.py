@@ -159,8 +159,12 @@ def build_error_line(error: Exception) -> str:
     return (errors or lines or [type(error).__name__])[0]
 
 
-def _matches(spec: str, d: Device) -> bool:
+def _matches(spec: str, d: Device, devices: list[Device]) -> bool:
     spec_l = spec.lower()
+    kind, _, nth = spec_l.partition(":")
+    if kind in ("gpu", "cpu") and nth.isdigit():     # the nth device of a kind, from 0
+        of_kind = [e for e in devices if e.kind.lower() == kind]
+        return int(nth) < len(of_kind) and of_kind[int(nth)] is d
     if spec_l in ("auto", "any"):
         return True
     if spec_l in ("gpu", "cpu"):
@@ -170,16 +174,34 @@ def _matches(spec: str, d: Device) -> bool:
     return spec_l in d.name.lower() or spec_l in d.platform.name.lower()
 
 
+def choose_devices(specs: list[str], log=lambda line: print(line, file=sys.stderr)) -> list[Backend]:
+    """Repeated --device options: one backend per spec (a spec named twice opens its device
+    twice, as two independent queues), or 'all': every device that builds the kernels."""
+    if "all" not in (s.lower() for s in specs):
+        return [choose_device(spec, log=log) for spec in specs]
+    backends = []
+    for d in list_devices():
+        try:
+            backends.append(open_device(d))
+        except cl.Error as e:
+            log(f"skipping {d.describe()}: cannot build the kernels: {build_error_line(e)}")
+    if not backends:
+        raise UserError("--device all: no OpenCL device can build the kernels "
+                        "(see 'pathtrace devices --check')")
+    return backends
+
+
 def choose_device(spec: str = "auto", extra: str = "", use_cache: bool = True,
                   log=lambda line: print(line, file=sys.stderr)) -> Backend:
     """--device: 'auto' (the first GPU whose platform builds our kernels, else a CPU), 'gpu',
-    'cpu', an index from `pathtrace devices`, or a fragment of a device or platform name.
+    'cpu', 'gpu:N' or 'cpu:N' (the Nth of that kind, from 0), an index from `pathtrace
+    devices`, or a fragment of a device or platform name.
     A device whose platform cannot build the kernels is skipped with one line saying why."""
     devices = list_devices()
     if not devices:
         raise UserError("no OpenCL device found: install an OpenCL driver "
                         "(on Debian/Ubuntu, 'apt install pocl-opencl-icd' runs on the CPU)")
-    candidates = [d for d in devices if _matches(spec, d)]
+    candidates = [d for d in devices if _matches(spec, d, devices)]
     if not candidates:
         raise UserError(f"--device: no OpenCL device matches '{spec}' "
                         f"(see 'pathtrace devices'; {len(devices)} found)")

@@ -17,6 +17,14 @@ from app.types import RENDER_PARAMS
 RR_DEPTH = 5           # where Russian roulette on throughput starts (Mitsuba 3's default)
 
 
+def variance_of(sum: np.ndarray, sum_sq: np.ndarray, samples: int) -> np.ndarray:
+    """The per-sample variance of each pixel and channel from the running sums of `samples`
+    samples (of one sample, not of the mean)."""
+    n = max(samples, 1)
+    m = sum[..., :3].astype(np.float64) / n
+    return np.maximum(sum_sq[..., :3] / n - m * m, 0.0).astype(np.float32)
+
+
 class Renderer:
     def __init__(self, backend: Backend, scene, width: int = None, height: int = None):
         """scene: a CompiledScene, or a Scene to compile."""
@@ -154,11 +162,16 @@ class Renderer:
         p["rr_depth"] = RR_DEPTH
         return p
 
-    def add_samples(self, count: int = 1) -> cl.Event:
-        """Queues one launch that adds `count` samples to every pixel; returns its event."""
+    def add_samples(self, count: int = 1, start: int = None) -> cl.Event:
+        """Queues one launch that adds `count` samples to every pixel; returns its event. The
+        samples are those of index start, start + 1, ... (default: the next ones of this
+        renderer), so that several renderers can share one render's sample indices."""
         b = self._buffers
         kernel = self.kernels[self.settings.nee]
-        kernel.set_args(*self._scene_args(), self.params(count), b["sum"], b["sum_sq"])
+        params = self.params(count)
+        if start is not None:
+            params["sample_start"] = start
+        kernel.set_args(*self._scene_args(), params, b["sum"], b["sum_sq"])
         local = (8, 8)
         global_size = tuple(-(-n // l) * l for n, l in zip((self.width, self.height), local))
         event = cl.enqueue_nd_range_kernel(self.backend.queue, kernel, global_size, local)
@@ -187,11 +200,13 @@ class Renderer:
         """Rays traced since the last reset (camera rays and bounces), all pixels together."""
         return int(self._read("sum_sq")[..., 3].sum(dtype=np.float64))
 
+    def read_sum_sq(self) -> np.ndarray:
+        """The raw sums of squares, (H, W, 4) float32: rgb, and rays traced in a."""
+        return self._read("sum_sq")
+
     def variance(self) -> np.ndarray:
         """The per-sample variance of each pixel and channel (of one sample, not of the mean)."""
-        n = max(self.samples, 1)
-        m = self._read("sum")[..., :3].astype(np.float64) / n
-        return np.maximum(self._read("sum_sq")[..., :3] / n - m * m, 0.0).astype(np.float32)
+        return variance_of(self.read_sum(), self.read_sum_sq(), self.samples)
 
     def _upload(self, name, array):
         array = np.ascontiguousarray(array)

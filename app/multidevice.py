@@ -1,0 +1,134 @@
+"""One render on several devices. The scene is compiled once and uploaded to each device; every
+device adds whole-image samples to its own accumulation buffers, drawing sample indices from one
+shared counter, and the sums are added at the end. The random numbers of a sample are keyed on
+its absolute index (kernels/rng.cl), so the image does not depend on which device rendered which
+sample: it equals a one-device render of the same samples up to the order of float additions.
+
+Balancing follows the idea of Cycles' work balancer: each device takes launches sized to its own
+measured speed (app.render.next_launch_size), so a fast device takes more samples and a device
+that slows down takes fewer; near the end a device takes no more than its share of what is left,
+by the measured speeds, so that no device is left finishing a long launch alone."""
+
+import math
+import threading
+import time
+
+import numpy as np
+
+from app.compiled import CompiledScene, compile_scene
+from app.device import Backend
+from app.render import next_launch_size
+from app.renderer import Renderer, variance_of
+
+
+class SampleCounter:
+    """Hands out consecutive ranges of sample indices, [0, total), to several takers."""
+
+    def __init__(self, total: int):
+        self.total = total
+        self.issued = 0
+        self.stopped = False
+        self._lock = threading.Lock()
+        self._rates = {}        # taker -> its last measured samples per second
+
+    def take(self, taker, wanted: int, rate: float = None):
+        """Up to `wanted` sample indices for `taker` (rate: its speed, samples/s), as
+        (start, count), or None when all are issued or the render was stopped."""
+        with self._lock:
+            if rate:
+                self._rates[taker] = rate
+            left = self.total - self.issued
+            if self.stopped or left <= 0:
+                return None
+            count = min(wanted, left)
+            if rate and len(self._rates) > 1:
+                share = left * rate / sum(self._rates.values())
+                count = max(1, min(count, math.ceil(share)))
+            start = self.issued
+            self.issued += count
+            return start, count
+
+    def stop(self):
+        with self._lock:
+            self.stopped = True
+
+
+class DeviceGroup:
+    """Renderers of one compiled scene on several backends, driven together."""
+
+    def __init__(self, backends: list[Backend], scene, width: int = None, height: int = None):
+        compiled = scene if isinstance(scene, CompiledScene) else compile_scene(scene)
+        self.renderers = [Renderer(b, compiled, width, height) for b in backends]
+        self.compiled = compiled
+
+    @property
+    def samples(self) -> int:
+        """Samples per pixel accumulated over all devices."""
+        return sum(r.samples for r in self.renderers)
+
+    @property
+    def bvh_seconds(self) -> float:
+        return self.compiled.bvh_seconds
+
+    def render(self, spp: int, on_progress=None, launch_seconds: float = 0.25):
+        """Adds samples 0 .. spp-1 of every pixel, spread over the devices; on_progress(samples
+        done) after each launch. Re-raises the first device error; Ctrl-C stops every device
+        after its current launch."""
+        counter = SampleCounter(spp)
+        errors = []
+        progress_lock = threading.Lock()
+
+        def work(renderer):
+            try:
+                chunk, rate = 1, None
+                while (taken := counter.take(renderer, chunk, rate)) is not None:
+                    start, count = taken
+                    began = time.perf_counter()
+                    renderer.add_samples(count, start)
+                    renderer.finish()
+                    elapsed = time.perf_counter() - began
+                    rate = count / max(elapsed, 1e-9)
+                    chunk = next_launch_size(count, elapsed, launch_seconds)
+                    if on_progress:
+                        with progress_lock:
+                            on_progress(self.samples)
+            except BaseException as e:      # a device error ends the render for all
+                errors.append(e)
+                counter.stop()
+
+        threads = [threading.Thread(target=work, args=(r,), daemon=True) for r in self.renderers]
+        for t in threads:
+            t.start()
+        try:
+            for t in threads:
+                while t.is_alive():
+                    t.join(0.1)             # wakes for Ctrl-C, which only the main thread gets
+        except KeyboardInterrupt:
+            counter.stop()
+            for t in threads:
+                t.join()
+            raise
+        if errors:
+            raise errors[0]
+
+    def samples_per_device(self) -> list[int]:
+        return [r.samples for r in self.renderers]
+
+    def read_sums(self):
+        """The merged running sums: (sum, sum_sq), each (H, W, 4) float64."""
+        total = np.zeros((self.renderers[0].height, self.renderers[0].width, 4), np.float64)
+        total_sq = total.copy()
+        for r in self.renderers:
+            total += r.read_sum()
+            total_sq += r.read_sum_sq()
+        return total, total_sq
+
+    def mean(self) -> np.ndarray:
+        return (self.read_sums()[0][..., :3] / max(self.samples, 1)).astype(np.float32)
+
+    def variance(self) -> np.ndarray:
+        total, total_sq = self.read_sums()
+        return variance_of(total, total_sq, self.samples)
+
+    def rays_traced(self) -> int:
+        return int(self.read_sums()[1][..., 3].sum())

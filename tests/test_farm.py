@@ -1,0 +1,112 @@
+"""The render farm on a local Ray cluster of CPU actors (app/farm.py): the merged image equals
+the one-process render of the same samples, also when an actor is killed mid-render, and each
+bad input is one line."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import ray
+
+from app import farm
+from app.compiled import compile_scene
+from app.errors import UserError
+from app.image_io import read_hdr
+from app.renderer import Renderer
+from app.scene import load_scene
+
+
+@pytest.fixture(scope="module")
+def cluster():
+    """A local cluster of 3 CPUs, the driver's own: left running between the tests here."""
+    farm.connect(num_cpus=3)
+    yield ray
+    ray.shutdown()
+
+
+@pytest.fixture(scope="module")
+def scenes():
+    return [compile_scene(load_scene(name).with_settings(width=40, height=24, spp=40))
+            for name in ("simple", "cornell-box")]
+
+
+def one_process(backend, compiled, camera, spp):
+    r = Renderer(backend, compiled)
+    r.set_camera(camera)
+    r.add_samples(spp)
+    return r.read_sum().astype(np.float64)
+
+
+def test_farm_image_equals_the_one_process_render(cluster, scenes, backend):
+    actors = farm.start_actors(cluster, scenes, cpu_actors=3)
+    assert len(actors) == 3
+    jobs = [farm.Job(0, scenes[0].scene.camera, 40), farm.Job(1, scenes[1].scene.camera, 24)]
+    jobs += [farm.Job(0, c, 16) for c in farm.orbit(scenes[0].scene.camera, 2, 90)]
+    counted = []
+    sums, _ = farm.Farm(cluster, actors, scenes).render(jobs, counted.append)
+    assert sum(counted) == 40 + 24 + 2 * 16
+    for job, s in zip(jobs, sums):
+        ref = one_process(backend, scenes[job.scene], job.camera, job.spp)
+        assert s[..., 3].min() == s[..., 3].max() == job.spp          # every pixel: every sample
+        np.testing.assert_allclose(s[..., :3], ref[..., :3], rtol=1e-5, atol=1e-5)
+    # the orbit's second frame looks from elsewhere
+    assert not np.allclose(sums[2], sums[3])
+
+
+def test_killing_an_actor_mid_render_keeps_the_exact_samples(cluster, scenes, backend):
+    actors = farm.start_actors(cluster, scenes, cpu_actors=3)
+    f = farm.Farm(cluster, actors, scenes)
+    victim = actors[1][0]
+    killed = []
+
+    def kill_once(samples):
+        if not killed:
+            cluster.kill(victim)
+            killed.append(samples)
+
+    job = farm.Job(1, scenes[1].scene.camera, 120)
+    (s,), _ = f.render([job], kill_once)
+    assert killed and f.lost >= 1 and victim not in f.actors
+    assert s[..., 3].min() == s[..., 3].max() == 120
+    ref = one_process(backend, scenes[1], job.camera, 120)
+    np.testing.assert_allclose(s[..., :3], ref[..., :3], rtol=1e-5, atol=1e-5)
+
+
+def test_a_worker_without_a_usable_device_is_one_clear_error(cluster, scenes, capsys):
+    with pytest.raises(UserError, match="no farm worker could open an OpenCL device.*no OpenCL device matches 'no-such-device'"):
+        farm.start_actors(cluster, scenes, cpu_actors=1, cpu_device="no-such-device")
+    assert "a worker has no usable device" in capsys.readouterr().out
+
+
+def test_no_cluster_at_the_address_is_one_line(tmp_path):
+    for address, message in [("127.0.0.1:9", "cannot reach a Ray cluster there"),
+                             ("nonsense", "give host:port")]:
+        r = subprocess.run([sys.executable, "-m", "app", "farm", "render", "simple", "--address",
+                            address, "-o", str(tmp_path / "x.png")], capture_output=True, text=True,
+                           timeout=60)
+        assert r.returncode == 1 and message in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    assert not list(tmp_path.iterdir())
+
+
+def test_output_names_must_tell_the_images_apart(tmp_path, capsys):
+    from app.cli import main
+    assert main(["farm", "render", "simple", "demo", "-o", str(tmp_path / "x.png")]) == 1
+    assert "several images would share a name" in capsys.readouterr().err
+    assert main(["farm", "render", "simple", "-o", str(tmp_path / "{nope}.png")]) == 1
+    assert "only {name} and {frame}" in capsys.readouterr().err
+
+
+def test_farm_render_from_the_command_line(tmp_path):
+    """`pathtrace farm render` with a local cluster of its own: three frames of an orbit, each
+    the one-process render of its camera."""
+    pattern = str(tmp_path / "frame-{frame}.pfm")
+    r = subprocess.run([sys.executable, "-m", "app", "farm", "render", "simple", "--size", "32x20",
+                        "--spp", "12", "--frames", "3", "--orbit", "60", "--num-cpus", "2",
+                        "--cpu-actors", "2", "-o", pattern, "-q"], capture_output=True, text=True,
+                       timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["frame-0.pfm", "frame-1.pfm", "frame-2.pfm"]
+    images = [read_hdr(tmp_path / f"frame-{k}.pfm", "test") for k in range(3)]
+    assert all(np.isfinite(i).all() and i.shape == (20, 32, 3) for i in images)
+    assert not np.allclose(images[0], images[2])

@@ -1,0 +1,103 @@
+"""Several devices in one render (app/multidevice.py): the merged image equals a one-device
+render of the same samples, whatever the split; sample ranges are issued exactly once."""
+
+import threading
+
+import numpy as np
+import pytest
+
+from app.cli import main
+from app.device import open_device
+from app.multidevice import DeviceGroup, SampleCounter
+from app.renderer import Renderer
+from app.scene import load_scene
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return load_scene("simple").with_settings(width=40, height=24)
+
+
+def test_samples_split_by_index_give_the_same_image(backend, scene):
+    """The random numbers are keyed on the sample's index: samples 0-15 added as 5-7, 0-4 and
+    8-15 (in that order) give the image of one launch of 16."""
+    whole = Renderer(backend, scene)
+    whole.add_samples(16)
+    parts = Renderer(backend, scene)
+    for start, count in [(5, 3), (0, 5), (8, 8)]:
+        parts.add_samples(count, start)
+    np.testing.assert_allclose(parts.mean(), whole.mean(), rtol=1e-5, atol=1e-7)
+    assert parts.samples == 16
+
+
+def test_two_devices_give_the_one_device_image(backend, scene):
+    """One device split twice (two contexts and queues on it): the merged sums equal a
+    one-device render of the same samples, to float rounding, and both devices took part."""
+    second = open_device(backend.device)
+    group = DeviceGroup([backend, second], scene)
+    done = []
+    group.render(48, on_progress=done.append, launch_seconds=0.01)
+    single = Renderer(backend, scene)
+    single.add_samples(48)
+    assert group.samples == 48 and done[-1] == 48
+    assert all(n > 0 for n in group.samples_per_device())
+    np.testing.assert_allclose(group.mean(), single.mean(), rtol=1e-5, atol=1e-7)
+    np.testing.assert_allclose(group.variance(), single.variance(), rtol=1e-3, atol=1e-6)
+    assert group.rays_traced() == single.rays_traced()
+
+
+def test_sample_counter_issues_every_index_once_across_threads():
+    counter = SampleCounter(10_000)
+    taken = [[] for _ in range(4)]
+
+    def take(k):
+        rate = 100.0 * (k + 1)
+        while (t := counter.take(k, 7 * (k + 1), rate)) is not None:
+            taken[k].append(t)
+
+    threads = [threading.Thread(target=take, args=(k,)) for k in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    indices = np.concatenate([np.arange(s, s + c) for ranges in taken for s, c in ranges])
+    np.testing.assert_array_equal(np.sort(indices), np.arange(10_000))
+
+
+def test_near_the_end_a_device_takes_only_its_share():
+    """With 10 samples left, a device of a third of the measured speed takes 4, not the 100
+    its launch size asks for."""
+    counter = SampleCounter(10)
+    counter.take("fast", 0, rate=200.0)
+    assert counter.take("slow", 100, rate=100.0) == (0, 4)
+    assert counter.take("fast", 100, rate=200.0) == (4, 4)
+
+
+def test_a_device_error_stops_the_render_and_is_raised(backend, scene):
+    group = DeviceGroup([backend, open_device(backend.device)], scene)
+
+    def fail(*args):
+        raise RuntimeError("device lost")
+
+    group.renderers[1].add_samples = fail
+    with pytest.raises(RuntimeError, match="device lost"):
+        group.render(1000, launch_seconds=0.01)
+    assert group.samples < 1000
+
+
+def test_render_on_two_devices_from_the_command_line(tmp_path, capsys):
+    out = tmp_path / "two.pfm"
+    assert main(["render", "simple", "--size", "32x20", "--spp", "8", "--device", "cpu",
+                 "--device", "cpu:0", "-o", str(out), "-q"]) == 0
+    assert capsys.readouterr().err.count("device: ") == 2 and out.stat().st_size > 0
+
+
+def test_the_viewer_refuses_several_devices(capsys):
+    assert main(["view", "simple", "--device", "cpu", "--device", "cpu"]) == 1
+    err = capsys.readouterr().err
+    assert "the viewer renders on one device" in err and len(err.strip().splitlines()) == 1
+
+
+def test_an_unmatched_nth_device_is_one_line(capsys):
+    assert main(["render", "simple", "--device", "cpu:7", "-o", "x.png", "-q"]) == 1
+    assert "no OpenCL device matches 'cpu:7'" in capsys.readouterr().err
