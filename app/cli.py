@@ -160,6 +160,8 @@ def cmd_convert(args):
 
 
 def cmd_farm_render(args):
+    import time
+
     import numpy as np
     from tqdm import tqdm
 
@@ -181,7 +183,7 @@ def cmd_farm_render(args):
         raise UserError(f"--output {args.output}: several images would share a name; put "
                         "{name} (the scene's) or {frame} (its number) in it")
     compiled = [compile_scene(scene) for scene in scenes]
-    ray = farm.connect(args.address, args.num_cpus)
+    ray = farm.connect(args.address, args.num_cpus, args.num_gpus)
     try:
         actors = farm.start_actors(ray, compiled, args.cpu_actors)
         for _, device in actors:
@@ -189,10 +191,13 @@ def cmd_farm_render(args):
         total = sum(job.spp for job in jobs)
         bar = tqdm(total=total, unit="spp", desc=f"farm: {len(jobs)} image{'s' * (len(jobs) > 1)}",
                    file=sys.stderr, disable=args.quiet, dynamic_ncols=True)
+        start = time.perf_counter()
         try:
             sums, _ = farm.Farm(ray, actors, compiled).render(jobs, bar.update)
         finally:
             bar.close()
+        print(f"farm: {total} spp in {time.perf_counter() - start:.2f} s on {len(actors)} "
+              f"worker{'s' * (len(actors) > 1)}", file=sys.stderr)
     finally:
         ray.shutdown()
     for job, total_sum in zip(jobs, sums):
@@ -320,6 +325,8 @@ def build_parser():
                         "machine, or host:port); default: start a local one")
     p.add_argument("--num-cpus", type=_int_range(1), metavar="N",
                    help="CPUs of the local cluster started without --address (default: all)")
+    p.add_argument("--num-gpus", type=_int_range(0), metavar="N",
+                   help="GPUs of the local cluster started without --address (default: all)")
     p.add_argument("--cpu-actors", type=_int_range(0), metavar="N",
                    help="workers rendering with PoCL on CPUs (default: 1 if the cluster has no "
                         "GPU, else 0); one actor per GPU is always started")

@@ -57,8 +57,14 @@ def _actor_class(ray):
         """One OpenCL device of one node with the farm's scenes uploaded."""
 
         def __init__(self, scenes, device_spec: str):
-            from app.device import choose_device
+            from app.device import choose_device, list_devices
             from app.renderer import Renderer
+            if device_spec == "gpu":
+                # Ray reserves a GPU for this actor and hides the others from CUDA; should the
+                # OpenCL driver still list them all, take the reserved one by its number
+                ids = ray.get_gpu_ids()
+                if ids and sum(d.kind == "GPU" for d in list_devices()) > 1:
+                    device_spec = f"gpu:{int(ids[0])}"
             backend = choose_device(device_spec, log=lambda line: None)
             self.device = backend.device.describe()
             self.renderers = [Renderer(backend, compiled) for compiled in scenes]
@@ -86,15 +92,16 @@ def _import_ray():
     return ray
 
 
-def connect(address: str = None, num_cpus: int = None):
+def connect(address: str = None, num_cpus: int = None, num_gpus: int = None):
     """Joins the Ray cluster at `address` ('auto': the one started on this machine with
-    `ray start`), or starts a local one when no address is given."""
+    `ray start`), or starts a local one (of num_cpus CPUs and num_gpus GPUs, default all) when
+    no address is given."""
     ray = _import_ray()
     if address and address != "auto":
         _check_reachable(address)
     if not ray.is_initialized():
         try:
-            ray.init(address=address, num_cpus=num_cpus, include_dashboard=False,
+            ray.init(address=address, num_cpus=num_cpus, num_gpus=num_gpus, include_dashboard=False,
                      logging_level="ERROR", log_to_driver=False)
         except (ConnectionError, RuntimeError, ValueError) as e:
             raise UserError(f"--address {address}: cannot reach a Ray cluster: "
