@@ -70,7 +70,8 @@ def list_devices() -> list[Device]:
             found = platform.get_devices()
         except cl.Error:
             continue
-        devices.extend(Device(len(devices) + i, platform, d) for i, d in enumerate(found))
+        first = len(devices)      # not inside the generator: extend() grows the list as it goes
+        devices.extend(Device(first + i, platform, d) for i, d in enumerate(found))
     return devices
 
 
