@@ -46,6 +46,16 @@ def _finite(text):
     return value
 
 
+def add_output_options(p: argparse.ArgumentParser):
+    """Options of the commands that write images (render, farm render)."""
+    from app.tonemap import TONEMAPS
+    p.add_argument("--exposure", type=_finite, default=0.0, metavar="EV",
+                   help="exposure in stops, for .png/.jpg (default 0)")
+    p.add_argument("--tonemap", choices=TONEMAPS, default="standard",
+                   help="tone curve for .png/.jpg (default standard: clip at 1)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+
+
 def add_render_options(p: argparse.ArgumentParser, device: bool = True):
     """Options shared by everything that renders a scene (the farm's workers choose their own
     devices: device=False)."""
@@ -266,12 +276,7 @@ def build_parser():
                    help="output image; repeat for several (.png/.jpg tonemapped; "
                         ".exr/.hdr/.pfm linear HDR)")
     p.add_argument("--spp", type=_int_range(1), help="samples per pixel (default: the scene's)")
-    p.add_argument("--exposure", type=_finite, default=0.0, metavar="EV",
-                   help="exposure in stops, for .png/.jpg (default 0)")
-    from app.tonemap import TONEMAPS
-    p.add_argument("--tonemap", choices=TONEMAPS, default="standard",
-                   help="tone curve for .png/.jpg (default standard: clip at 1)")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    add_output_options(p)
     add_render_options(p)
     p.set_defaults(func=cmd_render)
 
@@ -330,11 +335,7 @@ def build_parser():
     p.add_argument("--cpu-actors", type=_int_range(0), metavar="N",
                    help="workers rendering with PoCL on CPUs (default: 1 if the cluster has no "
                         "GPU, else 0); one actor per GPU is always started")
-    p.add_argument("--exposure", type=_finite, default=0.0, metavar="EV",
-                   help="exposure in stops, for .png/.jpg (default 0)")
-    p.add_argument("--tonemap", choices=TONEMAPS, default="standard",
-                   help="tone curve for .png/.jpg (default standard: clip at 1)")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    add_output_options(p)
     add_render_options(p, device=False)
     p.set_defaults(func=cmd_farm_render)
 
