@@ -114,21 +114,17 @@ class DeviceGroup:
     def samples_per_device(self) -> list[int]:
         return [r.samples for r in self.renderers]
 
-    def read_sums(self):
-        """The merged running sums: (sum, sum_sq), each (H, W, 4) float64."""
-        total = np.zeros((self.renderers[0].height, self.renderers[0].width, 4), np.float64)
-        total_sq = total.copy()
-        for r in self.renderers:
-            total += r.read_sum()
-            total_sq += r.read_sum_sq()
-        return total, total_sq
+    def _merged(self, read) -> np.ndarray:
+        """The sum over devices of one of each renderer's buffers (read: Renderer.read_sum or
+        read_sum_sq), in float64."""
+        return sum((read(r).astype(np.float64) for r in self.renderers[1:]),
+                   read(self.renderers[0]).astype(np.float64))
 
     def mean(self) -> np.ndarray:
-        return (self.read_sums()[0][..., :3] / max(self.samples, 1)).astype(np.float32)
+        return (self._merged(Renderer.read_sum)[..., :3] / max(self.samples, 1)).astype(np.float32)
 
     def variance(self) -> np.ndarray:
-        total, total_sq = self.read_sums()
-        return variance_of(total, total_sq, self.samples)
+        return variance_of(self._merged(Renderer.read_sum), self._merged(Renderer.read_sum_sq), self.samples)
 
     def rays_traced(self) -> int:
-        return int(self.read_sums()[1][..., 3].sum())
+        return int(self._merged(Renderer.read_sum_sq)[..., 3].sum())
