@@ -6,6 +6,10 @@ uploads, every launch, and reading the image back. Compilation is timed apart, c
 and warm (from the binary cache). A one-sample warm-up launch runs first,
 outside the timed region, because some drivers (PoCL among them) finish compiling a kernel at
 its first launch; it renders the scene itself, so that the kernels specialised to it are built.
+
+`pathtrace bench --builds` times BVH builds instead (app/bvh.py, on each device asked for): random
+spheres and a height field of triangles at 64k, 1M and 4M primitives, the median of three builds
+each, with the tree's SAH cost.
 """
 
 import datetime
@@ -99,6 +103,56 @@ def run(device_specs, scene_names, estimators, width, height, spp, together=Fals
                 log(format_row(r))
                 results.append(r)
     return results
+
+
+BUILD_SIZES = (64_000, 1_000_000, 4_000_000)
+
+
+@dataclass
+class BuildTime:
+    scene: str
+    device: str
+    primitives: int
+    seconds: float            # the median of three builds
+    sah_cost: float           # app.bvh.sah_cost
+    nodes: int
+    node_megabytes: float
+
+
+def run_builds(device_specs, sizes, log=print):
+    """A row per device, size and kind of primitive (spheres, triangles)."""
+    import numpy as np
+
+    from app.bvh import build_bvh, primitive_boxes, sah_cost
+    from app.scene.builtin import builtin_scene, count_name
+
+    results = []
+    for backend in choose_devices(device_specs):
+        build_bvh(np.zeros((2, 3)), np.ones((2, 3)), queue=backend.queue)   # builds the kernel
+        for n in sizes:
+            for name in (f"spheres{count_name(n)}-diffuse", f"heightfield{count_name(n)}"):
+                scene = load_scene(name)
+                corners = np.concatenate([m.vertices[m.faces] for m in scene.meshes]) if scene.meshes \
+                    else np.zeros((0, 3, 3), np.float32)
+                lo, hi = primitive_boxes(scene.spheres, corners)
+                seconds = []
+                for _ in range(3):
+                    start = time.perf_counter()
+                    bvh = build_bvh(lo, hi, len(scene.spheres), backend.queue)
+                    seconds.append(time.perf_counter() - start)
+                r = BuildTime(name, backend.device.describe(), len(lo), sorted(seconds)[1], sah_cost(bvh),
+                              len(bvh.nodes), bvh.nodes.nbytes / 2**20)
+                log(format_build_row(r))
+                results.append(r)
+    return results
+
+
+BUILD_HEADER = f"{'scene':<22} {'device':<44} {'primitives':>10} {'build s':>8} {'SAH cost':>9} {'nodes':>9} {'MB':>7}"
+
+
+def format_build_row(r: BuildTime) -> str:
+    return (f"{r.scene:<22} {r.device[:44]:<44} {r.primitives:>10} {r.seconds:>8.3f} {r.sah_cost:>9.2f} "
+            f"{r.nodes:>9} {r.node_megabytes:>7.1f}")
 
 
 HEADER = (f"{'scene':<20} {'device':<44} {'est.':<10} {'size':>9} {'spp':>5} {'seconds':>8} "

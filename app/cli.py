@@ -13,6 +13,28 @@ EPILOG = ("A scene is a .toml file, a Mitsuba 3 .xml file or a built-in name (pa
           "cornell-box.")
 
 
+PROGRESS_AFTER = 1.0    # seconds before a BVH build shows its progress
+
+
+class BuildProgress:
+    """A progress bar for a scene's BVH build on standard error, shown once the build has taken
+    PROGRESS_AFTER seconds; call it with the fraction done."""
+
+    def __init__(self, name: str, quiet: bool):
+        from tqdm import tqdm
+        self.bar = tqdm(total=100, desc=f"{name}: building the BVH", unit="%", delay=PROGRESS_AFTER,
+                        file=sys.stderr, disable=quiet, bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed}")
+
+    def __call__(self, fraction: float):
+        self.bar.update(100 * fraction - self.bar.n)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.bar.close()
+
+
 def _size(text):
     try:
         w, h = (int(v) for v in text.lower().split("x"))
@@ -21,6 +43,14 @@ def _size(text):
     if not (1 <= w <= 16384 and 1 <= h <= 16384):
         raise argparse.ArgumentTypeError(f"'{text}': width and height must be 1 to 16384")
     return w, h
+
+
+def _count(text):
+    """A primitive count: digits with an optional k or M suffix, 2 to 100M."""
+    digits, suffix = (text[:-1], text[-1]) if text[-1:] in ("k", "M") else (text, "")
+    if not digits.isdigit() or not 2 <= int(digits) * {"": 1, "k": 1000, "M": 10**6}[suffix] <= 10**8:
+        raise argparse.ArgumentTypeError(f"'{text}' is not a count from 2 to 100M (e.g. 64k, 1M)")
+    return int(digits) * {"": 1, "k": 1000, "M": 10**6}[suffix]
 
 
 def _int_range(low, high=None):
@@ -134,7 +164,8 @@ def cmd_render(args):
     backends = choose_devices(args.device or ["auto"])
     for backend in backends:
         print(f"device: {backend.device.describe()}", file=sys.stderr)
-    group = DeviceGroup(backends, scene)
+    with BuildProgress(scene.name, args.quiet) as progress:
+        group = DeviceGroup(backends, scene, progress=progress)
     pixels = s.width * s.height
     bar = tqdm(total=s.spp, unit="spp", desc=f"{scene.name} {s.width}x{s.height}",
                file=sys.stderr, disable=args.quiet, dynamic_ncols=True)
@@ -192,7 +223,10 @@ def cmd_farm_render(args):
     if len({job.output for job in jobs}) < len(jobs):
         raise UserError(f"--output {args.output}: several images would share a name; put "
                         "{name} (the scene's) or {frame} (its number) in it")
-    compiled = [compile_scene(scene) for scene in scenes]
+    compiled = []
+    for scene in scenes:
+        with BuildProgress(scene.name, args.quiet) as progress:
+            compiled.append(compile_scene(scene, progress=progress))
     ray = farm.connect(args.address, args.num_cpus, args.num_gpus)
     try:
         actors = farm.start_actors(ray, compiled, args.cpu_actors)
@@ -255,6 +289,13 @@ def cmd_bench(args):
     if args.json:
         from app.image_io import check_writable
         check_writable(args.json, "--json", formats=None)
+    if args.builds is not None:
+        print(bench.BUILD_HEADER)
+        results = bench.run_builds(args.device or ["auto"], args.builds or bench.BUILD_SIZES)
+        if args.json:
+            bench.write_json(args.json, results, sys.argv[1:])
+            print(f"wrote {args.json}", file=sys.stderr)
+        return 0
     width, height = args.size
     print(bench.HEADER)
     results = bench.run(args.device or ["auto"], args.scenes, args.estimator, width, height, args.spp,
@@ -308,6 +349,9 @@ def build_parser():
     p.add_argument("--together", action="store_true",
                    help="render each scene on all the --device devices at once (one row per "
                         "scene) instead of on each in turn")
+    p.add_argument("--builds", nargs="*", type=_count, metavar="N",
+                   help="time BVH builds instead of renders: random spheres and a height field of "
+                        "N primitives each (a k or M suffix allowed; default 64k 1M 4M)")
     p.add_argument("--quick", action="store_true", help="a smoke test: 320x180, 8 spp")
     p.add_argument("--json", metavar="FILE", help="also write the results as JSON")
     p.set_defaults(func=cmd_bench)

@@ -8,13 +8,15 @@ import time
 from dataclasses import dataclass
 
 import numpy as np
+import pyopencl as cl
 
 from app.bvh import BVH, build_bvh, primitive_boxes
+from app.errors import UserError, format_bytes
 from app.features import Features
 from app.lights import LightTable, build_light_table, emitted_power
 from app.materials import TAGS
 from app.scene.description import Scene
-from app.types import TRIANGLE
+from app.types import BVH_NODE, TRIANGLE
 
 
 @dataclass
@@ -26,16 +28,24 @@ class ShapeRef:
     material: int      # row of scene.materials
 
 
+# The BVH build's peak host memory per primitive, measured (docs/performance.md)
+BUILD_HOST_BYTES = 320
+
+
 class CompiledScene:
-    def __init__(self, scene: Scene):
+    def __init__(self, scene: Scene, queue: cl.CommandQueue = None, progress=None):
+        """queue: the device that builds the BVH (app.bvh.build_bvh) and whose memory the scene
+        must fit; progress(fraction) is called as the BVH build goes."""
         self.scene = scene
-        start = time.perf_counter()
         n_spheres = len(scene.spheres)
         meshes = scene.meshes
+        n_triangles = sum(len(m.faces) for m in meshes)
+        check_memory(scene.name, n_spheres, n_triangles, queue.device if queue else None)
+        start = time.perf_counter()
         corners = np.concatenate([m.vertices[m.faces] for m in meshes]) if meshes \
             else np.zeros((0, 3, 3), np.float32)
         lo, hi = primitive_boxes(scene.spheres, corners)
-        self.bvh: BVH = build_bvh(lo, hi, np.arange(len(lo)) >= n_spheres)
+        self.bvh: BVH = build_bvh(lo, hi, n_spheres, queue, progress)
         self.bvh_seconds = time.perf_counter() - start
 
         order = self.bvh.order
@@ -108,5 +118,33 @@ class CompiledScene:
         return ShapeRef("mesh", shape - self.num_spheres, mesh.name, mesh.material)
 
 
-def compile_scene(scene: Scene) -> CompiledScene:
-    return CompiledScene(scene)
+def compile_scene(scene: Scene, queue: cl.CommandQueue = None, progress=None) -> CompiledScene:
+    return CompiledScene(scene, queue, progress)
+
+
+def check_memory(name: str, n_spheres: int, n_triangles: int, device: cl.Device = None):
+    """Refuses, with one line and before anything is allocated, a scene whose BVH build would not
+    fit in the host's available memory, or whose buffers would not fit on `device`."""
+    from app.device import check_fits
+
+    n = n_spheres + n_triangles
+    available = available_host_memory()
+    if available is not None and n * BUILD_HOST_BYTES > available:
+        raise UserError(f"{name}: building the BVH of {n} primitives needs about "
+                        f"{format_bytes(n * BUILD_HOST_BYTES)} of memory; {format_bytes(available)} is available")
+    if device is not None:   # the largest each buffer can be (Renderer.set_scene uploads them)
+        check_fits(device, {"BVH": BVH_NODE.itemsize * max(n - 1, 1), "spheres": 16 * n_spheres,
+                            "triangles": TRIANGLE.itemsize * n_triangles,
+                            "shading normals": 3 * 16 * n_triangles, "materials": 4 * n}, name)
+
+
+def available_host_memory():
+    """MemAvailable from /proc/meminfo in bytes, or None where there is no such file."""
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        return None
+    return None

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pyopencl as cl
 
-from app.errors import UserError
+from app.errors import UserError, format_bytes
 from app.features import Features
 from app.resources import resource_dir
 
@@ -90,10 +90,15 @@ class BuildResult:
 
 def build_program(context: cl.Context, device: cl.Device, extra: str = "",
                   use_cache: bool = True, features: Features = Features()) -> BuildResult:
-    """Builds the kernels, specialised to `features`, for one device. The binary is cached under
-    cache_dir(), keyed by the source, the options and the exact device and driver."""
-    source = kernel_source(extra, features)
+    """Builds the kernels, specialised to `features`, for one device."""
     options = list(BUILD_OPTIONS) + [f"-D{d}" for d in features.defines()]
+    return build_cached(context, device, kernel_source(extra, features), options, use_cache)
+
+
+def build_cached(context: cl.Context, device: cl.Device, source: str, options: list[str],
+                 use_cache: bool = True) -> BuildResult:
+    """Builds a program for one device. The binary is cached under cache_dir(), keyed by the
+    source, the options and the exact device and driver."""
     key = hashlib.sha256("\0".join([
         source, " ".join(options), device.platform.name, device.platform.version, device.name,
         device.version, device.driver_version]).encode()).hexdigest()[:32]
@@ -151,6 +156,20 @@ def open_device(device: Device, extra: str = "", use_cache: bool = True) -> Back
     queue = cl.CommandQueue(context, properties=cl.command_queue_properties.PROFILING_ENABLE)
     return Backend(device, context, queue, build_program(context, device.device, extra, use_cache),
                    extra, use_cache)
+
+
+def check_fits(device: cl.Device, buffers: dict, what: str):
+    """Refuses, with one line, buffers (name: bytes) that `device` cannot hold: one larger than its
+    largest allocation, or all together more than its global memory."""
+    name = device.name.strip()
+    largest = max(buffers, key=buffers.get)
+    if buffers[largest] > device.max_mem_alloc_size:
+        raise UserError(f"{what}: its {largest} need {format_bytes(buffers[largest])} in one buffer; "
+                        f"{name} allocates at most {format_bytes(device.max_mem_alloc_size)} at once")
+    total = sum(buffers.values())
+    if total > device.global_mem_size:
+        raise UserError(f"{what} needs {format_bytes(total)} of device memory; "
+                        f"{name} has {format_bytes(device.global_mem_size)}")
 
 
 def build_error_line(error: Exception) -> str:

@@ -10,3 +10,11 @@ def warn(message: str):
     """One warning line on standard error: something pathtrace did instead of what was asked."""
     import sys
     print(f"pathtrace: warning: {message}", file=sys.stderr)
+
+
+def format_bytes(n: float) -> str:
+    """A size for messages: '512 MB', '6.4 GB'."""
+    for unit, size in (("GB", 1 << 30), ("MB", 1 << 20), ("kB", 1 << 10)):
+        if n >= size:
+            return f"{n / size:.3g} {unit}"
+    return f"{int(n)} bytes"

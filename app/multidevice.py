@@ -56,8 +56,12 @@ class SampleCounter:
 class DeviceGroup:
     """Renderers of one compiled scene on several backends, driven together."""
 
-    def __init__(self, backends: list[Backend], scene, width: int = None, height: int = None):
-        compiled = scene if isinstance(scene, CompiledScene) else compile_scene(scene)
+    def __init__(self, backends: list[Backend], scene, width: int = None, height: int = None,
+                 progress=None):
+        """scene: a CompiledScene, or a Scene to compile on the first device (progress as for
+        Renderer)."""
+        compiled = scene if isinstance(scene, CompiledScene) \
+            else compile_scene(scene, backends[0].queue, progress)
         self.renderers = [Renderer(b, compiled, width, height) for b in backends]
         self.compiled = compiled
 

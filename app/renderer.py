@@ -9,7 +9,7 @@ import pyopencl as cl
 
 from app.camera import Camera
 from app.compiled import CompiledScene, compile_scene
-from app.device import Backend
+from app.device import Backend, check_fits
 from app.environment import Environment
 from app.scene import Scene
 from app.types import RENDER_PARAMS
@@ -26,21 +26,23 @@ def variance_of(sum: np.ndarray, sum_sq: np.ndarray, samples: int) -> np.ndarray
 
 
 class Renderer:
-    def __init__(self, backend: Backend, scene, width: int = None, height: int = None):
-        """scene: a CompiledScene, or a Scene to compile."""
+    def __init__(self, backend: Backend, scene, width: int = None, height: int = None, progress=None):
+        """scene: a CompiledScene, or a Scene to compile (on this device, calling progress(fraction)
+        as its BVH build goes)."""
         self.backend = backend
         self.program = None       # the kernels specialised to the scene (_select_program)
         self._buffers = {}
         self.width = self.height = 0
         self.samples = 0          # samples per pixel accumulated so far
-        self.set_scene(scene)
+        self.set_scene(scene, progress)
         self.resize(width or self.scene.settings.width, height or self.scene.settings.height)
 
     # --- what is rendered ------------------------------------------------------------------
-    def set_scene(self, scene):
-        """Uploads a compiled scene (compiling a Scene first); takes its camera and settings;
-        resets."""
-        self.compiled = scene if isinstance(scene, CompiledScene) else compile_scene(scene)
+    def set_scene(self, scene, progress=None):
+        """Uploads a compiled scene (compiling a Scene first, on this device); takes its camera and
+        settings; resets."""
+        self.compiled = scene if isinstance(scene, CompiledScene) \
+            else compile_scene(scene, self.backend.queue, progress)
         self.scene: Scene = self.compiled.scene
         self.camera = self.scene.camera.copy()
         self.settings = self.scene.settings
@@ -128,8 +130,11 @@ class Renderer:
     def resize(self, width: int, height: int):
         if (width, height) == (self.width, self.height):
             return
-        self.width, self.height = width, height
         nbytes = width * height * 16
+        others = {name: b.size for name, b in self._buffers.items() if name not in ("sum", "sum_sq")}
+        check_fits(self.backend.device.device, {**others, "sum": nbytes, "sum_sq": nbytes},
+                   f"a {width}x{height} image of {self.scene.name}")
+        self.width, self.height = width, height
         for name in ("sum", "sum_sq"):
             self._buffers[name] = cl.Buffer(self.backend.context, cl.mem_flags.READ_WRITE, nbytes)
         self.reset()

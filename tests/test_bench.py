@@ -29,3 +29,18 @@ def test_bench_rejects_bad_input(tmp_path):
     assert r.returncode == 1 and "--estimator: unknown 'fast'" in r.stderr
     r = pathtrace("bench", "--quick", "--json", tmp_path / "no" / "b.json")
     assert r.returncode == 1 and "does not exist" in r.stderr
+
+
+def test_build_bench_times_spheres_and_triangles(tmp_path):
+    out = tmp_path / "builds.json"
+    r = pathtrace("bench", "--builds", "2k", "20k", "--device", "cpu", "--json", out)
+    assert r.returncode == 0, r.stderr
+    rows = json.loads(out.read_text())["results"]
+    assert [row["scene"] for row in rows] == ["spheres2k-diffuse", "heightfield2k", "spheres20k-diffuse", "heightfield20k"]
+    for row in rows:
+        assert row["seconds"] > 0 and row["sah_cost"] > 0.5
+        assert 0 < row["nodes"] < row["primitives"] and row["node_megabytes"] == row["nodes"] * 64 / 2**20
+    assert rows[0]["primitives"] == 2000 and abs(rows[3]["primitives"] - 20000) < 400   # a square grid, and its ball
+    assert "build s" in r.stdout and "heightfield20k" in r.stdout
+    r = pathtrace("bench", "--builds", "1")
+    assert r.returncode == 2 and "'1' is not a count from 2 to 100M" in r.stderr

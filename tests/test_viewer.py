@@ -158,6 +158,18 @@ def test_left_click_picks_a_mesh_whatever_the_bvh_order(viewer):
     v.load_scene("simple")
 
 
+def test_a_slow_build_shows_its_progress_in_the_title(viewer, monkeypatch):
+    import app.viewer.window as window
+    monkeypatch.setattr(window, "PROGRESS_AFTER", 0.0)
+    titles = []
+    set_title = viewer.glfw.set_window_title
+    monkeypatch.setattr(viewer.glfw, "set_window_title", lambda w, t: (titles.append(t), set_title(w, t)))
+    viewer.load_scene("spheres8k")
+    assert titles[-2] == "pathtrace - building the BVH of spheres8k: 100%"
+    assert titles[-1] == "pathtrace - spheres8k" and viewer.renderer.scene.name == "spheres8k"
+    viewer.load_scene("simple")
+
+
 def test_screenshot_matches_a_headless_render(viewer, backend):
     settle(viewer)
     viewer.renderer.reset()

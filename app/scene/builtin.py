@@ -53,7 +53,7 @@ def random_spheres(n: int, diffuse_only: bool) -> Scene:
     material[diffuse] = b.materials.add_rows(pack("diffuse", {"rho_d": albedo[diffuse]}))
     material[phong] = b.materials.add_rows(pack("phong", {"rho_d": 0.3 * albedo[phong], "rho_s": 0.6, "n": 100.0}))
     material[emitter] = b.materials.add_rows(pack("black", {}, emission=4.0 * albedo[emitter]))
-    return Scene(f"spheres{_count(n)}{'-diffuse' if diffuse_only else ''}",
+    return Scene(f"spheres{count_name(n)}{'-diffuse' if diffuse_only else ''}",
                  np.column_stack([centres, np.full(n, radius)]).astype(np.float32), material,
                  b.materials, camera=Camera([28, 20, 36], [0, 0, 0], [0, 1, 0], 45.0),
                  environment=Environment.constant((1, 1, 1)),
@@ -75,12 +75,12 @@ def height_field(triangles: int) -> Scene:
     builder = SceneBuilder()
     builder.add_mesh(Mesh("height field", v, f.astype(np.int32), None, builder.material(diffuse(0.6))))
     builder.add_sphere((0.3, 0.35, 0.2), 0.25, diffuse((0.8, 0.3, 0.2)), "ball")
-    return builder.build(f"heightfield{_count(triangles)}", camera=Camera([0, 1.6, 2.4], [0, 0, 0], [0, 1, 0], 45.0),
+    return builder.build(f"heightfield{count_name(triangles)}", camera=Camera([0, 1.6, 2.4], [0, 0, 0], [0, 1, 0], 45.0),
                          environment=Environment.constant((0.8, 0.85, 1.0)),
                          settings=RenderSettings(width=1920, height=1080, spp=64))
 
 
-def _count(n: int) -> str:
+def count_name(n: int) -> str:
     return f"{n // 1000}k" if n % 1000 == 0 and n < 1_000_000 else \
         f"{n // 1_000_000}M" if n % 1_000_000 == 0 else str(n)
 

@@ -22,6 +22,7 @@ FRAME_BUDGET = 1 / 40          # seconds of kernel work per frame: keeps the win
 PREVIEW_SCALE = 4              # while moving, render at 1/4 of the resolution (as Cycles does)
 REST_DELAY = 0.25              # seconds without a move before returning to full resolution
 UPLOAD_INTERVAL = 1 / 30       # the host copy to the display texture runs at most this often
+PROGRESS_AFTER = 1.0           # seconds before a BVH build shows its progress
 
 
 NO_DISPLAY = ("pathtrace view needs a display, and none was found. Render headless with "
@@ -79,7 +80,7 @@ class Viewer:
         self._last_time = time.perf_counter()
         self._cursor = None
         fw, fh = glfw.get_framebuffer_size(self.window)
-        self.renderer = Renderer(backend, scene, max(fw, 1), max(fh, 1))
+        self.renderer = Renderer(backend, scene, max(fw, 1), max(fh, 1), self._build_progress(scene.name))
         self._init_display()
 
     # --- set-up -----------------------------------------------------------------------------
@@ -165,10 +166,27 @@ class Viewer:
         except UserError as e:
             self.message = str(e)
             return
-        self.renderer.set_scene(scene)
+        self.renderer.set_scene(scene, self._build_progress(scene.name))
         self.selected = None
         self.glfw.set_window_title(self.window, f"pathtrace - {scene.name}")
         self.message = f"loaded {scene.name}"
+
+    def _build_progress(self, name: str):
+        """A progress callback for a scene's BVH build: once it has taken PROGRESS_AFTER seconds,
+        the window's title and a bar across it show how far it is. The bar is drawn with plain
+        OpenGL, since the build may run inside the panel's frame."""
+        started = time.perf_counter()
+
+        def show(fraction):
+            if time.perf_counter() - started < PROGRESS_AFTER:
+                return
+            self.glfw.set_window_title(self.window, f"pathtrace - building the BVH of {name}: {fraction:.0%}")
+            fw, fh = self.glfw.get_framebuffer_size(self.window)
+            self.ctx.viewport = (0, 0, fw, fh)
+            self.ctx.clear(0.1, 0.1, 0.1)
+            self.ctx.clear(0.35, 0.6, 0.9, viewport=(0, fh // 2 - 6, int(fw * fraction), 12))
+            self.glfw.swap_buffers(self.window)
+        return show
 
     def edit_material(self, index: int, material):
         """Replaces row `index` of the scene's material table (shared by every shape that uses

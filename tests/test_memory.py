@@ -1,0 +1,65 @@
+"""Scenes and images that would not fit: refused with one line before anything is allocated, on
+the host (the BVH build) and on the device (its largest allocation and its global memory)."""
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from app import cli, compiled
+from app.compiled import BUILD_HOST_BYTES, check_memory
+from app.device import check_fits
+from app.errors import UserError
+from app.renderer import Renderer
+from app.scene import load_scene
+
+SMALL_DEVICE = SimpleNamespace(name="Tiny GPU ", max_mem_alloc_size=1 << 20, global_mem_size=3 << 20)
+
+
+def test_a_buffer_larger_than_the_largest_allocation_is_refused():
+    with pytest.raises(UserError, match=r"^big: its BVH need 2 MB in one buffer; Tiny GPU allocates at most 1 MB at once$"):
+        check_fits(SMALL_DEVICE, {"BVH": 2 << 20, "spheres": 10}, "big")
+
+
+def test_buffers_larger_together_than_global_memory_are_refused():
+    with pytest.raises(UserError, match=r"^big needs 4 MB of device memory; Tiny GPU has 3 MB$"):
+        check_fits(SMALL_DEVICE, {"a": 1 << 20, "b": 1 << 20, "c": 1 << 20, "d": 1 << 20}, "big")
+    check_fits(SMALL_DEVICE, {"a": 1 << 20, "b": 1 << 20, "c": 1 << 20}, "fits")
+
+
+def test_a_scene_too_large_for_the_device_is_refused_before_its_build():
+    # 20000 spheres need 20000 BVH nodes of 64 bytes at most: 1.2 MB in one buffer
+    with pytest.raises(UserError, match="spheres20k: its BVH need 1.22 MB in one buffer"):
+        check_memory("spheres20k", 20000, 0, SMALL_DEVICE)
+    check_memory("spheres8k", 8000, 0, SMALL_DEVICE)
+
+
+def test_a_build_larger_than_the_host_memory_is_refused(monkeypatch):
+    monkeypatch.setattr(compiled, "available_host_memory", lambda: 10 * BUILD_HOST_BYTES * 1000)
+    with pytest.raises(UserError, match="building the BVH of 64000 primitives needs about 19.5 MB of memory; 3.05 MB is available"):
+        compiled.compile_scene(load_scene("spheres64k"))
+
+
+def test_an_image_too_large_for_the_device_is_refused(backend):
+    r = Renderer(backend, load_scene("simple"), 8, 8)
+    side = int((backend.device.device.max_mem_alloc_size // 16) ** 0.5) + 1
+    with pytest.raises(UserError, match=f"a {side}x{side} image of simple: its sum"):
+        r.resize(side, side)
+    assert (r.width, r.height) == (8, 8)      # the renderer still works at its old size
+    r.add_samples(1)
+    assert np.all(np.isfinite(r.mean()))
+
+
+def test_the_command_line_says_what_does_not_fit(monkeypatch, tmp_path, capsys):
+    monkeypatch.setattr(compiled, "available_host_memory", lambda: 1 << 20)
+    code = cli.main(["render", "spheres8k", "-o", str(tmp_path / "a.png"), "--size", "8x8", "--spp", "1", "-q"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 1 and err[-1].startswith("pathtrace: error: spheres8k: building the BVH of 8000 primitives needs about")
+    assert not list(tmp_path.iterdir())
+
+
+def test_a_slow_build_shows_its_progress(monkeypatch, tmp_path, capsys):
+    monkeypatch.setattr(cli, "PROGRESS_AFTER", 0.0)
+    code = cli.main(["render", "spheres8k", "-o", str(tmp_path / "a.png"), "--size", "8x8", "--spp", "1"])
+    assert code == 0
+    assert "spheres8k: building the BVH: 100%" in capsys.readouterr().err
