@@ -1,25 +1,30 @@
-"""A bounding volume hierarchy over spheres and triangles together, flattened into the BVH_NODE
-array that kernels/bvh.cl walks. Built in three steps:
+"""A bounding volume hierarchy over spheres and triangles together, built on an OpenCL device and
+flattened into the BVH_NODE array that kernels/bvh.cl walks. In three steps:
 
-1. Bottom-up by PLOC, parallel locally-ordered clustering (Meister and Bittner, IEEE TVCG 2018).
-   The primitives are sorted along a 63-bit Morton curve of their centroids; each pass, every
-   cluster finds the cluster within RADIUS places of it in that order whose union with it has the
-   smallest surface area (kernels/build/ploc.cl, on an OpenCL device), and mutual nearest
-   neighbours merge into one cluster in the place of the first. Passes repeat until one cluster
-   in TOP_FRACTION is left.
+1. Bottom-up by PLOC, parallel locally-ordered clustering (Meister and Bittner, IEEE TVCG 2018;
+   kernels/build/ploc.cl). The primitives are sorted along a 63-bit Morton curve of their
+   centroids (kernels/build/morton.cl); each pass, every cluster finds the cluster within RADIUS
+   places of it in that order whose union with it has the smallest surface area, and mutual
+   nearest neighbours merge into one cluster in the place of the first. Passes repeat until the
+   clusters are few enough for step 2.
 2. Over the remaining clusters, two candidate tops: PLOC's passes continued, and a top-down split
    by the binned surface area heuristic (Wald, "On fast Construction of SAH-based Bounding Volume
-   Hierarchies", 2007); the one of smaller SAH cost is kept. PLOC's greedy merges of large
-   clusters make poor top levels on evenly spread primitives (a quarter more traversal time on
-   spheres64k), the binned split poor ones on the teapot over its floor (a sixth more SAH cost),
-   and over at most TOP_MAX clusters both are cheap.
+   Hierarchies", 2007) here in NumPy; the one of smaller SAH cost is kept. PLOC's greedy merges
+   make poorer trees than the binned split on evenly spread primitives (3-4 % more traversal
+   time on the H100 for spheres64k), the binned split a poorer top on the teapot over its floor
+   (a sixth more SAH cost). The split's cost grows with the clusters it splits, and its gain
+   matters most where the scene is small and the build quick, so PLOC stops at
+   min(N, TOP_WORK / N) clusters: small scenes (up to 65536 primitives) are split whole,
+   1M primitives above 4096 clusters.
 3. Collapsed by the SAH (as pbrt-v4's builder decides): a subtree of at most MAX_LEAF_SIZE
-   primitives becomes one leaf where that is cheaper than its split, and laid out depth-first.
+   primitives becomes one leaf where that is cheaper than its split, and laid out depth-first
+   (kernels/build/collapse.cl).
 
 Leaves hold one kind of primitive (kernels/types.h): spheres and triangles are built apart and
 their two trees joined at the root. Nodes are made in batches (a PLOC pass, a level of the top
-split) whose members depend only on earlier batches below them, so the sweeps of step 3 run batch
-by batch with whole-array operations: no Python code runs per node.
+split) whose members depend only on earlier batches below them, so step 3 sweeps the tree with
+one launch per batch. The host only sorts the Morton codes, sums each pass's per-group counts and
+splits the top; the tree stays on the device until its nodes are read back.
 """
 
 from dataclasses import dataclass
@@ -30,15 +35,14 @@ import pyopencl as cl
 
 from app.types import BVH_NODE
 
-MAX_LEAF_SIZE = 4
+MAX_LEAF_SIZE = 4           # these three as in kernels/build/collapse.cl
 MAX_DEPTH = 30              # kernels/bvh.cl keeps a 32-entry stack
 TRAVERSAL_COST = 0.5        # relative to one primitive test, as in pbrt-v4's BVH build
 RADIUS = 8                  # PLOC's search radius: 8 and 16 give trees of the same SAH cost here
-TOP_FRACTION = 8            # PLOC stops at one cluster in this many primitives ...
-TOP_MAX = 16384             # ... or at this many clusters, whichever is fewer
+TOP_WORK = 1 << 32          # PLOC stops at min(N, TOP_WORK / N) clusters (see step 2)
 MORTON_BITS = 21            # per axis: 63 bits in all
 MAX_BINS = 16
-WORK_GROUP = 64
+GROUP = 256                 # SCAN_GROUP of kernels/build/ploc.cl; every build kernel uses it
 
 
 @dataclass
@@ -77,32 +81,43 @@ def sah_cost(bvh: BVH) -> float:
 
 
 class Builder:
-    """kernels/build/ploc.cl on one OpenCL device, with buffers that grow as needed."""
+    """The build kernels (kernels/build/) on one OpenCL device."""
 
     def __init__(self, queue: cl.CommandQueue):
         from app.device import build_cached
         from app.resources import resource_dir
 
         self.queue = queue
-        source = (resource_dir("kernels") / "build" / "ploc.cl").read_text()
-        self.find_nearest = build_cached(queue.context, queue.device, source, []).program.find_nearest
-        self.capacity = 0
+        folder = resource_dir("kernels")
+        source = "\n".join(f'#line 1 "{name}"\n' + (folder / name).read_text() for name in
+                           ("types.h", "build/morton.cl", "build/ploc.cl", "build/collapse.cl"))
+        self.program = build_cached(queue.context, queue.device, source, []).program
+        self.kernels = {k.function_name: k for k in self.program.all_kernels()}
 
-    def nearest(self, boxes: np.ndarray) -> np.ndarray:
-        """Each cluster's nearest neighbour among the RADIUS on either side; boxes: (C, 2, 4)
-        float32, lo then hi."""
-        count = len(boxes)
-        if count > self.capacity:
-            self.capacity = count
-            self.box_buf = cl.Buffer(self.queue.context, cl.mem_flags.READ_ONLY, boxes.nbytes)
-            self.nearest_buf = cl.Buffer(self.queue.context, cl.mem_flags.WRITE_ONLY, count * 4)
-        out = np.empty(count, np.int32)
-        cl.enqueue_copy(self.queue, self.box_buf, boxes, is_blocking=False)
-        groups = -(-count // WORK_GROUP)     # one work-group size, so PoCL compiles the kernel once
-        self.find_nearest(self.queue, (groups * WORK_GROUP,), (WORK_GROUP,), self.box_buf,
-                          np.int32(count), np.int32(RADIUS), self.nearest_buf)
-        cl.enqueue_copy(self.queue, out, self.nearest_buf, is_blocking=True)
+    def launch(self, name: str, count: int, *args):
+        """Kernel `name` over `count` items, in work-groups of GROUP (the kernels skip the rest)."""
+        groups = max(-(-count // GROUP), 1)
+        self.kernels[name](self.queue, (groups * GROUP,), (GROUP,), *args)
+        return groups
+
+    def buffer(self, nbytes: int) -> cl.Buffer:
+        return cl.Buffer(self.queue.context, cl.mem_flags.READ_WRITE, max(int(nbytes), 4))
+
+    def filled(self, value, count: int) -> cl.Buffer:
+        buf = self.buffer(count * value.itemsize)
+        cl.enqueue_fill_buffer(self.queue, buf, value, 0, count * value.itemsize)
+        return buf
+
+    def read(self, buf: cl.Buffer, count: int, dtype, offset: int = 0) -> np.ndarray:
+        out = np.empty(count, dtype)
+        if count:
+            cl.enqueue_copy(self.queue, out, buf, src_offset=offset * np.dtype(dtype).itemsize, is_blocking=True)
         return out
+
+    def write(self, buf: cl.Buffer, array: np.ndarray, offset: int = 0):
+        array = np.ascontiguousarray(array)
+        if array.size:
+            cl.enqueue_copy(self.queue, buf, array, dst_offset=offset * array[0].nbytes, is_blocking=True)
 
 
 _builders: dict = {}
@@ -130,77 +145,64 @@ def _first_working_builder() -> Builder:
 
 
 class _Tree:
-    """A binary tree under construction: primitives are nodes 0..n-1, and each new node gets the
-    next number. batches: slices of node numbers, each depending only on earlier ones."""
+    """The binary tree on the device: primitives are nodes 0..n-1 and each new node gets the next
+    number. child: per node (left, right), -1 for primitives; box: per node two float4, lo then
+    hi; batches: (first node, count), each depending only on earlier ones."""
 
-    def __init__(self, lo, hi):
+    def __init__(self, builder: Builder, lo: np.ndarray, hi: np.ndarray):
+        self.b = builder
         self.n = len(lo)
-        size = max(2 * self.n - 1, 1)
-        self.left = np.full(size, -1, np.int32)
-        self.right = np.full(size, -1, np.int32)
-        self.lo = np.zeros((size, 3), np.float32)
-        self.hi = np.zeros((size, 3), np.float32)
-        self.lo[:self.n], self.hi[:self.n] = lo, hi
+        size = 2 * self.n - 1
+        self.child = builder.filled(np.int32(-1), 2 * size)
+        self.box = builder.buffer(size * 32)
+        boxes = np.zeros((self.n, 2, 4), np.float32)
+        boxes[:, 0, :3], boxes[:, 1, :3] = lo, hi
+        builder.write(self.box, boxes)
         self.made = self.n
-        self.batches: list[slice] = []
+        self.batches: list[tuple[int, int]] = []
 
     def add(self, left, right, lo, hi) -> np.ndarray:
-        """New nodes over the given children, as one batch; returns their numbers."""
-        b = slice(self.made, self.made + len(left))
-        self.left[b], self.right[b], self.lo[b], self.hi[b] = left, right, lo, hi
-        self.made = b.stop
-        self.batches.append(b)
-        return np.arange(b.start, b.stop, dtype=np.int32)
+        """New nodes made on the host, as one batch; returns their numbers."""
+        count = len(left)
+        self.b.write(self.child, np.column_stack([left, right]).astype(np.int32), self.made)
+        boxes = np.zeros((count, 2, 4), np.float32)
+        boxes[:, 0, :3], boxes[:, 1, :3] = lo, hi
+        self.b.write(self.box, boxes, self.made)
+        return self.made_batch(count)
 
-    def mark(self):
-        return self.made, len(self.batches)
+    def made_batch(self, count: int) -> np.ndarray:
+        self.batches.append((self.made, count))
+        self.made += count
+        return np.arange(self.made - count, self.made, dtype=np.int32)
 
-    def area_since(self, mark) -> float:
-        return float(surface_area(self.lo[mark[0]:self.made].astype(np.float64),
-                                  self.hi[mark[0]:self.made].astype(np.float64)).sum())
+    def boxes(self, first: int, stop: int) -> np.ndarray:
+        return self.b.read(self.box, 2 * (stop - first), np.dtype((np.float32, 4)), 2 * first).reshape(-1, 2, 4)
 
-    def cut(self, mark) -> "_Cut":
-        """Takes back the nodes made since `mark`, returning them."""
-        made, batches = mark
-        b = slice(made, self.made)
-        taken = _Cut(self.area_since(mark), self.batches[batches:], self.left[b].copy(),
-                     self.right[b].copy(), self.lo[b].copy(), self.hi[b].copy())
-        self.made, self.batches = made, self.batches[:batches]
-        return taken
-
-    def paste(self, cut: "_Cut"):
-        """Puts back nodes taken by cut() at the same mark."""
-        b = slice(self.made, self.made + len(cut.left))
-        self.left[b], self.right[b], self.lo[b], self.hi[b] = cut.left, cut.right, cut.lo, cut.hi
-        self.made = b.stop
-        self.batches += cut.batches
-
-
-@dataclass
-class _Cut:
-    area: float
-    batches: list
-    left: np.ndarray
-    right: np.ndarray
-    lo: np.ndarray
-    hi: np.ndarray
+    def cut(self, mark):
+        """Takes back the nodes made since mark = (made, len(batches))."""
+        self.made, batches = mark
+        self.batches = self.batches[:batches]
 
 
 def build_bvh(lo: np.ndarray, hi: np.ndarray, num_spheres: int = None,
               queue: cl.CommandQueue = None, progress: Callable[[float], None] = None) -> BVH:
     """A BVH over N >= 1 primitives given by their boxes lo..hi ((N, 3) each, finite): spheres
-    first (num_spheres of them; default: all), then triangles, which leaves keep apart. The
-    clustering runs on `queue`'s device (default: builder_for()'s); progress, if given, is called
-    with the fraction done after each PLOC pass."""
+    first (num_spheres of them; default: all), then triangles, which leaves keep apart. It is
+    built on `queue`'s device (default: builder_for()'s); progress, if given, is called with the
+    fraction done after each PLOC pass."""
     lo, hi = np.asarray(lo, np.float32), np.asarray(hi, np.float32)
     if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
         raise ValueError("build_bvh: primitive boxes must be finite")
     n = len(lo)
     num_spheres = n if num_spheres is None else num_spheres
-    tree = _Tree(lo, hi)
-    if n == 1:
-        return _flatten(tree, 0, num_spheres)
+    if n == 1:   # a lone primitive: the root holds it in both slots (tested twice, harmlessly)
+        nodes = np.zeros(1, BVH_NODE)
+        nodes["child"]["lo"] = np.nextafter(lo[0], np.float32(-np.inf))
+        nodes["child"]["hi"] = np.nextafter(hi[0], np.float32(np.inf))
+        nodes["child"]["count"] = 1 if num_spheres else -1
+        return BVH(nodes, np.zeros(1, np.int64), 1)
     builder = builder_for(queue)
+    tree = _Tree(builder, lo, hi)
     merged = 0
 
     def report(count):   # n - 1 merges in all, the join of the kinds' trees included
@@ -209,90 +211,93 @@ def build_bvh(lo: np.ndarray, hi: np.ndarray, num_spheres: int = None,
         if progress:
             progress(merged / (n - 1))
 
-    roots = [_build_kind(tree, builder, first, stop, report)
+    roots = [_build_kind(tree, lo, hi, first, stop, report)
              for first, stop in ((0, num_spheres), (num_spheres, n)) if stop > first]
     if len(roots) == 2:
         a, b = roots
-        roots = tree.add([a], [b], [np.minimum(tree.lo[a], tree.lo[b])], [np.maximum(tree.hi[a], tree.hi[b])])
+        box = tree.boxes(a, a + 1)[0], tree.boxes(b, b + 1)[0]
+        roots = tree.add([a], [b], [np.minimum(box[0][0], box[1][0])[:3]], [np.maximum(box[0][1], box[1][1])[:3]])
         report(1)
-    return _flatten(tree, roots[0], num_spheres)
+    return _flatten(tree, int(roots[0]), num_spheres)
 
 
-def _build_kind(tree: _Tree, builder: Builder, first: int, stop: int, report) -> int:
+def _build_kind(tree: _Tree, lo, hi, first: int, stop: int, report) -> int:
     """Steps 1 and 2 over the primitives first..stop-1; returns the root."""
-    node = (_morton_order(tree.lo[first:stop], tree.hi[first:stop]) + first).astype(np.int32)
-    boxes = np.zeros((len(node), 2, 4), np.float32)
-    np.take(tree.lo, node, axis=0, out=boxes[:, 0, :3], mode="clip")
-    np.take(tree.hi, node, axis=0, out=boxes[:, 1, :3], mode="clip")
-    node, boxes = _cluster(tree, builder, node, boxes, max(1, min(len(node) // TOP_FRACTION, TOP_MAX)), report)
-    if len(node) == 1:
-        return int(node[0])
-    # two candidate tops over the remaining clusters; the one of smaller SAH cost is kept (the
-    # clusters below are the same, so the sum of the new nodes' areas decides)
-    mark = tree.mark()
-    split_root = _split_top(tree, node.copy(), boxes[:, 0, :3].copy(), boxes[:, 1, :3].copy())
-    split_top = tree.cut(mark)
-    cluster_root = _cluster(tree, builder, node, boxes, 1, report)[0][0]
-    if split_top.area < tree.area_since(mark):
-        tree.cut(mark)
-        tree.paste(split_top)
-        return split_root
-    return int(cluster_root)
-
-
-def _cluster(tree: _Tree, builder: Builder, node, boxes, stop, report):
-    """Step 1: PLOC passes over the clusters `node` (boxes: (C, 2, 4), lo then hi, in Morton
-    order) until `stop` clusters are left; returns those and their boxes. Each pass compacts into
-    the other of two buffers: fresh memory is slow to touch on some virtual machines."""
-    spare_node, spare_boxes = np.empty_like(node), np.empty_like(boxes)
-    while len(node) > stop:
-        nearest = builder.nearest(boxes)
-        index = np.arange(len(node), dtype=np.int32)
-        mutual = nearest[nearest] == index
-        i = np.flatnonzero(mutual & (index < nearest))
-        j = nearest[i]
-        lo, hi = np.minimum(boxes[i, 0], boxes[j, 0]), np.maximum(boxes[i, 1], boxes[j, 1])
-        node[i] = tree.add(node[i], node[j], lo[:, :3], hi[:, :3])
-        boxes[i, 0], boxes[i, 1] = lo, hi
-        keep = ~mutual | (index < nearest)
-        m = len(node) - len(i)
-        np.compress(keep, node, out=spare_node[:m])
-        np.compress(keep, boxes, axis=0, out=spare_boxes[:m])
-        node, spare_node = spare_node[:m], node
-        boxes, spare_boxes = spare_boxes[:m], boxes
-        report(len(i))
-    return node, boxes
-
-
-def _morton_order(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """The indices of the boxes sorted along a Morton curve of their centroids, in their bounds."""
-    cen = lo + hi                               # twice the centroids: the order is the same
+    b, count = tree.b, stop - first
+    if count == 1:
+        return first
+    cen = lo[first:stop] + hi[first:stop]       # twice the centroids: the order is the same
     c_lo, c_hi = cen.min(axis=0), cen.max(axis=0)
     scale = np.divide((1 << MORTON_BITS) - 1, c_hi - c_lo, out=np.zeros(3, np.float32), where=c_hi > c_lo)
-    cen -= c_lo
-    cen *= scale
-    code = np.zeros(len(cen), np.uint64)
-    v, t = np.empty(len(cen), np.uint64), np.empty(len(cen), np.uint64)
-    for axis in range(3):   # the magic-number spread of 21 bits to every third bit, in place
-        v[:] = cen[:, axis]
-        for shift, mask in ((32, 0x1F00000000FFFF), (16, 0x1F0000FF0000FF), (8, 0x100F00F00F00F00F),
-                            (4, 0x10C30C30C30C30C3), (2, 0x1249249249249249)):
-            np.left_shift(v, np.uint64(shift), out=t)
-            v |= t
-            v &= np.uint64(mask)
-        v <<= np.uint64(2 - axis)
-        code |= v
-    return np.argsort(code)   # not stable, but deterministic, and five times faster here
+    codes = b.buffer(count * 8)
+    b.launch("morton_codes", count, tree.box, np.int32(first), np.int32(count),
+             np.append(c_lo, 0).astype(np.float32), np.append(scale, 0).astype(np.float32), codes)
+    # not a stable sort, but a deterministic one, and five times faster than NumPy's stable one
+    order = np.argsort(b.read(codes, count, np.uint64)).astype(np.int32)
+    order_buf = b.buffer(count * 4)
+    b.write(order_buf, order)
+    clusters = _Clusters(b, count)
+    b.launch("first_clusters", count, tree.box, order_buf, np.int32(first), np.int32(count),
+             clusters.node, clusters.box)
+    clusters.cluster(tree, max(2, min(count, TOP_WORK // count)), report)
+    if clusters.count == 1:
+        return int(b.read(clusters.node, 1, np.int32)[0])
+    # two candidate tops over the remaining clusters; the one of smaller SAH cost is kept (the
+    # clusters below are the same, so the sum of the new nodes' areas decides)
+    node = b.read(clusters.node, clusters.count, np.int32)
+    boxes = b.read(clusters.box, 2 * clusters.count, np.dtype((np.float32, 4))).reshape(-1, 2, 4)
+    levels, split_root = _split_top(node, boxes[:, 0, :3], boxes[:, 1, :3], tree.made)
+    split_area = sum(surface_area(lo_, hi_).astype(np.float64).sum() for _, _, lo_, hi_ in levels)
+    mark = tree.made, len(tree.batches)
+    cluster_root = clusters.cluster(tree, 1, report)
+    made = tree.boxes(mark[0], tree.made).astype(np.float64)
+    if split_area < surface_area(made[:, 0, :3], made[:, 1, :3]).sum():
+        tree.cut(mark)
+        for level in levels:
+            tree.add(*level)
+        return split_root
+    return cluster_root
 
 
-def _split_top(tree: _Tree, clusters: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> int:
-    """Step 2: the binned SAH split of the clusters (nodes of the tree with boxes lo..hi) down to
-    single clusters, level by level with whole-array operations; returns the root. A segment
-    gets as many bins as it has clusters, up to MAX_BINS, and one whose centroids coincide is
-    halved by count."""
+class _Clusters:
+    """PLOC's clusters on the device: node numbers and boxes, in Morton order, in two buffers that
+    passes compact into alternately."""
+
+    def __init__(self, b: Builder, count: int):
+        self.b, self.count = b, count
+        self.node, self.box = b.buffer(count * 4), b.buffer(count * 32)
+        self.node_out, self.box_out = b.buffer(count * 4), b.buffer(count * 32)
+        groups = -(-count // GROUP)
+        self.nearest, self.prefix = b.buffer(count * 4), b.buffer(count * 8)
+        self.group_sum, self.group_start = b.buffer(groups * 8), b.buffer(groups * 8)
+
+    def cluster(self, tree: _Tree, stop: int, report) -> int:
+        """Step 1: passes until `stop` clusters are left; returns the last cluster's node."""
+        b = self.b
+        while self.count > stop:
+            count = np.int32(self.count)
+            b.launch("find_nearest", self.count, self.box, count, np.int32(RADIUS), self.nearest)
+            groups = b.launch("mark_merges", self.count, self.nearest, count, self.prefix, self.group_sum)
+            sums = b.read(self.group_sum, groups, np.dtype((np.int32, 2)))
+            b.write(self.group_start, np.cumsum(sums, axis=0, dtype=np.int32) - sums)
+            b.launch("merge_clusters", self.count, self.nearest, count, self.prefix, self.group_start,
+                     np.int32(tree.made), self.node, self.box, self.node_out, self.box_out,
+                     tree.child, tree.box)
+            merges, self.count = (int(v) for v in sums.sum(axis=0))
+            tree.made_batch(merges)
+            self.node, self.node_out = self.node_out, self.node
+            self.box, self.box_out = self.box_out, self.box
+            report(merges)
+        return tree.made - 1
+
+
+def _split_top(clusters: np.ndarray, lo: np.ndarray, hi: np.ndarray, first_node: int):
+    """Step 2's binned SAH split of the (two or more) clusters, nodes of the tree with boxes lo..hi,
+    down to single clusters, level by level with whole-array operations. A segment gets as many
+    bins as it has clusters, up to MAX_BINS, and one whose centroids coincide is halved by count.
+    Returns the new nodes, numbered from first_node, as batches (left, right, lo, hi) from the
+    bottom level up, and the root."""
     count = len(clusters)
-    if count == 1:
-        return int(clusters[0])
     cen = (lo + hi) * 0.5
     levels = []     # per level: each segment's two halves' node or cluster, and its box
     starts, counts = np.array([0]), np.array([count])
@@ -329,11 +334,14 @@ def _split_top(tree: _Tree, clusters: np.ndarray, lo: np.ndarray, hi: np.ndarray
     # nodes bottom-up, each level's batch after the ones below it: a half of one cluster is the
     # cluster itself, a larger half the node made for it one level down (at the half's start)
     made_at = np.empty(count, np.int32)
+    batches = []
     for starts, n_left, counts, box_lo, box_hi in reversed(levels):
         left = np.where(n_left > 1, made_at[starts], clusters[starts])
         right = np.where(counts - n_left > 1, made_at[starts + n_left], clusters[starts + n_left])
-        made_at[starts] = tree.add(left, right, box_lo, box_hi)
-    return int(made_at[0])
+        made_at[starts] = first_node + np.arange(len(starts))
+        first_node += len(starts)
+        batches.append((left, right, box_lo, box_hi))
+    return batches, int(made_at[0])
 
 
 def _best_splits(lo, hi, cen, seg, offsets, n_seg, bins):
@@ -387,104 +395,30 @@ def _sweep(box_lo, box_hi, reverse):
     return surface_area(lo, hi)
 
 
+
 def _flatten(tree: _Tree, root: int, num_spheres: int) -> BVH:
-    """Step 3: the binary tree collapsed into leaves by the SAH and laid out as BVH_NODEs in
-    depth-first order, each leaf's primitives consecutive."""
-    n, left, right = tree.n, tree.left, tree.right
-    if n == 1:   # a lone primitive: the root holds it in both slots (tested twice, harmlessly)
-        nodes = np.zeros(1, BVH_NODE)
-        lo, hi = tree.lo[:1].copy(), tree.hi[:1].copy()
-        _widen(lo, hi)
-        nodes["child"]["lo"], nodes["child"]["hi"] = lo, hi
-        nodes["child"]["count"] = 1 if num_spheres else -1
-        return BVH(nodes, np.zeros(1, np.int64), 1)
-
-    # bottom-up: primitives under each node, and its SAH cost relative to its own area (float32
-    # areas may overflow to inf in huge scenes, which only makes a leaf less likely)
-    size = len(left)
-    count = np.ones(size, np.int32)
-    with np.errstate(over="ignore", invalid="ignore"):
-        area = _half_area(tree.lo, tree.hi)
-    cost = np.ones(size, np.float32)
-    sah_leaf = np.zeros(size, bool)
-    for b in tree.batches:
-        l, r = left[b], right[b]
-        count[b] = count[l] + count[r]
-        with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
-            split = TRAVERSAL_COST + np.divide(area[l] * cost[l] + area[r] * cost[r], area[b],
-                                               out=cost[l] + cost[r], where=area[b] > 0)
-        sah_leaf[b] = (count[b] <= MAX_LEAF_SIZE) & (count[b] <= split)
-        cost[b] = np.where(sah_leaf[b], count[b], split)
-
-    # top-down: depth; a node is an inner BVH node unless it is a primitive, a leaf by the SAH,
-    # inside a leaf, or at MAX_DEPTH (where the leaf keeps all its primitives). The root is inner.
-    depth = np.zeros(size, np.int32)
-    inner = np.zeros(size, bool)
-    inner[root] = True
-    for b in reversed(tree.batches):
-        parents = np.flatnonzero(inner[b]) + b.start
-        for child in (left[parents], right[parents]):
-            depth[child] = depth[parents] + 1
-            inner[child] = (child >= n) & ~sah_leaf[child] & (depth[child] < MAX_DEPTH)
-
-    # bottom-up: inner nodes in each subtree; top-down: each inner node's number in depth-first
-    # order, and each node's first primitive
-    nodes_below = inner.astype(np.int32)
-    for b in tree.batches:
-        nodes_below[b] = np.where(inner[b], 1 + nodes_below[left[b]] + nodes_below[right[b]], 0)
-    number = np.zeros(size, np.int32)
-    first = np.zeros(size, np.int32)
-    for b in reversed(tree.batches):
-        first[left[b]] = first[b]
-        first[right[b]] = first[b] + count[left[b]]
-        number[left[b]] = number[b] + 1
-        number[right[b]] = number[b] + 1 + nodes_below[left[b]]
-    order = np.empty(n, np.int64)
-    order[first[:n]] = np.arange(n)
-
-    parents = np.empty(np.count_nonzero(inner), np.int32)
-    parents[number[inner]] = np.flatnonzero(inner)                    # in depth-first order
-    children = np.stack([left[parents], right[parents]], axis=1)     # (nodes, 2)
-
-    # BVH_NODE's 16 words: per child lo, index, hi, count; filled in place (np.take with out),
-    # since fresh memory is slow to touch on some virtual machines
-    _widen(tree.lo, tree.hi)
-    words = np.zeros((len(parents), 2, 8), np.int32)
-    np.take(tree.lo.view(np.int32), children, axis=0, out=words[:, :, 0:3], mode="clip")
-    np.take(tree.hi.view(np.int32), children, axis=0, out=words[:, :, 4:7], mode="clip")
-    # a leaf indexes its kind's own array (kernels/types.h), and a triangle leaf's count is
-    # negative; in BVH order the spheres' tree comes first, so triangles' numbers are shifted
-    is_inner = inner[children]
-    index = first[children]
-    is_triangle = index >= num_spheres
-    np.subtract(index, num_spheres, out=index, where=is_triangle)
-    np.copyto(index, number[children], where=is_inner)
-    words[:, :, 3] = index
-    leaf_count = count[children]
-    np.negative(leaf_count, out=leaf_count, where=is_triangle)
-    leaf_count[is_inner] = 0
-    words[:, :, 7] = leaf_count
-    nodes = words.reshape(len(parents), 16).view(BVH_NODE).reshape(-1)
-    return BVH(nodes, order, int(depth[children][~is_inner].max()))
-
-
-def _half_area(lo, hi):
-    """Half the surface areas of boxes, with few temporary arrays."""
-    d = hi - lo
-    np.maximum(d, 0, out=d)
-    area = d[:, 0] * d[:, 1]
-    area += d[:, 1] * d[:, 2]
-    area += d[:, 2] * d[:, 0]
-    return area
-
-
-def _widen(lo, hi):
-    """Widens boxes in place by one or two float steps, covering the rounding of centre -/+ radius
-    and of the corners' float32 values: x -/+ (|x| 2^-23 + FLT_MIN) rounds to at least the next
-    float outward (|x| 2^-23 is one to two units in the last place of x), and moves 0 too."""
-    step = np.empty_like(lo)
-    for box, outward in ((lo, np.subtract), (hi, np.add)):
-        np.abs(box, out=step)
-        step *= np.float32(2.0 ** -23)
-        step += np.finfo(np.float32).tiny
-        outward(box, step, out=box)
+    """Step 3 on the device (kernels/build/collapse.cl): sweeps over the batches, then the nodes
+    and the primitives' order read back."""
+    b, n, size = tree.b, tree.n, tree.made
+    prims, cost = b.filled(np.int32(1), size), b.filled(np.float32(1), size)
+    sah_leaf, inner = b.filled(np.uint8(0), size), b.filled(np.uint8(0), size)
+    depth, below = b.filled(np.int32(0), size), b.filled(np.int32(0), size)
+    number, first_prim = b.filled(np.int32(0), size), b.filled(np.int32(0), size)
+    b.write(inner, np.ones(1, np.uint8), root)
+    for first, count in tree.batches:
+        b.launch("collapse_up", count, tree.child, tree.box, np.int32(first), np.int32(count),
+                 prims, cost, sah_leaf)
+    for first, count in reversed(tree.batches):
+        b.launch("mark_inner_down", count, tree.child, np.int32(first), np.int32(count), np.int32(n),
+                 sah_leaf, inner, depth)
+    for first, count in tree.batches:
+        b.launch("count_inner_up", count, tree.child, np.int32(first), np.int32(count), inner, below)
+    for first, count in reversed(tree.batches):
+        b.launch("number_down", count, tree.child, np.int32(first), np.int32(count), prims, below,
+                 number, first_prim)
+    num_nodes = int(b.read(below, 1, np.int32, root)[0])
+    nodes, order, max_depth = b.buffer(num_nodes * BVH_NODE.itemsize), b.buffer(n * 4), b.filled(np.int32(0), 1)
+    b.launch("write_nodes", size, tree.child, tree.box, np.int32(size), np.int32(n), np.int32(num_spheres),
+             inner, number, first_prim, prims, depth, nodes, order, max_depth)
+    return BVH(b.read(nodes, num_nodes, BVH_NODE), b.read(order, n, np.int32).astype(np.int64),
+               int(b.read(max_depth, 1, np.int32)[0]))

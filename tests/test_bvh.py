@@ -175,7 +175,11 @@ def test_ploc_nearest_neighbours_follow_the_pair_order(backend, case):
         hi = lo + 1
     boxes = np.zeros((n, 2, 4), np.float32)
     boxes[:, 0, :3], boxes[:, 1, :3] = lo, hi
-    got = builder_for(backend.queue).nearest(boxes)
+    b = builder_for(backend.queue)
+    box, nearest = b.buffer(boxes.nbytes), b.buffer(4 * n)
+    b.write(box, boxes)
+    b.launch("find_nearest", n, box, np.int32(n), np.int32(RADIUS), nearest)
+    got = b.read(nearest, n, np.int32)
     np.testing.assert_array_equal(got, window_nearest(boxes, RADIUS))
     if case == "identical":   # they pair up, so a pass halves them
         np.testing.assert_array_equal(got, np.arange(n) ^ 1)
