@@ -5,6 +5,8 @@ and degenerate triangles, mixed scenes, and every primitive at one point."""
 import numpy as np
 import pytest
 
+import app.bvh as bvh_module
+
 from app.bvh import MAX_DEPTH, MAX_LEAF_SIZE, RADIUS, TRAVERSAL_COST, build_bvh, builder_for, sah_cost
 from app.compiled import compile_scene
 from app.scene import Mesh, SceneBuilder, diffuse
@@ -49,6 +51,15 @@ def scene_of(spheres=(), triangles=()):
     return b.build("test")
 
 
+@pytest.fixture(params=["default", "ploc"])
+def top_work(request, monkeypatch):
+    """Each build test twice: as built (scenes this small are split whole by the binned SAH, PLOC
+    competing only for the top), and with PLOC clustering down to two clusters."""
+    if request.param == "ploc":
+        monkeypatch.setattr(bvh_module, "TOP_WORK", 0)
+    return request.param
+
+
 def leaf_ranges(nodes):
     c = nodes["child"].reshape(-1)
     leaf = c["count"] != 0
@@ -56,7 +67,7 @@ def leaf_ranges(nodes):
 
 
 @pytest.mark.parametrize("n_spheres,n_triangles", [(1, 0), (0, 1), (2, 0), (3, 4), (7, 0), (100, 100), (0, 3000), (2000, 3000)])
-def test_every_primitive_in_one_leaf_and_inside_its_boxes(n_spheres, n_triangles):
+def test_every_primitive_in_one_leaf_and_inside_its_boxes(n_spheres, n_triangles, top_work):
     rng = np.random.default_rng(n_spheres + n_triangles)
     c = compile_scene(scene_of(random_spheres(rng, n_spheres), triangle_soup(rng, n_triangles)))
     n = n_spheres + n_triangles
@@ -80,7 +91,7 @@ def test_every_primitive_in_one_leaf_and_inside_its_boxes(n_spheres, n_triangles
     assert c.bvh.depth <= MAX_DEPTH
 
 
-def test_children_boxes_nest():
+def test_children_boxes_nest(top_work):
     rng = np.random.default_rng(3)
     nodes = compile_scene(scene_of(random_spheres(rng, 1500), triangle_soup(rng, 1500))).bvh.nodes
     c = nodes["child"]
@@ -112,7 +123,7 @@ def nearest(kernels, compiled, rays, rng, aim_at):
 
 
 @pytest.mark.parametrize("case", ["spheres", "soup", "mixed", "coincident", "one-point", "degenerate-neighbours"])
-def test_nearest_hit_matches_brute_force(kernels, case):
+def test_nearest_hit_matches_brute_force(kernels, case, top_work):
     rng = np.random.default_rng(len(case))
     spheres, tris = np.zeros((0, 4), np.float32), np.zeros((0, 3, 3), np.float32)
     if case == "spheres":
@@ -208,9 +219,9 @@ def test_the_build_is_deterministic_and_reports_progress(backend):
     assert np.all(np.diff(seen) >= 0) and seen[-1] == pytest.approx(1.0)
 
 
-def test_sah_cost_is_near_a_full_sweep_build():
+def test_sah_cost_is_near_a_full_sweep_build(top_work):
     """The SAH cost against a top-down full-sweep SAH build (every split position on every axis, the
-    classic high-quality reference) of the same 2000 spheres: within 10 %."""
+    classic high-quality reference) of the same 2000 spheres: within 10 %, with PLOC alone too."""
     rng = np.random.default_rng(5)
     s = random_spheres(rng, 2000, (0.05, 0.4))
     lo, hi = s[:, :3] - s[:, 3:], s[:, :3] + s[:, 3:]

@@ -184,7 +184,8 @@ class Viewer:
             fw, fh = self.glfw.get_framebuffer_size(self.window)
             self.ctx.viewport = (0, 0, fw, fh)
             self.ctx.clear(0.1, 0.1, 0.1)
-            self.ctx.clear(0.35, 0.6, 0.9, viewport=(0, fh // 2 - 6, int(fw * fraction), 12))
+            self.ctx.clear(0.25, 0.25, 0.25, viewport=(fw // 8, fh // 2 - 6, fw * 3 // 4, 12))
+            self.ctx.clear(0.35, 0.6, 0.9, viewport=(fw // 8, fh // 2 - 6, int(fw * 3 // 4 * fraction), 12))
             self.glfw.swap_buffers(self.window)
         return show
 
