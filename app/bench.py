@@ -114,7 +114,7 @@ class BuildTime:
     device: str
     primitives: int
     seconds: float            # the median of three builds
-    sah_cost: float           # app.bvh.sah_cost
+    sah_cost: float           # app.bvh.BVH.cost
     nodes: int
     node_megabytes: float
 
@@ -123,7 +123,7 @@ def run_builds(device_specs, sizes, log=print):
     """A row per device, size and kind of primitive (spheres, triangles)."""
     import numpy as np
 
-    from app.bvh import build_bvh, primitive_boxes, sah_cost
+    from app.bvh import build_bvh, primitive_boxes
     from app.scene.builtin import builtin_scene, count_name
 
     results = []
@@ -140,7 +140,7 @@ def run_builds(device_specs, sizes, log=print):
                     start = time.perf_counter()
                     bvh = build_bvh(lo, hi, len(scene.spheres), backend.queue)
                     seconds.append(time.perf_counter() - start)
-                r = BuildTime(name, backend.device.describe(), len(lo), sorted(seconds)[1], sah_cost(bvh),
+                r = BuildTime(name, backend.device.describe(), len(lo), sorted(seconds)[1], bvh.cost,
                               len(bvh.nodes), bvh.nodes.nbytes / 2**20)
                 log(format_build_row(r))
                 results.append(r)

@@ -133,7 +133,7 @@ def check_memory(name: str, n_spheres: int, n_triangles: int, device: cl.Device 
         raise UserError(f"{name}: building the BVH of {n} primitives needs about "
                         f"{format_bytes(n * BUILD_HOST_BYTES)} of memory; {format_bytes(available)} is available")
     if device is not None:   # the largest each buffer can be (Renderer.set_scene uploads them)
-        check_fits(device, {"BVH": BVH_NODE.itemsize * max(n - 1, 1), "spheres": 16 * n_spheres,
+        check_fits(device, {"BVH": BVH_NODE.itemsize * max(2 * n // 3, 1), "spheres": 16 * n_spheres,
                             "triangles": TRIANGLE.itemsize * n_triangles,
                             "shading normals": 3 * 16 * n_triangles, "materials": 4 * n}, name)
 

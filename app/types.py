@@ -23,14 +23,8 @@ MATERIAL = np.dtype([
     ("table", np.float32, 16),      # a function of cos(theta) a BSDF tabulates on the host
 ])
 
-BVH_CHILD = np.dtype([
-    ("lo", np.float32, 3),
-    ("index", np.int32),
-    ("hi", np.float32, 3),
-    ("count", np.int32),            # > 0: spheres; < 0: triangles; 0: inner node
-])
-
-BVH_NODE = np.dtype([("child", BVH_CHILD, 2)])
+BVH_NODE = np.dtype([(name, np.float32, 4) for name in ("lo_x", "lo_y", "lo_z", "hi_x", "hi_y", "hi_z")]
+                    + [("index", np.int32, 4), ("count", np.int32, 4)])   # count > 0: spheres; < 0: triangles; 0: inner or unused
 
 RENDER_PARAMS = np.dtype([
     ("eye", np.float32, 4),

@@ -37,19 +37,15 @@ typedef struct {
                              cos = (k / 15)^2 (app/materials/microfacet.py; lookup_cos_table) */
 } Material;
 
-/* One child of a BVH node: its box and what it holds. A leaf holds spheres [index, index + count)
- * when count > 0 and triangles [index, index - count) when count < 0 (leaves hold one kind of
- * shape); an inner child has count == 0 and index is its node. Keeping both children's boxes
- * in the parent lets traversal test them together and go nearer-first. */
+/* A BVH node: up to four children, their boxes as structure-of-arrays so that one float4
+ * operation tests all four. A leaf child holds spheres [index, index + count) when count > 0 and
+ * triangles [index, index - count) when count < 0 (leaves hold one kind of shape); an inner
+ * child has count == 0 and index its node; an unused slot has count 0, index -1 and a box at
+ * +inf, which no ray enters. */
 typedef struct {
-    float lo[3];
-    int index;
-    float hi[3];
-    int count;
-} BVHChild;
-
-typedef struct {
-    BVHChild child[2];
+    float4 lo_x, lo_y, lo_z, hi_x, hi_y, hi_z;
+    int4 index;
+    int4 count;
 } BVHNode;
 
 /* Everything one launch of the render kernel needs besides the scene buffers. */

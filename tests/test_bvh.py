@@ -7,7 +7,7 @@ import pytest
 
 import app.bvh as bvh_module
 
-from app.bvh import MAX_DEPTH, MAX_LEAF_SIZE, RADIUS, TRAVERSAL_COST, build_bvh, builder_for, sah_cost
+from app.bvh import MAX_DEPTH, MAX_LEAF_SIZE, RADIUS, TRAVERSAL_COST, build_bvh, builder_for
 from app.compiled import compile_scene
 from app.scene import Mesh, SceneBuilder, diffuse
 from tests.conftest import scene_arrays
@@ -60,10 +60,18 @@ def top_work(request, monkeypatch):
     return request.param
 
 
+def slots(nodes):
+    """Every child slot of the 4-wide nodes: (node, lo (3), hi (3), index, count), unused ones too."""
+    lo = np.stack([nodes[f"lo_{a}"] for a in "xyz"], axis=-1)        # (nodes, 4, 3)
+    hi = np.stack([nodes[f"hi_{a}"] for a in "xyz"], axis=-1)
+    node = np.repeat(np.arange(len(nodes)), 4)
+    return node, lo.reshape(-1, 3), hi.reshape(-1, 3), nodes["index"].reshape(-1), nodes["count"].reshape(-1)
+
+
 def leaf_ranges(nodes):
-    c = nodes["child"].reshape(-1)
-    leaf = c["count"] != 0
-    return c[leaf]
+    _, lo, hi, index, count = slots(nodes)
+    leaf = count != 0
+    return [dict(lo=l, hi=h, index=i, count=c) for l, h, i, c in zip(lo[leaf], hi[leaf], index[leaf], count[leaf])]
 
 
 @pytest.mark.parametrize("n_spheres,n_triangles", [(1, 0), (0, 1), (2, 0), (3, 4), (7, 0), (100, 100), (0, 3000), (2000, 3000)])
@@ -84,29 +92,31 @@ def test_every_primitive_in_one_leaf_and_inside_its_boxes(n_spheres, n_triangles
             corners = np.stack([c.triangles[f][idx, :3] for f in ("v0", "v1", "v2")], axis=1)
             lo, hi = corners.min(axis=1), corners.max(axis=1)
         assert np.all(lo >= leaf["lo"]) and np.all(hi <= leaf["hi"])
-    if n == 1:   # the lone primitive sits in both root slots
-        covered = {k: sorted(set(v)) for k, v in covered.items()}
     assert sorted(covered["s"]) == list(range(n_spheres))
     assert sorted(covered["t"]) == list(range(n_triangles))
     assert c.bvh.depth <= MAX_DEPTH
 
 
 def test_children_boxes_nest(top_work):
+    """An inner slot's box holds every used slot of the node it points to; every node but the root
+    is pointed to once; unused slots lie at +inf."""
     rng = np.random.default_rng(3)
     nodes = compile_scene(scene_of(random_spheres(rng, 1500), triangle_soup(rng, 1500))).bvh.nodes
-    c = nodes["child"]
-    for k in range(len(nodes)):
-        for s in range(2):
-            if c["count"][k, s] == 0:
-                inner = c[c["index"][k, s]]
-                assert np.all(inner["lo"] >= c["lo"][k, s]) and np.all(inner["hi"] <= c["hi"][k, s])
+    node, lo, hi, index, count = slots(nodes)
+    unused = (count == 0) & (index == -1)
+    assert np.all(lo[unused] == np.inf) and np.all(hi[unused] == np.inf)
+    inner = (count == 0) & (index >= 0)
+    assert sorted(index[inner].tolist()) == list(range(1, len(nodes)))
+    for k in np.flatnonzero(inner):
+        used = (node == index[k]) & ~unused
+        assert 2 <= used.sum() <= 4
+        assert np.all(lo[used] >= lo[k]) and np.all(hi[used] <= hi[k])
 
 
 def test_identical_boxes_still_split():
     lo = np.tile([1.0, 2.0, 3.0], (1000, 1)).astype(np.float32)
     bvh = build_bvh(lo, lo + 0.5)
-    c = bvh.nodes["child"]
-    assert c["count"].max() <= 4 and bvh.depth < 20
+    assert bvh.nodes["count"].max() <= 4 and bvh.depth < 20
 
 
 def nearest(kernels, compiled, rays, rng, aim_at):
@@ -203,7 +213,7 @@ def test_deep_chains_are_cut_at_max_depth():
     lo = np.column_stack([2.0 ** np.arange(60), np.zeros(60), np.zeros(60)]).astype(np.float32)
     bvh = build_bvh(lo, lo + 1)
     assert bvh.depth == MAX_DEPTH
-    counts = bvh.nodes["child"]["count"]
+    counts = bvh.nodes["count"]
     assert counts[counts != 0].sum() == 60
     assert sorted(bvh.order.tolist()) == list(range(60))
 
@@ -225,11 +235,11 @@ def test_sah_cost_is_near_a_full_sweep_build(top_work):
     rng = np.random.default_rng(5)
     s = random_spheres(rng, 2000, (0.05, 0.4))
     lo, hi = s[:, :3] - s[:, 3:], s[:, :3] + s[:, 3:]
-    assert sah_cost(build_bvh(lo, hi)) < 1.1 * full_sweep_sah(lo.astype(np.float64), hi.astype(np.float64))
+    assert build_bvh(lo, hi).cost < 1.1 * full_sweep_sah(lo.astype(np.float64), hi.astype(np.float64))
 
 
 def full_sweep_sah(lo, hi):
-    """The SAH cost (as app.bvh.sah_cost counts it) of a top-down full-sweep build with leaves of at
+    """The SAH cost (as app.bvh.BVH.cost counts it) of a top-down full-sweep build with leaves of at
     most MAX_LEAF_SIZE, recursive and slow: a reference for small inputs only."""
     def area(l, h):
         d = h - l

@@ -28,8 +28,8 @@ def test_buffers_larger_together_than_global_memory_are_refused():
 
 
 def test_a_scene_too_large_for_the_device_is_refused_before_its_build():
-    # 20000 spheres need 20000 BVH nodes of 64 bytes at most: 1.2 MB in one buffer
-    with pytest.raises(UserError, match="spheres20k: its BVH need 1.22 MB in one buffer"):
+    # 20000 spheres need at most 13333 4-wide BVH nodes of 128 bytes: 1.6 MB in one buffer
+    with pytest.raises(UserError, match="spheres20k: its BVH need 1.63 MB in one buffer"):
         check_memory("spheres20k", 20000, 0, SMALL_DEVICE)
     check_memory("spheres8k", 8000, 0, SMALL_DEVICE)
 

@@ -11,7 +11,7 @@ STRUCTS = {
     "Triangle": TRIANGLE,
     "RenderParams": RENDER_PARAMS,
     "Light": LIGHT,
-    "BVHChild": BVH_NODE["child"].base,
+    "BVHNode": BVH_NODE,
 }
 
 
