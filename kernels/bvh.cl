@@ -52,21 +52,9 @@ void intersect_triangles(const SceneData *sc, int first, int count, float3 o, fl
     }
 }
 
-/* NO_TRIANGLES (a build option for scenes of spheres only) leaves the triangle code out. */
-void intersect_leaf(const SceneData *sc, int index, int count, float3 o, float3 d, Hit *hit)
-{
-#ifdef NO_TRIANGLES
-    intersect_spheres(sc, index, count, o, d, hit);
-#else
-    if (count > 0)
-        intersect_spheres(sc, index, count, o, d, hit);
-    else
-        intersect_triangles(sc, index, -count, o, d, hit);
-#endif
-}
-
 /* Tests the primitives of a node's leaves that the ray enters (t < INFINITY); returns t with the
- * leaves' slots set to INFINITY, leaving the inner children's. Sphere leaves are short, so the
+ * leaves' slots set to INFINITY, leaving the inner children's. NO_TRIANGLES (a build option for
+ * scenes of spheres only) leaves the triangle code out. Sphere leaves are short, so the
  * four slots are tested unrolled; with triangles, one copy of the (inlined) primitive tests in
  * a loop over the leaves' bits keeps the kernel's registers down (the teapot's NEE kernel ran
  * 26 % slower on the H100 with four copies, the sphere scenes 6-8 % faster). */
@@ -86,7 +74,10 @@ float4 intersect_leaves(const SceneData *sc, float4 t, int4 count, int4 index, f
         leaves &= leaves - 1;
         int c = k == 0 ? count.x : k == 1 ? count.y : k == 2 ? count.z : count.w;
         int i = k == 0 ? index.x : k == 1 ? index.y : k == 2 ? index.z : index.w;
-        intersect_leaf(sc, i, c, o, d, hit);
+        if (c > 0)
+            intersect_spheres(sc, i, c, o, d, hit);
+        else
+            intersect_triangles(sc, i, -c, o, d, hit);
     }
 #endif
     return select(t, (float4)(INFINITY), leaf);
