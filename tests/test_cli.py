@@ -60,6 +60,20 @@ BAD_FILES = [
     (GOOD.replace("rho_d = 0.5", "rho_d = [0.5, 0.5]"), "must be a number or a list of 3 numbers"),
     (GOOD.replace("[environment]", "[render]\nwidth = 0\n[environment]"), "render.width: must be at least 1"),
     (GOOD.replace("[environment]", "[render]\nrussian_roulette = \"off\"\n[environment]"), "needs a max_depth"),
+    # values a float32 or an int32 cannot hold, and shapes of data tomllib or NumPy trip on
+    (GOOD.replace("center = [0, 0, 0]", "center = [1e39, 0, 0]"),
+     "spheres[0].center: must be a list of 3 finite numbers within float32's range, got [1e+39, 0, 0]"),
+    (GOOD.replace("radius = 1", "radius = " + "9" * 400), "spheres[0].radius: must be finite and within float32's range"),
+    (GOOD.replace("[environment]", "[render]\nmax_depth = 2147483648\n[environment]"),
+     "render.max_depth: must fit in 32 bits, got 2147483648"),
+    (GOOD.replace("rho_d = 0.5 }", "rho_d = 0.5, Le = 1e39 }"), "spheres[0].material.Le: must hold finite numbers within float32's range"),
+    (GOOD.replace("color = 0.5", "color = 0.5\nintensity = 1e39"), "environment.intensity: must be finite and within float32's range"),
+    (GOOD.replace("look_at = [0, 0, 0]", "look_at = [0, 0, 0]\nup = [0, 0, 0]"), "camera.up: must not be zero"),
+    (GOOD.replace("color = 0.5", "color = 0.5\nrotation = 1e42"), "environment.rotation: must be finite and within float32's range"),
+    (GOOD.replace("look_at = [0, 0, 0]", "look_at = [0, 0, 0]\nup = [1e-320, 0, 0]"), "camera.up: must not be zero"),
+    (GOOD + "\nx = " + "[" * 1000 + "]" * 1000 + "\n", "nested too deeply"),
+    (GOOD.replace('type = "diffuse"', 'type = ["diffuse"]'), "spheres[0].material.type: must be one of"),
+    (GOOD.replace('material = { type = "diffuse", rho_d = 0.5 }', 'material = { type = {} }'), "spheres[0].material.type: must be one of"),
 ]
 
 
@@ -72,6 +86,17 @@ def test_bad_scene_file_gets_one_clear_message(tmp_path, text, message):
     assert message in r.stderr and str(scene) in r.stderr, r.stderr
     assert "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1
     assert not out.exists()
+
+
+def test_a_huge_environment_rotation_wraps(tmp_path):
+    """A rotation near float32's limit (1e42, beyond it, crashed the kernel; it is refused now):
+    the angle is wrapped to [0, 360) in float64 before it reaches the device."""
+    from app.image_io import read_hdr
+    scene = write(tmp_path, GOOD.replace("color = 0.5", 'map = "studio_small_03_1k.hdr"\nrotation = 3e38'))
+    out = tmp_path / "o.exr"
+    r = pathtrace("render", scene, "-o", out, "--spp", "2", "--size", "16x8", "-q")
+    assert r.returncode == 0, r.stderr
+    assert np.all(np.isfinite(read_hdr(out, "test")))
 
 
 def test_unreadable_environment_map(tmp_path):

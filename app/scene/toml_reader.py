@@ -48,9 +48,11 @@ class _Reader:
         value = data[key]
         kinds = (int,) if integer else (int, float)
         if isinstance(value, bool) or not isinstance(value, kinds):
-            self.fail(f"{where}.{key}", f"must be {'an integer' if integer else 'a number'}, got {value!r}")
-        if not math.isfinite(value):
-            self.fail(f"{where}.{key}", f"must be finite, got {value}")
+            self.fail(f"{where}.{key}", f"must be {'an integer' if integer else 'a number'}, got {_short(value)}")
+        if integer and not -2**31 <= value < 2**31:
+            self.fail(f"{where}.{key}", f"must fit in 32 bits, got {_short(value)}")
+        if not _is_finite_number(value):
+            self.fail(f"{where}.{key}", f"must be finite and within float32's range (3.4e38), got {_short(value)}")
         if low is not None and value < low:
             self.fail(f"{where}.{key}", f"must be at least {low}, got {value}")
         if high is not None and value > high:
@@ -68,8 +70,8 @@ class _Reader:
         if not isinstance(items, list) or len(items) != 3:
             self.fail(f"{where}.{key}", f"must be a number or a list of 3 numbers, got {value!r}")
         for c in items:
-            if isinstance(c, bool) or not isinstance(c, (int, float)) or not math.isfinite(c):
-                self.fail(f"{where}.{key}", f"must hold finite numbers, got {value!r}")
+            if not _is_finite_number(c):
+                self.fail(f"{where}.{key}", f"must hold finite numbers within float32's range, got {_short(value)}")
             if c < 0 or (high is not None and c > high):
                 bound = f"in [0, {high}]" if high is not None else "non-negative"
                 self.fail(f"{where}.{key}", f"must be {bound}, got {value!r}")
@@ -81,10 +83,9 @@ class _Reader:
                 self.fail(where, f"missing '{key}'")
             return np.asarray(default, np.float64)
         value = data[key]
-        if (not isinstance(value, list) or len(value) != 3
-                or not all(isinstance(c, (int, float)) and not isinstance(c, bool) and math.isfinite(c)
-                           for c in value)):
-            self.fail(f"{where}.{key}", f"must be a list of 3 finite numbers, got {value!r}")
+        if not isinstance(value, list) or len(value) != 3 or not all(_is_finite_number(c) for c in value):
+            self.fail(f"{where}.{key}", f"must be a list of 3 finite numbers within float32's range, "
+                                        f"got {_short(value)}")
         return np.asarray(value, np.float64)
 
     def material(self, data, where) -> Material:
@@ -145,6 +146,8 @@ class _Reader:
         forward = cam.look_at - cam.eye
         if np.linalg.norm(forward) == 0:
             self.fail("camera.look_at", "must differ from camera.eye")
+        if np.linalg.norm(cam.up) < 1e-30:
+            self.fail("camera.up", f"must not be zero, got {cam.up.tolist()}")
         if np.linalg.norm(np.cross(forward, cam.up)) < 1e-9 * np.linalg.norm(forward) * np.linalg.norm(cam.up):
             self.fail("camera.up", "must not be parallel to the view direction")
         return cam
@@ -153,7 +156,7 @@ class _Reader:
         where = "environment"
         self.table(data, where, {"color", "map", "intensity", "rotation"})
         intensity = self.number(data, "intensity", where, default=1.0, low=0)
-        rotation = self.number(data, "rotation", where, default=0.0)
+        rotation = self.number(data, "rotation", where, default=0.0) % 360.0   # an angle: wrapped in float64
         if "map" in data and "color" in data:
             self.fail(where, "give either 'color' or 'map', not both")
         if "map" in data:
@@ -334,8 +337,23 @@ class _Reader:
             settings=self.settings(data.get("render", {})))
 
 
+FLOAT32_MAX = float(np.finfo(np.float32).max)
+
+
 def _is_finite_number(x):
-    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+    """A number the kernels can hold: an int or float, not a bool, finite as a float32."""
+    if isinstance(x, bool) or not isinstance(x, (int, float)):
+        return False
+    try:
+        return math.isfinite(x) and abs(float(x)) <= FLOAT32_MAX
+    except OverflowError:       # an integer beyond float64's range
+        return False
+
+
+def _short(value) -> str:
+    """A value for a message: its repr, cut to 60 characters."""
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
 
 
 def read_scene_file(path) -> Scene:
@@ -350,4 +368,6 @@ def read_scene_file(path) -> Scene:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise UserError(f"{path}: not valid TOML: {e}") from None
+    except RecursionError:
+        raise UserError(f"{path}: not valid TOML: arrays or tables nested too deeply") from None
     return _Reader(path).scene(data)
