@@ -76,11 +76,18 @@ def _finite(text):
     return value
 
 
+def _exposure(text):
+    value = _finite(text)
+    if abs(value) > 100:     # 2^100 already saturates every pixel; 2^1100 overflows a double
+        raise argparse.ArgumentTypeError(f"{value} stops is out of range (must be -100 to 100)")
+    return value
+
+
 def add_output_options(p: argparse.ArgumentParser):
     """Options of the commands that write images (render, farm render)."""
     from app.tonemap import TONEMAPS
-    p.add_argument("--exposure", type=_finite, default=0.0, metavar="EV",
-                   help="exposure in stops, for .png/.jpg (default 0)")
+    p.add_argument("--exposure", type=_exposure, default=0.0, metavar="EV",
+                   help="exposure in stops, -100 to 100, for .png/.jpg (default 0)")
     p.add_argument("--tonemap", choices=TONEMAPS, default="standard",
                    help="tone curve for .png/.jpg (default standard: clip at 1)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
@@ -153,7 +160,7 @@ def cmd_render(args):
     from tqdm import tqdm
 
     from app.device import choose_devices
-    from app.image_io import check_writable, write_image
+    from app.image_io import check_writable, shown, write_images
     from app.multidevice import DeviceGroup
     from app.scene import load_scene
 
@@ -180,10 +187,9 @@ def cmd_render(args):
         print(f"interrupted at {group.samples}/{s.spp} spp; nothing written", file=sys.stderr)
         return 130
     bar.close()
-    image = group.mean()
+    write_images(args.output, group.mean(), args.exposure, args.tonemap)
     for path in args.output:
-        write_image(path, image, args.exposure, args.tonemap)
-        print(f"wrote {path}", file=sys.stderr)
+        print(f"wrote {shown(path)}", file=sys.stderr)
     return 0
 
 

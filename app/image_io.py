@@ -1,12 +1,13 @@
 """Image files: HDR maps in, rendered images out. Linear HDR for .exr, .hdr and .pfm; tonemapped
 8-bit sRGB for .png and .jpg. OpenEXR's own bindings handle .exr, OpenCV the rest (its wheels
 carry no EXR codec). Every write is atomic: the image goes to a temporary file beside the
-target, which is renamed over it only once complete.
+target, which is renamed over it only once complete (and with several outputs, once all are).
 
 OpenCV and OpenEXR are imported where they are used, so that the core (scenes with constant
 environments, the renderer, the benchmarks) runs with NumPy and PyOpenCL alone."""
 
 import os
+import stat
 import tempfile
 from pathlib import Path
 
@@ -19,22 +20,67 @@ HDR_FORMATS = (".exr", ".hdr", ".pfm")
 LDR_FORMATS = (".png", ".jpg", ".jpeg")
 
 
+MAX_MAP_PIXELS = 1 << 26       # 8192 x 8192: a map's float32 RGB is then 768 MB
+
+
+def check_regular_file(path: Path, where: str, what: str, max_bytes: int):
+    """Refuses, in one line, a path that does not exist, is not a regular file (a folder, a FIFO,
+    a device such as /dev/zero: reading one could hang or never end) or is larger than
+    max_bytes."""
+    try:
+        info = os.stat(path)
+    except FileNotFoundError:
+        raise UserError(f"{where}: {what} '{shown(path)}' does not exist") from None
+    except OSError as e:
+        raise UserError(f"{where}: {what} '{shown(path)}': {e.strerror}") from None
+    if not stat.S_ISREG(info.st_mode):
+        raise UserError(f"{where}: {what} '{shown(path)}' is not a regular file")
+    if info.st_size > max_bytes:
+        raise UserError(f"{where}: {what} '{shown(path)}' is larger than {max_bytes >> 20} MB")
+
+
 def read_hdr(path: Path, where: str) -> np.ndarray:
     """A Radiance .hdr, OpenEXR or PFM image as linear float32 RGB, (H, W, 3)."""
     path = Path(path)
-    if not path.is_file():
-        raise UserError(f"{where}: environment map '{path}' does not exist")
+    check_regular_file(path, where, "environment map", 4 << 30)
+    size = _header_size(path)
+    if size is not None and size[0] * size[1] > MAX_MAP_PIXELS:
+        raise UserError(f"{where}: '{shown(path)}' claims {size[0]}x{size[1]} pixels, more than "
+                        f"pathtrace takes ({MAX_MAP_PIXELS} pixels)")
     rgb = _read_exr(path) if path.suffix.lower() == ".exr" else _read_with_opencv(path)
     if rgb is None:
-        raise UserError(f"{where}: '{path}' is not a readable HDR image (.hdr, .exr or .pfm)")
+        raise UserError(f"{where}: '{shown(path)}' is not a readable HDR image (.hdr, .exr or .pfm)")
     if not np.all(np.isfinite(rgb)) or rgb.min() < 0:
-        raise UserError(f"{where}: '{path}' holds negative, NaN or infinite pixels")
+        raise UserError(f"{where}: '{shown(path)}' holds negative, NaN or infinite pixels")
     return rgb
+
+
+def _header_size(path: Path):
+    """(width, height) as a .pfm or Radiance .hdr header states it, read before any decoder
+    allocates for it; None where the header is not one of those (the decoder then refuses it)."""
+    with open(path, "rb") as f:
+        head = f.read(4096)
+    lines = head.split(b"\n")
+    try:
+        if lines[0] in (b"PF", b"Pf"):
+            w, h = lines[1].split()
+            return int(w), int(h)
+        if lines[0].startswith(b"#?"):
+            blank = lines.index(b"")
+            y, h, x, w = lines[blank + 1].split()
+            return int(w), int(h)
+    except (ValueError, IndexError):
+        return None
+    return None
 
 
 def _read_with_opencv(path: Path):
     import cv2
-    image = cv2.imread(str(path), cv2.IMREAD_UNCHANGED | cv2.IMREAD_ANYDEPTH | cv2.IMREAD_COLOR)
+    # silent: a truncated file would print OpenCV's own error line before ours; decoded from
+    # memory: no file name reaches OpenCV
+    cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
+    data = np.fromfile(path, np.uint8)
+    image = cv2.imdecode(data, cv2.IMREAD_UNCHANGED | cv2.IMREAD_ANYDEPTH | cv2.IMREAD_COLOR)
     if image is None or image.ndim != 3 or image.dtype not in (np.float32, np.float16):
         return None
     return np.ascontiguousarray(image[..., 2::-1], np.float32)
@@ -69,37 +115,74 @@ def check_writable(path: Path, what: str = "--output", formats=HDR_FORMATS + LDR
     given, has none of those suffixes)."""
     path = Path(path)
     if formats and path.suffix.lower() not in formats:
-        raise UserError(f"{what}: '{path}' has an unknown image format (use one of {', '.join(formats)})")
-    if not path.parent.is_dir():
-        raise UserError(f"{what}: folder '{path.parent}' does not exist")
+        raise UserError(f"{what}: '{shown(path)}' has an unknown image format (use one of {', '.join(formats)})")
+    target = _target(path)
+    if not target.parent.is_dir():
+        raise UserError(f"{what}: folder '{shown(target.parent)}' does not exist")
     try:   # the only sure test (permissions, read-only mounts, root's exceptions) is to try
-        fd, probe = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+        fd, probe = tempfile.mkstemp(prefix=".pathtrace-", dir=target.parent)
         os.close(fd)
         os.unlink(probe)
     except OSError as e:
-        raise UserError(f"{what}: '{path}' is not writable ({e.strerror})") from None
-    if path.is_dir() or (path.exists() and not os.access(path, os.W_OK)):
-        raise UserError(f"{what}: '{path}' is not writable")
+        raise UserError(f"{what}: '{shown(path)}' is not writable ({e.strerror})") from None
+    if target.is_dir() or (target.exists() and not os.access(target, os.W_OK)):
+        raise UserError(f"{what}: '{shown(path)}' is not writable")
 
 
-def write_atomically(path: Path, write, what: str, errors=(OSError,)):
-    """Calls write(temporary_path) -> success for a temporary file beside `path` (same suffix,
-    so format-sniffing writers choose right), then renames it over `path`; on any failure the
-    temporary file is removed and `path` is left as it was."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
-    os.close(fd)
-    try:
+def shown(path) -> str:
+    """A path for a message: bytes that are not UTF-8 shown as escapes."""
+    return str(path).encode("utf-8", "backslashreplace").decode("utf-8")
+
+
+def _target(path: Path) -> Path:
+    """Where writing `path` lands: a symbolic link's target, so that the link stays a link."""
+    return Path(os.path.realpath(path)) if path.is_symlink() else path
+
+
+class Staged:
+    """Files written beside their targets under temporary ASCII names (so that any valid target
+    name works, whatever its length or encoding) and renamed over them only by commit(): until
+    then, and on any failure, the targets stay as they were and the temporary files are removed.
+    A new file gets the permissions the umask gives; a replaced one keeps its own."""
+
+    def __init__(self):
+        self.files = []       # (temporary, target)
+
+    def add(self, path: Path, write, what: str, errors=(OSError,)):
+        """Calls write(temporary_path) -> success for a temporary file beside `path`'s target."""
+        path = Path(path)
+        target = _target(path)
+        fd, tmp = tempfile.mkstemp(prefix=".pathtrace-", suffix=path.suffix.lower(), dir=target.parent)
+        os.close(fd)
+        self.files.append((tmp, target))
         try:
             ok = write(tmp)
         except errors as e:
-            raise UserError(f"{what}: cannot write '{path}': {e}") from None
+            raise UserError(f"{what}: cannot write '{shown(path)}': {e}") from None
         if not ok:
-            raise UserError(f"{what}: cannot write '{path}'")
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
+            raise UserError(f"{what}: cannot write '{shown(path)}'")
+        os.chmod(tmp, _mode_for(target))
+
+    def commit(self):
+        for tmp, target in self.files:
+            os.replace(tmp, target)
+        self.files = []
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        for tmp, _ in self.files:
+            if os.path.exists(tmp):
+                os.unlink(tmp)
+
+
+def _mode_for(target: Path) -> int:
+    if target.exists():
+        return target.stat().st_mode & 0o7777
+    umask = os.umask(0)
+    os.umask(umask)
+    return 0o666 & ~umask
 
 
 def write_text(path: Path, text: str, what: str = "--json"):
@@ -108,21 +191,43 @@ def write_text(path: Path, text: str, what: str = "--json"):
     def write(tmp):
         Path(tmp).write_text(text)
         return True
-    write_atomically(path, write, what)
+    with Staged() as staged:
+        staged.add(path, write, what)
+        staged.commit()
+
+
+def write_images(paths, linear: np.ndarray, exposure: float = 0.0, curve: str = "standard",
+                 what: str = "--output"):
+    """Writes (H, W, 3) linear radiance to every path, as is for HDR formats, tonemapped for PNG
+    and JPEG: all or none (the files are renamed into place only once every one is complete)."""
+    import cv2
+    with Staged() as staged:
+        for path in paths:
+            check_writable(path, what)
+            staged.add(path, _image_writer(Path(path).suffix.lower(), linear, exposure, curve), what,
+                       errors=(OSError, RuntimeError, ValueError, cv2.error))
+        staged.commit()
 
 
 def write_image(path: Path, linear: np.ndarray, exposure: float = 0.0, curve: str = "standard",
                 what: str = "--output"):
-    """Writes (H, W, 3) linear radiance: as is for HDR formats, tonemapped for PNG and JPEG."""
-    import cv2
-    path = Path(path)
-    check_writable(path, what)
-    suffix = path.suffix.lower()
+    write_images([path], linear, exposure, curve, what)
+
+
+def _image_writer(suffix: str, linear: np.ndarray, exposure: float, curve: str):
+    """write(path) for one format. OpenCV encodes in memory and Python writes the bytes, so no
+    file name reaches OpenCV's writer (which crashed on names that are not UTF-8)."""
     if suffix == ".exr":
-        write_atomically(path, lambda tmp: _write_exr(tmp, linear), what, errors=(OSError, RuntimeError))
-        return
-    if suffix in HDR_FORMATS:
-        data = np.ascontiguousarray(linear[..., ::-1], np.float32)
-    else:
-        data = np.ascontiguousarray(to_8bit(tonemap(linear, exposure, curve))[..., ::-1])
-    write_atomically(path, lambda tmp: cv2.imwrite(tmp, data), what, errors=(cv2.error, OSError))
+        return lambda tmp: _write_exr(tmp, linear)
+
+    def write(tmp):
+        import cv2
+        if suffix in HDR_FORMATS:
+            data = np.ascontiguousarray(linear[..., ::-1], np.float32)
+        else:
+            data = np.ascontiguousarray(to_8bit(tonemap(linear, exposure, curve))[..., ::-1])
+        ok, encoded = cv2.imencode(".jpg" if suffix == ".jpeg" else suffix, data)
+        if ok:
+            Path(tmp).write_bytes(encoded.tobytes())
+        return ok
+    return write

@@ -356,12 +356,19 @@ def _short(value) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
+MAX_SCENE_BYTES = 64 << 20    # a scene file; meshes go in files of their own
+
+
 def read_scene_file(path) -> Scene:
+    from app.image_io import check_regular_file, shown
     path = Path(path)
+    if not path.exists():
+        raise UserError(f"{shown(path)}: no such scene file")
+    check_regular_file(path, shown(path), "the scene file", MAX_SCENE_BYTES)
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
-        raise UserError(f"{path}: no such scene file") from None
+        raise UserError(f"{shown(path)}: no such scene file") from None
     except (OSError, UnicodeDecodeError) as e:
         raise UserError(f"{path}: cannot read the scene file ({e})") from None
     try:
