@@ -1,6 +1,7 @@
 """pathtrace: an interactive, progressive path tracer with OpenCL kernels."""
 
 import argparse
+import os
 import sys
 from pathlib import Path
 
@@ -405,13 +406,29 @@ def build_parser():
     return parser
 
 
+def _terminate(signum, frame):
+    """SIGTERM ends a run as Ctrl-C does: through KeyboardInterrupt, so that every temporary file
+    is removed and nothing half-written is left."""
+    raise KeyboardInterrupt
+
+
 def main(argv=None) -> int:
+    import signal
+    signal.signal(signal.SIGTERM, _terminate)
     args = build_parser().parse_args(argv)
     try:
-        return args.func(args)
+        code = args.func(args)
+        sys.stdout.flush()
+        return code
     except UserError as e:
         print(f"pathtrace: error: {e}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         print("pathtrace: interrupted", file=sys.stderr)
         return 130
+    except OSError as e:
+        if e.filename is not None:
+            raise                       # not standard output: a fault of ours, shown as such
+        sys.stdout = open(os.devnull, "w")   # so that the exit does not try the flush again
+        print(f"pathtrace: error: cannot write the standard output ({e.strerror})", file=sys.stderr)
+        return 1

@@ -104,11 +104,12 @@ def build_cached(context: cl.Context, device: cl.Device, source: str, options: l
         device.version, device.driver_version]).encode()).hexdigest()[:32]
     path = cache_dir() / f"{key}.bin"
     start = time.perf_counter()
-    if use_cache and path.is_file():
+    binary = _read_cached(path) if use_cache else None
+    if binary is not None:
         try:
-            program = cl.Program(context, [device], [path.read_bytes()]).build(options=options)
+            program = cl.Program(context, [device], [binary]).build(options=options)
             return BuildResult(program, time.perf_counter() - start, True)
-        except (cl.Error, OSError):
+        except cl.Error:
             pass   # a stale or foreign binary: rebuild from source below
     program = cl.Program(context, source).build(options=options, devices=[device])
     seconds = time.perf_counter() - start
@@ -118,11 +119,23 @@ def build_cached(context: cl.Context, device: cl.Device, source: str, options: l
             try:
                 path.parent.mkdir(parents=True, exist_ok=True)
                 tmp = path.with_suffix(f".tmp{os.getpid()}")
-                tmp.write_bytes(binary)
+                tmp.write_bytes(hashlib.sha256(binary).digest() + binary)
                 os.replace(tmp, path)
             except OSError:
                 pass   # caching is an optimisation; a read-only home still renders
     return BuildResult(program, seconds, False)
+
+
+def _read_cached(path: Path):
+    """A cached binary, or None where there is none or it does not match the digest it was
+    written with: a truncated or damaged binary handed to a driver can crash it (PoCL
+    segfaulted on the first half of a valid one)."""
+    try:
+        data = path.read_bytes()
+    except OSError:
+        return None
+    digest, binary = data[:32], data[32:]
+    return binary if binary and hashlib.sha256(binary).digest() == digest else None
 
 
 @dataclass

@@ -168,3 +168,41 @@ def test_ctrl_c_stops_cleanly_and_writes_nothing(tmp_path):
     _, err = p.communicate(timeout=60)
     assert p.returncode == 130 and "nothing written" in err and "Traceback" not in err, err
     assert not out.exists() and not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("damage", ["truncated", "garbage", "empty"])
+def test_a_damaged_kernel_cache_is_rebuilt(tmp_path, damage):
+    """A truncated cache file (the first half of a valid one) crashed PoCL at every start."""
+    env_cache = tmp_path / "cache"
+    run = lambda: subprocess.run([sys.executable, "-m", "app", "render", "simple", "-o", str(tmp_path / "o.png"),
+                                  "--size", "8x8", "--spp", "1", "-q"], cwd=ROOT, capture_output=True, text=True,
+                                 env={**os.environ, "PYTHONPATH": str(ROOT), "PATHTRACE_CACHE": str(env_cache)}, timeout=300)
+    assert run().returncode == 0
+    files = sorted(env_cache.glob("*.bin"))
+    assert files
+    for f in files:
+        data = f.read_bytes()
+        f.write_bytes({"truncated": data[: len(data) // 2], "garbage": os.urandom(len(data)), "empty": b""}[damage])
+    r = run()
+    assert r.returncode == 0, r.stderr
+    assert all(f.read_bytes() != b"" and len(f.read_bytes()) > 32 for f in files)   # rebuilt and cached again
+
+
+def test_a_full_standard_output_gets_one_line():
+    with open("/dev/full", "w") as full:
+        r = subprocess.run([sys.executable, "-m", "app", "scenes"], cwd=ROOT, stdout=full, stderr=subprocess.PIPE,
+                           text=True, env={**os.environ, "PYTHONPATH": str(ROOT)}, timeout=60)
+    assert r.returncode == 1 and r.stderr == "pathtrace: error: cannot write the standard output (No space left on device)\n"
+
+
+def test_sigterm_stops_a_render_and_leaves_no_file(tmp_path):
+    import signal
+    import time
+    p = subprocess.Popen([sys.executable, "-m", "app", "render", "spheres8k", "-o", str(tmp_path / "a.exr"),
+                          "--size", "640x360", "--spp", "100000"], cwd=ROOT, stderr=subprocess.PIPE, text=True,
+                         env={**os.environ, "PYTHONPATH": str(ROOT)})
+    time.sleep(4)
+    p.send_signal(signal.SIGTERM)
+    _, err = p.communicate(timeout=60)
+    assert p.returncode == 130 and "nothing written" in err and "Traceback" not in err
+    assert not list(tmp_path.iterdir())
