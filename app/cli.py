@@ -339,7 +339,8 @@ def build_parser():
     p.set_defaults(func=cmd_view)
 
     from app.bench import TARGET_SCENES
-    p = sub.add_parser("bench", help="time renders of the benchmark scenes (the report's table)",
+    p = sub.add_parser("bench", help="time renders of the benchmark scenes (the table of the report "
+                                     "pathtrace grew from)",
                        description="Times renders of the benchmark scenes, by default at 1920x1080 "
                                    "and 1000 spp: the report's estimator (Russian roulette) on the "
                                    "report's scenes, the comparison mode (max depth 8, no Russian "

@@ -232,5 +232,5 @@ def test_without_a_display_it_says_how_to_render_headless(tmp_path):
     r = subprocess.run([sys.executable, "-m", "app", "view"], env=env, capture_output=True, text=True,
                        timeout=60)
     assert r.returncode == 1
-    assert "pathtrace render" in r.stderr and "xvfb-run" in r.stderr
+    assert f"{sys.executable} -m app render simple -o out.png" in r.stderr and "xvfb-run" in r.stderr
     assert len(r.stderr.strip().splitlines()) == 1 and "Traceback" not in r.stderr

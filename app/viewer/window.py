@@ -25,15 +25,24 @@ UPLOAD_INTERVAL = 1 / 30       # the host copy to the display texture runs at mo
 PROGRESS_AFTER = 1.0           # seconds before a BVH build shows its progress
 
 
-NO_DISPLAY = ("pathtrace view needs a display, and none was found. Render headless with "
-              "'pathtrace render SCENE -o out.png', or run the viewer on a virtual display: "
-              "'xvfb-run -s \"-screen 0 1280x800x24\" pathtrace view'")
+def no_display_message() -> str:
+    """What to do without a display, with commands that paste as they are: this very program
+    (the virtual environment is rarely on PATH) and xvfb-run, or how to install it."""
+    import shlex
+    import shutil
+    program = shlex.quote(sys.argv[0]) if os.path.basename(sys.argv[0]) == "pathtrace" \
+        else f"{shlex.quote(sys.executable)} -m app"
+    xvfb = f'xvfb-run -s "-screen 0 1280x800x24" {program} view'
+    if not shutil.which("xvfb-run"):
+        xvfb = f"sudo apt install xvfb, then {xvfb}"
+    return (f"pathtrace view needs a display, and none was found. To render headless: "
+            f"{program} render simple -o out.png   To run the viewer on a virtual display: {xvfb}")
 
 
 def require_display():
     """On Linux a window needs an X11 or Wayland display; say so in one line, not a traceback."""
     if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
-        raise UserError(NO_DISPLAY)
+        raise UserError(no_display_message())
 
 
 class Viewer:
@@ -46,7 +55,7 @@ class Viewer:
 
         self.glfw, self.imgui = glfw, imgui
         if not glfw.init():
-            raise UserError(NO_DISPLAY)
+            raise UserError(no_display_message())
         glfw.window_hint(glfw.CONTEXT_VERSION_MAJOR, 3)
         glfw.window_hint(glfw.CONTEXT_VERSION_MINOR, 3)
         glfw.window_hint(glfw.OPENGL_PROFILE, glfw.OPENGL_CORE_PROFILE)
