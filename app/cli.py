@@ -175,13 +175,18 @@ def cmd_render(args):
     with BuildProgress(scene.name, args.quiet) as progress:
         group = DeviceGroup(backends, scene, progress=progress)
     pixels = s.width * s.height
-    bar = tqdm(total=s.spp, unit="spp", desc=f"{scene.name} {s.width}x{s.height}",
-               file=sys.stderr, disable=args.quiet, dynamic_ncols=True)
+    # the rate and the time left from the average since the start (smoothing 0): the launches grow
+    # from one sample, so a smoothed rate underestimates the time left; in samples per second
+    # always, as a fixed unit, where tqdm would flip to seconds per sample
+    bar = tqdm(total=s.spp, desc=f"{scene.name} {s.width}x{s.height}", file=sys.stderr,
+               disable=args.quiet, dynamic_ncols=True, smoothing=0,
+               bar_format="{desc}: {percentage:3.0f}%|{bar}| {n}/{total} spp [{elapsed}<{remaining}{postfix}]")
     try:
         def progress(done):
             bar.update(done - bar.n)
-            rate = bar.format_dict.get("rate") or 0
-            bar.set_postfix_str(f"{rate * pixels / 1e6:.1f} Msamples/s", refresh=False)
+            elapsed = bar.format_dict["elapsed"]
+            if elapsed > 0:
+                bar.set_postfix_str(f"{done * pixels / elapsed / 1e6:.2f} Msamples/s", refresh=False)
         group.render(s.spp, progress)
     except KeyboardInterrupt:
         bar.close()
@@ -407,6 +412,21 @@ def build_parser():
     return parser
 
 
+def parse(parser: argparse.ArgumentParser, argv):
+    """parse_args, except that an unknown option is reported with the usage of the subcommand it
+    was given to, not the top level's."""
+    args, extra = parser.parse_known_args(argv)
+    if extra:
+        chosen = parser
+        for dest in ("command", "farm_command"):   # down the chain of subcommands
+            action = next((a for a in chosen._actions if isinstance(a, argparse._SubParsersAction)), None)
+            if action is None or getattr(args, dest, None) is None:
+                break
+            chosen = action.choices[getattr(args, dest)]
+        chosen.error(f"unrecognized arguments: {' '.join(extra)}")
+    return args
+
+
 def _terminate(signum, frame):
     """SIGTERM ends a run as Ctrl-C does: through KeyboardInterrupt, so that every temporary file
     is removed and nothing half-written is left."""
@@ -416,7 +436,7 @@ def _terminate(signum, frame):
 def main(argv=None) -> int:
     import signal
     signal.signal(signal.SIGTERM, _terminate)
-    args = build_parser().parse_args(argv)
+    args = parse(build_parser(), argv)
     try:
         code = args.func(args)
         sys.stdout.flush()
@@ -427,6 +447,10 @@ def main(argv=None) -> int:
     except KeyboardInterrupt:
         print("pathtrace: interrupted", file=sys.stderr)
         return 130
+    except MemoryError:
+        print("pathtrace: error: out of memory (a smaller --size, fewer samples at once or a smaller "
+              "scene may fit)", file=sys.stderr)
+        return 1
     except OSError as e:
         if e.filename is not None:
             raise                       # not standard output: a fault of ours, shown as such

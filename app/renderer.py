@@ -8,13 +8,16 @@ import numpy as np
 import pyopencl as cl
 
 from app.camera import Camera
-from app.compiled import CompiledScene, compile_scene
+from app.compiled import CompiledScene, available_host_memory, compile_scene
 from app.device import Backend, check_fits
+from app.errors import UserError, format_bytes
 from app.environment import Environment
 from app.scene import Scene
 from app.types import RENDER_PARAMS
 
 RR_DEPTH = 5           # where Russian roulette on throughput starts (Mitsuba 3's default)
+READ_BACK_BYTES = 64   # host memory per pixel to read an image back and write it: the float4
+                       # sums, the float32 mean and the encoded copies
 
 
 def variance_of(sum: np.ndarray, sum_sq: np.ndarray, samples: int) -> np.ndarray:
@@ -132,8 +135,12 @@ class Renderer:
             return
         nbytes = width * height * 16
         others = {name: b.size for name, b in self._buffers.items() if name not in ("sum", "sum_sq")}
-        check_fits(self.backend.device.device, {**others, "sum": nbytes, "sum_sq": nbytes},
-                   f"a {width}x{height} image of {self.scene.name}")
+        what = f"a {width}x{height} image of {self.scene.name}"
+        check_fits(self.backend.device.device, {**others, "sum": nbytes, "sum_sq": nbytes}, what)
+        available = available_host_memory()
+        if available is not None and READ_BACK_BYTES * width * height > available:
+            raise UserError(f"{what} needs about {format_bytes(READ_BACK_BYTES * width * height)} of "
+                            f"memory to read back and write; {format_bytes(available)} is available")
         self.width, self.height = width, height
         for name in ("sum", "sum_sq"):
             self._buffers[name] = cl.Buffer(self.backend.context, cl.mem_flags.READ_WRITE, nbytes)

@@ -206,3 +206,28 @@ def test_sigterm_stops_a_render_and_leaves_no_file(tmp_path):
     _, err = p.communicate(timeout=60)
     assert p.returncode == 130 and "nothing written" in err and "Traceback" not in err
     assert not list(tmp_path.iterdir())
+
+
+def test_a_bad_option_shows_its_subcommands_usage():
+    r = pathtrace("render", "simple", "-o", "x.png", "--bogus")
+    assert r.returncode == 2 and r.stderr.startswith("usage: pathtrace render")
+    assert r.stderr.strip().endswith("pathtrace render: error: unrecognized arguments: --bogus")
+
+
+def test_the_progress_bar_ends_with_the_real_rate(tmp_path):
+    r = pathtrace("render", "simple", "-o", tmp_path / "a.png", "--size", "64x36", "--spp", "16")
+    assert r.returncode == 0
+    last = r.stderr.replace("\r", "\n").strip().splitlines()[-2]       # before "wrote ..."
+    assert last.startswith("simple 64x36: 100%") and "16/16 spp" in last
+    assert float(last.split("Msamples/s")[0].split()[-1]) > 0
+
+
+def test_running_out_of_memory_gets_one_line(monkeypatch, capsys):
+    from app import cli
+    import app.scene
+
+    def huge(name):
+        raise MemoryError
+    monkeypatch.setattr(app.scene, "load_scene", huge)
+    assert cli.main(["render", "simple", "-o", "/tmp/never.png"]) == 1
+    assert capsys.readouterr().err.startswith("pathtrace: error: out of memory")

@@ -63,3 +63,12 @@ def test_a_slow_build_shows_its_progress(monkeypatch, tmp_path, capsys):
     code = cli.main(["render", "spheres8k", "-o", str(tmp_path / "a.png"), "--size", "8x8", "--spp", "1"])
     assert code == 0
     assert "spheres8k: building the BVH: 100%" in capsys.readouterr().err
+
+
+def test_an_image_too_large_to_read_back_is_refused(backend, monkeypatch):
+    import app.renderer
+    r = Renderer(backend, load_scene("simple"), 8, 8)
+    monkeypatch.setattr(app.renderer, "available_host_memory", lambda: 1 << 20)
+    with pytest.raises(UserError, match="a 4096x4096 image of simple needs about 1 GB of memory to read back"):
+        r.resize(4096, 4096)
+    assert (r.width, r.height) == (8, 8)

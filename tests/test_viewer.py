@@ -170,6 +170,20 @@ def test_a_slow_build_shows_its_progress_in_the_title(viewer, monkeypatch):
     viewer.load_scene("simple")
 
 
+def test_a_scene_that_fails_to_open_leaves_the_viewer_as_it_was(viewer, monkeypatch, capsys):
+    import app.viewer.window as window
+
+    def broken(name):
+        raise RuntimeError("a library failed")
+    monkeypatch.setattr(window, "load_scene", broken)
+    before = viewer.renderer.scene.name
+    viewer.load_scene("whatever.toml")
+    frames(viewer, 2)
+    assert viewer.renderer.scene.name == before
+    assert viewer.message == "cannot open whatever.toml: RuntimeError: a library failed"
+    assert "cannot open whatever.toml" in capsys.readouterr().err
+
+
 def test_screenshot_matches_a_headless_render(viewer, backend):
     settle(viewer)
     viewer.renderer.reset()

@@ -170,12 +170,15 @@ class Viewer:
 
     # --- what changes the image ------------------------------------------------------------
     def load_scene(self, name: str):
+        """Opens a scene; whatever goes wrong is shown in the panel and printed, and the window
+        keeps the scene it had."""
         try:
             scene = load_scene(name)
-        except UserError as e:
-            self.message = str(e)
+            self.renderer.set_scene(scene, self._build_progress(scene.name))
+        except Exception as e:   # a viewer must outlive any bad file, ours or a library's error
+            self.message = str(e) if isinstance(e, UserError) else f"cannot open {name}: {type(e).__name__}: {e}"
+            print(f"pathtrace: {self.message}", file=sys.stderr)
             return
-        self.renderer.set_scene(scene, self._build_progress(scene.name))
         self.selected = None
         self.glfw.set_window_title(self.window, f"pathtrace - {scene.name}")
         self.message = f"loaded {scene.name}"
