@@ -201,7 +201,10 @@ def test_sigterm_stops_a_render_and_leaves_no_file(tmp_path):
     p = subprocess.Popen([sys.executable, "-m", "app", "render", "spheres8k", "-o", str(tmp_path / "a.exr"),
                           "--size", "640x360", "--spp", "100000"], cwd=ROOT, stderr=subprocess.PIPE, text=True,
                          env={**os.environ, "PYTHONPATH": str(ROOT)})
-    time.sleep(4)
+    deadline = time.time() + 60
+    line = ""
+    while "spp" not in line and time.time() < deadline:   # wait until rendering has begun
+        line = p.stderr.readline()
     p.send_signal(signal.SIGTERM)
     _, err = p.communicate(timeout=60)
     assert p.returncode == 130 and "nothing written" in err and "Traceback" not in err
