@@ -457,3 +457,16 @@ def main(argv=None) -> int:
         sys.stdout = open(os.devnull, "w")   # so that the exit does not try the flush again
         print(f"pathtrace: error: cannot write the standard output ({e.strerror})", file=sys.stderr)
         return 1
+
+
+def run():
+    """The console entry point: main(), then the exit. After an interrupt it leaves at once
+    (os._exit), past the interpreter's teardown: tearing down PoCL while it still winds down an
+    interrupted launch aborted the process (std::terminate) now and then; every temporary file
+    is removed by then."""
+    code = main()
+    if code == 130:
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    raise SystemExit(code)
