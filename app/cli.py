@@ -105,7 +105,7 @@ def add_render_options(p: argparse.ArgumentParser, device: bool = True):
                             "to share the samples between devices, or 'all' for every device")
     p.add_argument("--size", type=_size, metavar="WxH", help="image size (default: the scene's)")
     p.add_argument("--seed", type=_int_range(0, 2**32 - 1), help="random seed (default: the scene's)")
-    p.add_argument("--max-depth", type=_int_range(0), metavar="N",
+    p.add_argument("--max-depth", type=_int_range(0, 2**31 - 1), metavar="N",
                    help="longest path in vertices, 1 = emitters seen directly; 0 = unlimited")
     p.add_argument("--rr", choices=RUSSIAN_ROULETTE,
                    help="how paths end: throughput (Russian roulette from depth 5, the default), "
@@ -328,7 +328,7 @@ def build_parser():
     p.add_argument("-o", "--output", action="append", required=True, metavar="FILE",
                    help="output image; repeat for several (.png/.jpg tonemapped; "
                         ".exr/.hdr/.pfm linear HDR)")
-    p.add_argument("--spp", type=_int_range(1), help="samples per pixel (default: the scene's)")
+    p.add_argument("--spp", type=_int_range(1, 2**31 - 1), help="samples per pixel (default: the scene's)")
     add_output_options(p)
     add_render_options(p)
     p.set_defaults(func=cmd_render)
@@ -358,7 +358,7 @@ def build_parser():
                         "(next-event estimation); repeatable; default: rr for the report's "
                         "scenes, depth8 for -diffuse ones, both without NEE")
     p.add_argument("--size", type=_size, metavar="WxH", help="default 1920x1080")
-    p.add_argument("--spp", type=_int_range(1), help="samples per pixel (default 1000)")
+    p.add_argument("--spp", type=_int_range(1, 2**31 - 1), help="samples per pixel (default 1000)")
     p.add_argument("--together", action="store_true",
                    help="render each scene on all the --device devices at once (one row per "
                         "scene) instead of on each in turn")
@@ -377,7 +377,7 @@ def build_parser():
     p.add_argument("-o", "--output", required=True, metavar="FILE",
                    help="output image; with several images, put {name} (the scene's name) or "
                         "{frame} (the image's number) in it, as in 'out/{name}-{frame:03d}.exr'")
-    p.add_argument("--spp", type=_int_range(1), help="samples per pixel (default: the scene's)")
+    p.add_argument("--spp", type=_int_range(1, 2**31 - 1), help="samples per pixel (default: the scene's)")
     p.add_argument("--frames", type=_int_range(1), metavar="N",
                    help="render N frames of the camera orbiting its look-at point")
     p.add_argument("--orbit", type=_finite, default=360.0, metavar="DEGREES",
