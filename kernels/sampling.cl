@@ -53,5 +53,6 @@ float3 sample_cosine_power(float r1, float r2, float n)
 
 float pdf_cosine_power(float cos_a, float n)
 {
-    return cos_a > 0.0f ? (n + 1.0f) / (2.0f * PI_F) * pow(cos_a, n) : 0.0f;
+    /* cos_a from a rounded dot product can exceed 1, and 1.0000001^1e8 is 1.6e5 */
+    return cos_a > 0.0f ? (n + 1.0f) / (2.0f * PI_F) * pow(min(cos_a, 1.0f), n) : 0.0f;
 }

@@ -138,3 +138,25 @@ def test_hdr_lit_sphere_matches_quadrature(backend, nee):
     ok, p, threshold = z_test(got[:, None], var[:, None], expected[:, None])
     assert ok, (p, threshold)
     assert abs(np.mean(got / expected) - 1) < 0.005
+
+
+def test_a_phong_lobe_of_exponent_1e8_stays_finite_and_unbiased(backend, tmp_path):
+    """n = 1e8 lies in the documented range (n >= 0). A rounded cos(alpha) just above 1 raised to
+    the 1e8th overflowed, and the power heuristic's squared densities gave inf / inf: NaN pixels
+    with NEE (#12). Both estimators must give finite pixels and the same mean."""
+    path = tmp_path / "sharp.toml"
+    path.write_text('[camera]\neye = [0, 1, 5]\nlook_at = [0, 0, 0]\n[environment]\ncolor = 0.5\n'
+                    '[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\n'
+                    'material = { type = "phong", rho_d = 0.2, rho_s = 0.7, n = 1e8 }\n'
+                    '[[spheres]]\ncenter = [2, 2, 0]\nradius = 0.3\nmaterial = { type = "emitter", Le = 20 }\n')
+    scene = load_scene(str(path))
+    means, errors = [], []
+    for nee in (True, False):
+        r = Renderer(backend, scene.with_settings(nee=nee), 32, 24)
+        r.add_samples(64)
+        image = r.mean()
+        assert np.all(np.isfinite(image))
+        means.append(image.mean())
+        # the image mean's standard error, from the pixels' sample variances
+        errors.append(np.sqrt(r.variance().sum() / 64) / image.size)
+    assert abs(means[0] - means[1]) < 5 * np.hypot(*errors)

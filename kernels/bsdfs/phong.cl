@@ -18,7 +18,7 @@ float3 eval_phong(const global Material *m, float3 wo, float3 wi)
     if (wo.z <= 0.0f || wi.z <= 0.0f)
         return (float3)(0.0f);
     float exponent = m->p1.w;
-    float cos_a = dot(wi, reflect_local(wo));
+    float cos_a = min(dot(wi, reflect_local(wo)), 1.0f);   /* rounding can exceed 1: cos^1e8 blows up */
     float glossy = cos_a > 0.0f ? (exponent + 2.0f) / (2.0f * PI_F) * pow(cos_a, exponent) : 0.0f;
     return m->p0.xyz / PI_F + m->p1.xyz * glossy;
 }
