@@ -6,7 +6,7 @@ import sys
 from pathlib import Path
 
 from app import __version__
-from app.errors import UserError
+from app.errors import UserError, warn
 from app.scene.description import RUSSIAN_ROULETTE
 
 EPILOG = ("A scene is a .toml file, a Mitsuba 3 .xml file or a built-in name (pathtrace scenes lists them): simple, "
@@ -193,6 +193,10 @@ def cmd_render(args):
         print(f"interrupted at {group.samples}/{s.spp} spp; nothing written", file=sys.stderr)
         return 130
     bar.close()
+    dropped = group.dropped_samples()
+    if dropped:
+        warn(f"{scene.name}: {dropped} of {s.spp * pixels} samples were NaN or infinite and were left out "
+             f"(as black)")
     write_images(args.output, group.mean(), args.exposure, args.tonemap)
     for path in args.output:
         print(f"wrote {shown(path)}", file=sys.stderr)

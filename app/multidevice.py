@@ -132,3 +132,6 @@ class DeviceGroup:
 
     def rays_traced(self) -> int:
         return int(self._merged(Renderer.read_sum_sq)[..., 3].sum())
+
+    def dropped_samples(self) -> int:
+        return sum(r.dropped_samples() for r in self.renderers)

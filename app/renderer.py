@@ -200,13 +200,18 @@ class Renderer:
         return out
 
     def read_sum(self, out=None) -> np.ndarray:
-        """The raw accumulation buffer, (H, W, 4) float32: radiance sums in rgb, sample count
+        """The raw accumulation buffer, (H, W, 4) float32: radiance sums in rgb, the samples kept
         in a; into `out` if given (the viewer reuses one array for every upload)."""
         return self._read("sum", out)
 
     def mean(self) -> np.ndarray:
         """The image so far: mean radiance per pixel, (H, W, 3) float32."""
         return self._read("sum")[..., :3] / max(self.samples, 1)
+
+    def dropped_samples(self) -> int:
+        """Samples left out since the last reset because they were NaN or infinite
+        (kernels/integrator.cl counts the kept ones), all pixels together."""
+        return self.samples * self.width * self.height - int(self._read("sum")[..., 3].sum(dtype=np.float64))
 
     def rays_traced(self) -> int:
         """Rays traced since the last reset (camera rays and bounces), all pixels together."""

@@ -139,7 +139,10 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
 }
 
 /* One work-item per pixel adds p.sample_count samples to the running sums of radiance (rgb; w
- * counts samples) and of its square (rgb, for the per-pixel variance; w counts rays traced). */
+ * counts the samples kept) and of its square (rgb, for the per-pixel variance; w counts rays
+ * traced). A NaN or infinite sample (a bug, or a scene beyond float32) is left out, counting as
+ * black, so that it cannot poison the pixel for the rest of the render; the host counts the
+ * samples left out from w (Renderer.dropped_samples) and reports them. */
 void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum,
                   global float4 *sum_sq, const int nee)
 {
@@ -147,17 +150,20 @@ void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum
     if (x >= p->width || y >= p->height)
         return;
     float3 acc = (float3)(0.0f), acc_sq = (float3)(0.0f);
-    int rays = 0;
+    int rays = 0, kept = 0;
     for (uint i = 0; i < p->sample_count; ++i) {
         Rng rng = make_rng(x, y, p->sample_start + i, p->seed);
         float4 jitter = next_uniform4(&rng);
         float3 d = camera_direction(p, x + jitter.x, y + jitter.y);
         float3 l = trace_path(sc, p, p->eye.xyz, d, &rng, &rays, nee);
-        acc += l;
-        acc_sq += l * l;
+        if (all(isfinite(l))) {
+            acc += l;
+            acc_sq += l * l;
+            ++kept;
+        }
     }
     int k = y * p->width + x;
-    sum[k] += (float4)(acc, (float)p->sample_count);
+    sum[k] += (float4)(acc, (float)kept);
     sum_sq[k] += (float4)(acc_sq, (float)rays);
 }
 

@@ -54,3 +54,34 @@ def test_builtin_scenes_render_finite_and_plausible(backend, name):
     r.finish()
     image = r.mean()
     assert np.all(np.isfinite(image)) and image.min() >= 0 and image.mean() > 0.05
+
+
+def poisoned_simple():
+    """`simple` with its ground's albedo NaN, as a bug or a value beyond float32 might make it."""
+    scene = load_scene("simple")
+    ground = scene.sphere_material[0]
+    scene.materials.rows["p0"][ground, :3] = np.nan
+    return scene
+
+
+def test_nan_samples_are_left_out_and_counted(backend):
+    """A NaN sample never poisons its pixel: it counts as black and is reported (#12)."""
+    r = Renderer(backend, poisoned_simple(), 32, 18)
+    r.add_samples(4)
+    image = r.mean()
+    assert np.all(np.isfinite(image))
+    dropped = r.dropped_samples()
+    assert 0 < dropped < 4 * 32 * 18          # the ground's samples, not the sky's
+    clean = Renderer(backend, load_scene("simple"), 32, 18)
+    clean.add_samples(4)
+    assert clean.dropped_samples() == 0
+    sky = image[0]                               # the top row sees only the sky
+    np.testing.assert_allclose(sky, clean.mean()[0], rtol=1e-6)
+
+
+def test_the_command_line_reports_nan_samples(monkeypatch, tmp_path, capsys):
+    from app import cli
+    import app.scene
+    monkeypatch.setattr(app.scene, "load_scene", lambda name: poisoned_simple())
+    assert cli.main(["render", "simple", "-o", str(tmp_path / "a.png"), "--size", "16x9", "--spp", "2", "-q"]) == 0
+    assert "samples were NaN or infinite and were left out (as black)" in capsys.readouterr().err
