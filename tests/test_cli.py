@@ -236,3 +236,10 @@ def test_running_out_of_memory_gets_one_line(monkeypatch, capsys):
     monkeypatch.setattr(app.scene, "load_scene", huge)
     assert cli.main(["render", "simple", "-o", "/tmp/never.png"]) == 1
     assert capsys.readouterr().err.startswith("pathtrace: error: out of memory")
+
+
+def test_a_huge_or_binary_value_is_not_echoed_whole(tmp_path):
+    scene = write(tmp_path, GOOD.replace('type = "diffuse"', 'type = "' + "x" * 1_000_000 + '\\u0000"'))
+    r = pathtrace("render", scene, "-o", tmp_path / "o.png", "--spp", "1")
+    assert r.returncode == 1 and "material.type: must be one of" in r.stderr
+    assert len(r.stderr) < 600 and "\0" not in r.stderr
