@@ -243,3 +243,12 @@ def test_a_huge_or_binary_value_is_not_echoed_whole(tmp_path):
     r = pathtrace("render", scene, "-o", tmp_path / "o.png", "--spp", "1")
     assert r.returncode == 1 and "material.type: must be one of" in r.stderr
     assert len(r.stderr) < 600 and "\0" not in r.stderr
+
+
+@pytest.mark.parametrize("where", ["scene", "map"])
+def test_a_name_too_long_for_the_file_system_gets_one_line(tmp_path, where):
+    long = "b" * 300
+    scene = tmp_path / f"{long}.toml" if where == "scene" else \
+        write(tmp_path, GOOD.replace("color = 0.5", f'map = "{long}.hdr"'))
+    r = pathtrace("render", scene, "-o", tmp_path / "o.png", "--spp", "1")
+    assert r.returncode == 1 and r.stderr.strip().endswith("File name too long") and "Traceback" not in r.stderr

@@ -19,7 +19,11 @@ def load_scene(name_or_path: str) -> Scene:
     path = Path(name_or_path)
     if path.suffix.lower() == ".xml":
         return read_mitsuba_file(path)
-    if path.suffix == ".toml" or path.exists():
+    try:
+        exists = path.exists()
+    except OSError as e:     # a name too long for the file system, say
+        raise UserError(f"{str(path)[:80]}...: {e.strerror}") from None
+    if path.suffix == ".toml" or exists:
         return read_scene_file(path)
     scene = builtin_scene(name_or_path)
     if scene is not None:

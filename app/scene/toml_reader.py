@@ -4,6 +4,7 @@ the file and the field, e.g.
 """
 
 import math
+import os
 import tomllib
 from pathlib import Path
 
@@ -172,10 +173,10 @@ class _Reader:
     def find_asset(self, name):
         """A map path is relative to the scene file; a bare name may also be a shipped map."""
         candidate = (self.path.parent / name)
-        if candidate.exists():
+        if _exists(candidate):
             return candidate
         shipped = resource_dir("assets") / "envmaps" / name
-        return shipped if shipped.exists() else candidate
+        return shipped if _exists(shipped) else candidate   # read_hdr says what is wrong with it
 
     def settings(self, data):
         where = "render"
@@ -350,6 +351,14 @@ def _is_finite_number(x):
         return False
 
 
+def _exists(path: Path) -> bool:
+    """Path.exists, but False (not an OSError) for a name too long for the file system."""
+    try:
+        return path.exists()
+    except OSError:
+        return False
+
+
 def _short(value) -> str:
     """A value for a message: its repr, cut to 60 characters."""
     text = repr(value)
@@ -362,7 +371,13 @@ MAX_SCENE_BYTES = 64 << 20    # a scene file; meshes go in files of their own
 def read_scene_file(path) -> Scene:
     from app.image_io import check_regular_file, shown
     path = Path(path)
-    if not path.exists():
+    if not _exists(path):
+        try:
+            os.stat(path)
+        except FileNotFoundError:
+            pass
+        except OSError as e:             # a name too long for the file system, say
+            raise UserError(f"{shown(path)}: {e.strerror}") from None
         raise UserError(f"{shown(path)}: no such scene file")
     check_regular_file(path, shown(path), "the scene file", MAX_SCENE_BYTES)
     try:
