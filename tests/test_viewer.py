@@ -184,6 +184,36 @@ def test_a_scene_that_fails_to_open_leaves_the_viewer_as_it_was(viewer, monkeypa
     assert "cannot open whatever.toml" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("curve,exposure", [("standard", 0.0), ("aces", 0.5), ("standard", -1.0)])
+def test_the_display_shader_matches_tonemap(viewer, curve, exposure):
+    """shaders/display.frag (mean = sum / count, exposure, tone curve, sRGB) draws what
+    app/tonemap.py writes, to one 8-bit step, on a ramp of radiances from 0 to 4."""
+    import moderngl
+
+    from app.tonemap import to_8bit, tonemap
+    v = viewer
+    radiance = np.stack([np.linspace(0, 4, 64), np.linspace(0, 1, 64), np.linspace(0, 0.05, 64)], -1)[None]
+    acc = np.concatenate([radiance * 4, np.full((1, 64, 1), 4.0)], -1).astype(np.float32)   # 4 samples
+    texture = v.ctx.texture((64, 1), 4, data=acc.tobytes(), dtype="f4")
+    texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
+    target = v.ctx.simple_framebuffer((64, 1))
+    try:
+        target.use()
+        v.ctx.viewport = (0, 0, 64, 1)
+        texture.use(0)
+        v.program["accumulation"] = 0
+        v.program["exposure"] = exposure
+        v.program["curve"] = 1 if curve == "aces" else 0
+        v.vao.render(mode=v.ctx.TRIANGLE_STRIP)
+        drawn = np.frombuffer(target.read(components=3), np.uint8).reshape(1, 64, 3)
+    finally:
+        v.ctx.screen.use()
+        texture.release()
+        target.release()
+    expected = to_8bit(tonemap(radiance, exposure, curve))
+    assert np.abs(drawn.astype(int) - expected).max() <= 1
+
+
 def test_screenshot_matches_a_headless_render(viewer, backend):
     settle(viewer)
     viewer.renderer.reset()
