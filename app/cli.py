@@ -161,7 +161,8 @@ def cmd_render(args):
     from tqdm import tqdm
 
     from app.device import choose_devices
-    from app.image_io import check_writable, shown, write_images
+    from app.files import shown
+    from app.image_io import check_writable, write_images
     from app.multidevice import DeviceGroup
     from app.scene import load_scene
 

@@ -7,13 +7,13 @@ OpenCV and OpenEXR are imported where they are used, so that the core (scenes wi
 environments, the renderer, the benchmarks) runs with NumPy and PyOpenCL alone."""
 
 import os
-import stat
 import tempfile
 from pathlib import Path
 
 import numpy as np
 
 from app.errors import UserError
+from app.files import check_regular_file, shown
 from app.tonemap import tonemap, to_8bit
 
 HDR_FORMATS = (".exr", ".hdr", ".pfm")
@@ -21,22 +21,6 @@ LDR_FORMATS = (".png", ".jpg", ".jpeg")
 
 
 MAX_MAP_PIXELS = 1 << 26       # 8192 x 8192: a map's float32 RGB is then 768 MB
-
-
-def check_regular_file(path: Path, where: str, what: str, max_bytes: int):
-    """Refuses, in one line, a path that does not exist, is not a regular file (a folder, a FIFO,
-    a device such as /dev/zero: reading one could hang or never end) or is larger than
-    max_bytes."""
-    try:
-        info = os.stat(path)
-    except FileNotFoundError:
-        raise UserError(f"{where}: {what} '{shown(path)}' does not exist") from None
-    except OSError as e:
-        raise UserError(f"{where}: {what} '{shown(path)}': {e.strerror}") from None
-    if not stat.S_ISREG(info.st_mode):
-        raise UserError(f"{where}: {what} '{shown(path)}' is not a regular file")
-    if info.st_size > max_bytes:
-        raise UserError(f"{where}: {what} '{shown(path)}' is larger than {max_bytes >> 20} MB")
 
 
 def read_hdr(path: Path, where: str) -> np.ndarray:
@@ -127,11 +111,6 @@ def check_writable(path: Path, what: str = "--output", formats=HDR_FORMATS + LDR
         raise UserError(f"{what}: '{shown(path)}' is not writable ({e.strerror})") from None
     if target.is_dir() or (target.exists() and not os.access(target, os.W_OK)):
         raise UserError(f"{what}: '{shown(path)}' is not writable")
-
-
-def shown(path) -> str:
-    """A path for a message: bytes that are not UTF-8 shown as escapes."""
-    return str(path).encode("utf-8", "backslashreplace").decode("utf-8")
 
 
 def _target(path: Path) -> Path:

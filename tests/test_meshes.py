@@ -130,4 +130,4 @@ def test_cli_names_the_scene_field_and_mesh_file(tmp_path, capsys):
     path.write_text(path.read_text().replace('"q.obj"', '"missing.ply"'))
     assert main(["render", str(path), "-o", str(tmp_path / "x.png")]) == 1
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "meshes[0].file" in err[0] and "missing.ply: no such mesh file" in err[0]
+    assert len(err) == 1 and "meshes[0].file" in err[0] and "missing.ply' does not exist" in err[0] and "mesh file '" in err[0]

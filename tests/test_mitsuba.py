@@ -176,7 +176,7 @@ ERRORS = [
      "<float name=\"radius\">: value 'abc' is not a number"),
     ('<shape type="sphere"><float name="radius" value="1e39"/></shape>', None, "is not a finite float32"),
     ('<shape type="sphere"><float name="radius" value="$r"/></shape>', None, "$r has no <default> value"),
-    ('<shape type="obj"><string name="filename" value="nowhere.obj"/></shape>', None, "no such mesh file"),
+    ('<shape type="obj"><string name="filename" value="nowhere.obj"/></shape>', None, "nowhere.obj' does not exist"),
     ('<shape type="sphere"><ref id="gold"/></shape>', None, "no top-level element has id 'gold'"),
     ('<include filename="scene.xml"/>', None, "includes nest deeper than 8"),
     (SPHERE, "<scenery>", "not well-formed XML"),

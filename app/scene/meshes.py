@@ -1,12 +1,12 @@
 """Reading triangle meshes: PLY through plyfile, OBJ, STL, glTF and GLB through trimesh. Every
 problem is one line naming the file; degenerate triangles are dropped with a warning."""
 
-import os
 from pathlib import Path
 
 import numpy as np
 
 from app.errors import UserError, warn
+from app.files import check_regular_file
 
 FORMATS = (".ply", ".obj", ".stl", ".gltf", ".glb")
 MAX_FILE_BYTES = 4 << 30            # a mesh file larger than this is refused before reading
@@ -23,16 +23,7 @@ def read_mesh(path: Path, where: str):
     if suffix not in FORMATS:
         raise UserError(f"{where}: {path}: unknown mesh format '{path.suffix}' "
                         f"(use {', '.join(FORMATS)})")
-    try:
-        st = os.stat(path)
-    except FileNotFoundError:
-        raise UserError(f"{where}: {path}: no such mesh file") from None
-    except OSError as e:
-        raise UserError(f"{where}: {path}: cannot read the mesh ({e.strerror})") from None
-    if not os.path.isfile(path):
-        raise UserError(f"{where}: {path}: not a regular file")
-    if st.st_size > MAX_FILE_BYTES:
-        raise UserError(f"{where}: {path}: the file is larger than {MAX_FILE_BYTES >> 30} GB")
+    check_regular_file(path, where, "mesh file", MAX_FILE_BYTES)
     try:
         if suffix == ".ply":
             vertices, faces, normals = _read_ply(path)

@@ -369,7 +369,7 @@ MAX_SCENE_BYTES = 64 << 20    # a scene file; meshes go in files of their own
 
 
 def read_scene_file(path) -> Scene:
-    from app.image_io import check_regular_file, shown
+    from app.files import check_regular_file, shown
     path = Path(path)
     if not _exists(path):
         try:

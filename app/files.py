@@ -1,0 +1,29 @@
+"""Files the user names: the one check made before reading any of them (scene files, maps,
+meshes), and paths as messages show them."""
+
+import os
+import stat
+from pathlib import Path
+
+from app.errors import UserError
+
+
+def shown(path) -> str:
+    """A path for a message: bytes that are not UTF-8 shown as escapes."""
+    return str(path).encode("utf-8", "backslashreplace").decode("utf-8")
+
+
+def check_regular_file(path: Path, where: str, what: str, max_bytes: int):
+    """Refuses, in one line, a path that does not exist, is not a regular file (a folder, a FIFO,
+    a device such as /dev/zero: reading one could hang or never end) or is larger than
+    max_bytes."""
+    try:
+        info = os.stat(path)
+    except FileNotFoundError:
+        raise UserError(f"{where}: {what} '{shown(path)}' does not exist") from None
+    except OSError as e:
+        raise UserError(f"{where}: {what} '{shown(path)}': {e.strerror}") from None
+    if not stat.S_ISREG(info.st_mode):
+        raise UserError(f"{where}: {what} '{shown(path)}' is not a regular file")
+    if info.st_size > max_bytes:
+        raise UserError(f"{where}: {what} '{shown(path)}' is larger than {max_bytes >> 20} MB")
