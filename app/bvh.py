@@ -38,8 +38,9 @@ import pyopencl as cl
 
 from app.types import BVH_NODE
 
-MAX_LEAF_SIZE = 4           # these three as in kernels/build/collapse.cl
-MAX_DEPTH = 30              # kernels/bvh.cl keeps a 32-entry stack
+# these three reach kernels/build/collapse.cl as build options
+MAX_LEAF_SIZE = 4
+MAX_DEPTH = 30              # of the binary tree: kernels/bvh.cl's stack holds 48 = 3 x 30 / 2 + 3
 TRAVERSAL_COST = 0.5        # relative to one primitive test, as in pbrt-v4's BVH build
 RADIUS = 8                  # PLOC's search radius: 8 and 16 give trees of the same SAH cost here
 TOP_WORK = 1 << 32          # PLOC stops at min(N, TOP_WORK / N) clusters (see step 2)
@@ -84,7 +85,9 @@ class Builder:
         folder = resource_dir("kernels")
         source = "\n".join(f'#line 1 "{name}"\n' + (folder / name).read_text() for name in
                            ("types.h", "build/morton.cl", "build/ploc.cl", "build/collapse.cl"))
-        self.program = build_cached(queue.context, queue.device, source, []).program
+        options = [f"-DMAX_LEAF_SIZE={MAX_LEAF_SIZE}", f"-DMAX_DEPTH={MAX_DEPTH}",
+                   f"-DTRAVERSAL_COST={TRAVERSAL_COST}f"]
+        self.program = build_cached(queue.context, queue.device, source, options).program
         self.kernels = {k.function_name: k for k in self.program.all_kernels()}
 
     def launch(self, name: str, count: int, *args):

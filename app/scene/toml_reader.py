@@ -371,14 +371,12 @@ MAX_SCENE_BYTES = 64 << 20    # a scene file; meshes go in files of their own
 def read_scene_file(path) -> Scene:
     from app.files import check_regular_file, shown
     path = Path(path)
-    if not _exists(path):
-        try:
-            os.stat(path)
-        except FileNotFoundError:
-            pass
-        except OSError as e:             # a name too long for the file system, say
-            raise UserError(f"{shown(path)}: {e.strerror}") from None
-        raise UserError(f"{shown(path)}: no such scene file")
+    try:
+        os.stat(path)
+    except FileNotFoundError:
+        raise UserError(f"{shown(path)}: no such scene file") from None
+    except OSError as e:                 # a name too long for the file system, say
+        raise UserError(f"{shown(path)}: {e.strerror}") from None
     check_regular_file(path, shown(path), "the scene file", MAX_SCENE_BYTES)
     try:
         text = path.read_text(encoding="utf-8")

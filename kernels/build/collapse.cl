@@ -6,7 +6,7 @@
  *    subtree of at most MAX_LEAF_SIZE primitives becomes one leaf where that is cheaper than its
  *    split (the surface area heuristic, MacDonald and Booth 1990, as pbrt-v4's builder decides).
  * 2. mark_inner_down: depth, and whether a node is an inner BVH node: not a primitive, not a leaf
- *    by the SAH, not inside a leaf, not at MAX_DEPTH (kernels/bvh.cl keeps a 32-entry stack; a
+ *    by the SAH, not inside a leaf, not at MAX_DEPTH (kernels/bvh.cl's stack is sized for it; a
  *    leaf there keeps all its primitives).
  * 3. count_inner_up: the 4-wide nodes in each subtree. Inner nodes at even depths become 4-wide
  *    nodes; those at odd depths give their children to their parent's (so the 4-wide tree is
@@ -19,9 +19,7 @@
 
 #pragma OPENCL FP_CONTRACT OFF
 
-#define MAX_LEAF_SIZE 4
-#define MAX_DEPTH 30
-#define TRAVERSAL_COST 0.5f
+/* MAX_LEAF_SIZE, MAX_DEPTH and TRAVERSAL_COST come as build options from app/bvh.py. */
 
 /* Half the surface area; extents clamped to FLT_MAX so that a huge flat box gives inf, never NaN. */
 float half_area(global const float4 *box, int k)
