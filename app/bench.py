@@ -9,7 +9,8 @@ its first launch; it renders the scene itself, so that the kernels specialised t
 
 `pathtrace bench --builds` times BVH builds instead (app/bvh.py, on each device asked for): random
 spheres and a height field of triangles at 64k, 1M and 4M primitives, the median of three builds
-each, with the tree's SAH cost.
+each, with the tree's SAH cost. `--display` times the viewer's way from the device's image to
+the host (docs/performance.md), and `--denoise` Open Image Denoise at each quality.
 """
 
 import datetime
@@ -145,6 +146,77 @@ def run_builds(device_specs, sizes, log=print):
                 log(format_build_row(r))
                 results.append(r)
     return results
+
+
+@dataclass
+class Timing:
+    """One step of the viewer's frame or of denoising, timed on its own (the median of 30)."""
+    what: str
+    device: str
+    width: int
+    height: int
+    milliseconds: float
+
+
+def _median_ms(step, repeats: int = 30) -> float:
+    step()                                # the first run allocates and builds
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        step()
+        times.append(time.perf_counter() - start)
+    return 1000 * sorted(times)[len(times) // 2]
+
+
+def run_display(device_specs, width, height, log=print):
+    """The image's way from the device to the host each frame: the float4 sums read back (what
+    the viewer copied before app.display), and app.display's half floats, mapped where the
+    device shares memory with the host and copied otherwise. The texture upload that follows is
+    OpenGL's and is not timed here."""
+    import numpy as np
+
+    from app.display import Display
+    results = []
+    for backend in choose_devices(device_specs):
+        r = Renderer(backend, load_scene("simple"), width, height)
+        r.add_samples(1)
+        r.finish()
+        host = np.empty((height, width, 4), np.float32)
+        steps = {"float sums, read back": lambda: r.read_sum(out=host)}
+        for shared in {backend.device.device.host_unified_memory, False}:
+            display = Display(backend, shared)
+            steps[f"half floats, {'mapped' if shared else 'copied'}"] = \
+                lambda d=display: (d.request(r.buffer("sum"), width, height), d.wait(lambda p: None))
+        for what, step in steps.items():
+            t = Timing(what, backend.device.describe(), width, height, _median_ms(step))
+            log(format_timing(t))
+            results.append(t)
+    return results
+
+
+def run_denoise(width, height, log=print):
+    """Open Image Denoise on the demo's 4-sample image and guides, at each quality."""
+    from app.denoise import QUALITIES, Denoiser
+    from app.device import choose_device
+    r = Renderer(choose_device("auto"), load_scene("demo"), width, height)
+    r.set_aovs(True)
+    r.add_samples(4)
+    image, (albedo, normal) = r.mean(), r.read_aovs()
+    results = []
+    for quality in QUALITIES:
+        denoiser = Denoiser(quality)
+        t = Timing(f"denoise, {quality}", f"Open Image Denoise, {denoiser.device_name}", width, height,
+                   _median_ms(lambda: denoiser(image, albedo, normal), repeats=5))
+        log(format_timing(t))
+        results.append(t)
+    return results
+
+
+TIMING_HEADER = f"{'step':<28} {'device':<44} {'size':>10} {'ms':>8}"
+
+
+def format_timing(t: Timing) -> str:
+    return f"{t.what:<28} {t.device[:44]:<44} {f'{t.width}x{t.height}':>10} {t.milliseconds:>8.2f}"
 
 
 BUILD_HEADER = f"{'scene':<22} {'device':<44} {'primitives':>10} {'build s':>8} {'SAH cost':>9} {'nodes':>9} {'MB':>7}"

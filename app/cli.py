@@ -168,6 +168,11 @@ def cmd_render(args):
 
     for path in args.output:
         check_writable(path)
+        for name in args.aov or ():
+            check_writable(aov_path(path, name))
+    if args.denoise:
+        from app.denoise import Denoiser
+        Denoiser("high")             # before rendering: a missing or failing OIDN says so now
     scene = apply_render_options(load_scene(args.scene), args)
     s = scene.settings
     backends = choose_devices(args.device or ["auto"])
@@ -175,6 +180,7 @@ def cmd_render(args):
         print(f"device: {backend.device.describe()}", file=sys.stderr)
     with BuildProgress(scene.name, args.quiet) as progress:
         group = DeviceGroup(backends, scene, progress=progress)
+    group.set_aovs(bool(args.denoise or args.aov))
     pixels = s.width * s.height
     # the rate and the time left from the average since the start (smoothing 0): the launches grow
     # from one sample, so a smoothed rate underestimates the time left; in samples per second
@@ -198,10 +204,50 @@ def cmd_render(args):
     if dropped:
         warn(f"{scene.name}: {dropped} of {s.spp * pixels} samples were NaN or infinite and were left out "
              f"(as black)")
-    write_images(args.output, group.mean(), args.exposure, args.tonemap)
-    for path in args.output:
-        print(f"wrote {shown(path)}", file=sys.stderr)
+    outputs = render_outputs(group, args)
+    write_images(outputs, args.exposure, args.tonemap)
+    for out in outputs:
+        print(f"wrote {shown(out.path)}", file=sys.stderr)
     return 0
+
+
+AOVS = ("albedo", "normal")
+
+
+def _aovs(text: str) -> tuple:
+    names = tuple(n.strip() for n in text.split(",") if n.strip())
+    unknown = [n for n in names if n not in AOVS]
+    if unknown or not names:
+        raise argparse.ArgumentTypeError(f"'{text}': give albedo, normal or albedo,normal")
+    return names
+
+
+def aov_path(path: str, name: str) -> Path:
+    """Where --aov writes `name` beside an output: out.png -> out.albedo.png."""
+    path = Path(path)
+    return path.with_name(f"{path.stem}.{name}{path.suffix}")
+
+
+def render_outputs(group, args) -> list:
+    """What `render` writes: the image (denoised with --denoise; an EXR then keeps the noisy one
+    as its layer "noisy") to every --output, and with --aov the albedo and normal beside each
+    (normals stored as n / 2 + 1/2 in PNG and JPEG, the usual encoding)."""
+    from app.image_io import Output
+    noisy = group.mean()
+    image, layers = noisy, {}
+    if args.denoise or args.aov:
+        albedo, normal = group.read_aovs()
+    if args.denoise:
+        from app.denoise import Denoiser
+        image, layers = Denoiser("high")(noisy, albedo, normal), {"noisy": noisy}
+    outputs = []
+    for path in args.output:
+        hdr = Path(path).suffix.lower() in (".exr", ".hdr", ".pfm")
+        outputs.append(Output(Path(path), image, layers if Path(path).suffix.lower() == ".exr" else {}))
+        for name in args.aov or ():
+            aov = albedo if name == "albedo" else (normal if hdr else normal * 0.5 + 0.5)
+            outputs.append(Output(aov_path(path, name), aov, raw=True))
+    return outputs
 
 
 def cmd_convert(args):
@@ -288,8 +334,7 @@ def cmd_view(args):
     require_display()      # before any device work
     scene = apply_render_options(load_scene(args.scene), args)
     backend = choose_device((args.device or ["auto"])[0])
-    width, height = args.size or (1280, 720)
-    viewer = Viewer(backend, scene, width, height, args.screenshot_dir)
+    viewer = Viewer(backend, scene, args.screenshot_dir)
     try:
         viewer.run(args.frames)
         if args.screenshot:
@@ -302,10 +347,23 @@ def cmd_view(args):
 def cmd_bench(args):
     from app import bench
 
+    timing_size = args.size or ((320, 180) if args.quick else (1280, 720))
     bench.validate(args)
     if args.json:
         from app.image_io import check_writable
         check_writable(args.json, "--json", formats=None)
+    if args.display or args.denoise:
+        print(bench.TIMING_HEADER)
+        width, height = timing_size
+        results = []
+        if args.display:
+            results += bench.run_display(args.device or ["auto"], width, height)
+        if args.denoise:
+            results += bench.run_denoise(width, height)
+        if args.json:
+            bench.write_json(args.json, results, sys.argv[1:])
+            print(f"wrote {args.json}", file=sys.stderr)
+        return 0
     if args.builds is not None:
         print(bench.BUILD_HEADER)
         results = bench.run_builds(args.device or ["auto"], args.builds or bench.BUILD_SIZES)
@@ -334,6 +392,12 @@ def build_parser():
                    help="output image; repeat for several (.png/.jpg tonemapped; "
                         ".exr/.hdr/.pfm linear HDR)")
     p.add_argument("--spp", type=_int_range(1, 2**31 - 1), help="samples per pixel (default: the scene's)")
+    p.add_argument("--denoise", action="store_true",
+                   help="denoise with Intel Open Image Denoise, guided by the albedo and normal "
+                        "(an .exr output keeps the noisy image as its layer 'noisy')")
+    p.add_argument("--aov", type=_aovs, metavar="albedo,normal",
+                   help="also write the denoiser's albedo and/or normal beside each output "
+                        "(out.png -> out.albedo.png, out.normal.png)")
     add_output_options(p)
     add_render_options(p)
     p.set_defaults(func=cmd_render)
@@ -370,6 +434,10 @@ def build_parser():
     p.add_argument("--builds", nargs="*", type=_count, metavar="N",
                    help="time BVH builds instead of renders: random spheres and a height field of "
                         "N primitives each (a k or M suffix allowed; default 64k 1M 4M)")
+    p.add_argument("--display", action="store_true",
+                   help="time the viewer's copy of the image to the host each frame (default size 1280x720)")
+    p.add_argument("--denoise", action="store_true",
+                   help="time Open Image Denoise at each quality (default size 1280x720)")
     p.add_argument("--quick", action="store_true", help="a smoke test: 320x180, 8 spp")
     p.add_argument("--json", metavar="FILE", help="also write the results as JSON")
     p.set_defaults(func=cmd_bench)

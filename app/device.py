@@ -19,7 +19,7 @@ from app.resources import resource_dir
 CORE_FILES = ("types.h", "rng.cl", "sampling.cl", "scene.cl", "spawn.cl", "shapes/sphere.cl",
               "shapes/triangle.cl", "bvh.cl", "bsdf.cl", "fresnel.cl", "microfacet.cl",
               "coating.cl")
-LATER_FILES = ("environment.cl", "lights.cl", "camera.cl", "integrator.cl")
+LATER_FILES = ("environment.cl", "lights.cl", "camera.cl", "integrator.cl", "aovs.cl", "display.cl")
 
 # No -cl-fast-relaxed-math: it implies finite math, and the kernels rely on INFINITY.
 BUILD_OPTIONS = ("-cl-mad-enable", "-cl-no-signed-zeros")

@@ -8,6 +8,7 @@ environments, the renderer, the benchmarks) runs with NumPy and PyOpenCL alone."
 
 import os
 import tempfile
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -86,10 +87,15 @@ def _read_exr(path: Path):
     return np.ascontiguousarray(rgb[..., :3], np.float32)
 
 
-def _write_exr(path: str, rgb: np.ndarray):
+def _write_exr(path: str, rgb: np.ndarray, layers: dict = {}):
+    """RGB, and each of `layers` as the channels <name>.R, <name>.G, <name>.B."""
     import OpenEXR
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
-    with OpenEXR.File(header, {"RGB": np.ascontiguousarray(rgb, np.float32)}) as f:
+    channels = {"RGB": np.ascontiguousarray(rgb, np.float32)}
+    for name, image in layers.items():
+        for k, c in enumerate("RGB"):
+            channels[f"{name}.{c}"] = np.ascontiguousarray(image[..., k], np.float32)
+    with OpenEXR.File(header, channels) as f:
         f.write(path)
     return True
 
@@ -175,36 +181,49 @@ def write_text(path: Path, text: str, what: str = "--json"):
         staged.commit()
 
 
-def write_images(paths, linear: np.ndarray, exposure: float = 0.0, curve: str = "standard",
-                 what: str = "--output"):
-    """Writes (H, W, 3) linear radiance to every path, as is for HDR formats, tonemapped for PNG
-    and JPEG: all or none (the files are renamed into place only once every one is complete)."""
+@dataclass
+class Output:
+    """An image file to write: (H, W, 3) linear radiance, tonemapped for PNG and JPEG; `layers`,
+    more such images by name, go into an EXR file beside its RGB (the noisy image beside the
+    denoised one); `raw` values (an albedo or an encoded normal) are stored in PNG and JPEG as
+    they are, clipped to [0, 1], without exposure, tone curve or sRGB."""
+    path: Path
+    image: np.ndarray
+    layers: dict = field(default_factory=dict)
+    raw: bool = False
+
+
+def write_images(outputs, exposure: float = 0.0, curve: str = "standard", what: str = "--output"):
+    """Writes each Output. All or none: the files are renamed into place only once every one is
+    complete."""
     import cv2
     with Staged() as staged:
-        for path in paths:
-            check_writable(path, what)
-            staged.add(path, _image_writer(Path(path).suffix.lower(), linear, exposure, curve), what,
+        for out in outputs:
+            check_writable(out.path, what)
+            staged.add(out.path, _image_writer(Path(out.path).suffix.lower(), out, exposure, curve), what,
                        errors=(OSError, RuntimeError, ValueError, cv2.error))
         staged.commit()
 
 
 def write_image(path: Path, linear: np.ndarray, exposure: float = 0.0, curve: str = "standard",
                 what: str = "--output"):
-    write_images([path], linear, exposure, curve, what)
+    write_images([Output(path, linear)], exposure, curve, what)
 
 
-def _image_writer(suffix: str, linear: np.ndarray, exposure: float, curve: str):
+def _image_writer(suffix: str, out: Output, exposure: float, curve: str):
     """write(path) for one format. OpenCV encodes in memory and Python writes the bytes, so no
     file name reaches OpenCV's writer (which crashed on names that are not UTF-8)."""
     if suffix == ".exr":
-        return lambda tmp: _write_exr(tmp, linear)
+        return lambda tmp: _write_exr(tmp, out.image, out.layers)
 
     def write(tmp):
         import cv2
         if suffix in HDR_FORMATS:
-            data = np.ascontiguousarray(linear[..., ::-1], np.float32)
+            data = np.ascontiguousarray(out.image[..., ::-1], np.float32)
+        elif out.raw:
+            data = np.ascontiguousarray(to_8bit(np.clip(out.image, 0.0, 1.0))[..., ::-1])
         else:
-            data = np.ascontiguousarray(to_8bit(tonemap(linear, exposure, curve))[..., ::-1])
+            data = np.ascontiguousarray(to_8bit(tonemap(out.image, exposure, curve))[..., ::-1])
         ok, encoded = cv2.imencode(".jpg" if suffix == ".jpeg" else suffix, data)
         if ok:
             Path(tmp).write_bytes(encoded.tobytes())

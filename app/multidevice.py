@@ -18,7 +18,7 @@ import numpy as np
 from app.compiled import CompiledScene, compile_scene
 from app.device import Backend
 from app.render import next_launch_size
-from app.renderer import Renderer, variance_of
+from app.renderer import Renderer, aov_means, variance_of
 
 
 class SampleCounter:
@@ -123,6 +123,15 @@ class DeviceGroup:
         read_sum_sq), in float64."""
         return sum((read(r).astype(np.float64) for r in self.renderers[1:]),
                    read(self.renderers[0]).astype(np.float64))
+
+    def set_aovs(self, on: bool):
+        """Accumulate the denoiser's albedo and normal too (Renderer.set_aovs), on every device."""
+        for r in self.renderers:
+            r.set_aovs(on)
+
+    def read_aovs(self) -> tuple:
+        """The denoiser's albedo and normal over all devices (Renderer.read_aovs)."""
+        return aov_means(self._merged(Renderer.read_albedo_sum), self._merged(Renderer.read_normal_sum))
 
     def mean(self) -> np.ndarray:
         return (self._merged(Renderer.read_sum)[..., :3] / max(self.samples, 1)).astype(np.float32)

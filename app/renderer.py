@@ -18,6 +18,29 @@ from app.types import RENDER_PARAMS
 RR_DEPTH = 5           # where Russian roulette on throughput starts (Mitsuba 3's default)
 READ_BACK_BYTES = 64   # host memory per pixel to read an image back and write it: the float4
                        # sums, the float32 mean and the encoded copies
+AOV_PASSES = 16        # the denoiser's albedo and normal are accumulated over the first passes
+                       # only: by then they hardly change (kernels/aovs.cl takes 4 BSDF samples
+                       # a pass), and the path tracer runs at full speed after
+AOV_BUFFERS = ("albedo_sum", "normal_sum")   # kernels/aovs.cl: rgb and xyz sums; the albedo's w
+                                             # counts the samples
+
+
+def image_buffers(aovs: bool) -> tuple:
+    """The per-pixel float4 buffers: the sums, and with `aovs` the denoiser's albedo and normal."""
+    return ("sum", "sum_sq") + (AOV_BUFFERS if aovs else ())
+
+
+def per_pixel_mean(sums: np.ndarray) -> np.ndarray:
+    """rgb / w of float4 sums whose w counts each pixel's samples (0 where there are none):
+    the mean of a pass under way, whose rows differ by a sample."""
+    w = sums[..., 3:4]
+    return np.divide(sums[..., :3], w, out=np.zeros(sums.shape[:-1] + (3,), np.float32), where=w > 0)
+
+
+def aov_means(albedo_sum: np.ndarray, normal_sum: np.ndarray) -> tuple:
+    """The denoiser's albedo (clamped to [0, 1], its range) and normal from their sums."""
+    normal_sum = np.concatenate([normal_sum[..., :3], albedo_sum[..., 3:]], -1)
+    return np.clip(per_pixel_mean(albedo_sum), 0.0, 1.0), per_pixel_mean(normal_sum)
 
 
 def variance_of(sum: np.ndarray, sum_sq: np.ndarray, samples: int) -> np.ndarray:
@@ -36,7 +59,9 @@ class Renderer:
         self.program = None       # the kernels specialised to the scene (_select_program)
         self._buffers = {}
         self.width = self.height = 0
-        self.samples = 0          # samples per pixel accumulated so far
+        self.samples = 0          # samples per pixel accumulated so far (whole passes)
+        self.aovs = False         # whether the denoiser's albedo and normal are accumulated too
+        self.resets = 0           # how many times the image restarted (app.render.Progressive)
         self.set_scene(scene, progress)
         self.resize(width or self.scene.settings.width, height or self.scene.settings.height)
 
@@ -85,6 +110,7 @@ class Renderer:
         if program is not self.program:
             self.program = program
             self.kernels = {False: cl.Kernel(program, "render"), True: cl.Kernel(program, "render_nee")}
+            self.aov_kernel = cl.Kernel(program, "render_aovs")
 
     def set_environment(self, environment: Environment):
         self.scene.environment = environment
@@ -133,26 +159,39 @@ class Renderer:
     def resize(self, width: int, height: int):
         if (width, height) == (self.width, self.height):
             return
+        self._allocate_images(width, height, self.aovs)
+
+    def set_aovs(self, on: bool):
+        """Starts (or stops) accumulating the denoiser's albedo and normal beside the radiance;
+        resets."""
+        if on != self.aovs:
+            self._allocate_images(self.width, self.height, on)
+
+    def _allocate_images(self, width: int, height: int, aovs: bool):
         nbytes = width * height * 16
-        others = {name: b.size for name, b in self._buffers.items() if name not in ("sum", "sum_sq")}
+        images = image_buffers(aovs)
+        others = {name: b.size for name, b in self._buffers.items() if name not in image_buffers(True)}
         what = f"a {width}x{height} image of {self.scene.name}"
-        check_fits(self.backend.device.device, {**others, "sum": nbytes, "sum_sq": nbytes}, what)
+        check_fits(self.backend.device.device, {**others, **{name: nbytes for name in images}}, what)
         available = available_host_memory()
         if available is not None and READ_BACK_BYTES * width * height > available:
             raise UserError(f"{what} needs about {format_bytes(READ_BACK_BYTES * width * height)} of "
                             f"memory to read back and write; {format_bytes(available)} is available")
-        self.width, self.height = width, height
-        for name in ("sum", "sum_sq"):
+        self.width, self.height, self.aovs = width, height, aovs
+        for name in AOV_BUFFERS:
+            self._buffers.pop(name, None)
+        for name in images:
             self._buffers[name] = cl.Buffer(self.backend.context, cl.mem_flags.READ_WRITE, nbytes)
         self.reset()
 
     def reset(self):
         """Restarts the progressive average."""
         if "sum" in self._buffers:
-            for name in ("sum", "sum_sq"):
+            for name in image_buffers(self.aovs):
                 cl.enqueue_fill_buffer(self.backend.queue, self._buffers[name], np.float32(0), 0,
                                        self.width * self.height * 16)
         self.samples = 0
+        self.resets += 1
 
     # --- rendering -------------------------------------------------------------------------
     def params(self, sample_count: int) -> np.ndarray:
@@ -174,24 +213,40 @@ class Renderer:
         p["rr_depth"] = RR_DEPTH
         return p
 
-    def add_samples(self, count: int = 1, start: int = None) -> cl.Event:
-        """Queues one launch that adds `count` samples to every pixel; returns its event. The
+    def add_samples(self, count: int = 1, start: int = None, rows: tuple = None) -> list:
+        """Queues one launch that adds `count` samples to every pixel (and one for the albedo and
+        normal, with set_aovs); returns their events. The
         samples are those of index start, start + 1, ... (default: the next ones of this
-        renderer), so that several renderers can share one render's sample indices."""
+        renderer), so that several renderers can share one render's sample indices.
+
+        rows = (first, end) adds them to those rows only: a band of a pass, so that no launch
+        holds a window up (app.render.Progressive). Bands go top to bottom; `samples` counts
+        whole passes, so it grows with the band that ends at the last row. A pass split into
+        bands adds the very samples one launch would."""
         b = self._buffers
-        kernel = self.kernels[self.settings.nee]
+        first, end = rows if rows is not None else (0, self.height)
         params = self.params(count)
+        params["row_start"], params["row_end"] = first, end
         if start is not None:
             params["sample_start"] = start
-        kernel.set_args(*self._scene_args(), params, b["sum"], b["sum_sq"])
         local = (8, 8)
-        global_size = tuple(-(-n // l) * l for n, l in zip((self.width, self.height), local))
-        event = cl.enqueue_nd_range_kernel(self.backend.queue, kernel, global_size, local)
-        self.samples += count
-        return event
+        global_size = tuple(-(-n // l) * l for n, l in zip((self.width, end - first), local))
+        kernel = self.kernels[self.settings.nee]
+        kernel.set_args(*self._scene_args(), params, b["sum"], b["sum_sq"])
+        events = [cl.enqueue_nd_range_kernel(self.backend.queue, kernel, global_size, local)]
+        if self.aovs and self.samples < AOV_PASSES:
+            self.aov_kernel.set_args(*self._scene_args(), params, b["albedo_sum"], b["normal_sum"])
+            events.append(cl.enqueue_nd_range_kernel(self.backend.queue, self.aov_kernel, global_size, local))
+        if end >= self.height:
+            self.samples += count
+        return events
 
     def finish(self):
         self.backend.queue.finish()
+
+    def buffer(self, name: str) -> cl.Buffer:
+        """One of the device buffers of image_buffers, for kernels beside the renderer's."""
+        return self._buffers[name]
 
     def _read(self, name, out=None) -> np.ndarray:
         if out is None:
@@ -207,6 +262,29 @@ class Renderer:
     def mean(self) -> np.ndarray:
         """The image so far: mean radiance per pixel, (H, W, 3) float32."""
         return self._read("sum")[..., :3] / max(self.samples, 1)
+
+    def read_aovs(self) -> tuple:
+        """The denoiser's auxiliary images so far (set_aovs): the mean albedo, clamped to
+        [0, 1], and the mean shading normal (not renormalised; 0 where paths escaped), each
+        (H, W, 3) float32."""
+        return aov_means(self.read_albedo_sum(), self.read_normal_sum())
+
+    def read_albedo_sum(self) -> np.ndarray:
+        """The raw albedo sums (set_aovs), (H, W, 4) float32: rgb, and the samples in w."""
+        return self._read("albedo_sum")
+
+    def read_normal_sum(self) -> np.ndarray:
+        """The raw normal sums (set_aovs), (H, W, 4) float32: xyz."""
+        return self._read("normal_sum")
+
+    def read_async(self, names: tuple) -> tuple:
+        """Queues copies of the named buffers (of image_buffers) to new host arrays without
+        waiting; returns (the last copy's event, the arrays)."""
+        arrays = [np.empty((self.height, self.width, 4), np.float32) for _ in names]
+        events = [cl.enqueue_copy(self.backend.queue, a, self._buffers[n], is_blocking=False)
+                  for a, n in zip(arrays, names)]
+        self.backend.queue.flush()
+        return events[-1], arrays
 
     def dropped_samples(self) -> int:
         """Samples left out since the last reset because they were NaN or infinite

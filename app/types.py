@@ -45,8 +45,8 @@ RENDER_PARAMS = np.dtype([
     ("env_pick", np.float32),
     ("num_spheres", np.int32),
     ("rr_depth", np.int32),
-    ("pad1", np.int32),
-    ("pad2", np.int32),
+    ("row_start", np.int32),        # rows [row_start, row_end) of the image
+    ("row_end", np.int32),
     ("pad3", np.int32),
 ])
 

@@ -138,16 +138,16 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
     }
 }
 
-/* One work-item per pixel adds p.sample_count samples to the running sums of radiance (rgb; w
- * counts the samples kept) and of its square (rgb, for the per-pixel variance; w counts rays
- * traced). A NaN or infinite sample (a bug, or a scene beyond float32) is left out, counting as
+/* One work-item per pixel of rows [row_start, row_end) (a band of a pass, or all of them) adds
+ * p.sample_count samples to the running sums of radiance (rgb; w counts the samples kept) and
+ * of its square (rgb, for the per-pixel variance; w counts rays traced). A NaN or infinite sample (a bug, or a scene beyond float32) is left out, counting as
  * black, so that it cannot poison the pixel for the rest of the render; the host counts the
  * samples left out from w (Renderer.dropped_samples) and reports them. */
 void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum,
                   global float4 *sum_sq, const int nee)
 {
-    int x = get_global_id(0), y = get_global_id(1);
-    if (x >= p->width || y >= p->height)
+    int x = get_global_id(0), y = p->row_start + get_global_id(1);
+    if (x >= p->width || y >= p->row_end)
         return;
     float3 acc = (float3)(0.0f), acc_sq = (float3)(0.0f);
     int rays = 0, kept = 0;

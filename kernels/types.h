@@ -68,8 +68,8 @@ typedef struct {
     float env_pick;      /* probability that next-event estimation samples the environment */
     int num_spheres;     /* the first triangle's primitive index */
     int rr_depth;        /* Russian roulette on throughput starts at this depth */
-    int pad1;
-    int pad2;
+    int row_start;       /* the launch covers image rows [row_start, row_end): a band of a pass */
+    int row_end;
     int pad3;
 } RenderParams;
 

@@ -1,7 +1,7 @@
 #version 330 core
-// The accumulation buffer as the user sees it: mean = sum / count, exposure, tone curve, sRGB.
-// The same steps as app/tonemap.py, which writes the PNG screenshots.
-uniform sampler2D accumulation;   // rgb: sum of radiance; a: number of samples
+// The mean radiance as the user sees it: exposure, tone curve, sRGB. The same steps as
+// app/tonemap.py, which writes the PNG screenshots.
+uniform sampler2D radiance;       // rgb: mean radiance (kernels/display.cl, or the denoised image)
 uniform float exposure;           // stops
 uniform int curve;                // 0: standard (clip), 1: ACES fit (Narkowicz 2015)
 in vec2 uv;
@@ -20,10 +20,8 @@ vec3 linear_to_srgb(vec3 x)
 
 void main()
 {
-    vec4 acc = texture(accumulation, uv);
-    vec3 radiance = acc.a > 0.0 ? acc.rgb / acc.a : vec3(0.0);
-    radiance *= exp2(exposure);
+    vec3 x = texture(radiance, uv).rgb * exp2(exposure);
     if (curve == 1)
-        radiance = aces_fit(radiance);
-    color = vec4(linear_to_srgb(radiance), 1.0);
+        x = aces_fit(x);
+    color = vec4(linear_to_srgb(x), 1.0);
 }

@@ -44,3 +44,14 @@ def test_build_bench_times_spheres_and_triangles(tmp_path):
     assert "build s" in r.stdout and "heightfield20k" in r.stdout
     r = pathtrace("bench", "--builds", "1")
     assert r.returncode == 2 and "'1' is not a count from 2 to 100M" in r.stderr
+
+
+def test_display_and_denoise_timings(tmp_path):
+    out = tmp_path / "timings.json"
+    r = pathtrace("bench", "--display", "--denoise", "--size", "64x36", "--device", "cpu", "--json", out)
+    assert r.returncode == 0, r.stderr
+    rows = json.loads(out.read_text())["results"]
+    steps = [row["what"] for row in rows]
+    assert steps[0] == "float sums, read back" and "half floats, copied" in steps
+    assert [s for s in steps if s.startswith("denoise")] == ["denoise, high", "denoise, balanced", "denoise, fast"]
+    assert all(row["milliseconds"] > 0 and (row["width"], row["height"]) == (64, 36) for row in rows)

@@ -47,6 +47,39 @@ def test_render_writes_png_and_exr(tmp_path):
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]   # no temporary left
 
 
+def test_render_denoise_writes_the_denoised_image_the_noisy_layer_and_the_aovs(tmp_path):
+    """--denoise: the outputs hold the denoised image and an EXR keeps the noisy one as its layer
+    "noisy", which is the image a render without --denoise writes; --aov: the albedo and normal
+    beside each output (PNG normals encoded as n / 2 + 1/2)."""
+    import OpenEXR
+    from app.image_io import read_hdr
+    png, exr, plain = tmp_path / "d.png", tmp_path / "d.exr", tmp_path / "plain.exr"
+    common = ("--size", "48x27", "--spp", "4", "-q")
+    r = pathtrace("render", "demo", "-o", png, "-o", exr, "--denoise", "--aov", "albedo,normal", *common)
+    assert r.returncode == 0, r.stderr
+    assert pathtrace("render", "demo", "-o", plain, *common).returncode == 0
+    with OpenEXR.File(str(exr)) as f:
+        channels = f.channels()
+        denoised, noisy = channels["RGB"].pixels, channels["noisy"].pixels
+    np.testing.assert_allclose(noisy, read_hdr(plain, "test"), rtol=1e-5, atol=1e-6)
+    assert np.all(np.isfinite(denoised)) and np.abs(denoised - noisy).mean() > 0.01 * noisy.mean()
+    # denoising smooths: neighbouring pixels differ less
+    assert np.abs(np.diff(denoised, axis=1)).mean() < 0.5 * np.abs(np.diff(noisy, axis=1)).mean()
+    albedo, normal = read_hdr(tmp_path / "d.albedo.exr", "test"), None
+    with OpenEXR.File(str(tmp_path / "d.normal.exr")) as f:
+        normal = f.channels()["RGB"].pixels
+    assert albedo.min() >= 0 and albedo.max() <= 1 and np.abs(normal).max() <= 1 + 1e-5
+    for name in ("d.albedo.png", "d.normal.png"):
+        assert (tmp_path / name).read_bytes()[:4] == b"\x89PNG"
+
+
+@pytest.mark.parametrize("value", ["depth", "albedo,foo", ","])
+def test_render_refuses_an_unknown_aov(tmp_path, value):
+    r = pathtrace("render", "simple", "-o", tmp_path / "o.png", "--aov", value)
+    assert r.returncode == 2 and "--aov" in r.stderr and "Traceback" not in r.stderr
+    assert not list(tmp_path.iterdir())
+
+
 BAD_FILES = [
     ("[camera\n", "not valid TOML"),
     (GOOD + "\nfoo = 1\n", "unknown key 'foo'"),

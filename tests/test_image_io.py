@@ -10,7 +10,7 @@ import pytest
 
 from app import image_io
 from app.errors import UserError
-from app.image_io import read_hdr, write_image, write_images
+from app.image_io import Output, read_hdr, write_image, write_images
 from tests.test_cli import GOOD, pathtrace, write
 
 IMAGE = np.random.default_rng(0).random((6, 8, 3)).astype(np.float32)
@@ -57,11 +57,11 @@ def test_several_outputs_are_written_all_or_none(tmp_path, monkeypatch):
     first = tmp_path / "a.png"
     first.write_bytes(b"old")
 
-    def fail(path, rgb):
+    def fail(path, rgb, layers):
         raise RuntimeError("disk full")
     monkeypatch.setattr(image_io, "_write_exr", fail)
     with pytest.raises(UserError, match="cannot write .*b.exr': disk full"):
-        write_images([first, tmp_path / "b.exr"], IMAGE)
+        write_images([Output(first, IMAGE), Output(tmp_path / "b.exr", IMAGE)])
     assert first.read_bytes() == b"old" and sorted(os.listdir(tmp_path)) == ["a.png"]
 
 

@@ -1,6 +1,7 @@
 """The viewer in a real X server (Xvfb, Mesa's llvmpipe), driven by real X input events from
-xdotool: camera moves reset accumulation, the GUI swallows its clicks, screenshots match a
-headless render, resizing works, memory stays flat, and it closes cleanly."""
+xdotool: camera moves reset accumulation, the GUI swallows its clicks and wheel, the window
+stays smooth while the CPU renders, the panel fits, screenshots match a headless render, the
+render size is the scene's, memory stays flat, and it closes cleanly."""
 
 import os
 import shutil
@@ -17,7 +18,7 @@ from app.renderer import Renderer
 from app.scene import load_scene
 
 ROOT = Path(__file__).resolve().parent.parent
-W, H = 640, 360      # the panel covers x < 340; the tests act to its right
+W, H = 640, 360      # the panel covers x < 370; the tests act to its right
 
 
 @pytest.fixture(scope="module")
@@ -25,7 +26,7 @@ def display():
     for tool in ("Xvfb", "xdotool"):
         assert shutil.which(tool), f"{tool} is missing: ./install.sh --dev installs it"
     number = 90 + os.getpid() % 50
-    server = subprocess.Popen(["Xvfb", f":{number}", "-screen", "0", "1024x768x24", "-nolisten", "tcp"],
+    server = subprocess.Popen(["Xvfb", f":{number}", "-screen", "0", "1920x1200x24", "-nolisten", "tcp"],
                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     old = os.environ.get("DISPLAY")
     os.environ["DISPLAY"] = f":{number}"
@@ -45,7 +46,7 @@ def display():
 @pytest.fixture(scope="module")
 def viewer(display, backend, tmp_path_factory):
     from app.viewer.window import Viewer
-    v = Viewer(backend, load_scene("simple"), W, H, tmp_path_factory.mktemp("shots"))
+    v = Viewer(backend, load_scene("simple").with_settings(width=W, height=H), tmp_path_factory.mktemp("shots"))
     for _ in range(3):
         v.frame()
     yield v
@@ -71,27 +72,86 @@ def settle(viewer):
     frames(viewer, 2)
 
 
+def back_to_simple(viewer):
+    """The module's scene again, at the module's size (a scene opens at its own)."""
+    viewer.load_scene("simple")
+    viewer.size = (W, H)
+    settle(viewer)
+
+
+def click_widget(viewer, label):
+    """A click at the centre of the panel's widget `label` (where it was drawn last)."""
+    x0, y0, x1, y1 = viewer.widgets[label]
+    xdo("mousemove", "--window", window_id(viewer), int((x0 + x1) / 2), int((y0 + y1) / 2))
+    frames(viewer, 2)
+    xdo("click", 1)
+
+
 def test_key_moves_the_camera_and_resets_accumulation(viewer):
     settle(viewer)
     frames(viewer, 4)
-    before_eye, before_samples = viewer.renderer.camera.eye.copy(), viewer.renderer.samples
-    assert before_samples >= 4
+    before_eye, resets = viewer.renderer.camera.eye.copy(), viewer.renderer.resets
     xdo("windowfocus", "--sync", window_id(viewer))
     xdo("keydown", "w")
-    viewer.frame()
-    after_one_frame = viewer.renderer.samples
-    frames(viewer, 4)
-    scale_while_moving = viewer.scale
+    frames(viewer, 5)
+    preview = (viewer.scale, viewer.renderer.width, viewer.renderer.height)
     xdo("keyup", "w")
     frames(viewer, 1)
     eye = viewer.renderer.camera.eye
     forward = viewer.renderer.camera.look_at - eye
     assert np.dot(eye - before_eye, forward) > 0              # W goes forward
-    assert after_one_frame == viewer.launch_spp or after_one_frame < before_samples   # reset
-    assert scale_while_moving > 1                             # preview resolution while moving
+    assert viewer.renderer.resets > resets                    # and restarts the image
+    scale = preview[0]
+    assert preview[1:] == (W // scale, H // scale)            # the preview resolution while moving
     settle(viewer)
-    assert viewer.scale == 1 and (viewer.renderer.width, viewer.renderer.height) == \
-        tuple(viewer.glfw.get_framebuffer_size(viewer.window))
+    assert viewer.scale == 1 and (viewer.renderer.width, viewer.renderer.height) == (W, H)
+
+
+def test_the_preview_is_as_coarse_as_a_pass_in_a_frame_needs():
+    from app.viewer.window import MAX_PREVIEW_SCALE, MOVE_BUDGET, preview_scale
+    pixel = MOVE_BUDGET / (640 * 360)           # a full pass takes exactly the budget
+    assert preview_scale(pixel, 640, 360) == 1
+    assert preview_scale(pixel * 4, 640, 360) == 2
+    assert preview_scale(pixel * 17, 640, 360) == 5
+    assert preview_scale(pixel * 1e6, 640, 360) == MAX_PREVIEW_SCALE
+    assert preview_scale(None, 640, 360) == 4   # before anything was measured
+
+
+def test_r_resets_the_camera_and_h_shows_the_keys(viewer):
+    settle(viewer)
+    xdo("windowfocus", "--sync", window_id(viewer))
+    xdo("keydown", "d")
+    frames(viewer, 4)
+    xdo("keyup", "d")
+    frames(viewer, 1)
+    scene_camera = viewer.renderer.scene.camera
+    assert not np.allclose(viewer.renderer.camera.eye, scene_camera.eye)
+    xdo("key", "r")
+    frames(viewer, 2)
+    np.testing.assert_allclose(viewer.renderer.camera.eye, scene_camera.eye)
+    np.testing.assert_allclose(viewer.renderer.camera.look_at, scene_camera.look_at)
+    assert not viewer.show_help
+    xdo("key", "h")
+    frames(viewer, 2)
+    assert viewer.show_help
+    xdo("key", "h")
+    frames(viewer, 2)
+    assert not viewer.show_help
+
+
+def test_the_wheel_over_the_panel_scrolls_only_the_panel(viewer):
+    settle(viewer)
+    speed = viewer.controls.speed
+    xdo("mousemove", "--window", window_id(viewer), 60, 200)        # over the panel
+    frames(viewer, 2)
+    xdo("click", 5)
+    frames(viewer, 2)
+    assert viewer.controls.speed == speed
+    xdo("mousemove", "--window", window_id(viewer), 500, 200)       # over the image
+    frames(viewer, 2)
+    xdo("click", 4)
+    frames(viewer, 2)
+    assert viewer.controls.speed == pytest.approx(speed * 1.25)
 
 
 def test_right_drag_turns_the_camera(viewer):
@@ -155,7 +215,7 @@ def test_left_click_picks_a_mesh_whatever_the_bvh_order(viewer):
     assert v.selected is not None
     assert (v.selected.kind, v.selected.name) == ("mesh", "short block")
     assert v.renderer.scene.materials.name_of(v.selected.material) == "white"
-    v.load_scene("simple")
+    back_to_simple(v)
 
 
 def test_a_slow_build_shows_its_progress_in_the_title(viewer, monkeypatch):
@@ -167,7 +227,7 @@ def test_a_slow_build_shows_its_progress_in_the_title(viewer, monkeypatch):
     viewer.load_scene("spheres8k")
     assert titles[-2] == "pathtrace - building the BVH of spheres8k: 100%"
     assert titles[-1] == "pathtrace - spheres8k" and viewer.renderer.scene.name == "spheres8k"
-    viewer.load_scene("simple")
+    back_to_simple(viewer)
 
 
 def test_a_scene_that_fails_to_open_leaves_the_viewer_as_it_was(viewer, monkeypatch, capsys):
@@ -186,40 +246,44 @@ def test_a_scene_that_fails_to_open_leaves_the_viewer_as_it_was(viewer, monkeypa
 
 @pytest.mark.parametrize("curve,exposure", [("standard", 0.0), ("aces", 0.5), ("standard", -1.0)])
 def test_the_display_shader_matches_tonemap(viewer, curve, exposure):
-    """shaders/display.frag (mean = sum / count, exposure, tone curve, sRGB) draws what
-    app/tonemap.py writes, to one 8-bit step, on a ramp of radiances from 0 to 4."""
+    """shaders/display.frag (exposure, tone curve, sRGB, on the mean radiance that
+    kernels/display.cl writes as half floats) draws what app/tonemap.py writes, to one 8-bit
+    step, on a ramp of radiances from 0 to 4."""
     import moderngl
 
     from app.tonemap import to_8bit, tonemap
     v = viewer
     radiance = np.stack([np.linspace(0, 4, 64), np.linspace(0, 1, 64), np.linspace(0, 0.05, 64)], -1)[None]
-    acc = np.concatenate([radiance * 4, np.full((1, 64, 1), 4.0)], -1).astype(np.float32)   # 4 samples
-    texture = v.ctx.texture((64, 1), 4, data=acc.tobytes(), dtype="f4")
+    pixels = np.concatenate([radiance, np.ones((1, 64, 1))], -1).astype(np.float16)
+    texture = v.ctx.texture((64, 1), 4, data=pixels.tobytes(), dtype="f2")
     texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
     target = v.ctx.simple_framebuffer((64, 1))
     try:
         target.use()
         v.ctx.viewport = (0, 0, 64, 1)
         texture.use(0)
-        v.program["accumulation"] = 0
+        v.program["radiance"] = 0
         v.program["exposure"] = exposure
         v.program["curve"] = 1 if curve == "aces" else 0
+        v.program["extent"] = (1.0, 1.0)
         v.vao.render(mode=v.ctx.TRIANGLE_STRIP)
         drawn = np.frombuffer(target.read(components=3), np.uint8).reshape(1, 64, 3)
     finally:
         v.ctx.screen.use()
         texture.release()
         target.release()
-    expected = to_8bit(tonemap(radiance, exposure, curve))
+    expected = to_8bit(tonemap(pixels[..., :3].astype(np.float64), exposure, curve))
     assert np.abs(drawn.astype(int) - expected).max() <= 1
 
 
 def test_screenshot_matches_a_headless_render(viewer, backend):
     settle(viewer)
+    viewer.denoise = False
     viewer.renderer.reset()
     while viewer.renderer.samples < 32:
         viewer.frame()
     png, exr = viewer.screenshot()
+    viewer.denoise = True
     assert png.exists() and exr.exists() and png.read_bytes()[:4] == b"\x89PNG"
     shot = read_hdr(exr, "screenshot")
     r = viewer.renderer
@@ -228,20 +292,126 @@ def test_screenshot_matches_a_headless_render(viewer, backend):
     for _ in range(r.samples):
         headless.add_samples(1)
     headless.finish()
-    # the same camera, seed and sample indices: the same samples, summed in another order
+    # the same camera, seed and sample indices: the same samples, summed in another order (the
+    # pass under way was finished first)
     np.testing.assert_allclose(shot, headless.mean(), rtol=1e-4, atol=1e-5)
 
 
-def test_resize_reallocates_and_resets(viewer):
+def test_at_rest_the_denoised_image_is_shown_and_saved(viewer):
+    """Once the camera rests, the denoiser's image replaces the noisy one; a screenshot then
+    writes it, with the noisy one as the EXR's layer "noisy"."""
+    import OpenEXR
     settle(viewer)
-    viewer.glfw.set_window_size(viewer.window, 480, 270)
+    viewer.renderer.reset()
+    start = time.perf_counter()
+    while not (viewer.denoised_at and viewer.denoised_at[0] == viewer.renderer.resets):
+        viewer.frame()
+        assert time.perf_counter() - start < 30, "no denoised image within 30 s"
+    assert viewer.texture.size == (W, H) and viewer.texture.components == 3    # the denoised one
+    png, exr = viewer.screenshot()
+    with OpenEXR.File(str(exr)) as f:
+        channels = f.channels()
+        denoised, noisy = channels["RGB"].pixels, channels["noisy"].pixels
+    np.testing.assert_allclose(noisy, viewer.renderer.mean(), rtol=1e-6)
+    assert np.abs(denoised - noisy).mean() > 0 and np.all(np.isfinite(denoised))
+
+
+def test_resizing_the_window_keeps_the_render_size(viewer):
+    """The render size is the scene's; the window shows it whole, scaled, with bars."""
+    from app.viewer.window import image_extent
+    settle(viewer)
+    viewer.glfw.set_window_size(viewer.window, 480, 400)
     for _ in range(50):
         frames(viewer, 1)
-        if viewer.glfw.get_framebuffer_size(viewer.window) == (480, 270):
+        if viewer.glfw.get_framebuffer_size(viewer.window) == (480, 400):
             break
     settle(viewer)
-    assert (viewer.renderer.width, viewer.renderer.height) == (480, 270)
-    assert viewer.texture.size == (480, 270)
+    assert (viewer.renderer.width, viewer.renderer.height) == (W, H)
+    assert image_extent((W, H), (480, 400)) == (1.0, pytest.approx((480 / 400) / (W / H)))
+    viewer.glfw.set_window_size(viewer.window, W, H)
+    for _ in range(50):
+        frames(viewer, 1)
+        if viewer.glfw.get_framebuffer_size(viewer.window) == (W, H):
+            break
+
+
+def test_the_window_fits_the_screen_and_keeps_the_image_aspect():
+    from app.viewer.window import fit_window
+    assert fit_window(640, 360, (1920, 1080)) == (640, 360)
+    w, h = fit_window(4000, 3000, (1920, 1080))
+    assert h <= 0.9 * 1080 and abs(w / h - 4 / 3) < 0.01
+
+
+def test_a_scene_opens_at_its_own_size(viewer):
+    cornell = load_scene("cornell-box").settings
+    viewer.load_scene("cornell-box")
+    settle(viewer)
+    assert viewer.size == (cornell.width, cornell.height) == (viewer.renderer.width, viewer.renderer.height)
+    back_to_simple(viewer)
+
+
+@pytest.mark.parametrize("size", [(800, 600), (1920, 1080)])
+def test_the_panel_fits_its_text(viewer, size):
+    """Every section open, a shape picked: no widget reaches past the panel's edge, and the
+    panel stays inside the window."""
+    v = viewer
+    v.glfw.set_window_size(v.window, *size)
+    for _ in range(50):
+        frames(v, 1)
+        if v.glfw.get_framebuffer_size(v.window) == size:
+            break
+    settle(v)
+    v.selected = v.renderer.compiled.shape(0)
+    v.redraw_soon()
+    frames(v, 2)
+    assert {"built-in", "file", "folder", "emission", "env rotation", "max depth (0: none)"} <= set(v.widgets)
+    assert v.clipped == set()
+    x, y, w, h = v.panel_rect
+    assert x >= 0 and y >= 0 and x + w <= size[0] and y + h <= size[1]
+    v.selected = None
+    v.glfw.set_window_size(v.window, W, H)
+    for _ in range(50):
+        frames(v, 1)
+        if v.glfw.get_framebuffer_size(v.window) == (W, H):
+            break
+
+
+def test_the_window_stays_smooth_while_the_cpu_renders(display, backend, tmp_path):
+    """The issue's test: the demo at 1280x720 on the CPU device, for 10 s of rendering and
+    denoising, while text is typed and a box clicked: the loop's frame time stays under 50 ms
+    (median) and 100 ms (99th percentile), and each input arrives in the frame after it was sent
+    (imgui takes one typed character a frame)."""
+    from app.viewer.window import Viewer
+    if backend.device.kind != "CPU":
+        pytest.skip("the criterion is for the CPU device (PoCL)")
+    v = Viewer(backend, load_scene("demo").with_settings(width=1280, height=720), tmp_path,
+               window_size=(960, 540))
+    try:
+        frames(v, 30)
+        v.frame_times.clear()
+        start = time.perf_counter()
+        click_widget(v, "folder")
+        frames(v, 2)
+        xdo("key", "End")
+        frames(v, 2)
+        typed = ""
+        for char in "abcdefgh":
+            xdo("type", char)
+            v.frame()
+            typed += char
+            assert str(v.screenshot_dir).endswith(typed), (str(v.screenshot_dir), typed)
+        denoise = v.denoise
+        click_widget(v, "denoise (Open Image Denoise)")
+        frames(v, 2)
+        assert v.denoise != denoise
+        while time.perf_counter() - start < 10:
+            v.frame()
+        times = np.array(v.frame_times) * 1000
+        assert np.median(times) < 50 and np.percentile(times, 99) < 100, \
+            (np.median(times), np.percentile(times, 99))
+        assert v.progressive.passes_done >= 2
+    finally:
+        v.close()
 
 
 def rss_mb():

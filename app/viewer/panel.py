@@ -1,5 +1,11 @@
-"""The imgui panel. Changes that alter the rendered image go through the Renderer, which resets
-the accumulation; display-only ones (exposure, tone curve) do not reset it."""
+"""The imgui panel, and the keyboard help (H). Changes that alter the rendered image go through
+the Renderer, which resets the accumulation; display-only ones (exposure, tone curve) do not.
+
+Every labelled widget shares one width, the panel's less a label column as wide as the widest
+label (so no label is ever cut off), and the panel cannot be made narrower than that column
+and a usable widget. Text wraps. The panel is resizable, scrolls when its content is taller
+than the window, and never leaves the window. Each widget's range holds every value the scene
+format accepts."""
 
 import numpy as np
 
@@ -8,8 +14,52 @@ from app.scene.builtin import BUILTIN_SCENES
 from app.scene.description import RUSSIAN_ROULETTE
 from app.tonemap import TONEMAPS
 
+MARGIN = 10                 # pixels between the panel and the window's edges
+WIDGET_MIN = 150            # the narrowest a widget may get, in pixels
+FLOAT_MAX = 3.4e38          # float32's largest value: the kernels' limit for any parameter
+INT_MAX = 2**31 - 1
+KEYS = (("W A S D", "move"), ("Q / E, Ctrl / Space", "down / up"), ("right mouse drag", "look around"),
+        ("mouse wheel", "speed"), ("Shift", "move faster"), ("left click", "pick a shape"),
+        ("R", "reset the camera to the scene's"), ("P or F12", "screenshot (PNG + EXR)"),
+        ("H", "this help"), ("Esc", "quit"))
 
-def _material_editor(imgui, v):
+# every label the panel draws beside a widget, to size the label column
+LABELS = ("exposure (EV)", "tone curve", "max depth (0: none)", "Russian roulette", "env intensity",
+          "env rotation", "speed", "vertical fov", "built-in", "file", "folder", "emission") + \
+    tuple({p.name for bsdf in BSDFS.values() for p in bsdf.params})
+
+
+def _label_column(imgui) -> float:
+    return max(imgui.calc_text_size(label).x for label in LABELS) + imgui.get_style().item_inner_spacing.x
+
+
+class _Layout:
+    """Checks, after each labelled widget, that it ended inside the panel (the viewer's
+    `clipped` set names those that did not; tests/test_viewer.py asserts it stays empty), and
+    notes where it was drawn (the viewer's `widgets`: label -> (x0, y0, x1, y1), window pixels)."""
+
+    def __init__(self, imgui, v):
+        self.imgui, self.v = imgui, v
+        self.right = imgui.get_cursor_screen_pos().x + imgui.get_content_region_avail().x
+        v.clipped, v.widgets = set(), {}
+
+    def check(self, label: str):
+        if self._note(label).x > self.right + 0.5:
+            self.v.clipped.add(label)
+
+    def _note(self, label: str):
+        lo, hi = self.imgui.get_item_rect_min(), self.imgui.get_item_rect_max()
+        self.v.widgets[label] = (lo.x, lo.y, hi.x, hi.y)
+        return hi
+
+    def header(self, label: str, flags=0) -> bool:
+        """A section's header, which spans the panel's whole width by design."""
+        opened = self.imgui.collapsing_header(label, flags)
+        self._note(label)
+        return opened
+
+
+def _material_editor(imgui, v, layout):
     """The picked shape and its material's parameters, as the registry declares them."""
     shape = v.selected
     table = v.renderer.scene.materials
@@ -30,86 +80,156 @@ def _material_editor(imgui, v):
         elif param.kind == "bool":
             hit, new = imgui.checkbox(param.name, bool(value))
         else:
-            high = param.high if param.high is not None else 5000.0
-            hit, new = imgui.slider_float(param.name, float(value), param.low, high,
-                                          flags=imgui.SliderFlags_.logarithmic)
+            high = param.high if param.high is not None else FLOAT_MAX
+            hit, new = imgui.drag_float(param.name, float(value), max(abs(float(value)), 1e-3) * 0.01,
+                                        param.low, high, "%.4g", imgui.SliderFlags_.always_clamp)
+        layout.check(param.name)
         if hit:
             m.params[param.name], changed = np.asarray(new, np.float64), True
     hit, le = imgui.input_float3("emission", np.asarray(m.emission, np.float64).tolist())
+    layout.check("emission")
     if hit:
-        m.emission, changed = np.maximum(le, 0.0), True
+        m.emission, changed = np.clip(le, 0.0, FLOAT_MAX), True
     if changed and BSDFS[m.type].check({k: np.atleast_2d(x) if np.ndim(x) else np.atleast_1d(x)
                                         for k, x in m.params.items()}) is None:
         v.edit_material(shape.material, m)
 
+
+def _status(imgui, v):
+    """What the device is doing, honest about a pass under way: whole passes, then how far the
+    next one is; samples per second as the device measured them."""
+    r, p = v.renderer, v.progressive
+    times = list(v.frame_times)[-30:]
+    frame = sum(times) / max(len(times), 1)
+    imgui.text_wrapped(f"device: {v.backend.device.name}")
+    imgui.set_item_tooltip(f"{v.backend.device.describe()}\ndisplay: {v.display_path}")
+    rate = 1e-6 / p.seconds_per_pixel if p.seconds_per_pixel else 0.0
+    imgui.text_wrapped(f"{1 / max(frame, 1e-6):.0f} fps, {1000 * frame:.1f} ms/frame")
+    imgui.text_wrapped(f"{p.passes_done} spp + {p.progress:.0%} of the next, {rate:.2f} Msamples/s")
+    size = f"{r.width}x{r.height}" + (f" (preview 1/{v.scale} of {v.size[0]}x{v.size[1]})" if v.scale > 1 else "")
+    imgui.text_wrapped(size)
+    if v.denoise and v.denoised_at is not None and v.denoised_at[0] == r.resets and v.scale == 1:
+        imgui.text_wrapped(f"denoised at {v.denoised_at[1]} spp in {v.denoise_seconds:.2f} s")
+    if v.message:
+        if v.error:
+            imgui.text_colored((1.0, 0.45, 0.4, 1.0), "error:")
+            imgui.same_line()
+        imgui.text_wrapped(v.message)
+
+
 def draw_panel(v):
     imgui = v.imgui
     r = v.renderer
-    imgui.set_next_window_pos((10, 10), imgui.Cond_.first_use_ever)
-    imgui.set_next_window_size((330, 0), imgui.Cond_.first_use_ever)
+    io = imgui.get_io()
+    column = _label_column(imgui)
+    width_min = column + WIDGET_MIN + 2 * imgui.get_style().window_padding.x
+    screen_w, screen_h = io.display_size.x, io.display_size.y
+    imgui.set_next_window_pos((MARGIN, MARGIN), imgui.Cond_.first_use_ever)
+    imgui.set_next_window_size((width_min + 40, screen_h - 2 * MARGIN), imgui.Cond_.first_use_ever)
+    imgui.set_next_window_size_constraints(
+        (min(width_min, screen_w - 2 * MARGIN), min(100, screen_h)),
+        (max(screen_w - 2 * MARGIN, 1), max(screen_h - 2 * MARGIN, 1)))
     imgui.begin("pathtrace")
-    imgui.text(f"device: {v.backend.device.name[:38]}")
-    imgui.text(f"{r.samples} spp   {r.width}x{r.height}{'  (preview)' if v.scale > 1 else ''}")
-    imgui.text(f"{v.samples_per_second / 1e6:.1f} Msamples/s   {v.frame_ms:.1f} ms/frame")
-    imgui.text(f"display: {v.display_path}")
+    layout = _Layout(imgui, v)
+    imgui.push_item_width(-column)
+    _status(imgui, v)
 
-    if imgui.collapsing_header("Image", imgui.TreeNodeFlags_.default_open):
-        _, v.exposure = imgui.slider_float("exposure (EV)", v.exposure, -8.0, 8.0)
-        current = TONEMAPS.index(v.tonemap)
-        changed, current = imgui.combo("tone curve", current, list(TONEMAPS))
+    if layout.header("Image", imgui.TreeNodeFlags_.default_open):
+        _, v.exposure = imgui.drag_float("exposure (EV)", v.exposure, 0.02, -100.0, 100.0, "%.2f",
+                                         imgui.SliderFlags_.always_clamp)
+        layout.check("exposure (EV)")
+        changed, current = imgui.combo("tone curve", TONEMAPS.index(v.tonemap), list(TONEMAPS))
+        layout.check("tone curve")
         if changed:
             v.tonemap = TONEMAPS[current]
+        changed, v.denoise = imgui.checkbox("denoise (Open Image Denoise)", v.denoise)
+        layout.check("denoise (Open Image Denoise)")
+        if v.denoise_error:
+            imgui.text_wrapped(v.denoise_error)
         s = r.settings
-        changed, depth = imgui.slider_int("max depth (0: none)", s.max_depth, 0, 64)
+        changed, depth = imgui.drag_int("max depth (0: none)", s.max_depth, 0.2, 0, INT_MAX, "%d",
+                                        imgui.SliderFlags_.always_clamp)
+        layout.check("max depth (0: none)")
         if changed and (depth > 0 or s.russian_roulette != "off"):
             r.set_settings(max_depth=depth)
         current = RUSSIAN_ROULETTE.index(s.russian_roulette)
         changed, current = imgui.combo("Russian roulette", current, list(RUSSIAN_ROULETTE))
+        layout.check("Russian roulette")
         if changed and (RUSSIAN_ROULETTE[current] != "off" or s.max_depth > 0):
             r.set_settings(russian_roulette=RUSSIAN_ROULETTE[current])
         changed, nee = imgui.checkbox("next-event estimation (MIS)", s.nee)
+        layout.check("next-event estimation (MIS)")
         if changed:
             r.set_settings(nee=nee)
         env = r.environment
-        changed, value = imgui.slider_float("env intensity", env.intensity, 0.0, 10.0)
+        changed, value = imgui.drag_float("env intensity", env.intensity, max(env.intensity, 0.01) * 0.01,
+                                          0.0, FLOAT_MAX, "%.4g", imgui.SliderFlags_.always_clamp)
+        layout.check("env intensity")
         if changed:
             env.intensity = value
-            r.reset()
-        changed, value = imgui.slider_float("env rotation", env.rotation, -180.0, 180.0)
+            r.set_environment(env)        # the light table weighs the environment by its power
+        changed, value = imgui.slider_float("env rotation", env.rotation % 360.0, 0.0, 360.0, "%.1f deg")
+        layout.check("env rotation")
         if changed:
-            env.rotation = value
+            env.rotation = value % 360.0
             r.reset()
 
-    if imgui.collapsing_header("Camera", imgui.TreeNodeFlags_.default_open):
-        _, v.controls.speed = imgui.slider_float("speed", v.controls.speed, 0.01, 100.0,
-                                                 flags=imgui.SliderFlags_.logarithmic)
-        changed, fov = imgui.slider_float("vertical fov", r.camera.vfov, 5.0, 120.0)
+    if layout.header("Camera", imgui.TreeNodeFlags_.default_open):
+        _, v.controls.speed = imgui.slider_float("speed", v.controls.speed, 0.01, 1000.0, "%.3g",
+                                                 imgui.SliderFlags_.logarithmic)
+        layout.check("speed")
+        changed, fov = imgui.slider_float("vertical fov", r.camera.vfov, 0.1, 179.9, "%.1f deg")
+        layout.check("vertical fov")
         if changed:
             r.camera.vfov = fov
             r.reset()
-        imgui.text_wrapped("WASD move, Q/E down/up, right mouse look, wheel speed, Shift fast, "
-                           "left click picks a sphere, P or F12 screenshot")
+        imgui.text_wrapped("H shows the keys; R resets the camera")
 
-    if imgui.collapsing_header("Scene"):
+    if layout.header("Scene", imgui.TreeNodeFlags_.default_open):
         names = list(BUILTIN_SCENES)
         current = names.index(r.scene.name) if r.scene.name in names else -1
         changed, current = imgui.combo("built-in", current, names)
+        layout.check("built-in")
         if changed:
             v.load_scene(names[current])
         _, v.scene_file = imgui.input_text("file", v.scene_file)
-        if imgui.button("open file"):
+        layout.check("file")
+        opened = imgui.button("open file")
+        layout.check("open file")
+        if opened:
             v.load_scene(v.scene_file)
 
-    if v.selected is not None and imgui.collapsing_header("Selected", imgui.TreeNodeFlags_.default_open):
-        _material_editor(imgui, v)
+    if v.selected is not None and layout.header("Selected", imgui.TreeNodeFlags_.default_open):
+        _material_editor(imgui, v, layout)
 
-    if imgui.collapsing_header("Screenshots", imgui.TreeNodeFlags_.default_open):
+    if layout.header("Screenshots", imgui.TreeNodeFlags_.default_open):
         changed, folder = imgui.input_text("folder", str(v.screenshot_dir))
+        layout.check("folder")
         if changed:
             from pathlib import Path
             v.screenshot_dir = Path(folder)
-        if imgui.button("screenshot (P)"):
+        pressed = imgui.button("screenshot (P)")
+        layout.check("screenshot (P)")
+        if pressed:
             v.screenshot()
-    if v.message:
-        imgui.text_wrapped(v.message)
+    imgui.pop_item_width()
+    pos, size = imgui.get_window_pos(), imgui.get_window_size()
+    v.panel_rect = (pos.x, pos.y, size.x, size.y)
+    imgui.end()
+
+
+def draw_help(v):
+    """The keyboard help overlay (H), centred in the window."""
+    imgui = v.imgui
+    io = imgui.get_io()
+    imgui.set_next_window_pos((io.display_size.x / 2, io.display_size.y / 2), imgui.Cond_.always, (0.5, 0.5))
+    imgui.set_next_window_bg_alpha(0.85)
+    flags = imgui.WindowFlags_.always_auto_resize | imgui.WindowFlags_.no_collapse
+    opened, v.show_help = imgui.begin("keys (H to close)", v.show_help, flags)
+    if opened:
+        key_column = max(imgui.calc_text_size(k).x for k, _ in KEYS) + 2 * imgui.get_style().item_spacing.x
+        for key, what in KEYS:
+            imgui.text(key)
+            imgui.same_line(key_column)
+            imgui.text(what)
     imgui.end()

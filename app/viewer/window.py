@@ -1,28 +1,46 @@
-"""The viewer's window and loop. Each frame: poll input, move the camera, add samples through the
-core Renderer within a time budget, copy the accumulation buffer to a display texture (through
-the host; see `display_path`), draw it with shaders/display.frag, then the imgui panel."""
+"""The viewer's window and loop. The window never waits for the renderer: each frame polls input,
+moves the camera, lets app.render.Progressive collect finished launches and queue new ones
+(bands of rows sized to a fraction of a frame), and shows the newest image that has reached the
+host (app.display: half floats, drawn by shaders/display.frag), then the imgui panel. While the
+camera rests the image is denoised (app.denoise) in a worker thread, every time its samples
+have doubled."""
 
 import datetime
+import math
 import os
 import sys
 import time
+from collections import deque
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
+import pyopencl as cl
 
+from app.display import Display
 from app.errors import UserError
-from app.render import next_launch_size
-from app.renderer import Renderer
+from app.render import Progressive
+from app.renderer import Renderer, aov_means, per_pixel_mean
 from app.resources import resource_dir
 from app.scene import load_scene
 from app.viewer.controls import FlyControls, pick_ray
-from app.viewer.panel import draw_panel
+from app.viewer.panel import draw_help, draw_panel
 
-FRAME_BUDGET = 1 / 40          # seconds of kernel work per frame: keeps the window above 30 fps
-PREVIEW_SCALE = 4              # while moving, render at 1/4 of the resolution (as Cycles does)
-REST_DELAY = 0.25              # seconds without a move before returning to full resolution
-UPLOAD_INTERVAL = 1 / 30       # the host copy to the display texture runs at most this often
+LAUNCH_BUDGET = 1 / 120        # device seconds per launch: a reset waits for at most two
+MOVE_BUDGET = 1 / 30           # device seconds for a whole preview pass while the camera moves
+MAX_PREVIEW_SCALE = 16         # the coarsest preview: 1/16 of the resolution on each axis
+REST_DELAY = 0.2               # seconds without a move before returning to full resolution
+UPLOAD_INTERVAL = 0.1          # at rest the noisy image reaches the screen at most this often
+                               # (while moving, each preview pass as soon as it is done)
+DENOISE_QUALITY = {"CPU": "fast", "CUDA": "high"}   # OIDN's preset for the viewer, by its device:
+                               # on two cores "fast" denoises 1280x720 in 0.35 s, "high" in 0.65 s
 PROGRESS_AFTER = 1.0           # seconds before a BVH build shows its progress
+FRAME_RATE = 60                # turns of the loop per second at most: the window's work leaves
+                               # the rest of the CPU to the renderer (PoCL) and the denoiser
+SETTLE = 0.3                   # seconds of redrawing after input, for the panel to answer it
+STATUS_INTERVAL = 0.25         # the status line's figures are redrawn at least this often
+FRAME_TIMES = 600              # frames whose durations the viewer keeps (frame_times)
+SCREEN_FILL = 0.9              # the largest share of the screen a new window takes
 
 
 def no_display_message() -> str:
@@ -45,8 +63,33 @@ def require_display():
         raise UserError(no_display_message())
 
 
+def fit_window(width: int, height: int, screen: tuple) -> tuple:
+    """A window size for a width x height image: the image's own size, scaled down (keeping its
+    aspect ratio) to fit SCREEN_FILL of the screen's (w, h) work area."""
+    scale = min(1.0, SCREEN_FILL * screen[0] / width, SCREEN_FILL * screen[1] / height)
+    return max(int(width * scale), 1), max(int(height * scale), 1)
+
+
+def image_extent(image: tuple, window: tuple) -> tuple:
+    """The share (x, y) of a window that an image fills when shown whole with its aspect ratio,
+    centred, the rest bars."""
+    ratio = (image[0] / image[1]) / (window[0] / window[1])
+    return (1.0, 1.0 / ratio) if ratio > 1 else (ratio, 1.0)
+
+
+def preview_scale(seconds_per_pixel: float, width: int, height: int) -> int:
+    """How much to divide each axis of the image by while the camera moves, so that a pass
+    takes about MOVE_BUDGET on the device (Cycles' adaptive resolution)."""
+    if seconds_per_pixel is None:
+        return 4
+    return int(min(max(math.ceil(math.sqrt(seconds_per_pixel * width * height / MOVE_BUDGET)), 1),
+                   MAX_PREVIEW_SCALE))
+
+
 class Viewer:
-    def __init__(self, backend, scene, width=1280, height=720, screenshot_dir="screenshots"):
+    def __init__(self, backend, scene, screenshot_dir="screenshots", window_size=None):
+        """Renders `scene` at its settings' size (pathtrace view --size sets it), in a window of
+        window_size (default: that size, fitted to the screen)."""
         require_display()
         import glfw
         import moderngl
@@ -56,11 +99,15 @@ class Viewer:
         self.glfw, self.imgui = glfw, imgui
         if not glfw.init():
             raise UserError(no_display_message())
+        if window_size is None:
+            monitor = glfw.get_primary_monitor()
+            screen = glfw.get_monitor_workarea(monitor)[2:] if monitor else (1280, 720)
+            window_size = fit_window(scene.settings.width, scene.settings.height, screen)
         glfw.window_hint(glfw.CONTEXT_VERSION_MAJOR, 3)
         glfw.window_hint(glfw.CONTEXT_VERSION_MINOR, 3)
         glfw.window_hint(glfw.OPENGL_PROFILE, glfw.OPENGL_CORE_PROFILE)
         glfw.window_hint(glfw.OPENGL_FORWARD_COMPAT, True)
-        self.window = glfw.create_window(width, height, f"pathtrace - {scene.name}", None, None)
+        self.window = glfw.create_window(*window_size, f"pathtrace - {scene.name}", None, None)
         if not self.window:
             glfw.terminate()
             raise UserError("pathtrace view: could not open an OpenGL 3.3 window on this display")
@@ -68,6 +115,7 @@ class Viewer:
         glfw.swap_interval(0)
         self.ctx = moderngl.create_context()
         self.imgui_context = imgui.create_context()
+        imgui.set_current_context(self.imgui_context)   # create_context() leaves an existing one current
         imgui.get_io().set_ini_filename("")
         self.gui = GlfwRenderer(self.window)
         self._chain_callbacks()
@@ -76,20 +124,37 @@ class Viewer:
         self.controls = FlyControls()
         self.exposure, self.tonemap = 0.0, "standard"
         self.screenshot_dir = Path(screenshot_dir)
-        self.message = ""
+        self.message, self.error = "", False    # the panel's last line, and whether it is an error
         self.scene_file = ""          # the panel's "open file" field
         self.selected = None
-        self.scale = 1
+        self.show_help = False        # the keyboard help overlay (H)
+        self.panel_rect = (0, 0, 0, 0)  # where the panel was drawn last (x, y, w, h)
+        self.clipped = set()          # labels of widgets the panel could not fit (panel.py)
+        self.widgets = {}             # where the panel drew each labelled widget (panel.py)
+        self.scale = 1                # the preview's divisor of the resolution (1: full)
         self.last_move = -1.0
-        self.frame_ms = 0.0
-        self.samples_per_second = 0.0
-        self.launch_spp = 1
-        self._last_upload = 0.0
-        self._uploaded_samples = -1
+        self.frame_times = deque(maxlen=FRAME_TIMES)   # seconds from one turn's start to the next's
+        self.draws = 0                # how many times the window was redrawn
+        self._events = 0              # input events so far (the callbacks count them)
+        self._redraw_until = 0.0
+        self._last_draw = 0.0
         self._last_time = time.perf_counter()
         self._cursor = None
-        fw, fh = glfw.get_framebuffer_size(self.window)
-        self.renderer = Renderer(backend, scene, max(fw, 1), max(fh, 1), self._build_progress(scene.name))
+        self.renderer = Renderer(backend, scene, progress=self._build_progress(scene.name))
+        self.size = (self.renderer.width, self.renderer.height)    # the full resolution
+        self.progressive = Progressive(self.renderer, LAUNCH_BUDGET)
+        self.display = Display(backend)
+        self.denoise = True
+        self._denoiser = None
+        self._worker = ThreadPoolExecutor(1, thread_name_prefix="denoise")
+        self._denoising = None        # (future, resets, samples) of the denoise under way
+        self._readback = None         # (event, arrays, resets, samples) read for the denoiser
+        self.denoised_at = None       # (resets, samples) of the denoised image shown, or None
+        self.denoise_seconds = None   # how long the last denoise took
+        self.denoise_error = None
+        self._shown = None            # (resets, passes, rows) of the noisy image last requested
+        self._new_image = False
+        self._last_upload = 0.0
         self._init_display()
 
     # --- set-up -----------------------------------------------------------------------------
@@ -104,12 +169,19 @@ class Viewer:
 
     @property
     def display_path(self) -> str:
-        """How the image reaches the screen. Sharing needs cl_khr_gl_sharing and a pyopencl built
-        with GL; where either is missing the accumulation buffer is copied through the host."""
-        return "host copy (no CL/GL sharing on this device)"
+        """How the image reaches the screen. PyPI's pyopencl has no CL/GL sharing, so the half
+        floats of app.display go through the host: mapped where the device shares its memory."""
+        return "device half floats, " + ("mapped" if self.display.shared else "copied") + " to a texture"
 
     def _chain_callbacks(self):
+        """Our handlers after imgui's; each counts an input event, which asks for redrawing."""
         glfw, gui = self.glfw, self.gui
+
+        def counted(handler):
+            def call(window, *args):
+                self._events += 1
+                handler(window, *args)
+            return call
 
         def on_key(window, key, scancode, action, mods):
             gui.keyboard_callback(window, key, scancode, action, mods)
@@ -117,18 +189,30 @@ class Viewer:
 
         def on_scroll(window, dx, dy):
             gui.scroll_callback(window, dx, dy)
-            if not self.imgui.get_io().want_capture_mouse:
+            if not self._gui_has_mouse():
                 self.controls.scroll(dy)
 
         def on_button(window, button, action, mods):
             gui.mouse_button_callback(window, button, action, mods)
             self.on_mouse_button(button, action)
 
-        glfw.set_key_callback(self.window, on_key)
-        glfw.set_scroll_callback(self.window, on_scroll)
-        glfw.set_mouse_button_callback(self.window, on_button)
+        glfw.set_key_callback(self.window, counted(on_key))
+        glfw.set_scroll_callback(self.window, counted(on_scroll))
+        glfw.set_mouse_button_callback(self.window, counted(on_button))
+        glfw.set_char_callback(self.window, counted(gui.char_callback))
+        glfw.set_cursor_pos_callback(self.window, counted(gui.mouse_callback))
+        glfw.set_window_size_callback(self.window, counted(gui.resize_callback))
+        glfw.set_window_refresh_callback(self.window, counted(lambda window: None))
 
     # --- input ------------------------------------------------------------------------------
+    def _gui_has_mouse(self) -> bool:
+        """Whether the mouse belongs to the panel: imgui says so (as of the last frame), or the
+        cursor is over the panel now (an event can arrive before imgui has seen the cursor
+        move there)."""
+        x, y = self.glfw.get_cursor_pos(self.window)
+        px, py, pw, ph = self.panel_rect
+        return self.imgui.get_io().want_capture_mouse or (px <= x < px + pw and py <= y < py + ph)
+
     def key_name(self, key):
         glfw = self.glfw
         names = {glfw.KEY_W: "W", glfw.KEY_A: "A", glfw.KEY_S: "S", glfw.KEY_D: "D", glfw.KEY_Q: "Q",
@@ -138,24 +222,41 @@ class Viewer:
     def on_key(self, key, action, mods):
         glfw = self.glfw
         name = self.key_name(key)
-        if action == glfw.PRESS and (key in (glfw.KEY_F12, glfw.KEY_P)) and not self.imgui.get_io().want_text_input:
+        typing = self.imgui.get_io().want_text_input
+        free = not self.imgui.get_io().want_capture_keyboard
+        if action == glfw.PRESS and key in (glfw.KEY_F12, glfw.KEY_P) and not typing:
             self.screenshot()
         elif action == glfw.PRESS and key == glfw.KEY_ESCAPE:
             glfw.set_window_should_close(self.window, True)
-        elif name and action == glfw.PRESS and not self.imgui.get_io().want_capture_keyboard:
+        elif action == glfw.PRESS and key == glfw.KEY_H and free:
+            self.show_help = not self.show_help
+        elif action == glfw.PRESS and key == glfw.KEY_R and free:
+            self.reset_camera()
+        elif name and action == glfw.PRESS and free:
             self.controls.held.add(name)
         elif name and action == glfw.RELEASE:
             self.controls.held.discard(name)
 
     def on_mouse_button(self, button, action):
         glfw = self.glfw
-        if self.imgui.get_io().want_capture_mouse:
+        if self._gui_has_mouse():
             return                                   # a click on the GUI never moves the camera
         if button == glfw.MOUSE_BUTTON_LEFT and action == glfw.PRESS:
-            x, y = glfw.get_cursor_pos(self.window)
-            w, h = glfw.get_window_size(self.window)
-            o, d = pick_ray(self.renderer.camera, w, h, x, y)
-            self.selected = self.renderer.pick(o, d)
+            point = self.image_point(*glfw.get_cursor_pos(self.window))
+            if point is not None:
+                w, h = self.size
+                o, d = pick_ray(self.renderer.camera, w, h, *point)
+                self.selected = self.renderer.pick(o, d)
+
+    def image_point(self, x: float, y: float):
+        """The image pixel (x, y), at full resolution, under window point (x, y); None on the bars."""
+        ww, wh = self.glfw.get_window_size(self.window)
+        ex, ey = image_extent(self.size, (ww, wh))
+        u = (x / ww - 0.5) / ex + 0.5
+        v = (y / wh - 0.5) / ey + 0.5
+        if not (0 <= u < 1 and 0 <= v < 1):
+            return None
+        return u * self.size[0], v * self.size[1]
 
     def _mouse_look(self):
         glfw = self.glfw
@@ -169,19 +270,31 @@ class Viewer:
         return delta
 
     # --- what changes the image ------------------------------------------------------------
+    def reset_camera(self):
+        """R: back to the scene's own camera."""
+        self.renderer.set_camera(self.renderer.scene.camera)
+        self.last_move = time.perf_counter()
+
+    def set_message(self, text: str, error: bool = False):
+        """The panel's status line; errors are also printed, for the terminal and its log."""
+        self.message, self.error = text, error
+        print(f"pathtrace: {text}", file=sys.stderr)
+
     def load_scene(self, name: str):
-        """Opens a scene; whatever goes wrong is shown in the panel and printed, and the window
-        keeps the scene it had."""
+        """Opens a scene, at its own size; whatever goes wrong is shown in the panel and
+        printed, and the window keeps the scene it had."""
         try:
             scene = load_scene(name)
             self.renderer.set_scene(scene, self._build_progress(scene.name))
+            self.renderer.resize(scene.settings.width, scene.settings.height)
         except Exception as e:   # a viewer must outlive any bad file, ours or a library's error
-            self.message = str(e) if isinstance(e, UserError) else f"cannot open {name}: {type(e).__name__}: {e}"
-            print(f"pathtrace: {self.message}", file=sys.stderr)
+            self.set_message(str(e) if isinstance(e, UserError) else
+                             f"cannot open {name}: {type(e).__name__}: {e}", error=True)
             return
+        self.size = (scene.settings.width, scene.settings.height)
         self.selected = None
         self.glfw.set_window_title(self.window, f"pathtrace - {scene.name}")
-        self.message = f"loaded {scene.name}"
+        self.set_message(f"loaded {scene.name}")
 
     def _build_progress(self, name: str):
         """A progress callback for a scene's BVH build: once it has taken PROGRESS_AFTER seconds,
@@ -209,13 +322,19 @@ class Viewer:
 
     # --- the loop ---------------------------------------------------------------------------
     def frame(self):
+        """One turn of the loop. Input is read and the renderer fed every turn; the window is
+        redrawn only when there is something new to show (an image, input that the panel may
+        answer, or the status line's figures every STATUS_INTERVAL): on a CPU device, drawing
+        with Mesa's llvmpipe takes the cores that render."""
         glfw = self.glfw
         glfw.make_context_current(self.window)
         self.imgui.set_current_context(self.imgui_context)
+        events = self._events
         glfw.poll_events()
-        self.gui.process_inputs()
         now = time.perf_counter()
         dt, self._last_time = now - self._last_time, now
+        if self._events != events:
+            self.redraw_soon()
 
         camera = self.renderer.camera
         dx, dy = self._mouse_look()
@@ -223,47 +342,147 @@ class Viewer:
         if self.controls.update(camera, dt, dx, dy, fast):
             self.renderer.set_camera(camera)
             self.last_move = now
+        self._set_resolution(now - self.last_move < REST_DELAY)
+        self.progressive.step()
+        new_image = self._update_image(now)
+        if new_image or now < self._redraw_until or now - self._last_draw >= STATUS_INTERVAL:
+            self._redraw()
+            self._last_draw = now
+        spare = 1 / FRAME_RATE - (time.perf_counter() - now)
+        if spare > 0:
+            time.sleep(spare)
+        self.frame_times.append(time.perf_counter() - now)
+
+    def redraw_soon(self):
+        """Asks for the window to be redrawn over the next SETTLE seconds (after a change made
+        other than through input, which asks by itself)."""
+        self._redraw_until = time.perf_counter() + SETTLE
+
+    def _redraw(self):
+        glfw = self.glfw
+        self.gui.process_inputs()
         fw, fh = glfw.get_framebuffer_size(self.window)
         if fw > 0 and fh > 0:
-            self.scale = PREVIEW_SCALE if now - self.last_move < REST_DELAY else 1
-            self.renderer.resize(max(fw // self.scale, 1), max(fh // self.scale, 1))
-            self._render_samples()
             self._draw(fw, fh)
         self.imgui.new_frame()
         draw_panel(self)
+        if self.show_help:
+            draw_help(self)
         self.imgui.render()
         self.gui.render(self.imgui.get_draw_data())
         glfw.swap_buffers(self.window)
-        self.frame_ms = 1000 * (time.perf_counter() - now)
+        self.draws += 1
 
-    def _render_samples(self):
-        """One launch, sized to take about FRAME_BUDGET seconds."""
+    def _set_resolution(self, moving: bool):
+        """Full resolution at rest; while moving, a preview coarse enough for a pass to take
+        about MOVE_BUDGET, chosen when the move starts."""
+        if moving and self.scale == 1:
+            self.scale = preview_scale(self.progressive.seconds_per_pixel, *self.size)
+        elif not moving:
+            self.scale = 1
+        # the denoiser's albedo and normal at full resolution, while denoising (kept when it
+        # is switched off, which then does not restart the image)
+        self.renderer.set_aovs(self.scale == 1 and (self.denoise or self.renderer.aovs))
+        self.renderer.resize(max(self.size[0] // self.scale, 1), max(self.size[1] // self.scale, 1))
+
+    def _update_image(self, now: float) -> bool:
+        """Brings the newest image towards the screen, never waiting: the noisy one while it is
+        all there is, the denoised one once the camera rests. Returns whether the texture
+        changed."""
+        r, p = self.renderer, self.progressive
+        self._new_image = False
+        # both on the CPU, the denoiser would share its cores with the renderer: the renderer
+        # pauses while it runs, so that the denoised image comes twice as soon
+        p.paused = self._denoising is not None and not self._denoising[0].done() \
+            and self._denoiser.device_name == "CPU" and self.backend.device.kind == "CPU"
+        self.display.poll(self._upload)
+        resting = self.scale == 1
+        if self.denoise and resting and self._denoiser_ready():
+            self._advance_denoise()
+        showing_denoised = self.denoised_at is not None and self.denoised_at[0] == r.resets
+        current = (r.resets, p.passes_done, p.rows_done)
+        due = not resting or now - self._last_upload >= UPLOAD_INTERVAL
+        if p.passes_done >= 1 and current != self._shown and due and not self.display.busy \
+                and not (self.denoise and showing_denoised):
+            self.display.request(r.buffer("sum"), r.width, r.height)
+            self._shown, self._last_upload = current, now
+        return self._new_image
+
+    def _denoiser_ready(self) -> bool:
+        if self._denoiser is None and self.denoise_error is None:
+            try:
+                from app.denoise import Denoiser
+                self._denoiser = Denoiser(lambda device: DENOISE_QUALITY[device])
+                # OIDN's first run at a size prepares it (a third of a second on two cores):
+                # done now, in the worker, it is not waited for when the camera stops
+                self._worker.submit(self._denoiser.prepare, self.size[1], self.size[0])
+            except Exception as e:     # no pyoidn, or OIDN cannot run here: say so, keep going
+                self.denoise_error = f"denoiser unavailable: {e}"
+                self.set_message(self.denoise_error, error=True)
+        return self._denoiser is not None
+
+    def _advance_denoise(self):
+        """One step of denoising, never waiting: read the image back once its passes have doubled
+        since the last denoise, hand it to the worker thread when it has arrived, and show
+        the result when the worker is done. Results of an image since reset are dropped."""
+        r, p = self.renderer, self.progressive
+        if self._denoising is not None and self._denoising[0].done():
+            future, resets, samples = self._denoising
+            self._denoising = None
+            try:
+                image, seconds = future.result()
+            except RuntimeError as e:
+                self.denoise_error = str(e)
+                self.set_message(f"denoising failed: {e}", error=True)
+                self.denoise = False
+                return
+            if resets == r.resets:
+                self.denoised_at, self.denoise_seconds = (resets, samples), seconds
+                self._upload(image.astype(np.float16))
+                self._shown = None            # the noisy image is no longer what is shown
+        if self._readback is not None:
+            event, arrays, resets, samples = self._readback
+            if event.command_execution_status != cl.command_execution_status.COMPLETE:
+                return
+            self._readback = None
+            if resets == r.resets and self._denoising is None:
+                future = self._worker.submit(self._denoise_job, *arrays)
+                self._denoising = (future, resets, samples)
+            return
+        if self._denoising is not None or p.passes_done < 1:
+            return
+        last = self.denoised_at[1] if self.denoised_at and self.denoised_at[0] == r.resets else 0
+        if p.passes_done >= 2 * last:
+            event, arrays = r.read_async(("sum", "albedo_sum", "normal_sum"))
+            self._readback = (event, arrays, r.resets, p.passes_done)
+
+    def _denoise_job(self, sums, albedo_sum, normal_sum):
+        """In the worker thread: the means, then OIDN (which runs outside the GIL)."""
         start = time.perf_counter()
-        self.renderer.add_samples(self.launch_spp)
-        self.renderer.finish()
-        elapsed = time.perf_counter() - start
-        r = self.renderer
-        self.samples_per_second = r.width * r.height * self.launch_spp / max(elapsed, 1e-9)
-        self.launch_spp = next_launch_size(self.launch_spp, elapsed, FRAME_BUDGET)
+        albedo, normal = aov_means(albedo_sum, normal_sum)
+        image = self._denoiser(per_pixel_mean(sums), albedo, normal)
+        return image, time.perf_counter() - start
+
+    def _upload(self, pixels: np.ndarray):
+        """(H, W, 4 or 3) half-float radiance into the display texture."""
+        self._new_image = True
+        h, w, channels = pixels.shape
+        if self.texture is None or self.texture.size != (w, h) or self.texture.components != channels:
+            if self.texture is not None:
+                self.texture.release()
+            self.texture = self.ctx.texture((w, h), channels, dtype="f2")
+        self.texture.write(np.ascontiguousarray(pixels))
 
     def _draw(self, fw, fh):
-        r = self.renderer
-        now = time.perf_counter()
-        stale = self.texture is None or self.texture.size != (r.width, r.height)
-        if stale or (r.samples != self._uploaded_samples and now - self._last_upload >= UPLOAD_INTERVAL):
-            if stale:
-                if self.texture is not None:
-                    self.texture.release()
-                self.texture = self.ctx.texture((r.width, r.height), 4, dtype="f4")
-                self._host_copy = np.empty((r.height, r.width, 4), np.float32)
-            self.texture.write(r.read_sum(out=self._host_copy))
-            self._last_upload, self._uploaded_samples = now, r.samples
         self.ctx.viewport = (0, 0, fw, fh)
-        self.ctx.clear(0, 0, 0)
+        self.ctx.clear(0.08, 0.08, 0.08)
+        if self.texture is None:
+            return
         self.texture.use(0)
-        self.program["accumulation"] = 0
+        self.program["radiance"] = 0
         self.program["exposure"] = self.exposure
         self.program["curve"] = 1 if self.tonemap == "aces" else 0
+        self.program["extent"] = image_extent(self.size, (fw, fh))
         self.vao.render(mode=self.ctx.TRIANGLE_STRIP)
 
     def run(self, frames=None):
@@ -273,24 +492,32 @@ class Viewer:
             count += 1
 
     def screenshot(self):
-        """Writes the displayed image (PNG, tonemapped as shown) and the mean radiance (EXR)."""
-        from app.image_io import write_image
+        """Writes the image as shown: tonemapped (PNG) and as radiance (EXR); where it is the
+        denoised one, the EXR keeps the noisy one as its layer "noisy". The pass under way is
+        finished first, so that every pixel holds the same samples."""
+        from app.image_io import Output, write_images
+        self.progressive.finish_pass()
+        r = self.renderer
         stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S-%f")[:-3]
-        base = self.screenshot_dir / f"pathtrace-{self.renderer.scene.name}-{stamp}"
+        base = self.screenshot_dir / f"pathtrace-{r.scene.name}-{stamp}"
+        noisy = r.mean()
+        shown, layers = noisy, {}
+        if self.denoised_at is not None and self.denoised_at[0] == r.resets and self.denoise and self.scale == 1:
+            shown, layers = self._denoiser(noisy, *r.read_aovs()), {"noisy": noisy}
+        outputs = [Output(base.with_suffix(".png"), shown), Output(base.with_suffix(".exr"), shown, layers)]
         try:
             self.screenshot_dir.mkdir(parents=True, exist_ok=True)
-            image = self.renderer.mean()
-            paths = [base.with_suffix(".png"), base.with_suffix(".exr")]
-            write_image(paths[0], image, self.exposure, self.tonemap, what="screenshot")
-            write_image(paths[1], image, what="screenshot")
+            write_images(outputs, self.exposure, self.tonemap, what="screenshot")
         except (UserError, OSError) as e:
-            self.message = f"screenshot failed: {e}"
+            self.set_message(f"screenshot failed: {e}", error=True)
             return None
-        self.message = f"saved {paths[0]} and .exr ({self.renderer.samples} spp)"
-        print(self.message, file=sys.stderr)
+        paths = [out.path for out in outputs]
+        self.set_message(f"saved {paths[0]} and .exr ({r.samples} spp{', denoised' if layers else ''})")
         return paths
 
     def close(self):
+        self._worker.shutdown(wait=True)
+        self.renderer.finish()
         self.glfw.make_context_current(self.window)
         self.imgui.set_current_context(self.imgui_context)
         self.gui.shutdown()

@@ -1,0 +1,88 @@
+"""Denoising with Intel Open Image Denoise (OIDN), through pyoidn, whose wheel bundles OIDN with
+its CPU device and its CUDA one. The "RT" filter (a U-Net trained on path-traced images) takes
+the noisy HDR radiance with the first non-specular surface's albedo and normal
+(kernels/aovs.cl) as guides, which keep texture and geometric edges sharp.
+
+A Denoiser owns one OIDN device and filter and reuses them, since creating a filter costs more
+than running it. OIDN runs outside the GIL (pyoidn calls it through cffi), so a window can
+denoise in a worker thread and stay smooth."""
+
+import numpy as np
+
+QUALITIES = ("high", "balanced", "fast")   # OIDN's quality presets: slower is sharper
+
+
+def _oidn():
+    """pyoidn, or one line saying how to get it."""
+    try:
+        import pyoidn
+    except ImportError as e:          # an install without it (it is a dependency)
+        from app.errors import UserError
+        raise UserError(f"denoising needs pyoidn (pip install pyoidn): {e}") from None
+    return pyoidn
+
+
+def _finite_nonnegative(image: np.ndarray) -> np.ndarray:
+    """OIDN's HDR input must be finite and non-negative."""
+    return np.ascontiguousarray(np.nan_to_num(np.maximum(image, 0.0), posinf=65504.0), np.float32)
+
+
+class Denoiser:
+    def __init__(self, quality="high"):
+        """quality: one of QUALITIES, or a function of the device's name ("CUDA" or "CPU") that
+        gives one. The device is OIDN's CUDA one where a CUDA GPU is present, else its CPU one."""
+        oidn = _oidn()
+        self._oidn = oidn
+        gpu = oidn.Device.is_cuda_available()
+        self.device_name = "CUDA" if gpu else "CPU"
+        if callable(quality):
+            quality = quality(self.device_name)
+        self._device = oidn.Device(oidn.OIDN_DEVICE_TYPE_CUDA if gpu else oidn.OIDN_DEVICE_TYPE_CPU)
+        self._device.commit()
+        self._check("creating the device")
+        self._filter = oidn.Filter(self._device, oidn.OIDN_FILTER_TYPE_RT)
+        self._filter.set_bool("hdr", True)
+        self._filter.set_quality({"high": oidn.OIDN_QUALITY_HIGH, "balanced": oidn.OIDN_QUALITY_BALANCED,
+                                  "fast": oidn.OIDN_QUALITY_FAST}[quality])
+        self._size = None
+
+    def _check(self, what: str):
+        error = self._device.get_error()
+        if error:
+            raise RuntimeError(f"Open Image Denoise, {what}: {error}")
+
+    def _bind(self, height: int, width: int):
+        """Device buffers for the four images, bound to the filter (again when the size changes)."""
+        if self._size == (height, width):
+            return
+        oidn, nbytes = self._oidn, height * width * 12
+        self._buffers = {name: oidn.Buffer(self._device, nbytes)
+                         for name in (oidn.OIDN_IMAGE_COLOR, oidn.OIDN_IMAGE_ALBEDO,
+                                      oidn.OIDN_IMAGE_NORMAL, oidn.OIDN_IMAGE_OUTPUT)}
+        for name, buffer in self._buffers.items():
+            self._filter.set_image(name, buffer, oidn.OIDN_FORMAT_FLOAT3, width, height)
+        self._filter.commit()
+        self._check("preparing the filter")
+        self._size = (height, width)
+
+    def prepare(self, height: int, width: int):
+        """Runs once on black images of this size: OIDN's first run at a size is slower."""
+        black = np.zeros((height, width, 3), np.float32)
+        self(black, black, black)
+
+    def __call__(self, color: np.ndarray, albedo: np.ndarray, normal: np.ndarray) -> np.ndarray:
+        """The denoised (H, W, 3) float32 radiance, from the noisy radiance, the albedo in [0, 1]
+        and the normal (each (H, W, 3))."""
+        oidn = self._oidn
+        h, w, _ = color.shape
+        self._bind(h, w)
+        nbytes = h * w * 12
+        for name, image in ((oidn.OIDN_IMAGE_COLOR, _finite_nonnegative(color)),
+                            (oidn.OIDN_IMAGE_ALBEDO, np.ascontiguousarray(albedo, np.float32)),
+                            (oidn.OIDN_IMAGE_NORMAL, np.ascontiguousarray(normal, np.float32))):
+            self._buffers[name].write(0, nbytes, image)
+        self._filter.execute()
+        self._check("denoising")
+        out = np.empty((h, w, 3), np.float32)
+        self._buffers[oidn.OIDN_IMAGE_OUTPUT].read(0, nbytes, out)
+        return out

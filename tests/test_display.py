@@ -1,0 +1,91 @@
+"""The viewer's way to the screen, headless: kernels/display.cl's half floats against the mean
+computed on the host, mapped and copied paths alike; and app.render.Progressive, which feeds a
+renderer in bands without ever waiting for it."""
+
+import threading
+
+import numpy as np
+import pyopencl as cl
+import pytest
+
+from app.display import Display
+from app.render import Progressive
+from app.renderer import Renderer, per_pixel_mean
+from app.scene import load_scene
+
+
+@pytest.fixture(scope="module")
+def renderer(backend):
+    return Renderer(backend, load_scene("simple"), 40, 24)
+
+
+@pytest.mark.parametrize("shared", [True, False])
+def test_display_half_floats_are_the_per_pixel_mean(backend, shared):
+    """rgb / w per pixel to half precision; no sample yet: black; beyond half's range: clamped
+    to its largest value, not infinite."""
+    h, w = 7, 9
+    rng = np.random.default_rng(1)
+    sums = np.concatenate([rng.uniform(0, 50, (h, w, 3)), rng.integers(1, 9, (h, w, 1))], -1).astype(np.float32)
+    sums[0, 0, 3] = 0.0
+    sums[1, 1, :3], sums[1, 1, 3] = 1e9, 1.0
+    buffer = cl.Buffer(backend.context, cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR, hostbuf=sums)
+    display, got = Display(backend, shared), []
+    display.request(buffer, w, h)
+    display.wait(lambda pixels: got.append(pixels.astype(np.float32)))
+    expected = per_pixel_mean(sums)
+    expected[1, 1] = 65504.0
+    np.testing.assert_allclose(got[0][..., :3], expected, rtol=1e-3)
+    assert np.all(got[0][0, 0, :3] == 0) and np.all(got[0][..., 3] == 1)
+
+
+def test_bands_add_the_samples_one_launch_would(backend, renderer):
+    """A pass split into bands of rows draws the same sample indices: bit-identical sums."""
+    r = renderer
+    r.reset()
+    r.add_samples(3)
+    whole = r.read_sum().copy()
+    r.reset()
+    for first in range(0, r.height, 5):
+        r.add_samples(3, rows=(first, min(first + 5, r.height)))
+    assert r.samples == 3
+    np.testing.assert_array_equal(r.read_sum(), whole)
+
+
+def test_progressive_never_waits_and_counts_whole_passes(backend, renderer):
+    """With the device held up (a barrier on an event only the test completes), step() still
+    returns, having queued its launches, and counts nothing as done; released, the passes it
+    finished hold exactly the samples whole-image launches would have added."""
+    r = renderer
+    r.reset()
+    p = Progressive(r, budget=1e-4)           # tiny launches: several bands a pass
+    gate = cl.UserEvent(backend.context)
+    cl.enqueue_barrier(backend.queue, wait_for=[gate])
+    returned = threading.Event()
+    worker = threading.Thread(target=lambda: (p.step(), returned.set()))
+    worker.start()
+    assert returned.wait(10), "step() waited for the device"
+    assert p.passes_done == 0 and p.rows_done == 0
+    gate.set_status(cl.command_execution_status.COMPLETE)
+    worker.join()
+    while p.passes_done < 2:
+        p.step()
+    p.finish_pass()
+    assert p.passes_done == r.samples >= 2 and p.progress == 0.0
+    counts = r.read_sum()[..., 3]
+    assert np.all(counts == r.samples)
+    banded = r.read_sum().copy()
+    reference = Renderer(backend, r.compiled, r.width, r.height)
+    reference.add_samples(r.samples)
+    np.testing.assert_allclose(reference.read_sum(), banded, rtol=1e-5, atol=1e-6)
+
+
+def test_a_reset_restarts_the_pass(backend, renderer):
+    r = renderer
+    p = Progressive(r, budget=1e-4)
+    while p.passes_done < 1:
+        p.step()
+    r.reset()
+    p.step()
+    assert p.passes_done == 0
+    p.finish_pass()
+    assert np.all(r.read_sum()[..., 3] == r.samples)
