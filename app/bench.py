@@ -169,26 +169,19 @@ def _median_ms(step, repeats: int = 30) -> float:
 
 
 def run_display(device_specs, width, height, log=print):
-    """The image's way from the device to the host each frame: the float4 sums read back (what
-    the viewer copied before app.display), and app.display's half floats, mapped where the
-    device shares memory with the host and copied otherwise. The texture upload that follows is
-    OpenGL's and is not timed here."""
-    import numpy as np
-
-    from app.display import Display
+    """The image's way from the device to the host each frame, each of app.display's ways (the
+    texture upload that follows is OpenGL's and is not timed here)."""
+    from app.display import MODES, Display
     results = []
     for backend in choose_devices(device_specs):
         r = Renderer(backend, load_scene("simple"), width, height)
         r.add_samples(1)
         r.finish()
-        host = np.empty((height, width, 4), np.float32)
-        steps = {"float sums, read back": lambda: r.read_sum(out=host)}
-        for shared in {backend.device.device.host_unified_memory, False}:
-            display = Display(backend, shared)
-            steps[f"half floats, {'mapped' if shared else 'copied'}"] = \
-                lambda d=display: (d.request(r.buffer("sum"), width, height), d.wait(lambda p: None))
-        for what, step in steps.items():
-            t = Timing(what, backend.device.describe(), width, height, _median_ms(step))
+        for mode in MODES:
+            display = Display(backend, mode)
+            step = lambda: (display.request(r.buffer("sum"), width, height), display.wait(lambda p: None))  # noqa: E731
+            chosen = " (default)" if Display(backend).mode == mode else ""
+            t = Timing(f"display: {mode}{chosen}", backend.device.describe(), width, height, _median_ms(step))
             log(format_timing(t))
             results.append(t)
     return results

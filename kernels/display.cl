@@ -1,8 +1,9 @@
-/* The image on its way to a window: the mean radiance of each pixel as half floats, 8 bytes a
- * pixel for the host to copy instead of the 16 of the float sums. The window's shader
- * (shaders/display.frag) then applies exposure, the tone curve and sRGB, so that changing
- * them needs no new copy. (Tonemapping to 8 bits here would halve the copy again, but the sRGB
- * curve's pow costs PoCL 50 ms a frame at 1280x720 on two cores; this kernel takes 0.5 ms.) */
+/* The image on its way to a window over a discrete GPU's bus (app/display.py): the mean
+ * radiance of each pixel as half floats, 8 bytes a pixel for the host to copy instead of the 16
+ * of the float sums, with a count of 1 in w. The window's shader (shaders/display.frag) then
+ * applies exposure, the tone curve and sRGB, so that changing them needs no new copy.
+ * (Tonemapping to 8 bits here would halve the copy again, but the sRGB curve's pow costs PoCL
+ * 50 ms a frame at 1280x720 on two cores; this kernel takes 0.5 ms.) */
 
 /* One work-item per pixel. sum: radiance sums in rgb and the pixel's sample count in w (while a
  * pass is under way its rows hold one sample more than the others); a pixel with no sample yet

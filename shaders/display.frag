@@ -1,7 +1,8 @@
 #version 330 core
-// The mean radiance as the user sees it: exposure, tone curve, sRGB. The same steps as
+// The image as the user sees it: mean = rgb / a, exposure, tone curve, sRGB. The same steps as
 // app/tonemap.py, which writes the PNG screenshots.
-uniform sampler2D radiance;       // rgb: mean radiance (kernels/display.cl, or the denoised image)
+uniform sampler2D radiance;       // rgb: radiance summed over a samples (app/display.py: the
+                                  // accumulation buffer; or a mean, or the denoised image, a = 1)
 uniform float exposure;           // stops
 uniform int curve;                // 0: standard (clip), 1: ACES fit (Narkowicz 2015)
 in vec2 uv;
@@ -20,7 +21,8 @@ vec3 linear_to_srgb(vec3 x)
 
 void main()
 {
-    vec3 x = texture(radiance, uv).rgb * exp2(exposure);
+    vec4 t = texture(radiance, uv);
+    vec3 x = (t.a > 0.0 ? t.rgb / t.a : vec3(0.0)) * exp2(exposure);
     if (curve == 1)
         x = aces_fit(x);
     color = vec4(linear_to_srgb(x), 1.0);

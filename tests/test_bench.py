@@ -52,6 +52,6 @@ def test_display_and_denoise_timings(tmp_path):
     assert r.returncode == 0, r.stderr
     rows = json.loads(out.read_text())["results"]
     steps = [row["what"] for row in rows]
-    assert steps[0] == "float sums, read back" and "half floats, copied" in steps
+    assert steps[:2] == ["display: sums (default)", "display: half"]     # PoCL shares the host's memory
     assert [s for s in steps if s.startswith("denoise")] == ["denoise, high", "denoise, balanced", "denoise, fast"]
     assert all(row["milliseconds"] > 0 and (row["width"], row["height"]) == (64, 36) for row in rows)

@@ -1,6 +1,6 @@
-"""The viewer's way to the screen, headless: kernels/display.cl's half floats against the mean
-computed on the host, mapped and copied paths alike; and app.render.Progressive, which feeds a
-renderer in bands without ever waiting for it."""
+"""The viewer's way to the screen, headless: what app.display brings to the host (the float sums,
+or kernels/display.cl's half floats) against the mean computed on the host; and
+app.render.Progressive, which feeds a renderer in bands without ever waiting for it."""
 
 import threading
 
@@ -8,7 +8,7 @@ import numpy as np
 import pyopencl as cl
 import pytest
 
-from app.display import Display
+from app.display import MODES, Display
 from app.render import Progressive
 from app.renderer import Renderer, per_pixel_mean
 from app.scene import load_scene
@@ -19,23 +19,32 @@ def renderer(backend):
     return Renderer(backend, load_scene("simple"), 40, 24)
 
 
-@pytest.mark.parametrize("shared", [True, False])
-def test_display_half_floats_are_the_per_pixel_mean(backend, shared):
-    """rgb / w per pixel to half precision; no sample yet: black; beyond half's range: clamped
-    to its largest value, not infinite."""
+@pytest.mark.parametrize("mode", MODES)
+def test_each_display_way_gives_the_per_pixel_mean(backend, mode):
+    """rgb / a of what reaches the host is the mean of each pixel (to half precision for half
+    floats); a pixel with no sample yet is black; beyond half's range, half floats clamp to its
+    largest value rather than become infinite."""
     h, w = 7, 9
     rng = np.random.default_rng(1)
     sums = np.concatenate([rng.uniform(0, 50, (h, w, 3)), rng.integers(1, 9, (h, w, 1))], -1).astype(np.float32)
     sums[0, 0, 3] = 0.0
     sums[1, 1, :3], sums[1, 1, 3] = 1e9, 1.0
     buffer = cl.Buffer(backend.context, cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR, hostbuf=sums)
-    display, got = Display(backend, shared), []
+    display, got = Display(backend, mode), []
     display.request(buffer, w, h)
-    display.wait(lambda pixels: got.append(pixels.astype(np.float32)))
+    display.wait(lambda pixels: got.append(pixels.astype(np.float64)))
+    a = got[0][..., 3:]
+    mean = np.divide(got[0][..., :3], a, out=np.zeros((h, w, 3)), where=a > 0)
     expected = per_pixel_mean(sums)
-    expected[1, 1] = 65504.0
-    np.testing.assert_allclose(got[0][..., :3], expected, rtol=1e-3)
-    assert np.all(got[0][0, 0, :3] == 0) and np.all(got[0][..., 3] == 1)
+    if mode == "half":
+        expected[1, 1] = 65504.0
+    np.testing.assert_allclose(mean, expected, rtol=1e-3)
+    assert np.all(mean[0, 0] == 0)
+
+
+def test_the_default_way_follows_the_memory(backend):
+    shared = backend.device.device.host_unified_memory
+    assert Display(backend).mode == ("sums" if shared else "half")
 
 
 def test_bands_add_the_samples_one_launch_would(backend, renderer):

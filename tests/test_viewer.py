@@ -193,12 +193,12 @@ def test_left_click_picks_the_sphere_under_the_cursor(viewer):
     xdo("click", 1)
     frames(v, 2)
     assert (v.selected.kind, v.selected.index) == ("sphere", 3)
-    samples = v.renderer.samples
+    resets = v.renderer.resets
     m = v.renderer.scene.materials.get(v.selected.material)
     assert m.type == "phong"
     m.params.update(rho_d=np.array([0.5, 0.1, 0.1]), rho_s=np.array([0.4, 0.4, 0.4]))
     v.edit_material(v.selected.material, m)
-    assert v.renderer.samples == 0 and samples > 0           # an edit resets
+    assert v.renderer.samples == 0 and v.renderer.resets == resets + 1     # an edit resets
     np.testing.assert_allclose(v.renderer.compiled.materials["p1"][v.selected.material, :3], 0.4)
 
 
@@ -246,16 +246,15 @@ def test_a_scene_that_fails_to_open_leaves_the_viewer_as_it_was(viewer, monkeypa
 
 @pytest.mark.parametrize("curve,exposure", [("standard", 0.0), ("aces", 0.5), ("standard", -1.0)])
 def test_the_display_shader_matches_tonemap(viewer, curve, exposure):
-    """shaders/display.frag (exposure, tone curve, sRGB, on the mean radiance that
-    kernels/display.cl writes as half floats) draws what app/tonemap.py writes, to one 8-bit
-    step, on a ramp of radiances from 0 to 4."""
+    """shaders/display.frag (mean = rgb / a, exposure, tone curve, sRGB) draws what
+    app/tonemap.py writes, to one 8-bit step, on a ramp of radiances from 0 to 4."""
     import moderngl
 
     from app.tonemap import to_8bit, tonemap
     v = viewer
     radiance = np.stack([np.linspace(0, 4, 64), np.linspace(0, 1, 64), np.linspace(0, 0.05, 64)], -1)[None]
-    pixels = np.concatenate([radiance, np.ones((1, 64, 1))], -1).astype(np.float16)
-    texture = v.ctx.texture((64, 1), 4, data=pixels.tobytes(), dtype="f2")
+    pixels = np.concatenate([radiance * 4, np.full((1, 64, 1), 4.0)], -1).astype(np.float32)  # 4 samples
+    texture = v.ctx.texture((64, 1), 4, data=pixels.tobytes(), dtype="f4")
     texture.filter = (moderngl.NEAREST, moderngl.NEAREST)
     target = v.ctx.simple_framebuffer((64, 1))
     try:
@@ -272,7 +271,7 @@ def test_the_display_shader_matches_tonemap(viewer, curve, exposure):
         v.ctx.screen.use()
         texture.release()
         target.release()
-    expected = to_8bit(tonemap(pixels[..., :3].astype(np.float64), exposure, curve))
+    expected = to_8bit(tonemap(radiance, exposure, curve))
     assert np.abs(drawn.astype(int) - expected).max() <= 1
 
 
@@ -307,7 +306,10 @@ def test_at_rest_the_denoised_image_is_shown_and_saved(viewer):
     while not (viewer.denoised_at and viewer.denoised_at[0] == viewer.renderer.resets):
         viewer.frame()
         assert time.perf_counter() - start < 30, "no denoised image within 30 s"
-    assert viewer.texture.size == (W, H) and viewer.texture.components == 3    # the denoised one
+    shown = np.frombuffer(viewer.texture.read(), np.float32).reshape(H, W, 4)
+    shown = shown[..., :3] / shown[..., 3:]
+    roughness = lambda image: np.abs(np.diff(image, axis=1)).mean()       # noqa: E731
+    assert roughness(shown) < 0.5 * roughness(viewer.renderer.mean())    # the smooth one is shown
     png, exr = viewer.screenshot()
     with OpenEXR.File(str(exr)) as f:
         channels = f.channels()
@@ -333,6 +335,27 @@ def test_resizing_the_window_keeps_the_render_size(viewer):
         frames(viewer, 1)
         if viewer.glfw.get_framebuffer_size(viewer.window) == (W, H):
             break
+
+
+def test_the_rotation_slider_reaches_a_full_turn(viewer):
+    """The environment's rotation takes any angle (the demo's is 200 degrees): a press near the
+    slider's right end sets over 300, and an edit resets the image."""
+    v = viewer
+    settle(v)
+    env = v.renderer.environment
+    x0, y0, x1, y1 = v.widgets["env rotation"]
+    label = v.imgui.calc_text_size("env rotation").x + v.imgui.get_style().item_inner_spacing.x
+    resets = v.renderer.resets
+    xdo("windowfocus", "--sync", window_id(v))
+    xdo("mousemove", "--window", window_id(v), int(x1 - label - 24), int((y0 + y1) / 2))
+    frames(v, 2)
+    xdo("mousedown", 1)           # a slider takes a press that lasts a frame, as a hand's does
+    frames(v, 3)
+    xdo("mouseup", 1)
+    frames(v, 2)
+    assert 300 < env.rotation < 360 and v.renderer.resets > resets      # (360 itself wraps to 0)
+    env.rotation = 0.0
+    v.renderer.reset()
 
 
 def test_the_window_fits_the_screen_and_keeps_the_image_aspect():
@@ -390,16 +413,15 @@ def test_the_window_stays_smooth_while_the_cpu_renders(display, backend, tmp_pat
         frames(v, 30)
         v.frame_times.clear()
         start = time.perf_counter()
-        click_widget(v, "folder")
-        frames(v, 2)
-        xdo("key", "End")
+        assert v.widgets["file"][3] < v.panel_rect[1] + v.panel_rect[3]      # in sight
+        click_widget(v, "file")
         frames(v, 2)
         typed = ""
         for char in "abcdefgh":
             xdo("type", char)
             v.frame()
             typed += char
-            assert str(v.screenshot_dir).endswith(typed), (str(v.screenshot_dir), typed)
+            assert v.scene_file == typed, (v.scene_file, typed)
         denoise = v.denoise
         click_widget(v, "denoise (Open Image Denoise)")
         frames(v, 2)

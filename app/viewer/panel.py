@@ -108,8 +108,13 @@ def _status(imgui, v):
     imgui.text_wrapped(f"{p.passes_done} spp + {p.progress:.0%} of the next, {rate:.2f} Msamples/s")
     size = f"{r.width}x{r.height}" + (f" (preview 1/{v.scale} of {v.size[0]}x{v.size[1]})" if v.scale > 1 else "")
     imgui.text_wrapped(size)
-    if v.denoise and v.denoised_at is not None and v.denoised_at[0] == r.resets and v.scale == 1:
+    # always one line, so that nothing below moves when the denoiser starts or stops
+    if not v.denoise:
+        imgui.text_wrapped("denoiser: off")
+    elif v.denoised_at is not None and v.denoised_at[0] == r.resets and v.scale == 1:
         imgui.text_wrapped(f"denoised at {v.denoised_at[1]} spp in {v.denoise_seconds:.2f} s")
+    else:
+        imgui.text_wrapped("denoiser: waits for the camera to rest and a whole pass")
     if v.message:
         if v.error:
             imgui.text_colored((1.0, 0.45, 0.4, 1.0), "error:")

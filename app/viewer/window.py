@@ -1,7 +1,7 @@
 """The viewer's window and loop. The window never waits for the renderer: each frame polls input,
 moves the camera, lets app.render.Progressive collect finished launches and queue new ones
 (bands of rows sized to a fraction of a frame), and shows the newest image that has reached the
-host (app.display: half floats, drawn by shaders/display.frag), then the imgui panel. While the
+host (app.display, drawn by shaders/display.frag), then the imgui panel. While the
 camera rests the image is denoised (app.denoise) in a worker thread, every time its samples
 have doubled."""
 
@@ -169,9 +169,9 @@ class Viewer:
 
     @property
     def display_path(self) -> str:
-        """How the image reaches the screen. PyPI's pyopencl has no CL/GL sharing, so the half
-        floats of app.display go through the host: mapped where the device shares its memory."""
-        return "device half floats, " + ("mapped" if self.display.shared else "copied") + " to a texture"
+        """How the image reaches the screen. PyPI's pyopencl has no CL/GL sharing, so app.display
+        copies it through the host."""
+        return {"sums": "float sums", "half": "half-float means"}[self.display.mode] + " copied to a texture"
 
     def _chain_callbacks(self):
         """Our handlers after imgui's; each counts an input event, which asks for redrawing."""
@@ -438,7 +438,7 @@ class Viewer:
                 return
             if resets == r.resets:
                 self.denoised_at, self.denoise_seconds = (resets, samples), seconds
-                self._upload(image.astype(np.float16))
+                self._upload(np.concatenate([image, np.ones_like(image[..., :1])], -1))
                 self._shown = None            # the noisy image is no longer what is shown
         if self._readback is not None:
             event, arrays, resets, samples = self._readback
@@ -464,13 +464,15 @@ class Viewer:
         return image, time.perf_counter() - start
 
     def _upload(self, pixels: np.ndarray):
-        """(H, W, 4 or 3) half-float radiance into the display texture."""
+        """(H, W, 4) float32 or float16 pixels (radiance in rgb, divided by a) into the display
+        texture."""
         self._new_image = True
-        h, w, channels = pixels.shape
-        if self.texture is None or self.texture.size != (w, h) or self.texture.components != channels:
+        h, w, _ = pixels.shape
+        dtype = "f2" if pixels.dtype == np.float16 else "f4"
+        if self.texture is None or self.texture.size != (w, h) or self.texture.dtype != dtype:
             if self.texture is not None:
                 self.texture.release()
-            self.texture = self.ctx.texture((w, h), channels, dtype="f2")
+            self.texture = self.ctx.texture((w, h), 4, dtype=dtype)
         self.texture.write(np.ascontiguousarray(pixels))
 
     def _draw(self, fw, fh):
