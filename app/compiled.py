@@ -12,7 +12,7 @@ import pyopencl as cl
 
 from app.bvh import BVH, build_bvh, primitive_boxes
 from app.errors import UserError, format_bytes
-from app.features import Features
+from app.features import Features, stack_size
 from app.lights import LightTable, build_light_table, emitted_power
 from app.materials import TAGS
 from app.scene.description import Scene
@@ -106,7 +106,7 @@ class CompiledScene:
         used = np.unique(self.materials["type"][np.unique(self.prim_material)])
         return Features(triangles=self.num_triangles > 0,
                         bsdfs=tuple(name for name, tag in TAGS.items() if tag in used),
-                        russian_roulette=russian_roulette)
+                        russian_roulette=russian_roulette, stack=stack_size(self.bvh.depth))
 
     def shape(self, prim: int) -> ShapeRef:
         """The description's shape that primitive `prim` (BVH order) belongs to."""

@@ -14,7 +14,17 @@ class Features:
     triangles: bool = True
     bsdfs: tuple = None                    # names of app.materials.BSDFS; None: all of them
     russian_roulette: str = "throughput"   # one of app.scene.description.RUSSIAN_ROULETTE
+    stack: int = 48                        # BVH traversal stack entries the tree can need
 
     def defines(self) -> tuple:
         return ((() if self.triangles else ("NO_TRIANGLES",))
-                + (f"RUSSIAN_ROULETTE=RR_{self.russian_roulette.upper()}",))
+                + (f"RUSSIAN_ROULETTE=RR_{self.russian_roulette.upper()}", f"BVH_STACK_SIZE={self.stack}"))
+
+
+def stack_size(binary_depth: int) -> int:
+    """Traversal stack entries for a tree whose binary form is `binary_depth` deep: its 4-wide
+    form has at most half as many levels and one more, and traversal pushes at most three
+    children per 4-wide node on its way down (kernels/bvh.cl); 48 at app/bvh.py's deepest.
+    Rounded up to a multiple of 8, so that scenes share programs; a small stack is private
+    memory a GPU need not reserve, hence occupancy."""
+    return min(48, max(8, -(-(3 * ((binary_depth + 1) // 2) + 3) // 8) * 8))

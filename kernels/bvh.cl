@@ -84,8 +84,11 @@ float4 intersect_leaves(const SceneData *sc, float4 t, int4 count, int4 index, f
 }
 
 /* app/bvh.py keeps the binary tree at most 30 levels deep, so the 4-wide one at most 15, and
- * traversal pushes at most three nodes per level. */
+ * traversal pushes at most three nodes per level: 48 entries. A scene's program is built with
+ * the size its own tree needs (app/features.py: stack_size). */
+#ifndef BVH_STACK_SIZE
 #define BVH_STACK_SIZE 48
+#endif
 
 /* The hit along o + t d, t in (0, t_max): the nearest one, or with any_hit (a constant at each
  * call, so the compiler builds two traversals) the first one found, which is all a shadow ray

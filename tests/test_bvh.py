@@ -269,3 +269,34 @@ def full_sweep_sah(lo, hi):
     idx = np.arange(len(lo))
     root = area(lo.min(axis=0), hi.max(axis=0))
     return build(idx) / root
+
+
+def most_pushes(nodes) -> int:
+    """The most entries kernels/bvh.cl's stack can hold on this tree: along each path from the
+    root, the inner children that a node pushes besides the one it visits next."""
+    def walk(node, held):
+        inner = [int(i) for i, c in zip(nodes["index"][node], nodes["count"][node]) if c == 0 and i >= 0]
+        if not inner:
+            return held
+        pushed = held + len(inner) - 1
+        return max(walk(child, pushed) for child in inner)
+    return walk(0, 0)
+
+
+@pytest.mark.parametrize("build", ["chain", "random", "ploc"])
+def test_the_stack_each_scene_gets_holds_its_tree(build, monkeypatch):
+    """app.features.stack_size, from the binary depth, bounds what traversal can push, for the
+    deepest tree app/bvh.py makes (a chain cut at MAX_DEPTH) and for random ones."""
+    from app.features import stack_size
+    rng = np.random.default_rng(5)
+    if build == "chain":
+        lo = np.column_stack([2.0 ** np.arange(60), np.zeros(60), np.zeros(60)]).astype(np.float32)
+        hi = lo + 1
+    else:
+        if build == "ploc":
+            monkeypatch.setattr(bvh_module, "TOP_WORK", 0)
+        lo = rng.uniform(-10, 10, (20000, 3)).astype(np.float32)
+        hi = lo + rng.uniform(0.01, 1, (20000, 3)).astype(np.float32)
+    bvh = build_bvh(lo, hi)
+    assert most_pushes(bvh.nodes) <= stack_size(bvh.depth) <= 48
+    assert stack_size(MAX_DEPTH) == 48 and stack_size(1) == 8

@@ -101,7 +101,9 @@ def test_through_a_mirror_the_next_surface_counts(backend):
     r.set_aovs(True)
     r.add_samples(4)
     albedo, normal = r.read_aovs()
-    np.testing.assert_allclose(albedo, np.broadcast_to(0.5 * SPHERE_RHO, albedo.shape), atol=1e-6)
+    # the mirror's reflectance is its Fresnel term for eta = 0, k = 1: exactly 1, to float32
+    # rounding, which a GPU's fast square roots and divisions make 1e-4 (measured on an H100)
+    np.testing.assert_allclose(albedo, np.broadcast_to(0.5 * SPHERE_RHO, albedo.shape), rtol=1e-3)
     np.testing.assert_allclose(normal, np.broadcast_to([0, -1, 0], normal.shape), atol=1e-5)
 
 
