@@ -3,6 +3,7 @@
 import argparse
 import os
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 from app import __version__
@@ -120,11 +121,11 @@ def apply_render_options(scene, args):
     width, height = args.size or (s.width, s.height)
     max_depth = s.max_depth if args.max_depth is None else args.max_depth
     rr = args.rr or s.russian_roulette
-    if rr == "off" and max_depth == 0:
-        raise UserError("--rr off needs --max-depth N (N >= 1), or paths would never end")
     changes = dict(width=width, height=height, max_depth=max_depth, russian_roulette=rr,
                    seed=s.seed if args.seed is None else args.seed,
                    nee=s.nee if args.nee is None else args.nee)
+    if not replace(s, **changes).paths_end:
+        raise UserError("--rr off needs --max-depth N (N >= 1), or paths would never end")
     if getattr(args, "spp", None) is not None:
         changes["spp"] = args.spp
     return scene.with_settings(**changes)

@@ -3,9 +3,11 @@
 import numpy as np
 import pytest
 
-from app.scene.builtin import BUILTIN_SCENES
+from app.camera import Camera
+from app.environment import Environment
 from app.renderer import Renderer
-from app.scene import load_scene
+from app.scene import RenderSettings, SceneBuilder, diffuse, load_scene
+from app.scene.builtin import BUILTIN_SCENES
 from tests.stats import z_test
 
 
@@ -85,3 +87,22 @@ def test_the_command_line_reports_nan_samples(monkeypatch, tmp_path, capsys):
     monkeypatch.setattr(app.scene, "load_scene", lambda name: poisoned_simple())
     assert cli.main(["render", "simple", "-o", str(tmp_path / "a.png"), "--size", "16x9", "--spp", "2", "-q"]) == 0
     assert "samples were NaN or infinite and were left out (as black)" in capsys.readouterr().err
+
+
+def test_an_environment_edit_updates_the_light_choice(backend):
+    """The light table weighs the environment by its power: one that starts black is never
+    sampled, and turning it up (Renderer.set_environment, as the viewer's panel does) makes it
+    a light, so next-event estimation samples it."""
+    from app.scene import emitter
+    b = SceneBuilder()
+    b.add_sphere((0, 0, 0), 1.0, diffuse(0.5))
+    b.add_sphere((0, 4, 0), 0.5, emitter(10.0))
+    scene = b.build("lights", camera=Camera([0, 0, 5], [0, 0, 0], [0, 1, 0], 40.0),
+                    environment=Environment.constant((1, 1, 1), intensity=0.0),
+                    settings=RenderSettings(width=16, height=16))
+    r = Renderer(backend, scene)
+    assert r.lights.env_pick == 0.0
+    env = r.environment
+    env.intensity = 1.0
+    r.set_environment(env)
+    assert 0.0 < r.lights.env_pick < 1.0 and r.params(1)["env_pick"] == r.lights.env_pick

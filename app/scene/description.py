@@ -27,6 +27,12 @@ class RenderSettings:
     seed: int = 0
     nee: bool = True              # next-event estimation with MIS; off: the report's estimator
 
+    @property
+    def paths_end(self) -> bool:
+        """Whether these settings end every path: without Russian roulette only max_depth
+        does. The scene files, the command line and the viewer's panel all refuse the others."""
+        return self.russian_roulette != "off" or self.max_depth > 0
+
 
 @dataclass
 class MeshFile:

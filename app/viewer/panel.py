@@ -7,6 +7,8 @@ and a usable widget. Text wraps. The panel is resizable, scrolls when its conten
 than the window, and never leaves the window. Each widget's range holds every value the scene
 format accepts."""
 
+from dataclasses import replace
+
 import numpy as np
 
 from app.materials import BSDFS
@@ -155,12 +157,12 @@ def draw_panel(v):
         changed, depth = imgui.drag_int("max depth (0: none)", s.max_depth, 0.2, 0, INT_MAX, "%d",
                                         imgui.SliderFlags_.always_clamp)
         layout.check("max depth (0: none)")
-        if changed and (depth > 0 or s.russian_roulette != "off"):
+        if changed and replace(s, max_depth=depth).paths_end:
             r.set_settings(max_depth=depth)
         current = RUSSIAN_ROULETTE.index(s.russian_roulette)
         changed, current = imgui.combo("Russian roulette", current, list(RUSSIAN_ROULETTE))
         layout.check("Russian roulette")
-        if changed and (RUSSIAN_ROULETTE[current] != "off" or s.max_depth > 0):
+        if changed and replace(s, russian_roulette=RUSSIAN_ROULETTE[current]).paths_end:
             r.set_settings(russian_roulette=RUSSIAN_ROULETTE[current])
         changed, nee = imgui.checkbox("next-event estimation (MIS)", s.nee)
         layout.check("next-event estimation (MIS)")
