@@ -5,7 +5,8 @@ from collections import deque
 
 import pyopencl as cl
 
-QUEUE_AHEAD = 2        # launches kept queued, so that the device never waits for the window
+QUEUE_AHEAD = 3        # launches kept queued, so that the device never waits for the window
+                       # (with two, PoCL idled between a window's turns)
 
 
 def next_launch_size(count: int, elapsed: float, target_seconds: float) -> int:

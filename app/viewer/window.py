@@ -26,10 +26,12 @@ from app.scene import load_scene
 from app.viewer.controls import FlyControls, pick_ray
 from app.viewer.panel import draw_help, draw_panel
 
-LAUNCH_BUDGET = 1 / 120        # device seconds per launch: a reset waits for at most two
+LAUNCH_BUDGET = 1 / 120        # device seconds per launch: a reset waits for at most three
+                               # (app.render.QUEUE_AHEAD); larger ones made the 99th-percentile
+                               # frame 50-80 ms on two cores
 MOVE_BUDGET = 1 / 30           # device seconds for a whole preview pass while the camera moves
 MAX_PREVIEW_SCALE = 16         # the coarsest preview: 1/16 of the resolution on each axis
-REST_DELAY = 0.2               # seconds without a move before returning to full resolution
+REST_DELAY = 0.1               # seconds without a move before returning to full resolution
 UPLOAD_INTERVAL = 0.1          # at rest the noisy image reaches the screen at most this often
                                # (while moving, each preview pass as soon as it is done)
 DENOISE_QUALITY = {"CPU": "fast", "CUDA": "high"}   # OIDN's preset for the viewer, by its device:
@@ -37,7 +39,7 @@ DENOISE_QUALITY = {"CPU": "fast", "CUDA": "high"}   # OIDN's preset for the view
 PROGRESS_AFTER = 1.0           # seconds before a BVH build shows its progress
 FRAME_RATE = 60                # turns of the loop per second at most: the window's work leaves
                                # the rest of the CPU to the renderer (PoCL) and the denoiser
-SETTLE = 0.3                   # seconds of redrawing after input, for the panel to answer it
+SETTLE = 0.1                   # seconds of redrawing after input, for the panel to answer it
 STATUS_INTERVAL = 0.25         # the status line's figures are redrawn at least this often
 FRAME_TIMES = 600              # frames whose durations the viewer keeps (frame_times)
 SCREEN_FILL = 0.9              # the largest share of the screen a new window takes
