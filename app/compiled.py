@@ -4,6 +4,7 @@ table, the light table and the environment's sampling tables. A Renderer per dev
 uploads it. Primitives have one index space (kernels/types.h); prim_shape maps each back to the
 shape of the description it came from, so that users only ever see the description's shapes."""
 
+import os
 import time
 from dataclasses import dataclass
 
@@ -139,7 +140,14 @@ def check_memory(name: str, n_spheres: int, n_triangles: int, device: cl.Device 
 
 
 def available_host_memory():
-    """MemAvailable from /proc/meminfo in bytes, or None where there is no such file."""
+    """Bytes this process can still allocate: MemAvailable from /proc/meminfo, or less where a
+    control group caps the process's memory (a container, a batch job); None where neither can
+    be read."""
+    limits = [x for x in (_meminfo_available(), cgroup_memory_left()) if x is not None]
+    return min(limits) if limits else None
+
+
+def _meminfo_available():
     try:
         with open("/proc/meminfo") as f:
             for line in f:
@@ -147,4 +155,39 @@ def available_host_memory():
                     return int(line.split()[1]) * 1024
     except (OSError, ValueError, IndexError):
         return None
+    return None
+
+
+def cgroup_memory_left(root: str = "/sys/fs/cgroup", membership: str = "/proc/self/cgroup"):
+    """The memory control group's limit less its usage, in bytes: cgroup v2 (memory.max,
+    memory.current) or v1 (memory.limit_in_bytes, memory.usage_in_bytes). The group's files are
+    looked for at its path under the hierarchy and, as inside a container, at the hierarchy's
+    root. None where there is no limit ("max", or v1's near-2^63) or no such files."""
+    try:
+        with open(membership) as f:
+            lines = [line.rstrip("\n").split(":", 2) for line in f]
+    except OSError:
+        return None
+    for fields in lines:
+        if len(fields) != 3:
+            continue
+        _, controllers, path = fields
+        if controllers == "":
+            names, base = ("memory.max", "memory.current"), root
+        elif "memory" in controllers.split(","):
+            names, base = ("memory.limit_in_bytes", "memory.usage_in_bytes"), os.path.join(root, "memory")
+        else:
+            continue
+        for folder in (os.path.join(base, path.lstrip("/")), base):
+            try:
+                with open(os.path.join(folder, names[0])) as f:
+                    limit = f.read().strip()
+                with open(os.path.join(folder, names[1])) as f:
+                    used = int(f.read().strip())
+            except (OSError, ValueError):
+                continue
+            if limit == "max" or int(limit) >= 1 << 62:
+                break
+            return max(int(limit) - used, 0)
+    return None
     return None

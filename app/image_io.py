@@ -6,6 +6,7 @@ target, which is renamed over it only once complete (and with several outputs, o
 OpenCV and OpenEXR are imported where they are used, so that the core (scenes with constant
 environments, the renderer, the benchmarks) runs with NumPy and PyOpenCL alone."""
 
+import io
 import os
 import tempfile
 from dataclasses import dataclass, field
@@ -72,9 +73,11 @@ def _read_with_opencv(path: Path):
 
 
 def _read_exr(path: Path):
+    """OpenEXR is given the file's bytes, not its name: its bindings take only names that are
+    UTF-8."""
     import OpenEXR
     try:
-        with OpenEXR.File(str(path)) as f:
+        with OpenEXR.File(io.BytesIO(Path(path).read_bytes())) as f:
             channels = f.channels()
             if "RGB" in channels:
                 rgb = channels["RGB"].pixels
@@ -95,8 +98,10 @@ def _write_exr(path: str, rgb: np.ndarray, layers: dict = {}):
     for name, image in layers.items():
         for k, c in enumerate("RGB"):
             channels[f"{name}.{c}"] = np.ascontiguousarray(image[..., k], np.float32)
+    encoded = io.BytesIO()               # bytes, not a name, as _read_exr
     with OpenEXR.File(header, channels) as f:
-        f.write(path)
+        f.write(encoded)
+    Path(path).write_bytes(encoded.getvalue())
     return True
 
 

@@ -24,6 +24,19 @@ def test_a_name_that_is_not_utf8_is_written(tmp_path, suffix):
     assert os.listdir(tmp_path) == [name] and (tmp_path / name).stat().st_size > 0
 
 
+@pytest.mark.parametrize("suffix", [".exr", ".hdr", ".pfm"])
+def test_maps_in_a_folder_whose_name_is_not_utf8_are_written_and_read(tmp_path, suffix):
+    """OpenEXR's bindings take only UTF-8 names: pathtrace hands them bytes instead."""
+    folder = tmp_path / os.fsdecode(b"caf\xe9")
+    folder.mkdir()
+    path = folder / f"map{suffix}"
+    write_image(path, IMAGE)
+    back = read_hdr(path, "environment.map")
+    # Radiance's RGBE keeps 8 bits of mantissa under the pixel's largest channel's exponent
+    step = IMAGE.max(-1, keepdims=True) / 128 if suffix == ".hdr" else 1e-6
+    assert np.all(np.abs(back - IMAGE) <= step)
+
+
 def test_a_long_name_is_written(tmp_path):
     path = tmp_path / ("x" * 246 + ".png")          # 250 characters: valid; the temporary name is short
     write_image(path, IMAGE)

@@ -72,3 +72,40 @@ def test_an_image_too_large_to_read_back_is_refused(backend, monkeypatch):
     with pytest.raises(UserError, match="a 4096x4096 image of simple needs about 1 GB of memory to read back"):
         r.resize(4096, 4096)
     assert (r.width, r.height) == (8, 8)
+
+
+def fake_cgroup(tmp_path, membership, files):
+    """A /proc/self/cgroup and a hierarchy holding `files` (path: text)."""
+    (tmp_path / "cgroup").write_text(membership)
+    for path, text in files.items():
+        (tmp_path / "fs" / path).parent.mkdir(parents=True, exist_ok=True)
+        (tmp_path / "fs" / path).write_text(text)
+    return str(tmp_path / "fs"), str(tmp_path / "cgroup")
+
+
+@pytest.mark.parametrize("layout", ["v2", "v2 at the root", "v1", "v1 at the root"])
+def test_a_control_group_limit_caps_the_memory_available(tmp_path, layout):
+    """A container's or a batch job's memory limit less its usage, cgroup v2 or v1, whether the
+    group's files sit at its path or (inside a container) at the hierarchy's root."""
+    from app.compiled import cgroup_memory_left
+    at_root = layout.endswith("root")
+    if layout.startswith("v2"):
+        folder = "" if at_root else "job/"
+        root, membership = fake_cgroup(tmp_path, "0::/job\n", {f"{folder}memory.max": "3000000\n",
+                                                               f"{folder}memory.current": "1000000\n"})
+    else:
+        folder = "memory/" if at_root else "memory/job/"
+        root, membership = fake_cgroup(tmp_path, "5:cpu:/\n4:memory:/job\n", {
+            f"{folder}memory.limit_in_bytes": "3000000\n", f"{folder}memory.usage_in_bytes": "1000000\n"})
+    assert cgroup_memory_left(root, membership) == 2000000
+
+
+@pytest.mark.parametrize("limit", ["max\n", "9223372036854771712\n"])
+def test_no_control_group_limit_leaves_meminfo_in_charge(tmp_path, limit):
+    from app.compiled import cgroup_memory_left
+    name = "memory.max" if limit == "max\n" else "memory/memory.limit_in_bytes"
+    usage = "memory.current" if limit == "max\n" else "memory/memory.usage_in_bytes"
+    line = "0::/\n" if limit == "max\n" else "4:memory:/\n"
+    root, membership = fake_cgroup(tmp_path, line, {name: limit, usage: "5\n"})
+    assert cgroup_memory_left(root, membership) is None
+    assert cgroup_memory_left(str(tmp_path / "none"), str(tmp_path / "none")) is None
