@@ -67,9 +67,13 @@ def frames(viewer, n):
 
 
 def settle(viewer):
-    """Lets the camera come to rest and the full resolution return."""
+    """Lets the camera come to rest and the full resolution return (after the denoised draft,
+    where there is one)."""
     time.sleep(0.3)
     frames(viewer, 2)
+    start = time.perf_counter()
+    while viewer.scale != 1 and time.perf_counter() - start < 10:
+        viewer.frame()
 
 
 def back_to_simple(viewer):
@@ -316,6 +320,31 @@ def test_at_rest_the_denoised_image_is_shown_and_saved(viewer):
         denoised, noisy = channels["RGB"].pixels, channels["noisy"].pixels
     np.testing.assert_allclose(noisy, viewer.renderer.mean(), rtol=1e-6)
     assert np.abs(denoised - noisy).mean() > 0 and np.all(np.isfinite(denoised))
+
+
+def test_coming_to_rest_shows_a_denoised_draft_first(viewer, monkeypatch):
+    """After a move whose preview was coarse, the first image at rest is the denoised draft at
+    half resolution; no noisy image replaces it before the full resolution's denoised one."""
+    import app.viewer.window as window
+    v = viewer
+    settle(v)
+    monkeypatch.setattr(window, "preview_scale", lambda *args: 4)
+    xdo("windowfocus", "--sync", window_id(v))
+    xdo("keydown", "a")
+    frames(v, 4)
+    xdo("keyup", "a")
+    requests = []
+    request = v.display.request
+    monkeypatch.setattr(v.display, "request", lambda *a: (requests.append(v.clean), request(*a)))
+    start = time.perf_counter()
+    while not v.clean:
+        v.frame()
+        assert time.perf_counter() - start < 20
+    assert v.draft and v.texture.size == (W // 2, H // 2)
+    while not (v.scale == 1 and v.denoised_at[0] == v.renderer.resets):
+        v.frame()
+        assert time.perf_counter() - start < 40
+    assert v.texture.size == (W, H) and not any(requests)     # nothing noisy once clean
 
 
 def test_resizing_the_window_keeps_the_render_size(viewer):

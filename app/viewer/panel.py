@@ -108,12 +108,12 @@ def _status(imgui, v):
     rate = 1e-6 / p.seconds_per_pixel if p.seconds_per_pixel else 0.0
     imgui.text_wrapped(f"{1 / max(frame, 1e-6):.0f} fps, {1000 * frame:.1f} ms/frame")
     imgui.text_wrapped(f"{p.passes_done} spp + {p.progress:.0%} of the next, {rate:.2f} Msamples/s")
-    size = f"{r.width}x{r.height}" + (f" (preview 1/{v.scale} of {v.size[0]}x{v.size[1]})" if v.scale > 1 else "")
+    size = f"{r.width}x{r.height}" + (f" ({'draft' if v.draft else 'preview'} 1/{v.scale} of {v.size[0]}x{v.size[1]})" if v.scale > 1 else "")
     imgui.text_wrapped(size)
     # always one line, so that nothing below moves when the denoiser starts or stops
     if not v.denoise:
         imgui.text_wrapped("denoiser: off")
-    elif v.denoised_at is not None and v.denoised_at[0] == r.resets and v.scale == 1:
+    elif v.denoised_at is not None and v.denoised_at[0] == r.resets and v.resting:
         imgui.text_wrapped(f"denoised at {v.denoised_at[1]} spp in {v.denoise_seconds:.2f} s")
     else:
         imgui.text_wrapped("denoiser: waits for the camera to rest and a whole pass")
