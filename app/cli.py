@@ -7,7 +7,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from app import __version__
-from app.errors import UserError, warn
+from app.errors import UserError, short, warn
 from app.scene.description import RUSSIAN_ROULETTE
 
 EPILOG = ("A scene is a .toml file, a Mitsuba 3 .xml file or a built-in name (pathtrace scenes lists them): simple, "
@@ -41,9 +41,9 @@ def _size(text):
     try:
         w, h = (int(v) for v in text.lower().split("x"))
     except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not WIDTHxHEIGHT, e.g. 1920x1080") from None
+        raise argparse.ArgumentTypeError(f"{short(text)} is not WIDTHxHEIGHT, e.g. 1920x1080") from None
     if not (1 <= w <= 16384 and 1 <= h <= 16384):
-        raise argparse.ArgumentTypeError(f"'{text}': width and height must be 1 to 16384")
+        raise argparse.ArgumentTypeError(f"{short(text)}: width and height must be 1 to 16384")
     return w, h
 
 
@@ -51,7 +51,7 @@ def _count(text):
     """A primitive count: digits with an optional k or M suffix, 2 to 100M."""
     digits, suffix = (text[:-1], text[-1]) if text[-1:] in ("k", "M") else (text, "")
     if not digits.isdigit() or not 2 <= int(digits) * {"": 1, "k": 1000, "M": 10**6}[suffix] <= 10**8:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a count from 2 to 100M (e.g. 64k, 1M)")
+        raise argparse.ArgumentTypeError(f"{short(text)} is not a count from 2 to 100M (e.g. 64k, 1M)")
     return int(digits) * {"": 1, "k": 1000, "M": 10**6}[suffix]
 
 
@@ -60,7 +60,7 @@ def _int_range(low, high=None):
         try:
             value = int(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"'{text}' is not an integer") from None
+            raise argparse.ArgumentTypeError(f"{short(text)} is not an integer") from None
         if value < low or (high is not None and value > high):
             bound = f"at least {low}" if high is None else f"{low} to {high}"
             raise argparse.ArgumentTypeError(f"{value} is out of range (must be {bound})")
@@ -72,9 +72,9 @@ def _finite(text):
     try:
         value = float(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"'{text}' is not a number") from None
+        raise argparse.ArgumentTypeError(f"{short(text)} is not a number") from None
     if value != value or value in (float("inf"), float("-inf")):
-        raise argparse.ArgumentTypeError(f"'{text}' is not a finite number")
+        raise argparse.ArgumentTypeError(f"{short(text)} is not a finite number")
     return value
 
 
@@ -219,7 +219,7 @@ def _aovs(text: str) -> tuple:
     names = tuple(n.strip() for n in text.split(",") if n.strip())
     unknown = [n for n in names if n not in AOVS]
     if unknown or not names:
-        raise argparse.ArgumentTypeError(f"'{text}': give albedo, normal or albedo,normal")
+        raise argparse.ArgumentTypeError(f"{short(text)}: give albedo, normal or albedo,normal")
     return names
 
 

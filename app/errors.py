@@ -18,3 +18,10 @@ def format_bytes(n: float) -> str:
         if n >= size:
             return f"{n / size:.3g} {unit}"
     return f"{int(n)} bytes"
+
+
+def short(value) -> str:
+    """A value the user gave, for a message: its repr (quoted, escapes shown), cut to 60
+    characters, so that a huge or binary value cannot flood the terminal."""
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."

@@ -73,6 +73,16 @@ def test_render_denoise_writes_the_denoised_image_the_noisy_layer_and_the_aovs(t
         assert (tmp_path / name).read_bytes()[:4] == b"\x89PNG"
 
 
+@pytest.mark.parametrize("flag", ["--size", "--spp", "--aov", "--exposure"])
+def test_a_huge_or_binary_option_value_is_echoed_short(tmp_path, flag):
+    """A value of 100k characters, or one with control characters, is quoted and cut to 60."""
+    for value in ("9" * 100_000 + "x", "1\x1b[2J\x07x"):
+        r = pathtrace("render", "simple", "-o", tmp_path / "o.png", flag, value)
+        assert r.returncode == 2 and flag in r.stderr and "Traceback" not in r.stderr
+        last = r.stderr.strip().splitlines()[-1]
+        assert len(last) < 200 and "\x1b" not in last, last
+
+
 @pytest.mark.parametrize("value", ["depth", "albedo,foo", ","])
 def test_render_refuses_an_unknown_aov(tmp_path, value):
     r = pathtrace("render", "simple", "-o", tmp_path / "o.png", "--aov", value)

@@ -12,7 +12,7 @@ import numpy as np
 
 from app.camera import Camera
 from app.environment import Environment
-from app.errors import UserError
+from app.errors import UserError, short
 from app.materials import BSDFS, Material
 from app.resources import resource_dir
 from app.scene import transform
@@ -49,11 +49,11 @@ class _Reader:
         value = data[key]
         kinds = (int,) if integer else (int, float)
         if isinstance(value, bool) or not isinstance(value, kinds):
-            self.fail(f"{where}.{key}", f"must be {'an integer' if integer else 'a number'}, got {_short(value)}")
+            self.fail(f"{where}.{key}", f"must be {'an integer' if integer else 'a number'}, got {short(value)}")
         if integer and not -2**31 <= value < 2**31:
-            self.fail(f"{where}.{key}", f"must fit in 32 bits, got {_short(value)}")
+            self.fail(f"{where}.{key}", f"must fit in 32 bits, got {short(value)}")
         if not _is_finite_number(value):
-            self.fail(f"{where}.{key}", f"must be finite and within float32's range (3.4e38), got {_short(value)}")
+            self.fail(f"{where}.{key}", f"must be finite and within float32's range (3.4e38), got {short(value)}")
         if low is not None and value < low:
             self.fail(f"{where}.{key}", f"must be at least {low}, got {value}")
         if high is not None and value > high:
@@ -69,13 +69,13 @@ class _Reader:
         value = data[key]
         items = [value] * 3 if isinstance(value, (int, float)) and not isinstance(value, bool) else value
         if not isinstance(items, list) or len(items) != 3:
-            self.fail(f"{where}.{key}", f"must be a number or a list of 3 numbers, got {_short(value)}")
+            self.fail(f"{where}.{key}", f"must be a number or a list of 3 numbers, got {short(value)}")
         for c in items:
             if not _is_finite_number(c):
-                self.fail(f"{where}.{key}", f"must hold finite numbers within float32's range, got {_short(value)}")
+                self.fail(f"{where}.{key}", f"must hold finite numbers within float32's range, got {short(value)}")
             if c < 0 or (high is not None and c > high):
                 bound = f"in [0, {high}]" if high is not None else "non-negative"
-                self.fail(f"{where}.{key}", f"must be {bound}, got {_short(value)}")
+                self.fail(f"{where}.{key}", f"must be {bound}, got {short(value)}")
         return np.asarray(items, np.float64)
 
     def vector(self, data, key, where, default=None):
@@ -86,15 +86,15 @@ class _Reader:
         value = data[key]
         if not isinstance(value, list) or len(value) != 3 or not all(_is_finite_number(c) for c in value):
             self.fail(f"{where}.{key}", f"must be a list of 3 finite numbers within float32's range, "
-                                        f"got {_short(value)}")
+                                        f"got {short(value)}")
         return np.asarray(value, np.float64)
 
     def material(self, data, where) -> Material:
         if not isinstance(data, dict):
-            self.fail(where, f"must be a table, got {_short(data)}")
+            self.fail(where, f"must be a table, got {short(data)}")
         kind = data.get("type")
         if not isinstance(kind, str) or kind not in MATERIAL_TYPES:
-            self.fail(f"{where}.type", f"must be one of {', '.join(MATERIAL_TYPES)}, got {_short(kind)}")
+            self.fail(f"{where}.type", f"must be one of {', '.join(MATERIAL_TYPES)}, got {short(kind)}")
         if kind == "emitter":
             self.table(data, where, {"type", "Le"})
             return Material("black", emission=self.color(data, "Le", where))
@@ -114,7 +114,7 @@ class _Reader:
             self.fail(where, str(e))
         twosided = data.get("twosided", False)
         if not isinstance(twosided, bool):
-            self.fail(f"{where}.twosided", f"must be true or false, got {_short(twosided)}")
+            self.fail(f"{where}.twosided", f"must be true or false, got {short(twosided)}")
         emission = self.color(data, "Le", where, default=(0, 0, 0))
         return Material(kind, values, emission, twosided)
 
@@ -125,15 +125,15 @@ class _Reader:
             return self.color(data, param.name, where, high=param.high)
         if param.kind == "bool":
             if not isinstance(value, bool):
-                self.fail(f"{where}.{param.name}", f"must be true or false, got {_short(value)}")
+                self.fail(f"{where}.{param.name}", f"must be true or false, got {short(value)}")
             return value
         if isinstance(value, str) and param.names:
             if value not in param.names:
                 self.fail(f"{where}.{param.name}",
-                          f"unknown name {_short(value)} (known: {', '.join(sorted(param.names))})")
+                          f"unknown name {short(value)} (known: {', '.join(sorted(param.names))})")
             return value             # BSDFType.resolve turns it into its number
         if param.kind == "name":
-            self.fail(f"{where}.{param.name}", f"must be a name, got {_short(value)}")
+            self.fail(f"{where}.{param.name}", f"must be a name, got {short(value)}")
         return self.number(data, param.name, where, low=param.low, high=param.high)
 
     def camera(self, data):
@@ -163,7 +163,7 @@ class _Reader:
         if "map" in data:
             name = data["map"]
             if not isinstance(name, str):
-                self.fail("environment.map", f"must be a file name, got {_short(name)}")
+                self.fail("environment.map", f"must be a file name, got {short(name)}")
             return Environment.from_file(self.find_asset(name), intensity, rotation,
                                          where=f"{self.path}: environment.map")
         env = Environment.constant(self.color(data, "color", where, default=(1, 1, 1)), intensity)
@@ -186,9 +186,9 @@ class _Reader:
             rr = "throughput" if rr else "off"
         if rr not in RUSSIAN_ROULETTE:
             self.fail("render.russian_roulette",
-                      f"must be one of {', '.join(RUSSIAN_ROULETTE)} (or true, false), got {_short(rr)}")
+                      f"must be one of {', '.join(RUSSIAN_ROULETTE)} (or true, false), got {short(rr)}")
         if not isinstance(nee, bool):
-            self.fail("render.nee", f"must be true or false, got {_short(nee)}")
+            self.fail("render.nee", f"must be true or false, got {short(nee)}")
         s = RenderSettings(
             width=self.number(data, "width", where, default=960, low=1, high=16384, integer=True),
             height=self.number(data, "height", where, default=540, low=1, high=16384, integer=True),
@@ -213,7 +213,7 @@ class _Reader:
     def name(self, data, where, default):
         name = data.get("name", default)
         if not isinstance(name, str) or not name or len(name) > 200:
-            self.fail(f"{where}.name", f"must be a non-empty string of at most 200 characters, got {_short(name)}")
+            self.fail(f"{where}.name", f"must be a non-empty string of at most 200 characters, got {short(name)}")
         return name
 
     def transform(self, data, where) -> np.ndarray:
@@ -234,13 +234,13 @@ class _Reader:
             s = data["scale"]
             s = [s] * 3 if _is_finite_number(s) else s
             if not isinstance(s, list) or len(s) != 3 or not all(_is_finite_number(x) and x != 0 for x in s):
-                self.fail(f"{where}.scale", f"must be a non-zero number or 3 of them, got {_short(data['scale'])}")
+                self.fail(f"{where}.scale", f"must be a non-zero number or 3 of them, got {short(data['scale'])}")
             m = transform.scaling(s) @ m
         if "rotate" in data:
             r = data["rotate"]
             if (not isinstance(r, list) or len(r) != 4 or not all(_is_finite_number(x) for x in r)
                     or not any(r[:3])):
-                self.fail(f"{where}.rotate", f"must be [axis_x, axis_y, axis_z, degrees] with a non-zero axis, got {_short(r)}")
+                self.fail(f"{where}.rotate", f"must be [axis_x, axis_y, axis_z, degrees] with a non-zero axis, got {short(r)}")
             m = transform.rotation(r[:3], r[3]) @ m
         if "translate" in data:
             m = transform.translation(self.vector(data, "translate", where)) @ m
@@ -255,14 +255,14 @@ class _Reader:
         for key in ("face_normals", "flip_normals"):
             flags[key] = data.get(key, False)
             if not isinstance(flags[key], bool):
-                self.fail(f"{where}.{key}", f"must be true or false, got {_short(flags[key])}")
+                self.fail(f"{where}.{key}", f"must be true or false, got {short(flags[key])}")
         m = self.transform(data, where)
         if "file" in data:
             if "vertices" in data or "faces" in data:
                 self.fail(where, "give either 'file' or 'vertices' and 'faces', not both")
             name = data["file"]
             if not isinstance(name, str) or not name:
-                self.fail(f"{where}.file", f"must be a file name, got {_short(name)}")
+                self.fail(f"{where}.file", f"must be a file name, got {short(name)}")
             source = self.path.parent / name
             vertices, faces, normals = read_mesh(source, f"{self.path}: {where}.file")
             if flags["face_normals"]:
@@ -357,12 +357,6 @@ def _exists(path: Path) -> bool:
         return path.exists()
     except OSError:
         return False
-
-
-def _short(value) -> str:
-    """A value for a message: its repr, cut to 60 characters."""
-    text = repr(value)
-    return text if len(text) <= 60 else text[:57] + "..."
 
 
 MAX_SCENE_BYTES = 64 << 20    # a scene file; meshes go in files of their own
