@@ -21,6 +21,16 @@ from app.render import next_launch_size
 from app.renderer import Renderer, aov_means, variance_of
 
 
+FIRST_BANDS = 16       # the first sample of a render is split into this many launches of rows,
+                       # until its speed is known: a 4096x4096 sample on two cores takes seconds
+
+
+def row_bands(height: int, bands: int):
+    """(first, end) of `bands` bands of rows covering [0, height), top to bottom."""
+    edges = np.linspace(0, height, min(bands, height) + 1).round().astype(int)
+    return [(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:])]
+
+
 class SampleCounter:
     """Hands out consecutive ranges of sample indices, [0, total), to several takers."""
 
@@ -76,23 +86,29 @@ class DeviceGroup:
 
     def render(self, spp: int, on_progress=None, launch_seconds: float = 0.25):
         """Adds samples 0 .. spp-1 of every pixel, spread over the devices; on_progress(samples
-        done) after each launch. Re-raises the first device error; Ctrl-C stops every device
-        after its current launch."""
+        done) after each launch. A launch is sized to take about launch_seconds: several samples
+        where one is quick, one sample split into bands of rows where it is not (the first is,
+        until its speed is known). Re-raises the first device error; Ctrl-C stops every device
+        after its current launch or band."""
         counter = SampleCounter(spp)
         errors = []
         progress_lock = threading.Lock()
 
         def work(renderer):
             try:
-                chunk, rate = 1, None
+                chunk, rate, bands = 1, None, FIRST_BANDS
                 while (taken := counter.take(renderer, chunk, rate)) is not None:
                     start, count = taken
                     began = time.perf_counter()
-                    renderer.add_samples(count, start)
-                    renderer.finish()
+                    for rows in row_bands(renderer.height, bands):
+                        if counter.stopped:          # Ctrl-C: stop between bands, not after
+                            return                   # a whole image's sample
+                        renderer.add_samples(count, start, rows)
+                        renderer.finish()
                     elapsed = time.perf_counter() - began
                     rate = count / max(elapsed, 1e-9)
                     chunk = next_launch_size(count, elapsed, launch_seconds)
+                    bands = max(1, math.ceil(elapsed / count / launch_seconds))
                     if on_progress:
                         with progress_lock:
                             on_progress(self.samples)

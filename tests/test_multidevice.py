@@ -48,6 +48,29 @@ def test_two_devices_give_the_one_device_image(backend, scene):
     assert group.rays_traced() == single.rays_traced()
 
 
+def test_slow_samples_are_split_into_bands_of_rows(backend, scene, monkeypatch):
+    """The first sample is split into FIRST_BANDS launches of rows, and a sample slower than the
+    launch budget into bands too (so that Ctrl-C never waits for a whole image's sample); the
+    image is the one of whole-image launches."""
+    from app.multidevice import FIRST_BANDS, row_bands
+    assert row_bands(24, 5) == [(0, 5), (5, 10), (10, 14), (14, 19), (19, 24)]
+    assert row_bands(3, 16) == [(0, 1), (1, 2), (2, 3)]
+    launches = []
+    add = Renderer.add_samples
+    monkeypatch.setattr(Renderer, "add_samples",
+                        lambda self, count=1, start=None, rows=None: (launches.append((count, rows)),
+                                                                      add(self, count, start, rows))[1])
+    group = DeviceGroup([backend], scene)
+    group.render(3, launch_seconds=1e-9)
+    first = launches[:FIRST_BANDS]
+    assert [rows for _, rows in first] == row_bands(24, FIRST_BANDS) and all(c == 1 for c, _ in first)
+    assert len(launches) == FIRST_BANDS + 2 * 24 and all(rows[1] - rows[0] == 1 for _, rows in launches[FIRST_BANDS:])
+    single = Renderer(backend, scene)
+    add(single, 3)
+    assert group.samples == 3
+    np.testing.assert_allclose(group.mean(), single.mean(), rtol=1e-5, atol=1e-7)
+
+
 def test_sample_counter_issues_every_index_once_across_threads():
     counter = SampleCounter(10_000)
     taken = [[] for _ in range(4)]
