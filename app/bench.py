@@ -177,10 +177,11 @@ def run_display(device_specs, width, height, log=print):
         r = Renderer(backend, load_scene("simple"), width, height)
         r.add_samples(1)
         r.finish()
+        default = Display(backend).mode
         for mode in MODES:
             display = Display(backend, mode)
             step = lambda: (display.request(r.buffer("sum"), width, height), display.wait(lambda p: None))  # noqa: E731
-            chosen = " (default)" if Display(backend).mode == mode else ""
+            chosen = " (default)" if mode == default else ""
             t = Timing(f"display: {mode}{chosen}", backend.device.describe(), width, height, _median_ms(step))
             log(format_timing(t))
             results.append(t)

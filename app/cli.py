@@ -233,7 +233,7 @@ def render_outputs(group, args) -> list:
     """What `render` writes: the image (denoised with --denoise; an EXR then keeps the noisy one
     as its layer "noisy") to every --output, and with --aov the albedo and normal beside each
     (normals stored as n / 2 + 1/2 in PNG and JPEG, the usual encoding)."""
-    from app.image_io import Output
+    from app.image_io import HDR_FORMATS, Output
     noisy = group.mean()
     image, layers = noisy, {}
     if args.denoise or args.aov:
@@ -243,8 +243,9 @@ def render_outputs(group, args) -> list:
         image, layers = Denoiser("high")(noisy, albedo, normal), {"noisy": noisy}
     outputs = []
     for path in args.output:
-        hdr = Path(path).suffix.lower() in (".exr", ".hdr", ".pfm")
-        outputs.append(Output(Path(path), image, layers if Path(path).suffix.lower() == ".exr" else {}))
+        suffix = Path(path).suffix.lower()
+        hdr = suffix in HDR_FORMATS
+        outputs.append(Output(Path(path), image, layers if suffix == ".exr" else {}))
         for name in args.aov or ():
             aov = albedo if name == "albedo" else (normal if hdr else normal * 0.5 + 0.5)
             outputs.append(Output(aov_path(path, name), aov, raw=True))

@@ -5,7 +5,8 @@ the noisy HDR radiance with the first non-specular surface's albedo and normal
 
 A Denoiser owns one OIDN device and filter and reuses them, since creating a filter costs more
 than running it. OIDN runs outside the GIL (pyoidn calls it through cffi), so a window can
-denoise in a worker thread and stay smooth."""
+denoise in a worker thread and stay smooth. A Denoiser is not for two threads at once: its
+device buffers are shared by every call."""
 
 import numpy as np
 
@@ -47,9 +48,11 @@ class Denoiser:
         self._size = None
 
     def _check(self, what: str):
+        """OIDN's last error as one line (a user's render must not end in a traceback)."""
         error = self._device.get_error()
         if error:
-            raise RuntimeError(f"Open Image Denoise, {what}: {error}")
+            from app.errors import UserError
+            raise UserError(f"Open Image Denoise, {what}: {error}")
 
     def _bind(self, height: int, width: int):
         """Device buffers for the four images, bound to the filter (again when the size changes)."""

@@ -21,8 +21,8 @@ READ_BACK_BYTES = 64   # host memory per pixel to read an image back and write i
 AOV_PASSES = 16        # the denoiser's albedo and normal are accumulated over the first passes
                        # only: by then they hardly change (kernels/aovs.cl takes 4 BSDF samples
                        # a pass), and the path tracer runs at full speed after
-AOV_BUFFERS = ("albedo_sum", "normal_sum")   # kernels/aovs.cl: rgb and xyz sums; the albedo's w
-                                             # counts the samples
+AOV_BUFFERS = ("albedo_sum", "normal_sum")   # kernels/aovs.cl: rgb and xyz sums, w counting
+                                             # the samples
 
 
 def image_buffers(aovs: bool) -> tuple:
@@ -39,7 +39,6 @@ def per_pixel_mean(sums: np.ndarray) -> np.ndarray:
 
 def aov_means(albedo_sum: np.ndarray, normal_sum: np.ndarray) -> tuple:
     """The denoiser's albedo (clamped to [0, 1], its range) and normal from their sums."""
-    normal_sum = np.concatenate([normal_sum[..., :3], albedo_sum[..., 3:]], -1)
     return np.clip(per_pixel_mean(albedo_sum), 0.0, 1.0), per_pixel_mean(normal_sum)
 
 
@@ -248,16 +247,15 @@ class Renderer:
         """One of the device buffers of image_buffers, for kernels beside the renderer's."""
         return self._buffers[name]
 
-    def _read(self, name, out=None) -> np.ndarray:
-        if out is None:
-            out = np.empty((self.height, self.width, 4), np.float32)
+    def _read(self, name) -> np.ndarray:
+        out = np.empty((self.height, self.width, 4), np.float32)
         cl.enqueue_copy(self.backend.queue, out, self._buffers[name])
         return out
 
-    def read_sum(self, out=None) -> np.ndarray:
+    def read_sum(self) -> np.ndarray:
         """The raw accumulation buffer, (H, W, 4) float32: radiance sums in rgb, the samples kept
-        in a; into `out` if given (the viewer reuses one array for every upload)."""
-        return self._read("sum", out)
+        in a."""
+        return self._read("sum")
 
     def mean(self) -> np.ndarray:
         """The image so far: mean radiance per pixel, (H, W, 3) float32."""
@@ -274,7 +272,7 @@ class Renderer:
         return self._read("albedo_sum")
 
     def read_normal_sum(self) -> np.ndarray:
-        """The raw normal sums (set_aovs), (H, W, 4) float32: xyz."""
+        """The raw normal sums (set_aovs), (H, W, 4) float32: xyz, and the samples in w."""
         return self._read("normal_sum")
 
     def read_async(self, names: tuple) -> tuple:

@@ -70,8 +70,8 @@ void trace_aovs(const SceneData *sc, const RenderParams *p, float3 o, float3 d, 
     }
 }
 
-/* Adds p.sample_count samples of albedo (rgb; w counts them) and normal (xyz) to each pixel of
- * rows [row_start, row_end), for the same sample indices as the render kernels. */
+/* Adds p.sample_count samples of albedo (rgb) and normal (xyz) to each pixel of rows
+ * [row_start, row_end), for the same sample indices as the render kernels; w counts them. */
 kernel void render_aovs(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *albedo_sum,
                         global float4 *normal_sum)
 {
@@ -92,5 +92,5 @@ kernel void render_aovs(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *
     }
     int k = y * p.width + x;
     albedo_sum[k] += (float4)(albedo_acc, (float)p.sample_count);
-    normal_sum[k] += (float4)(normal_acc, 0.0f);
+    normal_sum[k] += (float4)(normal_acc, (float)p.sample_count);
 }

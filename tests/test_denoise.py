@@ -155,3 +155,13 @@ def test_the_denoiser_takes_nan_and_inf_without_spreading_them(demo):
     broken[5, 6] = np.inf
     out = Denoiser("fast")(broken, albedo, normal)
     assert np.all(np.isfinite(out))
+
+
+def test_an_error_of_open_image_denoise_is_one_line(monkeypatch):
+    """What OIDN reports (out of memory, an unsupported device) reaches the user as one line."""
+    import pyoidn
+
+    from app.errors import UserError
+    monkeypatch.setattr(pyoidn.Device, "get_error", lambda self: "out of memory")
+    with pytest.raises(UserError, match="^Open Image Denoise, creating the device: out of memory$"):
+        Denoiser("fast")

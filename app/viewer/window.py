@@ -453,7 +453,7 @@ class Viewer:
             self._denoising = None
             try:
                 image, seconds = future.result()
-            except RuntimeError as e:
+            except Exception as e:     # a viewer must outlive any failure of the library
                 self.denoise_error = str(e)
                 self.set_message(f"denoising failed: {e}", error=True)
                 self.denoise = False
@@ -527,10 +527,12 @@ class Viewer:
         base = self.screenshot_dir / f"pathtrace-{r.scene.name}-{stamp}"
         noisy = r.mean()
         shown, layers = noisy, {}
-        if self.denoised_at is not None and self.denoised_at[0] == r.resets and self.denoise and self.resting:
-            shown, layers = self._denoiser(noisy, *r.read_aovs()), {"noisy": noisy}
-        outputs = [Output(base.with_suffix(".png"), shown), Output(base.with_suffix(".exr"), shown, layers)]
         try:
+            if self.denoised_at is not None and self.denoised_at[0] == r.resets and self.denoise and self.resting:
+                # through the worker: the denoiser's buffers are not for two threads at once
+                denoised = self._worker.submit(self._denoiser, noisy, *r.read_aovs()).result()
+                shown, layers = denoised, {"noisy": noisy}
+            outputs = [Output(base.with_suffix(".png"), shown), Output(base.with_suffix(".exr"), shown, layers)]
             self.screenshot_dir.mkdir(parents=True, exist_ok=True)
             write_images(outputs, self.exposure, self.tonemap, what="screenshot")
         except (UserError, OSError) as e:
