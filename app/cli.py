@@ -216,7 +216,7 @@ AOVS = ("albedo", "normal")
 
 
 def _aovs(text: str) -> tuple:
-    names = tuple(n.strip() for n in text.split(",") if n.strip())
+    names = tuple(dict.fromkeys(n.strip() for n in text.split(",") if n.strip()))   # each once
     unknown = [n for n in names if n not in AOVS]
     if unknown or not names:
         raise argparse.ArgumentTypeError(f"{short(text)}: give albedo, normal or albedo,normal")

@@ -83,6 +83,11 @@ def test_a_huge_or_binary_option_value_is_echoed_short(tmp_path, flag):
         assert len(last) < 200 and "\x1b" not in last, last
 
 
+def test_an_aov_named_twice_is_written_once():
+    from app.cli import _aovs
+    assert _aovs("normal, albedo,normal") == ("normal", "albedo")
+
+
 @pytest.mark.parametrize("value", ["depth", "albedo,foo", ","])
 def test_render_refuses_an_unknown_aov(tmp_path, value):
     r = pathtrace("render", "simple", "-o", tmp_path / "o.png", "--aov", value)
