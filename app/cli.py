@@ -7,7 +7,8 @@ from dataclasses import replace
 from pathlib import Path
 
 from app import __version__
-from app.errors import UserError, short, warn
+from app.console import INTERRUPTED
+from app.errors import UserError, cut, short, warn
 from app.scene.description import RUSSIAN_ROULETTE
 
 EPILOG = ("A scene is a .toml file, a Mitsuba 3 .xml file or a built-in name (pathtrace scenes lists them): simple, "
@@ -199,7 +200,7 @@ def cmd_render(args):
     except KeyboardInterrupt:
         bar.close()
         print(f"interrupted at {group.samples}/{s.spp} spp; nothing written", file=sys.stderr)
-        return 130
+        return INTERRUPTED
     bar.close()
     dropped = group.dropped_samples()
     if dropped:
@@ -384,7 +385,7 @@ def cmd_bench(args):
 
 
 def build_parser():
-    parser = argparse.ArgumentParser(prog="pathtrace", description=__doc__, epilog=EPILOG)
+    parser = Parser(prog="pathtrace", description=__doc__, epilog=EPILOG)
     parser.add_argument("--version", action="version", version=f"pathtrace {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
@@ -487,6 +488,16 @@ def build_parser():
     return parser
 
 
+class Parser(argparse.ArgumentParser):
+    """argparse's parser, whose messages echo what the user typed cut short: argparse quotes an
+    invalid choice or an unknown option whole, however long, and an ambiguous one raw."""
+
+    MESSAGE_LIMIT = 400
+
+    def error(self, message):
+        super().error(cut(" ".join(cut(word) for word in message.split(" ")), self.MESSAGE_LIMIT))
+
+
 def parse(parser: argparse.ArgumentParser, argv):
     """parse_args, except that an unknown option is reported with the usage of the subcommand it
     was given to, not the top level's."""
@@ -502,15 +513,8 @@ def parse(parser: argparse.ArgumentParser, argv):
     return args
 
 
-def _terminate(signum, frame):
-    """SIGTERM ends a run as Ctrl-C does: through KeyboardInterrupt, so that every temporary file
-    is removed and nothing half-written is left."""
-    raise KeyboardInterrupt
-
-
 def main(argv=None) -> int:
-    import signal
-    signal.signal(signal.SIGTERM, _terminate)
+    """Runs one command; returns its exit status (app.console: the entry point around it)."""
     args = parse(build_parser(), argv)
     try:
         code = args.func(args)
@@ -521,7 +525,7 @@ def main(argv=None) -> int:
         return 1
     except KeyboardInterrupt:
         print("pathtrace: interrupted", file=sys.stderr)
-        return 130
+        return INTERRUPTED
     except MemoryError:
         print("pathtrace: error: out of memory (a smaller --size, fewer samples at once or a smaller "
               "scene may fit)", file=sys.stderr)
@@ -533,15 +537,3 @@ def main(argv=None) -> int:
         print(f"pathtrace: error: cannot write the standard output ({e.strerror})", file=sys.stderr)
         return 1
 
-
-def run():
-    """The console entry point: main(), then the exit. After an interrupt it leaves at once
-    (os._exit), past the interpreter's teardown: tearing down PoCL while it still winds down an
-    interrupted launch aborted the process (std::terminate) now and then; every temporary file
-    is removed by then."""
-    code = main()
-    if code == 130:
-        sys.stdout.flush()
-        sys.stderr.flush()
-        os._exit(code)
-    raise SystemExit(code)

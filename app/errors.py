@@ -20,8 +20,16 @@ def format_bytes(n: float) -> str:
     return f"{int(n)} bytes"
 
 
+def cut(text: str, limit: int = 60) -> str:
+    """Text the user gave, for a message: characters that do not print (NUL, escape sequences)
+    shown as escapes, and cut to `limit` characters, so that a huge or binary value cannot flood
+    or garble the terminal."""
+    if not text.isprintable():
+        text = "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+    return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
 def short(value) -> str:
     """A value the user gave, for a message: its repr (quoted, escapes shown), cut to 60
-    characters, so that a huge or binary value cannot flood the terminal."""
-    text = repr(value)
-    return text if len(text) <= 60 else text[:57] + "..."
+    characters."""
+    return cut(repr(value))

@@ -47,6 +47,14 @@ def test_render_writes_png_and_exr(tmp_path):
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]   # no temporary left
 
 
+@pytest.mark.parametrize("scene", ["demo", "teapot", "cornell-box"])
+def test_a_successful_render_prints_no_warning_from_below(tmp_path, scene):
+    """Only our own lines: no RuntimeWarning from NumPy, no line from OpenCV or a driver."""
+    r = pathtrace("render", scene, "-o", tmp_path / "a.png", "--size", "16x16", "--spp", "1", "-q")
+    assert r.returncode == 0, r.stderr
+    assert all(line.startswith(("device: ", "wrote ")) for line in r.stderr.splitlines()), r.stderr
+
+
 def test_render_denoise_writes_the_denoised_image_the_noisy_layer_and_the_aovs(tmp_path):
     """--denoise: the outputs hold the denoised image and an EXR keeps the noisy one as its layer
     "noisy", which is the image a render without --denoise writes; --aov: the albedo and normal
@@ -81,6 +89,22 @@ def test_a_huge_or_binary_option_value_is_echoed_short(tmp_path, flag):
         assert r.returncode == 2 and flag in r.stderr and "Traceback" not in r.stderr
         last = r.stderr.strip().splitlines()[-1]
         assert len(last) < 200 and "\x1b" not in last, last
+
+
+@pytest.mark.parametrize("args", [
+    ["render", "simple", "-o", "o.png", "--rr", "q" * 100_000],            # argparse: invalid choice
+    ["q" * 100_000],                                                       # an unknown command
+    ["render", "simple", "-o", "o.png", "--" + "s" * 100_000],             # unrecognized
+    ["render", "simple", "-o", "o.png", "--s=" + "s" * 100_000],           # ambiguous, echoed raw
+    ["render", "simple", "-o", "o.png", "--s=a\x1b[2J\x07b"],
+    ["render", "simple", "-o", "o.png"] + ["--ab"] * 10_000,
+])
+def test_argparses_own_messages_echo_values_short(tmp_path, args):
+    r = pathtrace(*args, cwd=tmp_path)
+    assert r.returncode == 2 and "Traceback" not in r.stderr
+    last = r.stderr.strip().splitlines()[-1]
+    assert "error:" in last and len(last) < 500 and last.isprintable(), last
+    assert not list(tmp_path.iterdir())
 
 
 def test_an_aov_named_twice_is_written_once():
@@ -218,6 +242,27 @@ def test_ctrl_c_stops_cleanly_and_writes_nothing(tmp_path):
     _, err = p.communicate(timeout=60)
     assert p.returncode == 130 and "nothing written" in err and "Traceback" not in err, err
     assert not out.exists() and not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("module", ["numpy", "pyopencl", "app.cli"])
+def test_ctrl_c_while_the_package_imports_gets_one_line(tmp_path, module):
+    """SIGINT sent as the console entry point starts importing `module` (an audit hook fires at
+    that moment, so the test hits the window every time; a real Ctrl-C there is a matter of
+    luck)."""
+    child = f"""
+import os, signal, sys
+def hook(event, args):
+    if event == "import" and args[0] == {module!r}:
+        os.kill(os.getpid(), signal.SIGINT)
+sys.addaudithook(hook)
+sys.argv = ["pathtrace", "render", "simple", "-o", {str(tmp_path / "o.png")!r}]
+from app.console import run
+run()
+"""
+    r = subprocess.run([sys.executable, "-c", child], cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)},
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 130 and r.stderr == "pathtrace: interrupted\n", r.stderr
+    assert not list(tmp_path.iterdir())
 
 
 @pytest.mark.parametrize("damage", ["truncated", "garbage", "empty"])

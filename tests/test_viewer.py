@@ -402,6 +402,22 @@ def test_a_scene_opens_at_its_own_size(viewer):
     back_to_simple(viewer)
 
 
+def test_a_scene_opened_takes_its_own_render_settings(viewer, tmp_path):
+    """None of the previous scene's [render] settings stays behind."""
+    path = tmp_path / "own.toml"
+    path.write_text("[render]\nwidth = 64\nheight = 48\nmax_depth = 3\nrussian_roulette = \"off\"\n"
+                    "nee = false\nseed = 7\n[[spheres]]\ncenter = [0, 0, -3]\nradius = 1\n"
+                    "material = { type = \"diffuse\", rho_d = 0.5 }\n")
+    viewer.load_scene(str(path))
+    settle(viewer)
+    own = viewer.renderer.settings
+    assert (own.max_depth, own.russian_roulette, own.nee, own.seed) == (3, "off", False, 7)
+    viewer.load_scene("cornell-box")
+    settle(viewer)
+    assert viewer.renderer.settings == load_scene("cornell-box").settings
+    back_to_simple(viewer)
+
+
 @pytest.mark.parametrize("size", [(800, 600), (1920, 1080)])
 def test_the_panel_fits_its_text(viewer, size):
     """Every section open, a shape picked: no widget reaches past the panel's edge, and the
