@@ -4,7 +4,6 @@ table, the light table and the environment's sampling tables. A Renderer per dev
 uploads it. Primitives have one index space (kernels/types.h); prim_shape maps each back to the
 shape of the description it came from, so that users only ever see the description's shapes."""
 
-import os
 import time
 from dataclasses import dataclass
 
@@ -16,6 +15,7 @@ from app.errors import UserError, format_bytes
 from app.features import Features, stack_size
 from app.lights import LightTable, build_light_table, emitted_power
 from app.materials import TAGS
+from app.memory import available_host_memory
 from app.scene.description import Scene
 from app.types import BVH_NODE, TRIANGLE
 
@@ -137,57 +137,3 @@ def check_memory(name: str, n_spheres: int, n_triangles: int, device: cl.Device 
         check_fits(device, {"BVH": BVH_NODE.itemsize * max(2 * n // 3, 1), "spheres": 16 * n_spheres,
                             "triangles": TRIANGLE.itemsize * n_triangles,
                             "shading normals": 3 * 16 * n_triangles, "materials": 4 * n}, name)
-
-
-def available_host_memory():
-    """Bytes this process can still allocate: MemAvailable from /proc/meminfo, or less where a
-    control group caps the process's memory (a container, a batch job); None where neither can
-    be read."""
-    limits = [x for x in (_meminfo_available(), cgroup_memory_left()) if x is not None]
-    return min(limits) if limits else None
-
-
-def _meminfo_available():
-    try:
-        with open("/proc/meminfo") as f:
-            for line in f:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except (OSError, ValueError, IndexError):
-        return None
-    return None
-
-
-def cgroup_memory_left(root: str = "/sys/fs/cgroup", membership: str = "/proc/self/cgroup"):
-    """The memory control group's limit less its usage, in bytes: cgroup v2 (memory.max,
-    memory.current) or v1 (memory.limit_in_bytes, memory.usage_in_bytes). The group's files are
-    looked for at its path under the hierarchy and, as inside a container, at the hierarchy's
-    root. None where there is no limit ("max", or v1's near-2^63) or no such files."""
-    try:
-        with open(membership) as f:
-            lines = [line.rstrip("\n").split(":", 2) for line in f]
-    except OSError:
-        return None
-    for fields in lines:
-        if len(fields) != 3:
-            continue
-        _, controllers, path = fields
-        if controllers == "":
-            names, base = ("memory.max", "memory.current"), root
-        elif "memory" in controllers.split(","):
-            names, base = ("memory.limit_in_bytes", "memory.usage_in_bytes"), os.path.join(root, "memory")
-        else:
-            continue
-        for folder in (os.path.join(base, path.lstrip("/")), base):
-            try:
-                with open(os.path.join(folder, names[0])) as f:
-                    limit = f.read().strip()
-                with open(os.path.join(folder, names[1])) as f:
-                    used = int(f.read().strip())
-            except (OSError, ValueError):
-                continue
-            if limit == "max" or int(limit) >= 1 << 62:
-                break
-            return max(int(limit) - used, 0)
-    return None
-    return None

@@ -66,7 +66,10 @@ def _read_with_opencv(path: Path):
     # memory: no file name reaches OpenCV
     cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
     data = np.fromfile(path, np.uint8)
-    image = cv2.imdecode(data, cv2.IMREAD_UNCHANGED | cv2.IMREAD_ANYDEPTH | cv2.IMREAD_COLOR)
+    try:
+        image = cv2.imdecode(data, cv2.IMREAD_UNCHANGED | cv2.IMREAD_ANYDEPTH | cv2.IMREAD_COLOR)
+    except cv2.error:      # an empty file fails OpenCV's assertion instead of returning None
+        return None
     if image is None or image.ndim != 3 or image.dtype not in (np.float32, np.float16):
         return None
     return np.ascontiguousarray(image[..., 2::-1], np.float32)

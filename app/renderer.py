@@ -8,10 +8,11 @@ import numpy as np
 import pyopencl as cl
 
 from app.camera import Camera
-from app.compiled import CompiledScene, available_host_memory, compile_scene
+from app.compiled import CompiledScene, compile_scene
 from app.device import Backend, check_fits
 from app.errors import UserError, format_bytes
 from app.environment import Environment
+from app.memory import available_host_memory
 from app.scene import Scene
 from app.types import RENDER_PARAMS
 
@@ -170,12 +171,15 @@ class Renderer:
         nbytes = width * height * 16
         images = image_buffers(aovs)
         others = {name: b.size for name, b in self._buffers.items() if name not in image_buffers(True)}
-        what = f"a {width}x{height} image of {self.scene.name}"
+        what = f"the {width}x{height} image of {self.scene.name}"
         check_fits(self.backend.device.device, {**others, **{name: nbytes for name in images}}, what)
+        host = READ_BACK_BYTES * width * height
+        if self.backend.device.device.host_unified_memory:    # a CPU device's buffers are the host's
+            host += nbytes * len(images)
         available = available_host_memory()
-        if available is not None and READ_BACK_BYTES * width * height > available:
-            raise UserError(f"{what} needs about {format_bytes(READ_BACK_BYTES * width * height)} of "
-                            f"memory to read back and write; {format_bytes(available)} is available")
+        if available is not None and host > available:
+            raise UserError(f"{what} needs about {format_bytes(host)} of memory to render, read back "
+                            f"and write; {format_bytes(available)} is available")
         self.width, self.height, self.aovs = width, height, aovs
         for name in AOV_BUFFERS:
             self._buffers.pop(name, None)

@@ -1,6 +1,7 @@
 """A scene-file fuzzer (#12): TOML files generated around the valid shape of a scene (every field
 sometimes replaced by a value of another type, a huge or tiny or non-finite number, an empty or
-nested container, or left out) are rendered by the command line, each in a process of its own
+nested container, or left out; the environment map sometimes a good file, sometimes a damaged
+one, a folder or none) are rendered by the command line, each in a process of its own
 with a time limit, on the tests' device. Each must either exit 0 having written an image of
 finite pixels, or exit 1 with one error line that names the file; never a traceback, a signal, a
 hang, a warning from below (NumPy's, OpenCV's) or a file left behind. A bounded number of
@@ -22,6 +23,18 @@ from app.image_io import read_hdr
 from app.scene.toml_reader import FILE_TYPES, MATERIAL_TYPES
 
 ROOT = Path(__file__).resolve().parent.parent
+GOOD_MAP = ROOT / "assets" / "envmaps" / "studio_small_03_1k.hdr"
+# environment maps beside each case's scene file, good and damaged: file name -> how it is made
+MAPS = {
+    "good.hdr": lambda path: path.write_bytes(GOOD_MAP.read_bytes()),
+    "cut.hdr": lambda path: path.write_bytes(GOOD_MAP.read_bytes()[:GOOD_MAP.stat().st_size // 2]),
+    "empty.hdr": lambda path: path.write_bytes(b""),
+    "noise.exr": lambda path: path.write_bytes(np.random.default_rng(1).bytes(4096)),
+    "noise.pfm": lambda path: path.write_bytes(b"PF\n4 4\n-1.0\n" + np.random.default_rng(2).bytes(100)),
+    "huge.pfm": lambda path: path.write_bytes(b"PF\n99999 99999\n-1.0\n"),
+    "folder.hdr": lambda path: path.mkdir(),
+    "missing.hdr": lambda path: None,
+}
 CASE_SECONDS = 120      # a case's time limit: a kernel program for a new mix of materials
                         # builds in a few seconds on two PoCL cores; a render of 8x6 pixels takes less
 
@@ -73,8 +86,8 @@ def materials(draw):
     elif kind == "twosided":
         m["bsdf"] = draw(maybe(materials()))
     elif kind in FILE_TYPES:
-        for param in FILE_TYPES[kind].params:
-            if draw(st.booleans()):
+        for param in FILE_TYPES[kind].params:       # the required ones, and some of the others
+            if param.default is None or draw(st.booleans()):
                 m[param.name] = draw(maybe(param_values(param)))
     if draw(st.integers(0, 19)) == 7:
         m[draw(st.sampled_from(["Le", "twosided", "bogus"]))] = draw(ODD_VALUES)
@@ -88,6 +101,7 @@ def scenes(draw):
                    "vfov": draw(maybe(st.floats(1, 179)))},
         "environment": {"color": draw(maybe(st.floats(0, 2))), "intensity": draw(maybe(st.floats(0, 4))),
                         "rotation": draw(maybe(st.floats(-720, 720)))},
+        "map": draw(st.sampled_from([None, None, None] + sorted(MAPS))),
         "render": {"max_depth": draw(maybe(st.integers(0, 16))), "spp": draw(maybe(st.integers(1, 4))),
                    "russian_roulette": draw(maybe(st.sampled_from(["throughput", "albedo", "off"]))),
                    "nee": draw(maybe(st.booleans()))},
@@ -99,6 +113,10 @@ def scenes(draw):
                                                              min_size=3, max_size=6))),
                             "faces": draw(maybe(st.just([[0, 1, 2]]))),
                             "material": draw(materials())}]
+    environment_map = scene.pop("map")
+    if environment_map is not None:       # in place of the constant colour, as the format has it
+        del scene["environment"]["color"]
+        scene["environment"]["map"] = environment_map
     for section in list(scene):            # whole sections sometimes dropped or replaced
         choice = draw(st.integers(0, 29))
         if choice == 13:
@@ -158,6 +176,9 @@ def render(folder: Path, scene: Path):
 def test_a_scene_file_renders_finite_pixels_or_is_refused_in_one_line(tmp_path, scene):
     with tempfile.TemporaryDirectory(dir=tmp_path) as folder:
         folder = Path(folder)
+        for name, make in MAPS.items():
+            make(folder / name)
+        before = sorted(p.name for p in folder.iterdir())
         path = folder / "fuzzed.toml"
         path.write_text(toml_text(scene))
         status, err = render(folder, path)
@@ -169,7 +190,7 @@ def test_a_scene_file_renders_finite_pixels_or_is_refused_in_one_line(tmp_path, 
         assert all(line.startswith(("device: ", "wrote ", "pathtrace: warning: ", "pathtrace: error: "))
                    for line in lines), case
         errors = [line for line in lines if line.startswith("pathtrace: error: ")]
-        left = sorted(p.name for p in folder.iterdir())
+        left = sorted(set(p.name for p in folder.iterdir()) - set(before))
         if status == 1:
             assert len(errors) == 1 and str(path) in errors[0], case
             assert left == ["fuzzed.toml"], case

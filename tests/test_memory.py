@@ -43,7 +43,7 @@ def test_a_build_larger_than_the_host_memory_is_refused(monkeypatch):
 def test_an_image_too_large_for_the_device_is_refused(backend):
     r = Renderer(backend, load_scene("simple"), 8, 8)
     side = int((backend.device.device.max_mem_alloc_size // 16) ** 0.5) + 1
-    with pytest.raises(UserError, match=f"a {side}x{side} image of simple: its sum"):
+    with pytest.raises(UserError, match=f"the {side}x{side} image of simple: its sum"):
         r.resize(side, side)
     assert (r.width, r.height) == (8, 8)      # the renderer still works at its old size
     r.add_samples(1)
@@ -56,6 +56,7 @@ def test_the_command_line_says_what_does_not_fit(monkeypatch, tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 1 and err[-1].startswith("pathtrace: error: spheres8k: building the BVH of 8000 primitives needs about")
     assert not list(tmp_path.iterdir())
+    assert run("64x64").returncode == 0 and (tmp_path / "o.png").exists()
 
 
 def test_a_slow_build_shows_its_progress(monkeypatch, tmp_path, capsys):
@@ -69,7 +70,7 @@ def test_an_image_too_large_to_read_back_is_refused(backend, monkeypatch):
     import app.renderer
     r = Renderer(backend, load_scene("simple"), 8, 8)
     monkeypatch.setattr(app.renderer, "available_host_memory", lambda: 1 << 20)
-    with pytest.raises(UserError, match="a 4096x4096 image of simple needs about 1 GB of memory to read back"):
+    with pytest.raises(UserError, match="the 4096x4096 image of simple needs about .* of memory to render, read back"):
         r.resize(4096, 4096)
     assert (r.width, r.height) == (8, 8)
 
@@ -87,7 +88,7 @@ def fake_cgroup(tmp_path, membership, files):
 def test_a_control_group_limit_caps_the_memory_available(tmp_path, layout):
     """A container's or a batch job's memory limit less its usage, cgroup v2 or v1, whether the
     group's files sit at its path or (inside a container) at the hierarchy's root."""
-    from app.compiled import cgroup_memory_left
+    from app.memory import cgroup_memory_left
     at_root = layout.endswith("root")
     if layout.startswith("v2"):
         folder = "" if at_root else "job/"
@@ -102,10 +103,34 @@ def test_a_control_group_limit_caps_the_memory_available(tmp_path, layout):
 
 @pytest.mark.parametrize("limit", ["max\n", "9223372036854771712\n"])
 def test_no_control_group_limit_leaves_meminfo_in_charge(tmp_path, limit):
-    from app.compiled import cgroup_memory_left
+    from app.memory import cgroup_memory_left
     name = "memory.max" if limit == "max\n" else "memory/memory.limit_in_bytes"
     usage = "memory.current" if limit == "max\n" else "memory/memory.usage_in_bytes"
     line = "0::/\n" if limit == "max\n" else "4:memory:/\n"
     root, membership = fake_cgroup(tmp_path, line, {name: limit, usage: "5\n"})
     assert cgroup_memory_left(root, membership) is None
     assert cgroup_memory_left(str(tmp_path / "none"), str(tmp_path / "none")) is None
+
+
+def test_an_address_space_limit_is_respected(tmp_path):
+    """Under ulimit -v, an image that cannot fit gets one line (PoCL aborted on an assertion when
+    its allocation failed), and one that fits renders."""
+    import resource
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    def limited():
+        resource.setrlimit(resource.RLIMIT_AS, (3 << 30, resource.RLIM_INFINITY))
+    root = Path(__file__).resolve().parent.parent
+    run = lambda size: subprocess.run(  # noqa: E731
+        [sys.executable, "-c", "import app.memory as m; print(m.address_space_left())"] if size is None else
+        [sys.executable, "-m", "app", "render", "simple", "-o", str(tmp_path / "o.png"), "--size", size, "--spp", "1"],
+        cwd=root, preexec_fn=limited, capture_output=True, text=True, timeout=300)
+    left = int(run(None).stdout)
+    assert 0 < left < 3 << 30
+    r = run("8000x8000")
+    assert r.returncode == 1 and r.stderr.strip().splitlines()[-1].startswith(
+        "pathtrace: error: the 8000x8000 image of simple needs about"), r.stderr
+    assert not list(tmp_path.iterdir())
+    assert run("64x64").returncode == 0 and (tmp_path / "o.png").exists()
