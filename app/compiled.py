@@ -12,7 +12,7 @@ import pyopencl as cl
 
 from app.bvh import BVH, build_bvh, primitive_boxes
 from app.errors import UserError, format_bytes
-from app.features import Features, stack_size
+from app.features import FLAT_MAX, Features, stack_size
 from app.lights import LightTable, build_light_table, emitted_power
 from app.materials import TAGS
 from app.memory import available_host_memory
@@ -107,7 +107,9 @@ class CompiledScene:
         used = np.unique(self.materials["type"][np.unique(self.prim_material)])
         return Features(triangles=self.num_triangles > 0,
                         bsdfs=tuple(name for name, tag in TAGS.items() if tag in used),
-                        russian_roulette=russian_roulette, stack=stack_size(self.bvh.depth))
+                        russian_roulette=russian_roulette, stack=stack_size(self.bvh.depth),
+                        flat=(self.num_spheres, self.num_triangles)
+                        if self.num_spheres + self.num_triangles <= FLAT_MAX else ())
 
     def shape(self, prim: int) -> ShapeRef:
         """The description's shape that primitive `prim` (BVH order) belongs to."""

@@ -16,7 +16,7 @@ from app.resources import resource_dir
 
 # The order in which the kernel files are joined into one program; the BSDFs of the material
 # registry and their generated dispatch follow bsdf.cl.
-CORE_FILES = ("types.h", "rng.cl", "sampling.cl", "scene.cl", "spawn.cl", "shapes/sphere.cl",
+CORE_FILES = ("types.h", "vector.cl", "rng.cl", "sampling.cl", "scene.cl", "spawn.cl", "shapes/sphere.cl",
               "shapes/triangle.cl", "bvh.cl", "bsdf.cl", "fresnel.cl", "microfacet.cl",
               "coating.cl")
 LATER_FILES = ("environment.cl", "lights.cl", "camera.cl", "integrator.cl", "aovs.cl", "display.cl")

@@ -15,10 +15,20 @@ class Features:
     bsdfs: tuple = None                    # names of app.materials.BSDFS; None: all of them
     russian_roulette: str = "throughput"   # one of app.scene.description.RUSSIAN_ROULETTE
     stack: int = 48                        # BVH traversal stack entries the tree can need
+    flat: tuple = ()                       # (spheres, triangles) of a scene of at most FLAT_MAX
+                                           # primitives, which rays test all, with no tree
 
     def defines(self) -> tuple:
         return ((() if self.triangles else ("NO_TRIANGLES",))
-                + (f"RUSSIAN_ROULETTE=RR_{self.russian_roulette.upper()}", f"BVH_STACK_SIZE={self.stack}"))
+                + (f"RUSSIAN_ROULETTE=RR_{self.russian_roulette.upper()}", f"BVH_STACK_SIZE={self.stack}")
+                + ((f"FLAT_SPHERES={self.flat[0]}", f"FLAT_TRIANGLES={self.flat[1]}") if self.flat else ()))
+
+
+FLAT_MAX = 8
+"""The most primitives a scene may have for its rays to test them all instead of traversing its
+BVH (kernels/bvh.cl). The counts are compile-time constants, so the tests unroll: for a handful
+of spheres that is cheaper than a traversal's node loads, sort and stack, and leaves the
+kernel fewer registers, hence more threads in flight, on a GPU (docs/performance.md)."""
 
 
 def stack_size(binary_depth: int) -> int:

@@ -105,6 +105,19 @@ float4 intersect_leaves(const SceneData *sc, float4 t, int4 count, int4 index, f
         int i_ = swap ? ib : ia; ib = swap ? ia : ib; ia = i_;   \
     }
 
+#ifdef FLAT_SPHERES
+/* A scene of a few primitives (app/features.py: FLAT_MAX) is not traversed: each ray tests them
+ * all, FLAT_SPHERES spheres and FLAT_TRIANGLES triangles, constants that let the loops unroll. */
+Hit trace_ray(const SceneData *sc, float3 o, float3 d, float t_max, const int any_hit)
+{
+    Hit hit = {t_max, -1, 0.0f, 0.0f};
+    intersect_spheres(sc, 0, FLAT_SPHERES, o, d, &hit);
+#ifndef NO_TRIANGLES
+    intersect_triangles(sc, 0, FLAT_TRIANGLES, o, d, &hit);
+#endif
+    return hit;
+}
+#else
 Hit trace_ray(const SceneData *sc, float3 o, float3 d, float t_max, const int any_hit)
 {
     Hit hit = {t_max, -1, 0.0f, 0.0f};
@@ -141,6 +154,7 @@ Hit trace_ray(const SceneData *sc, float3 o, float3 d, float t_max, const int an
         node = stack[--top];
     }
 }
+#endif
 
 Hit intersect_scene(const SceneData *sc, float3 o, float3 d, float t_max)
 {

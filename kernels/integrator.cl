@@ -48,7 +48,7 @@ float3 sample_direct_light(const SceneData *sc, const RenderParams *p, const glo
     float3 dir = ls.wi;
     float t_max = INFINITY;
     if (ls.prim >= 0) {
-        t_max = length(ls.y - o);
+        t_max = norm(ls.y - o);
         dir = (ls.y - o) / t_max;
         t_max *= 1.0f - SHADOW_EPSILON;
     }

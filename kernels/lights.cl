@@ -65,7 +65,7 @@ LightSample sample_light(const SceneData *sc, const RenderParams *p, float3 x, f
     else if (light.prim >= sc->num_spheres) {
         const global Triangle *tri = &sc->triangles[light.prim - sc->num_spheres];
         ls.y = sample_triangle_area(tri, u.y, u.z);
-        ls.wi = normalize(ls.y - x);
+        ls.wi = unit(ls.y - x);
         ls.pdf = light.pick * pdf_triangle_solid_angle(tri, x, ls.y);
     }
 #endif

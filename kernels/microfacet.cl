@@ -36,7 +36,7 @@ float pdf_ggx_visible(float3 wo, float3 m, float alpha)
  * visible half-sphere, and the normal there is unstretched. */
 float3 sample_ggx_visible(float3 wo, float alpha, float u1, float u2)
 {
-    float3 vh = normalize((float3)(alpha * wo.x, alpha * wo.y, wo.z));
+    float3 vh = unit((float3)(alpha * wo.x, alpha * wo.y, wo.z));
     float len2 = vh.x * vh.x + vh.y * vh.y;
     float3 t1 = len2 > 0.0f ? (float3)(-vh.y, vh.x, 0.0f) * rsqrt(len2) : (float3)(1.0f, 0.0f, 0.0f);
     float3 t2 = cross(vh, t1);
@@ -45,5 +45,5 @@ float3 sample_ggx_visible(float3 wo, float alpha, float u1, float u2)
     float s = 0.5f * (1.0f + vh.z);
     p2 = (1.0f - s) * sqrt(fmax(0.0f, 1.0f - p1 * p1)) + s * p2;
     float3 nh = p1 * t1 + p2 * t2 + sqrt(fmax(0.0f, 1.0f - p1 * p1 - p2 * p2)) * vh;
-    return normalize((float3)(alpha * nh.x, alpha * nh.y, fmax(1e-6f, nh.z)));
+    return unit((float3)(alpha * nh.x, alpha * nh.y, fmax(1e-6f, nh.z)));
 }

@@ -300,3 +300,52 @@ def test_the_stack_each_scene_gets_holds_its_tree(build, monkeypatch):
     bvh = build_bvh(lo, hi)
     assert most_pushes(bvh.nodes) <= stack_size(bvh.depth) <= 48
     assert stack_size(MAX_DEPTH) == 48 and stack_size(1) == 8
+
+
+FLAT_MIXED = """
+[camera]
+eye = [0, 1, 4]
+look_at = [0, 0.5, 0]
+[environment]
+color = 0.8
+[[spheres]]
+center = [-0.6, 0.5, 0]
+radius = 0.5
+material = { type = "diffuse", rho_d = 0.7 }
+[[spheres]]
+center = [0.7, 1.6, -0.5]
+radius = 0.3
+material = { type = "emitter", Le = 4 }
+[[meshes]]
+vertices = [[-2, 0, -2], [2, 0, -2], [2, 0, 2], [-2, 0, 2], [0.2, 0, -1], [1.2, 1, -1], [0.2, 1.2, -1]]
+faces = [[0, 2, 1], [0, 3, 2], [4, 5, 6]]
+material = { type = "diffuse", rho_d = 0.5 }
+"""
+
+
+@pytest.mark.parametrize("scene", ["simple", "mixed"])
+@pytest.mark.parametrize("nee", [False, True])
+def test_a_flat_scene_renders_as_its_tree_does(backend, monkeypatch, tmp_path, scene, nee):
+    """A scene of at most FLAT_MAX primitives is built without traversal (app/features.py): its
+    rays find the hits its BVH gives, so the same samples make the same image."""
+    from dataclasses import replace
+
+    from app.compiled import CompiledScene
+    from app.renderer import Renderer
+    from app.scene import load_scene
+    if scene == "mixed":
+        (tmp_path / "mixed.toml").write_text(FLAT_MIXED)
+        scene = str(tmp_path / "mixed.toml")
+    loaded = load_scene(scene).with_settings(nee=nee)
+
+    def render():
+        r = Renderer(backend, loaded, 48, 32)
+        r.add_samples(4)
+        return r.compiled.features(r.settings.russian_roulette), r.mean()
+    features, flat = render()
+    assert features.flat and sum(features.flat) <= 8
+    tree_features = CompiledScene.features
+    monkeypatch.setattr(CompiledScene, "features", lambda self, rr: replace(tree_features(self, rr), flat=()))
+    features, tree = render()
+    assert not features.flat and flat.mean() > 0
+    np.testing.assert_allclose(flat, tree, rtol=1e-4, atol=1e-6)

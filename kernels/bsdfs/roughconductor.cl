@@ -15,7 +15,7 @@ float3 eval_roughconductor(const global Material *m, float3 wo, float3 wi)
     if (wo.z <= 0.0f || wi.z <= 0.0f)
         return (float3)(0.0f);
     float alpha = m->p0.w;
-    float3 h = normalize(wo + wi);
+    float3 h = unit(wo + wi);
     float g = ggx_g1(wo, h, alpha) * ggx_g1(wi, h, alpha);
     float3 f = fresnel_conductor(dot(wo, h), m->p0.xyz, m->p1.xyz);
     return m->p2.xyz * f * (ggx_d(h, alpha) * g / (4.0f * wo.z * wi.z));
@@ -26,7 +26,7 @@ float pdf_roughconductor(const global Material *m, float3 wo, float3 wi)
 {
     if (wo.z <= 0.0f || wi.z <= 0.0f)
         return 0.0f;
-    float3 h = normalize(wo + wi);
+    float3 h = unit(wo + wi);
     float wo_h = dot(wo, h);
     return wo_h > 0.0f ? pdf_ggx_visible(wo, h, m->p0.w) / (4.0f * wo_h) : 0.0f;
 }

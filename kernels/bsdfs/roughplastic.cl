@@ -19,7 +19,7 @@ float3 eval_roughplastic(const global Material *m, float3 wo, float3 wi)
     if (wo.z <= 0.0f || wi.z <= 0.0f)
         return (float3)(0.0f);
     float alpha = m->p2.w, eta = m->p0.w;
-    float3 h = normalize(wo + wi);
+    float3 h = unit(wo + wi);
     float cos_t, eta_ti;
     float f = fresnel_dielectric(dot(wo, h), eta, &cos_t, &eta_ti);
     float g = ggx_g1(wo, h, alpha) * ggx_g1(wi, h, alpha);
@@ -35,7 +35,7 @@ float pdf_roughplastic(const global Material *m, float3 wo, float3 wi)
     if (wo.z <= 0.0f || wi.z <= 0.0f)
         return 0.0f;
     float p_s = coating_choice(m, 1.0f - lookup_cos_table(m, wo.z));
-    float3 h = normalize(wo + wi);
+    float3 h = unit(wo + wi);
     float wo_h = dot(wo, h);
     float specular = wo_h > 0.0f ? pdf_ggx_visible(wo, h, m->p2.w) / (4.0f * wo_h) : 0.0f;
     return p_s * specular + (1.0f - p_s) * pdf_cosine_hemisphere(wi.z);

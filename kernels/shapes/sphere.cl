@@ -22,16 +22,18 @@ float intersect_sphere(Sphere s, float3 o, float3 d, float t_max)
     return (t > 0.0f && t < t_max) ? t : INFINITY;
 }
 
-/* The hit point of o + t d, projected back onto the sphere, with its error bound (pbrt-v4
- * section 6.8.5: gamma(5) |p| for the reprojected point relative to the centre, plus the
- * rounding of adding the centre back) and outward unit normal. */
+/* The hit point of o + t d, projected back onto the sphere, with its error bound and outward
+ * unit normal. pbrt-v4 (section 6.8.5) bounds the reprojected point relative to the centre by
+ * gamma(5) |p| for a correctly rounded sqrt and division; here the scale is r rsqrt(|p|^2):
+ * gamma(3) in the dot product, halved by the square root, OpenCL's 2 ulp (4 epsilon) for rsqrt
+ * and two products make 7.5 epsilon, so gamma(8); plus the rounding of adding the centre back. */
 void sphere_surface(Sphere s, float3 o, float3 d, float t, float3 *p, float3 *error, float3 *n)
 {
     float3 rel = o + t * d - s.xyz;
-    rel *= s.w / length(rel);
+    rel *= s.w * rsqrt(dot(rel, rel));
     *n = rel / s.w;
     *p = s.xyz + rel;
-    *error = gamma_bound(5) * fabs(rel) + gamma_bound(2) * fabs(*p);
+    *error = gamma_bound(8) * fabs(rel) + gamma_bound(2) * fabs(*p);
 }
 
 /* 1 - cos(theta_max) of the cone a sphere subtends from p, as sin^2 / (1 + cos) to keep
@@ -61,5 +63,5 @@ float3 sample_sphere_cone(Sphere s, float3 p, float u1, float u2)
     float cos_t = 1.0f - one_minus_cos;
     float sin_t = sqrt(max(0.0f, one_minus_cos * (2.0f - one_minus_cos)));
     float3 v = (float3)(cos(2.0f * PI_F * u2) * sin_t, sin(2.0f * PI_F * u2) * sin_t, cos_t);
-    return to_world(v, normalize(s.xyz - p));
+    return to_world(v, unit(s.xyz - p));
 }
