@@ -172,9 +172,10 @@ def cmd_render(args):
         check_writable(path)
         for name in args.aov or ():
             check_writable(aov_path(path, name))
-    if args.denoise:
+    denoiser = None
+    if args.denoise:                 # before rendering: a missing or failing OIDN says so now
         from app.denoise import Denoiser
-        Denoiser("high")             # before rendering: a missing or failing OIDN says so now
+        denoiser = Denoiser("high")
     scene = apply_render_options(load_scene(args.scene), args)
     s = scene.settings
     backends = choose_devices(args.device or ["auto"])
@@ -206,7 +207,7 @@ def cmd_render(args):
     if dropped:
         warn(f"{scene.name}: {dropped} of {s.spp * pixels} samples were NaN or infinite and were left out "
              f"(as black)")
-    outputs = render_outputs(group, args)
+    outputs = render_outputs(group, args, denoiser)
     write_images(outputs, args.exposure, args.tonemap)
     for out in outputs:
         print(f"wrote {shown(out.path)}", file=sys.stderr)
@@ -230,18 +231,17 @@ def aov_path(path: str, name: str) -> Path:
     return path.with_name(f"{path.stem}.{name}{path.suffix}")
 
 
-def render_outputs(group, args) -> list:
-    """What `render` writes: the image (denoised with --denoise; an EXR then keeps the noisy one
-    as its layer "noisy") to every --output, and with --aov the albedo and normal beside each
-    (normals stored as n / 2 + 1/2 in PNG and JPEG, the usual encoding)."""
+def render_outputs(group, args, denoiser=None) -> list:
+    """What `render` writes: the image (denoised by `denoiser` with --denoise; an EXR then keeps
+    the noisy one as its layer "noisy") to every --output, and with --aov the albedo and normal
+    beside each (normals stored as n / 2 + 1/2 in PNG and JPEG, the usual encoding)."""
     from app.image_io import HDR_FORMATS, Output
     noisy = group.mean()
     image, layers = noisy, {}
     if args.denoise or args.aov:
         albedo, normal = group.read_aovs()
-    if args.denoise:
-        from app.denoise import Denoiser
-        image, layers = Denoiser("high")(noisy, albedo, normal), {"noisy": noisy}
+    if denoiser is not None:
+        image, layers = denoiser(noisy, albedo, normal), {"noisy": noisy}
     outputs = []
     for path in args.output:
         suffix = Path(path).suffix.lower()
