@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Sets pathtrace up on Debian or Ubuntu: the system's OpenCL and OpenGL pieces, a virtual
-# environment in .venv, and pathtrace installed into it (a normal, non-editable install).
-#   ./install.sh          what rendering and the viewer need
+# environment in .venv, and pathtrace installed into it.
+#   ./install.sh          what rendering and the viewer need (a normal install: a copy)
 #   ./install.sh --dev    also Xvfb and xdotool (the window tests), the test packages and Ray
-#                         (the render farm, which the tests run on a local cluster)
+#                         (the render farm, which the tests run on a local cluster); pathtrace
+#                         is installed editable, so that `import pathtrace` is this checkout
 set -euo pipefail
 cd "$(dirname "$0")"
 
@@ -30,7 +31,7 @@ fi
 [ -x .venv/bin/python ] || python3 -m venv .venv
 .venv/bin/python -m pip install -q --upgrade pip
 if [ $dev = 1 ]; then
-    .venv/bin/python -m pip install -q ".[test,farm]"
+    .venv/bin/python -m pip install -q -e ".[test,farm]"
 else
     .venv/bin/python -m pip install -q .
 fi

@@ -1,3 +1,3 @@
-from app.console import run
+from pathtrace.console import run
 
 run()

@@ -20,11 +20,11 @@ import sys
 import time
 from dataclasses import asdict, dataclass
 
-from app.device import build_program, choose_devices
-from app.errors import UserError
-from app.multidevice import DeviceGroup
-from app.renderer import Renderer
-from app.scene import load_scene
+from pathtrace.device import build_program, choose_devices
+from pathtrace.errors import UserError
+from pathtrace.multidevice import DeviceGroup
+from pathtrace.renderer import Renderer
+from pathtrace.scene import load_scene
 
 TARGET_SCENES = ("simple", "spheres8k", "spheres64k",
                  "simple-diffuse", "spheres8k-diffuse", "spheres64k-diffuse", "teapot-sky")
@@ -59,12 +59,12 @@ def default_estimator(scene_name: str) -> str:
 
 def measure(backends, scene, estimator, width, height, spp, builds) -> Result:
     """One timed render of `scene` on `backends` together (one device, or several sharing the
-    samples: app.multidevice)."""
+    samples: pathtrace.multidevice)."""
     settings = dict(max_depth=COMPARISON_DEPTH, russian_roulette="off") if estimator.startswith("depth8") \
         else dict(max_depth=0, russian_roulette="albedo")
     settings["nee"] = estimator.endswith("+nee")
     scene = scene.with_settings(**settings)
-    # the scene's own kernels (app.features), built and launched once outside the timed region
+    # the scene's own kernels (pathtrace.features), built and launched once outside the timed region
     for backend in backends:
         Renderer(backend, scene, 16, 16).add_samples(1)
         backend.queue.finish()
@@ -115,7 +115,7 @@ class BuildTime:
     device: str
     primitives: int
     seconds: float            # the median of three builds
-    sah_cost: float           # app.bvh.BVH.cost
+    sah_cost: float           # pathtrace.bvh.BVH.cost
     nodes: int
     node_megabytes: float
 
@@ -124,8 +124,8 @@ def run_builds(device_specs, sizes, log=print):
     """A row per device, size and kind of primitive (spheres, triangles)."""
     import numpy as np
 
-    from app.bvh import build_bvh, primitive_boxes
-    from app.scene.builtin import builtin_scene, count_name
+    from pathtrace.bvh import build_bvh, primitive_boxes
+    from pathtrace.scene.builtin import builtin_scene, count_name
 
     results = []
     for backend in choose_devices(device_specs):
@@ -169,9 +169,9 @@ def _median_ms(step, repeats: int = 30) -> float:
 
 
 def run_display(device_specs, width, height, log=print):
-    """The image's way from the device to the host each frame, each of app.display's ways (the
+    """The image's way from the device to the host each frame, each of pathtrace.display's ways (the
     texture upload that follows is OpenGL's and is not timed here)."""
-    from app.display import MODES, Display
+    from pathtrace.display import MODES, Display
     results = []
     for backend in choose_devices(device_specs):
         r = Renderer(backend, load_scene("simple"), width, height)
@@ -190,12 +190,13 @@ def run_display(device_specs, width, height, log=print):
 
 def run_denoise(width, height, log=print):
     """Open Image Denoise on the demo's 4-sample image and guides, at each quality."""
-    from app.denoise import QUALITIES, Denoiser
-    from app.device import choose_device
+    from pathtrace.denoise import QUALITIES, Denoiser
+    from pathtrace.device import choose_device
     r = Renderer(choose_device("auto"), load_scene("demo"), width, height)
     r.set_aovs(True)
     r.add_samples(4)
-    image, (albedo, normal) = r.mean(), r.read_aovs()
+    image, aovs = r.mean(), r.read_aovs()
+    albedo, normal = aovs["albedo"], aovs["normal"]
     results = []
     for quality in QUALITIES:
         denoiser = Denoiser(quality)
@@ -239,7 +240,7 @@ def write_json(path, results, argv):
         "host": platform.node(), "python": sys.version.split()[0], "pyopencl": cl.VERSION_TEXT,
         "results": [asdict(r) for r in results],
     }
-    from app.image_io import write_text
+    from pathtrace.image_io import write_text
     write_text(path, json.dumps(data, indent=2) + "\n")
 
 

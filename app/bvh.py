@@ -36,7 +36,7 @@ from typing import Callable
 import numpy as np
 import pyopencl as cl
 
-from app.types import BVH_NODE
+from pathtrace.types import BVH_NODE
 
 # these three reach kernels/build/collapse.cl as build options
 MAX_LEAF_SIZE = 4
@@ -78,8 +78,8 @@ class Builder:
     """The build kernels (kernels/build/) on one OpenCL device."""
 
     def __init__(self, queue: cl.CommandQueue):
-        from app.device import build_cached
-        from app.resources import resource_dir
+        from pathtrace.device import build_cached
+        from pathtrace.resources import resource_dir
 
         self.queue = queue
         folder = resource_dir("kernels")
@@ -128,8 +128,8 @@ def builder_for(queue: cl.CommandQueue = None) -> Builder:
 
 
 def _first_working_builder() -> Builder:
-    from app.device import list_devices
-    from app.errors import UserError
+    from pathtrace.device import list_devices
+    from pathtrace.errors import UserError
 
     for d in sorted(list_devices(), key=lambda d: d.kind != "GPU"):
         try:

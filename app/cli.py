@@ -6,10 +6,10 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
-from app import __version__
-from app.console import INTERRUPTED
-from app.errors import UserError, cut, short, warn
-from app.scene.description import RUSSIAN_ROULETTE
+from pathtrace import __version__
+from pathtrace.console import INTERRUPTED
+from pathtrace.errors import UserError, cut, short, warn
+from pathtrace.scene.description import RUSSIAN_ROULETTE
 
 EPILOG = ("A scene is a .toml file, a Mitsuba 3 .xml file or a built-in name (pathtrace scenes lists them): simple, "
           "simple-diffuse, spheres8k[-diffuse], spheres64k[-diffuse], demo, teapot, teapot-sky, "
@@ -88,7 +88,7 @@ def _exposure(text):
 
 def add_output_options(p: argparse.ArgumentParser):
     """Options of the commands that write images (render, farm render)."""
-    from app.tonemap import TONEMAPS
+    from pathtrace.tonemap import TONEMAPS
     p.add_argument("--exposure", type=_exposure, default=0.0, metavar="EV",
                    help="exposure in stops, -100 to 100, for .png/.jpg (default 0)")
     p.add_argument("--tonemap", choices=TONEMAPS, default="standard",
@@ -133,7 +133,7 @@ def apply_render_options(scene, args):
 
 
 def cmd_devices(args):
-    from app.device import build_error_line, list_devices, open_device
+    from pathtrace.device import build_error_line, list_devices, open_device
     import pyopencl as cl
 
     devices = list_devices()
@@ -153,7 +153,7 @@ def cmd_devices(args):
 
 
 def cmd_scenes(args):
-    from app.scene.builtin import BUILTIN_SCENES
+    from pathtrace.scene.builtin import BUILTIN_SCENES
     for name in BUILTIN_SCENES:
         print(name)
     return 0
@@ -162,11 +162,11 @@ def cmd_scenes(args):
 def cmd_render(args):
     from tqdm import tqdm
 
-    from app.device import choose_devices
-    from app.files import shown
-    from app.image_io import check_writable, write_images
-    from app.multidevice import DeviceGroup
-    from app.scene import load_scene
+    from pathtrace.device import choose_devices
+    from pathtrace.files import shown
+    from pathtrace.image_io import check_writable, write_images
+    from pathtrace.multidevice import DeviceGroup
+    from pathtrace.scene import load_scene
 
     for path in args.output:
         check_writable(path)
@@ -174,7 +174,7 @@ def cmd_render(args):
             check_writable(aov_path(path, name))
     denoiser = None
     if args.denoise:                 # before rendering: a missing or failing OIDN says so now
-        from app.denoise import Denoiser
+        from pathtrace.denoise import Denoiser
         denoiser = Denoiser("high")
     scene = apply_render_options(load_scene(args.scene), args)
     s = scene.settings
@@ -235,7 +235,7 @@ def render_outputs(group, args, denoiser=None) -> list:
     """What `render` writes: the image (denoised by `denoiser` with --denoise; an EXR then keeps
     the noisy one as its layer "noisy") to every --output, and with --aov the albedo and normal
     beside each (normals stored as n / 2 + 1/2 in PNG and JPEG, the usual encoding)."""
-    from app.image_io import HDR_FORMATS, Output
+    from pathtrace.image_io import HDR_FORMATS, Output
     noisy = group.mean()
     image, layers = noisy, {}
     if args.denoise or args.aov:
@@ -254,9 +254,9 @@ def render_outputs(group, args, denoiser=None) -> list:
 
 
 def cmd_convert(args):
-    from app.image_io import write_text
-    from app.scene import load_scene
-    from app.scene.toml_writer import scene_toml
+    from pathtrace.image_io import write_text
+    from pathtrace.scene import load_scene
+    from pathtrace.scene.toml_writer import scene_toml
 
     out = Path(args.output)
     if out.suffix.lower() != ".toml":
@@ -272,10 +272,10 @@ def cmd_farm_render(args):
     import numpy as np
     from tqdm import tqdm
 
-    from app import farm
-    from app.compiled import compile_scene
-    from app.image_io import check_writable, write_image
-    from app.scene import load_scene
+    from pathtrace import farm
+    from pathtrace.compiled import compile_scene
+    from pathtrace.image_io import check_writable, write_image
+    from pathtrace.scene import load_scene
 
     scenes = [apply_render_options(load_scene(name), args) for name in args.scene]
     if args.frames and len(scenes) > 1:
@@ -327,9 +327,9 @@ def farm_output(pattern: str, name: str, frame: int, count: int) -> str:
 
 
 def cmd_view(args):
-    from app.device import choose_device
-    from app.scene import load_scene
-    from app.viewer.window import Viewer, require_display
+    from pathtrace.device import choose_device
+    from pathtrace.scene import load_scene
+    from pathtrace.viewer.window import Viewer, require_display
 
     if args.device and len(args.device) > 1:
         raise UserError("--device: the viewer renders on one device; give one (several are "
@@ -348,12 +348,12 @@ def cmd_view(args):
 
 
 def cmd_bench(args):
-    from app import bench
+    from pathtrace import bench
 
     timing_size = args.size or ((320, 180) if args.quick else (1280, 720))
     bench.validate(args)
     if args.json:
-        from app.image_io import check_writable
+        from pathtrace.image_io import check_writable
         check_writable(args.json, "--json", formats=None)
     if args.display or args.denoise:
         print(bench.TIMING_HEADER)
@@ -415,7 +415,7 @@ def build_parser():
     add_render_options(p)
     p.set_defaults(func=cmd_view)
 
-    from app.bench import TARGET_SCENES
+    from pathtrace.bench import TARGET_SCENES
     p = sub.add_parser("bench", help="time renders of the benchmark scenes (the table of the report "
                                      "pathtrace grew from)",
                        description="Times renders of the benchmark scenes, by default at 1920x1080 "
@@ -514,7 +514,7 @@ def parse(parser: argparse.ArgumentParser, argv):
 
 
 def main(argv=None) -> int:
-    """Runs one command; returns its exit status (app.console: the entry point around it)."""
+    """Runs one command; returns its exit status (pathtrace.console: the entry point around it)."""
     args = parse(build_parser(), argv)
     try:
         code = args.func(args)

@@ -10,14 +10,14 @@ from dataclasses import dataclass
 import numpy as np
 import pyopencl as cl
 
-from app.bvh import BVH, build_bvh, primitive_boxes
-from app.errors import UserError, format_bytes
-from app.features import FLAT_MAX, Features, stack_size
-from app.lights import LightTable, build_light_table, emitted_power
-from app.materials import TAGS
-from app.memory import available_host_memory
-from app.scene.description import Scene
-from app.types import BVH_NODE, TRIANGLE
+from pathtrace.bvh import BVH, build_bvh, primitive_boxes
+from pathtrace.errors import UserError, format_bytes
+from pathtrace.features import FLAT_MAX, Features, stack_size
+from pathtrace.lights import LightTable, build_light_table, emitted_power
+from pathtrace.materials import TAGS
+from pathtrace.memory import available_host_memory
+from pathtrace.scene.description import Scene
+from pathtrace.types import BVH_NODE, TRIANGLE
 
 
 @dataclass
@@ -35,7 +35,7 @@ BUILD_HOST_BYTES = 320
 
 class CompiledScene:
     def __init__(self, scene: Scene, queue: cl.CommandQueue = None, progress=None):
-        """queue: the device that builds the BVH (app.bvh.build_bvh) and whose memory the scene
+        """queue: the device that builds the BVH (pathtrace.bvh.build_bvh) and whose memory the scene
         must fit; progress(fraction) is called as the BVH build goes."""
         self.scene = scene
         n_spheres = len(scene.spheres)
@@ -128,7 +128,7 @@ def compile_scene(scene: Scene, queue: cl.CommandQueue = None, progress=None) ->
 def check_memory(name: str, n_spheres: int, n_triangles: int, device: cl.Device = None):
     """Refuses, with one line and before anything is allocated, a scene whose BVH build would not
     fit in the host's available memory, or whose buffers would not fit on `device`."""
-    from app.device import check_fits
+    from pathtrace.device import check_fits
 
     n = n_spheres + n_triangles
     available = available_host_memory()

@@ -18,7 +18,7 @@ def _oidn():
     try:
         import pyoidn
     except ImportError as e:          # an install without it (it is a dependency)
-        from app.errors import UserError
+        from pathtrace.errors import UserError
         raise UserError(f"denoising needs pyoidn (pip install pyoidn): {e}") from None
     return pyoidn
 
@@ -51,7 +51,7 @@ class Denoiser:
         """OIDN's last error as one line (a user's render must not end in a traceback)."""
         error = self._device.get_error()
         if error:
-            from app.errors import UserError
+            from pathtrace.errors import UserError
             raise UserError(f"Open Image Denoise, {what}: {error}")
 
     def _bind(self, height: int, width: int):

@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pyopencl as cl
 
-from app.errors import UserError, format_bytes
-from app.features import Features
-from app.resources import resource_dir
+from pathtrace.errors import UserError, format_bytes
+from pathtrace.features import Features
+from pathtrace.resources import resource_dir
 
 # The order in which the kernel files are joined into one program; the BSDFs of the material
 # registry and their generated dispatch follow bsdf.cl.
@@ -28,7 +28,7 @@ BUILD_OPTIONS = ("-cl-mad-enable", "-cl-no-signed-zeros")
 def kernel_source(extra: str = "", features: Features = Features()) -> str:
     """The kernels as one source text, each file introduced by a #line marker so that compiler
     messages name the file and line."""
-    from app.materials import dispatch_source, kernel_files
+    from pathtrace.materials import dispatch_source, kernel_files
 
     folder = resource_dir("kernels")
     texts = [(name, (folder / name).read_text())

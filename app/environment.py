@@ -23,7 +23,7 @@ class Environment:
 
     @classmethod
     def from_file(cls, path: Path, intensity=1.0, rotation=0.0, where="environment.map"):
-        from app.image_io import read_hdr
+        from pathtrace.image_io import read_hdr
         return cls(read_hdr(path, where), intensity, rotation, str(path))
 
     def sampling_cdfs(self):

@@ -20,9 +20,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from app.camera import Camera
-from app.errors import UserError
-from app.render import next_launch_size
+from pathtrace.camera import Camera
+from pathtrace.errors import UserError
+from pathtrace.render import next_launch_size
 
 BATCH_SECONDS = 1.0       # a batch's target duration: long enough that transfers are amortised
 
@@ -57,8 +57,8 @@ def _actor_class(ray):
         """One OpenCL device of one node with the farm's scenes uploaded."""
 
         def __init__(self, scenes, device_spec: str):
-            from app.device import choose_device, list_devices
-            from app.renderer import Renderer
+            from pathtrace.device import choose_device, list_devices
+            from pathtrace.renderer import Renderer
             if device_spec == "gpu":
                 # Ray reserves a GPU for this actor and hides the others from CUDA; should the
                 # OpenCL driver still list them all, take the reserved one by its number

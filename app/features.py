@@ -12,8 +12,8 @@ class Features:
     every thread (docs/performance.md). The default, every shape and material, is the program
     the tests build their kernels beside."""
     triangles: bool = True
-    bsdfs: tuple = None                    # names of app.materials.BSDFS; None: all of them
-    russian_roulette: str = "throughput"   # one of app.scene.description.RUSSIAN_ROULETTE
+    bsdfs: tuple = None                    # names of pathtrace.materials.BSDFS; None: all of them
+    russian_roulette: str = "throughput"   # one of pathtrace.scene.description.RUSSIAN_ROULETTE
     stack: int = 48                        # BVH traversal stack entries the tree can need
     flat: tuple = ()                       # (spheres, triangles) of a scene of at most FLAT_MAX
                                            # primitives, which rays test all, with no tree

@@ -5,7 +5,7 @@ import os
 import stat
 from pathlib import Path
 
-from app.errors import UserError
+from pathtrace.errors import UserError
 
 
 def shown(path) -> str:

@@ -14,9 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
-from app.errors import UserError
-from app.files import check_regular_file, shown
-from app.tonemap import tonemap, to_8bit
+from pathtrace.errors import UserError
+from pathtrace.files import check_regular_file, shown
+from pathtrace.tonemap import tonemap, to_8bit
 
 HDR_FORMATS = (".exr", ".hdr", ".pfm")
 LDR_FORMATS = (".png", ".jpg", ".jpeg")

@@ -5,8 +5,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from app.environment import LUMINANCE
-from app.types import LIGHT
+from pathtrace.environment import LUMINANCE
+from pathtrace.types import LIGHT
 
 
 @dataclass

@@ -5,7 +5,7 @@ its absolute index (kernels/rng.cl), so the image does not depend on which devic
 sample: it equals a one-device render of the same samples up to the order of float additions.
 
 Balancing follows the idea of Cycles' work balancer: each device takes launches sized to its own
-measured speed (app.render.next_launch_size), so a fast device takes more samples and a device
+measured speed (pathtrace.render.next_launch_size), so a fast device takes more samples and a device
 that slows down takes fewer; near the end a device takes no more than its share of what is left,
 by the measured speeds, so that no device is left finishing a long launch alone."""
 
@@ -15,10 +15,10 @@ import time
 
 import numpy as np
 
-from app.compiled import CompiledScene, compile_scene
-from app.device import Backend
-from app.render import next_launch_size
-from app.renderer import Renderer, aov_means, variance_of
+from pathtrace.compiled import CompiledScene, compile_scene
+from pathtrace.device import Backend
+from pathtrace.render import next_launch_size
+from pathtrace.renderer import Renderer, aov_means, variance_of
 
 
 FIRST_BANDS = 16       # the first sample of a render is split into this many launches of rows,
@@ -145,8 +145,8 @@ class DeviceGroup:
         for r in self.renderers:
             r.set_aovs(on)
 
-    def read_aovs(self) -> tuple:
-        """The denoiser's albedo and normal over all devices (Renderer.read_aovs)."""
+    def read_aovs(self) -> dict:
+        """The albedo, normal and depth over all devices (Renderer.read_aovs)."""
         return aov_means(self._merged(Renderer.read_albedo_sum), self._merged(Renderer.read_normal_sum))
 
     def mean(self) -> np.ndarray:

@@ -7,14 +7,14 @@ from dataclasses import replace
 import numpy as np
 import pyopencl as cl
 
-from app.camera import Camera
-from app.compiled import CompiledScene, compile_scene
-from app.device import Backend, check_fits
-from app.errors import UserError, format_bytes
-from app.environment import Environment
-from app.memory import available_host_memory
-from app.scene import Scene
-from app.types import RENDER_PARAMS
+from pathtrace.camera import Camera
+from pathtrace.compiled import CompiledScene, compile_scene
+from pathtrace.device import Backend, check_fits
+from pathtrace.errors import UserError, format_bytes
+from pathtrace.environment import Environment
+from pathtrace.memory import available_host_memory
+from pathtrace.scene import Scene
+from pathtrace.types import RENDER_PARAMS
 
 RR_DEPTH = 5           # where Russian roulette on throughput starts (Mitsuba 3's default)
 READ_BACK_BYTES = 64   # host memory per pixel to read an image back and write it: the float4
@@ -22,8 +22,8 @@ READ_BACK_BYTES = 64   # host memory per pixel to read an image back and write i
 AOV_PASSES = 16        # the denoiser's albedo and normal are accumulated over the first passes
                        # only: by then they hardly change (kernels/aovs.cl takes 4 BSDF samples
                        # a pass), and the path tracer runs at full speed after
-AOV_BUFFERS = ("albedo_sum", "normal_sum")   # kernels/aovs.cl: rgb and xyz sums, w counting
-                                             # the samples
+AOV_BUFFERS = ("albedo_sum", "normal_sum")   # kernels/aovs.cl: albedo rgb and the samples
+                                             # kept in w; normal xyz and the depth in w
 
 
 def image_buffers(aovs: bool) -> tuple:
@@ -38,9 +38,13 @@ def per_pixel_mean(sums: np.ndarray) -> np.ndarray:
     return np.divide(sums[..., :3], w, out=np.zeros(sums.shape[:-1] + (3,), np.float32), where=w > 0)
 
 
-def aov_means(albedo_sum: np.ndarray, normal_sum: np.ndarray) -> tuple:
-    """The denoiser's albedo (clamped to [0, 1], its range) and normal from their sums."""
-    return np.clip(per_pixel_mean(albedo_sum), 0.0, 1.0), per_pixel_mean(normal_sum)
+def aov_means(albedo_sum: np.ndarray, normal_sum: np.ndarray) -> dict:
+    """The auxiliary images from their sums (kernels/aovs.cl), each (H, W, 3) float32 but the
+    depth (H, W): "albedo" (clamped to [0, 1], the denoiser's range), "normal" and "depth"."""
+    w = albedo_sum[..., 3:4]
+    sums = np.concatenate([albedo_sum[..., :3], normal_sum], axis=-1)
+    means = np.divide(sums, w, out=np.zeros(sums.shape, np.float32), where=w > 0)
+    return {"albedo": np.clip(means[..., :3], 0.0, 1.0), "normal": means[..., 3:6], "depth": means[..., 6]}
 
 
 def variance_of(sum: np.ndarray, sum_sq: np.ndarray, samples: int) -> np.ndarray:
@@ -61,7 +65,7 @@ class Renderer:
         self.width = self.height = 0
         self.samples = 0          # samples per pixel accumulated so far (whole passes)
         self.aovs = False         # whether the denoiser's albedo and normal are accumulated too
-        self.resets = 0           # how many times the image restarted (app.render.Progressive)
+        self.resets = 0           # how many times the image restarted (pathtrace.render.Progressive)
         self.set_scene(scene, progress)
         self.resize(width or self.scene.settings.width, height or self.scene.settings.height)
 
@@ -105,7 +109,7 @@ class Renderer:
         self.reset()
 
     def _select_program(self):
-        """The kernels specialised to the scene's shapes and materials (app.device.Features)."""
+        """The kernels specialised to the scene's shapes and materials (pathtrace.device.Features)."""
         program = self.backend.program_for(self.compiled.features(self.settings.russian_roulette))
         if program is not self.program:
             self.program = program
@@ -223,7 +227,7 @@ class Renderer:
         renderer), so that several renderers can share one render's sample indices.
 
         rows = (first, end) adds them to those rows only: a band of a pass, so that no launch
-        holds a window up (app.render.Progressive). Bands go top to bottom; `samples` counts
+        holds a window up (pathtrace.render.Progressive). Bands go top to bottom; `samples` counts
         whole passes, so it grows with the band that ends at the last row. A pass split into
         bands adds the very samples one launch would."""
         b = self._buffers
@@ -265,10 +269,11 @@ class Renderer:
         """The image so far: mean radiance per pixel, (H, W, 3) float32."""
         return self._read("sum")[..., :3] / max(self.samples, 1)
 
-    def read_aovs(self) -> tuple:
-        """The denoiser's auxiliary images so far (set_aovs): the mean albedo, clamped to
-        [0, 1], and the mean shading normal (not renormalised; 0 where paths escaped), each
-        (H, W, 3) float32."""
+    def read_aovs(self) -> dict:
+        """The auxiliary images so far (set_aovs): "albedo", the mean albedo clamped to [0, 1],
+        and "normal", the mean shading normal (not renormalised; 0 where paths escaped), each
+        (H, W, 3) float32; "depth", the mean distance from the camera to the first surface
+        (0 where the camera ray escaped), (H, W) float32."""
         return aov_means(self.read_albedo_sum(), self.read_normal_sum())
 
     def read_albedo_sum(self) -> np.ndarray:
@@ -276,7 +281,7 @@ class Renderer:
         return self._read("albedo_sum")
 
     def read_normal_sum(self) -> np.ndarray:
-        """The raw normal sums (set_aovs), (H, W, 4) float32: xyz, and the samples in w."""
+        """The raw normal sums (set_aovs), (H, W, 4) float32: xyz, and the depths in w."""
         return self._read("normal_sum")
 
     def read_async(self, names: tuple) -> tuple:

@@ -1,5 +1,5 @@
 """Where the kernels, shaders and assets are: inside the installed package (the wheel carries
-them as app/kernels, app/shaders, app/assets) or beside it in a source checkout."""
+them as pathtrace/kernels, pathtrace/shaders, pathtrace/assets) or beside it in a source checkout."""
 
 from pathlib import Path
 

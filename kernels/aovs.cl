@@ -11,7 +11,9 @@
  * albedo at low sample counts, which it keeps as if it were texture. An emitter adds its
  * radiance, a path that escapes takes the environment's: lights and the sky are then edges the
  * denoiser keeps. The host clamps the mean to [0, 1], the range the denoiser expects. The
- * normal is the shading normal, facing the ray; an escaping path has none (0).
+ * normal is the shading normal, facing the ray; an escaping path has none (0). The depth is
+ * the camera ray's distance to the first surface it hits, mirrors or not (Mitsuba 3's `aov`
+ * integrator's "depth"); 0 where it escapes.
  *
  * A separate kernel, not a branch of the integrator: the path tracer pays nothing when no one
  * denoises, and the first hit is the beauty sample's own (same sample index, same jitter). */
@@ -35,11 +37,13 @@ float3 estimate_albedo(const global Material *m, float3 wo, const BSDFSample *fi
 }
 
 void trace_aovs(const SceneData *sc, const RenderParams *p, float3 o, float3 d, Rng *rng,
-                float3 *albedo, float3 *normal)
+                float3 *albedo, float3 *normal, float *depth)
 {
     float3 throughput = (float3)(1.0f);
     for (int bounce = 0; bounce <= AOV_MAX_DELTA; ++bounce) {
         Hit hit = intersect_scene(sc, o, d, INFINITY);
+        if (bounce == 0)
+            *depth = hit.prim < 0 ? 0.0f : hit.t;
         if (hit.prim < 0) {
             *albedo = throughput * lookup_environment(sc->env, p, d);
             return;
@@ -71,7 +75,8 @@ void trace_aovs(const SceneData *sc, const RenderParams *p, float3 o, float3 d, 
 }
 
 /* Adds p.sample_count samples of albedo (rgb) and normal (xyz) to each pixel of rows
- * [row_start, row_end), for the same sample indices as the render kernels; w counts them. */
+ * [row_start, row_end), for the same sample indices as the render kernels; albedo_sum's w
+ * counts them, normal_sum's w sums the depth. */
 kernel void render_aovs(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *albedo_sum,
                         global float4 *normal_sum)
 {
@@ -80,17 +85,20 @@ kernel void render_aovs(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *
     if (x >= p.width || y >= p.row_end)
         return;
     float3 albedo_acc = (float3)(0.0f), normal_acc = (float3)(0.0f);
+    float depth_acc = 0.0f;
     for (uint i = 0; i < p.sample_count; ++i) {
         Rng rng = make_rng(x, y, p.sample_start + i, p.seed);
         float4 jitter = next_uniform4(&rng);
         float3 d = camera_direction(&p, x + jitter.x, y + jitter.y);
         float3 albedo = (float3)(0.0f), normal = (float3)(0.0f);
-        trace_aovs(&sc, &p, p.eye.xyz, d, &rng, &albedo, &normal);
+        float depth = 0.0f;
+        trace_aovs(&sc, &p, p.eye.xyz, d, &rng, &albedo, &normal, &depth);
         if (all(isfinite(albedo)))
             albedo_acc += albedo;
         normal_acc += normal;
+        depth_acc += depth;
     }
     int k = y * p.width + x;
     albedo_sum[k] += (float4)(albedo_acc, (float)p.sample_count);
-    normal_sum[k] += (float4)(normal_acc, (float)p.sample_count);
+    normal_sum[k] += (float4)(normal_acc, depth_acc);
 }

@@ -18,9 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-
-from app.scene import load_scene  # noqa: E402
+from pathtrace.scene import load_scene
 
 OUT = Path(__file__).resolve().parent.parent / "tests" / "references"
 SCENES = {  # name: (width, height, spp per render, renders)

@@ -17,12 +17,10 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
-
-from app.device import choose_device  # noqa: E402
-from app.image_io import write_image  # noqa: E402
-from app.renderer import Renderer  # noqa: E402
-from app.scene import load_scene  # noqa: E402
+from pathtrace.device import choose_device
+from pathtrace.image_io import write_image
+from pathtrace.renderer import Renderer
+from pathtrace.scene import load_scene
 
 
 def rel_mse(x, ref):

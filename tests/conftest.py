@@ -2,17 +2,15 @@
 real ones."""
 
 import os
-import sys
 from pathlib import Path
 
 import numpy as np
 import pyopencl as cl
 import pytest
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
+from pathtrace.device import choose_device, open_device
 
-from app.device import choose_device, open_device  # noqa: E402
+ROOT = Path(__file__).resolve().parent.parent
 
 
 @pytest.fixture(scope="session")

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from pyopencl import cltypes
 
-from app.materials import pack
+from pathtrace.materials import pack
 from tests.test_sampling import chi_square
 
 SOURCE = """

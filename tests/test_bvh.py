@@ -5,11 +5,11 @@ and degenerate triangles, mixed scenes, and every primitive at one point."""
 import numpy as np
 import pytest
 
-import app.bvh as bvh_module
+import pathtrace.bvh as bvh_module
 
-from app.bvh import MAX_DEPTH, MAX_LEAF_SIZE, RADIUS, TRAVERSAL_COST, build_bvh, builder_for
-from app.compiled import compile_scene
-from app.scene import Mesh, SceneBuilder, diffuse
+from pathtrace.bvh import MAX_DEPTH, MAX_LEAF_SIZE, RADIUS, TRAVERSAL_COST, build_bvh, builder_for
+from pathtrace.compiled import compile_scene
+from pathtrace.scene import Mesh, SceneBuilder, diffuse
 from tests.conftest import scene_arrays
 
 SOURCE = """
@@ -239,7 +239,7 @@ def test_sah_cost_is_near_a_full_sweep_build(top_work):
 
 
 def full_sweep_sah(lo, hi):
-    """The SAH cost (as app.bvh.BVH.cost counts it) of a top-down full-sweep build with leaves of at
+    """The SAH cost (as pathtrace.bvh.BVH.cost counts it) of a top-down full-sweep build with leaves of at
     most MAX_LEAF_SIZE, recursive and slow: a reference for small inputs only."""
     def area(l, h):
         d = h - l
@@ -285,9 +285,9 @@ def most_pushes(nodes) -> int:
 
 @pytest.mark.parametrize("build", ["chain", "random", "ploc"])
 def test_the_stack_each_scene_gets_holds_its_tree(build, monkeypatch):
-    """app.features.stack_size, from the binary depth, bounds what traversal can push, for the
+    """pathtrace.features.stack_size, from the binary depth, bounds what traversal can push, for the
     deepest tree app/bvh.py makes (a chain cut at MAX_DEPTH) and for random ones."""
-    from app.features import stack_size
+    from pathtrace.features import stack_size
     rng = np.random.default_rng(5)
     if build == "chain":
         lo = np.column_stack([2.0 ** np.arange(60), np.zeros(60), np.zeros(60)]).astype(np.float32)
@@ -330,9 +330,9 @@ def test_a_flat_scene_renders_as_its_tree_does(backend, monkeypatch, tmp_path, s
     rays find the hits its BVH gives, so the same samples make the same image."""
     from dataclasses import replace
 
-    from app.compiled import CompiledScene
-    from app.renderer import Renderer
-    from app.scene import load_scene
+    from pathtrace.compiled import CompiledScene
+    from pathtrace.renderer import Renderer
+    from pathtrace.scene import load_scene
     if scene == "mixed":
         (tmp_path / "mixed.toml").write_text(FLAT_MIXED)
         scene = str(tmp_path / "mixed.toml")

@@ -12,8 +12,7 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def pathtrace(*args, cwd=ROOT):
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    return subprocess.run([sys.executable, "-m", "app", *map(str, args)], cwd=cwd, env=env,
+    return subprocess.run([sys.executable, "-m", "pathtrace", *map(str, args)], cwd=cwd,
                           capture_output=True, text=True, timeout=300)
 
 
@@ -37,7 +36,7 @@ material = { type = "diffuse", rho_d = 0.5 }
 
 
 def test_render_writes_png_and_exr(tmp_path):
-    from app.image_io import read_hdr
+    from pathtrace.image_io import read_hdr
     png, exr = tmp_path / "a.png", tmp_path / "a.exr"
     r = pathtrace("render", "simple", "-o", png, "-o", exr, "--size", "32x18", "--spp", "4", "-q")
     assert r.returncode == 0, r.stderr
@@ -60,7 +59,7 @@ def test_render_denoise_writes_the_denoised_image_the_noisy_layer_and_the_aovs(t
     "noisy", which is the image a render without --denoise writes; --aov: the albedo and normal
     beside each output (PNG normals encoded as n / 2 + 1/2)."""
     import OpenEXR
-    from app.image_io import read_hdr
+    from pathtrace.image_io import read_hdr
     png, exr, plain = tmp_path / "d.png", tmp_path / "d.exr", tmp_path / "plain.exr"
     common = ("--size", "48x27", "--spp", "4", "-q")
     r = pathtrace("render", "demo", "-o", png, "-o", exr, "--denoise", "--aov", "albedo,normal", *common)
@@ -108,7 +107,7 @@ def test_argparses_own_messages_echo_values_short(tmp_path, args):
 
 
 def test_an_aov_named_twice_is_written_once():
-    from app.cli import _aovs
+    from pathtrace.cli import _aovs
     assert _aovs("normal, albedo,normal") == ("normal", "albedo")
 
 
@@ -163,7 +162,7 @@ def test_bad_scene_file_gets_one_clear_message(tmp_path, text, message):
 def test_a_huge_environment_rotation_wraps(tmp_path):
     """A rotation near float32's limit (1e42, beyond it, crashed the kernel; it is refused now):
     the angle is wrapped to [0, 360) in float64 before it reaches the device."""
-    from app.image_io import read_hdr
+    from pathtrace.image_io import read_hdr
     scene = write(tmp_path, GOOD.replace("color = 0.5", 'map = "studio_small_03_1k.hdr"\nrotation = 3e38'))
     out = tmp_path / "o.exr"
     r = pathtrace("render", scene, "-o", out, "--spp", "2", "--size", "16x8", "-q")
@@ -233,9 +232,8 @@ def test_ctrl_c_stops_cleanly_and_writes_nothing(tmp_path):
     import signal
     import time
     out = tmp_path / "o.png"
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    p = subprocess.Popen([sys.executable, "-m", "app", "render", "spheres8k", "-o", str(out),
-                          "--spp", "100000", "--size", "64x36"], cwd=ROOT, env=env,
+    p = subprocess.Popen([sys.executable, "-m", "pathtrace", "render", "spheres8k", "-o", str(out),
+                          "--spp", "100000", "--size", "64x36"], cwd=ROOT,
                          stderr=subprocess.PIPE, text=True)
     deadline = time.time() + 60
     line = ""
@@ -247,7 +245,7 @@ def test_ctrl_c_stops_cleanly_and_writes_nothing(tmp_path):
     assert not out.exists() and not list(tmp_path.iterdir())
 
 
-@pytest.mark.parametrize("module", ["numpy", "pyopencl", "app.cli"])
+@pytest.mark.parametrize("module", ["numpy", "pyopencl", "pathtrace.cli"])
 def test_ctrl_c_while_the_package_imports_gets_one_line(tmp_path, module):
     """SIGINT sent as the console entry point starts importing `module` (an audit hook fires at
     that moment, so the test hits the window every time; a real Ctrl-C there is a matter of
@@ -259,10 +257,10 @@ def hook(event, args):
         os.kill(os.getpid(), signal.SIGINT)
 sys.addaudithook(hook)
 sys.argv = ["pathtrace", "render", "simple", "-o", {str(tmp_path / "o.png")!r}]
-from app.console import run
+from pathtrace.console import run
 run()
 """
-    r = subprocess.run([sys.executable, "-c", child], cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)},
+    r = subprocess.run([sys.executable, "-c", child], cwd=ROOT,
                        capture_output=True, text=True, timeout=120)
     assert r.returncode == 130 and r.stderr == "pathtrace: interrupted\n", r.stderr
     assert not list(tmp_path.iterdir())
@@ -272,9 +270,9 @@ run()
 def test_a_damaged_kernel_cache_is_rebuilt(tmp_path, damage):
     """A truncated cache file (the first half of a valid one) crashed PoCL at every start."""
     env_cache = tmp_path / "cache"
-    run = lambda: subprocess.run([sys.executable, "-m", "app", "render", "simple", "-o", str(tmp_path / "o.png"),
+    run = lambda: subprocess.run([sys.executable, "-m", "pathtrace", "render", "simple", "-o", str(tmp_path / "o.png"),
                                   "--size", "8x8", "--spp", "1", "-q"], cwd=ROOT, capture_output=True, text=True,
-                                 env={**os.environ, "PYTHONPATH": str(ROOT), "PATHTRACE_CACHE": str(env_cache)}, timeout=300)
+                                 env={**os.environ, "PATHTRACE_CACHE": str(env_cache)}, timeout=300)
     assert run().returncode == 0
     files = sorted(env_cache.glob("*.bin"))
     assert files
@@ -288,17 +286,17 @@ def test_a_damaged_kernel_cache_is_rebuilt(tmp_path, damage):
 
 def test_a_full_standard_output_gets_one_line():
     with open("/dev/full", "w") as full:
-        r = subprocess.run([sys.executable, "-m", "app", "scenes"], cwd=ROOT, stdout=full, stderr=subprocess.PIPE,
-                           text=True, env={**os.environ, "PYTHONPATH": str(ROOT)}, timeout=60)
+        r = subprocess.run([sys.executable, "-m", "pathtrace", "scenes"], cwd=ROOT, stdout=full, stderr=subprocess.PIPE,
+                           text=True, timeout=60)
     assert r.returncode == 1 and r.stderr == "pathtrace: error: cannot write the standard output (No space left on device)\n"
 
 
 def test_sigterm_stops_a_render_and_leaves_no_file(tmp_path):
     import signal
     import time
-    p = subprocess.Popen([sys.executable, "-m", "app", "render", "spheres8k", "-o", str(tmp_path / "a.exr"),
+    p = subprocess.Popen([sys.executable, "-m", "pathtrace", "render", "spheres8k", "-o", str(tmp_path / "a.exr"),
                           "--size", "640x360", "--spp", "100000"], cwd=ROOT, stderr=subprocess.PIPE, text=True,
-                         env={**os.environ, "PYTHONPATH": str(ROOT)})
+                         env=dict(os.environ))
     deadline = time.time() + 60
     line = ""
     while "spp" not in line and time.time() < deadline:   # wait until rendering has begun
@@ -324,12 +322,12 @@ def test_the_progress_bar_ends_with_the_real_rate(tmp_path):
 
 
 def test_running_out_of_memory_gets_one_line(monkeypatch, capsys):
-    from app import cli
-    import app.scene
+    from pathtrace import cli
+    import pathtrace.scene
 
     def huge(name):
         raise MemoryError
-    monkeypatch.setattr(app.scene, "load_scene", huge)
+    monkeypatch.setattr(pathtrace.scene, "load_scene", huge)
     assert cli.main(["render", "simple", "-o", "/tmp/never.png"]) == 1
     assert capsys.readouterr().err.startswith("pathtrace: error: out of memory")
 

@@ -5,12 +5,12 @@ pixel, and no bias at many."""
 import numpy as np
 import pytest
 
-from app.camera import Camera
-from app.denoise import Denoiser
-from app.environment import Environment
-from app.materials import Material
-from app.renderer import Renderer
-from app.scene import Mesh, RenderSettings, SceneBuilder, diffuse, load_scene
+from pathtrace.camera import Camera
+from pathtrace.denoise import Denoiser
+from pathtrace.environment import Environment
+from pathtrace.materials import Material
+from pathtrace.renderer import Renderer
+from pathtrace.scene import Mesh, RenderSettings, SceneBuilder, diffuse, load_scene
 
 QUAD = np.array([[0, 1, 2], [0, 2, 3]], np.int32)
 FLOOR_RHO, SPHERE_RHO, SKY = np.array([0.2, 0.5, 0.8]), np.array([0.7, 0.3, 0.1]), 0.6
@@ -27,7 +27,7 @@ def camera_rays(camera, w, h, sx, sy):
 
 def first_hit(eye, d, centre, radius):
     """What each ray meets first: 0 nothing, 1 the floor (y = 0, |x|, |z| < 50), 2 the sphere;
-    and the sphere's outward normal there."""
+    the sphere's outward normal there; the distance to the hit (0 for nothing)."""
     oc = eye - centre
     b = np.sum(d * oc, -1)
     disc = b * b - (np.dot(oc, oc) - radius ** 2)
@@ -38,14 +38,16 @@ def first_hit(eye, d, centre, radius):
     kind = np.where(t_sphere < t_floor, 2, np.where(np.isfinite(t_floor), 1, 0))
     t = np.where(np.isfinite(t_sphere), t_sphere, 0.0)
     normal = (eye + t[..., None] * d - centre) / radius
-    return kind, normal
+    distance = np.where(kind == 2, t_sphere, np.where(kind == 1, t_floor, 0.0))
+    return kind, normal, distance
 
 
-def test_albedo_of_a_diffuse_plane_and_normal_of_a_sphere(backend):
+def test_albedo_normal_and_depth_of_a_diffuse_plane_and_a_sphere(backend):
     """A diffuse floor and a diffuse sphere under a grey sky: the albedo is each surface's
     reflectance exactly (every sample of a Lambertian BSDF weighs rho), the sky's radiance where
     paths escape; the normal is the floor's +y, the sphere's analytic normal (averaged over the
-    pixel) and 0 for the sky. Pixels on an outline mix two and are left out."""
+    pixel) and 0 for the sky; the depth is the analytic distance to the hit, 0 for the sky.
+    Pixels on an outline mix two and are left out."""
     b = SceneBuilder()
     floor = np.array([[-50, 0, -50], [-50, 0, 50], [50, 0, 50], [50, 0, -50]], np.float32)
     b.add_mesh(Mesh("floor", floor, QUAD, None, b.material(diffuse(FLOOR_RHO))))
@@ -58,21 +60,25 @@ def test_albedo_of_a_diffuse_plane_and_normal_of_a_sphere(backend):
     r = Renderer(backend, scene)
     r.set_aovs(True)
     r.add_samples(16)
-    albedo, normal = r.read_aovs()
+    aovs = r.read_aovs()
+    albedo, normal, depth = aovs["albedo"], aovs["normal"], aovs["depth"]
+    assert depth.shape == (h, w)
 
     offsets = (np.arange(4) + 0.5) / 4
     hits = [first_hit(camera.eye, camera_rays(camera, w, h, sx, sy), centre, radius)
             for sx in offsets for sy in offsets]
-    kinds = np.stack([k for k, _ in hits])
+    kinds = np.stack([k for k, _, _ in hits])
     # a pixel is whole if its 16 points meet one surface and so do its neighbours' (an outline
     # can cross a pixel between the points)
     mixed = np.pad(~np.all(kinds == kinds[0], axis=0), 1)
     whole = ~(mixed[1:-1, 1:-1] | mixed[:-2, 1:-1] | mixed[2:, 1:-1] | mixed[1:-1, :-2] | mixed[1:-1, 2:])
     kind = np.where(whole, kinds[0], -1)
-    sphere_normal = np.mean([n for _, n in hits], axis=0)
+    sphere_normal = np.mean([n for _, n, _ in hits], axis=0)
     # the sphere's normal varies across a pixel: the mean of the 16 points above stands for the
     # mean over the pixel to within the spread of those points
-    spread = np.max([np.linalg.norm(n - sphere_normal, axis=-1) for _, n in hits], axis=0)
+    spread = np.max([np.linalg.norm(n - sphere_normal, axis=-1) for _, n, _ in hits], axis=0)
+    distances = np.stack([t for _, _, t in hits])
+    distance, distance_spread = distances.mean(axis=0), np.ptp(distances, axis=0)
     assert min((kind == k).sum() for k in (0, 1, 2)) > 40, [(kind == k).sum() for k in (0, 1, 2)]
 
     np.testing.assert_allclose(albedo[kind == 1], np.broadcast_to(FLOOR_RHO, albedo[kind == 1].shape), atol=1e-6)
@@ -82,6 +88,10 @@ def test_albedo_of_a_diffuse_plane_and_normal_of_a_sphere(backend):
     assert np.all(normal[kind == 0] == 0)
     error = np.linalg.norm(normal - sphere_normal, axis=-1)[kind == 2]
     assert np.all(error <= spread[kind == 2] + 1e-3), error.max()
+    assert np.all(depth[kind == 0] == 0)
+    surface = kind > 0
+    depth_error = np.abs(depth - distance)[surface]
+    assert np.all(depth_error <= distance_spread[surface] + 1e-4 * distance[surface]), depth_error.max()
 
 
 def test_through_a_mirror_the_next_surface_counts(backend):
@@ -100,7 +110,8 @@ def test_through_a_mirror_the_next_surface_counts(backend):
     r = Renderer(backend, scene)
     r.set_aovs(True)
     r.add_samples(4)
-    albedo, normal = r.read_aovs()
+    aovs = r.read_aovs()
+    albedo, normal = aovs["albedo"], aovs["normal"]
     # the mirror's reflectance is its Fresnel term for eta = 0, k = 1: exactly 1, to float32
     # rounding, which a GPU's fast square roots and divisions make 1e-4 (measured on an H100)
     np.testing.assert_allclose(albedo, np.broadcast_to(0.5 * SPHERE_RHO, albedo.shape), rtol=1e-3)
@@ -129,8 +140,8 @@ def relative_mse(image, reference):
 
 
 def test_denoising_4_samples_cuts_the_error_five_fold(demo):
-    noisy, (albedo, normal), reference, _ = demo
-    denoised = Denoiser("high")(noisy, albedo, normal)
+    noisy, aovs, reference, _ = demo
+    denoised = Denoiser("high")(noisy, aovs["albedo"], aovs["normal"])
     assert denoised.shape == noisy.shape and np.all(np.isfinite(denoised))
     noisy_error, denoised_error = relative_mse(noisy, reference), relative_mse(denoised, reference)
     assert noisy_error >= 5 * denoised_error, (noisy_error, denoised_error)
@@ -142,18 +153,19 @@ def test_denoising_a_converged_image_keeps_its_means(demo):
     up to 3 % for 24x32 blocks by the horizon: the denoiser softens the sky map's detail, which
     is what a denoiser does, not a shift of the estimate."""
     _, _, reference, r = demo
-    denoised = Denoiser("high")(reference, *r.read_aovs())
+    aovs = r.read_aovs()
+    denoised = Denoiser("high")(reference, aovs["albedo"], aovs["normal"])
     assert abs(denoised.mean() / reference.mean() - 1) < 0.005
     quadrants = lambda x: x.reshape(2, 36, 2, 64, 3).mean(axis=(1, 3))     # noqa: E731
     np.testing.assert_allclose(quadrants(denoised), quadrants(reference), rtol=0.01)
 
 
 def test_the_denoiser_takes_nan_and_inf_without_spreading_them(demo):
-    noisy, (albedo, normal), _, _ = demo
+    noisy, aovs, _, _ = demo
     broken = noisy.copy()
     broken[3, 4] = np.nan
     broken[5, 6] = np.inf
-    out = Denoiser("fast")(broken, albedo, normal)
+    out = Denoiser("fast")(broken, aovs["albedo"], aovs["normal"])
     assert np.all(np.isfinite(out))
 
 
@@ -161,7 +173,7 @@ def test_an_error_of_open_image_denoise_is_one_line(monkeypatch):
     """What OIDN reports (out of memory, an unsupported device) reaches the user as one line."""
     import pyoidn
 
-    from app.errors import UserError
+    from pathtrace.errors import UserError
     monkeypatch.setattr(pyoidn.Device, "get_error", lambda self: "out of memory")
     with pytest.raises(UserError, match="^Open Image Denoise, creating the device: out of memory$"):
         Denoiser("fast")

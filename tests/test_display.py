@@ -1,6 +1,6 @@
-"""The viewer's way to the screen, headless: what app.display brings to the host (the float sums,
+"""The viewer's way to the screen, headless: what pathtrace.display brings to the host (the float sums,
 or kernels/display.cl's half floats) against the mean computed on the host; and
-app.render.Progressive, which feeds a renderer in bands without ever waiting for it."""
+pathtrace.render.Progressive, which feeds a renderer in bands without ever waiting for it."""
 
 import threading
 
@@ -8,10 +8,10 @@ import numpy as np
 import pyopencl as cl
 import pytest
 
-from app.display import MODES, Display
-from app.render import Progressive
-from app.renderer import Renderer, per_pixel_mean
-from app.scene import load_scene
+from pathtrace.display import MODES, Display
+from pathtrace.render import Progressive
+from pathtrace.renderer import Renderer, per_pixel_mean
+from pathtrace.scene import load_scene
 
 
 @pytest.fixture(scope="module")

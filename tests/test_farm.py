@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 import ray
 
-from app import farm
-from app.compiled import compile_scene
-from app.errors import UserError
-from app.image_io import read_hdr
-from app.renderer import Renderer
-from app.scene import load_scene
+from pathtrace import farm
+from pathtrace.compiled import compile_scene
+from pathtrace.errors import UserError
+from pathtrace.image_io import read_hdr
+from pathtrace.renderer import Renderer
+from pathtrace.scene import load_scene
 
 
 @pytest.fixture(scope="module")
@@ -82,7 +82,7 @@ def test_a_worker_without_a_usable_device_is_one_clear_error(cluster, scenes, ca
 def test_no_cluster_at_the_address_is_one_line(tmp_path):
     for address, message in [("127.0.0.1:9", "cannot reach a Ray cluster there"),
                              ("nonsense", "give host:port")]:
-        r = subprocess.run([sys.executable, "-m", "app", "farm", "render", "simple", "--address",
+        r = subprocess.run([sys.executable, "-m", "pathtrace", "farm", "render", "simple", "--address",
                             address, "-o", str(tmp_path / "x.png")], capture_output=True, text=True,
                            timeout=60)
         assert r.returncode == 1 and message in r.stderr and len(r.stderr.strip().splitlines()) == 1
@@ -90,7 +90,7 @@ def test_no_cluster_at_the_address_is_one_line(tmp_path):
 
 
 def test_output_names_must_tell_the_images_apart(tmp_path, capsys):
-    from app.cli import main
+    from pathtrace.cli import main
     assert main(["farm", "render", "simple", "demo", "-o", str(tmp_path / "x.png")]) == 1
     assert "several images would share a name" in capsys.readouterr().err
     assert main(["farm", "render", "simple", "-o", str(tmp_path / "{nope}.png")]) == 1
@@ -101,7 +101,7 @@ def test_farm_render_from_the_command_line(tmp_path):
     """`pathtrace farm render` with a local cluster of its own: three frames of an orbit, each
     the one-process render of its camera."""
     pattern = str(tmp_path / "frame-{frame}.pfm")
-    r = subprocess.run([sys.executable, "-m", "app", "farm", "render", "simple", "--size", "32x20",
+    r = subprocess.run([sys.executable, "-m", "pathtrace", "farm", "render", "simple", "--size", "32x20",
                         "--spp", "12", "--frames", "3", "--orbit", "60", "--num-cpus", "2",
                         "--cpu-actors", "2", "-o", pattern, "-q"], capture_output=True, text=True,
                        timeout=300)

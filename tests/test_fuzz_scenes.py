@@ -19,8 +19,8 @@ import numpy as np
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
-from app.image_io import read_hdr
-from app.scene.toml_reader import FILE_TYPES, MATERIAL_TYPES
+from pathtrace.image_io import read_hdr
+from pathtrace.scene.toml_reader import FILE_TYPES, MATERIAL_TYPES
 
 ROOT = Path(__file__).resolve().parent.parent
 GOOD_MAP = ROOT / "assets" / "envmaps" / "studio_small_03_1k.hdr"
@@ -160,11 +160,10 @@ def toml_text(scene: dict) -> str:
 def render(folder: Path, scene: Path):
     """`pathtrace render` of the scene in a process of its own: (exit status, standard error),
     the status None where it outlived CASE_SECONDS (and was killed)."""
-    command = [sys.executable, "-m", "app", "render", str(scene), "-o", str(folder / "out.exr"),
+    command = [sys.executable, "-m", "pathtrace", "render", str(scene), "-o", str(folder / "out.exr"),
                "--size", "8x6", "-q", "--device", os.environ.get("PATHTRACE_TEST_DEVICE", "cpu")]
     try:
-        r = subprocess.run(command, cwd=folder, capture_output=True, text=True, timeout=CASE_SECONDS,
-                           env={**os.environ, "PYTHONPATH": str(ROOT)})
+        r = subprocess.run(command, cwd=folder, capture_output=True, text=True, timeout=CASE_SECONDS)
     except subprocess.TimeoutExpired as e:
         return None, e.stderr or ""
     return r.returncode, r.stderr

@@ -6,10 +6,10 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from app.camera import Camera
-from app.environment import Environment
-from app.renderer import Renderer
-from app.scene import RenderSettings, SceneBuilder, diffuse, emitter
+from pathtrace.camera import Camera
+from pathtrace.environment import Environment
+from pathtrace.renderer import Renderer
+from pathtrace.scene import RenderSettings, SceneBuilder, diffuse, emitter
 from tests.stats import z_test
 
 
@@ -173,7 +173,7 @@ def lambert_irradiance(p, corners, le):
 def test_square_light_irradiance_matches_lambert(backend, nee):
     """A diffuse floor (a quad) under a square emitter (a quad facing down) in a black world,
     direct light only: the floor's radiance is rho / pi times Lambert's irradiance."""
-    from app.scene import Mesh
+    from pathtrace.scene import Mesh
     rho, le, h = 0.6, 5.0, 1.0
     light = np.array([[-0.5, h, -0.5], [0.5, h, -0.5], [0.5, h, 0.5], [-0.5, h, 0.5]])
     b = SceneBuilder()
@@ -223,7 +223,7 @@ def test_closed_mesh_white_furnace_renders_one(backend, nee):
     """A subdivided icosahedron of albedo 1 under a uniform environment of radiance 1: every
     pixel converges to 1. (Flat shading: interpolated normals lose the directions that fall
     below the geometric surface, as in Mitsuba 3, so they are not exactly lossless.)"""
-    from app.scene import Mesh
+    from pathtrace.scene import Mesh
     from tests.geometry import icosphere
     v, f = icosphere(2)
     b = SceneBuilder()
@@ -239,7 +239,7 @@ def test_closed_mesh_white_furnace_renders_one(backend, nee):
 def test_no_light_leaks_into_a_closed_box(backend, nee):
     """A camera inside a closed cube (12 triangles, shared corners, facing in), under a bright
     sky: no path may reach the sky, so the image is exactly black, corners included."""
-    from app.scene import Mesh
+    from pathtrace.scene import Mesh
     from tests.geometry import cube
     v, f = cube(1.0, inward=True)
     b = SceneBuilder()

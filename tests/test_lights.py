@@ -6,9 +6,9 @@ import pytest
 from pyopencl import cltypes
 from scipy import stats
 
-from app.environment import Environment
-from app.lights import alias_table, build_light_table, emitted_power
-from app.types import RENDER_PARAMS
+from pathtrace.environment import Environment
+from pathtrace.lights import alias_table, build_light_table, emitted_power
+from pathtrace.types import RENDER_PARAMS
 from tests.test_sampling import chi_square
 
 SOURCE = """
@@ -107,7 +107,7 @@ def env_params(env):
 
 @pytest.fixture(scope="module")
 def sunset():
-    from app.resources import resource_dir
+    from pathtrace.resources import resource_dir
     env = Environment.from_file(resource_dir("assets") / "envmaps" / "venice_sunset_1k.hdr", rotation=75.0)
     env.image = env.image[::4, ::4].copy()     # 256 x 128: faster, just as peaked
     return env

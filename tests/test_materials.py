@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 from pyopencl import cltypes
 
-from app.materials import BSDFS, Material, pack
-from app.materials.microfacet import TABLE_COSINES, rough_coating, rough_dielectric_albedo
-from app.materials.optics import diffuse_fresnel_reflectance, fresnel_dielectric
+from pathtrace.materials import BSDFS, Material, pack
+from pathtrace.materials.microfacet import TABLE_COSINES, rough_coating, rough_dielectric_albedo
+from pathtrace.materials.optics import diffuse_fresnel_reflectance, fresnel_dielectric
 from tests.test_bsdfs import direction, evaluate, hemisphere_grid, sample
 from tests.test_integrator import furnace_scene, render
 from tests.test_sampling import chi_square

@@ -4,10 +4,10 @@ reported in one line naming the file."""
 import numpy as np
 import pytest
 
-from app.cli import main
-from app.errors import UserError
-from app.scene import load_scene
-from app.scene.meshes import read_mesh
+from pathtrace.cli import main
+from pathtrace.errors import UserError
+from pathtrace.scene import load_scene
+from pathtrace.scene.meshes import read_mesh
 from tests.geometry import cube
 
 QUAD_OBJ = """# a unit quad in the x-y plane, facing +z, with normals, as one polygon

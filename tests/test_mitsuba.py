@@ -9,10 +9,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from app.cli import main
-from app.errors import UserError
-from app.scene import load_scene
-from app.scene.mitsuba import read_mitsuba_file
+from pathtrace.cli import main
+from pathtrace.errors import UserError
+from pathtrace.scene import load_scene
+from pathtrace.scene.mitsuba import read_mitsuba_file
 
 SCENES = Path(__file__).parent / "scenes"
 

@@ -6,11 +6,11 @@ import threading
 import numpy as np
 import pytest
 
-from app.cli import main
-from app.device import open_device
-from app.multidevice import DeviceGroup, SampleCounter
-from app.renderer import Renderer
-from app.scene import load_scene
+from pathtrace.cli import main
+from pathtrace.device import open_device
+from pathtrace.multidevice import DeviceGroup, SampleCounter
+from pathtrace.renderer import Renderer
+from pathtrace.scene import load_scene
 
 
 @pytest.fixture(scope="module")
@@ -52,7 +52,7 @@ def test_slow_samples_are_split_into_bands_of_rows(backend, scene, monkeypatch):
     """The first sample is split into FIRST_BANDS launches of rows, and a sample slower than the
     launch budget into bands too (so that Ctrl-C never waits for a whole image's sample); the
     image is the one of whole-image launches."""
-    from app.multidevice import FIRST_BANDS, row_bands
+    from pathtrace.multidevice import FIRST_BANDS, row_bands
     assert row_bands(24, 5) == [(0, 5), (5, 10), (10, 14), (14, 19), (19, 24)]
     assert row_bands(3, 16) == [(0, 1), (1, 2), (2, 3)]
     launches = []

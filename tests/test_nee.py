@@ -6,8 +6,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from app.renderer import Renderer
-from app.scene import load_scene
+from pathtrace.renderer import Renderer
+from pathtrace.scene import load_scene
 from tests.stats import z_test
 
 SPP = 4096
@@ -101,8 +101,8 @@ def bilinear_map(image, factor=4):
 def test_hdr_lit_sphere_matches_quadrature(backend, nee):
     """A lone diffuse sphere (albedo a) under an HDR map, direct light only: its radiance at
     normal n is a / pi * integral of L(w) max(0, n . w) dw, summed here over the map."""
-    from app.camera import Camera
-    from app.scene import RenderSettings, SceneBuilder, diffuse
+    from pathtrace.camera import Camera
+    from pathtrace.scene import RenderSettings, SceneBuilder, diffuse
 
     env = box_filtered(load_scene("demo").environment)
     env = replace(env, rotation=75.0)

@@ -6,8 +6,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from app.renderer import Renderer
-from app.scene import load_scene
+from pathtrace.renderer import Renderer
+from pathtrace.scene import load_scene
 from tests.stats import z_test
 
 REFERENCES = sorted((Path(__file__).parent / "references").glob("*.npz"))

@@ -3,11 +3,11 @@
 import numpy as np
 import pytest
 
-from app.camera import Camera
-from app.environment import Environment
-from app.renderer import Renderer
-from app.scene import RenderSettings, SceneBuilder, diffuse, load_scene
-from app.scene.builtin import BUILTIN_SCENES
+from pathtrace.camera import Camera
+from pathtrace.environment import Environment
+from pathtrace.renderer import Renderer
+from pathtrace.scene import RenderSettings, SceneBuilder, diffuse, load_scene
+from pathtrace.scene.builtin import BUILTIN_SCENES
 from tests.stats import z_test
 
 
@@ -82,9 +82,9 @@ def test_nan_samples_are_left_out_and_counted(backend):
 
 
 def test_the_command_line_reports_nan_samples(monkeypatch, tmp_path, capsys):
-    from app import cli
-    import app.scene
-    monkeypatch.setattr(app.scene, "load_scene", lambda name: poisoned_simple())
+    from pathtrace import cli
+    import pathtrace.scene
+    monkeypatch.setattr(pathtrace.scene, "load_scene", lambda name: poisoned_simple())
     assert cli.main(["render", "simple", "-o", str(tmp_path / "a.png"), "--size", "16x9", "--spp", "2", "-q"]) == 0
     assert "samples were NaN or infinite and were left out (as black)" in capsys.readouterr().err
 
@@ -93,7 +93,7 @@ def test_an_environment_edit_updates_the_light_choice(backend):
     """The light table weighs the environment by its power: one that starts black is never
     sampled, and turning it up (Renderer.set_environment, as the viewer's panel does) makes it
     a light, so next-event estimation samples it."""
-    from app.scene import emitter
+    from pathtrace.scene import emitter
     b = SceneBuilder()
     b.add_sphere((0, 0, 0), 1.0, diffuse(0.5))
     b.add_sphere((0, 4, 0), 0.5, emitter(10.0))

@@ -5,7 +5,7 @@ shaders/display.frag draws the same values."""
 import numpy as np
 import pytest
 
-from app.tonemap import aces_fit, linear_to_srgb, tonemap, to_8bit
+from pathtrace.tonemap import aces_fit, linear_to_srgb, tonemap, to_8bit
 
 
 def test_srgb_transfer_function_at_its_defining_points():

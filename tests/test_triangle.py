@@ -5,8 +5,8 @@ spheres: a ray leaving a surface never meets that surface again by error."""
 import numpy as np
 import pytest
 
-from app.compiled import compile_scene
-from app.scene import Mesh, SceneBuilder, diffuse
+from pathtrace.compiled import compile_scene
+from pathtrace.scene import Mesh, SceneBuilder, diffuse
 from tests.conftest import scene_arrays
 from tests.geometry import height_field, icosphere
 
@@ -57,7 +57,7 @@ def f4(a):
 
 
 def triangles(corners):
-    from app.types import TRIANGLE
+    from pathtrace.types import TRIANGLE
     t = np.zeros(len(corners), TRIANGLE)
     for k, f in enumerate(("v0", "v1", "v2")):
         t[f][:, :3] = corners[:, k]

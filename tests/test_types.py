@@ -4,7 +4,7 @@
 import numpy as np
 import pytest
 
-from app.types import BVH_NODE, LIGHT, MATERIAL, RENDER_PARAMS, TRIANGLE
+from pathtrace.types import BVH_NODE, LIGHT, MATERIAL, RENDER_PARAMS, TRIANGLE
 
 STRUCTS = {
     "Material": MATERIAL,

@@ -13,9 +13,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from app.image_io import read_hdr
-from app.renderer import Renderer
-from app.scene import load_scene
+from pathtrace.image_io import read_hdr
+from pathtrace.renderer import Renderer
+from pathtrace.scene import load_scene
 
 ROOT = Path(__file__).resolve().parent.parent
 W, H = 640, 360      # the panel covers x < 370; the tests act to its right
@@ -45,7 +45,7 @@ def display():
 
 @pytest.fixture(scope="module")
 def viewer(display, backend, tmp_path_factory):
-    from app.viewer.window import Viewer
+    from pathtrace.viewer.window import Viewer
     v = Viewer(backend, load_scene("simple").with_settings(width=W, height=H), tmp_path_factory.mktemp("shots"))
     for _ in range(3):
         v.frame()
@@ -112,7 +112,7 @@ def test_key_moves_the_camera_and_resets_accumulation(viewer):
 
 
 def test_the_preview_is_as_coarse_as_a_pass_in_a_frame_needs():
-    from app.viewer.window import MAX_PREVIEW_SCALE, MOVE_BUDGET, preview_scale
+    from pathtrace.viewer.window import MAX_PREVIEW_SCALE, MOVE_BUDGET, preview_scale
     pixel = MOVE_BUDGET / (640 * 360)           # a full pass takes exactly the budget
     assert preview_scale(pixel, 640, 360) == 1
     assert preview_scale(pixel * 4, 640, 360) == 2
@@ -223,7 +223,7 @@ def test_left_click_picks_a_mesh_whatever_the_bvh_order(viewer):
 
 
 def test_a_slow_build_shows_its_progress_in_the_title(viewer, monkeypatch):
-    import app.viewer.window as window
+    import pathtrace.viewer.window as window
     monkeypatch.setattr(window, "PROGRESS_AFTER", 0.0)
     titles = []
     set_title = viewer.glfw.set_window_title
@@ -235,7 +235,7 @@ def test_a_slow_build_shows_its_progress_in_the_title(viewer, monkeypatch):
 
 
 def test_a_scene_that_fails_to_open_leaves_the_viewer_as_it_was(viewer, monkeypatch, capsys):
-    import app.viewer.window as window
+    import pathtrace.viewer.window as window
 
     def broken(name):
         raise RuntimeError("a library failed")
@@ -254,7 +254,7 @@ def test_the_display_shader_matches_tonemap(viewer, curve, exposure):
     app/tonemap.py writes, to one 8-bit step, on a ramp of radiances from 0 to 4."""
     import moderngl
 
-    from app.tonemap import to_8bit, tonemap
+    from pathtrace.tonemap import to_8bit, tonemap
     v = viewer
     radiance = np.stack([np.linspace(0, 4, 64), np.linspace(0, 1, 64), np.linspace(0, 0.05, 64)], -1)[None]
     pixels = np.concatenate([radiance * 4, np.full((1, 64, 1), 4.0)], -1).astype(np.float32)  # 4 samples
@@ -325,7 +325,7 @@ def test_at_rest_the_denoised_image_is_shown_and_saved(viewer):
 def test_coming_to_rest_shows_a_denoised_draft_first(viewer, monkeypatch):
     """After a move whose preview was coarse, the first image at rest is the denoised draft at
     half resolution; no noisy image replaces it before the full resolution's denoised one."""
-    import app.viewer.window as window
+    import pathtrace.viewer.window as window
     v = viewer
     settle(v)
     monkeypatch.setattr(window, "preview_scale", lambda *args: 4)
@@ -349,7 +349,7 @@ def test_coming_to_rest_shows_a_denoised_draft_first(viewer, monkeypatch):
 
 def test_resizing_the_window_keeps_the_render_size(viewer):
     """The render size is the scene's; the window shows it whole, scaled, with bars."""
-    from app.viewer.window import image_extent
+    from pathtrace.viewer.window import image_extent
     settle(viewer)
     viewer.glfw.set_window_size(viewer.window, 480, 400)
     for _ in range(50):
@@ -388,7 +388,7 @@ def test_the_rotation_slider_reaches_a_full_turn(viewer):
 
 
 def test_the_window_fits_the_screen_and_keeps_the_image_aspect():
-    from app.viewer.window import fit_window
+    from pathtrace.viewer.window import fit_window
     assert fit_window(640, 360, (1920, 1080)) == (640, 360)
     w, h = fit_window(4000, 3000, (1920, 1080))
     assert h <= 0.9 * 1080 and abs(w / h - 4 / 3) < 0.01
@@ -449,7 +449,7 @@ def test_the_window_stays_smooth_while_the_cpu_renders(display, backend, tmp_pat
     denoising, while text is typed and a box clicked: the loop's frame time stays under 50 ms
     (median) and 100 ms (99th percentile), and each input arrives in the frame after it was sent
     (imgui takes one typed character a frame)."""
-    from app.viewer.window import Viewer
+    from pathtrace.viewer.window import Viewer
     if backend.device.kind != "CPU":
         pytest.skip("the criterion is for the CPU device (PoCL)")
     v = Viewer(backend, load_scene("demo").with_settings(width=1280, height=720), tmp_path,
@@ -499,9 +499,8 @@ def test_many_frames_leave_memory_flat(viewer):
 
 @pytest.mark.parametrize("scene", ["simple", str(ROOT / "tests" / "scenes" / "cbox.xml")], ids=["builtin", "mitsuba-xml"])
 def test_view_command_closes_cleanly(display, tmp_path, scene):
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    r = subprocess.run([sys.executable, "-m", "app", "view", scene, "--size", "160x90", "--frames", "5",
-                        "--screenshot", "--screenshot-dir", tmp_path], env=env, capture_output=True,
+    r = subprocess.run([sys.executable, "-m", "pathtrace", "view", scene, "--size", "160x90", "--frames", "5",
+                        "--screenshot", "--screenshot-dir", tmp_path], capture_output=True,
                        text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     assert len(list(tmp_path.glob("*.png"))) == 1 and len(list(tmp_path.glob("*.exr"))) == 1
@@ -509,9 +508,8 @@ def test_view_command_closes_cleanly(display, tmp_path, scene):
 
 def test_without_a_display_it_says_how_to_render_headless(tmp_path):
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
-    env["PYTHONPATH"] = str(ROOT)
-    r = subprocess.run([sys.executable, "-m", "app", "view"], env=env, capture_output=True, text=True,
+    r = subprocess.run([sys.executable, "-m", "pathtrace", "view"], env=env, capture_output=True, text=True,
                        timeout=60)
     assert r.returncode == 1
-    assert f"{sys.executable} -m app render simple -o out.png" in r.stderr and "xvfb-run" in r.stderr
+    assert f"{sys.executable} -m pathtrace render simple -o out.png" in r.stderr and "xvfb-run" in r.stderr
     assert len(r.stderr.strip().splitlines()) == 1 and "Traceback" not in r.stderr

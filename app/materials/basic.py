@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from app.materials.bsdf import BSDFType, Param
+from pathtrace.materials.bsdf import BSDFType, Param
 
 
 class Black(BSDFType):

@@ -3,9 +3,9 @@ rough one (the GGX microfacet model), with Mitsuba 3's parameters."""
 
 import numpy as np
 
-from app.materials.bsdf import DELTA, BSDFType, Param
-from app.materials.microfacet import GGX_PARAMS, resolve_distribution
-from app.materials.optics import CONDUCTORS
+from pathtrace.materials.bsdf import DELTA, BSDFType, Param
+from pathtrace.materials.microfacet import GGX_PARAMS, resolve_distribution
+from pathtrace.materials.optics import CONDUCTORS
 
 _CONDUCTOR_PARAMS = (
     Param("material", "name", default="none", names=CONDUCTORS,

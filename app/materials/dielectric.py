@@ -3,8 +3,8 @@ a thin sheet of glass (no refraction), with Mitsuba 3's parameters."""
 
 import numpy as np
 
-from app.materials.bsdf import DELTA, TRANSMISSIVE, BSDFType, Param
-from app.materials.optics import IOR
+from pathtrace.materials.bsdf import DELTA, TRANSMISSIVE, BSDFType, Param
+from pathtrace.materials.optics import IOR
 
 def check_interface(values) -> str | None:
     """The two IORs of an interface (glass, a plastic's coating) must differ."""

@@ -6,8 +6,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from app.materials.bsdf import Param
-from app.materials.optics import fresnel_dielectric
+from pathtrace.materials.bsdf import Param
+from pathtrace.materials.optics import fresnel_dielectric
 
 GGX_PARAMS = (
     Param("alpha", "number", default=0.1, low=1e-4, high=1.0,

@@ -3,10 +3,10 @@
 
 import numpy as np
 
-from app.materials.bsdf import BSDFType, Param
-from app.materials.dielectric import check_interface
-from app.materials.microfacet import GGX_PARAMS, resolve_distribution, rough_coating
-from app.materials.optics import IOR, diffuse_fresnel_reflectance
+from pathtrace.materials.bsdf import BSDFType, Param
+from pathtrace.materials.dielectric import check_interface
+from pathtrace.materials.microfacet import GGX_PARAMS, resolve_distribution, rough_coating
+from pathtrace.materials.optics import IOR, diffuse_fresnel_reflectance
 
 
 class Plastic(BSDFType):

@@ -2,11 +2,11 @@
 pdf_bsdf, sample_bsdf) generated from it, so that adding a material is one kernel file
 (kernels/bsdfs/<name>.cl) and one entry here."""
 
-from app.materials.basic import Black, Diffuse, Phong
-from app.materials.bsdf import DELTA
-from app.materials.conductor import Conductor, RoughConductor
-from app.materials.dielectric import Dielectric, ThinDielectric
-from app.materials.plastic import Plastic, RoughPlastic
+from pathtrace.materials.basic import Black, Diffuse, Phong
+from pathtrace.materials.bsdf import DELTA
+from pathtrace.materials.conductor import Conductor, RoughConductor
+from pathtrace.materials.dielectric import Dielectric, ThinDielectric
+from pathtrace.materials.plastic import Plastic, RoughPlastic
 
 BSDFS = {cls.name: cls() for cls in (Black, Diffuse, Phong, Conductor, RoughConductor,
                                      Dielectric, ThinDielectric, Plastic,

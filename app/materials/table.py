@@ -5,9 +5,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from app.materials.bsdf import TWOSIDED
-from app.materials.registry import BSDFS, TAGS
-from app.types import MATERIAL
+from pathtrace.materials.bsdf import TWOSIDED
+from pathtrace.materials.registry import BSDFS, TAGS
+from pathtrace.types import MATERIAL
 
 
 @dataclass

@@ -3,8 +3,8 @@
 
 from pathlib import Path
 
-from app.errors import UserError
-from app.scene.description import Mesh, RenderSettings, Scene, SceneBuilder, diffuse, emitter, phong
+from pathtrace.errors import UserError
+from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder, diffuse, emitter, phong
 
 __all__ = ["Mesh", "RenderSettings", "Scene", "SceneBuilder", "diffuse", "emitter", "phong",
            "load_scene"]
@@ -12,9 +12,9 @@ __all__ = ["Mesh", "RenderSettings", "Scene", "SceneBuilder", "diffuse", "emitte
 
 def load_scene(name_or_path: str) -> Scene:
     """A scene file path or a built-in scene's name: the two are interchangeable."""
-    from app.scene.builtin import BUILTIN_SCENES, builtin_scene
-    from app.scene.mitsuba import read_mitsuba_file
-    from app.scene.toml_reader import read_scene_file
+    from pathtrace.scene.builtin import BUILTIN_SCENES, builtin_scene
+    from pathtrace.scene.mitsuba import read_mitsuba_file
+    from pathtrace.scene.toml_reader import read_scene_file
 
     path = Path(name_or_path)
     if path.suffix.lower() == ".xml":

@@ -6,12 +6,12 @@ import re
 
 import numpy as np
 
-from app.camera import Camera
-from app.environment import Environment
-from app.materials import pack
-from app.resources import resource_dir
-from app.scene.description import RenderSettings, Scene, SceneBuilder
-from app.scene.toml_reader import read_scene_file
+from pathtrace.camera import Camera
+from pathtrace.environment import Environment
+from pathtrace.materials import pack
+from pathtrace.resources import resource_dir
+from pathtrace.scene.description import RenderSettings, Scene, SceneBuilder
+from pathtrace.scene.toml_reader import read_scene_file
 
 
 def _shipped(name: str) -> Scene:
@@ -64,7 +64,7 @@ def height_field(triangles: int) -> Scene:
     """A bumpy height field of about `triangles` triangles with a sphere on it, under a sky: the
     scaling scene for meshes (the same field as Mitsuba's side-by-side timing of a 1M-triangle
     mesh)."""
-    from app.scene.description import Mesh, diffuse
+    from pathtrace.scene.description import Mesh, diffuse
     n = max(int(np.sqrt(triangles / 2)), 1)
     x, z = np.meshgrid(np.linspace(-1, 1, n + 1), np.linspace(-1, 1, n + 1))
     y = 0.08 * np.sin(9 * x) * np.cos(7 * z)

@@ -6,9 +6,9 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from app.camera import Camera
-from app.environment import Environment
-from app.materials import Material, MaterialTable
+from pathtrace.camera import Camera
+from pathtrace.environment import Environment
+from pathtrace.materials import Material, MaterialTable
 
 
 # How paths end (kernels/integrator.cl, RR_*): "throughput", Russian roulette on the path's

@@ -5,8 +5,8 @@ from pathlib import Path
 
 import numpy as np
 
-from app.errors import UserError, warn
-from app.files import check_regular_file
+from pathtrace.errors import UserError, warn
+from pathtrace.files import check_regular_file
 
 FORMATS = (".ply", ".obj", ".stl", ".gltf", ".glb")
 MAX_FILE_BYTES = 4 << 30            # a mesh file larger than this is refused before reading
@@ -115,7 +115,7 @@ def _read_obj(path):
 def _read_with_trimesh(path, suffix):
     import trimesh
 
-    from app.scene.transform import transform_normals, transform_points
+    from pathtrace.scene.transform import transform_normals, transform_points
 
     scene = trimesh.load(str(path), file_type=suffix[1:], force="scene", process=False)
     parts = []

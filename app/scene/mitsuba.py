@@ -17,13 +17,13 @@ from xml.parsers import expat
 
 import numpy as np
 
-from app.camera import Camera
-from app.environment import Environment
-from app.errors import UserError, warn
-from app.materials import BSDFS, Material
-from app.scene import transform
-from app.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
-from app.scene.meshes import MAX_COORDINATE, check_mesh, read_mesh
+from pathtrace.camera import Camera
+from pathtrace.environment import Environment
+from pathtrace.errors import UserError, warn
+from pathtrace.materials import BSDFS, Material
+from pathtrace.scene import transform
+from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
+from pathtrace.scene.meshes import MAX_COORDINATE, check_mesh, read_mesh
 
 MAX_XML_BYTES = 64 << 20
 MAX_ELEMENTS = 1_000_000
@@ -320,7 +320,7 @@ class _Reader:
         if kind == "checkerboard":
             mean = (self.color(props, "color0", 0.4) + self.color(props, "color1", 0.2)) / 2
         elif kind == "bitmap" and "filename" in props:
-            from app.image_io import read_hdr
+            from pathtrace.image_io import read_hdr
             try:
                 mean = read_hdr(node.file.parent / self.get(props, "filename"), node.where()).reshape(-1, 3).mean(0)
             except UserError:

@@ -10,14 +10,14 @@ from pathlib import Path
 
 import numpy as np
 
-from app.camera import Camera
-from app.environment import Environment
-from app.errors import UserError, short
-from app.materials import BSDFS, Material
-from app.resources import resource_dir
-from app.scene import transform
-from app.scene.description import RUSSIAN_ROULETTE, Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
-from app.scene.meshes import MAX_COORDINATE, check_mesh, read_mesh, triangulate
+from pathtrace.camera import Camera
+from pathtrace.environment import Environment
+from pathtrace.errors import UserError, short
+from pathtrace.materials import BSDFS, Material
+from pathtrace.resources import resource_dir
+from pathtrace.scene import transform
+from pathtrace.scene.description import RUSSIAN_ROULETTE, Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
+from pathtrace.scene.meshes import MAX_COORDINATE, check_mesh, read_mesh, triangulate
 
 # the scene-file types besides the registry's: "emitter" is a black BSDF with emission, and
 # "twosided" wraps another material (Mitsuba 3's plugin; `twosided = true` says the same)
@@ -363,7 +363,7 @@ MAX_SCENE_BYTES = 64 << 20    # a scene file; meshes go in files of their own
 
 
 def read_scene_file(path) -> Scene:
-    from app.files import check_regular_file, shown
+    from pathtrace.files import check_regular_file, shown
     path = Path(path)
     try:
         os.stat(path)

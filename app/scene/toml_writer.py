@@ -8,10 +8,10 @@ from pathlib import Path
 
 import numpy as np
 
-from app.materials import BSDFS
-from app.errors import UserError
-from app.scene.description import Scene
-from app.scene.toml_reader import MAX_INLINE
+from pathtrace.materials import BSDFS
+from pathtrace.errors import UserError
+from pathtrace.scene.description import Scene
+from pathtrace.scene.toml_reader import MAX_INLINE
 
 
 def _value(v) -> str:

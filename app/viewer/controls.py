@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from app.camera import Camera
+from pathtrace.camera import Camera
 
 # key names, mapped to GLFW's codes by the window
 MOVES = {

@@ -11,10 +11,10 @@ from dataclasses import replace
 
 import numpy as np
 
-from app.materials import BSDFS
-from app.scene.builtin import BUILTIN_SCENES
-from app.scene.description import RUSSIAN_ROULETTE
-from app.tonemap import TONEMAPS
+from pathtrace.materials import BSDFS
+from pathtrace.scene.builtin import BUILTIN_SCENES
+from pathtrace.scene.description import RUSSIAN_ROULETTE
+from pathtrace.tonemap import TONEMAPS
 
 MARGIN = 10                 # pixels between the panel and the window's edges
 WIDGET_MIN = 150            # the narrowest a widget may get, in pixels

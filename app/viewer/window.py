@@ -1,8 +1,8 @@
 """The viewer's window and loop. The window never waits for the renderer: each frame polls input,
-moves the camera, lets app.render.Progressive collect finished launches and queue new ones
+moves the camera, lets pathtrace.render.Progressive collect finished launches and queue new ones
 (bands of rows sized to a fraction of a frame), and shows the newest image that has reached the
-host (app.display, drawn by shaders/display.frag), then the imgui panel. While the
-camera rests the image is denoised (app.denoise) in a worker thread, every time its samples
+host (pathtrace.display, drawn by shaders/display.frag), then the imgui panel. While the
+camera rests the image is denoised (pathtrace.denoise) in a worker thread, every time its samples
 have doubled."""
 
 import datetime
@@ -17,17 +17,17 @@ from pathlib import Path
 import numpy as np
 import pyopencl as cl
 
-from app.display import Display
-from app.errors import UserError
-from app.render import Progressive
-from app.renderer import Renderer, aov_means, per_pixel_mean
-from app.resources import resource_dir
-from app.scene import load_scene
-from app.viewer.controls import FlyControls, pick_ray
-from app.viewer.panel import draw_help, draw_panel
+from pathtrace.display import Display
+from pathtrace.errors import UserError
+from pathtrace.render import Progressive
+from pathtrace.renderer import Renderer, aov_means, per_pixel_mean
+from pathtrace.resources import resource_dir
+from pathtrace.scene import load_scene
+from pathtrace.viewer.controls import FlyControls, pick_ray
+from pathtrace.viewer.panel import draw_help, draw_panel
 
 LAUNCH_BUDGET = 1 / 120        # device seconds per launch: a reset waits for at most three
-                               # (app.render.QUEUE_AHEAD); larger ones made the 99th-percentile
+                               # (pathtrace.render.QUEUE_AHEAD); larger ones made the 99th-percentile
                                # frame 50-80 ms on two cores
 MOVE_BUDGET = 1 / 30           # device seconds for a whole preview pass while the camera moves
 MAX_PREVIEW_SCALE = 16         # the coarsest preview: 1/16 of the resolution on each axis
@@ -52,7 +52,7 @@ def no_display_message() -> str:
     import shlex
     import shutil
     program = shlex.quote(sys.argv[0]) if os.path.basename(sys.argv[0]) == "pathtrace" \
-        else f"{shlex.quote(sys.executable)} -m app"
+        else f"{shlex.quote(sys.executable)} -m pathtrace"
     xvfb = f'xvfb-run -s "-screen 0 1280x800x24" {program} view'
     if not shutil.which("xvfb-run"):
         xvfb = f"sudo apt install xvfb, then {xvfb}"
@@ -174,7 +174,7 @@ class Viewer:
 
     @property
     def display_path(self) -> str:
-        """How the image reaches the screen. PyPI's pyopencl has no CL/GL sharing, so app.display
+        """How the image reaches the screen. PyPI's pyopencl has no CL/GL sharing, so pathtrace.display
         copies it through the host."""
         return {"sums": "float sums", "half": "half-float means"}[self.display.mode] + " copied to a texture"
 
@@ -432,7 +432,7 @@ class Viewer:
     def _denoiser_ready(self) -> bool:
         if self._denoiser is None and self.denoise_error is None:
             try:
-                from app.denoise import Denoiser
+                from pathtrace.denoise import Denoiser
                 self._denoiser = Denoiser(lambda device: DENOISE_QUALITY[device])
                 # OIDN's first run at a size prepares it (a third of a second on two cores):
                 # done now, in the worker, it is not waited for when the camera stops
@@ -482,8 +482,8 @@ class Viewer:
     def _denoise_job(self, sums, albedo_sum, normal_sum):
         """In the worker thread: the means, then OIDN (which runs outside the GIL)."""
         start = time.perf_counter()
-        albedo, normal = aov_means(albedo_sum, normal_sum)
-        image = self._denoiser(per_pixel_mean(sums), albedo, normal)
+        aovs = aov_means(albedo_sum, normal_sum)
+        image = self._denoiser(per_pixel_mean(sums), aovs["albedo"], aovs["normal"])
         return image, time.perf_counter() - start
 
     def _upload(self, pixels: np.ndarray):
@@ -520,7 +520,7 @@ class Viewer:
         """Writes the image as shown: tonemapped (PNG) and as radiance (EXR); where it is the
         denoised one, the EXR keeps the noisy one as its layer "noisy". The pass under way is
         finished first, so that every pixel holds the same samples."""
-        from app.image_io import Output, write_images
+        from pathtrace.image_io import Output, write_images
         self.progressive.finish_pass()
         r = self.renderer
         stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S-%f")[:-3]
@@ -530,7 +530,8 @@ class Viewer:
         try:
             if self.denoised_at is not None and self.denoised_at[0] == r.resets and self.denoise and self.resting:
                 # through the worker: the denoiser's buffers are not for two threads at once
-                denoised = self._worker.submit(self._denoiser, noisy, *r.read_aovs()).result()
+                aovs = r.read_aovs()
+                denoised = self._worker.submit(self._denoiser, noisy, aovs["albedo"], aovs["normal"]).result()
                 shown, layers = denoised, {"noisy": noisy}
             outputs = [Output(base.with_suffix(".png"), shown), Output(base.with_suffix(".exr"), shown, layers)]
             self.screenshot_dir.mkdir(parents=True, exist_ok=True)
