@@ -1,3 +1,35 @@
-"""pathtrace: an interactive, progressive path tracer with OpenCL kernels."""
+"""pathtrace: an interactive, progressive path tracer with OpenCL kernels.
+
+The Python API (docs/python.md): load(), load_dict(), material(), render(), progressive(),
+denoise(), tonemap(), write(), show(), view() and devices(). Importing pathtrace imports
+nothing else: NumPy and PyOpenCL load with the first function used, and the viewer's GL and GUI
+packages only with view()."""
 
 __version__ = "0.1.0"
+
+# name -> the module that defines it, imported on first use (PEP 562)
+_EXPORTS = {
+    **{name: "pathtrace.api" for name in ("load", "load_dict", "material", "render", "progressive", "denoise",
+                                          "tonemap", "write", "show", "view", "devices", "Snapshot", "AOVS")},
+    "Scene": "pathtrace.scene.description",
+    "RenderSettings": "pathtrace.scene.description",
+    "Camera": "pathtrace.camera",
+    "Environment": "pathtrace.environment",
+    "Material": "pathtrace.materials.table",
+    "UserError": "pathtrace.errors",
+}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name):
+    if name not in _EXPORTS:
+        raise AttributeError(f"module 'pathtrace' has no attribute {name!r}")
+    import importlib
+    value = getattr(importlib.import_module(_EXPORTS[name]), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_EXPORTS))

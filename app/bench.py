@@ -190,7 +190,7 @@ def run_display(device_specs, width, height, log=print):
 
 def run_denoise(width, height, log=print):
     """Open Image Denoise on the demo's 4-sample image and guides, at each quality."""
-    from pathtrace.denoise import QUALITIES, Denoiser
+    from pathtrace.denoiser import QUALITIES, Denoiser
     from pathtrace.device import choose_device
     r = Renderer(choose_device("auto"), load_scene("demo"), width, height)
     r.set_aovs(True)

@@ -35,6 +35,9 @@ class BuildProgress:
         return self
 
     def __exit__(self, *exc):
+        self.close()
+
+    def close(self):
         self.bar.close()
 
 
@@ -88,7 +91,7 @@ def _exposure(text):
 
 def add_output_options(p: argparse.ArgumentParser):
     """Options of the commands that write images (render, farm render)."""
-    from pathtrace.tonemap import TONEMAPS
+    from pathtrace.tonecurve import TONEMAPS
     p.add_argument("--exposure", type=_exposure, default=0.0, metavar="EV",
                    help="exposure in stops, -100 to 100, for .png/.jpg (default 0)")
     p.add_argument("--tonemap", choices=TONEMAPS, default="standard",
@@ -162,11 +165,9 @@ def cmd_scenes(args):
 def cmd_render(args):
     from tqdm import tqdm
 
-    from pathtrace.device import choose_devices
+    from pathtrace import api
     from pathtrace.files import shown
     from pathtrace.image_io import check_writable, write_images
-    from pathtrace.multidevice import DeviceGroup
-    from pathtrace.scene import load_scene
 
     for path in args.output:
         check_writable(path)
@@ -174,40 +175,43 @@ def cmd_render(args):
             check_writable(aov_path(path, name))
     denoiser = None
     if args.denoise:                 # before rendering: a missing or failing OIDN says so now
-        from pathtrace.denoise import Denoiser
+        from pathtrace.denoiser import Denoiser
         denoiser = Denoiser("high")
-    scene = apply_render_options(load_scene(args.scene), args)
+    scene = apply_render_options(api.load(args.scene), args)
     s = scene.settings
-    backends = choose_devices(args.device or ["auto"])
-    for backend in backends:
+    for backend in api.open_devices(args.device or ["auto"]):
         print(f"device: {backend.device.describe()}", file=sys.stderr)
-    with BuildProgress(scene.name, args.quiet) as progress:
-        group = DeviceGroup(backends, scene, progress=progress)
-    group.set_aovs(bool(args.denoise or args.aov))
     pixels = s.width * s.height
-    # the rate and the time left from the average since the start (smoothing 0): the launches grow
-    # from one sample, so a smoothed rate underestimates the time left; in samples per second
-    # always, as a fixed unit, where tqdm would flip to seconds per sample
-    bar = tqdm(total=s.spp, desc=f"{scene.name} {s.width}x{s.height}", file=sys.stderr,
-               disable=args.quiet, dynamic_ncols=True, smoothing=0,
-               bar_format="{desc}: {percentage:3.0f}%|{bar}| {n}/{total} spp [{elapsed}<{remaining}{postfix}]")
+    build_progress = BuildProgress(scene.name, args.quiet)
+    bar = None
+
+    def progress(done):
+        # made as the first samples start (after the BVH build): the rate and the time left from
+        # the average since then (smoothing 0): the launches grow from one sample, so a smoothed
+        # rate underestimates the time left; in samples per second always, as a fixed unit,
+        # where tqdm would flip to seconds per sample
+        nonlocal bar
+        if bar is None:
+            build_progress.close()
+            bar = tqdm(total=s.spp, desc=f"{scene.name} {s.width}x{s.height}", file=sys.stderr,
+                       disable=args.quiet, dynamic_ncols=True, smoothing=0,
+                       bar_format="{desc}: {percentage:3.0f}%|{bar}| {n}/{total} spp [{elapsed}<{remaining}{postfix}]")
+        bar.update(done - bar.n)
+        elapsed = bar.format_dict["elapsed"]
+        if elapsed > 0:
+            bar.set_postfix_str(f"{done * pixels / elapsed / 1e6:.2f} Msamples/s", refresh=False)
     try:
-        def progress(done):
-            bar.update(done - bar.n)
-            elapsed = bar.format_dict["elapsed"]
-            if elapsed > 0:
-                bar.set_postfix_str(f"{done * pixels / elapsed / 1e6:.2f} Msamples/s", refresh=False)
-        group.render(s.spp, progress)
+        result = api.render(scene, device=args.device or ["auto"], progress=progress,
+                            build_progress=build_progress,
+                            aovs=("albedo", "normal") if args.denoise or args.aov else ())
     except KeyboardInterrupt:
-        bar.close()
-        print(f"interrupted at {group.samples}/{s.spp} spp; nothing written", file=sys.stderr)
+        print(f"interrupted at {0 if bar is None else bar.n}/{s.spp} spp; nothing written", file=sys.stderr)
         return INTERRUPTED
-    bar.close()
-    dropped = group.dropped_samples()
-    if dropped:
-        warn(f"{scene.name}: {dropped} of {s.spp * pixels} samples were NaN or infinite and were left out "
-             f"(as black)")
-    outputs = render_outputs(group, args, denoiser)
+    finally:
+        build_progress.close()
+        if bar is not None:
+            bar.close()
+    outputs = render_outputs(result, args, denoiser)
     write_images(outputs, args.exposure, args.tonemap)
     for out in outputs:
         print(f"wrote {shown(out.path)}", file=sys.stderr)
@@ -231,15 +235,16 @@ def aov_path(path: str, name: str) -> Path:
     return path.with_name(f"{path.stem}.{name}{path.suffix}")
 
 
-def render_outputs(group, args, denoiser=None) -> list:
-    """What `render` writes: the image (denoised by `denoiser` with --denoise; an EXR then keeps
-    the noisy one as its layer "noisy") to every --output, and with --aov the albedo and normal
-    beside each (normals stored as n / 2 + 1/2 in PNG and JPEG, the usual encoding)."""
+def render_outputs(result, args, denoiser=None) -> list:
+    """What `render` writes from api.render's result: the image (denoised by `denoiser` with
+    --denoise; an EXR then keeps the noisy one as its layer "noisy") to every --output, and with
+    --aov the albedo and normal beside each (normals stored as n / 2 + 1/2 in PNG and JPEG, the
+    usual encoding)."""
     from pathtrace.image_io import HDR_FORMATS, Output
-    noisy = group.mean()
+    noisy = result["image"] if isinstance(result, dict) else result
     image, layers = noisy, {}
-    if args.denoise or args.aov:
-        albedo, normal = group.read_aovs()
+    if isinstance(result, dict):
+        albedo, normal = result["albedo"], result["normal"]
     if denoiser is not None:
         image, layers = denoiser(noisy, albedo, normal), {"noisy": noisy}
     outputs = []
@@ -254,14 +259,14 @@ def render_outputs(group, args, denoiser=None) -> list:
 
 
 def cmd_convert(args):
+    from pathtrace.api import load
     from pathtrace.image_io import write_text
-    from pathtrace.scene import load_scene
     from pathtrace.scene.toml_writer import scene_toml
 
     out = Path(args.output)
     if out.suffix.lower() != ".toml":
         raise UserError(f"--output: {out}: pathtrace writes scenes as .toml")
-    write_text(out, scene_toml(load_scene(args.scene), out), "--output")
+    write_text(out, scene_toml(load(args.scene), out), "--output")
     print(f"wrote {out}", file=sys.stderr)
     return 0
 
@@ -327,23 +332,16 @@ def farm_output(pattern: str, name: str, frame: int, count: int) -> str:
 
 
 def cmd_view(args):
-    from pathtrace.device import choose_device
-    from pathtrace.scene import load_scene
-    from pathtrace.viewer.window import Viewer, require_display
+    from pathtrace import api
 
     if args.device and len(args.device) > 1:
         raise UserError("--device: the viewer renders on one device; give one (several are "
                         "for 'pathtrace render')")
+    from pathtrace.viewer.window import require_display
     require_display()      # before any device work
-    scene = apply_render_options(load_scene(args.scene), args)
-    backend = choose_device((args.device or ["auto"])[0])
-    viewer = Viewer(backend, scene, args.screenshot_dir)
-    try:
-        viewer.run(args.frames)
-        if args.screenshot:
-            viewer.screenshot()
-    finally:
-        viewer.close()
+    scene = apply_render_options(api.load(args.scene), args)
+    api.view(scene, (args.device or ["auto"])[0], frames=args.frames, screenshot_dir=args.screenshot_dir,
+             screenshot=args.screenshot)
     return 0
 
 

@@ -22,7 +22,7 @@ import numpy as np
 
 from pathtrace.camera import Camera
 from pathtrace.errors import UserError
-from pathtrace.render import next_launch_size
+from pathtrace.launches import next_launch_size
 
 BATCH_SECONDS = 1.0       # a batch's target duration: long enough that transfers are amortised
 

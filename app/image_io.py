@@ -16,7 +16,7 @@ import numpy as np
 
 from pathtrace.errors import UserError
 from pathtrace.files import check_regular_file, shown
-from pathtrace.tonemap import tonemap, to_8bit
+from pathtrace.tonecurve import tonemap, to_8bit
 
 HDR_FORMATS = (".exr", ".hdr", ".pfm")
 LDR_FORMATS = (".png", ".jpg", ".jpeg")

@@ -5,7 +5,7 @@ its absolute index (kernels/rng.cl), so the image does not depend on which devic
 sample: it equals a one-device render of the same samples up to the order of float additions.
 
 Balancing follows the idea of Cycles' work balancer: each device takes launches sized to its own
-measured speed (pathtrace.render.next_launch_size), so a fast device takes more samples and a device
+measured speed (pathtrace.launches.next_launch_size), so a fast device takes more samples and a device
 that slows down takes fewer; near the end a device takes no more than its share of what is left,
 by the measured speeds, so that no device is left finishing a long launch alone."""
 
@@ -17,7 +17,7 @@ import numpy as np
 
 from pathtrace.compiled import CompiledScene, compile_scene
 from pathtrace.device import Backend
-from pathtrace.render import next_launch_size
+from pathtrace.launches import next_launch_size
 from pathtrace.renderer import Renderer, aov_means, variance_of
 
 
@@ -32,11 +32,11 @@ def row_bands(height: int, bands: int):
 
 
 class SampleCounter:
-    """Hands out consecutive ranges of sample indices, [0, total), to several takers."""
+    """Hands out consecutive ranges of sample indices, [start, total), to several takers."""
 
-    def __init__(self, total: int):
+    def __init__(self, total: int, start: int = 0):
         self.total = total
-        self.issued = 0
+        self.issued = start
         self.stopped = False
         self._lock = threading.Lock()
         self._rates = {}        # taker -> its last measured samples per second
@@ -85,12 +85,13 @@ class DeviceGroup:
         return self.compiled.bvh_seconds
 
     def render(self, spp: int, on_progress=None, launch_seconds: float = 0.25):
-        """Adds samples 0 .. spp-1 of every pixel, spread over the devices; on_progress(samples
+        """Brings every pixel to `spp` samples: adds samples self.samples .. spp-1, spread over
+        the devices (so that a render can go on where the last one stopped); on_progress(samples
         done) after each launch. A launch is sized to take about launch_seconds: several samples
         where one is quick, one sample split into bands of rows where it is not (the first is,
         until its speed is known). Re-raises the first device error; Ctrl-C stops every device
         after its current launch or band."""
-        counter = SampleCounter(spp)
+        counter = SampleCounter(spp, self.samples)
         errors = []
         progress_lock = threading.Lock()
 

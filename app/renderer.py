@@ -65,7 +65,7 @@ class Renderer:
         self.width = self.height = 0
         self.samples = 0          # samples per pixel accumulated so far (whole passes)
         self.aovs = False         # whether the denoiser's albedo and normal are accumulated too
-        self.resets = 0           # how many times the image restarted (pathtrace.render.Progressive)
+        self.resets = 0           # how many times the image restarted (pathtrace.launches.Progressive)
         self.set_scene(scene, progress)
         self.resize(width or self.scene.settings.width, height or self.scene.settings.height)
 
@@ -227,7 +227,7 @@ class Renderer:
         renderer), so that several renderers can share one render's sample indices.
 
         rows = (first, end) adds them to those rows only: a band of a pass, so that no launch
-        holds a window up (pathtrace.render.Progressive). Bands go top to bottom; `samples` counts
+        holds a window up (pathtrace.launches.Progressive). Bands go top to bottom; `samples` counts
         whole passes, so it grows with the band that ends at the last row. A pass split into
         bands adds the very samples one launch would."""
         b = self._buffers

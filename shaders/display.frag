@@ -1,6 +1,6 @@
 #version 330 core
 // The image as the user sees it: mean = rgb / a, exposure, tone curve, sRGB. The same steps as
-// app/tonemap.py, which writes the PNG screenshots.
+// app/tonecurve.py, which writes the PNG screenshots.
 uniform sampler2D radiance;       // rgb: radiance summed over a samples (app/display.py: the
                                   // accumulation buffer; or a mean, or the denoised image, a = 1)
 uniform float exposure;           // stops

@@ -251,10 +251,10 @@ def test_a_scene_that_fails_to_open_leaves_the_viewer_as_it_was(viewer, monkeypa
 @pytest.mark.parametrize("curve,exposure", [("standard", 0.0), ("aces", 0.5), ("standard", -1.0)])
 def test_the_display_shader_matches_tonemap(viewer, curve, exposure):
     """shaders/display.frag (mean = rgb / a, exposure, tone curve, sRGB) draws what
-    app/tonemap.py writes, to one 8-bit step, on a ramp of radiances from 0 to 4."""
+    app/tonecurve.py writes, to one 8-bit step, on a ramp of radiances from 0 to 4."""
     import moderngl
 
-    from pathtrace.tonemap import to_8bit, tonemap
+    from pathtrace.tonecurve import to_8bit, tonemap
     v = viewer
     radiance = np.stack([np.linspace(0, 4, 64), np.linspace(0, 1, 64), np.linspace(0, 0.05, 64)], -1)[None]
     pixels = np.concatenate([radiance * 4, np.full((1, 64, 1), 4.0)], -1).astype(np.float32)  # 4 samples
@@ -504,6 +504,27 @@ def test_view_command_closes_cleanly(display, tmp_path, scene):
                        text=True, timeout=120)
     assert r.returncode == 0, r.stderr
     assert len(list(tmp_path.glob("*.png"))) == 1 and len(list(tmp_path.glob("*.exr"))) == 1
+
+
+def test_api_view_opens_a_scene_made_in_python(display, tmp_path):
+    """pathtrace.view() on a scene written as dicts, in a process of its own (as a script or a
+    notebook calls it): the window renders it, and its screenshot shows the red ball."""
+    code = f"""
+import pathtrace
+scene = pathtrace.load_dict({{
+    "camera": {{"eye": [0, 0, 4], "look_at": [0, 0, 0]}},
+    "environment": {{"color": [1, 1, 1]}},
+    "materials": {{"red": {{"type": "diffuse", "rho_d": [0.9, 0.05, 0.05]}}}},
+    "spheres": [{{"center": [0, 0, 0], "radius": 1, "material": "red"}}],
+}}, "ball")
+pathtrace.view(scene, device={os.environ.get("PATHTRACE_TEST_DEVICE", "cpu")!r}, size=(64, 48), frames=30,
+               screenshot_dir={str(tmp_path)!r}, screenshot=True)
+"""
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    exr = read_hdr(next(tmp_path.glob("*.exr")), "screenshot")
+    centre = exr[20:28, 28:36].mean(axis=(0, 1))
+    assert centre[0] > 4 * centre[1] and centre[0] > 4 * centre[2], centre
 
 
 def test_without_a_display_it_says_how_to_render_headless(tmp_path):

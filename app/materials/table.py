@@ -5,6 +5,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from pathtrace.errors import UserError, short
 from pathtrace.materials.bsdf import TWOSIDED
 from pathtrace.materials.registry import BSDFS, TAGS
 from pathtrace.types import MATERIAL
@@ -76,6 +77,23 @@ class MaterialTable:
 
     def set(self, index: int, material: Material):
         self.rows[index] = pack(material.type, material.params, material.emission, material.twosided)[0]
+
+    def index(self, key) -> int:
+        """The row of a material given by name (a scene file's named material) or by row."""
+        if isinstance(key, str):
+            if key not in self.names:
+                raise UserError(f"no material named {short(key)} (named: {', '.join(self.names) or 'none'})")
+            return self.names[key]
+        if isinstance(key, bool) or not isinstance(key, (int, np.integer)) or not -len(self) <= key < len(self):
+            raise UserError(f"no material {short(key)}: give a name or a row from 0 to {len(self) - 1}")
+        return int(key) % len(self)
+
+    def __getitem__(self, key) -> Material:
+        """table["gold"] or table[3]: the material as a Material, to change and assign back."""
+        return self.get(self.index(key))
+
+    def __setitem__(self, key, material: Material):
+        self.set(self.index(key), material)
 
     def name_of(self, index: int) -> str | None:
         return next((n for n, i in self.names.items() if i == index), None)

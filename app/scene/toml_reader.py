@@ -27,11 +27,14 @@ MAX_INLINE = 100_000    # vertices or faces written in a scene file; larger mesh
 
 
 class _Reader:
-    def __init__(self, path: Path):
+    def __init__(self, path: Path, label: str = None):
+        """path: the scene file (meshes and maps are found beside it; its stem names the
+        scene); label: how messages name the scene, the path by default."""
         self.path = path
+        self.label = label or str(path)
 
     def fail(self, where, problem):
-        raise UserError(f"{self.path}: {where}: {problem}")
+        raise UserError(f"{self.label}: {where}: {problem}")
 
     def table(self, data, where, allowed):
         if not isinstance(data, dict):
@@ -165,7 +168,7 @@ class _Reader:
             if not isinstance(name, str):
                 self.fail("environment.map", f"must be a file name, got {short(name)}")
             return Environment.from_file(self.find_asset(name), intensity, rotation,
-                                         where=f"{self.path}: environment.map")
+                                         where=f"{self.label}: environment.map")
         env = Environment.constant(self.color(data, "color", where, default=(1, 1, 1)), intensity)
         env.rotation = rotation
         return env
@@ -264,14 +267,14 @@ class _Reader:
             if not isinstance(name, str) or not name:
                 self.fail(f"{where}.file", f"must be a file name, got {short(name)}")
             source = self.path.parent / name
-            vertices, faces, normals = read_mesh(source, f"{self.path}: {where}.file")
+            vertices, faces, normals = read_mesh(source, f"{self.label}: {where}.file")
             if flags["face_normals"]:
                 normals = None
             origin = MeshFile(str(source), m, normals is None, flags["flip_normals"])
             default_name = Path(name).stem
         else:
             vertices, faces = self.inline_geometry(data, where)
-            vertices, faces, normals = check_mesh(vertices, faces, None, f"{self.path}: {where}")
+            vertices, faces, normals = check_mesh(vertices, faces, None, f"{self.label}: {where}")
             source, default_name, origin = "", f"mesh {where[7:-1]}", None
         if flags["flip_normals"]:
             faces = faces[:, ::-1]
@@ -385,3 +388,27 @@ def read_scene_file(path) -> Scene:
     except RecursionError:
         raise UserError(f"{path}: not valid TOML: arrays or tables nested too deeply") from None
     return _Reader(path).scene(data)
+
+
+def read_scene_dict(data: dict, name: str = "scene", folder=".") -> Scene:
+    """A scene given as the TOML format's tables in Python: dicts, lists or tuples, numbers
+    (NumPy's too) and strings; NumPy arrays stand for lists. Files the scene names (meshes, maps)
+    are found relative to `folder`. Messages name the scene "scene dict 'name'"."""
+    return _Reader(Path(folder) / f"{name}.toml", f"scene dict {name!r}").scene(_as_toml(data))
+
+
+def _as_toml(value):
+    """What tomllib would have given for the same data: lists for tuples and arrays, Python
+    numbers for NumPy's."""
+    if isinstance(value, dict):
+        return {k: _as_toml(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [_as_toml(v) for v in value]
+    if isinstance(value, np.generic):
+        return value.item()
+    return value
+
+
+def read_material_dict(data: dict) -> Material:
+    """One material given as a [materials] table of the TOML format, in Python."""
+    return _Reader(Path("material.toml"), "material dict").material(_as_toml(data), "material")

@@ -14,7 +14,7 @@ import numpy as np
 from pathtrace.materials import BSDFS
 from pathtrace.scene.builtin import BUILTIN_SCENES
 from pathtrace.scene.description import RUSSIAN_ROULETTE
-from pathtrace.tonemap import TONEMAPS
+from pathtrace.tonecurve import TONEMAPS
 
 MARGIN = 10                 # pixels between the panel and the window's edges
 WIDGET_MIN = 150            # the narrowest a widget may get, in pixels

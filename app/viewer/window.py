@@ -1,8 +1,8 @@
 """The viewer's window and loop. The window never waits for the renderer: each frame polls input,
-moves the camera, lets pathtrace.render.Progressive collect finished launches and queue new ones
+moves the camera, lets pathtrace.launches.Progressive collect finished launches and queue new ones
 (bands of rows sized to a fraction of a frame), and shows the newest image that has reached the
 host (pathtrace.display, drawn by shaders/display.frag), then the imgui panel. While the
-camera rests the image is denoised (pathtrace.denoise) in a worker thread, every time its samples
+camera rests the image is denoised (pathtrace.denoiser) in a worker thread, every time its samples
 have doubled."""
 
 import datetime
@@ -19,7 +19,7 @@ import pyopencl as cl
 
 from pathtrace.display import Display
 from pathtrace.errors import UserError
-from pathtrace.render import Progressive
+from pathtrace.launches import Progressive
 from pathtrace.renderer import Renderer, aov_means, per_pixel_mean
 from pathtrace.resources import resource_dir
 from pathtrace.scene import load_scene
@@ -27,7 +27,7 @@ from pathtrace.viewer.controls import FlyControls, pick_ray
 from pathtrace.viewer.panel import draw_help, draw_panel
 
 LAUNCH_BUDGET = 1 / 120        # device seconds per launch: a reset waits for at most three
-                               # (pathtrace.render.QUEUE_AHEAD); larger ones made the 99th-percentile
+                               # (pathtrace.launches.QUEUE_AHEAD); larger ones made the 99th-percentile
                                # frame 50-80 ms on two cores
 MOVE_BUDGET = 1 / 30           # device seconds for a whole preview pass while the camera moves
 MAX_PREVIEW_SCALE = 16         # the coarsest preview: 1/16 of the resolution on each axis
@@ -432,7 +432,7 @@ class Viewer:
     def _denoiser_ready(self) -> bool:
         if self._denoiser is None and self.denoise_error is None:
             try:
-                from pathtrace.denoise import Denoiser
+                from pathtrace.denoiser import Denoiser
                 self._denoiser = Denoiser(lambda device: DENOISE_QUALITY[device])
                 # OIDN's first run at a size prepares it (a third of a second on two cores):
                 # done now, in the worker, it is not waited for when the camera stops

@@ -1,0 +1,350 @@
+"""pathtrace's Python API (docs/python.md): load a scene (a file, a built-in, or dicts of the TOML
+format), change it, render it to NumPy arrays, and write, tonemap, denoise or show the images.
+The command line is built on these functions.
+
+Images are NumPy arrays of linear radiance, (height, width, 3) float32, row 0 at the top; sizes
+are (width, height) in pixels. A scene rendered again is not compiled again: its BVH and buffers
+stay on the device between renders, and only what changed since the last render (the camera,
+the settings, the materials, the environment) is uploaded again; a change of geometry (spheres
+or meshes) compiles it anew."""
+
+import hashlib
+import time
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from pathtrace.errors import UserError, short, warn
+from pathtrace.scene.description import RUSSIAN_ROULETTE, Scene
+
+AOVS = ("albedo", "normal", "depth")
+MAX_SIZE = 16384          # pixels on a side, as `--size` allows
+
+
+def load(path_or_name) -> Scene:
+    """A scene from a .toml or Mitsuba 3 .xml file, or a built-in scene by name ('simple',
+    'demo', 'cornell-box', ...; `pathtrace scenes` lists them)."""
+    from pathtrace.scene import load_scene
+    return load_scene(str(path_or_name))
+
+
+def load_dict(data: dict, name: str = "scene", folder=".") -> Scene:
+    """A scene written in Python: the tables of the TOML format (docs/scene-format.md) as dicts,
+    lists (or tuples, or NumPy arrays) and numbers. Mesh and map files it names are looked up
+    relative to `folder`."""
+    from pathtrace.scene.toml_reader import read_scene_dict
+    if not isinstance(data, dict):
+        raise UserError(f"load_dict: the scene must be a dict of the TOML format's tables, got {short(data)}")
+    return read_scene_dict(data, name, folder)
+
+
+def material(data: dict):
+    """A Material from a table of the TOML format's [materials], e.g.
+    {"type": "roughconductor", "material": "Au", "alpha": 0.2}; assign it to a scene's material
+    by name or row: scene.materials["gold"] = pathtrace.material({...})."""
+    from pathtrace.scene.toml_reader import read_material_dict
+    return read_material_dict(data)
+
+
+def devices() -> list:
+    """The OpenCL devices found, each with .index, .name, .kind ('GPU' or 'CPU') and
+    .describe(); `device=` takes an index, a kind, or part of a name."""
+    from pathtrace.device import list_devices
+    return list_devices()
+
+
+_backends = {}            # device specs -> opened backends, kept for the next render
+
+
+def open_devices(device="auto") -> list:
+    """The backends for `device`: a spec as `--device` takes it ('auto', 'gpu', 'cpu', 'gpu:1',
+    an index, part of a name, or 'all') or a list of specs. Opened once and kept."""
+    from pathtrace.device import choose_devices
+    specs = (device,) if isinstance(device, str) else tuple(device)
+    if not specs or not all(isinstance(s, str) for s in specs):
+        raise UserError(f"device: give a device spec such as 'auto', 'gpu', 'cpu:0' or a list of them, "
+                        f"got {short(device)}")
+    if specs not in _backends:
+        _backends[specs] = choose_devices(list(specs))
+    return _backends[specs]
+
+
+@dataclass
+class Snapshot:
+    """An image as progressive() yields it: `spp` samples per pixel after `seconds` of rendering
+    (device time, from the first sample; compiling and reading back excluded). `aovs` holds the
+    auxiliary images that were asked for. Shown inline in Jupyter."""
+    spp: int
+    seconds: float
+    image: np.ndarray
+    aovs: dict
+
+    def _repr_png_(self):
+        return png_bytes(self.image)
+
+
+def settings_for(scene: Scene, spp=None, size=None, seed=None, max_depth=None, rr=None, nee=None):
+    """The scene's render settings with the given ones in their place, checked."""
+    s = scene.settings
+    changes = {}
+    if spp is not None:
+        changes["spp"] = _integer("spp", spp, 1, 2**31 - 1)
+    if size is not None:
+        if not isinstance(size, (tuple, list)) or len(size) != 2:
+            raise UserError(f"size: give (width, height), got {short(size)}")
+        changes["width"], changes["height"] = (_integer("size", v, 1, MAX_SIZE) for v in size)
+    if seed is not None:
+        changes["seed"] = _integer("seed", seed, 0, 2**32 - 1)
+    if max_depth is not None:
+        changes["max_depth"] = _integer("max_depth", max_depth, 0, 2**31 - 1)
+    if rr is not None:
+        if rr not in RUSSIAN_ROULETTE:
+            raise UserError(f"rr: give one of {', '.join(RUSSIAN_ROULETTE)}, got {short(rr)}")
+        changes["russian_roulette"] = rr
+    if nee is not None:
+        changes["nee"] = bool(nee)
+    settings = replace(s, **changes)
+    if not settings.paths_end:
+        raise UserError("rr 'off' needs max_depth >= 1, or paths would never end")
+    return settings
+
+
+def _integer(name, value, low, high):
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not low <= value <= high:
+        raise UserError(f"{name}: give an integer from {low} to {high}, got {short(value)}")
+    return int(value)
+
+
+class _Prepared:
+    """A scene compiled and uploaded to a group of devices, with what it was compiled from, so
+    that the next render uploads only what changed."""
+
+    def __init__(self, scene: Scene, backends: list, build_progress=None):
+        from pathtrace.multidevice import DeviceGroup
+        self.backends = backends
+        self.geometry = _geometry_digest(scene)
+        self.group = DeviceGroup(backends, scene, progress=build_progress)
+        self.environment = _environment_key(scene.environment)
+
+    def update(self, scene: Scene, settings, aovs: bool):
+        """Brings the devices up to date with the scene and restarts the image."""
+        compiled = self.group.compiled
+        environment = _environment_key(scene.environment)
+        materials_changed = not np.array_equal(scene.materials.rows, compiled.materials)
+        for r in self.group.renderers:
+            if environment != self.environment:
+                r.set_environment(scene.environment)
+            elif materials_changed:
+                r.upload_materials()
+            r.set_camera(scene.camera)
+            r.set_settings(**{k: getattr(settings, k) for k in ("max_depth", "russian_roulette", "seed", "nee")})
+            r.resize(settings.width, settings.height)
+            r.set_aovs(aovs)
+        self.environment = environment
+
+
+def prepare(scene: Scene, device="auto", build_progress=None) -> _Prepared:
+    """The compiled, uploaded form of `scene` on `device` (open_devices), made once and kept
+    with the scene (so that it goes when the scene goes); compiled anew if the scene's geometry
+    changed or the devices differ."""
+    backends = open_devices(device)
+    kept = scene.__dict__.get("_prepared")
+    if kept is not None and kept.backends == backends and kept.geometry == _geometry_digest(scene):
+        return kept
+    scene.__dict__.pop("_prepared", None)    # free the old buffers before making new ones
+    scene._prepared = _Prepared(scene, backends, build_progress)
+    return scene._prepared
+
+
+def _geometry_digest(scene: Scene) -> bytes:
+    """A digest of everything the BVH and the primitive arrays are built from."""
+    h = hashlib.blake2b(digest_size=16)
+    arrays = [scene.spheres, scene.sphere_material]
+    for m in scene.meshes:
+        arrays += [m.vertices, m.faces, np.zeros(0) if m.normals is None else m.normals,
+                   np.array([m.material])]
+    for a in arrays:
+        a = np.ascontiguousarray(a)
+        h.update(str((a.dtype.str, a.shape)).encode())
+        h.update(a.data)
+    return h.digest()
+
+
+def _environment_key(environment):
+    return id(environment), id(environment.image), float(environment.intensity), float(environment.rotation)
+
+
+def progressive(scene, spp=None, steps=None, size=None, device="auto", seed=None, max_depth=None,
+                rr=None, nee=None, aovs=(), progress=False, build_progress=None):
+    """Renders `scene` (a Scene, or what load() takes) and yields a Snapshot each time the image
+    reaches one of `steps` samples per pixel (default: 1, 2, 4, ... up to spp, and spp; spp
+    defaults to the scene's). Arguments as for render(). Stopping the iteration early stops the
+    render."""
+    scene = scene if isinstance(scene, Scene) else load(scene)
+    settings = settings_for(scene, spp, size, seed, max_depth, rr, nee)
+    steps = _steps(steps, settings.spp)
+    aovs = _aov_names(aovs)
+    prepared = prepare(scene, device, build_progress)
+    prepared.update(scene, settings, bool(aovs))
+    group = prepared.group
+    on_progress, close = _progress(progress, scene.name, settings, steps[-1])
+    if on_progress:
+        on_progress(0)
+    seconds = 0.0
+    try:
+        for target in steps:
+            start = time.perf_counter()
+            group.render(target, on_progress)
+            seconds += time.perf_counter() - start
+            read = group.read_aovs() if aovs else {}
+            yield Snapshot(target, seconds, group.mean(), {name: read[name] for name in aovs})
+    finally:
+        close()
+    dropped = group.dropped_samples()
+    if dropped:
+        warn(f"{scene.name}: {dropped} of {steps[-1] * settings.width * settings.height} samples were NaN "
+             f"or infinite and were left out (as black)")
+
+
+def render(scene, spp=None, size=None, device="auto", seed=None, max_depth=None, rr=None, nee=None,
+           aovs=(), progress=False, build_progress=None):
+    """Renders `scene` (a Scene, or what load() takes) and returns the image, (height, width, 3)
+    float32 linear radiance. With `aovs` (names from "albedo", "normal", "depth"), returns a dict
+    of "image" and each of them: albedo and normal (H, W, 3), the first hit's distance (H, W), 0
+    where the camera ray escapes; averaged over each pixel, from the first 16 samples.
+
+    spp: samples per pixel; size: (width, height); seed: 0 to 2^32 - 1; max_depth: the longest
+    path in vertices (1: emitters seen directly, 0: no limit); rr: how paths end ("throughput",
+    "albedo" or "off"); nee: next-event estimation; each defaults to the scene's settings.
+    device: as open_devices() takes it; several devices share the samples. progress: True for a
+    progress bar (a notebook's, in Jupyter), or a function called with the samples per pixel
+    done (0 as the first samples start, after the scene is compiled); build_progress: a function called with the fraction of a large BVH build done."""
+    for snapshot in progressive(scene, spp, None, size, device, seed, max_depth, rr, nee, aovs,
+                                progress, build_progress):
+        pass
+    return {"image": snapshot.image, **snapshot.aovs} if snapshot.aovs else snapshot.image
+
+
+def _steps(steps, spp: int) -> list:
+    if steps is None:
+        return sorted({min(1 << k, spp) for k in range(spp.bit_length() + 1)})
+    steps = [_integer("steps", s, 1, 2**31 - 1) for s in steps]
+    if not steps or steps != sorted(set(steps)):
+        raise UserError(f"steps: give increasing sample counts, got {short(steps)}")
+    return steps
+
+
+def _aov_names(aovs) -> tuple:
+    names = (aovs,) if isinstance(aovs, str) else tuple(aovs or ())
+    unknown = [n for n in names if n not in AOVS]
+    if unknown:
+        raise UserError(f"aovs: {short(unknown[0])} is not one of {', '.join(AOVS)}")
+    return tuple(dict.fromkeys(names))
+
+
+def _progress(progress, name: str, settings, total: int):
+    """(on_progress(samples done), close()) for a progress argument."""
+    if callable(progress):
+        return progress, lambda: None
+    if not progress:
+        return None, lambda: None
+    from tqdm.auto import tqdm
+    bar = tqdm(total=total, desc=f"{name} {settings.width}x{settings.height}", unit="spp")
+    return (lambda done: bar.update(done - bar.n)), bar.close
+
+
+def denoise(image: np.ndarray, albedo: np.ndarray = None, normal: np.ndarray = None,
+            quality: str = "high") -> np.ndarray:
+    """The image denoised by Intel Open Image Denoise, guided by the albedo and normal that
+    render(aovs=("albedo", "normal")) gives (better) or not; quality "high", "balanced" or
+    "fast". Each array (H, W, 3)."""
+    from pathtrace.denoiser import QUALITIES, Denoiser
+    if quality not in QUALITIES:
+        raise UserError(f"quality: give one of {', '.join(QUALITIES)}, got {short(quality)}")
+    image = _rgb("image", image)
+    guides = [None if a is None else _rgb(name, a, image.shape) for name, a in (("albedo", albedo), ("normal", normal))]
+    if guides[0] is None and guides[1] is not None:
+        raise UserError("denoise: a normal guide needs the albedo guide too (Open Image Denoise's rule)")
+    return Denoiser(quality)(image, *guides)
+
+
+def _rgb(name: str, image, shape=None) -> np.ndarray:
+    """An (H, W, 3) float32 array from an image argument; (H, W) is taken as grey."""
+    a = np.asarray(image, np.float32)
+    if a.ndim == 2:
+        a = np.repeat(a[..., None], 3, axis=-1)
+    if a.ndim != 3 or a.shape[-1] != 3 or 0 in a.shape:
+        raise UserError(f"{name}: give an (H, W, 3) or (H, W) array, got shape {a.shape}")
+    if shape is not None and a.shape != shape:
+        raise UserError(f"{name}: its shape {a.shape} is not the image's {shape}")
+    return np.ascontiguousarray(a)
+
+
+def tonemap(image: np.ndarray, exposure: float = 0.0, curve: str = "standard") -> np.ndarray:
+    """Linear radiance to display sRGB, (H, W, 3) uint8: exposure in stops, then the tone curve
+    ("standard" clips at 1, "aces" is Narkowicz's fit of ACES), then the sRGB transfer function;
+    what a .png output holds."""
+    from pathtrace.tonecurve import TONEMAPS, to_8bit
+    from pathtrace.tonecurve import tonemap as display
+    if curve not in TONEMAPS:
+        raise UserError(f"curve: give one of {', '.join(TONEMAPS)}, got {short(curve)}")
+    if isinstance(exposure, bool) or not isinstance(exposure, (int, float, np.number)) or not -100 <= exposure <= 100:
+        raise UserError(f"exposure: give stops from -100 to 100, got {short(exposure)}")
+    return to_8bit(display(_rgb("image", image), float(exposure), curve))
+
+
+def write(path, image: np.ndarray, exposure: float = 0.0, curve: str = "standard"):
+    """Writes an image file, atomically: .png and .jpg tonemapped (as tonemap() does), .exr,
+    .hdr and .pfm as linear float radiance. (H, W) arrays (a depth) are written as grey."""
+    from pathtrace.image_io import write_image
+    tonemap(np.zeros((1, 1, 3)), exposure, curve)         # the same checks
+    write_image(Path(path), _rgb("image", image), float(exposure), curve, what="path")
+
+
+def png_bytes(image: np.ndarray, exposure: float = 0.0, curve: str = "standard") -> bytes:
+    """The image tonemapped and encoded as PNG."""
+    import cv2
+    ok, encoded = cv2.imencode(".png", np.ascontiguousarray(tonemap(image, exposure, curve)[..., ::-1]))
+    return encoded.tobytes()
+
+
+@dataclass
+class Picture:
+    """An image as Jupyter shows it inline (show())."""
+    image: np.ndarray
+    exposure: float = 0.0
+    curve: str = "standard"
+
+    def _repr_png_(self):
+        return png_bytes(self.image, self.exposure, self.curve)
+
+
+def show(image: np.ndarray, exposure: float = 0.0, curve: str = "standard") -> Picture:
+    """An object that Jupyter displays as the tonemapped image (the last expression of a cell,
+    or IPython.display.display(...))."""
+    tonemap(np.zeros((1, 1, 3)), exposure, curve)
+    return Picture(_rgb("image", image), float(exposure), curve)
+
+
+def view(scene="simple", device: str = "auto", size=None, frames: int = None,
+         screenshot_dir="screenshots", screenshot: bool = False):
+    """Opens the interactive viewer on `scene` (a Scene, or what load() takes) and returns when
+    its window is closed, or after `frames` frames; screenshot: take one when closing. Needs a
+    display."""
+    from pathtrace.viewer.window import Viewer, require_display
+    if not isinstance(device, str):
+        raise UserError("device: the viewer renders on one device; give one spec (several are for render)")
+    require_display()              # before any device work
+    scene = scene if isinstance(scene, Scene) else load(scene)
+    if size is not None:
+        scene = replace(scene, settings=settings_for(scene, size=size))
+    if frames is not None:
+        frames = _integer("frames", frames, 1, 2**31 - 1)
+    viewer = Viewer(open_devices(device)[0], scene, screenshot_dir)
+    try:
+        viewer.run(frames)
+        if screenshot:
+            viewer.screenshot()
+    finally:
+        viewer.close()

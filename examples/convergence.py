@@ -1,0 +1,46 @@
+"""A convergence study: the error of the `simple-diffuse` scene against a reference, as rendering
+time goes on, with next-event estimation on and off, plotted on log-log axes (matplotlib).
+
+    python examples/convergence.py -o convergence.png [--size 160x90] [--spp 256] [--device auto]
+"""
+
+import argparse
+
+import matplotlib
+import numpy as np
+
+import pathtrace
+
+matplotlib.use("Agg")           # files only, no window
+import matplotlib.pyplot as plt  # noqa: E402
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("-o", "--output", default="convergence.png")
+    parser.add_argument("--size", default="160x90")
+    parser.add_argument("--spp", type=int, default=256, help="samples of the longest run")
+    parser.add_argument("--device", default="auto")
+    args = parser.parse_args()
+    size = tuple(int(v) for v in args.size.split("x"))
+
+    scene = pathtrace.load("simple-diffuse")
+    # the reference: 8x the samples, with NEE and another seed, so that its noise is not the runs'
+    reference = pathtrace.render(scene, spp=8 * args.spp, size=size, device=args.device, nee=True, seed=1)
+    for nee in (False, True):
+        runs = pathtrace.progressive(scene, spp=args.spp, size=size, device=args.device, nee=nee)
+        points = [(s.seconds, float(np.sqrt(np.mean((s.image - reference) ** 2)))) for s in runs]
+        seconds, rmse = zip(*points)
+        plt.loglog(seconds, rmse, "o-", label="NEE + MIS" if nee else "BSDF sampling only")
+        print(f"nee={nee}: RMSE {rmse[-1]:.4g} after {seconds[-1]:.3g} s")
+    plt.xlabel("rendering time (s)")
+    plt.ylabel("RMSE against the reference")
+    plt.title(f"simple-diffuse, {size[0]}x{size[1]}")
+    plt.legend()
+    plt.grid(True, which="both", alpha=0.3)
+    plt.savefig(args.output, dpi=100)
+    print(f"wrote {args.output}")
+
+
+if __name__ == "__main__":
+    main()

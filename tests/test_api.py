@@ -1,0 +1,226 @@
+"""The Python API (app/api.py, docs/python.md): each public function, its errors as UserError,
+and re-rendering a changed scene without compiling it again."""
+
+import os
+import subprocess
+import sys
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import pathtrace
+from pathtrace.errors import UserError
+from pathtrace.image_io import read_hdr
+from pathtrace.tonecurve import tonemap as display
+
+ROOT = Path(__file__).resolve().parent.parent
+DEVICE = os.environ.get("PATHTRACE_TEST_DEVICE", "cpu")
+SIZE = (48, 27)
+
+
+def render(scene, **kwargs):
+    return pathtrace.render(scene, size=kwargs.pop("size", SIZE), device=DEVICE, **kwargs)
+
+
+def small_scene(rho=0.5, le=4.0):
+    """A diffuse sphere under an emissive one, in dicts of the TOML format."""
+    return {
+        "camera": {"eye": [0, 1, 6], "look_at": [0, 0.5, 0], "vfov": 40},
+        "environment": {"color": [0.1, 0.1, 0.1]},
+        "render": {"width": 32, "height": 18, "spp": 8},
+        "materials": {"ball": {"type": "diffuse", "rho_d": [rho, rho, rho]},
+                      "lamp": {"type": "emitter", "Le": [le, le, le]}},
+        "spheres": [{"center": (0, 0.5, 0), "radius": 1.0, "material": "ball", "name": "ball"},
+                    {"center": np.array([0.0, 4.0, 1.0]), "radius": np.float32(0.5), "material": "lamp"}],
+    }
+
+
+def test_import_is_headless_and_lazy():
+    """`import pathtrace` loads nothing heavy; a render loads NumPy and PyOpenCL but no GL, GUI
+    or Ray package."""
+    code = ("import sys, pathtrace; print(sorted(m for m in ('numpy', 'pyopencl') if m in sys.modules)); "
+            f"pathtrace.render('simple', spp=1, size=(8, 6), device={DEVICE!r}); "
+            "print(sorted(m for m in ('moderngl', 'glfw', 'imgui_bundle', 'OpenGL', 'ray') if m in sys.modules))")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split("\n")[:2] == ["[]", "[]"]
+
+
+def test_public_names():
+    for name in pathtrace.__all__:
+        assert getattr(pathtrace, name) is not None
+    assert "render" in dir(pathtrace)
+    with pytest.raises(AttributeError):
+        pathtrace.no_such_name
+
+
+def test_load_takes_names_and_files():
+    assert pathtrace.load("simple").name == "simple"
+    assert len(pathtrace.load(ROOT / "tests" / "scenes" / "cbox.xml").meshes) > 0
+    with pytest.raises(UserError, match="neither a scene file nor a built-in"):
+        pathtrace.load("no-such-scene")
+
+
+def test_load_dict_renders_as_the_same_toml_file():
+    """A TOML file's tables given as dicts, its mesh files found relative to `folder`: the same
+    image, bit for bit."""
+    path = ROOT / "assets" / "scenes" / "teapot.toml"
+    data = tomllib.loads(path.read_text())
+    from_dict = pathtrace.load_dict(data, "teapot", folder=path.parent)
+    np.testing.assert_array_equal(render(from_dict, spp=2), render(pathtrace.load(path), spp=2))
+
+
+def test_load_dict_errors_name_the_field():
+    data = small_scene()
+    data["spheres"][0]["radius"] = -1
+    with pytest.raises(UserError, match=r"^scene dict 'mine': spheres\[0\]\.radius: must be positive"):
+        pathtrace.load_dict(data, "mine")
+    with pytest.raises(UserError, match="must be a dict"):
+        pathtrace.load_dict([1, 2])
+
+
+def test_render_returns_float32_rgb_and_is_deterministic():
+    scene = pathtrace.load_dict(small_scene())
+    image = render(scene, spp=4, seed=3)
+    assert image.shape == (SIZE[1], SIZE[0], 3) and image.dtype == np.float32
+    assert np.all(np.isfinite(image)) and image.mean() > 0
+    np.testing.assert_array_equal(image, render(scene, spp=4, seed=3))
+    assert not np.array_equal(image, render(scene, spp=4, seed=4))
+    # the scene's own settings where none are given
+    assert pathtrace.render(scene, device=DEVICE).shape == (18, 32, 3)
+
+
+def test_render_with_aovs():
+    scene = pathtrace.load_dict(small_scene())
+    out = render(scene, spp=2, aovs=("albedo", "depth", "normal"))
+    assert list(out) == ["image", "albedo", "depth", "normal"]
+    assert out["albedo"].shape == out["normal"].shape == out["image"].shape
+    assert out["depth"].shape == out["image"].shape[:2]
+    # the sphere's albedo at the centre pixel, and its distance: eye (0, 1, 6) to the sphere of
+    # radius 1 around (0, 0.5, 0), along the ray through the centre of the image
+    h, w = out["depth"].shape
+    np.testing.assert_allclose(out["albedo"][h // 2, w // 2], 0.5, atol=1e-6)
+    eye, centre = np.array([0, 1, 6.0]), np.array([0, 0.5, 0])
+    d = (centre - eye) / np.linalg.norm(centre - eye)
+    oc = eye - centre
+    b = d @ oc
+    t = -b - np.sqrt(b * b - (oc @ oc - 1))
+    assert abs(out["depth"][h // 2, w // 2] - t) < 0.05 * t
+    with pytest.raises(UserError, match="aovs"):
+        render(scene, aovs=("albedo", "beauty"))
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    (dict(spp=0), "spp"), (dict(spp=1.5), "spp"), (dict(size=(0, 10)), "size"), (dict(size=(10,)), "size"),
+    (dict(size=(20000, 10)), "size"), (dict(seed=-1), "seed"), (dict(rr="sometimes"), "rr"),
+    (dict(rr="off", max_depth=0), "rr 'off' needs max_depth"), (dict(device="no-such-device"), "--device"),
+    (dict(device=[3]), "device"), (dict(steps=[4, 2]), "steps"),
+])
+def test_bad_arguments_are_one_line_user_errors(kwargs, message):
+    scene = pathtrace.load_dict(small_scene())
+    with pytest.raises(UserError, match=message) as e:
+        if "steps" in kwargs:
+            list(pathtrace.progressive(scene, device=DEVICE, **kwargs))
+        else:
+            pathtrace.render(scene, **{"device": DEVICE, **kwargs})
+    assert "\n" not in str(e.value)
+
+
+def test_a_changed_scene_is_rendered_without_compiling_it_again():
+    """Camera, material, environment and settings changes reuse the compiled scene (its BVH
+    stays) and give the image a fresh scene with those changes gives; moving geometry compiles
+    anew."""
+    scene = pathtrace.load_dict(small_scene())
+    render(scene, spp=2)
+    prepared = scene._prepared
+    bvh = prepared.group.compiled.bvh
+
+    scene.camera.eye = np.array([1.0, 2.0, 5.0])
+    scene.materials["ball"] = pathtrace.material({"type": "diffuse", "rho_d": [0.9, 0.2, 0.1]})
+    lamp = scene.materials["lamp"]
+    lamp.emission = lamp.emission * 2
+    scene.materials["lamp"] = lamp
+    scene.environment.intensity = 3.0
+    changed = render(scene, spp=2, max_depth=3)
+    assert scene._prepared is prepared and prepared.group.compiled.bvh is bvh
+
+    fresh = pathtrace.load_dict(small_scene(le=8.0))
+    fresh.camera.eye = np.array([1.0, 2.0, 5.0])
+    fresh.materials["ball"] = pathtrace.material({"type": "diffuse", "rho_d": [0.9, 0.2, 0.1]})
+    fresh.environment.intensity = 3.0
+    np.testing.assert_array_equal(changed, render(fresh, spp=2, max_depth=3))
+
+    scene.spheres[0, 1] += 0.25
+    moved = render(scene, spp=2, max_depth=3)
+    assert scene._prepared is not prepared
+    assert not np.array_equal(moved, changed)
+
+
+def test_progressive_yields_each_step_and_ends_at_the_render():
+    scene = pathtrace.load_dict(small_scene())
+    snapshots = list(pathtrace.progressive(scene, spp=6, size=SIZE, device=DEVICE))
+    assert [s.spp for s in snapshots] == [1, 2, 4, 6]
+    assert all(b.seconds >= a.seconds for a, b in zip(snapshots, snapshots[1:]))
+    np.testing.assert_allclose(snapshots[-1].image, render(scene, spp=6), rtol=1e-5, atol=1e-6)
+    steps = [s.spp for s in pathtrace.progressive(scene, steps=[3, 5], size=SIZE, device=DEVICE, aovs="albedo")]
+    assert steps == [3, 5]
+    assert snapshots[0]._repr_png_()[:4] == b"\x89PNG"
+
+
+def test_progress_is_reported():
+    seen = []
+    render(pathtrace.load_dict(small_scene()), spp=5, progress=seen.append)
+    assert seen[0] == 0 and seen[-1] == 5 and seen == sorted(seen)
+
+
+def test_tonemap_write_and_show(tmp_path):
+    image = np.random.default_rng(1).uniform(0, 2, (6, 8, 3)).astype(np.float32)
+    srgb = pathtrace.tonemap(image, exposure=-1, curve="aces")
+    assert srgb.dtype == np.uint8 and srgb.shape == (6, 8, 3)
+    np.testing.assert_array_equal(srgb, np.round(display(image, -1, "aces") * 255).astype(np.uint8))
+    pathtrace.write(tmp_path / "a.exr", image)
+    np.testing.assert_array_equal(read_hdr(tmp_path / "a.exr", "a"), image)
+    pathtrace.write(tmp_path / "d.exr", image[..., 0])           # a depth: grey
+    np.testing.assert_array_equal(read_hdr(tmp_path / "d.exr", "d")[..., 2], image[..., 0])
+    pathtrace.write(tmp_path / "a.png", image)
+    assert (tmp_path / "a.png").read_bytes()[:4] == b"\x89PNG"
+    assert pathtrace.show(image)._repr_png_()[:4] == b"\x89PNG"
+    for bad in (lambda: pathtrace.tonemap(image, curve="filmic"), lambda: pathtrace.tonemap(image, exposure=1e9),
+                lambda: pathtrace.write(tmp_path / "b.png", np.zeros((4, 4, 2))),
+                lambda: pathtrace.write(tmp_path / "b.txt", image), lambda: pathtrace.show(np.zeros(3))):
+        with pytest.raises(UserError):
+            bad()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a.exr", "a.png", "d.exr"]
+
+
+def test_denoise():
+    scene = pathtrace.load("demo")
+    out = pathtrace.render(scene, spp=2, size=(64, 36), device=DEVICE, aovs=("albedo", "normal"))
+    denoised = pathtrace.denoise(out["image"], out["albedo"], out["normal"])
+    assert denoised.shape == out["image"].shape and np.all(np.isfinite(denoised))
+    # smoother: neighbouring pixels differ less than in the noisy image
+    roughness = lambda x: np.abs(np.diff(x, axis=1)).mean()     # noqa: E731
+    assert roughness(denoised) < 0.7 * roughness(out["image"])
+    assert pathtrace.denoise(out["image"]).shape == out["image"].shape
+    with pytest.raises(UserError, match="shape"):
+        pathtrace.denoise(out["image"], out["albedo"][:10])
+    with pytest.raises(UserError, match="quality"):
+        pathtrace.denoise(out["image"], quality="best")
+
+
+def test_devices():
+    found = pathtrace.devices()
+    assert found and all(d.kind in ("GPU", "CPU", "other") for d in found)
+    assert any(d.kind == "CPU" for d in found)
+
+
+def test_material_errors_name_the_field():
+    with pytest.raises(UserError, match=r"material dict: material\.alpha"):
+        pathtrace.material({"type": "roughconductor", "alpha": -1})
+    scene = pathtrace.load_dict(small_scene())
+    with pytest.raises(UserError, match="no material named 'gold'"):
+        scene.materials["gold"]
+    with pytest.raises(UserError, match="no material 7"):
+        scene.materials[7]

@@ -1,0 +1,24 @@
+"""The scripts of examples/ run as a user runs them (small, to keep the suite quick) and write
+their images."""
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+DEVICE = os.environ.get("PATHTRACE_TEST_DEVICE", "cpu")
+
+
+@pytest.mark.parametrize("script, args", [
+    ("material_sweep.py", ["--size", "40x30", "--spp", "4"]),
+    ("convergence.py", ["--size", "32x18", "--spp", "16"]),
+])
+def test_example_writes_its_image(tmp_path, script, args):
+    out = tmp_path / "out.png"
+    r = subprocess.run([sys.executable, ROOT / "examples" / script, "-o", out, "--device", DEVICE, *args],
+                       cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert out.read_bytes()[:4] == b"\x89PNG" and f"wrote {out}" in r.stdout
