@@ -11,9 +11,14 @@ from pathtrace.console import INTERRUPTED
 from pathtrace.errors import UserError, cut, short, warn
 from pathtrace.scene.description import RUSSIAN_ROULETTE
 
-EPILOG = ("A scene is a .toml file, a Mitsuba 3 .xml file or a built-in name (pathtrace scenes lists them): simple, "
-          "simple-diffuse, spheres8k[-diffuse], spheres64k[-diffuse], demo, teapot, teapot-sky, "
-          "cornell-box.")
+GENERATED_SCENES = (("spheresN[-diffuse]", "N random spheres, e.g. spheres512k, spheres1M-diffuse"),
+                    ("heightfieldN", "a height field of about N triangles, e.g. heightfield1M"))
+
+
+def epilog() -> str:
+    from pathtrace.scene.builtin import BUILTIN_SCENES
+    return ("A scene is a .toml file, a Mitsuba 3 .xml file or a built-in name (pathtrace scenes lists them): "
+            + ", ".join(BUILTIN_SCENES) + "; and " + ", ".join(name for name, _ in GENERATED_SCENES) + ".")
 
 
 PROGRESS_AFTER = 1.0    # seconds before a BVH build shows its progress
@@ -159,6 +164,8 @@ def cmd_scenes(args):
     from pathtrace.scene.builtin import BUILTIN_SCENES
     for name in BUILTIN_SCENES:
         print(name)
+    for name, what in GENERATED_SCENES:
+        print(f"{name}: {what}")
     return 0
 
 
@@ -169,10 +176,15 @@ def cmd_render(args):
     from pathtrace.files import shown
     from pathtrace.image_io import check_writable, write_images
 
+    written = {}
     for path in args.output:
-        check_writable(path)
-        for name in args.aov or ():
-            check_writable(aov_path(path, name))
+        for target in [path, *(aov_path(path, name) for name in args.aov or ())]:
+            check_writable(target)
+            key = os.path.realpath(target)
+            if key in written:
+                raise UserError(f"--output: {short(str(target))} would be written twice "
+                                f"(as {short(str(written[key]))} too)")
+            written[key] = target
     denoiser = None
     if args.denoise:                 # before rendering: a missing or failing OIDN says so now
         from pathtrace.denoiser import Denoiser
@@ -383,11 +395,12 @@ def cmd_bench(args):
 
 
 def build_parser():
-    parser = Parser(prog="pathtrace", description=__doc__, epilog=EPILOG)
+    scenes_epilog = epilog()
+    parser = Parser(prog="pathtrace", description=__doc__, epilog=scenes_epilog)
     parser.add_argument("--version", action="version", version=f"pathtrace {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    p = sub.add_parser("render", help="render a still image", epilog=EPILOG)
+    p = sub.add_parser("render", help="render a still image", epilog=scenes_epilog)
     p.add_argument("scene", help="a .toml or Mitsuba 3 .xml scene file, or a built-in scene name")
     p.add_argument("-o", "--output", action="append", required=True, metavar="FILE",
                    help="output image; repeat for several (.png/.jpg tonemapped; "
@@ -403,7 +416,7 @@ def build_parser():
     add_render_options(p)
     p.set_defaults(func=cmd_render)
 
-    p = sub.add_parser("view", help="open the interactive viewer", epilog=EPILOG)
+    p = sub.add_parser("view", help="open the interactive viewer", epilog=scenes_epilog)
     p.add_argument("scene", nargs="?", default="simple",
                    help="a .toml or Mitsuba 3 .xml file, or a built-in name (default simple)")
     p.add_argument("--screenshot-dir", default="screenshots", metavar="DIR",
@@ -443,10 +456,10 @@ def build_parser():
     p.add_argument("--json", metavar="FILE", help="also write the results as JSON")
     p.set_defaults(func=cmd_bench)
 
-    p = sub.add_parser("farm", help="render on a Ray cluster (docs/farm.md)", epilog=EPILOG)
+    p = sub.add_parser("farm", help="render on a Ray cluster (docs/farm.md)", epilog=scenes_epilog)
     farm_sub = p.add_subparsers(dest="farm_command", required=True, metavar="COMMAND")
     p = farm_sub.add_parser("render", help="render stills, or the frames of an orbit, on every "
-                                           "device of a Ray cluster", epilog=EPILOG)
+                                           "device of a Ray cluster", epilog=scenes_epilog)
     p.add_argument("scene", nargs="+", help="scene files or built-in names: one image each")
     p.add_argument("-o", "--output", required=True, metavar="FILE",
                    help="output image; with several images, put {name} (the scene's name) or "
@@ -471,7 +484,7 @@ def build_parser():
     p.set_defaults(func=cmd_farm_render)
 
     p = sub.add_parser("convert", help="write a scene (a Mitsuba 3 .xml file, say) as pathtrace TOML",
-                       epilog=EPILOG)
+                       epilog=scenes_epilog)
     p.add_argument("scene", help="a .xml or .toml scene file or a built-in scene name")
     p.add_argument("-o", "--output", required=True, metavar="FILE.toml",
                    help="the TOML file to write (mesh files stay where they are, referenced)")

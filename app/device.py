@@ -33,7 +33,7 @@ def kernel_source(extra: str = "", features: Features = Features()) -> str:
     folder = resource_dir("kernels")
     texts = [(name, (folder / name).read_text())
              for name in (*CORE_FILES, *kernel_files(features.bsdfs))]
-    texts.append(("app/materials.py: dispatch_source", dispatch_source(features.bsdfs)))
+    texts.append(("app/materials/registry.py: dispatch_source", dispatch_source(features.bsdfs)))
     texts += [(name, (folder / name).read_text()) for name in LATER_FILES]
     if extra:
         texts.append(("extra", extra))

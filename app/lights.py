@@ -36,6 +36,13 @@ def alias_table(weights: np.ndarray):
     return keep, alias
 
 
+def keep_threshold(keep: np.ndarray) -> np.ndarray:
+    """Keep probabilities as the kernel compares them: a uniform 32-bit word below the threshold
+    keeps, so the probability is threshold / 2^32, within 2^-32 of `keep` (1 becomes 1 - 2^-32;
+    Vose's construction leaves keep 1 only where alias is the entry itself)."""
+    return np.minimum(np.round(np.asarray(keep, np.float64) * 2.0**32), 2**32 - 1).astype(np.uint32)
+
+
 def emitted_power(spheres, triangles, emission_of_sphere, emission_of_triangle):
     """Luminance power of each primitive: pi Le times its emitting area (a sphere's whole
     surface 4 pi r^2; a triangle's front, whose area is half its edges' cross product)."""
@@ -65,7 +72,7 @@ def build_light_table(power: np.ndarray, environment) -> LightTable:
     table = np.zeros(len(prims), LIGHT)
     table["prim"] = prims
     table["alias"] = alias
-    table["keep"] = keep
+    table["keep"] = keep_threshold(keep)
     table["pick"] = weights / weights.sum()
     pick[emitters] = table["pick"][:len(emitters)]
     return LightTable(table, len(prims), pick, float(table["pick"][-1]) if env_lit else 0.0)

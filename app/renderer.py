@@ -17,8 +17,9 @@ from pathtrace.scene import Scene
 from pathtrace.types import RENDER_PARAMS
 
 RR_DEPTH = 5           # where Russian roulette on throughput starts (Mitsuba 3's default)
-READ_BACK_BYTES = 64   # host memory per pixel to read an image back and write it: the float4
-                       # sums, the float32 mean and the encoded copies
+READ_BACK_BYTES = 112  # host memory per pixel to read an image back and write it: the float4
+                       # sums and their compensations, the float64 sum, the float32 mean and
+                       # the encoded copies
 AOV_PASSES = 16        # the denoiser's albedo and normal are accumulated over the first passes
                        # only: by then they hardly change (kernels/aovs.cl takes 4 BSDF samples
                        # a pass), and the path tracer runs at full speed after
@@ -26,9 +27,13 @@ AOV_BUFFERS = ("albedo_sum", "normal_sum")   # kernels/aovs.cl: albedo rgb and t
                                              # kept in w; normal xyz and the depth in w
 
 
+SUM_BUFFERS = ("sum", "sum_sq", "sum_c", "sum_sq_c")   # kernels/integrator.cl: the sums and
+                                                       # what their rounding lost (Kahan)
+
+
 def image_buffers(aovs: bool) -> tuple:
     """The per-pixel float4 buffers: the sums, and with `aovs` the denoiser's albedo and normal."""
-    return ("sum", "sum_sq") + (AOV_BUFFERS if aovs else ())
+    return SUM_BUFFERS + (AOV_BUFFERS if aovs else ())
 
 
 def per_pixel_mean(sums: np.ndarray) -> np.ndarray:
@@ -239,7 +244,7 @@ class Renderer:
         local = (8, 8)
         global_size = tuple(-(-n // l) * l for n, l in zip((self.width, end - first), local))
         kernel = self.kernels[self.settings.nee]
-        kernel.set_args(*self._scene_args(), params, b["sum"], b["sum_sq"])
+        kernel.set_args(*self._scene_args(), params, *(b[name] for name in SUM_BUFFERS))
         events = [cl.enqueue_nd_range_kernel(self.backend.queue, kernel, global_size, local)]
         if self.aovs and self.samples < AOV_PASSES:
             self.aov_kernel.set_args(*self._scene_args(), params, b["albedo_sum"], b["normal_sum"])
@@ -260,14 +265,17 @@ class Renderer:
         cl.enqueue_copy(self.backend.queue, out, self._buffers[name])
         return out
 
+    def _read_compensated(self, name) -> np.ndarray:
+        """A compensated sum (kernels/integrator.cl add_compensated) as float64: sum - c."""
+        return self._read(name).astype(np.float64) - self._read(f"{name}_c")
+
     def read_sum(self) -> np.ndarray:
-        """The raw accumulation buffer, (H, W, 4) float32: radiance sums in rgb, the samples kept
-        in a."""
-        return self._read("sum")
+        """The radiance sums, (H, W, 4) float64: rgb, and the samples kept in a."""
+        return self._read_compensated("sum")
 
     def mean(self) -> np.ndarray:
         """The image so far: mean radiance per pixel, (H, W, 3) float32."""
-        return self._read("sum")[..., :3] / max(self.samples, 1)
+        return (self.read_sum()[..., :3] / max(self.samples, 1)).astype(np.float32)
 
     def read_aovs(self) -> dict:
         """The auxiliary images so far (set_aovs): "albedo", the mean albedo clamped to [0, 1],
@@ -296,15 +304,15 @@ class Renderer:
     def dropped_samples(self) -> int:
         """Samples left out since the last reset because they were NaN or infinite
         (kernels/integrator.cl counts the kept ones), all pixels together."""
-        return self.samples * self.width * self.height - int(self._read("sum")[..., 3].sum(dtype=np.float64))
+        return self.samples * self.width * self.height - int(round(self.read_sum()[..., 3].sum()))
 
     def rays_traced(self) -> int:
         """Rays traced since the last reset (camera rays and bounces), all pixels together."""
-        return int(self._read("sum_sq")[..., 3].sum(dtype=np.float64))
+        return int(round(self.read_sum_sq()[..., 3].sum()))
 
     def read_sum_sq(self) -> np.ndarray:
-        """The raw sums of squares, (H, W, 4) float32: rgb, and rays traced in a."""
-        return self._read("sum_sq")
+        """The sums of squares, (H, W, 4) float64: rgb, and rays traced in a."""
+        return self._read_compensated("sum_sq")
 
     def variance(self) -> np.ndarray:
         """The per-sample variance of each pixel and channel (of one sample, not of the mean)."""

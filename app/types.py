@@ -16,7 +16,7 @@ MATERIAL = np.dtype([
     ("p1", np.float32, 4),
     ("p2", np.float32, 4),
     ("emission", np.float32, 4),    # Le rgb
-    ("type", np.int32),             # BSDF tag (app/materials.py)
+    ("type", np.int32),             # BSDF tag (app/materials/registry.py)
     ("flags", np.int32),            # MATERIAL_* bits
     ("continuation", np.float32),   # the report's Russian roulette: probability of going on
     ("pad0", np.int32),
@@ -53,6 +53,6 @@ RENDER_PARAMS = np.dtype([
 LIGHT = np.dtype([
     ("prim", np.int32),             # -1: the environment
     ("alias", np.int32),
-    ("keep", np.float32),
+    ("keep", np.uint32),            # the keep probability times 2^32 (lights.keep_threshold)
     ("pick", np.float32),
 ])

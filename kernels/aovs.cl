@@ -40,8 +40,9 @@ void trace_aovs(const SceneData *sc, const RenderParams *p, float3 o, float3 d, 
                 float3 *albedo, float3 *normal, float *depth)
 {
     float3 throughput = (float3)(1.0f);
+    int self = -1;
     for (int bounce = 0; bounce <= AOV_MAX_DELTA; ++bounce) {
-        Hit hit = intersect_scene(sc, o, d, INFINITY);
+        Hit hit = intersect_scene(sc, o, d, INFINITY, self);
         if (bounce == 0)
             *depth = hit.prim < 0 ? 0.0f : hit.t;
         if (hit.prim < 0) {
@@ -71,6 +72,7 @@ void trace_aovs(const SceneData *sc, const RenderParams *p, float3 o, float3 d, 
         throughput *= bs.weight;
         o = offset_ray_origin(s.p, s.offset, s.ng, wi);
         d = wi;
+        self = hit.prim;
     }
 }
 

@@ -36,11 +36,15 @@ void intersect_spheres(const SceneData *sc, int first, int count, float3 o, floa
     }
 }
 
-void intersect_triangles(const SceneData *sc, int first, int count, float3 o, float3 d, Hit *hit)
+/* `self`: the primitive the ray leaves (or -1), which a plane cannot meet again: skipped. */
+void intersect_triangles(const SceneData *sc, int first, int count, float3 o, float3 d, int self,
+                         Hit *hit)
 {
     float3 row_x, row_y, row_z;
     triangle_shear(d, &row_x, &row_y, &row_z);
     for (int i = first; i < first + count; ++i) {
+        if (sc->num_spheres + i == self)
+            continue;
         float b1, b2;
         float t = intersect_triangle(&sc->triangles[i], o, row_x, row_y, row_z, hit->t, &b1, &b2);
         if (t < hit->t) {
@@ -59,7 +63,7 @@ void intersect_triangles(const SceneData *sc, int first, int count, float3 o, fl
  * a loop over the leaves' bits keeps the kernel's registers down (the teapot's NEE kernel ran
  * 26 % slower on the H100 with four copies, the sphere scenes 6-8 % faster). */
 float4 intersect_leaves(const SceneData *sc, float4 t, int4 count, int4 index, float3 o, float3 d,
-                        Hit *hit)
+                        int self, Hit *hit)
 {
     int4 leaf = (t < INFINITY) & (count != 0);
 #ifdef NO_TRIANGLES
@@ -77,7 +81,7 @@ float4 intersect_leaves(const SceneData *sc, float4 t, int4 count, int4 index, f
         if (c > 0)
             intersect_spheres(sc, i, c, o, d, hit);
         else
-            intersect_triangles(sc, i, -c, o, d, hit);
+            intersect_triangles(sc, i, -c, o, d, self, hit);
     }
 #endif
     return select(t, (float4)(INFINITY), leaf);
@@ -95,8 +99,9 @@ float4 intersect_leaves(const SceneData *sc, float4 t, int4 count, int4 index, f
  * needs to know. A node's leaves are tested at once; its inner children are visited
  * nearer-first, the others pushed farther-first. The stack holds node indices only (small
  * private memory keeps GPU occupancy up); a popped node's boxes are tested against the nearest
- * hit found meanwhile. Rays leaving a surface start at an offset origin (kernels/spawn.cl), so
- * no primitive needs to be skipped. */
+ * hit found meanwhile. Rays leaving a surface start at an offset origin (kernels/spawn.cl) and
+ * skip the triangle they leave (`self`), so that a neighbour met at t ~ 0 (in a concave corner)
+ * is met, not lost to a bound on t's rounding that only the triangle left behind needs. */
 /* Orders two (distance, node) pairs nearer-first; selects, not branches, so everything stays in
  * registers. */
 #define ORDER(ta, ia, tb, ib) {                                 \
@@ -108,17 +113,17 @@ float4 intersect_leaves(const SceneData *sc, float4 t, int4 count, int4 index, f
 #ifdef FLAT_SPHERES
 /* A scene of a few primitives (app/features.py: FLAT_MAX) is not traversed: each ray tests them
  * all, FLAT_SPHERES spheres and FLAT_TRIANGLES triangles, constants that let the loops unroll. */
-Hit trace_ray(const SceneData *sc, float3 o, float3 d, float t_max, const int any_hit)
+Hit trace_ray(const SceneData *sc, float3 o, float3 d, float t_max, int self, const int any_hit)
 {
     Hit hit = {t_max, -1, 0.0f, 0.0f};
     intersect_spheres(sc, 0, FLAT_SPHERES, o, d, &hit);
 #ifndef NO_TRIANGLES
-    intersect_triangles(sc, 0, FLAT_TRIANGLES, o, d, &hit);
+    intersect_triangles(sc, 0, FLAT_TRIANGLES, o, d, self, &hit);
 #endif
     return hit;
 }
 #else
-Hit trace_ray(const SceneData *sc, float3 o, float3 d, float t_max, const int any_hit)
+Hit trace_ray(const SceneData *sc, float3 o, float3 d, float t_max, int self, const int any_hit)
 {
     Hit hit = {t_max, -1, 0.0f, 0.0f};
     float3 inv_d = 1.0f / d;
@@ -129,7 +134,7 @@ Hit trace_ray(const SceneData *sc, float3 o, float3 d, float t_max, const int an
         const global BVHNode *n = &sc->nodes[node];
         float4 t = intersect_boxes(n, o, inv_d, hit.t);
         int4 index = n->index;
-        t = intersect_leaves(sc, t, n->count, index, o, d, &hit);
+        t = intersect_leaves(sc, t, n->count, index, o, d, self, &hit);
         if (any_hit && hit.prim >= 0)
             return hit;
         /* the inner children still in front of the nearest hit (a leaf hit may have moved it in
@@ -156,15 +161,17 @@ Hit trace_ray(const SceneData *sc, float3 o, float3 d, float t_max, const int an
 }
 #endif
 
-Hit intersect_scene(const SceneData *sc, float3 o, float3 d, float t_max)
+/* The nearest hit along o + t d, t in (0, t_max), skipping triangle `self` (the primitive the
+ * ray leaves, or -1). */
+Hit intersect_scene(const SceneData *sc, float3 o, float3 d, float t_max, int self)
 {
-    return trace_ray(sc, o, d, t_max, 0);
+    return trace_ray(sc, o, d, t_max, self, 0);
 }
 
-/* Whether anything lies on o + t d for t in (0, t_max). */
-int occluded(const SceneData *sc, float3 o, float3 d, float t_max)
+/* Whether anything but `self` lies on o + t d for t in (0, t_max). */
+int occluded(const SceneData *sc, float3 o, float3 d, float t_max, int self)
 {
-    return trace_ray(sc, o, d, t_max, 1).prim >= 0;
+    return trace_ray(sc, o, d, t_max, self, 1).prim >= 0;
 }
 
 /* What a path needs of the surface it hit. */
@@ -173,12 +180,14 @@ typedef struct {
     float3 ng;       /* unit geometric normal, on the front side */
     float3 ns;       /* unit shading normal, in ng's hemisphere */
     float offset;    /* how far rays leaving p start from it along ng (kernels/spawn.cl) */
+    int prim;        /* the primitive hit */
 } Surface;
 
 Surface surface_at(const SceneData *sc, const Hit *hit, float3 o, float3 d)
 {
     Surface s;
     float3 error;
+    s.prim = hit->prim;
 #ifndef NO_TRIANGLES
     if (hit->prim >= sc->num_spheres) {
         triangle_surface(&sc->triangles[hit->prim - sc->num_spheres], sc->normals, hit->b1,

@@ -27,9 +27,9 @@
  * density of continuing is `go_on` times the BSDF's pdf. Everything but visibility is computed
  * before the shadow ray, so that only the contribution stays live while it is traced. */
 float3 sample_direct_light(const SceneData *sc, const RenderParams *p, const global Material *m,
-                           const Surface *s, float3 wo, float go_on, float4 u, int *rays)
+                           const Surface *s, float3 wo, float go_on, uint4 r, int *rays)
 {
-    LightSample ls = sample_light(sc, p, s->p, s->ns, u);
+    LightSample ls = sample_light(sc, p, s->p, s->ns, r);
     float3 wi = to_frame(ls.wi, s->ns);
     /* the shading and geometric normals must agree on the side wi leaves on (no light leaks) */
     if (ls.pdf <= 0.0f || dot(ls.wi, s->ng) * wi.z <= 0.0f)
@@ -53,7 +53,7 @@ float3 sample_direct_light(const SceneData *sc, const RenderParams *p, const glo
         t_max *= 1.0f - SHADOW_EPSILON;
     }
     ++*rays;
-    return occluded(sc, o, dir, t_max) ? (float3)(0.0f) : contribution;
+    return occluded(sc, o, dir, t_max, s->prim) ? (float3)(0.0f) : contribution;
 }
 
 /* Returns the radiance arriving at o from direction -d; adds the rays it traced to *rays.
@@ -72,9 +72,10 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
      * (0 for the camera ray and delta bounces: no light sample could have found what it hits) */
     float3 prev_x = o, prev_n = (float3)(0.0f);
     float pdf_prev = 0.0f;
+    int self = -1;                   /* the primitive the ray leaves */
     for (int depth = 1;; ++depth) {
         ++*rays;
-        Hit hit = intersect_scene(sc, o, d, INFINITY);
+        Hit hit = intersect_scene(sc, o, d, INFINITY, self);
         if (hit.prim < 0) {
             float w = 1.0f;
             if (nee && pdf_prev > 0.0f && p->env_pick > 0.0f)
@@ -107,7 +108,7 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
         float go_on = RUSSIAN_ROULETTE == RR_ALBEDO ? m->continuation : 1.0f;
         if (nee && p->num_lights > 0 && !(m->flags & MATERIAL_DELTA))
             radiance += throughput * sample_direct_light(sc, p, m, &s, wo, go_on,
-                                                         next_uniform4(rng), rays);
+                                                         next_bits4(rng), rays);
         float4 u = next_uniform4(rng);
         if (RUSSIAN_ROULETTE == RR_ALBEDO) {
             if (u.x >= go_on)
@@ -135,44 +136,69 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
         prev_n = s.ns;
         o = offset_ray_origin(s.p, s.offset, s.ng, wi);
         d = wi;
+        self = hit.prim;
     }
+}
+
+/* Compensated summation (Kahan, "Further remarks on reducing truncation errors", CACM 8(1),
+ * 1965): *s + x, the low-order part that rounding loses kept in *c (the sum is *s - *c), so that
+ * a pixel's sums stay accurate to a few ulps after millions of samples, where a plain float32
+ * sum of N samples rounds each new one by 2^-24 N of the total (a viewer left running for
+ * hours stopped converging). No reassociation is allowed (no -cl-fast-relaxed-math), so the
+ * compiler keeps (t - s) - y. */
+void add_compensated(float4 *s, float4 *c, float4 x)
+{
+    float4 y = x - *c;
+    float4 t = *s + y;
+    *c = (t - *s) - y;
+    *s = t;
 }
 
 /* One work-item per pixel of rows [row_start, row_end) (a band of a pass, or all of them) adds
  * p.sample_count samples to the running sums of radiance (rgb; w counts the samples kept) and
- * of its square (rgb, for the per-pixel variance; w counts rays traced). A NaN or infinite sample (a bug, or a scene beyond float32) is left out, counting as
- * black, so that it cannot poison the pixel for the rest of the render; the host counts the
- * samples left out from w (Renderer.dropped_samples) and reports them. */
+ * of its square (rgb, for the per-pixel variance; w counts rays traced), compensated (sum_c
+ * and sum_sq_c hold what rounding lost). A NaN or infinite sample (a bug, or a scene beyond
+ * float32) is left out, counting as black, so that it cannot poison the pixel for the rest of
+ * the render; the host counts the samples left out from w (Renderer.dropped_samples) and
+ * reports them. */
 void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum,
-                  global float4 *sum_sq, const int nee)
+                  global float4 *sum_sq, global float4 *sum_c, global float4 *sum_sq_c,
+                  const int nee)
 {
     int x = get_global_id(0), y = p->row_start + get_global_id(1);
     if (x >= p->width || y >= p->row_end)
         return;
-    float3 acc = (float3)(0.0f), acc_sq = (float3)(0.0f);
-    int rays = 0, kept = 0;
+    float4 acc = (float4)(0.0f), acc_c = (float4)(0.0f);
+    float4 acc_sq = (float4)(0.0f), acc_sq_c = (float4)(0.0f);
+    int rays = 0;
     for (uint i = 0; i < p->sample_count; ++i) {
         Rng rng = make_rng(x, y, p->sample_start + i, p->seed);
         float4 jitter = next_uniform4(&rng);
         float3 d = camera_direction(p, x + jitter.x, y + jitter.y);
         float3 l = trace_path(sc, p, p->eye.xyz, d, &rng, &rays, nee);
         if (all(isfinite(l))) {
-            acc += l;
-            acc_sq += l * l;
-            ++kept;
+            add_compensated(&acc, &acc_c, (float4)(l, 1.0f));
+            add_compensated(&acc_sq, &acc_sq_c, (float4)(l * l, 0.0f));
         }
     }
     int k = y * p->width + x;
-    sum[k] += (float4)(acc, (float)kept);
-    sum_sq[k] += (float4)(acc_sq, (float)rays);
+    float4 s = sum[k], c = sum_c[k];
+    add_compensated(&s, &c, acc - acc_c);
+    sum[k] = s;
+    sum_c[k] = c;
+    s = sum_sq[k];
+    c = sum_sq_c[k];
+    add_compensated(&s, &c, acc_sq - acc_sq_c + (float4)(0.0f, 0.0f, 0.0f, (float)rays));
+    sum_sq[k] = s;
+    sum_sq_c[k] = c;
 }
 
 #define RENDER_KERNEL(name, nee)                                                                 \
     kernel void name(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *sum,                 \
-                     global float4 *sum_sq)                                                      \
+                     global float4 *sum_sq, global float4 *sum_c, global float4 *sum_sq_c)       \
     {                                                                                            \
         SceneData sc = SCENE_DATA(p.num_spheres);                                                \
-        render_pixel(&sc, &p, sum, sum_sq, nee);                                                 \
+        render_pixel(&sc, &p, sum, sum_sq, sum_c, sum_sq_c, nee);                                \
     }
 
 /* render: the report's estimator; render_nee: with next-event estimation */
@@ -183,5 +209,5 @@ RENDER_KERNEL(render_nee, 1)
 kernel void pick(SCENE_KERNEL_ARGS, int num_spheres, float4 o, float4 d, global int *prim)
 {
     SceneData sc = SCENE_DATA(num_spheres);
-    *prim = intersect_scene(&sc, o.xyz, normalize(d.xyz), INFINITY).prim;
+    *prim = intersect_scene(&sc, o.xyz, normalize(d.xyz), INFINITY, -1).prim;
 }

@@ -13,12 +13,16 @@ float mis_weight(float a, float b)
     return a > 0.0f ? 1.0f / (1.0f + r * r) : 0.0f;
 }
 
-/* Walker's alias method: one uniform number picks a light in proportion to its power. */
-int pick_light(const global Light *lights, int count, float u)
+/* Walker's alias method: a bin chosen uniformly, then kept or replaced by its alias, picks a
+ * light in proportion to its power. The bin comes from all 32 bits of one hash word, as
+ * floor(bin_bits * count / 2^32) (each bin's probability is 1/count to within count / 2^32
+ * relative), and the keep test from all 32 bits of another, against the threshold the host
+ * stored (app/lights.py keep_threshold). Drawing both from one float, as before, left the keep
+ * test 24 - log2(count) bits, which skewed the choice by up to 2x at 2^17 lights. */
+int pick_light(const global Light *lights, int count, uint bin_bits, uint keep_bits)
 {
-    float x = u * count;
-    int i = min((int)x, count - 1);
-    return (x - i) < lights[i].keep ? i : lights[i].alias;
+    int i = (int)mul_hi(bin_bits, (uint)count);
+    return keep_bits < lights[i].keep ? i : lights[i].alias;
 }
 
 /* Density with which next-event estimation at a vertex of normal n samples direction d towards
@@ -50,10 +54,12 @@ typedef struct {
     int prim;        /* the emitter: a primitive, or -1 for the environment */
 } LightSample;
 
-/* Draws a light and a direction towards it from point x of shading normal n. */
-LightSample sample_light(const SceneData *sc, const RenderParams *p, float3 x, float3 n, float4 u)
+/* Draws a light and a direction towards it from point x of shading normal n, from four hash
+ * words: the light from r.w and r.x, the direction from r.y and r.z. */
+LightSample sample_light(const SceneData *sc, const RenderParams *p, float3 x, float3 n, uint4 r)
 {
-    Light light = sc->lights[pick_light(sc->lights, p->num_lights, u.x)];
+    float4 u = to_uniform4(r);
+    Light light = sc->lights[pick_light(sc->lights, p->num_lights, r.w, r.x)];
     LightSample ls = {(float3)(0.0f), 0.0f, (float3)(0.0f), light.prim};
     if (light.prim < 0) {
         ls.wi = (p->env_width == 1 && p->env_height == 1)

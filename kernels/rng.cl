@@ -25,10 +25,22 @@ Rng make_rng(uint x, uint y, uint sample, uint seed)
     return rng;
 }
 
-/* Four uniform numbers in [0, 1): the top 24 bits of each hash word, so 1 is never returned. */
-float4 next_uniform4(Rng *rng)
+/* The next four 32-bit hash words. */
+uint4 next_bits4(Rng *rng)
 {
     uint4 v = rng->key;
     v.w += 0x9e3779b9u * rng->dim++;
-    return convert_float4(pcg4d(v) >> 8u) * 0x1.0p-24f;
+    return pcg4d(v);
+}
+
+/* Four uniform numbers in [0, 1) from four hash words: the top 24 bits of each (a float's
+ * precision), so 1 is never returned. */
+float4 to_uniform4(uint4 bits)
+{
+    return convert_float4(bits >> 8u) * 0x1.0p-24f;
+}
+
+float4 next_uniform4(Rng *rng)
+{
+    return to_uniform4(next_bits4(rng));
 }

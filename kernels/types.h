@@ -75,12 +75,12 @@ typedef struct {
 
 /* One entry of the light table: an emitter (a primitive, or the environment when prim is -1),
  * chosen in proportion to its power through Walker's alias method (Vose's construction):
- * entry i is kept with probability `keep`, else its `alias` is taken. `pick` is the overall
- * probability of choosing this light. */
+ * entry i is kept when a uniform 32-bit word is below `keep` (a probability times 2^32), else
+ * its `alias` is taken. `pick` is the overall probability of choosing this light. */
 typedef struct {
     int prim;
     int alias;
-    float keep;
+    uint keep;
     float pick;
 } Light;
 

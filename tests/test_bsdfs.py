@@ -106,10 +106,34 @@ def test_albedo_is_at_most_one_and_the_estimator_finds_it(kernels, theta, rho_d,
 
 
 @pytest.mark.parametrize("rho_d,rho_s,n", [(0.3, 0.6, 20.0), ((0.9, 0.1, 0.2), (0.1, 0.9, 0.3), 30.0)])
-def test_sample_weight_is_eval_cos_over_pdf_and_eval_is_reciprocal(kernels, rho_d, rho_s, n):
-    """For a lobe-mixture the one-sample weight is f_lobe cos / (P_lobe pdf_lobe); summed over
-    both lobes' contributions its expectation is eval cos / pdf. Here, per sample: the reported
-    pdf equals pdf_bsdf, and eval is symmetric in (wo, wi)."""
+def test_sample_weights_carry_f_cos_into_every_region(kernels, rho_d, rho_s, n):
+    """For a lobe-mixture the one-sample weight is f_lobe cos / (P_lobe pdf_lobe), not eval cos
+    / pdf sample by sample; but over any region of directions, the sum of the weights of the
+    samples that land there, over the number drawn, estimates the integral of f cos over it.
+    Tested per (z, phi) bin against quadrature, with each bin's standard error."""
+    m, wo = material(rho_d, rho_s, n), direction(40)
+    count = 400_000
+    wi, weight = sample(kernels, m, wo, count=count, seed=7)
+    ok = weight[:, 3] > 0
+    nz, nphi, sub = 8, 8, 100
+    edges = [np.linspace(0, 1, nz + 1), np.linspace(-np.pi, np.pi, nphi + 1)]
+    where = (wi[ok, 2], np.arctan2(wi[ok, 1], wi[ok, 0]))
+    grid, cell = hemisphere_grid(nz * sub, nphi * sub)
+    f, _ = evaluate(kernels, m, wo, grid)
+    for c in range(3):
+        expected = (f[:, c] * grid[:, 2] * cell).reshape(nz, sub, nphi, sub).sum(axis=(1, 3))
+        w = weight[ok, c].astype(np.float64)
+        total, _, _ = np.histogram2d(*where, edges, weights=w)
+        total_sq, _, _ = np.histogram2d(*where, edges, weights=w * w)
+        mean = total / count
+        se = np.sqrt(np.maximum(total_sq / count - mean ** 2, 0) / count)
+        assert np.all(np.abs(mean - expected) < 5 * se + 1e-3 * expected.max()), \
+            np.max(np.abs(mean - expected) / (se + 1e-12))
+
+
+@pytest.mark.parametrize("rho_d,rho_s,n", [(0.3, 0.6, 20.0), ((0.9, 0.1, 0.2), (0.1, 0.9, 0.3), 30.0)])
+def test_reported_pdf_is_the_pdf_and_eval_is_reciprocal(kernels, rho_d, rho_s, n):
+    """Per sample: the pdf sample() reports equals pdf_bsdf, and eval is symmetric in (wo, wi)."""
     m = material(rho_d, rho_s, n)
     wo = direction(40)
     wi, weight = sample(kernels, m, wo, count=2000, seed=3)

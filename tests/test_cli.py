@@ -346,3 +346,14 @@ def test_a_name_too_long_for_the_file_system_gets_one_line(tmp_path, where):
         write(tmp_path, GOOD.replace("color = 0.5", f'map = "{long}.hdr"'))
     r = pathtrace("render", scene, "-o", tmp_path / "o.png", "--spp", "1")
     assert r.returncode == 1 and r.stderr.strip().endswith("File name too long") and "Traceback" not in r.stderr
+
+
+@pytest.mark.parametrize("outputs", [["x.png", "x.png"], ["x.png", "./x.png"], ["x.exr", "x.albedo.exr"]],
+                         ids=["same", "same-file", "aov-clash"])
+def test_an_output_named_twice_is_refused(tmp_path, outputs):
+    """Two outputs (or an output and another's --aov image) that are one file: one line, nothing
+    written, where it used to write the file twice without a word."""
+    args = [a for o in outputs for a in ("-o", o)]
+    r = pathtrace("render", "simple", *args, "--aov", "albedo", "--size", "8x8", "--spp", "1", "-q", cwd=tmp_path)
+    assert r.returncode == 1 and "would be written twice" in r.stderr and len(r.stderr.splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []

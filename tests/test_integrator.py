@@ -42,6 +42,21 @@ def test_white_furnace_renders_one_everywhere(backend, settings):
     assert var.max() < 1e-8       # float32 rounding of the frame changes, not noise
 
 
+def test_white_furnace_whose_light_and_bsdf_densities_differ(backend):
+    """The constant-environment furnace above cannot see an MIS error: there both strategies
+    sample the cosine, so every weight is 1/2. Here the environment is a map of constant
+    texels, which next-event estimation samples by the map's distribution (uniform over the
+    sphere) while the diffuse BSDF samples the cosine: the MIS weights differ from sample to
+    sample, and only weights that sum to one per direction keep every pixel at 1."""
+    scene = furnace_scene(1.0, nee=True)
+    scene.environment = Environment(image=np.ones((16, 32, 3), np.float32), source="constant map")
+    mean, var, _ = render(backend, scene, 512)
+    assert var.max() > 1e-4                      # the weights do vary
+    ok, p, threshold = z_test(mean, var, np.ones_like(mean), block=4)
+    assert ok, (p, threshold)
+    np.testing.assert_allclose(mean.mean(), 1.0, atol=2e-3)
+
+
 @pytest.mark.parametrize("nee", [False, True])
 @pytest.mark.parametrize("rr", [True, False])
 def test_grey_furnace_renders_albedo_times_environment(backend, rr, nee):

@@ -102,6 +102,9 @@ BAD = [
     ("garbage.obj", b"\x00\x01\x02 not an obj", "no triangles"),
     ("empty.stl", b"", "no triangles"),
     ("mesh.xyz", b"1 2 3", "unknown mesh format"),
+    ("short.obj", b"v 0 0 0\nv 1 0 0\nf 1 2 3\n", r"line 3: face corner 3 names a vertex the file does not have \(2 so far"),
+    ("word.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n", "line 4: face corner 'x' is not a vertex index"),
+    ("back.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n", "line 4: face corner -4"),
 ]
 
 
@@ -118,8 +121,10 @@ def test_nan_vertices_and_bad_indices(tmp_path):
     with pytest.raises(UserError, match="vertex 1 is not finite"):
         read_mesh(tmp_path / "n.ply", "test")
     (tmp_path / "i.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n")
-    with pytest.raises(UserError):
+    with pytest.raises(UserError, match="line 4: face corner 9 names a vertex"):
         read_mesh(tmp_path / "i.obj", "test")
+    (tmp_path / "neg.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n")     # relative indices
+    assert read_mesh(tmp_path / "neg.obj", "test")[1].tolist() == [[0, 1, 2]]
     write_ply(tmp_path / "i.ply", [[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 7]])
     with pytest.raises(UserError, match="face 0 refers to vertex"):
         read_mesh(tmp_path / "i.ply", "test")

@@ -83,6 +83,16 @@ def back_to_simple(viewer):
     settle(viewer)
 
 
+def image_to_window(v, fx: float, fy: float) -> tuple:
+    """The window point (in the window's pixels) where the image shows the point a fraction
+    (fx, fy) across it, wherever the layout puts the image (beside a docked panel, or not)."""
+    from pathtrace.viewer.window import image_extent
+    ww, wh = v.glfw.get_window_size(v.window)
+    x0, aw = v.image_area(ww, wh)
+    ex, ey = image_extent(v.size, (aw, wh))
+    return int(x0 + ((fx - 0.5) * ex + 0.5) * aw), int(((fy - 0.5) * ey + 0.5) * wh)
+
+
 def click_widget(viewer, label):
     """A click at the centre of the panel's widget `label` (where it was drawn last)."""
     x0, y0, x1, y1 = viewer.widgets[label]
@@ -191,8 +201,8 @@ def test_left_click_picks_the_sphere_under_the_cursor(viewer):
     settle(v)
     v.renderer.set_camera(load_scene("simple").camera)
     settle(v)
-    # the blue glossy sphere (scene index 3) lies right of centre, clear of the panel
-    xdo("mousemove", "--window", window_id(v), int(W * 0.69), H // 2)
+    # the blue glossy sphere (scene index 3) lies right of the image's centre
+    xdo("mousemove", "--window", window_id(v), *image_to_window(v, 0.69, 0.5))
     frames(v, 2)
     xdo("click", 1)
     frames(v, 2)
@@ -211,8 +221,8 @@ def test_left_click_picks_a_mesh_whatever_the_bvh_order(viewer):
     v = viewer
     v.load_scene("cornell-box")
     settle(v)
-    # the short block stands right of centre, low, clear of the panel
-    xdo("mousemove", "--window", window_id(v), int(W * 0.62), int(H * 0.75))
+    # the short block stands right of the image's centre, low
+    xdo("mousemove", "--window", window_id(v), *image_to_window(v, 0.62, 0.75))
     frames(v, 2)
     xdo("click", 1)
     frames(v, 2)
@@ -222,15 +232,27 @@ def test_left_click_picks_a_mesh_whatever_the_bvh_order(viewer):
     back_to_simple(v)
 
 
-def test_a_slow_build_shows_its_progress_in_the_title(viewer, monkeypatch):
+def test_opening_a_scene_says_what_it_is_busy_with(viewer, monkeypatch):
+    """A slow BVH build shows its progress, then the kernels' compilation is named, each in a
+    frame of its own (a notice over the window, and the title); then the first pass is named
+    until an image arrives."""
     import pathtrace.viewer.window as window
     monkeypatch.setattr(window, "PROGRESS_AFTER", 0.0)
-    titles = []
+    titles, notices = [], []
     set_title = viewer.glfw.set_window_title
     monkeypatch.setattr(viewer.glfw, "set_window_title", lambda w, t: (titles.append(t), set_title(w, t)))
+    show = viewer.show_progress
+    monkeypatch.setattr(viewer, "show_progress", lambda *a: (notices.append(a), show(*a)))
     viewer.load_scene("spheres8k")
-    assert titles[-2] == "pathtrace - building the BVH of spheres8k: 100%"
+    assert titles[-3] == "pathtrace - building the BVH of spheres8k: 100%"
+    assert titles[-2].startswith("pathtrace - compiling the kernels for spheres8k on ")
     assert titles[-1] == "pathtrace - spheres8k" and viewer.renderer.scene.name == "spheres8k"
+    assert notices[0] == ("building the BVH of spheres8k", notices[0][1]) and notices[-1][0].startswith("compiling")
+    viewer.texture.release()
+    viewer.texture = None                 # as when a window opens: no image yet
+    viewer.redraw_soon()
+    frames(viewer, 1)
+    assert viewer.notice == "rendering the first pass of spheres8k"
     back_to_simple(viewer)
 
 
@@ -534,3 +556,52 @@ def test_without_a_display_it_says_how_to_render_headless(tmp_path):
     assert r.returncode == 1
     assert f"{sys.executable} -m pathtrace render simple -o out.png" in r.stderr and "xvfb-run" in r.stderr
     assert len(r.stderr.strip().splitlines()) == 1 and "Traceback" not in r.stderr
+
+
+def test_the_image_edges_do_not_wrap_round(viewer):
+    """An image black but for a bright bottom row, shown scaled up (linear filtering): the top
+    row stays black. With a repeating texture the top row blended in the bottom one (a light at
+    the bottom edge showed as a line at the top)."""
+    v = viewer
+    pixels = np.zeros((H // 8, W // 8, 4), np.float32)
+    pixels[..., 3] = 1.0
+    pixels[-1, :, :3] = 100.0
+    v._upload(pixels)
+    fbo = v.ctx.simple_framebuffer((W, H))
+    open_panel, v.panel_open = v.panel_open, False          # the image takes the whole target
+    try:
+        fbo.use()
+        v._draw(W, H)
+        shown = np.frombuffer(fbo.read(components=3), np.uint8).reshape(H, W, 3)[::-1]
+    finally:
+        v.ctx.screen.use()
+        v.panel_open = open_panel
+        fbo.release()
+    assert shown[-1].min() > 200 and shown[0].max() == 0, (shown[0].max(), shown[-1].min())
+    settle(v)
+
+
+@pytest.mark.parametrize("size", [(512, 512), (960, 540), (1920, 1080)])
+def test_the_panel_docks_beside_the_image_or_starts_collapsed(display, backend, tmp_path, size):
+    """A window too small for both starts with the panel collapsed and the image over the whole
+    window; a larger one docks the panel at the left and fits the image in the rest, which a
+    click on the panel never reaches. A picked shape's name is in sight without scrolling."""
+    from pathtrace.viewer.window import Viewer
+    v = Viewer(backend, load_scene("cornell-box").with_settings(width=size[0] // 4, height=size[1] // 4),
+               tmp_path, window_size=size)
+    try:
+        frames(v, 5)
+        ww, wh = v.glfw.get_window_size(v.window)
+        x0, width = v.image_area(ww, wh)
+        px, py, pw, ph = v.panel_rect
+        if size == (512, 512):
+            assert not v.panel_open and (x0, width) == (0, ww)
+        else:
+            assert v.panel_open and x0 >= px + pw and x0 + width == ww and width >= ww / 3
+            assert v.image_point(px + pw / 2, wh / 2) is None                # on the panel
+            v.selected = v.renderer.compiled.shape(0)
+            v.redraw_soon()
+            frames(v, 2)
+            assert v.widgets["Selected"][3] < min(py + ph, wh) / 2           # near the top
+    finally:
+        v.close()

@@ -5,7 +5,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pathtrace.errors import UserError, warn
+from pathtrace.errors import UserError, short, warn
 from pathtrace.files import check_regular_file
 
 FORMATS = (".ply", ".obj", ".stl", ".gltf", ".glb")
@@ -28,7 +28,7 @@ def read_mesh(path: Path, where: str):
         if suffix == ".ply":
             vertices, faces, normals = _read_ply(path)
         elif suffix == ".obj":
-            vertices, faces, normals = _read_obj(path)
+            vertices, faces, normals = _read_obj(path, f"{where}: {path}")
         else:
             vertices, faces, normals = _read_with_trimesh(path, suffix)
     except UserError:
@@ -51,7 +51,7 @@ def check_mesh(vertices, faces, normals, where):
         bad = int(np.argmax(~np.all(np.isfinite(vertices), axis=1)))
         raise UserError(f"{where}: vertex {bad} is not finite ({vertices[bad].tolist()})")
     if np.any(np.abs(vertices) > MAX_COORDINATE):
-        raise UserError(f"{where}: vertex coordinates beyond 1e30 cannot be traced in float32")
+        raise UserError(f"{where}: vertex coordinates beyond {MAX_COORDINATE:g} cannot be traced in float32")
     if faces.min() < 0 or faces.max() >= len(vertices):
         bad = int(np.argmax((faces < 0).any(axis=1) | (faces >= len(vertices)).any(axis=1)))
         raise UserError(f"{where}: face {bad} refers to vertex {faces[bad].tolist()}, "
@@ -103,13 +103,37 @@ def triangulate(polygons) -> np.ndarray:
     return np.concatenate(out) if out else np.zeros((0, 3), np.int64)
 
 
-def _read_obj(path):
+def _read_obj(path, where):
+    import io
+
     import trimesh.exchange.obj as obj
 
     with open(path, "r", encoding="utf-8", errors="replace") as f:
-        loaded = obj.load_obj(f, skip_materials=True)
+        text = f.read()
+    _check_obj_faces(text, where)
+    loaded = obj.load_obj(io.StringIO(text), skip_materials=True)
     parts = list(loaded.get("geometry", {}).values()) if "geometry" in loaded else [loaded]
     return _concatenate([(p.get("vertices"), p.get("faces"), p.get("vertex_normals")) for p in parts])
+
+
+def _check_obj_faces(text: str, where: str):
+    """Every face corner of an OBJ file names a vertex it has: an index from 1 to the number of
+    `v` lines, or a negative one counting back from the last vertex read (the OBJ format's
+    rule). trimesh otherwise fails with an IndexError that says nothing of the file."""
+    vertices = 0
+    for number, line in enumerate(text.splitlines(), 1):
+        if line.startswith("v ") or line.startswith("v\t"):
+            vertices += 1
+        elif line.startswith("f ") or line.startswith("f\t"):
+            for corner in line.split()[1:]:
+                index = corner.split("/")[0]
+                try:
+                    k = int(index)
+                except ValueError:
+                    raise UserError(f"{where}: line {number}: face corner {short(corner)} is not a vertex index") from None
+                if not (1 <= k <= vertices or -vertices <= k <= -1):
+                    raise UserError(f"{where}: line {number}: face corner {k} names a vertex the file does not have "
+                                    f"({vertices} so far; OBJ counts from 1)")
 
 
 def _read_with_trimesh(path, suffix):

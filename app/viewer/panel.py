@@ -133,13 +133,21 @@ def draw_panel(v):
     screen_w, screen_h = io.display_size.x, io.display_size.y
     imgui.set_next_window_pos((MARGIN, MARGIN), imgui.Cond_.first_use_ever)
     imgui.set_next_window_size((width_min + 40, screen_h - 2 * MARGIN), imgui.Cond_.first_use_ever)
+    # docked at the left, the image beside it (Viewer.image_area); in a window too small for
+    # both, the panel starts as its title bar alone and the image takes the window
+    docked_image = screen_w - (width_min + 40 + 3 * MARGIN)
+    imgui.set_next_window_collapsed(docked_image < screen_w / 3, imgui.Cond_.first_use_ever)
     imgui.set_next_window_size_constraints(
         (min(width_min, screen_w - 2 * MARGIN), min(100, screen_h)),
         (max(screen_w - 2 * MARGIN, 1), max(screen_h - 2 * MARGIN, 1)))
-    imgui.begin("pathtrace")
+    v.panel_open = imgui.begin("pathtrace")[0]
     layout = _Layout(imgui, v)
     imgui.push_item_width(-column)
     _status(imgui, v)
+
+    # the picked shape first, in sight in a short window
+    if v.selected is not None and layout.header("Selected", imgui.TreeNodeFlags_.default_open):
+        _material_editor(imgui, v, layout)
 
     if layout.header("Image", imgui.TreeNodeFlags_.default_open):
         _, v.exposure = imgui.drag_float("exposure (EV)", v.exposure, 0.02, -100.0, 100.0, "%.2f",
@@ -198,16 +206,13 @@ def draw_panel(v):
         changed, current = imgui.combo("built-in", current, names)
         layout.check("built-in")
         if changed:
-            v.load_scene(names[current])
+            v.requested_scene = names[current]
         _, v.scene_file = imgui.input_text("file", v.scene_file)
         layout.check("file")
         opened = imgui.button("open file")
         layout.check("open file")
         if opened:
-            v.load_scene(v.scene_file)
-
-    if v.selected is not None and layout.header("Selected", imgui.TreeNodeFlags_.default_open):
-        _material_editor(imgui, v, layout)
+            v.requested_scene = v.scene_file
 
     if layout.header("Screenshots", imgui.TreeNodeFlags_.default_open):
         changed, folder = imgui.input_text("folder", str(v.screenshot_dir))
@@ -223,6 +228,24 @@ def draw_panel(v):
     pos, size = imgui.get_window_pos(), imgui.get_window_size()
     v.panel_rect = (pos.x, pos.y, size.x, size.y)
     imgui.end()
+
+
+def draw_notice(v, text: str, fraction: float = None):
+    """What the window is busy with while it has no image (a BVH build, the kernels'
+    compilation, the first pass), centred over the image, with a bar where the fraction done is
+    known."""
+    imgui = v.imgui
+    io = imgui.get_io()
+    imgui.set_next_window_pos((io.display_size.x / 2, io.display_size.y / 2), imgui.Cond_.always, (0.5, 0.5))
+    imgui.set_next_window_bg_alpha(0.85)
+    flags = (imgui.WindowFlags_.always_auto_resize | imgui.WindowFlags_.no_title_bar
+             | imgui.WindowFlags_.no_inputs | imgui.WindowFlags_.no_saved_settings)
+    imgui.begin("notice", None, flags)
+    imgui.text(text + ("" if fraction is not None else " ..."))
+    if fraction is not None:
+        imgui.progress_bar(fraction, (max(imgui.calc_text_size(text).x, 200), 0))
+    imgui.end()
+    v.notice = text
 
 
 def draw_help(v):

@@ -24,7 +24,7 @@ from pathtrace.renderer import Renderer, aov_means, per_pixel_mean
 from pathtrace.resources import resource_dir
 from pathtrace.scene import load_scene
 from pathtrace.viewer.controls import FlyControls, pick_ray
-from pathtrace.viewer.panel import draw_help, draw_panel
+from pathtrace.viewer.panel import MARGIN, draw_help, draw_notice, draw_panel
 
 LAUNCH_BUDGET = 1 / 120        # device seconds per launch: a reset waits for at most three
                                # (pathtrace.launches.QUEUE_AHEAD); larger ones made the 99th-percentile
@@ -132,6 +132,9 @@ class Viewer:
         self.selected = None
         self.show_help = False        # the keyboard help overlay (H)
         self.panel_rect = (0, 0, 0, 0)  # where the panel was drawn last (x, y, w, h)
+        self.panel_open = False       # whether it was drawn expanded (not collapsed to its title)
+        self.notice = ""              # what the window says while there is no image yet
+        self.requested_scene = None   # a scene the panel asked for, opened at the next turn
         self.clipped = set()          # labels of widgets the panel could not fit (panel.py)
         self.widgets = {}             # where the panel drew each labelled widget (panel.py)
         self.scale = 1                # the preview's divisor of the resolution (1: full)
@@ -145,7 +148,8 @@ class Viewer:
         self._last_draw = 0.0
         self._last_time = time.perf_counter()
         self._cursor = None
-        self.renderer = Renderer(backend, scene, progress=self._build_progress(scene.name))
+        self._init_display()
+        self.renderer = self._open(scene)
         self.size = (self.renderer.width, self.renderer.height)    # the full resolution
         self.progressive = Progressive(self.renderer, LAUNCH_BUDGET)
         self.display = Display(backend)
@@ -160,7 +164,6 @@ class Viewer:
         self._shown = None            # (resets, passes, rows) of the noisy image last requested
         self._new_image = False
         self._last_upload = 0.0
-        self._init_display()
 
     # --- set-up -----------------------------------------------------------------------------
     def _init_display(self):
@@ -253,11 +256,25 @@ class Viewer:
                 o, d = pick_ray(self.renderer.camera, w, h, *point)
                 self.selected = self.renderer.pick(o, d)
 
+    def image_area(self, width: int, height: int) -> tuple:
+        """(x0, width) of the part of a window `width` wide (in pixels or points) that the image
+        is fitted into: right of the panel where the panel is open and docked at the left edge
+        and leaves the image at least a third of the window; the whole window otherwise (the
+        panel then floats over the image)."""
+        x, _, w, _ = self.panel_rect
+        points = self.imgui.get_io().display_size.x or width
+        right = (x + w + MARGIN) * width / points
+        if self.panel_open and x <= 2 * MARGIN and width - right >= width / 3:
+            return int(right), width - int(right)
+        return 0, width
+
     def image_point(self, x: float, y: float):
-        """The image pixel (x, y), at full resolution, under window point (x, y); None on the bars."""
+        """The image pixel (x, y), at full resolution, under window point (x, y); None on the bars
+        or the panel."""
         ww, wh = self.glfw.get_window_size(self.window)
-        ex, ey = image_extent(self.size, (ww, wh))
-        u = (x / ww - 0.5) / ex + 0.5
+        x0, aw = self.image_area(ww, wh)
+        ex, ey = image_extent(self.size, (aw, wh))
+        u = ((x - x0) / aw - 0.5) / ex + 0.5
         v = (y / wh - 0.5) / ey + 0.5
         if not (0 <= u < 1 and 0 <= v < 1):
             return None
@@ -285,12 +302,24 @@ class Viewer:
         self.message, self.error = text, error
         print(f"pathtrace: {text}", file=sys.stderr)
 
+    def _open(self, scene, renderer=None) -> Renderer:
+        """The scene compiled (saying so while its BVH builds, if that takes a while) and given
+        to `renderer` (or a new one), saying so while the kernels compile."""
+        from pathtrace.compiled import compile_scene
+        compiled = compile_scene(scene, self.backend.queue, self._build_progress(scene.name))
+        self.show_progress(f"compiling the kernels for {scene.name} on {self.backend.device.name}")
+        if renderer is None:
+            return Renderer(self.backend, compiled)
+        renderer.set_scene(compiled)
+        return renderer
+
     def load_scene(self, name: str):
         """Opens a scene, at its own size; whatever goes wrong is shown in the panel and
-        printed, and the window keeps the scene it had."""
+        printed, and the window keeps the scene it had. Call it between turns of the loop (the
+        panel asks through requested_scene): it draws frames of its own as it goes."""
         try:
             scene = load_scene(name)
-            self.renderer.set_scene(scene, self._build_progress(scene.name))
+            self._open(scene, self.renderer)
             self.renderer.resize(scene.settings.width, scene.settings.height)
         except Exception as e:   # a viewer must outlive any bad file, ours or a library's error
             self.set_message(str(e) if isinstance(e, UserError) else
@@ -303,21 +332,31 @@ class Viewer:
 
     def _build_progress(self, name: str):
         """A progress callback for a scene's BVH build: once it has taken PROGRESS_AFTER seconds,
-        the window's title and a bar across it show how far it is. The bar is drawn with plain
-        OpenGL, since the build may run inside the panel's frame."""
+        the window says how far it is."""
         started = time.perf_counter()
 
         def show(fraction):
-            if time.perf_counter() - started < PROGRESS_AFTER:
-                return
-            self.glfw.set_window_title(self.window, f"pathtrace - building the BVH of {name}: {fraction:.0%}")
-            fw, fh = self.glfw.get_framebuffer_size(self.window)
-            self.ctx.viewport = (0, 0, fw, fh)
-            self.ctx.clear(0.1, 0.1, 0.1)
-            self.ctx.clear(0.25, 0.25, 0.25, viewport=(fw // 8, fh // 2 - 6, fw * 3 // 4, 12))
-            self.ctx.clear(0.35, 0.6, 0.9, viewport=(fw // 8, fh // 2 - 6, int(fw * 3 // 4 * fraction), 12))
-            self.glfw.swap_buffers(self.window)
+            if time.perf_counter() - started >= PROGRESS_AFTER:
+                self.show_progress(f"building the BVH of {name}", fraction)
         return show
+
+    def show_progress(self, text: str, fraction: float = None):
+        """One frame, outside the loop, that says what the window is busy with (a BVH build,
+        the kernels' compilation), with a bar where the fraction done is known; the title says
+        it too."""
+        glfw, imgui = self.glfw, self.imgui
+        self.notice = text
+        glfw.set_window_title(self.window, f"pathtrace - {text}" + (f": {fraction:.0%}" if fraction is not None else ""))
+        glfw.poll_events()
+        self.gui.process_inputs()
+        fw, fh = glfw.get_framebuffer_size(self.window)
+        self.ctx.viewport = (0, 0, fw, fh)
+        self.ctx.clear(0.08, 0.08, 0.08)
+        imgui.new_frame()
+        draw_notice(self, text, fraction)
+        imgui.render()
+        self.gui.render(imgui.get_draw_data())
+        glfw.swap_buffers(self.window)
 
     def edit_material(self, index: int, material):
         """Replaces row `index` of the scene's material table (shared by every shape that uses
@@ -334,6 +373,10 @@ class Viewer:
         glfw = self.glfw
         glfw.make_context_current(self.window)
         self.imgui.set_current_context(self.imgui_context)
+        if self.requested_scene is not None:
+            name, self.requested_scene = self.requested_scene, None
+            self.load_scene(name)
+            self.redraw_soon()
         events = self._events
         glfw.poll_events()
         now = time.perf_counter()
@@ -371,6 +414,10 @@ class Viewer:
             self._draw(fw, fh)
         self.imgui.new_frame()
         draw_panel(self)
+        if self.texture is None:
+            draw_notice(self, f"rendering the first pass of {self.renderer.scene.name}")
+        else:
+            self.notice = ""
         if self.show_help:
             draw_help(self)
         self.imgui.render()
@@ -496,6 +543,9 @@ class Viewer:
             if self.texture is not None:
                 self.texture.release()
             self.texture = self.ctx.texture((w, h), 4, dtype=dtype)
+            # clamped, not repeated: scaled with linear filtering, an edge row would otherwise
+            # blend in the opposite edge's (a light at the bottom bled into the top row)
+            self.texture.repeat_x = self.texture.repeat_y = False
         self.texture.write(np.ascontiguousarray(pixels))
 
     def _draw(self, fw, fh):
@@ -503,12 +553,15 @@ class Viewer:
         self.ctx.clear(0.08, 0.08, 0.08)
         if self.texture is None:
             return
+        x0, aw = self.image_area(fw, fh)
+        self.ctx.viewport = (x0, 0, aw, fh)
         self.texture.use(0)
         self.program["radiance"] = 0
         self.program["exposure"] = self.exposure
         self.program["curve"] = 1 if self.tonemap == "aces" else 0
-        self.program["extent"] = image_extent(self.size, (fw, fh))
+        self.program["extent"] = image_extent(self.size, (aw, fh))
         self.vao.render(mode=self.ctx.TRIANGLE_STRIP)
+        self.ctx.viewport = (0, 0, fw, fh)
 
     def run(self, frames=None):
         count = 0

@@ -8,7 +8,7 @@
  *   p1.xyz  rho_s, glossy albedo      p1.w  the exponent n
  *   p2.x    probability of sampling the glossy lobe (p0.w + p2.x = 1)
  * with rho_d + rho_s <= 1 per channel. The lobes are chosen in the ratio max(rho_d) : max(rho_s)
- * (app/materials.py), so that, with the report's Russian roulette continuing a path with
+ * (app/materials/basic.py), so that, with the report's Russian roulette continuing a path with
  * probability max(rho_d) + max(rho_s) (Material.continuation), every channel's weight stays <= 1.
  *
  * Directions are in the local shading frame (z the normal); the surface is one-sided. */

@@ -9,7 +9,10 @@
  * triangles, and each edge function is a difference of two products that the other triangle
  * computes with exactly the opposite sign, so a ray can never pass between them.
  * The shear rows are passed in (see triangle_shear): they depend on the ray only.
- * Returns t in (0, t_max) or INFINITY, with the barycentric weights of v1 and v2. */
+ * Returns t in (0, t_max) or INFINITY, with the barycentric weights of v1 and v2. A ray never
+ * tests the triangle it leaves (kernels/bvh.cl: `self`), so any t > 0 is a hit: a neighbour
+ * met at t ~ 0 in a concave corner is met (a bound on t's rounding, as pbrt-v4 rejects below,
+ * let such rays through the corners of a closed box). */
 #pragma OPENCL FP_CONTRACT OFF
 #ifdef cl_khr_fp64
 #pragma OPENCL EXTENSION cl_khr_fp64 : enable
@@ -74,17 +77,7 @@ float intersect_triangle(const global Triangle *tri, float3 o, float3 row_x, flo
         return INFINITY;
     float inv = 1.0f / det;
     float t = t_scaled * inv;
-    /* t must exceed its own rounding error (pbrt-v4 section 6.8.4): a ray leaving this very
-     * triangle at a grazing angle otherwise finds it again at t ~ 0 */
-    float max_z = fmax(fmax(fabs(az), fabs(bz)), fabs(cz));
-    float max_x = fmax(fmax(fabs(ax), fabs(bx)), fabs(cx));
-    float max_y = fmax(fmax(fabs(ay), fabs(by)), fabs(cy));
-    float max_e = fmax(fmax(fabs(u), fabs(v)), fabs(w));
-    float delta_z = gamma_bound(3) * max_z;
-    float delta_x = gamma_bound(5) * (max_x + max_z), delta_y = gamma_bound(5) * (max_y + max_z);
-    float delta_e = 2.0f * (gamma_bound(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
-    float delta_t = 3.0f * (gamma_bound(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * fabs(inv);
-    if (t <= delta_t || t >= t_max)
+    if (t <= 0.0f || t >= t_max)
         return INFINITY;
     *b1 = v * inv;
     *b2 = w * inv;
@@ -104,25 +97,27 @@ float triangle_area(const global Triangle *tri)
 
 /* The point of barycentric weights (b1, b2), its error bound (pbrt-v4 eq. 6.29: gamma(7) times
  * the sum of |b_i v_i|), the geometric normal, and the shading normal: the corners' normals
- * interpolated, turned to the geometric normal's side (which decides front and back). */
+ * interpolated, turned to the geometric normal's side (which decides front and back).
+ * A point on an edge may round to just beyond the plane of the neighbouring face, within its
+ * error box; in a concave corner a ray leaving it would then start behind that face and pass
+ * through. The point is moved towards the triangle's centroid by four times the length of its
+ * error bound (never more than half the way): inside its own triangle and off the neighbour's
+ * plane, by an amount that scales with the point's own rounding, not with the scene. The bound
+ * grows to cover the move. */
 void triangle_surface(const global Triangle *tri, const global float4 *normals, float b1, float b2,
                       float3 *p, float3 *error, float3 *ng, float3 *ns)
 {
     float b0 = 1.0f - b1 - b2;
     float3 p0 = b0 * tri->v0.xyz, p1 = b1 * tri->v1.xyz, p2 = b2 * tri->v2.xyz;
     *error = gamma_bound(7) * (fabs(p0) + fabs(p1) + fabs(p2));
-    /* A hit on an edge may round to a point on or just beyond the plane of the neighbouring
-     * face; where two faces meet at a corner of a room, a ray leaving from there could slip
-     * out through the corner (or meet the neighbour closer than intersect_triangle can resolve
-     * and be let through). Moving the point towards the centroid by 1e-4 of the way (and at
-     * least a few error bounds) keeps it inside its own triangle and resolvably off the
-     * neighbours' planes, at the cost of a shift far below what an image shows. */
-    float3 centre = (tri->v0.xyz + tri->v1.xyz + tri->v2.xyz) / 3.0f;
     *p = p0 + p1 + p2;
-    float3 inward = centre - *p;
+    float3 inward = (tri->v0.xyz + tri->v1.xyz + tri->v2.xyz) / 3.0f - *p;
     float len = length(inward);
-    if (len > 0.0f)
-        *p += inward * clamp(4.0f * length(*error) / len, 1e-4f, 0.5f);
+    if (len > 0.0f) {
+        float3 move = inward * fmin(4.0f * length(*error) / len, 0.5f);
+        *p += move;
+        *error += fabs(move);
+    }
     *ng = triangle_normal(tri);
     int k = as_int(tri->v0.w);
     *ns = *ng;
