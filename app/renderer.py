@@ -17,9 +17,8 @@ from pathtrace.scene import Scene
 from pathtrace.types import RENDER_PARAMS
 
 RR_DEPTH = 5           # where Russian roulette on throughput starts (Mitsuba 3's default)
-READ_BACK_BYTES = 112  # host memory per pixel to read an image back and write it: the float4
-                       # sums and their compensations, the float64 sum, the float32 mean and
-                       # the encoded copies
+READ_BACK_BYTES = 64   # host memory per pixel to read an image back and write it: the float4
+                       # sums, the float32 mean and the encoded copies
 AOV_PASSES = 16        # the denoiser's albedo and normal are accumulated over the first passes
                        # only: by then they hardly change (kernels/aovs.cl takes 4 BSDF samples
                        # a pass), and the path tracer runs at full speed after
@@ -29,6 +28,8 @@ AOV_BUFFERS = ("albedo_sum", "normal_sum")   # kernels/aovs.cl: albedo rgb and t
 
 SUM_BUFFERS = ("sum", "sum_sq", "sum_c", "sum_sq_c")   # kernels/integrator.cl: the sums and
                                                        # what their rounding lost (Kahan)
+MAX_LAUNCH_SAMPLES = 64   # samples a launch adds to a pixel, summed plainly in float32 before the
+                          # compensated running sum takes them: within 64 ulps of their sum
 
 
 def image_buffers(aovs: bool) -> tuple:
@@ -226,8 +227,9 @@ class Renderer:
         return p
 
     def add_samples(self, count: int = 1, start: int = None, rows: tuple = None) -> list:
-        """Queues one launch that adds `count` samples to every pixel (and one for the albedo and
-        normal, with set_aovs); returns their events. The
+        """Queues the launches that add `count` samples to every pixel (one per
+        MAX_LAUNCH_SAMPLES, and one for the albedo and normal, with set_aovs); returns their
+        events. The
         samples are those of index start, start + 1, ... (default: the next ones of this
         renderer), so that several renderers can share one render's sample indices.
 
@@ -237,15 +239,19 @@ class Renderer:
         bands adds the very samples one launch would."""
         b = self._buffers
         first, end = rows if rows is not None else (0, self.height)
-        params = self.params(count)
-        params["row_start"], params["row_end"] = first, end
-        if start is not None:
-            params["sample_start"] = start
+        start = self.samples if start is None else start
         local = (8, 8)
         global_size = tuple(-(-n // l) * l for n, l in zip((self.width, end - first), local))
         kernel = self.kernels[self.settings.nee]
-        kernel.set_args(*self._scene_args(), params, *(b[name] for name in SUM_BUFFERS))
-        events = [cl.enqueue_nd_range_kernel(self.backend.queue, kernel, global_size, local)]
+        events = []
+        for offset in range(0, count, MAX_LAUNCH_SAMPLES):      # (kernels/integrator.cl)
+            params = self.params(min(MAX_LAUNCH_SAMPLES, count - offset))
+            params["row_start"], params["row_end"] = first, end
+            params["sample_start"] = start + offset
+            kernel.set_args(*self._scene_args(), params, *(b[name] for name in SUM_BUFFERS))
+            events.append(cl.enqueue_nd_range_kernel(self.backend.queue, kernel, global_size, local))
+        params = self.params(count)
+        params["row_start"], params["row_end"], params["sample_start"] = first, end, start
         if self.aovs and self.samples < AOV_PASSES:
             self.aov_kernel.set_args(*self._scene_args(), params, b["albedo_sum"], b["normal_sum"])
             events.append(cl.enqueue_nd_range_kernel(self.backend.queue, self.aov_kernel, global_size, local))
@@ -270,12 +276,13 @@ class Renderer:
         return self._read(name).astype(np.float64) - self._read(f"{name}_c")
 
     def read_sum(self) -> np.ndarray:
-        """The radiance sums, (H, W, 4) float64: rgb, and the samples kept in a."""
-        return self._read_compensated("sum")
+        """The radiance sums, (H, W, 4) float32: rgb, and the samples kept in a (within an ulp
+        of the compensated sums: exact counts come from dropped_samples)."""
+        return self._read("sum")
 
     def mean(self) -> np.ndarray:
         """The image so far: mean radiance per pixel, (H, W, 3) float32."""
-        return (self.read_sum()[..., :3] / max(self.samples, 1)).astype(np.float32)
+        return self._read("sum")[..., :3] / max(self.samples, 1)
 
     def read_aovs(self) -> dict:
         """The auxiliary images so far (set_aovs): "albedo", the mean albedo clamped to [0, 1],
@@ -304,15 +311,15 @@ class Renderer:
     def dropped_samples(self) -> int:
         """Samples left out since the last reset because they were NaN or infinite
         (kernels/integrator.cl counts the kept ones), all pixels together."""
-        return self.samples * self.width * self.height - int(round(self.read_sum()[..., 3].sum()))
+        return self.samples * self.width * self.height - int(round(self._read_compensated("sum")[..., 3].sum()))
 
     def rays_traced(self) -> int:
         """Rays traced since the last reset (camera rays and bounces), all pixels together."""
-        return int(round(self.read_sum_sq()[..., 3].sum()))
+        return int(round(self._read_compensated("sum_sq")[..., 3].sum()))
 
     def read_sum_sq(self) -> np.ndarray:
-        """The sums of squares, (H, W, 4) float64: rgb, and rays traced in a."""
-        return self._read_compensated("sum_sq")
+        """The sums of squares, (H, W, 4) float32: rgb, and rays traced in a."""
+        return self._read("sum_sq")
 
     def variance(self) -> np.ndarray:
         """The per-sample variance of each pixel and channel (of one sample, not of the mean)."""

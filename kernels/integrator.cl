@@ -142,10 +142,11 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
 
 /* Compensated summation (Kahan, "Further remarks on reducing truncation errors", CACM 8(1),
  * 1965): *s + x, the low-order part that rounding loses kept in *c (the sum is *s - *c), so that
- * a pixel's sums stay accurate to a few ulps after millions of samples, where a plain float32
- * sum of N samples rounds each new one by 2^-24 N of the total (a viewer left running for
- * hours stopped converging). No reassociation is allowed (no -cl-fast-relaxed-math), so the
- * compiler keeps (t - s) - y. */
+ * a pixel's running sums stay accurate to a few ulps after millions of samples, where a plain
+ * float32 sum of N samples rounds each new one by up to 2^-24 N of the total (a viewer left
+ * running for hours stopped converging). No reassociation is allowed (no
+ * -cl-fast-relaxed-math), so the compiler keeps (t - s) - y. Within a launch the samples are
+ * summed plainly, in registers: a launch adds at most MAX_LAUNCH_SAMPLES (app/renderer.py). */
 void add_compensated(float4 *s, float4 *c, float4 x)
 {
     float4 y = x - *c;
@@ -168,27 +169,27 @@ void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum
     int x = get_global_id(0), y = p->row_start + get_global_id(1);
     if (x >= p->width || y >= p->row_end)
         return;
-    float4 acc = (float4)(0.0f), acc_c = (float4)(0.0f);
-    float4 acc_sq = (float4)(0.0f), acc_sq_c = (float4)(0.0f);
-    int rays = 0;
+    float3 acc = (float3)(0.0f), acc_sq = (float3)(0.0f);
+    int rays = 0, kept = 0;
     for (uint i = 0; i < p->sample_count; ++i) {
         Rng rng = make_rng(x, y, p->sample_start + i, p->seed);
         float4 jitter = next_uniform4(&rng);
         float3 d = camera_direction(p, x + jitter.x, y + jitter.y);
         float3 l = trace_path(sc, p, p->eye.xyz, d, &rng, &rays, nee);
         if (all(isfinite(l))) {
-            add_compensated(&acc, &acc_c, (float4)(l, 1.0f));
-            add_compensated(&acc_sq, &acc_sq_c, (float4)(l * l, 0.0f));
+            acc += l;
+            acc_sq += l * l;
+            ++kept;
         }
     }
     int k = y * p->width + x;
     float4 s = sum[k], c = sum_c[k];
-    add_compensated(&s, &c, acc - acc_c);
+    add_compensated(&s, &c, (float4)(acc, (float)kept));
     sum[k] = s;
     sum_c[k] = c;
     s = sum_sq[k];
     c = sum_sq_c[k];
-    add_compensated(&s, &c, acc_sq - acc_sq_c + (float4)(0.0f, 0.0f, 0.0f, (float)rays));
+    add_compensated(&s, &c, (float4)(acc_sq, (float)rays));
     sum_sq[k] = s;
     sum_sq_c[k] = c;
 }

@@ -110,9 +110,10 @@ def test_an_environment_edit_updates_the_light_choice(backend):
 
 def test_sums_stay_exact_over_tens_of_millions_of_samples(backend):
     """A pixel that sees only a sky of radiance 0.1 (not a float32 number: every sample adds a
-    rounded value) gets 2^25 samples in 32 launches. Plain float32 sums, as before, gave a mean of
-    0.10099 (each addition rounds by up to half an ulp of a growing total); the compensated sums
-    keep the mean, the sample count and the rays traced exact."""
+    rounded value) gets 2^25 samples. Plain float32 sums, as before, gave a mean of 0.10099 (each
+    addition rounds by up to half an ulp of a growing total); the compensated running sums keep
+    the mean to within the rounding of a launch's 64 samples (2.4e-6 at worst), and the sample
+    count and the rays traced exact."""
     b = SceneBuilder()
     b.add_sphere((0, 0, 10), 1.0, diffuse(0.5))              # behind the camera
     scene = b.build("sky", camera=Camera([0, 0, 0], [0, 0, -1], [0, 1, 0], 1.0),
@@ -124,6 +125,6 @@ def test_sums_stay_exact_over_tens_of_millions_of_samples(backend):
         r.add_samples(per_launch)
     r.finish()
     n = launches * per_launch
-    np.testing.assert_allclose(r.mean(), np.float32(0.1), rtol=1e-6)
+    np.testing.assert_allclose(r.mean(), np.float32(0.1), rtol=3e-6)
     assert r.read_sum()[0, 0, 3] == n and r.dropped_samples() == 0 and r.rays_traced() == n
     np.testing.assert_allclose(r.variance(), 0.0, atol=1e-8)
