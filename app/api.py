@@ -266,7 +266,8 @@ def denoise(image: np.ndarray, albedo: np.ndarray = None, normal: np.ndarray = N
     guides = [None if a is None else _rgb(name, a, image.shape) for name, a in (("albedo", albedo), ("normal", normal))]
     if guides[0] is None and guides[1] is not None:
         raise UserError("denoise: a normal guide needs the albedo guide too (Open Image Denoise's rule)")
-    return Denoiser(quality)(image, *guides)
+    with Denoiser(quality) as denoiser:
+        return denoiser(image, *guides)
 
 
 def _rgb(name: str, image, shape=None) -> np.ndarray:

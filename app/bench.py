@@ -199,9 +199,9 @@ def run_denoise(width, height, log=print):
     albedo, normal = aovs["albedo"], aovs["normal"]
     results = []
     for quality in QUALITIES:
-        denoiser = Denoiser(quality)
-        t = Timing(f"denoise, {quality}", f"Open Image Denoise, {denoiser.device_name}", width, height,
-                   _median_ms(lambda: denoiser(image, albedo, normal), repeats=5))
+        with Denoiser(quality) as denoiser:
+            t = Timing(f"denoise, {quality}", f"Open Image Denoise, {denoiser.device_name}", width, height,
+                       _median_ms(lambda: denoiser(image, albedo, normal), repeats=5))
         log(format_timing(t))
         results.append(t)
     return results

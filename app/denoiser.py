@@ -46,6 +46,21 @@ class Denoiser:
         self._filter.set_quality({"high": oidn.OIDN_QUALITY_HIGH, "balanced": oidn.OIDN_QUALITY_BALANCED,
                                   "fast": oidn.OIDN_QUALITY_FAST}[quality])
         self._size = None
+        self._buffers = {}
+
+    def close(self):
+        """Releases OIDN's buffers, filter and device (pyoidn frees nothing by itself)."""
+        for buffer in self._buffers.values():
+            buffer.release()
+        self._buffers = {}
+        self._filter.release()
+        self._device.release()
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
 
     def _check(self, what: str):
         """OIDN's last error as one line (a user's render must not end in a traceback)."""
@@ -55,15 +70,19 @@ class Denoiser:
             raise UserError(f"Open Image Denoise, {what}: {error}")
 
     def _bind(self, height: int, width: int):
-        """Device buffers for the four images, bound to the filter (again when the size changes)."""
+        """Device buffers for the four images, bound to the filter (again when the size changes:
+        the old ones are released, or every size change kept four images' worth, 14 MB a camera
+        move in the viewer, whose draft and full sizes alternate)."""
         if self._size == (height, width):
             return
         oidn, nbytes = self._oidn, height * width * 12
-        self._buffers = {name: oidn.Buffer(self._device, nbytes)
-                         for name in (oidn.OIDN_IMAGE_COLOR, oidn.OIDN_IMAGE_ALBEDO,
-                                      oidn.OIDN_IMAGE_NORMAL, oidn.OIDN_IMAGE_OUTPUT)}
+        old, self._buffers = self._buffers, {name: oidn.Buffer(self._device, nbytes)
+                                              for name in (oidn.OIDN_IMAGE_COLOR, oidn.OIDN_IMAGE_ALBEDO,
+                                                           oidn.OIDN_IMAGE_NORMAL, oidn.OIDN_IMAGE_OUTPUT)}
         for name, buffer in self._buffers.items():
             self._filter.set_image(name, buffer, oidn.OIDN_FORMAT_FLOAT3, width, height)
+        for buffer in old.values():      # the filter now holds the new ones
+            buffer.release()
         self._filter.commit()
         self._check("preparing the filter")
         self._size = (height, width)

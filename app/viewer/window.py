@@ -598,6 +598,8 @@ class Viewer:
 
     def close(self):
         self._worker.shutdown(wait=True)
+        if self._denoiser is not None:
+            self._denoiser.close()
         self.renderer.finish()
         self.glfw.make_context_current(self.window)
         self.imgui.set_current_context(self.imgui_context)
