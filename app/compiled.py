@@ -31,6 +31,10 @@ class ShapeRef:
 
 # The BVH build's peak host memory per primitive, measured (docs/performance.md)
 BUILD_HOST_BYTES = 320
+# The brightest radiance a scene may ask for (an emitter's, or the environment's texels times
+# its intensity): a pixel's float32 sums of a million samples of it stay far below float32's
+# 3.4e38, where 3e38, or 1e38 x 2, made every pixel +inf.
+MAX_RADIANCE = 1e20
 
 
 class CompiledScene:
@@ -95,6 +99,7 @@ class CompiledScene:
         environment change)."""
         self.materials = self.scene.materials.rows.copy()
         emission = self.materials["emission"][:, :3].astype(np.float64)
+        check_radiance(self.scene)
         prim_emission = emission[self.prim_material]
         corners = np.stack([self.triangles[f][:, :3] for f in ("v0", "v1", "v2")], axis=1)
         power = emitted_power(self.spheres, corners, prim_emission[:self.num_spheres],
@@ -119,6 +124,21 @@ class CompiledScene:
                             int(self.scene.sphere_material[shape]))
         mesh = self.scene.meshes[shape - self.num_spheres]
         return ShapeRef("mesh", shape - self.num_spheres, mesh.name, mesh.material)
+
+
+def check_radiance(scene: Scene):
+    """Refuses, in one line, radiance beyond MAX_RADIANCE (or not finite)."""
+    emission = scene.materials.rows["emission"][:, :3].astype(np.float64)
+    env = scene.environment
+    brightest_env = float(np.max(env.image)) * float(env.intensity)
+    if emission.size and not np.max(emission) <= MAX_RADIANCE:
+        row = int(np.argmax(np.max(np.nan_to_num(emission, nan=np.inf), axis=1)))
+        name = scene.materials.name_of(row) or f"#{row}"
+        raise UserError(f"{scene.name}: material {name}: an emitted radiance of {np.max(emission[row]):.3g} "
+                        f"is beyond {MAX_RADIANCE:g}, where the sums of samples overflow")
+    if not brightest_env <= MAX_RADIANCE:
+        raise UserError(f"{scene.name}: the environment's radiance times its intensity reaches {brightest_env:.3g}, "
+                        f"beyond {MAX_RADIANCE:g}, where the sums of samples overflow")
 
 
 def compile_scene(scene: Scene, queue: cl.CommandQueue = None, progress=None) -> CompiledScene:

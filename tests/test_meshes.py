@@ -105,6 +105,9 @@ BAD = [
     ("short.obj", b"v 0 0 0\nv 1 0 0\nf 1 2 3\n", r"line 3: face corner 3 names a vertex the file does not have \(2 so far"),
     ("word.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n", "line 4: face corner 'x' is not a vertex index"),
     ("back.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n", "line 4: face corner -4"),
+    ("list.ply", b"ply\nformat ascii 1.0\nelement vertex 3\nproperty list uchar float x\nproperty float y\n"
+                 b"property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                 b"1 0 0 0\n1 1 0 0\n1 0 1 0\n3 0 1 2\n", "the PLY vertex property 'x' must be a number, not a list"),
 ]
 
 

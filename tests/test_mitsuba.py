@@ -4,6 +4,7 @@ unsupported or malformed input as one line. The images against Mitsuba's own ren
 files are in test_reference.py."""
 
 import math
+import os
 from pathlib import Path
 
 import numpy as np
@@ -192,6 +193,24 @@ ERRORS = [
      None, "a colour must not be negative"),
     ('<shape type="sphere"><bsdf type="diffuse"><rgb name="reflectance" value="1.5"/></bsdf></shape>',
      None, "a reflectance must lie in [0, 1]"),
+    # the fuzzer's tracebacks of round 3 (#28), each now one line
+    ("<shape type='sphere'>" * 1000 + "</shape>" * 1000, None, "elements nest deeper than 64"),
+    ('<bsdf type="twosided" id="a"><ref id="b"/></bsdf><bsdf type="twosided" id="b"><ref id="a"/></bsdf>'
+     '<shape type="sphere"><ref id="a"/></shape>', None, "a reference cycle: 'a -> b -> a'"),
+    ('<texture type="checkerboard" id="t"><ref name="color0" id="t"/></texture>' + SPHERE, None,
+     "a reference cycle: 't -> t'"),
+    ('<shape type="sphere"><bsdf type="diffuse"><spectrum name="reflectance" value="400:0.5:1"/></bsdf></shape>',
+     None, "a spectrum is wavelength:value pairs, got '400:0.5:1'"),
+    ('<integrator type="path"><integer name="max_depth" value="2147483648"/></integrator>' + SPHERE, None,
+     "must be -1 (unlimited) to 2147483647, got 2147483648"),
+    ('<sensor type="perspective"><string name="focal_length" value="0mm"/></sensor>' + SPHERE, None,
+     "focal_length must be positive, got '0mm'"),
+    ('<shape type="sphere"><transform name="to_world"><rotate x="1e-300" angle="30"/></transform></shape>', None,
+     "the rotation axis must be 3 numbers, not all (near) zero"),
+    ('<sensor type="perspective"><transform name="to_world"><lookat origin="0,0,5" target="0,0,0" up="0,0,0"/>'
+     '</transform></sensor>' + SPHERE, None, "up must be a vector not parallel to the view direction"),
+    ('<shape type="rectangle"><transform name="to_world"><scale value="1e-20"/><scale value="1e-20"/></transform>'
+     '</shape>', None, "singular or beyond float32"),
 ]
 
 
@@ -214,3 +233,62 @@ def test_entity_expansion_bomb_is_refused_quickly(tmp_path):
                  header=f"<!DOCTYPE scene [{entities}]>\n<scene>")
     with pytest.raises(UserError, match="document type declarations"):
         read_mitsuba_file(path)
+
+
+def test_mitsubas_defaults_render_as_mitsuba_renders_them(tmp_path):
+    """A constant emitter without a radiance is 1 (Mitsuba's default), a checkerboard without
+    colours is 0.4 and 0.2 (replaced by its mean, 0.3); both used to fail with a traceback."""
+    scene = read_mitsuba_file(write(tmp_path, '<emitter type="constant"/><shape type="sphere"><bsdf type="diffuse">'
+                                              '<texture type="checkerboard" name="reflectance"/></bsdf></shape>'))
+    np.testing.assert_allclose(scene.environment.image.reshape(-1), 1.0)
+    np.testing.assert_allclose(scene.materials.get(int(scene.sphere_material[0])).params["rho_d"], 0.3)
+
+
+def test_an_unknown_encoding_is_one_line(tmp_path):
+    path = tmp_path / "scene.xml"
+    path.write_text(f'<?xml version="1.0" encoding="nope"?>\n<scene version="3.0.0">{SPHERE}</scene>')
+    with pytest.raises(UserError, match=r"scene.xml:1: the XML declaration's encoding cannot be read"):
+        read_mitsuba_file(path)
+
+
+def test_an_include_that_is_a_fifo_is_refused_without_opening_it(tmp_path):
+    os.mkfifo(tmp_path / "fifo.xml")
+    with pytest.raises(UserError, match="fifo.xml' is not a regular file"):
+        read_mitsuba_file(write(tmp_path, SPHERE + '<include filename="fifo.xml"/>'))
+
+
+def test_includes_share_one_budget(tmp_path, monkeypatch):
+    """A fan-out of includes (each file including the next level several times) is bounded by
+    the bytes and elements of all files together, not per file."""
+    import pathtrace.scene.mitsuba as mitsuba
+    monkeypatch.setattr(mitsuba, "MAX_ELEMENTS", 5000)
+    for level in range(6):
+        inner = f'<include filename="l{level + 1}.xml"/>' * 12 if level < 5 else SPHERE
+        write(tmp_path, inner, name=f"l{level}.xml")
+    with pytest.raises(UserError, match="more than 5000 elements"):
+        read_mitsuba_file(tmp_path / "l0.xml")
+
+
+def test_a_huge_comment_parses_in_linear_time(tmp_path):
+    """expat's ParseFile took 64 s on a 20 MB comment (a token over many blocks); the whole
+    buffer at once takes well under a second."""
+    import time
+    path = write(tmp_path, "<!--" + "x" * 20_000_000 + "-->" + SPHERE)
+    start = time.perf_counter()
+    read_mitsuba_file(path)
+    assert time.perf_counter() - start < 5
+
+
+@pytest.mark.parametrize("body,message", [
+    ('<emitter type="constant"><rgb name="radiance" value="3e38"/></emitter>' + SPHERE,
+     "the environment's radiance times its intensity reaches 3e+38, beyond 1e+20"),
+    ('<shape type="sphere"><emitter type="area"><rgb name="radiance" value="1e38"/></emitter></shape>',
+     "an emitted radiance of 1e+38 is beyond 1e+20"),
+])
+def test_radiance_that_would_overflow_the_sums_is_refused(tmp_path, capsys, body, message):
+    """Radiance of 3e38 (or 1e38 summed twice) made every pixel +inf while the render reported
+    success; the compiled scene refuses radiance beyond 1e20 in one line, nothing written."""
+    path = write(tmp_path, body)
+    assert main(["render", str(path), "-o", str(tmp_path / "x.exr"), "--size", "8x6", "--spp", "1", "-q"]) == 1
+    err = capsys.readouterr().err
+    assert message in err and err.count("error") == 1 and not (tmp_path / "x.exr").exists()

@@ -79,8 +79,13 @@ def _read_ply(path):
     if "vertex" not in names or "face" not in names:
         raise UserError(f"{path}: the PLY file has no {'vertex' if 'vertex' not in names else 'face'} element")
     v = ply["vertex"].data
-    vertices = np.column_stack([v["x"], v["y"], v["z"]])
     fields = v.dtype.names
+    for k in ("x", "y", "z", "nx", "ny", "nz"):
+        if k in fields and v.dtype[k].kind not in "fiu":
+            raise UserError(f"{path}: the PLY vertex property '{k}' must be a number, not a list")
+        if k in "xyz" and k not in fields:
+            raise UserError(f"{path}: the PLY vertices have no '{k}'")
+    vertices = np.column_stack([v["x"], v["y"], v["z"]])
     normals = np.column_stack([v["nx"], v["ny"], v["nz"]]) if {"nx", "ny", "nz"} <= set(fields) else None
     face = ply["face"].data
     key = next((k for k in ("vertex_indices", "vertex_index") if k in face.dtype.names), None)

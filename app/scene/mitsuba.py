@@ -19,14 +19,15 @@ import numpy as np
 
 from pathtrace.camera import Camera
 from pathtrace.environment import Environment
-from pathtrace.errors import UserError, warn
+from pathtrace.errors import UserError, cut, short, warn
 from pathtrace.materials import BSDFS, Material
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.meshes import MAX_COORDINATE, check_mesh, read_mesh
 
 MAX_XML_BYTES = 64 << 20
-MAX_ELEMENTS = 1_000_000
+MAX_ELEMENTS = 1_000_000   # in a file and its includes together, as MAX_XML_BYTES
+MAX_NESTING = 64           # elements inside elements (a Mitsuba scene needs a handful)
 MAX_INCLUDE_DEPTH = 8
 MAX_FILM = 16384
 DISK_SEGMENTS = 256       # a disk is a fan of this many triangles (area within 0.01 % of pi r^2)
@@ -47,28 +48,40 @@ class Node:
         return f"{self.file}:{self.line}: {label}"
 
 
-def parse_xml(path: Path) -> Node:
+def parse_xml(path: Path, budget: list = None, where: str = None) -> Node:
     """The element tree of one file, each element with its line; a malformed file is one
-    UserError naming the line."""
+    UserError naming the line. budget: [bytes, elements] left for this file and the others of
+    its scene (its includes), which it decreases; where: what names the file (an <include>)."""
+    from pathtrace.files import check_regular_file, shown
+    budget = [MAX_XML_BYTES, MAX_ELEMENTS] if budget is None else budget
     try:
-        size = os.stat(path).st_size
+        os.stat(path)
     except FileNotFoundError:
-        raise UserError(f"{path}: no such scene file") from None
+        raise UserError(f"{where or shown(path)}: no such scene file") from None
+    except OSError as e:
+        raise UserError(f"{where or shown(path)}: cannot read the scene ({e.strerror})") from None
+    check_regular_file(path, where or shown(path), "the scene file", budget[0])
+    try:
+        with open(path, "rb") as f:
+            data = f.read(budget[0] + 1)
     except OSError as e:
         raise UserError(f"{path}: cannot read the scene ({e.strerror})") from None
-    if size > MAX_XML_BYTES:
-        raise UserError(f"{path}: the file is larger than {MAX_XML_BYTES >> 20} MB")
+    if len(data) > budget[0]:
+        raise UserError(f"{path}: the scene and its includes are larger than {MAX_XML_BYTES >> 20} MB")
+    budget[0] -= len(data)
     parser = expat.ParserCreate()
-    stack, count = [Node("#document", {}, 0, path)], [0]
+    stack = [Node("#document", {}, 0, path)]
 
     def refuse_dtd(*_):
         raise UserError(f"{path}:{parser.CurrentLineNumber}: document type declarations "
                         "(<!DOCTYPE>, <!ENTITY>) are not accepted in scene files")
 
     def start(tag, attrs):
-        count[0] += 1
-        if count[0] > MAX_ELEMENTS:
-            raise UserError(f"{path}: more than {MAX_ELEMENTS} elements")
+        budget[1] -= 1
+        if budget[1] < 0:
+            raise UserError(f"{path}: the scene and its includes have more than {MAX_ELEMENTS} elements")
+        if len(stack) > MAX_NESTING:
+            raise UserError(f"{path}:{parser.CurrentLineNumber}: elements nest deeper than {MAX_NESTING}")
         node = Node(tag, attrs, parser.CurrentLineNumber, path)
         stack[-1].children.append(node)
         stack.append(node)
@@ -82,12 +95,13 @@ def parse_xml(path: Path) -> Node:
     parser.StartElementHandler = start
     parser.EndElementHandler = end
     try:
-        with open(path, "rb") as f:
-            parser.ParseFile(f)
+        # the whole buffer at once: ParseFile feeds expat in blocks, and a token spread over
+        # many blocks (a 20 MB comment) took time quadratic in its length (64 s)
+        parser.Parse(data, True)
     except expat.ExpatError as e:
         raise UserError(f"{path}:{e.lineno}: not well-formed XML ({expat.ErrorString(e.code)})") from None
-    except OSError as e:
-        raise UserError(f"{path}: cannot read the scene ({e.strerror})") from None
+    except (LookupError, ValueError) as e:      # an encoding Python does not know
+        raise UserError(f"{path}:1: the XML declaration's encoding cannot be read ({cut(str(e))})") from None
     roots = stack[0].children
     if len(roots) != 1 or roots[0].tag != "scene":
         raise UserError(f"{path}: not a Mitsuba scene (the root element must be <scene>)")
@@ -133,6 +147,8 @@ def _color(node):
     text = node.attrs.get("value", "")
     if node.tag == "spectrum" and ":" in text:
         pairs = [p.split(":") for p in re.split(r"[,\s]+", text.strip()) if p]
+        if any(len(p) != 2 for p in pairs):
+            _fail(node, f"a spectrum is wavelength:value pairs, got {short(text)}")
         values = [_float(node, v) for _, v in pairs]
         warn(f"{node.where()}: a sampled spectrum; pathtrace renders RGB and uses its mean, {np.mean(values):.4g}")
         return np.full(3, float(np.mean(values)))
@@ -157,8 +173,8 @@ def _lookat(node):
         _fail(node, "target must differ from origin")
     d /= np.linalg.norm(d)
     left = np.cross(up, d)
-    if np.linalg.norm(left) < 1e-9 * np.linalg.norm(up):
-        _fail(node, "up must not be parallel to the view direction")
+    if not np.linalg.norm(left) > 1e-9 * np.linalg.norm(up):     # a zero up vector too
+        _fail(node, "up must be a vector not parallel to the view direction")
     left /= np.linalg.norm(left)
     # Mitsuba's look_at: the columns are left (+x), up (+y), forward (+z) and the origin
     m = np.eye(4)
@@ -183,8 +199,8 @@ def _transform(node):
             step = transform.scaling(s)
         elif op.tag == "rotate":
             axis = _vector(op) if "value" not in op.attrs else np.array(_floats(op, op.attrs["value"]))
-            if len(axis) != 3 or not np.any(axis):
-                _fail(op, "the rotation axis must be 3 numbers, not all zero")
+            if len(axis) != 3 or not np.linalg.norm(axis) > 1e-30:
+                _fail(op, "the rotation axis must be 3 numbers, not all (near) zero")
             step = transform.rotation(axis, _float(op, op.attrs.get("angle"), "angle"))
         elif op.tag == "matrix":
             v = _floats(op, op.attrs.get("value", ""))
@@ -202,6 +218,10 @@ def _transform(node):
         else:
             _fail(op, "unknown transform operation (translate, rotate, scale, matrix, lookat)")
         m = step @ m
+        # the normals' matrix is the inverse transpose: it must exist in float64 and hold in float32
+        det = np.linalg.det(m[:3, :3])
+        if not (np.all(np.isfinite(m)) and np.abs(m).max() <= 3.0e38 and abs(det) > 1e-36):
+            _fail(op, "the transform so far is singular or beyond float32 (a scale that underflows?)")
     return m
 
 
@@ -210,6 +230,7 @@ class _Reader:
 
     def __init__(self, path: Path):
         self.path = path
+        self.budget = [MAX_XML_BYTES, MAX_ELEMENTS]   # bytes and elements left (parse_xml)
         self.defaults = {}
         self.named = {}             # id -> Node
         self.builder = SceneBuilder()
@@ -247,7 +268,7 @@ class _Reader:
                 name = child.attrs.get("filename")
                 if not name:
                     _fail(child, "needs a filename")
-                included = parse_xml(child.file.parent / name)
+                included = parse_xml(child.file.parent / name, self.budget, child.where())
                 out.extend(self.expand(included, depth + 1))
                 continue
             child.children = self.expand(child, depth)
@@ -303,7 +324,7 @@ class _Reader:
         """A colour parameter; a texture is replaced by its mean colour, with a warning."""
         node = props.get(name)
         if node is None:
-            return np.asarray(default, np.float64)
+            return np.broadcast_to(np.asarray(default, np.float64), 3).copy()
         if node.tag == "ref":
             node = self.resolve(node)
         if node.tag == "texture":
@@ -332,6 +353,42 @@ class _Reader:
              f"({', '.join(f'{c:.3g}' for c in mean)})")
         return mean
 
+    def check_reference_cycles(self):
+        """Refuses a <ref> that leads back to an element it is inside (a bsdf or texture made of
+        itself), which would recurse for ever; found by depth-first search without recursion."""
+        refs = {}
+        for name, node in self.named.items():
+            found, todo = [], list(node.children)
+            while todo:
+                child = todo.pop()
+                if child.tag == "ref" and child.attrs.get("id") in self.named:
+                    found.append(child)
+                todo.extend(child.children)
+            refs[name] = found
+        state = {}                       # id -> 1 on the current path, 2 done
+        for root in self.named:
+            if root in state:
+                continue
+            path, stack = [], [(root, iter(refs[root]))]
+            state[root] = 1
+            path.append(root)
+            while stack:
+                name, pending = stack[-1]
+                ref = next(pending, None)
+                if ref is None:
+                    state[name] = 2
+                    stack.pop()
+                    path.pop()
+                    continue
+                target = ref.attrs["id"]
+                if state.get(target) == 1:
+                    cycle = path[path.index(target):] + [target]
+                    _fail(ref, f"a reference cycle: {short(' -> '.join(cycle))}")
+                if target not in state:
+                    state[target] = 1
+                    path.append(target)
+                    stack.append((target, iter(refs[target])))
+
     def resolve(self, ref):
         target = self.named.get(ref.attrs.get("id"))
         if target is None:
@@ -341,13 +398,14 @@ class _Reader:
     # -- the scene --
 
     def read(self) -> Scene:
-        root = parse_xml(self.path)
+        root = parse_xml(self.path, self.budget)
         self.substitute(root)
         version = root.attrs.get("version", "3.0.0")
         if not version.startswith(("2.", "3.")):
             warn(f"{root.where()}: version {version}; pathtrace reads Mitsuba 3 scenes")
         nodes = self.expand(root)
         self.named = {node.attrs["id"]: node for node in nodes if "id" in node.attrs}
+        self.check_reference_cycles()
         for node in nodes:
             if node.tag == "shape":
                 self.shape(node)
@@ -379,8 +437,8 @@ class _Reader:
         if kind not in ("path", "volpath", "prb", "prbvolpath"):
             warn(f"{node.where()}: pathtrace renders with its path tracer instead")
         max_depth = self.get(props, "max_depth", -1, ("integer",))
-        if max_depth < -1:
-            _fail(props["max_depth"], f"must be -1 (unlimited) or more, got {max_depth}")
+        if not -1 <= max_depth < 2**31:
+            _fail(props["max_depth"], f"must be -1 (unlimited) to {2**31 - 1}, got {max_depth}")
         self.max_depth = 0 if max_depth == -1 else max_depth
         rr_depth = self.get(props, "rr_depth", 5, ("integer",))
         if max_depth == 0:
@@ -421,6 +479,8 @@ class _Reader:
         else:
             text = self.get(props, "focal_length", "50mm", ("string",))
             f = _float(props.get("focal_length", node), text.removesuffix("mm"), "focal_length")
+            if f <= 0:
+                _fail(props.get("focal_length", node), f"focal_length must be positive, got {short(text)}")
             fov, axis = math.degrees(2 * math.atan(math.hypot(36, 24) / (2 * f))), "diagonal"
         if not 0 < fov < 180:
             _fail(props.get("fov", node), f"the field of view must lie in (0, 180) degrees, got {fov}")

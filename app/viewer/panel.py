@@ -11,6 +11,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from pathtrace.compiled import MAX_RADIANCE
 from pathtrace.materials import BSDFS
 from pathtrace.scene.builtin import BUILTIN_SCENES
 from pathtrace.scene.description import RUSSIAN_ROULETTE
@@ -91,7 +92,7 @@ def _material_editor(imgui, v, layout):
     hit, le = imgui.input_float3("emission", np.asarray(m.emission, np.float64).tolist())
     layout.check("emission")
     if hit:
-        m.emission, changed = np.clip(le, 0.0, FLOAT_MAX), True
+        m.emission, changed = np.clip(le, 0.0, MAX_RADIANCE), True
     if changed and BSDFS[m.type].check({k: np.atleast_2d(x) if np.ndim(x) else np.atleast_1d(x)
                                         for k, x in m.params.items()}) is None:
         v.edit_material(shape.material, m)
@@ -177,8 +178,9 @@ def draw_panel(v):
         if changed:
             r.set_settings(nee=nee)
         env = r.environment
+        most = MAX_RADIANCE / max(float(np.max(env.image)), 1e-30)    # (pathtrace.compiled)
         changed, value = imgui.drag_float("env intensity", env.intensity, max(env.intensity, 0.01) * 0.01,
-                                          0.0, FLOAT_MAX, "%.4g", imgui.SliderFlags_.always_clamp)
+                                          0.0, min(most, FLOAT_MAX), "%.4g", imgui.SliderFlags_.always_clamp)
         layout.check("env intensity")
         if changed:
             env.intensity = value
