@@ -338,9 +338,9 @@ def farm_output(pattern: str, name: str, frame: int, count: int) -> str:
     in (a pattern for one image may have neither)."""
     try:
         return pattern.format(name=name, frame=frame)
-    except (KeyError, IndexError, ValueError) as e:
-        raise UserError(f"--output {pattern}: only {{name}} and {{frame}} may stand in braces "
-                        f"({type(e).__name__}: {e})") from None
+    except (KeyError, IndexError, ValueError, AttributeError, TypeError) as e:   # '{name.x}'
+        raise UserError(f"--output {short(pattern)}: only {{name}} and {{frame}} may stand in braces "
+                        f"({type(e).__name__}: {cut(str(e))})") from None
 
 
 def cmd_view(args):
@@ -528,6 +528,10 @@ def main(argv=None) -> int:
     """Runs one command; returns its exit status (pathtrace.console: the entry point around it)."""
     args = parse(build_parser(), argv)
     try:
+        if sys.stdout is None:          # started with standard output closed (>&-)
+            if args.command in ("scenes", "devices", "bench"):
+                raise UserError("cannot write the standard output: it is closed")
+            sys.stdout = open(os.devnull, "w")
         code = args.func(args)
         sys.stdout.flush()
         return code

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pyopencl as cl
 
-from pathtrace.errors import UserError, format_bytes
+from pathtrace.errors import UserError, format_bytes, short
 from pathtrace.features import Features
 from pathtrace.resources import resource_dir
 
@@ -192,17 +192,23 @@ def build_error_line(error: Exception) -> str:
     return (errors or lines or [type(error).__name__])[0]
 
 
+def _index(text: str) -> bool:
+    """Whether text is a device index: ASCII digits, few of them (str.isdigit also takes '²',
+    which int() refuses, and int() refuses 5000 digits)."""
+    return text.isascii() and text.isdigit() and len(text) <= 9
+
+
 def _matches(spec: str, d: Device, devices: list[Device]) -> bool:
     spec_l = spec.lower()
     kind, _, nth = spec_l.partition(":")
-    if kind in ("gpu", "cpu") and nth.isdigit():     # the nth device of a kind, from 0
+    if kind in ("gpu", "cpu") and _index(nth):       # the nth device of a kind, from 0
         of_kind = [e for e in devices if e.kind.lower() == kind]
         return int(nth) < len(of_kind) and of_kind[int(nth)] is d
     if spec_l in ("auto", "any"):
         return True
     if spec_l in ("gpu", "cpu"):
         return d.kind.lower() == spec_l
-    if spec.isdigit():
+    if _index(spec):
         return d.index == int(spec)
     return spec_l in d.name.lower() or spec_l in d.platform.name.lower()
 
@@ -236,7 +242,7 @@ def choose_device(spec: str = "auto", extra: str = "", use_cache: bool = True,
                         "(on Debian/Ubuntu, 'apt install pocl-opencl-icd' runs on the CPU)")
     candidates = [d for d in devices if _matches(spec, d, devices)]
     if not candidates:
-        raise UserError(f"--device: no OpenCL device matches '{spec}' "
+        raise UserError(f"--device: no OpenCL device matches {short(spec)} "
                         f"(see 'pathtrace devices'; {len(devices)} found)")
     candidates.sort(key=lambda d: d.kind != "GPU")   # stable: GPUs first, then listing order
     for d in candidates:
@@ -244,4 +250,4 @@ def choose_device(spec: str = "auto", extra: str = "", use_cache: bool = True,
             return open_device(d, extra, use_cache)
         except cl.Error as e:
             log(f"skipping {d.describe()}: cannot build the kernels: {build_error_line(e)}")
-    raise UserError(f"--device: no device matching '{spec}' can build the kernels")
+    raise UserError(f"--device: no device matching {short(spec)} can build the kernels")

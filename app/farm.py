@@ -21,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pathtrace.camera import Camera
-from pathtrace.errors import UserError
+from pathtrace.errors import UserError, cut, short
 from pathtrace.launches import next_launch_size
 
 BATCH_SECONDS = 1.0       # a batch's target duration: long enough that transfers are amortised
@@ -104,7 +104,7 @@ def connect(address: str = None, num_cpus: int = None, num_gpus: int = None):
             ray.init(address=address, num_cpus=num_cpus, num_gpus=num_gpus, include_dashboard=False,
                      logging_level="ERROR", log_to_driver=False)
         except (ConnectionError, RuntimeError, ValueError) as e:
-            raise UserError(f"--address {address}: cannot reach a Ray cluster: "
+            raise UserError(f"--address {short(address)}: cannot reach a Ray cluster: "
                             f"{str(e).strip().splitlines()[0]}") from None
     return ray
 
@@ -112,14 +112,14 @@ def connect(address: str = None, num_cpus: int = None, num_gpus: int = None):
 def _check_reachable(address: str, seconds: float = 3.0):
     """Ray retries an unreachable head for minutes, printing as it goes: try its port first."""
     host, _, port = address.removeprefix("ray://").rpartition(":")
-    if not host or not port.isdigit():
-        raise UserError(f"--address {address}: give host:port (the head's GCS port, 6379 by "
+    if not host or not (port.isascii() and port.isdigit() and len(port) <= 5 and int(port) < 65536):
+        raise UserError(f"--address {short(address)}: give host:port (the head's GCS port, 6379 by "
                         "default), or 'auto'")
     try:
         socket.create_connection((host, int(port)), timeout=seconds).close()
-    except OSError as e:
-        raise UserError(f"--address {address}: cannot reach a Ray cluster there "
-                        f"({e.strerror or e})") from None
+    except (OSError, UnicodeError, ValueError) as e:     # UnicodeError: a host IDNA refuses
+        raise UserError(f"--address {short(address)}: cannot reach a Ray cluster there "
+                        f"({cut(getattr(e, 'strerror', None) or str(e))})") from None
 
 
 def start_actors(ray, scenes, cpu_actors: int = None, cpu_device: str = "cpu"):

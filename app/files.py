@@ -5,7 +5,7 @@ import os
 import stat
 from pathlib import Path
 
-from pathtrace.errors import UserError
+from pathtrace.errors import UserError, cut
 
 
 def shown(path) -> str:
@@ -19,11 +19,13 @@ def check_regular_file(path: Path, where: str, what: str, max_bytes: int):
     max_bytes."""
     try:
         info = os.stat(path)
+    except ValueError:                  # a NUL byte in the name
+        raise UserError(f"{where}: {what} '{cut(shown(path), 100)}': a file name cannot hold a NUL byte") from None
     except FileNotFoundError:
-        raise UserError(f"{where}: {what} '{shown(path)}' does not exist") from None
+        raise UserError(f"{where}: {what} '{cut(shown(path), 100)}' does not exist") from None
     except OSError as e:
-        raise UserError(f"{where}: {what} '{shown(path)}': {e.strerror}") from None
+        raise UserError(f"{where}: {what} '{cut(shown(path), 100)}': {e.strerror}") from None
     if not stat.S_ISREG(info.st_mode):
-        raise UserError(f"{where}: {what} '{shown(path)}' is not a regular file")
+        raise UserError(f"{where}: {what} '{cut(shown(path), 100)}' is not a regular file")
     if info.st_size > max_bytes:
-        raise UserError(f"{where}: {what} '{shown(path)}' is larger than {max_bytes >> 20} MB")
+        raise UserError(f"{where}: {what} '{cut(shown(path), 100)}' is larger than {max_bytes >> 20} MB")

@@ -6,15 +6,17 @@ target, which is renamed over it only once complete (and with several outputs, o
 OpenCV and OpenEXR are imported where they are used, so that the core (scenes with constant
 environments, the renderer, the benchmarks) runs with NumPy and PyOpenCL alone."""
 
+import errno
 import io
 import os
+import stat
 import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from pathtrace.errors import UserError
+from pathtrace.errors import UserError, cut
 from pathtrace.files import check_regular_file, shown
 from pathtrace.tonecurve import tonemap, to_8bit
 
@@ -112,19 +114,30 @@ def check_writable(path: Path, what: str = "--output", formats=HDR_FORMATS + LDR
     """Fails early, before any rendering, if `path` cannot be written (or, where `formats` is
     given, has none of those suffixes)."""
     path = Path(path)
+    name = cut(shown(path), 100)
     if formats and path.suffix.lower() not in formats:
-        raise UserError(f"{what}: '{shown(path)}' has an unknown image format (use one of {', '.join(formats)})")
-    target = _target(path)
-    if not target.parent.is_dir():
-        raise UserError(f"{what}: folder '{shown(target.parent)}' does not exist")
-    try:   # the only sure test (permissions, read-only mounts, root's exceptions) is to try
+        raise UserError(f"{what}: '{name}' has an unknown image format (use one of {', '.join(formats)})")
+    try:
+        target = _target(path)
+        if not target.parent.is_dir():
+            raise UserError(f"{what}: folder '{cut(shown(target.parent), 100)}' does not exist")
+        # the only sure test (permissions, read-only mounts, root's exceptions) is to try
         fd, probe = tempfile.mkstemp(prefix=".pathtrace-", dir=target.parent)
         os.close(fd)
         os.unlink(probe)
+        if len(os.fsencode(target.name)) > os.pathconf(target.parent, "PC_NAME_MAX"):
+            raise OSError(errno.ENAMETOOLONG, os.strerror(errno.ENAMETOOLONG))
+        info = os.stat(target) if os.path.lexists(target) else None
+    except ValueError:                  # a NUL byte
+        raise UserError(f"{what}: '{name}': a file name cannot hold a NUL byte") from None
     except OSError as e:
-        raise UserError(f"{what}: '{shown(path)}' is not writable ({e.strerror})") from None
-    if target.is_dir() or (target.exists() and not os.access(target, os.W_OK)):
-        raise UserError(f"{what}: '{shown(path)}' is not writable")
+        raise UserError(f"{what}: '{name}' is not writable ({e.strerror})") from None
+    if info is not None and not stat.S_ISREG(info.st_mode):
+        # a device (a link to /dev/full, say), a FIFO or a folder: renaming a new file over it
+        # would replace it, and writing into it is not what an image output means
+        raise UserError(f"{what}: '{name}' exists and is not a regular file; pathtrace replaces only regular files")
+    if not os.access(target, os.W_OK) and info is not None:
+        raise UserError(f"{what}: '{name}' is not writable")
 
 
 def _target(path: Path) -> Path:

@@ -1,12 +1,16 @@
 """The command line: renders, and one clear message with a non-zero exit for each bad input."""
 
 import os
+import shlex
+import stat
 import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+
+from pathtrace.errors import UserError
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -357,3 +361,61 @@ def test_an_output_named_twice_is_refused(tmp_path, outputs):
     r = pathtrace("render", "simple", *args, "--aov", "albedo", "--size", "8x8", "--spp", "1", "-q", cwd=tmp_path)
     assert r.returncode == 1 and "would be written twice" in r.stderr and len(r.stderr.splitlines()) == 1
     assert list(tmp_path.iterdir()) == []
+
+
+# --- round 3 of the fuzzer (#28): each class of traceback it found is one line now -----------
+
+@pytest.mark.parametrize("spec", ["²", "cpu:²", "9" * 5000, "gpu:0\nx"])
+def test_a_device_spec_of_odd_digits_is_one_line(spec):
+    r = pathtrace("render", "simple", "-o", "o.png", "--spp", "1", "--device", spec)
+    assert r.returncode == 1 and len(r.stderr.splitlines()) == 1, r.stderr
+    assert "no OpenCL device matches" in r.stderr and len(r.stderr) < 300
+
+
+@pytest.mark.parametrize("command", [["render", "simple", "--spp", "1", "-o"], ["convert", "simple", "-o"],
+                                     ["bench", "--quick", "--json"]], ids=["render", "convert", "bench"])
+def test_an_output_name_too_long_for_the_file_system_is_one_line(tmp_path, command):
+    suffix = {"render": ".png", "convert": ".toml", "bench": ".json"}[command[0]]
+    r = pathtrace(*command, tmp_path / ("a" * 300 + suffix))
+    assert r.returncode == 1 and "File name too long" in r.stderr and len(r.stderr.splitlines()) == 1
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_outputs_that_are_not_regular_files_are_refused_and_kept(tmp_path):
+    """A link to a device (as root, rename() replaced /dev/full itself), a FIFO, a folder."""
+    (tmp_path / "full.png").symlink_to("/dev/full")
+    os.mkfifo(tmp_path / "fifo.png")
+    (tmp_path / "dir.png").mkdir()
+    for name in ("full.png", "fifo.png", "dir.png"):
+        r = pathtrace("render", "simple", "-o", tmp_path / name, "--size", "8x6", "--spp", "1", "-q")
+        assert r.returncode == 1 and len(r.stderr.splitlines()) == 1, r.stderr
+    assert os.readlink(tmp_path / "full.png") == "/dev/full" and stat.S_ISFIFO(os.lstat(tmp_path / "fifo.png").st_mode)
+
+
+def test_listing_to_a_closed_standard_output_is_one_line():
+    r = subprocess.run(f"{shlex.quote(sys.executable)} -m pathtrace scenes >&-", shell=True, cwd=ROOT,
+                       capture_output=True, text=True, timeout=60)
+    assert r.returncode == 1 and r.stderr == "pathtrace: error: cannot write the standard output: it is closed\n"
+
+
+@pytest.mark.parametrize("field", ['[environment]\nmap = "a\\u0000b.hdr"\n',
+                                   '[[meshes]]\nfile = "a\\u0000b.ply"\nmaterial = { type = "diffuse", rho_d = 0.5 }\n'],
+                         ids=["map", "mesh"])
+def test_a_nul_byte_in_a_file_name_is_one_line(tmp_path, field):
+    scene = tmp_path / "s.toml"
+    scene.write_text(field + '[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = { type = "diffuse", rho_d = 0.5 }\n')
+    r = pathtrace("render", scene, "-o", tmp_path / "o.png", "--spp", "1")
+    assert r.returncode == 1 and "a file name cannot hold a NUL byte" in r.stderr and "\\x00" in r.stderr
+    assert len(r.stderr.splitlines()) == 1
+
+
+def test_farm_patterns_and_addresses_of_odd_text_are_one_line():
+    from pathtrace.cli import farm_output
+    from pathtrace.farm import _check_reachable
+    for pattern in ("{name.x}.png", "{frame[0]}.png", "{0}.png", "{name!z}.png"):
+        with pytest.raises(UserError, match="only {name} and {frame} may stand in braces"):
+            farm_output(pattern, "simple", 0, 1)
+    for address in ("127.0.0.1:²", "127.0.0.1:" + "9" * 5000, "host:99999"):
+        with pytest.raises(UserError, match="give host:port") as e:
+            _check_reachable(address)
+        assert len(str(e.value)) < 300

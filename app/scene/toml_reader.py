@@ -358,7 +358,7 @@ def _exists(path: Path) -> bool:
     """Path.exists, but False (not an OSError) for a name too long for the file system."""
     try:
         return path.exists()
-    except OSError:
+    except (OSError, ValueError):       # a name too long, or holding a NUL byte
         return False
 
 
