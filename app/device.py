@@ -3,6 +3,7 @@
 
 import hashlib
 import os
+import stat
 import sys
 import time
 from dataclasses import dataclass
@@ -116,13 +117,18 @@ def build_cached(context: cl.Context, device: cl.Device, source: str, options: l
     if use_cache:
         binary = program.get_info(cl.program_info.BINARIES)[0]
         if binary:
+            tmp = path.with_suffix(f".tmp{os.getpid()}")
             try:
                 path.parent.mkdir(parents=True, exist_ok=True)
-                tmp = path.with_suffix(f".tmp{os.getpid()}")
                 tmp.write_bytes(hashlib.sha256(binary).digest() + binary)
                 os.replace(tmp, path)
             except OSError:
-                pass   # caching is an optimisation; a read-only home still renders
+                # caching is an optimisation: a read-only or full disk still renders, and leaves
+                # no partial file behind
+                try:
+                    tmp.unlink()
+                except OSError:
+                    pass
     return BuildResult(program, seconds, False)
 
 
@@ -131,6 +137,9 @@ def _read_cached(path: Path):
     written with: a truncated or damaged binary handed to a driver can crash it (PoCL
     segfaulted on the first half of a valid one)."""
     try:
+        # a regular file only: an entry that is a FIFO would block the open for ever
+        if not stat.S_ISREG(os.stat(path).st_mode):
+            return None
         data = path.read_bytes()
     except OSError:
         return None

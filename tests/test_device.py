@@ -1,0 +1,44 @@
+"""The kernel cache (app/device.py build_cached): an entry that is not a regular file is not
+opened (a FIFO blocked for ever), and a write that fails (a full disk) leaves nothing behind."""
+
+import os
+import subprocess
+import sys
+
+SOURCE = "kernel void one(global int *a) { a[0] = 1; }"
+BUILD = f"""
+import pyopencl as cl
+from pathtrace.device import build_cached, choose_device
+b = choose_device({os.environ.get("PATHTRACE_TEST_DEVICE", "cpu")!r})
+r = build_cached(b.context, b.device.device, {SOURCE!r}, [])
+print("cached" if r.cached else "built")
+"""
+
+
+def build(cache, extra=""):
+    return subprocess.run([sys.executable, "-c", extra + BUILD], env={**os.environ, "PATHTRACE_CACHE": str(cache)},
+                          capture_output=True, text=True, timeout=120)
+
+
+def test_a_cache_entry_that_is_a_fifo_is_not_opened(tmp_path):
+    assert build(tmp_path).stdout.strip() == "built"
+    assert build(tmp_path).stdout.strip() == "cached"
+    # choose_device caches the renderer's kernels too: the one-line kernel's entry is the smallest
+    entry = min(tmp_path.glob("*.bin"), key=lambda p: p.stat().st_size)
+    entry.unlink()
+    os.mkfifo(entry)
+    r = build(tmp_path)                  # hung in open() before
+    assert r.returncode == 0 and r.stdout.strip() == "built", r.stderr
+
+
+def test_a_full_disk_leaves_no_partial_cache_file(tmp_path):
+    """The write fails half-way (ENOSPC): the build still succeeds, and no .tmp file is left."""
+    full = ("import errno, pathlib\n"
+            "def write_bytes(self, data):\n"
+            "    with open(self, 'wb') as f:\n"
+            "        f.write(data[: len(data) // 2])\n"
+            "    raise OSError(errno.ENOSPC, 'No space left on device')\n"
+            "pathlib.Path.write_bytes = write_bytes\n")
+    r = build(tmp_path, full)
+    assert r.returncode == 0 and r.stdout.strip() == "built", r.stderr
+    assert not list(tmp_path.glob("*.tmp*")) and not list(tmp_path.glob("*.bin"))
