@@ -139,3 +139,12 @@ def test_cli_names_the_scene_field_and_mesh_file(tmp_path, capsys):
     assert main(["render", str(path), "-o", str(tmp_path / "x.png")]) == 1
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "meshes[0].file" in err[0] and "missing.ply' does not exist" in err[0] and "mesh file '" in err[0]
+
+
+def test_a_gltf_buffer_that_is_a_fifo_is_refused_without_opening_it(tmp_path):
+    """trimesh opened a glTF's external buffer however it was made: a FIFO hung the load."""
+    import os
+    os.mkfifo(tmp_path / "buf.bin")
+    (tmp_path / "m.gltf").write_text('{"asset": {"version": "2.0"}, "buffers": [{"uri": "buf.bin", "byteLength": 36}]}')
+    with pytest.raises(UserError, match=r"buffers\[0\]: file '.*buf.bin' is not a regular file"):
+        read_mesh(tmp_path / "m.gltf", "meshes[0].file")

@@ -30,6 +30,8 @@ def read_mesh(path: Path, where: str):
         elif suffix == ".obj":
             vertices, faces, normals = _read_obj(path, f"{where}: {path}")
         else:
+            if suffix == ".gltf":
+                _check_gltf_buffers(path, f"{where}: {path}")
             vertices, faces, normals = _read_with_trimesh(path, suffix)
     except UserError:
         raise
@@ -139,6 +141,25 @@ def _check_obj_faces(text: str, where: str):
                 if not (1 <= k <= vertices or -vertices <= k <= -1):
                     raise UserError(f"{where}: line {number}: face corner {k} names a vertex the file does not have "
                                     f"({vertices} so far; OBJ counts from 1)")
+
+
+def _check_gltf_buffers(path: Path, where: str):
+    """The files a glTF's buffers and images name are regular files of bounded size, checked
+    before trimesh opens them (a buffer that is a FIFO hung the load)."""
+    import json
+    try:
+        data = json.loads(Path(path).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError, RecursionError) as e:
+        raise UserError(f"{where}: not a readable glTF file ({type(e).__name__})") from None
+    if not isinstance(data, dict):
+        raise UserError(f"{where}: not a glTF file (its JSON is not an object)")
+    for kind in ("buffers", "images"):
+        entries = data.get(kind, [])
+        for k, entry in enumerate(entries if isinstance(entries, list) else []):
+            uri = entry.get("uri") if isinstance(entry, dict) else None
+            if isinstance(uri, str) and not uri.startswith("data:"):
+                from urllib.parse import unquote
+                check_regular_file(Path(path).parent / unquote(uri), f"{where}: {kind}[{k}]", "file", MAX_FILE_BYTES)
 
 
 def _read_with_trimesh(path, suffix):
