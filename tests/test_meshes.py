@@ -148,3 +148,23 @@ def test_a_gltf_buffer_that_is_a_fifo_is_refused_without_opening_it(tmp_path):
     (tmp_path / "m.gltf").write_text('{"asset": {"version": "2.0"}, "buffers": [{"uri": "buf.bin", "byteLength": 36}]}')
     with pytest.raises(UserError, match=r"buffers\[0\]: file '.*buf.bin' is not a regular file"):
         read_mesh(tmp_path / "m.gltf", "meshes[0].file")
+
+
+def test_nan_indices_and_huge_coordinates_print_nothing_but_our_line(tmp_path):
+    """NumPy's own warnings reached the terminal before pathtrace's line (a NaN face index cast
+    to int, a cross product of 1e17 coordinates squared in float32)."""
+    import subprocess
+    import sys
+    (tmp_path / "n.ply").write_text("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                    "property float z\nelement face 1\nproperty list uchar float vertex_indices\n"
+                                    "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 nan\n")
+    (tmp_path / "big.obj").write_text("v 0 0 0\nv 1e17 0 0\nv 0 1e17 0\nf 1 2 3\n")
+    for name, status in (("n.ply", 1), ("big.obj", 0)):
+        scene = tmp_path / f"{name}.toml"
+        scene.write_text(f'[[meshes]]\nfile = "{name}"\nmaterial = {{ type = "diffuse", rho_d = 0.5 }}\n')
+        r = subprocess.run([sys.executable, "-W", "default", "-m", "pathtrace", "render", scene, "-o", tmp_path / "o.exr",
+                            "--size", "8x6", "--spp", "1", "-q"], capture_output=True, text=True, timeout=120)
+        assert r.returncode == status and "Warning" not in r.stderr, r.stderr
+    assert "whole numbers" in subprocess.run(
+        [sys.executable, "-m", "pathtrace", "render", tmp_path / "n.ply.toml", "-o", tmp_path / "o.exr"],
+        capture_output=True, text=True, timeout=120).stderr

@@ -62,7 +62,9 @@ def check_mesh(vertices, faces, normals, where):
         normals = np.asarray(normals, np.float64).reshape(-1, 3)
         if len(normals) != len(vertices) or not np.all(np.isfinite(normals)):
             normals = None     # unusable normals: shade flat rather than refuse the mesh
-    corners = vertices.astype(np.float32)[faces]
+    # the float32 corners the kernels get, their cross products in float64 (1e17 squared
+    # overflows float32)
+    corners = vertices.astype(np.float32)[faces].astype(np.float64)
     area2 = np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
     keep = area2 > 0
     if not keep.all():
@@ -104,7 +106,10 @@ def triangulate(polygons) -> np.ndarray:
     for n in np.unique(lengths):
         if n < 3:
             continue
-        group = np.stack([polygons[i] for i in np.flatnonzero(lengths == n)]).astype(np.int64)
+        group = np.stack([polygons[i] for i in np.flatnonzero(lengths == n)])
+        if group.dtype.kind == "f" and not np.all(np.isfinite(group) & (group == np.round(group))):
+            raise ValueError("face vertex indices must be whole numbers")   # a PLY list of floats
+        group = group.astype(np.int64)
         for k in range(1, n - 1):
             out.append(group[:, [0, k, k + 1]])
     return np.concatenate(out) if out else np.zeros((0, 3), np.int64)
