@@ -2,6 +2,7 @@
 
 import argparse
 import os
+import signal
 import sys
 from dataclasses import replace
 from pathlib import Path
@@ -22,6 +23,25 @@ def epilog() -> str:
 
 
 PROGRESS_AFTER = 1.0    # seconds before a BVH build shows its progress
+
+
+class FinalWrite:
+    """Around the writing of a command's outputs (all or none, app/image_io.py): Ctrl-C and
+    SIGTERM wait until it ends, and once the outputs are complete they are ignored, so that a
+    signal arriving then cannot turn a finished command into an 'interrupted' exit (130). A
+    write that fails leaves the signals as they were."""
+
+    SIGNALS = {signal.SIGINT, signal.SIGTERM}
+
+    def __enter__(self):
+        signal.pthread_sigmask(signal.SIG_BLOCK, self.SIGNALS)
+        return self
+
+    def __exit__(self, kind, *exc):
+        if kind is None:                 # complete: a pending signal is discarded
+            for s in self.SIGNALS:
+                signal.signal(s, signal.SIG_IGN)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, self.SIGNALS)
 
 
 class BuildProgress:
@@ -224,7 +244,8 @@ def cmd_render(args):
         if bar is not None:
             bar.close()
     outputs = render_outputs(result, args, denoiser)
-    write_images(outputs, args.exposure, args.tonemap)
+    with FinalWrite():
+        write_images(outputs, args.exposure, args.tonemap)
     for out in outputs:
         print(f"wrote {shown(out.path)}", file=sys.stderr)
     return 0
@@ -278,7 +299,9 @@ def cmd_convert(args):
     out = Path(args.output)
     if out.suffix.lower() != ".toml":
         raise UserError(f"--output: {out}: pathtrace writes scenes as .toml")
-    write_text(out, scene_toml(load(args.scene), out), "--output")
+    text = scene_toml(load(args.scene), out)
+    with FinalWrite():
+        write_text(out, text, "--output")
     print(f"wrote {out}", file=sys.stderr)
     return 0
 

@@ -419,3 +419,24 @@ def test_farm_patterns_and_addresses_of_odd_text_are_one_line():
         with pytest.raises(UserError, match="give host:port") as e:
             _check_reachable(address)
         assert len(str(e.value)) < 300
+
+
+@pytest.mark.parametrize("signum", ["SIGINT", "SIGTERM"])
+def test_a_signal_after_the_outputs_are_written_does_not_fail_the_command(tmp_path, signum):
+    """The signal arrives just as the last output is complete (sent from inside the commit of
+    the writes): the render is whole, so the exit is 0, not 'interrupted' (130)."""
+    code = f"""
+import os, signal, sys
+import pathtrace.image_io as io
+from pathtrace.console import run
+commit = io.Staged.commit
+def commit_then_signal(self):
+    commit(self)
+    os.kill(os.getpid(), signal.{signum})
+io.Staged.commit = commit_then_signal
+sys.argv = ["pathtrace", "render", "simple", "-o", {str(tmp_path / "o.png")!r}, "--size", "8x6", "--spp", "1", "-q"]
+run()
+"""
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, (r.returncode, r.stderr)
+    assert (tmp_path / "o.png").read_bytes()[:4] == b"\x89PNG"
