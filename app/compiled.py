@@ -11,7 +11,7 @@ import numpy as np
 import pyopencl as cl
 
 from pathtrace.bvh import BVH, build_bvh, primitive_boxes
-from pathtrace.errors import UserError, format_bytes
+from pathtrace.errors import UserError, format_bytes, short
 from pathtrace.features import FLAT_MAX, Features, stack_size
 from pathtrace.lights import LightTable, build_light_table, emitted_power
 from pathtrace.materials import TAGS
@@ -131,13 +131,15 @@ def check_radiance(scene: Scene):
     emission = scene.materials.rows["emission"][:, :3].astype(np.float64)
     env = scene.environment
     brightest_env = float(np.max(env.image)) * float(env.intensity)
+    where = scene.source or scene.name
     if emission.size and not np.max(emission) <= MAX_RADIANCE:
         row = int(np.argmax(np.max(np.nan_to_num(emission, nan=np.inf), axis=1)))
         name = scene.materials.name_of(row) or f"#{row}"
-        raise UserError(f"{scene.name}: material {name}: an emitted radiance of {np.max(emission[row]):.3g} "
+        raise UserError(f"{where}: material {short(name)}: an emitted radiance of {np.max(emission[row]):.3g} "
                         f"is beyond {MAX_RADIANCE:g}, where the sums of samples overflow")
     if not brightest_env <= MAX_RADIANCE:
-        raise UserError(f"{scene.name}: the environment's radiance times its intensity reaches {brightest_env:.3g}, "
+        source = "" if env.source == "constant" else f" (map {short(env.source)})"
+        raise UserError(f"{where}: the environment's radiance times its intensity reaches {brightest_env:.3g}{source}, "
                         f"beyond {MAX_RADIANCE:g}, where the sums of samples overflow")
 
 

@@ -6,6 +6,7 @@ target, which is renamed over it only once complete (and with several outputs, o
 OpenCV and OpenEXR are imported where they are used, so that the core (scenes with constant
 environments, the renderer, the benchmarks) runs with NumPy and PyOpenCL alone."""
 
+import contextlib
 import errno
 import io
 import os
@@ -77,12 +78,30 @@ def _read_with_opencv(path: Path):
     return np.ascontiguousarray(image[..., 2::-1], np.float32)
 
 
+@contextlib.contextmanager
+def _quiet_c_library():
+    """Standard error (file descriptor 2) sent to /dev/null for the duration: OpenEXR's C
+    library prints its own lines about a damaged file (EXR_ERR_BAD_CHUNK_LEADER ...), before the
+    one line pathtrace gives."""
+    import sys
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 2)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
 def _read_exr(path: Path):
     """OpenEXR is given the file's bytes, not its name: its bindings take only names that are
     UTF-8."""
     import OpenEXR
     try:
-        with OpenEXR.File(io.BytesIO(Path(path).read_bytes())) as f:
+        data = Path(path).read_bytes()
+        with _quiet_c_library(), OpenEXR.File(io.BytesIO(data)) as f:
             channels = f.channels()
             if "RGB" in channels:
                 rgb = channels["RGB"].pixels

@@ -180,19 +180,27 @@ def test_a_scene_file_renders_finite_pixels_or_is_refused_in_one_line(tmp_path, 
         before = sorted(p.name for p in folder.iterdir())
         path = folder / "fuzzed.toml"
         path.write_text(toml_text(scene))
-        status, err = render(folder, path)
-        event(f"exit {status}")           # shown by pytest --hypothesis-show-statistics
-        case = f"{path.read_text()}\nexit {status}, standard error:\n{err}"
-        assert status is not None, f"no exit within {CASE_SECONDS} s: " + case
-        assert status in (0, 1), case              # negative: a signal; 2: a usage error
-        lines = err.splitlines()
-        assert all(line.startswith(("device: ", "wrote ", "pathtrace: warning: ", "pathtrace: error: "))
-                   for line in lines), case
-        errors = [line for line in lines if line.startswith("pathtrace: error: ")]
-        left = sorted(set(p.name for p in folder.iterdir()) - set(before))
-        if status == 1:
-            assert len(errors) == 1 and str(path) in errors[0], case
-            assert left == ["fuzzed.toml"], case
-        else:
-            assert not errors and left == ["fuzzed.toml", "out.exr"], case
-            assert np.all(np.isfinite(read_hdr(folder / "out.exr", "test"))), case
+        check_case(folder, path, before, path.read_text())
+
+
+def check_case(folder: Path, path: Path, before: list, shown: str, named: str = None):
+    """Renders scene `path` in `folder` (whose files were `before`, the scene written since) and
+    checks the outcome: exit 0 with an image of finite pixels, or exit 1 with one error line that
+    names the scene (or `named`, the fuzzed file it refers to); nothing else on standard error,
+    and no file left behind. `shown` is what a failure prints of the case."""
+    status, err = render(folder, path)
+    event(f"exit {status}")           # shown by pytest --hypothesis-show-statistics
+    case = f"{shown}\nexit {status}, standard error:\n{err}"
+    assert status is not None, f"no exit within {CASE_SECONDS} s: " + case
+    assert status in (0, 1), case              # negative: a signal; 2: a usage error
+    lines = err.splitlines()
+    assert all(line.startswith(("device: ", "wrote ", "pathtrace: warning: ", "pathtrace: error: "))
+               for line in lines), case
+    errors = [line for line in lines if line.startswith("pathtrace: error: ")]
+    left = sorted(set(p.name for p in folder.iterdir()) - set(before))
+    if status == 1:
+        assert len(errors) == 1 and (str(path) in errors[0] or (named or str(path)) in errors[0]), case
+        assert left == [path.name], case
+    else:
+        assert not errors and left == sorted([path.name, "out.exr"]), case
+        assert np.all(np.isfinite(read_hdr(folder / "out.exr", "test"))), case

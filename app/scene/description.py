@@ -66,6 +66,7 @@ class Scene:
     camera: Camera = field(default_factory=Camera)
     environment: Environment = field(default_factory=lambda: Environment.constant((1, 1, 1)))
     settings: RenderSettings = field(default_factory=RenderSettings)
+    source: str = ""              # the file it was read from (for messages), if any
 
     def with_settings(self, **changes) -> "Scene":
         return replace(self, settings=replace(self.settings, **changes))

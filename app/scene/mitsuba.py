@@ -425,7 +425,7 @@ class _Reader:
         settings.max_depth, settings.russian_roulette = self.max_depth, self.rr
         return self.builder.build(self.path.stem, camera=self.camera or self.default_camera(),
                                   environment=self.environment or Environment.constant((0, 0, 0)),
-                                  settings=settings)
+                                  settings=settings, source=str(self.path))
 
     def default_camera(self):
         """Mitsuba's default sensor: at the origin, looking down +z, fov 45 on x."""

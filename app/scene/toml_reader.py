@@ -338,7 +338,7 @@ class _Reader:
             self.path.stem,
             camera=self.camera(data.get("camera", {"eye": [0, 0, 5], "look_at": [0, 0, 0]})),
             environment=self.environment(data.get("environment", {})),
-            settings=self.settings(data.get("render", {})))
+            settings=self.settings(data.get("render", {})), source=self.label)
 
 
 FLOAT32_MAX = float(np.finfo(np.float32).max)
