@@ -292,3 +292,15 @@ def test_radiance_that_would_overflow_the_sums_is_refused(tmp_path, capsys, body
     assert main(["render", str(path), "-o", str(tmp_path / "x.exr"), "--size", "8x6", "--spp", "1", "-q"]) == 1
     err = capsys.readouterr().err
     assert message in err and err.count("error") == 1 and not (tmp_path / "x.exr").exists()
+
+
+@pytest.mark.parametrize("body", ['<shape type="sphere"><ref id="' + "x" * 200_000 + '"/></shape>',
+                                  '<shape type="sphere"><float name="radius" value="' + "1" * 100_000 + 'x"/></shape>',
+                                  '<shape type="sphere"><ref id="a&#10;b&#27;[2J"/></shape>'])
+def test_values_echoed_in_messages_are_cut_and_escaped(tmp_path, body):
+    """A 200,000-character id made a 400 kB message; a newline or an escape sequence split or
+    garbled the line."""
+    with pytest.raises(UserError) as e:
+        read_mitsuba_file(write(tmp_path, body))
+    message = str(e.value)
+    assert len(message) < 400 and message.isprintable(), message

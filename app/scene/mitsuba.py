@@ -44,7 +44,7 @@ class Node:
     def where(self):
         """file:line: <tag key="value">, by the first of name, type and id it has."""
         key = next((k for k in ("name", "type", "id") if self.attrs.get(k)), None)
-        label = f'<{self.tag} {key}="{self.attrs[key]}">' if key else f"<{self.tag}>"
+        label = f'<{cut(self.tag)} {key}="{cut(self.attrs[key])}">' if key else f"<{cut(self.tag)}>"
         return f"{self.file}:{self.line}: {label}"
 
 
@@ -118,9 +118,9 @@ def _float(node, text, what="value"):
     try:
         value = float(text)
     except (TypeError, ValueError):
-        _fail(node, f"{what} {text!r} is not a number")
+        _fail(node, f"{what} {short(text)} is not a number")
     if not math.isfinite(value) or abs(value) > 3.0e38:
-        _fail(node, f"{what} {text!r} is not a finite float32")
+        _fail(node, f"{what} {short(text)} is not a finite float32")
     return value
 
 
@@ -136,7 +136,7 @@ def _vector(node):
         if len(v) == 1:
             v = v * 3
         if len(v) != 3:
-            _fail(node, f"value must be 1 or 3 numbers, got {node.attrs['value']!r}")
+            _fail(node, f"value must be 1 or 3 numbers, got {short(node.attrs['value'])}")
         return np.array(v)
     return np.array([_float(node, node.attrs.get(k, "0"), k) for k in "xyz"])
 
@@ -156,9 +156,9 @@ def _color(node):
     if len(v) == 1:
         v = v * 3
     if len(v) != 3:
-        _fail(node, f"value must be 1 or 3 numbers, got {text!r}")
+        _fail(node, f"value must be 1 or 3 numbers, got {short(text)}")
     if min(v) < 0:
-        _fail(node, f"a colour must not be negative, got {text!r}")
+        _fail(node, f"a colour must not be negative, got {short(text)}")
     return np.array(v)
 
 
@@ -293,10 +293,10 @@ class _Reader:
             try:
                 return int(text)
             except (TypeError, ValueError):
-                _fail(node, f"{text!r} is not an integer")
+                _fail(node, f"{short(text)} is not an integer")
         if tag == "boolean":
             if text not in ("true", "false"):
-                _fail(node, f"must be true or false, got {text!r}")
+                _fail(node, f"must be true or false, got {short(text)}")
             return text == "true"
         if tag == "string":
             if text is None:
@@ -392,7 +392,7 @@ class _Reader:
     def resolve(self, ref):
         target = self.named.get(ref.attrs.get("id"))
         if target is None:
-            _fail(ref, f"no top-level element has id '{ref.attrs.get('id')}'")
+            _fail(ref, f"no top-level element has id {short(ref.attrs.get('id'))}")
         return target
 
     # -- the scene --
@@ -473,7 +473,7 @@ class _Reader:
                 self.settings.spp = count
         axis = self.get(props, "fov_axis", "x", ("string",))
         if axis not in ("x", "y", "diagonal", "smaller", "larger"):
-            _fail(props["fov_axis"], f"must be x, y, diagonal, smaller or larger, got {axis!r}")
+            _fail(props["fov_axis"], f"must be x, y, diagonal, smaller or larger, got {short(axis)}")
         if "fov" in props:
             fov = self.get(props, "fov", kinds=("float",))
         else:
