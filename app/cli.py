@@ -31,17 +31,27 @@ class FinalWrite:
     signal arriving then cannot turn a finished command into an 'interrupted' exit (130). A
     write that fails leaves the signals as they were."""
 
-    SIGNALS = {signal.SIGINT, signal.SIGTERM}
+    SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
     def __enter__(self):
-        signal.pthread_sigmask(signal.SIG_BLOCK, self.SIGNALS)
+        # Python's handlers, which run in the main thread whichever thread the signal reached
+        # (masking the signal would hold it in this thread only, not in the OpenCL driver's)
+        self.received = None
+        self.saved = {s: signal.signal(s, self._defer) for s in self.SIGNALS}
         return self
 
+    def _defer(self, signum, frame):
+        self.received = signum
+
     def __exit__(self, kind, *exc):
-        if kind is None:                 # complete: a pending signal is discarded
+        if kind is None:                 # complete: a signal now changes nothing
             for s in self.SIGNALS:
                 signal.signal(s, signal.SIG_IGN)
-        signal.pthread_sigmask(signal.SIG_UNBLOCK, self.SIGNALS)
+            return
+        for s, handler in self.saved.items():
+            signal.signal(s, handler)
+        if self.received is not None and kind is not KeyboardInterrupt:
+            raise KeyboardInterrupt
 
 
 class BuildProgress:
