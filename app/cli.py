@@ -29,7 +29,7 @@ class FinalWrite:
     """Around the writing of a command's outputs (all or none, app/image_io.py): Ctrl-C and
     SIGTERM wait until it ends, and once the outputs are complete they are ignored, so that a
     signal arriving then cannot turn a finished command into an 'interrupted' exit (130). A
-    write that fails leaves the signals as they were."""
+    write that fails restores the handlers, and a signal received meanwhile then interrupts."""
 
     SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
