@@ -243,15 +243,14 @@ class Renderer:
         local = (8, 8)
         global_size = tuple(-(-n // l) * l for n, l in zip((self.width, end - first), local))
         kernel = self.kernels[self.settings.nee]
-        events = []
-        for offset in range(0, count, MAX_LAUNCH_SAMPLES):      # (kernels/integrator.cl)
-            params = self.params(min(MAX_LAUNCH_SAMPLES, count - offset))
-            params["row_start"], params["row_end"] = first, end
-            params["sample_start"] = start + offset
-            kernel.set_args(*self._scene_args(), params, *(b[name] for name in SUM_BUFFERS))
-            events.append(cl.enqueue_nd_range_kernel(self.backend.queue, kernel, global_size, local))
         params = self.params(count)
         params["row_start"], params["row_end"], params["sample_start"] = first, end, start
+        events = []
+        for offset in range(0, count, MAX_LAUNCH_SAMPLES):      # (kernels/integrator.cl)
+            launch = params.copy()
+            launch["sample_start"], launch["sample_count"] = start + offset, min(MAX_LAUNCH_SAMPLES, count - offset)
+            kernel.set_args(*self._scene_args(), launch, *(b[name] for name in SUM_BUFFERS))
+            events.append(cl.enqueue_nd_range_kernel(self.backend.queue, kernel, global_size, local))
         if self.aovs and self.samples < AOV_PASSES:
             self.aov_kernel.set_args(*self._scene_args(), params, b["albedo_sum"], b["normal_sum"])
             events.append(cl.enqueue_nd_range_kernel(self.backend.queue, self.aov_kernel, global_size, local))

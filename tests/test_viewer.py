@@ -248,7 +248,8 @@ def test_opening_a_scene_says_what_it_is_busy_with(viewer, monkeypatch):
     assert titles[-2].startswith("pathtrace - compiling the kernels for spheres8k on ")
     assert titles[-1] == "pathtrace - spheres8k" and viewer.renderer.scene.name == "spheres8k"
     assert notices[0] == ("building the BVH of spheres8k", notices[0][1]) and notices[-1][0].startswith("compiling")
-    viewer.texture.release()
+    if viewer.texture is not None:
+        viewer.texture.release()
     viewer.texture = None                 # as when a window opens: no image yet
     viewer.redraw_soon()
     frames(viewer, 1)
@@ -645,4 +646,21 @@ def test_camera_moves_do_not_grow_the_process(display, backend, tmp_path):
         assert turns > 200
         assert rss_mb() - before < 40, (before, rss_mb())
     finally:
+        v.close()
+
+
+def test_the_title_names_the_scene_after_it_opens(display, backend, tmp_path):
+    """The compile notices borrow the title while they run; the window's title then names its
+    scene again (it kept 'compiling the kernels ...' for the whole session)."""
+    from pathtrace.viewer.window import Viewer
+    titles = []
+    v = Viewer(backend, load_scene("simple").with_settings(width=64, height=36), tmp_path, window_size=(320, 180))
+    try:
+        set_title = v.glfw.set_window_title
+        v.glfw.set_window_title = lambda w, t: (titles.append(t), set_title(w, t))
+        v.load_scene("cornell-box")
+        v.load_scene("no-such-scene")
+        assert titles[-1] == "pathtrace - cornell-box"
+    finally:
+        v.glfw.set_window_title = set_title
         v.close()

@@ -20,6 +20,7 @@ import pyopencl as cl
 from pathtrace.display import Display
 from pathtrace.errors import UserError
 from pathtrace.launches import Progressive
+from pathtrace.compiled import compile_scene
 from pathtrace.renderer import Renderer, aov_means, per_pixel_mean
 from pathtrace.resources import resource_dir
 from pathtrace.scene import load_scene
@@ -304,13 +305,18 @@ class Viewer:
 
     def _open(self, scene, renderer=None) -> Renderer:
         """The scene compiled (saying so while its BVH builds, if that takes a while) and given
-        to `renderer` (or a new one), saying so while the kernels compile."""
-        from pathtrace.compiled import compile_scene
-        compiled = compile_scene(scene, self.backend.queue, self._build_progress(scene.name))
-        self.show_progress(f"compiling the kernels for {scene.name} on {self.backend.device.name}")
-        if renderer is None:
-            return Renderer(self.backend, compiled)
-        renderer.set_scene(compiled)
+        to `renderer` (or a new one), saying so while the kernels compile; the title then names
+        the scene the window shows (the one it had, if this fails)."""
+        try:
+            compiled = compile_scene(scene, self.backend.queue, self._build_progress(scene.name))
+            self.show_progress(f"compiling the kernels for {scene.name} on {self.backend.device.name}")
+            if renderer is None:
+                renderer = Renderer(self.backend, compiled)
+            else:
+                renderer.set_scene(compiled)
+        finally:
+            shown = scene if renderer is None else renderer.scene
+            self.glfw.set_window_title(self.window, f"pathtrace - {shown.name}")
         return renderer
 
     def load_scene(self, name: str):
@@ -327,7 +333,6 @@ class Viewer:
             return
         self.size = (scene.settings.width, scene.settings.height)
         self.selected = None
-        self.glfw.set_window_title(self.window, f"pathtrace - {scene.name}")
         self.set_message(f"loaded {scene.name}")
 
     def _build_progress(self, name: str):
