@@ -24,9 +24,14 @@ def cut(text: str, limit: int = 60) -> str:
     """Text the user gave, for a message: characters that do not print (NUL, escape sequences)
     shown as escapes, and cut to `limit` characters, so that a huge or binary value cannot flood
     or garble the terminal."""
-    if not text.isprintable():
-        text = "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+    text = escape(text)
     return text if len(text) <= limit else text[:limit - 3] + "..."
+
+
+def escape(text: str) -> str:
+    """Characters that do not print (a newline, NUL, an escape sequence) as Python escapes, so
+    that a message stays one line and cannot drive the terminal."""
+    return text if text.isprintable() else "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
 
 
 def short(value) -> str:

@@ -5,12 +5,13 @@ import os
 import stat
 from pathlib import Path
 
-from pathtrace.errors import UserError, cut
+from pathtrace.errors import UserError, cut, escape
 
 
 def shown(path) -> str:
-    """A path for a message: bytes that are not UTF-8 shown as escapes."""
-    return str(path).encode("utf-8", "backslashreplace").decode("utf-8")
+    """A path for a message, on one line: bytes that are not UTF-8 and characters that do not
+    print (a newline, an escape sequence) shown as escapes."""
+    return escape(str(path).encode("utf-8", "backslashreplace").decode("utf-8"))
 
 
 def check_regular_file(path: Path, where: str, what: str, max_bytes: int):

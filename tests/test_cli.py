@@ -440,3 +440,8 @@ run()
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert r.returncode == 0, (r.returncode, r.stderr)
     assert (tmp_path / "o.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_a_name_with_a_newline_is_shown_on_one_line(tmp_path):
+    r = pathtrace("render", "simple", "-o", tmp_path / "a\nb.png", "--size", "8x6", "--spp", "1", "-q")
+    assert r.returncode == 0 and r.stderr.splitlines()[-1] == f"wrote {tmp_path}/a\\nb.png"
