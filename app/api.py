@@ -131,7 +131,8 @@ class _Prepared:
         """Brings the devices up to date with the scene and restarts the image."""
         compiled = self.group.compiled
         environment = _environment_key(scene.environment)
-        materials_changed = not np.array_equal(scene.materials.rows, compiled.materials)
+        rows, textures = compiled.material_source
+        materials_changed = not np.array_equal(scene.materials.rows, rows) or scene.materials.textures != textures
         for r in self.group.renderers:
             if environment != self.environment:
                 r.set_environment(scene.environment)
@@ -163,7 +164,7 @@ def _geometry_digest(scene: Scene) -> bytes:
     arrays = [scene.spheres, scene.sphere_material]
     for m in scene.meshes:
         arrays += [m.vertices, m.faces, np.zeros(0) if m.normals is None else m.normals,
-                   np.array([m.material])]
+                   np.zeros(0) if m.uvs is None else m.uvs, np.array([m.material])]
     for a in arrays:
         a = np.ascontiguousarray(a)
         h.update(str((a.dtype.str, a.shape)).encode())

@@ -27,7 +27,8 @@ from pathtrace.renderer import Renderer
 from pathtrace.scene import load_scene
 
 TARGET_SCENES = ("simple", "spheres8k", "spheres64k",
-                 "simple-diffuse", "spheres8k-diffuse", "spheres64k-diffuse", "teapot-sky")
+                 "simple-diffuse", "spheres8k-diffuse", "spheres64k-diffuse", "teapot-sky",
+                 "teapot-textured")
 COMPARISON_DEPTH = 8
 ESTIMATORS = ("rr", "depth8", "rr+nee", "depth8+nee")
 

@@ -1,7 +1,8 @@
 """The compiled scene: a scene description turned into the flat, device-independent form the
 kernels read (as pbrt-v4 and Mitsuba 3 do): primitives in BVH order, the BVH, the material
 table, the light table and the environment's sampling tables. A Renderer per device only
-uploads it. Primitives have one index space (kernels/types.h); prim_shape maps each back to the
+uploads it. A scene's textures compile into their own tables (app/textures/table.py).
+Primitives have one index space (kernels/types.h); prim_shape maps each back to the
 shape of the description it came from, so that users only ever see the description's shapes."""
 
 import time
@@ -17,6 +18,7 @@ from pathtrace.lights import LightTable, build_light_table, emitted_power
 from pathtrace.materials import TAGS
 from pathtrace.memory import available_host_memory
 from pathtrace.scene.description import Scene
+from pathtrace.textures import TextureTables, compile_textures
 from pathtrace.types import BVH_NODE, TRIANGLE
 
 
@@ -28,6 +30,10 @@ class ShapeRef:
     name: str
     material: int      # row of scene.materials
 
+
+# The scene's buffers in the order of the kernels' SCENE_KERNEL_ARGS (kernels/scene.cl)
+SCENE_BUFFERS = ("nodes", "spheres", "triangles", "normals", "uvs", "prim_material", "materials", "bindings",
+                 "textures", "texels", "env", "lights", "light_pick", "env_marginal", "env_conditional")
 
 # The BVH build's peak host memory per primitive, measured (docs/performance.md)
 BUILD_HOST_BYTES = 320
@@ -45,7 +51,8 @@ class CompiledScene:
         n_spheres = len(scene.spheres)
         meshes = scene.meshes
         n_triangles = sum(len(m.faces) for m in meshes)
-        check_memory(scene.name, n_spheres, n_triangles, queue.device if queue else None)
+        check_memory(scene.name, n_spheres, n_triangles, queue.device if queue else None,
+                     scene.materials.texel_bytes())
         start = time.perf_counter()
         corners = np.concatenate([m.vertices[m.faces] for m in meshes]) if meshes \
             else np.zeros((0, 3, 3), np.float32)
@@ -59,29 +66,19 @@ class CompiledScene:
         self.num_spheres = n_spheres
         self.spheres = np.ascontiguousarray(scene.spheres[sphere_order], np.float32)
 
-        # per triangle (input order): its mesh and its corners' shading normals, if any
         counts = [len(m.faces) for m in meshes]
         mesh_of = np.repeat(np.arange(len(meshes)), counts).astype(np.int64)
-        corner_normals = np.zeros((len(corners), 3, 3), np.float32)
-        has_normals = np.zeros(len(corners), bool)
-        first = 0
-        for m, n in zip(meshes, counts):
-            if m.normals is not None:
-                corner_normals[first:first + n] = m.normals[m.faces]
-                has_normals[first:first + n] = True
-            first += n
-
         self.triangles = np.zeros(len(triangle_order), TRIANGLE)
         for k, field in enumerate(("v0", "v1", "v2")):
             self.triangles[field][:, :3] = corners[triangle_order, k]
-        # shading normals per corner, in BVH order; a flat triangle's index is -1
-        with_normals = has_normals[triangle_order]
-        table = corner_normals[triangle_order[with_normals]].reshape(-1, 3)
-        self.normals = np.zeros((max(len(table), 1), 4), np.float32)
-        self.normals[:len(table), :3] = table
-        normal_index = np.full(len(triangle_order), -1, np.int32)
-        normal_index[with_normals] = np.arange(np.count_nonzero(with_normals), dtype=np.int32) * 3
+        # per-corner shading normals and texture coordinates, in BVH order, for the triangles of
+        # meshes that have them; the others' index is -1
+        normals, normal_index = corner_table(meshes, "normals", triangle_order)
+        self.normals = np.zeros((len(normals), 4), np.float32)
+        self.normals[:, :3] = normals
         self.triangles["v0"][:, 3] = normal_index.view(np.float32)
+        self.uvs, uv_index = corner_table(meshes, "uvs", triangle_order)
+        self.triangles["v1"][:, 3] = uv_index.view(np.float32)
 
         # one index space: spheres, then triangles, each in BVH order
         mesh_material = np.array([m.material for m in meshes], np.int32)
@@ -95,9 +92,16 @@ class CompiledScene:
         return len(self.triangles)
 
     def update_materials(self):
-        """Re-reads the material table and rebuilds the light table (after a material edit or an
-        environment change)."""
-        self.materials = self.scene.materials.rows.copy()
+        """Re-reads the material table, its textures and the light table (after a material edit
+        or an environment change)."""
+        table = self.scene.materials
+        self.material_source = (table.rows.copy(), [list(t) for t in table.textures])
+        try:
+            self.textures: TextureTables = compile_textures([[t[1:] for t in entries] for entries in table.textures])
+        except ValueError as e:
+            raise UserError(f"{self.scene.source or self.scene.name}: {e}") from None
+        self.materials = table.rows.copy()
+        self.materials["textures"] = self.textures.first
         emission = self.materials["emission"][:, :3].astype(np.float64)
         check_radiance(self.scene)
         prim_emission = emission[self.prim_material]
@@ -106,12 +110,23 @@ class CompiledScene:
                               prim_emission[self.num_spheres:])
         self.lights: LightTable = build_light_table(power, self.scene.environment)
 
+    def geometry_arrays(self) -> dict:
+        """The buffers of the shapes, by their names in SCENE_BUFFERS."""
+        return {"nodes": self.bvh.nodes, "spheres": self.spheres, "triangles": self.triangles,
+                "normals": self.normals, "uvs": self.uvs, "prim_material": self.prim_material}
+
+    def material_arrays(self) -> dict:
+        """The buffers of the materials, their textures and the light table."""
+        return {"materials": self.materials, "bindings": self.textures.bindings, "textures": self.textures.textures,
+                "texels": self.textures.texels, "lights": self.lights.lights, "light_pick": self.lights.pick}
+
     def features(self, russian_roulette: str) -> Features:
         """What the kernels need for this scene: triangles or not, the material types its
         primitives use, and the Russian roulette rule of its settings."""
         used = np.unique(self.materials["type"][np.unique(self.prim_material)])
         return Features(triangles=self.num_triangles > 0,
                         bsdfs=tuple(name for name, tag in TAGS.items() if tag in used),
+                        textures=self.textures.types,
                         russian_roulette=russian_roulette, stack=stack_size(self.bvh.depth),
                         flat=(self.num_spheres, self.num_triangles)
                         if self.num_spheres + self.num_triangles <= FLAT_MAX else ())
@@ -124,6 +139,27 @@ class CompiledScene:
                             int(self.scene.sphere_material[shape]))
         mesh = self.scene.meshes[shape - self.num_spheres]
         return ShapeRef("mesh", shape - self.num_spheres, mesh.name, mesh.material)
+
+
+def corner_table(meshes: list, attribute: str, triangle_order: np.ndarray) -> tuple:
+    """The per-vertex `attribute` ("normals" or "uvs") of the meshes that have it, gathered per
+    triangle corner in BVH order (at least one row, as buffers cannot be empty), and each
+    triangle's index of its first corner there, or -1 for a triangle of a mesh without it."""
+    width = 3 if attribute == "normals" else 2
+    parts, has = [], []
+    for m in meshes:
+        values = getattr(m, attribute)
+        parts.append(values[m.faces] if values is not None else None)
+        has.append(np.full(len(m.faces), values is not None))
+    if not any(p is not None for p in parts):
+        return np.zeros((1, width), np.float32), np.full(len(triangle_order), -1, np.int32)
+    per_triangle = np.concatenate([p if p is not None else np.zeros((len(m.faces), 3, width), np.float32)
+                                   for p, m in zip(parts, meshes)])
+    with_it = np.concatenate(has)[triangle_order]
+    table = per_triangle[triangle_order[with_it]].reshape(-1, width).astype(np.float32)
+    index = np.full(len(triangle_order), -1, np.int32)
+    index[with_it] = np.arange(np.count_nonzero(with_it), dtype=np.int32) * 3
+    return (table if len(table) else np.zeros((1, width), np.float32)), index
 
 
 def check_radiance(scene: Scene):
@@ -147,17 +183,18 @@ def compile_scene(scene: Scene, queue: cl.CommandQueue = None, progress=None) ->
     return CompiledScene(scene, queue, progress)
 
 
-def check_memory(name: str, n_spheres: int, n_triangles: int, device: cl.Device = None):
+def check_memory(name: str, n_spheres: int, n_triangles: int, device: cl.Device = None, texel_bytes: int = 0):
     """Refuses, with one line and before anything is allocated, a scene whose BVH build would not
     fit in the host's available memory, or whose buffers would not fit on `device`."""
     from pathtrace.device import check_fits
 
     n = n_spheres + n_triangles
     available = available_host_memory()
-    if available is not None and n * BUILD_HOST_BYTES > available:
+    if available is not None and n * BUILD_HOST_BYTES + texel_bytes > available:
         raise UserError(f"{name}: building the BVH of {n} primitives needs about "
                         f"{format_bytes(n * BUILD_HOST_BYTES)} of memory; {format_bytes(available)} is available")
     if device is not None:   # the largest each buffer can be (Renderer.set_scene uploads them)
         check_fits(device, {"BVH": BVH_NODE.itemsize * max(2 * n // 3, 1), "spheres": 16 * n_spheres,
                             "triangles": TRIANGLE.itemsize * n_triangles,
-                            "shading normals": 3 * 16 * n_triangles, "materials": 4 * n}, name)
+                            "shading normals": 3 * 16 * n_triangles, "texture coordinates": 3 * 8 * n_triangles,
+                            "materials": 4 * n, "textures": texel_bytes}, name)

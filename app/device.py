@@ -15,11 +15,12 @@ from pathtrace.errors import UserError, format_bytes, short
 from pathtrace.features import Features
 from pathtrace.resources import resource_dir
 
-# The order in which the kernel files are joined into one program; the BSDFs of the material
-# registry and their generated dispatch follow bsdf.cl.
+# The order in which the kernel files are joined into one program: the core files, the texture
+# kernels of the types a scene uses (app/textures/registry.py: kernel_parts), the BSDFs of the
+# material registry and their generated dispatch, the rest.
 CORE_FILES = ("types.h", "vector.cl", "rng.cl", "sampling.cl", "scene.cl", "spawn.cl", "shapes/sphere.cl",
-              "shapes/triangle.cl", "bvh.cl", "bsdf.cl", "fresnel.cl", "microfacet.cl",
-              "coating.cl")
+              "shapes/triangle.cl", "bvh.cl")
+BSDF_FILES = ("bsdf.cl", "fresnel.cl", "microfacet.cl", "coating.cl")
 LATER_FILES = ("environment.cl", "lights.cl", "camera.cl", "integrator.cl", "aovs.cl", "display.cl")
 
 # No -cl-fast-relaxed-math: it implies finite math, and the kernels rely on INFINITY.
@@ -30,10 +31,13 @@ def kernel_source(extra: str = "", features: Features = Features()) -> str:
     """The kernels as one source text, each file introduced by a #line marker so that compiler
     messages name the file and line."""
     from pathtrace.materials import dispatch_source, kernel_files
+    from pathtrace.textures import kernel_parts
 
     folder = resource_dir("kernels")
-    texts = [(name, (folder / name).read_text())
-             for name in (*CORE_FILES, *kernel_files(features.bsdfs))]
+    texts = [(name, (folder / name).read_text()) for name in CORE_FILES]
+    texts += [(name, text if text is not None else (folder / name).read_text())
+              for name, text in kernel_parts(features.textures)]
+    texts += [(name, (folder / name).read_text()) for name in (*BSDF_FILES, *kernel_files(features.bsdfs))]
     texts.append(("app/materials/registry.py: dispatch_source", dispatch_source(features.bsdfs)))
     texts += [(name, (folder / name).read_text()) for name in LATER_FILES]
     if extra:

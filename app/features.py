@@ -9,17 +9,19 @@ class Features:
     """What a scene and its settings need of the kernels. Each scene's program is specialised
     to it and leaves out the code of the shapes, materials and Russian roulette rule it does
     not use: on a GPU every branch a kernel could take costs registers, hence occupancy, in
-    every thread (docs/performance.md). The default, every shape and material, is the program
-    the tests build their kernels beside."""
+    every thread (docs/performance.md). The default, every shape and material and no textures,
+    is the program the tests build their kernels beside."""
     triangles: bool = True
     bsdfs: tuple = None                    # names of pathtrace.materials.BSDFS; None: all of them
+    textures: tuple = ()                   # names of pathtrace.textures.TEXTURES the scene uses;
+                                           # () leaves all texture code out
     russian_roulette: str = "throughput"   # one of pathtrace.scene.description.RUSSIAN_ROULETTE
     stack: int = 48                        # BVH traversal stack entries the tree can need
     flat: tuple = ()                       # (spheres, triangles) of a scene of at most FLAT_MAX
                                            # primitives, which rays test all, with no tree
 
     def defines(self) -> tuple:
-        return ((() if self.triangles else ("NO_TRIANGLES",))
+        return ((() if self.triangles else ("NO_TRIANGLES",)) + (("TEXTURES",) if self.textures else ())
                 + (f"RUSSIAN_ROULETTE=RR_{self.russian_roulette.upper()}", f"BVH_STACK_SIZE={self.stack}")
                 + ((f"FLAT_SPHERES={self.flat[0]}", f"FLAT_TRIANGLES={self.flat[1]}") if self.flat else ()))
 

@@ -28,17 +28,24 @@ LDR_FORMATS = (".png", ".jpg", ".jpeg")
 MAX_MAP_PIXELS = 1 << 26       # 8192 x 8192: a map's float32 RGB is then 768 MB
 
 
-def read_hdr(path: Path, where: str) -> np.ndarray:
-    """A Radiance .hdr, OpenEXR or PFM image as linear float32 RGB, (H, W, 3)."""
+def read_hdr(path: Path, where: str, what: str = "environment map", max_side: int = None) -> np.ndarray:
+    """A Radiance .hdr, OpenEXR or PFM image as linear float32 RGB, (H, W, 3); `what` it is
+    and the most pixels it may have on a side name it in messages."""
     path = Path(path)
-    check_regular_file(path, where, "environment map", 4 << 30)
+    check_regular_file(path, where, what, 4 << 30)
     size = _header_size(path)
     if size is not None and size[0] * size[1] > MAX_MAP_PIXELS:
         raise UserError(f"{where}: '{shown(path)}' claims {size[0]}x{size[1]} pixels, more than "
                         f"pathtrace takes ({MAX_MAP_PIXELS} pixels)")
+    if size is not None and max_side is not None and max(size) > max_side:
+        raise UserError(f"{where}: {what} '{shown(path)}' is {size[0]}x{size[1]} pixels; pathtrace takes "
+                        f"at most {max_side} on a side")
     rgb = _read_exr(path) if path.suffix.lower() == ".exr" else _read_with_opencv(path)
     if rgb is None:
         raise UserError(f"{where}: '{shown(path)}' is not a readable HDR image (.hdr, .exr or .pfm)")
+    if max_side is not None and max(rgb.shape[:2]) > max_side:
+        raise UserError(f"{where}: {what} '{shown(path)}' is {rgb.shape[1]}x{rgb.shape[0]} pixels; "
+                        f"pathtrace takes at most {max_side} on a side")
     if not np.all(np.isfinite(rgb)) or rgb.min() < 0:
         raise UserError(f"{where}: '{shown(path)}' holds negative, NaN or infinite pixels")
     return rgb

@@ -8,7 +8,7 @@ import numpy as np
 import pyopencl as cl
 
 from pathtrace.camera import Camera
-from pathtrace.compiled import CompiledScene, compile_scene
+from pathtrace.compiled import SCENE_BUFFERS, CompiledScene, compile_scene
 from pathtrace.device import Backend, check_fits
 from pathtrace.errors import UserError, format_bytes
 from pathtrace.environment import Environment
@@ -85,12 +85,8 @@ class Renderer:
         self.camera = self.scene.camera.copy()
         self.settings = self.scene.settings
         self._select_program()
-        c = self.compiled
-        self._upload("nodes", c.bvh.nodes)
-        self._upload("spheres", c.spheres)
-        self._upload("triangles", c.triangles)
-        self._upload("normals", c.normals)
-        self._upload("prim_material", c.prim_material)
+        for name, array in self.compiled.geometry_arrays().items():
+            self._upload(name, array)
         self._upload_environment()
         self._upload_materials()
         self.reset()
@@ -136,9 +132,8 @@ class Renderer:
         self._upload("env_conditional", conditional)
 
     def _upload_materials(self):
-        self._upload("materials", self.compiled.materials)
-        self._upload("lights", self.lights.lights)
-        self._upload("light_pick", self.lights.pick)
+        for name, array in self.compiled.material_arrays().items():
+            self._upload(name, array)
 
     def pick(self, origin, direction):
         """The shape seen along a ray (a ShapeRef), or None."""
@@ -152,10 +147,7 @@ class Renderer:
         return self.compiled.shape(int(prim[0])) if prim[0] >= 0 else None
 
     def _scene_args(self):
-        b = self._buffers
-        return (b["nodes"], b["spheres"], b["triangles"], b["normals"], b["prim_material"],
-                b["materials"], b["env"], b["lights"], b["light_pick"], b["env_marginal"],
-                b["env_conditional"])
+        return tuple(self._buffers[name] for name in SCENE_BUFFERS)
 
     def set_camera(self, camera: Camera):
         self.camera = camera.copy()

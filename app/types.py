@@ -7,7 +7,7 @@ SPHERE = np.dtype((np.float32, 4))  # centre xyz, radius w
 
 TRIANGLE = np.dtype([
     ("v0", np.float32, 4),          # w: first shading normal's index (int bits), or -1
-    ("v1", np.float32, 4),
+    ("v1", np.float32, 4),          # w: first texture coordinate's index (int bits), or -1
     ("v2", np.float32, 4),
 ])
 
@@ -19,8 +19,31 @@ MATERIAL = np.dtype([
     ("type", np.int32),             # BSDF tag (app/materials/registry.py)
     ("flags", np.int32),            # MATERIAL_* bits
     ("continuation", np.float32),   # the report's Russian roulette: probability of going on
-    ("pad0", np.int32),
+    ("textures", np.int32),         # first row of its TEXTURE_BINDINGs, or -1
     ("table", np.float32, 16),      # a function of cos(theta) a BSDF tabulates on the host
+])
+
+TEXTURE_BINDING = np.dtype([
+    ("texture", np.int32),          # row of the texture table
+    ("slot", np.int32),             # the first of the material's floats it gives (p0.x: 0)
+    ("width", np.int32),            # 3: a colour; 1: a number
+    ("last", np.int32),             # 1 on a material's last binding
+])
+
+TEXTURE = np.dtype([
+    ("to_u", np.float32, 4),        # the uv transform's rows
+    ("to_v", np.float32, 4),
+    ("value", np.float32, (3, 4)),  # constant inputs
+    ("input", np.int32, 3),         # texture inputs (rows of the table), or -1: value[k]
+    ("type", np.int32),             # TEXTURE_* tag (app/textures/registry.py)
+    ("width", np.int32),
+    ("height", np.int32),
+    ("texels", np.uint32),          # first texel, in 4-byte words of the texel buffer
+    ("format", np.int32),
+    ("channels", np.int32),
+    ("wrap", np.int32),
+    ("filter", np.int32),
+    ("pad", np.int32),
 ])
 
 BVH_NODE = np.dtype([(name, np.float32, 4) for name in ("lo_x", "lo_y", "lo_z", "hi_x", "hi_y", "hi_z")]

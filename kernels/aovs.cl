@@ -24,7 +24,7 @@
 
 /* The mean weight of ALBEDO_SAMPLES samples of m's BSDF seen from wo; `first` is one already
  * drawn. */
-float3 estimate_albedo(const global Material *m, float3 wo, const BSDFSample *first, Rng *rng)
+float3 estimate_albedo(MaterialRef m, float3 wo, const BSDFSample *first, Rng *rng)
 {
     float3 sum = first->weight;
     for (int i = 1; i < ALBEDO_SAMPLES; ++i) {
@@ -50,7 +50,7 @@ void trace_aovs(const SceneData *sc, const RenderParams *p, float3 o, float3 d, 
             return;
         }
         Surface s = surface_at(sc, &hit, o, d);
-        const global Material *m = &sc->materials[sc->prim_material[hit.prim]];
+        MATERIAL_AT(m, sc, s);
         int front = dot(s.ng, d) < 0.0f;
         if (!front && (m->flags & MATERIAL_TWOSIDED)) {
             s.ng = -s.ng;

@@ -17,6 +17,25 @@
  * faces round); transmissive ones (MATERIAL_TRANSMISSIVE) see wo on either side of their
  * front's frame and tell inside from outside by the sign of wo.z. */
 
+/* The material a BSDF reads: the scene's row itself, or, in a program for a scene with textures,
+ * the row with its textured parameters looked up at the hit (kernels/shading.cl), a copy in
+ * private memory. */
+#ifdef TEXTURES
+typedef const Material *MaterialRef;
+#else
+typedef const global Material *MaterialRef;
+#endif
+
+/* Declares `m`, the MaterialRef of surface s's material (a Surface, kernels/bvh.cl). */
+#ifdef TEXTURES
+#define MATERIAL_AT(m, sc, s)                                                                     \
+    Material m##_shaded = shade_material(sc, &(sc)->materials[(sc)->prim_material[(s).prim]],    \
+                                         (s).uv);                                                \
+    MaterialRef m = &m##_shaded
+#else
+#define MATERIAL_AT(m, sc, s) MaterialRef m = &(sc)->materials[(sc)->prim_material[(s).prim]]
+#endif
+
 #define MATERIAL_TWOSIDED 1      /* the same BSDF on both sides (front-side frame mirrored) */
 #define MATERIAL_DELTA 2         /* every lobe is a delta: no light sampling here */
 #define MATERIAL_TRANSMISSIVE 4  /* an interface seen from both sides */

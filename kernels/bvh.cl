@@ -181,6 +181,7 @@ typedef struct {
     float3 ns;       /* unit shading normal, in ng's hemisphere */
     float offset;    /* how far rays leaving p start from it along ng (kernels/spawn.cl) */
     int prim;        /* the primitive hit */
+    float2 uv;       /* texture coordinates (in a program for a scene with textures) */
 } Surface;
 
 Surface surface_at(const SceneData *sc, const Hit *hit, float3 o, float3 d)
@@ -190,14 +191,20 @@ Surface surface_at(const SceneData *sc, const Hit *hit, float3 o, float3 d)
     s.prim = hit->prim;
 #ifndef NO_TRIANGLES
     if (hit->prim >= sc->num_spheres) {
-        triangle_surface(&sc->triangles[hit->prim - sc->num_spheres], sc->normals, hit->b1,
-                         hit->b2, &s.p, &error, &s.ng, &s.ns);
+        const global Triangle *tri = &sc->triangles[hit->prim - sc->num_spheres];
+        triangle_surface(tri, sc->normals, hit->b1, hit->b2, &s.p, &error, &s.ng, &s.ns);
         s.offset = error_offset(s.ng, error);
+#ifdef TEXTURES
+        s.uv = triangle_uv(tri, sc->uvs, hit->b1, hit->b2);
+#endif
         return s;
     }
 #endif
     sphere_surface(sc->spheres[hit->prim], o, d, hit->t, &s.p, &error, &s.ng);
     s.ns = s.ng;
     s.offset = error_offset(s.ng, error);
+#ifdef TEXTURES
+    s.uv = sphere_uv(sc->spheres[hit->prim], s.p);
+#endif
     return s;
 }

@@ -15,7 +15,7 @@
 /* The base's albedo after its bounces under the coating:
  *     rho / (1 - F_int)          (linear: the colour stays the one given)
  *     rho / (1 - rho F_int)      (nonlinear: it deepens with each bounce) */
-float3 coated_base_albedo(const global Material *m)
+float3 coated_base_albedo(MaterialRef m)
 {
     float3 rho = m->p0.xyz;
     return m->p2.y != 0.0f ? rho / (1.0f - rho * m->p1.w) : rho / (1.0f - m->p1.w);
@@ -23,7 +23,7 @@ float3 coated_base_albedo(const global Material *m)
 
 /* The probability of sampling the coating's reflection, given the share r of the light at wo
  * that the coating reflects. */
-float coating_choice(const global Material *m, float r)
+float coating_choice(MaterialRef m, float r)
 {
     float s = r * m->p2.x, d = (1.0f - r) * (1.0f - m->p2.x);
     return s + d > 0.0f ? s / (s + d) : 0.0f;
@@ -31,7 +31,7 @@ float coating_choice(const global Material *m, float r)
 
 /* A function of cos(theta) tabulated in Material.table at cos = (k / 15)^2, interpolated
  * linearly in sqrt(cos) (the table is dense at grazing angles). */
-float lookup_cos_table(const global Material *m, float cos_theta)
+float lookup_cos_table(MaterialRef m, float cos_theta)
 {
     float x = sqrt(clamp(cos_theta, 0.0f, 1.0f)) * 15.0f;
     int i = min((int)x, 14);

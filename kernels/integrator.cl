@@ -26,7 +26,7 @@
  * shading normal): its contribution f cos Le / pdf, weighted against BSDF sampling, whose
  * density of continuing is `go_on` times the BSDF's pdf. Everything but visibility is computed
  * before the shadow ray, so that only the contribution stays live while it is traced. */
-float3 sample_direct_light(const SceneData *sc, const RenderParams *p, const global Material *m,
+float3 sample_direct_light(const SceneData *sc, const RenderParams *p, MaterialRef m,
                            const Surface *s, float3 wo, float go_on, uint4 r, int *rays)
 {
     LightSample ls = sample_light(sc, p, s->p, s->ns, r);
@@ -37,8 +37,7 @@ float3 sample_direct_light(const SceneData *sc, const RenderParams *p, const glo
     float3 f = eval_bsdf(m, wo, wi);
     if (all(f == 0.0f))
         return (float3)(0.0f);
-    float3 le = ls.prim < 0 ? lookup_environment(sc->env, p, ls.wi)
-                            : sc->materials[sc->prim_material[ls.prim]].emission.xyz;
+    float3 le = light_radiance(sc, p, &ls);
     float w = mis_weight(ls.pdf, go_on * pdf_bsdf(m, wo, wi));
     float3 contribution = f * fabs(wi.z) * le * (w / ls.pdf);
     /* The light is seen if a shadow ray from the offset origin towards the point on it meets
@@ -83,7 +82,7 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
             return radiance + throughput * lookup_environment(sc->env, p, d) * w;
         }
         Surface s = surface_at(sc, &hit, o, d);
-        const global Material *m = &sc->materials[sc->prim_material[hit.prim]];
+        MATERIAL_AT(m, sc, s);
         int front = dot(s.ng, d) < 0.0f;
         if (!front) {
             /* One-sided, as Mitsuba 3's BSDFs and area lights: a back face is black. A

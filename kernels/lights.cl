@@ -52,6 +52,7 @@ typedef struct {
     float pdf;       /* its density per solid angle, the light's choice included */
     float3 y;        /* the point on the light (unused for the environment) */
     int prim;        /* the emitter: a primitive, or -1 for the environment */
+    float2 uv;       /* y's texture coordinates (in a program for a scene with textures) */
 } LightSample;
 
 /* Draws a light and a direction towards it from point x of shading normal n, from four hash
@@ -60,7 +61,7 @@ LightSample sample_light(const SceneData *sc, const RenderParams *p, float3 x, f
 {
     float4 u = to_uniform4(r);
     Light light = sc->lights[pick_light(sc->lights, p->num_lights, r.w, r.x)];
-    LightSample ls = {(float3)(0.0f), 0.0f, (float3)(0.0f), light.prim};
+    LightSample ls = {(float3)(0.0f), 0.0f, (float3)(0.0f), light.prim, (float2)(0.0f)};
     if (light.prim < 0) {
         ls.wi = (p->env_width == 1 && p->env_height == 1)
                     ? to_world(sample_cosine_hemisphere(u.y, u.z), n)
@@ -70,7 +71,11 @@ LightSample sample_light(const SceneData *sc, const RenderParams *p, float3 x, f
 #ifndef NO_TRIANGLES
     else if (light.prim >= sc->num_spheres) {
         const global Triangle *tri = &sc->triangles[light.prim - sc->num_spheres];
-        ls.y = sample_triangle_area(tri, u.y, u.z);
+        float2 b;
+        ls.y = sample_triangle_area(tri, u.y, u.z, &b);
+#ifdef TEXTURES
+        ls.uv = triangle_uv(tri, sc->uvs, b.x, b.y);
+#endif
         ls.wi = unit(ls.y - x);
         ls.pdf = light.pick * pdf_triangle_solid_angle(tri, x, ls.y);
     }
@@ -83,6 +88,23 @@ LightSample sample_light(const SceneData *sc, const RenderParams *p, float3 x, f
          * sphere, the tangent point */
         float t = intersect_sphere(s, x, ls.wi, INFINITY);
         ls.y = x + (isinf(t) ? dot(s.xyz - x, ls.wi) : t) * ls.wi;
+#ifdef TEXTURES
+        ls.uv = sphere_uv(s, ls.y);
+#endif
     }
     return ls;
+}
+
+/* The radiance arriving from a light sample's point (its emitter's, looked up at the point
+ * where the emission is a texture), or the environment's along its direction. */
+float3 light_radiance(const SceneData *sc, const RenderParams *p, const LightSample *ls)
+{
+    if (ls->prim < 0)
+        return lookup_environment(sc->env, p, ls->wi);
+    const global Material *m = &sc->materials[sc->prim_material[ls->prim]];
+#ifdef TEXTURES
+    return emission_at(sc, m, ls->uv);
+#else
+    return m->emission.xyz;
+#endif
 }

@@ -1,13 +1,18 @@
 /* The compiled scene as the kernels see it (app/compiled.py builds it; app/renderer.py uploads
- * it): every table in one struct, so that helpers take one argument however the scene grows. */
+ * it): every table in one struct, so that helpers take one argument however the scene grows.
+ * The order of the arguments is app/compiled.py's SCENE_BUFFERS. */
 
 typedef struct {
     const global BVHNode *nodes;
     const global Sphere *spheres;           /* primitives [0, num_spheres), in BVH order */
     const global Triangle *triangles;       /* primitives [num_spheres, ...), in BVH order */
     const global float4 *normals;           /* per-corner shading normals of the triangles */
+    const global float2 *uvs;               /* per-corner texture coordinates of the triangles */
     const global int *prim_material;        /* per primitive: its row of `materials` */
     const global Material *materials;
+    const global TextureBinding *bindings;  /* the textured parameters of the materials */
+    const global Texture *textures;
+    const global uchar *texels;             /* the images of the textures, 4-byte aligned */
     const global float4 *env;               /* the environment map, rgba texels */
     const global Light *lights;
     const global float *light_pick;         /* per primitive: probability of choosing it as a light */
@@ -18,11 +23,12 @@ typedef struct {
 
 #define SCENE_KERNEL_ARGS                                                                         \
     const global BVHNode *nodes, const global Sphere *spheres, const global Triangle *triangles,  \
-    const global float4 *normals, const global int *prim_material,                                \
-    const global Material *materials, const global float4 *env, const global Light *lights,       \
-    const global float *light_pick, const global float *env_marginal,                             \
+    const global float4 *normals, const global float2 *uvs, const global int *prim_material,      \
+    const global Material *materials, const global TextureBinding *bindings,                      \
+    const global Texture *textures, const global uchar *texels, const global float4 *env,         \
+    const global Light *lights, const global float *light_pick, const global float *env_marginal, \
     const global float *env_conditional
 
 #define SCENE_DATA(num_spheres)                                                                   \
-    {nodes, spheres, triangles, normals, prim_material, materials, env, lights, light_pick,       \
-     env_marginal, env_conditional, num_spheres}
+    {nodes, spheres, triangles, normals, uvs, prim_material, materials, bindings, textures,       \
+     texels, env, lights, light_pick, env_marginal, env_conditional, num_spheres}

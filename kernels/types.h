@@ -14,7 +14,8 @@ typedef float4 Sphere;
 
 /* A triangle's corners in world space, counter-clockwise seen from its front (the geometric
  * normal is cross(v1 - v0, v2 - v0), as in Mitsuba 3). v0.w holds, as an int, the index of its
- * first of three per-corner shading normals in the normals table, or -1 when it has none. */
+ * first of three per-corner shading normals in the normals table, or -1 when it has none; v1.w
+ * likewise its first of three texture coordinates in the uvs table, or -1 (uv (0, 0)). */
 typedef struct {
     float4 v0;
     float4 v1;
@@ -23,7 +24,10 @@ typedef struct {
 
 /* A material: a BSDF chosen by `type` (the BSDF_* tags of kernels/bsdf.cl) with up to twelve
  * parameters in p0..p2 (and a table, for those that tabulate one), whose meaning each
- * kernels/bsdfs/ file documents at its top, and the radiance its surface emits. */
+ * kernels/bsdfs/ file documents at its top, and the radiance its surface emits. Parameters that
+ * a texture gives are looked up at each hit (kernels/texture.cl: shade_material) and written
+ * over their slots; the slots hold their mean, from which the host derives what the BSDF needs
+ * as a constant (lobe choices, the light's power). */
 typedef struct {
     float4 p0;
     float4 p1;
@@ -32,10 +36,40 @@ typedef struct {
     int type;
     int flags;            /* MATERIAL_* bits of kernels/bsdf.cl */
     float continuation;   /* the report's Russian roulette: probability of going on from here */
-    int pad0;
+    int textures;         /* its first row of the texture bindings, or -1: none */
     float table[16];      /* a function of cos(theta) that a BSDF tabulates on the host, at
                              cos = (k / 15)^2 (app/materials/microfacet.py; lookup_cos_table) */
 } Material;
+
+/* A parameter of a material that a texture gives: the texture's value at the hit goes into the
+ * material's floats from `slot` on (p0.x is 0, p1.x 4, p2.x 8, emission.x 12). A material's
+ * bindings are consecutive rows, the last one marked. */
+typedef struct {
+    int texture;   /* row of the texture table */
+    int slot;
+    int width;     /* 3: a colour, into slot .. slot + 2; 1: a number, the texture's luminance */
+    int last;      /* 1 on the material's last binding */
+} TextureBinding;
+
+/* A texture: a function of the surface's uv (kernels/texture.cl), of the type `type` (the
+ * TEXTURE_* tags, app/textures/registry.py), whose fields each kernels/textures/ file documents
+ * at its top. Its inputs are numbered 0 to 2: input k is texture input[k] where that is a row of
+ * the table, else the constant value[k]. */
+typedef struct {
+    float4 to_u;       /* the uv transform: u' = dot(to_u.xyz, (u, v, 1)) */
+    float4 to_v;       /* v' = dot(to_v.xyz, (u, v, 1)) */
+    float4 value[3];
+    int input[3];
+    int type;
+    int width;         /* an image's size in texels */
+    int height;
+    uint texels;       /* its first texel, in 4-byte words of the texel buffer */
+    int format;        /* TEXELS_* of kernels/textures/bitmap.cl */
+    int channels;      /* 1, 3 or 4 */
+    int wrap;          /* WRAP_* */
+    int filter;        /* FILTER_* */
+    int pad;
+} Texture;
 
 /* A BVH node: up to four children, their boxes as structure-of-arrays so that one float4
  * operation tests all four. A leaf child holds spheres [index, index + count) when count > 0 and

@@ -8,7 +8,9 @@ import numpy as np
 import pyopencl as cl
 import pytest
 
-from pathtrace.device import choose_device, open_device
+from pathtrace.compiled import SCENE_BUFFERS
+from pathtrace.device import build_program, choose_device
+from pathtrace.features import Features
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -20,11 +22,13 @@ def backend():
 
 
 class KernelRunner:
-    """Builds the kernels plus a test kernel, and runs it on NumPy arrays."""
+    """Builds the kernels plus a test kernel (the program of `features`: by default every shape
+    and material, no textures), and runs it on NumPy arrays."""
 
-    def __init__(self, backend, source):
-        self.backend = open_device(backend.device, extra=source)
-        self.ctx, self.queue = self.backend.context, self.backend.queue
+    def __init__(self, backend, source, features=Features()):
+        self.ctx = cl.Context([backend.device.device])
+        self.queue = cl.CommandQueue(self.ctx)
+        self.program = build_program(self.ctx, backend.device.device, source, features=features).program
 
     def __call__(self, name, global_size, *args):
         bufs, outs = [], []
@@ -36,7 +40,7 @@ class KernelRunner:
                 outs.append((buf, a))
             else:
                 bufs.append(a)
-        kernel = cl.Kernel(self.backend.program, name)
+        kernel = cl.Kernel(self.program, name)
         kernel(self.queue, (global_size,), None, *bufs)
         for buf, a in outs:
             cl.enqueue_copy(self.queue, a, buf)
@@ -47,19 +51,18 @@ class KernelRunner:
 def kernels(backend):
     cache = {}
 
-    def make(source):
-        if source not in cache:
-            cache[source] = KernelRunner(backend, source)
-        return cache[source]
+    def make(source, features=Features()):
+        if (source, features) not in cache:
+            cache[source, features] = KernelRunner(backend, source, features)
+        return cache[source, features]
     return make
 
 
 def scene_arrays(compiled):
     """The arrays of a CompiledScene in the order of the kernels' SCENE_KERNEL_ARGS (empty ones
     padded to one element, as the Renderer uploads them)."""
-    lights = compiled.lights
     marginal, conditional = compiled.scene.environment.sampling_cdfs()
-    arrays = (compiled.bvh.nodes, compiled.spheres, compiled.triangles, compiled.normals,
-              compiled.prim_material, compiled.materials, compiled.scene.environment.rgba(),
-              lights.lights, lights.pick, marginal, conditional)
-    return [np.ascontiguousarray(a) if a.size else np.zeros(1, a.dtype) for a in arrays]
+    arrays = {**compiled.geometry_arrays(), **compiled.material_arrays(), "env": compiled.scene.environment.rgba(),
+              "env_marginal": marginal, "env_conditional": conditional}
+    return [np.ascontiguousarray(a) if a.size else np.zeros(1, a.dtype)
+            for a in (arrays[name] for name in SCENE_BUFFERS)]

@@ -33,14 +33,14 @@ def write_ply(path, vertices, faces, normals=None, ascii=False):
 def test_ply_with_normals(tmp_path, ascii):
     v, f = cube()
     write_ply(tmp_path / "c.ply", v, f, normals=v / np.linalg.norm(v, axis=1, keepdims=True), ascii=ascii)
-    vertices, faces, normals = read_mesh(tmp_path / "c.ply", "test")
+    vertices, faces, normals, _ = read_mesh(tmp_path / "c.ply", "test")
     np.testing.assert_allclose(vertices, v)
     assert faces.shape == (12, 3) and normals is not None
 
 
 def test_obj_polygons_are_triangulated_with_their_normals(tmp_path):
     (tmp_path / "q.obj").write_text(QUAD_OBJ)
-    vertices, faces, normals = read_mesh(tmp_path / "q.obj", "test")
+    vertices, faces, normals, _ = read_mesh(tmp_path / "q.obj", "test")
     assert faces.shape == (2, 3)
     corners = vertices[faces]
     n = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
@@ -53,7 +53,7 @@ def test_stl_and_glb(tmp_path, suffix):
     import trimesh
     v, f = cube()
     trimesh.Trimesh(v, f, process=False).export(str(tmp_path / f"c{suffix}"))
-    vertices, faces, _ = read_mesh(tmp_path / f"c{suffix}", "test")
+    vertices, faces, _, _ = read_mesh(tmp_path / f"c{suffix}", "test")
     assert len(faces) == 12
     corners = vertices[faces]
     n = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
@@ -92,7 +92,7 @@ def test_matrix_and_mirroring_keep_the_front(tmp_path):
 
 def test_degenerate_triangles_are_dropped_with_a_count(tmp_path, capsys):
     write_ply(tmp_path / "d.ply", [[0, 0, 0], [1, 0, 0], [0, 1, 0], [2, 0, 0]], [[0, 1, 2], [0, 1, 3], [1, 1, 2]])
-    _, faces, _ = read_mesh(tmp_path / "d.ply", "test")
+    _, faces, _, _ = read_mesh(tmp_path / "d.ply", "test")
     assert len(faces) == 1
     assert "dropped 2 degenerate triangle(s) of 3" in capsys.readouterr().err
 

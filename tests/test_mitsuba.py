@@ -143,9 +143,10 @@ def test_convert_writes_toml_that_reads_back_the_same_scene(tmp_path, name):
 
 
 WARNINGS = [
-    ('<shape type="sphere"><bsdf type="diffuse"><texture type="bitmap" name="reflectance">'
-     '<string name="filename" value="missing.png"/></texture></bsdf></shape>',
-     "textures are not supported; pathtrace uses its mean colour"),
+    ('<shape type="sphere"><bsdf type="diffuse"><texture type="wireframe" name="reflectance"/></bsdf></shape>',
+     "pathtrace has no wireframe texture; it uses a constant grey of 0.5 instead"),
+    ('<emitter type="constant"><texture type="checkerboard" name="radiance"/></emitter>' + SPHERE,
+     "a texture cannot stand here; pathtrace uses its mean colour (0.3, 0.3, 0.3)"),
     ('<shape type="sphere"><bsdf type="principled"><rgb name="base_color" value="0.8, 0.2, 0.1"/></bsdf></shape>',
      "pathtrace uses a diffuse BSDF of albedo 0.8, 0.2, 0.1"),
     ('<shape type="sphere"><bsdf type="roughconductor"/></shape>',
@@ -178,7 +179,9 @@ ERRORS = [
     ('<shape type="sphere"><float name="radius" value="1e39"/></shape>', None, "is not a finite float32"),
     ('<shape type="sphere"><float name="radius" value="$r"/></shape>', None, "$r has no <default> value"),
     ('<shape type="obj"><string name="filename" value="nowhere.obj"/></shape>', None, "nowhere.obj' does not exist"),
-    ('<shape type="sphere"><ref id="gold"/></shape>', None, "no top-level element has id 'gold'"),
+    ('<shape type="sphere"><ref id="gold"/></shape>', None, "no element has id 'gold'"),
+    ('<shape type="sphere"><bsdf type="diffuse"><texture type="bitmap" name="reflectance">'
+     '<string name="filename" value="missing.png"/></texture></bsdf></shape>', None, "missing.png' does not exist"),
     ('<include filename="scene.xml"/>', None, "includes nest deeper than 8"),
     (SPHERE, "<scenery>", "not well-formed XML"),
     ('<sensor type="perspective"><film type="hdrfilm"><integer name="width" value="100000"/></film></sensor>',
@@ -237,11 +240,13 @@ def test_entity_expansion_bomb_is_refused_quickly(tmp_path):
 
 def test_mitsubas_defaults_render_as_mitsuba_renders_them(tmp_path):
     """A constant emitter without a radiance is 1 (Mitsuba's default), a checkerboard without
-    colours is 0.4 and 0.2 (replaced by its mean, 0.3); both used to fail with a traceback."""
+    colours is 0.4 and 0.2; both used to fail with a traceback."""
     scene = read_mitsuba_file(write(tmp_path, '<emitter type="constant"/><shape type="sphere"><bsdf type="diffuse">'
                                               '<texture type="checkerboard" name="reflectance"/></bsdf></shape>'))
     np.testing.assert_allclose(scene.environment.image.reshape(-1), 1.0)
-    np.testing.assert_allclose(scene.materials.get(int(scene.sphere_material[0])).params["rho_d"], 0.3)
+    checker = scene.materials.get(int(scene.sphere_material[0])).params["rho_d"]
+    assert checker.type == "checkerboard"
+    np.testing.assert_allclose([checker.params["color0"], checker.params["color1"]], [[0.4] * 3, [0.2] * 3])
 
 
 def test_an_unknown_encoding_is_one_line(tmp_path):

@@ -4,7 +4,7 @@
 import numpy as np
 import pytest
 
-from pathtrace.types import BVH_NODE, LIGHT, MATERIAL, RENDER_PARAMS, TRIANGLE
+from pathtrace.types import BVH_NODE, LIGHT, MATERIAL, RENDER_PARAMS, TEXTURE, TEXTURE_BINDING, TRIANGLE
 
 STRUCTS = {
     "Material": MATERIAL,
@@ -12,6 +12,8 @@ STRUCTS = {
     "RenderParams": RENDER_PARAMS,
     "Light": LIGHT,
     "BVHNode": BVH_NODE,
+    "Texture": TEXTURE,
+    "TextureBinding": TEXTURE_BINDING,
 }
 
 

@@ -19,7 +19,7 @@ class Black(BSDFType):
 
 class Diffuse(BSDFType):
     name = "diffuse"
-    params = (Param("rho_d", "color", high=1.0, doc="albedo (Mitsuba: reflectance)"),)
+    params = (Param("rho_d", "color", high=1.0, doc="albedo (Mitsuba: reflectance)", slot="p0.xyz"),)
     doc = "Lambertian, f = rho_d / pi"
 
     def pack(self, values, rows):
@@ -34,9 +34,9 @@ class Diffuse(BSDFType):
 
 class Phong(BSDFType):
     name = "phong"
-    params = (Param("rho_d", "color", high=1.0, doc="diffuse albedo"),
-              Param("rho_s", "color", default=0.0, high=1.0, doc="glossy albedo"),
-              Param("n", "number", doc="Phong exponent"))
+    params = (Param("rho_d", "color", high=1.0, doc="diffuse albedo", slot="p0.xyz"),
+              Param("rho_s", "color", default=0.0, high=1.0, doc="glossy albedo", slot="p1.xyz"),
+              Param("n", "number", doc="Phong exponent", slot="p1.w"))
     doc = ("modified Phong (Lafortune & Willems 1994), f = rho_d / pi + rho_s (n + 2) / (2 pi) "
            "cos^n(alpha); rho_d + rho_s <= 1 in each channel")
 

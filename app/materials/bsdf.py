@@ -6,6 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pathtrace.textures.texture import Texture
+
 # MATERIAL.flags bits, as kernels/bsdf.cl defines them
 TWOSIDED = 1        # the same BSDF on both sides
 DELTA = 2           # every lobe is a delta: no light sampling there
@@ -22,6 +24,22 @@ class Param:
     high: float = None        # None: unbounded
     doc: str = ""
     names: dict = None        # for "number": named values accepted too; for "name": the choices
+    slot: str = None          # where the kernel reads it, as "p0.xyz" or "p1.w" (a colour's
+                              # slot is .xyz): a parameter with a slot may be a texture, whose
+                              # value at each hit goes there (kernels/shading.cl)
+
+
+def constant_of(value, kind: str, summary=Texture.mean):
+    """A parameter's value where the host needs a constant: a texture's mean (or another
+    summary), as a colour or, for a number, its luminance (the kernel's reading of a colour
+    texture as a number, kernels/texture.cl); anything else as it is."""
+    if not isinstance(value, Texture):
+        return value
+    rgb = summary(value)
+    return rgb if kind == "color" else float(np.dot(rgb, LUMINANCE))
+
+
+LUMINANCE = np.array([0.212671, 0.715160, 0.072169])     # kernels/texture.cl: luminance
 
 
 class BSDFType:
@@ -56,11 +74,19 @@ class BSDFType:
                 if p.default is None:
                     raise ValueError(f"missing '{p.name}'")
                 values[p.name] = p.default
+            if isinstance(values.get(p.name), Texture) and p.slot is None:
+                raise ValueError(f"{p.name}: {self.name}'s {p.name} cannot be a texture (the host "
+                                 "derives constants from it)")
+        # a texture is checked by its largest values
+        bounds = {k: constant_of(v, self.kind_of(k), Texture.maximum) for k, v in values.items()}
         problem = self.check({k: np.atleast_2d(v) if np.ndim(v) else np.atleast_1d(v)
-                              for k, v in values.items()})
+                              for k, v in bounds.items()})
         if problem:
             raise ValueError(problem)
         return values
+
+    def kind_of(self, name: str) -> str:
+        return next((p.kind for p in self.params if p.name == name), "number")
 
     def check(self, values: dict) -> str | None:
         """A problem with a combination of values (every parameter present), or None."""

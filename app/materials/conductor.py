@@ -1,6 +1,8 @@
 """Metals: a smooth conductor (a mirror with the Fresnel reflectance of a complex IOR) and a
 rough one (the GGX microfacet model), with Mitsuba 3's parameters."""
 
+from dataclasses import replace
+
 import numpy as np
 
 from pathtrace.materials.bsdf import DELTA, BSDFType, Param
@@ -11,10 +13,10 @@ _CONDUCTOR_PARAMS = (
     Param("material", "name", default="none", names=CONDUCTORS,
           doc="a named metal (Mitsuba's: Au, Ag, Cu, Al, Cr, ... or gold, silver, copper, "
               "aluminium), or none, a perfect mirror; instead of eta and k"),
-    Param("eta", "color", default=0.0, high=100.0, doc="real part of the complex IOR"),
-    Param("k", "color", default=1.0, high=100.0, doc="imaginary part (absorption) of the IOR"),
+    Param("eta", "color", default=0.0, high=100.0, doc="real part of the complex IOR", slot="p0.xyz"),
+    Param("k", "color", default=1.0, high=100.0, doc="imaginary part (absorption) of the IOR", slot="p1.xyz"),
     Param("specular_reflectance", "color", default=1.0, high=1.0,
-          doc="a factor on the reflectance (not physical; Mitsuba's)"),
+          doc="a factor on the reflectance (not physical; Mitsuba's)", slot="p2.xyz"),
 )
 
 
@@ -47,7 +49,7 @@ class Conductor(BSDFType):
 
 class RoughConductor(Conductor):
     name = "roughconductor"
-    params = _CONDUCTOR_PARAMS + GGX_PARAMS
+    params = _CONDUCTOR_PARAMS + (replace(GGX_PARAMS[0], slot="p0.w"),) + GGX_PARAMS[1:]
     flags = 0
     doc = ("rough metal: the GGX microfacet BRDF with Smith's separable shadowing, sampled by "
            "visible normals (Heitz 2018)")

@@ -19,8 +19,9 @@ _DIELECTRIC_PARAMS = (
               "diamond"),
     Param("ext_ior", "number", default=1.000277, low=1.0, high=10.0, names=IOR,
           doc="IOR outside"),
-    Param("specular_reflectance", "color", default=1.0, high=1.0, doc="factor on reflection"),
-    Param("specular_transmittance", "color", default=1.0, high=1.0, doc="factor on transmission"),
+    Param("specular_reflectance", "color", default=1.0, high=1.0, doc="factor on reflection", slot="p1.xyz"),
+    Param("specular_transmittance", "color", default=1.0, high=1.0, doc="factor on transmission",
+          slot="p2.xyz"),
 )
 
 

@@ -12,9 +12,10 @@ from pathtrace.materials.optics import IOR, diffuse_fresnel_reflectance
 class Plastic(BSDFType):
     name = "plastic"
     params = (
-        Param("diffuse_reflectance", "color", default=0.5, high=1.0, doc="the base's albedo"),
+        Param("diffuse_reflectance", "color", default=0.5, high=1.0, doc="the base's albedo",
+              slot="p0.xyz"),
         Param("specular_reflectance", "color", default=1.0, high=1.0,
-              doc="factor on the coating's reflection"),
+              doc="factor on the coating's reflection", slot="p1.xyz"),
         Param("int_ior", "number", default=1.49, low=1.0, high=10.0, names=IOR,
               doc="the coating's IOR: a number or a name (default polypropylene)"),
         Param("ext_ior", "number", default=1.000277, low=1.0, high=10.0, names=IOR,

@@ -26,11 +26,11 @@ def dispatch_source(names=None) -> str:
         cases = "".join(f"    case BSDF_{n.upper()}: return {call.format(n)};\n" for n in types)
         return f"    switch (m->type) {{\n{cases}    default: return {default};\n    }}\n"
     return (tags
-            + "float3 eval_bsdf(const global Material *m, float3 wo, float3 wi)\n{\n"
+            + "float3 eval_bsdf(MaterialRef m, float3 wo, float3 wi)\n{\n"
             + switch(smooth, "eval_{}(m, wo, wi)", "(float3)(0.0f)") + "}\n"
-            + "float pdf_bsdf(const global Material *m, float3 wo, float3 wi)\n{\n"
+            + "float pdf_bsdf(MaterialRef m, float3 wo, float3 wi)\n{\n"
             + switch(smooth, "pdf_{}(m, wo, wi)", "0.0f") + "}\n"
-            + "int sample_bsdf(const global Material *m, float3 wo, float3 u, BSDFSample *s)\n{\n"
+            + "int sample_bsdf(MaterialRef m, float3 wo, float3 u, BSDFSample *s)\n{\n"
             + switch(with_kernel, "sample_{}(m, wo, u, s)", "0") + "}\n")
 
 

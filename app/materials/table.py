@@ -1,23 +1,54 @@
 """A scene's materials: the packed MATERIAL rows the kernels read, with named entries and
-per-row access to the parameters (the viewer's editor)."""
+per-row access to the parameters (the viewer's editor). A parameter may be a texture: its row
+holds its mean (app/materials/bsdf.py: constant_of), and the row's bindings say which texture
+gives the parameter's slot at each hit (app/textures/table.py compiles them)."""
 
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from pathtrace.errors import UserError, short
-from pathtrace.materials.bsdf import TWOSIDED
+from pathtrace.materials.bsdf import TWOSIDED, constant_of
+from pathtrace.textures.texture import Texture
 from pathtrace.materials.registry import BSDFS, TAGS
 from pathtrace.types import MATERIAL
 
 
 @dataclass
 class Material:
-    """One material as a scene file states it."""
+    """One material as a scene file states it; parameters with a slot (Param.slot) and the
+    emission may be Textures."""
     type: str
     params: dict = field(default_factory=dict)
     emission: np.ndarray = field(default_factory=lambda: np.zeros(3))
     twosided: bool = False
+
+    def textures(self) -> list:
+        """(parameter, first float of its slot, width, Texture) of each textured parameter, the
+        emission's as "emission"."""
+        out = []
+        for p in BSDFS[self.type].params:
+            value = self.params.get(p.name)
+            if isinstance(value, Texture):
+                out.append((p.name, *slot_index(p.slot), value))
+        if isinstance(self.emission, Texture):
+            out.append(("emission", *slot_index("emission.xyz"), self.emission))
+        return out
+
+    def constants(self) -> tuple:
+        """(params, emission) with each texture replaced by its mean."""
+        kinds = {p.name: p.kind for p in BSDFS[self.type].params}
+        return ({k: constant_of(v, kinds.get(k, "number")) for k, v in self.params.items()},
+                constant_of(self.emission, "color"))
+
+
+_FIELDS = {"p0": 0, "p1": 4, "p2": 8, "emission": 12}
+
+
+def slot_index(slot: str) -> tuple:
+    """(first float, width) of a slot such as "p0.xyz" (0, 3) or "p1.w" (7, 1)."""
+    field_name, components = slot.split(".")
+    return _FIELDS[field_name] + "xyzw".index(components[0]), len(components)
 
 
 def pack(type_name: str, params: dict, emission=(0, 0, 0), twosided=False) -> np.ndarray:
@@ -38,6 +69,7 @@ def pack(type_name: str, params: dict, emission=(0, 0, 0), twosided=False) -> np
     rows["type"] = TAGS[type_name]
     rows["flags"] = bsdf.flags | (TWOSIDED if twosided else 0)
     rows["continuation"] = bsdf.continuation(values) if values else 0.0
+    rows["textures"] = -1
     return rows
 
 
@@ -54,17 +86,21 @@ class MaterialTable:
     def __init__(self):
         self.rows = np.zeros(0, MATERIAL)
         self.names: dict[str, int] = {}
+        self.textures: list = []     # per row: Material.textures() of its material
 
     def __len__(self):
         return len(self.rows)
 
     def add(self, material: Material, name: str = None) -> int:
-        return int(self.add_rows(pack(material.type, material.params, material.emission,
-                                      material.twosided), name)[0])
+        params, emission = material.constants()
+        row = int(self.add_rows(pack(material.type, params, emission, material.twosided), name)[0])
+        self.textures[row] = material.textures()
+        return row
 
     def add_rows(self, rows: np.ndarray, name: str = None) -> np.ndarray:
         first = len(self.rows)
         self.rows = np.concatenate([self.rows, rows])
+        self.textures += [[] for _ in range(len(rows))]
         if name is not None:
             self.names[name] = first
         return np.arange(first, first + len(rows))
@@ -72,11 +108,19 @@ class MaterialTable:
     def get(self, index: int) -> Material:
         row = self.rows[index]
         type_name = list(BSDFS)[int(row["type"])]
-        return Material(type_name, BSDFS[type_name].unpack(row), row["emission"][:3].astype(np.float64),
-                        bool(row["flags"] & TWOSIDED))
+        material = Material(type_name, BSDFS[type_name].unpack(row), row["emission"][:3].astype(np.float64),
+                            bool(row["flags"] & TWOSIDED))
+        for name, _, _, texture in self.textures[index]:
+            if name == "emission":
+                material.emission = texture
+            else:
+                material.params[name] = texture
+        return material
 
     def set(self, index: int, material: Material):
-        self.rows[index] = pack(material.type, material.params, material.emission, material.twosided)[0]
+        params, emission = material.constants()
+        self.rows[index] = pack(material.type, params, emission, material.twosided)[0]
+        self.textures[index] = material.textures()
 
     def index(self, key) -> int:
         """The row of a material given by name (a scene file's named material) or by row."""
@@ -95,10 +139,24 @@ class MaterialTable:
     def __setitem__(self, key, material: Material):
         self.set(self.index(key), material)
 
+    def all_textures(self) -> list:
+        """Every texture the materials use, their inputs included, each once."""
+        found, todo = {}, [entry[3] for entries in self.textures for entry in entries]
+        while todo:
+            t = todo.pop()
+            if id(t) not in found:
+                found[id(t)] = t
+                todo += t.inputs()
+        return list(found.values())
+
+    def texel_bytes(self) -> int:
+        """An upper bound of the bytes the textures' images take on a device."""
+        return sum(t.params["image"].texels.nbytes for t in self.all_textures() if "image" in t.params)
+
     def name_of(self, index: int) -> str | None:
         return next((n for n, i in self.names.items() if i == index), None)
 
     def copy(self) -> "MaterialTable":
         t = MaterialTable()
-        t.rows, t.names = self.rows.copy(), dict(self.names)
+        t.rows, t.names, t.textures = self.rows.copy(), dict(self.names), [list(b) for b in self.textures]
         return t

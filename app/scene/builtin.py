@@ -109,6 +109,7 @@ BUILTIN_SCENES = {
     "demo": lambda: _shipped("demo"),
     "teapot": lambda: _shipped("teapot"),
     "teapot-sky": lambda: _shipped("teapot-sky"),
+    "teapot-textured": lambda: _shipped("teapot-textured"),
     "cornell-box": lambda: _shipped("cornell-box"),
     "materials": lambda: _shipped("materials"),
     "material-spheres": lambda: _shipped("material-spheres"),

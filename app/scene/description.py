@@ -41,6 +41,7 @@ class MeshFile:
     matrix: np.ndarray            # the 4x4 transform applied to the file's vertices
     face_normals: bool = False    # the file's vertex normals were dropped
     flip_normals: bool = False    # the front side was turned round
+    smooth: bool = False          # normals were computed where the file has none
 
 
 @dataclass
@@ -53,6 +54,8 @@ class Mesh:
     material: int                 # row of the scene's MaterialTable
     source: str = ""              # the file it came from, if any
     file: MeshFile | None = None  # and how it was read
+    uvs: np.ndarray | None = None # (V, 2) float32 texture coordinates, v = 0 at an image's top
+                                  # row (Mitsuba 3's convention), or None: (0, 0)
 
 
 @dataclass

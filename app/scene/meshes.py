@@ -1,7 +1,13 @@
 """Reading triangle meshes: PLY through plyfile, OBJ, STL, glTF and GLB through trimesh. Every
-problem is one line naming the file; degenerate triangles are dropped with a warning."""
+problem is one line naming the file; degenerate triangles are dropped with a warning.
 
+Texture coordinates follow Mitsuba 3's convention, v = 0 at an image's top row: a PLY file's
+(u, v) as they are (Mitsuba reads them so); OBJ's vt and glTF's TEXCOORD_0 as Mitsuba's OBJ
+reader and the glTF format place them (trimesh gives both with v = 0 at the bottom: flipped)."""
+
+import warnings
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -15,9 +21,20 @@ MAX_TRIANGLES = 64_000_000          # ~6 GB of device memory (docs/performance.m
 MAX_COORDINATE = 1e18
 
 
-def read_mesh(path: Path, where: str):
-    """(vertices (V, 3) float64, faces (F, 3) int64, normals (V, 3) or None) of a mesh file.
-    `where` names the field that refers to the file, for messages."""
+class MeshData(NamedTuple):
+    vertices: np.ndarray          # (V, 3) float64
+    faces: np.ndarray             # (F, 3) int64
+    normals: np.ndarray | None    # (V, 3), or None
+    uvs: np.ndarray | None = None  # (V, 2), or None
+
+
+# PLY vertex properties that hold texture coordinates, as Mitsuba 3 and pbrt-v4 accept them
+PLY_UV_NAMES = (("u", "v"), ("s", "t"), ("texture_u", "texture_v"), ("texture_s", "texture_t"))
+
+
+def read_mesh(path: Path, where: str) -> MeshData:
+    """A mesh file's vertices, faces, normals and texture coordinates. `where` names the field
+    that refers to the file, for messages."""
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix not in FORMATS:
@@ -25,24 +42,29 @@ def read_mesh(path: Path, where: str):
                         f"(use {', '.join(FORMATS)})")
     check_regular_file(path, where, "mesh file", MAX_FILE_BYTES)
     try:
-        if suffix == ".ply":
-            vertices, faces, normals = _read_ply(path)
-        elif suffix == ".obj":
-            vertices, faces, normals = _read_obj(path, f"{where}: {path}")
-        else:
-            if suffix == ".gltf":
-                _check_gltf_buffers(path, f"{where}: {path}")
-            vertices, faces, normals = _read_with_trimesh(path, suffix)
+        with warnings.catch_warnings():
+            # the parsers' own lines (NumPy's loadtxt on a cut PLY) would precede pathtrace's one
+            warnings.simplefilter("ignore")
+            if suffix == ".ply":
+                mesh = _read_ply(path)
+            elif suffix == ".obj":
+                mesh = _read_obj(path, f"{where}: {path}")
+            else:
+                if suffix == ".gltf":
+                    _check_gltf_buffers(path, f"{where}: {path}")
+                mesh = _read_with_trimesh(path, suffix)
     except UserError:
         raise
     except Exception as e:     # the parsers raise anything on a malformed file
         raise UserError(f"{where}: {path}: not a readable {suffix[1:].upper()} mesh "
                         f"({type(e).__name__}: {str(e).splitlines()[0] if str(e) else 'malformed'})") from None
-    return check_mesh(vertices, faces, normals, f"{where}: {path}")
+    return check_mesh(*mesh, where=f"{where}: {path}")
 
 
-def check_mesh(vertices, faces, normals, where):
-    """Validates a mesh and drops its degenerate triangles (repeated corners or zero area)."""
+def check_mesh(vertices, faces, normals, uvs=None, where="") -> MeshData:
+    """Validates a mesh and drops its degenerate triangles (repeated corners or zero area).
+    Unusable normals or texture coordinates (the wrong count) are dropped; NaN or infinite
+    texture coordinates are refused."""
     vertices = np.asarray(vertices, np.float64).reshape(-1, 3)
     faces = np.asarray(faces, np.int64).reshape(-1, 3)
     if len(faces) == 0:
@@ -62,6 +84,13 @@ def check_mesh(vertices, faces, normals, where):
         normals = np.asarray(normals, np.float64).reshape(-1, 3)
         if len(normals) != len(vertices) or not np.all(np.isfinite(normals)):
             normals = None     # unusable normals: shade flat rather than refuse the mesh
+    if uvs is not None:
+        uvs = np.asarray(uvs, np.float64).reshape(-1, 2) if np.size(uvs) % 2 == 0 else np.zeros((0, 2))
+        if len(uvs) != len(vertices):
+            uvs = None
+        elif not np.all(np.isfinite(uvs)) or np.any(np.abs(uvs) > MAX_COORDINATE):
+            bad = int(np.argmax(~np.all(np.isfinite(uvs) & (np.abs(uvs) <= MAX_COORDINATE), axis=1)))
+            raise UserError(f"{where}: the texture coordinates of vertex {bad} are not finite ({uvs[bad].tolist()})")
     # the float32 corners the kernels get, their cross products in float64 (1e17 squared
     # overflows float32)
     corners = vertices.astype(np.float32)[faces].astype(np.float64)
@@ -72,7 +101,25 @@ def check_mesh(vertices, faces, normals, where):
         faces = faces[keep]
         if len(faces) == 0:
             raise UserError(f"{where}: every triangle of the mesh is degenerate")
-    return vertices, faces, normals
+    return MeshData(vertices, faces, normals, uvs)
+
+
+def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """Smooth normals at the vertices: each face's unit normal weighted by its angle at the
+    vertex (Thuermer and Wuethrich 1998), as Mitsuba 3 computes them for a mesh that has none.
+    A vertex of degenerate faces only gets a zero normal, which the kernels shade flat."""
+    corners = vertices[faces]
+    n = np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0])
+    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    normals = np.zeros_like(vertices, dtype=np.float64)
+    for i in range(3):
+        d0 = corners[:, (i + 1) % 3] - corners[:, i]
+        d1 = corners[:, (i + 2) % 3] - corners[:, i]
+        d0 /= np.maximum(np.linalg.norm(d0, axis=1, keepdims=True), 1e-300)
+        d1 /= np.maximum(np.linalg.norm(d1, axis=1, keepdims=True), 1e-300)
+        angle = np.arccos(np.clip(np.sum(d0 * d1, axis=1), -1, 1))
+        np.add.at(normals, faces[:, i], n * angle[:, None])
+    return normals / np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-300)
 
 
 def _read_ply(path):
@@ -91,11 +138,15 @@ def _read_ply(path):
             raise UserError(f"{path}: the PLY vertices have no '{k}'")
     vertices = np.column_stack([v["x"], v["y"], v["z"]])
     normals = np.column_stack([v["nx"], v["ny"], v["nz"]]) if {"nx", "ny", "nz"} <= set(fields) else None
+    names = next((pair for pair in PLY_UV_NAMES if set(pair) <= set(fields)), None)
+    if names and any(v.dtype[k].kind not in "fiu" for k in names):
+        raise UserError(f"{path}: the PLY vertex property '{names[0]}' must be a number, not a list")
+    uvs = np.column_stack([v[names[0]], v[names[1]]]) if names else None
     face = ply["face"].data
     key = next((k for k in ("vertex_indices", "vertex_index") if k in face.dtype.names), None)
     if key is None:
         raise UserError(f"{path}: the PLY faces have no vertex_indices")
-    return vertices, triangulate(face[key]), normals
+    return MeshData(vertices, triangulate(face[key]), normals, uvs)
 
 
 def triangulate(polygons) -> np.ndarray:
@@ -125,7 +176,18 @@ def _read_obj(path, where):
     _check_obj_faces(text, where)
     loaded = obj.load_obj(io.StringIO(text), skip_materials=True)
     parts = list(loaded.get("geometry", {}).values()) if "geometry" in loaded else [loaded]
-    return _concatenate([(p.get("vertices"), p.get("faces"), p.get("vertex_normals")) for p in parts])
+    return _concatenate([(p.get("vertices"), p.get("faces"), p.get("vertex_normals"), _trimesh_uvs(p.get("visual")))
+                         for p in parts])
+
+
+def _trimesh_uvs(visual):
+    """trimesh's texture coordinates (v = 0 at the bottom) in Mitsuba's convention, or None."""
+    uv = getattr(visual, "uv", None)
+    if uv is None or len(uv) == 0:
+        return None
+    uv = np.array(uv, np.float64).reshape(-1, 2)
+    uv[:, 1] = 1.0 - uv[:, 1]
+    return uv
 
 
 def _check_obj_faces(text: str, where: str):
@@ -181,7 +243,8 @@ def _read_with_trimesh(path, suffix):
             continue
         has_normals = suffix != ".stl" and "vertex_normals" in geometry._cache
         normals = transform_normals(matrix, geometry.vertex_normals) if has_normals else None
-        parts.append((transform_points(matrix, geometry.vertices), geometry.faces, normals))
+        parts.append((transform_points(matrix, geometry.vertices), geometry.faces, normals,
+                      _trimesh_uvs(getattr(geometry, "visual", None))))
     return _concatenate(parts)
 
 
@@ -192,12 +255,17 @@ def _triangles(faces) -> np.ndarray:
 
 
 def _concatenate(parts):
+    """Parts (vertices, faces, normals, uvs) as one mesh; normals and uvs where every part has
+    them."""
     parts = [p for p in parts if p[0] is not None and p[1] is not None and len(p[1])]
     if not parts:
-        return np.zeros((0, 3)), np.zeros((0, 3), np.int64), None
+        return MeshData(np.zeros((0, 3)), np.zeros((0, 3), np.int64), None)
     offsets = np.cumsum([0] + [len(p[0]) for p in parts[:-1]])
     vertices = np.concatenate([np.asarray(p[0], np.float64).reshape(-1, 3) for p in parts])
     faces = np.concatenate([_triangles(p[1]) + o for p, o in zip(parts, offsets)])
-    with_normals = all(p[2] is not None and len(p[2]) == len(p[0]) for p in parts)
-    normals = np.concatenate([np.asarray(p[2]).reshape(-1, 3) for p in parts]) if with_normals else None
-    return vertices, faces, normals
+
+    def joined(k, width):
+        if all(p[k] is not None and len(p[k]) == len(p[0]) for p in parts):
+            return np.concatenate([np.asarray(p[k], np.float64).reshape(-1, width) for p in parts])
+        return None
+    return MeshData(vertices, faces, joined(2, 3), joined(3, 2))

@@ -21,9 +21,11 @@ from pathtrace.camera import Camera
 from pathtrace.environment import Environment
 from pathtrace.errors import UserError, cut, short, warn
 from pathtrace.materials import BSDFS, Material
+from pathtrace.materials.bsdf import constant_of
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
-from pathtrace.scene.meshes import MAX_COORDINATE, check_mesh, read_mesh
+from pathtrace.scene.meshes import MAX_COORDINATE, check_mesh, read_mesh, vertex_normals
+from pathtrace.textures import TEXTURES, Texture, read_image
 
 MAX_XML_BYTES = 64 << 20
 MAX_ELEMENTS = 1_000_000   # in a file and its includes together, as MAX_XML_BYTES
@@ -235,6 +237,8 @@ class _Reader:
         self.named = {}             # id -> Node
         self.builder = SceneBuilder()
         self.material_rows = {}     # id(bsdf Node) -> material row
+        self.textures = {}          # id(texture Node) -> Texture, so that a shared one is one
+        self.images = {}            # the images read (read_image's cache)
         self.camera = None
         self.settings = RenderSettings(width=768, height=576, spp=4)
         self.environment = None
@@ -320,38 +324,57 @@ class _Reader:
             _fail(node, f"'{name}' must be a {' or '.join(kinds)}")
         return self.value(node)
 
-    def color(self, props, name, default):
-        """A colour parameter; a texture is replaced by its mean colour, with a warning."""
+    def color(self, props, name, default, textures=True):
+        """A colour parameter: rgb, spectrum, float, or (where `textures`) a Texture; elsewhere a
+        texture is replaced by its mean colour, with a warning."""
         node = props.get(name)
         if node is None:
             return np.broadcast_to(np.asarray(default, np.float64), 3).copy()
         if node.tag == "ref":
             node = self.resolve(node)
         if node.tag == "texture":
-            return self.texture_mean(node)
+            texture = self.texture(node)
+            if textures:
+                return texture
+            mean = texture.mean()
+            warn(f"{node.where()}: a texture cannot stand here; pathtrace uses its mean colour "
+                 f"({', '.join(f'{c:.3g}' for c in mean)})")
+            return mean
         if node.tag == "float":
             return np.full(3, self.value(node))
         if node.tag not in ("rgb", "spectrum"):
-            _fail(node, f"'{name}' must be a colour (rgb, spectrum, float)")
+            _fail(node, f"'{name}' must be a colour (rgb, spectrum, float) or a texture")
         return self.value(node)
 
-    def texture_mean(self, node):
+    def texture(self, node) -> Texture:
+        """The Texture of a <texture> element: bitmap (filename, raw, filter_type, wrap_mode,
+        to_uv) or checkerboard (color0, color1, to_uv), with Mitsuba 3's defaults; another type
+        is replaced by a constant grey of 0.5, with a warning."""
+        if id(node) in self.textures:
+            return self.textures[id(node)]
         kind = node.attrs.get("type")
         props = self.properties(node)
-        if kind == "checkerboard":
-            mean = (self.color(props, "color0", 0.4) + self.color(props, "color1", 0.2)) / 2
-        elif kind == "bitmap" and "filename" in props:
-            from pathtrace.image_io import read_hdr
-            try:
-                mean = read_hdr(node.file.parent / self.get(props, "filename"), node.where()).reshape(-1, 3).mean(0)
-            except UserError:
-                mean = np.full(3, 0.5)
+        params = {"to_uv": self.get(props, "to_uv", np.eye(4), ("transform",))}
+        if kind == "bitmap":
+            filename = self.get(props, "filename", kinds=("string",))
+            if filename is None:
+                _fail(node, "a bitmap needs a filename")
+            raw = self.get(props, "raw", False, ("boolean",))
+            params["image"] = read_image(node.file.parent / filename, f"{node.where()}: filename", raw, self.images)
+            params["filter"] = self.get(props, "filter_type", "bilinear", ("string",))
+            params["wrap"] = self.get(props, "wrap_mode", "repeat", ("string",))
+        elif kind == "checkerboard":
+            params["color0"] = self.color(props, "color0", 0.4)
+            params["color1"] = self.color(props, "color1", 0.2)
         else:
-            mean = np.full(3, 0.5)
-        mean = np.clip(np.asarray(mean, np.float64), 0, None)
-        warn(f"{node.where()}: textures are not supported; pathtrace uses its mean colour "
-             f"({', '.join(f'{c:.3g}' for c in mean)})")
-        return mean
+            warn(f"{node.where()}: pathtrace has no {kind} texture; it uses a constant grey of 0.5 instead")
+            kind, params = "constant", {"value": 0.5}
+        try:
+            params = TEXTURES[kind].complete(params)
+        except ValueError as e:
+            _fail(node, str(e))
+        self.textures[id(node)] = Texture(kind, params, node.attrs.get("id"))
+        return self.textures[id(node)]
 
     def check_reference_cycles(self):
         """Refuses a <ref> that leads back to an element it is inside (a bsdf or texture made of
@@ -392,8 +415,20 @@ class _Reader:
     def resolve(self, ref):
         target = self.named.get(ref.attrs.get("id"))
         if target is None:
-            _fail(ref, f"no top-level element has id {short(ref.attrs.get('id'))}")
+            _fail(ref, f"no element has id {short(ref.attrs.get('id'))}")
         return target
+
+    @staticmethod
+    def declared_ids(nodes) -> dict:
+        """id -> element, for elements at any depth: Mitsuba 3 registers the ids of nested
+        elements too (a texture declared inside one BSDF and referred to by another)."""
+        named, todo = {}, list(reversed(nodes))
+        while todo:                       # depth first, in document order
+            node = todo.pop()
+            if "id" in node.attrs and node.tag != "ref":
+                named.setdefault(node.attrs["id"], node)
+            todo.extend(reversed(node.children))
+        return named
 
     # -- the scene --
 
@@ -404,7 +439,7 @@ class _Reader:
         if not version.startswith(("2.", "3.")):
             warn(f"{root.where()}: version {version}; pathtrace reads Mitsuba 3 scenes")
         nodes = self.expand(root)
-        self.named = {node.attrs["id"]: node for node in nodes if "id" in node.attrs}
+        self.named = self.declared_ids(nodes)
         self.check_reference_cycles()
         for node in nodes:
             if node.tag == "shape":
@@ -515,7 +550,7 @@ class _Reader:
             warn(f"{node.where()}: a second environment; pathtrace keeps the first")
             return
         if kind == "constant":
-            self.environment = Environment.constant(self.color(props, "radiance", 1.0))
+            self.environment = Environment.constant(self.color(props, "radiance", 1.0, textures=False))
         elif kind == "envmap":
             name = self.get(props, "filename", kinds=("string",))
             if name is None:
@@ -586,14 +621,14 @@ class _Reader:
             return Material("diffuse", {"rho_d": np.full(3, 0.5)})
         if kind == "diffuse":
             rho = self.color(props, "reflectance", 0.5)
-            if np.any(rho > 1):
+            if np.any(constant_of(rho, "color", Texture.maximum) > 1):
                 _fail(props["reflectance"], "a reflectance must lie in [0, 1]")
             return Material("diffuse", {"rho_d": rho})
         if kind in ("conductor", "roughconductor", "dielectric", "thindielectric", "plastic",
                     "roughplastic"):
             return self.mitsuba_material(node, kind, props)
-        albedo = self.color(props, "base_color", None) if "base_color" in props else \
-            self.color(props, "reflectance", 0.5) if "reflectance" in props else np.full(3, 0.5)
+        albedo = self.color(props, "base_color", None, False) if "base_color" in props else \
+            self.color(props, "reflectance", 0.5, False) if "reflectance" in props else np.full(3, 0.5)
         albedo = np.clip(albedo, 0, 1)
         warn(f"{node.where()}: not supported; pathtrace uses a diffuse BSDF of albedo "
              f"{', '.join(f'{c:.3g}' for c in albedo)}")
@@ -614,7 +649,9 @@ class _Reader:
                 values[p.name] = self.get(props, p.name, kinds=("string",))
             else:
                 c = props[p.name]
-                values[p.name] = c.attrs.get("value") if c.tag == "string" else self.get(props, p.name, kinds=("float",))
+                target = self.resolve(c) if c.tag == "ref" else c
+                values[p.name] = c.attrs.get("value") if c.tag == "string" else \
+                    self.texture(target) if target.tag == "texture" else self.get(props, p.name, kinds=("float",))
         if values.get("distribution", "ggx") != "ggx" or (kind.startswith("rough") and "distribution" not in props):
             warn(f"{node.where()}: pathtrace's microfacets are GGX; the {values.get('distribution', 'beckmann')} "
                  "distribution (Mitsuba's default) is rendered as GGX of the same alpha")
@@ -630,8 +667,9 @@ class _Reader:
         for p in bsdf.params:        # the range of what the file gave (the TOML reader's Param bounds)
             if p.kind in ("name", "bool") or p.name not in values or isinstance(values[p.name], str):
                 continue
-            v = np.asarray(values[p.name], np.float64)
-            if np.any(v < p.low) or (p.high is not None and np.any(v > p.high)):
+            low = np.asarray(constant_of(values[p.name], p.kind, Texture.minimum), np.float64)
+            high = np.asarray(constant_of(values[p.name], p.kind, Texture.maximum), np.float64)
+            if np.any(low < p.low) or (p.high is not None and np.any(high > p.high)):
                 bound = f"[{p.low}, {p.high}]" if p.high is not None else f"at least {p.low}"
                 _fail(props.get(p.name, node), f"{p.name} must lie in {bound}")
         try:
@@ -671,32 +709,33 @@ class _Reader:
                 _fail(node, f"the sphere reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace")
             self.builder.add_sphere(center, radius, material, name)
             return
-        normals = None
+        normals = uvs = None
         if kind == "rectangle":
             vertices = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], np.float64)
             faces = np.array([[0, 1, 2], [0, 2, 3]])
+            uvs = (vertices[:, :2] + 1) / 2             # Mitsuba's: (0, 0) at (-1, -1)
         elif kind == "cube":
-            vertices, faces = _cube()
+            vertices, faces, uvs = _cube()
         elif kind == "disk":
-            a = np.linspace(0, 2 * np.pi, DISK_SEGMENTS, endpoint=False)
-            vertices = np.vstack([[0, 0, 0], np.column_stack([np.cos(a), np.sin(a), np.zeros_like(a)])])
-            k = np.arange(DISK_SEGMENTS)
-            faces = np.column_stack([np.zeros_like(k), 1 + k, 1 + (k + 1) % DISK_SEGMENTS])
+            vertices, faces, uvs = _disk()
         elif kind in ("obj", "ply"):
             filename = self.get(props, "filename", kinds=("string",))
             if filename is None:
                 _fail(node, "needs a filename")
-            vertices, faces, normals = read_mesh(node.file.parent / filename, node.where())
+            vertices, faces, normals, uvs = read_mesh(node.file.parent / filename, node.where())
             if self.get(props, "face_normals", False, ("boolean",)):
                 normals = None
+            smooth = normals is None and not self.get(props, "face_normals", False, ("boolean",))
+            if smooth:                        # Mitsuba 3 smooths a mesh that has no normals
+                normals = vertex_normals(vertices, faces)
             origin = MeshFile(str(node.file.parent / filename), m, normals is None,
-                              self.get(props, "flip_normals", False, ("boolean",)))
+                              self.get(props, "flip_normals", False, ("boolean",)), smooth)
             name = name or Path(filename).stem
         else:
             warn(f"{node.where()}: pathtrace has no {kind} shape; it ignores this one")
             return
         if kind not in ("obj", "ply"):
-            vertices, faces, normals = check_mesh(vertices, faces, None, node.where())
+            vertices, faces, normals, uvs = check_mesh(vertices, faces, None, uvs, node.where())
         if self.get(props, "flip_normals", False, ("boolean",)):
             faces = faces[:, ::-1]
             normals = None if normals is None else -normals
@@ -711,24 +750,46 @@ class _Reader:
         self.builder.add_mesh(Mesh(name or f"{kind} {len(self.builder.meshes)}",
                                    vertices.astype(np.float32), faces.astype(np.int32),
                                    None if normals is None else normals.astype(np.float32),
-                                   material, origin.path if origin else "", origin))
+                                   material, origin.path if origin else "", origin,
+                                   None if uvs is None else uvs.astype(np.float32)))
+
+
+# Mitsuba 3's cube texture coordinates per face (axis, sign): u and v each (s * p[k] + 1) / 2 for
+# the point's coordinate k and a sign s, as (k_u, s_u, k_v, s_v); read off Mitsuba 3.9's cube
+_CUBE_UV = {(2, 1): (1, 1, 0, 1), (2, -1): (1, -1, 0, 1), (0, 1): (1, 1, 2, -1),
+            (0, -1): (1, 1, 2, 1), (1, 1): (0, -1, 2, -1), (1, -1): (2, 1, 0, 1)}
 
 
 def _cube():
-    """Mitsuba's cube: [-1, 1]^3, faces counter-clockwise seen from outside."""
-    vertices, faces = [], []
+    """Mitsuba's cube: [-1, 1]^3, faces counter-clockwise seen from outside, with its uvs."""
+    vertices, faces, uvs = [], [], []
     for axis in range(3):
-        for sign in (-1.0, 1.0):
+        for sign in (-1, 1):
             u, v = (axis + 1) % 3, (axis + 2) % 3
             base = len(vertices)
+            ku, su, kv, sv = _CUBE_UV[axis, sign]
             for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
                 p = np.zeros(3)
                 p[axis], p[u], p[v] = sign, a, b
                 vertices.append(p)
+                uvs.append(((su * p[ku] + 1) / 2, (sv * p[kv] + 1) / 2))
             # (u, v, axis) is right-handed, so these corners run counter-clockwise about +axis
             quad = [base, base + 1, base + 2, base + 3] if sign > 0 else [base, base + 3, base + 2, base + 1]
             faces += [[quad[0], quad[1], quad[2]], [quad[0], quad[2], quad[3]]]
-    return np.array(vertices), np.array(faces)
+    return np.array(vertices), np.array(faces), np.array(uvs)
+
+
+def _disk():
+    """Mitsuba's disk, the unit disk in the xy plane facing +z, as a fan of DISK_SEGMENTS
+    triangles with its uvs, u = r and v = phi / 2 pi: each triangle has its own corners, so that
+    v runs on to 1 at the seam and the centre takes its wedge's middle angle."""
+    k = np.arange(DISK_SEGMENTS)
+    a0, a1 = k / DISK_SEGMENTS, (k + 1) / DISK_SEGMENTS
+    rim = lambda a: np.column_stack([np.cos(2 * np.pi * a), np.sin(2 * np.pi * a), np.zeros_like(a)])  # noqa: E731
+    vertices = np.stack([np.zeros((DISK_SEGMENTS, 3)), rim(a0), rim(a1)], axis=1).reshape(-1, 3)
+    uvs = np.stack([np.column_stack([np.zeros_like(a0), (a0 + a1) / 2]), np.column_stack([np.ones_like(a0), a0]),
+                    np.column_stack([np.ones_like(a1), a1])], axis=1).reshape(-1, 2)
+    return vertices, np.arange(3 * DISK_SEGMENTS).reshape(-1, 3), uvs
 
 
 def read_mitsuba_file(path) -> Scene:

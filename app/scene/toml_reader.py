@@ -14,10 +14,13 @@ from pathtrace.camera import Camera
 from pathtrace.environment import Environment
 from pathtrace.errors import UserError, short
 from pathtrace.materials import BSDFS, Material
+from pathtrace.materials.bsdf import constant_of
 from pathtrace.resources import resource_dir
 from pathtrace.scene import transform
 from pathtrace.scene.description import RUSSIAN_ROULETTE, Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
-from pathtrace.scene.meshes import MAX_COORDINATE, check_mesh, read_mesh, triangulate
+from pathtrace.scene.meshes import MAX_COORDINATE, check_mesh, read_mesh, triangulate, vertex_normals
+from pathtrace.textures import TEXTURES, Texture, read_image
+from pathtrace.textures.bitmap import FILTERS, WRAP_MODES
 
 # the scene-file types besides the registry's: "emitter" is a black BSDF with emission, and
 # "twosided" wraps another material (Mitsuba 3's plugin; `twosided = true` says the same)
@@ -32,6 +35,10 @@ class _Reader:
         scene); label: how messages name the scene, the path by default."""
         self.path = path
         self.label = label or str(path)
+        self.texture_tables = {}     # the [textures] tables, by name
+        self.textures = {}           # name -> Texture, as they are read
+        self.resolving = []          # the names being read (a reference cycle comes back to one)
+        self.images = {}             # the images read (read_image's cache)
 
     def fail(self, where, problem):
         raise UserError(f"{self.label}: {where}: {problem}")
@@ -81,6 +88,93 @@ class _Reader:
                 self.fail(f"{where}.{key}", f"must be {bound}, got {short(value)}")
         return np.asarray(items, np.float64)
 
+    def color_or_texture(self, data, key, where, default=None):
+        """A colour, or a texture (by name or inline) where one may stand."""
+        value = data.get(key)
+        if isinstance(value, dict) or (isinstance(value, str) and value in self.texture_tables):
+            return self.texture_value(value, f"{where}.{key}")
+        return self.color(data, key, where, default)
+
+    # -- textures --
+
+    def texture_value(self, value, where) -> Texture:
+        """A texture given by name (of [textures]) or as an inline table."""
+        if isinstance(value, str):
+            return self.named_texture(value, where)
+        return self.texture(value, where)
+
+    def named_texture(self, name, where) -> Texture:
+        if name not in self.texture_tables:
+            self.fail(where, f"no texture named {short(name)} (named: {', '.join(self.texture_tables) or 'none'})")
+        if name in self.resolving:
+            cycle = self.resolving[self.resolving.index(name):] + [name]
+            self.fail(where, f"a texture reference cycle: {short(' -> '.join(cycle))}")
+        if name not in self.textures:
+            self.resolving.append(name)
+            self.textures[name] = self.texture(self.texture_tables[name], f"textures.{name}", name)
+            self.resolving.pop()
+        return self.textures[name]
+
+    def texture(self, data, where, name=None) -> Texture:
+        """One texture table: its type, the type's inputs (a colour, a texture name or an inline
+        table each), a bitmap's file, raw, filter and wrap, and a uv transform."""
+        if not isinstance(data, dict):
+            self.fail(where, f"must be a table, got {short(data)}")
+        kind = data.get("type")
+        if not isinstance(kind, str) or kind not in TEXTURES:
+            self.fail(f"{where}.type", f"must be one of {', '.join(TEXTURES)}, got {short(kind)}")
+        texture_type = TEXTURES[kind]
+        extra = {"bitmap": {"file", "raw", "filter", "wrap"}, "constant": {"value"}}.get(kind, set())
+        self.table(data, where, {"type", "uv_scale", "uv_offset", "uv_rotate", "uv_matrix",
+                                 *texture_type.inputs, *extra})
+        params = {"to_uv": self.uv_transform(data, where)}
+        for key in texture_type.inputs:
+            if key in data:
+                params[key] = self.color_or_texture(data, key, where)
+        if kind == "constant" and "value" in data:
+            params["value"] = self.color(data, "value", where)
+        if kind == "bitmap":
+            file = data.get("file")
+            if not isinstance(file, str) or not file:
+                self.fail(f"{where}.file", f"must be an image file name, got {short(file)}")
+            raw = data.get("raw", False)
+            if not isinstance(raw, bool):
+                self.fail(f"{where}.raw", f"must be true or false, got {short(raw)}")
+            for key, choices in (("filter", FILTERS), ("wrap", WRAP_MODES)):
+                if key in data and data[key] not in choices:
+                    self.fail(f"{where}.{key}", f"must be one of {', '.join(choices)}, got {short(data[key])}")
+                if key in data:
+                    params[key] = data[key]
+            params["image"] = read_image(self.path.parent / file, f"{self.label}: {where}.file", raw, self.images)
+        try:
+            return Texture(kind, texture_type.complete(params), name)
+        except ValueError as e:
+            self.fail(where, str(e))
+
+    def uv_transform(self, data, where) -> np.ndarray:
+        """uv_matrix (3 rows of 3, acting on (u, v, 1)), or uv' = uv_offset + R(uv_rotate) (uv_scale
+        uv), R turning counter-clockwise by degrees."""
+        if "uv_matrix" in data:
+            m = data["uv_matrix"]
+            if not (isinstance(m, list) and len(m) == 3 and all(
+                    isinstance(r, list) and len(r) == 3 and all(_is_finite_number(x) for x in r) for r in m)):
+                self.fail(f"{where}.uv_matrix", f"must be 3 rows of 3 finite numbers, got {short(m)}")
+            if any(k in data for k in ("uv_scale", "uv_offset", "uv_rotate")):
+                self.fail(where, "give either uv_matrix or uv_scale, uv_offset and uv_rotate, not both")
+            return np.asarray(m, np.float64)
+        scale = self.pair(data, "uv_scale", where, (1.0, 1.0))
+        offset = self.pair(data, "uv_offset", where, (0.0, 0.0))
+        angle = math.radians(self.number(data, "uv_rotate", where, default=0.0))
+        c, s = math.cos(angle), math.sin(angle)
+        return np.array([[c * scale[0], -s * scale[1], offset[0]], [s * scale[0], c * scale[1], offset[1]], [0, 0, 1]])
+
+    def pair(self, data, key, where, default):
+        value = data.get(key, default)
+        items = [value, value] if _is_finite_number(value) else value
+        if not (isinstance(items, (list, tuple)) and len(items) == 2 and all(_is_finite_number(x) for x in items)):
+            self.fail(f"{where}.{key}", f"must be a number or a list of 2 finite numbers, got {short(value)}")
+        return [float(x) for x in items]
+
     def vector(self, data, key, where, default=None):
         if key not in data:
             if default is None:
@@ -100,7 +194,7 @@ class _Reader:
             self.fail(f"{where}.type", f"must be one of {', '.join(MATERIAL_TYPES)}, got {short(kind)}")
         if kind == "emitter":
             self.table(data, where, {"type", "Le"})
-            return Material("black", emission=self.color(data, "Le", where))
+            return Material("black", emission=self.color_or_texture(data, "Le", where))
         if kind == "twosided":
             self.table(data, where, {"type", "bsdf"})
             if "bsdf" not in data:
@@ -118,12 +212,22 @@ class _Reader:
         twosided = data.get("twosided", False)
         if not isinstance(twosided, bool):
             self.fail(f"{where}.twosided", f"must be true or false, got {short(twosided)}")
-        emission = self.color(data, "Le", where, default=(0, 0, 0))
+        emission = self.color_or_texture(data, "Le", where, default=(0, 0, 0))
         return Material(kind, values, emission, twosided)
 
     def parameter(self, data, param, where):
-        """One material parameter as its Param declares it (app/materials/bsdf.py)."""
+        """One material parameter as its Param declares it (app/materials/bsdf.py); one with a
+        slot may be a texture: a name of [textures] or an inline table."""
         value = data[param.name]
+        if param.slot and (isinstance(value, dict) or (isinstance(value, str) and value in self.texture_tables)):
+            texture = self.texture_value(value, f"{where}.{param.name}")
+            low = np.min(constant_of(texture, param.kind, Texture.minimum))
+            high = np.max(constant_of(texture, param.kind, Texture.maximum))
+            if low < param.low or (param.high is not None and high > param.high):
+                bound = f"in [{param.low}, {param.high}]" if param.high is not None else f"at least {param.low}"
+                self.fail(f"{where}.{param.name}", f"the texture's values must lie {bound}, "
+                                                   f"but reach from {low:.4g} to {high:.4g}")
+            return texture
         if param.kind == "color":
             return self.color(data, param.name, where, high=param.high)
         if param.kind == "bool":
@@ -252,10 +356,10 @@ class _Reader:
     def mesh(self, data, where, material) -> Mesh:
         """A mesh from a file, or written inline as vertices and faces (polygons of 3 or more
         corners, counter-clockwise seen from the front)."""
-        self.table(data, where, {"file", "vertices", "faces", "material", "name", "translate",
-                                 "rotate", "scale", "matrix", "face_normals", "flip_normals"})
+        self.table(data, where, {"file", "vertices", "faces", "uvs", "material", "name", "translate",
+                                 "rotate", "scale", "matrix", "face_normals", "flip_normals", "smooth"})
         flags = {}
-        for key in ("face_normals", "flip_normals"):
+        for key in ("face_normals", "flip_normals", "smooth"):
             flags[key] = data.get(key, False)
             if not isinstance(flags[key], bool):
                 self.fail(f"{where}.{key}", f"must be true or false, got {short(flags[key])}")
@@ -267,14 +371,16 @@ class _Reader:
             if not isinstance(name, str) or not name:
                 self.fail(f"{where}.file", f"must be a file name, got {short(name)}")
             source = self.path.parent / name
-            vertices, faces, normals = read_mesh(source, f"{self.label}: {where}.file")
+            vertices, faces, normals, uvs = read_mesh(source, f"{self.label}: {where}.file")
             if flags["face_normals"]:
                 normals = None
-            origin = MeshFile(str(source), m, normals is None, flags["flip_normals"])
+            elif normals is None and flags["smooth"]:
+                normals = vertex_normals(vertices, faces)
+            origin = MeshFile(str(source), m, flags["face_normals"], flags["flip_normals"], flags["smooth"])
             default_name = Path(name).stem
         else:
-            vertices, faces = self.inline_geometry(data, where)
-            vertices, faces, normals = check_mesh(vertices, faces, None, f"{self.label}: {where}")
+            vertices, faces, uvs = self.inline_geometry(data, where)
+            vertices, faces, normals, uvs = check_mesh(vertices, faces, None, uvs, f"{self.label}: {where}")
             source, default_name, origin = "", f"mesh {where[7:-1]}", None
         if flags["flip_normals"]:
             faces = faces[:, ::-1]
@@ -288,7 +394,7 @@ class _Reader:
             faces = faces[:, ::-1]
         return Mesh(self.name(data, where, default_name), vertices.astype(np.float32),
                     faces.astype(np.int32), None if normals is None else normals.astype(np.float32),
-                    material, str(source), origin)
+                    material, str(source), origin, None if uvs is None else uvs.astype(np.float32))
 
     def inline_geometry(self, data, where):
         vertices, faces = data.get("vertices"), data.get("faces")
@@ -302,11 +408,21 @@ class _Reader:
             self.fail(f"{where}.faces", "must be a list of polygons, each 3 to 64 integer vertex indices")
         if any(not 0 <= i < len(vertices) for f in faces for i in f):
             self.fail(f"{where}.faces", f"vertex indices must lie in 0..{len(vertices) - 1}")
-        return np.asarray(vertices, np.float64), triangulate(faces)
+        uvs = data.get("uvs")
+        if uvs is not None and (not isinstance(uvs, list) or len(uvs) != len(vertices) or not all(
+                isinstance(t, list) and len(t) == 2 and all(_is_finite_number(x) for x in t) for t in uvs)):
+            self.fail(f"{where}.uvs", f"must be a list of {len(vertices)} pairs of finite numbers, one per vertex")
+        return np.asarray(vertices, np.float64), triangulate(faces), None if uvs is None else np.asarray(uvs, np.float64)
 
     def scene(self, data) -> Scene:
-        self.table(data, "top level", {"camera", "environment", "render", "materials", "spheres", "meshes"})
+        self.table(data, "top level", {"camera", "environment", "render", "textures", "materials", "spheres",
+                                       "meshes"})
         builder = SceneBuilder()
+        self.texture_tables = data.get("textures", {})
+        self.table(self.texture_tables, "textures",
+                   set(self.texture_tables) if isinstance(self.texture_tables, dict) else set())
+        for name in self.texture_tables:
+            self.named_texture(name, f"textures.{name}")
         named = data.get("materials", {})
         self.table(named, "materials", set(named) if isinstance(named, dict) else set())
         rows = {}

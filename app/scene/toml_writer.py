@@ -12,6 +12,7 @@ from pathtrace.materials import BSDFS
 from pathtrace.errors import UserError
 from pathtrace.scene.description import Scene
 from pathtrace.scene.toml_reader import MAX_INLINE
+from pathtrace.textures import Texture
 
 
 def _value(v) -> str:
@@ -35,21 +36,48 @@ def _color(c):
     return c[0] if len(set(c)) == 1 else c
 
 
-def material_table(material) -> dict:
-    """A material as the TOML reader reads it back."""
+def material_table(material, texture_names: dict = {}) -> dict:
+    """A material as the TOML reader reads it back; its textures by their names in
+    texture_names (id(Texture) -> name)."""
+    def value(v, kind):
+        if isinstance(v, Texture):
+            return texture_names[id(v)]
+        return _color(v) if kind == "color" else bool(v) if kind == "bool" else float(v)
     if material.type == "black":
-        return {"type": "emitter", "Le": _color(material.emission)}
+        return {"type": "emitter", "Le": value(material.emission, "color")}
     bsdf = BSDFS[material.type]
     table = {"type": material.type}
     for p in bsdf.params:
         if p.kind == "name":
             continue
-        v = material.params[p.name]
-        table[p.name] = _color(v) if p.kind == "color" else bool(v) if p.kind == "bool" else float(v)
-    if np.any(material.emission > 0):
-        table["Le"] = _color(material.emission)
+        table[p.name] = value(material.params[p.name], p.kind)
+    if isinstance(material.emission, Texture) or np.any(material.emission > 0):
+        table["Le"] = value(material.emission, "color")
     if material.twosided:
         table["twosided"] = True
+    return table
+
+
+def texture_table(texture: Texture, names: dict, rel) -> dict:
+    """A texture as the TOML reader reads it back: its inputs by name, a bitmap's file relative
+    to the output, its uv transform as a matrix."""
+    table = {"type": texture.type}
+    for key in texture.kind.inputs:
+        v = texture.params[key]
+        table[key] = names[id(v)] if isinstance(v, Texture) else _color(v)
+    if texture.type == "constant":
+        table["value"] = _color(texture.params["value"])
+    if texture.type == "bitmap":
+        image = texture.params["image"]
+        if not image.path:
+            raise UserError(f"texture {texture.name or ''}: an image made in memory has no file to refer to")
+        table["file"] = rel(image.path)
+        if image.linear and image.texels.dtype == np.uint8:
+            table["raw"] = True
+        table["filter"], table["wrap"] = texture.params["filter"], texture.params["wrap"]
+    m = texture.params.get("to_uv")
+    if m is not None and not np.allclose(m, np.eye(3)):
+        table["uv_matrix"] = np.asarray(m, np.float64).tolist()
     return table
 
 
@@ -70,11 +98,23 @@ def scene_toml(scene: Scene, out: Path) -> str:
     lines += [f"intensity = {_value(env.intensity)}", f"rotation = {_value(env.rotation)}", "",
               "[render]", f"width = {s.width}", f"height = {s.height}", f"spp = {s.spp}",
               f"max_depth = {s.max_depth}", f"russian_roulette = {_value(s.russian_roulette)}",
-              f"seed = {s.seed}", f"nee = {_value(s.nee)}", "", "[materials]"]
+              f"seed = {s.seed}", f"nee = {_value(s.nee)}", ""]
+    textures = scene.materials.all_textures()
+    texture_names, taken = {}, set()
+    for k, t in enumerate(textures):
+        name = t.name if t.name and t.name not in taken else f"texture{k}"
+        texture_names[id(t)] = name
+        taken.add(name)
+    if textures:      # inputs first, so that the file reads in order
+        lines.append("[textures]")
+        for t in sorted(textures, key=lambda t: not t.kind.leaf):
+            lines.append(f"{json.dumps(texture_names[id(t)])} = {_inline(texture_table(t, texture_names, rel))}")
+        lines.append("")
+    lines.append("[materials]")
     names = {}
     for row in range(len(scene.materials)):
         names[row] = scene.materials.name_of(row) or f"material{row}"
-        lines.append(f"{json.dumps(names[row])} = {_inline(material_table(scene.materials.get(row)))}")
+        lines.append(f"{json.dumps(names[row])} = {_inline(material_table(scene.materials.get(row), texture_names))}")
     for i, sphere in enumerate(scene.spheres):
         lines += ["", "[[spheres]]", f"name = {_value(scene.sphere_name(i))}",
                   f"center = {_value(sphere[:3].tolist())}", f"radius = {_value(sphere[3])}",
@@ -87,9 +127,13 @@ def scene_toml(scene: Scene, out: Path) -> str:
                 lines.append("face_normals = true")
             if mesh.file.flip_normals:
                 lines.append("flip_normals = true")
+            if mesh.file.smooth:
+                lines.append("smooth = true")
         else:
             if len(mesh.vertices) > MAX_INLINE or len(mesh.faces) > MAX_INLINE:
                 raise UserError(f"{mesh.name}: {len(mesh.faces)} triangles is too many to write inline")
             lines += [f"vertices = {_value(mesh.vertices.astype(np.float64).tolist())}",
                       f"faces = {_value(mesh.faces.tolist())}"]
+            if mesh.uvs is not None:
+                lines.append(f"uvs = {_value(mesh.uvs.astype(np.float64).tolist())}")
     return "\n".join(lines) + "\n"

@@ -8,13 +8,16 @@ than the window, and never leaves the window. Each widget's range holds every va
 format accepts."""
 
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 
 from pathtrace.compiled import MAX_RADIANCE
 from pathtrace.materials import BSDFS
+from pathtrace.materials.bsdf import constant_of
 from pathtrace.scene.builtin import BUILTIN_SCENES
 from pathtrace.scene.description import RUSSIAN_ROULETTE
+from pathtrace.textures import Texture
 from pathtrace.tonecurve import TONEMAPS
 
 MARGIN = 10                 # pixels between the panel and the window's edges
@@ -74,6 +77,10 @@ def _material_editor(imgui, v, layout):
         if param.kind == "name":          # resolved into the numbers edited below
             continue
         value = m.params[param.name]
+        if isinstance(value, Texture):    # named, not edited
+            imgui.text_wrapped(f"{param.name}: {texture_label(value)}")
+            layout.check(param.name)
+            continue
         if param.kind == "color" and param.high == 1.0:
             hit, new = imgui.color_edit3(param.name, np.broadcast_to(value, 3).tolist())
             new = np.clip(new, param.low, param.high)
@@ -89,13 +96,26 @@ def _material_editor(imgui, v, layout):
         layout.check(param.name)
         if hit:
             m.params[param.name], changed = np.asarray(new, np.float64), True
-    hit, le = imgui.input_float3("emission", np.asarray(m.emission, np.float64).tolist())
+    if isinstance(m.emission, Texture):
+        imgui.text_wrapped(f"emission: {texture_label(m.emission)}")
+    else:
+        hit, le = imgui.input_float3("emission", np.asarray(m.emission, np.float64).tolist())
+        if hit:
+            m.emission, changed = np.clip(le, 0.0, MAX_RADIANCE), True
     layout.check("emission")
-    if hit:
-        m.emission, changed = np.clip(le, 0.0, MAX_RADIANCE), True
-    if changed and BSDFS[m.type].check({k: np.atleast_2d(x) if np.ndim(x) else np.atleast_1d(x)
-                                        for k, x in m.params.items()}) is None:
+    bsdf = BSDFS[m.type]
+    if changed and bsdf.check({k: np.atleast_2d(x) if np.ndim(x) else np.atleast_1d(x)
+                               for k, x in ((k, constant_of(x, bsdf.kind_of(k), Texture.maximum))
+                                            for k, x in m.params.items())}) is None:
         v.edit_material(shape.material, m)
+
+
+def texture_label(texture: Texture) -> str:
+    """How the panel names a texture: its name, type and file."""
+    name = f"'{texture.name}' " if texture.name else ""
+    image = texture.params.get("image")
+    source = f" {Path(image.path).name}" if image is not None and image.path else ""
+    return f"texture {name}({texture.type}{source})"
 
 
 def _status(imgui, v):

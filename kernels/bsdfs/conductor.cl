@@ -8,7 +8,7 @@
  *
  * A delta BRDF (sample only: only sampling finds it). One-sided. */
 
-int sample_conductor(const global Material *m, float3 wo, float3 u, BSDFSample *s)
+int sample_conductor(MaterialRef m, float3 wo, float3 u, BSDFSample *s)
 {
     if (wo.z <= 0.0f)
         return 0;

@@ -11,7 +11,7 @@
  * 1 - R), so the weight is the factor alone, times (n_i / n_t)^2 for refraction: radiance is
  * compressed into a smaller solid angle on entering a denser medium (Veach 1997, section 5.2). */
 
-int sample_dielectric(const global Material *m, float3 wo, float3 u, BSDFSample *s)
+int sample_dielectric(MaterialRef m, float3 wo, float3 u, BSDFSample *s)
 {
     float cos_t, eta_ti;
     float r = fresnel_dielectric(wo.z, m->p0.x / m->p0.y, &cos_t, &eta_ti);

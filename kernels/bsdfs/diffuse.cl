@@ -5,19 +5,19 @@
  *
  * Directions are in the local shading frame (z the normal); the surface is one-sided. */
 
-float3 eval_diffuse(const global Material *m, float3 wo, float3 wi)
+float3 eval_diffuse(MaterialRef m, float3 wo, float3 wi)
 {
     if (wo.z <= 0.0f || wi.z <= 0.0f)
         return (float3)(0.0f);
     return m->p0.xyz / PI_F;
 }
 
-float pdf_diffuse(const global Material *m, float3 wo, float3 wi)
+float pdf_diffuse(MaterialRef m, float3 wo, float3 wi)
 {
     return wo.z > 0.0f ? pdf_cosine_hemisphere(wi.z) : 0.0f;
 }
 
-int sample_diffuse(const global Material *m, float3 wo, float3 u, BSDFSample *s)
+int sample_diffuse(MaterialRef m, float3 wo, float3 u, BSDFSample *s)
 {
     if (wo.z <= 0.0f)
         return 0;

@@ -13,7 +13,7 @@
  *
  * Directions are in the local shading frame (z the normal); the surface is one-sided. */
 
-float3 eval_phong(const global Material *m, float3 wo, float3 wi)
+float3 eval_phong(MaterialRef m, float3 wo, float3 wi)
 {
     if (wo.z <= 0.0f || wi.z <= 0.0f)
         return (float3)(0.0f);
@@ -24,7 +24,7 @@ float3 eval_phong(const global Material *m, float3 wo, float3 wi)
 }
 
 /* The density of the directions sample_phong draws: the lobes' densities mixed. */
-float pdf_phong(const global Material *m, float3 wo, float3 wi)
+float pdf_phong(MaterialRef m, float3 wo, float3 wi)
 {
     if (wo.z <= 0.0f || wi.z <= 0.0f)
         return 0.0f;
@@ -35,7 +35,7 @@ float pdf_phong(const global Material *m, float3 wo, float3 wi)
 /* One lobe chosen by u.x, and the weight f cos / pdf of that lobe alone divided by its choice
  * probability (a one-sample estimator over the lobes, as in the report). A glossy direction
  * below the surface ends the path. */
-int sample_phong(const global Material *m, float3 wo, float3 u, BSDFSample *s)
+int sample_phong(MaterialRef m, float3 wo, float3 u, BSDFSample *s)
 {
     if (wo.z <= 0.0f)
         return 0;

@@ -10,13 +10,13 @@
  * eval and pdf hold the diffuse part only; the coating's reflection is a delta. One-sided. */
 
 /* Fresnel reflectance of the coating seen from outside at cosine cos_theta. */
-float plastic_fresnel(const global Material *m, float cos_theta)
+float plastic_fresnel(MaterialRef m, float cos_theta)
 {
     float cos_t, eta_ti;
     return fresnel_dielectric(cos_theta, m->p0.w, &cos_t, &eta_ti);
 }
 
-float3 eval_plastic(const global Material *m, float3 wo, float3 wi)
+float3 eval_plastic(MaterialRef m, float3 wo, float3 wi)
 {
     if (wo.z <= 0.0f || wi.z <= 0.0f)
         return (float3)(0.0f);
@@ -24,7 +24,7 @@ float3 eval_plastic(const global Material *m, float3 wo, float3 wi)
     return coated_base_albedo(m) * (t / (PI_F * m->p0.w * m->p0.w));
 }
 
-float pdf_plastic(const global Material *m, float3 wo, float3 wi)
+float pdf_plastic(MaterialRef m, float3 wo, float3 wi)
 {
     if (wo.z <= 0.0f || wi.z <= 0.0f)
         return 0.0f;
@@ -32,7 +32,7 @@ float pdf_plastic(const global Material *m, float3 wo, float3 wi)
     return (1.0f - p_s) * pdf_cosine_hemisphere(wi.z);
 }
 
-int sample_plastic(const global Material *m, float3 wo, float3 u, BSDFSample *s)
+int sample_plastic(MaterialRef m, float3 wo, float3 u, BSDFSample *s)
 {
     if (wo.z <= 0.0f)
         return 0;

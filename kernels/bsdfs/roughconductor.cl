@@ -10,7 +10,7 @@
  *
  * Sampled by visible normals: the weight f cos / pdf is F(wo.h) G1(wi, h). One-sided. */
 
-float3 eval_roughconductor(const global Material *m, float3 wo, float3 wi)
+float3 eval_roughconductor(MaterialRef m, float3 wo, float3 wi)
 {
     if (wo.z <= 0.0f || wi.z <= 0.0f)
         return (float3)(0.0f);
@@ -22,7 +22,7 @@ float3 eval_roughconductor(const global Material *m, float3 wo, float3 wi)
 }
 
 /* pdf(wi) = D_wo(h) / (4 wo.h), the Jacobian of reflection (Walter et al. 2007, eq. 14) */
-float pdf_roughconductor(const global Material *m, float3 wo, float3 wi)
+float pdf_roughconductor(MaterialRef m, float3 wo, float3 wi)
 {
     if (wo.z <= 0.0f || wi.z <= 0.0f)
         return 0.0f;
@@ -31,7 +31,7 @@ float pdf_roughconductor(const global Material *m, float3 wo, float3 wi)
     return wo_h > 0.0f ? pdf_ggx_visible(wo, h, m->p0.w) / (4.0f * wo_h) : 0.0f;
 }
 
-int sample_roughconductor(const global Material *m, float3 wo, float3 u, BSDFSample *s)
+int sample_roughconductor(MaterialRef m, float3 wo, float3 u, BSDFSample *s)
 {
     if (wo.z <= 0.0f)
         return 0;

@@ -14,7 +14,7 @@
  * The lobe is chosen as Mitsuba does, from the tabulated reflectance 1 - T(cos_o); eval and pdf
  * hold both lobes, so a sample's weight is f cos / pdf of the whole. One-sided. */
 
-float3 eval_roughplastic(const global Material *m, float3 wo, float3 wi)
+float3 eval_roughplastic(MaterialRef m, float3 wo, float3 wi)
 {
     if (wo.z <= 0.0f || wi.z <= 0.0f)
         return (float3)(0.0f);
@@ -30,7 +30,7 @@ float3 eval_roughplastic(const global Material *m, float3 wo, float3 wi)
 
 /* The lobe choice's mixture: D_wo(h) / (4 wo.h) for the coating (Walter et al. 2007, eq. 14),
  * the cosine-weighted hemisphere for the base. */
-float pdf_roughplastic(const global Material *m, float3 wo, float3 wi)
+float pdf_roughplastic(MaterialRef m, float3 wo, float3 wi)
 {
     if (wo.z <= 0.0f || wi.z <= 0.0f)
         return 0.0f;
@@ -41,7 +41,7 @@ float pdf_roughplastic(const global Material *m, float3 wo, float3 wi)
     return p_s * specular + (1.0f - p_s) * pdf_cosine_hemisphere(wi.z);
 }
 
-int sample_roughplastic(const global Material *m, float3 wo, float3 u, BSDFSample *s)
+int sample_roughplastic(MaterialRef m, float3 wo, float3 u, BSDFSample *s)
 {
     if (wo.z <= 0.0f)
         return 0;

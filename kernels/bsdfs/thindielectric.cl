@@ -9,7 +9,7 @@
  *
  * Transmissive and symmetric: both sides behave alike. */
 
-int sample_thindielectric(const global Material *m, float3 wo, float3 u, BSDFSample *s)
+int sample_thindielectric(MaterialRef m, float3 wo, float3 u, BSDFSample *s)
 {
     float cos_t, eta_ti;
     float r = fresnel_dielectric(fabs(wo.z), m->p0.x / m->p0.y, &cos_t, &eta_ti);

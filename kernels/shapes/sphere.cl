@@ -36,6 +36,17 @@ void sphere_surface(Sphere s, float3 o, float3 d, float t, float3 *p, float3 *er
     *error = gamma_bound(8) * fabs(rel) + gamma_bound(2) * fabs(*p);
 }
 
+/* Texture coordinates of point p on the sphere, as Mitsuba 3's `sphere` gives them:
+ * u = phi / 2 pi, phi = atan2(y, x) in [0, 2 pi), and v = theta / pi, theta the angle from +z,
+ * in the sphere's frame (a sphere keeps no rotation: the world's axes). */
+float2 sphere_uv(Sphere s, float3 p)
+{
+    float3 n = (p - s.xyz) / s.w;
+    float phi = atan2(n.y, n.x);
+    phi = phi < 0.0f ? phi + 2.0f * PI_F : phi;
+    return (float2)(phi / (2.0f * PI_F), acos(clamp(n.z, -1.0f, 1.0f)) / PI_F);
+}
+
 /* 1 - cos(theta_max) of the cone a sphere subtends from p, as sin^2 / (1 + cos) to keep
  * precision for small, far spheres; 0 when p is inside the sphere. */
 float cone_solid_angle_factor(Sphere s, float3 p)

@@ -129,12 +129,24 @@ void triangle_surface(const global Triangle *tri, const global float4 *normals, 
     }
 }
 
+/* The texture coordinates at barycentric weights (b1, b2): the corners' interpolated, or (0, 0)
+ * for a triangle without them. */
+float2 triangle_uv(const global Triangle *tri, const global float2 *uvs, float b1, float b2)
+{
+    int k = as_int(tri->v1.w);
+    if (k < 0)
+        return (float2)(0.0f);
+    return (1.0f - b1 - b2) * uvs[k] + b1 * uvs[k + 1] + b2 * uvs[k + 2];
+}
+
 /* A point uniform over the triangle's area: b1 = u2 sqrt(u1), b2 = 1 - sqrt(u1) (pbrt-v4
- * section 6.5.4 gives the same density); its density per area is 1 / area. */
-float3 sample_triangle_area(const global Triangle *tri, float u1, float u2)
+ * section 6.5.4 gives the same density); its density per area is 1 / area. Its barycentric
+ * weights (b1, b2) go to *b. */
+float3 sample_triangle_area(const global Triangle *tri, float u1, float u2, float2 *b)
 {
     float s = sqrt(u1);
     float b1 = u2 * s, b2 = 1.0f - s;
+    *b = (float2)(b1, b2);
     return (1.0f - b1 - b2) * tri->v0.xyz + b1 * tri->v1.xyz + b2 * tri->v2.xyz;
 }
 

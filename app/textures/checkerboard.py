@@ -1,0 +1,19 @@
+"""The checkerboard texture (Mitsuba 3's): two colours in alternating squares of uv."""
+
+import numpy as np
+
+from pathtrace.textures.texture import TextureType, input_bounds, input_mean
+
+
+class Checkerboard(TextureType):
+    name = "checkerboard"
+    doc = "color0 and color1 in alternating squares of the unit of uv (Mitsuba 3's checkerboard)"
+    inputs = ("color0", "color1")
+    defaults = {"color0": 0.4, "color1": 0.2}     # Mitsuba 3's
+
+    def mean(self, texture):
+        return (input_mean(texture.params["color0"]) + input_mean(texture.params["color1"])) / 2
+
+    def bounds(self, texture):
+        (lo0, hi0), (lo1, hi1) = input_bounds(texture.params["color0"]), input_bounds(texture.params["color1"])
+        return np.minimum(lo0, lo1), np.maximum(hi0, hi1)

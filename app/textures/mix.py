@@ -1,0 +1,21 @@
+"""The mix texture (pbrt-v4's): a blend of two textures by an amount."""
+
+import numpy as np
+
+from pathtrace.textures.texture import TextureType, input_bounds, input_mean
+
+
+class Mix(TextureType):
+    name = "mix"
+    doc = "(1 - amount) tex1 + amount tex2 (pbrt-v4's mix; amount's first channel)"
+    inputs = ("tex1", "tex2", "amount")
+    defaults = {"tex1": 0.0, "tex2": 1.0, "amount": 0.5}   # pbrt-v4's
+
+    def mean(self, texture):
+        a = float(input_mean(texture.params["amount"])[0])
+        return (1 - a) * input_mean(texture.params["tex1"]) + a * input_mean(texture.params["tex2"])
+
+    def bounds(self, texture):
+        # for amounts in [0, 1]; others extrapolate, beyond these
+        (lo1, hi1), (lo2, hi2) = input_bounds(texture.params["tex1"]), input_bounds(texture.params["tex2"])
+        return np.minimum(lo1, lo2), np.maximum(hi1, hi2)

@@ -1,0 +1,22 @@
+"""The scale texture (pbrt-v4's): a texture times a factor."""
+
+import numpy as np
+
+from pathtrace.textures.texture import TextureType, input_bounds, input_mean
+
+
+class Scale(TextureType):
+    name = "scale"
+    doc = "tex times scale (pbrt-v4's scale)"
+    inputs = ("tex", "scale")
+    defaults = {"tex": 1.0, "scale": 1.0}
+
+    def mean(self, texture):
+        # exact where either input is constant; otherwise an estimate that is 0 only where the
+        # product is 0 everywhere
+        return input_mean(texture.params["tex"]) * input_mean(texture.params["scale"])
+
+    def bounds(self, texture):
+        a, b = input_bounds(texture.params["tex"]), input_bounds(texture.params["scale"])
+        products = np.array([x * y for x in a for y in b])
+        return products.min(axis=0), products.max(axis=0)

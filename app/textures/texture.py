@@ -1,0 +1,105 @@
+"""Textures as scene files state them, and the interface every texture type implements on the
+host: its inputs, how it packs into a TEXTURE row that its kernel file kernels/textures/<name>.cl
+reads (documented at that file's top), and its mean and maximum, which stand for it where the
+host needs one number (a BSDF's lobe choice, an emitter's power, a range check)."""
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+IDENTITY_UV = np.eye(3)
+
+
+@dataclass(eq=False)
+class Texture:
+    """One texture: a type of the registry (pathtrace.textures.TEXTURES) and its parameters.
+    An input (a checkerboard's colours, a scale's factor) is a number, three numbers, or a
+    Texture; `to_uv` (a 3x3 matrix acting on (u, v, 1)) transforms the surface's uv first."""
+    type: str
+    params: dict = field(default_factory=dict)
+    name: str | None = None
+
+    @property
+    def kind(self):
+        from pathtrace.textures.registry import TEXTURES
+        return TEXTURES[self.type]
+
+    def mean(self) -> np.ndarray:
+        """The texture's mean colour over the unit square of uv (an estimate for those that
+        combine textures), rgb."""
+        return self.kind.mean(self)
+
+    def maximum(self) -> np.ndarray:
+        """An upper bound of its values, rgb."""
+        return self.kind.bounds(self)[1]
+
+    def minimum(self) -> np.ndarray:
+        """A lower bound of its values, rgb."""
+        return self.kind.bounds(self)[0]
+
+    def inputs(self) -> list:
+        """Its inputs that are textures."""
+        return [self.params[n] for n in self.kind.inputs if isinstance(self.params.get(n), Texture)]
+
+
+def input_mean(value) -> np.ndarray:
+    return value.mean() if isinstance(value, Texture) else np.broadcast_to(np.asarray(value, np.float64), 3)
+
+
+def input_bounds(value) -> tuple:
+    if isinstance(value, Texture):
+        return value.kind.bounds(value)
+    v = np.broadcast_to(np.asarray(value, np.float64), 3)
+    return v, v
+
+
+def uv_matrix(to_uv) -> np.ndarray:
+    """A uv transform as the 3x3 matrix acting on (u, v, 1): given as 3x3, or as the 4x4 of a
+    scene file's transform, whose x, y and translation parts act on uv (Mitsuba 3's to_uv)."""
+    m = np.asarray(to_uv, np.float64)
+    if m.shape == (4, 4):
+        m = m[np.ix_([0, 1, 3], [0, 1, 3])]
+    if m.shape != (3, 3) or not np.all(np.isfinite(m)):
+        raise ValueError("to_uv must be a finite 3x3 or 4x4 matrix")
+    return m
+
+
+class TextureType:
+    """One texture type. Subclasses set name, doc, inputs (the names of inputs 0 to 2, each with
+    its default in `defaults`) and define pack (the type's own fields) and mean."""
+    name: str
+    doc: str = ""
+    inputs: tuple = ()
+    defaults: dict = {}
+
+    @property
+    def leaf(self) -> bool:
+        """Whether it reads no other texture, and so may be another's input."""
+        return not self.inputs
+
+    def complete(self, params: dict) -> dict:
+        """The parameters with defaults filled in and checked; raises ValueError."""
+        values = {**self.defaults, **params}
+        values["to_uv"] = uv_matrix(values.get("to_uv", IDENTITY_UV))
+        for name in self.inputs:
+            value = values[name]
+            if isinstance(value, Texture) and not value.kind.leaf:
+                raise ValueError(f"{name}: a texture's input cannot itself combine textures ({value.type}); "
+                                 "inputs nest one level deep")
+            if not isinstance(value, Texture):
+                v = np.asarray(value, np.float64)
+                if v.size not in (1, 3) or not np.all(np.isfinite(v)):
+                    raise ValueError(f"{name} must be a number, three numbers or a texture")
+                values[name] = np.broadcast_to(v.reshape(-1), 3).copy()
+        return values
+
+    def pack(self, texture: Texture, row, texels):
+        """Fills the type's own fields of `row` (a TEXTURE record), storing any image in
+        `texels` (a TexelStore)."""
+
+    def mean(self, texture: Texture) -> np.ndarray:
+        raise NotImplementedError
+
+    def bounds(self, texture: Texture) -> tuple:
+        """(lowest, highest) of its values, rgb, or bounds of them."""
+        raise NotImplementedError

@@ -1,0 +1,49 @@
+/* A material at a surface point: its textured parameters (app/textures; kernels/texture.cl)
+ * looked up at the point's uv and written over the slots that hold their means, in a private
+ * copy that the BSDFs read (MaterialRef, kernels/bsdf.cl). A program for a scene without
+ * textures reads the scene's rows directly, as if none of this existed. */
+
+#define SLOT_EMISSION 12
+
+/* p with the binding's value written from component k on: a colour into .xyz, a number (the
+ * texture's luminance) into component k. */
+float4 with_slot(float4 p, int k, int width, float3 v)
+{
+    if (width == 3)
+        return (float4)(v, p.w);
+    float x = luminance(v);
+    return (float4)(k == 0 ? x : p.x, k == 1 ? x : p.y, k == 2 ? x : p.z, k == 3 ? x : p.w);
+}
+
+Material shade_material(const SceneData *sc, const global Material *row, float2 uv)
+{
+    Material m = *row;
+    for (int i = m.textures; i >= 0; ++i) {
+        TextureBinding b = sc->bindings[i];
+        float3 v = eval_texture(sc, b.texture, uv);
+        int k = b.slot & 3;
+        switch (b.slot >> 2) {
+        case 0: m.p0 = with_slot(m.p0, k, b.width, v); break;
+        case 1: m.p1 = with_slot(m.p1, k, b.width, v); break;
+        case 2: m.p2 = with_slot(m.p2, k, b.width, v); break;
+        default: m.emission = with_slot(m.emission, k, b.width, v); break;
+        }
+        if (b.last)
+            break;
+    }
+    return m;
+}
+
+/* The radiance a material emits at uv: its emission, or its emission texture there. */
+float3 emission_at(const SceneData *sc, const global Material *row, float2 uv)
+{
+    float3 le = row->emission.xyz;
+    for (int i = row->textures; i >= 0; ++i) {
+        TextureBinding b = sc->bindings[i];
+        if (b.slot == SLOT_EMISSION)
+            le = eval_texture(sc, b.texture, uv);
+        if (b.last)
+            break;
+    }
+    return le;
+}

@@ -1,0 +1,287 @@
+"""Textures: the kernels' lookups against NumPy versions of the same definitions (sRGB decoding,
+wrap modes, nearest and bilinear filtering, the uv transform, the combining types), a material's
+textured parameters, texture coordinates from every mesh format, and bad texture input as one
+line. Whole images against Mitsuba 3 are in test_reference.py (tests/scenes/textures.xml)."""
+
+import numpy as np
+import pytest
+from PIL import Image as PILImage
+
+from pathtrace.errors import UserError
+from pathtrace.features import Features
+from pathtrace.materials import Material, MaterialTable
+from pathtrace.scene.meshes import read_mesh
+from pathtrace.scene.mitsuba import read_mitsuba_file
+from pathtrace.textures import TEXTURES, Image, Texture, compile_textures, read_image
+from pathtrace.textures.bitmap import srgb_to_linear
+from pathtrace.types import MATERIAL
+from tests.test_mitsuba import SPHERE, write
+
+ALL_TEXTURES = Features(textures=tuple(TEXTURES))
+
+SOURCE = """
+kernel void lookup_texture(const global Texture *textures, const global uchar *texels, int index,
+                           const global float2 *uv, global float4 *out)
+{
+    SceneData sc;
+    sc.textures = textures;
+    sc.texels = texels;
+    int i = get_global_id(0);
+    out[i] = (float4)(eval_texture(&sc, index, uv[i]), 0.0f);
+}
+
+kernel void shade(const global Material *materials, const global TextureBinding *bindings,
+                  const global Texture *textures, const global uchar *texels,
+                  const global float2 *uv, global Material *out)
+{
+    SceneData sc;
+    sc.bindings = bindings;
+    sc.textures = textures;
+    sc.texels = texels;
+    int i = get_global_id(0);
+    out[i] = shade_material(&sc, &materials[0], uv[i]);
+}
+"""
+
+
+def texture(kind, **params):
+    return Texture(kind, TEXTURES[kind].complete(params))
+
+
+def lookup(kernels, tex, uv):
+    """The kernel's values of `tex` at uv (N, 2)."""
+    tables = compile_textures([[(0, 3, tex)]])
+    out = np.zeros((len(uv), 4), np.float32)
+    kernels(SOURCE, ALL_TEXTURES)("lookup_texture", len(uv), tables.textures, tables.texels,
+                                  np.int32(0), np.ascontiguousarray(uv, np.float32), out)
+    return out[:, :3]
+
+
+def wrap(i, n, mode):
+    if mode == "clamp":
+        return np.clip(i, 0, n - 1)
+    if mode == "mirror":
+        m = np.mod(i, 2 * n)
+        return np.where(m < n, m, 2 * n - 1 - m)
+    return np.mod(i, n)
+
+
+def reference_lookup(rgb, uv, mode, filt, to_uv):
+    """The bitmap's definition (kernels/textures/bitmap.cl) in NumPy, float64."""
+    h, w, _ = rgb.shape
+    st = np.column_stack([uv, np.ones(len(uv))]) @ to_uv.T
+    x, y = st[:, 0] * w, st[:, 1] * h
+    if filt == "nearest":
+        return rgb[wrap(np.floor(y).astype(int), h, mode), wrap(np.floor(x).astype(int), w, mode)]
+    x, y = x - 0.5, y - 0.5
+    x0, y0 = np.floor(x).astype(int), np.floor(y).astype(int)
+    ax, ay = (x - x0)[:, None], (y - y0)[:, None]
+
+    def texel(i, j):
+        return rgb[wrap(j, h, mode), wrap(i, w, mode)]
+    top = (1 - ax) * texel(x0, y0) + ax * texel(x0 + 1, y0)
+    bottom = (1 - ax) * texel(x0, y0 + 1) + ax * texel(x0 + 1, y0 + 1)
+    return (1 - ay) * top + ay * bottom
+
+
+FORMATS = {   # name: (texels, linear), and the tolerance of the stored precision
+    "srgb8": (lambda r: r.integers(0, 256, (5, 7, 3)).astype(np.uint8), False, 1e-5),
+    "linear8": (lambda r: r.integers(0, 256, (5, 7, 3)).astype(np.uint8), True, 1e-5),
+    "grey8": (lambda r: r.integers(0, 256, (5, 7, 1)).astype(np.uint8), False, 1e-5),
+    "rgba8": (lambda r: r.integers(0, 256, (5, 7, 4)).astype(np.uint8), False, 1e-5),
+    "half": (lambda r: r.uniform(0, 50, (5, 7, 3)).astype(np.float32), True, 2e-3),
+    "float": (lambda r: r.uniform(0, 1e6, (5, 7, 3)).astype(np.float32), True, 1e-5),
+}
+
+
+@pytest.mark.parametrize("filt", ["nearest", "bilinear"])
+@pytest.mark.parametrize("mode", ["repeat", "mirror", "clamp"])
+@pytest.mark.parametrize("fmt", list(FORMATS))
+def test_bitmap_lookup_matches_its_definition(kernels, fmt, mode, filt):
+    rng = np.random.default_rng(hash((fmt, mode, filt)) % 2**32)
+    make, linear, tolerance = FORMATS[fmt]
+    image = Image(make(rng), linear)
+    to_uv = np.array([[1.7, 0.3, -0.4], [-0.2, 1.3, 0.25], [0, 0, 1]])
+    tex = texture("bitmap", image=image, wrap=mode, filter=filt, to_uv=to_uv)
+    uv = rng.uniform(-1.5, 2.5, (500, 2))
+    expected = reference_lookup(image.rgb(), uv, mode, filt, to_uv)
+    got = lookup(kernels, tex, uv)
+    np.testing.assert_allclose(got, expected, rtol=tolerance, atol=tolerance * np.max(expected))
+
+
+def test_srgb_decoding_is_the_standards_curve(kernels):
+    """Each 8-bit value decodes to the IEC 61966-2-1 curve, whose two pieces meet at 0.04045."""
+    values = np.arange(256, dtype=np.uint8).reshape(1, 256, 1)
+    tex = texture("bitmap", image=Image(values), filter="nearest")
+    uv = np.column_stack([(np.arange(256) + 0.5) / 256, np.full(256, 0.5)])
+    got = lookup(kernels, tex, uv)[:, 0]
+    c = np.arange(256) / 255
+    exact = np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+    np.testing.assert_allclose(got, exact, rtol=1e-6, atol=1e-9)
+    assert srgb_to_linear(0.5) == pytest.approx(0.214041, abs=1e-6)
+
+
+def test_checkerboard_scale_and_mix(kernels):
+    rng = np.random.default_rng(3)
+    uv = rng.uniform(-2, 2, (400, 2))
+    board = texture("checkerboard", color0=[0.9, 0.1, 0.2], color1=0.3, to_uv=np.diag([4.0, 2.0, 1.0]))
+    st = uv * [4, 2]
+    same = ((st[:, 0] - np.floor(st[:, 0])) > 0.5) == ((st[:, 1] - np.floor(st[:, 1])) > 0.5)
+    np.testing.assert_allclose(lookup(kernels, board, uv), np.where(same[:, None], [0.9, 0.1, 0.2], 0.3), rtol=1e-6)
+    image = Image(rng.integers(0, 256, (4, 4, 3)).astype(np.uint8))
+    bitmap = texture("bitmap", image=image)
+    plain = reference_lookup(image.rgb(), uv, "repeat", "bilinear", np.eye(3))
+    np.testing.assert_allclose(lookup(kernels, texture("scale", tex=bitmap, scale=[2, 0.5, 1]), uv),
+                               plain * [2, 0.5, 1], rtol=1e-5, atol=1e-6)
+    np.testing.assert_allclose(lookup(kernels, texture("mix", tex1=0.2, tex2=bitmap, amount=0.25), uv),
+                               0.75 * 0.2 + 0.25 * plain, rtol=1e-5, atol=1e-6)
+    # the means that stand for them on the host
+    assert board.mean() == pytest.approx((np.array([0.9, 0.1, 0.2]) + 0.3) / 2)
+    np.testing.assert_allclose(texture("scale", tex=bitmap, scale=2.0).mean(), 2 * image.rgb().reshape(-1, 3).mean(0))
+
+
+def test_inputs_nest_one_level_deep():
+    inner = texture("scale", tex=0.5, scale=0.5)
+    with pytest.raises(ValueError, match="nest one level deep"):
+        compile_textures([[(0, 3, texture("mix", tex1=inner))]])
+
+
+def test_a_material_reads_its_textured_parameters_at_the_hit(kernels):
+    """A colour texture fills its slot's rgb; a number parameter (roughconductor's alpha) takes the
+    texture's luminance; the row holds their means for the host's constants."""
+    rng = np.random.default_rng(5)
+    colours = Image(rng.integers(0, 256, (3, 3, 3)).astype(np.uint8))
+    grey = Image(rng.integers(10, 256, (2, 2, 3)).astype(np.uint8), linear=True)
+    table = MaterialTable()
+    row = table.add(Material("roughconductor", {"specular_reflectance": texture("bitmap", image=colours),
+                                                "alpha": texture("bitmap", image=grey, filter="nearest"),
+                                                "eta": 0.2, "k": 3.0}))
+    tables = compile_textures([[entry[1:] for entry in entries] for entries in table.textures])
+    materials = table.rows.copy()
+    materials["textures"] = tables.first
+    uv = rng.uniform(0, 1, (64, 2))
+    out = np.zeros(len(uv), MATERIAL)
+    kernels(SOURCE, ALL_TEXTURES)("shade", len(uv), materials, tables.bindings, tables.textures, tables.texels,
+                                  np.ascontiguousarray(uv, np.float32), out)
+    np.testing.assert_allclose(out["p2"][:, :3], reference_lookup(colours.rgb(), uv, "repeat", "bilinear", np.eye(3)),
+                               rtol=1e-5, atol=1e-6)
+    alpha = reference_lookup(grey.rgb(), uv, "repeat", "nearest", np.eye(3)) @ [0.212671, 0.715160, 0.072169]
+    np.testing.assert_allclose(out["p0"][:, 3], alpha, rtol=1e-5)
+    np.testing.assert_allclose(out["p0"][:, :3], 0.2)           # untextured slots as they were
+    assert table.rows[row]["p0"][3] == pytest.approx(grey.rgb().reshape(-1, 3).mean(0) @ [0.212671, 0.715160, 0.072169], rel=1e-5)
+    again = table.get(row)
+    assert again.params["alpha"] is table.textures[row][1][3]   # the viewer's editor sees the textures
+
+
+def test_a_scene_without_textures_compiles_no_texture_code():
+    from pathtrace.compiled import CompiledScene
+    from pathtrace.device import kernel_source
+    from pathtrace.scene import load_scene
+    features = CompiledScene(load_scene("simple")).features("throughput")
+    assert features.textures == () and "TEXTURES" not in features.defines()
+    assert "eval_texture" not in kernel_source(features=features)
+
+
+# -- texture coordinates from files ---------------------------------------------------------
+
+def ply_with(tmp_path, names):
+    from plyfile import PlyData, PlyElement
+    v = np.zeros(3, [("x", "f4"), ("y", "f4"), ("z", "f4"), (names[0], "f4"), (names[1], "f4")])
+    v["x"], v["y"] = [0, 1, 0], [0, 0, 1]
+    v[names[0]], v[names[1]] = [0.1, 0.2, 0.3], [0.7, 0.8, 0.9]
+    f = np.array([([0, 1, 2],)], [("vertex_indices", "i4", (3,))])
+    path = tmp_path / "t.ply"
+    PlyData([PlyElement.describe(v, "vertex"), PlyElement.describe(f, "face")]).write(str(path))
+    return path
+
+
+@pytest.mark.parametrize("names", [("u", "v"), ("s", "t"), ("texture_u", "texture_v"), ("texture_s", "texture_t")])
+def test_ply_texture_coordinates_are_read_as_they_are(tmp_path, names):
+    uvs = read_mesh(ply_with(tmp_path, names), "test").uvs
+    np.testing.assert_allclose(uvs, [[0.1, 0.7], [0.2, 0.8], [0.3, 0.9]], rtol=1e-6)
+
+
+def test_obj_and_gltf_texture_coordinates_put_v_0_at_the_images_top(tmp_path):
+    """OBJ's vt has v = 0 at an image's bottom: flipped, as Mitsuba 3's OBJ reader does. glTF's
+    TEXCOORD_0 has it at the top already (trimesh flips it on reading and writing)."""
+    import trimesh
+    (tmp_path / "q.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0.1 0.2\nvt 0.3 0.4\nvt 0.5 0.6\nf 1/1 2/2 3/3\n")
+    np.testing.assert_allclose(read_mesh(tmp_path / "q.obj", "test").uvs, [[0.1, 0.8], [0.3, 0.6], [0.5, 0.4]], rtol=1e-6)
+    mesh = trimesh.Trimesh([[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 1, 2]], process=False,
+                           visual=trimesh.visual.TextureVisuals(uv=[[0.1, 0.2], [0.3, 0.4], [0.5, 0.6]]))
+    mesh.export(tmp_path / "q.glb")
+    np.testing.assert_allclose(read_mesh(tmp_path / "q.glb", "test").uvs, [[0.1, 0.8], [0.3, 0.6], [0.5, 0.4]], rtol=1e-6)
+
+
+def test_texture_coordinates_that_are_not_finite_are_refused(tmp_path):
+    path = ply_with(tmp_path, ("u", "v"))
+    data = path.read_bytes().replace(np.float32(0.8).tobytes(), np.float32(np.nan).tobytes())
+    path.write_bytes(data)
+    with pytest.raises(UserError, match=r"t.ply: the texture coordinates of vertex 1 are not finite"):
+        read_mesh(path, "test")
+
+
+# -- bad texture files, in scene files --------------------------------------------------------
+
+def bitmap_scene(tmp_path, filename, extra=""):
+    return write(tmp_path, f'<shape type="sphere"><bsdf type="diffuse"><texture type="bitmap" name="reflectance">'
+                           f'<string name="filename" value="{filename}"/>{extra}</texture></bsdf></shape>')
+
+
+def make_bad(tmp_path, case):
+    if case == "truncated":
+        PILImage.fromarray(np.zeros((64, 64, 3), np.uint8) + 100).save(tmp_path / "t.png")
+        data = (tmp_path / "t.png").read_bytes()
+        (tmp_path / "t.png").write_bytes(data[:len(data) // 2])
+        return "t.png", "", "is not a readable PNG image"
+    if case == "not an image":
+        (tmp_path / "t.png").write_text("hello")
+        return "t.png", "", "is not a readable PNG image"
+    if case == "huge":
+        PILImage.fromarray(np.zeros((1, 16385), np.uint8)).save(tmp_path / "t.png")
+        return "t.png", "", "is 16385x1 texels; pathtrace takes at most 16384 on a side"
+    if case == "NaN texels":
+        (tmp_path / "t.pfm").write_bytes(b"PF\n2 1\n-1.0\n" + np.array([1, 2, np.nan, 1, 1, 1], "<f4").tobytes())
+        return "t.pfm", "", "holds negative, NaN or infinite pixels"
+    if case == "unknown format":
+        (tmp_path / "t.gif").write_bytes(b"GIF89a")
+        return "t.gif", "", "unknown image format '.gif'"
+    if case == "unknown wrap mode":
+        PILImage.fromarray(np.zeros((2, 2, 3), np.uint8)).save(tmp_path / "t.png")
+        return "t.png", '<string name="wrap_mode" value="wobble"/>', "wrap: unknown wrap 'wobble' (known: repeat, mirror, clamp)"
+    raise AssertionError(case)
+
+
+@pytest.mark.parametrize("case", ["truncated", "not an image", "huge", "NaN texels", "unknown format", "unknown wrap mode"])
+def test_bad_texture_files_fail_with_one_line(tmp_path, case):
+    filename, extra, message = make_bad(tmp_path, case)
+    with pytest.raises(UserError) as e:
+        read_mitsuba_file(bitmap_scene(tmp_path, filename, extra))
+    assert message in str(e.value) and "scene.xml:3" in str(e.value) and "\n" not in str(e.value), str(e.value)
+
+
+def test_image_formats_read_alike(tmp_path):
+    """PNG, TGA and BMP hold the same 8-bit texels; a 16-bit PNG decodes to float."""
+    rng = np.random.default_rng(1)
+    rgb = rng.integers(0, 256, (3, 5, 3)).astype(np.uint8)
+    for suffix in ("png", "tga", "bmp"):
+        PILImage.fromarray(rgb).save(tmp_path / f"t.{suffix}")
+        image = read_image(tmp_path / f"t.{suffix}", "test")
+        assert image.texels.dtype == np.uint8 and not image.linear
+        np.testing.assert_array_equal(image.texels, rgb)
+    grey16 = (rng.integers(0, 65536, (3, 5))).astype(np.uint16)
+    PILImage.fromarray(grey16).save(tmp_path / "g.png")
+    image = read_image(tmp_path / "g.png", "test")
+    np.testing.assert_allclose(image.texels[..., 0], srgb_to_linear(grey16 / 65535.0), rtol=1e-6, atol=1e-7)
+
+
+def test_a_shared_texture_is_stored_once(tmp_path):
+    PILImage.fromarray(np.zeros((8, 8, 3), np.uint8)).save(tmp_path / "t.png")
+    body = ('<texture type="bitmap" id="t"><string name="filename" value="t.png"/></texture>'
+            '<shape type="sphere"><bsdf type="diffuse"><ref name="reflectance" id="t"/></bsdf></shape>'
+            '<shape type="sphere"><point name="center" x="3" y="0" z="0"/><bsdf type="plastic">'
+            '<ref name="diffuse_reflectance" id="t"/></bsdf></shape>' + SPHERE)
+    scene = read_mitsuba_file(write(tmp_path, body))
+    assert len(scene.materials.all_textures()) == 1
+    tables = compile_textures([[e[1:] for e in entries] for entries in scene.materials.textures])
+    assert len(tables.texels) == 8 * 8 * 3
