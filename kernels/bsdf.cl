@@ -29,8 +29,7 @@ typedef const global Material *MaterialRef;
 /* Declares `m`, the MaterialRef of surface s's material (a Surface, kernels/bvh.cl). */
 #ifdef TEXTURES
 #define MATERIAL_AT(m, sc, s)                                                                     \
-    Material m##_shaded = shade_material(sc, &(sc)->materials[(sc)->prim_material[(s).prim]],    \
-                                         (s).uv);                                                \
+    Material m##_shaded = shade_material(sc, &(sc)->materials[(sc)->prim_material[(s).prim]], &(s)); \
     MaterialRef m = &m##_shaded
 #else
 #define MATERIAL_AT(m, sc, s) MaterialRef m = &(sc)->materials[(sc)->prim_material[(s).prim]]

@@ -181,7 +181,8 @@ typedef struct {
     float3 ns;       /* unit shading normal, in ng's hemisphere */
     float offset;    /* how far rays leaving p start from it along ng (kernels/spawn.cl) */
     int prim;        /* the primitive hit */
-    float2 uv;       /* texture coordinates (in a program for a scene with textures) */
+    float2 b;        /* a triangle's barycentric weights of v1 and v2, from which surface_uv
+                        finds its texture coordinates when a texture needs them */
 } Surface;
 
 Surface surface_at(const SceneData *sc, const Hit *hit, float3 o, float3 d)
@@ -194,17 +195,23 @@ Surface surface_at(const SceneData *sc, const Hit *hit, float3 o, float3 d)
         const global Triangle *tri = &sc->triangles[hit->prim - sc->num_spheres];
         triangle_surface(tri, sc->normals, hit->b1, hit->b2, &s.p, &error, &s.ng, &s.ns);
         s.offset = error_offset(s.ng, error);
-#ifdef TEXTURES
-        s.uv = triangle_uv(tri, sc->uvs, hit->b1, hit->b2);
-#endif
+        s.b = (float2)(hit->b1, hit->b2);
         return s;
     }
 #endif
     sphere_surface(sc->spheres[hit->prim], o, d, hit->t, &s.p, &error, &s.ng);
     s.ns = s.ng;
     s.offset = error_offset(s.ng, error);
-#ifdef TEXTURES
-    s.uv = sphere_uv(sc->spheres[hit->prim], s.p);
-#endif
+    s.b = (float2)(0.0f);
     return s;
+}
+
+/* The texture coordinates of point p on primitive prim, a triangle's barycentric weights b. */
+float2 surface_uv(const SceneData *sc, int prim, float2 b, float3 p)
+{
+#ifndef NO_TRIANGLES
+    if (prim >= sc->num_spheres)
+        return triangle_uv(&sc->triangles[prim - sc->num_spheres], sc->uvs, b.x, b.y);
+#endif
+    return sphere_uv(sc->spheres[prim], p);
 }

@@ -52,7 +52,7 @@ typedef struct {
     float pdf;       /* its density per solid angle, the light's choice included */
     float3 y;        /* the point on the light (unused for the environment) */
     int prim;        /* the emitter: a primitive, or -1 for the environment */
-    float2 uv;       /* y's texture coordinates (in a program for a scene with textures) */
+    float2 b;        /* y's barycentric weights on a triangle (for its texture coordinates) */
 } LightSample;
 
 /* Draws a light and a direction towards it from point x of shading normal n, from four hash
@@ -71,11 +71,7 @@ LightSample sample_light(const SceneData *sc, const RenderParams *p, float3 x, f
 #ifndef NO_TRIANGLES
     else if (light.prim >= sc->num_spheres) {
         const global Triangle *tri = &sc->triangles[light.prim - sc->num_spheres];
-        float2 b;
-        ls.y = sample_triangle_area(tri, u.y, u.z, &b);
-#ifdef TEXTURES
-        ls.uv = triangle_uv(tri, sc->uvs, b.x, b.y);
-#endif
+        ls.y = sample_triangle_area(tri, u.y, u.z, &ls.b);
         ls.wi = unit(ls.y - x);
         ls.pdf = light.pick * pdf_triangle_solid_angle(tri, x, ls.y);
     }
@@ -88,9 +84,6 @@ LightSample sample_light(const SceneData *sc, const RenderParams *p, float3 x, f
          * sphere, the tangent point */
         float t = intersect_sphere(s, x, ls.wi, INFINITY);
         ls.y = x + (isinf(t) ? dot(s.xyz - x, ls.wi) : t) * ls.wi;
-#ifdef TEXTURES
-        ls.uv = sphere_uv(s, ls.y);
-#endif
     }
     return ls;
 }
@@ -103,7 +96,7 @@ float3 light_radiance(const SceneData *sc, const RenderParams *p, const LightSam
         return lookup_environment(sc->env, p, ls->wi);
     const global Material *m = &sc->materials[sc->prim_material[ls->prim]];
 #ifdef TEXTURES
-    return emission_at(sc, m, ls->uv);
+    return m->textures < 0 ? m->emission.xyz : emission_at(sc, m, surface_uv(sc, ls->prim, ls->b, ls->y));
 #else
     return m->emission.xyz;
 #endif

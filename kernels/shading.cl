@@ -15,30 +15,38 @@ float4 with_slot(float4 p, int k, int width, float3 v)
     return (float4)(k == 0 ? x : p.x, k == 1 ? x : p.y, k == 2 ? x : p.z, k == 3 ? x : p.w);
 }
 
-Material shade_material(const SceneData *sc, const global Material *row, float2 uv)
+/* Writes the textured parameters of material m (its bindings) at texture coordinates uv. */
+void apply_textures(const SceneData *sc, Material *m, float2 uv)
 {
-    Material m = *row;
-    for (int i = m.textures; i >= 0; ++i) {
+    for (int i = m->textures;; ++i) {
         TextureBinding b = sc->bindings[i];
         float3 v = eval_texture(sc, b.texture, uv);
         int k = b.slot & 3;
         switch (b.slot >> 2) {
-        case 0: m.p0 = with_slot(m.p0, k, b.width, v); break;
-        case 1: m.p1 = with_slot(m.p1, k, b.width, v); break;
-        case 2: m.p2 = with_slot(m.p2, k, b.width, v); break;
-        default: m.emission = with_slot(m.emission, k, b.width, v); break;
+        case 0: m->p0 = with_slot(m->p0, k, b.width, v); break;
+        case 1: m->p1 = with_slot(m->p1, k, b.width, v); break;
+        case 2: m->p2 = with_slot(m->p2, k, b.width, v); break;
+        default: m->emission = with_slot(m->emission, k, b.width, v); break;
         }
         if (b.last)
-            break;
+            return;
     }
+}
+
+/* The material `row` at surface s (kernels/bvh.cl), whose uv is found only if a texture needs it. */
+Material shade_material(const SceneData *sc, const global Material *row, const Surface *s)
+{
+    Material m = *row;
+    if (m.textures >= 0)
+        apply_textures(sc, &m, surface_uv(sc, s->prim, s->b, s->p));
     return m;
 }
 
-/* The radiance a material emits at uv: its emission, or its emission texture there. */
+/* The radiance a textured material emits at uv: its emission, or its emission texture there. */
 float3 emission_at(const SceneData *sc, const global Material *row, float2 uv)
 {
     float3 le = row->emission.xyz;
-    for (int i = row->textures; i >= 0; ++i) {
+    for (int i = row->textures;; ++i) {
         TextureBinding b = sc->bindings[i];
         if (b.slot == SLOT_EMISSION)
             le = eval_texture(sc, b.texture, uv);

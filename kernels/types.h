@@ -65,7 +65,7 @@ typedef struct {
     int height;
     uint texels;       /* its first texel, in 4-byte words of the texel buffer */
     int format;        /* TEXELS_* of kernels/textures/bitmap.cl */
-    int channels;      /* 1, 3 or 4 */
+    int channels;      /* 1 or 4 (an rgb image is stored as rgba) */
     int wrap;          /* WRAP_* */
     int filter;        /* FILTER_* */
     int pad;

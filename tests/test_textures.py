@@ -39,7 +39,9 @@ kernel void shade(const global Material *materials, const global TextureBinding 
     sc.textures = textures;
     sc.texels = texels;
     int i = get_global_id(0);
-    out[i] = shade_material(&sc, &materials[0], uv[i]);
+    Material m = materials[0];
+    apply_textures(&sc, &m, uv[i]);
+    out[i] = m;
 }
 """
 
@@ -107,6 +109,17 @@ def test_bitmap_lookup_matches_its_definition(kernels, fmt, mode, filt):
     expected = reference_lookup(image.rgb(), uv, mode, filt, to_uv)
     got = lookup(kernels, tex, uv)
     np.testing.assert_allclose(got, expected, rtol=tolerance, atol=tolerance * np.max(expected))
+
+
+@pytest.mark.parametrize("mode", ["repeat", "mirror", "clamp"])
+def test_coordinates_beyond_any_image_look_up_a_texel(kernels, mode):
+    """NaN, infinite and huge uvs (a degenerate transform, a broken file) read a texel of the
+    image, never memory beyond it."""
+    texels = np.arange(1, 13, dtype=np.uint8).reshape(3, 4, 1) * 20
+    tex = texture("bitmap", image=Image(texels, linear=True), wrap=mode, filter="bilinear")
+    uv = np.array([[np.nan, 0.5], [np.inf, -np.inf], [1e30, -1e30], [3e9, 0.25], [-0.0, np.nan]])
+    got = lookup(kernels, tex, uv)
+    assert np.all(np.isfinite(got)) and np.all(got >= 20 / 255 - 1e-6) and np.all(got <= 240 / 255 + 1e-6)
 
 
 def test_srgb_decoding_is_the_standards_curve(kernels):
@@ -284,4 +297,4 @@ def test_a_shared_texture_is_stored_once(tmp_path):
     scene = read_mitsuba_file(write(tmp_path, body))
     assert len(scene.materials.all_textures()) == 1
     tables = compile_textures([[e[1:] for e in entries] for entries in scene.materials.textures])
-    assert len(tables.texels) == 8 * 8 * 3
+    assert len(tables.texels) == 1024 + 8 * 8 * 4      # the sRGB table, then the image once (rgb as rgba)

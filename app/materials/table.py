@@ -150,8 +150,10 @@ class MaterialTable:
         return list(found.values())
 
     def texel_bytes(self) -> int:
-        """An upper bound of the bytes the textures' images take on a device."""
-        return sum(t.params["image"].texels.nbytes for t in self.all_textures() if "image" in t.params)
+        """An upper bound of the bytes the textures' images take on a device (an rgb image is
+        stored as rgba there)."""
+        images = {id(t.params["image"]): t.params["image"].texels for t in self.all_textures() if "image" in t.params}
+        return sum(a.nbytes * (4 if a.shape[2] == 3 else a.shape[2]) // a.shape[2] for a in images.values())
 
     def name_of(self, index: int) -> str | None:
         return next((n for n, i in self.names.items() if i == index), None)

@@ -134,6 +134,8 @@ class Bitmap(TextureType):
             fmt, data = HALF, data.astype(np.float16)
         else:
             fmt = FLOAT
+        if data.shape[2] == 3:      # one aligned load per texel (kernels/textures/bitmap.cl)
+            data = np.concatenate([data, np.zeros_like(data[..., :1])], axis=2)
         row["width"], row["height"] = image.size
         row["channels"] = data.shape[2]
         row["format"] = fmt

@@ -2,7 +2,7 @@
 eval_input, eval_texture) generated from it, so that adding a texture type is one kernel file
 (kernels/textures/<name>.cl) and one entry here."""
 
-from pathtrace.textures.bitmap import SRGB_TABLE, Bitmap
+from pathtrace.textures.bitmap import Bitmap
 from pathtrace.textures.checkerboard import Checkerboard
 from pathtrace.textures.constant import Constant
 from pathtrace.textures.mix import Mix
@@ -22,10 +22,6 @@ def kernel_parts(names) -> list:
     leaves = [n for n in TEXTURES if n in names and TEXTURES[n].leaf]
     combined = [n for n in TEXTURES if n in names and not TEXTURES[n].leaf]
     tags = "".join(f"#define TEXTURE_{n.upper()} {TAGS[n]}\n" for n in TEXTURES)
-    if "bitmap" in names:
-        tags += ("/* the sRGB transfer function's inverse (IEC 61966-2-1) at the 256 8-bit values */\n"
-                 "constant float SRGB_TO_LINEAR[256] = {"
-                 + ", ".join(f"{float(v)!r}f" for v in SRGB_TABLE) + "};\n")
 
     def dispatch(signature, types):
         cases = "".join(f"    case TEXTURE_{n.upper()}: return eval_{n}(sc, t, uv);\n" for n in types)

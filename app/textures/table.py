@@ -6,30 +6,34 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pathtrace.textures.bitmap import SRGB_TABLE
 from pathtrace.textures.registry import TAGS, TEXTURES
 from pathtrace.textures.texture import Texture
 from pathtrace.types import TEXTURE, TEXTURE_BINDING
 
 
 class TexelStore:
-    """The texel buffer being filled: each image 4-byte aligned, an image that several textures
-    share stored once."""
+    """The texel buffer being filled: the sRGB decoding table (256 float32, which
+    kernels/textures/bitmap.cl reads), then each image 16-byte aligned, an image that several
+    textures share stored once."""
 
     def __init__(self):
-        self.parts, self.words, self.at = [], 0, {}
+        table = SRGB_TABLE.astype(np.float32).view(np.uint8)
+        self.parts, self.words, self.at = [table], len(table) // 4, {}
 
     def add(self, key, data: np.ndarray) -> int:
         """Stores `data` (once per key); returns its first 4-byte word."""
         if id(key) not in self.at:
+            # aligned to 16 bytes, so that a texel of four floats is one aligned load
             raw = np.ascontiguousarray(data).view(np.uint8).reshape(-1)
-            raw = np.concatenate([raw, np.zeros(-len(raw) % 4, np.uint8)])
+            raw = np.concatenate([raw, np.zeros(-len(raw) % 16, np.uint8)])
             self.at[id(key)] = self.words
             self.parts.append(raw)
             self.words += len(raw) // 4
         return self.at[id(key)]
 
     def buffer(self) -> np.ndarray:
-        return np.concatenate(self.parts) if self.parts else np.zeros(4, np.uint8)
+        return np.concatenate(self.parts)
 
 
 @dataclass
