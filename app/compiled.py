@@ -126,7 +126,7 @@ class CompiledScene:
         used = np.unique(self.materials["type"][np.unique(self.prim_material)])
         return Features(triangles=self.num_triangles > 0,
                         bsdfs=tuple(name for name, tag in TAGS.items() if tag in used),
-                        textures=self.textures.types,
+                        textures=self.textures.types, masks=self.textures.masks,
                         russian_roulette=russian_roulette, stack=stack_size(self.bvh.depth),
                         flat=(self.num_spheres, self.num_triangles)
                         if self.num_spheres + self.num_triangles <= FLAT_MAX else ())

@@ -15,11 +15,12 @@ from pathtrace.errors import UserError, format_bytes, short
 from pathtrace.features import Features
 from pathtrace.resources import resource_dir
 
-# The order in which the kernel files are joined into one program: the core files, the texture
-# kernels of the types a scene uses (app/textures/registry.py: kernel_parts), the BSDFs of the
-# material registry and their generated dispatch, the rest.
-CORE_FILES = ("types.h", "vector.cl", "rng.cl", "sampling.cl", "scene.cl", "spawn.cl", "shapes/sphere.cl",
-              "shapes/triangle.cl", "bvh.cl")
+# The order in which the kernel files are joined into one program: the basics, the texture
+# kernels of the types a scene uses (app/textures/registry.py: kernel_parts), the shapes and
+# traversal (with alpha masks where a scene has them), the shading of textured materials, the
+# BSDFs of the material registry and their generated dispatch, the rest.
+BASIC_FILES = ("types.h", "vector.cl", "rng.cl", "sampling.cl", "scene.cl")
+SHAPE_FILES = ("spawn.cl", "shapes/sphere.cl", "shapes/triangle.cl")
 BSDF_FILES = ("bsdf.cl", "fresnel.cl", "microfacet.cl", "coating.cl")
 LATER_FILES = ("environment.cl", "lights.cl", "camera.cl", "integrator.cl", "aovs.cl", "display.cl")
 
@@ -34,10 +35,12 @@ def kernel_source(extra: str = "", features: Features = Features()) -> str:
     from pathtrace.textures import kernel_parts
 
     folder = resource_dir("kernels")
-    texts = [(name, (folder / name).read_text()) for name in CORE_FILES]
+    texts = [(name, (folder / name).read_text()) for name in BASIC_FILES]
     texts += [(name, text if text is not None else (folder / name).read_text())
               for name, text in kernel_parts(features.textures)]
-    texts += [(name, (folder / name).read_text()) for name in (*BSDF_FILES, *kernel_files(features.bsdfs))]
+    files = (*SHAPE_FILES, *(("masks.cl",) if features.masks else ()), "bvh.cl",
+             *(("shading.cl",) if features.textures else ()), *BSDF_FILES, *kernel_files(features.bsdfs))
+    texts += [(name, (folder / name).read_text()) for name in files]
     texts.append(("app/materials/registry.py: dispatch_source", dispatch_source(features.bsdfs)))
     texts += [(name, (folder / name).read_text()) for name in LATER_FILES]
     if extra:

@@ -35,9 +35,6 @@ typedef const global Material *MaterialRef;
 #define MATERIAL_AT(m, sc, s) MaterialRef m = &(sc)->materials[(sc)->prim_material[(s).prim]]
 #endif
 
-#define MATERIAL_TWOSIDED 1      /* the same BSDF on both sides (front-side frame mirrored) */
-#define MATERIAL_DELTA 2         /* every lobe is a delta: no light sampling here */
-#define MATERIAL_TRANSMISSIVE 4  /* an interface seen from both sides */
 
 /* What a sampled lobe is, as pbrt-v4's BxDFFlags and Mitsuba's BSDFFlags. */
 #define LOBE_REFLECTION 1

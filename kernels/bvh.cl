@@ -1,5 +1,6 @@
 /* Ray queries against the whole scene: the nearest hit through the BVH, over spheres and
- * triangles together. */
+ * triangles together. In a scene with alpha masks a hit the mask cuts out is no hit
+ * (kernels/masks.cl). */
 
 typedef struct {
     float t;
@@ -28,7 +29,21 @@ float4 intersect_boxes(const global BVHNode *n, float3 o, float3 inv_d, float t_
 void intersect_spheres(const SceneData *sc, int first, int count, float3 o, float3 d, Hit *hit)
 {
     for (int i = first; i < first + count; ++i) {
+#ifdef ALPHA_MASKS
+        /* the ray crosses a sphere's surface twice: where the mask cuts the nearer crossing out,
+           the farther one may be met */
+        float2 crossings = sphere_crossings(sc->spheres[i], o, d);
+        float t = INFINITY;
+        for (int k = 0; k < 2; ++k) {
+            float tk = k == 0 ? crossings.x : crossings.y;
+            if (tk > 0.0f && tk < hit->t && !masked_out(sc, i, (float2)(0.0f), o + tk * d, d)) {
+                t = tk;
+                break;
+            }
+        }
+#else
         float t = intersect_sphere(sc->spheres[i], o, d, hit->t);
+#endif
         if (t < hit->t) {
             hit->t = t;
             hit->prim = i;
@@ -47,6 +62,10 @@ void intersect_triangles(const SceneData *sc, int first, int count, float3 o, fl
             continue;
         float b1, b2;
         float t = intersect_triangle(&sc->triangles[i], o, row_x, row_y, row_z, hit->t, &b1, &b2);
+#ifdef ALPHA_MASKS
+        if (t < hit->t && masked_out(sc, sc->num_spheres + i, (float2)(b1, b2), o + t * d, d))
+            continue;
+#endif
         if (t < hit->t) {
             hit->t = t;
             hit->prim = sc->num_spheres + i;

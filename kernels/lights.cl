@@ -96,7 +96,17 @@ float3 light_radiance(const SceneData *sc, const RenderParams *p, const LightSam
         return lookup_environment(sc->env, p, ls->wi);
     const global Material *m = &sc->materials[sc->prim_material[ls->prim]];
 #ifdef TEXTURES
-    return m->textures < 0 ? m->emission.xyz : emission_at(sc, m, surface_uv(sc, ls->prim, ls->b, ls->y));
+    if (m->textures < 0)
+        return m->emission.xyz;
+    float2 uv = surface_uv(sc, ls->prim, ls->b, ls->y);
+    float3 le = emission_at(sc, m, uv);
+#ifdef ALPHA_MASKS
+    /* a masked emitter is there with probability `opacity` where paths meet it; light sampling
+       finds its holes too, so it weighs the radiance by that probability */
+    if (m->flags & MATERIAL_MASKED)
+        le *= opacity_at(sc, m, uv);
+#endif
+    return le;
 #else
     return m->emission.xyz;
 #endif

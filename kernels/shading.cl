@@ -20,13 +20,12 @@ void apply_textures(const SceneData *sc, Material *m, float2 uv)
 {
     for (int i = m->textures;; ++i) {
         TextureBinding b = sc->bindings[i];
-        float3 v = eval_texture(sc, b.texture, uv);
         int k = b.slot & 3;
-        switch (b.slot >> 2) {
-        case 0: m->p0 = with_slot(m->p0, k, b.width, v); break;
-        case 1: m->p1 = with_slot(m->p1, k, b.width, v); break;
-        case 2: m->p2 = with_slot(m->p2, k, b.width, v); break;
-        default: m->emission = with_slot(m->emission, k, b.width, v); break;
+        switch (b.slot >> 2) {      /* an opacity (slot 16) is the traversal's (kernels/masks.cl) */
+        case 0: m->p0 = with_slot(m->p0, k, b.width, eval_texture(sc, b.texture, uv)); break;
+        case 1: m->p1 = with_slot(m->p1, k, b.width, eval_texture(sc, b.texture, uv)); break;
+        case 2: m->p2 = with_slot(m->p2, k, b.width, eval_texture(sc, b.texture, uv)); break;
+        case 3: m->emission = with_slot(m->emission, k, b.width, eval_texture(sc, b.texture, uv)); break;
         }
         if (b.last)
             return;

@@ -34,12 +34,17 @@ typedef struct {
     float4 p2;
     float4 emission;  /* Le in rgb, emitted on the front side */
     int type;
-    int flags;            /* MATERIAL_* bits of kernels/bsdf.cl */
+    int flags;            /* MATERIAL_* bits */
     float continuation;   /* the report's Russian roulette: probability of going on from here */
     int textures;         /* its first row of the texture bindings, or -1: none */
     float table[16];      /* a function of cos(theta) that a BSDF tabulates on the host, at
                              cos = (k / 15)^2 (app/materials/microfacet.py; lookup_cos_table) */
 } Material;
+
+#define MATERIAL_TWOSIDED 1      /* the same BSDF on both sides (front-side frame mirrored) */
+#define MATERIAL_DELTA 2         /* every lobe is a delta: no light sampling here */
+#define MATERIAL_TRANSMISSIVE 4  /* an interface seen from both sides */
+#define MATERIAL_MASKED 8        /* it has an opacity (kernels/masks.cl) */
 
 /* A parameter of a material that a texture gives: the texture's value at the hit goes into the
  * material's floats from `slot` on (p0.x is 0, p1.x 4, p2.x 8, emission.x 12). A material's

@@ -34,6 +34,7 @@ SCENES = {  # name: (width, height, spp per render, renders)
     "meshes-smaller": (None, None, 1024, 16),
     "meshes-larger": (None, None, 1024, 16),
     "textures": (None, None, 1024, 16),
+    "masks": (None, None, 1024, 16),
 }
 XML_SCENES = OUT.parent / "scenes"
 MAX_DEPTH = 8

@@ -21,7 +21,8 @@ def reference_scene(name):
 
 
 def test_references_are_present():
-    assert {p.stem for p in REFERENCES} >= {"simple-diffuse", "spheres8k-diffuse", "cbox", "envmap-spheres", "meshes", "meshes-smaller", "meshes-larger"}
+    assert {p.stem for p in REFERENCES} >= {"simple-diffuse", "spheres8k-diffuse", "cbox", "envmap-spheres", "meshes",
+                                            "meshes-smaller", "meshes-larger", "textures", "masks"}
 
 
 @pytest.mark.parametrize("nee", [True, False], ids=["nee", "no-nee"])

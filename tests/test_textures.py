@@ -298,3 +298,49 @@ def test_a_shared_texture_is_stored_once(tmp_path):
     assert len(scene.materials.all_textures()) == 1
     tables = compile_textures([[e[1:] for e in entries] for entries in scene.materials.textures])
     assert len(tables.texels) == 1024 + 8 * 8 * 4      # the sRGB table, then the image once (rgb as rgba)
+
+
+# -- alpha masks ------------------------------------------------------------------------------
+
+def masked_wall_scene(opacity, nee):
+    """A black wall of the given opacity filling the view in front of a white sky: each pixel
+    sees the sky through it with probability 1 - opacity."""
+    from pathtrace.api import load_dict
+    return load_dict({
+        "camera": {"eye": [0, 0, 3], "look_at": [0, 0, 0], "vfov": 30},
+        "environment": {"color": 1.0},
+        "render": {"width": 16, "height": 16, "max_depth": 4, "nee": nee},
+        "textures": {"holes": {"type": "checkerboard", "color0": 0.0, "color1": 1.0, "uv_scale": 64}},
+        "materials": {"wall": {"type": "diffuse", "rho_d": 0.0, "opacity": opacity}},
+        "meshes": [{"material": "wall", "vertices": [[-9, -9, 0], [9, -9, 0], [9, 9, 0], [-9, 9, 0]],
+                    "faces": [[0, 1, 2, 3]], "uvs": [[0, 0], [1, 0], [1, 1], [0, 1]]}]})
+
+
+@pytest.mark.parametrize("nee", [False, True], ids=["no-nee", "nee"])
+@pytest.mark.parametrize("opacity", [0.3, "holes"])
+def test_a_masked_surface_lets_through_one_minus_its_opacity(backend, opacity, nee):
+    """The pixels' mean is the sky times 1 - opacity: 0.7 for a constant 0.3, and 0.5 for a fine
+    checkerboard of opaque and clear squares; a Binomial count, so the tolerance is its standard
+    error."""
+    from pathtrace.renderer import Renderer
+    r = Renderer(backend, masked_wall_scene(opacity, nee))
+    r.add_samples(64)
+    expected = 0.7 if opacity == 0.3 else 0.5
+    mean, n = float(r.mean().mean()), 16 * 16 * 64
+    assert abs(mean - expected) < 5 * np.sqrt(expected * (1 - expected) / n), mean
+
+
+def test_opacity_is_checked_and_written_back(tmp_path):
+    from pathtrace.api import load_dict
+    from pathtrace.scene.toml_reader import read_scene_file
+    from pathtrace.scene.toml_writer import scene_toml
+    base = {"spheres": [{"center": [0, 0, 0], "radius": 1, "material": "m"}]}
+    with pytest.raises(UserError, match=r"materials.m.opacity: must be at most 1.0, got 1.5"):
+        load_dict({**base, "materials": {"m": {"type": "diffuse", "rho_d": 0.5, "opacity": 1.5}}})
+    PILImage.fromarray(np.full((2, 2), 128, np.uint8)).save(tmp_path / "a.png")
+    scene = load_dict({**base, "textures": {"a": {"type": "bitmap", "file": "a.png", "raw": True}},
+                       "materials": {"m": {"type": "diffuse", "rho_d": 0.5, "opacity": "a"}}}, folder=tmp_path)
+    (tmp_path / "out.toml").write_text(scene_toml(scene, tmp_path / "out.toml"))
+    again = read_scene_file(tmp_path / "out.toml")
+    opacity = again.materials.get(0).opacity
+    assert isinstance(opacity, Texture) and opacity.mean() == pytest.approx(128 / 255)

@@ -8,10 +8,11 @@ import numpy as np
 
 from pathtrace.textures.texture import Texture
 
-# MATERIAL.flags bits, as kernels/bsdf.cl defines them
+# MATERIAL.flags bits, as kernels/types.h defines them
 TWOSIDED = 1        # the same BSDF on both sides
 DELTA = 2           # every lobe is a delta: no light sampling there
-TRANSMISSIVE = 4    # an interface seen from both sides, the BSDF telling them apart
+TRANSMISSIVE = 4    # an interface seen from both sides
+MASKED = 8          # it has an opacity (an alpha mask), the BSDF telling them apart
 
 
 @dataclass(frozen=True)

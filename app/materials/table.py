@@ -8,9 +8,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pathtrace.errors import UserError, short
-from pathtrace.materials.bsdf import TWOSIDED, constant_of
-from pathtrace.textures.texture import Texture
+from pathtrace.materials.bsdf import MASKED, TWOSIDED, constant_of
 from pathtrace.materials.registry import BSDFS, TAGS
+from pathtrace.textures.texture import Texture
 from pathtrace.types import MATERIAL
 
 
@@ -22,10 +22,17 @@ class Material:
     params: dict = field(default_factory=dict)
     emission: np.ndarray = field(default_factory=lambda: np.zeros(3))
     twosided: bool = False
+    opacity: object = 1.0         # an alpha mask: the probability that a ray meets the surface,
+                                  # a number or a Texture (kernels/masks.cl)
+
+    @property
+    def masked(self) -> bool:
+        return isinstance(self.opacity, Texture) or float(self.opacity) < 1.0
 
     def textures(self) -> list:
         """(parameter, first float of its slot, width, Texture) of each textured parameter, the
-        emission's as "emission"."""
+        emission's as "emission" and the opacity's (a constant one as a constant texture) as
+        "opacity"."""
         out = []
         for p in BSDFS[self.type].params:
             value = self.params.get(p.name)
@@ -33,6 +40,10 @@ class Material:
                 out.append((p.name, *slot_index(p.slot), value))
         if isinstance(self.emission, Texture):
             out.append(("emission", *slot_index("emission.xyz"), self.emission))
+        if self.masked:
+            opacity = self.opacity if isinstance(self.opacity, Texture) else \
+                Texture("constant", {"value": np.full(3, float(self.opacity)), "to_uv": np.eye(3)})
+            out.append(("opacity", *slot_index("opacity.x"), opacity))
         return out
 
     def constants(self) -> tuple:
@@ -42,7 +53,7 @@ class Material:
                 constant_of(self.emission, "color"))
 
 
-_FIELDS = {"p0": 0, "p1": 4, "p2": 8, "emission": 12}
+_FIELDS = {"p0": 0, "p1": 4, "p2": 8, "emission": 12, "opacity": 16}   # kernels/shading.cl, masks.cl
 
 
 def slot_index(slot: str) -> tuple:
@@ -92,9 +103,8 @@ class MaterialTable:
         return len(self.rows)
 
     def add(self, material: Material, name: str = None) -> int:
-        params, emission = material.constants()
-        row = int(self.add_rows(pack(material.type, params, emission, material.twosided), name)[0])
-        self.textures[row] = material.textures()
+        row = int(self.add_rows(np.zeros(1, MATERIAL), name)[0])
+        self.set(row, material)
         return row
 
     def add_rows(self, rows: np.ndarray, name: str = None) -> np.ndarray:
@@ -111,8 +121,8 @@ class MaterialTable:
         material = Material(type_name, BSDFS[type_name].unpack(row), row["emission"][:3].astype(np.float64),
                             bool(row["flags"] & TWOSIDED))
         for name, _, _, texture in self.textures[index]:
-            if name == "emission":
-                material.emission = texture
+            if name in ("emission", "opacity"):
+                setattr(material, name, texture)
             else:
                 material.params[name] = texture
         return material
@@ -120,6 +130,8 @@ class MaterialTable:
     def set(self, index: int, material: Material):
         params, emission = material.constants()
         self.rows[index] = pack(material.type, params, emission, material.twosided)[0]
+        if material.masked:
+            self.rows[index]["flags"] |= MASKED
         self.textures[index] = material.textures()
 
     def index(self, key) -> int:

@@ -21,7 +21,7 @@ from pathtrace.camera import Camera
 from pathtrace.environment import Environment
 from pathtrace.errors import UserError, cut, short, warn
 from pathtrace.materials import BSDFS, Material
-from pathtrace.materials.bsdf import constant_of
+from pathtrace.materials.bsdf import LUMINANCE, constant_of
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.meshes import MAX_COORDINATE, check_mesh, read_mesh, vertex_normals
@@ -613,7 +613,14 @@ class _Reader:
             m = self.material(inner[0])
             m.twosided = True
             return m
-        if kind in ("bumpmap", "normalmap", "mask"):
+        if kind == "mask":
+            inner = [c for c in node.children if c.tag in ("bsdf", "ref") and "name" not in c.attrs]
+            if not inner:
+                _fail(node, "needs a nested <bsdf>")
+            m = self.material(inner[0])
+            m.opacity = self.opacity(props, node)
+            return m
+        if kind in ("bumpmap", "normalmap"):
             inner = [c for c in node.children if c.tag in ("bsdf", "ref")]
             warn(f"{node.where()}: not supported; pathtrace uses the nested BSDF without it")
             if inner:
@@ -633,6 +640,18 @@ class _Reader:
         warn(f"{node.where()}: not supported; pathtrace uses a diffuse BSDF of albedo "
              f"{', '.join(f'{c:.3g}' for c in albedo)}")
         return Material("diffuse", {"rho_d": albedo})
+
+    def opacity(self, props, node):
+        """A mask's `opacity` (Mitsuba's default 0.5): a number in [0, 1] or a texture, whose
+        luminance is the probability that a ray meets the surface."""
+        value = self.color(props, "opacity", 0.5)
+        if isinstance(value, Texture):
+            low, high = value.minimum(), value.maximum()
+        else:
+            low = high = value
+        if np.min(low) < 0 or np.max(high) > 1:
+            _fail(props.get("opacity", node), "an opacity must lie in [0, 1]")
+        return value if isinstance(value, Texture) else float(np.dot(value, LUMINANCE))
 
     def mitsuba_material(self, node, kind, props):
         """The types that share Mitsuba's parameter names (app/materials)."""

@@ -193,8 +193,9 @@ class _Reader:
         if not isinstance(kind, str) or kind not in MATERIAL_TYPES:
             self.fail(f"{where}.type", f"must be one of {', '.join(MATERIAL_TYPES)}, got {short(kind)}")
         if kind == "emitter":
-            self.table(data, where, {"type", "Le"})
-            return Material("black", emission=self.color_or_texture(data, "Le", where))
+            self.table(data, where, {"type", "Le", "opacity"})
+            return Material("black", emission=self.color_or_texture(data, "Le", where),
+                            opacity=self.opacity(data, where))
         if kind == "twosided":
             self.table(data, where, {"type", "bsdf"})
             if "bsdf" not in data:
@@ -203,7 +204,7 @@ class _Reader:
             inner.twosided = True
             return inner
         bsdf = FILE_TYPES[kind]
-        self.table(data, where, {"type", "Le", "twosided", *(p.name for p in bsdf.params)})
+        self.table(data, where, {"type", "Le", "twosided", "opacity", *(p.name for p in bsdf.params)})
         given = {p.name: self.parameter(data, p, where) for p in bsdf.params if p.name in data}
         try:
             values = bsdf.complete(given)
@@ -213,7 +214,19 @@ class _Reader:
         if not isinstance(twosided, bool):
             self.fail(f"{where}.twosided", f"must be true or false, got {short(twosided)}")
         emission = self.color_or_texture(data, "Le", where, default=(0, 0, 0))
-        return Material(kind, values, emission, twosided)
+        return Material(kind, values, emission, twosided, self.opacity(data, where))
+
+    def opacity(self, data, where):
+        """An alpha mask: a number in [0, 1] (default 1, opaque) or a texture whose luminance is
+        the probability that a ray meets the surface."""
+        value = data.get("opacity", 1.0)
+        if isinstance(value, dict) or (isinstance(value, str) and value in self.texture_tables):
+            texture = self.texture_value(value, f"{where}.opacity")
+            low, high = np.min(texture.minimum()), np.max(texture.maximum())
+            if low < 0 or high > 1:
+                self.fail(f"{where}.opacity", f"the texture's values must lie in [0, 1], but reach from {low:.4g} to {high:.4g}")
+            return texture
+        return self.number(data, "opacity", where, default=1.0, low=0.0, high=1.0)
 
     def parameter(self, data, param, where):
         """One material parameter as its Param declares it (app/materials/bsdf.py); one with a

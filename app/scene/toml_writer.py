@@ -44,7 +44,10 @@ def material_table(material, texture_names: dict = {}) -> dict:
             return texture_names[id(v)]
         return _color(v) if kind == "color" else bool(v) if kind == "bool" else float(v)
     if material.type == "black":
-        return {"type": "emitter", "Le": value(material.emission, "color")}
+        table = {"type": "emitter", "Le": value(material.emission, "color")}
+        if material.masked:
+            table["opacity"] = value(material.opacity, "number")
+        return table
     bsdf = BSDFS[material.type]
     table = {"type": material.type}
     for p in bsdf.params:
@@ -55,6 +58,8 @@ def material_table(material, texture_names: dict = {}) -> dict:
         table["Le"] = value(material.emission, "color")
     if material.twosided:
         table["twosided"] = True
+    if material.masked:
+        table["opacity"] = value(material.opacity, "number")
     return table
 
 

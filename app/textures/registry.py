@@ -15,8 +15,8 @@ TAGS = {name: i for i, name in enumerate(TEXTURES)}
 def kernel_parts(names) -> list:
     """(name, source) of the texture kernels for the types `names`, in the order they compile:
     kernels/texture.cl, the types that read no other texture and their dispatch, then the
-    types that combine them and the full dispatch, then kernels/shading.cl. Empty when `names`
-    is: a scene without textures compiles none of it."""
+    types that combine them and the full dispatch. Empty when `names` is: a scene without
+    textures compiles none of it."""
     if not names:
         return []
     leaves = [n for n in TEXTURES if n in names and TEXTURES[n].leaf]
@@ -34,4 +34,4 @@ def kernel_parts(names) -> list:
     here = "app/textures/registry.py: kernel_parts"
     return ([(here, tags), ("texture.cl", None)] + [(f"textures/{n}.cl", None) for n in leaves]
             + [(here, leaf_dispatch)] + [(f"textures/{n}.cl", None) for n in combined]
-            + [(here, full), ("shading.cl", None)])
+            + [(here, full)])

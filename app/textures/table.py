@@ -12,6 +12,9 @@ from pathtrace.textures.texture import Texture
 from pathtrace.types import TEXTURE, TEXTURE_BINDING
 
 
+OPACITY_SLOT = 16        # kernels/masks.cl: SLOT_OPACITY
+
+
 class TexelStore:
     """The texel buffer being filled: the sRGB decoding table (256 float32, which
     kernels/textures/bitmap.cl reads), then each image 16-byte aligned, an image that several
@@ -43,6 +46,7 @@ class TextureTables:
     bindings: np.ndarray       # TEXTURE_BINDING rows
     first: np.ndarray          # per material row: its first binding, or -1
     types: tuple               # the texture types used (pathtrace.features.Features.textures)
+    masks: bool                # a binding is an opacity (Features.masks)
 
 
 def compile_textures(bindings: list) -> TextureTables:
@@ -86,4 +90,5 @@ def compile_textures(bindings: list) -> TextureTables:
         kind.pack(texture, row, store)
     return TextureTables(textures if len(textures) else np.zeros(1, TEXTURE), store.buffer(),
                          np.array(table, TEXTURE_BINDING) if table else np.zeros(1, TEXTURE_BINDING),
-                         first, tuple(n for n in TEXTURES if any(t.type == n for t in order)))
+                         first, tuple(n for n in TEXTURES if any(t.type == n for t in order)),
+                         any(slot == OPACITY_SLOT for _, slot, _, _ in table))

@@ -5,21 +5,27 @@
  * The discriminant is computed as r^2 - |f - (f.d) d|^2 rather than b^2 - c, and the two roots
  * as c / q and q, following Haines et al., "Precision Improvements for Ray/Sphere Intersection",
  * Ray Tracing Gems, ch. 7 (2019): both stay accurate for the r = 1000 ground seen from afar. */
-float intersect_sphere(Sphere s, float3 o, float3 d, float t_max)
+/* Both t where the line o + t d meets the sphere, nearer first, or INFINITY twice. */
+float2 sphere_crossings(Sphere s, float3 o, float3 d)
 {
     float3 f = o - s.xyz;
     float b = dot(f, d);
     float3 l = f - b * d;
     float disc = s.w * s.w - dot(l, l);
     if (disc < 0.0f)
-        return INFINITY;
+        return (float2)(INFINITY);
     float c = dot(f, f) - s.w * s.w;
     float q = -(b + copysign(sqrt(disc), b));
     float t0 = c / q, t1 = q;
-    float t_near = fmin(t0, t1), t_far = fmax(t0, t1);
-    /* A ray starting inside the sphere (c < 0) meets it only on the way out. */
-    float t = t_near > 0.0f ? t_near : t_far;
-    return (t > 0.0f && t < t_max) ? t : INFINITY;
+    return (float2)(fmin(t0, t1), fmax(t0, t1));
+}
+
+float intersect_sphere(Sphere s, float3 o, float3 d, float t_max)
+{
+    float2 t = sphere_crossings(s, o, d);
+    /* A ray starting inside the sphere meets it only on the way out. */
+    float t_hit = t.x > 0.0f ? t.x : t.y;
+    return (t_hit > 0.0f && t_hit < t_max) ? t_hit : INFINITY;
 }
 
 /* The hit point of o + t d, projected back onto the sphere, with its error bound and outward
