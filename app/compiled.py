@@ -127,6 +127,7 @@ class CompiledScene:
         return Features(triangles=self.num_triangles > 0,
                         bsdfs=tuple(name for name, tag in TAGS.items() if tag in used),
                         textures=self.textures.types, masks=self.textures.masks,
+                        normal_maps=self.textures.normal_maps,
                         russian_roulette=russian_roulette, stack=stack_size(self.bvh.depth),
                         flat=(self.num_spheres, self.num_triangles)
                         if self.num_spheres + self.num_triangles <= FLAT_MAX else ())

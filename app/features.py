@@ -16,6 +16,7 @@ class Features:
     textures: tuple = ()                   # names of pathtrace.textures.TEXTURES the scene uses;
                                            # () leaves all texture code out
     masks: bool = False                    # a material has an opacity (kernels/masks.cl)
+    normal_maps: bool = False              # a material has a normal or bump map (kernels/normal_maps.cl)
     russian_roulette: str = "throughput"   # one of pathtrace.scene.description.RUSSIAN_ROULETTE
     stack: int = 48                        # BVH traversal stack entries the tree can need
     flat: tuple = ()                       # (spheres, triangles) of a scene of at most FLAT_MAX
@@ -23,7 +24,7 @@ class Features:
 
     def defines(self) -> tuple:
         return ((() if self.triangles else ("NO_TRIANGLES",)) + (("TEXTURES",) if self.textures else ())
-                + (("ALPHA_MASKS",) if self.masks else ())
+                + (("ALPHA_MASKS",) if self.masks else ()) + (("NORMAL_MAPS",) if self.normal_maps else ())
                 + (f"RUSSIAN_ROULETTE=RR_{self.russian_roulette.upper()}", f"BVH_STACK_SIZE={self.stack}")
                 + ((f"FLAT_SPHERES={self.flat[0]}", f"FLAT_TRIANGLES={self.flat[1]}") if self.flat else ()))
 

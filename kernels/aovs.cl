@@ -50,12 +50,10 @@ void trace_aovs(const SceneData *sc, const RenderParams *p, float3 o, float3 d, 
             return;
         }
         Surface s = surface_at(sc, &hit, o, d);
-        MATERIAL_AT(m, sc, s);
         int front = dot(s.ng, d) < 0.0f;
-        if (!front && (m->flags & MATERIAL_TWOSIDED)) {
-            s.ng = -s.ng;
-            s.ns = -s.ns;
-        }
+        if (!front && (sc->materials[sc->prim_material[hit.prim]].flags & MATERIAL_TWOSIDED))
+            turn_round(&s);
+        MATERIAL_AT(m, sc, s, d);
         float3 wo = to_frame(-d, s.ns);
         BSDFSample bs;
         bs.eta = 1.0f;

@@ -26,13 +26,15 @@ typedef const Material *MaterialRef;
 typedef const global Material *MaterialRef;
 #endif
 
-/* Declares `m`, the MaterialRef of surface s's material (a Surface, kernels/bvh.cl). */
+/* Declares `m`, the MaterialRef of surface s's material (a Surface, kernels/bvh.cl), seen along
+ * ray direction d. */
 #ifdef TEXTURES
-#define MATERIAL_AT(m, sc, s)                                                                     \
-    Material m##_shaded = shade_material(sc, &(sc)->materials[(sc)->prim_material[(s).prim]], &(s)); \
+#define MATERIAL_AT(m, sc, s, d)                                                                  \
+    Material m##_shaded = shade_material(sc, &(sc)->materials[(sc)->prim_material[(s).prim]],    \
+                                         &(s), -(d));                                           \
     MaterialRef m = &m##_shaded
 #else
-#define MATERIAL_AT(m, sc, s) MaterialRef m = &(sc)->materials[(sc)->prim_material[(s).prim]]
+#define MATERIAL_AT(m, sc, s, d) MaterialRef m = &(sc)->materials[(sc)->prim_material[(s).prim]]
 #endif
 
 

@@ -202,6 +202,11 @@ typedef struct {
     int prim;        /* the primitive hit */
     float2 b;        /* a triangle's barycentric weights of v1 and v2, from which surface_uv
                         finds its texture coordinates when a texture needs them */
+    float side;      /* 1; -1 once turned round to a two-sided material's back (turn_round) */
+#ifdef NORMAL_MAPS
+    float3 ns_unperturbed;   /* the shading normal before a normal or bump map (normal_maps.cl) */
+    float terminator;        /* the shadowing term's alpha^2 (0: no perturbation) */
+#endif
 } Surface;
 
 Surface surface_at(const SceneData *sc, const Hit *hit, float3 o, float3 d)
@@ -215,6 +220,7 @@ Surface surface_at(const SceneData *sc, const Hit *hit, float3 o, float3 d)
         triangle_surface(tri, sc->normals, hit->b1, hit->b2, &s.p, &error, &s.ng, &s.ns);
         s.offset = error_offset(s.ng, error);
         s.b = (float2)(hit->b1, hit->b2);
+        s.side = 1.0f;
         return s;
     }
 #endif
@@ -222,7 +228,17 @@ Surface surface_at(const SceneData *sc, const Hit *hit, float3 o, float3 d)
     s.ns = s.ng;
     s.offset = error_offset(s.ng, error);
     s.b = (float2)(0.0f);
+    s.side = 1.0f;
     return s;
+}
+
+/* The back of a two-sided material: its normals turned round (Mitsuba 3's `twosided` mirrors
+ * the shading frame's z, keeping its tangents). */
+void turn_round(Surface *s)
+{
+    s->ng = -s->ng;
+    s->ns = -s->ns;
+    s->side = -1.0f;
 }
 
 /* The texture coordinates of point p on primitive prim, a triangle's barycentric weights b. */

@@ -37,6 +37,9 @@ float3 sample_direct_light(const SceneData *sc, const RenderParams *p, MaterialR
     float3 f = eval_bsdf(m, wo, wi);
     if (all(f == 0.0f))
         return (float3)(0.0f);
+#ifdef NORMAL_MAPS
+    f *= shadow_terminator(s, ls.wi);
+#endif
     float3 le = light_radiance(sc, p, &ls);
     float w = mis_weight(ls.pdf, go_on * pdf_bsdf(m, wo, wi));
     float3 contribution = f * fabs(wi.z) * le * (w / ls.pdf);
@@ -82,19 +85,18 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
             return radiance + throughput * lookup_environment(sc->env, p, d) * w;
         }
         Surface s = surface_at(sc, &hit, o, d);
-        MATERIAL_AT(m, sc, s);
+        int flags = sc->materials[sc->prim_material[hit.prim]].flags;
         int front = dot(s.ng, d) < 0.0f;
         if (!front) {
             /* One-sided, as Mitsuba 3's BSDFs and area lights: a back face is black. A
              * two-sided material turns its frame round; a transmissive one (glass) keeps it
              * and its BSDF sees wo below the surface. */
-            if (m->flags & MATERIAL_TWOSIDED) {
-                s.ng = -s.ng;
-                s.ns = -s.ns;
-            } else if (!(m->flags & MATERIAL_TRANSMISSIVE)) {
+            if (flags & MATERIAL_TWOSIDED)
+                turn_round(&s);
+            else if (!(flags & MATERIAL_TRANSMISSIVE))
                 return radiance;
-            }
         }
+        MATERIAL_AT(m, sc, s, d);
         if (front && any(m->emission.xyz > 0.0f)) {
             float w = 1.0f;
             if (nee && pdf_prev > 0.0f)
@@ -122,6 +124,9 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
         if (dot(wi, s.ng) * bs.wi.z <= 0.0f)
             return radiance;                 /* the normals disagree on wi's side */
         throughput *= bs.weight / go_on;
+#ifdef NORMAL_MAPS
+        throughput *= shadow_terminator(&s, wi);
+#endif
         eta_scale *= bs.eta;
         if (RUSSIAN_ROULETTE == RR_THROUGHPUT && depth >= p->rr_depth) {
             float q = fmin(fmax(fmax(throughput.x, throughput.y), throughput.z)

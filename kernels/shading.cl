@@ -32,12 +32,23 @@ void apply_textures(const SceneData *sc, Material *m, float2 uv)
     }
 }
 
-/* The material `row` at surface s (kernels/bvh.cl), whose uv is found only if a texture needs it. */
-Material shade_material(const SceneData *sc, const global Material *row, const Surface *s)
+/* The material `row` at surface s (kernels/bvh.cl), seen from direction wo, whose uv is found
+ * only if a texture needs it; a normal or bump map perturbs s's shading normal
+ * (kernels/normal_maps.cl). */
+Material shade_material(const SceneData *sc, const global Material *row, Surface *s, float3 wo)
 {
     Material m = *row;
-    if (m.textures >= 0)
-        apply_textures(sc, &m, surface_uv(sc, s->prim, s->b, s->p));
+#ifdef NORMAL_MAPS
+    s->ns_unperturbed = s->ns;
+    s->terminator = 0.0f;
+#endif
+    if (m.textures >= 0) {
+        float2 uv = surface_uv(sc, s->prim, s->b, s->p);
+        apply_textures(sc, &m, uv);
+#ifdef NORMAL_MAPS
+        perturb_normal(sc, row, uv, wo, s);
+#endif
+    }
     return m;
 }
 

@@ -35,6 +35,7 @@ SCENES = {  # name: (width, height, spp per render, renders)
     "meshes-larger": (None, None, 1024, 16),
     "textures": (None, None, 1024, 16),
     "masks": (None, None, 1024, 16),
+    "normal-maps": (None, None, 1024, 16),
 }
 XML_SCENES = OUT.parent / "scenes"
 MAX_DEPTH = 8

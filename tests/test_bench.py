@@ -6,13 +6,16 @@ from tests.test_cli import pathtrace
 
 
 def test_quick_bench_writes_a_table_and_json(tmp_path):
+    """A sphere scene and the textured mesh scene, both estimators: each (scene, estimator) one row
+    (every target scene would cost the suite half a minute of kernel builds)."""
     out = tmp_path / "bench.json"
-    r = pathtrace("bench", "--quick", "--device", "cpu", "--json", out,
+    r = pathtrace("bench", "--quick", "--device", "cpu", "--json", out, "--scenes", "simple", "teapot-textured",
                   "--estimator", "rr", "--estimator", "depth8+nee")
     assert r.returncode == 0, r.stderr
     data = json.loads(out.read_text())
     rows = data["results"]
-    assert len(rows) == 7 * 2 and {row["estimator"] for row in rows} == {"rr", "depth8+nee"}
+    assert len(rows) == 2 * 2 and {row["estimator"] for row in rows} == {"rr", "depth8+nee"}
+    assert {row["scene"] for row in rows} == {"simple", "teapot-textured"}
     for row in rows:
         assert row["width"] == 320 and row["height"] == 180 and row["spp"] == 8
         assert row["seconds"] > 0 and row["bvh_seconds"] < row["seconds"]

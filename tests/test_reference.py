@@ -22,7 +22,7 @@ def reference_scene(name):
 
 def test_references_are_present():
     assert {p.stem for p in REFERENCES} >= {"simple-diffuse", "spheres8k-diffuse", "cbox", "envmap-spheres", "meshes",
-                                            "meshes-smaller", "meshes-larger", "textures", "masks"}
+                                            "meshes-smaller", "meshes-larger", "textures", "masks", "normal-maps"}
 
 
 @pytest.mark.parametrize("nee", [True, False], ids=["nee", "no-nee"])

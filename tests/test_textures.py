@@ -344,3 +344,94 @@ def test_opacity_is_checked_and_written_back(tmp_path):
     again = read_scene_file(tmp_path / "out.toml")
     opacity = again.materials.get(0).opacity
     assert isinstance(opacity, Texture) and opacity.mean() == pytest.approx(128 / 255)
+
+
+# -- normal and bump maps ---------------------------------------------------------------------
+
+GRADIENT_SOURCE = """
+kernel void gradient(const global Texture *textures, const global uchar *texels,
+                     const global float2 *uv, global float2 *out)
+{
+    SceneData sc;
+    sc.textures = textures;
+    sc.texels = texels;
+    int i = get_global_id(0);
+    out[i] = grad_bitmap(&sc, &textures[0], uv[i]);
+}
+"""
+
+
+@pytest.mark.parametrize("mode", ["repeat", "mirror", "clamp"])
+def test_bitmap_gradient_is_the_slope_of_its_bilinear_lookup(kernels, mode):
+    """grad_bitmap (a bump map's slopes) against central differences of the NumPy lookup, at
+    points away from texel-centre lines, where the bilinear interpolant is smooth."""
+    rng = np.random.default_rng(11)
+    image = Image(rng.integers(0, 256, (6, 5, 3)).astype(np.uint8), linear=True)
+    to_uv = np.array([[1.3, 0.4, 0.1], [-0.3, 0.9, 0.2], [0, 0, 1]])
+    tex = texture("bitmap", image=image, wrap=mode, to_uv=to_uv)
+    tables = compile_textures([[(24, 1, tex)]])
+    uv = rng.uniform(0.05, 0.95, (300, 2))
+    out = np.zeros((len(uv), 2), np.float32)
+    kernels(GRADIENT_SOURCE, Features(textures=("bitmap",)))("gradient", len(uv), tables.textures, tables.texels,
+                                                              np.ascontiguousarray(uv, np.float32), out)
+    lum = np.array([0.212671, 0.715160, 0.072169])
+    f = lambda q: reference_lookup(image.rgb(), q, mode, "bilinear", to_uv) @ lum  # noqa: E731
+    h = 1e-5
+    numeric = np.column_stack([(f(uv + [h, 0]) - f(uv - [h, 0])) / (2 * h), (f(uv + [0, h]) - f(uv - [0, h])) / (2 * h)])
+    # the interpolant kinks on the lines through texel centres and at the image's border (where
+    # the wrap modes differ): central differences across those are left out
+    st = (np.column_stack([uv, np.ones(len(uv))]) @ to_uv.T)[:, :2] * [5, 6]
+    smooth = np.all((np.abs((st - 0.5) % 1 - 0.5) < 0.49) & (st > 0.6) & (st < [4.4, 5.4]), axis=1)
+    assert smooth.sum() > 50
+    np.testing.assert_allclose(out[smooth], numeric[smooth], rtol=1e-3, atol=1e-3 * np.abs(numeric).max())
+
+
+def flat_map_scene(kind, tmp_path):
+    """The material-spheres floor scene with a map that perturbs nothing: a normal map of
+    (0, 0, 1) everywhere, or a bump map of constant height."""
+    from pathtrace.api import load_dict
+    value = [128, 128, 255] if kind == "normal_map" else [77, 77, 77]
+    PILImage.fromarray(np.full((4, 4, 3), value, np.uint8)).save(tmp_path / "flat.png")
+    material = {"type": "diffuse", "rho_d": 0.6}
+    if kind:
+        material[kind] = {"type": "bitmap", "file": "flat.png", "raw": True}
+    return load_dict({
+        "camera": {"eye": [0, 2, 4], "look_at": [0, 0.3, 0], "vfov": 40},
+        "environment": {"color": 0.3}, "render": {"width": 24, "height": 16},
+        "materials": {"m": material, "lamp": {"type": "emitter", "Le": 30}},
+        "spheres": [{"center": [0, 0.5, 0], "radius": 0.5, "material": "m"},
+                    {"center": [2, 3, 1], "radius": 0.3, "material": "lamp"}],
+        "meshes": [{"material": "m", "vertices": [[-3, 0, -3], [-3, 0, 3], [3, 0, 3], [3, 0, -3]],
+                    "faces": [[0, 1, 2, 3]], "uvs": [[0, 0], [0, 1], [1, 1], [1, 0]]}]}, folder=tmp_path)
+
+
+@pytest.mark.parametrize("kind", ["normal_map", "bump_map"])
+def test_a_map_that_perturbs_nothing_changes_nothing(backend, tmp_path, kind):
+    """The 8-bit (0, 0, 1) normal is (128, 128, 255): within 1/255 of the geometric normal, so
+    the image moves by less than a percent; a constant height has no slopes: the same image."""
+    from pathtrace.renderer import Renderer
+    images = []
+    for k in (None, kind):
+        r = Renderer(backend, flat_map_scene(k, tmp_path))
+        r.add_samples(16)
+        images.append(r.mean())
+    if kind == "bump_map":
+        np.testing.assert_allclose(images[1], images[0], rtol=1e-5, atol=1e-6)
+    else:
+        assert abs(images[1].mean() / images[0].mean() - 1) < 0.01
+
+
+def test_shading_maps_in_scene_files(tmp_path):
+    from pathtrace.api import load_dict
+    PILImage.fromarray(np.full((2, 2, 3), 128, np.uint8)).save(tmp_path / "m.png")
+    base = {"spheres": [{"center": [0, 0, 0], "radius": 1, "material": "m"}]}
+    bitmap = {"type": "bitmap", "file": "m.png", "raw": True}
+    scene = load_dict({**base, "materials": {"m": {"type": "diffuse", "rho_d": 0.5, "bump_map": bitmap,
+                                                   "bump_scale": 0.1}}}, folder=tmp_path)
+    bump = scene.materials.get(0).bump_map
+    assert bump.type == "scale" and bump.params["scale"][0] == pytest.approx(0.1)
+    for material, message in [({"normal_map": bitmap, "bump_map": bitmap}, "give a normal_map or a bump_map, not both"),
+                               ({"bump_scale": 2}, "materials.m.bump_scale: scales a bump_map, and there is none"),
+                               ({"bump_map": {"type": "checkerboard"}}, "must be a bitmap texture")]:
+        with pytest.raises(UserError, match=message):
+            load_dict({**base, "materials": {"m": {"type": "diffuse", "rho_d": 0.5, **material}}}, folder=tmp_path)

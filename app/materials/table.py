@@ -24,6 +24,8 @@ class Material:
     twosided: bool = False
     opacity: object = 1.0         # an alpha mask: the probability that a ray meets the surface,
                                   # a number or a Texture (kernels/masks.cl)
+    normal_map: Texture = None    # a tangent-space normal map, or a bump map (a height field: a
+    bump_map: Texture = None      # bitmap, or a scale of one), kernels/normal_maps.cl
 
     @property
     def masked(self) -> bool:
@@ -44,6 +46,13 @@ class Material:
             opacity = self.opacity if isinstance(self.opacity, Texture) else \
                 Texture("constant", {"value": np.full(3, float(self.opacity)), "to_uv": np.eye(3)})
             out.append(("opacity", *slot_index("opacity.x"), opacity))
+        if self.normal_map is not None and self.bump_map is not None:
+            raise ValueError("give a normal map or a bump map, not both")
+        if self.normal_map is not None:
+            out.append(("normal_map", *slot_index("normal_map.xyz"), self.normal_map))
+        if self.bump_map is not None:
+            check_bump_map(self.bump_map)
+            out.append(("bump_map", *slot_index("bump_map.x"), self.bump_map))
         return out
 
     def constants(self) -> tuple:
@@ -53,7 +62,18 @@ class Material:
                 constant_of(self.emission, "color"))
 
 
-_FIELDS = {"p0": 0, "p1": 4, "p2": 8, "emission": 12, "opacity": 16}   # kernels/shading.cl, masks.cl
+# kernels/shading.cl, masks.cl, normal_maps.cl
+def check_bump_map(texture: Texture):
+    """A bump map's slopes are the analytic gradient of a bitmap (Mitsuba's eval_1_grad), times
+    a constant factor: a bitmap, or a scale of one by a number. Raises ValueError."""
+    inner, factor = texture, None
+    if texture.type == "scale":
+        inner, factor = texture.params["tex"], texture.params["scale"]
+    if not isinstance(inner, Texture) or inner.type != "bitmap" or isinstance(factor, Texture):
+        raise ValueError("a bump map must be a bitmap texture, or a scale of one by a number")
+
+
+_FIELDS = {"p0": 0, "p1": 4, "p2": 8, "emission": 12, "opacity": 16, "normal_map": 20, "bump_map": 24}
 
 
 def slot_index(slot: str) -> tuple:
@@ -121,7 +141,7 @@ class MaterialTable:
         material = Material(type_name, BSDFS[type_name].unpack(row), row["emission"][:3].astype(np.float64),
                             bool(row["flags"] & TWOSIDED))
         for name, _, _, texture in self.textures[index]:
-            if name in ("emission", "opacity"):
+            if name in ("emission", "opacity", "normal_map", "bump_map"):
                 setattr(material, name, texture)
             else:
                 material.params[name] = texture

@@ -22,6 +22,7 @@ from pathtrace.environment import Environment
 from pathtrace.errors import UserError, cut, short, warn
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import LUMINANCE, constant_of
+from pathtrace.materials.table import check_bump_map
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.meshes import MAX_COORDINATE, check_mesh, read_mesh, vertex_normals
@@ -621,11 +622,7 @@ class _Reader:
             m.opacity = self.opacity(props, node)
             return m
         if kind in ("bumpmap", "normalmap"):
-            inner = [c for c in node.children if c.tag in ("bsdf", "ref")]
-            warn(f"{node.where()}: not supported; pathtrace uses the nested BSDF without it")
-            if inner:
-                return self.material(inner[0])
-            return Material("diffuse", {"rho_d": np.full(3, 0.5)})
+            return self.mapped_material(node, kind, props)
         if kind == "diffuse":
             rho = self.color(props, "reflectance", 0.5)
             if np.any(constant_of(rho, "color", Texture.maximum) > 1):
@@ -640,6 +637,35 @@ class _Reader:
         warn(f"{node.where()}: not supported; pathtrace uses a diffuse BSDF of albedo "
              f"{', '.join(f'{c:.3g}' for c in albedo)}")
         return Material("diffuse", {"rho_d": albedo})
+
+    def mapped_material(self, node, kind, props):
+        """A `normalmap` (its texture `normalmap`) or `bumpmap` (its one texture, times `scale`)
+        around a nested BSDF."""
+        inner = [c for c in node.children if c.tag in ("bsdf", "ref") and "name" not in c.attrs]
+        if not inner:
+            _fail(node, "needs a nested <bsdf>")
+        m = self.material(inner[0])
+        maps = [c for c in node.children if c.tag == "texture" or (c.tag == "ref" and "name" in c.attrs)]
+        if kind == "normalmap":
+            maps = [c for c in maps if c.attrs.get("name") == "normalmap"]
+        if not maps:
+            _fail(node, 'needs a <texture name="normalmap">' if kind == "normalmap" else "needs a <texture>")
+        target = self.resolve(maps[0]) if maps[0].tag == "ref" else maps[0]
+        if target.tag != "texture":
+            _fail(maps[0], "must be a texture")
+        texture = self.texture(target)
+        if kind == "normalmap":
+            m.normal_map = texture
+            return m
+        scale = self.get(props, "scale", 1.0, ("float",))
+        if scale != 1.0:
+            texture = Texture("scale", TEXTURES["scale"].complete({"tex": texture, "scale": scale}))
+        try:
+            check_bump_map(texture)
+        except ValueError as e:
+            _fail(target, str(e))
+        m.bump_map = texture
+        return m
 
     def opacity(self, props, node):
         """A mask's `opacity` (Mitsuba's default 0.5): a number in [0, 1] or a texture, whose

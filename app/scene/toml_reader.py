@@ -15,6 +15,7 @@ from pathtrace.environment import Environment
 from pathtrace.errors import UserError, short
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import constant_of
+from pathtrace.materials.table import check_bump_map
 from pathtrace.resources import resource_dir
 from pathtrace.scene import transform
 from pathtrace.scene.description import RUSSIAN_ROULETTE, Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
@@ -204,7 +205,8 @@ class _Reader:
             inner.twosided = True
             return inner
         bsdf = FILE_TYPES[kind]
-        self.table(data, where, {"type", "Le", "twosided", "opacity", *(p.name for p in bsdf.params)})
+        self.table(data, where, {"type", "Le", "twosided", "opacity", "normal_map", "bump_map", "bump_scale",
+                                 *(p.name for p in bsdf.params)})
         given = {p.name: self.parameter(data, p, where) for p in bsdf.params if p.name in data}
         try:
             values = bsdf.complete(given)
@@ -214,7 +216,31 @@ class _Reader:
         if not isinstance(twosided, bool):
             self.fail(f"{where}.twosided", f"must be true or false, got {short(twosided)}")
         emission = self.color_or_texture(data, "Le", where, default=(0, 0, 0))
-        return Material(kind, values, emission, twosided, self.opacity(data, where))
+        material = Material(kind, values, emission, twosided, self.opacity(data, where))
+        self.shading_maps(data, where, material)
+        return material
+
+    def shading_maps(self, data, where, material):
+        """normal_map (a texture of tangent-space normals, 2 rgb - 1), or bump_map (a bitmap of
+        heights) times bump_scale."""
+        if "normal_map" in data and "bump_map" in data:
+            self.fail(where, "give a normal_map or a bump_map, not both")
+        for key in ("normal_map", "bump_map"):
+            if key in data:
+                value = data[key]
+                if not (isinstance(value, dict) or isinstance(value, str)):
+                    self.fail(f"{where}.{key}", f"must be a texture (a name or a table), got {short(value)}")
+                setattr(material, key, self.texture_value(value, f"{where}.{key}"))
+        scale = self.number(data, "bump_scale", where, default=1.0)
+        if "bump_scale" in data and "bump_map" not in data:
+            self.fail(f"{where}.bump_scale", "scales a bump_map, and there is none")
+        if material.bump_map is not None:
+            if scale != 1.0:
+                material.bump_map = Texture("scale", TEXTURES["scale"].complete({"tex": material.bump_map, "scale": scale}))
+            try:
+                check_bump_map(material.bump_map)
+            except ValueError as e:
+                self.fail(f"{where}.bump_map", str(e))
 
     def opacity(self, data, where):
         """An alpha mask: a number in [0, 1] (default 1, opaque) or a texture whose luminance is

@@ -60,6 +60,9 @@ def material_table(material, texture_names: dict = {}) -> dict:
         table["twosided"] = True
     if material.masked:
         table["opacity"] = value(material.opacity, "number")
+    for key in ("normal_map", "bump_map"):
+        if getattr(material, key) is not None:
+            table[key] = value(getattr(material, key), "color")
     return table
 
 

@@ -13,6 +13,7 @@ from pathtrace.types import TEXTURE, TEXTURE_BINDING
 
 
 OPACITY_SLOT = 16        # kernels/masks.cl: SLOT_OPACITY
+NORMAL_MAP_SLOTS = (20, 24)   # kernels/normal_maps.cl: SLOT_NORMAL_MAP, SLOT_BUMP_MAP
 
 
 class TexelStore:
@@ -47,6 +48,7 @@ class TextureTables:
     first: np.ndarray          # per material row: its first binding, or -1
     types: tuple               # the texture types used (pathtrace.features.Features.textures)
     masks: bool                # a binding is an opacity (Features.masks)
+    normal_maps: bool          # a binding is a normal or bump map (Features.normal_maps)
 
 
 def compile_textures(bindings: list) -> TextureTables:
@@ -91,4 +93,5 @@ def compile_textures(bindings: list) -> TextureTables:
     return TextureTables(textures if len(textures) else np.zeros(1, TEXTURE), store.buffer(),
                          np.array(table, TEXTURE_BINDING) if table else np.zeros(1, TEXTURE_BINDING),
                          first, tuple(n for n in TEXTURES if any(t.type == n for t in order)),
-                         any(slot == OPACITY_SLOT for _, slot, _, _ in table))
+                         any(slot == OPACITY_SLOT for _, slot, _, _ in table),
+                         any(slot in NORMAL_MAP_SLOTS for _, slot, _, _ in table))

@@ -115,3 +115,27 @@ float3 eval_bitmap(const SceneData *sc, const global Texture *t, float2 uv)
     float3 bottom = mix(read_texel(sc, t, row1 + x0), read_texel(sc, t, row1 + x1), ax);
     return mix(top, bottom, ay);
 }
+
+/* The gradient of the bitmap's luminance with respect to the surface's uv, as Mitsuba 3's
+ * eval_1_grad: the bilinear interpolant's partial derivatives in texels, times the resolution,
+ * through the transpose of the uv transform's linear part; 0 for nearest filtering, whose
+ * value is piecewise constant (a bump map's slopes, kernels/normal_maps.cl). */
+float2 grad_bitmap(const SceneData *sc, const global Texture *t, float2 uv)
+{
+    if (t->filter == FILTER_NEAREST)
+        return (float2)(0.0f);
+    uv = wrap_period(transform_uv(t, uv), t->wrap);
+    int w = t->width, h = t->height;
+    float x = uv.x * w - 0.5f, y = uv.y * h - 0.5f;
+    int x0 = texel_coordinate(x), y0 = texel_coordinate(y);
+    float ax = x - floor(x), ay = y - floor(y);
+    int x1 = wrap_texel(x0 + 1, w, t->wrap), y1 = wrap_texel(y0 + 1, h, t->wrap);
+    x0 = wrap_texel(x0, w, t->wrap);
+    y0 = wrap_texel(y0, h, t->wrap);
+    size_t row0 = (size_t)y0 * w, row1 = (size_t)y1 * w;
+    float f00 = luminance(read_texel(sc, t, row0 + x0)), f10 = luminance(read_texel(sc, t, row0 + x1));
+    float f01 = luminance(read_texel(sc, t, row1 + x0)), f11 = luminance(read_texel(sc, t, row1 + x1));
+    float2 df = (float2)((1.0f - ay) * (f10 - f00) + ay * (f11 - f01),
+                         (1.0f - ax) * (f01 - f00) + ax * (f11 - f10)) * (float2)(w, h);
+    return (float2)(t->to_u.x * df.x + t->to_v.x * df.y, t->to_u.y * df.x + t->to_v.y * df.y);
+}

@@ -1,0 +1,118 @@
+/* Normal maps and bump maps (Mitsuba 3's `normalmap` and `bumpmap`; pbrt-v4's `normalmap` and
+ * `displacement`): the shading normal perturbed at each hit, before the BSDF sees it. Compiled
+ * in only for scenes that have one (NORMAL_MAPS).
+ *
+ * A normal map's rgb in [0, 1] holds a unit vector of Mitsuba's shading frame, 2 rgb - 1. A bump
+ * map is a height field h(u, v) over the surface: dp/du and dp/dv are tilted by its slopes along
+ * the normal, p' = p + h n (Blinn 1978, with Mitsuba's first-order terms), and the normal is
+ * their cross product. The integrator weighs what a perturbed surface reflects by
+ * shadow_terminator, as Mitsuba's normal map does. */
+
+#define SLOT_NORMAL_MAP 20   /* app/materials/table.py */
+#define SLOT_BUMP_MAP 24
+
+/* dp/du and dp/dv at a hit: a triangle's from its corners' texture coordinates (pbrt-v4
+ * eq. 6.7), or, where those are missing or degenerate, the tangents of make_frame; a sphere's as Mitsuba's
+ * sphere gives them for its (u, v) = (phi / 2 pi, theta / pi). */
+void surface_derivatives(const SceneData *sc, const Surface *s, float3 *dpdu, float3 *dpdv)
+{
+#ifndef NO_TRIANGLES
+    if (s->prim >= sc->num_spheres) {
+        const global Triangle *tri = &sc->triangles[s->prim - sc->num_spheres];
+        int k = as_int(tri->v1.w);
+        if (k >= 0) {
+            float2 duv02 = sc->uvs[k] - sc->uvs[k + 2], duv12 = sc->uvs[k + 1] - sc->uvs[k + 2];
+            float3 dp02 = tri->v0.xyz - tri->v2.xyz, dp12 = tri->v1.xyz - tri->v2.xyz;
+            float det = duv02.x * duv12.y - duv02.y * duv12.x;
+            if (fabs(det) > 1e-12f) {
+                *dpdu = (duv12.y * dp02 - duv02.y * dp12) / det;
+                *dpdv = (duv02.x * dp12 - duv12.x * dp02) / det;
+                return;
+            }
+        }
+        make_frame(triangle_normal(tri), dpdu, dpdv);   /* Mitsuba's coordinate_system */
+        return;
+    }
+#endif
+    Sphere sphere = sc->spheres[s->prim];
+    float3 l = (s->p - sphere.xyz) / sphere.w;
+    float rd = sqrt(l.x * l.x + l.y * l.y);
+    float2 phi = rd > 0.0f ? (float2)(l.x, l.y) / rd : (float2)(1.0f, 0.0f);
+    *dpdu = 2.0f * PI_F * sphere.w * (float3)(-l.y, l.x, 0.0f);
+    *dpdv = PI_F * sphere.w * (float3)(l.z * phi.x, l.z * phi.y, -rd);
+}
+
+/* The slopes (dh/du, dh/dv) of bump map texture i: a bitmap's, or a scaled bitmap's (Mitsuba's
+ * `scale`) times its factor; the host allows no other. */
+float2 bump_slopes(const SceneData *sc, int i, float2 uv)
+{
+    const global Texture *t = &sc->textures[i];
+    float k = 1.0f;
+    if (t->type == TEXTURE_SCALE) {
+        k = t->value[1].x;
+        t = &sc->textures[t->input[0]];
+    }
+    return k * grad_bitmap(sc, t, uv);
+}
+
+/* Mitsuba 3's shadowing term for perturbed normals (Conty Estevez et al., "A Microfacet-Based
+ * Shadowing Function to Solve the Bump Terminator Problem", Ray Tracing Gems, 2019): the
+ * perturbation's tilt is read as the roughness of microfacets, alpha^2 = min(tan^2(tilt) / 8, 1),
+ * whose Smith shadowing of direction w, 2 / (1 + sqrt(1 + alpha^2 tan^2(theta_w))) with theta_w
+ * from the unperturbed normal, darkens the light that grazes the surface (the hard terminator of
+ * strong normal maps). 1 where nothing was perturbed. */
+float shadow_terminator(const Surface *s, float3 w)
+{
+    if (s->terminator <= 0.0f)
+        return 1.0f;
+    float c = dot(w, s->ns_unperturbed);
+    float tan2 = fmax(0.0f, 1.0f - c * c) / fmax(c * c, 1e-12f);
+    return 2.0f / (1.0f + sqrt(1.0f + s->terminator * tan2));
+}
+
+/* s's shading normal perturbed by material `row`'s normal or bump map, if it has one, seen from
+ * direction wo. As Mitsuba 3.9's `normalmap`: the map's normal m lies in the frame (t_s, t_t, ns),
+ * t_s = dp/du made orthogonal to ns and t_t = ns x t_s (the front's, on a two-sided back whose ns
+ * is turned round); one that faces away from wo has its tangential part turned round
+ * (Schuessler et al. 2017's flip); its tilt sets the shadowing term. As its `bumpmap`: the
+ * normal of the tilted derivatives, on the geometric normal's side. */
+void perturb_normal(const SceneData *sc, const global Material *row, float2 uv, float3 wo, Surface *s)
+{
+    for (int i = row->textures;; ++i) {
+        TextureBinding b = sc->bindings[i];
+        if (b.slot == SLOT_NORMAL_MAP || b.slot == SLOT_BUMP_MAP) {
+            float3 dpdu, dpdv, n = s->ns;
+            surface_derivatives(sc, s, &dpdu, &dpdv);
+            if (b.slot == SLOT_NORMAL_MAP) {
+                float3 t_s = dpdu - n * dot(n, dpdu), t_t;
+                float len = length(t_s);
+                if (len > 0.0f)
+                    t_s /= len;
+                else
+                    make_frame(n, &t_s, &t_t);
+                t_t = s->side * cross(n, t_s);
+                float3 m = 2.0f * eval_texture(sc, b.texture, uv) - 1.0f;
+                float3 wo_local = (float3)(dot(wo, t_s), dot(wo, t_t), dot(wo, n));
+                if (wo_local.z * dot(wo_local, m) <= 0.0f)
+                    m.xy = -m.xy;
+                float len_m = length(m);
+                if (!(len_m > 0.0f) || !isfinite(len_m))
+                    return;
+                m /= len_m;
+                s->terminator = fmin(0.125f * fmax(0.0f, 1.0f - m.z * m.z) / fmax(m.z * m.z, 1e-12f), 1.0f);
+                s->ns = m.x * t_s + m.y * t_t + m.z * n;
+                return;
+            }
+            float2 slope = bump_slopes(sc, b.texture, uv);
+            float3 du = dpdu + n * (slope.x - dot(n, dpdu));
+            float3 dv = dpdv + n * (slope.y - dot(n, dpdv));
+            n = cross(du, dv);
+            float len = length(n);
+            if (len > 0.0f && isfinite(len))
+                s->ns = dot(n, s->ng) < 0.0f ? -n / len : n / len;
+            return;
+        }
+        if (b.last)
+            return;
+    }
+}
