@@ -200,10 +200,12 @@ typedef struct {
     float3 ns;       /* unit shading normal, in ng's hemisphere */
     float offset;    /* how far rays leaving p start from it along ng (kernels/spawn.cl) */
     int prim;        /* the primitive hit */
+#ifdef TEXTURES
     float2 b;        /* a triangle's barycentric weights of v1 and v2, from which surface_uv
                         finds its texture coordinates when a texture needs them */
-    float side;      /* 1; -1 once turned round to a two-sided material's back (turn_round) */
+#endif
 #ifdef NORMAL_MAPS
+    float side;              /* 1; -1 once turned round to a two-sided material's back */
     float3 ns_unperturbed;   /* the shading normal before a normal or bump map (normal_maps.cl) */
     float terminator;        /* the shadowing term's alpha^2 (0: no perturbation) */
 #endif
@@ -219,16 +221,24 @@ Surface surface_at(const SceneData *sc, const Hit *hit, float3 o, float3 d)
         const global Triangle *tri = &sc->triangles[hit->prim - sc->num_spheres];
         triangle_surface(tri, sc->normals, hit->b1, hit->b2, &s.p, &error, &s.ng, &s.ns);
         s.offset = error_offset(s.ng, error);
+#ifdef TEXTURES
         s.b = (float2)(hit->b1, hit->b2);
+#endif
+#ifdef NORMAL_MAPS
         s.side = 1.0f;
+#endif
         return s;
     }
 #endif
     sphere_surface(sc->spheres[hit->prim], o, d, hit->t, &s.p, &error, &s.ng);
     s.ns = s.ng;
     s.offset = error_offset(s.ng, error);
+#ifdef TEXTURES
     s.b = (float2)(0.0f);
+#endif
+#ifdef NORMAL_MAPS
     s.side = 1.0f;
+#endif
     return s;
 }
 
@@ -238,10 +248,13 @@ void turn_round(Surface *s)
 {
     s->ng = -s->ng;
     s->ns = -s->ns;
+#ifdef NORMAL_MAPS
     s->side = -1.0f;
+#endif
 }
 
-/* The texture coordinates of point p on primitive prim, a triangle's barycentric weights b. */
+/* The texture coordinates of point p on primitive prim, a triangle's barycentric weights b (a
+ * program for a scene with textures has them). */
 float2 surface_uv(const SceneData *sc, int prim, float2 b, float3 p)
 {
 #ifndef NO_TRIANGLES
