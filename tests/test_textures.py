@@ -435,3 +435,31 @@ def test_shading_maps_in_scene_files(tmp_path):
                                ({"bump_map": {"type": "checkerboard"}}, "must be a bitmap texture")]:
         with pytest.raises(UserError, match=message):
             load_dict({**base, "materials": {"m": {"type": "diffuse", "rho_d": 0.5, **material}}}, folder=tmp_path)
+
+
+# -- the command line and the viewer ----------------------------------------------------------
+
+@pytest.mark.parametrize("textures,message", [
+    ('a = { type = "checkerboard", color0 = "b" }\nb = { type = "checkerboard", color0 = "a" }',
+     "textures.b.color0: a texture reference cycle: 'a -> b -> a'"),
+    ('a = { type = "bitmap", file = "nowhere.png" }', "nowhere.png' does not exist"),
+    ('a = { type = "bitmap", file = "t.png", wrap = "wobble" }', "textures.a.wrap: must be one of repeat, mirror, clamp"),
+    ('a = { type = "bitmap", file = "t.png", uv_scale = [1, "x"] }', "textures.a.uv_scale: must be a number or a list of 2"),
+])
+def test_a_bad_texture_is_one_line_and_writes_nothing(tmp_path, textures, message):
+    from tests.test_cli import pathtrace
+    PILImage.fromarray(np.zeros((2, 2, 3), np.uint8)).save(tmp_path / "t.png")
+    scene = tmp_path / "s.toml"
+    scene.write_text(f'[textures]\n{textures}\n\n[materials]\nm = {{ type = "diffuse", rho_d = "a" }}\n\n'
+                     '[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = "m"\n')
+    out = tmp_path / "o.png"
+    r = pathtrace("render", scene, "-o", out, "--spp", "1", "--size", "8x8")
+    assert r.returncode == 1 and message in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert not out.exists()
+
+
+def test_the_panel_names_a_pickeds_textures():
+    from pathtrace.viewer.panel import texture_label
+    image = Image(np.zeros((2, 2, 3), np.uint8), path="/some/where/wood.png")
+    assert texture_label(Texture("bitmap", {"image": image}, "wood")) == "texture 'wood' (bitmap wood.png)"
+    assert texture_label(texture("checkerboard")) == "texture (checkerboard)"
