@@ -6,8 +6,9 @@ traceback, hang, foreign line or leftover file.
 - Mitsuba XML: a valid scene whose attribute values are sometimes replaced by odd text (huge,
   tiny, non-finite, negative, Unicode digits, NUL, wavelength lists), whose elements are
   sometimes repeated or nested in one another, and whose ids sometimes point nowhere or back.
-- Meshes (PLY ascii and binary, OBJ, STL) and maps (Radiance HDR, PFM, OpenEXR): valid files cut
-  short, with bytes flipped or inserted, or with a header line replaced."""
+- Meshes (PLY ascii and binary, OBJ, STL), maps (Radiance HDR, PFM, OpenEXR) and texture images
+  (PNG, JPEG, TGA, BMP): valid files cut short, with bytes flipped or inserted, or with a header
+  line replaced."""
 
 import tempfile
 from pathlib import Path
@@ -32,6 +33,12 @@ XML = """<?xml version="1.0"?>
   </sensor>
   <bsdf type="diffuse" id="white"><rgb name="reflectance" value="0.7, 0.7, 0.7"/></bsdf>
   <bsdf type="roughconductor" id="metal"><float name="alpha" value="0.2"/><string name="material" value="Au"/></bsdf>
+  <texture type="bitmap" id="tiles"><string name="filename" value="t.png"/><string name="wrap_mode" value="mirror"/>
+    <transform name="to_uv"><scale x="2" y="3"/></transform></texture>
+  <bsdf type="mask" id="leaf"><float name="opacity" value="0.6"/>
+    <bsdf type="normalmap"><ref name="normalmap" id="tiles"/><bsdf type="diffuse"><ref name="reflectance" id="tiles"/></bsdf></bsdf>
+  </bsdf>
+  <shape type="cube"><transform name="to_world"><translate x="-2" y="0.5" z="0"/></transform><ref id="leaf"/></shape>
   <emitter type="constant"><rgb name="radiance" value="0.5"/></emitter>
   <shape type="sphere"><point name="center" x="0" y="0.5" z="0"/><float name="radius" value="1"/><ref id="metal"/></shape>
   <shape type="rectangle">
@@ -89,10 +96,10 @@ FUZZ = settings(max_examples=15, deadline=None,
 def test_a_mitsuba_scene_renders_finite_pixels_or_is_refused_in_one_line(tmp_path, text):
     with tempfile.TemporaryDirectory(dir=tmp_path) as folder:
         folder = Path(folder)
-        before = []
         path = folder / "fuzzed.xml"
         path.write_text(text)
-        check_case(folder, path, before, text)
+        (folder / "t.png").write_bytes(VALID["tex.png"])
+        check_case(folder, path, ["t.png"], text)
 
 
 def _valid_files() -> dict:
@@ -118,6 +125,11 @@ def _valid_files() -> dict:
     image = np.random.default_rng(3).uniform(0, 2, (8, 16, 3)).astype(np.float32)
     for name in ("map.hdr", "map.pfm", "map.exr"):
         write_image(folder / name, image, what="test")
+        files[name] = (folder / name).read_bytes()
+    from PIL import Image
+    texels = np.random.default_rng(4).integers(0, 256, (6, 5, 3)).astype(np.uint8)
+    for name in ("tex.png", "tex.jpg", "tex.tga", "tex.bmp"):
+        Image.fromarray(texels).save(folder / name)
         files[name] = (folder / name).read_bytes()
     return files
 
@@ -159,6 +171,9 @@ def test_a_damaged_mesh_or_map_renders_finite_pixels_or_is_refused_in_one_line(t
         material = '{ type = "diffuse", rho_d = 0.5 }'
         if name.startswith("map"):
             scene = f'[environment]\nmap = "{name}"\n[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = {material}\n'
+        elif name.startswith("tex"):
+            material = f'{{ type = "diffuse", rho_d = {{ type = "bitmap", file = "{name}" }}, opacity = {{ type = "bitmap", file = "{name}" }} }}'
+            scene = f'[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = {material}\n'
         else:
             scene = f'[camera]\neye = [0, 2, 5]\nlook_at = [0, 0, 0]\n[[meshes]]\nfile = "{name}"\nmaterial = {material}\n'
         path = folder / "fuzzed.toml"

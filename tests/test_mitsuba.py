@@ -115,7 +115,7 @@ def test_generated_shapes_face_out(tmp_path, shape):
         assert area == pytest.approx(4.0 if shape == "rectangle" else math.pi, rel=1e-3)
 
 
-@pytest.mark.parametrize("name", ["cbox", "meshes", "envmap-spheres"])
+@pytest.mark.parametrize("name", ["cbox", "meshes", "envmap-spheres", "textures", "masks", "normal-maps"])
 def test_convert_writes_toml_that_reads_back_the_same_scene(tmp_path, name):
     out = tmp_path / "sub" / f"{name}.toml"
     out.parent.mkdir()
@@ -129,7 +129,19 @@ def test_convert_writes_toml_that_reads_back_the_same_scene(tmp_path, name):
         np.testing.assert_allclose(ma.vertices, mb.vertices, rtol=1e-6, atol=1e-6)
         np.testing.assert_array_equal(ma.faces, mb.faces)
         assert (ma.normals is None) == (mb.normals is None)
+        if ma.normals is not None:          # a file's, or smoothed as Mitsuba smooths it
+            np.testing.assert_allclose(ma.normals, mb.normals, rtol=1e-5, atol=1e-6)
+        assert (ma.uvs is None) == (mb.uvs is None)
+        if ma.uvs is not None:
+            np.testing.assert_allclose(ma.uvs, mb.uvs, rtol=1e-6, atol=1e-7)
         assert ma.material == mb.material
+    for row in range(len(a.materials)):      # the same textures, by what they hold
+        ta, tb = a.materials.textures[row], b.materials.textures[row]
+        assert [t[:3] for t in ta] == [t[:3] for t in tb]
+        for (_, _, _, x), (_, _, _, y) in zip(ta, tb):
+            assert x.type == y.type
+            np.testing.assert_allclose(x.mean(), y.mean(), rtol=1e-6)
+            np.testing.assert_allclose(x.params.get("to_uv", np.eye(3)), y.params.get("to_uv", np.eye(3)), rtol=1e-6)
     if name == "meshes":     # file meshes stay references, relative to the TOML file
         text = out.read_text()
         assert 'file = "../' in text and "matrix = " in text
