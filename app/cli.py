@@ -352,12 +352,16 @@ def cmd_farm_render(args):
         bar = tqdm(total=total, unit="spp", desc=f"farm: {len(jobs)} image{'s' * (len(jobs) > 1)}",
                    file=sys.stderr, disable=args.quiet, dynamic_ncols=True)
         start = time.perf_counter()
+        renders = farm.Farm(ray, actors, compiled)
         try:
-            sums, _ = farm.Farm(ray, actors, compiled).render(jobs, bar.update)
+            sums, _ = renders.render(jobs, bar.update)
         finally:
             bar.close()
+        lost = renders.lost_workers
         print(f"farm: {total} spp in {time.perf_counter() - start:.2f} s on {len(actors)} "
-              f"worker{'s' * (len(actors) > 1)}", file=sys.stderr)
+              f"worker{'s' * (len(actors) > 1)}"
+              + (f" ({lost} died; the others rendered its samples)" if lost == 1 else
+                 f" ({lost} died; the others rendered their samples)" if lost else ""), file=sys.stderr)
     finally:
         ray.shutdown()
     for job, total_sum in zip(jobs, sums):

@@ -106,7 +106,27 @@ def connect(address: str = None, num_cpus: int = None, num_gpus: int = None):
         except (ConnectionError, RuntimeError, ValueError) as e:
             raise UserError(f"--address {short(address)}: cannot reach a Ray cluster: "
                             f"{str(e).strip().splitlines()[0]}") from None
+        _drop_worker_death_reports()
     return ray
+
+
+def _drop_worker_death_reports():
+    """Ray's driver prints every error the cluster reports, a worker's death among them, as a
+    paragraph on standard output ('(raylet) A worker died or was killed ...'), whatever
+    log_to_driver says: its error listener calls ray._private.worker.print_to_stdstream. The
+    farm gives a dead worker's batches to the others and reports the loss in its own summary
+    line (Farm.lost_workers), so those reports are dropped; worker logs pass as before. A Ray
+    without that function (a future version) prints them."""
+    from ray._private import worker
+    show = getattr(worker, "print_to_stdstream", None)
+    if show is None or getattr(show, "drops_raylet_reports", False):
+        return
+
+    def drop_raylet_reports(data, ignore_prefix):
+        if data.get("pid") != "raylet":
+            show(data, ignore_prefix)
+    drop_raylet_reports.drops_raylet_reports = True
+    worker.print_to_stdstream = drop_raylet_reports
 
 
 def _check_reachable(address: str, seconds: float = 3.0):
@@ -163,6 +183,12 @@ class Farm:
         self.actors = dict(actors)          # actor -> device description
         self.scenes = scenes
         self.lost = 0                       # batches re-issued because their actor died
+        self.started = len(self.actors)
+
+    @property
+    def lost_workers(self) -> int:
+        """How many workers died during the renders so far."""
+        return self.started - len(self.actors)
 
     def render(self, jobs: list[Job], on_batch=None):
         """The merged (sum, sum_sq) of each job, (H, W, 4) float64 each; on_batch(samples per

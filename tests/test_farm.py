@@ -73,6 +73,33 @@ def test_killing_an_actor_mid_render_keeps_the_exact_samples(cluster, scenes, ba
     np.testing.assert_allclose(s[..., :3], ref[..., :3], rtol=1e-5, atol=1e-5)
 
 
+def test_a_worker_killed_by_the_system_is_reported_in_one_line_not_by_ray(cluster, scenes, backend, capfd):
+    """A worker process killed outright (SIGKILL, as the OOM killer does) used to bring Ray's
+    'A worker died or was killed ...' paragraph to the terminal while the render went on; the
+    farm reports the loss itself (Farm.lost_workers) and the image still holds every sample."""
+    import os
+    import signal
+    import time
+    actors = farm.start_actors(cluster, scenes, cpu_actors=2)
+    f = farm.Farm(cluster, actors, scenes)
+    victim = actors[0][0]
+    pid = ray.get(victim.__ray_call__.remote(lambda self: os.getpid()))
+    killed = []
+
+    def kill_once(samples):
+        if not killed:
+            os.kill(pid, signal.SIGKILL)
+            killed.append(samples)
+
+    job = farm.Job(0, scenes[0].scene.camera, 200)
+    (s,), _ = f.render([job], kill_once)
+    assert killed and f.lost_workers == 1
+    assert s[..., 3].min() == s[..., 3].max() == 200
+    time.sleep(3)            # Ray's error listener reports a death a moment after it
+    out, err = capfd.readouterr()
+    assert "worker died" not in (out + err).lower() and "raylet" not in out + err, out + err
+
+
 def test_a_worker_without_a_usable_device_is_one_clear_error(cluster, scenes, capsys):
     with pytest.raises(UserError, match="no farm worker could open an OpenCL device.*no OpenCL device matches 'no-such-device'"):
         farm.start_actors(cluster, scenes, cpu_actors=1, cpu_device="no-such-device")
