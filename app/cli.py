@@ -324,7 +324,8 @@ def cmd_farm_render(args):
 
     from pathtrace import farm
     from pathtrace.compiled import compile_scene
-    from pathtrace.image_io import check_writable, write_image
+    from pathtrace.files import shown
+    from pathtrace.image_io import Output, check_writable, write_images
     from pathtrace.scene import load_scene
 
     scenes = [apply_render_options(load_scene(name), args) for name in args.scene]
@@ -364,9 +365,13 @@ def cmd_farm_render(args):
                  f" ({lost} died; the others rendered their samples)" if lost else ""), file=sys.stderr)
     finally:
         ray.shutdown()
-    for job, total_sum in zip(jobs, sums):
-        write_image(job.output, (total_sum[..., :3] / job.spp).astype(np.float32), args.exposure, args.tonemap)
-        print(f"wrote {job.output}", file=sys.stderr)
+    # all or none, as every command writes: a failure at the last frame leaves no earlier one
+    outputs = [Output(job.output, (total_sum[..., :3] / job.spp).astype(np.float32))
+               for job, total_sum in zip(jobs, sums)]
+    with FinalWrite():
+        write_images(outputs, args.exposure, args.tonemap)
+    for out in outputs:
+        print(f"wrote {shown(out.path)}", file=sys.stderr)
     return 0
 
 
