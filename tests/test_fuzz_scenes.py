@@ -1,7 +1,8 @@
 """A scene-file fuzzer (#12): TOML files generated around the valid shape of a scene (every field
 sometimes replaced by a value of another type, a huge or tiny or non-finite number, an empty or
 nested container, or left out; the environment map sometimes a good file, sometimes a damaged
-one, a folder or none) are rendered by the command line, each in a process of its own
+one, a folder or none; material parameters, opacities and normal and bump maps sometimes
+textures, whose images are good, damaged or missing files) are rendered by the command line, each in a process of its own
 with a time limit, on the tests' device. Each must either exit 0 having written an image of
 finite pixels, or exit 1 with one error line that names the file; never a traceback, a signal, a
 hang, a warning from below (NumPy's, OpenCV's) or a file left behind. A bounded number of
@@ -17,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 from hypothesis import HealthCheck, event, given, settings
+from PIL import Image as PILImage
 from hypothesis import strategies as st
 
 from pathtrace.image_io import read_hdr
@@ -34,6 +36,14 @@ MAPS = {
     "huge.pfm": lambda path: path.write_bytes(b"PF\n99999 99999\n-1.0\n"),
     "folder.hdr": lambda path: path.mkdir(),
     "missing.hdr": lambda path: None,
+}
+# texture images beside each case's scene file (the maps above serve as textures too)
+IMAGES = {
+    "good.png": lambda path: PILImage.fromarray(
+        np.random.default_rng(5).integers(0, 256, (4, 6, 3)).astype(np.uint8)).save(path),
+    "grey.png": lambda path: PILImage.fromarray(np.full((3, 3), 200, np.uint8)).save(path),
+    "cut.png": lambda path: path.write_bytes(b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR\x00\x00"),
+    "text.jpg": lambda path: path.write_text("not an image"),
 }
 CASE_SECONDS = 120      # a case's time limit: a kernel program for a new mix of materials
                         # builds in a few seconds on two PoCL cores; a render of 8x6 pixels takes less
@@ -61,8 +71,36 @@ def vec3(low=-10.0, high=10.0):
     return maybe(st.lists(st.floats(low, high), min_size=3, max_size=3))
 
 
+@st.composite
+def textures(draw, depth=0):
+    """An inline texture table: a bitmap of one of the images or maps, or a checkerboard, scale,
+    mix or constant, with a uv transform; each field sometimes odd."""
+    kind = draw(st.sampled_from(["bitmap", "bitmap", "checkerboard", "scale", "mix", "constant", "nosuch"]))
+    t = {"type": draw(maybe(st.just(kind)))}
+    if kind == "bitmap":
+        good = ["good.png", "grey.png", "good.hdr"]
+        t["file"] = draw(maybe(st.sampled_from(good), st.sampled_from(sorted(set(IMAGES) | set(MAPS) - set(good)))))
+        if draw(st.booleans()):
+            t["raw"] = draw(maybe(st.booleans()))
+        if draw(st.booleans()):
+            t["wrap"] = draw(maybe(st.sampled_from(["repeat", "mirror", "clamp"])))
+        if draw(st.booleans()):
+            t["filter"] = draw(maybe(st.sampled_from(["bilinear", "nearest"])))
+    elif kind != "constant" and kind != "nosuch":
+        inputs = {"checkerboard": ("color0", "color1"), "scale": ("tex", "scale"), "mix": ("tex1", "tex2", "amount")}
+        for key in inputs[kind]:
+            if draw(st.booleans()):
+                t[key] = draw(maybe(st.floats(0, 1) if depth else st.one_of(st.floats(0, 1), textures(depth + 1))))
+    else:
+        t["value"] = draw(maybe(st.floats(0, 1)))
+    if draw(st.booleans()):
+        t[draw(st.sampled_from(["uv_scale", "uv_offset", "uv_rotate"]))] = draw(maybe(st.floats(-4, 4)))
+    return t
+
+
 def param_values(param):
-    """Valid values of one material parameter, as its Param declares them (app/materials/bsdf.py)."""
+    """Valid values of one material parameter, as its Param declares them (app/materials/bsdf.py);
+    one with a slot now and then a texture."""
     if param.kind == "bool":
         return st.booleans()
     if param.kind == "name":
@@ -70,9 +108,13 @@ def param_values(param):
     high = min(param.high or 1e4, 1e4)
     if param.kind == "color":
         one = st.floats(param.low, high / 3)     # phong's rho_d + rho_s must stay <= 1
-        return st.one_of(one, st.lists(one, min_size=3, max_size=3))
-    values = st.floats(max(param.low, 1e-3), high)
-    return st.one_of(values, st.sampled_from(sorted(param.names))) if param.names else values
+        values = st.one_of(one, st.lists(one, min_size=3, max_size=3))
+    else:
+        values = st.floats(max(param.low, 1e-3), high)
+        values = st.one_of(values, st.sampled_from(sorted(param.names))) if param.names else values
+    if param.slot:
+        return st.integers(0, 5).flatmap(lambda k: textures() if k == 0 else values)
+    return values
 
 
 @st.composite
@@ -89,6 +131,11 @@ def materials(draw):
         for param in FILE_TYPES[kind].params:       # the required ones, and some of the others
             if param.default is None or draw(st.booleans()):
                 m[param.name] = draw(maybe(param_values(param)))
+    if kind not in ("twosided", "nosuch") and draw(st.integers(0, 4)) == 0:
+        key = draw(st.sampled_from(["opacity", "normal_map", "bump_map", "Le"]))
+        m[key] = draw(maybe(st.one_of(textures(), st.floats(0, 1))))
+        if key == "bump_map" and draw(st.booleans()):
+            m["bump_scale"] = draw(maybe(st.floats(-2, 2)))
     if draw(st.integers(0, 19)) == 7:
         m[draw(st.sampled_from(["Le", "twosided", "bogus"]))] = draw(ODD_VALUES)
     return m
@@ -113,6 +160,9 @@ def scenes(draw):
                                                              min_size=3, max_size=6))),
                             "faces": draw(maybe(st.just([[0, 1, 2]]))),
                             "material": draw(materials())}]
+        if draw(st.booleans()):
+            scene["meshes"][0]["uvs"] = draw(maybe(st.lists(st.lists(st.floats(-2, 2), min_size=2, max_size=2),
+                                                            min_size=3, max_size=6)))
     environment_map = scene.pop("map")
     if environment_map is not None:       # in place of the constant colour, as the format has it
         del scene["environment"]["color"]
@@ -175,7 +225,7 @@ def render(folder: Path, scene: Path):
 def test_a_scene_file_renders_finite_pixels_or_is_refused_in_one_line(tmp_path, scene):
     with tempfile.TemporaryDirectory(dir=tmp_path) as folder:
         folder = Path(folder)
-        for name, make in MAPS.items():
+        for name, make in {**MAPS, **IMAGES}.items():
             make(folder / name)
         before = sorted(p.name for p in folder.iterdir())
         path = folder / "fuzzed.toml"
