@@ -421,6 +421,16 @@ def test_a_map_that_perturbs_nothing_changes_nothing(backend, tmp_path, kind):
         assert abs(images[1].mean() / images[0].mean() - 1) < 0.01
 
 
+def test_a_map_around_a_map_keeps_the_inner_one(tmp_path, capsys):
+    PILImage.fromarray(np.full((2, 2, 3), 128, np.uint8)).save(tmp_path / "m.png")
+    bitmap = '<texture type="bitmap" name="normalmap"><string name="filename" value="m.png"/></texture>'
+    scene = read_mitsuba_file(write(tmp_path, f'<shape type="sphere"><bsdf type="bumpmap">{bitmap}'
+                                              f'<bsdf type="normalmap">{bitmap}<bsdf type="diffuse"/></bsdf></bsdf></shape>'))
+    m = scene.materials.get(0)
+    assert m.normal_map is not None and m.bump_map is None
+    assert "a bumpmap around another map; pathtrace applies the inner one only" in capsys.readouterr().err
+
+
 def test_shading_maps_in_scene_files(tmp_path):
     from pathtrace.api import load_dict
     PILImage.fromarray(np.full((2, 2, 3), 128, np.uint8)).save(tmp_path / "m.png")

@@ -654,6 +654,9 @@ class _Reader:
         if target.tag != "texture":
             _fail(maps[0], "must be a texture")
         texture = self.texture(target)
+        if m.normal_map is not None or m.bump_map is not None:
+            warn(f"{node.where()}: a {kind} around another map; pathtrace applies the inner one only")
+            return m
         if kind == "normalmap":
             m.normal_map = texture
             return m
