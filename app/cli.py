@@ -8,7 +8,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from pathtrace import __version__
-from pathtrace.console import INTERRUPTED
+from pathtrace.console import INTERRUPTED, check_interrupt
 from pathtrace.errors import UserError, cut, short, warn
 from pathtrace.scene.description import RUSSIAN_ROULETTE
 
@@ -233,6 +233,7 @@ def cmd_render(args):
         # rate underestimates the time left; in samples per second always, as a fixed unit,
         # where tqdm would flip to seconds per sample
         nonlocal bar
+        check_interrupt()
         if bar is None:
             build_progress.close()
             bar = tqdm(total=s.spp, desc=f"{scene.name} {s.width}x{s.height}", file=sys.stderr,
@@ -354,8 +355,12 @@ def cmd_farm_render(args):
                    file=sys.stderr, disable=args.quiet, dynamic_ncols=True)
         start = time.perf_counter()
         renders = farm.Farm(ray, actors, compiled)
+
+        def on_batch(count):
+            check_interrupt()
+            bar.update(count)
         try:
-            sums, _ = renders.render(jobs, bar.update)
+            sums, _ = renders.render(jobs, on_batch)
         finally:
             bar.close()
         lost = renders.lost_workers

@@ -445,3 +445,38 @@ run()
 def test_a_name_with_a_newline_is_shown_on_one_line(tmp_path):
     r = pathtrace("render", "simple", "-o", tmp_path / "a\nb.png", "--size", "8x6", "--spp", "1", "-q")
     assert r.returncode == 0 and r.stderr.splitlines()[-1] == f"wrote {tmp_path}/a\\nb.png"
+
+
+def test_an_interrupt_dropped_by_python_still_ends_the_render(tmp_path):
+    """A signal whose KeyboardInterrupt is raised inside a weak reference's callback (a garbage
+    collection between launches: Python prints and drops such exceptions) used to leave the render
+    running to its end; now the next launch's progress ends it, with the one line and no
+    traceback. The child sends itself SIGTERM from such a callback once samples are in (without
+    the fix it renders all 3000 samples and writes the image)."""
+    out = tmp_path / "o.png"
+    child = f"""
+import os, signal, sys, weakref
+import tqdm
+original = tqdm.tqdm.update
+fired = []
+class Token:
+    pass
+def callback(ref):
+    os.kill(os.getpid(), signal.SIGTERM)
+    for _ in range(100000):     # a loop: Python runs the signal's handler here, in the callback
+        pass
+def update(self, n=1):          # the progress bar's update, in the main thread
+    if not fired and self.n > 0:
+        token = Token()
+        fired.append(weakref.ref(token, callback))
+        del token               # the callback runs here, and the signal's exception is dropped in it
+    return original(self, n)
+tqdm.tqdm.update = update
+sys.argv = ["pathtrace", "render", "simple", "-o", {str(out)!r}, "--spp", "3000", "--size", "32x18"]
+from pathtrace.console import run
+run()
+"""
+    r = subprocess.run([sys.executable, "-c", child], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 130 and "nothing written" in r.stderr, r.stderr
+    assert "Traceback" not in r.stderr and "Exception ignored" not in r.stderr, r.stderr
+    assert not out.exists()
