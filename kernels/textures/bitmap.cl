@@ -93,27 +93,36 @@ float2 wrap_period(float2 st, int wrap)
     return st;
 }
 
-float3 eval_bitmap(const SceneData *sc, const global Texture *t, float2 uv)
+/* The four texels whose centres (at half-integer coordinates) surround uv, each coordinate
+ * wrapped once: their indices 00, 10, 01, 11 (x first), and uv's bilinear weights (ax, ay)
+ * between them. */
+void bilinear_texels(const global Texture *t, float2 uv, ulong4 *texel, float2 *a)
 {
-    uv = wrap_period(transform_uv(t, uv), t->wrap);
     int w = t->width, h = t->height;
-    if (t->filter == FILTER_NEAREST) {
-        int x = wrap_texel(texel_coordinate(uv.x * w), w, t->wrap);
-        int y = wrap_texel(texel_coordinate(uv.y * h), h, t->wrap);
-        return read_texel(sc, t, (size_t)y * w + x);
-    }
-    /* texel centres lie at half-integer coordinates: the four around uv, each coordinate
-     * wrapped once */
     float x = uv.x * w - 0.5f, y = uv.y * h - 0.5f;
     int x0 = texel_coordinate(x), y0 = texel_coordinate(y);
-    float ax = x - floor(x), ay = y - floor(y);
+    *a = (float2)(x - floor(x), y - floor(y));
     int x1 = wrap_texel(x0 + 1, w, t->wrap), y1 = wrap_texel(y0 + 1, h, t->wrap);
     x0 = wrap_texel(x0, w, t->wrap);
     y0 = wrap_texel(y0, h, t->wrap);
     size_t row0 = (size_t)y0 * w, row1 = (size_t)y1 * w;
-    float3 top = mix(read_texel(sc, t, row0 + x0), read_texel(sc, t, row0 + x1), ax);
-    float3 bottom = mix(read_texel(sc, t, row1 + x0), read_texel(sc, t, row1 + x1), ax);
-    return mix(top, bottom, ay);
+    *texel = (ulong4)(row0 + x0, row0 + x1, row1 + x0, row1 + x1);
+}
+
+float3 eval_bitmap(const SceneData *sc, const global Texture *t, float2 uv)
+{
+    uv = wrap_period(transform_uv(t, uv), t->wrap);
+    if (t->filter == FILTER_NEAREST) {
+        int x = wrap_texel(texel_coordinate(uv.x * t->width), t->width, t->wrap);
+        int y = wrap_texel(texel_coordinate(uv.y * t->height), t->height, t->wrap);
+        return read_texel(sc, t, (size_t)y * t->width + x);
+    }
+    ulong4 i;
+    float2 a;
+    bilinear_texels(t, uv, &i, &a);
+    float3 top = mix(read_texel(sc, t, i.s0), read_texel(sc, t, i.s1), a.x);
+    float3 bottom = mix(read_texel(sc, t, i.s2), read_texel(sc, t, i.s3), a.x);
+    return mix(top, bottom, a.y);
 }
 
 /* The gradient of the bitmap's luminance with respect to the surface's uv, as Mitsuba 3's
@@ -124,18 +133,12 @@ float2 grad_bitmap(const SceneData *sc, const global Texture *t, float2 uv)
 {
     if (t->filter == FILTER_NEAREST)
         return (float2)(0.0f);
-    uv = wrap_period(transform_uv(t, uv), t->wrap);
-    int w = t->width, h = t->height;
-    float x = uv.x * w - 0.5f, y = uv.y * h - 0.5f;
-    int x0 = texel_coordinate(x), y0 = texel_coordinate(y);
-    float ax = x - floor(x), ay = y - floor(y);
-    int x1 = wrap_texel(x0 + 1, w, t->wrap), y1 = wrap_texel(y0 + 1, h, t->wrap);
-    x0 = wrap_texel(x0, w, t->wrap);
-    y0 = wrap_texel(y0, h, t->wrap);
-    size_t row0 = (size_t)y0 * w, row1 = (size_t)y1 * w;
-    float f00 = luminance(read_texel(sc, t, row0 + x0)), f10 = luminance(read_texel(sc, t, row0 + x1));
-    float f01 = luminance(read_texel(sc, t, row1 + x0)), f11 = luminance(read_texel(sc, t, row1 + x1));
-    float2 df = (float2)((1.0f - ay) * (f10 - f00) + ay * (f11 - f01),
-                         (1.0f - ax) * (f01 - f00) + ax * (f11 - f10)) * (float2)(w, h);
+    ulong4 i;
+    float2 a;
+    bilinear_texels(t, wrap_period(transform_uv(t, uv), t->wrap), &i, &a);
+    float f00 = luminance(read_texel(sc, t, i.s0)), f10 = luminance(read_texel(sc, t, i.s1));
+    float f01 = luminance(read_texel(sc, t, i.s2)), f11 = luminance(read_texel(sc, t, i.s3));
+    float2 df = (float2)((1.0f - a.y) * (f10 - f00) + a.y * (f11 - f01),
+                         (1.0f - a.x) * (f01 - f00) + a.x * (f11 - f10)) * (float2)(t->width, t->height);
     return (float2)(t->to_u.x * df.x + t->to_v.x * df.y, t->to_u.y * df.x + t->to_v.y * df.y);
 }
