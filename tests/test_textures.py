@@ -455,6 +455,7 @@ def test_shading_maps_in_scene_files(tmp_path):
     ('a = { type = "bitmap", file = "nowhere.png" }', "nowhere.png' does not exist"),
     ('a = { type = "bitmap", file = "t.png", wrap = "wobble" }', "textures.a.wrap: must be one of repeat, mirror, clamp"),
     ('a = { type = "bitmap", file = "t.png", uv_scale = [1, "x"] }', "textures.a.uv_scale: must be a number or a list of 2"),
+    ('a = { type = "bitmap", file = "x\\u0000y.png" }', "x\\x00y.png': a file name cannot hold a NUL byte"),
 ])
 def test_a_bad_texture_is_one_line_and_writes_nothing(tmp_path, textures, message):
     from tests.test_cli import pathtrace

@@ -65,16 +65,16 @@ def read_image(path: Path, where: str, raw: bool = False, cache: dict = None) ->
     from pathtrace.image_io import read_hdr
 
     path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix not in LDR_FORMATS + HDR_FORMATS:
+        raise UserError(f"{where}: '{shown(path)}': unknown image format '{path.suffix}' "
+                        f"(use {', '.join(LDR_FORMATS + HDR_FORMATS)})")
+    check_regular_file(path, where, "texture", MAX_FILE_BYTES)   # before realpath: a NUL byte
     if cache is not None:
         key = (os.path.realpath(path), raw)
         if key not in cache:
             cache[key] = read_image(path, where, raw)
         return cache[key]
-    suffix = path.suffix.lower()
-    if suffix not in LDR_FORMATS + HDR_FORMATS:
-        raise UserError(f"{where}: '{shown(path)}': unknown image format '{path.suffix}' "
-                        f"(use {', '.join(LDR_FORMATS + HDR_FORMATS)})")
-    check_regular_file(path, where, "texture", MAX_FILE_BYTES)
     if suffix in HDR_FORMATS:
         texels = read_hdr(path, where, "texture", MAX_SIDE)
         return Image(np.ascontiguousarray(texels, np.float32), True, str(path))
