@@ -1,8 +1,14 @@
-"""A pinhole camera given by eye, look-at point, up vector and vertical field of view."""
+"""The camera: eye, look-at point and up vector, and a projection, each a kernel file
+kernels/cameras/<name>.cl (kernels/camera.cl is their interface): "perspective", a pinhole or,
+with an aperture, a thin lens; or "orthographic"."""
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
+
+PROJECTIONS = ("perspective", "orthographic")
+MAX_EXTENT = 1e30     # the largest aperture, focus distance or view height a file may give
 
 
 def _normalize(v):
@@ -14,21 +20,57 @@ class Camera:
     eye: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 5.0]))
     look_at: np.ndarray = field(default_factory=lambda: np.zeros(3))
     up: np.ndarray = field(default_factory=lambda: np.array([0.0, 1.0, 0.0]))
-    vfov: float = 45.0
+    vfov: float = 45.0                 # perspective: the vertical field of view, degrees
+    projection: str = "perspective"    # one of PROJECTIONS
+    aperture: float = 0.0              # perspective: the lens's radius (0: a pinhole)
+    focus_distance: float = 1.0        # perspective with an aperture: the distance along the
+                                       # view direction to the plane in focus
+    height: float = 2.0                # orthographic: the view's height in world units
 
     def __post_init__(self):
         self.eye = np.asarray(self.eye, np.float64)
         self.look_at = np.asarray(self.look_at, np.float64)
         self.up = np.asarray(self.up, np.float64)
 
+    def check(self):
+        """Raises ValueError("<field>: <problem>") for the first field out of range (the view
+        itself, eye, look_at and up, the readers check)."""
+        if self.projection not in PROJECTIONS:
+            raise ValueError(f"type: must be perspective, thinlens or orthographic, got {self.projection!r}")
+        if not 0 < self.vfov < 180:
+            raise ValueError(f"vfov: must be between 0 and 180 degrees, got {self.vfov:g}")
+        for name in ("aperture", "focus_distance", "height"):
+            value = getattr(self, name)
+            if not (0 <= value <= MAX_EXTENT if name == "aperture" else 0 < value <= MAX_EXTENT):
+                raise ValueError(f"{name}: must be {'in [0' if name == 'aperture' else 'in (0'}, "
+                                 f"{MAX_EXTENT:g}], got {value:g}")
+
     def basis(self, aspect: float):
-        """Unit forward, and right and up scaled so that forward + x right + y up, x and y in
-        [-1, 1], spans the image (the kernel's camera_direction)."""
+        """Unit forward, and right and up scaled so that the image spans forward + x right + y up
+        (perspective) or eye + x right + y up (orthographic), x and y in [-1, 1]
+        (kernels/cameras/)."""
         forward = _normalize(self.look_at - self.eye)
         right = _normalize(np.cross(forward, self.up))
         up = np.cross(right, forward)
-        half_height = np.tan(np.radians(self.vfov) / 2.0)
+        half_height = self.height / 2 if self.projection == "orthographic" else math.tan(math.radians(self.vfov) / 2)
         return forward, right * half_height * aspect, up * half_height
 
+    def ray(self, aspect: float, x: float, y: float):
+        """The ray through the image's point (x, y) in [-1, 1]^2, +y up, from the lens's centre:
+        (origin, unit direction)."""
+        forward, right, up = self.basis(aspect)
+        if self.projection == "orthographic":
+            return self.eye + x * right + y * up, forward
+        return self.eye, _normalize(forward + x * right + y * up)
+
     def copy(self) -> "Camera":
-        return Camera(self.eye.copy(), self.look_at.copy(), self.up.copy(), self.vfov)
+        return Camera(self.eye.copy(), self.look_at.copy(), self.up.copy(), self.vfov, self.projection,
+                      self.aperture, self.focus_distance, self.height)
+
+
+def kernel_parts(projection: str) -> list:
+    """(name, source) of the camera kernels of a program: the projection's file and the
+    generate_ray that names it (kernels/camera.cl)."""
+    glue = ("CameraRay generate_ray(const RenderParams *p, float sx, float sy, float2 u)\n{\n"
+            f"    return generate_{projection}_ray(p, sx, sy, u);\n}}\n")
+    return [("camera.cl", None), (f"cameras/{projection}.cl", None), ("app/camera.py: kernel_parts", glue)]

@@ -153,6 +153,24 @@ def add_render_options(p: argparse.ArgumentParser, device: bool = True):
     p.add_argument("--nee", action=argparse.BooleanOptionalAction, default=None,
                    help="next-event estimation: sample lights at every bounce, combined by MIS "
                         "(default on; --no-nee gives the report's estimator)")
+    p.add_argument("--filter", type=_pixel_filter, metavar="NAME[:RADIUS[:STDDEV]]",
+                   help="pixel filter: box (radius 0.5), tent (1) or gaussian (stddev 0.5, radius 4 "
+                        "stddev), radius and stddev in pixels (default: the scene's)")
+
+
+def _pixel_filter(text: str):
+    from pathtrace.filters import PixelFilter
+    name, *numbers = text.split(":")
+    try:
+        values = [float(x) for x in numbers]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{short(text)}: radius and stddev must be numbers") from None
+    if len(values) > (2 if name == "gaussian" else 1):
+        raise argparse.ArgumentTypeError(f"{short(text)}: too many numbers for a {short(name)} filter")
+    try:
+        return PixelFilter(name, *values).check()
+    except ValueError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
 
 
 def apply_render_options(scene, args):
@@ -162,9 +180,13 @@ def apply_render_options(scene, args):
     rr = args.rr or s.russian_roulette
     changes = dict(width=width, height=height, max_depth=max_depth, russian_roulette=rr,
                    seed=s.seed if args.seed is None else args.seed,
-                   nee=s.nee if args.nee is None else args.nee)
+                   nee=s.nee if args.nee is None else args.nee,
+                   filter=args.filter or s.filter)
     if not replace(s, **changes).paths_end:
         raise UserError("--rr off needs --max-depth N (N >= 1), or paths would never end")
+    if not changes["nee"] and scene.lights:
+        warn(f"{scene.name}: its {len(scene.lights)} point, spot or directional light(s) are reached by "
+             f"next-event estimation only; without it (--no-nee) they light nothing")
     if getattr(args, "spp", None) is not None:
         changes["spp"] = args.spp
     return scene.with_settings(**changes)

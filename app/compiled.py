@@ -17,7 +17,8 @@ from pathtrace.features import FLAT_MAX, Features, stack_size
 from pathtrace.lights import LightTable, build_light_table, emitted_power
 from pathtrace.materials import TAGS
 from pathtrace.memory import available_host_memory
-from pathtrace.scene.description import Scene
+from pathtrace.camera import Camera
+from pathtrace.scene.description import RenderSettings, Scene
 from pathtrace.textures import TextureTables, compile_textures
 from pathtrace.types import BVH_NODE, TRIANGLE
 
@@ -57,6 +58,8 @@ class CompiledScene:
         corners = np.concatenate([m.vertices[m.faces] for m in meshes]) if meshes \
             else np.zeros((0, 3, 3), np.float32)
         lo, hi = primitive_boxes(scene.spheres, corners)
+        # the scene's bounding sphere, by which a light at infinity's power is reckoned
+        self.radius = float(np.linalg.norm(hi.max(axis=0) - lo.min(axis=0)) / 2) if len(lo) else 1.0
         self.bvh: BVH = build_bvh(lo, hi, n_spheres, queue, progress)
         self.bvh_seconds = time.perf_counter() - start
 
@@ -108,7 +111,8 @@ class CompiledScene:
         corners = np.stack([self.triangles[f][:, :3] for f in ("v0", "v1", "v2")], axis=1)
         power = emitted_power(self.spheres, corners, prim_emission[:self.num_spheres],
                               prim_emission[self.num_spheres:])
-        self.lights: LightTable = build_light_table(power, self.scene.environment)
+        self.lights: LightTable = build_light_table(power, self.scene.environment, self.scene.lights,
+                                                    max(self.radius, 1e-6))
 
     def geometry_arrays(self) -> dict:
         """The buffers of the shapes, by their names in SCENE_BUFFERS."""
@@ -120,15 +124,16 @@ class CompiledScene:
         return {"materials": self.materials, "bindings": self.textures.bindings, "textures": self.textures.textures,
                 "texels": self.textures.texels, "lights": self.lights.lights, "light_pick": self.lights.pick}
 
-    def features(self, russian_roulette: str) -> Features:
-        """What the kernels need for this scene: triangles or not, the material types its
-        primitives use, and the Russian roulette rule of its settings."""
+    def features(self, settings: RenderSettings, camera: Camera) -> Features:
+        """What the kernels need for this scene: triangles or not, the material and light types
+        it uses, and the Russian roulette rule, pixel filter and camera of its settings."""
         used = np.unique(self.materials["type"][np.unique(self.prim_material)])
         return Features(triangles=self.num_triangles > 0,
                         bsdfs=tuple(name for name, tag in TAGS.items() if tag in used),
                         textures=self.textures.types, masks=self.textures.masks,
-                        normal_maps=self.textures.normal_maps,
-                        russian_roulette=russian_roulette, stack=stack_size(self.bvh.depth),
+                        normal_maps=self.textures.normal_maps, lights=self.lights.types,
+                        camera=camera.projection, filter=settings.filter.name,
+                        russian_roulette=settings.russian_roulette, stack=stack_size(self.bvh.depth),
                         flat=(self.num_spheres, self.num_triangles)
                         if self.num_spheres + self.num_triangles <= FLAT_MAX else ())
 

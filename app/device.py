@@ -18,11 +18,12 @@ from pathtrace.resources import resource_dir
 # The order in which the kernel files are joined into one program: the basics, the texture
 # kernels of the types a scene uses (app/textures/registry.py: kernel_parts), the shapes and
 # traversal (with alpha masks where a scene has them), the shading of textured materials, the
-# BSDFs of the material registry and their generated dispatch, the rest.
+# BSDFs of the material registry and their generated dispatch, the environment, the light types
+# a scene has and their dispatch (app/lights/registry.py), its camera and pixel filter, the rest.
 BASIC_FILES = ("types.h", "vector.cl", "rng.cl", "sampling.cl", "scene.cl")
 SHAPE_FILES = ("spawn.cl", "shapes/sphere.cl", "shapes/triangle.cl")
 BSDF_FILES = ("bsdf.cl", "fresnel.cl", "microfacet.cl", "coating.cl")
-LATER_FILES = ("environment.cl", "lights.cl", "camera.cl", "integrator.cl", "aovs.cl", "display.cl")
+LATER_FILES = ("integrator.cl", "aovs.cl", "display.cl")
 
 # No -cl-fast-relaxed-math: it implies finite math, and the kernels rely on INFINITY.
 BUILD_OPTIONS = ("-cl-mad-enable", "-cl-no-signed-zeros")
@@ -31,6 +32,7 @@ BUILD_OPTIONS = ("-cl-mad-enable", "-cl-no-signed-zeros")
 def kernel_source(extra: str = "", features: Features = Features()) -> str:
     """The kernels as one source text, each file introduced by a #line marker so that compiler
     messages name the file and line."""
+    from pathtrace import camera, filters, lights
     from pathtrace.materials import dispatch_source, kernel_files
     from pathtrace.textures import kernel_parts
 
@@ -43,6 +45,9 @@ def kernel_source(extra: str = "", features: Features = Features()) -> str:
              *(("shading.cl",) if features.textures else ()), *BSDF_FILES, *kernel_files(features.bsdfs))
     texts += [(name, (folder / name).read_text()) for name in files]
     texts.append(("app/materials/registry.py: dispatch_source", dispatch_source(features.bsdfs)))
+    parts = [("environment.cl", None), *lights.kernel_parts(features.lights),
+             *camera.kernel_parts(features.camera), *filters.kernel_parts(features.filter)]
+    texts += [(name, text if text is not None else (folder / name).read_text()) for name, text in parts]
     texts += [(name, (folder / name).read_text()) for name in LATER_FILES]
     if extra:
         texts.append(("extra", extra))

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 class Features:
     """What a scene and its settings need of the kernels. Each scene's program is specialised
     to it and leaves out the code of the shapes, materials and Russian roulette rule it does
-    not use: on a GPU every branch a kernel could take costs registers, hence occupancy, in
+    not use (and only its lights' types, its camera and its pixel filter): on a GPU every branch a kernel could take costs registers, hence occupancy, in
     every thread (docs/performance.md). The default, every shape and material and no textures,
     is the program the tests build their kernels beside."""
     triangles: bool = True
@@ -17,6 +17,9 @@ class Features:
                                            # () leaves all texture code out
     masks: bool = False                    # a material has an opacity (kernels/masks.cl)
     normal_maps: bool = False              # a material has a normal or bump map (kernels/normal_maps.cl)
+    lights: tuple = None                   # names of pathtrace.lights.LIGHTS the scene has; None: all
+    camera: str = "perspective"            # one of pathtrace.camera.PROJECTIONS
+    filter: str = "box"                    # one of pathtrace.filters.FILTERS
     russian_roulette: str = "throughput"   # one of pathtrace.scene.description.RUSSIAN_ROULETTE
     stack: int = 48                        # BVH traversal stack entries the tree can need
     flat: tuple = ()                       # (spheres, triangles) of a scene of at most FLAT_MAX

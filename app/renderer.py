@@ -112,7 +112,7 @@ class Renderer:
 
     def _select_program(self):
         """The kernels specialised to the scene's shapes and materials (pathtrace.device.Features)."""
-        program = self.backend.program_for(self.compiled.features(self.settings.russian_roulette))
+        program = self.backend.program_for(self.compiled.features(self.settings, self.camera))
         if program is not self.program:
             self.program = program
             self.kernels = {False: cl.Kernel(program, "render"), True: cl.Kernel(program, "render_nee")}
@@ -135,22 +135,33 @@ class Renderer:
         for name, array in self.compiled.material_arrays().items():
             self._upload(name, array)
 
-    def pick(self, origin, direction):
-        """The shape seen along a ray (a ShapeRef), or None."""
-        out = cl.Buffer(self.backend.context, cl.mem_flags.WRITE_ONLY, 4)
+    def _nearest_hit(self, origin, direction) -> tuple:
+        """(primitive, distance) of the nearest hit along a ray; primitive -1 where there is none."""
+        out = cl.Buffer(self.backend.context, cl.mem_flags.WRITE_ONLY, 8)
         kernel = cl.Kernel(self.program, "pick")
         kernel(self.backend.queue, (1,), None, *self._scene_args(),
                np.int32(self.compiled.num_spheres), np.append(np.float32(origin), 0).astype(np.float32),
                np.append(np.float32(direction), 0).astype(np.float32), out)
-        prim = np.zeros(1, np.int32)
-        cl.enqueue_copy(self.backend.queue, prim, out)
-        return self.compiled.shape(int(prim[0])) if prim[0] >= 0 else None
+        hit = np.zeros(2, np.int32)
+        cl.enqueue_copy(self.backend.queue, hit, out)
+        return int(hit[0]), float(hit[1:].view(np.float32)[0])
+
+    def pick(self, origin, direction):
+        """The shape seen along a ray (a ShapeRef), or None."""
+        prim, _ = self._nearest_hit(origin, direction)
+        return self.compiled.shape(prim) if prim >= 0 else None
+
+    def hit_distance(self, origin, direction):
+        """The distance along a ray (of unit direction) to the first surface, or None."""
+        prim, t = self._nearest_hit(origin, direction)
+        return t if prim >= 0 else None
 
     def _scene_args(self):
         return tuple(self._buffers[name] for name in SCENE_BUFFERS)
 
     def set_camera(self, camera: Camera):
         self.camera = camera.copy()
+        self._select_program()
         self.reset()
 
     def set_settings(self, **changes):
@@ -204,6 +215,8 @@ class Renderer:
         forward, right, up = self.camera.basis(self.width / self.height)
         p["eye"][:3] = self.camera.eye
         p["forward"][:3], p["right"][:3], p["up"][:3] = forward, right, up
+        p["lens"][:2] = self.camera.aperture, self.camera.focus_distance
+        p["filter"] = self.settings.filter.params()
         p["env_scale"][:3] = self.environment.intensity
         p["width"], p["height"] = self.width, self.height
         p["sample_start"], p["sample_count"] = self.samples, sample_count

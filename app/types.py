@@ -55,6 +55,8 @@ RENDER_PARAMS = np.dtype([
     ("right", np.float32, 4),
     ("up", np.float32, 4),
     ("env_scale", np.float32, 4),
+    ("lens", np.float32, 4),        # aperture radius, focus distance (kernels/cameras/)
+    ("filter", np.float32, 4),      # the pixel filter's parameters (kernels/filters/)
     ("width", np.int32),
     ("height", np.int32),
     ("sample_start", np.uint32),
@@ -74,8 +76,19 @@ RENDER_PARAMS = np.dtype([
 ])
 
 LIGHT = np.dtype([
-    ("prim", np.int32),             # -1: the environment
+    ("p0", np.float32, 4),          # the type's parameters (kernels/lights/<type>.cl)
+    ("p1", np.float32, 4),
+    ("p2", np.float32, 4),
+    ("type", np.int32),             # LIGHT_* tag (app/lights/registry.py)
+    ("prim", np.int32),             # an area light's primitive, else -1
     ("alias", np.int32),
     ("keep", np.uint32),            # the keep probability times 2^32 (lights.keep_threshold)
     ("pick", np.float32),
+    ("pad", np.int32, 3),
+])
+
+LIGHT_NODE = np.dtype([
+    ("lo", np.float32, 4),          # box low corner; w: total power
+    ("hi", np.float32, 4),          # box high corner; w: cos(theta_o)
+    ("axis", np.float32, 4),        # normals' cone axis; w: cos(theta_e)
 ])

@@ -88,11 +88,10 @@ kernel void render_aovs(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *
     float depth_acc = 0.0f;
     for (uint i = 0; i < p.sample_count; ++i) {
         Rng rng = make_rng(x, y, p.sample_start + i, p.seed);
-        float4 jitter = next_uniform4(&rng);
-        float3 d = camera_direction(&p, x + jitter.x, y + jitter.y);
+        CameraRay ray = sample_camera_ray(&p, x, y, &rng);
         float3 albedo = (float3)(0.0f), normal = (float3)(0.0f);
         float depth = 0.0f;
-        trace_aovs(&sc, &p, p.eye.xyz, d, &rng, &albedo, &normal, &depth);
+        trace_aovs(&sc, &p, ray.o, ray.d, &rng, &albedo, &normal, &depth);
         if (all(isfinite(albedo)))
             albedo_acc += albedo;
         normal_acc += normal;

@@ -24,8 +24,9 @@
 
 /* One light sample at surface s, whose BSDF m sees outgoing direction wo (local frame of the
  * shading normal): its contribution f cos Le / pdf, weighted against BSDF sampling, whose
- * density of continuing is `go_on` times the BSDF's pdf. Everything but visibility is computed
- * before the shadow ray, so that only the contribution stays live while it is traced. */
+ * density of continuing is `go_on` times the BSDF's pdf (a delta light, which no path can find,
+ * keeps its whole weight). Everything but visibility is computed before the shadow ray, so
+ * that only the contribution stays live while it is traced. */
 float3 sample_direct_light(const SceneData *sc, const RenderParams *p, MaterialRef m,
                            const Surface *s, float3 wo, float go_on, uint4 r, int *rays)
 {
@@ -40,16 +41,16 @@ float3 sample_direct_light(const SceneData *sc, const RenderParams *p, MaterialR
 #ifdef NORMAL_MAPS
     f *= shadow_terminator(s, ls.wi);
 #endif
-    float3 le = light_radiance(sc, p, &ls);
-    float w = mis_weight(ls.pdf, go_on * pdf_bsdf(m, wo, wi));
+    float3 le = sample_radiance(sc, p, &ls, s->p);
+    float w = (ls.flags & LIGHT_DELTA) ? 1.0f : mis_weight(ls.pdf, go_on * pdf_bsdf(m, wo, wi));
     float3 contribution = f * fabs(wi.z) * le * (w / ls.pdf);
     /* The light is seen if a shadow ray from the offset origin towards the point on it meets
      * nothing before it (stopping just short, by pbrt-v4's ShadowEpsilon: pbrt's SpawnRayTo);
-     * the environment is seen if the ray meets nothing at all. */
+     * a light at infinity is seen if the ray meets nothing at all. */
     float3 o = offset_ray_origin(s->p, s->offset, s->ng, ls.wi);
     float3 dir = ls.wi;
     float t_max = INFINITY;
-    if (ls.prim >= 0) {
+    if (!(ls.flags & LIGHT_AT_INFINITY)) {
         t_max = norm(ls.y - o);
         dir = (ls.y - o) / t_max;
         t_max *= 1.0f - SHADOW_EPSILON;
@@ -177,9 +178,8 @@ void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum
     int rays = 0, kept = 0;
     for (uint i = 0; i < p->sample_count; ++i) {
         Rng rng = make_rng(x, y, p->sample_start + i, p->seed);
-        float4 jitter = next_uniform4(&rng);
-        float3 d = camera_direction(p, x + jitter.x, y + jitter.y);
-        float3 l = trace_path(sc, p, p->eye.xyz, d, &rng, &rays, nee);
+        CameraRay ray = sample_camera_ray(p, x, y, &rng);
+        float3 l = trace_path(sc, p, ray.o, ray.d, &rng, &rays, nee);
         if (all(isfinite(l))) {
             acc += l;
             acc_sq += l * l;
@@ -210,9 +210,12 @@ void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum
 RENDER_KERNEL(render, 0)
 RENDER_KERNEL(render_nee, 1)
 
-/* The nearest primitive along one ray (the viewer's picking), or -1. */
-kernel void pick(SCENE_KERNEL_ARGS, int num_spheres, float4 o, float4 d, global int *prim)
+/* The nearest primitive along one ray, or -1, and its distance (the viewer's picking and
+ * focusing): hit[0] the primitive, hit[1] the distance's float bits. */
+kernel void pick(SCENE_KERNEL_ARGS, int num_spheres, float4 o, float4 d, global int *hit)
 {
     SceneData sc = SCENE_DATA(num_spheres);
-    *prim = intersect_scene(&sc, o.xyz, normalize(d.xyz), INFINITY, -1).prim;
+    Hit h = intersect_scene(&sc, o.xyz, normalize(d.xyz), INFINITY, -1);
+    hit[0] = h.prim;
+    hit[1] = as_int(h.t);
 }

@@ -1,7 +1,33 @@
-/* Light sampling for next-event estimation. Every emitter (emissive spheres and triangles, and
- * the environment) is one entry of one light table, chosen in proportion to its power through
- * an alias table (app/lights.py); then a direction towards it is sampled: over the cone a sphere
- * subtends, by area on a triangle, by importance over the environment map. */
+/* The light interface for next-event estimation. Every light is one entry of one light table,
+ * chosen in proportion to its power through an alias table (app/lights/table.py); then its type
+ * (kernels/lights/<name>.cl) samples a direction towards it. Each type provides
+ *
+ *   sample_X_light(sc, p, l, x, n, u, &ls)   a direction wi from point x (shading normal n)
+ *                                            towards light l, from two uniforms: its density
+ *                                            per solid angle (1 for a delta light), the point it
+ *                                            aims at, and LIGHT_* flags; returns 0 when none
+ *   radiance_X_light(sc, p, l, &ls, x)       the radiance arriving at x along the sample (for a
+ *                                            delta light, what it delivers: intensity / r^2, or
+ *                                            irradiance)
+ *
+ * and app/lights/registry.py generates the dispatch on the type tag (LIGHT_<NAME>), so that the
+ * integrator never names a light type. Area lights and the environment also give the density
+ * with which they would have sampled a direction that a path found by itself (pdf_light,
+ * pdf_environment), for multiple importance sampling; delta lights cannot be found so, and carry
+ * no MIS weight. */
+
+#define LIGHT_DELTA 1          /* a delta light: no path finds it, no MIS weight */
+#define LIGHT_AT_INFINITY 2    /* the shadow ray runs to infinity, not to the sample's point */
+
+typedef struct {
+    float3 wi;       /* unit direction from the shading point towards the light */
+    float3 y;        /* the point on the light the shadow ray ends at (unless at infinity) */
+    float2 b;        /* y's barycentric weights on a triangle (for its texture coordinates) */
+    float pdf;       /* its density per solid angle, the light's choice included; for a delta
+                        light the choice probability alone */
+    int light;       /* its entry of the light table */
+    int flags;       /* LIGHT_* */
+} LightSample;
 
 /* Power heuristic with beta = 2 (Veach, "Robust Monte Carlo Methods for Light Transport
  * Simulation", 1997, section 9.2.4): the weight of the technique with density a. Written as
@@ -17,97 +43,54 @@ float mis_weight(float a, float b)
  * light in proportion to its power. The bin comes from all 32 bits of one hash word, as
  * floor(bin_bits * count / 2^32) (each bin's probability is 1/count to within count / 2^32
  * relative), and the keep test from all 32 bits of another, against the threshold the host
- * stored (app/lights.py keep_threshold). Drawing both from one float, as before, left the keep
- * test 24 - log2(count) bits, which skewed the choice by up to 2x at 2^17 lights. */
+ * stored (app/lights/table.py keep_threshold). Drawing both from one float, as before, left the
+ * keep test 24 - log2(count) bits, which skewed the choice by up to 2x at 2^17 lights. */
 int pick_light(const global Light *lights, int count, uint bin_bits, uint keep_bits)
 {
     int i = (int)mul_hi(bin_bits, (uint)count);
     return keep_bits < lights[i].keep ? i : lights[i].alias;
 }
 
-/* Density with which next-event estimation at a vertex of normal n samples direction d towards
- * the environment, once the environment is chosen: cosine-weighted for a constant colour, the
- * map's distribution otherwise. */
-float pdf_environment(const SceneData *sc, const RenderParams *p, float3 n, float3 d)
+/* The sample of a delta light at `position`: the one direction towards it from x (none from
+ * the position itself). */
+int aim_at_position(float3 position, float3 x, LightSample *ls)
 {
-    if (p->env_width == 1 && p->env_height == 1)
-        return pdf_cosine_hemisphere(dot(n, d));
-    return pdf_environment_map(sc->env_marginal, sc->env_conditional, p, d);
+    float3 v = position - x;
+    float r2 = dot(v, v);
+    if (!(r2 > 0.0f))
+        return 0;
+    ls->y = position;
+    ls->wi = v * rsqrt(r2);
+    ls->pdf = 1.0f;
+    ls->flags = LIGHT_DELTA;
+    return 1;
 }
 
-/* Density (per solid angle, the light's choice included) with which next-event estimation at x
- * samples point y on emissive primitive `prim`. */
-float pdf_light(const SceneData *sc, int prim, float3 x, float3 y)
-{
-    float pick = sc->light_pick[prim];
-#ifndef NO_TRIANGLES
-    if (prim >= sc->num_spheres)
-        return pick * pdf_triangle_solid_angle(&sc->triangles[prim - sc->num_spheres], x, y);
-#endif
-    return pick * pdf_sphere_cone(sc->spheres[prim], x);
-}
-
-typedef struct {
-    float3 wi;       /* unit direction from the shading point towards the light */
-    float pdf;       /* its density per solid angle, the light's choice included */
-    float3 y;        /* the point on the light (unused for the environment) */
-    int prim;        /* the emitter: a primitive, or -1 for the environment */
-    float2 b;        /* y's barycentric weights on a triangle (for its texture coordinates) */
-} LightSample;
+/* The generated dispatch (app/lights/registry.py), defined after the types' files. */
+int sample_light_of_type(const SceneData *sc, const RenderParams *p, const global Light *l,
+                         float3 x, float3 n, float2 u, LightSample *ls);
+float3 light_radiance(const SceneData *sc, const RenderParams *p, const global Light *l,
+                      const LightSample *ls, float3 x);
 
 /* Draws a light and a direction towards it from point x of shading normal n, from four hash
- * words: the light from r.w and r.x, the direction from r.y and r.z. */
+ * words: the light from r.w and r.x, the direction from r.y and r.z. A sample of pdf 0 is
+ * none. */
 LightSample sample_light(const SceneData *sc, const RenderParams *p, float3 x, float3 n, uint4 r)
 {
     float4 u = to_uniform4(r);
-    Light light = sc->lights[pick_light(sc->lights, p->num_lights, r.w, r.x)];
-    LightSample ls = {(float3)(0.0f), 0.0f, (float3)(0.0f), light.prim, (float2)(0.0f)};
-    if (light.prim < 0) {
-        ls.wi = (p->env_width == 1 && p->env_height == 1)
-                    ? to_world(sample_cosine_hemisphere(u.y, u.z), n)
-                    : sample_environment_map(sc->env_marginal, sc->env_conditional, p, u.y, u.z);
-        ls.pdf = light.pick * pdf_environment(sc, p, n, ls.wi);
-    }
-#ifndef NO_TRIANGLES
-    else if (light.prim >= sc->num_spheres) {
-        const global Triangle *tri = &sc->triangles[light.prim - sc->num_spheres];
-        ls.y = sample_triangle_area(tri, u.y, u.z, &ls.b);
-        ls.wi = unit(ls.y - x);
-        ls.pdf = light.pick * pdf_triangle_solid_angle(tri, x, ls.y);
-    }
-#endif
-    else {
-        Sphere s = sc->spheres[light.prim];
-        ls.wi = sample_sphere_cone(s, x, u.y, u.z);
-        ls.pdf = light.pick * pdf_sphere_cone(s, x);
-        /* the point the direction meets; on the cone's rim, where rounding may miss the
-         * sphere, the tangent point */
-        float t = intersect_sphere(s, x, ls.wi, INFINITY);
-        ls.y = x + (isinf(t) ? dot(s.xyz - x, ls.wi) : t) * ls.wi;
-    }
+    LightSample ls;
+    ls.light = pick_light(sc->lights, p->num_lights, r.w, r.x);
+    ls.flags = 0;
+    ls.b = (float2)(0.0f);
+    const global Light *l = &sc->lights[ls.light];
+    if (!sample_light_of_type(sc, p, l, x, n, u.yz, &ls))
+        ls.pdf = 0.0f;
+    ls.pdf *= l->pick;
     return ls;
 }
 
-/* The radiance arriving from a light sample's point (its emitter's, looked up at the point
- * where the emission is a texture), or the environment's along its direction. */
-float3 light_radiance(const SceneData *sc, const RenderParams *p, const LightSample *ls)
+/* The radiance a light sample delivers to x. */
+float3 sample_radiance(const SceneData *sc, const RenderParams *p, const LightSample *ls, float3 x)
 {
-    if (ls->prim < 0)
-        return lookup_environment(sc->env, p, ls->wi);
-    const global Material *m = &sc->materials[sc->prim_material[ls->prim]];
-#ifdef TEXTURES
-    if (m->textures < 0)
-        return m->emission.xyz;
-    float2 uv = surface_uv(sc, ls->prim, ls->b, ls->y);
-    float3 le = emission_at(sc, m, uv);
-#ifdef ALPHA_MASKS
-    /* a masked emitter is there with probability `opacity` where paths meet it; light sampling
-       finds its holes too, so it weighs the radiance by that probability */
-    if (m->flags & MATERIAL_MASKED)
-        le *= opacity_at(sc, m, uv);
-#endif
-    return le;
-#else
-    return m->emission.xyz;
-#endif
+    return light_radiance(sc, p, &sc->lights[ls->light], ls, x);
 }

@@ -56,3 +56,21 @@ float pdf_cosine_power(float cos_a, float n)
     /* cos_a from a rounded dot product can exceed 1, and 1.0000001^1e8 is 1.6e5 */
     return cos_a > 0.0f ? (n + 1.0f) / (2.0f * PI_F) * pow(min(cos_a, 1.0f), n) : 0.0f;
 }
+
+/* The unit disk, uniformly, by Shirley and Chiu's concentric map ("A Low Distortion Map
+ * Between Disk and Square", 1997), in the form of pbrt-v4's SampleUniformDiskConcentric. */
+float2 sample_concentric_disk(float2 u)
+{
+    float2 o = 2.0f * u - 1.0f;
+    if (o.x == 0.0f && o.y == 0.0f)
+        return (float2)(0.0f);
+    float r, theta;
+    if (fabs(o.x) > fabs(o.y)) {
+        r = o.x;
+        theta = 0.25f * PI_F * (o.y / o.x);
+    } else {
+        r = o.y;
+        theta = 0.5f * PI_F - 0.25f * PI_F * (o.x / o.y);
+    }
+    return r * (float2)(cos(theta), sin(theta));
+}

@@ -94,6 +94,9 @@ typedef struct {
     float4 right;      /* camera right, scaled by tan(vfov / 2) * aspect */
     float4 up;         /* camera up, scaled by tan(vfov / 2) */
     float4 env_scale;  /* environment radiance multiplier (rgb) */
+    float4 lens;       /* the camera's: x its aperture radius (0: a pinhole), y the distance to
+                          the plane in focus (kernels/cameras/) */
+    float4 filter;     /* the pixel filter's parameters (kernels/filters/<name>.cl) */
     int width;         /* image size in pixels */
     int height;
     uint sample_start; /* index of the first sample of this launch (keys the RNG) */
@@ -112,15 +115,32 @@ typedef struct {
     int pad3;
 } RenderParams;
 
-/* One entry of the light table: an emitter (a primitive, or the environment when prim is -1),
- * chosen in proportion to its power through Walker's alias method (Vose's construction):
- * entry i is kept when a uniform 32-bit word is below `keep` (a probability times 2^32), else
- * its `alias` is taken. `pick` is the overall probability of choosing this light. */
+/* One entry of the light table: a light of type `type` (the LIGHT_* tags of
+ * app/lights/registry.py) whose parameters p0..p2 each kernels/lights/ file documents at its
+ * top; an area light names its emissive primitive (`prim`, else -1). Lights are chosen in
+ * proportion to power through Walker's alias method (Vose's construction): entry i is kept when
+ * a uniform 32-bit word is below `keep` (a probability times 2^32), else its `alias` is taken.
+ * `pick` is the overall probability of choosing this light. */
 typedef struct {
+    float4 p0;
+    float4 p1;
+    float4 p2;
+    int type;
     int prim;
     int alias;
     uint keep;
     float pick;
+    int pad[3];
 } Light;
+
+/* A node of the light tree (app/lights/tree.py), in heap order: node i's children are 2i + 1 and
+ * 2i + 2, the last level's nodes the lights themselves (in the order of their table entries),
+ * empty past the last one (power 0). */
+typedef struct {
+    float4 lo;      /* xyz: its lights' box's low corner; w: their total power */
+    float4 hi;      /* xyz: the box's high corner; w: cos(theta_o), the spread of their normals */
+    float4 axis;    /* xyz: the normals' cone's axis; w: cos(theta_e), how far beyond its normal
+                       each light emits */
+} LightNode;
 
 #endif

@@ -36,6 +36,8 @@ SCENES = {  # name: (width, height, spp per render, renders)
     "textures": (None, None, 1024, 16),
     "masks": (None, None, 1024, 16),
     "normal-maps": (None, None, 1024, 16),
+    "lights": (None, None, 1024, 16),
+    "thinlens": (None, None, 1024, 16),
 }
 XML_SCENES = OUT.parent / "scenes"
 MAX_DEPTH = 8

@@ -341,11 +341,11 @@ def test_a_flat_scene_renders_as_its_tree_does(backend, monkeypatch, tmp_path, s
     def render():
         r = Renderer(backend, loaded, 48, 32)
         r.add_samples(4)
-        return r.compiled.features(r.settings.russian_roulette), r.mean()
+        return r.compiled.features(r.settings, r.camera), r.mean()
     features, flat = render()
     assert features.flat and sum(features.flat) <= 8
     tree_features = CompiledScene.features
-    monkeypatch.setattr(CompiledScene, "features", lambda self, rr: replace(tree_features(self, rr), flat=()))
+    monkeypatch.setattr(CompiledScene, "features", lambda self, settings, camera: replace(tree_features(self, settings, camera), flat=()))
     features, tree = render()
     assert not features.flat and flat.mean() > 0
     np.testing.assert_allclose(flat, tree, rtol=1e-4, atol=1e-6)

@@ -194,3 +194,119 @@ def test_environment_samples_follow_their_pdf(kernels, sunset):
     assert chi_square(counts.ravel(), expected.ravel()) > 1e-3
     # the pdf the sampler reports for its own samples is the density evaluated there
     assert np.all(out[:, 3] > 0)
+
+
+# -- delta lights: point, spot, directional ------------------------------------------------
+
+RHO, H, SIZE = 0.5, 1.0, 4.0     # the floor's albedo, the light's height, the view's width
+
+
+def floor_under(light, backend, nee=True):
+    """A diffuse floor of albedo RHO (y = 0) seen straight down by an orthographic camera that
+    covers [-2, 2]^2, lit by `light` alone: each pixel's radiance is RHO / pi times the
+    irradiance there, closed forms below. Returns the image, 32 x 32 pixels of 256 samples, and
+    the floor's x and z at an 8 x 8 grid of points in each pixel (axes 2 and 3), over which the
+    closed forms are averaged as the pixel averages its samples; and the standard error of each
+    pixel's mean (the samples differ only by where in the pixel they land)."""
+    from pathtrace.renderer import Renderer
+    from pathtrace.scene.toml_reader import read_scene_dict
+    scene = read_scene_dict({
+        "camera": {"type": "orthographic", "eye": [0, 5, 0], "look_at": [0, 0, 0], "up": [0, 0, -1],
+                   "height": SIZE},
+        "environment": {"color": 0},
+        "render": {"max_depth": 2, "russian_roulette": "off", "nee": nee},
+        "materials": {"floor": {"type": "diffuse", "rho_d": RHO}},
+        "meshes": [{"vertices": [[-9, 0, -9], [9, 0, -9], [9, 0, 9], [-9, 0, 9]], "faces": [[0, 3, 2, 1]],
+                    "material": "floor"}],
+        "lights": [light]}, "floor")
+    r = Renderer(backend, scene, 32, 32)
+    r.add_samples(256)
+    points = ((np.arange(32 * 8) + 0.5) / (32 * 8) * SIZE - SIZE / 2).reshape(32, 8)
+    x = np.broadcast_to(points[None, :, None, :], (32, 32, 8, 8))
+    z = np.broadcast_to(points[:, None, :, None], (32, 32, 8, 8))
+    return r.mean(), x, z, np.sqrt(r.variance() / r.samples)
+
+
+def assert_within_noise(image, expected, error):
+    """Each pixel within 5 standard errors of the closed form (and float32's rounding): with
+    1024 pixels and 3 channels a false alarm is a chance of 2e-3."""
+    assert np.all(np.abs(image - expected) <= 5 * error + 1e-5 * np.abs(expected) + 1e-7), \
+        np.max(np.abs(image - expected) / (error + 1e-12))
+
+
+def test_a_point_light_gives_the_inverse_square_law(backend):
+    image, x, z, error = floor_under({"type": "point", "position": [0, H, 0], "intensity": [3, 2, 1]}, backend)
+    d2 = H * H + x * x + z * z
+    expected = RHO / np.pi * np.array([3, 2, 1]) * (H / np.sqrt(d2) / d2).mean(axis=(2, 3))[..., None]
+    assert_within_noise(image, expected, error)
+
+
+@pytest.mark.parametrize("falloff", ["linear", "smoothstep"])
+def test_a_spot_light_falls_off_between_its_beam_and_its_cutoff(backend, falloff):
+    image, x, z, error = floor_under({"type": "spot", "position": [0, H, 0], "look_at": [0, 0, 0], "intensity": 2.0,
+                               "cutoff_angle": 40.0, "beam_width": 25.0, "falloff": falloff}, backend)
+    d2 = H * H + x * x + z * z
+    theta = np.degrees(np.arctan(np.hypot(x, z) / H))
+    if falloff == "linear":        # Mitsuba 3's: linear in the angle
+        profile = np.clip((40.0 - theta) / 15.0, 0, 1)
+    else:                          # pbrt-v4's: a smoothstep in the cosine
+        t = np.clip((np.cos(np.radians(theta)) - np.cos(np.radians(40))) /
+                    (np.cos(np.radians(25)) - np.cos(np.radians(40))), 0, 1)
+        profile = t * t * (3 - 2 * t)
+    expected = (RHO / np.pi * 2.0 * profile * H / np.sqrt(d2) / d2).mean(axis=(2, 3))
+    assert_within_noise(image[..., 1], expected, error[..., 1])
+    theta = theta.mean(axis=(2, 3))
+    assert image[..., 1][theta > 42].max() == 0 and image[..., 1][theta < 24].min() > 0
+
+
+def test_a_directional_light_gives_its_irradiance_times_the_cosine(backend):
+    direction = np.array([1.0, -2.0, 0.5])
+    image, _, _, _ = floor_under({"type": "directional", "direction": direction.tolist(), "irradiance": 3.0}, backend)
+    cos = 2.0 / np.linalg.norm(direction)
+    np.testing.assert_allclose(image, RHO / np.pi * 3.0 * cos, rtol=1e-5)
+
+
+def test_delta_lights_are_dark_without_next_event_estimation(backend):
+    """No path can hit a point, so the estimator without NEE never sees one: the scene is black,
+    and `render` says so (test_cli.py)."""
+    image, _, _, _ = floor_under({"type": "point", "position": [0, H, 0], "intensity": 3.0}, backend, nee=False)
+    assert image.max() == 0
+
+
+def test_delta_lights_join_the_table_by_power():
+    from pathtrace.lights import DirectionalLight, PointLight, SpotLight
+    point = PointLight([0, 1, 0], [1.0, 1.0, 1.0])
+    spot = SpotLight([0, 1, 0], [0, -1, 0], [2.0, 2.0, 2.0], 30.0, 30.0)
+    sun = DirectionalLight([0, -1, 0], [1.0, 1.0, 1.0])
+    for light in (point, spot, sun):
+        light.check()
+    power = np.array([np.pi * 2.0])          # one emissive primitive of power 2 pi
+    table = build_light_table(power, Environment.constant((0, 0, 0)), [point, spot, sun], radius=2.0)
+    expected = np.array([2 * np.pi, 4 * np.pi, 2 * 2 * np.pi * (1 - np.cos(np.radians(30))), np.pi * 4])
+    np.testing.assert_allclose(table.lights["pick"], expected / expected.sum(), rtol=1e-6)
+    assert table.types == ("area", "point", "spot", "directional")
+    assert list(table.lights["prim"]) == [0, -1, -1, -1] and table.pick[0] == table.lights["pick"][0]
+
+
+@pytest.mark.parametrize("light,problem", [
+    ({"type": "spot", "position": [0, 1, 0], "direction": [0, -1, 0], "intensity": 1, "cutoff_angle": -5},
+     "lights[0].cutoff_angle: must be in (0, 180] degrees"),
+    ({"type": "spot", "position": [0, 1, 0], "direction": [0, -1, 0], "intensity": 1, "cutoff_angle": 200},
+     "lights[0].cutoff_angle: must be in (0, 180] degrees"),
+    ({"type": "spot", "position": [0, 1, 0], "direction": [0, -1, 0], "intensity": 1, "cutoff_angle": 20,
+      "beam_width": 30}, "lights[0].beam_width: must be in [0, cutoff_angle = 20] degrees"),
+    ({"type": "spot", "position": [0, 1, 0], "direction": [0, 0, 0], "intensity": 1}, "lights[0].direction: must not be zero"),
+    ({"type": "directional", "direction": [0, 0, 0], "irradiance": 1}, "lights[0].direction: must not be zero"),
+    ({"type": "point", "position": [0, 1, 0], "intensity": -1}, "lights[0].intensity: must be non-negative"),
+    ({"type": "point", "position": [0, 1, 0], "intensity": 1e30}, "lights[0].intensity: must be three numbers in [0, 1e20]"),
+    ({"type": "point", "intensity": 1}, "lights[0]: missing 'position'"),
+    ({"type": "lamp", "position": [0, 1, 0]}, "lights[0].type: must be one of point, spot, directional"),
+    ({"type": "spot", "position": [0, 1, 0], "direction": [0, -1, 0], "intensity": 1, "falloff": "cubic"},
+     "lights[0].falloff: must be linear or smoothstep")])
+def test_bad_lights_are_one_line_naming_the_field(light, problem):
+    from pathtrace.errors import UserError
+    from pathtrace.scene.toml_reader import read_scene_dict
+    with pytest.raises(UserError) as e:
+        read_scene_dict({"spheres": [{"center": [0, 0, 0], "radius": 1, "material": {"type": "diffuse", "rho_d": 0.5}}],
+                         "lights": [light]}, "bad")
+    assert problem in str(e.value) and "\n" not in str(e.value)

@@ -12,6 +12,7 @@ import pytest
 
 from pathtrace.cli import main
 from pathtrace.errors import UserError
+from pathtrace.filters import PixelFilter
 from pathtrace.scene import load_scene
 from pathtrace.scene.mitsuba import read_mitsuba_file
 
@@ -115,7 +116,8 @@ def test_generated_shapes_face_out(tmp_path, shape):
         assert area == pytest.approx(4.0 if shape == "rectangle" else math.pi, rel=1e-3)
 
 
-@pytest.mark.parametrize("name", ["cbox", "meshes", "envmap-spheres", "textures", "masks", "normal-maps"])
+@pytest.mark.parametrize("name", ["cbox", "meshes", "envmap-spheres", "textures", "masks", "normal-maps", "lights",
+                                  "thinlens"])
 def test_convert_writes_toml_that_reads_back_the_same_scene(tmp_path, name):
     out = tmp_path / "sub" / f"{name}.toml"
     out.parent.mkdir()
@@ -147,7 +149,17 @@ def test_convert_writes_toml_that_reads_back_the_same_scene(tmp_path, name):
         assert 'file = "../' in text and "matrix = " in text
     for attr in ("eye", "look_at", "up"):
         np.testing.assert_allclose(getattr(a.camera, attr), getattr(b.camera, attr), rtol=1e-6)
-    assert a.camera.vfov == pytest.approx(b.camera.vfov)
+    assert (a.camera.vfov, a.camera.aperture, a.camera.focus_distance, a.camera.height) == pytest.approx(
+        (b.camera.vfov, b.camera.aperture, b.camera.focus_distance, b.camera.height), rel=1e-6)
+    assert a.camera.projection == b.camera.projection
+    assert [type(x) for x in a.lights] == [type(y) for y in b.lights]
+    for x, y in zip(a.lights, b.lights):
+        for field in x.fields:
+            value = getattr(x, field)
+            if isinstance(value, str):
+                assert value == getattr(y, field)
+            else:
+                np.testing.assert_allclose(value, getattr(y, field), rtol=1e-6, atol=1e-7, err_msg=field)
     np.testing.assert_array_equal(a.environment.image, b.environment.image)
     assert (a.environment.intensity, a.environment.rotation) == pytest.approx(
         (b.environment.intensity, b.environment.rotation))
@@ -163,11 +175,15 @@ WARNINGS = [
      "pathtrace uses a diffuse BSDF of albedo 0.8, 0.2, 0.1"),
     ('<shape type="sphere"><bsdf type="roughconductor"/></shape>',
      "the beckmann distribution (Mitsuba's default) is rendered as GGX"),
-    (f'<emitter type="point"/>{SPHERE}', "pathtrace has no point emitters; it ignores this one"),
+    (f'<emitter type="sky"/>{SPHERE}', "pathtrace has no sky emitters; it ignores this one"),
     (f'<shape type="hair"/>{SPHERE}', "pathtrace has no hair shape; it ignores this one"),
     (f'<integrator type="direct"/>{SPHERE}', "pathtrace renders with its path tracer instead"),
-    (f'<sensor type="perspective"><film type="hdrfilm"><rfilter type="gaussian"/></film></sensor>{SPHERE}',
-     "a box filter"),
+    (f'<sensor type="perspective"><film type="hdrfilm"><rfilter type="mitchell"/></film></sensor>{SPHERE}',
+     "pathtrace has no mitchell filter"),
+    (f'<emitter type="spot"><texture type="checkerboard" name="texture"/></emitter>{SPHERE}',
+     "pathtrace's spot lights have no texture; ignored"),
+    ('<sensor type="orthographic"><transform name="to_world"><scale x="2" y="3"/></transform></sensor>' + SPHERE,
+     "to_world scales x and y differently"),
     (f'<medium type="homogeneous" id="fog"/>{SPHERE}', "not supported; pathtrace ignores it"),
 ]
 
@@ -321,3 +337,65 @@ def test_values_echoed_in_messages_are_cut_and_escaped(tmp_path, body):
         read_mitsuba_file(write(tmp_path, body))
     message = str(e.value)
     assert len(message) < 400 and message.isprintable(), message
+
+
+# -- lights, cameras and pixel filters ------------------------------------------------------
+
+def test_point_spot_and_directional_emitters_are_placed_as_mitsuba_places_them(tmp_path):
+    scene = read_mitsuba_file(write(tmp_path, SPHERE + """
+        <emitter type="point"><point name="position" x="1" y="2" z="3"/><rgb name="intensity" value="4, 5, 6"/></emitter>
+        <emitter type="point"><transform name="to_world"><translate x="-1" y="0.5"/></transform></emitter>
+        <emitter type="spot"><transform name="to_world"><lookat origin="0, 4, 0" target="0, 0, 0" up="0, 0, 1"/></transform>
+            <float name="cutoff_angle" value="30"/></emitter>
+        <emitter type="directional"><vector name="direction" x="0" y="-2" z="0"/><float name="irradiance" value="3"/></emitter>
+        <emitter type="directional"><transform name="to_world"><rotate x="1" angle="90"/></transform></emitter>"""))
+    point, moved, spot, sun, turned = scene.lights
+    np.testing.assert_allclose(point.position, [1, 2, 3])
+    np.testing.assert_allclose(point.intensity, [4, 5, 6])
+    np.testing.assert_allclose(moved.position, [-1, 0.5, 0])
+    np.testing.assert_allclose(moved.intensity, 1.0)                  # Mitsuba's default
+    np.testing.assert_allclose(spot.position, [0, 4, 0])
+    np.testing.assert_allclose(spot.direction, [0, -1, 0], atol=1e-12)  # along the transform's +z
+    assert (spot.cutoff_angle, spot.beam_width, spot.falloff) == (30.0, 22.5, "linear")
+    np.testing.assert_allclose(sun.direction, [0, -1, 0])
+    np.testing.assert_allclose(sun.irradiance, 3.0)
+    np.testing.assert_allclose(turned.direction, [0, -1, 0], atol=1e-12)
+
+
+def test_thinlens_orthographic_and_filters_read_as_mitsuba_means_them(tmp_path):
+    film = '<film type="hdrfilm"><integer name="width" value="80"/><integer name="height" value="40"/>{}</film>'
+    scene = read_mitsuba_file(write(tmp_path, SPHERE + f"""
+        <sensor type="thinlens"><float name="fov" value="40"/><float name="aperture_radius" value="0.25"/>
+            {film.format('<rfilter type="tent"><float name="radius" value="1.5"/></rfilter>')}</sensor>"""))
+    cam = scene.camera
+    assert (cam.projection, cam.aperture, cam.focus_distance) == ("perspective", 0.25, 10000.0)
+    assert scene.settings.filter == PixelFilter("tent", 1.5)
+    scene = read_mitsuba_file(write(tmp_path, SPHERE + f"""
+        <sensor type="orthographic"><transform name="to_world"><scale value="3"/>
+            <lookat origin="0, 5, 0" target="0, 0, 0" up="0, 0, -1"/></transform>
+            {film.format('<rfilter type="gaussian"><float name="stddev" value="0.25"/></rfilter>')}</sensor>"""))
+    cam = scene.camera
+    assert cam.projection == "orthographic" and cam.height == pytest.approx(3.0)   # 6 wide, 2:1
+    assert scene.settings.filter == PixelFilter("gaussian", 1.0, 0.25)            # radius 4 stddev
+    # a film without an rfilter: Mitsuba's gaussian
+    assert read_mitsuba_file(write(tmp_path, SPHERE)).settings.filter == PixelFilter("gaussian", 2.0, 0.5)
+
+
+@pytest.mark.parametrize("body,message", [
+    ('<emitter type="spot"><float name="cutoff_angle" value="-5"/></emitter>', "cutoff_angle: must be in (0, 180] degrees"),
+    ('<emitter type="spot"><float name="cutoff_angle" value="10"/><float name="beam_width" value="20"/></emitter>',
+     "beam_width: must be in [0, cutoff_angle = 10] degrees"),
+    ('<emitter type="directional"><vector name="direction" x="0" y="0" z="0"/></emitter>', "direction: must not be zero"),
+    ('<emitter type="point"><rgb name="intensity" value="1e30, 1, 1"/></emitter>', "intensity: must be three numbers in [0, 1e20]"),
+    ('<sensor type="thinlens"/>', "a thinlens camera needs an aperture_radius"),
+    ('<sensor type="thinlens"><float name="aperture_radius" value="-1"/></sensor>', "aperture_radius: must be in [0"),
+    ('<sensor type="thinlens"><float name="aperture_radius" value="1"/><float name="focus_distance" value="0"/></sensor>',
+     "focus_distance: must be in (0"),
+    ('<sensor type="perspective"><film type="hdrfilm"><rfilter type="tent"><float name="radius" value="1e30"/>'
+     '</rfilter></film></sensor>', "radius: must be in (0, 32] pixels"),
+    ('<sensor type="perspective"><film type="hdrfilm"><rfilter type="gaussian"><float name="stddev" value="0"/>'
+     '</rfilter></film></sensor>', "stddev: must be in (0, 32] pixels")])
+def test_bad_lights_cameras_and_filters_are_one_line(tmp_path, body, message):
+    with pytest.raises(UserError) as e:
+        read_mitsuba_file(write(tmp_path, SPHERE + body))
+    assert message in str(e.value) and "scene.xml:" in str(e.value) and "\n" not in str(e.value)

@@ -190,7 +190,8 @@ def test_a_scene_without_textures_compiles_no_texture_code():
     from pathtrace.compiled import CompiledScene
     from pathtrace.device import kernel_source
     from pathtrace.scene import load_scene
-    features = CompiledScene(load_scene("simple")).features("throughput")
+    scene = load_scene("simple")
+    features = CompiledScene(scene).features(scene.settings, scene.camera)
     assert features.textures == () and "TEXTURES" not in features.defines()
     assert "eval_texture" not in kernel_source(features=features)
 

@@ -4,13 +4,14 @@
 import numpy as np
 import pytest
 
-from pathtrace.types import BVH_NODE, LIGHT, MATERIAL, RENDER_PARAMS, TEXTURE, TEXTURE_BINDING, TRIANGLE
+from pathtrace.types import BVH_NODE, LIGHT, LIGHT_NODE, MATERIAL, RENDER_PARAMS, TEXTURE, TEXTURE_BINDING, TRIANGLE
 
 STRUCTS = {
     "Material": MATERIAL,
     "Triangle": TRIANGLE,
     "RenderParams": RENDER_PARAMS,
     "Light": LIGHT,
+    "LightNode": LIGHT_NODE,
     "BVHNode": BVH_NODE,
     "Texture": TEXTURE,
     "TextureBinding": TEXTURE_BINDING,

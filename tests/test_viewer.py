@@ -216,6 +216,33 @@ def test_left_click_picks_the_sphere_under_the_cursor(viewer):
     np.testing.assert_allclose(v.renderer.compiled.materials["p1"][v.selected.material, :3], 0.4)
 
 
+def test_ctrl_click_focuses_the_lens_on_the_surface_under_the_cursor(viewer):
+    """The plane in focus moves to the blue sphere's point under the cursor: its distance along
+    the view direction, from the sphere's own equation; the click picks nothing."""
+    from pathtrace.viewer.controls import pick_ray
+    v = viewer
+    settle(v)
+    camera = load_scene("simple").camera
+    camera.aperture = 0.3
+    v.renderer.set_camera(camera)
+    v.selected = None
+    settle(v)
+    xdo("mousemove", "--window", window_id(v), *image_to_window(v, 0.69, 0.5))
+    frames(v, 2)
+    xdo("keydown", "ctrl", "click", "1", "keyup", "ctrl")
+    frames(v, 2)
+    w, h = v.size
+    o, d = pick_ray(camera, w, h, 0.69 * w, 0.5 * h)
+    scene = v.renderer.scene
+    c, radius = scene.spheres[3, :3].astype(np.float64), float(scene.spheres[3, 3])
+    b = np.dot(d, o - c)
+    t = -b - np.sqrt(b * b - (np.dot(o - c, o - c) - radius * radius))
+    forward = camera.basis(1.0)[0]
+    assert v.renderer.camera.focus_distance == pytest.approx(t * np.dot(d, forward), rel=2e-2)
+    assert v.renderer.camera.aperture == 0.3 and v.selected is None
+    v.renderer.set_camera(load_scene("simple").camera)
+
+
 def test_left_click_picks_a_mesh_whatever_the_bvh_order(viewer):
     """The Cornell box: a click on the short block names that mesh and its material."""
     v = viewer

@@ -8,6 +8,7 @@ import numpy as np
 
 from pathtrace.camera import Camera
 from pathtrace.environment import Environment
+from pathtrace.filters import PixelFilter
 from pathtrace.materials import Material, MaterialTable
 
 
@@ -26,6 +27,7 @@ class RenderSettings:
     russian_roulette: str = "throughput"   # one of RUSSIAN_ROULETTE
     seed: int = 0
     nee: bool = True              # next-event estimation with MIS; off: the report's estimator
+    filter: PixelFilter = field(default_factory=PixelFilter)   # where samples land in a pixel
 
     @property
     def paths_end(self) -> bool:
@@ -70,6 +72,8 @@ class Scene:
     environment: Environment = field(default_factory=lambda: Environment.constant((1, 1, 1)))
     settings: RenderSettings = field(default_factory=RenderSettings)
     source: str = ""              # the file it was read from (for messages), if any
+    lights: list = field(default_factory=list)   # its delta lights (pathtrace.lights: point, spot,
+                                                 # directional); emissive shapes are its area lights
 
     def with_settings(self, **changes) -> "Scene":
         return replace(self, settings=replace(self.settings, **changes))

@@ -1,7 +1,7 @@
 """Reading Mitsuba 3 XML scenes (the subset docs/mitsuba.md lists) into the scene description
 the TOML format also produces. Every problem names the file and line, e.g.
     cbox.xml:12: <float name="radius">: 'abc' is not a number
-and what pathtrace cannot do (textures, point lights, other integrators) is one warning line per
+and what pathtrace cannot do (media, other integrators) is one warning line per
 element saying what it does instead.
 
 Files come from strangers, so the parser is expat with document type declarations refused (no
@@ -20,6 +20,8 @@ import numpy as np
 from pathtrace.camera import Camera
 from pathtrace.environment import Environment
 from pathtrace.errors import UserError, cut, short, warn
+from pathtrace.filters import FILTERS, PixelFilter
+from pathtrace.lights import DELTA_LIGHTS, DirectionalLight, PointLight, SpotLight
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import LUMINANCE, constant_of
 from pathtrace.materials.table import check_bump_map
@@ -243,6 +245,8 @@ class _Reader:
         self.camera = None
         self.settings = RenderSettings(width=768, height=576, spp=4)
         self.environment = None
+        self.lights = []            # point, spot and directional emitters
+        self.filter = None          # the film's rfilter
         self.max_depth, self.rr = 0, "throughput"
 
     # -- properties of an element: {name: Node} after $substitution --
@@ -459,9 +463,10 @@ class _Reader:
             raise UserError(f"{self.path}: the scene has no shapes pathtrace can render")
         settings = self.settings
         settings.max_depth, settings.russian_roulette = self.max_depth, self.rr
+        settings.filter = self.filter or PixelFilter("gaussian")      # Mitsuba's default
         return self.builder.build(self.path.stem, camera=self.camera or self.default_camera(),
                                   environment=self.environment or Environment.constant((0, 0, 0)),
-                                  settings=settings, source=str(self.path))
+                                  settings=settings, source=str(self.path), lights=self.lights)
 
     def default_camera(self):
         """Mitsuba's default sensor: at the origin, looking down +z, fov 45 on x."""
@@ -494,10 +499,8 @@ class _Reader:
 
     def sensor(self, node):
         kind = node.attrs.get("type")
-        if kind not in ("perspective", "thinlens"):
-            _fail(node, "pathtrace has a perspective camera only")
-        if kind == "thinlens":
-            warn(f"{node.where()}: no depth of field in pathtrace; a pinhole camera instead")
+        if kind not in ("perspective", "thinlens", "orthographic"):
+            _fail(node, "pathtrace has perspective, thinlens and orthographic cameras only")
         props = self.properties(node)
         for child in node.children:
             if child.tag == "film":
@@ -507,6 +510,40 @@ class _Reader:
                 if not 1 <= count <= 1 << 24:
                     _fail(child, f"sample_count must be in 1..{1 << 24}, got {count}")
                 self.settings.spp = count
+        if self.filter is None:
+            self.filter = PixelFilter("gaussian")     # Mitsuba's default
+        m = self.get(props, "to_world", np.eye(4), ("transform",))
+        eye = m[:3, 3]
+        forward, up = m[:3, :3] @ [0, 0, 1.0], m[:3, :3] @ [0, 1.0, 0]
+        left = m[:3, :3] @ [1.0, 0, 0]
+        if np.dot(np.cross(up, forward), left) < 0:
+            warn(f"{node.where()}: a mirroring camera transform; pathtrace renders it unmirrored")
+        camera = Camera(eye, eye + forward / np.linalg.norm(forward), up)
+        if kind == "orthographic":
+            # Mitsuba's orthographic view spans [-1, 1] across the film's width in camera space,
+            # scaled by to_world
+            w, h = self.settings.width, self.settings.height
+            if not math.isclose(np.linalg.norm(left), np.linalg.norm(up), rel_tol=1e-4):
+                warn(f"{node.where()}: to_world scales x and y differently; pathtrace keeps the view's width")
+            camera.projection, camera.height = "orthographic", 2 * np.linalg.norm(left) * h / w
+        else:
+            camera.vfov = self.field_of_view(node, props)
+        if kind == "thinlens":
+            camera.aperture = self.get(props, "aperture_radius", kinds=("float",))
+            if camera.aperture is None:
+                _fail(node, "a thinlens camera needs an aperture_radius")
+            camera.focus_distance = self.get(props, "focus_distance", 10000.0, ("float",))  # Mitsuba's default
+        try:
+            camera.check()
+        except ValueError as e:
+            field, problem = str(e).split(": ", 1)
+            field = {"aperture": "aperture_radius", "vfov": "fov"}.get(field, field)
+            _fail(props.get(field, node), f"{field}: {problem}")
+        self.camera = camera
+
+    def field_of_view(self, node, props):
+        """The vertical field of view of a perspective or thin-lens sensor's fov and fov_axis, or
+        its focal_length (on a 36 x 24 mm film's diagonal, as Mitsuba takes it)."""
         axis = self.get(props, "fov_axis", "x", ("string",))
         if axis not in ("x", "y", "diagonal", "smaller", "larger"):
             _fail(props["fov_axis"], f"must be x, y, diagonal, smaller or larger, got {short(axis)}")
@@ -520,13 +557,7 @@ class _Reader:
             fov, axis = math.degrees(2 * math.atan(math.hypot(36, 24) / (2 * f))), "diagonal"
         if not 0 < fov < 180:
             _fail(props.get("fov", node), f"the field of view must lie in (0, 180) degrees, got {fov}")
-        m = self.get(props, "to_world", np.eye(4), ("transform",))
-        eye = m[:3, 3]
-        forward, up = m[:3, :3] @ [0, 0, 1.0], m[:3, :3] @ [0, 1.0, 0]
-        left = m[:3, :3] @ [1.0, 0, 0]
-        if np.dot(np.cross(up, forward), left) < 0:
-            warn(f"{node.where()}: a mirroring camera transform; pathtrace renders it unmirrored")
-        self.camera = Camera(eye, eye + forward / np.linalg.norm(forward), up, self.vertical_fov(fov, axis))
+        return self.vertical_fov(fov, axis)
 
     def film(self, node):
         props = self.properties(node)
@@ -539,10 +570,25 @@ class _Reader:
         if node.attrs.get("type") not in ("hdrfilm", "specfilm", None):
             warn(f"{node.where()}: pathtrace writes the image format of the output file's name")
         for child in node.children:
-            if child.tag == "rfilter" and child.attrs.get("type") != "box":
-                warn(f"{child.where()}: pathtrace averages samples over each pixel (a box filter)")
-        if not any(c.tag == "rfilter" for c in node.children):
-            warn(f"{node.where()}: Mitsuba's default filter is gaussian; pathtrace uses a box filter")
+            if child.tag == "rfilter":
+                self.filter = self.rfilter(child)
+
+    def rfilter(self, node) -> PixelFilter:
+        """Mitsuba's box (radius 0.5), tent (radius, 1) and gaussian (stddev 0.5, radius 4
+        stddev); the filters with negative lobes become the gaussian, with a warning."""
+        kind = node.attrs.get("type")
+        props = self.properties(node)
+        if kind not in FILTERS:
+            warn(f"{node.where()}: pathtrace has no {kind} filter (its weights go negative, which filter "
+                 f"importance sampling cannot follow); it uses Mitsuba's gaussian")
+            return PixelFilter("gaussian")
+        stddev = self.get(props, "stddev", 0.5, ("float",)) if kind == "gaussian" else 0.5
+        radius = self.get(props, "radius", None, ("float",)) if kind == "tent" else None
+        try:
+            return PixelFilter(kind, radius, stddev).check()
+        except ValueError as e:
+            field, problem = str(e).split(": ", 1)
+            _fail(props.get(field, node), f"{field}: {problem}")
 
     def emitter(self, node):
         kind = node.attrs.get("type")
@@ -562,8 +608,34 @@ class _Reader:
             self.environment = Environment.from_file(node.file.parent / name, scale,
                                                      self.envmap_rotation(node, props),
                                                      where=node.where())
+        elif kind in DELTA_LIGHTS:
+            self.lights.append(self.delta_light(node, kind, props))
         else:
             warn(f"{node.where()}: pathtrace has no {kind} emitters; it ignores this one")
+
+    def delta_light(self, node, kind, props):
+        """A point, spot or directional emitter, placed as Mitsuba places it: a point's
+        `position` or its to_world's origin; a spot's to_world (it shines along local +z); a
+        directional's `direction` or its to_world's +z."""
+        m = self.get(props, "to_world", np.eye(4), ("transform",))
+        if kind == "point":
+            position = self.get(props, "position", m[:3, 3], ("point", "vector"))
+            light = PointLight(position, self.color(props, "intensity", 1.0, textures=False))
+        elif kind == "spot":
+            light = SpotLight(m[:3, 3], m[:3, :3] @ [0, 0, 1.0], self.color(props, "intensity", 1.0, textures=False),
+                              self.get(props, "cutoff_angle", 20.0, ("float",)),
+                              self.get(props, "beam_width", None, ("float",)))
+            if "texture" in props:
+                warn(f"{props['texture'].where()}: pathtrace's spot lights have no texture; ignored")
+        else:
+            direction = self.get(props, "direction", m[:3, :3] @ [0, 0, 1.0], ("vector", "point"))
+            light = DirectionalLight(direction, self.color(props, "irradiance", 1.0, textures=False))
+        try:
+            light.check()
+        except ValueError as e:
+            field, problem = str(e).split(": ", 1)
+            _fail(props.get(field, node), f"{field}: {problem}")
+        return light
 
     def envmap_rotation(self, node, props):
         """pathtrace's rotation about +y for a Mitsuba envmap's to_world: Mitsuba puts the map's

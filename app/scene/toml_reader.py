@@ -3,6 +3,7 @@ the file and the field, e.g.
     scenes/room.toml: spheres[3].radius: must be positive, got -1
 """
 
+import dataclasses
 import math
 import os
 import tomllib
@@ -11,6 +12,9 @@ from pathlib import Path
 import numpy as np
 
 from pathtrace.camera import Camera
+from pathtrace import filters
+from pathtrace.filters import PixelFilter
+from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.environment import Environment
 from pathtrace.errors import UserError, short
 from pathtrace.materials import BSDFS, Material
@@ -142,7 +146,7 @@ class _Reader:
             if not isinstance(raw, bool):
                 self.fail(f"{where}.raw", f"must be true or false, got {short(raw)}")
             for key, choices in (("filter", FILTERS), ("wrap", WRAP_MODES)):
-                if key in data and data[key] not in choices:
+                if key in data and (not isinstance(data[key], str) or data[key] not in choices):
                     self.fail(f"{where}.{key}", f"must be one of {', '.join(choices)}, got {short(data[key])}")
                 if key in data:
                     params[key] = data[key]
@@ -284,12 +288,31 @@ class _Reader:
 
     def camera(self, data):
         where = "camera"
-        self.table(data, where, {"eye", "look_at", "up", "vfov"})
+        self.table(data, where, {"type", "eye", "look_at", "up", "vfov", "aperture_radius", "focus_distance",
+                                 "height"})
+        kind = data.get("type", "perspective")
+        if kind not in ("perspective", "thinlens", "orthographic"):
+            self.fail("camera.type", f"must be perspective, thinlens or orthographic, got {short(kind)}")
+        if kind == "thinlens" and ("aperture_radius" not in data or "focus_distance" not in data):
+            self.fail("camera", "a thinlens camera needs both 'aperture_radius' and 'focus_distance'")
+        if "aperture_radius" in data and "focus_distance" not in data:
+            self.fail("camera.aperture_radius", "an aperture needs a 'focus_distance', the distance in focus")
+        for key, kinds in (("aperture_radius", ("perspective", "thinlens")), ("focus_distance", ("perspective", "thinlens")),
+                           ("vfov", ("perspective", "thinlens")), ("height", ("orthographic",))):
+            if key in data and kind not in kinds:
+                self.fail(f"camera.{key}", f"a {kind} camera has no {key}")
         cam = Camera(self.vector(data, "eye", where), self.vector(data, "look_at", where),
                      self.vector(data, "up", where, default=(0, 1, 0)),
-                     self.number(data, "vfov", where, default=45.0))
-        if not 0 < cam.vfov < 180:
-            self.fail("camera.vfov", f"must be between 0 and 180 degrees, got {cam.vfov}")
+                     self.number(data, "vfov", where, default=45.0),
+                     "orthographic" if kind == "orthographic" else "perspective",
+                     self.number(data, "aperture_radius", where, default=0.0),
+                     self.number(data, "focus_distance", where, default=1.0),
+                     self.number(data, "height", where, default=2.0))
+        try:
+            cam.check()
+        except ValueError as e:
+            field, problem = str(e).split(": ", 1)
+            self.fail(f"camera.{ {'aperture': 'aperture_radius'}.get(field, field)}", problem)
         forward = cam.look_at - cam.eye
         if np.linalg.norm(forward) == 0:
             self.fail("camera.look_at", "must differ from camera.eye")
@@ -298,6 +321,44 @@ class _Reader:
         if np.linalg.norm(np.cross(forward, cam.up)) < 1e-9 * np.linalg.norm(forward) * np.linalg.norm(cam.up):
             self.fail("camera.up", "must not be parallel to the view direction")
         return cam
+
+    def light(self, data, where):
+        """One [[lights]] entry: a point, spot or directional light (pathtrace.lights), with
+        Mitsuba 3's parameter names; a spot may aim by `look_at` instead of `direction`."""
+        if not isinstance(data, dict):
+            self.fail(where, f"must be a table, got {type(data).__name__}")
+        kind = data.get("type")
+        if kind not in DELTA_LIGHTS:
+            self.fail(f"{where}.type", f"must be one of {', '.join(DELTA_LIGHTS)}, got {short(kind)}")
+        cls = DELTA_LIGHTS[kind]
+        self.table(data, where, {"type", *cls.fields, *(("look_at",) if kind == "spot" else ())})
+        values = {}
+        for key in cls.fields:
+            if key not in data:
+                continue
+            if key in ("position", "direction"):
+                values[key] = self.vector(data, key, where)
+            elif key in ("intensity", "irradiance"):
+                values[key] = self.color(data, key, where)
+            elif key == "falloff":
+                values[key] = data[key]
+            else:
+                values[key] = self.number(data, key, where)
+        if kind == "spot" and "look_at" in data:
+            if "direction" in data:
+                self.fail(where, "give either 'direction' or 'look_at', not both")
+            values["direction"] = self.vector(data, "look_at", where) - values.get("position", np.zeros(3))
+        required = [f.name for f in dataclasses.fields(cls)
+                    if f.default is dataclasses.MISSING and f.name not in values]
+        if required:
+            self.fail(where, f"missing '{required[0]}'")
+        light = cls(**values)
+        try:
+            light.check()
+        except ValueError as e:
+            field, problem = str(e).split(": ", 1)
+            self.fail(f"{where}.{field}", problem)
+        return light
 
     def environment(self, data):
         where = "environment"
@@ -326,7 +387,7 @@ class _Reader:
 
     def settings(self, data):
         where = "render"
-        self.table(data, where, {"width", "height", "spp", "max_depth", "russian_roulette", "seed", "nee"})
+        self.table(data, where, {"width", "height", "spp", "max_depth", "russian_roulette", "seed", "nee", "filter"})
         rr, nee = data.get("russian_roulette", "throughput"), data.get("nee", True)
         if rr is True or rr is False:
             rr = "throughput" if rr else "off"
@@ -341,10 +402,29 @@ class _Reader:
             spp=self.number(data, "spp", where, default=64, low=1, integer=True),
             max_depth=self.number(data, "max_depth", where, default=0, low=0, integer=True),
             russian_roulette=rr, nee=nee,
-            seed=self.number(data, "seed", where, default=0, low=0, high=2**32 - 1, integer=True))
+            seed=self.number(data, "seed", where, default=0, low=0, high=2**32 - 1, integer=True),
+            filter=self.pixel_filter(data.get("filter", "box")))
         if not s.paths_end:
             self.fail("render.russian_roulette", "off needs a max_depth above 0, or paths never end")
         return s
+
+    def pixel_filter(self, data) -> PixelFilter:
+        """render.filter: a name (box, tent, gaussian) or a table of type, radius and stddev."""
+        where = "render.filter"
+        if isinstance(data, str):
+            data = {"type": data}
+        self.table(data, where, {"type", "radius", "stddev"})
+        kind = data.get("type", "box")
+        if kind not in filters.FILTERS:
+            self.fail(f"{where}.type", f"must be one of {', '.join(filters.FILTERS)}, got {short(kind)}")
+        if "stddev" in data and kind != "gaussian":
+            self.fail(f"{where}.stddev", f"a {kind} filter has no stddev")
+        radius = self.number(data, "radius", where) if "radius" in data else None
+        try:
+            return PixelFilter(kind, radius, self.number(data, "stddev", where, default=0.5)).check()
+        except ValueError as e:
+            field, problem = str(e).split(": ", 1)
+            self.fail(f"{where}.{field}", problem)
 
     def material_ref(self, builder, named, data, where):
         m = data.get("material")
@@ -455,7 +535,7 @@ class _Reader:
 
     def scene(self, data) -> Scene:
         self.table(data, "top level", {"camera", "environment", "render", "textures", "materials", "spheres",
-                                       "meshes"})
+                                       "meshes", "lights"})
         builder = SceneBuilder()
         self.texture_tables = data.get("textures", {})
         self.table(self.texture_tables, "textures",
@@ -473,6 +553,9 @@ class _Reader:
                 self.fail(key, f"must be an array of tables ([[{key}]]), got {type(value).__name__}")
         if not spheres and not meshes:
             self.fail("spheres", "the scene needs at least one [[spheres]] or [[meshes]] entry")
+        lights = data.get("lights", [])
+        if not isinstance(lights, list):
+            self.fail("lights", f"must be an array of tables ([[lights]]), got {type(lights).__name__}")
         for i, s in enumerate(spheres):
             where = f"spheres[{i}]"
             self.table(s, where, {"center", "radius", "material", "name"})
@@ -493,7 +576,8 @@ class _Reader:
             self.path.stem,
             camera=self.camera(data.get("camera", {"eye": [0, 0, 5], "look_at": [0, 0, 0]})),
             environment=self.environment(data.get("environment", {})),
-            settings=self.settings(data.get("render", {})), source=self.label)
+            settings=self.settings(data.get("render", {})), source=self.label,
+            lights=[self.light(light, f"lights[{i}]") for i, light in enumerate(lights)])
 
 
 FLOAT32_MAX = float(np.finfo(np.float32).max)

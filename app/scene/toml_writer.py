@@ -89,16 +89,38 @@ def texture_table(texture: Texture, names: dict, rel) -> dict:
     return table
 
 
+def filter_table(f) -> dict:
+    table = {"type": f.name, "radius": f.extent}
+    if f.name == "gaussian":
+        table["stddev"] = f.stddev
+    return table
+
+
+def _plain(value):
+    """A light's parameter as TOML holds it: arrays as lists of floats."""
+    return np.asarray(value, np.float64).tolist() if isinstance(value, np.ndarray) else value
+
+
 def scene_toml(scene: Scene, out: Path) -> str:
     """The TOML text of a scene, its file references relative to `out`'s folder."""
     def rel(path):
         return os.path.relpath(Path(path).resolve(), Path(out).resolve().parent)
 
     s, cam, env = scene.settings, scene.camera, scene.environment
-    lines = [f"# {scene.name}, converted by pathtrace convert", "",
-             "[camera]", f"eye = {_value(cam.eye.tolist())}", f"look_at = {_value(cam.look_at.tolist())}",
-             f"up = {_value(cam.up.tolist())}", f"vfov = {_value(cam.vfov)}", "",
-             "[environment]"]
+    lines = [f"# {scene.name}, converted by pathtrace convert", "", "[camera]"]
+    if cam.projection == "orthographic":
+        lines += ['type = "orthographic"']
+    elif cam.aperture > 0:
+        lines += ['type = "thinlens"']
+    lines += [f"eye = {_value(cam.eye.tolist())}", f"look_at = {_value(cam.look_at.tolist())}",
+              f"up = {_value(cam.up.tolist())}"]
+    if cam.projection == "orthographic":
+        lines += [f"height = {_value(cam.height)}"]
+    else:
+        lines += [f"vfov = {_value(cam.vfov)}"]
+    if cam.projection == "perspective" and cam.aperture > 0:
+        lines += [f"aperture_radius = {_value(cam.aperture)}", f"focus_distance = {_value(cam.focus_distance)}"]
+    lines += ["", "[environment]"]
     if env.source == "constant":
         lines.append(f"color = {_value(_color(env.image[0, 0]))}")
     else:
@@ -106,7 +128,12 @@ def scene_toml(scene: Scene, out: Path) -> str:
     lines += [f"intensity = {_value(env.intensity)}", f"rotation = {_value(env.rotation)}", "",
               "[render]", f"width = {s.width}", f"height = {s.height}", f"spp = {s.spp}",
               f"max_depth = {s.max_depth}", f"russian_roulette = {_value(s.russian_roulette)}",
-              f"seed = {s.seed}", f"nee = {_value(s.nee)}", ""]
+              f"seed = {s.seed}", f"nee = {_value(s.nee)}",
+              f"filter = {_inline(filter_table(s.filter))}", ""]
+    for light in scene.lights:
+        lines += ["[[lights]]", f"type = {_value(light.name)}"]
+        lines += [f"{name} = {_value(_plain(getattr(light, name)))}" for name in light.fields]
+        lines.append("")
     textures = scene.materials.all_textures()
     texture_names, taken = {}, set()
     for k, t in enumerate(textures):

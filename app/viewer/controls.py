@@ -66,7 +66,6 @@ def _rotate(v, axis, angle):
 
 
 def pick_ray(camera: Camera, width: int, height: int, x: float, y: float):
-    """The camera ray through window point (x, y), pixels from the top-left corner."""
-    forward, right, up = camera.basis(width / height)
-    d = forward + (2 * x / width - 1) * right + (1 - 2 * y / height) * up
-    return camera.eye, d / np.linalg.norm(d)
+    """The camera ray through image point (x, y), pixels from the top-left corner, from the
+    lens's centre."""
+    return camera.ray(width / height, 2 * x / width - 1, 1 - 2 * y / height)

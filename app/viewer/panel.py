@@ -26,12 +26,12 @@ FLOAT_MAX = 3.4e38          # float32's largest value: the kernels' limit for an
 INT_MAX = 2**31 - 1
 KEYS = (("W A S D", "move"), ("Q / E, Ctrl / Space", "down / up"), ("right mouse drag", "look around"),
         ("mouse wheel", "speed"), ("Shift", "move faster"), ("left click", "pick a shape"),
-        ("R", "reset the camera to the scene's"), ("P or F12", "screenshot (PNG + EXR)"),
-        ("H", "this help"), ("Esc", "quit"))
+        ("Ctrl + left click", "focus the lens there"), ("R", "reset the camera to the scene's"),
+        ("P or F12", "screenshot (PNG + EXR)"), ("H", "this help"), ("Esc", "quit"))
 
 # every label the panel draws beside a widget, to size the label column
 LABELS = ("exposure (EV)", "tone curve", "max depth (0: none)", "Russian roulette", "env intensity",
-          "env rotation", "speed", "vertical fov", "built-in", "file", "folder", "emission") + \
+          "env rotation", "speed", "vertical fov", "view height", "aperture", "focus distance", "built-in", "file", "folder", "emission") + \
     tuple({p.name for bsdf in BSDFS.values() for p in bsdf.params})
 
 
@@ -215,12 +215,34 @@ def draw_panel(v):
         _, v.controls.speed = imgui.slider_float("speed", v.controls.speed, 0.01, 1000.0, "%.3g",
                                                  imgui.SliderFlags_.logarithmic)
         layout.check("speed")
-        changed, fov = imgui.slider_float("vertical fov", r.camera.vfov, 0.1, 179.9, "%.1f deg")
-        layout.check("vertical fov")
-        if changed:
-            r.camera.vfov = fov
-            r.reset()
-        imgui.text_wrapped("H shows the keys; R resets the camera")
+        camera = r.camera
+        if camera.projection == "orthographic":
+            changed, height = imgui.slider_float("view height", camera.height, 1e-3, 1e4, "%.3g",
+                                                 imgui.SliderFlags_.logarithmic)
+            layout.check("view height")
+            if changed:
+                camera.height = height
+                r.set_camera(camera)
+        else:
+            changed, fov = imgui.slider_float("vertical fov", camera.vfov, 0.1, 179.9, "%.1f deg")
+            layout.check("vertical fov")
+            if changed:
+                camera.vfov = fov
+                r.set_camera(camera)
+            # a thin lens: the aperture's radius and the distance in focus, in scene units
+            changed, aperture = imgui.slider_float("aperture", camera.aperture, 0.0, 10.0, "%.3g",
+                                                   imgui.SliderFlags_.logarithmic)
+            layout.check("aperture")
+            if changed:
+                camera.aperture = max(aperture, 0.0)
+                r.set_camera(camera)
+            changed, focus = imgui.slider_float("focus distance", camera.focus_distance, 1e-3, 1e4, "%.3g",
+                                                imgui.SliderFlags_.logarithmic)
+            layout.check("focus distance")
+            if changed:
+                camera.focus_distance = max(focus, 1e-3)
+                r.set_camera(camera)
+        imgui.text_wrapped("H shows the keys; R resets the camera; Ctrl+click focuses the lens on a point")
 
     if layout.header("Scene", imgui.TreeNodeFlags_.default_open):
         names = list(BUILTIN_SCENES)

@@ -203,7 +203,7 @@ class Viewer:
 
         def on_button(window, button, action, mods):
             gui.mouse_button_callback(window, button, action, mods)
-            self.on_mouse_button(button, action)
+            self.on_mouse_button(button, action, mods)
 
         glfw.set_key_callback(self.window, counted(on_key))
         glfw.set_scroll_callback(self.window, counted(on_scroll))
@@ -246,7 +246,9 @@ class Viewer:
         elif name and action == glfw.RELEASE:
             self.controls.held.discard(name)
 
-    def on_mouse_button(self, button, action):
+    def on_mouse_button(self, button, action, mods=0):
+        """A left click picks the shape under the cursor; with Ctrl, it focuses the lens there
+        instead (focus_at)."""
         glfw = self.glfw
         if self._gui_has_mouse():
             return                                   # a click on the GUI never moves the camera
@@ -255,7 +257,22 @@ class Viewer:
             if point is not None:
                 w, h = self.size
                 o, d = pick_ray(self.renderer.camera, w, h, *point)
-                self.selected = self.renderer.pick(o, d)
+                if mods & glfw.MOD_CONTROL:
+                    self.focus_at(o, d)
+                else:
+                    self.selected = self.renderer.pick(o, d)
+
+    def focus_at(self, origin, direction):
+        """Puts the plane in focus through the surface seen along a ray (a perspective camera;
+        the aperture stays as it is). Returns whether a surface was there."""
+        camera = self.renderer.camera
+        t = self.renderer.hit_distance(origin, direction)
+        if camera.projection != "perspective" or t is None:
+            return False
+        forward = camera.basis(1.0)[0]
+        camera.focus_distance = float(t * np.dot(direction, forward))
+        self.renderer.set_camera(camera)
+        return True
 
     def image_area(self, width: int, height: int) -> tuple:
         """(x0, width) of the part of a window `width` wide (in pixels or points) that the image

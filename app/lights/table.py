@@ -1,11 +1,13 @@
-"""What next-event estimation samples: every emitter in one table (emissive spheres, emissive
-triangles and the environment), chosen through an alias table."""
+"""What next-event estimation samples: every light in one table (emissive spheres and
+triangles, the environment and the delta lights), chosen in proportion to power through an
+alias table."""
 
 from dataclasses import dataclass
 
 import numpy as np
 
 from pathtrace.environment import LUMINANCE
+from pathtrace.lights.registry import TAGS
 from pathtrace.types import LIGHT
 
 
@@ -15,6 +17,7 @@ class LightTable:
     count: int                # real entries
     pick: np.ndarray          # (primitives,) float32: per primitive, the probability of choosing it
     env_pick: float           # probability of choosing the environment
+    types: tuple = ()         # the names of the light types in the table (app/lights/registry.py)
 
 
 def alias_table(weights: np.ndarray):
@@ -54,25 +57,35 @@ def emitted_power(spheres, triangles, emission_of_sphere, emission_of_triangle):
     return np.concatenate([sphere_power, triangle_power])
 
 
-def build_light_table(power: np.ndarray, environment) -> LightTable:
-    """power: per primitive, in BVH order. The environment, when it is not black, is chosen as
-    often as all other lights together (half the time), or always when there are none."""
+def build_light_table(power: np.ndarray, environment, delta_lights=(), radius: float = 1.0) -> LightTable:
+    """power: per primitive, in BVH order; delta_lights: the scene's point, spot and directional
+    lights (app/lights/light.py), `radius` the scene's bounding sphere's. The environment, when
+    it is not black, is chosen as often as all other lights together (half the time), or always
+    when there are none."""
     pick = np.zeros(len(power), np.float32)
     emitters = np.flatnonzero(power > 0)
+    delta_lights = [light for light in delta_lights if light.power(radius) > 0]
     env_lit = bool(np.any(environment.image > 0)) and environment.intensity > 0
-    weights = power[emitters]
-    prims = emitters
+    weights = np.concatenate([power[emitters], [light.power(radius) for light in delta_lights]])
+    count = len(weights)
     if env_lit:
-        env_weight = weights.sum() if len(emitters) else 1.0
-        weights = np.append(weights, env_weight)
-        prims = np.append(prims, -1)
-    if not len(prims):
+        weights = np.append(weights, weights.sum() if count else 1.0)
+    if not len(weights):
         return LightTable(np.zeros(1, LIGHT), 0, pick, 0.0)
     keep, alias = alias_table(weights)
-    table = np.zeros(len(prims), LIGHT)
-    table["prim"] = prims
+    table = np.zeros(len(weights), LIGHT)
+    table["prim"] = -1
+    table["prim"][:len(emitters)] = emitters
+    table["type"][:len(emitters)] = TAGS["area"]
+    for row, light in zip(table[len(emitters):count], delta_lights):
+        row["type"] = TAGS[light.name]
+        light.pack(row)
+    if env_lit:
+        table["type"][-1] = TAGS["environment"]
     table["alias"] = alias
     table["keep"] = keep_threshold(keep)
     table["pick"] = weights / weights.sum()
     pick[emitters] = table["pick"][:len(emitters)]
-    return LightTable(table, len(prims), pick, float(table["pick"][-1]) if env_lit else 0.0)
+    types = (("area",) if len(emitters) else ()) + (("environment",) if env_lit else ()) \
+        + tuple(dict.fromkeys(light.name for light in delta_lights))
+    return LightTable(table, len(table), pick, float(table["pick"][-1]) if env_lit else 0.0, types)

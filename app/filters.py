@@ -1,0 +1,56 @@
+"""Pixel filters: where in and around its pixel each sample lands, by filter importance sampling
+(kernels/camera.cl). Each type is a kernel file kernels/filters/<name>.cl, with Mitsuba 3's and
+pbrt-v4's parameters: box (radius 0.5), tent (pbrt-v4's triangle; radius 1, pbrt-v4's 2) and
+gaussian (stddev 0.5; radius 4 stddev, pbrt-v4's 1.5)."""
+
+import math
+from dataclasses import dataclass
+
+FILTERS = ("box", "tent", "gaussian")
+DEFAULT_RADIUS = {"box": 0.5, "tent": 1.0, "gaussian": None}    # gaussian: 4 stddev
+MAX_RADIUS = 32.0       # pixels: wider is no longer a pixel filter
+
+
+@dataclass(frozen=True)
+class PixelFilter:
+    name: str = "box"
+    radius: float = None       # pixels; None: the type's default
+    stddev: float = 0.5        # gaussian: pixels
+
+    def __post_init__(self):
+        if self.radius is None and self.name in FILTERS:
+            default = 4 * self.stddev if self.name == "gaussian" else DEFAULT_RADIUS[self.name]
+            object.__setattr__(self, "radius", default)
+
+    @property
+    def extent(self) -> float:
+        """The radius in effect."""
+        return self.radius
+
+    def check(self) -> "PixelFilter":
+        """Raises ValueError("<field>: <problem>") for the first field out of range."""
+        if self.name not in FILTERS:
+            raise ValueError(f"type: must be box, tent or gaussian, got {self.name!r}")
+        if self.name == "gaussian" and not 0 < self.stddev <= MAX_RADIUS:
+            raise ValueError(f"stddev: must be in (0, {MAX_RADIUS:g}] pixels, got {self.stddev:g}")
+        if not 0 < self.extent <= MAX_RADIUS:
+            raise ValueError(f"radius: must be in (0, {MAX_RADIUS:g}] pixels, got {self.extent:g}")
+        return self
+
+    def params(self) -> tuple:
+        """RenderParams.filter (kernels/filters/<name>.cl)."""
+        r = self.extent
+        if self.name == "gaussian":
+            return (r, self.stddev, math.exp(-r * r / (2 * self.stddev ** 2)), 0.0)
+        return (r, 0.0, 0.0, 0.0)
+
+    def describe(self) -> str:
+        extra = f", stddev {self.stddev:g}" if self.name == "gaussian" else ""
+        return f"{self.name} (radius {self.extent:g}{extra})"
+
+
+def kernel_parts(name: str) -> list:
+    """(name, source) of a program's filter: its file and the sample_filter that names it."""
+    glue = ("float2 sample_filter(const RenderParams *p, float2 u, Rng *rng)\n{\n"
+            f"    return sample_{name}_filter(p, u, rng);\n}}\n")
+    return [(f"filters/{name}.cl", None), ("app/filters.py: kernel_parts", glue)]

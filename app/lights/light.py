@@ -1,0 +1,61 @@
+"""The interface every light type implements on the host. Area lights (emissive shapes) and the
+environment come from the materials and the environment; the others are delta lights a scene
+file names one by one (point, spot, directional), each a dataclass here with Mitsuba 3's
+parameter names, its checks, its power (by which next-event estimation chooses it) and how it
+packs into the LIGHT struct that its kernel file kernels/lights/<name>.cl reads (which documents
+the packed layout at its top)."""
+
+import math
+
+import numpy as np
+
+from pathtrace.environment import LUMINANCE
+
+
+class DeltaLight:
+    """A light that no ray can hit: reached by next-event estimation only (kernels/lights.cl),
+    and so dark in the estimator without it (RenderSettings.nee off)."""
+    name: str
+    fields: tuple           # its parameters, in the order scene files list them
+
+    def check(self):
+        """Raises ValueError("<parameter>: <problem>") for the first parameter out of range."""
+
+    def power(self, radius: float) -> float:
+        """Its luminance power in watts; `radius` bounds the scene (for lights at infinity)."""
+
+    def pack(self, row: np.ndarray):
+        """Fills a LIGHT row's parameters p0..p2."""
+
+
+def check_point(name: str, value) -> np.ndarray:
+    v = np.asarray(value, np.float64)
+    if v.shape != (3,) or not np.all(np.isfinite(v)) or np.max(np.abs(v)) > 1e30:
+        raise ValueError(f"{name}: must be three finite numbers, got {np.asarray(value).tolist()}")
+    return v
+
+
+def check_direction(name: str, value) -> np.ndarray:
+    v = check_point(name, value)
+    length = np.linalg.norm(v)
+    if not length > 0:
+        raise ValueError(f"{name}: must not be zero")
+    return v / length
+
+
+def check_color(name: str, value) -> np.ndarray:
+    """A non-negative rgb value (a number is grey) below the radiance bound of app/compiled.py."""
+    v = np.broadcast_to(np.asarray(value, np.float64), 3).copy()
+    if not np.all(np.isfinite(v)) or np.any(v < 0) or np.max(v) > 1e20:
+        raise ValueError(f"{name}: must be three numbers in [0, 1e20], got {np.asarray(value).tolist()}")
+    return v
+
+
+def check_angle(name: str, value, high: float) -> float:
+    if not 0 < value <= high or not math.isfinite(value):
+        raise ValueError(f"{name}: must be in (0, {high:g}] degrees, got {value:g}")
+    return float(value)
+
+
+def luminance(rgb) -> float:
+    return float(np.dot(rgb, LUMINANCE))

@@ -1,0 +1,28 @@
+"""A point light (Mitsuba 3's `point`, pbrt-v4's `point`): radiant intensity `intensity` (W/sr,
+rgb) in every direction from `position`. kernels/lights/point.cl samples it."""
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from pathtrace.lights.light import DeltaLight, check_color, check_point, luminance
+
+
+@dataclass
+class PointLight(DeltaLight):
+    position: np.ndarray
+    intensity: np.ndarray
+    name = "point"
+    fields = ("position", "intensity")
+
+    def check(self):
+        self.position = check_point("position", self.position)
+        self.intensity = check_color("intensity", self.intensity)
+
+    def power(self, radius: float) -> float:
+        return 4 * math.pi * luminance(self.intensity)
+
+    def pack(self, row):
+        row["p0"][:3] = self.position
+        row["p1"][:3] = self.intensity

@@ -1,0 +1,56 @@
+"""A spot light: radiant intensity `intensity` (W/sr, rgb) from `position` along `direction`,
+full inside `beam_width` of the axis and none beyond `cutoff_angle` (degrees, measured from the
+axis). Between them it falls off as Mitsuba 3's `spot` does, linearly in the angle ("linear"),
+or as pbrt-v4's `spot` does, by a smoothstep in the cosine ("smoothstep": pbrt's coneangle is
+cutoff_angle, coneangle - conedelta is beam_width). kernels/lights/spot.cl samples it."""
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from pathtrace.lights.light import DeltaLight, check_angle, check_color, check_direction, check_point, luminance
+
+FALLOFFS = ("linear", "smoothstep")
+
+
+@dataclass
+class SpotLight(DeltaLight):
+    position: np.ndarray
+    direction: np.ndarray
+    intensity: np.ndarray
+    cutoff_angle: float = 20.0
+    beam_width: float = None        # None: 3/4 of cutoff_angle, Mitsuba's default
+    falloff: str = "linear"
+    name = "spot"
+    fields = ("position", "direction", "intensity", "cutoff_angle", "beam_width", "falloff")
+
+    def check(self):
+        self.position = check_point("position", self.position)
+        self.direction = check_direction("direction", self.direction)
+        self.intensity = check_color("intensity", self.intensity)
+        self.cutoff_angle = check_angle("cutoff_angle", self.cutoff_angle, 180.0)
+        if self.beam_width is None:
+            self.beam_width = 0.75 * self.cutoff_angle
+        if not 0 <= self.beam_width <= self.cutoff_angle:
+            raise ValueError(f"beam_width: must be in [0, cutoff_angle = {self.cutoff_angle:g}] degrees, "
+                             f"got {self.beam_width:g}")
+        if self.falloff not in FALLOFFS:
+            raise ValueError(f"falloff: must be linear or smoothstep, got {self.falloff!r}")
+
+    def power(self, radius: float) -> float:
+        """Its intensity over the solid angle of the cone halfway between beam and cutoff (the
+        exact power for selection matters only for the variance)."""
+        cos_mid = math.cos(math.radians(0.5 * (self.cutoff_angle + self.beam_width)))
+        return 2 * math.pi * (1 - cos_mid) * luminance(self.intensity)
+
+    def pack(self, row):
+        row["p0"][:3] = self.position
+        row["p0"][3] = math.cos(math.radians(self.cutoff_angle))
+        row["p1"][:3] = self.intensity
+        row["p1"][3] = math.cos(math.radians(self.beam_width))
+        row["p2"][:3] = self.direction
+        # the falloff: linear, by 1 / (cutoff - beam) in radians (0 where there is no band
+        # between them), or the smoothstep, marked by -1
+        width = math.radians(self.cutoff_angle - self.beam_width)
+        row["p2"][3] = (1.0 / width if width > 0 else 0.0) if self.falloff == "linear" else -1.0

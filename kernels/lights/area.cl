@@ -1,0 +1,63 @@
+/* An area light: an emissive primitive (a sphere or a triangle of the scene), whose material's
+ * emission (a colour or a texture, kernels/shading.cl) leaves its front side.
+ *
+ *   prim   the primitive; p0..p2 unused
+ *
+ * A sphere is sampled over the cone it subtends from the shading point, a triangle by area. */
+
+/* Density (per solid angle, the light's choice included) with which next-event estimation at x
+ * samples point y on emissive primitive `prim`: what MIS weighs a path that hit it against. */
+float pdf_light(const SceneData *sc, int prim, float3 x, float3 y)
+{
+    float pick = sc->light_pick[prim];
+#ifndef NO_TRIANGLES
+    if (prim >= sc->num_spheres)
+        return pick * pdf_triangle_solid_angle(&sc->triangles[prim - sc->num_spheres], x, y);
+#endif
+    return pick * pdf_sphere_cone(sc->spheres[prim], x);
+}
+
+int sample_area_light(const SceneData *sc, const RenderParams *p, const global Light *l, float3 x,
+                      float3 n, float2 u, LightSample *ls)
+{
+#ifndef NO_TRIANGLES
+    if (l->prim >= sc->num_spheres) {
+        const global Triangle *tri = &sc->triangles[l->prim - sc->num_spheres];
+        ls->y = sample_triangle_area(tri, u.x, u.y, &ls->b);
+        ls->wi = unit(ls->y - x);
+        ls->pdf = pdf_triangle_solid_angle(tri, x, ls->y);
+        return 1;
+    }
+#endif
+    Sphere s = sc->spheres[l->prim];
+    ls->wi = sample_sphere_cone(s, x, u.x, u.y);
+    ls->pdf = pdf_sphere_cone(s, x);
+    /* the point the direction meets; on the cone's rim, where rounding may miss the sphere, the
+       tangent point */
+    float t = intersect_sphere(s, x, ls->wi, INFINITY);
+    ls->y = x + (isinf(t) ? dot(s.xyz - x, ls->wi) : t) * ls->wi;
+    return 1;
+}
+
+/* The emitter's radiance at the sample's point (looked up there where the emission is a
+ * texture). */
+float3 radiance_area_light(const SceneData *sc, const RenderParams *p, const global Light *l,
+                           const LightSample *ls, float3 x)
+{
+    const global Material *m = &sc->materials[sc->prim_material[l->prim]];
+#ifdef TEXTURES
+    if (m->textures < 0)
+        return m->emission.xyz;
+    float2 uv = surface_uv(sc, l->prim, ls->b, ls->y);
+    float3 le = emission_at(sc, m, uv);
+#ifdef ALPHA_MASKS
+    /* a masked emitter is there with probability `opacity` where paths meet it; light sampling
+       finds its holes too, so it weighs the radiance by that probability */
+    if (m->flags & MATERIAL_MASKED)
+        le *= opacity_at(sc, m, uv);
+#endif
+    return le;
+#else
+    return m->emission.xyz;
+#endif
+}
