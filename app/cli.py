@@ -10,6 +10,7 @@ from pathlib import Path
 from pathtrace import __version__
 from pathtrace.console import INTERRUPTED, check_interrupt
 from pathtrace.errors import UserError, cut, short, warn
+from pathtrace.lights import LIGHT_SAMPLERS
 from pathtrace.scene.description import RUSSIAN_ROULETTE
 
 GENERATED_SCENES = (("spheresN[-diffuse]", "N random spheres, e.g. spheres512k, spheres1M-diffuse"),
@@ -153,6 +154,10 @@ def add_render_options(p: argparse.ArgumentParser, device: bool = True):
     p.add_argument("--nee", action=argparse.BooleanOptionalAction, default=None,
                    help="next-event estimation: sample lights at every bounce, combined by MIS "
                         "(default on; --no-nee gives the report's estimator)")
+    p.add_argument("--light-sampler", choices=LIGHT_SAMPLERS,
+                   help="how next-event estimation chooses a light: power (in proportion to its "
+                        "power), tree (by a light tree, from what it gives the shading point), or "
+                        "auto (the tree from 64 lights on; the default: the scene's)")
     p.add_argument("--filter", type=_pixel_filter, metavar="NAME[:RADIUS[:STDDEV]]",
                    help="pixel filter: box (radius 0.5), tent (1) or gaussian (stddev 0.5, radius 4 "
                         "stddev), radius and stddev in pixels (default: the scene's)")
@@ -181,7 +186,7 @@ def apply_render_options(scene, args):
     changes = dict(width=width, height=height, max_depth=max_depth, russian_roulette=rr,
                    seed=s.seed if args.seed is None else args.seed,
                    nee=s.nee if args.nee is None else args.nee,
-                   filter=args.filter or s.filter)
+                   filter=args.filter or s.filter, light_sampler=args.light_sampler or s.light_sampler)
     if not replace(s, **changes).paths_end:
         raise UserError("--rr off needs --max-depth N (N >= 1), or paths would never end")
     if not changes["nee"] and scene.lights:

@@ -14,7 +14,7 @@ import pyopencl as cl
 from pathtrace.bvh import BVH, build_bvh, primitive_boxes
 from pathtrace.errors import UserError, format_bytes, short
 from pathtrace.features import FLAT_MAX, Features, stack_size
-from pathtrace.lights import LightTable, build_light_table, emitted_power
+from pathtrace.lights import LightTable, build_light_table, emitted_power, primitive_bounds
 from pathtrace.materials import TAGS
 from pathtrace.memory import available_host_memory
 from pathtrace.camera import Camera
@@ -34,7 +34,8 @@ class ShapeRef:
 
 # The scene's buffers in the order of the kernels' SCENE_KERNEL_ARGS (kernels/scene.cl)
 SCENE_BUFFERS = ("nodes", "spheres", "triangles", "normals", "uvs", "prim_material", "materials", "bindings",
-                 "textures", "texels", "env", "lights", "light_pick", "env_marginal", "env_conditional")
+                 "textures", "texels", "env", "lights", "prim_light", "light_nodes", "env_marginal",
+                 "env_conditional")
 
 # The BVH build's peak host memory per primitive, measured (docs/performance.md)
 BUILD_HOST_BYTES = 320
@@ -88,6 +89,7 @@ class CompiledScene:
         self.prim_shape = np.concatenate([sphere_order, n_spheres + mesh_of[triangle_order]]).astype(np.int32)
         self.prim_material = np.concatenate([scene.sphere_material[sphere_order],
                                              mesh_material[mesh_of[triangle_order]] if meshes else []]).astype(np.int32)
+        self.light_sampler = scene.settings.light_sampler    # pathtrace.lights.LIGHT_SAMPLERS
         self.update_materials()
 
     @property
@@ -112,7 +114,8 @@ class CompiledScene:
         power = emitted_power(self.spheres, corners, prim_emission[:self.num_spheres],
                               prim_emission[self.num_spheres:])
         self.lights: LightTable = build_light_table(power, self.scene.environment, self.scene.lights,
-                                                    max(self.radius, 1e-6))
+                                                    max(self.radius, 1e-6), primitive_bounds(self.spheres, corners),
+                                                    self.light_sampler)
 
     def geometry_arrays(self) -> dict:
         """The buffers of the shapes, by their names in SCENE_BUFFERS."""
@@ -122,7 +125,8 @@ class CompiledScene:
     def material_arrays(self) -> dict:
         """The buffers of the materials, their textures and the light table."""
         return {"materials": self.materials, "bindings": self.textures.bindings, "textures": self.textures.textures,
-                "texels": self.textures.texels, "lights": self.lights.lights, "light_pick": self.lights.pick}
+                "texels": self.textures.texels, "lights": self.lights.lights, "prim_light": self.lights.prim_light,
+                "light_nodes": self.lights.nodes}
 
     def features(self, settings: RenderSettings, camera: Camera) -> Features:
         """What the kernels need for this scene: triangles or not, the material and light types
@@ -132,6 +136,7 @@ class CompiledScene:
                         bsdfs=tuple(name for name, tag in TAGS.items() if tag in used),
                         textures=self.textures.types, masks=self.textures.masks,
                         normal_maps=self.textures.normal_maps, lights=self.lights.types,
+                        light_tree=self.lights.tree,
                         camera=camera.projection, filter=settings.filter.name,
                         russian_roulette=settings.russian_roulette, stack=stack_size(self.bvh.depth),
                         flat=(self.num_spheres, self.num_triangles)

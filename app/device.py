@@ -45,7 +45,7 @@ def kernel_source(extra: str = "", features: Features = Features()) -> str:
              *(("shading.cl",) if features.textures else ()), *BSDF_FILES, *kernel_files(features.bsdfs))
     texts += [(name, (folder / name).read_text()) for name in files]
     texts.append(("app/materials/registry.py: dispatch_source", dispatch_source(features.bsdfs)))
-    parts = [("environment.cl", None), *lights.kernel_parts(features.lights),
+    parts = [("environment.cl", None), *lights.kernel_parts(features.lights, features.light_tree),
              *camera.kernel_parts(features.camera), *filters.kernel_parts(features.filter)]
     texts += [(name, text if text is not None else (folder / name).read_text()) for name, text in parts]
     texts += [(name, (folder / name).read_text()) for name in LATER_FILES]

@@ -18,6 +18,7 @@ class Features:
     masks: bool = False                    # a material has an opacity (kernels/masks.cl)
     normal_maps: bool = False              # a material has a normal or bump map (kernels/normal_maps.cl)
     lights: tuple = None                   # names of pathtrace.lights.LIGHTS the scene has; None: all
+    light_tree: bool = False               # lights are chosen through a light tree (kernels/light_tree.cl)
     camera: str = "perspective"            # one of pathtrace.camera.PROJECTIONS
     filter: str = "box"                    # one of pathtrace.filters.FILTERS
     russian_roulette: str = "throughput"   # one of pathtrace.scene.description.RUSSIAN_ROULETTE
@@ -28,6 +29,7 @@ class Features:
     def defines(self) -> tuple:
         return ((() if self.triangles else ("NO_TRIANGLES",)) + (("TEXTURES",) if self.textures else ())
                 + (("ALPHA_MASKS",) if self.masks else ()) + (("NORMAL_MAPS",) if self.normal_maps else ())
+                + (("LIGHT_TREE",) if self.light_tree else ())
                 + (f"RUSSIAN_ROULETTE=RR_{self.russian_roulette.upper()}", f"BVH_STACK_SIZE={self.stack}")
                 + ((f"FLAT_SPHERES={self.flat[0]}", f"FLAT_TRIANGLES={self.flat[1]}") if self.flat else ()))
 

@@ -166,6 +166,9 @@ class Renderer:
 
     def set_settings(self, **changes):
         self.settings = replace(self.settings, **changes)
+        if self.settings.light_sampler != self.compiled.light_sampler:
+            self.compiled.light_sampler = self.settings.light_sampler
+            self.upload_materials()
         self._select_program()
         self.reset()
 

@@ -91,4 +91,8 @@ LIGHT_NODE = np.dtype([
     ("lo", np.float32, 4),          # box low corner; w: total power
     ("hi", np.float32, 4),          # box high corner; w: cos(theta_o)
     ("axis", np.float32, 4),        # normals' cone axis; w: cos(theta_e)
+    ("child", np.int32),            # first child, or -1: a leaf
+    ("parent", np.int32),           # -1: the root
+    ("light", np.int32),            # a leaf's light table entry
+    ("pad", np.int32),
 ])

@@ -28,9 +28,9 @@
  * keeps its whole weight). Everything but visibility is computed before the shadow ray, so
  * that only the contribution stays live while it is traced. */
 float3 sample_direct_light(const SceneData *sc, const RenderParams *p, MaterialRef m,
-                           const Surface *s, float3 wo, float go_on, uint4 r, int *rays)
+                           const Surface *s, float3 wo, float go_on, uint4 r, Rng *rng, int *rays)
 {
-    LightSample ls = sample_light(sc, p, s->p, s->ns, r);
+    LightSample ls = sample_light(sc, p, s->p, s->ns, r, rng);
     float3 wi = to_frame(ls.wi, s->ns);
     /* the shading and geometric normals must agree on the side wi leaves on (no light leaks) */
     if (ls.pdf <= 0.0f || dot(ls.wi, s->ng) * wi.z <= 0.0f)
@@ -101,7 +101,7 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
         if (front && any(m->emission.xyz > 0.0f)) {
             float w = 1.0f;
             if (nee && pdf_prev > 0.0f)
-                w = mis_weight(pdf_prev, pdf_light(sc, hit.prim, prev_x, s.p));
+                w = mis_weight(pdf_prev, pdf_light(sc, hit.prim, prev_x, prev_n, s.p));
             radiance += throughput * m->emission.xyz * w;
         }
         if (depth >= max_depth)
@@ -109,8 +109,8 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
         float3 wo = to_frame(-d, s.ns);
         float go_on = RUSSIAN_ROULETTE == RR_ALBEDO ? m->continuation : 1.0f;
         if (nee && p->num_lights > 0 && !(m->flags & MATERIAL_DELTA))
-            radiance += throughput * sample_direct_light(sc, p, m, &s, wo, go_on,
-                                                         next_bits4(rng), rays);
+            radiance += throughput * sample_direct_light(sc, p, m, &s, wo, go_on, next_bits4(rng), rng,
+                                                         rays);
         float4 u = next_uniform4(rng);
         if (RUSSIAN_ROULETTE == RR_ALBEDO) {
             if (u.x >= go_on)

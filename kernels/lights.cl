@@ -72,20 +72,36 @@ int sample_light_of_type(const SceneData *sc, const RenderParams *p, const globa
 float3 light_radiance(const SceneData *sc, const RenderParams *p, const global Light *l,
                       const LightSample *ls, float3 x);
 
+#ifdef LIGHT_TREE
+int pick_from_tree(const SceneData *sc, const global Light *root, float3 x, float3 n, Rng *rng,
+                   float *pick);
+float tree_pick_probability(const SceneData *sc, int leaf, float3 x, float3 n);
+#endif
+
 /* Draws a light and a direction towards it from point x of shading normal n, from four hash
- * words: the light from r.w and r.x, the direction from r.y and r.z. A sample of pdf 0 is
- * none. */
-LightSample sample_light(const SceneData *sc, const RenderParams *p, float3 x, float3 n, uint4 r)
+ * words: the light from r.w and r.x (and, through a light tree, from more words of the rng),
+ * the direction from r.y and r.z. A sample of pdf 0 is none. */
+LightSample sample_light(const SceneData *sc, const RenderParams *p, float3 x, float3 n, uint4 r, Rng *rng)
 {
-    float4 u = to_uniform4(r);
     LightSample ls;
     ls.light = pick_light(sc->lights, p->num_lights, r.w, r.x);
     ls.flags = 0;
     ls.b = (float2)(0.0f);
+    ls.pdf = 0.0f;
     const global Light *l = &sc->lights[ls.light];
-    if (!sample_light_of_type(sc, p, l, x, n, u.yz, &ls))
+    float pick = l->pick;
+#ifdef LIGHT_TREE
+    if (l->type == LIGHT_TREE_ROOT) {
+        ls.light = pick_from_tree(sc, l, x, n, rng, &pick);
+        if (ls.light < 0)
+            return ls;
+        l = &sc->lights[ls.light];
+    }
+#endif
+    if (sample_light_of_type(sc, p, l, x, n, to_uniform4(r).yz, &ls))
+        ls.pdf *= pick;
+    else
         ls.pdf = 0.0f;
-    ls.pdf *= l->pick;
     return ls;
 }
 

@@ -15,7 +15,8 @@ typedef struct {
     const global uchar *texels;             /* the images of the textures, 4-byte aligned */
     const global float4 *env;               /* the environment map, rgba texels */
     const global Light *lights;
-    const global float *light_pick;         /* per primitive: probability of choosing it as a light */
+    const global int *prim_light;           /* per primitive: its entry of `lights`, or -1 */
+    const global LightNode *light_nodes;    /* the light tree (kernels/light_tree.cl), if any */
     const global float *env_marginal;
     const global float *env_conditional;
     int num_spheres;
@@ -26,9 +27,10 @@ typedef struct {
     const global float4 *normals, const global float2 *uvs, const global int *prim_material,      \
     const global Material *materials, const global TextureBinding *bindings,                      \
     const global Texture *textures, const global uchar *texels, const global float4 *env,         \
-    const global Light *lights, const global float *light_pick, const global float *env_marginal, \
+    const global Light *lights, const global int *prim_light,                                    \
+    const global LightNode *light_nodes, const global float *env_marginal,                        \
     const global float *env_conditional
 
 #define SCENE_DATA(num_spheres)                                                                   \
     {nodes, spheres, triangles, normals, uvs, prim_material, materials, bindings, textures,       \
-     texels, env, lights, light_pick, env_marginal, env_conditional, num_spheres}
+     texels, env, lights, prim_light, light_nodes, env_marginal, env_conditional, num_spheres}

@@ -133,14 +133,16 @@ typedef struct {
     int pad[3];
 } Light;
 
-/* A node of the light tree (app/lights/tree.py), in heap order: node i's children are 2i + 1 and
- * 2i + 2, the last level's nodes the lights themselves (in the order of their table entries),
- * empty past the last one (power 0). */
+/* A node of the light tree (app/lights/tree.py): the root is node 0; a leaf is one light. */
 typedef struct {
     float4 lo;      /* xyz: its lights' box's low corner; w: their total power */
     float4 hi;      /* xyz: the box's high corner; w: cos(theta_o), the spread of their normals */
     float4 axis;    /* xyz: the normals' cone's axis; w: cos(theta_e), how far beyond its normal
                        each light emits */
+    int child;      /* its first child (the second follows it), or -1 for a leaf */
+    int parent;     /* -1 for the root */
+    int light;      /* a leaf's entry of the light table */
+    int pad;
 } LightNode;
 
 #endif

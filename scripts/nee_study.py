@@ -7,7 +7,10 @@ time and the relative MSE against the reference, mean((x - ref)^2 / (ref^2 + 0.0
 usual relative error of rendering papers; 0.01 keeps dark pixels from dominating).
 
     python scripts/nee_study.py [--device D] [--size WxH] [--seconds S] [--ref-spp N] [--json F]
-"""
+                                [--light-samplers power tree ...]
+
+With several --light-samplers, NEE runs once with each (pathtrace.lights.LIGHT_SAMPLERS): the
+choice of lights by power against the light tree."""
 
 import argparse
 import json
@@ -80,6 +83,8 @@ def main():
     ap.add_argument("--scenes", nargs="+", default=["simple", "demo"])
     ap.add_argument("--targets", type=float, nargs="+", default=[0.05, 0.02, 0.01])
     ap.add_argument("--json")
+    ap.add_argument("--light-samplers", nargs="+", default=["auto"], metavar="SAMPLER",
+                    help="how NEE chooses lights; one NEE run per sampler (default auto)")
     ap.add_argument("--images", default="docs/images")
     ap.add_argument("--mitsuba", action="store_true",
                     help="also time Mitsuba 3 (the -diffuse scenes, max depth 8, no Russian roulette)")
@@ -97,10 +102,11 @@ def main():
         ref_r.finish()
         ref = ref_r.mean()
         shots = []
-        for nee in (False, True):
-            curve, snap = progressive(backend, base.with_settings(nee=nee, seed=1), args.seconds, ref)
+        for nee, sampler in [(False, "auto")] + [(True, s) for s in args.light_samplers]:
+            curve, snap = progressive(backend, base.with_settings(nee=nee, seed=1, light_sampler=sampler),
+                                      args.seconds, ref)
             shots.append(snap)
-            row = {"scene": name, "nee": nee, "spp_per_second": curve[-1][1] / curve[-1][0],
+            row = {"scene": name, "nee": nee, "light_sampler": sampler, "spp_per_second": curve[-1][1] / curve[-1][0],
                    "rel_mse_after_1s": next(e for t, s, e in curve if t >= 1.0),
                    "time_to": {str(t): time_to(curve, t)[0] for t in args.targets}}
             out["results"].append(row)
@@ -112,7 +118,7 @@ def main():
                    "time_to": {str(t): time_to(curve, t)[0] for t in args.targets}}
             out["results"].append(row)
             print(json.dumps(row))
-        if args.images:   # left: the report's estimator; right: NEE; both after 1 s
+        if args.images:   # left: the report's estimator; right: NEE (one per sampler); all after 1 s
             Path(args.images).mkdir(parents=True, exist_ok=True)
             write_image(Path(args.images) / f"nee-{name}.png", np.concatenate(shots, axis=1))
     if args.json:

@@ -310,3 +310,98 @@ def test_bad_lights_are_one_line_naming_the_field(light, problem):
         read_scene_dict({"spheres": [{"center": [0, 0, 0], "radius": 1, "material": {"type": "diffuse", "rho_d": 0.5}}],
                          "lights": [light]}, "bad")
     assert problem in str(e.value) and "\n" not in str(e.value)
+
+
+# -- the light tree ------------------------------------------------------------------------
+
+def lamp_field(n=20_000, size=60.0, seed=5):
+    """n small emissive triangles facing down, 1 to 1.5 above a diffuse floor, spread over
+    size x size, their radiance over three decades; the camera, below them, sees the floor
+    only: many lights, lit from out of view, most of them far from any one point."""
+    from pathtrace.camera import Camera
+    from pathtrace.materials.table import pack
+    from pathtrace.scene.description import Mesh, SceneBuilder, diffuse
+    rng = np.random.default_rng(seed)
+    b = SceneBuilder()
+    h = size * 0.7
+    floor = np.array([[-h, 0, -h], [-h, 0, h], [h, 0, h], [h, 0, -h]], np.float32)
+    b.add_mesh(Mesh("floor", floor, np.array([[0, 1, 2], [0, 2, 3]], np.int32), None, b.material(diffuse(0.5))))
+    centres = np.column_stack([rng.uniform(-size / 2, size / 2, n), rng.uniform(1.0, 1.5, n),
+                               rng.uniform(-size / 2, size / 2, n)])
+    lamps = (centres[:, None, :] + np.array([[-0.08, 0, -0.08], [0.08, 0, -0.08], [0, 0, 0.08]])).astype(np.float32)
+    radiance = 10.0 ** rng.uniform(-1, 2, (n, 1)) * rng.uniform(0.3, 1, (n, 3))
+    rows = b.materials.add_rows(pack("black", {}, emission=radiance))
+    one = np.array([[0, 1, 2]], np.int32)
+    for k in range(n):
+        b.add_mesh(Mesh(f"lamp {k}", lamps[k], one, None, int(rows[k])))
+    return b.build("lamp-field", camera=Camera([0, 0.6, 0], [0, 0, -1], [0, 1, 0], 40.0),
+                   environment=Environment.constant((0, 0, 0)))
+
+
+TREE_SOURCE = """
+kernel void tree_picks(SCENE_KERNEL_ARGS, int num_spheres, float4 x, float4 n, global int *out)
+{
+    SceneData sc = SCENE_DATA(num_spheres);
+    int i = get_global_id(0);
+    Rng rng = make_rng(i, 1, 2, 3);
+    float pick = 1.0f;
+    out[i] = pick_from_tree(&sc, &sc.lights[0], x.xyz, n.xyz, &rng, &pick);
+}
+kernel void tree_probabilities(SCENE_KERNEL_ARGS, int num_spheres, float4 x, float4 n, int first,
+                               global float *out)
+{
+    SceneData sc = SCENE_DATA(num_spheres);
+    int i = get_global_id(0);
+    out[i] = tree_pick_probability(&sc, sc.lights[first + i].alias, x.xyz, n.xyz);
+}
+"""
+
+
+def test_the_light_tree_picks_each_light_with_the_probability_nee_divides_by(kernels):
+    """At a point of the floor, the tree's walks land on each light as often as the probability
+    recomputed from its leaf says (which MIS divides by), those probabilities sum to 1, and a
+    light behind the point's surface is never picked."""
+    from pyopencl import cltypes
+    from pathtrace.compiled import CompiledScene
+    from tests.conftest import scene_arrays
+    scene = lamp_field(n=400, size=8.0).with_settings(light_sampler="tree")
+    c = CompiledScene(scene)
+    from pathtrace.lights import LIGHTS
+    assert c.lights.tree and c.lights.count == 1 and c.lights.lights["type"][0] == len(LIGHTS)   # its root
+    run = kernels(TREE_SOURCE, c.features(scene.settings, scene.camera))
+    x, n = cltypes.make_float4(0.3, 0.0, -1.0, 0), cltypes.make_float4(0, 1, 0, 0)
+    lights = len(c.lights.lights) - c.lights.count
+    p = np.zeros(lights, np.float32)
+    run("tree_probabilities", lights, *scene_arrays(c), np.int32(c.num_spheres), x, n, np.int32(c.lights.count), p)
+    assert p.sum() == pytest.approx(1.0, abs=1e-5) and p.max() < 0.5
+    picks = np.zeros(N, np.int32)
+    run("tree_picks", N, *scene_arrays(c), np.int32(c.num_spheres), x, n, picks)
+    assert picks.min() >= c.lights.count
+    counts = np.bincount(picks - c.lights.count, minlength=lights)
+    assert chi_square(counts, p.astype(np.float64) * N) > 1e-3
+    # from below the floor, facing down, no lamp is above the surface's side
+    below = np.zeros(64, np.int32)
+    run("tree_picks", 64, *scene_arrays(c), np.int32(c.num_spheres), cltypes.make_float4(0, 2.0, 0, 0),
+        cltypes.make_float4(0, 1, 0, 0), below)
+    assert np.all(below == -1)
+
+
+def test_the_light_tree_lowers_the_variance_of_many_lights_and_keeps_the_mean(backend):
+    """20,000 lamps over three decades of power, out of view: at equal samples the tree's
+    per-pixel variance (median over pixels) is at least 3x lower than the choice by power
+    (measured 4.2x, 2026-11-24, PoCL), and its image has the mean of the estimator without NEE,
+    pixel by pixel (a Z-test, pooled over 4x4 blocks)."""
+    from pathtrace.renderer import Renderer
+    from tests.stats import z_test
+    scene = lamp_field().with_settings(max_depth=2, russian_roulette="off")
+    images = {}
+    for sampler, nee, spp in (("power", True, 64), ("tree", True, 64), ("tree", False, 1024)):
+        r = Renderer(backend, scene.with_settings(light_sampler=sampler, nee=nee), 48, 32)
+        assert r.lights.tree == (sampler == "tree")
+        r.add_samples(spp)
+        images[sampler, nee] = (r.mean(), r.variance(), r.samples)
+    ratio = np.median(images["power", True][1]) / np.median(images["tree", True][1])
+    assert ratio >= 3.0, ratio
+    (tree, var_tree, n_tree), (plain, var_plain, n_plain) = images["tree", True], images["tree", False]
+    ok, p, threshold = z_test(tree, var_tree / n_tree, plain, var_plain / n_plain, block=4)
+    assert ok, f"smallest p-value {p:.3g} below the Sidak threshold {threshold:.3g}"

@@ -27,6 +27,12 @@ class DeltaLight:
     def pack(self, row: np.ndarray):
         """Fills a LIGHT row's parameters p0..p2."""
 
+    def tree_bounds(self):
+        """Where and which way it shines, for the light tree (app/lights/tree.py): (point, cone
+        axis, cos(theta_o), cos(theta_e)); None for a light at infinity, which the tree leaves
+        out."""
+        return None
+
 
 def check_point(name: str, value) -> np.ndarray:
     v = np.asarray(value, np.float64)

@@ -26,3 +26,7 @@ class PointLight(DeltaLight):
     def pack(self, row):
         row["p0"][:3] = self.position
         row["p1"][:3] = self.intensity
+
+    def tree_bounds(self):
+        """Every direction: normals spread over the sphere, emission within 90 degrees of each."""
+        return self.position, np.array([0.0, 0.0, 1.0]), -1.0, 0.0

@@ -13,11 +13,12 @@ LIGHTS = ("area", "environment", *DELTA_LIGHTS)
 TAGS = {name: i for i, name in enumerate(LIGHTS)}
 
 
-def kernel_parts(names=None) -> list:
+def kernel_parts(names=None, tree: bool = False) -> list:
     """(name, source) of the light kernels of the types `names` (None: all), in the order they
-    compile: the tags, each type's file, and the dispatch over the types `names`."""
+    compile: the tags, the interface, the light tree's traversal (for a scene that has one),
+    each type's file, and the dispatch over the types `names`."""
     used = [n for n in LIGHTS if names is None or n in names]
-    tags = "".join(f"#define LIGHT_{n.upper()} {TAGS[n]}\n" for n in LIGHTS)
+    tags = "".join(f"#define LIGHT_{n.upper()} {TAGS[n]}\n" for n in LIGHTS) + f"#define LIGHT_TREE_ROOT {len(LIGHTS)}\n"
 
     def switch(call, default):
         cases = "".join(f"    case LIGHT_{n.upper()}: return {call.format(n)};\n" for n in used)
@@ -30,4 +31,5 @@ def kernel_parts(names=None) -> list:
                 + switch("radiance_{}_light(sc, p, l, ls, x)", "(float3)(0.0f)") + "}\n")
     files = [f"lights/{n}.cl" for n in LIGHTS if n in ("area", "environment") or n in used]
     here = "app/lights/registry.py: kernel_parts"
-    return [(here, tags), ("lights.cl", None)] + [(f, None) for f in files] + [(here, dispatch)]
+    return ([(here, tags), ("lights.cl", None)] + ([("light_tree.cl", None)] if tree else [])
+            + [(f, None) for f in files] + [(here, dispatch)])

@@ -54,3 +54,8 @@ class SpotLight(DeltaLight):
         # between them), or the smoothstep, marked by -1
         width = math.radians(self.cutoff_angle - self.beam_width)
         row["p2"][3] = (1.0 / width if width > 0 else 0.0) if self.falloff == "linear" else -1.0
+
+    def tree_bounds(self):
+        """pbrt-v4's spot bounds: its axis, full out to the beam, then falling off to the cutoff."""
+        return (self.position, self.direction, math.cos(math.radians(self.beam_width)),
+                math.cos(math.radians(self.cutoff_angle - self.beam_width)))

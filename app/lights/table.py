@@ -8,16 +8,31 @@ import numpy as np
 
 from pathtrace.environment import LUMINANCE
 from pathtrace.lights.registry import TAGS
-from pathtrace.types import LIGHT
+from pathtrace.lights.tree import build_light_tree, light_bounds
+from pathtrace.types import LIGHT, LIGHT_NODE
+
+
+LIGHT_SAMPLERS = ("auto", "power", "tree")   # how next-event estimation chooses a light
+TREE_MIN = 64     # lights with a place from which "auto" chooses by the light tree
 
 
 @dataclass
 class LightTable:
-    lights: np.ndarray        # LIGHT entries (at least one, a dummy when there are no lights)
-    count: int                # real entries
-    pick: np.ndarray          # (primitives,) float32: per primitive, the probability of choosing it
+    lights: np.ndarray        # LIGHT entries (at least one, a dummy when there are no lights): the
+                              # `count` that the alias table chooses among, then, with a light
+                              # tree, the tree's lights in the order of its leaves
+    count: int                # entries the alias table chooses among
+    prim_light: np.ndarray    # (primitives,) int32: per primitive, its entry, or -1
     env_pick: float           # probability of choosing the environment
     types: tuple = ()         # the names of the light types in the table (app/lights/registry.py)
+    nodes: np.ndarray = None  # the light tree's LIGHT_NODEs (a dummy one without a tree)
+    tree: bool = False        # whether lights with a place are chosen through the tree
+
+    @property
+    def pick(self) -> np.ndarray:
+        """Per primitive, the probability that the alias table chooses it (0 for none; with a
+        tree, the tree's probability as a whole)."""
+        return np.where(self.prim_light >= 0, self.lights["pick"][np.maximum(self.prim_light, 0)], 0.0)
 
 
 def alias_table(weights: np.ndarray):
@@ -57,35 +72,75 @@ def emitted_power(spheres, triangles, emission_of_sphere, emission_of_triangle):
     return np.concatenate([sphere_power, triangle_power])
 
 
-def build_light_table(power: np.ndarray, environment, delta_lights=(), radius: float = 1.0) -> LightTable:
+def build_light_table(power: np.ndarray, environment, delta_lights=(), radius: float = 1.0,
+                      prim_bounds: dict = None, sampler: str = "power") -> LightTable:
     """power: per primitive, in BVH order; delta_lights: the scene's point, spot and directional
-    lights (app/lights/light.py), `radius` the scene's bounding sphere's. The environment, when
-    it is not black, is chosen as often as all other lights together (half the time), or always
-    when there are none."""
-    pick = np.zeros(len(power), np.float32)
+    lights (app/lights/light.py), `radius` the scene's bounding sphere's; prim_bounds: the
+    primitives' light bounds (app/lights/tree.py: primitive_bounds), needed for a tree. The
+    environment, when it is not black, is chosen as often as all other lights together (half
+    the time), or always when there are none. sampler "power" chooses every light in proportion
+    to its power; "tree" chooses the lights that have a place through a light tree; "auto" the
+    tree from TREE_MIN such lights on."""
     emitters = np.flatnonzero(power > 0)
     delta_lights = [light for light in delta_lights if light.power(radius) > 0]
+    placed = [light for light in delta_lights if light.tree_bounds() is not None]
     env_lit = bool(np.any(environment.image > 0)) and environment.intensity > 0
-    weights = np.concatenate([power[emitters], [light.power(radius) for light in delta_lights]])
-    count = len(weights)
+    tree = sampler == "tree" or (sampler == "auto" and len(emitters) + len(placed) >= TREE_MIN)
+    tree = tree and len(emitters) + len(placed) > 0
+    # the entries: those the alias table chooses among, and the tree's after them
+    bounded = [("prim", int(i), float(power[i])) for i in emitters] + [("delta", light, light.power(radius))
+                                                                         for light in placed]
+    at_infinity = [("delta", light, light.power(radius)) for light in delta_lights if light.tree_bounds() is None]
+    top = ([("tree", None, sum(w for _, _, w in bounded))] if tree else bounded) + at_infinity
+    weights = np.array([w for _, _, w in top], np.float64)
     if env_lit:
-        weights = np.append(weights, weights.sum() if count else 1.0)
-    if not len(weights):
-        return LightTable(np.zeros(1, LIGHT), 0, pick, 0.0)
-    keep, alias = alias_table(weights)
-    table = np.zeros(len(weights), LIGHT)
+        weights = np.append(weights, weights.sum() if len(top) else 1.0)
+        top.append(("environment", None, 0.0))
+    nodes = np.zeros(1, LIGHT_NODE)
+    if not top:
+        return LightTable(np.zeros(1, LIGHT), 0, np.full(len(power), -1, np.int32), 0.0, (), nodes)
+    entries = top
+    if tree:
+        nodes, leaf = build_light_tree(tree_bounds(bounded, prim_bounds))
+        order = np.argsort(leaf)
+        entries = top + [bounded[i] for i in order]
+    table = np.zeros(len(entries), LIGHT)
     table["prim"] = -1
-    table["prim"][:len(emitters)] = emitters
-    table["type"][:len(emitters)] = TAGS["area"]
-    for row, light in zip(table[len(emitters):count], delta_lights):
-        row["type"] = TAGS[light.name]
-        light.pack(row)
-    if env_lit:
-        table["type"][-1] = TAGS["environment"]
-    table["alias"] = alias
-    table["keep"] = keep_threshold(keep)
-    table["pick"] = weights / weights.sum()
-    pick[emitters] = table["pick"][:len(emitters)]
+    prim_light = np.full(len(power), -1, np.int32)
+    for k, (kind, what, _) in enumerate(entries):
+        if kind == "prim":
+            table["type"][k], table["prim"][k] = TAGS["area"], what
+            prim_light[what] = k
+        elif kind == "delta":
+            table["type"][k] = TAGS[what.name]
+            what.pack(table[k])
+        elif kind == "environment":
+            table["type"][k] = TAGS["environment"]
+        else:
+            table["type"][k] = len(TAGS)               # LIGHT_TREE_ROOT (kernels/light_tree.cl)
+    keep, alias = alias_table(weights)
+    count = len(top)
+    table["alias"][:count] = alias
+    table["keep"][:count] = keep_threshold(keep)
+    table["pick"][:count] = weights / weights.sum()
+    if tree:
+        table["alias"][count:] = leaf[order]
+        table["pick"][count:] = table["pick"][0]
+        nodes["light"][leaf[order]] = count + np.arange(len(order))
     types = (("area",) if len(emitters) else ()) + (("environment",) if env_lit else ()) \
         + tuple(dict.fromkeys(light.name for light in delta_lights))
-    return LightTable(table, len(table), pick, float(table["pick"][-1]) if env_lit else 0.0, types)
+    return LightTable(table, count, prim_light, float(table["pick"][count - 1]) if env_lit else 0.0, types,
+                      nodes, tree)
+
+
+def tree_bounds(bounded: list, prim_bounds: dict) -> dict:
+    """The light tree's leaves for the entries `bounded` (primitives, then points and spots)."""
+    prims = np.array([what for kind, what, _ in bounded if kind == "prim"], np.int64)
+    deltas = [what.tree_bounds() for kind, what, _ in bounded if kind == "delta"]
+    power = np.array([w for _, _, w in bounded], np.float64)
+    position = np.array([b[0] for b in deltas], np.float64).reshape(-1, 3)
+    return light_bounds(
+        np.concatenate([prim_bounds["lo"][prims], position]), np.concatenate([prim_bounds["hi"][prims], position]),
+        power, np.concatenate([prim_bounds["axis"][prims], np.array([b[1] for b in deltas]).reshape(-1, 3)]),
+        np.concatenate([prim_bounds["cos_o"][prims], [b[2] for b in deltas]]),
+        np.concatenate([prim_bounds["cos_e"][prims], [b[3] for b in deltas]]))

@@ -28,6 +28,7 @@ class RenderSettings:
     seed: int = 0
     nee: bool = True              # next-event estimation with MIS; off: the report's estimator
     filter: PixelFilter = field(default_factory=PixelFilter)   # where samples land in a pixel
+    light_sampler: str = "auto"   # how NEE chooses a light: one of pathtrace.lights.LIGHT_SAMPLERS
 
     @property
     def paths_end(self) -> bool:

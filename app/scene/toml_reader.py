@@ -14,7 +14,7 @@ import numpy as np
 from pathtrace.camera import Camera
 from pathtrace import filters
 from pathtrace.filters import PixelFilter
-from pathtrace.lights import DELTA_LIGHTS
+from pathtrace.lights import DELTA_LIGHTS, LIGHT_SAMPLERS
 from pathtrace.environment import Environment
 from pathtrace.errors import UserError, short
 from pathtrace.materials import BSDFS, Material
@@ -387,7 +387,11 @@ class _Reader:
 
     def settings(self, data):
         where = "render"
-        self.table(data, where, {"width", "height", "spp", "max_depth", "russian_roulette", "seed", "nee", "filter"})
+        self.table(data, where, {"width", "height", "spp", "max_depth", "russian_roulette", "seed", "nee", "filter",
+                                 "light_sampler"})
+        sampler = data.get("light_sampler", "auto")
+        if sampler not in LIGHT_SAMPLERS:
+            self.fail("render.light_sampler", f"must be one of {', '.join(LIGHT_SAMPLERS)}, got {short(sampler)}")
         rr, nee = data.get("russian_roulette", "throughput"), data.get("nee", True)
         if rr is True or rr is False:
             rr = "throughput" if rr else "off"
@@ -403,7 +407,7 @@ class _Reader:
             max_depth=self.number(data, "max_depth", where, default=0, low=0, integer=True),
             russian_roulette=rr, nee=nee,
             seed=self.number(data, "seed", where, default=0, low=0, high=2**32 - 1, integer=True),
-            filter=self.pixel_filter(data.get("filter", "box")))
+            filter=self.pixel_filter(data.get("filter", "box")), light_sampler=sampler)
         if not s.paths_end:
             self.fail("render.russian_roulette", "off needs a max_depth above 0, or paths never end")
         return s

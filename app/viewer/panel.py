@@ -229,20 +229,24 @@ def draw_panel(v):
             if changed:
                 camera.vfov = fov
                 r.set_camera(camera)
-            # a thin lens: the aperture's radius and the distance in focus, in scene units
-            changed, aperture = imgui.slider_float("aperture", camera.aperture, 0.0, 10.0, "%.3g",
-                                                   imgui.SliderFlags_.logarithmic)
-            layout.check("aperture")
-            if changed:
-                camera.aperture = max(aperture, 0.0)
-                r.set_camera(camera)
-            changed, focus = imgui.slider_float("focus distance", camera.focus_distance, 1e-3, 1e4, "%.3g",
-                                                imgui.SliderFlags_.logarithmic)
-            layout.check("focus distance")
-            if changed:
-                camera.focus_distance = max(focus, 1e-3)
-                r.set_camera(camera)
-        imgui.text_wrapped("H shows the keys; R resets the camera; Ctrl+click focuses the lens on a point")
+        imgui.text_wrapped("H shows the keys; R resets the camera")
+
+    if r.camera.projection == "perspective" and layout.header("Lens"):
+        # a thin lens: the aperture's radius and the distance in focus, in scene units
+        camera = r.camera
+        changed, aperture = imgui.slider_float("aperture", camera.aperture, 0.0, 10.0, "%.3g",
+                                               imgui.SliderFlags_.logarithmic)
+        layout.check("aperture")
+        if changed:
+            camera.aperture = max(aperture, 0.0)
+            r.set_camera(camera)
+        changed, focus = imgui.slider_float("focus distance", camera.focus_distance, 1e-3, 1e4, "%.3g",
+                                            imgui.SliderFlags_.logarithmic)
+        layout.check("focus distance")
+        if changed:
+            camera.focus_distance = max(focus, 1e-3)
+            r.set_camera(camera)
+        imgui.text_wrapped("aperture 0 is a pinhole; Ctrl + left click focuses on the surface under the cursor")
 
     if layout.header("Scene", imgui.TreeNodeFlags_.default_open):
         names = list(BUILTIN_SCENES)

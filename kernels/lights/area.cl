@@ -6,10 +6,16 @@
  * A sphere is sampled over the cone it subtends from the shading point, a triangle by area. */
 
 /* Density (per solid angle, the light's choice included) with which next-event estimation at x
- * samples point y on emissive primitive `prim`: what MIS weighs a path that hit it against. */
-float pdf_light(const SceneData *sc, int prim, float3 x, float3 y)
+ * (shading normal n) samples point y on emissive primitive `prim`: what MIS weighs a path that
+ * hit it against. Through a light tree, the choice depends on x and n, and the light's entry
+ * names its leaf (`alias`). */
+float pdf_light(const SceneData *sc, int prim, float3 x, float3 n, float3 y)
 {
-    float pick = sc->light_pick[prim];
+    const global Light *l = &sc->lights[sc->prim_light[prim]];
+    float pick = l->pick;
+#ifdef LIGHT_TREE
+    pick *= tree_pick_probability(sc, l->alias, x, n);
+#endif
 #ifndef NO_TRIANGLES
     if (prim >= sc->num_spheres)
         return pick * pdf_triangle_solid_angle(&sc->triangles[prim - sc->num_spheres], x, y);
