@@ -34,7 +34,7 @@ class ShapeRef:
 
 # The scene's buffers in the order of the kernels' SCENE_KERNEL_ARGS (kernels/scene.cl)
 SCENE_BUFFERS = ("nodes", "spheres", "triangles", "normals", "uvs", "prim_material", "materials", "bindings",
-                 "textures", "texels", "env", "lights", "prim_light", "light_nodes", "env_marginal",
+                 "textures", "texels", "env", "lights", "light_pick", "light_leaf", "light_nodes", "env_marginal",
                  "env_conditional")
 
 # The BVH build's peak host memory per primitive, measured (docs/performance.md)
@@ -125,7 +125,8 @@ class CompiledScene:
     def material_arrays(self) -> dict:
         """The buffers of the materials, their textures and the light table."""
         return {"materials": self.materials, "bindings": self.textures.bindings, "textures": self.textures.textures,
-                "texels": self.textures.texels, "lights": self.lights.lights, "prim_light": self.lights.prim_light,
+                "texels": self.textures.texels, "lights": self.lights.lights, "light_pick": self.lights.pick,
+                "light_leaf": self.lights.leaf,
                 "light_nodes": self.lights.nodes}
 
     def features(self, settings: RenderSettings, camera: Camera) -> Features:

@@ -17,7 +17,9 @@ class Features:
                                            # () leaves all texture code out
     masks: bool = False                    # a material has an opacity (kernels/masks.cl)
     normal_maps: bool = False              # a material has a normal or bump map (kernels/normal_maps.cl)
-    lights: tuple = None                   # names of pathtrace.lights.LIGHTS the scene has; None: all
+    lights: tuple = None                   # the delta light types the scene has (pathtrace.lights.
+                                           # DELTA_LIGHTS; area lights and the environment are
+                                           # always compiled in); None: all
     light_tree: bool = False               # lights are chosen through a light tree (kernels/light_tree.cl)
     camera: str = "perspective"            # one of pathtrace.camera.PROJECTIONS
     filter: str = "box"                    # one of pathtrace.filters.FILTERS

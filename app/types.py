@@ -76,15 +76,15 @@ RENDER_PARAMS = np.dtype([
 ])
 
 LIGHT = np.dtype([
+    ("keep", np.uint32),            # the keep probability times 2^32 (lights.keep_threshold)
+    ("alias", np.int32),
+    ("pick", np.float32),
+    ("type", np.int32),             # LIGHT_* tag (app/lights/registry.py)
+    ("prim", np.int32),             # an area light's primitive, else -1
+    ("pad", np.int32, 3),
     ("p0", np.float32, 4),          # the type's parameters (kernels/lights/<type>.cl)
     ("p1", np.float32, 4),
     ("p2", np.float32, 4),
-    ("type", np.int32),             # LIGHT_* tag (app/lights/registry.py)
-    ("prim", np.int32),             # an area light's primitive, else -1
-    ("alias", np.int32),
-    ("keep", np.uint32),            # the keep probability times 2^32 (lights.keep_threshold)
-    ("pick", np.float32),
-    ("pad", np.int32, 3),
 ])
 
 LIGHT_NODE = np.dtype([

@@ -41,9 +41,8 @@ float3 sample_direct_light(const SceneData *sc, const RenderParams *p, MaterialR
 #ifdef NORMAL_MAPS
     f *= shadow_terminator(s, ls.wi);
 #endif
-    float3 le = sample_radiance(sc, p, &ls, s->p);
     float w = (ls.flags & LIGHT_DELTA) ? 1.0f : mis_weight(ls.pdf, go_on * pdf_bsdf(m, wo, wi));
-    float3 contribution = f * fabs(wi.z) * le * (w / ls.pdf);
+    float3 contribution = f * fabs(wi.z) * ls.le * (w / ls.pdf);
     /* The light is seen if a shadow ray from the offset origin towards the point on it meets
      * nothing before it (stopping just short, by pbrt-v4's ShadowEpsilon: pbrt's SpawnRayTo);
      * a light at infinity is seen if the ray meets nothing at all. */

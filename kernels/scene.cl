@@ -15,7 +15,9 @@ typedef struct {
     const global uchar *texels;             /* the images of the textures, 4-byte aligned */
     const global float4 *env;               /* the environment map, rgba texels */
     const global Light *lights;
-    const global int *prim_light;           /* per primitive: its entry of `lights`, or -1 */
+    const global float *light_pick;         /* per primitive: the probability that the light
+                                               table chooses it (through a tree: the tree) */
+    const global int *light_leaf;           /* per primitive: its leaf of the light tree */
     const global LightNode *light_nodes;    /* the light tree (kernels/light_tree.cl), if any */
     const global float *env_marginal;
     const global float *env_conditional;
@@ -27,10 +29,11 @@ typedef struct {
     const global float4 *normals, const global float2 *uvs, const global int *prim_material,      \
     const global Material *materials, const global TextureBinding *bindings,                      \
     const global Texture *textures, const global uchar *texels, const global float4 *env,         \
-    const global Light *lights, const global int *prim_light,                                    \
+    const global Light *lights, const global float *light_pick, const global int *light_leaf,    \
     const global LightNode *light_nodes, const global float *env_marginal,                        \
     const global float *env_conditional
 
 #define SCENE_DATA(num_spheres)                                                                   \
     {nodes, spheres, triangles, normals, uvs, prim_material, materials, bindings, textures,       \
-     texels, env, lights, prim_light, light_nodes, env_marginal, env_conditional, num_spheres}
+     texels, env, lights, light_pick, light_leaf, light_nodes, env_marginal, env_conditional,      \
+     num_spheres}

@@ -122,15 +122,15 @@ typedef struct {
  * a uniform 32-bit word is below `keep` (a probability times 2^32), else its `alias` is taken.
  * `pick` is the overall probability of choosing this light. */
 typedef struct {
+    uint keep;
+    int alias;
+    float pick;
+    int type;
+    int prim;
+    int pad[3];
     float4 p0;
     float4 p1;
     float4 p2;
-    int type;
-    int prim;
-    int alias;
-    uint keep;
-    float pick;
-    int pad[3];
 } Light;
 
 /* A node of the light tree (app/lights/tree.py): the root is node 0; a leaf is one light. */

@@ -284,7 +284,7 @@ def test_delta_lights_join_the_table_by_power():
     table = build_light_table(power, Environment.constant((0, 0, 0)), [point, spot, sun], radius=2.0)
     expected = np.array([2 * np.pi, 4 * np.pi, 2 * 2 * np.pi * (1 - np.cos(np.radians(30))), np.pi * 4])
     np.testing.assert_allclose(table.lights["pick"], expected / expected.sum(), rtol=1e-6)
-    assert table.types == ("area", "point", "spot", "directional")
+    assert table.types == ("point", "spot", "directional")
     assert list(table.lights["prim"]) == [0, -1, -1, -1] and table.pick[0] == table.lights["pick"][0]
 
 

@@ -1,5 +1,5 @@
-"""The registry of light types: each type's tag, and the kernels' dispatch (sample_light_of_type,
-light_radiance) generated from it, so that adding a light type is one kernel file
+"""The registry of light types: each type's tag, and the kernels' dispatch (sample_light_of_type)
+generated from it, so that adding a light type is one kernel file
 (kernels/lights/<name>.cl), one host module and one entry here. Area lights and the
 environment are always compiled in, as the integrator weighs the emitters its paths hit against
 them; the delta lights only into the programs of scenes that have them."""
@@ -14,10 +14,10 @@ TAGS = {name: i for i, name in enumerate(LIGHTS)}
 
 
 def kernel_parts(names=None, tree: bool = False) -> list:
-    """(name, source) of the light kernels of the types `names` (None: all), in the order they
-    compile: the tags, the interface, the light tree's traversal (for a scene that has one),
-    each type's file, and the dispatch over the types `names`."""
-    used = [n for n in LIGHTS if names is None or n in names]
+    """(name, source) of the light kernels of a program whose delta light types are `names`
+    (None: all), in the order they compile: the tags, the interface, the light tree's traversal
+    (for a scene that has one), each type's file, and the dispatch over them."""
+    used = [n for n in LIGHTS if n in ("area", "environment") or names is None or n in names]
     tags = "".join(f"#define LIGHT_{n.upper()} {TAGS[n]}\n" for n in LIGHTS) + f"#define LIGHT_TREE_ROOT {len(LIGHTS)}\n"
 
     def switch(call, default):
@@ -25,11 +25,8 @@ def kernel_parts(names=None, tree: bool = False) -> list:
         return f"    switch (l->type) {{\n{cases}    default: return {default};\n    }}\n"
     dispatch = ("int sample_light_of_type(const SceneData *sc, const RenderParams *p, const global Light *l,\n"
                 "                         float3 x, float3 n, float2 u, LightSample *ls)\n{\n"
-                + switch("sample_{}_light(sc, p, l, x, n, u, ls)", "0") + "}\n"
-                + "float3 light_radiance(const SceneData *sc, const RenderParams *p, const global Light *l,\n"
-                  "                      const LightSample *ls, float3 x)\n{\n"
-                + switch("radiance_{}_light(sc, p, l, ls, x)", "(float3)(0.0f)") + "}\n")
-    files = [f"lights/{n}.cl" for n in LIGHTS if n in ("area", "environment") or n in used]
+                + switch("sample_{}_light(sc, p, l, x, n, u, ls)", "0") + "}\n")
+    files = [f"lights/{n}.cl" for n in used]
     here = "app/lights/registry.py: kernel_parts"
     return ([(here, tags), ("lights.cl", None)] + ([("light_tree.cl", None)] if tree else [])
             + [(f, None) for f in files] + [(here, dispatch)])

@@ -24,15 +24,23 @@ class LightTable:
     count: int                # entries the alias table chooses among
     prim_light: np.ndarray    # (primitives,) int32: per primitive, its entry, or -1
     env_pick: float           # probability of choosing the environment
-    types: tuple = ()         # the names of the light types in the table (app/lights/registry.py)
+    types: tuple = ()         # the delta light types in the table (app/lights/registry.py)
     nodes: np.ndarray = None  # the light tree's LIGHT_NODEs (a dummy one without a tree)
     tree: bool = False        # whether lights with a place are chosen through the tree
 
     @property
     def pick(self) -> np.ndarray:
-        """Per primitive, the probability that the alias table chooses it (0 for none; with a
-        tree, the tree's probability as a whole)."""
-        return np.where(self.prim_light >= 0, self.lights["pick"][np.maximum(self.prim_light, 0)], 0.0)
+        """Per primitive, float32: the probability that the alias table chooses it (0 for none;
+        with a tree, the tree's probability as a whole), which MIS reads where a path hits it."""
+        return np.where(self.prim_light >= 0, self.lights["pick"][np.maximum(self.prim_light, 0)],
+                        0.0).astype(np.float32)
+
+    @property
+    def leaf(self) -> np.ndarray:
+        """Per primitive, int32: its leaf of the light tree (-1 for none; one -1 without a tree)."""
+        if not self.tree:
+            return np.full(1, -1, np.int32)
+        return np.where(self.prim_light >= 0, self.lights["alias"][np.maximum(self.prim_light, 0)], -1).astype(np.int32)
 
 
 def alias_table(weights: np.ndarray):
@@ -127,8 +135,7 @@ def build_light_table(power: np.ndarray, environment, delta_lights=(), radius: f
         table["alias"][count:] = leaf[order]
         table["pick"][count:] = table["pick"][0]
         nodes["light"][leaf[order]] = count + np.arange(len(order))
-    types = (("area",) if len(emitters) else ()) + (("environment",) if env_lit else ()) \
-        + tuple(dict.fromkeys(light.name for light in delta_lights))
+    types = tuple(dict.fromkeys(light.name for light in delta_lights))
     return LightTable(table, count, prim_light, float(table["pick"][count - 1]) if env_lit else 0.0, types,
                       nodes, tree)
 

@@ -7,14 +7,13 @@
 
 /* Density (per solid angle, the light's choice included) with which next-event estimation at x
  * (shading normal n) samples point y on emissive primitive `prim`: what MIS weighs a path that
- * hit it against. Through a light tree, the choice depends on x and n, and the light's entry
- * names its leaf (`alias`). */
+ * hit it against. Through a light tree, the choice depends on x and n, from the light's leaf
+ * up. */
 float pdf_light(const SceneData *sc, int prim, float3 x, float3 n, float3 y)
 {
-    const global Light *l = &sc->lights[sc->prim_light[prim]];
-    float pick = l->pick;
+    float pick = sc->light_pick[prim];
 #ifdef LIGHT_TREE
-    pick *= tree_pick_probability(sc, l->alias, x, n);
+    pick *= tree_pick_probability(sc, sc->light_leaf[prim], x, n);
 #endif
 #ifndef NO_TRIANGLES
     if (prim >= sc->num_spheres)
@@ -23,38 +22,15 @@ float pdf_light(const SceneData *sc, int prim, float3 x, float3 n, float3 y)
     return pick * pdf_sphere_cone(sc->spheres[prim], x);
 }
 
-int sample_area_light(const SceneData *sc, const RenderParams *p, const global Light *l, float3 x,
-                      float3 n, float2 u, LightSample *ls)
+/* The emitter's radiance at point y of primitive `prim`, b its barycentric weights on a triangle
+ * (looked up there where the emission is a texture). */
+float3 area_light_radiance(const SceneData *sc, int prim, float3 y, float2 b)
 {
-#ifndef NO_TRIANGLES
-    if (l->prim >= sc->num_spheres) {
-        const global Triangle *tri = &sc->triangles[l->prim - sc->num_spheres];
-        ls->y = sample_triangle_area(tri, u.x, u.y, &ls->b);
-        ls->wi = unit(ls->y - x);
-        ls->pdf = pdf_triangle_solid_angle(tri, x, ls->y);
-        return 1;
-    }
-#endif
-    Sphere s = sc->spheres[l->prim];
-    ls->wi = sample_sphere_cone(s, x, u.x, u.y);
-    ls->pdf = pdf_sphere_cone(s, x);
-    /* the point the direction meets; on the cone's rim, where rounding may miss the sphere, the
-       tangent point */
-    float t = intersect_sphere(s, x, ls->wi, INFINITY);
-    ls->y = x + (isinf(t) ? dot(s.xyz - x, ls->wi) : t) * ls->wi;
-    return 1;
-}
-
-/* The emitter's radiance at the sample's point (looked up there where the emission is a
- * texture). */
-float3 radiance_area_light(const SceneData *sc, const RenderParams *p, const global Light *l,
-                           const LightSample *ls, float3 x)
-{
-    const global Material *m = &sc->materials[sc->prim_material[l->prim]];
+    const global Material *m = &sc->materials[sc->prim_material[prim]];
 #ifdef TEXTURES
     if (m->textures < 0)
         return m->emission.xyz;
-    float2 uv = surface_uv(sc, l->prim, ls->b, ls->y);
+    float2 uv = surface_uv(sc, prim, b, y);
     float3 le = emission_at(sc, m, uv);
 #ifdef ALPHA_MASKS
     /* a masked emitter is there with probability `opacity` where paths meet it; light sampling
@@ -66,4 +42,29 @@ float3 radiance_area_light(const SceneData *sc, const RenderParams *p, const glo
 #else
     return m->emission.xyz;
 #endif
+}
+
+int sample_area_light(const SceneData *sc, const RenderParams *p, const global Light *l, float3 x,
+                      float3 n, float2 u, LightSample *ls)
+{
+    float2 b = (float2)(0.0f);
+#ifndef NO_TRIANGLES
+    if (l->prim >= sc->num_spheres) {
+        const global Triangle *tri = &sc->triangles[l->prim - sc->num_spheres];
+        ls->y = sample_triangle_area(tri, u.x, u.y, &b);
+        ls->wi = unit(ls->y - x);
+        ls->pdf = pdf_triangle_solid_angle(tri, x, ls->y);
+        ls->le = area_light_radiance(sc, l->prim, ls->y, b);
+        return 1;
+    }
+#endif
+    Sphere s = sc->spheres[l->prim];
+    ls->wi = sample_sphere_cone(s, x, u.x, u.y);
+    ls->pdf = pdf_sphere_cone(s, x);
+    /* the point the direction meets; on the cone's rim, where rounding may miss the sphere, the
+       tangent point */
+    float t = intersect_sphere(s, x, ls->wi, INFINITY);
+    ls->y = x + (isinf(t) ? dot(s.xyz - x, ls->wi) : t) * ls->wi;
+    ls->le = area_light_radiance(sc, l->prim, ls->y, b);
+    return 1;
 }

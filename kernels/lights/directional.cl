@@ -11,12 +11,7 @@ int sample_directional_light(const SceneData *sc, const RenderParams *p, const g
 {
     ls->wi = -l->p0.xyz;
     ls->pdf = 1.0f;
+    ls->le = l->p1.xyz;
     ls->flags = LIGHT_DELTA | LIGHT_AT_INFINITY;
     return 1;
-}
-
-float3 radiance_directional_light(const SceneData *sc, const RenderParams *p, const global Light *l,
-                                  const LightSample *ls, float3 x)
-{
-    return l->p1.xyz;
 }

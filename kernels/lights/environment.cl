@@ -22,12 +22,7 @@ int sample_environment_light(const SceneData *sc, const RenderParams *p, const g
                  ? to_world(sample_cosine_hemisphere(u.x, u.y), n)
                  : sample_environment_map(sc->env_marginal, sc->env_conditional, p, u.x, u.y);
     ls->pdf = pdf_environment(sc, p, n, ls->wi);
+    ls->le = lookup_environment(sc->env, p, ls->wi);
     ls->flags = LIGHT_AT_INFINITY;
     return 1;
-}
-
-float3 radiance_environment_light(const SceneData *sc, const RenderParams *p, const global Light *l,
-                                  const LightSample *ls, float3 x)
-{
-    return lookup_environment(sc->env, p, ls->wi);
 }

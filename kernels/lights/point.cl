@@ -8,12 +8,9 @@
 int sample_point_light(const SceneData *sc, const RenderParams *p, const global Light *l, float3 x,
                        float3 n, float2 u, LightSample *ls)
 {
-    return aim_at_position(l->p0.xyz, x, ls);
-}
-
-float3 radiance_point_light(const SceneData *sc, const RenderParams *p, const global Light *l,
-                            const LightSample *ls, float3 x)
-{
-    float3 v = ls->y - x;
-    return l->p1.xyz / dot(v, v);
+    float r2;
+    if (!aim_at_position(l->p0.xyz, x, ls, &r2))
+        return 0;
+    ls->le = l->p1.xyz / r2;
+    return 1;
 }

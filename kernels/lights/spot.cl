@@ -10,12 +10,6 @@
  *
  * A delta light: the only direction towards it is sampled, and it delivers I falloff / r^2. */
 
-int sample_spot_light(const SceneData *sc, const RenderParams *p, const global Light *l, float3 x,
-                      float3 n, float2 u, LightSample *ls)
-{
-    return aim_at_position(l->p0.xyz, x, ls);
-}
-
 /* The falloff at cos_theta from the axis. */
 float spot_falloff(const global Light *l, float cos_theta)
 {
@@ -31,9 +25,12 @@ float spot_falloff(const global Light *l, float cos_theta)
     return (acos(cos_cutoff) - acos(cos_theta)) * l->p2.w;
 }
 
-float3 radiance_spot_light(const SceneData *sc, const RenderParams *p, const global Light *l,
-                           const LightSample *ls, float3 x)
+int sample_spot_light(const SceneData *sc, const RenderParams *p, const global Light *l, float3 x,
+                      float3 n, float2 u, LightSample *ls)
 {
-    float3 v = ls->y - x;
-    return l->p1.xyz * (spot_falloff(l, dot(-ls->wi, l->p2.xyz)) / dot(v, v));
+    float r2;
+    if (!aim_at_position(l->p0.xyz, x, ls, &r2))
+        return 0;
+    ls->le = l->p1.xyz * (spot_falloff(l, dot(-ls->wi, l->p2.xyz)) / r2);
+    return 1;
 }
