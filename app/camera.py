@@ -1,6 +1,6 @@
 """The camera: eye, look-at point and up vector, and a projection, each a kernel file
 kernels/cameras/<name>.cl (kernels/camera.cl is their interface): "perspective", a pinhole or,
-with an aperture, a thin lens; or "orthographic"."""
+with an aperture, a thin lens (kernels/cameras/thinlens.cl); or "orthographic"."""
 
 import math
 from dataclasses import dataclass, field
@@ -68,9 +68,15 @@ class Camera:
                       self.aperture, self.focus_distance, self.height)
 
 
+def kernel_name(camera: Camera) -> str:
+    """The kernel file (kernels/cameras/<name>.cl) of a camera: a perspective camera with an
+    aperture has one of its own, "thinlens", so that pinholes compile none of the lens."""
+    return "thinlens" if camera.projection == "perspective" and camera.aperture > 0 else camera.projection
+
+
 def kernel_parts(projection: str) -> list:
-    """(name, source) of the camera kernels of a program: the projection's file and the
-    generate_ray that names it (kernels/camera.cl)."""
+    """(name, source) of the camera kernels of a program: the kernel file `projection` (a
+    kernel_name) and the generate_ray that names it (kernels/camera.cl)."""
     glue = ("CameraRay generate_ray(const RenderParams *p, float sx, float sy, float2 u)\n{\n"
             f"    return generate_{projection}_ray(p, sx, sy, u);\n}}\n")
     return [("camera.cl", None), (f"cameras/{projection}.cl", None), ("app/camera.py: kernel_parts", glue)]

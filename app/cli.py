@@ -157,7 +157,7 @@ def add_render_options(p: argparse.ArgumentParser, device: bool = True):
     p.add_argument("--light-sampler", choices=LIGHT_SAMPLERS,
                    help="how next-event estimation chooses a light: power (in proportion to its "
                         "power), tree (by a light tree, from what it gives the shading point), or "
-                        "auto (the tree from 64 lights on; the default: the scene's)")
+                        "auto (the tree from 4096 lights on; the default: the scene's)")
     p.add_argument("--filter", type=_pixel_filter, metavar="NAME[:RADIUS[:STDDEV]]",
                    help="pixel filter: box (radius 0.5), tent (1) or gaussian (stddev 0.5, radius 4 "
                         "stddev), radius and stddev in pixels (default: the scene's)")

@@ -17,7 +17,7 @@ from pathtrace.features import FLAT_MAX, Features, stack_size
 from pathtrace.lights import LightTable, build_light_table, emitted_power, primitive_bounds
 from pathtrace.materials import TAGS
 from pathtrace.memory import available_host_memory
-from pathtrace.camera import Camera
+from pathtrace.camera import Camera, kernel_name
 from pathtrace.scene.description import RenderSettings, Scene
 from pathtrace.textures import TextureTables, compile_textures
 from pathtrace.types import BVH_NODE, TRIANGLE
@@ -114,7 +114,8 @@ class CompiledScene:
         power = emitted_power(self.spheres, corners, prim_emission[:self.num_spheres],
                               prim_emission[self.num_spheres:])
         self.lights: LightTable = build_light_table(power, self.scene.environment, self.scene.lights,
-                                                    max(self.radius, 1e-6), primitive_bounds(self.spheres, corners),
+                                                    max(self.radius, 1e-6),
+                                                    lambda prims: primitive_bounds(self.spheres, corners, prims),
                                                     self.light_sampler)
 
     def geometry_arrays(self) -> dict:
@@ -138,7 +139,7 @@ class CompiledScene:
                         textures=self.textures.types, masks=self.textures.masks,
                         normal_maps=self.textures.normal_maps, lights=self.lights.types,
                         light_tree=self.lights.tree,
-                        camera=camera.projection, filter=settings.filter.name,
+                        camera=kernel_name(camera), filter=settings.filter.name,
                         russian_roulette=settings.russian_roulette, stack=stack_size(self.bvh.depth),
                         flat=(self.num_spheres, self.num_triangles)
                         if self.num_spheres + self.num_triangles <= FLAT_MAX else ())

@@ -21,7 +21,7 @@ class Features:
                                            # DELTA_LIGHTS; area lights and the environment are
                                            # always compiled in); None: all
     light_tree: bool = False               # lights are chosen through a light tree (kernels/light_tree.cl)
-    camera: str = "perspective"            # one of pathtrace.camera.PROJECTIONS
+    camera: str = "perspective"            # its kernel file: pathtrace.camera.kernel_name
     filter: str = "box"                    # one of pathtrace.filters.FILTERS
     russian_roulette: str = "throughput"   # one of pathtrace.scene.description.RUSSIAN_ROULETTE
     stack: int = 48                        # BVH traversal stack entries the tree can need

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from pathtrace.camera import Camera
+from pathtrace.camera import Camera, kernel_name
 from pathtrace.features import Features
 from pathtrace.filters import PixelFilter
 from pathtrace.types import RENDER_PARAMS
@@ -51,7 +51,7 @@ def params(camera, pixel_filter=PixelFilter()):
 
 def rays(kernels, camera, film):
     o, d = np.zeros((len(film), 4), np.float32), np.zeros((len(film), 4), np.float32)
-    kernels(SOURCE, Features(camera=camera.projection))("rays", len(film), params(camera),
+    kernels(SOURCE, Features(camera=kernel_name(camera)))("rays", len(film), params(camera),
                                                          np.ascontiguousarray(film, np.float32), o, d)
     return o[:, :3].astype(np.float64), d[:, :3].astype(np.float64)
 

@@ -13,7 +13,10 @@ from pathtrace.types import LIGHT, LIGHT_NODE
 
 
 LIGHT_SAMPLERS = ("auto", "power", "tree")   # how next-event estimation chooses a light
-TREE_MIN = 64     # lights with a place from which "auto" chooses by the light tree
+# Lights with a place from which "auto" chooses by the light tree: its walk costs more than it
+# saves below (PoCL, depth 8, per-pixel variance times time: 0.8x on 242 and 1,862 spheres, 3.7x
+# on 20,000 lamps; docs/performance.md)
+TREE_MIN = 4096
 
 
 @dataclass
@@ -81,10 +84,11 @@ def emitted_power(spheres, triangles, emission_of_sphere, emission_of_triangle):
 
 
 def build_light_table(power: np.ndarray, environment, delta_lights=(), radius: float = 1.0,
-                      prim_bounds: dict = None, sampler: str = "power") -> LightTable:
+                      prim_bounds=None, sampler: str = "power") -> LightTable:
     """power: per primitive, in BVH order; delta_lights: the scene's point, spot and directional
-    lights (app/lights/light.py), `radius` the scene's bounding sphere's; prim_bounds: the
-    primitives' light bounds (app/lights/tree.py: primitive_bounds), needed for a tree. The
+    lights (app/lights/light.py), `radius` the scene's bounding sphere's; prim_bounds(prims):
+    the light bounds of primitives `prims` (app/lights/tree.py: primitive_bounds), asked for a
+    tree only. The
     environment, when it is not black, is chosen as often as all other lights together (half
     the time), or always when there are none. sampler "power" chooses every light in proportion
     to its power; "tree" chooses the lights that have a place through a light tree; "auto" the
@@ -140,14 +144,15 @@ def build_light_table(power: np.ndarray, environment, delta_lights=(), radius: f
                       nodes, tree)
 
 
-def tree_bounds(bounded: list, prim_bounds: dict) -> dict:
+def tree_bounds(bounded: list, prim_bounds) -> dict:
     """The light tree's leaves for the entries `bounded` (primitives, then points and spots)."""
     prims = np.array([what for kind, what, _ in bounded if kind == "prim"], np.int64)
     deltas = [what.tree_bounds() for kind, what, _ in bounded if kind == "delta"]
     power = np.array([w for _, _, w in bounded], np.float64)
     position = np.array([b[0] for b in deltas], np.float64).reshape(-1, 3)
+    of_prims = prim_bounds(prims)     # in the order of `prims`: spheres first, as they come first
     return light_bounds(
-        np.concatenate([prim_bounds["lo"][prims], position]), np.concatenate([prim_bounds["hi"][prims], position]),
-        power, np.concatenate([prim_bounds["axis"][prims], np.array([b[1] for b in deltas]).reshape(-1, 3)]),
-        np.concatenate([prim_bounds["cos_o"][prims], [b[2] for b in deltas]]),
-        np.concatenate([prim_bounds["cos_e"][prims], [b[3] for b in deltas]]))
+        np.concatenate([of_prims["lo"], position]), np.concatenate([of_prims["hi"], position]),
+        power, np.concatenate([of_prims["axis"], np.array([b[1] for b in deltas]).reshape(-1, 3)]),
+        np.concatenate([of_prims["cos_o"], [b[2] for b in deltas]]),
+        np.concatenate([of_prims["cos_e"], [b[3] for b in deltas]]))

@@ -26,12 +26,13 @@ def light_bounds(lo, hi, power, axis, cos_o, cos_e):
                 cos_e=np.asarray(cos_e, np.float64))
 
 
-def primitive_bounds(spheres: np.ndarray, triangles: np.ndarray) -> dict:
-    """The light bounds of every primitive (spheres, then triangles as (n, 3, 3) corners), as
-    area lights: a sphere emits from all its surface, so its normals span every direction; a
-    triangle emits from its front, into the hemisphere about its normal (theta_e 90 degrees)."""
-    s = spheres.astype(np.float64)
-    t = triangles.astype(np.float64)
+def primitive_bounds(spheres: np.ndarray, triangles: np.ndarray, prims: np.ndarray) -> dict:
+    """The light bounds of primitives `prims` (of the spheres, then the triangles as (n, 3, 3)
+    corners), as area lights: a sphere emits from all its surface, so its normals span every
+    direction; a triangle emits from its front, into the hemisphere about its normal (theta_e
+    90 degrees)."""
+    s = spheres[prims[prims < len(spheres)]].astype(np.float64)
+    t = triangles[prims[prims >= len(spheres)] - len(spheres)].astype(np.float64)
     normal = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
     normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-30)
     sphere_axis = np.tile([0.0, 0.0, 1.0], (len(s), 1))
