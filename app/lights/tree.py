@@ -42,11 +42,6 @@ def primitive_bounds(spheres: np.ndarray, triangles: np.ndarray, prims: np.ndarr
                         np.concatenate([np.full(len(s), -1.0), np.ones(len(t))]), np.zeros(len(s) + len(t)))
 
 
-def morton_order(centres: np.ndarray) -> np.ndarray:
-    """The order of points along the Morton curve."""
-    return np.argsort(morton_codes(centres), kind="stable")
-
-
 def morton_codes(centres: np.ndarray) -> np.ndarray:
     """30-bit Morton (Z-order) codes of points over their bounding box: 10 bits an axis."""
     lo, hi = centres.min(axis=0), centres.max(axis=0)
@@ -93,11 +88,13 @@ def build_light_tree(bounds: dict) -> tuple:
     consecutive."""
     n = len(bounds["power"])
     centres = (bounds["lo"] + bounds["hi"]) / 2
-    order = morton_order(centres)
-    codes = morton_codes(centres)[order]
+    codes = morton_codes(centres)
+    order = np.argsort(codes, kind="stable")
+    codes = codes[order]
     start, end = np.array([0]), np.array([n])
     parent = np.array([-1])
-    levels = []          # per level: (first node index, start, end, parent)
+    levels = []          # per level: (first node index, start, end, parent); at most 30 levels
+                         # of Morton bits and log2(n) of halving (kernels/light_tree.cl allows 64)
     count = 0
     while len(start):
         levels.append((count, start, end, parent))
