@@ -126,6 +126,7 @@ class _Prepared:
         self.geometry = _geometry_digest(scene)
         self.group = DeviceGroup(backends, scene, progress=build_progress)
         self.environment = _environment_key(scene.environment)
+        self.lights = _lights_key(scene.lights)
 
     def update(self, scene: Scene, settings, aovs: bool):
         """Brings the devices up to date with the scene and restarts the image."""
@@ -133,16 +134,18 @@ class _Prepared:
         environment = _environment_key(scene.environment)
         rows, textures = compiled.material_source
         materials_changed = not np.array_equal(scene.materials.rows, rows) or scene.materials.textures != textures
+        lights = _lights_key(scene.lights)
         for r in self.group.renderers:
             if environment != self.environment:
                 r.set_environment(scene.environment)
-            elif materials_changed:
+            elif materials_changed or lights != self.lights:
                 r.upload_materials()
             r.set_camera(scene.camera)
-            r.set_settings(**{k: getattr(settings, k) for k in ("max_depth", "russian_roulette", "seed", "nee")})
+            r.set_settings(**{k: getattr(settings, k) for k in ("max_depth", "russian_roulette", "seed", "nee",
+                                                                "filter", "light_sampler")})
             r.resize(settings.width, settings.height)
             r.set_aovs(aovs)
-        self.environment = environment
+        self.environment, self.lights = environment, lights
 
 
 def prepare(scene: Scene, device="auto", build_progress=None) -> _Prepared:
@@ -174,6 +177,11 @@ def _geometry_digest(scene: Scene) -> bytes:
 
 def _environment_key(environment):
     return id(environment), id(environment.image), float(environment.intensity), float(environment.rotation)
+
+
+def _lights_key(lights) -> tuple:
+    """What the delta lights are, to tell whether they changed since the last render."""
+    return tuple((light.name, *(np.asarray(getattr(light, f)).tobytes() for f in light.fields)) for light in lights)
 
 
 def progressive(scene, spp=None, steps=None, size=None, device="auto", seed=None, max_depth=None,

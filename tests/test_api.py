@@ -158,6 +158,31 @@ def test_a_changed_scene_is_rendered_without_compiling_it_again():
     assert not np.array_equal(moved, changed)
 
 
+def test_changed_lights_filter_and_camera_type_are_rendered_as_a_fresh_scene_renders_them():
+    """Delta lights, the pixel filter, the light sampler and the thin lens reach the devices
+    without a new compile, as a fresh scene with them renders."""
+    from pathtrace.filters import PixelFilter
+    from pathtrace.lights import PointLight
+
+    def change(s):
+        s.lights.append(PointLight([0.5, 2.0, 1.0], [3.0, 2.0, 1.0]))
+        s.lights[-1].check()
+        s.camera.aperture, s.camera.focus_distance = 0.2, 4.0
+        s.settings.filter = PixelFilter("tent")
+        s.settings.light_sampler = "tree"
+    scene = pathtrace.load_dict(small_scene())
+    before = render(scene, spp=2)
+    prepared = scene._prepared
+    change(scene)
+    changed = render(scene, spp=2)
+    assert scene._prepared is prepared and not np.array_equal(changed, before)
+    fresh = pathtrace.load_dict(small_scene())
+    change(fresh)
+    np.testing.assert_array_equal(changed, render(fresh, spp=2))
+    scene.lights[-1].intensity = np.array([6.0, 4.0, 2.0])
+    assert not np.array_equal(render(scene, spp=2), changed)
+
+
 def test_progressive_yields_each_step_and_ends_at_the_render():
     scene = pathtrace.load_dict(small_scene())
     snapshots = list(pathtrace.progressive(scene, spp=6, size=SIZE, device=DEVICE))
