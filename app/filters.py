@@ -9,12 +9,13 @@ from dataclasses import dataclass
 FILTERS = ("box", "tent", "gaussian")
 DEFAULT_RADIUS = {"box": 0.5, "tent": 1.0, "gaussian": None}    # gaussian: 4 stddev
 MAX_RADIUS = 32.0       # pixels: wider is no longer a pixel filter
+MIN_WIDTH = 1e-3        # pixels: the narrowest radius or stddev (float32 squares of less underflow)
 
 
 @dataclass(frozen=True)
 class PixelFilter:
     name: str = "box"
-    radius: float = None       # pixels; None: the type's default
+    radius: float = None       # pixels; None: the type's default (set on construction)
     stddev: float = 0.5        # gaussian: pixels
 
     def __post_init__(self):
@@ -22,31 +23,22 @@ class PixelFilter:
             default = 4 * self.stddev if self.name == "gaussian" else DEFAULT_RADIUS[self.name]
             object.__setattr__(self, "radius", default)
 
-    @property
-    def extent(self) -> float:
-        """The radius in effect."""
-        return self.radius
-
     def check(self) -> "PixelFilter":
         """Raises ValueError("<field>: <problem>") for the first field out of range."""
         if self.name not in FILTERS:
             raise ValueError(f"type: must be box, tent or gaussian, got {self.name!r}")
-        if self.name == "gaussian" and not 0 < self.stddev <= MAX_RADIUS:
-            raise ValueError(f"stddev: must be in (0, {MAX_RADIUS:g}] pixels, got {self.stddev:g}")
-        if not 0 < self.extent <= MAX_RADIUS:
-            raise ValueError(f"radius: must be in (0, {MAX_RADIUS:g}] pixels, got {self.extent:g}")
+        if self.name == "gaussian" and not MIN_WIDTH <= self.stddev <= MAX_RADIUS:
+            raise ValueError(f"stddev: must be in [{MIN_WIDTH:g}, {MAX_RADIUS:g}] pixels, got {self.stddev:g}")
+        if not MIN_WIDTH <= self.radius <= MAX_RADIUS:
+            raise ValueError(f"radius: must be in [{MIN_WIDTH:g}, {MAX_RADIUS:g}] pixels, got {self.radius:g}")
         return self
 
     def params(self) -> tuple:
         """RenderParams.filter (kernels/filters/<name>.cl)."""
-        r = self.extent
+        r = self.radius
         if self.name == "gaussian":
             return (r, self.stddev, math.exp(-r * r / (2 * self.stddev ** 2)), 0.0)
         return (r, 0.0, 0.0, 0.0)
-
-    def describe(self) -> str:
-        extra = f", stddev {self.stddev:g}" if self.name == "gaussian" else ""
-        return f"{self.name} (radius {self.extent:g}{extra})"
 
 
 def kernel_parts(name: str) -> list:

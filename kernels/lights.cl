@@ -11,10 +11,10 @@
  *
  * and app/lights/registry.py generates the dispatch on the type tag (LIGHT_<NAME>), so that the
  * integrator never names a light type. The radiance comes with the sample: a second dispatch
- * on the type after the BSDF's evaluation cost 8 % of a simple scene's time on an H100. Area lights and the environment also give the density
- * with which they would have sampled a direction that a path found by itself (pdf_light,
- * pdf_environment), for multiple importance sampling; delta lights cannot be found so, and carry
- * no MIS weight. */
+ * on the type after the BSDF's evaluation cost 8 % of a simple scene's time on an H100. Area
+ * lights and the environment also give the density with which they would have sampled a
+ * direction that a path found by itself (pdf_light, pdf_environment), for multiple importance
+ * sampling; delta lights cannot be found so, and carry no MIS weight. */
 
 #define LIGHT_DELTA 1          /* a delta light: no path finds it, no MIS weight */
 #define LIGHT_AT_INFINITY 2    /* the shadow ray runs to infinity, not to the sample's point */

@@ -392,9 +392,9 @@ def test_thinlens_orthographic_and_filters_read_as_mitsuba_means_them(tmp_path):
     ('<sensor type="thinlens"><float name="aperture_radius" value="1"/><float name="focus_distance" value="0"/></sensor>',
      "focus_distance: must be in (0"),
     ('<sensor type="perspective"><film type="hdrfilm"><rfilter type="tent"><float name="radius" value="1e30"/>'
-     '</rfilter></film></sensor>', "radius: must be in (0, 32] pixels"),
+     '</rfilter></film></sensor>', "radius: must be in [0.001, 32] pixels"),
     ('<sensor type="perspective"><film type="hdrfilm"><rfilter type="gaussian"><float name="stddev" value="0"/>'
-     '</rfilter></film></sensor>', "stddev: must be in (0, 32] pixels")])
+     '</rfilter></film></sensor>', "stddev: must be in [0.001, 32] pixels")])
 def test_bad_lights_cameras_and_filters_are_one_line(tmp_path, body, message):
     with pytest.raises(UserError) as e:
         read_mitsuba_file(write(tmp_path, SPHERE + body))

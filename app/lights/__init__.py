@@ -10,5 +10,6 @@ from pathtrace.lights.table import (LIGHT_SAMPLERS, LightTable, alias_table, bui
                                     keep_threshold)
 from pathtrace.lights.tree import primitive_bounds
 
-__all__ = ["DELTA_LIGHTS", "LIGHTS", "LIGHT_SAMPLERS", "primitive_bounds", "TAGS", "DeltaLight", "DirectionalLight", "LightTable", "PointLight",
-           "SpotLight", "alias_table", "build_light_table", "emitted_power", "keep_threshold", "kernel_parts"]
+__all__ = ["DELTA_LIGHTS", "LIGHTS", "LIGHT_SAMPLERS", "TAGS", "DeltaLight", "DirectionalLight", "LightTable",
+           "PointLight", "SpotLight", "alias_table", "build_light_table", "emitted_power", "keep_threshold",
+           "kernel_parts", "primitive_bounds"]

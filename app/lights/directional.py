@@ -25,7 +25,3 @@ class DirectionalLight(DeltaLight):
         """What falls on the scene: its irradiance over the disk of the scene's bounding sphere,
         as Mitsuba and pbrt-v4 take it."""
         return math.pi * radius * radius * luminance(self.irradiance)
-
-    def pack(self, row):
-        row["p0"][:3] = self.direction
-        row["p1"][:3] = self.irradiance

@@ -25,7 +25,10 @@ class DeltaLight:
         """Its luminance power in watts; `radius` bounds the scene (for lights at infinity)."""
 
     def pack(self, row: np.ndarray):
-        """Fills a LIGHT row's parameters p0..p2."""
+        """Fills a LIGHT row's parameters: by default its fields' values, in order, into p0.xyz,
+        p1.xyz, ... (a type whose layout differs says so)."""
+        for k, name in enumerate(self.fields):
+            row[f"p{k}"][:3] = getattr(self, name)
 
     def tree_bounds(self):
         """Where and which way it shines, for the light tree (app/lights/tree.py): (point, cone

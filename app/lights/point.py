@@ -23,10 +23,6 @@ class PointLight(DeltaLight):
     def power(self, radius: float) -> float:
         return 4 * math.pi * luminance(self.intensity)
 
-    def pack(self, row):
-        row["p0"][:3] = self.position
-        row["p1"][:3] = self.intensity
-
     def tree_bounds(self):
         """Every direction: normals spread over the sphere, emission within 90 degrees of each."""
         return self.position, np.array([0.0, 0.0, 1.0]), -1.0, 0.0

@@ -88,69 +88,71 @@ def build_light_table(power: np.ndarray, environment, delta_lights=(), radius: f
     """power: per primitive, in BVH order; delta_lights: the scene's point, spot and directional
     lights (app/lights/light.py), `radius` the scene's bounding sphere's; prim_bounds(prims):
     the light bounds of primitives `prims` (app/lights/tree.py: primitive_bounds), asked for a
-    tree only. The
-    environment, when it is not black, is chosen as often as all other lights together (half
-    the time), or always when there are none. sampler "power" chooses every light in proportion
-    to its power; "tree" chooses the lights that have a place through a light tree; "auto" the
-    tree from TREE_MIN such lights on."""
+    tree only. The environment, when it is not black, is chosen as often as all other lights
+    together (half the time), or always when there are none. sampler "power" chooses every
+    light in proportion to its power; "tree" chooses the lights that have a place (emitters,
+    points, spots) through a light tree; "auto" the tree from TREE_MIN such lights on.
+
+    The entries: with a tree, its root, the lights at infinity and the environment (which the
+    alias table chooses among), then the tree's lights in the order of its leaves; without,
+    the emitters, the points and spots, the lights at infinity and the environment."""
     emitters = np.flatnonzero(power > 0)
-    delta_lights = [light for light in delta_lights if light.power(radius) > 0]
-    placed = [light for light in delta_lights if light.tree_bounds() is not None]
+    delta = [(light, light.power(radius)) for light in delta_lights]
+    delta = [(light, w) for light, w in delta if w > 0]
+    placed = [(light, w) for light, w in delta if light.tree_bounds() is not None]
+    at_infinity = [(light, w) for light, w in delta if light.tree_bounds() is None]
     env_lit = bool(np.any(environment.image > 0)) and environment.intensity > 0
-    tree = sampler == "tree" or (sampler == "auto" and len(emitters) + len(placed) >= TREE_MIN)
-    tree = tree and len(emitters) + len(placed) > 0
-    # the entries: those the alias table chooses among, and the tree's after them
-    bounded = [("prim", int(i), float(power[i])) for i in emitters] + [("delta", light, light.power(radius))
-                                                                         for light in placed]
-    at_infinity = [("delta", light, light.power(radius)) for light in delta_lights if light.tree_bounds() is None]
-    top = ([("tree", None, sum(w for _, _, w in bounded))] if tree else bounded) + at_infinity
-    weights = np.array([w for _, _, w in top], np.float64)
+    bounded = len(emitters) + len(placed)
+    tree = bounded > 0 and (sampler == "tree" or (sampler == "auto" and bounded >= TREE_MIN))
+    bounded_power = np.concatenate([power[emitters], [w for _, w in placed]])
+    weights = np.concatenate([[bounded_power.sum()] if tree else bounded_power, [w for _, w in at_infinity]])
     if env_lit:
-        weights = np.append(weights, weights.sum() if len(top) else 1.0)
-        top.append(("environment", None, 0.0))
+        weights = np.append(weights, weights.sum() if len(weights) else 1.0)
     nodes = np.zeros(1, LIGHT_NODE)
-    if not top:
+    if not len(weights):
         return LightTable(np.zeros(1, LIGHT), 0, np.full(len(power), -1, np.int32), 0.0, (), nodes)
-    entries = top
-    if tree:
-        nodes, leaf = build_light_tree(tree_bounds(bounded, prim_bounds))
-        order = np.argsort(leaf)
-        entries = top + [bounded[i] for i in order]
-    table = np.zeros(len(entries), LIGHT)
+    count = len(weights)
+    table = np.zeros(count + (bounded if tree else 0), LIGHT)
     table["prim"] = -1
-    prim_light = np.full(len(power), -1, np.int32)
-    for k, (kind, what, _) in enumerate(entries):
-        if kind == "prim":
-            table["type"][k], table["prim"][k] = TAGS["area"], what
-            prim_light[what] = k
-        elif kind == "delta":
-            table["type"][k] = TAGS[what.name]
-            what.pack(table[k])
-        elif kind == "environment":
-            table["type"][k] = TAGS["environment"]
-        else:
-            table["type"][k] = len(TAGS)               # LIGHT_TREE_ROOT (kernels/light_tree.cl)
+    # where the emitters and the points and spots go: after the top entries, in leaf order, or first
+    if tree:
+        nodes, leaf = build_light_tree(tree_bounds(emitters, [light for light, _ in placed], bounded_power,
+                                                   prim_bounds))
+        slot = np.empty(bounded, np.int64)
+        slot[np.argsort(leaf)] = count + np.arange(bounded)
+        table["type"][0] = len(TAGS)                   # LIGHT_TREE_ROOT (kernels/light_tree.cl)
+        table["alias"][slot] = leaf
+        nodes["light"][leaf] = slot
+        rest = 1
+    else:
+        slot = np.arange(bounded)
+        rest = bounded
+    table["type"][slot[:len(emitters)]] = TAGS["area"]
+    table["prim"][slot[:len(emitters)]] = emitters
+    for k, (light, _) in [*zip(slot[len(emitters):], placed), *enumerate(at_infinity, rest)]:
+        table["type"][k] = TAGS[light.name]
+        light.pack(table[k])
+    if env_lit:
+        table["type"][count - 1] = TAGS["environment"]
     keep, alias = alias_table(weights)
-    count = len(top)
     table["alias"][:count] = alias
     table["keep"][:count] = keep_threshold(keep)
     table["pick"][:count] = weights / weights.sum()
     if tree:
-        table["alias"][count:] = leaf[order]
         table["pick"][count:] = table["pick"][0]
-        nodes["light"][leaf[order]] = count + np.arange(len(order))
-    types = tuple(dict.fromkeys(light.name for light in delta_lights))
+    prim_light = np.full(len(power), -1, np.int32)
+    prim_light[emitters] = slot[:len(emitters)]
+    types = tuple(dict.fromkeys(light.name for light, _ in delta))
     return LightTable(table, count, prim_light, float(table["pick"][count - 1]) if env_lit else 0.0, types,
                       nodes, tree)
 
 
-def tree_bounds(bounded: list, prim_bounds) -> dict:
-    """The light tree's leaves for the entries `bounded` (primitives, then points and spots)."""
-    prims = np.array([what for kind, what, _ in bounded if kind == "prim"], np.int64)
-    deltas = [what.tree_bounds() for kind, what, _ in bounded if kind == "delta"]
-    power = np.array([w for _, _, w in bounded], np.float64)
+def tree_bounds(emitters: np.ndarray, placed: list, power: np.ndarray, prim_bounds) -> dict:
+    """The light tree's leaves: the emissive primitives `emitters`, then the points and spots
+    `placed`, of power `power`."""
+    deltas = [light.tree_bounds() for light in placed]
     position = np.array([b[0] for b in deltas], np.float64).reshape(-1, 3)
-    of_prims = prim_bounds(prims)     # in the order of `prims`: spheres first, as they come first
+    of_prims = prim_bounds(emitters)
     return light_bounds(
         np.concatenate([of_prims["lo"], position]), np.concatenate([of_prims["hi"], position]),
         power, np.concatenate([of_prims["axis"], np.array([b[1] for b in deltas]).reshape(-1, 3)]),

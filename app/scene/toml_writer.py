@@ -90,7 +90,7 @@ def texture_table(texture: Texture, names: dict, rel) -> dict:
 
 
 def filter_table(f) -> dict:
-    table = {"type": f.name, "radius": f.extent}
+    table = {"type": f.name, "radius": f.radius}
     if f.name == "gaussian":
         table["stddev"] = f.stddev
     return table
