@@ -13,6 +13,7 @@ import pyopencl as cl
 
 from pathtrace.errors import UserError, format_bytes, short
 from pathtrace.features import Features
+from pathtrace.occupancy import build_for_occupancy, is_nvidia
 from pathtrace.resources import resource_dir
 
 # The order in which the kernel files are joined into one program: the basics, the texture
@@ -27,6 +28,9 @@ LATER_FILES = ("integrator.cl", "aovs.cl", "display.cl")
 
 # No -cl-fast-relaxed-math: it implies finite math, and the kernels rely on INFINITY.
 BUILD_OPTIONS = ("-cl-mad-enable", "-cl-no-signed-zeros")
+# A cache entry: the SHA-256 of the rest, the build options the binary was made with (NUL
+# separated) and a newline, the binary.
+CACHE_FORMAT = "2"
 
 
 def kernel_source(extra: str = "", features: Features = Features()) -> str:
@@ -112,28 +116,35 @@ def build_program(context: cl.Context, device: cl.Device, extra: str = "",
 def build_cached(context: cl.Context, device: cl.Device, source: str, options: list[str],
                  use_cache: bool = True) -> BuildResult:
     """Builds a program for one device. The binary is cached under cache_dir(), keyed by the
-    source, the options and the exact device and driver."""
+    source, the options, the exact device and driver and the entry's format."""
     key = hashlib.sha256("\0".join([
-        source, " ".join(options), device.platform.name, device.platform.version, device.name,
+        CACHE_FORMAT, source, " ".join(options), device.platform.name, device.platform.version, device.name,
         device.version, device.driver_version]).encode()).hexdigest()[:32]
     path = cache_dir() / f"{key}.bin"
     start = time.perf_counter()
-    binary = _read_cached(path) if use_cache else None
-    if binary is not None:
+    cached = _read_cached(path) if use_cache else None
+    if cached is not None:
+        built_with, binary = cached
         try:
-            program = cl.Program(context, [device], [binary]).build(options=options)
+            program = cl.Program(context, [device], [binary]).build(options=built_with)
             return BuildResult(program, time.perf_counter() - start, True)
         except cl.Error:
             pass   # a stale or foreign binary: rebuild from source below
-    program = cl.Program(context, source).build(options=options, devices=[device])
+    if is_nvidia(device):
+        program, options = build_for_occupancy(context, device, source, options)
+    else:
+        program = cl.Program(context, source).build(options=options, devices=[device])
     seconds = time.perf_counter() - start
     if use_cache:
         binary = program.get_info(cl.program_info.BINARIES)[0]
         if binary:
+            # the options it was built with go with it: a register cap applies when a driver
+            # compiles the cached intermediate code (NVIDIA's PTX) for the device
+            data = "\0".join(options).encode() + b"\n" + binary
             tmp = path.with_suffix(f".tmp{os.getpid()}")
             try:
                 path.parent.mkdir(parents=True, exist_ok=True)
-                tmp.write_bytes(hashlib.sha256(binary).digest() + binary)
+                tmp.write_bytes(hashlib.sha256(data).digest() + data)
                 os.replace(tmp, path)
             except OSError:
                 # caching is an optimisation: a read-only or full disk still renders, and leaves
@@ -146,9 +157,9 @@ def build_cached(context: cl.Context, device: cl.Device, source: str, options: l
 
 
 def _read_cached(path: Path):
-    """A cached binary, or None where there is none or it does not match the digest it was
-    written with: a truncated or damaged binary handed to a driver can crash it (PoCL
-    segfaulted on the first half of a valid one)."""
+    """A cached binary and the build options it was made with, or None where there is none or
+    it does not match the digest it was written with: a truncated or damaged binary handed to a
+    driver can crash it (PoCL segfaulted on the first half of a valid one)."""
     try:
         # a regular file only: an entry that is a FIFO would block the open for ever
         if not stat.S_ISREG(os.stat(path).st_mode):
@@ -156,8 +167,11 @@ def _read_cached(path: Path):
         data = path.read_bytes()
     except OSError:
         return None
-    digest, binary = data[:32], data[32:]
-    return binary if binary and hashlib.sha256(binary).digest() == digest else None
+    digest, data = data[:32], data[32:]
+    if hashlib.sha256(data).digest() != digest or b"\n" not in data:
+        return None
+    options, binary = data.split(b"\n", 1)
+    return ([o for o in options.decode().split("\0") if o], binary) if binary else None
 
 
 @dataclass

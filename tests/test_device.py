@@ -42,3 +42,14 @@ def test_a_full_disk_leaves_no_partial_cache_file(tmp_path):
     r = build(tmp_path, full)
     assert r.returncode == 0 and r.stdout.strip() == "built", r.stderr
     assert not list(tmp_path.glob("*.tmp*")) and not list(tmp_path.glob("*.bin"))
+
+
+def test_a_cache_entry_keeps_the_options_its_binary_was_built_with(tmp_path):
+    """A register cap chosen at build time (app/occupancy.py) must apply again when the cached
+    binary is built for the device: the entry carries the options."""
+    from pathtrace.device import _read_cached
+    r = build(tmp_path, "import pathtrace.device as d\n"
+                        "cached = d.build_cached\n"
+                        "d.build_cached = lambda c, dev, s, o, u=True: cached(c, dev, s, o + ['-DONE=1'], u)\n")
+    assert r.returncode == 0, r.stderr
+    assert ["-DONE=1"] in [_read_cached(p)[0] for p in tmp_path.glob("*.bin")]

@@ -1,0 +1,79 @@
+"""Register caps on NVIDIA GPUs: a path tracer's kernel is latency-bound, and how many warps an
+SM keeps in flight to hide that latency is set by how many registers each thread holds. ptxas
+allocates what it likes, and small source changes move it across an occupancy step (the same
+path tracer took 96 registers, 20 resident warps of the 8x8 work groups, or 116 and 16 warps,
+after an unrelated change to the light interface: 5-8 % of the H100's time on sphere scenes).
+So on NVIDIA's OpenCL the kernels are built once with ptxas's report (-cl-nv-verbose), and again
+under the register caps that would keep more warps resident, down to 4/5 of what ptxas chose;
+the lowest cap that compiles without spilling is kept. Other platforms build as they are."""
+
+import math
+import re
+
+import pyopencl as cl
+
+REPORT = "-cl-nv-verbose"
+# Registers are allocated per warp in units of 256 (8 per thread) on every NVIDIA architecture
+# since Maxwell (CUDA occupancy calculator); the renderer launches 8x8 work groups of 2 warps,
+# and a work group is resident whole. No SM holds more than 64 warps (sm_90; fewer on some).
+ALLOCATION_UNIT = 8
+GROUP_WARPS = 2
+MOST_WARPS = 64
+LOWEST_FRACTION = 0.8
+
+
+def is_nvidia(device: cl.Device) -> bool:
+    return "NVIDIA" in device.platform.name and "cl_nv_device_attribute_query" in device.extensions
+
+
+def kernel_registers(log: str) -> dict:
+    """Per entry function of a ptxas report: (registers, spill store bytes)."""
+    found, current = {}, None
+    for line in log.splitlines():
+        m = re.search(r"(?:Compiling entry function|Function properties for) '?(\w+)'?", line)
+        if m:
+            current = m.group(1)
+            found.setdefault(current, (0, 0))
+        m = re.search(r"(\d+) bytes spill stores", line)
+        if m and current:
+            found[current] = (found[current][0], int(m.group(1)))
+        m = re.search(r"Used (\d+) registers", line)
+        if m and current:
+            found[current] = (int(m.group(1)), found[current][1])
+    return found
+
+
+def resident_warps(registers: int, register_file: int, warp: int) -> int:
+    """Warps resident per SM when each thread holds `registers` (work groups of GROUP_WARPS)."""
+    per_thread = -(-registers // ALLOCATION_UNIT) * ALLOCATION_UNIT
+    return min(MOST_WARPS, GROUP_WARPS * (register_file // (GROUP_WARPS * warp * per_thread)))
+
+
+def register_caps(registers: int, register_file: int = 65536, warp: int = 32) -> list[int]:
+    """The register counts below `registers`, and not below LOWEST_FRACTION of it, at which more
+    warps are resident: the most registers of each such occupancy, lowest first."""
+    now = resident_warps(registers, register_file, warp)
+    caps = {}
+    lowest = math.ceil(registers * LOWEST_FRACTION)
+    for cap in range(registers - 1, lowest - 1, -1):
+        warps = resident_warps(cap, register_file, warp)
+        if warps > now and warps not in caps:
+            caps[warps] = cap
+    return sorted(caps.values())
+
+
+def build_for_occupancy(context: cl.Context, device: cl.Device, source: str, options: list[str]):
+    """The program built with the options under which it keeps the most warps resident without
+    spilling, and those options."""
+    program = cl.Program(context, source).build(options=options + [REPORT], devices=[device])
+    found = kernel_registers(program.get_build_info(device, cl.program_build_info.LOG))
+    if not found:
+        return program, options
+    most = max(registers for registers, _ in found.values())
+    for cap in register_caps(most, device.registers_per_block_nv, device.warp_size_nv):
+        capped = options + [f"-cl-nv-maxrregcount={cap}"]
+        trial = cl.Program(context, source).build(options=capped + [REPORT], devices=[device])
+        report = kernel_registers(trial.get_build_info(device, cl.program_build_info.LOG))
+        if report and all(spilled == 0 for _, spilled in report.values()):
+            return trial, capped
+    return program, options

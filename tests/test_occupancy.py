@@ -1,0 +1,47 @@
+"""Register caps on NVIDIA GPUs (app/occupancy.py): ptxas's report read per kernel, and the
+caps that would keep more warps resident."""
+
+from pathlib import Path
+
+from pathtrace.occupancy import kernel_registers, register_caps, resident_warps
+
+# An H100's report for a scene's program (-cl-nv-verbose), as the driver wrote it.
+REPORT = """
+ptxas info    : 24 bytes gmem
+ptxas info    : Compiling entry function 'render_aovs' for 'sm_90a'
+ptxas info    : Function properties for render_aovs
+ptxas         .     192 bytes stack frame, 0 bytes spill stores, 0 bytes spill loads
+ptxas info    : Used 126 registers, used 0 barriers
+ptxas info    : Compile time = 209.296 ms
+ptxas info    : Compiling entry function 'render_nee' for 'sm_90a'
+ptxas info    : Function properties for render_nee
+ptxas         .     320 bytes stack frame, 220 bytes spill stores, 220 bytes spill loads
+ptxas info    : Used 96 registers, used 0 barriers
+"""
+
+
+def test_the_report_gives_each_kernels_registers_and_spills():
+    assert kernel_registers(REPORT) == {"render_aovs": (126, 0), "render_nee": (96, 220)}
+    assert kernel_registers("Build succeeded") == {}
+
+
+def test_resident_warps_follow_the_register_file_in_whole_work_groups():
+    # 65536 registers per SM, 2-warp work groups, 8 registers per thread allocation unit
+    assert resident_warps(96, 65536, 32) == 20
+    assert resident_warps(116, 65536, 32) == 16      # 120 allocated: 8 groups of 7680
+    assert resident_warps(120, 65536, 32) == 16
+    assert resident_warps(128, 65536, 32) == 16
+    assert resident_warps(112, 65536, 32) == 18
+    assert resident_warps(64, 65536, 32) == 32
+    assert resident_warps(24, 65536, 32) == 64
+
+
+def test_caps_are_the_occupancy_steps_down_to_four_fifths():
+    assert register_caps(116) == [96, 112]
+    assert register_caps(128) == [112]                # 104 keeps 18 warps too; 96 is below 4/5
+    assert register_caps(96) == [80, 88]
+    assert register_caps(32) == []                    # 64 warps already, the most an SM holds
+    for registers in range(40, 255):
+        for cap in register_caps(registers):
+            assert registers * 0.8 <= cap < registers
+            assert resident_warps(cap, 65536, 32) > resident_warps(registers, 65536, 32)
