@@ -126,7 +126,7 @@ def run_builds(device_specs, sizes, log=print):
     import numpy as np
 
     from pathtrace.bvh import build_bvh, primitive_boxes
-    from pathtrace.scene.builtin import builtin_scene, count_name
+    from pathtrace.scene.builtin import count_name
 
     results = []
     for backend in choose_devices(device_specs):

@@ -26,6 +26,8 @@ class Camera:
     focus_distance: float = 1.0        # perspective with an aperture: the distance along the
                                        # view direction to the plane in focus
     height: float = 2.0                # orthographic: the view's height in world units
+    mirrored: bool = False             # the image's right is -(forward x up): a left-handed
+                                       # camera, as pbrt's LookAt gives (app/scene/pbrt)
 
     def __post_init__(self):
         self.eye = np.asarray(self.eye, np.float64)
@@ -52,6 +54,8 @@ class Camera:
         forward = _normalize(self.look_at - self.eye)
         right = _normalize(np.cross(forward, self.up))
         up = np.cross(right, forward)
+        if self.mirrored:
+            right = -right
         half_height = self.height / 2 if self.projection == "orthographic" else math.tan(math.radians(self.vfov) / 2)
         return forward, right * half_height * aspect, up * half_height
 
@@ -65,7 +69,7 @@ class Camera:
 
     def copy(self) -> "Camera":
         return Camera(self.eye.copy(), self.look_at.copy(), self.up.copy(), self.vfov, self.projection,
-                      self.aperture, self.focus_distance, self.height)
+                      self.aperture, self.focus_distance, self.height, self.mirrored)
 
 
 def kernel_name(camera: Camera) -> str:

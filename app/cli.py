@@ -19,7 +19,7 @@ GENERATED_SCENES = (("spheresN[-diffuse]", "N random spheres, e.g. spheres512k, 
 
 def epilog() -> str:
     from pathtrace.scene.builtin import BUILTIN_SCENES
-    return ("A scene is a .toml file, a Mitsuba 3 .xml file or a built-in name (pathtrace scenes lists them): "
+    return ("A scene is a .toml file, a Mitsuba 3 .xml file, a pbrt-v4 .pbrt file or a built-in name (pathtrace scenes lists them): "
             + ", ".join(BUILTIN_SCENES) + "; and " + ", ".join(name for name, _ in GENERATED_SCENES) + ".")
 
 
@@ -337,11 +337,44 @@ def cmd_convert(args):
     out = Path(args.output)
     if out.suffix.lower() != ".toml":
         raise UserError(f"--output: {out}: pathtrace writes scenes as .toml")
-    text = scene_toml(load(args.scene), out)
+    scene = load(args.scene)
+    env = scene.environment
+    if env.resampled:        # the map as pathtrace reads it, beside the scene
+        from pathtrace.image_io import _write_exr
+        path = out.with_name(out.stem + ".environment.exr")
+        _write_exr(str(path), env.image)
+        scene.environment = replace(env, source=str(path), resampled=False)
+        print(f"wrote {path}", file=sys.stderr)
+    written = write_mesh_files(scene, out)
+    if written:
+        print(f"wrote {written} meshes to {out.stem}.meshes/", file=sys.stderr)
+    text = scene_toml(scene, out)
     with FinalWrite():
         write_text(out, text, "--output")
     print(f"wrote {out}", file=sys.stderr)
     return 0
+
+
+def write_mesh_files(scene, out: Path, inline_faces: int = 1000) -> int:
+    """Meshes that came from no file (a pbrt scene's, whose faces and uvs the reader turned)
+    written as PLY files beside the TOML, where they have normals (an inline mesh has none) or
+    more than `inline_faces` faces; the scene then refers to them. Returns how many."""
+    import numpy as np
+
+    from pathtrace.scene.description import MeshFile
+    from pathtrace.scene.meshes import write_ply
+
+    folder = out.with_name(out.stem + ".meshes")
+    count = 0
+    for k, mesh in enumerate(scene.meshes):
+        if mesh.file is not None or (mesh.normals is None and len(mesh.faces) <= inline_faces):
+            continue
+        folder.mkdir(exist_ok=True)
+        path = folder / f"{k:04d}.ply"
+        write_ply(path, mesh.vertices, mesh.faces, mesh.normals, mesh.uvs)
+        mesh.file = MeshFile(str(path), np.eye(4))
+        count += 1
+    return count
 
 
 def cmd_farm_render(args):
@@ -475,7 +508,7 @@ def build_parser():
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
     p = sub.add_parser("render", help="render a still image", epilog=scenes_epilog)
-    p.add_argument("scene", help="a .toml or Mitsuba 3 .xml scene file, or a built-in scene name")
+    p.add_argument("scene", help="a .toml, Mitsuba 3 .xml or pbrt-v4 .pbrt scene file, or a built-in scene name")
     p.add_argument("-o", "--output", action="append", required=True, metavar="FILE",
                    help="output image; repeat for several (.png/.jpg tonemapped; "
                         ".exr/.hdr/.pfm linear HDR)")
@@ -492,7 +525,7 @@ def build_parser():
 
     p = sub.add_parser("view", help="open the interactive viewer", epilog=scenes_epilog)
     p.add_argument("scene", nargs="?", default="simple",
-                   help="a .toml or Mitsuba 3 .xml file, or a built-in name (default simple)")
+                   help="a .toml, Mitsuba 3 .xml or pbrt-v4 .pbrt file, or a built-in name (default simple)")
     p.add_argument("--screenshot-dir", default="screenshots", metavar="DIR",
                    help="where P / F12 / the panel's button write PNG + EXR (default ./screenshots)")
     p.add_argument("--frames", type=_int_range(1), metavar="N", help="close after N frames (for scripts)")
@@ -557,9 +590,9 @@ def build_parser():
     add_render_options(p, device=False)
     p.set_defaults(func=cmd_farm_render)
 
-    p = sub.add_parser("convert", help="write a scene (a Mitsuba 3 .xml file, say) as pathtrace TOML",
+    p = sub.add_parser("convert", help="write a scene (a Mitsuba 3 .xml or pbrt-v4 .pbrt file, say) as pathtrace TOML",
                        epilog=scenes_epilog)
-    p.add_argument("scene", help="a .xml or .toml scene file or a built-in scene name")
+    p.add_argument("scene", help="a .xml, .pbrt or .toml scene file or a built-in scene name")
     p.add_argument("-o", "--output", required=True, metavar="FILE.toml",
                    help="the TOML file to write (mesh files stay where they are, referenced)")
     p.set_defaults(func=cmd_convert)

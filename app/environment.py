@@ -15,6 +15,7 @@ class Environment:
     intensity: float = 1.0
     rotation: float = 0.0      # degrees about +y
     source: str = "constant"   # a file path, or "constant"
+    resampled: bool = False    # the image is not the file's (a pbrt equal-area map made lat-long)
 
     @classmethod
     def constant(cls, color, intensity=1.0):

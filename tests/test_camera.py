@@ -194,3 +194,19 @@ def test_the_command_line_filter_overrides_the_scenes(tmp_path):
     run = subprocess.run([sys.executable, "-m", "pathtrace", "render", str(scene), "--no-nee", "--size", "8x8",
                           "--spp", "1", "-q", "-o", str(tmp_path / "x.png")], capture_output=True, text=True)
     assert run.returncode == 0 and "without it (--no-nee) they light nothing" in run.stderr
+
+
+@pytest.mark.parametrize("mirrored", [False, True])
+def test_fly_controls_move_and_turn_towards_the_images_right(mirrored):
+    """D strafes, and a mouse move to the right turns the view, towards the side of the image
+    that is on the right: -(forward x up) for a mirrored camera."""
+    from pathtrace.viewer.controls import FlyControls
+    camera = Camera((0, 0, 5), (0, 0, 0), (0, 1, 0), mirrored=mirrored)
+    image_right = camera.basis(1.0)[1]
+    controls = FlyControls(held={"D"})
+    before = camera.eye.copy()
+    assert controls.update(camera, 0.1)
+    assert np.dot(camera.eye - before, image_right) > 0
+    turned = Camera((0, 0, 5), (0, 0, 0), (0, 1, 0), mirrored=mirrored)
+    FlyControls().update(turned, 0.0, look_dx=20)
+    assert np.dot(turned.look_at - turned.eye, image_right) > 0

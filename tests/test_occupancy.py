@@ -1,7 +1,6 @@
 """Register caps on NVIDIA GPUs (app/occupancy.py): ptxas's report read per kernel, and the
 caps that would keep more warps resident."""
 
-from pathlib import Path
 
 from pathtrace.occupancy import kernel_registers, register_caps, resident_warps
 

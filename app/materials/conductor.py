@@ -3,7 +3,6 @@ rough one (the GGX microfacet model), with Mitsuba 3's parameters."""
 
 from dataclasses import replace
 
-import numpy as np
 
 from pathtrace.materials.bsdf import DELTA, BSDFType, Param
 from pathtrace.materials.microfacet import GGX_PARAMS, resolve_distribution

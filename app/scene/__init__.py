@@ -14,11 +14,14 @@ def load_scene(name_or_path: str) -> Scene:
     """A scene file path or a built-in scene's name: the two are interchangeable."""
     from pathtrace.scene.builtin import BUILTIN_SCENES, builtin_scene
     from pathtrace.scene.mitsuba import read_mitsuba_file
+    from pathtrace.scene.pbrt import read_pbrt_file
     from pathtrace.scene.toml_reader import read_scene_file
 
     path = Path(name_or_path)
     if path.suffix.lower() == ".xml":
         return read_mitsuba_file(path)
+    if path.name.lower().endswith((".pbrt", ".pbrt.gz")):
+        return read_pbrt_file(path)
     try:
         exists = path.exists()
     except OSError as e:     # a name too long for the file system, say

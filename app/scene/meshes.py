@@ -5,6 +5,8 @@ Texture coordinates follow Mitsuba 3's convention, v = 0 at an image's top row: 
 (u, v) as they are (Mitsuba reads them so); OBJ's vt and glTF's TEXCOORD_0 as Mitsuba's OBJ
 reader and the glTF format place them (trimesh gives both with v = 0 at the bottom: flipped)."""
 
+import gzip
+import io
 import warnings
 from pathlib import Path
 from typing import NamedTuple
@@ -14,7 +16,8 @@ import numpy as np
 from pathtrace.errors import UserError, short, warn
 from pathtrace.files import check_regular_file
 
-FORMATS = (".ply", ".obj", ".stl", ".gltf", ".glb")
+FORMATS = (".ply", ".ply.gz", ".obj", ".stl", ".gltf", ".glb")
+DISK_SEGMENTS = 256       # a disk is a fan of this many triangles (area within 0.01 % of pi r^2)
 MAX_FILE_BYTES = 4 << 30            # a mesh file larger than this is refused before reading
 MAX_TRIANGLES = 64_000_000          # ~6 GB of device memory (docs/performance.md)
 # the largest coordinate a shape may reach: the BVH's float32 surface areas, (2 x)^2, stay finite
@@ -36,7 +39,7 @@ def read_mesh(path: Path, where: str) -> MeshData:
     """A mesh file's vertices, faces, normals and texture coordinates. `where` names the field
     that refers to the file, for messages."""
     path = Path(path)
-    suffix = path.suffix.lower()
+    suffix = ".ply.gz" if path.name.lower().endswith(".ply.gz") else path.suffix.lower()
     if suffix not in FORMATS:
         raise UserError(f"{where}: {path}: unknown mesh format '{path.suffix}' "
                         f"(use {', '.join(FORMATS)})")
@@ -47,6 +50,9 @@ def read_mesh(path: Path, where: str) -> MeshData:
             warnings.simplefilter("ignore")
             if suffix == ".ply":
                 mesh = _read_ply(path)
+            elif suffix == ".ply.gz":           # pbrt-v4's plymesh takes them
+                with gzip.open(path) as f:
+                    mesh = _read_ply(f, path)
             elif suffix == ".obj":
                 mesh = _read_obj(path, f"{where}: {path}")
             else:
@@ -122,14 +128,71 @@ def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
     return normals / np.maximum(np.linalg.norm(normals, axis=1, keepdims=True), 1e-300)
 
 
-def _read_ply(path):
+# PLY's scalar types as NumPy's
+PLY_TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2",
+             "ushort": "u2", "uint16": "u2", "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4",
+             "float": "f4", "float32": "f4", "double": "f8", "float64": "f8"}
+
+
+def _read_binary_triangles(data: bytes, path):
+    """The vertex records and triangles of a binary PLY file whose elements are a vertex of
+    scalar properties and a face of one index list, every face a triangle (what exporters and
+    pbrt's scenes write), as NumPy views of the buffer; None for any other file (plyfile reads
+    those, a Python loop over the faces: 200x slower)."""
+    end = data.find(b"end_header")
+    if not data.startswith(b"ply") or end < 0:
+        return None
+    lines = data[:end].decode("ascii", "replace").splitlines()
+    body = data.find(b"\n", end) + 1
+    fmt = next((line.split() for line in lines if line.startswith("format ")), None)
+    if fmt is None or len(fmt) < 2 or fmt[1] not in ("binary_little_endian", "binary_big_endian"):
+        return None
+    order = "<" if fmt[1] == "binary_little_endian" else ">"
+    elements = []
+    for line in lines:
+        words = line.split()
+        if words[:1] == ["element"] and len(words) == 3 and words[2].isdigit():
+            elements.append((words[1], int(words[2]), []))
+        elif words[:1] == ["property"] and elements:
+            elements[-1][2].append(words[1:])
+    if [e[0] for e in elements] != ["vertex", "face"]:
+        return None
+    (_, n_vertices, vertex_props), (_, n_faces, face_props) = elements
+    if any(len(p) != 2 or p[0] not in PLY_TYPES for p in vertex_props) or len(face_props) != 1:
+        return None
+    face = face_props[0]
+    if len(face) != 4 or face[0] != "list" or face[1] not in PLY_TYPES or face[2] not in PLY_TYPES \
+            or face[3] not in ("vertex_indices", "vertex_index"):
+        return None
+    vertex_type = np.dtype([(name, order + PLY_TYPES[t]) for t, name in vertex_props])
+    face_type = np.dtype([("n", order + PLY_TYPES[face[1]]), ("i", order + PLY_TYPES[face[2]], 3)])
+    need = vertex_type.itemsize * n_vertices + face_type.itemsize * n_faces
+    if body + need > len(data):
+        raise UserError(f"{path}: the PLY file holds {len(data) - body} bytes of data where its header "
+                        f"claims {n_vertices} vertices and {n_faces} faces (at least {need} bytes)")
+    faces = np.frombuffer(data, face_type, n_faces, body + vertex_type.itemsize * n_vertices)
+    if not np.all(faces["n"] == 3):
+        return None
+    return np.frombuffer(data, vertex_type, n_vertices, body), faces["i"].astype(np.int64)
+
+
+def _read_ply(source, path=None):
+    """A PLY mesh from a path, or from a file object `source` read from `path`."""
     from plyfile import PlyData
 
-    ply = PlyData.read(str(path))
-    names = [e.name for e in ply.elements]
-    if "vertex" not in names or "face" not in names:
-        raise UserError(f"{path}: the PLY file has no {'vertex' if 'vertex' not in names else 'face'} element")
-    v = ply["vertex"].data
+    path = path or source
+    data = source.read(MAX_FILE_BYTES + 1) if path is not source else Path(path).read_bytes()
+    if len(data) > MAX_FILE_BYTES:
+        raise UserError(f"{path}: the PLY file decompresses to more than {MAX_FILE_BYTES >> 30} GB")
+    fast = _read_binary_triangles(data, path)
+    if fast is not None:
+        v, triangles = fast
+    else:
+        ply = PlyData.read(io.BytesIO(data))
+        names = [e.name for e in ply.elements]
+        if "vertex" not in names or "face" not in names:
+            raise UserError(f"{path}: the PLY file has no {'vertex' if 'vertex' not in names else 'face'} element")
+        v = ply["vertex"].data
     fields = v.dtype.names
     for k in ("x", "y", "z", "nx", "ny", "nz"):
         if k in fields and v.dtype[k].kind not in "fiu":
@@ -142,6 +205,8 @@ def _read_ply(path):
     if names and any(v.dtype[k].kind not in "fiu" for k in names):
         raise UserError(f"{path}: the PLY vertex property '{names[0]}' must be a number, not a list")
     uvs = np.column_stack([v[names[0]], v[names[1]]]) if names else None
+    if fast is not None:
+        return MeshData(vertices, triangles, normals, uvs)
     face = ply["face"].data
     key = next((k for k in ("vertex_indices", "vertex_index") if k in face.dtype.names), None)
     if key is None:
@@ -269,3 +334,35 @@ def _concatenate(parts):
             return np.concatenate([np.asarray(p[k], np.float64).reshape(-1, width) for p in parts])
         return None
     return MeshData(vertices, faces, joined(2, 3), joined(3, 2))
+
+
+def unit_disk():
+    """Mitsuba's disk, the unit disk in the xy plane facing +z, as a fan of DISK_SEGMENTS
+    triangles with its uvs, u = r and v = phi / 2 pi: each triangle has its own corners, so that
+    v runs on to 1 at the seam and the centre takes its wedge's middle angle."""
+    k = np.arange(DISK_SEGMENTS)
+    a0, a1 = k / DISK_SEGMENTS, (k + 1) / DISK_SEGMENTS
+    rim = lambda a: np.column_stack([np.cos(2 * np.pi * a), np.sin(2 * np.pi * a), np.zeros_like(a)])  # noqa: E731
+    vertices = np.stack([np.zeros((DISK_SEGMENTS, 3)), rim(a0), rim(a1)], axis=1).reshape(-1, 3)
+    uvs = np.stack([np.column_stack([np.zeros_like(a0), (a0 + a1) / 2]), np.column_stack([np.ones_like(a0), a0]),
+                    np.column_stack([np.ones_like(a1), a1])], axis=1).reshape(-1, 2)
+    return vertices, np.arange(3 * DISK_SEGMENTS).reshape(-1, 3), uvs
+
+
+def write_ply(path: Path, vertices, faces, normals=None, uvs=None):
+    """A binary PLY file of a triangle mesh, with its normals and uvs where it has them (as
+    _read_binary_triangles reads it back)."""
+    columns = [("x", vertices[:, 0]), ("y", vertices[:, 1]), ("z", vertices[:, 2])]
+    if normals is not None:
+        columns += [("nx", normals[:, 0]), ("ny", normals[:, 1]), ("nz", normals[:, 2])]
+    if uvs is not None:
+        columns += [("u", uvs[:, 0]), ("v", uvs[:, 1])]
+    records = np.zeros(len(vertices), [(name, "<f4") for name, _ in columns])
+    for name, values in columns:
+        records[name] = values
+    triangles = np.zeros(len(faces), [("n", "u1"), ("i", "<i4", 3)])
+    triangles["n"], triangles["i"] = 3, faces
+    header = "ply\nformat binary_little_endian 1.0\n" + f"element vertex {len(vertices)}\n" \
+        + "".join(f"property float {name}\n" for name, _ in columns) \
+        + f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n"
+    Path(path).write_bytes(header.encode() + records.tobytes() + triangles.tobytes())

@@ -27,7 +27,7 @@ from pathtrace.materials.bsdf import LUMINANCE, constant_of
 from pathtrace.materials.table import check_bump_map
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
-from pathtrace.scene.meshes import MAX_COORDINATE, check_mesh, read_mesh, vertex_normals
+from pathtrace.scene.meshes import MAX_COORDINATE, check_mesh, read_mesh, unit_disk, vertex_normals
 from pathtrace.textures import TEXTURES, Texture, read_image
 
 MAX_XML_BYTES = 64 << 20
@@ -35,7 +35,6 @@ MAX_ELEMENTS = 1_000_000   # in a file and its includes together, as MAX_XML_BYT
 MAX_NESTING = 64           # elements inside elements (a Mitsuba scene needs a handful)
 MAX_INCLUDE_DEPTH = 8
 MAX_FILM = 16384
-DISK_SEGMENTS = 256       # a disk is a fan of this many triangles (area within 0.01 % of pi r^2)
 
 
 @dataclass
@@ -516,9 +515,10 @@ class _Reader:
         eye = m[:3, 3]
         forward, up = m[:3, :3] @ [0, 0, 1.0], m[:3, :3] @ [0, 1.0, 0]
         left = m[:3, :3] @ [1.0, 0, 0]
-        if np.dot(np.cross(up, forward), left) < 0:
-            warn(f"{node.where()}: a mirroring camera transform; pathtrace renders it unmirrored")
         camera = Camera(eye, eye + forward / np.linalg.norm(forward), up)
+        # Mitsuba's camera space has +x to the image's left: a transform that turns it to the
+        # right mirrors the image
+        camera.mirrored = bool(np.dot(np.cross(up, forward), left) < 0)
         if kind == "orthographic":
             # Mitsuba's orthographic view spans [-1, 1] across the film's width in camera space,
             # scaled by to_world
@@ -837,7 +837,7 @@ class _Reader:
         elif kind == "cube":
             vertices, faces, uvs = _cube()
         elif kind == "disk":
-            vertices, faces, uvs = _disk()
+            vertices, faces, uvs = unit_disk()
         elif kind in ("obj", "ply"):
             filename = self.get(props, "filename", kinds=("string",))
             if filename is None:
@@ -897,19 +897,6 @@ def _cube():
             quad = [base, base + 1, base + 2, base + 3] if sign > 0 else [base, base + 3, base + 2, base + 1]
             faces += [[quad[0], quad[1], quad[2]], [quad[0], quad[2], quad[3]]]
     return np.array(vertices), np.array(faces), np.array(uvs)
-
-
-def _disk():
-    """Mitsuba's disk, the unit disk in the xy plane facing +z, as a fan of DISK_SEGMENTS
-    triangles with its uvs, u = r and v = phi / 2 pi: each triangle has its own corners, so that
-    v runs on to 1 at the seam and the centre takes its wedge's middle angle."""
-    k = np.arange(DISK_SEGMENTS)
-    a0, a1 = k / DISK_SEGMENTS, (k + 1) / DISK_SEGMENTS
-    rim = lambda a: np.column_stack([np.cos(2 * np.pi * a), np.sin(2 * np.pi * a), np.zeros_like(a)])  # noqa: E731
-    vertices = np.stack([np.zeros((DISK_SEGMENTS, 3)), rim(a0), rim(a1)], axis=1).reshape(-1, 3)
-    uvs = np.stack([np.column_stack([np.zeros_like(a0), (a0 + a1) / 2]), np.column_stack([np.ones_like(a0), a0]),
-                    np.column_stack([np.ones_like(a1), a1])], axis=1).reshape(-1, 2)
-    return vertices, np.arange(3 * DISK_SEGMENTS).reshape(-1, 3), uvs
 
 
 def read_mitsuba_file(path) -> Scene:

@@ -56,6 +56,12 @@ class _Reader:
             self.fail(where, f"unknown key '{unknown[0]}' (allowed: {', '.join(sorted(allowed))})")
         return data
 
+    def boolean(self, data, key, where, default):
+        value = data.get(key, default)
+        if not isinstance(value, bool):
+            self.fail(f"{where}.{key}", f"must be true or false, got {short(value)}")
+        return value
+
     def number(self, data, key, where, default=None, low=None, high=None, integer=False):
         if key not in data:
             if default is None:
@@ -289,7 +295,7 @@ class _Reader:
     def camera(self, data):
         where = "camera"
         self.table(data, where, {"type", "eye", "look_at", "up", "vfov", "aperture_radius", "focus_distance",
-                                 "height"})
+                                 "height", "mirrored"})
         kind = data.get("type", "perspective")
         if kind not in ("perspective", "thinlens", "orthographic"):
             self.fail("camera.type", f"must be perspective, thinlens or orthographic, got {short(kind)}")
@@ -308,6 +314,7 @@ class _Reader:
                      self.number(data, "aperture_radius", where, default=0.0),
                      self.number(data, "focus_distance", where, default=1.0),
                      self.number(data, "height", where, default=2.0))
+        cam.mirrored = self.boolean(data, "mirrored", where, False)
         try:
             cam.check()
         except ValueError as e:

@@ -118,6 +118,8 @@ def scene_toml(scene: Scene, out: Path) -> str:
         lines += [f"height = {_value(cam.height)}"]
     else:
         lines += [f"vfov = {_value(cam.vfov)}"]
+    if cam.mirrored:
+        lines += ["mirrored = true"]
     if cam.projection == "perspective" and cam.aperture > 0:
         lines += [f"aperture_radius = {_value(cam.aperture)}", f"focus_distance = {_value(cam.focus_distance)}"]
     lines += ["", "[environment]"]

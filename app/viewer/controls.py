@@ -31,17 +31,19 @@ class FlyControls:
         distance = np.linalg.norm(forward)
         forward /= distance
         up = camera.up / np.linalg.norm(camera.up)
+        # the image's right: forward x up, or its opposite for a mirrored camera (a pbrt LookAt)
+        side = -1.0 if camera.mirrored else 1.0
         if look_dx or look_dy:
-            yaw = -np.radians(look_dx * MOUSE_DEGREES_PER_PIXEL)
-            pitch = -np.radians(look_dy * MOUSE_DEGREES_PER_PIXEL)
+            yaw = -side * np.radians(look_dx * MOUSE_DEGREES_PER_PIXEL)
+            pitch = -side * np.radians(look_dy * MOUSE_DEGREES_PER_PIXEL)
             forward = _rotate(forward, up, yaw)
-            right = np.cross(forward, up)
+            right = side * np.cross(forward, up)
             right /= np.linalg.norm(right)
             turned = _rotate(forward, right, pitch)
             if abs(np.dot(turned, up)) < 0.995:     # never look straight up or down
                 forward = turned
             moved = True
-        right = np.cross(forward, up)
+        right = side * np.cross(forward, up)
         right /= np.linalg.norm(right)
         step = np.zeros(3)
         for key in self.held:

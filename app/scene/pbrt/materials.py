@@ -1,0 +1,279 @@
+"""pbrt-v4's materials and textures, mapped onto pathtrace's (app/materials, app/textures) as
+pbrt-v4 means them: roughness remapped as pbrt remaps it, texture coordinates flipped as pbrt's
+image lookups flip them, colours from spectra (app/spectra.py). What pathtrace does not have yet
+is approximated by its nearest material, with one warning each (docs/pbrt.md)."""
+
+import math
+
+import numpy as np
+
+from pathtrace.errors import UserError, warn
+from pathtrace.materials import BSDFS, Material
+from pathtrace.materials.bsdf import TRANSMISSIVE
+from pathtrace.spectra import blackbody_rgb, emission_rgb, named_spectrum, reflectance_rgb, sampled
+from pathtrace.textures import TEXTURES, Texture
+from pathtrace.textures.bitmap import read_image
+
+SMOOTH_ALPHA = 1e-3     # pbrt-v4's TrowbridgeReitzDistribution::EffectivelySmooth
+
+
+def spectrum_rgb(params, name, default, kind="reflectance"):
+    """A colour parameter: rgb, blackbody, a named spectrum, (wavelength, value) pairs or a
+    float; `kind` "reflectance", "illuminant" (luminance 1, as pbrt-v4 normalises a light's
+    spectrum) or "unbounded" (an IOR)."""
+    ptype = params.type_of(name)
+    if ptype is None:
+        return None if default is None else np.broadcast_to(np.asarray(default, np.float64), 3).copy()
+    if ptype in ("rgb", "color"):
+        return np.asarray(params.get(name, (ptype,)), np.float64)
+    if ptype == "float":
+        return np.full(3, params.float(name))
+    if ptype == "blackbody":
+        kelvin = float(params.get(name, ("blackbody",))[0])
+        if kelvin <= 0:
+            params.fail(name, f"a blackbody's temperature must be positive, got {kelvin:g}")
+        return blackbody_rgb(kelvin)
+    if ptype == "spectrum":
+        values = params.get(name, ("spectrum",), 0)
+        if isinstance(values, list):
+            if len(values) != 1:
+                params.fail(name, "a named spectrum is one quoted name")
+            try:
+                rgb, note = named_spectrum(values[0])
+            except KeyError:
+                params.fail(name, f"unknown named spectrum {values[0]!r}")
+            if note:
+                warn(f"{params.where(name)}: {values[0]} is taken as {note}")
+            return rgb
+        if len(values) % 2:
+            params.fail(name, "a spectrum is (wavelength, value) pairs")
+        try:
+            curve = sampled(values)
+        except ValueError as e:
+            params.fail(name, str(e))
+        if kind == "illuminant":
+            return emission_rgb(curve)
+        return reflectance_rgb(curve) if kind == "reflectance" else np.full(3, float(np.mean(curve)))
+    params.fail(name, f"must be a colour (rgb, spectrum, blackbody, float), got {ptype}")
+
+
+def make(kind, values, where) -> Material:
+    """A Material of pathtrace's type `kind`, its values completed and checked by the type."""
+    try:
+        # pbrt's reflecting BSDFs reflect on both sides (Mitsuba's, which pathtrace's follow,
+        # on the front only); glass is two-sided by its own nature
+        return Material(kind, BSDFS[kind].complete(values), twosided=not BSDFS[kind].flags & TRANSMISSIVE)
+    except ValueError as e:
+        raise UserError(f"{where}: {e}") from None
+
+
+class MaterialMapper:
+    """The reader's named textures and materials, and the mapping of pbrt's onto pathtrace's."""
+
+    def __init__(self, reader):
+        self.reader = reader
+        self.textures = {}          # name: Texture or float
+        self.float_textures = {}
+        self.images = {}
+
+    # -- textures --
+
+    def texture_input(self, params, name, default, float_texture=False):
+        """A material's or texture's input: a texture by name, or a constant colour (or float)."""
+        if params.type_of(name) == "texture":
+            ref = params.string(name)
+            table = self.float_textures if float_texture else self.textures
+            if ref not in table:
+                other = self.textures if float_texture else self.float_textures
+                if ref in other:
+                    params.fail(name, f"texture '{ref}' is a {'spectrum' if float_texture else 'float'} texture")
+                params.fail(name, f"no texture named '{ref}'")
+            return table[ref]
+        if float_texture:
+            return params.float(name, default)
+        return spectrum_rgb(params, name, default)
+
+    def define_texture(self, name, kind, cls, params, where):
+        """Texture "name" "spectrum"|"float" "class" ..."""
+        if kind not in ("spectrum", "float"):
+            raise UserError(f"{where}: a texture is \"spectrum\" or \"float\", got {kind!r}")
+        is_float = kind == "float"
+        value = self._texture(cls, params, is_float, where)
+        (self.float_textures if is_float else self.textures)[name] = value
+
+    def _mapping(self, params, where, half=False):
+        """pbrt's uv mapping (su u + du, sv v + dv) as pathtrace's to_uv, on the flipped v that
+        the reader gives meshes: t = 1 - (sv v_pbrt + dv) with v_pbrt = 1 - v."""
+        mapping = params.string("mapping", "uv")
+        if mapping != "uv":
+            warn(f"{where}: pathtrace maps textures by uv only; the {mapping} mapping is taken as uv")
+        su, sv = params.float("uscale", 1.0), params.float("vscale", 1.0)
+        du, dv = params.float("udelta", 0.0), params.float("vdelta", 0.0)
+        m = np.array([[su, 0, du], [0, sv, 1 - sv - dv], [0, 0, 1.0]])
+        if half:
+            m[:2] *= 0.5
+        return m
+
+    def _texture(self, cls, params, is_float, where):
+        inp = lambda n, d: self.texture_input(params, n, d, is_float)      # noqa: E731
+        if cls == "constant":
+            return inp("value", 1.0)
+        if cls == "imagemap":
+            filename = params.string("filename")
+            if filename is None:
+                raise UserError(f"{where}: an imagemap needs a filename")
+            encoding = params.string("encoding", "sRGB")
+            if encoding not in ("sRGB", "linear") and not encoding.startswith("gamma "):
+                raise UserError(f"{where}: 'encoding' must be sRGB, linear or gamma <g>, got {encoding!r}")
+            if encoding.startswith("gamma "):
+                warn(f"{where}: pathtrace decodes 8-bit images as sRGB or linear; {encoding} is taken as sRGB")
+            image = read_image(self.reader.resolve(filename), f"{where}: filename", encoding == "linear",
+                               self.images)
+            wrap = params.string("wrap", "repeat")
+            if wrap not in ("repeat", "clamp", "black", "octahedralsphere"):
+                raise UserError(f"{where}: 'wrap' must be repeat, black, clamp or octahedralsphere, got {wrap!r}")
+            if wrap in ("black", "octahedralsphere"):
+                warn(f"{where}: pathtrace has no {wrap} wrap; it clamps")
+                wrap = "clamp"
+            filt = params.string("filter", "bilinear")
+            if filt not in ("point", "bilinear", "trilinear", "ewa"):
+                raise UserError(f"{where}: 'filter' must be point, bilinear, trilinear or ewa, got {filt!r}")
+            texture = Texture("bitmap", TEXTURES["bitmap"].complete(
+                {"image": image, "wrap": wrap, "filter": "nearest" if filt == "point" else "bilinear",
+                 "to_uv": self._mapping(params, where)}))
+            scale = params.float("scale", 1.0)
+            if scale != 1.0:
+                texture = Texture("scale", TEXTURES["scale"].complete({"tex": texture, "scale": scale}))
+            if params.bool("invert", False):
+                texture = Texture("mix", TEXTURES["mix"].complete({"tex1": 1.0, "tex2": 0.0, "amount": texture}))
+            return texture
+        if cls == "checkerboard":
+            if params.int("dimension", 2) != 2:
+                warn(f"{where}: pathtrace's checkerboard is 2D; the 3D one is taken as 2D")
+            # pbrt's squares are a unit of (s, t) and Mitsuba's half a unit: (s, t) / 2
+            return Texture("checkerboard", TEXTURES["checkerboard"].complete(
+                {"color0": inp("tex1", 1.0), "color1": inp("tex2", 0.0), "to_uv": self._mapping(params, where, True)}))
+        if cls == "scale":
+            return Texture("scale", TEXTURES["scale"].complete(
+                {"tex": inp("tex", 1.0), "scale": self.texture_input(params, "scale", 1.0, True)}))
+        if cls == "mix":
+            return Texture("mix", TEXTURES["mix"].complete(
+                {"tex1": inp("tex1", 0.0), "tex2": inp("tex2", 1.0),
+                 "amount": self.texture_input(params, "amount", 0.5, True)}))
+        if cls == "bilerp":
+            corners = [inp(k, d) for k, d in (("v00", 0.0), ("v01", 1.0), ("v10", 0.0), ("v11", 1.0))]
+            mean = np.mean([np.asarray(c, np.float64) for c in corners if not isinstance(c, Texture)] or [0.5], axis=0)
+            warn(f"{where}: pathtrace has no bilerp texture; it uses the corners' mean")
+            return float(np.mean(mean)) if is_float else np.broadcast_to(mean, 3).copy()
+        warn(f"{where}: pathtrace has no {cls} texture; it uses a constant 0.5 instead")
+        return 0.5 if is_float else np.full(3, 0.5)
+
+    # -- materials --
+
+    def roughness(self, params, where):
+        """pbrt-v4's microfacet alpha from roughness / uroughness / vroughness and
+        remaproughness (alpha = sqrt(roughness): RoughnessToAlpha)."""
+        r = params.float("roughness", 0.0)
+        ru, rv = params.float("uroughness", r), params.float("vroughness", r)
+        for name, v in (("roughness", r), ("uroughness", ru), ("vroughness", rv)):
+            if v < 0 or v > 1e3 or not math.isfinite(v):
+                params.fail(name, f"must lie in [0, 1000], got {v:g}")
+        remap = params.bool("remaproughness", True)
+        au, av = (math.sqrt(ru), math.sqrt(rv)) if remap else (ru, rv)
+        if not math.isclose(au, av, rel_tol=1e-6):
+            warn(f"{where}: anisotropic roughness is not supported yet; pathtrace uses alpha {(au + av) / 2:.3g}")
+        return (au + av) / 2
+
+    def material(self, kind, params, where) -> Material | None:
+        """The Material of a pbrt material, or None for `interface` (and "" / "none"): no
+        surface, only a boundary between media."""
+        if kind in ("interface", "", "none"):
+            return None
+        if kind == "diffuse":
+            return make("diffuse", {"rho_d": self.texture_input(params, "reflectance", 0.5)}, where)
+        if kind == "conductor":
+            return self._conductor(params, where)
+        if kind in ("dielectric", "thindielectric"):
+            eta = self._eta(params, where)
+            alpha = self.roughness(params, where)
+            if kind == "dielectric" and alpha >= SMOOTH_ALPHA:
+                warn(f"{where}: rough glass is not supported yet; pathtrace renders it smooth")
+            if eta == 1.0:
+                warn(f"{where}: a dielectric of eta 1 is invisible; pathtrace leaves the surface out")
+                return None
+            return make(kind, {"int_ior": eta, "ext_ior": 1.0}, where)
+        if kind in ("coateddiffuse", "coatedconductor"):
+            return self._coated(kind, params, where)
+        if kind == "diffusetransmission":
+            warn(f"{where}: diffuse transmission is not supported yet; pathtrace renders its reflection only")
+            return make("diffuse", {"rho_d": self.texture_input(params, "reflectance", 0.25)}, where)
+        if kind == "mix":
+            names = params.get("materials", ("string",), 2)
+            amount = params.float("amount", 0.5)
+            pick = names[1] if amount >= 0.5 else names[0]
+            warn(f"{where}: pathtrace has no mix material yet; it uses '{pick}', the larger share")
+            return self.reader.named_material(pick, where)
+        warn(f"{where}: pathtrace has no {kind} material; it uses a diffuse one of albedo 0.5")
+        return make("diffuse", {"rho_d": np.full(3, 0.5)}, where)
+
+    def _eta(self, params, where) -> float:
+        ptype = params.type_of("eta")
+        if ptype == "spectrum":
+            eta = float(np.mean(spectrum_rgb(params, "eta", None, "unbounded")))
+        else:
+            eta = params.float("eta", 1.5)
+        if not 1e-3 <= eta <= 10 or not math.isfinite(eta):
+            params.fail("eta", f"must lie in [0.001, 10], got {eta:g}")
+        if eta < 1:
+            warn(f"{where}: eta {eta:g} < 1 (the outside denser); pathtrace takes its reciprocal with the normal turned")
+            eta = 1 / eta
+        return eta
+
+    def _conductor(self, params, where):
+        if params.type_of("reflectance") is not None:
+            # pbrt-v4: the Fresnel reflectance of eta 1 and k = 2 sqrt(r) / sqrt(1 - r)
+            r = np.clip(spectrum_rgb(params, "reflectance", 0.0), 0.0, 0.9999)
+            eta, k = np.ones(3), 2 * np.sqrt(r) / np.sqrt(1 - r)
+        else:
+            eta = spectrum_rgb(params, "eta", None, "unbounded")
+            k = spectrum_rgb(params, "k", None, "unbounded")
+            if eta is None:
+                eta = named_spectrum("metal-Cu-eta")[0]        # pbrt-v4's default: copper
+            if k is None:
+                k = named_spectrum("metal-Cu-k")[0]
+        alpha = self.roughness(params, where)
+        values = {"eta": eta, "k": k}
+        if alpha < SMOOTH_ALPHA:
+            return make("conductor", values, where)
+        return make("roughconductor", {**values, "alpha": min(alpha, 1.0), "distribution": "ggx"}, where)
+
+    def _coated(self, kind, params, where):
+        """pbrt-v4's layered materials, until their random walk is in (the BSDF issue): a
+        coateddiffuse as Mitsuba's (rough)plastic of the same reflectance, roughness and IOR, a
+        coatedconductor as its conductor."""
+        alpha = self.roughness(params, where)
+        if kind == "coatedconductor":
+            warn(f"{where}: pathtrace has no layered materials yet; this coatedconductor is rendered as its conductor")
+            inner = {"eta": spectrum_rgb(params, "conductor.eta", named_spectrum("metal-Cu-eta")[0], "unbounded"),
+                     "k": spectrum_rgb(params, "conductor.k", named_spectrum("metal-Cu-k")[0], "unbounded")}
+            if params.type_of("reflectance") is not None:
+                r = np.clip(spectrum_rgb(params, "reflectance", 0.0), 0.0, 0.9999)
+                inner = {"eta": np.ones(3), "k": 2 * np.sqrt(r) / np.sqrt(1 - r)}
+            for name in ("conductor.roughness", "conductor.uroughness", "conductor.vroughness", "interface.eta",
+                         "interface.roughness", "interface.uroughness", "interface.vroughness", "thickness",
+                         "albedo", "g", "maxdepth", "nsamples"):
+                if name in params.params:
+                    params.params[name].used = True
+            return make("conductor", inner, where)
+        warn(f"{where}: pathtrace has no layered materials yet; this coateddiffuse is rendered as Mitsuba's "
+             f"{'rough' if alpha >= SMOOTH_ALPHA else ''}plastic")
+        eta = self._eta(params, where)
+        for name in ("thickness", "albedo", "g", "maxdepth", "nsamples"):
+            if name in params.params:
+                params.params[name].used = True
+        values = {"diffuse_reflectance": self.texture_input(params, "reflectance", 0.5), "int_ior": eta,
+                  "ext_ior": 1.0}
+        if alpha < SMOOTH_ALPHA:
+            return make("plastic", values, where)
+        return make("roughplastic", {**values, "alpha": min(alpha, 1.0), "distribution": "ggx"}, where)
+

@@ -1,0 +1,802 @@
+"""The pbrt-v4 scene reader: directives and the graphics state (pbrt-v4's file format, "pbrt-v4
+User's Guide" and its src/pbrt/scene.cpp), mapped onto pathtrace's scene description.
+
+Conventions, each as pbrt-v4 has it:
+- transforms: `Transform`/`ConcatTransform` take 16 numbers in column-major order; `Rotate`,
+  `Scale`, `Translate`, `LookAt` post-multiply the current transform (CTM);
+- the camera's CTM is camera-from-world; camera space looks down +z with +y up and +x to the
+  image's right, so that a plain `LookAt` gives the mirror image of a right-handed camera
+  (pathtrace's Camera.mirrored); `fov` spans the shorter image axis;
+- `maxdepth` counts bounces: pbrt's N is pathtrace's (Mitsuba's) N + 1 vertices;
+- a triangle's front is its winding's side (turned by `ReverseOrientation`), or where it has
+  normals `N`, their side; an area light emits from its front unless `twosided`;
+- texture coordinates: pbrt looks images up at (u, 1 - v); the reader turns every mesh's v
+  round once, to pathtrace's (Mitsuba's) convention, and maps textures accordingly;
+- filenames are relative to the main file's folder, `Include`d files' too.
+Instances (`ObjectBegin`/`ObjectInstance`) are flattened into world-space copies, which the
+memory check bounds (docs/pbrt.md)."""
+
+import gzip
+import math
+import os
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from pathtrace.camera import Camera
+from pathtrace.environment import Environment
+from pathtrace.errors import UserError, cut, warn
+from pathtrace.files import check_regular_file
+from pathtrace.filters import PixelFilter
+from pathtrace.lights import DirectionalLight, PointLight, SpotLight
+from pathtrace.lights.light import luminance
+from pathtrace.scene import transform
+from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder
+from pathtrace.scene.meshes import MAX_COORDINATE, check_mesh, read_mesh, unit_disk, vertex_normals
+from pathtrace.scene.pbrt.equal_area import to_latlong
+from pathtrace.scene.pbrt.materials import MaterialMapper, make, spectrum_rgb
+from pathtrace.textures import Texture
+from pathtrace.scene.pbrt.tokens import Tokens, numbers, parameters, string
+
+MAX_FILE_BYTES = 4 << 30
+MAX_INCLUDE_DEPTH = 16
+MAX_FILM = 16384
+
+
+@dataclass
+class GraphicsState:
+    ctm: np.ndarray = field(default_factory=lambda: np.eye(4))
+    reverse: bool = False
+    material: object = "default"          # a Material, None (an interface), or "default"
+    area_light: object = None             # (ParamList, where) of an AreaLightSource
+    alpha_warned: bool = False
+
+    def copy(self):
+        return replace(self, ctm=self.ctm.copy())
+
+
+class PbrtReader:
+    def __init__(self, path: Path):
+        self.path = Path(path)
+        self.folder = self.path.parent
+        self.state = GraphicsState()
+        self.stack = []                   # saved states of AttributeBegin / TransformBegin
+        self.named_systems = {}
+        self.named_materials = {}
+        self.mapper = MaterialMapper(self)
+        self.builder = SceneBuilder()
+        self.settings = RenderSettings(width=1280, height=720, spp=16, max_depth=6)
+        self.filter = PixelFilter("gaussian", 1.5, 0.5)        # pbrt-v4's default
+        self.camera_params = None
+        self.environment = None
+        self.lights = []
+        self.objects = {}                 # ObjectBegin name: [(mesh or sphere record)]
+        self.current_object = None
+        self.world = False
+        self.including = []
+        self.material_rows = {}
+        self.warned = set()
+
+    # -- files --
+
+    def resolve(self, name: str) -> Path:
+        p = Path(name)
+        return p if p.is_absolute() else self.folder / p
+
+    def read(self) -> Scene:
+        self.parse_file(self.path, "scene")
+        if self.stack:
+            warn(f"{self.path}: {len(self.stack)} AttributeBegin without AttributeEnd")
+        if not self.builder.spheres and not self.builder.meshes:
+            raise UserError(f"{self.path}: the scene has no shapes pathtrace can render")
+        self.settings.filter = self.filter
+        return self.builder.build(self.path.stem, camera=self.make_camera(),
+                                  environment=self.environment or Environment.constant((0, 0, 0)),
+                                  settings=self.settings, source=str(self.path), lights=self.lights)
+
+    def parse_file(self, path: Path, where: str):
+        if len(self.including) >= MAX_INCLUDE_DEPTH:
+            raise UserError(f"{where}: Include nested more than {MAX_INCLUDE_DEPTH} deep")
+        check_regular_file(path, where, "scene file", MAX_FILE_BYTES)
+        real = os.path.realpath(path)
+        if real in self.including:
+            raise UserError(f"{where}: '{cut(str(path), 100)}' includes itself")
+        try:
+            data = path.read_bytes()
+            if data[:2] == b"\x1f\x8b":
+                data = gzip.decompress(data)
+            text = data.decode("utf-8")
+        except (OSError, EOFError, gzip.BadGzipFile) as e:
+            raise UserError(f"{where}: {path}: cannot be read ({e})") from None
+        except UnicodeDecodeError as e:
+            raise UserError(f"{path}: not a text file (byte {e.start} is not UTF-8)") from None
+        self.including.append(real)
+        tokens = Tokens(text, path)
+        while True:
+            kind, name, offset = tokens.next()
+            if kind == "end":
+                break
+            if kind != "word":
+                tokens.fail(offset, f"expected a directive, got {'a quoted string' if kind == 'string' else kind}")
+            handler = DIRECTIVES.get(name)
+            if handler is None:
+                tokens.fail(offset, f"unknown directive '{cut(name)}'")
+            handler(self, tokens, offset)
+        self.including.pop()
+
+    def once(self, key, message):
+        if key not in self.warned:
+            self.warned.add(key)
+            warn(message)
+
+    def unused(self, params, what):
+        for p in params.unused():
+            warn(f"{params.tokens.where(p.offset)}: '{p.name}' is not a parameter pathtrace's {what} reads; ignored")
+
+    # -- transforms --
+
+    def concat(self, m):
+        self.state.ctm = self.state.ctm @ m
+
+    def _transform(self, tokens, offset, concat):
+        m = numbers(tokens, 16, "Transform").reshape(4, 4).T
+        if abs(np.linalg.det(m[:3, :3])) < 1e-12 or np.any(m[3] != [0, 0, 0, 1]):
+            tokens.fail(offset, "a singular or projective transform")
+        self.state.ctm = self.state.ctm @ m if concat else m
+
+    def _lookat(self, tokens, offset):
+        v = numbers(tokens, 9, "LookAt")
+        eye, look, up = v[:3], v[3:6], v[6:]
+        d = look - eye
+        if np.linalg.norm(d) == 0:
+            tokens.fail(offset, "LookAt: the eye and the point looked at coincide")
+        d = d / np.linalg.norm(d)
+        right = np.cross(up / max(np.linalg.norm(up), 1e-300), d)
+        if np.linalg.norm(right) < 1e-9:
+            tokens.fail(offset, "LookAt: the up vector is parallel to the view direction")
+        right /= np.linalg.norm(right)
+        new_up = np.cross(d, right)
+        world_from_camera = np.eye(4)
+        world_from_camera[:3, 0], world_from_camera[:3, 1], world_from_camera[:3, 2] = right, new_up, d
+        world_from_camera[:3, 3] = eye
+        self.concat(np.linalg.inv(world_from_camera))
+
+    # -- scene-wide options --
+
+    def _camera(self, tokens, offset):
+        kind = string(tokens, "Camera")
+        params = parameters(tokens)
+        self.camera_params = (kind, params, tokens.where(offset), self.state.ctm.copy())
+        self.named_systems["camera"] = np.linalg.inv(self.state.ctm)
+
+    def make_camera(self) -> Camera:
+        """pathtrace's camera for pbrt's, once the film's size is known."""
+        if self.camera_params is None:
+            kind, params, where, ctm = "perspective", None, str(self.path), np.eye(4)
+        else:
+            kind, params, where, ctm = self.camera_params
+        world_from_camera = np.linalg.inv(ctm)
+        r = world_from_camera[:3, :3]
+        eye = world_from_camera[:3, 3]
+        forward, up, right = r @ [0, 0, 1.0], r @ [0, 1.0, 0], r @ [1.0, 0, 0]
+        camera = Camera(eye, eye + forward / np.linalg.norm(forward), up)
+        camera.mirrored = bool(np.dot(np.cross(forward, up), right) < 0)
+        w, h = self.settings.width, self.settings.height
+        if kind not in ("perspective", "orthographic"):
+            warn(f"{where}: pathtrace has no {kind} camera; it uses a perspective one")
+            kind = "perspective"
+        get = (lambda name, default: default) if params is None else \
+            (lambda name, default: params.float(name, default))          # noqa: E731
+        if params is not None and params.type_of("screenwindow"):
+            params.floats("screenwindow")
+            warn(f"{where}: pathtrace frames the image by fov; 'screenwindow' is ignored")
+        if kind == "orthographic":
+            camera.projection = "orthographic"
+            camera.height = 2.0 * np.linalg.norm(up) * (1.0 if w >= h else h / w)
+        else:
+            fov = get("fov", 90.0)
+            if not 0 < fov < 180:
+                params.fail("fov", f"must lie in (0, 180) degrees, got {fov:g}")
+            t = math.tan(math.radians(fov) / 2)
+            camera.vfov = fov if w >= h else math.degrees(2 * math.atan(t * h / w))
+        camera.aperture = get("lensradius", 0.0)
+        camera.focus_distance = get("focaldistance", 1e6)
+        if camera.aperture > 0 and kind == "orthographic":
+            warn(f"{where}: pathtrace's orthographic camera has no lens; 'lensradius' is ignored")
+            camera.aperture = 0.0
+        try:
+            camera.check()
+        except ValueError as e:
+            name, problem = str(e).split(": ", 1)
+            name = {"aperture": "lensradius", "focus_distance": "focaldistance", "vfov": "fov"}.get(name, name)
+            raise UserError(f"{where}: '{name}' {problem}") from None
+        if params is not None:
+            params.float("frameaspectratio")
+            self.unused(params, f"{kind} camera")
+        return camera
+
+    def _film(self, tokens, offset):
+        kind = string(tokens, "Film")
+        params = parameters(tokens)
+        for name, default in (("xresolution", 1280), ("yresolution", 720)):
+            v = params.int(name, default)
+            if not 1 <= v <= MAX_FILM:
+                params.fail(name, f"must be in 1..{MAX_FILM}, got {v}")
+        self.settings.width, self.settings.height = params.int("xresolution", 1280), params.int("yresolution", 720)
+        params.string("filename")
+        for name in ("cropwindow", "pixelbounds"):
+            if params.type_of(name):
+                params.floats(name, ("float", "integer"))
+                warn(f"{params.where(name)}: pathtrace renders the whole film; ignored")
+        if kind not in ("rgb", "gbuffer", "spectral"):
+            warn(f"{tokens.where(offset)}: pathtrace has no {kind} film; it renders RGB")
+        self.unused(params, "film")
+
+    def _sampler(self, tokens, offset):
+        string(tokens, "Sampler")
+        params = parameters(tokens)
+        spp = params.int("pixelsamples", 16)
+        if not 1 <= spp <= 1 << 24:
+            params.fail("pixelsamples", f"must be in 1..{1 << 24}, got {spp}")
+        self.settings.spp = spp
+        for p in params.unused():
+            p.used = True          # the sampler's own settings (seed, randomization) do not apply
+
+    def _integrator(self, tokens, offset):
+        kind = string(tokens, "Integrator")
+        params = parameters(tokens)
+        if kind not in ("path", "volpath"):
+            warn(f"{tokens.where(offset)}: pathtrace renders with its path tracer instead of {kind}")
+        depth = params.int("maxdepth", 5)
+        if not 0 <= depth < 2 ** 31 - 1:
+            params.fail("maxdepth", f"must be in 0..{2 ** 31 - 2}, got {depth}")
+        self.settings.max_depth = depth + 1
+        if params.bool("regularize", False):
+            warn(f"{params.where('regularize')}: pathtrace does not regularize; ignored")
+        sampler = params.string("lightsampler", "bvh")
+        if sampler not in ("bvh", "power", "uniform"):
+            params.fail("lightsampler", f"must be bvh, power or uniform, got {sampler!r}")
+        self.settings.light_sampler = {"bvh": "auto", "power": "power", "uniform": "power"}[sampler]
+        for p in params.unused():
+            p.used = True          # the other integrators' settings
+
+    def _pixel_filter(self, tokens, offset):
+        kind = string(tokens, "PixelFilter")
+        params = parameters(tokens)
+        defaults = {"box": 0.5, "triangle": 2.0, "gaussian": 1.5, "mitchell": 2.0, "lanczos": 4.0}
+        if kind not in defaults:
+            tokens.fail(offset, f"unknown pixel filter '{cut(kind)}' (pbrt-v4 has {', '.join(defaults)})")
+        rx, ry = params.float("xradius", defaults[kind]), params.float("yradius", defaults[kind])
+        if rx != ry:
+            warn(f"{tokens.where(offset)}: pathtrace's filters have one radius; it uses {(rx + ry) / 2:g}")
+        radius = (rx + ry) / 2
+        if kind in ("mitchell", "lanczos"):
+            warn(f"{tokens.where(offset)}: pathtrace has no {kind} filter (its weights go negative); "
+                 "it uses pbrt's gaussian")
+            kind, radius = "gaussian", 1.5
+            for p in params.unused():
+                p.used = True
+        name = {"triangle": "tent"}.get(kind, kind)
+        try:
+            self.filter = PixelFilter(name, radius, params.float("sigma", 0.5)).check()
+        except ValueError as e:
+            raise UserError(f"{tokens.where(offset)}: {e}") from None
+        self.unused(params, f"{kind} filter")
+
+    # -- the graphics state --
+
+    def _attribute_begin(self, tokens, offset):
+        self.stack.append(("attribute", self.state.copy(), offset))
+
+    def _attribute_end(self, tokens, offset):
+        if not self.stack or self.stack[-1][0] != "attribute":
+            tokens.fail(offset, "AttributeEnd without AttributeBegin")
+        self.state = self.stack.pop()[1]
+
+    def _transform_begin(self, tokens, offset):
+        self.stack.append(("transform", self.state.ctm.copy(), offset))
+
+    def _transform_end(self, tokens, offset):
+        if not self.stack or self.stack[-1][0] != "transform":
+            tokens.fail(offset, "TransformEnd without TransformBegin")
+        self.state.ctm = self.stack.pop()[1]
+
+    def _world_begin(self, tokens, offset):
+        self.world = True
+        self.state.ctm = np.eye(4)
+        self.named_systems["world"] = np.eye(4)
+
+    def _material(self, tokens, offset):
+        kind = string(tokens, "Material")
+        params = parameters(tokens)
+        self.state.material = self.mapper.material(kind, params, tokens.where(offset))
+        self.unused(params, f"{kind} material")
+
+    def _make_named_material(self, tokens, offset):
+        name = string(tokens, "MakeNamedMaterial")
+        params = parameters(tokens)
+        kind = params.string("type")
+        if kind is None:
+            tokens.fail(offset, f"MakeNamedMaterial '{cut(name)}' needs a \"string type\"")
+        self.named_materials[name] = self.mapper.material(kind, params, tokens.where(offset))
+        self.unused(params, f"{kind} material")
+
+    def named_material(self, name, where):
+        if name not in self.named_materials:
+            raise UserError(f"{where}: no material named '{cut(name)}'")
+        return self.named_materials[name]
+
+    def _named_material(self, tokens, offset):
+        self.state.material = self.named_material(string(tokens, "NamedMaterial"), tokens.where(offset))
+
+    def _texture(self, tokens, offset):
+        name = string(tokens, "Texture")
+        kind = string(tokens, "Texture")
+        cls = string(tokens, "Texture")
+        params = parameters(tokens)
+        self.mapper.define_texture(name, kind, cls, params, tokens.where(offset))
+        self.unused(params, f"{cls} texture")
+
+    def _area_light(self, tokens, offset):
+        kind = string(tokens, "AreaLightSource")
+        params = parameters(tokens)
+        if kind != "diffuse":
+            tokens.fail(offset, f"unknown area light '{cut(kind)}' (pbrt-v4 has diffuse)")
+        self.state.area_light = (params, tokens.where(offset))
+
+    def _medium(self, tokens, offset):
+        string(tokens, "MakeNamedMedium")
+        parameters(tokens)
+        self.once("media", f"{tokens.where(offset)}: participating media are not supported yet; "
+                           "pathtrace renders the scene without them")
+
+    def _medium_interface(self, tokens, offset):
+        string(tokens, "MediumInterface")
+        if tokens.peek()[0] == "string" and " " not in tokens.peek()[1]:
+            tokens.next()
+
+    def _coordinate_system(self, tokens, offset):
+        self.named_systems[string(tokens, "CoordinateSystem")] = self.state.ctm.copy()
+
+    def _coord_sys_transform(self, tokens, offset):
+        name = string(tokens, "CoordSysTransform")
+        if name not in self.named_systems:
+            tokens.fail(offset, f"no coordinate system named '{cut(name)}'")
+        self.state.ctm = self.named_systems[name].copy()
+
+    def _include(self, tokens, offset):
+        name = string(tokens, "Include")
+        self.parse_file(self.resolve(name), tokens.where(offset))
+
+    def _ignored(what, count=0, takes_params=False):
+        def handler(self, tokens, offset):
+            for _ in range(count):
+                string(tokens, what)
+            if takes_params:
+                parameters(tokens)
+            self.once(what, f"{tokens.where(offset)}: {what} is not supported; ignored")
+        return handler
+
+    def _option(self, tokens, offset):
+        parameters(tokens)
+        self.once("Option", f"{tokens.where(offset)}: Option is not supported; ignored")
+
+    def _transform_times(self, tokens, offset):
+        numbers(tokens, 2, "TransformTimes")
+
+    def _active_transform(self, tokens, offset):
+        kind, value, at = tokens.next()
+        if value not in ("All", "StartTime", "EndTime"):
+            tokens.fail(at, "ActiveTransform takes All, StartTime or EndTime")
+        if value != "All":
+            self.once("motion", f"{tokens.where(offset)}: pathtrace has no motion blur; it uses the start transform")
+
+    # -- instancing --
+
+    def _object_begin(self, tokens, offset):
+        name = string(tokens, "ObjectBegin")
+        if self.current_object is not None:
+            tokens.fail(offset, "ObjectBegin inside another ObjectBegin")
+        self._attribute_begin(tokens, offset)
+        self.current_object = name
+        self.objects[name] = []
+
+    def _object_end(self, tokens, offset):
+        if self.current_object is None:
+            tokens.fail(offset, "ObjectEnd without ObjectBegin")
+        self.current_object = None
+        self._attribute_end(tokens, offset)
+
+    def _object_instance(self, tokens, offset):
+        name = string(tokens, "ObjectInstance")
+        if name not in self.objects:
+            tokens.fail(offset, f"no object named '{cut(name)}'")
+        m = self.state.ctm
+        for record in self.objects[name]:
+            if isinstance(record, Mesh):
+                faces = record.faces[:, ::-1] if transform.flips_handedness(m) else record.faces
+                vertices = transform.transform_points(m, record.vertices)
+                self.check_extent(vertices, tokens.where(offset))
+                normals = None if record.normals is None else transform.transform_normals(m, record.normals)
+                self.builder.add_mesh(replace(record, vertices=vertices.astype(np.float32), faces=faces,
+                                              normals=None if normals is None else normals.astype(np.float32)))
+            else:
+                center, radius, row, sphere_name = record
+                scale = float(np.mean(np.linalg.norm(m[:3, :3], axis=0)))
+                self.builder.add_sphere(transform.transform_points(m, center[None])[0], radius * scale, row, sphere_name)
+
+    # -- shapes --
+
+    def material_row(self, emission=None, alpha=1.0):
+        """The row of the current material, with a shape's emission and alpha (a row of its own
+        where either is given)."""
+        material = self.state.material
+        if isinstance(material, str):
+            material = make("diffuse", {"rho_d": np.full(3, 0.5)}, "")      # pbrt-v4's default
+            self.state.material = material
+        if material is None:
+            material = make("black", {}, "")
+        if alpha is not None and not (isinstance(alpha, float) and alpha == 1.0):
+            if not isinstance(alpha, Texture) and not 0 <= alpha <= 1:
+                raise UserError(f"'alpha' must lie in [0, 1], got {alpha:g}")
+            material = replace(material, opacity=alpha)
+            if emission is None:
+                return self.builder.material(material)
+        if emission is not None:
+            return self.builder.material(replace(material, emission=emission))
+        if id(material) not in self.material_rows:
+            self.material_rows[id(material)] = (self.builder.material(material), material)
+        return self.material_rows[id(material)][0]
+
+    def check_extent(self, vertices, where):
+        if np.any(np.abs(vertices) > MAX_COORDINATE):
+            raise UserError(f"{where}: the shape reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace")
+
+    def _shape(self, tokens, offset):
+        kind = string(tokens, "Shape")
+        params = parameters(tokens)
+        where = tokens.where(offset)
+        if self.state.material is None and self.state.area_light is None:
+            for p in params.params.values():
+                p.used = True
+            self.once(("interface", where), f"{where}: a shape of the interface material only bounds media; "
+                                            "pathtrace leaves it out")
+            return
+        mesh = self.shape_mesh(kind, params, where)
+        if mesh is None:
+            return
+        vertices, faces, normals, uvs, source = mesh
+        emission, twosided = self.area_emission(vertices, faces, where)
+        if self.current_object is not None and emission is not None:
+            warn(f"{where}: pbrt-v4 has no area lights in instances; this shape does not emit")
+            emission = None
+        alpha = self.mapper.texture_input(params, "alpha", 1.0, float_texture=True) \
+            if params.type_of("alpha") else 1.0
+        row = self.material_row(emission, alpha)
+        self.unused(params, f"{kind} shape")
+        name = Path(source).stem if source else f"{kind} {len(self.builder.meshes)}"
+        if kind == "sphere":
+            center, radius = vertices
+            target = self.objects[self.current_object] if self.current_object is not None else None
+            if target is not None:
+                target.append((center, radius, row, name))
+            else:
+                self.builder.add_sphere(center, radius, row, name)
+            return
+        if twosided:
+            faces = np.concatenate([faces, faces[:, ::-1]])
+        # no MeshFile: the file's faces were turned and its uvs flipped, which a converted
+        # scene's reference to the file could not say (convert writes the mesh anew)
+        record = Mesh(name, vertices.astype(np.float32), faces.astype(np.int32),
+                      None if normals is None else normals.astype(np.float32), row, source, None,
+                      None if uvs is None else uvs.astype(np.float32))
+        if self.current_object is not None:
+            self.objects[self.current_object].append(record)
+        else:
+            self.builder.add_mesh(record)
+
+
+    def shape_mesh(self, kind, params, where):
+        """(vertices, faces, normals, uvs, file) in world space, fronts as pbrt has them; for a
+        sphere (center, radius) and None. None for a shape pathtrace leaves out."""
+        m = self.state.ctm
+        if kind == "sphere":
+            radius = params.float("radius", 1.0)
+            if radius <= 0:
+                params.fail("radius", f"must be positive, got {radius:g}")
+            for name, default in (("zmin", -radius), ("zmax", radius), ("phimax", 360.0)):
+                if params.float(name, default) != default:
+                    warn(f"{params.where(name)}: pathtrace's spheres are whole; the partial sphere is rendered whole")
+            scales = np.linalg.norm(m[:3, :3], axis=0)
+            if not np.allclose(scales, scales[0], rtol=1e-5):
+                warn(f"{where}: a non-uniformly scaled sphere; pathtrace renders a sphere of the mean scale")
+            if self.state.reverse:
+                warn(f"{where}: pathtrace's spheres face outwards; ReverseOrientation is ignored")
+            center = m[:3, 3].copy()
+            r = radius * float(np.mean(scales))
+            self.check_extent(np.abs(center) + r, where)
+            return (center, r), None, None, None, ""
+        source, normals, uvs = "", None, None
+        if kind == "trianglemesh":
+            p = params.get("P", ("point3", "point"), 0)
+            if p is None:
+                raise UserError(f"{where}: a trianglemesh needs \"point3 P\"")
+            vertices = p.reshape(-1, 3)
+            idx = params.get("indices", ("integer",), 0)
+            if idx is None:
+                if len(vertices) != 3:
+                    raise UserError(f"{where}: a trianglemesh needs \"integer indices\" unless it has 3 vertices")
+                idx = np.arange(3)
+            if len(idx) % 3:
+                params.fail("indices", f"takes triangles, 3 indices each; got {len(idx)}")
+            faces = idx.reshape(-1, 3)
+            normals, uvs = self.vertex_attributes(params, len(vertices))
+            vertices, faces, normals, uvs = check_mesh(vertices, faces, normals, uvs, where)
+        elif kind == "bilinearmesh":
+            p = params.get("P", ("point3", "point"), 0)
+            if p is None:
+                raise UserError(f"{where}: a bilinearmesh needs \"point3 P\"")
+            vertices = p.reshape(-1, 3)
+            idx = params.get("indices", ("integer",), 0)
+            if idx is None:
+                if len(vertices) != 4:
+                    raise UserError(f"{where}: a bilinearmesh needs \"integer indices\" unless it has 4 vertices")
+                idx = np.arange(4)
+            if len(idx) % 4:
+                params.fail("indices", f"takes patches, 4 indices each; got {len(idx)}")
+            q = idx.reshape(-1, 4)
+            # corners p00, p10, p01, p11: two triangles of the patch's orientation
+            faces = np.concatenate([q[:, [0, 1, 3]], q[:, [0, 3, 2]]])
+            normals, uvs = self.vertex_attributes(params, len(vertices))
+            vertices, faces, normals, uvs = check_mesh(vertices, faces, normals, uvs, where)
+        elif kind in ("plymesh",):
+            filename = params.string("filename")
+            if filename is None:
+                raise UserError(f"{where}: a plymesh needs a filename")
+            source = str(self.resolve(filename))
+            vertices, faces, normals, uvs = read_mesh(self.resolve(filename), f"{where}: filename")
+            if uvs is not None:
+                uvs = np.column_stack([uvs[:, 0], 1 - uvs[:, 1]])
+            for name in ("displacement", "edgelength"):
+                if params.type_of(name):
+                    params.get(name, (params.type_of(name),), 0)
+                    warn(f"{params.where(name)}: pathtrace does not displace meshes; ignored")
+        elif kind == "disk":
+            radius = params.float("radius", 1.0)
+            if radius <= 0:
+                params.fail("radius", f"must be positive, got {radius:g}")
+            if params.float("innerradius", 0.0) != 0 or params.float("phimax", 360.0) != 360:
+                warn(f"{where}: pathtrace's disks are whole; innerradius and phimax are ignored")
+            vertices, faces, uvs = unit_disk()
+            vertices = vertices * [radius, radius, 1.0]
+            vertices[:, 2] = params.float("height", 0.0)
+            uvs = None
+        elif kind == "loopsubdiv":
+            p = params.get("P", ("point3", "point"), 0)
+            idx = params.get("indices", ("integer",), 0)
+            if p is None or idx is None or len(idx) % 3:
+                raise UserError(f"{where}: a loopsubdiv needs \"point3 P\" and \"integer indices\" (triangles)")
+            params.int("levels", 3)
+            warn(f"{where}: pathtrace does not subdivide; the control mesh is rendered with smooth normals")
+            vertices, faces, normals, uvs = check_mesh(p.reshape(-1, 3), idx.reshape(-1, 3), None, None, where)
+            normals = vertex_normals(vertices, faces)
+        else:
+            for p in params.params.values():
+                p.used = True
+            warn(f"{where}: pathtrace has no {kind} shape; it leaves it out")
+            return None
+        vertices = transform.transform_points(m, vertices)
+        self.check_extent(vertices, where)
+        if transform.flips_handedness(m):
+            faces = faces[:, ::-1]
+        if normals is not None:
+            normals = transform.transform_normals(m, normals)
+            if self.state.reverse:
+                normals = -normals
+            faces = self.orient_by_normals(vertices, faces, normals)
+        elif self.state.reverse:
+            faces = faces[:, ::-1]
+        return vertices, faces, normals, uvs, source
+
+    def vertex_attributes(self, params, count):
+        n = params.get("N", ("normal", "normal3"), 0)
+        uv = params.get("uv", ("point2", "float"), 0)
+        if n is not None and len(n) != 3 * count:
+            params.fail("N", f"has {len(n) // 3} normals for {count} vertices")
+        if uv is not None and len(uv) != 2 * count:
+            params.fail("uv", f"has {len(uv) // 2} uvs for {count} vertices")
+        for name in ("S", "faceIndices"):
+            if params.type_of(name):
+                params.get(name, (params.type_of(name),), 0)
+        uvs = None if uv is None else np.column_stack([uv[0::2], 1 - uv[1::2]])
+        return None if n is None else n.reshape(-1, 3), uvs
+
+    @staticmethod
+    def orient_by_normals(vertices, faces, normals):
+        """pbrt-v4 turns a triangle's geometric normal to its shading normals' side: the
+        winding that agrees with them."""
+        p = vertices[faces]
+        winding = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+        shading = normals[faces].sum(axis=1)
+        flip = np.einsum("ij,ij->i", winding, shading) < 0
+        faces = faces.copy()
+        faces[flip] = faces[flip][:, ::-1]
+        return faces
+
+    def area_emission(self, vertices, faces, where):
+        """The emitted radiance of a shape under an AreaLightSource, and whether it emits from
+        both sides."""
+        if self.state.area_light is None:
+            return None, False
+        params, light_where = self.state.area_light
+        if params.type_of("filename"):
+            params.string("filename")
+            warn(f"{light_where}: pathtrace's area lights have no image; it uses L")
+        le = spectrum_rgb(params, "L", 1.0, "illuminant") * params.float("scale", 1.0)
+        twosided = params.bool("twosided", False)
+        power = params.float("power", -1.0)
+        if power > 0 and faces is not None:
+            p = vertices[faces]
+            area = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1).sum()
+            lum = luminance(le)
+            if area > 0 and lum > 0:
+                le = le * power / (math.pi * (2 if twosided else 1) * area * lum)
+        if np.any(le < 0):
+            params.fail("L", "an emitted radiance must not be negative")
+        self.unused(params, "diffuse area light")
+        return le, twosided
+
+    # -- lights --
+
+    def _light(self, tokens, offset):
+        kind = string(tokens, "LightSource")
+        params = parameters(tokens)
+        where = tokens.where(offset)
+        m = self.state.ctm
+        scale = params.float("scale", 1.0)
+        if kind in ("point", "spot"):
+            color = spectrum_rgb(params, "I", 1.0, "illuminant") * scale
+            p_from = params.point("from", np.zeros(3))
+            position = transform.transform_points(m, p_from[None])[0]
+            power = params.float("power", -1.0)
+            if kind == "point":
+                if power > 0:
+                    color = color * power / (4 * math.pi)
+                light = PointLight(position, color)
+            else:
+                p_to = params.point("to", np.array([0, 0, 1.0]))
+                cone, delta = params.float("coneangle", 30.0), params.float("conedelta", 5.0)
+                if power > 0:
+                    cos_end, cos_start = math.cos(math.radians(cone)), math.cos(math.radians(cone - delta))
+                    color = color * power / (2 * math.pi * (1 - 0.5 * (cos_start + cos_end)))
+                light = SpotLight(position, m[:3, :3] @ (p_to - p_from), color, cone,
+                                  min(max(cone - delta, 0.0), cone), "smoothstep")
+        elif kind == "distant":
+            color = spectrum_rgb(params, "L", 1.0, "illuminant") * scale
+            p_from = params.point("from", np.zeros(3))
+            p_to = params.point("to", np.array([0, 0, 1.0]))
+            illuminance = params.float("illuminance", -1.0)
+            if illuminance > 0:
+                color = color * illuminance
+            light = DirectionalLight(m[:3, :3] @ (p_to - p_from), color)
+        elif kind == "infinite":
+            self.infinite_light(params, where, scale)
+            self.unused(params, "infinite light")
+            return
+        else:
+            for p in params.params.values():
+                p.used = True
+            warn(f"{where}: pathtrace has no {kind} light; it leaves it out")
+            return
+        try:
+            light.check()
+        except ValueError as e:
+            name, problem = str(e).split(": ", 1)
+            pbrt_name = {"intensity": "I", "irradiance": "L", "direction": "to",
+                         "cutoff_angle": "coneangle", "beam_width": "conedelta"}.get(name, name)
+            raise UserError(f"{where}: '{pbrt_name}' {problem}") from None
+        self.lights.append(light)
+        self.unused(params, f"{kind} light")
+
+    def infinite_light(self, params, where, scale):
+        if self.environment is not None:
+            warn(f"{where}: a second infinite light; pathtrace keeps the first")
+            for p in params.params.values():
+                p.used = True
+            return
+        if params.type_of("portal"):
+            params.floats("portal", ("point3", "point"))
+            warn(f"{params.where('portal')}: pathtrace does not sample portals; the light is sampled whole")
+        if params.type_of("illuminance"):
+            params.float("illuminance")
+            warn(f"{params.where('illuminance')}: pathtrace does not normalise by illuminance; ignored")
+        filename = params.string("filename")
+        if filename is not None:
+            if params.type_of("L"):
+                params.fail("L", "an infinite light takes L or a filename, not both")
+            from pathtrace.image_io import read_hdr
+            path = self.resolve(filename)
+            image = read_hdr(path, f"{where}: filename")
+            if image.shape[0] != image.shape[1]:
+                raise UserError(f"{where}: {path}: pbrt-v4's environment maps are square (equal-area), "
+                                f"got {image.shape[1]}x{image.shape[0]}")
+            latlong = to_latlong(image[..., :3], np.linalg.inv(self.state.ctm[:3, :3]))
+            self.environment = Environment(latlong, scale, 0.0, str(path), resampled=True)
+            return
+        color = spectrum_rgb(params, "L", 1.0, "illuminant") * scale
+        if np.any(color < 0):
+            params.fail("L", "must not be negative")
+        self.environment = Environment.constant(color)
+
+    def _reverse_orientation(self, tokens, offset):
+        self.state.reverse = not self.state.reverse
+
+
+def _three(what, make):
+    def handler(self, tokens, offset):
+        self.concat(make(numbers(tokens, 3, what)))
+    return handler
+
+
+def _rotate(self, tokens, offset):
+    v = numbers(tokens, 4, "Rotate")
+    if np.linalg.norm(v[1:]) == 0:
+        tokens.fail(offset, "Rotate: the axis is zero")
+    self.concat(transform.rotation(v[1:], v[0]))
+
+
+def _scale_directive(self, tokens, offset):
+    v = numbers(tokens, 3, "Scale")
+    if np.any(v == 0):
+        tokens.fail(offset, "Scale: a zero factor flattens everything after it")
+    self.concat(transform.scaling(v))
+
+
+DIRECTIVES = {
+    "Identity": lambda self, tokens, offset: setattr(self.state, "ctm", np.eye(4)),
+    "Translate": _three("Translate", transform.translation),
+    "Scale": _scale_directive,
+    "Rotate": _rotate,
+    "LookAt": PbrtReader._lookat,
+    "Transform": lambda self, tokens, offset: self._transform(tokens, offset, False),
+    "ConcatTransform": lambda self, tokens, offset: self._transform(tokens, offset, True),
+    "CoordinateSystem": PbrtReader._coordinate_system,
+    "CoordSysTransform": PbrtReader._coord_sys_transform,
+    "TransformTimes": PbrtReader._transform_times,
+    "ActiveTransform": PbrtReader._active_transform,
+    "ReverseOrientation": PbrtReader._reverse_orientation,
+    "Camera": PbrtReader._camera,
+    "Film": PbrtReader._film,
+    "Sampler": PbrtReader._sampler,
+    "Integrator": PbrtReader._integrator,
+    "PixelFilter": PbrtReader._pixel_filter,
+    "Accelerator": PbrtReader._ignored("Accelerator", 1, True),
+    "ColorSpace": PbrtReader._ignored("ColorSpace", 1),
+    "Option": PbrtReader._option,
+    "WorldBegin": PbrtReader._world_begin,
+    "WorldEnd": lambda self, tokens, offset: None,          # pbrt-v3's; v4 accepts and ignores it
+    "AttributeBegin": PbrtReader._attribute_begin,
+    "AttributeEnd": PbrtReader._attribute_end,
+    "TransformBegin": PbrtReader._transform_begin,
+    "TransformEnd": PbrtReader._transform_end,
+    "Attribute": PbrtReader._ignored("Attribute", 1, True),
+    "Material": PbrtReader._material,
+    "MakeNamedMaterial": PbrtReader._make_named_material,
+    "NamedMaterial": PbrtReader._named_material,
+    "Texture": PbrtReader._texture,
+    "AreaLightSource": PbrtReader._area_light,
+    "LightSource": PbrtReader._light,
+    "Shape": PbrtReader._shape,
+    "MakeNamedMedium": PbrtReader._medium,
+    "MediumInterface": PbrtReader._medium_interface,
+    "ObjectBegin": PbrtReader._object_begin,
+    "ObjectEnd": PbrtReader._object_end,
+    "ObjectInstance": PbrtReader._object_instance,
+    "Include": PbrtReader._include,
+    "Import": PbrtReader._include,
+}
+
+
+def read_pbrt_file(path) -> Scene:
+    return PbrtReader(Path(path)).read()

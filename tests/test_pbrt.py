@@ -1,0 +1,277 @@
+"""The pbrt-v4 reader (app/scene/pbrt): each convention of pbrt-v4's format against what it
+means, a translated Mitsuba reference scene against Mitsuba's render, and bad input."""
+
+import gzip
+import math
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pathtrace.errors import UserError
+from pathtrace.materials.optics import CONDUCTORS
+from pathtrace.renderer import Renderer
+from pathtrace.scene import load_scene
+from pathtrace.scene.pbrt.equal_area import sphere_to_square
+from pathtrace.spectra import blackbody_rgb, named_spectrum, reflectance_rgb, sampled
+from tests.stats import z_test
+
+SCENES = Path(__file__).parent / "scenes"
+FLOOR = 'Shape "trianglemesh" "point3 P" [ -1 0 -1  1 0 -1  1 0 1  -1 0 1 ] "integer indices" [ 0 2 1  0 3 2 ]\n'
+
+
+def scene(tmp_path, body, head="", name="s.pbrt"):
+    path = tmp_path / name
+    path.write_text(head + "\nWorldBegin\n" + body)
+    return load_scene(str(path))
+
+
+def fails(tmp_path, text, name="s.pbrt") -> str:
+    path = tmp_path / name
+    path.write_text(text)
+    with pytest.raises(UserError) as e:
+        load_scene(str(path))
+    message = str(e.value)
+    assert "\n" not in message
+    return message
+
+
+# -- a Mitsuba reference, translated --
+
+def test_the_cornell_box_renders_as_mitsuba_renders_its_xml(backend):
+    """tests/scenes/cbox.pbrt is cbox.xml in pbrt's terms (handedness, fov, transform order,
+    maxdepth, instances): its render passes the Z-test against Mitsuba 3's of the XML."""
+    ref = np.load(Path(__file__).parent / "references" / "cbox.npz")
+    pbrt = load_scene(str(SCENES / "cbox.pbrt"))
+    assert pbrt.settings.max_depth == int(ref["max_depth"]) == 8
+    h, w, _ = ref["mean"].shape
+    r = Renderer(backend, pbrt.with_settings(russian_roulette="off"), w, h)
+    for _ in range(16):
+        r.add_samples(128)
+    r.finish()
+    ok, p, threshold = z_test(r.mean(), r.variance() / r.samples, ref["mean"], ref["var_of_mean"], block=4)
+    assert ok, f"smallest p-value {p:.3g} below the Sidak threshold {threshold:.3g}"
+
+
+# -- conventions --
+
+def test_a_plain_lookat_is_a_mirrored_camera_and_scale_minus_x_undoes_it(tmp_path):
+    look = "LookAt 0 1 5  0 1 0  0 1 0\nCamera \"perspective\"\n"
+    plain = scene(tmp_path, FLOOR, look).camera
+    assert plain.mirrored
+    forward, right, up = plain.basis(1.0)
+    assert np.allclose(forward, [0, 0, -1]) and up[1] > 0
+    # pbrt's image right is camera +x = cross(up, dir) = -x here; pathtrace's unmirrored right is +x
+    assert right[0] < 0
+    flipped = scene(tmp_path, FLOOR, "Scale -1 1 1\n" + look).camera
+    assert not flipped.mirrored and flipped.basis(1.0)[1][0] > 0
+
+
+@pytest.mark.parametrize("width,height", [(200, 100), (100, 200)])
+def test_fov_spans_the_shorter_image_axis(tmp_path, width, height):
+    head = (f'Film "rgb" "integer xresolution" {width} "integer yresolution" {height}\n'
+            'LookAt 0 1 5  0 1 0  0 1 0\nCamera "perspective" "float fov" 40\n')
+    camera = scene(tmp_path, FLOOR, head).camera
+    half = math.tan(math.radians(camera.vfov) / 2)
+    shorter = half if height <= width else half * width / height
+    assert shorter == pytest.approx(math.tan(math.radians(20)))
+
+
+def test_transforms_are_column_major_and_compose_in_the_order_written(tmp_path):
+    s = scene(tmp_path, 'AttributeBegin\nTransform [ 1 0 0 0  0 1 0 0  0 0 1 0  1 2 3 1 ]\n'
+                        'Shape "sphere" "float radius" 0.5\nAttributeEnd\n'
+                        'AttributeBegin\nTranslate 1 0 0\nScale 2 2 2\nShape "sphere"\nAttributeEnd\n'
+                        'AttributeBegin\nTranslate 0 0 5\nConcatTransform [ 1 0 0 0  0 1 0 0  0 0 1 0  0 1 0 1 ]\n'
+                        'Shape "sphere"\nAttributeEnd\nShape "sphere" "float radius" 3\n')
+    assert np.allclose(s.spheres, [[1, 2, 3, 0.5], [1, 0, 0, 2], [0, 1, 5, 1], [0, 0, 0, 3]])
+
+
+def test_maxdepth_counts_bounces(tmp_path):
+    assert scene(tmp_path, FLOOR, 'Integrator "path" "integer maxdepth" 3\n').settings.max_depth == 4
+    assert scene(tmp_path, FLOOR).settings.max_depth == 6            # pbrt's default 5
+
+
+def test_named_spectra_blackbodies_and_sampled_spectra(tmp_path):
+    s = scene(tmp_path, 'Material "conductor" "spectrum eta" "metal-Au-eta" "spectrum k" "metal-Au-k"\n' + FLOOR)
+    m = s.materials.get(s.meshes[0].material)
+    assert m.type == "conductor"
+    assert np.allclose(m.params["eta"], CONDUCTORS["Au"][0]) and np.allclose(m.params["k"], CONDUCTORS["Au"][1])
+    assert named_spectrum("glass-BK7")[0][0] == pytest.approx(1.5168)
+    white = blackbody_rgb(6504.0)
+    y = 0.2126 * white[0] + 0.7152 * white[1] + 0.0722 * white[2]
+    # a 6504 K blackbody lies on the Planckian locus, just below D65 (a little magenta)
+    assert y == pytest.approx(1.0, abs=0.01) and np.ptp(white) < 0.1 and white[1] < min(white[0], white[2])
+    warm = blackbody_rgb(2700.0)
+    assert warm[0] > warm[1] > warm[2]
+    constant = sampled(np.array([300.0, 0.4, 900.0, 0.4]))
+    assert np.allclose(reflectance_rgb(constant), 0.4)
+
+
+def test_roughness_is_remapped_as_pbrt_remaps_it(tmp_path):
+    def alpha(params):
+        s = scene(tmp_path, f'Material "conductor" {params}\n' + FLOOR)
+        return s.materials.get(s.meshes[0].material).params["alpha"]
+    assert alpha('"float roughness" 0.25') == pytest.approx(0.5)
+    assert alpha('"float roughness" 0.25 "bool remaproughness" false') == pytest.approx(0.25)
+
+
+def test_fronts_follow_the_normals_or_reverse_orientation(tmp_path):
+    """The light's winding faces +y; with normals N pointing down, pbrt's front is down."""
+    quad = '"point3 P" [ -1 0 -1  1 0 -1  1 0 1  -1 0 1 ] "integer indices" [ 0 2 1  0 3 2 ]'
+    down = '"normal N" [ 0 -1 0  0 -1 0  0 -1 0  0 -1 0 ]'
+
+    def normal(body):
+        m = scene(tmp_path, body).meshes[0]
+        p = m.vertices[m.faces[0]]
+        n = np.cross(p[1] - p[0], p[2] - p[0])
+        return np.sign(n[1])
+    assert normal(f'Shape "trianglemesh" {quad}\n') == 1
+    assert normal(f'ReverseOrientation\nShape "trianglemesh" {quad}\n') == -1
+    assert normal(f'Shape "trianglemesh" {quad} {down}\n') == -1
+    assert normal(f'ReverseOrientation\nShape "trianglemesh" {quad} {down}\n') == 1
+
+
+def test_texture_coordinates_are_flipped_as_pbrt_looks_images_up(tmp_path):
+    m = scene(tmp_path, 'Shape "trianglemesh" "point3 P" [ 0 0 0  1 0 0  0 1 0 ] "point2 uv" [ 0 0  1 0  0 0.25 ]\n').meshes[0]
+    assert np.allclose(m.uvs, [[0, 1], [1, 1], [0, 0.75]])
+
+
+def test_instances_are_placed_by_their_transforms(tmp_path):
+    s = scene(tmp_path, 'ObjectBegin "tri"\nShape "trianglemesh" "point3 P" [ 0 0 0  1 0 0  0 1 0 ]\nObjectEnd\n'
+                        'AttributeBegin\nTranslate 10 0 0\nObjectInstance "tri"\nAttributeEnd\n'
+                        'AttributeBegin\nTranslate 0 0 -4\nScale 2 2 2\nObjectInstance "tri"\nAttributeEnd\n')
+    assert len(s.meshes) == 2
+    assert np.allclose(s.meshes[0].vertices, [[10, 0, 0], [11, 0, 0], [10, 1, 0]])
+    assert np.allclose(s.meshes[1].vertices, [[0, 0, -4], [2, 0, -4], [0, 2, -4]])
+
+
+def test_include_is_relative_to_the_main_file(tmp_path):
+    (tmp_path / "parts").mkdir()
+    (tmp_path / "parts" / "floor.pbrt").write_text(FLOOR)
+    (tmp_path / "parts" / "more.pbrt").write_text('Include "parts/floor.pbrt"\n')
+    s = scene(tmp_path, 'Include "parts/more.pbrt"\nImport "parts/floor.pbrt"\n')
+    assert len(s.meshes) == 2
+
+
+def test_lights_as_pbrt_places_and_scales_them(tmp_path):
+    s = scene(tmp_path, 'LightSource "point" "point3 from" [ 0 2 0 ] "rgb I" [ 1 2 3 ] "float scale" 2\n'
+                        'AttributeBegin\nTranslate 0 5 0\n'
+                        'LightSource "spot" "point3 from" [ 0 0 0 ] "point3 to" [ 0 -1 0 ] "float coneangle" 40 '
+                        '"float conedelta" 10\nAttributeEnd\n'
+                        'LightSource "distant" "point3 from" [ 0 1 0 ] "point3 to" [ 0 0 0 ] "blackbody L" 5000 '
+                        '"float illuminance" 3\n' + FLOOR)
+    point, spot, sun = s.lights
+    assert np.allclose(point.position, [0, 2, 0]) and np.allclose(point.intensity, [2, 4, 6])
+    assert np.allclose(spot.position, [0, 5, 0]) and np.allclose(spot.direction, [0, -1, 0])
+    assert (spot.cutoff_angle, spot.beam_width, spot.falloff) == (40, 30, "smoothstep")
+    assert np.allclose(sun.direction, [0, -1, 0])
+    y = 0.2126 * sun.irradiance[0] + 0.7152 * sun.irradiance[1] + 0.0722 * sun.irradiance[2]
+    assert y == pytest.approx(3.0, rel=0.01)
+
+
+def test_the_equal_area_square_is_pbrts_layout_and_equal_area():
+    d = np.array([[0, 0, 1.0], [1.0, 0, 0], [0, 1.0, 0], [0, 0, -1.0]])
+    assert np.allclose(sphere_to_square(d)[:3], [[0.5, 0.5], [1, 0.5], [0.5, 1]])
+    assert np.allclose(np.abs(sphere_to_square(d)[3] - 0.5), 0.5)          # -z at the corners
+    rng = np.random.default_rng(1)
+    v = rng.normal(size=(200_000, 3))
+    uv = sphere_to_square(v / np.linalg.norm(v, axis=1, keepdims=True))
+    counts, _, _ = np.histogram2d(uv[:, 0], uv[:, 1], bins=10, range=[[0, 1], [0, 1]])
+    expected = len(v) / 100
+    chi2 = ((counts - expected) ** 2 / expected).sum()
+    assert chi2 < 150          # 99 degrees of freedom: p < 1e-3 beyond 148
+
+
+def test_an_equal_area_map_is_resampled_through_the_lights_transform(tmp_path):
+    """A map bright only around light-space +z, turned by Rotate -90 about x, is bright at the
+    lat-long map's top (+y)."""
+    from pathtrace.image_io import _write_exr
+    n = 32
+    square = np.zeros((n, n, 3), np.float32)
+    square[n // 2 - 2:n // 2 + 2, n // 2 - 2:n // 2 + 2] = 100.0
+    _write_exr(str(tmp_path / "sky.exr"), square)
+    s = scene(tmp_path, 'AttributeBegin\nRotate -90 1 0 0\nLightSource "infinite" "string filename" "sky.exr"\n'
+                        'AttributeEnd\n' + FLOOR)
+    env = s.environment.image
+    assert env.shape == (n, 2 * n, 3)
+    rows = env.mean(axis=(1, 2))
+    assert rows[0] > 10 and rows[n // 2:].max() == 0
+
+
+def test_convert_writes_a_pbrt_scene_as_toml_that_reads_the_same(tmp_path):
+    from pathtrace.scene.toml_writer import scene_toml
+    s = load_scene(str(SCENES / "cbox.pbrt"))
+    out = tmp_path / "cbox.toml"
+    out.write_text(scene_toml(s, out))
+    t = load_scene(str(out))
+    assert t.camera.mirrored == s.camera.mirrored and t.triangle_count == s.triangle_count
+    assert all(np.allclose(a, b) for a, b in zip(t.camera.basis(1.0), s.camera.basis(1.0)))
+
+
+# -- bad input: one line naming the file and line --
+
+@pytest.mark.parametrize("text,expected", [
+    ('Shape "trianglemesh" "point3 P" [ 0 0 0  1 0 0', "unterminated '['"),
+    ('WorldBegin\nShape "trianglemesh\n', "s.pbrt:2: an unterminated string"),
+    ('WorldBegin\nFrobnicate 1 2 3\n', "s.pbrt:2: unknown directive 'Frobnicate'"),
+    ('Camera "perspective" "float fov" [ "wide" ]\nWorldBegin\n', "float values must be numbers"),
+    ('LookAt 0 0 0  0 0 1  0 1\nWorldBegin\n', "expected a number"),
+    ('Camera "perspective" "float fov" [ 1e40 ]\nWorldBegin\n', "beyond what float32 holds"),
+    ('Camera "perspective" "point3 fov" [ 1 2 ]\nWorldBegin\n', "groups of 3"),
+    ('WorldBegin\nShape "sphere" "integer radius" [ 1.5 ]\n', "whole numbers"),
+    ('WorldBegin\nShape "sphere" "float radius" [ 1 2 ]\n', "takes 1 value"),
+    ('WorldBegin\nShape "sphere" "float radius" -1\n', "'radius': must be positive"),
+    ('WorldBegin\nAttributeEnd\n', "AttributeEnd without AttributeBegin"),
+    ('WorldBegin\nNamedMaterial "nothing"\n', "no material named 'nothing'"),
+    ('WorldBegin\nLightSource "spot" "float coneangle" 200\n' + FLOOR, "'coneangle'"),
+    ('WorldBegin\nLightSource "point" "rgb I" [ -1 1 1 ]\n' + FLOOR, "'I'"),
+    ('WorldBegin\nLightSource "distant" "point3 to" [ 0 0 0 ]\n' + FLOOR, "'to'"),
+    ('Camera "perspective" "float lensradius" -1\nWorldBegin\n' + FLOOR, "'lensradius'"),
+    ('PixelFilter "gaussian" "float xradius" 0 "float yradius" 0\nWorldBegin\n', "radius"),
+    ('WorldBegin\n' + FLOOR.replace("0 3 2", "0 3 9"), "refers to vertex"),
+])
+def test_bad_input_is_one_line_naming_the_file(tmp_path, text, expected):
+    message = fails(tmp_path, text)
+    assert "s.pbrt" in message and expected in message, message
+
+
+def test_an_include_cycle_and_a_fifo_are_refused(tmp_path):
+    (tmp_path / "a.pbrt").write_text('Include "b.pbrt"\n')
+    (tmp_path / "b.pbrt").write_text('Include "a.pbrt"\n')
+    assert "includes itself" in fails(tmp_path, 'WorldBegin\nInclude "a.pbrt"\n')
+    os.mkfifo(tmp_path / "fifo.pbrt")
+    assert "fifo.pbrt" in fails(tmp_path, 'WorldBegin\nInclude "fifo.pbrt"\n', "t.pbrt")
+
+
+def test_a_ply_gz_that_is_not_gzip_and_a_huge_vertex_claim_are_refused(tmp_path):
+    (tmp_path / "bad.ply.gz").write_bytes(b"ply\nformat ascii 1.0\nend_header\n")
+    assert "bad.ply.gz" in fails(tmp_path, 'WorldBegin\nShape "plymesh" "string filename" "bad.ply.gz"\n')
+    header = (b"ply\nformat binary_little_endian 1.0\nelement vertex 1099511627776\nproperty float x\n"
+              b"property float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+              b"end_header\n")
+    (tmp_path / "huge.ply.gz").write_bytes(gzip.compress(header + b"\0" * 64))
+    assert "huge.ply.gz" in fails(tmp_path, 'WorldBegin\nShape "plymesh" "string filename" "huge.ply.gz"\n')
+
+
+def test_convert_writes_turned_meshes_and_resampled_maps_beside_the_toml(tmp_path):
+    """A mesh with normals (which TOML cannot hold inline) and the lat-long form of an
+    equal-area map go to files beside the TOML; the converted scene reads the same."""
+    import subprocess
+    import sys
+
+    from pathtrace.image_io import _write_exr
+    _write_exr(str(tmp_path / "sky.exr"), np.full((8, 8, 3), 0.5, np.float32))
+    (tmp_path / "s.pbrt").write_text(
+        'LookAt 0 2 5  0 0 0  0 1 0\nCamera "perspective"\nWorldBegin\n'
+        'LightSource "infinite" "string filename" "sky.exr"\n'
+        'Shape "trianglemesh" "point3 P" [ -1 0 -1  1 0 -1  1 0 1  -1 0 1 ] "integer indices" [ 0 2 1  0 3 2 ]'
+        ' "normal N" [ 0 -1 0  0 -1 0  0 -1 0  0 -1 0 ] "point2 uv" [ 0 0  1 0  1 1  0 1 ]\n')
+    r = subprocess.run([sys.executable, "-m", "pathtrace", "convert", str(tmp_path / "s.pbrt"), "-o",
+                        str(tmp_path / "out.toml")], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert (tmp_path / "out.environment.exr").is_file() and list((tmp_path / "out.meshes").glob("*.ply"))
+    a, b = load_scene(str(tmp_path / "s.pbrt")), load_scene(str(tmp_path / "out.toml"))
+    assert b.camera.mirrored and np.allclose(a.environment.image, b.environment.image)
+    for name in ("vertices", "faces", "normals", "uvs"):
+        assert np.allclose(getattr(a.meshes[0], name), getattr(b.meshes[0], name)), name
