@@ -73,8 +73,7 @@ class CompiledScene:
         counts = [len(m.faces) for m in meshes]
         mesh_of = np.repeat(np.arange(len(meshes)), counts).astype(np.int64)
         self.triangles = np.zeros(len(triangle_order), TRIANGLE)
-        for k, field in enumerate(("v0", "v1", "v2")):
-            self.triangles[field][:, :3] = corners[triangle_order, k]
+        self.triangles.view(np.float32).reshape(-1, 3, 4)[:, :, :3] = corners[triangle_order]
         # per-corner shading normals and texture coordinates, in BVH order, for the triangles of
         # meshes that have them; the others' index is -1
         normals, normal_index = corner_table(meshes, "normals", triangle_order)
@@ -110,7 +109,8 @@ class CompiledScene:
         emission = self.materials["emission"][:, :3].astype(np.float64)
         check_radiance(self.scene)
         prim_emission = emission[self.prim_material]
-        corners = np.stack([self.triangles[f][:, :3] for f in ("v0", "v1", "v2")], axis=1)
+        # the corners as a view of the triangles' rows (v0, v1, v2 are consecutive float4s), not a copy
+        corners = self.triangles.view(np.float32).reshape(-1, 3, 4)[:, :, :3]
         power = emitted_power(self.spheres, corners, prim_emission[:self.num_spheres],
                               prim_emission[self.num_spheres:])
         self.lights: LightTable = build_light_table(power, self.scene.environment, self.scene.lights,
@@ -159,17 +159,18 @@ def corner_table(meshes: list, attribute: str, triangle_order: np.ndarray) -> tu
     triangle corner in BVH order (at least one row, as buffers cannot be empty), and each
     triangle's index of its first corner there, or -1 for a triangle of a mesh without it."""
     width = 3 if attribute == "normals" else 2
-    parts, has = [], []
-    for m in meshes:
-        values = getattr(m, attribute)
-        parts.append(values[m.faces] if values is not None else None)
-        has.append(np.full(len(m.faces), values is not None))
-    if not any(p is not None for p in parts):
+    having = [m for m in meshes if getattr(m, attribute) is not None]
+    if not having:
         return np.zeros((1, width), np.float32), np.full(len(triangle_order), -1, np.int32)
-    per_triangle = np.concatenate([p if p is not None else np.zeros((len(m.faces), 3, width), np.float32)
-                                   for p, m in zip(parts, meshes)])
-    with_it = np.concatenate(has)[triangle_order]
-    table = per_triangle[triangle_order[with_it]].reshape(-1, width).astype(np.float32)
+    # the meshes' values end to end, their faces indexing them, and each triangle's rank among
+    # the triangles that have values: one gather in BVH order, no per-triangle copy before it
+    values = np.concatenate([getattr(m, attribute) for m in having]).astype(np.float32)
+    starts = np.cumsum([0] + [len(getattr(m, attribute)) for m in having[:-1]])
+    faces = np.concatenate([m.faces + start for m, start in zip(having, starts)])
+    has = np.concatenate([np.full(len(m.faces), getattr(m, attribute) is not None) for m in meshes])
+    rank = np.cumsum(has) - 1
+    with_it = has[triangle_order]
+    table = values[faces[rank[triangle_order[with_it]]]].reshape(-1, width)
     index = np.full(len(triangle_order), -1, np.int32)
     index[with_it] = np.arange(np.count_nonzero(with_it), dtype=np.int32) * 3
     return (table if len(table) else np.zeros((1, width), np.float32)), index

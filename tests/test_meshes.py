@@ -168,3 +168,40 @@ def test_nan_indices_and_huge_coordinates_print_nothing_but_our_line(tmp_path):
     assert "whole numbers" in subprocess.run(
         [sys.executable, "-m", "pathtrace", "render", tmp_path / "n.ply.toml", "-o", tmp_path / "o.exr"],
         capture_output=True, text=True, timeout=120).stderr
+
+
+@pytest.mark.parametrize("order", ["<", ">"])
+def test_binary_ply_read_as_views_equals_plyfiles_reading(tmp_path, order):
+    """The NumPy reader of binary triangle PLYs (both byte orders, extra properties, double
+    coordinates, ushort counts) gives what plyfile gives; a quad sends the file to plyfile."""
+    from plyfile import PlyData, PlyElement
+
+    from pathtrace.scene.meshes import _read_binary_triangles
+    rng = np.random.default_rng(3)
+    v = np.zeros(5, [("x", "f8"), ("y", "f8"), ("z", "f8"), ("confidence", "f4"), ("nx", "f4"), ("ny", "f4"),
+                     ("nz", "f4"), ("s", "f4"), ("t", "f4")])
+    for name in v.dtype.names:
+        v[name] = rng.random(5)
+    faces = np.array([([0, 1, 2],), ([1, 3, 2],), ([2, 3, 4],)], [("vertex_indices", "i4", (3,))])
+    path = tmp_path / "m.ply"
+    PlyData([PlyElement.describe(v, "vertex"), PlyElement.describe(faces, "face", len_types={"vertex_indices": "u2"})],
+            byte_order=order).write(str(path))
+    assert _read_binary_triangles(path.read_bytes(), path) is not None
+    mesh = read_mesh(path, "test")
+    assert np.allclose(mesh.vertices, np.column_stack([v["x"], v["y"], v["z"]]))
+    assert np.allclose(mesh.normals, np.column_stack([v["nx"], v["ny"], v["nz"]]))
+    assert np.allclose(mesh.uvs, np.column_stack([v["s"], v["t"]]))
+    assert np.array_equal(mesh.faces, [[0, 1, 2], [1, 3, 2], [2, 3, 4]])
+    quads = np.array([([0, 1, 3, 2],)], [("vertex_indices", "i4", (4,))])
+    PlyData([PlyElement.describe(v, "vertex"), PlyElement.describe(quads, "face")], byte_order=order).write(str(path))
+    assert _read_binary_triangles(path.read_bytes(), path) is None
+    assert np.array_equal(read_mesh(path, "test").faces, [[0, 1, 3], [0, 3, 2]])
+
+
+def test_a_binary_ply_shorter_than_its_header_says_is_refused(tmp_path):
+    path = tmp_path / "short.ply"
+    path.write_bytes(b"ply\nformat binary_little_endian 1.0\nelement vertex 1099511627776\nproperty float x\n"
+                     b"property float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                     b"end_header\n" + b"\0" * 64)
+    with pytest.raises(UserError, match="short.ply: the PLY file holds 64 bytes of data where its header claims"):
+        read_mesh(path, "test")

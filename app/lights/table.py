@@ -77,9 +77,11 @@ def emitted_power(spheres, triangles, emission_of_sphere, emission_of_triangle):
     surface 4 pi r^2; a triangle's front, whose area is half its edges' cross product)."""
     r = spheres[:, 3].astype(np.float64)
     sphere_power = (emission_of_sphere @ LUMINANCE) * np.pi * 4 * np.pi * r ** 2
-    t = triangles.astype(np.float64)
+    triangle_power = emission_of_triangle @ LUMINANCE
+    lit = np.flatnonzero(triangle_power > 0)      # the areas of emitters only: most emit nothing
+    t = triangles[lit].astype(np.float64)
     area = 0.5 * np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1)
-    triangle_power = (emission_of_triangle @ LUMINANCE) * np.pi * area
+    triangle_power[lit] *= np.pi * area
     return np.concatenate([sphere_power, triangle_power])
 
 

@@ -6,11 +6,12 @@ from pathtrace.materials.basic import Black, Diffuse, Phong
 from pathtrace.materials.bsdf import DELTA
 from pathtrace.materials.conductor import Conductor, RoughConductor
 from pathtrace.materials.dielectric import Dielectric, ThinDielectric
+from pathtrace.materials.diffusetransmission import DiffuseTransmission
 from pathtrace.materials.plastic import Plastic, RoughPlastic
 
 BSDFS = {cls.name: cls() for cls in (Black, Diffuse, Phong, Conductor, RoughConductor,
                                      Dielectric, ThinDielectric, Plastic,
-                                     RoughPlastic)}
+                                     RoughPlastic, DiffuseTransmission)}
 TAGS = {name: i for i, name in enumerate(BSDFS)}
 
 

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pathtrace.errors import UserError, short
-from pathtrace.materials.bsdf import MASKED, TWOSIDED, constant_of
+from pathtrace.materials.bsdf import MASKED, TRANSMISSIVE, TWOSIDED, constant_of
 from pathtrace.materials.registry import BSDFS, TAGS
 from pathtrace.textures.texture import Texture
 from pathtrace.types import MATERIAL
@@ -88,6 +88,10 @@ def pack(type_name: str, params: dict, emission=(0, 0, 0), twosided=False) -> np
     or an (N,) array. Parameters left out take their defaults; named choices must have been
     resolved (BSDFType.resolve)."""
     bsdf = BSDFS[type_name]
+    if twosided and bsdf.flags & TRANSMISSIVE:
+        # Mitsuba 3 refuses the combination too: a transmissive BSDF already has two sides, and
+        # turning its frame round for back hits would send light through glass the wrong way
+        raise ValueError(f"a {type_name} cannot be two-sided: it transmits, and is seen from both sides already")
     values = {p.name: _as_rows(params.get(p.name, p.default), p.kind)
               for p in bsdf.params if p.kind != "name"}
     emission = _as_rows(emission, "color")

@@ -23,7 +23,7 @@ from pathtrace.errors import UserError, cut, short, warn
 from pathtrace.filters import FILTERS, PixelFilter
 from pathtrace.lights import DELTA_LIGHTS, DirectionalLight, PointLight, SpotLight
 from pathtrace.materials import BSDFS, Material
-from pathtrace.materials.bsdf import LUMINANCE, constant_of
+from pathtrace.materials.bsdf import LUMINANCE, TRANSMISSIVE, constant_of
 from pathtrace.materials.table import check_bump_map
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
@@ -684,6 +684,8 @@ class _Reader:
             if not inner:
                 _fail(node, "needs a nested <bsdf>")
             m = self.material(inner[0])
+            if BSDFS[m.type].flags & TRANSMISSIVE:
+                _fail(node, f"a twosided BSDF cannot hold a {m.type}: it transmits (Mitsuba 3 refuses it too)")
             m.twosided = True
             return m
         if kind == "mask":

@@ -18,7 +18,7 @@ from pathtrace.lights import DELTA_LIGHTS, LIGHT_SAMPLERS
 from pathtrace.environment import Environment
 from pathtrace.errors import UserError, short
 from pathtrace.materials import BSDFS, Material
-from pathtrace.materials.bsdf import constant_of
+from pathtrace.materials.bsdf import TRANSMISSIVE, constant_of
 from pathtrace.materials.table import check_bump_map
 from pathtrace.resources import resource_dir
 from pathtrace.scene import transform
@@ -212,6 +212,8 @@ class _Reader:
             if "bsdf" not in data:
                 self.fail(where, "missing 'bsdf' (the material to make two-sided)")
             inner = self.material(data["bsdf"], f"{where}.bsdf")
+            if BSDFS[inner.type].flags & TRANSMISSIVE:
+                self.fail(f"{where}.bsdf", f"a {inner.type} cannot be two-sided: it transmits")
             inner.twosided = True
             return inner
         bsdf = FILE_TYPES[kind]
@@ -222,9 +224,9 @@ class _Reader:
             values = bsdf.complete(given)
         except ValueError as e:
             self.fail(where, str(e))
-        twosided = data.get("twosided", False)
-        if not isinstance(twosided, bool):
-            self.fail(f"{where}.twosided", f"must be true or false, got {short(twosided)}")
+        twosided = self.boolean(data, "twosided", where, False)
+        if twosided and bsdf.flags & TRANSMISSIVE:
+            self.fail(f"{where}.twosided", f"a {kind} cannot be two-sided: it transmits, and is seen from both sides already")
         emission = self.color_or_texture(data, "Le", where, default=(0, 0, 0))
         material = Material(kind, values, emission, twosided, self.opacity(data, where))
         self.shading_maps(data, where, material)

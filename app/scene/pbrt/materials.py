@@ -205,8 +205,15 @@ class MaterialMapper:
         if kind in ("coateddiffuse", "coatedconductor"):
             return self._coated(kind, params, where)
         if kind == "diffusetransmission":
-            warn(f"{where}: diffuse transmission is not supported yet; pathtrace renders its reflection only")
-            return make("diffuse", {"rho_d": self.texture_input(params, "reflectance", 0.25)}, where)
+            scale = params.float("scale", 1.0)
+            values = {}
+            for name in ("reflectance", "transmittance"):
+                value = self.texture_input(params, name, 0.25)
+                if scale != 1.0:
+                    value = Texture("scale", TEXTURES["scale"].complete({"tex": value, "scale": scale})) \
+                        if isinstance(value, Texture) else value * scale
+                values[name] = value
+            return make("diffusetransmission", values, where)
         if kind == "mix":
             names = params.get("materials", ("string",), 2)
             amount = params.float("amount", 0.5)

@@ -617,9 +617,13 @@ class PbrtReader:
         """pbrt-v4 turns a triangle's geometric normal to its shading normals' side: the
         winding that agrees with them."""
         p = vertices[faces]
-        winding = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
-        shading = normals[faces].sum(axis=1)
-        flip = np.einsum("ij,ij->i", winding, shading) < 0
+        a, b = (p[:, 1] - p[:, 0]).T, (p[:, 2] - p[:, 0]).T
+        n = normals[faces[:, 0]] + normals[faces[:, 1]] + normals[faces[:, 2]]
+        # (a x b) . n, written out: np.cross costs more than the products on small meshes
+        flip = (a[1] * b[2] - a[2] * b[1]) * n[:, 0] + (a[2] * b[0] - a[0] * b[2]) * n[:, 1] \
+            + (a[0] * b[1] - a[1] * b[0]) * n[:, 2] < 0
+        if not flip.any():
+            return faces
         faces = faces.copy()
         faces[flip] = faces[flip][:, ::-1]
         return faces

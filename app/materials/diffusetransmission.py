@@ -1,0 +1,34 @@
+"""Diffuse transmission (pbrt-v4's `diffusetransmission`): Lambertian reflection and
+transmission with their own colours; kernels/bsdfs/diffusetransmission.cl."""
+
+import numpy as np
+
+from pathtrace.materials.bsdf import TRANSMISSIVE, BSDFType, Param
+
+
+class DiffuseTransmission(BSDFType):
+    name = "diffusetransmission"
+    params = (Param("reflectance", "color", default=0.25, high=1.0, doc="R: the share reflected, f = R / pi",
+                    slot="p0.xyz"),
+              Param("transmittance", "color", default=0.25, high=1.0,
+                    doc="T: the share transmitted, f = T / pi through the surface", slot="p1.xyz"))
+    flags = TRANSMISSIVE
+    doc = ("Lambertian reflection and transmission, the same from either side (pbrt-v4's "
+           "diffusetransmission); reflectance + transmittance <= 1 in each channel")
+
+    def check(self, values):
+        total = values["reflectance"] + values["transmittance"]
+        if np.any(total > 1 + 1e-6):
+            return (f"reflectance + transmittance must not exceed 1 in any channel (energy conservation), "
+                    f"got {[round(float(x), 6) for x in np.ravel(total)[:3]]}")
+        return None
+
+    def pack(self, values, rows):
+        rows["p0"][:, :3] = values["reflectance"]
+        rows["p1"][:, :3] = values["transmittance"]
+
+    def unpack(self, row):
+        return {"reflectance": row["p0"][:3].copy(), "transmittance": row["p1"][:3].copy()}
+
+    def continuation(self, values):
+        return np.minimum(np.max(values["reflectance"] + values["transmittance"], axis=-1), 1.0)
