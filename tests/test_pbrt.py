@@ -39,15 +39,18 @@ def fails(tmp_path, text, name="s.pbrt") -> str:
 
 # -- a Mitsuba reference, translated --
 
-def test_the_cornell_box_renders_as_mitsuba_renders_its_xml(backend):
-    """tests/scenes/cbox.pbrt is cbox.xml in pbrt's terms (handedness, fov, transform order,
-    maxdepth, instances): its render passes the Z-test against Mitsuba 3's of the XML."""
-    ref = np.load(Path(__file__).parent / "references" / "cbox.npz")
-    pbrt = load_scene(str(SCENES / "cbox.pbrt"))
+@pytest.mark.parametrize("name", ["cbox", "meshes-smaller", "meshes-larger"])
+def test_translations_of_mitsuba_scenes_render_as_mitsuba_renders_the_xml(backend, name):
+    """tests/scenes/<name>.pbrt is <name>.xml in pbrt's terms (handedness, the fov's axis,
+    transform order, maxdepth, instances, a PLY mesh, a sphere, an infinite light): its render
+    passes the Z-test against Mitsuba 3's render of the XML."""
+    ref = np.load(Path(__file__).parent / "references" / f"{name}.npz")
+    pbrt = load_scene(str(SCENES / f"{name}.pbrt"))
     assert pbrt.settings.max_depth == int(ref["max_depth"]) == 8
     h, w, _ = ref["mean"].shape
+    assert (pbrt.settings.width, pbrt.settings.height) == (w, h)
     r = Renderer(backend, pbrt.with_settings(russian_roulette="off"), w, h)
-    for _ in range(16):
+    for _ in range(8):
         r.add_samples(128)
     r.finish()
     ok, p, threshold = z_test(r.mean(), r.variance() / r.samples, ref["mean"], ref["var_of_mean"], block=4)
