@@ -15,7 +15,7 @@ from pathtrace.bvh import BVH, build_bvh, primitive_boxes
 from pathtrace.errors import UserError, format_bytes, short
 from pathtrace.features import FLAT_MAX, Features, stack_size
 from pathtrace.lights import LightTable, build_light_table, emitted_power, primitive_bounds
-from pathtrace.materials import TAGS
+from pathtrace.materials import BSDFS, TAGS
 from pathtrace.memory import available_host_memory
 from pathtrace.camera import Camera, kernel_name
 from pathtrace.scene.description import RenderSettings, Scene
@@ -133,8 +133,11 @@ class CompiledScene:
     def features(self, settings: RenderSettings, camera: Camera) -> Features:
         """What the kernels need for this scene: triangles or not, the material and light types
         it uses, and the Russian roulette rule, pixel filter and camera of its settings."""
-        used = np.unique(self.materials["type"][np.unique(self.prim_material)])
-        return Features(triangles=self.num_triangles > 0,
+        rows = self.materials[np.unique(self.prim_material)]
+        used = np.unique(rows["type"])
+        variants = tuple(sorted({d for name, tag in TAGS.items() if tag in used
+                                 for d in BSDFS[name].defines(rows[rows["type"] == tag])}))
+        return Features(triangles=self.num_triangles > 0, bsdf_defines=variants,
                         bsdfs=tuple(name for name, tag in TAGS.items() if tag in used),
                         textures=self.textures.types, masks=self.textures.masks,
                         normal_maps=self.textures.normal_maps, lights=self.lights.types,

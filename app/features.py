@@ -27,13 +27,21 @@ class Features:
     stack: int = 48                        # BVH traversal stack entries the tree can need
     flat: tuple = ()                       # (spheres, triangles) of a scene of at most FLAT_MAX
                                            # primitives, which rays test all, with no tree
+    bsdf_defines: tuple = None             # the variants its materials need (BSDFType.defines,
+                                           # such as BECKMANN); None: all
 
     def defines(self) -> tuple:
         return ((() if self.triangles else ("NO_TRIANGLES",)) + (("TEXTURES",) if self.textures else ())
                 + (("ALPHA_MASKS",) if self.masks else ()) + (("NORMAL_MAPS",) if self.normal_maps else ())
                 + (("LIGHT_TREE",) if self.light_tree else ())
                 + (f"RUSSIAN_ROULETTE=RR_{self.russian_roulette.upper()}", f"BVH_STACK_SIZE={self.stack}")
-                + ((f"FLAT_SPHERES={self.flat[0]}", f"FLAT_TRIANGLES={self.flat[1]}") if self.flat else ()))
+                + ((f"FLAT_SPHERES={self.flat[0]}", f"FLAT_TRIANGLES={self.flat[1]}") if self.flat else ())
+                + (self.bsdf_defines if self.bsdf_defines is not None else all_bsdf_defines()))
+
+
+def all_bsdf_defines() -> tuple:
+    from pathtrace.materials import BSDFS
+    return tuple(sorted({d for b in BSDFS.values() for d in b.variant_defines}))
 
 
 FLAT_MAX = 8

@@ -1,4 +1,6 @@
-/* The GGX (Trowbridge-Reitz) microfacet distribution with Smith shadowing, isotropic roughness
+/* Microfacet distributions: GGX and Beckmann, isotropic roughness alpha, with Smith shadowing.
+ *
+ * The GGX (Trowbridge-Reitz) microfacet distribution with Smith shadowing, isotropic roughness
  * alpha, in the local frame (z the macro-surface normal): Walter et al., "Microfacet Models for
  * Refraction through Rough Surfaces", EGSR 2007; sampled by visible normals after Heitz,
  * "Sampling the GGX Distribution of Visible Normals", JCGT 7(4), 2018. Shadowing is Smith's
@@ -46,4 +48,111 @@ float3 sample_ggx_visible(float3 wo, float alpha, float u1, float u2)
     p2 = (1.0f - s) * sqrt(fmax(0.0f, 1.0f - p1 * p1)) + s * p2;
     float3 nh = p1 * t1 + p2 * t2 + sqrt(fmax(0.0f, 1.0f - p1 * p1 - p2 * p2)) * vh;
     return unit((float3)(alpha * nh.x, alpha * nh.y, fmax(1e-6f, nh.z)));
+}
+
+/* The Beckmann distribution (Walter et al. 2007, eq. 25), Mitsuba 3's default for its rough
+ * materials: D(m) = exp(-tan^2 theta_m / a^2) / (pi a^2 cos^4 theta_m). */
+float beckmann_d(float3 m, float alpha)
+{
+    if (m.z <= 0.0f)
+        return 0.0f;
+    float a2 = alpha * alpha, cos2 = m.z * m.z;
+    float tan2 = (m.x * m.x + m.y * m.y) / cos2;
+    return exp(-tan2 / a2) / (PI_F * a2 * cos2 * cos2);
+}
+
+/* Smith's G1 for Beckmann by Walter's rational approximation of 1 / (1 + Lambda) (Walter et al.
+ * 2007, eq. 27; within 0.35 %), as Mitsuba 3 computes it: a = 1 / (alpha tan theta_v). */
+float beckmann_g1(float3 v, float3 m, float alpha)
+{
+    if (dot(v, m) * v.z <= 0.0f)
+        return 0.0f;
+    float xy2 = v.x * v.x + v.y * v.y;
+    if (xy2 <= 0.0f)
+        return 1.0f;
+    float a = fabs(v.z) * rsqrt(xy2) / alpha;
+    if (a >= 1.6f)
+        return 1.0f;
+    return (3.535f * a + 2.181f * a * a) / (1.0f + 2.276f * a + 2.577f * a * a);
+}
+
+/* erf^-1(x), x in (-1, 1): Giles, "Approximating the erfinv function", GPU Computing Gems
+ * (2011), single precision, within a few float32 ulps. */
+float erfinv_approx(float x)
+{
+    float w = -log((1.0f - x) * (1.0f + x)), p;
+    if (w < 5.0f) {
+        w -= 2.5f;
+        p = 2.81022636e-08f;
+        p = fma(p, w, 3.43273939e-07f); p = fma(p, w, -3.5233877e-06f);
+        p = fma(p, w, -4.39150654e-06f); p = fma(p, w, 0.00021858087f);
+        p = fma(p, w, -0.00125372503f); p = fma(p, w, -0.00417768164f);
+        p = fma(p, w, 0.246640727f); p = fma(p, w, 1.50140941f);
+    } else {
+        w = sqrt(w) - 3.0f;
+        p = -0.000200214257f;
+        p = fma(p, w, 0.000100950558f); p = fma(p, w, 0.00134934322f);
+        p = fma(p, w, -0.00367342844f); p = fma(p, w, 0.00573950773f);
+        p = fma(p, w, -0.0076224613f); p = fma(p, w, 0.00943887047f);
+        p = fma(p, w, 1.00167406f); p = fma(p, w, 2.83297682f);
+    }
+    return p * x;
+}
+
+/* A microfacet slope of the Beckmann distribution of alpha 1 seen from a direction at
+ * cos theta (its visible slopes, x towards the direction): Jakob, "An Improved Visible Normal
+ * Sampling Routine for the Beckmann Distribution" (2014). The slope's x has the CDF
+ *     C(b) = (1 + b + tan theta exp(-erfinv(b)^2) / sqrt(pi)) / (1 + c + tan theta exp(-cot^2) / sqrt(pi)),
+ * b = erf(x) in [-1, c = erf(cot theta)], inverted by Newton's method kept inside a bisection
+ * interval; y is an independent normal slope. */
+float2 sample_beckmann_slope(float cos_t, float u1, float u2)
+{
+    if (cos_t > 0.9999f) {                     /* normal incidence: the whole distribution */
+        float r = sqrt(-log(1.0f - u1)), phi = 2.0f * PI_F * u2;
+        return (float2)(r * cos(phi), r * sin(phi));
+    }
+    float sin_t = sqrt(fmax(0.0f, 1.0f - cos_t * cos_t));
+    float tan_t = sin_t / cos_t, cot_t = cos_t / sin_t;
+    const float inv_sqrt_pi = 0.5641895835f;
+    float a = -1.0f, c = erf(cot_t), x = fmax(u1, 1e-6f);
+    float norm = 1.0f / (1.0f + c + inv_sqrt_pi * tan_t * exp(-cot_t * cot_t));
+    /* a close first guess (Jakob 2014, a fit in theta) */
+    float theta = acos(cos_t);
+    float b = c - (1.0f + c) * pow(1.0f - x, 1.0f + theta * (-0.876f + theta * (0.4265f - 0.0594f * theta)));
+    for (int it = 0; it < 10; ++it) {
+        if (!(b >= a && b <= c))               /* outside the interval (or NaN): bisect */
+            b = 0.5f * (a + c);
+        float e = erfinv_approx(b);
+        float value = norm * (1.0f + b + inv_sqrt_pi * tan_t * exp(-e * e)) - x;
+        if (fabs(value) < 1e-5f)
+            break;
+        if (value > 0.0f)
+            c = b;
+        else
+            a = b;
+        b -= value / (norm * (1.0f - e * tan_t));
+    }
+    return (float2)(erfinv_approx(b), erfinv_approx(2.0f * fmax(u2, 1e-6f) - 1.0f));
+}
+
+/* A microfacet normal of the Beckmann distribution seen from wo (wo.z > 0), of density
+ * G1(wo, m) max(0, wo.m) D(m) / wo.z: wo stretched to roughness 1, a visible slope drawn there,
+ * turned to wo's azimuth, unstretched (Heitz and d'Eon 2014, section 4). The G1 of that density
+ * is Smith's exact one; pdf_beckmann_visible and the BSDFs use Walter's approximation
+ * (beckmann_g1), as Mitsuba 3 does, which follows it to 0.35 %: the weights' expectation is off
+ * by that much at most, at grazing angles. */
+float3 sample_beckmann_visible(float3 wo, float alpha, float u1, float u2)
+{
+    float3 w = unit((float3)(alpha * wo.x, alpha * wo.y, wo.z));
+    float xy = sqrt(w.x * w.x + w.y * w.y);
+    float cos_phi = xy > 0.0f ? w.x / xy : 1.0f, sin_phi = xy > 0.0f ? w.y / xy : 0.0f;
+    float2 s = sample_beckmann_slope(w.z, u1, u2);
+    float2 r = (float2)(cos_phi * s.x - sin_phi * s.y, sin_phi * s.x + cos_phi * s.y) * alpha;
+    return unit((float3)(-r.x, -r.y, 1.0f));
+}
+
+/* The density of the normals sample_beckmann_visible draws from wo (wo.z > 0). */
+float pdf_beckmann_visible(float3 wo, float3 m, float alpha)
+{
+    return beckmann_g1(wo, m, alpha) * fmax(0.0f, dot(wo, m)) * beckmann_d(m, alpha) / wo.z;
 }

@@ -38,6 +38,7 @@ SCENES = {  # name: (width, height, spp per render, renders)
     "normal-maps": (None, None, 1024, 16),
     "lights": (None, None, 1024, 16),
     "thinlens": (None, None, 1024, 16),
+    "beckmann": (None, None, 1024, 16),
 }
 XML_SCENES = OUT.parent / "scenes"
 MAX_DEPTH = 8

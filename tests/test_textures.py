@@ -475,3 +475,19 @@ def test_the_panel_names_a_pickeds_textures():
     image = Image(np.zeros((2, 2, 3), np.uint8), path="/some/where/wood.png")
     assert texture_label(Texture("bitmap", {"image": image}, "wood")) == "texture 'wood' (bitmap wood.png)"
     assert texture_label(texture("checkerboard")) == "texture (checkerboard)"
+
+
+def test_a_bump_map_of_a_combining_texture_is_refused_in_one_line_even_when_scaled(tmp_path):
+    """A checkerboard as a bump map with a bump_scale raised ValueError from the scale texture
+    (inputs nest one level deep) before the bump map's own check (found by the scene fuzzer)."""
+    from pathtrace.errors import UserError
+    from pathtrace.scene import load_scene
+    (tmp_path / "s.toml").write_text('[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = { type = "conductor", '
+                                     'bump_map = { type = "checkerboard" }, bump_scale = 0.5 }\n')
+    with pytest.raises(UserError, match="bump_map: a bump map must be a bitmap"):
+        load_scene(str(tmp_path / "s.toml"))
+    (tmp_path / "s.xml").write_text('<scene version="3.0.0"><shape type="sphere"><bsdf type="bumpmap">'
+                                    '<texture type="checkerboard"/><float name="scale" value="2"/>'
+                                    '<bsdf type="diffuse"/></bsdf></shape></scene>')
+    with pytest.raises(UserError, match="a bump map must be a bitmap"):
+        load_scene(str(tmp_path / "s.xml"))

@@ -93,6 +93,13 @@ class BSDFType:
         """A problem with a combination of values (every parameter present), or None."""
         return None
 
+    variant_defines: tuple = ()   # every define defines() may give
+
+    def defines(self, rows: np.ndarray) -> tuple:
+        """The kernel defines that MATERIAL rows of this type need (code of variants that
+        scenes without them do not compile in)."""
+        return ()
+
     def pack(self, values: dict, rows: np.ndarray):
         raise NotImplementedError
 

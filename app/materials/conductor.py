@@ -1,11 +1,12 @@
 """Metals: a smooth conductor (a mirror with the Fresnel reflectance of a complex IOR) and a
-rough one (the GGX microfacet model), with Mitsuba 3's parameters."""
+rough one (the GGX or Beckmann microfacet model), with Mitsuba 3's parameters."""
 
 from dataclasses import replace
 
+import numpy as np
 
 from pathtrace.materials.bsdf import DELTA, BSDFType, Param
-from pathtrace.materials.microfacet import GGX_PARAMS, resolve_distribution
+from pathtrace.materials.microfacet import DISTRIBUTION, DISTRIBUTIONS, GGX_PARAMS
 from pathtrace.materials.optics import CONDUCTORS
 
 _CONDUCTOR_PARAMS = (
@@ -48,17 +49,25 @@ class Conductor(BSDFType):
 
 class RoughConductor(Conductor):
     name = "roughconductor"
-    params = _CONDUCTOR_PARAMS + (replace(GGX_PARAMS[0], slot="p0.w"),) + GGX_PARAMS[1:]
+    params = _CONDUCTOR_PARAMS + (replace(GGX_PARAMS[0], slot="p0.w"), DISTRIBUTION)
     flags = 0
-    doc = ("rough metal: the GGX microfacet BRDF with Smith's separable shadowing, sampled by "
-           "visible normals (Heitz 2018)")
+    doc = ("rough metal: the GGX or Beckmann microfacet BRDF with Smith's separable shadowing, GGX "
+           "sampled by visible normals (Heitz 2018), Beckmann by its distribution")
 
-    def resolve(self, values):
-        return super().resolve(resolve_distribution(values))
+    def check(self, values):
+        if not np.all(np.isin(values["distribution"], list(DISTRIBUTIONS.values()))):
+            return "distribution: must be ggx or beckmann"
+        return None
+
+    variant_defines = ("BECKMANN",)
+
+    def defines(self, rows):
+        return ("BECKMANN",) if np.any(rows["p2"][:, 3] > 0.5) else ()
 
     def pack(self, values, rows):
         super().pack(values, rows)
         rows["p0"][:, 3] = values["alpha"]
+        rows["p2"][:, 3] = values["distribution"]
 
     def unpack(self, row):
-        return {**super().unpack(row), "alpha": float(row["p0"][3])}
+        return {**super().unpack(row), "alpha": float(row["p0"][3]), "distribution": float(row["p2"][3])}

@@ -11,11 +11,17 @@ from pathtrace.materials.optics import fresnel_dielectric
 
 GGX_PARAMS = (
     Param("alpha", "number", default=0.1, low=1e-4, high=1.0,
-          doc="GGX roughness (Mitsuba's alpha: the root mean square slope)"),
+          doc="the microfacet roughness (Mitsuba's alpha: the root mean square slope)"),
     Param("distribution", "name", default="ggx", names={"ggx": "ggx"},
           doc="the microfacet distribution; GGX only (Mitsuba's default for the plastics is "
               "beckmann: give ggx there)"),
 )
+
+# roughconductor's distribution: a number the kernel reads (kernels/bsdfs/roughconductor.cl),
+# given by name
+DISTRIBUTIONS = {"ggx": 0.0, "beckmann": 1.0}
+DISTRIBUTION = Param("distribution", "number", default=0.0, low=0.0, high=1.0, names=DISTRIBUTIONS,
+                     doc="the microfacet distribution: ggx (0) or beckmann (1; Mitsuba's default)")
 
 # roughplastic's MATERIAL.table holds a function of cos(theta) at these cosines: (k / 15)^2,
 # dense at grazing angles where the coating's transmittance changes fastest (16 samples there

@@ -735,10 +735,10 @@ class _Reader:
             m.normal_map = texture
             return m
         scale = self.get(props, "scale", 1.0, ("float",))
-        if scale != 1.0:
-            texture = Texture("scale", TEXTURES["scale"].complete({"tex": texture, "scale": scale}))
-        try:
+        try:                  # the map itself first: a scale of a combining texture cannot be built
             check_bump_map(texture)
+            if scale != 1.0:
+                texture = Texture("scale", TEXTURES["scale"].complete({"tex": texture, "scale": scale}))
         except ValueError as e:
             _fail(target, str(e))
         m.bump_map = texture
@@ -774,8 +774,10 @@ class _Reader:
                 target = self.resolve(c) if c.tag == "ref" else c
                 values[p.name] = c.attrs.get("value") if c.tag == "string" else \
                     self.texture(target) if target.tag == "texture" else self.get(props, p.name, kinds=("float",))
-        if values.get("distribution", "ggx") != "ggx" or (kind.startswith("rough") and "distribution" not in props):
-            warn(f"{node.where()}: pathtrace's microfacets are GGX; the {values.get('distribution', 'beckmann')} "
+        if kind == "roughconductor":
+            values.setdefault("distribution", "beckmann")             # Mitsuba's default
+        elif values.get("distribution", "ggx") != "ggx" or (kind.startswith("rough") and "distribution" not in props):
+            warn(f"{node.where()}: pathtrace's rough plastic is GGX; the {values.get('distribution', 'beckmann')} "
                  "distribution (Mitsuba's default) is rendered as GGX of the same alpha")
             values["distribution"] = "ggx"
         if kind.startswith("rough") and "alpha" not in props and ("alpha_u" in props or "alpha_v" in props):

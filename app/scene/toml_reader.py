@@ -247,10 +247,13 @@ class _Reader:
         if "bump_scale" in data and "bump_map" not in data:
             self.fail(f"{where}.bump_scale", "scales a bump_map, and there is none")
         if material.bump_map is not None:
-            if scale != 1.0:
-                material.bump_map = Texture("scale", TEXTURES["scale"].complete({"tex": material.bump_map, "scale": scale}))
+            # the map itself first: a scale of a texture that combines others cannot be built
             try:
                 check_bump_map(material.bump_map)
+                if scale != 1.0:
+                    material.bump_map = Texture("scale", TEXTURES["scale"].complete({"tex": material.bump_map,
+                                                                                      "scale": scale}))
+                    check_bump_map(material.bump_map)
             except ValueError as e:
                 self.fail(f"{where}.bump_map", str(e))
 

@@ -1,34 +1,59 @@
-/* roughconductor: a rough metal, the GGX microfacet BRDF (kernels/microfacet.cl)
+/* roughconductor: a rough metal, the microfacet BRDF of a GGX or Beckmann distribution
+ * (kernels/microfacet.cl)
  *     f(wo, wi) = F(wo.h) D(h) G1(wo, h) G1(wi, h) / (4 cos(theta_o) cos(theta_i)),
- * h the half vector, F the conductor Fresnel reflectance (Mitsuba 3's `roughconductor` with
- * distribution ggx).
+ * h the half vector, F the conductor Fresnel reflectance (Mitsuba 3's `roughconductor`).
  *
  * Parameters (Material):
- *   p0.xyz  eta, the real part of the complex IOR     p0.w  alpha, the GGX roughness
+ *   p0.xyz  eta, the real part of the complex IOR     p0.w  alpha, the roughness
  *   p1.xyz  k, its imaginary part
  *   p2.xyz  specular_reflectance, a factor on the reflectance
+ *                                                      p2.w  1 for Beckmann, 0 for GGX
  *
- * Sampled by visible normals: the weight f cos / pdf is F(wo.h) G1(wi, h). One-sided. */
+ * Sampled by visible normals of either distribution: the weight f cos / pdf is
+ * F(wo.h) G1(wi, h). One-sided. Beckmann's code is compiled only into the programs of scenes
+ * that have it (BECKMANN, app/materials/conductor.py): the branch cost scenes of GGX metals
+ * 3-6 % on an H100. */
+
+#ifdef BECKMANN
+#define IS_BECKMANN(m) ((m)->p2.w > 0.5f)
+#else
+#define IS_BECKMANN(m) 0
+#endif
+
+float conductor_d(MaterialRef m, float3 h)
+{
+    return IS_BECKMANN(m) ? beckmann_d(h, m->p0.w) : ggx_d(h, m->p0.w);
+}
+
+float conductor_g1(MaterialRef m, float3 v, float3 h)
+{
+    return IS_BECKMANN(m) ? beckmann_g1(v, h, m->p0.w) : ggx_g1(v, h, m->p0.w);
+}
+
+/* The density, per solid angle of h, of the normal that sampling draws from wo */
+float pdf_conductor_normal(MaterialRef m, float3 wo, float3 h)
+{
+    return IS_BECKMANN(m) ? pdf_beckmann_visible(wo, h, m->p0.w) : pdf_ggx_visible(wo, h, m->p0.w);
+}
 
 float3 eval_roughconductor(MaterialRef m, float3 wo, float3 wi)
 {
     if (wo.z <= 0.0f || wi.z <= 0.0f)
         return (float3)(0.0f);
-    float alpha = m->p0.w;
     float3 h = unit(wo + wi);
-    float g = ggx_g1(wo, h, alpha) * ggx_g1(wi, h, alpha);
+    float g = conductor_g1(m, wo, h) * conductor_g1(m, wi, h);
     float3 f = fresnel_conductor(dot(wo, h), m->p0.xyz, m->p1.xyz);
-    return m->p2.xyz * f * (ggx_d(h, alpha) * g / (4.0f * wo.z * wi.z));
+    return m->p2.xyz * f * (conductor_d(m, h) * g / (4.0f * wo.z * wi.z));
 }
 
-/* pdf(wi) = D_wo(h) / (4 wo.h), the Jacobian of reflection (Walter et al. 2007, eq. 14) */
+/* pdf(wi) = pdf(h) / (4 wo.h), the Jacobian of reflection (Walter et al. 2007, eq. 14) */
 float pdf_roughconductor(MaterialRef m, float3 wo, float3 wi)
 {
     if (wo.z <= 0.0f || wi.z <= 0.0f)
         return 0.0f;
     float3 h = unit(wo + wi);
     float wo_h = dot(wo, h);
-    return wo_h > 0.0f ? pdf_ggx_visible(wo, h, m->p0.w) / (4.0f * wo_h) : 0.0f;
+    return wo_h > 0.0f ? pdf_conductor_normal(m, wo, h) / (4.0f * wo_h) : 0.0f;
 }
 
 int sample_roughconductor(MaterialRef m, float3 wo, float3 u, BSDFSample *s)
@@ -36,13 +61,14 @@ int sample_roughconductor(MaterialRef m, float3 wo, float3 u, BSDFSample *s)
     if (wo.z <= 0.0f)
         return 0;
     float alpha = m->p0.w;
-    float3 h = sample_ggx_visible(wo, alpha, u.y, u.z);
+    float3 h = IS_BECKMANN(m) ? sample_beckmann_visible(wo, alpha, u.y, u.z)
+                              : sample_ggx_visible(wo, alpha, u.y, u.z);
     float wo_h = dot(wo, h);
     s->wi = 2.0f * wo_h * h - wo;
     if (s->wi.z <= 0.0f || wo_h <= 0.0f)
         return 0;
-    s->pdf = pdf_ggx_visible(wo, h, alpha) / (4.0f * wo_h);
-    s->weight = m->p2.xyz * fresnel_conductor(wo_h, m->p0.xyz, m->p1.xyz) * ggx_g1(s->wi, h, alpha);
+    s->pdf = pdf_conductor_normal(m, wo, h) / (4.0f * wo_h);
+    s->weight = m->p2.xyz * fresnel_conductor(wo_h, m->p0.xyz, m->p1.xyz) * conductor_g1(m, s->wi, h);
     s->lobe = LOBE_GLOSSY | LOBE_REFLECTION;
     return s->pdf > 0.0f;
 }
