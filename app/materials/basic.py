@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from pathtrace.materials.bsdf import BSDFType, Param
+from pathtrace.materials.bsdf import BSDFType, Param, check_sum_at_most_one
 
 
 class Black(BSDFType):
@@ -41,11 +41,7 @@ class Phong(BSDFType):
            "cos^n(alpha); rho_d + rho_s <= 1 in each channel")
 
     def check(self, values):
-        total = values["rho_d"] + values["rho_s"]
-        if np.any(total > 1 + 1e-6):
-            return (f"rho_d + rho_s must not exceed 1 in any channel (energy conservation), "
-                    f"got {[round(float(x), 6) for x in np.ravel(total)[:3]]}")
-        return None
+        return check_sum_at_most_one(values, "rho_d", "rho_s")
 
     @staticmethod
     def lobe_albedos(values):

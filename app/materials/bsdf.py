@@ -43,6 +43,15 @@ def constant_of(value, kind: str, summary=Texture.mean):
 LUMINANCE = np.array([0.212671, 0.715160, 0.072169])     # kernels/texture.cl: luminance
 
 
+def check_sum_at_most_one(values, a: str, b: str) -> str | None:
+    """Energy conservation of two lobes: values[a] + values[b] at most 1 in each channel."""
+    total = values[a] + values[b]
+    if np.any(total > 1 + 1e-6):
+        return (f"{a} + {b} must not exceed 1 in any channel (energy conservation), "
+                f"got {[round(float(x), 6) for x in np.ravel(total)[:3]]}")
+    return None
+
+
 class BSDFType:
     """One material type. Subclasses set name, params and doc, and define pack/unpack over
     arrays whose leading axis is the row (so that a scene of 10^6 random spheres packs at once)."""

@@ -3,7 +3,7 @@ transmission with their own colours; kernels/bsdfs/diffusetransmission.cl."""
 
 import numpy as np
 
-from pathtrace.materials.bsdf import TRANSMISSIVE, BSDFType, Param
+from pathtrace.materials.bsdf import TRANSMISSIVE, BSDFType, Param, check_sum_at_most_one
 
 
 class DiffuseTransmission(BSDFType):
@@ -17,11 +17,7 @@ class DiffuseTransmission(BSDFType):
            "diffusetransmission); reflectance + transmittance <= 1 in each channel")
 
     def check(self, values):
-        total = values["reflectance"] + values["transmittance"]
-        if np.any(total > 1 + 1e-6):
-            return (f"reflectance + transmittance must not exceed 1 in any channel (energy conservation), "
-                    f"got {[round(float(x), 6) for x in np.ravel(total)[:3]]}")
-        return None
+        return check_sum_at_most_one(values, "reflectance", "transmittance")
 
     def pack(self, values, rows):
         rows["p0"][:, :3] = values["reflectance"]

@@ -50,7 +50,6 @@ class GraphicsState:
     reverse: bool = False
     material: object = "default"          # a Material, None (an interface), or "default"
     area_light: object = None             # (ParamList, where) of an AreaLightSource
-    alpha_warned: bool = False
 
     def copy(self):
         return replace(self, ctm=self.ctm.copy())
@@ -73,7 +72,6 @@ class PbrtReader:
         self.lights = []
         self.objects = {}                 # ObjectBegin name: [(mesh or sphere record)]
         self.current_object = None
-        self.world = False
         self.including = []
         self.material_rows = {}
         self.warned = set()
@@ -303,7 +301,6 @@ class PbrtReader:
         self.state.ctm = self.stack.pop()[1]
 
     def _world_begin(self, tokens, offset):
-        self.world = True
         self.state.ctm = np.eye(4)
         self.named_systems["world"] = np.eye(4)
 
@@ -519,33 +516,11 @@ class PbrtReader:
             return (center, r), None, None, None, ""
         source, normals, uvs = "", None, None
         if kind == "trianglemesh":
-            p = params.get("P", ("point3", "point"), 0)
-            if p is None:
-                raise UserError(f"{where}: a trianglemesh needs \"point3 P\"")
-            vertices = p.reshape(-1, 3)
-            idx = params.get("indices", ("integer",), 0)
-            if idx is None:
-                if len(vertices) != 3:
-                    raise UserError(f"{where}: a trianglemesh needs \"integer indices\" unless it has 3 vertices")
-                idx = np.arange(3)
-            if len(idx) % 3:
-                params.fail("indices", f"takes triangles, 3 indices each; got {len(idx)}")
-            faces = idx.reshape(-1, 3)
+            vertices, faces = self.indexed_polygons(params, kind, 3, where)
             normals, uvs = self.vertex_attributes(params, len(vertices))
             vertices, faces, normals, uvs = check_mesh(vertices, faces, normals, uvs, where)
         elif kind == "bilinearmesh":
-            p = params.get("P", ("point3", "point"), 0)
-            if p is None:
-                raise UserError(f"{where}: a bilinearmesh needs \"point3 P\"")
-            vertices = p.reshape(-1, 3)
-            idx = params.get("indices", ("integer",), 0)
-            if idx is None:
-                if len(vertices) != 4:
-                    raise UserError(f"{where}: a bilinearmesh needs \"integer indices\" unless it has 4 vertices")
-                idx = np.arange(4)
-            if len(idx) % 4:
-                params.fail("indices", f"takes patches, 4 indices each; got {len(idx)}")
-            q = idx.reshape(-1, 4)
+            vertices, q = self.indexed_polygons(params, kind, 4, where)
             # corners p00, p10, p01, p11: two triangles of the patch's orientation
             faces = np.concatenate([q[:, [0, 1, 3]], q[:, [0, 3, 2]]])
             normals, uvs = self.vertex_attributes(params, len(vertices))
@@ -573,13 +548,10 @@ class PbrtReader:
             vertices[:, 2] = params.float("height", 0.0)
             uvs = None
         elif kind == "loopsubdiv":
-            p = params.get("P", ("point3", "point"), 0)
-            idx = params.get("indices", ("integer",), 0)
-            if p is None or idx is None or len(idx) % 3:
-                raise UserError(f"{where}: a loopsubdiv needs \"point3 P\" and \"integer indices\" (triangles)")
+            vertices, faces = self.indexed_polygons(params, kind, 3, where)
             params.int("levels", 3)
             warn(f"{where}: pathtrace does not subdivide; the control mesh is rendered with smooth normals")
-            vertices, faces, normals, uvs = check_mesh(p.reshape(-1, 3), idx.reshape(-1, 3), None, None, where)
+            vertices, faces, normals, uvs = check_mesh(vertices, faces, None, None, where)
             normals = vertex_normals(vertices, faces)
         else:
             for p in params.params.values():
@@ -598,6 +570,23 @@ class PbrtReader:
         elif self.state.reverse:
             faces = faces[:, ::-1]
         return vertices, faces, normals, uvs, source
+
+    @staticmethod
+    def indexed_polygons(params, kind, corners, where):
+        """A mesh's "point3 P" and its "integer indices", `corners` per polygon (which may be
+        left out where P holds exactly one polygon): vertices (V, 3) and indices (N, corners)."""
+        p = params.get("P", ("point3", "point"), 0)
+        if p is None:
+            raise UserError(f'{where}: a {kind} needs "point3 P"')
+        vertices = p.reshape(-1, 3)
+        idx = params.get("indices", ("integer",), 0)
+        if idx is None:
+            if len(vertices) != corners:
+                raise UserError(f'{where}: a {kind} needs "integer indices" unless it has {corners} vertices')
+            idx = np.arange(corners)
+        if len(idx) % corners:
+            params.fail("indices", f"takes polygons of {corners} indices each; got {len(idx)}")
+        return vertices, idx.reshape(-1, corners)
 
     def vertex_attributes(self, params, count):
         n = params.get("N", ("normal", "normal3"), 0)
