@@ -172,6 +172,8 @@ def _geometry_digest(scene: Scene) -> bytes:
         a = np.ascontiguousarray(a)
         h.update(str((a.dtype.str, a.shape)).encode())
         h.update(a.data)
+    # the media and what bounds them compile with the primitives (pathtrace.compiled)
+    h.update(repr((scene.media, scene.sphere_media, [m.media for m in scene.meshes])).encode())
     return h.digest()
 
 

@@ -15,7 +15,8 @@ from pathtrace.bvh import BVH, build_bvh, primitive_boxes
 from pathtrace.errors import UserError, format_bytes, short
 from pathtrace.features import FLAT_MAX, Features, stack_size
 from pathtrace.lights import LightTable, build_light_table, emitted_power, primitive_bounds
-from pathtrace.materials import BSDFS, TAGS
+from pathtrace.materials import BSDFS, NULL, TAGS
+from pathtrace.media import media_table, packed_interfaces
 from pathtrace.memory import available_host_memory
 from pathtrace.camera import Camera, kernel_name
 from pathtrace.scene.description import RenderSettings, Scene
@@ -35,7 +36,7 @@ class ShapeRef:
 # The scene's buffers in the order of the kernels' SCENE_KERNEL_ARGS (kernels/scene.cl)
 SCENE_BUFFERS = ("nodes", "spheres", "triangles", "normals", "uvs", "prim_material", "materials", "bindings",
                  "textures", "texels", "env", "lights", "light_pick", "light_leaf", "light_nodes", "env_marginal",
-                 "env_conditional")
+                 "env_conditional", "media", "prim_media")
 
 # The BVH build's peak host memory per primitive, measured (docs/performance.md)
 BUILD_HOST_BYTES = 320
@@ -88,8 +89,32 @@ class CompiledScene:
         self.prim_shape = np.concatenate([sphere_order, n_spheres + mesh_of[triangle_order]]).astype(np.int32)
         self.prim_material = np.concatenate([scene.sphere_material[sphere_order],
                                              mesh_material[mesh_of[triangle_order]] if meshes else []]).astype(np.int32)
+        self.media = self.compile_media(scene, sphere_order, mesh_of[triangle_order])
         self.light_sampler = scene.settings.light_sampler    # pathtrace.lights.LIGHT_SAMPLERS
         self.update_materials()
+
+    def compile_media(self, scene: Scene, sphere_order: np.ndarray, triangle_mesh: np.ndarray) -> np.ndarray:
+        """The media table, and self.prim_media: per primitive, the media it bounds (one
+        element, unread, in a scene without media or interfaces)."""
+        spheres = scene.sphere_media
+        interfaces = [m.media for m in scene.meshes]
+        if not scene.media and spheres is None and all(i is None for i in interfaces):
+            self.prim_media = np.full(1, -1, np.int32)
+        else:
+            sphere_codes = packed_interfaces(spheres if spheres is not None else [None] * self.num_spheres)
+            mesh_codes = packed_interfaces(interfaces)
+            self.prim_media = np.concatenate([sphere_codes[sphere_order], mesh_codes[triangle_mesh]]).astype(np.int32)
+        try:
+            return media_table(scene.media)
+        except ValueError as e:
+            raise UserError(f"{scene.source or scene.name}: {e}") from None
+
+    @property
+    def has_media(self) -> bool:
+        """Whether the kernels need their volumetric paths (kernels/volume.cl): media, or null
+        surfaces that rays cross."""
+        null_rows = self.materials["flags"] & NULL != 0
+        return bool(self.scene.media) or bool(np.any(null_rows[np.unique(self.prim_material)]))
 
     @property
     def num_triangles(self) -> int:
@@ -121,7 +146,8 @@ class CompiledScene:
     def geometry_arrays(self) -> dict:
         """The buffers of the shapes, by their names in SCENE_BUFFERS."""
         return {"nodes": self.bvh.nodes, "spheres": self.spheres, "triangles": self.triangles,
-                "normals": self.normals, "uvs": self.uvs, "prim_material": self.prim_material}
+                "normals": self.normals, "uvs": self.uvs, "prim_material": self.prim_material,
+                "media": self.media, "prim_media": self.prim_media}
 
     def material_arrays(self) -> dict:
         """The buffers of the materials, their textures and the light table."""
@@ -141,7 +167,7 @@ class CompiledScene:
                         bsdfs=tuple(name for name, tag in TAGS.items() if tag in used),
                         textures=self.textures.types, masks=self.textures.masks,
                         normal_maps=self.textures.normal_maps, lights=self.lights.types,
-                        light_tree=self.lights.tree,
+                        light_tree=self.lights.tree, media=self.has_media,
                         camera=kernel_name(camera), filter=settings.filter.name,
                         russian_roulette=settings.russian_roulette, stack=stack_size(self.bvh.depth),
                         flat=(self.num_spheres, self.num_triangles)

@@ -20,10 +20,12 @@ from pathtrace.resources import resource_dir
 # kernels of the types a scene uses (app/textures/registry.py: kernel_parts), the shapes and
 # traversal (with alpha masks where a scene has them), the shading of textured materials, the
 # BSDFs of the material registry and their generated dispatch, the environment, the light types
-# a scene has and their dispatch (app/lights/registry.py), its camera and pixel filter, the rest.
+# a scene has and their dispatch (app/lights/registry.py), its camera and pixel filter, the media
+# where it has them, the rest.
 BASIC_FILES = ("types.h", "vector.cl", "rng.cl", "sampling.cl", "scene.cl")
 SHAPE_FILES = ("spawn.cl", "shapes/sphere.cl", "shapes/triangle.cl")
 BSDF_FILES = ("bsdf.cl", "fresnel.cl", "microfacet.cl", "coating.cl")
+MEDIA_FILES = ("media/homogeneous.cl", "phase.cl", "volume.cl")
 LATER_FILES = ("integrator.cl", "aovs.cl", "display.cl")
 
 # No -cl-fast-relaxed-math: it implies finite math, and the kernels rely on INFINITY.
@@ -52,7 +54,8 @@ def kernel_source(extra: str = "", features: Features = Features()) -> str:
     parts = [("environment.cl", None), *lights.kernel_parts(features.lights, features.light_tree),
              *camera.kernel_parts(features.camera), *filters.kernel_parts(features.filter)]
     texts += [(name, text if text is not None else (folder / name).read_text()) for name, text in parts]
-    texts += [(name, (folder / name).read_text()) for name in LATER_FILES]
+    texts += [(name, (folder / name).read_text())
+              for name in (*(MEDIA_FILES if features.media else ()), *LATER_FILES)]
     if extra:
         texts.append(("extra", extra))
     return "\n".join(f'#line 1 "{name}"\n{text}' for name, text in texts)

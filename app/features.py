@@ -8,7 +8,8 @@ from dataclasses import dataclass
 class Features:
     """What a scene and its settings need of the kernels. Each scene's program is specialised
     to it and leaves out the code of the shapes, materials and Russian roulette rule it does
-    not use (and only its lights' types, its camera and its pixel filter): on a GPU every branch a kernel could take costs registers, hence occupancy, in
+    not use (and only its lights' types, its camera and its pixel filter, and the volumetric
+    paths only where it has media): on a GPU every branch a kernel could take costs registers, hence occupancy, in
     every thread (docs/performance.md). The default, every shape and material and no textures,
     is the program the tests build their kernels beside."""
     triangles: bool = True
@@ -21,6 +22,7 @@ class Features:
                                            # DELTA_LIGHTS; area lights and the environment are
                                            # always compiled in); None: all
     light_tree: bool = False               # lights are chosen through a light tree (kernels/light_tree.cl)
+    media: bool = False                    # participating media or null surfaces (kernels/volume.cl)
     camera: str = "perspective"            # its kernel file: pathtrace.camera.kernel_name
     filter: str = "box"                    # one of pathtrace.filters.FILTERS
     russian_roulette: str = "throughput"   # one of pathtrace.scene.description.RUSSIAN_ROULETTE
@@ -33,7 +35,7 @@ class Features:
     def defines(self) -> tuple:
         return ((() if self.triangles else ("NO_TRIANGLES",)) + (("TEXTURES",) if self.textures else ())
                 + (("ALPHA_MASKS",) if self.masks else ()) + (("NORMAL_MAPS",) if self.normal_maps else ())
-                + (("LIGHT_TREE",) if self.light_tree else ())
+                + (("LIGHT_TREE",) if self.light_tree else ()) + (("MEDIA",) if self.media else ())
                 + (f"RUSSIAN_ROULETTE=RR_{self.russian_roulette.upper()}", f"BVH_STACK_SIZE={self.stack}")
                 + ((f"FLAT_SPHERES={self.flat[0]}", f"FLAT_TRIANGLES={self.flat[1]}") if self.flat else ())
                 + (self.bsdf_defines if self.bsdf_defines is not None else all_bsdf_defines()))

@@ -232,6 +232,7 @@ class Renderer:
         p["env_pick"] = self.lights.env_pick
         p["num_spheres"] = self.compiled.num_spheres
         p["rr_depth"] = RR_DEPTH
+        p["camera_medium"] = self.scene.camera_medium
         return p
 
     def add_samples(self, count: int = 1, start: int = None, rows: tuple = None) -> list:

@@ -72,7 +72,7 @@ RENDER_PARAMS = np.dtype([
     ("rr_depth", np.int32),
     ("row_start", np.int32),        # rows [row_start, row_end) of the image
     ("row_end", np.int32),
-    ("pad3", np.int32),
+    ("camera_medium", np.int32),    # the camera's medium (a row of the media table), or -1
 ])
 
 LIGHT = np.dtype([
@@ -95,4 +95,9 @@ LIGHT_NODE = np.dtype([
     ("parent", np.int32),           # -1: the root
     ("light", np.int32),            # a leaf's light table entry
     ("pad", np.int32),
+])
+
+MEDIUM = np.dtype([
+    ("sigma_s", np.float32, 4),     # scattering coefficient rgb; w: the phase function's g
+    ("sigma_t", np.float32, 4),     # extinction coefficient rgb
 ])

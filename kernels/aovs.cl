@@ -50,8 +50,16 @@ void trace_aovs(const SceneData *sc, const RenderParams *p, float3 o, float3 d, 
             return;
         }
         Surface s = surface_at(sc, &hit, o, d);
+        int flags = sc->materials[sc->prim_material[hit.prim]].flags;
+#ifdef MEDIA
+        if (flags & MATERIAL_NULL) {        /* no surface (the media themselves are not guides) */
+            o = offset_ray_origin(s.p, s.offset, s.ng, d);
+            self = hit.prim;
+            continue;
+        }
+#endif
         int front = dot(s.ng, d) < 0.0f;
-        if (!front && (sc->materials[sc->prim_material[hit.prim]].flags & MATERIAL_TWOSIDED))
+        if (!front && (flags & MATERIAL_TWOSIDED))
             turn_round(&s);
         MATERIAL_AT(m, sc, s, d);
         float3 wo = to_frame(-d, s.ns);

@@ -204,8 +204,10 @@ typedef struct {
     float2 b;        /* a triangle's barycentric weights of v1 and v2, from which surface_uv
                         finds its texture coordinates when a texture needs them */
 #endif
-#ifdef NORMAL_MAPS
+#if defined(NORMAL_MAPS) || defined(MEDIA)
     float side;              /* 1; -1 once turned round to a two-sided material's back */
+#endif
+#ifdef NORMAL_MAPS
     float3 ns_unperturbed;   /* the shading normal before a normal or bump map (normal_maps.cl) */
     float terminator;        /* the shadowing term's alpha^2 (0: no perturbation) */
 #endif
@@ -224,7 +226,7 @@ Surface surface_at(const SceneData *sc, const Hit *hit, float3 o, float3 d)
 #ifdef TEXTURES
         s.b = (float2)(hit->b1, hit->b2);
 #endif
-#ifdef NORMAL_MAPS
+#if defined(NORMAL_MAPS) || defined(MEDIA)
         s.side = 1.0f;
 #endif
         return s;
@@ -236,7 +238,7 @@ Surface surface_at(const SceneData *sc, const Hit *hit, float3 o, float3 d)
 #ifdef TEXTURES
     s.b = (float2)(0.0f);
 #endif
-#ifdef NORMAL_MAPS
+#if defined(NORMAL_MAPS) || defined(MEDIA)
     s.side = 1.0f;
 #endif
     return s;
@@ -248,7 +250,7 @@ void turn_round(Surface *s)
 {
     s->ng = -s->ng;
     s->ns = -s->ns;
-#ifdef NORMAL_MAPS
+#if defined(NORMAL_MAPS) || defined(MEDIA)
     s->side = -1.0f;
 #endif
 }

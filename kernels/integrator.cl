@@ -22,13 +22,38 @@
 #define RR_THROUGHPUT 2    /* from rr_depth on, go on with probability min(max throughput, 0.95)
                               (Mitsuba 3's; pbrt-v4 has no cap) */
 
+/* The fraction of light sample ls's radiance that reaches o, a ray leaving primitive `self` (or
+ * -1) in `medium` (-1: none): 1 or 0 by whether a shadow ray from o towards the point on the
+ * light meets nothing before it (stopping just short, by pbrt-v4's ShadowEpsilon: pbrt's
+ * SpawnRayTo; a light at infinity is seen if the ray meets nothing at all), or in a scene with
+ * media the transmittance along it (kernels/volume.cl). */
+float3 light_visibility(const SceneData *sc, float3 o, const LightSample *ls, int self, int medium,
+                        int *rays)
+{
+    float3 dir = ls->wi;
+    float t_max = INFINITY;
+    if (!(ls->flags & LIGHT_AT_INFINITY)) {
+        t_max = norm(ls->y - o);
+        dir = (ls->y - o) / t_max;
+        t_max *= 1.0f - SHADOW_EPSILON;
+    }
+    ++*rays;
+#ifdef MEDIA
+    return transmittance_along(sc, o, dir, t_max, self, medium, rays);
+#else
+    return occluded(sc, o, dir, t_max, self) ? (float3)(0.0f) : (float3)(1.0f);
+#endif
+}
+
 /* One light sample at surface s, whose BSDF m sees outgoing direction wo (local frame of the
  * shading normal): its contribution f cos Le / pdf, weighted against BSDF sampling, whose
  * density of continuing is `go_on` times the BSDF's pdf (a delta light, which no path can find,
  * keeps its whole weight). Everything but visibility is computed before the shadow ray, so
- * that only the contribution stays live while it is traced. */
+ * that only the contribution stays live while it is traced; the shadow ray leaves s into the
+ * medium on the light's side (`medium` where s bounds none). */
 float3 sample_direct_light(const SceneData *sc, const RenderParams *p, MaterialRef m,
-                           const Surface *s, float3 wo, float go_on, uint4 r, Rng *rng, int *rays)
+                           const Surface *s, float3 wo, float go_on, int medium, uint4 r, Rng *rng,
+                           int *rays)
 {
     LightSample ls = sample_light(sc, p, s->p, s->ns, r, rng);
     float3 wi = to_frame(ls.wi, s->ns);
@@ -43,24 +68,50 @@ float3 sample_direct_light(const SceneData *sc, const RenderParams *p, MaterialR
 #endif
     float w = (ls.flags & LIGHT_DELTA) ? 1.0f : mis_weight(ls.pdf, go_on * pdf_bsdf(m, wo, wi));
     float3 contribution = f * fabs(wi.z) * ls.le * (w / ls.pdf);
-    /* The light is seen if a shadow ray from the offset origin towards the point on it meets
-     * nothing before it (stopping just short, by pbrt-v4's ShadowEpsilon: pbrt's SpawnRayTo);
-     * a light at infinity is seen if the ray meets nothing at all. */
     float3 o = offset_ray_origin(s->p, s->offset, s->ng, ls.wi);
-    float3 dir = ls.wi;
-    float t_max = INFINITY;
-    if (!(ls.flags & LIGHT_AT_INFINITY)) {
-        t_max = norm(ls.y - o);
-        dir = (ls.y - o) / t_max;
-        t_max *= 1.0f - SHADOW_EPSILON;
-    }
-    ++*rays;
-    return occluded(sc, o, dir, t_max, s->prim) ? (float3)(0.0f) : contribution;
+#ifdef MEDIA
+    medium = medium_after(sc, s, ls.wi, medium);
+#endif
+    return contribution * light_visibility(sc, o, &ls, s->prim, medium, rays);
+}
+
+#ifdef MEDIA
+/* One light sample at point x inside a medium whose phase function has mean cosine g, the path
+ * arriving along -wo: the phase function's value times the light's radiance and the
+ * transmittance towards it, over its density, weighted against phase-function sampling (power
+ * heuristic; a delta light keeps its whole weight). */
+float3 sample_direct_light_in_medium(const SceneData *sc, const RenderParams *p, float3 x, float3 wo,
+                                     float g, int medium, uint4 r, Rng *rng, int *rays)
+{
+    /* no normal: the light tree weighs no cosine, a constant environment is sampled uniformly */
+    LightSample ls = sample_light(sc, p, x, (float3)(0.0f), r, rng);
+    if (ls.pdf <= 0.0f)
+        return (float3)(0.0f);
+    float phase = eval_hg(g, wo, ls.wi);
+    float w = (ls.flags & LIGHT_DELTA) ? 1.0f : mis_weight(ls.pdf, phase);
+    float3 contribution = ls.le * (phase * w / ls.pdf);
+    return contribution * light_visibility(sc, x, &ls, -1, medium, rays);
+}
+#endif
+
+/* Russian roulette on throughput (RR_THROUGHPUT): go on with probability min(max throughput
+ * eta^2, 0.95), from uniform u, dividing the throughput by it; returns 0 when the path ends. */
+int survives_roulette(float3 *throughput, float eta_scale, float u)
+{
+    float q = fmin(fmax(fmax(throughput->x, throughput->y), throughput->z) * eta_scale * eta_scale, 0.95f);
+    if (u >= q)
+        return 0;
+    *throughput /= q;
+    return 1;
 }
 
 /* Returns the radiance arriving at o from direction -d; adds the rays it traced to *rays.
  * `nee` is a constant in each kernel below, so the compiler builds one lean path tracer
- * without the light sampling code and one with it. */
+ * without the light sampling code and one with it. In a scene with media (MEDIA), each segment
+ * of the path first samples a free flight in the medium it crosses (kernels/media/): the path
+ * scatters inside the medium by the phase function (kernels/phase.cl), with light sampling as
+ * at a surface, or reaches the surface, whose crossing may change the medium
+ * (kernels/volume.cl). */
 float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d, Rng *rng,
                   int *rays, const int nee)
 {
@@ -71,13 +122,53 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
     float eta_scale = 1.0f;
     int max_depth = p->max_depth > 0 ? p->max_depth : UNLIMITED_DEPTH;
     /* where the last bounce left from, and the density with which BSDF sampling chose d there
-     * (0 for the camera ray and delta bounces: no light sample could have found what it hits) */
+     * (0 for the camera ray and delta bounces: no light sample could have found what it hits);
+     * prev_n is 0 after a scattering in a medium */
     float3 prev_x = o, prev_n = (float3)(0.0f);
     float pdf_prev = 0.0f;
     int self = -1;                   /* the primitive the ray leaves */
+    int medium = p->camera_medium;   /* the medium the ray crosses, or -1 (a program without
+                                        media never reads it) */
+#ifdef MEDIA
+    /* the channel whose free flights the path samples, and each channel's path density over
+       the hero's (kernels/media/homogeneous.cl), scaled to a mean of 1 */
+    int hero = min((int)(next_uniform4(rng).x * 3.0f), 2);
+    float3 ratios = (float3)(1.0f);
+#endif
     for (int depth = 1;; ++depth) {
         ++*rays;
         Hit hit = intersect_scene(sc, o, d, INFINITY, self);
+#ifdef MEDIA
+        if (medium >= 0) {
+            const global Medium *med = &sc->media[medium];
+            float4 u = next_uniform4(rng);
+            FreeFlight flight = sample_free_flight(med, hit.t, hero, u.x);
+            /* throughput stays the path's f over its channel-averaged density (ratios keep a
+               mean of 1), so that every estimate below is spectral MIS's */
+            float3 ratios_next = ratios * flight.ratio;
+            float mean_ratio = dot(ratios_next, (float3)(1.0f / 3.0f));
+            throughput *= flight.weight / mean_ratio;
+            ratios = ratios_next / mean_ratio;
+            if (flight.scattered) {
+                if (depth >= max_depth || all(throughput == 0.0f))
+                    return radiance;
+                float3 x = o + flight.t * d, wo = -d;
+                float g = med->sigma_s.w;
+                if (nee && p->num_lights > 0)
+                    radiance += throughput * sample_direct_light_in_medium(sc, p, x, wo, g, medium,
+                                                                           next_bits4(rng), rng, rays);
+                /* the phase function is sampled exactly: its weight is 1 */
+                d = sample_hg(g, wo, u.zw, &pdf_prev);
+                if (RUSSIAN_ROULETTE != RR_OFF && depth >= p->rr_depth
+                    && !survives_roulette(&throughput, eta_scale, next_uniform4(rng).x))
+                    return radiance;
+                prev_x = o = x;
+                prev_n = (float3)(0.0f);
+                self = -1;
+                continue;
+            }
+        }
+#endif
         if (hit.prim < 0) {
             float w = 1.0f;
             if (nee && pdf_prev > 0.0f && p->env_pick > 0.0f)
@@ -86,6 +177,16 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
         }
         Surface s = surface_at(sc, &hit, o, d);
         int flags = sc->materials[sc->prim_material[hit.prim]].flags;
+#ifdef MEDIA
+        if (flags & MATERIAL_NULL) {
+            /* no vertex: the ray goes on through, into the medium beyond */
+            medium = medium_after(sc, &s, d, medium);
+            o = offset_ray_origin(s.p, s.offset, s.ng, d);
+            self = hit.prim;
+            --depth;
+            continue;
+        }
+#endif
         int front = dot(s.ng, d) < 0.0f;
         if (!front) {
             /* One-sided, as Mitsuba 3's BSDFs and area lights: a back face is black. A
@@ -108,8 +209,8 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
         float3 wo = to_frame(-d, s.ns);
         float go_on = RUSSIAN_ROULETTE == RR_ALBEDO ? m->continuation : 1.0f;
         if (nee && p->num_lights > 0 && !(m->flags & MATERIAL_DELTA))
-            radiance += throughput * sample_direct_light(sc, p, m, &s, wo, go_on, next_bits4(rng), rng,
-                                                         rays);
+            radiance += throughput * sample_direct_light(sc, p, m, &s, wo, go_on,
+                                                         medium, next_bits4(rng), rng, rays);
         float4 u = next_uniform4(rng);
         if (RUSSIAN_ROULETTE == RR_ALBEDO) {
             if (u.x >= go_on)
@@ -128,19 +229,18 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
         throughput *= shadow_terminator(&s, wi);
 #endif
         eta_scale *= bs.eta;
-        if (RUSSIAN_ROULETTE == RR_THROUGHPUT && depth >= p->rr_depth) {
-            float q = fmin(fmax(fmax(throughput.x, throughput.y), throughput.z)
-                           * eta_scale * eta_scale, 0.95f);
-            if (u.w >= q)
-                return radiance;
-            throughput /= q;
-        }
+        if (RUSSIAN_ROULETTE == RR_THROUGHPUT && depth >= p->rr_depth
+            && !survives_roulette(&throughput, eta_scale, u.w))
+            return radiance;
         pdf_prev = (bs.lobe & LOBE_DELTA) ? 0.0f : go_on * bs.pdf;
         prev_x = s.p;
         prev_n = s.ns;
         o = offset_ray_origin(s.p, s.offset, s.ng, wi);
         d = wi;
         self = hit.prim;
+#ifdef MEDIA
+        medium = medium_after(sc, &s, wi, medium);
+#endif
     }
 }
 

@@ -41,6 +41,14 @@ float pdf_cosine_hemisphere(float cos_theta)
     return cos_theta > 0.0f ? cos_theta / PI_F : 0.0f;
 }
 
+/* The whole sphere, uniformly; pdf 1 / (4 pi). */
+float3 sample_uniform_sphere(float r1, float r2)
+{
+    float z = 1.0f - 2.0f * r2;
+    float s = sqrt(fmax(0.0f, 1.0f - z * z));
+    return (float3)(cos(2.0f * PI_F * r1) * s, sin(2.0f * PI_F * r1) * s, z);
+}
+
 /* cos^n lobe around z, the report's eq. (4); its pdf is (n + 1) / (2 pi) cos^n(alpha).
  * cos(alpha) = r2^(1/(n+1)) is computed as exp(log(r2') / (n + 1)) with r2' = 1 - r2 (the same
  * distribution), so that r2 = 0 never reaches log and large n keeps precision. */

@@ -21,6 +21,9 @@ typedef struct {
     const global LightNode *light_nodes;    /* the light tree (kernels/light_tree.cl), if any */
     const global float *env_marginal;
     const global float *env_conditional;
+    const global Medium *media;             /* the participating media (kernels/media/) */
+    const global int *prim_media;           /* per primitive: the media it bounds
+                                               (types.h: NO_MEDIUM_CHANGE) */
     int num_spheres;
 } SceneData;
 
@@ -31,9 +34,9 @@ typedef struct {
     const global Texture *textures, const global uchar *texels, const global float4 *env,         \
     const global Light *lights, const global float *light_pick, const global int *light_leaf,    \
     const global LightNode *light_nodes, const global float *env_marginal,                        \
-    const global float *env_conditional
+    const global float *env_conditional, const global Medium *media, const global int *prim_media
 
 #define SCENE_DATA(num_spheres)                                                                   \
     {nodes, spheres, triangles, normals, uvs, prim_material, materials, bindings, textures,       \
      texels, env, lights, light_pick, light_leaf, light_nodes, env_marginal, env_conditional,      \
-     num_spheres}
+     media, prim_media, num_spheres}

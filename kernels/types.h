@@ -45,6 +45,7 @@ typedef struct {
 #define MATERIAL_DELTA 2         /* every lobe is a delta: no light sampling here */
 #define MATERIAL_TRANSMISSIVE 4  /* an interface seen from both sides */
 #define MATERIAL_MASKED 8        /* it has an opacity (kernels/masks.cl) */
+#define MATERIAL_NULL 16         /* no surface, only a boundary between media (kernels/volume.cl) */
 
 /* A parameter of a material that a texture gives: the texture's value at the hit goes into the
  * material's floats from `slot` on (p0.x is 0, p1.x 4, p2.x 8, emission.x 12). A material's
@@ -112,7 +113,7 @@ typedef struct {
     int rr_depth;        /* Russian roulette on throughput starts at this depth */
     int row_start;       /* the launch covers image rows [row_start, row_end): a band of a pass */
     int row_end;
-    int pad3;
+    int camera_medium;   /* the medium the camera is in (a row of the media table), or -1 */
 } RenderParams;
 
 /* One entry of the light table: a light of type `type` (the LIGHT_* tags of
@@ -144,5 +145,17 @@ typedef struct {
     int light;      /* a leaf's entry of the light table */
     int pad;
 } LightNode;
+
+/* A participating medium (kernels/media/homogeneous.cl documents its fields): homogeneous,
+ * with a Henyey-Greenstein phase function (kernels/phase.cl). */
+typedef struct {
+    float4 sigma_s;   /* scattering coefficient per unit length (rgb); w: the phase function's g */
+    float4 sigma_t;   /* extinction coefficient sigma_a + sigma_s (rgb); w unused */
+} Medium;
+
+/* A primitive's media (scene.cl: prim_media): NO_MEDIUM_CHANGE where crossing or leaving it
+ * keeps the medium a ray is in, else (interior + 1) | (exterior + 1) << 16, a row of the media
+ * table on each side, 0 standing for none (vacuum). */
+#define NO_MEDIUM_CHANGE (-1)
 
 #endif

@@ -184,7 +184,9 @@ WARNINGS = [
      "pathtrace's spot lights have no texture; ignored"),
     ('<sensor type="orthographic"><transform name="to_world"><scale x="2" y="3"/></transform></sensor>' + SPHERE,
      "to_world scales x and y differently"),
-    (f'<medium type="homogeneous" id="fog"/>{SPHERE}', "not supported; pathtrace ignores it"),
+    ('<shape type="sphere"><bsdf type="null"/><medium type="homogeneous" name="interior"><phase type="rayleigh"/>'
+     '</medium></shape>' + SPHERE, "pathtrace has no rayleigh phase function; it scatters isotropically instead"),
+    (f'<volume type="gridvolume"/>{SPHERE}', "not supported; pathtrace ignores it"),
 ]
 
 

@@ -23,13 +23,14 @@ def reference_scene(name):
 def test_references_are_present():
     assert {p.stem for p in REFERENCES} >= {"simple-diffuse", "spheres8k-diffuse", "cbox", "envmap-spheres", "meshes",
                                             "meshes-smaller", "meshes-larger", "textures", "masks", "normal-maps",
-                                            "lights", "thinlens", "beckmann"}
+                                            "lights", "thinlens", "beckmann", "media-sphere", "media-glass",
+                                            "media-fog"}
 
 
 # Scenes lit by delta lights (point, spot, directional) are compared with NEE only: no path can
 # hit such a light, so without NEE they are dark, in pathtrace as in Mitsuba's estimators
 # without emitter sampling (test_lights.py checks that they are).
-DELTA_LIT = {"lights"}
+DELTA_LIT = {"lights", "media-fog"}
 CASES = [(path, nee) for path in REFERENCES for nee in (True, False) if nee or path.stem not in DELTA_LIT]
 
 

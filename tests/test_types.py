@@ -4,7 +4,8 @@
 import numpy as np
 import pytest
 
-from pathtrace.types import BVH_NODE, LIGHT, LIGHT_NODE, MATERIAL, RENDER_PARAMS, TEXTURE, TEXTURE_BINDING, TRIANGLE
+from pathtrace.types import (BVH_NODE, LIGHT, LIGHT_NODE, MATERIAL, MEDIUM, RENDER_PARAMS, TEXTURE, TEXTURE_BINDING,
+                             TRIANGLE)
 
 STRUCTS = {
     "Material": MATERIAL,
@@ -15,6 +16,7 @@ STRUCTS = {
     "BVHNode": BVH_NODE,
     "Texture": TEXTURE,
     "TextureBinding": TEXTURE_BINDING,
+    "Medium": MEDIUM,
 }
 
 

@@ -1,14 +1,29 @@
-"""The report's materials: black (an emitter's surface), Lambertian diffuse, modified Phong."""
+"""The report's materials: black (an emitter's surface), Lambertian diffuse, modified Phong; and
+null, no surface at all."""
 
 import numpy as np
 
-from pathtrace.materials.bsdf import BSDFType, Param, check_sum_at_most_one
+from pathtrace.materials.bsdf import NULL, BSDFType, Param, check_sum_at_most_one
 
 
 class Black(BSDFType):
     name = "black"
     doc = "reflects nothing; with Le an emitter (the `emitter` type of scene files)"
     kernel = False
+
+    def pack(self, values, rows):
+        pass
+
+    def unpack(self, row):
+        return {}
+
+
+class Null(BSDFType):
+    name = "null"
+    doc = ("no surface: paths and shadow rays cross it unchanged, and it counts as no bounce; with "
+           "media, the boundary of a medium (Mitsuba 3's null BSDF, pbrt-v4's interface material)")
+    kernel = False
+    flags = NULL
 
     def pack(self, values, rows):
         pass

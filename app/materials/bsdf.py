@@ -13,6 +13,7 @@ TWOSIDED = 1        # the same BSDF on both sides
 DELTA = 2           # every lobe is a delta: no light sampling there
 TRANSMISSIVE = 4    # an interface seen from both sides
 MASKED = 8          # it has an opacity (an alpha mask), the BSDF telling them apart
+NULL = 16           # no surface, only a boundary between media (kernels/volume.cl)
 
 
 @dataclass(frozen=True)
@@ -58,7 +59,7 @@ class BSDFType:
     name: str
     params: tuple = ()
     doc: str = ""
-    flags: int = 0            # DELTA, TRANSMISSIVE
+    flags: int = 0            # DELTA, TRANSMISSIVE, NULL
     kernel: bool = True       # has kernels/bsdfs/<name>.cl
 
     def resolve(self, values: dict) -> dict:

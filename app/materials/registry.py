@@ -2,7 +2,7 @@
 pdf_bsdf, sample_bsdf) generated from it, so that adding a material is one kernel file
 (kernels/bsdfs/<name>.cl) and one entry here."""
 
-from pathtrace.materials.basic import Black, Diffuse, Phong
+from pathtrace.materials.basic import Black, Diffuse, Null, Phong
 from pathtrace.materials.bsdf import DELTA
 from pathtrace.materials.conductor import Conductor, RoughConductor
 from pathtrace.materials.dielectric import Dielectric, ThinDielectric
@@ -11,7 +11,7 @@ from pathtrace.materials.plastic import Plastic, RoughPlastic
 
 BSDFS = {cls.name: cls() for cls in (Black, Diffuse, Phong, Conductor, RoughConductor,
                                      Dielectric, ThinDielectric, Plastic,
-                                     RoughPlastic, DiffuseTransmission)}
+                                     RoughPlastic, DiffuseTransmission, Null)}
 TAGS = {name: i for i, name in enumerate(BSDFS)}
 
 

@@ -8,7 +8,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from pathtrace.errors import UserError, short
-from pathtrace.materials.bsdf import MASKED, TRANSMISSIVE, TWOSIDED, constant_of
+from pathtrace.materials.bsdf import MASKED, NULL, TRANSMISSIVE, TWOSIDED, constant_of
 from pathtrace.materials.registry import BSDFS, TAGS
 from pathtrace.textures.texture import Texture
 from pathtrace.types import MATERIAL
@@ -95,6 +95,8 @@ def pack(type_name: str, params: dict, emission=(0, 0, 0), twosided=False) -> np
     values = {p.name: _as_rows(params.get(p.name, p.default), p.kind)
               for p in bsdf.params if p.kind != "name"}
     emission = _as_rows(emission, "color")
+    if bsdf.flags & NULL and np.any(emission > 0):
+        raise ValueError("a null material is no surface, and cannot emit")
     lengths = [len(v) for v in values.values()] + [len(emission)]
     n = 0 if 0 in lengths else max(lengths)
     values = {k: np.broadcast_to(v, (n,) + v.shape[1:]) for k, v in values.items()}

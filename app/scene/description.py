@@ -8,8 +8,11 @@ import numpy as np
 
 from pathtrace.camera import Camera
 from pathtrace.environment import Environment
+from pathtrace.errors import warn
 from pathtrace.filters import PixelFilter
-from pathtrace.materials import Material, MaterialTable
+from pathtrace.materials import NULL, TRANSMISSIVE, Material, MaterialTable
+from pathtrace.media import MediumInterface
+from pathtrace.scene.meshes import is_closed
 
 
 # How paths end (kernels/integrator.cl, RR_*): "throughput", Russian roulette on the path's
@@ -59,6 +62,7 @@ class Mesh:
     file: MeshFile | None = None  # and how it was read
     uvs: np.ndarray | None = None # (V, 2) float32 texture coordinates, v = 0 at an image's top
                                   # row (Mitsuba 3's convention), or None: (0, 0)
+    media: MediumInterface | None = None   # the media it bounds, or None: it changes no medium
 
 
 @dataclass
@@ -75,6 +79,9 @@ class Scene:
     source: str = ""              # the file it was read from (for messages), if any
     lights: list = field(default_factory=list)   # its delta lights (pathtrace.lights: point, spot,
                                                  # directional); emissive shapes are its area lights
+    media: list = field(default_factory=list)    # its participating media (pathtrace.media.Medium)
+    sphere_media: list = None     # per sphere, the MediumInterface it bounds or None; None: none does
+    camera_medium: int = -1       # the medium the camera is in (a row of `media`), or -1: none
 
     def with_settings(self, **changes) -> "Scene":
         return replace(self, settings=replace(self.settings, **changes))
@@ -93,23 +100,34 @@ class SceneBuilder:
     def __init__(self):
         self.materials = MaterialTable()
         self.spheres, self.sphere_material, self.sphere_names, self.meshes = [], [], [], []
+        self.sphere_media = []
 
     def material(self, material) -> int:
         """A row for a Material (added) or an existing row index."""
         return material if isinstance(material, (int, np.integer)) else self.materials.add(material)
 
-    def add_sphere(self, center, radius, material, name=None):
+    def add_sphere(self, center, radius, material, name=None, media: MediumInterface = None):
         self.spheres.append((*center, radius))
+        self.sphere_media.append(media)
         self.sphere_material.append(self.material(material))
         self.sphere_names.append(name or f"sphere {len(self.spheres) - 1}")
 
     def add_mesh(self, mesh: Mesh):
+        """Adds a mesh; one that rays cross (a null or transmissive material) into a medium but
+        has no inside (an open mesh) is warned of: rays that pass its edges never enter or leave
+        the medium."""
+        crossed = self.materials.rows[mesh.material]["flags"] & (NULL | TRANSMISSIVE)
+        if mesh.media is not None and crossed and len(mesh.faces) and not is_closed(mesh.vertices, mesh.faces):
+            warn(f"mesh {mesh.name!r}{f' ({mesh.source})' if mesh.source else ''}: bounds a medium but is not "
+                 "closed; rays that miss it never enter or leave the medium")
         self.meshes.append(mesh)
 
     def build(self, name, **kwargs) -> Scene:
         return Scene(name, np.asarray(self.spheres, np.float32).reshape(-1, 4),
                      np.asarray(self.sphere_material, np.int32).reshape(-1), self.materials,
-                     self.meshes, self.sphere_names or None, **kwargs)
+                     self.meshes, self.sphere_names or None,
+                     sphere_media=self.sphere_media if any(m is not None for m in self.sphere_media) else None,
+                     **kwargs)
 
 
 def diffuse(rho_d) -> Material:

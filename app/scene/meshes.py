@@ -134,6 +134,16 @@ PLY_TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": 
              "float": "f4", "float32": "f4", "double": "f8", "float64": "f8"}
 
 
+def is_closed(vertices: np.ndarray, faces: np.ndarray) -> bool:
+    """Whether a mesh encloses a volume: every edge, its corners welded by position (a cube's
+    faces may each have corners of their own), is shared by exactly two triangles."""
+    _, weld = np.unique(vertices, axis=0, return_inverse=True)
+    corners = weld.reshape(-1)[faces]
+    edges = np.sort(np.concatenate([corners[:, [0, 1]], corners[:, [1, 2]], corners[:, [2, 0]]]), axis=1)
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    return bool(np.all(counts == 2))
+
+
 def _read_binary_triangles(data: bytes, path):
     """The vertex records and triangles of a binary PLY file whose elements are a vertex of
     scalar properties and a face of one index list, every face a triangle (what exporters and

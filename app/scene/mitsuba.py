@@ -1,7 +1,7 @@
 """Reading Mitsuba 3 XML scenes (the subset docs/mitsuba.md lists) into the scene description
 the TOML format also produces. Every problem names the file and line, e.g.
     cbox.xml:12: <float name="radius">: 'abc' is not a number
-and what pathtrace cannot do (media, other integrators) is one warning line per
+and what pathtrace cannot do (heterogeneous media, other integrators) is one warning line per
 element saying what it does instead.
 
 Files come from strangers, so the parser is expat with document type declarations refused (no
@@ -25,6 +25,7 @@ from pathtrace.lights import DELTA_LIGHTS, DirectionalLight, PointLight, SpotLig
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import LUMINANCE, TRANSMISSIVE, constant_of
 from pathtrace.materials.table import check_bump_map
+from pathtrace.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.meshes import MAX_COORDINATE, check_mesh, read_mesh, unit_disk, vertex_normals
@@ -247,6 +248,9 @@ class _Reader:
         self.lights = []            # point, spot and directional emitters
         self.filter = None          # the film's rfilter
         self.max_depth, self.rr = 0, "throughput"
+        self.media = []             # the scene's participating media
+        self.medium_rows = {}       # id(medium Node) -> row of self.media
+        self.camera_medium = -1
 
     # -- properties of an element: {name: Node} after $substitution --
 
@@ -454,7 +458,7 @@ class _Reader:
                 self.integrator(node)
             elif node.tag == "emitter":
                 self.emitter(node)
-            elif node.tag in ("bsdf", "texture"):
+            elif node.tag in ("bsdf", "texture", "medium"):
                 continue                   # used where referenced
             else:
                 warn(f"{node.where()}: not supported; pathtrace ignores it")
@@ -465,7 +469,8 @@ class _Reader:
         settings.filter = self.filter or PixelFilter("gaussian")      # Mitsuba's default
         return self.builder.build(self.path.stem, camera=self.camera or self.default_camera(),
                                   environment=self.environment or Environment.constant((0, 0, 0)),
-                                  settings=settings, source=str(self.path), lights=self.lights)
+                                  settings=settings, source=str(self.path), lights=self.lights,
+                                  media=self.media, camera_medium=self.camera_medium)
 
     def default_camera(self):
         """Mitsuba's default sensor: at the origin, looking down +z, fov 45 on x."""
@@ -509,6 +514,8 @@ class _Reader:
                 if not 1 <= count <= 1 << 24:
                     _fail(child, f"sample_count must be in 1..{1 << 24}, got {count}")
                 self.settings.spp = count
+            elif child.tag == "medium" or (child.tag == "ref" and self.resolve(child).tag == "medium"):
+                self.camera_medium = self.medium(child)       # Mitsuba 3: the sensor's one medium
         if self.filter is None:
             self.filter = PixelFilter("gaussian")     # Mitsuba's default
         m = self.get(props, "to_world", np.eye(4), ("transform",))
@@ -671,6 +678,10 @@ class _Reader:
         self.material_rows[key] = self.builder.materials.add(material, name)
         return self.material_rows[key]
 
+    def material_node(self, node):
+        """The <bsdf> a shape's <bsdf> or <ref> stands for."""
+        return self.resolve(node) if node.tag == "ref" else node
+
     def material(self, node) -> Material:
         """The Material of a <bsdf> (or <ref> to one)."""
         if node.tag == "ref":
@@ -697,6 +708,8 @@ class _Reader:
             return m
         if kind in ("bumpmap", "normalmap"):
             return self.mapped_material(node, kind, props)
+        if kind == "null":
+            return Material("null")
         if kind == "diffuse":
             rho = self.color(props, "reflectance", 0.5)
             if np.any(constant_of(rho, "color", Texture.maximum) > 1):
@@ -802,12 +815,54 @@ class _Reader:
             _fail(node, str(e))
         return Material(kind, values)
 
+    # -- media --
+
+    def medium(self, node) -> int:
+        """The row of a <medium> (or a <ref> to one) in the scene's media: Mitsuba 3's
+        `homogeneous` (sigma_t and albedo, constant, times scale) with an `isotropic` or `hg`
+        phase function."""
+        if node.tag == "ref":
+            node = self.resolve(node)
+            if node.tag != "medium":
+                _fail(node, "a medium's <ref> must name a <medium>")
+        if id(node) in self.medium_rows:
+            return self.medium_rows[id(node)]
+        kind = node.attrs.get("type")
+        if kind != "homogeneous":
+            _fail(node, f"pathtrace has homogeneous media only, not {short(kind)}")
+        props = {c.attrs["name"]: c for c in node.children if "name" in c.attrs}
+        for name, child in props.items():
+            if name not in ("albedo", "sigma_t", "scale", "sample_emitters", "has_spectral_extinction"):
+                warn(f"{child.where()}: not a parameter of pathtrace's homogeneous medium; ignored")
+            elif child.tag == "volume":
+                _fail(child, f"{name}: pathtrace's media are homogeneous; give a float or an rgb")
+        if not self.get(props, "sample_emitters", True, ("boolean",)):
+            warn(f"{props['sample_emitters'].where()}: pathtrace samples emitters in every medium")
+        scale = self.get(props, "scale", 1.0, ("float",))
+        g = 0.0
+        for phase in (c for c in node.children if c.tag == "phase"):
+            if phase.attrs.get("type") == "hg":
+                g = self.get(self.properties(phase), "g", 0.8, ("float",))     # Mitsuba 3's default
+            elif phase.attrs.get("type") != "isotropic":
+                warn(f"{phase.where()}: pathtrace has no {phase.attrs.get('type')} phase function; "
+                     "it scatters isotropically instead")
+        try:
+            medium = Medium.from_albedo(node.attrs.get("id") or f"medium {len(self.media)}",
+                                        self.color(props, "sigma_t", 1.0, False) * scale,
+                                        self.color(props, "albedo", 0.75, False), g)
+        except ValueError as e:
+            field, problem = str(e).split(": ", 1)
+            _fail(props.get(field, node), f"{field}: {problem}")
+        self.media.append(medium)
+        self.medium_rows[id(node)] = len(self.media) - 1
+        return self.medium_rows[id(node)]
+
     # -- shapes --
 
     def shape(self, node):
         kind = node.attrs.get("type")
         props = self.properties(node)
-        bsdf, emission = None, None
+        bsdf, emission, media = None, None, {}
         for child in node.children:
             if child.tag in ("bsdf", "ref") and "name" not in child.attrs:
                 bsdf = child
@@ -816,9 +871,15 @@ class _Reader:
                     warn(f"{child.where()}: a shape's emitter must be area; ignored")
                     continue
                 emission = self.color(self.properties(child), "radiance", 1.0)
+            elif child.tag in ("medium", "ref") and child.attrs.get("name") in ("interior", "exterior"):
+                media[child.attrs["name"]] = self.medium(child)
             elif child.tag in ("medium", "sensor"):
                 warn(f"{child.where()}: not supported; ignored")
+        if emission is not None and bsdf is not None and self.material_node(bsdf).attrs.get("type") == "null":
+            _fail(node, "an area emitter on a null BSDF: pathtrace's null surfaces cannot emit")
         material = self.material_row(bsdf, emission)
+        # Mitsuba 3: a shape with a medium on either side is a transition, the other side vacuum
+        interface = MediumInterface(media.get("interior", -1), media.get("exterior", -1)) if media else None
         m = self.get(props, "to_world", np.eye(4), ("transform",))
         name = node.attrs.get("id")
         if kind == "sphere":
@@ -831,7 +892,7 @@ class _Reader:
                 _fail(node, f"the radius must be positive, got {radius}")
             if np.any(np.abs(center) + radius > MAX_COORDINATE):
                 _fail(node, f"the sphere reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace")
-            self.builder.add_sphere(center, radius, material, name)
+            self.builder.add_sphere(center, radius, material, name, interface)
             return
         normals = uvs = None
         if kind == "rectangle":
@@ -875,7 +936,7 @@ class _Reader:
                                    vertices.astype(np.float32), faces.astype(np.int32),
                                    None if normals is None else normals.astype(np.float32),
                                    material, origin.path if origin else "", origin,
-                                   None if uvs is None else uvs.astype(np.float32)))
+                                   None if uvs is None else uvs.astype(np.float32), interface))
 
 
 # Mitsuba 3's cube texture coordinates per face (axis, sign): u and v each (s * p[k] + 1) / 2 for

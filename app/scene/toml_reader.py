@@ -20,6 +20,7 @@ from pathtrace.errors import UserError, short
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import TRANSMISSIVE, constant_of
 from pathtrace.materials.table import check_bump_map
+from pathtrace.media import Medium, MediumInterface
 from pathtrace.resources import resource_dir
 from pathtrace.scene import transform
 from pathtrace.scene.description import RUSSIAN_ROULETTE, Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
@@ -44,6 +45,7 @@ class _Reader:
         self.textures = {}           # name -> Texture, as they are read
         self.resolving = []          # the names being read (a reference cycle comes back to one)
         self.images = {}             # the images read (read_image's cache)
+        self.media = {}              # name -> row of the scene's media, as [media] is read
 
     def fail(self, where, problem):
         raise UserError(f"{self.label}: {where}: {problem}")
@@ -300,7 +302,7 @@ class _Reader:
     def camera(self, data):
         where = "camera"
         self.table(data, where, {"type", "eye", "look_at", "up", "vfov", "aperture_radius", "focus_distance",
-                                 "height", "mirrored"})
+                                 "height", "mirrored", "medium"})
         kind = data.get("type", "perspective")
         if kind not in ("perspective", "thinlens", "orthographic"):
             self.fail("camera.type", f"must be perspective, thinlens or orthographic, got {short(kind)}")
@@ -333,6 +335,42 @@ class _Reader:
         if np.linalg.norm(np.cross(forward, cam.up)) < 1e-9 * np.linalg.norm(forward) * np.linalg.norm(cam.up):
             self.fail("camera.up", "must not be parallel to the view direction")
         return cam
+
+    def medium(self, data, where) -> Medium:
+        """One [media] table: sigma_a and sigma_s (pbrt-v4's), or sigma_t and albedo (Mitsuba
+        3's), each times `scale`, and the phase function's g."""
+        self.table(data, where, {"sigma_a", "sigma_s", "sigma_t", "albedo", "scale", "g"})
+        pbrt, mitsuba = {"sigma_a", "sigma_s"} & set(data), {"sigma_t", "albedo"} & set(data)
+        if pbrt and mitsuba:
+            self.fail(where, "give either sigma_a and sigma_s, or sigma_t and albedo, not both")
+        scale = self.number(data, "scale", where, default=1.0, low=0.0)
+        g = self.number(data, "g", where, default=0.0)
+        name = where.split(".", 1)[1]
+        try:
+            if mitsuba:
+                return Medium.from_albedo(name, self.color(data, "sigma_t", where, default=1.0) * scale,
+                                          self.color(data, "albedo", where, default=0.75, high=1.0), g)
+            return Medium.checked(name, self.color(data, "sigma_a", where, default=1.0) * scale,
+                                  self.color(data, "sigma_s", where, default=1.0) * scale, g)
+        except ValueError as e:
+            field, problem = str(e).split(": ", 1)
+            self.fail(f"{where}.{field}", problem)
+
+    def medium_row(self, data, key, where) -> int:
+        """The row of the medium `key` names ([media]), -1 where the key is absent (vacuum)."""
+        name = data.get(key)
+        if name is None:
+            return -1
+        if name not in self.media:
+            known = f" (known: {', '.join(sorted(self.media))})" if self.media else " (there is no [media] table)"
+            self.fail(f"{where}.{key}", f"no medium named {short(name)}{known}")
+        return self.media[name]
+
+    def interface(self, data, where) -> MediumInterface | None:
+        """The media a shape bounds (`interior`, `exterior`; one left out is vacuum), or None."""
+        if "interior" not in data and "exterior" not in data:
+            return None
+        return MediumInterface(self.medium_row(data, "interior", where), self.medium_row(data, "exterior", where))
 
     def light(self, data, where):
         """One [[lights]] entry: a point, spot or directional light (pathtrace.lights), with
@@ -492,7 +530,8 @@ class _Reader:
         """A mesh from a file, or written inline as vertices and faces (polygons of 3 or more
         corners, counter-clockwise seen from the front)."""
         self.table(data, where, {"file", "vertices", "faces", "uvs", "material", "name", "translate",
-                                 "rotate", "scale", "matrix", "face_normals", "flip_normals", "smooth"})
+                                 "rotate", "scale", "matrix", "face_normals", "flip_normals", "smooth",
+                                 "interior", "exterior"})
         flags = {}
         for key in ("face_normals", "flip_normals", "smooth"):
             flags[key] = data.get(key, False)
@@ -529,7 +568,8 @@ class _Reader:
             faces = faces[:, ::-1]
         return Mesh(self.name(data, where, default_name), vertices.astype(np.float32),
                     faces.astype(np.int32), None if normals is None else normals.astype(np.float32),
-                    material, str(source), origin, None if uvs is None else uvs.astype(np.float32))
+                    material, str(source), origin, None if uvs is None else uvs.astype(np.float32),
+                    self.interface(data, where))
 
     def inline_geometry(self, data, where):
         vertices, faces = data.get("vertices"), data.get("faces")
@@ -551,13 +591,19 @@ class _Reader:
 
     def scene(self, data) -> Scene:
         self.table(data, "top level", {"camera", "environment", "render", "textures", "materials", "spheres",
-                                       "meshes", "lights"})
+                                       "meshes", "lights", "media"})
         builder = SceneBuilder()
         self.texture_tables = data.get("textures", {})
         self.table(self.texture_tables, "textures",
                    set(self.texture_tables) if isinstance(self.texture_tables, dict) else set())
         for name in self.texture_tables:
             self.named_texture(name, f"textures.{name}")
+        tables = data.get("media", {})
+        self.table(tables, "media", set(tables) if isinstance(tables, dict) else set())
+        media = []
+        for name, m in tables.items():
+            media.append(self.medium(m, f"media.{name}"))
+            self.media[name] = len(media) - 1
         named = data.get("materials", {})
         self.table(named, "materials", set(named) if isinstance(named, dict) else set())
         rows = {}
@@ -574,7 +620,7 @@ class _Reader:
             self.fail("lights", f"must be an array of tables ([[lights]]), got {type(lights).__name__}")
         for i, s in enumerate(spheres):
             where = f"spheres[{i}]"
-            self.table(s, where, {"center", "radius", "material", "name"})
+            self.table(s, where, {"center", "radius", "material", "name", "interior", "exterior"})
             center = self.vector(s, "center", where)
             radius = self.number(s, "radius", where)
             if radius <= 0:
@@ -582,15 +628,17 @@ class _Reader:
             if np.any(np.abs(center) + radius > MAX_COORDINATE):
                 self.fail(where, f"the sphere reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace")
             builder.add_sphere(center, radius, self.material_ref(builder, rows, s, where),
-                               self.name(s, where, f"sphere {i}"))
+                               self.name(s, where, f"sphere {i}"), self.interface(s, where))
         for i, m in enumerate(meshes):
             where = f"meshes[{i}]"
             if not isinstance(m, dict):
                 self.fail(where, f"must be a table, got {type(m).__name__}")
             builder.add_mesh(self.mesh(m, where, self.material_ref(builder, rows, m, where)))
+        camera = data.get("camera", {"eye": [0, 0, 5], "look_at": [0, 0, 0]})
         return builder.build(
-            self.path.stem,
-            camera=self.camera(data.get("camera", {"eye": [0, 0, 5], "look_at": [0, 0, 0]})),
+            self.path.stem, media=media,
+            camera_medium=self.medium_row(camera, "medium", "camera") if isinstance(camera, dict) else -1,
+            camera=self.camera(camera),
             environment=self.environment(data.get("environment", {})),
             settings=self.settings(data.get("render", {})), source=self.label,
             lights=[self.light(light, f"lights[{i}]") for i, light in enumerate(lights)])

@@ -122,6 +122,9 @@ def scene_toml(scene: Scene, out: Path) -> str:
         lines += ["mirrored = true"]
     if cam.projection == "perspective" and cam.aperture > 0:
         lines += [f"aperture_radius = {_value(cam.aperture)}", f"focus_distance = {_value(cam.focus_distance)}"]
+    medium_names = _medium_names(scene.media)
+    if scene.camera_medium >= 0:
+        lines.append(f"medium = {_value(medium_names[scene.camera_medium])}")
     lines += ["", "[environment]"]
     if env.source == "constant":
         lines.append(f"color = {_value(_color(env.image[0, 0]))}")
@@ -147,6 +150,12 @@ def scene_toml(scene: Scene, out: Path) -> str:
         for t in sorted(textures, key=lambda t: not t.kind.leaf):
             lines.append(f"{json.dumps(texture_names[id(t)])} = {_inline(texture_table(t, texture_names, rel))}")
         lines.append("")
+    if scene.media:
+        lines.append("[media]")
+        for name, m in zip(medium_names, scene.media):
+            table = {"sigma_a": _color(m.sigma_a), "sigma_s": _color(m.sigma_s), "g": float(m.g)}
+            lines.append(f"{json.dumps(name)} = {_inline(table)}")
+        lines.append("")
     lines.append("[materials]")
     names = {}
     for row in range(len(scene.materials)):
@@ -156,8 +165,10 @@ def scene_toml(scene: Scene, out: Path) -> str:
         lines += ["", "[[spheres]]", f"name = {_value(scene.sphere_name(i))}",
                   f"center = {_value(sphere[:3].tolist())}", f"radius = {_value(sphere[3])}",
                   f"material = {_value(names[int(scene.sphere_material[i])])}"]
+        lines += _interface_lines(scene.sphere_media[i] if scene.sphere_media else None, medium_names)
     for mesh in scene.meshes:
         lines += ["", "[[meshes]]", f"name = {_value(mesh.name)}", f"material = {_value(names[mesh.material])}"]
+        lines += _interface_lines(mesh.media, medium_names)
         if mesh.file is not None:
             lines += [f"file = {_value(rel(mesh.file.path))}", f"matrix = {_value(mesh.file.matrix.tolist())}"]
             if mesh.file.face_normals:
@@ -174,3 +185,22 @@ def scene_toml(scene: Scene, out: Path) -> str:
             if mesh.uvs is not None:
                 lines.append(f"uvs = {_value(mesh.uvs.astype(np.float64).tolist())}")
     return "\n".join(lines) + "\n"
+
+
+def _medium_names(media: list) -> list:
+    """Unique names for the [media] table, the media's own where they are unique."""
+    names, taken = [], set()
+    for k, m in enumerate(media):
+        name = m.name if m.name and m.name not in taken else f"medium{k}"
+        names.append(name)
+        taken.add(name)
+    return names
+
+
+def _interface_lines(interface, medium_names: list) -> list:
+    """A shape's interior and exterior media (a side of vacuum left out); nothing for a shape
+    that bounds none."""
+    if interface is None:
+        return []
+    return [f"{key} = {_value(medium_names[row])}"
+            for key, row in (("interior", interface.interior), ("exterior", interface.exterior)) if row >= 0]

@@ -12,7 +12,10 @@ Conventions, each as pbrt-v4 has it:
   normals `N`, their side; an area light emits from its front unless `twosided`;
 - texture coordinates: pbrt looks images up at (u, 1 - v); the reader turns every mesh's v
   round once, to pathtrace's (Mitsuba's) convention, and maps textures accordingly;
-- filenames are relative to the main file's folder, `Include`d files' too.
+- filenames are relative to the main file's folder, `Include`d files' too;
+- media: a shape bounds the current MediumInterface's inside (behind its front) and outside
+  media where they differ, else none (a ray keeps its medium across it); the camera is in the
+  outside medium current at `Camera`; `interface` shapes are null surfaces.
 Instances (`ObjectBegin`/`ObjectInstance`) are flattened into world-space copies, which the
 memory check bounds (docs/pbrt.md)."""
 
@@ -31,6 +34,7 @@ from pathtrace.files import check_regular_file
 from pathtrace.filters import PixelFilter
 from pathtrace.lights import DirectionalLight, PointLight, SpotLight
 from pathtrace.lights.light import luminance
+from pathtrace.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.meshes import MAX_COORDINATE, check_mesh, read_mesh, unit_disk, vertex_normals
@@ -50,6 +54,7 @@ class GraphicsState:
     reverse: bool = False
     material: object = "default"          # a Material, None (an interface), or "default"
     area_light: object = None             # (ParamList, where) of an AreaLightSource
+    media: tuple = ("", "")               # MediumInterface: the inside and outside media's names
 
     def copy(self):
         return replace(self, ctm=self.ctm.copy())
@@ -73,6 +78,10 @@ class PbrtReader:
         self.objects = {}                 # ObjectBegin name: [(mesh or sphere record)]
         self.current_object = None
         self.including = []
+        self.media = []                   # the scene's media, None where named but not yet made
+        self.medium_rows = {}             # medium name -> row of self.media
+        self.medium_mentions = {}         # medium name -> where it was first named
+        self.null_material = make("null", {}, "")    # the interface material's, one row for all
         self.material_rows = {}
         self.warned = set()
 
@@ -89,9 +98,14 @@ class PbrtReader:
         if not self.builder.spheres and not self.builder.meshes:
             raise UserError(f"{self.path}: the scene has no shapes pathtrace can render")
         self.settings.filter = self.filter
+        for name, row in self.medium_rows.items():
+            if self.media[row] is None:
+                raise UserError(f"{self.medium_mentions[name]}: no medium named '{cut(name)}' (MakeNamedMedium)")
+        camera_medium = self.camera_params[4] if self.camera_params else -1
         return self.builder.build(self.path.stem, camera=self.make_camera(),
                                   environment=self.environment or Environment.constant((0, 0, 0)),
-                                  settings=self.settings, source=str(self.path), lights=self.lights)
+                                  settings=self.settings, source=str(self.path), lights=self.lights,
+                                  media=self.media, camera_medium=camera_medium)
 
     def parse_file(self, path: Path, where: str):
         if len(self.including) >= MAX_INCLUDE_DEPTH:
@@ -165,7 +179,9 @@ class PbrtReader:
     def _camera(self, tokens, offset):
         kind = string(tokens, "Camera")
         params = parameters(tokens)
-        self.camera_params = (kind, params, tokens.where(offset), self.state.ctm.copy())
+        # pbrt-v4: the camera is in the current outside medium
+        self.camera_params = (kind, params, tokens.where(offset), self.state.ctm.copy(),
+                              self.medium_row(self.state.media[1], tokens.where(offset)))
         self.named_systems["camera"] = np.linalg.inv(self.state.ctm)
 
     def make_camera(self) -> Camera:
@@ -173,7 +189,7 @@ class PbrtReader:
         if self.camera_params is None:
             kind, params, where, ctm = "perspective", None, str(self.path), np.eye(4)
         else:
-            kind, params, where, ctm = self.camera_params
+            kind, params, where, ctm, _ = self.camera_params
         world_from_camera = np.linalg.inv(ctm)
         r = world_from_camera[:3, :3]
         eye = world_from_camera[:3, 3]
@@ -342,16 +358,70 @@ class PbrtReader:
             tokens.fail(offset, f"unknown area light '{cut(kind)}' (pbrt-v4 has diffuse)")
         self.state.area_light = (params, tokens.where(offset))
 
+    def medium_row(self, name: str, where: str) -> int:
+        """The row of the medium `name` ("": none, -1), which MakeNamedMedium may make later in
+        the file (pbrt-v4 creates media before shapes, whatever the order)."""
+        if not name:
+            return -1
+        if name not in self.medium_rows:
+            self.medium_rows[name] = len(self.media)
+            self.media.append(None)
+            self.medium_mentions[name] = where
+        return self.medium_rows[name]
+
     def _medium(self, tokens, offset):
-        string(tokens, "MakeNamedMedium")
-        parameters(tokens)
-        self.once("media", f"{tokens.where(offset)}: participating media are not supported yet; "
-                           "pathtrace renders the scene without them")
+        """MakeNamedMedium: a homogeneous medium (sigma_a, sigma_s, scale, g); pbrt-v4's grid
+        and cloud media are none of pathtrace's yet."""
+        name = string(tokens, "MakeNamedMedium")
+        params = parameters(tokens)
+        where = tokens.where(offset)
+        kind = params.string("type")
+        if kind is None:
+            tokens.fail(offset, f"MakeNamedMedium '{cut(name)}' needs a \"string type\"")
+        if name in self.medium_rows and self.media[self.medium_rows[name]] is not None:
+            tokens.fail(offset, f"a second medium named '{cut(name)}'")
+        row = self.medium_row(name, where)
+        if kind != "homogeneous":
+            for p in params.params.values():
+                p.used = True
+            warn(f"{where}: pathtrace has homogeneous media only; the {cut(kind)} medium '{cut(name)}' "
+                 "is rendered as vacuum")
+            self.media[row] = Medium(name, np.zeros(3), np.zeros(3))
+            return
+        if params.type_of("preset"):
+            warn(f"{params.where('preset')}: pathtrace has no named scattering presets; it uses sigma_a and sigma_s")
+            params.string("preset")
+        for emission in ("Le", "Lescale"):
+            if params.type_of(emission):
+                warn(f"{params.where(emission)}: pathtrace's media do not emit; ignored")
+                params.get(emission, (params.type_of(emission),), 0)
+        scale = params.float("scale", 1.0)
+        try:
+            self.media[row] = Medium.checked(name, spectrum_rgb(params, "sigma_a", 1.0, "unbounded") * scale,
+                                             spectrum_rgb(params, "sigma_s", 1.0, "unbounded") * scale,
+                                             params.float("g", 0.0))
+        except ValueError as e:
+            field, problem = str(e).split(": ", 1)
+            if field in params.params:
+                params.fail(field, problem)
+            raise UserError(f"{where}: {field}: {problem}") from None
+        self.unused(params, "homogeneous medium")
 
     def _medium_interface(self, tokens, offset):
-        string(tokens, "MediumInterface")
+        """MediumInterface "inside" "outside" (one name: both sides)."""
+        inside = string(tokens, "MediumInterface")
+        outside = inside
         if tokens.peek()[0] == "string" and " " not in tokens.peek()[1]:
-            tokens.next()
+            outside = tokens.next()[1]
+        self.state.media = (inside, outside)
+
+    def medium_interface(self, where) -> MediumInterface | None:
+        """The media the current shape bounds, or None where both sides are the same (pbrt-v4:
+        no transition, the ray keeps its medium)."""
+        inside, outside = self.state.media
+        if inside == outside:
+            return None
+        return MediumInterface(self.medium_row(inside, where), self.medium_row(outside, where))
 
     def _coordinate_system(self, tokens, offset):
         self.named_systems[string(tokens, "CoordinateSystem")] = self.state.ctm.copy()
@@ -419,9 +489,10 @@ class PbrtReader:
                 self.builder.add_mesh(replace(record, vertices=vertices.astype(np.float32), faces=faces,
                                               normals=None if normals is None else normals.astype(np.float32)))
             else:
-                center, radius, row, sphere_name = record
+                center, radius, row, sphere_name, media = record
                 scale = float(np.mean(np.linalg.norm(m[:3, :3], axis=0)))
-                self.builder.add_sphere(transform.transform_points(m, center[None])[0], radius * scale, row, sphere_name)
+                self.builder.add_sphere(transform.transform_points(m, center[None])[0], radius * scale, row,
+                                        sphere_name, media)
 
     # -- shapes --
 
@@ -432,8 +503,8 @@ class PbrtReader:
         if isinstance(material, str):
             material = make("diffuse", {"rho_d": np.full(3, 0.5)}, "")      # pbrt-v4's default
             self.state.material = material
-        if material is None:
-            material = make("black", {}, "")
+        if material is None:              # pbrt's interface: no surface, only a boundary of media
+            material = make("black", {}, "") if emission is not None else self.null_material
         if alpha is not None and not (isinstance(alpha, float) and alpha == 1.0):
             if not isinstance(alpha, Texture) and not 0 <= alpha <= 1:
                 raise UserError(f"'alpha' must lie in [0, 1], got {alpha:g}")
@@ -454,11 +525,12 @@ class PbrtReader:
         kind = string(tokens, "Shape")
         params = parameters(tokens)
         where = tokens.where(offset)
-        if self.state.material is None and self.state.area_light is None:
+        media = self.medium_interface(where)
+        if self.state.material is None and self.state.area_light is None and media is None:
             for p in params.params.values():
                 p.used = True
-            self.once(("interface", where), f"{where}: a shape of the interface material only bounds media; "
-                                            "pathtrace leaves it out")
+            self.once(("interface", where), f"{where}: a shape of the interface material that bounds no "
+                                            "medium is nothing; pathtrace leaves it out")
             return
         mesh = self.shape_mesh(kind, params, where)
         if mesh is None:
@@ -477,9 +549,9 @@ class PbrtReader:
             center, radius = vertices
             target = self.objects[self.current_object] if self.current_object is not None else None
             if target is not None:
-                target.append((center, radius, row, name))
+                target.append((center, radius, row, name, media))
             else:
-                self.builder.add_sphere(center, radius, row, name)
+                self.builder.add_sphere(center, radius, row, name, media)
             return
         if twosided:
             faces = np.concatenate([faces, faces[:, ::-1]])
@@ -487,7 +559,7 @@ class PbrtReader:
         # scene's reference to the file could not say (convert writes the mesh anew)
         record = Mesh(name, vertices.astype(np.float32), faces.astype(np.int32),
                       None if normals is None else normals.astype(np.float32), row, source, None,
-                      None if uvs is None else uvs.astype(np.float32))
+                      None if uvs is None else uvs.astype(np.float32), media)
         if self.current_object is not None:
             self.objects[self.current_object].append(record)
         else:
