@@ -110,11 +110,10 @@ class CompiledScene:
             raise UserError(f"{scene.source or scene.name}: {e}") from None
 
     @property
-    def has_media(self) -> bool:
-        """Whether the kernels need their volumetric paths (kernels/volume.cl): media, or null
-        surfaces that rays cross."""
+    def has_null_surfaces(self) -> bool:
+        """Whether a shape's material is null: rays cross it (NULL_SURFACES)."""
         null_rows = self.materials["flags"] & NULL != 0
-        return bool(self.scene.media) or bool(np.any(null_rows[np.unique(self.prim_material)]))
+        return bool(np.any(null_rows[np.unique(self.prim_material)]))
 
     @property
     def num_triangles(self) -> int:
@@ -167,7 +166,8 @@ class CompiledScene:
                         bsdfs=tuple(name for name, tag in TAGS.items() if tag in used),
                         textures=self.textures.types, masks=self.textures.masks,
                         normal_maps=self.textures.normal_maps, lights=self.lights.types,
-                        light_tree=self.lights.tree, media=self.has_media,
+                        light_tree=self.lights.tree, media=bool(self.scene.media) or self.has_null_surfaces,
+                        null_surfaces=self.has_null_surfaces,
                         camera=kernel_name(camera), filter=settings.filter.name,
                         russian_roulette=settings.russian_roulette, stack=stack_size(self.bvh.depth),
                         flat=(self.num_spheres, self.num_triangles)

@@ -23,6 +23,7 @@ class Features:
                                            # always compiled in); None: all
     light_tree: bool = False               # lights are chosen through a light tree (kernels/light_tree.cl)
     media: bool = False                    # participating media or null surfaces (kernels/volume.cl)
+    null_surfaces: bool = False            # a material is null: rays cross it (NULL_SURFACES)
     camera: str = "perspective"            # its kernel file: pathtrace.camera.kernel_name
     filter: str = "box"                    # one of pathtrace.filters.FILTERS
     russian_roulette: str = "throughput"   # one of pathtrace.scene.description.RUSSIAN_ROULETTE
@@ -36,6 +37,7 @@ class Features:
         return ((() if self.triangles else ("NO_TRIANGLES",)) + (("TEXTURES",) if self.textures else ())
                 + (("ALPHA_MASKS",) if self.masks else ()) + (("NORMAL_MAPS",) if self.normal_maps else ())
                 + (("LIGHT_TREE",) if self.light_tree else ()) + (("MEDIA",) if self.media else ())
+                + (("NULL_SURFACES",) if self.null_surfaces else ())
                 + (f"RUSSIAN_ROULETTE=RR_{self.russian_roulette.upper()}", f"BVH_STACK_SIZE={self.stack}")
                 + ((f"FLAT_SPHERES={self.flat[0]}", f"FLAT_TRIANGLES={self.flat[1]}") if self.flat else ())
                 + (self.bsdf_defines if self.bsdf_defines is not None else all_bsdf_defines()))

@@ -51,7 +51,7 @@ void trace_aovs(const SceneData *sc, const RenderParams *p, float3 o, float3 d, 
         }
         Surface s = surface_at(sc, &hit, o, d);
         int flags = sc->materials[sc->prim_material[hit.prim]].flags;
-#ifdef MEDIA
+#ifdef NULL_SURFACES
         if (flags & MATERIAL_NULL) {        /* no surface (the media themselves are not guides) */
             o = offset_ray_origin(s.p, s.offset, s.ng, d);
             self = hit.prim;

@@ -177,7 +177,7 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
         }
         Surface s = surface_at(sc, &hit, o, d);
         int flags = sc->materials[sc->prim_material[hit.prim]].flags;
-#ifdef MEDIA
+#ifdef NULL_SURFACES
         if (flags & MATERIAL_NULL) {
             /* no vertex: the ray goes on through, into the medium beyond */
             medium = medium_after(sc, &s, d, medium);
