@@ -39,6 +39,7 @@ SCENES = {  # name: (width, height, spp per render, renders)
     "lights": (None, None, 1024, 16),
     "thinlens": (None, None, 1024, 16),
     "beckmann": (None, None, 1024, 16),
+    "roughdielectric": (None, None, 1024, 16),
     "media-sphere": (None, None, 1024, 16),
     "media-glass": (None, None, 1024, 16),
     "media-fog": (None, None, 1024, 16),

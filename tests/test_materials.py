@@ -301,10 +301,13 @@ def test_rough_mirror_loses_the_light_its_microfacets_send_below(backend):
 
 # -- diffuse transmission (pbrt-v4's) --
 
-def sphere_grid(nz=800, nphi=800):
-    """Midpoints of a (z, phi) grid over the whole sphere, each cell of solid angle dz dphi."""
-    grid, cell = hemisphere_grid(nz, nphi)
-    return np.concatenate([grid, grid * [1, 1, -1]]), cell
+def sphere_grid(nz, nphi):
+    """Midpoints of a (z, phi) grid over the whole sphere; each cell has solid angle dz dphi."""
+    z = (np.arange(nz) + 0.5) / nz * 2 - 1
+    phi = (np.arange(nphi) + 0.5) / nphi * 2 * np.pi - np.pi
+    zz, pp = np.meshgrid(z, phi, indexing="ij")
+    s = np.sqrt(1 - zz ** 2)
+    return np.stack([s * np.cos(pp), s * np.sin(pp), zz], -1).reshape(-1, 3), (2 / nz) * (2 * np.pi / nphi)
 
 
 @pytest.mark.parametrize("side", [1, -1])
@@ -322,7 +325,7 @@ def test_diffuse_transmission_samples_its_pdf_on_both_sides(kernels, side, r, t)
     nz, nphi = 16, 16
     counts, _, _ = np.histogram2d(wi[:, 2], np.arctan2(wi[:, 1], wi[:, 0]),
                                   [np.linspace(-1, 1, 2 * nz + 1), np.linspace(-np.pi, np.pi, nphi + 1)])
-    grid, cell = sphere_grid(nz * 20, nphi * 20)
+    grid, cell = sphere_grid(2 * nz * 20, nphi * 20)
     f, pdf = evaluate(kernels, m, wo, grid)
     assert (pdf * cell).sum() == pytest.approx(1.0, rel=1e-3)
     zbin = np.clip(((grid[:, 2] + 1) / 2 * 2 * nz).astype(int), 0, 2 * nz - 1)
@@ -374,7 +377,7 @@ def test_a_two_sided_transmissive_material_is_refused_in_every_reader(tmp_path):
                                     '<bsdf type="roughdielectric"/></bsdf></shape>'
                                     '<shape type="sphere"><bsdf type="twosided"><bsdf type="thindielectric"/></bsdf>'
                                     '</shape></scene>')
-    with pytest.raises(UserError, match="s.xml:1: .*cannot hold a thindielectric"):
+    with pytest.raises(UserError, match="s.xml:1: .*cannot hold a roughdielectric"):
         load_scene(str(tmp_path / "s.xml"))
 
 
@@ -412,3 +415,74 @@ def test_only_scenes_with_beckmann_metals_compile_beckmann(tmp_path):
         scene = load_scene(str(tmp_path / "s.toml"))
         return CompiledScene(scene).features(scene.settings, scene.camera).defines()
     assert "BECKMANN" in defines("beckmann") and "BECKMANN" not in defines("ggx")
+
+
+# -- rough glass --
+
+ROUGH_GLASS = {
+    "ggx-0.1": material("roughdielectric", alpha=0.1, int_ior=1.5),
+    "ggx-0.5-water": material("roughdielectric", alpha=0.5, int_ior="water"),
+    "beckmann-0.3": material("roughdielectric", alpha=0.3, int_ior=1.5, distribution="beckmann"),
+    "beckmann-0.8-diamond": material("roughdielectric", alpha=0.8, int_ior="diamond", distribution="beckmann"),
+}
+
+
+@pytest.mark.parametrize("theta", [10, 55, 80, 120, 165])
+@pytest.mark.parametrize("name", list(ROUGH_GLASS))
+def test_rough_glass_samples_its_pdf_over_the_sphere(kernels, name, theta):
+    """From outside (theta < 90) and inside: the directions reflected and refracted follow the
+    pdf over the whole sphere, and the pdf integrates to the share of draws that gave one."""
+    m, wo = ROUGH_GLASS[name], direction(theta)
+    wi, weight = sample(kernels, m, wo, seed=theta)
+    ok = weight[:, 3] == 1
+    # the bins' pole along y, away from the lobes (which lie about the xz plane): near a pole
+    # the midpoints of even steps in z are too coarse in angle for a narrow refracted lobe
+    nz, nphi, sub = 32, 16, 40
+    grid, cell = sphere_grid(nz * sub, nphi * sub)
+    _, pdf = evaluate(kernels, m, wo, grid[:, [0, 2, 1]])
+    expected = (pdf * cell).reshape(nz, sub, nphi, sub).sum(axis=(1, 3)) * len(wi)
+    counts, _, _ = np.histogram2d(wi[ok, 1], np.arctan2(wi[ok, 2], wi[ok, 0]),
+                                  [np.linspace(-1, 1, nz + 1), np.linspace(-np.pi, np.pi, nphi + 1)])
+    assert expected.sum() == pytest.approx(ok.sum(), rel=0.01)
+    assert chi_square(counts.ravel(), expected.ravel()) > 1e-3
+
+
+@pytest.mark.parametrize("theta", [40, 140])
+@pytest.mark.parametrize("name", list(ROUGH_GLASS))
+def test_rough_glass_weights_and_generalised_reciprocity(kernels, name, theta):
+    """The weight is f |cos| / pdf with pdf_bsdf's pdf; reflection is reciprocal, and refraction
+    reciprocal up to the IORs: f(wi, wo) / n(wi's side)^2 = f(wo, wi) / n(wo's side)^2."""
+    m, wo = ROUGH_GLASS[name], direction(theta)
+    wi, weight = sample(kernels, m, wo, count=4000, seed=3)
+    ok = weight[:, 3] == 1
+    f, pdf = evaluate(kernels, m, wo, wi[ok])
+    np.testing.assert_allclose(wi[ok, 3], pdf, rtol=2e-4)
+    np.testing.assert_allclose(weight[ok, :3], f * np.abs(wi[ok, 2:3]) / pdf[:, None], rtol=2e-3, atol=1e-6)
+    n_inside, n_outside = float(m["p0"][0][0]), float(m["p0"][0][1])
+    wo_vec = np.array([wo["x"], wo["y"], wo["z"]])
+    n = lambda z: n_outside if z > 0 else n_inside      # noqa: E731
+    for k in np.flatnonzero(ok)[:40]:
+        back, _ = evaluate(kernels, m, cltypes.make_float4(*wi[k, :3], 0), wo_vec[None])
+        forward = f[np.flatnonzero(ok) == k][0]
+        np.testing.assert_allclose(back[0] / n(wi[k, 2]) ** 2, forward / n(wo_vec[2]) ** 2, rtol=2e-3, atol=1e-7)
+
+
+@pytest.mark.parametrize("theta", [0, 60, 85, 150])
+@pytest.mark.parametrize("name", list(ROUGH_GLASS))
+def test_rough_glass_albedo_is_what_sampling_estimates_and_at_most_one(kernels, name, theta):
+    """The quadrature of f |cos| over the sphere, with radiance's (n_wo / n_wi)^2 undone on
+    the refracted side, is the sample weights' mean with that factor undone too, and at most 1:
+    what the microfacets do not reflect or refract (shadowed light) is lost, never gained."""
+    m, wo = ROUGH_GLASS[name], direction(theta)
+    n_inside, n_outside = float(m["p0"][0][0]), float(m["p0"][0][1])
+    n_wo = n_outside if wo["z"] > 0 else n_inside
+    grid, cell = sphere_grid(4000, 800)
+    grid = grid[:, [0, 2, 1]]                 # the pole along y, away from the lobes
+    f, _ = evaluate(kernels, m, wo, grid)
+    crossed = np.where(grid[:, 2] * wo["z"] < 0, (np.where(grid[:, 2] > 0, n_outside, n_inside) / n_wo) ** 2, 1.0)
+    albedo = (f[:, 0] * np.abs(grid[:, 2]) * crossed).sum() * cell
+    wi, weight = sample(kernels, m, wo, seed=theta + 1)
+    crossed = np.where(wi[:, 2] * wo["z"] < 0, (np.where(wi[:, 2] > 0, n_outside, n_inside) / n_wo) ** 2, 1.0)
+    w = np.where(weight[:, 3] == 1, weight[:, 0] * crossed, 0.0)
+    assert abs(w.mean() - albedo) < 5 * w.std() / np.sqrt(len(w)) + 3e-3, (w.mean(), albedo)
+    assert albedo <= 1.0 + 3e-3

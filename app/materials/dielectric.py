@@ -1,9 +1,13 @@
-"""Glass: the smooth interface between two dielectrics (Fresnel reflection and refraction), and
-a thin sheet of glass (no refraction), with Mitsuba 3's parameters."""
+"""Glass: the smooth interface between two dielectrics (Fresnel reflection and refraction), a
+rough one (Walter et al.'s microfacet model), and a thin sheet of glass (no refraction), with
+Mitsuba 3's parameters."""
+
+from dataclasses import replace
 
 import numpy as np
 
 from pathtrace.materials.bsdf import DELTA, TRANSMISSIVE, BSDFType, Param
+from pathtrace.materials.microfacet import DISTRIBUTION, DISTRIBUTIONS, GGX_PARAMS
 from pathtrace.materials.optics import IOR
 
 def check_interface(values) -> str | None:
@@ -50,3 +54,29 @@ class ThinDielectric(Dielectric):
     name = "thindielectric"
     doc = ("a thin sheet of glass: light is reflected or passes straight through, with the "
            "sheet's inner reflections summed")
+
+
+class RoughDielectric(Dielectric):
+    name = "roughdielectric"
+    params = _DIELECTRIC_PARAMS + (replace(GGX_PARAMS[0], slot="p0.z"), DISTRIBUTION)
+    flags = TRANSMISSIVE
+    doc = ("rough glass: reflection and refraction by GGX or Beckmann microfacets (Walter et al. "
+           "2007), sampled by the normals visible from the outgoing direction")
+
+    def check(self, values):
+        if not np.all(np.isin(values["distribution"], list(DISTRIBUTIONS.values()))):
+            return "distribution: must be ggx or beckmann"
+        return check_interface(values)
+
+    variant_defines = ("BECKMANN",)
+
+    def defines(self, rows):
+        return ("BECKMANN",) if np.any(rows["p0"][:, 3] > 0.5) else ()
+
+    def pack(self, values, rows):
+        super().pack(values, rows)
+        rows["p0"][:, 2] = values["alpha"]
+        rows["p0"][:, 3] = values["distribution"]
+
+    def unpack(self, row):
+        return {**super().unpack(row), "alpha": float(row["p0"][2]), "distribution": float(row["p0"][3])}

@@ -5,12 +5,12 @@ pdf_bsdf, sample_bsdf) generated from it, so that adding a material is one kerne
 from pathtrace.materials.basic import Black, Diffuse, Null, Phong
 from pathtrace.materials.bsdf import DELTA
 from pathtrace.materials.conductor import Conductor, RoughConductor
-from pathtrace.materials.dielectric import Dielectric, ThinDielectric
+from pathtrace.materials.dielectric import Dielectric, RoughDielectric, ThinDielectric
 from pathtrace.materials.diffusetransmission import DiffuseTransmission
 from pathtrace.materials.plastic import Plastic, RoughPlastic
 
 BSDFS = {cls.name: cls() for cls in (Black, Diffuse, Phong, Conductor, RoughConductor,
-                                     Dielectric, ThinDielectric, Plastic,
+                                     Dielectric, RoughDielectric, ThinDielectric, Plastic,
                                      RoughPlastic, DiffuseTransmission, Null)}
 TAGS = {name: i for i, name in enumerate(BSDFS)}
 

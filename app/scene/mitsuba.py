@@ -715,7 +715,7 @@ class _Reader:
             if np.any(constant_of(rho, "color", Texture.maximum) > 1):
                 _fail(props["reflectance"], "a reflectance must lie in [0, 1]")
             return Material("diffuse", {"rho_d": rho})
-        if kind in ("conductor", "roughconductor", "dielectric", "thindielectric", "plastic",
+        if kind in ("conductor", "roughconductor", "dielectric", "roughdielectric", "thindielectric", "plastic",
                     "roughplastic"):
             return self.mitsuba_material(node, kind, props)
         albedo = self.color(props, "base_color", None, False) if "base_color" in props else \
@@ -787,7 +787,7 @@ class _Reader:
                 target = self.resolve(c) if c.tag == "ref" else c
                 values[p.name] = c.attrs.get("value") if c.tag == "string" else \
                     self.texture(target) if target.tag == "texture" else self.get(props, p.name, kinds=("float",))
-        if kind == "roughconductor":
+        if kind in ("roughconductor", "roughdielectric"):
             values.setdefault("distribution", "beckmann")             # Mitsuba's default
         elif values.get("distribution", "ggx") != "ggx" or (kind.startswith("rough") and "distribution" not in props):
             warn(f"{node.where()}: pathtrace's rough plastic is GGX; the {values.get('distribution', 'beckmann')} "

@@ -196,11 +196,12 @@ class MaterialMapper:
         if kind in ("dielectric", "thindielectric"):
             eta = self._eta(params, where)
             alpha = self.roughness(params, where)
-            if kind == "dielectric" and alpha >= SMOOTH_ALPHA:
-                warn(f"{where}: rough glass is not supported yet; pathtrace renders it smooth")
             if eta == 1.0:
                 warn(f"{where}: a dielectric of eta 1 is invisible; pathtrace leaves the surface out")
                 return None
+            if kind == "dielectric" and alpha >= SMOOTH_ALPHA:      # pbrt-v4's rough glass: GGX
+                return make("roughdielectric", {"int_ior": eta, "ext_ior": 1.0, "alpha": min(alpha, 1.0),
+                                                "distribution": "ggx"}, where)
             return make(kind, {"int_ior": eta, "ext_ior": 1.0}, where)
         if kind in ("coateddiffuse", "coatedconductor"):
             return self._coated(kind, params, where)
