@@ -29,16 +29,6 @@ typedef struct {
     int flags;       /* LIGHT_* */
 } LightSample;
 
-/* Power heuristic with beta = 2 (Veach, "Robust Monte Carlo Methods for Light Transport
- * Simulation", 1997, section 9.2.4): the weight of the technique with density a. Written as
- * 1 / (1 + (b / a)^2), so that densities whose squares overflow float32 (a Phong lobe of
- * exponent 1e8 has a density of 1.6e7) give 0 or 1, never inf / inf. */
-float mis_weight(float a, float b)
-{
-    float r = b / a;
-    return a > 0.0f ? 1.0f / (1.0f + r * r) : 0.0f;
-}
-
 /* Walker's alias method: a bin chosen uniformly, then kept or replaced by its alias, picks a
  * light in proportion to its power. The bin comes from all 32 bits of one hash word, as
  * floor(bin_bits * count / 2^32) (each bin's probability is 1/count to within count / 2^32

@@ -278,3 +278,20 @@ def test_convert_writes_turned_meshes_and_resampled_maps_beside_the_toml(tmp_pat
     assert b.camera.mirrored and np.allclose(a.environment.image, b.environment.image)
     for name in ("vertices", "faces", "normals", "uvs"):
         assert np.allclose(getattr(a.meshes[0], name), getattr(b.meshes[0], name)), name
+
+
+def test_coateddiffuse_is_pbrts_layered_material(tmp_path):
+    """pbrt-v4's coateddiffuse keeps its parameters (roughness remapped by default, maxdepth,
+    nsamples, the layer's thickness, albedo and g); a roughness below pbrt's 1e-3 is smooth."""
+    s = scene(tmp_path, 'Material "coateddiffuse" "rgb reflectance" [0.2 0.4 0.6] "float roughness" 0.04 '
+                        '"float thickness" 0.2 "rgb albedo" [0.5 0.5 0.5] "float g" 0.3 "integer maxdepth" 20 '
+                        '"integer nsamples" 2 "float eta" 1.4\n' + FLOOR
+              + 'Material "coateddiffuse" "float roughness" 0.0005 "bool remaproughness" false\n' + FLOOR)
+    rough, smooth = (s.materials.get(m.material) for m in s.meshes)
+    assert rough.type == smooth.type == "coateddiffuse" and rough.twosided
+    np.testing.assert_allclose(rough.params["reflectance"], [0.2, 0.4, 0.6])
+    assert rough.params["alpha"] == pytest.approx(0.2)            # sqrt(0.04)
+    assert (rough.params["thickness"], rough.params["g"], rough.params["maxdepth"], rough.params["nsamples"],
+            rough.params["eta"]) == pytest.approx((0.2, 0.3, 20, 2, 1.4))
+    np.testing.assert_allclose(rough.params["albedo"], 0.5)
+    assert (smooth.params["alpha"], smooth.params["maxdepth"], smooth.params["thickness"]) == pytest.approx((0, 10, 0.01))

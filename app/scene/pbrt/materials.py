@@ -256,9 +256,8 @@ class MaterialMapper:
         return make("roughconductor", {**values, "alpha": min(alpha, 1.0), "distribution": "ggx"}, where)
 
     def _coated(self, kind, params, where):
-        """pbrt-v4's layered materials, until their random walk is in (the BSDF issue): a
-        coateddiffuse as Mitsuba's (rough)plastic of the same reflectance, roughness and IOR, a
-        coatedconductor as its conductor."""
+        """pbrt-v4's layered materials: a coateddiffuse as pathtrace's (the same random walk), a
+        coatedconductor as its conductor until its layered form is in."""
         alpha = self.roughness(params, where)
         if kind == "coatedconductor":
             warn(f"{where}: pathtrace has no layered materials yet; this coatedconductor is rendered as its conductor")
@@ -273,15 +272,10 @@ class MaterialMapper:
                 if name in params.params:
                     params.params[name].used = True
             return make("conductor", inner, where)
-        warn(f"{where}: pathtrace has no layered materials yet; this coateddiffuse is rendered as Mitsuba's "
-             f"{'rough' if alpha >= SMOOTH_ALPHA else ''}plastic")
-        eta = self._eta(params, where)
-        for name in ("thickness", "albedo", "g", "maxdepth", "nsamples"):
-            if name in params.params:
-                params.params[name].used = True
-        values = {"diffuse_reflectance": self.texture_input(params, "reflectance", 0.5), "int_ior": eta,
-                  "ext_ior": 1.0}
-        if alpha < SMOOTH_ALPHA:
-            return make("plastic", values, where)
-        return make("roughplastic", {**values, "alpha": min(alpha, 1.0), "distribution": "ggx"}, where)
+        values = {"reflectance": self.texture_input(params, "reflectance", 0.5), "eta": self._eta(params, where),
+                  "alpha": min(alpha, 1.0) if alpha >= SMOOTH_ALPHA else 0.0,
+                  "thickness": params.float("thickness", 0.01), "g": params.float("g", 0.0),
+                  "albedo": spectrum_rgb(params, "albedo", 0.0),
+                  "maxdepth": params.int("maxdepth", 10), "nsamples": params.int("nsamples", 1)}
+        return make("coateddiffuse", values, where)
 
