@@ -32,13 +32,15 @@ GLOSSY = {
     "roughplastic-0.1": material("roughplastic", diffuse_reflectance=[0.7, 0.3, 0.1], alpha=0.1, int_ior=1.5),
     "roughplastic-nonlinear-0.6": material("roughplastic", diffuse_reflectance=[0.2, 0.9, 0.5], alpha=0.6,
                                            nonlinear=True, specular_reflectance=0.7),
+    "roughplastic-beckmann-0.2": material("roughplastic", diffuse_reflectance=[0.7, 0.3, 0.1], alpha=0.2,
+                                          distribution="beckmann"),
 }
 
 
 @pytest.mark.parametrize("theta", [0, 35, 70])
 @pytest.mark.parametrize("name", ["roughconductor-gold-0.15", "roughconductor-mirror-0.5", "plastic",
                                   "roughconductor-beckmann-gold-0.1", "roughconductor-beckmann-0.6",
-                                  "roughplastic-0.1", "roughplastic-nonlinear-0.6"])
+                                  "roughplastic-0.1", "roughplastic-nonlinear-0.6", "roughplastic-beckmann-0.2"])
 def test_sampled_directions_follow_the_pdf(kernels, name, theta):
     """The non-delta directions' histogram over (cos theta, phi) bins matches the pdf integrated
     over each bin; the pdf's integral over the hemisphere is the share of draws that gave one

@@ -173,8 +173,6 @@ WARNINGS = [
      "a texture cannot stand here; pathtrace uses its mean colour (0.3, 0.3, 0.3)"),
     ('<shape type="sphere"><bsdf type="principled"><rgb name="base_color" value="0.8, 0.2, 0.1"/></bsdf></shape>',
      "pathtrace uses a diffuse BSDF of albedo 0.8, 0.2, 0.1"),
-    ('<shape type="sphere"><bsdf type="roughplastic"/></shape>',
-     "the beckmann distribution (Mitsuba's default) is rendered as GGX"),
     (f'<emitter type="sky"/>{SPHERE}', "pathtrace has no sky emitters; it ignores this one"),
     (f'<shape type="hair"/>{SPHERE}', "pathtrace has no hair shape; it ignores this one"),
     (f'<integrator type="direct"/>{SPHERE}', "pathtrace renders with its path tracer instead"),

@@ -1,7 +1,8 @@
-"""The GGX microfacet distribution on the host, mirroring kernels/microfacet.cl: the roughness
-parameters the rough materials share, and the rough dielectric interface's reflectance that
-roughplastic tabulates (Mitsuba 3 computes the same quantities at load time)."""
+"""The GGX and Beckmann microfacet distributions on the host, mirroring kernels/microfacet.cl:
+the roughness parameters the rough materials share, and the rough dielectric interface's
+reflectance that roughplastic tabulates (Mitsuba 3 computes the same quantities at load time)."""
 
+import math
 from functools import lru_cache
 
 import numpy as np
@@ -12,9 +13,6 @@ from pathtrace.materials.optics import fresnel_dielectric
 GGX_PARAMS = (
     Param("alpha", "number", default=0.1, low=1e-4, high=1.0,
           doc="the microfacet roughness (Mitsuba's alpha: the root mean square slope)"),
-    Param("distribution", "name", default="ggx", names={"ggx": "ggx"},
-          doc="the microfacet distribution; GGX only (Mitsuba's default for the plastics is "
-              "beckmann: give ggx there)"),
 )
 
 # roughconductor's distribution: a number the kernel reads (kernels/bsdfs/roughconductor.cl),
@@ -28,13 +26,6 @@ DISTRIBUTION = Param("distribution", "number", default=0.0, low=0.0, high=1.0, n
 # are as close to the exact curve as Mitsuba's 64 evenly spaced ones)
 TABLE_SIZE = 16
 TABLE_COSINES = np.maximum(1e-6, np.linspace(0.0, 1.0, TABLE_SIZE) ** 2)
-
-
-def resolve_distribution(values: dict) -> dict:
-    values = dict(values)
-    if values.pop("distribution", "ggx") != "ggx":
-        raise ValueError("distribution: only ggx is implemented")
-    return values
 
 
 def ggx_g1(v, m, alpha):
@@ -62,9 +53,59 @@ def sample_ggx_visible(wo, alpha, u1, u2):
     return m / np.linalg.norm(m, axis=-1, keepdims=True)
 
 
-def rough_dielectric_albedo(cos_theta, alpha, eta, nodes=None):
+def beckmann_g1(v, m, alpha):
+    """Smith's G1 for Beckmann by Walter's rational approximation, as the kernels (and Mitsuba 3)."""
+    xy = np.sqrt(v[..., 0] ** 2 + v[..., 1] ** 2)
+    a = np.abs(v[..., 2]) / np.maximum(xy, 1e-30) / alpha
+    g = np.where(a >= 1.6, 1.0, (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a))
+    return np.where(np.sum(v * m, axis=-1) * v[..., 2] > 0, g, 0.0)
+
+
+def erfinv_approx(x):
+    """erf^-1(x) by Giles's single-precision approximation, as the kernels compute it."""
+    x = np.asarray(x, np.float64)
+    w = -np.log((1.0 - x) * (1.0 + x))
+    small, big = w - 2.5, np.sqrt(np.maximum(w, 5.0)) - 3.0
+    p_small = np.polyval([2.81022636e-08, 3.43273939e-07, -3.5233877e-06, -4.39150654e-06, 0.00021858087,
+                          -0.00125372503, -0.00417768164, 0.246640727, 1.50140941], small)
+    p_big = np.polyval([-0.000200214257, 0.000100950558, 0.00134934322, -0.00367342844, 0.00573950773,
+                        -0.0076224613, 0.00943887047, 1.00167406, 2.83297682], big)
+    return np.where(w < 5.0, p_small, p_big) * x
+
+
+def sample_beckmann_visible(wo, alpha, u1, u2):
+    """Jakob 2014's visible Beckmann normals, as kernels/microfacet.cl draws them, for one
+    direction wo (wo.z > 0) and arrays of uniforms: a slope of the stretched direction by Newton's
+    method on its CDF inside a bisection interval, turned to wo's azimuth and unstretched."""
+    w = np.array([alpha * wo[0], alpha * wo[1], wo[2]])
+    w /= np.linalg.norm(w)
+    xy = np.hypot(w[0], w[1])
+    cos_phi, sin_phi = (w[0] / xy, w[1] / xy) if xy > 0 else (1.0, 0.0)
+    u1, u2 = np.maximum(u1, 1e-9), np.maximum(u2, 1e-9)
+    if w[2] > 0.9999:
+        r, phi = np.sqrt(-np.log(1.0 - u1)), 2 * np.pi * u2
+        sx, sy = r * np.cos(phi), r * np.sin(phi)
+    else:
+        theta = np.arccos(w[2])
+        tan_t, cot_t = np.tan(theta), 1.0 / np.tan(theta)
+        lo, hi = np.full_like(u1, -1.0), np.full_like(u1, math.erf(cot_t))
+        norm = 1.0 / (1.0 + math.erf(cot_t) + tan_t * np.exp(-cot_t * cot_t) / np.sqrt(np.pi))
+        b = hi - (1.0 + hi) * (1.0 - u1) ** (1.0 + theta * (-0.876 + theta * (0.4265 - 0.0594 * theta)))
+        for _ in range(20):
+            b = np.where((b >= lo) & (b <= hi), b, 0.5 * (lo + hi))
+            e = erfinv_approx(np.clip(b, -1 + 1e-12, 1 - 1e-12))
+            value = norm * (1.0 + b + tan_t * np.exp(-e * e) / np.sqrt(np.pi)) - u1
+            hi, lo = np.where(value > 0, b, hi), np.where(value > 0, lo, b)
+            b = b - value / (norm * (1.0 - e * tan_t))
+        sx, sy = erfinv_approx(np.clip(b, -1 + 1e-12, 1 - 1e-12)), erfinv_approx(np.clip(2.0 * u2 - 1.0, -1 + 1e-12, 1 - 1e-12))
+    rx, ry = (cos_phi * sx - sin_phi * sy) * alpha, (sin_phi * sx + cos_phi * sy) * alpha
+    m = np.stack([-rx, -ry, np.ones_like(rx)], axis=-1)
+    return m / np.linalg.norm(m, axis=-1, keepdims=True)
+
+
+def rough_dielectric_albedo(cos_theta, alpha, eta, nodes=None, beckmann=False):
     """The fractions of light arriving at cos_theta (an array) that a rough dielectric interface
-    (GGX, relative IOR eta = n_inside / n_outside) reflects and transmits, as two arrays: over
+    (GGX, or Beckmann, of relative IOR eta = n_inside / n_outside) reflects and transmits, as two arrays: over
     visible normals m, E[F(wi.m) G1(wr, m)] and E[(1 - F(wi.m)) G1(wt, m)], wr and wt the
     mirrored and refracted directions (none where they leave on the wrong side); their sum is
     below 1 by what the microfacets shadow. Gauss-Legendre quadrature over the sampling square;
@@ -76,28 +117,29 @@ def rough_dielectric_albedo(cos_theta, alpha, eta, nodes=None):
     reflected, transmitted = np.empty(len(cos_theta)), np.empty(len(cos_theta))
     for i, c in enumerate(cos_theta):
         wi = np.array([np.sqrt(max(0.0, 1.0 - c * c)), 0.0, c])
-        m = sample_ggx_visible(wi, alpha, u1, u2)
+        m = (sample_beckmann_visible if beckmann else sample_ggx_visible)(wi, alpha, u1, u2)
         wi_m = m @ wi
         f = fresnel_dielectric(wi_m, eta)
         wr = 2.0 * wi_m[..., None] * m - wi
-        reflected[i] = np.sum(np.where(wr[..., 2] > 0, f * ggx_g1(wr, m, alpha), 0.0) * weight)
+        g1 = beckmann_g1 if beckmann else ggx_g1
+        reflected[i] = np.sum(np.where(wr[..., 2] > 0, f * g1(wr, m, alpha), 0.0) * weight)
         # Snell's law about m; under total internal reflection f = 1 and nothing passes
         cos_t = np.sqrt(np.maximum(0.0, 1.0 - (1.0 - wi_m ** 2) / eta ** 2))
         wt = -wi / eta + (wi_m / eta - cos_t)[..., None] * m
-        passed = (1.0 - f) * ggx_g1(wt, m, alpha)
+        passed = (1.0 - f) * g1(wt, m, alpha)
         transmitted[i] = np.sum(np.where(wt[..., 2] < 0, passed, 0.0) * weight)
     return reflected, transmitted
 
 
 @lru_cache(maxsize=256)
-def rough_coating(alpha: float, eta: float) -> tuple[np.ndarray, float]:
+def rough_coating(alpha: float, eta: float, beckmann: bool = False) -> tuple[np.ndarray, float]:
     """A rough dielectric coating's transmittance T(cos) at TABLE_COSINES (light entering from
     outside), and its cosine-weighted mean reflectance 2 int R(mu) mu dmu seen from inside
     (relative IOR 1/eta) -- roughplastic's two precomputed quantities, as Mitsuba 3's. The
     mean is Mitsuba's own rule, the average over 64 evenly spaced cosines including both ends:
     it sits about 0.01 below the integral (R is 1 up to the critical angle), and following it
     keeps roughplastic the same material in both renderers."""
-    _, transmittance = rough_dielectric_albedo(TABLE_COSINES, alpha, eta)
+    _, transmittance = rough_dielectric_albedo(TABLE_COSINES, alpha, eta, beckmann=beckmann)
     mu = np.maximum(1e-6, np.linspace(0.0, 1.0, 64))
-    inside, _ = rough_dielectric_albedo(mu, alpha, 1.0 / eta)
+    inside, _ = rough_dielectric_albedo(mu, alpha, 1.0 / eta, beckmann=beckmann)
     return transmittance, float(2.0 * np.mean(inside * mu))

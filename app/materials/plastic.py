@@ -1,11 +1,11 @@
-"""Plastics: a diffuse base under a smooth or a rough (GGX) dielectric coating (Mitsuba 3's
-`plastic` and `roughplastic`; both pack the layout of kernels/coating.cl)."""
+"""Plastics: a diffuse base under a smooth or a rough (GGX or Beckmann) dielectric coating
+(Mitsuba 3's `plastic` and `roughplastic`; both pack the layout of kernels/coating.cl)."""
 
 import numpy as np
 
 from pathtrace.materials.bsdf import BSDFType, Param
 from pathtrace.materials.dielectric import check_interface
-from pathtrace.materials.microfacet import GGX_PARAMS, resolve_distribution, rough_coating
+from pathtrace.materials.microfacet import DISTRIBUTION, DISTRIBUTIONS, GGX_PARAMS, rough_coating
 from pathtrace.materials.optics import IOR, diffuse_fresnel_reflectance
 
 
@@ -57,26 +57,35 @@ class Plastic(BSDFType):
 
 class RoughPlastic(Plastic):
     name = "roughplastic"
-    params = Plastic.params + GGX_PARAMS
-    doc = ("a diffuse base under a rough (GGX) dielectric coating: the coating's glossy "
+    params = Plastic.params + GGX_PARAMS + (DISTRIBUTION,)
+    doc = ("a diffuse base under a rough (GGX or Beckmann) dielectric coating: the coating's glossy "
            "reflection plus the light it lets through to the base and back out")
 
-    def resolve(self, values):
-        return super().resolve(resolve_distribution(values))
+    def check(self, values):
+        if not np.all(np.isin(values["distribution"], list(DISTRIBUTIONS.values()))):
+            return "distribution: must be ggx or beckmann"
+        return super().check(values)
+
+    variant_defines = ("BECKMANN",)
+
+    def defines(self, rows):
+        return ("BECKMANN",) if np.any(rows["p2"][:, 3] < 0) else ()
 
     def pack(self, values, rows):
-        rows["p2"][:, 3] = values["alpha"]
+        # alpha, negated for Beckmann (kernels/bsdfs/roughplastic.cl)
+        rows["p2"][:, 3] = np.where(np.asarray(values["distribution"]) > 0.5, -1.0, 1.0) * values["alpha"]
         super().pack(values, rows)
 
     def pack_coating(self, values, eta, rows):
         """The rough coating's transmittance table and mean internal reflectance, once per
-        distinct (alpha, eta)."""
-        alpha = np.broadcast_to(values["alpha"], len(rows))
+        distinct (alpha, eta, distribution)."""
+        alpha = np.broadcast_to(rows["p2"][:, 3], len(rows))
         distinct, which = np.unique(np.stack([alpha, eta], axis=1), axis=0, return_inverse=True)
         for k, (a, e) in enumerate(distinct):
-            table, inside = rough_coating(float(a), float(e))
+            table, inside = rough_coating(abs(float(a)), float(e), bool(a < 0))
             rows["table"][which.reshape(-1) == k] = table
             rows["p1"][which.reshape(-1) == k, 3] = inside
 
     def unpack(self, row):
-        return {**super().unpack(row), "alpha": float(row["p2"][3])}
+        return {**super().unpack(row), "alpha": abs(float(row["p2"][3])),
+                "distribution": 1.0 if row["p2"][3] < 0 else 0.0}

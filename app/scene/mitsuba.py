@@ -787,12 +787,8 @@ class _Reader:
                 target = self.resolve(c) if c.tag == "ref" else c
                 values[p.name] = c.attrs.get("value") if c.tag == "string" else \
                     self.texture(target) if target.tag == "texture" else self.get(props, p.name, kinds=("float",))
-        if kind in ("roughconductor", "roughdielectric"):
+        if kind.startswith("rough"):
             values.setdefault("distribution", "beckmann")             # Mitsuba's default
-        elif values.get("distribution", "ggx") != "ggx" or (kind.startswith("rough") and "distribution" not in props):
-            warn(f"{node.where()}: pathtrace's rough plastic is GGX; the {values.get('distribution', 'beckmann')} "
-                 "distribution (Mitsuba's default) is rendered as GGX of the same alpha")
-            values["distribution"] = "ggx"
         if kind.startswith("rough") and "alpha" not in props and ("alpha_u" in props or "alpha_v" in props):
             a = [self.get(props, k, 0.1, ("float",)) for k in ("alpha_u", "alpha_v")]
             warn(f"{node.where()}: anisotropic roughness is not supported; pathtrace uses alpha {np.mean(a):.3g}")
