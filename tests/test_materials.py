@@ -479,7 +479,7 @@ def test_rough_glass_albedo_is_what_sampling_estimates_and_at_most_one(kernels, 
     m, wo = ROUGH_GLASS[name], direction(theta)
     n_inside, n_outside = float(m["p0"][0][0]), float(m["p0"][0][1])
     n_wo = n_outside if wo["z"] > 0 else n_inside
-    grid, cell = sphere_grid(4000, 800)
+    grid, cell = sphere_grid(2400, 480)
     grid = grid[:, [0, 2, 1]]                 # the pole along y, away from the lobes
     f, _ = evaluate(kernels, m, wo, grid)
     crossed = np.where(grid[:, 2] * wo["z"] < 0, (np.where(grid[:, 2] > 0, n_outside, n_inside) / n_wo) ** 2, 1.0)
