@@ -41,6 +41,7 @@ SCENES = {  # name: (width, height, spp per render, renders)
     "beckmann": (None, None, 1024, 16),
     "roughdielectric": (None, None, 1024, 16),
     "roughplastic": (None, None, 1024, 16),
+    "metals": (None, None, 1024, 16),
     "media-sphere": (None, None, 1024, 16),
     "media-glass": (None, None, 1024, 16),
     "media-fog": (None, None, 1024, 16),

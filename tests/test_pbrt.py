@@ -39,11 +39,12 @@ def fails(tmp_path, text, name="s.pbrt") -> str:
 
 # -- a Mitsuba reference, translated --
 
-@pytest.mark.parametrize("name", ["cbox", "meshes-smaller", "meshes-larger"])
+@pytest.mark.parametrize("name", ["cbox", "meshes-smaller", "meshes-larger", "metals"])
 def test_translations_of_mitsuba_scenes_render_as_mitsuba_renders_the_xml(backend, name):
     """tests/scenes/<name>.pbrt is <name>.xml in pbrt's terms (handedness, the fov's axis,
-    transform order, maxdepth, instances, a PLY mesh, a sphere, an infinite light): its render
-    passes the Z-test against Mitsuba 3's render of the XML."""
+    transform order, maxdepth, instances, a PLY mesh, a sphere, an infinite light, pbrt's named
+    metal spectra for Mitsuba's named metals): its render passes the Z-test against Mitsuba 3's
+    render of the XML."""
     ref = np.load(Path(__file__).parent / "references" / f"{name}.npz")
     pbrt = load_scene(str(SCENES / f"{name}.pbrt"))
     assert pbrt.settings.max_depth == int(ref["max_depth"]) == 8

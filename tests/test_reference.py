@@ -23,7 +23,7 @@ def reference_scene(name):
 def test_references_are_present():
     assert {p.stem for p in REFERENCES} >= {"simple-diffuse", "spheres8k-diffuse", "cbox", "envmap-spheres", "meshes",
                                             "meshes-smaller", "meshes-larger", "textures", "masks", "normal-maps",
-                                            "lights", "thinlens", "beckmann", "roughdielectric", "roughplastic", "media-sphere", "media-glass",
+                                            "lights", "thinlens", "beckmann", "roughdielectric", "roughplastic", "metals", "media-sphere", "media-glass",
                                             "media-fog"}
 
 
