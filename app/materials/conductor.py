@@ -6,7 +6,7 @@ from dataclasses import replace
 import numpy as np
 
 from pathtrace.materials.bsdf import DELTA, BSDFType, Param
-from pathtrace.materials.microfacet import DISTRIBUTION, DISTRIBUTIONS, GGX_PARAMS
+from pathtrace.materials.microfacet import DISTRIBUTION, GGX_PARAMS, check_distribution
 from pathtrace.materials.optics import CONDUCTORS
 
 _CONDUCTOR_PARAMS = (
@@ -55,9 +55,7 @@ class RoughConductor(Conductor):
            "sampled by visible normals (Heitz 2018), Beckmann by its distribution")
 
     def check(self, values):
-        if not np.all(np.isin(values["distribution"], list(DISTRIBUTIONS.values()))):
-            return "distribution: must be ggx or beckmann"
-        return None
+        return check_distribution(values)
 
     variant_defines = ("BECKMANN",)
 

@@ -7,7 +7,7 @@ from dataclasses import replace
 import numpy as np
 
 from pathtrace.materials.bsdf import DELTA, TRANSMISSIVE, BSDFType, Param
-from pathtrace.materials.microfacet import DISTRIBUTION, DISTRIBUTIONS, GGX_PARAMS
+from pathtrace.materials.microfacet import DISTRIBUTION, GGX_PARAMS, check_distribution
 from pathtrace.materials.optics import IOR
 
 def check_interface(values) -> str | None:
@@ -64,9 +64,7 @@ class RoughDielectric(Dielectric):
            "2007), sampled by the normals visible from the outgoing direction")
 
     def check(self, values):
-        if not np.all(np.isin(values["distribution"], list(DISTRIBUTIONS.values()))):
-            return "distribution: must be ggx or beckmann"
-        return check_interface(values)
+        return check_distribution(values) or check_interface(values)
 
     variant_defines = ("BECKMANN",)
 

@@ -21,6 +21,13 @@ DISTRIBUTIONS = {"ggx": 0.0, "beckmann": 1.0}
 DISTRIBUTION = Param("distribution", "number", default=0.0, low=0.0, high=1.0, names=DISTRIBUTIONS,
                      doc="the microfacet distribution: ggx (0) or beckmann (1; Mitsuba's default)")
 
+
+def check_distribution(values) -> str | None:
+    """The rough materials' distribution must be one of DISTRIBUTIONS' numbers."""
+    if not np.all(np.isin(values["distribution"], list(DISTRIBUTIONS.values()))):
+        return "distribution: must be ggx or beckmann"
+    return None
+
 # roughplastic's MATERIAL.table holds a function of cos(theta) at these cosines: (k / 15)^2,
 # dense at grazing angles where the coating's transmittance changes fastest (16 samples there
 # are as close to the exact curve as Mitsuba's 64 evenly spaced ones)

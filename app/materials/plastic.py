@@ -5,7 +5,7 @@ import numpy as np
 
 from pathtrace.materials.bsdf import BSDFType, Param
 from pathtrace.materials.dielectric import check_interface
-from pathtrace.materials.microfacet import DISTRIBUTION, DISTRIBUTIONS, GGX_PARAMS, rough_coating
+from pathtrace.materials.microfacet import DISTRIBUTION, GGX_PARAMS, check_distribution, rough_coating
 from pathtrace.materials.optics import IOR, diffuse_fresnel_reflectance
 
 
@@ -62,9 +62,7 @@ class RoughPlastic(Plastic):
            "reflection plus the light it lets through to the base and back out")
 
     def check(self, values):
-        if not np.all(np.isin(values["distribution"], list(DISTRIBUTIONS.values()))):
-            return "distribution: must be ggx or beckmann"
-        return super().check(values)
+        return check_distribution(values) or super().check(values)
 
     variant_defines = ("BECKMANN",)
 

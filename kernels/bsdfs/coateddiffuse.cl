@@ -67,6 +67,28 @@ float exit_through_coating(Interface top, float3 w, float3 wi, float w_pdf)
     return f * top.eta * top.eta * mis_weight(w_pdf, from_wi);     /* (n_i / n_t)^2 = eta^2 */
 }
 
+/* Directions into the layer through the coating, from wo (radiance's) and from wi (the
+ * virtual light's, importance's); 0 when either has none. */
+int enter_layer(Interface top, float3 wo, float3 wi, Rng *rng, BSDFSample *os, BSDFSample *is)
+{
+    os->eta = is->eta = 1.0f;
+    return sample_interface(top, wo, next_uniform4(rng).xyz, LOBE_TRANSMISSION, os)
+           && sample_interface(top, wi, next_uniform4(rng).xyz, LOBE_TRANSMISSION, is);
+}
+
+/* Russian roulette once a walk carries little (pbrt-v4's rule), from uniform u: 0 ends it. */
+int walk_survives(float3 *beta, int depth, float u)
+{
+    float most = fmax(fmax(beta->x, beta->y), beta->z);
+    if (depth > 3 && most < 0.25f) {
+        float q = fmax(0.0f, 1.0f - most);
+        if (u < q)
+            return 0;
+        *beta /= 1.0f - q;
+    }
+    return 1;
+}
+
 float3 eval_coateddiffuse(MaterialRef m, float3 wo, float3 wi)
 {
     if (wo.z <= 0.0f || wi.z <= 0.0f)
@@ -80,11 +102,8 @@ float3 eval_coateddiffuse(MaterialRef m, float3 wo, float3 wi)
     float3 f = (float3)(samples * eval_interface(top, wo, wi, LOBE_REFLECTION, &pdf));
     Rng rng = layer_rng(wo, wi, 1u);
     for (int k = 0; k < samples; ++k) {
-        /* into the layer from wo, and from wi (the virtual light's direction inside) */
         BSDFSample os, is;
-        os.eta = is.eta = 1.0f;
-        if (!sample_interface(top, wo, next_uniform4(&rng).xyz, LOBE_TRANSMISSION, &os)
-            || !sample_interface(top, wi, next_uniform4(&rng).xyz, LOBE_TRANSMISSION, &is))
+        if (!enter_layer(top, wo, wi, &rng, &os, &is))
             continue;
         float3 is_f = is.weight / fabs(is.wi.z);      /* f / pdf of the direction from wi */
         float3 beta = radiance_weight(&os);
@@ -92,14 +111,8 @@ float3 eval_coateddiffuse(MaterialRef m, float3 wo, float3 wi)
         float3 w = os.wi;
         for (int depth = 0; depth < max_depth; ++depth) {
             float4 u = next_uniform4(&rng);
-            /* Russian roulette once the walk carries little (pbrt-v4's rule) */
-            float most = fmax(fmax(beta.x, beta.y), beta.z);
-            if (depth > 3 && most < 0.25f) {
-                float q = fmax(0.0f, 1.0f - most);
-                if (u.w < q)
-                    break;
-                beta /= 1.0f - q;
-            }
+            if (!walk_survives(&beta, depth, u.w))
+                break;
             if (all(albedo == 0.0f)) {
                 z = z == thickness ? 0.0f : thickness;
                 beta *= layer_transmittance(thickness, w);
@@ -165,9 +178,7 @@ float pdf_coateddiffuse(MaterialRef m, float3 wo, float3 wi)
     for (int k = 0; k < samples; ++k) {
         /* the density of the path top-transmission, base reflection, top-transmission */
         BSDFSample os, is;
-        os.eta = is.eta = 1.0f;
-        if (!sample_interface(top, wo, next_uniform4(&rng).xyz, LOBE_TRANSMISSION, &os)
-            || !sample_interface(top, wi, next_uniform4(&rng).xyz, LOBE_TRANSMISSION, &is))
+        if (!enter_layer(top, wo, wi, &rng, &os, &is))
             continue;
         if (top.alpha == 0.0f) {
             sum += pdf_cosine_hemisphere(-is.wi.z);
@@ -208,13 +219,8 @@ int sample_coateddiffuse(MaterialRef m, float3 wo, float3 u, BSDFSample *s)
     float z = thickness;
     for (int depth = 0; depth < max_depth; ++depth) {
         float4 v = next_uniform4(&rng);
-        float most = fmax(fmax(beta.x, beta.y), beta.z);
-        if (depth > 3 && most < 0.25f) {
-            float q = fmax(0.0f, 1.0f - most);
-            if (v.w < q)
-                return 0;
-            beta /= 1.0f - q;
-        }
+        if (!walk_survives(&beta, depth, v.w))
+            return 0;
         if (any(albedo != 0.0f)) {
             float zp = z + copysign(-log1p(-v.x) * fabs(w.z), w.z);
             if (zp == z)
