@@ -110,12 +110,6 @@ class CompiledScene:
             raise UserError(f"{scene.source or scene.name}: {e}") from None
 
     @property
-    def has_null_surfaces(self) -> bool:
-        """Whether a shape's material is null: rays cross it (NULL_SURFACES)."""
-        null_rows = self.materials["flags"] & NULL != 0
-        return bool(np.any(null_rows[np.unique(self.prim_material)]))
-
-    @property
     def num_triangles(self) -> int:
         return len(self.triangles)
 
@@ -160,14 +154,15 @@ class CompiledScene:
         it uses, and the Russian roulette rule, pixel filter and camera of its settings."""
         rows = self.materials[np.unique(self.prim_material)]
         used = np.unique(rows["type"])
+        null_surfaces = bool(np.any(rows["flags"] & NULL))     # rays cross them (NULL_SURFACES)
         variants = tuple(sorted({d for name, tag in TAGS.items() if tag in used
                                  for d in BSDFS[name].defines(rows[rows["type"] == tag])}))
         return Features(triangles=self.num_triangles > 0, bsdf_defines=variants,
                         bsdfs=tuple(name for name, tag in TAGS.items() if tag in used),
                         textures=self.textures.types, masks=self.textures.masks,
                         normal_maps=self.textures.normal_maps, lights=self.lights.types,
-                        light_tree=self.lights.tree, media=bool(self.scene.media) or self.has_null_surfaces,
-                        null_surfaces=self.has_null_surfaces,
+                        light_tree=self.lights.tree, media=bool(self.scene.media) or null_surfaces,
+                        null_surfaces=null_surfaces,
                         camera=kernel_name(camera), filter=settings.filter.name,
                         russian_roulette=settings.russian_roulette, stack=stack_size(self.bvh.depth),
                         flat=(self.num_spheres, self.num_triangles)

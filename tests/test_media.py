@@ -259,6 +259,7 @@ def test_toml_media_shapes_and_camera(tmp_path):
     (('medium = "fog"', 'medium = "smoke"'), "camera.medium: no medium named 'smoke'"),
     (('milk = { sigma_t', 'milk = { sigma_a = 1, sigma_t'), "media.milk: give either"),
     (('albedo = 0.9', 'albedo = 1.2'), "media.milk.albedo: "),
+    (('{ type = "null" }', '{ type = "null", Le = 1 }'), "spheres[0].material.Le: a null material"),
 ])
 def test_bad_toml_media_give_one_line_naming_the_field(tmp_path, edit, expected):
     path = tmp_path / "m.toml"

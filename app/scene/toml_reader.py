@@ -18,7 +18,7 @@ from pathtrace.lights import DELTA_LIGHTS, LIGHT_SAMPLERS
 from pathtrace.environment import Environment
 from pathtrace.errors import UserError, short
 from pathtrace.materials import BSDFS, Material
-from pathtrace.materials.bsdf import TRANSMISSIVE, constant_of
+from pathtrace.materials.bsdf import NULL, TRANSMISSIVE, constant_of
 from pathtrace.materials.table import check_bump_map
 from pathtrace.media import Medium, MediumInterface
 from pathtrace.resources import resource_dir
@@ -230,6 +230,8 @@ class _Reader:
         if twosided and bsdf.flags & TRANSMISSIVE:
             self.fail(f"{where}.twosided", f"a {kind} cannot be two-sided: it transmits, and is seen from both sides already")
         emission = self.color_or_texture(data, "Le", where, default=(0, 0, 0))
+        if bsdf.flags & NULL and (isinstance(emission, Texture) or np.any(emission > 0)):
+            self.fail(f"{where}.Le", "a null material is no surface, and cannot emit")
         material = Material(kind, values, emission, twosided, self.opacity(data, where))
         self.shading_maps(data, where, material)
         return material
