@@ -46,7 +46,7 @@ def kernel_source(extra: str = "", features: Features = Features()) -> str:
     texts = [(name, (folder / name).read_text()) for name in BASIC_FILES]
     texts += [(name, text if text is not None else (folder / name).read_text())
               for name, text in kernel_parts(features.textures)]
-    files = (*SHAPE_FILES, *(("masks.cl",) if features.masks else ()), "bvh.cl",
+    files = (*SHAPE_FILES, *(("masks.cl",) if features.masks else ()), "bvh.cl", "frame.cl",
              *(("normal_maps.cl",) if features.normal_maps else ()),
              *(("shading.cl",) if features.textures else ()), *BSDF_FILES, *kernel_files(features.bsdfs))
     texts += [(name, (folder / name).read_text()) for name in files]

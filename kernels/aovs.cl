@@ -62,7 +62,7 @@ void trace_aovs(const SceneData *sc, const RenderParams *p, float3 o, float3 d, 
         if (!front && (flags & MATERIAL_TWOSIDED))
             turn_round(&s);
         MATERIAL_AT(m, sc, s, d);
-        float3 wo = to_frame(-d, s.ns);
+        float3 wo = to_shading(&s, -d);
         BSDFSample bs;
         bs.eta = 1.0f;
         int sampled = (front || (m->flags & (MATERIAL_TWOSIDED | MATERIAL_TRANSMISSIVE)))
@@ -74,7 +74,7 @@ void trace_aovs(const SceneData *sc, const RenderParams *p, float3 o, float3 d, 
             *normal = dot(s.ns, d) > 0.0f ? -s.ns : s.ns;
             return;
         }
-        float3 wi = to_world(bs.wi, s.ns);
+        float3 wi = from_shading(&s, bs.wi);
         throughput *= bs.weight;
         o = offset_ray_origin(s.p, s.offset, s.ng, wi);
         d = wi;

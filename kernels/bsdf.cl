@@ -27,14 +27,17 @@ typedef const global Material *MaterialRef;
 #endif
 
 /* Declares `m`, the MaterialRef of surface s's material (a Surface, kernels/bvh.cl), seen along
- * ray direction d. */
+ * ray direction d, and completes s's shading frame (kernels/frame.cl). */
 #ifdef TEXTURES
 #define MATERIAL_AT(m, sc, s, d)                                                                  \
     Material m##_shaded = shade_material(sc, &(sc)->materials[(sc)->prim_material[(s).prim]],    \
                                          &(s), -(d));                                           \
-    MaterialRef m = &m##_shaded
+    MaterialRef m = &m##_shaded;                                                                 \
+    complete_frame(sc, &(s))
 #else
-#define MATERIAL_AT(m, sc, s, d) MaterialRef m = &(sc)->materials[(sc)->prim_material[(s).prim]]
+#define MATERIAL_AT(m, sc, s, d)                                                                  \
+    MaterialRef m = &(sc)->materials[(sc)->prim_material[(s).prim]];                             \
+    complete_frame(sc, &(s))
 #endif
 
 

@@ -211,6 +211,9 @@ typedef struct {
     float3 ns_unperturbed;   /* the shading normal before a normal or bump map (normal_maps.cl) */
     float terminator;        /* the shadowing term's alpha^2 (0: no perturbation) */
 #endif
+#ifdef ANISOTROPIC
+    float3 ts;               /* the shading frame's unit tangent (frame.cl: complete_frame) */
+#endif
 } Surface;
 
 Surface surface_at(const SceneData *sc, const Hit *hit, float3 o, float3 d)

@@ -56,7 +56,7 @@ float3 sample_direct_light(const SceneData *sc, const RenderParams *p, MaterialR
                            int *rays)
 {
     LightSample ls = sample_light(sc, p, s->p, s->ns, r, rng);
-    float3 wi = to_frame(ls.wi, s->ns);
+    float3 wi = to_shading(s, ls.wi);
     /* the shading and geometric normals must agree on the side wi leaves on (no light leaks) */
     if (ls.pdf <= 0.0f || dot(ls.wi, s->ng) * wi.z <= 0.0f)
         return (float3)(0.0f);
@@ -206,7 +206,7 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
         }
         if (depth >= max_depth)
             return radiance;
-        float3 wo = to_frame(-d, s.ns);
+        float3 wo = to_shading(&s, -d);
         float go_on = RUSSIAN_ROULETTE == RR_ALBEDO ? m->continuation : 1.0f;
         if (nee && p->num_lights > 0 && !(m->flags & MATERIAL_DELTA))
             radiance += throughput * sample_direct_light(sc, p, m, &s, wo, go_on,
@@ -221,7 +221,7 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
         bs.eta = 1.0f;
         if (!sample_bsdf(m, wo, u.xyz, &bs))
             return radiance;
-        float3 wi = to_world(bs.wi, s.ns);
+        float3 wi = from_shading(&s, bs.wi);
         if (dot(wi, s.ng) * bs.wi.z <= 0.0f)
             return radiance;                 /* the normals disagree on wi's side */
         throughput *= bs.weight / go_on;

@@ -14,9 +14,14 @@
 
 typedef struct {
     float eta;       /* n inside (below the surface) / n outside */
-    float alpha;     /* the roughness; 0: smooth */
+    float2 alpha;    /* the roughness along the tangent and the bitangent; (0, 0): smooth */
     int beckmann;    /* the distribution: 1 Beckmann, 0 GGX */
 } Interface;
+
+int is_smooth(Interface c)
+{
+    return c.alpha.x == 0.0f;
+}
 
 float interface_d(Interface c, float3 h)
 {
@@ -43,7 +48,7 @@ float eval_interface(Interface c, float3 wo, float3 wi, int lobes, float *pdf)
 {
     *pdf = 0.0f;
     int reflect = wo.z * wi.z > 0.0f;
-    if (c.alpha == 0.0f || wo.z == 0.0f || wi.z == 0.0f
+    if (is_smooth(c) || wo.z == 0.0f || wi.z == 0.0f
         || !(lobes & (reflect ? LOBE_REFLECTION : LOBE_TRANSMISSION)))
         return 0.0f;
     float e = reflect ? 1.0f : (wo.z > 0.0f ? c.eta : 1.0f / c.eta);
@@ -78,7 +83,7 @@ int sample_interface(Interface c, float3 wo, float3 u, int lobes, BSDFSample *s)
     if (wo.z == 0.0f)
         return 0;
     float3 up = wo.z > 0.0f ? wo : -wo;
-    float3 h = c.alpha == 0.0f ? (float3)(0.0f, 0.0f, 1.0f)
+    float3 h = is_smooth(c) ? (float3)(0.0f, 0.0f, 1.0f)
              : c.beckmann ? sample_beckmann_visible(up, c.alpha, u.y, u.z) : sample_ggx_visible(up, c.alpha, u.y, u.z);
     float wo_h = dot(wo, h);
     float cos_t, eta_ti;
@@ -101,7 +106,7 @@ int sample_interface(Interface c, float3 wo, float3 u, int lobes, BSDFSample *s)
         s->lobe = LOBE_TRANSMISSION;
         s->weight = (float3)((1.0f - fr) / (1.0f - p_reflect));
     }
-    if (c.alpha == 0.0f) {
+    if (is_smooth(c)) {
         s->pdf = (s->lobe & LOBE_REFLECTION) ? p_reflect : 1.0f - p_reflect;
         s->lobe |= LOBE_DELTA;
         return 1;

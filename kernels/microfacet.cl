@@ -1,34 +1,44 @@
-/* Microfacet distributions: GGX and Beckmann, isotropic roughness alpha, with Smith shadowing.
+/* Microfacet distributions: GGX and Beckmann with Smith shadowing, in the local shading frame
+ * (z the macro-surface normal, x its tangent: kernels/frame.cl). The roughness alpha is a pair,
+ * (alpha_x, alpha_y) along the tangent and the bitangent (Mitsuba 3's alpha_u and alpha_v;
+ * equal for an isotropic surface): each distribution is its isotropic form of roughness 1
+ * stretched by alpha (Heitz, "Understanding the Masking-Shadowing Function in
+ * Microfacet-Based BRDFs", JCGT 3(2), 2014, section 5.3), which leaves the shadowing a
+ * function of the projected roughness alpha(phi_v)^2 tan^2 theta_v =
+ * (alpha_x^2 v_x^2 + alpha_y^2 v_y^2) / v_z^2.
  *
- * The GGX (Trowbridge-Reitz) microfacet distribution with Smith shadowing, isotropic roughness
- * alpha, in the local frame (z the macro-surface normal): Walter et al., "Microfacet Models for
- * Refraction through Rough Surfaces", EGSR 2007; sampled by visible normals after Heitz,
- * "Sampling the GGX Distribution of Visible Normals", JCGT 7(4), 2018. Shadowing is Smith's
- * separable form G1(wo) G1(wi), as Mitsuba 3 uses. */
+ * GGX (Trowbridge-Reitz): Walter et al., "Microfacet Models for Refraction through Rough
+ * Surfaces", EGSR 2007; sampled by visible normals after Heitz, "Sampling the GGX Distribution of
+ * Visible Normals", JCGT 7(4), 2018. Shadowing is Smith's separable form G1(wo) G1(wi), as
+ * Mitsuba 3 uses. */
 
-/* D(m) = 1 / (pi a^2 ((m_x^2 + m_y^2) / a^2 + m_z^2)^2) */
-float ggx_d(float3 m, float alpha)
+/* alpha(phi_v)^2 tan^2 theta_v of direction v (Heitz 2014, eq. 80) */
+float projected_roughness2(float3 v, float2 alpha)
+{
+    float xy = alpha.x * alpha.x * v.x * v.x + alpha.y * alpha.y * v.y * v.y;
+    return xy / (v.z * v.z);
+}
+
+/* D(m) = 1 / (pi a_x a_y (m_x^2 / a_x^2 + m_y^2 / a_y^2 + m_z^2)^2) */
+float ggx_d(float3 m, float2 alpha)
 {
     if (m.z <= 0.0f)
         return 0.0f;
-    float a2 = alpha * alpha;
-    float t = (m.x * m.x + m.y * m.y) / a2 + m.z * m.z;
-    return 1.0f / (PI_F * a2 * t * t);
+    float t = m.x * m.x / (alpha.x * alpha.x) + m.y * m.y / (alpha.y * alpha.y) + m.z * m.z;
+    return 1.0f / (PI_F * alpha.x * alpha.y * t * t);
 }
 
-/* Smith's G1(v, m) = 2 / (1 + sqrt(1 + a^2 tan^2 theta_v)); 0 when v sees m's back. */
-float ggx_g1(float3 v, float3 m, float alpha)
+/* Smith's G1(v, m) = 2 / (1 + sqrt(1 + alpha(phi)^2 tan^2 theta_v)); 0 when v sees m's back. */
+float ggx_g1(float3 v, float3 m, float2 alpha)
 {
     if (dot(v, m) * v.z <= 0.0f)
         return 0.0f;
-    float cos2 = v.z * v.z;
-    float tan2 = fmax(0.0f, 1.0f - cos2) / cos2;
-    return 2.0f / (1.0f + sqrt(1.0f + alpha * alpha * tan2));
+    return 2.0f / (1.0f + sqrt(1.0f + projected_roughness2(v, alpha)));
 }
 
 /* The density of the normals sample_ggx_visible draws from wo (wo.z > 0):
  * D_wo(m) = G1(wo, m) max(0, wo.m) D(m) / wo.z (Heitz 2018, eq. 1). */
-float pdf_ggx_visible(float3 wo, float3 m, float alpha)
+float pdf_ggx_visible(float3 wo, float3 m, float2 alpha)
 {
     return ggx_g1(wo, m, alpha) * fmax(0.0f, dot(wo, m)) * ggx_d(m, alpha) / wo.z;
 }
@@ -36,9 +46,9 @@ float pdf_ggx_visible(float3 wo, float3 m, float alpha)
 /* A microfacet normal seen from wo (wo.z > 0), from two uniforms (Heitz 2018, listing 1): wo is
  * stretched to the hemisphere configuration, a point is drawn on the projected disk of the
  * visible half-sphere, and the normal there is unstretched. */
-float3 sample_ggx_visible(float3 wo, float alpha, float u1, float u2)
+float3 sample_ggx_visible(float3 wo, float2 alpha, float u1, float u2)
 {
-    float3 vh = unit((float3)(alpha * wo.x, alpha * wo.y, wo.z));
+    float3 vh = unit((float3)(alpha.x * wo.x, alpha.y * wo.y, wo.z));
     float len2 = vh.x * vh.x + vh.y * vh.y;
     float3 t1 = len2 > 0.0f ? (float3)(-vh.y, vh.x, 0.0f) * rsqrt(len2) : (float3)(1.0f, 0.0f, 0.0f);
     float3 t2 = cross(vh, t1);
@@ -47,30 +57,30 @@ float3 sample_ggx_visible(float3 wo, float alpha, float u1, float u2)
     float s = 0.5f * (1.0f + vh.z);
     p2 = (1.0f - s) * sqrt(fmax(0.0f, 1.0f - p1 * p1)) + s * p2;
     float3 nh = p1 * t1 + p2 * t2 + sqrt(fmax(0.0f, 1.0f - p1 * p1 - p2 * p2)) * vh;
-    return unit((float3)(alpha * nh.x, alpha * nh.y, fmax(1e-6f, nh.z)));
+    return unit((float3)(alpha.x * nh.x, alpha.y * nh.y, fmax(1e-6f, nh.z)));
 }
 
 /* The Beckmann distribution (Walter et al. 2007, eq. 25), Mitsuba 3's default for its rough
- * materials: D(m) = exp(-tan^2 theta_m / a^2) / (pi a^2 cos^4 theta_m). */
-float beckmann_d(float3 m, float alpha)
+ * materials: D(m) = exp(-(m_x^2 / a_x^2 + m_y^2 / a_y^2) / m_z^2) / (pi a_x a_y m_z^4). */
+float beckmann_d(float3 m, float2 alpha)
 {
     if (m.z <= 0.0f)
         return 0.0f;
-    float a2 = alpha * alpha, cos2 = m.z * m.z;
-    float tan2 = (m.x * m.x + m.y * m.y) / cos2;
-    return exp(-tan2 / a2) / (PI_F * a2 * cos2 * cos2);
+    float cos2 = m.z * m.z;
+    float e = (m.x * m.x / (alpha.x * alpha.x) + m.y * m.y / (alpha.y * alpha.y)) / cos2;
+    return exp(-e) / (PI_F * alpha.x * alpha.y * cos2 * cos2);
 }
 
 /* Smith's G1 for Beckmann by Walter's rational approximation of 1 / (1 + Lambda) (Walter et al.
- * 2007, eq. 27; within 0.35 %), as Mitsuba 3 computes it: a = 1 / (alpha tan theta_v). */
-float beckmann_g1(float3 v, float3 m, float alpha)
+ * 2007, eq. 27; within 0.35 %), as Mitsuba 3 computes it: a = 1 / (alpha(phi) tan theta_v). */
+float beckmann_g1(float3 v, float3 m, float2 alpha)
 {
     if (dot(v, m) * v.z <= 0.0f)
         return 0.0f;
-    float xy2 = v.x * v.x + v.y * v.y;
-    if (xy2 <= 0.0f)
+    float r2 = projected_roughness2(v, alpha);
+    if (r2 <= 0.0f)
         return 1.0f;
-    float a = fabs(v.z) * rsqrt(xy2) / alpha;
+    float a = rsqrt(r2);
     if (a >= 1.6f)
         return 1.0f;
     return (3.535f * a + 2.181f * a * a) / (1.0f + 2.276f * a + 2.577f * a * a);
@@ -141,9 +151,9 @@ float2 sample_beckmann_slope(float cos_t, float u1, float u2)
  * is Smith's exact one; pdf_beckmann_visible and the BSDFs use Walter's approximation
  * (beckmann_g1), as Mitsuba 3 does, which follows it to 0.35 %: the weights' expectation is off
  * by that much at most, at grazing angles. */
-float3 sample_beckmann_visible(float3 wo, float alpha, float u1, float u2)
+float3 sample_beckmann_visible(float3 wo, float2 alpha, float u1, float u2)
 {
-    float3 w = unit((float3)(alpha * wo.x, alpha * wo.y, wo.z));
+    float3 w = unit((float3)(alpha.x * wo.x, alpha.y * wo.y, wo.z));
     float xy = sqrt(w.x * w.x + w.y * w.y);
     float cos_phi = xy > 0.0f ? w.x / xy : 1.0f, sin_phi = xy > 0.0f ? w.y / xy : 0.0f;
     float2 s = sample_beckmann_slope(w.z, u1, u2);
@@ -152,7 +162,7 @@ float3 sample_beckmann_visible(float3 wo, float alpha, float u1, float u2)
 }
 
 /* The density of the normals sample_beckmann_visible draws from wo (wo.z > 0). */
-float pdf_beckmann_visible(float3 wo, float3 m, float alpha)
+float pdf_beckmann_visible(float3 wo, float3 m, float2 alpha)
 {
     return beckmann_g1(wo, m, alpha) * fmax(0.0f, dot(wo, m)) * beckmann_d(m, alpha) / wo.z;
 }

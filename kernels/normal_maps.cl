@@ -11,37 +11,6 @@
 #define SLOT_NORMAL_MAP 20   /* app/materials/table.py */
 #define SLOT_BUMP_MAP 24
 
-/* dp/du and dp/dv at a hit: a triangle's from its corners' texture coordinates (pbrt-v4
- * eq. 6.7), or, where those are missing or degenerate, the tangents of make_frame; a sphere's as Mitsuba's
- * sphere gives them for its (u, v) = (phi / 2 pi, theta / pi). */
-void surface_derivatives(const SceneData *sc, const Surface *s, float3 *dpdu, float3 *dpdv)
-{
-#ifndef NO_TRIANGLES
-    if (s->prim >= sc->num_spheres) {
-        const global Triangle *tri = &sc->triangles[s->prim - sc->num_spheres];
-        int k = as_int(tri->v1.w);
-        if (k >= 0) {
-            float2 duv02 = sc->uvs[k] - sc->uvs[k + 2], duv12 = sc->uvs[k + 1] - sc->uvs[k + 2];
-            float3 dp02 = tri->v0.xyz - tri->v2.xyz, dp12 = tri->v1.xyz - tri->v2.xyz;
-            float det = duv02.x * duv12.y - duv02.y * duv12.x;
-            if (fabs(det) > 1e-12f) {
-                *dpdu = (duv12.y * dp02 - duv02.y * dp12) / det;
-                *dpdv = (duv02.x * dp12 - duv12.x * dp02) / det;
-                return;
-            }
-        }
-        make_frame(triangle_normal(tri), dpdu, dpdv);   /* Mitsuba's coordinate_system */
-        return;
-    }
-#endif
-    Sphere sphere = sc->spheres[s->prim];
-    float3 l = (s->p - sphere.xyz) / sphere.w;
-    float rd = sqrt(l.x * l.x + l.y * l.y);
-    float2 phi = rd > 0.0f ? (float2)(l.x, l.y) / rd : (float2)(1.0f, 0.0f);
-    *dpdu = 2.0f * PI_F * sphere.w * (float3)(-l.y, l.x, 0.0f);
-    *dpdv = PI_F * sphere.w * (float3)(l.z * phi.x, l.z * phi.y, -rd);
-}
-
 /* The slopes (dh/du, dh/dv) of bump map texture i: a bitmap's, or a scaled bitmap's (Mitsuba's
  * `scale`) times its factor; the host allows no other. */
 float2 bump_slopes(const SceneData *sc, int i, float2 uv)
@@ -84,13 +53,7 @@ void perturb_normal(const SceneData *sc, const global Material *row, float2 uv, 
             float3 dpdu, dpdv, n = s->ns;
             surface_derivatives(sc, s, &dpdu, &dpdv);
             if (b.slot == SLOT_NORMAL_MAP) {
-                float3 t_s = dpdu - n * dot(n, dpdu), t_t;
-                float len = length(t_s);
-                if (len > 0.0f)
-                    t_s /= len;
-                else
-                    make_frame(n, &t_s, &t_t);
-                t_t = s->side * cross(n, t_s);
+                float3 t_s = shading_tangent(sc, s), t_t = s->side * cross(n, t_s);
                 float3 m = 2.0f * eval_texture(sc, b.texture, uv) - 1.0f;
                 float3 wo_local = (float3)(dot(wo, t_s), dot(wo, t_t), dot(wo, n));
                 if (wo_local.z * dot(wo_local, m) <= 0.0f)

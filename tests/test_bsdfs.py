@@ -26,10 +26,11 @@ kernel void bsdf_eval(global const Material *mat, float4 wo, global const float4
     out[i] = (float4)(eval_bsdf(mat, wo.xyz, wi[i].xyz), pdf_bsdf(mat, wo.xyz, wi[i].xyz));
 }
 """
-def direction(theta_deg):
-    """The outgoing direction at theta degrees from the normal, as a kernel argument."""
-    t = np.radians(theta_deg)
-    return cltypes.make_float4(np.sin(t), 0, np.cos(t), 0)
+def direction(theta_deg, phi_deg=0.0):
+    """The outgoing direction at theta degrees from the normal (and phi from the tangent), as a
+    kernel argument."""
+    t, p = np.radians(theta_deg), np.radians(phi_deg)
+    return cltypes.make_float4(np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t), 0)
 
 
 def material(rho_d, rho_s, n):

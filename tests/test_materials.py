@@ -27,6 +27,10 @@ GLOSSY = {
     "roughconductor-aluminium-0.9": material("roughconductor", material="Al", alpha=0.9),
     "roughconductor-beckmann-gold-0.1": material("roughconductor", material="Au", alpha=0.1, distribution="beckmann"),
     "roughconductor-beckmann-0.6": material("roughconductor", alpha=0.6, distribution="beckmann"),
+    "roughconductor-anisotropic-0.05-0.4": material("roughconductor", material="Cu", alpha=0.05, alpha_v=0.4,
+                                                    distribution="ggx"),
+    "roughconductor-anisotropic-beckmann-0.5-0.1": material("roughconductor", alpha=0.5, alpha_v=0.1,
+                                                            distribution="beckmann"),
     "plastic": material("plastic", diffuse_reflectance=[0.7, 0.3, 0.1], int_ior=1.5),
     "plastic-nonlinear": material("plastic", diffuse_reflectance=0.9, nonlinear=True, int_ior="diamond"),
     "roughplastic-0.1": material("roughplastic", diffuse_reflectance=[0.7, 0.3, 0.1], alpha=0.1, int_ior=1.5),
@@ -37,15 +41,21 @@ GLOSSY = {
 }
 
 
+def azimuth(name):
+    """wo's azimuth for a material: off the frame's axes where the roughness depends on it."""
+    return 30.0 if "anisotropic" in name else 0.0
+
+
 @pytest.mark.parametrize("theta", [0, 35, 70])
 @pytest.mark.parametrize("name", ["roughconductor-gold-0.15", "roughconductor-mirror-0.5", "plastic",
                                   "roughconductor-beckmann-gold-0.1", "roughconductor-beckmann-0.6",
+                                  "roughconductor-anisotropic-0.05-0.4", "roughconductor-anisotropic-beckmann-0.5-0.1",
                                   "roughplastic-0.1", "roughplastic-nonlinear-0.6", "roughplastic-beckmann-0.2"])
 def test_sampled_directions_follow_the_pdf(kernels, name, theta):
     """The non-delta directions' histogram over (cos theta, phi) bins matches the pdf integrated
     over each bin; the pdf's integral over the hemisphere is the share of draws that gave one
     (the rest went below the surface or to a delta lobe)."""
-    m, wo = GLOSSY[name], direction(theta)
+    m, wo = GLOSSY[name], direction(theta, azimuth(name))
     wi, weight = sample(kernels, m, wo, seed=theta)
     glossy = weight[:, 3] == 1
     assert np.all(wi[glossy, 2] > 0)
@@ -80,7 +90,7 @@ def test_weight_is_eval_cos_over_pdf_and_eval_is_reciprocal(kernels, name):
 def test_albedo_is_at_most_one_and_sampling_finds_it(kernels, name, theta):
     """The directional albedo of the non-delta part, by quadrature of f cos, is what the mean
     non-delta sample weight estimates; with the delta part's weight it is at most 1."""
-    m, wo = GLOSSY[name], direction(theta)
+    m, wo = GLOSSY[name], direction(theta, azimuth(name))
     grid, cell = hemisphere_grid(3000, 1500)
     f, _ = evaluate(kernels, m, wo, grid)
     albedo = (f * grid[:, 2:3]).sum(axis=0) * cell
@@ -420,6 +430,24 @@ def test_only_scenes_with_beckmann_metals_compile_beckmann(tmp_path):
     assert "BECKMANN" in defines("beckmann") and "BECKMANN" not in defines("ggx")
 
 
+def test_only_scenes_with_anisotropic_roughness_keep_tangents(tmp_path):
+    """A tangent per hit (kernels/frame.cl) is compiled in for anisotropic roughness only; an
+    alpha_v left out follows alpha."""
+    from pathtrace.compiled import CompiledScene
+    from pathtrace.scene import load_scene
+
+    def compiled(params):
+        (tmp_path / "s.toml").write_text(f'[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = {{ type = '
+                                         f'"roughconductor", {params} }}\n')
+        scene = load_scene(str(tmp_path / "s.toml"))
+        c = CompiledScene(scene)
+        return "ANISOTROPIC" in c.features(scene.settings, scene.camera).defines(), scene.materials.get(0).params
+    anisotropic, params = compiled("alpha = 0.2, alpha_v = 0.05")
+    assert anisotropic and params["alpha_v"] == pytest.approx(0.05)
+    anisotropic, params = compiled("alpha = 0.3")
+    assert not anisotropic and params["alpha_v"] == pytest.approx(0.3)
+
+
 # -- rough glass --
 
 ROUGH_GLASS = {
@@ -427,6 +455,7 @@ ROUGH_GLASS = {
     "ggx-0.5-water": material("roughdielectric", alpha=0.5, int_ior="water"),
     "beckmann-0.3": material("roughdielectric", alpha=0.3, int_ior=1.5, distribution="beckmann"),
     "beckmann-0.8-diamond": material("roughdielectric", alpha=0.8, int_ior="diamond", distribution="beckmann"),
+    "ggx-anisotropic-0.4-0.08": material("roughdielectric", alpha=0.4, alpha_v=0.08, int_ior=1.5, distribution="ggx"),
 }
 
 
@@ -435,7 +464,7 @@ ROUGH_GLASS = {
 def test_rough_glass_samples_its_pdf_over_the_sphere(kernels, name, theta):
     """From outside (theta < 90) and inside: the directions reflected and refracted follow the
     pdf over the whole sphere, and the pdf integrates to the share of draws that gave one."""
-    m, wo = ROUGH_GLASS[name], direction(theta)
+    m, wo = ROUGH_GLASS[name], direction(theta, azimuth(name))
     wi, weight = sample(kernels, m, wo, seed=theta)
     ok = weight[:, 3] == 1
     # the bins' pole along y, away from the lobes (which lie about the xz plane): near a pole
@@ -455,7 +484,7 @@ def test_rough_glass_samples_its_pdf_over_the_sphere(kernels, name, theta):
 def test_rough_glass_weights_and_generalised_reciprocity(kernels, name, theta):
     """The weight is f |cos| / pdf with pdf_bsdf's pdf; reflection is reciprocal, and refraction
     reciprocal up to the IORs: f(wi, wo) / n(wi's side)^2 = f(wo, wi) / n(wo's side)^2."""
-    m, wo = ROUGH_GLASS[name], direction(theta)
+    m, wo = ROUGH_GLASS[name], direction(theta, azimuth(name))
     wi, weight = sample(kernels, m, wo, count=4000, seed=3)
     ok = weight[:, 3] == 1
     f, pdf = evaluate(kernels, m, wo, wi[ok])
@@ -476,7 +505,7 @@ def test_rough_glass_albedo_is_what_sampling_estimates_and_at_most_one(kernels, 
     """The quadrature of f |cos| over the sphere, with radiance's (n_wo / n_wi)^2 undone on
     the refracted side, is the sample weights' mean with that factor undone too, and at most 1:
     what the microfacets do not reflect or refract (shadowed light) is lost, never gained."""
-    m, wo = ROUGH_GLASS[name], direction(theta)
+    m, wo = ROUGH_GLASS[name], direction(theta, azimuth(name))
     n_inside, n_outside = float(m["p0"][0][0]), float(m["p0"][0][1])
     n_wo = n_outside if wo["z"] > 0 else n_inside
     grid, cell = sphere_grid(2400, 480)

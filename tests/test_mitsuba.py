@@ -242,6 +242,10 @@ ERRORS = [
      '</transform></sensor>' + SPHERE, None, "up must be a vector not parallel to the view direction"),
     ('<shape type="rectangle"><transform name="to_world"><scale value="1e-20"/><scale value="1e-20"/></transform>'
      '</shape>', None, "singular or beyond float32"),
+    ('<shape type="sphere"><bsdf type="roughconductor"><float name="alpha_u" value="0.1"/></bsdf></shape>', None,
+     "give alpha, or alpha_u and alpha_v, not a mixture"),
+    ('<shape type="sphere"><bsdf type="roughdielectric"><float name="alpha_u" value="0.1"/>'
+     '<float name="alpha_v" value="1.5"/></bsdf></shape>', None, "alpha_v must lie in [0.0001, 1.0]"),
 ]
 
 

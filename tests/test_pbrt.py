@@ -120,6 +120,15 @@ def test_roughness_is_remapped_as_pbrt_remaps_it(tmp_path):
     assert alpha('"float roughness" 0.25 "bool remaproughness" false') == pytest.approx(0.25)
 
 
+def test_u_and_v_roughness_are_the_tangent_and_bitangent_alphas(tmp_path):
+    """pbrt-v4's uroughness runs along dp/du (its BSDF frame's x), as Mitsuba's alpha_u."""
+    for kind in ("conductor", "dielectric"):
+        s = scene(tmp_path, f'Material "{kind}" "float uroughness" 0.04 "float vroughness" 0.25\n' + FLOOR)
+        m = s.materials.get(s.meshes[0].material)
+        assert m.type == "rough" + kind
+        assert (m.params["alpha"], m.params["alpha_v"]) == pytest.approx((0.2, 0.5))
+
+
 def test_fronts_follow_the_normals_or_reverse_orientation(tmp_path):
     """The light's winding faces +y; with normals N pointing down, pbrt's front is down."""
     quad = '"point3 P" [ -1 0 -1  1 0 -1  1 0 1  -1 0 1 ] "integer indices" [ 0 2 1  0 3 2 ]'

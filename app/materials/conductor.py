@@ -1,12 +1,10 @@
 """Metals: a smooth conductor (a mirror with the Fresnel reflectance of a complex IOR) and a
 rough one (the GGX or Beckmann microfacet model), with Mitsuba 3's parameters."""
 
-from dataclasses import replace
-
 import numpy as np
 
 from pathtrace.materials.bsdf import DELTA, BSDFType, Param
-from pathtrace.materials.microfacet import DISTRIBUTION, GGX_PARAMS, check_distribution
+from pathtrace.materials.microfacet import DISTRIBUTION, AnisotropicRoughness, anisotropic_params, check_distribution
 from pathtrace.materials.optics import CONDUCTORS
 
 _CONDUCTOR_PARAMS = (
@@ -47,25 +45,28 @@ class Conductor(BSDFType):
                 "specular_reflectance": row["p2"][:3].copy()}
 
 
-class RoughConductor(Conductor):
+class RoughConductor(AnisotropicRoughness, Conductor):
     name = "roughconductor"
-    params = _CONDUCTOR_PARAMS + (replace(GGX_PARAMS[0], slot="p0.w"), DISTRIBUTION)
+    params = _CONDUCTOR_PARAMS + anisotropic_params("p0.w", "p1.w") + (DISTRIBUTION,)
     flags = 0
-    doc = ("rough metal: the GGX or Beckmann microfacet BRDF with Smith's separable shadowing, GGX "
-           "sampled by visible normals (Heitz 2018), Beckmann by its distribution")
+    doc = ("rough metal: the GGX or Beckmann microfacet BRDF with Smith's separable shadowing, "
+           "isotropic or anisotropic, sampled by visible normals (Heitz 2018; Jakob 2014)")
 
     def check(self, values):
         return check_distribution(values)
 
-    variant_defines = ("BECKMANN",)
+    variant_defines = ("BECKMANN",) + AnisotropicRoughness.variant_defines
 
     def defines(self, rows):
-        return ("BECKMANN",) if np.any(rows["p2"][:, 3] > 0.5) else ()
+        return ((("BECKMANN",) if np.any(rows["p2"][:, 3] > 0.5) else ())
+                + (("ANISOTROPIC",) if self.anisotropic(rows, rows["p0"][:, 3], rows["p1"][:, 3]) else ()))
 
     def pack(self, values, rows):
         super().pack(values, rows)
         rows["p0"][:, 3] = values["alpha"]
+        rows["p1"][:, 3] = values["alpha_v"]
         rows["p2"][:, 3] = values["distribution"]
 
     def unpack(self, row):
-        return {**super().unpack(row), "alpha": float(row["p0"][3]), "distribution": float(row["p2"][3])}
+        return {**super().unpack(row), "alpha": float(row["p0"][3]), "alpha_v": float(row["p1"][3]),
+                "distribution": float(row["p2"][3])}

@@ -2,12 +2,10 @@
 rough one (Walter et al.'s microfacet model), and a thin sheet of glass (no refraction), with
 Mitsuba 3's parameters."""
 
-from dataclasses import replace
-
 import numpy as np
 
 from pathtrace.materials.bsdf import DELTA, TRANSMISSIVE, BSDFType, Param
-from pathtrace.materials.microfacet import DISTRIBUTION, GGX_PARAMS, check_distribution
+from pathtrace.materials.microfacet import DISTRIBUTION, AnisotropicRoughness, anisotropic_params, check_distribution
 from pathtrace.materials.optics import IOR
 
 def check_interface(values) -> str | None:
@@ -56,9 +54,9 @@ class ThinDielectric(Dielectric):
            "sheet's inner reflections summed")
 
 
-class RoughDielectric(Dielectric):
+class RoughDielectric(AnisotropicRoughness, Dielectric):
     name = "roughdielectric"
-    params = _DIELECTRIC_PARAMS + (replace(GGX_PARAMS[0], slot="p0.z"), DISTRIBUTION)
+    params = _DIELECTRIC_PARAMS + anisotropic_params("p0.z", "p1.w") + (DISTRIBUTION,)
     flags = TRANSMISSIVE
     doc = ("rough glass: reflection and refraction by GGX or Beckmann microfacets (Walter et al. "
            "2007), sampled by the normals visible from the outgoing direction")
@@ -66,15 +64,18 @@ class RoughDielectric(Dielectric):
     def check(self, values):
         return check_distribution(values) or check_interface(values)
 
-    variant_defines = ("BECKMANN",)
+    variant_defines = ("BECKMANN",) + AnisotropicRoughness.variant_defines
 
     def defines(self, rows):
-        return ("BECKMANN",) if np.any(rows["p0"][:, 3] > 0.5) else ()
+        return ((("BECKMANN",) if np.any(rows["p0"][:, 3] > 0.5) else ())
+                + (("ANISOTROPIC",) if self.anisotropic(rows, rows["p0"][:, 2], rows["p1"][:, 3]) else ()))
 
     def pack(self, values, rows):
         super().pack(values, rows)
         rows["p0"][:, 2] = values["alpha"]
+        rows["p1"][:, 3] = values["alpha_v"]
         rows["p0"][:, 3] = values["distribution"]
 
     def unpack(self, row):
-        return {**super().unpack(row), "alpha": float(row["p0"][2]), "distribution": float(row["p0"][3])}
+        return {**super().unpack(row), "alpha": float(row["p0"][2]), "alpha_v": float(row["p1"][3]),
+                "distribution": float(row["p0"][3])}

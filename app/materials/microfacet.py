@@ -3,6 +3,7 @@ the roughness parameters the rough materials share, and the rough dielectric int
 reflectance that roughplastic tabulates (Mitsuba 3 computes the same quantities at load time)."""
 
 import math
+from dataclasses import replace
 from functools import lru_cache
 
 import numpy as np
@@ -14,6 +15,35 @@ GGX_PARAMS = (
     Param("alpha", "number", default=0.1, low=1e-4, high=1.0,
           doc="the microfacet roughness (Mitsuba's alpha: the root mean square slope)"),
 )
+
+
+def anisotropic_params(alpha_slot: str, alpha_v_slot: str) -> tuple:
+    """The roughness of a rough material that may be anisotropic (kernels/microfacet.cl), in
+    the MATERIAL slots its kernel reads: alpha along the shading frame's tangent, dp/du (Mitsuba's
+    alpha_u), and alpha_v along its bitangent, alpha where left out (AnisotropicRoughness)."""
+    return (replace(GGX_PARAMS[0], slot=alpha_slot,
+                    doc="the microfacet roughness (Mitsuba's alpha: the root mean square slope); "
+                        "with alpha_v, the roughness along dp/du (Mitsuba's alpha_u)"),
+            Param("alpha_v", "number", default=GGX_PARAMS[0].default, low=1e-4, high=1.0, slot=alpha_v_slot,
+                  doc="the roughness along the bitangent; alpha where left out (isotropic)"))
+
+
+class AnisotropicRoughness:
+    """Of a BSDFType whose params include anisotropic_params: alpha_v follows alpha where a
+    file leaves it out, and programs of scenes where the two differ (or may, where a texture
+    gives them) keep a tangent per hit (ANISOTROPIC, kernels/frame.cl); the others cost nothing
+    more."""
+    variant_defines = ("ANISOTROPIC",)
+
+    def resolve(self, values):
+        values = super().resolve(values)
+        if "alpha_v" not in values:
+            values["alpha_v"] = values.get("alpha", GGX_PARAMS[0].default)
+        return values
+
+    def anisotropic(self, rows, alpha, alpha_v) -> bool:
+        """Whether any of these rows, whose alphas are alpha and alpha_v, needs a tangent."""
+        return bool(np.any((alpha != alpha_v) | (rows["textures"] >= 0)))
 
 # roughconductor's distribution: a number the kernel reads (kernels/bsdfs/roughconductor.cl),
 # given by name

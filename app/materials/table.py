@@ -85,9 +85,10 @@ def slot_index(slot: str) -> tuple:
 def pack(type_name: str, params: dict, emission=(0, 0, 0), twosided=False) -> np.ndarray:
     """Rows of MATERIAL for one type. Each parameter and the emission hold one value for all
     rows or one per row: a colour is a number, 3 numbers or an (N, 3) array, a number a scalar
-    or an (N,) array. Parameters left out take their defaults; named choices must have been
-    resolved (BSDFType.resolve)."""
+    or an (N,) array. Names are resolved (BSDFType.resolve), and parameters left out take their
+    defaults."""
     bsdf = BSDFS[type_name]
+    params = bsdf.resolve(params)
     if twosided and bsdf.flags & TRANSMISSIVE:
         # Mitsuba 3 refuses the combination too: a transmissive BSDF already has two sides, and
         # turning its frame round for back hits would send light through glass the wrong way

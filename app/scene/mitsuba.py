@@ -789,11 +789,17 @@ class _Reader:
                     self.texture(target) if target.tag == "texture" else self.get(props, p.name, kinds=("float",))
         if kind.startswith("rough"):
             values.setdefault("distribution", "beckmann")             # Mitsuba's default
-        if kind.startswith("rough") and "alpha" not in props and ("alpha_u" in props or "alpha_v" in props):
-            a = [self.get(props, k, 0.1, ("float",)) for k in ("alpha_u", "alpha_v")]
-            warn(f"{node.where()}: anisotropic roughness is not supported; pathtrace uses alpha {np.mean(a):.3g}")
-            values["alpha"] = float(np.mean(a))
-        known = {p.name for p in bsdf.params} | {"alpha_u", "alpha_v", "sample_visible"}
+        anisotropic = any(p.name == "alpha_v" for p in bsdf.params)
+        if anisotropic and ("alpha_v" in props or "alpha_u" in props):
+            # Mitsuba's anisotropic roughness: alpha_u (pathtrace's alpha) and alpha_v, both
+            # required (its MicrofacetDistribution refuses one without the other)
+            if "alpha" in props or "alpha_u" not in props or "alpha_v" not in props:
+                _fail(node, "give alpha, or alpha_u and alpha_v, not a mixture")
+            c = props["alpha_u"]
+            target = self.resolve(c) if c.tag == "ref" else c
+            values["alpha"] = self.texture(target) if target.tag == "texture" else \
+                self.get(props, "alpha_u", kinds=("float",))
+        known = {p.name for p in bsdf.params} | {"sample_visible"} | ({"alpha_u"} if anisotropic else set())
         for name in props:
             if name not in known:
                 warn(f"{props[name].where()}: not a parameter pathtrace's {kind} has; ignored")

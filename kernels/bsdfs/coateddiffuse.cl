@@ -28,7 +28,7 @@
 
 Interface coating_of(MaterialRef m)
 {
-    Interface c = {m->p1.x, m->p0.w, 0};
+    Interface c = {m->p1.x, (float2)(m->p0.w), 0};
     return c;
 }
 
@@ -97,7 +97,7 @@ float3 eval_coateddiffuse(MaterialRef m, float3 wo, float3 wi)
     float3 rho = m->p0.xyz, albedo = m->p2.xyz;
     float thickness = m->p1.y, g = m->p1.z;
     int max_depth = (int)m->p1.w, samples = (int)m->p2.w;
-    int rough = top.alpha > 0.0f;
+    int rough = !is_smooth(top);
     float pdf;
     float3 f = (float3)(samples * eval_interface(top, wo, wi, LOBE_REFLECTION, &pdf));
     Rng rng = layer_rng(wo, wi, 1u);
@@ -180,7 +180,7 @@ float pdf_coateddiffuse(MaterialRef m, float3 wo, float3 wi)
         BSDFSample os, is;
         if (!enter_layer(top, wo, wi, &rng, &os, &is))
             continue;
-        if (top.alpha == 0.0f) {
+        if (is_smooth(top)) {
             sum += pdf_cosine_hemisphere(-is.wi.z);
         } else {
             /* by MIS of the base's density towards -is.wi and the top's towards wi after a
@@ -209,7 +209,7 @@ int sample_coateddiffuse(MaterialRef m, float3 wo, float3 u, BSDFSample *s)
         return 0;
     if (s->lobe & LOBE_REFLECTION) {
         /* the coating's own reflection: the sample as it is (a delta where it is smooth) */
-        if (top.alpha > 0.0f)
+        if (!is_smooth(top))
             s->pdf = pdf_coateddiffuse(m, wo, s->wi);
         return 1;
     }

@@ -4,8 +4,8 @@
  * h the half vector, F the conductor Fresnel reflectance (Mitsuba 3's `roughconductor`).
  *
  * Parameters (Material):
- *   p0.xyz  eta, the real part of the complex IOR     p0.w  alpha, the roughness
- *   p1.xyz  k, its imaginary part
+ *   p0.xyz  eta, the real part of the complex IOR     p0.w  alpha, the roughness along the tangent
+ *   p1.xyz  k, its imaginary part                     p1.w  alpha_v, along the bitangent
  *   p2.xyz  specular_reflectance, a factor on the reflectance
  *                                                      p2.w  1 for Beckmann, 0 for GGX
  *
@@ -20,20 +20,22 @@
 #define IS_BECKMANN(m) 0
 #endif
 
+#define CONDUCTOR_ALPHA(m) ((float2)((m)->p0.w, (m)->p1.w))
+
 float conductor_d(MaterialRef m, float3 h)
 {
-    return IS_BECKMANN(m) ? beckmann_d(h, m->p0.w) : ggx_d(h, m->p0.w);
+    return IS_BECKMANN(m) ? beckmann_d(h, CONDUCTOR_ALPHA(m)) : ggx_d(h, CONDUCTOR_ALPHA(m));
 }
 
 float conductor_g1(MaterialRef m, float3 v, float3 h)
 {
-    return IS_BECKMANN(m) ? beckmann_g1(v, h, m->p0.w) : ggx_g1(v, h, m->p0.w);
+    return IS_BECKMANN(m) ? beckmann_g1(v, h, CONDUCTOR_ALPHA(m)) : ggx_g1(v, h, CONDUCTOR_ALPHA(m));
 }
 
 /* The density, per solid angle of h, of the normal that sampling draws from wo */
 float pdf_conductor_normal(MaterialRef m, float3 wo, float3 h)
 {
-    return IS_BECKMANN(m) ? pdf_beckmann_visible(wo, h, m->p0.w) : pdf_ggx_visible(wo, h, m->p0.w);
+    return IS_BECKMANN(m) ? pdf_beckmann_visible(wo, h, CONDUCTOR_ALPHA(m)) : pdf_ggx_visible(wo, h, CONDUCTOR_ALPHA(m));
 }
 
 float3 eval_roughconductor(MaterialRef m, float3 wo, float3 wi)
@@ -60,7 +62,7 @@ int sample_roughconductor(MaterialRef m, float3 wo, float3 u, BSDFSample *s)
 {
     if (wo.z <= 0.0f)
         return 0;
-    float alpha = m->p0.w;
+    float2 alpha = CONDUCTOR_ALPHA(m);
     float3 h = IS_BECKMANN(m) ? sample_beckmann_visible(wo, alpha, u.y, u.z)
                               : sample_ggx_visible(wo, alpha, u.y, u.z);
     float wo_h = dot(wo, h);

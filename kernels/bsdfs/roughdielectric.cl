@@ -7,8 +7,8 @@
  *
  * Parameters (Material):
  *   p0.x    int_ior, the IOR inside (opposite the normal)     p0.y  ext_ior, outside
- *   p0.z    alpha, the roughness                              p0.w  1 for Beckmann, 0 for GGX
- *   p1.xyz  specular_reflectance R, a factor on reflection
+ *   p0.z    alpha, the roughness along the tangent            p0.w  1 for Beckmann, 0 for GGX
+ *   p1.xyz  specular_reflectance R, a factor on reflection    p1.w  alpha_v, along the bitangent
  *   p2.xyz  specular_transmittance T, a factor on transmission
  *
  * Transmissive: wo may lie on either side. Sampling draws a normal visible from wo (mirrored
@@ -24,7 +24,7 @@
 
 Interface rough_glass(MaterialRef m)
 {
-    Interface c = {m->p0.x / m->p0.y, m->p0.z, ROUGH_GLASS_IS_BECKMANN(m)};
+    Interface c = {m->p0.x / m->p0.y, (float2)(m->p0.z, m->p1.w), ROUGH_GLASS_IS_BECKMANN(m)};
     return c;
 }
 

@@ -24,7 +24,7 @@
 /* The coating as an interface of kernels/interface.cl */
 Interface plastic_coating(MaterialRef m)
 {
-    Interface c = {m->p0.w, fabs(m->p2.w), PLASTIC_IS_BECKMANN(m)};
+    Interface c = {m->p0.w, (float2)(fabs(m->p2.w)), PLASTIC_IS_BECKMANN(m)};
     return c;
 }
 

@@ -170,19 +170,27 @@ class MaterialMapper:
 
     # -- materials --
 
-    def roughness(self, params, where):
-        """pbrt-v4's microfacet alpha from roughness / uroughness / vroughness and
-        remaproughness (alpha = sqrt(roughness): RoughnessToAlpha)."""
-        r = params.float("roughness", 0.0)
-        ru, rv = params.float("uroughness", r), params.float("vroughness", r)
+    def roughness(self, params, where, prefix=""):
+        """pbrt-v4's microfacet alphas (along dp/du and dp/dv, as its BSDF frame has them) from
+        roughness / uroughness / vroughness and remaproughness (alpha = sqrt(roughness):
+        RoughnessToAlpha)."""
+        r = params.float(prefix + "roughness", 0.0)
+        ru, rv = params.float(prefix + "uroughness", r), params.float(prefix + "vroughness", r)
         for name, v in (("roughness", r), ("uroughness", ru), ("vroughness", rv)):
             if v < 0 or v > 1e3 or not math.isfinite(v):
-                params.fail(name, f"must lie in [0, 1000], got {v:g}")
+                params.fail(prefix + name, f"must lie in [0, 1000], got {v:g}")
         remap = params.bool("remaproughness", True)
-        au, av = (math.sqrt(ru), math.sqrt(rv)) if remap else (ru, rv)
-        if not math.isclose(au, av, rel_tol=1e-6):
-            warn(f"{where}: anisotropic roughness is not supported yet; pathtrace uses alpha {(au + av) / 2:.3g}")
-        return (au + av) / 2
+        return (math.sqrt(ru), math.sqrt(rv)) if remap else (ru, rv)
+
+    @staticmethod
+    def rough_values(alphas) -> dict | None:
+        """The alpha and alpha_v of a rough material (GGX, pbrt-v4's TrowbridgeReitz) for a
+        pair of alphas, or None where pbrt deems them smooth (EffectivelySmooth: both below
+        SMOOTH_ALPHA)."""
+        if max(alphas) < SMOOTH_ALPHA:
+            return None
+        au, av = (min(max(a, 1e-4), 1.0) for a in alphas)
+        return {"alpha": au, "alpha_v": av, "distribution": "ggx"}
 
     def material(self, kind, params, where) -> Material | None:
         """The Material of a pbrt material, or None for `interface` (and "" / "none"): no
@@ -195,13 +203,12 @@ class MaterialMapper:
             return self._conductor(params, where)
         if kind in ("dielectric", "thindielectric"):
             eta = self._eta(params, where)
-            alpha = self.roughness(params, where)
+            rough = self.rough_values(self.roughness(params, where))
             if eta == 1.0:
                 warn(f"{where}: a dielectric of eta 1 is invisible; pathtrace leaves the surface out")
                 return None
-            if kind == "dielectric" and alpha >= SMOOTH_ALPHA:      # pbrt-v4's rough glass: GGX
-                return make("roughdielectric", {"int_ior": eta, "ext_ior": 1.0, "alpha": min(alpha, 1.0),
-                                                "distribution": "ggx"}, where)
+            if kind == "dielectric" and rough:      # pbrt-v4's rough glass: GGX
+                return make("roughdielectric", {"int_ior": eta, "ext_ior": 1.0, **rough}, where)
             return make(kind, {"int_ior": eta, "ext_ior": 1.0}, where)
         if kind in ("coateddiffuse", "coatedconductor"):
             return self._coated(kind, params, where)
@@ -249,16 +256,19 @@ class MaterialMapper:
                 eta = named_spectrum("metal-Cu-eta")[0]        # pbrt-v4's default: copper
             if k is None:
                 k = named_spectrum("metal-Cu-k")[0]
-        alpha = self.roughness(params, where)
+        rough = self.rough_values(self.roughness(params, where))
         values = {"eta": eta, "k": k}
-        if alpha < SMOOTH_ALPHA:
+        if not rough:
             return make("conductor", values, where)
-        return make("roughconductor", {**values, "alpha": min(alpha, 1.0), "distribution": "ggx"}, where)
+        return make("roughconductor", {**values, **rough}, where)
 
     def _coated(self, kind, params, where):
         """pbrt-v4's layered materials: a coateddiffuse as pathtrace's (the same random walk), a
         coatedconductor as its conductor until its layered form is in."""
-        alpha = self.roughness(params, where)
+        au, av = self.roughness(params, where)
+        if not math.isclose(au, av, rel_tol=1e-6):
+            warn(f"{where}: pathtrace's coatings are isotropic; it uses alpha {(au + av) / 2:.3g}")
+        alpha = (au + av) / 2
         if kind == "coatedconductor":
             warn(f"{where}: pathtrace has no layered materials yet; this coatedconductor is rendered as its conductor")
             inner = {"eta": spectrum_rgb(params, "conductor.eta", named_spectrum("metal-Cu-eta")[0], "unbounded"),
