@@ -16,6 +16,7 @@ from pathtrace.errors import UserError, format_bytes, short
 from pathtrace.features import FLAT_MAX, Features, stack_size
 from pathtrace.lights import LightTable, build_light_table, emitted_power, primitive_bounds
 from pathtrace.materials import BSDFS, NULL, TAGS
+from pathtrace.materials.blend import reachable
 from pathtrace.media import media_table, packed_interfaces
 from pathtrace.memory import available_host_memory
 from pathtrace.camera import Camera, kernel_name
@@ -152,7 +153,7 @@ class CompiledScene:
     def features(self, settings: RenderSettings, camera: Camera) -> Features:
         """What the kernels need for this scene: triangles or not, the material and light types
         it uses, and the Russian roulette rule, pixel filter and camera of its settings."""
-        rows = self.materials[np.unique(self.prim_material)]
+        rows = self.materials[reachable(self.materials, self.prim_material)]
         used = np.unique(rows["type"])
         null_surfaces = bool(np.any(rows["flags"] & NULL))     # rays cross them (NULL_SURFACES)
         variants = tuple(sorted({d for name, tag in TAGS.items() if tag in used

@@ -39,7 +39,7 @@ def kernel_source(extra: str = "", features: Features = Features()) -> str:
     """The kernels as one source text, each file introduced by a #line marker so that compiler
     messages name the file and line."""
     from pathtrace import camera, filters, lights
-    from pathtrace.materials import dispatch_source, kernel_files
+    from pathtrace.materials import dispatch_source, kernel_files, tag_source
     from pathtrace.textures import kernel_parts
 
     folder = resource_dir("kernels")
@@ -49,6 +49,7 @@ def kernel_source(extra: str = "", features: Features = Features()) -> str:
     files = (*SHAPE_FILES, *(("masks.cl",) if features.masks else ()), "bvh.cl", "frame.cl",
              *(("normal_maps.cl",) if features.normal_maps else ()),
              *(("shading.cl",) if features.textures else ()), *BSDF_FILES, *kernel_files(features.bsdfs))
+    texts.append(("app/materials/registry.py: tag_source", tag_source()))
     texts += [(name, (folder / name).read_text()) for name in files]
     texts.append(("app/materials/registry.py: dispatch_source", dispatch_source(features.bsdfs)))
     parts = [("environment.cl", None), *lights.kernel_parts(features.lights, features.light_tree),

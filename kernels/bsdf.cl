@@ -26,17 +26,24 @@ typedef const Material *MaterialRef;
 typedef const global Material *MaterialRef;
 #endif
 
+/* The row of surface s's material, seen along ray direction d: a blend's chosen component
+ * (kernels/bsdfs/blendbsdf.cl) in a program for a scene with blends. */
+#ifdef BLEND
+#define MATERIAL_ROW(sc, s, d) choose_component(sc, &(sc)->materials[(sc)->prim_material[(s).prim]], &(s), -(d))
+#else
+#define MATERIAL_ROW(sc, s, d) (&(sc)->materials[(sc)->prim_material[(s).prim]])
+#endif
+
 /* Declares `m`, the MaterialRef of surface s's material (a Surface, kernels/bvh.cl), seen along
  * ray direction d, and completes s's shading frame (kernels/frame.cl). */
 #ifdef TEXTURES
 #define MATERIAL_AT(m, sc, s, d)                                                                  \
-    Material m##_shaded = shade_material(sc, &(sc)->materials[(sc)->prim_material[(s).prim]],    \
-                                         &(s), -(d));                                           \
+    Material m##_shaded = shade_material(sc, MATERIAL_ROW(sc, s, d), &(s), -(d));               \
     MaterialRef m = &m##_shaded;                                                                 \
     complete_frame(sc, &(s))
 #else
 #define MATERIAL_AT(m, sc, s, d)                                                                  \
-    MaterialRef m = &(sc)->materials[(sc)->prim_material[(s).prim]];                             \
+    MaterialRef m = MATERIAL_ROW(sc, s, d);                                                      \
     complete_frame(sc, &(s))
 #endif
 

@@ -46,6 +46,7 @@ SCENES = {  # name: (width, height, spp per render, renders)
     "media-glass": (None, None, 1024, 16),
     "media-fog": (None, None, 1024, 16),
     "anisotropic": (None, None, 1024, 16),
+    "blend": (None, None, 1024, 16),
 }
 XML_SCENES = OUT.parent / "scenes"
 MAX_DEPTH = 8

@@ -277,15 +277,19 @@ def furnace(backend, mat: Material, spp=64, **settings):
 @pytest.mark.parametrize("mat", [Material("dielectric", {"int_ior": 1.5}),
                                  Material("dielectric", {"int_ior": 2.4, "ext_ior": 1.33}),
                                  Material("thindielectric", {"int_ior": 1.5}),
-                                 Material("conductor", {})],
-                         ids=["glass", "diamond-in-water", "thin", "mirror"])
+                                 Material("conductor", {}),
+                                 Material("blendbsdf", {"weight": 0.4}, components=(
+                                     Material("diffuse", {"rho_d": 1.0}), Material("conductor", {})))],
+                         ids=["glass", "diamond-in-water", "thin", "mirror", "blend-of-white-and-mirror"])
 @pytest.mark.parametrize("rr", ["throughput", "albedo"])
 def test_lossless_materials_render_the_environment(backend, mat, rr):
     """A white furnace: a lossless sphere (glass: every path enters and leaves, the radiance
     scaling cancelling; a mirror of reflectance 1) in a uniform environment of radiance 1 is
-    invisible. Paths inside glass can be long; Russian roulette keeps the estimate unbiased."""
+    invisible, and so is a blend of a white diffuse and a mirror (light sampling where the
+    diffuse one is taken, none at the mirror). Paths inside glass can be long; Russian roulette
+    keeps the estimate unbiased."""
     values = {**{p.name: p.default for p in BSDFS[mat.type].params if p.kind != "name"}, **mat.params}
-    mean, var = furnace(backend, Material(mat.type, values), russian_roulette=rr)
+    mean, var = furnace(backend, Material(mat.type, values, components=mat.components), russian_roulette=rr)
     assert np.all(np.abs(mean - 1.0) < 5 * np.sqrt(var) + 2e-3), (mean.min(), mean.max())
 
 

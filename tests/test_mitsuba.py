@@ -117,7 +117,7 @@ def test_generated_shapes_face_out(tmp_path, shape):
 
 
 @pytest.mark.parametrize("name", ["cbox", "meshes", "envmap-spheres", "textures", "masks", "normal-maps", "lights",
-                                  "thinlens"])
+                                  "thinlens", "anisotropic", "blend"])
 def test_convert_writes_toml_that_reads_back_the_same_scene(tmp_path, name):
     out = tmp_path / "sub" / f"{name}.toml"
     out.parent.mkdir()

@@ -24,7 +24,7 @@ def test_references_are_present():
     assert {p.stem for p in REFERENCES} >= {"simple-diffuse", "spheres8k-diffuse", "cbox", "envmap-spheres", "meshes",
                                             "meshes-smaller", "meshes-larger", "textures", "masks", "normal-maps",
                                             "lights", "thinlens", "beckmann", "roughdielectric", "roughplastic", "metals", "media-sphere", "media-glass",
-                                            "media-fog", "anisotropic"} | NO_NEE
+                                            "media-fog", "anisotropic", "blend"} | NO_NEE
 
 
 # Scenes lit by delta lights (point, spot, directional) are compared with NEE only: no path can
@@ -34,7 +34,12 @@ DELTA_LIT = {"lights", "media-fog"}
 # Without NEE each estimator is checked once per kind of BSDF, emitter and medium (the scenes
 # left out repeat those of one below, on other shapes), to keep the suite within its time
 NO_NEE = {"simple-diffuse", "cbox", "material-spheres", "textures", "masks", "normal-maps", "beckmann",
-          "roughdielectric", "roughplastic", "anisotropic", "media-sphere", "media-glass"}
+          "roughdielectric", "roughplastic", "anisotropic", "blend", "media-sphere", "media-glass"}
+# Mitsuba's own bias, relative to the mean, where it is known: its blendbsdf weighs emitter hits
+# by the chosen component's density and light samples by the mixture's (docs/mitsuba.md), which
+# moved blocks of tests/scenes/blend.xml by up to 1.6 % against pathtrace's unbiased mixture
+# (whose white-and-mirror blend passes the white furnace, test_materials.py)
+REFERENCE_BIAS = {"blend": 0.02}
 CASES = [(path, nee) for path in REFERENCES for nee in (True, False) if nee or path.stem in NO_NEE]
 
 
@@ -51,5 +56,6 @@ def test_matches_mitsuba(backend, path, nee):
     for _ in range(16 if path.stem in DELTA_LIT else 32):
         r.add_samples(128)
     r.finish()
-    ok, p, threshold = z_test(r.mean(), r.variance() / r.samples, ref["mean"], ref["var_of_mean"], block=4)
+    ok, p, threshold = z_test(r.mean(), r.variance() / r.samples, ref["mean"], ref["var_of_mean"], block=4,
+                              rel_floor=REFERENCE_BIAS.get(path.stem, 1e-5))
     assert ok, f"smallest p-value {p:.3g} below the Sidak threshold {threshold:.3g}"

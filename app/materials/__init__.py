@@ -2,8 +2,8 @@
 kernels/bsdfs/), their registry and the scene's material table."""
 
 from pathtrace.materials.bsdf import DELTA, NULL, TRANSMISSIVE, TWOSIDED, BSDFType, Param
-from pathtrace.materials.registry import BSDFS, TAGS, dispatch_source, kernel_files
+from pathtrace.materials.registry import BSDFS, TAGS, dispatch_source, kernel_files, tag_source
 from pathtrace.materials.table import Material, MaterialTable, pack
 
 __all__ = ["BSDFS", "TAGS", "DELTA", "NULL", "TRANSMISSIVE", "TWOSIDED", "BSDFType", "Param", "Material",
-           "MaterialTable", "dispatch_source", "kernel_files", "pack"]
+           "MaterialTable", "dispatch_source", "kernel_files", "pack", "tag_source"]

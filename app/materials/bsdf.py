@@ -61,6 +61,8 @@ class BSDFType:
     doc: str = ""
     flags: int = 0            # DELTA, TRANSMISSIVE, NULL
     kernel: bool = True       # has kernels/bsdfs/<name>.cl
+    resolved_first: bool = False   # the kernels turn it into another material before any BSDF
+                                   # call (a blend): its file has no eval, pdf or sample
 
     def resolve(self, values: dict) -> dict:
         """Turns names into the numbers they stand for (a named IOR; a "name" parameter, in the

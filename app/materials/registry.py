@@ -3,6 +3,7 @@ pdf_bsdf, sample_bsdf) generated from it, so that adding a material is one kerne
 (kernels/bsdfs/<name>.cl) and one entry here."""
 
 from pathtrace.materials.basic import Black, Diffuse, Null, Phong
+from pathtrace.materials.blend import BlendBSDF
 from pathtrace.materials.bsdf import DELTA
 from pathtrace.materials.conductor import Conductor, RoughConductor
 from pathtrace.materials.dielectric import Dielectric, RoughDielectric, ThinDielectric
@@ -12,23 +13,25 @@ from pathtrace.materials.plastic import Plastic, RoughPlastic
 
 BSDFS = {cls.name: cls() for cls in (Black, Diffuse, Phong, Conductor, RoughConductor,
                                      Dielectric, RoughDielectric, ThinDielectric, Plastic,
-                                     RoughPlastic, DiffuseTransmission, CoatedDiffuse, Null)}
+                                     RoughPlastic, DiffuseTransmission, CoatedDiffuse, Null, BlendBSDF)}
 TAGS = {name: i for i, name in enumerate(BSDFS)}
 
 
+def tag_source() -> str:
+    """The BSDF_<NAME> tags of every type, which the kernel files may name."""
+    return "".join(f"#define BSDF_{name.upper()} {TAGS[name]}\n" for name in BSDFS)
+
+
 def dispatch_source(names=None) -> str:
-    """The BSDF_<NAME> tags of every type, and the eval/pdf/sample dispatch of kernels/bsdf.cl
-    over the types `names` (None: all)."""
-    tags = "".join(f"#define BSDF_{name.upper()} {TAGS[name]}\n" for name in BSDFS)
-    with_kernel = _with_kernel(names)
+    """The eval/pdf/sample dispatch of kernels/bsdf.cl over the types `names` (None: all)."""
+    with_kernel = [n for n in _with_kernel(names) if not BSDFS[n].resolved_first]
     # a type whose every lobe is a delta has no eval or pdf (both 0): it provides sample only
     smooth = [n for n in with_kernel if not BSDFS[n].flags & DELTA]
 
     def switch(types, call, default):
         cases = "".join(f"    case BSDF_{n.upper()}: return {call.format(n)};\n" for n in types)
         return f"    switch (m->type) {{\n{cases}    default: return {default};\n    }}\n"
-    return (tags
-            + "float3 eval_bsdf(MaterialRef m, float3 wo, float3 wi)\n{\n"
+    return ("float3 eval_bsdf(MaterialRef m, float3 wo, float3 wi)\n{\n"
             + switch(smooth, "eval_{}(m, wo, wi)", "(float3)(0.0f)") + "}\n"
             + "float pdf_bsdf(MaterialRef m, float3 wo, float3 wi)\n{\n"
             + switch(smooth, "pdf_{}(m, wo, wi)", "0.0f") + "}\n"

@@ -3,11 +3,12 @@ per-row access to the parameters (the viewer's editor). A parameter may be a tex
 holds its mean (app/materials/bsdf.py: constant_of), and the row's bindings say which texture
 gives the parameter's slot at each hit (app/textures/table.py compiles them)."""
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from pathtrace.errors import UserError, short
+from pathtrace.materials.blend import check_blend
 from pathtrace.materials.bsdf import MASKED, NULL, TRANSMISSIVE, TWOSIDED, constant_of
 from pathtrace.materials.registry import BSDFS, TAGS
 from pathtrace.textures.texture import Texture
@@ -26,6 +27,7 @@ class Material:
                                   # a number or a Texture (kernels/masks.cl)
     normal_map: Texture = None    # a tangent-space normal map, or a bump map (a height field: a
     bump_map: Texture = None      # bitmap, or a scale of one), kernels/normal_maps.cl
+    components: tuple = ()        # a blendbsdf's two Materials (app/materials/blend.py)
 
     @property
     def masked(self) -> bool:
@@ -152,14 +154,40 @@ class MaterialTable:
                 setattr(material, name, texture)
             else:
                 material.params[name] = texture
+        if type_name == "blendbsdf":
+            material.components = tuple(replace(self.get(int(r)), emission=np.zeros(3), twosided=False,
+                                                normal_map=None, bump_map=None) for r in row["p0"][1:3])
         return material
 
     def set(self, index: int, material: Material):
         params, emission = material.constants()
-        self.rows[index] = pack(material.type, params, emission, material.twosided)[0]
+        row = pack(material.type, params, emission, material.twosided)[0]
         if material.masked:
-            self.rows[index]["flags"] |= MASKED
+            row["flags"] |= MASKED
+        if material.type == "blendbsdf":
+            components = self._set_components(index, material)
+            row["p0"][1:3] = components
+            row["flags"] |= self.rows[components[0]]["flags"] & TRANSMISSIVE
+        self.rows[index] = row
         self.textures[index] = material.textures()
+
+    def _set_components(self, index: int, material: Material) -> list:
+        """The rows of a blend's components, its own (those it had, or new ones), each with
+        the blend's emission, sides and shading maps (the kernels shade the component a hit
+        takes)."""
+        problem = check_blend(material)
+        if problem:
+            raise ValueError(problem)
+        old = self.rows[index]
+        rows = [int(r) for r in old["p0"][1:3]] if old["type"] == TAGS["blendbsdf"] else [None, None]
+        for k, c in enumerate(material.components):
+            c = replace(c, emission=material.emission, twosided=material.twosided,
+                        normal_map=material.normal_map, bump_map=material.bump_map)
+            if rows[k] is None:
+                rows[k] = self.add(c)
+            else:
+                self.set(rows[k], c)
+        return rows
 
     def index(self, key) -> int:
         """The row of a material given by name (a scene file's named material) or by row."""

@@ -23,7 +23,8 @@ from pathtrace.errors import UserError, cut, short, warn
 from pathtrace.filters import FILTERS, PixelFilter
 from pathtrace.lights import DELTA_LIGHTS, DirectionalLight, PointLight, SpotLight
 from pathtrace.materials import BSDFS, Material
-from pathtrace.materials.bsdf import LUMINANCE, TRANSMISSIVE, constant_of
+from pathtrace.materials.blend import check_blend, transmits
+from pathtrace.materials.bsdf import LUMINANCE, constant_of
 from pathtrace.materials.table import check_bump_map
 from pathtrace.media import Medium, MediumInterface
 from pathtrace.scene import transform
@@ -695,10 +696,12 @@ class _Reader:
             if not inner:
                 _fail(node, "needs a nested <bsdf>")
             m = self.material(inner[0])
-            if BSDFS[m.type].flags & TRANSMISSIVE:
+            if transmits(m):
                 _fail(node, f"a twosided BSDF cannot hold a {m.type}: it transmits (Mitsuba 3 refuses it too)")
             m.twosided = True
             return m
+        if kind == "blendbsdf":
+            return self.blend(node, props)
         if kind == "mask":
             inner = [c for c in node.children if c.tag in ("bsdf", "ref") and "name" not in c.attrs]
             if not inner:
@@ -724,6 +727,28 @@ class _Reader:
         warn(f"{node.where()}: not supported; pathtrace uses a diffuse BSDF of albedo "
              f"{', '.join(f'{c:.3g}' for c in albedo)}")
         return Material("diffuse", {"rho_d": albedo})
+
+    def blend(self, node, props) -> Material:
+        """A `blendbsdf`: its two nested BSDFs, the second taken with probability `weight` (a
+        number or a texture; 0.5)."""
+        inner = [c for c in node.children if c.tag in ("bsdf", "ref") and c.attrs.get("name") != "weight"]
+        if len(inner) != 2:
+            _fail(node, f"needs two nested BSDFs, got {len(inner)}")
+        weight = 0.5
+        if "weight" in props:
+            c = props["weight"]
+            target = self.resolve(c) if c.tag == "ref" else c
+            weight = self.texture(target) if target.tag == "texture" else self.get(props, "weight", kinds=("float",))
+            low = constant_of(weight, "number", Texture.minimum)
+            high = constant_of(weight, "number", Texture.maximum)
+            if not 0 <= low <= high <= 1:
+                _fail(c, "weight must lie in [0, 1]")
+        m = Material("blendbsdf", BSDFS["blendbsdf"].complete({"weight": weight}),
+                     components=tuple(self.material(c) for c in inner))
+        problem = check_blend(m)
+        if problem:
+            _fail(node, problem)
+        return m
 
     def mapped_material(self, node, kind, props):
         """A `normalmap` (its texture `normalmap`) or `bumpmap` (its one texture, times `scale`)

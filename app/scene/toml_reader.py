@@ -18,6 +18,7 @@ from pathtrace.lights import DELTA_LIGHTS, LIGHT_SAMPLERS
 from pathtrace.environment import Environment
 from pathtrace.errors import UserError, short
 from pathtrace.materials import BSDFS, Material
+from pathtrace.materials.blend import check_blend, transmits
 from pathtrace.materials.bsdf import NULL, TRANSMISSIVE, constant_of
 from pathtrace.materials.table import check_bump_map
 from pathtrace.media import Medium, MediumInterface
@@ -46,6 +47,8 @@ class _Reader:
         self.resolving = []          # the names being read (a reference cycle comes back to one)
         self.images = {}             # the images read (read_image's cache)
         self.media = {}              # name -> row of the scene's media, as [media] is read
+        self.material_tables = {}    # the [materials] tables, by name (a blend's bsdfs name them)
+        self.blending = []           # the named materials being read as a blend's components
 
     def fail(self, where, problem):
         raise UserError(f"{self.label}: {where}: {problem}")
@@ -214,13 +217,13 @@ class _Reader:
             if "bsdf" not in data:
                 self.fail(where, "missing 'bsdf' (the material to make two-sided)")
             inner = self.material(data["bsdf"], f"{where}.bsdf")
-            if BSDFS[inner.type].flags & TRANSMISSIVE:
+            if transmits(inner):
                 self.fail(f"{where}.bsdf", f"a {inner.type} cannot be two-sided: it transmits")
             inner.twosided = True
             return inner
         bsdf = FILE_TYPES[kind]
         self.table(data, where, {"type", "Le", "twosided", "opacity", "normal_map", "bump_map", "bump_scale",
-                                 *(p.name for p in bsdf.params)})
+                                 *(p.name for p in bsdf.params), *(("bsdfs",) if kind == "blendbsdf" else ())})
         given = {p.name: self.parameter(data, p, where) for p in bsdf.params if p.name in data}
         try:
             values = bsdf.complete(given)
@@ -234,7 +237,33 @@ class _Reader:
             self.fail(f"{where}.Le", "a null material is no surface, and cannot emit")
         material = Material(kind, values, emission, twosided, self.opacity(data, where))
         self.shading_maps(data, where, material)
+        if kind == "blendbsdf":
+            material.components = self.components(data, where)
+            problem = check_blend(material)
+            if problem:
+                self.fail(where, problem)
+            if twosided and transmits(material):
+                self.fail(f"{where}.twosided", "a blend of transmissive materials cannot be two-sided")
         return material
+
+    def components(self, data, where) -> tuple:
+        """A blend's `bsdfs`: two materials, each a table or the name of one in [materials]."""
+        given = data.get("bsdfs")
+        if not isinstance(given, list) or len(given) != 2:
+            self.fail(f"{where}.bsdfs", f"must be a list of two materials (tables or names), got {short(given)}")
+        out = []
+        for k, m in enumerate(given):
+            if isinstance(m, str):
+                if m not in self.material_tables:
+                    self.fail(f"{where}.bsdfs[{k}]", f"no material named {short(m)} in [materials]")
+                if m in self.blending:
+                    self.fail(f"{where}.bsdfs[{k}]", f"a reference cycle: {short(' -> '.join(self.blending + [m]))}")
+                self.blending.append(m)
+                out.append(self.material(self.material_tables[m], f"materials.{m}"))
+                self.blending.pop()
+            else:
+                out.append(self.material(m, f"{where}.bsdfs[{k}]"))
+        return tuple(out)
 
     def shading_maps(self, data, where, material):
         """normal_map (a texture of tangent-space normals, 2 rgb - 1), or bump_map (a bitmap of
@@ -608,6 +637,7 @@ class _Reader:
             self.media[name] = len(media) - 1
         named = data.get("materials", {})
         self.table(named, "materials", set(named) if isinstance(named, dict) else set())
+        self.material_tables = named
         rows = {}
         for name, m in named.items():
             rows[name] = builder.materials.add(self.material(m, f"materials.{name}"), name)

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from pathtrace.materials import BSDFS
+from pathtrace.materials.blend import component_rows
 from pathtrace.errors import UserError
 from pathtrace.scene.description import Scene
 from pathtrace.scene.toml_reader import MAX_INLINE
@@ -24,6 +25,8 @@ def _value(v) -> str:
         return str(int(v))
     if isinstance(v, (float, np.floating)):
         return str(np.float32(v))       # the shortest text that reads back as the same float32
+    if isinstance(v, dict):
+        return _inline(v)
     return "[" + ", ".join(_value(x) for x in v) + "]"
 
 
@@ -63,6 +66,8 @@ def material_table(material, texture_names: dict = {}) -> dict:
     for key in ("normal_map", "bump_map"):
         if getattr(material, key) is not None:
             table[key] = value(getattr(material, key), "color")
+    if material.components:
+        table["bsdfs"] = [material_table(c, texture_names) for c in material.components]
     return table
 
 
@@ -158,7 +163,10 @@ def scene_toml(scene: Scene, out: Path) -> str:
         lines.append("")
     lines.append("[materials]")
     names = {}
+    components = set(component_rows(scene.materials.rows).tolist())    # written inside their blends
     for row in range(len(scene.materials)):
+        if row in components:
+            continue
         names[row] = scene.materials.name_of(row) or f"material{row}"
         lines.append(f"{json.dumps(names[row])} = {_inline(material_table(scene.materials.get(row), texture_names))}")
     for i, sphere in enumerate(scene.spheres):

@@ -10,6 +10,7 @@ import numpy as np
 from pathtrace.errors import UserError, warn
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import TRANSMISSIVE
+from pathtrace.materials.blend import check_blend, transmits
 from pathtrace.spectra import blackbody_rgb, emission_rgb, named_spectrum, reflectance_rgb, sampled
 from pathtrace.textures import TEXTURES, Texture
 from pathtrace.textures.bitmap import read_image
@@ -223,13 +224,31 @@ class MaterialMapper:
                 values[name] = value
             return make("diffusetransmission", values, where)
         if kind == "mix":
-            names = params.get("materials", ("string",), 2)
-            amount = params.float("amount", 0.5)
-            pick = names[1] if amount >= 0.5 else names[0]
-            warn(f"{where}: pathtrace has no mix material yet; it uses '{pick}', the larger share")
-            return self.reader.named_material(pick, where)
+            return self._mix(params, where)
         warn(f"{where}: pathtrace has no {kind} material; it uses a diffuse one of albedo 0.5")
         return make("diffuse", {"rho_d": np.full(3, 0.5)}, where)
+
+    def _mix(self, params, where):
+        """pbrt-v4's mix: materials[1] with probability `amount` (a number or a float texture),
+        as pathtrace's blendbsdf chooses its second component; an `interface` in it (no
+        surface) leaves the other alone, with a warning."""
+        names = params.get("materials", ("string",), 2)
+        parts = [self.reader.named_material(n, where) for n in names]
+        amount = self.texture_input(params, "amount", 0.5, True)
+        if any(p is None for p in parts):
+            other = next((p for p in parts if p is not None), None)
+            warn(f"{where}: pathtrace cannot mix a surface with an interface; it uses the other material alone")
+            return other
+        blend = Material("blendbsdf", {"weight": amount}, components=tuple(parts))
+        problem = check_blend(blend)
+        if problem:
+            raise UserError(f"{where}: {problem}")
+        try:
+            blend.params = BSDFS["blendbsdf"].complete(blend.params)
+        except ValueError as e:
+            raise UserError(f"{where}: amount: {e}") from None
+        blend.twosided = not transmits(blend)
+        return blend
 
     def _eta(self, params, where) -> float:
         ptype = params.type_of("eta")
