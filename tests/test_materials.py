@@ -562,7 +562,14 @@ COATED = {
     "rough-0.4-thick": coated(reflectance=0.8, alpha=0.4, thickness=0.3, eta=1.33),
     "scattering-layer": coated(reflectance=0.5, alpha=0.2, thickness=0.5, albedo=[0.9, 0.5, 0.2], g=0.4,
                                nsamples=2),
+    # behind a mirror base, f is estimated by the coating's transmission towards wi alone (no MIS):
+    # its heavy tail needs more walks per estimate for the quadrature to find its mean
+    "conductor-rough-coating-mirror": material("coatedconductor", material="Au", alpha=0.2, nsamples=16),
+    "conductor-smooth-coating-rough-metal": material("coatedconductor", material="Cu", conductor_alpha=0.3),
+    "conductor-rough-scattering": material("coatedconductor", material="Al", alpha=0.1, conductor_alpha=0.2,
+                                           alpha_v=0.3, thickness=0.2, albedo=[0.8, 0.6, 0.3], g=-0.3),
 }
+SMOOTH_COATINGS = {"smooth": 1.5, "conductor-smooth-coating-rough-metal": 1.5}
 
 
 @pytest.mark.parametrize("theta", [10, 60])
@@ -577,8 +584,8 @@ def test_coated_sampling_and_evaluation_estimate_one_albedo(kernels, name, theta
     grid, cell = hemisphere_grid(600, 300)
     f, _ = evaluate(kernels, m, wo, grid)
     albedo = (f * grid[:, 2:3]).sum(axis=0) * cell
-    if name == "smooth":
-        albedo += fresnel_dielectric(np.cos(np.radians(theta)), 1.5)
+    if name in SMOOTH_COATINGS:
+        albedo += fresnel_dielectric(np.cos(np.radians(theta)), SMOOTH_COATINGS[name])
     assert np.all(np.abs(total - albedo) < 5 * err + 0.01 * albedo + 2e-3), (total, albedo)
     assert np.all(albedo <= 1.0 + 1e-3)
     glossy = weight[:, 3] == 1
@@ -586,15 +593,60 @@ def test_coated_sampling_and_evaluation_estimate_one_albedo(kernels, name, theta
     np.testing.assert_allclose(wi[glossy, 3][:2000], pdf, rtol=1e-5)
 
 
-def test_coated_light_sampling_and_bsdf_sampling_agree(backend):
+@pytest.mark.parametrize("theta", [0, 40, 70])
+def test_a_smooth_coating_over_a_mirror_is_the_series_of_its_reflections(kernels, theta):
+    """Smooth coating, clear thin layer, smooth metal: a delta BSDF whose albedo is the coating's
+    F plus what enters, (1 - F), reflected by the metal at the refracted angle (R_m) and let out
+    by the coating (1 - F), or sent back down (F): F + (1 - F)^2 R_m / (1 - F R_m)."""
+    from pathtrace.materials.optics import CONDUCTORS
+    eta, (m_eta, m_k) = 1.5, CONDUCTORS["Au"]
+    m = material("coatedconductor", material="Au", interface_eta=eta, thickness=1e-6, maxdepth=100)
+    assert m["flags"][0] & 2                        # MATERIAL_DELTA: light sampling is skipped
+    cos_o = np.cos(np.radians(theta))
+    cos_t = np.sqrt(1 - (1 - cos_o ** 2) / eta ** 2)
+    f, r_m = fresnel_dielectric(cos_o, eta), complex_fresnel(cos_t, np.array(m_eta), np.array(m_k))
+    expected = f + (1 - f) ** 2 * r_m / (1 - f * r_m)
+    wi, weight = sample(kernels, m, direction(theta), count=40000, seed=theta)
+    assert np.all(weight[:, 3] == 2)                 # every sample a delta
+    mean, err = weight[:, :3].mean(axis=0), weight[:, :3].std(axis=0) / np.sqrt(len(weight))
+    assert np.all(np.abs(mean - expected) < 5 * err + 1e-4), (mean, expected)
+
+
+def complex_fresnel(cos_i, eta, k):
+    """The unpolarised Fresnel reflectance of a conductor (pbrt-v4's FrComplex), independent of
+    kernels/fresnel.cl."""
+    n = eta + 1j * k
+    sin2 = 1 - cos_i ** 2
+    cos_t = np.sqrt(1 - sin2 / n ** 2)
+    r_par = (n * cos_i - cos_t) / (n * cos_i + cos_t)
+    r_perp = (cos_i - n * cos_t) / (cos_i + n * cos_t)
+    return (np.abs(r_par) ** 2 + np.abs(r_perp) ** 2) / 2
+
+
+def test_an_invisible_coating_over_a_rough_metal_is_the_rough_metal(kernels):
+    """A coating of IOR 1.0001 over a thin clear layer neither reflects nor bends: the estimate is
+    the bare GGX metal's f."""
+    layered = material("coatedconductor", material="Cu", interface_eta=1.0001, thickness=1e-6, conductor_alpha=0.3,
+                       nsamples=4)
+    bare = material("roughconductor", material="Cu", alpha=0.3, distribution="ggx")
+    grid, _ = hemisphere_grid(12, 12)
+    for theta in (10, 50):
+        f_layered, _ = evaluate(kernels, layered, direction(theta), grid)
+        f_bare, _ = evaluate(kernels, bare, direction(theta), grid)
+        np.testing.assert_allclose(f_layered, f_bare, rtol=0.02, atol=1e-4)
+
+
+@pytest.mark.parametrize("kind,params", [("coateddiffuse", {"reflectance": [0.7, 0.3, 0.1], "alpha": 0.15}),
+                                         ("coatedconductor", {"material": "Cu", "alpha": 0.1, "conductor_alpha": 0.25,
+                                                              "albedo": 0.5, "thickness": 0.1})])
+def test_coated_light_sampling_and_bsdf_sampling_agree(backend, kind, params):
     """A rough coated sphere under a sky and a lamp: the image with next-event estimation (its
     MIS weights read the estimated pdf) and the one without agree to within noise."""
     from pathtrace.environment import Environment
     from pathtrace.scene.description import SceneBuilder
     from tests.stats import z_test
     b = SceneBuilder()
-    b.add_sphere((0, 0, 0), 1.0, Material("coateddiffuse", BSDFS["coateddiffuse"].complete(
-        {"reflectance": [0.7, 0.3, 0.1], "alpha": 0.15})), "ball")
+    b.add_sphere((0, 0, 0), 1.0, Material(kind, BSDFS[kind].complete(params)), "ball")
     b.add_sphere((2, 3, 2), 0.6, Material("black", emission=np.array([6.0, 6.0, 6.0])), "lamp")
     scene = b.build("coated", environment=Environment.constant((0.3, 0.35, 0.4))).with_settings(
         max_depth=4, russian_roulette="off")

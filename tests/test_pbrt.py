@@ -305,3 +305,22 @@ def test_coateddiffuse_is_pbrts_layered_material(tmp_path):
             rough.params["eta"]) == pytest.approx((0.2, 0.3, 20, 2, 1.4))
     np.testing.assert_allclose(rough.params["albedo"], 0.5)
     assert (smooth.params["alpha"], smooth.params["maxdepth"], smooth.params["thickness"]) == pytest.approx((0, 10, 0.01))
+
+
+def test_coatedconductor_is_pbrts_layered_material(tmp_path):
+    """pbrt-v4's coatedconductor: its coating's and metal's roughness (prefixed interface. and
+    conductor., u and v apart), the coating's eta, the layer; copper by default, or a
+    reflectance; all-smooth with a clear layer it is a delta BSDF."""
+    from pathtrace.materials.optics import CONDUCTORS
+    s = scene(tmp_path, 'Material "coatedconductor" "float interface.roughness" 0.01 "float conductor.uroughness" 0.09 '
+                        '"float conductor.vroughness" 0.04 "float interface.eta" 1.33 "float thickness" 0.1 '
+                        '"rgb albedo" [0.2 0.3 0.4] "integer maxdepth" 15\n' + FLOOR
+              + 'Material "coatedconductor" "rgb reflectance" [0.9 0.5 0.2]\n' + FLOOR)
+    rough, smooth = (s.materials.get(m.material) for m in s.meshes)
+    assert rough.type == smooth.type == "coatedconductor" and rough.twosided
+    assert (rough.params["alpha"], rough.params["alpha_v"], rough.params["conductor_alpha"],
+            rough.params["conductor_alpha_v"]) == pytest.approx((0.1, 0.1, 0.3, 0.2))
+    assert (rough.params["interface_eta"], rough.params["thickness"], rough.params["maxdepth"]) == pytest.approx((1.33, 0.1, 15))
+    np.testing.assert_allclose(rough.params["eta"], CONDUCTORS["Cu"][0], rtol=0.05)   # pbrt's copper, as RGB
+    assert smooth.params["alpha"] == smooth.params["conductor_alpha"] == 0
+    assert s.materials.rows[s.meshes[1].material]["flags"] & 2      # MATERIAL_DELTA

@@ -112,6 +112,11 @@ class BSDFType:
         scenes without them do not compile in)."""
         return ()
 
+    def row_flags(self, values: dict, n: int) -> np.ndarray:
+        """The flags of n rows of these values: the type's, and DELTA for rows whose every lobe
+        is a delta where the type's are not always (a layered material of smooth layers)."""
+        return np.full(n, self.flags, np.int32)
+
     def pack(self, values: dict, rows: np.ndarray):
         raise NotImplementedError
 

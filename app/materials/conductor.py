@@ -18,6 +18,21 @@ _CONDUCTOR_PARAMS = (
 )
 
 
+METAL_PARAMS = _CONDUCTOR_PARAMS[:3]      # a metal's: a named one, or eta and k
+
+
+def resolve_metal(values: dict) -> dict:
+    """A named metal ('material') turned into its eta and k."""
+    if "material" in values:
+        if "eta" in values or "k" in values:
+            raise ValueError("give either 'material' or 'eta' and 'k', not both")
+        name = values.pop("material")
+        if name not in CONDUCTORS:
+            raise ValueError(f"material: unknown conductor {name!r} (known: {', '.join(sorted(CONDUCTORS))})")
+        values["eta"], values["k"] = CONDUCTORS[name]
+    return values
+
+
 class Conductor(BSDFType):
     name = "conductor"
     params = _CONDUCTOR_PARAMS
@@ -25,15 +40,7 @@ class Conductor(BSDFType):
     doc = "smooth metal: a mirror whose reflectance is the conductor Fresnel equations'"
 
     def resolve(self, values):
-        values = super().resolve(values)
-        if "material" in values:
-            if "eta" in values or "k" in values:
-                raise ValueError("give either 'material' or 'eta' and 'k', not both")
-            name = values.pop("material")
-            if name not in CONDUCTORS:
-                raise ValueError(f"material: unknown conductor {name!r} (known: {', '.join(sorted(CONDUCTORS))})")
-            values["eta"], values["k"] = CONDUCTORS[name]
-        return values
+        return resolve_metal(super().resolve(values))
 
     def pack(self, values, rows):
         rows["p0"][:, :3] = values["eta"]

@@ -1,39 +1,52 @@
-"""pbrt-v4's layered materials: `coateddiffuse`, a Lambertian base under a smooth or rough
-dielectric coating with a layer of medium between them, evaluated by random walks between the
-layers (kernels/bsdfs/coateddiffuse.cl), with pbrt-v4's parameters and defaults."""
+"""pbrt-v4's layered materials, evaluated by random walks between the layers
+(kernels/layered.cl), with pbrt-v4's parameters and defaults: `coateddiffuse`, a Lambertian base
+under a smooth or rough dielectric coating with a layer of medium between them, and
+`coatedconductor`, a metal base under the same."""
+
+from dataclasses import replace
 
 import numpy as np
 
-from pathtrace.materials.bsdf import BSDFType, Param
+from pathtrace.materials.bsdf import DELTA, BSDFType, Param
+from pathtrace.materials.conductor import METAL_PARAMS, resolve_metal
+from pathtrace.materials.microfacet import GGX_PARAMS
 
 MAX_WALK_DEPTH = 100      # maxdepth: events per random walk
 MAX_WALKS = 16            # nsamples: walks per estimate
+
+_LAYER_PARAMS = (
+    Param("thickness", "number", default=0.01, low=1e-6, high=1e3,
+          doc="the layer between coating and base, in units of its extinction (1 per unit)"),
+    Param("albedo", "color", default=0.0, high=1.0,
+          doc="the layer's single-scattering albedo; 0: it only absorbs"),
+    Param("g", "number", default=0.0, low=-0.999, high=0.999,
+          doc="the layer's Henyey-Greenstein phase function's mean cosine"),
+    Param("maxdepth", "number", default=10, low=1, high=MAX_WALK_DEPTH, doc="events per random walk"),
+    Param("nsamples", "number", default=1, low=1, high=MAX_WALKS, doc="random walks per estimate"),
+)
+_ALPHA = replace(GGX_PARAMS[0], default=0.0, low=0.0,
+                 doc="the coating's GGX roughness (pbrt's roughness, remapped or not); 0: smooth")
+
+
+def check_walks(values) -> str | None:
+    for name in ("maxdepth", "nsamples"):
+        if np.any(values[name] != np.round(values[name])):
+            return f"{name}: must be a whole number, got {np.ravel(values[name])[0]:g}"
+    return None
 
 
 class CoatedDiffuse(BSDFType):
     name = "coateddiffuse"
     params = (
         Param("reflectance", "color", default=0.5, high=1.0, doc="the base's albedo", slot="p0.xyz"),
-        Param("alpha", "number", default=0.0, high=1.0,
-              doc="the coating's GGX roughness (pbrt's roughness, remapped or not); 0: smooth"),
+        _ALPHA,
         Param("eta", "number", default=1.5, low=1.0001, high=10.0, doc="the coating's IOR"),
-        Param("thickness", "number", default=0.01, low=1e-6, high=1e3,
-              doc="the layer between coating and base, in units of its extinction (1 per unit)"),
-        Param("albedo", "color", default=0.0, high=1.0,
-              doc="the layer's single-scattering albedo; 0: it only absorbs"),
-        Param("g", "number", default=0.0, low=-0.999, high=0.999,
-              doc="the layer's Henyey-Greenstein phase function's mean cosine"),
-        Param("maxdepth", "number", default=10, low=1, high=MAX_WALK_DEPTH, doc="events per random walk"),
-        Param("nsamples", "number", default=1, low=1, high=MAX_WALKS, doc="random walks per estimate"),
-    )
+    ) + _LAYER_PARAMS
     doc = ("pbrt-v4's coateddiffuse: a diffuse base under a smooth or rough dielectric coating, "
            "light followed between them by random walks (Guo et al. 2018)")
 
     def check(self, values):
-        for name in ("maxdepth", "nsamples"):
-            if np.any(values[name] != np.round(values[name])):
-                return f"{name}: must be a whole number, got {np.ravel(values[name])[0]:g}"
-        return None
+        return check_walks(values)
 
     def pack(self, values, rows):
         rows["p0"][:, :3] = values["reflectance"]
@@ -52,3 +65,59 @@ class CoatedDiffuse(BSDFType):
 
     def continuation(self, values):
         return np.maximum(np.max(values["reflectance"], axis=-1), 0.1)
+
+
+class CoatedConductor(BSDFType):
+    name = "coatedconductor"
+    params = (
+        *METAL_PARAMS,          # material, or eta and k: the base's metal
+        _ALPHA,
+        Param("alpha_v", "number", default=0.0, low=0.0, high=1.0,
+              doc="the coating's roughness along the bitangent; alpha where left out"),
+        Param("interface_eta", "number", default=1.5, low=1.0001, high=10.0, doc="the coating's IOR"),
+        Param("conductor_alpha", "number", default=0.0, low=0.0, high=1.0,
+              doc="the metal's GGX roughness along the tangent; 0: a mirror"),
+        Param("conductor_alpha_v", "number", default=0.0, low=0.0, high=1.0,
+              doc="the metal's roughness along the bitangent; conductor_alpha where left out"),
+    ) + _LAYER_PARAMS
+    doc = ("pbrt-v4's coatedconductor: a smooth or rough metal under a smooth or rough dielectric "
+           "coating, light followed between them by random walks (Guo et al. 2018)")
+    variant_defines = ("ANISOTROPIC",)
+
+    def resolve(self, values):
+        values = resolve_metal(super().resolve(values))
+        for v, u in (("alpha_v", "alpha"), ("conductor_alpha_v", "conductor_alpha")):
+            if v not in values:
+                values[v] = values.get(u, 0.0)
+        return values
+
+    def check(self, values):
+        for u, v in (("alpha", "alpha_v"), ("conductor_alpha", "conductor_alpha_v")):
+            if np.any((values[u] == 0) != (values[v] == 0)):
+                return f"{u} and {v}: both 0 (smooth) or neither"
+        return check_walks(values)
+
+    def defines(self, rows):
+        apart = (rows["p0"][:, 3] != rows["table"][:, 4]) | (rows["p1"][:, 3] != rows["table"][:, 5])
+        return ("ANISOTROPIC",) if np.any(apart) else ()
+
+    def row_flags(self, values, n):
+        delta = (values["alpha"] == 0) & (values["conductor_alpha"] == 0) & np.all(values["albedo"] == 0, axis=-1)
+        return np.where(np.broadcast_to(delta, n), DELTA, 0).astype(np.int32)
+
+    def pack(self, values, rows):
+        rows["p0"][:, :3] = values["eta"]
+        rows["p0"][:, 3] = values["alpha"]
+        rows["p1"][:, :3] = values["k"]
+        rows["p1"][:, 3] = values["conductor_alpha"]
+        rows["p2"][:, :3] = values["albedo"]
+        rows["p2"][:, 3] = values["thickness"]
+        for i, name in enumerate(("interface_eta", "g", "maxdepth", "nsamples", "alpha_v", "conductor_alpha_v")):
+            rows["table"][:, i] = values[name]
+
+    def unpack(self, row):
+        table = {name: float(row["table"][i]) for i, name in
+                 enumerate(("interface_eta", "g", "maxdepth", "nsamples", "alpha_v", "conductor_alpha_v"))}
+        return {"eta": row["p0"][:3].copy(), "k": row["p1"][:3].copy(), "alpha": float(row["p0"][3]),
+                "conductor_alpha": float(row["p1"][3]), "albedo": row["p2"][:3].copy(),
+                "thickness": float(row["p2"][3]), **table}

@@ -8,12 +8,13 @@ from pathtrace.materials.bsdf import DELTA
 from pathtrace.materials.conductor import Conductor, RoughConductor
 from pathtrace.materials.dielectric import Dielectric, RoughDielectric, ThinDielectric
 from pathtrace.materials.diffusetransmission import DiffuseTransmission
-from pathtrace.materials.layered import CoatedDiffuse
+from pathtrace.materials.layered import CoatedConductor, CoatedDiffuse
 from pathtrace.materials.plastic import Plastic, RoughPlastic
 
 BSDFS = {cls.name: cls() for cls in (Black, Diffuse, Phong, Conductor, RoughConductor,
                                      Dielectric, RoughDielectric, ThinDielectric, Plastic,
-                                     RoughPlastic, DiffuseTransmission, CoatedDiffuse, Null, BlendBSDF)}
+                                     RoughPlastic, DiffuseTransmission, CoatedDiffuse, Null, BlendBSDF,
+                                     CoatedConductor)}
 TAGS = {name: i for i, name in enumerate(BSDFS)}
 
 

@@ -107,7 +107,7 @@ def pack(type_name: str, params: dict, emission=(0, 0, 0), twosided=False) -> np
     bsdf.pack(values, rows)
     rows["emission"][:, :3] = emission
     rows["type"] = TAGS[type_name]
-    rows["flags"] = bsdf.flags | (TWOSIDED if twosided else 0)
+    rows["flags"] = bsdf.row_flags(values, n) | (TWOSIDED if twosided else 0)
     rows["continuation"] = bsdf.continuation(values) if values else 0.0
     rows["textures"] = -1
     return rows

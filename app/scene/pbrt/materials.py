@@ -250,14 +250,14 @@ class MaterialMapper:
         blend.twosided = not transmits(blend)
         return blend
 
-    def _eta(self, params, where) -> float:
-        ptype = params.type_of("eta")
+    def _eta(self, params, where, name="eta") -> float:
+        ptype = params.type_of(name)
         if ptype == "spectrum":
-            eta = float(np.mean(spectrum_rgb(params, "eta", None, "unbounded")))
+            eta = float(np.mean(spectrum_rgb(params, name, None, "unbounded")))
         else:
-            eta = params.float("eta", 1.5)
+            eta = params.float(name, 1.5)
         if not 1e-3 <= eta <= 10 or not math.isfinite(eta):
-            params.fail("eta", f"must lie in [0.001, 10], got {eta:g}")
+            params.fail(name, f"must lie in [0.001, 10], got {eta:g}")
         if eta < 1:
             warn(f"{where}: eta {eta:g} < 1 (the outside denser); pathtrace takes its reciprocal with the normal turned")
             eta = 1 / eta
@@ -282,29 +282,28 @@ class MaterialMapper:
         return make("roughconductor", {**values, **rough}, where)
 
     def _coated(self, kind, params, where):
-        """pbrt-v4's layered materials: a coateddiffuse as pathtrace's (the same random walk), a
-        coatedconductor as its conductor until its layered form is in."""
-        au, av = self.roughness(params, where)
-        if not math.isclose(au, av, rel_tol=1e-6):
-            warn(f"{where}: pathtrace's coatings are isotropic; it uses alpha {(au + av) / 2:.3g}")
-        alpha = (au + av) / 2
+        """pbrt-v4's layered materials, as pathtrace's (the same random walks): coateddiffuse,
+        and coatedconductor, whose coating's and metal's parameters are prefixed interface. and
+        conductor. (its metal copper by default, or of a `reflectance`)."""
+        layer = {"thickness": params.float("thickness", 0.01), "g": params.float("g", 0.0),
+                 "albedo": spectrum_rgb(params, "albedo", 0.0),
+                 "maxdepth": params.int("maxdepth", 10), "nsamples": params.int("nsamples", 1)}
         if kind == "coatedconductor":
-            warn(f"{where}: pathtrace has no layered materials yet; this coatedconductor is rendered as its conductor")
-            inner = {"eta": spectrum_rgb(params, "conductor.eta", named_spectrum("metal-Cu-eta")[0], "unbounded"),
+            metal = {"eta": spectrum_rgb(params, "conductor.eta", named_spectrum("metal-Cu-eta")[0], "unbounded"),
                      "k": spectrum_rgb(params, "conductor.k", named_spectrum("metal-Cu-k")[0], "unbounded")}
             if params.type_of("reflectance") is not None:
                 r = np.clip(spectrum_rgb(params, "reflectance", 0.0), 0.0, 0.9999)
-                inner = {"eta": np.ones(3), "k": 2 * np.sqrt(r) / np.sqrt(1 - r)}
-            for name in ("conductor.roughness", "conductor.uroughness", "conductor.vroughness", "interface.eta",
-                         "interface.roughness", "interface.uroughness", "interface.vroughness", "thickness",
-                         "albedo", "g", "maxdepth", "nsamples"):
-                if name in params.params:
-                    params.params[name].used = True
-            return make("conductor", inner, where)
+                metal = {"eta": np.ones(3), "k": 2 * np.sqrt(r) / np.sqrt(1 - r)}
+            coating = self.rough_values(self.roughness(params, where, "interface.")) or {"alpha": 0.0, "alpha_v": 0.0}
+            base = self.rough_values(self.roughness(params, where, "conductor.")) or {"alpha": 0.0, "alpha_v": 0.0}
+            return make("coatedconductor", {**metal, **layer, "alpha": coating["alpha"], "alpha_v": coating["alpha_v"],
+                                            "conductor_alpha": base["alpha"], "conductor_alpha_v": base["alpha_v"],
+                                            "interface_eta": self._eta(params, where, "interface.eta")}, where)
+        au, av = self.roughness(params, where)
+        if not math.isclose(au, av, rel_tol=1e-6):
+            warn(f"{where}: pathtrace's coateddiffuse coating is isotropic; it uses alpha {(au + av) / 2:.3g}")
+        alpha = (au + av) / 2
         values = {"reflectance": self.texture_input(params, "reflectance", 0.5), "eta": self._eta(params, where),
-                  "alpha": min(alpha, 1.0) if alpha >= SMOOTH_ALPHA else 0.0,
-                  "thickness": params.float("thickness", 0.01), "g": params.float("g", 0.0),
-                  "albedo": spectrum_rgb(params, "albedo", 0.0),
-                  "maxdepth": params.int("maxdepth", 10), "nsamples": params.int("nsamples", 1)}
+                  "alpha": min(alpha, 1.0) if alpha >= SMOOTH_ALPHA else 0.0, **layer}
         return make("coateddiffuse", values, where)
 
