@@ -24,8 +24,7 @@ from pathtrace.resources import resource_dir
 # where it has them, the rest.
 BASIC_FILES = ("types.h", "vector.cl", "rng.cl", "sampling.cl", "scene.cl")
 SHAPE_FILES = ("spawn.cl", "shapes/sphere.cl", "shapes/triangle.cl")
-BSDF_FILES = ("bsdf.cl", "fresnel.cl", "microfacet.cl", "coating.cl", "interface.cl", "metal.cl", "phase.cl",
-              "layered.cl")
+BSDF_FILES = ("bsdf.cl", "fresnel.cl", "microfacet.cl", "coating.cl", "interface.cl", "phase.cl")
 MEDIA_FILES = ("media/homogeneous.cl", "volume.cl")
 LATER_FILES = ("integrator.cl", "aovs.cl", "display.cl")
 

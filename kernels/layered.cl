@@ -1,5 +1,5 @@
 /* pbrt-v4's layered BSDFs (`coateddiffuse`, `coatedconductor`): a base (Lambertian, or a metal:
- * kernels/metal.cl) under a dielectric coating (smooth, or rough with GGX microfacets:
+ * a roughconductor's row, kernels/bsdfs/roughconductor.cl, or a mirror) under a dielectric coating (smooth, or rough with GGX microfacets:
  * kernels/interface.cl), with a layer of homogeneous medium between them: the layered BSDF of
  * Guo, Hasan and Zhao, "Position-Free Monte Carlo Simulation for Arbitrary Layered BSDFs",
  * SIGGRAPH Asia 2018, as pbrt-v4's LayeredBxDF estimates it. Light is followed on a random walk
@@ -26,8 +26,9 @@
 
 typedef struct {
     Interface top;       /* the coating */
-    int metal;           /* the base: 1 a metal (`base`), 0 Lambertian of reflectance `rho` */
-    Metal base;
+    int metal;           /* the base: 1 the metal of `base`, a roughconductor's row (alpha 0: a
+                            mirror), 0 Lambertian of reflectance `rho` */
+    MaterialRef base;
     float3 rho;
     float3 albedo;       /* the layer's single-scattering albedo (0: it only absorbs) */
     float thickness;
@@ -39,27 +40,37 @@ typedef struct {
 /* The base, seen in the layer's frame with both directions above it */
 int base_is_delta(const Layers *l)
 {
-    return l->metal && l->base.alpha.x == 0.0f;
+    return l->metal && l->base->p0.w == 0.0f;
 }
 
 float3 eval_base(const Layers *l, float3 wo, float3 wi)
 {
     if (l->metal)
-        return eval_metal(l->base, wo, wi);
+        return base_is_delta(l) ? (float3)(0.0f) : eval_roughconductor(l->base, wo, wi);
     return wo.z > 0.0f && wi.z > 0.0f ? l->rho * (1.0f / PI_F) : (float3)(0.0f);
 }
 
 float pdf_base(const Layers *l, float3 wo, float3 wi)
 {
     if (l->metal)
-        return pdf_metal(l->base, wo, wi);
+        return base_is_delta(l) ? 0.0f : pdf_roughconductor(l->base, wo, wi);
     return wo.z > 0.0f ? pdf_cosine_hemisphere(wi.z) : 0.0f;
 }
 
 int sample_base(const Layers *l, float3 wo, float2 u, BSDFSample *s)
 {
-    if (l->metal)
-        return sample_metal(l->base, wo, u, s);
+    if (base_is_delta(l)) {                     /* a mirror */
+        s->wi = reflect_local(wo);
+        s->weight = fresnel_conductor(wo.z, l->base->p0.xyz, l->base->p1.xyz);
+        s->pdf = 1.0f;
+        s->eta = 1.0f;
+        s->lobe = LOBE_REFLECTION | LOBE_DELTA;
+        return wo.z > 0.0f;
+    }
+    if (l->metal) {
+        s->eta = 1.0f;
+        return sample_roughconductor(l->base, wo, (float3)(0.0f, u.x, u.y), s);
+    }
     s->wi = sample_cosine_hemisphere(u.x, u.y);
     s->pdf = pdf_cosine_hemisphere(s->wi.z);
     s->weight = l->rho;

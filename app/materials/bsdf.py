@@ -63,6 +63,7 @@ class BSDFType:
     kernel: bool = True       # has kernels/bsdfs/<name>.cl
     resolved_first: bool = False   # the kernels turn it into another material before any BSDF
                                    # call (a blend): its file has no eval, pdf or sample
+    requires: tuple = ()      # kernel files its own builds on, compiled before it (kernels/)
 
     def resolve(self, values: dict) -> dict:
         """Turns names into the numbers they stand for (a named IOR; a "name" parameter, in the

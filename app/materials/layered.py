@@ -35,8 +35,13 @@ def check_walks(values) -> str | None:
     return None
 
 
+# the random walks, whose metal base is a roughconductor's (kernels/layered.cl)
+LAYERED_FILES = ("bsdfs/roughconductor.cl", "layered.cl")
+
+
 class CoatedDiffuse(BSDFType):
     name = "coateddiffuse"
+    requires = LAYERED_FILES
     params = (
         Param("reflectance", "color", default=0.5, high=1.0, doc="the base's albedo", slot="p0.xyz"),
         _ALPHA,
@@ -69,6 +74,7 @@ class CoatedDiffuse(BSDFType):
 
 class CoatedConductor(BSDFType):
     name = "coatedconductor"
+    requires = LAYERED_FILES
     params = (
         *METAL_PARAMS,          # material, or eta and k: the base's metal
         _ALPHA,
@@ -98,26 +104,27 @@ class CoatedConductor(BSDFType):
         return check_walks(values)
 
     def defines(self, rows):
-        apart = (rows["p0"][:, 3] != rows["table"][:, 4]) | (rows["p1"][:, 3] != rows["table"][:, 5])
+        apart = (rows["p0"][:, 3] != rows["p1"][:, 3]) | (rows["table"][:, 4] != rows["table"][:, 5])
         return ("ANISOTROPIC",) if np.any(apart) else ()
 
     def row_flags(self, values, n):
         delta = (values["alpha"] == 0) & (values["conductor_alpha"] == 0) & np.all(values["albedo"] == 0, axis=-1)
         return np.where(np.broadcast_to(delta, n), DELTA, 0).astype(np.int32)
 
+    # the rest, after a roughconductor's p0..p2 (kernels/bsdfs/coatedconductor.cl)
+    TABLE = ("interface_eta", "g", "maxdepth", "nsamples", "alpha", "alpha_v", "thickness")
+
     def pack(self, values, rows):
         rows["p0"][:, :3] = values["eta"]
-        rows["p0"][:, 3] = values["alpha"]
+        rows["p0"][:, 3] = values["conductor_alpha"]
         rows["p1"][:, :3] = values["k"]
-        rows["p1"][:, 3] = values["conductor_alpha"]
-        rows["p2"][:, :3] = values["albedo"]
-        rows["p2"][:, 3] = values["thickness"]
-        for i, name in enumerate(("interface_eta", "g", "maxdepth", "nsamples", "alpha_v", "conductor_alpha_v")):
+        rows["p1"][:, 3] = values["conductor_alpha_v"]
+        rows["p2"] = (1.0, 1.0, 1.0, 0.0)
+        for i, name in enumerate(self.TABLE):
             rows["table"][:, i] = values[name]
+        rows["table"][:, 7:10] = values["albedo"]
 
     def unpack(self, row):
-        table = {name: float(row["table"][i]) for i, name in
-                 enumerate(("interface_eta", "g", "maxdepth", "nsamples", "alpha_v", "conductor_alpha_v"))}
-        return {"eta": row["p0"][:3].copy(), "k": row["p1"][:3].copy(), "alpha": float(row["p0"][3]),
-                "conductor_alpha": float(row["p1"][3]), "albedo": row["p2"][:3].copy(),
-                "thickness": float(row["p2"][3]), **table}
+        return {"eta": row["p0"][:3].copy(), "k": row["p1"][:3].copy(), "conductor_alpha": float(row["p0"][3]),
+                "conductor_alpha_v": float(row["p1"][3]), "albedo": row["table"][7:10].copy(),
+                **{name: float(row["table"][i]) for i, name in enumerate(self.TABLE)}}

@@ -45,5 +45,9 @@ def _with_kernel(names):
 
 
 def kernel_files(names=None) -> list[str]:
-    """The kernel files of the types `names` (None: all), in registry order."""
-    return [f"bsdfs/{n}.cl" for n in _with_kernel(names)]
+    """The kernel files of the types `names` (None: all), in registry order, each after the
+    files it requires (BSDFType.requires), every file once."""
+    files = []
+    for n in _with_kernel(names):
+        files += [f for f in (*BSDFS[n].requires, f"bsdfs/{n}.cl") if f not in files]
+    return files

@@ -15,6 +15,7 @@ Layers coated_diffuse(MaterialRef m)
     l.top.alpha = (float2)(m->p0.w);
     l.top.beckmann = 0;
     l.metal = 0;
+    l.base = m;
     l.rho = m->p0.xyz;
     l.albedo = m->p2.xyz;
     l.thickness = m->p1.y;

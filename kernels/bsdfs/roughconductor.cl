@@ -1,5 +1,7 @@
 /* roughconductor: a rough metal, the microfacet BRDF of a GGX or Beckmann distribution
- * (kernels/metal.cl; Mitsuba 3's `roughconductor`), times a specular_reflectance factor.
+ * (kernels/microfacet.cl)
+ *     f(wo, wi) = F(wo.h) D(h) G1(wo, h) G1(wi, h) / (4 cos(theta_o) cos(theta_i)),
+ * h the half vector, F the conductor Fresnel reflectance (Mitsuba 3's `roughconductor`).
  *
  * Parameters (Material):
  *   p0.xyz  eta, the real part of the complex IOR     p0.w  alpha, the roughness along the tangent
@@ -18,26 +20,57 @@
 #define IS_BECKMANN(m) 0
 #endif
 
-Metal rough_metal(MaterialRef m)
+#define CONDUCTOR_ALPHA(m) ((float2)((m)->p0.w, (m)->p1.w))
+
+float conductor_d(MaterialRef m, float3 h)
 {
-    Metal c = {m->p0.xyz, m->p1.xyz, (float2)(m->p0.w, m->p1.w), IS_BECKMANN(m)};
-    return c;
+    return IS_BECKMANN(m) ? beckmann_d(h, CONDUCTOR_ALPHA(m)) : ggx_d(h, CONDUCTOR_ALPHA(m));
+}
+
+float conductor_g1(MaterialRef m, float3 v, float3 h)
+{
+    return IS_BECKMANN(m) ? beckmann_g1(v, h, CONDUCTOR_ALPHA(m)) : ggx_g1(v, h, CONDUCTOR_ALPHA(m));
+}
+
+/* The density, per solid angle of h, of the normal that sampling draws from wo */
+float pdf_conductor_normal(MaterialRef m, float3 wo, float3 h)
+{
+    return IS_BECKMANN(m) ? pdf_beckmann_visible(wo, h, CONDUCTOR_ALPHA(m)) : pdf_ggx_visible(wo, h, CONDUCTOR_ALPHA(m));
 }
 
 float3 eval_roughconductor(MaterialRef m, float3 wo, float3 wi)
 {
-    return m->p2.xyz * eval_metal(rough_metal(m), wo, wi);
+    if (wo.z <= 0.0f || wi.z <= 0.0f)
+        return (float3)(0.0f);
+    float3 h = unit(wo + wi);
+    float g = conductor_g1(m, wo, h) * conductor_g1(m, wi, h);
+    float3 f = fresnel_conductor(dot(wo, h), m->p0.xyz, m->p1.xyz);
+    return m->p2.xyz * f * (conductor_d(m, h) * g / (4.0f * wo.z * wi.z));
 }
 
+/* pdf(wi) = pdf(h) / (4 wo.h), the Jacobian of reflection (Walter et al. 2007, eq. 14) */
 float pdf_roughconductor(MaterialRef m, float3 wo, float3 wi)
 {
-    return pdf_metal(rough_metal(m), wo, wi);
+    if (wo.z <= 0.0f || wi.z <= 0.0f)
+        return 0.0f;
+    float3 h = unit(wo + wi);
+    float wo_h = dot(wo, h);
+    return wo_h > 0.0f ? pdf_conductor_normal(m, wo, h) / (4.0f * wo_h) : 0.0f;
 }
 
 int sample_roughconductor(MaterialRef m, float3 wo, float3 u, BSDFSample *s)
 {
-    if (!sample_metal(rough_metal(m), wo, u.yz, s))
+    if (wo.z <= 0.0f)
         return 0;
-    s->weight *= m->p2.xyz;
-    return 1;
+    float2 alpha = CONDUCTOR_ALPHA(m);
+    float3 h = IS_BECKMANN(m) ? sample_beckmann_visible(wo, alpha, u.y, u.z)
+                              : sample_ggx_visible(wo, alpha, u.y, u.z);
+    float wo_h = dot(wo, h);
+    s->wi = 2.0f * wo_h * h - wo;
+    if (s->wi.z <= 0.0f || wo_h <= 0.0f)
+        return 0;
+    s->pdf = pdf_conductor_normal(m, wo, h) / (4.0f * wo_h);
+    s->weight = m->p2.xyz * fresnel_conductor(wo_h, m->p0.xyz, m->p1.xyz) * conductor_g1(m, s->wi, h);
+    s->lobe = LOBE_GLOSSY | LOBE_REFLECTION;
+    return s->pdf > 0.0f;
 }
