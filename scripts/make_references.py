@@ -47,6 +47,7 @@ SCENES = {  # name: (width, height, spp per render, renders)
     "media-fog": (None, None, 1024, 16),
     "anisotropic": (None, None, 1024, 16),
     "blend": (None, None, 1024, 16),
+    "equal-area": (None, None, 1024, 16),
 }
 XML_SCENES = OUT.parent / "scenes"
 MAX_DEPTH = 8

@@ -24,7 +24,7 @@ def test_references_are_present():
     assert {p.stem for p in REFERENCES} >= {"simple-diffuse", "spheres8k-diffuse", "cbox", "envmap-spheres", "meshes",
                                             "meshes-smaller", "meshes-larger", "textures", "masks", "normal-maps",
                                             "lights", "thinlens", "beckmann", "roughdielectric", "roughplastic", "metals", "media-sphere", "media-glass",
-                                            "media-fog", "anisotropic", "blend"} | NO_NEE
+                                            "media-fog", "anisotropic", "blend", "equal-area"} | NO_NEE
 
 
 # Scenes lit by delta lights (point, spot, directional) are compared with NEE only: no path can
@@ -39,7 +39,9 @@ NO_NEE = {"simple-diffuse", "cbox", "material-spheres", "textures", "masks", "no
 # by the chosen component's density and light samples by the mixture's (docs/mitsuba.md), which
 # moved blocks of tests/scenes/blend.xml by up to 1.6 % against pathtrace's unbiased mixture
 # (whose white-and-mirror blend passes the white furnace, test_materials.py)
-REFERENCE_BIAS = {"blend": 0.02}
+# And where both render the same map but interpolate its texels differently: the sky of
+# equal-area.xml, seen directly (zero variance), came out up to 0.3 % apart at its glow.
+REFERENCE_BIAS = {"blend": 0.02, "equal-area": 0.005}
 CASES = [(path, nee) for path in REFERENCES for nee in (True, False) if nee or path.stem in NO_NEE]
 
 
