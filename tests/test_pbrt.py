@@ -327,3 +327,5 @@ def test_coatedconductor_is_pbrts_layered_material(tmp_path):
     np.testing.assert_allclose(rough.params["eta"], CONDUCTORS["Cu"][0], rtol=0.05)   # pbrt's copper, as RGB
     assert smooth.params["alpha"] == smooth.params["conductor_alpha"] == 0
     assert s.materials.rows[s.meshes[1].material]["flags"] & 2      # MATERIAL_DELTA
+    assert "'nsamples': must lie in [1, 16], got 100" in fails(
+        tmp_path, 'WorldBegin\nMaterial "coatedconductor" "integer nsamples" 100\n' + FLOOR)

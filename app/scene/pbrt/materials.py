@@ -288,6 +288,9 @@ class MaterialMapper:
         layer = {"thickness": params.float("thickness", 0.01), "g": params.float("g", 0.0),
                  "albedo": spectrum_rgb(params, "albedo", 0.0),
                  "maxdepth": params.int("maxdepth", 10), "nsamples": params.int("nsamples", 1)}
+        for p in BSDFS[kind].params:       # the walks' bounds (a walk per sample costs time)
+            if p.name in ("maxdepth", "nsamples", "thickness", "g") and not p.low <= layer[p.name] <= p.high:
+                params.fail(p.name, f"must lie in [{p.low:g}, {p.high:g}], got {layer[p.name]:g}")
         if kind == "coatedconductor":
             metal = {"eta": spectrum_rgb(params, "conductor.eta", named_spectrum("metal-Cu-eta")[0], "unbounded"),
                      "k": spectrum_rgb(params, "conductor.k", named_spectrum("metal-Cu-k")[0], "unbounded")}
