@@ -17,10 +17,3 @@ float2 transform_uv(const global Texture *t, float2 uv)
     float3 h = (float3)(uv, 1.0f);
     return (float2)(dot(t->to_u.xyz, h), dot(t->to_v.xyz, h));
 }
-
-/* The luminance of a linear sRGB colour (Rec. 709 weights, as Mitsuba 3's `luminance`): the
- * value of a colour texture where a material's parameter is a number, as Mitsuba's eval_1. */
-float luminance(float3 c)
-{
-    return dot(c, (float3)(0.212671f, 0.715160f, 0.072169f));
-}

@@ -48,6 +48,7 @@ SCENES = {  # name: (width, height, spp per render, renders)
     "anisotropic": (None, None, 1024, 16),
     "blend": (None, None, 1024, 16),
     "equal-area": (None, None, 1024, 16),
+    "principled": (None, None, 1024, 16),
 }
 XML_SCENES = OUT.parent / "scenes"
 MAX_DEPTH = 8

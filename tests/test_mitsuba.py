@@ -117,7 +117,7 @@ def test_generated_shapes_face_out(tmp_path, shape):
 
 
 @pytest.mark.parametrize("name", ["cbox", "meshes", "envmap-spheres", "textures", "masks", "normal-maps", "lights",
-                                  "thinlens", "anisotropic", "blend"])
+                                  "thinlens", "anisotropic", "blend", "principled"])
 def test_convert_writes_toml_that_reads_back_the_same_scene(tmp_path, name):
     out = tmp_path / "sub" / f"{name}.toml"
     out.parent.mkdir()
@@ -171,7 +171,7 @@ WARNINGS = [
      "pathtrace has no wireframe texture; it uses a constant grey of 0.5 instead"),
     ('<emitter type="constant"><texture type="checkerboard" name="radiance"/></emitter>' + SPHERE,
      "a texture cannot stand here; pathtrace uses its mean colour (0.3, 0.3, 0.3)"),
-    ('<shape type="sphere"><bsdf type="principled"><rgb name="base_color" value="0.8, 0.2, 0.1"/></bsdf></shape>',
+    ('<shape type="sphere"><bsdf type="principledthin"><rgb name="base_color" value="0.8, 0.2, 0.1"/></bsdf></shape>',
      "pathtrace uses a diffuse BSDF of albedo 0.8, 0.2, 0.1"),
     (f'<emitter type="sky"/>{SPHERE}', "pathtrace has no sky emitters; it ignores this one"),
     (f'<shape type="hair"/>{SPHERE}', "pathtrace has no hair shape; it ignores this one"),

@@ -24,7 +24,7 @@ def test_references_are_present():
     assert {p.stem for p in REFERENCES} >= {"simple-diffuse", "spheres8k-diffuse", "cbox", "envmap-spheres", "meshes",
                                             "meshes-smaller", "meshes-larger", "textures", "masks", "normal-maps",
                                             "lights", "thinlens", "beckmann", "roughdielectric", "roughplastic", "metals", "media-sphere", "media-glass",
-                                            "media-fog", "anisotropic", "blend", "equal-area"} | NO_NEE
+                                            "media-fog", "anisotropic", "blend", "equal-area", "principled"} | NO_NEE
 
 
 # Scenes lit by delta lights (point, spot, directional) are compared with NEE only: no path can
@@ -34,7 +34,7 @@ DELTA_LIT = {"lights", "media-fog"}
 # Without NEE each estimator is checked once per kind of BSDF, emitter and medium (the scenes
 # left out repeat those of one below, on other shapes), to keep the suite within its time
 NO_NEE = {"simple-diffuse", "cbox", "material-spheres", "textures", "masks", "normal-maps", "beckmann",
-          "roughdielectric", "roughplastic", "anisotropic", "blend", "media-sphere", "media-glass"}
+          "roughdielectric", "roughplastic", "anisotropic", "blend", "principled", "media-sphere", "media-glass"}
 # Mitsuba's own bias, relative to the mean, where it is known: its blendbsdf weighs emitter hits
 # by the chosen component's density and light samples by the mixture's (docs/mitsuba.md), which
 # moved blocks of tests/scenes/blend.xml by up to 1.6 % against pathtrace's unbiased mixture

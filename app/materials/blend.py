@@ -5,7 +5,7 @@ materials are the Material's components; the table gives each blend rows of its 
 
 import numpy as np
 
-from pathtrace.materials.bsdf import NULL, TRANSMISSIVE, BSDFType, Param
+from pathtrace.materials.bsdf import NULL, BSDFType, Param
 
 MAX_BLEND_DEPTH = 8     # blends nested in blends, at most (kernels/bsdfs/blendbsdf.cl)
 
@@ -42,7 +42,7 @@ def transmits(material) -> bool:
     from pathtrace.materials.registry import BSDFS
     if material.type == "blendbsdf":
         return any(transmits(c) for c in material.components)
-    return bool(BSDFS[material.type].flags & TRANSMISSIVE)
+    return BSDFS[material.type].transmits(material.params)
 
 
 def check_blend(material) -> str | None:

@@ -29,6 +29,8 @@ class Param:
     slot: str = None          # where the kernel reads it, as "p0.xyz" or "p1.w" (a colour's
                               # slot is .xyz): a parameter with a slot may be a texture, whose
                               # value at each hit goes there (kernels/shading.cl)
+    into: str = None          # another way to give parameter `into`, which resolve() turns it
+                              # into (principled's specular, its eta): never kept itself
 
 
 def constant_of(value, kind: str, summary=Texture.mean):
@@ -84,7 +86,7 @@ class BSDFType:
         the combination checked. Raises ValueError with the problem."""
         values = self.resolve(given)
         for p in self.params:
-            if p.kind != "name" and p.name not in values:
+            if p.kind != "name" and p.into is None and p.name not in values:
                 if p.default is None:
                     raise ValueError(f"missing '{p.name}'")
                 values[p.name] = p.default
@@ -112,6 +114,11 @@ class BSDFType:
         """The kernel defines that MATERIAL rows of this type need (code of variants that
         scenes without them do not compile in)."""
         return ()
+
+    def transmits(self, values: dict) -> bool:
+        """Whether a material of these parameters (textures among them) is seen from both sides:
+        its type's flag, or for a type that transmits by its parameters (principled), theirs."""
+        return bool(self.flags & TRANSMISSIVE)
 
     def row_flags(self, values: dict, n: int) -> np.ndarray:
         """The flags of n rows of these values: the type's, and DELTA for rows whose every lobe

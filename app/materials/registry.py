@@ -10,11 +10,12 @@ from pathtrace.materials.dielectric import Dielectric, RoughDielectric, ThinDiel
 from pathtrace.materials.diffusetransmission import DiffuseTransmission
 from pathtrace.materials.layered import CoatedConductor, CoatedDiffuse
 from pathtrace.materials.plastic import Plastic, RoughPlastic
+from pathtrace.materials.principled import Principled
 
 BSDFS = {cls.name: cls() for cls in (Black, Diffuse, Phong, Conductor, RoughConductor,
                                      Dielectric, RoughDielectric, ThinDielectric, Plastic,
                                      RoughPlastic, DiffuseTransmission, CoatedDiffuse, Null, BlendBSDF,
-                                     CoatedConductor)}
+                                     CoatedConductor, Principled)}
 TAGS = {name: i for i, name in enumerate(BSDFS)}
 
 

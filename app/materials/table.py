@@ -91,12 +91,12 @@ def pack(type_name: str, params: dict, emission=(0, 0, 0), twosided=False) -> np
     defaults."""
     bsdf = BSDFS[type_name]
     params = bsdf.resolve(params)
-    if twosided and bsdf.flags & TRANSMISSIVE:
+    if twosided and bsdf.transmits(params):
         # Mitsuba 3 refuses the combination too: a transmissive BSDF already has two sides, and
         # turning its frame round for back hits would send light through glass the wrong way
         raise ValueError(f"a {type_name} cannot be two-sided: it transmits, and is seen from both sides already")
     values = {p.name: _as_rows(params.get(p.name, p.default), p.kind)
-              for p in bsdf.params if p.kind != "name"}
+              for p in bsdf.params if p.kind != "name" and p.into is None}
     emission = _as_rows(emission, "color")
     if bsdf.flags & NULL and np.any(emission > 0):
         raise ValueError("a null material is no surface, and cannot emit")

@@ -719,7 +719,7 @@ class _Reader:
                 _fail(props["reflectance"], "a reflectance must lie in [0, 1]")
             return Material("diffuse", {"rho_d": rho})
         if kind in ("conductor", "roughconductor", "dielectric", "roughdielectric", "thindielectric", "plastic",
-                    "roughplastic"):
+                    "roughplastic", "principled"):
             return self.mitsuba_material(node, kind, props)
         albedo = self.color(props, "base_color", None, False) if "base_color" in props else \
             self.color(props, "reflectance", 0.5, False) if "reflectance" in props else np.full(3, 0.5)

@@ -19,7 +19,7 @@ from pathtrace.environment import Environment
 from pathtrace.errors import UserError, short
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.blend import check_blend, transmits
-from pathtrace.materials.bsdf import NULL, TRANSMISSIVE, constant_of
+from pathtrace.materials.bsdf import NULL, constant_of
 from pathtrace.materials.table import check_bump_map
 from pathtrace.media import Medium, MediumInterface
 from pathtrace.resources import resource_dir
@@ -230,7 +230,7 @@ class _Reader:
         except ValueError as e:
             self.fail(where, str(e))
         twosided = self.boolean(data, "twosided", where, False)
-        if twosided and bsdf.flags & TRANSMISSIVE:
+        if twosided and bsdf.transmits(values):
             self.fail(f"{where}.twosided", f"a {kind} cannot be two-sided: it transmits, and is seen from both sides already")
         emission = self.color_or_texture(data, "Le", where, default=(0, 0, 0))
         if bsdf.flags & NULL and (isinstance(emission, Texture) or np.any(emission > 0)):

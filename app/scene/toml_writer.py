@@ -54,9 +54,9 @@ def material_table(material, texture_names: dict = {}) -> dict:
     bsdf = BSDFS[material.type]
     table = {"type": material.type}
     for p in bsdf.params:
-        if p.kind == "name":
-            continue
-        table[p.name] = value(material.params[p.name], p.kind)
+        # what resolves into other parameters is not kept: a name, principled's specular (its eta)
+        if p.kind != "name" and p.into is None:
+            table[p.name] = value(material.params[p.name], p.kind)
     if isinstance(material.emission, Texture) or np.any(material.emission > 0):
         table["Le"] = value(material.emission, "color")
     if material.twosided:

@@ -35,8 +35,14 @@ LABELS = ("exposure (EV)", "tone curve", "max depth (0: none)", "Russian roulett
     tuple({p.name for bsdf in BSDFS.values() for p in bsdf.params})
 
 
+# a parameter's name longer than this (principled's sampling rates) goes on a line of its own
+# above its widget, rather than widening every row's label column
+LABEL_CAP = 22
+
+
 def _label_column(imgui) -> float:
-    return max(imgui.calc_text_size(label).x for label in LABELS) + imgui.get_style().item_inner_spacing.x
+    return max(imgui.calc_text_size(label).x for label in LABELS if len(label) <= LABEL_CAP) + \
+        imgui.get_style().item_inner_spacing.x
 
 
 class _Layout:
@@ -74,24 +80,28 @@ def _material_editor(imgui, v, layout):
     imgui.text_wrapped(f"{shape.kind} '{shape.name}': material {label} ({m.type})")
     changed = False
     for param in BSDFS[m.type].params:
-        if param.kind == "name":          # resolved into the numbers edited below
+        if param.kind == "name" or param.into:     # resolved into the numbers edited below
             continue
         value = m.params[param.name]
         if isinstance(value, Texture):    # named, not edited
             imgui.text_wrapped(f"{param.name}: {texture_label(value)}")
             layout.check(param.name)
             continue
+        label = param.name
+        if len(label) > LABEL_CAP:
+            imgui.text_wrapped(label)
+            label = f"##{label}"
         if param.kind == "color" and param.high == 1.0:
-            hit, new = imgui.color_edit3(param.name, np.broadcast_to(value, 3).tolist())
+            hit, new = imgui.color_edit3(label, np.broadcast_to(value, 3).tolist())
             new = np.clip(new, param.low, param.high)
         elif param.kind == "color":       # a triple beyond [0, 1], such as a conductor's eta
-            hit, new = imgui.input_float3(param.name, np.broadcast_to(value, 3).tolist())
+            hit, new = imgui.input_float3(label, np.broadcast_to(value, 3).tolist())
             new = np.clip(new, param.low, param.high)
         elif param.kind == "bool":
-            hit, new = imgui.checkbox(param.name, bool(value))
+            hit, new = imgui.checkbox(label, bool(value))
         else:
             high = param.high if param.high is not None else FLOAT_MAX
-            hit, new = imgui.drag_float(param.name, float(value), max(abs(float(value)), 1e-3) * 0.01,
+            hit, new = imgui.drag_float(label, float(value), max(abs(float(value)), 1e-3) * 0.01,
                                         param.low, high, "%.4g", imgui.SliderFlags_.always_clamp)
         layout.check(param.name)
         if hit:
