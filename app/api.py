@@ -165,7 +165,12 @@ def _geometry_digest(scene: Scene) -> bytes:
     """A digest of everything the BVH and the primitive arrays are built from."""
     h = hashlib.blake2b(digest_size=16)
     arrays = [scene.spheres, scene.sphere_material]
-    for m in scene.meshes:
+    instances = scene.instances
+    if instances is not None:
+        arrays += [instances.object, instances.to_world]
+    objects = instances.objects if instances is not None else []
+    meshes = scene.meshes + [m for o in objects for m in o.meshes]
+    for m in meshes:
         arrays += [m.vertices, m.faces, np.zeros(0) if m.normals is None else m.normals,
                    np.zeros(0) if m.uvs is None else m.uvs, np.array([m.material])]
     for a in arrays:
@@ -173,7 +178,7 @@ def _geometry_digest(scene: Scene) -> bytes:
         h.update(str((a.dtype.str, a.shape)).encode())
         h.update(a.data)
     # the media and what bounds them compile with the primitives (pathtrace.compiled)
-    h.update(repr((scene.media, scene.sphere_media, [m.media for m in scene.meshes])).encode())
+    h.update(repr((scene.media, scene.sphere_media, [m.media for m in meshes])).encode())
     return h.digest()
 
 

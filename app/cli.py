@@ -366,7 +366,8 @@ def write_mesh_files(scene, out: Path, inline_faces: int = 1000) -> int:
 
     folder = out.with_name(out.stem + ".meshes")
     count = 0
-    for k, mesh in enumerate(scene.meshes):
+    objects = scene.instances.objects if scene.instances is not None else []
+    for k, mesh in enumerate(scene.meshes + [m for o in objects for m in o.meshes]):
         if mesh.file is not None or (mesh.normals is None and len(mesh.faces) <= inline_faces):
             continue
         folder.mkdir(exist_ok=True)

@@ -22,14 +22,16 @@ from pathtrace.memory import available_host_memory
 from pathtrace.camera import Camera, kernel_name
 from pathtrace.scene.description import RenderSettings, Scene
 from pathtrace.textures import TextureTables, compile_textures
-from pathtrace.types import BVH_NODE, TRIANGLE
+from pathtrace.scene import instances as instancing
+from pathtrace.two_level import build_two_level
+from pathtrace.types import BVH_NODE, INSTANCE, TRIANGLE
 
 
 @dataclass
 class ShapeRef:
     """A shape of the description, as picking reports it."""
     kind: str          # "sphere" or "mesh"
-    index: int         # into scene.spheres or scene.meshes
+    index: int         # into scene.spheres, or the compiled scene's meshes (scene.meshes first)
     name: str
     material: int      # row of scene.materials
 
@@ -37,7 +39,7 @@ class ShapeRef:
 # The scene's buffers in the order of the kernels' SCENE_KERNEL_ARGS (kernels/scene.cl)
 SCENE_BUFFERS = ("nodes", "spheres", "triangles", "normals", "uvs", "prim_material", "materials", "bindings",
                  "textures", "texels", "env", "lights", "light_pick", "light_leaf", "light_nodes", "env_marginal",
-                 "env_conditional", "media", "prim_media")
+                 "env_conditional", "media", "prim_media", "instances")
 
 # The BVH build's peak host memory per primitive, measured (docs/performance.md)
 BUILD_HOST_BYTES = 320
@@ -53,17 +55,37 @@ class CompiledScene:
         must fit; progress(fraction) is called as the BVH build goes."""
         self.scene = scene
         n_spheres = len(scene.spheres)
-        meshes = scene.meshes
+        instances = scene.instances
+        problem = instances is not None and instancing.check_instances(instances)
+        if problem:
+            raise UserError(f"{scene.source or scene.name}: {problem}")
+        # a scene of few instanced triangles draws copies of them (app/scene/instances.py)
+        self.two_level = instances is not None and instances.triangle_count > instancing.FLATTEN_MAX
+        # the meshes whose triangles the kernels hold: the scene's (and its instances' copies),
+        # then, with a two-level BVH, its objects', in their own space
+        meshes = scene.meshes if instances is None or self.two_level else \
+            scene.meshes + instancing.flattened_meshes(instances)
+        self.object_meshes = [len(meshes)]
+        if self.two_level:
+            for o in instances.objects:
+                meshes = meshes + o.meshes
+                self.object_meshes.append(len(meshes))
+        self.meshes = meshes
         n_triangles = sum(len(m.faces) for m in meshes)
         check_memory(scene.name, n_spheres, n_triangles, queue.device if queue else None,
-                     scene.materials.texel_bytes())
+                     scene.materials.texel_bytes(), len(instances) if self.two_level else 0)
         start = time.perf_counter()
         corners = np.concatenate([m.vertices[m.faces] for m in meshes]) if meshes \
             else np.zeros((0, 3, 3), np.float32)
         lo, hi = primitive_boxes(scene.spheres, corners)
+        if self.two_level:
+            two = build_two_level(scene, lo, hi, self.object_meshes, meshes, queue, progress)
+            self.bvh, self.instances, self.instance_depth, lo, hi = two.bvh, two.instances, two.depth, two.lo, two.hi
+        else:
+            self.bvh: BVH = build_bvh(lo, hi, n_spheres, queue, progress)
+            self.instances = np.zeros(1, INSTANCE)
         # the scene's bounding sphere, by which a light at infinity's power is reckoned
         self.radius = float(np.linalg.norm(hi.max(axis=0) - lo.min(axis=0)) / 2) if len(lo) else 1.0
-        self.bvh: BVH = build_bvh(lo, hi, n_spheres, queue, progress)
         self.bvh_seconds = time.perf_counter() - start
 
         order = self.bvh.order
@@ -98,7 +120,7 @@ class CompiledScene:
         """The media table, and self.prim_media: per primitive, the media it bounds (one
         element, unread, in a scene without media or interfaces)."""
         spheres = scene.sphere_media
-        interfaces = [m.media for m in scene.meshes]
+        interfaces = [m.media for m in self.meshes]
         if not scene.media and spheres is None and all(i is None for i in interfaces):
             self.prim_media = np.full(1, -1, np.int32)
         else:
@@ -141,7 +163,7 @@ class CompiledScene:
         """The buffers of the shapes, by their names in SCENE_BUFFERS."""
         return {"nodes": self.bvh.nodes, "spheres": self.spheres, "triangles": self.triangles,
                 "normals": self.normals, "uvs": self.uvs, "prim_material": self.prim_material,
-                "media": self.media, "prim_media": self.prim_media}
+                "media": self.media, "prim_media": self.prim_media, "instances": self.instances}
 
     def material_arrays(self) -> dict:
         """The buffers of the materials, their textures and the light table."""
@@ -166,8 +188,9 @@ class CompiledScene:
                         null_surfaces=null_surfaces,
                         camera=kernel_name(camera), filter=settings.filter.name,
                         russian_roulette=settings.russian_roulette, stack=stack_size(self.bvh.depth),
+                        instance_stack=stack_size(self.instance_depth) if self.two_level else 0,
                         flat=(self.num_spheres, self.num_triangles)
-                        if self.num_spheres + self.num_triangles <= FLAT_MAX else ())
+                        if self.num_spheres + self.num_triangles <= FLAT_MAX and not self.two_level else ())
 
     def shape(self, prim: int) -> ShapeRef:
         """The description's shape that primitive `prim` (BVH order) belongs to."""
@@ -175,7 +198,7 @@ class CompiledScene:
         if shape < self.num_spheres:
             return ShapeRef("sphere", shape, self.scene.sphere_name(shape),
                             int(self.scene.sphere_material[shape]))
-        mesh = self.scene.meshes[shape - self.num_spheres]
+        mesh = self.meshes[shape - self.num_spheres]
         return ShapeRef("mesh", shape - self.num_spheres, mesh.name, mesh.material)
 
 
@@ -222,12 +245,13 @@ def compile_scene(scene: Scene, queue: cl.CommandQueue = None, progress=None) ->
     return CompiledScene(scene, queue, progress)
 
 
-def check_memory(name: str, n_spheres: int, n_triangles: int, device: cl.Device = None, texel_bytes: int = 0):
+def check_memory(name: str, n_spheres: int, n_triangles: int, device: cl.Device = None, texel_bytes: int = 0,
+                 n_instances: int = 0):
     """Refuses, with one line and before anything is allocated, a scene whose BVH build would not
     fit in the host's available memory, or whose buffers would not fit on `device`."""
     from pathtrace.device import check_fits
 
-    n = n_spheres + n_triangles
+    n = n_spheres + n_triangles + n_instances
     available = available_host_memory()
     if available is not None and n * BUILD_HOST_BYTES + texel_bytes > available:
         raise UserError(f"{name}: building the BVH of {n} primitives needs about "
@@ -236,4 +260,5 @@ def check_memory(name: str, n_spheres: int, n_triangles: int, device: cl.Device 
         check_fits(device, {"BVH": BVH_NODE.itemsize * max(2 * n // 3, 1), "spheres": 16 * n_spheres,
                             "triangles": TRIANGLE.itemsize * n_triangles,
                             "shading normals": 3 * 16 * n_triangles, "texture coordinates": 3 * 8 * n_triangles,
-                            "materials": 4 * n, "textures": texel_bytes}, name)
+                            "materials": 4 * n, "textures": texel_bytes,
+                            "instances": INSTANCE.itemsize * n_instances}, name)

@@ -28,6 +28,8 @@ class Features:
     filter: str = "box"                    # one of pathtrace.filters.FILTERS
     russian_roulette: str = "throughput"   # one of pathtrace.scene.description.RUSSIAN_ROULETTE
     stack: int = 48                        # BVH traversal stack entries the tree can need
+    instance_stack: int = 0                # with a two-level BVH (INSTANCES): the stack entries of
+                                           # the tree over its instances; 0: one level
     flat: tuple = ()                       # (spheres, triangles) of a scene of at most FLAT_MAX
                                            # primitives, which rays test all, with no tree
     bsdf_defines: tuple = None             # the variants its materials need (BSDFType.defines,
@@ -40,6 +42,7 @@ class Features:
                 + (("NULL_SURFACES",) if self.null_surfaces else ())
                 + (f"RUSSIAN_ROULETTE=RR_{self.russian_roulette.upper()}", f"BVH_STACK_SIZE={self.stack}")
                 + ((f"FLAT_SPHERES={self.flat[0]}", f"FLAT_TRIANGLES={self.flat[1]}") if self.flat else ())
+                + (("INSTANCES", f"INSTANCE_STACK_SIZE={self.instance_stack}") if self.instance_stack else ())
                 + (self.bsdf_defines if self.bsdf_defines is not None else all_bsdf_defines()))
 
 

@@ -49,6 +49,13 @@ TEXTURE = np.dtype([
 BVH_NODE = np.dtype([(name, np.float32, 4) for name in ("lo_x", "lo_y", "lo_z", "hi_x", "hi_y", "hi_z")]
                     + [("index", np.int32, 4), ("count", np.int32, 4)])   # count > 0: spheres; < 0: triangles; 0: inner or unused
 
+INSTANCE = np.dtype([
+    ("to_world", np.float32, (3, 4)),   # rows of the 3x4 world-from-object transform
+    ("to_object", np.float32, (3, 4)),  # and of its inverse
+    ("root", np.int32),                 # the object's BVH root node
+    ("pad", np.int32, 3),
+])
+
 RENDER_PARAMS = np.dtype([
     ("eye", np.float32, 4),
     ("forward", np.float32, 4),

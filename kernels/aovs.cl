@@ -40,7 +40,7 @@ void trace_aovs(const SceneData *sc, const RenderParams *p, float3 o, float3 d, 
                 float3 *albedo, float3 *normal, float *depth)
 {
     float3 throughput = (float3)(1.0f);
-    int self = -1;
+    PrimId self = NO_PRIM;
     for (int bounce = 0; bounce <= AOV_MAX_DELTA; ++bounce) {
         Hit hit = intersect_scene(sc, o, d, INFINITY, self);
         if (bounce == 0)
@@ -54,7 +54,7 @@ void trace_aovs(const SceneData *sc, const RenderParams *p, float3 o, float3 d, 
 #ifdef NULL_SURFACES
         if (flags & MATERIAL_NULL) {        /* no surface (the media themselves are not guides) */
             o = offset_ray_origin(s.p, s.offset, s.ng, d);
-            self = hit.prim;
+            self = HIT_ID(hit);
             continue;
         }
 #endif
@@ -78,7 +78,7 @@ void trace_aovs(const SceneData *sc, const RenderParams *p, float3 o, float3 d, 
         throughput *= bs.weight;
         o = offset_ray_origin(s.p, s.offset, s.ng, wi);
         d = wi;
-        self = hit.prim;
+        self = HIT_ID(hit);
     }
 }
 

@@ -1,13 +1,36 @@
 /* Ray queries against the whole scene: the nearest hit through the BVH, over spheres and
  * triangles together. In a scene with alpha masks a hit the mask cuts out is no hit
- * (kernels/masks.cl). */
+ * (kernels/masks.cl). A scene with instances (INSTANCES) has a two-level BVH: a tree over its
+ * instances' boxes, whose leaves hold instances, each a tree over an object's primitives, which
+ * the ray enters turned into the object's space (app/scene/instances.py). */
 
 typedef struct {
     float t;
     int prim;     /* primitive index (types.h); -1: no hit */
     float b1;     /* a triangle hit's barycentric weights of v1 and v2 */
     float b2;
+#ifdef INSTANCES
+    int instance; /* the instance whose primitive it is */
+#endif
 } Hit;
+
+/* A primitive where it is drawn: with instances, the pair (primitive, instance), since an
+ * object's primitives are drawn by many; the surface a ray leaves is one (PrimId self). */
+#ifdef INSTANCES
+typedef int2 PrimId;
+#define NO_PRIM ((int2)(-1))
+#define HIT_ID(h) ((int2)((h).prim, (h).instance))
+#define SURFACE_ID(s) ((int2)((s).prim, (s).instance))
+#define IS_SELF(self, prim, instance) ((self).x == (prim) && (self).y == (instance))
+#define SET_INSTANCE(hit, i) ((hit)->instance = (i))
+#else
+typedef int PrimId;
+#define NO_PRIM (-1)
+#define HIT_ID(h) ((h).prim)
+#define SURFACE_ID(s) ((s).prim)
+#define IS_SELF(self, prim, instance) ((self) == (prim))
+#define SET_INSTANCE(hit, i)
+#endif
 
 #define BOX_EXIT_SCALE 1.0000003576f
 
@@ -26,7 +49,7 @@ float4 intersect_boxes(const global BVHNode *n, float3 o, float3 inv_d, float t_
     return select((float4)(INFINITY), t_enter, t_enter <= t_exit);
 }
 
-void intersect_spheres(const SceneData *sc, int first, int count, float3 o, float3 d, Hit *hit)
+void intersect_spheres(const SceneData *sc, int first, int count, float3 o, float3 d, int instance, Hit *hit)
 {
     for (int i = first; i < first + count; ++i) {
 #ifdef ALPHA_MASKS
@@ -47,18 +70,20 @@ void intersect_spheres(const SceneData *sc, int first, int count, float3 o, floa
         if (t < hit->t) {
             hit->t = t;
             hit->prim = i;
+            SET_INSTANCE(hit, instance);
         }
     }
 }
 
-/* `self`: the primitive the ray leaves (or -1), which a plane cannot meet again: skipped. */
-void intersect_triangles(const SceneData *sc, int first, int count, float3 o, float3 d, int self,
-                         Hit *hit)
+/* `self`: the primitive the ray leaves (or NO_PRIM), which a plane cannot meet again: skipped.
+ * `instance`: the instance drawing them. */
+void intersect_triangles(const SceneData *sc, int first, int count, float3 o, float3 d, PrimId self,
+                         int instance, Hit *hit)
 {
     float3 row_x, row_y, row_z;
     triangle_shear(d, &row_x, &row_y, &row_z);
     for (int i = first; i < first + count; ++i) {
-        if (sc->num_spheres + i == self)
+        if (IS_SELF(self, sc->num_spheres + i, instance))
             continue;
         float b1, b2;
         float t = intersect_triangle(&sc->triangles[i], o, row_x, row_y, row_z, hit->t, &b1, &b2);
@@ -71,9 +96,26 @@ void intersect_triangles(const SceneData *sc, int first, int count, float3 o, fl
             hit->prim = sc->num_spheres + i;
             hit->b1 = b1;
             hit->b2 = b2;
+            SET_INSTANCE(hit, instance);
         }
     }
 }
+
+/* The slots of a node that are leaves the ray enters (leaf: -1 there), as four bits. */
+uint leaf_bits(int4 leaf)
+{
+    return (leaf.x & 1) | (leaf.y & 2) | (leaf.z & 4) | (leaf.w & 8);
+}
+
+/* Takes the lowest slot of the bits `leaves`: its leaf's first primitive (or instance) into
+ * `first` and its count into `c`. A macro, as the traversal's other steps (ORDER, NEXT_NODE):
+ * the variables stay in registers, however the compiler inlines. */
+#define NEXT_LEAF(leaves, index, count, first, c) {                                          \
+        uint k_ = 31 - clz((leaves) & (0u - (leaves)));                                      \
+        (leaves) &= (leaves) - 1;                                                            \
+        first = k_ == 0 ? (index).x : k_ == 1 ? (index).y : k_ == 2 ? (index).z : (index).w; \
+        c = k_ == 0 ? (count).x : k_ == 1 ? (count).y : k_ == 2 ? (count).z : (count).w;    \
+    }
 
 /* Tests the primitives of a node's leaves that the ray enters (t < INFINITY); returns t with the
  * leaves' slots set to INFINITY, leaving the inner children's. NO_TRIANGLES (a build option for
@@ -82,25 +124,23 @@ void intersect_triangles(const SceneData *sc, int first, int count, float3 o, fl
  * a loop over the leaves' bits keeps the kernel's registers down (the teapot's NEE kernel ran
  * 26 % slower on the H100 with four copies, the sphere scenes 6-8 % faster). */
 float4 intersect_leaves(const SceneData *sc, float4 t, int4 count, int4 index, float3 o, float3 d,
-                        int self, Hit *hit)
+                        PrimId self, int instance, Hit *hit)
 {
     int4 leaf = (t < INFINITY) & (count != 0);
 #ifdef NO_TRIANGLES
-    if (leaf.x) intersect_spheres(sc, index.x, count.x, o, d, hit);
-    if (leaf.y) intersect_spheres(sc, index.y, count.y, o, d, hit);
-    if (leaf.z) intersect_spheres(sc, index.z, count.z, o, d, hit);
-    if (leaf.w) intersect_spheres(sc, index.w, count.w, o, d, hit);
+    if (leaf.x) intersect_spheres(sc, index.x, count.x, o, d, instance, hit);
+    if (leaf.y) intersect_spheres(sc, index.y, count.y, o, d, instance, hit);
+    if (leaf.z) intersect_spheres(sc, index.z, count.z, o, d, instance, hit);
+    if (leaf.w) intersect_spheres(sc, index.w, count.w, o, d, instance, hit);
 #else
-    uint leaves = (leaf.x & 1) | (leaf.y & 2) | (leaf.z & 4) | (leaf.w & 8);
+    uint leaves = leaf_bits(leaf);
     while (leaves) {
-        uint k = 31 - clz(leaves & (0u - leaves));
-        leaves &= leaves - 1;
-        int c = k == 0 ? count.x : k == 1 ? count.y : k == 2 ? count.z : count.w;
-        int i = k == 0 ? index.x : k == 1 ? index.y : k == 2 ? index.z : index.w;
+        int i, c;
+        NEXT_LEAF(leaves, index, count, i, c);
         if (c > 0)
-            intersect_spheres(sc, i, c, o, d, hit);
+            intersect_spheres(sc, i, c, o, d, instance, hit);
         else
-            intersect_triangles(sc, i, -c, o, d, self, hit);
+            intersect_triangles(sc, i, -c, o, d, self, instance, hit);
     }
 #endif
     return select(t, (float4)(INFINITY), leaf);
@@ -129,66 +169,124 @@ float4 intersect_leaves(const SceneData *sc, float4 t, int4 count, int4 index, f
         int i_ = swap ? ib : ia; ib = swap ? ia : ib; ia = i_;   \
     }
 
+#ifdef INSTANCES
+/* A point and a vector moved by an instance's 3x4 transform (its rows). */
+float3 transform_point(const global float4 *rows, float3 p)
+{
+    return (float3)(dot(rows[0].xyz, p), dot(rows[1].xyz, p), dot(rows[2].xyz, p))
+           + (float3)(rows[0].w, rows[1].w, rows[2].w);
+}
+
+float3 transform_vector(const global float4 *rows, float3 v)
+{
+    return (float3)(dot(rows[0].xyz, v), dot(rows[1].xyz, v), dot(rows[2].xyz, v));
+}
+#endif
+
+/* Sets `node` to the node to visit next, from a node's children entered at distances t
+ * (INFINITY: not entered, or a leaf already tested) with `index` their nodes: the nearest child
+ * in front of the nearest hit t_hit, the others in front of it pushed farthest first so that
+ * they pop nearest first (a five-comparator network); else the top of the stack, or -1 when it
+ * is empty. */
+#define NEXT_NODE(t, index, t_hit, stack, top, node) {                   \
+        float t0 = (t).x, t1 = (t).y, t2 = (t).z, t3 = (t).w;             \
+        int i0 = (index).x, i1 = (index).y, i2 = (index).z, i3 = (index).w; \
+        ORDER(t0, i0, t1, i1);                                            \
+        ORDER(t2, i2, t3, i3);                                            \
+        ORDER(t0, i0, t2, i2);                                            \
+        ORDER(t1, i1, t3, i3);                                            \
+        ORDER(t1, i1, t2, i2);                                            \
+        if (t3 < (t_hit)) stack[top++] = i3;                              \
+        if (t2 < (t_hit)) stack[top++] = i2;                              \
+        if (t1 < (t_hit)) stack[top++] = i1;                              \
+        node = t0 < (t_hit) ? i0 : top == 0 ? -1 : stack[--top];          \
+    }
+
 #ifdef FLAT_SPHERES
 /* A scene of a few primitives (app/features.py: FLAT_MAX) is not traversed: each ray tests them
  * all, FLAT_SPHERES spheres and FLAT_TRIANGLES triangles, constants that let the loops unroll. */
-Hit trace_ray(const SceneData *sc, float3 o, float3 d, float t_max, int self, const int any_hit)
+Hit trace_ray(const SceneData *sc, float3 o, float3 d, float t_max, PrimId self, const int any_hit)
 {
     Hit hit = {t_max, -1, 0.0f, 0.0f};
-    intersect_spheres(sc, 0, FLAT_SPHERES, o, d, &hit);
+    intersect_spheres(sc, 0, FLAT_SPHERES, o, d, 0, &hit);
 #ifndef NO_TRIANGLES
-    intersect_triangles(sc, 0, FLAT_TRIANGLES, o, d, self, &hit);
+    intersect_triangles(sc, 0, FLAT_TRIANGLES, o, d, self, 0, &hit);
 #endif
     return hit;
 }
 #else
-Hit trace_ray(const SceneData *sc, float3 o, float3 d, float t_max, int self, const int any_hit)
+/* Walks the tree below node `root` for the ray o + t d, which is in the tree's space (the
+ * world's, or instance `instance`'s object's): the nearest hit, or `hit` if none is nearer. */
+Hit walk_tree(const SceneData *sc, int root, float3 o, float3 d, PrimId self, int instance,
+              const int any_hit, Hit hit)
 {
-    Hit hit = {t_max, -1, 0.0f, 0.0f};
     float3 inv_d = 1.0f / d;
     int stack[BVH_STACK_SIZE];
     int top = 0;
-    int node = 0;
-    for (;;) {
+    int node = root;
+    do {
         const global BVHNode *n = &sc->nodes[node];
         float4 t = intersect_boxes(n, o, inv_d, hit.t);
         int4 index = n->index;
-        t = intersect_leaves(sc, t, n->count, index, o, d, self, &hit);
+        t = intersect_leaves(sc, t, n->count, index, o, d, self, instance, &hit);
         if (any_hit && hit.prim >= 0)
             return hit;
-        /* the inner children still in front of the nearest hit (a leaf hit may have moved it in
-         * front of some), sorted by a five-comparator network: the nearest is visited next, the
-         * others pushed farthest first so that they pop nearest first */
-        float t0 = t.x, t1 = t.y, t2 = t.z, t3 = t.w;
-        int i0 = index.x, i1 = index.y, i2 = index.z, i3 = index.w;
-        ORDER(t0, i0, t1, i1);
-        ORDER(t2, i2, t3, i3);
-        ORDER(t0, i0, t2, i2);
-        ORDER(t1, i1, t3, i3);
-        ORDER(t1, i1, t2, i2);
-        if (t3 < hit.t) stack[top++] = i3;
-        if (t2 < hit.t) stack[top++] = i2;
-        if (t1 < hit.t) stack[top++] = i1;
-        if (t0 < hit.t) {
-            node = i0;
-            continue;
+        NEXT_NODE(t, index, hit.t, stack, top, node);
+    } while (node >= 0);
+    return hit;
+}
+
+#ifdef INSTANCES
+/* The tree over the instances, whose leaves' instances the ray enters in their objects' space
+ * (d is not normalised there, so that t stays the world's). Objects hold no instances, so the
+ * two walks have stacks of their own (INSTANCE_STACK_SIZE for this one). */
+Hit trace_ray(const SceneData *sc, float3 o, float3 d, float t_max, PrimId self, const int any_hit)
+{
+    Hit hit = {t_max, -1, 0.0f, 0.0f, -1};
+    float3 inv_d = 1.0f / d;
+    int stack[INSTANCE_STACK_SIZE];
+    int top = 0;
+    int node = 0;
+    do {
+        const global BVHNode *n = &sc->nodes[node];
+        float4 t = intersect_boxes(n, o, inv_d, hit.t);
+        int4 index = n->index, count = n->count;
+        int4 leaf = (t < INFINITY) & (count != 0);
+        uint leaves = leaf_bits(leaf);
+        while (leaves) {
+            int first, c;
+            NEXT_LEAF(leaves, index, count, first, c);
+            for (int i = first; i < first + c; ++i) {
+                const global Instance *inst = &sc->instances[i];
+                hit = walk_tree(sc, inst->root, transform_point(inst->to_object, o),
+                                transform_vector(inst->to_object, d), self, i, any_hit, hit);
+                if (any_hit && hit.prim >= 0)
+                    return hit;
+            }
         }
-        if (top == 0)
-            return hit;
-        node = stack[--top];
-    }
+        t = select(t, (float4)(INFINITY), leaf);
+        NEXT_NODE(t, index, hit.t, stack, top, node);
+    } while (node >= 0);
+    return hit;
+}
+#else
+Hit trace_ray(const SceneData *sc, float3 o, float3 d, float t_max, PrimId self, const int any_hit)
+{
+    Hit hit = {t_max, -1, 0.0f, 0.0f};
+    return walk_tree(sc, 0, o, d, self, 0, any_hit, hit);
 }
 #endif
+#endif
 
-/* The nearest hit along o + t d, t in (0, t_max), skipping triangle `self` (the primitive the
- * ray leaves, or -1). */
-Hit intersect_scene(const SceneData *sc, float3 o, float3 d, float t_max, int self)
+/* The nearest hit along o + t d, t in (0, t_max), skipping the surface `self` (the one the ray
+ * leaves, or NO_PRIM). */
+Hit intersect_scene(const SceneData *sc, float3 o, float3 d, float t_max, PrimId self)
 {
     return trace_ray(sc, o, d, t_max, self, 0);
 }
 
 /* Whether anything but `self` lies on o + t d for t in (0, t_max). */
-int occluded(const SceneData *sc, float3 o, float3 d, float t_max, int self)
+int occluded(const SceneData *sc, float3 o, float3 d, float t_max, PrimId self)
 {
     return trace_ray(sc, o, d, t_max, self, 1).prim >= 0;
 }
@@ -200,6 +298,9 @@ typedef struct {
     float3 ns;       /* unit shading normal, in ng's hemisphere */
     float offset;    /* how far rays leaving p start from it along ng (kernels/spawn.cl) */
     int prim;        /* the primitive hit */
+#ifdef INSTANCES
+    int instance;    /* the instance that draws it */
+#endif
 #ifdef TEXTURES
     float2 b;        /* a triangle's barycentric weights of v1 and v2, from which surface_uv
                         finds its texture coordinates when a texture needs them */
@@ -216,34 +317,64 @@ typedef struct {
 #endif
 } Surface;
 
+#ifdef INSTANCES
+/* p's error bound after p (in object space, error `error`) was moved to the world by the
+ * instance's transform (pbrt-v4's Transform of a Point3fi: the rounding of the product added). */
+float3 transform_error(const global float4 *rows, float3 p, float3 error)
+{
+    float3 m0 = fabs(rows[0].xyz), m1 = fabs(rows[1].xyz), m2 = fabs(rows[2].xyz);
+    float3 moved = (float3)(dot(m0, error), dot(m1, error), dot(m2, error));
+    float3 size = (float3)(dot(m0, fabs(p)), dot(m1, fabs(p)), dot(m2, fabs(p)))
+                  + fabs((float3)(rows[0].w, rows[1].w, rows[2].w));
+    return (1.0f + gamma_bound(3)) * moved + gamma_bound(3) * size;
+}
+
+/* A normal turned to the world: by the inverse transpose of world from object, the transpose of
+ * to_object's rows. */
+float3 transform_normal(const global float4 *to_object, float3 n)
+{
+    return unit(n.x * to_object[0].xyz + n.y * to_object[1].xyz + n.z * to_object[2].xyz);
+}
+#endif
+
+/* The surface at hit, found along o + t d, in world space. */
 Surface surface_at(const SceneData *sc, const Hit *hit, float3 o, float3 d)
 {
     Surface s;
     float3 error;
     s.prim = hit->prim;
-#ifndef NO_TRIANGLES
-    if (hit->prim >= sc->num_spheres) {
-        const global Triangle *tri = &sc->triangles[hit->prim - sc->num_spheres];
-        triangle_surface(tri, sc->normals, hit->b1, hit->b2, &s.p, &error, &s.ng, &s.ns);
-        s.offset = error_offset(s.ng, error);
 #ifdef TEXTURES
-        s.b = (float2)(hit->b1, hit->b2);
-#endif
-#if defined(NORMAL_MAPS) || defined(MEDIA)
-        s.side = 1.0f;
-#endif
-        return s;
-    }
-#endif
-    sphere_surface(sc->spheres[hit->prim], o, d, hit->t, &s.p, &error, &s.ng);
-    s.ns = s.ng;
-    s.offset = error_offset(s.ng, error);
-#ifdef TEXTURES
-    s.b = (float2)(0.0f);
+    s.b = (float2)(hit->b1, hit->b2);
 #endif
 #if defined(NORMAL_MAPS) || defined(MEDIA)
     s.side = 1.0f;
 #endif
+#ifdef INSTANCES
+    s.instance = hit->instance;
+    const global Instance *inst = &sc->instances[hit->instance];
+    o = transform_point(inst->to_object, o);
+    d = transform_vector(inst->to_object, d);
+#endif
+#ifndef NO_TRIANGLES
+    if (hit->prim >= sc->num_spheres) {
+        const global Triangle *tri = &sc->triangles[hit->prim - sc->num_spheres];
+        triangle_surface(tri, sc->normals, hit->b1, hit->b2, &s.p, &error, &s.ng, &s.ns);
+    } else
+#endif
+    {
+        sphere_surface(sc->spheres[hit->prim], o, d, hit->t, &s.p, &error, &s.ng);
+        s.ns = s.ng;
+#ifdef TEXTURES
+        s.b = (float2)(0.0f);
+#endif
+    }
+#ifdef INSTANCES
+    error = transform_error(inst->to_world, s.p, error);
+    s.p = transform_point(inst->to_world, s.p);
+    s.ng = transform_normal(inst->to_object, s.ng);
+    s.ns = transform_normal(inst->to_object, s.ns);
+#endif
+    s.offset = error_offset(s.ng, error);
     return s;
 }
 

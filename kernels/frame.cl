@@ -5,11 +5,23 @@
  * roughness along x and y apart) follows Mitsuba 3's convention: x is dp/du made orthogonal to
  * the shading normal (SurfaceInteraction::initialize_sh_frame), kept in the Surface. */
 
+/* Derivatives found in the space of surface s's object, turned to the world's (a program
+ * without instances has them there already). */
+void instanced_derivatives(const SceneData *sc, const Surface *s, float3 *dpdu, float3 *dpdv)
+{
+#ifdef INSTANCES
+    const global float4 *m = sc->instances[s->instance].to_world;
+    *dpdu = transform_vector(m, *dpdu);
+    *dpdv = transform_vector(m, *dpdv);
+#endif
+}
+
 /* dp/du and dp/dv at a hit: a triangle's from its corners' texture coordinates (pbrt-v4
  * eq. 6.7), or, where those are missing or degenerate, its edges from v0, the derivatives of the
  * barycentric parameterisation (u, v) = (b1, b2) that Mitsuba 3.9 gives a mesh without texture
  * coordinates (read off its SurfaceInteraction: dp_du = v1 - v0); a sphere's as Mitsuba's
- * sphere gives them for its (u, v) = (phi / 2 pi, theta / pi). */
+ * sphere gives them for its (u, v) = (phi / 2 pi, theta / pi). An instance's triangle has its
+ * object's, turned to the world (instanced_derivatives). */
 void surface_derivatives(const SceneData *sc, const Surface *s, float3 *dpdu, float3 *dpdv)
 {
 #ifndef NO_TRIANGLES
@@ -23,11 +35,13 @@ void surface_derivatives(const SceneData *sc, const Surface *s, float3 *dpdu, fl
             if (fabs(det) > 1e-12f) {
                 *dpdu = (duv12.y * dp02 - duv02.y * dp12) / det;
                 *dpdv = (duv02.x * dp12 - duv12.x * dp02) / det;
+                instanced_derivatives(sc, s, dpdu, dpdv);
                 return;
             }
         }
         *dpdu = tri->v1.xyz - tri->v0.xyz;
         *dpdv = tri->v2.xyz - tri->v0.xyz;
+        instanced_derivatives(sc, s, dpdu, dpdv);
         return;
     }
 #endif

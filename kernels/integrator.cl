@@ -22,12 +22,12 @@
 #define RR_THROUGHPUT 2    /* from rr_depth on, go on with probability min(max throughput, 0.95)
                               (Mitsuba 3's; pbrt-v4 has no cap) */
 
-/* The fraction of light sample ls's radiance that reaches o, a ray leaving primitive `self` (or
- * -1) in `medium` (-1: none): 1 or 0 by whether a shadow ray from o towards the point on the
+/* The fraction of light sample ls's radiance that reaches o, a ray leaving surface `self` (or
+ * NO_PRIM) in `medium` (-1: none): 1 or 0 by whether a shadow ray from o towards the point on the
  * light meets nothing before it (stopping just short, by pbrt-v4's ShadowEpsilon: pbrt's
  * SpawnRayTo; a light at infinity is seen if the ray meets nothing at all), or in a scene with
  * media the transmittance along it (kernels/volume.cl). */
-float3 light_visibility(const SceneData *sc, float3 o, const LightSample *ls, int self, int medium,
+float3 light_visibility(const SceneData *sc, float3 o, const LightSample *ls, PrimId self, int medium,
                         int *rays)
 {
     float3 dir = ls->wi;
@@ -72,7 +72,7 @@ float3 sample_direct_light(const SceneData *sc, const RenderParams *p, MaterialR
 #ifdef MEDIA
     medium = medium_after(sc, s, ls.wi, medium);
 #endif
-    return contribution * light_visibility(sc, o, &ls, s->prim, medium, rays);
+    return contribution * light_visibility(sc, o, &ls, SURFACE_ID(*s), medium, rays);
 }
 
 #ifdef MEDIA
@@ -90,7 +90,7 @@ float3 sample_direct_light_in_medium(const SceneData *sc, const RenderParams *p,
     float phase = eval_hg(g, wo, ls.wi);
     float w = (ls.flags & LIGHT_DELTA) ? 1.0f : mis_weight(ls.pdf, phase);
     float3 contribution = ls.le * (phase * w / ls.pdf);
-    return contribution * light_visibility(sc, x, &ls, -1, medium, rays);
+    return contribution * light_visibility(sc, x, &ls, NO_PRIM, medium, rays);
 }
 #endif
 
@@ -126,7 +126,7 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
      * prev_n is 0 after a scattering in a medium */
     float3 prev_x = o, prev_n = (float3)(0.0f);
     float pdf_prev = 0.0f;
-    int self = -1;                   /* the primitive the ray leaves */
+    PrimId self = NO_PRIM;           /* the surface the ray leaves */
     int medium = p->camera_medium;   /* the medium the ray crosses, or -1 (a program without
                                         media never reads it) */
 #ifdef MEDIA
@@ -164,7 +164,7 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
                     return radiance;
                 prev_x = o = x;
                 prev_n = (float3)(0.0f);
-                self = -1;
+                self = NO_PRIM;
                 continue;
             }
         }
@@ -182,7 +182,7 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
             /* no vertex: the ray goes on through, into the medium beyond */
             medium = medium_after(sc, &s, d, medium);
             o = offset_ray_origin(s.p, s.offset, s.ng, d);
-            self = hit.prim;
+            self = HIT_ID(hit);
             --depth;
             continue;
         }
@@ -237,7 +237,7 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d
         prev_n = s.ns;
         o = offset_ray_origin(s.p, s.offset, s.ng, wi);
         d = wi;
-        self = hit.prim;
+        self = HIT_ID(hit);
 #ifdef MEDIA
         medium = medium_after(sc, &s, wi, medium);
 #endif
@@ -314,7 +314,7 @@ RENDER_KERNEL(render_nee, 1)
 kernel void pick(SCENE_KERNEL_ARGS, int num_spheres, float4 o, float4 d, global int *hit)
 {
     SceneData sc = SCENE_DATA(num_spheres);
-    Hit h = intersect_scene(&sc, o.xyz, normalize(d.xyz), INFINITY, -1);
+    Hit h = intersect_scene(&sc, o.xyz, normalize(d.xyz), INFINITY, NO_PRIM);
     hit[0] = h.prim;
     hit[1] = as_int(h.t);
 }

@@ -24,6 +24,7 @@ typedef struct {
     const global Medium *media;             /* the participating media (kernels/media/) */
     const global int *prim_media;           /* per primitive: the media it bounds
                                                (types.h: NO_MEDIUM_CHANGE) */
+    const global Instance *instances;       /* a two-level BVH's instances (INSTANCES) */
     int num_spheres;
 } SceneData;
 
@@ -34,9 +35,10 @@ typedef struct {
     const global Texture *textures, const global uchar *texels, const global float4 *env,         \
     const global Light *lights, const global float *light_pick, const global int *light_leaf,    \
     const global LightNode *light_nodes, const global float *env_marginal,                        \
-    const global float *env_conditional, const global Medium *media, const global int *prim_media
+    const global float *env_conditional, const global Medium *media, const global int *prim_media, \
+    const global Instance *instances
 
 #define SCENE_DATA(num_spheres)                                                                   \
     {nodes, spheres, triangles, normals, uvs, prim_material, materials, bindings, textures,       \
      texels, env, lights, light_pick, light_leaf, light_nodes, env_marginal, env_conditional,      \
-     media, prim_media, num_spheres}
+     media, prim_media, instances, num_spheres}

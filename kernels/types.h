@@ -88,6 +88,17 @@ typedef struct {
     int4 count;
 } BVHNode;
 
+/* An instance of an object (app/scene/instances.py): the object's BVH below node `root`, seen
+ * through the instance's transform, whose 3x4 rows (world from object) and its inverse's are
+ * kept; the scene's own shapes are an instance of the identity. In a program for a scene
+ * without a two-level BVH (INSTANCES), the table is one unread row. */
+typedef struct {
+    float4 to_world[3];
+    float4 to_object[3];
+    int root;
+    int pad[3];
+} Instance;
+
 /* Everything one launch of the render kernel needs besides the scene buffers. */
 typedef struct {
     float4 eye;        /* camera position */

@@ -32,7 +32,7 @@ int medium_after(const SceneData *sc, const Surface *s, float3 w, int current)
  * along the way, and any surface blocks it: an any-hit query answers, as in scenes without
  * media, where finding the nearest hit cost staircase2 (a medium inside a glass panel) half
  * its render time again on an H100. */
-float3 transmittance_along(const SceneData *sc, float3 o, float3 d, float t_max, int self, int medium,
+float3 transmittance_along(const SceneData *sc, float3 o, float3 d, float t_max, PrimId self, int medium,
                            int *rays)
 {
 #ifndef NULL_SURFACES
@@ -54,7 +54,7 @@ float3 transmittance_along(const SceneData *sc, float3 o, float3 d, float t_max,
         float3 next = offset_ray_origin(s.p, s.offset, s.ng, d);
         t_max -= dot(next - o, d);
         o = next;
-        self = hit.prim;
+        self = HIT_ID(hit);
         ++*rays;
     }
     return (float3)(0.0f);

@@ -49,6 +49,7 @@ SCENES = {  # name: (width, height, spp per render, renders)
     "blend": (None, None, 1024, 16),
     "equal-area": (None, None, 1024, 16),
     "principled": (None, None, 1024, 16),
+    "instances": (None, None, 1024, 16),
 }
 XML_SCENES = OUT.parent / "scenes"
 MAX_DEPTH = 8

@@ -23,8 +23,8 @@ kernel void nearest(SCENE_KERNEL_ARGS, int num_spheres, int num_triangles,
     Hit h = intersect_scene(&sc, org, dir, INFINITY, -1);
     t_bvh[k] = h.t; i_bvh[k] = h.prim;
     Hit b = {INFINITY, -1, 0.0f, 0.0f};
-    intersect_spheres(&sc, 0, num_spheres, org, dir, &b);
-    intersect_triangles(&sc, 0, num_triangles, org, dir, -1, &b);
+    intersect_spheres(&sc, 0, num_spheres, org, dir, 0, &b);
+    intersect_triangles(&sc, 0, num_triangles, org, dir, -1, 0, &b);
     t_all[k] = b.t; i_all[k] = b.prim;
 }
 """

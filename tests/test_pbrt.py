@@ -13,7 +13,10 @@ from pathtrace.errors import UserError
 from pathtrace.materials.optics import CONDUCTORS
 from pathtrace.renderer import Renderer
 from pathtrace.scene import load_scene
+import pathtrace.scene.instances as instancing
+from pathtrace.scene.instances import flattened_meshes
 from pathtrace.scene.pbrt.equal_area import sphere_to_square
+from pathtrace.scene.transform import scaling, translation
 from pathtrace.spectra import blackbody_rgb, named_spectrum, reflectance_rgb, sampled
 from tests.stats import z_test
 from tests.test_reference import REFERENCE_BIAS
@@ -40,19 +43,22 @@ def fails(tmp_path, text, name="s.pbrt") -> str:
 
 # -- a Mitsuba reference, translated --
 
-@pytest.mark.parametrize("name", ["cbox", "meshes-smaller", "meshes-larger", "metals", "equal-area"])
-def test_translations_of_mitsuba_scenes_render_as_mitsuba_renders_the_xml(backend, name):
+@pytest.mark.parametrize("name,two_level", [("cbox", False), ("cbox", True), ("meshes-smaller", False),
+                                            ("meshes-larger", False), ("metals", False), ("equal-area", False)])
+def test_translations_of_mitsuba_scenes_render_as_mitsuba_renders_the_xml(backend, monkeypatch, name, two_level):
     """tests/scenes/<name>.pbrt is <name>.xml in pbrt's terms (handedness, the fov's axis,
     transform order, maxdepth, instances, a PLY mesh, a sphere, an infinite light, pbrt's named
     metal spectra for Mitsuba's named metals, an infinite light's equal-area map against the
     lat-long map of the same sky): its render passes the Z-test against Mitsuba 3's render of
-    the XML."""
+    the XML. cbox.pbrt's instanced boxes render so both as copies and through the two-level BVH."""
+    monkeypatch.setattr(instancing, "FLATTEN_MAX", -1 if two_level else instancing.FLATTEN_MAX)
     ref = np.load(Path(__file__).parent / "references" / f"{name}.npz")
     pbrt = load_scene(str(SCENES / f"{name}.pbrt"))
     assert pbrt.settings.max_depth == int(ref["max_depth"]) == 8
     h, w, _ = ref["mean"].shape
     assert (pbrt.settings.width, pbrt.settings.height) == (w, h)
     r = Renderer(backend, pbrt.with_settings(russian_roulette="off"), w, h)
+    assert r.compiled.two_level == two_level
     for _ in range(8):
         r.add_samples(128)
     r.finish()
@@ -154,12 +160,18 @@ def test_texture_coordinates_are_flipped_as_pbrt_looks_images_up(tmp_path):
 
 
 def test_instances_are_placed_by_their_transforms(tmp_path):
-    s = scene(tmp_path, 'ObjectBegin "tri"\nShape "trianglemesh" "point3 P" [ 0 0 0  1 0 0  0 1 0 ]\nObjectEnd\n'
+    """An object keeps the transform current at its shapes, each instance adds its own; the
+    copies that flattening makes are where pbrt puts them."""
+    s = scene(tmp_path, 'ObjectBegin "tri"\nTranslate 0 1 0\nShape "trianglemesh" "point3 P" [ 0 0 0  1 0 0  0 1 0 ]\n'
+                        'ObjectEnd\n'
                         'AttributeBegin\nTranslate 10 0 0\nObjectInstance "tri"\nAttributeEnd\n'
                         'AttributeBegin\nTranslate 0 0 -4\nScale 2 2 2\nObjectInstance "tri"\nAttributeEnd\n')
-    assert len(s.meshes) == 2
-    assert np.allclose(s.meshes[0].vertices, [[10, 0, 0], [11, 0, 0], [10, 1, 0]])
-    assert np.allclose(s.meshes[1].vertices, [[0, 0, -4], [2, 0, -4], [0, 2, -4]])
+    assert len(s.instances) == 2 and not s.meshes
+    np.testing.assert_allclose(s.instances.objects[0].meshes[0].vertices, [[0, 1, 0], [1, 1, 0], [0, 2, 0]])
+    np.testing.assert_allclose(s.instances.to_world[1], translation((0, 0, -4)) @ scaling(2))
+    flat = flattened_meshes(s.instances)
+    np.testing.assert_allclose(flat[0].vertices, [[10, 1, 0], [11, 1, 0], [10, 2, 0]])
+    np.testing.assert_allclose(flat[1].vertices, [[0, 2, -4], [2, 2, -4], [0, 4, -4]])
 
 
 def test_include_is_relative_to_the_main_file(tmp_path):

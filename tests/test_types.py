@@ -4,8 +4,8 @@
 import numpy as np
 import pytest
 
-from pathtrace.types import (BVH_NODE, LIGHT, LIGHT_NODE, MATERIAL, MEDIUM, RENDER_PARAMS, TEXTURE, TEXTURE_BINDING,
-                             TRIANGLE)
+from pathtrace.types import (BVH_NODE, INSTANCE, LIGHT, LIGHT_NODE, MATERIAL, MEDIUM, RENDER_PARAMS, TEXTURE,
+                             TEXTURE_BINDING, TRIANGLE)
 
 STRUCTS = {
     "Material": MATERIAL,
@@ -17,6 +17,7 @@ STRUCTS = {
     "Texture": TEXTURE,
     "TextureBinding": TEXTURE_BINDING,
     "Medium": MEDIUM,
+    "Instance": INSTANCE,
 }
 
 

@@ -82,6 +82,8 @@ class Scene:
     media: list = field(default_factory=list)    # its participating media (pathtrace.media.Medium)
     sphere_media: list = None     # per sphere, the MediumInterface it bounds or None; None: none does
     camera_medium: int = -1       # the medium the camera is in (a row of `media`), or -1: none
+    instances: object = None      # pathtrace.scene.instances.Instances: meshes drawn many times,
+                                  # or None. Their meshes are not among `meshes`
 
     def with_settings(self, **changes) -> "Scene":
         return replace(self, settings=replace(self.settings, **changes))
@@ -91,6 +93,7 @@ class Scene:
 
     @property
     def triangle_count(self) -> int:
+        """The triangles of `meshes` (instances' not counted)."""
         return sum(len(m.faces) for m in self.meshes)
 
 
@@ -101,6 +104,7 @@ class SceneBuilder:
         self.materials = MaterialTable()
         self.spheres, self.sphere_material, self.sphere_names, self.meshes = [], [], [], []
         self.sphere_media = []
+        self.objects, self.instance_object, self.instance_to_world = [], [], []
 
     def material(self, material) -> int:
         """A row for a Material (added) or an existing row index."""
@@ -122,7 +126,22 @@ class SceneBuilder:
                  "closed; rays that miss it never enter or leave the medium")
         self.meshes.append(mesh)
 
+    def add_object(self, name: str) -> int:
+        """A new, empty object (SceneObject) that instances may draw; its index."""
+        from pathtrace.scene.instances import SceneObject
+        self.objects.append(SceneObject(name))
+        return len(self.objects) - 1
+
+    def add_instance(self, obj: int, to_world: np.ndarray):
+        """An instance of object `obj` through the 4x4 world-from-object transform."""
+        self.instance_object.append(obj)
+        self.instance_to_world.append(np.asarray(to_world, np.float64))
+
     def build(self, name, **kwargs) -> Scene:
+        if self.instance_object:
+            from pathtrace.scene.instances import Instances
+            kwargs["instances"] = Instances(self.objects, np.asarray(self.instance_object, np.int32),
+                                            np.asarray(self.instance_to_world, np.float64).reshape(-1, 4, 4))
         return Scene(name, np.asarray(self.spheres, np.float32).reshape(-1, 4),
                      np.asarray(self.sphere_material, np.int32).reshape(-1), self.materials,
                      self.meshes, self.sphere_names or None,

@@ -240,6 +240,7 @@ class _Reader:
         self.defaults = {}
         self.named = {}             # id -> Node
         self.builder = SceneBuilder()
+        self.groups, self.group_spheres = {}, {}     # shapegroup node: its object; object: its spheres
         self.material_rows = {}     # id(bsdf Node) -> material row
         self.textures = {}          # id(texture Node) -> Texture, so that a shared one is one
         self.images = {}            # the images read (read_image's cache)
@@ -451,6 +452,8 @@ class _Reader:
         self.named = self.declared_ids(nodes)
         self.check_reference_cycles()
         for node in nodes:
+            if node.tag == "shape" and node.attrs.get("type") == "shapegroup":
+                continue                   # drawn where an instance refers to it
             if node.tag == "shape":
                 self.shape(node)
             elif node.tag == "sensor":
@@ -463,7 +466,7 @@ class _Reader:
                 continue                   # used where referenced
             else:
                 warn(f"{node.where()}: not supported; pathtrace ignores it")
-        if not self.builder.spheres and not self.builder.meshes:
+        if not self.builder.spheres and not self.builder.meshes and not self.builder.instance_object:
             raise UserError(f"{self.path}: the scene has no shapes pathtrace can render")
         settings = self.settings
         settings.max_depth, settings.russian_roulette = self.max_depth, self.rr
@@ -886,9 +889,41 @@ class _Reader:
 
     # -- shapes --
 
-    def shape(self, node):
+    def shapegroup(self, node) -> int:
+        """The object of a `shapegroup` (its index in the builder), read once: its meshes in the
+        group's space; its spheres, which instances copy into the world (self.group_spheres)."""
+        if id(node) not in self.groups:
+            obj = self.builder.add_object(node.attrs.get("id", "shapegroup"))
+            self.groups[id(node)] = obj
+            self.group_spheres[obj] = []
+            for child in node.children:
+                if child.tag == "shape":
+                    if child.attrs.get("type") in ("shapegroup", "instance"):
+                        _fail(child, "a shapegroup cannot hold shapegroups or instances (nor can Mitsuba's)")
+                    self.shape(child, obj)
+        return self.groups[id(node)]
+
+    def instance(self, node, props):
+        """An `instance`: the shapegroup it refers to, through its to_world."""
+        refs = [c for c in node.children if c.tag in ("ref", "shape")]
+        target = self.resolve(refs[0]) if refs and refs[0].tag == "ref" else refs[0] if refs else None
+        if target is None or target.tag != "shape" or target.attrs.get("type") != "shapegroup":
+            _fail(node, "needs a shapegroup (a <ref> to one)")
+        obj = self.shapegroup(target)
+        m = self.get(props, "to_world", np.eye(4), ("transform",))
+        if self.builder.objects[obj].meshes:
+            self.builder.add_instance(obj, m)
+        for center, radius, material, name, interface in self.group_spheres[obj]:
+            scale = float(np.mean(np.linalg.norm(m[:3, :3], axis=0)))
+            self.builder.add_sphere(transform.transform_points(m, center[None])[0], radius * scale, material,
+                                    name, interface)
+
+    def shape(self, node, group: int = None):
+        """A shape of the scene, or of the shapegroup whose object is `group`."""
         kind = node.attrs.get("type")
         props = self.properties(node)
+        if kind == "instance":
+            return self.instance(node, props)
         bsdf, emission, media = None, None, {}
         for child in node.children:
             if child.tag in ("bsdf", "ref") and "name" not in child.attrs:
@@ -896,6 +931,10 @@ class _Reader:
             elif child.tag == "emitter":
                 if child.attrs.get("type") != "area":
                     warn(f"{child.where()}: a shape's emitter must be area; ignored")
+                    continue
+                if group is not None:
+                    warn(f"{child.where()}: an emitter in a shapegroup; instances have no area lights "
+                         "(nor do Mitsuba's), so pathtrace ignores it")
                     continue
                 emission = self.color(self.properties(child), "radiance", 1.0)
             elif child.tag in ("medium", "ref") and child.attrs.get("name") in ("interior", "exterior"):
@@ -919,7 +958,10 @@ class _Reader:
                 _fail(node, f"the radius must be positive, got {radius}")
             if np.any(np.abs(center) + radius > MAX_COORDINATE):
                 _fail(node, f"the sphere reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace")
-            self.builder.add_sphere(center, radius, material, name, interface)
+            if group is not None:
+                self.group_spheres[group].append((center, radius, material, name, interface))
+            else:
+                self.builder.add_sphere(center, radius, material, name, interface)
             return
         normals = uvs = None
         if kind == "rectangle":
@@ -959,11 +1001,13 @@ class _Reader:
         if transform.flips_handedness(m):
             faces = faces[:, ::-1]
         origin = origin if kind in ("obj", "ply") else None
-        self.builder.add_mesh(Mesh(name or f"{kind} {len(self.builder.meshes)}",
-                                   vertices.astype(np.float32), faces.astype(np.int32),
-                                   None if normals is None else normals.astype(np.float32),
-                                   material, origin.path if origin else "", origin,
-                                   None if uvs is None else uvs.astype(np.float32), interface))
+        mesh = Mesh(name or f"{kind} {len(self.builder.meshes)}", vertices.astype(np.float32), faces.astype(np.int32),
+                    None if normals is None else normals.astype(np.float32), material,
+                    origin.path if origin else "", origin, None if uvs is None else uvs.astype(np.float32), interface)
+        if group is not None:
+            self.builder.objects[group].meshes.append(mesh)
+        else:
+            self.builder.add_mesh(mesh)
 
 
 # Mitsuba 3's cube texture coordinates per face (axis, sign): u and v each (s * p[k] + 1) / 2 for

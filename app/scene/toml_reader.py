@@ -602,6 +602,34 @@ class _Reader:
                     material, str(source), origin, None if uvs is None else uvs.astype(np.float32),
                     self.interface(data, where))
 
+    def instances(self, objects, instances, builder, rows):
+        """[objects.NAME] (its `meshes`: an array of mesh tables, in the object's space) and
+        [[instances]] (an `object`'s name and a transform, as a mesh's) into the builder."""
+        self.table(objects, "objects", set(objects) if isinstance(objects, dict) else set())
+        index = {}
+        for name, o in objects.items():
+            where = f"objects.{name}"
+            self.table(o, where, {"meshes"})
+            meshes = o.get("meshes")
+            if not isinstance(meshes, list) or not meshes:
+                self.fail(f"{where}.meshes", "must be an array of mesh tables ([[objects.NAME.meshes]])")
+            index[name] = builder.add_object(name)
+            for i, m in enumerate(meshes):
+                w = f"{where}.meshes[{i}]"
+                if not isinstance(m, dict):
+                    self.fail(w, f"must be a table, got {type(m).__name__}")
+                mesh = self.mesh(m, w, self.material_ref(builder, rows, m, w))
+                if np.any(builder.materials.rows[mesh.material]["emission"][:3] > 0):
+                    self.fail(f"{w}.material", "an object's mesh cannot emit: instances have no area lights")
+                builder.objects[index[name]].meshes.append(mesh)
+        for i, inst in enumerate(instances):
+            where = f"instances[{i}]"
+            self.table(inst, where, {"object", "translate", "rotate", "scale", "matrix"})
+            name = inst.get("object")
+            if name not in index:
+                self.fail(f"{where}.object", f"must name an entry of [objects], got {short(name)}")
+            builder.add_instance(index[name], self.transform(inst, where))
+
     def inline_geometry(self, data, where):
         vertices, faces = data.get("vertices"), data.get("faces")
         if (not isinstance(vertices, list) or not vertices or len(vertices) > MAX_INLINE
@@ -622,7 +650,7 @@ class _Reader:
 
     def scene(self, data) -> Scene:
         self.table(data, "top level", {"camera", "environment", "render", "textures", "materials", "spheres",
-                                       "meshes", "lights", "media"})
+                                       "meshes", "lights", "media", "objects", "instances"})
         builder = SceneBuilder()
         self.texture_tables = data.get("textures", {})
         self.table(self.texture_tables, "textures",
@@ -645,8 +673,11 @@ class _Reader:
         for key, value in (("spheres", spheres), ("meshes", meshes)):
             if not isinstance(value, list):
                 self.fail(key, f"must be an array of tables ([[{key}]]), got {type(value).__name__}")
-        if not spheres and not meshes:
-            self.fail("spheres", "the scene needs at least one [[spheres]] or [[meshes]] entry")
+        instances = data.get("instances", [])
+        if not isinstance(instances, list):
+            self.fail("instances", f"must be an array of tables ([[instances]]), got {type(instances).__name__}")
+        if not spheres and not meshes and not instances:
+            self.fail("spheres", "the scene needs at least one [[spheres]], [[meshes]] or [[instances]] entry")
         lights = data.get("lights", [])
         if not isinstance(lights, list):
             self.fail("lights", f"must be an array of tables ([[lights]]), got {type(lights).__name__}")
@@ -666,6 +697,7 @@ class _Reader:
             if not isinstance(m, dict):
                 self.fail(where, f"must be a table, got {type(m).__name__}")
             builder.add_mesh(self.mesh(m, where, self.material_ref(builder, rows, m, where)))
+        self.instances(data.get("objects", {}), instances, builder, rows)
         camera = data.get("camera", {"eye": [0, 0, 5], "look_at": [0, 0, 0]})
         return builder.build(
             self.path.stem, media=media,

@@ -175,24 +175,37 @@ def scene_toml(scene: Scene, out: Path) -> str:
                   f"material = {_value(names[int(scene.sphere_material[i])])}"]
         lines += _interface_lines(scene.sphere_media[i] if scene.sphere_media else None, medium_names)
     for mesh in scene.meshes:
-        lines += ["", "[[meshes]]", f"name = {_value(mesh.name)}", f"material = {_value(names[mesh.material])}"]
-        lines += _interface_lines(mesh.media, medium_names)
-        if mesh.file is not None:
-            lines += [f"file = {_value(rel(mesh.file.path))}", f"matrix = {_value(mesh.file.matrix.tolist())}"]
-            if mesh.file.face_normals:
-                lines.append("face_normals = true")
-            if mesh.file.flip_normals:
-                lines.append("flip_normals = true")
-            if mesh.file.smooth:
-                lines.append("smooth = true")
-        else:
-            if len(mesh.vertices) > MAX_INLINE or len(mesh.faces) > MAX_INLINE:
-                raise UserError(f"{mesh.name}: {len(mesh.faces)} triangles is too many to write inline")
-            lines += [f"vertices = {_value(mesh.vertices.astype(np.float64).tolist())}",
-                      f"faces = {_value(mesh.faces.tolist())}"]
-            if mesh.uvs is not None:
-                lines.append(f"uvs = {_value(mesh.uvs.astype(np.float64).tolist())}")
+        lines += ["", "[[meshes]]"] + _mesh_lines(mesh, names, medium_names, rel)
+    if scene.instances is not None:
+        for o in scene.instances.objects:
+            for mesh in o.meshes:
+                lines += ["", f"[[objects.{json.dumps(o.name)}.meshes]]"] + _mesh_lines(mesh, names, medium_names, rel)
+        for k in range(len(scene.instances)):
+            lines += ["", "[[instances]]", f"object = {_value(scene.instances.objects[scene.instances.object[k]].name)}",
+                      f"matrix = {_value(scene.instances.to_world[k].tolist())}"]
     return "\n".join(lines) + "\n"
+
+
+def _mesh_lines(mesh, names: dict, medium_names: list, rel) -> list:
+    """The keys of a mesh's table: its name, material, media, and its file or its geometry."""
+    lines = [f"name = {_value(mesh.name)}", f"material = {_value(names[mesh.material])}"]
+    lines += _interface_lines(mesh.media, medium_names)
+    if mesh.file is not None:
+        lines += [f"file = {_value(rel(mesh.file.path))}", f"matrix = {_value(mesh.file.matrix.tolist())}"]
+        if mesh.file.face_normals:
+            lines.append("face_normals = true")
+        if mesh.file.flip_normals:
+            lines.append("flip_normals = true")
+        if mesh.file.smooth:
+            lines.append("smooth = true")
+    else:
+        if len(mesh.vertices) > MAX_INLINE or len(mesh.faces) > MAX_INLINE:
+            raise UserError(f"{mesh.name}: {len(mesh.faces)} triangles is too many to write inline")
+        lines += [f"vertices = {_value(mesh.vertices.astype(np.float64).tolist())}",
+                  f"faces = {_value(mesh.faces.tolist())}"]
+        if mesh.uvs is not None:
+            lines.append(f"uvs = {_value(mesh.uvs.astype(np.float64).tolist())}")
+    return lines
 
 
 def _medium_names(media: list) -> list:

@@ -16,8 +16,9 @@ Conventions, each as pbrt-v4 has it:
 - media: a shape bounds the current MediumInterface's inside (behind its front) and outside
   media where they differ, else none (a ray keeps its medium across it); the camera is in the
   outside medium current at `Camera`; `interface` shapes are null surfaces.
-Instances (`ObjectBegin`/`ObjectInstance`) are flattened into world-space copies, which the
-memory check bounds (docs/pbrt.md)."""
+Instances (`ObjectBegin`/`ObjectInstance`) are the scene's objects and instances
+(app/scene/instances.py: a two-level BVH, or world-space copies where they are few); spheres in
+an object are copied into world space at each instance."""
 
 import gzip
 import math
@@ -75,7 +76,7 @@ class PbrtReader:
         self.camera_params = None
         self.environment = None
         self.lights = []
-        self.objects = {}                 # ObjectBegin name: [(mesh or sphere record)]
+        self.objects = {}                 # ObjectBegin name: (its builder object, its sphere records)
         self.current_object = None
         self.including = []
         self.media = []                   # the scene's media, None where named but not yet made
@@ -95,7 +96,7 @@ class PbrtReader:
         self.parse_file(self.path, "scene")
         if self.stack:
             warn(f"{self.path}: {len(self.stack)} AttributeBegin without AttributeEnd")
-        if not self.builder.spheres and not self.builder.meshes:
+        if not self.builder.spheres and not self.builder.meshes and not self.builder.instance_object:
             raise UserError(f"{self.path}: the scene has no shapes pathtrace can render")
         self.settings.filter = self.filter
         for name, row in self.medium_rows.items():
@@ -467,7 +468,7 @@ class PbrtReader:
             tokens.fail(offset, "ObjectBegin inside another ObjectBegin")
         self._attribute_begin(tokens, offset)
         self.current_object = name
-        self.objects[name] = []
+        self.objects[name] = (self.builder.add_object(name), [])
 
     def _object_end(self, tokens, offset):
         if self.current_object is None:
@@ -480,19 +481,13 @@ class PbrtReader:
         if name not in self.objects:
             tokens.fail(offset, f"no object named '{cut(name)}'")
         m = self.state.ctm
-        for record in self.objects[name]:
-            if isinstance(record, Mesh):
-                faces = record.faces[:, ::-1] if transform.flips_handedness(m) else record.faces
-                vertices = transform.transform_points(m, record.vertices)
-                self.check_extent(vertices, tokens.where(offset))
-                normals = None if record.normals is None else transform.transform_normals(m, record.normals)
-                self.builder.add_mesh(replace(record, vertices=vertices.astype(np.float32), faces=faces,
-                                              normals=None if normals is None else normals.astype(np.float32)))
-            else:
-                center, radius, row, sphere_name, media = record
-                scale = float(np.mean(np.linalg.norm(m[:3, :3], axis=0)))
-                self.builder.add_sphere(transform.transform_points(m, center[None])[0], radius * scale, row,
-                                        sphere_name, media)
+        obj, spheres = self.objects[name]
+        if self.builder.objects[obj].meshes:
+            self.builder.add_instance(obj, m)
+        for center, radius, row, sphere_name, media in spheres:
+            scale = float(np.mean(np.linalg.norm(m[:3, :3], axis=0)))
+            self.builder.add_sphere(transform.transform_points(m, center[None])[0], radius * scale, row,
+                                    sphere_name, media)
 
     # -- shapes --
 
@@ -547,9 +542,8 @@ class PbrtReader:
         name = Path(source).stem if source else f"{kind} {len(self.builder.meshes)}"
         if kind == "sphere":
             center, radius = vertices
-            target = self.objects[self.current_object] if self.current_object is not None else None
-            if target is not None:
-                target.append((center, radius, row, name, media))
+            if self.current_object is not None:
+                self.objects[self.current_object][1].append((center, radius, row, name, media))
             else:
                 self.builder.add_sphere(center, radius, row, name, media)
             return
@@ -561,7 +555,7 @@ class PbrtReader:
                       None if normals is None else normals.astype(np.float32), row, source, None,
                       None if uvs is None else uvs.astype(np.float32), media)
         if self.current_object is not None:
-            self.objects[self.current_object].append(record)
+            self.builder.objects[self.objects[self.current_object][0]].meshes.append(record)
         else:
             self.builder.add_mesh(record)
 

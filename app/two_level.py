@@ -1,0 +1,105 @@
+"""The two-level BVH of a scene with many instances (app/scene/instances.py): one BVH per object
+over its triangles in its own space, one over the scene's own spheres and meshes (drawn by an
+instance of the identity), and on top a BVH over the instances' world boxes, whose leaves hold
+instances (kernels/bvh.cl: INSTANCES). Its nodes are laid end to end, the top's first, each
+tree's child indices moved to where its nodes and primitives landed."""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from pathtrace.bvh import BVH, build_bvh
+from pathtrace.errors import UserError
+from pathtrace.scene.meshes import MAX_COORDINATE
+from pathtrace.types import INSTANCE
+
+
+@dataclass
+class TwoLevel:
+    bvh: BVH                 # all nodes, the top's first; order: the primitives' (as one BVH's);
+                             # depth: the deepest object tree's
+    instances: np.ndarray    # INSTANCE rows, in the top tree's order
+    depth: int               # the top tree's depth
+    lo: np.ndarray           # the instances' world boxes
+    hi: np.ndarray
+
+
+def moved(nodes: np.ndarray, node_base: int, sphere_base: int, triangle_base: int) -> np.ndarray:
+    """A tree's nodes with their inner children's indices moved by node_base and their leaves'
+    by the first sphere and triangle of the tree's primitives (kernels/types.h: BVHNode)."""
+    nodes = nodes.copy()
+    index, count = nodes["index"], nodes["count"]
+    index[(count == 0) & (index >= 0)] += node_base
+    index[count > 0] += sphere_base
+    index[count < 0] += triangle_base
+    return nodes
+
+
+def box_corners(lo, hi) -> np.ndarray:
+    """The 8 corners of each box ((N, 3) bounds), as (N, 8, 3)."""
+    pick = np.array([[(k >> a) & 1 for a in range(3)] for k in range(8)], bool)
+    return np.where(pick[None], hi[:, None, :], lo[:, None, :])
+
+
+def build_two_level(scene, lo: np.ndarray, hi: np.ndarray, mesh_ends: list, meshes: list, queue=None,
+                    progress=None) -> TwoLevel:
+    """The two-level BVH over the scene's spheres and the triangles of `meshes`, whose boxes are
+    lo, hi (spheres first, then each mesh's triangles in turn); meshes[:mesh_ends[0]] are the
+    scene's own, meshes[mesh_ends[k]:mesh_ends[k + 1]] object k's."""
+    instances = scene.instances
+    n_spheres = len(scene.spheres)
+    emission = scene.materials.rows["emission"][:, :3]
+    for mesh in meshes[mesh_ends[0]:]:
+        if np.any(emission[mesh.material] > 0):
+            raise UserError(f"{scene.source or scene.name}: mesh '{mesh.name}' of an instanced object emits; "
+                            "instances have no area lights (as in pbrt-v4 and Mitsuba 3)")
+    tri_ends = n_spheres + np.cumsum([0] + [len(m.faces) for m in meshes])[mesh_ends]
+    trees, orders, depth = [], [], 0
+    # the scene's own shapes, then each object's: one tree each (None for an empty one)
+    spans = [(0, int(tri_ends[0]), n_spheres)] + [(int(a), int(b), 0) for a, b in zip(tri_ends[:-1], tri_ends[1:])]
+    for first, stop, spheres in spans:
+        tree = build_bvh(lo[first:stop], hi[first:stop], spheres, queue) if stop > first else None
+        trees.append(tree)
+        if tree is not None:
+            orders.append(first + tree.order)
+            depth = max(depth, tree.depth)
+    boxes = [(lo[a:b].min(axis=0), hi[a:b].max(axis=0)) if b > a else None for a, b, _ in spans]
+
+    # the instances: the scene's own shapes (if any), then the file's, whose objects have triangles
+    keep = np.flatnonzero([trees[1 + k] is not None for k in instances.object])
+    obj = np.concatenate([[-1] if trees[0] is not None else [], instances.object[keep]]).astype(np.int64)
+    own = [np.eye(4)[None]] if trees[0] is not None else []
+    to_world = np.concatenate(own + [instances.to_world[keep]])
+    if not len(obj):
+        raise UserError(f"{scene.source or scene.name}: nothing to render (no shape, and instances of empty objects)")
+    obj_lo = np.array([boxes[1 + k][0] if k >= 0 else boxes[0][0] for k in obj])
+    obj_hi = np.array([boxes[1 + k][1] if k >= 0 else boxes[0][1] for k in obj])
+    world = np.einsum("nij,nkj->nki", to_world[:, :3, :3], box_corners(obj_lo, obj_hi)) + to_world[:, None, :3, 3]
+    inst_lo, inst_hi = world.min(axis=1), world.max(axis=1)
+    if np.any(np.abs(inst_lo) > MAX_COORDINATE) or np.any(np.abs(inst_hi) > MAX_COORDINATE):
+        raise UserError(f"{scene.source or scene.name}: an instance reaches beyond {MAX_COORDINATE:g}, "
+                        "which float32 cannot trace")
+    top = build_bvh(inst_lo, inst_hi, len(obj), queue, progress)
+
+    # nodes end to end: the top tree, then each object tree, moved to its nodes and primitives
+    parts, node_base, roots = [top.nodes], len(top.nodes), []
+    sphere_base = triangle_base = 0
+    for (first, stop, spheres), tree in zip(spans, trees):
+        if tree is None:
+            roots.append(-1)
+            continue
+        roots.append(node_base)
+        parts.append(moved(tree.nodes, node_base, sphere_base, triangle_base))
+        node_base += len(tree.nodes)
+        sphere_base += spheres
+        triangle_base += stop - first - spheres
+    table = np.zeros(len(obj), INSTANCE)
+    ordered = top.order
+    m = to_world[ordered]
+    table["to_world"] = m[:, :3, :]
+    table["to_object"] = np.linalg.inv(m)[:, :3, :]
+    table["root"] = [roots[1 + k] if k >= 0 else roots[0] for k in obj[ordered]]
+    # the primitives' order: spheres, then triangles, each kind in its trees' order
+    order = np.concatenate(orders)
+    order = np.concatenate([order[order < n_spheres], order[order >= n_spheres]])
+    return TwoLevel(BVH(np.concatenate(parts), order, depth, top.cost), table, top.depth, inst_lo, inst_hi)
