@@ -56,20 +56,21 @@ class CompiledScene:
         self.scene = scene
         n_spheres = len(scene.spheres)
         instances = scene.instances
-        problem = instances is not None and instancing.check_instances(instances)
+        problem = instances is not None and instancing.check_instances(instances, scene.materials)
         if problem:
             raise UserError(f"{scene.source or scene.name}: {problem}")
         # a scene of few instanced triangles draws copies of them (app/scene/instances.py)
         self.two_level = instances is not None and instances.triangle_count > instancing.FLATTEN_MAX
         # the meshes whose triangles the kernels hold: the scene's (and its instances' copies),
         # then, with a two-level BVH, its objects', in their own space
-        meshes = scene.meshes if instances is None or self.two_level else \
-            scene.meshes + instancing.flattened_meshes(instances)
-        self.object_meshes = [len(meshes)]
+        meshes = list(scene.meshes)
+        if instances is not None and not self.two_level:
+            meshes += instancing.flattened_meshes(instances)
+        mesh_ends = [len(meshes)]            # where the scene's own meshes and each object's end
         if self.two_level:
             for o in instances.objects:
-                meshes = meshes + o.meshes
-                self.object_meshes.append(len(meshes))
+                meshes += o.meshes
+                mesh_ends.append(len(meshes))
         self.meshes = meshes
         n_triangles = sum(len(m.faces) for m in meshes)
         check_memory(scene.name, n_spheres, n_triangles, queue.device if queue else None,
@@ -79,7 +80,7 @@ class CompiledScene:
             else np.zeros((0, 3, 3), np.float32)
         lo, hi = primitive_boxes(scene.spheres, corners)
         if self.two_level:
-            two = build_two_level(scene, lo, hi, self.object_meshes, meshes, queue, progress)
+            two = build_two_level(scene, lo, hi, mesh_ends, meshes, queue, progress)
             self.bvh, self.instances, self.instance_depth, lo, hi = two.bvh, two.instances, two.depth, two.lo, two.hi
         else:
             self.bvh: BVH = build_bvh(lo, hi, n_spheres, queue, progress)

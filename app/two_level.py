@@ -10,7 +10,7 @@ import numpy as np
 
 from pathtrace.bvh import BVH, build_bvh
 from pathtrace.errors import UserError
-from pathtrace.scene.meshes import MAX_COORDINATE
+from pathtrace.scene.instances import world_boxes
 from pathtrace.types import INSTANCE
 
 
@@ -35,12 +35,6 @@ def moved(nodes: np.ndarray, node_base: int, sphere_base: int, triangle_base: in
     return nodes
 
 
-def box_corners(lo, hi) -> np.ndarray:
-    """The 8 corners of each box ((N, 3) bounds), as (N, 8, 3)."""
-    pick = np.array([[(k >> a) & 1 for a in range(3)] for k in range(8)], bool)
-    return np.where(pick[None], hi[:, None, :], lo[:, None, :])
-
-
 def build_two_level(scene, lo: np.ndarray, hi: np.ndarray, mesh_ends: list, meshes: list, queue=None,
                     progress=None) -> TwoLevel:
     """The two-level BVH over the scene's spheres and the triangles of `meshes`, whose boxes are
@@ -48,11 +42,6 @@ def build_two_level(scene, lo: np.ndarray, hi: np.ndarray, mesh_ends: list, mesh
     scene's own, meshes[mesh_ends[k]:mesh_ends[k + 1]] object k's."""
     instances = scene.instances
     n_spheres = len(scene.spheres)
-    emission = scene.materials.rows["emission"][:, :3]
-    for mesh in meshes[mesh_ends[0]:]:
-        if np.any(emission[mesh.material] > 0):
-            raise UserError(f"{scene.source or scene.name}: mesh '{mesh.name}' of an instanced object emits; "
-                            "instances have no area lights (as in pbrt-v4 and Mitsuba 3)")
     tri_ends = n_spheres + np.cumsum([0] + [len(m.faces) for m in meshes])[mesh_ends]
     trees, orders, depth = [], [], 0
     # the scene's own shapes, then each object's: one tree each (None for an empty one)
@@ -63,22 +52,19 @@ def build_two_level(scene, lo: np.ndarray, hi: np.ndarray, mesh_ends: list, mesh
         if tree is not None:
             orders.append(first + tree.order)
             depth = max(depth, tree.depth)
-    boxes = [(lo[a:b].min(axis=0), hi[a:b].max(axis=0)) if b > a else None for a, b, _ in spans]
 
-    # the instances: the scene's own shapes (if any), then the file's, whose objects have triangles
-    keep = np.flatnonzero([trees[1 + k] is not None for k in instances.object])
-    obj = np.concatenate([[-1] if trees[0] is not None else [], instances.object[keep]]).astype(np.int64)
-    own = [np.eye(4)[None]] if trees[0] is not None else []
-    to_world = np.concatenate(own + [instances.to_world[keep]])
+    # the instances: the scene's own shapes (if any, through the identity: object -1), then the
+    # file's, whose objects have triangles
+    world_lo, world_hi = world_boxes(instances)
+    keep = np.flatnonzero(np.all(world_lo <= world_hi, axis=1))
+    own = trees[0] is not None
+    obj = np.concatenate([[-1] if own else [], instances.object[keep]]).astype(np.int64)
     if not len(obj):
         raise UserError(f"{scene.source or scene.name}: nothing to render (no shape, and instances of empty objects)")
-    obj_lo = np.array([boxes[1 + k][0] if k >= 0 else boxes[0][0] for k in obj])
-    obj_hi = np.array([boxes[1 + k][1] if k >= 0 else boxes[0][1] for k in obj])
-    world = np.einsum("nij,nkj->nki", to_world[:, :3, :3], box_corners(obj_lo, obj_hi)) + to_world[:, None, :3, 3]
-    inst_lo, inst_hi = world.min(axis=1), world.max(axis=1)
-    if np.any(np.abs(inst_lo) > MAX_COORDINATE) or np.any(np.abs(inst_hi) > MAX_COORDINATE):
-        raise UserError(f"{scene.source or scene.name}: an instance reaches beyond {MAX_COORDINATE:g}, "
-                        "which float32 cannot trace")
+    to_world = np.concatenate(([np.eye(4)[None]] if own else []) + [instances.to_world[keep]])
+    stop = spans[0][1]
+    inst_lo = np.concatenate(([lo[:stop].min(axis=0)[None]] if own else []) + [world_lo[keep]])
+    inst_hi = np.concatenate(([hi[:stop].max(axis=0)[None]] if own else []) + [world_hi[keep]])
     top = build_bvh(inst_lo, inst_hi, len(obj), queue, progress)
 
     # nodes end to end: the top tree, then each object tree, moved to its nodes and primitives
@@ -98,7 +84,7 @@ def build_two_level(scene, lo: np.ndarray, hi: np.ndarray, mesh_ends: list, mesh
     m = to_world[ordered]
     table["to_world"] = m[:, :3, :]
     table["to_object"] = np.linalg.inv(m)[:, :3, :]
-    table["root"] = [roots[1 + k] if k >= 0 else roots[0] for k in obj[ordered]]
+    table["root"] = np.asarray(roots)[obj[ordered] + 1]        # roots[0]: the scene's own
     # the primitives' order: spheres, then triangles, each kind in its trees' order
     order = np.concatenate(orders)
     order = np.concatenate([order[order < n_spheres], order[order >= n_spheres]])

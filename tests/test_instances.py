@@ -14,7 +14,7 @@ import pathtrace.scene.instances as instancing
 from pathtrace.compiled import compile_scene
 from pathtrace.errors import UserError
 from pathtrace.renderer import Renderer
-from pathtrace.scene import Mesh, SceneBuilder, diffuse, load_scene
+from pathtrace.scene import Mesh, SceneBuilder, diffuse, emitter, load_scene
 from pathtrace.scene.transform import rotation, scaling, translation
 from tests.conftest import KernelRunner, scene_arrays
 from tests.stats import z_test
@@ -217,6 +217,10 @@ def test_instances_the_api_makes_are_checked():
     b.add_instance(obj, np.diag([1.0, 0.0, 1.0, 1.0]))
     with pytest.raises(UserError, match="instance 0: its transform is not finite, affine and invertible"):
         compile_scene(b.build("bad"))
+    b.instance_to_world[0] = np.eye(4)
+    b.objects[obj].meshes[0].material = b.material(emitter(1.0))
+    with pytest.raises(UserError, match="mesh 'tri' of an instanced object emits"):
+        compile_scene(b.build("bright"))
 
 
 def test_convert_writes_objects_and_instances_that_read_back_the_same(tmp_path):
@@ -239,10 +243,13 @@ def test_convert_writes_objects_and_instances_that_read_back_the_same(tmp_path):
     ('[[instances]]\nobject = "nothing"\n', "instances[0].object: must name an entry of [objects]"),
     ('[[objects.lamp.meshes]]\nvertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]\nfaces = [[0, 1, 2]]\n'
      'material = { type = "emitter", Le = [1, 1, 1] }\n[[instances]]\nobject = "lamp"\n', "cannot emit"),
+    ('[[objects.far.meshes]]\nvertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]\nfaces = [[0, 1, 2]]\n'
+     'material = { type = "diffuse", rho_d = 0.5 }\n[[instances]]\nobject = "far"\nscale = 1e30\n',
+     "instance 0 reaches beyond 1e+18"),
 ])
 def test_bad_toml_instances_are_one_line(tmp_path, body, problem):
     (tmp_path / "s.toml").write_text('[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = { type = "diffuse", '
                                      'rho_d = 0.5 }\n' + body)
     with pytest.raises(UserError) as e:
-        load_scene(str(tmp_path / "s.toml"))
+        compile_scene(load_scene(str(tmp_path / "s.toml")))       # copied into the world or not
     assert problem in str(e.value) and "\n" not in str(e.value)

@@ -163,7 +163,7 @@ def test_instances_are_placed_by_their_transforms(tmp_path):
     """An object keeps the transform current at its shapes, each instance adds its own; the
     copies that flattening makes are where pbrt puts them."""
     s = scene(tmp_path, 'ObjectBegin "tri"\nTranslate 0 1 0\nShape "trianglemesh" "point3 P" [ 0 0 0  1 0 0  0 1 0 ]\n'
-                        'ObjectEnd\n'
+                        'Shape "sphere" "float radius" 0.5\nObjectEnd\n'
                         'AttributeBegin\nTranslate 10 0 0\nObjectInstance "tri"\nAttributeEnd\n'
                         'AttributeBegin\nTranslate 0 0 -4\nScale 2 2 2\nObjectInstance "tri"\nAttributeEnd\n')
     assert len(s.instances) == 2 and not s.meshes
@@ -172,6 +172,8 @@ def test_instances_are_placed_by_their_transforms(tmp_path):
     flat = flattened_meshes(s.instances)
     np.testing.assert_allclose(flat[0].vertices, [[10, 1, 0], [11, 1, 0], [10, 2, 0]])
     np.testing.assert_allclose(flat[1].vertices, [[0, 2, -4], [2, 2, -4], [0, 4, -4]])
+    # the object's sphere, copied into the world at each instance
+    np.testing.assert_allclose(s.spheres, [[10, 1, 0, 0.5], [0, 2, -4, 1.0]])
 
 
 def test_include_is_relative_to_the_main_file(tmp_path):

@@ -133,9 +133,19 @@ class SceneBuilder:
         return len(self.objects) - 1
 
     def add_instance(self, obj: int, to_world: np.ndarray):
-        """An instance of object `obj` through the 4x4 world-from-object transform."""
-        self.instance_object.append(obj)
-        self.instance_to_world.append(np.asarray(to_world, np.float64))
+        """An instance of object `obj` through the 4x4 world-from-object transform: its meshes
+        drawn through it (Scene.instances), its spheres copied into the world (spheres keep no
+        rotation: a non-uniform scale is averaged, as for any sphere)."""
+        from pathtrace.scene.transform import transform_points
+        m = np.asarray(to_world, np.float64)
+        o = self.objects[obj]
+        if o.meshes:
+            self.instance_object.append(obj)
+            self.instance_to_world.append(m)
+        scale = float(np.mean(np.linalg.norm(m[:3, :3], axis=0)))
+        for center, radius, material, name, media in o.spheres:
+            self.add_sphere(transform_points(m, np.asarray(center, np.float64)[None])[0], radius * scale, material,
+                            name, media)
 
     def build(self, name, **kwargs) -> Scene:
         if self.instance_object:

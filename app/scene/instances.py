@@ -11,6 +11,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from pathtrace.scene import transform
+from pathtrace.scene.meshes import MAX_COORDINATE
 
 # Scenes whose instances hold at most this many triangles in all are flattened: below it the
 # copies cost little memory, and a one-level BVH saves every ray the transforms.
@@ -19,9 +20,12 @@ FLATTEN_MAX = 1 << 20
 
 @dataclass
 class SceneObject:
-    """A named group of meshes (vertices in the object's space) that instances draw."""
+    """A named group of meshes (vertices in the object's space) that instances draw, and of
+    spheres (center, radius, material, name, media), which SceneBuilder.add_instance copies into
+    the world at each instance."""
     name: str
     meshes: list = field(default_factory=list)
+    spheres: list = field(default_factory=list)
 
     @property
     def triangle_count(self) -> int:
@@ -46,17 +50,54 @@ class Instances:
         return int(counts[self.object].sum()) if len(self.object) else 0
 
 
-def check_instances(instances: Instances) -> str | None:
-    """A problem with the instances, or None: each transform finite, affine and invertible, and
-    each object one of `objects` (the readers make them so; the API may not)."""
+def check_instances(instances: Instances, materials) -> str | None:
+    """A problem with the instances, or None: each object one of `objects`, none of its meshes
+    emitting (the readers make them so; the API may not), each transform finite, affine and
+    invertible, and each instance within the coordinates float32 can trace."""
     m = instances.to_world
     if np.any((instances.object < 0) | (instances.object >= len(instances.objects))):
         return "an instance of an object that does not exist"
+    emission = materials.rows["emission"][:, :3]
+    for mesh in (mesh for o in instances.objects for mesh in o.meshes):
+        if np.any(emission[mesh.material] > 0):
+            return (f"mesh '{mesh.name}' of an instanced object emits; instances have no area lights "
+                    "(as in pbrt-v4 and Mitsuba 3)")
     bad = ~np.all(np.isfinite(m), axis=(1, 2)) | np.any(m[:, 3] != (0, 0, 0, 1), axis=1)
     bad[~bad] = np.abs(np.linalg.det(m[~bad, :3, :3])) < 1e-30
     if np.any(bad):
         return f"instance {int(np.argmax(bad))}: its transform is not finite, affine and invertible"
+    lo, hi = world_boxes(instances)
+    with np.errstate(over="ignore", invalid="ignore"):
+        far = ~(np.maximum(np.abs(lo), np.abs(hi)).max(axis=1) <= MAX_COORDINATE) & np.all(lo <= hi, axis=1)
+    if np.any(far):
+        return f"instance {int(np.argmax(far))} reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace"
     return None
+
+
+def object_box(obj: SceneObject) -> tuple:
+    """The box (lo, hi) of an object's triangles; empty (lo > hi) where it has none."""
+    corners = [m.vertices[m.faces].reshape(-1, 3) for m in obj.meshes if len(m.faces)]
+    if not corners:
+        return np.full(3, np.inf), np.full(3, -np.inf)
+    c = np.concatenate(corners)
+    return c.min(axis=0).astype(np.float64), c.max(axis=0).astype(np.float64)
+
+
+def world_boxes(instances: Instances) -> tuple:
+    """Each instance's world box (lo, hi): its object's box's corners moved by its transform;
+    empty (lo > hi) for an instance of an object without triangles."""
+    boxes = np.array([object_box(o) for o in instances.objects]).reshape(-1, 2, 3)
+    lo, hi = boxes[instances.object, 0], boxes[instances.object, 1]
+    empty = ~np.all(lo <= hi, axis=1)
+    lo, hi = np.where(empty[:, None], 0.0, lo), np.where(empty[:, None], 0.0, hi)
+    pick = np.array([[(k >> a) & 1 for a in range(3)] for k in range(8)], bool)
+    corners = np.where(pick[None], hi[:, None, :], lo[:, None, :])           # (N, 8, 3)
+    m = instances.to_world
+    with np.errstate(over="ignore", invalid="ignore"):
+        world = np.einsum("nij,nkj->nki", m[:, :3, :3], corners) + m[:, None, :3, 3]
+    lo, hi = world.min(axis=1), world.max(axis=1)
+    lo[empty], hi[empty] = np.inf, -np.inf
+    return lo, hi
 
 
 def flattened_meshes(instances: Instances) -> list:

@@ -240,7 +240,7 @@ class _Reader:
         self.defaults = {}
         self.named = {}             # id -> Node
         self.builder = SceneBuilder()
-        self.groups, self.group_spheres = {}, {}     # shapegroup node: its object; object: its spheres
+        self.groups = {}            # id(shapegroup Node) -> its object in the builder
         self.material_rows = {}     # id(bsdf Node) -> material row
         self.textures = {}          # id(texture Node) -> Texture, so that a shared one is one
         self.images = {}            # the images read (read_image's cache)
@@ -890,12 +890,11 @@ class _Reader:
     # -- shapes --
 
     def shapegroup(self, node) -> int:
-        """The object of a `shapegroup` (its index in the builder), read once: its meshes in the
-        group's space; its spheres, which instances copy into the world (self.group_spheres)."""
+        """The object of a `shapegroup` (its index in the builder), read once: its shapes in the
+        group's space."""
         if id(node) not in self.groups:
             obj = self.builder.add_object(node.attrs.get("id", "shapegroup"))
             self.groups[id(node)] = obj
-            self.group_spheres[obj] = []
             for child in node.children:
                 if child.tag == "shape":
                     if child.attrs.get("type") in ("shapegroup", "instance"):
@@ -909,14 +908,7 @@ class _Reader:
         target = self.resolve(refs[0]) if refs and refs[0].tag == "ref" else refs[0] if refs else None
         if target is None or target.tag != "shape" or target.attrs.get("type") != "shapegroup":
             _fail(node, "needs a shapegroup (a <ref> to one)")
-        obj = self.shapegroup(target)
-        m = self.get(props, "to_world", np.eye(4), ("transform",))
-        if self.builder.objects[obj].meshes:
-            self.builder.add_instance(obj, m)
-        for center, radius, material, name, interface in self.group_spheres[obj]:
-            scale = float(np.mean(np.linalg.norm(m[:3, :3], axis=0)))
-            self.builder.add_sphere(transform.transform_points(m, center[None])[0], radius * scale, material,
-                                    name, interface)
+        self.builder.add_instance(self.shapegroup(target), self.get(props, "to_world", np.eye(4), ("transform",)))
 
     def shape(self, node, group: int = None):
         """A shape of the scene, or of the shapegroup whose object is `group`."""
@@ -959,7 +951,7 @@ class _Reader:
             if np.any(np.abs(center) + radius > MAX_COORDINATE):
                 _fail(node, f"the sphere reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace")
             if group is not None:
-                self.group_spheres[group].append((center, radius, material, name, interface))
+                self.builder.objects[group].spheres.append((center, radius, material, name, interface))
             else:
                 self.builder.add_sphere(center, radius, material, name, interface)
             return

@@ -76,7 +76,7 @@ class PbrtReader:
         self.camera_params = None
         self.environment = None
         self.lights = []
-        self.objects = {}                 # ObjectBegin name: (its builder object, its sphere records)
+        self.objects = {}                 # ObjectBegin name: its builder object
         self.current_object = None
         self.including = []
         self.media = []                   # the scene's media, None where named but not yet made
@@ -468,7 +468,7 @@ class PbrtReader:
             tokens.fail(offset, "ObjectBegin inside another ObjectBegin")
         self._attribute_begin(tokens, offset)
         self.current_object = name
-        self.objects[name] = (self.builder.add_object(name), [])
+        self.objects[name] = self.builder.add_object(name)
 
     def _object_end(self, tokens, offset):
         if self.current_object is None:
@@ -480,14 +480,7 @@ class PbrtReader:
         name = string(tokens, "ObjectInstance")
         if name not in self.objects:
             tokens.fail(offset, f"no object named '{cut(name)}'")
-        m = self.state.ctm
-        obj, spheres = self.objects[name]
-        if self.builder.objects[obj].meshes:
-            self.builder.add_instance(obj, m)
-        for center, radius, row, sphere_name, media in spheres:
-            scale = float(np.mean(np.linalg.norm(m[:3, :3], axis=0)))
-            self.builder.add_sphere(transform.transform_points(m, center[None])[0], radius * scale, row,
-                                    sphere_name, media)
+        self.builder.add_instance(self.objects[name], self.state.ctm)
 
     # -- shapes --
 
@@ -543,7 +536,7 @@ class PbrtReader:
         if kind == "sphere":
             center, radius = vertices
             if self.current_object is not None:
-                self.objects[self.current_object][1].append((center, radius, row, name, media))
+                self.builder.objects[self.objects[self.current_object]].spheres.append((center, radius, row, name, media))
             else:
                 self.builder.add_sphere(center, radius, row, name, media)
             return
@@ -555,7 +548,7 @@ class PbrtReader:
                       None if normals is None else normals.astype(np.float32), row, source, None,
                       None if uvs is None else uvs.astype(np.float32), media)
         if self.current_object is not None:
-            self.builder.objects[self.objects[self.current_object][0]].meshes.append(record)
+            self.builder.objects[self.objects[self.current_object]].meshes.append(record)
         else:
             self.builder.add_mesh(record)
 
