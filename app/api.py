@@ -346,19 +346,22 @@ def show(image: np.ndarray, exposure: float = 0.0, curve: str = "standard") -> P
 
 def view(scene="simple", device: str = "auto", size=None, frames: int = None,
          screenshot_dir="screenshots", screenshot: bool = False):
-    """Opens the interactive viewer on `scene` (a Scene, or what load() takes) and returns when
-    its window is closed, or after `frames` frames; screenshot: take one when closing. Needs a
-    display."""
+    """Opens the interactive viewer on `scene` (a Scene, what load() takes, or a function that
+    returns a Scene) and returns when its window is closed, or after `frames` frames;
+    screenshot: take one when closing. Needs a display. The window opens at once: the scene is
+    read, the device opened and the kernels compiled while it says so."""
     from pathtrace.viewer.window import Viewer, require_display
     if not isinstance(device, str):
         raise UserError("device: the viewer renders on one device; give one spec (several are for render)")
     require_display()              # before any device work
-    scene = scene if isinstance(scene, Scene) else load(scene)
-    if size is not None:
-        scene = replace(scene, settings=settings_for(scene, size=size))
     if frames is not None:
         frames = _integer("frames", frames, 1, 2**31 - 1)
-    viewer = Viewer(open_devices(device)[0], scene, screenshot_dir)
+
+    def read():
+        """The scene, read in the viewer's worker thread while its window says so."""
+        read = scene if isinstance(scene, Scene) else scene() if callable(scene) else load(scene)
+        return read if size is None else replace(read, settings=settings_for(read, size=size))
+    viewer = Viewer(lambda: open_devices(device)[0], read, screenshot_dir)
     try:
         viewer.run(frames)
         if screenshot:

@@ -7,12 +7,14 @@ import os
 import shutil
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from pathtrace.errors import UserError
 from pathtrace.image_io import read_hdr
 from pathtrace.renderer import Renderer
 from pathtrace.scene import load_scene
@@ -260,21 +262,43 @@ def test_left_click_picks_a_mesh_whatever_the_bvh_order(viewer):
 
 
 def test_opening_a_scene_says_what_it_is_busy_with(viewer, monkeypatch):
-    """A slow BVH build shows its progress, then the kernels' compilation is named, each in a
-    frame of its own (a notice over the window, and the title); then the first pass is named
-    until an image arrives."""
+    """While a scene opens in the worker thread, the window keeps drawing frames that say what
+    it does (a notice over the window, and the title): the BVH build's progress, then the kernels'
+    compilation. Each step waits until the window has drawn it, so that a window that froze
+    fails here. Then the first pass is named until an image arrives."""
     import pathtrace.viewer.window as window
-    monkeypatch.setattr(window, "PROGRESS_AFTER", 0.0)
     titles, notices = [], []
+    drawn = {"bvh": threading.Event(), "kernels": threading.Event()}
     set_title = viewer.glfw.set_window_title
     monkeypatch.setattr(viewer.glfw, "set_window_title", lambda w, t: (titles.append(t), set_title(w, t)))
     show = viewer.show_progress
-    monkeypatch.setattr(viewer, "show_progress", lambda *a: (notices.append(a), show(*a)))
+
+    def shown(text, fraction=None):
+        notices.append((text, fraction))
+        if text == "building the BVH of spheres8k" and fraction == 0.5:
+            drawn["bvh"].set()
+        if text.startswith("compiling the kernels for spheres8k on "):
+            drawn["kernels"].set()
+        show(text, fraction)
+    monkeypatch.setattr(viewer, "show_progress", shown)
+    compile_scene = window.compile_scene
+
+    def slow_compile(scene, queue, progress):
+        progress(0.5)
+        assert drawn["bvh"].wait(30), "the window did not show the BVH build's progress"
+        return compile_scene(scene, queue, progress)
+    monkeypatch.setattr(window, "compile_scene", slow_compile)
+    set_scene = viewer.renderer.set_scene
+
+    def slow_set_scene(compiled):
+        assert drawn["kernels"].wait(30), "the window did not say that the kernels compile"
+        set_scene(compiled)
+    monkeypatch.setattr(viewer.renderer, "set_scene", slow_set_scene)
     viewer.load_scene("spheres8k")
-    assert titles[-3] == "pathtrace - building the BVH of spheres8k: 100%"
-    assert titles[-2].startswith("pathtrace - compiling the kernels for spheres8k on ")
+    assert ("building the BVH of spheres8k", 0.5) in notices
     assert titles[-1] == "pathtrace - spheres8k" and viewer.renderer.scene.name == "spheres8k"
-    assert notices[0] == ("building the BVH of spheres8k", notices[0][1]) and notices[-1][0].startswith("compiling")
+    assert any(t.startswith("pathtrace - compiling the kernels for spheres8k on ") for t in titles)
+    monkeypatch.undo()
     if viewer.texture is not None:
         viewer.texture.release()
     viewer.texture = None                 # as when a window opens: no image yet
@@ -282,6 +306,37 @@ def test_opening_a_scene_says_what_it_is_busy_with(viewer, monkeypatch):
     frames(viewer, 1)
     assert viewer.notice == "rendering the first pass of spheres8k"
     back_to_simple(viewer)
+
+
+def test_the_window_opens_before_its_scene_is_read(display, backend, tmp_path, monkeypatch):
+    """Given functions that read the scene and open the device (as pathtrace view gives them),
+    the window opens and draws before they return, then takes the scene's size; a scene that
+    cannot be read closes the window and raises its one line."""
+    from pathtrace.viewer.window import Viewer
+    reading = threading.Event()
+    show = Viewer.show_progress
+
+    def shown(self, text, fraction=None):
+        if text.startswith("reading the scene"):
+            reading.set()
+        show(self, text, fraction)
+    monkeypatch.setattr(Viewer, "show_progress", shown)
+
+    def read():
+        assert reading.wait(30), "the window did not open before the scene was read"
+        return load_scene("simple").with_settings(width=96, height=54)
+    v = Viewer(lambda: backend, read, tmp_path)
+    try:
+        assert v.renderer.scene.name == "simple" and v.backend is backend
+        frames(v, 2)
+        assert v.glfw.get_window_size(v.window) == (96, 54)
+    finally:
+        v.close()
+
+    def broken():
+        raise UserError("broken.xml: line 3: not a scene")
+    with pytest.raises(UserError, match="broken.xml: line 3"):
+        Viewer(lambda: backend, broken, tmp_path)
 
 
 def test_a_scene_that_fails_to_open_leaves_the_viewer_as_it_was(viewer, monkeypatch, capsys):

@@ -9,6 +9,7 @@ import datetime
 import math
 import os
 import sys
+import threading
 import time
 from collections import deque
 from concurrent.futures import ThreadPoolExecutor
@@ -38,7 +39,7 @@ UPLOAD_INTERVAL = 0.1          # at rest the noisy image reaches the screen at m
                                # (while moving, each preview pass as soon as it is done)
 DENOISE_QUALITY = {"CPU": "fast", "CUDA": "high"}   # OIDN's preset for the viewer, by its device:
                                # on two cores "fast" denoises 1280x720 in 0.35 s, "high" in 0.65 s
-PROGRESS_AFTER = 1.0           # seconds before a BVH build shows its progress
+DEFAULT_SIZE = (1280, 720)     # the window's size before its scene is read (fitted to the screen)
 FRAME_RATE = 60                # turns of the loop per second at most: the window's work leaves
                                # the rest of the CPU to the renderer (PoCL) and the denoiser
 SETTLE = 0.1                   # seconds of redrawing after input, for the panel to answer it
@@ -93,7 +94,12 @@ def preview_scale(seconds_per_pixel: float, width: int, height: int) -> int:
 class Viewer:
     def __init__(self, backend, scene, screenshot_dir="screenshots", window_size=None):
         """Renders `scene` at its settings' size (pathtrace view --size sets it), in a window of
-        window_size (default: that size, fitted to the screen)."""
+        window_size (default: that size, fitted to the screen).
+
+        `backend` and `scene` may be functions that return them (pathtrace view passes those):
+        the window then opens first, at a size fitted to DEFAULT_SIZE until the scene is read,
+        and stays live, saying what it waits for, while they are called in a worker thread
+        (reading the file, opening the device), the BVH builds and the kernels compile."""
         require_display()
         import glfw
         import moderngl
@@ -103,15 +109,18 @@ class Viewer:
         self.glfw, self.imgui = glfw, imgui
         if not glfw.init():
             raise UserError(no_display_message())
-        if window_size is None:
-            monitor = glfw.get_primary_monitor()
-            screen = glfw.get_monitor_workarea(monitor)[2:] if monitor else (1280, 720)
-            window_size = fit_window(scene.settings.width, scene.settings.height, screen)
+        monitor = glfw.get_primary_monitor()
+        screen = glfw.get_monitor_workarea(monitor)[2:] if monitor else DEFAULT_SIZE
+        fitted = window_size is None
+        if fitted:
+            given = DEFAULT_SIZE if callable(scene) else (scene.settings.width, scene.settings.height)
+            window_size = fit_window(*given, screen)
         glfw.window_hint(glfw.CONTEXT_VERSION_MAJOR, 3)
         glfw.window_hint(glfw.CONTEXT_VERSION_MINOR, 3)
         glfw.window_hint(glfw.OPENGL_PROFILE, glfw.OPENGL_CORE_PROFILE)
         glfw.window_hint(glfw.OPENGL_FORWARD_COMPAT, True)
-        self.window = glfw.create_window(*window_size, f"pathtrace - {scene.name}", None, None)
+        title = "pathtrace" if callable(scene) else f"pathtrace - {scene.name}"
+        self.window = glfw.create_window(*window_size, title, None, None)
         if not self.window:
             glfw.terminate()
             raise UserError("pathtrace view: could not open an OpenGL 3.3 window on this display")
@@ -124,7 +133,6 @@ class Viewer:
         self.gui = GlfwRenderer(self.window)
         self._chain_callbacks()
 
-        self.backend = backend
         self.controls = FlyControls()
         self.exposure, self.tonemap = 0.0, "standard"
         self.screenshot_dir = Path(screenshot_dir)
@@ -149,11 +157,18 @@ class Viewer:
         self._last_draw = 0.0
         self._last_time = time.perf_counter()
         self._cursor = None
+        self._status = ("", None)     # (text, fraction done or None) of the work in the background
         self._init_display()
-        self.renderer = self._open(scene)
+        try:
+            self.renderer = self._in_background(lambda: self._start(backend, scene), "opening the scene")
+        except BaseException:
+            self._close_window()
+            raise
+        if fitted and callable(scene):
+            glfw.set_window_size(self.window, *fit_window(self.renderer.width, self.renderer.height, screen))
         self.size = (self.renderer.width, self.renderer.height)    # the full resolution
         self.progressive = Progressive(self.renderer, LAUNCH_BUDGET)
-        self.display = Display(backend)
+        self.display = Display(self.backend)
         self.denoise = True
         self._denoiser = None
         self._worker = ThreadPoolExecutor(1, thread_name_prefix="denoise")
@@ -320,29 +335,70 @@ class Viewer:
         self.message, self.error = text, error
         print(f"pathtrace: {text}", file=sys.stderr)
 
+    def _start(self, backend, scene) -> Renderer:
+        """In the worker thread: the device opened and the scene read, where they are functions
+        that do so, and the scene compiled for the device."""
+        if callable(scene):
+            self._status = ("reading the scene", None)
+            scene = scene()
+        if callable(backend):
+            self._status = ("opening the device", None)
+            backend = backend()
+        self.backend = backend
+        return self._open(scene)
+
     def _open(self, scene, renderer=None) -> Renderer:
-        """The scene compiled (saying so while its BVH builds, if that takes a while) and given
-        to `renderer` (or a new one), saying so while the kernels compile; the title then names
-        the scene the window shows (the one it had, if this fails)."""
-        try:
-            compiled = compile_scene(scene, self.backend.queue, self._build_progress(scene.name))
-            self.show_progress(f"compiling the kernels for {scene.name} on {self.backend.device.name}")
-            if renderer is None:
-                renderer = Renderer(self.backend, compiled)
-            else:
-                renderer.set_scene(compiled)
-        finally:
-            shown = scene if renderer is None else renderer.scene
-            self.glfw.set_window_title(self.window, f"pathtrace - {shown.name}")
+        """In the worker thread: the scene compiled (its BVH build's progress shown) and given to
+        `renderer` (or a new one), the kernels compiled for it (said while they are)."""
+        compiled = compile_scene(scene, self.backend.queue, self._build_progress(scene.name))
+        self._status = (f"compiling the kernels for {scene.name} on {self.backend.device.name}", None)
+        if renderer is None:
+            return Renderer(self.backend, compiled)
+        renderer.set_scene(compiled)
         return renderer
+
+    def _in_background(self, work, text: str) -> Renderer:
+        """work()'s renderer (or its exception), work called in a worker thread while this one keeps
+        the window live: it draws what the work says it is doing (self._status, starting at
+        `text`) with the seconds spent, and the title says it too. A window closed meanwhile is
+        hidden at once; the work cannot be stopped halfway (a driver's compiler), so the close
+        takes effect when it ends. The title then names the scene shown."""
+        outcome = {}
+
+        def call():
+            try:
+                outcome["value"] = work()
+            except BaseException as e:     # handed to the caller below, in this thread
+                outcome["error"] = e
+        self._status = (text, None)
+        worker = threading.Thread(target=call, name="open", daemon=True)
+        started = time.perf_counter()
+        worker.start()
+        try:
+            while worker.is_alive():
+                said, fraction = self._status
+                waited = time.perf_counter() - started
+                self.show_progress(said + (f" ({waited:.0f} s)" if waited >= 1 and fraction is None else ""),
+                                   fraction)
+                if self.glfw.window_should_close(self.window):
+                    self.glfw.hide_window(self.window)
+                worker.join(1 / FRAME_RATE)
+        finally:
+            worker.join()
+            shown = outcome.get("value") or getattr(self, "renderer", None)
+            if shown is not None:
+                self.glfw.set_window_title(self.window, f"pathtrace - {shown.scene.name}")
+        if "error" in outcome:
+            raise outcome["error"]
+        return outcome["value"]
 
     def load_scene(self, name: str):
         """Opens a scene, at its own size; whatever goes wrong is shown in the panel and
         printed, and the window keeps the scene it had. Call it between turns of the loop (the
         panel asks through requested_scene): it draws frames of its own as it goes."""
         try:
-            scene = load_scene(name)
-            self._open(scene, self.renderer)
+            scene = self._in_background(lambda: self._open(load_scene(name), self.renderer),
+                                        f"opening {name}").scene
             self.renderer.resize(scene.settings.width, scene.settings.height)
         except Exception as e:   # a viewer must outlive any bad file, ours or a library's error
             self.set_message(str(e) if isinstance(e, UserError) else
@@ -353,13 +409,10 @@ class Viewer:
         self.set_message(f"loaded {scene.name}")
 
     def _build_progress(self, name: str):
-        """A progress callback for a scene's BVH build: once it has taken PROGRESS_AFTER seconds,
-        the window says how far it is."""
-        started = time.perf_counter()
-
+        """A progress callback for a scene's BVH build, from the worker thread: the window, live
+        in its own thread, shows how far it is."""
         def show(fraction):
-            if time.perf_counter() - started >= PROGRESS_AFTER:
-                self.show_progress(f"building the BVH of {name}", fraction)
+            self._status = (f"building the BVH of {name}", fraction)
         return show
 
     def show_progress(self, text: str, fraction: float = None):
@@ -623,6 +676,9 @@ class Viewer:
         if self._denoiser is not None:
             self._denoiser.close()
         self.renderer.finish()
+        self._close_window()
+
+    def _close_window(self):
         self.glfw.make_context_current(self.window)
         self.imgui.set_current_context(self.imgui_context)
         self.gui.shutdown()
