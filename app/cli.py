@@ -484,6 +484,16 @@ def cmd_bench(args):
             bench.write_json(args.json, results, sys.argv[1:])
             print(f"wrote {args.json}", file=sys.stderr)
         return 0
+    if args.load or args.load_scene:
+        from pathtrace import load_bench
+        print(load_bench.LOAD_HEADER)
+        results = [r for device in args.device or ["auto"]
+                   for r in load_bench.run_load(device, args.load_scene or [], args.repeats, args.mitsuba,
+                                                args.mitsuba_variant)]
+        if args.json:
+            bench.write_json(args.json, results, sys.argv[1:])
+            print(f"wrote {args.json}", file=sys.stderr)
+        return 0
     if args.builds is not None:
         print(bench.BUILD_HEADER)
         results = bench.run_builds(args.device or ["auto"], args.builds or bench.BUILD_SIZES)
@@ -559,6 +569,19 @@ def build_parser():
                    help="time the viewer's copy of the image to the host each frame (default size 1280x720)")
     p.add_argument("--denoise", action="store_true",
                    help="time Open Image Denoise at each quality (default size 1280x720)")
+    p.add_argument("--load", action="store_true",
+                   help="time loading instead: seconds from 'pathtrace render FILE' to its first image "
+                        "(1 spp) for a 1M-triangle PLY file and for 850 PLY meshes in a pbrt-v4 file")
+    p.add_argument("--load-scene", action="append", metavar="FILE",
+                   help="with --load, also time this scene file (repeatable)")
+    p.add_argument("--repeats", type=_int_range(1, 100), default=3,
+                   help="with --load, the best of this many runs (default 3)")
+    p.add_argument("--mitsuba", metavar="PYTHON",
+                   help="with --load, also time Mitsuba 3 on the same scenes' XML, run by this Python "
+                        "(one with 'pip install mitsuba')")
+    p.add_argument("--mitsuba-variant", default="llvm_ad_rgb", metavar="VARIANT",
+                   help="Mitsuba's variant for --mitsuba (default llvm_ad_rgb; it needs LLVM, found "
+                        "through DRJIT_LIBLLVM_PATH)")
     p.add_argument("--quick", action="store_true", help="a smoke test: 320x180, 8 spp")
     p.add_argument("--json", metavar="FILE", help="also write the results as JSON")
     p.set_defaults(func=cmd_bench)

@@ -1,6 +1,7 @@
 """`pathtrace bench --quick`: the benchmark runs end to end and reports consistent figures."""
 
 import json
+import sys
 
 from tests.test_cli import pathtrace
 
@@ -58,3 +59,39 @@ def test_display_and_denoise_timings(tmp_path):
     assert steps[:2] == ["display: sums (default)", "display: half"]     # PoCL shares the host's memory
     assert [s for s in steps if s.startswith("denoise")] == ["denoise, high", "denoise, balanced", "denoise, fast"]
     assert all(row["milliseconds"] > 0 and (row["width"], row["height"]) == (64, 36) for row in rows)
+
+
+def test_load_bench_scenes_say_the_same_in_each_format(tmp_path):
+    """The load rows' scenes, as pathtrace's file and as the Mitsuba 3 XML timed against it,
+    are one scene: the same triangles, camera and film, and images equal to within noise."""
+    import numpy as np
+
+    from pathtrace import api
+    from pathtrace.load_bench import write_height_field, write_meshes
+    for ours, xml, what, size in (write_meshes(tmp_path, 6), write_height_field(tmp_path)):
+        a, b = api.load(tmp_path / ours), api.load(tmp_path / xml)
+        assert sum(len(m.faces) for m in a.meshes) == sum(len(m.faces) for m in b.meshes) == int(what.split()[3].replace(",", ""))
+        assert (a.settings.width, a.settings.height) == (b.settings.width, b.settings.height) == size
+        assert np.allclose(a.camera.eye, b.camera.eye) and abs(a.camera.vfov - b.camera.vfov) < 1e-4
+        if len(a.meshes) > 1:            # the height field's million triangles are for the timing
+            ia, ib = (api.render(s, device="cpu", spp=64, seed=int(s is b)) for s in (a, b))
+            assert abs(ia.mean() - ib.mean()) < 0.02 * ia.mean(), (ia.mean(), ib.mean())
+
+
+def test_load_bench_rows(tmp_path):
+    """`bench --load`: a row per generated scene and per --load-scene file, with pathtrace's
+    seconds; Mitsuba's column only when asked for, and a Python without Mitsuba is one line."""
+    scene = tmp_path / "one.toml"
+    scene.write_text('[[spheres]]\ncenter = [0, 0, -3]\nradius = 1\nmaterial = { type = "diffuse", rho_d = 0.5 }\n')
+    out = tmp_path / "load.json"
+    r = pathtrace("bench", "--load", "--repeats", "1", "--device", "cpu", "--load-scene", scene, "--json", out)
+    assert r.returncode == 0, r.stderr
+    rows = json.loads(out.read_text())["results"]
+    assert [row["scene"] for row in rows] == ["heightfield1M", "meshes850", "one"]
+    assert all(row["seconds"] > 0 and row["mitsuba_seconds"] is None and row["device"] == "cpu" for row in rows)
+    assert "pathtrace s" in r.stdout and "870,400 triangles" in r.stdout
+    r = pathtrace("bench", "--load-scene", tmp_path / "missing.toml", "--repeats", "1", "--device", "cpu")
+    assert r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1 and "missing.toml" in r.stderr
+    r = pathtrace("bench", "--load-scene", scene, "--repeats", "1", "--device", "cpu",
+                  "--mitsuba", sys.executable, "--mitsuba-variant", "scalar_rgb")
+    assert r.returncode == 1 and "No module named 'mitsuba'" in r.stderr, r.stderr

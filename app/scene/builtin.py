@@ -65,6 +65,18 @@ def height_field(triangles: int) -> Scene:
     scaling scene for meshes (the same field as Mitsuba's side-by-side timing of a 1M-triangle
     mesh)."""
     from pathtrace.scene.description import Mesh, diffuse
+    v, f = height_field_mesh(triangles)
+    builder = SceneBuilder()
+    builder.add_mesh(Mesh("height field", v, f, None, builder.material(diffuse(0.6))))
+    builder.add_sphere((0.3, 0.35, 0.2), 0.25, diffuse((0.8, 0.3, 0.2)), "ball")
+    return builder.build(f"heightfield{count_name(triangles)}", camera=Camera([0, 1.6, 2.4], [0, 0, 0], [0, 1, 0], 45.0),
+                         environment=Environment.constant((0.8, 0.85, 1.0)),
+                         settings=RenderSettings(width=1920, height=1080, spp=64))
+
+
+def height_field_mesh(triangles: int):
+    """The vertices (float32) and triangles (int32, counter-clockwise seen from +y) of a bumpy
+    height field over [-1, 1]^2 of about `triangles` triangles."""
     n = max(int(np.sqrt(triangles / 2)), 1)
     x, z = np.meshgrid(np.linspace(-1, 1, n + 1), np.linspace(-1, 1, n + 1))
     y = 0.08 * np.sin(9 * x) * np.cos(7 * z)
@@ -72,12 +84,7 @@ def height_field(triangles: int) -> Scene:
     i = np.arange(n)[:, None] * (n + 1) + np.arange(n)[None, :]
     a, b, c, d = i, i + 1, i + n + 1, i + n + 2
     f = np.concatenate([np.stack([a, c, b], -1).reshape(-1, 3), np.stack([b, c, d], -1).reshape(-1, 3)])
-    builder = SceneBuilder()
-    builder.add_mesh(Mesh("height field", v, f.astype(np.int32), None, builder.material(diffuse(0.6))))
-    builder.add_sphere((0.3, 0.35, 0.2), 0.25, diffuse((0.8, 0.3, 0.2)), "ball")
-    return builder.build(f"heightfield{count_name(triangles)}", camera=Camera([0, 1.6, 2.4], [0, 0, 0], [0, 1, 0], 45.0),
-                         environment=Environment.constant((0.8, 0.85, 1.0)),
-                         settings=RenderSettings(width=1920, height=1080, spp=64))
+    return v, f.astype(np.int32)
 
 
 def count_name(n: int) -> str:
