@@ -46,7 +46,7 @@ class Result:
     msamples_per_s: float
     mrays_per_s: float
     bvh_seconds: float
-    build_cold_seconds: float
+    build_cold_seconds: float       # None where not measured (bench --no-cold)
     build_warm_seconds: float
 
 
@@ -83,21 +83,23 @@ def measure(backends, scene, estimator, width, height, spp, builds) -> Result:
                   group.bvh_seconds, *builds)
 
 
-def kernel_build_times(backend):
-    cold = build_program(backend.context, backend.device.device, use_cache=False).seconds
+def kernel_build_times(backend, cold: bool = True):
+    """Seconds to build the kernels without our binary cache (None unless `cold`: on NVIDIA's
+    OpenCL that build tunes register caps, app/occupancy.py, a minute on the H100) and from it."""
+    cold = build_program(backend.context, backend.device.device, use_cache=False).seconds if cold else None
     build_program(backend.context, backend.device.device)          # fills the cache if empty
     warm = build_program(backend.context, backend.device.device).seconds
     return cold, warm
 
 
-def run(device_specs, scene_names, estimators, width, height, spp, together=False, log=print):
+def run(device_specs, scene_names, estimators, width, height, spp, together=False, cold=True, log=print):
     """A row per device and scene, or with `together` a row per scene for all the devices
     rendering it as one (the multi-device scaling measurement)."""
     backends = choose_devices(device_specs)
     groups = [backends] if together else [[b] for b in backends]
     results = []
     for group in groups:
-        builds = kernel_build_times(group[0])
+        builds = kernel_build_times(group[0], cold)
         for name in scene_names:
             scene = load_scene(name)
             for est in estimators or [default_estimator(name)]:
@@ -230,7 +232,8 @@ HEADER = (f"{'scene':<20} {'device':<44} {'est.':<10} {'size':>9} {'spp':>5} {'s
 def format_row(r: Result) -> str:
     return (f"{r.scene:<20} {r.device[:44]:<44} {r.estimator:<10} {f'{r.width}x{r.height}':>9} "
             f"{r.spp:>5} {r.seconds:>8.3f} {r.msamples_per_s:>10.1f} {r.mrays_per_s:>8.1f} "
-            f"{r.bvh_seconds:>6.3f} {r.build_cold_seconds:>8.2f}/{r.build_warm_seconds:<8.3f}")
+            f"{r.bvh_seconds:>6.3f} {'-' if r.build_cold_seconds is None else f'{r.build_cold_seconds:.2f}':>8}"
+            f"/{r.build_warm_seconds:<8.3f}")
 
 
 def write_json(path, results, argv):

@@ -504,7 +504,7 @@ def cmd_bench(args):
     width, height = args.size
     print(bench.HEADER)
     results = bench.run(args.device or ["auto"], args.scenes, args.estimator, width, height, args.spp,
-                        args.together)
+                        args.together, not args.no_cold)
     if args.json:
         bench.write_json(args.json, results, sys.argv[1:])
         print(f"wrote {args.json}", file=sys.stderr)
@@ -569,6 +569,9 @@ def build_parser():
                    help="time the viewer's copy of the image to the host each frame (default size 1280x720)")
     p.add_argument("--denoise", action="store_true",
                    help="time Open Image Denoise at each quality (default size 1280x720)")
+    p.add_argument("--no-cold", action="store_true",
+                   help="skip timing the kernels' build without the cache (on NVIDIA's OpenCL it tunes "
+                        "register caps, about a minute)")
     p.add_argument("--load", action="store_true",
                    help="time loading instead: seconds from 'pathtrace render FILE' to its first image "
                         "(1 spp) for a 1M-triangle PLY file and for 850 PLY meshes in a pbrt-v4 file")

@@ -95,3 +95,12 @@ def test_load_bench_rows(tmp_path):
     r = pathtrace("bench", "--load-scene", scene, "--repeats", "1", "--device", "cpu",
                   "--mitsuba", sys.executable, "--mitsuba-variant", "scalar_rgb")
     assert r.returncode == 1 and "No module named 'mitsuba'" in r.stderr, r.stderr
+
+
+def test_bench_without_the_cold_build(tmp_path):
+    out = tmp_path / "bench.json"
+    r = pathtrace("bench", "--quick", "--device", "cpu", "--scenes", "simple", "--no-cold", "--json", out)
+    assert r.returncode == 0, r.stderr
+    row, = json.loads(out.read_text())["results"]
+    assert row["build_cold_seconds"] is None and row["build_warm_seconds"] >= 0 and row["seconds"] > 0
+    assert " -/" in r.stdout
