@@ -7,6 +7,14 @@ and warm (from the binary cache). A one-sample warm-up launch runs first,
 outside the timed region, because some drivers (PoCL among them) finish compiling a kernel at
 its first launch; it renders the scene itself, so that the kernels specialised to it are built.
 
+With `--mitsuba PYTHON`, each row of the comparison mode with NEE (depth8+nee: max depth 8, no
+Russian roulette, as Mitsuba's `path` with rr_depth beyond 8) is rendered by Mitsuba 3 too, in a
+process of that Python (pathtrace.mitsuba_timing), from the scene's own XML file or from its twin
+written by pathtrace.scene.mitsuba_writer: the same view, size, samples and depth, its render
+alone timed, beside pathtrace's render alone (the launches and the read-back, without the BVH
+build and uploads): the per-sample ratio of docs/benchmarks.md. Scenes that are files written
+on demand (pathtrace.bench_scenes: `tori400-textured`) are named like built-in ones.
+
 `pathtrace bench --builds` times BVH builds instead (app/bvh.py, on each device asked for): random
 spheres and a height field of triangles at 64k, 1M and 4M primitives, the median of three builds
 each, with the tree's SAH cost. `--display` times the viewer's way from the device's image to
@@ -16,9 +24,12 @@ the host (docs/performance.md), and `--denoise` Open Image Denoise at each quali
 import datetime
 import json
 import platform
+import shutil
 import sys
+import tempfile
 import time
 from dataclasses import asdict, dataclass
+from pathlib import Path
 
 from pathtrace.device import build_program, choose_devices
 from pathtrace.errors import UserError
@@ -29,6 +40,7 @@ from pathtrace.scene import load_scene
 TARGET_SCENES = ("simple", "spheres8k", "spheres64k",
                  "simple-diffuse", "spheres8k-diffuse", "spheres64k-diffuse", "teapot-sky",
                  "teapot-textured")
+GENERATED_FILES = ("tori400-textured",)      # pathtrace.bench_scenes
 COMPARISON_DEPTH = 8
 ESTIMATORS = ("rr", "depth8", "rr+nee", "depth8+nee")
 
@@ -48,14 +60,19 @@ class Result:
     bvh_seconds: float
     build_cold_seconds: float       # None where not measured (bench --no-cold)
     build_warm_seconds: float
+    render_seconds: float = 0.0     # of `seconds`, the launches and reading the image back
+    mean: float = 0.0               # the image's mean radiance
+    mitsuba_variant: str = ""       # with --mitsuba: Mitsuba 3's render of the same scene
+    mitsuba_seconds: float = None
+    mitsuba_mean: float = None
 
 
-def default_estimator(scene_name: str) -> str:
+def default_estimator(scene) -> str:
     """The report's estimator on the report's scenes, the comparison mode on -diffuse ones, and
     the comparison mode with NEE on mesh scenes (as Mitsuba's side-by-side timing of them)."""
-    if scene_name.startswith(("teapot", "heightfield")):
+    if scene.meshes:
         return "depth8+nee"
-    return "depth8" if scene_name.endswith("-diffuse") else "rr"
+    return "depth8" if scene.name.endswith("-diffuse") else "rr"
 
 
 def measure(backends, scene, estimator, width, height, spp, builds) -> Result:
@@ -71,8 +88,9 @@ def measure(backends, scene, estimator, width, height, spp, builds) -> Result:
         backend.queue.finish()
     start = time.perf_counter()
     group = DeviceGroup(backends, scene, width, height)
+    rendering = time.perf_counter()
     group.render(spp, launch_seconds=0.5)
-    group.mean()
+    image = group.mean()
     seconds = time.perf_counter() - start
     rays = group.rays_traced()
     names = [b.device.describe() for b in backends]
@@ -80,7 +98,7 @@ def measure(backends, scene, estimator, width, height, spp, builds) -> Result:
         else " + ".join(names)
     return Result(scene.name, device, estimator, width, height, spp, seconds,
                   width * height * spp / seconds / 1e6, rays / seconds / 1e6,
-                  group.bvh_seconds, *builds)
+                  group.bvh_seconds, *builds, render_seconds=start + seconds - rendering, mean=float(image.mean()))
 
 
 def kernel_build_times(backend, cold: bool = True):
@@ -92,21 +110,65 @@ def kernel_build_times(backend, cold: bool = True):
     return cold, warm
 
 
-def run(device_specs, scene_names, estimators, width, height, spp, together=False, cold=True, log=print):
+def run(device_specs, scene_names, estimators, width, height, spp, together=False, cold=True,
+        mitsuba: tuple = None, log=print):
     """A row per device and scene, or with `together` a row per scene for all the devices
-    rendering it as one (the multi-device scaling measurement)."""
+    rendering it as one (the multi-device scaling measurement). mitsuba: (python, variant) to
+    time Mitsuba 3 on the rows of the comparison mode with NEE (depth8+nee)."""
     backends = choose_devices(device_specs)
     groups = [backends] if together else [[b] for b in backends]
     results = []
-    for group in groups:
-        builds = kernel_build_times(group[0], cold)
-        for name in scene_names:
-            scene = load_scene(name)
-            for est in estimators or [default_estimator(name)]:
-                r = measure(group, scene, est, width, height, spp, builds)
-                log(format_row(r))
-                results.append(r)
+    folder = Path(tempfile.mkdtemp(prefix="pathtrace-bench-"))
+    try:
+        scenes = [scene_file(name, folder) for name in scene_names]
+        for group in groups:
+            builds = kernel_build_times(group[0], cold)
+            for name in scenes:
+                scene = load_scene(name)
+                for est in estimators or [default_estimator(scene)]:
+                    r = measure(group, scene, est, width, height, spp, builds)
+                    log(format_row(r))
+                    if mitsuba and est == "depth8+nee":
+                        time_mitsuba(r, scene, mitsuba, folder)
+                        log(format_mitsuba(r))
+                    results.append(r)
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
     return results
+
+
+def scene_file(name: str, folder: Path) -> str:
+    """A scene name as load_scene takes it: one of GENERATED_FILES written into `folder`."""
+    if name not in GENERATED_FILES:
+        return name
+    from pathtrace.bench_scenes import write_textured_tori
+    where = folder / name
+    where.mkdir(exist_ok=True)
+    return str(write_textured_tori(where))
+
+
+def time_mitsuba(r: Result, scene, mitsuba: tuple, folder: Path):
+    """Mitsuba 3's render of the row's scene (its XML file, or the twin written for it), into r."""
+    from pathtrace.mitsuba_timing import mitsuba_render
+    from pathtrace.scene.mitsuba_writer import write_mitsuba
+    python, variant = mitsuba
+    source = str(scene.source or "")
+    if source.lower().endswith(".xml"):
+        xml = source
+    else:
+        twin = folder / f"{scene.name}-twin"
+        twin.mkdir(exist_ok=True)
+        xml = write_mitsuba(scene.with_settings(width=r.width, height=r.height, spp=r.spp,
+                                                max_depth=COMPARISON_DEPTH), twin / f"{scene.name}.xml")
+    r.mitsuba_variant = variant
+    r.mitsuba_seconds, r.mitsuba_mean = mitsuba_render(python, variant, xml, scene.camera, r.width, r.height,
+                                                       r.spp, COMPARISON_DEPTH)
+
+
+def format_mitsuba(r: Result) -> str:
+    return (f"{'':<20} Mitsuba 3 {r.mitsuba_variant}: {r.mitsuba_seconds:.3f} s to render; pathtrace "
+            f"{r.render_seconds:.3f} s: {r.mitsuba_seconds / r.render_seconds:.2f}x per sample "
+            f"(image means {r.mean:.4f} and {r.mitsuba_mean:.4f})")
 
 
 BUILD_SIZES = (64_000, 1_000_000, 4_000_000)
@@ -254,7 +316,8 @@ def validate(args):
     args.size = args.size or (1920, 1080)
     args.spp = args.spp or 1000
     for name in args.scenes:
-        load_scene(name)     # fail on a bad name before any device work
+        if name not in GENERATED_FILES:
+            load_scene(name)     # fail on a bad name before any device work
     unknown = set(args.estimator or []) - set(ESTIMATORS)
     if unknown:
         raise UserError(f"--estimator: unknown '{sorted(unknown)[0]}' (use {', '.join(ESTIMATORS)})")

@@ -504,7 +504,8 @@ def cmd_bench(args):
     width, height = args.size
     print(bench.HEADER)
     results = bench.run(args.device or ["auto"], args.scenes, args.estimator, width, height, args.spp,
-                        args.together, not args.no_cold)
+                        args.together, not args.no_cold,
+                        (args.mitsuba, args.mitsuba_variant) if args.mitsuba else None)
     if args.json:
         bench.write_json(args.json, results, sys.argv[1:])
         print(f"wrote {args.json}", file=sys.stderr)
@@ -580,8 +581,9 @@ def build_parser():
     p.add_argument("--repeats", type=_int_range(1, 100), default=3,
                    help="with --load, the best of this many runs (default 3)")
     p.add_argument("--mitsuba", metavar="PYTHON",
-                   help="with --load, also time Mitsuba 3 on the same scenes' XML, run by this Python "
-                        "(one with 'pip install mitsuba')")
+                   help="also time Mitsuba 3 on the same scenes (their XML, or a twin written for "
+                        "them), run by this Python (one with 'pip install mitsuba'): the depth8+nee rows, "
+                        "or with --load every row")
     p.add_argument("--mitsuba-variant", default="llvm_ad_rgb", metavar="VARIANT",
                    help="Mitsuba's variant for --mitsuba (default llvm_ad_rgb; it needs LLVM, found "
                         "through DRJIT_LIBLLVM_PATH)")

@@ -104,3 +104,13 @@ def test_bench_without_the_cold_build(tmp_path):
     row, = json.loads(out.read_text())["results"]
     assert row["build_cold_seconds"] is None and row["build_warm_seconds"] >= 0 and row["seconds"] > 0
     assert " -/" in r.stdout
+
+
+def test_bench_renders_the_generated_textured_scene_and_asks_mitsuba(tmp_path):
+    """`tori400-textured` is written on demand and rendered; --mitsuba then runs the Python
+    given, whose failure (here: no Mitsuba) is one line after pathtrace's row."""
+    r = pathtrace("bench", "--device", "cpu", "--no-cold", "--scenes", "tori400-textured", "--size", "32x18",
+                  "--spp", "1", "--mitsuba", sys.executable)
+    assert r.returncode == 1, r.stderr
+    assert "tori400-textured" in r.stdout and "depth8+nee" in r.stdout
+    assert len(r.stderr.strip().splitlines()) == 1 and "No module named" in r.stderr

@@ -1,0 +1,121 @@
+"""The benchmark scenes that are files: written on demand into a folder, each as pathtrace reads
+it and as Mitsuba 3 XML, so that both renderers time the same work (`pathtrace bench --load`,
+and `pathtrace bench --scenes tori400-textured`).
+
+- `heightfield1M`: one binary PLY file of 1,000,000 triangles (the height field of
+  `pathtrace bench --builds`) with a sphere, in a TOML scene;
+- `meshes850`: 850 binary PLY files of tori (1,024 triangles each, with vertex normals) on a
+  grid, in a pbrt-v4 scene (the layout of published scenes of many meshes);
+- `tori400-textured`: 400 tori with uvs, each with its own 256x256 bitmap texture (a PNG file),
+  on a textured ground, under a sky and a sphere lamp, in Mitsuba XML (which pathtrace reads too):
+  the "several hundred textured meshes" row of the mesh benchmarks."""
+
+from pathlib import Path
+
+import numpy as np
+
+from pathtrace.scene.mitsuba_writer import ply_bytes
+
+def torus(nu=32, nv=16, r0=1.0, r1=0.35):
+    """A torus of 2 nu nv triangles, counter-clockwise seen from outside: its points, normals,
+    uvs (u around the ring, v around the tube; the seams' vertices doubled so that uvs do not
+    wrap inside a triangle) and triangles."""
+    U, V = np.meshgrid(np.linspace(0, 2 * np.pi, nu + 1), np.linspace(0, 2 * np.pi, nv + 1), indexing="ij")
+    centre = np.stack([np.cos(U), np.zeros_like(U), np.sin(U)], -1)
+    normal = np.stack([np.cos(U) * np.cos(V), np.sin(V), np.sin(U) * np.cos(V)], -1)
+    points = (r0 * centre + r1 * normal).reshape(-1, 3)
+    uvs = np.stack([U / (2 * np.pi), V / (2 * np.pi)], -1).reshape(-1, 2)
+    i, j = np.meshgrid(np.arange(nu), np.arange(nv), indexing="ij")
+    a, b = i * (nv + 1) + j, (i + 1) * (nv + 1) + j
+    faces = np.concatenate([np.stack([a, a + 1, b], -1).reshape(-1, 3), np.stack([b, a + 1, b + 1], -1).reshape(-1, 3)])
+    return points, normal.reshape(-1, 3), uvs, faces
+
+
+def xml_scene(size, origin, target, fov, shapes, sky) -> str:
+    """A Mitsuba 3 scene: a path tracer, a perspective camera, a constant sky and `shapes`."""
+    return "\n".join([
+        '<scene version="3.0.0">', '<integrator type="path"><integer name="max_depth" value="5"/></integrator>',
+        f'<sensor type="perspective"><float name="fov" value="{fov}"/><string name="fov_axis" value="y"/>'
+        f'<transform name="to_world"><lookat origin="{", ".join(map(str, origin))}" '
+        f'target="{", ".join(map(str, target))}" up="0, 1, 0"/></transform>'
+        '<sampler type="independent"><integer name="sample_count" value="1"/></sampler>'
+        f'<film type="hdrfilm"><integer name="width" value="{size[0]}"/><integer name="height" value="{size[1]}"/>'
+        '</film></sensor>', f'<emitter type="constant"><rgb name="radiance" value="{sky}"/></emitter>',
+        *shapes, "</scene>", ""])
+
+
+def write_height_field(folder: Path) -> tuple:
+    from pathtrace.scene.builtin import height_field_mesh
+    points, faces = height_field_mesh(1_000_000)
+    (folder / "field.ply").write_bytes(ply_bytes(points, faces))
+    (folder / "heightfield1M.toml").write_text("\n".join([
+        "[camera]", "eye = [0, 1.6, 2.4]", "look_at = [0, 0, 0]", "vfov = 45", "",
+        "[environment]", "color = [0.8, 0.85, 1.0]", "", "[render]", "width = 64", "height = 36", "",
+        "[[meshes]]", 'name = "height field"', 'file = "field.ply"', 'material = { type = "diffuse", rho_d = 0.6 }',
+        "", "[[spheres]]", 'name = "ball"', "center = [0.3, 0.35, 0.2]", "radius = 0.25",
+        'material = { type = "diffuse", rho_d = [0.8, 0.3, 0.2] }', ""]))
+    shapes = ['<shape type="ply"><string name="filename" value="field.ply"/>'
+              '<bsdf type="diffuse"><rgb name="reflectance" value="0.6"/></bsdf></shape>',
+              '<shape type="sphere"><point name="center" x="0.3" y="0.35" z="0.2"/><float name="radius" value="0.25"/>'
+              '<bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.3, 0.2"/></bsdf></shape>']
+    (folder / "heightfield1M.xml").write_text(xml_scene((64, 36), (0, 1.6, 2.4), (0, 0, 0), 45, shapes, "0.8, 0.85, 1.0"))
+    return "heightfield1M.toml", "heightfield1M.xml", f"1 PLY file, {len(faces):,} triangles", (64, 36)
+
+
+def write_meshes(folder: Path, count: int = 850) -> tuple:
+    points, normals, _, faces = torus()
+    side = int(np.ceil(np.sqrt(count)))
+    for k in range(count):
+        (folder / f"m{k:04d}.ply").write_bytes(ply_bytes(points + [k % side * 2.5, 0, k // side * 2.5], faces, normals))
+    middle = side * 1.25
+    eye, target = (middle, side * 1.2, -side * 0.6), (middle, 0, middle)
+    pbrt = ['Integrator "path" "integer maxdepth" [ 4 ]', 'Sampler "independent" "integer pixelsamples" 1',
+            'Film "rgb" "integer xresolution" 64 "integer yresolution" 64', "Scale -1 1 1",
+            f"LookAt {' '.join(map(str, eye))}  {' '.join(map(str, target))}  0 1 0",
+            'Camera "perspective" "float fov" 60', "WorldBegin", 'LightSource "infinite" "rgb L" [ 1 1 1 ]',
+            'Material "diffuse" "rgb reflectance" [ 0.5 0.5 0.5 ]']
+    pbrt += [f'Shape "plymesh" "string filename" "m{k:04d}.ply"' for k in range(count)]
+    (folder / f"meshes{count}.pbrt").write_text("\n".join(pbrt) + "\n")
+    shapes = [f'<shape type="ply"><string name="filename" value="m{k:04d}.ply"/>'
+              '<bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></shape>' for k in range(count)]
+    (folder / f"meshes{count}.xml").write_text(xml_scene((64, 64), eye, target, 60, shapes, "1"))
+    return f"meshes{count}.pbrt", f"meshes{count}.xml", f"{count} PLY files, {count * len(faces):,} triangles", (64, 64)
+
+
+
+
+def write_textured_tori(folder: Path, count: int = 400) -> Path:
+    """`tori400-textured` (the module's docstring) in `folder`: its XML file."""
+    from PIL import Image
+    points, normals, uvs, faces = torus()
+    side = int(np.ceil(np.sqrt(count)))
+    rng = np.random.default_rng(400)
+    y, x = np.mgrid[0:256, 0:256] / 256
+    shapes = []
+    for k in range(count):
+        # each its own image: stripes and rings in two colours of its own
+        a, b = rng.uniform(0.1, 0.9, (2, 3))
+        f = rng.uniform(2, 12, 2)
+        mix = (0.5 + 0.5 * np.sin(2 * np.pi * (f[0] * x + 0.5 * np.sin(2 * np.pi * f[1] * y))))[..., None]
+        Image.fromarray(np.uint8(255 * (a * mix + b * (1 - mix)))).save(folder / f"t{k:04d}.png")
+        (folder / f"torus{k:04d}.ply").write_bytes(ply_bytes(points + [k % side * 2.5, 0.35, k // side * 2.5],
+                                                             faces, normals, uvs))
+        shapes.append(f'<shape type="ply"><string name="filename" value="torus{k:04d}.ply"/><bsdf type="diffuse">'
+                      f'<texture type="bitmap" name="reflectance"><string name="filename" value="t{k:04d}.png"/>'
+                      '</texture></bsdf></shape>')
+    check = np.where((np.floor(x * 8) + np.floor(y * 8)) % 2 == 0, 200, 60).astype(np.uint8)
+    Image.fromarray(check).save(folder / "ground.png")
+    extent = side * 2.5 + 2
+    shapes.append(f'<shape type="rectangle"><transform name="to_world"><rotate x="1" angle="-90"/>'
+                  f'<scale value="{extent / 2}"/><translate x="{side * 1.25 - 1.25}" z="{side * 1.25 - 1.25}"/>'
+                  '</transform><bsdf type="diffuse"><texture type="bitmap" name="reflectance">'
+                  '<string name="filename" value="ground.png"/><transform name="to_uv"><scale value="8"/></transform>'
+                  '</texture></bsdf></shape>')
+    shapes.append(f'<shape type="sphere"><point name="center" x="{side * 0.3}" y="{side * 1.2}" z="{-side * 0.6}"/>'
+                  f'<float name="radius" value="{side * 0.1}"/><emitter type="area"><rgb name="radiance" value="30"/>'
+                  '</emitter></shape>')
+    middle = side * 1.25
+    path = folder / f"tori{count}-textured.xml"
+    path.write_text(xml_scene((1920, 1080), (middle, side * 0.6, -side * 0.3), (middle, 0, middle * 0.8), 50,
+                              shapes, "0.5, 0.6, 0.8"))
+    return path

@@ -1,0 +1,77 @@
+"""Mitsuba 3 timed beside pathtrace, in a fresh process of a Python that has it (`pathtrace bench
+--mitsuba PYTHON`): pathtrace does not depend on Mitsuba, and a process of its own keeps Dr.Jit's
+threads and GPU context out of ours. Two measurements:
+
+- load: `mitsuba.load_file` and a 1-spp render of an XML file, timed from process start to exit;
+- render: the scene loaded, its camera replaced by pathtrace's view of it (eye, target, up,
+  vertical fov, the film's size, a box filter) and its integrator by `path` at the row's max
+  depth without Russian roulette (rr_depth beyond it, as pathtrace's comparison mode), one untimed 1-spp render (Dr.Jit compiles its kernels then), then one render of all the
+  samples, timed to the end of its evaluation. The image's mean comes back with the seconds, so
+  that a twin that differs from pathtrace's scene shows."""
+
+import json
+import subprocess
+import time
+
+from pathtrace.errors import UserError
+
+LOAD = """
+import sys, mitsuba as mi
+mi.set_variant(sys.argv[2])
+mi.Bitmap(mi.render(mi.load_file(sys.argv[1]), spp=1)).write(sys.argv[3])
+"""
+RENDER = """
+import json, sys, time
+import drjit as dr, mitsuba as mi, numpy as np
+a = json.loads(sys.argv[1])
+mi.set_variant(a["variant"])
+scene = mi.load_file(a["xml"])
+sensor = mi.load_dict({
+    "type": "perspective", "fov": a["vfov"], "fov_axis": "y",
+    "to_world": mi.ScalarTransform4f().look_at(origin=a["eye"], target=a["target"], up=a["up"]),
+    "film": {"type": "hdrfilm", "width": a["width"], "height": a["height"], "rfilter": {"type": "box"},
+             "pixel_format": "rgb"},
+    "sampler": {"type": "independent", "sample_count": 1}})
+integrator = mi.load_dict({"type": "path", "max_depth": a["max_depth"], "rr_depth": a["max_depth"] + 1})
+image = mi.render(scene, sensor=sensor, integrator=integrator, spp=1)
+dr.eval(image); dr.sync_thread()
+start = time.perf_counter()
+image = mi.render(scene, sensor=sensor, integrator=integrator, spp=a["spp"], seed=1)
+dr.eval(image); dr.sync_thread()
+seconds = time.perf_counter() - start
+print(json.dumps({"seconds": seconds, "mean": float(np.mean(np.array(image)[..., :3]))}))
+"""
+
+
+def best_time(command, repeats: int, cwd) -> float:
+    """The shortest of `repeats` runs of `command`, from process start to exit; a failure is one
+    line naming the command and its last line of output."""
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        r = subprocess.run(command, cwd=cwd, capture_output=True, text=True)
+        times.append(time.perf_counter() - start)
+        if r.returncode:
+            raise UserError(f"bench: {' '.join(map(str, command[:6]))} ... failed: {_last_line(r)}")
+    return min(times)
+
+
+def _last_line(r) -> str:
+    return (r.stderr.strip().splitlines() or r.stdout.strip().splitlines() or ["(no output)"])[-1]
+
+
+def mitsuba_load_command(python: str, variant: str, xml, out) -> list:
+    return [python, "-c", LOAD, str(xml), variant, str(out)]
+
+
+def mitsuba_render(python: str, variant: str, xml, camera, width: int, height: int, spp: int,
+                   max_depth: int) -> tuple[float, float]:
+    """Mitsuba's seconds to render `xml` as described above, and its image's mean."""
+    args = dict(variant=variant, xml=str(xml), width=width, height=height, spp=spp, max_depth=max_depth,
+                eye=[float(x) for x in camera.eye], target=[float(x) for x in camera.look_at],
+                up=[float(x) for x in camera.up], vfov=float(camera.vfov))
+    r = subprocess.run([python, "-c", RENDER, json.dumps(args)], capture_output=True, text=True)
+    if r.returncode:
+        raise UserError(f"bench --mitsuba: Mitsuba 3 ({python}, {variant}) failed on {xml}: {_last_line(r)}")
+    result = json.loads(r.stdout.strip().splitlines()[-1])
+    return result["seconds"], result["mean"]

@@ -1,0 +1,91 @@
+"""A scene written as Mitsuba 3 XML: the twin that `pathtrace bench --mitsuba` has Mitsuba render,
+so that both renderers time the same work. The subset is what the benchmark scenes hold:
+spheres and triangle meshes (written beside the XML as binary PLY files, with their normals and
+uvs), diffuse and black materials (two-sided where pathtrace's are), area emitters, a constant
+environment, a perspective pinhole camera with a box filter, and the path integrator at the
+scene's max depth. Anything else (other BSDFs, textures, maps, lights, lenses, media, instances)
+is refused in one line: a twin that differed would time other work."""
+
+from pathlib import Path
+
+import numpy as np
+
+from pathtrace.errors import UserError
+from pathtrace.scene.description import Scene
+
+
+def ply_bytes(points, faces, normals=None, uvs=None) -> bytes:
+    """A binary little-endian PLY file of float32 vertices (with normals, with uvs as u, v) and
+    int32 triangles, as exporters write them."""
+    names = ["x", "y", "z"] + (["nx", "ny", "nz"] if normals is not None else []) + (["u", "v"] if uvs is not None else [])
+    header = ["ply", "format binary_little_endian 1.0", f"element vertex {len(points)}"]
+    header += [f"property float {n}" for n in names]
+    header += [f"element face {len(faces)}", "property list uchar int vertex_indices", "end_header"]
+    columns = [c for c in (points, normals, uvs) if c is not None]
+    records = np.zeros(len(faces), dtype=[("n", "u1"), ("i", "<i4", 3)])
+    records["n"], records["i"] = 3, faces
+    return ("\n".join(header) + "\n").encode() + np.concatenate(columns, 1).astype("<f4").tobytes() + records.tobytes()
+
+
+def _rgb(value) -> str:
+    return ", ".join(f"{float(x):.9g}" for x in np.broadcast_to(np.asarray(value, np.float64), 3))
+
+
+def _vector(value) -> str:
+    return ", ".join(f"{float(x):.9g}" for x in value)
+
+
+def _material(scene: Scene, row: int) -> str:
+    """The BSDF and area emitter of a shape of material `row`."""
+    m = scene.materials.get(row)
+    name = scene.materials.name_of(row) or f"#{row}"
+    if m.type not in ("diffuse", "black") or any(not isinstance(v, (int, float, np.ndarray, np.number))
+                                                 for v in m.params.values()):
+        raise UserError(f"{scene.source or scene.name}: material {name}: only diffuse and black materials "
+                        f"without textures are written as Mitsuba XML ({m.type})")
+    reflectance = m.params["rho_d"] if m.type == "diffuse" else 0.0
+    bsdf = f'<bsdf type="diffuse"><rgb name="reflectance" value="{_rgb(reflectance)}"/></bsdf>'
+    if m.twosided:
+        bsdf = f'<bsdf type="twosided">{bsdf}</bsdf>'
+    if np.any(m.emission > 0):
+        bsdf += f'<emitter type="area"><rgb name="radiance" value="{_rgb(m.emission)}"/></emitter>'
+    return bsdf
+
+
+def write_mitsuba(scene: Scene, path: Path) -> Path:
+    """Writes `scene` as Mitsuba 3 XML at `path`, its meshes as PLY files beside it; returns path."""
+    path = Path(path)
+    where = scene.source or scene.name
+    cam = scene.camera
+    if cam.projection != "perspective" or cam.aperture > 0 or cam.mirrored:
+        raise UserError(f"{where}: only pinhole perspective cameras (right-handed) are written as Mitsuba XML")
+    env = scene.environment
+    if env.image.shape[:2] != (1, 1):
+        raise UserError(f"{where}: environment maps are not written as Mitsuba XML")
+    if scene.lights or scene.instances is not None or scene.media:
+        raise UserError(f"{where}: lights other than emitting shapes, instances and media are not "
+                        f"written as Mitsuba XML")
+    s = scene.settings
+    lines = ['<scene version="3.0.0">',
+             f'<integrator type="path"><integer name="max_depth" value="{s.max_depth if s.max_depth else -1}"/>'
+             '</integrator>',
+             f'<sensor type="perspective"><float name="fov" value="{float(cam.vfov):.9g}"/>'
+             '<string name="fov_axis" value="y"/><transform name="to_world">'
+             f'<lookat origin="{_vector(cam.eye)}" target="{_vector(cam.look_at)}" up="{_vector(cam.up)}"/></transform>'
+             f'<sampler type="independent"><integer name="sample_count" value="{s.spp}"/></sampler>'
+             f'<film type="hdrfilm"><integer name="width" value="{s.width}"/><integer name="height" value="{s.height}"/>'
+             '<rfilter type="box"/><string name="pixel_format" value="rgb"/></film></sensor>']
+    radiance = env.image[0, 0, :3] * env.intensity
+    if np.any(radiance > 0):
+        lines.append(f'<emitter type="constant"><rgb name="radiance" value="{_rgb(radiance)}"/></emitter>')
+    lines += [f'<shape type="sphere"><point name="center" value="{_vector(c[:3])}"/>'
+              f'<float name="radius" value="{float(c[3]):.9g}"/>{_material(scene, int(m))}</shape>'
+              for c, m in zip(scene.spheres, scene.sphere_material)]
+    for i, mesh in enumerate(scene.meshes):
+        ply = path.with_name(f"{path.stem}-mesh{i}.ply")
+        ply.write_bytes(ply_bytes(mesh.vertices, mesh.faces, mesh.normals, mesh.uvs))
+        flat = "" if mesh.normals is not None else '<boolean name="face_normals" value="true"/>'
+        lines.append(f'<shape type="ply"><string name="filename" value="{ply.name}"/>{flat}'
+                     f'{_material(scene, mesh.material)}</shape>')
+    path.write_text("\n".join(lines + ["</scene>", ""]))
+    return path
