@@ -5,9 +5,11 @@ threads and GPU context out of ours. Two measurements:
 - load: `mitsuba.load_file` and a 1-spp render of an XML file, timed from process start to exit;
 - render: the scene loaded, its camera replaced by pathtrace's view of it (eye, target, up,
   vertical fov, the film's size, a box filter) and its integrator by `path` at the row's max
-  depth without Russian roulette (rr_depth beyond it, as pathtrace's comparison mode), one untimed 1-spp render (Dr.Jit compiles its kernels then), then one render of all the
-  samples, timed to the end of its evaluation. The image's mean comes back with the seconds, so
-  that a twin that differs from pathtrace's scene shows."""
+  depth without Russian roulette (rr_depth beyond it, as pathtrace's comparison mode), one
+  untimed 1-spp render (Dr.Jit compiles its kernels then), then one render of all the samples
+  (in as many passes as Mitsuba chooses for its memory), timed to the end of its evaluation. The
+  image's mean comes back with the seconds, so that a twin that differs from pathtrace's scene
+  shows."""
 
 import json
 import subprocess
@@ -73,5 +75,5 @@ def mitsuba_render(python: str, variant: str, xml, camera, width: int, height: i
     r = subprocess.run([python, "-c", RENDER, json.dumps(args)], capture_output=True, text=True)
     if r.returncode:
         raise UserError(f"bench --mitsuba: Mitsuba 3 ({python}, {variant}) failed on {xml}: {_last_line(r)}")
-    result = json.loads(r.stdout.strip().splitlines()[-1])
+    result = json.loads([line for line in r.stdout.splitlines() if line.startswith("{")][-1])
     return result["seconds"], result["mean"]
