@@ -12,10 +12,12 @@ laid out as the 4-wide BVHNode array that kernels/bvh.cl walks. In three steps:
    Hierarchies", 2007) here in NumPy; the one of smaller SAH cost is kept. PLOC's greedy merges
    make poorer trees than the binned split on evenly spread primitives (3-4 % more traversal
    time on the H100 for spheres64k), the binned split a poorer top on the teapot over its floor
-   (a sixth more SAH cost). The split's cost grows with the clusters it splits, and its gain
-   matters most where the scene is small and the build quick, so PLOC stops at
-   min(N, TOP_WORK / N) clusters: small scenes (up to 65536 primitives) are split whole,
-   1M primitives above 4096 clusters.
+   (a sixth more SAH cost). PLOC stops at min(N, TOP_CLUSTERS) clusters: scenes of up to 65536
+   primitives are split whole, larger ones above 65536 clusters. The split's time grows with
+   its clusters, not with N (0.2-0.3 s on two cores for 65536), and its gain is largest where
+   PLOC's clusters straddle empty space: against PLOC down to 2^32 / N clusters (the rule
+   before), 400 tori on a grid (410k triangles) get a fifth less SAH cost and trace 13-15 %
+   faster on the H100, a 1M-triangle height field 5 % less and 4 % faster (docs/performance.md).
 3. Collapsed by the SAH (as pbrt-v4's builder decides): a subtree of at most MAX_LEAF_SIZE
    primitives becomes one leaf where that is cheaper than its split; then every other level of
    the binary tree is folded into its parent, giving 4-wide nodes, laid out depth-first
@@ -43,7 +45,7 @@ MAX_LEAF_SIZE = 4
 MAX_DEPTH = 30              # of the binary tree: kernels/bvh.cl's stack holds 48 = 3 x 30 / 2 + 3
 TRAVERSAL_COST = 0.5        # relative to one primitive test, as in pbrt-v4's BVH build
 RADIUS = 8                  # PLOC's search radius: 8 and 16 give trees of the same SAH cost here
-TOP_WORK = 1 << 32          # PLOC stops at min(N, TOP_WORK / N) clusters (see step 2)
+TOP_CLUSTERS = 65536        # PLOC stops at min(N, TOP_CLUSTERS) clusters (see step 2)
 MORTON_BITS = 21            # per axis: 63 bits in all
 MAX_BINS = 16
 GROUP = 256                 # SCAN_GROUP of kernels/build/ploc.cl; every build kernel uses it
@@ -239,7 +241,7 @@ def _build_kind(tree: _Tree, lo, hi, first: int, stop: int, report) -> int:
     clusters = _Clusters(b, count)
     b.launch("first_clusters", count, tree.box, order_buf, np.int32(first), np.int32(count),
              clusters.node, clusters.box)
-    clusters.cluster(tree, max(2, min(count, TOP_WORK // count)), report)
+    clusters.cluster(tree, max(2, min(count, TOP_CLUSTERS)), report)
     if clusters.count == 1:
         return int(b.read(clusters.node, 1, np.int32)[0])
     # two candidate tops over the remaining clusters; the one of smaller SAH cost is kept (the

@@ -56,7 +56,7 @@ def top_work(request, monkeypatch):
     """Each build test twice: as built (scenes this small are split whole by the binned SAH, PLOC
     competing only for the top), and with PLOC clustering down to two clusters."""
     if request.param == "ploc":
-        monkeypatch.setattr(bvh_module, "TOP_WORK", 0)
+        monkeypatch.setattr(bvh_module, "TOP_CLUSTERS", 0)
     return request.param
 
 
@@ -294,7 +294,7 @@ def test_the_stack_each_scene_gets_holds_its_tree(build, monkeypatch):
         hi = lo + 1
     else:
         if build == "ploc":
-            monkeypatch.setattr(bvh_module, "TOP_WORK", 0)
+            monkeypatch.setattr(bvh_module, "TOP_CLUSTERS", 0)
         lo = rng.uniform(-10, 10, (20000, 3)).astype(np.float32)
         hi = lo + rng.uniform(0.01, 1, (20000, 3)).astype(np.float32)
     bvh = build_bvh(lo, hi)
