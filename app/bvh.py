@@ -73,6 +73,16 @@ def primitive_boxes(spheres: np.ndarray, triangles: np.ndarray):
     return lo, hi
 
 
+def column_min(a: np.ndarray) -> np.ndarray:
+    """The minimum of each column of an (N, k) array: NumPy reduces a short row axis-0-wise 20x
+    slower than a column at a time (26 ms against 1.2 ms for 1M rows of 3)."""
+    return np.array([a[:, i].min() for i in range(a.shape[1])], a.dtype)
+
+
+def column_max(a: np.ndarray) -> np.ndarray:
+    return np.array([a[:, i].max() for i in range(a.shape[1])], a.dtype)
+
+
 def surface_area(lo, hi):
     d = np.maximum(hi - lo, 0)
     return 2 * (d[..., 0] * d[..., 1] + d[..., 1] * d[..., 2] + d[..., 2] * d[..., 0])
@@ -229,7 +239,7 @@ def _build_kind(tree: _Tree, lo, hi, first: int, stop: int, report) -> int:
     if count == 1:
         return first
     cen = lo[first:stop] + hi[first:stop]       # twice the centroids: the order is the same
-    c_lo, c_hi = cen.min(axis=0), cen.max(axis=0)
+    c_lo, c_hi = column_min(cen), column_max(cen)
     scale = np.divide((1 << MORTON_BITS) - 1, c_hi - c_lo, out=np.zeros(3, np.float32), where=c_hi > c_lo)
     codes = b.buffer(count * 8)
     b.launch("morton_codes", count, tree.box, np.int32(first), np.int32(count),
@@ -300,7 +310,10 @@ def _split_top(clusters: np.ndarray, lo: np.ndarray, hi: np.ndarray, first_node:
     Returns the new nodes, numbered from first_node, as batches (left, right, lo, hi) from the
     bottom level up, and the root."""
     count = len(clusters)
-    cen = (lo + hi) * 0.5
+    # one row per cluster, moved as one: its node (int32 bits), lo, hi and centroid
+    rows = np.empty((count, 10), np.float32)
+    rows[:, 0] = np.asarray(clusters, np.int32).view(np.float32)
+    rows[:, 1:4], rows[:, 4:7], rows[:, 7:10] = lo, hi, (lo + hi) * 0.5
     levels = []     # per level: each segment's two halves' node or cluster, and its box
     starts, counts = np.array([0]), np.array([count])
     while len(starts):
@@ -316,8 +329,9 @@ def _split_top(clusters: np.ndarray, lo: np.ndarray, hi: np.ndarray, first_node:
         for b in np.unique(bins):
             s0, s1 = np.searchsorted(bins, b), np.searchsorted(bins, b, side="right")
             p0, p1 = offsets[s0], offsets[s1] if s1 < n_seg else seg.size
+            r = rows[pos[p0:p1]]
             box_lo[s0:s1], box_hi[s0:s1], cost[s0:s1], goes_left[p0:p1] = _best_splits(
-                lo[pos[p0:p1]], hi[pos[p0:p1]], cen[pos[p0:p1]], seg[p0:p1] - s0, offsets[s0:s1] - p0, s1 - s0, b)
+                r[:, 1:4], r[:, 4:7], r[:, 7:10], seg[p0:p1] - s0, offsets[s0:s1] - p0, s1 - s0, b)
 
         # partition each segment stably by its split, or in halves where the centroids coincide
         rank = pos - starts[seg]
@@ -326,8 +340,7 @@ def _split_top(clusters: np.ndarray, lo: np.ndarray, hi: np.ndarray, first_node:
         left_before = np.cumsum(goes_left) - goes_left
         left_rank = left_before - left_before[offsets][seg]
         new_pos = starts[seg] + np.where(goes_left, left_rank, n_left[seg] + rank - left_rank)
-        for a in (clusters, lo, hi, cen):
-            a[new_pos] = a[pos].copy()
+        rows[new_pos] = rows[pos]
         levels.append((starts, n_left, counts, box_lo, box_hi))
         halves = np.concatenate([np.column_stack([starts, n_left]),
                                  np.column_stack([starts + n_left, counts - n_left])])
@@ -335,6 +348,7 @@ def _split_top(clusters: np.ndarray, lo: np.ndarray, hi: np.ndarray, first_node:
 
     # nodes bottom-up, each level's batch after the ones below it: a half of one cluster is the
     # cluster itself, a larger half the node made for it one level down (at the half's start)
+    clusters = rows[:, 0].copy().view(np.int32)
     made_at = np.empty(count, np.int32)
     batches = []
     for starts, n_left, counts, box_lo, box_hi in reversed(levels):

@@ -11,7 +11,7 @@ from dataclasses import dataclass
 import numpy as np
 import pyopencl as cl
 
-from pathtrace.bvh import BVH, build_bvh, primitive_boxes
+from pathtrace.bvh import BVH, build_bvh, column_max, column_min, primitive_boxes
 from pathtrace.errors import UserError, format_bytes, short
 from pathtrace.features import FLAT_MAX, Features, stack_size
 from pathtrace.lights import LightTable, build_light_table, emitted_power, primitive_bounds
@@ -76,7 +76,8 @@ class CompiledScene:
         check_memory(scene.name, n_spheres, n_triangles, queue.device if queue else None,
                      scene.materials.texel_bytes(), len(instances) if self.two_level else 0)
         start = time.perf_counter()
-        corners = np.concatenate([m.vertices[m.faces] for m in meshes]) if meshes \
+        # gathered from float32 vertices: what the kernels get, and half the bytes to move
+        corners = np.concatenate([np.asarray(m.vertices, np.float32)[m.faces] for m in meshes]) if meshes \
             else np.zeros((0, 3, 3), np.float32)
         lo, hi = primitive_boxes(scene.spheres, corners)
         if self.two_level:
@@ -86,7 +87,7 @@ class CompiledScene:
             self.bvh: BVH = build_bvh(lo, hi, n_spheres, queue, progress)
             self.instances = np.zeros(1, INSTANCE)
         # the scene's bounding sphere, by which a light at infinity's power is reckoned
-        self.radius = float(np.linalg.norm(hi.max(axis=0) - lo.min(axis=0)) / 2) if len(lo) else 1.0
+        self.radius = float(np.linalg.norm(column_max(hi) - column_min(lo)) / 2) if len(lo) else 1.0
         self.bvh_seconds = time.perf_counter() - start
 
         order = self.bvh.order

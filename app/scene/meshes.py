@@ -97,11 +97,13 @@ def check_mesh(vertices, faces, normals, uvs=None, where="") -> MeshData:
         elif not np.all(np.isfinite(uvs)) or np.any(np.abs(uvs) > MAX_COORDINATE):
             bad = int(np.argmax(~np.all(np.isfinite(uvs) & (np.abs(uvs) <= MAX_COORDINATE), axis=1)))
             raise UserError(f"{where}: the texture coordinates of vertex {bad} are not finite ({uvs[bad].tolist()})")
-    # the float32 corners the kernels get, their cross products in float64 (1e17 squared
-    # overflows float32)
-    corners = vertices.astype(np.float32)[faces].astype(np.float64)
-    area2 = np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
-    keep = area2 > 0
+    # the float32 corners the kernels get, their edges' cross products in float64 (1e17 squared
+    # overflows float32), by components: a triangle has area where any component is nonzero
+    v = vertices.astype(np.float32).astype(np.float64)
+    a = v[faces[:, 0]]
+    e1, e2 = v[faces[:, 1]] - a, v[faces[:, 2]] - a
+    keep = ((e1[:, 1] * e2[:, 2] != e1[:, 2] * e2[:, 1]) | (e1[:, 2] * e2[:, 0] != e1[:, 0] * e2[:, 2])
+            | (e1[:, 0] * e2[:, 1] != e1[:, 1] * e2[:, 0]))
     if not keep.all():
         warn(f"{where}: dropped {np.count_nonzero(~keep)} degenerate triangle(s) of {len(faces)}")
         faces = faces[keep]
