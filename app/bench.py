@@ -65,6 +65,9 @@ class Result:
     mitsuba_variant: str = ""       # with --mitsuba: Mitsuba 3's render of the same scene
     mitsuba_seconds: float = None
     mitsuba_mean: float = None
+    rays_per_sample: float = None   # with --traversal (app/traversal_stats.py)
+    nodes_per_ray: float = None
+    primitives_per_ray: float = None
 
 
 def default_estimator(scene) -> str:
@@ -75,13 +78,17 @@ def default_estimator(scene) -> str:
     return "depth8" if scene.name.endswith("-diffuse") else "rr"
 
 
+def estimator_settings(estimator: str) -> dict:
+    """The render settings of one of ESTIMATORS."""
+    settings = dict(max_depth=COMPARISON_DEPTH, russian_roulette="off") if estimator.startswith("depth8") \
+        else dict(max_depth=0, russian_roulette="albedo")
+    return dict(settings, nee=estimator.endswith("+nee"))
+
+
 def measure(backends, scene, estimator, width, height, spp, builds) -> Result:
     """One timed render of `scene` on `backends` together (one device, or several sharing the
     samples: pathtrace.multidevice)."""
-    settings = dict(max_depth=COMPARISON_DEPTH, russian_roulette="off") if estimator.startswith("depth8") \
-        else dict(max_depth=0, russian_roulette="albedo")
-    settings["nee"] = estimator.endswith("+nee")
-    scene = scene.with_settings(**settings)
+    scene = scene.with_settings(**estimator_settings(estimator))
     # the scene's own kernels (pathtrace.features), built and launched once outside the timed region
     for backend in backends:
         Renderer(backend, scene, 16, 16).add_samples(1)
@@ -111,7 +118,7 @@ def kernel_build_times(backend, cold: bool = True):
 
 
 def run(device_specs, scene_names, estimators, width, height, spp, together=False, cold=True,
-        mitsuba: tuple = None, log=print):
+        mitsuba: tuple = None, traversal: bool = False, log=print):
     """A row per device and scene, or with `together` a row per scene for all the devices
     rendering it as one (the multi-device scaling measurement). mitsuba: (python, variant) to
     time Mitsuba 3 on the rows of the comparison mode with NEE (depth8+nee)."""
@@ -128,6 +135,9 @@ def run(device_specs, scene_names, estimators, width, height, spp, together=Fals
                 for est in estimators or [default_estimator(scene)]:
                     r = measure(group, scene, est, width, height, spp, builds)
                     log(format_row(r))
+                    if traversal:
+                        count_traversal(r, group[0], scene)
+                        log(format_traversal(r))
                     if mitsuba and est == "depth8+nee":
                         time_mitsuba(r, scene, mitsuba, folder)
                         log(format_mitsuba(r))
@@ -135,6 +145,23 @@ def run(device_specs, scene_names, estimators, width, height, spp, together=Fals
     finally:
         shutil.rmtree(folder, ignore_errors=True)
     return results
+
+
+TRAVERSAL_SPP = 4       # samples per pixel of the counting renders: the ratios settle long before
+
+
+def count_traversal(r: Result, backend, scene):
+    """The row's rays per sample and BVH work per ray (app/traversal_stats.py), into r."""
+    from pathtrace.traversal_stats import traversal_stats
+    stats = traversal_stats(backend, scene.with_settings(**estimator_settings(r.estimator)), r.width, r.height,
+                            min(r.spp, TRAVERSAL_SPP))
+    r.rays_per_sample, r.nodes_per_ray, r.primitives_per_ray = \
+        stats.rays_per_sample, stats.nodes_per_ray, stats.primitives_per_ray
+
+
+def format_traversal(r: Result) -> str:
+    return (f"{'':<20} traversal: {r.rays_per_sample:.2f} rays per sample, {r.nodes_per_ray:.1f} nodes "
+            f"and {r.primitives_per_ray:.1f} primitives per ray")
 
 
 def scene_file(name: str, folder: Path) -> str:

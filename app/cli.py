@@ -505,7 +505,7 @@ def cmd_bench(args):
     print(bench.HEADER)
     results = bench.run(args.device or ["auto"], args.scenes, args.estimator, width, height, args.spp,
                         args.together, not args.no_cold,
-                        (args.mitsuba, args.mitsuba_variant) if args.mitsuba else None)
+                        (args.mitsuba, args.mitsuba_variant) if args.mitsuba else None, args.traversal)
     if args.json:
         bench.write_json(args.json, results, sys.argv[1:])
         print(f"wrote {args.json}", file=sys.stderr)
@@ -573,6 +573,9 @@ def build_parser():
     p.add_argument("--no-cold", action="store_true",
                    help="skip timing the kernels' build without the cache (on NVIDIA's OpenCL it tunes "
                         "register caps, about a minute)")
+    p.add_argument("--traversal", action="store_true",
+                   help="also count, for each row, the rays per sample and the BVH nodes visited and "
+                        "primitives tested per ray (three renders of 4 spp at the row's size)")
     p.add_argument("--load", action="store_true",
                    help="time loading instead: seconds from 'pathtrace render FILE' to its first image "
                         "(1 spp) for a 1M-triangle PLY file and for 850 PLY meshes in a pbrt-v4 file")

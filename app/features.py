@@ -34,6 +34,9 @@ class Features:
                                            # primitives, which rays test all, with no tree
     bsdf_defines: tuple = None             # the variants its materials need (BSDFType.defines,
                                            # such as BECKMANN); None: all
+    traversal_stats: int = 0               # 1 or 2: the render kernels count nodes visited or
+                                           # primitives tested in place of rays
+                                           # (app/traversal_stats.py); 0: they count rays
 
     def defines(self) -> tuple:
         return ((() if self.triangles else ("NO_TRIANGLES",)) + (("TEXTURES",) if self.textures else ())
@@ -43,7 +46,8 @@ class Features:
                 + (f"RUSSIAN_ROULETTE=RR_{self.russian_roulette.upper()}", f"BVH_STACK_SIZE={self.stack}")
                 + ((f"FLAT_SPHERES={self.flat[0]}", f"FLAT_TRIANGLES={self.flat[1]}") if self.flat else ())
                 + (("INSTANCES", f"INSTANCE_STACK_SIZE={self.instance_stack}") if self.instance_stack else ())
-                + (self.bsdf_defines if self.bsdf_defines is not None else all_bsdf_defines()))
+                + (self.bsdf_defines if self.bsdf_defines is not None else all_bsdf_defines())
+                + ((f"TRAVERSAL_STATS={self.traversal_stats}",) if self.traversal_stats else ()))
 
 
 def all_bsdf_defines() -> tuple:

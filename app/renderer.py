@@ -72,6 +72,7 @@ class Renderer:
         self.samples = 0          # samples per pixel accumulated so far (whole passes)
         self.aovs = False         # whether the denoiser's albedo and normal are accumulated too
         self.resets = 0           # how many times the image restarted (pathtrace.launches.Progressive)
+        self.traversal_stats = 0  # Features.traversal_stats: set through count_traversal()
         self.set_scene(scene, progress)
         self.resize(width or self.scene.settings.width, height or self.scene.settings.height)
 
@@ -112,7 +113,8 @@ class Renderer:
 
     def _select_program(self):
         """The kernels specialised to the scene's shapes and materials (pathtrace.device.Features)."""
-        program = self.backend.program_for(self.compiled.features(self.settings, self.camera))
+        features = self.compiled.features(self.settings, self.camera)
+        program = self.backend.program_for(replace(features, traversal_stats=self.traversal_stats))
         if program is not self.program:
             self.program = program
             self.kernels = {False: cl.Kernel(program, "render"), True: cl.Kernel(program, "render_nee")}
@@ -320,6 +322,13 @@ class Renderer:
         """Samples left out since the last reset because they were NaN or infinite
         (kernels/integrator.cl counts the kept ones), all pixels together."""
         return self.samples * self.width * self.height - int(round(self._read_compensated("sum")[..., 3].sum()))
+
+    def count_traversal(self, kind: int):
+        """From now on, rays_traced() counts nodes visited (kind 1) or primitives tested (2) in
+        the BVH instead of rays (0: rays again); resets."""
+        self.traversal_stats = kind
+        self._select_program()
+        self.reset()
 
     def rays_traced(self) -> int:
         """Rays traced since the last reset (camera rays and bounces), all pixels together."""

@@ -51,6 +51,7 @@ float4 intersect_boxes(const global BVHNode *n, float3 o, float3 inv_d, float t_
 
 void intersect_spheres(const SceneData *sc, int first, int count, float3 o, float3 d, int instance, Hit *hit)
 {
+    COUNT_WORK(sc, PRIMITIVES_TESTED, count);
     for (int i = first; i < first + count; ++i) {
 #ifdef ALPHA_MASKS
         /* the ray crosses a sphere's surface twice: where the mask cuts the nearer crossing out,
@@ -82,6 +83,7 @@ void intersect_triangles(const SceneData *sc, int first, int count, float3 o, fl
 {
     float3 row_x, row_y, row_z;
     triangle_shear(d, &row_x, &row_y, &row_z);
+    COUNT_WORK(sc, PRIMITIVES_TESTED, count);
     for (int i = first; i < first + count; ++i) {
         if (IS_SELF(self, sc->num_spheres + i, instance))
             continue;
@@ -226,6 +228,7 @@ Hit walk_tree(const SceneData *sc, int root, float3 o, float3 d, PrimId self, in
     int node = root;
     do {
         const global BVHNode *n = &sc->nodes[node];
+        COUNT_WORK(sc, NODES_VISITED, 1);
         float4 t = intersect_boxes(n, o, inv_d, hit.t);
         int4 index = n->index;
         t = intersect_leaves(sc, t, n->count, index, o, d, self, instance, &hit);
@@ -249,6 +252,7 @@ Hit trace_ray(const SceneData *sc, float3 o, float3 d, float t_max, PrimId self,
     int node = 0;
     do {
         const global BVHNode *n = &sc->nodes[node];
+        COUNT_WORK(sc, NODES_VISITED, 1);
         float4 t = intersect_boxes(n, o, inv_d, hit.t);
         int4 index = n->index, count = n->count;
         int4 leaf = (t < INFINITY) & (count != 0);

@@ -285,6 +285,9 @@ void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum
             ++kept;
         }
     }
+#ifdef TRAVERSAL_STATS
+    rays = *sc->work;         /* the work counted stands in for the rays traced */
+#endif
     int k = y * p->width + x;
     float4 s = sum[k], c = sum_c[k];
     add_compensated(&s, &c, (float4)(acc, (float)kept));
@@ -302,8 +305,17 @@ void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum
                      global float4 *sum_sq, global float4 *sum_c, global float4 *sum_sq_c)       \
     {                                                                                            \
         SceneData sc = SCENE_DATA(p.num_spheres);                                                \
+        COUNT_WORK_INTO(sc);                                                                     \
         render_pixel(&sc, &p, sum, sum_sq, sum_c, sum_sq_c, nee);                                \
     }
+
+/* With TRAVERSAL_STATS the render kernels count the work of their rays' traversals into a
+ * counter of their own, which each pixel reports in place of its rays. */
+#ifdef TRAVERSAL_STATS
+#define COUNT_WORK_INTO(sc) int work_ = 0; (sc).work = &work_
+#else
+#define COUNT_WORK_INTO(sc)
+#endif
 
 /* render: the report's estimator; render_nee: with next-event estimation */
 RENDER_KERNEL(render, 0)

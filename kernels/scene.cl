@@ -26,7 +26,21 @@ typedef struct {
                                                (types.h: NO_MEDIUM_CHANGE) */
     const global Instance *instances;       /* a two-level BVH's instances (INSTANCES) */
     int num_spheres;
+#ifdef TRAVERSAL_STATS
+    int *work;                              /* the render kernels' count of traversal work:
+                                               nodes visited (TRAVERSAL_STATS 1) or primitives
+                                               tested (2); NULL in the other kernels */
+#endif
 } SceneData;
+
+/* Counts k units of traversal work where a kernel asked for them (app/traversal_stats.py). */
+#ifdef TRAVERSAL_STATS
+#define COUNT_WORK(sc, kind, k) if ((kind) == TRAVERSAL_STATS && (sc)->work) *(sc)->work += (k)
+#else
+#define COUNT_WORK(sc, kind, k)
+#endif
+#define NODES_VISITED 1
+#define PRIMITIVES_TESTED 2
 
 #define SCENE_KERNEL_ARGS                                                                         \
     const global BVHNode *nodes, const global Sphere *spheres, const global Triangle *triangles,  \
