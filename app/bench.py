@@ -139,8 +139,13 @@ def run(device_specs, scene_names, estimators, width, height, spp, together=Fals
                         count_traversal(r, group[0], scene)
                         log(format_traversal(r))
                     if mitsuba and est == "depth8+nee":
-                        time_mitsuba(r, scene, mitsuba, folder)
-                        log(format_mitsuba(r))
+                        try:
+                            twin = mitsuba_twin(scene, r, folder)
+                        except UserError as e:     # the scene says what a twin cannot: no column
+                            log(f"{'':<20} Mitsuba 3: no twin of {scene.name}: {e}")
+                        else:
+                            time_mitsuba(r, scene, twin, mitsuba)
+                            log(format_mitsuba(r))
                     results.append(r)
     finally:
         shutil.rmtree(folder, ignore_errors=True)
@@ -174,19 +179,23 @@ def scene_file(name: str, folder: Path) -> str:
     return str(write_textured_tori(where))
 
 
-def time_mitsuba(r: Result, scene, mitsuba: tuple, folder: Path):
-    """Mitsuba 3's render of the row's scene (its XML file, or the twin written for it), into r."""
-    from pathtrace.mitsuba_timing import mitsuba_render
+def mitsuba_twin(scene, r: Result, folder: Path):
+    """The Mitsuba 3 XML of the row's scene: its own file, or a twin written into `folder`
+    (UserError where the scene holds what a twin cannot say)."""
     from pathtrace.scene.mitsuba_writer import write_mitsuba
-    python, variant = mitsuba
     source = str(scene.source or "")
     if source.lower().endswith(".xml"):
-        xml = source
-    else:
-        twin = folder / f"{scene.name}-twin"
-        twin.mkdir(exist_ok=True)
-        xml = write_mitsuba(scene.with_settings(width=r.width, height=r.height, spp=r.spp,
-                                                max_depth=COMPARISON_DEPTH), twin / f"{scene.name}.xml")
+        return source
+    twin = folder / f"{scene.name}-twin"
+    twin.mkdir(exist_ok=True)
+    return write_mitsuba(scene.with_settings(width=r.width, height=r.height, spp=r.spp, max_depth=COMPARISON_DEPTH),
+                         twin / f"{scene.name}.xml")
+
+
+def time_mitsuba(r: Result, scene, xml, mitsuba: tuple):
+    """Mitsuba 3's render of `xml`, the row's scene, into r."""
+    from pathtrace.mitsuba_timing import mitsuba_render
+    python, variant = mitsuba
     r.mitsuba_variant = variant
     r.mitsuba_seconds, r.mitsuba_mean = mitsuba_render(python, variant, xml, scene.camera, r.width, r.height,
                                                        r.spp, COMPARISON_DEPTH)

@@ -51,11 +51,18 @@ def best_time(command, repeats: int, cwd) -> float:
     times = []
     for _ in range(repeats):
         start = time.perf_counter()
-        r = subprocess.run(command, cwd=cwd, capture_output=True, text=True)
+        r = _run(command, cwd)
         times.append(time.perf_counter() - start)
         if r.returncode:
             raise UserError(f"bench: {' '.join(map(str, command[:6]))} ... failed: {_last_line(r)}")
     return min(times)
+
+
+def _run(command, cwd=None):
+    try:
+        return subprocess.run(command, cwd=cwd, capture_output=True, text=True)
+    except OSError as e:          # a Python that is not there, or not a program
+        raise UserError(f"bench: cannot run {command[0]}: {e.strerror or e}") from None
 
 
 def _last_line(r) -> str:
@@ -72,7 +79,7 @@ def mitsuba_render(python: str, variant: str, xml, camera, width: int, height: i
     args = dict(variant=variant, xml=str(xml), width=width, height=height, spp=spp, max_depth=max_depth,
                 eye=[float(x) for x in camera.eye], target=[float(x) for x in camera.look_at],
                 up=[float(x) for x in camera.up], vfov=float(camera.vfov))
-    r = subprocess.run([python, "-c", RENDER, json.dumps(args)], capture_output=True, text=True)
+    r = _run([python, "-c", RENDER, json.dumps(args)])
     if r.returncode:
         raise UserError(f"bench --mitsuba: Mitsuba 3 ({python}, {variant}) failed on {xml}: {_last_line(r)}")
     result = json.loads([line for line in r.stdout.splitlines() if line.startswith("{")][-1])

@@ -118,3 +118,16 @@ def test_bench_renders_the_generated_textured_scene_and_asks_mitsuba(tmp_path):
     assert r.returncode == 1, r.stderr
     assert "tori400-textured" in r.stdout and "depth8+nee" in r.stdout
     assert len(r.stderr.strip().splitlines()) == 1 and "No module named" in r.stderr
+
+
+def test_bench_mitsuba_column_without_a_twin_or_a_python(tmp_path):
+    """A scene a twin cannot say (simple's Phong spheres) gets a line saying so and the bench goes
+    on; a Python that is not there is one error line."""
+    r = pathtrace("bench", "--quick", "--device", "cpu", "--no-cold", "--scenes", "simple", "--estimator",
+                  "depth8+nee", "--mitsuba", sys.executable)
+    assert r.returncode == 0, r.stderr
+    assert "Mitsuba 3: no twin of simple" in r.stdout and "(phong)" in r.stdout
+    r = pathtrace("bench", "--quick", "--device", "cpu", "--no-cold", "--scenes", "simple-diffuse", "--estimator",
+                  "depth8+nee", "--mitsuba", tmp_path / "no-python")
+    assert r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1
+    assert "cannot run" in r.stderr and "no-python" in r.stderr
