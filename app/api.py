@@ -359,8 +359,8 @@ def view(scene="simple", device: str = "auto", size=None, frames: int = None,
 
     def read():
         """The scene, read in the viewer's worker thread while its window says so."""
-        read = scene if isinstance(scene, Scene) else scene() if callable(scene) else load(scene)
-        return read if size is None else replace(read, settings=settings_for(read, size=size))
+        given = scene if isinstance(scene, Scene) else scene() if callable(scene) else load(scene)
+        return given if size is None else replace(given, settings=settings_for(given, size=size))
     viewer = Viewer(lambda: open_devices(device)[0], read, screenshot_dir)
     try:
         viewer.run(frames)

@@ -14,7 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from pathtrace.scene.mitsuba_writer import ply_bytes
+from pathtrace.scene.mitsuba_writer import ply_bytes, scene_xml
+
 
 def torus(nu=32, nv=16, r0=1.0, r1=0.35):
     """A torus of 2 nu nv triangles, counter-clockwise seen from outside: its points, normals,
@@ -31,19 +32,6 @@ def torus(nu=32, nv=16, r0=1.0, r1=0.35):
     return points, normal.reshape(-1, 3), uvs, faces
 
 
-def xml_scene(size, origin, target, fov, shapes, sky) -> str:
-    """A Mitsuba 3 scene: a path tracer, a perspective camera, a constant sky and `shapes`."""
-    return "\n".join([
-        '<scene version="3.0.0">', '<integrator type="path"><integer name="max_depth" value="5"/></integrator>',
-        f'<sensor type="perspective"><float name="fov" value="{fov}"/><string name="fov_axis" value="y"/>'
-        f'<transform name="to_world"><lookat origin="{", ".join(map(str, origin))}" '
-        f'target="{", ".join(map(str, target))}" up="0, 1, 0"/></transform>'
-        '<sampler type="independent"><integer name="sample_count" value="1"/></sampler>'
-        f'<film type="hdrfilm"><integer name="width" value="{size[0]}"/><integer name="height" value="{size[1]}"/>'
-        '</film></sensor>', f'<emitter type="constant"><rgb name="radiance" value="{sky}"/></emitter>',
-        *shapes, "</scene>", ""])
-
-
 def write_height_field(folder: Path) -> tuple:
     from pathtrace.scene.builtin import height_field_mesh
     points, faces = height_field_mesh(1_000_000)
@@ -58,7 +46,8 @@ def write_height_field(folder: Path) -> tuple:
               '<bsdf type="diffuse"><rgb name="reflectance" value="0.6"/></bsdf></shape>',
               '<shape type="sphere"><point name="center" x="0.3" y="0.35" z="0.2"/><float name="radius" value="0.25"/>'
               '<bsdf type="diffuse"><rgb name="reflectance" value="0.8, 0.3, 0.2"/></bsdf></shape>']
-    (folder / "heightfield1M.xml").write_text(xml_scene((64, 36), (0, 1.6, 2.4), (0, 0, 0), 45, shapes, "0.8, 0.85, 1.0"))
+    xml = scene_xml((64, 36), (0, 1.6, 2.4), (0, 0, 0), (0, 1, 0), 45, 1, 5, (0.8, 0.85, 1.0), shapes)
+    (folder / "heightfield1M.xml").write_text(xml)
     return "heightfield1M.toml", "heightfield1M.xml", f"1 PLY file, {len(faces):,} triangles", (64, 36)
 
 
@@ -78,7 +67,7 @@ def write_meshes(folder: Path, count: int = 850) -> tuple:
     (folder / f"meshes{count}.pbrt").write_text("\n".join(pbrt) + "\n")
     shapes = [f'<shape type="ply"><string name="filename" value="m{k:04d}.ply"/>'
               '<bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></shape>' for k in range(count)]
-    (folder / f"meshes{count}.xml").write_text(xml_scene((64, 64), eye, target, 60, shapes, "1"))
+    (folder / f"meshes{count}.xml").write_text(scene_xml((64, 64), eye, target, (0, 1, 0), 60, 1, 5, 1.0, shapes))
     return f"meshes{count}.pbrt", f"meshes{count}.xml", f"{count} PLY files, {count * len(faces):,} triangles", (64, 64)
 
 
@@ -116,6 +105,6 @@ def write_textured_tori(folder: Path, count: int = 400) -> Path:
                   '</emitter></shape>')
     middle = side * 1.25
     path = folder / f"tori{count}-textured.xml"
-    path.write_text(xml_scene((1920, 1080), (middle, side * 0.6, -side * 0.3), (middle, 0, middle * 0.8), 50,
-                              shapes, "0.5, 0.6, 0.8"))
+    path.write_text(scene_xml((1920, 1080), (middle, side * 0.6, -side * 0.3), (middle, 0, middle * 0.8), (0, 1, 0),
+                              50, 1, 5, (0.5, 0.6, 0.8), shapes))
     return path

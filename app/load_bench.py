@@ -9,11 +9,13 @@ process of that Python, timed the same way, in the same run (pathtrace.mitsuba_t
 import shutil
 import sys
 import tempfile
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
 from pathtrace.bench_scenes import write_height_field, write_meshes
-from pathtrace.mitsuba_timing import best_time, mitsuba_load_command
+from pathtrace.errors import UserError
+from pathtrace.mitsuba_timing import last_line, mitsuba_load_command, run_command
 
 
 @dataclass
@@ -24,6 +26,19 @@ class LoadTime:
     seconds: float              # pathtrace, command to image, the best of the repeats
     mitsuba_variant: str = ""
     mitsuba_seconds: float = None
+
+
+def best_time(command, repeats: int, cwd) -> float:
+    """The shortest of `repeats` runs of `command`, from process start to exit; a failure is one
+    line naming the command and its last line of output."""
+    times = []
+    for _ in range(repeats):
+        start = time.perf_counter()
+        r = run_command(command, cwd)
+        times.append(time.perf_counter() - start)
+        if r.returncode:
+            raise UserError(f"bench: {' '.join(map(str, command[:6]))} ... failed: {last_line(r)}")
+    return min(times)
 
 
 def run_load(device: str, scene_files, repeats: int, mitsuba_python: str = None,

@@ -13,7 +13,6 @@ threads and GPU context out of ours. Two measurements:
 
 import json
 import subprocess
-import time
 
 from pathtrace.errors import UserError
 
@@ -45,27 +44,16 @@ print(json.dumps({"seconds": seconds, "mean": float(np.mean(np.array(image)[...,
 """
 
 
-def best_time(command, repeats: int, cwd) -> float:
-    """The shortest of `repeats` runs of `command`, from process start to exit; a failure is one
-    line naming the command and its last line of output."""
-    times = []
-    for _ in range(repeats):
-        start = time.perf_counter()
-        r = _run(command, cwd)
-        times.append(time.perf_counter() - start)
-        if r.returncode:
-            raise UserError(f"bench: {' '.join(map(str, command[:6]))} ... failed: {_last_line(r)}")
-    return min(times)
-
-
-def _run(command, cwd=None):
+def run_command(command, cwd=None):
+    """subprocess.run, its output captured; a program that cannot be run is one line."""
     try:
         return subprocess.run(command, cwd=cwd, capture_output=True, text=True)
     except OSError as e:          # a Python that is not there, or not a program
         raise UserError(f"bench: cannot run {command[0]}: {e.strerror or e}") from None
 
 
-def _last_line(r) -> str:
+def last_line(r) -> str:
+    """The last line a finished command wrote, to name its failure."""
     return (r.stderr.strip().splitlines() or r.stdout.strip().splitlines() or ["(no output)"])[-1]
 
 
@@ -79,8 +67,8 @@ def mitsuba_render(python: str, variant: str, xml, camera, width: int, height: i
     args = dict(variant=variant, xml=str(xml), width=width, height=height, spp=spp, max_depth=max_depth,
                 eye=[float(x) for x in camera.eye], target=[float(x) for x in camera.look_at],
                 up=[float(x) for x in camera.up], vfov=float(camera.vfov))
-    r = _run([python, "-c", RENDER, json.dumps(args)])
+    r = run_command([python, "-c", RENDER, json.dumps(args)])
     if r.returncode:
-        raise UserError(f"bench --mitsuba: Mitsuba 3 ({python}, {variant}) failed on {xml}: {_last_line(r)}")
+        raise UserError(f"bench --mitsuba: Mitsuba 3 ({python}, {variant}) failed on {xml}: {last_line(r)}")
     result = json.loads([line for line in r.stdout.splitlines() if line.startswith("{")][-1])
     return result["seconds"], result["mean"]

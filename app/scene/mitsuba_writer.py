@@ -66,26 +66,34 @@ def write_mitsuba(scene: Scene, path: Path) -> Path:
         raise UserError(f"{where}: lights other than emitting shapes, instances and media are not "
                         f"written as Mitsuba XML")
     s = scene.settings
-    lines = ['<scene version="3.0.0">',
-             f'<integrator type="path"><integer name="max_depth" value="{s.max_depth if s.max_depth else -1}"/>'
-             '</integrator>',
-             f'<sensor type="perspective"><float name="fov" value="{float(cam.vfov):.9g}"/>'
-             '<string name="fov_axis" value="y"/><transform name="to_world">'
-             f'<lookat origin="{_vector(cam.eye)}" target="{_vector(cam.look_at)}" up="{_vector(cam.up)}"/></transform>'
-             f'<sampler type="independent"><integer name="sample_count" value="{s.spp}"/></sampler>'
-             f'<film type="hdrfilm"><integer name="width" value="{s.width}"/><integer name="height" value="{s.height}"/>'
-             '<rfilter type="box"/><string name="pixel_format" value="rgb"/></film></sensor>']
     radiance = env.image[0, 0, :3] * env.intensity
-    if np.any(radiance > 0):
-        lines.append(f'<emitter type="constant"><rgb name="radiance" value="{_rgb(radiance)}"/></emitter>')
-    lines += [f'<shape type="sphere"><point name="center" value="{_vector(c[:3])}"/>'
+    shapes = [f'<shape type="sphere"><point name="center" value="{_vector(c[:3])}"/>'
               f'<float name="radius" value="{float(c[3]):.9g}"/>{_material(scene, int(m))}</shape>'
               for c, m in zip(scene.spheres, scene.sphere_material)]
     for i, mesh in enumerate(scene.meshes):
         ply = path.with_name(f"{path.stem}-mesh{i}.ply")
         ply.write_bytes(ply_bytes(mesh.vertices, mesh.faces, mesh.normals, mesh.uvs))
         flat = "" if mesh.normals is not None else '<boolean name="face_normals" value="true"/>'
-        lines.append(f'<shape type="ply"><string name="filename" value="{ply.name}"/>{flat}'
-                     f'{_material(scene, mesh.material)}</shape>')
-    path.write_text("\n".join(lines + ["</scene>", ""]))
+        shapes.append(f'<shape type="ply"><string name="filename" value="{ply.name}"/>{flat}'
+                      f'{_material(scene, mesh.material)}</shape>')
+    path.write_text(scene_xml((s.width, s.height), cam.eye, cam.look_at, cam.up, cam.vfov, s.spp,
+                              s.max_depth if s.max_depth else -1, radiance if np.any(radiance > 0) else None, shapes))
     return path
+
+
+def scene_xml(size, eye, target, up, vfov: float, spp: int, max_depth: int, sky, shapes) -> str:
+    """A Mitsuba 3 scene file: the path integrator at max_depth (-1: no limit), a perspective
+    pinhole camera at eye looking at target (vfov degrees, vertically) with a film of `size` and
+    a box filter, `spp` independent samples, a constant sky of radiance `sky` (None: none), and
+    `shapes` (their XML elements)."""
+    lines = ['<scene version="3.0.0">',
+             f'<integrator type="path"><integer name="max_depth" value="{max_depth}"/></integrator>',
+             f'<sensor type="perspective"><float name="fov" value="{float(vfov):.9g}"/>'
+             '<string name="fov_axis" value="y"/><transform name="to_world">'
+             f'<lookat origin="{_vector(eye)}" target="{_vector(target)}" up="{_vector(up)}"/></transform>'
+             f'<sampler type="independent"><integer name="sample_count" value="{spp}"/></sampler>'
+             f'<film type="hdrfilm"><integer name="width" value="{size[0]}"/><integer name="height" value="{size[1]}"/>'
+             '<rfilter type="box"/><string name="pixel_format" value="rgb"/></film></sensor>']
+    if sky is not None:
+        lines.append(f'<emitter type="constant"><rgb name="radiance" value="{_rgb(sky)}"/></emitter>')
+    return "\n".join(lines + list(shapes) + ["</scene>", ""])
