@@ -486,6 +486,9 @@ def cmd_bench(args):
         return 0
     if args.load or args.load_scene:
         from pathtrace import load_bench
+        from pathtrace.scene import load_scene
+        for name in args.load_scene or []:
+            load_scene(name)     # fail on a bad file before the timed runs
         print(load_bench.LOAD_HEADER)
         results = [r for device in args.device or ["auto"]
                    for r in load_bench.run_load(device, args.load_scene or [], args.repeats, args.mitsuba,
