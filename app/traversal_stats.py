@@ -16,7 +16,7 @@ NODES_VISITED, PRIMITIVES_TESTED = 1, 2       # kernels/scene.cl
 class TraversalStats:
     rays_per_sample: float
     nodes_per_ray: float        # 4-wide nodes (each tests four boxes); the instances' tree's too
-    primitives_per_ray: float   # sphere and triangle tests, the ray's own surface skipped
+    primitives_per_ray: float   # sphere and triangle tests (a leaf counted whole, the triangle the ray leaves too)
 
 
 def traversal_stats(backend, scene, width: int, height: int, spp: int) -> TraversalStats:
