@@ -35,16 +35,24 @@ typedef int PrimId;
 #define BOX_EXIT_SCALE 1.0000003576f
 
 /* Entry distances of the ray into a 4-wide node's four boxes, INFINITY where it misses one or
- * enters past t_max. The exit distance is scaled up by 1 + 2 gamma(3), the rounding of its
- * computation (pbrt-v4 section 6.8.2), so that a ray grazing a thin box (a sliver triangle's) is
- * never missed. An empty slot's box lies at +inf and is never entered. */
+ * enters past t_max. A plane's distance is plane * inv_d - o * inv_d, one fused multiply-add
+ * (as Embree's); the rounding of o * inv_d, computed once per ray, moves the near planes nearer
+ * and the far ones farther by two ulps of it, and the exit distance is scaled up by
+ * 1 + 2 gamma(3), the rounding of the rest (pbrt-v4 section 6.8.2), so that a ray grazing a thin
+ * box (a sliver triangle's) is never missed. Along an axis the ray runs down, the near plane is
+ * the box's high one. An empty slot's box lies at +inf and is never entered. */
 float4 intersect_boxes(const global BVHNode *n, float3 o, float3 inv_d, float t_max)
 {
-    float4 x0 = (n->lo_x - o.x) * inv_d.x, x1 = (n->hi_x - o.x) * inv_d.x;
-    float4 y0 = (n->lo_y - o.y) * inv_d.y, y1 = (n->hi_y - o.y) * inv_d.y;
-    float4 z0 = (n->lo_z - o.z) * inv_d.z, z1 = (n->hi_z - o.z) * inv_d.z;
-    float4 t_enter = fmax(fmax(fmin(x0, x1), fmin(y0, y1)), fmax(fmin(z0, z1), 0.0f));
-    float4 t_exit = fmin(fmin(fmax(x0, x1), fmax(y0, y1)), fmax(z0, z1)) * BOX_EXIT_SCALE;
+    float3 c = -o * inv_d, err = fabs(c) * 0x1p-22f;
+    float3 c_near = c - err, c_far = c + err;
+    float4 x0 = fma(inv_d.x < 0.0f ? n->hi_x : n->lo_x, inv_d.x, c_near.x);
+    float4 x1 = fma(inv_d.x < 0.0f ? n->lo_x : n->hi_x, inv_d.x, c_far.x);
+    float4 y0 = fma(inv_d.y < 0.0f ? n->hi_y : n->lo_y, inv_d.y, c_near.y);
+    float4 y1 = fma(inv_d.y < 0.0f ? n->lo_y : n->hi_y, inv_d.y, c_far.y);
+    float4 z0 = fma(inv_d.z < 0.0f ? n->hi_z : n->lo_z, inv_d.z, c_near.z);
+    float4 z1 = fma(inv_d.z < 0.0f ? n->lo_z : n->hi_z, inv_d.z, c_far.z);
+    float4 t_enter = fmax(fmax(x0, y0), fmax(z0, 0.0f));
+    float4 t_exit = fmin(fmin(x1, y1), z1) * BOX_EXIT_SCALE;
     t_exit = fmin(t_exit, t_max);
     return select((float4)(INFINITY), t_enter, t_enter <= t_exit);
 }
