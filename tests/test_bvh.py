@@ -163,6 +163,29 @@ def test_nearest_hit_matches_brute_force(kernels, case, top_work):
     assert np.mean(np.isfinite(t_all)) > 0.3
 
 
+def test_nearest_hit_far_from_the_origin(kernels):
+    """Triangles of a hundredth of a unit 1000 units from the world's origin, met by rays that
+    start among them and aim at their corners, through the corners of their boxes: the fused box
+    test (kernels/bvh.cl: intersect_boxes) rounds -o * inv_d at the scale of 1000, and still
+    loses no hit to brute force."""
+    rng = np.random.default_rng(13)
+    offset = np.array([1000.0, -700.0, 400.0])
+    centres = offset + rng.uniform(-0.05, 0.05, (3000, 1, 3))
+    tris = (centres + rng.normal(scale=0.01, size=(3000, 3, 3))).astype(np.float32)
+    c = compile_scene(scene_of((), tris))
+    rays = 20000
+    o = np.zeros((rays, 4), np.float32)
+    o[:, :3] = offset + rng.uniform(-0.08, 0.08, (rays, 3))
+    d = np.zeros((rays, 4), np.float32)
+    d[:, :3] = tris[rng.integers(0, len(tris), rays), rng.integers(0, 3, rays)] - o[:, :3]
+    out = [np.zeros(rays, np.float32), np.zeros(rays, np.int32), np.zeros(rays, np.float32), np.zeros(rays, np.int32)]
+    kernels(SOURCE)("nearest", rays, *scene_arrays(c), np.int32(0), np.int32(c.num_triangles), o, d, *out)
+    t_bvh, i_bvh, t_all, i_all = out
+    np.testing.assert_array_equal(t_bvh, t_all)
+    assert np.all((i_bvh == i_all) | (t_bvh == t_all))
+    assert np.mean(np.isfinite(t_all)) > 0.9
+
+
 def window_nearest(boxes, radius):
     """kernels/build/ploc.cl's rule in NumPy: the smallest union area within `radius` places, ties
     to the smaller index distance, then by whether (lower index / k) is odd."""
