@@ -27,6 +27,14 @@ kernel void nearest(SCENE_KERNEL_ARGS, int num_spheres, int num_triangles,
     intersect_triangles(&sc, 0, num_triangles, org, dir, -1, 0, &b);
     t_all[k] = b.t; i_all[k] = b.prim;
 }
+
+kernel void blocked(SCENE_KERNEL_ARGS, int num_spheres, global const float4 *o, global const float4 *d,
+                    global int *out)
+{
+    SceneData sc = SCENE_DATA(num_spheres);
+    int k = get_global_id(0);
+    out[k] = occluded(&sc, o[k].xyz, normalize(d[k].xyz), d[k].w, -1);
+}
 """
 
 
@@ -119,12 +127,18 @@ def test_identical_boxes_still_split():
     assert bvh.nodes["count"].max() <= 4 and bvh.depth < 20
 
 
-def nearest(kernels, compiled, rays, rng, aim_at):
+def nearest_rays(rng, rays, aim_at):
+    """Origins in a cube around the primitives and directions (float4 each), half of them aimed
+    at a primitive."""
     o = np.column_stack([rng.uniform(-15, 15, (rays, 3)), np.zeros(rays)]).astype(np.float32)
     d = rng.normal(size=(rays, 3))
     targets = aim_at[rng.integers(0, len(aim_at), rays // 2)]
-    d[: rays // 2] = targets - o[: rays // 2, :3]     # half the rays aim at a primitive
-    d = np.column_stack([d, np.zeros(rays)]).astype(np.float32)
+    d[: rays // 2] = targets - o[: rays // 2, :3]
+    return o, np.column_stack([d, np.zeros(rays)]).astype(np.float32)
+
+
+def nearest(kernels, compiled, rays, rng, aim_at):
+    o, d = nearest_rays(rng, rays, aim_at)
     out = [np.zeros(rays, np.float32), np.zeros(rays, np.int32), np.zeros(rays, np.float32), np.zeros(rays, np.int32)]
     runner = kernels(SOURCE)
     runner("nearest", rays, *scene_arrays(compiled), np.int32(compiled.num_spheres),
@@ -184,6 +198,27 @@ def test_nearest_hit_far_from_the_origin(kernels):
     np.testing.assert_array_equal(t_bvh, t_all)
     assert np.all((i_bvh == i_all) | (t_bvh == t_all))
     assert np.mean(np.isfinite(t_all)) > 0.9
+
+
+@pytest.mark.parametrize("case", ["spheres", "mixed"])
+def test_shadow_rays_match_brute_force(kernels, case, top_work):
+    """occluded(), the any-hit walk of shadow rays, says whether anything lies before t_max
+    exactly where the brute-force nearest hit does (rays whose nearest hit is within a part in
+    10^5 of t_max are left out, where float rounding decides)."""
+    rng = np.random.default_rng(21)
+    spheres = random_spheres(rng, 2000 if case == "mixed" else 5000)
+    tris = triangle_soup(rng, 3000) if case == "mixed" else np.zeros((0, 3, 3), np.float32)
+    c = compile_scene(scene_of(spheres, tris))
+    aim_at = np.concatenate([spheres[:, :3], tris.mean(axis=1)])
+    rays = 20000
+    _, _, t_all, _ = nearest(kernels, c, rays, np.random.default_rng(22), aim_at)
+    o, d = nearest_rays(np.random.default_rng(22), rays, aim_at)      # the same rays
+    d[:, 3] = rng.uniform(0.0, 30.0, rays)
+    out = np.zeros(rays, np.int32)
+    kernels(SOURCE)("blocked", rays, *scene_arrays(c), np.int32(c.num_spheres), o, d, out)
+    clear = np.abs(t_all - d[:, 3]) > 1e-5 * d[:, 3]
+    np.testing.assert_array_equal(out[clear] != 0, (t_all < d[:, 3])[clear])
+    assert 0.2 < np.mean(out) < 0.8
 
 
 def window_nearest(boxes, radius):
