@@ -98,14 +98,15 @@ def measure(backends, scene, estimator, width, height, spp, builds) -> Result:
     rendering = time.perf_counter()
     group.render(spp, launch_seconds=0.5)
     image = group.mean()
-    seconds = time.perf_counter() - start
+    end = time.perf_counter()
+    seconds = end - start
     rays = group.rays_traced()
     names = [b.device.describe() for b in backends]
     device = names[0] if len(names) == 1 else f"{len(names)}x {names[0]}" if len(set(names)) == 1 \
         else " + ".join(names)
     return Result(scene.name, device, estimator, width, height, spp, seconds,
                   width * height * spp / seconds / 1e6, rays / seconds / 1e6,
-                  group.bvh_seconds, *builds, render_seconds=start + seconds - rendering, mean=float(image.mean()))
+                  group.bvh_seconds, *builds, render_seconds=end - rendering, mean=float(image.mean()))
 
 
 def kernel_build_times(backend, cold: bool = True):

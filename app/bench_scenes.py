@@ -71,8 +71,6 @@ def write_meshes(folder: Path, count: int = 850) -> tuple:
     return f"meshes{count}.pbrt", f"meshes{count}.xml", f"{count} PLY files, {count * len(faces):,} triangles", (64, 64)
 
 
-
-
 def write_textured_tori(folder: Path, count: int = 400) -> Path:
     """`tori400-textured` (the module's docstring) in `folder`: its XML file."""
     from PIL import Image

@@ -36,10 +36,10 @@ typedef int PrimId;
 
 /* Entry distances of the ray into a 4-wide node's four boxes, INFINITY where it misses one or
  * enters past t_max. A plane's distance is plane * inv_d - o * inv_d, one fused multiply-add
- * (as Embree's); the rounding of o * inv_d, computed once per ray, moves the near planes nearer
- * and the far ones farther by two ulps of it, and the exit distance is scaled up by
- * 1 + 2 gamma(3), the rounding of the rest (pbrt-v4 section 6.8.2), so that a ray grazing a thin
- * box (a sliver triangle's) is never missed. Along an axis the ray runs down, the near plane is
+ * (as Embree's). The rounding of o * inv_d (the same at every node of a walk, so the compiler
+ * may compute it once) moves the near planes nearer and the far ones farther by two ulps of it,
+ * and the exit distance is scaled up by 1 + 2 gamma(3), the rounding of the rest (pbrt-v4
+ * section 6.8.2), so that a ray grazing a thin box (a sliver triangle's) is never missed. Along an axis the ray runs down, the near plane is
  * the box's high one. An empty slot's box lies at +inf and is never entered. */
 float4 intersect_boxes(const global BVHNode *n, float3 o, float3 inv_d, float t_max)
 {

@@ -137,12 +137,13 @@ def nearest_rays(rng, rays, aim_at):
     return o, np.column_stack([d, np.zeros(rays)]).astype(np.float32)
 
 
-def nearest(kernels, compiled, rays, rng, aim_at):
-    o, d = nearest_rays(rng, rays, aim_at)
+def nearest(kernels, compiled, o, d):
+    """The nearest hits of rays o, d (float4 each): through the BVH (t, primitive) and by brute
+    force over all primitives (t, primitive)."""
+    rays = len(o)
     out = [np.zeros(rays, np.float32), np.zeros(rays, np.int32), np.zeros(rays, np.float32), np.zeros(rays, np.int32)]
-    runner = kernels(SOURCE)
-    runner("nearest", rays, *scene_arrays(compiled), np.int32(compiled.num_spheres),
-           np.int32(compiled.num_triangles), o, d, *out)
+    kernels(SOURCE)("nearest", rays, *scene_arrays(compiled), np.int32(compiled.num_spheres),
+                    np.int32(compiled.num_triangles), o, d, *out)
     return out
 
 
@@ -170,7 +171,7 @@ def test_nearest_hit_matches_brute_force(kernels, case, top_work):
         tris = np.concatenate([tris, sliver])
     c = compile_scene(scene_of(spheres, tris))
     aim_at = np.concatenate([spheres[:, :3], tris.mean(axis=1)])
-    t_bvh, i_bvh, t_all, i_all = nearest(kernels, c, 20000, rng, aim_at)
+    t_bvh, i_bvh, t_all, i_all = nearest(kernels, c, *nearest_rays(rng, 20000, aim_at))
     np.testing.assert_array_equal(t_bvh, t_all)
     # different primitives only where two are met at exactly the same t
     assert np.all((i_bvh == i_all) | (t_bvh == t_all))
@@ -192,9 +193,7 @@ def test_nearest_hit_far_from_the_origin(kernels):
     o[:, :3] = offset + rng.uniform(-0.08, 0.08, (rays, 3))
     d = np.zeros((rays, 4), np.float32)
     d[:, :3] = tris[rng.integers(0, len(tris), rays), rng.integers(0, 3, rays)] - o[:, :3]
-    out = [np.zeros(rays, np.float32), np.zeros(rays, np.int32), np.zeros(rays, np.float32), np.zeros(rays, np.int32)]
-    kernels(SOURCE)("nearest", rays, *scene_arrays(c), np.int32(0), np.int32(c.num_triangles), o, d, *out)
-    t_bvh, i_bvh, t_all, i_all = out
+    t_bvh, i_bvh, t_all, i_all = nearest(kernels, c, o, d)
     np.testing.assert_array_equal(t_bvh, t_all)
     assert np.all((i_bvh == i_all) | (t_bvh == t_all))
     assert np.mean(np.isfinite(t_all)) > 0.9
@@ -211,9 +210,9 @@ def test_shadow_rays_match_brute_force(kernels, case, top_work):
     c = compile_scene(scene_of(spheres, tris))
     aim_at = np.concatenate([spheres[:, :3], tris.mean(axis=1)])
     rays = 20000
-    _, _, t_all, _ = nearest(kernels, c, rays, np.random.default_rng(22), aim_at)
-    o, d = nearest_rays(np.random.default_rng(22), rays, aim_at)      # the same rays
-    d[:, 3] = rng.uniform(0.0, 30.0, rays)
+    o, d = nearest_rays(rng, rays, aim_at)
+    t_all = nearest(kernels, c, o, d)[2]
+    d[:, 3] = rng.uniform(0.0, 30.0, rays)       # t_max
     out = np.zeros(rays, np.int32)
     kernels(SOURCE)("blocked", rays, *scene_arrays(c), np.int32(c.num_spheres), o, d, out)
     clear = np.abs(t_all - d[:, 3]) > 1e-5 * d[:, 3]
