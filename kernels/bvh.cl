@@ -39,8 +39,9 @@ typedef int PrimId;
  * (as Embree's). The rounding of o * inv_d (the same at every node of a walk, so the compiler
  * may compute it once) moves the near planes nearer and the far ones farther by two ulps of it,
  * and the exit distance is scaled up by 1 + 2 gamma(3), the rounding of the rest (pbrt-v4
- * section 6.8.2), so that a ray grazing a thin box (a sliver triangle's) is never missed. Along an axis the ray runs down, the near plane is
- * the box's high one. An empty slot's box lies at +inf and is never entered. */
+ * section 6.8.2), so that a ray grazing a thin box (a sliver triangle's) is never missed.
+ * Along an axis the ray runs down, the near plane is the box's high one. An empty slot's box
+ * lies at +inf and is never entered. */
 float4 intersect_boxes(const global BVHNode *n, float3 o, float3 inv_d, float t_max)
 {
     float3 c = -o * inv_d, err = fabs(c) * 0x1p-22f;
