@@ -112,8 +112,11 @@ class BuildResult:
 
 def build_program(context: cl.Context, device: cl.Device, extra: str = "",
                   use_cache: bool = True, features: Features = Features()) -> BuildResult:
-    """Builds the kernels, specialised to `features`, for one device."""
+    """Builds the kernels, specialised to `features` and to the kind of device (CPU_DEVICE: on
+    CPUs the samplers' azimuths take cospi: kernels/sampling.cl, COS_TURNS), for one device."""
     options = list(BUILD_OPTIONS) + [f"-D{d}" for d in features.defines()]
+    if device.type & cl.device_type.CPU:
+        options.append("-DCPU_DEVICE")
     return build_cached(context, device, kernel_source(extra, features), options, use_cache)
 
 

@@ -33,9 +33,8 @@ float3 lookup_environment(const global float4 *env, const RenderParams *p, float
 /* The inverse of direction_to_latlong. */
 float3 latlong_to_direction(float u, float v, float rotation)
 {
-    float phi = 2.0f * PI_F * (u - rotation - 0.5f);
-    float theta = PI_F * v;
-    return (float3)(sin(theta) * sin(phi), cos(theta), -sin(theta) * cos(phi));
+    float phi = u - rotation - 0.5f, theta = 0.5f * v;                 /* in turns */
+    return (float3)(SIN_TURNS(theta) * SIN_TURNS(phi), COS_TURNS(theta), -SIN_TURNS(theta) * COS_TURNS(phi));
 }
 
 /* The interval i of a cdf of n intervals (cdf[0] = 0, cdf[n] = 1) with cdf[i] <= x < cdf[i+1];

@@ -52,8 +52,8 @@ float3 sample_ggx_visible(float3 wo, float2 alpha, float u1, float u2)
     float len2 = vh.x * vh.x + vh.y * vh.y;
     float3 t1 = len2 > 0.0f ? (float3)(-vh.y, vh.x, 0.0f) * rsqrt(len2) : (float3)(1.0f, 0.0f, 0.0f);
     float3 t2 = cross(vh, t1);
-    float r = sqrt(u1), phi = 2.0f * PI_F * u2;
-    float p1 = r * cos(phi), p2 = r * sin(phi);
+    float r = sqrt(u1);
+    float p1 = r * COS_TURNS(u2), p2 = r * SIN_TURNS(u2);
     float s = 0.5f * (1.0f + vh.z);
     p2 = (1.0f - s) * sqrt(fmax(0.0f, 1.0f - p1 * p1)) + s * p2;
     float3 nh = p1 * t1 + p2 * t2 + sqrt(fmax(0.0f, 1.0f - p1 * p1 - p2 * p2)) * vh;
@@ -118,8 +118,8 @@ float erfinv_approx(float x)
 float2 sample_beckmann_slope(float cos_t, float u1, float u2)
 {
     if (cos_t > 0.9999f) {                     /* normal incidence: the whole distribution */
-        float r = sqrt(-log(1.0f - u1)), phi = 2.0f * PI_F * u2;
-        return (float2)(r * cos(phi), r * sin(phi));
+        float r = sqrt(-log(1.0f - u1));
+        return (float2)(r * COS_TURNS(u2), r * SIN_TURNS(u2));
     }
     float sin_t = sqrt(fmax(0.0f, 1.0f - cos_t * cos_t));
     float tan_t = sin_t / cos_t, cot_t = cos_t / sin_t;

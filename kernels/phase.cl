@@ -29,8 +29,7 @@ float3 sample_hg(float g, float3 wo, float2 u, float *pdf)
     }
     mu = clamp(mu, -1.0f, 1.0f);
     float sin_mu = sqrt(fmax(0.0f, 1.0f - mu * mu));
-    float phi = 2.0f * PI_F * u.y;
-    float3 wi = to_world((float3)(sin_mu * cos(phi), sin_mu * sin(phi), mu), -wo);
+    float3 wi = to_world((float3)(sin_mu * COS_TURNS(u.y), sin_mu * SIN_TURNS(u.y), mu), -wo);
     *pdf = eval_hg(g, wo, wi);
     return wi;
 }

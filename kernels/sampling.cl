@@ -2,6 +2,19 @@
 
 #define PI_F 3.14159265358979323846f
 
+/* cos(2 pi t) and sin(2 pi t) of t turns: every sampler's azimuth. On a CPU (PoCL) cos and sin
+ * reduce their argument modulo pi / 2 the slow way, 12 % of simple-diffuse's kernel time there;
+ * cospi and sinpi reduce a multiple of pi exactly and cheaply, and 2 t needs no rounded product
+ * with pi, so CPUs take them (-16 % on simple-diffuse). On the H100 they gained nothing that
+ * could be told from noise (docs/performance.md), so GPUs compile the code they had. */
+#ifdef CPU_DEVICE
+#define COS_TURNS(t) cospi(2.0f * (t))
+#define SIN_TURNS(t) sinpi(2.0f * (t))
+#else
+#define COS_TURNS(t) cos(2.0f * PI_F * (t))
+#define SIN_TURNS(t) sin(2.0f * PI_F * (t))
+#endif
+
 /* An orthonormal basis around a unit vector n (Duff et al., "Building an Orthonormal Basis,
  * Revisited", JCGT 6(1), 2017): branch-free and exact for every n. */
 void make_frame(float3 n, float3 *t, float3 *b)
@@ -33,7 +46,7 @@ float3 to_frame(float3 v, float3 axis)
 float3 sample_cosine_hemisphere(float r1, float r2)
 {
     float s = sqrt(1.0f - r2);
-    return (float3)(cos(2.0f * PI_F * r1) * s, sin(2.0f * PI_F * r1) * s, sqrt(r2));
+    return (float3)(COS_TURNS(r1) * s, SIN_TURNS(r1) * s, sqrt(r2));
 }
 
 float pdf_cosine_hemisphere(float cos_theta)
@@ -46,7 +59,7 @@ float3 sample_uniform_sphere(float r1, float r2)
 {
     float z = 1.0f - 2.0f * r2;
     float s = sqrt(fmax(0.0f, 1.0f - z * z));
-    return (float3)(cos(2.0f * PI_F * r1) * s, sin(2.0f * PI_F * r1) * s, z);
+    return (float3)(COS_TURNS(r1) * s, SIN_TURNS(r1) * s, z);
 }
 
 /* cos^n lobe around z, the report's eq. (4); its pdf is (n + 1) / (2 pi) cos^n(alpha).
@@ -56,7 +69,7 @@ float3 sample_cosine_power(float r1, float r2, float n)
 {
     float cos_a = exp(log(1.0f - r2) / (n + 1.0f));
     float sin_a = sqrt(max(0.0f, 1.0f - cos_a * cos_a));
-    return (float3)(cos(2.0f * PI_F * r1) * sin_a, sin(2.0f * PI_F * r1) * sin_a, cos_a);
+    return (float3)(COS_TURNS(r1) * sin_a, SIN_TURNS(r1) * sin_a, cos_a);
 }
 
 float pdf_cosine_power(float cos_a, float n)
@@ -72,15 +85,15 @@ float2 sample_concentric_disk(float2 u)
     float2 o = 2.0f * u - 1.0f;
     if (o.x == 0.0f && o.y == 0.0f)
         return (float2)(0.0f);
-    float r, theta;
+    float r, theta;                            /* in turns */
     if (fabs(o.x) > fabs(o.y)) {
         r = o.x;
-        theta = 0.25f * PI_F * (o.y / o.x);
+        theta = 0.125f * (o.y / o.x);
     } else {
         r = o.y;
-        theta = 0.5f * PI_F - 0.25f * PI_F * (o.x / o.y);
+        theta = 0.25f - 0.125f * (o.x / o.y);
     }
-    return r * (float2)(cos(theta), sin(theta));
+    return r * (float2)(COS_TURNS(theta), SIN_TURNS(theta));
 }
 
 /* Power heuristic with beta = 2 (Veach, "Robust Monte Carlo Methods for Light Transport

@@ -81,10 +81,10 @@ float gtr1_d(float3 h, float a)
 /* A GTR1 normal, of density D(h) cos theta_h: cos^2 theta = (1 - a^(2(1 - u2))) / (1 - a^2). */
 float3 sample_gtr1(float a, float u1, float u2)
 {
-    float a2 = a * a, phi = 2.0f * PI_F * u1;
+    float a2 = a * a;
     float cos2 = (1.0f - pow(a2, 1.0f - u2)) / (1.0f - a2);
     float sin_t = sqrt(fmax(0.0f, 1.0f - cos2)), cos_t = sqrt(fmax(0.0f, cos2));
-    return (float3)(cos(phi) * sin_t, sin(phi) * sin_t, cos_t);
+    return (float3)(COS_TURNS(u1) * sin_t, SIN_TURNS(u1) * sin_t, cos_t);
 }
 
 /* The specular reflection's Fresnel term seen from outside at cos_h, from the dielectric's

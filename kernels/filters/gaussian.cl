@@ -21,7 +21,7 @@ float sample_gaussian(const RenderParams *p, float u0, float u1, Rng *rng)
     for (int i = 0; i < GAUSSIAN_TRIES; ++i) {
         float x, proposal;
         if (radius >= 2.0f * stddev) {
-            x = stddev * sqrt(-2.0f * log(1.0f - u0)) * cos(2.0f * PI_F * u1);
+            x = stddev * sqrt(-2.0f * log(1.0f - u0)) * COS_TURNS(u1);
             proposal = exp(-x * x / (2.0f * stddev * stddev));
         } else {
             x = radius * (2.0f * u0 - 1.0f);

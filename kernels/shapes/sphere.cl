@@ -79,6 +79,6 @@ float3 sample_sphere_cone(Sphere s, float3 p, float u1, float u2)
     float one_minus_cos = u1 * k;
     float cos_t = 1.0f - one_minus_cos;
     float sin_t = sqrt(max(0.0f, one_minus_cos * (2.0f - one_minus_cos)));
-    float3 v = (float3)(cos(2.0f * PI_F * u2) * sin_t, sin(2.0f * PI_F * u2) * sin_t, cos_t);
+    float3 v = (float3)(COS_TURNS(u2) * sin_t, SIN_TURNS(u2) * sin_t, cos_t);
     return to_world(v, unit(s.xyz - p));
 }
