@@ -34,7 +34,8 @@ float3 lookup_environment(const global float4 *env, const RenderParams *p, float
 float3 latlong_to_direction(float u, float v, float rotation)
 {
     float phi = u - rotation - 0.5f, theta = 0.5f * v;                 /* in turns */
-    return (float3)(SIN_TURNS(theta) * SIN_TURNS(phi), COS_TURNS(theta), -SIN_TURNS(theta) * COS_TURNS(phi));
+    float sin_t = SIN_TURNS(theta);
+    return (float3)(sin_t * SIN_TURNS(phi), COS_TURNS(theta), -sin_t * COS_TURNS(phi));
 }
 
 /* The interval i of a cdf of n intervals (cdf[0] = 0, cdf[n] = 1) with cdf[i] <= x < cdf[i+1];

@@ -9,7 +9,7 @@ import pyopencl as cl
 import pytest
 
 from pathtrace.compiled import SCENE_BUFFERS
-from pathtrace.device import build_program, choose_device
+from pathtrace.device import build_cached, build_program, choose_device
 from pathtrace.features import Features
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -23,12 +23,15 @@ def backend():
 
 class KernelRunner:
     """Builds the kernels plus a test kernel (the program of `features`: by default every shape
-    and material, no textures), and runs it on NumPy arrays."""
+    and material, no textures), or with `options` the source alone, and runs it on NumPy arrays."""
 
-    def __init__(self, backend, source, features=Features()):
-        self.ctx = cl.Context([backend.device.device])
+    def __init__(self, backend, source, features=Features(), options=None):
+        device = backend.device.device
+        self.ctx = cl.Context([device])
         self.queue = cl.CommandQueue(self.ctx)
-        self.program = build_program(self.ctx, backend.device.device, source, features=features).program
+        built = (build_program(self.ctx, device, source, features=features) if options is None
+                 else build_cached(self.ctx, device, source, options))
+        self.program = built.program
 
     def __call__(self, name, global_size, *args):
         bufs, outs = [], []

@@ -1,12 +1,12 @@
 """The direction warps of kernels/sampling.cl against their densities (chi-square tests)."""
 
 import numpy as np
-import pyopencl as cl
 import pytest
 from scipy import stats
 
-from pathtrace.device import BUILD_OPTIONS, build_cached
+from pathtrace.device import BUILD_OPTIONS
 from pathtrace.resources import resource_dir
+from tests.conftest import KernelRunner
 
 SOURCE = """
 kernel void warp(int which, float exponent, global const float4 *u, global float4 *out)
@@ -102,19 +102,12 @@ def test_turns_give_cosine_and_sine(backend, cpu_form):
     cospi and sinpi, else cos and sin), for the turns the samplers pass: [0, 1), the concentric disk's
     [-1/8, 3/8] and the environment's shifted by its rotation. The cospi form is exact at
     quarter turns."""
-    device = backend.device.device
-    ctx = cl.Context([device])
     source = (resource_dir("kernels") / "sampling.cl").read_text() + CIRCLE
     options = list(BUILD_OPTIONS) + (["-DCPU_DEVICE"] if cpu_form else [])
-    program = build_cached(ctx, device, source, options).program
     quarters = np.arange(-8, 13, dtype=np.float32) / 4
     t = np.concatenate([quarters, np.random.default_rng(3).uniform(-2.5, 3.0, 100_000)]).astype(np.float32)
-    t_buf = cl.Buffer(ctx, cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR, hostbuf=t)
-    out_buf = cl.Buffer(ctx, cl.mem_flags.WRITE_ONLY, t.size * 8)
-    queue = cl.CommandQueue(ctx)
-    program.circle(queue, (t.size,), None, t_buf, out_buf)
-    out = np.empty((t.size, 2), np.float32)
-    cl.enqueue_copy(queue, out, out_buf)
+    out = np.zeros((t.size, 2), np.float32)
+    KernelRunner(backend, source, options=options)("circle", t.size, t, out)
     angle = 2 * np.pi * t.astype(np.float64)
     np.testing.assert_allclose(out, np.stack([np.cos(angle), np.sin(angle)], axis=1), rtol=0, atol=2e-6)
     if cpu_form:
