@@ -1,5 +1,5 @@
 """OpenCL devices: listing them, choosing one from the --device flag, and building the kernels
-(with a binary cache, so that a second start does not recompile)."""
+(with a binary cache where the driver keeps none, so that a second start does not recompile)."""
 
 import hashlib
 import os
@@ -120,10 +120,22 @@ def build_program(context: cl.Context, device: cl.Device, extra: str = "",
     return build_cached(context, device, kernel_source(extra, features), options, use_cache)
 
 
+def keeps_own_cache(device: cl.Device) -> bool:
+    """Whether the driver caches what it compiles well enough that pathtrace's cache only costs:
+    PoCL keeps each program it has built (a rebuild from source reads it back in 0.06 s) and each
+    kernel it has compiled for a work-group size. Asking PoCL for a program's binary compiles
+    every kernel in it for a generic work-group size first, about 4 s for the render program on
+    two cores, kernels a scene may never launch and which its launches compile again for their
+    size (docs/performance.md)."""
+    return device.platform.name.strip() == "Portable Computing Language"
+
+
 def build_cached(context: cl.Context, device: cl.Device, source: str, options: list[str],
                  use_cache: bool = True) -> BuildResult:
-    """Builds a program for one device. The binary is cached under cache_dir(), keyed by the
-    source, the options, the exact device and driver and the entry's format."""
+    """Builds a program for one device. Unless the driver keeps its own cache, the binary is
+    cached under cache_dir(), keyed by the source, the options, the exact device and driver and
+    the entry's format."""
+    use_cache = use_cache and not keeps_own_cache(device)
     key = hashlib.sha256("\0".join([
         CACHE_FORMAT, source, " ".join(options), device.platform.name, device.platform.version, device.name,
         device.version, device.driver_version]).encode()).hexdigest()[:32]
