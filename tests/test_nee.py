@@ -68,9 +68,15 @@ SCENES = {"simple": lambda: load_scene("simple"), "hdr": hdr_scene,
 MIN_VARIANCE_RATIO = {"simple": 9.0, "hdr": 1.8, "materials": 150.0, "many-lights": 2.5}
 
 
-def render(backend, scene, nee, seed):
+# Samples per pixel: where paths without NEE meet the lights rarely (a small lamp, a sun), enough
+# that a block's sample variance has seen them; the many lights' ceiling fills half the view,
+# and its 4096-sample pair took 47 s of the suite on two cores
+SCENE_SPP = {"many-lights": 1024}
+
+
+def render(backend, scene, nee, seed, spp):
     r = Renderer(backend, scene.with_settings(nee=nee, seed=seed), *SIZE)
-    for _ in range(SPP // 256):
+    for _ in range(spp // 256):
         r.add_samples(256)
     r.finish()
     return r.mean(), r.variance()
@@ -78,18 +84,18 @@ def render(backend, scene, nee, seed):
 
 @pytest.fixture(scope="module", params=list(SCENES))
 def pair(request, backend):
-    scene = SCENES[request.param]()
-    return request.param, render(backend, scene, False, 1), render(backend, scene, True, 2)
+    scene, spp = SCENES[request.param](), SCENE_SPP.get(request.param, SPP)
+    return request.param, spp, render(backend, scene, False, 1, spp), render(backend, scene, True, 2, spp)
 
 
 def test_nee_converges_to_the_same_image(pair):
-    _, (m0, v0), (m1, v1) = pair
-    ok, p, threshold = z_test(m0, v0 / SPP, m1, v1 / SPP, block=4)
+    _, spp, (m0, v0), (m1, v1) = pair
+    ok, p, threshold = z_test(m0, v0 / spp, m1, v1 / spp, block=4)
     assert ok, (p, threshold)
 
 
 def test_nee_lowers_the_variance(pair):
-    name, (_, v0), (_, v1) = pair
+    name, _, (_, v0), (_, v1) = pair
     ratio = np.median(v0.mean(-1) / np.maximum(v1.mean(-1), 1e-12))
     print(f"{name}: variance ratio {ratio:.2f}")
     assert ratio >= MIN_VARIANCE_RATIO[name], ratio
@@ -98,9 +104,9 @@ def test_nee_lowers_the_variance(pair):
 def test_nee_off_and_on_agree_on_the_image_mean(pair):
     """The whole image's mean per channel, within five standard errors (from the pixels' sample
     variances), a coarser check than the block test above that no block's error can hide."""
-    _, (m0, v0), (m1, v1) = pair
+    _, spp, (m0, v0), (m1, v1) = pair
     pixels = m0.shape[0] * m0.shape[1]
-    se = np.sqrt((v0.sum(axis=(0, 1)) + v1.sum(axis=(0, 1))) / SPP) / pixels
+    se = np.sqrt((v0.sum(axis=(0, 1)) + v1.sum(axis=(0, 1))) / spp) / pixels
     assert np.all(np.abs(m0.mean(axis=(0, 1)) - m1.mean(axis=(0, 1))) < 5 * se), (m0.mean(axis=(0, 1)), m1.mean(axis=(0, 1)), se)
 
 
