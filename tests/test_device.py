@@ -10,8 +10,8 @@ BUILD = f"""
 import pyopencl as cl
 import pathtrace.device as d
 from pathtrace.device import build_cached, choose_device
-d.keeps_own_cache = lambda device: False      # PoCL's own cache makes ours unused on it
 b = choose_device({os.environ.get("PATHTRACE_TEST_DEVICE", "cpu")!r})
+d.keeps_own_cache = lambda device: False      # PoCL keeps its own cache, which leaves ours unused
 r = build_cached(b.context, b.device.device, {SOURCE!r}, [])
 print("cached" if r.cached else "built")
 """
@@ -25,7 +25,8 @@ def build(cache, extra=""):
 def test_a_cache_entry_that_is_a_fifo_is_not_opened(tmp_path):
     assert build(tmp_path).stdout.strip() == "built"
     assert build(tmp_path).stdout.strip() == "cached"
-    # choose_device caches the renderer's kernels too: the one-line kernel's entry is the smallest
+    # on a device that keeps no cache of its own, choose_device caches the renderer's kernels
+    # too: the one-line kernel's entry is the smallest
     entry = min(tmp_path.glob("*.bin"), key=lambda p: p.stat().st_size)
     entry.unlink()
     os.mkfifo(entry)
