@@ -27,10 +27,9 @@ def test_references_are_present():
                                             "media-fog", "anisotropic", "blend", "equal-area", "principled", "instances"} | NO_NEE
 
 
-# Scenes lit by delta lights (point, spot, directional) are compared with NEE only: no path can
-# hit such a light, so without NEE they are dark, in pathtrace as in Mitsuba's estimators
-# without emitter sampling (test_lights.py checks that they are).
-DELTA_LIT = {"lights", "media-fog"}
+# Scenes lit by delta lights (point, spot, directional), "lights" and "media-fog", are compared
+# with NEE only: no path can hit such a light, so without NEE they are dark, in pathtrace as in
+# Mitsuba's estimators without emitter sampling (test_lights.py checks that they are).
 # Without NEE each estimator is checked once per kind of BSDF, emitter and medium (the scenes
 # left out repeat those of one below, on other shapes), to keep the suite within its time
 NO_NEE = {"simple-diffuse", "cbox", "material-spheres", "textures", "masks", "normal-maps", "beckmann",
@@ -42,6 +41,10 @@ NO_NEE = {"simple-diffuse", "cbox", "material-spheres", "textures", "masks", "no
 # And where both render the same map but interpolate its texels differently: the sky of
 # equal-area.xml, seen directly (zero variance), came out up to 0.3 % apart at its glow.
 REFERENCE_BIAS = {"blend": 0.02, "equal-area": 0.005}
+# Lit by the shipped map's sun, with mirror and glass spheres: with NEE at 2048 samples per pixel
+# a block failed (p 2.2e-6 against the threshold 1.55e-5), its sample variance short of the rare
+# sun-through-mirror paths'
+SUN_THROUGH_DELTAS = {"material-spheres-hdr"}
 CASES = [(path, nee) for path in REFERENCES for nee in (True, False) if nee or path.stem in NO_NEE]
 
 
@@ -53,9 +56,11 @@ def test_matches_mitsuba(backend, path, nee):
     r = Renderer(backend, scene, w, h)
     # Without NEE we hit the lights by chance: far from the lamp of `simple` a pixel meets it
     # about once in a thousand samples, and a sample variance that has not seen it is too
-    # small. Enough samples per pixel, pooled over 4x4 blocks, see it dozens of times. A scene
-    # lit by delta lights alone is lit by light sampling only, and needs half as many.
-    for _ in range(16 if path.stem in DELTA_LIT else 32):
+    # small. Enough samples per pixel (4096), pooled over 4x4 blocks, see it dozens of times.
+    # With NEE every sample sees the lights, and half as many keep the test's standard error
+    # within 1.34 times (the references' 16384 samples included) for half the time; but not
+    # where the light is a map's sun, which the paths through delta BSDFs meet by chance alone.
+    for _ in range(16 if nee and path.stem not in SUN_THROUGH_DELTAS else 32):
         r.add_samples(128)
     r.finish()
     ok, p, threshold = z_test(r.mean(), r.variance() / r.samples, ref["mean"], ref["var_of_mean"], block=4,
