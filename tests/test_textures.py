@@ -491,3 +491,18 @@ def test_a_bump_map_of_a_combining_texture_is_refused_in_one_line_even_when_scal
                                     '<bsdf type="diffuse"/></bsdf></shape></scene>')
     with pytest.raises(UserError, match="a bump map must be a bitmap"):
         load_scene(str(tmp_path / "s.xml"))
+
+
+@pytest.mark.parametrize("dtype,channels,linear", [(np.uint8, 3, False), (np.uint8, 4, False), (np.uint8, 1, True),
+                                                   (np.float32, 3, True), (np.float32, 1, True)])
+def test_an_images_summary_is_its_decoded_texels_mean_and_extremes(dtype, channels, linear):
+    """The materials' host side reads a texture's mean, least and greatest rgb through
+    Image.summary, which for 8-bit images takes histograms instead of decoding every texel."""
+    rng = np.random.default_rng(channels)
+    texels = rng.integers(3, 250, (37, 53, channels)) if dtype == np.uint8 else rng.uniform(0, 40, (37, 53, channels))
+    image = Image(texels.astype(dtype), linear)
+    rgb = image.rgb().reshape(-1, 3)
+    mean, low, high = image.summary
+    np.testing.assert_allclose(mean, rgb.mean(axis=0), rtol=1e-12)
+    np.testing.assert_array_equal(low, rgb.min(axis=0))
+    np.testing.assert_array_equal(high, rgb.max(axis=0))

@@ -5,6 +5,7 @@ exceeds half's range)."""
 
 import os
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
@@ -55,6 +56,24 @@ class Image:
     def rgb(self) -> np.ndarray:
         v = self.linear_values()
         return np.repeat(v, 3, axis=2) if v.shape[2] == 1 else v[..., :3]
+
+    @cached_property
+    def summary(self) -> tuple:
+        """The rgb's mean, least and greatest values per channel, as the materials' host side asks
+        for them (several times per texture). Of 8-bit texels, from each channel's histogram
+        through the (monotonic) decoding, without decoding every texel: the 401 maps of
+        tori400-textured took 3 s of its loading that way."""
+        t = self.texels[..., :3]
+        if t.dtype != np.uint8:
+            rgb = self.rgb().reshape(-1, 3)
+            mean, low, high = rgb.mean(axis=0), rgb.min(axis=0), rgb.max(axis=0)
+        else:
+            table = np.arange(256) / 255.0 if self.linear else SRGB_TABLE
+            counts = np.array([np.bincount(t[..., c].ravel(), minlength=256) for c in range(t.shape[2])])
+            levels = [np.flatnonzero(h) for h in counts]
+            mean = counts @ table / t[..., 0].size
+            low, high = table[[k[0] for k in levels]], table[[k[-1] for k in levels]]
+        return tuple(np.resize(x, 3) for x in (mean, low, high))
 
 
 def read_image(path: Path, where: str, raw: bool = False, cache: dict = None) -> Image:
@@ -144,11 +163,10 @@ class Bitmap(TextureType):
         row["texels"] = texels.add(image, data)
 
     def mean(self, texture):
-        return texture.params["image"].rgb().reshape(-1, 3).mean(axis=0)
+        return texture.params["image"].summary[0]
 
     def bounds(self, texture):
-        rgb = texture.params["image"].rgb().reshape(-1, 3)
-        return rgb.min(axis=0), rgb.max(axis=0)
+        return texture.params["image"].summary[1:]
 
 
 def check_texels(image: Image) -> Image:
