@@ -1,9 +1,12 @@
 """The kernel cache (app/device.py build_cached): an entry that is not a regular file is not
-opened (a FIFO blocked for ever), and a write that fails (a full disk) leaves nothing behind."""
+opened (a FIFO blocked for ever), a write that fails (a full disk) leaves nothing behind, and on
+PoCL, which keeps its own, it is not used."""
 
 import os
 import subprocess
 import sys
+
+from pathtrace.device import build_cached
 
 SOURCE = "kernel void one(global int *a) { a[0] = 1; }"
 BUILD = f"""
@@ -56,3 +59,17 @@ def test_a_cache_entry_keeps_the_options_its_binary_was_built_with(tmp_path):
                         "d.build_cached = lambda c, dev, s, o, u=True: cached(c, dev, s, o + ['-DONE=1'], u)\n")
     assert r.returncode == 0, r.stderr
     assert ["-DONE=1"] in [_read_cached(p)[0] for p in tmp_path.glob("*.bin")]
+
+
+def test_pocl_keeps_the_kernels_in_its_own_cache_alone(backend, tmp_path, monkeypatch):
+    """Asking PoCL for a program's binary, to store it, compiled every kernel of the program first
+    (4 s for the render program on two cores): where the driver is PoCL, pathtrace's cache
+    stays empty and every build is PoCL's, which its own cache makes fast the second time."""
+    from pathtrace.device import keeps_own_cache
+    device = backend.device.device
+    assert keeps_own_cache(device) == ("Portable Computing Language" in device.platform.name)
+    monkeypatch.setenv("PATHTRACE_CACHE", str(tmp_path))
+    for _ in range(2):
+        r = build_cached(backend.context, device, SOURCE, [])
+        assert not r.cached or not keeps_own_cache(device)
+    assert bool(list(tmp_path.glob("*.bin"))) != keeps_own_cache(device)
