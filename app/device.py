@@ -111,13 +111,14 @@ class BuildResult:
 
 
 def build_program(context: cl.Context, device: cl.Device, extra: str = "",
-                  use_cache: bool = True, features: Features = Features()) -> BuildResult:
+                  use_cache: bool = True, features: Features = Features(), tune: bool = True) -> BuildResult:
     """Builds the kernels, specialised to `features` and to the kind of device (CPU_DEVICE: on
-    CPUs the samplers' azimuths take cospi: kernels/sampling.cl, COS_TURNS), for one device."""
+    CPUs the samplers' azimuths take cospi: kernels/sampling.cl, COS_TURNS), for one device.
+    `tune`: see build_cached."""
     options = list(BUILD_OPTIONS) + [f"-D{d}" for d in features.defines()]
     if device.type & cl.device_type.CPU:
         options.append("-DCPU_DEVICE")
-    return build_cached(context, device, kernel_source(extra, features), options, use_cache)
+    return build_cached(context, device, kernel_source(extra, features), options, use_cache, tune)
 
 
 def keeps_own_cache(device: cl.Device) -> bool:
@@ -131,14 +132,16 @@ def keeps_own_cache(device: cl.Device) -> bool:
 
 
 def build_cached(context: cl.Context, device: cl.Device, source: str, options: list[str],
-                 use_cache: bool = True) -> BuildResult:
+                 use_cache: bool = True, tune: bool = True) -> BuildResult:
     """Builds a program for one device. Unless the driver keeps its own cache, the binary is
-    cached under cache_dir(), keyed by the source, the options, the exact device and driver and
-    the entry's format."""
+    cached under cache_dir(), keyed by the source, the options, whether it was tuned, the exact
+    device and driver and the entry's format. `tune`: on NVIDIA, try the register caps of
+    app/occupancy.py (two to four more builds of the program)."""
     use_cache = use_cache and not keeps_own_cache(device)
+    tune = tune and is_nvidia(device)
     key = hashlib.sha256("\0".join([
-        CACHE_FORMAT, source, " ".join(options), device.platform.name, device.platform.version, device.name,
-        device.version, device.driver_version]).encode()).hexdigest()[:32]
+        CACHE_FORMAT, source, " ".join(options), "tuned" * tune, device.platform.name, device.platform.version,
+        device.name, device.version, device.driver_version]).encode()).hexdigest()[:32]
     path = cache_dir() / f"{key}.bin"
     start = time.perf_counter()
     cached = _read_cached(path) if use_cache else None
@@ -149,7 +152,7 @@ def build_cached(context: cl.Context, device: cl.Device, source: str, options: l
             return BuildResult(program, time.perf_counter() - start, True)
         except cl.Error:
             pass   # a stale or foreign binary: rebuild from source below
-    if is_nvidia(device):
+    if tune:
         program, options = build_for_occupancy(context, device, source, options)
     else:
         program = cl.Program(context, source).build(options=options, devices=[device])
@@ -205,14 +208,15 @@ class Backend:
     use_cache: bool = True
 
     def __post_init__(self):
-        self._variants = {Features(): self.build.program}
+        self._variants = {}
 
     @property
     def program(self) -> cl.Program:
         return self.build.program
 
     def program_for(self, features: Features) -> cl.Program:
-        """The kernels specialised to `features`, built once per backend."""
+        """The kernels specialised to `features`, built once per backend (and tuned, unlike
+        `program`)."""
         if features not in self._variants:
             self._variants[features] = build_program(self.context, self.device.device, self.extra,
                                                      self.use_cache, features).program
@@ -220,9 +224,12 @@ class Backend:
 
 
 def open_device(device: Device, extra: str = "", use_cache: bool = True) -> Backend:
+    """The device with its queue and its program of every feature, which shows that its platform
+    builds the kernels. That program renders no scene (each scene gets its own, program_for), so
+    it is built without the register-cap trials that a first start on NVIDIA would wait for."""
     context = cl.Context([device.device])
     queue = cl.CommandQueue(context, properties=cl.command_queue_properties.PROFILING_ENABLE)
-    return Backend(device, context, queue, build_program(context, device.device, extra, use_cache),
+    return Backend(device, context, queue, build_program(context, device.device, extra, use_cache, tune=False),
                    extra, use_cache)
 
 

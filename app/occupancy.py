@@ -72,17 +72,20 @@ def build_for_occupancy(context: cl.Context, device: cl.Device, source: str, opt
     scene of the same PTX as one tuned before (another version's source, the same kernels) got
     no cap (5-9 % of the H100's time on sphere scenes). A kernel named by a random token makes
     the PTX new, so that ptxas runs and reports for every build here; the binary kept is the
-    one built under the chosen options, which the driver then finds in its cache."""
+    one built under the chosen options, which the driver then finds in its cache. The options
+    returned are the whole of those it was built with, the report's included: the driver's cache
+    is keyed by them too, and without it every later start ran ptxas on the cached PTX again
+    (22 s of each start on the H100 for the program of every feature, docs/performance.md)."""
     source += f"\nkernel void occupancy_probe_{os.urandom(8).hex()}(void) {{}}\n"
     program = cl.Program(context, source).build(options=options + [REPORT], devices=[device])
     found = kernel_registers(program.get_build_info(device, cl.program_build_info.LOG))
     if not found:
-        return program, options
+        return program, options + [REPORT]
     most = max(registers for registers, _ in found.values())
     for cap in register_caps(most, device.registers_per_block_nv, device.warp_size_nv):
-        capped = options + [f"-cl-nv-maxrregcount={cap}"]
-        trial = cl.Program(context, source).build(options=capped + [REPORT], devices=[device])
+        capped = options + [f"-cl-nv-maxrregcount={cap}", REPORT]
+        trial = cl.Program(context, source).build(options=capped, devices=[device])
         report = kernel_registers(trial.get_build_info(device, cl.program_build_info.LOG))
         if report and all(spilled == 0 for _, spilled in report.values()):
             return trial, capped
-    return program, options
+    return program, options + [REPORT]

@@ -56,7 +56,7 @@ def test_a_cache_entry_keeps_the_options_its_binary_was_built_with(tmp_path):
     from pathtrace.device import _read_cached
     r = build(tmp_path, "import pathtrace.device as d\n"
                         "cached = d.build_cached\n"
-                        "d.build_cached = lambda c, dev, s, o, u=True: cached(c, dev, s, o + ['-DONE=1'], u)\n")
+                        "d.build_cached = lambda c, dev, s, o, *rest: cached(c, dev, s, o + ['-DONE=1'], *rest)\n")
     assert r.returncode == 0, r.stderr
     assert ["-DONE=1"] in [_read_cached(p)[0] for p in tmp_path.glob("*.bin")]
 
