@@ -44,3 +44,44 @@ def test_caps_are_the_occupancy_steps_down_to_four_fifths():
         for cap in register_caps(registers):
             assert registers * 0.8 <= cap < registers
             assert resident_warps(cap, 65536, 32) > resident_warps(registers, 65536, 32)
+
+
+def report(registers, spilled):
+    return (f"ptxas info    : Compiling entry function 'render_nee' for 'sm_90a'\n"
+            f"ptxas         .     320 bytes stack frame, {spilled} bytes spill stores, {spilled} bytes spill loads\n"
+            f"ptxas info    : Used {registers} registers, used 0 barriers\n")
+
+
+class FakeProgram:
+    """cl.Program on a stand-in for NVIDIA's driver: each build's log is ptxas's report for the
+    register cap in its options (116 registers uncapped; spills below 100)."""
+    built = []
+
+    def __init__(self, context, source):
+        pass
+
+    def build(self, options, devices):
+        self.options = options
+        cap = next((int(o.split("=")[1]) for o in options if o.startswith("-cl-nv-maxrregcount=")), None)
+        self.log = report(cap or 116, 64 if cap and cap < 100 else 0) if "-cl-nv-verbose" in options else ""
+        FakeProgram.built.append(options)
+        return self
+
+    def get_build_info(self, device, what):
+        return self.log
+
+
+class FakeDevice:
+    registers_per_block_nv, warp_size_nv = 65536, 32
+
+
+def test_the_options_kept_are_those_the_program_was_built_with(monkeypatch):
+    """The driver caches what ptxas made, keyed by the PTX and the build options: the options that
+    go with the cached binary must be the very ones of its build, the report's included, or the
+    next start misses that cache and runs ptxas again (22-32 s on the H100)."""
+    import pathtrace.occupancy as occupancy
+    monkeypatch.setattr(occupancy.cl, "Program", FakeProgram)
+    program, options = occupancy.build_for_occupancy(None, FakeDevice(), "kernel void k(void) {}", ["-DA"])
+    assert options == program.options == ["-DA", "-cl-nv-maxrregcount=112", "-cl-nv-verbose"]
+    assert FakeProgram.built == [["-DA", "-cl-nv-verbose"], ["-DA", "-cl-nv-maxrregcount=96", "-cl-nv-verbose"],
+                                 ["-DA", "-cl-nv-maxrregcount=112", "-cl-nv-verbose"]]
