@@ -69,3 +69,15 @@ def scene_arrays(compiled):
               "env_marginal": marginal, "env_conditional": conditional}
     return [np.ascontiguousarray(a) if a.size else np.zeros(1, a.dtype)
             for a in (arrays[name] for name in SCENE_BUFFERS)]
+
+
+# The longest test files, longest first (their times on two cores, 2026-11-25: the references
+# about 250 s, the rest 60-100 s each). The workers take whole files (--dist loadfile), so a long
+# one begun last leaves the other worker idle at the end.
+LONGEST_FILES = ("test_reference.py", "test_viewer.py", "test_materials.py", "test_cli.py", "test_bench.py",
+                 "test_nee.py")
+
+
+def pytest_collection_modifyitems(items):
+    rank = {name: k for k, name in enumerate(LONGEST_FILES)}
+    items.sort(key=lambda item: rank.get(item.path.name, len(LONGEST_FILES)))
