@@ -140,7 +140,7 @@ def build_cached(context: cl.Context, device: cl.Device, source: str, options: l
     use_cache = use_cache and not keeps_own_cache(device)
     tune = tune and is_nvidia(device)
     key = hashlib.sha256("\0".join([
-        CACHE_FORMAT, source, " ".join(options), "tuned" * tune, device.platform.name, device.platform.version,
+        CACHE_FORMAT, source, " ".join(options), "tuned" if tune else "", device.platform.name, device.platform.version,
         device.name, device.version, device.driver_version]).encode()).hexdigest()[:32]
     path = cache_dir() / f"{key}.bin"
     start = time.perf_counter()

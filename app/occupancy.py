@@ -74,8 +74,8 @@ def build_for_occupancy(context: cl.Context, device: cl.Device, source: str, opt
     the PTX new, so that ptxas runs and reports for every build here; the binary kept is the
     one built under the chosen options, which the driver then finds in its cache. The options
     returned are the whole of those it was built with, the report's included: the driver's cache
-    is keyed by them too, and without it every later start ran ptxas on the cached PTX again
-    (22 s of each start on the H100 for the program of every feature, docs/performance.md)."""
+    is keyed by them too, and without it the next start ran ptxas on the cached PTX again (25-35 s
+    on the H100, docs/performance.md)."""
     source += f"\nkernel void occupancy_probe_{os.urandom(8).hex()}(void) {{}}\n"
     program = cl.Program(context, source).build(options=options + [REPORT], devices=[device])
     found = kernel_registers(program.get_build_info(device, cl.program_build_info.LOG))

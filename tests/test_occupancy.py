@@ -78,7 +78,7 @@ class FakeDevice:
 def test_the_options_kept_are_those_the_program_was_built_with(monkeypatch):
     """The driver caches what ptxas made, keyed by the PTX and the build options: the options that
     go with the cached binary must be the very ones of its build, the report's included, or the
-    next start misses that cache and runs ptxas again (22-32 s on the H100)."""
+    next start misses that cache and runs ptxas again (25-35 s on the H100)."""
     import pathtrace.occupancy as occupancy
     monkeypatch.setattr(occupancy.cl, "Program", FakeProgram)
     program, options = occupancy.build_for_occupancy(None, FakeDevice(), "kernel void k(void) {}", ["-DA"])

@@ -61,9 +61,8 @@ class Image:
     def summary(self) -> tuple:
         """The rgb's mean, least and greatest values per channel, which the host side asks for
         several times per texture (the material table's constants, the readers' range checks).
-        Of 8-bit texels, from each channel's histogram
-        through the (monotonic) decoding, without decoding every texel: the 401 maps of
-        tori400-textured took 3 s of its loading that way."""
+        Of 8-bit texels, from each channel's histogram through the (monotonic) decoding, without
+        decoding every texel: the 401 maps of tori400-textured took 3 s of its loading that way."""
         t = self.texels[..., :3]
         if t.dtype != np.uint8:
             rgb = self.rgb().reshape(-1, 3)
