@@ -76,8 +76,9 @@ class CompiledScene:
         check_memory(scene.name, n_spheres, n_triangles, queue.device if queue else None,
                      scene.materials.texel_bytes(), len(instances) if self.two_level else 0)
         start = time.perf_counter()
-        # gathered from float32 vertices: what the kernels get, and half the bytes to move
-        corners = np.concatenate([np.asarray(m.vertices, np.float32)[m.faces] for m in meshes]) if meshes \
+        # gathered from float32 vertices: what the kernels get, and half the bytes to move (rows
+        # gathered by np.take, which is 3-4x faster than NumPy's indexing with an array)
+        corners = np.concatenate([np.take(np.asarray(m.vertices, np.float32), m.faces, axis=0) for m in meshes]) if meshes \
             else np.zeros((0, 3, 3), np.float32)
         lo, hi = primitive_boxes(scene.spheres, corners)
         if self.two_level:
@@ -99,7 +100,7 @@ class CompiledScene:
         counts = [len(m.faces) for m in meshes]
         mesh_of = np.repeat(np.arange(len(meshes)), counts).astype(np.int64)
         self.triangles = np.zeros(len(triangle_order), TRIANGLE)
-        self.triangles.view(np.float32).reshape(-1, 3, 4)[:, :, :3] = corners[triangle_order]
+        self.triangles.view(np.float32).reshape(-1, 3, 4)[:, :, :3] = np.take(corners, triangle_order, axis=0)
         # per-corner shading normals and texture coordinates, in BVH order, for the triangles of
         # meshes that have them; the others' index is -1
         normals, normal_index = corner_table(meshes, "normals", triangle_order)
@@ -220,7 +221,7 @@ def corner_table(meshes: list, attribute: str, triangle_order: np.ndarray) -> tu
     has = np.concatenate([np.full(len(m.faces), getattr(m, attribute) is not None) for m in meshes])
     rank = np.cumsum(has) - 1
     with_it = has[triangle_order]
-    table = values[faces[rank[triangle_order[with_it]]]].reshape(-1, width)
+    table = np.take(values, np.take(faces, rank[triangle_order[with_it]], axis=0), axis=0).reshape(-1, width)
     index = np.full(len(triangle_order), -1, np.int32)
     index[with_it] = np.arange(np.count_nonzero(with_it), dtype=np.int32) * 3
     return (table if len(table) else np.zeros((1, width), np.float32)), index
