@@ -11,7 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 import pyopencl as cl
 
-from pathtrace.bvh import BVH, build_bvh, column_max, column_min, primitive_boxes
+from pathtrace.bvh import BVH, column_max, column_min, primitive_boxes
+from pathtrace.bvh_cache import cached_bvh
 from pathtrace.errors import UserError, format_bytes, short
 from pathtrace.features import FLAT_MAX, Features, stack_size
 from pathtrace.lights import LightTable, build_light_table, emitted_power, primitive_bounds
@@ -51,7 +52,7 @@ MAX_RADIANCE = 1e20
 
 class CompiledScene:
     def __init__(self, scene: Scene, queue: cl.CommandQueue = None, progress=None):
-        """queue: the device that builds the BVH (pathtrace.bvh.build_bvh) and whose memory the scene
+        """queue: the device that builds the BVH (pathtrace.bvh.build_bvh, or pathtrace.bvh_cache reads it) and whose memory the scene
         must fit; progress(fraction) is called as the BVH build goes."""
         self.scene = scene
         n_spheres = len(scene.spheres)
@@ -85,7 +86,7 @@ class CompiledScene:
             two = build_two_level(scene, lo, hi, mesh_ends, meshes, queue, progress)
             self.bvh, self.instances, self.instance_depth, lo, hi = two.bvh, two.instances, two.depth, two.lo, two.hi
         else:
-            self.bvh: BVH = build_bvh(lo, hi, n_spheres, queue, progress)
+            self.bvh: BVH = cached_bvh(lo, hi, n_spheres, queue, progress)
             self.instances = np.zeros(1, INSTANCE)
         # the scene's bounding sphere, by which a light at infinity's power is reckoned
         self.radius = float(np.linalg.norm(column_max(hi) - column_min(lo)) / 2) if len(lo) else 1.0

@@ -2,10 +2,13 @@
 for before anything else. Each row writes a scene's files (pathtrace.bench_scenes:
 heightfield1M and meshes850) or takes a scene file given, and times `pathtrace render FILE` at
 64x64 (64x36 for the height field) with 1 spp from process start to exit, Python's start-up and
-imports included, best of --repeats after one untimed run that fills the kernel cache; with
---mitsuba PYTHON the same scene's Mitsuba 3 XML is loaded and rendered with 1 spp in a fresh
-process of that Python, timed the same way, in the same run (pathtrace.mitsuba_timing)."""
+imports included, best of --repeats after one untimed run that fills the kernel cache: with the
+BVH built (the BVH cache turned off), then with the BVH read from the cache that run filled
+(pathtrace.bvh_cache), as a scene opened a second time loads. With --mitsuba PYTHON the same
+scene's Mitsuba 3 XML is loaded and rendered with 1 spp in a fresh process of that Python, timed
+the same way, in the same run (pathtrace.mitsuba_timing); the ratio is against the build."""
 
+import os
 import shutil
 import sys
 import tempfile
@@ -24,17 +27,18 @@ class LoadTime:
     what: str                   # its size in words
     device: str                 # pathtrace's --device
     seconds: float              # pathtrace, command to image, the best of the repeats
+    cached_seconds: float       # the same, the BVH read from the BVH cache
     mitsuba_variant: str = ""
     mitsuba_seconds: float = None
 
 
-def best_time(command, repeats: int, cwd) -> float:
+def best_time(command, repeats: int, cwd, env=None) -> float:
     """The shortest of `repeats` runs of `command`, from process start to exit; a failure is one
     line naming the command and its last line of output."""
     times = []
     for _ in range(repeats):
         start = time.perf_counter()
-        r = run_command(command, cwd)
+        r = run_command(command, cwd, env)
         times.append(time.perf_counter() - start)
         if r.returncode:
             raise UserError(f"bench: {' '.join(map(str, command[:6]))} ... failed: {last_line(r)}")
@@ -50,11 +54,14 @@ def run_load(device: str, scene_files, repeats: int, mitsuba_python: str = None,
         rows = [write_height_field(folder), write_meshes(folder)]
         rows += [(str(Path(f).resolve()), str(Path(f).resolve()) if f.lower().endswith(".xml") else None,
                   "/".join(Path(f).resolve().parts[-3:])[-36:], (64, 64)) for f in scene_files]
+        built = {**os.environ, "PATHTRACE_BVH_CACHE": "0"}
+        cached = {**os.environ, "PATHTRACE_BVH_CACHE": str(folder / "bvh")}
         for scene, xml, what, size in rows:
             render = [sys.executable, "-m", "pathtrace", "render", scene, "--size", f"{size[0]}x{size[1]}",
                       "--spp", "1", "--device", device, "-o", str(folder / "out.exr"), "-q"]
-            best_time(render, 1, folder)                   # fills the kernel cache
-            r = LoadTime(Path(scene).stem, what, device, best_time(render, repeats, folder))
+            best_time(render, 1, folder, cached)            # fills the kernel and BVH caches
+            r = LoadTime(Path(scene).stem, what, device, best_time(render, repeats, folder, built),
+                         best_time(render, repeats, folder, cached))
             if mitsuba_python and xml:
                 mitsuba = mitsuba_load_command(mitsuba_python, variant, xml, folder / "mitsuba.exr")
                 r.mitsuba_variant, r.mitsuba_seconds = variant, best_time(mitsuba, repeats, folder)
@@ -65,10 +72,12 @@ def run_load(device: str, scene_files, repeats: int, mitsuba_python: str = None,
     return results
 
 
-LOAD_HEADER = f"{'scene':<16} {'what':<36} {'device':<8} {'pathtrace s':>11} {'Mitsuba 3 s':>22} {'ratio':>6}"
+LOAD_HEADER = (f"{'scene':<16} {'what':<36} {'device':<8} {'pathtrace s':>11} {'BVH cached s':>12} "
+               f"{'Mitsuba 3 s':>22} {'ratio':>6}")
 
 
 def format_load_row(r: LoadTime) -> str:
     theirs = f"{r.mitsuba_seconds:.2f} ({r.mitsuba_variant})" if r.mitsuba_seconds is not None else "-"
     ratio = f"{r.mitsuba_seconds / r.seconds:.2f}" if r.mitsuba_seconds is not None else "-"
-    return f"{r.scene:<16} {r.what:<36} {r.device:<8} {r.seconds:>11.2f} {theirs:>22} {ratio:>6}"
+    return (f"{r.scene:<16} {r.what:<36} {r.device:<8} {r.seconds:>11.2f} {r.cached_seconds:>12.2f} "
+            f"{theirs:>22} {ratio:>6}")

@@ -44,10 +44,10 @@ print(json.dumps({"seconds": seconds, "mean": float(np.mean(np.array(image)[...,
 """
 
 
-def run_command(command, cwd=None):
+def run_command(command, cwd=None, env=None):
     """subprocess.run, its output captured; a program that cannot be run is one line."""
     try:
-        return subprocess.run(command, cwd=cwd, capture_output=True, text=True)
+        return subprocess.run(command, cwd=cwd, env=env, capture_output=True, text=True)
     except OSError as e:          # a Python that is not there, or not a program
         raise UserError(f"bench: cannot run {command[0]}: {e.strerror or e}") from None
 

@@ -8,7 +8,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pathtrace.bvh import BVH, build_bvh
+from pathtrace.bvh import BVH
+from pathtrace.bvh_cache import cached_bvh
 from pathtrace.errors import UserError
 from pathtrace.scene.instances import world_boxes
 from pathtrace.types import INSTANCE
@@ -47,7 +48,7 @@ def build_two_level(scene, lo: np.ndarray, hi: np.ndarray, mesh_ends: list, mesh
     # the scene's own shapes, then each object's: one tree each (None for an empty one)
     spans = [(0, int(tri_ends[0]), n_spheres)] + [(int(a), int(b), 0) for a, b in zip(tri_ends[:-1], tri_ends[1:])]
     for first, stop, spheres in spans:
-        tree = build_bvh(lo[first:stop], hi[first:stop], spheres, queue) if stop > first else None
+        tree = cached_bvh(lo[first:stop], hi[first:stop], spheres, queue) if stop > first else None
         trees.append(tree)
         if tree is not None:
             orders.append(first + tree.order)
@@ -65,7 +66,7 @@ def build_two_level(scene, lo: np.ndarray, hi: np.ndarray, mesh_ends: list, mesh
     stop = spans[0][1]
     inst_lo = np.concatenate(([lo[:stop].min(axis=0)[None]] if own else []) + [world_lo[keep]])
     inst_hi = np.concatenate(([hi[:stop].max(axis=0)[None]] if own else []) + [world_hi[keep]])
-    top = build_bvh(inst_lo, inst_hi, len(obj), queue, progress)
+    top = cached_bvh(inst_lo, inst_hi, len(obj), queue, progress)
 
     # nodes end to end: the top tree, then each object tree, moved to its nodes and primitives
     parts, node_base, roots = [top.nodes], len(top.nodes), []

@@ -14,6 +14,10 @@ from pathtrace.features import Features
 
 ROOT = Path(__file__).resolve().parent.parent
 
+# The BVH cache (pathtrace.bvh_cache) is off in the tests, theirs and their commands': every
+# scene is built, and nothing is written to the user's cache; tests/test_bvh_cache.py turns it on.
+os.environ.setdefault("PATHTRACE_BVH_CACHE", "0")
+
 
 @pytest.fixture(scope="session")
 def backend():

@@ -1,0 +1,157 @@
+"""BVHs of large scenes kept on disk between runs, as the kernels are: a scene rendered or viewed
+again skips its build, the longest step of loading a large mesh (about 1 s of the 2.5 s from
+command to first image for a million triangles on two CPU cores; docs/benchmarks.md, Loading).
+
+An entry is keyed by the digest of what the tree is built from, the primitives' boxes and where
+the spheres end, together with the builder's own source (app/bvh.py and kernels/build/), so that
+a changed builder never reads an old tree. Any device's tree serves every device: each is a
+valid BVH over the same boxes. Entries are checked against a digest of their contents when read
+(a damaged one is built again and replaced), written whole or not at all, and the oldest are
+removed once the entries exceed MAX_BYTES. Scenes of fewer than MIN_PRIMITIVES primitives build
+in a fraction of a second and are not cached. The folder is cache_dir()/bvh, or the folder that
+PATHTRACE_BVH_CACHE names; PATHTRACE_BVH_CACHE=0 turns the cache off."""
+
+import hashlib
+import os
+import stat
+from pathlib import Path
+
+import numpy as np
+
+from pathtrace.bvh import BVH, build_bvh
+from pathtrace.resources import resource_dir
+from pathtrace.types import BVH_NODE
+
+FORMAT = b"1"
+MIN_PRIMITIVES = 65536
+MAX_BYTES = 1 << 30
+_HEADER = np.dtype([("digest", "S32"), ("nodes", "<i8"), ("primitives", "<i8"), ("depth", "<i8"), ("cost", "<f8")])
+
+_builder_digest = None
+
+
+def builder_digest() -> bytes:
+    """The digest of the builder's source: app/bvh.py and its kernels."""
+    global _builder_digest
+    if _builder_digest is None:
+        h = hashlib.sha256(FORMAT)
+        h.update(Path(__file__).with_name("bvh.py").read_bytes())
+        for name in ("types.h", "build/morton.cl", "build/ploc.cl", "build/collapse.cl"):
+            h.update((resource_dir("kernels") / name).read_bytes())
+        _builder_digest = h.digest()
+    return _builder_digest
+
+
+def folder():
+    """The cache's folder, or None where it is turned off."""
+    from pathtrace.device import cache_dir
+    chosen = os.environ.get("PATHTRACE_BVH_CACHE", "")
+    return None if chosen == "0" else Path(chosen) if chosen else cache_dir() / "bvh"
+
+
+def entry_key(lo: np.ndarray, hi: np.ndarray, num_spheres: int) -> str:
+    h = hashlib.sha256(builder_digest())
+    h.update(np.array([len(lo), num_spheres], np.int64).tobytes())
+    h.update(np.ascontiguousarray(lo, np.float32))
+    h.update(np.ascontiguousarray(hi, np.float32))
+    return h.hexdigest()[:32]
+
+
+def cached_bvh(lo: np.ndarray, hi: np.ndarray, num_spheres: int = None, queue=None, progress=None) -> BVH:
+    """build_bvh's tree (same arguments), read from the cache where an entry holds it; a tree
+    built is stored there."""
+    n, where = len(lo), folder()
+    if n < MIN_PRIMITIVES or where is None:
+        return build_bvh(lo, hi, num_spheres, queue, progress)
+    path = where / f"{entry_key(lo, hi, n if num_spheres is None else num_spheres)}.bvh"
+    bvh = read_entry(path, n)
+    if bvh is not None:
+        if progress:
+            progress(1.0)
+        return bvh
+    bvh = build_bvh(lo, hi, num_spheres, queue, progress)
+    write_entry(path, bvh)
+    return bvh
+
+
+def _payload_digest(nodes: np.ndarray, order: np.ndarray, header: np.ndarray) -> bytes:
+    h = hashlib.sha256(header.tobytes())
+    h.update(nodes)
+    h.update(order)
+    return h.digest()
+
+
+def read_entry(path: Path, primitives: int):
+    """The BVH stored at path, or None where there is none, or it is damaged or not for this
+    many primitives."""
+    try:
+        # a regular file only: an entry that is a FIFO would block the open for ever
+        info = os.stat(path)
+        if not stat.S_ISREG(info.st_mode):
+            return None
+        data = bytearray(info.st_size)      # writable: the nodes are used in place, not copied
+        with open(path, "rb") as f:
+            if f.readinto(data) != len(data):
+                return None
+    except OSError:
+        return None
+    if len(data) < _HEADER.itemsize:
+        return None
+    header = np.frombuffer(data, _HEADER, count=1).copy()[0]
+    count = int(header["nodes"])
+    if int(header["primitives"]) != primitives or count < 1 \
+            or len(data) != _HEADER.itemsize + count * BVH_NODE.itemsize + primitives * 4:
+        return None
+    nodes = np.frombuffer(data, BVH_NODE, count=count, offset=_HEADER.itemsize)
+    order = np.frombuffer(data, np.int32, count=primitives, offset=_HEADER.itemsize + nodes.nbytes)
+    digest = bytes(data[:32])      # the header's first field
+    header["digest"] = b""
+    if _payload_digest(nodes, order, header) != digest:
+        return None
+    try:
+        os.utime(path)      # recently used: removed last
+    except OSError:
+        pass
+    return BVH(nodes, order.astype(np.int64), int(header["depth"]), float(header["cost"]))
+
+
+def write_entry(path: Path, bvh: BVH):
+    """Stores bvh at path, whole (a temporary file renamed) or not at all: the cache is an
+    optimisation, and a read-only or full disk still renders. Then removes the oldest entries
+    beyond MAX_BYTES."""
+    nodes, order = np.ascontiguousarray(bvh.nodes), bvh.order.astype(np.int32)
+    header = np.zeros(1, _HEADER)
+    header["nodes"], header["primitives"], header["depth"], header["cost"] = len(nodes), len(order), bvh.depth, bvh.cost
+    header["digest"] = _payload_digest(nodes, order, header)
+    tmp = path.with_suffix(f".tmp{os.getpid()}")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with open(tmp, "wb") as f:
+            f.write(header.tobytes())
+            f.write(nodes)
+            f.write(order)
+        os.replace(tmp, path)
+    except OSError:
+        try:
+            tmp.unlink()
+        except OSError:
+            pass
+        return
+    prune(path.parent)
+
+
+def prune(where: Path, limit: int = MAX_BYTES):
+    """Removes the least recently used entries until the rest take at most `limit` bytes."""
+    try:
+        entries = [(e.stat().st_mtime, e.stat().st_size, e) for e in where.glob("*.bvh")]
+    except OSError:
+        return
+    total = sum(size for _, size, _ in entries)
+    for _, size, entry in sorted(entries, key=lambda e: e[0]):
+        if total <= limit:
+            break
+        try:
+            entry.unlink()
+            total -= size
+        except OSError:
+            pass

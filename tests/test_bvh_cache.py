@@ -1,0 +1,136 @@
+"""The BVH cache: a tree read back is the tree built, is read rather than built, and a damaged,
+foreign, blocking or unwritable entry or folder costs a build, never a wrong tree or a hang."""
+
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import pathtrace.bvh_cache as cache
+from pathtrace.bvh import build_bvh
+from tests.conftest import ROOT
+
+N = cache.MIN_PRIMITIVES
+
+
+def boxes(seed=0, n=N):
+    lo = np.random.default_rng(seed).random((n, 3), dtype=np.float32) * 10
+    return lo, lo + 0.05
+
+
+def same(a, b):
+    return (np.array_equal(a.nodes.view(np.uint8), b.nodes.view(np.uint8)) and np.array_equal(a.order, b.order)
+            and a.depth == b.depth and a.cost == b.cost)
+
+
+@pytest.fixture
+def folder(tmp_path, monkeypatch):
+    monkeypatch.setenv("PATHTRACE_BVH_CACHE", str(tmp_path / "bvh"))
+    return tmp_path / "bvh"
+
+
+def no_build(*args):
+    raise AssertionError("built, where the cache holds the tree")
+
+
+def test_a_tree_is_read_back_as_built_and_not_built_again(folder, monkeypatch):
+    lo, hi = boxes()
+    built = cache.cached_bvh(lo, hi, N // 2)
+    assert same(built, build_bvh(lo, hi, N // 2))
+    entry, = folder.glob("*.bvh")
+    monkeypatch.setattr(cache, "build_bvh", no_build)
+    progress = []
+    read = cache.cached_bvh(lo, hi, N // 2, progress=progress.append)
+    assert same(read, built) and read.nodes.flags.writeable and progress == [1.0]
+
+
+def test_the_key_is_the_boxes_and_the_spheres_count(folder):
+    lo, hi = boxes()
+    cache.cached_bvh(lo, hi, 0)
+    cache.cached_bvh(lo, hi, N)            # the same boxes, the kinds split elsewhere
+    moved = lo.copy()
+    moved[7, 1] = np.nextafter(moved[7, 1], np.float32(0))
+    cache.cached_bvh(moved, hi, 0)         # one float's last bit
+    assert len(list(folder.glob("*.bvh"))) == 3
+
+
+def test_small_scenes_and_a_cache_turned_off_write_nothing(folder, monkeypatch):
+    lo, hi = boxes(n=N - 1)
+    cache.cached_bvh(lo, hi)
+    assert not folder.exists()
+    monkeypatch.setenv("PATHTRACE_BVH_CACHE", "0")
+    cache.cached_bvh(*boxes())
+    assert not folder.exists()
+
+
+@pytest.mark.parametrize("damage", ["truncated", "flipped", "empty", "fifo"])
+def test_a_damaged_entry_is_built_again_and_replaced(folder, damage):
+    lo, hi = boxes()
+    built = cache.cached_bvh(lo, hi)
+    entry, = folder.glob("*.bvh")
+    data = entry.read_bytes()
+    entry.unlink()
+    if damage == "truncated":
+        entry.write_bytes(data[: len(data) // 2])
+    elif damage == "flipped":
+        entry.write_bytes(data[:1000] + bytes([data[1000] ^ 1]) + data[1001:])
+    elif damage == "empty":
+        entry.write_bytes(b"")
+    else:
+        os.mkfifo(entry)
+    assert cache.read_entry(entry, N) is None
+    if damage == "fifo":
+        entry.unlink()
+    assert same(cache.cached_bvh(lo, hi), built)
+    assert cache.read_entry(entry, N) is not None
+
+
+def test_an_unwritable_folder_still_builds_and_leaves_nothing(tmp_path, monkeypatch):
+    blocked = tmp_path / "file"
+    blocked.write_text("not a folder")
+    monkeypatch.setenv("PATHTRACE_BVH_CACHE", str(blocked / "bvh"))
+    lo, hi = boxes()
+    assert same(cache.cached_bvh(lo, hi), build_bvh(lo, hi))
+    assert [p.name for p in tmp_path.iterdir()] == ["file"]
+
+
+def test_the_least_recently_used_entries_go_first(folder):
+    for seed in range(3):
+        cache.cached_bvh(*boxes(seed))
+    entries = sorted(folder.glob("*.bvh"), key=lambda p: p.stat().st_mtime)
+    for age, entry in enumerate(entries):
+        os.utime(entry, (1000 + age, 1000 + age))
+    cache.read_entry(entries[0], N)        # used: now the newest
+    cache.prune(folder, limit=entries[0].stat().st_size + entries[2].stat().st_size)
+    assert sorted(p.name for p in folder.glob("*.bvh")) == sorted(p.name for p in (entries[0], entries[2]))
+
+
+def test_a_mesh_renders_the_same_from_the_cache(tmp_path):
+    """From the command: the first render stores its scene's tree, the second reads it (its
+    folder's entry is the only one, and unchanged) and writes the same image."""
+    n = 190
+    x, y = np.meshgrid(np.linspace(-1, 1, n), np.linspace(-1, 1, n))
+    z = 0.1 * np.sin(4 * x) * np.cos(3 * y)
+    vertices = np.column_stack([x.ravel(), z.ravel(), y.ravel()])
+    i = (np.arange(n - 1)[:, None] * n + np.arange(n - 1)).ravel()
+    faces = np.concatenate([np.column_stack([i, i + n, i + 1]), np.column_stack([i + 1, i + n, i + n + 1])])
+    assert len(faces) >= N
+    obj = tmp_path / "field.obj"
+    obj.write_text("".join(f"v {a} {b} {c}\n" for a, b, c in vertices)
+                   + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces))
+    scene = tmp_path / "scene.toml"
+    scene.write_text('[camera]\neye = [0, 2, 2.5]\nlook_at = [0, 0, 0]\n\n[[meshes]]\nfile = "field.obj"\n'
+                     'material = { type = "diffuse", rho_d = 0.6 }\n')
+    env = {**os.environ, "PATHTRACE_BVH_CACHE": str(tmp_path / "bvh")}
+    images = []
+    for k in range(2):
+        out = tmp_path / f"out{k}.exr"
+        r = subprocess.run([sys.executable, "-m", "pathtrace", "render", scene, "--size", "32x24", "--spp", "2",
+                            "--device", "cpu", "-o", out, "-q"], cwd=ROOT, env=env, capture_output=True, text=True,
+                           timeout=300)
+        assert r.returncode == 0, r.stderr
+        entry, = (tmp_path / "bvh").glob("*.bvh")
+        images.append((out.read_bytes(), entry.read_bytes()))
+    assert images[0] == images[1]
