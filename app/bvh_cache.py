@@ -5,19 +5,19 @@ command to first image for a million triangles on two CPU cores; docs/benchmarks
 An entry is keyed by the digest of what the tree is built from, the primitives' boxes and where
 the spheres end, together with the builder's own source (app/bvh.py and kernels/build/), so that
 a changed builder never reads an old tree. Any device's tree serves every device: each is a
-valid BVH over the same boxes. Entries are checked against a digest of their contents when read
-(a damaged one is built again and replaced), written whole or not at all, and the oldest are
-removed once the entries exceed MAX_BYTES. Scenes of fewer than MIN_PRIMITIVES primitives build
-in a fraction of a second and are not cached. The folder is cache_dir()/bvh, or the folder that
+valid BVH over the same boxes. Entries are files of pathtrace.cache_files (a damaged one is built
+again and replaced), and the least recently used are removed once the entries exceed MAX_BYTES.
+Scenes of fewer than MIN_PRIMITIVES primitives build in a fraction of a second and are not
+cached. The folder is cache_dir()/bvh, or the folder that
 PATHTRACE_BVH_CACHE names; PATHTRACE_BVH_CACHE=0 turns the cache off."""
 
 import hashlib
 import os
-import stat
 from pathlib import Path
 
 import numpy as np
 
+from pathtrace import cache_files
 from pathtrace.bvh import BVH, build_bvh
 from pathtrace.resources import resource_dir
 from pathtrace.types import BVH_NODE
@@ -25,7 +25,7 @@ from pathtrace.types import BVH_NODE
 FORMAT = b"1"
 MIN_PRIMITIVES = 65536
 MAX_BYTES = 1 << 30
-_HEADER = np.dtype([("digest", "S32"), ("nodes", "<i8"), ("primitives", "<i8"), ("depth", "<i8"), ("cost", "<f8")])
+_HEADER = np.dtype([("nodes", "<i8"), ("primitives", "<i8"), ("depth", "<i8"), ("cost", "<f8")])
 
 _builder_digest = None
 
@@ -74,40 +74,19 @@ def cached_bvh(lo: np.ndarray, hi: np.ndarray, num_spheres: int = None, queue=No
     return bvh
 
 
-def _payload_digest(nodes: np.ndarray, order: np.ndarray, header: np.ndarray) -> bytes:
-    h = hashlib.sha256(header.tobytes())
-    h.update(nodes)
-    h.update(order)
-    return h.digest()
-
-
 def read_entry(path: Path, primitives: int):
     """The BVH stored at path, or None where there is none, or it is damaged or not for this
     many primitives."""
-    try:
-        # a regular file only: an entry that is a FIFO would block the open for ever
-        info = os.stat(path)
-        if not stat.S_ISREG(info.st_mode):
-            return None
-        data = bytearray(info.st_size)      # writable: the nodes are used in place, not copied
-        with open(path, "rb") as f:
-            if f.readinto(data) != len(data):
-                return None
-    except OSError:
+    data = cache_files.read_entry(path)      # writable: the nodes are used in place, not copied
+    if data is None or len(data) < _HEADER.itemsize:
         return None
-    if len(data) < _HEADER.itemsize:
-        return None
-    header = np.frombuffer(data, _HEADER, count=1).copy()[0]
+    header = np.frombuffer(data, _HEADER, count=1)[0]
     count = int(header["nodes"])
     if int(header["primitives"]) != primitives or count < 1 \
             or len(data) != _HEADER.itemsize + count * BVH_NODE.itemsize + primitives * 4:
         return None
     nodes = np.frombuffer(data, BVH_NODE, count=count, offset=_HEADER.itemsize)
     order = np.frombuffer(data, np.int32, count=primitives, offset=_HEADER.itemsize + nodes.nbytes)
-    digest = bytes(data[:32])      # the header's first field
-    header["digest"] = b""
-    if _payload_digest(nodes, order, header) != digest:
-        return None
     try:
         os.utime(path)      # recently used: removed last
     except OSError:
@@ -116,28 +95,13 @@ def read_entry(path: Path, primitives: int):
 
 
 def write_entry(path: Path, bvh: BVH):
-    """Stores bvh at path, whole (a temporary file renamed) or not at all: the cache is an
-    optimisation, and a read-only or full disk still renders. Then removes the oldest entries
-    beyond MAX_BYTES."""
-    nodes, order = np.ascontiguousarray(bvh.nodes), bvh.order.astype(np.int32)
+    """Stores bvh at path (pathtrace.cache_files: whole or not at all), then removes the oldest
+    entries beyond MAX_BYTES."""
     header = np.zeros(1, _HEADER)
-    header["nodes"], header["primitives"], header["depth"], header["cost"] = len(nodes), len(order), bvh.depth, bvh.cost
-    header["digest"] = _payload_digest(nodes, order, header)
-    tmp = path.with_suffix(f".tmp{os.getpid()}")
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with open(tmp, "wb") as f:
-            f.write(header.tobytes())
-            f.write(nodes)
-            f.write(order)
-        os.replace(tmp, path)
-    except OSError:
-        try:
-            tmp.unlink()
-        except OSError:
-            pass
-        return
-    prune(path.parent)
+    header["nodes"], header["primitives"], header["depth"], header["cost"] = \
+        len(bvh.nodes), len(bvh.order), bvh.depth, bvh.cost
+    if cache_files.write_entry(path, header, np.ascontiguousarray(bvh.nodes), bvh.order.astype(np.int32)):
+        prune(path.parent)
 
 
 def prune(where: Path, limit: int = MAX_BYTES):

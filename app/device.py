@@ -3,7 +3,6 @@
 
 import hashlib
 import os
-import stat
 import sys
 import time
 from dataclasses import dataclass
@@ -11,6 +10,7 @@ from pathlib import Path
 
 import pyopencl as cl
 
+from pathtrace.cache_files import read_entry, write_entry
 from pathtrace.errors import UserError, format_bytes, short
 from pathtrace.features import Features
 from pathtrace.occupancy import build_for_occupancy, is_nvidia
@@ -162,35 +162,16 @@ def build_cached(context: cl.Context, device: cl.Device, source: str, options: l
         if binary:
             # the options it was built with go with it: a register cap applies when a driver
             # compiles the cached intermediate code (NVIDIA's PTX) for the device
-            data = "\0".join(options).encode() + b"\n" + binary
-            tmp = path.with_suffix(f".tmp{os.getpid()}")
-            try:
-                path.parent.mkdir(parents=True, exist_ok=True)
-                tmp.write_bytes(hashlib.sha256(data).digest() + data)
-                os.replace(tmp, path)
-            except OSError:
-                # caching is an optimisation: a read-only or full disk still renders, and leaves
-                # no partial file behind
-                try:
-                    tmp.unlink()
-                except OSError:
-                    pass
+            write_entry(path, "\0".join(options).encode() + b"\n", binary)
     return BuildResult(program, seconds, False)
 
 
 def _read_cached(path: Path):
     """A cached binary and the build options it was made with, or None where there is none or
-    it does not match the digest it was written with: a truncated or damaged binary handed to a
-    driver can crash it (PoCL segfaulted on the first half of a valid one)."""
-    try:
-        # a regular file only: an entry that is a FIFO would block the open for ever
-        if not stat.S_ISREG(os.stat(path).st_mode):
-            return None
-        data = path.read_bytes()
-    except OSError:
-        return None
-    digest, data = data[:32], data[32:]
-    if hashlib.sha256(data).digest() != digest or b"\n" not in data:
+    it is damaged (pathtrace.cache_files)."""
+    data = read_entry(path)
+    data = bytes(data) if data is not None else b""
+    if b"\n" not in data:
         return None
     options, binary = data.split(b"\n", 1)
     return ([o for o in options.decode().split("\0") if o], binary) if binary else None

@@ -39,12 +39,12 @@ def test_a_cache_entry_that_is_a_fifo_is_not_opened(tmp_path):
 
 def test_a_full_disk_leaves_no_partial_cache_file(tmp_path):
     """The write fails half-way (ENOSPC): the build still succeeds, and no .tmp file is left."""
-    full = ("import errno, pathlib\n"
-            "def write_bytes(self, data):\n"
-            "    with open(self, 'wb') as f:\n"
-            "        f.write(data[: len(data) // 2])\n"
-            "    raise OSError(errno.ENOSPC, 'No space left on device')\n"
-            "pathlib.Path.write_bytes = write_bytes\n")
+    full = ("import builtins, errno, io, pathtrace.cache_files as files\n"
+            "class Full(io.FileIO):\n"
+            "    def write(self, data):\n"
+            "        super().write(bytes(data)[: len(data) // 2])\n"
+            "        raise OSError(errno.ENOSPC, 'No space left on device')\n"
+            "files.open = lambda path, mode='r': Full(path, mode) if 'w' in mode else builtins.open(path, mode)\n")
     r = build(tmp_path, full)
     assert r.returncode == 0 and r.stdout.strip() == "built", r.stderr
     assert not list(tmp_path.glob("*.tmp*")) and not list(tmp_path.glob("*.bin"))
