@@ -3,8 +3,8 @@ again skips its build, the longest step of loading a large mesh (about 1 s of th
 command to first image for a million triangles on two CPU cores; docs/benchmarks.md, Loading).
 
 An entry is keyed by the digest of what the tree is built from, the primitives' boxes and where
-the spheres end, together with the builder's own source (app/bvh.py and kernels/build/), so that
-a changed builder never reads an old tree. Any device's tree serves every device: each is a
+the spheres end, together with the source of the builder (app/bvh.py and kernels/build/) and of
+this file, so that a changed builder or entry format never reads an old entry. Any device's tree serves every device: each is a
 valid BVH over the same boxes. Entries are files of pathtrace.cache_files (a damaged one is built
 again and replaced), and the least recently used are removed once the entries exceed MAX_BYTES.
 Scenes of fewer than MIN_PRIMITIVES primitives build in a fraction of a second and are not
@@ -22,7 +22,6 @@ from pathtrace.bvh import BVH, build_bvh
 from pathtrace.resources import resource_dir
 from pathtrace.types import BVH_NODE
 
-FORMAT = b"1"
 MIN_PRIMITIVES = 65536
 MAX_BYTES = 1 << 30
 _HEADER = np.dtype([("nodes", "<i8"), ("primitives", "<i8"), ("depth", "<i8"), ("cost", "<f8")])
@@ -31,10 +30,11 @@ _builder_digest = None
 
 
 def builder_digest() -> bytes:
-    """The digest of the builder's source: app/bvh.py and its kernels."""
+    """The digest of the builder's source (app/bvh.py and its kernels) and of this file's, which
+    writes and reads the entries."""
     global _builder_digest
     if _builder_digest is None:
-        h = hashlib.sha256(FORMAT)
+        h = hashlib.sha256(Path(__file__).read_bytes())
         h.update(Path(__file__).with_name("bvh.py").read_bytes())
         for name in ("types.h", "build/morton.cl", "build/ploc.cl", "build/collapse.cl"):
             h.update((resource_dir("kernels") / name).read_bytes())
