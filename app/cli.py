@@ -472,6 +472,9 @@ def cmd_bench(args):
     if args.json:
         from pathtrace.image_io import check_writable
         check_writable(args.json, "--json", formats=None)
+    if args.mitsuba:
+        from pathtrace.mitsuba_timing import check_mitsuba
+        check_mitsuba(args.mitsuba, args.mitsuba_variant)
     if args.display or args.denoise:
         print(bench.TIMING_HEADER)
         width, height = timing_size

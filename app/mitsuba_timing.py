@@ -52,6 +52,14 @@ def run_command(command, cwd=None, env=None):
         raise UserError(f"bench: cannot run {command[0]}: {e.strerror or e}") from None
 
 
+def check_mitsuba(python: str, variant: str):
+    """Refuses, in one line and before any timed run, a Python that cannot run Mitsuba 3's
+    `variant` (no Mitsuba there, or a variant its machine lacks: LLVM, CUDA)."""
+    r = run_command([python, "-c", "import sys, mitsuba as mi; mi.set_variant(sys.argv[1])", variant])
+    if r.returncode:
+        raise UserError(f"bench: --mitsuba {python} cannot run Mitsuba 3's {variant}: {last_line(r)}")
+
+
 def last_line(r) -> str:
     """The last line a finished command wrote, to name its failure."""
     return (r.stderr.strip().splitlines() or r.stdout.strip().splitlines() or ["(no output)"])[-1]
