@@ -68,6 +68,7 @@ class Result:
     rays_per_sample: float = None   # with --traversal (app/traversal_stats.py)
     nodes_per_ray: float = None
     primitives_per_ray: float = None
+    trace_split: object = None      # with --trace-split: a pathtrace.trace_split.TraceSplit
 
 
 def default_estimator(scene) -> str:
@@ -119,7 +120,7 @@ def kernel_build_times(backend, cold: bool = True):
 
 
 def run(device_specs, scene_names, estimators, width, height, spp, together=False, cold=True,
-        mitsuba: tuple = None, traversal: bool = False, log=print):
+        mitsuba: tuple = None, traversal: bool = False, split: bool = False, log=print):
     """A row per device and scene, or with `together` a row per scene for all the devices
     rendering it as one (the multi-device scaling measurement). mitsuba: (python, variant) to
     time Mitsuba 3 on the rows of the comparison mode with NEE (depth8+nee)."""
@@ -139,6 +140,10 @@ def run(device_specs, scene_names, estimators, width, height, spp, together=Fals
                     if traversal:
                         count_traversal(r, group[0], scene)
                         log(format_traversal(r))
+                    if split:
+                        from pathtrace.trace_split import format_split, trace_split
+                        r.trace_split = trace_split(group[0], scene, width, height, SPLIT_SPP)
+                        log(format_split(r.trace_split))
                     if mitsuba and est == "depth8+nee":
                         try:
                             twin = mitsuba_twin(scene, r, folder)
@@ -154,6 +159,7 @@ def run(device_specs, scene_names, estimators, width, height, spp, together=Fals
 
 
 TRAVERSAL_SPP = 4       # samples per pixel of the counting renders: the ratios settle long before
+SPLIT_SPP = 8           # of the trace split's renders (the first untimed)
 
 
 def count_traversal(r: Result, backend, scene):

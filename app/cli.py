@@ -511,7 +511,8 @@ def cmd_bench(args):
     print(bench.HEADER)
     results = bench.run(args.device or ["auto"], args.scenes, args.estimator, width, height, args.spp,
                         args.together, not args.no_cold,
-                        (args.mitsuba, args.mitsuba_variant) if args.mitsuba else None, args.traversal)
+                        (args.mitsuba, args.mitsuba_variant) if args.mitsuba else None, args.traversal,
+                        args.trace_split)
     if args.json:
         bench.write_json(args.json, results, sys.argv[1:])
         print(f"wrote {args.json}", file=sys.stderr)
@@ -582,6 +583,10 @@ def build_parser():
     p.add_argument("--traversal", action="store_true",
                    help="also count, for each row, the rays per sample and the BVH nodes visited and "
                         "primitives tested per ray (three renders of 4 spp at the row's size)")
+    p.add_argument("--trace-split", action="store_true",
+                   help="also time, for each row, its depth-2 paths against the same rays traced by a "
+                        "kernel that only walks the BVH: how much of the time is tracing (8 spp at the "
+                        "row's size)")
     p.add_argument("--load", action="store_true",
                    help="time loading instead: seconds from 'pathtrace render FILE' to its first image "
                         "(1 spp) for a 1M-triangle PLY file and for 850 PLY meshes in a pbrt-v4 file")

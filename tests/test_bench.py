@@ -111,10 +111,10 @@ def test_load_bench_rows(tmp_path):
     assert len(r.stderr.strip().splitlines()) == 1 and not r.stdout    # before any timed run
 
 
-def test_bench_without_the_cold_build_and_with_traversal_counts(tmp_path):
+def test_bench_without_the_cold_build_and_with_traversal_counts_and_the_trace_split(tmp_path):
     out = tmp_path / "bench.json"
     r = pathtrace("bench", "--quick", "--device", "cpu", "--scenes", "simple", "--no-cold", "--traversal",
-                  "--json", out)
+                  "--trace-split", "--json", out)
     assert r.returncode == 0, r.stderr
     row, = json.loads(out.read_text())["results"]
     assert row["build_cold_seconds"] is None and row["build_warm_seconds"] >= 0 and row["seconds"] > 0
@@ -122,6 +122,8 @@ def test_bench_without_the_cold_build_and_with_traversal_counts(tmp_path):
     # simple's five spheres have no tree: every ray tests all five (app/features.py: FLAT_MAX)
     assert row["nodes_per_ray"] == 0 and row["primitives_per_ray"] == 5 and row["rays_per_sample"] >= 1
     assert "traversal: " in r.stdout
+    split = row["trace_split"]
+    assert split["rays_per_pixel"]["camera"] == 1 and split["megakernel_ms"] > 0 and "trace split (depth 2" in r.stdout
 
 
 def test_bench_renders_the_generated_textured_scene_and_asks_mitsuba(tmp_path):
