@@ -35,9 +35,11 @@ def trace_split(backend, scene, width: int, height: int, spp: int) -> TraceSplit
     """The split of `spp` samples per pixel (at least 2: the first launches are not timed) of
     `scene`'s paths of depth 2 with next-event estimation and no roulette, seed 0."""
     renderer = Renderer(backend, scene.with_settings(max_depth=2, nee=True, russian_roulette="off"), width, height)
-    if renderer.compiled.two_level:
-        raise UserError(f"--trace-split: {scene.name} has a two-level BVH, which its kernels do not walk")
     features = renderer.compiled.features(renderer.settings, renderer.camera)
+    if renderer.compiled.two_level or features.media:
+        what = "a two-level BVH, which its kernels do not walk" if renderer.compiled.two_level \
+            else "participating media, whose paths its kernels do not follow"
+        raise UserError(f"--trace-split: {scene.name} has {what}")
     program = build_program(backend.context, backend.device.device,
                             (resource_dir("kernels") / "trace_split.cl").read_text(),
                             backend.use_cache, replace(features, traversal_stats=0)).program

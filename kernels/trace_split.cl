@@ -11,7 +11,8 @@
  *   rays    per pixel three rays, camera, bounce and shadow, each two float4: the origin and
  *           t_max, then the unit direction and, as int bits, the primitive the ray leaves (-1:
  *           none). A zero direction is no ray (the camera ray escaped, the surface was a back
- *           face, the sample was refused). Media are not followed: each ray is the surface's.
+ *           face, the sample was refused). Scenes with media or a two-level BVH are not split
+ *           (app/trace_split.py refuses them).
  *   which   0, 1 or 2: trace_rays traces each pixel's camera, bounce or shadow ray.
  *   hits    per pixel, the primitive hit (-1: none), 1 or 0 for an occluded shadow ray or not,
  *           and -2 where there was no ray. */

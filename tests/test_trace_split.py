@@ -1,6 +1,8 @@
 """app/trace_split.py and kernels/trace_split.cl: the rays that the trace split times are the
 megakernel's own, and a scene its kernels cannot walk is refused in one line."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -10,6 +12,8 @@ from pathtrace.scene import load_scene
 from pathtrace.trace_split import trace_split
 from pathtrace.traversal_stats import traversal_stats
 from tests.test_instances import instanced_scene
+
+SCENES = Path(__file__).parent / "scenes"
 
 
 @pytest.mark.parametrize("name", ["materials", "cornell-box"])
@@ -32,3 +36,10 @@ def test_a_two_level_scene_is_refused_in_one_line(backend, monkeypatch):
     monkeypatch.setattr(instancing, "FLATTEN_MAX", -1)
     with pytest.raises(UserError, match="two-level BVH"):
         trace_split(backend, instanced_scene(np.random.default_rng(1)), 16, 16, 2)
+
+
+def test_a_scene_with_media_is_refused_in_one_line(backend):
+    """The megakernel's paths there sample free flights and transmittance, which the recorded
+    rays would leave out: a split of other work."""
+    with pytest.raises(UserError, match="participating media"):
+        trace_split(backend, load_scene(str(SCENES / "media-fog.xml")), 16, 16, 2)
