@@ -142,8 +142,12 @@ def run(device_specs, scene_names, estimators, width, height, spp, together=Fals
                         log(format_traversal(r))
                     if split:
                         from pathtrace.trace_split import format_split, trace_split
-                        r.trace_split = trace_split(group[0], scene, width, height, SPLIT_SPP)
-                        log(format_split(r.trace_split))
+                        try:
+                            r.trace_split = trace_split(group[0], scene, width, height, SPLIT_SPP)
+                        except UserError as e:     # a scene its kernels do not split: no line of figures
+                            log(f"{'':<20} {e}")
+                        else:
+                            log(format_split(r.trace_split))
                     if mitsuba and est == "depth8+nee":
                         try:
                             twin = mitsuba_twin(scene, r, folder)

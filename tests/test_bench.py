@@ -2,6 +2,7 @@
 
 import json
 import sys
+from pathlib import Path
 
 from tests.test_cli import pathtrace
 
@@ -113,10 +114,11 @@ def test_load_bench_rows(tmp_path):
 
 def test_bench_without_the_cold_build_and_with_traversal_counts_and_the_trace_split(tmp_path):
     out = tmp_path / "bench.json"
-    r = pathtrace("bench", "--quick", "--device", "cpu", "--scenes", "simple", "--no-cold", "--traversal",
+    media = str(Path(__file__).parent / "scenes" / "media-fog.xml")
+    r = pathtrace("bench", "--quick", "--device", "cpu", "--scenes", "simple", media, "--no-cold", "--traversal",
                   "--trace-split", "--json", out)
     assert r.returncode == 0, r.stderr
-    row, = json.loads(out.read_text())["results"]
+    row, fog = json.loads(out.read_text())["results"]
     assert row["build_cold_seconds"] is None and row["build_warm_seconds"] >= 0 and row["seconds"] > 0
     assert " -/" in r.stdout
     # simple's five spheres have no tree: every ray tests all five (app/features.py: FLAT_MAX)
@@ -124,6 +126,8 @@ def test_bench_without_the_cold_build_and_with_traversal_counts_and_the_trace_sp
     assert "traversal: " in r.stdout
     split = row["trace_split"]
     assert split["rays_per_pixel"]["camera"] == 1 and split["megakernel_ms"] > 0 and "trace split (depth 2" in r.stdout
+    # a scene the split's kernels do not follow gets a line saying so, and the bench goes on
+    assert fog["trace_split"] is None and "media-fog has participating media" in r.stdout
 
 
 def test_bench_renders_the_generated_textured_scene_and_asks_mitsuba(tmp_path):
