@@ -243,12 +243,15 @@ class Output:
 def write_images(outputs, exposure: float = 0.0, curve: str = "standard", what: str = "--output"):
     """Writes each Output. All or none: the files are renamed into place only once every one is
     complete."""
-    import cv2
+    errors = (OSError, RuntimeError, ValueError)
+    if any(Path(out.path).suffix.lower() != ".exr" for out in outputs):
+        import cv2          # OpenCV encodes the other formats; an EXR alone does without its import
+        errors += (cv2.error,)
     with Staged() as staged:
         for out in outputs:
             check_writable(out.path, what)
             staged.add(out.path, _image_writer(Path(out.path).suffix.lower(), out, exposure, curve), what,
-                       errors=(OSError, RuntimeError, ValueError, cv2.error))
+                       errors=errors)
         staged.commit()
 
 

@@ -11,23 +11,23 @@ __all__ = ["Mesh", "RenderSettings", "Scene", "SceneBuilder", "diffuse", "emitte
 
 
 def load_scene(name_or_path: str) -> Scene:
-    """A scene file path or a built-in scene's name: the two are interchangeable."""
-    from pathtrace.scene.builtin import BUILTIN_SCENES, builtin_scene
-    from pathtrace.scene.mitsuba import read_mitsuba_file
-    from pathtrace.scene.pbrt import read_pbrt_file
-    from pathtrace.scene.toml_reader import read_scene_file
-
+    """A scene file path or a built-in scene's name: the two are interchangeable. Only the
+    reader a scene needs is imported (each is a few tens of milliseconds of a command's start)."""
     path = Path(name_or_path)
     if path.suffix.lower() == ".xml":
+        from pathtrace.scene.mitsuba import read_mitsuba_file
         return read_mitsuba_file(path)
     if path.name.lower().endswith((".pbrt", ".pbrt.gz")):
+        from pathtrace.scene.pbrt import read_pbrt_file
         return read_pbrt_file(path)
     try:
         exists = path.exists()
     except OSError as e:     # a name too long for the file system, say
         raise UserError(f"{str(path)[:80]}...: {e.strerror}") from None
     if path.suffix == ".toml" or exists:
+        from pathtrace.scene.toml_reader import read_scene_file
         return read_scene_file(path)
+    from pathtrace.scene.builtin import BUILTIN_SCENES, builtin_scene
     scene = builtin_scene(name_or_path)
     if scene is not None:
         return scene
