@@ -141,7 +141,7 @@ class Renderer:
         """(primitive, distance) of the nearest hit along a ray; primitive -1 where there is none."""
         out = cl.Buffer(self.backend.context, cl.mem_flags.WRITE_ONLY, 8)
         kernel = cl.Kernel(self.program, "pick")
-        kernel(self.backend.queue, (1,), None, *self._scene_args(),
+        kernel(self.backend.queue, (1,), None, *self.scene_args(),
                np.int32(self.compiled.num_spheres), np.append(np.float32(origin), 0).astype(np.float32),
                np.append(np.float32(direction), 0).astype(np.float32), out)
         hit = np.zeros(2, np.int32)
@@ -158,7 +158,9 @@ class Renderer:
         prim, t = self._nearest_hit(origin, direction)
         return t if prim >= 0 else None
 
-    def _scene_args(self):
+    def scene_args(self) -> tuple:
+        """The scene's device buffers in the order of the kernels' SCENE_KERNEL_ARGS
+        (kernels/scene.cl), for kernels beside the renderer's (app/trace_split.py)."""
         return tuple(self._buffers[name] for name in SCENE_BUFFERS)
 
     def set_camera(self, camera: Camera):
@@ -260,10 +262,10 @@ class Renderer:
         for offset in range(0, count, MAX_LAUNCH_SAMPLES):      # (kernels/integrator.cl)
             launch = params.copy()
             launch["sample_start"], launch["sample_count"] = start + offset, min(MAX_LAUNCH_SAMPLES, count - offset)
-            kernel.set_args(*self._scene_args(), launch, *(b[name] for name in SUM_BUFFERS))
+            kernel.set_args(*self.scene_args(), launch, *(b[name] for name in SUM_BUFFERS))
             events.append(cl.enqueue_nd_range_kernel(self.backend.queue, kernel, global_size, local))
         if self.aovs and self.samples < AOV_PASSES:
-            self.aov_kernel.set_args(*self._scene_args(), params, b["albedo_sum"], b["normal_sum"])
+            self.aov_kernel.set_args(*self.scene_args(), params, b["albedo_sum"], b["normal_sum"])
             events.append(cl.enqueue_nd_range_kernel(self.backend.queue, self.aov_kernel, global_size, local))
         if end >= self.height:
             self.samples += count

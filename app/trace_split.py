@@ -50,7 +50,7 @@ def trace_split(backend, scene, width: int, height: int, spp: int) -> TraceSplit
     record, trace = cl.Kernel(program, "record_rays"), cl.Kernel(program, "trace_rays")
 
     def seconds(kernel, *args) -> float:
-        kernel.set_args(*renderer._scene_args(), *args)
+        kernel.set_args(*renderer.scene_args(), *args)
         start = time.perf_counter()
         cl.enqueue_nd_range_kernel(queue, kernel, size, local)
         queue.finish()
