@@ -30,6 +30,13 @@ class TraceSplit:
     def traced_ms(self) -> float:
         return sum(self.trace_ms.values())
 
+    @property
+    def shading_ms(self) -> float:
+        """What the recording kernel does beyond its camera rays' walk: the first vertex's
+        surface, material, light sample and BSDF sample, the least a wavefront's shading kernel
+        would take for these paths."""
+        return max(self.record_ms - self.trace_ms["camera"], 0.0)
+
 
 def trace_split(backend, scene, width: int, height: int, spp: int) -> TraceSplit:
     """The split of `spp` samples per pixel (at least 2: the first launches are not timed) of
@@ -87,4 +94,4 @@ def format_split(s: TraceSplit) -> str:
     rays = sum(s.rays_per_pixel.values())
     return (f"{'':<20} trace split (depth 2, ms per spp): megakernel {s.megakernel_ms:.3f}; its "
             f"{rays:.2f} rays per pixel traced alone {s.traced_ms:.3f} ({each}), "
-            f"{s.traced_ms / s.megakernel_ms:.0%} of it")
+            f"{s.traced_ms / s.megakernel_ms:.0%} of it; the first vertex's shading {s.shading_ms:.3f}")
