@@ -11,7 +11,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pyopencl as cl
 
-from pathtrace.device import build_program
+from pathtrace.device import build_program, check_fits
 from pathtrace.errors import UserError
 from pathtrace.renderer import Renderer
 from pathtrace.resources import resource_dir
@@ -40,7 +40,7 @@ class TraceSplit:
 
 def trace_split(backend, scene, width: int, height: int, spp: int) -> TraceSplit:
     """The split of `spp` samples per pixel (at least 2: the first launches are not timed) of
-    `scene`'s paths of depth 2 with next-event estimation and no roulette, seed 0."""
+    `scene`'s paths of depth 2 with next-event estimation and no roulette, at the scene's seed."""
     renderer = Renderer(backend, scene.with_settings(max_depth=2, nee=True, russian_roulette="off"), width, height)
     features = renderer.compiled.features(renderer.settings, renderer.camera)
     if renderer.compiled.two_level or features.media:
@@ -52,8 +52,10 @@ def trace_split(backend, scene, width: int, height: int, spp: int) -> TraceSplit
                             backend.use_cache, replace(features, traversal_stats=0)).program
     queue, local = backend.queue, (8, 8)
     size = tuple(-(-n // l) * l for n, l in zip((width, height), local))
-    rays = cl.Buffer(backend.context, cl.mem_flags.READ_WRITE, width * height * 6 * 16)
-    hits = cl.Buffer(backend.context, cl.mem_flags.READ_WRITE, width * height * 4)
+    nbytes = {"rays": width * height * 6 * 16, "hits": width * height * 4}
+    check_fits(backend.device.device, nbytes, f"--trace-split at {width}x{height}")
+    rays = cl.Buffer(backend.context, cl.mem_flags.READ_WRITE, nbytes["rays"])
+    hits = cl.Buffer(backend.context, cl.mem_flags.READ_WRITE, nbytes["hits"])
     record, trace = cl.Kernel(program, "record_rays"), cl.Kernel(program, "trace_rays")
 
     def seconds(kernel, *args) -> float:
