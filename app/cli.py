@@ -519,8 +519,13 @@ def cmd_bench(args):
     return 0
 
 
+# The epilog of the commands that take a scene, written out only when help is shown: the names
+# of the built-in scenes come from their module, which no other command need import
+SCENES_EPILOG = "(the scenes)"
+
+
 def build_parser():
-    scenes_epilog = epilog()
+    scenes_epilog = SCENES_EPILOG
     parser = Parser(prog="pathtrace", description=__doc__, epilog=scenes_epilog)
     parser.add_argument("--version", action="version", version=f"pathtrace {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
@@ -653,6 +658,11 @@ class Parser(argparse.ArgumentParser):
     invalid choice or an unknown option whole, however long, and an ambiguous one raw."""
 
     MESSAGE_LIMIT = 400
+
+    def format_help(self):
+        if self.epilog == SCENES_EPILOG:
+            self.epilog = epilog()
+        return super().format_help()
 
     def error(self, message):
         super().error(cut(" ".join(cut(word) for word in message.split(" ")), self.MESSAGE_LIMIT))

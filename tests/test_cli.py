@@ -484,3 +484,17 @@ run()
     assert r.returncode == 130 and "nothing written" in r.stderr, r.stderr
     assert "Traceback" not in r.stderr and "Exception ignored" not in r.stderr, r.stderr
     assert not out.exists()
+
+
+def test_a_pbrt_render_to_exr_imports_no_other_scene_reader_and_no_opencv(tmp_path):
+    """What a command imports is part of the wait for its first image (docs/performance.md,
+    2026-11-26): a pbrt-v4 scene rendered to EXR loads neither the other scene readers nor
+    OpenCV, and a PNG then does load OpenCV, which encodes it."""
+    readers = ("pathtrace.scene.mitsuba", "pathtrace.scene.toml_reader", "pathtrace.scene.builtin")
+    for out, expected in (("x.exr", []), ("x.png", ["cv2"])):
+        code = ("import sys\nfrom pathtrace.cli import main\n"
+                f"code = main(['render', {str(ROOT / 'tests' / 'scenes' / 'cbox.pbrt')!r}, '--size', '8x8', "
+                f"'--spp', '1', '--device', 'cpu', '-q', '-o', {str(tmp_path / out)!r}])\n"
+                f"print(code, sorted(m for m in {('cv2',) + readers!r} if m in sys.modules))\n")
+        r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+        assert r.returncode == 0 and r.stdout.strip().splitlines()[-1] == f"0 {expected}", (r.stdout, r.stderr)
