@@ -665,8 +665,7 @@ class PbrtReader:
     def orient_by_normals(vertices, faces, normals):
         """pbrt-v4 turns a triangle's geometric normal to its shading normals' side: the
         winding that agrees with them."""
-        # rows gathered by np.take, twice as fast as indexing with the faces here (850 meshes of
-        # 1,024 triangles: 104 against 47 us each)
+        # rows gathered by np.take, faster than indexing with the faces (as app/compiled.py's)
         f0, f1, f2 = faces[:, 0], faces[:, 1], faces[:, 2]
         p0 = np.take(vertices, f0, axis=0)
         a, b = (np.take(vertices, f1, axis=0) - p0).T, (np.take(vertices, f2, axis=0) - p0).T
