@@ -141,13 +141,7 @@ def run(device_specs, scene_names, estimators, width, height, spp, together=Fals
                         count_traversal(r, group[0], scene)
                         log(format_traversal(r))
                     if split:
-                        from pathtrace.trace_split import format_split, trace_split
-                        try:
-                            r.trace_split = trace_split(group[0], scene, width, height, SPLIT_SPP)
-                        except UserError as e:     # a scene its kernels do not split: no line of figures
-                            log(f"{'':<20} {e}")
-                        else:
-                            log(format_split(r.trace_split))
+                        log(split_row(r, group[0], scene))
                     if mitsuba and est == "depth8+nee":
                         try:
                             twin = mitsuba_twin(scene, r, folder)
@@ -173,6 +167,17 @@ def count_traversal(r: Result, backend, scene):
                             min(r.spp, TRAVERSAL_SPP))
     r.rays_per_sample, r.nodes_per_ray, r.primitives_per_ray = \
         stats.rays_per_sample, stats.nodes_per_ray, stats.primitives_per_ray
+
+
+def split_row(r: Result, backend, scene) -> str:
+    """The row's trace split (app/trace_split.py) into r, and its line; for a scene the split's
+    kernels do not follow, the line that says so."""
+    from pathtrace.trace_split import format_split, trace_split
+    try:
+        r.trace_split = trace_split(backend, scene, r.width, r.height, SPLIT_SPP)
+    except UserError as e:
+        return f"{'':<20} {e}"
+    return format_split(r.trace_split)
 
 
 def format_traversal(r: Result) -> str:
