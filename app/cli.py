@@ -525,12 +525,11 @@ SCENES_EPILOG = "(the scenes)"
 
 
 def build_parser():
-    scenes_epilog = SCENES_EPILOG
-    parser = Parser(prog="pathtrace", description=__doc__, epilog=scenes_epilog)
+    parser = Parser(prog="pathtrace", description=__doc__, epilog=SCENES_EPILOG)
     parser.add_argument("--version", action="version", version=f"pathtrace {__version__}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    p = sub.add_parser("render", help="render a still image", epilog=scenes_epilog)
+    p = sub.add_parser("render", help="render a still image", epilog=SCENES_EPILOG)
     p.add_argument("scene", help="a .toml, Mitsuba 3 .xml or pbrt-v4 .pbrt scene file, or a built-in scene name")
     p.add_argument("-o", "--output", action="append", required=True, metavar="FILE",
                    help="output image; repeat for several (.png/.jpg tonemapped; "
@@ -546,7 +545,7 @@ def build_parser():
     add_render_options(p)
     p.set_defaults(func=cmd_render)
 
-    p = sub.add_parser("view", help="open the interactive viewer", epilog=scenes_epilog)
+    p = sub.add_parser("view", help="open the interactive viewer", epilog=SCENES_EPILOG)
     p.add_argument("scene", nargs="?", default="simple",
                    help="a .toml, Mitsuba 3 .xml or pbrt-v4 .pbrt file, or a built-in name (default simple)")
     p.add_argument("--screenshot-dir", default="screenshots", metavar="DIR",
@@ -610,10 +609,10 @@ def build_parser():
     p.add_argument("--json", metavar="FILE", help="also write the results as JSON")
     p.set_defaults(func=cmd_bench)
 
-    p = sub.add_parser("farm", help="render on a Ray cluster (docs/farm.md)", epilog=scenes_epilog)
+    p = sub.add_parser("farm", help="render on a Ray cluster (docs/farm.md)", epilog=SCENES_EPILOG)
     farm_sub = p.add_subparsers(dest="farm_command", required=True, metavar="COMMAND")
     p = farm_sub.add_parser("render", help="render stills, or the frames of an orbit, on every "
-                                           "device of a Ray cluster", epilog=scenes_epilog)
+                                           "device of a Ray cluster", epilog=SCENES_EPILOG)
     p.add_argument("scene", nargs="+", help="scene files or built-in names: one image each")
     p.add_argument("-o", "--output", required=True, metavar="FILE",
                    help="output image; with several images, put {name} (the scene's name) or "
@@ -638,7 +637,7 @@ def build_parser():
     p.set_defaults(func=cmd_farm_render)
 
     p = sub.add_parser("convert", help="write a scene (a Mitsuba 3 .xml or pbrt-v4 .pbrt file, say) as pathtrace TOML",
-                       epilog=scenes_epilog)
+                       epilog=SCENES_EPILOG)
     p.add_argument("scene", help="a .xml, .pbrt or .toml scene file or a built-in scene name")
     p.add_argument("-o", "--output", required=True, metavar="FILE.toml",
                    help="the TOML file to write (mesh files stay where they are, referenced)")

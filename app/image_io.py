@@ -243,15 +243,15 @@ class Output:
 def write_images(outputs, exposure: float = 0.0, curve: str = "standard", what: str = "--output"):
     """Writes each Output. All or none: the files are renamed into place only once every one is
     complete."""
+    suffixes = [Path(out.path).suffix.lower() for out in outputs]
     errors = (OSError, RuntimeError, ValueError)
-    if any(Path(out.path).suffix.lower() != ".exr" for out in outputs):
+    if any(suffix != ".exr" for suffix in suffixes):
         import cv2          # OpenCV encodes the other formats; an EXR alone does without its import
         errors += (cv2.error,)
     with Staged() as staged:
-        for out in outputs:
+        for out, suffix in zip(outputs, suffixes):
             check_writable(out.path, what)
-            staged.add(out.path, _image_writer(Path(out.path).suffix.lower(), out, exposure, curve), what,
-                       errors=errors)
+            staged.add(out.path, _image_writer(suffix, out, exposure, curve), what, errors=errors)
         staged.commit()
 
 
