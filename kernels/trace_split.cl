@@ -23,6 +23,19 @@ void write_ray(global float4 *rays, int k, float3 o, float t_max, float3 d, int 
     rays[k + 1] = (float4)(d, as_float(self));
 }
 
+/* The shadow ray of light sample ls from o, as kernels/integrator.cl's light_visibility traces
+ * it: its unit direction into *d, and its t_max, just short of the point on the light (INFINITY
+ * for a light at infinity). */
+float shadow_ray(float3 o, const LightSample *ls, float3 *d)
+{
+    *d = ls->wi;
+    if (ls->flags & LIGHT_AT_INFINITY)
+        return INFINITY;
+    float t = norm(ls->y - o);
+    *d = (ls->y - o) / t;
+    return t * (1.0f - SHADOW_EPSILON);
+}
+
 kernel void record_rays(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *rays)
 {
     SceneData sc = SCENE_DATA(p.num_spheres);
@@ -52,13 +65,8 @@ kernel void record_rays(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *
         LightSample ls = sample_light(&sc, &p, s.p, s.ns, next_bits4(&rng), &rng);
         float3 wi = to_shading(&s, ls.wi);
         if (ls.pdf > 0.0f && dot(ls.wi, s.ng) * wi.z > 0.0f && any(eval_bsdf(m, wo, wi) != 0.0f)) {
-            float3 o = offset_ray_origin(s.p, s.offset, s.ng, ls.wi), d = ls.wi;
-            float t_max = INFINITY;
-            if (!(ls.flags & LIGHT_AT_INFINITY)) {
-                t_max = norm(ls.y - o);
-                d = (ls.y - o) / t_max;
-                t_max *= 1.0f - SHADOW_EPSILON;
-            }
+            float3 o = offset_ray_origin(s.p, s.offset, s.ng, ls.wi), d;
+            float t_max = shadow_ray(o, &ls, &d);
             write_ray(rays, k + 4, o, t_max, d, hit.prim);
         }
     }

@@ -224,13 +224,8 @@ kernel void render_packets(SCENE_KERNEL_ARGS, const RenderParams p, global float
                     if (any(f != 0.0f)) {
                         float w = (ls.flags & LIGHT_DELTA) ? 1.0f : mis_weight(ls.pdf, pdf_bsdf(m, wo, wi));
                         light[l] = throughput[l] * f * fabs(wi.z) * ls.le * (w / ls.pdf);
-                        float3 so = offset_ray_origin(s.p, s.offset, s.ng, ls.wi), sd = ls.wi;
-                        float t_max = INFINITY;
-                        if (!(ls.flags & LIGHT_AT_INFINITY)) {
-                            t_max = norm(ls.y - so);
-                            sd = (ls.y - so) / t_max;
-                            t_max *= 1.0f - SHADOW_EPSILON;
-                        }
+                        float3 so = offset_ray_origin(s.p, s.offset, s.ng, ls.wi), sd;
+                        float t_max = shadow_ray(so, &ls, &sd);
                         set_lane(&Q, l, so, sd, t_max, hit.prim);
                     }
                 }
