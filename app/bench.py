@@ -69,6 +69,7 @@ class Result:
     nodes_per_ray: float = None
     primitives_per_ray: float = None
     trace_split: object = None      # with --trace-split: a pathtrace.trace_split.TraceSplit
+    path_queue: int = 0             # the render setting (--path-queue)
 
 
 def default_estimator(scene) -> str:
@@ -107,7 +108,8 @@ def measure(backends, scene, estimator, width, height, spp, builds) -> Result:
         else " + ".join(names)
     return Result(scene.name, device, estimator, width, height, spp, seconds,
                   width * height * spp / seconds / 1e6, rays / seconds / 1e6,
-                  group.bvh_seconds, *builds, render_seconds=end - rendering, mean=float(image.mean()))
+                  group.bvh_seconds, *builds, render_seconds=end - rendering, mean=float(image.mean()),
+                  path_queue=scene.settings.path_queue)
 
 
 def kernel_build_times(backend, cold: bool = True):
@@ -120,10 +122,11 @@ def kernel_build_times(backend, cold: bool = True):
 
 
 def run(device_specs, scene_names, estimators, width, height, spp, together=False, cold=True,
-        mitsuba: tuple = None, traversal: bool = False, split: bool = False, log=print):
+        mitsuba: tuple = None, traversal: bool = False, split: bool = False, path_queue: int = 0, log=print):
     """A row per device and scene, or with `together` a row per scene for all the devices
     rendering it as one (the multi-device scaling measurement). mitsuba: (python, variant) to
-    time Mitsuba 3 on the rows of the comparison mode with NEE (depth8+nee)."""
+    time Mitsuba 3 on the rows of the comparison mode with NEE (depth8+nee). path_queue: the
+    render setting (pathtrace render --path-queue) for every row."""
     backends = choose_devices(device_specs)
     groups = [backends] if together else [[b] for b in backends]
     results = []
@@ -133,7 +136,7 @@ def run(device_specs, scene_names, estimators, width, height, spp, together=Fals
         for group in groups:
             builds = kernel_build_times(group[0], cold)
             for name in scenes:
-                scene = load_scene(name)
+                scene = load_scene(name).with_settings(path_queue=path_queue)
                 for est in estimators or [default_estimator(scene)]:
                     r = measure(group, scene, est, width, height, spp, builds)
                     log(format_row(r))

@@ -161,6 +161,14 @@ def add_render_options(p: argparse.ArgumentParser, device: bool = True):
     p.add_argument("--filter", type=_pixel_filter, metavar="NAME[:RADIUS[:STDDEV]]",
                    help="pixel filter: box (radius 0.5), tent (1) or gaussian (stddev 0.5, radius 4 "
                         "stddev), radius and stddev in pixels (default: the scene's)")
+    add_path_queue_option(p)
+
+
+def add_path_queue_option(p: argparse.ArgumentParser):
+    p.add_argument("--path-queue", type=_int_range(0, 64), metavar="N",
+                   help="trace the paths that go on past N vertices from a queue, one vertex a pass, "
+                        "so that a GPU's warps stay full where few paths go on long (the same image; "
+                        "faster on some scenes, slower on others: docs/performance.md); 0 = off, the default")
 
 
 def _pixel_filter(text: str):
@@ -186,7 +194,8 @@ def apply_render_options(scene, args):
     changes = dict(width=width, height=height, max_depth=max_depth, russian_roulette=rr,
                    seed=s.seed if args.seed is None else args.seed,
                    nee=s.nee if args.nee is None else args.nee,
-                   filter=args.filter or s.filter, light_sampler=args.light_sampler or s.light_sampler)
+                   filter=args.filter or s.filter, light_sampler=args.light_sampler or s.light_sampler,
+                   path_queue=s.path_queue if args.path_queue is None else args.path_queue)
     if not replace(s, **changes).paths_end:
         raise UserError("--rr off needs --max-depth N (N >= 1), or paths would never end")
     if not changes["nee"] and scene.lights:
@@ -512,7 +521,7 @@ def cmd_bench(args):
     results = bench.run(args.device or ["auto"], args.scenes, args.estimator, width, height, args.spp,
                         args.together, not args.no_cold,
                         (args.mitsuba, args.mitsuba_variant) if args.mitsuba else None, args.traversal,
-                        args.trace_split)
+                        args.trace_split, args.path_queue or 0)
     if args.json:
         bench.write_json(args.json, results, sys.argv[1:])
         print(f"wrote {args.json}", file=sys.stderr)
@@ -605,6 +614,7 @@ def build_parser():
     p.add_argument("--mitsuba-variant", default="llvm_ad_rgb", metavar="VARIANT",
                    help="Mitsuba's variant for --mitsuba (default llvm_ad_rgb; it needs LLVM, found "
                         "through DRJIT_LIBLLVM_PATH)")
+    add_path_queue_option(p)
     p.add_argument("--quick", action="store_true", help="a smoke test: 320x180, 8 spp")
     p.add_argument("--json", metavar="FILE", help="also write the results as JSON")
     p.set_defaults(func=cmd_bench)

@@ -37,6 +37,9 @@ class Features:
     traversal_stats: int = 0               # 1 or 2: the render kernels count nodes visited or
                                            # primitives tested in place of rays
                                            # (app/traversal_stats.py); 0: they count rays
+    path_queue: int = 0                    # paths going on past this many vertices wait in the
+                                           # continuation queue (PATH_QUEUE, kernels/integrator.cl;
+                                           # app/renderer.py: queue_depth); 0: no queue
 
     def defines(self) -> tuple:
         return ((() if self.triangles else ("NO_TRIANGLES",)) + (("TEXTURES",) if self.textures else ())
@@ -47,7 +50,8 @@ class Features:
                 + ((f"FLAT_SPHERES={self.flat[0]}", f"FLAT_TRIANGLES={self.flat[1]}") if self.flat else ())
                 + (("INSTANCES", f"INSTANCE_STACK_SIZE={self.instance_stack}") if self.instance_stack else ())
                 + (self.bsdf_defines if self.bsdf_defines is not None else all_bsdf_defines())
-                + ((f"TRAVERSAL_STATS={self.traversal_stats}",) if self.traversal_stats else ()))
+                + ((f"TRAVERSAL_STATS={self.traversal_stats}",) if self.traversal_stats else ())
+                + ((f"PATH_QUEUE={self.path_queue}",) if self.path_queue else ()))
 
 
 def all_bsdf_defines() -> tuple:

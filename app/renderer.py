@@ -14,7 +14,7 @@ from pathtrace.errors import UserError, format_bytes
 from pathtrace.environment import Environment
 from pathtrace.memory import available_host_memory
 from pathtrace.scene import Scene
-from pathtrace.types import RENDER_PARAMS
+from pathtrace.types import PATH_RECORD, RENDER_PARAMS
 
 RR_DEPTH = 5           # where Russian roulette on throughput starts (Mitsuba 3's default)
 READ_BACK_BYTES = 64   # host memory per pixel to read an image back and write it: the float4
@@ -30,6 +30,13 @@ SUM_BUFFERS = ("sum", "sum_sq", "sum_c", "sum_sq_c")   # kernels/integrator.cl: 
                                                        # what their rounding lost (Kahan)
 MAX_LAUNCH_SAMPLES = 64   # samples a launch adds to a pixel, summed plainly in float32 before the
                           # compensated running sum takes them: within 64 ulps of their sum
+QUEUE_PASSES = 6          # passes of continue_paths that trace one vertex each, queueing the paths
+                          # that go on again; a last pass traces them to their ends
+QUEUE_POOL = 1 << 22      # pixel samples a launch with the queue renders (a few per pixel): enough
+                          # paths going on to fill a GPU when continue_paths traces them
+MAX_QUEUED = 1 << 22      # entries of each of the two queues (PATH_RECORD, 128 bytes; at most a
+                          # sixteenth of the device's memory); paths that find one full go on where
+                          # they are
 
 
 def image_buffers(aovs: bool) -> tuple:
@@ -69,6 +76,7 @@ class Renderer:
         self.program = None       # the kernels specialised to the scene (_select_program)
         self._buffers = {}
         self.width = self.height = 0
+        self._queued_for = None   # the settings.path_queue that the queue's buffers are sized for
         self.samples = 0          # samples per pixel accumulated so far (whole passes)
         self.aovs = False         # whether the denoiser's albedo and normal are accumulated too
         self.resets = 0           # how many times the image restarted (pathtrace.launches.Progressive)
@@ -112,13 +120,21 @@ class Renderer:
         self.reset()
 
     def _select_program(self):
-        """The kernels specialised to the scene's shapes and materials (pathtrace.device.Features)."""
+        """The kernels specialised to the scene's shapes and materials (pathtrace.device.Features),
+        and the continuation queue's buffers sized for settings.path_queue."""
         features = self.compiled.features(self.settings, self.camera)
-        program = self.backend.program_for(replace(features, traversal_stats=self.traversal_stats))
+        program = self.backend.program_for(replace(features, traversal_stats=self.traversal_stats,
+                                                   path_queue=self.settings.path_queue))
         if program is not self.program:
             self.program = program
             self.kernels = {False: cl.Kernel(program, "render"), True: cl.Kernel(program, "render_nee")}
+            queue = self.settings.path_queue          # its kernels are in the program only with it
+            self.continue_kernels = {False: cl.Kernel(program, "continue_paths"),
+                                     True: cl.Kernel(program, "continue_paths_nee")} if queue else None
+            self.add_queued = cl.Kernel(program, "add_queued_paths") if queue else None
             self.aov_kernel = cl.Kernel(program, "render_aovs")
+        if self.width and self._queued_for != self.settings.path_queue:
+            self._allocate_images(self.width, self.height, self.aovs)
 
     def set_environment(self, environment: Environment):
         self.scene.environment = environment
@@ -190,9 +206,13 @@ class Renderer:
     def _allocate_images(self, width: int, height: int, aovs: bool):
         nbytes = width * height * 16
         images = image_buffers(aovs)
-        others = {name: b.size for name, b in self._buffers.items() if name not in image_buffers(True)}
+        entries = PATH_RECORD.itemsize * self.queue_capacity(width, height)
+        queue = {"queue": entries, "queue_next": entries, "counters": 4 * (QUEUE_PASSES + 2),
+                 "results": 16 * (width * height * self.queue_samples(width, height) if self.settings.path_queue else 1)}
+        others = {name: b.size for name, b in self._buffers.items()
+                  if name not in image_buffers(True) and name not in queue}
         what = f"the {width}x{height} image of {self.scene.name}"
-        check_fits(self.backend.device.device, {**others, **{name: nbytes for name in images}}, what)
+        check_fits(self.backend.device.device, {**others, **{name: nbytes for name in images}, **queue}, what)
         host = READ_BACK_BYTES * width * height
         if self.backend.device.device.host_unified_memory:    # a CPU device's buffers are the host's
             host += nbytes * len(images)
@@ -205,7 +225,21 @@ class Renderer:
             self._buffers.pop(name, None)
         for name in images:
             self._buffers[name] = cl.Buffer(self.backend.context, cl.mem_flags.READ_WRITE, nbytes)
+        for name, size in queue.items():
+            self._buffers[name] = cl.Buffer(self.backend.context, cl.mem_flags.READ_WRITE, size)
+        self._queued_for = self.settings.path_queue
         self.reset()
+
+    def queue_samples(self, width: int, height: int) -> int:
+        """Samples per pixel of a launch with the continuation queue."""
+        return max(1, min(MAX_LAUNCH_SAMPLES, QUEUE_POOL // (width * height)))
+
+    def queue_capacity(self, width: int, height: int) -> int:
+        """Entries of the continuation queue for a width x height image (one, unused, without)."""
+        if not self.settings.path_queue:
+            return 1
+        memory = self.backend.device.device.global_mem_size // 16 // PATH_RECORD.itemsize
+        return min(width * height * self.queue_samples(width, height), MAX_QUEUED, memory)
 
     def reset(self):
         """Restarts the progressive average."""
@@ -259,16 +293,43 @@ class Renderer:
         params = self.params(count)
         params["row_start"], params["row_end"], params["sample_start"] = first, end, start
         events = []
-        for offset in range(0, count, MAX_LAUNCH_SAMPLES):      # (kernels/integrator.cl)
+        sums = tuple(b[name] for name in SUM_BUFFERS)
+        capacity = np.int32(self.queue_capacity(self.width, self.height) if self.settings.path_queue else 0)
+        # with the continuation queue, a few samples per launch (queue_samples), for which the
+        # launch's pixels have room in `results` (kernels/integrator.cl: render_pixel)
+        step = self.queue_samples(self.width, self.height) if self.settings.path_queue else MAX_LAUNCH_SAMPLES
+        for offset in range(0, count, step):
             launch = params.copy()
-            launch["sample_start"], launch["sample_count"] = start + offset, min(MAX_LAUNCH_SAMPLES, count - offset)
-            kernel.set_args(*self.scene_args(), launch, *(b[name] for name in SUM_BUFFERS))
+            launch["sample_start"], launch["sample_count"] = start + offset, min(step, count - offset)
+            if self.settings.path_queue:
+                events.append(cl.enqueue_fill_buffer(self.backend.queue, b["counters"], np.int32(0), 0,
+                                                     b["counters"].size))
+            kernel.set_args(*self.scene_args(), launch, *sums, b["queue"], b["counters"], capacity, b["results"])
             events.append(cl.enqueue_nd_range_kernel(self.backend.queue, kernel, global_size, local))
+            if self.settings.path_queue:
+                events += self._continue_paths(launch, capacity, global_size)
         if self.aovs and self.samples < AOV_PASSES:
             self.aov_kernel.set_args(*self.scene_args(), params, b["albedo_sum"], b["normal_sum"])
             events.append(cl.enqueue_nd_range_kernel(self.backend.queue, self.aov_kernel, global_size, local))
         if end >= self.height:
             self.samples += count
+        return events
+
+    def _continue_paths(self, launch, capacity, global_size) -> list:
+        """Queues the passes of continue_paths over the paths that the render launch `launch`
+        queued, each taking them from one of the two queues and queueing those that go on in the
+        other, then add_queued_paths; returns their events."""
+        b, events = self._buffers, []
+        queues = (b["queue"], b["queue_next"])
+        follow = self.continue_kernels[self.settings.nee]
+        size = (-(-int(capacity) // 64) * 64,)
+        for k in range(QUEUE_PASSES + 1):
+            steps = 1 if k < QUEUE_PASSES else 0
+            follow.set_args(*self.scene_args(), launch, queues[k % 2], queues[(k + 1) % 2], b["counters"],
+                            np.int32(k), capacity, np.int32(steps), b["results"])
+            events.append(cl.enqueue_nd_range_kernel(self.backend.queue, follow, size, (64,)))
+        self.add_queued.set_args(launch, *(b[name] for name in SUM_BUFFERS), b["results"])
+        events.append(cl.enqueue_nd_range_kernel(self.backend.queue, self.add_queued, global_size, (8, 8)))
         return events
 
     def finish(self):

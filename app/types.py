@@ -108,3 +108,7 @@ MEDIUM = np.dtype([
     ("sigma_s", np.float32, 4),     # scattering coefficient rgb; w: the phase function's g
     ("sigma_t", np.float32, 4),     # extinction coefficient rgb
 ])
+
+PATH_RECORD = np.dtype([(name, np.float32, 4) for name in
+                        ("o", "d", "throughput", "radiance", "prev_x", "prev_n", "ratios")]
+                       + [("rng", np.uint32, 4)])   # kernels/types.h PathRecord: the continuation queue's entries

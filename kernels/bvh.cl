@@ -23,6 +23,8 @@ typedef int2 PrimId;
 #define SURFACE_ID(s) ((int2)((s).prim, (s).instance))
 #define IS_SELF(self, prim, instance) ((self).x == (prim) && (self).y == (instance))
 #define SET_INSTANCE(hit, i) ((hit)->instance = (i))
+#define PRIM_ID_PAIR(id) (id)
+#define PRIM_ID_OF_PAIR(v) (v)
 #else
 typedef int PrimId;
 #define NO_PRIM (-1)
@@ -30,6 +32,8 @@ typedef int PrimId;
 #define SURFACE_ID(s) ((s).prim)
 #define IS_SELF(self, prim, instance) ((self) == (prim))
 #define SET_INSTANCE(hit, i)
+#define PRIM_ID_PAIR(id) ((int2)((id), -1))
+#define PRIM_ID_OF_PAIR(v) ((v).x)
 #endif
 
 #define BOX_EXIT_SCALE 1.0000003576f

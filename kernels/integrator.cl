@@ -105,37 +105,104 @@ int survives_roulette(float3 *throughput, float eta_scale, float u)
     return 1;
 }
 
-/* Returns the radiance arriving at o from direction -d; adds the rays it traced to *rays.
- * `nee` is a constant in each kernel below, so the compiler builds one lean path tracer
- * without the light sampling code and one with it. In a scene with media (MEDIA), each segment
- * of the path first samples a free flight in the medium it crosses (kernels/media/): the path
- * scatters inside the medium by the phase function (kernels/phase.cl), with light sampling as
- * at a surface, or reaches the surface, whose crossing may change the medium
- * (kernels/volume.cl). */
-float3 trace_path(const SceneData *sc, const RenderParams *p, float3 o, float3 d, Rng *rng,
-                  int *rays, const int nee)
+/* Where a path about to trace its ray to vertex `depth` waits instead: `records` holds
+ * `capacity` paths, `count` counts those handed in (beyond capacity: not taken, they go on). */
+typedef struct {
+    global PathRecord *records;
+    volatile global int *count;
+    int capacity;    /* 0: no queue */
+    int depth;
+} PathQueue;
+
+/* A path leaving the camera along o + t d (with MEDIA, it draws its hero channel from rng). */
+PathRecord start_path(const RenderParams *p, float3 o, float3 d, Rng *rng)
 {
-    float3 radiance = (float3)(0.0f);
-    float3 throughput = (float3)(1.0f);
+    PathRecord path;
+    path.o = (float4)(o, 1.0f);                                  /* eta_scale */
+    path.d = (float4)(d, 0.0f);                                  /* pdf_prev */
+    path.throughput = (float4)((float3)(1.0f), as_float(1));     /* depth */
+    path.radiance = (float4)((float3)(0.0f), as_float(p->camera_medium));
+    path.prev_x = (float4)(o, as_float(-1));                     /* no surface left */
+    path.prev_n = (float4)((float3)(0.0f), as_float(-1));
+    path.ratios = (float4)((float3)(1.0f), 0.0f);
+#ifdef MEDIA
+    path.ratios.w = as_float(min((int)(next_uniform4(rng).x * 3.0f), 2));
+#endif
+    path.rng = (uint4)(rng->key.xyz, rng->dim);
+    return path;
+}
+
+/* Returns the radiance arriving at a path's origin along its ray, from the state `start` (a
+ * path from the camera, start_path, or one taken from the continuation queue); adds the rays it
+ * traced to *rays. `nee` is a constant in each kernel below, so the compiler builds one lean
+ * path tracer without the light sampling code and one with it. In a scene with media (MEDIA),
+ * each segment of the path first samples a free flight in the medium it crosses
+ * (kernels/media/): the path scatters inside the medium by the phase function
+ * (kernels/phase.cl), with light sampling as at a surface, or reaches the surface, whose
+ * crossing may change the medium (kernels/volume.cl).
+ *
+ * With PATH_QUEUE (the render setting path_queue, app/features.py), a path about to trace its
+ * ray to vertex queue.depth is stored in `queue` instead, where it has room (*queued set, the
+ * radiance returned is not the path's), and continue_paths traces it on. A GPU runs a warp's 32
+ * paths in step until the longest ends: where a few paths go on bouncing among meshes, the
+ * others' lanes idle for every vertex they add (Laine, Karras and Aila 2013, "Megakernels
+ * Considered Harmful"); gathered into a queue, the paths that go on fill whole warps, at the
+ * cost of storing and loading them (docs/performance.md, 2026-11-26, says where that pays).
+ *
+ * On CPUs it is inlined, so that the start state stays in registers: PoCL left the call out of
+ * line and passed the state through memory (simple-diffuse 7-8 % slower on two cores). NVIDIA's
+ * compiler keeps it out of line too; inlined there, the default program's PTX grew from 2.45 to
+ * 3.26 MB, a change not timed, so GPUs keep the form measured in docs/performance.md. */
+#ifdef CPU_DEVICE
+__attribute__((always_inline))
+#endif
+float3 trace_path(const SceneData *sc, const RenderParams *p, const PathRecord *start, Rng *rng,
+                  int *rays, const int nee, PathQueue queue, int *queued)
+{
+    float3 o = start->o.xyz, d = start->d.xyz;
+    float3 radiance = start->radiance.xyz;
+    float3 throughput = start->throughput.xyz;
     /* the product of the relative IORs of the refractions so far: throughput eta^2 is the
      * throughput without the radiance scaling of dense media, which Russian roulette reads */
-    float eta_scale = 1.0f;
+    float eta_scale = start->o.w;
     int max_depth = p->max_depth > 0 ? p->max_depth : UNLIMITED_DEPTH;
     /* where the last bounce left from, and the density with which BSDF sampling chose d there
      * (0 for the camera ray and delta bounces: no light sample could have found what it hits);
      * prev_n is 0 after a scattering in a medium */
-    float3 prev_x = o, prev_n = (float3)(0.0f);
-    float pdf_prev = 0.0f;
-    PrimId self = NO_PRIM;           /* the surface the ray leaves */
-    int medium = p->camera_medium;   /* the medium the ray crosses, or -1 (a program without
-                                        media never reads it) */
+    float3 prev_x = start->prev_x.xyz, prev_n = start->prev_n.xyz;
+    float pdf_prev = start->d.w;
+    /* the surface the ray leaves */
+    PrimId self = PRIM_ID_OF_PAIR(((int2)(as_int(start->prev_x.w), as_int(start->prev_n.w))));
+    /* the medium the ray crosses, or -1 (a program without media never reads it) */
+    int medium = as_int(start->radiance.w);
 #ifdef MEDIA
     /* the channel whose free flights the path samples, and each channel's path density over
        the hero's (kernels/media/homogeneous.cl), scaled to a mean of 1 */
-    int hero = min((int)(next_uniform4(rng).x * 3.0f), 2);
-    float3 ratios = (float3)(1.0f);
+    int hero = as_int(start->ratios.w);
+    float3 ratios = start->ratios.xyz;
 #endif
-    for (int depth = 1;; ++depth) {
+    for (int depth = as_int(start->throughput.w);; ++depth) {
+#ifdef PATH_QUEUE
+        if (depth == queue.depth && queue.capacity > 0) {
+            int slot = atomic_inc(queue.count);
+            if (slot < queue.capacity) {
+                global PathRecord *r = &queue.records[slot];
+                int2 left = PRIM_ID_PAIR(self);
+                r->o = (float4)(o, eta_scale);
+                r->d = (float4)(d, pdf_prev);
+                r->throughput = (float4)(throughput, as_float(depth));
+                r->radiance = (float4)(radiance, as_float(medium));
+                r->prev_x = (float4)(prev_x, as_float(left.x));
+                r->prev_n = (float4)(prev_n, as_float(left.y));
+#ifdef MEDIA
+                r->ratios = (float4)(ratios, as_float(hero));
+#endif
+                r->rng = (uint4)(rng->key.xyz, rng->dim);
+                *queued = 1;
+                return radiance;
+            }
+        }
+#endif
         ++*rays;
         Hit hit = intersect_scene(sc, o, d, INFINITY, self);
 #ifdef MEDIA
@@ -259,36 +326,12 @@ void add_compensated(float4 *s, float4 *c, float4 x)
     *s = t;
 }
 
-/* One work-item per pixel of rows [row_start, row_end) (a band of a pass, or all of them) adds
- * p.sample_count samples to the running sums of radiance (rgb; w counts the samples kept) and
- * of its square (rgb, for the per-pixel variance; w counts rays traced), compensated (sum_c
- * and sum_sq_c hold what rounding lost). A NaN or infinite sample (a bug, or a scene beyond
- * float32) is left out, counting as black, so that it cannot poison the pixel for the rest of
- * the render; the host counts the samples left out from w (Renderer.dropped_samples) and
- * reports them. */
-void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum,
-                  global float4 *sum_sq, global float4 *sum_c, global float4 *sum_sq_c,
-                  const int nee)
+/* Adds a launch's samples of pixel k to its running sums of radiance (rgb; w counts the samples
+ * kept) and of its square (rgb, for the per-pixel variance; w counts rays traced), compensated
+ * (sum_c and sum_sq_c hold what rounding lost). */
+void add_to_pixel(global float4 *sum, global float4 *sum_sq, global float4 *sum_c,
+                  global float4 *sum_sq_c, int k, float3 acc, int kept, float3 acc_sq, int rays)
 {
-    int x = get_global_id(0), y = p->row_start + get_global_id(1);
-    if (x >= p->width || y >= p->row_end)
-        return;
-    float3 acc = (float3)(0.0f), acc_sq = (float3)(0.0f);
-    int rays = 0, kept = 0;
-    for (uint i = 0; i < p->sample_count; ++i) {
-        Rng rng = make_rng(x, y, p->sample_start + i, p->seed);
-        CameraRay ray = sample_camera_ray(p, x, y, &rng);
-        float3 l = trace_path(sc, p, ray.o, ray.d, &rng, &rays, nee);
-        if (all(isfinite(l))) {
-            acc += l;
-            acc_sq += l * l;
-            ++kept;
-        }
-    }
-#ifdef TRAVERSAL_STATS
-    rays = *sc->work;         /* the work counted stands in for the rays traced */
-#endif
-    int k = y * p->width + x;
     float4 s = sum[k], c = sum_c[k];
     add_compensated(&s, &c, (float4)(acc, (float)kept));
     sum[k] = s;
@@ -300,14 +343,134 @@ void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum
     sum_sq_c[k] = c;
 }
 
+/* The entry of `results` (add_queued_paths) of a launch's sample of pixel (x, y). */
+int result_index(const RenderParams *p, uint x, uint y, uint sample)
+{
+    return (y * p->width + x) * p->sample_count + (sample - p->sample_start);
+}
+
+/* One work-item per pixel of rows [row_start, row_end) (a band of a pass, or all of them) adds
+ * p.sample_count samples to the pixel's running sums (add_to_pixel). A NaN or infinite sample
+ * (a bug, or a scene beyond float32) is left out, counting as black, so that it cannot poison
+ * the pixel for the rest of the render; the host counts the samples left out from w
+ * (Renderer.dropped_samples) and reports them. A sample whose path waits in the continuation
+ * queue (PATH_QUEUE) is added by add_queued_paths, from its entry of `results`: w holds the
+ * rays its path traced after it was queued, as int bits, or -1 where the path was not queued. */
+void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum,
+                  global float4 *sum_sq, global float4 *sum_c, global float4 *sum_sq_c,
+                  PathQueue queue, global float4 *results, const int nee)
+{
+    int x = get_global_id(0), y = p->row_start + get_global_id(1);
+    if (x >= p->width || y >= p->row_end)
+        return;
+    float3 acc = (float3)(0.0f), acc_sq = (float3)(0.0f);
+    int rays = 0, kept = 0;
+    for (uint i = 0; i < p->sample_count; ++i) {
+        Rng rng = make_rng(x, y, p->sample_start + i, p->seed);
+        CameraRay ray = sample_camera_ray(p, x, y, &rng);
+        PathRecord start = start_path(p, ray.o, ray.d, &rng);
+        int queued = 0;
+        float3 l = trace_path(sc, p, &start, &rng, &rays, nee, queue, &queued);
+#ifdef PATH_QUEUE
+        if (queue.capacity > 0)
+            results[result_index(p, x, y, p->sample_start + i)] = (float4)((float3)(0.0f), as_float(queued - 1));
+#endif
+        if (!queued && all(isfinite(l))) {
+            acc += l;
+            acc_sq += l * l;
+            ++kept;
+        }
+    }
+#ifdef TRAVERSAL_STATS
+    rays = *sc->work;         /* the work counted stands in for the rays traced */
+#endif
+    add_to_pixel(sum, sum_sq, sum_c, sum_sq_c, y * p->width + x, acc, kept, acc_sq, rays);
+}
+
+/* queue, counters, queue_capacity, results: PATH_QUEUE's continuation queue, which paths enter
+ * before their vertex PATH_QUEUE + 1, its count being counters[0] (queue_capacity 0: no queue) */
+#ifdef PATH_QUEUE
+#define FIRST_QUEUED_VERTEX (PATH_QUEUE + 1)
+#else
+#define FIRST_QUEUED_VERTEX 0
+#endif
 #define RENDER_KERNEL(name, nee)                                                                 \
     kernel void name(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *sum,                 \
-                     global float4 *sum_sq, global float4 *sum_c, global float4 *sum_sq_c)       \
+                     global float4 *sum_sq, global float4 *sum_c, global float4 *sum_sq_c,       \
+                     global PathRecord *queue, volatile global int *counters, int queue_capacity, \
+                     global float4 *results)                                                     \
     {                                                                                            \
         SceneData sc = SCENE_DATA(p.num_spheres);                                                \
         COUNT_WORK_INTO(sc);                                                                     \
-        render_pixel(&sc, &p, sum, sum_sq, sum_c, sum_sq_c, nee);                                \
+        PathQueue q = {queue, counters, queue_capacity, FIRST_QUEUED_VERTEX};                    \
+        render_pixel(&sc, &p, sum, sum_sq, sum_c, sum_sq_c, q, results, nee);                    \
     }
+
+#ifdef PATH_QUEUE
+/* Queued path i of pass `pass` (counters[pass] of them in `queue`, entered by the launch of
+ * parameters p): traces it on for `steps` vertices, where it waits again in `next` (counted by
+ * counters[pass + 1]) if it goes on and `next` has room, or to its end (steps 0). Each pass adds
+ * the rays it traced to the path's entry of `results`, and the pass that ends the path leaves its
+ * radiance there. */
+void continue_path(const SceneData *sc, const RenderParams *p, const global PathRecord *queue, int i,
+                   PathQueue next, int steps, global float4 *results, const int nee)
+{
+    PathRecord start = queue[i];
+    Rng rng = make_rng(start.rng.x, start.rng.y, start.rng.z, p->seed);
+    rng.dim = start.rng.w;
+    next.depth = steps > 0 ? as_int(start.throughput.w) + steps : -1;
+    int rays = 0, queued = 0;
+    float3 l = trace_path(sc, p, &start, &rng, &rays, nee, next, &queued);
+#ifdef TRAVERSAL_STATS
+    rays = *sc->work;
+#endif
+    int k = result_index(p, start.rng.x, start.rng.y, start.rng.z);
+    rays += as_int(results[k].w);
+    results[k] = (float4)(queued ? (float3)(0.0f) : l, as_float(rays));
+}
+
+/* One work-item per entry of the queue; those beyond the paths queued end at once (the host
+ * launches a pass over the whole queue rather than wait to read how many paths it holds). */
+#define CONTINUE_KERNEL(name, nee)                                                               \
+    kernel void name(SCENE_KERNEL_ARGS, const RenderParams p, const global PathRecord *queue,    \
+                     global PathRecord *next, volatile global int *counters, int pass,            \
+                     int queue_capacity, int steps, global float4 *results)                      \
+    {                                                                                            \
+        SceneData sc = SCENE_DATA(p.num_spheres);                                                \
+        COUNT_WORK_INTO(sc);                                                                     \
+        PathQueue q = {next, counters + pass + 1, queue_capacity, 0};                            \
+        if (get_global_id(0) < min(counters[pass], queue_capacity))                              \
+            continue_path(&sc, &p, queue, get_global_id(0), q, steps, results, nee);             \
+    }
+
+/* One work-item per pixel, after the passes of continue_paths: adds the launch's samples of the
+ * pixel whose paths were queued, in the order of the samples, so that the sums do not depend on
+ * the order in which the queues were filled. */
+kernel void add_queued_paths(const RenderParams p, global float4 *sum, global float4 *sum_sq,
+                             global float4 *sum_c, global float4 *sum_sq_c,
+                             const global float4 *results)
+{
+    int x = get_global_id(0), y = p.row_start + get_global_id(1);
+    if (x >= p.width || y >= p.row_end)
+        return;
+    float3 acc = (float3)(0.0f), acc_sq = (float3)(0.0f);
+    int rays = 0, kept = 0, queued = 0;
+    for (uint i = 0; i < p.sample_count; ++i) {
+        float4 l = results[result_index(&p, x, y, p.sample_start + i)];
+        if (as_int(l.w) < 0)
+            continue;
+        ++queued;
+        rays += as_int(l.w);
+        if (all(isfinite(l.xyz))) {
+            acc += l.xyz;
+            acc_sq += l.xyz * l.xyz;
+            ++kept;
+        }
+    }
+    if (queued)
+        add_to_pixel(sum, sum_sq, sum_c, sum_sq_c, y * p.width + x, acc, kept, acc_sq, rays);
+}
+#endif
 
 /* With TRAVERSAL_STATS the render kernels count the work of their rays' traversals into a
  * counter of their own, which each pixel reports in place of its rays. */
@@ -320,6 +483,10 @@ void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum
 /* render: the report's estimator; render_nee: with next-event estimation */
 RENDER_KERNEL(render, 0)
 RENDER_KERNEL(render_nee, 1)
+#ifdef PATH_QUEUE
+CONTINUE_KERNEL(continue_paths, 0)
+CONTINUE_KERNEL(continue_paths_nee, 1)
+#endif
 
 /* The nearest primitive along one ray, or -1, and its distance (the viewer's picking and
  * focusing): hit[0] the primitive, hit[1] the distance's float bits. */

@@ -157,6 +157,19 @@ typedef struct {
     int pad;
 } LightNode;
 
+/* A path between two of its vertices, waiting in the continuation queue (kernels/integrator.cl,
+ * PATH_QUEUE): trace_path's loop state, with integers in float slots as their bits. */
+typedef struct {
+    float4 o;           /* xyz: the ray's origin; w: eta_scale */
+    float4 d;           /* xyz: its direction; w: pdf_prev */
+    float4 throughput;  /* xyz; w: the depth of the vertex the ray is to find */
+    float4 radiance;    /* xyz: what has reached the camera so far; w: the medium the ray crosses */
+    float4 prev_x;      /* xyz: the vertex it left; w: the primitive it left */
+    float4 prev_n;      /* xyz: the normal there; w: the instance that draws that primitive */
+    float4 ratios;      /* with MEDIA, xyz: the channels' path densities over the hero's; w: the hero */
+    uint4 rng;          /* its random numbers' key: pixel x, y, sample; w: the dimensions drawn */
+} PathRecord;
+
 /* A participating medium (kernels/media/homogeneous.cl documents its fields): homogeneous,
  * with a Henyey-Greenstein phase function (kernels/phase.cl). */
 typedef struct {

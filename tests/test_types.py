@@ -4,8 +4,8 @@
 import numpy as np
 import pytest
 
-from pathtrace.types import (BVH_NODE, INSTANCE, LIGHT, LIGHT_NODE, MATERIAL, MEDIUM, RENDER_PARAMS, TEXTURE,
-                             TEXTURE_BINDING, TRIANGLE)
+from pathtrace.types import (BVH_NODE, INSTANCE, LIGHT, LIGHT_NODE, MATERIAL, MEDIUM, PATH_RECORD, RENDER_PARAMS,
+                             TEXTURE, TEXTURE_BINDING, TRIANGLE)
 
 STRUCTS = {
     "Material": MATERIAL,
@@ -18,6 +18,7 @@ STRUCTS = {
     "TextureBinding": TEXTURE_BINDING,
     "Medium": MEDIUM,
     "Instance": INSTANCE,
+    "PathRecord": PATH_RECORD,
 }
 
 

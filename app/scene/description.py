@@ -32,6 +32,9 @@ class RenderSettings:
     nee: bool = True              # next-event estimation with MIS; off: the report's estimator
     filter: PixelFilter = field(default_factory=PixelFilter)   # where samples land in a pixel
     light_sampler: str = "auto"   # how NEE chooses a light: one of pathtrace.lights.LIGHT_SAMPLERS
+    path_queue: int = 0           # paths going on past this many vertices are traced on from a queue
+                                  # (kernels/integrator.cl, PATH_QUEUE): the same image, sooner on
+                                  # GPUs where few paths go on long; 0: no queue
 
     @property
     def paths_end(self) -> bool:
