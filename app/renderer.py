@@ -322,7 +322,9 @@ class Renderer:
         b, events = self._buffers, []
         queues = (b["queue"], b["queue_next"])
         follow = self.continue_kernels[self.settings.nee]
-        size = (-(-int(capacity) // 64) * 64,)
+        rows = int(launch["row_end"] - launch["row_start"])
+        paths = min(int(capacity), self.width * rows * int(launch["sample_count"]))   # at most one a sample
+        size = (-(-paths // 64) * 64,)
         for k in range(QUEUE_PASSES + 1):
             steps = 1 if k < QUEUE_PASSES else 0
             follow.set_args(*self.scene_args(), launch, queues[k % 2], queues[(k + 1) % 2], b["counters"],

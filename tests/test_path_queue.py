@@ -111,3 +111,15 @@ def test_render_command_takes_the_setting(tmp_path):
         assert r.returncode == 0, r.stderr
         images.append(read_hdr(out, "test"))
     np.testing.assert_allclose(images[1], images[0], rtol=1e-5, atol=1e-6)
+
+
+def test_bands_of_rows_render_the_same(backend):
+    """The viewer's launches cover bands of rows (pathtrace.launches.Progressive); a band's passes
+    take only as many paths as its pixels can queue."""
+    scene = load_scene("cornell-box").with_settings(max_depth=6, russian_roulette="off")
+    plain = render(backend, scene, 0)
+    r = Renderer(backend, scene.with_settings(path_queue=1), *SIZE)
+    for first, end in ((0, 7), (7, 20), (20, SIZE[1])):
+        r.add_samples(SPP, rows=(first, end))
+    r.finish()
+    assert_same_render(plain, (r.read_sum(), r._read("sum_sq"), r))
