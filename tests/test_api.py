@@ -249,3 +249,17 @@ def test_material_errors_name_the_field():
         scene.materials["gold"]
     with pytest.raises(UserError, match="no material 7"):
         scene.materials[7]
+
+
+def test_the_path_queue_setting_reaches_a_prepared_scene():
+    """settings.path_queue changed between renders of one scene takes effect on its devices (the
+    continuation queue's buffers sized anew), and the image is the one without it, but for the
+    order of each pixel's float32 sums."""
+    scene = pathtrace.load_dict(small_scene())
+    plain = render(scene, spp=4, max_depth=6)
+    prepared = scene._prepared
+    scene.settings.path_queue = 1
+    queued = render(scene, spp=4, max_depth=6)
+    assert scene._prepared is prepared
+    assert all(r.settings.path_queue == 1 for r in prepared.group.renderers)
+    np.testing.assert_allclose(queued, plain, rtol=1e-5, atol=1e-6)

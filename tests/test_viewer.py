@@ -492,6 +492,43 @@ def test_the_rotation_slider_reaches_a_full_turn(viewer):
     v.renderer.reset()
 
 
+def test_the_speed_slider_turns_the_path_queue_on(viewer):
+    """A press a third of the way along the "path queue" slider (0 to 4) sets the render setting to
+    1, and the image goes on accumulating."""
+    v = viewer
+    settle(v)
+    assert v.renderer.settings.path_queue == 0
+    label = "path queue (0: off)"
+    xdo("windowfocus", "--sync", window_id(v))
+    xdo("mousemove", "--window", window_id(v), 60, 200)          # over the panel: scroll it into sight
+    frames(v, 2)
+    bottom = v.panel_rect[1] + v.panel_rect[3]
+    scrolls = 0
+    while v.widgets[label][3] > bottom - 10 and scrolls < 30:
+        xdo("click", 5)
+        frames(v, 2)
+        scrolls += 1
+    x0, y0, x1, y1 = v.widgets[label]
+    slider_end = x1 - v.imgui.calc_text_size(label).x - v.imgui.get_style().item_inner_spacing.x
+    xdo("mousemove", "--window", window_id(v), int(x0 + 0.3 * (slider_end - x0)), int((y0 + y1) / 2))
+    frames(v, 2)
+    xdo("mousedown", 1)           # a slider takes a press that lasts a frame, as a hand's does
+    frames(v, 3)
+    xdo("mouseup", 1)
+    frames(v, 2)
+    assert v.renderer.settings.path_queue == 1
+    resets = v.renderer.resets
+    start = time.perf_counter()
+    while v.renderer.samples < 2 and time.perf_counter() - start < 20:
+        v.frame()
+    assert v.renderer.samples >= 2 and v.renderer.resets == resets
+    v.renderer.set_settings(path_queue=0)
+    xdo("mousemove", "--window", window_id(v), 60, 200)
+    for _ in range(scrolls):
+        xdo("click", 4)
+        frames(v, 1)
+
+
 def test_the_window_fits_the_screen_and_keeps_the_image_aspect():
     from pathtrace.viewer.window import fit_window
     assert fit_window(640, 360, (1920, 1080)) == (640, 360)

@@ -31,7 +31,7 @@ KEYS = (("W A S D", "move"), ("Q / E, Ctrl / Space", "down / up"), ("right mouse
 
 # every label the panel draws beside a widget, to size the label column
 LABELS = ("exposure (EV)", "tone curve", "max depth (0: none)", "Russian roulette", "env intensity",
-          "env rotation", "speed", "vertical fov", "view height", "aperture", "focus distance", "built-in", "file", "folder", "emission") + \
+          "env rotation", "path queue (0: off)", "speed", "vertical fov", "view height", "aperture", "focus distance", "built-in", "file", "folder", "emission") + \
     tuple({p.name for bsdf in BSDFS.values() for p in bsdf.params})
 
 
@@ -271,6 +271,14 @@ def draw_panel(v):
         layout.check("open file")
         if opened:
             v.requested_scene = v.scene_file
+
+    if layout.header("Speed", imgui.TreeNodeFlags_.default_open):
+        changed, queue = imgui.slider_int("path queue (0: off)", r.settings.path_queue, 0, 4)
+        layout.check("path queue (0: off)")
+        if changed:
+            r.set_settings(path_queue=queue)
+        imgui.text_wrapped("paths going on past this many vertices wait in a queue: the same image, "
+                           "sooner on a GPU where few paths go on long")
 
     if layout.header("Screenshots", imgui.TreeNodeFlags_.default_open):
         changed, folder = imgui.input_text("folder", str(v.screenshot_dir))
