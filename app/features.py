@@ -39,7 +39,7 @@ class Features:
                                            # (app/traversal_stats.py); 0: they count rays
     path_queue: int = 0                    # paths going on past this many vertices wait in the
                                            # continuation queue (PATH_QUEUE, kernels/integrator.cl;
-                                           # app/renderer.py: queue_depth); 0: no queue
+                                           # the render setting path_queue); 0: no queue
 
     def defines(self) -> tuple:
         return ((() if self.triangles else ("NO_TRIANGLES",)) + (("TEXTURES",) if self.textures else ())

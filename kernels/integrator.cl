@@ -429,8 +429,8 @@ void continue_path(const SceneData *sc, const RenderParams *p, const global Path
     results[k] = (float4)(queued ? (float3)(0.0f) : l, as_float(rays));
 }
 
-/* One work-item per entry of the queue; those beyond the paths queued end at once (the host
- * launches a pass over the whole queue rather than wait to read how many paths it holds). */
+/* One work-item per path the launch could have queued; those beyond the paths in the queue end
+ * at once (the host does not wait to read how many there are). */
 #define CONTINUE_KERNEL(name, nee)                                                               \
     kernel void name(SCENE_KERNEL_ARGS, const RenderParams p, const global PathRecord *queue,    \
                      global PathRecord *next, volatile global int *counters, int pass,            \
