@@ -11,7 +11,7 @@ from pathtrace import __version__
 from pathtrace.console import INTERRUPTED, check_interrupt
 from pathtrace.errors import UserError, cut, short, warn
 from pathtrace.lights import LIGHT_SAMPLERS
-from pathtrace.scene.description import RUSSIAN_ROULETTE
+from pathtrace.scene.description import MAX_PATH_QUEUE, RUSSIAN_ROULETTE
 
 GENERATED_SCENES = (("spheresN[-diffuse]", "N random spheres, e.g. spheres512k, spheres1M-diffuse"),
                     ("heightfieldN", "a height field of about N triangles, e.g. heightfield1M"))
@@ -165,7 +165,7 @@ def add_render_options(p: argparse.ArgumentParser, device: bool = True):
 
 
 def add_path_queue_option(p: argparse.ArgumentParser):
-    p.add_argument("--path-queue", type=_int_range(0, 64), metavar="N",
+    p.add_argument("--path-queue", type=_int_range(0, MAX_PATH_QUEUE), metavar="N",
                    help="trace the paths that go on past N vertices from a queue, one vertex a pass, "
                         "so that a GPU's warps stay full where few paths go on long (the same image; "
                         "faster on some scenes, slower on others: docs/performance.md); 0 = off, the default")

@@ -94,6 +94,7 @@ class Renderer:
         self.camera = self.scene.camera.copy()
         self.settings = self.scene.settings
         self._select_program()
+        self._size_queue()
         for name, array in self.compiled.geometry_arrays().items():
             self._upload(name, array)
         self._upload_environment()
@@ -120,8 +121,7 @@ class Renderer:
         self.reset()
 
     def _select_program(self):
-        """The kernels specialised to the scene's shapes and materials (pathtrace.device.Features),
-        and the continuation queue's buffers sized for settings.path_queue."""
+        """The kernels specialised to the scene's shapes and materials (pathtrace.device.Features)."""
         features = self.compiled.features(self.settings, self.camera)
         program = self.backend.program_for(replace(features, traversal_stats=self.traversal_stats,
                                                    path_queue=self.settings.path_queue))
@@ -133,6 +133,9 @@ class Renderer:
                                      True: cl.Kernel(program, "continue_paths_nee")} if queue else None
             self.add_queued = cl.Kernel(program, "add_queued_paths") if queue else None
             self.aov_kernel = cl.Kernel(program, "render_aovs")
+
+    def _size_queue(self):
+        """After a change of settings: the continuation queue's buffers sized for path_queue."""
         if self.width and self._queued_for != self.settings.path_queue:
             self._allocate_images(self.width, self.height, self.aovs)
 
@@ -190,6 +193,7 @@ class Renderer:
             self.compiled.light_sampler = self.settings.light_sampler
             self.upload_materials()
         self._select_program()
+        self._size_queue()
         self.reset()
 
     def resize(self, width: int, height: int):
@@ -206,9 +210,9 @@ class Renderer:
     def _allocate_images(self, width: int, height: int, aovs: bool):
         nbytes = width * height * 16
         images = image_buffers(aovs)
-        entries = PATH_RECORD.itemsize * self.queue_capacity(width, height)
-        queue = {"queue": entries, "queue_next": entries, "counters": 4 * (QUEUE_PASSES + 2),
-                 "results": 16 * (width * height * self.queue_samples(width, height) if self.settings.path_queue else 1)}
+        entries = PATH_RECORD.itemsize * max(self.queue_capacity(width, height), 1)   # (a buffer has bytes)
+        results = width * height * self.queue_samples(width, height) if self.settings.path_queue else 1
+        queue = {"queue": entries, "queue_next": entries, "counters": 4 * (QUEUE_PASSES + 2), "results": 16 * results}
         others = {name: b.size for name, b in self._buffers.items()
                   if name not in image_buffers(True) and name not in queue}
         what = f"the {width}x{height} image of {self.scene.name}"
@@ -235,9 +239,9 @@ class Renderer:
         return max(1, min(MAX_LAUNCH_SAMPLES, QUEUE_POOL // (width * height)))
 
     def queue_capacity(self, width: int, height: int) -> int:
-        """Entries of the continuation queue for a width x height image (one, unused, without)."""
+        """Entries of the continuation queue for a width x height image (0 without it)."""
         if not self.settings.path_queue:
-            return 1
+            return 0
         memory = self.backend.device.device.global_mem_size // 16 // PATH_RECORD.itemsize
         return min(width * height * self.queue_samples(width, height), MAX_QUEUED, memory)
 
@@ -294,7 +298,7 @@ class Renderer:
         params["row_start"], params["row_end"], params["sample_start"] = first, end, start
         events = []
         sums = tuple(b[name] for name in SUM_BUFFERS)
-        capacity = np.int32(self.queue_capacity(self.width, self.height) if self.settings.path_queue else 0)
+        capacity = np.int32(self.queue_capacity(self.width, self.height))
         # with the continuation queue, a few samples per launch (queue_samples), for which the
         # launch's pixels have room in `results` (kernels/integrator.cl: render_pixel)
         step = self.queue_samples(self.width, self.height) if self.settings.path_queue else MAX_LAUNCH_SAMPLES

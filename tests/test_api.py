@@ -263,3 +263,12 @@ def test_the_path_queue_setting_reaches_a_prepared_scene():
     assert scene._prepared is prepared
     assert all(r.settings.path_queue == 1 for r in prepared.group.renderers)
     np.testing.assert_allclose(queued, plain, rtol=1e-5, atol=1e-6)
+
+
+
+@pytest.mark.parametrize("value", [-1, 65, 1.5, "2", None])
+def test_a_bad_path_queue_setting_is_one_user_error(value):
+    scene = pathtrace.load_dict(small_scene())
+    scene.settings.path_queue = value
+    with pytest.raises(UserError, match="settings.path_queue: give an integer from 0 to 64"):
+        render(scene, spp=1)

@@ -19,6 +19,7 @@ from pathtrace.scene.meshes import is_closed
 # throughput from depth 5 on (Mitsuba 3's and pbrt-v4's); "albedo", the report's, at every
 # vertex with the material's albedo; "off", at max_depth only.
 RUSSIAN_ROULETTE = ("off", "albedo", "throughput")
+MAX_PATH_QUEUE = 64     # RenderSettings.path_queue's largest value (no path that long is short)
 
 
 @dataclass
