@@ -30,11 +30,11 @@ SUM_BUFFERS = ("sum", "sum_sq", "sum_c", "sum_sq_c")   # kernels/integrator.cl: 
                                                        # what their rounding lost (Kahan)
 MAX_LAUNCH_SAMPLES = 64   # samples a launch adds to a pixel, summed plainly in float32 before the
                           # compensated running sum takes them: within 64 ulps of their sum
-QUEUE_PASSES = 6          # passes of continue_paths that trace one vertex each, queueing the paths
+QUEUE_PASSES = 4          # passes of continue_paths that trace one vertex each, queueing the paths
                           # that go on again; a last pass traces them to their ends
-QUEUE_POOL = 1 << 22      # pixel samples a launch with the queue renders (a few per pixel): enough
+QUEUE_POOL = 1 << 23      # pixel samples a launch with the queue renders (a few per pixel): enough
                           # paths going on to fill a GPU when continue_paths traces them
-MAX_QUEUED = 1 << 22      # entries of each of the two queues (PATH_RECORD, 128 bytes; at most a
+MAX_QUEUED = 1 << 23      # entries of each of the two queues (PATH_RECORD, 128 bytes; at most a
                           # sixteenth of the device's memory); paths that find one full go on where
                           # they are
 

@@ -108,11 +108,50 @@ int survives_roulette(float3 *throughput, float eta_scale, float u)
 /* Where a path about to trace its ray to vertex `depth` waits instead: `records` holds
  * `capacity` paths, `count` counts those handed in (beyond capacity: not taken, they go on). */
 typedef struct {
-    global PathRecord *records;
+    global float4 *records;
     volatile global int *count;
     int capacity;    /* 0: no queue */
     int depth;
 } PathQueue;
+
+/* A queue holds its paths as a structure of arrays: the k-th float4 of PathRecord for slot s at
+ * records[k * capacity + s], so that the lanes of a warp storing or loading one field of
+ * consecutive slots touch consecutive words (coalesced), where an array of 128-byte records had
+ * each of the eight accesses touch 32 cache lines. Without MEDIA, `ratios` is neither stored nor
+ * loaded. */
+void store_path(global float4 *records, int capacity, int slot, const PathRecord *path)
+{
+    global float4 *r = records + slot;
+    r[0] = path->o;
+    r[capacity] = path->d;
+    r[2 * capacity] = path->throughput;
+    r[3 * capacity] = path->radiance;
+    r[4 * capacity] = path->prev_x;
+    r[5 * capacity] = path->prev_n;
+#ifdef MEDIA
+    r[6 * capacity] = path->ratios;
+#endif
+    r[7 * capacity] = as_float4(path->rng);
+}
+
+PathRecord load_path(const global float4 *records, int capacity, int slot)
+{
+    const global float4 *r = records + slot;
+    PathRecord path;
+    path.o = r[0];
+    path.d = r[capacity];
+    path.throughput = r[2 * capacity];
+    path.radiance = r[3 * capacity];
+    path.prev_x = r[4 * capacity];
+    path.prev_n = r[5 * capacity];
+#ifdef MEDIA
+    path.ratios = r[6 * capacity];
+#else
+    path.ratios = (float4)(1.0f);
+#endif
+    path.rng = as_uint4(r[7 * capacity]);
+    return path;
+}
 
 /* A path leaving the camera along o + t d (with MEDIA, it draws its hero channel from rng). */
 PathRecord start_path(const RenderParams *p, float3 o, float3 d, Rng *rng)
@@ -186,18 +225,19 @@ float3 trace_path(const SceneData *sc, const RenderParams *p, const PathRecord *
         if (depth == queue.depth && queue.capacity > 0) {
             int slot = atomic_inc(queue.count);
             if (slot < queue.capacity) {
-                global PathRecord *r = &queue.records[slot];
                 int2 left = PRIM_ID_PAIR(self);
-                r->o = (float4)(o, eta_scale);
-                r->d = (float4)(d, pdf_prev);
-                r->throughput = (float4)(throughput, as_float(depth));
-                r->radiance = (float4)(radiance, as_float(medium));
-                r->prev_x = (float4)(prev_x, as_float(left.x));
-                r->prev_n = (float4)(prev_n, as_float(left.y));
+                PathRecord r;
+                r.o = (float4)(o, eta_scale);
+                r.d = (float4)(d, pdf_prev);
+                r.throughput = (float4)(throughput, as_float(depth));
+                r.radiance = (float4)(radiance, as_float(medium));
+                r.prev_x = (float4)(prev_x, as_float(left.x));
+                r.prev_n = (float4)(prev_n, as_float(left.y));
 #ifdef MEDIA
-                r->ratios = (float4)(ratios, as_float(hero));
+                r.ratios = (float4)(ratios, as_float(hero));
 #endif
-                r->rng = (uint4)(rng->key.xyz, rng->dim);
+                r.rng = (uint4)(rng->key.xyz, rng->dim);
+                store_path(queue.records, queue.capacity, slot, &r);
                 *queued = 1;
                 return radiance;
             }
@@ -397,7 +437,7 @@ void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum
 #define RENDER_KERNEL(name, nee)                                                                 \
     kernel void name(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *sum,                 \
                      global float4 *sum_sq, global float4 *sum_c, global float4 *sum_sq_c,       \
-                     global PathRecord *queue, volatile global int *counters, int queue_capacity, \
+                     global float4 *queue, volatile global int *counters, int queue_capacity,     \
                      global float4 *results)                                                     \
     {                                                                                            \
         SceneData sc = SCENE_DATA(p.num_spheres);                                                \
@@ -412,10 +452,10 @@ void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum
  * counters[pass + 1]) if it goes on and `next` has room, or to its end (steps 0). Each pass adds
  * the rays it traced to the path's entry of `results`, and the pass that ends the path leaves its
  * radiance there. */
-void continue_path(const SceneData *sc, const RenderParams *p, const global PathRecord *queue, int i,
+void continue_path(const SceneData *sc, const RenderParams *p, const global float4 *queue, int i,
                    PathQueue next, int steps, global float4 *results, const int nee)
 {
-    PathRecord start = queue[i];
+    PathRecord start = load_path(queue, next.capacity, i);
     Rng rng = make_rng(start.rng.x, start.rng.y, start.rng.z, p->seed);
     rng.dim = start.rng.w;
     next.depth = steps > 0 ? as_int(start.throughput.w) + steps : -1;
@@ -432,8 +472,8 @@ void continue_path(const SceneData *sc, const RenderParams *p, const global Path
 /* One work-item per path the launch could have queued; those beyond the paths in the queue end
  * at once (the host does not wait to read how many there are). */
 #define CONTINUE_KERNEL(name, nee)                                                               \
-    kernel void name(SCENE_KERNEL_ARGS, const RenderParams p, const global PathRecord *queue,    \
-                     global PathRecord *next, volatile global int *counters, int pass,            \
+    kernel void name(SCENE_KERNEL_ARGS, const RenderParams p, const global float4 *queue,        \
+                     global float4 *next, volatile global int *counters, int pass,                \
                      int queue_capacity, int steps, global float4 *results)                      \
     {                                                                                            \
         SceneData sc = SCENE_DATA(p.num_spheres);                                                \
