@@ -33,7 +33,8 @@ MAX_LAUNCH_SAMPLES = 64   # samples a launch adds to a pixel, summed plainly in 
 QUEUE_PASSES = 4          # passes of continue_paths that trace one vertex each, queueing the paths
                           # that go on again; a last pass traces them to their ends
 QUEUE_POOL = 1 << 23      # pixel samples a launch with the queue renders (a few per pixel): enough
-                          # paths going on to fill a GPU when continue_paths traces them
+                          # paths going on to fill a GPU when continue_paths traces them, and the
+                          # passes' cost per launch spread (docs/performance.md, 2026-11-26)
 MAX_QUEUED = 1 << 23      # entries of each of the two queues (PATH_RECORD, 128 bytes; at most a
                           # sixteenth of the device's memory); paths that find one full go on where
                           # they are
