@@ -366,6 +366,17 @@ void add_compensated(float4 *s, float4 *c, float4 x)
     *s = t;
 }
 
+/* Adds a sample's radiance l to a pixel's sums of the launch, if it is finite (kept counts
+ * those added; render_pixel documents what becomes of the others). */
+void add_sample(float3 l, float3 *acc, float3 *acc_sq, int *kept)
+{
+    if (all(isfinite(l))) {
+        *acc += l;
+        *acc_sq += l * l;
+        ++*kept;
+    }
+}
+
 /* Adds a launch's samples of pixel k to its running sums of radiance (rgb; w counts the samples
  * kept) and of its square (rgb, for the per-pixel variance; w counts rays traced), compensated
  * (sum_c and sum_sq_c hold what rounding lost). */
@@ -415,11 +426,8 @@ void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum
         if (queue.capacity > 0)
             results[result_index(p, x, y, p->sample_start + i)] = (float4)((float3)(0.0f), as_float(queued - 1));
 #endif
-        if (!queued && all(isfinite(l))) {
-            acc += l;
-            acc_sq += l * l;
-            ++kept;
-        }
+        if (!queued)
+            add_sample(l, &acc, &acc_sq, &kept);
     }
 #ifdef TRAVERSAL_STATS
     rays = *sc->work;         /* the work counted stands in for the rays traced */
@@ -501,11 +509,7 @@ kernel void add_queued_paths(const RenderParams p, global float4 *sum, global fl
             continue;
         ++queued;
         rays += as_int(l.w);
-        if (all(isfinite(l.xyz))) {
-            acc += l.xyz;
-            acc_sq += l.xyz * l.xyz;
-            ++kept;
-        }
+        add_sample(l.xyz, &acc, &acc_sq, &kept);
     }
     if (queued)
         add_to_pixel(sum, sum_sq, sum_c, sum_sq_c, y * p.width + x, acc, kept, acc_sq, rays);
