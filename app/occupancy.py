@@ -5,7 +5,11 @@ path tracer took 96 registers, 20 resident warps of the 8x8 work groups, or 116 
 after an unrelated change to the light interface: 5-8 % of the H100's time on sphere scenes).
 So on NVIDIA's OpenCL the kernels are built once with ptxas's report (-cl-nv-verbose), and again
 under the register caps that would keep more warps resident, down to 4/5 of what ptxas chose;
-the lowest cap that compiles without spilling is kept. Other platforms build as they are."""
+the lowest cap that compiles without spilling is kept, unless it leaves fewer than FEWEST_WARPS
+resident: then the most registers that keep that many, if no kernel spills more than MOST_SPILLED
+bytes there (a heavy program, such as tori400-textured's with its textures, ran 13 % faster at
+16 warps with a hundred bytes spilled than at 14 without: docs/performance.md). Other platforms
+build as they are."""
 
 import math
 import os
@@ -21,6 +25,9 @@ ALLOCATION_UNIT = 8
 GROUP_WARPS = 2
 MOST_WARPS = 64
 LOWEST_FRACTION = 0.8
+FEWEST_WARPS = 16           # a quarter of an SM's: fewer leave the BVH walk's latency unhidden
+MOST_SPILLED = 256          # bytes of spill stores per kernel allowed for FEWEST_WARPS: the tori
+                            # gained with up to 328 (docs/performance.md); beyond, not measured
 
 
 def is_nvidia(device: cl.Device) -> bool:
@@ -63,9 +70,14 @@ def register_caps(registers: int, register_file: int = 65536, warp: int = 32) ->
     return sorted(caps.values())
 
 
+def most_registers(warps: int, register_file: int = 65536, warp: int = 32) -> int:
+    """The most registers a thread may hold with `warps` warps resident per SM."""
+    return max(cap for cap in range(1, 256) if resident_warps(cap, register_file, warp) >= warps)
+
+
 def build_for_occupancy(context: cl.Context, device: cl.Device, source: str, options: list[str]):
     """The program built with the options under which it keeps the most warps resident without
-    spilling, and those options.
+    spilling (or FEWEST_WARPS, spilling a little: see above), and those options.
 
     The driver keeps compiled code in its own cache (~/.nv/ComputeCache), keyed by the PTX and
     the options: where it already holds this PTX, ptxas does not run and reports nothing, and a
@@ -82,10 +94,29 @@ def build_for_occupancy(context: cl.Context, device: cl.Device, source: str, opt
     if not found:
         return program, options + [REPORT]
     most = max(registers for registers, _ in found.values())
-    for cap in register_caps(most, device.registers_per_block_nv, device.warp_size_nv):
+    register_file, warp = device.registers_per_block_nv, device.warp_size_nv
+    built = {most: (program, options + [REPORT], found)}
+
+    def build(cap):
         capped = options + [f"-cl-nv-maxrregcount={cap}", REPORT]
         trial = cl.Program(context, source).build(options=capped, devices=[device])
-        report = kernel_registers(trial.get_build_info(device, cl.program_build_info.LOG))
-        if report and all(spilled == 0 for _, spilled in report.values()):
-            return trial, capped
-    return program, options + [REPORT]
+        built[cap] = trial, capped, kernel_registers(trial.get_build_info(device, cl.program_build_info.LOG))
+
+    def spilled(cap) -> int:
+        """The most bytes a kernel spills under `cap`; -1 where ptxas reported nothing."""
+        report = built[cap][2]
+        return max(spills for _, spills in report.values()) if report else -1
+
+    kept = most
+    for cap in register_caps(most, register_file, warp):
+        build(cap)
+        if spilled(cap) == 0:
+            kept = cap
+            break
+    if resident_warps(kept, register_file, warp) < FEWEST_WARPS:
+        fuller = most_registers(FEWEST_WARPS, register_file, warp)
+        if fuller not in built:
+            build(fuller)
+        if 0 <= spilled(fuller) <= MOST_SPILLED:
+            kept = fuller
+    return built[kept][:2]

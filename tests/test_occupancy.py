@@ -2,7 +2,7 @@
 caps that would keep more warps resident."""
 
 
-from pathtrace.occupancy import kernel_registers, register_caps, resident_warps
+from pathtrace.occupancy import kernel_registers, most_registers, register_caps, resident_warps
 
 # An H100's report for a scene's program (-cl-nv-verbose), as the driver wrote it.
 REPORT = """
@@ -46,6 +46,15 @@ def test_caps_are_the_occupancy_steps_down_to_four_fifths():
             assert resident_warps(cap, 65536, 32) > resident_warps(registers, 65536, 32)
 
 
+def test_most_registers_is_the_top_of_an_occupancy_step():
+    assert most_registers(16) == 128
+    assert most_registers(20) == 96
+    assert most_registers(64) == 32
+    for warps in range(10, 65, 2):       # 8 warps hold the most a thread may have, 255
+        cap = most_registers(warps)
+        assert resident_warps(cap, 65536, 32) >= warps > resident_warps(cap + 1, 65536, 32)
+
+
 def report(registers, spilled):
     return (f"ptxas info    : Compiling entry function 'render_nee' for 'sm_90a'\n"
             f"ptxas         .     320 bytes stack frame, {spilled} bytes spill stores, {spilled} bytes spill loads\n"
@@ -54,8 +63,9 @@ def report(registers, spilled):
 
 class FakeProgram:
     """cl.Program on a stand-in for NVIDIA's driver: each build's log is ptxas's report for the
-    register cap in its options (116 registers uncapped; spills below 100)."""
+    register cap in its options (`uncapped` registers without one; spills below `spills_below`)."""
     built = []
+    uncapped, spills_below, spill_bytes = 116, 100, 64
 
     def __init__(self, context, source):
         pass
@@ -63,8 +73,9 @@ class FakeProgram:
     def build(self, options, devices):
         self.options = options
         cap = next((int(o.split("=")[1]) for o in options if o.startswith("-cl-nv-maxrregcount=")), None)
-        self.log = report(cap or 116, 64 if cap and cap < 100 else 0) if "-cl-nv-verbose" in options else ""
-        FakeProgram.built.append(options)
+        spilled = self.spill_bytes if cap and cap < self.spills_below else 0
+        self.log = report(cap or self.uncapped, spilled) if "-cl-nv-verbose" in options else ""
+        type(self).built.append(options)
         return self
 
     def get_build_info(self, device, what):
@@ -85,3 +96,47 @@ def test_the_options_kept_are_those_the_program_was_built_with(monkeypatch):
     assert options == program.options == ["-DA", "-cl-nv-maxrregcount=112", "-cl-nv-verbose"]
     assert FakeProgram.built == [["-DA", "-cl-nv-verbose"], ["-DA", "-cl-nv-maxrregcount=96", "-cl-nv-verbose"],
                                  ["-DA", "-cl-nv-maxrregcount=112", "-cl-nv-verbose"]]
+
+
+def test_a_heavy_program_spills_rather_than_keep_fewer_than_16_warps(monkeypatch):
+    """157 registers uncapped (12 warps resident), spilling below 140: the cap of 144 builds
+    without spills but keeps 14 warps, so 128 (16 warps) is kept, spills and all, from the trial
+    already built."""
+    import pathtrace.occupancy as occupancy
+
+    class HeavyProgram(FakeProgram):
+        built, uncapped, spills_below = [], 157, 140
+
+    monkeypatch.setattr(occupancy.cl, "Program", HeavyProgram)
+    program, options = occupancy.build_for_occupancy(None, FakeDevice(), "kernel void k(void) {}", ["-DA"])
+    assert options == program.options == ["-DA", "-cl-nv-maxrregcount=128", "-cl-nv-verbose"]
+    assert HeavyProgram.built == [["-DA", "-cl-nv-verbose"], ["-DA", "-cl-nv-maxrregcount=128", "-cl-nv-verbose"],
+                                  ["-DA", "-cl-nv-maxrregcount=144", "-cl-nv-verbose"]]
+
+
+def test_the_cap_of_16_warps_is_built_where_no_trial_reached_it(monkeypatch):
+    """200 registers uncapped (10 warps): the caps tried stop at 4/5 of that, none of them spills,
+    and all keep fewer than 16 warps, so the program is built once more at 128."""
+    import pathtrace.occupancy as occupancy
+
+    class Program(FakeProgram):
+        built, uncapped, spills_below = [], 200, 100
+
+    monkeypatch.setattr(occupancy.cl, "Program", Program)
+    program, options = occupancy.build_for_occupancy(None, FakeDevice(), "kernel void k(void) {}", ["-DA"])
+    assert options == program.options == ["-DA", "-cl-nv-maxrregcount=128", "-cl-nv-verbose"]
+    assert Program.built[-1] == options and len(Program.built) == 3
+
+
+def test_a_program_that_would_spill_much_for_16_warps_keeps_its_cap_without_spills(monkeypatch):
+    """As the heavy program above, but spilling 400 bytes at 128 registers, more than
+    MOST_SPILLED: the cap of 144 without spills is kept, as before the 16-warp rule."""
+    import pathtrace.occupancy as occupancy
+
+    class Program(FakeProgram):
+        built, uncapped, spills_below, spill_bytes = [], 157, 140, 400
+
+    assert Program.spill_bytes > occupancy.MOST_SPILLED
+    monkeypatch.setattr(occupancy.cl, "Program", Program)
+    program, options = occupancy.build_for_occupancy(None, FakeDevice(), "kernel void k(void) {}", ["-DA"])
+    assert options == program.options == ["-DA", "-cl-nv-maxrregcount=144", "-cl-nv-verbose"]
