@@ -63,8 +63,8 @@ def report(registers, spilled):
 
 class FakeProgram:
     """cl.Program on a stand-in for NVIDIA's driver: each build's log is ptxas's report for the
-    register cap in its options (`uncapped` registers without one; spills below `spills_below`)."""
-    built = []
+    register cap in its options (`uncapped` registers without one; `spill_bytes` spilled below
+    `spills_below`)."""
     uncapped, spills_below, spill_bytes = 116, 100, 64
 
     def __init__(self, context, source):
@@ -75,7 +75,7 @@ class FakeProgram:
         cap = next((int(o.split("=")[1]) for o in options if o.startswith("-cl-nv-maxrregcount=")), None)
         spilled = self.spill_bytes if cap and cap < self.spills_below else 0
         self.log = report(cap or self.uncapped, spilled) if "-cl-nv-verbose" in options else ""
-        type(self).built.append(options)
+        self.built.append(options)
         return self
 
     def get_build_info(self, device, what):
@@ -86,57 +86,51 @@ class FakeDevice:
     registers_per_block_nv, warp_size_nv = 65536, 32
 
 
+def tune(monkeypatch, **program) -> tuple:
+    """build_for_occupancy on the stand-in driver (FakeProgram's settings replaced by `program`):
+    the options kept, which must be those of the program returned, and each build's options."""
+    import pathtrace.occupancy as occupancy
+    Program = type("Program", (FakeProgram,), dict(program, built=[]))
+    monkeypatch.setattr(occupancy.cl, "Program", Program)
+    built, options = occupancy.build_for_occupancy(None, FakeDevice(), "kernel void k(void) {}", ["-DA"])
+    assert options == built.options
+    return options, Program.built
+
+
+def capped(cap: int) -> list:
+    return ["-DA", f"-cl-nv-maxrregcount={cap}", "-cl-nv-verbose"]
+
+
 def test_the_options_kept_are_those_the_program_was_built_with(monkeypatch):
     """The driver caches what ptxas made, keyed by the PTX and the build options: the options that
     go with the cached binary must be the very ones of its build, the report's included, or the
     next start misses that cache and runs ptxas again (25-35 s on the H100)."""
-    import pathtrace.occupancy as occupancy
-    monkeypatch.setattr(occupancy.cl, "Program", FakeProgram)
-    program, options = occupancy.build_for_occupancy(None, FakeDevice(), "kernel void k(void) {}", ["-DA"])
-    assert options == program.options == ["-DA", "-cl-nv-maxrregcount=112", "-cl-nv-verbose"]
-    assert FakeProgram.built == [["-DA", "-cl-nv-verbose"], ["-DA", "-cl-nv-maxrregcount=96", "-cl-nv-verbose"],
-                                 ["-DA", "-cl-nv-maxrregcount=112", "-cl-nv-verbose"]]
+    options, builds = tune(monkeypatch)
+    assert options == capped(112)
+    assert builds == [["-DA", "-cl-nv-verbose"], capped(96), capped(112)]
 
 
 def test_a_heavy_program_spills_rather_than_keep_fewer_than_16_warps(monkeypatch):
     """157 registers uncapped (12 warps resident), spilling below 140: the cap of 144 builds
     without spills but keeps 14 warps, so 128 (16 warps) is kept, spills and all, from the trial
     already built."""
-    import pathtrace.occupancy as occupancy
-
-    class HeavyProgram(FakeProgram):
-        built, uncapped, spills_below = [], 157, 140
-
-    monkeypatch.setattr(occupancy.cl, "Program", HeavyProgram)
-    program, options = occupancy.build_for_occupancy(None, FakeDevice(), "kernel void k(void) {}", ["-DA"])
-    assert options == program.options == ["-DA", "-cl-nv-maxrregcount=128", "-cl-nv-verbose"]
-    assert HeavyProgram.built == [["-DA", "-cl-nv-verbose"], ["-DA", "-cl-nv-maxrregcount=128", "-cl-nv-verbose"],
-                                  ["-DA", "-cl-nv-maxrregcount=144", "-cl-nv-verbose"]]
+    options, builds = tune(monkeypatch, uncapped=157, spills_below=140)
+    assert options == capped(128)
+    assert builds == [["-DA", "-cl-nv-verbose"], capped(128), capped(144)]
 
 
 def test_the_cap_of_16_warps_is_built_where_no_trial_reached_it(monkeypatch):
     """200 registers uncapped (10 warps): the caps tried stop at 4/5 of that, none of them spills,
     and all keep fewer than 16 warps, so the program is built once more at 128."""
-    import pathtrace.occupancy as occupancy
-
-    class Program(FakeProgram):
-        built, uncapped, spills_below = [], 200, 100
-
-    monkeypatch.setattr(occupancy.cl, "Program", Program)
-    program, options = occupancy.build_for_occupancy(None, FakeDevice(), "kernel void k(void) {}", ["-DA"])
-    assert options == program.options == ["-DA", "-cl-nv-maxrregcount=128", "-cl-nv-verbose"]
-    assert Program.built[-1] == options and len(Program.built) == 3
+    options, builds = tune(monkeypatch, uncapped=200)
+    assert options == capped(128)
+    assert builds == [["-DA", "-cl-nv-verbose"], capped(168), capped(128)]
 
 
 def test_a_program_that_would_spill_much_for_16_warps_keeps_its_cap_without_spills(monkeypatch):
     """As the heavy program above, but spilling 400 bytes at 128 registers, more than
     MOST_SPILLED: the cap of 144 without spills is kept, as before the 16-warp rule."""
-    import pathtrace.occupancy as occupancy
-
-    class Program(FakeProgram):
-        built, uncapped, spills_below, spill_bytes = [], 157, 140, 400
-
-    assert Program.spill_bytes > occupancy.MOST_SPILLED
-    monkeypatch.setattr(occupancy.cl, "Program", Program)
-    program, options = occupancy.build_for_occupancy(None, FakeDevice(), "kernel void k(void) {}", ["-DA"])
-    assert options == program.options == ["-DA", "-cl-nv-maxrregcount=144", "-cl-nv-verbose"]
+    from pathtrace.occupancy import MOST_SPILLED
+    assert 400 > MOST_SPILLED
+    options, _ = tune(monkeypatch, uncapped=157, spills_below=140, spill_bytes=400)
+    assert options == capped(144)
