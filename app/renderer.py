@@ -35,6 +35,8 @@ QUEUE_PASSES = 4          # passes of continue_paths that trace one vertex each,
 QUEUE_POOL = 1 << 23      # pixel samples a launch with the queue renders (a few per pixel): enough
                           # paths going on to fill a GPU when continue_paths traces them, and the
                           # passes' cost per launch spread (docs/performance.md, 2026-11-26)
+QUEUE_GROUP = 64          # work-items per group of continue_paths (32 and 128 were no faster:
+                          # docs/performance.md, 2026-11-26)
 MAX_QUEUED = 1 << 23      # entries of each of the two queues (PATH_RECORD, 128 bytes; at most a
                           # sixteenth of the device's memory); paths that find one full go on where
                           # they are
@@ -329,12 +331,12 @@ class Renderer:
         follow = self.continue_kernels[self.settings.nee]
         rows = int(launch["row_end"] - launch["row_start"])
         paths = min(int(capacity), self.width * rows * int(launch["sample_count"]))   # at most one a sample
-        size = (-(-paths // 64) * 64,)
+        size = (-(-paths // QUEUE_GROUP) * QUEUE_GROUP,)
         for k in range(QUEUE_PASSES + 1):
             steps = 1 if k < QUEUE_PASSES else 0
             follow.set_args(*self.scene_args(), launch, queues[k % 2], queues[(k + 1) % 2], b["counters"],
                             np.int32(k), capacity, np.int32(steps), b["results"])
-            events.append(cl.enqueue_nd_range_kernel(self.backend.queue, follow, size, (64,)))
+            events.append(cl.enqueue_nd_range_kernel(self.backend.queue, follow, size, (QUEUE_GROUP,)))
         self.add_queued.set_args(launch, *(b[name] for name in SUM_BUFFERS), b["results"])
         events.append(cl.enqueue_nd_range_kernel(self.backend.queue, self.add_queued, global_size, (8, 8)))
         return events
