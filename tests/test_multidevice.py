@@ -2,6 +2,7 @@
 render of the same samples, whatever the split; sample ranges are issued exactly once."""
 
 import threading
+import time
 
 import numpy as np
 import pytest
@@ -37,6 +38,11 @@ def test_two_devices_give_the_one_device_image(backend, scene):
     for b in (backend, second):   # each builds the scene's kernels first, so that neither is left out
         Renderer(b, scene, 4, 4).add_samples(1)
     group = DeviceGroup([backend, second], scene)
+    # the first device is slowed, so that it cannot take every sample before the second's thread
+    # starts (on a loaded machine, as CI's two cores under the test workers, it once did)
+    first = group.renderers[0]
+    add_samples = first.add_samples
+    first.add_samples = lambda *args: (time.sleep(0.02), add_samples(*args))[1]
     done = []
     group.render(48, on_progress=done.append, launch_seconds=0.01)
     single = Renderer(backend, scene)
