@@ -6,10 +6,12 @@ after an unrelated change to the light interface: 5-8 % of the H100's time on sp
 So on NVIDIA's OpenCL the kernels are built once with ptxas's report (-cl-nv-verbose), and again
 under the register caps that would keep more warps resident, down to 4/5 of what ptxas chose;
 the lowest cap that compiles without spilling is kept, unless it leaves fewer than FEWEST_WARPS
-resident: then the most registers that keep that many, if no kernel spills more than MOST_SPILLED
-bytes there (a heavy program, such as tori400-textured's with its textures, ran 13 % faster at
-16 warps with a hundred bytes spilled than at 14 without: docs/performance.md). Other platforms
-build as they are."""
+resident: such a heavy program is built for SPILLING_WARPS instead, if no kernel spills more than
+MOST_SPILLED bytes there. Measured on the H100 (docs/performance.md), every heavy program ran
+faster at 20 warps, spills and all, than without spills at 14 or at the 16 warps of 128
+registers: tori400-textured's 7-9 %, the pbrt-v4 scenes coffee and staircase2 9-10 % with one
+to two kilobytes spilled; programs that keep 16 warps without spills (the teapot's) lost 3-6 %
+at 20, so they keep their cap. Other platforms build as they are."""
 
 import math
 import os
@@ -26,8 +28,9 @@ GROUP_WARPS = 2
 MOST_WARPS = 64
 LOWEST_FRACTION = 0.8
 FEWEST_WARPS = 16           # a quarter of an SM's: fewer leave the BVH walk's latency unhidden
-MOST_SPILLED = 256          # bytes of spill stores per kernel allowed for FEWEST_WARPS: the tori
-                            # gained with up to 328 (docs/performance.md); beyond, not measured
+SPILLING_WARPS = 20         # where a program needs more registers than FEWEST_WARPS allow
+MOST_SPILLED = 2048         # bytes of spill stores per kernel allowed for SPILLING_WARPS: the most
+                            # measured to gain was 1932 (docs/performance.md); beyond, not measured
 
 
 def is_nvidia(device: cl.Device) -> bool:
@@ -77,7 +80,7 @@ def most_registers(warps: int, register_file: int = 65536, warp: int = 32) -> in
 
 def build_for_occupancy(context: cl.Context, device: cl.Device, source: str, options: list[str]):
     """The program built with the options under which it keeps the most warps resident without
-    spilling (or FEWEST_WARPS, spilling a little: see above), and those options.
+    spilling (or SPILLING_WARPS, spilling: see above), and those options.
 
     The driver keeps compiled code in its own cache (~/.nv/ComputeCache), keyed by the PTX and
     the options: where it already holds this PTX, ptxas does not run and reports nothing, and a
@@ -114,7 +117,7 @@ def build_for_occupancy(context: cl.Context, device: cl.Device, source: str, opt
             kept = cap
             break
     if resident_warps(kept, register_file, warp) < FEWEST_WARPS:
-        fuller = most_registers(FEWEST_WARPS, register_file, warp)
+        fuller = most_registers(SPILLING_WARPS, register_file, warp)
         if fuller not in built:
             build(fuller)
         if 0 <= spilled(fuller) <= MOST_SPILLED:
