@@ -110,16 +110,26 @@ def build_for_occupancy(context: cl.Context, device: cl.Device, source: str, opt
         report = built[cap][2]
         return max(spills for _, spills in report.values()) if report else -1
 
+    fuller = most_registers(SPILLING_WARPS, register_file, warp)
+
+    def fits_spilling() -> bool:
+        """Whether the program built for SPILLING_WARPS spills at most MOST_SPILLED bytes."""
+        if fuller not in built:
+            build(fuller)
+        return 0 <= spilled(fuller) <= MOST_SPILLED
+
     kept = most
     for cap in register_caps(most, register_file, warp):
+        # caps run from the most warps down: once they keep fewer than FEWEST_WARPS, every cap
+        # keeping that many has spilled, so the program is heavy, and it is built for
+        # SPILLING_WARPS before any cap of fewer warps (which only a program spilling too much
+        # there needs: one build fewer on a first start)
+        if resident_warps(cap, register_file, warp) < FEWEST_WARPS and fits_spilling():
+            return built[fuller][:2]
         build(cap)
         if spilled(cap) == 0:
             kept = cap
             break
-    if resident_warps(kept, register_file, warp) < FEWEST_WARPS:
-        fuller = most_registers(SPILLING_WARPS, register_file, warp)
-        if fuller not in built:
-            build(fuller)
-        if 0 <= spilled(fuller) <= MOST_SPILLED:
-            kept = fuller
+    if resident_warps(kept, register_file, warp) < FEWEST_WARPS and fits_spilling():
+        kept = fuller
     return built[kept][:2]
