@@ -6,10 +6,14 @@ threads and GPU context out of ours. Two measurements:
 - render: the scene loaded, its camera replaced by pathtrace's view of it (eye, target, up,
   vertical fov, the film's size, a box filter) and its integrator by `path` at the row's max
   depth without Russian roulette (rr_depth beyond it, as pathtrace's comparison mode), one
-  untimed 1-spp render (Dr.Jit compiles its kernels then), then one render of all the samples
-  (in as many passes as Mitsuba chooses for its memory), timed to the end of its evaluation. The
-  image's mean comes back with the seconds, so that a twin that differs from pathtrace's scene
-  shows."""
+  untimed render of all the samples, then another (in as many passes as Mitsuba chooses for its
+  memory), timed to the end of its evaluation. The untimed render has the timed one's samples
+  because Dr.Jit's kernels may depend on the sample count (Mitsuba 3.9.1's log for its Cornell
+  box: 1 and 2 spp shared a kernel, 16 and 32 another, 24 and 48 a third, each compiled at its
+  first use, 0.37 s on two cores), and because a render's wavefront memory, which Dr.Jit keeps
+  for the next, grows with it: neither belongs in the timed render, as pathtrace's kernels and
+  buffers are made before its own. The image's mean comes back with the seconds, so that a
+  twin that differs from pathtrace's scene shows."""
 
 import json
 import subprocess
@@ -34,7 +38,7 @@ sensor = mi.load_dict({
              "pixel_format": "rgb"},
     "sampler": {"type": "independent", "sample_count": 1}})
 integrator = mi.load_dict({"type": "path", "max_depth": a["max_depth"], "rr_depth": a["max_depth"] + 1})
-image = mi.render(scene, sensor=sensor, integrator=integrator, spp=1)
+image = mi.render(scene, sensor=sensor, integrator=integrator, spp=a["spp"], seed=0)
 dr.eval(image); dr.sync_thread()
 start = time.perf_counter()
 image = mi.render(scene, sensor=sensor, integrator=integrator, spp=a["spp"], seed=1)
