@@ -320,7 +320,7 @@ def _split_top(clusters: np.ndarray, lo: np.ndarray, hi: np.ndarray, first_node:
         bins = np.clip(2 ** np.ceil(np.log2(counts)).astype(np.int64), 2, MAX_BINS)
         by_bins = np.argsort(bins, kind="stable")    # segments of one bin count lie together
         starts, counts, bins = starts[by_bins], counts[by_bins], bins[by_bins]
-        seg = np.repeat(np.arange(len(starts)), counts)
+        seg = np.repeat(np.arange(len(starts), dtype=np.int32), counts)
         offsets = np.concatenate([[0], np.cumsum(counts)[:-1]])
         pos = np.arange(seg.size) - offsets[seg] + starts[seg]
         n_seg = len(starts)
@@ -329,7 +329,7 @@ def _split_top(clusters: np.ndarray, lo: np.ndarray, hi: np.ndarray, first_node:
         for b in np.unique(bins):
             s0, s1 = np.searchsorted(bins, b), np.searchsorted(bins, b, side="right")
             p0, p1 = offsets[s0], offsets[s1] if s1 < n_seg else seg.size
-            r = rows[pos[p0:p1]]
+            r = np.take(rows, pos[p0:p1], axis=0)
             box_lo[s0:s1], box_hi[s0:s1], cost[s0:s1], goes_left[p0:p1] = _best_splits(
                 r[:, 1:4], r[:, 4:7], r[:, 7:10], seg[p0:p1] - s0, offsets[s0:s1] - p0, s1 - s0, b)
 
@@ -340,7 +340,9 @@ def _split_top(clusters: np.ndarray, lo: np.ndarray, hi: np.ndarray, first_node:
         left_before = np.cumsum(goes_left) - goes_left
         left_rank = left_before - left_before[offsets][seg]
         new_pos = starts[seg] + np.where(goes_left, left_rank, n_left[seg] + rank - left_rank)
-        rows[new_pos] = rows[pos]
+        moved = np.arange(count)
+        moved[new_pos] = pos
+        rows = np.take(rows, moved, axis=0)     # one gather (np.take) of whole rows
         levels.append((starts, n_left, counts, box_lo, box_hi))
         halves = np.concatenate([np.column_stack([starts, n_left]),
                                  np.column_stack([starts + n_left, counts - n_left])])
@@ -369,18 +371,23 @@ def _best_splits(lo, hi, cen, seg, offsets, n_seg, bins):
     c_lo = np.minimum.reduceat(cen, offsets)
     extent = np.maximum.reduceat(cen, offsets) - c_lo
     scale = np.divide(bins, extent, out=np.zeros_like(extent), where=extent > 0)
-    bin_of = np.minimum(((cen - c_lo[seg]) * scale[seg]).astype(np.int32), bins - 1)   # (M, 3)
+    sizes = np.diff(np.append(offsets, len(seg)))
+    bin_of = np.minimum(((cen - np.repeat(c_lo, sizes, axis=0)) * np.repeat(scale, sizes, axis=0))
+                        .astype(np.int32), bins - 1)                                   # (M, 3)
 
     # per (bin, segment, split axis): how many clusters, and the box around them; the bin is the
-    # outer axis so that the sweeps run over contiguous slices
-    cell = (bin_of * n_seg + seg[:, None]) * 3 + np.arange(3)                          # (M, 3)
+    # outer axis so that the sweeps run over contiguous slices (int32: fewer than 2^31 cells)
+    cell = (bin_of * np.int32(n_seg) + seg[:, None].astype(np.int32, copy=False)) * np.int32(3) \
+        + np.arange(3, dtype=np.int32)                                                 # (M, 3)
     count = np.bincount(cell.ravel(), minlength=bins * n_seg * 3).reshape(bins, n_seg, 3)
     bin_lo = np.full(bins * n_seg * 3 * 3, np.inf, np.float32)
     bin_hi = np.full(bins * n_seg * 3 * 3, -np.inf, np.float32)
     for axis in range(3):   # ufunc.at is fastest on flat arrays
+        first = cell[:, axis] * np.int32(3)
         for c in range(3):
-            np.minimum.at(bin_lo, cell[:, axis] * 3 + c, lo[:, c])
-            np.maximum.at(bin_hi, cell[:, axis] * 3 + c, hi[:, c])
+            at = first + np.int32(c)
+            np.minimum.at(bin_lo, at, lo[:, c])
+            np.maximum.at(bin_hi, at, hi[:, c])
     bin_lo = bin_lo.reshape(bins, n_seg, 3, 3)
     bin_hi = bin_hi.reshape(bins, n_seg, 3, 3)
 
