@@ -8,10 +8,11 @@ under the register caps that would keep more warps resident, down to 4/5 of what
 the lowest cap that compiles without spilling is kept, unless it leaves fewer than FEWEST_WARPS
 resident: such a heavy program is built for SPILLING_WARPS instead, if no kernel spills more than
 MOST_SPILLED bytes there. Measured on the H100 (docs/performance.md), every heavy program ran
-faster at 20 warps, spills and all, than as tuned before (14 warps without spills, or uncapped) or at 16 warps
-of 128 registers: tori400-textured's 7-9 %, the pbrt-v4 scenes coffee and staircase2 9-10 % with
-one to two kilobytes spilled; the teapot's program, which keeps 16 warps without spills, lost
-3-7 % at 20, so such programs keep their cap. Other platforms build as they are."""
+faster at 20 warps, spills and all, than as tuned before (14 warps without spills, or
+uncapped) or at the 16 warps of 128 registers: tori400-textured's 7-9 %, the pbrt-v4 scenes
+coffee and staircase2 9-10 % with one to two kilobytes spilled; the teapot's program, which
+keeps 16 warps without spills, lost 3-7 % at 20, so such programs keep their cap. Other
+platforms build as they are."""
 
 import math
 import os
