@@ -68,6 +68,33 @@ def frames(viewer, n):
         viewer.frame()
 
 
+def frames_until(viewer, condition, timeout=5.0):
+    """Frames until condition() holds (or the timeout passes): xdotool's events reach the window
+    when the X server delivers them, which on a loaded machine may be several frames later."""
+    start = time.perf_counter()
+    while not condition() and time.perf_counter() - start < timeout:
+        viewer.frame()
+
+
+def move(viewer, x, y):
+    """The pointer moved to (x, y) in the window, once the window has seen it there."""
+    xdo("mousemove", "--window", window_id(viewer), x, y)
+    frames_until(viewer, lambda: tuple(round(c) for c in viewer.glfw.get_cursor_pos(viewer.window)) == (x, y))
+    frames(viewer, 2)
+
+
+def press(viewer, button=1):
+    """A press of a mouse button that lasts some frames, as a hand's does (a slider takes no
+    press that begins and ends within one frame's events), at the pointer's place."""
+    glfw, window = viewer.glfw, viewer.window
+    xdo("mousedown", button)
+    frames_until(viewer, lambda: glfw.get_mouse_button(window, button - 1) == glfw.PRESS)
+    frames(viewer, 2)
+    xdo("mouseup", button)
+    frames_until(viewer, lambda: glfw.get_mouse_button(window, button - 1) == glfw.RELEASE)
+    frames(viewer, 2)
+
+
 def settle(viewer):
     """Lets the camera come to rest and the full resolution return (after the denoised draft,
     where there is one)."""
@@ -481,12 +508,8 @@ def test_the_rotation_slider_reaches_a_full_turn(viewer):
     label = v.imgui.calc_text_size("env rotation").x + v.imgui.get_style().item_inner_spacing.x
     resets = v.renderer.resets
     xdo("windowfocus", "--sync", window_id(v))
-    xdo("mousemove", "--window", window_id(v), int(x1 - label - 24), int((y0 + y1) / 2))
-    frames(v, 2)
-    xdo("mousedown", 1)           # a slider takes a press that lasts a frame, as a hand's does
-    frames(v, 3)
-    xdo("mouseup", 1)
-    frames(v, 2)
+    move(v, int(x1 - label - 24), int((y0 + y1) / 2))
+    press(v)
     assert 300 < env.rotation < 360 and v.renderer.resets > resets      # (360 itself wraps to 0)
     env.rotation = 0.0
     v.renderer.reset()
@@ -510,12 +533,8 @@ def test_the_speed_slider_turns_the_path_queue_on(viewer):
         scrolls += 1
     x0, y0, x1, y1 = v.widgets[label]
     slider_end = x1 - v.imgui.calc_text_size(label).x - v.imgui.get_style().item_inner_spacing.x
-    xdo("mousemove", "--window", window_id(v), int(x0 + 0.3 * (slider_end - x0)), int((y0 + y1) / 2))
-    frames(v, 2)
-    xdo("mousedown", 1)           # a slider takes a press that lasts a frame, as a hand's does
-    frames(v, 3)
-    xdo("mouseup", 1)
-    frames(v, 2)
+    move(v, int(x0 + 0.3 * (slider_end - x0)), int((y0 + y1) / 2))
+    press(v)
     assert v.renderer.settings.path_queue == 1
     resets = v.renderer.resets
     start = time.perf_counter()
