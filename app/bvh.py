@@ -320,7 +320,7 @@ def _split_top(clusters: np.ndarray, lo: np.ndarray, hi: np.ndarray, first_node:
         bins = np.clip(2 ** np.ceil(np.log2(counts)).astype(np.int64), 2, MAX_BINS)
         by_bins = np.argsort(bins, kind="stable")    # segments of one bin count lie together
         starts, counts, bins = starts[by_bins], counts[by_bins], bins[by_bins]
-        seg = np.repeat(np.arange(len(starts), dtype=np.int32), counts)
+        seg = np.repeat(np.arange(len(starts)), counts)
         offsets = np.concatenate([[0], np.cumsum(counts)[:-1]])
         pos = np.arange(seg.size) - offsets[seg] + starts[seg]
         n_seg = len(starts)
@@ -377,7 +377,7 @@ def _best_splits(lo, hi, cen, seg, offsets, n_seg, bins):
 
     # per (bin, segment, split axis): how many clusters, and the box around them; the bin is the
     # outer axis so that the sweeps run over contiguous slices (int32: fewer than 2^31 cells)
-    cell = (bin_of * np.int32(n_seg) + seg[:, None].astype(np.int32, copy=False)) * np.int32(3) \
+    cell = (bin_of * np.int32(n_seg) + seg[:, None].astype(np.int32)) * np.int32(3) \
         + np.arange(3, dtype=np.int32)                                                 # (M, 3)
     count = np.bincount(cell.ravel(), minlength=bins * n_seg * 3).reshape(bins, n_seg, 3)
     bin_lo = np.full(bins * n_seg * 3 * 3, np.inf, np.float32)

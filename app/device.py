@@ -13,7 +13,7 @@ import pyopencl as cl
 from pathtrace.cache_files import read_entry, write_entry
 from pathtrace.errors import UserError, format_bytes, short
 from pathtrace.features import Features
-from pathtrace.occupancy import FEWEST_WARPS, MOST_SPILLED, SPILLING_WARPS, build_for_occupancy, is_nvidia
+from pathtrace.occupancy import TUNING_RULE, build_for_occupancy, is_nvidia
 from pathtrace.resources import resource_dir
 
 # The order in which the kernel files are joined into one program: the basics, the texture
@@ -134,14 +134,14 @@ def keeps_own_cache(device: cl.Device) -> bool:
 def build_cached(context: cl.Context, device: cl.Device, source: str, options: list[str],
                  use_cache: bool = True, tune: bool = True) -> BuildResult:
     """Builds a program for one device. Unless the driver keeps its own cache, the binary is
-    cached under cache_dir(), keyed by the source, the options, whether it was tuned (and the
-    tuning rule's FEWEST_WARPS, SPILLING_WARPS and MOST_SPILLED), the exact device and driver and the entry's
-    format. `tune`: on NVIDIA, try the register caps of app/occupancy.py (two to four more builds
-    of the program)."""
+    cached under cache_dir(), keyed by the source, the options, whether it was tuned and under
+    which rule (occupancy.TUNING_RULE), the exact device and driver and the entry's format.
+    `tune`: on NVIDIA, try the register caps of app/occupancy.py (up to four more builds of the
+    program)."""
     use_cache = use_cache and not keeps_own_cache(device)
     tune = tune and is_nvidia(device)
     key = hashlib.sha256("\0".join([
-        CACHE_FORMAT, source, " ".join(options), f"tuned, {FEWEST_WARPS}/{SPILLING_WARPS} warps, {MOST_SPILLED} bytes" if tune else "",
+        CACHE_FORMAT, source, " ".join(options), f"tuned, {TUNING_RULE}" if tune else "",
         device.platform.name, device.platform.version,
         device.name, device.version, device.driver_version]).encode()).hexdigest()[:32]
     path = cache_dir() / f"{key}.bin"

@@ -32,6 +32,9 @@ FEWEST_WARPS = 16           # a quarter of an SM's: fewer leave the BVH walk's l
 SPILLING_WARPS = 20         # where a program needs more registers than FEWEST_WARPS allow
 MOST_SPILLED = 2048         # bytes of spill stores per kernel allowed for SPILLING_WARPS: the most
                             # measured to gain was 1932 (docs/performance.md); beyond, not measured
+# What a program tuned under this rule is tuned by: part of the program cache's key, so that
+# binaries tuned under another rule are not reused (app/device.py)
+TUNING_RULE = f"{FEWEST_WARPS}/{SPILLING_WARPS} warps, {MOST_SPILLED} bytes"
 
 
 def is_nvidia(device: cl.Device) -> bool:

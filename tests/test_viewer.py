@@ -100,9 +100,7 @@ def settle(viewer):
     where there is one)."""
     time.sleep(0.3)
     frames(viewer, 2)
-    start = time.perf_counter()
-    while viewer.scale != 1 and time.perf_counter() - start < 10:
-        viewer.frame()
+    frames_until(viewer, lambda: viewer.scale == 1, timeout=10)
 
 
 def back_to_simple(viewer):
@@ -537,9 +535,7 @@ def test_the_speed_slider_turns_the_path_queue_on(viewer):
     press(v)
     assert v.renderer.settings.path_queue == 1
     resets = v.renderer.resets
-    start = time.perf_counter()
-    while v.renderer.samples < 2 and time.perf_counter() - start < 20:
-        v.frame()
+    frames_until(v, lambda: v.renderer.samples >= 2, timeout=20)
     assert v.renderer.samples >= 2 and v.renderer.resets == resets
     v.renderer.set_settings(path_queue=0)
     xdo("mousemove", "--window", window_id(v), 60, 200)
