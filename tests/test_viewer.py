@@ -526,14 +526,16 @@ def test_the_speed_slider_turns_the_path_queue_on(viewer):
     bottom = v.panel_rect[1] + v.panel_rect[3]
     scrolls = 0
     while v.widgets[label][3] > bottom - 10 and scrolls < 30:
-        xdo("click", 5)
-        frames(v, 2)
+        before = v.widgets[label]
+        xdo("click", 5)           # each notch waited for: one seen late would move the slider after
+        frames_until(v, lambda: v.widgets.get(label) != before, timeout=2)
         scrolls += 1
+    frames(v, 2)
     x0, y0, x1, y1 = v.widgets[label]
     slider_end = x1 - v.imgui.calc_text_size(label).x - v.imgui.get_style().item_inner_spacing.x
     move(v, int(x0 + 0.3 * (slider_end - x0)), int((y0 + y1) / 2))
     press(v)
-    assert v.renderer.settings.path_queue == 1
+    assert v.renderer.settings.path_queue == 1, (v.widgets[label], v.panel_rect, scrolls)
     resets = v.renderer.resets
     frames_until(v, lambda: v.renderer.samples >= 2, timeout=20)
     assert v.renderer.samples >= 2 and v.renderer.resets == resets
