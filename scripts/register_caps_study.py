@@ -13,6 +13,7 @@ Prints one JSON line per row."""
 import argparse
 import json
 from contextlib import contextmanager
+from dataclasses import replace
 
 import pyopencl as cl
 
@@ -27,18 +28,16 @@ RENDER_KERNELS = ("render", "continue_paths")     # with _nee where the scene ha
 
 @contextmanager
 def forced_cap(backend, cap: int):
-    """Programs built while inside are built under `cap` (with ptxas's report), not tuned, and
-    neither read from nor written to the program cache."""
-    tuned, backend.use_cache = device.build_for_occupancy, False
+    """A backend of the same device whose programs are built under `cap` (with ptxas's report),
+    not tuned, and neither read from nor written to the program cache."""
+    tuned = device.build_for_occupancy
     capped = [f"-cl-nv-maxrregcount={cap}", REPORT]
     device.build_for_occupancy = lambda context, dev, source, options: (
         cl.Program(context, source).build(options=options + capped, devices=[dev]), options + capped)
-    backend._variants.clear()
     try:
-        yield
+        yield replace(backend, use_cache=False)     # its own programs (Backend.program_for)
     finally:
-        device.build_for_occupancy, backend.use_cache = tuned, True
-        backend._variants.clear()
+        device.build_for_occupancy = tuned
 
 
 def row(backend, scene, queue: int, spp: int, size, cap: int = None) -> dict:
@@ -70,8 +69,8 @@ def main():
         for queue in args.queue:
             print(json.dumps(row(backend, scene, queue, args.spp, size)), flush=True)
             for cap in args.caps:
-                with forced_cap(backend, cap):
-                    print(json.dumps(row(backend, scene, queue, args.spp, size, cap)), flush=True)
+                with forced_cap(backend, cap) as capped:
+                    print(json.dumps(row(capped, scene, queue, args.spp, size, cap)), flush=True)
 
 
 if __name__ == "__main__":
