@@ -91,8 +91,8 @@ void intersect_spheres(const SceneData *sc, int first, int count, float3 o, floa
 
 /* `self`: the primitive the ray leaves (or NO_PRIM), which a plane cannot meet again: skipped.
  * `instance`: the instance drawing them. */
-void intersect_triangles(const SceneData *sc, int first, int count, float3 o, float3 d, PrimId self,
-                         int instance, Hit *hit)
+CPU_INLINE void intersect_triangles(const SceneData *sc, int first, int count, float3 o, float3 d,
+                                    PrimId self, int instance, Hit *hit)
 {
     float3 row_x, row_y, row_z;
     triangle_shear(d, &row_x, &row_y, &row_z);
@@ -138,7 +138,7 @@ uint leaf_bits(int4 leaf)
  * four slots are tested unrolled; with triangles, one copy of the (inlined) primitive tests in
  * a loop over the leaves' bits keeps the kernel's registers down (the teapot's NEE kernel ran
  * 26 % slower on the H100 with four copies, the sphere scenes 6-8 % faster). */
-float4 intersect_leaves(const SceneData *sc, float4 t, int4 count, int4 index, float3 o, float3 d,
+CPU_INLINE float4 intersect_leaves(const SceneData *sc, float4 t, int4 count, int4 index, float3 o, float3 d,
                         PrimId self, int instance, Hit *hit)
 {
     int4 leaf = (t < INFINITY) & (count != 0);

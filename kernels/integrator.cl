@@ -188,15 +188,12 @@ PathRecord start_path(const RenderParams *p, float3 o, float3 d, Rng *rng)
  * Considered Harmful"); gathered into a queue, the paths that go on fill whole warps, at the
  * cost of storing and loading them (docs/performance.md, 2026-11-26, says where that pays).
  *
- * On CPUs it is inlined, so that the start state stays in registers: PoCL left the call out of
+ * On CPUs it is inlined (CPU_INLINE), so that the start state stays in registers: PoCL left the call out of
  * line and passed the state through memory (simple-diffuse 7-8 % slower on two cores). NVIDIA's
  * compiler keeps it out of line too; inlined there, the default program's PTX grew from 2.45 to
  * 3.26 MB, a change not timed, so GPUs keep the form measured in docs/performance.md. */
-#ifdef CPU_DEVICE
-__attribute__((always_inline))
-#endif
-float3 trace_path(const SceneData *sc, const RenderParams *p, const PathRecord *start, Rng *rng,
-                  int *rays, const int nee, PathQueue queue, int *queued)
+CPU_INLINE float3 trace_path(const SceneData *sc, const RenderParams *p, const PathRecord *start,
+                             Rng *rng, int *rays, const int nee, PathQueue queue, int *queued)
 {
     float3 o = start->o.xyz, d = start->d.xyz;
     float3 radiance = start->radiance.xyz;

@@ -6,30 +6,28 @@
  * the origin and runs along +z (a translation, a permutation of the axes so that the ray's
  * largest component is z, and a shear); the 2D edge functions of the transformed corners then
  * decide the hit. A shared edge is computed from the same transformed corners by both of its
- * triangles, and each edge function is a difference of two products that the other triangle
- * computes with exactly the opposite sign, so a ray can never pass between them.
+ * triangles, and each edge function has the sign of its exact value (edge_function), so the
+ * two triangles see the ray on opposite sides of the edge, or on it, and it can never pass
+ * between them.
  * The shear rows are passed in (see triangle_shear): they depend on the ray only.
  * Returns t in (0, t_max) or INFINITY, with the barycentric weights of v1 and v2. A ray never
  * tests the triangle it leaves (kernels/bvh.cl: `self`), so any t > 0 is a hit: a neighbour
  * met at t ~ 0 in a concave corner is met (a bound on t's rounding, as pbrt-v4 rejects below,
  * let such rays through the corners of a closed box). */
 #pragma OPENCL FP_CONTRACT OFF
-#ifdef cl_khr_fp64
-#pragma OPENCL EXTENSION cl_khr_fp64 : enable
-#endif
+/* ax by - ay bx by Kahan's difference of products: the rounding error of ay bx, recovered
+ * exactly by a fused multiply-add, is added back, which leaves the result within 2 ulp of the
+ * exact value (Jeannerod, Louvet and Muller, "Further analysis of Kahan's algorithm for the
+ * accurate computation of 2x2 determinants", Math. Comp. 82, 2013). So its sign is exact, and it
+ * is zero only where the exact value is (products above the float range's 1e-38, where
+ * underflow would lose the error term): what the paper's fallback to double precision gave,
+ * without doubles (1-3.5 % faster on the H100's triangle scenes, docs/performance.md,
+ * 2026-11-27). Its products must not be contracted: FP_CONTRACT is off here. */
 float edge_function(float ax, float ay, float bx, float by)
 {
-    float p = ax * by;
     float q = ay * bx;
-    float e = p - q;
-#ifdef cl_khr_fp64
-    /* A zero may be rounding: a ray along the line of a sliver's edge, far beyond it. Products
-     * of floats are exact in double, so the sign recomputed there is exact (the paper's
-     * fallback; devices without doubles keep the float result). */
-    if (e == 0.0f)
-        e = (float)((double)ax * (double)by - (double)ay * (double)bx);
-#endif
-    return e;
+    float q_error = fma(-ay, bx, q);
+    return fma(ax, by, -q) + q_error;
 }
 
 /* The rows of the shear: transformed x = dot(row_x, v - o), etc. Rows hold zeros in the axes
@@ -54,8 +52,8 @@ void triangle_shear(float3 d, float3 *row_x, float3 *row_y, float3 *row_z)
     *row_z = ez / dz;
 }
 
-float intersect_triangle(const global Triangle *tri, float3 o, float3 row_x, float3 row_y,
-                         float3 row_z, float t_max, float *b1, float *b2)
+CPU_INLINE float intersect_triangle(const global Triangle *tri, float3 o, float3 row_x,
+                                    float3 row_y, float3 row_z, float t_max, float *b1, float *b2)
 {
     float3 a = tri->v0.xyz - o, b = tri->v1.xyz - o, c = tri->v2.xyz - o;
     float ax = dot(row_x, a), ay = dot(row_y, a);
