@@ -12,6 +12,7 @@ class Features:
     paths only where it has media): on a GPU every branch a kernel could take costs registers, hence occupancy, in
     every thread (docs/performance.md). The default, every shape and material and no textures,
     is the program the tests build their kernels beside."""
+    spheres: bool = True
     triangles: bool = True
     bsdfs: tuple = None                    # names of pathtrace.materials.BSDFS; None: all of them
     textures: tuple = ()                   # names of pathtrace.textures.TEXTURES the scene uses;
@@ -42,7 +43,8 @@ class Features:
                                            # the render setting path_queue); 0: no queue
 
     def defines(self) -> tuple:
-        return ((() if self.triangles else ("NO_TRIANGLES",)) + (("TEXTURES",) if self.textures else ())
+        return ((() if self.spheres else ("NO_SPHERES",)) + (() if self.triangles else ("NO_TRIANGLES",))
+                + (("TEXTURES",) if self.textures else ())
                 + (("ALPHA_MASKS",) if self.masks else ()) + (("NORMAL_MAPS",) if self.normal_maps else ())
                 + (("LIGHT_TREE",) if self.light_tree else ()) + (("MEDIA",) if self.media else ())
                 + (("NULL_SURFACES",) if self.null_surfaces else ())

@@ -406,3 +406,30 @@ def test_a_flat_scene_renders_as_its_tree_does(backend, monkeypatch, tmp_path, s
     features, tree = render()
     assert not features.flat and flat.mean() > 0
     np.testing.assert_allclose(flat, tree, rtol=1e-4, atol=1e-6)
+
+
+@pytest.mark.parametrize("scene", ["cornell-box", "teapot"])
+def test_a_scene_of_triangles_only_renders_without_the_sphere_code(backend, monkeypatch, scene):
+    """A scene without spheres compiles its traversal without the sphere test (NO_SPHERES,
+    app/features.py), which a scene does not pay for where it has none: the same samples make the
+    same image as the program with it."""
+    from dataclasses import replace
+
+    from pathtrace.compiled import CompiledScene
+    from pathtrace.renderer import Renderer
+    from pathtrace.scene import load_scene
+    loaded = load_scene(scene)
+
+    def render():
+        r = Renderer(backend, loaded, 48, 32)
+        r.add_samples(4)
+        return r.compiled.features(r.settings, r.camera), r.mean()
+    features, without = render()
+    assert not features.spheres and "NO_SPHERES" in features.defines() and not features.flat
+    specialised = CompiledScene.features
+    monkeypatch.setattr(CompiledScene, "features",
+                        lambda self, settings, camera: replace(specialised(self, settings, camera), spheres=True))
+    features, with_spheres = render()
+    assert "NO_SPHERES" not in features.defines() and without.mean() > 0
+    np.testing.assert_allclose(without, with_spheres, rtol=1e-5, atol=1e-7)
+    assert CompiledScene(load_scene("simple")).features(loaded.settings, loaded.camera).spheres
