@@ -177,15 +177,16 @@ class CompiledScene:
                 "light_nodes": self.lights.nodes}
 
     def features(self, settings: RenderSettings, camera: Camera) -> Features:
-        """What the kernels need for this scene: spheres and triangles or not, the material and light types
-        it uses, and the Russian roulette rule, pixel filter and camera of its settings."""
+        """What the kernels need for this scene: which shapes (spheres, triangles), the material and
+        light types it uses, and the Russian roulette rule, pixel filter and camera of its
+        settings."""
         rows = self.materials[reachable(self.materials, self.prim_material)]
         used = np.unique(rows["type"])
         null_surfaces = bool(np.any(rows["flags"] & NULL))     # rays cross them (NULL_SURFACES)
         variants = tuple(sorted({d for name, tag in TAGS.items() if tag in used
                                  for d in BSDFS[name].defines(rows[rows["type"] == tag])}))
-        return Features(spheres=self.num_spheres > 0, triangles=self.num_triangles > 0, bsdf_defines=variants,
-                        bsdfs=tuple(name for name, tag in TAGS.items() if tag in used),
+        return Features(spheres=self.num_spheres > 0, triangles=self.num_triangles > 0,
+                        bsdf_defines=variants, bsdfs=tuple(name for name, tag in TAGS.items() if tag in used),
                         textures=self.textures.types, masks=self.textures.masks,
                         normal_maps=self.textures.normal_maps, lights=self.lights.types,
                         light_tree=self.lights.tree, media=bool(self.scene.media) or null_surfaces,

@@ -12,8 +12,8 @@ class Features:
     paths only where it has media): on a GPU every branch a kernel could take costs registers, hence occupancy, in
     every thread (docs/performance.md). The default, every shape and material and no textures,
     is the program the tests build their kernels beside."""
-    spheres: bool = True
-    triangles: bool = True
+    spheres: bool = True                   # the scene has spheres (else NO_SPHERES: no sphere test)
+    triangles: bool = True                 # the scene has triangles (else NO_TRIANGLES)
     bsdfs: tuple = None                    # names of pathtrace.materials.BSDFS; None: all of them
     textures: tuple = ()                   # names of pathtrace.textures.TEXTURES the scene uses;
                                            # () leaves all texture code out
