@@ -13,6 +13,7 @@ _EXPORTS = {
                                           "tonemap", "write", "show", "view", "devices", "Snapshot", "AOVS")},
     "Scene": "pathtrace.scene.description",
     "RenderSettings": "pathtrace.scene.description",
+    "PATH_QUEUE_AUTO": "pathtrace.scene.description",
     "Camera": "pathtrace.camera",
     "Environment": "pathtrace.environment",
     "Material": "pathtrace.materials.table",

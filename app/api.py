@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from pathtrace.errors import UserError, short, warn
-from pathtrace.scene.description import MAX_PATH_QUEUE, RUSSIAN_ROULETTE, Scene
+from pathtrace.scene.description import MAX_PATH_QUEUE, PATH_QUEUE_AUTO, RUSSIAN_ROULETTE, Scene
 
 AOVS = ("albedo", "normal", "depth")
 MAX_SIZE = 16384          # pixels on a side, as `--size` allows
@@ -105,7 +105,8 @@ def settings_for(scene: Scene, spp=None, size=None, seed=None, max_depth=None, r
     if nee is not None:
         changes["nee"] = bool(nee)
     settings = replace(s, **changes)
-    _integer("settings.path_queue", settings.path_queue, 0, MAX_PATH_QUEUE)
+    if not (type(settings.path_queue) is int and settings.path_queue == PATH_QUEUE_AUTO):
+        _integer("settings.path_queue (or PATH_QUEUE_AUTO)", settings.path_queue, 0, MAX_PATH_QUEUE)
     if not settings.paths_end:
         raise UserError("rr 'off' needs max_depth >= 1, or paths would never end")
     return settings

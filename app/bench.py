@@ -69,7 +69,9 @@ class Result:
     nodes_per_ray: float = None
     primitives_per_ray: float = None
     trace_split: object = None      # with --trace-split: a pathtrace.trace_split.TraceSplit
-    path_queue: int = 0             # the render setting (--path-queue)
+    path_queue: int = 0             # the render setting (--path-queue; -1: auto)
+    queue_plan: str = ""            # with --path-queue auto: the plan its trials chose, and
+                                    # each plan's fastest trial in seconds (pathtrace.renderer)
 
 
 def default_estimator(scene) -> str:
@@ -97,6 +99,7 @@ def measure(backends, scene, estimator, width, height, spp, builds) -> Result:
         backend.queue.finish()
     start = time.perf_counter()
     group = DeviceGroup(backends, scene, width, height)
+    group.choose_queue_plans(spp)   # path_queue "auto": its trial renders, like a build, before the render
     rendering = time.perf_counter()
     group.render(spp, launch_seconds=0.5)
     image = group.mean()
@@ -109,7 +112,12 @@ def measure(backends, scene, estimator, width, height, spp, builds) -> Result:
     return Result(scene.name, device, estimator, width, height, spp, seconds,
                   width * height * spp / seconds / 1e6, rays / seconds / 1e6,
                   group.bvh_seconds, *builds, render_seconds=end - rendering, mean=float(image.mean()),
-                  path_queue=scene.settings.path_queue)
+                  path_queue=scene.settings.path_queue, queue_plan=chosen_plans(group))
+
+
+def chosen_plans(group) -> str:
+    """What path_queue "auto" chose on each device of `group` ("" where it was not asked for)."""
+    return "; ".join(r.describe_queue_plan() for r in group.renderers if r.auto_plan is not None)
 
 
 def kernel_build_times(backend, cold: bool = True):
@@ -140,6 +148,8 @@ def run(device_specs, scene_names, estimators, width, height, spp, together=Fals
                 for est in estimators or [default_estimator(scene)]:
                     r = measure(group, scene, est, width, height, spp, builds)
                     log(format_row(r))
+                    if r.queue_plan:
+                        log(f"  path queue auto: {r.queue_plan}")
                     if traversal:
                         count_traversal(r, group[0], scene)
                         log(format_traversal(r))

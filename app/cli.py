@@ -11,7 +11,7 @@ from pathtrace import __version__
 from pathtrace.console import INTERRUPTED, check_interrupt
 from pathtrace.errors import UserError, cut, short, warn
 from pathtrace.lights import LIGHT_SAMPLERS
-from pathtrace.scene.description import MAX_PATH_QUEUE, RUSSIAN_ROULETTE
+from pathtrace.scene.description import MAX_PATH_QUEUE, PATH_QUEUE_AUTO, RUSSIAN_ROULETTE
 
 GENERATED_SCENES = (("spheresN[-diffuse]", "N random spheres, e.g. spheres512k, spheres1M-diffuse"),
                     ("heightfieldN", "a height field of about N triangles, e.g. heightfield1M"))
@@ -135,7 +135,7 @@ def add_output_options(p: argparse.ArgumentParser):
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
 
 
-def add_render_options(p: argparse.ArgumentParser, device: bool = True):
+def add_render_options(p: argparse.ArgumentParser, device: bool = True, queue_auto: bool = True):
     """Options shared by everything that renders a scene (the farm's workers choose their own
     devices: device=False)."""
     if device:
@@ -161,14 +161,20 @@ def add_render_options(p: argparse.ArgumentParser, device: bool = True):
     p.add_argument("--filter", type=_pixel_filter, metavar="NAME[:RADIUS[:STDDEV]]",
                    help="pixel filter: box (radius 0.5), tent (1) or gaussian (stddev 0.5, radius 4 "
                         "stddev), radius and stddev in pixels (default: the scene's)")
-    add_path_queue_option(p)
+    add_path_queue_option(p, auto=queue_auto)
 
 
-def add_path_queue_option(p: argparse.ArgumentParser):
-    p.add_argument("--path-queue", type=_int_range(0, MAX_PATH_QUEUE), metavar="N",
+def add_path_queue_option(p: argparse.ArgumentParser, auto: bool = True):
+    p.add_argument("--path-queue", type=_path_queue if auto else _int_range(0, MAX_PATH_QUEUE),
+                   metavar="N|auto" if auto else "N",
                    help="trace the paths that go on past N vertices from a queue, one vertex a pass, "
                         "so that a GPU's warps stay full where few paths go on long (the same image; "
-                        "faster on some scenes, slower on others: docs/performance.md); 0 = off, the default")
+                        "faster on some scenes, slower on others: docs/performance.md); 0 = off, the default"
+                        + ("; auto: on a GPU, chosen by trial renders before the render" if auto else ""))
+
+
+def _path_queue(text: str) -> int:
+    return PATH_QUEUE_AUTO if text == "auto" else _int_range(0, MAX_PATH_QUEUE)(text)
 
 
 def _pixel_filter(text: str):
@@ -561,7 +567,7 @@ def build_parser():
                    help="where P / F12 / the panel's button write PNG + EXR (default ./screenshots)")
     p.add_argument("--frames", type=_int_range(1), metavar="N", help="close after N frames (for scripts)")
     p.add_argument("--screenshot", action="store_true", help="take a screenshot when closing")
-    add_render_options(p)
+    add_render_options(p, queue_auto=False)     # no trial renders in the viewer: its panel sets N
     p.set_defaults(func=cmd_view)
 
     from pathtrace.bench import TARGET_SCENES

@@ -76,6 +76,7 @@ def _actor_class(ray):
             """Samples start .. start+count-1 of every pixel: their (sum, sum_sq) arrays."""
             renderer = self.renderers[scene]
             renderer.set_camera(camera)         # resets the sums
+            renderer.choose_queue_plan(count)   # path_queue "auto": once, by trial renders
             renderer.add_samples(count, start)
             renderer.finish()
             return renderer.read_sum(), renderer.read_sum_sq()

@@ -84,6 +84,13 @@ class DeviceGroup:
     def bvh_seconds(self) -> float:
         return self.compiled.bvh_seconds
 
+    def choose_queue_plans(self, spp: int):
+        """With path_queue "auto", before a render of `spp` samples per pixel: each device's
+        launch plan, by its trial renders (Renderer.choose_queue_plan), which render() would
+        otherwise run first."""
+        for r in self.renderers:
+            r.choose_queue_plan(spp)
+
     def render(self, spp: int, on_progress=None, launch_seconds: float = 0.25):
         """Brings every pixel to `spp` samples: adds samples self.samples .. spp-1, spread over
         the devices (so that a render can go on where the last one stopped); on_progress(samples
@@ -91,6 +98,8 @@ class DeviceGroup:
         where one is quick, one sample split into bands of rows where it is not (the first is,
         until its speed is known). Re-raises the first device error; Ctrl-C stops every device
         after its current launch or band."""
+        if not self.samples:
+            self.choose_queue_plans(spp)
         counter = SampleCounter(spp, self.samples)
         errors = []
         progress_lock = threading.Lock()

@@ -2,6 +2,7 @@
 each add_samples() call adds samples per pixel. The command line, the benchmarks and the viewer
 all drive this API; it imports nothing from the window or the GUI."""
 
+import time
 from dataclasses import replace
 
 import numpy as np
@@ -14,6 +15,7 @@ from pathtrace.errors import UserError, format_bytes
 from pathtrace.environment import Environment
 from pathtrace.memory import available_host_memory
 from pathtrace.scene import Scene
+from pathtrace.scene.description import PATH_QUEUE_AUTO
 from pathtrace.types import PATH_RECORD, RENDER_PARAMS
 
 RR_DEPTH = 5           # where Russian roulette on throughput starts (Mitsuba 3's default)
@@ -40,6 +42,15 @@ QUEUE_GROUP = 64          # work-items per group of continue_paths (32 and 128 w
 MAX_QUEUED = 1 << 23      # entries of each of the two queues (PATH_RECORD, 128 bytes; at most a
                           # sixteenth of the device's memory); paths that find one full go on where
                           # they are
+# The launch plans that path_queue "auto" chooses among on a GPU, as (the queue depth the program
+# is built with, whether launches use the queue): no queue; the queue after the first vertex; and
+# the queue's program with its queue unused. The three trace the same rays into the same image,
+# but NVIDIA's compiler schedules the queue's program differently, and which of the three is
+# fastest depends on the scene as much as on the paths (docs/performance.md, 2026-11-27: the
+# queue chosen by trial renders).
+AUTO_PLANS = ((0, False), (1, True), (1, False))
+PLAN_NAMES = dict(zip(AUTO_PLANS, ("no queue", "queue", "queue unused")))
+TRIAL_SAMPLES = 16        # samples per pixel of each trial render of a plan (two rounds of trials)
 
 
 def image_buffers(aovs: bool) -> tuple:
@@ -79,7 +90,9 @@ class Renderer:
         self.program = None       # the kernels specialised to the scene (_select_program)
         self._buffers = {}
         self.width = self.height = 0
-        self._queued_for = None   # the settings.path_queue that the queue's buffers are sized for
+        self._queued_for = None   # the launch plan (queue_plan) that the queue's buffers are sized for
+        self.auto_plan = None     # with path_queue "auto": the plan its trials chose (choose_queue_plan)
+        self.plan_seconds = {}    # and the seconds of each plan's fastest trial
         self.samples = 0          # samples per pixel accumulated so far (whole passes)
         self.aovs = False         # whether the denoiser's albedo and normal are accumulated too
         self.resets = 0           # how many times the image restarted (pathtrace.launches.Progressive)
@@ -96,6 +109,7 @@ class Renderer:
         self.scene: Scene = self.compiled.scene
         self.camera = self.scene.camera.copy()
         self.settings = self.scene.settings
+        self.auto_plan = None
         self._select_program()
         self._size_queue()
         for name, array in self.compiled.geometry_arrays().items():
@@ -126,21 +140,71 @@ class Renderer:
     def _select_program(self):
         """The kernels specialised to the scene's shapes and materials (pathtrace.device.Features)."""
         features = self.compiled.features(self.settings, self.camera)
+        depth, _ = self.queue_plan()
         program = self.backend.program_for(replace(features, traversal_stats=self.traversal_stats,
-                                                   path_queue=self.settings.path_queue))
+                                                   path_queue=depth))
         if program is not self.program:
             self.program = program
             self.kernels = {False: cl.Kernel(program, "render"), True: cl.Kernel(program, "render_nee")}
-            queue = self.settings.path_queue          # its kernels are in the program only with it
+            queue = depth                             # its kernels are in the program only with it
             self.continue_kernels = {False: cl.Kernel(program, "continue_paths"),
                                      True: cl.Kernel(program, "continue_paths_nee")} if queue else None
             self.add_queued = cl.Kernel(program, "add_queued_paths") if queue else None
             self.aov_kernel = cl.Kernel(program, "render_aovs")
 
     def _size_queue(self):
-        """After a change of settings: the continuation queue's buffers sized for path_queue."""
-        if self.width and self._queued_for != self.settings.path_queue:
+        """After a change of settings or plan: the continuation queue's buffers sized for it."""
+        if self.width and self._queued_for != self.queue_plan():
             self._allocate_images(self.width, self.height, self.aovs)
+
+    def queue_plan(self) -> tuple:
+        """(the queue depth the program is built with, whether launches use the queue): from
+        settings.path_queue, or with "auto" the plan its trials chose (no queue until then)."""
+        if self.settings.path_queue == PATH_QUEUE_AUTO:
+            return self.auto_plan or AUTO_PLANS[0]
+        return self.settings.path_queue, self.settings.path_queue > 0
+
+    def choose_queue_plan(self, samples: int, trials: bool = None):
+        """With path_queue "auto", before a render of `samples` samples per pixel: renders
+        TRIAL_SAMPLES samples per pixel with each of AUTO_PLANS, twice in turn, and keeps the
+        plan of the fastest trial (their seconds in plan_seconds). Then resets. The plans'
+        programs are built here, before the trials time anything. `trials` (default: on GPUs
+        only): on other devices, whose work-items run one after another, the queue only costs
+        (docs/performance.md), so they take no queue without trials; so does a render shorter
+        than the trials."""
+        if self.settings.path_queue != PATH_QUEUE_AUTO or self.auto_plan is not None:
+            return
+        if trials is None:
+            trials = bool(self.backend.device.device.type & cl.device_type.GPU)
+        if not trials or samples < 2 * len(AUTO_PLANS) * TRIAL_SAMPLES:
+            self._set_auto_plan(AUTO_PLANS[0])
+            return
+        seconds = {}
+        for _ in range(2):
+            for plan in AUTO_PLANS:
+                self._set_auto_plan(plan)
+                self.reset()
+                self.finish()
+                start = time.perf_counter()
+                self.add_samples(TRIAL_SAMPLES)
+                self.finish()
+                seconds[plan] = min(seconds.get(plan, float("inf")), time.perf_counter() - start)
+        self.plan_seconds = seconds
+        self._set_auto_plan(min(seconds, key=seconds.get))
+        self.reset()
+
+    def describe_queue_plan(self) -> str:
+        """The launch plan in words, and with "auto" each plan's fastest trial."""
+        depth, queued = self.queue_plan()
+        words = f"queue after vertex {depth}" if queued else \
+            "the queue's program, its queue unused" if depth else "no queue"
+        trials = ", ".join(f"{PLAN_NAMES[p]} {s:.4f} s" for p, s in self.plan_seconds.items())
+        return f"{words} (trials of {TRIAL_SAMPLES} spp: {trials})" if trials else words
+
+    def _set_auto_plan(self, plan: tuple):
+        self.auto_plan = plan
+        self._select_program()
+        self._size_queue()
 
     def set_environment(self, environment: Environment):
         self.scene.environment = environment
@@ -191,6 +255,8 @@ class Renderer:
         self.reset()
 
     def set_settings(self, **changes):
+        if "path_queue" in changes:
+            self.auto_plan = None                    # "auto" chooses again
         self.settings = replace(self.settings, **changes)
         if self.settings.light_sampler != self.compiled.light_sampler:
             self.compiled.light_sampler = self.settings.light_sampler
@@ -214,7 +280,7 @@ class Renderer:
         nbytes = width * height * 16
         images = image_buffers(aovs)
         entries = PATH_RECORD.itemsize * max(self.queue_capacity(width, height), 1)   # (a buffer has bytes)
-        results = width * height * self.queue_samples(width, height) if self.settings.path_queue else 1
+        results = width * height * self.queue_samples(width, height) if self.queue_plan()[1] else 1
         queue = {"queue": entries, "queue_next": entries, "counters": 4 * (QUEUE_PASSES + 2), "results": 16 * results}
         others = {name: b.size for name, b in self._buffers.items()
                   if name not in image_buffers(True) and name not in queue}
@@ -234,7 +300,7 @@ class Renderer:
             self._buffers[name] = cl.Buffer(self.backend.context, cl.mem_flags.READ_WRITE, nbytes)
         for name, size in queue.items():
             self._buffers[name] = cl.Buffer(self.backend.context, cl.mem_flags.READ_WRITE, size)
-        self._queued_for = self.settings.path_queue
+        self._queued_for = self.queue_plan()
         self.reset()
 
     def queue_samples(self, width: int, height: int) -> int:
@@ -242,8 +308,9 @@ class Renderer:
         return max(1, min(MAX_LAUNCH_SAMPLES, QUEUE_POOL // (width * height)))
 
     def queue_capacity(self, width: int, height: int) -> int:
-        """Entries of the continuation queue for a width x height image (0 without it)."""
-        if not self.settings.path_queue:
+        """Entries of the continuation queue for a width x height image (0 where launches do
+        not use it)."""
+        if not self.queue_plan()[1]:
             return 0
         memory = self.backend.device.device.global_mem_size // 16 // PATH_RECORD.itemsize
         return min(width * height * self.queue_samples(width, height), MAX_QUEUED, memory)
@@ -304,16 +371,17 @@ class Renderer:
         capacity = np.int32(self.queue_capacity(self.width, self.height))
         # with the continuation queue, a few samples per launch (queue_samples), for which the
         # launch's pixels have room in `results` (kernels/integrator.cl: render_pixel)
-        step = self.queue_samples(self.width, self.height) if self.settings.path_queue else MAX_LAUNCH_SAMPLES
+        queued = self.queue_plan()[1]
+        step = self.queue_samples(self.width, self.height) if queued else MAX_LAUNCH_SAMPLES
         for offset in range(0, count, step):
             launch = params.copy()
             launch["sample_start"], launch["sample_count"] = start + offset, min(step, count - offset)
-            if self.settings.path_queue:
+            if queued:
                 events.append(cl.enqueue_fill_buffer(self.backend.queue, b["counters"], np.int32(0), 0,
                                                      b["counters"].size))
             kernel.set_args(*self.scene_args(), launch, *sums, b["queue"], b["counters"], capacity, b["results"])
             events.append(cl.enqueue_nd_range_kernel(self.backend.queue, kernel, global_size, local))
-            if self.settings.path_queue:
+            if queued:
                 events += self._continue_paths(launch, capacity, global_size)
         if self.aovs and self.samples < AOV_PASSES:
             self.aov_kernel.set_args(*self.scene_args(), params, b["albedo_sum"], b["normal_sum"])

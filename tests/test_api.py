@@ -266,9 +266,20 @@ def test_the_path_queue_setting_reaches_a_prepared_scene():
 
 
 
-@pytest.mark.parametrize("value", [-1, 65, 1.5, "2", None])
+@pytest.mark.parametrize("value", [-2, 65, 1.5, -1.0, "2", "auto", None, True])
 def test_a_bad_path_queue_setting_is_one_user_error(value):
     scene = pathtrace.load_dict(small_scene())
     scene.settings.path_queue = value
-    with pytest.raises(UserError, match="settings.path_queue: give an integer from 0 to 64"):
+    with pytest.raises(UserError, match=r"settings.path_queue \(or PATH_QUEUE_AUTO\): give an integer from 0 to 64"):
         render(scene, spp=1)
+
+
+def test_the_path_queue_setting_takes_auto():
+    """pathtrace.PATH_QUEUE_AUTO: on PoCL, no queue (and no trial renders), so the image is the
+    one without it."""
+    scene = pathtrace.load_dict(small_scene())
+    plain = render(scene, spp=4, max_depth=6)
+    scene.settings.path_queue = pathtrace.PATH_QUEUE_AUTO
+    auto = render(scene, spp=4, max_depth=6)
+    assert all(r.queue_plan() == (0, False) and not r.plan_seconds for r in scene._prepared.group.renderers)
+    np.testing.assert_array_equal(auto, plain)

@@ -123,3 +123,79 @@ def test_bands_of_rows_render_the_same(backend):
         r.add_samples(SPP, rows=(first, end))
     r.finish()
     assert_same_render(plain, (r.read_sum(), r._read("sum_sq"), r))
+
+
+def test_auto_trials_each_plan_and_keeps_the_fastest(backend, monkeypatch):
+    """path_queue "auto" times a trial render of each launch plan, twice, and keeps the one whose
+    trial was fastest (on a clock that charges each plan its own cost per sample), then renders
+    from an empty image."""
+    cost = {(0, False): 3.0, (1, True): 1.0, (1, False): 2.0}
+    clock = [0.0]
+    add_samples = Renderer.add_samples
+
+    def timed_add_samples(self, count, *args, **kwargs):
+        clock[0] += cost[self.queue_plan()] * count
+        return add_samples(self, count, *args, **kwargs)
+
+    monkeypatch.setattr(Renderer, "add_samples", timed_add_samples)
+    monkeypatch.setattr(renderer_module.time, "perf_counter", lambda: clock[0])
+    scene = load_scene("cornell-box").with_settings(max_depth=6, russian_roulette="off",
+                                                   path_queue=renderer_module.PATH_QUEUE_AUTO)
+    for cheapest in ((1, True), (1, False), (0, False)):
+        cost[cheapest] = 0.5
+        r = Renderer(backend, scene, *SIZE)
+        r.choose_queue_plan(1000, trials=True)
+        assert r.auto_plan == cheapest
+        assert r.plan_seconds == {plan: c * renderer_module.TRIAL_SAMPLES for plan, c in cost.items()}
+        assert r.samples == 0 and not r.read_sum().any()
+        assert "trials of 16 spp" in r.describe_queue_plan()
+        cost[cheapest] = 4.0
+
+
+@pytest.mark.parametrize("plan", renderer_module.AUTO_PLANS)
+def test_every_plan_renders_the_megakernels_image(backend, plan):
+    """The plans "auto" chooses among, the queue's program with its queue unused included, render
+    the image without the queue."""
+    scene = load_scene("teapot-textured").with_settings(max_depth=8, russian_roulette="off")
+    plain = render(backend, scene, 0)
+    r = Renderer(backend, scene.with_settings(path_queue=renderer_module.PATH_QUEUE_AUTO), *SIZE)
+    r._set_auto_plan(plan)
+    assert r.queue_plan() == plan
+    r.add_samples(SPP)
+    r.finish()
+    assert_same_render(plain, (r.read_sum(), r._read("sum_sq"), r))
+
+
+def test_auto_runs_no_trials_on_cpus_or_for_short_renders(backend, monkeypatch):
+    """Without trials, "auto" is no queue: on CPUs (PoCL), and for renders shorter than the trials;
+    a change of the setting chooses again."""
+    trials = []
+    monkeypatch.setattr(Renderer, "add_samples", lambda self, *a, **k: trials.append(a))
+    scene = load_scene("cornell-box").with_settings(path_queue=renderer_module.PATH_QUEUE_AUTO)
+    r = Renderer(backend, scene, *SIZE)
+    r.choose_queue_plan(10**6)
+    r.choose_queue_plan(95, trials=True)
+    assert r.queue_plan() == (0, False) and not trials and not r.plan_seconds
+    assert r.describe_queue_plan() == "no queue"
+    r.set_settings(path_queue=renderer_module.PATH_QUEUE_AUTO)
+    assert r.auto_plan is None
+    r.choose_queue_plan(96, trials=True)
+    assert len(trials) == 6 and r.auto_plan in renderer_module.AUTO_PLANS
+
+
+def test_render_command_takes_auto(tmp_path):
+    """`pathtrace render --path-queue auto` renders the image it renders without; the viewer, which
+    runs no trials, refuses it in one line."""
+    from pathtrace.image_io import read_hdr
+    images = []
+    for setting in ("0", "auto"):
+        out = tmp_path / f"q{setting}.exr"
+        r = subprocess.run([sys.executable, "-m", "pathtrace", "render", "cornell-box", "--size", "24x16",
+                            "--spp", "4", "--max-depth", "6", "--rr", "off", "--path-queue", setting, "-q",
+                            "-o", str(out)], capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+        images.append(read_hdr(out, "test"))
+    np.testing.assert_array_equal(images[1], images[0])
+    r = subprocess.run([sys.executable, "-m", "pathtrace", "view", "cornell-box", "--path-queue", "auto"],
+                       capture_output=True, text=True)
+    assert r.returncode != 0 and "'auto' is not an integer" in r.stderr and "Traceback" not in r.stderr

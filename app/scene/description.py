@@ -20,6 +20,7 @@ from pathtrace.scene.meshes import is_closed
 # vertex with the material's albedo; "off", at max_depth only.
 RUSSIAN_ROULETTE = ("off", "albedo", "throughput")
 MAX_PATH_QUEUE = 64     # RenderSettings.path_queue's largest value (no path that long is short)
+PATH_QUEUE_AUTO = -1    # RenderSettings.path_queue "auto": chosen by trial renders (pathtrace.renderer)
 
 
 @dataclass
@@ -35,7 +36,8 @@ class RenderSettings:
     light_sampler: str = "auto"   # how NEE chooses a light: one of pathtrace.lights.LIGHT_SAMPLERS
     path_queue: int = 0           # paths going on past this many vertices are traced on from a queue
                                   # (kernels/integrator.cl, PATH_QUEUE): the same image, sooner on
-                                  # GPUs where few paths go on long; 0: no queue
+                                  # GPUs where few paths go on long; 0: no queue;
+                                  # PATH_QUEUE_AUTO: chosen by trial renders on GPUs
 
     @property
     def paths_end(self) -> bool:
