@@ -177,12 +177,12 @@ class Renderer:
         if trials is None:
             trials = bool(self.backend.device.device.type & cl.device_type.GPU)
         if not trials or samples < 2 * len(AUTO_PLANS) * TRIAL_SAMPLES:
-            self._set_auto_plan(AUTO_PLANS[0])
+            self.use_queue_plan(AUTO_PLANS[0])
             return
         seconds = {}
         for _ in range(2):
             for plan in AUTO_PLANS:
-                self._set_auto_plan(plan)
+                self.use_queue_plan(plan)
                 self.reset()
                 self.finish()
                 start = time.perf_counter()
@@ -190,7 +190,7 @@ class Renderer:
                 self.finish()
                 seconds[plan] = min(seconds.get(plan, float("inf")), time.perf_counter() - start)
         self.plan_seconds = seconds
-        self._set_auto_plan(min(seconds, key=seconds.get))
+        self.use_queue_plan(min(seconds, key=seconds.get))
         self.reset()
 
     def describe_queue_plan(self) -> str:
@@ -201,7 +201,9 @@ class Renderer:
         trials = ", ".join(f"{PLAN_NAMES[p]} {s:.4f} s" for p, s in self.plan_seconds.items())
         return f"{words} (trials of {TRIAL_SAMPLES} spp: {trials})" if trials else words
 
-    def _set_auto_plan(self, plan: tuple):
+    def use_queue_plan(self, plan: tuple):
+        """Renders with `plan` (one of AUTO_PLANS) from now on, as path_queue "auto" would once
+        its trials chose it."""
         self.auto_plan = plan
         self._select_program()
         self._size_queue()

@@ -159,7 +159,7 @@ def test_every_plan_renders_the_megakernels_image(backend, plan):
     scene = load_scene("teapot-textured").with_settings(max_depth=8, russian_roulette="off")
     plain = render(backend, scene, 0)
     r = Renderer(backend, scene.with_settings(path_queue=renderer_module.PATH_QUEUE_AUTO), *SIZE)
-    r._set_auto_plan(plan)
+    r.use_queue_plan(plan)
     assert r.queue_plan() == plan
     r.add_samples(SPP)
     r.finish()
