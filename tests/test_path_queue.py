@@ -99,14 +99,15 @@ def test_changing_the_setting_sizes_the_queue_and_renders_the_same(backend):
     assert r.buffer("queue").size == renderer_module.PATH_RECORD.itemsize
 
 
-def test_render_command_takes_the_setting(tmp_path):
-    """`pathtrace render --path-queue N` renders the image it renders without."""
+@pytest.mark.parametrize("setting", ["2", "auto"])
+def test_render_command_takes_the_setting(tmp_path, setting):
+    """`pathtrace render --path-queue N` (or auto) renders the image it renders without."""
     from pathtrace.image_io import read_hdr
     images = []
-    for depth in ("0", "2"):
-        out = tmp_path / f"q{depth}.exr"
+    for value in ("0", setting):
+        out = tmp_path / f"q{value}.exr"
         r = subprocess.run([sys.executable, "-m", "pathtrace", "render", "cornell-box", "--size", "24x16",
-                            "--spp", "4", "--max-depth", "6", "--rr", "off", "--path-queue", depth, "-q",
+                            "--spp", "4", "--max-depth", "6", "--rr", "off", "--path-queue", value, "-q",
                             "-o", str(out)], capture_output=True, text=True)
         assert r.returncode == 0, r.stderr
         images.append(read_hdr(out, "test"))
@@ -183,19 +184,8 @@ def test_auto_runs_no_trials_on_cpus_or_for_short_renders(backend, monkeypatch):
     assert len(trials) == 6 and r.auto_plan in renderer_module.AUTO_PLANS
 
 
-def test_render_command_takes_auto(tmp_path):
-    """`pathtrace render --path-queue auto` renders the image it renders without; the viewer, which
-    runs no trials, refuses it in one line."""
-    from pathtrace.image_io import read_hdr
-    images = []
-    for setting in ("0", "auto"):
-        out = tmp_path / f"q{setting}.exr"
-        r = subprocess.run([sys.executable, "-m", "pathtrace", "render", "cornell-box", "--size", "24x16",
-                            "--spp", "4", "--max-depth", "6", "--rr", "off", "--path-queue", setting, "-q",
-                            "-o", str(out)], capture_output=True, text=True)
-        assert r.returncode == 0, r.stderr
-        images.append(read_hdr(out, "test"))
-    np.testing.assert_array_equal(images[1], images[0])
+def test_the_viewer_refuses_auto():
+    """The viewer runs no trials (its panel sets the queue): `view --path-queue auto` is one line."""
     r = subprocess.run([sys.executable, "-m", "pathtrace", "view", "cornell-box", "--path-queue", "auto"],
                        capture_output=True, text=True)
     assert r.returncode != 0 and "'auto' is not an integer" in r.stderr and "Traceback" not in r.stderr
