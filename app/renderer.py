@@ -109,7 +109,7 @@ class Renderer:
         self.scene: Scene = self.compiled.scene
         self.camera = self.scene.camera.copy()
         self.settings = self.scene.settings
-        self.auto_plan = None
+        self.auto_plan, self.plan_seconds = None, {}      # "auto" chooses again
         self._select_program()
         self._size_queue()
         for name, array in self.compiled.geometry_arrays().items():
@@ -258,7 +258,7 @@ class Renderer:
 
     def set_settings(self, **changes):
         if "path_queue" in changes:
-            self.auto_plan = None                    # "auto" chooses again
+            self.auto_plan, self.plan_seconds = None, {}  # "auto" chooses again
         self.settings = replace(self.settings, **changes)
         if self.settings.light_sampler != self.compiled.light_sampler:
             self.compiled.light_sampler = self.settings.light_sampler

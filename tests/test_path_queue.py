@@ -179,7 +179,7 @@ def test_auto_runs_no_trials_on_cpus_or_for_short_renders(backend, monkeypatch):
     assert r.queue_plan() == (0, False) and not trials and not r.plan_seconds
     assert r.describe_queue_plan() == "no queue"
     r.set_settings(path_queue=renderer_module.PATH_QUEUE_AUTO)
-    assert r.auto_plan is None
+    assert r.auto_plan is None and not r.plan_seconds
     r.choose_queue_plan(96, trials=True)
     assert len(trials) == 6 and r.auto_plan in renderer_module.AUTO_PLANS
 
