@@ -206,6 +206,7 @@ def progressive(scene, spp=None, steps=None, size=None, device="auto", seed=None
     prepared = prepare(scene, device, build_progress)
     prepared.update(scene, settings, bool(aovs))
     group = prepared.group
+    group.choose_queue_plans(steps[-1])     # path_queue "auto": for the whole render, not its first step
     on_progress, close = _progress(progress, scene.name, settings, steps[-1])
     if on_progress:
         on_progress(0)

@@ -274,6 +274,20 @@ def test_a_bad_path_queue_setting_is_one_user_error(value):
         render(scene, spp=1)
 
 
+def test_auto_chooses_its_plan_for_the_whole_render(monkeypatch):
+    """A render's first snapshot has 1 spp; "auto" chooses for the render's samples, so that a
+    long render runs its trials (which a render shorter than them skips)."""
+    from pathtrace.renderer import Renderer
+    asked = []
+    choose = Renderer.choose_queue_plan
+    monkeypatch.setattr(Renderer, "choose_queue_plan", lambda self, samples, trials=None:
+                        (asked.append(samples), choose(self, samples, trials)))
+    scene = pathtrace.load_dict(small_scene())
+    scene.settings.path_queue = pathtrace.PATH_QUEUE_AUTO
+    render(scene, spp=200, max_depth=6)
+    assert asked and asked[0] == 200
+
+
 def test_the_path_queue_setting_takes_auto():
     """pathtrace.PATH_QUEUE_AUTO: on PoCL, no queue (and no trial renders), so the image is the
     one without it."""
