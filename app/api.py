@@ -54,6 +54,15 @@ def devices() -> list:
     return list_devices()
 
 
+def queue_plans(scene) -> list:
+    """What settings.path_queue PATH_QUEUE_AUTO chose for `scene`'s last render, in words, one
+    per device (pathtrace.renderer: the plan and each plan's trial); empty where it was not
+    asked for or the scene was not rendered."""
+    prepared = scene.__dict__.get("_prepared")
+    renderers = prepared.group.renderers if prepared else ()
+    return [r.describe_queue_plan() for r in renderers if r.auto_plan is not None]
+
+
 _backends = {}            # device specs -> opened backends, kept for the next render
 
 

@@ -296,6 +296,8 @@ def cmd_render(args):
         build_progress.close()
         if bar is not None:
             bar.close()
+    for plan in api.queue_plans(scene):
+        print(f"path queue auto: {plan}", file=sys.stderr)
     outputs = render_outputs(result, args, denoiser)
     with FinalWrite():
         write_images(outputs, args.exposure, args.tonemap)

@@ -296,4 +296,8 @@ def test_the_path_queue_setting_takes_auto():
     scene.settings.path_queue = pathtrace.PATH_QUEUE_AUTO
     auto = render(scene, spp=4, max_depth=6)
     assert all(r.queue_plan() == (0, False) and not r.plan_seconds for r in scene._prepared.group.renderers)
+    assert pathtrace.queue_plans(scene) == ["no queue"]
     np.testing.assert_array_equal(auto, plain)
+    scene.settings.path_queue = 0
+    render(scene, spp=1)
+    assert pathtrace.queue_plans(scene) == [] and pathtrace.queue_plans(pathtrace.load_dict(small_scene())) == []

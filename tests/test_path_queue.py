@@ -110,6 +110,7 @@ def test_render_command_takes_the_setting(tmp_path, setting):
                             "--spp", "4", "--max-depth", "6", "--rr", "off", "--path-queue", value, "-q",
                             "-o", str(out)], capture_output=True, text=True)
         assert r.returncode == 0, r.stderr
+        assert ("path queue auto: no queue" in r.stderr) == (value == "auto"), r.stderr
         images.append(read_hdr(out, "test"))
     np.testing.assert_allclose(images[1], images[0], rtol=1e-5, atol=1e-6)
 
