@@ -168,8 +168,8 @@ class Renderer:
         """With path_queue "auto", before a render of `samples` samples per pixel: renders
         TRIAL_SAMPLES samples per pixel with each of AUTO_PLANS, twice in turn, and keeps the
         plan of the fastest trial (their seconds in plan_seconds). Then resets. The plans'
-        programs are built here, before the trials time anything. `trials` (default: on GPUs
-        only): on other devices, whose work-items run one after another, the queue only costs
+        programs are built here, before the trials time anything; a plan whose queue does not fit
+        in the device's memory is left out. `trials` (default: on GPUs only): on other devices, whose work-items run one after another, the queue only costs
         (docs/performance.md), so they take no queue without trials; so does a render shorter
         than the trials."""
         if self.settings.path_queue != PATH_QUEUE_AUTO or self.auto_plan is not None:
@@ -182,7 +182,10 @@ class Renderer:
         seconds = {}
         for _ in range(2):
             for plan in AUTO_PLANS:
-                self.use_queue_plan(plan)
+                try:
+                    self.use_queue_plan(plan)
+                except UserError:      # its queue does not fit in the device's memory: no candidate
+                    continue
                 self.reset()
                 self.finish()
                 start = time.perf_counter()

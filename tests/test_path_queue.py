@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 from pathtrace import renderer as renderer_module
+from pathtrace.errors import UserError
 from pathtrace.renderer import Renderer
 from pathtrace.scene import load_scene
 from pathtrace.traversal_stats import traversal_stats
@@ -152,6 +153,27 @@ def test_auto_trials_each_plan_and_keeps_the_fastest(backend, monkeypatch):
         assert r.samples == 0 and not r.read_sum().any()
         assert "trials of 16 spp" in r.describe_queue_plan()
         cost[cheapest] = 4.0
+
+
+def test_auto_leaves_out_a_queue_that_does_not_fit(backend, monkeypatch):
+    """Where the queue's buffers would not fit in the device's memory, "auto" chooses among the
+    other plans rather than refusing a render that fits without them."""
+    check_fits = renderer_module.check_fits
+
+    def queue_never_fits(device, buffers, what):
+        if buffers["queue"] > renderer_module.PATH_RECORD.itemsize:
+            raise UserError(f"{what}: too large")
+        check_fits(device, buffers, what)
+
+    monkeypatch.setattr(renderer_module, "check_fits", queue_never_fits)
+    scene = load_scene("cornell-box").with_settings(max_depth=6, russian_roulette="off",
+                                                   path_queue=renderer_module.PATH_QUEUE_AUTO)
+    r = Renderer(backend, scene, *SIZE)
+    r.choose_queue_plan(1000, trials=True)
+    assert set(r.plan_seconds) == {(0, False), (1, False)} and r.auto_plan in r.plan_seconds
+    r.add_samples(SPP)
+    r.finish()
+    assert_same_render(render(backend, scene, 0), (r.read_sum(), r._read("sum_sq"), r))
 
 
 @pytest.mark.parametrize("plan", renderer_module.AUTO_PLANS)
