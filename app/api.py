@@ -59,8 +59,7 @@ def queue_plans(scene) -> list:
     per device (pathtrace.renderer: the plan and each plan's trial); empty where it was not
     asked for or the scene was not rendered."""
     prepared = scene.__dict__.get("_prepared")
-    renderers = prepared.group.renderers if prepared else ()
-    return [r.describe_queue_plan() for r in renderers if r.auto_plan is not None]
+    return prepared.group.queue_plans() if prepared else []
 
 
 _backends = {}            # device specs -> opened backends, kept for the next render

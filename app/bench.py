@@ -112,12 +112,7 @@ def measure(backends, scene, estimator, width, height, spp, builds) -> Result:
     return Result(scene.name, device, estimator, width, height, spp, seconds,
                   width * height * spp / seconds / 1e6, rays / seconds / 1e6,
                   group.bvh_seconds, *builds, render_seconds=end - rendering, mean=float(image.mean()),
-                  path_queue=scene.settings.path_queue, queue_plan=chosen_plans(group))
-
-
-def chosen_plans(group) -> str:
-    """What path_queue "auto" chose on each device of `group` ("" where it was not asked for)."""
-    return "; ".join(r.describe_queue_plan() for r in group.renderers if r.auto_plan is not None)
+                  path_queue=scene.settings.path_queue, queue_plan="; ".join(group.queue_plans()))
 
 
 def kernel_build_times(backend, cold: bool = True):

@@ -86,10 +86,14 @@ class DeviceGroup:
 
     def choose_queue_plans(self, spp: int):
         """With path_queue "auto", before a render of `spp` samples per pixel: each device's
-        launch plan, by its trial renders (Renderer.choose_queue_plan), which render() would
-        otherwise run first."""
+        launch plan, by its trial renders (Renderer.choose_queue_plan); until then, no queue."""
         for r in self.renderers:
             r.choose_queue_plan(spp)
+
+    def queue_plans(self) -> list:
+        """What path_queue "auto" chose on each device, in words (empty where it was not asked
+        for or has not chosen yet)."""
+        return [r.describe_queue_plan() for r in self.renderers if r.auto_plan is not None]
 
     def render(self, spp: int, on_progress=None, launch_seconds: float = 0.25):
         """Brings every pixel to `spp` samples: adds samples self.samples .. spp-1, spread over
@@ -98,8 +102,6 @@ class DeviceGroup:
         where one is quick, one sample split into bands of rows where it is not (the first is,
         until its speed is known). Re-raises the first device error; Ctrl-C stops every device
         after its current launch or band."""
-        if not self.samples:
-            self.choose_queue_plans(spp)
         counter = SampleCounter(spp, self.samples)
         errors = []
         progress_lock = threading.Lock()

@@ -90,7 +90,7 @@ class Renderer:
         self.program = None       # the kernels specialised to the scene (_select_program)
         self._buffers = {}
         self.width = self.height = 0
-        self._queued_for = None   # the launch plan (queue_plan) that the queue's buffers are sized for
+        self._queued_for = None   # whether the queue's buffers are sized for launches that use it
         self.auto_plan = None     # with path_queue "auto": the plan its trials chose (choose_queue_plan)
         self.plan_seconds = {}    # and the seconds of each plan's fastest trial
         self.samples = 0          # samples per pixel accumulated so far (whole passes)
@@ -153,8 +153,9 @@ class Renderer:
             self.aov_kernel = cl.Kernel(program, "render_aovs")
 
     def _size_queue(self):
-        """After a change of settings or plan: the continuation queue's buffers sized for it."""
-        if self.width and self._queued_for != self.queue_plan():
+        """After a change of settings or plan: the continuation queue's buffers sized for whether
+        launches use it (which queue depth does not change)."""
+        if self.width and self._queued_for != self.queue_plan()[1]:
             self._allocate_images(self.width, self.height, self.aovs)
 
     def queue_plan(self) -> tuple:
@@ -197,11 +198,10 @@ class Renderer:
         self.reset()
 
     def describe_queue_plan(self) -> str:
-        """The launch plan in words, and with "auto" each plan's fastest trial."""
-        depth, queued = self.queue_plan()
-        words = f"queue after vertex {depth}" if queued else \
-            "the queue's program, its queue unused" if depth else "no queue"
+        """The plan path_queue "auto" chose (choose_queue_plan), in words, with each plan's fastest
+        trial where it ran trials."""
         trials = ", ".join(f"{PLAN_NAMES[p]} {s:.4f} s" for p, s in self.plan_seconds.items())
+        words = PLAN_NAMES[self.auto_plan]
         return f"{words} (trials of {TRIAL_SAMPLES} spp: {trials})" if trials else words
 
     def use_queue_plan(self, plan: tuple):
@@ -305,7 +305,7 @@ class Renderer:
             self._buffers[name] = cl.Buffer(self.backend.context, cl.mem_flags.READ_WRITE, nbytes)
         for name, size in queue.items():
             self._buffers[name] = cl.Buffer(self.backend.context, cl.mem_flags.READ_WRITE, size)
-        self._queued_for = self.queue_plan()
+        self._queued_for = self.queue_plan()[1]
         self.reset()
 
     def queue_samples(self, width: int, height: int) -> int:
