@@ -174,7 +174,12 @@ def add_path_queue_option(p: argparse.ArgumentParser, auto: bool = True):
 
 
 def _path_queue(text: str) -> int:
-    return PATH_QUEUE_AUTO if text == "auto" else _int_range(0, MAX_PATH_QUEUE)(text)
+    if text == "auto":
+        return PATH_QUEUE_AUTO
+    try:
+        return _int_range(0, MAX_PATH_QUEUE)(text)
+    except argparse.ArgumentTypeError as e:
+        raise argparse.ArgumentTypeError(f"{e}; or auto") from None
 
 
 def _pixel_filter(text: str):

@@ -197,7 +197,8 @@ def test_unreadable_environment_map(tmp_path, name, data):
     (["simple", "--exposure", "nan"], "is not a finite number"),
     (["simple", "--max-depth", "2147483648"], "2147483648 is out of range (must be 0 to 2147483647)"),
     (["simple", "--spp", "2147483648"], "2147483648 is out of range (must be 1 to 2147483647)"),
-    (["simple", "--path-queue", "-1"], "-1 is out of range (must be 0 to 64)"),
+    (["simple", "--path-queue", "-1"], "-1 is out of range (must be 0 to 64); or auto"),
+    (["simple", "--path-queue", "automatic"], "'automatic' is not an integer; or auto"),
 ])
 def test_bad_arguments_get_one_clear_message(tmp_path, args, message):
     out = tmp_path / "o.png"
