@@ -13,6 +13,7 @@ import pyopencl as cl
 
 from pathtrace.bvh import BVH, column_max, column_min, primitive_boxes
 from pathtrace.bvh_cache import cached_bvh
+from pathtrace.environment import LUMINANCE
 from pathtrace.errors import UserError, format_bytes, short
 from pathtrace.features import FLAT_MAX, Features, stack_size
 from pathtrace.lights import LightTable, build_light_table, emitted_power, primitive_bounds
@@ -77,11 +78,13 @@ class CompiledScene:
         check_memory(scene.name, n_spheres, n_triangles, queue.device if queue else None,
                      scene.materials.texel_bytes(), len(instances) if self.two_level else 0)
         start = time.perf_counter()
-        # gathered from float32 vertices: what the kernels get, and half the bytes to move (rows
-        # gathered by np.take, which is 3-4x faster than NumPy's indexing with an array)
-        corners = np.concatenate([np.take(np.asarray(m.vertices, np.float32), m.faces, axis=0) for m in meshes]) if meshes \
-            else np.zeros((0, 3, 3), np.float32)
-        lo, hi = primitive_boxes(scene.spheres, corners)
+        # the corners as the kernels' triangle rows hold them (float4s, w filled below), gathered
+        # from float32 vertices (half the bytes of float64 to move) by np.take, which is 3-4x
+        # faster than NumPy's indexing with an array; whole 48-byte rows are then put in BVH
+        # order by one more np.take, 3x faster than a gather into the rows' xyz
+        corners = np.concatenate([np.take(padded_points(m.vertices), m.faces, axis=0) for m in meshes]) if meshes \
+            else np.zeros((0, 3, 4), np.float32)
+        lo, hi = primitive_boxes(scene.spheres, corners[:, :, :3])
         if self.two_level:
             two = build_two_level(scene, lo, hi, mesh_ends, meshes, queue, progress)
             self.bvh, self.instances, self.instance_depth, lo, hi = two.bvh, two.instances, two.depth, two.lo, two.hi
@@ -100,8 +103,7 @@ class CompiledScene:
 
         counts = [len(m.faces) for m in meshes]
         mesh_of = np.repeat(np.arange(len(meshes)), counts).astype(np.int64)
-        self.triangles = np.zeros(len(triangle_order), TRIANGLE)
-        self.triangles.view(np.float32).reshape(-1, 3, 4)[:, :, :3] = np.take(corners, triangle_order, axis=0)
+        self.triangles = np.take(corners, triangle_order, axis=0).reshape(-1, 12).view(TRIANGLE).reshape(-1)
         # per-corner shading normals and texture coordinates, in BVH order, for the triangles of
         # meshes that have them; the others' index is -1
         normals, normal_index = corner_table(meshes, "normals", triangle_order)
@@ -151,13 +153,12 @@ class CompiledScene:
             raise UserError(f"{self.scene.source or self.scene.name}: {e}") from None
         self.materials = table.rows.copy()
         self.materials["textures"] = self.textures.first
-        emission = self.materials["emission"][:, :3].astype(np.float64)
         check_radiance(self.scene)
-        prim_emission = emission[self.prim_material]
+        # each material's luminance, gathered per primitive (8 bytes a primitive, not 24)
+        luminance = np.take(self.materials["emission"][:, :3].astype(np.float64) @ LUMINANCE, self.prim_material)
         # the corners as a view of the triangles' rows (v0, v1, v2 are consecutive float4s), not a copy
         corners = self.triangles.view(np.float32).reshape(-1, 3, 4)[:, :, :3]
-        power = emitted_power(self.spheres, corners, prim_emission[:self.num_spheres],
-                              prim_emission[self.num_spheres:])
+        power = emitted_power(self.spheres, corners, luminance[:self.num_spheres], luminance[self.num_spheres:])
         self.lights: LightTable = build_light_table(power, self.scene.environment, self.scene.lights,
                                                     max(self.radius, 1e-6),
                                                     lambda prims: primitive_bounds(self.spheres, corners, prims),
@@ -205,6 +206,13 @@ class CompiledScene:
                             int(self.scene.sphere_material[shape]))
         mesh = self.meshes[shape - self.num_spheres]
         return ShapeRef("mesh", shape - self.num_spheres, mesh.name, mesh.material)
+
+
+def padded_points(vertices) -> np.ndarray:
+    """A mesh's vertices as (V, 4) float32 rows, w 0."""
+    points = np.zeros((len(vertices), 4), np.float32)
+    points[:, :3] = vertices
+    return points
 
 
 def corner_table(meshes: list, attribute: str, triangle_order: np.ndarray) -> tuple:

@@ -6,7 +6,7 @@ import pytest
 from pyopencl import cltypes
 from scipy import stats
 
-from pathtrace.environment import Environment
+from pathtrace.environment import LUMINANCE, Environment
 from pathtrace.lights import alias_table, build_light_table, emitted_power
 from pathtrace.types import RENDER_PARAMS
 from tests.test_sampling import chi_square
@@ -84,7 +84,7 @@ def pick(kernels, lights, bin_bits, keep_bits):
 def test_kernel_picks_lights_in_proportion_to_power(kernels):
     spheres = np.array([[0, 0, 0, 1], [5, 0, 0, 0.5], [9, 0, 0, 2], [0, 0, 4, 1]], np.float32)
     emission = np.array([[1, 1, 1], [8, 8, 8], [0, 0, 0], [0.5, 2, 0.1]], np.float32)
-    power = emitted_power(spheres, np.zeros((0, 3, 3)), emission, np.zeros((0, 3)))
+    power = emitted_power(spheres, np.zeros((0, 3, 3)), emission @ LUMINANCE, np.zeros(0))
     table = build_light_table(power, Environment.constant((0, 0, 0)))
     assert table.count == 3 and table.env_pick == 0.0 and table.pick[2] == 0
     rng = np.random.default_rng(3)
@@ -135,7 +135,7 @@ def test_light_table_holds_spheres_triangles_and_the_environment():
     the environment chosen as often as all other lights together."""
     spheres = np.array([[0, 0, 0, 1]], np.float32)
     triangles = np.array([[[0, 0, 0], [2, 0, 0], [0, 2, 0]], [[0, 0, 0], [1, 0, 0], [0, 1, 0]]], np.float32)
-    power = emitted_power(spheres, triangles, np.array([[1.0, 1, 1]]), np.array([[1.0, 1, 1], [0, 0, 0]]))
+    power = emitted_power(spheres, triangles, [1.0], [1.0, 0.0])     # the luminances of white and black
     np.testing.assert_allclose(power, [np.pi * 4 * np.pi, np.pi * 2.0, 0.0])
     table = build_light_table(power, Environment.constant((1, 1, 1)))
     assert table.count == 3 and table.env_pick == pytest.approx(0.5)

@@ -72,12 +72,13 @@ def keep_threshold(keep: np.ndarray) -> np.ndarray:
     return np.minimum(np.round(np.asarray(keep, np.float64) * 2.0**32), 2**32 - 1).astype(np.uint32)
 
 
-def emitted_power(spheres, triangles, emission_of_sphere, emission_of_triangle):
+def emitted_power(spheres, triangles, sphere_luminance, triangle_luminance):
     """Luminance power of each primitive: pi Le times its emitting area (a sphere's whole
-    surface 4 pi r^2; a triangle's front, whose area is half its edges' cross product)."""
+    surface 4 pi r^2; a triangle's front, whose area is half its edges' cross product), from
+    the luminance each emits (of its rgb radiance, by LUMINANCE)."""
     r = spheres[:, 3].astype(np.float64)
-    sphere_power = (emission_of_sphere @ LUMINANCE) * np.pi * 4 * np.pi * r ** 2
-    triangle_power = emission_of_triangle @ LUMINANCE
+    sphere_power = np.asarray(sphere_luminance, np.float64) * np.pi * 4 * np.pi * r ** 2
+    triangle_power = np.array(triangle_luminance, np.float64)
     lit = np.flatnonzero(triangle_power > 0)      # the areas of emitters only: most emit nothing
     t = triangles[lit].astype(np.float64)
     area = 0.5 * np.linalg.norm(np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]), axis=1)
