@@ -47,6 +47,14 @@ typedef const global Material *MaterialRef;
     complete_frame(sc, &(s))
 #endif
 
+/* The radiance surface s emits, seen along ray direction d: all that a path's last vertex needs
+ * of its material, which is not shaded there (no texture looked up but an emission texture). */
+#ifdef TEXTURES
+#define EMISSION_AT(sc, s, d) surface_emission(sc, MATERIAL_ROW(sc, s, d), &(s))
+#else
+#define EMISSION_AT(sc, s, d) (MATERIAL_ROW(sc, s, d)->emission.xyz)
+#endif
+
 
 /* What a sampled lobe is, as pbrt-v4's BxDFFlags and Mitsuba's BSDFFlags. */
 #define LOBE_REFLECTION 1

@@ -45,6 +45,15 @@ float3 light_visibility(const SceneData *sc, float3 o, const LightSample *ls, Pr
 #endif
 }
 
+/* The weight of light emitted at point y of primitive `prim` towards the previous vertex x
+ * (normal n; 0 after a scattering in a medium): the power heuristic against the light sampling
+ * that could have found y from x, where the path chose its direction with density pdf_prev (0:
+ * a delta lobe or the camera ray, which no light sample could have found). */
+float emission_weight(const SceneData *sc, int prim, const int nee, float pdf_prev, float3 x, float3 n, float3 y)
+{
+    return nee && pdf_prev > 0.0f ? mis_weight(pdf_prev, pdf_light(sc, prim, x, n, y)) : 1.0f;
+}
+
 /* One light sample at surface s, whose BSDF m sees outgoing direction wo (local frame of the
  * shading normal): its contribution f cos Le / pdf, weighted against BSDF sampling, whose
  * density of continuing is `go_on` times the BSDF's pdf (a delta light, which no path can find,
@@ -301,15 +310,18 @@ CPU_INLINE float3 trace_path(const SceneData *sc, const RenderParams *p, const P
             else if (!(flags & MATERIAL_TRANSMISSIVE))
                 return radiance;
         }
-        MATERIAL_AT(m, sc, s, d);
-        if (front && any(m->emission.xyz > 0.0f)) {
-            float w = 1.0f;
-            if (nee && pdf_prev > 0.0f)
-                w = mis_weight(pdf_prev, pdf_light(sc, hit.prim, prev_x, prev_n, s.p));
-            radiance += throughput * m->emission.xyz * w;
-        }
-        if (depth >= max_depth)
+        if (depth >= max_depth) {
+            /* the last vertex: only the light it emits counts, so its material is not shaded
+               (pbrt-v4's PathIntegrator also ends a path at maxDepth before getting its BSDF) */
+            float3 le = front ? EMISSION_AT(sc, s, d) : (float3)(0.0f);
+            if (any(le > 0.0f))
+                radiance += throughput * le * emission_weight(sc, hit.prim, nee, pdf_prev, prev_x, prev_n, s.p);
             return radiance;
+        }
+        MATERIAL_AT(m, sc, s, d);
+        if (front && any(m->emission.xyz > 0.0f))
+            radiance += throughput * m->emission.xyz
+                        * emission_weight(sc, hit.prim, nee, pdf_prev, prev_x, prev_n, s.p);
         float3 wo = to_shading(&s, -d);
         float go_on = RUSSIAN_ROULETTE == RR_ALBEDO ? m->continuation : 1.0f;
         if (nee && p->num_lights > 0 && !(m->flags & MATERIAL_DELTA))

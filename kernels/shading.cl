@@ -52,16 +52,30 @@ Material shade_material(const SceneData *sc, const global Material *row, Surface
     return m;
 }
 
-/* The radiance a textured material emits at uv: its emission, or its emission texture there. */
-float3 emission_at(const SceneData *sc, const global Material *row, float2 uv)
+/* The texture bound to the emission of material `row`, or -1. */
+int emission_texture(const SceneData *sc, const global Material *row)
 {
-    float3 le = row->emission.xyz;
-    for (int i = row->textures;; ++i) {
+    for (int i = row->textures; i >= 0; ++i) {
         TextureBinding b = sc->bindings[i];
         if (b.slot == SLOT_EMISSION)
-            le = eval_texture(sc, b.texture, uv);
+            return b.texture;
         if (b.last)
             break;
     }
-    return le;
+    return -1;
+}
+
+/* The radiance a textured material emits at uv: its emission, or its emission texture there. */
+float3 emission_at(const SceneData *sc, const global Material *row, float2 uv)
+{
+    int t = emission_texture(sc, row);
+    return t < 0 ? row->emission.xyz : eval_texture(sc, t, uv);
+}
+
+/* The radiance material `row` emits at surface s: its uv is found only where the emission is a
+ * texture, and no other texture is looked up. */
+float3 surface_emission(const SceneData *sc, const global Material *row, const Surface *s)
+{
+    int t = emission_texture(sc, row);
+    return t < 0 ? row->emission.xyz : eval_texture(sc, t, surface_uv(sc, s->prim, s->b, s->p));
 }

@@ -264,3 +264,34 @@ def test_no_light_leaks_into_a_closed_box(backend, nee):
                     settings=RenderSettings(width=48, height=48, nee=nee, max_depth=16, russian_roulette="off"))
     mean, _, _ = render(backend, scene, 64)
     assert np.all(mean == 0.0)
+
+
+def textured_emitter_scene(max_depth, nee):
+    """A wall that emits a checkerboard of radiance 0.2 and 1.0 (its squares a whole number
+    across the view, so 0.6 on average), filling the view, under a black sky."""
+    from pathtrace.api import load_dict
+    return load_dict({
+        "camera": {"eye": [0, 0, 3], "look_at": [0, 0, 0], "vfov": 30},
+        "environment": {"color": 0.0},
+        "render": {"width": 32, "height": 32, "max_depth": max_depth, "nee": nee},
+        "textures": {"board": {"type": "checkerboard", "color0": 0.2, "color1": 1.0, "uv_scale": 4}},
+        "materials": {"wall": {"type": "emitter", "Le": "board"}},
+        "meshes": [{"material": "wall", "vertices": [[-w, -w, 0], [w, -w, 0], [w, w, 0], [-w, w, 0]],
+                    "faces": [[0, 1, 2, 3]], "uvs": [[0, 0], [1, 0], [1, 1], [0, 1]]}
+                   for w in [3 * np.tan(np.radians(15))]]})
+
+
+@pytest.mark.parametrize("nee", [False, True], ids=["no-nee", "nee"])
+def test_a_paths_last_vertex_emits_its_textured_radiance(backend, nee):
+    """At a path's last vertex the material is not shaded, only its emission looked up
+    (kernels/integrator.cl): with max depth 1 the camera rays' vertices are the last, and each
+    pixel must get what a longer path gets there (the wall's BSDF is black, so nothing more),
+    sample for sample, and the texture, not its mean."""
+    images = []
+    for depth in (1, 3):
+        r = Renderer(backend, textured_emitter_scene(depth, nee))
+        r.add_samples(16)
+        images.append(r.mean())
+    np.testing.assert_array_equal(images[0], images[1])
+    assert abs(float(images[0].mean()) - 0.6) < 0.02
+    assert np.quantile(images[0], 0.1) < 0.3 and np.quantile(images[0], 0.9) > 0.9
