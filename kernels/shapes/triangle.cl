@@ -52,13 +52,19 @@ void triangle_shear(float3 d, float3 *row_x, float3 *row_y, float3 *row_z)
     *row_z = ez / dz;
 }
 
+/* dot(r, v) as a product and two fused multiply-adds, which FP_CONTRACT off would not form */
+float dot_fma(float3 r, float3 v)
+{
+    return fma(r.x, v.x, fma(r.y, v.y, r.z * v.z));
+}
+
 CPU_INLINE float intersect_triangle(const global Triangle *tri, float3 o, float3 row_x,
                                     float3 row_y, float3 row_z, float t_max, float *b1, float *b2)
 {
     float3 a = tri->v0.xyz - o, b = tri->v1.xyz - o, c = tri->v2.xyz - o;
-    float ax = dot(row_x, a), ay = dot(row_y, a);
-    float bx = dot(row_x, b), by = dot(row_y, b);
-    float cx = dot(row_x, c), cy = dot(row_y, c);
+    float ax = dot_fma(row_x, a), ay = dot_fma(row_y, a);
+    float bx = dot_fma(row_x, b), by = dot_fma(row_y, b);
+    float cx = dot_fma(row_x, c), cy = dot_fma(row_y, c);
     float u = edge_function(cx, cy, bx, by);    /* weight of v0 */
     float v = edge_function(ax, ay, cx, cy);    /* weight of v1 */
     float w = edge_function(bx, by, ax, ay);    /* weight of v2 */
@@ -67,7 +73,7 @@ CPU_INLINE float intersect_triangle(const global Triangle *tri, float3 o, float3
     float det = u + v + w;
     if (det == 0.0f)
         return INFINITY;
-    float az = dot(row_z, a), bz = dot(row_z, b), cz = dot(row_z, c);
+    float az = dot_fma(row_z, a), bz = dot_fma(row_z, b), cz = dot_fma(row_z, c);
     float t_scaled = u * az + v * bz + w * cz;
     /* t = t_scaled / det must lie in (0, t_max); compared before dividing, as in the paper */
     if (det < 0.0f ? (t_scaled >= 0.0f || t_scaled < t_max * det)
