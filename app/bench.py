@@ -29,6 +29,7 @@ import sys
 import tempfile
 import time
 from dataclasses import asdict, dataclass
+from statistics import median
 from pathlib import Path
 
 from pathtrace.device import build_program, choose_devices
@@ -60,10 +61,13 @@ class Result:
     bvh_seconds: float
     build_cold_seconds: float       # None where not measured (bench --no-cold)
     build_warm_seconds: float
-    render_seconds: float = 0.0     # of `seconds`, the launches and reading the image back
+    render_seconds: float = 0.0     # of `seconds`, the launches and reading the image back (with
+                                    # --rounds, the median round's)
+    render_rounds: list = None      # with --rounds N > 1: each round's render seconds
     mean: float = 0.0               # the image's mean radiance
     mitsuba_variant: str = ""       # with --mitsuba: Mitsuba 3's render of the same scene
-    mitsuba_seconds: float = None
+    mitsuba_seconds: float = None   # the median of its rounds
+    mitsuba_rounds: list = None     # with --rounds N > 1: each round's seconds
     mitsuba_mean: float = None
     rays_per_sample: float = None   # with --traversal (app/traversal_stats.py)
     nodes_per_ray: float = None
@@ -89,9 +93,10 @@ def estimator_settings(estimator: str) -> dict:
     return dict(settings, nee=estimator.endswith("+nee"))
 
 
-def measure(backends, scene, estimator, width, height, spp, builds) -> Result:
-    """One timed render of `scene` on `backends` together (one device, or several sharing the
-    samples: pathtrace.multidevice)."""
+def measure(backends, scene, estimator, width, height, spp, builds, rounds: int = 1) -> Result:
+    """A timed render of `scene` on `backends` together (one device, or several sharing the
+    samples: pathtrace.multidevice); with rounds > 1, that many renders of the same samples, of
+    which the median counts (a GPU's time for one render moves by up to a tenth between runs)."""
     scene = scene.with_settings(**estimator_settings(estimator))
     # the scene's own kernels (pathtrace.features), built and launched once outside the timed region
     for backend in backends:
@@ -100,18 +105,25 @@ def measure(backends, scene, estimator, width, height, spp, builds) -> Result:
     start = time.perf_counter()
     group = DeviceGroup(backends, scene, width, height)
     group.choose_queue_plans(spp)   # path_queue "auto": its trial renders, like a build, before the render
-    rendering = time.perf_counter()
-    group.render(spp, launch_seconds=0.5)
-    image = group.mean()
-    end = time.perf_counter()
-    seconds = end - start
+    setup = time.perf_counter() - start
+    times = []
+    for k in range(rounds):
+        for renderer in group.renderers if k else ():
+            renderer.reset()
+        rendering = time.perf_counter()
+        group.render(spp, launch_seconds=0.5)
+        image = group.mean()
+        times.append(time.perf_counter() - rendering)
+    render_seconds = median(times)
+    seconds = setup + render_seconds
     rays = group.rays_traced()
     names = [b.device.describe() for b in backends]
     device = names[0] if len(names) == 1 else f"{len(names)}x {names[0]}" if len(set(names)) == 1 \
         else " + ".join(names)
     return Result(scene.name, device, estimator, width, height, spp, seconds,
                   width * height * spp / seconds / 1e6, rays / seconds / 1e6,
-                  group.bvh_seconds, *builds, render_seconds=end - rendering, mean=float(image.mean()),
+                  group.bvh_seconds, *builds, render_seconds=render_seconds, render_rounds=times if rounds > 1 else None,
+                  mean=float(image.mean()),
                   path_queue=scene.settings.path_queue, queue_plan="; ".join(group.queue_plans()))
 
 
@@ -125,11 +137,13 @@ def kernel_build_times(backend, cold: bool = True):
 
 
 def run(device_specs, scene_names, estimators, width, height, spp, together=False, cold=True,
-        mitsuba: tuple = None, traversal: bool = False, split: bool = False, path_queue: int = 0, log=print):
+        mitsuba: tuple = None, traversal: bool = False, split: bool = False, path_queue: int = 0,
+        rounds: int = 1, log=print):
     """A row per device and scene, or with `together` a row per scene for all the devices
     rendering it as one (the multi-device scaling measurement). mitsuba: (python, variant) to
     time Mitsuba 3 on the rows of the comparison mode with NEE (depth8+nee). path_queue: the
-    render setting (pathtrace render --path-queue) for every row."""
+    render setting (pathtrace render --path-queue) for every row. rounds: the renders timed per
+    row, pathtrace's and then Mitsuba's, whose medians count."""
     backends = choose_devices(device_specs)
     groups = [backends] if together else [[b] for b in backends]
     results = []
@@ -141,7 +155,7 @@ def run(device_specs, scene_names, estimators, width, height, spp, together=Fals
             for name in scenes:
                 scene = load_scene(name).with_settings(path_queue=path_queue)
                 for est in estimators or [default_estimator(scene)]:
-                    r = measure(group, scene, est, width, height, spp, builds)
+                    r = measure(group, scene, est, width, height, spp, builds, rounds)
                     log(format_row(r))
                     if r.queue_plan:
                         log(f"  path queue auto: {r.queue_plan}")
@@ -156,7 +170,7 @@ def run(device_specs, scene_names, estimators, width, height, spp, together=Fals
                         except UserError as e:     # the scene says what a twin cannot: no column
                             log(f"{'':<20} Mitsuba 3: no twin of {scene.name}: {e}")
                         else:
-                            time_mitsuba(r, scene, twin, mitsuba)
+                            time_mitsuba(r, scene, twin, mitsuba, rounds)
                             log(format_mitsuba(r))
                     results.append(r)
     finally:
@@ -216,19 +230,24 @@ def mitsuba_twin(scene, r: Result, folder: Path):
                          twin / f"{scene.name}.xml")
 
 
-def time_mitsuba(r: Result, scene, xml, mitsuba: tuple):
-    """Mitsuba 3's render of `xml`, the row's scene, into r."""
+def time_mitsuba(r: Result, scene, xml, mitsuba: tuple, rounds: int = 1):
+    """Mitsuba 3's render of `xml`, the row's scene, into r: the median of `rounds` renders."""
     from pathtrace.mitsuba_timing import mitsuba_render
     python, variant = mitsuba
     r.mitsuba_variant = variant
-    r.mitsuba_seconds, r.mitsuba_mean = mitsuba_render(python, variant, xml, scene.camera, r.width, r.height,
-                                                       r.spp, COMPARISON_DEPTH)
+    times, r.mitsuba_mean = mitsuba_render(python, variant, xml, scene.camera, r.width, r.height, r.spp,
+                                           COMPARISON_DEPTH, rounds)
+    r.mitsuba_seconds = median(times)
+    r.mitsuba_rounds = times if rounds > 1 else None
 
 
 def format_mitsuba(r: Result) -> str:
-    return (f"{'':<20} Mitsuba 3 {r.mitsuba_variant}: {r.mitsuba_seconds:.3f} s to render; pathtrace "
-            f"{r.render_seconds:.3f} s: {r.mitsuba_seconds / r.render_seconds:.2f}x per sample "
-            f"(image means {r.mean:.4f} and {r.mitsuba_mean:.4f})")
+    def timed(seconds, rounds):     # a median, with its rounds' range
+        return f"{seconds:.3f} s" + (f" ({min(rounds):.3f}-{max(rounds):.3f})" if rounds else "")
+    medians = f" (medians of {len(r.render_rounds)} renders)" if r.render_rounds else ""
+    return (f"{'':<20} Mitsuba 3 {r.mitsuba_variant}: {timed(r.mitsuba_seconds, r.mitsuba_rounds)} to render; "
+            f"pathtrace {timed(r.render_seconds, r.render_rounds)}: {r.mitsuba_seconds / r.render_seconds:.2f}x "
+            f"per sample{medians} (image means {r.mean:.4f} and {r.mitsuba_mean:.4f})")
 
 
 BUILD_SIZES = (64_000, 1_000_000, 4_000_000)

@@ -534,7 +534,7 @@ def cmd_bench(args):
     results = bench.run(args.device or ["auto"], args.scenes, args.estimator, width, height, args.spp,
                         args.together, not args.no_cold,
                         (args.mitsuba, args.mitsuba_variant) if args.mitsuba else None, args.traversal,
-                        args.trace_split, args.path_queue or 0)
+                        args.trace_split, args.path_queue or 0, args.rounds)
     if args.json:
         bench.write_json(args.json, results, sys.argv[1:])
         print(f"wrote {args.json}", file=sys.stderr)
@@ -620,6 +620,9 @@ def build_parser():
                    help="with --load, also time this scene file (repeatable)")
     p.add_argument("--repeats", type=_int_range(1, 100), default=3,
                    help="with --load, the best of this many runs (default 3)")
+    p.add_argument("--rounds", type=_int_range(1, 100), default=1,
+                   help="time each row's render this many times (and Mitsuba's, with --mitsuba) and "
+                        "count the medians (default 1)")
     p.add_argument("--mitsuba", metavar="PYTHON",
                    help="also time Mitsuba 3 on the same scenes (their XML, or a twin written for "
                         "them), run by this Python (one with 'pip install mitsuba'): the depth8+nee rows, "

@@ -7,7 +7,7 @@ threads and GPU context out of ours. Two measurements:
   vertical fov, the film's size, a box filter) and its integrator by `path` at the row's max
   depth without Russian roulette (rr_depth beyond it, as pathtrace's comparison mode), one
   untimed render of all the samples, then another (in as many passes as Mitsuba chooses for its
-  memory), timed to the end of its evaluation. The untimed render has the timed one's samples
+  memory), timed to the end of its evaluation, or `rounds` more, each timed (`bench --rounds`). The untimed render has the timed one's samples
   because Dr.Jit's kernels may depend on the sample count (Mitsuba 3.9.1's log for its Cornell
   box: 1 and 2 spp shared a kernel, 16 and 32 another, 24 and 48 a third, each compiled at its
   first use, 0.37 s on two cores), and because a render's wavefront memory, which Dr.Jit keeps
@@ -40,10 +40,12 @@ sensor = mi.load_dict({
 integrator = mi.load_dict({"type": "path", "max_depth": a["max_depth"], "rr_depth": a["max_depth"] + 1})
 image = mi.render(scene, sensor=sensor, integrator=integrator, spp=a["spp"], seed=0)
 dr.eval(image); dr.sync_thread()
-start = time.perf_counter()
-image = mi.render(scene, sensor=sensor, integrator=integrator, spp=a["spp"], seed=1)
-dr.eval(image); dr.sync_thread()
-seconds = time.perf_counter() - start
+seconds = []
+for seed in range(1, a["rounds"] + 1):
+    start = time.perf_counter()
+    image = mi.render(scene, sensor=sensor, integrator=integrator, spp=a["spp"], seed=seed)
+    dr.eval(image); dr.sync_thread()
+    seconds.append(time.perf_counter() - start)
 print(json.dumps({"seconds": seconds, "mean": float(np.mean(np.array(image)[..., :3]))}))
 """
 
@@ -74,9 +76,10 @@ def mitsuba_load_command(python: str, variant: str, xml, out) -> list:
 
 
 def mitsuba_render(python: str, variant: str, xml, camera, width: int, height: int, spp: int,
-                   max_depth: int) -> tuple[float, float]:
-    """Mitsuba's seconds to render `xml` as described above, and its image's mean."""
-    args = dict(variant=variant, xml=str(xml), width=width, height=height, spp=spp, max_depth=max_depth,
+                   max_depth: int, rounds: int = 1) -> tuple[list, float]:
+    """Mitsuba's seconds to render `xml` as described above, one per timed round, and its last
+    image's mean."""
+    args = dict(variant=variant, xml=str(xml), width=width, height=height, spp=spp, max_depth=max_depth, rounds=rounds,
                 eye=[float(x) for x in camera.eye], target=[float(x) for x in camera.look_at],
                 up=[float(x) for x in camera.up], vfov=float(camera.vfov))
     r = run_command([python, "-c", RENDER, json.dumps(args)])

@@ -152,3 +152,28 @@ def test_bench_mitsuba_column_without_a_twin_or_a_python(tmp_path):
                   "depth8+nee", "--mitsuba", tmp_path / "no-python")
     assert r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1
     assert "cannot run" in r.stderr and "no-python" in r.stderr
+
+
+def test_bench_rounds_count_the_medians_of_both_renderers(tmp_path):
+    """--rounds 3: each row's render timed three times, and Mitsuba's (here a stand-in that
+    records its renders, tests/test_mitsuba_timing.py) too; the medians are compared."""
+    from statistics import median
+    from tests.test_mitsuba_timing import fake_mitsuba as fake_packages
+    fake_packages(tmp_path)
+    python = tmp_path / "python"
+    python.write_text(f'#!/bin/sh\nPYTHONPATH="{tmp_path}" RENDERS="{tmp_path / "renders.jsonl"}" '
+                      f'exec "{sys.executable}" "$@"\n')
+    python.chmod(0o755)
+    out = tmp_path / "bench.json"
+    r = pathtrace("bench", "--quick", "--device", "cpu", "--no-cold", "--scenes", "simple-diffuse", "--estimator",
+                  "depth8+nee", "--rounds", "3", "--mitsuba", python, "--mitsuba-variant", "scalar_rgb",
+                  "--json", out)
+    assert r.returncode == 0, r.stderr
+    row, = json.loads(out.read_text())["results"]
+    assert len(row["render_rounds"]) == 3 and row["render_seconds"] == median(row["render_rounds"])
+    assert row["seconds"] >= row["render_seconds"]
+    assert len(row["mitsuba_rounds"]) == 3 and row["mitsuba_seconds"] == median(row["mitsuba_rounds"])
+    assert len((tmp_path / "renders.jsonl").read_text().splitlines()) == 4     # one untimed, three timed
+    assert "(medians of 3 renders)" in r.stdout
+    r = pathtrace("bench", "--quick", "--rounds", "0")
+    assert r.returncode == 2 and "--rounds" in r.stderr
