@@ -29,8 +29,8 @@ import sys
 import tempfile
 import time
 from dataclasses import asdict, dataclass
-from statistics import median
 from pathlib import Path
+from statistics import median
 
 from pathtrace.device import build_program, choose_devices
 from pathtrace.errors import UserError
@@ -95,8 +95,8 @@ def estimator_settings(estimator: str) -> dict:
 
 def measure(backends, scene, estimator, width, height, spp, builds, rounds: int = 1) -> Result:
     """A timed render of `scene` on `backends` together (one device, or several sharing the
-    samples: pathtrace.multidevice); with rounds > 1, that many renders of the same samples, of
-    which the median counts (a GPU's time for one render moves by up to a tenth between runs)."""
+    samples: pathtrace.multidevice); with rounds > 1, that many renders of the same samples,
+    whose median counts."""
     scene = scene.with_settings(**estimator_settings(estimator))
     # the scene's own kernels (pathtrace.features), built and launched once outside the timed region
     for backend in backends:
@@ -122,8 +122,8 @@ def measure(backends, scene, estimator, width, height, spp, builds, rounds: int 
         else " + ".join(names)
     return Result(scene.name, device, estimator, width, height, spp, seconds,
                   width * height * spp / seconds / 1e6, rays / seconds / 1e6,
-                  group.bvh_seconds, *builds, render_seconds=render_seconds, render_rounds=times if rounds > 1 else None,
-                  mean=float(image.mean()),
+                  group.bvh_seconds, *builds, render_seconds=render_seconds,
+                  render_rounds=times if rounds > 1 else None, mean=float(image.mean()),
                   path_queue=scene.settings.path_queue, queue_plan="; ".join(group.queue_plans()))
 
 

@@ -7,13 +7,13 @@ threads and GPU context out of ours. Two measurements:
   vertical fov, the film's size, a box filter) and its integrator by `path` at the row's max
   depth without Russian roulette (rr_depth beyond it, as pathtrace's comparison mode), one
   untimed render of all the samples, then another (in as many passes as Mitsuba chooses for its
-  memory), timed to the end of its evaluation, or `rounds` more, each timed (`bench --rounds`). The untimed render has the timed one's samples
-  because Dr.Jit's kernels may depend on the sample count (Mitsuba 3.9.1's log for its Cornell
-  box: 1 and 2 spp shared a kernel, 16 and 32 another, 24 and 48 a third, each compiled at its
-  first use, 0.37 s on two cores), and because a render's wavefront memory, which Dr.Jit keeps
-  for the next, grows with it: neither belongs in the timed render, as pathtrace's kernels and
-  buffers are made before its own. The image's mean comes back with the seconds, so that a
-  twin that differs from pathtrace's scene shows."""
+  memory), timed to the end of its evaluation, or `rounds` more, each timed (`bench --rounds`).
+  The untimed render has the timed ones' samples because Dr.Jit's kernels may depend on the
+  sample count (Mitsuba 3.9.1's log for its Cornell box: 1 and 2 spp shared a kernel, 16 and 32
+  another, 24 and 48 a third, each compiled at its first use, 0.37 s on two cores), and because
+  a render's wavefront memory, which Dr.Jit keeps for the next, grows with it: neither belongs in
+  the timed render, as pathtrace's kernels and buffers are made before its own. The image's
+  mean comes back with the seconds, so that a twin that differs from pathtrace's scene shows."""
 
 import json
 import subprocess
@@ -79,8 +79,8 @@ def mitsuba_render(python: str, variant: str, xml, camera, width: int, height: i
                    max_depth: int, rounds: int = 1) -> tuple[list, float]:
     """Mitsuba's seconds to render `xml` as described above, one per timed round, and its last
     image's mean."""
-    args = dict(variant=variant, xml=str(xml), width=width, height=height, spp=spp, max_depth=max_depth, rounds=rounds,
-                eye=[float(x) for x in camera.eye], target=[float(x) for x in camera.look_at],
+    args = dict(variant=variant, xml=str(xml), width=width, height=height, spp=spp, max_depth=max_depth,
+                rounds=rounds, eye=[float(x) for x in camera.eye], target=[float(x) for x in camera.look_at],
                 up=[float(x) for x in camera.up], vfov=float(camera.vfov))
     r = run_command([python, "-c", RENDER, json.dumps(args)])
     if r.returncode:
