@@ -108,8 +108,9 @@ def measure(backends, scene, estimator, width, height, spp, builds, rounds: int 
     setup = time.perf_counter() - start
     times = []
     for k in range(rounds):
-        for renderer in group.renderers if k else ():
-            renderer.reset()
+        if k:                       # the same samples again
+            for renderer in group.renderers:
+                renderer.reset()
         rendering = time.perf_counter()
         group.render(spp, launch_seconds=0.5)
         image = group.mean()

@@ -82,7 +82,7 @@ class CompiledScene:
         # from float32 vertices (half the bytes of float64 to move) by np.take, which is 3-4x
         # faster than NumPy's indexing with an array; whole 48-byte rows are then put in BVH
         # order by one more np.take, 3x faster than a gather into the rows' xyz
-        corners = np.concatenate([np.take(padded_points(m.vertices), m.faces, axis=0) for m in meshes]) if meshes \
+        corners = np.concatenate([np.take(float4_rows(m.vertices), m.faces, axis=0) for m in meshes]) if meshes \
             else np.zeros((0, 3, 4), np.float32)
         lo, hi = primitive_boxes(scene.spheres, corners[:, :, :3])
         if self.two_level:
@@ -107,8 +107,7 @@ class CompiledScene:
         # per-corner shading normals and texture coordinates, in BVH order, for the triangles of
         # meshes that have them; the others' index is -1
         normals, normal_index = corner_table(meshes, "normals", triangle_order)
-        self.normals = np.zeros((len(normals), 4), np.float32)
-        self.normals[:, :3] = normals
+        self.normals = float4_rows(normals)
         self.triangles["v0"][:, 3] = normal_index.view(np.float32)
         self.uvs, uv_index = corner_table(meshes, "uvs", triangle_order)
         self.triangles["v1"][:, 3] = uv_index.view(np.float32)
@@ -208,11 +207,11 @@ class CompiledScene:
         return ShapeRef("mesh", shape - self.num_spheres, mesh.name, mesh.material)
 
 
-def padded_points(vertices) -> np.ndarray:
-    """A mesh's vertices as (V, 4) float32 rows, w 0."""
-    points = np.zeros((len(vertices), 4), np.float32)
-    points[:, :3] = vertices
-    return points
+def float4_rows(rows) -> np.ndarray:
+    """(N, 3) rows (vertices, normals) as the kernels' float4s: (N, 4) float32, w 0."""
+    out = np.zeros((len(rows), 4), np.float32)
+    out[:, :3] = rows
+    return out
 
 
 def corner_table(meshes: list, attribute: str, triangle_order: np.ndarray) -> tuple:

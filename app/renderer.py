@@ -146,10 +146,10 @@ class Renderer:
         if program is not self.program:
             self.program = program
             self.kernels = {False: cl.Kernel(program, "render"), True: cl.Kernel(program, "render_nee")}
-            queue = depth                             # its kernels are in the program only with it
+            # the queue's kernels are in the program only where it is built with a queue depth
             self.continue_kernels = {False: cl.Kernel(program, "continue_paths"),
-                                     True: cl.Kernel(program, "continue_paths_nee")} if queue else None
-            self.add_queued = cl.Kernel(program, "add_queued_paths") if queue else None
+                                     True: cl.Kernel(program, "continue_paths_nee")} if depth else None
+            self.add_queued = cl.Kernel(program, "add_queued_paths") if depth else None
             self.aov_kernel = cl.Kernel(program, "render_aovs")
 
     def _size_queue(self):
@@ -170,9 +170,9 @@ class Renderer:
         TRIAL_SAMPLES samples per pixel with each of AUTO_PLANS, twice in turn, and keeps the
         plan of the fastest trial (their seconds in plan_seconds). Then resets. The plans'
         programs are built here, before the trials time anything; a plan whose queue does not fit
-        in the device's memory is left out. `trials` (default: on GPUs only): on other devices, whose work-items run one after another, the queue only costs
-        (docs/performance.md), so they take no queue without trials; so does a render shorter
-        than the trials."""
+        in the device's memory is left out. `trials` (default: on GPUs only): on other devices,
+        whose work-items run one after another, the queue only costs (docs/performance.md), so
+        they take no queue without trials; so does a render shorter than the trials."""
         if self.settings.path_queue != PATH_QUEUE_AUTO or self.auto_plan is not None:
             return
         if trials is None:

@@ -42,11 +42,7 @@ def main():
                 r.finish()
                 seconds = time.perf_counter() - start
                 print(json.dumps(dict(round=k, scene=scene.name, plan=PLAN_NAMES[plan],
-                                      seconds=round_to(seconds), mean=float(r.mean().mean()))), flush=True)
-
-
-def round_to(x: float) -> float:
-    return float(f"{x:.4f}")
+                                      seconds=round(seconds, 4), mean=float(r.mean().mean()))), flush=True)
 
 
 if __name__ == "__main__":
