@@ -15,7 +15,7 @@ from pathtrace.bvh import BVH, column_max, column_min, primitive_boxes
 from pathtrace.bvh_cache import cached_bvh
 from pathtrace.environment import LUMINANCE
 from pathtrace.errors import UserError, format_bytes, short
-from pathtrace.features import FLAT_MAX, Features, stack_size
+from pathtrace.features import FLAT_MAX, LONE_MAX, Features, stack_size
 from pathtrace.lights import LightTable, build_light_table, emitted_power, primitive_bounds
 from pathtrace.materials import BSDFS, NULL, TAGS
 from pathtrace.materials.blend import reachable
@@ -85,17 +85,24 @@ class CompiledScene:
         corners = np.concatenate([np.take(float4_rows(m.vertices), m.faces, axis=0) for m in meshes]) if meshes \
             else np.zeros((0, 3, 4), np.float32)
         lo, hi = primitive_boxes(scene.spheres, corners[:, :, :3])
+        # a few spheres beside many triangles stay out of the tree (LONE_MAX), in their order
+        self.lone_spheres = n_spheres if n_spheres <= LONE_MAX and n_spheres + n_triangles > FLAT_MAX \
+            and not self.two_level else 0
+        self.instances = np.zeros(1, INSTANCE)
         if self.two_level:
             two = build_two_level(scene, lo, hi, mesh_ends, meshes, queue, progress)
             self.bvh, self.instances, self.instance_depth, lo, hi = two.bvh, two.instances, two.depth, two.lo, two.hi
+            order = self.bvh.order
+        elif self.lone_spheres:
+            self.bvh: BVH = cached_bvh(lo[n_spheres:], hi[n_spheres:], 0, queue, progress)
+            order = np.concatenate([np.arange(n_spheres), n_spheres + self.bvh.order])
         else:
-            self.bvh: BVH = cached_bvh(lo, hi, n_spheres, queue, progress)
-            self.instances = np.zeros(1, INSTANCE)
+            self.bvh = cached_bvh(lo, hi, n_spheres, queue, progress)
+            order = self.bvh.order
         # the scene's bounding sphere, by which a light at infinity's power is reckoned
         self.radius = float(np.linalg.norm(column_max(hi) - column_min(lo)) / 2) if len(lo) else 1.0
         self.bvh_seconds = time.perf_counter() - start
 
-        order = self.bvh.order
         sphere_order = order[order < n_spheres]
         triangle_order = order[order >= n_spheres] - n_spheres
         self.num_spheres = n_spheres
@@ -194,6 +201,7 @@ class CompiledScene:
                         camera=kernel_name(camera), filter=settings.filter.name,
                         russian_roulette=settings.russian_roulette, stack=stack_size(self.bvh.depth),
                         instance_stack=stack_size(self.instance_depth) if self.two_level else 0,
+                        lone_spheres=self.lone_spheres,
                         flat=(self.num_spheres, self.num_triangles)
                         if self.num_spheres + self.num_triangles <= FLAT_MAX and not self.two_level else ())
 

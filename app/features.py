@@ -33,6 +33,9 @@ class Features:
                                            # the tree over its instances; 0: one level
     flat: tuple = ()                       # (spheres, triangles) of a scene of at most FLAT_MAX
                                            # primitives, which rays test all, with no tree
+    lone_spheres: int = 0                  # the spheres of a scene of triangles and at most LONE_MAX
+                                           # of them, which rays test before walking a tree over the
+                                           # triangles alone (LONE_SPHERES, kernels/bvh.cl); 0: none
     bsdf_defines: tuple = None             # the variants its materials need (BSDFType.defines,
                                            # such as BECKMANN); None: all
     traversal_stats: int = 0               # 1 or 2: the render kernels count nodes visited or
@@ -50,6 +53,7 @@ class Features:
                 + (("NULL_SURFACES",) if self.null_surfaces else ())
                 + (f"RUSSIAN_ROULETTE=RR_{self.russian_roulette.upper()}", f"BVH_STACK_SIZE={self.stack}")
                 + ((f"FLAT_SPHERES={self.flat[0]}", f"FLAT_TRIANGLES={self.flat[1]}") if self.flat else ())
+                + ((f"LONE_SPHERES={self.lone_spheres}",) if self.lone_spheres else ())
                 + (("INSTANCES", f"INSTANCE_STACK_SIZE={self.instance_stack}") if self.instance_stack else ())
                 + (self.bsdf_defines if self.bsdf_defines is not None else all_bsdf_defines())
                 + ((f"TRAVERSAL_STATS={self.traversal_stats}",) if self.traversal_stats else ())
@@ -66,6 +70,14 @@ FLAT_MAX = 8
 BVH (kernels/bvh.cl). The counts are compile-time constants, so the tests unroll: for a handful
 of spheres that is cheaper than a traversal's node loads, sort and stack, and leaves the
 kernel fewer registers, hence more threads in flight, on a GPU (docs/performance.md)."""
+
+
+LONE_MAX = 4
+"""The most spheres a scene of more primitives than FLAT_MAX may have for its rays to test them
+before the walk, outside the BVH (app/compiled.py), rather than in its leaves: a tree of
+triangles alone walks without the sphere leaves' branch and code, which a height field with
+one sphere (heightfield1M) paid 11 % of its time per ray for on the H100 (docs/performance.md).
+Each such sphere costs every ray one test, as a box of a 4-wide node does."""
 
 
 def stack_size(binary_depth: int) -> int:

@@ -135,7 +135,7 @@ uint leaf_bits(int4 leaf)
 /* Tests the primitives of a node's leaves that the ray enters (t < INFINITY); returns t with the
  * leaves' slots set to INFINITY, leaving the inner children's. NO_TRIANGLES (a build option for
  * scenes of spheres only) leaves the triangle code out, NO_SPHERES (for scenes of triangles
- * only) the sphere code. Sphere leaves are short, so the four slots are tested unrolled; with
+ * only) and LONE_SPHERES (whose tree holds triangles only: trace_ray) the sphere code. Sphere leaves are short, so the four slots are tested unrolled; with
  * triangles, one copy of the (inlined) primitive tests in a loop over the leaves' bits keeps the
  * kernel's registers down (the teapot's NEE kernel ran 26 % slower on the H100 with four
  * copies, the sphere scenes 6-8 % faster). */
@@ -153,7 +153,7 @@ CPU_INLINE float4 intersect_leaves(const SceneData *sc, float4 t, int4 count, in
     while (leaves) {
         int i, c;
         NEXT_LEAF(leaves, index, count, i, c);
-#ifndef NO_SPHERES
+#if !defined(NO_SPHERES) && !defined(LONE_SPHERES)
         if (c > 0)
             intersect_spheres(sc, i, c, o, d, instance, hit);
         else
@@ -290,9 +290,16 @@ Hit trace_ray(const SceneData *sc, float3 o, float3 d, float t_max, PrimId self,
     return hit;
 }
 #else
+/* With LONE_SPHERES, a scene's few spheres (app/features.py: LONE_MAX) are not in the tree, which
+ * holds its triangles alone: every ray tests them first, and their nearest hit bounds the walk. */
 Hit trace_ray(const SceneData *sc, float3 o, float3 d, float t_max, PrimId self, const int any_hit)
 {
     Hit hit = {t_max, -1, 0.0f, 0.0f};
+#ifdef LONE_SPHERES
+    intersect_spheres(sc, 0, LONE_SPHERES, o, d, 0, &hit);
+    if (any_hit && hit.prim >= 0)
+        return hit;
+#endif
     return walk_tree(sc, 0, o, d, self, 0, any_hit, hit);
 }
 #endif

@@ -65,6 +65,13 @@ def kernels(backend):
     return make
 
 
+def layout_features(compiled) -> Features:
+    """The features of the default program (which test kernels are built with) that a compiled
+    scene's layout needs: its few spheres outside the tree (LONE_SPHERES), which a kernel built
+    without would never meet."""
+    return Features(lone_spheres=compiled.lone_spheres)
+
+
 def scene_arrays(compiled):
     """The arrays of a CompiledScene in the order of the kernels' SCENE_KERNEL_ARGS (empty ones
     padded to one element, as the Renderer uploads them)."""

@@ -9,8 +9,9 @@ import pathtrace.bvh as bvh_module
 
 from pathtrace.bvh import MAX_DEPTH, MAX_LEAF_SIZE, RADIUS, TRAVERSAL_COST, build_bvh, builder_for
 from pathtrace.compiled import compile_scene
+from pathtrace.features import LONE_MAX
 from pathtrace.scene import Mesh, SceneBuilder, diffuse
-from tests.conftest import scene_arrays
+from tests.conftest import layout_features, scene_arrays
 
 SOURCE = """
 kernel void nearest(SCENE_KERNEL_ARGS, int num_spheres, int num_triangles,
@@ -142,12 +143,12 @@ def nearest(kernels, compiled, o, d):
     force over all primitives (t, primitive)."""
     rays = len(o)
     out = [np.zeros(rays, np.float32), np.zeros(rays, np.int32), np.zeros(rays, np.float32), np.zeros(rays, np.int32)]
-    kernels(SOURCE)("nearest", rays, *scene_arrays(compiled), np.int32(compiled.num_spheres),
+    kernels(SOURCE, layout_features(compiled))("nearest", rays, *scene_arrays(compiled), np.int32(compiled.num_spheres),
                     np.int32(compiled.num_triangles), o, d, *out)
     return out
 
 
-@pytest.mark.parametrize("case", ["spheres", "soup", "mixed", "coincident", "one-point", "degenerate-neighbours"])
+@pytest.mark.parametrize("case", ["spheres", "soup", "mixed", "lone", "coincident", "one-point", "degenerate-neighbours"])
 def test_nearest_hit_matches_brute_force(kernels, case, top_work):
     rng = np.random.default_rng(len(case))
     spheres, tris = np.zeros((0, 4), np.float32), np.zeros((0, 3, 3), np.float32)
@@ -157,6 +158,8 @@ def test_nearest_hit_matches_brute_force(kernels, case, top_work):
         tris = triangle_soup(rng, 5000)
     elif case == "mixed":
         spheres, tris = random_spheres(rng, 2000), triangle_soup(rng, 3000)
+    elif case == "lone":            # a few spheres, which rays test outside the tree (LONE_SPHERES)
+        spheres, tris = random_spheres(rng, LONE_MAX, (1.0, 3.0)), triangle_soup(rng, 3000)
     elif case == "coincident":      # every triangle three times, and 100 copies of one
         base = triangle_soup(rng, 500)
         tris = np.concatenate([base, base, base, np.repeat(base[:1], 100, axis=0)])
@@ -170,12 +173,15 @@ def test_nearest_hit_matches_brute_force(kernels, case, top_work):
         sliver[:, 2] = sliver[:, 0] + 1e-4 * (sliver[:, 1] - sliver[:, 0])
         tris = np.concatenate([tris, sliver])
     c = compile_scene(scene_of(spheres, tris))
+    assert c.lone_spheres == (LONE_MAX if case == "lone" else 0)
     aim_at = np.concatenate([spheres[:, :3], tris.mean(axis=1)])
     t_bvh, i_bvh, t_all, i_all = nearest(kernels, c, *nearest_rays(rng, 20000, aim_at))
     np.testing.assert_array_equal(t_bvh, t_all)
     # different primitives only where two are met at exactly the same t
     assert np.all((i_bvh == i_all) | (t_bvh == t_all))
     assert np.mean(np.isfinite(t_all)) > 0.3
+    if len(spheres):
+        assert np.mean((i_all >= 0) & (i_all < len(spheres))) > 0.02     # the spheres are met too
 
 
 def test_nearest_hit_far_from_the_origin(kernels):
@@ -199,14 +205,15 @@ def test_nearest_hit_far_from_the_origin(kernels):
     assert np.mean(np.isfinite(t_all)) > 0.9
 
 
-@pytest.mark.parametrize("case", ["spheres", "mixed"])
+@pytest.mark.parametrize("case", ["spheres", "mixed", "lone"])
 def test_shadow_rays_match_brute_force(kernels, case, top_work):
     """occluded(), the any-hit walk of shadow rays, says whether anything lies before t_max
     exactly where the brute-force nearest hit does (rays whose nearest hit is within a part in
     10^5 of t_max are left out, where float rounding decides)."""
     rng = np.random.default_rng(21)
-    spheres = random_spheres(rng, 2000 if case == "mixed" else 5000)
-    tris = triangle_soup(rng, 3000) if case == "mixed" else np.zeros((0, 3, 3), np.float32)
+    spheres = random_spheres(rng, LONE_MAX, (1.0, 3.0)) if case == "lone" \
+        else random_spheres(rng, 2000 if case == "mixed" else 5000)
+    tris = triangle_soup(rng, 3000) if case != "spheres" else np.zeros((0, 3, 3), np.float32)
     c = compile_scene(scene_of(spheres, tris))
     aim_at = np.concatenate([spheres[:, :3], tris.mean(axis=1)])
     rays = 20000
@@ -214,7 +221,7 @@ def test_shadow_rays_match_brute_force(kernels, case, top_work):
     t_all = nearest(kernels, c, o, d)[2]
     d[:, 3] = rng.uniform(0.0, 30.0, rays)       # t_max
     out = np.zeros(rays, np.int32)
-    kernels(SOURCE)("blocked", rays, *scene_arrays(c), np.int32(c.num_spheres), o, d, out)
+    kernels(SOURCE, layout_features(c))("blocked", rays, *scene_arrays(c), np.int32(c.num_spheres), o, d, out)
     clear = np.abs(t_all - d[:, 3]) > 1e-5 * d[:, 3]
     np.testing.assert_array_equal(out[clear] != 0, (t_all < d[:, 3])[clear])
     assert 0.2 < np.mean(out) < 0.8
@@ -433,3 +440,27 @@ def test_a_scene_of_triangles_only_renders_without_the_sphere_code(backend, monk
     assert "NO_SPHERES" not in features.defines() and without.mean() > 0
     np.testing.assert_allclose(without, with_spheres, rtol=1e-5, atol=1e-7)
     assert CompiledScene(load_scene("simple")).features(loaded.settings, loaded.camera).spheres
+
+
+def test_a_few_spheres_beside_triangles_stay_out_of_the_tree(backend, monkeypatch):
+    """teapot-sky, a teapot on a ground quad with one sphere: the sphere is outside the tree
+    (LONE_SPHERES), whose leaves hold triangles only, and the same samples make the same image as
+    with the sphere in the tree."""
+    import pathtrace.compiled as compiled_module
+    from pathtrace.renderer import Renderer
+    from pathtrace.scene import load_scene
+    loaded = load_scene("teapot-sky")
+
+    def render():
+        r = Renderer(backend, loaded, 48, 32)
+        r.add_samples(4)
+        return r.compiled, r.compiled.features(r.settings, r.camera), r.mean()
+    compiled, features, lone = render()
+    assert compiled.lone_spheres == compiled.num_spheres == 1 and "LONE_SPHERES=1" in features.defines()
+    assert np.all(compiled.bvh.nodes["count"] <= 0)
+    monkeypatch.setattr(compiled_module, "LONE_MAX", 0)
+    compiled, features, in_tree = render()
+    assert not compiled.lone_spheres and np.any(compiled.bvh.nodes["count"] > 0)
+    assert not any(d.startswith("LONE_SPHERES") for d in features.defines())
+    np.testing.assert_allclose(lone, in_tree, rtol=1e-5, atol=1e-7)
+    assert lone.mean() > 0
