@@ -143,8 +143,9 @@ def nearest(kernels, compiled, o, d):
     force over all primitives (t, primitive)."""
     rays = len(o)
     out = [np.zeros(rays, np.float32), np.zeros(rays, np.int32), np.zeros(rays, np.float32), np.zeros(rays, np.int32)]
-    kernels(SOURCE, layout_features(compiled))("nearest", rays, *scene_arrays(compiled), np.int32(compiled.num_spheres),
-                    np.int32(compiled.num_triangles), o, d, *out)
+    kernels(SOURCE, layout_features(compiled))("nearest", rays, *scene_arrays(compiled),
+                                               np.int32(compiled.num_spheres),
+                                               np.int32(compiled.num_triangles), o, d, *out)
     return out
 
 

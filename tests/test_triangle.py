@@ -154,7 +154,8 @@ def mesh_scene(vertices, faces, spheres=()):
 
 def trace(kernels, compiled, o, d):
     out = np.zeros((len(o), 4), np.float32)
-    kernels(SOURCE, layout_features(compiled))("trace", len(o), *scene_arrays(compiled), np.int32(compiled.num_spheres), f4(o), f4(d), out)
+    kernels(SOURCE, layout_features(compiled))("trace", len(o), *scene_arrays(compiled),
+                                               np.int32(compiled.num_spheres), f4(o), f4(d), out)
     return out[:, 0], out[:, 1].view(np.int32)
 
 
@@ -175,8 +176,9 @@ def test_closed_mesh_is_watertight(kernels):
 
 def respawn(kernels, compiled, o, d, w, side):
     out = np.zeros((len(o), 4), np.float32)
-    kernels(SOURCE, layout_features(compiled))("respawn", len(o), *scene_arrays(compiled), np.int32(compiled.num_spheres),
-                    f4(o), f4(d), f4(w), np.float32(side), out)
+    kernels(SOURCE, layout_features(compiled))("respawn", len(o), *scene_arrays(compiled),
+                                               np.int32(compiled.num_spheres), f4(o), f4(d), f4(w),
+                                               np.float32(side), out)
     return out[:, 0].view(np.int32), out[:, 1], out[:, 2].view(np.int32)
 
 
