@@ -89,12 +89,13 @@ class CompiledScene:
         self.lone_spheres = n_spheres if n_spheres <= LONE_MAX and n_spheres + n_triangles > FLAT_MAX \
             and not self.two_level else 0
         self.instances = np.zeros(1, INSTANCE)
+        self.bvh: BVH
         if self.two_level:
             two = build_two_level(scene, lo, hi, mesh_ends, meshes, queue, progress)
             self.bvh, self.instances, self.instance_depth, lo, hi = two.bvh, two.instances, two.depth, two.lo, two.hi
             order = self.bvh.order
         elif self.lone_spheres:
-            self.bvh: BVH = cached_bvh(lo[n_spheres:], hi[n_spheres:], 0, queue, progress)
+            self.bvh = cached_bvh(lo[n_spheres:], hi[n_spheres:], 0, queue, progress)
             order = np.concatenate([np.arange(n_spheres), n_spheres + self.bvh.order])
         else:
             self.bvh = cached_bvh(lo, hi, n_spheres, queue, progress)

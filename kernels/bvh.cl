@@ -136,9 +136,10 @@ uint leaf_bits(int4 leaf)
  * leaves' slots set to INFINITY, leaving the inner children's. NO_TRIANGLES (a build option for
  * scenes of spheres only) leaves the triangle code out, NO_SPHERES (for scenes of triangles
  * only) and LONE_SPHERES (whose tree holds triangles only: trace_ray) the sphere code. Sphere
- * leaves are short, so the four slots are tested unrolled; with triangles, one copy of the (inlined) primitive tests in a loop over the leaves' bits keeps the
- * kernel's registers down (the teapot's NEE kernel ran 26 % slower on the H100 with four
- * copies, the sphere scenes 6-8 % faster). */
+ * leaves are short, so the four slots are tested unrolled; with triangles, one copy of the
+ * (inlined) primitive tests in a loop over the leaves' bits keeps the kernel's registers down
+ * (the teapot's NEE kernel ran 26 % slower on the H100 with four copies, the sphere scenes 6-8 %
+ * faster). */
 CPU_INLINE float4 intersect_leaves(const SceneData *sc, float4 t, int4 count, int4 index, float3 o,
                                    float3 d, PrimId self, int instance, Hit *hit)
 {
