@@ -1,0 +1,112 @@
+"""Which shapes of kernel PoCL runs in SIMD lanes, an experiment for #31's CPU goal
+(docs/performance.md, 2026-11-27): a diffuse bounce among five spheres (scripts/simd_study.cl)
+written one path per work-item in scalar floats, or LANES paths per work-item in OpenCL
+vectors, and the whole path in one kernel with and without a barrier at each bounce. Not part
+of the renderer.
+
+    python scripts/simd_study.py [--device cpu] [--paths 262144] [--depth 8] [--lanes 4 8 16]
+
+Prints, per shape, the best of three runs of DEPTH bounces of every path (in millions of
+bounces per second) and the mean radiance, which is the same for every shape: they draw the same
+random numbers. `POCL_VECTORIZER_REMARKS=1` (with `POCL_KERNEL_CACHE=0`) makes PoCL say which of
+its work-item loops LLVM vectorised."""
+
+import argparse
+import time
+from pathlib import Path
+
+import numpy as np
+import pyopencl as cl
+
+from pathtrace.device import choose_device
+
+HERE = Path(__file__).resolve().parent
+
+
+def build(backend, options: list[str], lanes: int = 0):
+    source = (HERE / "simd_study.cl").read_text()
+    if lanes:
+        indices = ", ".join(str(k) for k in range(lanes))
+        source = (f"#define LANES {lanes}\ntypedef float{lanes} floatN;\ntypedef int{lanes} intN;\n"
+                  f"typedef uint{lanes} uintN;\n#define convert_floatN convert_float{lanes}\n"
+                  f"#define VLOAD vload{lanes}\n#define VSTORE vstore{lanes}\n"
+                  f"#define LANE_INDEX ((uintN)({indices}))\n") + source
+    return cl.Program(backend.context, source).build(options=options)
+
+
+def starting_paths(n: int):
+    """Camera-like rays from (0, 1, 8) into the spheres, as (3, n) origins and directions."""
+    rng = np.random.default_rng(1)
+    o = np.zeros((3, n), np.float32)
+    o[1], o[2] = 1.0, 8.0
+    d = rng.normal(size=(3, n)).astype(np.float32)
+    d[2] = -np.abs(d[2]) - 2.0
+    return o, d / np.linalg.norm(d, axis=0)
+
+
+def best_of_three(queue, prepare, n: int) -> tuple:
+    """Best of three runs and the mean radiance: prepare() sets a run up (fresh buffers) and
+    returns the function that enqueues it and the radiance buffer it writes."""
+    best = np.inf
+    for _ in range(3):
+        run, radiance = prepare()
+        queue.finish()
+        start = time.perf_counter()
+        run()
+        queue.finish()
+        best = min(best, time.perf_counter() - start)
+    out = np.empty(n, np.float32)
+    cl.enqueue_copy(queue, out, radiance)
+    return best, float(out.mean())
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--device", default="cpu")
+    ap.add_argument("--paths", type=int, default=1 << 18)
+    ap.add_argument("--depth", type=int, default=8)
+    ap.add_argument("--lanes", type=int, nargs="+", default=[4, 8, 16])
+    args = ap.parse_args()
+    backend = choose_device(args.device)
+    ctx, queue, n = backend.context, backend.queue, args.paths
+    o, d = starting_paths(n)
+    mf = cl.mem_flags
+    print(f"{backend.device.describe()}: {n} paths, {args.depth} bounces each")
+
+    def buffer(host):
+        return cl.Buffer(ctx, mf.READ_WRITE | mf.COPY_HOST_PTR, hostbuf=host)
+
+    def bounces(kernel, items: int):
+        """A launch of `kernel` over `items` work-items per bounce."""
+        def prepare():
+            state = [buffer(o), buffer(d), buffer(np.ones(n, np.float32)), buffer(np.zeros(n, np.float32))]
+
+            def run():
+                for depth in range(args.depth):
+                    kernel(queue, (items,), None, *state, np.int32(n), np.int32(depth))
+            return run, state[3]
+        return best_of_three(queue, prepare, n)
+
+    def whole_paths(kernel):
+        """One launch of `kernel` for the whole paths, in work-groups of 64."""
+        def prepare():
+            state = [buffer(o), buffer(d), cl.Buffer(ctx, mf.READ_WRITE, 4 * n)]
+            return (lambda: kernel(queue, (n,), (64,), *state, np.int32(n))), state[2]
+        return best_of_three(queue, prepare, n)
+
+    def report(name, seconds, mean):
+        print(f"{name:38s} {seconds * 1e3:8.1f} ms {n * args.depth / seconds / 1e6:8.1f} M bounces/s"
+              f"  mean radiance {mean:.6f}", flush=True)
+
+    report("bounce, a path per work-item", *bounces(cl.Kernel(build(backend, []), "bounce"), n))
+    for lanes in args.lanes:
+        kernel = cl.Kernel(build(backend, [], lanes), "bounce_lanes")
+        report(f"bounce_lanes, {lanes} paths per work-item", *bounces(kernel, n // lanes))
+    for barrier in (False, True):
+        options = [f"-DDEPTH={args.depth}"] + (["-DBOUNCE_BARRIER"] if barrier else [])
+        report(f"render{', a barrier per bounce' if barrier else ''}",
+               *whole_paths(cl.Kernel(build(backend, options), "render")))
+
+
+if __name__ == "__main__":
+    main()
