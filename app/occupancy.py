@@ -10,9 +10,12 @@ resident: such a heavy program is built for SPILLING_WARPS instead, if no kernel
 MOST_SPILLED bytes there. Measured on the H100 (docs/performance.md), every heavy program ran
 faster at 20 warps, spills and all, than as tuned before (14 warps without spills, or
 uncapped) or at the 16 warps of 128 registers: tori400-textured's 7-9 %, the pbrt-v4 scenes
-coffee and staircase2 9-10 % with one to two kilobytes spilled; the teapot's program, which
-keeps 16 warps without spills, lost 3-7 % at 20, so such programs keep their cap. Other
-platforms build as they are."""
+coffee and staircase2 9-10 % with one to two kilobytes spilled. A light program, one that keeps
+FEWEST_WARPS or more without spills but fewer than LIGHT_WARPS, is built for LIGHT_WARPS if no
+kernel spills more than LIGHT_SPILLED bytes there: the height field, simple-diffuse,
+spheres8k-diffuse and teapot-sky with four spheres (16-20 warps as tuned) ran 2-14 % faster at 24
+warps, spilling 40-288 bytes, the textured teapot the same, teapot-sky 6 % slower (2026-11-27).
+Other platforms build as they are."""
 
 import math
 import os
@@ -32,9 +35,13 @@ FEWEST_WARPS = 16           # a quarter of an SM's: fewer leave the BVH walk's l
 SPILLING_WARPS = 20         # where a program needs more registers than FEWEST_WARPS allow
 MOST_SPILLED = 2048         # bytes of spill stores per kernel allowed for SPILLING_WARPS: the most
                             # measured to gain was 1932 (docs/performance.md); beyond, not measured
+LIGHT_WARPS = 24            # where a light program keeps fewer without spills
+LIGHT_SPILLED = 512         # bytes of spill stores per kernel allowed for LIGHT_WARPS: the most
+                            # measured was 472 (the textured teapot, which neither gained nor lost)
 # What a program tuned under this rule is tuned by: part of the program cache's key, so that
 # binaries tuned under another rule are not reused (app/device.py)
-TUNING_RULE = f"{FEWEST_WARPS}/{SPILLING_WARPS} warps, {MOST_SPILLED} bytes"
+TUNING_RULE = (f"{FEWEST_WARPS}/{SPILLING_WARPS} warps, {MOST_SPILLED} bytes; "
+               f"light {LIGHT_WARPS} warps, {LIGHT_SPILLED} bytes")
 
 
 def is_nvidia(device: cl.Device) -> bool:
@@ -115,12 +122,13 @@ def build_for_occupancy(context: cl.Context, device: cl.Device, source: str, opt
         return max(spills for _, spills in report.values()) if report else -1
 
     fuller = most_registers(SPILLING_WARPS, register_file, warp)
+    lighter = most_registers(LIGHT_WARPS, register_file, warp)
 
-    def fits_spilling() -> bool:
-        """Whether the program built for SPILLING_WARPS spills at most MOST_SPILLED bytes."""
-        if fuller not in built:
-            build(fuller)
-        return 0 <= spilled(fuller) <= MOST_SPILLED
+    def fits(cap: int, most_spilled: int) -> bool:
+        """Whether the program built under `cap` spills at most `most_spilled` bytes."""
+        if cap not in built:
+            build(cap)
+        return 0 <= spilled(cap) <= most_spilled
 
     kept = most
     for cap in register_caps(most, register_file, warp):
@@ -128,12 +136,15 @@ def build_for_occupancy(context: cl.Context, device: cl.Device, source: str, opt
         # keeping that many has spilled, so the program is heavy, and it is built for
         # SPILLING_WARPS before any cap of fewer warps (which only a program spilling too much
         # there needs: one build fewer on a first start)
-        if resident_warps(cap, register_file, warp) < FEWEST_WARPS and fits_spilling():
+        if resident_warps(cap, register_file, warp) < FEWEST_WARPS and fits(fuller, MOST_SPILLED):
             return built[fuller][:2]
         build(cap)
         if spilled(cap) == 0:
             kept = cap
             break
-    if resident_warps(kept, register_file, warp) < FEWEST_WARPS and fits_spilling():
+    warps = resident_warps(kept, register_file, warp)
+    if warps < FEWEST_WARPS and fits(fuller, MOST_SPILLED):
         kept = fuller
+    elif FEWEST_WARPS <= warps < LIGHT_WARPS and fits(lighter, LIGHT_SPILLED):
+        kept = lighter
     return built[kept][:2]

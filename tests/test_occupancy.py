@@ -105,9 +105,9 @@ def test_the_options_kept_are_those_the_program_was_built_with(monkeypatch):
     """The driver caches what ptxas made, keyed by the PTX and the build options: the options that
     go with the cached binary must be the very ones of its build, the report's included, or the
     next start misses that cache and runs ptxas again (25-35 s on the H100)."""
-    options, builds = tune(monkeypatch)
+    options, builds = tune(monkeypatch, spill_bytes=1000)
     assert options == capped(112)
-    assert builds == [["-DA", "-cl-nv-verbose"], capped(96), capped(112)]
+    assert builds == [["-DA", "-cl-nv-verbose"], capped(96), capped(112), capped(80)]
 
 
 def test_a_heavy_program_spills_for_20_warps_rather_than_keep_fewer_than_16(monkeypatch):
@@ -119,13 +119,34 @@ def test_a_heavy_program_spills_for_20_warps_rather_than_keep_fewer_than_16(monk
     assert builds == [["-DA", "-cl-nv-verbose"], capped(128), capped(96)]
 
 
-def test_a_program_of_16_warps_that_would_spill_keeps_its_registers(monkeypatch):
-    """116 registers (16 warps, as the teapot's program), spilling at every cap tried (96, 112):
-    it is no heavy program, so it stays uncapped, not pushed to 20 warps (the teapot lost 3-6 %
-    there)."""
+def test_a_light_program_spilling_little_at_24_warps_is_built_for_them(monkeypatch):
+    """116 registers (16 warps, as the height field's program), spilling 64 bytes at every cap
+    tried (96, 112): it is no heavy program, so it is not built for 20 warps, but as it keeps
+    fewer than LIGHT_WARPS and spills no more than LIGHT_SPILLED at 80 registers (24 warps),
+    it is built there."""
+    from pathtrace.occupancy import LIGHT_SPILLED
+    assert 64 <= LIGHT_SPILLED
     options, builds = tune(monkeypatch, uncapped=116, spills_below=200)
+    assert options == capped(80)
+    assert builds == [["-DA", "-cl-nv-verbose"], capped(96), capped(112), capped(80)]
+
+
+def test_a_light_program_spilling_much_at_24_warps_keeps_its_registers(monkeypatch):
+    """The same program spilling 1000 bytes at every cap, more than LIGHT_SPILLED: it stays
+    uncapped (16 warps), neither at 20 warps nor at 24."""
+    from pathtrace.occupancy import LIGHT_SPILLED
+    assert 1000 > LIGHT_SPILLED
+    options, builds = tune(monkeypatch, uncapped=116, spills_below=200, spill_bytes=1000)
     assert options == ["-DA", "-cl-nv-verbose"]
-    assert builds == [["-DA", "-cl-nv-verbose"], capped(96), capped(112)]
+    assert builds == [["-DA", "-cl-nv-verbose"], capped(96), capped(112), capped(80)]
+
+
+def test_a_program_of_24_warps_or_more_is_not_rebuilt(monkeypatch):
+    """80 registers (24 warps) uncapped, spilling below 76: the caps of 64 and 72 (32 and 28
+    warps) spill, so the 80 registers are kept, and no build for LIGHT_WARPS follows."""
+    options, builds = tune(monkeypatch, uncapped=80, spills_below=76)
+    assert options == ["-DA", "-cl-nv-verbose"]
+    assert builds == [["-DA", "-cl-nv-verbose"], capped(64), capped(72)]
 
 
 def test_a_program_of_ten_warps_is_built_for_20(monkeypatch):
