@@ -14,7 +14,7 @@ coffee and staircase2 9-10 % with one to two kilobytes spilled. A light program,
 FEWEST_WARPS or more without spills but fewer than LIGHT_WARPS, is built for LIGHT_WARPS if no
 kernel spills more than LIGHT_SPILLED bytes there: the height field, simple-diffuse,
 spheres8k-diffuse and teapot-sky with four spheres (16-20 warps as tuned) ran 2-14 % faster at 24
-warps, spilling 40-288 bytes, the textured teapot the same, teapot-sky 6 % slower (2026-11-27).
+warps, spilling 40-288 bytes, the textured teapot the same, teapot-sky 6-7 % slower (2026-11-27).
 Other platforms build as they are."""
 
 import math
@@ -91,7 +91,7 @@ def most_registers(warps: int, register_file: int = 65536, warp: int = 32) -> in
 
 def build_for_occupancy(context: cl.Context, device: cl.Device, source: str, options: list[str]):
     """The program built with the options under which it keeps the most warps resident without
-    spilling (or SPILLING_WARPS, spilling: see above), and those options.
+    spilling (or SPILLING_WARPS or LIGHT_WARPS, spilling: see above), and those options.
 
     The driver keeps compiled code in its own cache (~/.nv/ComputeCache), keyed by the PTX and
     the options: where it already holds this PTX, ptxas does not run and reports nothing, and a
