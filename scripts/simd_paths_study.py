@@ -21,17 +21,13 @@ import pyopencl as cl
 from pathtrace.bench import estimator_settings, measure
 from pathtrace.device import choose_device
 from pathtrace.scene import load_scene
+from simd_study import lanes_header
 
 HERE = Path(__file__).resolve().parent
 
 
 def lanes_program(backend, lanes: int):
-    indices = ", ".join(str(k) for k in range(lanes))
-    header = "\n".join([f"#define LANES {lanes}", f"typedef float{lanes} floatN;", f"typedef int{lanes} intN;",
-                        f"typedef uint{lanes} uintN;", f"#define convert_floatN convert_float{lanes}",
-                        f"#define convert_intN convert_int{lanes}", f"#define as_uintN as_uint{lanes}",
-                        f"#define VSTORE vstore{lanes}", f"#define LANE_INDEX ((intN)({indices}))", ""])
-    return cl.Program(backend.context, header + (HERE / "simd_paths_study.cl").read_text()).build()
+    return cl.Program(backend.context, lanes_header(lanes) + (HERE / "simd_paths_study.cl").read_text()).build()
 
 
 def scene_tables(scene):

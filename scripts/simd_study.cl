@@ -95,7 +95,7 @@ kernel void bounce_lanes(global float *o, global float *d, global float *tr, glo
                          int n, int depth)
 {
     int i = get_global_id(0) * LANES;
-    uintN path = (uintN)(i) + LANE_INDEX;
+    uintN path = as_uintN((intN)(i) + LANE_INDEX);
     floatN ox = VLOAD(0, o + i), oy = VLOAD(0, o + n + i), oz = VLOAD(0, o + 2 * n + i);
     floatN dx = VLOAD(0, d + i), dy = VLOAD(0, d + n + i), dz = VLOAD(0, d + 2 * n + i);
     floatN t = VLOAD(0, tr + i), l = VLOAD(0, radiance + i);

@@ -23,15 +23,20 @@ from pathtrace.device import choose_device
 HERE = Path(__file__).resolve().parent
 
 
+def lanes_header(lanes: int) -> str:
+    """The OpenCL names of kernels written for LANES paths per work-item: floatN, intN and uintN
+    (the vector types), their conversions, loads and stores, and LANE_INDEX (0, 1, ... as intN)."""
+    indices = ", ".join(str(k) for k in range(lanes))
+    return "\n".join([f"#define LANES {lanes}", f"typedef float{lanes} floatN;", f"typedef int{lanes} intN;",
+                      f"typedef uint{lanes} uintN;", f"#define convert_floatN convert_float{lanes}",
+                      f"#define convert_intN convert_int{lanes}", f"#define as_uintN as_uint{lanes}",
+                      f"#define VLOAD vload{lanes}", f"#define VSTORE vstore{lanes}",
+                      f"#define LANE_INDEX ((intN)({indices}))", ""])
+
+
 def build(backend, options: list[str], lanes: int = 0):
     source = (HERE / "simd_study.cl").read_text()
-    if lanes:
-        indices = ", ".join(str(k) for k in range(lanes))
-        source = (f"#define LANES {lanes}\ntypedef float{lanes} floatN;\ntypedef int{lanes} intN;\n"
-                  f"typedef uint{lanes} uintN;\n#define convert_floatN convert_float{lanes}\n"
-                  f"#define VLOAD vload{lanes}\n#define VSTORE vstore{lanes}\n"
-                  f"#define LANE_INDEX ((uintN)({indices}))\n") + source
-    return cl.Program(backend.context, source).build(options=options)
+    return cl.Program(backend.context, (lanes_header(lanes) if lanes else "") + source).build(options=options)
 
 
 def starting_paths(n: int):
