@@ -208,6 +208,15 @@ def test_bad_arguments_get_one_clear_message(tmp_path, args, message):
     assert not out.exists()
 
 
+@pytest.mark.parametrize("name", ["no\nsuch\nscene", "no\x1b[31msuch", "x" * 5000])
+def test_a_scene_name_that_does_not_print_is_shown_on_one_line(tmp_path, name):
+    """A name with a newline or an escape sequence, or one too long for the file system, is
+    shown escaped and cut, in one line."""
+    r = pathtrace("render", name, "-o", tmp_path / "o.png")
+    assert r.returncode == 1 and r.stderr.count("\n") == 1 and "\x1b" not in r.stderr, r.stderr
+    assert len(r.stderr) < 400 and "Traceback" not in r.stderr
+
+
 @pytest.mark.parametrize("output,message", [
     ("nofolder/o.png", "folder 'nofolder' does not exist"),
     ("o.tiff", "unknown image format"),

@@ -3,7 +3,8 @@
 
 from pathlib import Path
 
-from pathtrace.errors import UserError
+from pathtrace.errors import UserError, cut
+from pathtrace.files import shown
 from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder, diffuse, emitter, phong
 
 __all__ = ["Mesh", "RenderSettings", "Scene", "SceneBuilder", "diffuse", "emitter", "phong",
@@ -23,7 +24,7 @@ def load_scene(name_or_path: str) -> Scene:
     try:
         exists = path.exists()
     except OSError as e:     # a name too long for the file system, say
-        raise UserError(f"{str(path)[:80]}...: {e.strerror}") from None
+        raise UserError(f"{cut(shown(path), 80)}: {e.strerror}") from None
     if path.suffix == ".toml" or exists:
         from pathtrace.scene.toml_reader import read_scene_file
         return read_scene_file(path)
@@ -31,5 +32,5 @@ def load_scene(name_or_path: str) -> Scene:
     scene = builtin_scene(name_or_path)
     if scene is not None:
         return scene
-    raise UserError(f"{name_or_path}: neither a scene file nor a built-in scene "
+    raise UserError(f"{cut(shown(name_or_path), 100)}: neither a scene file nor a built-in scene "
                     f"(built-ins: {', '.join(BUILTIN_SCENES)})")
