@@ -38,9 +38,10 @@ class TraceSplit:
         return max(self.record_ms - self.trace_ms["camera"], 0.0)
 
 
-def trace_split(backend, scene, width: int, height: int, spp: int) -> TraceSplit:
-    """The split of `spp` samples per pixel (at least 2: the first launches are not timed) of
-    `scene`'s paths of depth 2 with next-event estimation and no roulette, at the scene's seed."""
+def split_renderer(backend, scene, width: int, height: int):
+    """A renderer of `scene`'s paths of depth 2 with next-event estimation and no roulette, and
+    its program with kernels/trace_split.cl's kernels (record_rays, trace_rays), which refuses,
+    in one line, scenes whose paths those kernels do not follow."""
     renderer = Renderer(backend, scene.with_settings(max_depth=2, nee=True, russian_roulette="off"), width, height)
     features = renderer.compiled.features(renderer.settings, renderer.camera)
     if renderer.compiled.two_level or features.media:
@@ -50,6 +51,13 @@ def trace_split(backend, scene, width: int, height: int, spp: int) -> TraceSplit
     program = build_program(backend.context, backend.device.device,
                             (resource_dir("kernels") / "trace_split.cl").read_text(),
                             backend.use_cache, replace(features, traversal_stats=0)).program
+    return renderer, program
+
+
+def trace_split(backend, scene, width: int, height: int, spp: int) -> TraceSplit:
+    """The split of `spp` samples per pixel (at least 2: the first launches are not timed) of
+    `scene`'s paths of depth 2 with next-event estimation and no roulette, at the scene's seed."""
+    renderer, program = split_renderer(backend, scene, width, height)
     queue, local = backend.queue, (8, 8)
     size = tuple(-(-n // l) * l for n, l in zip((width, height), local))
     nbytes = {"rays": width * height * 6 * 16, "hits": width * height * 4}

@@ -19,48 +19,53 @@ themselves for it."""
 
 import argparse
 import os
+import sys
 import tempfile
 import time
-from dataclasses import replace
 from pathlib import Path
 
 
 def main():
+    from pathtrace.cli import _int_range, _size
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("scenes", nargs="*", default=["teapot-sky", "heightfield1M", "tori400-textured"])
-    ap.add_argument("--size", default="480x272")
-    ap.add_argument("--spp", type=int, default=4)
-    ap.add_argument("--threads", type=int)
+    ap.add_argument("--size", type=_size, default=(480, 272), metavar="WxH")
+    ap.add_argument("--spp", type=_int_range(1, 1024), default=4)
+    ap.add_argument("--threads", type=_int_range(1, 1024))
     args = ap.parse_args()
     if args.threads:
         os.environ["POCL_MAX_PTHREAD_COUNT"] = str(args.threads)
 
     import numpy as np
     import pyopencl as cl
-    from embreex.mesh_construction import TriangleMesh
-    from embreex.rtcore_scene import EmbreeScene
+    try:
+        from embreex.mesh_construction import TriangleMesh
+        from embreex.rtcore_scene import EmbreeScene
+    except ImportError:
+        sys.exit("embree_walk_study: Embree's binding is missing: pip install embreex")
 
     from pathtrace.bench import scene_file
-    from pathtrace.device import build_program, choose_device
+    from pathtrace.device import choose_device
+    from pathtrace.errors import UserError
     from pathtrace.features import LONE_MAX
-    from pathtrace.renderer import Renderer
-    from pathtrace.resources import resource_dir
     from pathtrace.scene import load_scene
+    from pathtrace.trace_split import split_renderer
 
-    width, height = (int(v) for v in args.size.split("x"))
+    width, height = args.size
     backend = choose_device("cpu")
     q = backend.queue
     print(f"{backend.device.describe()}, {args.threads or 'all'} PoCL threads; {width}x{height}, "
           f"depth-2 rays of {args.spp} samples per pixel")
     for name in args.scenes:
-        scene = load_scene(scene_file(name, Path(tempfile.mkdtemp(prefix="pathtrace-embree-"))))
-        if len(scene.spheres) > LONE_MAX:
-            raise SystemExit(f"{name}: {len(scene.spheres)} spheres, which Embree's triangles cannot stand for")
-        r = Renderer(backend, scene.with_settings(max_depth=2, nee=True, russian_roulette="off"), width, height)
-        features = replace(r.compiled.features(r.settings, r.camera), traversal_stats=0)
-        program = build_program(backend.context, backend.device.device,
-                                (resource_dir("kernels") / "trace_split.cl").read_text(), backend.use_cache,
-                                features).program
+        try:
+            scene = load_scene(scene_file(name, Path(tempfile.mkdtemp(prefix="pathtrace-embree-"))))
+            if len(scene.spheres) > LONE_MAX:
+                raise UserError(f"{name}: {len(scene.spheres)} spheres, which Embree's triangles cannot stand for")
+            r, program = split_renderer(backend, scene, width, height)
+            if r.compiled.num_triangles == 0:
+                raise UserError(f"{name}: no triangles for Embree to walk")
+        except UserError as e:
+            sys.exit(f"embree_walk_study: {e}")
         record, trace = cl.Kernel(program, "record_rays"), cl.Kernel(program, "trace_rays")
         pixels = width * height
         rays = cl.Buffer(backend.context, cl.mem_flags.READ_WRITE, pixels * 96)

@@ -12,6 +12,7 @@ of `pathtrace bench`) and each lane width's, and the images' means, which agree 
 two draw different random numbers and choose lights with different probabilities)."""
 
 import argparse
+import sys
 import time
 from pathlib import Path
 
@@ -19,7 +20,9 @@ import numpy as np
 import pyopencl as cl
 
 from pathtrace.bench import estimator_settings, measure
+from pathtrace.cli import _int_range, _size
 from pathtrace.device import choose_device
+from pathtrace.errors import UserError
 from pathtrace.scene import load_scene
 from simd_study import lanes_header
 
@@ -66,13 +69,16 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("scene", nargs="?", default="simple-diffuse")
     ap.add_argument("--device", default="cpu")
-    ap.add_argument("--size", default="480x270")
-    ap.add_argument("--spp", type=int, default=32)
-    ap.add_argument("--lanes", type=int, nargs="+", default=[8, 16])
+    ap.add_argument("--size", type=_size, default=(480, 270), metavar="WxH")
+    ap.add_argument("--spp", type=_int_range(1, 4096), default=32)
+    ap.add_argument("--lanes", type=int, nargs="+", choices=(2, 4, 8, 16), default=[8, 16])
     args = ap.parse_args()
-    width, height = (int(v) for v in args.size.split("x"))
-    backend = choose_device(args.device)
-    scene = load_scene(args.scene)
+    width, height = args.size
+    try:
+        backend = choose_device(args.device)
+        scene = load_scene(args.scene)
+    except UserError as e:
+        sys.exit(f"simd_paths_study: {e}")
     spheres, albedo, emission, lights, sky = scene_tables(scene)
     eye, corner, step_x, step_y = camera_plane(scene.camera, width, height)
     pixels = width * height

@@ -12,13 +12,16 @@ random numbers. `POCL_VECTORIZER_REMARKS=1` (with `POCL_KERNEL_CACHE=0`) makes P
 its work-item loops LLVM vectorised."""
 
 import argparse
+import sys
 import time
 from pathlib import Path
 
 import numpy as np
 import pyopencl as cl
 
+from pathtrace.cli import _int_range
 from pathtrace.device import choose_device
+from pathtrace.errors import UserError
 
 HERE = Path(__file__).resolve().parent
 
@@ -68,11 +71,16 @@ def best_of_three(queue, prepare, n: int) -> tuple:
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--device", default="cpu")
-    ap.add_argument("--paths", type=int, default=1 << 18)
-    ap.add_argument("--depth", type=int, default=8)
-    ap.add_argument("--lanes", type=int, nargs="+", default=[4, 8, 16])
+    ap.add_argument("--paths", type=_int_range(16, 1 << 24), default=1 << 18, help="a multiple of 16")
+    ap.add_argument("--depth", type=_int_range(1, 64), default=8)
+    ap.add_argument("--lanes", type=int, nargs="+", choices=(2, 4, 8, 16), default=[4, 8, 16])
     args = ap.parse_args()
-    backend = choose_device(args.device)
+    if args.paths % 16:
+        ap.error(f"--paths: {args.paths} is not a multiple of 16")
+    try:
+        backend = choose_device(args.device)
+    except UserError as e:
+        sys.exit(f"simd_study: {e}")
     ctx, queue, n = backend.context, backend.queue, args.paths
     o, d = starting_paths(n)
     mf = cl.mem_flags
