@@ -7,7 +7,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from pathtrace.features import GENERIC, choice_glue
+
 PROJECTIONS = ("perspective", "orthographic")
+CAMERA_KERNELS = ("perspective", "thinlens", "orthographic")   # kernel_name's; RenderParams.camera_type
 MAX_EXTENT = 1e30     # the largest aperture, focus distance or view height a file may give
 
 
@@ -80,7 +83,10 @@ def kernel_name(camera: Camera) -> str:
 
 def kernel_parts(projection: str) -> list:
     """(name, source) of the camera kernels of a program: the kernel file `projection` (a
-    kernel_name) and the generate_ray that names it (kernels/camera.cl)."""
-    glue = ("CameraRay generate_ray(const RenderParams *p, float sx, float sy, float2 u)\n{\n"
-            f"    return generate_{projection}_ray(p, sx, sy, u);\n}}\n")
-    return [("camera.cl", None), (f"cameras/{projection}.cl", None), ("app/camera.py: kernel_parts", glue)]
+    kernel_name, or GENERIC: every one of CAMERA_KERNELS) and the generate_ray that calls it
+    (kernels/camera.cl)."""
+    names = CAMERA_KERNELS if projection == GENERIC else (projection,)
+    glue = choice_glue("CameraRay generate_ray(const RenderParams *p, float sx, float sy, float2 u)",
+                       "generate_{}_ray(p, sx, sy, u)", CAMERA_KERNELS, projection, "camera_type")
+    return [("camera.cl", None), *((f"cameras/{n}.cl", None) for n in names),
+            ("app/camera.py: kernel_parts", glue)]

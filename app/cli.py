@@ -135,6 +135,15 @@ def add_output_options(p: argparse.ArgumentParser):
     p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
 
 
+def add_program_option(p: argparse.ArgumentParser, default: str):
+    from pathtrace.programs import PROGRAM_ENV, PROGRAM_MODES
+    p.add_argument("--program", choices=PROGRAM_MODES,
+                   help="which kernels render: auto (a generic program, built once and cached, until "
+                        "the scene's own is built in the background), specialised (wait for the "
+                        "scene's own: repeatable renders) or generic (never build another); default "
+                        f"{PROGRAM_ENV} if set, else {default}")
+
+
 def add_render_options(p: argparse.ArgumentParser, device: bool = True, queue_auto: bool = True):
     """Options shared by everything that renders a scene (the farm's workers choose their own
     devices: device=False)."""
@@ -144,6 +153,7 @@ def add_render_options(p: argparse.ArgumentParser, device: bool = True, queue_au
                             "gpu, cpu, gpu:N or cpu:N (the Nth of that kind, from 0), an index "
                             "from 'pathtrace devices', or part of a device name; render: repeat "
                             "to share the samples between devices, or 'all' for every device")
+        add_program_option(p, "auto")
     p.add_argument("--size", type=_size, metavar="WxH", help="image size (default: the scene's)")
     p.add_argument("--seed", type=_int_range(0, 2**32 - 1), help="random seed (default: the scene's)")
     p.add_argument("--max-depth", type=_int_range(0, 2**31 - 1), metavar="N",
@@ -219,6 +229,7 @@ def apply_render_options(scene, args):
 
 def cmd_devices(args):
     from pathtrace.device import build_error_line, list_devices, open_device
+    from pathtrace.programs import warm_up
     import pyopencl as cl
 
     devices = list_devices()
@@ -230,7 +241,8 @@ def cmd_devices(args):
         if args.check:
             try:
                 b = open_device(d)
-                line += f": builds the kernels ({b.build.seconds:.2f} s{', cached' if b.build.cached else ''})"
+                line += (f": builds the kernels ({b.build.seconds:.2f} s{', cached' if b.build.cached else ''}) "
+                         f"and renders ({warm_up(b):.2f} s)")
             except cl.Error as e:
                 line += f": cannot build the kernels: {build_error_line(e)}"
         print(line)
@@ -586,6 +598,7 @@ def build_parser():
                                    "roulette) on the -diffuse ones.")
     p.add_argument("--device", action="append", metavar="DEVICE",
                    help="as for render; repeat for several, or 'all' (default: auto)")
+    add_program_option(p, "specialised")
     p.add_argument("--scenes", nargs="+", default=list(TARGET_SCENES), metavar="SCENE")
     p.add_argument("--estimator", action="append", metavar="EST",
                    help="rr (the report's), depth8 (comparison mode), or either with +nee "
@@ -670,7 +683,7 @@ def build_parser():
     p.set_defaults(func=cmd_convert)
 
     p = sub.add_parser("devices", help="list OpenCL platforms and devices")
-    p.add_argument("--check", action="store_true", help="also build the kernels on each")
+    p.add_argument("--check", action="store_true", help="also build the generic kernels on each and render with them once, which fills the drivers' caches (pathtrace.programs)")
     p.set_defaults(func=cmd_devices)
 
     p = sub.add_parser("scenes", help="list the built-in scenes")
@@ -708,10 +721,21 @@ def parse(parser: argparse.ArgumentParser, argv):
     return args
 
 
+def choose_program_mode(args):
+    """--program, for every device this process opens (pathtrace.programs); bench times the
+    scenes' own programs unless asked otherwise."""
+    from pathtrace.programs import PROGRAM_ENV
+    mode = getattr(args, "program", None) or (None if args.command != "bench" or os.environ.get(PROGRAM_ENV)
+                                              else "specialised")
+    if mode:
+        os.environ[PROGRAM_ENV] = mode
+
+
 def main(argv=None) -> int:
     """Runs one command; returns its exit status (pathtrace.console: the entry point around it)."""
     args = parse(build_parser(), argv)
     try:
+        choose_program_mode(args)
         if sys.stdout is None:          # started with standard output closed (>&-)
             if args.command in ("scenes", "devices", "bench"):
                 raise UserError("cannot write the standard output: it is closed")

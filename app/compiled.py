@@ -133,7 +133,8 @@ class CompiledScene:
         element, unread, in a scene without media or interfaces)."""
         spheres = scene.sphere_media
         interfaces = [m.media for m in self.meshes]
-        if not scene.media and spheres is None and all(i is None for i in interfaces):
+        self.media_per_primitive = bool(scene.media) or spheres is not None or any(i is not None for i in interfaces)
+        if not self.media_per_primitive:
             self.prim_media = np.full(1, -1, np.int32)
         else:
             sphere_codes = packed_interfaces(spheres if spheres is not None else [None] * self.num_spheres)
@@ -205,6 +206,13 @@ class CompiledScene:
                         flat=(self.num_spheres, self.num_triangles)
                         if self.num_spheres + self.num_triangles <= FLAT_MAX and not self.two_level else ())
 
+    @property
+    def layout(self) -> int:
+        """The LAYOUT_* bits (kernels/scene.cl) by which a generic program reads this scene's
+        buffers."""
+        return ((LAYOUT_LONE_SPHERES if self.lone_spheres else 0) | (LAYOUT_INSTANCES if self.two_level else 0)
+                | (LAYOUT_MEDIA if self.media_per_primitive else 0) | (LAYOUT_LIGHT_TREE if self.lights.tree else 0))
+
     def shape(self, prim: int) -> ShapeRef:
         """The description's shape that primitive `prim` (BVH order) belongs to."""
         shape = int(self.prim_shape[prim])
@@ -213,6 +221,9 @@ class CompiledScene:
                             int(self.scene.sphere_material[shape]))
         mesh = self.meshes[shape - self.num_spheres]
         return ShapeRef("mesh", shape - self.num_spheres, mesh.name, mesh.material)
+
+
+LAYOUT_LONE_SPHERES, LAYOUT_INSTANCES, LAYOUT_MEDIA, LAYOUT_LIGHT_TREE = 1, 2, 4, 8    # kernels/scene.cl
 
 
 def float4_rows(rows) -> np.ndarray:

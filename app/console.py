@@ -37,9 +37,10 @@ def _unraisable(info, default=sys.unraisablehook):
 
 
 def run():
-    """pathtrace.cli.main(), then the exit. After an interrupt it leaves at once (os._exit), past the
-    interpreter's teardown: tearing down PoCL while it still winds down an interrupted launch
-    aborted the process (std::terminate) now and then; every temporary file is removed by then."""
+    """pathtrace.cli.main(), then the exit. After an interrupt, or with a kernel build under way
+    (_building), it leaves at once (os._exit), past the interpreter's teardown: tearing down PoCL
+    while it still winds down an interrupted launch aborted the process (std::terminate) now and
+    then; every temporary file is removed by then."""
     signal.signal(signal.SIGINT, _interrupt)
     signal.signal(signal.SIGTERM, _interrupt)
     sys.unraisablehook = _unraisable
@@ -49,8 +50,16 @@ def run():
     except KeyboardInterrupt:        # main() reports its own; this is one during the imports
         print("pathtrace: interrupted", file=sys.stderr)
         code = INTERRUPTED
-    if code == INTERRUPTED:
+    if code == INTERRUPTED or _building():
         sys.stdout.flush()
         sys.stderr.flush()
         os._exit(code)
     raise SystemExit(code)
+
+
+def _building() -> bool:
+    """Whether a scene's program is still being built in the background (pathtrace.programs):
+    NVIDIA's driver crashed the interpreter's teardown around a build under way (SIGSEGV after a
+    render that had written its image), so the command leaves past it, the build dropped."""
+    programs = sys.modules.get("pathtrace.programs")
+    return programs is not None and programs.builds_under_way()

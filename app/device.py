@@ -14,6 +14,7 @@ from pathtrace.cache_files import read_entry, write_entry
 from pathtrace.errors import UserError, format_bytes, short
 from pathtrace.features import Features
 from pathtrace.occupancy import TUNING_RULE, build_for_occupancy, is_nvidia
+from pathtrace.programs import Programs, default_mode
 from pathtrace.resources import resource_dir
 
 # The order in which the kernel files are joined into one program: the basics, the texture
@@ -181,39 +182,48 @@ def _read_cached(path: Path):
 
 @dataclass
 class Backend:
-    """A chosen device with its context, queue and built program (all features), and the
-    programs specialised to scenes' features, built when first asked for."""
+    """A chosen device with its context, queue and generic program (Features.generic_program,
+    which also holds the display's kernels), and the programs specialised to scenes' features
+    (pathtrace.programs), built when first asked for. `mode`: one of programs.PROGRAM_MODES, how
+    a renderer on it chooses between them."""
     device: Device
     context: cl.Context
     queue: cl.CommandQueue
     build: BuildResult
     extra: str = ""
     use_cache: bool = True
+    mode: str = "auto"
 
     def __post_init__(self):
-        self._variants = {}
+        self.programs = Programs(lambda features: build_program(self.context, self.device.device, self.extra,
+                                                                self.use_cache, features).program,
+                                 self.device.name)
 
     @property
     def program(self) -> cl.Program:
+        """The generic program."""
         return self.build.program
 
     def program_for(self, features: Features) -> cl.Program:
-        """The kernels specialised to `features`, built once per backend (and tuned, unlike
-        `program`)."""
-        if features not in self._variants:
-            self._variants[features] = build_program(self.context, self.device.device, self.extra,
-                                                     self.use_cache, features).program
-        return self._variants[features]
+        """The kernels specialised to `features` (and tuned, unlike `program`), built once per
+        backend; waits for them."""
+        return self.programs.get(features)
+
+    def ready_program(self, features: Features):
+        """The kernels specialised to `features` if they are built, else None, their build
+        started in the background."""
+        return self.programs.ready(features)
 
 
-def open_device(device: Device, extra: str = "", use_cache: bool = True) -> Backend:
-    """The device with its queue and its program of every feature, which shows that its platform
-    builds the kernels. That program renders no scene (each scene gets its own, program_for), so
-    it is built without the register-cap trials that a first start on NVIDIA would wait for."""
+def open_device(device: Device, extra: str = "", use_cache: bool = True, mode: str = None) -> Backend:
+    """The device with its queue and its generic program, which shows that its platform builds
+    the kernels and draws the first images of every scene (pathtrace.programs). It is built
+    without the register-cap trials, which only a scene's own program waits for, in the
+    background."""
     context = cl.Context([device.device])
     queue = cl.CommandQueue(context, properties=cl.command_queue_properties.PROFILING_ENABLE)
-    return Backend(device, context, queue, build_program(context, device.device, extra, use_cache, tune=False),
-                   extra, use_cache)
+    build = build_program(context, device.device, extra, use_cache, Features.generic_program(), tune=False)
+    return Backend(device, context, queue, build, extra, use_cache, mode or default_mode())
 
 
 def check_fits(device: cl.Device, buffers: dict, what: str):

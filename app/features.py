@@ -3,6 +3,10 @@ specialises the kernel program to a scene."""
 
 from dataclasses import dataclass
 
+GENERIC = "generic"
+"""The camera, filter and Russian roulette rule of a generic program (Features.generic_program), which
+chooses them at run time."""
+
 
 @dataclass(frozen=True)
 class Features:
@@ -44,6 +48,20 @@ class Features:
     path_queue: int = 0                    # paths going on past this many vertices wait in the
                                            # continuation queue (PATH_QUEUE, kernels/integrator.cl;
                                            # the render setting path_queue); 0: no queue
+    generic: bool = False                  # renders any scene (Features.generic_program)
+
+    @staticmethod
+    def generic_program() -> "Features":
+        """The program that renders every scene pathtrace can load, with every shape, BSDF,
+        texture, light and medium compiled in and the camera, pixel filter, Russian roulette
+        rule and the compiled scene's layout (kernels/scene.cl: LAYOUT_*) read from the launch's
+        RenderParams (GENERIC). Built once per device and driver and cached, it draws a scene's
+        first images while the scene's own program, specialised by these features, builds
+        (pathtrace.programs)."""
+        from pathtrace.textures import TEXTURES
+        return Features(textures=tuple(TEXTURES), masks=True, normal_maps=True, light_tree=True,
+                        media=True, null_surfaces=True, camera=GENERIC, filter=GENERIC,
+                        russian_roulette=GENERIC, stack=48, instance_stack=48, generic=True)
 
     def defines(self) -> tuple:
         return ((() if self.spheres else ("NO_SPHERES",)) + (() if self.triangles else ("NO_TRIANGLES",))
@@ -51,13 +69,25 @@ class Features:
                 + (("ALPHA_MASKS",) if self.masks else ()) + (("NORMAL_MAPS",) if self.normal_maps else ())
                 + (("LIGHT_TREE",) if self.light_tree else ()) + (("MEDIA",) if self.media else ())
                 + (("NULL_SURFACES",) if self.null_surfaces else ())
-                + (f"RUSSIAN_ROULETTE=RR_{self.russian_roulette.upper()}", f"BVH_STACK_SIZE={self.stack}")
+                + (("GENERIC",) if self.generic else (f"RUSSIAN_ROULETTE=RR_{self.russian_roulette.upper()}",))
+                + (f"BVH_STACK_SIZE={self.stack}",)
                 + ((f"FLAT_SPHERES={self.flat[0]}", f"FLAT_TRIANGLES={self.flat[1]}") if self.flat else ())
                 + ((f"LONE_SPHERES={self.lone_spheres}",) if self.lone_spheres else ())
                 + (("INSTANCES", f"INSTANCE_STACK_SIZE={self.instance_stack}") if self.instance_stack else ())
                 + (self.bsdf_defines if self.bsdf_defines is not None else all_bsdf_defines())
                 + ((f"TRAVERSAL_STATS={self.traversal_stats}",) if self.traversal_stats else ())
                 + ((f"PATH_QUEUE={self.path_queue}",) if self.path_queue else ()))
+
+
+def choice_glue(signature: str, call: str, names: tuple, chosen: str, field: str) -> str:
+    """The kernel function `signature` that returns `call` (a format of one kind's name) for
+    the kind `chosen` of `names`, or in a generic program (chosen GENERIC) for the kind whose
+    index in `names` the launch's RenderParams field `field` holds."""
+    if chosen != GENERIC:
+        return f"{signature}\n{{\n    return {call.format(chosen)};\n}}\n"
+    cases = "".join(f"    case {i}: return {call.format(n)};\n" for i, n in enumerate(names[:-1]))
+    return (f"{signature}\n{{\n    switch (p->{field}) {{\n{cases}"
+            f"    default: return {call.format(names[-1])};\n    }}\n}}\n")
 
 
 def all_bsdf_defines() -> tuple:

@@ -6,6 +6,8 @@ gaussian (stddev 0.5; radius 4 stddev, pbrt-v4's 1.5)."""
 import math
 from dataclasses import dataclass
 
+from pathtrace.features import GENERIC, choice_glue
+
 FILTERS = ("box", "tent", "gaussian")
 DEFAULT_RADIUS = {"box": 0.5, "tent": 1.0, "gaussian": None}    # gaussian: 4 stddev
 MAX_RADIUS = 32.0       # pixels: wider is no longer a pixel filter
@@ -42,7 +44,9 @@ class PixelFilter:
 
 
 def kernel_parts(name: str) -> list:
-    """(name, source) of a program's filter: its file and the sample_filter that names it."""
-    glue = ("float2 sample_filter(const RenderParams *p, float2 u, Rng *rng)\n{\n"
-            f"    return sample_{name}_filter(p, u, rng);\n}}\n")
-    return [(f"filters/{name}.cl", None), ("app/filters.py: kernel_parts", glue)]
+    """(name, source) of a program's filter: its file (GENERIC: every one of FILTERS) and the
+    sample_filter that calls it."""
+    names = FILTERS if name == GENERIC else (name,)
+    glue = choice_glue("float2 sample_filter(const RenderParams *p, float2 u, Rng *rng)",
+                       "sample_{}_filter(p, u, rng)", FILTERS, name, "filter_type")
+    return [*((f"filters/{n}.cl", None) for n in names), ("app/filters.py: kernel_parts", glue)]

@@ -2,20 +2,26 @@
 each add_samples() call adds samples per pixel. The command line, the benchmarks and the viewer
 all drive this API; it imports nothing from the window or the GUI."""
 
+import hashlib
+import json
 import time
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pyopencl as cl
 
-from pathtrace.camera import Camera
+from pathtrace.camera import CAMERA_KERNELS, Camera, kernel_name
 from pathtrace.compiled import SCENE_BUFFERS, CompiledScene, compile_scene
-from pathtrace.device import Backend, check_fits
+from pathtrace.cache_files import read_entry, write_entry
+from pathtrace.device import Backend, cache_dir, check_fits
 from pathtrace.errors import UserError, format_bytes
 from pathtrace.environment import Environment
 from pathtrace.memory import available_host_memory
+from pathtrace.occupancy import TUNING_RULE
 from pathtrace.scene import Scene
-from pathtrace.scene.description import PATH_QUEUE_AUTO
+from pathtrace.filters import FILTERS
+from pathtrace.scene.description import PATH_QUEUE_AUTO, RUSSIAN_ROULETTE
 from pathtrace.types import PATH_RECORD, RENDER_PARAMS
 
 RR_DEPTH = 5           # where Russian roulette on throughput starts (Mitsuba 3's default)
@@ -87,12 +93,14 @@ class Renderer:
         """scene: a CompiledScene, or a Scene to compile (on this device, calling progress(fraction)
         as its BVH build goes)."""
         self.backend = backend
-        self.program = None       # the kernels specialised to the scene (_select_program)
+        self.program = None       # the kernels launches run (_select_program)
+        self._awaited = None      # the features of the scene's own program while it builds
         self._buffers = {}
         self.width = self.height = 0
         self._queued_for = None   # whether the queue's buffers are sized for launches that use it
         self.auto_plan = None     # with path_queue "auto": the plan its trials chose (choose_queue_plan)
         self.plan_seconds = {}    # and the seconds of each plan's fastest trial
+        self.plan_cached = False  # whether it is the verdict of earlier trials (_plan_verdict_path)
         self.samples = 0          # samples per pixel accumulated so far (whole passes)
         self.aovs = False         # whether the denoiser's albedo and normal are accumulated too
         self.resets = 0           # how many times the image restarted (pathtrace.launches.Progressive)
@@ -109,7 +117,7 @@ class Renderer:
         self.scene: Scene = self.compiled.scene
         self.camera = self.scene.camera.copy()
         self.settings = self.scene.settings
-        self.auto_plan, self.plan_seconds = None, {}      # "auto" chooses again
+        self.auto_plan, self.plan_seconds, self.plan_cached = None, {}, False  # "auto" chooses again
         self._select_program()
         self._size_queue()
         for name, array in self.compiled.geometry_arrays().items():
@@ -138,19 +146,58 @@ class Renderer:
         self.reset()
 
     def _select_program(self):
-        """The kernels specialised to the scene's shapes and materials (pathtrace.device.Features)."""
-        features = self.compiled.features(self.settings, self.camera)
-        depth, _ = self.queue_plan()
-        program = self.backend.program_for(replace(features, traversal_stats=self.traversal_stats,
-                                                   path_queue=depth))
-        if program is not self.program:
-            self.program = program
-            self.kernels = {False: cl.Kernel(program, "render"), True: cl.Kernel(program, "render_nee")}
-            # the queue's kernels are in the program only where it is built with a queue depth
-            self.continue_kernels = {False: cl.Kernel(program, "continue_paths"),
-                                     True: cl.Kernel(program, "continue_paths_nee")} if depth else None
-            self.add_queued = cl.Kernel(program, "add_queued_paths") if depth else None
-            self.aov_kernel = cl.Kernel(program, "render_aovs")
+        """The kernels for the scene: its own, specialised to its shapes, materials and settings
+        (pathtrace.features.Features), or the backend's generic program, by the backend's mode
+        (pathtrace.programs): with "auto", the generic program until the scene's own is built
+        in the background (add_samples then switches to it, the average going on)."""
+        features = replace(self.compiled.features(self.settings, self.camera),
+                           traversal_stats=self.traversal_stats, path_queue=self.queue_plan()[0])
+        mode = self.backend.mode
+        self._awaited = None
+        if mode == "specialised" or self.traversal_stats:      # the generic program counts rays
+            program = self.backend.program_for(features)
+        elif mode == "generic":
+            program = self.backend.program
+        else:
+            program = self.backend.ready_program(features)
+            if program is None:
+                program, self._awaited = self.backend.program, features
+        self._use_program(program)
+
+    def _use_program(self, program: cl.Program):
+        if program is self.program:
+            return
+        self.program = program
+        self.kernels = {False: cl.Kernel(program, "render"), True: cl.Kernel(program, "render_nee")}
+        # the queue's kernels are in a scene's program built with a queue depth, never in the
+        # generic program, which renders without the queue until the scene's own is built
+        queue = self.queue_plan()[0] and program is not self.backend.program
+        self.continue_kernels = {False: cl.Kernel(program, "continue_paths"),
+                                 True: cl.Kernel(program, "continue_paths_nee")} if queue else None
+        self.add_queued = cl.Kernel(program, "add_queued_paths") if queue else None
+        self.aov_kernel = cl.Kernel(program, "render_aovs")
+
+    @property
+    def uses_generic_program(self) -> bool:
+        """Whether launches run the generic program now (pathtrace.programs)."""
+        return self.program is self.backend.program
+
+    def switch_when_built(self, wait: bool = False) -> bool:
+        """Switches to the scene's own program if it is built (with `wait`, once it is); the
+        average goes on. Whether the scene's own program renders now."""
+        if self._awaited is not None:
+            program = self.backend.program_for(self._awaited) if wait else self.backend.ready_program(self._awaited)
+            if program is not None:
+                self._awaited = None
+                self._use_program(program)
+            elif self.backend.programs.failed(self._awaited):    # said once, by the backend
+                self._awaited = None
+        return not self.uses_generic_program
+
+    @property
+    def building_program(self) -> bool:
+        """Whether the scene's own program is being built, to switch to (switch_when_built)."""
+        return self._awaited is not None
 
     def _size_queue(self):
         """After a change of settings or plan: the continuation queue's buffers sized for whether
@@ -180,6 +227,13 @@ class Renderer:
         if not trials or samples < 2 * len(AUTO_PLANS) * TRIAL_SAMPLES:
             self.use_queue_plan(AUTO_PLANS[0])
             return
+        verdict = self._plan_verdict_path()
+        cached = read_entry(verdict)
+        if cached is not None and tuple(json.loads(bytes(cached))) in AUTO_PLANS:
+            self.plan_seconds = {}
+            self.use_queue_plan(tuple(json.loads(bytes(cached))))
+            self.plan_cached = True
+            return
         seconds = {}
         for _ in range(2):
             for plan in AUTO_PLANS:
@@ -187,6 +241,7 @@ class Renderer:
                     self.use_queue_plan(plan)
                 except UserError:      # its queue does not fit in the device's memory: no candidate
                     continue
+                self.switch_when_built(wait=True)      # trials time the plans' own programs
                 self.reset()
                 self.finish()
                 start = time.perf_counter()
@@ -195,13 +250,26 @@ class Renderer:
                 seconds[plan] = min(seconds.get(plan, float("inf")), time.perf_counter() - start)
         self.plan_seconds = seconds
         self.use_queue_plan(min(seconds, key=seconds.get))
+        write_entry(verdict, json.dumps(self.auto_plan).encode())
         self.reset()
+
+    def _plan_verdict_path(self) -> Path:
+        """Where the trials' verdict for this scene's program, image size and device is kept, so
+        that they run once, not before every render (pathtrace.cache_files)."""
+        d = self.backend.device.device
+        features = replace(self.compiled.features(self.settings, self.camera), path_queue=0)
+        key = hashlib.sha256("\0".join(map(str, (
+            features, self.width, self.height, AUTO_PLANS, TRIAL_SAMPLES, TUNING_RULE,
+            d.platform.name, d.platform.version, d.name, d.version, d.driver_version))).encode()).hexdigest()[:32]
+        return cache_dir() / "queue-plans" / f"{key}.bin"
 
     def describe_queue_plan(self) -> str:
         """The plan path_queue "auto" chose (choose_queue_plan), in words, with each plan's fastest
         trial where it ran trials."""
         trials = ", ".join(f"{PLAN_NAMES[p]} {s:.4f} s" for p, s in self.plan_seconds.items())
         words = PLAN_NAMES[self.auto_plan]
+        if self.plan_cached:
+            return f"{words} (as earlier trials chose)"
         return f"{words} (trials of {TRIAL_SAMPLES} spp: {trials})" if trials else words
 
     def use_queue_plan(self, plan: tuple):
@@ -233,7 +301,7 @@ class Renderer:
         out = cl.Buffer(self.backend.context, cl.mem_flags.WRITE_ONLY, 8)
         kernel = cl.Kernel(self.program, "pick")
         kernel(self.backend.queue, (1,), None, *self.scene_args(),
-               np.int32(self.compiled.num_spheres), np.append(np.float32(origin), 0).astype(np.float32),
+               np.int32(self.compiled.num_spheres), np.int32(self.compiled.layout), np.append(np.float32(origin), 0).astype(np.float32),
                np.append(np.float32(direction), 0).astype(np.float32), out)
         hit = np.zeros(2, np.int32)
         cl.enqueue_copy(self.backend.queue, hit, out)
@@ -261,7 +329,7 @@ class Renderer:
 
     def set_settings(self, **changes):
         if "path_queue" in changes:
-            self.auto_plan, self.plan_seconds = None, {}  # "auto" chooses again
+            self.auto_plan, self.plan_seconds, self.plan_cached = None, {}, False  # "auto" chooses again
         self.settings = replace(self.settings, **changes)
         if self.settings.light_sampler != self.compiled.light_sampler:
             self.compiled.light_sampler = self.settings.light_sampler
@@ -350,6 +418,10 @@ class Renderer:
         p["num_spheres"] = self.compiled.num_spheres
         p["rr_depth"] = RR_DEPTH
         p["camera_medium"] = self.scene.camera_medium
+        p["camera_type"] = CAMERA_KERNELS.index(kernel_name(self.camera))
+        p["filter_type"] = FILTERS.index(self.settings.filter.name)
+        p["rr_rule"] = RUSSIAN_ROULETTE.index(self.settings.russian_roulette)
+        p["layout"] = self.compiled.layout
         return p
 
     def add_samples(self, count: int = 1, start: int = None, rows: tuple = None) -> list:
@@ -363,6 +435,7 @@ class Renderer:
         holds a window up (pathtrace.launches.Progressive). Bands go top to bottom; `samples` counts
         whole passes, so it grows with the band that ends at the last row. A pass split into
         bands adds the very samples one launch would."""
+        self.switch_when_built()
         b = self._buffers
         first, end = rows if rows is not None else (0, self.height)
         start = self.samples if start is None else start
@@ -376,7 +449,7 @@ class Renderer:
         capacity = np.int32(self.queue_capacity(self.width, self.height))
         # with the continuation queue, a few samples per launch (queue_samples), for which the
         # launch's pixels have room in `results` (kernels/integrator.cl: render_pixel)
-        queued = self.queue_plan()[1]
+        queued = self.queue_plan()[1] and self.continue_kernels is not None
         step = self.queue_samples(self.width, self.height) if queued else MAX_LAUNCH_SAMPLES
         for offset in range(0, count, step):
             launch = params.copy()

@@ -80,6 +80,10 @@ RENDER_PARAMS = np.dtype([
     ("row_start", np.int32),        # rows [row_start, row_end) of the image
     ("row_end", np.int32),
     ("camera_medium", np.int32),    # the camera's medium (a row of the media table), or -1
+    ("camera_type", np.int32),      # a GENERIC program's run-time choices (kernels/types.h)
+    ("filter_type", np.int32),
+    ("rr_rule", np.int32),
+    ("layout", np.int32),           # the compiled scene's LAYOUT_* bits (kernels/scene.cl)
 ])
 
 LIGHT = np.dtype([

@@ -88,7 +88,7 @@ void trace_aovs(const SceneData *sc, const RenderParams *p, float3 o, float3 d, 
 kernel void render_aovs(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *albedo_sum,
                         global float4 *normal_sum)
 {
-    SceneData sc = SCENE_DATA(p.num_spheres);
+    SceneData sc = SCENE_DATA(p.num_spheres, p.layout);
     int x = get_global_id(0), y = p.row_start + get_global_id(1);
     if (x >= p.width || y >= p.row_end)
         return;

@@ -35,6 +35,13 @@ typedef int PrimId;
 #define PRIM_ID_PAIR(id) ((int2)((id), -1))
 #define PRIM_ID_OF_PAIR(v) ((v).x)
 #endif
+/* Whether a hit's primitive is an instance's: always in a scene's program with INSTANCES, whose
+ * tree holds instances alone; in a GENERIC program, where the scene has them (walk_world). */
+#ifdef GENERIC
+#define INSTANCED(instance) ((instance) >= 0)
+#else
+#define INSTANCED(instance) 1
+#endif
 
 #define BOX_EXIT_SCALE 1.0000003576f
 
@@ -260,7 +267,7 @@ Hit walk_tree(const SceneData *sc, int root, float3 o, float3 d, PrimId self, in
 /* The tree over the instances, whose leaves' instances the ray enters in their objects' space
  * (d is not normalised there, so that t stays the world's). Objects hold no instances, so the
  * two walks have stacks of their own (INSTANCE_STACK_SIZE for this one). */
-Hit trace_ray(const SceneData *sc, float3 o, float3 d, float t_max, PrimId self, const int any_hit)
+Hit walk_instances(const SceneData *sc, float3 o, float3 d, float t_max, PrimId self, const int any_hit)
 {
     Hit hit = {t_max, -1, 0.0f, 0.0f, -1};
     float3 inv_d = 1.0f / d;
@@ -290,20 +297,43 @@ Hit trace_ray(const SceneData *sc, float3 o, float3 d, float t_max, PrimId self,
     } while (node >= 0);
     return hit;
 }
-#else
-/* With LONE_SPHERES, a scene's few spheres (app/features.py: LONE_MAX) are not in the tree, which
- * holds its triangles alone: every ray tests them first, and their nearest hit bounds the walk. */
-Hit trace_ray(const SceneData *sc, float3 o, float3 d, float t_max, PrimId self, const int any_hit)
+#endif
+
+/* A one-level tree over the world's primitives. With LONE_SPHERES, a scene's few spheres
+ * (app/features.py: LONE_MAX) are not in the tree, which holds its triangles alone: every ray
+ * tests them first, and their nearest hit bounds the walk. Its hits are drawn by no instance
+ * (-1), which a GENERIC program, built with INSTANCES, tells apart (surface_at). */
+Hit walk_world(const SceneData *sc, float3 o, float3 d, float t_max, PrimId self, const int any_hit)
 {
     Hit hit = {t_max, -1, 0.0f, 0.0f};
-#ifdef LONE_SPHERES
-    intersect_spheres(sc, 0, LONE_SPHERES, o, d, 0, &hit);
-    if (any_hit && hit.prim >= 0)
-        return hit;
+    SET_INSTANCE(&hit, -1);
+#ifdef GENERIC
+    int lone = sc->layout & LAYOUT_LONE_SPHERES ? sc->num_spheres : 0;
+#elif defined(LONE_SPHERES)
+    const int lone = LONE_SPHERES;
+#else
+    const int lone = 0;
 #endif
-    return walk_tree(sc, 0, o, d, self, 0, any_hit, hit);
+    if (lone) {
+        intersect_spheres(sc, 0, lone, o, d, -1, &hit);
+        if (any_hit && hit.prim >= 0)
+            return hit;
+    }
+    return walk_tree(sc, 0, o, d, self, -1, any_hit, hit);
 }
+
+Hit trace_ray(const SceneData *sc, float3 o, float3 d, float t_max, PrimId self, const int any_hit)
+{
+#ifdef GENERIC
+    if (sc->layout & LAYOUT_INSTANCES)
+        return walk_instances(sc, o, d, t_max, self, any_hit);
+    return walk_world(sc, o, d, t_max, self, any_hit);
+#elif defined(INSTANCES)
+    return walk_instances(sc, o, d, t_max, self, any_hit);
+#else
+    return walk_world(sc, o, d, t_max, self, any_hit);
 #endif
+}
 #endif
 
 /* The nearest hit along o + t d, t in (0, t_max), skipping the surface `self` (the one the ray
@@ -379,9 +409,11 @@ Surface surface_at(const SceneData *sc, const Hit *hit, float3 o, float3 d)
 #endif
 #ifdef INSTANCES
     s.instance = hit->instance;
-    const global Instance *inst = &sc->instances[hit->instance];
-    o = transform_point(inst->to_object, o);
-    d = transform_vector(inst->to_object, d);
+    const global Instance *inst = &sc->instances[max(hit->instance, 0)];
+    if (INSTANCED(hit->instance)) {
+        o = transform_point(inst->to_object, o);
+        d = transform_vector(inst->to_object, d);
+    }
 #endif
 #ifndef NO_TRIANGLES
     if (hit->prim >= sc->num_spheres) {
@@ -397,10 +429,12 @@ Surface surface_at(const SceneData *sc, const Hit *hit, float3 o, float3 d)
 #endif
     }
 #ifdef INSTANCES
-    error = transform_error(inst->to_world, s.p, error);
-    s.p = transform_point(inst->to_world, s.p);
-    s.ng = transform_normal(inst->to_object, s.ng);
-    s.ns = transform_normal(inst->to_object, s.ns);
+    if (INSTANCED(hit->instance)) {
+        error = transform_error(inst->to_world, s.p, error);
+        s.p = transform_point(inst->to_world, s.p);
+        s.ng = transform_normal(inst->to_object, s.ng);
+        s.ns = transform_normal(inst->to_object, s.ns);
+    }
 #endif
     s.offset = error_offset(s.ng, error);
     return s;

@@ -10,6 +10,8 @@
 void instanced_derivatives(const SceneData *sc, const Surface *s, float3 *dpdu, float3 *dpdv)
 {
 #ifdef INSTANCES
+    if (!INSTANCED(s->instance))
+        return;
     const global float4 *m = sc->instances[s->instance].to_world;
     *dpdu = transform_vector(m, *dpdu);
     *dpdv = transform_vector(m, *dpdv);

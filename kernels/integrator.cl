@@ -21,6 +21,9 @@
                               (Material.continuation), folded into the lobe choice */
 #define RR_THROUGHPUT 2    /* from rr_depth on, go on with probability min(max throughput, 0.95)
                               (Mitsuba 3's; pbrt-v4 has no cap) */
+#ifdef GENERIC
+#define RUSSIAN_ROULETTE (p->rr_rule)   /* a GENERIC program's choice at run time */
+#endif
 
 /* The fraction of light sample ls's radiance that reaches o, a ray leaving surface `self` (or
  * NO_PRIM) in `medium` (-1: none): 1 or 0 by whether a shadow ray from o towards the point on the
@@ -457,7 +460,7 @@ void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum
                      global float4 *queue, volatile global int *counters, int queue_capacity,     \
                      global float4 *results)                                                     \
     {                                                                                            \
-        SceneData sc = SCENE_DATA(p.num_spheres);                                                \
+        SceneData sc = SCENE_DATA(p.num_spheres, p.layout);                                      \
         COUNT_WORK_INTO(sc);                                                                     \
         PathQueue q = {queue, counters, queue_capacity, FIRST_QUEUED_VERTEX};                    \
         render_pixel(&sc, &p, sum, sum_sq, sum_c, sum_sq_c, q, results, nee);                    \
@@ -493,7 +496,7 @@ void continue_path(const SceneData *sc, const RenderParams *p, const global floa
                      global float4 *next, volatile global int *counters, int pass,                \
                      int queue_capacity, int steps, global float4 *results)                      \
     {                                                                                            \
-        SceneData sc = SCENE_DATA(p.num_spheres);                                                \
+        SceneData sc = SCENE_DATA(p.num_spheres, p.layout);                                      \
         COUNT_WORK_INTO(sc);                                                                     \
         PathQueue q = {next, counters + pass + 1, queue_capacity, 0};                            \
         if (get_global_id(0) < min(counters[pass], queue_capacity))                              \
@@ -543,9 +546,9 @@ CONTINUE_KERNEL(continue_paths_nee, 1)
 
 /* The nearest primitive along one ray, or -1, and its distance (the viewer's picking and
  * focusing): hit[0] the primitive, hit[1] the distance's float bits. */
-kernel void pick(SCENE_KERNEL_ARGS, int num_spheres, float4 o, float4 d, global int *hit)
+kernel void pick(SCENE_KERNEL_ARGS, int num_spheres, int layout, float4 o, float4 d, global int *hit)
 {
-    SceneData sc = SCENE_DATA(num_spheres);
+    SceneData sc = SCENE_DATA(num_spheres, layout);
     Hit h = intersect_scene(&sc, o.xyz, normalize(d.xyz), INFINITY, NO_PRIM);
     hit[0] = h.prim;
     hit[1] = as_int(h.t);

@@ -26,6 +26,7 @@ typedef struct {
                                                (types.h: NO_MEDIUM_CHANGE) */
     const global Instance *instances;       /* a two-level BVH's instances (INSTANCES) */
     int num_spheres;
+    int layout;                             /* LAYOUT_* bits, which a GENERIC program reads */
 #ifdef TRAVERSAL_STATS
     int *work;                              /* the render kernels' count of traversal work:
                                                nodes visited (TRAVERSAL_STATS 1) or primitives
@@ -52,7 +53,20 @@ typedef struct {
     const global float *env_conditional, const global Medium *media, const global int *prim_media, \
     const global Instance *instances
 
-#define SCENE_DATA(num_spheres)                                                                   \
+#define SCENE_DATA(num_spheres, layout)                                                           \
     {nodes, spheres, triangles, normals, uvs, prim_material, materials, bindings, textures,       \
      texels, env, lights, light_pick, light_leaf, light_nodes, env_marginal, env_conditional,      \
-     media, prim_media, instances, num_spheres}
+     media, prim_media, instances, num_spheres, layout}
+
+/* How a compiled scene is laid out (app/compiled.py: CompiledScene.layout). A scene's own program
+ * is built for its layout (LONE_SPHERES, INSTANCES, MEDIA); a GENERIC program, which renders any
+ * scene, reads these bits instead. */
+#define LAYOUT_LONE_SPHERES 1   /* the spheres are outside the BVH, which holds the triangles */
+#define LAYOUT_INSTANCES 2      /* the BVH is a tree of instances (kernels/bvh.cl) */
+#define LAYOUT_MEDIA 4          /* prim_media has an entry per primitive */
+#define LAYOUT_LIGHT_TREE 8     /* lights are chosen through a light tree (kernels/light_tree.cl) */
+#ifdef GENERIC
+#define HAS_LIGHT_TREE(sc) ((sc)->layout & LAYOUT_LIGHT_TREE)
+#else
+#define HAS_LIGHT_TREE(sc) 1    /* LIGHT_TREE is a scene's program's only where it has a tree */
+#endif

@@ -38,7 +38,7 @@ float shadow_ray(float3 o, const LightSample *ls, float3 *d)
 
 kernel void record_rays(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *rays)
 {
-    SceneData sc = SCENE_DATA(p.num_spheres);
+    SceneData sc = SCENE_DATA(p.num_spheres, p.layout);
     int x = get_global_id(0), y = get_global_id(1);
     if (x >= p.width || y >= p.height)
         return;
@@ -84,7 +84,7 @@ kernel void record_rays(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *
 kernel void trace_rays(SCENE_KERNEL_ARGS, const RenderParams p, const global float4 *rays, int which,
                        global int *hits)
 {
-    SceneData sc = SCENE_DATA(p.num_spheres);
+    SceneData sc = SCENE_DATA(p.num_spheres, p.layout);
     int x = get_global_id(0), y = get_global_id(1);
     if (x >= p.width || y >= p.height)
         return;

@@ -125,6 +125,12 @@ typedef struct {
     int row_start;       /* the launch covers image rows [row_start, row_end): a band of a pass */
     int row_end;
     int camera_medium;   /* the medium the camera is in (a row of the media table), or -1 */
+    /* What a GENERIC program (app/features.py: Features.generic_program) chooses at run time, and a
+       scene's program by build options: */
+    int camera_type;     /* the camera's kernel (app/camera.py: CAMERA_KERNELS index) */
+    int filter_type;     /* the pixel filter (app/filters.py: FILTERS index) */
+    int rr_rule;         /* Russian roulette's rule (RR_OFF, RR_ALBEDO, RR_THROUGHPUT) */
+    int layout;          /* the compiled scene's LAYOUT_* bits (kernels/scene.cl) */
 } RenderParams;
 
 /* One entry of the light table: a light of type `type` (the LIGHT_* tags of

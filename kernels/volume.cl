@@ -19,6 +19,10 @@
  * Mitsuba 3's target_medium), or `current` where the primitive bounds no medium. */
 int medium_after(const SceneData *sc, const Surface *s, float3 w, int current)
 {
+#ifdef GENERIC
+    if (!(sc->layout & LAYOUT_MEDIA))
+        return current;     /* a scene without media has no entry per primitive */
+#endif
     int media = sc->prim_media[s->prim];
     if (media == NO_MEDIUM_CHANGE)
         return current;

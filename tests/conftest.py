@@ -17,6 +17,9 @@ ROOT = Path(__file__).resolve().parent.parent
 # The BVH cache (pathtrace.bvh_cache) is off in the tests, theirs and their commands': every
 # scene is built, and nothing is written to the user's cache; tests/test_bvh_cache.py turns it on.
 os.environ.setdefault("PATHTRACE_BVH_CACHE", "0")
+# Renders wait for their scene's own program, so that each is repeatable (pathtrace.programs);
+# tests/test_programs.py renders with the generic program and switches between the two.
+os.environ.setdefault("PATHTRACE_PROGRAM", "specialised")
 
 
 @pytest.fixture(scope="session")

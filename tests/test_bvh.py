@@ -18,7 +18,7 @@ kernel void nearest(SCENE_KERNEL_ARGS, int num_spheres, int num_triangles,
                     global const float4 *o, global const float4 *d,
                     global float *t_bvh, global int *i_bvh, global float *t_all, global int *i_all)
 {
-    SceneData sc = SCENE_DATA(num_spheres);
+    SceneData sc = SCENE_DATA(num_spheres, 0);
     int k = get_global_id(0);
     float3 org = o[k].xyz, dir = normalize(d[k].xyz);
     Hit h = intersect_scene(&sc, org, dir, INFINITY, -1);
@@ -32,7 +32,7 @@ kernel void nearest(SCENE_KERNEL_ARGS, int num_spheres, int num_triangles,
 kernel void blocked(SCENE_KERNEL_ARGS, int num_spheres, global const float4 *o, global const float4 *d,
                     global int *out)
 {
-    SceneData sc = SCENE_DATA(num_spheres);
+    SceneData sc = SCENE_DATA(num_spheres, 0);
     int k = get_global_id(0);
     out[k] = occluded(&sc, o[k].xyz, normalize(d[k].xyz), d[k].w, -1);
 }

@@ -73,3 +73,43 @@ def test_pocl_keeps_the_kernels_in_its_own_cache_alone(backend, tmp_path, monkey
         r = build_cached(backend.context, device, SOURCE, [])
         assert not r.cached or not keeps_own_cache(device)
     assert bool(list(tmp_path.glob("*.bin"))) != keeps_own_cache(device)
+
+
+def only_entry(cache):
+    """The one-line kernel's cache entry: on a device that keeps no cache of its own, choose_device
+    caches the generic program too, whose entry is larger."""
+    return min(cache.glob("*.bin"), key=lambda p: p.stat().st_size)
+
+
+def test_a_damaged_cache_entry_is_built_again_and_replaced(tmp_path):
+    assert build(tmp_path).stdout.strip() == "built"
+    entry = only_entry(tmp_path)
+    data = bytearray(entry.read_bytes())
+    data[len(data) // 2] ^= 0xFF                 # a flipped bit: its digest no longer matches
+    entry.write_bytes(bytes(data))
+    assert build(tmp_path).stdout.strip() == "built"
+    assert build(tmp_path).stdout.strip() == "cached"
+
+
+def test_a_foreign_binary_in_a_cache_entry_is_built_again(tmp_path):
+    """A whole entry whose binary the driver refuses (another driver's, or garbage): rebuilt."""
+    from pathtrace.cache_files import write_entry
+    assert build(tmp_path).stdout.strip() == "built"
+    entry = only_entry(tmp_path)
+    write_entry(entry, b"\n", b"\x7fELF not a binary this driver reads" * 8)
+    assert build(tmp_path).stdout.strip() == "built"
+    assert build(tmp_path).stdout.strip() == "cached"
+
+
+def test_two_processes_building_the_same_program_leave_one_whole_entry(tmp_path):
+    """Each writes a temporary file of its own and renames it over the entry: whichever rename
+    comes last, the entry is whole, and no temporary file stays."""
+    from pathtrace.device import _read_cached
+    env = {**os.environ, "PATHTRACE_CACHE": str(tmp_path)}
+    runs = [subprocess.Popen([sys.executable, "-c", BUILD], env=env, stdout=subprocess.PIPE, text=True)
+            for _ in range(2)]
+    outputs = [r.communicate(timeout=300)[0].strip() for r in runs]
+    assert all(r.returncode == 0 for r in runs) and set(outputs) <= {"built", "cached"}
+    assert all(_read_cached(p) is not None for p in tmp_path.glob("*.bin"))
+    assert not list(tmp_path.glob("*.tmp*"))
+    assert build(tmp_path).stdout.strip() == "cached"

@@ -23,7 +23,7 @@ SOURCE = """
 kernel void nearest(SCENE_KERNEL_ARGS, int num_spheres, global const float4 *o, global const float4 *d,
                     global float4 *out_p, global float4 *out_n)
 {
-    SceneData sc = SCENE_DATA(num_spheres);
+    SceneData sc = SCENE_DATA(num_spheres, 0);
     int k = get_global_id(0);
     float3 dir = normalize(d[k].xyz);
     Hit h = intersect_scene(&sc, o[k].xyz, dir, INFINITY, NO_PRIM);
@@ -40,7 +40,7 @@ kernel void nearest(SCENE_KERNEL_ARGS, int num_spheres, global const float4 *o, 
 /* from below the first surface up, then on from it, leaving it (SURFACE_ID) */
 kernel void twice(SCENE_KERNEL_ARGS, int num_spheres, float4 o, global float4 *out)
 {
-    SceneData sc = SCENE_DATA(num_spheres);
+    SceneData sc = SCENE_DATA(num_spheres, 0);
     float3 up = (float3)(0.0f, 1.0f, 0.0f);
     Hit h = intersect_scene(&sc, o.xyz, up, INFINITY, NO_PRIM);
     Surface s = surface_at(&sc, &h, o.xyz, up);

@@ -341,7 +341,7 @@ def lamp_field(n=20_000, size=60.0, seed=5):
 TREE_SOURCE = """
 kernel void tree_picks(SCENE_KERNEL_ARGS, int num_spheres, float4 x, float4 n, global int *out)
 {
-    SceneData sc = SCENE_DATA(num_spheres);
+    SceneData sc = SCENE_DATA(num_spheres, 0);
     int i = get_global_id(0);
     Rng rng = make_rng(i, 1, 2, 3);
     float pick = 1.0f;
@@ -350,7 +350,7 @@ kernel void tree_picks(SCENE_KERNEL_ARGS, int num_spheres, float4 x, float4 n, g
 kernel void tree_probabilities(SCENE_KERNEL_ARGS, int num_spheres, float4 x, float4 n, int first,
                                global float *out)
 {
-    SceneData sc = SCENE_DATA(num_spheres);
+    SceneData sc = SCENE_DATA(num_spheres, 0);
     int i = get_global_id(0);
     out[i] = tree_pick_probability(&sc, sc.lights[first + i].alias, x.xyz, n.xyz);
 }

@@ -128,10 +128,10 @@ def test_bands_of_rows_render_the_same(backend):
     assert_same_render(plain, (r.read_sum(), r._read("sum_sq"), r))
 
 
-def test_auto_trials_each_plan_and_keeps_the_fastest(backend, monkeypatch):
+def test_auto_trials_each_plan_and_keeps_the_fastest(backend, monkeypatch, tmp_path):
     """path_queue "auto" times a trial render of each launch plan, twice, and keeps the one whose
     trial was fastest (on a clock that charges each plan its own cost per sample), then renders
-    from an empty image."""
+    from an empty image. The verdict is kept: a second render of the scene runs no trials."""
     cost = {(0, False): 3.0, (1, True): 1.0, (1, False): 2.0}
     clock = [0.0]
     add_samples = Renderer.add_samples
@@ -145,6 +145,7 @@ def test_auto_trials_each_plan_and_keeps_the_fastest(backend, monkeypatch):
     scene = load_scene("cornell-box").with_settings(max_depth=6, russian_roulette="off",
                                                    path_queue=renderer_module.PATH_QUEUE_AUTO)
     for cheapest in ((1, True), (1, False), (0, False)):
+        monkeypatch.setenv("PATHTRACE_CACHE", str(tmp_path / str(cheapest)))
         cost[cheapest] = 0.5
         r = Renderer(backend, scene, *SIZE)
         r.choose_queue_plan(1000, trials=True)
@@ -152,10 +153,15 @@ def test_auto_trials_each_plan_and_keeps_the_fastest(backend, monkeypatch):
         assert r.plan_seconds == {plan: c * renderer_module.TRIAL_SAMPLES for plan, c in cost.items()}
         assert r.samples == 0 and not r.read_sum().any()
         assert "trials of 16 spp" in r.describe_queue_plan()
+        before = clock[0]
+        again = Renderer(backend, scene, *SIZE)
+        again.choose_queue_plan(1000, trials=True)
+        assert again.auto_plan == cheapest and clock[0] == before and again.plan_cached
+        assert again.describe_queue_plan().endswith("(as earlier trials chose)")
         cost[cheapest] = 4.0
 
 
-def test_auto_leaves_out_a_queue_that_does_not_fit(backend, monkeypatch):
+def test_auto_leaves_out_a_queue_that_does_not_fit(backend, monkeypatch, tmp_path):
     """Where the queue's buffers would not fit in the device's memory, "auto" chooses among the
     other plans rather than refusing a render that fits without them."""
     check_fits = renderer_module.check_fits
@@ -166,6 +172,7 @@ def test_auto_leaves_out_a_queue_that_does_not_fit(backend, monkeypatch):
         check_fits(device, buffers, what)
 
     monkeypatch.setattr(renderer_module, "check_fits", queue_never_fits)
+    monkeypatch.setenv("PATHTRACE_CACHE", str(tmp_path))       # no verdict of earlier trials
     scene = load_scene("cornell-box").with_settings(max_depth=6, russian_roulette="off",
                                                    path_queue=renderer_module.PATH_QUEUE_AUTO)
     r = Renderer(backend, scene, *SIZE)

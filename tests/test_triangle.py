@@ -40,7 +40,7 @@ kernel void hit_triangle(global const Triangle *tri, global const float4 *o, glo
 kernel void trace(SCENE_KERNEL_ARGS, int num_spheres, global const float4 *o, global const float4 *d,
                   global float4 *out)
 {
-    SceneData sc = SCENE_DATA(num_spheres);
+    SceneData sc = SCENE_DATA(num_spheres, 0);
     int i = get_global_id(0);
     Hit h = intersect_scene(&sc, o[i].xyz, normalize(d[i].xyz), INFINITY, -1);
     out[i] = (float4)(h.t, as_float(h.prim), 0.0f, 0.0f);
@@ -51,7 +51,7 @@ kernel void trace(SCENE_KERNEL_ARGS, int num_spheres, global const float4 *o, gl
 kernel void respawn(SCENE_KERNEL_ARGS, int num_spheres, global const float4 *o, global const float4 *d,
                     global const float4 *w, float side, global float4 *out)
 {
-    SceneData sc = SCENE_DATA(num_spheres);
+    SceneData sc = SCENE_DATA(num_spheres, 0);
     int i = get_global_id(0);
     float3 dir = normalize(d[i].xyz);
     Hit h = intersect_scene(&sc, o[i].xyz, dir, INFINITY, -1);

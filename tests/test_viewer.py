@@ -302,7 +302,7 @@ def test_opening_a_scene_says_what_it_is_busy_with(viewer, monkeypatch):
         notices.append((text, fraction))
         if text == "building the BVH of spheres8k" and fraction == 0.5:
             drawn["bvh"].set()
-        if text.startswith("compiling the kernels for spheres8k on "):
+        if text.startswith("preparing the kernels for spheres8k on "):
             drawn["kernels"].set()
         show(text, fraction)
     monkeypatch.setattr(viewer, "show_progress", shown)
@@ -322,7 +322,7 @@ def test_opening_a_scene_says_what_it_is_busy_with(viewer, monkeypatch):
     viewer.load_scene("spheres8k")
     assert ("building the BVH of spheres8k", 0.5) in notices
     assert titles[-1] == "pathtrace - spheres8k" and viewer.renderer.scene.name == "spheres8k"
-    assert any(t.startswith("pathtrace - compiling the kernels for spheres8k on ") for t in titles)
+    assert any(t.startswith("pathtrace - preparing the kernels for spheres8k on ") for t in titles)
     monkeypatch.undo()
     if viewer.texture is not None:
         viewer.texture.release()

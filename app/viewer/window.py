@@ -351,7 +351,7 @@ class Viewer:
         """In the worker thread: the scene compiled (its BVH build's progress shown) and given to
         `renderer` (or a new one), the kernels compiled for it (said while they are)."""
         compiled = compile_scene(scene, self.backend.queue, self._build_progress(scene.name))
-        self._status = (f"compiling the kernels for {scene.name} on {self.backend.device.name}", None)
+        self._status = (f"preparing the kernels for {scene.name} on {self.backend.device.name}", None)
         if renderer is None:
             return Renderer(self.backend, compiled)
         renderer.set_scene(compiled)
@@ -491,6 +491,9 @@ class Viewer:
         draw_panel(self)
         if self.texture is None:
             draw_notice(self, f"rendering the first pass of {self.renderer.scene.name}")
+        elif self.renderer.building_program:
+            draw_notice(self, f"building the kernels of {self.renderer.scene.name}; generic kernels render "
+                              f"meanwhile", bottom=True)
         else:
             self.notice = ""
         if self.show_help:

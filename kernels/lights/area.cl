@@ -13,7 +13,8 @@ float pdf_light(const SceneData *sc, int prim, float3 x, float3 n, float3 y)
 {
     float pick = sc->light_pick[prim];
 #ifdef LIGHT_TREE
-    pick *= tree_pick_probability(sc, sc->light_leaf[prim], x, n);
+    if (HAS_LIGHT_TREE(sc))
+        pick *= tree_pick_probability(sc, sc->light_leaf[prim], x, n);
 #endif
 #ifndef NO_TRIANGLES
     if (prim >= sc->num_spheres)

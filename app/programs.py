@@ -1,0 +1,136 @@
+"""The programs a device renders with: one generic program that renders any scene, and each
+scene's own program, specialised to its features (app/features.py), built in the background.
+
+A specialised program is the fastest a scene can have (on a GPU every branch a kernel could take
+costs registers, hence occupancy), but building it can take seconds on a GPU's driver, longer
+with the register-cap trials of app/occupancy.py, and every new mix of materials, textures and
+lights is a new program. The generic program (Features.generic_program) is built once per
+device, driver and pathtrace version and cached, so a scene's first images never wait for a
+build: they come from the generic program while the scene's own builds in a thread (the
+drivers' builds release Python's lock), and launches switch to it once it is there.
+
+Both programs draw the same estimator, each sample an unbiased estimate of the pixel, so the
+average goes on across the switch (Renderer keeps its accumulation). Which samples a render
+draws then depends on when the build ended: PROGRAM_MODES says how to ask for repeatable
+renders."""
+
+import atexit
+import os
+import threading
+import time
+from concurrent.futures import Future
+
+import pyopencl as cl
+
+from pathtrace.errors import UserError, warn
+from pathtrace.features import Features
+
+PROGRAM_MODES = ("auto", "specialised", "generic")
+"""auto: the generic program until the scene's own is built (in the background); specialised:
+wait for the scene's own program (repeatable renders, the tests' default); generic: never build
+another (the generic program's speed, measured by `pathtrace bench`)."""
+PROGRAM_ENV = "PATHTRACE_PROGRAM"    # the mode where no --program is given
+BUILD_THREAD = "pathtrace-build"
+
+
+def builds_under_way() -> bool:
+    """Whether a program is being built in the background in this process."""
+    return any(t.name == BUILD_THREAD and t.is_alive() for t in threading.enumerate())
+
+
+@atexit.register
+def _finish_builds():
+    """A script or notebook that ends while a program builds waits for the build (which its
+    cache then keeps): the interpreter's teardown under a build in NVIDIA's driver crashed the
+    process. The commands leave without waiting (pathtrace.console)."""
+    for thread in threading.enumerate():
+        if thread.name == BUILD_THREAD:
+            thread.join()
+
+
+def default_mode() -> str:
+    mode = os.environ.get(PROGRAM_ENV, "auto")
+    if mode not in PROGRAM_MODES:
+        raise UserError(f"{PROGRAM_ENV}: must be one of {', '.join(PROGRAM_MODES)}, got {mode!r}")
+    return mode
+
+
+class Programs:
+    """The specialised programs of one device: built once each, in a background thread, on
+    request. `build(features)` builds one (pathtrace.device.build_program, bound to the device)."""
+
+    def __init__(self, build, name: str):
+        self._build = build
+        self._name = name
+        self._lock = threading.Lock()
+        self._futures: dict[Features, Future] = {}
+        self._reported = set()
+
+    def get(self, features: Features) -> cl.Program:
+        """The program for `features`, built now if no build of it is under way or done."""
+        return self._future(features).result()
+
+    def ready(self, features: Features):
+        """The program for `features` if it is built, else None, its build started in the
+        background. A build that failed leaves None and says why once."""
+        future = self._future(features, background=True)
+        if not future.done():
+            return None
+        error = future.exception()
+        if error is None:
+            return future.result()
+        if features not in self._reported:
+            self._reported.add(features)
+            warn(f"{self._name}: the scene's own kernels did not build "
+                 f"({str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__}); "
+                 f"rendering on with the generic kernels")
+        return None
+
+    def failed(self, features: Features) -> bool:
+        """Whether the build of the program for `features` ended in an error."""
+        future = self._futures.get(features)
+        return future is not None and future.done() and future.exception() is not None
+
+    def _future(self, features: Features, background: bool = False) -> Future:
+        with self._lock:
+            future = self._futures.get(features)
+            if future is not None:
+                return future
+            future = self._futures[features] = Future()
+            future.set_running_or_notify_cancel()
+        if background:
+            # a daemon thread: a process that ends before the build does neither waits for it
+            # nor leaves a torn cache entry (app/cache_files.py writes whole files)
+            thread = threading.Thread(target=self._run, args=(features, future), daemon=True,
+                                      name=BUILD_THREAD)
+            thread.start()
+        else:
+            self._run(features, future)
+            future.result()
+        return future
+
+    def _run(self, features: Features, future: Future):
+        try:
+            future.set_result(self._build(features))
+        except Exception as e:
+            future.set_exception(e)
+
+
+def warm_up(backend) -> float:
+    """Renders one sample of a small built-in scene with `backend`'s generic program, with and
+    without next-event estimation, so that a driver that compiles kernels at their first launch
+    (PoCL, for each work-group size) has them in its cache before a user's first image; the
+    seconds it took."""
+    from pathtrace.renderer import Renderer
+    from pathtrace.scene import load_scene
+    generic = type(backend)(backend.device, backend.context, backend.queue, backend.build, backend.extra,
+                            backend.use_cache, "generic")
+    start = time.perf_counter()
+    scene = load_scene("simple")
+    for nee in (True, False):
+        r = Renderer(generic, scene.with_settings(nee=nee), 8, 8)
+        r.set_aovs(True)
+        r.add_samples(1)
+        r.finish()
+    return time.perf_counter() - start
+

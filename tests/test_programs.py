@@ -1,0 +1,175 @@
+"""The generic program and the switch to a scene's own (app/programs.py): the generic program
+renders every test scene as the scene's own program does, within noise, whatever the camera,
+filter, Russian roulette rule and scene layout it reads at run time; a renderer switches to the
+scene's program mid-accumulation once it is built, the average going on; a build that fails
+leaves the generic program rendering, said in one line."""
+
+import threading
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from pathtrace.device import Backend
+from pathtrace.filters import PixelFilter
+from pathtrace.programs import Programs
+from pathtrace.renderer import Renderer
+from pathtrace.scene import load_scene
+from tests.stats import z_test
+
+SCENES = sorted(p for p in (Path(__file__).parent / "scenes").iterdir() if p.suffix in (".xml", ".pbrt"))
+SIZE = 16
+SPP = 128
+
+
+def with_mode(backend: Backend, mode: str) -> Backend:
+    """The same device, context and generic program, choosing programs by `mode`."""
+    return Backend(backend.device, backend.context, backend.queue, backend.build, backend.extra,
+                   backend.use_cache, mode)
+
+
+def render(backend, scene, spp=SPP):
+    r = Renderer(backend, scene, SIZE, SIZE)
+    for _ in range(spp // 64):
+        r.add_samples(64)
+    r.finish()
+    return r
+
+
+def same_image(a: Renderer, b: Renderer):
+    ok, p, threshold = z_test(a.mean(), a.variance() / a.samples, b.mean(), b.variance() / b.samples, block=4)
+    assert ok, f"smallest p-value {p:.3g} below the Sidak threshold {threshold:.3g}"
+
+
+@pytest.fixture(scope="module")
+def generic(backend):
+    return with_mode(backend, "generic")
+
+
+@pytest.fixture(scope="module")
+def specialised(backend):
+    return with_mode(backend, "specialised")
+
+
+@pytest.mark.parametrize("path", SCENES, ids=lambda p: p.name)
+def test_the_generic_program_renders_each_test_scene_as_its_own_program(generic, specialised, path):
+    scene = load_scene(str(path))
+    a, b = render(generic, scene), render(specialised, scene)
+    assert a.uses_generic_program and not b.uses_generic_program
+    same_image(a, b)
+
+
+@pytest.mark.parametrize("name,settings", [
+    ("teapot-sky", {}),                                           # lone spheres beside the triangles' tree
+    ("cornell-box", {"russian_roulette": "albedo"}),
+    ("cornell-box", {"russian_roulette": "off", "max_depth": 6}),
+    ("cornell-box", {"filter": PixelFilter("gaussian")}),
+    ("cornell-box", {"filter": PixelFilter("tent")}),
+    ("cornell-box", {"light_sampler": "tree"}),
+], ids=lambda v: v if isinstance(v, str) else "-".join(f"{k}={getattr(x, 'name', x)}" for k, x in v.items()))
+def test_the_generic_program_reads_its_choices_at_run_time(generic, specialised, name, settings):
+    scene = load_scene(name)
+    scene = scene.with_settings(**settings) if settings else scene
+    a, b = render(generic, scene), render(specialised, scene)
+    assert a.params(1)["layout"] == b.params(1)["layout"]
+    same_image(a, b)
+
+
+def test_the_generic_program_walks_a_two_level_bvh(generic, specialised, monkeypatch):
+    from pathtrace.scene import instances
+    monkeypatch.setattr(instances, "FLATTEN_MAX", -1)       # instances.xml's copies are few
+    scene = load_scene(str(Path(__file__).parent / "scenes" / "instances.xml"))
+    a, b = render(generic, scene), render(specialised, scene)
+    assert a.compiled.two_level and a.params(1)["layout"] & 2      # LAYOUT_INSTANCES
+    same_image(a, b)
+
+
+def test_an_orthographic_camera_through_the_generic_program(generic, specialised):
+    scene = load_scene("cornell-box")
+    camera = scene.camera.copy()
+    camera.projection, camera.height = "orthographic", 1.2
+    a, b = Renderer(generic, scene, SIZE, SIZE), Renderer(specialised, scene, SIZE, SIZE)
+    for r in (a, b):
+        r.set_camera(camera)
+        for _ in range(SPP // 64):
+            r.add_samples(64)
+        r.finish()
+    same_image(a, b)
+
+
+class GatedBuild:
+    """A backend's build of scenes' programs that waits until the test opens the gate."""
+
+    def __init__(self, backend, fail=False):
+        self.backend, self.fail = backend, fail
+        self.gate = threading.Event()
+        self.started = threading.Event()
+        self.finished = threading.Event()
+
+    def __call__(self, features):
+        self.started.set()
+        self.gate.wait(60)
+        try:
+            if self.fail:
+                raise RuntimeError("clBuildProgram failed: BUILD_PROGRAM_FAILURE\nerror: an injected failure")
+            return self.backend.program_for(features)
+        finally:
+            self.finished.set()
+
+
+def test_a_renderer_switches_to_the_scenes_program_mid_accumulation(backend, specialised):
+    auto = with_mode(backend, "auto")
+    gated = GatedBuild(specialised)
+    auto.programs = Programs(gated, auto.device.name)
+    scene = load_scene("cornell-box")
+    r = Renderer(auto, scene, SIZE, SIZE)
+    assert gated.started.wait(60) and r.uses_generic_program
+    resets = r.resets
+    r.add_samples(64)
+    r.finish()
+    assert r.uses_generic_program and r.samples == 64      # the build is still under way
+    gated.gate.set()
+    assert r.switch_when_built(wait=True)
+    for _ in range(SPP // 64 - 1):
+        r.add_samples(64)
+    r.finish()
+    assert not r.uses_generic_program and r.samples == SPP and r.resets == resets   # the average went on
+    same_image(r, render(specialised, scene))
+
+
+def test_a_failed_build_leaves_the_generic_program_rendering(backend, capsys):
+    auto = with_mode(backend, "auto")
+    gated = GatedBuild(backend, fail=True)
+    auto.programs = Programs(gated, auto.device.name)
+    r = Renderer(auto, load_scene("cornell-box"), SIZE, SIZE)
+    assert r.building_program
+    gated.gate.set()
+    assert gated.finished.wait(60)
+    for _ in range(1000):
+        r.add_samples(1)       # each asks whether the build is done
+        if not r.building_program:
+            break
+    r.finish()
+    assert r.uses_generic_program and not r.building_program and r.samples <= 1000
+    assert np.isfinite(r.mean()).all() and r.mean().max() > 0
+    lines = [line for line in capsys.readouterr().err.splitlines() if "did not build" in line]
+    assert len(lines) == 1 and "an injected failure" not in lines[0] and "BUILD_PROGRAM_FAILURE" in lines[0]
+
+
+def test_path_queue_plans_render_with_the_generic_program_until_theirs_is_built(backend, specialised):
+    """The generic program has no continuation queue: launches go without it meanwhile."""
+    auto = with_mode(backend, "auto")
+    gated = GatedBuild(specialised)
+    auto.programs = Programs(gated, auto.device.name)
+    scene = load_scene("cornell-box").with_settings(path_queue=2)
+    r = Renderer(auto, scene, SIZE, SIZE)
+    r.add_samples(64)
+    r.finish()
+    assert r.uses_generic_program and r.continue_kernels is None
+    gated.gate.set()
+    r.switch_when_built(wait=True)
+    assert r.continue_kernels is not None
+    for _ in range(SPP // 64 - 1):
+        r.add_samples(64)
+    r.finish()
+    same_image(r, render(specialised, scene))
