@@ -4,12 +4,13 @@ import argparse
 import os
 import signal
 import sys
+import time
 from dataclasses import replace
 from pathlib import Path
 
 from pathtrace import __version__
 from pathtrace.console import INTERRUPTED, check_interrupt
-from pathtrace.errors import UserError, cut, short, warn
+from pathtrace.errors import UserError, cut, escape, short, warn
 from pathtrace.lights import LIGHT_SAMPLERS
 from pathtrace.scene.description import MAX_PATH_QUEUE, PATH_QUEUE_AUTO, RUSSIAN_ROULETTE
 
@@ -77,6 +78,28 @@ class BuildProgress:
         self.bar.close()
 
 
+class Phases:
+    """The lines of `render`'s phases on standard error, each with its time: called with what
+    was done as each phase ends, it prints "WHAT in SECONDS s" (nothing when quiet). A phase's
+    time runs from the end of the one before (or from restart()); one timed elsewhere gives its
+    `seconds`."""
+
+    def __init__(self, quiet: bool):
+        self.quiet = quiet
+        self.restart()
+
+    def restart(self):
+        """Times the next phase from now."""
+        self.start = time.perf_counter()
+
+    def __call__(self, what: str, note: str = "", seconds: float = None):
+        if seconds is None:
+            seconds = time.perf_counter() - self.start
+        if not self.quiet:
+            print(f"{what} in {seconds:.2f} s{note}", file=sys.stderr)
+        self.restart()
+
+
 def _size(text):
     try:
         w, h = (int(v) for v in text.lower().split("x"))
@@ -132,7 +155,8 @@ def add_output_options(p: argparse.ArgumentParser):
                    help="exposure in stops, -100 to 100, for .png/.jpg (default 0)")
     p.add_argument("--tonemap", choices=TONEMAPS, default="standard",
                    help="tone curve for .png/.jpg (default standard: clip at 1)")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    p.add_argument("-q", "--quiet", action="store_true",
+                   help="no progress bar, and (render) no line per phase with its time")
 
 
 def add_render_options(p: argparse.ArgumentParser, device: bool = True, queue_auto: bool = True):
@@ -262,17 +286,27 @@ def cmd_render(args):
                 raise UserError(f"--output: {short(str(target))} would be written twice "
                                 f"(as {short(str(written[key]))} too)")
             written[key] = target
+    phase = Phases(args.quiet)
     denoiser = None
     if args.denoise:                 # before rendering: a missing or failing OIDN says so now
         from pathtrace.denoiser import Denoiser
         denoiser = Denoiser("high")
+        phase(f"opened Open Image Denoise ({denoiser.device_name})")
     scene = apply_render_options(api.load(args.scene), args)
+    phase(f"loaded {escape(scene.name)}")
     s = scene.settings
-    for backend in api.open_devices(args.device or ["auto"]):
+    backends = api.open_devices(args.device or ["auto"])
+    for backend in backends:
         print(f"device: {backend.device.describe()}", file=sys.stderr)
+    cached = " (from the kernel cache)" if all(b.build.cached for b in backends) else ""
+    phase(f"opened the device{'s' * (len(backends) > 1)} and built the kernels", cached)
     pixels = s.width * s.height
     build_progress = BuildProgress(scene.name, args.quiet)
     bar = None
+
+    def prepared(what, seconds):
+        build_progress.close()       # a bar left open would share its line with this one
+        phase(what, seconds=seconds)
 
     def progress(done):
         # made as the first samples start (after the BVH build): the rate and the time left from
@@ -292,7 +326,7 @@ def cmd_render(args):
             bar.set_postfix_str(f"{done * pixels / elapsed / 1e6:.2f} Msamples/s", refresh=False)
     try:
         result = api.render(scene, device=args.device or ["auto"], progress=progress,
-                            build_progress=build_progress,
+                            build_progress=build_progress, phases=prepared,
                             aovs=("albedo", "normal") if args.denoise or args.aov else ())
     except KeyboardInterrupt:
         print(f"interrupted at {0 if bar is None else bar.n}/{s.spp} spp; nothing written", file=sys.stderr)
@@ -303,11 +337,17 @@ def cmd_render(args):
             bar.close()
     for plan in api.queue_plans(scene):
         print(f"path queue auto: {plan}", file=sys.stderr)
+    phase.restart()                  # from the end of the render
     outputs = render_outputs(result, args, denoiser)
+    if denoiser is not None:
+        phase("denoised")
     with FinalWrite():
         write_images(outputs, args.exposure, args.tonemap)
-    for out in outputs:
-        print(f"wrote {shown(out.path)}", file=sys.stderr)
+    if args.quiet:
+        for out in outputs:
+            print(f"wrote {shown(out.path)}", file=sys.stderr)
+    else:
+        phase("wrote " + ", ".join(shown(out.path) for out in outputs))
     return 0
 
 
