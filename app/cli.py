@@ -530,13 +530,26 @@ def cmd_bench(args):
     from pathtrace import bench
 
     timing_size = args.size or ((320, 180) if args.quick else (1280, 720))
-    bench.validate(args)
+    if args.first_image:
+        from pathtrace import first_image
+        first_image.validate(args)
+    else:
+        bench.validate(args)
     if args.json:
         from pathtrace.image_io import check_writable
         check_writable(args.json, "--json", formats=None)
     if args.mitsuba:
         from pathtrace.mitsuba_timing import check_mitsuba
         check_mitsuba(args.mitsuba, args.mitsuba_variant)
+    if args.first_image:
+        print(first_image.HEADER)
+        results = [r for device in args.device or ["auto"]
+                   for r in first_image.run(device, args.scenes, args.load_scene or [], args.size, args.repeats,
+                                            args.mitsuba, args.mitsuba_variant)]
+        if args.json:
+            bench.write_json(args.json, results, sys.argv[1:])
+            print(f"wrote {args.json}", file=sys.stderr)
+        return 0
     if args.display or args.denoise:
         print(bench.TIMING_HEADER)
         width, height = timing_size
@@ -618,6 +631,7 @@ def build_parser():
     p.set_defaults(func=cmd_view)
 
     from pathtrace.bench import TARGET_SCENES
+    from pathtrace.first_image import SCENES as FIRST_IMAGE_SCENES
     p = sub.add_parser("bench", help="time renders of the benchmark scenes (the table of the report "
                                      "pathtrace grew from)",
                        description="Times renders of the benchmark scenes, by default at 1920x1080 "
@@ -626,12 +640,14 @@ def build_parser():
                                    "roulette) on the -diffuse ones.")
     p.add_argument("--device", action="append", metavar="DEVICE",
                    help="as for render; repeat for several, or 'all' (default: auto)")
-    p.add_argument("--scenes", nargs="+", default=list(TARGET_SCENES), metavar="SCENE")
+    p.add_argument("--scenes", nargs="+", metavar="SCENE",
+                   help="built-in names or scene files (default: " + " ".join(TARGET_SCENES) + "; with "
+                        "--first-image: " + " ".join(FIRST_IMAGE_SCENES) + ")")
     p.add_argument("--estimator", action="append", metavar="EST",
                    help="rr (the report's), depth8 (comparison mode), or either with +nee "
                         "(next-event estimation); repeatable; default: rr for the report's "
                         "scenes, depth8 for -diffuse ones, both without NEE")
-    p.add_argument("--size", type=_size, metavar="WxH", help="default 1920x1080")
+    p.add_argument("--size", type=_size, metavar="WxH", help="default 1920x1080 (with --first-image 640x360)")
     p.add_argument("--spp", type=_int_range(1, 2**31 - 1), help="samples per pixel (default 1000)")
     p.add_argument("--together", action="store_true",
                    help="render each scene on all the --device devices at once (one row per "
@@ -656,17 +672,21 @@ def build_parser():
     p.add_argument("--load", action="store_true",
                    help="time loading instead: seconds from 'pathtrace render FILE' to its first image "
                         "(1 spp) for a 1M-triangle PLY file and for 850 PLY meshes in a pbrt-v4 file")
+    p.add_argument("--first-image", action="store_true",
+                   help="time the first image instead: seconds from 'pathtrace render SCENE --spp 1' "
+                        "to its image written, in fresh processes, cold (every kernel and BVH cache "
+                        "empty) and warm (the caches the cold run filled), for --scenes and --load-scene")
     p.add_argument("--load-scene", action="append", metavar="FILE",
-                   help="with --load, also time this scene file (repeatable)")
+                   help="with --load or --first-image, also time this scene file (repeatable)")
     p.add_argument("--repeats", type=_int_range(1, 100), default=3,
-                   help="with --load, the best of this many runs (default 3)")
+                   help="with --load or --first-image, the best of this many runs (default 3)")
     p.add_argument("--rounds", type=_int_range(1, 100), default=1,
                    help="time each row's render this many times (and Mitsuba's, with --mitsuba) and "
                         "count the medians (default 1)")
     p.add_argument("--mitsuba", metavar="PYTHON",
                    help="also time Mitsuba 3 on the same scenes (their XML, or a twin written for "
                         "them), run by this Python (one with 'pip install mitsuba'): the depth8+nee rows, "
-                        "or with --load every row")
+                        "or with --load or --first-image every row")
     p.add_argument("--mitsuba-variant", default="llvm_ad_rgb", metavar="VARIANT",
                    help="Mitsuba's variant for --mitsuba (default llvm_ad_rgb; it needs LLVM, found "
                         "through DRJIT_LIBLLVM_PATH)")
