@@ -42,6 +42,7 @@ TARGET_SCENES = ("simple", "spheres8k", "spheres64k",
                  "simple-diffuse", "spheres8k-diffuse", "spheres64k-diffuse", "teapot-sky",
                  "teapot-textured")
 GENERATED_FILES = ("tori400-textured",)      # pathtrace.bench_scenes
+FIRST_IMAGE_SCENES = ("simple", "cornell-box", "teapot-sky", "meshes850")    # pathtrace.first_image
 COMPARISON_DEPTH = 8
 ESTIMATORS = ("rr", "depth8", "rr+nee", "depth8+nee")
 

@@ -630,8 +630,7 @@ def build_parser():
     add_render_options(p, queue_auto=False)     # no trial renders in the viewer: its panel sets N
     p.set_defaults(func=cmd_view)
 
-    from pathtrace.bench import TARGET_SCENES
-    from pathtrace.first_image import SCENES as FIRST_IMAGE_SCENES
+    from pathtrace.bench import FIRST_IMAGE_SCENES, TARGET_SCENES
     p = sub.add_parser("bench", help="time renders of the benchmark scenes (the table of the report "
                                      "pathtrace grew from)",
                        description="Times renders of the benchmark scenes, by default at 1920x1080 "

@@ -12,9 +12,10 @@ and imports included, and checks that the image was written:
 - warm: the same command with the same folders, which the cold run filled, the best of
   --repeats: a scene opened again.
 
-The rows: built-in scenes (SCENES by default), `meshes850` (850 PLY tori in a Mitsuba XML file,
-pathtrace.bench_scenes.write_meshes, written with the rows' size), the generated files of
-`pathtrace bench` (pathtrace.bench.GENERATED_FILES) where named, and each --load-scene file.
+The rows: --scenes (by default pathtrace.bench.FIRST_IMAGE_SCENES): built-in scenes, `meshes850`
+(850 PLY tori in a Mitsuba XML file, pathtrace.bench_scenes.write_meshes, written with the rows'
+size) and the files `pathtrace bench` writes (pathtrace.bench.GENERATED_FILES); then each
+--load-scene file.
 With --mitsuba PYTHON, Mitsuba 3 loads and renders with 1 spp the row's XML (the scene's own file,
 or a twin written for a built-in one: pathtrace.bench.mitsuba_twin) in a fresh process of that
 Python (pathtrace.mitsuba_timing), cold and then warm in the same way: Dr.Jit keeps its kernels
@@ -30,7 +31,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from pathtrace.bench import GENERATED_FILES, mitsuba_twin, scene_file
+from pathtrace.bench import FIRST_IMAGE_SCENES, GENERATED_FILES, mitsuba_twin, scene_file
 from pathtrace.bench_scenes import write_meshes
 from pathtrace.errors import UserError
 from pathtrace.files import shown
@@ -39,7 +40,6 @@ from pathtrace.mitsuba_timing import mitsuba_load_command
 from pathtrace.scene import load_scene
 
 MESHES = "meshes850"
-SCENES = ("simple", "cornell-box", "teapot-sky", MESHES)
 SIZE = (640, 360)
 # the variables that would point pathtrace at caches other than the fresh folders
 PATHTRACE_CACHES = ("PATHTRACE_CACHE", "PATHTRACE_BVH_CACHE")
@@ -65,7 +65,7 @@ class FirstImage:
 def validate(args):
     """The mode's defaults into args (--scenes, --size), and each scene loaded, so that a bad
     name or file fails in one line before any timed run."""
-    args.scenes = args.scenes or list(SCENES)
+    args.scenes = args.scenes or list(FIRST_IMAGE_SCENES)
     args.size = args.size or SIZE
     for name in args.scenes:
         if name not in (MESHES, *GENERATED_FILES):
@@ -105,7 +105,7 @@ def rows(folder: Path, scenes, scene_files, size) -> list:
                           "written by bench" if name in GENERATED_FILES else "built-in"))
     for f in scene_files:
         path = Path(f).resolve()
-        found.append((path.stem, str(path), "/".join(path.parts[-3:])[-32:]))
+        found.append((path.stem, str(path), "/".join(path.parts[-3:])[-34:]))
     return found
 
 
@@ -160,7 +160,7 @@ def time_mitsuba(r: FirstImage, scene_name: str, folder: Path, python: str, vari
     return ""
 
 
-HEADER = (f"{'scene':<16} {'what':<32} {'device':<8} {'size':>9} {'cold s':>7} {'warm s':>7} "
+HEADER = (f"{'scene':<16} {'what':<34} {'device':<8} {'size':>9} {'cold s':>7} {'warm s':>7} "
           f"{'Mitsuba 3 cold/warm s':>34} {'ratio cold/warm':>15}")
 
 
@@ -170,5 +170,5 @@ def format_row(r: FirstImage) -> str:
     if r.mitsuba_cold_seconds is not None:
         theirs = f"{r.mitsuba_cold_seconds:.2f}/{r.mitsuba_warm_seconds:.2f} ({r.mitsuba_variant})"
         ratio = f"{r.mitsuba_cold_seconds / r.cold_seconds:.2f}/{r.mitsuba_warm_seconds / r.warm_seconds:.2f}"
-    return (f"{r.scene:<16} {r.what:<32} {r.device:<8} {f'{r.width}x{r.height}':>9} {r.cold_seconds:>7.2f} "
+    return (f"{r.scene:<16} {r.what:<34} {r.device:<8} {f'{r.width}x{r.height}':>9} {r.cold_seconds:>7.2f} "
             f"{r.warm_seconds:>7.2f} {theirs:>34} {ratio:>15}")
