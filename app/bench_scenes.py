@@ -52,8 +52,9 @@ def write_height_field(folder: Path) -> tuple:
 
 
 def write_meshes(folder: Path, count: int = 850, size: tuple = (64, 64)) -> tuple:
-    """`meshes850` (the module's docstring; `count` tori), its film `size` pixels: (the pbrt-v4
-    file's name, the XML file's, the scene in words, the size)."""
+    """Writes `meshes850` (the module's docstring) into `folder`, with `count` tori and a film of
+    `size` pixels; returns the pbrt-v4 file's name, the XML file's, the scene in words and the
+    size."""
     points, normals, _, faces = torus()
     side = int(np.ceil(np.sqrt(count)))
     for k in range(count):
