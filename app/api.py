@@ -130,11 +130,22 @@ class _Prepared:
     """A scene compiled and uploaded to a group of devices, with what it was compiled from, so
     that the next render uploads only what changed."""
 
-    def __init__(self, scene: Scene, backends: list, build_progress=None):
+    def __init__(self, scene: Scene, backends: list, build_progress=None, phases=None):
+        from pathtrace.compiled import compile_scene
         from pathtrace.multidevice import DeviceGroup
         self.backends = backends
         self.geometry = _geometry_digest(scene)
-        self.group = DeviceGroup(backends, scene, progress=build_progress)
+        start = time.perf_counter()
+        compiled = compile_scene(scene, backends[0].queue, build_progress)
+        if phases:
+            phases(f"compiled the scene ({_contents(compiled)}, BVH in {compiled.bvh_seconds:.2f} s)",
+                   time.perf_counter() - start)
+        start = time.perf_counter()
+        self.group = DeviceGroup(backends, compiled)
+        if phases:
+            # the renderers' construction includes building the kernels specialised to the
+            # scene, which it does not report on its own
+            phases(f"prepared the renderer{'s' * (len(backends) > 1)}", time.perf_counter() - start)
         self.environment = _environment_key(scene.environment)
         self.lights = _lights_key(scene.lights)
 
@@ -158,17 +169,24 @@ class _Prepared:
         self.environment, self.lights = environment, lights
 
 
-def prepare(scene: Scene, device="auto", build_progress=None) -> _Prepared:
+def prepare(scene: Scene, device="auto", build_progress=None, phases=None) -> _Prepared:
     """The compiled, uploaded form of `scene` on `device` (open_devices), made once and kept
     with the scene (so that it goes when the scene goes); compiled anew if the scene's geometry
-    changed or the devices differ."""
+    changed or the devices differ. phases(what, seconds) is called as each step of making it
+    ends: compiling the scene, then preparing the renderers."""
     backends = open_devices(device)
     kept = scene.__dict__.get("_prepared")
     if kept is not None and kept.backends == backends and kept.geometry == _geometry_digest(scene):
         return kept
     scene.__dict__.pop("_prepared", None)    # free the old buffers before making new ones
-    scene._prepared = _Prepared(scene, backends, build_progress)
+    scene._prepared = _Prepared(scene, backends, build_progress, phases)
     return scene._prepared
+
+
+def _contents(compiled) -> str:
+    """What a compiled scene holds, in words: '5 spheres', '126,504 triangles, 1 sphere'."""
+    counts = [(compiled.num_triangles, "triangle"), (compiled.num_spheres, "sphere")]
+    return ", ".join(f"{n:,} {what}{'s' * (n != 1)}" for n, what in counts if n) or "nothing"
 
 
 def _geometry_digest(scene: Scene) -> bytes:
@@ -202,7 +220,7 @@ def _lights_key(lights) -> tuple:
 
 
 def progressive(scene, spp=None, steps=None, size=None, device="auto", seed=None, max_depth=None,
-                rr=None, nee=None, aovs=(), progress=False, build_progress=None):
+                rr=None, nee=None, aovs=(), progress=False, build_progress=None, phases=None):
     """Renders `scene` (a Scene, or what load() takes) and yields a Snapshot each time the image
     reaches one of `steps` samples per pixel (default: 1, 2, 4, ... up to spp, and spp; spp
     defaults to the scene's). Arguments as for render(). Stopping the iteration early stops the
@@ -211,7 +229,7 @@ def progressive(scene, spp=None, steps=None, size=None, device="auto", seed=None
     settings = settings_for(scene, spp, size, seed, max_depth, rr, nee)
     steps = _steps(steps, settings.spp)
     aovs = _aov_names(aovs)
-    prepared = prepare(scene, device, build_progress)
+    prepared = prepare(scene, device, build_progress, phases)
     prepared.update(scene, settings, bool(aovs))
     group = prepared.group
     group.choose_queue_plans(steps[-1])     # path_queue "auto": for the whole render, not its first step
@@ -235,7 +253,7 @@ def progressive(scene, spp=None, steps=None, size=None, device="auto", seed=None
 
 
 def render(scene, spp=None, size=None, device="auto", seed=None, max_depth=None, rr=None, nee=None,
-           aovs=(), progress=False, build_progress=None):
+           aovs=(), progress=False, build_progress=None, phases=None):
     """Renders `scene` (a Scene, or what load() takes) and returns the image, (height, width, 3)
     float32 linear radiance. With `aovs` (names from "albedo", "normal", "depth"), returns a dict
     of "image" and each of them: albedo and normal (H, W, 3), the first hit's distance (H, W), 0
@@ -246,9 +264,11 @@ def render(scene, spp=None, size=None, device="auto", seed=None, max_depth=None,
     "albedo" or "off"); nee: next-event estimation; each defaults to the scene's settings.
     device: as open_devices() takes it; several devices share the samples. progress: True for a
     progress bar (a notebook's, in Jupyter), or a function called with the samples per pixel
-    done (0 as the first samples start, after the scene is compiled); build_progress: a function called with the fraction of a large BVH build done."""
+    done (0 as the first samples start, after the scene is compiled); build_progress: a function called with the fraction of a large BVH build done;
+    phases: a function called with (what, seconds) as each step before the first sample ends,
+    where the scene was not compiled already: "compiled the scene (...)", "prepared the renderer"."""
     for snapshot in progressive(scene, spp, None, size, device, seed, max_depth, rr, nee, aovs,
-                                progress, build_progress):
+                                progress, build_progress, phases):
         pass
     return {"image": snapshot.image, **snapshot.aovs} if snapshot.aovs else snapshot.image
 

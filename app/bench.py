@@ -42,6 +42,7 @@ TARGET_SCENES = ("simple", "spheres8k", "spheres64k",
                  "simple-diffuse", "spheres8k-diffuse", "spheres64k-diffuse", "teapot-sky",
                  "teapot-textured")
 GENERATED_FILES = ("tori400-textured",)      # pathtrace.bench_scenes
+FIRST_IMAGE_SCENES = ("simple", "cornell-box", "teapot-sky", "meshes850")    # pathtrace.first_image
 COMPARISON_DEPTH = 8
 ESTIMATORS = ("rr", "depth8", "rr+nee", "depth8+nee")
 
@@ -167,7 +168,7 @@ def run(device_specs, scene_names, estimators, width, height, spp, together=Fals
                         log(split_row(r, group[0], scene))
                     if mitsuba and est == "depth8+nee":
                         try:
-                            twin = mitsuba_twin(scene, r, folder)
+                            twin = mitsuba_twin(scene, (r.width, r.height), r.spp, folder)
                         except UserError as e:     # the scene says what a twin cannot: no column
                             log(f"{'':<20} Mitsuba 3: no twin of {scene.name}: {e}")
                         else:
@@ -218,16 +219,17 @@ def scene_file(name: str, folder: Path) -> str:
     return str(write_textured_tori(where))
 
 
-def mitsuba_twin(scene, r: Result, folder: Path):
-    """The Mitsuba 3 XML of the row's scene: its own file, or a twin written into `folder`
-    (UserError where the scene holds what a twin cannot say)."""
+def mitsuba_twin(scene, size: tuple, spp: int, folder: Path):
+    """The Mitsuba 3 XML of a row's scene: its own file, or a twin written into `folder` with a
+    film of `size` (width, height) and `spp` samples (UserError where the scene holds what a twin
+    cannot say)."""
     from pathtrace.scene.mitsuba_writer import write_mitsuba
     source = str(scene.source or "")
     if source.lower().endswith(".xml"):
         return source
     twin = folder / f"{scene.name}-twin"
     twin.mkdir(exist_ok=True)
-    return write_mitsuba(scene.with_settings(width=r.width, height=r.height, spp=r.spp, max_depth=COMPARISON_DEPTH),
+    return write_mitsuba(scene.with_settings(width=size[0], height=size[1], spp=spp, max_depth=COMPARISON_DEPTH),
                          twin / f"{scene.name}.xml")
 
 
@@ -395,6 +397,7 @@ def validate(args):
         args.size, args.spp = args.size or (320, 180), args.spp or 8
     args.size = args.size or (1920, 1080)
     args.spp = args.spp or 1000
+    args.scenes = args.scenes or list(TARGET_SCENES)
     for name in args.scenes:
         if name not in GENERATED_FILES:
             load_scene(name)     # fail on a bad name before any device work

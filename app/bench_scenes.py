@@ -51,7 +51,10 @@ def write_height_field(folder: Path) -> tuple:
     return "heightfield1M.toml", "heightfield1M.xml", f"1 PLY file, {len(faces):,} triangles", (64, 36)
 
 
-def write_meshes(folder: Path, count: int = 850) -> tuple:
+def write_meshes(folder: Path, count: int = 850, size: tuple = (64, 64)) -> tuple:
+    """Writes `meshes850` (the module's docstring) into `folder`, with `count` tori and a film of
+    `size` pixels; returns the pbrt-v4 file's name, the XML file's, the scene in words and the
+    size."""
     points, normals, _, faces = torus()
     side = int(np.ceil(np.sqrt(count)))
     for k in range(count):
@@ -59,7 +62,7 @@ def write_meshes(folder: Path, count: int = 850) -> tuple:
     middle = side * 1.25
     eye, target = (middle, side * 1.2, -side * 0.6), (middle, 0, middle)
     pbrt = ['Integrator "path" "integer maxdepth" [ 4 ]', 'Sampler "independent" "integer pixelsamples" 1',
-            'Film "rgb" "integer xresolution" 64 "integer yresolution" 64', "Scale -1 1 1",
+            f'Film "rgb" "integer xresolution" {size[0]} "integer yresolution" {size[1]}', "Scale -1 1 1",
             f"LookAt {' '.join(map(str, eye))}  {' '.join(map(str, target))}  0 1 0",
             'Camera "perspective" "float fov" 60', "WorldBegin", 'LightSource "infinite" "rgb L" [ 1 1 1 ]',
             'Material "diffuse" "rgb reflectance" [ 0.5 0.5 0.5 ]']
@@ -67,8 +70,8 @@ def write_meshes(folder: Path, count: int = 850) -> tuple:
     (folder / f"meshes{count}.pbrt").write_text("\n".join(pbrt) + "\n")
     shapes = [f'<shape type="ply"><string name="filename" value="m{k:04d}.ply"/>'
               '<bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></shape>' for k in range(count)]
-    (folder / f"meshes{count}.xml").write_text(scene_xml((64, 64), eye, target, (0, 1, 0), 60, 1, 5, 1.0, shapes))
-    return f"meshes{count}.pbrt", f"meshes{count}.xml", f"{count} PLY files, {count * len(faces):,} triangles", (64, 64)
+    (folder / f"meshes{count}.xml").write_text(scene_xml(size, eye, target, (0, 1, 0), 60, 1, 5, 1.0, shapes))
+    return f"meshes{count}.pbrt", f"meshes{count}.xml", f"{count} PLY files, {count * len(faces):,} triangles", size
 
 
 def write_textured_tori(folder: Path, count: int = 400) -> Path:

@@ -4,12 +4,13 @@ import argparse
 import os
 import signal
 import sys
+import time
 from dataclasses import replace
 from pathlib import Path
 
 from pathtrace import __version__
 from pathtrace.console import INTERRUPTED, check_interrupt
-from pathtrace.errors import UserError, cut, short, warn
+from pathtrace.errors import UserError, cut, escape, short, warn
 from pathtrace.lights import LIGHT_SAMPLERS
 from pathtrace.scene.description import MAX_PATH_QUEUE, PATH_QUEUE_AUTO, RUSSIAN_ROULETTE
 
@@ -77,6 +78,28 @@ class BuildProgress:
         self.bar.close()
 
 
+class Phases:
+    """The lines of `render`'s phases on standard error, each with its time: called with what
+    was done as each phase ends, it prints "WHAT in SECONDS s" (nothing when quiet). A phase's
+    time runs from the end of the one before (or from restart()); one timed elsewhere gives its
+    `seconds`."""
+
+    def __init__(self, quiet: bool):
+        self.quiet = quiet
+        self.restart()
+
+    def restart(self):
+        """Times the next phase from now."""
+        self.start = time.perf_counter()
+
+    def __call__(self, what: str, note: str = "", seconds: float = None):
+        if seconds is None:
+            seconds = time.perf_counter() - self.start
+        if not self.quiet:
+            print(f"{what} in {seconds:.2f} s{note}", file=sys.stderr)
+        self.restart()
+
+
 def _size(text):
     try:
         w, h = (int(v) for v in text.lower().split("x"))
@@ -132,7 +155,8 @@ def add_output_options(p: argparse.ArgumentParser):
                    help="exposure in stops, -100 to 100, for .png/.jpg (default 0)")
     p.add_argument("--tonemap", choices=TONEMAPS, default="standard",
                    help="tone curve for .png/.jpg (default standard: clip at 1)")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    p.add_argument("-q", "--quiet", action="store_true",
+                   help="no progress bar, and (render) no line per phase with its time")
 
 
 def add_program_option(p: argparse.ArgumentParser, default: str):
@@ -274,17 +298,27 @@ def cmd_render(args):
                 raise UserError(f"--output: {short(str(target))} would be written twice "
                                 f"(as {short(str(written[key]))} too)")
             written[key] = target
+    phase = Phases(args.quiet)
     denoiser = None
     if args.denoise:                 # before rendering: a missing or failing OIDN says so now
         from pathtrace.denoiser import Denoiser
         denoiser = Denoiser("high")
+        phase(f"opened Open Image Denoise ({denoiser.device_name})")
     scene = apply_render_options(api.load(args.scene), args)
+    phase(f"loaded {escape(scene.name)}")
     s = scene.settings
-    for backend in api.open_devices(args.device or ["auto"]):
+    backends = api.open_devices(args.device or ["auto"])
+    for backend in backends:
         print(f"device: {backend.device.describe()}", file=sys.stderr)
+    cached = " (from the kernel cache)" if all(b.build.cached for b in backends) else ""
+    phase(f"opened the device{'s' * (len(backends) > 1)} and built the kernels", cached)
     pixels = s.width * s.height
     build_progress = BuildProgress(scene.name, args.quiet)
     bar = None
+
+    def prepared(what, seconds):
+        build_progress.close()       # a bar left open would share its line with this one
+        phase(what, seconds=seconds)
 
     def progress(done):
         # made as the first samples start (after the BVH build): the rate and the time left from
@@ -304,7 +338,7 @@ def cmd_render(args):
             bar.set_postfix_str(f"{done * pixels / elapsed / 1e6:.2f} Msamples/s", refresh=False)
     try:
         result = api.render(scene, device=args.device or ["auto"], progress=progress,
-                            build_progress=build_progress,
+                            build_progress=build_progress, phases=prepared,
                             aovs=("albedo", "normal") if args.denoise or args.aov else ())
     except KeyboardInterrupt:
         print(f"interrupted at {0 if bar is None else bar.n}/{s.spp} spp; nothing written", file=sys.stderr)
@@ -315,11 +349,17 @@ def cmd_render(args):
             bar.close()
     for plan in api.queue_plans(scene):
         print(f"path queue auto: {plan}", file=sys.stderr)
+    phase.restart()                  # from the end of the render
     outputs = render_outputs(result, args, denoiser)
+    if denoiser is not None:
+        phase("denoised")
     with FinalWrite():
         write_images(outputs, args.exposure, args.tonemap)
-    for out in outputs:
-        print(f"wrote {shown(out.path)}", file=sys.stderr)
+    if args.quiet:
+        for out in outputs:
+            print(f"wrote {shown(out.path)}", file=sys.stderr)
+    else:
+        phase("wrote " + ", ".join(shown(out.path) for out in outputs))
     return 0
 
 
@@ -502,13 +542,26 @@ def cmd_bench(args):
     from pathtrace import bench
 
     timing_size = args.size or ((320, 180) if args.quick else (1280, 720))
-    bench.validate(args)
+    if args.first_image:
+        from pathtrace import first_image
+        first_image.validate(args)
+    else:
+        bench.validate(args)
     if args.json:
         from pathtrace.image_io import check_writable
         check_writable(args.json, "--json", formats=None)
     if args.mitsuba:
         from pathtrace.mitsuba_timing import check_mitsuba
         check_mitsuba(args.mitsuba, args.mitsuba_variant)
+    if args.first_image:
+        print(first_image.HEADER)
+        results = [r for device in args.device or ["auto"]
+                   for r in first_image.run(device, args.scenes, args.load_scene or [], args.size, args.repeats,
+                                            args.mitsuba, args.mitsuba_variant)]
+        if args.json:
+            bench.write_json(args.json, results, sys.argv[1:])
+            print(f"wrote {args.json}", file=sys.stderr)
+        return 0
     if args.display or args.denoise:
         print(bench.TIMING_HEADER)
         width, height = timing_size
@@ -589,7 +642,7 @@ def build_parser():
     add_render_options(p, queue_auto=False)     # no trial renders in the viewer: its panel sets N
     p.set_defaults(func=cmd_view)
 
-    from pathtrace.bench import TARGET_SCENES
+    from pathtrace.bench import FIRST_IMAGE_SCENES, TARGET_SCENES
     p = sub.add_parser("bench", help="time renders of the benchmark scenes (the table of the report "
                                      "pathtrace grew from)",
                        description="Times renders of the benchmark scenes, by default at 1920x1080 "
@@ -599,12 +652,14 @@ def build_parser():
     p.add_argument("--device", action="append", metavar="DEVICE",
                    help="as for render; repeat for several, or 'all' (default: auto)")
     add_program_option(p, "specialised")
-    p.add_argument("--scenes", nargs="+", default=list(TARGET_SCENES), metavar="SCENE")
+    p.add_argument("--scenes", nargs="+", metavar="SCENE",
+                   help="built-in names or scene files (default: " + " ".join(TARGET_SCENES) + "; with "
+                        "--first-image: " + " ".join(FIRST_IMAGE_SCENES) + ")")
     p.add_argument("--estimator", action="append", metavar="EST",
                    help="rr (the report's), depth8 (comparison mode), or either with +nee "
                         "(next-event estimation); repeatable; default: rr for the report's "
                         "scenes, depth8 for -diffuse ones, both without NEE")
-    p.add_argument("--size", type=_size, metavar="WxH", help="default 1920x1080")
+    p.add_argument("--size", type=_size, metavar="WxH", help="default 1920x1080 (with --first-image 640x360)")
     p.add_argument("--spp", type=_int_range(1, 2**31 - 1), help="samples per pixel (default 1000)")
     p.add_argument("--together", action="store_true",
                    help="render each scene on all the --device devices at once (one row per "
@@ -629,17 +684,21 @@ def build_parser():
     p.add_argument("--load", action="store_true",
                    help="time loading instead: seconds from 'pathtrace render FILE' to its first image "
                         "(1 spp) for a 1M-triangle PLY file and for 850 PLY meshes in a pbrt-v4 file")
+    p.add_argument("--first-image", action="store_true",
+                   help="time the first image instead: seconds from 'pathtrace render SCENE --spp 1' "
+                        "to its image written, in fresh processes, cold (every kernel and BVH cache "
+                        "empty) and warm (the caches the cold run filled), for --scenes and --load-scene")
     p.add_argument("--load-scene", action="append", metavar="FILE",
-                   help="with --load, also time this scene file (repeatable)")
+                   help="with --load or --first-image, also time this scene file (repeatable)")
     p.add_argument("--repeats", type=_int_range(1, 100), default=3,
-                   help="with --load, the best of this many runs (default 3)")
+                   help="with --load or --first-image, the best of this many runs (default 3)")
     p.add_argument("--rounds", type=_int_range(1, 100), default=1,
                    help="time each row's render this many times (and Mitsuba's, with --mitsuba) and "
                         "count the medians (default 1)")
     p.add_argument("--mitsuba", metavar="PYTHON",
                    help="also time Mitsuba 3 on the same scenes (their XML, or a twin written for "
                         "them), run by this Python (one with 'pip install mitsuba'): the depth8+nee rows, "
-                        "or with --load every row")
+                        "or with --load or --first-image every row")
     p.add_argument("--mitsuba-variant", default="llvm_ad_rgb", metavar="VARIANT",
                    help="Mitsuba's variant for --mitsuba (default llvm_ad_rgb; it needs LLVM, found "
                         "through DRJIT_LIBLLVM_PATH)")
@@ -722,11 +781,13 @@ def parse(parser: argparse.ArgumentParser, argv):
 
 
 def choose_program_mode(args):
-    """--program, for every device this process opens (pathtrace.programs); bench times the
-    scenes' own programs unless asked otherwise."""
+    """--program, for every device this process opens and the renders it starts
+    (pathtrace.programs). bench times the scenes' own programs' renders unless asked otherwise;
+    its --load and --first-image time commands as a user runs them."""
     from pathtrace.programs import PROGRAM_ENV
-    mode = getattr(args, "program", None) or (None if args.command != "bench" or os.environ.get(PROGRAM_ENV)
-                                              else "specialised")
+    times_renders = args.command == "bench" and not (args.load or args.first_image)
+    mode = getattr(args, "program", None) or (
+        "specialised" if times_renders and not os.environ.get(PROGRAM_ENV) else None)
     if mode:
         os.environ[PROGRAM_ENV] = mode
 

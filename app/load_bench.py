@@ -18,6 +18,7 @@ from pathlib import Path
 
 from pathtrace.bench_scenes import write_height_field, write_meshes
 from pathtrace.errors import UserError
+from pathtrace.files import shown
 from pathtrace.mitsuba_timing import last_line, mitsuba_load_command, run_command
 
 
@@ -32,17 +33,29 @@ class LoadTime:
     mitsuba_seconds: float = None
 
 
-def best_time(command, repeats: int, cwd, env=None) -> float:
+def best_time(command, repeats: int, cwd, env=None, output: Path = None) -> float:
     """The shortest of `repeats` runs of `command`, from process start to exit; a failure is one
-    line naming the command and its last line of output."""
+    line naming the command and its last line of output. output: the image the command writes,
+    removed before each run; a run that leaves none fails too."""
     times = []
     for _ in range(repeats):
+        if output is not None:
+            output.unlink(missing_ok=True)
         start = time.perf_counter()
         r = run_command(command, cwd, env)
         times.append(time.perf_counter() - start)
         if r.returncode:
-            raise UserError(f"bench: {' '.join(map(str, command[:6]))} ... failed: {last_line(r)}")
+            raise UserError(f"bench: {command_line(command)} failed: {last_line(r)}")
+        if output is not None and not (output.is_file() and output.stat().st_size):
+            raise UserError(f"bench: {command_line(command)} exited 0 but wrote no {shown(output.name)}")
     return min(times)
+
+
+def command_line(command, words: int = 7) -> str:
+    """The start of a command, on one line: its first `words` words, a script given with -c
+    (Mitsuba's, pathtrace.mitsuba_timing) as '...'."""
+    shown_words = ["..." if k and str(command[k - 1]) == "-c" else shown(word) for k, word in enumerate(command)]
+    return " ".join(shown_words[:words]) + (" ..." if len(command) > words else "")
 
 
 def run_load(device: str, scene_files, repeats: int, mitsuba_python: str = None,

@@ -16,6 +16,7 @@ threads and GPU context out of ours. Two measurements:
   mean comes back with the seconds, so that a twin that differs from pathtrace's scene shows."""
 
 import json
+import os
 import subprocess
 
 from pathtrace.errors import UserError
@@ -72,7 +73,9 @@ def last_line(r) -> str:
 
 
 def mitsuba_load_command(python: str, variant: str, xml, out) -> list:
-    return [python, "-c", LOAD, str(xml), variant, str(out)]
+    """The command of the load measurement; a relative path to the Python made absolute, as the
+    benchmarks run it from a folder of their own."""
+    return [os.path.abspath(python) if os.sep in python else python, "-c", LOAD, str(xml), variant, str(out)]
 
 
 def mitsuba_render(python: str, variant: str, xml, camera, width: int, height: int, spp: int,

@@ -340,6 +340,27 @@ def test_the_progress_bar_ends_with_the_real_rate(tmp_path):
     assert float(last.split("Msamples/s")[0].split()[-1]) > 0
 
 
+def test_render_prints_each_phase_with_its_time_unless_quiet(tmp_path):
+    """One line per phase, in order, around the progress bar; -q prints none of them (and still
+    the device and what was written)."""
+    import re
+    out = tmp_path / "a.png"
+    args = ("render", "simple", "-o", out, "--size", "16x9", "--spp", "2", "--denoise")
+    r = pathtrace(*args)
+    assert r.returncode == 0, r.stderr
+    lines = r.stderr.replace("\r", "\n").splitlines()
+    timed = [k for k, line in enumerate(lines) if re.search(r" in \d+\.\d\d s( \(.*\))?$", line)]
+    phases = [lines[k].rsplit(" in ", 1)[0].split(" (")[0] for k in timed]
+    assert phases == ["opened Open Image Denoise", "loaded simple", "opened the device and built the kernels",
+                      "compiled the scene", "prepared the renderer", "denoised", f"wrote {out}"], lines
+    assert lines[timed[3]].startswith("compiled the scene (5 spheres, BVH in ")
+    bar = [k for k, line in enumerate(lines) if line.startswith("simple 16x9: 100%")]
+    assert bar and timed[4] < bar[0] < timed[5]
+    r = pathtrace(*args, "-q")
+    assert r.returncode == 0 and r.stderr.splitlines()[1:] == [f"wrote {out}"], r.stderr
+    assert r.stderr.startswith("device: ")
+
+
 def test_running_out_of_memory_gets_one_line(monkeypatch, capsys):
     from pathtrace import cli
     import pathtrace.scene
@@ -382,7 +403,7 @@ def test_an_output_named_twice_is_refused(tmp_path, outputs):
 
 @pytest.mark.parametrize("spec", ["²", "cpu:²", "9" * 5000, "gpu:0\nx"])
 def test_a_device_spec_of_odd_digits_is_one_line(spec):
-    r = pathtrace("render", "simple", "-o", "o.png", "--spp", "1", "--device", spec)
+    r = pathtrace("render", "simple", "-o", "o.png", "--spp", "1", "--device", spec, "-q")   # no "loaded" line
     assert r.returncode == 1 and len(r.stderr.splitlines()) == 1, r.stderr
     assert "no OpenCL device matches" in r.stderr and len(r.stderr) < 300
 

@@ -1,0 +1,90 @@
+"""`pathtrace bench --first-image` (app/first_image.py): command to first image, cold and warm."""
+
+import json
+import sys
+from pathlib import Path
+
+import pytest
+
+from pathtrace.errors import UserError
+from tests.test_cli import pathtrace
+
+# Mitsuba's load measurement (pathtrace.mitsuba_timing.LOAD) against a stand-in that writes its
+# image and records, per run, whether Dr.Jit's kernel cache (~/.drjit) was there already.
+FAKE_MITSUBA = """
+import json, os
+def set_variant(variant): pass
+def load_file(path): return path
+def render(scene, spp=1): return scene
+class Bitmap:
+    def __init__(self, image): pass
+    def write(self, path):
+        cache = os.path.join(os.environ["HOME"], ".drjit")
+        with open(os.environ["RUNS"], "a") as f:
+            f.write(json.dumps({"home": os.environ["HOME"], "cached": os.path.isdir(cache)}) + "\\n")
+        os.makedirs(cache, exist_ok=True)
+        with open(path, "w") as f:
+            f.write("image")
+"""
+
+
+def fake_mitsuba(tmp_path) -> Path:
+    (tmp_path / "fake" / "mitsuba").mkdir(parents=True)
+    (tmp_path / "fake" / "mitsuba" / "__init__.py").write_text(FAKE_MITSUBA)
+    python = tmp_path / "python"
+    python.write_text(f'#!/bin/sh\nPYTHONPATH="{tmp_path / "fake"}" RUNS="{tmp_path / "runs.jsonl"}" '
+                      f'exec "{sys.executable}" "$@"\n')
+    python.chmod(0o755)
+    return python
+
+
+def test_a_row_is_timed_cold_from_empty_caches_then_warm(tmp_path):
+    out = tmp_path / "first.json"
+    r = pathtrace("bench", "--first-image", "--scenes", "simple", "--size", "16x9", "--repeats", "1",
+                  "--device", "cpu", "--json", out)
+    assert r.returncode == 0, r.stderr
+    row, = json.loads(out.read_text())["results"]
+    assert (row["scene"], row["what"], row["device"], row["width"], row["height"]) == ("simple", "built-in", "cpu", 16, 9)
+    assert row["cold_seconds"] > 0 and row["warm_seconds"] > 0
+    # the cold run's caches were empty before it, and it filled them (PoCL's programs here)
+    assert row["cache_files_before"] == 0 and row["cache_files_after"] > 0
+    assert row["mitsuba_cold_seconds"] is None and row["mitsuba_warm_seconds"] is None
+    header, line = r.stdout.splitlines()
+    assert "cold s" in header and "warm s" in header and line.startswith("simple ")
+
+
+def test_mitsuba_is_timed_cold_in_a_fresh_home_then_warm(tmp_path):
+    """The row's Mitsuba runs: the first finds no kernel cache, the warm ones find the one the
+    first left; the ratios are printed."""
+    out = tmp_path / "first.json"
+    r = pathtrace("bench", "--first-image", "--scenes", "cornell-box", "--size", "16x16", "--repeats", "2",
+                  "--device", "cpu", "--mitsuba", fake_mitsuba(tmp_path), "--mitsuba-variant", "scalar_rgb",
+                  "--json", out)
+    assert r.returncode == 0, r.stderr
+    row, = json.loads(out.read_text())["results"]
+    assert row["mitsuba_variant"] == "scalar_rgb" and row["mitsuba_cold_seconds"] > 0 and row["mitsuba_warm_seconds"] > 0
+    runs = [json.loads(line) for line in (tmp_path / "runs.jsonl").read_text().splitlines()]
+    assert [run["cached"] for run in runs] == [False, True, True] and len({run["home"] for run in runs}) == 1
+    assert not Path(runs[0]["home"]).exists()          # removed with the bench's folder
+    assert "(scalar_rgb)" in r.stdout
+
+
+def test_no_mitsuba_column_without_an_xml_of_the_rows_size(tmp_path):
+    """A scene a twin cannot say, and an XML file whose film is another size, get a reason."""
+    from pathtrace.first_image import FirstImage, time_mitsuba
+    row = lambda name: FirstImage(name, "", "cpu", 64, 64, 1.0, 1.0, "", 0, 1)   # noqa: E731
+    fog = str(Path(__file__).parent / "scenes" / "media-fog.xml")
+    assert time_mitsuba(row("simple"), "simple", tmp_path / "a", sys.executable, "scalar_rgb", 1) \
+        .startswith("no twin of simple:")
+    assert time_mitsuba(row("media-fog"), fog, tmp_path / "b", sys.executable, "scalar_rgb", 1) \
+        == "media-fog.xml has a 64x40 film, which Mitsuba renders as it is; --size 64x40 compares it"
+
+
+def test_a_failed_render_or_a_missing_image_is_one_line_naming_the_command(tmp_path):
+    r = pathtrace("bench", "--first-image", "--scenes", "simple", "--size", "16x9", "--repeats", "1",
+                  "--device", "nosuch")
+    assert r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert "-m pathtrace render simple --size 16x9 ... failed: " in r.stderr and "nosuch" in r.stderr
+    from pathtrace.load_bench import best_time
+    with pytest.raises(UserError, match=r"-c \.\.\. exited 0 but wrote no out\.exr$"):
+        best_time([sys.executable, "-c", "pass"], 1, tmp_path, output=tmp_path / "out.exr")
