@@ -62,6 +62,13 @@ def queue_plans(scene) -> list:
     return prepared.group.queue_plans() if prepared else []
 
 
+def programs_used(scene) -> list:
+    """Where the generic program (pathtrace.programs) drew samples of `scene`'s last render, in
+    words, one per device that it did on; empty where the scenes' own programs drew them all."""
+    prepared = scene.__dict__.get("_prepared")
+    return prepared.group.programs_used() if prepared else []
+
+
 _backends = {}            # device specs -> opened backends, kept for the next render
 
 

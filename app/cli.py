@@ -264,9 +264,12 @@ def cmd_devices(args):
         line = f"[{d.index}] {d.describe()}, {d.device.max_compute_units} compute units"
         if args.check:
             try:
-                b = open_device(d)
-                line += (f": builds the kernels ({b.build.seconds:.2f} s{', cached' if b.build.cached else ''}) "
-                         f"and renders ({warm_up(b):.2f} s)")
+                b = open_device(d, mode="generic")
+                start = time.perf_counter()
+                cached = b.opened.generic and b.opened.cached
+                b.program
+                line += (f": builds the generic kernels ({time.perf_counter() - start + b.opened.seconds:.2f} s"
+                         f"{', cached' if cached else ''}) and renders with them ({warm_up(b):.2f} s)")
             except cl.Error as e:
                 line += f": cannot build the kernels: {build_error_line(e)}"
         print(line)
@@ -310,8 +313,10 @@ def cmd_render(args):
     backends = api.open_devices(args.device or ["auto"])
     for backend in backends:
         print(f"device: {backend.device.describe()}", file=sys.stderr)
-    cached = " (from the kernel cache)" if all(b.build.cached for b in backends) else ""
-    phase(f"opened the device{'s' * (len(backends) > 1)} and built the kernels", cached)
+    generic = all(b.opened.generic for b in backends)
+    cached = " (from the kernel cache)" if generic and all(b.opened.cached for b in backends) else ""
+    phase(f"opened the device{'s' * (len(backends) > 1)}" + (" and built the generic kernels" if generic else ""),
+          cached)
     pixels = s.width * s.height
     build_progress = BuildProgress(scene.name, args.quiet)
     bar = None
@@ -349,6 +354,9 @@ def cmd_render(args):
             bar.close()
     for plan in api.queue_plans(scene):
         print(f"path queue auto: {plan}", file=sys.stderr)
+    if not args.quiet:
+        for words in api.programs_used(scene):
+            print(words, file=sys.stderr)
     phase.restart()                  # from the end of the render
     outputs = render_outputs(result, args, denoiser)
     if denoiser is not None:

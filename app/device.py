@@ -109,17 +109,43 @@ class BuildResult:
     program: cl.Program
     seconds: float
     cached: bool
+    generic: bool = False     # the generic program (Features.generic_program)
+
+
+def program_options(device: cl.Device, features: Features) -> list[str]:
+    """The build options of the kernels specialised to `features` and to the kind of device
+    (CPU_DEVICE: on CPUs the samplers' azimuths take cospi: kernels/sampling.cl, COS_TURNS)."""
+    options = list(BUILD_OPTIONS) + [f"-D{d}" for d in features.defines()]
+    if device.type & cl.device_type.CPU:
+        options.append("-DCPU_DEVICE")
+    return options
 
 
 def build_program(context: cl.Context, device: cl.Device, extra: str = "",
                   use_cache: bool = True, features: Features = Features(), tune: bool = True) -> BuildResult:
-    """Builds the kernels, specialised to `features` and to the kind of device (CPU_DEVICE: on
-    CPUs the samplers' azimuths take cospi: kernels/sampling.cl, COS_TURNS), for one device.
-    `tune`: see build_cached."""
-    options = list(BUILD_OPTIONS) + [f"-D{d}" for d in features.defines()]
-    if device.type & cl.device_type.CPU:
-        options.append("-DCPU_DEVICE")
-    return build_cached(context, device, kernel_source(extra, features), options, use_cache, tune)
+    """Builds the kernels specialised to `features` for one device. `tune`: see build_cached."""
+    return build_cached(context, device, kernel_source(extra, features), program_options(device, features),
+                        use_cache, tune)
+
+
+def builds_fast(device: cl.Device, extra: str = "", features: Features = Features(), tune: bool = True) -> bool:
+    """Whether building the program of `features` will not compile it afresh: its binary is in
+    pathtrace's cache, or the driver keeps its own cache and builds from it (PoCL, whose first
+    build of the generic program takes 2 s on two cores where NVIDIA's took minutes)."""
+    return keeps_own_cache(device) or cache_entry(device, kernel_source(extra, features),
+                                                  program_options(device, features), tune).is_file()
+
+
+def cache_entry(device: cl.Device, source: str, options: list[str], tune: bool) -> Path:
+    """Where the binary of a build is cached: keyed by the source, the options, whether it is
+    tuned and under which rule (occupancy.TUNING_RULE), the exact device and driver and the
+    entry's format."""
+    tune = tune and is_nvidia(device)
+    key = hashlib.sha256("\0".join([
+        CACHE_FORMAT, source, " ".join(options), f"tuned, {TUNING_RULE}" if tune else "",
+        device.platform.name, device.platform.version,
+        device.name, device.version, device.driver_version]).encode()).hexdigest()[:32]
+    return cache_dir() / f"{key}.bin"
 
 
 def keeps_own_cache(device: cl.Device) -> bool:
@@ -135,17 +161,11 @@ def keeps_own_cache(device: cl.Device) -> bool:
 def build_cached(context: cl.Context, device: cl.Device, source: str, options: list[str],
                  use_cache: bool = True, tune: bool = True) -> BuildResult:
     """Builds a program for one device. Unless the driver keeps its own cache, the binary is
-    cached under cache_dir(), keyed by the source, the options, whether it was tuned and under
-    which rule (occupancy.TUNING_RULE), the exact device and driver and the entry's format.
-    `tune`: on NVIDIA, try the register caps of app/occupancy.py (up to four more builds of the
-    program)."""
+    cached under cache_dir() (cache_entry). `tune`: on NVIDIA, try the register caps of
+    app/occupancy.py (up to four more builds of the program)."""
     use_cache = use_cache and not keeps_own_cache(device)
+    path = cache_entry(device, source, options, tune)
     tune = tune and is_nvidia(device)
-    key = hashlib.sha256("\0".join([
-        CACHE_FORMAT, source, " ".join(options), f"tuned, {TUNING_RULE}" if tune else "",
-        device.platform.name, device.platform.version,
-        device.name, device.version, device.driver_version]).encode()).hexdigest()[:32]
-    path = cache_dir() / f"{key}.bin"
     start = time.perf_counter()
     cached = _read_cached(path) if use_cache else None
     if cached is not None:
@@ -182,48 +202,77 @@ def _read_cached(path: Path):
 
 @dataclass
 class Backend:
-    """A chosen device with its context, queue and generic program (Features.generic_program,
-    which also holds the display's kernels), and the programs specialised to scenes' features
-    (pathtrace.programs), built when first asked for. `mode`: one of programs.PROGRAM_MODES, how
-    a renderer on it chooses between them."""
+    """A chosen device with its context and queue, and its programs (pathtrace.programs): the
+    generic program (Features.generic_program) and those specialised to scenes' features, built
+    when first asked for. `opened`: what open_device built to show that the platform builds
+    kernels. `mode`: one of programs.PROGRAM_MODES, how a renderer on it chooses among them."""
     device: Device
     context: cl.Context
     queue: cl.CommandQueue
-    build: BuildResult
+    opened: BuildResult
     extra: str = ""
     use_cache: bool = True
     mode: str = "auto"
+    generic: Programs = None
 
     def __post_init__(self):
-        self.programs = Programs(lambda features: build_program(self.context, self.device.device, self.extra,
-                                                                self.use_cache, features).program,
-                                 self.device.name)
+        def build(features, tune):
+            return build_program(self.context, self.device.device, self.extra, self.use_cache, features, tune).program
+        self.programs = Programs(build, self.device.name, is_nvidia(self.device.device))
+        if self.generic is None:     # else shared with the backend it was made from (with_mode)
+            self.generic = self.programs
+        if self.opened.program is not None and self.opened.generic:
+            self.generic.add(Features.generic_program(), False, self.opened.program)
+
+    def with_mode(self, mode: str) -> "Backend":
+        """The same device, context, queue and generic program, choosing programs by `mode`."""
+        return Backend(self.device, self.context, self.queue, self.opened, self.extra, self.use_cache, mode,
+                       self.generic)
 
     @property
     def program(self) -> cl.Program:
-        """The generic program."""
-        return self.build.program
+        """The generic program; waits for it."""
+        return self.generic.get(Features.generic_program(), tuned=False)
 
-    def program_for(self, features: Features) -> cl.Program:
-        """The kernels specialised to `features` (and tuned, unlike `program`), built once per
-        backend; waits for them."""
-        return self.programs.get(features)
+    def ready_generic(self):
+        """The generic program if it is built, else None, its build started in the background."""
+        return self.generic.ready(Features.generic_program(), tuned=False)
+
+    def program_for(self, features: Features, tuned: bool = True) -> cl.Program:
+        """The kernels specialised to `features` (on NVIDIA with `tuned`, under the register caps
+        of app/occupancy.py), built once per backend; waits for them."""
+        return self.programs.get(features, tuned)
 
     def ready_program(self, features: Features):
-        """The kernels specialised to `features` if they are built, else None, their build
+        """The tuned kernels specialised to `features` if they are built, else None, their build
         started in the background."""
-        return self.programs.ready(features)
+        return self.programs.ready(features, tuned=True)
 
 
 def open_device(device: Device, extra: str = "", use_cache: bool = True, mode: str = None) -> Backend:
-    """The device with its queue and its generic program, which shows that its platform builds
-    the kernels and draws the first images of every scene (pathtrace.programs). It is built
-    without the register-cap trials, which only a scene's own program waits for, in the
-    background."""
+    """The device with its queue. Where the generic program builds fast (it is cached:
+    builds_fast), it is built now: it shows that the platform builds the kernels and draws every
+    scene's first images (pathtrace.programs). Elsewhere (a first start on NVIDIA, whose driver
+    takes minutes over it) the display's small program shows the platform builds, and the
+    generic program is built in the background, for later scenes and starts."""
     context = cl.Context([device.device])
     queue = cl.CommandQueue(context, properties=cl.command_queue_properties.PROFILING_ENABLE)
-    build = build_program(context, device.device, extra, use_cache, Features.generic_program(), tune=False)
-    return Backend(device, context, queue, build, extra, use_cache, mode or default_mode())
+    mode = mode or default_mode()
+    generic = Features.generic_program()
+    if builds_fast(device.device, extra, generic, tune=False):
+        opened = build_program(context, device.device, extra, use_cache, generic, tune=False)
+        opened.generic = True
+    else:
+        opened = build_cached(context, device.device, display_source(), list(BUILD_OPTIONS), use_cache, False)
+    backend = Backend(device, context, queue, opened, extra, use_cache, mode)
+    if mode != "specialised":
+        backend.ready_generic()
+    return backend
+
+
+def display_source() -> str:
+    """kernels/display.cl alone: the window's kernel, which needs nothing of the renderer's."""
+    return (resource_dir("kernels") / "display.cl").read_text()
 
 
 def check_fits(device: cl.Device, buffers: dict, what: str):

@@ -95,6 +95,11 @@ class DeviceGroup:
         for or has not chosen yet)."""
         return [r.describe_queue_plan() for r in self.renderers if r.auto_plan is not None]
 
+    def programs_used(self) -> list:
+        """Where the generic program drew samples, on each device, in words
+        (Renderer.describe_programs)."""
+        return [f"{r.backend.device.name}: {words}" for r in self.renderers if (words := r.describe_programs())]
+
     def render(self, spp: int, on_progress=None, launch_seconds: float = 0.25):
         """Brings every pixel to `spp` samples: adds samples self.samples .. spp-1, spread over
         the devices (so that a render can go on where the last one stopped); on_progress(samples

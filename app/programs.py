@@ -56,62 +56,74 @@ def default_mode() -> str:
 
 
 class Programs:
-    """The specialised programs of one device: built once each, in a background thread, on
-    request. `build(features)` builds one (pathtrace.device.build_program, bound to the device)."""
+    """Programs of one device, each built once, now or in a background thread, on request.
+    `build(features, tune)` builds one (pathtrace.device.build_program, bound to the device);
+    `tunes`: whether a tuned build differs from an untuned one (NVIDIA: app/occupancy.py)."""
 
-    def __init__(self, build, name: str):
+    def __init__(self, build, name: str, tunes: bool):
         self._build = build
         self._name = name
+        self._tunes = tunes
         self._lock = threading.Lock()
-        self._futures: dict[Features, Future] = {}
+        self._futures: dict[tuple, Future] = {}
         self._reported = set()
 
-    def get(self, features: Features) -> cl.Program:
-        """The program for `features`, built now if no build of it is under way or done."""
-        return self._future(features).result()
+    def _key(self, features: Features, tuned: bool) -> tuple:
+        return features, tuned and self._tunes
 
-    def ready(self, features: Features):
+    def add(self, features: Features, tuned: bool, program: cl.Program):
+        """A program built elsewhere."""
+        future = Future()
+        future.set_result(program)
+        with self._lock:
+            self._futures[self._key(features, tuned)] = future
+
+    def get(self, features: Features, tuned: bool = True) -> cl.Program:
+        """The program for `features`, built now if no build of it is under way or done."""
+        return self._future(self._key(features, tuned)).result()
+
+    def ready(self, features: Features, tuned: bool = True):
         """The program for `features` if it is built, else None, its build started in the
         background. A build that failed leaves None and says why once."""
-        future = self._future(features, background=True)
+        key = self._key(features, tuned)
+        future = self._future(key, background=True)
         if not future.done():
             return None
         error = future.exception()
         if error is None:
             return future.result()
-        if features not in self._reported:
-            self._reported.add(features)
-            warn(f"{self._name}: the scene's own kernels did not build "
-                 f"({str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__}); "
-                 f"rendering on with the generic kernels")
+        if key not in self._reported:
+            self._reported.add(key)
+            warn(f"{self._name}: the {'generic' if features.generic else 'scene' + chr(39) + 's own'} kernels "
+                 f"did not build ({str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__})"
+                 + ("" if features.generic else "; rendering on with the kernels in use"))
         return None
 
-    def failed(self, features: Features) -> bool:
+    def failed(self, features: Features, tuned: bool = True) -> bool:
         """Whether the build of the program for `features` ended in an error."""
-        future = self._futures.get(features)
+        future = self._futures.get(self._key(features, tuned))
         return future is not None and future.done() and future.exception() is not None
 
-    def _future(self, features: Features, background: bool = False) -> Future:
+    def _future(self, key: tuple, background: bool = False) -> Future:
         with self._lock:
-            future = self._futures.get(features)
+            future = self._futures.get(key)
             if future is not None:
                 return future
-            future = self._futures[features] = Future()
+            future = self._futures[key] = Future()
             future.set_running_or_notify_cancel()
         if background:
             # a daemon thread: a process that ends before the build does neither waits for it
             # nor leaves a torn cache entry (app/cache_files.py writes whole files)
-            thread = threading.Thread(target=self._run, args=(features, future), daemon=True,
-                                      name=BUILD_THREAD)
+            thread = threading.Thread(target=self._run, args=(key, future), daemon=True, name=BUILD_THREAD)
             thread.start()
         else:
-            self._run(features, future)
+            self._run(key, future)
             future.result()
         return future
 
-    def _run(self, features: Features, future: Future):
+    def _run(self, key: tuple, future: Future):
         try:
-            future.set_result(self._build(features))
+            future.set_result(self._build(*key))
         except Exception as e:
             future.set_exception(e)
 
@@ -123,8 +135,7 @@ def warm_up(backend) -> float:
     seconds it took."""
     from pathtrace.renderer import Renderer
     from pathtrace.scene import load_scene
-    generic = type(backend)(backend.device, backend.context, backend.queue, backend.build, backend.extra,
-                            backend.use_cache, "generic")
+    generic = backend.with_mode("generic")
     start = time.perf_counter()
     scene = load_scene("simple")
     for nee in (True, False):

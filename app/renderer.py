@@ -94,6 +94,7 @@ class Renderer:
         as its BVH build goes)."""
         self.backend = backend
         self.program = None       # the kernels launches run (_select_program)
+        self.uses_generic_program = False
         self._awaited = None      # the features of the scene's own program while it builds
         self._buffers = {}
         self.width = self.height = 0
@@ -102,6 +103,7 @@ class Renderer:
         self.plan_seconds = {}    # and the seconds of each plan's fastest trial
         self.plan_cached = False  # whether it is the verdict of earlier trials (_plan_verdict_path)
         self.samples = 0          # samples per pixel accumulated so far (whole passes)
+        self.generic_samples = 0  # of which the generic program drew (pathtrace.programs)
         self.aovs = False         # whether the denoiser's albedo and normal are accumulated too
         self.resets = 0           # how many times the image restarted (pathtrace.launches.Progressive)
         self.traversal_stats = 0  # Features.traversal_stats: set through count_traversal()
@@ -148,51 +150,65 @@ class Renderer:
     def _select_program(self):
         """The kernels for the scene: its own, specialised to its shapes, materials and settings
         (pathtrace.features.Features), or the backend's generic program, by the backend's mode
-        (pathtrace.programs): with "auto", the generic program until the scene's own is built
-        in the background (add_samples then switches to it, the average going on)."""
+        (pathtrace.programs). With "auto", the scene's own program, tuned, is built in the
+        background, and add_samples switches to it once it is there, the average going on;
+        until then the generic program renders, or where that is not built yet either (a first
+        start on NVIDIA) the scene's own program untuned, one build."""
         features = replace(self.compiled.features(self.settings, self.camera),
                            traversal_stats=self.traversal_stats, path_queue=self.queue_plan()[0])
         mode = self.backend.mode
         self._awaited = None
         if mode == "specialised" or self.traversal_stats:      # the generic program counts rays
-            program = self.backend.program_for(features)
+            self._use_program(self.backend.program_for(features), generic=False)
         elif mode == "generic":
-            program = self.backend.program
+            self._use_program(self.backend.program, generic=True)
         else:
-            program = self.backend.ready_program(features)
-            if program is None:
-                program, self._awaited = self.backend.program, features
-        self._use_program(program)
+            own = self.backend.ready_program(features)
+            if own is not None:
+                self._use_program(own, generic=False)
+                return
+            self._awaited = features
+            generic = self.backend.ready_generic()
+            if generic is not None:
+                self._use_program(generic, generic=True)
+            else:
+                self._use_program(self.backend.program_for(features, tuned=False), generic=False)
 
-    def _use_program(self, program: cl.Program):
+    def _use_program(self, program: cl.Program, generic: bool):
         if program is self.program:
             return
         self.program = program
+        self.uses_generic_program = generic     # (pathtrace.programs)
         self.kernels = {False: cl.Kernel(program, "render"), True: cl.Kernel(program, "render_nee")}
         # the queue's kernels are in a scene's program built with a queue depth, never in the
         # generic program, which renders without the queue until the scene's own is built
-        queue = self.queue_plan()[0] and program is not self.backend.program
+        queue = self.queue_plan()[0] and not generic
         self.continue_kernels = {False: cl.Kernel(program, "continue_paths"),
                                  True: cl.Kernel(program, "continue_paths_nee")} if queue else None
         self.add_queued = cl.Kernel(program, "add_queued_paths") if queue else None
         self.aov_kernel = cl.Kernel(program, "render_aovs")
 
-    @property
-    def uses_generic_program(self) -> bool:
-        """Whether launches run the generic program now (pathtrace.programs)."""
-        return self.program is self.backend.program
-
     def switch_when_built(self, wait: bool = False) -> bool:
-        """Switches to the scene's own program if it is built (with `wait`, once it is); the
-        average goes on. Whether the scene's own program renders now."""
+        """Switches to the scene's own tuned program if it is built (with `wait`, once it is);
+        the average goes on. Whether the scene's own program renders now."""
         if self._awaited is not None:
             program = self.backend.program_for(self._awaited) if wait else self.backend.ready_program(self._awaited)
             if program is not None:
                 self._awaited = None
-                self._use_program(program)
+                self._use_program(program, generic=False)
             elif self.backend.programs.failed(self._awaited):    # said once, by the backend
                 self._awaited = None
         return not self.uses_generic_program
+
+    def describe_programs(self) -> str:
+        """Which program drew the samples since the last reset, in words, where the generic
+        program drew any (else "")."""
+        if not self.generic_samples:
+            return ""
+        if self.generic_samples == self.samples:
+            return (f"{self.samples} spp from the generic kernels"
+                    + (" (the scene's own were still building)" if self.building_program else ""))
+        return f"the first {self.generic_samples} of {self.samples} spp from the generic kernels, the rest from the scene's own"
 
     @property
     def building_program(self) -> bool:
@@ -394,7 +410,7 @@ class Renderer:
             for name in image_buffers(self.aovs):
                 cl.enqueue_fill_buffer(self.backend.queue, self._buffers[name], np.float32(0), 0,
                                        self.width * self.height * 16)
-        self.samples = 0
+        self.samples = self.generic_samples = 0
         self.resets += 1
 
     # --- rendering -------------------------------------------------------------------------
@@ -466,6 +482,7 @@ class Renderer:
             events.append(cl.enqueue_nd_range_kernel(self.backend.queue, self.aov_kernel, global_size, local))
         if end >= self.height:
             self.samples += count
+            self.generic_samples += count if self.uses_generic_program else 0
         return events
 
     def _continue_paths(self, launch, capacity, global_size) -> list:

@@ -25,12 +25,11 @@ def build(cache, extra=""):
                           capture_output=True, text=True, timeout=120)
 
 
-def test_a_cache_entry_that_is_a_fifo_is_not_opened(tmp_path):
+def test_a_cache_entry_that_is_a_fifo_is_not_opened(backend, tmp_path):
+    from pathtrace.device import cache_entry
     assert build(tmp_path).stdout.strip() == "built"
     assert build(tmp_path).stdout.strip() == "cached"
-    # on a device that keeps no cache of its own, choose_device caches the renderer's kernels
-    # too: the one-line kernel's entry is the smallest
-    entry = min(tmp_path.glob("*.bin"), key=lambda p: p.stat().st_size)
+    entry = tmp_path / cache_entry(backend.device.device, SOURCE, [], True).name
     entry.unlink()
     os.mkfifo(entry)
     r = build(tmp_path)                  # hung in open() before
@@ -75,15 +74,18 @@ def test_pocl_keeps_the_kernels_in_its_own_cache_alone(backend, tmp_path, monkey
     assert bool(list(tmp_path.glob("*.bin"))) != keeps_own_cache(device)
 
 
-def only_entry(cache):
-    """The one-line kernel's cache entry: on a device that keeps no cache of its own, choose_device
-    caches the generic program too, whose entry is larger."""
-    return min(cache.glob("*.bin"), key=lambda p: p.stat().st_size)
+def only_entry(backend, cache, monkeypatch):
+    """The one-line kernel's cache entry (choose_device caches other programs beside it)."""
+    from pathtrace.device import cache_entry
+    monkeypatch.setenv("PATHTRACE_CACHE", str(cache))
+    entry = cache_entry(backend.device.device, SOURCE, [], True)
+    assert entry.is_file()
+    return entry
 
 
-def test_a_damaged_cache_entry_is_built_again_and_replaced(tmp_path):
+def test_a_damaged_cache_entry_is_built_again_and_replaced(backend, tmp_path, monkeypatch):
     assert build(tmp_path).stdout.strip() == "built"
-    entry = only_entry(tmp_path)
+    entry = only_entry(backend, tmp_path, monkeypatch)
     data = bytearray(entry.read_bytes())
     data[len(data) // 2] ^= 0xFF                 # a flipped bit: its digest no longer matches
     entry.write_bytes(bytes(data))
@@ -91,11 +93,11 @@ def test_a_damaged_cache_entry_is_built_again_and_replaced(tmp_path):
     assert build(tmp_path).stdout.strip() == "cached"
 
 
-def test_a_foreign_binary_in_a_cache_entry_is_built_again(tmp_path):
+def test_a_foreign_binary_in_a_cache_entry_is_built_again(backend, tmp_path, monkeypatch):
     """A whole entry whose binary the driver refuses (another driver's, or garbage): rebuilt."""
     from pathtrace.cache_files import write_entry
     assert build(tmp_path).stdout.strip() == "built"
-    entry = only_entry(tmp_path)
+    entry = only_entry(backend, tmp_path, monkeypatch)
     write_entry(entry, b"\n", b"\x7fELF not a binary this driver reads" * 8)
     assert build(tmp_path).stdout.strip() == "built"
     assert build(tmp_path).stdout.strip() == "cached"

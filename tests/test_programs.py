@@ -23,9 +23,7 @@ SPP = 128
 
 
 def with_mode(backend: Backend, mode: str) -> Backend:
-    """The same device, context and generic program, choosing programs by `mode`."""
-    return Backend(backend.device, backend.context, backend.queue, backend.build, backend.extra,
-                   backend.use_cache, mode)
+    return backend.with_mode(mode)
 
 
 def render(backend, scene, spp=SPP):
@@ -106,13 +104,13 @@ class GatedBuild:
         self.started = threading.Event()
         self.finished = threading.Event()
 
-    def __call__(self, features):
+    def __call__(self, features, tune):
         self.started.set()
         self.gate.wait(60)
         try:
             if self.fail:
                 raise RuntimeError("clBuildProgram failed: BUILD_PROGRAM_FAILURE\nerror: an injected failure")
-            return self.backend.program_for(features)
+            return self.backend.program_for(features, tune)
         finally:
             self.finished.set()
 
@@ -120,7 +118,7 @@ class GatedBuild:
 def test_a_renderer_switches_to_the_scenes_program_mid_accumulation(backend, specialised):
     auto = with_mode(backend, "auto")
     gated = GatedBuild(specialised)
-    auto.programs = Programs(gated, auto.device.name)
+    auto.programs = Programs(gated, auto.device.name, False)
     scene = load_scene("cornell-box")
     r = Renderer(auto, scene, SIZE, SIZE)
     assert gated.started.wait(60) and r.uses_generic_program
@@ -140,7 +138,7 @@ def test_a_renderer_switches_to_the_scenes_program_mid_accumulation(backend, spe
 def test_a_failed_build_leaves_the_generic_program_rendering(backend, capsys):
     auto = with_mode(backend, "auto")
     gated = GatedBuild(backend, fail=True)
-    auto.programs = Programs(gated, auto.device.name)
+    auto.programs = Programs(gated, auto.device.name, False)
     r = Renderer(auto, load_scene("cornell-box"), SIZE, SIZE)
     assert r.building_program
     gated.gate.set()
@@ -160,7 +158,7 @@ def test_path_queue_plans_render_with_the_generic_program_until_theirs_is_built(
     """The generic program has no continuation queue: launches go without it meanwhile."""
     auto = with_mode(backend, "auto")
     gated = GatedBuild(specialised)
-    auto.programs = Programs(gated, auto.device.name)
+    auto.programs = Programs(gated, auto.device.name, False)
     scene = load_scene("cornell-box").with_settings(path_queue=2)
     r = Renderer(auto, scene, SIZE, SIZE)
     r.add_samples(64)
@@ -172,4 +170,36 @@ def test_path_queue_plans_render_with_the_generic_program_until_theirs_is_built(
     for _ in range(SPP // 64 - 1):
         r.add_samples(64)
     r.finish()
+    same_image(r, render(specialised, scene))
+
+
+def test_without_the_generic_program_the_first_image_waits_for_one_untuned_build(backend, specialised):
+    """A first start on NVIDIA, whose driver takes minutes over the generic program: that builds
+    in the background, the scene's own program is built once, untuned, for the first image, and
+    the tuned one (app/occupancy.py) replaces it once built."""
+    auto = with_mode(backend, "auto")
+    generic = GatedBuild(specialised)
+    auto.generic = Programs(generic, auto.device.name, False)
+    tuned = threading.Event()
+    built = []
+
+    def build(features, tune):
+        built.append(tune)
+        if tune:
+            assert tuned.wait(60)
+        return specialised.program_for(features)
+    auto.programs = Programs(build, auto.device.name, True)
+    scene = load_scene("cornell-box")
+    r = Renderer(auto, scene, SIZE, SIZE)
+    assert generic.started.wait(60) and not generic.finished.is_set()
+    assert not r.uses_generic_program and r.building_program and False in built
+    r.add_samples(64)
+    r.finish()
+    tuned.set()
+    assert r.switch_when_built(wait=True) and not r.building_program and sorted(built) == [False, True]
+    for _ in range(SPP // 64 - 1):
+        r.add_samples(64)
+    r.finish()
+    generic.gate.set()
+    assert r.samples == SPP and r.generic_samples == 0
     same_image(r, render(specialised, scene))

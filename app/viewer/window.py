@@ -492,8 +492,8 @@ class Viewer:
         if self.texture is None:
             draw_notice(self, f"rendering the first pass of {self.renderer.scene.name}")
         elif self.renderer.building_program:
-            draw_notice(self, f"building the kernels of {self.renderer.scene.name}; generic kernels render "
-                              f"meanwhile", bottom=True)
+            draw_notice(self, f"building the kernels of {self.renderer.scene.name} in the background",
+                        bottom=True)
         else:
             self.notice = ""
         if self.show_help:
