@@ -234,9 +234,10 @@ class Backend:
         """The generic program; waits for it."""
         return self.generic.get(Features.generic_program(), tuned=False)
 
-    def ready_generic(self):
-        """The generic program if it is built, else None, its build started in the background."""
-        return self.generic.ready(Features.generic_program(), tuned=False)
+    def built_generic(self):
+        """The generic program if it is built, else None (it is built at open where that is
+        fast, and by `pathtrace devices --check`, never behind a scene's first image)."""
+        return self.generic.built(Features.generic_program(), tuned=False)
 
     def program_for(self, features: Features, tuned: bool = True) -> cl.Program:
         """The kernels specialised to `features` (on NVIDIA with `tuned`, under the register caps
@@ -252,9 +253,10 @@ class Backend:
 def open_device(device: Device, extra: str = "", use_cache: bool = True, mode: str = None) -> Backend:
     """The device with its queue. Where the generic program builds fast (it is cached:
     builds_fast), it is built now: it shows that the platform builds the kernels and draws every
-    scene's first images (pathtrace.programs). Elsewhere (a first start on NVIDIA, whose driver
-    takes minutes over it) the display's small program shows the platform builds, and the
-    generic program is built in the background, for later scenes and starts."""
+    scene's first images (pathtrace.programs). Elsewhere (NVIDIA's driver took over three minutes
+    over it, and a build in a background thread held up the scene's own build behind it) the
+    display's small program shows that the platform builds, and the generic program waits for
+    `pathtrace devices --check` (./install.sh runs it)."""
     context = cl.Context([device.device])
     queue = cl.CommandQueue(context, properties=cl.command_queue_properties.PROFILING_ENABLE)
     mode = mode or default_mode()
@@ -264,10 +266,7 @@ def open_device(device: Device, extra: str = "", use_cache: bool = True, mode: s
         opened.generic = True
     else:
         opened = build_cached(context, device.device, display_source(), list(BUILD_OPTIONS), use_cache, False)
-    backend = Backend(device, context, queue, opened, extra, use_cache, mode)
-    if mode != "specialised":
-        backend.ready_generic()
-    return backend
+    return Backend(device, context, queue, opened, extra, use_cache, mode)
 
 
 def display_source() -> str:

@@ -99,6 +99,11 @@ class Programs:
                  + ("" if features.generic else "; rendering on with the kernels in use"))
         return None
 
+    def built(self, features: Features, tuned: bool = True):
+        """The program for `features` if it is built, else None; starts nothing."""
+        future = self._futures.get(self._key(features, tuned))
+        return future.result() if future is not None and future.done() and future.exception() is None else None
+
     def failed(self, features: Features, tuned: bool = True) -> bool:
         """Whether the build of the program for `features` ended in an error."""
         future = self._futures.get(self._key(features, tuned))

@@ -152,8 +152,9 @@ class Renderer:
         (pathtrace.features.Features), or the backend's generic program, by the backend's mode
         (pathtrace.programs). With "auto", the scene's own program, tuned, is built in the
         background, and add_samples switches to it once it is there, the average going on;
-        until then the generic program renders, or where that is not built yet either (a first
-        start on NVIDIA) the scene's own program untuned, one build."""
+        until then the generic program renders, or where that is not built (NVIDIA's driver
+        takes minutes over it: `pathtrace devices --check` builds it) the scene's own program
+        untuned, one build, before the tuned one starts."""
         features = replace(self.compiled.features(self.settings, self.camera),
                            traversal_stats=self.traversal_stats, path_queue=self.queue_plan()[0])
         mode = self.backend.mode
@@ -163,16 +164,15 @@ class Renderer:
         elif mode == "generic":
             self._use_program(self.backend.program, generic=True)
         else:
-            own = self.backend.ready_program(features)
+            own = self.backend.programs.built(features)
             if own is not None:
                 self._use_program(own, generic=False)
                 return
+            generic = self.backend.built_generic()
+            self._use_program(generic if generic is not None else self.backend.program_for(features, tuned=False),
+                              generic=generic is not None)
             self._awaited = features
-            generic = self.backend.ready_generic()
-            if generic is not None:
-                self._use_program(generic, generic=True)
-            else:
-                self._use_program(self.backend.program_for(features, tuned=False), generic=False)
+            self.switch_when_built()      # starts the tuned build (on other drivers it is this one)
 
     def _use_program(self, program: cl.Program, generic: bool):
         if program is self.program:
