@@ -1,5 +1,6 @@
-"""Reading triangle meshes: PLY through plyfile, OBJ, STL, glTF and GLB through trimesh. Every
-problem is one line naming the file; degenerate triangles are dropped with a warning.
+"""Reading triangle meshes: PLY through NumPy (plyfile for what its fast path does not take),
+OBJ through NumPy (pathtrace.scene.obj), STL, glTF and GLB through trimesh. Every problem is one
+line naming the file; degenerate triangles are dropped with a warning.
 
 Texture coordinates follow Mitsuba 3's convention, v = 0 at an image's top row: a PLY file's
 (u, v) as they are (Mitsuba reads them so); OBJ's vt and glTF's TEXCOORD_0 as Mitsuba's OBJ
@@ -13,7 +14,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from pathtrace.errors import UserError, short, warn
+from pathtrace.errors import UserError, warn
 from pathtrace.files import check_regular_file
 
 FORMATS = (".ply", ".ply.gz", ".obj", ".stl", ".gltf", ".glb")
@@ -244,17 +245,8 @@ def triangulate(polygons) -> np.ndarray:
 
 
 def _read_obj(path, where):
-    import io
-
-    import trimesh.exchange.obj as obj
-
-    with open(path, "r", encoding="utf-8", errors="replace") as f:
-        text = f.read()
-    _check_obj_faces(text, where)
-    loaded = obj.load_obj(io.StringIO(text), skip_materials=True)
-    parts = list(loaded.get("geometry", {}).values()) if "geometry" in loaded else [loaded]
-    return _concatenate([(p.get("vertices"), p.get("faces"), p.get("vertex_normals"), _trimesh_uvs(p.get("visual")))
-                         for p in parts])
+    from pathtrace.scene.obj import parse_obj
+    return MeshData(*parse_obj(Path(path).read_bytes(), where))
 
 
 def _trimesh_uvs(visual):
@@ -265,26 +257,6 @@ def _trimesh_uvs(visual):
     uv = np.array(uv, np.float64).reshape(-1, 2)
     uv[:, 1] = 1.0 - uv[:, 1]
     return uv
-
-
-def _check_obj_faces(text: str, where: str):
-    """Every face corner of an OBJ file names a vertex it has: an index from 1 to the number of
-    `v` lines, or a negative one counting back from the last vertex read (the OBJ format's
-    rule). trimesh otherwise fails with an IndexError that says nothing of the file."""
-    vertices = 0
-    for number, line in enumerate(text.splitlines(), 1):
-        if line.startswith("v ") or line.startswith("v\t"):
-            vertices += 1
-        elif line.startswith("f ") or line.startswith("f\t"):
-            for corner in line.split()[1:]:
-                index = corner.split("/")[0]
-                try:
-                    k = int(index)
-                except ValueError:
-                    raise UserError(f"{where}: line {number}: face corner {short(corner)} is not a vertex index") from None
-                if not (1 <= k <= vertices or -vertices <= k <= -1):
-                    raise UserError(f"{where}: line {number}: face corner {k} names a vertex the file does not have "
-                                    f"({vertices} so far; OBJ counts from 1)")
 
 
 def _check_gltf_buffers(path: Path, where: str):
