@@ -366,3 +366,65 @@ def test_obj_decimals_read_as_float_reads_them():
     vertices = parse_obj(obj.encode(), "test")[0]
     assert np.array_equal(vertices, np.array([float(w) for w in words]).reshape(-1, 3))
 
+
+def test_mesh_files_hand_out_what_read_mesh_reads_in_the_order_asked(tmp_path, monkeypatch, capsys):
+    """MeshFiles, read ahead in threads, hands out each file as read_mesh reads it, with its
+    warning or problem line when it is asked for: in the order asked, the first bad file in
+    file order the one reported; a file read ahead under another `where` than asked for speaks
+    of the one asked for."""
+    from pathtrace.bench_scenes import torus_obj
+    from pathtrace.scene.meshes import MeshFiles
+    monkeypatch.setattr(MeshFiles, "LARGE", 0)          # every file read ahead, however small
+    paths = [tmp_path / f"m{k}.obj" for k in range(9)]
+    for k, path in enumerate(paths):
+        path.write_text(torus_obj(8 + k, 4) + ("f 1 1 2\n" if k in (1, 3) else "f 1 2 999999\n" if k in (6, 7) else ""))
+    expected = [read_mesh(path, "first") for path in paths[:6]]
+    capsys.readouterr()
+    with MeshFiles([(path, f"shape {k}") for k, path in enumerate(paths)]) as files:
+        for k in range(6):
+            mesh = files.read(paths[k], f"shape {k}")
+            assert all(np.array_equal(a, b) for a, b in zip(mesh, expected[k]))
+        assert [line.split(":")[2] for line in capsys.readouterr().err.splitlines()] == [" shape 1", " shape 3"]
+        with pytest.raises(UserError, match=r"^shape 6: .*m6.obj: line \d+: face corner 999999") as e:
+            files.read(paths[6], "shape 6")
+        assert "\n" not in str(e.value)
+    with MeshFiles([(paths[7], "a guess"), (paths[1], "a guess")]) as files:
+        with pytest.raises(UserError, match="^shape 7: "):
+            files.read(paths[7], "shape 7")
+        files.read(paths[1], "shape 1")
+    assert capsys.readouterr().err.startswith("pathtrace: warning: shape 1: ")
+
+
+@pytest.mark.parametrize("kind", ["xml", "pbrt", "toml"])
+def test_a_scene_of_many_mesh_files_names_its_first_bad_one(tmp_path, monkeypatch, kind):
+    """Each reader reads its scene's mesh files ahead (MeshFiles) and still reports the first
+    bad file in file order, in one line; a scene of good files has its meshes in file order."""
+    from pathtrace.scene.meshes import MeshFiles, write_ply
+    monkeypatch.setattr(MeshFiles, "LARGE", 0)
+    v, f = cube()
+    suffix = "ply" if kind == "pbrt" else "obj"
+    names = [f"m{k}.{suffix}" for k in range(6)]
+    for k, name in enumerate(names):
+        if suffix == "ply":
+            write_ply(tmp_path / name, np.asarray(v, float) + k, np.asarray(f))
+        else:
+            (tmp_path / name).write_text("".join(f"v {x + k} {y} {z}\n" for x, y, z in v)
+                                         + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in f))
+    scene = tmp_path / f"scene.{kind}"
+    if kind == "xml":
+        scene.write_text('<scene version="3.0.0">' + "".join(f'<shape type="obj"><string name="filename" value="{n}"/>'
+                                                             '</shape>' for n in names) + "</scene>")
+    elif kind == "pbrt":
+        scene.write_text('WorldBegin\nMaterial "diffuse"\n' + "".join(f'Shape "plymesh" "string filename" "{n}"\n'
+                                                                      for n in names))
+    else:
+        scene.write_text("".join(f'[[meshes]]\nfile = "{n}"\nmaterial = {{ type = "diffuse", rho_d = 0.5 }}\n'
+                                 for n in names))
+    s = load_scene(str(scene))
+    assert [m.name for m in s.meshes] == [f"m{k}" for k in range(6)]
+    assert [float(m.vertices[:, 0].min()) for m in s.meshes] == [float(np.min(v, axis=0)[0]) + k for k in range(6)]
+    for k in (4, 2):
+        (tmp_path / names[k]).write_bytes(b"ply\nformat nonsense\n" if suffix == "ply" else b"v 0 0 0\nf 1 2 3\n")
+    with pytest.raises(UserError, match=r"m2\.") as e:
+        load_scene(str(scene))
+    assert "m4." not in str(e.value) and "\n" not in str(e.value)
