@@ -109,9 +109,10 @@ class MeshFiles:
         self._submit()
 
     def _submit(self):
-        """Reads ahead up to two files a thread past the reader's latest."""
+        """Reads ahead up to two files a thread past the reader's latest, where there are two
+        to read at least (one alone the reader waits for)."""
         end = min(self.taken + 2 * self.workers, len(self.requests))
-        if self.submitted >= end or self.workers < 2:
+        if self.submitted >= end or self.workers < 2 or len(self.requests) < 2:
             return
         if self.pool is None:
             self.pool = ThreadPoolExecutor(self.workers, thread_name_prefix="mesh-files")
