@@ -6,6 +6,9 @@ and `pathtrace bench --scenes tori400-textured`).
   `pathtrace bench --builds`) with a sphere, in a TOML scene;
 - `meshes850`: 850 binary PLY files of tori (1,024 triangles each, with vertex normals) on a
   grid, in a pbrt-v4 scene (the layout of published scenes of many meshes);
+- `meshes850-obj`: the same tori as OBJ files written as Blender writes them, in Mitsuba XML
+  (the layout of scenes exported from Blender): not a row of `bench --load`, but a file for its
+  `--load-scene` (docs/performance.md);
 - `tori400-textured`: 400 tori with uvs, each with its own 256x256 bitmap texture (a PNG file),
   on a textured ground, under a sky and a sphere lamp, in Mitsuba XML (which pathtrace reads too):
   the "several hundred textured meshes" row of the mesh benchmarks."""
@@ -72,6 +75,41 @@ def write_meshes(folder: Path, count: int = 850, size: tuple = (64, 64)) -> tupl
               '<bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></shape>' for k in range(count)]
     (folder / f"meshes{count}.xml").write_text(scene_xml(size, eye, target, (0, 1, 0), 60, 1, 5, 1.0, shapes))
     return f"meshes{count}.pbrt", f"meshes{count}.xml", f"{count} PLY files, {count * len(faces):,} triangles", size
+
+
+def torus_obj(nu=32, nv=16) -> str:
+    """torus()'s torus as Blender writes an OBJ file: each point once (v, with its normal vn),
+    the uv seams' corners doubled only in vt, faces of v/vt/vn indices, and its uvs with v = 0 at
+    the bottom, as OBJ places them (pathtrace.scene.meshes flips them to Mitsuba's)."""
+    points, normals, uvs, _ = torus(nu, nv)
+    grid = np.arange((nu + 1) * (nv + 1)).reshape(nu + 1, nv + 1)
+    shared = grid[:nu, :nv].reshape(-1)                  # the points before the seams' copies
+    i, j = np.meshgrid(np.arange(nu), np.arange(nv), indexing="ij")
+    point = lambda i, j: (i % nu) * nv + j % nv + 1      # noqa: E731
+    corners = [(i, j), (i, j + 1), (i + 1, j), (i + 1, j), (i, j + 1), (i + 1, j + 1)]
+    rows = np.stack([np.stack([point(a, b), grid[a, b] + 1, point(a, b)], -1) for a, b in corners], 2)
+    faces = rows.reshape(-1, 2, 3, 3).transpose(1, 0, 2, 3).reshape(-1, 3, 3)
+    return "".join(["# Blender 4.2.0\no torus\n", *(f"v {x:.6f} {y:.6f} {z:.6f}\n" for x, y, z in points[shared]),
+                    *(f"vn {x:.4f} {y:.4f} {z:.4f}\n" for x, y, z in normals[shared]),
+                    *(f"vt {u:.6f} {1 - v:.6f}\n" for u, v in uvs), "s 1\nusemtl Material\n",
+                    *("f " + " ".join("/".join(map(str, c)) for c in face) + "\n" for face in faces)])
+
+
+def write_obj_meshes(folder: Path, count: int = 850) -> Path:
+    """`meshes850-obj` (the module's docstring) in `folder`: its XML file."""
+    text = torus_obj()
+    side = int(np.ceil(np.sqrt(count)))
+    shapes = []
+    for k in range(count):
+        (folder / f"o{k:04d}.obj").write_text(text)
+        shapes.append(f'<shape type="obj"><string name="filename" value="o{k:04d}.obj"/>'
+                      f'<transform name="to_world"><translate x="{k % side * 2.5}" z="{k // side * 2.5}"/></transform>'
+                      '<bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></shape>')
+    middle = side * 1.25
+    path = folder / f"meshes{count}-obj.xml"
+    path.write_text(scene_xml((64, 64), (middle, side * 1.2, -side * 0.6), (middle, 0, middle), (0, 1, 0), 60, 1, 5,
+                              1.0, shapes))
+    return path
 
 
 def write_textured_tori(folder: Path, count: int = 400) -> Path:

@@ -90,6 +90,22 @@ def test_load_bench_scenes_say_the_same_in_each_format(tmp_path):
             assert abs(ia.mean() - ib.mean()) < 0.02 * ia.mean(), (ia.mean(), ib.mean())
 
 
+
+def test_the_obj_scene_is_meshes850_as_obj_files(tmp_path):
+    """bench_scenes.write_obj_meshes (the OBJ scene for `bench --load --load-scene`) holds
+    meshes850's tori at the same places, as OBJ files in Mitsuba XML."""
+    import numpy as np
+
+    from pathtrace import api
+    from pathtrace.bench_scenes import write_meshes, write_obj_meshes
+    ply = api.load(tmp_path / write_meshes(tmp_path, 5)[0])
+    obj = api.load(write_obj_meshes(tmp_path, 5))
+    assert [len(m.faces) for m in obj.meshes] == [len(m.faces) for m in ply.meshes] == [1024] * 5
+    for a, b in zip(obj.meshes, ply.meshes):
+        assert np.allclose(a.vertices.min(axis=0), b.vertices.min(axis=0), atol=1e-5)
+        assert np.allclose(a.vertices.max(axis=0), b.vertices.max(axis=0), atol=1e-5)
+        assert a.uvs is not None and a.normals is not None
+
 def test_load_bench_rows(tmp_path):
     """`bench --load`: a row per generated scene and per --load-scene file, with pathtrace's
     seconds, the BVH built and read from the BVH cache; Mitsuba's column only when asked for, and

@@ -105,6 +105,18 @@ BAD = [
     ("short.obj", b"v 0 0 0\nv 1 0 0\nf 1 2 3\n", r"line 3: face corner 3 names a vertex the file does not have \(2 so far"),
     ("word.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 x\n", "line 4: face corner 'x' is not a vertex index"),
     ("back.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf -1 -2 -4\n", "line 4: face corner -4"),
+    ("vt.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/2 3/1\n",
+     r"line 5: face corner '2/2' names a texture coordinate \(vt\) the file does not have \(1 so far"),
+    ("vn.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//-2\n",
+     r"line 5: face corner '3//-2' names a normal \(vn\) the file does not have \(1 so far"),
+    ("slashes.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1/1/1/1 2 3\n",
+     "line 4: face corner '1/1/1/1' is not v, v/vt, v//vn or v/vt/vn indices"),
+    ("lead.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 /3\n", "line 4: face corner '/3' is not a vertex index"),
+    ("two.obj", b"v 0 0 0\nv 1 0\nv 0 1 0\nf 1 2 3\n", r"line 2: a vertex \(v\) needs three coordinates, got 2"),
+    ("zero.obj", b"v 0 0 0\nv 1 0 zero\nv 0 1 0\nf 1 2 3\n", "line 2: 'zero' is not a number"),
+    ("first.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\nv 0 x 0\nvt 1\nf 1/1 2/1 3/4\n",
+     "line 4: face corner 9 names a vertex"),
+    ("earlier.obj", b"v 0 0 0\nv 1 0 0\nvn 0 0 y\nv 0 1 0\nf 1 2 4\n", "line 3: 'y' is not a number"),
     ("list.ply", b"ply\nformat ascii 1.0\nelement vertex 3\nproperty list uchar float x\nproperty float y\n"
                  b"property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
                  b"1 0 0 0\n1 1 0 0\n1 0 1 0\n3 0 1 2\n", "the PLY vertex property 'x' must be a number, not a list"),
@@ -205,3 +217,214 @@ def test_a_binary_ply_shorter_than_its_header_says_is_refused(tmp_path):
                      b"end_header\n" + b"\0" * 64)
     with pytest.raises(UserError, match="short.ply: the PLY file holds 64 bytes of data where its header claims"):
         read_mesh(path, "test")
+
+
+
+# --- OBJ, read by app/scene/obj.py ---------------------------------------------------------
+
+def corner_rows(mesh):
+    """A mesh as its triangles' corners (position, then uv and normal where it has them), each
+    triangle turned to start at its least corner, sorted: equal for two meshes that differ only
+    in the order of their vertices, of their triangles and of a triangle's corners (kept in turn)."""
+    vertices, faces, normals, uvs = mesh
+    columns = [vertices[faces]] + [a[faces] for a in (uvs, normals) if a is not None]
+    corners = np.round(np.concatenate(columns, axis=2), 6).reshape(len(faces), -1)
+    width = corners.shape[1] // 3
+    return np.array(sorted(min(tuple(np.roll(c, -k * width)) for k in range(3)) for c in corners))
+
+
+def trimesh_obj(path):
+    """The mesh trimesh's OBJ reader makes of a file, as pathtrace read OBJ files before its own
+    reader (its parts joined, vt's v flipped to Mitsuba's convention)."""
+    import io
+
+    import trimesh.exchange.obj as obj
+
+    from pathtrace.scene.meshes import _concatenate, _trimesh_uvs
+    loaded = obj.load_obj(io.StringIO(path.read_text()), skip_materials=True)
+    parts = list(loaded.get("geometry", {}).values()) if "geometry" in loaded else [loaded]
+    return _concatenate([(p.get("vertices"), p.get("faces"), p.get("vertex_normals"), _trimesh_uvs(p.get("visual")))
+                         for p in parts])
+
+
+FORMS = ("{v}", "{v}/{t}", "{v}//{n}", "{v}/{t}/{n}")
+
+
+def random_obj(seed: int) -> str:
+    """An OBJ file of random v, vt and vn (in fixed point or not, with colours or w or not) and
+    faces of 3 to 6 distinct corners, all of one form or of mixed forms, with indices from 1 or
+    negative ones, and other statements: as trimesh reads it right (every v, vt and vn before
+    the faces, as trimesh counts negative indices back from the file's last; where forms are
+    mixed, the first face a v/vt/vn triangle and no usemtl, so that trimesh reads each face line
+    by itself)."""
+    rng = np.random.default_rng(seed)
+    number = rng.choice(["{:.6f}", "{!r}", "{:.3g}", "{:.4f}"])
+    negative, mixed = rng.random() < 0.4, rng.random() < 0.4
+    counts = dict(zip("vtn", rng.integers(6, 40, 3)))
+    colours, w = rng.random() < 0.2, rng.random() < 0.2
+    v = [f"v {' '.join(number.format(float(x)) for x in p)}" + (" 0.5 0.25 1" if colours else "")
+         for p in rng.uniform(-5, 5, (counts["v"], 3))]
+    t = [f"vt {' '.join(number.format(float(x)) for x in p)}" + (" 0" if w else "") for p in rng.uniform(0, 1, (counts["t"], 2))]
+    n = [f"vn {' '.join(number.format(float(x)) for x in p)}" for p in rng.normal(size=(counts["n"], 3))]
+    form = rng.choice(FORMS)
+    faces = []
+    for k in range(int(rng.integers(2, 30))):
+        size = 3 if (mixed and k == 0) or rng.random() < 0.4 else int(rng.integers(3, 7))
+        corner = FORMS[3] if mixed and k == 0 else rng.choice(FORMS) if mixed else form
+        picks = {key: rng.choice(counts[key], size, replace=False) for key in "vtn"}
+        faces.append("f " + " ".join(corner.format(**{key: int(picks[key][j]) - counts[key] if negative and rng.random() < 0.5
+                                                     else int(picks[key][j]) + 1 for key in "vtn"}) for j in range(size)))
+        if not mixed and rng.random() < 0.15:
+            faces.append(f"usemtl m{int(rng.integers(3))}")
+    head = ["# random", "mtllib none.mtl", "o thing"]
+    return "\n".join(head + v + t + n + ["g part", "s 1"] + faces) + "\n"
+
+
+@pytest.mark.parametrize("seed", range(40))
+def test_obj_reads_as_trimesh_read_it(tmp_path, seed):
+    """The OBJ reader against trimesh's, which pathtrace used before: the same triangles, each
+    corner with the same position, uv and normal, on quads, polygons, negative indices, missing
+    vt or vn and mixed forms; vertices split where a v has another vt or vn in another face,
+    and none that no face uses."""
+    from pathtrace.scene.meshes import check_mesh
+    path = tmp_path / "random.obj"
+    path.write_text(random_obj(seed))
+    ours = read_mesh(path, "test")
+    theirs = check_mesh(*trimesh_obj(path), where="trimesh")
+    assert (ours.uvs is None, ours.normals is None) == (theirs.uvs is None, theirs.normals is None)
+    a, b = corner_rows(ours), corner_rows(theirs)
+    assert a.shape == b.shape and np.allclose(a, b, atol=1e-6)
+    assert len(np.unique(ours.faces)) == len(ours.vertices)
+
+
+def test_obj_forms_split_vertices_and_fans():
+    """Each distinct (v, vt, vn) a vertex, in the order of the v lines; a quad a fan about its
+    first corner; vt's v flipped; a face of fewer than three corners skipped."""
+    from pathtrace.scene.obj import parse_obj
+    text = (b"v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 9 9 9\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvt 0.5 0.25\n"
+            b"vn 0 0 1\nf 1/1/1 2/2/1 3/3/1 4/4/1\nf 1/5/1 3/3/1 4/4/1\nf 1/1/1 2/2/1\n")
+    vertices, faces, normals, uvs = parse_obj(text, "test")
+    assert vertices.tolist() == [[0, 0, 0], [0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]   # v 1 twice, v 5 unused
+    assert uvs.tolist() == [[0, 1], [0.5, 0.75], [1, 1], [1, 0], [0, 0]]
+    assert faces.tolist() == [[0, 2, 3], [0, 3, 4], [1, 3, 4]]
+    assert normals.tolist() == [[0, 0, 1]] * 5
+    # where some corner has no vt (or vn), the mesh has none
+    vertices, faces, normals, uvs = parse_obj(text.replace(b"f 1/5/1 3/3/1", b"f 1//1 3//1"), "test")
+    assert uvs is None and normals is not None and faces.tolist() == [[0, 1, 2], [0, 2, 3], [0, 2, 3]]
+
+
+def test_obj_as_blender_writes_it_is_the_torus_it_was_written_from(tmp_path):
+    """The benchmark's OBJ torus (each point once, the uv seams doubled in vt only, v/vt/vn
+    corners) reads as the torus: its points split where the seams give them two uvs."""
+    from pathtrace.bench_scenes import torus, torus_obj
+    (tmp_path / "t.obj").write_text(torus_obj())
+    mesh = read_mesh(tmp_path / "t.obj", "test")
+    points, normals, uvs, faces = torus()
+    assert len(mesh.vertices) == len(points) == 33 * 17 and len(mesh.faces) == len(faces)
+    assert np.allclose(corner_rows(mesh), corner_rows((points, faces, normals, uvs)), atol=1e-4)
+
+
+def test_obj_negative_indices_count_back_from_what_was_read_so_far():
+    """-1 is the last vertex read before the face (the OBJ format's rule; trimesh's reader
+    counted back from the file's last)."""
+    from pathtrace.scene.obj import parse_obj
+    vertices, faces, _, _ = parse_obj(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\n"
+                                      b"v 0 0 1\nv 1 0 1\nv 0 1 1\nf -3 -2 -1\nf 1 2 -1\n", "test")
+    assert vertices[faces].tolist() == [[[0, 0, 0], [1, 0, 0], [0, 1, 0]], [[0, 0, 1], [1, 0, 1], [0, 1, 1]],
+                                        [[0, 0, 0], [1, 0, 0], [0, 1, 1]]]
+
+
+def test_obj_layout_as_editors_write_it():
+    """Comments, indentation, continued lines, CRLF, a byte order mark, other statements, colours
+    after a v, w after a vt and a vt of u alone (v = 0) are read as the format has them."""
+    from pathtrace.scene.obj import parse_obj
+    text = (b"\xef\xbb\xbf# made by hand\r\nmtllib m.mtl\r\no a # name\r\n  v 0 0 0 1 0 0\r\n\tv 1 0 \\\r\n 0\r\n"
+            b"v 0 1 0 # third\r\nvt 0.25\r\nvt 1 0 0\r\nvt 0 1 0.5\r\ns off\r\nusemtl x\r\nvp 1 2\r\nl 1 2\r\n"
+            b"f 1/1 2/2 \\\n 3/3 # a triangle\r\n")
+    vertices, faces, normals, uvs = parse_obj(text, "test")
+    assert vertices.tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0]] and faces.tolist() == [[0, 1, 2]]
+    assert uvs.tolist() == [[0.25, 1], [1, 1], [0, 0]] and normals is None
+
+
+def test_obj_decimals_read_as_float_reads_them():
+    """Values in fixed point, read by NumPy's integer reader and a power of ten, equal float()'s
+    to the last bit; values of any other form (exponents, many digits, nan, integers) are read
+    by float()."""
+    from pathtrace.scene.obj import _decimals, _tokens, parse_obj
+    rng = np.random.default_rng(7)
+    fixed = [f"{x:.{p}f}" for x, p in zip(rng.uniform(-1e4, 1e4, 3000) * 10.0 ** -rng.integers(0, 8, 3000),
+                                          rng.integers(1, 10, 3000))] + ["+.5", "-7.", "-0.000"]
+    text = np.frombuffer(" ".join(fixed).encode() + b"\n", np.uint8)
+    values = _decimals(text, *_tokens(text))
+    assert values is not None and np.array_equal(values, [float(w) for w in fixed])
+    for other in (["1e-5"], ["0.000000000000000001"], ["nan"], ["12"], ["1.2.3"], ["1-2"]):
+        text = np.frombuffer(" ".join(fixed[:5] + other).encode() + b"\n", np.uint8)
+        assert _decimals(text, *_tokens(text)) is None
+    words = fixed[:297] + ["1e-5", "0.000000000000000001", "12"]
+    obj = "".join(f"v {' '.join(words[k:k + 3])}\n" for k in range(0, len(words), 3))
+    obj += "f " + " ".join(str(k + 1) for k in range(len(words) // 3)) + "\n"
+    vertices = parse_obj(obj.encode(), "test")[0]
+    assert np.array_equal(vertices, np.array([float(w) for w in words]).reshape(-1, 3))
+
+
+def test_mesh_files_hand_out_what_read_mesh_reads_in_the_order_asked(tmp_path, monkeypatch, capsys):
+    """MeshFiles, read ahead in threads, hands out each file as read_mesh reads it, with its
+    warning or problem line when it is asked for: in the order asked, the first bad file in
+    file order the one reported; a file read ahead under another `where` than asked for speaks
+    of the one asked for."""
+    from pathtrace.bench_scenes import torus_obj
+    from pathtrace.scene.meshes import MeshFiles
+    monkeypatch.setattr(MeshFiles, "LARGE", 0)          # every file read ahead, however small
+    paths = [tmp_path / f"m{k}.obj" for k in range(9)]
+    for k, path in enumerate(paths):
+        path.write_text(torus_obj(8 + k, 4) + ("f 1 1 2\n" if k in (1, 3) else "f 1 2 999999\n" if k in (6, 7) else ""))
+    expected = [read_mesh(path, "first") for path in paths[:6]]
+    capsys.readouterr()
+    with MeshFiles([(path, f"shape {k}") for k, path in enumerate(paths)]) as files:
+        for k in range(6):
+            mesh = files.read(paths[k], f"shape {k}")
+            assert all(np.array_equal(a, b) for a, b in zip(mesh, expected[k]))
+        assert [line.split(":")[2] for line in capsys.readouterr().err.splitlines()] == [" shape 1", " shape 3"]
+        with pytest.raises(UserError, match=r"^shape 6: .*m6.obj: line \d+: face corner 999999") as e:
+            files.read(paths[6], "shape 6")
+        assert "\n" not in str(e.value)
+    with MeshFiles([(paths[7], "a guess"), (paths[1], "a guess")]) as files:
+        with pytest.raises(UserError, match="^shape 7: "):
+            files.read(paths[7], "shape 7")
+        files.read(paths[1], "shape 1")
+    assert capsys.readouterr().err.startswith("pathtrace: warning: shape 1: ")
+
+
+@pytest.mark.parametrize("kind", ["xml", "pbrt", "toml"])
+def test_a_scene_of_many_mesh_files_names_its_first_bad_one(tmp_path, monkeypatch, kind):
+    """Each reader reads its scene's mesh files ahead (MeshFiles) and still reports the first
+    bad file in file order, in one line; a scene of good files has its meshes in file order."""
+    from pathtrace.scene.meshes import MeshFiles, write_ply
+    monkeypatch.setattr(MeshFiles, "LARGE", 0)
+    v, f = cube()
+    suffix = "ply" if kind == "pbrt" else "obj"
+    names = [f"m{k}.{suffix}" for k in range(6)]
+    for k, name in enumerate(names):
+        if suffix == "ply":
+            write_ply(tmp_path / name, np.asarray(v, float) + k, np.asarray(f))
+        else:
+            (tmp_path / name).write_text("".join(f"v {x + k} {y} {z}\n" for x, y, z in v)
+                                         + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in f))
+    scene = tmp_path / f"scene.{kind}"
+    if kind == "xml":
+        scene.write_text('<scene version="3.0.0">' + "".join(f'<shape type="obj"><string name="filename" value="{n}"/>'
+                                                             '</shape>' for n in names) + "</scene>")
+    elif kind == "pbrt":
+        scene.write_text('WorldBegin\nMaterial "diffuse"\n' + "".join(f'Shape "plymesh" "string filename" "{n}"\n'
+                                                                      for n in names))
+    else:
+        scene.write_text("".join(f'[[meshes]]\nfile = "{n}"\nmaterial = {{ type = "diffuse", rho_d = 0.5 }}\n'
+                                 for n in names))
+    s = load_scene(str(scene))
+    assert [m.name for m in s.meshes] == [f"m{k}" for k in range(6)]
+    assert [float(m.vertices[:, 0].min()) for m in s.meshes] == [float(np.min(v, axis=0)[0]) + k for k in range(6)]
+    for k in (4, 2):
+        (tmp_path / names[k]).write_bytes(b"ply\nformat nonsense\n" if suffix == "ply" else b"v 0 0 0\nf 1 2 3\n")
+    with pytest.raises(UserError, match=r"m2\.") as e:
+        load_scene(str(scene))
+    assert "m4." not in str(e.value) and "\n" not in str(e.value)

@@ -1,5 +1,6 @@
-"""Reading triangle meshes: PLY through plyfile, OBJ, STL, glTF and GLB through trimesh. Every
-problem is one line naming the file; degenerate triangles are dropped with a warning.
+"""Reading triangle meshes: PLY through NumPy (plyfile for what its fast path does not take),
+OBJ through NumPy (pathtrace.scene.obj), STL, glTF and GLB through trimesh. Every problem is one
+line naming the file; degenerate triangles are dropped with a warning.
 
 Texture coordinates follow Mitsuba 3's convention, v = 0 at an image's top row: a PLY file's
 (u, v) as they are (Mitsuba reads them so); OBJ's vt and glTF's TEXCOORD_0 as Mitsuba's OBJ
@@ -7,13 +8,18 @@ reader and the glTF format place them (trimesh gives both with v = 0 at the bott
 
 import gzip
 import io
+import os
+import threading
 import warnings
+from collections import deque
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
 from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 
-from pathtrace.errors import UserError, short, warn
+from pathtrace.errors import UserError, warn
 from pathtrace.files import check_regular_file
 
 FORMATS = (".ply", ".ply.gz", ".obj", ".stl", ".gltf", ".glb")
@@ -35,9 +41,9 @@ class MeshData(NamedTuple):
 PLY_UV_NAMES = (("u", "v"), ("s", "t"), ("texture_u", "texture_v"), ("texture_s", "texture_t"))
 
 
-def read_mesh(path: Path, where: str) -> MeshData:
+def read_mesh(path: Path, where: str, warn=warn) -> MeshData:
     """A mesh file's vertices, faces, normals and texture coordinates. `where` names the field
-    that refers to the file, for messages."""
+    that refers to the file, for messages; `warn` takes the warning lines."""
     path = Path(path)
     suffix = ".ply.gz" if path.name.lower().endswith(".ply.gz") else path.suffix.lower()
     if suffix not in FORMATS:
@@ -45,32 +51,133 @@ def read_mesh(path: Path, where: str) -> MeshData:
                         f"(use {', '.join(FORMATS)})")
     check_regular_file(path, where, "mesh file", MAX_FILE_BYTES)
     try:
-        with warnings.catch_warnings():
-            # the parsers' own lines (NumPy's loadtxt on a cut PLY) would precede pathtrace's one
-            warnings.simplefilter("ignore")
-            if suffix == ".ply":
-                mesh = _read_ply(path)
-            elif suffix == ".ply.gz":           # pbrt-v4's plymesh takes them
-                with gzip.open(path) as f:
-                    mesh = _read_ply(f, path)
-            elif suffix == ".obj":
-                mesh = _read_obj(path, f"{where}: {path}")
-            else:
-                if suffix == ".gltf":
-                    _check_gltf_buffers(path, f"{where}: {path}")
-                mesh = _read_with_trimesh(path, suffix)
+        if suffix == ".ply":
+            mesh = _read_ply(path)
+        elif suffix == ".ply.gz":           # pbrt-v4's plymesh takes them
+            with gzip.open(path) as f:
+                mesh = _read_ply(f, path)
+        elif suffix == ".obj":
+            mesh = _read_obj(path, f"{where}: {path}")
+        else:
+            if suffix == ".gltf":
+                _check_gltf_buffers(path, f"{where}: {path}")
+            mesh = _read_with_trimesh(path, suffix)
     except UserError:
         raise
     except Exception as e:     # the parsers raise anything on a malformed file
         raise UserError(f"{where}: {path}: not a readable {suffix[1:].upper()} mesh "
                         f"({type(e).__name__}: {str(e).splitlines()[0] if str(e) else 'malformed'})") from None
-    return check_mesh(*mesh, where=f"{where}: {path}")
+    return check_mesh(*mesh, where=f"{where}: {path}", warn=warn)
 
 
-def check_mesh(vertices, faces, normals, uvs=None, where="") -> MeshData:
-    """Validates a mesh and drops its degenerate triangles (repeated corners or zero area).
-    Unusable normals or texture coordinates (the wrong count) are dropped; NaN or infinite
-    texture coordinates are refused."""
+class MeshFiles:
+    """The mesh files a scene names, the large ones read ahead in threads in the order the
+    reader names them: add() takes (path, where) pairs as read_mesh does, read() hands out one as
+    read_mesh(path, where) would have read it then. Its problem or warning lines come out at
+    read(), so that they keep the reader's order: the first bad file in file order is the one
+    reported. A file read ahead under another `where` than read()'s (a reader's guess), with a
+    problem or a warning, is read again for read()'s lines.
+
+    Only files of LARGE bytes or more are read ahead: NumPy releases the interpreter's lock in
+    each operation on an array, and a small file's reading is hundreds of short ones, whose lock
+    handovers between threads cost more than another core gives (docs/performance.md,
+    2026-11-28)."""
+
+    LARGE = 512 << 10
+
+    def __init__(self, requests=()):
+        self.requests = []
+        self.waiting = {}      # path -> the indices of its requests not yet read()
+        self.futures = {}      # index of a request -> its Future
+        self.submitted = 0
+        self.taken = 0         # the requests before the latest read() one
+        self.pool = None
+        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+        self.workers = min(cores, 32)
+        self.add(requests)
+
+    def add(self, requests):
+        for path, where in requests:
+            path = Path(path)
+            try:
+                size = path.stat().st_size
+            except (OSError, ValueError):      # read_mesh says what is wrong, when asked
+                continue
+            if size >= self.LARGE:
+                self.waiting.setdefault(path, deque()).append(len(self.requests))
+                self.requests.append((path, where))
+        self._submit()
+
+    def _submit(self):
+        """Reads ahead up to two files a thread past the reader's latest, where there are two
+        to read at least (one alone the reader waits for)."""
+        end = min(self.taken + 2 * self.workers, len(self.requests))
+        if self.submitted >= end or self.workers < 2 or len(self.requests) < 2:
+            return
+        if self.pool is None:
+            self.pool = ThreadPoolExecutor(self.workers, thread_name_prefix="mesh-files")
+        for i in range(self.submitted, end):
+            self.futures[i] = self.pool.submit(_read_noting, *self.requests[i])
+        self.submitted = end
+
+    def read(self, path, where: str) -> MeshData:
+        indices = self.waiting.get(Path(path))
+        if not indices:
+            return read_mesh(path, where)
+        i = indices.popleft()
+        self.taken = max(self.taken, i + 1)
+        self._submit()
+        future = self.futures.pop(i, None)
+        if future is None:
+            return read_mesh(path, where)
+        try:
+            mesh, notes = future.result()
+        except UserError:
+            if self.requests[i][1] != where:
+                return read_mesh(path, where)
+            raise
+        if notes and self.requests[i][1] != where:
+            return read_mesh(path, where)
+        for note in notes:
+            warn(note)
+        return mesh
+
+    def close(self):
+        for future in self.futures.values():
+            future.cancel()
+        if self.pool is not None:
+            self.pool.shutdown(wait=True)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *_):
+        self.close()
+
+
+def _read_noting(path, where):
+    """read_mesh(path, where) in a thread: the mesh and its warning lines, kept for the reader."""
+    notes = []
+    return read_mesh(path, where, notes.append), notes
+
+
+_QUIET = threading.Lock()
+
+
+@contextmanager
+def _parsers_quiet():
+    """The parsers' own warning lines silenced: they would precede pathtrace's one line (NumPy's
+    loadtxt in plyfile on a cut PLY). warnings.catch_warnings sets the process's filters, and
+    mesh files are read in threads (MeshFiles), so such parses run one at a time."""
+    with _QUIET, warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        yield
+
+
+def check_mesh(vertices, faces, normals, uvs=None, where="", warn=warn) -> MeshData:
+    """Validates a mesh and drops its degenerate triangles (repeated corners or zero area), with
+    a line to `warn`. Unusable normals or texture coordinates (the wrong count) are dropped; NaN
+    or infinite texture coordinates are refused."""
     vertices = np.asarray(vertices, np.float64).reshape(-1, 3)
     faces = np.asarray(faces, np.int64).reshape(-1, 3)
     if len(faces) == 0:
@@ -190,21 +297,24 @@ def _read_binary_triangles(data: bytes, path):
 
 def _read_ply(source, path=None):
     """A PLY mesh from a path, or from a file object `source` read from `path`."""
-    from plyfile import PlyData
-
     path = path or source
     data = source.read(MAX_FILE_BYTES + 1) if path is not source else Path(path).read_bytes()
     if len(data) > MAX_FILE_BYTES:
         raise UserError(f"{path}: the PLY file decompresses to more than {MAX_FILE_BYTES >> 30} GB")
     fast = _read_binary_triangles(data, path)
     if fast is not None:
-        v, triangles = fast
-    else:
+        return _ply_mesh(*fast, path)
+    from plyfile import PlyData
+    with _parsers_quiet():
         ply = PlyData.read(io.BytesIO(data))
         names = [e.name for e in ply.elements]
         if "vertex" not in names or "face" not in names:
             raise UserError(f"{path}: the PLY file has no {'vertex' if 'vertex' not in names else 'face'} element")
-        v = ply["vertex"].data
+        return _ply_mesh(ply["vertex"].data, ply["face"].data, path)
+
+
+def _ply_mesh(v, faces, path) -> MeshData:
+    """A mesh of a PLY file's vertex records and its triangles, or its face records (polygons)."""
     fields = v.dtype.names
     for k in ("x", "y", "z", "nx", "ny", "nz"):
         if k in fields and v.dtype[k].kind not in "fiu":
@@ -217,13 +327,12 @@ def _read_ply(source, path=None):
     if names and any(v.dtype[k].kind not in "fiu" for k in names):
         raise UserError(f"{path}: the PLY vertex property '{names[0]}' must be a number, not a list")
     uvs = np.column_stack([v[names[0]], v[names[1]]]) if names else None
-    if fast is not None:
-        return MeshData(vertices, triangles, normals, uvs)
-    face = ply["face"].data
-    key = next((k for k in ("vertex_indices", "vertex_index") if k in face.dtype.names), None)
+    if faces.dtype.names is None:
+        return MeshData(vertices, faces, normals, uvs)
+    key = next((k for k in ("vertex_indices", "vertex_index") if k in faces.dtype.names), None)
     if key is None:
         raise UserError(f"{path}: the PLY faces have no vertex_indices")
-    return MeshData(vertices, triangulate(face[key]), normals, uvs)
+    return MeshData(vertices, triangulate(faces[key]), normals, uvs)
 
 
 def triangulate(polygons) -> np.ndarray:
@@ -244,17 +353,8 @@ def triangulate(polygons) -> np.ndarray:
 
 
 def _read_obj(path, where):
-    import io
-
-    import trimesh.exchange.obj as obj
-
-    with open(path, "r", encoding="utf-8", errors="replace") as f:
-        text = f.read()
-    _check_obj_faces(text, where)
-    loaded = obj.load_obj(io.StringIO(text), skip_materials=True)
-    parts = list(loaded.get("geometry", {}).values()) if "geometry" in loaded else [loaded]
-    return _concatenate([(p.get("vertices"), p.get("faces"), p.get("vertex_normals"), _trimesh_uvs(p.get("visual")))
-                         for p in parts])
+    from pathtrace.scene.obj import parse_obj
+    return MeshData(*parse_obj(Path(path).read_bytes(), where))
 
 
 def _trimesh_uvs(visual):
@@ -265,26 +365,6 @@ def _trimesh_uvs(visual):
     uv = np.array(uv, np.float64).reshape(-1, 2)
     uv[:, 1] = 1.0 - uv[:, 1]
     return uv
-
-
-def _check_obj_faces(text: str, where: str):
-    """Every face corner of an OBJ file names a vertex it has: an index from 1 to the number of
-    `v` lines, or a negative one counting back from the last vertex read (the OBJ format's
-    rule). trimesh otherwise fails with an IndexError that says nothing of the file."""
-    vertices = 0
-    for number, line in enumerate(text.splitlines(), 1):
-        if line.startswith("v ") or line.startswith("v\t"):
-            vertices += 1
-        elif line.startswith("f ") or line.startswith("f\t"):
-            for corner in line.split()[1:]:
-                index = corner.split("/")[0]
-                try:
-                    k = int(index)
-                except ValueError:
-                    raise UserError(f"{where}: line {number}: face corner {short(corner)} is not a vertex index") from None
-                if not (1 <= k <= vertices or -vertices <= k <= -1):
-                    raise UserError(f"{where}: line {number}: face corner {k} names a vertex the file does not have "
-                                    f"({vertices} so far; OBJ counts from 1)")
 
 
 def _check_gltf_buffers(path: Path, where: str):
@@ -311,18 +391,19 @@ def _read_with_trimesh(path, suffix):
 
     from pathtrace.scene.transform import transform_normals, transform_points
 
-    scene = trimesh.load(str(path), file_type=suffix[1:], force="scene", process=False)
-    parts = []
-    for node in scene.graph.nodes_geometry:
-        matrix, name = scene.graph[node]
-        geometry = scene.geometry[name]
-        if not hasattr(geometry, "faces"):
-            continue
-        has_normals = suffix != ".stl" and "vertex_normals" in geometry._cache
-        normals = transform_normals(matrix, geometry.vertex_normals) if has_normals else None
-        parts.append((transform_points(matrix, geometry.vertices), geometry.faces, normals,
-                      _trimesh_uvs(getattr(geometry, "visual", None))))
-    return _concatenate(parts)
+    with _parsers_quiet():
+        scene = trimesh.load(str(path), file_type=suffix[1:], force="scene", process=False)
+        parts = []
+        for node in scene.graph.nodes_geometry:
+            matrix, name = scene.graph[node]
+            geometry = scene.geometry[name]
+            if not hasattr(geometry, "faces"):
+                continue
+            has_normals = suffix != ".stl" and "vertex_normals" in geometry._cache
+            normals = transform_normals(matrix, geometry.vertex_normals) if has_normals else None
+            parts.append((transform_points(matrix, geometry.vertices), geometry.faces, normals,
+                          _trimesh_uvs(getattr(geometry, "visual", None))))
+        return _concatenate(parts)
 
 
 def _triangles(faces) -> np.ndarray:

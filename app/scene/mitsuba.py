@@ -29,7 +29,7 @@ from pathtrace.materials.table import check_bump_map
 from pathtrace.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
-from pathtrace.scene.meshes import MAX_COORDINATE, check_mesh, read_mesh, unit_disk, vertex_normals
+from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, unit_disk, vertex_normals
 from pathtrace.textures import TEXTURES, Texture, read_image
 
 MAX_XML_BYTES = 64 << 20
@@ -253,6 +253,7 @@ class _Reader:
         self.media = []             # the scene's participating media
         self.medium_rows = {}       # id(medium Node) -> row of self.media
         self.camera_medium = -1
+        self.mesh_files = MeshFiles()   # the obj and ply shapes' files, read ahead
 
     # -- properties of an element: {name: Node} after $substitution --
 
@@ -451,21 +452,22 @@ class _Reader:
         nodes = self.expand(root)
         self.named = self.declared_ids(nodes)
         self.check_reference_cycles()
-        for node in nodes:
-            if node.tag == "shape" and node.attrs.get("type") == "shapegroup":
-                continue                   # drawn where an instance refers to it
-            if node.tag == "shape":
-                self.shape(node)
-            elif node.tag == "sensor":
-                self.sensor(node)
-            elif node.tag == "integrator":
-                self.integrator(node)
-            elif node.tag == "emitter":
-                self.emitter(node)
-            elif node.tag in ("bsdf", "texture", "medium"):
-                continue                   # used where referenced
-            else:
-                warn(f"{node.where()}: not supported; pathtrace ignores it")
+        with MeshFiles(self.named_mesh_files(nodes)) as self.mesh_files:
+            for node in nodes:
+                if node.tag == "shape" and node.attrs.get("type") == "shapegroup":
+                    continue                   # drawn where an instance refers to it
+                if node.tag == "shape":
+                    self.shape(node)
+                elif node.tag == "sensor":
+                    self.sensor(node)
+                elif node.tag == "integrator":
+                    self.integrator(node)
+                elif node.tag == "emitter":
+                    self.emitter(node)
+                elif node.tag in ("bsdf", "texture", "medium"):
+                    continue                   # used where referenced
+                else:
+                    warn(f"{node.where()}: not supported; pathtrace ignores it")
         if not self.builder.spheres and not self.builder.meshes and not self.builder.instance_object:
             raise UserError(f"{self.path}: the scene has no shapes pathtrace can render")
         settings = self.settings
@@ -475,6 +477,19 @@ class _Reader:
                                   environment=self.environment or Environment.constant((0, 0, 0)),
                                   settings=settings, source=str(self.path), lights=self.lights,
                                   media=self.media, camera_medium=self.camera_medium)
+
+    def named_mesh_files(self, nodes) -> list:
+        """The (path, where) of the obj and ply shapes' files, in document order, for MeshFiles
+        to read ahead (a file name given otherwise than as a string is left to shape())."""
+        found, todo = [], list(reversed(nodes))
+        while todo:
+            node = todo.pop()
+            if node.tag == "shape" and node.attrs.get("type") in ("obj", "ply"):
+                filename = self.properties(node).get("filename")
+                if filename is not None and filename.tag == "string" and filename.attrs.get("value"):
+                    found.append((node.file.parent / filename.attrs["value"], node.where()))
+            todo.extend(reversed(node.children))
+        return found
 
     def default_camera(self):
         """Mitsuba's default sensor: at the origin, looking down +z, fov 45 on x."""
@@ -968,7 +983,7 @@ class _Reader:
             filename = self.get(props, "filename", kinds=("string",))
             if filename is None:
                 _fail(node, "needs a filename")
-            vertices, faces, normals, uvs = read_mesh(node.file.parent / filename, node.where())
+            vertices, faces, normals, uvs = self.mesh_files.read(node.file.parent / filename, node.where())
             if self.get(props, "face_normals", False, ("boolean",)):
                 normals = None
             smooth = normals is None and not self.get(props, "face_normals", False, ("boolean",))

@@ -25,7 +25,7 @@ from pathtrace.media import Medium, MediumInterface
 from pathtrace.resources import resource_dir
 from pathtrace.scene import transform
 from pathtrace.scene.description import RUSSIAN_ROULETTE, Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
-from pathtrace.scene.meshes import MAX_COORDINATE, check_mesh, read_mesh, triangulate, vertex_normals
+from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, triangulate, vertex_normals
 from pathtrace.textures import TEXTURES, Texture, read_image
 from pathtrace.textures.bitmap import FILTERS, WRAP_MODES
 
@@ -49,6 +49,7 @@ class _Reader:
         self.media = {}              # name -> row of the scene's media, as [media] is read
         self.material_tables = {}    # the [materials] tables, by name (a blend's bsdfs name them)
         self.blending = []           # the named materials being read as a blend's components
+        self.mesh_files = MeshFiles()  # the scene's mesh files, read ahead
 
     def fail(self, where, problem):
         raise UserError(f"{self.label}: {where}: {problem}")
@@ -576,7 +577,7 @@ class _Reader:
             if not isinstance(name, str) or not name:
                 self.fail(f"{where}.file", f"must be a file name, got {short(name)}")
             source = self.path.parent / name
-            vertices, faces, normals, uvs = read_mesh(source, f"{self.label}: {where}.file")
+            vertices, faces, normals, uvs = self.mesh_files.read(source, f"{self.label}: {where}.file")
             if flags["face_normals"]:
                 normals = None
             elif normals is None and flags["smooth"]:
@@ -601,6 +602,16 @@ class _Reader:
                     faces.astype(np.int32), None if normals is None else normals.astype(np.float32),
                     material, str(source), origin, None if uvs is None else uvs.astype(np.float32),
                     self.interface(data, where))
+
+    def named_mesh_files(self, meshes, objects):
+        """The (path, where) of the files that [[meshes]] and then [objects] name, in the order
+        they are read, for MeshFiles to read ahead (what is not a file name is left to mesh())."""
+        tables = [(f"meshes[{i}]", m) for i, m in enumerate(meshes)]
+        if isinstance(objects, dict):
+            tables += [(f"objects.{name}.meshes[{i}]", m) for name, o in objects.items() if isinstance(o, dict)
+                       and isinstance(o.get("meshes"), list) for i, m in enumerate(o["meshes"])]
+        return [(self.path.parent / m["file"], f"{self.label}: {where}.file") for where, m in tables
+                if isinstance(m, dict) and isinstance(m.get("file"), str) and m["file"]]
 
     def instances(self, objects, instances, builder, rows):
         """[objects.NAME] (its `meshes`: an array of mesh tables, in the object's space) and
@@ -692,12 +703,13 @@ class _Reader:
                 self.fail(where, f"the sphere reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace")
             builder.add_sphere(center, radius, self.material_ref(builder, rows, s, where),
                                self.name(s, where, f"sphere {i}"), self.interface(s, where))
-        for i, m in enumerate(meshes):
-            where = f"meshes[{i}]"
-            if not isinstance(m, dict):
-                self.fail(where, f"must be a table, got {type(m).__name__}")
-            builder.add_mesh(self.mesh(m, where, self.material_ref(builder, rows, m, where)))
-        self.instances(data.get("objects", {}), instances, builder, rows)
+        with MeshFiles(self.named_mesh_files(meshes, data.get("objects"))) as self.mesh_files:
+            for i, m in enumerate(meshes):
+                where = f"meshes[{i}]"
+                if not isinstance(m, dict):
+                    self.fail(where, f"must be a table, got {type(m).__name__}")
+                builder.add_mesh(self.mesh(m, where, self.material_ref(builder, rows, m, where)))
+            self.instances(data.get("objects", {}), instances, builder, rows)
         camera = data.get("camera", {"eye": [0, 0, 5], "look_at": [0, 0, 0]})
         return builder.build(
             self.path.stem, media=media,

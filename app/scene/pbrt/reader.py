@@ -23,6 +23,7 @@ an object are copied into world space at each instance."""
 import gzip
 import math
 import os
+import re
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -38,7 +39,7 @@ from pathtrace.lights.light import luminance
 from pathtrace.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder
-from pathtrace.scene.meshes import MAX_COORDINATE, check_mesh, read_mesh, unit_disk, vertex_normals
+from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, unit_disk, vertex_normals
 from pathtrace.scene.pbrt.equal_area import to_latlong
 from pathtrace.scene.pbrt.materials import MaterialMapper, make, spectrum_rgb
 from pathtrace.textures import Texture
@@ -47,6 +48,9 @@ from pathtrace.scene.pbrt.tokens import Tokens, numbers, parameters, string
 MAX_FILE_BYTES = 4 << 30
 MAX_INCLUDE_DEPTH = 16
 MAX_FILM = 16384
+# a plymesh shape and its file name, as MeshFiles reads them ahead (PbrtReader.named_mesh_files)
+_PLYMESH = re.compile(r'\bShape\s+"plymesh"')
+_FILENAME = re.compile(r'"string\s+filename"\s*\[?\s*"([^"]*)"')
 
 
 @dataclass
@@ -85,6 +89,7 @@ class PbrtReader:
         self.null_material = make("null", {}, "")    # the interface material's, one row for all
         self.material_rows = {}
         self.warned = set()
+        self.mesh_files = MeshFiles()     # the plymesh shapes' files, read ahead
 
     # -- files --
 
@@ -93,7 +98,8 @@ class PbrtReader:
         return p if p.is_absolute() else self.folder / p
 
     def read(self) -> Scene:
-        self.parse_file(self.path, "scene")
+        with self.mesh_files:
+            self.parse_file(self.path, "scene")
         if self.stack:
             warn(f"{self.path}: {len(self.stack)} AttributeBegin without AttributeEnd")
         if not self.builder.spheres and not self.builder.meshes and not self.builder.instance_object:
@@ -126,6 +132,7 @@ class PbrtReader:
             raise UserError(f"{path}: not a text file (byte {e.start} is not UTF-8)") from None
         self.including.append(real)
         tokens = Tokens(text, path)
+        self.mesh_files.add(self.named_mesh_files(text, tokens))
         while True:
             kind, name, offset = tokens.next()
             if kind == "end":
@@ -137,6 +144,19 @@ class PbrtReader:
                 tokens.fail(offset, f"unknown directive '{cut(name)}'")
             handler(self, tokens, offset)
         self.including.pop()
+
+    def named_mesh_files(self, text: str, tokens: Tokens) -> list:
+        """The (path, where) of the files that the file's plymesh shapes seem to name, in order,
+        for MeshFiles to read ahead: a guess by pattern (a commented-out shape is read for
+        nothing, a file named otherwise is left to shape_mesh), which shape_mesh's own read
+        corrects."""
+        starts = [m.start() for m in _PLYMESH.finditer(text)] + [len(text)]
+        found = []
+        for start, end in zip(starts, starts[1:]):
+            name = _FILENAME.search(text, start, min(end, start + 4096))
+            if name:
+                found.append((self.resolve(name.group(1)), f"{tokens.where(start)}: filename"))
+        return found
 
     def once(self, key, message):
         if key not in self.warned:
@@ -590,7 +610,7 @@ class PbrtReader:
                 raise UserError(f"{where}: a plymesh needs a filename")
             path = self.resolve(filename)
             source = str(path)
-            vertices, faces, normals, uvs = read_mesh(path, f"{where}: filename")
+            vertices, faces, normals, uvs = self.mesh_files.read(path, f"{where}: filename")
             if uvs is not None:
                 uvs = np.column_stack([uvs[:, 0], 1 - uvs[:, 1]])
             for name in ("displacement", "edgelength"):
