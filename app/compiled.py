@@ -203,15 +203,20 @@ class CompiledScene:
                         russian_roulette=settings.russian_roulette, stack=stack_size(self.bvh.depth),
                         instance_stack=stack_size(self.instance_depth) if self.two_level else 0,
                         lone_spheres=self.lone_spheres,
-                        flat=(self.num_spheres, self.num_triangles)
-                        if self.num_spheres + self.num_triangles <= FLAT_MAX and not self.two_level else ())
+                        flat=(self.num_spheres, self.num_triangles) if self.flat else ())
+
+    @property
+    def flat(self) -> bool:
+        """Whether rays test every primitive, with no tree (app/features.py: FLAT_MAX)."""
+        return self.num_spheres + self.num_triangles <= FLAT_MAX and not self.two_level
 
     @property
     def layout(self) -> int:
         """The LAYOUT_* bits (kernels/scene.cl) by which a generic program reads this scene's
         buffers."""
         return ((LAYOUT_LONE_SPHERES if self.lone_spheres else 0) | (LAYOUT_INSTANCES if self.two_level else 0)
-                | (LAYOUT_MEDIA if self.media_per_primitive else 0) | (LAYOUT_LIGHT_TREE if self.lights.tree else 0))
+                | (LAYOUT_MEDIA if self.media_per_primitive else 0) | (LAYOUT_LIGHT_TREE if self.lights.tree else 0)
+                | (LAYOUT_FLAT | self.num_triangles << LAYOUT_FLAT_TRIANGLES if self.flat else 0))
 
     def shape(self, prim: int) -> ShapeRef:
         """The description's shape that primitive `prim` (BVH order) belongs to."""
@@ -223,7 +228,9 @@ class CompiledScene:
         return ShapeRef("mesh", shape - self.num_spheres, mesh.name, mesh.material)
 
 
-LAYOUT_LONE_SPHERES, LAYOUT_INSTANCES, LAYOUT_MEDIA, LAYOUT_LIGHT_TREE = 1, 2, 4, 8    # kernels/scene.cl
+# kernels/scene.cl
+LAYOUT_LONE_SPHERES, LAYOUT_INSTANCES, LAYOUT_MEDIA, LAYOUT_LIGHT_TREE, LAYOUT_FLAT = 1, 2, 4, 8, 16
+LAYOUT_FLAT_TRIANGLES = 8
 
 
 def float4_rows(rows) -> np.ndarray:

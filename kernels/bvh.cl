@@ -308,6 +308,11 @@ Hit walk_world(const SceneData *sc, float3 o, float3 d, float t_max, PrimId self
     Hit hit = {t_max, -1, 0.0f, 0.0f};
     SET_INSTANCE(&hit, -1);
 #ifdef GENERIC
+    if (sc->layout & LAYOUT_FLAT) {    /* as a FLAT_SPHERES program tests them, but in loops */
+        intersect_spheres(sc, 0, sc->num_spheres, o, d, -1, &hit);
+        intersect_triangles(sc, 0, sc->layout >> LAYOUT_FLAT_TRIANGLES, o, d, self, -1, &hit);
+        return hit;
+    }
     int lone = sc->layout & LAYOUT_LONE_SPHERES ? sc->num_spheres : 0;
 #elif defined(LONE_SPHERES)
     const int lone = LONE_SPHERES;

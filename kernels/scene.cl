@@ -65,6 +65,8 @@ typedef struct {
 #define LAYOUT_INSTANCES 2      /* the BVH is a tree of instances (kernels/bvh.cl) */
 #define LAYOUT_MEDIA 4          /* prim_media has an entry per primitive */
 #define LAYOUT_LIGHT_TREE 8     /* lights are chosen through a light tree (kernels/light_tree.cl) */
+#define LAYOUT_FLAT 16          /* a few primitives, tested all (kernels/bvh.cl: FLAT_SPHERES), */
+#define LAYOUT_FLAT_TRIANGLES 8 /* the triangles' count in the bits from this one up */
 #ifdef GENERIC
 #define HAS_LIGHT_TREE(sc) ((sc)->layout & LAYOUT_LIGHT_TREE)
 #else

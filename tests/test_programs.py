@@ -59,6 +59,7 @@ def test_the_generic_program_renders_each_test_scene_as_its_own_program(generic,
 
 @pytest.mark.parametrize("name,settings", [
     ("teapot-sky", {}),                                           # lone spheres beside the triangles' tree
+    ("simple-diffuse", {}),                                       # five spheres, tested all (flat)
     ("cornell-box", {"russian_roulette": "albedo"}),
     ("cornell-box", {"russian_roulette": "off", "max_depth": 6}),
     ("cornell-box", {"filter": PixelFilter("gaussian")}),
@@ -70,6 +71,7 @@ def test_the_generic_program_reads_its_choices_at_run_time(generic, specialised,
     scene = scene.with_settings(**settings) if settings else scene
     a, b = render(generic, scene), render(specialised, scene)
     assert a.params(1)["layout"] == b.params(1)["layout"]
+    assert bool(a.params(1)["layout"] & 16) == bool(a.compiled.flat)      # LAYOUT_FLAT
     same_image(a, b)
 
 
