@@ -10,8 +10,8 @@ __version__ = "0.1.0"
 # name -> the module that defines it, imported on first use (PEP 562)
 _EXPORTS = {
     **{name: "pathtrace.api" for name in ("load", "load_dict", "material", "render", "progressive", "denoise",
-                                          "tonemap", "write", "show", "view", "devices", "queue_plans", "Snapshot",
-                                          "AOVS")},
+                                          "tonemap", "write", "show", "view", "devices", "queue_plans",
+                                          "programs_used", "Snapshot", "AOVS")},
     "Scene": "pathtrace.scene.description",
     "RenderSettings": "pathtrace.scene.description",
     "PATH_QUEUE_AUTO": "pathtrace.scene.description",

@@ -301,3 +301,15 @@ def test_the_path_queue_setting_takes_auto():
     scene.settings.path_queue = 0
     render(scene, spp=1)
     assert pathtrace.queue_plans(scene) == [] and pathtrace.queue_plans(pathtrace.load_dict(small_scene())) == []
+
+
+def test_programs_used_says_where_the_generic_program_drew_samples(monkeypatch):
+    backend = pathtrace.api.open_devices(DEVICE)[0]
+    scene = pathtrace.load_dict(small_scene())
+    render(scene, spp=4)
+    assert pathtrace.programs_used(scene) == []              # the tests' mode: the scene's own
+    monkeypatch.setattr(backend, "mode", "generic")
+    generic = pathtrace.load_dict(small_scene())
+    render(generic, spp=4)
+    assert pathtrace.programs_used(generic) == [f"{backend.device.name}: 4 spp from the generic kernels"]
+    assert pathtrace.programs_used(pathtrace.load_dict(small_scene())) == []
