@@ -2,6 +2,7 @@
 real ones."""
 
 import os
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -17,6 +18,9 @@ ROOT = Path(__file__).resolve().parent.parent
 # The BVH cache (pathtrace.bvh_cache) is off in the tests, theirs and their commands': every
 # scene is built, and nothing is written to the user's cache; tests/test_bvh_cache.py turns it on.
 os.environ.setdefault("PATHTRACE_BVH_CACHE", "0")
+# Nor to its cache of kernel binaries and path-queue verdicts (Renderer.choose_queue_plan), whose
+# verdicts would spare a later run the trials that tests count.
+os.environ.setdefault("PATHTRACE_CACHE", tempfile.mkdtemp(prefix="pathtrace-tests-"))
 # Renders wait for their scene's own program, so that each is repeatable (pathtrace.programs);
 # tests/test_programs.py renders with the generic program and switches between the two.
 os.environ.setdefault("PATHTRACE_PROGRAM", "specialised")

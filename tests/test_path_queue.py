@@ -197,9 +197,10 @@ def test_every_plan_renders_the_megakernels_image(backend, plan):
     assert_same_render(plain, (r.read_sum(), r._read("sum_sq"), r))
 
 
-def test_auto_runs_no_trials_on_cpus_or_for_short_renders(backend, monkeypatch):
+def test_auto_runs_no_trials_on_cpus_or_for_short_renders(backend, monkeypatch, tmp_path):
     """Without trials, "auto" is no queue: on CPUs (PoCL), and for renders shorter than the trials;
     a change of the setting chooses again."""
+    monkeypatch.setenv("PATHTRACE_CACHE", str(tmp_path))       # no verdict of earlier trials
     trials = []
     monkeypatch.setattr(Renderer, "add_samples", lambda self, *a, **k: trials.append(a))
     scene = load_scene("cornell-box").with_settings(path_queue=renderer_module.PATH_QUEUE_AUTO)

@@ -635,6 +635,9 @@ def test_the_window_stays_smooth_while_the_cpu_renders(display, backend, tmp_pat
         times = np.array(v.frame_times) * 1000
         assert np.median(times) < 50 and np.percentile(times, 99) < 100, \
             (np.median(times), np.percentile(times, 99))
+        # the render goes on meanwhile: two whole passes, however long a loaded machine takes
+        while v.progressive.passes_done < 2 and time.perf_counter() - start < 120:
+            v.frame()
         assert v.progressive.passes_done >= 2
     finally:
         v.close()
