@@ -298,13 +298,14 @@ def draw_panel(v):
 
 def draw_notice(v, text: str, fraction: float = None, bottom: bool = False):
     """What the window is busy with: while it has no image (a BVH build, the kernels'
-    compilation, the first pass), centred over the image, with a bar where the fraction done is
+    compilation, the first pass), centred over the image's place, with a bar where the fraction done is
     known; with `bottom`, work that goes on behind an image (the scene's own kernels being
     built), at the window's foot, where it hides little of the image."""
     imgui = v.imgui
     io = imgui.get_io()
+    x0, width = v.image_area(io.display_size.x, io.display_size.y)    # beside the panel, not under it
     y, pivot = (io.display_size.y - 8, 1.0) if bottom else (io.display_size.y / 2, 0.5)
-    imgui.set_next_window_pos((io.display_size.x / 2, y), imgui.Cond_.always, (0.5, pivot))
+    imgui.set_next_window_pos((x0 + width / 2, y), imgui.Cond_.always, (0.5, pivot))
     imgui.set_next_window_bg_alpha(0.85)
     flags = (imgui.WindowFlags_.always_auto_resize | imgui.WindowFlags_.no_title_bar
              | imgui.WindowFlags_.no_inputs | imgui.WindowFlags_.no_saved_settings)
