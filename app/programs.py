@@ -5,9 +5,14 @@ A specialised program is the fastest a scene can have (on a GPU every branch a k
 costs registers, hence occupancy), but building it can take seconds on a GPU's driver, longer
 with the register-cap trials of app/occupancy.py, and every new mix of materials, textures and
 lights is a new program. The generic program (Features.generic_program) is built once per
-device, driver and pathtrace version and cached, so a scene's first images never wait for a
-build: they come from the generic program while the scene's own builds in a thread (the
-drivers' builds release Python's lock), and launches switch to it once it is there.
+device, driver and pathtrace version and cached (app/device.py: open_device builds it where that
+is fast, `pathtrace devices --check` everywhere), so that a scene's first images need no build:
+they come from the generic program while the scene's own builds in a thread (the drivers'
+builds release Python's lock), and launches switch to it once it is there. Where the generic
+program is not built, the first image waits for one untuned build of the scene's own, and the
+tuned one (app/occupancy.py) follows in the background. Nothing else builds behind a first
+image: NVIDIA's driver took minutes over the generic program, and a scene's build in another
+thread waited for it (docs/performance.md, 2026-11-28).
 
 Both programs draw the same estimator, each sample an unbiased estimate of the pixel, so the
 average goes on across the switch (Renderer keeps its accumulation). Which samples a render
