@@ -266,7 +266,7 @@ def cmd_devices(args):
             try:
                 b = open_device(d, mode="generic")
                 start = time.perf_counter()
-                cached = b.opened.generic and b.opened.cached
+                cached = b.built_generic() is not None and b.opened.cached
                 b.program
                 line += (f": builds the generic kernels ({time.perf_counter() - start + b.opened.seconds:.2f} s"
                          f"{', cached' if cached else ''}) and renders with them ({warm_up(b):.2f} s)")
@@ -313,7 +313,7 @@ def cmd_render(args):
     backends = api.open_devices(args.device or ["auto"])
     for backend in backends:
         print(f"device: {backend.device.describe()}", file=sys.stderr)
-    generic = all(b.opened.generic for b in backends)
+    generic = all(b.built_generic() is not None for b in backends)
     cached = " (from the kernel cache)" if generic and all(b.opened.cached for b in backends) else ""
     phase(f"opened the device{'s' * (len(backends) > 1)}" + (" and built the generic kernels" if generic else ""),
           cached)

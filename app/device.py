@@ -109,7 +109,6 @@ class BuildResult:
     program: cl.Program
     seconds: float
     cached: bool
-    generic: bool = False     # the generic program (Features.generic_program)
 
 
 def program_options(device: cl.Device, features: Features) -> list[str]:
@@ -126,14 +125,6 @@ def build_program(context: cl.Context, device: cl.Device, extra: str = "",
     """Builds the kernels specialised to `features` for one device. `tune`: see build_cached."""
     return build_cached(context, device, kernel_source(extra, features), program_options(device, features),
                         use_cache, tune)
-
-
-def builds_fast(device: cl.Device, extra: str = "", features: Features = Features(), tune: bool = True) -> bool:
-    """Whether building the program of `features` will not compile it afresh: its binary is in
-    pathtrace's cache, or the driver keeps its own cache and builds from it (PoCL, whose first
-    build of the generic program takes 2 s on two cores where NVIDIA's took minutes)."""
-    return keeps_own_cache(device) or cache_entry(device, kernel_source(extra, features),
-                                                  program_options(device, features), tune).is_file()
 
 
 def cache_entry(device: cl.Device, source: str, options: list[str], tune: bool) -> Path:
@@ -213,31 +204,28 @@ class Backend:
     extra: str = ""
     use_cache: bool = True
     mode: str = "auto"
-    generic: Programs = None
+    programs: Programs = None     # shared with the backends made from this one (with_mode)
 
     def __post_init__(self):
-        def build(features, tune):
-            return build_program(self.context, self.device.device, self.extra, self.use_cache, features, tune).program
-        self.programs = Programs(build, self.device.name, is_nvidia(self.device.device))
-        if self.generic is None:     # else shared with the backend it was made from (with_mode)
-            self.generic = self.programs
-        if self.opened.program is not None and self.opened.generic:
-            self.generic.add(Features.generic_program(), False, self.opened.program)
+        if self.programs is None:
+            self.programs = Programs(lambda features, tune: build_program(
+                self.context, self.device.device, self.extra, self.use_cache, features, tune).program,
+                self.device.name, is_nvidia(self.device.device))
 
     def with_mode(self, mode: str) -> "Backend":
-        """The same device, context, queue and generic program, choosing programs by `mode`."""
+        """The same device, context, queue and programs, choosing among them by `mode`."""
         return Backend(self.device, self.context, self.queue, self.opened, self.extra, self.use_cache, mode,
-                       self.generic)
+                       self.programs)
 
     @property
     def program(self) -> cl.Program:
         """The generic program; waits for it."""
-        return self.generic.get(Features.generic_program(), tuned=False)
+        return self.programs.get(Features.generic_program(), tuned=False)
 
     def built_generic(self):
         """The generic program if it is built, else None (it is built at open where that is
         fast, and by `pathtrace devices --check`, never behind a scene's first image)."""
-        return self.generic.built(Features.generic_program(), tuned=False)
+        return self.programs.built(Features.generic_program(), tuned=False)
 
     def program_for(self, features: Features, tuned: bool = True) -> cl.Program:
         """The kernels specialised to `features` (on NVIDIA with `tuned`, under the register caps
@@ -251,22 +239,26 @@ class Backend:
 
 
 def open_device(device: Device, extra: str = "", use_cache: bool = True, mode: str = None) -> Backend:
-    """The device with its queue. Where the generic program builds fast (it is cached:
-    builds_fast), it is built now: it shows that the platform builds the kernels and draws every
-    scene's first images (pathtrace.programs). Elsewhere (NVIDIA's driver took over three minutes
-    over it, and a build in a background thread held up the scene's own build behind it) the
-    display's small program shows that the platform builds, and the generic program waits for
-    `pathtrace devices --check` (./install.sh runs it)."""
+    """The device with its queue. Where building the generic program will not compile it afresh
+    (its binary is in pathtrace's cache, or the driver keeps its own cache and builds from it:
+    PoCL, whose first build of it takes 2 s on two cores), it is built now: it shows that the
+    platform builds the kernels and draws every scene's first images (pathtrace.programs).
+    Elsewhere (NVIDIA's driver took over three minutes over it, and a build in a background
+    thread held up the scene's own build behind it) the display's small program shows that the
+    platform builds, and the generic program waits for `pathtrace devices --check` (./install.sh
+    runs it)."""
     context = cl.Context([device.device])
     queue = cl.CommandQueue(context, properties=cl.command_queue_properties.PROFILING_ENABLE)
-    mode = mode or default_mode()
     generic = Features.generic_program()
-    if builds_fast(device.device, extra, generic, tune=False):
-        opened = build_program(context, device.device, extra, use_cache, generic, tune=False)
-        opened.generic = True
-    else:
-        opened = build_cached(context, device.device, display_source(), list(BUILD_OPTIONS), use_cache, False)
-    return Backend(device, context, queue, opened, extra, use_cache, mode)
+    source, options = kernel_source(extra, generic), program_options(device.device, generic)
+    fast = keeps_own_cache(device.device) or cache_entry(device.device, source, options, False).is_file()
+    if not fast:
+        source, options = display_source(), list(BUILD_OPTIONS)
+    opened = build_cached(context, device.device, source, options, use_cache, False)
+    backend = Backend(device, context, queue, opened, extra, use_cache, mode or default_mode())
+    if fast:
+        backend.programs.add(generic, False, opened.program)
+    return backend
 
 
 def display_source() -> str:

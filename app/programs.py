@@ -54,7 +54,7 @@ def _finish_builds():
 
 
 def default_mode() -> str:
-    mode = os.environ.get(PROGRAM_ENV, "auto")
+    mode = os.environ.get(PROGRAM_ENV) or "auto"      # empty: unset
     if mode not in PROGRAM_MODES:
         raise UserError(f"{PROGRAM_ENV}: must be one of {', '.join(PROGRAM_MODES)}, got {mode!r}")
     return mode

@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from pathtrace.device import Backend
+from pathtrace.features import Features
 from pathtrace.filters import PixelFilter
 from pathtrace.programs import Programs
 from pathtrace.renderer import Renderer
@@ -24,6 +25,16 @@ SPP = 128
 
 def with_mode(backend: Backend, mode: str) -> Backend:
     return backend.with_mode(mode)
+
+
+def building_with(backend: Backend, build, tunes: bool = False, generic: bool = True) -> Backend:
+    """An "auto" backend on the same device whose scenes' programs `build` builds, with the
+    generic program already built where `generic`."""
+    auto = with_mode(backend, "auto")
+    auto.programs = Programs(build, auto.device.name, tunes)
+    if generic:
+        auto.programs.add(Features.generic_program(), False, backend.program)
+    return auto
 
 
 def render(backend, scene, spp=SPP):
@@ -118,9 +129,8 @@ class GatedBuild:
 
 
 def test_a_renderer_switches_to_the_scenes_program_mid_accumulation(backend, specialised):
-    auto = with_mode(backend, "auto")
     gated = GatedBuild(specialised)
-    auto.programs = Programs(gated, auto.device.name, False)
+    auto = building_with(backend, gated)
     scene = load_scene("cornell-box")
     r = Renderer(auto, scene, SIZE, SIZE)
     assert gated.started.wait(60) and r.uses_generic_program
@@ -138,9 +148,8 @@ def test_a_renderer_switches_to_the_scenes_program_mid_accumulation(backend, spe
 
 
 def test_a_failed_build_leaves_the_generic_program_rendering(backend, capsys):
-    auto = with_mode(backend, "auto")
     gated = GatedBuild(backend, fail=True)
-    auto.programs = Programs(gated, auto.device.name, False)
+    auto = building_with(backend, gated)
     r = Renderer(auto, load_scene("cornell-box"), SIZE, SIZE)
     assert r.building_program
     gated.gate.set()
@@ -158,9 +167,8 @@ def test_a_failed_build_leaves_the_generic_program_rendering(backend, capsys):
 
 def test_path_queue_plans_render_with_the_generic_program_until_theirs_is_built(backend, specialised):
     """The generic program has no continuation queue: launches go without it meanwhile."""
-    auto = with_mode(backend, "auto")
     gated = GatedBuild(specialised)
-    auto.programs = Programs(gated, auto.device.name, False)
+    auto = building_with(backend, gated)
     scene = load_scene("cornell-box").with_settings(path_queue=2)
     r = Renderer(auto, scene, SIZE, SIZE)
     r.add_samples(64)
@@ -180,21 +188,18 @@ def test_without_the_generic_program_the_first_image_waits_for_one_untuned_build
     `pathtrace devices --check` spends once): the scene's own program is built once, untuned, for
     the first image, nothing else building beside it, and the tuned one (app/occupancy.py),
     built after it in the background, replaces it once built."""
-    auto = with_mode(backend, "auto")
-    generic = GatedBuild(specialised)
-    auto.generic = Programs(generic, auto.device.name, False)
     tuned = threading.Event()
     built = []
 
     def build(features, tune):
+        assert not features.generic
         built.append(tune)
         if tune:
             assert tuned.wait(60)
         return specialised.program_for(features)
-    auto.programs = Programs(build, auto.device.name, True)
+    auto = building_with(backend, build, tunes=True, generic=False)
     scene = load_scene("cornell-box")
     r = Renderer(auto, scene, SIZE, SIZE)
-    assert not generic.started.is_set()
     assert not r.uses_generic_program and r.building_program and built[0] is False
     r.add_samples(64)
     r.finish()
@@ -203,5 +208,5 @@ def test_without_the_generic_program_the_first_image_waits_for_one_untuned_build
     for _ in range(SPP // 64 - 1):
         r.add_samples(64)
     r.finish()
-    assert r.samples == SPP and r.generic_samples == 0 and not generic.started.is_set()
+    assert r.samples == SPP and r.generic_samples == 0
     same_image(r, render(specialised, scene))
