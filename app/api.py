@@ -98,6 +98,11 @@ class Snapshot:
     def _repr_png_(self):
         return png_bytes(self.image)
 
+    def __repr__(self) -> str:
+        h, w = self.image.shape[:2]
+        return f"<Snapshot {w}x{h}, {self.spp} spp after {self.seconds:.3g} s" + \
+            (f", aovs {', '.join(self.aovs)}>" if self.aovs else ">")
+
 
 def settings_for(scene: Scene, spp=None, size=None, seed=None, max_depth=None, rr=None, nee=None):
     """The scene's render settings with the given ones in their place, checked."""
@@ -373,6 +378,10 @@ class Picture:
 
     def _repr_png_(self):
         return png_bytes(self.image, self.exposure, self.curve)
+
+    def __repr__(self) -> str:
+        h, w = self.image.shape[:2]
+        return f"<Picture {w}x{h}, exposure {self.exposure:g}, {self.curve} tone curve>"
 
 
 def show(image: np.ndarray, exposure: float = 0.0, curve: str = "standard") -> Picture:

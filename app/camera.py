@@ -37,6 +37,14 @@ class Camera:
         self.look_at = np.asarray(self.look_at, np.float64)
         self.up = np.asarray(self.up, np.float64)
 
+    def __repr__(self) -> str:
+        from pathtrace.named import vector
+        lens = (f", vfov {self.vfov:g}" + (f", aperture {self.aperture:g} focused at {self.focus_distance:g}"
+                                          if self.aperture > 0 else "")) if self.projection != "orthographic" \
+            else f", height {self.height:g}"
+        return (f"<Camera {self.projection} at {vector(self.eye)} looking at {vector(self.look_at)}, up "
+                f"{vector(self.up)}{lens}{', mirrored' if self.mirrored else ''}>")
+
     def check(self):
         """Raises ValueError("<field>: <problem>") for the first field out of range (the view
         itself, eye, look_at and up, the readers check)."""

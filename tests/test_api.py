@@ -313,3 +313,48 @@ def test_programs_used_says_where_the_generic_program_drew_samples(monkeypatch):
     render(generic, spp=4)
     assert pathtrace.programs_used(generic) == [f"{backend.device.name}: 4 spp from the generic kernels"]
     assert pathtrace.programs_used(pathtrace.load_dict(small_scene())) == []
+
+
+def test_materials_meshes_lights_and_textures_read_as_mappings():
+    """A notebook lists a scene's parts as it lists a dict's: keys, items, len, in."""
+    scene = pathtrace.load("cornell-box")
+    assert list(scene.materials) == scene.materials.keys() == ["white", "red", "green", "light"]
+    assert len(scene.materials) == 4 and "red" in scene.materials and 3 in scene.materials
+    assert "blue" not in scene.materials and 4 not in scene.materials and True not in scene.materials
+    name, red = scene.materials.items()[1]
+    assert name == "red" and red.type == "diffuse" and np.allclose(red.params["rho_d"], scene.materials["red"].params["rho_d"])
+    assert [m.type for m in scene.materials.values()] == [scene.materials[k].type for k in scene.materials]
+    assert scene.meshes.keys()[-1] == "tall block" and "tall block" in scene.meshes
+    assert scene.meshes["tall block"] is scene.meshes[-1] and dict(scene.meshes.items())["walls"] is scene.meshes[0]
+    with pytest.raises(UserError, match="no mesh named 'roof' \\(named: walls, left wall"):
+        scene.meshes["roof"]
+    assert scene.with_settings(spp=1).meshes is scene.meshes
+    unnamed = pathtrace.load(ROOT / "tests" / "scenes" / "lights.xml")
+    assert unnamed.materials.keys() == [0, 1, 2] and unnamed.lights.keys() == ["point 0", "spot 1", "directional 2"]
+    assert unnamed.lights["spot 1"] is unnamed.lights[1]
+    textured = pathtrace.load(ROOT / "assets" / "scenes" / "teapot-textured.toml")
+    assert sorted(textured.textures) == ["glaze", "tiles"] and textured.textures["glaze"].type == "checkerboard"
+
+
+def test_reprs_are_one_short_line():
+    """repr() of each public object says what it holds in a line, never dumping its arrays."""
+    scene = pathtrace.load("teapot")        # 126,050 triangles
+    text = repr(scene)
+    assert text.startswith("<Scene 'teapot': 0 spheres, 3 meshes (126050 triangles), 2 materials, 0 delta lights; "
+                           "bounds (-200, 0, -200) to (200, 6.165, 200); camera at (15, 8.5, 11.5) looking at (0, 2.4, 0); "
+                           "1280x720, 256 spp; from ")
+    lower, upper = scene.bounds()
+    vertices = np.concatenate([m.vertices for m in scene.meshes])
+    assert np.array_equal(lower, vertices.min(0)) and np.array_equal(upper, vertices.max(0))
+    image = np.zeros((36, 64, 3), np.float32)
+    objects = [scene, scene.materials, scene.meshes, scene.meshes[0], scene.lights, scene.camera, scene.environment,
+               pathtrace.load(ROOT / "tests" / "scenes" / "textures.xml").textures["texture 0"],
+               pathtrace.show(image), pathtrace.Snapshot(4, 0.5, image, {})]
+    for obj in objects:
+        text = repr(obj)
+        assert "\n" not in text and len(text) < 400 and "array" not in text and "..." not in text[:-1], text
+    body = scene.meshes["teapot body"]
+    assert repr(body) == (f"<Mesh 'teapot body': {len(body.vertices)} vertices, {len(body.faces)} triangles, material 0, "
+                          f"smooth normals, uvs, from {body.source}>")
+    assert repr(pathtrace.show(image)) == "<Picture 64x36, exposure 0, standard tone curve>"
+    assert repr(scene.camera) == "<Camera perspective at (15, 8.5, 11.5) looking at (0, 2.4, 0), up (0, 1, 0), vfov 30>"

@@ -121,7 +121,8 @@ def _as_rows(value, kind):
 
 
 class MaterialTable:
-    """The scene's materials in the packed form the kernels read; a shape refers to a row."""
+    """The scene's materials in the packed form the kernels read; a shape refers to a row. Read
+    as a mapping: its keys are the rows' names, or their numbers where they have none."""
 
     def __init__(self):
         self.rows = np.zeros(0, MATERIAL)
@@ -205,6 +206,33 @@ class MaterialTable:
 
     def __setitem__(self, key, material: Material):
         self.set(self.index(key), material)
+
+    def keys(self) -> list:
+        """Each row's name, or its number where it has none, in row order."""
+        named = {}
+        for name, row in self.names.items():
+            named.setdefault(row, name)
+        return [named.get(i, i) for i in range(len(self))]
+
+    def __iter__(self):
+        return iter(self.keys())
+
+    def values(self) -> list:
+        return [self.get(i) for i in range(len(self))]
+
+    def items(self) -> list:
+        return list(zip(self.keys(), self.values()))
+
+    def __contains__(self, key) -> bool:
+        if isinstance(key, str):
+            return key in self.names
+        return not isinstance(key, bool) and isinstance(key, (int, np.integer)) and -len(self) <= key < len(self)
+
+    def __repr__(self) -> str:
+        from pathtrace.named import summary
+        types = [list(BSDFS)[int(t)] for t in self.rows["type"]]
+        return f"<{len(self)} material{'' if len(self) == 1 else 's'}" + (
+            f": {summary(f'{k} ({t})' for k, t in zip(self.keys(), types))}>" if len(self) else ">")
 
     def all_textures(self) -> list:
         """Every texture the materials use, their inputs included, each once."""

@@ -12,6 +12,7 @@ from pathtrace.errors import warn
 from pathtrace.filters import PixelFilter
 from pathtrace.materials import NULL, TRANSMISSIVE, Material, MaterialTable
 from pathtrace.media import MediumInterface
+from pathtrace.named import NamedList, vector
 from pathtrace.scene.meshes import is_closed
 
 
@@ -70,6 +71,11 @@ class Mesh:
                                   # row (Mitsuba 3's convention), or None: (0, 0)
     media: MediumInterface | None = None   # the media it bounds, or None: it changes no medium
 
+    def __repr__(self) -> str:
+        return (f"<Mesh {self.name!r}: {len(self.vertices)} vertices, {len(self.faces)} triangles, material "
+                f"{self.material}{', smooth normals' if self.normals is not None else ''}"
+                f"{', uvs' if self.uvs is not None else ''}{f', from {self.source}' if self.source else ''}>")
+
 
 @dataclass
 class Scene:
@@ -90,6 +96,53 @@ class Scene:
     camera_medium: int = -1       # the medium the camera is in (a row of `media`), or -1: none
     instances: object = None      # pathtrace.scene.instances.Instances: meshes drawn many times,
                                   # or None. Their meshes are not among `meshes`
+
+    def __post_init__(self):
+        # lists that also answer by name (pathtrace.named), for notebooks; kept as they are
+        # where they already are, so that with_settings shares them
+        if not isinstance(self.meshes, NamedList):
+            self.meshes = NamedList(self.meshes, kind=("mesh", "meshes"))
+        if not isinstance(self.lights, NamedList):
+            self.lights = NamedList(self.lights, lambda i, light: f"{light.name} {i}", ("light", "lights"))
+
+    def __repr__(self) -> str:
+        """One line: what it holds, where it is, the camera and the image it renders; never its
+        arrays."""
+        s, c = self.settings, self.camera
+        parts = [f"{len(self.spheres)} sphere{'' if len(self.spheres) == 1 else 's'}",
+                 f"{len(self.meshes)} mesh{'' if len(self.meshes) == 1 else 'es'} ({self.triangle_count} triangles)"]
+        if self.instances is not None and len(self.instances):
+            parts.append(f"{len(self.instances)} instances ({self.instances.triangle_count} triangles)")
+        parts += [f"{len(self.materials)} material{'' if len(self.materials) == 1 else 's'}",
+                  f"{len(self.lights)} delta light{'' if len(self.lights) == 1 else 's'}"]
+        if self.media:
+            parts.append(f"{len(self.media)} media")
+        bounds = self.bounds()
+        where = f"bounds {vector(bounds[0])} to {vector(bounds[1])}" if bounds is not None else "empty"
+        return (f"<Scene {self.name!r}: {', '.join(parts)}; {where}; camera at {vector(c.eye)} looking at "
+                f"{vector(c.look_at)}; {s.width}x{s.height}, {s.spp} spp"
+                f"{f'; from {self.source}' if self.source else ''}>")
+
+    def bounds(self):
+        """(lower, upper) corners of the box round its spheres and meshes (world space; instances
+        left out), or None where it has neither."""
+        lows, highs = [], []
+        if len(self.spheres):
+            centre, radius = self.spheres[:, :3], self.spheres[:, 3:4]
+            lows.append((centre - radius).min(0))
+            highs.append((centre + radius).max(0))
+        for m in self.meshes:
+            if len(m.vertices):
+                lows.append(m.vertices.min(0))
+                highs.append(m.vertices.max(0))
+        return (np.min(lows, 0), np.max(highs, 0)) if lows else None
+
+    @property
+    def textures(self) -> dict:
+        """The textures its materials use (their inputs included), by name ("texture N" where a
+        texture has none): to look at; change a material's to change a texture."""
+        found = self.materials.all_textures()
+        return {t.name or f"texture {i}": t for i, t in enumerate(found)}
 
     def with_settings(self, **changes) -> "Scene":
         return replace(self, settings=replace(self.settings, **changes))

@@ -19,6 +19,19 @@ class Texture:
     params: dict = field(default_factory=dict)
     name: str | None = None
 
+    def __repr__(self) -> str:
+        """One line: its type, name and inputs (an image by its size and file, never its texels)."""
+        def value(v):
+            if isinstance(v, Texture):
+                return repr(v)
+            if hasattr(v, "texels"):
+                h, w = v.texels.shape[:2]
+                return f"{getattr(v, 'path', None) or 'image'} ({w}x{h})"
+            a = np.asarray(v)
+            return f"{a.tolist()}" if a.size <= 4 else f"array {a.shape}"
+        inputs = ", ".join(f"{k}={value(v)}" for k, v in self.params.items() if k != "to_uv")
+        return f"<Texture {self.type}{f' {self.name!r}' if self.name else ''}: {inputs}>"
+
     @property
     def kind(self):
         from pathtrace.textures.registry import TEXTURES
