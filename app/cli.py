@@ -10,7 +10,7 @@ from pathlib import Path
 
 from pathtrace import __version__
 from pathtrace.console import INTERRUPTED, check_interrupt
-from pathtrace.errors import UserError, cut, escape, short, warn
+from pathtrace.errors import UserError, cut, did_you_mean, escape, short, warn
 from pathtrace.lights import LIGHT_SAMPLERS
 from pathtrace.scene.description import MAX_PATH_QUEUE, PATH_QUEUE_AUTO, RUSSIAN_ROULETTE
 
@@ -770,7 +770,22 @@ class Parser(argparse.ArgumentParser):
         return super().format_help()
 
     def error(self, message):
-        super().error(cut(" ".join(cut(word) for word in message.split(" ")), self.MESSAGE_LIMIT))
+        super().error(cut(" ".join(cut(word) for word in message.split(" ")), self.MESSAGE_LIMIT)
+                      + self.suggestion(message))
+
+    def suggestion(self, message: str) -> str:
+        """"; did you mean ...?" for an unknown option (among this parser's) or an invalid
+        choice (among the argument's), where one is close to what was typed."""
+        import re
+        choice = re.match(r"argument (\S+): invalid choice: '(.*)' \(choose from (.*)\)$", message)
+        if choice:
+            return did_you_mean(choice[2], re.findall(r"'([^']*)'", choice[3]))
+        unknown = re.match(r"unrecognized arguments: (.*)$", message)
+        options = [o for a in self._actions for o in a.option_strings if o.startswith("--")]
+        for word in unknown[1].split(" ") if unknown else ():
+            if word.startswith("--"):
+                return did_you_mean(word.split("=")[0], options)
+        return ""
 
 
 def parse(parser: argparse.ArgumentParser, argv):

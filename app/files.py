@@ -14,6 +14,12 @@ def shown(path) -> str:
     return escape(str(path).encode("utf-8", "backslashreplace").decode("utf-8"))
 
 
+def missing(path, what: str, where: str = None) -> UserError:
+    """The one wording of a file that is not there, wherever it was named: "<where>: <what>
+    '<path>' does not exist"."""
+    return UserError(f"{where + ': ' if where else ''}{what} '{cut(shown(path), 100)}' does not exist")
+
+
 def check_regular_file(path: Path, where: str, what: str, max_bytes: int):
     """Refuses, in one line, a path that does not exist, is not a regular file (a folder, a FIFO,
     a device such as /dev/zero: reading one could hang or never end) or is larger than
@@ -23,7 +29,7 @@ def check_regular_file(path: Path, where: str, what: str, max_bytes: int):
     except ValueError:                  # a NUL byte in the name
         raise UserError(f"{where}: {what} '{cut(shown(path), 100)}': a file name cannot hold a NUL byte") from None
     except FileNotFoundError:
-        raise UserError(f"{where}: {what} '{cut(shown(path), 100)}' does not exist") from None
+        raise missing(path, what, where) from None
     except OSError as e:
         raise UserError(f"{where}: {what} '{cut(shown(path), 100)}': {e.strerror}") from None
     if not stat.S_ISREG(info.st_mode):

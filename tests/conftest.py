@@ -21,9 +21,32 @@ os.environ.setdefault("PATHTRACE_BVH_CACHE", "0")
 # Nor to its cache of kernel binaries and path-queue verdicts (Renderer.choose_queue_plan), whose
 # verdicts would spare a later run the trials that tests count.
 os.environ.setdefault("PATHTRACE_CACHE", tempfile.mkdtemp(prefix="pathtrace-tests-"))
-# Renders wait for their scene's own program, so that each is repeatable (pathtrace.programs);
-# tests/test_programs.py renders with the generic program and switches between the two.
-os.environ.setdefault("PATHTRACE_PROGRAM", "specialised")
+# Renders use the generic program, which renders any scene (pathtrace.programs): one build,
+# which PoCL's cache keeps for every worker and every command the tests run, where each scene's
+# own program would be a build of its own (some 130 over the suite, most of its time on two
+# cores). Tests about the specialised programs (what a scene's features compile in or leave
+# out, the path queue, which only a scene's own program has) are marked `specialised`: their
+# renders wait for their scene's own program. Both modes are repeatable; tests/test_programs.py
+# renders with each and switches between the two.
+os.environ.setdefault("PATHTRACE_PROGRAM", "generic")
+
+
+def pytest_configure(config):
+    config.addinivalue_line("markers", "specialised: renders with each scene's own program (PATHTRACE_PROGRAM "
+                                       "specialised), for tests about what the specialised programs compile")
+
+
+@pytest.fixture(autouse=True)
+def program_mode(request, monkeypatch):
+    """In a test marked `specialised`: the scenes' own programs, for the test's backend, the
+    devices the API keeps open and the commands it runs."""
+    if request.node.get_closest_marker("specialised") is None:
+        return
+    from pathtrace import api
+    monkeypatch.setenv("PATHTRACE_PROGRAM", "specialised")
+    monkeypatch.setattr(api, "_backends", dict(api._backends))    # those it opens go with it
+    for backend in [request.getfixturevalue("backend"), *(b for group in api._backends.values() for b in group)]:
+        monkeypatch.setattr(backend, "mode", "specialised")
 
 
 @pytest.fixture(scope="session")

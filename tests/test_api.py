@@ -274,6 +274,7 @@ def test_a_bad_path_queue_setting_is_one_user_error(value):
         render(scene, spp=1)
 
 
+@pytest.mark.specialised
 def test_auto_chooses_its_plan_for_the_whole_render(monkeypatch):
     """A render's first snapshot has 1 spp; "auto" chooses for the render's samples, so that a
     long render runs its trials (which a render shorter than them skips)."""
@@ -288,6 +289,7 @@ def test_auto_chooses_its_plan_for_the_whole_render(monkeypatch):
     assert asked and asked[0] == 200
 
 
+@pytest.mark.specialised
 def test_the_path_queue_setting_takes_auto():
     """pathtrace.PATH_QUEUE_AUTO: on PoCL, no queue (and no trial renders), so the image is the
     one without it."""
@@ -303,6 +305,7 @@ def test_the_path_queue_setting_takes_auto():
     assert pathtrace.queue_plans(scene) == [] and pathtrace.queue_plans(pathtrace.load_dict(small_scene())) == []
 
 
+@pytest.mark.specialised
 def test_programs_used_says_where_the_generic_program_drew_samples(monkeypatch):
     backend = pathtrace.api.open_devices(DEVICE)[0]
     scene = pathtrace.load_dict(small_scene())
@@ -358,3 +361,12 @@ def test_reprs_are_one_short_line():
                           f"smooth normals, uvs, from {body.source}>")
     assert repr(pathtrace.show(image)) == "<Picture 64x36, exposure 0, standard tone curve>"
     assert repr(scene.camera) == "<Camera perspective at (15, 8.5, 11.5) looking at (0, 2.4, 0), up (0, 1, 0), vfov 30>"
+
+
+@pytest.mark.parametrize("source, generic", [("cbox.pbrt", "scene-v4.pbrt"), ("lights.xml", "scene.xml")])
+def test_a_file_of_a_generic_name_is_named_after_its_folder(tmp_path, source, generic):
+    """Bitterli's scenes are all scene-v4.pbrt or scene.xml: the folder says which."""
+    (tmp_path / "coffee").mkdir()
+    (tmp_path / "coffee" / generic).write_text((ROOT / "tests" / "scenes" / source).read_text())
+    assert pathtrace.load(tmp_path / "coffee" / generic).name == "coffee"
+    assert pathtrace.load(ROOT / "tests" / "scenes" / source).name == source.split(".")[0]

@@ -388,6 +388,7 @@ material = { type = "diffuse", rho_d = 0.5 }
 """
 
 
+@pytest.mark.specialised
 @pytest.mark.parametrize("scene", ["simple", "mixed"])
 @pytest.mark.parametrize("nee", [False, True])
 def test_a_flat_scene_renders_as_its_tree_does(backend, monkeypatch, tmp_path, scene, nee):
@@ -416,6 +417,7 @@ def test_a_flat_scene_renders_as_its_tree_does(backend, monkeypatch, tmp_path, s
     np.testing.assert_allclose(flat, tree, rtol=1e-4, atol=1e-6)
 
 
+@pytest.mark.specialised
 @pytest.mark.parametrize("scene", ["cornell-box", "teapot"])
 def test_a_scene_of_triangles_only_renders_without_the_sphere_code(backend, monkeypatch, scene):
     """A scene without spheres compiles its traversal without the sphere test (NO_SPHERES,
@@ -443,6 +445,7 @@ def test_a_scene_of_triangles_only_renders_without_the_sphere_code(backend, monk
     assert CompiledScene(load_scene("simple")).features(loaded.settings, loaded.camera).spheres
 
 
+@pytest.mark.specialised
 def test_a_few_spheres_beside_triangles_stay_out_of_the_tree(backend, monkeypatch):
     """teapot-sky, a teapot on a ground quad with one sphere: the sphere is outside the tree
     (LONE_SPHERES), whose leaves hold triangles only, and the same samples make the same image as

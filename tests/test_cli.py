@@ -186,8 +186,14 @@ def test_unreadable_environment_map(tmp_path, name, data):
 
 
 @pytest.mark.parametrize("args,message", [
-    (["missing.toml"], "no such scene file"),
-    (["nosuchscene"], "neither a scene file nor a built-in scene"),
+    (["missing.toml"], "error: scene file 'missing.toml' does not exist\n"),
+    (["missing.xml"], "error: scene file 'missing.xml' does not exist\n"),
+    (["missing.pbrt"], "error: scene file 'missing.pbrt' does not exist\n"),
+    (["nosuchscene"], "neither a scene file nor a built-in scene (built-ins: simple,"),
+    (["cornel-box"], "cornel-box: neither a scene file nor a built-in scene; did you mean cornell-box? (built-ins: "),
+    (["simple", "--tonemap", "acse"], "invalid choice: 'acse' (choose from 'standard', 'aces'); did you mean aces?\n"),
+    (["simple", "--sppp", "4"], "unrecognized arguments: --sppp 4; did you mean --spp?\n"),
+    (["simple", "--rr=throughput", "--max-dept", "4"], "unrecognized arguments: --max-dept 4; did you mean --max-depth?\n"),
     (["simple", "--device", "no-such-device"], "--device: no OpenCL device matches 'no-such-device'"),
     (["simple", "--size", "0x10"], "width and height must be 1 to 16384"),
     (["simple", "--size", "big"], "is not WIDTHxHEIGHT"),

@@ -17,6 +17,8 @@ from pathtrace.renderer import Renderer
 from pathtrace.scene import load_scene
 from pathtrace.traversal_stats import traversal_stats
 
+pytestmark = pytest.mark.specialised     # the queue is in the scenes' own programs alone
+
 SCENES = Path(__file__).parent / "scenes"
 SIZE = (40, 24)
 SPP = 6

@@ -9,6 +9,7 @@ import subprocess
 import sys
 import threading
 import time
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -513,6 +514,7 @@ def test_the_rotation_slider_reaches_a_full_turn(viewer):
     v.renderer.reset()
 
 
+@pytest.mark.specialised
 def test_the_speed_slider_turns_the_path_queue_on(viewer):
     """A press a third of the way along the "path queue" slider (0 to 4) sets the render setting to
     1, and the image goes on accumulating."""
@@ -544,6 +546,23 @@ def test_the_speed_slider_turns_the_path_queue_on(viewer):
     for _ in range(scrolls):
         xdo("click", 4)
         frames(v, 1)
+
+
+def test_movement_speed_is_at_the_scenes_scale():
+    """A quarter of the eye's distance to its look-at point a second, at most a tenth of the
+    bounds' diagonal: the demo (a 1000-unit ground sphere) moves as before, a small scene seen
+    from a far look-at point slowly; the wheel scales it from there."""
+    from pathtrace.viewer.controls import FlyControls, speed_for
+    demo = load_scene("demo")
+    assert speed_for(demo) == pytest.approx(0.25 * np.linalg.norm(demo.camera.look_at - demo.camera.eye))
+    box = load_scene("cornell-box")
+    lower, upper = box.bounds()
+    assert speed_for(box) == pytest.approx(0.1 * np.linalg.norm(upper - lower))
+    small = replace(box, spheres=box.spheres, meshes=[replace(m, vertices=m.vertices / 10) for m in box.meshes])
+    assert speed_for(small) == pytest.approx(speed_for(box) / 10)
+    controls = FlyControls(speed=speed_for(small))
+    controls.scroll(2)
+    assert controls.speed == pytest.approx(speed_for(small) * 1.25 ** 2)
 
 
 def test_the_window_fits_the_screen_and_keeps_the_image_aspect():

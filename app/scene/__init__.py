@@ -3,34 +3,50 @@
 
 from pathlib import Path
 
-from pathtrace.errors import UserError, cut
-from pathtrace.files import shown
+from pathtrace.errors import UserError, cut, did_you_mean
+from pathtrace.files import missing, shown
 from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder, diffuse, emitter, phong
 
 __all__ = ["Mesh", "RenderSettings", "Scene", "SceneBuilder", "diffuse", "emitter", "phong",
            "load_scene"]
 
 
+GENERIC_NAMES = ("scene", "scene-v3", "scene-v4")   # file names that say nothing of their scene, such as
+                                                   # those of Bitterli's collection (scene-v4.pbrt, scene.xml)
+
+
+def named(scene: Scene, path: Path) -> Scene:
+    """A scene read from a file with a generic name (GENERIC_NAMES) is named after its folder:
+    the window's title, the panel, the progress bar and screenshots then say which it is."""
+    stem = path.name.lower().removesuffix(".gz").rsplit(".", 1)[0]
+    if stem in GENERIC_NAMES and path.resolve().parent.name:
+        scene.name = path.resolve().parent.name
+    return scene
+
+
 def load_scene(name_or_path: str) -> Scene:
     """A scene file path or a built-in scene's name: the two are interchangeable. Only the
     reader a scene needs is imported (each is a few tens of milliseconds of a command's start)."""
     path = Path(name_or_path)
-    if path.suffix.lower() == ".xml":
-        from pathtrace.scene.mitsuba import read_mitsuba_file
-        return read_mitsuba_file(path)
-    if path.name.lower().endswith((".pbrt", ".pbrt.gz")):
-        from pathtrace.scene.pbrt import read_pbrt_file
-        return read_pbrt_file(path)
     try:
         exists = path.exists()
     except OSError as e:     # a name too long for the file system, say
         raise UserError(f"{cut(shown(path), 80)}: {e.strerror}") from None
-    if path.suffix == ".toml" or exists:
+    pbrt = path.name.lower().endswith((".pbrt", ".pbrt.gz"))
+    if not exists and (pbrt or path.suffix.lower() in (".xml", ".toml")):
+        raise missing(path, "scene file")
+    if path.suffix.lower() == ".xml":
+        from pathtrace.scene.mitsuba import read_mitsuba_file
+        return named(read_mitsuba_file(path), path)
+    if pbrt:
+        from pathtrace.scene.pbrt import read_pbrt_file
+        return named(read_pbrt_file(path), path)
+    if exists:
         from pathtrace.scene.toml_reader import read_scene_file
         return read_scene_file(path)
     from pathtrace.scene.builtin import BUILTIN_SCENES, builtin_scene
     scene = builtin_scene(name_or_path)
     if scene is not None:
         return scene
-    raise UserError(f"{cut(shown(name_or_path), 100)}: neither a scene file nor a built-in scene "
-                    f"(built-ins: {', '.join(BUILTIN_SCENES)})")
+    raise UserError(f"{cut(shown(name_or_path), 100)}: neither a scene file nor a built-in scene"
+                    f"{did_you_mean(str(name_or_path), BUILTIN_SCENES)} (built-ins: {', '.join(BUILTIN_SCENES)})")

@@ -58,12 +58,12 @@ def parse_xml(path: Path, budget: list = None, where: str = None) -> Node:
     """The element tree of one file, each element with its line; a malformed file is one
     UserError naming the line. budget: [bytes, elements] left for this file and the others of
     its scene (its includes), which it decreases; where: what names the file (an <include>)."""
-    from pathtrace.files import check_regular_file, shown
+    from pathtrace.files import check_regular_file, missing, shown
     budget = [MAX_XML_BYTES, MAX_ELEMENTS] if budget is None else budget
     try:
         os.stat(path)
     except FileNotFoundError:
-        raise UserError(f"{where or shown(path)}: no such scene file") from None
+        raise missing(path, "scene file", where) from None
     except OSError as e:
         raise UserError(f"{where or shown(path)}: cannot read the scene ({e.strerror})") from None
     check_regular_file(path, where or shown(path), "the scene file", budget[0])

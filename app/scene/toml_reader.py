@@ -745,19 +745,19 @@ MAX_SCENE_BYTES = 64 << 20    # a scene file; meshes go in files of their own
 
 
 def read_scene_file(path) -> Scene:
-    from pathtrace.files import check_regular_file, shown
+    from pathtrace.files import check_regular_file, missing, shown
     path = Path(path)
     try:
         os.stat(path)
     except FileNotFoundError:
-        raise UserError(f"{shown(path)}: no such scene file") from None
+        raise missing(path, "scene file") from None
     except OSError as e:                 # a name too long for the file system, say
         raise UserError(f"{shown(path)}: {e.strerror}") from None
     check_regular_file(path, shown(path), "the scene file", MAX_SCENE_BYTES)
     try:
         text = path.read_text(encoding="utf-8")
     except FileNotFoundError:
-        raise UserError(f"{shown(path)}: no such scene file") from None
+        raise missing(path, "scene file") from None
     except (OSError, UnicodeDecodeError) as e:
         raise UserError(f"{path}: cannot read the scene file ({e})") from None
     try:

@@ -62,6 +62,18 @@ class FlyControls:
         self.speed = float(np.clip(self.speed * 1.25 ** amount, 0.01, 1000.0))
 
 
+def speed_for(scene) -> float:
+    """A speed (units per second) at the scene's scale: a quarter of the distance from the eye
+    to the point it looks at, at most a tenth of the diagonal of the scene's bounds (a camera
+    whose look-at point is far off, as a pbrt LookAt may give, would carry out of a small scene
+    in a second), and the default where neither says anything. The wheel changes it from there."""
+    distance = float(np.linalg.norm(scene.camera.look_at - scene.camera.eye))
+    bounds = scene.bounds()
+    diagonal = float(np.linalg.norm(bounds[1] - bounds[0])) if bounds is not None else 0.0
+    candidates = [v for v in (0.25 * distance, 0.1 * diagonal) if v > 0 and np.isfinite(v)]
+    return float(np.clip(min(candidates), 0.01, 1000.0)) if candidates else FlyControls.speed
+
+
 def _rotate(v, axis, angle):
     """Rodrigues' rotation of v about a unit axis."""
     return v * np.cos(angle) + np.cross(axis, v) * np.sin(angle) + axis * np.dot(axis, v) * (1 - np.cos(angle))

@@ -25,7 +25,7 @@ from pathtrace.compiled import compile_scene
 from pathtrace.renderer import Renderer, aov_means, per_pixel_mean
 from pathtrace.resources import resource_dir
 from pathtrace.scene import load_scene
-from pathtrace.viewer.controls import FlyControls, pick_ray
+from pathtrace.viewer.controls import FlyControls, pick_ray, speed_for
 from pathtrace.viewer.panel import MARGIN, draw_help, draw_notice, draw_panel
 
 LAUNCH_BUDGET = 1 / 120        # device seconds per launch: a reset waits for at most three
@@ -164,6 +164,7 @@ class Viewer:
         except BaseException:
             self._close_window()
             raise
+        self._scene_opened(self.renderer.scene)
         if fitted and callable(scene):
             glfw.set_window_size(self.window, *fit_window(self.renderer.width, self.renderer.height, screen))
         self.size = (self.renderer.width, self.renderer.height)    # the full resolution
@@ -252,6 +253,7 @@ class Viewer:
             self.screenshot()
         elif action == glfw.PRESS and key == glfw.KEY_ESCAPE:
             glfw.set_window_should_close(self.window, True)
+            glfw.hide_window(self.window)      # gone at once, whatever close() then waits for
         elif action == glfw.PRESS and key == glfw.KEY_H and free:
             self.show_help = not self.show_help
         elif action == glfw.PRESS and key == glfw.KEY_R and free:
@@ -406,7 +408,15 @@ class Viewer:
             return
         self.size = (scene.settings.width, scene.settings.height)
         self.selected = None
+        self._scene_opened(scene)
         self.set_message(f"loaded {scene.name}")
+
+    def _scene_opened(self, scene):
+        """Movement at the scene's scale (the wheel changes it from there), and the panel's file
+        field naming the scene's file, if it has one."""
+        self.controls.speed = speed_for(scene)
+        if scene.source:
+            self.scene_file = scene.source
 
     def _build_progress(self, name: str):
         """A progress callback for a scene's BVH build, from the worker thread: the window, live
@@ -675,7 +685,11 @@ class Viewer:
         return paths
 
     def close(self):
-        self._worker.shutdown(wait=True)
+        """Hides the window at once, then lets the work under way end: a denoise in the worker
+        (those queued behind it are dropped) and the launches queued on the device."""
+        self.glfw.hide_window(self.window)
+        self.glfw.poll_events()
+        self._worker.shutdown(wait=True, cancel_futures=True)
         if self._denoiser is not None:
             self._denoiser.close()
         self.renderer.finish()
