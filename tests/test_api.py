@@ -366,7 +366,9 @@ def test_reprs_are_one_short_line():
 @pytest.mark.parametrize("source, generic", [("cbox.pbrt", "scene-v4.pbrt"), ("lights.xml", "scene.xml")])
 def test_a_file_of_a_generic_name_is_named_after_its_folder(tmp_path, source, generic):
     """Bitterli's scenes are all scene-v4.pbrt or scene.xml: the folder says which."""
-    (tmp_path / "coffee").mkdir()
+    (tmp_path / "coffee" / "pbrt").mkdir(parents=True)
     (tmp_path / "coffee" / generic).write_text((ROOT / "tests" / "scenes" / source).read_text())
+    (tmp_path / "coffee" / "pbrt" / generic).write_text((ROOT / "tests" / "scenes" / source).read_text())
     assert pathtrace.load(tmp_path / "coffee" / generic).name == "coffee"
+    assert pathtrace.load(tmp_path / "coffee" / "pbrt" / generic).name == "coffee"     # Bitterli's layout
     assert pathtrace.load(ROOT / "tests" / "scenes" / source).name == source.split(".")[0]

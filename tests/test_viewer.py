@@ -565,6 +565,19 @@ def test_movement_speed_is_at_the_scenes_scale():
     assert controls.speed == pytest.approx(speed_for(small) * 1.25 ** 2)
 
 
+def test_the_panel_docks_only_where_the_image_keeps_most_of_the_window():
+    """Beside the panel the image keeps a third of the window's width, or all it has without the
+    panel (a portrait image in a landscape window); elsewhere the panel floats over it."""
+    from types import SimpleNamespace
+
+    from pathtrace.viewer.window import Viewer
+    portrait, landscape = SimpleNamespace(size=(800, 1000)), SimpleNamespace(size=(1280, 720))
+    assert Viewer.docks(portrait, 1280, 720, 344)           # 576 px wide with or without the panel
+    assert Viewer.docks(SimpleNamespace(size=(100, 1000)), 1000, 720, 800)    # 72 of 1000 px either way
+    assert not Viewer.docks(portrait, 512, 512, 344) and not Viewer.docks(portrait, 450, 900, 344)
+    assert Viewer.docks(landscape, 1920, 1080, 344) and not Viewer.docks(landscape, 480, 270, 344)
+
+
 def test_the_window_fits_the_screen_and_keeps_the_image_aspect():
     from pathtrace.viewer.window import fit_window
     assert fit_window(640, 360, (1920, 1080)) == (640, 360)

@@ -12,15 +12,21 @@ __all__ = ["Mesh", "RenderSettings", "Scene", "SceneBuilder", "diffuse", "emitte
 
 
 GENERIC_NAMES = ("scene", "scene-v3", "scene-v4")   # file names that say nothing of their scene, such as
-                                                   # those of Bitterli's collection (scene-v4.pbrt, scene.xml)
+                                                   # those of Bitterli's collection (coffee/pbrt/scene-v4.pbrt,
+GENERIC_FOLDERS = ("pbrt", "pbrt-v4", "mitsuba")   # coffee/mitsuba/scene.xml), and folders that hold one
+                                                   # format's file of a scene
 
 
 def named(scene: Scene, path: Path) -> Scene:
-    """A scene read from a file with a generic name (GENERIC_NAMES) is named after its folder:
-    the window's title, the panel, the progress bar and screenshots then say which it is."""
+    """A scene read from a file with a generic name (GENERIC_NAMES) is named after its folder
+    (the one above, where that is a format's, GENERIC_FOLDERS): the window's title, the panel,
+    the progress bar and screenshots then say which it is."""
     stem = path.name.lower().removesuffix(".gz").rsplit(".", 1)[0]
-    if stem in GENERIC_NAMES and path.resolve().parent.name:
-        scene.name = path.resolve().parent.name
+    folder = path.resolve().parent
+    while folder.name.lower() in GENERIC_FOLDERS and folder.parent != folder:
+        folder = folder.parent
+    if stem in GENERIC_NAMES and folder.name:
+        scene.name = folder.name
     return scene
 
 

@@ -27,7 +27,7 @@ INT_MAX = 2**31 - 1
 KEYS = (("W A S D", "move"), ("Q / E, Ctrl / Space", "down / up"), ("right mouse drag", "look around"),
         ("mouse wheel", "speed"), ("Shift", "move faster"), ("left click", "pick a shape"),
         ("Ctrl + left click", "focus the lens there"), ("R", "reset the camera to the scene's"),
-        ("P or F12", "screenshot (PNG + EXR)"), ("H", "this help"), ("Esc", "quit"))
+        ("P or F12", "screenshot (PNG + EXR)"), ("Tab", "hide / show the panel"), ("H", "this help"), ("Esc", "quit"))
 
 # every label the panel draws beside a widget, to size the label column
 LABELS = ("exposure (EV)", "tone curve", "max depth (0: none)", "Russian roulette", "env intensity",
@@ -134,6 +134,9 @@ def _status(imgui, v):
     r, p = v.renderer, v.progressive
     times = list(v.frame_times)[-30:]
     frame = sum(times) / max(len(times), 1)
+    imgui.text_wrapped(f"scene: {r.scene.name}")
+    if r.scene.source:
+        imgui.set_item_tooltip(r.scene.source)
     imgui.text_wrapped(f"device: {v.backend.device.name}")
     imgui.set_item_tooltip(f"{v.backend.device.describe()}\ndisplay: {v.display_path}")
     rate = 1e-6 / p.seconds_per_pixel if p.seconds_per_pixel else 0.0
@@ -163,11 +166,11 @@ def draw_panel(v):
     width_min = column + WIDGET_MIN + 2 * imgui.get_style().window_padding.x
     screen_w, screen_h = io.display_size.x, io.display_size.y
     imgui.set_next_window_pos((MARGIN, MARGIN), imgui.Cond_.first_use_ever)
-    imgui.set_next_window_size((width_min + 40, screen_h - 2 * MARGIN), imgui.Cond_.first_use_ever)
-    # docked at the left, the image beside it (Viewer.image_area); in a window too small for
-    # both, the panel starts as its title bar alone and the image takes the window
-    docked_image = screen_w - (width_min + 40 + 3 * MARGIN)
-    imgui.set_next_window_collapsed(docked_image < screen_w / 3, imgui.Cond_.first_use_ever)
+    imgui.set_next_window_size((width_min, screen_h - 2 * MARGIN), imgui.Cond_.first_use_ever)
+    # docked at the left, the image beside it (Viewer.image_area); where the image would lose
+    # too much of the window to it (a small window, a portrait image), the panel starts as its
+    # title bar alone and floats over the image, which takes the window
+    imgui.set_next_window_collapsed(not v.docks(screen_w, screen_h, width_min + 2 * MARGIN), imgui.Cond_.first_use_ever)
     imgui.set_next_window_size_constraints(
         (min(width_min, screen_w - 2 * MARGIN), min(100, screen_h)),
         (max(screen_w - 2 * MARGIN, 1), max(screen_h - 2 * MARGIN, 1)))

@@ -46,6 +46,10 @@ SETTLE = 0.1                   # seconds of redrawing after input, for the panel
 STATUS_INTERVAL = 0.25         # the status line's figures are redrawn at least this often
 FRAME_TIMES = 600              # frames whose durations the viewer keeps (frame_times)
 SCREEN_FILL = 0.9              # the largest share of the screen a new window takes
+DOCKED_SHARE = 1 / 3           # the panel docks beside the image only where the image keeps this
+                               # share of the window's width, or loses nothing by it (a portrait
+                               # image in a landscape window); elsewhere it starts collapsed and
+                               # floats over the image
 
 
 def no_display_message() -> str:
@@ -140,6 +144,7 @@ class Viewer:
         self.scene_file = ""          # the panel's "open file" field
         self.selected = None
         self.show_help = False        # the keyboard help overlay (H)
+        self.show_panel = True        # the panel, shown or hidden by Tab
         self.panel_rect = (0, 0, 0, 0)  # where the panel was drawn last (x, y, w, h)
         self.panel_open = False       # whether it was drawn expanded (not collapsed to its title)
         self.notice = ""              # what the window says while there is no image yet
@@ -256,6 +261,8 @@ class Viewer:
             glfw.hide_window(self.window)      # gone at once, whatever close() then waits for
         elif action == glfw.PRESS and key == glfw.KEY_H and free:
             self.show_help = not self.show_help
+        elif action == glfw.PRESS and key == glfw.KEY_TAB and not typing:
+            self.show_panel = not self.show_panel
         elif action == glfw.PRESS and key == glfw.KEY_R and free:
             self.reset_camera()
         elif name and action == glfw.PRESS and free:
@@ -299,9 +306,16 @@ class Viewer:
         x, _, w, _ = self.panel_rect
         points = self.imgui.get_io().display_size.x or width
         right = (x + w + MARGIN) * width / points
-        if self.panel_open and x <= 2 * MARGIN and width - right >= width / 3:
+        if self.panel_open and x <= 2 * MARGIN and self.docks(width, height, right):
             return int(right), width - int(right)
         return 0, width
+
+    def docks(self, width: float, height: float, right: float) -> bool:
+        """Whether the image, fitted into a window `width` x `height` right of `right`, keeps
+        DOCKED_SHARE of the window's width or all it would have without the panel."""
+        beside = image_extent(self.size, (max(width - right, 1), height))[0] * (width - right)
+        whole = image_extent(self.size, (width, height))[0] * width
+        return beside >= min(whole, DOCKED_SHARE * width) - 0.5
 
     def image_point(self, x: float, y: float):
         """The image pixel (x, y), at full resolution, under window point (x, y); None on the bars
@@ -498,7 +512,10 @@ class Viewer:
         if fw > 0 and fh > 0:
             self._draw(fw, fh)
         self.imgui.new_frame()
-        draw_panel(self)
+        if self.show_panel:
+            draw_panel(self)
+        else:
+            self.panel_rect, self.panel_open = (0, 0, 0, 0), False
         if self.texture is None:
             draw_notice(self, f"rendering the first pass of {self.renderer.scene.name}")
         elif self.renderer.building_program:
