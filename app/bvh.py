@@ -142,7 +142,7 @@ def builder_for(queue: cl.CommandQueue = None) -> Builder:
 
 
 def _first_working_builder() -> Builder:
-    from pathtrace.device import list_devices
+    from pathtrace.device import HOW_TO_GET_ONE, list_devices
     from pathtrace.errors import UserError
 
     for d in sorted(list_devices(), key=lambda d: d.kind != "GPU"):
@@ -150,8 +150,7 @@ def _first_working_builder() -> Builder:
             return Builder(cl.CommandQueue(cl.Context([d.device])))
         except cl.Error:
             continue
-    raise UserError("no OpenCL device can build the BVH: install an OpenCL driver "
-                    "(on Debian/Ubuntu, 'apt install pocl-opencl-icd' runs on the CPU)")
+    raise UserError(f"no OpenCL device can build the BVH: {HOW_TO_GET_ONE}")
 
 
 class _Tree:

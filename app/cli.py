@@ -252,14 +252,13 @@ def apply_render_options(scene, args):
 
 
 def cmd_devices(args):
-    from pathtrace.device import build_error_line, list_devices, open_device
+    from pathtrace.device import NO_DEVICE, build_error_line, list_devices, open_device
     from pathtrace.programs import warm_up
     import pyopencl as cl
 
     devices = list_devices()
     if not devices:
-        print("no OpenCL devices found (on Debian/Ubuntu: apt install pocl-opencl-icd)")
-        return 1
+        raise UserError(NO_DEVICE)
     for d in devices:
         line = f"[{d.index}] {d.describe()}, {d.device.max_compute_units} compute units"
         if args.check:

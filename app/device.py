@@ -82,6 +82,11 @@ class Device:
         return f"{self.name} ({self.kind}, {self.platform.name.strip()})"
 
 
+HOW_TO_GET_ONE = ("for the CPU without root, pip install pocl-binary-distribution (pathtrace's extra [cpu]); "
+                  "on Debian/Ubuntu, apt install pocl-opencl-icd; for a GPU, its vendor's OpenCL driver")
+NO_DEVICE = f"no OpenCL device found: {HOW_TO_GET_ONE}"     # the one line wherever none is found
+
+
 def list_devices() -> list[Device]:
     devices = []
     try:
@@ -333,8 +338,7 @@ def choose_device(spec: str = "auto", extra: str = "", use_cache: bool = True,
     A device whose platform cannot build the kernels is skipped with one line saying why."""
     devices = list_devices()
     if not devices:
-        raise UserError("no OpenCL device found: install an OpenCL driver "
-                        "(on Debian/Ubuntu, 'apt install pocl-opencl-icd' runs on the CPU)")
+        raise UserError(NO_DEVICE)
     candidates = [d for d in devices if _matches(spec, d, devices)]
     if not candidates:
         raise UserError(f"--device: no OpenCL device matches {short(spec)} "

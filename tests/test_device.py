@@ -115,3 +115,17 @@ def test_two_processes_building_the_same_program_leave_one_whole_entry(tmp_path)
     assert all(_read_cached(p) is not None for p in tmp_path.glob("*.bin"))
     assert not list(tmp_path.glob("*.tmp*"))
     assert build(tmp_path).stdout.strip() == "cached"
+
+
+def test_without_an_opencl_platform_one_line_says_how_to_get_one(tmp_path):
+    """With the system's OpenCL drivers hidden (an empty vendors folder for the ICD loader), each
+    command that needs a device says in one line how to get one, root or not."""
+    env = {**os.environ, "OCL_ICD_VENDORS": str(tmp_path)}
+    for args in (["devices"], ["render", "simple", "-o", str(tmp_path / "o.png")]):
+        r = subprocess.run([sys.executable, "-m", "pathtrace", *args], env=env, capture_output=True, text=True,
+                           timeout=120)
+        assert r.returncode == 1 and not (tmp_path / "o.png").exists()
+        last = r.stderr.strip().splitlines()[-1]
+        assert last == ("pathtrace: error: no OpenCL device found: for the CPU without root, pip install "
+                        "pocl-binary-distribution (pathtrace's extra [cpu]); on Debian/Ubuntu, apt install "
+                        "pocl-opencl-icd; for a GPU, its vendor's OpenCL driver"), r.stderr
