@@ -109,6 +109,11 @@ class Programs:
         future = self._futures.get(self._key(features, tuned))
         return future.result() if future is not None and future.done() and future.exception() is None else None
 
+    def under_way(self, features: Features, tuned: bool = True) -> bool:
+        """Whether the program for `features` is being built."""
+        future = self._futures.get(self._key(features, tuned))
+        return future is not None and not future.done()
+
     def failed(self, features: Features, tuned: bool = True) -> bool:
         """Whether the build of the program for `features` ended in an error."""
         future = self._futures.get(self._key(features, tuned))
