@@ -193,7 +193,7 @@ def test_unreadable_environment_map(tmp_path, name, data):
     (["cornel-box"], "cornel-box: neither a scene file nor a built-in scene; did you mean cornell-box? (built-ins: "),
     (["simple", "--tonemap", "acse"], "invalid choice: 'acse' (choose from 'standard', 'aces'); did you mean aces?\n"),
     (["simple", "--sppp", "4"], "unrecognized arguments: --sppp 4; did you mean --spp?\n"),
-    (["simple", "--rr=throughput", "--max-dept", "4"], "unrecognized arguments: --max-dept 4; did you mean --max-depth?\n"),
+    (["simple", "--rr=throughput", "--max-deph", "4"], "unrecognized arguments: --max-deph 4; did you mean --max-depth?\n"),
     (["simple", "--device", "no-such-device"], "--device: no OpenCL device matches 'no-such-device'"),
     (["simple", "--size", "0x10"], "width and height must be 1 to 16384"),
     (["simple", "--size", "big"], "is not WIDTHxHEIGHT"),
