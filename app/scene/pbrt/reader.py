@@ -35,7 +35,7 @@ from pathtrace.errors import UserError, cut, warn
 from pathtrace.files import check_regular_file
 from pathtrace.filters import PixelFilter
 from pathtrace.lights import DirectionalLight, PointLight, SpotLight
-from pathtrace.lights.light import luminance
+from pathtrace.lights.light import MAX_RADIANCE, luminance
 from pathtrace.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder
@@ -169,6 +169,15 @@ class PbrtReader:
 
     # -- transforms --
 
+    def inverse(self, where: str, what: str) -> np.ndarray:
+        """The inverse of the current transform, which `what` needs; an error naming the line
+        where it is singular (a Scale of 0, or factors whose product underflows to 0): pbrt-v4
+        goes on with an inverse of NaNs there, which would render nothing meaningful."""
+        inverse = _inverse(self.state.ctm)
+        if inverse is None:
+            raise UserError(f"{where}: {what} needs the current transform's inverse, but the transform is singular")
+        return inverse
+
     def concat(self, m):
         self.state.ctm = self.state.ctm @ m
 
@@ -203,7 +212,7 @@ class PbrtReader:
         # pbrt-v4: the camera is in the current outside medium
         self.camera_params = (kind, params, tokens.where(offset), self.state.ctm.copy(),
                               self.medium_row(self.state.media[1], tokens.where(offset)))
-        self.named_systems["camera"] = np.linalg.inv(self.state.ctm)
+        self.named_systems["camera"] = self.inverse(tokens.where(offset), "the camera")
 
     def make_camera(self) -> Camera:
         """pathtrace's camera for pbrt's, once the film's size is known."""
@@ -500,6 +509,10 @@ class PbrtReader:
         name = string(tokens, "ObjectInstance")
         if name not in self.objects:
             tokens.fail(offset, f"no object named '{cut(name)}'")
+        if _inverse(self.state.ctm) is None:
+            warn(f"{tokens.where(offset)}: the current transform is singular (it flattens the instance); "
+                 "pathtrace leaves the instance out")
+            return
         self.builder.add_instance(self.objects[name], self.state.ctm)
 
     # -- shapes --
@@ -539,6 +552,13 @@ class PbrtReader:
                 p.used = True
             self.once(("interface", where), f"{where}: a shape of the interface material that bounds no "
                                             "medium is nothing; pathtrace leaves it out")
+            return
+        if _inverse(self.state.ctm) is None:
+            for p in params.params.values():
+                p.used = True
+            # pbrt-v4 would carry NaN normals and a NaN inverse: flattened to nothing, the
+            # shape is left out (as degenerate triangles are)
+            warn(f"{where}: the current transform is singular (it flattens the shape); pathtrace leaves the shape out")
             return
         mesh = self.shape_mesh(kind, params, where)
         if mesh is None:
@@ -708,17 +728,23 @@ class PbrtReader:
         if params.type_of("filename"):
             params.string("filename")
             warn(f"{light_where}: pathtrace's area lights have no image; it uses L")
-        le = spectrum_rgb(params, "L", 1.0, "illuminant") * params.float("scale", 1.0)
+        scale = params.float("scale", 1.0)
+        le = spectrum_rgb(params, "L", 1.0, "illuminant") * scale
         twosided = params.bool("twosided", False)
         power = params.float("power", -1.0)
+        if np.any(le < 0):
+            params.fail("scale" if scale < 0 else "L", "an emitted radiance must not be negative")
+        cause = "'L' times 'scale'"
         if power > 0 and faces is not None:
             p = vertices[faces]
             area = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1).sum()
             lum = luminance(le)
             if area > 0 and lum > 0:
                 le = le * power / (math.pi * (2 if twosided else 1) * area * lum)
-        if np.any(le < 0):
-            params.fail("L", "an emitted radiance must not be negative")
+                cause = f"'power' {power:g} over the shape's area of {area:.3g}"
+        if not np.max(le) <= MAX_RADIANCE:
+            raise UserError(f"{light_where}: {cause} gives an emitted radiance of {np.max(le):.3g}, "
+                            f"beyond {MAX_RADIANCE:g}, where the sums of samples overflow")
         self.unused(params, "diffuse area light")
         return le, twosided
 
@@ -796,7 +822,7 @@ class PbrtReader:
             if image.shape[0] != image.shape[1]:
                 raise UserError(f"{where}: {path}: pbrt-v4's environment maps are square (equal-area), "
                                 f"got {image.shape[1]}x{image.shape[0]}")
-            latlong = to_latlong(image[..., :3], np.linalg.inv(self.state.ctm[:3, :3]))
+            latlong = to_latlong(image[..., :3], self.inverse(where, "an infinite light's map")[:3, :3])
             self.environment = Environment(latlong, scale, 0.0, str(path), resampled=True)
             return
         color = spectrum_rgb(params, "L", 1.0, "illuminant") * scale
@@ -806,6 +832,15 @@ class PbrtReader:
 
     def _reverse_orientation(self, tokens, offset):
         self.state.reverse = not self.state.reverse
+
+
+def _inverse(m: np.ndarray):
+    """m's inverse, or None where m is singular (or its inverse overflows)."""
+    try:
+        inverse = np.linalg.inv(m)
+    except np.linalg.LinAlgError:
+        return None
+    return inverse if np.all(np.isfinite(inverse)) else None
 
 
 def _three(what, make):

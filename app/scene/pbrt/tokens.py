@@ -269,6 +269,10 @@ def _values(tokens: Tokens, ptype: str, name: str, offset: int):
             tokens.fail(offset, f"'{cut(name)}': {ptype} takes values in groups of {per}, got {len(items)}")
         if ptype == "integer" and np.any(items != np.round(items)):
             tokens.fail(offset, f"'{cut(name)}': integer values must be whole numbers")
+        if ptype == "integer" and np.any(np.abs(items) >= 2**31):
+            # pbrt-v4 reads integers as C ints; the value as written (exact for whole numbers)
+            big = items[np.argmax(np.abs(items) >= 2**31)]
+            tokens.fail(offset, f"'{cut(name)}': integer values must fit in 32 bits, got {int(big)}")
         return items
     if isinstance(items, np.ndarray):
         tokens.fail(offset, f"'{cut(name)}': {ptype} values must be quoted strings")
