@@ -47,6 +47,9 @@ from pathtrace.scene.pbrt.tokens import Tokens, numbers, parameters, string
 
 MAX_FILE_BYTES = 4 << 30
 MAX_INCLUDE_DEPTH = 16
+# Include directives read in all: a file included from many places counts each time, so that
+# a tree of includes (12 wide and 8 deep: 470 million reads) is refused at once, not read for ever
+MAX_INCLUDES = 4096
 MAX_FILM = 16384
 # a plymesh shape and its file name, as MeshFiles reads them ahead (PbrtReader.named_mesh_files)
 _PLYMESH = re.compile(r'\bShape\s+"plymesh"')
@@ -62,7 +65,8 @@ class GraphicsState:
     media: tuple = ("", "")               # MediumInterface: the inside and outside media's names
 
     def copy(self):
-        return replace(self, ctm=self.ctm.copy())
+        # not dataclasses.replace, which costs 25 us: an attribute block per shape is common
+        return GraphicsState(self.ctm.copy(), self.reverse, self.material, self.area_light, self.media)
 
 
 class PbrtReader:
@@ -82,12 +86,16 @@ class PbrtReader:
         self.lights = []
         self.objects = {}                 # ObjectBegin name: its builder object
         self.current_object = None
+        self.object_shapes = {}           # ObjectBegin name: its shapes, until it is instanced
         self.including = []
+        self.includes = 0                 # Include directives read so far
+        self.inverted = (None, None)      # (the bytes of a transform, its inverse): singular()
         self.media = []                   # the scene's media, None where named but not yet made
         self.medium_rows = {}             # medium name -> row of self.media
         self.medium_mentions = {}         # medium name -> where it was first named
         self.null_material = make("null", {}, "")    # the interface material's, one row for all
         self.material_rows = {}
+        self.default_material = None
         self.warned = set()
         self.mesh_files = MeshFiles()     # the plymesh shapes' files, read ahead
 
@@ -173,10 +181,18 @@ class PbrtReader:
         """The inverse of the current transform, which `what` needs; an error naming the line
         where it is singular (a Scale of 0, or factors whose product underflows to 0): pbrt-v4
         goes on with an inverse of NaNs there, which would render nothing meaningful."""
-        inverse = _inverse(self.state.ctm)
+        inverse = None if self.singular() else self.inverted[1]
         if inverse is None:
             raise UserError(f"{where}: {what} needs the current transform's inverse, but the transform is singular")
         return inverse
+
+    def singular(self) -> bool:
+        """Whether the current transform is singular; its inverse kept, with the transform's
+        bytes, for the shapes that follow under the same transform."""
+        key = self.state.ctm.tobytes()
+        if self.inverted[0] != key:
+            self.inverted = key, _inverse(self.state.ctm)
+        return self.inverted[1] is None
 
     def concat(self, m):
         self.state.ctm = self.state.ctm @ m
@@ -464,6 +480,9 @@ class PbrtReader:
 
     def _include(self, tokens, offset):
         name = string(tokens, "Include")
+        self.includes += 1
+        if self.includes > MAX_INCLUDES:
+            tokens.fail(offset, f"more than {MAX_INCLUDES} Includes in all (each time a file is included counts)")
         self.parse_file(self.resolve(name), tokens.where(offset))
 
     def _ignored(what, count=0, takes_params=False):
@@ -497,7 +516,10 @@ class PbrtReader:
             tokens.fail(offset, "ObjectBegin inside another ObjectBegin")
         self._attribute_begin(tokens, offset)
         self.current_object = name
-        self.objects[name] = self.builder.add_object(name)
+        # its shapes are kept as read and made at its first ObjectInstance: a file of 100,000
+        # objects never instanced costs their reading only (pbrt-v4 reads one in under a second)
+        self.objects[name] = None
+        self.object_shapes[name] = []
 
     def _object_end(self, tokens, offset):
         if self.current_object is None:
@@ -507,13 +529,29 @@ class PbrtReader:
 
     def _object_instance(self, tokens, offset):
         name = string(tokens, "ObjectInstance")
+        if self.current_object is not None:
+            tokens.fail(offset, "ObjectInstance inside ObjectBegin (pbrt-v4 has no nested instances)")
         if name not in self.objects:
             tokens.fail(offset, f"no object named '{cut(name)}'")
-        if _inverse(self.state.ctm) is None:
+        if self.singular():
             warn(f"{tokens.where(offset)}: the current transform is singular (it flattens the instance); "
                  "pathtrace leaves the instance out")
             return
+        if self.objects[name] is None:
+            self.make_object(name)
         self.builder.add_instance(self.objects[name], self.state.ctm)
+
+    def make_object(self, name: str):
+        """The object `name`, its shapes made now, each in the graphics state it was read in."""
+        self.objects[name] = self.builder.add_object(name)
+        saved = self.state, self.current_object
+        self.current_object = name
+        try:
+            for kind, params, where, state in self.object_shapes.pop(name):
+                self.state = state
+                self.add_shape(kind, params, where)
+        finally:
+            self.state, self.current_object = saved
 
     # -- shapes --
 
@@ -522,8 +560,11 @@ class PbrtReader:
         where either is given)."""
         material = self.state.material
         if isinstance(material, str):
-            material = make("diffuse", {"rho_d": np.full(3, 0.5)}, "")      # pbrt-v4's default
-            self.state.material = material
+            # pbrt-v4's default, one for the file (made again in each attribute block, it
+            # would add a row per shape)
+            if self.default_material is None:
+                self.default_material = make("diffuse", {"rho_d": np.full(3, 0.5)}, "")
+            material = self.default_material
         if material is None:              # pbrt's interface: no surface, only a boundary of media
             material = make("black", {}, "") if emission is not None else self.null_material
         if alpha is not None and not (isinstance(alpha, float) and alpha == 1.0):
@@ -546,6 +587,12 @@ class PbrtReader:
         kind = string(tokens, "Shape")
         params = parameters(tokens)
         where = tokens.where(offset)
+        if self.current_object is not None:
+            self.object_shapes[self.current_object].append((kind, params, where, self.state.copy()))
+        else:
+            self.add_shape(kind, params, where)
+
+    def add_shape(self, kind, params, where):
         media = self.medium_interface(where)
         if self.state.material is None and self.state.area_light is None and media is None:
             for p in params.params.values():
@@ -553,7 +600,7 @@ class PbrtReader:
             self.once(("interface", where), f"{where}: a shape of the interface material that bounds no "
                                             "medium is nothing; pathtrace leaves it out")
             return
-        if _inverse(self.state.ctm) is None:
+        if self.singular():
             for p in params.params.values():
                 p.used = True
             # pbrt-v4 would carry NaN normals and a NaN inverse: flattened to nothing, the
