@@ -101,9 +101,10 @@ class BSDFType:
             raise ValueError(problem)
         return values
 
-    def out_of_range(self, values: dict) -> str | None:
+    def out_of_range(self, values: dict) -> tuple | None:
         """The first parameter whose values (a texture's, its bounds) leave the parameter's
-        declared range [low, high] or are not finite, as a problem; None where all lie in it.
+        declared range [low, high] or are not finite, as (its name, the problem); None where
+        all lie in it.
         The TOML reader checks each field so as it reads it; this is the check for readers
         that compute parameters from a file's (pbrt-v4's)."""
         for p in self.params:
@@ -115,7 +116,7 @@ class BSDFType:
             if not (np.isfinite(low) and np.isfinite(high) and low >= p.low and (p.high is None or high <= p.high)):
                 bound = f"[{p.low:g}, {p.high:g}]" if p.high is not None else f"[{p.low:g}, inf)"
                 shown = f"{low:.4g}" if low == high else f"from {low:.4g} to {high:.4g}"
-                return f"{self.name}'s {p.name} must lie in {bound}, got {shown}"
+                return p.name, f"must lie in {bound}, got {shown}"
         return None
 
     def kind_of(self, name: str) -> str:

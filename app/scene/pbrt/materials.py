@@ -67,6 +67,12 @@ def spectrum_rgb(params, name, default, kind="reflectance"):
     params.fail(name, f"must be a colour (rgb, spectrum, blackbody, float), got {ptype}")
 
 
+# pathtrace's parameters that the pbrt materials' parameters become, for messages
+PBRT_NAMES = {"rho_d": "reflectance", "reflectance": "reflectance", "transmittance": "transmittance",
+              "int_ior": "eta", "eta": "eta", "alpha": "roughness", "alpha_v": "vroughness", "albedo": "albedo",
+              "thickness": "thickness", "g": "g", "weight": "amount", "k": "k or reflectance"}
+
+
 def make(kind, values, where) -> Material:
     """A Material of pathtrace's type `kind`, its values completed and checked by the type."""
     try:
@@ -77,7 +83,10 @@ def make(kind, values, where) -> Material:
         raise UserError(f"{where}: {e}") from None
     problem = BSDFS[kind].out_of_range(complete)     # the TOML reader's ranges (a reflectance in [0, 1])
     if problem:
-        raise UserError(f"{where}: {problem}")
+        name, text = problem
+        pbrt_name = PBRT_NAMES.get(name)
+        raise UserError(f"{where}: the {kind} material's {name}" + (f" (from '{pbrt_name}')" if pbrt_name else "")
+                        + f" {text}")
     return Material(kind, complete, twosided=not BSDFS[kind].flags & TRANSMISSIVE)
 
 
