@@ -1,19 +1,29 @@
 """The one exception type the command line turns into a message and a non-zero exit."""
 
+import re
+import threading
+
 
 class UserError(Exception):
     """A problem with what the user gave us (a file, a field, a flag), stated in one line that
     names where it is and what is wrong."""
 
 
-_held = []      # the warnings collected by the innermost grouped_warnings(), if any
+_local = threading.local()     # .held: the warnings each open grouped_warnings() of this thread collects
+
+
+def _held() -> list:
+    if not hasattr(_local, "held"):
+        _local.held = []
+    return _local.held
 
 
 def warn(message: str):
     """One warning line on standard error: something pathtrace did instead of what was asked
-    (held, within grouped_warnings(), to be told once with a count)."""
-    if _held:
-        _held[-1].append(message)
+    (held, within grouped_warnings() in the same thread, to be told once with a count)."""
+    held = _held()
+    if held:
+        held[-1].append(message)
         return
     import sys
     print(f"pathtrace: warning: {message}", file=sys.stderr)
@@ -26,12 +36,11 @@ class grouped_warnings:
     100,000 unknown parameters print one line, not 100,000."""
 
     def __enter__(self):
-        _held.append([])
+        _held().append([])
 
     def __exit__(self, *exc):
-        import re
         groups = {}
-        for message in _held.pop():
+        for message in _held().pop():
             key = re.sub(r"'[^']*'", "''", re.sub(r"^.*?:\d+: ", "", message))
             groups.setdefault(key, []).append(message)
         for messages in groups.values():
