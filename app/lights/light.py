@@ -62,7 +62,8 @@ def check_color(name: str, value) -> np.ndarray:
     """A non-negative rgb value (a number is grey) below MAX_RADIANCE."""
     v = np.broadcast_to(np.asarray(value, np.float64), 3).copy()
     if not np.all(np.isfinite(v)) or np.any(v < 0) or np.max(v) > MAX_RADIANCE:
-        raise ValueError(f"{name}: must be three numbers in [0, {MAX_RADIANCE:g}], got {np.asarray(value).tolist()}")
+        bound = f"{MAX_RADIANCE:.0e}".replace("e+", "e")          # 1e20
+        raise ValueError(f"{name}: must be three numbers in [0, {bound}], got {np.asarray(value).tolist()}")
     return v
 
 
