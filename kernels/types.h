@@ -32,7 +32,7 @@ typedef struct {
     float4 p0;
     float4 p1;
     float4 p2;
-    float4 emission;  /* Le in rgb, emitted on the front side */
+    float4 emission;  /* Le in rgb, emitted on the front side (both: MATERIAL_EMITS_BACK) */
     int type;
     int flags;            /* MATERIAL_* bits */
     float continuation;   /* the report's Russian roulette: probability of going on from here */
@@ -46,6 +46,8 @@ typedef struct {
 #define MATERIAL_TRANSMISSIVE 4  /* an interface seen from both sides */
 #define MATERIAL_MASKED 8        /* it has an opacity (kernels/masks.cl) */
 #define MATERIAL_NULL 16         /* no surface, only a boundary between media (kernels/volume.cl) */
+#define MATERIAL_EMITS_BACK 32   /* one surface emitting from both sides: pbrt-v4's DiffuseAreaLight
+                                    with twoSided (lights.h, L: no test of the side) */
 
 /* A parameter of a material that a texture gives: the texture's value at the hit goes into the
  * material's floats from `slot` on (p0.x is 0, p1.x 4, p2.x 8, emission.x 12). A material's

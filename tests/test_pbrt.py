@@ -105,6 +105,30 @@ def test_maxdepth_counts_bounces(tmp_path):
     assert scene(tmp_path, FLOOR).settings.max_depth == 6            # pbrt's default 5
 
 
+@pytest.mark.parametrize("kind", ["dielectric", "thindielectric"])
+def test_a_dielectric_of_eta_below_one_has_the_denser_medium_outside(tmp_path, kind):
+    """pbrt-v4's eta is inside over outside and may lie below 1 (an air bubble in water): its
+    DielectricBxDF takes etap = eta or 1 / eta by wo's side. The same interface, its normal
+    unturned, has int_ior 1 and ext_ior 1 / eta; taking 1 / eta inside turned the optics over
+    (review 2026-11-28, F7)."""
+    s = scene(tmp_path, f'Material "{kind}" "float eta" 0.75\n' + FLOOR)
+    m = s.materials.get(s.meshes[0].material)
+    assert m.type == kind and m.params["int_ior"] == pytest.approx(1.0) and m.params["ext_ior"] == pytest.approx(1 / 0.75)
+    assert "0.05" in fails(tmp_path, f'WorldBegin\nMaterial "{kind}" "float eta" 0.05\n' + FLOOR)
+
+
+def test_a_twosided_area_light_is_one_surface_emitting_from_both_sides(tmp_path):
+    """pbrt-v4's DiffuseAreaLight with twoSided: L on both sides of each triangle, which stays
+    one triangle (coincident opposite copies let the traversal's rounding pick the side seen;
+    review 2026-11-28, F1); tests/test_pbrt_reference.py renders it against pbrt-v4."""
+    s = scene(tmp_path, 'AreaLightSource "diffuse" "rgb L" [ 2 2 2 ] "bool twosided" true\n' + FLOOR)
+    assert len(s.meshes[0].faces) == 2
+    m = s.materials.get(s.meshes[0].material)
+    assert m.emits_back and np.allclose(m.emission, 2)
+    one = scene(tmp_path, 'AreaLightSource "diffuse"\n' + FLOOR, name="one.pbrt")
+    assert not one.materials.get(one.meshes[0].material).emits_back
+
+
 def test_named_spectra_blackbodies_and_sampled_spectra(tmp_path):
     s = scene(tmp_path, 'Material "conductor" "spectrum eta" "metal-Au-eta" "spectrum k" "metal-Au-k"\n' + FLOOR)
     m = s.materials.get(s.meshes[0].material)

@@ -208,9 +208,13 @@ class MaterialMapper:
             if eta == 1.0:
                 warn(f"{where}: a dielectric of eta 1 is invisible; pathtrace leaves the surface out")
                 return None
+            # pbrt-v4's eta is the inside's IOR over the outside's, any positive value (its
+            # DielectricBxDF takes etap = eta or 1 / eta by the side wo is on): below 1 the
+            # outside is the denser, an air bubble in water
+            iors = {"int_ior": eta, "ext_ior": 1.0} if eta > 1 else {"int_ior": 1.0, "ext_ior": 1 / eta}
             if kind == "dielectric" and rough:      # pbrt-v4's rough glass: GGX
-                return make("roughdielectric", {"int_ior": eta, "ext_ior": 1.0, **rough}, where)
-            return make(kind, {"int_ior": eta, "ext_ior": 1.0}, where)
+                return make("roughdielectric", {**iors, **rough}, where)
+            return make(kind, iors, where)
         if kind in ("coateddiffuse", "coatedconductor"):
             return self._coated(kind, params, where)
         if kind == "diffusetransmission":
@@ -256,10 +260,15 @@ class MaterialMapper:
             eta = float(np.mean(spectrum_rgb(params, name, None, "unbounded")))
         else:
             eta = params.float(name, 1.5)
-        if not 1e-3 <= eta <= 10 or not math.isfinite(eta):
-            params.fail(name, f"must lie in [0.001, 10], got {eta:g}")
+        if not 0.1 <= eta <= 10 or not math.isfinite(eta):
+            params.fail(name, f"must lie in [0.1, 10], got {eta:g}")
+        return eta
+
+    def _coating_eta(self, params, where, name="eta") -> float:
+        """A layered material's coating IOR, which pathtrace's coatings take above 1."""
+        eta = self._eta(params, where, name)
         if eta < 1:
-            warn(f"{where}: eta {eta:g} < 1 (the outside denser); pathtrace takes its reciprocal with the normal turned")
+            warn(f"{where}: {name} {eta:g} < 1: pathtrace's coatings are denser than the outside; it uses {1 / eta:.4g}")
             eta = 1 / eta
         return eta
 
@@ -301,12 +310,12 @@ class MaterialMapper:
             base = self.rough_values(self.roughness(params, where, "conductor.")) or {"alpha": 0.0, "alpha_v": 0.0}
             return make("coatedconductor", {**metal, **layer, "alpha": coating["alpha"], "alpha_v": coating["alpha_v"],
                                             "conductor_alpha": base["alpha"], "conductor_alpha_v": base["alpha_v"],
-                                            "interface_eta": self._eta(params, where, "interface.eta")}, where)
+                                            "interface_eta": self._coating_eta(params, where, "interface.eta")}, where)
         au, av = self.roughness(params, where)
         if not math.isclose(au, av, rel_tol=1e-6):
             warn(f"{where}: pathtrace's coateddiffuse coating is isotropic; it uses alpha {(au + av) / 2:.3g}")
         alpha = (au + av) / 2
-        values = {"reflectance": self.texture_input(params, "reflectance", 0.5), "eta": self._eta(params, where),
+        values = {"reflectance": self.texture_input(params, "reflectance", 0.5), "eta": self._coating_eta(params, where),
                   "alpha": min(alpha, 1.0) if alpha >= SMOOTH_ALPHA else 0.0, **layer}
         return make("coateddiffuse", values, where)
 

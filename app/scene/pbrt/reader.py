@@ -504,9 +504,9 @@ class PbrtReader:
 
     # -- shapes --
 
-    def material_row(self, emission=None, alpha=1.0):
-        """The row of the current material, with a shape's emission and alpha (a row of its own
-        where either is given)."""
+    def material_row(self, emission=None, alpha=1.0, emits_back=False):
+        """The row of the current material, with a shape's emission (from both sides where
+        emits_back) and alpha (a row of its own where either is given)."""
         material = self.state.material
         if isinstance(material, str):
             material = make("diffuse", {"rho_d": np.full(3, 0.5)}, "")      # pbrt-v4's default
@@ -520,7 +520,7 @@ class PbrtReader:
             if emission is None:
                 return self.builder.material(material)
         if emission is not None:
-            return self.builder.material(replace(material, emission=emission))
+            return self.builder.material(replace(material, emission=emission, emits_back=emits_back))
         if id(material) not in self.material_rows:
             self.material_rows[id(material)] = (self.builder.material(material), material)
         return self.material_rows[id(material)][0]
@@ -550,7 +550,10 @@ class PbrtReader:
             emission = None
         alpha = self.mapper.texture_input(params, "alpha", 1.0, float_texture=True) \
             if params.type_of("alpha") else 1.0
-        row = self.material_row(emission, alpha)
+        if twosided and kind == "sphere":
+            warn(f"{where}: pathtrace's sphere lights emit outwards only; 'twosided' is ignored")
+            twosided = False
+        row = self.material_row(emission, alpha, twosided)
         self.unused(params, f"{kind} shape")
         name = Path(source).stem if source else f"{kind} {len(self.builder.meshes)}"
         if kind == "sphere":
@@ -560,8 +563,6 @@ class PbrtReader:
             else:
                 self.builder.add_sphere(center, radius, row, name, media)
             return
-        if twosided:
-            faces = np.concatenate([faces, faces[:, ::-1]])
         # no MeshFile: the file's faces were turned and its uvs flipped, which a converted
         # scene's reference to the file could not say (convert writes the mesh anew)
         record = Mesh(name, vertices.astype(np.float32), faces.astype(np.int32),
