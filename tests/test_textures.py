@@ -433,6 +433,38 @@ def test_a_map_that_perturbs_nothing_changes_nothing(backend, tmp_path, kind):
         assert abs(images[1].mean() / images[0].mean() - 1) < 0.01
 
 
+def test_a_bump_map_and_the_normal_map_of_its_normal_render_alike(backend, tmp_path):
+    """A height ramp along u tilts the floor's normal by a constant angle; a normal map of that
+    normal (float texels, no rounding) perturbs it the same. Mitsuba 3.9 treats both alike (its
+    PerturbedBSDF: Schuessler's flip and the shadowing term of the tilt); pathtrace's bump map
+    lacked both, and lit this floor under a grazing lamp brighter (review 2026-11-28, F9)."""
+    from pathtrace.api import load_dict
+    from pathtrace.image_io import write_image
+    from pathtrace.renderer import Renderer
+    width, step, scale = 64, 2, 20.0
+    ramp = np.tile((np.arange(width) * step).astype(np.uint8)[None, :, None], (4, 1, 3))
+    PILImage.fromarray(ramp).save(tmp_path / "ramp.png")
+    # the floor's dp/du is (6, 0, 0), dp/dv (0, 0, 6): the bumped normal is (-s, 6, 0), s the
+    # height's slope along u, in the frame (dp/du, n x dp/du, n) = (x, -z, y) that is (-s, 0, 6)
+    s = step / 255 * width * scale
+    m = np.array([-s, 0.0, 6.0]) / np.hypot(s, 6.0)
+    write_image(tmp_path / "normal.exr", np.tile((m + 1) / 2, (4, 4, 1)).astype(np.float32))
+    images = []
+    for maps in ({"bump_map": {"type": "bitmap", "file": "ramp.png", "raw": True, "wrap": "clamp"}, "bump_scale": scale},
+                 {"normal_map": {"type": "bitmap", "file": "normal.exr", "raw": True}}):
+        scene = load_dict({
+            "camera": {"eye": [0, 3, 2], "look_at": [0, 0, 0], "vfov": 30},
+            "environment": {"color": 0.1}, "render": {"width": 16, "height": 12, "max_depth": 2},
+            "materials": {"m": {"type": "diffuse", "rho_d": 0.6, **maps}, "lamp": {"type": "emitter", "Le": 50}},
+            "spheres": [{"center": [4, 0.6, 0], "radius": 0.3, "material": "lamp"}],
+            "meshes": [{"material": "m", "vertices": [[-3, 0, -3], [-3, 0, 3], [3, 0, 3], [3, 0, -3]],
+                        "faces": [[0, 1, 2, 3]], "uvs": [[0, 0], [0, 1], [1, 1], [1, 0]]}]}, folder=tmp_path)
+        r = Renderer(backend, scene)
+        r.add_samples(64)
+        images.append(r.mean())
+    np.testing.assert_allclose(images[0], images[1], rtol=2e-3, atol=1e-5)
+
+
 def test_a_map_around_a_map_keeps_the_inner_one(tmp_path, capsys):
     PILImage.fromarray(np.full((2, 2, 3), 128, np.uint8)).save(tmp_path / "m.png")
     bitmap = '<texture type="bitmap" name="normalmap"><string name="filename" value="m.png"/></texture>'
