@@ -35,7 +35,7 @@ KNOWN_BIAS = {"mat_coatedconductor_gold": 0.02, "mat_conductor_remap": 0.03, "ma
               "mat_coateddiffuse": 0.015, "tex_imagemap_scale": 0.005, "tex_imagemap_linear": 0.003,
               "tex_checkerboard": 0.01, "point_power": 0.002, "distant_illuminance": 0.002}
 SCENES = ["alpha", "area_twosided_back", "area_twosided_front", "area_twosided_lit_floor",
-          "camera_thinlens_portrait", "distant_illuminance", "mat_coatedconductor_gold", "mat_coateddiffuse",
+          "camera_thinlens_portrait", "distant_illuminance", "instancing", "mat_coatedconductor_gold", "mat_coateddiffuse",
           "mat_conductor_reflectance", "mat_conductor_remap", "mat_dielectric_eta_below_one",
           "mat_dielectric_rough", "mat_diffusetransmission", "mat_thindielectric", "medium_sphere",
           "point_power", "reverse_orientation", "tex_checkerboard", "tex_imagemap_linear", "tex_imagemap_scale"]

@@ -39,7 +39,8 @@ from pathtrace.lights.light import luminance
 from pathtrace.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder
-from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, orient_by_normals, unit_disk, vertex_normals
+from pathtrace.scene.meshes import (ELLIPSOID_RINGS, MAX_COORDINATE, MeshFiles, check_mesh, ellipsoid, is_similarity,
+                                     orient_by_normals, unit_disk, vertex_normals)
 from pathtrace.scene.pbrt.equal_area import to_latlong
 from pathtrace.scene.pbrt.materials import MaterialMapper, make, spectrum_rgb
 from pathtrace.textures import Texture
@@ -550,13 +551,13 @@ class PbrtReader:
             emission = None
         alpha = self.mapper.texture_input(params, "alpha", 1.0, float_texture=True) \
             if params.type_of("alpha") else 1.0
-        if twosided and kind == "sphere":
+        if twosided and faces is None:
             warn(f"{where}: pathtrace's sphere lights emit outwards only; 'twosided' is ignored")
             twosided = False
         row = self.material_row(emission, alpha, twosided)
         self.unused(params, f"{kind} shape")
         name = Path(source).stem if source else f"{kind} {len(self.builder.meshes)}"
-        if kind == "sphere":
+        if faces is None:
             center, radius = vertices
             if self.current_object is not None:
                 self.builder.objects[self.objects[self.current_object]].spheres.append((center, radius, row, name, media))
@@ -576,7 +577,8 @@ class PbrtReader:
 
     def shape_mesh(self, kind, params, where):
         """(vertices, faces, normals, uvs, file) in world space, fronts as pbrt has them; for a
-        sphere (center, radius) and None. None for a shape pathtrace leaves out."""
+        sphere (center, radius) and None (a mesh where the transform makes it an ellipsoid).
+        None for a shape pathtrace leaves out."""
         m = self.state.ctm
         if kind == "sphere":
             radius = params.float("radius", 1.0)
@@ -585,9 +587,16 @@ class PbrtReader:
             for name, default in (("zmin", -radius), ("zmax", radius), ("phimax", 360.0)):
                 if params.float(name, default) != default:
                     warn(f"{params.where(name)}: pathtrace's spheres are whole; the partial sphere is rendered whole")
+            if not is_similarity(m):
+                warn(f"{where}: a sphere under a non-uniform transform is an ellipsoid, which pathtrace draws as a mesh "
+                     f"of {4 * ELLIPSOID_RINGS * (ELLIPSOID_RINGS - 1)} triangles")
+                vertices, faces, normals, uvs = ellipsoid(m, radius=radius)
+                self.check_extent(vertices, where)
+                if self.state.reverse:
+                    normals = -normals
+                    faces = orient_by_normals(vertices, faces, normals)
+                return vertices, faces, normals, uvs, ""
             scales = np.linalg.norm(m[:3, :3], axis=0)
-            if not np.allclose(scales, scales[0], rtol=1e-5):
-                warn(f"{where}: a non-uniformly scaled sphere; pathtrace renders a sphere of the mean scale")
             if self.state.reverse:
                 warn(f"{where}: pathtrace's spheres face outwards; ReverseOrientation is ignored")
             center = m[:3, 3].copy()
