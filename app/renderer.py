@@ -153,7 +153,7 @@ class Renderer:
         (pathtrace.programs). With "auto", the scene's own program, tuned, is built in the
         background, and add_samples switches to it once it is there, the average going on;
         until then the generic program renders, or where that is not built (NVIDIA's driver
-        takes minutes over it: `pathtrace devices --check` builds it) the scene's own program
+        takes 46 s over it: `pathtrace devices --check` builds it) the scene's own program
         untuned, one build, before the tuned one starts."""
         features = replace(self.compiled.features(self.settings, self.camera),
                            traversal_stats=self.traversal_stats, path_queue=self.queue_plan()[0])

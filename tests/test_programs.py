@@ -210,3 +210,29 @@ def test_without_the_generic_program_the_first_image_waits_for_one_untuned_build
     r.finish()
     assert r.samples == SPP and r.generic_samples == 0
     same_image(r, render(specialised, scene))
+
+
+
+@pytest.fixture(scope="module")
+def gpu_form(backend):
+    """The generic program in the form GPUs build: its dispatch over BSDFs, textures and lights
+    called rather than inlined (kernels/inlining.h: DISPATCH), which CPUs do not build, built
+    here without CPU_DEVICE."""
+    import pyopencl as cl
+    from pathtrace.device import kernel_source, program_options
+    generic = Features.generic_program()
+    options = [o for o in program_options(backend.device.device, generic) if o != "-DCPU_DEVICE"]
+    program = cl.Program(backend.context, kernel_source(backend.extra, generic)).build(
+        options=options, devices=[backend.device.device])
+    form = with_mode(backend, "generic")
+    form.programs = Programs(None, form.device.name, False)
+    form.programs.add(generic, False, program)
+    return form
+
+
+@pytest.mark.parametrize("name", ["textures.xml", "lights.xml", "blend.xml"])
+def test_the_generic_program_in_its_gpu_form_renders_as_its_own_program(gpu_form, specialised, name):
+    scene = load_scene(str(Path(__file__).parent / "scenes" / name))
+    a, b = render(gpu_form, scene), render(specialised, scene)
+    assert a.uses_generic_program and a.program is gpu_form.program
+    same_image(a, b)

@@ -27,10 +27,10 @@ def kernel_parts(names) -> list:
         cases = "".join(f"    case TEXTURE_{n.upper()}: return eval_{n}(sc, t, uv);\n" for n in types)
         return (f"{signature}\n{{\n    const global Texture *t = &sc->textures[i];\n"
                 f"    switch (t->type) {{\n{cases}    default: return (float3)(0.0f);\n    }}\n}}\n")
-    leaf_dispatch = (dispatch("float3 eval_leaf_texture(const SceneData *sc, int i, float2 uv)", leaves)
+    leaf_dispatch = (dispatch("DISPATCH float3 eval_leaf_texture(const SceneData *sc, int i, float2 uv)", leaves)
                      + "float3 eval_input(const SceneData *sc, const global Texture *t, int k, float2 uv)\n{\n"
                        "    return t->input[k] >= 0 ? eval_leaf_texture(sc, t->input[k], uv) : t->value[k].xyz;\n}\n")
-    full = dispatch("float3 eval_texture(const SceneData *sc, int i, float2 uv)", leaves + combined)
+    full = dispatch("DISPATCH float3 eval_texture(const SceneData *sc, int i, float2 uv)", leaves + combined)
     here = "app/textures/registry.py: kernel_parts"
     return ([(here, tags), ("texture.cl", None)] + [(f"textures/{n}.cl", None) for n in leaves]
             + [(here, leaf_dispatch)] + [(f"textures/{n}.cl", None) for n in combined]
