@@ -35,7 +35,7 @@ from pathtrace.errors import UserError, cut, warn
 from pathtrace.files import check_regular_file
 from pathtrace.filters import PixelFilter
 from pathtrace.lights import DirectionalLight, PointLight, SpotLight
-from pathtrace.lights.light import luminance
+from pathtrace.lights.light import MAX_RADIANCE, luminance
 from pathtrace.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder
@@ -48,6 +48,9 @@ from pathtrace.scene.pbrt.tokens import Tokens, numbers, parameters, string
 
 MAX_FILE_BYTES = 4 << 30
 MAX_INCLUDE_DEPTH = 16
+# Include directives read in all: a file included from many places counts each time, so that
+# a tree of includes (12 wide and 8 deep: 470 million reads) is refused at once, not read for ever
+MAX_INCLUDES = 4096
 MAX_FILM = 16384
 # a plymesh shape and its file name, as MeshFiles reads them ahead (PbrtReader.named_mesh_files)
 _PLYMESH = re.compile(r'\bShape\s+"plymesh"')
@@ -63,7 +66,8 @@ class GraphicsState:
     media: tuple = ("", "")               # MediumInterface: the inside and outside media's names
 
     def copy(self):
-        return replace(self, ctm=self.ctm.copy())
+        # not dataclasses.replace, which costs 25 us: an attribute block per shape is common
+        return GraphicsState(self.ctm.copy(), self.reverse, self.material, self.area_light, self.media)
 
 
 class PbrtReader:
@@ -83,12 +87,16 @@ class PbrtReader:
         self.lights = []
         self.objects = {}                 # ObjectBegin name: its builder object
         self.current_object = None
+        self.object_shapes = {}           # ObjectBegin name: its shapes, until it is instanced
         self.including = []
+        self.includes = 0                 # Include directives read so far
+        self.inverted = (None, None)      # (the bytes of a transform, its inverse): singular()
         self.media = []                   # the scene's media, None where named but not yet made
         self.medium_rows = {}             # medium name -> row of self.media
         self.medium_mentions = {}         # medium name -> where it was first named
         self.null_material = make("null", {}, "")    # the interface material's, one row for all
         self.material_rows = {}
+        self.default_material = None
         self.warned = set()
         self.mesh_files = MeshFiles()     # the plymesh shapes' files, read ahead
 
@@ -170,6 +178,23 @@ class PbrtReader:
 
     # -- transforms --
 
+    def inverse(self, where: str, what: str) -> np.ndarray:
+        """The inverse of the current transform, which `what` needs; an error naming the line
+        where it is singular (a Scale of 0, or factors whose product underflows to 0): pbrt-v4
+        goes on with an inverse of NaNs there, which would render nothing meaningful."""
+        inverse = None if self.singular() else self.inverted[1]
+        if inverse is None:
+            raise UserError(f"{where}: {what} needs the current transform's inverse, but the transform is singular")
+        return inverse
+
+    def singular(self) -> bool:
+        """Whether the current transform is singular; its inverse kept, with the transform's
+        bytes, for the shapes that follow under the same transform."""
+        key = self.state.ctm.tobytes()
+        if self.inverted[0] != key:
+            self.inverted = key, _inverse(self.state.ctm)
+        return self.inverted[1] is None
+
     def concat(self, m):
         self.state.ctm = self.state.ctm @ m
 
@@ -204,7 +229,7 @@ class PbrtReader:
         # pbrt-v4: the camera is in the current outside medium
         self.camera_params = (kind, params, tokens.where(offset), self.state.ctm.copy(),
                               self.medium_row(self.state.media[1], tokens.where(offset)))
-        self.named_systems["camera"] = np.linalg.inv(self.state.ctm)
+        self.named_systems["camera"] = self.inverse(tokens.where(offset), "the camera")
 
     def make_camera(self) -> Camera:
         """pathtrace's camera for pbrt's, once the film's size is known."""
@@ -456,6 +481,9 @@ class PbrtReader:
 
     def _include(self, tokens, offset):
         name = string(tokens, "Include")
+        self.includes += 1
+        if self.includes > MAX_INCLUDES:
+            tokens.fail(offset, f"more than {MAX_INCLUDES} Includes in all (each time a file is included counts)")
         self.parse_file(self.resolve(name), tokens.where(offset))
 
     def _ignored(what, count=0, takes_params=False):
@@ -489,7 +517,10 @@ class PbrtReader:
             tokens.fail(offset, "ObjectBegin inside another ObjectBegin")
         self._attribute_begin(tokens, offset)
         self.current_object = name
-        self.objects[name] = self.builder.add_object(name)
+        # its shapes are kept as read and made at its first ObjectInstance: a file of 100,000
+        # objects never instanced costs their reading only (pbrt-v4 reads one in under a second)
+        self.objects[name] = None
+        self.object_shapes[name] = []
 
     def _object_end(self, tokens, offset):
         if self.current_object is None:
@@ -499,9 +530,29 @@ class PbrtReader:
 
     def _object_instance(self, tokens, offset):
         name = string(tokens, "ObjectInstance")
+        if self.current_object is not None:
+            tokens.fail(offset, "ObjectInstance inside ObjectBegin (pbrt-v4 has no nested instances)")
         if name not in self.objects:
             tokens.fail(offset, f"no object named '{cut(name)}'")
+        if self.singular():
+            warn(f"{tokens.where(offset)}: the current transform is singular (it flattens the instance); "
+                 "pathtrace leaves the instance out")
+            return
+        if self.objects[name] is None:
+            self.make_object(name)
         self.builder.add_instance(self.objects[name], self.state.ctm)
+
+    def make_object(self, name: str):
+        """The object `name`, its shapes made now, each in the graphics state it was read in."""
+        self.objects[name] = self.builder.add_object(name)
+        saved = self.state, self.current_object
+        self.current_object = name
+        try:
+            for kind, params, where, state in self.object_shapes.pop(name):
+                self.state = state
+                self.add_shape(kind, params, where)
+        finally:
+            self.state, self.current_object = saved
 
     # -- shapes --
 
@@ -510,8 +561,11 @@ class PbrtReader:
         emits_back) and alpha (a row of its own where either is given)."""
         material = self.state.material
         if isinstance(material, str):
-            material = make("diffuse", {"rho_d": np.full(3, 0.5)}, "")      # pbrt-v4's default
-            self.state.material = material
+            # pbrt-v4's default, one for the file (made again in each attribute block, it
+            # would add a row per shape)
+            if self.default_material is None:
+                self.default_material = make("diffuse", {"rho_d": np.full(3, 0.5)}, "")
+            material = self.default_material
         if material is None:              # pbrt's interface: no surface, only a boundary of media
             material = make("black", {}, "") if emission is not None else self.null_material
         if alpha is not None and not (isinstance(alpha, float) and alpha == 1.0):
@@ -534,12 +588,25 @@ class PbrtReader:
         kind = string(tokens, "Shape")
         params = parameters(tokens)
         where = tokens.where(offset)
+        if self.current_object is not None:
+            self.object_shapes[self.current_object].append((kind, params, where, self.state.copy()))
+        else:
+            self.add_shape(kind, params, where)
+
+    def add_shape(self, kind, params, where):
         media = self.medium_interface(where)
         if self.state.material is None and self.state.area_light is None and media is None:
             for p in params.params.values():
                 p.used = True
             self.once(("interface", where), f"{where}: a shape of the interface material that bounds no "
                                             "medium is nothing; pathtrace leaves it out")
+            return
+        if self.singular():
+            for p in params.params.values():
+                p.used = True
+            # pbrt-v4 would carry NaN normals and a NaN inverse: flattened to nothing, the
+            # shape is left out (as degenerate triangles are)
+            warn(f"{where}: the current transform is singular (it flattens the shape); pathtrace leaves the shape out")
             return
         mesh = self.shape_mesh(kind, params, where)
         if mesh is None:
@@ -700,17 +767,23 @@ class PbrtReader:
         if params.type_of("filename"):
             params.string("filename")
             warn(f"{light_where}: pathtrace's area lights have no image; it uses L")
-        le = spectrum_rgb(params, "L", 1.0, "illuminant") * params.float("scale", 1.0)
+        scale = params.float("scale", 1.0)
+        le = spectrum_rgb(params, "L", 1.0, "illuminant") * scale
         twosided = params.bool("twosided", False)
         power = params.float("power", -1.0)
+        if np.any(le < 0):
+            params.fail("scale" if scale < 0 else "L", "an emitted radiance must not be negative")
+        cause = "'L' times 'scale'"
         if power > 0 and faces is not None:
             p = vertices[faces]
             area = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1).sum()
             lum = luminance(le)
             if area > 0 and lum > 0:
                 le = le * power / (math.pi * (2 if twosided else 1) * area * lum)
-        if np.any(le < 0):
-            params.fail("L", "an emitted radiance must not be negative")
+                cause = f"'power' {power:g} over the shape's area of {area:.3g}"
+        if not np.max(le) <= MAX_RADIANCE:
+            raise UserError(f"{light_where}: {cause} gives an emitted radiance of {np.max(le):.3g}, "
+                            f"beyond {MAX_RADIANCE:g}, where the sums of samples overflow")
         self.unused(params, "diffuse area light")
         return le, twosided
 
@@ -788,7 +861,7 @@ class PbrtReader:
             if image.shape[0] != image.shape[1]:
                 raise UserError(f"{where}: {path}: pbrt-v4's environment maps are square (equal-area), "
                                 f"got {image.shape[1]}x{image.shape[0]}")
-            latlong = to_latlong(image[..., :3], np.linalg.inv(self.state.ctm[:3, :3]))
+            latlong = to_latlong(image[..., :3], self.inverse(where, "an infinite light's map")[:3, :3])
             self.environment = Environment(latlong, scale, 0.0, str(path), resampled=True)
             return
         color = spectrum_rgb(params, "L", 1.0, "illuminant") * scale
@@ -798,6 +871,15 @@ class PbrtReader:
 
     def _reverse_orientation(self, tokens, offset):
         self.state.reverse = not self.state.reverse
+
+
+def _inverse(m: np.ndarray):
+    """m's inverse, or None where m is singular (or its inverse overflows)."""
+    try:
+        inverse = np.linalg.inv(m)
+    except np.linalg.LinAlgError:
+        return None
+    return inverse if np.all(np.isfinite(inverse)) else None
 
 
 def _three(what, make):
