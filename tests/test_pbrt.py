@@ -188,7 +188,7 @@ def test_lights_as_pbrt_places_and_scales_them(tmp_path):
     s = scene(tmp_path, 'LightSource "point" "point3 from" [ 0 2 0 ] "rgb I" [ 1 2 3 ] "float scale" 2\n'
                         'AttributeBegin\nTranslate 0 5 0\n'
                         'LightSource "spot" "point3 from" [ 0 0 0 ] "point3 to" [ 0 -1 0 ] "float coneangle" 40 '
-                        '"float conedelta" 10\nAttributeEnd\n'
+                        '"float conedeltaangle" 10\nAttributeEnd\n'
                         'LightSource "distant" "point3 from" [ 0 1 0 ] "point3 to" [ 0 0 0 ] "blackbody L" 5000 '
                         '"float illuminance" 3\n' + FLOOR)
     point, spot, sun = s.lights

@@ -35,7 +35,6 @@ from pathtrace.errors import UserError, cut, warn
 from pathtrace.files import check_regular_file
 from pathtrace.filters import PixelFilter
 from pathtrace.lights import DirectionalLight, PointLight, SpotLight
-from pathtrace.lights.light import luminance
 from pathtrace.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder
@@ -48,6 +47,8 @@ from pathtrace.scene.pbrt.tokens import Tokens, numbers, parameters, string
 MAX_FILE_BYTES = 4 << 30
 MAX_INCLUDE_DEPTH = 16
 MAX_FILM = 16384
+# the most material rows one `power` area light's triangles take (PbrtReader.area_emission)
+MAX_POWER_ROWS = 256
 # a plymesh shape and its file name, as MeshFiles reads them ahead (PbrtReader.named_mesh_files)
 _PLYMESH = re.compile(r'\bShape\s+"plymesh"')
 _FILENAME = re.compile(r'"string\s+filename"\s*\[?\s*"([^"]*)"')
@@ -544,33 +545,36 @@ class PbrtReader:
         if mesh is None:
             return
         vertices, faces, normals, uvs, source = mesh
-        emission, twosided = self.area_emission(vertices, faces, where)
-        if self.current_object is not None and emission is not None:
+        parts, twosided = self.area_emission(vertices, faces, where)
+        if self.current_object is not None and parts[0][1] is not None:
             warn(f"{where}: pbrt-v4 has no area lights in instances; this shape does not emit")
-            emission = None
+            parts = [(None, None)]
         alpha = self.mapper.texture_input(params, "alpha", 1.0, float_texture=True) \
             if params.type_of("alpha") else 1.0
-        row = self.material_row(emission, alpha)
         self.unused(params, f"{kind} shape")
         name = Path(source).stem if source else f"{kind} {len(self.builder.meshes)}"
         if kind == "sphere":
             center, radius = vertices
+            row = self.material_row(parts[0][1], alpha)
             if self.current_object is not None:
                 self.builder.objects[self.objects[self.current_object]].spheres.append((center, radius, row, name, media))
             else:
                 self.builder.add_sphere(center, radius, row, name, media)
             return
-        if twosided:
-            faces = np.concatenate([faces, faces[:, ::-1]])
-        # no MeshFile: the file's faces were turned and its uvs flipped, which a converted
-        # scene's reference to the file could not say (convert writes the mesh anew)
-        record = Mesh(name, vertices.astype(np.float32), faces.astype(np.int32),
-                      None if normals is None else normals.astype(np.float32), row, source, None,
-                      None if uvs is None else uvs.astype(np.float32), media)
-        if self.current_object is not None:
-            self.builder.objects[self.objects[self.current_object]].meshes.append(record)
-        else:
-            self.builder.add_mesh(record)
+        for subset, emission in parts:
+            row = self.material_row(emission, alpha)
+            part = faces if subset is None else faces[subset]
+            if twosided:
+                part = np.concatenate([part, part[:, ::-1]])
+            # no MeshFile: the file's faces were turned and its uvs flipped, which a converted
+            # scene's reference to the file could not say (convert writes the mesh anew)
+            record = Mesh(name, vertices.astype(np.float32), part.astype(np.int32),
+                          None if normals is None else normals.astype(np.float32), row, source, None,
+                          None if uvs is None else uvs.astype(np.float32), media)
+            if self.current_object is not None:
+                self.builder.objects[self.objects[self.current_object]].meshes.append(record)
+            else:
+                self.builder.add_mesh(record)
 
 
     def shape_mesh(self, kind, params, where):
@@ -700,10 +704,19 @@ class PbrtReader:
         return faces
 
     def area_emission(self, vertices, faces, where):
-        """The emitted radiance of a shape under an AreaLightSource, and whether it emits from
-        both sides."""
+        """The emitted radiance of a shape under an AreaLightSource, as [(faces, radiance)]
+        (faces an index array of the mesh's, or None for all), and whether it emits from both
+        sides; [(None, None)] where the shape is no light.
+
+        `power` is applied as pbrt-v4 applies it: a mesh is one DiffuseAreaLight per triangle
+        (src/pbrt/scene.cpp, the area lights' loop over the shapes Shape::Create returns), and
+        DiffuseAreaLight::Create (src/pbrt/lights.cpp) scales L by power / k_e with
+        k_e = (twosided ? 2 : 1) * shape.Area() * Pi, the area being the triangle's own. An RGB
+        L keeps its magnitude (scale /= SpectrumToPhotometric(L) sees only the colour space's
+        illuminant), so L is not divided by its luminance. Triangles of one area share a
+        radiance, and a material row."""
         if self.state.area_light is None:
-            return None, False
+            return [(None, None)], False
         params, light_where = self.state.area_light
         if params.type_of("filename"):
             params.string("filename")
@@ -711,16 +724,29 @@ class PbrtReader:
         le = spectrum_rgb(params, "L", 1.0, "illuminant") * params.float("scale", 1.0)
         twosided = params.bool("twosided", False)
         power = params.float("power", -1.0)
-        if power > 0 and faces is not None:
-            p = vertices[faces]
-            area = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1).sum()
-            lum = luminance(le)
-            if area > 0 and lum > 0:
-                le = le * power / (math.pi * (2 if twosided else 1) * area * lum)
         if np.any(le < 0):
             params.fail("L", "an emitted radiance must not be negative")
         self.unused(params, "diffuse area light")
-        return le, twosided
+        if power <= 0:
+            return [(None, le)], twosided
+        k_e = math.pi * (2 if twosided else 1)
+        if faces is None:                   # a sphere: (center, radius)
+            return [(None, le * power / (k_e * 4 * math.pi * vertices[1] ** 2))], twosided
+        p = vertices[faces]
+        area = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+        # float32's areas: a quad's two halves, equal but for rounding, share a row
+        areas, group = np.unique(area.astype(np.float32), return_inverse=True)
+        if len(areas) > MAX_POWER_ROWS:
+            # a row per triangle would outgrow the material table: areas in MAX_POWER_ROWS
+            # bins of equal ratio, each triangle given its bin's geometric mean
+            edges = np.geomspace(areas[0], areas[-1], MAX_POWER_ROWS + 1)
+            bins = np.clip(np.searchsorted(edges, areas, side="right") - 1, 0, MAX_POWER_ROWS - 1)
+            spread = float(edges[1] / edges[0]) ** 0.5 - 1
+            warn(f"{light_where}: 'power' over {len(areas)} triangle areas; pathtrace gives each triangle the "
+                 f"radiance of one of {MAX_POWER_ROWS} area classes, within {spread:.1%} of pbrt-v4's")
+            areas, group = np.sqrt(edges[:-1] * edges[1:]), bins[group]
+        return [(np.flatnonzero(group == g), le * power / (k_e * float(a)))
+                for g, a in enumerate(areas) if np.any(group == g)], twosided
 
     # -- lights --
 
@@ -741,7 +767,7 @@ class PbrtReader:
                 light = PointLight(position, color)
             else:
                 p_to = params.point("to", np.array([0, 0, 1.0]))
-                cone, delta = params.float("coneangle", 30.0), params.float("conedelta", 5.0)
+                cone, delta = params.float("coneangle", 30.0), params.float("conedeltaangle", 5.0)
                 if power > 0:
                     cos_end, cos_start = math.cos(math.radians(cone)), math.cos(math.radians(cone - delta))
                     color = color * power / (2 * math.pi * (1 - 0.5 * (cos_start + cos_end)))
@@ -769,7 +795,7 @@ class PbrtReader:
         except ValueError as e:
             name, problem = str(e).split(": ", 1)
             pbrt_name = {"intensity": "I", "irradiance": "L", "direction": "to",
-                         "cutoff_angle": "coneangle", "beam_width": "conedelta"}.get(name, name)
+                         "cutoff_angle": "coneangle", "beam_width": "conedeltaangle"}.get(name, name)
             raise UserError(f"{where}: '{pbrt_name}' {problem}") from None
         self.lights.append(light)
         self.unused(params, f"{kind} light")

@@ -1,0 +1,48 @@
+"""pbrt-v4's conventions at the reader's boundary (issue 57), each as pbrt-v4's source has it:
+what the reader makes of a file, and where it shows, a small render's statistic."""
+
+import math
+
+import numpy as np
+import pytest
+
+from pathtrace.renderer import Renderer
+from tests.test_pbrt import FLOOR, scene
+
+LIGHT_QUAD = '"point3 P" [ -0.5 1.5 -0.5  0.5 1.5 -0.5  0.5 1.5 0.5  -0.5 1.5 0.5 ] "integer indices" [ 0 1 2  0 2 3 ]'
+
+
+def emissions(s):
+    """The emitted radiance of each material row that the meshes emit by."""
+    rows = sorted({m.material for m in s.meshes})
+    return [e for e in (s.materials.get(r).emission for r in rows) if e is not None and np.any(e > 0)]
+
+
+# -- lights --
+
+def test_spot_lights_read_conedeltaangle(tmp_path):
+    """pbrt-v4 SpotLight::Create: GetOneFloat("conedeltaangle", 5.); the beam is coneangle minus it."""
+    s = scene(tmp_path, 'LightSource "spot" "point3 from" [ 0 2 0 ] "point3 to" [ 0 0 0 ] "float coneangle" 40 '
+                        '"float conedeltaangle" 20\n' + FLOOR)
+    assert (s.lights[0].cutoff_angle, s.lights[0].beam_width) == (40, 20)
+    default = scene(tmp_path, 'LightSource "spot" "float coneangle" 40\n' + FLOOR)
+    assert default.lights[0].beam_width == 35
+
+
+def test_area_power_is_per_triangle_and_keeps_ls_magnitude(tmp_path):
+    """pbrt-v4 makes one DiffuseAreaLight per triangle, each scaled by power / (pi area), its
+    own area; an RGB L is not divided by its luminance."""
+    s = scene(tmp_path, 'AttributeBegin\nAreaLightSource "diffuse" "rgb L" [ 1 0.9 0.8 ] "float power" 20\n'
+                        f'Shape "trianglemesh" {LIGHT_QUAD}\nAttributeEnd\n' + FLOOR)
+    (le,) = emissions(s)           # the quad's two triangles, of area 1/2 each, share a row
+    assert np.allclose(le, np.array([1, 0.9, 0.8]) * 20 / (math.pi * 0.5), rtol=1e-6)
+    # a triangle of area 2 and one of area 1/2, two-sided: a radiance each
+    s = scene(tmp_path, 'AttributeBegin\nAreaLightSource "diffuse" "rgb L" [ 1 1 1 ] "float power" 10 "bool twosided" true\n'
+                        'Shape "trianglemesh" "point3 P" [ 0 1 0  2 1 0  0 1 2  5 1 5  6 1 5  5 1 6 ] '
+                        '"integer indices" [ 0 1 2  3 4 5 ]\nAttributeEnd\n' + FLOOR)
+    got = sorted(float(e[0]) for e in emissions(s))
+    assert got == pytest.approx(sorted(10 / (2 * math.pi * a) for a in (2.0, 0.5)), rel=1e-6)
+    sphere = scene(tmp_path, 'AttributeBegin\nAreaLightSource "diffuse" "float power" 10\n'
+                             'Shape "sphere" "float radius" 0.5\nAttributeEnd\n' + FLOOR)
+    row = int(sphere.sphere_material[0])
+    assert sphere.materials.get(row).emission == pytest.approx(np.full(3, 10 / (math.pi * 4 * math.pi * 0.25)))
