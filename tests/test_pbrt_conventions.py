@@ -46,3 +46,21 @@ def test_area_power_is_per_triangle_and_keeps_ls_magnitude(tmp_path):
                              'Shape "sphere" "float radius" 0.5\nAttributeEnd\n' + FLOOR)
     row = int(sphere.sphere_material[0])
     assert sphere.materials.get(row).emission == pytest.approx(np.full(3, 10 / (math.pi * 4 * math.pi * 0.25)))
+
+
+# -- textures --
+
+def test_invert_on_a_colour_imagemap_inverts_each_channel(tmp_path):
+    """pbrt-v4 SpectrumImageTexture::Evaluate: ClampZero(1 - scale * rgb), per channel."""
+    from PIL import Image
+    Image.fromarray(np.array([[[255, 0, 0], [0, 0, 255]]], np.uint8)).save(tmp_path / "rb.png")
+    s = scene(tmp_path, 'Texture "t" "spectrum" "imagemap" "string filename" "rb.png" "bool invert" true\n'
+                        'Material "diffuse" "texture reflectance" "t"\n' + FLOOR)
+    texture = s.materials.get(s.meshes[0].material).params["rho_d"]
+    assert texture.type == "bitmap"
+    assert np.allclose(texture.params["image"].rgb()[0], [[0, 1, 1], [1, 1, 0]])
+    assert np.allclose(texture.mean(), [0.5, 1, 0.5])
+    s = scene(tmp_path, 'Texture "t" "spectrum" "imagemap" "string filename" "rb.png" "bool invert" true '
+                        '"float scale" 2 "string encoding" "linear"\nMaterial "diffuse" "texture reflectance" "t"\n' + FLOOR)
+    # 1 - 2 * 1 clamps at zero, as pbrt's ClampZero does
+    assert np.allclose(s.materials.get(s.meshes[0].material).params["rho_d"].mean(), [0.5, 1, 0.5])

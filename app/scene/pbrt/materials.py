@@ -13,7 +13,7 @@ from pathtrace.materials.bsdf import TRANSMISSIVE
 from pathtrace.materials.blend import check_blend, transmits
 from pathtrace.spectra import blackbody_rgb, emission_rgb, named_spectrum, reflectance_rgb, sampled
 from pathtrace.textures import TEXTURES, Texture
-from pathtrace.textures.bitmap import read_image
+from pathtrace.textures.bitmap import Image, read_image
 
 SMOOTH_ALPHA = 1e-3     # pbrt-v4's TrowbridgeReitzDistribution::EffectivelySmooth
 
@@ -56,6 +56,18 @@ def spectrum_rgb(params, name, default, kind="reflectance"):
             return emission_rgb(curve)
         return reflectance_rgb(curve) if kind == "reflectance" else np.full(3, float(np.mean(curve)))
     params.fail(name, f"must be a colour (rgb, spectrum, blackbody, float), got {ptype}")
+
+
+def inverted(image: Image, scale: float) -> Image:
+    """An imagemap's `invert`, as pbrt-v4's image textures have it (src/pbrt/textures.cpp,
+    SpectrumImageTexture::Evaluate: rgb = scale * lookup, then ClampZero(1 - rgb) per channel;
+    FloatImageTexture::Evaluate: max(0, 1 - v)): applied to the texels, in linear float, which
+    bilinear filtering then interpolates as pbrt interpolates before inverting (the two differ
+    only next to texels that the clamp at zero cuts). An alpha channel is kept."""
+    values = image.linear_values()
+    rgb = np.maximum(1.0 - scale * values[..., :3], 0.0)
+    texels = np.concatenate([rgb, values[..., 3:]], axis=2) if values.shape[2] == 4 else rgb
+    return Image(np.ascontiguousarray(texels, np.float32), True, image.path)
 
 
 def make(kind, values, where) -> Material:
@@ -139,14 +151,15 @@ class MaterialMapper:
             filt = params.string("filter", "bilinear")
             if filt not in ("point", "bilinear", "trilinear", "ewa"):
                 raise UserError(f"{where}: 'filter' must be point, bilinear, trilinear or ewa, got {filt!r}")
+            scale = params.float("scale", 1.0)
+            if params.bool("invert", False):
+                image = inverted(image, scale)
+                scale = 1.0
             texture = Texture("bitmap", TEXTURES["bitmap"].complete(
                 {"image": image, "wrap": wrap, "filter": "nearest" if filt == "point" else "bilinear",
                  "to_uv": self._mapping(params, where)}))
-            scale = params.float("scale", 1.0)
             if scale != 1.0:
                 texture = Texture("scale", TEXTURES["scale"].complete({"tex": texture, "scale": scale}))
-            if params.bool("invert", False):
-                texture = Texture("mix", TEXTURES["mix"].complete({"tex1": 1.0, "tex2": 0.0, "amount": texture}))
             return texture
         if cls == "checkerboard":
             if params.int("dimension", 2) != 2:
