@@ -64,3 +64,28 @@ def test_invert_on_a_colour_imagemap_inverts_each_channel(tmp_path):
                         '"float scale" 2 "string encoding" "linear"\nMaterial "diffuse" "texture reflectance" "t"\n' + FLOOR)
     # 1 - 2 * 1 clamps at zero, as pbrt's ClampZero does
     assert np.allclose(s.materials.get(s.meshes[0].material).params["rho_d"].mean(), [0.5, 1, 0.5])
+
+
+# -- the camera --
+
+@pytest.mark.parametrize("camera,film,half_height", [
+    ('"float screenwindow" [ -1.5 1.5 -0.75 0.75 ]', (80, 40), 0.75),
+    ('"float frameaspectratio" 0.5', (40, 80), 2.0),
+    ('', (40, 80), 2.0),
+    ('', (80, 40), 1.0)])
+def test_screenwindow_and_frameaspectratio_frame_the_image_as_pbrt(tmp_path, camera, film, half_height):
+    """pbrt-v4's screen window: [-frame, frame] x [-1, 1] for frame > 1, else [-1, 1] x
+    [-1/frame, 1/frame], or the file's screenwindow; tan(fov / 2) per unit of it."""
+    s = scene(tmp_path, FLOOR, f'Camera "perspective" "float fov" 30 {camera}\n'
+                               f'Film "rgb" "integer xresolution" {film[0]} "integer yresolution" {film[1]}\n')
+    assert math.tan(math.radians(s.camera.vfov) / 2) == pytest.approx(math.tan(math.radians(15)) * half_height)
+
+
+def test_a_screenwindow_off_centre_or_of_another_aspect_warns_what_is_used(tmp_path, capsys):
+    scene(tmp_path, FLOOR, 'Camera "perspective" "float screenwindow" [ 0 2 -1 1 ]\n'
+                           'Film "rgb" "integer xresolution" 40 "integer yresolution" 40\n')
+    err = capsys.readouterr().err
+    assert "centred window of the same size, [-1 1 -1 1]" in err
+    scene(tmp_path, FLOOR, 'Camera "perspective" "float screenwindow" [ -2 2 -1 1 ]\n'
+                           'Film "rgb" "integer xresolution" 40 "integer yresolution" 40\n')
+    assert "pixels that are not square" in capsys.readouterr().err

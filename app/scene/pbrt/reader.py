@@ -224,18 +224,16 @@ class PbrtReader:
             kind = "perspective"
         get = (lambda name, default: default) if params is None else \
             (lambda name, default: params.float(name, default))          # noqa: E731
-        if params is not None and params.type_of("screenwindow"):
-            params.floats("screenwindow")
-            warn(f"{where}: pathtrace frames the image by fov; 'screenwindow' is ignored")
+        half_height = self.screen_half_height(params, w, h)
         if kind == "orthographic":
             camera.projection = "orthographic"
-            camera.height = 2.0 * np.linalg.norm(up) * (1.0 if w >= h else h / w)
+            camera.height = 2.0 * np.linalg.norm(up) * half_height
         else:
             fov = get("fov", 90.0)
             if not 0 < fov < 180:
                 params.fail("fov", f"must lie in (0, 180) degrees, got {fov:g}")
-            t = math.tan(math.radians(fov) / 2)
-            camera.vfov = fov if w >= h else math.degrees(2 * math.atan(t * h / w))
+            # screen space spans tan(fov / 2) per unit (pbrt-v4's Perspective(fov, n, f))
+            camera.vfov = math.degrees(2 * math.atan(math.tan(math.radians(fov) / 2) * half_height))
         camera.aperture = get("lensradius", 0.0)
         camera.focus_distance = get("focaldistance", 1e6)
         if camera.aperture > 0 and kind == "orthographic":
@@ -248,9 +246,37 @@ class PbrtReader:
             name = {"aperture": "lensradius", "focus_distance": "focaldistance", "vfov": "fov"}.get(name, name)
             raise UserError(f"{where}: '{name}' {problem}") from None
         if params is not None:
-            params.float("frameaspectratio")
             self.unused(params, f"{kind} camera")
         return camera
+
+    @staticmethod
+    def screen_half_height(params, w, h) -> float:
+        """Half the image's height in pbrt's screen space, where the fov spans [-1, 1] (or an
+        orthographic camera one world unit each way): pbrt-v4's CameraBase screen window
+        (src/pbrt/cameras.cpp, CameraBaseParameters / the cameras' Create: frame =
+        frameaspectratio, else the film's x / y; the window [-frame, frame] x [-1, 1] where
+        frame > 1, else [-1, 1] x [-1/frame, 1/frame]; or the file's `screenwindow` x0 x1 y0
+        y1). pathtrace's image is centred and its pixels square, so the window's height frames
+        it; a window off centre or of another aspect than the film's is taken so, with a warning."""
+        if params is None:
+            return 1.0 if w >= h else h / w
+        frame = params.float("frameaspectratio", w / h)
+        if not frame > 0 or not math.isfinite(frame):
+            params.fail("frameaspectratio", f"must be positive, got {frame:g}")
+        window = (-frame, frame, -1.0, 1.0) if frame > 1 else (-1.0, 1.0, -1 / frame, 1 / frame)
+        if params.type_of("screenwindow"):
+            window = tuple(float(v) for v in params.floats("screenwindow"))
+            if len(window) != 4 or not window[0] < window[1] or not window[2] < window[3]:
+                params.fail("screenwindow", "takes x0 x1 y0 y1 with x0 < x1 and y0 < y1")
+        x0, x1, y0, y1 = window
+        name = "screenwindow" if params.type_of("screenwindow") else "frameaspectratio"
+        if not math.isclose(x0, -x1, abs_tol=1e-6 * (x1 - x0)) or not math.isclose(y0, -y1, abs_tol=1e-6 * (y1 - y0)):
+            warn(f"{params.where(name)}: pathtrace's image is centred on the view; it uses a centred window "
+                 f"of the same size, [{-(x1 - x0) / 2:g} {(x1 - x0) / 2:g} {-(y1 - y0) / 2:g} {(y1 - y0) / 2:g}]")
+        if not math.isclose((x1 - x0) / (y1 - y0), w / h, rel_tol=1e-4):
+            warn(f"{params.where(name)}: a window of aspect {(x1 - x0) / (y1 - y0):g} on a film of {w / h:g} "
+                 "has pixels that are not square; pathtrace's are, and it frames the window's height")
+        return (y1 - y0) / 2
 
     def _film(self, tokens, offset):
         kind = string(tokens, "Film")
