@@ -89,3 +89,33 @@ def test_a_screenwindow_off_centre_or_of_another_aspect_warns_what_is_used(tmp_p
     scene(tmp_path, FLOOR, 'Camera "perspective" "float screenwindow" [ -2 2 -1 1 ]\n'
                            'Film "rgb" "integer xresolution" 40 "integer yresolution" 40\n')
     assert "pixels that are not square" in capsys.readouterr().err
+
+
+# -- shapes --
+
+def ascii_ply(path, vertices, faces):
+    path.write_text("ply\nformat ascii 1.0\n" f"element vertex {len(vertices)}\nproperty float x\nproperty float y\n"
+                    f"property float z\nelement face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n"
+                    + "".join(" ".join(map(str, v)) + "\n" for v in vertices)
+                    + "".join(f"3 {' '.join(map(str, f))}\n" for f in faces))
+
+
+def test_degenerate_triangles_are_dropped_with_one_warning_that_counts_them(tmp_path, capsys):
+    """pbrt-v4's IntersectTriangle never hits a triangle of zero area: such triangles are
+    dropped, counted in one warning; a mesh left with none is left out, with a warning."""
+    ascii_ply(tmp_path / "flat.ply", [(0, 0, 0), (1, 0, 0), (2, 0, 0)], [(0, 1, 2), (0, 0, 1)])
+    s = scene(tmp_path, 'Shape "trianglemesh" "point3 P" [ 0 0 0  1 0 0  0 0 1  2 0 0 ] '
+                        '"integer indices" [ 0 1 2  0 1 3  1 1 2 ]\n'
+                        'Shape "plymesh" "string filename" "flat.ply"\n'
+                        'Shape "trianglemesh" "point3 P" [ 0 0 0  1 1 1  2 2 2 ] "integer indices" [ 0 1 2 ]\n')
+    assert [len(m.faces) for m in s.meshes] == [1]
+    err = capsys.readouterr().err.strip().splitlines()
+    assert sum("dropped 5 degenerate triangle(s)" in line for line in err) == 1
+    assert sum("every triangle of the" in line and "leaves the shape out" in line for line in err) == 2
+    assert len(err) == 3
+
+
+def test_a_scene_of_degenerate_triangles_only_is_refused_in_one_line(tmp_path):
+    from tests.test_pbrt import fails
+    message = fails(tmp_path, 'WorldBegin\nShape "trianglemesh" "point3 P" [ 0 0 0  1 1 1  2 2 2 ] "integer indices" [ 0 1 2 ]\n')
+    assert "no shapes" in message

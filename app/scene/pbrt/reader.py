@@ -91,6 +91,7 @@ class PbrtReader:
         self.material_rows = {}
         self.warned = set()
         self.mesh_files = MeshFiles()     # the plymesh shapes' files, read ahead
+        self.dropped = [0, 0]             # degenerate triangles dropped, of the meshes' triangles
 
     # -- files --
 
@@ -98,9 +99,19 @@ class PbrtReader:
         p = Path(name)
         return p if p.is_absolute() else self.folder / p
 
+    def degenerate(self, dropped, total):
+        """check_mesh's count of a mesh's degenerate triangles, which read() reports once."""
+        self.dropped[0] += dropped
+        self.dropped[1] += total
+
     def read(self) -> Scene:
         with self.mesh_files:
             self.parse_file(self.path, "scene")
+        if self.dropped[0]:
+            # pbrt-v4 keeps them, but its IntersectTriangle returns no intersection for a
+            # triangle of zero area (src/pbrt/shapes.h), nor does its area light sample one
+            warn(f"{self.path}: dropped {self.dropped[0]} degenerate triangle(s) of zero area, of "
+                 f"{self.dropped[1]} in the meshes that had any (pbrt-v4 never hits them)")
         if self.stack:
             warn(f"{self.path}: {len(self.stack)} AttributeBegin without AttributeEnd")
         if not self.builder.spheres and not self.builder.meshes and not self.builder.instance_object:
@@ -627,20 +638,20 @@ class PbrtReader:
         if kind == "trianglemesh":
             vertices, faces = self.indexed_polygons(params, kind, 3, where)
             normals, uvs = self.vertex_attributes(params, len(vertices))
-            vertices, faces, normals, uvs = check_mesh(vertices, faces, normals, uvs, where)
+            vertices, faces, normals, uvs = check_mesh(vertices, faces, normals, uvs, where, degenerate=self.degenerate)
         elif kind == "bilinearmesh":
             vertices, q = self.indexed_polygons(params, kind, 4, where)
             # corners p00, p10, p01, p11: two triangles of the patch's orientation
             faces = np.concatenate([q[:, [0, 1, 3]], q[:, [0, 3, 2]]])
             normals, uvs = self.vertex_attributes(params, len(vertices))
-            vertices, faces, normals, uvs = check_mesh(vertices, faces, normals, uvs, where)
+            vertices, faces, normals, uvs = check_mesh(vertices, faces, normals, uvs, where, degenerate=self.degenerate)
         elif kind in ("plymesh",):
             filename = params.string("filename")
             if filename is None:
                 raise UserError(f"{where}: a plymesh needs a filename")
             path = self.resolve(filename)
             source = str(path)
-            vertices, faces, normals, uvs = self.mesh_files.read(path, f"{where}: filename")
+            vertices, faces, normals, uvs = self.mesh_files.read(path, f"{where}: filename", self.degenerate)
             if uvs is not None:
                 uvs = np.column_stack([uvs[:, 0], 1 - uvs[:, 1]])
             for name in ("displacement", "edgelength"):
@@ -661,12 +672,16 @@ class PbrtReader:
             vertices, faces = self.indexed_polygons(params, kind, 3, where)
             params.int("levels", 3)
             warn(f"{where}: pathtrace does not subdivide; the control mesh is rendered with smooth normals")
-            vertices, faces, normals, uvs = check_mesh(vertices, faces, None, None, where)
+            vertices, faces, normals, uvs = check_mesh(vertices, faces, None, None, where, degenerate=self.degenerate)
             normals = vertex_normals(vertices, faces)
         else:
             for p in params.params.values():
                 p.used = True
             warn(f"{where}: pathtrace has no {kind} shape; it leaves it out")
+            return None
+        if len(faces) == 0:
+            warn(f"{where}: every triangle of the {kind} is degenerate (pbrt-v4 intersects none of them); "
+                 "pathtrace leaves the shape out")
             return None
         vertices = transform.transform_points(m, vertices)
         self.check_extent(vertices, where)
