@@ -119,3 +119,27 @@ def test_a_scene_of_degenerate_triangles_only_is_refused_in_one_line(tmp_path):
     from tests.test_pbrt import fails
     message = fails(tmp_path, 'WorldBegin\nShape "trianglemesh" "point3 P" [ 0 0 0  1 1 1  2 2 2 ] "integer indices" [ 0 1 2 ]\n')
     assert "no shapes" in message
+
+
+# -- materials' shading maps --
+
+def test_displacement_is_a_bump_map_and_normalmap_a_normal_map(tmp_path, capsys):
+    """pbrt-v4's materials take a float texture `displacement` (BumpMap) or a `string
+    normalmap` read with a linear encoding (NormalMap): pathtrace's bump and normal maps."""
+    from PIL import Image
+    Image.fromarray(np.array([[10, 200], [30, 90]], np.uint8)).save(tmp_path / "h.png")
+    Image.fromarray(np.array([[[128, 128, 255], [200, 128, 200]]], np.uint8)).save(tmp_path / "n.png")
+    s = scene(tmp_path, 'Texture "bump" "float" "imagemap" "string filename" "h.png" "float scale" 0.02\n'
+                        'Material "diffuse" "texture displacement" "bump"\n' + FLOOR)
+    bump = s.materials.get(s.meshes[0].material).bump_map
+    assert bump.type == "scale" and bump.params["tex"].type == "bitmap"
+    assert np.allclose(bump.params["scale"], 0.02)
+    s = scene(tmp_path, 'MakeNamedMaterial "m" "string type" "conductor" "string normalmap" "n.png"\n'
+                        'NamedMaterial "m"\n' + FLOOR)
+    normal = s.materials.get(s.meshes[0].material).normal_map
+    assert normal.type == "bitmap" and normal.params["image"].linear
+    assert (normal.params["wrap"], normal.params["filter"]) == ("repeat", "bilinear")
+    assert "not a parameter" not in capsys.readouterr().err
+    s = scene(tmp_path, 'Texture "c" "float" "checkerboard"\nMaterial "diffuse" "texture displacement" "c"\n' + FLOOR)
+    assert s.materials.get(s.meshes[0].material).bump_map is None
+    assert "the surface is rendered unbumped" in capsys.readouterr().err

@@ -4,6 +4,7 @@ image lookups flip them, colours from spectra (app/spectra.py). What pathtrace d
 is approximated by its nearest material, with one warning each (docs/pbrt.md)."""
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -11,6 +12,7 @@ from pathtrace.errors import UserError, warn
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import TRANSMISSIVE
 from pathtrace.materials.blend import check_blend, transmits
+from pathtrace.materials.table import check_bump_map
 from pathtrace.spectra import blackbody_rgb, emission_rgb, named_spectrum, reflectance_rgb, sampled
 from pathtrace.textures import TEXTURES, Texture
 from pathtrace.textures.bitmap import Image, read_image
@@ -208,7 +210,46 @@ class MaterialMapper:
 
     def material(self, kind, params, where) -> Material | None:
         """The Material of a pbrt material, or None for `interface` (and "" / "none"): no
-        surface, only a boundary between media."""
+        surface, only a boundary between media; with its `normalmap` or `displacement`."""
+        material = self._material(kind, params, where)
+        if material is None:
+            return None
+        return self.shading_maps(material, params, where)
+
+    def shading_maps(self, material, params, where) -> Material:
+        """pbrt-v4's `string normalmap` (an image read with a linear encoding, looked up
+        bilinearly with repeat wrapping at (u, 1 - v), 2 rgb - 1 in the frame of dp/du and the
+        shading normal: src/pbrt/materials.h, NormalMap) as pathtrace's normal map, which is
+        the same frame and lookup (the reader's v is pbrt's 1 - v); and its `texture
+        displacement`, a float texture of heights along the shading normal (BumpMap: dp/du +
+        dd/du n, the normal their cross product, on the geometric normal's side) as pathtrace's
+        bump map, whose slopes are the bitmap's analytic gradient where pbrt takes a finite
+        difference over the pixel's footprint. pbrt-v4's materials take either
+        (src/pbrt/materials.cpp, each Create: GetFloatTextureOrNull("displacement"); scene.cpp
+        reads "normalmap" for every material), and evaluate the normal map where both are given."""
+        normal_file = params.string("normalmap") if params.type_of("normalmap") else None
+        displacement = self.texture_input(params, "displacement", 0.0, True) if params.type_of("displacement") else None
+        if normal_file:
+            if displacement is not None:
+                warn(f"{params.where('displacement')}: pbrt-v4 uses the normal map where a material has both; "
+                     "so does pathtrace, and the displacement is ignored")
+            image = read_image(self.reader.resolve(normal_file), f"{params.where('normalmap')}", True, self.images)
+            texture = Texture("bitmap", TEXTURES["bitmap"].complete({"image": image, "wrap": "repeat",
+                                                                   "filter": "bilinear"}))
+            return replace(material, normal_map=texture)
+        if isinstance(displacement, Texture):
+            try:
+                check_bump_map(displacement)
+            except ValueError as e:
+                warn(f"{params.where('displacement')}: pathtrace cannot bump by this texture ({e}); "
+                     "the surface is rendered unbumped")
+                return material
+            return replace(material, bump_map=displacement)
+        if displacement is not None and displacement != 0:
+            warn(f"{params.where('displacement')}: a constant displacement moves no normal; ignored")
+        return material
+
+    def _material(self, kind, params, where) -> Material | None:
         if kind in ("interface", "", "none"):
             return None
         if kind == "diffuse":
