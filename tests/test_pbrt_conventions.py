@@ -143,3 +143,21 @@ def test_displacement_is_a_bump_map_and_normalmap_a_normal_map(tmp_path, capsys)
     s = scene(tmp_path, 'Texture "c" "float" "checkerboard"\nMaterial "diffuse" "texture displacement" "c"\n' + FLOOR)
     assert s.materials.get(s.meshes[0].material).bump_map is None
     assert "the surface is rendered unbumped" in capsys.readouterr().err
+
+
+def test_textures_nest_as_pbrt_nests_them(tmp_path):
+    """A mix of a checkerboard and a colour (tex_mix of ../shared/references/pbrt-v4), and a
+    scale of a scale of a checkerboard of checkerboards: read as the trees they are."""
+    s = scene(tmp_path, 'Texture "a" "spectrum" "checkerboard" "float uscale" 4 "float vscale" 4 '
+                        '"rgb tex1" [ 0.8 0.8 0.8 ] "rgb tex2" [ 0.1 0.1 0.1 ]\n'
+                        'Texture "t" "spectrum" "mix" "texture tex1" "a" "rgb tex2" [ 0.2 0.5 0.2 ] "float amount" 0.3\n'
+                        'Texture "b" "spectrum" "checkerboard" "texture tex1" "a" "texture tex2" "t"\n'
+                        'Texture "s" "spectrum" "scale" "texture tex" "b" "float scale" 0.5\n'
+                        'Texture "ss" "spectrum" "scale" "texture tex" "s" "float scale" 0.5\n'
+                        'Material "diffuse" "texture reflectance" "ss"\n' + FLOOR)
+    ss = s.materials.get(s.meshes[0].material).params["rho_d"]
+    b = ss.params["tex"].params["tex"]
+    assert (ss.type, b.type, b.params["color1"].type, b.params["color1"].params["tex1"].type) == \
+        ("scale", "checkerboard", "mix", "checkerboard")
+    mix_mean = 0.7 * 0.45 + 0.3 * np.array([0.2, 0.5, 0.2])
+    assert np.allclose(ss.mean(), 0.25 * (0.45 + mix_mean) / 2)
