@@ -161,3 +161,22 @@ def test_textures_nest_as_pbrt_nests_them(tmp_path):
         ("scale", "checkerboard", "mix", "checkerboard")
     mix_mean = 0.7 * 0.45 + 0.3 * np.array([0.2, 0.5, 0.2])
     assert np.allclose(ss.mean(), 0.25 * (0.45 + mix_mean) / 2)
+
+
+# -- the equal-area sky --
+
+def test_an_equal_area_sky_takes_pbrts_nearest_texels_unblurred_to_the_squares_edges():
+    """pbrt-v4's ImageInfiniteLight::ImageLe looks the square up at the nearest texel: one bright
+    texel on the square's edge is, in the lat-long map, its value where its solid angle is (not
+    blurred by a second bilinear resampling, nor by a clamp at the edge), and its solid angle is
+    the equal-area square's 4 pi / N^2."""
+    from pathtrace.scene.pbrt.equal_area import to_latlong
+    n = 16
+    square = np.zeros((n, n, 3), np.float32)
+    square[5, n - 1] = 1000.0
+    latlong = to_latlong(square, np.eye(3))
+    h, w, _ = latlong.shape
+    assert h >= 4 * n and set(np.unique(latlong)) == {0.0, 1000.0}
+    theta = (np.arange(h) + 0.5) / h * np.pi
+    solid_angle = (latlong[..., 0] > 0) @ np.ones(w) @ np.sin(theta) * (np.pi / h) * (2 * np.pi / w)
+    assert solid_angle == pytest.approx(4 * np.pi / n ** 2, rel=0.03)
