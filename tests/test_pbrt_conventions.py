@@ -180,3 +180,16 @@ def test_an_equal_area_sky_takes_pbrts_nearest_texels_unblurred_to_the_squares_e
     theta = (np.arange(h) + 0.5) / h * np.pi
     solid_angle = (latlong[..., 0] > 0) @ np.ones(w) @ np.sin(theta) * (np.pi / h) * (2 * np.pi / w)
     assert solid_angle == pytest.approx(4 * np.pi / n ** 2, rel=0.03)
+
+
+def test_an_imagemaps_default_encoding_is_srgb_for_png_only(tmp_path):
+    """pbrt-v4 SpectrumImageTexture::Create: encoding "sRGB" for a .png, else "linear"."""
+    from PIL import Image
+    for suffix in ("png", "tga"):
+        Image.fromarray(np.full((2, 2, 3), 128, np.uint8)).save(tmp_path / f"t.{suffix}")
+    linear = {}
+    for suffix in ("png", "tga"):
+        s = scene(tmp_path, f'Texture "t" "spectrum" "imagemap" "string filename" "t.{suffix}"\n'
+                            'Material "diffuse" "texture reflectance" "t"\n' + FLOOR)
+        linear[suffix] = s.materials.get(s.meshes[0].material).params["rho_d"].params["image"].linear
+    assert linear == {"png": False, "tga": True}

@@ -137,7 +137,8 @@ class MaterialMapper:
             filename = params.string("filename")
             if filename is None:
                 raise UserError(f"{where}: an imagemap needs a filename")
-            encoding = params.string("encoding", "sRGB")
+            # pbrt-v4 SpectrumImageTexture::Create: sRGB for a PNG, else linear, by default
+            encoding = params.string("encoding", "sRGB" if filename.lower().endswith(".png") else "linear")
             if encoding not in ("sRGB", "linear") and not encoding.startswith("gamma "):
                 raise UserError(f"{where}: 'encoding' must be sRGB, linear or gamma <g>, got {encoding!r}")
             if encoding.startswith("gamma "):
@@ -212,8 +213,8 @@ class MaterialMapper:
         """The Material of a pbrt material, or None for `interface` (and "" / "none"): no
         surface, only a boundary between media; with its `normalmap` or `displacement`."""
         material = self._material(kind, params, where)
-        if material is None:
-            return None
+        if material is None or kind == "mix":      # a mix's are its materials' (MixMaterial reads none)
+            return material
         return self.shading_maps(material, params, where)
 
     def shading_maps(self, material, params, where) -> Material:
@@ -258,7 +259,8 @@ class MaterialMapper:
             return self._conductor(params, where)
         if kind in ("dielectric", "thindielectric"):
             eta = self._eta(params, where)
-            rough = self.rough_values(self.roughness(params, where))
+            # pbrt-v4's ThinDielectricMaterial::Create reads no roughness: thin glass is smooth
+            rough = self.rough_values(self.roughness(params, where)) if kind == "dielectric" else None
             if eta == 1.0:
                 warn(f"{where}: a dielectric of eta 1 is invisible; pathtrace leaves the surface out")
                 return None
