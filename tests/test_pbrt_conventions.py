@@ -193,3 +193,14 @@ def test_an_imagemaps_default_encoding_is_srgb_for_png_only(tmp_path):
                             'Material "diffuse" "texture reflectance" "t"\n' + FLOOR)
         linear[suffix] = s.materials.get(s.meshes[0].material).params["rho_d"].params["image"].linear
     assert linear == {"png": False, "tga": True}
+
+
+def test_an_area_light_on_an_interface_shape_is_no_light(tmp_path, capsys):
+    """pbrt-v4 scene.cpp: 'Ignoring area light specification for shape with "interface"
+    material.' The shape still bounds its media."""
+    s = scene(tmp_path, 'MakeNamedMedium "fog" "string type" "homogeneous"\n'
+                        'AttributeBegin\nMaterial "interface"\nMediumInterface "fog" ""\n'
+                        'AreaLightSource "diffuse" "rgb L" [ 5 5 5 ]\nShape "sphere"\nAttributeEnd\n' + FLOOR)
+    assert "makes no area light of a shape of the interface material" in capsys.readouterr().err
+    assert all(not np.any(s.materials.get(r).emission > 0) for r in range(len(s.materials)))
+    assert len(s.spheres) == 1

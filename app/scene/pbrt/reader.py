@@ -550,7 +550,7 @@ class PbrtReader:
             material = make("diffuse", {"rho_d": np.full(3, 0.5)}, "")      # pbrt-v4's default
             self.state.material = material
         if material is None:              # pbrt's interface: no surface, only a boundary of media
-            material = make("black", {}, "") if emission is not None else self.null_material
+            material = self.null_material
         if alpha is not None and not (isinstance(alpha, float) and alpha == 1.0):
             if not isinstance(alpha, Texture) and not 0 <= alpha <= 1:
                 raise UserError(f"'alpha' must lie in [0, 1], got {alpha:g}")
@@ -572,7 +572,13 @@ class PbrtReader:
         params = parameters(tokens)
         where = tokens.where(offset)
         media = self.medium_interface(where)
-        if self.state.material is None and self.state.area_light is None and media is None:
+        if self.state.material is None and self.state.area_light is not None:
+            # pbrt-v4 makes no area light of a shape without a material (src/pbrt/scene.cpp, the
+            # area lights' loop: 'Ignoring area light specification for shape with "interface"
+            # material.')
+            warn(f"{where}: pbrt-v4 makes no area light of a shape of the interface material; "
+                 "neither does pathtrace, and the shape does not emit")
+        if self.state.material is None and media is None:
             for p in params.params.values():
                 p.used = True
             self.once(("interface", where), f"{where}: a shape of the interface material that bounds no "
@@ -756,7 +762,7 @@ class PbrtReader:
         L keeps its magnitude (scale /= SpectrumToPhotometric(L) sees only the colour space's
         illuminant), so L is not divided by its luminance. Triangles of one area share a
         radiance, and a material row."""
-        if self.state.area_light is None:
+        if self.state.area_light is None or self.state.material is None:
             return [(None, None)], False
         params, light_where = self.state.area_light
         if params.type_of("filename"):
