@@ -204,3 +204,21 @@ def test_an_area_light_on_an_interface_shape_is_no_light(tmp_path, capsys):
     assert "makes no area light of a shape of the interface material" in capsys.readouterr().err
     assert all(not np.any(s.materials.get(r).emission > 0) for r in range(len(s.materials)))
     assert len(s.spheres) == 1
+
+
+def test_an_infinite_lights_illuminance_scales_it_as_pbrt(tmp_path):
+    """pbrt-v4 Light::Create: a constant L times illuminance / pi; a map times illuminance over
+    the sum, over its texels above the horizon (z > 0), of luminance cos theta 2 pi / N^2."""
+    from pathtrace.image_io import _write_exr
+    from pathtrace.scene.pbrt.equal_area import sphere_to_square, square_to_sphere
+    rng = np.random.default_rng(2)
+    d = rng.normal(size=(1000, 3))
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    assert np.allclose(square_to_sphere(sphere_to_square(d)), d, atol=1e-9)
+    s = scene(tmp_path, 'LightSource "infinite" "rgb L" [ 0.5 1 1 ] "float illuminance" 3\n' + FLOOR)
+    assert np.allclose(s.environment.image.reshape(-1, 3)[0] * s.environment.intensity, np.array([0.5, 1, 1]) * 3 / math.pi)
+    n = 64
+    _write_exr(str(tmp_path / "sky.exr"), np.full((n, n, 3), 2.0, np.float32))
+    s = scene(tmp_path, 'LightSource "infinite" "string filename" "sky.exr" "float illuminance" 3\n' + FLOOR)
+    # a uniform map of c: c (pi / 2) in pbrt's sum (the upper half's mean cosine, 1/2, times 2 pi / 2)
+    assert float(np.mean(s.environment.image) * s.environment.intensity) == pytest.approx(3 / (math.pi / 2), rel=0.01)

@@ -31,6 +31,32 @@ def sphere_to_square(d: np.ndarray) -> np.ndarray:
     return np.stack([(u + 1) / 2, (v + 1) / 2], axis=-1)
 
 
+def square_to_sphere(uv: np.ndarray) -> np.ndarray:
+    """Points of the unit square (N, 2) to unit directions (N, 3): sphere_to_square's inverse
+    (pbrt-v4's EqualAreaSquareToSphere)."""
+    u, v = 2 * uv[:, 0] - 1, 2 * uv[:, 1] - 1
+    up, vp = np.abs(u), np.abs(v)
+    signed = 1 - (up + vp)
+    r = 1 - np.abs(signed)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        phi = np.where(r == 0, 1.0, (vp - up) / np.where(r == 0, 1.0, r) + 1) * np.pi / 4
+    z = np.copysign(1 - r * r, signed)
+    s = r * np.sqrt(np.maximum(0.0, 2 - r * r))
+    return np.stack([np.copysign(np.cos(phi), u) * s, np.copysign(np.sin(phi), v) * s, z], axis=-1)
+
+
+def upper_illuminance(square: np.ndarray) -> float:
+    """The illuminance by which pbrt-v4 normalises an equal-area map given "illuminance" (Light::
+    Create, src/pbrt/lights.cpp): the sum over texels whose centre's direction has z > 0 (light
+    space) of luminance times cos theta, times 2 pi / N^2, as pbrt writes it."""
+    n = square.shape[0]
+    c = (np.arange(n) + 0.5) / n
+    uv = np.stack(np.meshgrid(c, c), axis=-1).reshape(-1, 2)       # x along a row, rows down
+    z = square_to_sphere(uv)[:, 2]
+    lum = square[..., :3].reshape(-1, 3) @ np.array([0.2126, 0.7152, 0.0722])
+    return float(np.sum(np.where(z > 0, lum * z, 0.0)) * 2 * np.pi / (n * n))
+
+
 def latlong_rows(width: int, height: int, first: int, end: int) -> np.ndarray:
     """The direction at each pixel centre of rows first..end of a pathtrace lat-long map of
     width x height: (end - first, width, 3)."""

@@ -39,7 +39,7 @@ from pathtrace.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, unit_disk, vertex_normals
-from pathtrace.scene.pbrt.equal_area import to_latlong
+from pathtrace.scene.pbrt.equal_area import to_latlong, upper_illuminance
 from pathtrace.scene.pbrt.materials import MaterialMapper, make, spectrum_rgb
 from pathtrace.textures import Texture
 from pathtrace.scene.pbrt.tokens import Tokens, numbers, parameters, string
@@ -856,9 +856,9 @@ class PbrtReader:
         if params.type_of("portal"):
             params.floats("portal", ("point3", "point"))
             warn(f"{params.where('portal')}: pathtrace does not sample portals; the light is sampled whole")
-        if params.type_of("illuminance"):
-            params.float("illuminance")
-            warn(f"{params.where('illuminance')}: pathtrace does not normalise by illuminance; ignored")
+        # pbrt-v4's Light::Create: "illuminance" E_v scales a constant L by E_v / pi, and a map
+        # by E_v over its upper_illuminance
+        illuminance = params.float("illuminance", -1.0)
         filename = params.string("filename")
         if filename is not None:
             if params.type_of("L"):
@@ -869,12 +869,19 @@ class PbrtReader:
             if image.shape[0] != image.shape[1]:
                 raise UserError(f"{where}: {path}: pbrt-v4's environment maps are square (equal-area), "
                                 f"got {image.shape[1]}x{image.shape[0]}")
+            if illuminance > 0:
+                upper = upper_illuminance(image)
+                if upper <= 0:
+                    params.fail("illuminance", "the map is black above its horizon, which no scale brightens")
+                scale *= illuminance / upper
             latlong = to_latlong(image[..., :3], np.linalg.inv(self.state.ctm[:3, :3]))
             self.environment = Environment(latlong, scale, 0.0, str(path), resampled=True)
             return
         color = spectrum_rgb(params, "L", 1.0, "illuminant") * scale
         if np.any(color < 0):
             params.fail("L", "must not be negative")
+        if illuminance > 0:
+            color = color * illuminance / math.pi
         self.environment = Environment.constant(color)
 
     def _reverse_orientation(self, tokens, offset):
