@@ -495,13 +495,13 @@ class PbrtReader:
         name = string(tokens, "Include")
         self.parse_file(self.resolve(name), tokens.where(offset))
 
-    def _ignored(what, count=0, takes_params=False):
+    def _ignored(what, instead, count=0, takes_params=False):
         def handler(self, tokens, offset):
             for _ in range(count):
                 string(tokens, what)
             if takes_params:
                 parameters(tokens)
-            self.once(what, f"{tokens.where(offset)}: {what} is not supported; ignored")
+            self.once(what, f"{tokens.where(offset)}: {what} is not supported; ignored ({instead})")
         return handler
 
     def _option(self, tokens, offset):
@@ -767,7 +767,8 @@ class PbrtReader:
         params, light_where = self.state.area_light
         if params.type_of("filename"):
             params.string("filename")
-            warn(f"{light_where}: pathtrace's area lights have no image; it uses L")
+            warn(f"{light_where}: pathtrace's area lights have no image; it uses L "
+                 f"({', '.join(f'{c:g}' for c in spectrum_rgb(params, 'L', 1.0, 'illuminant'))})")
         le = spectrum_rgb(params, "L", 1.0, "illuminant") * params.float("scale", 1.0)
         twosided = params.bool("twosided", False)
         power = params.float("power", -1.0)
@@ -926,8 +927,8 @@ DIRECTIVES = {
     "Sampler": PbrtReader._sampler,
     "Integrator": PbrtReader._integrator,
     "PixelFilter": PbrtReader._pixel_filter,
-    "Accelerator": PbrtReader._ignored("Accelerator", 1, True),
-    "ColorSpace": PbrtReader._ignored("ColorSpace", 1),
+    "Accelerator": PbrtReader._ignored("Accelerator", "pathtrace builds its own BVH", 1, True),
+    "ColorSpace": PbrtReader._ignored("ColorSpace", "pathtrace takes colours as linear sRGB", 1),
     "Option": PbrtReader._option,
     "WorldBegin": PbrtReader._world_begin,
     "WorldEnd": lambda self, tokens, offset: None,          # pbrt-v3's; v4 accepts and ignores it
@@ -935,7 +936,7 @@ DIRECTIVES = {
     "AttributeEnd": PbrtReader._attribute_end,
     "TransformBegin": PbrtReader._transform_begin,
     "TransformEnd": PbrtReader._transform_end,
-    "Attribute": PbrtReader._ignored("Attribute", 1, True),
+    "Attribute": PbrtReader._ignored("Attribute", "each directive uses its own parameters and pbrt-v4's defaults", 1, True),
     "Material": PbrtReader._material,
     "MakeNamedMaterial": PbrtReader._make_named_material,
     "NamedMaterial": PbrtReader._named_material,
