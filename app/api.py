@@ -16,16 +16,19 @@ from pathlib import Path
 import numpy as np
 
 from pathtrace.errors import UserError, short, warn
-from pathtrace.scene.description import MAX_PATH_QUEUE, PATH_QUEUE_AUTO, RUSSIAN_ROULETTE, Scene
+from pathtrace.scene.description import RUSSIAN_ROULETTE, Scene
+from pathtrace.scene.validate import MAX_SIZE, check_scene, check_tables
+from pathtrace.scene.validate import integer as _integer
 
 AOVS = ("albedo", "normal", "depth")
-MAX_SIZE = 16384          # pixels on a side, as `--size` allows
 
 
 def load(path_or_name) -> Scene:
     """A scene from a .toml or Mitsuba 3 .xml file, or a built-in scene by name ('simple',
     'demo', 'cornell-box', ...; `pathtrace scenes` lists them)."""
     from pathtrace.scene import load_scene
+    if not isinstance(path_or_name, (str, Path)):
+        raise UserError(f"load: give a file path or a built-in scene's name, got {short(path_or_name)}")
     return load_scene(str(path_or_name))
 
 
@@ -36,6 +39,7 @@ def load_dict(data: dict, name: str = "scene", folder=".") -> Scene:
     from pathtrace.scene.toml_reader import read_scene_dict
     if not isinstance(data, dict):
         raise UserError(f"load_dict: the scene must be a dict of the TOML format's tables, got {short(data)}")
+    check_tables(data, "load_dict")
     return read_scene_dict(data, name, folder)
 
 
@@ -44,6 +48,7 @@ def material(data: dict):
     {"type": "roughconductor", "material": "Au", "alpha": 0.2}; assign it to a scene's material
     by name or row: scene.materials["gold"] = pathtrace.material({...})."""
     from pathtrace.scene.toml_reader import read_material_dict
+    check_tables(data, "material")
     return read_material_dict(data)
 
 
@@ -76,7 +81,7 @@ def open_devices(device="auto") -> list:
     """The backends for `device`: a spec as `--device` takes it ('auto', 'gpu', 'cpu', 'gpu:1',
     an index, part of a name, or 'all') or a list of specs. Opened once and kept."""
     from pathtrace.device import choose_devices
-    specs = (device,) if isinstance(device, str) else tuple(device)
+    specs = (device,) if isinstance(device, str) else tuple(device) if isinstance(device, (list, tuple)) else ()
     if not specs or not all(isinstance(s, str) for s in specs):
         raise UserError(f"device: give a device spec such as 'auto', 'gpu', 'cpu:0' or a list of them, "
                         f"got {short(device)}")
@@ -100,7 +105,9 @@ class Snapshot:
 
 
 def settings_for(scene: Scene, spp=None, size=None, seed=None, max_depth=None, rr=None, nee=None):
-    """The scene's render settings with the given ones in their place, checked."""
+    """The scene's render settings with the given ones in their place, checked (the scene's
+    own fields, which a user may have changed since loading, first)."""
+    check_scene(scene)
     s = scene.settings
     changes = {}
     if spp is not None:
@@ -114,23 +121,17 @@ def settings_for(scene: Scene, spp=None, size=None, seed=None, max_depth=None, r
     if max_depth is not None:
         changes["max_depth"] = _integer("max_depth", max_depth, 0, 2**31 - 1)
     if rr is not None:
-        if rr not in RUSSIAN_ROULETTE:
+        if not isinstance(rr, str) or rr not in RUSSIAN_ROULETTE:
             raise UserError(f"rr: give one of {', '.join(RUSSIAN_ROULETTE)}, got {short(rr)}")
         changes["russian_roulette"] = rr
     if nee is not None:
+        if not isinstance(nee, (bool, int, np.bool_, np.integer)):
+            raise UserError(f"nee: give True or False, got {short(nee)}")
         changes["nee"] = bool(nee)
     settings = replace(s, **changes)
-    if not (type(settings.path_queue) is int and settings.path_queue == PATH_QUEUE_AUTO):
-        _integer("settings.path_queue (or PATH_QUEUE_AUTO)", settings.path_queue, 0, MAX_PATH_QUEUE)
     if not settings.paths_end:
         raise UserError("rr 'off' needs max_depth >= 1, or paths would never end")
     return settings
-
-
-def _integer(name, value, low, high):
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not low <= value <= high:
-        raise UserError(f"{name}: give an integer from {low} to {high}, got {short(value)}")
-    return int(value)
 
 
 class _Prepared:
@@ -283,6 +284,8 @@ def render(scene, spp=None, size=None, device="auto", seed=None, max_depth=None,
 def _steps(steps, spp: int) -> list:
     if steps is None:
         return sorted({min(1 << k, spp) for k in range(spp.bit_length() + 1)})
+    if isinstance(steps, (str, bytes)) or not hasattr(steps, "__iter__"):
+        raise UserError(f"steps: give a list of increasing sample counts, got {short(steps)}")
     steps = [_integer("steps", s, 1, 2**31 - 1) for s in steps]
     if not steps or steps != sorted(set(steps)):
         raise UserError(f"steps: give increasing sample counts, got {short(steps)}")
@@ -290,6 +293,8 @@ def _steps(steps, spp: int) -> list:
 
 
 def _aov_names(aovs) -> tuple:
+    if not isinstance(aovs, str) and not hasattr(aovs or (), "__iter__"):
+        raise UserError(f"aovs: give names from {', '.join(AOVS)}, got {short(aovs)}")
     names = (aovs,) if isinstance(aovs, str) else tuple(aovs or ())
     unknown = [n for n in names if n not in AOVS]
     if unknown:
@@ -326,7 +331,10 @@ def denoise(image: np.ndarray, albedo: np.ndarray = None, normal: np.ndarray = N
 
 def _rgb(name: str, image, shape=None) -> np.ndarray:
     """An (H, W, 3) float32 array from an image argument; (H, W) is taken as grey."""
-    a = np.asarray(image, np.float32)
+    try:
+        a = np.asarray(image, np.float32)
+    except (TypeError, ValueError):
+        raise UserError(f"{name}: give an (H, W, 3) or (H, W) array of numbers, got {short(image)}") from None
     if a.ndim == 2:
         a = np.repeat(a[..., None], 3, axis=-1)
     if a.ndim != 3 or a.shape[-1] != 3 or 0 in a.shape:
@@ -353,6 +361,8 @@ def write(path, image: np.ndarray, exposure: float = 0.0, curve: str = "standard
     """Writes an image file, atomically: .png and .jpg tonemapped (as tonemap() does), .exr,
     .hdr and .pfm as linear float radiance. (H, W) arrays (a depth) are written as grey."""
     from pathtrace.image_io import write_image
+    if not isinstance(path, (str, Path)):
+        raise UserError(f"path: give a file name (str or Path), got {short(path)}")
     tonemap(np.zeros((1, 1, 3)), exposure, curve)         # the same checks
     write_image(Path(path), _rgb("image", image), float(exposure), curve, what="path")
 

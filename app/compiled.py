@@ -16,6 +16,7 @@ from pathtrace.bvh_cache import cached_bvh
 from pathtrace.environment import LUMINANCE
 from pathtrace.errors import UserError, format_bytes, short
 from pathtrace.features import FLAT_MAX, LONE_MAX, Features, stack_size
+from pathtrace.lights.light import MAX_RADIANCE
 from pathtrace.lights import LightTable, build_light_table, emitted_power, primitive_bounds
 from pathtrace.materials import BSDFS, NULL, TAGS
 from pathtrace.materials.blend import reachable
@@ -45,10 +46,6 @@ SCENE_BUFFERS = ("nodes", "spheres", "triangles", "normals", "uvs", "prim_materi
 
 # The BVH build's peak host memory per primitive, measured (docs/performance.md)
 BUILD_HOST_BYTES = 320
-# The brightest radiance a scene may ask for (an emitter's, or the environment's texels times
-# its intensity): a pixel's float32 sums of a million samples of it stay far below float32's
-# 3.4e38, where 3e38, or 1e38 x 2, made every pixel +inf.
-MAX_RADIANCE = 1e20
 
 
 class CompiledScene:

@@ -1,15 +1,50 @@
 """The one exception type the command line turns into a message and a non-zero exit."""
 
+import re
+import threading
+
 
 class UserError(Exception):
     """A problem with what the user gave us (a file, a field, a flag), stated in one line that
     names where it is and what is wrong."""
 
 
+_local = threading.local()     # .held: the warnings each open grouped_warnings() of this thread collects
+
+
+def _held() -> list:
+    if not hasattr(_local, "held"):
+        _local.held = []
+    return _local.held
+
+
 def warn(message: str):
-    """One warning line on standard error: something pathtrace did instead of what was asked."""
+    """One warning line on standard error: something pathtrace did instead of what was asked
+    (held, within grouped_warnings() in the same thread, to be told once with a count)."""
+    held = _held()
+    if held:
+        held[-1].append(message)
+        return
     import sys
     print(f"pathtrace: warning: {message}", file=sys.stderr)
+
+
+class grouped_warnings:
+    """Around the reading of a file: its warnings each once, with a count of the others like it
+    ("3 like this; the first: scene.pbrt:7: 'bogus' is not a parameter ..."), where "like" is
+    the same text once the leading place (path:line:) and quoted names are set aside, so that
+    100,000 unknown parameters print one line, not 100,000."""
+
+    def __enter__(self):
+        _held().append([])
+
+    def __exit__(self, *exc):
+        groups = {}
+        for message in _held().pop():
+            key = re.sub(r"'[^']*'", "''", re.sub(r"^.*?:\d+: ", "", message))
+            groups.setdefault(key, []).append(message)
+        for messages in groups.values():
+            warn(messages[0] if len(messages) == 1 else f"{len(messages)} like this; the first: {messages[0]}")
 
 
 def format_bytes(n: float) -> str:

@@ -10,6 +10,7 @@ import contextlib
 import errno
 import io
 import os
+import re
 import stat
 import tempfile
 from dataclasses import dataclass, field
@@ -148,9 +149,7 @@ def check_writable(path: Path, what: str = "--output", formats=HDR_FORMATS + LDR
         if not target.parent.is_dir():
             raise UserError(f"{what}: folder '{cut(shown(target.parent), 100)}' does not exist")
         # the only sure test (permissions, read-only mounts, root's exceptions) is to try
-        fd, probe = tempfile.mkstemp(prefix=".pathtrace-", dir=target.parent)
-        os.close(fd)
-        os.unlink(probe)
+        os.unlink(_temporary(target.parent))
         if len(os.fsencode(target.name)) > os.pathconf(target.parent, "PC_NAME_MAX"):
             raise OSError(errno.ENAMETOOLONG, os.strerror(errno.ENAMETOOLONG))
         info = os.stat(target) if os.path.lexists(target) else None
@@ -171,6 +170,51 @@ def _target(path: Path) -> Path:
     return Path(os.path.realpath(path)) if path.is_symlink() else path
 
 
+def _temporary(folder: Path, suffix: str = "") -> str:
+    """A new empty file in `folder` for a write to be renamed into place. Its name holds the
+    process id (.pathtrace-<pid>-...), so that those a killed process left (a SIGKILL runs no
+    code to remove them) are swept by the next write to the folder: sweep()."""
+    sweep(folder)
+    fd, tmp = tempfile.mkstemp(prefix=f"{TEMPORARY_PREFIX}{os.getpid()}-", suffix=suffix, dir=folder)
+    os.close(fd)
+    return tmp
+
+
+TEMPORARY_PREFIX = ".pathtrace-"
+_TEMPORARY = re.compile(r"\.pathtrace-(\d+)-")
+_swept = set()          # folders swept by this process
+
+
+def sweep(folder: Path):
+    """Removes the temporary files (_temporary) in `folder` of processes that no longer run,
+    once per folder per process."""
+    key = os.path.realpath(folder)
+    if key in _swept:
+        return
+    _swept.add(key)
+    try:
+        names = [e.name for e in os.scandir(folder) if e.name.startswith(TEMPORARY_PREFIX)]
+    except OSError:
+        return
+    for name in names:
+        m = _TEMPORARY.match(name)
+        if not m or int(m.group(1)) == os.getpid():
+            continue
+        try:
+            os.kill(int(m.group(1)), 0)
+            continue                 # its process runs (or runs as another user): not ours to take
+        except ProcessLookupError:
+            pass
+        except (PermissionError, OverflowError, OSError):
+            continue
+        try:
+            path = os.path.join(folder, name)
+            if stat.S_ISREG(os.lstat(path).st_mode):
+                os.unlink(path)
+        except OSError:
+            pass
+
+
 class Staged:
     """Files written beside their targets under temporary ASCII names (so that any valid target
     name works, whatever its length or encoding) and renamed over them only by commit(): until
@@ -184,8 +228,7 @@ class Staged:
         """Calls write(temporary_path) -> success for a temporary file beside `path`'s target."""
         path = Path(path)
         target = _target(path)
-        fd, tmp = tempfile.mkstemp(prefix=".pathtrace-", suffix=path.suffix.lower(), dir=target.parent)
-        os.close(fd)
+        tmp = _temporary(target.parent, path.suffix.lower())
         self.files.append((tmp, target))
         try:
             ok = write(tmp)

@@ -8,11 +8,12 @@ lights is a new program. The generic program (Features.generic_program) is built
 device, driver and pathtrace version and cached (app/device.py: open_device builds it where that
 is fast, `pathtrace devices --check` everywhere), so that a scene's first images need no build:
 they come from the generic program while the scene's own builds in a thread (the drivers'
-builds release Python's lock), and launches switch to it once it is there. Where the generic
+builds release Python's lock), started once the first pass is queued so that it takes no core
+from the first image (Renderer.switch_when_built), and launches switch to it once it is there. Where the generic
 program is not built, the first image waits for one untuned build of the scene's own, and the
 tuned one (app/occupancy.py) follows in the background. Nothing else builds behind a first
-image: NVIDIA's driver took minutes over the generic program, and a scene's build in another
-thread waited for it (docs/performance.md, 2026-11-28).
+image: NVIDIA's driver takes 46 s over the generic program on an H200, and a scene's build in
+another thread waited for it (docs/performance.md, 2026-11-28).
 
 Both programs draw the same estimator, each sample an unbiased estimate of the pixel, so the
 average goes on across the switch (Renderer keeps its accumulation). Which samples a render
@@ -108,6 +109,11 @@ class Programs:
         """The program for `features` if it is built, else None; starts nothing."""
         future = self._futures.get(self._key(features, tuned))
         return future.result() if future is not None and future.done() and future.exception() is None else None
+
+    def under_way(self, features: Features, tuned: bool = True) -> bool:
+        """Whether the program for `features` is being built."""
+        future = self._futures.get(self._key(features, tuned))
+        return future is not None and not future.done()
 
     def failed(self, features: Features, tuned: bool = True) -> bool:
         """Whether the build of the program for `features` ended in an error."""

@@ -96,6 +96,7 @@ class Renderer:
         self.program = None       # the kernels launches run (_select_program)
         self.uses_generic_program = False
         self._awaited = None      # the features of the scene's own program while it builds
+        self._build_due = False   # whether a pass is drawn, after which that build may start
         self._buffers = {}
         self.width = self.height = 0
         self._queued_for = None   # whether the queue's buffers are sized for launches that use it
@@ -153,12 +154,14 @@ class Renderer:
         (pathtrace.programs). With "auto", the scene's own program, tuned, is built in the
         background, and add_samples switches to it once it is there, the average going on;
         until then the generic program renders, or where that is not built (NVIDIA's driver
-        takes minutes over it: `pathtrace devices --check` builds it) the scene's own program
-        untuned, one build, before the tuned one starts."""
+        takes 46 s over it: `pathtrace devices --check` builds it) the scene's own program
+        untuned, one build. The background build starts once the first pass is queued, so that
+        it takes no core from the first image, and a render of one pass builds nothing more
+        (switch_when_built)."""
         features = replace(self.compiled.features(self.settings, self.camera),
                            traversal_stats=self.traversal_stats, path_queue=self.queue_plan()[0])
         mode = self.backend.mode
-        self._awaited = None
+        self._awaited, self._build_due = None, False
         if mode == "specialised" or self.traversal_stats:      # the generic program counts rays
             self._use_program(self.backend.program_for(features), generic=False)
         elif mode == "generic":
@@ -172,7 +175,6 @@ class Renderer:
             self._use_program(generic if generic is not None else self.backend.program_for(features, tuned=False),
                               generic=generic is not None)
             self._awaited = features
-            self.switch_when_built()      # starts the tuned build (on other drivers it is this one)
 
     def _use_program(self, program: cl.Program, generic: bool):
         if program is self.program:
@@ -190,8 +192,9 @@ class Renderer:
 
     def switch_when_built(self, wait: bool = False) -> bool:
         """Switches to the scene's own tuned program if it is built (with `wait`, once it is);
-        the average goes on. Whether the scene's own program renders now."""
-        if self._awaited is not None:
+        the average goes on. Its build starts at the first call after a whole pass is queued.
+        Whether the scene's own program renders now."""
+        if self._awaited is not None and (wait or self._build_due):
             program = self.backend.program_for(self._awaited) if wait else self.backend.ready_program(self._awaited)
             if program is not None:
                 self._awaited = None
@@ -207,7 +210,8 @@ class Renderer:
             return ""
         if self.generic_samples == self.samples:
             return (f"{self.samples} spp from the generic kernels"
-                    + (" (the scene's own were still building)" if self.building_program else ""))
+                    + (" (the scene's own were still building)"
+                       if self._awaited is not None and self.backend.programs.under_way(self._awaited) else ""))
         return f"the first {self.generic_samples} of {self.samples} spp from the generic kernels, the rest from the scene's own"
 
     @property
@@ -482,6 +486,7 @@ class Renderer:
             events.append(cl.enqueue_nd_range_kernel(self.backend.queue, self.aov_kernel, global_size, local))
         if end >= self.height:
             self.samples += count
+            self._build_due = True
             self.generic_samples += count if self.uses_generic_program else 0
         return events
 

@@ -38,12 +38,17 @@ def blackbody(wl: np.ndarray, kelvin: float) -> np.ndarray:
     """Planck's law: the spectral radiance of a blackbody at wavelengths wl (nm), unscaled."""
     h, c, k = 6.62606957e-34, 299792458.0, 1.3806488e-23
     m = wl * 1e-9
-    return 2 * h * c * c / (m ** 5 * np.expm1(h * c / (m * k * kelvin)))
+    with np.errstate(over="ignore"):        # a cold body: expm1 overflows to inf, the radiance to 0
+        return 2 * h * c * c / (m ** 5 * np.expm1(h * c / (m * k * kelvin)))
 
 
 def emission_rgb(values: np.ndarray) -> np.ndarray:
-    """The linear sRGB of an emission spectrum sampled at WAVELENGTHS, at luminance 1."""
+    """The linear sRGB of an emission spectrum sampled at WAVELENGTHS, at luminance 1. Raises
+    ValueError for one of no visible light (a zero spectrum, a blackbody of a few kelvin), which
+    has no colour at luminance 1 (pbrt-v4 divides by its zero photometric value)."""
     xyz = values @ cmf(WAVELENGTHS)
+    if not xyz[1] > 0 or not np.all(np.isfinite(xyz)):
+        raise ValueError("emits no visible light (a luminance of 0), so it has no colour to scale")
     return XYZ_TO_RGB @ (xyz / xyz[1])
 
 

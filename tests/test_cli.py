@@ -257,6 +257,8 @@ def test_ctrl_c_stops_cleanly_and_writes_nothing(tmp_path):
     p.send_signal(signal.SIGINT)
     _, err = p.communicate(timeout=60)
     assert p.returncode == 130 and "nothing written" in err and "Traceback" not in err, err
+    # on a line of its own, after the progress bar's (split at newlines only: a bar redraws with \r)
+    assert any(line.startswith("pathtrace: interrupted at ") for line in err.split("\n")), err
     assert not out.exists() and not list(tmp_path.iterdir())
 
 

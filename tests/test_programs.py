@@ -133,14 +133,17 @@ def test_a_renderer_switches_to_the_scenes_program_mid_accumulation(backend, spe
     auto = building_with(backend, gated)
     scene = load_scene("cornell-box")
     r = Renderer(auto, scene, SIZE, SIZE)
-    assert gated.started.wait(60) and r.uses_generic_program
     resets = r.resets
     r.add_samples(64)
     r.finish()
-    assert r.uses_generic_program and r.samples == 64      # the build is still under way
+    assert not gated.started.is_set()       # nothing builds behind the first image
+    r.add_samples(64)                       # the next pass starts the scene's own build
+    r.finish()
+    assert gated.started.wait(60) and r.uses_generic_program and r.samples == 128   # still under way
+    assert r.describe_programs() == "128 spp from the generic kernels (the scene's own were still building)"
     gated.gate.set()
     assert r.switch_when_built(wait=True)
-    for _ in range(SPP // 64 - 1):
+    for _ in range(SPP // 64 - 2):
         r.add_samples(64)
     r.finish()
     assert not r.uses_generic_program and r.samples == SPP and r.resets == resets   # the average went on
@@ -152,6 +155,8 @@ def test_a_failed_build_leaves_the_generic_program_rendering(backend, capsys):
     auto = building_with(backend, gated)
     r = Renderer(auto, load_scene("cornell-box"), SIZE, SIZE)
     assert r.building_program
+    r.add_samples(1)
+    r.add_samples(1)         # starts the build, after the first pass
     gated.gate.set()
     assert gated.finished.wait(60)
     for _ in range(1000):
@@ -210,3 +215,29 @@ def test_without_the_generic_program_the_first_image_waits_for_one_untuned_build
     r.finish()
     assert r.samples == SPP and r.generic_samples == 0
     same_image(r, render(specialised, scene))
+
+
+
+@pytest.fixture(scope="module")
+def gpu_form(backend):
+    """The generic program in the form GPUs build: its dispatch over BSDFs, textures and lights
+    called rather than inlined (kernels/inlining.h: DISPATCH), which CPUs do not build, built
+    here without CPU_DEVICE."""
+    import pyopencl as cl
+    from pathtrace.device import kernel_source, program_options
+    generic = Features.generic_program()
+    options = [o for o in program_options(backend.device.device, generic) if o != "-DCPU_DEVICE"]
+    program = cl.Program(backend.context, kernel_source(backend.extra, generic)).build(
+        options=options, devices=[backend.device.device])
+    form = with_mode(backend, "generic")
+    form.programs = Programs(None, form.device.name, False)
+    form.programs.add(generic, False, program)
+    return form
+
+
+@pytest.mark.parametrize("name", ["textures.xml", "lights.xml", "blend.xml"])
+def test_the_generic_program_in_its_gpu_form_renders_as_its_own_program(gpu_form, specialised, name):
+    scene = load_scene(str(Path(__file__).parent / "scenes" / name))
+    a, b = render(gpu_form, scene), render(specialised, scene)
+    assert a.uses_generic_program and a.program is gpu_form.program
+    same_image(a, b)

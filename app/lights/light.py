@@ -52,11 +52,18 @@ def check_direction(name: str, value) -> np.ndarray:
     return v / length
 
 
+# The brightest radiance a scene may ask for (an emitter's, or the environment's texels times
+# its intensity): a pixel's float32 sums of a million samples of it stay far below float32's
+# 3.4e38, where 3e38, or 1e38 x 2, made every pixel +inf.
+MAX_RADIANCE = 1e20
+
+
 def check_color(name: str, value) -> np.ndarray:
-    """A non-negative rgb value (a number is grey) below the radiance bound of app/compiled.py."""
+    """A non-negative rgb value (a number is grey) below MAX_RADIANCE."""
     v = np.broadcast_to(np.asarray(value, np.float64), 3).copy()
-    if not np.all(np.isfinite(v)) or np.any(v < 0) or np.max(v) > 1e20:
-        raise ValueError(f"{name}: must be three numbers in [0, 1e20], got {np.asarray(value).tolist()}")
+    if not np.all(np.isfinite(v)) or np.any(v < 0) or np.max(v) > MAX_RADIANCE:
+        bound = f"{MAX_RADIANCE:.0e}".replace("e+", "e")          # 1e20
+        raise ValueError(f"{name}: must be three numbers in [0, {bound}], got {np.asarray(value).tolist()}")
     return v
 
 

@@ -24,7 +24,7 @@ def kernel_parts(names=None, tree: bool = False) -> list:
     def switch(call, default):
         cases = "".join(f"    case LIGHT_{n.upper()}: return {call.format(n)};\n" for n in used)
         return f"    switch (l->type) {{\n{cases}    default: return {default};\n    }}\n"
-    dispatch = ("int sample_light_of_type(const SceneData *sc, const RenderParams *p, const global Light *l,\n"
+    dispatch = ("DISPATCH int sample_light_of_type(const SceneData *sc, const RenderParams *p, const global Light *l,\n"
                 "                         float3 x, float3 n, float2 u, LightSample *ls)\n{\n"
                 + switch("sample_{}_light(sc, p, l, x, n, u, ls)", "0") + "}\n")
     files = [f"lights/{n}.cl" for n in used]

@@ -101,6 +101,24 @@ class BSDFType:
             raise ValueError(problem)
         return values
 
+    def out_of_range(self, values: dict) -> tuple | None:
+        """The first parameter whose values (a texture's, its bounds) leave the parameter's
+        declared range [low, high] or are not finite, as (its name, the problem); None where
+        all lie in it.
+        The TOML reader checks each field so as it reads it; this is the check for readers
+        that compute parameters from a file's (pbrt-v4's)."""
+        for p in self.params:
+            value = values.get(p.name)
+            if p.kind not in ("color", "number") or value is None or isinstance(value, str):
+                continue
+            low = np.min(constant_of(value, p.kind, Texture.minimum))
+            high = np.max(constant_of(value, p.kind, Texture.maximum))
+            if not (np.isfinite(low) and np.isfinite(high) and low >= p.low and (p.high is None or high <= p.high)):
+                bound = f"[{p.low:g}, {p.high:g}]" if p.high is not None else f"[{p.low:g}, inf)"
+                shown = f"{low:.4g}" if low == high else f"from {low:.4g} to {high:.4g}"
+                return p.name, f"must lie in {bound}, got {shown}"
+        return None
+
     def kind_of(self, name: str) -> str:
         return next((p.kind for p in self.params if p.name == name), "number")
 

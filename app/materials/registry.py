@@ -34,11 +34,11 @@ def dispatch_source(names=None) -> str:
     def switch(types, call, default):
         cases = "".join(f"    case BSDF_{n.upper()}: return {call.format(n)};\n" for n in types)
         return f"    switch (m->type) {{\n{cases}    default: return {default};\n    }}\n"
-    return ("float3 eval_bsdf(MaterialRef m, float3 wo, float3 wi)\n{\n"
+    return ("DISPATCH float3 eval_bsdf(MaterialRef m, float3 wo, float3 wi)\n{\n"
             + switch(smooth, "eval_{}(m, wo, wi)", "(float3)(0.0f)") + "}\n"
-            + "float pdf_bsdf(MaterialRef m, float3 wo, float3 wi)\n{\n"
+            + "DISPATCH float pdf_bsdf(MaterialRef m, float3 wo, float3 wi)\n{\n"
             + switch(smooth, "pdf_{}(m, wo, wi)", "0.0f") + "}\n"
-            + "int sample_bsdf(MaterialRef m, float3 wo, float3 u, BSDFSample *s)\n{\n"
+            + "DISPATCH int sample_bsdf(MaterialRef m, float3 wo, float3 u, BSDFSample *s)\n{\n"
             + switch(with_kernel, "sample_{}(m, wo, u, s)", "0") + "}\n")
 
 

@@ -137,8 +137,15 @@ class MaterialTable:
         return row
 
     def add_rows(self, rows: np.ndarray, name: str = None) -> np.ndarray:
-        first = len(self.rows)
-        self.rows = np.concatenate([self.rows, rows])
+        first, end = len(self.rows), len(self.rows) + len(rows)
+        spare = self.rows.base
+        if spare is None or spare.dtype != MATERIAL or spare.ndim != 1 or len(spare) < end:
+            # rows are the start of a larger array, grown geometrically, so that a reader adding
+            # a row per shape (20,000 pbrt attribute blocks) takes linear time, not quadratic
+            spare = np.zeros(max(end, 2 * first, 16), MATERIAL)
+            spare[:first] = self.rows
+        spare[first:end] = rows
+        self.rows = spare[:end]
         self.textures += [[] for _ in range(len(rows))]
         if name is not None:
             self.names[name] = first
@@ -204,6 +211,9 @@ class MaterialTable:
         return self.get(self.index(key))
 
     def __setitem__(self, key, material: Material):
+        if not isinstance(material, Material):
+            raise UserError(f"materials[{short(key)}]: give a pathtrace.Material (pathtrace.material({{...}}) "
+                            f"makes one), got {short(material)}")
         self.set(self.index(key), material)
 
     def all_textures(self) -> list:

@@ -3,7 +3,7 @@
 
 from pathlib import Path
 
-from pathtrace.errors import UserError, cut
+from pathtrace.errors import UserError, cut, grouped_warnings
 from pathtrace.files import shown
 from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder, diffuse, emitter, phong
 
@@ -13,7 +13,13 @@ __all__ = ["Mesh", "RenderSettings", "Scene", "SceneBuilder", "diffuse", "emitte
 
 def load_scene(name_or_path: str) -> Scene:
     """A scene file path or a built-in scene's name: the two are interchangeable. Only the
-    reader a scene needs is imported (each is a few tens of milliseconds of a command's start)."""
+    reader a scene needs is imported (each is a few tens of milliseconds of a command's start).
+    Its warnings are told each once, with a count of those like it (grouped_warnings)."""
+    with grouped_warnings():
+        return _read_scene(name_or_path)
+
+
+def _read_scene(name_or_path: str) -> Scene:
     path = Path(name_or_path)
     if path.suffix.lower() == ".xml":
         from pathtrace.scene.mitsuba import read_mitsuba_file

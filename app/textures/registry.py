@@ -32,17 +32,17 @@ def kernel_parts(names) -> list:
         cases = "".join(f"    case TEXTURE_{n.upper()}: return eval_{n}({args});\n" for n in types)
         return (f"{signature}\n{{\n" + ("    const global Texture *t = &sc->textures[i];\n" if "int i" in signature else "")
                 + f"    switch (t->type) {{\n{cases}    default: return (float3)(0.0f);\n    }}\n}}\n")
-    leaf_dispatch = (dispatch("float3 eval_leaf_texture(const SceneData *sc, int i, float2 uv)", leaves, "sc, t, uv")
+    leaf_dispatch = (dispatch("DISPATCH float3 eval_leaf_texture(const SceneData *sc, int i, float2 uv)", leaves, "sc, t, uv")
                      + "float3 eval_input(const SceneData *sc, const global Texture *t, int k, float2 uv, const float3 *r)\n"
                        "{\n    int i = t->input[k];\n"
                        "    return i >= 0 ? eval_leaf_texture(sc, i, uv) : (i == -1 ? t->value[k].xyz : r[-2 - i]);\n}\n")
     if not combined:
-        full = ("float3 eval_texture(const SceneData *sc, int i, float2 uv)\n{\n"
+        full = ("DISPATCH float3 eval_texture(const SceneData *sc, int i, float2 uv)\n{\n"
                 "    return eval_leaf_texture(sc, i, uv);\n}\n")
     else:
-        full = (dispatch("float3 eval_combined(const SceneData *sc, const global Texture *t, float2 uv, const float3 *r)",
+        full = (dispatch("DISPATCH float3 eval_combined(const SceneData *sc, const global Texture *t, float2 uv, const float3 *r)",
                          combined, "sc, t, uv, r")
-                + "float3 eval_texture(const SceneData *sc, int i, float2 uv)\n{\n"
+                + "DISPATCH float3 eval_texture(const SceneData *sc, int i, float2 uv)\n{\n"
                   "    int j = sc->textures[i].program;\n"
                   "    if (j < 0)\n        return eval_leaf_texture(sc, i, uv);\n"
                   "    float3 r[TEXTURE_REGISTERS];\n    int top = 0;\n"

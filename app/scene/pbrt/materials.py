@@ -18,6 +18,9 @@ from pathtrace.textures import TEXTURES, Texture
 from pathtrace.textures.bitmap import Image, read_image
 
 SMOOTH_ALPHA = 1e-3     # pbrt-v4's TrowbridgeReitzDistribution::EffectivelySmooth
+# a conductor's reflectance r becomes k = 2 sqrt(r) / sqrt(1 - r) (below): r at most
+# 100^2 / (4 + 100^2), 0.9996, keeps k within the conductor's bound of 100
+MAX_REFLECTANCE = 100.0 ** 2 / (4 + 100.0 ** 2)
 
 
 def spectrum_rgb(params, name, default, kind="reflectance"):
@@ -35,7 +38,10 @@ def spectrum_rgb(params, name, default, kind="reflectance"):
         kelvin = float(params.get(name, ("blackbody",))[0])
         if kelvin <= 0:
             params.fail(name, f"a blackbody's temperature must be positive, got {kelvin:g}")
-        return blackbody_rgb(kelvin)
+        try:
+            return blackbody_rgb(kelvin)
+        except ValueError as e:
+            params.fail(name, f"a blackbody of {kelvin:g} K {e}")
     if ptype == "spectrum":
         values = params.get(name, ("spectrum",), 0)
         if isinstance(values, list):
@@ -55,7 +61,10 @@ def spectrum_rgb(params, name, default, kind="reflectance"):
         except ValueError as e:
             params.fail(name, str(e))
         if kind == "illuminant":
-            return emission_rgb(curve)
+            try:
+                return emission_rgb(curve)
+            except ValueError as e:
+                params.fail(name, f"the spectrum {e}")
         return reflectance_rgb(curve) if kind == "reflectance" else np.full(3, float(np.mean(curve)))
     params.fail(name, f"must be a colour (rgb, spectrum, blackbody, float), got {ptype}")
 
@@ -72,14 +81,27 @@ def inverted(image: Image, scale: float) -> Image:
     return Image(np.ascontiguousarray(texels, np.float32), True, image.path)
 
 
+# pathtrace's parameters that the pbrt materials' parameters become, for messages
+PBRT_NAMES = {"rho_d": "reflectance", "reflectance": "reflectance", "transmittance": "transmittance",
+              "int_ior": "eta", "eta": "eta", "alpha": "roughness", "alpha_v": "vroughness", "albedo": "albedo",
+              "thickness": "thickness", "g": "g", "weight": "amount", "k": "k or reflectance"}
+
+
 def make(kind, values, where) -> Material:
     """A Material of pathtrace's type `kind`, its values completed and checked by the type."""
     try:
         # pbrt's reflecting BSDFs reflect on both sides (Mitsuba's, which pathtrace's follow,
         # on the front only); glass is two-sided by its own nature
-        return Material(kind, BSDFS[kind].complete(values), twosided=not BSDFS[kind].flags & TRANSMISSIVE)
+        complete = BSDFS[kind].complete(values)
     except ValueError as e:
         raise UserError(f"{where}: {e}") from None
+    problem = BSDFS[kind].out_of_range(complete)     # the TOML reader's ranges (a reflectance in [0, 1])
+    if problem:
+        name, text = problem
+        pbrt_name = PBRT_NAMES.get(name)
+        raise UserError(f"{where}: the {kind} material's {name}" + (f" (from '{pbrt_name}')" if pbrt_name else "")
+                        + f" {text}")
+    return Material(kind, complete, twosided=not BSDFS[kind].flags & TRANSMISSIVE)
 
 
 class MaterialMapper:
@@ -289,6 +311,8 @@ class MaterialMapper:
         as pathtrace's blendbsdf chooses its second component; an `interface` in it (no
         surface) leaves the other alone, with a warning."""
         names = params.get("materials", ("string",), 2)
+        if names is None:
+            raise UserError(f'{where}: a mix material needs "string materials" [ "first" "second" ]')
         parts = [self.reader.named_material(n, where) for n in names]
         amount = self.texture_input(params, "amount", 0.5, True)
         if any(p is None for p in parts):
@@ -322,7 +346,7 @@ class MaterialMapper:
     def _conductor(self, params, where):
         if params.type_of("reflectance") is not None:
             # pbrt-v4: the Fresnel reflectance of eta 1 and k = 2 sqrt(r) / sqrt(1 - r)
-            r = np.clip(spectrum_rgb(params, "reflectance", 0.0), 0.0, 0.9999)
+            r = np.clip(spectrum_rgb(params, "reflectance", 0.0), 0.0, MAX_REFLECTANCE)
             eta, k = np.ones(3), 2 * np.sqrt(r) / np.sqrt(1 - r)
         else:
             eta = spectrum_rgb(params, "eta", None, "unbounded")
@@ -351,7 +375,7 @@ class MaterialMapper:
             metal = {"eta": spectrum_rgb(params, "conductor.eta", named_spectrum("metal-Cu-eta")[0], "unbounded"),
                      "k": spectrum_rgb(params, "conductor.k", named_spectrum("metal-Cu-k")[0], "unbounded")}
             if params.type_of("reflectance") is not None:
-                r = np.clip(spectrum_rgb(params, "reflectance", 0.0), 0.0, 0.9999)
+                r = np.clip(spectrum_rgb(params, "reflectance", 0.0), 0.0, MAX_REFLECTANCE)
                 metal = {"eta": np.ones(3), "k": 2 * np.sqrt(r) / np.sqrt(1 - r)}
             coating = self.rough_values(self.roughness(params, where, "interface.")) or {"alpha": 0.0, "alpha_v": 0.0}
             base = self.rough_values(self.roughness(params, where, "conductor.")) or {"alpha": 0.0, "alpha_v": 0.0}

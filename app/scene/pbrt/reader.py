@@ -35,6 +35,7 @@ from pathtrace.errors import UserError, cut, warn
 from pathtrace.files import check_regular_file
 from pathtrace.filters import PixelFilter
 from pathtrace.lights import DirectionalLight, PointLight, SpotLight
+from pathtrace.lights.light import MAX_RADIANCE
 from pathtrace.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder
@@ -46,6 +47,9 @@ from pathtrace.scene.pbrt.tokens import Tokens, numbers, parameters, string
 
 MAX_FILE_BYTES = 4 << 30
 MAX_INCLUDE_DEPTH = 16
+# Include directives read in all: a file included from many places counts each time, so that
+# a tree of includes (12 wide and 8 deep: 470 million reads) is refused at once, not read for ever
+MAX_INCLUDES = 4096
 MAX_FILM = 16384
 # the most material rows one `power` area light's triangles take (PbrtReader.area_emission)
 MAX_POWER_ROWS = 256
@@ -63,7 +67,8 @@ class GraphicsState:
     media: tuple = ("", "")               # MediumInterface: the inside and outside media's names
 
     def copy(self):
-        return replace(self, ctm=self.ctm.copy())
+        # not dataclasses.replace, which costs 25 us: an attribute block per shape is common
+        return GraphicsState(self.ctm.copy(), self.reverse, self.material, self.area_light, self.media)
 
 
 class PbrtReader:
@@ -83,12 +88,16 @@ class PbrtReader:
         self.lights = []
         self.objects = {}                 # ObjectBegin name: its builder object
         self.current_object = None
+        self.object_shapes = {}           # ObjectBegin name: its shapes, until it is instanced
         self.including = []
+        self.includes = 0                 # Include directives read so far
+        self.inverted = (None, None)      # (the bytes of a transform, its inverse): singular()
         self.media = []                   # the scene's media, None where named but not yet made
         self.medium_rows = {}             # medium name -> row of self.media
         self.medium_mentions = {}         # medium name -> where it was first named
         self.null_material = make("null", {}, "")    # the interface material's, one row for all
         self.material_rows = {}
+        self.default_material = None
         self.warned = set()
         self.mesh_files = MeshFiles()     # the plymesh shapes' files, read ahead
         self.dropped = [0, 0]             # degenerate triangles dropped, of the meshes' triangles
@@ -181,6 +190,23 @@ class PbrtReader:
 
     # -- transforms --
 
+    def inverse(self, where: str, what: str) -> np.ndarray:
+        """The inverse of the current transform, which `what` needs; an error naming the line
+        where it is singular (a Scale of 0, or factors whose product underflows to 0): pbrt-v4
+        goes on with an inverse of NaNs there, which would render nothing meaningful."""
+        inverse = None if self.singular() else self.inverted[1]
+        if inverse is None:
+            raise UserError(f"{where}: {what} needs the current transform's inverse, but the transform is singular")
+        return inverse
+
+    def singular(self) -> bool:
+        """Whether the current transform is singular; its inverse kept, with the transform's
+        bytes, for the shapes that follow under the same transform."""
+        key = self.state.ctm.tobytes()
+        if self.inverted[0] != key:
+            self.inverted = key, _inverse(self.state.ctm)
+        return self.inverted[1] is None
+
     def concat(self, m):
         self.state.ctm = self.state.ctm @ m
 
@@ -215,7 +241,7 @@ class PbrtReader:
         # pbrt-v4: the camera is in the current outside medium
         self.camera_params = (kind, params, tokens.where(offset), self.state.ctm.copy(),
                               self.medium_row(self.state.media[1], tokens.where(offset)))
-        self.named_systems["camera"] = np.linalg.inv(self.state.ctm)
+        self.named_systems["camera"] = self.inverse(tokens.where(offset), "the camera")
 
     def make_camera(self) -> Camera:
         """pathtrace's camera for pbrt's, once the film's size is known."""
@@ -493,6 +519,9 @@ class PbrtReader:
 
     def _include(self, tokens, offset):
         name = string(tokens, "Include")
+        self.includes += 1
+        if self.includes > MAX_INCLUDES:
+            tokens.fail(offset, f"more than {MAX_INCLUDES} Includes in all (each time a file is included counts)")
         self.parse_file(self.resolve(name), tokens.where(offset))
 
     def _ignored(what, instead, count=0, takes_params=False):
@@ -526,7 +555,10 @@ class PbrtReader:
             tokens.fail(offset, "ObjectBegin inside another ObjectBegin")
         self._attribute_begin(tokens, offset)
         self.current_object = name
-        self.objects[name] = self.builder.add_object(name)
+        # its shapes are kept as read and made at its first ObjectInstance: a file of 100,000
+        # objects never instanced costs their reading only (pbrt-v4 reads one in under a second)
+        self.objects[name] = None
+        self.object_shapes[name] = []
 
     def _object_end(self, tokens, offset):
         if self.current_object is None:
@@ -536,9 +568,29 @@ class PbrtReader:
 
     def _object_instance(self, tokens, offset):
         name = string(tokens, "ObjectInstance")
+        if self.current_object is not None:
+            tokens.fail(offset, "ObjectInstance inside ObjectBegin (pbrt-v4 has no nested instances)")
         if name not in self.objects:
             tokens.fail(offset, f"no object named '{cut(name)}'")
+        if self.singular():
+            warn(f"{tokens.where(offset)}: the current transform is singular (it flattens the instance); "
+                 "pathtrace leaves the instance out")
+            return
+        if self.objects[name] is None:
+            self.make_object(name)
         self.builder.add_instance(self.objects[name], self.state.ctm)
+
+    def make_object(self, name: str):
+        """The object `name`, its shapes made now, each in the graphics state it was read in."""
+        self.objects[name] = self.builder.add_object(name)
+        saved = self.state, self.current_object
+        self.current_object = name
+        try:
+            for kind, params, where, state in self.object_shapes.pop(name):
+                self.state = state
+                self.add_shape(kind, params, where)
+        finally:
+            self.state, self.current_object = saved
 
     # -- shapes --
 
@@ -547,8 +599,11 @@ class PbrtReader:
         where either is given)."""
         material = self.state.material
         if isinstance(material, str):
-            material = make("diffuse", {"rho_d": np.full(3, 0.5)}, "")      # pbrt-v4's default
-            self.state.material = material
+            # pbrt-v4's default, one for the file (made again in each attribute block, it
+            # would add a row per shape)
+            if self.default_material is None:
+                self.default_material = make("diffuse", {"rho_d": np.full(3, 0.5)}, "")
+            material = self.default_material
         if material is None:              # pbrt's interface: no surface, only a boundary of media
             material = self.null_material
         if alpha is not None and not (isinstance(alpha, float) and alpha == 1.0):
@@ -571,6 +626,12 @@ class PbrtReader:
         kind = string(tokens, "Shape")
         params = parameters(tokens)
         where = tokens.where(offset)
+        if self.current_object is not None:
+            self.object_shapes[self.current_object].append((kind, params, where, self.state.copy()))
+        else:
+            self.add_shape(kind, params, where)
+
+    def add_shape(self, kind, params, where):
         media = self.medium_interface(where)
         if self.state.material is None and self.state.area_light is not None:
             # pbrt-v4 makes no area light of a shape without a material (src/pbrt/scene.cpp, the
@@ -583,6 +644,13 @@ class PbrtReader:
                 p.used = True
             self.once(("interface", where), f"{where}: a shape of the interface material that bounds no "
                                             "medium is nothing; pathtrace leaves it out")
+            return
+        if self.singular():
+            for p in params.params.values():
+                p.used = True
+            # pbrt-v4 would carry NaN normals and a NaN inverse: flattened to nothing, the
+            # shape is left out (as degenerate triangles are)
+            warn(f"{where}: the current transform is singular (it flattens the shape); pathtrace leaves the shape out")
             return
         mesh = self.shape_mesh(kind, params, where)
         if mesh is None:
@@ -769,21 +837,37 @@ class PbrtReader:
             params.string("filename")
             warn(f"{light_where}: pathtrace's area lights have no image; it uses L "
                  f"({', '.join(f'{c:g}' for c in spectrum_rgb(params, 'L', 1.0, 'illuminant'))})")
-        le = spectrum_rgb(params, "L", 1.0, "illuminant") * params.float("scale", 1.0)
+        scale = params.float("scale", 1.0)
+        le = spectrum_rgb(params, "L", 1.0, "illuminant") * scale
         twosided = params.bool("twosided", False)
         power = params.float("power", -1.0)
         if np.any(le < 0):
-            params.fail("L", "an emitted radiance must not be negative")
+            params.fail("scale" if scale < 0 else "L", "an emitted radiance must not be negative")
         self.unused(params, "diffuse area light")
         if power <= 0:
-            return [(None, le)], twosided
-        k_e = math.pi * (2 if twosided else 1)
+            parts, cause = [(None, le)], "'L' times 'scale'"
+        else:
+            parts, area = self.powered(le, power, math.pi * (2 if twosided else 1), vertices, faces, light_where)
+            cause = f"'power' {power:g} over the shape's area of {area:.3g}" + \
+                ("" if faces is None else " (its smallest triangle's: each triangle emits the power, as pbrt-v4's do)")
+        top = max(float(np.max(e)) for _, e in parts)
+        if not top <= MAX_RADIANCE:
+            raise UserError(f"{light_where}: {cause} gives an emitted radiance of {top:.3g}, "
+                            f"beyond {MAX_RADIANCE:g}, where the sums of samples overflow")
+        return parts, twosided
+
+    @staticmethod
+    def powered(le, power, k_e, vertices, faces, light_where) -> list:
+        """area_emission's [(faces, radiance)] of a light given `power`, L power / (k_e area) with
+        each triangle's own area (a sphere's, 4 pi r^2), and the least area."""
         if faces is None:                   # a sphere: (center, radius)
-            return [(None, le * power / (k_e * 4 * math.pi * vertices[1] ** 2))], twosided
+            area = 4 * math.pi * vertices[1] ** 2
+            return [(None, le * power / (k_e * area))], area
         p = vertices[faces]
         area = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
-        # float32's areas: a quad's two halves, equal but for rounding, share a row
-        areas, group = np.unique(area.astype(np.float32), return_inverse=True)
+        # areas equal in float32 (a quad's two halves, but for rounding) share a row, at their mean
+        _, group = np.unique(area.astype(np.float32), return_inverse=True)
+        areas = np.bincount(group, weights=area) / np.bincount(group)
         if len(areas) > MAX_POWER_ROWS:
             # a row per triangle would outgrow the material table: areas in MAX_POWER_ROWS
             # bins of equal ratio, each triangle given its bin's geometric mean
@@ -794,7 +878,7 @@ class PbrtReader:
                  f"radiance of one of {MAX_POWER_ROWS} area classes, within {spread:.1%} of pbrt-v4's")
             areas, group = np.sqrt(edges[:-1] * edges[1:]), bins[group]
         return [(np.flatnonzero(group == g), le * power / (k_e * float(a)))
-                for g, a in enumerate(areas) if np.any(group == g)], twosided
+                for g, a in enumerate(areas) if np.any(group == g)], float(area.min())
 
     # -- lights --
 
@@ -875,7 +959,7 @@ class PbrtReader:
                 if upper <= 0:
                     params.fail("illuminance", "the map is black above its horizon, which no scale brightens")
                 scale *= illuminance / upper
-            latlong = to_latlong(image[..., :3], np.linalg.inv(self.state.ctm[:3, :3]))
+            latlong = to_latlong(image[..., :3], self.inverse(where, "an infinite light's map")[:3, :3])
             self.environment = Environment(latlong, scale, 0.0, str(path), resampled=True)
             return
         color = spectrum_rgb(params, "L", 1.0, "illuminant") * scale
@@ -887,6 +971,15 @@ class PbrtReader:
 
     def _reverse_orientation(self, tokens, offset):
         self.state.reverse = not self.state.reverse
+
+
+def _inverse(m: np.ndarray):
+    """m's inverse, or None where m is singular (or its inverse overflows)."""
+    try:
+        inverse = np.linalg.inv(m)
+    except np.linalg.LinAlgError:
+        return None
+    return inverse if np.all(np.isfinite(inverse)) else None
 
 
 def _three(what, make):

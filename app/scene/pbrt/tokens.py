@@ -233,8 +233,18 @@ def parameters(tokens: Tokens) -> ParamList:
         out.params[name] = Param(ptype, name, _values(tokens, ptype, name, offset), offset)
 
 
+def _written(tokens: Tokens, start: int, index: int) -> str:
+    """The `index`th value of the list at `start` as the file wrote it ("1e20", not the
+    -9223372036854775808 of a cast), for a message."""
+    text = tokens.text
+    end = text.find("]", start) if text[start] == "[" else start + len(_WORD.match(text, start).group())
+    words = text[start + (text[start] == "["):end if end >= 0 else len(text)].split()
+    return cut(words[index]) if index < len(words) else "?"
+
+
 def _values(tokens: Tokens, ptype: str, name: str, offset: int):
     kind, value, at = tokens.next()
+    start = at
     if kind == "numbers":
         items = value
     elif kind == "[":
@@ -262,13 +272,20 @@ def _values(tokens: Tokens, ptype: str, name: str, offset: int):
                 items = np.array([float(v) for _, v, _ in items], np.float64)
             except ValueError:
                 tokens.fail(offset, f"'{cut(name)}': {ptype} values must be numbers")
-        if not np.all(np.isfinite(items)) or np.any(np.abs(items) > FLOAT32_MAX):
-            tokens.fail(offset, f"'{cut(name)}': a value beyond what float32 holds")
         per = PARAM_TYPES[ptype]
         if len(items) == 0 or len(items) % per:
             tokens.fail(offset, f"'{cut(name)}': {ptype} takes values in groups of {per}, got {len(items)}")
-        if ptype == "integer" and np.any(items != np.round(items)):
-            tokens.fail(offset, f"'{cut(name)}': integer values must be whole numbers")
+        biggest = float(np.max(np.abs(items)))       # one reduction: NaN fails the comparison too
+        if not biggest <= FLOAT32_MAX:
+            bad = int(np.argmax(~(np.abs(items) <= FLOAT32_MAX)))
+            tokens.fail(offset, f"'{cut(name)}': {_written(tokens, start, bad)} is not finite, or beyond what float32 holds")
+        if ptype == "integer":
+            if np.any(items != np.round(items)):
+                bad = int(np.argmax(items != np.round(items)))
+                tokens.fail(offset, f"'{cut(name)}': integer values must be whole numbers, got {_written(tokens, start, bad)}")
+            if biggest >= 2**31:            # pbrt-v4 reads integers as C ints
+                bad = int(np.argmax(np.abs(items) >= 2**31))
+                tokens.fail(offset, f"'{cut(name)}': integer values must fit in 32 bits, got {_written(tokens, start, bad)}")
         return items
     if isinstance(items, np.ndarray):
         tokens.fail(offset, f"'{cut(name)}': {ptype} values must be quoted strings")
