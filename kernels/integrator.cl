@@ -413,9 +413,10 @@ int result_index(const RenderParams *p, uint x, uint y, uint sample)
 
 /* One work-item per pixel of rows [row_start, row_end) (a band of a pass, or all of them) adds
  * p.sample_count samples to the pixel's running sums (add_to_pixel). A NaN or infinite sample
- * (a bug, or a scene beyond float32) is left out, counting as black, so that it cannot poison
- * the pixel for the rest of the render; the host counts the samples left out from w
- * (Renderer.dropped_samples) and reports them. A sample whose path waits in the continuation
+ * (a bug, or a scene beyond float32) is left out, so that it cannot poison the pixel for the
+ * rest of the render; the host counts the samples left out from w (Renderer.dropped_samples)
+ * and reports them. Renderer.mean() divides by the samples taken, counting one left out as
+ * black; the viewer (shaders/display.frag) and per_pixel_mean divide by those kept. A sample whose path waits in the continuation
  * queue (PATH_QUEUE) is added by add_queued_paths, from its entry of `results`: w holds the
  * rays its path traced after it was queued, as int bits, or -1 where the path was not queued. */
 void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum,

@@ -15,8 +15,10 @@
  *                  event was a delta (a smooth coating over a mirror) is a delta sample.
  * Both estimates draw their random numbers from a hash of the two directions (of wo and the
  * uniforms for sample), as pbrt-v4 seeds its RNG: an evaluation is a deterministic function of
- * its arguments, so light sampling and BSDF sampling see the same pdf and their MIS weights sum
- * to 1. One-sided here (pbrt's are two-sided: app/scene/pbrt gives them `twosided`).
+ * its arguments. Light sampling and BSDF sampling do not see bitwise the same directions (one
+ * passes a direction through the shading frame and back), so their pdf estimates are
+ * independent; MIS stays unbiased because each estimate's expectation is the density both
+ * strategies sample, the argument pbrt-v4 relies on too. One-sided here (pbrt's are two-sided: app/scene/pbrt gives them `twosided`).
  *
  * Transmission through the coating is radiance's when the walk enters it from wo and leaves it
  * towards wi (divided by (n_t / n_i)^2), importance's (not divided) for the direction sampled

@@ -2,7 +2,7 @@
 full inside `beam_width` of the axis and none beyond `cutoff_angle` (degrees, measured from the
 axis). Between them it falls off as Mitsuba 3's `spot` does, linearly in the angle ("linear"),
 or as pbrt-v4's `spot` does, by a smoothstep in the cosine ("smoothstep": pbrt's coneangle is
-cutoff_angle, coneangle - conedelta is beam_width). kernels/lights/spot.cl samples it."""
+cutoff_angle, coneangle - conedeltaangle is beam_width). kernels/lights/spot.cl samples it."""
 
 import math
 from dataclasses import dataclass

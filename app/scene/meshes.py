@@ -42,9 +42,10 @@ class MeshData(NamedTuple):
 PLY_UV_NAMES = (("u", "v"), ("s", "t"), ("texture_u", "texture_v"), ("texture_s", "texture_t"))
 
 
-def read_mesh(path: Path, where: str, warn=warn) -> MeshData:
+def read_mesh(path: Path, where: str, warn=warn, degenerate=None) -> MeshData:
     """A mesh file's vertices, faces, normals and texture coordinates. `where` names the field
-    that refers to the file, for messages; `warn` takes the warning lines."""
+    that refers to the file, for messages; `warn` takes the warning lines; `degenerate` is
+    check_mesh's."""
     path = Path(path)
     suffix = ".ply.gz" if path.name.lower().endswith(".ply.gz") else path.suffix.lower()
     if suffix not in FORMATS:
@@ -68,7 +69,7 @@ def read_mesh(path: Path, where: str, warn=warn) -> MeshData:
     except Exception as e:     # the parsers raise anything on a malformed file
         raise UserError(f"{where}: {path}: not a readable {suffix[1:].upper()} mesh "
                         f"({type(e).__name__}: {str(e).splitlines()[0] if str(e) else 'malformed'})") from None
-    return check_mesh(*mesh, where=f"{where}: {path}", warn=warn)
+    return check_mesh(*mesh, where=f"{where}: {path}", warn=warn, degenerate=degenerate)
 
 
 class MeshFiles:
@@ -121,24 +122,28 @@ class MeshFiles:
             self.futures[i] = self.pool.submit(_read_noting, *self.requests[i])
         self.submitted = end
 
-    def read(self, path, where: str) -> MeshData:
+    def read(self, path, where: str, degenerate=None) -> MeshData:
+        """The mesh, as read_mesh(path, where, degenerate=degenerate) reads it. A file read
+        ahead with a problem or a warning (a degenerate triangle among them) is read again
+        where `degenerate` is given, which the threads do not take."""
         indices = self.waiting.get(Path(path))
         if not indices:
-            return read_mesh(path, where)
+            return read_mesh(path, where, degenerate=degenerate)
         i = indices.popleft()
         self.taken = max(self.taken, i + 1)
         self._submit()
         future = self.futures.pop(i, None)
         if future is None:
-            return read_mesh(path, where)
+            return read_mesh(path, where, degenerate=degenerate)
+        again = self.requests[i][1] != where or degenerate is not None
         try:
             mesh, notes = future.result()
         except UserError:
-            if self.requests[i][1] != where:
-                return read_mesh(path, where)
+            if again:
+                return read_mesh(path, where, degenerate=degenerate)
             raise
-        if notes and self.requests[i][1] != where:
-            return read_mesh(path, where)
+        if notes and again:
+            return read_mesh(path, where, degenerate=degenerate)
         for note in notes:
             warn(note)
         return mesh
@@ -175,10 +180,12 @@ def _parsers_quiet():
         yield
 
 
-def check_mesh(vertices, faces, normals, uvs=None, where="", warn=warn) -> MeshData:
+def check_mesh(vertices, faces, normals, uvs=None, where="", warn=warn, degenerate=None) -> MeshData:
     """Validates a mesh and drops its degenerate triangles (repeated corners or zero area), with
-    a line to `warn`. Unusable normals or texture coordinates (the wrong count) are dropped; NaN
-    or infinite texture coordinates are refused."""
+    a line to `warn`, or where `degenerate` is given, a call degenerate(dropped, total) in its
+    stead, and a mesh left with no triangle is returned so (the caller decides; otherwise it is
+    refused). Unusable normals or texture coordinates (the wrong count) are dropped; NaN or
+    infinite texture coordinates are refused."""
     vertices = np.asarray(vertices, np.float64).reshape(-1, 3)
     faces = np.asarray(faces, np.int64).reshape(-1, 3)
     if len(faces) == 0:
@@ -213,6 +220,9 @@ def check_mesh(vertices, faces, normals, uvs=None, where="", warn=warn) -> MeshD
     keep = ((e1[:, 1] * e2[:, 2] != e1[:, 2] * e2[:, 1]) | (e1[:, 2] * e2[:, 0] != e1[:, 0] * e2[:, 2])
             | (e1[:, 0] * e2[:, 1] != e1[:, 1] * e2[:, 0]))
     if not keep.all():
+        if degenerate is not None:
+            degenerate(int(np.count_nonzero(~keep)), len(faces))
+            return MeshData(vertices, faces[keep], normals, uvs)
         warn(f"{where}: dropped {np.count_nonzero(~keep)} degenerate triangle(s) of {len(faces)}")
         faces = faces[keep]
         if len(faces) == 0:
