@@ -212,11 +212,8 @@ def test_a_phong_lobe_of_exponent_1e8_stays_finite_and_unbiased(backend, tmp_pat
 # no path can hit, are taken out of the scenes.
 
 ROOT = Path(__file__).resolve().parent.parent
-# tex_mix.pbrt nests a checkerboard in a mix, which the pbrt reader does not read yet (#57)
-UNREAD = {"tex_mix.pbrt"}
-SCENE_FILES = sorted(p for p in [*(ROOT / "tests" / "scenes").glob("*.xml"), *(ROOT / "tests" / "scenes").glob("*.pbrt"),
-                                 *(ROOT / "assets" / "scenes").glob("*.toml"),
-                                 *(ROOT / "tests" / "references" / "pbrt-v4").glob("*.pbrt")] if p.name not in UNREAD)
+SCENE_FILES = sorted([*(ROOT / "tests" / "scenes").glob("*.xml"), *(ROOT / "tests" / "scenes").glob("*.pbrt"),
+                      *(ROOT / "assets" / "scenes").glob("*.toml"), *(ROOT / "tests" / "references" / "pbrt-v4").glob("*.pbrt")])
 SCENE_SIZE = (16, 12)
 SCENE_SPP_BY_NEE = {False: 512, True: 128}
 
