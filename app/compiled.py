@@ -18,7 +18,7 @@ from pathtrace.errors import UserError, format_bytes, short
 from pathtrace.features import FLAT_MAX, LONE_MAX, Features, stack_size
 from pathtrace.lights.light import MAX_RADIANCE
 from pathtrace.lights import LightTable, build_light_table, emitted_power, primitive_bounds
-from pathtrace.materials import BSDFS, NULL, TAGS
+from pathtrace.materials import BSDFS, EMITS_BACK, NULL, TAGS
 from pathtrace.materials.blend import reachable
 from pathtrace.media import media_table, packed_interfaces
 from pathtrace.memory import available_host_memory
@@ -160,12 +160,16 @@ class CompiledScene:
         check_radiance(self.scene)
         # each material's luminance, gathered per primitive (8 bytes a primitive, not 24)
         luminance = np.take(self.materials["emission"][:, :3].astype(np.float64) @ LUMINANCE, self.prim_material)
+        # a triangle emitting from both sides sends out twice the power of one side
+        both_sides = np.take((self.materials["flags"] & EMITS_BACK) != 0, self.prim_material)
+        both_sides[:self.num_spheres] = False
+        luminance[both_sides] *= 2
         # the corners as a view of the triangles' rows (v0, v1, v2 are consecutive float4s), not a copy
         corners = self.triangles.view(np.float32).reshape(-1, 3, 4)[:, :, :3]
         power = emitted_power(self.spheres, corners, luminance[:self.num_spheres], luminance[self.num_spheres:])
         self.lights: LightTable = build_light_table(power, self.scene.environment, self.scene.lights,
                                                     max(self.radius, 1e-6),
-                                                    lambda prims: primitive_bounds(self.spheres, corners, prims),
+                                                    lambda prims: primitive_bounds(self.spheres, corners, prims, both_sides[prims]),
                                                     self.light_sampler)
 
     def geometry_arrays(self) -> dict:

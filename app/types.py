@@ -34,7 +34,7 @@ TEXTURE = np.dtype([
     ("to_u", np.float32, 4),        # the uv transform's rows
     ("to_v", np.float32, 4),
     ("value", np.float32, (3, 4)),  # constant inputs
-    ("input", np.int32, 3),         # texture inputs (rows of the table), or -1: value[k]
+    ("input", np.int32, 3),         # a texture input: its row, -2 - r: register r, -1: value[k]
     ("type", np.int32),             # TEXTURE_* tag (app/textures/registry.py)
     ("width", np.int32),
     ("height", np.int32),
@@ -43,7 +43,7 @@ TEXTURE = np.dtype([
     ("channels", np.int32),
     ("wrap", np.int32),
     ("filter", np.int32),
-    ("pad", np.int32),
+    ("program", np.int32),          # a combining texture's first step (kernels/texture.cl), or -1
 ])
 
 BVH_NODE = np.dtype([(name, np.float32, 4) for name in ("lo_x", "lo_y", "lo_z", "hi_x", "hi_y", "hi_z")]

@@ -69,7 +69,7 @@ void trace_aovs(const SceneData *sc, const RenderParams *p, float3 o, float3 d, 
                       && sample_bsdf(m, wo, next_uniform4(rng).xyz, &bs);
         if (!(m->flags & MATERIAL_DELTA) || !sampled) {
             float3 rho = sampled ? estimate_albedo(m, wo, &bs, rng) : (float3)(0.0f);
-            float3 le = front ? m->emission.xyz : (float3)(0.0f);
+            float3 le = front || (flags & MATERIAL_EMITS_BACK) ? m->emission.xyz : (float3)(0.0f);
             *albedo = throughput * (rho + le);
             *normal = dot(s.ns, d) > 0.0f ? -s.ns : s.ns;
             return;

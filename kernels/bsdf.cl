@@ -1,9 +1,11 @@
 /* The BSDF interface: every material type provides eval, pdf and sample in the local shading
  * frame (z the shading normal, wo and wi pointing away from the surface);
  * eval_bsdf, pdf_bsdf and sample_bsdf dispatch on the material's type tag. Adding a material
- * means one kernels/bsdfs/ file and one entry in app/materials/registry.py, which gives each
- * type its tag (BSDF_<NAME>) and generates the dispatch (dispatch_source); the integrator never
- * names a material.
+ * takes its kernels/bsdfs/ file, its host BSDFType (app/materials: parameters, packing, checks)
+ * and its entry in app/materials/registry.py, which gives each type its tag (BSDF_<NAME>) and
+ * generates the dispatch (dispatch_source); the scene readers map their formats' names onto it
+ * by hand (app/scene/mitsuba.py, app/scene/pbrt/materials.py). The integrator never names a
+ * material.
  *
  *   eval_X(m, wo, wi)        f(wo, wi), without the cosine; 0 for delta lobes
  *   pdf_X(m, wo, wi)         the solid-angle density with which sample_X draws wi, its lobe's

@@ -304,25 +304,24 @@ CPU_INLINE float3 trace_path(const SceneData *sc, const RenderParams *p, const P
         }
 #endif
         int front = dot(s.ng, d) < 0.0f;
-        if (!front) {
-            /* One-sided, as Mitsuba 3's BSDFs and area lights: a back face is black. A
-             * two-sided material turns its frame round; a transmissive one (glass) keeps it
-             * and its BSDF sees wo below the surface. */
-            if (flags & MATERIAL_TWOSIDED)
-                turn_round(&s);
-            else if (!(flags & MATERIAL_TRANSMISSIVE))
-                return radiance;
-        }
-        if (depth >= max_depth) {
+        /* One-sided, as Mitsuba 3's BSDFs and area lights: a back face scatters nothing. A
+         * two-sided material turns its frame round; a transmissive one (glass) keeps it and its
+         * BSDF sees wo below the surface. Light leaves the front, or both sides of one surface
+         * (pbrt-v4's twoSided DiffuseAreaLight::L tests no side). */
+        int emits = front || (flags & MATERIAL_EMITS_BACK);
+        int scatters = front || (flags & (MATERIAL_TWOSIDED | MATERIAL_TRANSMISSIVE));
+        if (!front && (flags & MATERIAL_TWOSIDED))
+            turn_round(&s);
+        if (depth >= max_depth || !scatters) {
             /* the last vertex: only the light it emits counts, so its material is not shaded
                (pbrt-v4's PathIntegrator also ends a path at maxDepth before getting its BSDF) */
-            float3 le = front ? EMISSION_AT(sc, s, d) : (float3)(0.0f);
+            float3 le = emits ? EMISSION_AT(sc, s, d) : (float3)(0.0f);
             if (any(le > 0.0f))
                 radiance += throughput * le * emission_weight(sc, hit.prim, nee, pdf_prev, prev_x, prev_n, s.p);
             return radiance;
         }
         MATERIAL_AT(m, sc, s, d);
-        if (front && any(m->emission.xyz > 0.0f))
+        if (emits && any(m->emission.xyz > 0.0f))
             radiance += throughput * m->emission.xyz
                         * emission_weight(sc, hit.prim, nee, pdf_prev, prev_x, prev_n, s.p);
         float3 wo = to_shading(&s, -d);
@@ -414,9 +413,10 @@ int result_index(const RenderParams *p, uint x, uint y, uint sample)
 
 /* One work-item per pixel of rows [row_start, row_end) (a band of a pass, or all of them) adds
  * p.sample_count samples to the pixel's running sums (add_to_pixel). A NaN or infinite sample
- * (a bug, or a scene beyond float32) is left out, counting as black, so that it cannot poison
- * the pixel for the rest of the render; the host counts the samples left out from w
- * (Renderer.dropped_samples) and reports them. A sample whose path waits in the continuation
+ * (a bug, or a scene beyond float32) is left out, so that it cannot poison the pixel for the
+ * rest of the render; the host counts the samples left out from w (Renderer.dropped_samples)
+ * and reports them. Renderer.mean() divides by the samples taken, counting one left out as
+ * black; the viewer (shaders/display.frag) and per_pixel_mean divide by those kept. A sample whose path waits in the continuation
  * queue (PATH_QUEUE) is added by add_queued_paths, from its entry of `results`: w holds the
  * rays its path traced after it was queued, as int bits, or -1 where the path was not queued. */
 void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum,

@@ -15,8 +15,10 @@
  *                  event was a delta (a smooth coating over a mirror) is a delta sample.
  * Both estimates draw their random numbers from a hash of the two directions (of wo and the
  * uniforms for sample), as pbrt-v4 seeds its RNG: an evaluation is a deterministic function of
- * its arguments, so light sampling and BSDF sampling see the same pdf and their MIS weights sum
- * to 1. One-sided here (pbrt's are two-sided: app/scene/pbrt gives them `twosided`).
+ * its arguments. Light sampling and BSDF sampling do not see bitwise the same directions (one
+ * passes a direction through the shading frame and back), so their pdf estimates are
+ * independent; MIS stays unbiased because each estimate's expectation is the density both
+ * strategies sample, the argument pbrt-v4 relies on too. One-sided here (pbrt's are two-sided: app/scene/pbrt gives them `twosided`).
  *
  * Transmission through the coating is radiance's when the walk enters it from wo and leaves it
  * towards wi (divided by (n_t / n_i)^2), importance's (not divided) for the direction sampled
@@ -37,7 +39,8 @@ typedef struct {
     int samples;         /* walks per estimate */
 } Layers;
 
-/* The base, seen in the layer's frame with both directions above it */
+/* The base, seen in the layer's frame with both directions above it; a metal seen from inside
+ * the coating, its eta and k relative to the coating's IOR (eval_rough_metal) */
 int base_is_delta(const Layers *l)
 {
     return l->metal && l->base->p0.w == 0.0f;
@@ -46,7 +49,7 @@ int base_is_delta(const Layers *l)
 float3 eval_base(const Layers *l, float3 wo, float3 wi)
 {
     if (l->metal)
-        return base_is_delta(l) ? (float3)(0.0f) : eval_roughconductor(l->base, wo, wi);
+        return base_is_delta(l) ? (float3)(0.0f) : eval_rough_metal(l->base, l->top.eta, wo, wi);
     return wo.z > 0.0f && wi.z > 0.0f ? l->rho * (1.0f / PI_F) : (float3)(0.0f);
 }
 
@@ -61,7 +64,7 @@ int sample_base(const Layers *l, float3 wo, float2 u, BSDFSample *s)
 {
     if (base_is_delta(l)) {                     /* a mirror */
         s->wi = reflect_local(wo);
-        s->weight = fresnel_conductor(wo.z, l->base->p0.xyz, l->base->p1.xyz);
+        s->weight = fresnel_conductor(wo.z, l->base->p0.xyz / l->top.eta, l->base->p1.xyz / l->top.eta);
         s->pdf = 1.0f;
         s->eta = 1.0f;
         s->lobe = LOBE_REFLECTION | LOBE_DELTA;
@@ -69,7 +72,7 @@ int sample_base(const Layers *l, float3 wo, float2 u, BSDFSample *s)
     }
     if (l->metal) {
         s->eta = 1.0f;
-        return sample_roughconductor(l->base, wo, (float3)(0.0f, u.x, u.y), s);
+        return sample_rough_metal(l->base, l->top.eta, wo, (float3)(0.0f, u.x, u.y), s);
     }
     s->wi = sample_cosine_hemisphere(u.x, u.y);
     s->pdf = pdf_cosine_hemisphere(s->wi.z);

@@ -6,7 +6,8 @@
  * map is a height field h(u, v) over the surface: dp/du and dp/dv are tilted by its slopes along
  * the normal, p' = p + h n (Blinn 1978, with Mitsuba's first-order terms), and the normal is
  * their cross product. The integrator weighs what a perturbed surface reflects by
- * shadow_terminator, as Mitsuba's normal map does. */
+ * shadow_terminator, as Mitsuba 3.9's normal and bump maps both do (their common PerturbedBSDF,
+ * eval_shadow_terminator, since commit e32d7180 "Improve bump and normal mapping"). */
 
 #define SLOT_NORMAL_MAP 20   /* app/materials/table.py */
 #define SLOT_BUMP_MAP 24
@@ -40,39 +41,42 @@ float shadow_terminator(const Surface *s, float3 w)
 }
 
 /* s's shading normal perturbed by material `row`'s normal or bump map, if it has one, seen from
- * direction wo. As Mitsuba 3.9's `normalmap`: the map's normal m lies in the frame (t_s, t_t, ns),
- * t_s = dp/du made orthogonal to ns and t_t = ns x t_s (the front's, on a two-sided back whose ns
- * is turned round); one that faces away from wo has its tangential part turned round
- * (Schuessler et al. 2017's flip); its tilt sets the shadowing term. As its `bumpmap`: the
- * normal of the tilted derivatives, on the geometric normal's side. */
+ * direction wo, as Mitsuba 3.9's `normalmap` and `bumpmap` (one base class, PerturbedBSDF): the
+ * perturbed normal m in the frame (t_s, t_t, ns), t_s = dp/du made orthogonal to ns and
+ * t_t = ns x t_s (the front's, on a two-sided back whose ns is turned round), is a normal map's
+ * 2 rgb - 1, or a bump map's normal of the tilted derivatives, on the geometric normal's side;
+ * one that faces away from wo has its tangential part turned round (Schuessler et al. 2017's
+ * flip); its tilt sets the shadowing term. */
 void perturb_normal(const SceneData *sc, const global Material *row, float2 uv, float3 wo, Surface *s)
 {
     for (int i = row->textures;; ++i) {
         TextureBinding b = sc->bindings[i];
         if (b.slot == SLOT_NORMAL_MAP || b.slot == SLOT_BUMP_MAP) {
-            float3 dpdu, dpdv, n = s->ns;
-            surface_derivatives(sc, s, &dpdu, &dpdv);
+            float3 n = s->ns;
+            float3 t_s = shading_tangent(sc, s), t_t = s->side * cross(n, t_s);
+            float3 m;
             if (b.slot == SLOT_NORMAL_MAP) {
-                float3 t_s = shading_tangent(sc, s), t_t = s->side * cross(n, t_s);
-                float3 m = 2.0f * eval_texture(sc, b.texture, uv) - 1.0f;
-                float3 wo_local = (float3)(dot(wo, t_s), dot(wo, t_t), dot(wo, n));
-                if (wo_local.z * dot(wo_local, m) <= 0.0f)
-                    m.xy = -m.xy;
-                float len_m = length(m);
-                if (!(len_m > 0.0f) || !isfinite(len_m))
-                    return;
-                m /= len_m;
-                s->terminator = fmin(0.125f * fmax(0.0f, 1.0f - m.z * m.z) / fmax(m.z * m.z, 1e-12f), 1.0f);
-                s->ns = m.x * t_s + m.y * t_t + m.z * n;
-                return;
+                m = 2.0f * eval_texture(sc, b.texture, uv) - 1.0f;
+            } else {
+                float3 dpdu, dpdv;
+                surface_derivatives(sc, s, &dpdu, &dpdv);
+                float2 slope = bump_slopes(sc, b.texture, uv);
+                float3 du = dpdu + n * (slope.x - dot(n, dpdu));
+                float3 dv = dpdv + n * (slope.y - dot(n, dpdv));
+                float3 bumped = cross(du, dv);
+                if (dot(bumped, s->ng) < 0.0f)
+                    bumped = -bumped;
+                m = (float3)(dot(bumped, t_s), dot(bumped, t_t), dot(bumped, n));
             }
-            float2 slope = bump_slopes(sc, b.texture, uv);
-            float3 du = dpdu + n * (slope.x - dot(n, dpdu));
-            float3 dv = dpdv + n * (slope.y - dot(n, dpdv));
-            n = cross(du, dv);
-            float len = length(n);
-            if (len > 0.0f && isfinite(len))
-                s->ns = dot(n, s->ng) < 0.0f ? -n / len : n / len;
+            float3 wo_local = (float3)(dot(wo, t_s), dot(wo, t_t), dot(wo, n));
+            if (wo_local.z * dot(wo_local, m) <= 0.0f)
+                m.xy = -m.xy;
+            float len_m = length(m);
+            if (!(len_m > 0.0f) || !isfinite(len_m))
+                return;
+            m /= len_m;
+            s->terminator = fmin(0.125f * fmax(0.0f, 1.0f - m.z * m.z) / fmax(m.z * m.z, 1e-12f), 1.0f);
+            s->ns = m.x * t_s + m.y * t_t + m.z * n;
             return;
         }
         if (b.last)

@@ -9,8 +9,14 @@
  * types a scene uses, and the program for a scene without textures has none of this.
  *
  * Types that combine others (checkerboard, scale, mix) read their inputs through eval_input:
- * an input is an image or a constant texture (eval_leaf_texture) or a constant value. Inputs
- * nest one level deep, which the host checks: OpenCL C has no recursion. */
+ * an input is a texture that combines none (eval_leaf_texture), a constant value, or the value
+ * of a texture that combines others, in a register. Textures nest to any depth (pbrt-v4's do),
+ * and OpenCL C has no recursion: the host (app/textures/table.py) lays out the combining
+ * textures of each tree that a material reads as a program, rows in post-order ending with the
+ * tree's root, each pushing its value on a stack of registers after popping its combining
+ * inputs' (Sethi and Ullman's order, the input needing more registers first, which keeps a
+ * chain of any length within one register and a tree within log2 of its size).
+ * eval_texture runs it. */
 
 float2 transform_uv(const global Texture *t, float2 uv)
 {

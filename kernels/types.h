@@ -32,7 +32,7 @@ typedef struct {
     float4 p0;
     float4 p1;
     float4 p2;
-    float4 emission;  /* Le in rgb, emitted on the front side */
+    float4 emission;  /* Le in rgb, emitted on the front side (both: MATERIAL_EMITS_BACK) */
     int type;
     int flags;            /* MATERIAL_* bits */
     float continuation;   /* the report's Russian roulette: probability of going on from here */
@@ -46,6 +46,8 @@ typedef struct {
 #define MATERIAL_TRANSMISSIVE 4  /* an interface seen from both sides */
 #define MATERIAL_MASKED 8        /* it has an opacity (kernels/masks.cl) */
 #define MATERIAL_NULL 16         /* no surface, only a boundary between media (kernels/volume.cl) */
+#define MATERIAL_EMITS_BACK 32   /* one surface emitting from both sides: pbrt-v4's DiffuseAreaLight
+                                    with twoSided (lights.h, L: no test of the side) */
 
 /* A parameter of a material that a texture gives: the texture's value at the hit goes into the
  * material's floats from `slot` on (p0.x is 0, p1.x 4, p2.x 8, emission.x 12). A material's
@@ -59,8 +61,9 @@ typedef struct {
 
 /* A texture: a function of the surface's uv (kernels/texture.cl), of the type `type` (the
  * TEXTURE_* tags, app/textures/registry.py), whose fields each kernels/textures/ file documents
- * at its top. Its inputs are numbered 0 to 2: input k is texture input[k] where that is a row of
- * the table, else the constant value[k]. */
+ * at its top. Its inputs are numbered 0 to 2: input k is the texture of row input[k] where that is
+ * >= 0 (one that combines none), the value in register -2 - input[k] of its program where that is
+ * below -1 (one that combines others, kernels/texture.cl), else the constant value[k]. */
 typedef struct {
     float4 to_u;       /* the uv transform: u' = dot(to_u.xyz, (u, v, 1)) */
     float4 to_v;       /* v' = dot(to_v.xyz, (u, v, 1)) */
@@ -74,7 +77,7 @@ typedef struct {
     int channels;      /* 1 or 4 (an rgb image is stored as rgba) */
     int wrap;          /* WRAP_* */
     int filter;        /* FILTER_* */
-    int pad;
+    int program;       /* a texture that combines others: its program's first row (kernels/texture.cl); -1 */
 } Texture;
 
 /* A BVH node: up to four children, their boxes as structure-of-arrays so that one float4

@@ -201,7 +201,7 @@ def test_environment_samples_follow_their_pdf(kernels, sunset):
 RHO, H, SIZE = 0.5, 1.0, 4.0     # the floor's albedo, the light's height, the view's width
 
 
-def floor_under(light, backend, nee=True):
+def floor_under(light, backend, nee=True, sampler="power"):
     """A diffuse floor of albedo RHO (y = 0) seen straight down by an orthographic camera that
     covers [-2, 2]^2, lit by `light` alone: each pixel's radiance is RHO / pi times the
     irradiance there, closed forms below. Returns the image, 32 x 32 pixels of 256 samples, and
@@ -214,11 +214,11 @@ def floor_under(light, backend, nee=True):
         "camera": {"type": "orthographic", "eye": [0, 5, 0], "look_at": [0, 0, 0], "up": [0, 0, -1],
                    "height": SIZE},
         "environment": {"color": 0},
-        "render": {"max_depth": 2, "russian_roulette": "off", "nee": nee},
+        "render": {"max_depth": 2, "russian_roulette": "off", "nee": nee, "light_sampler": sampler},
         "materials": {"floor": {"type": "diffuse", "rho_d": RHO}},
         "meshes": [{"vertices": [[-9, 0, -9], [9, 0, -9], [9, 0, 9], [-9, 0, 9]], "faces": [[0, 3, 2, 1]],
                     "material": "floor"}],
-        "lights": [light]}, "floor")
+        "lights": light if isinstance(light, list) else [light]}, "floor")
     r = Renderer(backend, scene, 32, 32)
     r.add_samples(256)
     points = ((np.arange(32 * 8) + 0.5) / (32 * 8) * SIZE - SIZE / 2).reshape(32, 8)
@@ -257,6 +257,25 @@ def test_a_spot_light_falls_off_between_its_beam_and_its_cutoff(backend, falloff
     assert_within_noise(image[..., 1], expected, error[..., 1])
     theta = theta.mean(axis=(2, 3))
     assert image[..., 1][theta > 42].max() == 0 and image[..., 1][theta < 24].min() > 0
+
+
+@pytest.mark.parametrize("sampler", ["power", "tree"])
+def test_a_hard_edged_spot_lights_its_cone_through_either_light_sampler(backend, sampler):
+    """beam_width = cutoff_angle: full intensity inside, none outside. The light tree once bounded
+    it by theta_e = 0, and its importance test (cos theta' <= cos theta_e, pbrt-v4's) then
+    refused every point: a black floor (review 2026-11-28, F4). A second spot, the same but
+    pointing up (it lights nothing seen), makes the tree a tree; choosing by power it takes half
+    the light samples, the tree none."""
+    spot = {"type": "spot", "position": [0, H, 0], "look_at": [0, 0, 0], "intensity": 2.0, "cutoff_angle": 30.0,
+            "beam_width": 30.0}
+    image, x, z, error = floor_under([spot, {**spot, "look_at": [0, 2 * H, 0]}], backend, sampler=sampler)
+    d2 = H * H + x * x + z * z
+    inside = np.degrees(np.arctan(np.hypot(x, z) / H)) < 30.0
+    expected = (RHO / np.pi * 2.0 * inside * H / np.sqrt(d2) / d2).mean(axis=(2, 3))
+    # the pixels the edge crosses left out: 8 x 8 points do not integrate a step to within noise
+    whole = inside.all(axis=(2, 3)) | ~inside.any(axis=(2, 3))
+    assert_within_noise(image[..., 1][whole], expected[whole], error[..., 1][whole])
+    assert image[..., 1][inside.all(axis=(2, 3))].min() > 0
 
 
 def test_a_directional_light_gives_its_irradiance_times_the_cosine(backend):

@@ -597,14 +597,16 @@ def test_coated_sampling_and_evaluation_estimate_one_albedo(kernels, name, theta
 def test_a_smooth_coating_over_a_mirror_is_the_series_of_its_reflections(kernels, theta):
     """Smooth coating, clear thin layer, smooth metal: a delta BSDF whose albedo is the coating's
     F plus what enters, (1 - F), reflected by the metal at the refracted angle (R_m) and let out
-    by the coating (1 - F), or sent back down (F): F + (1 - F)^2 R_m / (1 - F R_m)."""
+    by the coating (1 - F), or sent back down (F): F + (1 - F)^2 R_m / (1 - F R_m). The metal
+    meets the coating, not air: R_m is that of its eta and k divided by the coating's IOR
+    (pbrt-v4's CoatedConductorMaterial::GetBxDF)."""
     from pathtrace.materials.optics import CONDUCTORS
     eta, (m_eta, m_k) = 1.5, CONDUCTORS["Au"]
     m = material("coatedconductor", material="Au", interface_eta=eta, thickness=1e-6, maxdepth=100)
     assert m["flags"][0] & 2                        # MATERIAL_DELTA: light sampling is skipped
     cos_o = np.cos(np.radians(theta))
     cos_t = np.sqrt(1 - (1 - cos_o ** 2) / eta ** 2)
-    f, r_m = fresnel_dielectric(cos_o, eta), complex_fresnel(cos_t, np.array(m_eta), np.array(m_k))
+    f, r_m = fresnel_dielectric(cos_o, eta), complex_fresnel(cos_t, np.array(m_eta) / eta, np.array(m_k) / eta)
     expected = f + (1 - f) ** 2 * r_m / (1 - f * r_m)
     wi, weight = sample(kernels, m, direction(theta), count=40000, seed=theta)
     assert np.all(weight[:, 3] == 2)                 # every sample a delta

@@ -116,6 +116,25 @@ def test_generated_shapes_face_out(tmp_path, shape):
         assert area == pytest.approx(4.0 if shape == "rectangle" else math.pi, rel=1e-3)
 
 
+@pytest.mark.parametrize("side,lit", [(-5, True), (5, False)])
+def test_a_mesh_whose_normals_oppose_its_winding_is_lit_on_its_normals_side(backend, tmp_path, side, lit):
+    """Mitsuba 3 keeps a mesh's interpolated normal as its shading frame, unturned, and its area
+    emitter and one-sided BSDFs test the side there (src/render/mesh.cpp; area.cpp, diffuse.cpp):
+    a quad wound to face +z with normals along -z emits towards -z. pathtrace once decided the
+    side by the winding and lit the other (review 2026-11-28, F8)."""
+    from pathtrace.renderer import Renderer
+    (tmp_path / "quad.obj").write_text("v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvn 0 0 -1\n"
+                                       "f 1//1 2//1 3//1 4//1\n")
+    path = write(tmp_path, f"""<sensor type="perspective"><float name="fov" value="20"/>
+        <transform name="to_world"><lookat origin="0, 0, {side}" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/><rfilter type="box"/></film></sensor>
+        <shape type="obj"><string name="filename" value="quad.obj"/>
+            <emitter type="area"><rgb name="radiance" value="2"/></emitter></shape>""")
+    r = Renderer(backend, load_scene(str(path)).with_settings(max_depth=1), 8, 8)
+    r.add_samples(4)
+    assert np.allclose(r.mean(), 2.0 if lit else 0.0), (r.mean().min(), r.mean().max())
+
+
 @pytest.mark.parametrize("name", ["cbox", "meshes", "envmap-spheres", "textures", "masks", "normal-maps", "lights",
                                   "thinlens", "anisotropic", "blend", "principled"])
 def test_convert_writes_toml_that_reads_back_the_same_scene(tmp_path, name):

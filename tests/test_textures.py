@@ -57,7 +57,7 @@ def lookup(kernels, tex, uv):
     tables = compile_textures([[(0, 3, tex)]])
     out = np.zeros((len(uv), 4), np.float32)
     kernels(SOURCE, ALL_TEXTURES)("lookup_texture", len(uv), tables.textures, tables.texels,
-                                  np.int32(0), np.ascontiguousarray(uv, np.float32), out)
+                                  tables.bindings[0]["texture"], np.ascontiguousarray(uv, np.float32), out)
     return out[:, :3]
 
 
@@ -164,10 +164,51 @@ def test_checkerboard_scale_and_mix(kernels):
     np.testing.assert_allclose(texture("scale", tex=bitmap, scale=2.0).mean(), 2 * image.rgb().reshape(-1, 3).mean(0))
 
 
-def test_inputs_nest_one_level_deep():
-    inner = texture("scale", tex=0.5, scale=0.5)
-    with pytest.raises(ValueError, match="nest one level deep"):
-        compile_textures([[(0, 3, texture("mix", tex1=inner))]])
+def checker(st):
+    """The checkerboard's square index (kernels/textures/checkerboard.cl): 0 or 1 at st."""
+    f = st - np.floor(st)
+    return ((f[:, 0] > 0.5) != (f[:, 1] > 0.5)).astype(int)
+
+
+def test_textures_nest_to_any_depth(kernels):
+    """pbrt-v4 nests textures freely: a mix of a checkerboard and a colour, a checkerboard of
+    checkerboards of images, a mix whose three inputs combine others, and chains thousands long,
+    each against the same definitions in NumPy."""
+    rng = np.random.default_rng(3)
+    uv = rng.uniform(-2, 2, (257, 2))
+    image = Image(rng.integers(0, 256, (4, 4, 3)).astype(np.uint8))
+    bitmap = texture("bitmap", image=image)
+    plain = reference_lookup(image.rgb(), uv, "repeat", "bilinear", np.eye(3))
+    scaled = np.diag([4.0, 4.0, 1.0])
+    board = texture("checkerboard", color0=[0.8, 0.8, 0.8], color1=[0.1, 0.1, 0.1], to_uv=scaled)
+    board_ref = np.where(checker(uv * 4)[:, None] == 0, 0.8, 0.1)
+    np.testing.assert_allclose(lookup(kernels, texture("mix", tex1=board, tex2=[0.2, 0.5, 0.2], amount=0.3), uv),
+                               0.7 * board_ref + 0.3 * np.array([0.2, 0.5, 0.2]), rtol=1e-5, atol=1e-6)
+    boards = texture("checkerboard", color0=board, color1=texture("checkerboard", color0=bitmap, color1=0.5))
+    expected = np.where(checker(uv)[:, None] == 0, board_ref, np.where(checker(uv)[:, None] == 0, plain, 0.5))
+    np.testing.assert_allclose(lookup(kernels, boards, uv), expected, rtol=1e-5, atol=1e-6)
+    three = texture("mix", tex1=boards, tex2=texture("scale", tex=bitmap, scale=2.0),
+                    amount=texture("mix", tex1=board, tex2=0.0, amount=0.5))
+    a = (0.5 * board_ref)[:, :1]
+    np.testing.assert_allclose(lookup(kernels, three, uv), (1 - a) * expected + a * 2 * plain, rtol=1e-5, atol=1e-6)
+    for length in (3, 3000):
+        chain = bitmap
+        for k in range(length):
+            chain = texture("scale", tex=chain, scale=1.0001) if k % 2 else texture("mix", tex1=0.0, tex2=chain, amount=1.0)
+        np.testing.assert_allclose(lookup(kernels, chain, uv), plain * 1.0001 ** (length // 2), rtol=1e-4, atol=1e-6)
+        assert chain.mean() == pytest.approx(image.rgb().reshape(-1, 3).mean(0) * 1.0001 ** (length // 2))
+
+
+def test_a_tree_beyond_the_kernels_registers_is_refused():
+    """A balanced tree of scales of 2^8 leaves needs 9 registers (Sethi-Ullman), one more than
+    the kernels have; of 2^7, 8."""
+    def tree(levels):
+        if levels == 0:
+            return texture("checkerboard")
+        return texture("scale", tex=tree(levels - 1), scale=tree(levels - 1))
+    compile_textures([[(0, 3, tree(7))]])
+    with pytest.raises(ValueError, match="needs 9 registers"):
+        compile_textures([[(0, 3, tree(8))]])
 
 
 def test_a_material_reads_its_textured_parameters_at_the_hit(kernels):
@@ -431,6 +472,38 @@ def test_a_map_that_perturbs_nothing_changes_nothing(backend, tmp_path, kind):
         np.testing.assert_allclose(images[1], images[0], rtol=1e-5, atol=1e-6)
     else:
         assert abs(images[1].mean() / images[0].mean() - 1) < 0.01
+
+
+def test_a_bump_map_and_the_normal_map_of_its_normal_render_alike(backend, tmp_path):
+    """A height ramp along u tilts the floor's normal by a constant angle; a normal map of that
+    normal (float texels, no rounding) perturbs it the same. Mitsuba 3.9 treats both alike (its
+    PerturbedBSDF: Schuessler's flip and the shadowing term of the tilt); pathtrace's bump map
+    lacked both, and lit this floor under a grazing lamp brighter (review 2026-11-28, F9)."""
+    from pathtrace.api import load_dict
+    from pathtrace.image_io import write_image
+    from pathtrace.renderer import Renderer
+    width, step, scale = 64, 2, 20.0
+    ramp = np.tile((np.arange(width) * step).astype(np.uint8)[None, :, None], (4, 1, 3))
+    PILImage.fromarray(ramp).save(tmp_path / "ramp.png")
+    # the floor's dp/du is (6, 0, 0), dp/dv (0, 0, 6): the bumped normal is (-s, 6, 0), s the
+    # height's slope along u, in the frame (dp/du, n x dp/du, n) = (x, -z, y) that is (-s, 0, 6)
+    s = step / 255 * width * scale
+    m = np.array([-s, 0.0, 6.0]) / np.hypot(s, 6.0)
+    write_image(tmp_path / "normal.exr", np.tile((m + 1) / 2, (4, 4, 1)).astype(np.float32))
+    images = []
+    for maps in ({"bump_map": {"type": "bitmap", "file": "ramp.png", "raw": True, "wrap": "clamp"}, "bump_scale": scale},
+                 {"normal_map": {"type": "bitmap", "file": "normal.exr", "raw": True}}):
+        scene = load_dict({
+            "camera": {"eye": [0, 3, 2], "look_at": [0, 0, 0], "vfov": 30},
+            "environment": {"color": 0.1}, "render": {"width": 16, "height": 12, "max_depth": 2},
+            "materials": {"m": {"type": "diffuse", "rho_d": 0.6, **maps}, "lamp": {"type": "emitter", "Le": 50}},
+            "spheres": [{"center": [4, 0.6, 0], "radius": 0.3, "material": "lamp"}],
+            "meshes": [{"material": "m", "vertices": [[-3, 0, -3], [-3, 0, 3], [3, 0, 3], [3, 0, -3]],
+                        "faces": [[0, 1, 2, 3]], "uvs": [[0, 0], [0, 1], [1, 1], [1, 0]]}]}, folder=tmp_path)
+        r = Renderer(backend, scene)
+        r.add_samples(64)
+        images.append(r.mean())
+    np.testing.assert_allclose(images[0], images[1], rtol=2e-3, atol=1e-5)
 
 
 def test_a_map_around_a_map_keeps_the_inner_one(tmp_path, capsys):

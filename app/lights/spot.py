@@ -2,7 +2,7 @@
 full inside `beam_width` of the axis and none beyond `cutoff_angle` (degrees, measured from the
 axis). Between them it falls off as Mitsuba 3's `spot` does, linearly in the angle ("linear"),
 or as pbrt-v4's `spot` does, by a smoothstep in the cosine ("smoothstep": pbrt's coneangle is
-cutoff_angle, coneangle - conedelta is beam_width). kernels/lights/spot.cl samples it."""
+cutoff_angle, coneangle - conedeltaangle is beam_width). kernels/lights/spot.cl samples it."""
 
 import math
 from dataclasses import dataclass
@@ -12,6 +12,9 @@ import numpy as np
 from pathtrace.lights.light import DeltaLight, check_angle, check_color, check_direction, check_point, luminance
 
 FALLOFFS = ("linear", "smoothstep")
+
+
+SLOP_COS_E = 0.999     # pbrt-v4's SpotLight::Bounds
 
 
 @dataclass
@@ -56,6 +59,11 @@ class SpotLight(DeltaLight):
         row["p2"][3] = (1.0 / width if width > 0 else 0.0) if self.falloff == "linear" else -1.0
 
     def tree_bounds(self):
-        """pbrt-v4's spot bounds: its axis, full out to the beam, then falling off to the cutoff."""
+        """pbrt-v4's spot bounds: its axis, full out to the beam, then falling off to the cutoff
+        (SpotLight::Bounds, lights.cpp). theta_e is kept above pbrt's slop, cos 0.999, which
+        pbrt-v4 applies only where the band rounds to nothing: the tree's importance test
+        (cos theta' <= cos theta_e, kernels/light_tree.cl) would refuse every point of a
+        hard-edged spot (beam = cutoff) that has theta_e 0, pbrt-v4's included. Beyond the cutoff
+        the light itself gives nothing, so the slop costs only wasted samples there."""
         return (self.position, self.direction, math.cos(math.radians(self.beam_width)),
-                math.cos(math.radians(self.cutoff_angle - self.beam_width)))
+                min(math.cos(math.radians(self.cutoff_angle - self.beam_width)), SLOP_COS_E))

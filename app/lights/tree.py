@@ -26,20 +26,25 @@ def light_bounds(lo, hi, power, axis, cos_o, cos_e):
                 cos_e=np.asarray(cos_e, np.float64))
 
 
-def primitive_bounds(spheres: np.ndarray, triangles: np.ndarray, prims: np.ndarray) -> dict:
+def primitive_bounds(spheres: np.ndarray, triangles: np.ndarray, prims: np.ndarray, both_sides=None) -> dict:
     """The light bounds of primitives `prims` (of the spheres, then the triangles as (n, 3, 3)
     corners), as area lights: a sphere emits from all its surface, so its normals span every
     direction; a triangle emits from its front, into the hemisphere about its normal (theta_e
-    90 degrees)."""
+    90 degrees), or where both_sides (per prim) is true from both, its normals then spanning
+    every direction too (pbrt-v4's LightBounds twoSided, lights.h, bounds the same set of
+    directions: the normal and its opposite)."""
     s = spheres[prims[prims < len(spheres)]].astype(np.float64)
     t = triangles[prims[prims >= len(spheres)] - len(spheres)].astype(np.float64)
     normal = np.cross(t[:, 1] - t[:, 0], t[:, 2] - t[:, 0])
     normal /= np.maximum(np.linalg.norm(normal, axis=1, keepdims=True), 1e-30)
     sphere_axis = np.tile([0.0, 0.0, 1.0], (len(s), 1))
+    cos_o = np.ones(len(t))
+    if both_sides is not None:
+        cos_o[np.asarray(both_sides)[prims >= len(spheres)]] = -1.0
     return light_bounds(np.concatenate([s[:, :3] - s[:, 3:], t.min(axis=1)]),
                         np.concatenate([s[:, :3] + s[:, 3:], t.max(axis=1)]),
                         np.zeros(len(s) + len(t)), np.concatenate([sphere_axis, normal]),
-                        np.concatenate([np.full(len(s), -1.0), np.ones(len(t))]), np.zeros(len(s) + len(t)))
+                        np.concatenate([np.full(len(s), -1.0), cos_o]), np.zeros(len(s) + len(t)))
 
 
 def morton_codes(centres: np.ndarray) -> np.ndarray:

@@ -1,6 +1,7 @@
 """The registry of material types: each type's tag, and the kernels' dispatch (eval_bsdf,
-pdf_bsdf, sample_bsdf) generated from it, so that adding a material is one kernel file
-(kernels/bsdfs/<name>.cl) and one entry here."""
+pdf_bsdf, sample_bsdf) generated from it. Adding a material takes its kernel file
+(kernels/bsdfs/<name>.cl), its host BSDFType (its parameters, packing and checks) and its entry
+here; the Mitsuba and pbrt readers map their formats' names onto it by hand."""
 
 from pathtrace.materials.basic import Black, Diffuse, Null, Phong
 from pathtrace.materials.blend import BlendBSDF

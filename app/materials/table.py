@@ -9,7 +9,7 @@ import numpy as np
 
 from pathtrace.errors import UserError, short
 from pathtrace.materials.blend import check_blend
-from pathtrace.materials.bsdf import MASKED, NULL, TRANSMISSIVE, TWOSIDED, constant_of
+from pathtrace.materials.bsdf import EMITS_BACK, MASKED, NULL, TRANSMISSIVE, TWOSIDED, constant_of
 from pathtrace.materials.registry import BSDFS, TAGS
 from pathtrace.textures.texture import Texture
 from pathtrace.types import MATERIAL
@@ -28,6 +28,7 @@ class Material:
     normal_map: Texture = None    # a tangent-space normal map, or a bump map (a height field: a
     bump_map: Texture = None      # bitmap, or a scale of one), kernels/normal_maps.cl
     components: tuple = ()        # a blendbsdf's two Materials (app/materials/blend.py)
+    emits_back: bool = False      # the emission leaves both sides (pbrt's twosided area light)
 
     @property
     def masked(self) -> bool:
@@ -84,7 +85,7 @@ def slot_index(slot: str) -> tuple:
     return _FIELDS[field_name] + "xyzw".index(components[0]), len(components)
 
 
-def pack(type_name: str, params: dict, emission=(0, 0, 0), twosided=False) -> np.ndarray:
+def pack(type_name: str, params: dict, emission=(0, 0, 0), twosided=False, emits_back=False) -> np.ndarray:
     """Rows of MATERIAL for one type. Each parameter and the emission hold one value for all
     rows or one per row: a colour is a number, 3 numbers or an (N, 3) array, a number a scalar
     or an (N,) array. Names are resolved (BSDFType.resolve), and parameters left out take their
@@ -107,7 +108,7 @@ def pack(type_name: str, params: dict, emission=(0, 0, 0), twosided=False) -> np
     bsdf.pack(values, rows)
     rows["emission"][:, :3] = emission
     rows["type"] = TAGS[type_name]
-    rows["flags"] = bsdf.row_flags(values, n) | (TWOSIDED if twosided else 0)
+    rows["flags"] = bsdf.row_flags(values, n) | (TWOSIDED if twosided else 0) | (EMITS_BACK if emits_back else 0)
     rows["continuation"] = bsdf.continuation(values) if values else 0.0
     rows["textures"] = -1
     return rows
@@ -156,20 +157,21 @@ class MaterialTable:
         row = self.rows[index]
         type_name = list(BSDFS)[int(row["type"])]
         material = Material(type_name, BSDFS[type_name].unpack(row), row["emission"][:3].astype(np.float64),
-                            bool(row["flags"] & TWOSIDED))
+                            bool(row["flags"] & TWOSIDED),
+                            emits_back=bool(row["flags"] & EMITS_BACK))
         for name, _, _, texture in self.textures[index]:
             if name in ("emission", "opacity", "normal_map", "bump_map"):
                 setattr(material, name, texture)
             else:
                 material.params[name] = texture
         if type_name == "blendbsdf":
-            material.components = tuple(replace(self.get(int(r)), emission=np.zeros(3), twosided=False,
+            material.components = tuple(replace(self.get(int(r)), emission=np.zeros(3), twosided=False, emits_back=False,
                                                 normal_map=None, bump_map=None) for r in row["p0"][1:3])
         return material
 
     def set(self, index: int, material: Material):
         params, emission = material.constants()
-        row = pack(material.type, params, emission, material.twosided)[0]
+        row = pack(material.type, params, emission, material.twosided, material.emits_back)[0]
         if material.masked:
             row["flags"] |= MASKED
         if material.type == "blendbsdf":
@@ -189,7 +191,7 @@ class MaterialTable:
         old = self.rows[index]
         rows = [int(r) for r in old["p0"][1:3]] if old["type"] == TAGS["blendbsdf"] else [None, None]
         for k, c in enumerate(material.components):
-            c = replace(c, emission=material.emission, twosided=material.twosided,
+            c = replace(c, emission=material.emission, twosided=material.twosided, emits_back=material.emits_back,
                         normal_map=material.normal_map, bump_map=material.bump_map)
             if rows[k] is None:
                 rows[k] = self.add(c)

@@ -13,7 +13,7 @@ from pathtrace.filters import PixelFilter
 from pathtrace.materials import NULL, TRANSMISSIVE, Material, MaterialTable
 from pathtrace.media import MediumInterface
 from pathtrace.named import NamedList, vector
-from pathtrace.scene.meshes import is_closed
+from pathtrace.scene.meshes import ellipsoid, is_closed, is_similarity
 
 
 # How paths end (kernels/integrator.cl, RR_*): "throughput", Russian roulette on the path's
@@ -164,6 +164,7 @@ class SceneBuilder:
         self.spheres, self.sphere_material, self.sphere_names, self.meshes = [], [], [], []
         self.sphere_media = []
         self.objects, self.instance_object, self.instance_to_world = [], [], []
+        self.ellipsoid_objects = set()     # objects whose spheres an instance made ellipsoids (warned once)
 
     def material(self, material) -> int:
         """A row for a Material (added) or an existing row index."""
@@ -193,18 +194,29 @@ class SceneBuilder:
 
     def add_instance(self, obj: int, to_world: np.ndarray):
         """An instance of object `obj` through the 4x4 world-from-object transform: its meshes
-        drawn through it (Scene.instances), its spheres copied into the world (spheres keep no
-        rotation: a non-uniform scale is averaged, as for any sphere)."""
+        drawn through it (Scene.instances), its spheres copied into the world, as spheres where
+        the transform keeps them round, else as meshes of the ellipsoids it makes of them
+        (pbrt-v4 intersects a sphere in its object space)."""
         from pathtrace.scene.transform import transform_points
         m = np.asarray(to_world, np.float64)
         o = self.objects[obj]
         if o.meshes:
             self.instance_object.append(obj)
             self.instance_to_world.append(m)
-        scale = float(np.mean(np.linalg.norm(m[:3, :3], axis=0)))
+        round_ = is_similarity(m)
+        if o.spheres and not round_ and obj not in self.ellipsoid_objects:
+            self.ellipsoid_objects.add(obj)
+            warn(f"object {o.name}: an instance under a non-uniform transform makes ellipsoids of its spheres, "
+                 "which pathtrace draws as meshes")
+        scale = float(np.linalg.norm(m[:3, 0]))
         for center, radius, material, name, media in o.spheres:
-            self.add_sphere(transform_points(m, np.asarray(center, np.float64)[None])[0], radius * scale, material,
-                            name, media)
+            if round_:
+                self.add_sphere(transform_points(m, np.asarray(center, np.float64)[None])[0], radius * scale, material,
+                                name, media)
+                continue
+            v, f, n, uv = ellipsoid(m, center, radius)
+            self.add_mesh(Mesh(name or f"ellipsoid {len(self.meshes)}", v.astype(np.float32), f.astype(np.int32),
+                               n.astype(np.float32), material, "", None, uv.astype(np.float32), media))
 
     def build(self, name, **kwargs) -> Scene:
         if self.instance_object:

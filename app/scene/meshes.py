@@ -21,6 +21,7 @@ import numpy as np
 
 from pathtrace.errors import UserError, warn
 from pathtrace.files import check_regular_file
+from pathtrace.scene.transform import transform_normals, transform_points
 
 FORMATS = (".ply", ".ply.gz", ".obj", ".stl", ".gltf", ".glb")
 DISK_SEGMENTS = 256       # a disk is a fan of this many triangles (area within 0.01 % of pi r^2)
@@ -41,9 +42,10 @@ class MeshData(NamedTuple):
 PLY_UV_NAMES = (("u", "v"), ("s", "t"), ("texture_u", "texture_v"), ("texture_s", "texture_t"))
 
 
-def read_mesh(path: Path, where: str, warn=warn) -> MeshData:
+def read_mesh(path: Path, where: str, warn=warn, degenerate=None) -> MeshData:
     """A mesh file's vertices, faces, normals and texture coordinates. `where` names the field
-    that refers to the file, for messages; `warn` takes the warning lines."""
+    that refers to the file, for messages; `warn` takes the warning lines; `degenerate` is
+    check_mesh's."""
     path = Path(path)
     suffix = ".ply.gz" if path.name.lower().endswith(".ply.gz") else path.suffix.lower()
     if suffix not in FORMATS:
@@ -67,7 +69,7 @@ def read_mesh(path: Path, where: str, warn=warn) -> MeshData:
     except Exception as e:     # the parsers raise anything on a malformed file
         raise UserError(f"{where}: {path}: not a readable {suffix[1:].upper()} mesh "
                         f"({type(e).__name__}: {str(e).splitlines()[0] if str(e) else 'malformed'})") from None
-    return check_mesh(*mesh, where=f"{where}: {path}", warn=warn)
+    return check_mesh(*mesh, where=f"{where}: {path}", warn=warn, degenerate=degenerate)
 
 
 class MeshFiles:
@@ -120,24 +122,28 @@ class MeshFiles:
             self.futures[i] = self.pool.submit(_read_noting, *self.requests[i])
         self.submitted = end
 
-    def read(self, path, where: str) -> MeshData:
+    def read(self, path, where: str, degenerate=None) -> MeshData:
+        """The mesh, as read_mesh(path, where, degenerate=degenerate) reads it. A file read
+        ahead with a problem or a warning (a degenerate triangle among them) is read again
+        where `degenerate` is given, which the threads do not take."""
         indices = self.waiting.get(Path(path))
         if not indices:
-            return read_mesh(path, where)
+            return read_mesh(path, where, degenerate=degenerate)
         i = indices.popleft()
         self.taken = max(self.taken, i + 1)
         self._submit()
         future = self.futures.pop(i, None)
         if future is None:
-            return read_mesh(path, where)
+            return read_mesh(path, where, degenerate=degenerate)
+        again = self.requests[i][1] != where or degenerate is not None
         try:
             mesh, notes = future.result()
         except UserError:
-            if self.requests[i][1] != where:
-                return read_mesh(path, where)
+            if again:
+                return read_mesh(path, where, degenerate=degenerate)
             raise
-        if notes and self.requests[i][1] != where:
-            return read_mesh(path, where)
+        if notes and again:
+            return read_mesh(path, where, degenerate=degenerate)
         for note in notes:
             warn(note)
         return mesh
@@ -174,10 +180,12 @@ def _parsers_quiet():
         yield
 
 
-def check_mesh(vertices, faces, normals, uvs=None, where="", warn=warn) -> MeshData:
+def check_mesh(vertices, faces, normals, uvs=None, where="", warn=warn, degenerate=None) -> MeshData:
     """Validates a mesh and drops its degenerate triangles (repeated corners or zero area), with
-    a line to `warn`. Unusable normals or texture coordinates (the wrong count) are dropped; NaN
-    or infinite texture coordinates are refused."""
+    a line to `warn`, or where `degenerate` is given, a call degenerate(dropped, total) in its
+    stead, and a mesh left with no triangle is returned so (the caller decides; otherwise it is
+    refused). Unusable normals or texture coordinates (the wrong count) are dropped; NaN or
+    infinite texture coordinates are refused."""
     vertices = np.asarray(vertices, np.float64).reshape(-1, 3)
     faces = np.asarray(faces, np.int64).reshape(-1, 3)
     if len(faces) == 0:
@@ -212,11 +220,70 @@ def check_mesh(vertices, faces, normals, uvs=None, where="", warn=warn) -> MeshD
     keep = ((e1[:, 1] * e2[:, 2] != e1[:, 2] * e2[:, 1]) | (e1[:, 2] * e2[:, 0] != e1[:, 0] * e2[:, 2])
             | (e1[:, 0] * e2[:, 1] != e1[:, 1] * e2[:, 0]))
     if not keep.all():
+        if degenerate is not None:
+            degenerate(int(np.count_nonzero(~keep)), len(faces))
+            return MeshData(vertices, faces[keep], normals, uvs)
         warn(f"{where}: dropped {np.count_nonzero(~keep)} degenerate triangle(s) of {len(faces)}")
         faces = faces[keep]
         if len(faces) == 0:
             raise UserError(f"{where}: every triangle of the mesh is degenerate")
     return MeshData(vertices, faces, normals, uvs)
+
+
+ELLIPSOID_RINGS = 64      # a sphere drawn as a mesh: rings from pole to pole, twice as many
+                          # segments round; 2 x 64 x 128 triangles, whose silhouette lies within
+                          # 1 - cos(pi / 128), 3e-4 of the radius, of the true surface's
+
+
+def is_similarity(m: np.ndarray) -> bool:
+    """Whether the 4x4 transform keeps a sphere round: rotation, reflection, uniform scale."""
+    g = m[:3, :3].T @ m[:3, :3]
+    return bool(np.allclose(g, g[0, 0] * np.eye(3), rtol=1e-5, atol=1e-9 * abs(g[0, 0])))
+
+
+def ellipsoid(m: np.ndarray, center=(0.0, 0.0, 0.0), radius: float = 1.0) -> MeshData:
+    """The sphere of `center` and `radius` under the 4x4 transform m, an ellipsoid where m is
+    no similarity, as a mesh with the ellipsoid's own normals (transformed by m's inverse
+    transpose), its front outside (or as m mirrors it, turned to the normals), and pbrt-v4's
+    sphere coordinates u = phi / 2 pi, v = theta / pi about z (v turned round, as the pbrt
+    reader turns every mesh's). pathtrace's spheres are round; pbrt-v4 intersects a sphere in
+    its object space, so that any transform gives an ellipsoid."""
+    rings = ELLIPSOID_RINGS
+    theta = np.linspace(0.0, np.pi, rings + 1)
+    phi = np.linspace(0.0, 2 * np.pi, 2 * rings + 1)
+    t, f = np.meshgrid(theta, phi, indexing="ij")
+    unit = np.stack([np.sin(t) * np.cos(f), np.sin(t) * np.sin(f), np.cos(t)], -1).reshape(-1, 3)
+    uvs = np.column_stack([(f / (2 * np.pi)).ravel(), 1.0 - (t / np.pi).ravel()])
+    row = lambda i, j: i * (2 * rings + 1) + j  # noqa: E731
+    i, j = np.meshgrid(np.arange(rings), np.arange(2 * rings), indexing="ij")
+    a, b, c, d = row(i, j), row(i, j + 1), row(i + 1, j + 1), row(i + 1, j)
+    # each quad as two triangles, less the one that the pole row makes degenerate
+    faces = np.concatenate([np.stack([a, c, b], -1)[1:].reshape(-1, 3), np.stack([a, d, c], -1)[:-1].reshape(-1, 3)])
+    vertices = transform_points(m, np.asarray(center, np.float64) + radius * unit)
+    normals = transform_normals(m, unit)
+    return MeshData(vertices, orient_by_normals(vertices, faces, normals), normals, uvs)
+
+
+def orient_by_normals(vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray) -> np.ndarray:
+    """The faces, each wound so that its geometric normal lies on its vertex normals' side (the
+    faces themselves where all agree already). pathtrace tells front from back by the geometric
+    normal (kernels/shapes/triangle.cl); pbrt-v4 turns the geometric normal to the shading
+    normal's side, and Mitsuba 3 decides the side by the shading frame (its one-sided BSDFs and
+    area emitters test cos_theta(si.wi) there, src/render/mesh.cpp keeping the interpolated
+    normal unturned): either way the side of the normals."""
+    # rows gathered by np.take, faster than indexing with the faces (as app/compiled.py's)
+    f0, f1, f2 = faces[:, 0], faces[:, 1], faces[:, 2]
+    p0 = np.take(vertices, f0, axis=0)
+    a, b = (np.take(vertices, f1, axis=0) - p0).T, (np.take(vertices, f2, axis=0) - p0).T
+    n = (np.take(normals, f0, axis=0) + np.take(normals, f1, axis=0) + np.take(normals, f2, axis=0)).T
+    # (a x b) . n, written out: np.cross costs more than the products on small meshes
+    flip = (a[1] * b[2] - a[2] * b[1]) * n[0] + (a[2] * b[0] - a[0] * b[2]) * n[1] \
+        + (a[0] * b[1] - a[1] * b[0]) * n[2] < 0
+    if not flip.any():
+        return faces
+    faces = faces.copy()
+    faces[flip] = faces[flip][:, ::-1]
+    return faces
 
 
 def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:

@@ -29,7 +29,7 @@ from pathtrace.materials.table import check_bump_map
 from pathtrace.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
-from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, unit_disk, vertex_normals
+from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, orient_by_normals, unit_disk, vertex_normals
 from pathtrace.textures import TEXTURES, Texture, read_image
 
 MAX_XML_BYTES = 64 << 20
@@ -1007,6 +1007,10 @@ class _Reader:
             normals = transform.transform_normals(m, normals)
         if transform.flips_handedness(m):
             faces = faces[:, ::-1]
+        if normals is not None:
+            oriented = orient_by_normals(vertices, faces, normals)
+            if oriented is not faces:        # turned: a converted scene writes the mesh anew
+                faces, origin = oriented, None
         origin = origin if kind in ("obj", "ply") else None
         mesh = Mesh(name or f"{kind} {len(self.builder.meshes)}", vertices.astype(np.float32), faces.astype(np.int32),
                     None if normals is None else normals.astype(np.float32), material,

@@ -47,6 +47,9 @@ def _material(scene: Scene, row: int) -> str:
     bsdf = f'<bsdf type="diffuse"><rgb name="reflectance" value="{_rgb(reflectance)}"/></bsdf>'
     if m.twosided:
         bsdf = f'<bsdf type="twosided">{bsdf}</bsdf>'
+    if np.any(m.emission > 0) and m.emits_back:
+        raise UserError(f"{scene.source or scene.name}: material {name}: Mitsuba 3's area emitters have one "
+                        "side; a material emitting from both is not written as Mitsuba XML")
     if np.any(m.emission > 0):
         bsdf += f'<emitter type="area"><rgb name="radiance" value="{_rgb(m.emission)}"/></emitter>'
     return bsdf

@@ -210,9 +210,9 @@ class _Reader:
         if not isinstance(kind, str) or kind not in MATERIAL_TYPES:
             self.fail(f"{where}.type", f"must be one of {', '.join(MATERIAL_TYPES)}, got {short(kind)}")
         if kind == "emitter":
-            self.table(data, where, {"type", "Le", "opacity"})
+            self.table(data, where, {"type", "Le", "emits_back", "opacity"})
             return Material("black", emission=self.color_or_texture(data, "Le", where),
-                            opacity=self.opacity(data, where))
+                            opacity=self.opacity(data, where), emits_back=self.boolean(data, "emits_back", where, False))
         if kind == "twosided":
             self.table(data, where, {"type", "bsdf"})
             if "bsdf" not in data:
@@ -223,7 +223,7 @@ class _Reader:
             inner.twosided = True
             return inner
         bsdf = FILE_TYPES[kind]
-        self.table(data, where, {"type", "Le", "twosided", "opacity", "normal_map", "bump_map", "bump_scale",
+        self.table(data, where, {"type", "Le", "emits_back", "twosided", "opacity", "normal_map", "bump_map", "bump_scale",
                                  *(p.name for p in bsdf.params), *(("bsdfs",) if kind == "blendbsdf" else ())})
         given = {p.name: self.parameter(data, p, where) for p in bsdf.params if p.name in data}
         try:
@@ -236,7 +236,8 @@ class _Reader:
         emission = self.color_or_texture(data, "Le", where, default=(0, 0, 0))
         if bsdf.flags & NULL and (isinstance(emission, Texture) or np.any(emission > 0)):
             self.fail(f"{where}.Le", "a null material is no surface, and cannot emit")
-        material = Material(kind, values, emission, twosided, self.opacity(data, where))
+        material = Material(kind, values, emission, twosided, self.opacity(data, where),
+                            emits_back=self.boolean(data, "emits_back", where, False))
         self.shading_maps(data, where, material)
         if kind == "blendbsdf":
             material.components = self.components(data, where)

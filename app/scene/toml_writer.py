@@ -48,6 +48,8 @@ def material_table(material, texture_names: dict = {}) -> dict:
         return _color(v) if kind == "color" else bool(v) if kind == "bool" else float(v)
     if material.type == "black":
         table = {"type": "emitter", "Le": value(material.emission, "color")}
+        if material.emits_back:
+            table["emits_back"] = True
         if material.masked:
             table["opacity"] = value(material.opacity, "number")
         return table
@@ -59,6 +61,8 @@ def material_table(material, texture_names: dict = {}) -> dict:
             table[p.name] = value(material.params[p.name], p.kind)
     if isinstance(material.emission, Texture) or np.any(material.emission > 0):
         table["Le"] = value(material.emission, "color")
+        if material.emits_back:
+            table["emits_back"] = True
     if material.twosided:
         table["twosided"] = True
     if material.masked:

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pathtrace.textures.bitmap import SRGB_TABLE
-from pathtrace.textures.registry import TAGS, TEXTURES
+from pathtrace.textures.registry import TAGS, TEXTURE_REGISTERS, TEXTURES
 from pathtrace.textures.texture import Texture
 from pathtrace.types import TEXTURE, TEXTURE_BINDING
 
@@ -51,16 +51,84 @@ class TextureTables:
     normal_maps: bool          # a binding is a normal or bump map (Features.normal_maps)
 
 
+def combining_inputs(texture: Texture) -> list:
+    """(k, input) of the inputs of `texture` that combine other textures."""
+    return [(k, texture.params[n]) for k, n in enumerate(texture.kind.inputs)
+            if isinstance(texture.params.get(n), Texture) and not texture.params[n].kind.leaf]
+
+
+def registers_needed(root: Texture) -> dict:
+    """id -> the registers the program of each combining texture under `root` needs (Sethi and
+    Ullman: its combining inputs evaluated in decreasing need, the i-th of them holding i values
+    below it), computed without recursion: chains may be thousands long."""
+    need, stack = {}, [(root, False)]
+    while stack:
+        node, inputs_done = stack.pop()
+        if id(node) in need:
+            continue
+        inputs = [t for _, t in combining_inputs(node)]
+        if inputs_done:
+            needs = sorted((need[id(t)] for t in inputs), reverse=True)
+            need[id(node)] = max([1] + [n + i for i, n in enumerate(needs)])
+        else:
+            stack.append((node, True))
+            stack += [(t, False) for t in inputs if id(t) not in need]
+    return need
+
+
+def program(root: Texture) -> list:
+    """The steps of a combining texture's program (kernels/texture.cl): (texture, {input k:
+    register}) for each combining texture of its tree in post-order, `root` last; each pushes
+    its value after its combining inputs' are popped. Raises ValueError where the tree needs
+    more than TEXTURE_REGISTERS."""
+    need = registers_needed(root)
+    if need[id(root)] > TEXTURE_REGISTERS:
+        raise ValueError(f"texture {root.name or root.type}: its tree of combined textures needs "
+                         f"{need[id(root)]} registers to evaluate, more than the kernels' {TEXTURE_REGISTERS} "
+                         "(a balanced tree of more than 2^7 textures that each combine two)")
+
+    def order(node):
+        return sorted(combining_inputs(node), key=lambda kt: -need[id(kt[1])])
+    steps, top = [], 0
+    frames = [[root, order(root), 0, {}, None]]       # node, its inputs in order, next, registers, its k
+    while frames:
+        frame = frames[-1]
+        node, inputs, at, registers, _ = frame
+        if at < len(inputs):
+            frame[2] += 1
+            k, child = inputs[at]
+            frames.append([child, order(child), 0, {}, k])
+            continue
+        frames.pop()
+        top -= len(inputs)
+        steps.append((node, registers))
+        if frames:
+            frames[-1][3][frame[4]] = top
+        top += 1
+    return steps
+
+
 def compile_textures(bindings: list) -> TextureTables:
-    """bindings: per material row, a list of (slot, width, Texture). Raises ValueError for a
-    texture that reads a texture which itself combines others (inputs nest one level deep)."""
-    rows, order = {}, []
+    """bindings: per material row, a list of (slot, width, Texture). A texture that combines none
+    is a row; one that combines others, the last row of its program (its tree's combining
+    textures, kernels/texture.cl), which a tree shared by several materials shares. Raises
+    ValueError for a tree that needs more registers than the kernels have."""
+    order, leaves, roots = [], {}, {}       # rows: (texture, registers or None, first step or -1)
+
+    def leaf_row(texture: Texture) -> int:
+        if id(texture) not in leaves:
+            leaves[id(texture)] = len(order)
+            order.append((texture, None, -1))
+        return leaves[id(texture)]
 
     def row_of(texture: Texture) -> int:
-        if id(texture) not in rows:
-            rows[id(texture)] = len(order)
-            order.append(texture)
-        return rows[id(texture)]
+        if texture.kind.leaf:
+            return leaf_row(texture)
+        if id(texture) not in roots:
+            first = len(order)
+            order.extend((node, registers, first) for node, registers in program(texture))
+            roots[id(texture)] = len(order) - 1
+        return roots[id(texture)]
 
     table, first = [], np.full(len(bindings), -1, np.int32)
     for material, entries in enumerate(bindings):
@@ -68,30 +136,30 @@ def compile_textures(bindings: list) -> TextureTables:
             first[material] = len(table)
         for k, (slot, width, texture) in enumerate(entries):
             table.append((row_of(texture), slot, width, int(k == len(entries) - 1)))
-    for texture in list(order):          # grows as inputs are found; they are leaves
-        for child in texture.inputs():
-            if not child.kind.leaf:
-                raise ValueError(f"texture {texture.name or texture.type}: its input "
-                                 f"{child.name or child.type} combines other textures; inputs "
-                                 "nest one level deep")
-            row_of(child)
+    for texture, registers, _ in list(order):
+        if registers is not None:
+            for name in texture.kind.inputs:
+                value = texture.params[name]
+                if isinstance(value, Texture) and value.kind.leaf:
+                    leaf_row(value)
     store = TexelStore()
     textures = np.zeros(len(order), TEXTURE)
-    for row, texture in zip(textures, order):
+    for row, (texture, registers, start) in zip(textures, order):
         kind = TEXTURES[texture.type]
         m = texture.params.get("to_uv", np.eye(3))
         row["to_u"][:3], row["to_v"][:3] = m[0], m[1]
         row["type"] = TAGS[texture.type]
         row["input"] = -1
+        row["program"] = start
         for k, name in enumerate(kind.inputs):
             value = texture.params[name]
-            if isinstance(value, Texture):
-                row["input"][k] = rows[id(value)]
-            else:
+            if not isinstance(value, Texture):
                 row["value"][k, :3] = value
+            else:
+                row["input"][k] = leaves[id(value)] if value.kind.leaf else -2 - registers[k]
         kind.pack(texture, row, store)
     return TextureTables(textures if len(textures) else np.zeros(1, TEXTURE), store.buffer(),
                          np.array(table, TEXTURE_BINDING) if table else np.zeros(1, TEXTURE_BINDING),
-                         first, tuple(n for n in TEXTURES if any(t.type == n for t in order)),
+                         first, tuple(n for n in TEXTURES if any(t.type == n for t, _, _ in order)),
                          any(slot == OPACITY_SLOT for _, slot, _, _ in table),
                          any(slot in NORMAL_MAP_SLOTS for _, slot, _, _ in table))

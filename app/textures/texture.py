@@ -3,6 +3,7 @@ host: its inputs, how it packs into a TEXTURE row that its kernel file kernels/t
 reads (documented at that file's top), and its mean and maximum, which stand for it where the
 host needs one number (a BSDF's lobe choice, an emitter's power, a range check)."""
 
+import sys
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -40,19 +41,37 @@ class Texture:
     def mean(self) -> np.ndarray:
         """The texture's mean colour over the unit square of uv (an estimate for those that
         combine textures), rgb."""
-        return self.kind.mean(self)
+        return deep(lambda: self.kind.mean(self))
 
     def maximum(self) -> np.ndarray:
         """An upper bound of its values, rgb."""
-        return self.kind.bounds(self)[1]
+        return deep(lambda: self.kind.bounds(self))[1]
 
     def minimum(self) -> np.ndarray:
         """A lower bound of its values, rgb."""
-        return self.kind.bounds(self)[0]
+        return deep(lambda: self.kind.bounds(self))[0]
 
     def inputs(self) -> list:
         """Its inputs that are textures."""
         return [self.params[n] for n in self.kind.inputs if isinstance(self.params.get(n), Texture)]
+
+
+# the recursion limit while a texture tree's mean or bounds are computed, a few calls per level:
+# pbrt-v4 files chain textures thousands deep. Python >= 3.11 (pyproject.toml) makes pure-Python
+# calls without growing the C stack, so the limit only bounds memory
+DEEP_RECURSION = 100_000
+
+
+def deep(call):
+    """call(), with the recursion limit raised to DEEP_RECURSION for a deep texture tree."""
+    limit = sys.getrecursionlimit()
+    if limit >= DEEP_RECURSION:
+        return call()
+    sys.setrecursionlimit(DEEP_RECURSION)
+    try:
+        return call()
+    finally:
+        sys.setrecursionlimit(limit)
 
 
 def input_mean(value) -> np.ndarray:
@@ -96,9 +115,6 @@ class TextureType:
         values["to_uv"] = uv_matrix(values.get("to_uv", IDENTITY_UV))
         for name in self.inputs:
             value = values[name]
-            if isinstance(value, Texture) and not value.kind.leaf:
-                raise ValueError(f"{name}: a texture's input cannot itself combine textures ({value.type}); "
-                                 "inputs nest one level deep")
             if not isinstance(value, Texture):
                 v = np.asarray(value, np.float64)
                 if v.size not in (1, 3) or not np.all(np.isfinite(v)):

@@ -38,14 +38,22 @@ float pdf_conductor_normal(MaterialRef m, float3 wo, float3 h)
     return IS_BECKMANN(m) ? pdf_beckmann_visible(wo, h, CONDUCTOR_ALPHA(m)) : pdf_ggx_visible(wo, h, CONDUCTOR_ALPHA(m));
 }
 
-float3 eval_roughconductor(MaterialRef m, float3 wo, float3 wi)
+/* f of the metal seen from a medium of IOR n_outside (1: air): the Fresnel term takes the
+ * metal's eta and k relative to that medium, as pbrt-v4 divides them by the coating's IOR under
+ * a coating (CoatedConductorMaterial::GetBxDF, materials.cpp: ce /= ieta; ck /= ieta). */
+float3 eval_rough_metal(MaterialRef m, float n_outside, float3 wo, float3 wi)
 {
     if (wo.z <= 0.0f || wi.z <= 0.0f)
         return (float3)(0.0f);
     float3 h = unit(wo + wi);
     float g = conductor_g1(m, wo, h) * conductor_g1(m, wi, h);
-    float3 f = fresnel_conductor(dot(wo, h), m->p0.xyz, m->p1.xyz);
+    float3 f = fresnel_conductor(dot(wo, h), m->p0.xyz / n_outside, m->p1.xyz / n_outside);
     return m->p2.xyz * f * (conductor_d(m, h) * g / (4.0f * wo.z * wi.z));
+}
+
+float3 eval_roughconductor(MaterialRef m, float3 wo, float3 wi)
+{
+    return eval_rough_metal(m, 1.0f, wo, wi);
 }
 
 /* pdf(wi) = pdf(h) / (4 wo.h), the Jacobian of reflection (Walter et al. 2007, eq. 14) */
@@ -58,7 +66,8 @@ float pdf_roughconductor(MaterialRef m, float3 wo, float3 wi)
     return wo_h > 0.0f ? pdf_conductor_normal(m, wo, h) / (4.0f * wo_h) : 0.0f;
 }
 
-int sample_roughconductor(MaterialRef m, float3 wo, float3 u, BSDFSample *s)
+/* A sample of the metal seen from a medium of IOR n_outside (eval_rough_metal) */
+int sample_rough_metal(MaterialRef m, float n_outside, float3 wo, float3 u, BSDFSample *s)
 {
     if (wo.z <= 0.0f)
         return 0;
@@ -70,7 +79,13 @@ int sample_roughconductor(MaterialRef m, float3 wo, float3 u, BSDFSample *s)
     if (s->wi.z <= 0.0f || wo_h <= 0.0f)
         return 0;
     s->pdf = pdf_conductor_normal(m, wo, h) / (4.0f * wo_h);
-    s->weight = m->p2.xyz * fresnel_conductor(wo_h, m->p0.xyz, m->p1.xyz) * conductor_g1(m, s->wi, h);
+    s->weight = m->p2.xyz * fresnel_conductor(wo_h, m->p0.xyz / n_outside, m->p1.xyz / n_outside)
+                * conductor_g1(m, s->wi, h);
     s->lobe = LOBE_GLOSSY | LOBE_REFLECTION;
     return s->pdf > 0.0f;
+}
+
+int sample_roughconductor(MaterialRef m, float3 wo, float3 u, BSDFSample *s)
+{
+    return sample_rough_metal(m, 1.0f, wo, u, s);
 }

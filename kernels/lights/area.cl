@@ -1,9 +1,16 @@
 /* An area light: an emissive primitive (a sphere or a triangle of the scene), whose material's
- * emission (a colour or a texture, kernels/shading.cl) leaves its front side.
+ * emission (a colour or a texture, kernels/shading.cl) leaves its front side, or both sides of a
+ * triangle whose material has MATERIAL_EMITS_BACK.
  *
  *   prim   the primitive; p0..p2 unused
  *
  * A sphere is sampled over the cone it subtends from the shading point, a triangle by area. */
+
+/* Whether primitive `prim` emits from its back as well as its front. */
+int emits_back(const SceneData *sc, int prim)
+{
+    return sc->materials[sc->prim_material[prim]].flags & MATERIAL_EMITS_BACK;
+}
 
 /* Density (per solid angle, the light's choice included) with which next-event estimation at x
  * (shading normal n) samples point y on emissive primitive `prim`: what MIS weighs a path that
@@ -18,7 +25,7 @@ float pdf_light(const SceneData *sc, int prim, float3 x, float3 n, float3 y)
 #endif
 #ifndef NO_TRIANGLES
     if (prim >= sc->num_spheres)
-        return pick * pdf_triangle_solid_angle(&sc->triangles[prim - sc->num_spheres], x, y);
+        return pick * pdf_triangle_solid_angle(&sc->triangles[prim - sc->num_spheres], x, y, emits_back(sc, prim));
 #endif
     return pick * pdf_sphere_cone(sc->spheres[prim], x);
 }
@@ -54,7 +61,7 @@ int sample_area_light(const SceneData *sc, const RenderParams *p, const global L
         const global Triangle *tri = &sc->triangles[l->prim - sc->num_spheres];
         ls->y = sample_triangle_area(tri, u.x, u.y, &b);
         ls->wi = unit(ls->y - x);
-        ls->pdf = pdf_triangle_solid_angle(tri, x, ls->y);
+        ls->pdf = pdf_triangle_solid_angle(tri, x, ls->y, emits_back(sc, l->prim));
         ls->le = area_light_radiance(sc, l->prim, ls->y, b);
         return 1;
     }

@@ -155,11 +155,14 @@ float3 sample_triangle_area(const global Triangle *tri, float u1, float u2, floa
 }
 
 /* Density per solid angle, seen from x, of area sampling at point y of the triangle, whose
- * front (normal n) faces direction -w from x: pdf_area * |x - y|^2 / cos(theta_y). */
-float pdf_triangle_solid_angle(const global Triangle *tri, float3 x, float3 y)
+ * emitting side (its front, normal n, or either with `both_sides`) faces direction -w from x:
+ * pdf_area * |x - y|^2 / |cos(theta_y)|; 0 from behind a one-sided emitter. */
+float pdf_triangle_solid_angle(const global Triangle *tri, float3 x, float3 y, int both_sides)
 {
     float3 w = y - x;
     float dist2 = dot(w, w);
     float cos_l = -dot(triangle_normal(tri), w) / sqrt(dist2);
+    if (both_sides)
+        cos_l = fabs(cos_l);
     return cos_l > 0.0f ? dist2 / (triangle_area(tri) * cos_l) : 0.0f;
 }

@@ -6,8 +6,8 @@
  *                      image textures read an image's first channel
  */
 
-float3 eval_mix(const SceneData *sc, const global Texture *t, float2 uv)
+float3 eval_mix(const SceneData *sc, const global Texture *t, float2 uv, const float3 *r)
 {
-    float amount = eval_input(sc, t, 2, uv).x;
-    return mix(eval_input(sc, t, 0, uv), eval_input(sc, t, 1, uv), amount);
+    float amount = eval_input(sc, t, 2, uv, r).x;
+    return mix(eval_input(sc, t, 0, uv, r), eval_input(sc, t, 1, uv, r), amount);
 }

@@ -4,6 +4,7 @@ image lookups flip them, colours from spectra (app/spectra.py). What pathtrace d
 is approximated by its nearest material, with one warning each (docs/pbrt.md)."""
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -11,9 +12,10 @@ from pathtrace.errors import UserError, warn
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import TRANSMISSIVE
 from pathtrace.materials.blend import check_blend, transmits
+from pathtrace.materials.table import check_bump_map
 from pathtrace.spectra import blackbody_rgb, emission_rgb, named_spectrum, reflectance_rgb, sampled
 from pathtrace.textures import TEXTURES, Texture
-from pathtrace.textures.bitmap import read_image
+from pathtrace.textures.bitmap import Image, read_image
 
 SMOOTH_ALPHA = 1e-3     # pbrt-v4's TrowbridgeReitzDistribution::EffectivelySmooth
 # a conductor's reflectance r becomes k = 2 sqrt(r) / sqrt(1 - r) (below): r at most
@@ -65,6 +67,18 @@ def spectrum_rgb(params, name, default, kind="reflectance"):
                 params.fail(name, f"the spectrum {e}")
         return reflectance_rgb(curve) if kind == "reflectance" else np.full(3, float(np.mean(curve)))
     params.fail(name, f"must be a colour (rgb, spectrum, blackbody, float), got {ptype}")
+
+
+def inverted(image: Image, scale: float) -> Image:
+    """An imagemap's `invert`, as pbrt-v4's image textures have it (src/pbrt/textures.cpp,
+    SpectrumImageTexture::Evaluate: rgb = scale * lookup, then ClampZero(1 - rgb) per channel;
+    FloatImageTexture::Evaluate: max(0, 1 - v)): applied to the texels, in linear float, which
+    bilinear filtering then interpolates as pbrt interpolates before inverting (the two differ
+    only next to texels that the clamp at zero cuts). An alpha channel is kept."""
+    values = image.linear_values()
+    rgb = np.maximum(1.0 - scale * values[..., :3], 0.0)
+    texels = np.concatenate([rgb, values[..., 3:]], axis=2) if values.shape[2] == 4 else rgb
+    return Image(np.ascontiguousarray(texels, np.float32), True, image.path)
 
 
 # pathtrace's parameters that the pbrt materials' parameters become, for messages
@@ -145,7 +159,8 @@ class MaterialMapper:
             filename = params.string("filename")
             if filename is None:
                 raise UserError(f"{where}: an imagemap needs a filename")
-            encoding = params.string("encoding", "sRGB")
+            # pbrt-v4 SpectrumImageTexture::Create: sRGB for a PNG, else linear, by default
+            encoding = params.string("encoding", "sRGB" if filename.lower().endswith(".png") else "linear")
             if encoding not in ("sRGB", "linear") and not encoding.startswith("gamma "):
                 raise UserError(f"{where}: 'encoding' must be sRGB, linear or gamma <g>, got {encoding!r}")
             if encoding.startswith("gamma "):
@@ -161,14 +176,15 @@ class MaterialMapper:
             filt = params.string("filter", "bilinear")
             if filt not in ("point", "bilinear", "trilinear", "ewa"):
                 raise UserError(f"{where}: 'filter' must be point, bilinear, trilinear or ewa, got {filt!r}")
+            scale = params.float("scale", 1.0)
+            if params.bool("invert", False):
+                image = inverted(image, scale)
+                scale = 1.0
             texture = Texture("bitmap", TEXTURES["bitmap"].complete(
                 {"image": image, "wrap": wrap, "filter": "nearest" if filt == "point" else "bilinear",
                  "to_uv": self._mapping(params, where)}))
-            scale = params.float("scale", 1.0)
             if scale != 1.0:
                 texture = Texture("scale", TEXTURES["scale"].complete({"tex": texture, "scale": scale}))
-            if params.bool("invert", False):
-                texture = Texture("mix", TEXTURES["mix"].complete({"tex1": 1.0, "tex2": 0.0, "amount": texture}))
             return texture
         if cls == "checkerboard":
             if params.int("dimension", 2) != 2:
@@ -217,7 +233,46 @@ class MaterialMapper:
 
     def material(self, kind, params, where) -> Material | None:
         """The Material of a pbrt material, or None for `interface` (and "" / "none"): no
-        surface, only a boundary between media."""
+        surface, only a boundary between media; with its `normalmap` or `displacement`."""
+        material = self._material(kind, params, where)
+        if material is None or kind == "mix":      # a mix's are its materials' (MixMaterial reads none)
+            return material
+        return self.shading_maps(material, params, where)
+
+    def shading_maps(self, material, params, where) -> Material:
+        """pbrt-v4's `string normalmap` (an image read with a linear encoding, looked up
+        bilinearly with repeat wrapping at (u, 1 - v), 2 rgb - 1 in the frame of dp/du and the
+        shading normal: src/pbrt/materials.h, NormalMap) as pathtrace's normal map, which is
+        the same frame and lookup (the reader's v is pbrt's 1 - v); and its `texture
+        displacement`, a float texture of heights along the shading normal (BumpMap: dp/du +
+        dd/du n, the normal their cross product, on the geometric normal's side) as pathtrace's
+        bump map, whose slopes are the bitmap's analytic gradient where pbrt takes a finite
+        difference over the pixel's footprint. pbrt-v4's materials take either
+        (src/pbrt/materials.cpp, each Create: GetFloatTextureOrNull("displacement"); scene.cpp
+        reads "normalmap" for every material), and evaluate the normal map where both are given."""
+        normal_file = params.string("normalmap") if params.type_of("normalmap") else None
+        displacement = self.texture_input(params, "displacement", 0.0, True) if params.type_of("displacement") else None
+        if normal_file:
+            if displacement is not None:
+                warn(f"{params.where('displacement')}: pbrt-v4 uses the normal map where a material has both; "
+                     "so does pathtrace, and the displacement is ignored")
+            image = read_image(self.reader.resolve(normal_file), f"{params.where('normalmap')}", True, self.images)
+            texture = Texture("bitmap", TEXTURES["bitmap"].complete({"image": image, "wrap": "repeat",
+                                                                   "filter": "bilinear"}))
+            return replace(material, normal_map=texture)
+        if isinstance(displacement, Texture):
+            try:
+                check_bump_map(displacement)
+            except ValueError as e:
+                warn(f"{params.where('displacement')}: pathtrace cannot bump by this texture ({e}); "
+                     "the surface is rendered unbumped")
+                return material
+            return replace(material, bump_map=displacement)
+        if displacement is not None and displacement != 0:
+            warn(f"{params.where('displacement')}: a constant displacement moves no normal; ignored")
+        return material
+
+    def _material(self, kind, params, where) -> Material | None:
         if kind in ("interface", "", "none"):
             return None
         if kind == "diffuse":
@@ -226,13 +281,18 @@ class MaterialMapper:
             return self._conductor(params, where)
         if kind in ("dielectric", "thindielectric"):
             eta = self._eta(params, where)
-            rough = self.rough_values(self.roughness(params, where))
+            # pbrt-v4's ThinDielectricMaterial::Create reads no roughness: thin glass is smooth
+            rough = self.rough_values(self.roughness(params, where)) if kind == "dielectric" else None
             if eta == 1.0:
                 warn(f"{where}: a dielectric of eta 1 is invisible; pathtrace leaves the surface out")
                 return None
+            # pbrt-v4's eta is the inside's IOR over the outside's, any positive value (its
+            # DielectricBxDF takes etap = eta or 1 / eta by the side wo is on): below 1 the
+            # outside is the denser, an air bubble in water
+            iors = {"int_ior": eta, "ext_ior": 1.0} if eta > 1 else {"int_ior": 1.0, "ext_ior": 1 / eta}
             if kind == "dielectric" and rough:      # pbrt-v4's rough glass: GGX
-                return make("roughdielectric", {"int_ior": eta, "ext_ior": 1.0, **rough}, where)
-            return make(kind, {"int_ior": eta, "ext_ior": 1.0}, where)
+                return make("roughdielectric", {**iors, **rough}, where)
+            return make(kind, iors, where)
         if kind in ("coateddiffuse", "coatedconductor"):
             return self._coated(kind, params, where)
         if kind == "diffusetransmission":
@@ -280,10 +340,15 @@ class MaterialMapper:
             eta = float(np.mean(spectrum_rgb(params, name, None, "unbounded")))
         else:
             eta = params.float(name, 1.5)
-        if not 1e-3 <= eta <= 10 or not math.isfinite(eta):
-            params.fail(name, f"must lie in [0.001, 10], got {eta:g}")
+        if not 0.1 <= eta <= 10 or not math.isfinite(eta):
+            params.fail(name, f"must lie in [0.1, 10], got {eta:g}")
+        return eta
+
+    def _coating_eta(self, params, where, name="eta") -> float:
+        """A layered material's coating IOR, which pathtrace's coatings take above 1."""
+        eta = self._eta(params, where, name)
         if eta < 1:
-            warn(f"{where}: eta {eta:g} < 1 (the outside denser); pathtrace takes its reciprocal with the normal turned")
+            warn(f"{where}: {name} {eta:g} < 1: pathtrace's coatings are denser than the outside; it uses {1 / eta:.4g}")
             eta = 1 / eta
         return eta
 
@@ -325,12 +390,12 @@ class MaterialMapper:
             base = self.rough_values(self.roughness(params, where, "conductor.")) or {"alpha": 0.0, "alpha_v": 0.0}
             return make("coatedconductor", {**metal, **layer, "alpha": coating["alpha"], "alpha_v": coating["alpha_v"],
                                             "conductor_alpha": base["alpha"], "conductor_alpha_v": base["alpha_v"],
-                                            "interface_eta": self._eta(params, where, "interface.eta")}, where)
+                                            "interface_eta": self._coating_eta(params, where, "interface.eta")}, where)
         au, av = self.roughness(params, where)
         if not math.isclose(au, av, rel_tol=1e-6):
             warn(f"{where}: pathtrace's coateddiffuse coating is isotropic; it uses alpha {(au + av) / 2:.3g}")
         alpha = (au + av) / 2
-        values = {"reflectance": self.texture_input(params, "reflectance", 0.5), "eta": self._eta(params, where),
+        values = {"reflectance": self.texture_input(params, "reflectance", 0.5), "eta": self._coating_eta(params, where),
                   "alpha": min(alpha, 1.0) if alpha >= SMOOTH_ALPHA else 0.0, **layer}
         return make("coateddiffuse", values, where)
 

@@ -35,12 +35,13 @@ from pathtrace.errors import UserError, cut, warn
 from pathtrace.files import check_regular_file
 from pathtrace.filters import PixelFilter
 from pathtrace.lights import DirectionalLight, PointLight, SpotLight
-from pathtrace.lights.light import MAX_RADIANCE, luminance
+from pathtrace.lights.light import MAX_RADIANCE
 from pathtrace.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder
-from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, unit_disk, vertex_normals
-from pathtrace.scene.pbrt.equal_area import to_latlong
+from pathtrace.scene.meshes import (ELLIPSOID_RINGS, MAX_COORDINATE, MeshFiles, check_mesh, ellipsoid, is_similarity,
+                                     orient_by_normals, unit_disk, vertex_normals)
+from pathtrace.scene.pbrt.equal_area import to_latlong, upper_illuminance
 from pathtrace.scene.pbrt.materials import MaterialMapper, make, spectrum_rgb
 from pathtrace.textures import Texture
 from pathtrace.scene.pbrt.tokens import Tokens, numbers, parameters, string
@@ -51,6 +52,8 @@ MAX_INCLUDE_DEPTH = 16
 # a tree of includes (12 wide and 8 deep: 470 million reads) is refused at once, not read for ever
 MAX_INCLUDES = 4096
 MAX_FILM = 16384
+# the most material rows one `power` area light's triangles take (PbrtReader.area_emission)
+MAX_POWER_ROWS = 256
 # a plymesh shape and its file name, as MeshFiles reads them ahead (PbrtReader.named_mesh_files)
 _PLYMESH = re.compile(r'\bShape\s+"plymesh"')
 _FILENAME = re.compile(r'"string\s+filename"\s*\[?\s*"([^"]*)"')
@@ -98,6 +101,7 @@ class PbrtReader:
         self.default_material = None
         self.warned = set()
         self.mesh_files = MeshFiles()     # the plymesh shapes' files, read ahead
+        self.dropped = [0, 0]             # degenerate triangles dropped, of the meshes' triangles
 
     # -- files --
 
@@ -105,9 +109,19 @@ class PbrtReader:
         p = Path(name)
         return p if p.is_absolute() else self.folder / p
 
+    def degenerate(self, dropped, total):
+        """check_mesh's count of a mesh's degenerate triangles, which read() reports once."""
+        self.dropped[0] += dropped
+        self.dropped[1] += total
+
     def read(self) -> Scene:
         with self.mesh_files:
             self.parse_file(self.path, "scene")
+        if self.dropped[0]:
+            # pbrt-v4 keeps them, but its IntersectTriangle returns no intersection for a
+            # triangle of zero area (src/pbrt/shapes.h), nor does its area light sample one
+            warn(f"{self.path}: dropped {self.dropped[0]} degenerate triangle(s) of zero area, of "
+                 f"{self.dropped[1]} in the meshes that had any (pbrt-v4 never hits them)")
         if self.stack:
             warn(f"{self.path}: {len(self.stack)} AttributeBegin without AttributeEnd")
         if not self.builder.spheres and not self.builder.meshes and not self.builder.instance_object:
@@ -248,18 +262,16 @@ class PbrtReader:
             kind = "perspective"
         get = (lambda name, default: default) if params is None else \
             (lambda name, default: params.float(name, default))          # noqa: E731
-        if params is not None and params.type_of("screenwindow"):
-            params.floats("screenwindow")
-            warn(f"{where}: pathtrace frames the image by fov; 'screenwindow' is ignored")
+        half_height = self.screen_half_height(params, w, h)
         if kind == "orthographic":
             camera.projection = "orthographic"
-            camera.height = 2.0 * np.linalg.norm(up) * (1.0 if w >= h else h / w)
+            camera.height = 2.0 * np.linalg.norm(up) * half_height
         else:
             fov = get("fov", 90.0)
             if not 0 < fov < 180:
                 params.fail("fov", f"must lie in (0, 180) degrees, got {fov:g}")
-            t = math.tan(math.radians(fov) / 2)
-            camera.vfov = fov if w >= h else math.degrees(2 * math.atan(t * h / w))
+            # screen space spans tan(fov / 2) per unit (pbrt-v4's Perspective(fov, n, f))
+            camera.vfov = math.degrees(2 * math.atan(math.tan(math.radians(fov) / 2) * half_height))
         camera.aperture = get("lensradius", 0.0)
         camera.focus_distance = get("focaldistance", 1e6)
         if camera.aperture > 0 and kind == "orthographic":
@@ -272,9 +284,37 @@ class PbrtReader:
             name = {"aperture": "lensradius", "focus_distance": "focaldistance", "vfov": "fov"}.get(name, name)
             raise UserError(f"{where}: '{name}' {problem}") from None
         if params is not None:
-            params.float("frameaspectratio")
             self.unused(params, f"{kind} camera")
         return camera
+
+    @staticmethod
+    def screen_half_height(params, w, h) -> float:
+        """Half the image's height in pbrt's screen space, where the fov spans [-1, 1] (or an
+        orthographic camera one world unit each way): pbrt-v4's CameraBase screen window
+        (src/pbrt/cameras.cpp, CameraBaseParameters / the cameras' Create: frame =
+        frameaspectratio, else the film's x / y; the window [-frame, frame] x [-1, 1] where
+        frame > 1, else [-1, 1] x [-1/frame, 1/frame]; or the file's `screenwindow` x0 x1 y0
+        y1). pathtrace's image is centred and its pixels square, so the window's height frames
+        it; a window off centre or of another aspect than the film's is taken so, with a warning."""
+        if params is None:
+            return 1.0 if w >= h else h / w
+        frame = params.float("frameaspectratio", w / h)
+        if not frame > 0 or not math.isfinite(frame):
+            params.fail("frameaspectratio", f"must be positive, got {frame:g}")
+        window = (-frame, frame, -1.0, 1.0) if frame > 1 else (-1.0, 1.0, -1 / frame, 1 / frame)
+        if params.type_of("screenwindow"):
+            window = tuple(float(v) for v in params.floats("screenwindow"))
+            if len(window) != 4 or not window[0] < window[1] or not window[2] < window[3]:
+                params.fail("screenwindow", "takes x0 x1 y0 y1 with x0 < x1 and y0 < y1")
+        x0, x1, y0, y1 = window
+        name = "screenwindow" if params.type_of("screenwindow") else "frameaspectratio"
+        if not math.isclose(x0, -x1, abs_tol=1e-6 * (x1 - x0)) or not math.isclose(y0, -y1, abs_tol=1e-6 * (y1 - y0)):
+            warn(f"{params.where(name)}: pathtrace's image is centred on the view; it uses a centred window "
+                 f"of the same size, [{-(x1 - x0) / 2:g} {(x1 - x0) / 2:g} {-(y1 - y0) / 2:g} {(y1 - y0) / 2:g}]")
+        if not math.isclose((x1 - x0) / (y1 - y0), w / h, rel_tol=1e-4):
+            warn(f"{params.where(name)}: a window of aspect {(x1 - x0) / (y1 - y0):g} on a film of {w / h:g} "
+                 "has pixels that are not square; pathtrace's are, and it frames the window's height")
+        return (y1 - y0) / 2
 
     def _film(self, tokens, offset):
         kind = string(tokens, "Film")
@@ -485,13 +525,13 @@ class PbrtReader:
             tokens.fail(offset, f"more than {MAX_INCLUDES} Includes in all (each time a file is included counts)")
         self.parse_file(self.resolve(name), tokens.where(offset))
 
-    def _ignored(what, count=0, takes_params=False):
+    def _ignored(what, instead, count=0, takes_params=False):
         def handler(self, tokens, offset):
             for _ in range(count):
                 string(tokens, what)
             if takes_params:
                 parameters(tokens)
-            self.once(what, f"{tokens.where(offset)}: {what} is not supported; ignored")
+            self.once(what, f"{tokens.where(offset)}: {what} is not supported; ignored ({instead})")
         return handler
 
     def _option(self, tokens, offset):
@@ -555,9 +595,9 @@ class PbrtReader:
 
     # -- shapes --
 
-    def material_row(self, emission=None, alpha=1.0):
-        """The row of the current material, with a shape's emission and alpha (a row of its own
-        where either is given)."""
+    def material_row(self, emission=None, alpha=1.0, emits_back=False):
+        """The row of the current material, with a shape's emission (from both sides where
+        emits_back) and alpha (a row of its own where either is given)."""
         material = self.state.material
         if isinstance(material, str):
             # pbrt-v4's default, one for the file (made again in each attribute block, it
@@ -566,7 +606,7 @@ class PbrtReader:
                 self.default_material = make("diffuse", {"rho_d": np.full(3, 0.5)}, "")
             material = self.default_material
         if material is None:              # pbrt's interface: no surface, only a boundary of media
-            material = make("black", {}, "") if emission is not None else self.null_material
+            material = self.null_material
         if alpha is not None and not (isinstance(alpha, float) and alpha == 1.0):
             if not isinstance(alpha, Texture) and not 0 <= alpha <= 1:
                 raise UserError(f"'alpha' must lie in [0, 1], got {alpha:g}")
@@ -574,7 +614,7 @@ class PbrtReader:
             if emission is None:
                 return self.builder.material(material)
         if emission is not None:
-            return self.builder.material(replace(material, emission=emission))
+            return self.builder.material(replace(material, emission=emission, emits_back=emits_back))
         if id(material) not in self.material_rows:
             self.material_rows[id(material)] = (self.builder.material(material), material)
         return self.material_rows[id(material)][0]
@@ -594,7 +634,13 @@ class PbrtReader:
 
     def add_shape(self, kind, params, where):
         media = self.medium_interface(where)
-        if self.state.material is None and self.state.area_light is None and media is None:
+        if self.state.material is None and self.state.area_light is not None:
+            # pbrt-v4 makes no area light of a shape without a material (src/pbrt/scene.cpp, the
+            # area lights' loop: 'Ignoring area light specification for shape with "interface"
+            # material.')
+            warn(f"{where}: pbrt-v4 makes no area light of a shape of the interface material; "
+                 "neither does pathtrace, and the shape does not emit")
+        if self.state.material is None and media is None:
             for p in params.params.values():
                 p.used = True
             self.once(("interface", where), f"{where}: a shape of the interface material that bounds no "
@@ -611,38 +657,42 @@ class PbrtReader:
         if mesh is None:
             return
         vertices, faces, normals, uvs, source = mesh
-        emission, twosided = self.area_emission(vertices, faces, where)
-        if self.current_object is not None and emission is not None:
+        parts, twosided = self.area_emission(vertices, faces, where)
+        if self.current_object is not None and parts[0][1] is not None:
             warn(f"{where}: pbrt-v4 has no area lights in instances; this shape does not emit")
-            emission = None
+            parts = [(None, None)]
         alpha = self.mapper.texture_input(params, "alpha", 1.0, float_texture=True) \
             if params.type_of("alpha") else 1.0
-        row = self.material_row(emission, alpha)
+        if twosided and faces is None:
+            warn(f"{where}: pathtrace's sphere lights emit outwards only; 'twosided' is ignored")
+            twosided = False
         self.unused(params, f"{kind} shape")
         name = Path(source).stem if source else f"{kind} {len(self.builder.meshes)}"
-        if kind == "sphere":
+        if faces is None:
             center, radius = vertices
+            row = self.material_row(parts[0][1], alpha, twosided)
             if self.current_object is not None:
                 self.builder.objects[self.objects[self.current_object]].spheres.append((center, radius, row, name, media))
             else:
                 self.builder.add_sphere(center, radius, row, name, media)
             return
-        if twosided:
-            faces = np.concatenate([faces, faces[:, ::-1]])
-        # no MeshFile: the file's faces were turned and its uvs flipped, which a converted
-        # scene's reference to the file could not say (convert writes the mesh anew)
-        record = Mesh(name, vertices.astype(np.float32), faces.astype(np.int32),
-                      None if normals is None else normals.astype(np.float32), row, source, None,
-                      None if uvs is None else uvs.astype(np.float32), media)
-        if self.current_object is not None:
-            self.builder.objects[self.objects[self.current_object]].meshes.append(record)
-        else:
-            self.builder.add_mesh(record)
-
+        for subset, emission in parts:
+            row = self.material_row(emission, alpha, twosided)
+            part = faces if subset is None else faces[subset]
+            # no MeshFile: the file's faces were turned and its uvs flipped, which a converted
+            # scene's reference to the file could not say (convert writes the mesh anew)
+            record = Mesh(name, vertices.astype(np.float32), part.astype(np.int32),
+                          None if normals is None else normals.astype(np.float32), row, source, None,
+                          None if uvs is None else uvs.astype(np.float32), media)
+            if self.current_object is not None:
+                self.builder.objects[self.objects[self.current_object]].meshes.append(record)
+            else:
+                self.builder.add_mesh(record)
 
     def shape_mesh(self, kind, params, where):
         """(vertices, faces, normals, uvs, file) in world space, fronts as pbrt has them; for a
-        sphere (center, radius) and None. None for a shape pathtrace leaves out."""
+        sphere (center, radius) and None (a mesh where the transform makes it an ellipsoid).
+        None for a shape pathtrace leaves out."""
         m = self.state.ctm
         if kind == "sphere":
             radius = params.float("radius", 1.0)
@@ -651,9 +701,16 @@ class PbrtReader:
             for name, default in (("zmin", -radius), ("zmax", radius), ("phimax", 360.0)):
                 if params.float(name, default) != default:
                     warn(f"{params.where(name)}: pathtrace's spheres are whole; the partial sphere is rendered whole")
+            if not is_similarity(m):
+                warn(f"{where}: a sphere under a non-uniform transform is an ellipsoid, which pathtrace draws as a mesh "
+                     f"of {4 * ELLIPSOID_RINGS * (ELLIPSOID_RINGS - 1)} triangles")
+                vertices, faces, normals, uvs = ellipsoid(m, radius=radius)
+                self.check_extent(vertices, where)
+                if self.state.reverse:
+                    normals = -normals
+                    faces = orient_by_normals(vertices, faces, normals)
+                return vertices, faces, normals, uvs, ""
             scales = np.linalg.norm(m[:3, :3], axis=0)
-            if not np.allclose(scales, scales[0], rtol=1e-5):
-                warn(f"{where}: a non-uniformly scaled sphere; pathtrace renders a sphere of the mean scale")
             if self.state.reverse:
                 warn(f"{where}: pathtrace's spheres face outwards; ReverseOrientation is ignored")
             center = m[:3, 3].copy()
@@ -664,20 +721,20 @@ class PbrtReader:
         if kind == "trianglemesh":
             vertices, faces = self.indexed_polygons(params, kind, 3, where)
             normals, uvs = self.vertex_attributes(params, len(vertices))
-            vertices, faces, normals, uvs = check_mesh(vertices, faces, normals, uvs, where)
+            vertices, faces, normals, uvs = check_mesh(vertices, faces, normals, uvs, where, degenerate=self.degenerate)
         elif kind == "bilinearmesh":
             vertices, q = self.indexed_polygons(params, kind, 4, where)
             # corners p00, p10, p01, p11: two triangles of the patch's orientation
             faces = np.concatenate([q[:, [0, 1, 3]], q[:, [0, 3, 2]]])
             normals, uvs = self.vertex_attributes(params, len(vertices))
-            vertices, faces, normals, uvs = check_mesh(vertices, faces, normals, uvs, where)
+            vertices, faces, normals, uvs = check_mesh(vertices, faces, normals, uvs, where, degenerate=self.degenerate)
         elif kind in ("plymesh",):
             filename = params.string("filename")
             if filename is None:
                 raise UserError(f"{where}: a plymesh needs a filename")
             path = self.resolve(filename)
             source = str(path)
-            vertices, faces, normals, uvs = self.mesh_files.read(path, f"{where}: filename")
+            vertices, faces, normals, uvs = self.mesh_files.read(path, f"{where}: filename", self.degenerate)
             if uvs is not None:
                 uvs = np.column_stack([uvs[:, 0], 1 - uvs[:, 1]])
             for name in ("displacement", "edgelength"):
@@ -698,12 +755,16 @@ class PbrtReader:
             vertices, faces = self.indexed_polygons(params, kind, 3, where)
             params.int("levels", 3)
             warn(f"{where}: pathtrace does not subdivide; the control mesh is rendered with smooth normals")
-            vertices, faces, normals, uvs = check_mesh(vertices, faces, None, None, where)
+            vertices, faces, normals, uvs = check_mesh(vertices, faces, None, None, where, degenerate=self.degenerate)
             normals = vertex_normals(vertices, faces)
         else:
             for p in params.params.values():
                 p.used = True
             warn(f"{where}: pathtrace has no {kind} shape; it leaves it out")
+            return None
+        if len(faces) == 0:
+            warn(f"{where}: every triangle of the {kind} is degenerate (pbrt-v4 intersects none of them); "
+                 "pathtrace leaves the shape out")
             return None
         vertices = transform.transform_points(m, vertices)
         self.check_extent(vertices, where)
@@ -713,7 +774,7 @@ class PbrtReader:
             normals = transform.transform_normals(m, normals)
             if self.state.reverse:
                 normals = -normals
-            faces = self.orient_by_normals(vertices, faces, normals)
+            faces = orient_by_normals(vertices, faces, normals)
         elif self.state.reverse:
             faces = faces[:, ::-1]
         return vertices, faces, normals, uvs, source
@@ -748,52 +809,67 @@ class PbrtReader:
         uvs = None if uv is None else np.column_stack([uv[0::2], 1 - uv[1::2]])
         return None if n is None else n.reshape(-1, 3), uvs
 
-    @staticmethod
-    def orient_by_normals(vertices, faces, normals):
-        """pbrt-v4 turns a triangle's geometric normal to its shading normals' side: the
-        winding that agrees with them."""
-        # rows gathered by np.take, faster than indexing with the faces (as app/compiled.py's)
-        f0, f1, f2 = faces[:, 0], faces[:, 1], faces[:, 2]
-        p0 = np.take(vertices, f0, axis=0)
-        a, b = (np.take(vertices, f1, axis=0) - p0).T, (np.take(vertices, f2, axis=0) - p0).T
-        n = (np.take(normals, f0, axis=0) + np.take(normals, f1, axis=0) + np.take(normals, f2, axis=0)).T
-        # (a x b) . n, written out: np.cross costs more than the products on small meshes
-        flip = (a[1] * b[2] - a[2] * b[1]) * n[0] + (a[2] * b[0] - a[0] * b[2]) * n[1] \
-            + (a[0] * b[1] - a[1] * b[0]) * n[2] < 0
-        if not flip.any():
-            return faces
-        faces = faces.copy()
-        faces[flip] = faces[flip][:, ::-1]
-        return faces
-
     def area_emission(self, vertices, faces, where):
-        """The emitted radiance of a shape under an AreaLightSource, and whether it emits from
-        both sides."""
-        if self.state.area_light is None:
-            return None, False
+        """The emitted radiance of a shape under an AreaLightSource, as [(faces, radiance)]
+        (faces an index array of the mesh's, or None for all), and whether it emits from both
+        sides; [(None, None)] where the shape is no light.
+
+        `power` is applied as pbrt-v4 applies it: a mesh is one DiffuseAreaLight per triangle
+        (src/pbrt/scene.cpp, the area lights' loop over the shapes Shape::Create returns), and
+        DiffuseAreaLight::Create (src/pbrt/lights.cpp) scales L by power / k_e with
+        k_e = (twosided ? 2 : 1) * shape.Area() * Pi, the area being the triangle's own. An RGB
+        L keeps its magnitude (scale /= SpectrumToPhotometric(L) sees only the colour space's
+        illuminant), so L is not divided by its luminance. Triangles of one area share a
+        radiance, and a material row."""
+        if self.state.area_light is None or self.state.material is None:
+            return [(None, None)], False
         params, light_where = self.state.area_light
         if params.type_of("filename"):
             params.string("filename")
-            warn(f"{light_where}: pathtrace's area lights have no image; it uses L")
+            warn(f"{light_where}: pathtrace's area lights have no image; it uses L "
+                 f"({', '.join(f'{c:g}' for c in spectrum_rgb(params, 'L', 1.0, 'illuminant'))})")
         scale = params.float("scale", 1.0)
         le = spectrum_rgb(params, "L", 1.0, "illuminant") * scale
         twosided = params.bool("twosided", False)
         power = params.float("power", -1.0)
         if np.any(le < 0):
             params.fail("scale" if scale < 0 else "L", "an emitted radiance must not be negative")
-        cause = "'L' times 'scale'"
-        if power > 0 and faces is not None:
-            p = vertices[faces]
-            area = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1).sum()
-            lum = luminance(le)
-            if area > 0 and lum > 0:
-                le = le * power / (math.pi * (2 if twosided else 1) * area * lum)
-                cause = f"'power' {power:g} over the shape's area of {area:.3g}"
-        if not np.max(le) <= MAX_RADIANCE:
-            raise UserError(f"{light_where}: {cause} gives an emitted radiance of {np.max(le):.3g}, "
-                            f"beyond {MAX_RADIANCE:g}, where the sums of samples overflow")
         self.unused(params, "diffuse area light")
-        return le, twosided
+        if power <= 0:
+            parts, cause = [(None, le)], "'L' times 'scale'"
+        else:
+            parts, area = self.powered(le, power, math.pi * (2 if twosided else 1), vertices, faces, light_where)
+            cause = f"'power' {power:g} over the shape's area of {area:.3g}" + \
+                ("" if faces is None else " (its smallest triangle's: each triangle emits the power, as pbrt-v4's do)")
+        top = max(float(np.max(e)) for _, e in parts)
+        if not top <= MAX_RADIANCE:
+            raise UserError(f"{light_where}: {cause} gives an emitted radiance of {top:.3g}, "
+                            f"beyond {MAX_RADIANCE:g}, where the sums of samples overflow")
+        return parts, twosided
+
+    @staticmethod
+    def powered(le, power, k_e, vertices, faces, light_where) -> list:
+        """area_emission's [(faces, radiance)] of a light given `power`, L power / (k_e area) with
+        each triangle's own area (a sphere's, 4 pi r^2), and the least area."""
+        if faces is None:                   # a sphere: (center, radius)
+            area = 4 * math.pi * vertices[1] ** 2
+            return [(None, le * power / (k_e * area))], area
+        p = vertices[faces]
+        area = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
+        # areas equal in float32 (a quad's two halves, but for rounding) share a row, at their mean
+        _, group = np.unique(area.astype(np.float32), return_inverse=True)
+        areas = np.bincount(group, weights=area) / np.bincount(group)
+        if len(areas) > MAX_POWER_ROWS:
+            # a row per triangle would outgrow the material table: areas in MAX_POWER_ROWS
+            # bins of equal ratio, each triangle given its bin's geometric mean
+            edges = np.geomspace(areas[0], areas[-1], MAX_POWER_ROWS + 1)
+            bins = np.clip(np.searchsorted(edges, areas, side="right") - 1, 0, MAX_POWER_ROWS - 1)
+            spread = float(edges[1] / edges[0]) ** 0.5 - 1
+            warn(f"{light_where}: 'power' over {len(areas)} triangle areas; pathtrace gives each triangle the "
+                 f"radiance of one of {MAX_POWER_ROWS} area classes, within {spread:.1%} of pbrt-v4's")
+            areas, group = np.sqrt(edges[:-1] * edges[1:]), bins[group]
+        return [(np.flatnonzero(group == g), le * power / (k_e * float(a)))
+                for g, a in enumerate(areas) if np.any(group == g)], float(area.min())
 
     # -- lights --
 
@@ -814,7 +890,7 @@ class PbrtReader:
                 light = PointLight(position, color)
             else:
                 p_to = params.point("to", np.array([0, 0, 1.0]))
-                cone, delta = params.float("coneangle", 30.0), params.float("conedelta", 5.0)
+                cone, delta = params.float("coneangle", 30.0), params.float("conedeltaangle", 5.0)
                 if power > 0:
                     cos_end, cos_start = math.cos(math.radians(cone)), math.cos(math.radians(cone - delta))
                     color = color * power / (2 * math.pi * (1 - 0.5 * (cos_start + cos_end)))
@@ -842,7 +918,7 @@ class PbrtReader:
         except ValueError as e:
             name, problem = str(e).split(": ", 1)
             pbrt_name = {"intensity": "I", "irradiance": "L", "direction": "to",
-                         "cutoff_angle": "coneangle", "beam_width": "conedelta"}.get(name, name)
+                         "cutoff_angle": "coneangle", "beam_width": "conedeltaangle"}.get(name, name)
             raise UserError(f"{where}: '{pbrt_name}' {problem}") from None
         self.lights.append(light)
         self.unused(params, f"{kind} light")
@@ -856,9 +932,9 @@ class PbrtReader:
         if params.type_of("portal"):
             params.floats("portal", ("point3", "point"))
             warn(f"{params.where('portal')}: pathtrace does not sample portals; the light is sampled whole")
-        if params.type_of("illuminance"):
-            params.float("illuminance")
-            warn(f"{params.where('illuminance')}: pathtrace does not normalise by illuminance; ignored")
+        # pbrt-v4's Light::Create: "illuminance" E_v scales a constant L by E_v / pi, and a map
+        # by E_v over its upper_illuminance
+        illuminance = params.float("illuminance", -1.0)
         filename = params.string("filename")
         if filename is not None:
             if params.type_of("L"):
@@ -869,12 +945,19 @@ class PbrtReader:
             if image.shape[0] != image.shape[1]:
                 raise UserError(f"{where}: {path}: pbrt-v4's environment maps are square (equal-area), "
                                 f"got {image.shape[1]}x{image.shape[0]}")
+            if illuminance > 0:
+                upper = upper_illuminance(image)
+                if upper <= 0:
+                    params.fail("illuminance", "the map is black above its horizon, which no scale brightens")
+                scale *= illuminance / upper
             latlong = to_latlong(image[..., :3], self.inverse(where, "an infinite light's map")[:3, :3])
             self.environment = Environment(latlong, scale, 0.0, str(path), resampled=True)
             return
         color = spectrum_rgb(params, "L", 1.0, "illuminant") * scale
         if np.any(color < 0):
             params.fail("L", "must not be negative")
+        if illuminance > 0:
+            color = color * illuminance / math.pi
         self.environment = Environment.constant(color)
 
     def _reverse_orientation(self, tokens, offset):
@@ -928,8 +1011,8 @@ DIRECTIVES = {
     "Sampler": PbrtReader._sampler,
     "Integrator": PbrtReader._integrator,
     "PixelFilter": PbrtReader._pixel_filter,
-    "Accelerator": PbrtReader._ignored("Accelerator", 1, True),
-    "ColorSpace": PbrtReader._ignored("ColorSpace", 1),
+    "Accelerator": PbrtReader._ignored("Accelerator", "pathtrace builds its own BVH", 1, True),
+    "ColorSpace": PbrtReader._ignored("ColorSpace", "pathtrace takes colours as linear sRGB", 1),
     "Option": PbrtReader._option,
     "WorldBegin": PbrtReader._world_begin,
     "WorldEnd": lambda self, tokens, offset: None,          # pbrt-v3's; v4 accepts and ignores it
@@ -937,7 +1020,7 @@ DIRECTIVES = {
     "AttributeEnd": PbrtReader._attribute_end,
     "TransformBegin": PbrtReader._transform_begin,
     "TransformEnd": PbrtReader._transform_end,
-    "Attribute": PbrtReader._ignored("Attribute", 1, True),
+    "Attribute": PbrtReader._ignored("Attribute", "each directive uses its own parameters and pbrt-v4's defaults", 1, True),
     "Material": PbrtReader._material,
     "MakeNamedMaterial": PbrtReader._make_named_material,
     "NamedMaterial": PbrtReader._named_material,
