@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from pathtrace.errors import UserError, short, warn
-from pathtrace.scene.description import RUSSIAN_ROULETTE, Scene
-from pathtrace.scene.validate import MAX_SIZE, check_scene, check_tables
+from pathtrace.scene.description import Scene
+from pathtrace.scene.validate import SETTING_RANGES, check_scene, check_tables, russian_roulette
 from pathtrace.scene.validate import integer as _integer
 
 AOVS = ("albedo", "normal", "depth")
@@ -116,19 +116,17 @@ def settings_for(scene: Scene, spp=None, size=None, seed=None, max_depth=None, r
     s = scene.settings
     changes = {}
     if spp is not None:
-        changes["spp"] = _integer("spp", spp, 1, 2**31 - 1)
+        changes["spp"] = _integer("spp", spp, *SETTING_RANGES["spp"])
     if size is not None:
         if not isinstance(size, (tuple, list)) or len(size) != 2:
             raise UserError(f"size: give (width, height), got {short(size)}")
-        changes["width"], changes["height"] = (_integer("size", v, 1, MAX_SIZE) for v in size)
+        changes["width"], changes["height"] = (_integer("size", v, *SETTING_RANGES["width"]) for v in size)
     if seed is not None:
-        changes["seed"] = _integer("seed", seed, 0, 2**32 - 1)
+        changes["seed"] = _integer("seed", seed, *SETTING_RANGES["seed"])
     if max_depth is not None:
-        changes["max_depth"] = _integer("max_depth", max_depth, 0, 2**31 - 1)
+        changes["max_depth"] = _integer("max_depth", max_depth, *SETTING_RANGES["max_depth"])
     if rr is not None:
-        if not isinstance(rr, str) or rr not in RUSSIAN_ROULETTE:
-            raise UserError(f"rr: give one of {', '.join(RUSSIAN_ROULETTE)}, got {short(rr)}")
-        changes["russian_roulette"] = rr
+        changes["russian_roulette"] = russian_roulette("rr", rr)
     if nee is not None:
         if not isinstance(nee, (bool, int, np.bool_, np.integer)):
             raise UserError(f"nee: give True or False, got {short(nee)}")

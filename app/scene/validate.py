@@ -13,6 +13,9 @@ from pathtrace.scene.description import MAX_PATH_QUEUE, PATH_QUEUE_AUTO, RUSSIAN
 from pathtrace.scene.meshes import MAX_COORDINATE
 
 MAX_SIZE = 16384          # pixels on a side, as `--size` and the TOML format allow
+SETTING_RANGES = {"width": (1, MAX_SIZE), "height": (1, MAX_SIZE), "spp": (1, 2**31 - 1),
+                  "seed": (0, 2**32 - 1), "max_depth": (0, 2**31 - 1)}
+"""The integer render settings' ranges, for a scene's fields and the API's arguments alike."""
 
 
 def check_scene(scene: Scene):
@@ -39,17 +42,19 @@ def integer(name: str, value, low: int, high: int) -> int:
     return int(value)
 
 
+def russian_roulette(name: str, value) -> str:
+    """value as a Russian roulette rule, or a UserError naming `name`."""
+    if not isinstance(value, str) or value not in RUSSIAN_ROULETTE:
+        raise UserError(f"{name}: give one of {', '.join(RUSSIAN_ROULETTE)}, got {short(value)}")
+    return value
+
+
 def _settings(s):
     from pathtrace.lights import LIGHT_SAMPLERS
     where = "scene.settings"
-    integer(f"{where}.width", s.width, 1, MAX_SIZE)
-    integer(f"{where}.height", s.height, 1, MAX_SIZE)
-    integer(f"{where}.spp", s.spp, 1, 2**31 - 1)
-    integer(f"{where}.seed", s.seed, 0, 2**32 - 1)
-    integer(f"{where}.max_depth", s.max_depth, 0, 2**31 - 1)
-    if not isinstance(s.russian_roulette, str) or s.russian_roulette not in RUSSIAN_ROULETTE:
-        raise UserError(f"{where}.russian_roulette: give one of {', '.join(RUSSIAN_ROULETTE)}, "
-                        f"got {short(s.russian_roulette)}")
+    for field, (low, high) in SETTING_RANGES.items():
+        integer(f"{where}.{field}", getattr(s, field), low, high)
+    russian_roulette(f"{where}.russian_roulette", s.russian_roulette)
     if not isinstance(s.nee, (bool, np.bool_)):
         raise UserError(f"{where}.nee: give True or False, got {short(s.nee)}")
     if not isinstance(s.light_sampler, str) or s.light_sampler not in LIGHT_SAMPLERS:
