@@ -548,21 +548,25 @@ def test_the_speed_slider_turns_the_path_queue_on(viewer):
         frames(v, 1)
 
 
-def test_movement_speed_is_at_the_scenes_scale():
+def test_movement_speed_is_at_the_scenes_scale(backend):
     """A quarter of the eye's distance to its look-at point a second, at most a tenth of the
     bounds' diagonal: the demo (a 1000-unit ground sphere) moves as before, a small scene seen
     from a far look-at point slowly; the wheel scales it from there."""
+    from pathtrace.compiled import compile_scene
     from pathtrace.viewer.controls import FlyControls, speed_for
+
+    def speed(scene):
+        return speed_for(scene.camera, compile_scene(scene, backend.queue).radius)
     demo = load_scene("demo")
-    assert speed_for(demo) == pytest.approx(0.25 * np.linalg.norm(demo.camera.look_at - demo.camera.eye))
+    assert speed(demo) == pytest.approx(0.25 * np.linalg.norm(demo.camera.look_at - demo.camera.eye))
     box = load_scene("cornell-box")
     lower, upper = box.bounds()
-    assert speed_for(box) == pytest.approx(0.1 * np.linalg.norm(upper - lower))
+    assert speed(box) == pytest.approx(0.1 * np.linalg.norm(upper - lower))
     small = replace(box, spheres=box.spheres, meshes=[replace(m, vertices=m.vertices / 10) for m in box.meshes])
-    assert speed_for(small) == pytest.approx(speed_for(box) / 10)
-    controls = FlyControls(speed=speed_for(small))
+    assert speed(small) == pytest.approx(speed(box) / 10)
+    controls = FlyControls(speed=speed(small))
     controls.scroll(2)
-    assert controls.speed == pytest.approx(speed_for(small) * 1.25 ** 2)
+    assert controls.speed == pytest.approx(speed(small) * 1.25 ** 2)
 
 
 def test_the_panel_docks_only_where_the_image_keeps_most_of_the_window():

@@ -62,15 +62,14 @@ class FlyControls:
         self.speed = float(np.clip(self.speed * 1.25 ** amount, 0.01, 1000.0))
 
 
-def speed_for(scene) -> float:
-    """A speed (units per second) at the scene's scale: a quarter of the distance from the eye
-    to the point it looks at, at most a tenth of the diagonal of the scene's bounds (a camera
+def speed_for(camera, radius: float) -> float:
+    """A speed (units per second) at the scene's scale: a quarter of the distance from `camera`'s
+    eye to the point it looks at, at most a fifth of `radius`, the compiled scene's bounding
+    sphere's (CompiledScene.radius: a tenth of its box's diagonal, instances included; a camera
     whose look-at point is far off, as a pbrt LookAt may give, would carry out of a small scene
     in a second), and the default where neither says anything. The wheel changes it from there."""
-    distance = float(np.linalg.norm(scene.camera.look_at - scene.camera.eye))
-    bounds = scene.bounds()
-    diagonal = float(np.linalg.norm(bounds[1] - bounds[0])) if bounds is not None else 0.0
-    candidates = [v for v in (0.25 * distance, 0.1 * diagonal) if v > 0 and np.isfinite(v)]
+    distance = float(np.linalg.norm(camera.look_at - camera.eye))
+    candidates = [v for v in (0.25 * distance, 0.2 * radius) if v > 0 and np.isfinite(v)]
     return float(np.clip(min(candidates), 0.01, 1000.0)) if candidates else FlyControls.speed
 
 

@@ -169,7 +169,7 @@ class Viewer:
         except BaseException:
             self._close_window()
             raise
-        self._scene_opened(self.renderer.scene)
+        self._scene_opened(self.renderer.compiled)
         if fitted and callable(scene):
             glfw.set_window_size(self.window, *fit_window(self.renderer.width, self.renderer.height, screen))
         self.size = (self.renderer.width, self.renderer.height)    # the full resolution
@@ -422,15 +422,15 @@ class Viewer:
             return
         self.size = (scene.settings.width, scene.settings.height)
         self.selected = None
-        self._scene_opened(scene)
+        self._scene_opened(self.renderer.compiled)
         self.set_message(f"loaded {scene.name}")
 
-    def _scene_opened(self, scene):
+    def _scene_opened(self, compiled):
         """Movement at the scene's scale (the wheel changes it from there), and the panel's file
         field naming the scene's file, if it has one."""
-        self.controls.speed = speed_for(scene)
-        if scene.source:
-            self.scene_file = scene.source
+        self.controls.speed = speed_for(compiled.scene.camera, compiled.radius)
+        if compiled.scene.source:
+            self.scene_file = compiled.scene.source
 
     def _build_progress(self, name: str):
         """A progress callback for a scene's BVH build, from the worker thread: the window, live
