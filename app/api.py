@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from pathtrace.errors import UserError, short, warn
-from pathtrace.scene.description import Scene
+from pathtrace.scene.description import INTEGRATORS, Scene
 from pathtrace.scene.validate import SETTING_RANGES, check_scene, check_tables, russian_roulette
 from pathtrace.scene.validate import integer as _integer
 
@@ -109,7 +109,7 @@ class Snapshot:
             (f", aovs {', '.join(self.aovs)}>" if self.aovs else ">")
 
 
-def settings_for(scene: Scene, spp=None, size=None, seed=None, max_depth=None, rr=None, nee=None):
+def settings_for(scene: Scene, spp=None, size=None, seed=None, max_depth=None, rr=None, nee=None, integrator=None):
     """The scene's render settings with the given ones in their place, checked (the scene's
     own fields, which a user may have changed since loading, first)."""
     check_scene(scene)
@@ -131,6 +131,10 @@ def settings_for(scene: Scene, spp=None, size=None, seed=None, max_depth=None, r
         if not isinstance(nee, (bool, int, np.bool_, np.integer)):
             raise UserError(f"nee: give True or False, got {short(nee)}")
         changes["nee"] = bool(nee)
+    if integrator is not None:
+        if not isinstance(integrator, str) or integrator not in INTEGRATORS:
+            raise UserError(f"integrator: give one of {', '.join(INTEGRATORS)}, got {short(integrator)}")
+        changes["integrator"] = integrator
     settings = replace(s, **changes)
     if not settings.paths_end:
         raise UserError("rr 'off' needs max_depth >= 1, or paths would never end")
@@ -174,7 +178,8 @@ class _Prepared:
                 r.upload_materials()
             r.set_camera(scene.camera)
             r.set_settings(**{k: getattr(settings, k) for k in ("max_depth", "russian_roulette", "seed", "nee",
-                                                                "filter", "light_sampler", "path_queue")})
+                                                                "filter", "light_sampler", "path_queue",
+                                                                "integrator")})
             r.resize(settings.width, settings.height)
             r.set_aovs(aovs)
         self.environment, self.lights = environment, lights
@@ -231,13 +236,13 @@ def _lights_key(lights) -> tuple:
 
 
 def progressive(scene, spp=None, steps=None, size=None, device="auto", seed=None, max_depth=None,
-                rr=None, nee=None, aovs=(), progress=False, build_progress=None, phases=None):
+                rr=None, nee=None, aovs=(), progress=False, build_progress=None, phases=None, integrator=None):
     """Renders `scene` (a Scene, or what load() takes) and yields a Snapshot each time the image
     reaches one of `steps` samples per pixel (default: 1, 2, 4, ... up to spp, and spp; spp
     defaults to the scene's). Arguments as for render(). Stopping the iteration early stops the
     render."""
     scene = scene if isinstance(scene, Scene) else load(scene)
-    settings = settings_for(scene, spp, size, seed, max_depth, rr, nee)
+    settings = settings_for(scene, spp, size, seed, max_depth, rr, nee, integrator)
     steps = _steps(steps, settings.spp)
     aovs = _aov_names(aovs)
     prepared = prepare(scene, device, build_progress, phases)
@@ -264,7 +269,7 @@ def progressive(scene, spp=None, steps=None, size=None, device="auto", seed=None
 
 
 def render(scene, spp=None, size=None, device="auto", seed=None, max_depth=None, rr=None, nee=None,
-           aovs=(), progress=False, build_progress=None, phases=None):
+           aovs=(), progress=False, build_progress=None, phases=None, integrator=None):
     """Renders `scene` (a Scene, or what load() takes) and returns the image, (height, width, 3)
     float32 linear radiance. With `aovs` (names from "albedo", "normal", "depth"), returns a dict
     of "image" and each of them: albedo and normal (H, W, 3), the first hit's distance (H, W), 0
@@ -272,14 +277,16 @@ def render(scene, spp=None, size=None, device="auto", seed=None, max_depth=None,
 
     spp: samples per pixel; size: (width, height); seed: 0 to 2^32 - 1; max_depth: the longest
     path in vertices (1: emitters seen directly, 0: no limit); rr: how paths end ("throughput",
-    "albedo" or "off"); nee: next-event estimation; each defaults to the scene's settings.
+    "albedo" or "off"); nee: next-event estimation; integrator: "path" (the path tracer), "bdpt"
+    (bidirectional path tracing) or "ptracer" (its light tracing alone); each defaults to the
+    scene's settings.
     device: as open_devices() takes it; several devices share the samples. progress: True for a
     progress bar (a notebook's, in Jupyter), or a function called with the samples per pixel
     done (0 as the first samples start, after the scene is compiled); build_progress: a function called with the fraction of a large BVH build done;
     phases: a function called with (what, seconds) as each step before the first sample ends,
     where the scene was not compiled already: "compiled the scene (...)", "prepared the renderer"."""
     for snapshot in progressive(scene, spp, None, size, device, seed, max_depth, rr, nee, aovs,
-                                progress, build_progress, phases):
+                                progress, build_progress, phases, integrator):
         pass
     return {"image": snapshot.image, **snapshot.aovs} if snapshot.aovs else snapshot.image
 

@@ -13,7 +13,7 @@ from pathtrace import __version__
 from pathtrace.console import INTERRUPTED, check_interrupt
 from pathtrace.errors import UserError, cut, did_you_mean, escape, short, warn
 from pathtrace.lights import LIGHT_SAMPLERS
-from pathtrace.scene.description import MAX_PATH_QUEUE, PATH_QUEUE_AUTO, RUSSIAN_ROULETTE
+from pathtrace.scene.description import INTEGRATORS, MAX_PATH_QUEUE, PATH_QUEUE_AUTO, RUSSIAN_ROULETTE
 
 GENERATED_SCENES = (("spheresN[-diffuse]", "N random spheres, e.g. spheres512k, spheres1M-diffuse"),
                     ("heightfieldN", "a height field of about N triangles, e.g. heightfield1M"))
@@ -193,6 +193,9 @@ def add_render_options(p: argparse.ArgumentParser, device: bool = True, queue_au
                    help="how next-event estimation chooses a light: power (in proportion to its "
                         "power), tree (by a light tree, from what it gives the shading point), or "
                         "auto (the tree from 4096 lights on; the default: the scene's)")
+    p.add_argument("--integrator", choices=INTEGRATORS,
+                   help="path (the path tracer, the default), bdpt (bidirectional path tracing: "
+                        "caustics) or ptracer (its light tracing alone); default: the scene's")
     p.add_argument("--filter", type=_pixel_filter, metavar="NAME[:RADIUS[:STDDEV]]",
                    help="pixel filter: box (radius 0.5), tent (1) or gaussian (stddev 0.5, radius 4 "
                         "stddev), radius and stddev in pixels (default: the scene's)")
@@ -241,7 +244,8 @@ def apply_render_options(scene, args):
                    seed=s.seed if args.seed is None else args.seed,
                    nee=s.nee if args.nee is None else args.nee,
                    filter=args.filter or s.filter, light_sampler=args.light_sampler or s.light_sampler,
-                   path_queue=s.path_queue if args.path_queue is None else args.path_queue)
+                   path_queue=s.path_queue if args.path_queue is None else args.path_queue,
+                   integrator=getattr(args, "integrator", None) or s.integrator)
     if not replace(s, **changes).paths_end:
         raise UserError("--rr off needs --max-depth N (N >= 1), or paths would never end")
     if not changes["nee"] and scene.lights:

@@ -22,7 +22,7 @@ from pathtrace.resources import resource_dir
 # traversal (with alpha masks where a scene has them), the shading of textured materials, the
 # BSDFs of the material registry and their generated dispatch, the environment, the light types
 # a scene has and their dispatch (app/lights/registry.py), its camera and pixel filter, the media
-# where it has them, the rest.
+# where it has them, the rest, and bidirectional path tracing where a render asks for it.
 BASIC_FILES = ("inlining.h", "types.h", "vector.cl", "color.cl", "rng.cl", "sampling.cl", "scene.cl")
 SHAPE_FILES = ("spawn.cl", "shapes/sphere.cl", "shapes/triangle.cl")
 BSDF_FILES = ("bsdf.cl", "fresnel.cl", "microfacet.cl", "coating.cl", "interface.cl", "phase.cl")
@@ -53,11 +53,12 @@ def kernel_source(extra: str = "", features: Features = Features()) -> str:
     texts.append(("app/materials/registry.py: tag_source", tag_source()))
     texts += [(name, (folder / name).read_text()) for name in files]
     texts.append(("app/materials/registry.py: dispatch_source", dispatch_source(features.bsdfs)))
-    parts = [("environment.cl", None), *lights.kernel_parts(features.lights, features.light_tree),
+    parts = [("environment.cl", None), *lights.kernel_parts(features.lights, features.light_tree, bool(features.bdpt)),
              *camera.kernel_parts(features.camera), *filters.kernel_parts(features.filter)]
     texts += [(name, text if text is not None else (folder / name).read_text()) for name, text in parts]
     texts += [(name, (folder / name).read_text())
-              for name in (*(MEDIA_FILES if features.media else ()), *LATER_FILES)]
+              for name in (*(MEDIA_FILES if features.media else ()), *LATER_FILES,
+                           *(("bdpt.cl",) if features.bdpt else ()))]
     if extra:
         texts.append(("extra", extra))
     return "\n".join(f'#line 1 "{name}"\n{text}' for name, text in texts)

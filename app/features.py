@@ -48,6 +48,10 @@ class Features:
     path_queue: int = 0                    # paths going on past this many vertices wait in the
                                            # continuation queue (PATH_QUEUE, kernels/integrator.cl;
                                            # the render setting path_queue); 0: no queue
+    bdpt: int = 0                          # bidirectional path tracing (kernels/bdpt.cl) of paths
+                                           # up to this depth (app/bdpt.py); 0: the path tracer alone
+    light_tracing: bool = False            # with bdpt: light tracing alone (LIGHT_TRACING), the
+                                           # integrator "ptracer"
     generic: bool = False                  # renders any scene (Features.generic_program)
 
     @staticmethod
@@ -76,7 +80,8 @@ class Features:
                 + (("INSTANCES", f"INSTANCE_STACK_SIZE={self.instance_stack}") if self.instance_stack else ())
                 + (self.bsdf_defines if self.bsdf_defines is not None else all_bsdf_defines())
                 + ((f"TRAVERSAL_STATS={self.traversal_stats}",) if self.traversal_stats else ())
-                + ((f"PATH_QUEUE={self.path_queue}",) if self.path_queue else ()))
+                + ((f"PATH_QUEUE={self.path_queue}",) if self.path_queue else ())
+                + ((f"BDPT={self.bdpt}",) if self.bdpt else ()) + (("LIGHT_TRACING",) if self.light_tracing else ()))
 
 
 def choice_glue(signature: str, call: str, names: tuple, chosen: str, field: str) -> str:

@@ -49,4 +49,7 @@ def kernel_parts(name: str) -> list:
     names = FILTERS if name == GENERIC else (name,)
     glue = choice_glue("float2 sample_filter(const RenderParams *p, float2 u, Rng *rng)",
                        "sample_{}_filter(p, u, rng)", FILTERS, name, "filter_type")
+    # the density of its offsets along an axis, which bidirectional path tracing splats by
+    glue += "#ifdef BDPT\n" + choice_glue("float pdf_filter(const RenderParams *p, float x)",
+                                          "pdf_{}_filter(p, x)", FILTERS, name, "filter_type") + "#endif\n"
     return [*((f"filters/{n}.cl", None) for n in names), ("app/filters.py: kernel_parts", glue)]

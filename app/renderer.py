@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pyopencl as cl
 
+from pathtrace import bdpt
 from pathtrace.camera import CAMERA_KERNELS, Camera, kernel_name
 from pathtrace.compiled import SCENE_BUFFERS, CompiledScene, compile_scene
 from pathtrace.cache_files import read_entry, write_entry
@@ -121,6 +122,9 @@ class Renderer:
         self.camera = self.scene.camera.copy()
         self.settings = self.scene.settings
         self.auto_plan, self.plan_seconds, self.plan_cached = None, {}, False  # "auto" chooses again
+        if self.compiled.light_sampler != self._light_sampler():
+            self.compiled.light_sampler = self._light_sampler()
+            self.compiled.update_materials()
         self._select_program()
         self._size_queue()
         for name, array in self.compiled.geometry_arrays().items():
@@ -162,6 +166,13 @@ class Renderer:
                            traversal_stats=self.traversal_stats, path_queue=self.queue_plan()[0])
         mode = self.backend.mode
         self._awaited, self._build_due = None, False
+        if self.settings.integrator != "path":
+            # the generic program has no bidirectional code (a path tracer's scene compiles none)
+            bdpt.check(self.scene.name, features, self.settings.integrator, self.compiled.lights)
+            features = replace(features, bdpt=bdpt.depth(self.settings.max_depth),
+                               light_tracing=self.settings.integrator == "ptracer")
+            self._use_program(self.backend.program_for(features), generic=False)
+            return
         if mode == "specialised" or self.traversal_stats:      # the generic program counts rays
             self._use_program(self.backend.program_for(features), generic=False)
         elif mode == "generic":
@@ -189,6 +200,8 @@ class Renderer:
                                  True: cl.Kernel(program, "continue_paths_nee")} if queue else None
         self.add_queued = cl.Kernel(program, "add_queued_paths") if queue else None
         self.aov_kernel = cl.Kernel(program, "render_aovs")
+        bidirectional = self.settings.integrator != "path"
+        self.bdpt_kernels = (cl.Kernel(program, "render_bdpt"), cl.Kernel(program, "add_splats")) if bidirectional else None
 
     def switch_when_built(self, wait: bool = False) -> bool:
         """Switches to the scene's own tuned program if it is built (with `wait`, once it is);
@@ -228,6 +241,8 @@ class Renderer:
     def queue_plan(self) -> tuple:
         """(the queue depth the program is built with, whether launches use the queue): from
         settings.path_queue, or with "auto" the plan its trials chose (no queue until then)."""
+        if self.settings.integrator != "path":
+            return AUTO_PLANS[0]                               # BDPT has no queue
         if self.settings.path_queue == PATH_QUEUE_AUTO:
             return self.auto_plan or AUTO_PLANS[0]
         return self.settings.path_queue, self.settings.path_queue > 0
@@ -351,12 +366,17 @@ class Renderer:
         if "path_queue" in changes:
             self.auto_plan, self.plan_seconds, self.plan_cached = None, {}, False  # "auto" chooses again
         self.settings = replace(self.settings, **changes)
-        if self.settings.light_sampler != self.compiled.light_sampler:
-            self.compiled.light_sampler = self.settings.light_sampler
+        if self._light_sampler() != self.compiled.light_sampler:
+            self.compiled.light_sampler = self._light_sampler()
             self.upload_materials()
         self._select_program()
         self._size_queue()
         self.reset()
+
+    def _light_sampler(self) -> str:
+        """How the compiled scene chooses lights: as the settings say, or for BDPT by power
+        alone, which light subpaths start from (pbrt-v4's BDPT uses its power sampler too)."""
+        return self.settings.light_sampler if self.settings.integrator == "path" else "power"
 
     def resize(self, width: int, height: int):
         if (width, height) == (self.width, self.height):
@@ -387,7 +407,7 @@ class Renderer:
             raise UserError(f"{what} needs about {format_bytes(host)} of memory to render, read back "
                             f"and write; {format_bytes(available)} is available")
         self.width, self.height, self.aovs = width, height, aovs
-        for name in AOV_BUFFERS:
+        for name in (*AOV_BUFFERS, "splats"):
             self._buffers.pop(name, None)
         for name in images:
             self._buffers[name] = cl.Buffer(self.backend.context, cl.mem_flags.READ_WRITE, nbytes)
@@ -461,9 +481,24 @@ class Renderer:
         start = self.samples if start is None else start
         local = (8, 8)
         global_size = tuple(-(-n // l) * l for n, l in zip((self.width, end - first), local))
-        kernel = self.kernels[self.settings.nee]
         params = self.params(count)
         params["row_start"], params["row_end"], params["sample_start"] = first, end, start
+        add = self._add_bidirectional if self.bdpt_kernels is not None else self._add_paths
+        events = add(params, count, start, global_size, local)
+        if self.aovs and self.samples < AOV_PASSES:
+            self.aov_kernel.set_args(*self.scene_args(), params, b["albedo_sum"], b["normal_sum"])
+            events.append(cl.enqueue_nd_range_kernel(self.backend.queue, self.aov_kernel, global_size, local))
+        if end >= self.height:
+            self.samples += count
+            self._build_due = True
+            self.generic_samples += count if self.uses_generic_program else 0
+        return events
+
+    def _add_paths(self, params, count: int, start: int, global_size: tuple, local: tuple) -> list:
+        """Queues the path tracer's launches that add `count` samples to the rows of `params`
+        (with the continuation queue where the plan uses it); returns their events."""
+        b = self._buffers
+        kernel = self.kernels[self.settings.nee]
         events = []
         sums = tuple(b[name] for name in SUM_BUFFERS)
         capacity = np.int32(self.queue_capacity(self.width, self.height))
@@ -481,13 +516,26 @@ class Renderer:
             events.append(cl.enqueue_nd_range_kernel(self.backend.queue, kernel, global_size, local))
             if queued:
                 events += self._continue_paths(launch, capacity, global_size)
-        if self.aovs and self.samples < AOV_PASSES:
-            self.aov_kernel.set_args(*self.scene_args(), params, b["albedo_sum"], b["normal_sum"])
-            events.append(cl.enqueue_nd_range_kernel(self.backend.queue, self.aov_kernel, global_size, local))
-        if end >= self.height:
-            self.samples += count
-            self._build_due = True
-            self.generic_samples += count if self.uses_generic_program else 0
+        return events
+
+    def _add_bidirectional(self, params, count: int, start: int, global_size: tuple, local: tuple) -> list:
+        """Queues the launches of render_bdpt (kernels/bdpt.cl) that add `count` samples to the
+        rows of `params`, each followed by add_splats over the whole image, which adds the light
+        tracing's splats (they land anywhere in the image) to the sums; returns their events."""
+        b = self._buffers
+        if "splats" not in b:
+            b["splats"] = cl.Buffer(self.backend.context, cl.mem_flags.READ_WRITE, self.width * self.height * 16)
+            cl.enqueue_fill_buffer(self.backend.queue, b["splats"], np.float32(0), 0, self.width * self.height * 16)
+        render, add = self.bdpt_kernels
+        whole = tuple(-(-n // l) * l for n, l in zip((self.width, self.height), local))
+        events = []
+        for offset in range(0, count, MAX_LAUNCH_SAMPLES):
+            launch = params.copy()
+            launch["sample_start"], launch["sample_count"] = start + offset, min(MAX_LAUNCH_SAMPLES, count - offset)
+            render.set_args(*self.scene_args(), launch, *(b[name] for name in SUM_BUFFERS), b["splats"])
+            events.append(cl.enqueue_nd_range_kernel(self.backend.queue, render, global_size, local))
+            add.set_args(launch, b["sum"], b["sum_c"], b["splats"])
+            events.append(cl.enqueue_nd_range_kernel(self.backend.queue, add, whole, local))
         return events
 
     def _continue_paths(self, launch, capacity, global_size) -> list:

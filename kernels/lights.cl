@@ -29,6 +29,26 @@ typedef struct {
     int flags;       /* LIGHT_* */
 } LightSample;
 
+#ifdef BDPT
+/* Light leaving a light, the first vertex of a light subpath (kernels/bdpt.cl): each type that
+ * can start one provides emit_X_light(sc, l, u, &e) and the density of its directions,
+ * dispatched by emit_light_of_type and pdf_emission_of_type (app/lights/registry.py: EMITTERS). */
+typedef struct {
+    float3 p;        /* the point it leaves */
+    float3 n;        /* an area light's unit normal on the side it leaves (0: a point) */
+    float3 d;        /* the unit direction it leaves in */
+    float3 le;       /* radiance (area lights) or intensity (point and spot lights) along d */
+    float pdf_pos;   /* density of p per area (1 for a point, whose position is a delta) */
+    float pdf_dir;   /* density of d per solid angle */
+    float offset;    /* how far rays leaving p start from it along n (kernels/spawn.cl) */
+    int prim;        /* an area light's primitive, else -1 */
+    int delta;       /* a point or spot light: no path finds it */
+} LightEmission;
+
+int emit_light_of_type(const SceneData *sc, const global Light *l, float4 u, LightEmission *e);
+float pdf_emission_of_type(const SceneData *sc, const global Light *l, float3 n, float3 w);
+#endif
+
 /* Walker's alias method: a bin chosen uniformly, then kept or replaced by its alias, picks a
  * light in proportion to its power. The bin comes from all 32 bits of one hash word, as
  * floor(bin_bits * count / 2^32) (each bin's probability is 1/count to within count / 2^32

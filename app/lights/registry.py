@@ -12,21 +12,34 @@ from pathtrace.lights.spot import SpotLight
 DELTA_LIGHTS = {cls.name: cls for cls in (PointLight, SpotLight, DirectionalLight)}
 LIGHTS = ("area", "environment", *DELTA_LIGHTS)
 TAGS = {name: i for i, name in enumerate(LIGHTS)}
+EMITTERS = {"area": "pdf_area_emission(sc, l->prim, n, w)", "point": "pdf_point_emission(l, w)",
+            "spot": "pdf_spot_emission(l, w)"}
+"""The types that start light subpaths in bidirectional path tracing (kernels/bdpt.cl), each with
+its direction density's call: a directional light or the environment would need a disk over the
+whole scene to leave from, not built yet; BDPT reaches them from camera subpaths alone."""
 
 
-def kernel_parts(names=None, tree: bool = False) -> list:
+def kernel_parts(names=None, tree: bool = False, bidirectional: bool = False) -> list:
     """(name, source) of the light kernels of a program whose delta light types are `names`
     (None: all), in the order they compile: the tags, the interface, the light tree's traversal
-    (for a scene that has one), each type's file, and the dispatch over them."""
+    (for a scene that has one), each type's file, and the dispatch over them (with
+    `bidirectional`, also over the light they emit: EMITTERS)."""
     used = [n for n in LIGHTS if n in ("area", "environment") or names is None or n in names]
     tags = "".join(f"#define LIGHT_{n.upper()} {TAGS[n]}\n" for n in LIGHTS) + f"#define LIGHT_TREE_ROOT {len(LIGHTS)}\n"
 
-    def switch(call, default):
-        cases = "".join(f"    case LIGHT_{n.upper()}: return {call.format(n)};\n" for n in used)
+    def switch(call, default, kinds=used):
+        cases = "".join(f"    case LIGHT_{n.upper()}: return {call(n) if callable(call) else call.format(n)};\n"
+                        for n in kinds)
         return f"    switch (l->type) {{\n{cases}    default: return {default};\n    }}\n"
     dispatch = ("DISPATCH int sample_light_of_type(const SceneData *sc, const RenderParams *p, const global Light *l,\n"
                 "                         float3 x, float3 n, float2 u, LightSample *ls)\n{\n"
                 + switch("sample_{}_light(sc, p, l, x, n, u, ls)", "0") + "}\n")
+    if bidirectional:
+        emitters = [n for n in used if n in EMITTERS]
+        dispatch += ("int emit_light_of_type(const SceneData *sc, const global Light *l, float4 u, LightEmission *e)\n{\n"
+                     + switch("emit_{}_light(sc, l, u, e)", "0", emitters) + "}\n"
+                     "float pdf_emission_of_type(const SceneData *sc, const global Light *l, float3 n, float3 w)\n{\n"
+                     + switch(lambda n: EMITTERS[n], "0.0f", emitters) + "}\n")
     files = [f"lights/{n}.cl" for n in used]
     here = "app/lights/registry.py: kernel_parts"
     return ([(here, tags), ("lights.cl", None)] + ([("light_tree.cl", None)] if tree else [])

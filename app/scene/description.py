@@ -22,6 +22,10 @@ from pathtrace.scene.meshes import ellipsoid, is_closed, is_similarity
 RUSSIAN_ROULETTE = ("off", "albedo", "throughput")
 MAX_PATH_QUEUE = 64     # RenderSettings.path_queue's largest value (no path that long is short)
 PATH_QUEUE_AUTO = -1    # RenderSettings.path_queue "auto": chosen by trial renders (pathtrace.renderer)
+# The estimators a render can use: "path", the path tracer (kernels/integrator.cl); "bdpt",
+# bidirectional path tracing (kernels/bdpt.cl, app/bdpt.py); "ptracer", its light tracing alone
+# (Mitsuba 3's particle tracer).
+INTEGRATORS = ("path", "bdpt", "ptracer")
 
 
 @dataclass
@@ -39,6 +43,7 @@ class RenderSettings:
                                   # (kernels/integrator.cl, PATH_QUEUE): the same image, sooner on
                                   # GPUs where few paths go on long; 0: no queue;
                                   # PATH_QUEUE_AUTO: chosen by trial renders on GPUs
+    integrator: str = "path"      # one of INTEGRATORS
 
     @property
     def paths_end(self) -> bool:

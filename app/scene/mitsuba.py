@@ -498,7 +498,9 @@ class _Reader:
     def integrator(self, node):
         kind = node.attrs.get("type")
         props = self.properties(node)
-        if kind not in ("path", "volpath", "prb", "prbvolpath"):
+        if kind in ("bdpt", "ptracer"):
+            self.settings.integrator = kind        # Mitsuba 0.6's bdpt, Mitsuba 3's particle tracer
+        elif kind not in ("path", "volpath", "prb", "prbvolpath"):
             warn(f"{node.where()}: pathtrace renders with its path tracer instead")
         max_depth = self.get(props, "max_depth", -1, ("integer",))
         if not -1 <= max_depth < 2**31:

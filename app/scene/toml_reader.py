@@ -24,7 +24,7 @@ from pathtrace.materials.table import check_bump_map
 from pathtrace.media import Medium, MediumInterface
 from pathtrace.resources import resource_dir
 from pathtrace.scene import transform
-from pathtrace.scene.description import RUSSIAN_ROULETTE, Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
+from pathtrace.scene.description import INTEGRATORS, RUSSIAN_ROULETTE, Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, triangulate, vertex_normals
 from pathtrace.textures import TEXTURES, Texture, read_image
 from pathtrace.textures.bitmap import FILTERS, WRAP_MODES
@@ -471,7 +471,10 @@ class _Reader:
     def settings(self, data):
         where = "render"
         self.table(data, where, {"width", "height", "spp", "max_depth", "russian_roulette", "seed", "nee", "filter",
-                                 "light_sampler"})
+                                 "light_sampler", "integrator"})
+        integrator = data.get("integrator", "path")
+        if integrator not in INTEGRATORS:
+            self.fail("render.integrator", f"must be one of {', '.join(INTEGRATORS)}, got {short(integrator)}")
         sampler = data.get("light_sampler", "auto")
         if sampler not in LIGHT_SAMPLERS:
             self.fail("render.light_sampler", f"must be one of {', '.join(LIGHT_SAMPLERS)}, got {short(sampler)}")
@@ -490,7 +493,7 @@ class _Reader:
             max_depth=self.number(data, "max_depth", where, default=0, low=0, integer=True),
             russian_roulette=rr, nee=nee,
             seed=self.number(data, "seed", where, default=0, low=0, high=2**32 - 1, integer=True),
-            filter=self.pixel_filter(data.get("filter", "box")), light_sampler=sampler)
+            filter=self.pixel_filter(data.get("filter", "box")), light_sampler=sampler, integrator=integrator)
         if not s.paths_end:
             self.fail("render.russian_roulette", "off needs a max_depth above 0, or paths never end")
         return s

@@ -143,7 +143,8 @@ def scene_toml(scene: Scene, out: Path) -> str:
               "[render]", f"width = {s.width}", f"height = {s.height}", f"spp = {s.spp}",
               f"max_depth = {s.max_depth}", f"russian_roulette = {_value(s.russian_roulette)}",
               f"seed = {s.seed}", f"nee = {_value(s.nee)}",
-              f"filter = {_inline(filter_table(s.filter))}", f"light_sampler = {_value(s.light_sampler)}", ""]
+              f"filter = {_inline(filter_table(s.filter))}", f"light_sampler = {_value(s.light_sampler)}",
+              f"integrator = {_value(s.integrator)}", ""]
     for light in scene.lights:
         lines += ["[[lights]]", f"type = {_value(light.name)}"]
         lines += [f"{name} = {_value(_plain(getattr(light, name)))}" for name in light.fields]

@@ -9,7 +9,7 @@ import math
 import numpy as np
 
 from pathtrace.errors import UserError, cut, short
-from pathtrace.scene.description import MAX_PATH_QUEUE, PATH_QUEUE_AUTO, RUSSIAN_ROULETTE, Scene
+from pathtrace.scene.description import INTEGRATORS, MAX_PATH_QUEUE, PATH_QUEUE_AUTO, RUSSIAN_ROULETTE, Scene
 from pathtrace.scene.meshes import MAX_COORDINATE
 
 MAX_SIZE = 16384          # pixels on a side, as `--size` and the TOML format allow
@@ -59,6 +59,8 @@ def _settings(s):
         raise UserError(f"{where}.nee: give True or False, got {short(s.nee)}")
     if not isinstance(s.light_sampler, str) or s.light_sampler not in LIGHT_SAMPLERS:
         raise UserError(f"{where}.light_sampler: give one of {', '.join(LIGHT_SAMPLERS)}, got {short(s.light_sampler)}")
+    if not isinstance(s.integrator, str) or s.integrator not in INTEGRATORS:
+        raise UserError(f"{where}.integrator: give one of {', '.join(INTEGRATORS)}, got {short(s.integrator)}")
     if not (type(s.path_queue) is int and s.path_queue == PATH_QUEUE_AUTO):
         integer(f"{where}.path_queue (or PATH_QUEUE_AUTO)", s.path_queue, 0, MAX_PATH_QUEUE)
     if not s.paths_end:

@@ -7,3 +7,12 @@ float2 sample_box_filter(const RenderParams *p, float2 u, Rng *rng)
 {
     return (2.0f * u - 1.0f) * p->filter.x;
 }
+
+#ifdef BDPT
+/* The density of sample_box_filter's offsets along one axis at x (kernels/bdpt.cl splats light
+ * tracing with it). */
+float pdf_box_filter(const RenderParams *p, float x)
+{
+    return fabs(x) <= p->filter.x ? 0.5f / p->filter.x : 0.0f;
+}
+#endif

@@ -41,3 +41,17 @@ float2 sample_gaussian_filter(const RenderParams *p, float2 u, Rng *rng)
     float4 v = next_uniform4(rng);
     return (float2)(sample_gaussian(p, u.x, u.y, rng), sample_gaussian(p, v.x, v.y, rng));
 }
+
+#ifdef BDPT
+/* The density of sample_gaussian_filter's offsets along one axis at x: g(x) - g(radius) over its
+ * integral from -radius to radius, stddev sqrt(2 pi) erf(radius / (stddev sqrt 2)) - 2 radius
+ * g(radius) (kernels/bdpt.cl splats light tracing with it). */
+float pdf_gaussian_filter(const RenderParams *p, float x)
+{
+    float radius = p->filter.x, stddev = p->filter.y, bias = p->filter.z;
+    if (fabs(x) > radius)
+        return 0.0f;
+    float area = stddev * sqrt(2.0f * PI_F) * erf(radius / (stddev * sqrt(2.0f))) - 2.0f * radius * bias;
+    return fmax(0.0f, exp(-x * x / (2.0f * stddev * stddev)) - bias) / area;
+}
+#endif

@@ -15,3 +15,13 @@ float2 sample_tent_filter(const RenderParams *p, float2 u, Rng *rng)
 {
     return (float2)(sample_tent(u.x, p->filter.x), sample_tent(u.y, p->filter.x));
 }
+
+#ifdef BDPT
+/* The density of sample_tent_filter's offsets along one axis at x: the tent over its area, the
+ * radius (kernels/bdpt.cl splats light tracing with it). */
+float pdf_tent_filter(const RenderParams *p, float x)
+{
+    float r = p->filter.x;
+    return fmax(0.0f, 1.0f - fabs(x) / r) / r;
+}
+#endif

@@ -76,3 +76,56 @@ int sample_area_light(const SceneData *sc, const RenderParams *p, const global L
     ls->le = area_light_radiance(sc, l->prim, ls->y, b);
     return 1;
 }
+
+#ifdef BDPT
+/* Light leaving an area light (kernels/bdpt.cl's light subpaths; pbrt-v4's DiffuseAreaLight::
+ * SampleLe): a point uniform over the primitive's area (a sphere's whole surface, whose back
+ * half faces away from any point that sees it), and a cosine-weighted direction about its
+ * normal, on its front or, for an emitter of both sides, on either with probability 1/2. */
+int emit_area_light(const SceneData *sc, const global Light *l, float4 u, LightEmission *e)
+{
+    float2 b = (float2)(0.0f);
+    float3 d = sample_cosine_hemisphere(u.z, u.w);
+    int two_sided = emits_back(sc, l->prim);
+    float side = 1.0f;
+    if (two_sided) {
+        /* the first uniform picks the side and is stretched back onto [0, 1) for the point */
+        side = u.x < 0.5f ? 1.0f : -1.0f;
+        u.x = u.x < 0.5f ? 2.0f * u.x : 2.0f * u.x - 1.0f;
+    }
+#ifndef NO_TRIANGLES
+    if (l->prim >= sc->num_spheres) {
+        const global Triangle *tri = &sc->triangles[l->prim - sc->num_spheres];
+        e->p = sample_triangle_area(tri, u.x, u.y, &b);
+        e->n = side * triangle_normal(tri);
+        e->pdf_pos = 1.0f / triangle_area(tri);
+        /* the point's rounding error is within gamma(7) of the corners' magnitudes (pbrt-v4
+           eq. 6.29, |b_i v_i| <= |v_i|) */
+        e->offset = error_offset(e->n, gamma_bound(7) * (fabs(tri->v0.xyz) + fabs(tri->v1.xyz) + fabs(tri->v2.xyz)));
+    } else
+#endif
+    {
+        Sphere s = sc->spheres[l->prim];
+        e->n = sample_uniform_sphere(u.x, u.y);
+        e->p = s.xyz + s.w * e->n;
+        e->pdf_pos = 1.0f / (4.0f * PI_F * s.w * s.w);
+        e->offset = gamma_bound(8) * (dot(fabs(s.xyz), fabs(e->n)) + s.w);
+    }
+    e->d = to_world(d, e->n);
+    e->pdf_dir = pdf_cosine_hemisphere(d.z) * (two_sided ? 0.5f : 1.0f);
+    e->le = area_light_radiance(sc, l->prim, e->p, b);
+    e->prim = l->prim;
+    e->delta = 0;
+    return e->pdf_dir > 0.0f;
+}
+
+/* The density per solid angle with which emit_area_light leaves point y of primitive `prim`
+ * (normal n, on its front) in direction w. */
+float pdf_area_emission(const SceneData *sc, int prim, float3 n, float3 w)
+{
+    float c = dot(n, w);
+    if (emits_back(sc, prim))
+        return 0.5f * fabs(c) / PI_F;
+    return c > 0.0f ? c / PI_F : 0.0f;
+}
+#endif

@@ -14,3 +14,27 @@ int sample_point_light(const SceneData *sc, const RenderParams *p, const global 
     ls->le = l->p1.xyz / r2;
     return 1;
 }
+
+#ifdef BDPT
+/* Light leaving a point light (kernels/bdpt.cl): every direction, uniformly (pbrt-v4's
+ * PointLight::SampleLe); le is the intensity. */
+int emit_point_light(const SceneData *sc, const global Light *l, float4 u, LightEmission *e)
+{
+    e->p = l->p0.xyz;
+    e->n = (float3)(0.0f);
+    e->d = sample_uniform_sphere(u.x, u.y);
+    e->pdf_pos = 1.0f;
+    e->pdf_dir = 1.0f / (4.0f * PI_F);
+    e->le = l->p1.xyz;
+    e->offset = 0.0f;
+    e->prim = -1;
+    e->delta = 1;
+    return 1;
+}
+
+/* The density per solid angle with which emit_point_light leaves in direction w. */
+float pdf_point_emission(const global Light *l, float3 w)
+{
+    return 1.0f / (4.0f * PI_F);
+}
+#endif

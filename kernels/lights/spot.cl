@@ -34,3 +34,31 @@ int sample_spot_light(const SceneData *sc, const RenderParams *p, const global L
     ls->le = l->p1.xyz * (spot_falloff(l, dot(-ls->wi, l->p2.xyz)) / r2);
     return 1;
 }
+
+#ifdef BDPT
+/* The density per solid angle with which emit_spot_light leaves in direction w. */
+float pdf_spot_emission(const global Light *l, float3 w)
+{
+    float cos_cutoff = l->p0.w;
+    return dot(w, l->p2.xyz) > cos_cutoff ? 1.0f / (2.0f * PI_F * (1.0f - cos_cutoff)) : 0.0f;
+}
+
+/* Light leaving a spot light (kernels/bdpt.cl): directions uniform in the cone of its cutoff
+ * (pbrt-v4's SpotLight::SampleLe); le is the intensity times the falloff. */
+int emit_spot_light(const SceneData *sc, const global Light *l, float4 u, LightEmission *e)
+{
+    float cos_cutoff = l->p0.w;
+    float cos_t = 1.0f - u.x * (1.0f - cos_cutoff);
+    float sin_t = sqrt(fmax(0.0f, 1.0f - cos_t * cos_t));
+    e->p = l->p0.xyz;
+    e->n = (float3)(0.0f);
+    e->d = to_world((float3)(COS_TURNS(u.y) * sin_t, SIN_TURNS(u.y) * sin_t, cos_t), l->p2.xyz);
+    e->pdf_pos = 1.0f;
+    e->pdf_dir = pdf_spot_emission(l, e->d);
+    e->le = l->p1.xyz * spot_falloff(l, cos_t);
+    e->offset = 0.0f;
+    e->prim = -1;
+    e->delta = 1;
+    return e->pdf_dir > 0.0f;
+}
+#endif

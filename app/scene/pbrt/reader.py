@@ -346,7 +346,11 @@ class PbrtReader:
     def _integrator(self, tokens, offset):
         kind = string(tokens, "Integrator")
         params = parameters(tokens)
-        if kind not in ("path", "volpath"):
+        if kind in ("bdpt", "mlt", "sppm"):
+            self.settings.integrator = "bdpt"
+            if kind != "bdpt":
+                warn(f"{tokens.where(offset)}: pathtrace renders {kind} with bdpt, the nearest method it has")
+        elif kind not in ("path", "volpath"):
             warn(f"{tokens.where(offset)}: pathtrace renders with its path tracer instead of {kind}")
         depth = params.int("maxdepth", 5)
         if not 0 <= depth < 2 ** 31 - 1:

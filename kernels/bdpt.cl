@@ -1,0 +1,585 @@
+/* Bidirectional path tracing (Veach 1997, chapter 10; the conventions of pbrt-v4's
+ * src/pbrt/cpu/integrators.cpp BDPTIntegrator and pbrt-v3's bdpt.cpp): for each sample, a camera
+ * subpath from the pixel and a light subpath from a light chosen by power, then every connection
+ * (s light vertices, t camera vertices) of total depth at most BDPT, the program's longest path
+ * (app/features.py), each weighted by multiple importance sampling (power heuristic) over the
+ * strategies that could have drawn the same path, from the forward and reverse densities the
+ * vertices store (bdpt_mis_weight), as pbrt does, not by drawing each strategy again.
+ *
+ * A path's vertices: the camera (or the light) is vertex 0 of its subpath; a path of s + t
+ * vertices has depth s + t - 1 in the path tracer's sense (kernels/integrator.cl: the camera
+ * ray's hit is depth 1, max_depth the last vertex, which only emits).
+ *
+ *   t >= 2, s = 0   the camera subpath hits an emitter (or escapes to the environment)
+ *   t >= 2, s = 1   a light sampled from camera vertex t - 1, as next-event estimation does
+ *   t >= 2, s >= 2  light vertex s - 1 joined to camera vertex t - 1 by a shadow ray
+ *   t = 1, s >= 2   light vertex s - 1 joined to the pinhole (light tracing): its contribution
+ *                   lands in another pixel, added to the launch's splat film by atomics
+ *
+ * Delta lobes are not joined (their vertices are not connectible) and delta lights are not hit,
+ * as in pbrt; the pinhole is reached by camera rays only, never by a light subpath (t = 0).
+ * Directional lights and the environment start no light subpath (app/lights/registry.py:
+ * EMITTERS): a path that ends there has two strategies, s = 0 and s = 1, weighed against each
+ * other as the path tracer does. There is no Russian roulette (pbrt-v4's BDPT has none): paths
+ * end at depth BDPT. Light subpaths carry importance: BSDFs are evaluated as their adjoints
+ * (arguments swapped, kernels/bsdf.cl's radiance convention), a delta refraction keeps the eta^2
+ * that radiance loses, and shading normals are corrected as Veach's section 5.3 says. */
+
+#define BDPT_CAMERA_VERTICES (BDPT + 1)
+#define BDPT_LIGHT_VERTICES BDPT
+
+/* One vertex of a subpath. The camera and a light are vertices of their own: s.p is their
+ * point and s.ng an area light's normal (0 for the pinhole and a point). */
+typedef struct {
+    Surface s;            /* a surface vertex's surface, its shading frame complete */
+#ifdef TEXTURES
+    Material m;           /* its material with the textures looked up there */
+#else
+    const global Material *m;
+#endif
+    float3 wo;            /* unit direction towards the vertex before it on its subpath */
+    float3 beta;          /* the subpath's throughput up to it */
+    float pdf_fwd;        /* density per area of drawing it along its own subpath */
+    float pdf_rev;        /* density per area of drawing it from the other end */
+    int delta;            /* its sampled lobe was a delta */
+    int connectible;      /* a surface that scatters light into more than a delta lobe */
+    int emits;            /* a surface that emits towards wo */
+} Vertex;
+
+#ifdef TEXTURES
+#define VERTEX_MATERIAL(v) ((MaterialRef)&(v)->m)
+#else
+#define VERTEX_MATERIAL(v) ((v)->m)
+#endif
+
+/* A density per solid angle at `from` as a density per area at `to`, whose geometric normal is
+ * n (0: a point, no cosine): pbrt's Vertex::ConvertDensity. */
+float convert_density(float pdf, float3 from, float3 to, float3 n)
+{
+    float3 w = to - from;
+    float d2 = dot(w, w);
+    if (!(d2 > 0.0f))
+        return 0.0f;
+    float c = any(n != 0.0f) ? fabs(dot(n, w)) * rsqrt(d2) : 1.0f;
+    return pdf * c / d2;
+}
+
+/* Veach's correction of the adjoint BSDF for shading normals (thesis, eq. 5.19; pbrt-v3's
+ * CorrectShadingNormal): importance arriving along wo and leaving along wi. */
+float correct_shading_normal(const Surface *s, float3 wo, float3 wi)
+{
+    float den = fabs(dot(wo, s->ng)) * fabs(dot(wi, s->ns));
+    return den > 0.0f ? fabs(dot(wo, s->ns)) * fabs(dot(wi, s->ng)) / den : 0.0f;
+}
+
+/* The BSDF of surface vertex v for light arriving along world direction `from` and leaving
+ * along `to` (radiance flows from `from` to `to`), without the cosine; 0 where the shading and
+ * geometric normals disagree on either side (no light leaks, as next-event estimation tests). */
+float3 eval_scattering(const Vertex *v, float3 from, float3 to)
+{
+    float3 a = to_shading(&v->s, from), b = to_shading(&v->s, to);
+    if (dot(from, v->s.ng) * a.z <= 0.0f || dot(to, v->s.ng) * b.z <= 0.0f)
+        return (float3)(0.0f);
+    return eval_bsdf(VERTEX_MATERIAL(v), b, a);
+}
+
+/* The density per solid angle with which surface vertex v, reached along `wo`, samples `wi`. */
+float pdf_scattering(const Vertex *v, float3 wo, float3 wi)
+{
+    return pdf_bsdf(VERTEX_MATERIAL(v), to_shading(&v->s, wo), to_shading(&v->s, wi));
+}
+
+/* The unit normal on the front of emissive primitive `prim` at its point y. */
+float3 emitter_normal(const SceneData *sc, int prim, float3 y)
+{
+#ifndef NO_TRIANGLES
+    if (prim >= sc->num_spheres)
+        return triangle_normal(&sc->triangles[prim - sc->num_spheres]);
+#endif
+    Sphere s = sc->spheres[prim];
+    return (y - s.xyz) / s.w;
+}
+
+/* The density per area with which a light subpath starts at a point of emissive primitive
+ * `prim`: the light's choice by power times its area's inverse (pbrt's PdfLightOrigin). */
+float pdf_emitter_origin(const SceneData *sc, int prim)
+{
+#ifndef NO_TRIANGLES
+    if (prim >= sc->num_spheres)
+        return sc->light_pick[prim] / triangle_area(&sc->triangles[prim - sc->num_spheres]);
+#endif
+    float r = sc->spheres[prim].w;
+    return sc->light_pick[prim] / (4.0f * PI_F * r * r);
+}
+
+/* The ratio of two strategies' densities as pbrt's MISWeight takes it, a delta's 0 read as 1,
+ * squared for the power heuristic. */
+float density_ratio2(float rev, float fwd)
+{
+    float r = (rev != 0.0f ? rev : 1.0f) / (fwd != 0.0f ? fwd : 1.0f);
+    return r * r;
+}
+
+/* The power heuristic's weight of strategy (s, t) for the path made of light vertices
+ * lt[0, s) and camera vertices cam[0, t) (pbrt-v4's BDPTIntegrator MISWeight with beta = 2):
+ * the other strategies' densities relative to this one's, as products of the ratios of reverse
+ * to forward densities along each subpath. The connection changes four reverse densities, of
+ * camera vertices t - 1 and t - 2 and light vertices s - 1 and s - 2, given in rev (x, y, z, w);
+ * the connected vertices count as non-delta. For s = 1 the light vertex is the one sampled
+ * from camera vertex t - 1, not lt[0]: its forward density is origin_pdf. light_delta: the
+ * light's position is a delta (a point or spot), which no camera subpath hits. */
+float bdpt_mis_weight(const Vertex *lt, int s, const Vertex *cam, int t, float4 rev, float origin_pdf,
+                      int light_delta)
+{
+    if (s + t == 2)
+        return 1.0f;
+    float sum = 0.0f, r = 1.0f;
+    for (int i = t - 1; i > 0; --i) {
+        float pdf_rev = i == t - 1 ? rev.x : i == t - 2 ? rev.y : cam[i].pdf_rev;
+        r *= density_ratio2(pdf_rev, cam[i].pdf_fwd);
+        if ((i == t - 1 || !cam[i].delta) && !cam[i - 1].delta)
+            sum += r;
+    }
+    r = 1.0f;
+    for (int i = s - 1; i >= 0; --i) {
+        float pdf_rev = i == s - 1 ? rev.z : i == s - 2 ? rev.w : lt[i].pdf_rev;
+        float pdf_fwd = s == 1 ? origin_pdf : lt[i].pdf_fwd;
+        r *= density_ratio2(pdf_rev, pdf_fwd);
+        int delta_before = i > 0 ? lt[i - 1].delta : light_delta;
+        if ((i == s - 1 || !lt[i].delta) && !delta_before)
+            sum += r;
+    }
+    return 1.0f / (1.0f + sum);
+}
+
+/* Traces subpath `path` on from its vertex k - 1 along the ray o + t d (leaving surface `self`),
+ * whose direction was drawn with density pdf_dir per solid angle (0: a delta lobe), with
+ * throughput beta, to at most max_vertices vertices; returns its vertex count. Each new
+ * vertex stores its forward density, and the reverse density of the one before it. A camera
+ * subpath (importance 0) that escapes adds the environment's radiance to *escaped, weighted
+ * against light sampling as the path tracer weighs it; a light subpath (importance 1) scatters
+ * by the adjoint BSDFs. */
+int extend_subpath(const SceneData *sc, const RenderParams *p, Vertex *path, int k, int max_vertices,
+                   float3 o, float3 d, float3 beta, float pdf_dir, PrimId self, const int importance,
+                   Rng *rng, int *rays, float3 *escaped)
+{
+    for (; k < max_vertices; ++k) {
+        Vertex *prev = &path[k - 1];
+        ++*rays;
+        Hit hit = intersect_scene(sc, o, d, INFINITY, self);
+        if (hit.prim < 0) {
+            if (!importance) {
+                /* the camera ray itself has no light-sampling rival (the path tracer's pdf_prev 0) */
+                float w = 1.0f;
+                if (k > 1 && pdf_dir > 0.0f && p->env_pick > 0.0f)
+                    w = mis_weight(pdf_dir, p->env_pick * pdf_environment(sc, p, prev->s.ns, d));
+                *escaped += beta * lookup_environment(sc->env, p, d) * w;
+            }
+            return k;
+        }
+        Surface s = surface_at(sc, &hit, o, d);
+        int flags = sc->materials[sc->prim_material[hit.prim]].flags;
+        int front = dot(s.ng, d) < 0.0f;
+        /* one-sided, as the path tracer's surfaces (kernels/integrator.cl: trace_path) */
+        int scatters = front || (flags & (MATERIAL_TWOSIDED | MATERIAL_TRANSMISSIVE));
+        if (!front && (flags & MATERIAL_TWOSIDED))
+            turn_round(&s);
+        Vertex *v = &path[k];
+#ifdef TEXTURES
+        v->m = shade_material(sc, MATERIAL_ROW(sc, s, d), &s, -d);
+#else
+        v->m = MATERIAL_ROW(sc, s, d);
+#endif
+        complete_frame(sc, &s);
+        v->s = s;
+        v->wo = -d;
+        v->beta = beta;
+        v->pdf_fwd = convert_density(pdf_dir, prev->s.p, s.p, s.ng);
+        v->pdf_rev = 0.0f;
+        v->delta = 0;
+        MaterialRef m = VERTEX_MATERIAL(v);
+        v->emits = front || (flags & MATERIAL_EMITS_BACK);
+        v->connectible = scatters && !(m->flags & MATERIAL_DELTA);
+        if (!scatters || k + 1 >= max_vertices)
+            return k + 1;
+        float3 wo = to_shading(&s, -d);
+        float4 u = next_uniform4(rng);
+        BSDFSample bs;
+        bs.eta = 1.0f;
+        if (!sample_bsdf(m, wo, u.xyz, &bs))
+            return k + 1;
+        float3 wi = from_shading(&s, bs.wi);
+        if (dot(wi, s.ng) * bs.wi.z <= 0.0f)
+            return k + 1;                    /* the normals disagree on wi's side */
+        /* importance scatters by the adjoint BSDF f(wi, wo): the BSDFs are reciprocal but for
+           a refraction's 1 / eta^2, which radiance takes and importance not (pbrt's
+           TransportMode), so its weight is radiance's times eta^2; a layered BSDF's estimate
+           (kernels/layered.cl) keeps this form, where f(wi, wo) / pdf would not */
+        float3 weight = bs.weight;
+        if (importance)
+            weight *= bs.eta * bs.eta * correct_shading_normal(&s, -d, wi);
+        float pdf_rev = 0.0f;
+        if (bs.lobe & LOBE_DELTA) {
+            v->delta = 1;
+            pdf_dir = 0.0f;
+        } else {
+            pdf_dir = bs.pdf;
+            pdf_rev = pdf_bsdf(m, bs.wi, wo);
+        }
+        beta *= weight;
+        if (all(beta == 0.0f))
+            return k + 1;
+        prev->pdf_rev = convert_density(pdf_rev, s.p, prev->s.p, prev->s.ng);
+        o = offset_ray_origin(s.p, s.offset, s.ng, wi);
+        d = wi;
+        self = HIT_ID(hit);
+    }
+    return k;
+}
+
+/* A light subpath in lt (at most max_vertices vertices, the light's own first): a light
+ * chosen by power through the alias table, light leaving it (emit_light_of_type); returns its
+ * vertex count, 0 where the light chosen starts none. *light_delta: its position is a delta. */
+int trace_light_subpath(const SceneData *sc, const RenderParams *p, Vertex *lt, int max_vertices, Rng *rng,
+                        int *rays, int *light_delta)
+{
+    uint4 r = next_bits4(rng);
+    float4 u = next_uniform4(rng);
+    if (p->num_lights <= 0 || max_vertices < 1)
+        return 0;
+    const global Light *l = &sc->lights[pick_light(sc->lights, p->num_lights, r.w, r.x)];
+    LightEmission e;
+    if (!emit_light_of_type(sc, l, u, &e) || all(e.le == 0.0f))
+        return 0;
+    float origin = l->pick * e.pdf_pos;
+    lt[0].s.p = e.p;
+    lt[0].s.ng = e.n;
+    lt[0].s.prim = e.prim;
+    lt[0].s.offset = e.offset;
+#ifdef INSTANCES
+    lt[0].s.instance = -1;
+#endif
+    lt[0].beta = e.le;
+    lt[0].pdf_fwd = origin;
+    lt[0].pdf_rev = 0.0f;
+    lt[0].delta = 0;
+    lt[0].connectible = 0;
+    lt[0].emits = 0;
+    *light_delta = e.delta;
+    float c = e.prim >= 0 ? fabs(dot(e.n, e.d)) : 1.0f;
+    float3 beta = e.le * (c / (origin * e.pdf_dir));
+    float3 o = e.prim >= 0 ? offset_ray_origin(e.p, e.offset, e.n, e.d) : e.p;
+#ifdef INSTANCES
+    PrimId self = NO_PRIM;    /* the light table's primitives are not instanced */
+#else
+    PrimId self = e.prim >= 0 ? e.prim : NO_PRIM;
+#endif
+    float3 unused = (float3)(0.0f);
+    return extend_subpath(sc, p, lt, 1, max_vertices, o, e.d, beta, e.pdf_dir, self, 1, rng, rays, &unused);
+}
+
+/* Whether the segment from surface vertex a towards point b is blocked (b itself excluded,
+ * stopping just short of it as light_visibility does). */
+int segment_blocked(const SceneData *sc, const Vertex *a, float3 b, int *rays)
+{
+    float3 w = b - a->s.p;
+    float3 o = offset_ray_origin(a->s.p, a->s.offset, a->s.ng, w);
+    float dist = norm(b - o);
+    ++*rays;
+    return occluded(sc, o, (b - o) / dist, dist * (1.0f - SHADOW_EPSILON), SURFACE_ID(a->s));
+}
+
+/* The reverse densities of bdpt_mis_weight (camera vertices t - 1 and t - 2, light vertices
+ * s - 1 and s - 2) for each kind of connection: pbrt's Vertex::Pdf and PdfLight, PdfLightOrigin
+ * as pbrt-v4's MISWeight assigns them. */
+
+/* s = 0: camera vertex pt, after pm, lies on an emitter. */
+float4 densities_from_emitter(const SceneData *sc, const Vertex *pt, const Vertex *pm)
+{
+    int prim = pt->s.prim;
+    float3 n = emitter_normal(sc, prim, pt->s.p);
+    return (float4)(pdf_emitter_origin(sc, prim),
+                    convert_density(pdf_area_emission(sc, prim, n, pt->wo), pt->s.p, pm->s.p, pm->s.ng), 0.0f, 0.0f);
+}
+
+/* s = 1: light l sampled at point y (normal n, 0 for a point) from camera vertex pt, after pm. */
+float4 densities_to_light(const SceneData *sc, const global Light *l, float3 y, float3 n, const Vertex *pt,
+                          const Vertex *pm)
+{
+    float3 wi = unit(y - pt->s.p);
+    return (float4)(convert_density(pdf_emission_of_type(sc, l, n, -wi), y, pt->s.p, pt->s.ng),
+                    convert_density(pdf_scattering(pt, wi, pt->wo), pt->s.p, pm->s.p, pm->s.ng),
+                    convert_density(pdf_scattering(pt, pt->wo, wi), pt->s.p, y, n), 0.0f);
+}
+
+/* s >= 2, t >= 2: light vertex qs, after qm, joined to camera vertex pt, after pm. */
+float4 densities_between(const Vertex *qs, const Vertex *qm, const Vertex *pt, const Vertex *pm)
+{
+    float3 w = unit(qs->s.p - pt->s.p);
+    return (float4)(convert_density(pdf_scattering(qs, qs->wo, -w), qs->s.p, pt->s.p, pt->s.ng),
+                    convert_density(pdf_scattering(pt, w, pt->wo), pt->s.p, pm->s.p, pm->s.ng),
+                    convert_density(pdf_scattering(pt, pt->wo, w), pt->s.p, qs->s.p, qs->s.ng),
+                    convert_density(pdf_scattering(qs, -w, qs->wo), qs->s.p, qm->s.p, qm->s.ng));
+}
+
+/* t = 1: light vertex qs, after qm, joined to the pinhole. */
+float4 densities_to_camera(const RenderParams *p, const Vertex *qs, const Vertex *qm)
+{
+    float3 w = unit(p->eye.xyz - qs->s.p);
+    return (float4)(0.0f, 0.0f,
+                    convert_density(pdf_perspective_direction(p, -w), p->eye.xyz, qs->s.p, qs->s.ng),
+                    convert_density(pdf_scattering(qs, w, qs->wo), qs->s.p, qm->s.p, qm->s.ng));
+}
+
+/* Strategy s = 0: camera vertex t - 1 (t >= 2) lies on an emitter; the radiance it sends back
+ * along the camera subpath, weighted. */
+float3 connect_emitter(const SceneData *sc, const Vertex *lt, const Vertex *cam, int t)
+{
+    const Vertex *pt = &cam[t - 1], *pm = &cam[t - 2];
+    if (!pt->emits)
+        return (float3)(0.0f);
+    float3 le = VERTEX_MATERIAL(pt)->emission.xyz;
+    if (all(le == 0.0f))
+        return (float3)(0.0f);
+    return pt->beta * le * bdpt_mis_weight(lt, 0, cam, t, densities_from_emitter(sc, pt, pm), 0.0f, 0);
+}
+
+/* Strategy s = 1: a light sampled from camera vertex t - 1 (t >= 2), as next-event estimation
+ * samples one (kernels/lights.cl: sample_light, by power), weighted. A light at infinity, which
+ * starts no light subpath, is weighed against the camera subpath's finding it alone. */
+float3 connect_light_sample(const SceneData *sc, const RenderParams *p, const Vertex *lt, const Vertex *cam,
+                            int t, Rng *rng, int *rays)
+{
+    const Vertex *pt = &cam[t - 1], *pm = &cam[t - 2];
+    LightSample ls = sample_light(sc, p, pt->s.p, pt->s.ns, next_bits4(rng), rng);
+    if (!(ls.pdf > 0.0f))
+        return (float3)(0.0f);
+    float3 f = eval_scattering(pt, ls.wi, pt->wo);
+    float3 c = pt->beta * f * fabs(dot(ls.wi, pt->s.ns)) * ls.le / ls.pdf;
+    if (all(c == 0.0f))
+        return (float3)(0.0f);
+    float w;
+    if (ls.flags & LIGHT_AT_INFINITY) {
+        w = (ls.flags & LIGHT_DELTA) ? 1.0f : mis_weight(ls.pdf, pdf_scattering(pt, pt->wo, ls.wi));
+    } else {
+        const global Light *l = &sc->lights[ls.light];
+        int delta = (ls.flags & LIGHT_DELTA) != 0;
+        float3 n = delta ? (float3)(0.0f) : emitter_normal(sc, l->prim, ls.y);
+        float origin = delta ? l->pick : pdf_emitter_origin(sc, l->prim);
+        w = bdpt_mis_weight(lt, 1, cam, t, densities_to_light(sc, l, ls.y, n, pt, pm), origin, delta);
+    }
+    float3 o = offset_ray_origin(pt->s.p, pt->s.offset, pt->s.ng, ls.wi);
+    return c * w * light_visibility(sc, o, &ls, SURFACE_ID(pt->s), -1, rays);
+}
+
+/* Strategy s >= 2, t >= 2: light vertex s - 1 joined to camera vertex t - 1, weighted. */
+float3 connect_vertices(const SceneData *sc, const Vertex *lt, int s, const Vertex *cam, int t, int *rays)
+{
+    const Vertex *qs = &lt[s - 1], *qm = &lt[s - 2], *pt = &cam[t - 1], *pm = &cam[t - 2];
+    float3 w = qs->s.p - pt->s.p;
+    float d2 = dot(w, w);
+    if (!(d2 > 0.0f))
+        return (float3)(0.0f);
+    w *= rsqrt(d2);
+    /* radiance flows from qs's past through qs, along -w to pt, and on to pt's past */
+    float3 f_q = eval_scattering(qs, qs->wo, -w) * correct_shading_normal(&qs->s, qs->wo, -w);
+    float3 f_p = eval_scattering(pt, w, pt->wo);
+    float g = fabs(dot(w, qs->s.ns)) * fabs(dot(w, pt->s.ns)) / d2;
+    float3 c = qs->beta * f_q * f_p * pt->beta * g;
+    if (all(c == 0.0f))
+        return (float3)(0.0f);
+    c *= bdpt_mis_weight(lt, s, cam, t, densities_between(qs, qm, pt, pm), 0.0f, 0);
+    return segment_blocked(sc, pt, qs->s.p, rays) ? (float3)(0.0f) : c;
+}
+
+/* Adds v to *a by compare-and-swap on its bits: OpenCL 1.2 has no atomic float add. */
+void atomic_add_float(volatile global float *a, float v)
+{
+    volatile global uint *bits = (volatile global uint *)a;
+    uint old = *bits, seen;
+    while ((seen = atomic_cmpxchg(bits, old, as_uint(as_float(old) + v))) != old)
+        old = seen;
+}
+
+/* Adds contribution c of film point `at` (pixels) to the splat film, to every pixel whose filter
+ * reaches the point, weighted by the density with which that pixel's camera rays land there
+ * (filter importance sampling, kernels/camera.cl: pdf_filter along each axis): a light-traced
+ * point counts for each pixel as its camera rays would. */
+void splat(global float4 *film, const RenderParams *p, float2 at, float3 c)
+{
+    float r = p->filter.x;
+    int x0 = max((int)ceil(at.x - r - 0.5f), 0), x1 = min((int)floor(at.x + r - 0.5f), (int)p->width - 1);
+    int y0 = max((int)ceil(at.y - r - 0.5f), 0), y1 = min((int)floor(at.y + r - 0.5f), (int)p->height - 1);
+    for (int y = y0; y <= y1; ++y) {
+        float wy = pdf_filter(p, at.y - ((float)y + 0.5f));
+        for (int x = x0; x <= x1; ++x) {
+            float w = wy * pdf_filter(p, at.x - ((float)x + 0.5f));
+            if (!(w > 0.0f))
+                continue;
+            volatile global float *px = (volatile global float *)&film[y * p->width + x];
+            atomic_add_float(px, w * c.x);
+            atomic_add_float(px + 1, w * c.y);
+            atomic_add_float(px + 2, w * c.z);
+        }
+    }
+}
+
+/* Strategy t = 1, s >= 2: light vertex s - 1 joined to the pinhole (pbrt-v4's
+ * PerspectiveCamera::SampleWi), splatted where it lands on the film; weighted, or with
+ * LIGHT_TRACING alone. */
+void connect_camera(const SceneData *sc, const RenderParams *p, const Vertex *lt, int s, const Vertex *cam,
+                    global float4 *film, int *rays)
+{
+    const Vertex *qs = &lt[s - 1], *qm = &lt[s - 2];
+    float3 w = p->eye.xyz - qs->s.p;          /* towards the eye */
+    float d2 = dot(w, w);
+    if (!(d2 > 0.0f))
+        return;
+    w *= rsqrt(d2);
+    float2 at;
+    float cos_t;
+    if (!perspective_film_point(p, -w, &at, &cos_t))
+        return;
+    float area = perspective_film_area(p);
+    float3 f = eval_scattering(qs, qs->wo, w) * correct_shading_normal(&qs->s, qs->wo, w);
+    /* We cos_lens / (dist^2 pdf_lens), We = 1 / (A cos^4), with cos_lens = cos theta */
+    float3 c = qs->beta * f * fabs(dot(w, qs->s.ns)) / (area * cos_t * cos_t * cos_t * d2);
+    if (all(c == 0.0f) || !all(isfinite(c)))
+        return;
+#ifndef LIGHT_TRACING
+    c *= bdpt_mis_weight(lt, s, cam, 1, densities_to_camera(p, qs, qm), 0.0f, 0);
+#endif
+    if (!segment_blocked(sc, qs, p->eye.xyz, rays))
+        splat(film, p, at, c);
+}
+
+#ifdef LIGHT_TRACING
+/* Strategy s = 1, t = 1 of light tracing alone: the point a light subpath leaves an area light
+ * from, seen by the pinhole (Mitsuba 3's ptracer sees emitters so); a point or spot light, which
+ * no camera ray sees either, is not. */
+void connect_light_to_camera(const SceneData *sc, const RenderParams *p, const Vertex *light,
+                             global float4 *film, int *rays)
+{
+    int prim = light->s.prim;
+    if (prim < 0)
+        return;
+    float3 w = p->eye.xyz - light->s.p;
+    float d2 = dot(w, w);
+    if (!(d2 > 0.0f))
+        return;
+    w *= rsqrt(d2);
+    float cos_l = dot(emitter_normal(sc, prim, light->s.p), w);
+    if (emits_back(sc, prim))
+        cos_l = fabs(cos_l);
+    float2 at;
+    float cos_t;
+    if (!(cos_l > 0.0f) || !perspective_film_point(p, -w, &at, &cos_t))
+        return;
+    /* Le cos_l / pdf_origin, times We cos_lens / dist^2 as in connect_camera */
+    float3 c = light->beta * cos_l
+               / (light->pdf_fwd * perspective_film_area(p) * cos_t * cos_t * cos_t * d2);
+    if (all(isfinite(c)) && !segment_blocked(sc, light, p->eye.xyz, rays))
+        splat(film, p, at, c);
+}
+
+/* One sample of light tracing alone (Mitsuba 3's ptracer): a light subpath, each of its
+ * vertices joined to the pinhole with weight 1; no camera subpath, the pixel's own radiance 0. */
+float3 sample_light_tracing(const SceneData *sc, const RenderParams *p, Rng *rng, global float4 *film, int *rays)
+{
+    Vertex lt[BDPT_LIGHT_VERTICES];
+    int light_delta = 0;
+    int nl = trace_light_subpath(sc, p, lt, BDPT_LIGHT_VERTICES, rng, rays, &light_delta);
+    if (nl > 0)
+        connect_light_to_camera(sc, p, &lt[0], film, rays);
+    for (int s = 2; s <= nl; ++s)
+        if (lt[s - 1].connectible)
+            connect_camera(sc, p, lt, s, 0, film, rays);
+    return (float3)(0.0f);
+}
+#endif
+
+/* One sample of pixel (x, y): its camera subpath's strategies (t >= 2) as the radiance
+ * returned, the light tracing of its light subpath (t = 1) splatted. */
+float3 sample_bidirectional(const SceneData *sc, const RenderParams *p, int x, int y, Rng *rng,
+                            global float4 *film, int *rays)
+{
+    Vertex cam[BDPT_CAMERA_VERTICES], lt[BDPT_LIGHT_VERTICES];
+    CameraRay ray = sample_camera_ray(p, x, y, rng);
+    cam[0].s.p = ray.o;
+    cam[0].s.ng = (float3)(0.0f);
+    cam[0].beta = (float3)(1.0f);
+    cam[0].pdf_fwd = 1.0f;
+    cam[0].pdf_rev = 0.0f;
+    cam[0].delta = 0;
+    cam[0].connectible = 0;
+    cam[0].emits = 0;
+    float3 l = (float3)(0.0f);
+    int nc = extend_subpath(sc, p, cam, 1, BDPT_CAMERA_VERTICES, ray.o, ray.d, (float3)(1.0f),
+                            pdf_perspective_direction(p, ray.d), NO_PRIM, 0, rng, rays, &l);
+    int light_delta = 0;
+    int nl = trace_light_subpath(sc, p, lt, BDPT_LIGHT_VERTICES, rng, rays, &light_delta);
+    /* s = 1 samples a light of its own, with or without a light subpath */
+    int s_max = max(nl, 1);
+    for (int t = 1; t <= nc; ++t) {
+        for (int s = 0; s <= s_max; ++s) {
+            if (s + t < 2 || s + t > BDPT + 1 || (s == 1 && t == 1))
+                continue;
+            if (t == 1) {
+                if (lt[s - 1].connectible)
+                    connect_camera(sc, p, lt, s, cam, film, rays);
+            } else if (s == 0) {
+                l += connect_emitter(sc, lt, cam, t);
+            } else if (s == 1) {
+                if (cam[t - 1].connectible && p->num_lights > 0)
+                    l += connect_light_sample(sc, p, lt, cam, t, rng, rays);
+            } else if (cam[t - 1].connectible && lt[s - 1].connectible) {
+                l += connect_vertices(sc, lt, s, cam, t, rays);
+            }
+        }
+    }
+    return l;
+}
+
+/* One work-item per pixel of rows [row_start, row_end) adds p.sample_count samples to the
+ * pixel's running sums, as render_pixel does (kernels/integrator.cl), and splats its light
+ * subpaths' contributions onto `film`, which add_splats then adds to the sums. */
+kernel void render_bdpt(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *sum, global float4 *sum_sq,
+                        global float4 *sum_c, global float4 *sum_sq_c, global float4 *film)
+{
+    SceneData sc = SCENE_DATA(p.num_spheres, p.layout);
+    COUNT_WORK_INTO(sc);
+    int x = get_global_id(0), y = p.row_start + get_global_id(1);
+    if (x >= p.width || y >= p.row_end)
+        return;
+    float3 acc = (float3)(0.0f), acc_sq = (float3)(0.0f);
+    int rays = 0, kept = 0;
+    for (uint i = 0; i < p.sample_count; ++i) {
+        Rng rng = make_rng(x, y, p.sample_start + i, p.seed);
+#ifdef LIGHT_TRACING
+        add_sample(sample_light_tracing(&sc, &p, &rng, film, &rays), &acc, &acc_sq, &kept);
+#else
+        add_sample(sample_bidirectional(&sc, &p, x, y, &rng, film, &rays), &acc, &acc_sq, &kept);
+#endif
+    }
+#ifdef TRAVERSAL_STATS
+    rays = *sc.work;
+#endif
+    add_to_pixel(sum, sum_sq, sum_c, sum_sq_c, y * p.width + x, acc, kept, acc_sq, rays);
+}
+
+/* One work-item per pixel of the whole image, after a launch of render_bdpt: adds the launch's
+ * splats to the pixel's radiance sum (compensated, counting no sample: the splats are part of
+ * the samples the launch added) and clears them for the next. The sums of squares hold the
+ * camera subpaths' part alone (Renderer.variance says so). */
+kernel void add_splats(const RenderParams p, global float4 *sum, global float4 *sum_c, global float4 *film)
+{
+    int x = get_global_id(0), y = get_global_id(1);
+    if (x >= p.width || y >= p.height)
+        return;
+    int k = y * p.width + x;
+    float4 s = sum[k], c = sum_c[k];
+    add_compensated(&s, &c, (float4)(film[k].xyz, 0.0f));
+    sum[k] = s;
+    sum_c[k] = c;
+    film[k] = (float4)(0.0f);
+}

@@ -1,0 +1,296 @@
+"""Bidirectional path tracing (kernels/bdpt.cl) and its light tracing alone (the integrator
+"ptracer"): each converges to the path tracer's image and to closed forms, and for fixed paths
+the MIS weights of all the strategies that can draw a path sum to 1."""
+
+from dataclasses import replace
+
+import numpy as np
+import pyopencl as cl
+import pytest
+
+from pathtrace.device import build_program
+from pathtrace.errors import UserError
+from pathtrace.filters import PixelFilter
+from pathtrace.renderer import Renderer
+from pathtrace.scene import load_scene
+from pathtrace.scene.toml_reader import read_scene_dict
+from tests.conftest import ROOT
+from tests.stats import z_test
+
+BATCHES = 6    # independent renders (seeds) whose spread gives a BDPT pixel's variance: its
+               # sums of squares hold the camera subpaths' part alone (the splats are shared)
+
+
+def render(backend, scene, integrator, spp, size, batches=BATCHES):
+    """The mean of `batches` renders of `spp` samples per pixel, and each pixel's variance of
+    that mean, from the renders' spread."""
+    means = []
+    for k in range(batches):
+        r = Renderer(backend, scene.with_settings(integrator=integrator, seed=1000 * k + 7), *size)
+        r.add_samples(spp)
+        r.finish()
+        means.append(r.mean())
+    means = np.array(means, np.float64)
+    return means.mean(0), means.var(0, ddof=1) / batches
+
+
+def path_reference(backend, scene, spp, size):
+    """The path tracer's image (with next-event estimation) and its variance of the mean, from
+    its per-pixel sample variance."""
+    r = Renderer(backend, scene.with_settings(integrator="path", seed=99), *size)
+    for _ in range(spp // 256):
+        r.add_samples(256)
+    r.finish()
+    return r.mean().astype(np.float64), r.variance().astype(np.float64) / r.samples
+
+
+RHO = 0.6
+LAMP = {"type": "emitter", "Le": [8.0, 7.2, 6.0]}
+
+
+def floor_scene(lights=(), objects=(), materials=None, max_depth=5, camera=None):
+    """A diffuse floor (y = 0) of albedo RHO under `lights`, with `objects` (spheres) on it, in a
+    black world, seen by a pinhole."""
+    return read_scene_dict({
+        "camera": camera or {"eye": [0, 2.2, 3.2], "look_at": [0, 0.4, 0], "up": [0, 1, 0], "vfov": 40},
+        "environment": {"color": 0},
+        "render": {"max_depth": max_depth, "russian_roulette": "off"},
+        "materials": {"floor": {"type": "diffuse", "rho_d": RHO}, **(materials or {})},
+        "meshes": [{"vertices": [[-9, 0, -9], [9, 0, -9], [9, 0, 9], [-9, 0, 9]], "faces": [[0, 3, 2, 1]],
+                    "material": "floor"}],
+        "spheres": list(objects), "lights": list(lights)}, "floor")
+
+
+def glass_scene():
+    """A glass sphere on the floor under a spherical lamp: a caustic, a path the path tracer finds
+    only by chance (floor -> glass -> glass -> lamp). The lamp is large enough that its image in
+    the glass is not so rare an event that a few renders' spread misjudges its variance."""
+    return floor_scene(objects=[{"center": [0, 0.5, 0], "radius": 0.5, "material": "glass"},
+                                {"center": [0.4, 2.0, -0.3], "radius": 0.3, "material": "lamp"},
+                                {"center": [-0.9, 0.3, 0.2], "radius": 0.3, "material": "metal"}],
+                       materials={"glass": {"type": "dielectric"}, "lamp": LAMP,
+                                  "metal": {"type": "roughconductor", "material": "Au", "alpha": 0.3}})
+
+
+def spot_scene():
+    """A spot and a point light over the floor, a diffuse and a glossy sphere: delta lights,
+    which light subpaths start from and no camera subpath hits."""
+    return floor_scene(
+        lights=[{"type": "spot", "position": [0.5, 2.0, 0.8], "look_at": [0, 0, 0], "intensity": 6.0,
+                 "cutoff_angle": 35.0},
+                {"type": "point", "position": [-1.0, 1.5, -0.5], "intensity": [1.0, 2.0, 3.0]}],
+        objects=[{"center": [0.3, 0.4, 0], "radius": 0.4, "material": "white"},
+                 {"center": [-0.6, 0.3, 0.4], "radius": 0.3, "material": "plastic"}],
+        materials={"white": {"type": "diffuse", "rho_d": 0.8},
+                   "plastic": {"type": "roughplastic", "diffuse_reflectance": 0.3, "alpha": 0.2}})
+
+
+def cbox():
+    return load_scene(str(ROOT / "tests/scenes/cbox.xml")).with_settings(filter=PixelFilter(), max_depth=5)
+
+
+def cbox_gaussian():
+    """The Cornell box through Mitsuba's default pixel filter, a gaussian of radius 2: light
+    tracing's splats spread over 5 x 5 pixels by the filter's density."""
+    return cbox().with_settings(filter=PixelFilter("gaussian"))
+
+
+# (scene, the integrator against the path tracer, its samples per pixel per batch, the path
+# tracer's samples per pixel): the Cornell box's diffuse walls with light tracing alone and
+# with BDPT, through a box and a gaussian filter; glass, gold and a caustic; delta lights
+CASES = {"cbox-ptracer": (cbox, "ptracer", 32, 2048), "cbox-bdpt": (cbox, "bdpt", 16, 2048),
+         "cbox-gaussian-ptracer": (cbox_gaussian, "ptracer", 32, 2048),
+         "glass-bdpt": (glass_scene, "bdpt", 16, 4096), "spot-bdpt": (spot_scene, "bdpt", 16, 2048)}
+SIZE = (24, 24)
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_converges_to_the_path_tracer(backend, case):
+    make, integrator, spp, path_spp = CASES[case]
+    scene = make()
+    m, v = render(backend, scene, integrator, spp, SIZE)
+    ref, ref_v = path_reference(backend, scene, path_spp, SIZE)
+    assert np.all(np.isfinite(m))
+    ok, p, threshold = z_test(m, v, ref, ref_v, block=4)
+    assert ok, (p, threshold)
+    # and the whole image's mean, within 4 standard errors
+    se = np.sqrt(v.sum(axis=(0, 1)) + ref_v.sum(axis=(0, 1))) / (SIZE[0] * SIZE[1])
+    assert np.all(np.abs(m.mean(axis=(0, 1)) - ref.mean(axis=(0, 1))) < 4 * se), (m.mean(axis=(0, 1)), ref.mean(axis=(0, 1)), se)
+
+
+def floor_radiance(scene, size, intensity, light, sub=4):
+    """Each pixel's mean radiance of the floor under a point light of `intensity` at `light`,
+    direct light only: RHO / pi * I cos / r^2 at the floor point each of sub x sub film points of
+    the pixel sees."""
+    w, h = size
+    forward, right, up = scene.camera.basis(w / h)
+    sx = (np.arange(w * sub) + 0.5) / (w * sub) * 2 - 1
+    sy = 1 - (np.arange(h * sub) + 0.5) / (h * sub) * 2
+    d = forward + sx[None, :, None] * right + sy[:, None, None] * up
+    t = -scene.camera.eye[1] / d[..., 1]
+    p = scene.camera.eye + t[..., None] * d
+    v = np.asarray(light) - p
+    r2 = (v * v).sum(-1)
+    radiance = RHO / np.pi * (v[..., 1] / np.sqrt(r2) / r2)[..., None] * np.asarray(intensity)
+    return radiance.reshape(h, sub, w, sub, 3).mean(axis=(1, 3))
+
+
+@pytest.mark.parametrize("integrator", ["ptracer", "bdpt"])
+def test_a_floor_under_a_point_light_has_the_closed_form(backend, integrator):
+    """E = I cos / r^2, L = rho / pi E: light tracing alone reaches the floor from the light and
+    the pinhole from the floor; BDPT adds the light sample (s = 1) and weighs the two."""
+    light, intensity = [0.3, 1.2, -0.2], [3.0, 2.0, 1.0]
+    camera = {"eye": [0, 3.0, 0.01], "look_at": [0, 0, 0], "up": [0, 0, -1], "vfov": 60}
+    scene = floor_scene(lights=[{"type": "point", "position": light, "intensity": intensity}],
+                        max_depth=2, camera=camera)
+    size = (20, 20)
+    m, v = render(backend, scene, integrator, 64, size)
+    expected = floor_radiance(scene, size, intensity, light)
+    ok, p, threshold = z_test(m, v, expected, block=2)
+    assert ok, (p, threshold)
+    assert abs(m.mean() / expected.mean() - 1) < 0.01
+
+
+def test_a_furnace_of_emitting_walls_has_the_closed_form(backend):
+    """A closed box whose inner walls emit Le and reflect diffusely with albedo rho: every path of
+    depth D sees Le (1 + rho + ... + rho^(D-1)), whatever its strategy, and every pixel too."""
+    rho, le, depth = 0.7, 0.5, 6
+    corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
+    faces = []
+    for quad in ([0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 4], [1, 5, 7, 3]):
+        v = corners[quad]
+        inward = np.dot(np.cross(v[1] - v[0], v[2] - v[0]), -v.mean(0)) > 0
+        faces.append(quad if inward else quad[::-1])      # the front faces the inside
+    scene = read_scene_dict({
+        "camera": {"eye": [0.2, -0.1, 0.6], "look_at": [0, 0, -1], "up": [0, 1, 0], "vfov": 70},
+        "environment": {"color": 0},
+        "render": {"max_depth": depth, "russian_roulette": "off"},
+        "materials": {"wall": {"type": "diffuse", "rho_d": rho, "Le": le}},
+        "meshes": [{"vertices": corners.tolist(), "faces": faces, "material": "wall"}]}, "furnace")
+    m, v = render(backend, scene, "bdpt", 8, (16, 16))
+    expected = le * (1 - rho ** depth) / (1 - rho)
+    ok, p, threshold = z_test(m, v, np.full_like(m, expected), block=2)
+    assert ok, (p, threshold)
+    assert abs(m.mean() / expected - 1) < 0.005, m.mean() / expected
+
+
+MIS_SUMS = """
+/* For pixel (x, y), a camera subpath that ends on an emitter (t vertices), taken as a path of n
+ * = t vertices drawn by every strategy (s, n - s): the weights bdpt_mis_weight gives them, from
+ * the densities the connections compute, summed over the strategies that can draw it (their
+ * joined vertices not deltas). out: (sum, strategies, n, 0), or n = 0 where there is none. */
+kernel void mis_sums(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *out)
+{
+    SceneData sc = SCENE_DATA(p.num_spheres, p.layout);
+    int x = get_global_id(0), y = get_global_id(1);
+    int k = y * p.width + x;
+    out[k] = (float4)(0.0f);
+    Vertex cam[BDPT_CAMERA_VERTICES], lt[BDPT_LIGHT_VERTICES];
+    int n = 0;
+    /* the first of up to 64 samples whose camera subpath ends on an emitter */
+    for (uint i = 0; i < 64 && n == 0; ++i) {
+        Rng rng = make_rng(x, y, i, p.seed);
+        CameraRay ray = sample_camera_ray(&p, x, y, &rng);
+        cam[0].s.p = ray.o;
+        cam[0].s.ng = (float3)(0.0f);
+        cam[0].delta = 0;
+        cam[0].pdf_fwd = 1.0f;
+        int rays = 0;
+        float3 escaped = (float3)(0.0f);
+        n = extend_subpath(&sc, &p, cam, 1, BDPT_CAMERA_VERTICES, ray.o, ray.d, (float3)(1.0f),
+                           pdf_perspective_direction(&p, ray.d), NO_PRIM, 0, &rng, &rays, &escaped);
+        if (n < 3 || !cam[n - 1].emits || all(VERTEX_MATERIAL(&cam[n - 1])->emission.xyz == 0.0f))
+            n = 0;
+    }
+    if (n == 0)
+        return;
+    /* the densities of the light's end of the path: drawn from the light, as a light subpath's */
+    float4 from_light = densities_from_emitter(&sc, &cam[n - 1], &cam[n - 2]);
+    float sum = bdpt_mis_weight(lt, 0, cam, n, from_light, 0.0f, 0);
+    int strategies = 1;
+    cam[n - 1].pdf_rev = from_light.x;
+    cam[n - 2].pdf_rev = from_light.y;
+    int prim = cam[n - 1].s.prim;
+    float origin = pdf_emitter_origin(&sc, prim);
+    float3 normal = emitter_normal(&sc, prim, cam[n - 1].s.p);
+    for (int s = 1; s < n; ++s) {
+        int t = n - s;
+        /* the light subpath: the camera subpath's last s vertices, reversed */
+        for (int j = 0; j < s; ++j) {
+            lt[j] = cam[n - 1 - j];
+            lt[j].pdf_fwd = cam[n - 1 - j].pdf_rev;
+            lt[j].pdf_rev = cam[n - 1 - j].pdf_fwd;
+            if (j > 0)
+                lt[j].wo = unit(cam[n - j].s.p - cam[n - 1 - j].s.p);
+        }
+        lt[0].pdf_fwd = origin;
+        lt[0].s.ng = normal;
+        lt[0].delta = 0;
+        const Vertex *qs = &lt[s - 1], *pt = &cam[t - 1];
+        float4 rev;
+        if (s == 1) {
+            if (!pt->connectible)
+                continue;
+            const global Light *l = &sc.lights[0];
+            for (int i = 0; i < p.num_lights; ++i)
+                if (sc.lights[i].prim == prim)
+                    l = &sc.lights[i];
+            rev = densities_to_light(&sc, l, qs->s.p, normal, pt, &cam[t - 2]);
+        } else if (!qs->connectible) {
+            continue;
+        } else if (t == 1) {
+            rev = densities_to_camera(&p, qs, &lt[s - 2]);
+        } else if (!pt->connectible) {
+            continue;
+        } else {
+            rev = densities_between(qs, &lt[s - 2], pt, &cam[t - 2]);
+        }
+        sum += bdpt_mis_weight(lt, s, cam, t, rev, origin, 0);
+        ++strategies;
+    }
+    out[k] = (float4)(sum, (float)strategies, (float)n, 0.0f);
+}
+"""
+
+
+@pytest.mark.parametrize("make", [cbox, glass_scene])
+def test_the_mis_weights_of_a_path_sum_to_one(backend, make):
+    """As pbrt-v4's BDPT tests check its weights: for each path a camera subpath draws to an
+    emitter, the weights of every strategy that could draw it, computed as the renders compute
+    them, sum to 1 (the glass scene's paths through the sphere have delta vertices, whose
+    strategies are left out)."""
+    r = Renderer(backend, make().with_settings(integrator="bdpt", max_depth=6), 32, 32)
+    features = replace(r.compiled.features(r.settings, r.camera), bdpt=6)
+    program = build_program(backend.context, backend.device.device, MIS_SUMS, features=features).program
+    out = np.zeros((32, 32, 4), np.float32)
+    buf = cl.Buffer(backend.context, cl.mem_flags.WRITE_ONLY, out.nbytes)
+    cl.Kernel(program, "mis_sums")(backend.queue, (32, 32), None, *r.scene_args(), r.params(1), buf)
+    cl.enqueue_copy(backend.queue, out, buf)
+    paths = out[..., 2] > 0
+    lengths = set(out[paths][:, 2].astype(int))
+    assert paths.sum() > 50 and len(lengths) >= 3, (paths.sum(), lengths)
+    np.testing.assert_allclose(out[paths][:, 0], 1.0, rtol=2e-3, err_msg=str(out[paths][:20]))
+    # every strategy of a path draws it in the Cornell box; through glass, some cannot
+    all_strategies = out[paths][:, 1] == out[paths][:, 2]
+    assert all_strategies.all() if make is cbox else not all_strategies.all()
+
+
+def test_a_scene_with_a_medium_is_one_line_for_bdpt(backend):
+    scene = load_scene(str(ROOT / "tests/scenes/media-fog.xml")).with_settings(filter=PixelFilter(),
+                                                                               integrator="bdpt")
+    with pytest.raises(UserError, match="integrator bdpt: participating media are not supported yet"):
+        Renderer(backend, scene, 8, 8)
+
+
+def test_the_path_tracers_program_compiles_nothing_of_bdpt(backend):
+    from pathtrace.device import kernel_source
+    scene = cbox()
+    r = Renderer(backend, scene, 8, 8)
+    features = r.compiled.features(r.settings, r.camera)
+    assert features.bdpt == 0 and not any(d.startswith("BDPT") for d in features.defines())
+    source = kernel_source(features=features)
+    emitters = "int emit_light_of_type(const SceneData *sc, const global Light *l, float4 u, LightEmission *e)\n{"
+    assert '"bdpt.cl"' not in source and emitters not in source and "render_bdpt" not in source
+    assert source == kernel_source(features=replace(features, bdpt=0))
+    bidirectional = kernel_source(features=replace(features, bdpt=5))
+    assert "render_bdpt" in bidirectional and emitters in bidirectional
