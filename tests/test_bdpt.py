@@ -294,3 +294,61 @@ def test_the_path_tracers_program_compiles_nothing_of_bdpt(backend):
     assert source == kernel_source(features=replace(features, bdpt=0))
     bidirectional = kernel_source(features=replace(features, bdpt=5))
     assert "render_bdpt" in bidirectional and emitters in bidirectional
+
+
+# --- choosing the integrator: the scene file, the command line, the Python API -------------------
+
+@pytest.mark.parametrize("kind,integrator,note", [("bdpt", "bdpt", None), ("path", "path", None),
+                                                  ("sppm", "bdpt", "renders sppm with bdpt, the nearest method"),
+                                                  ("mlt", "bdpt", "renders mlt with bdpt, the nearest method")])
+def test_a_pbrt_file_chooses_its_integrator(tmp_path, capsys, kind, integrator, note):
+    path = tmp_path / "s.pbrt"
+    path.write_text(f'Integrator "{kind}"\nWorldBegin\n'
+                    'Shape "trianglemesh" "point3 P" [ -1 0 -1  1 0 -1  1 0 1 ] "integer indices" [ 0 2 1 ]\n')
+    assert load_scene(str(path)).settings.integrator == integrator
+    err = capsys.readouterr().err
+    assert (note in err and len(err.strip().splitlines()) == 1) if note else note is None
+
+
+@pytest.mark.parametrize("kind", ["bdpt", "ptracer"])
+def test_a_mitsuba_file_chooses_its_integrator(tmp_path, kind):
+    path = tmp_path / "s.xml"
+    path.write_text(f'<scene version="3.0.0"><integrator type="{kind}"/>'
+                    '<shape type="sphere"><float name="radius" value="1"/></shape></scene>')
+    assert load_scene(str(path)).settings.integrator == kind
+
+
+def test_a_toml_file_chooses_its_integrator_and_keeps_it(tmp_path):
+    from pathtrace.scene.toml_writer import scene_toml
+    path = tmp_path / "s.toml"
+    sphere = '[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = { type = "diffuse", rho_d = 0.5 }\n'
+    path.write_text('[render]\nintegrator = "bdpt"\n' + sphere)
+    scene = load_scene(str(path))
+    assert scene.settings.integrator == "bdpt"
+    (tmp_path / "t.toml").write_text(scene_toml(scene, tmp_path / "t.toml"))
+    assert load_scene(str(tmp_path / "t.toml")).settings.integrator == "bdpt"
+    path.write_text('[render]\nintegrator = "mlt"\n' + sphere)
+    with pytest.raises(UserError, match=r"render.integrator: must be one of path, bdpt, ptracer, got 'mlt'"):
+        load_scene(str(path))
+
+
+def test_the_api_renders_with_the_integrator_it_is_given(backend):
+    from pathtrace import api
+    scene = cbox()
+    image = api.render(scene, spp=4, size=(12, 12), device="cpu", integrator="ptracer")
+    assert image.shape == (12, 12, 3) and np.isfinite(image).all() and image.mean() > 0
+    with pytest.raises(UserError, match="integrator: give one of path, bdpt, ptracer"):
+        api.render(scene, spp=1, size=(4, 4), device="cpu", integrator="sppm")
+
+
+def test_the_command_line_renders_with_bdpt_and_refuses_a_medium_in_one_line(tmp_path):
+    from tests.test_cli import pathtrace
+    out = tmp_path / "a.exr"
+    r = pathtrace("render", "tests/scenes/cbox.xml", "--integrator", "bdpt", "--size", "12x12", "--spp", "2",
+                  "-o", out, "-q")
+    assert r.returncode == 0 and out.exists(), r.stderr
+    r = pathtrace("render", "tests/scenes/media-fog.xml", "--integrator", "bdpt", "--filter", "box", "--size", "8x8",
+                  "--spp", "1", "-o", tmp_path / "b.exr", "-q")
+    lines = [line for line in r.stderr.splitlines() if not line.startswith("device: ")]
+    assert r.returncode != 0 and len(lines) == 1 and "participating media are not supported yet" in lines[0], r.stderr
+    assert not (tmp_path / "b.exr").exists()
