@@ -352,3 +352,36 @@ def test_the_command_line_renders_with_bdpt_and_refuses_a_medium_in_one_line(tmp
     lines = [line for line in r.stderr.splitlines() if not line.startswith("device: ")]
     assert r.returncode != 0 and len(lines) == 1 and "participating media are not supported yet" in lines[0], r.stderr
     assert not (tmp_path / "b.exr").exists()
+
+
+# --- splats add up wherever the samples are drawn -------------------------------------------------
+
+def test_splats_of_samples_split_by_index_and_rows_add_up(backend):
+    """Samples 0-11 added as 4-7, 0-3 and 8-11, the last in two bands of rows, give the image of
+    one launch of 12: each launch's splats land in the whole image, whatever rows it renders."""
+    scene = cbox().with_settings(integrator="bdpt")
+    whole = Renderer(backend, scene, 16, 16)
+    whole.add_samples(12)
+    parts = Renderer(backend, scene, 16, 16)
+    parts.add_samples(4, 4)
+    parts.add_samples(4, 0)
+    parts.add_samples(4, 8, rows=(0, 7))
+    parts.add_samples(4, 8, rows=(7, 16))
+    assert parts.samples == 12
+    # the splats' atomic additions come in any order: float rounding apart
+    np.testing.assert_allclose(parts.mean(), whole.mean(), rtol=2e-5, atol=1e-7)
+
+
+def test_two_devices_splat_the_one_device_image(backend):
+    """One device split twice (two contexts and queues): the merged sums of a BDPT render equal
+    a one-device render of the same samples (pathtrace.multidevice), splats included."""
+    from pathtrace.device import open_device
+    from pathtrace.multidevice import DeviceGroup
+    scene = cbox().with_settings(integrator="bdpt", width=16, height=16)
+    second = open_device(backend.device)
+    group = DeviceGroup([backend, second], scene)
+    group.render(24, launch_seconds=0.01)
+    single = Renderer(backend, scene)
+    single.add_samples(24)
+    assert group.samples == 24
+    np.testing.assert_allclose(group.mean(), single.mean(), rtol=2e-5, atol=1e-7)
