@@ -627,7 +627,9 @@ class Renderer:
         return self._read("sum_sq")
 
     def variance(self) -> np.ndarray:
-        """The per-sample variance of each pixel and channel (of one sample, not of the mean)."""
+        """The per-sample variance of each pixel and channel (of one sample, not of the mean). With
+        bdpt or ptracer, of the camera subpaths' part alone: light tracing's splats land in other
+        pixels' sums, not one sample's (kernels/bdpt.cl: add_splats)."""
         return variance_of(self.read_sum(), self.read_sum_sq(), self.samples)
 
     def _upload(self, name, array):

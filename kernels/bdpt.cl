@@ -13,11 +13,12 @@
  *   t >= 2, s = 0   the camera subpath hits an emitter (or escapes to the environment)
  *   t >= 2, s = 1   a light sampled from camera vertex t - 1, as next-event estimation does
  *   t >= 2, s >= 2  light vertex s - 1 joined to camera vertex t - 1 by a shadow ray
- *   t = 1, s >= 2   light vertex s - 1 joined to the pinhole (light tracing): its contribution
+ *   t = 1, s >= 2   light vertex s - 1 joined to the lens (light tracing): its contribution
  *                   lands in another pixel, added to the launch's splat film by atomics
  *
  * Delta lobes are not joined (their vertices are not connectible) and delta lights are not hit,
- * as in pbrt; the pinhole is reached by camera rays only, never by a light subpath (t = 0).
+ * as in pbrt; the lens (a pinhole or a thin lens) is reached by joins, never by a light subpath
+ * hitting it (t = 0, which pbrt leaves out too).
  * Directional lights and the environment start no light subpath (app/lights/registry.py:
  * EMITTERS): a path that ends there has two strategies, s = 0 and s = 1, weighed against each
  * other as the path tracer does. There is no Russian roulette (pbrt-v4's BDPT has none): paths
@@ -29,7 +30,7 @@
 #define BDPT_LIGHT_VERTICES BDPT
 
 /* One vertex of a subpath. The camera and a light are vertices of their own: s.p is their
- * point and s.ng an area light's normal (0 for the pinhole and a point). */
+ * point and s.ng an area light's normal (0 for the camera and a point). */
 typedef struct {
     Surface s;            /* a surface vertex's surface, its shading frame complete */
 #ifdef TEXTURES
@@ -322,12 +323,12 @@ float4 densities_between(const Vertex *qs, const Vertex *qm, const Vertex *pt, c
                     convert_density(pdf_scattering(qs, -w, qs->wo), qs->s.p, qm->s.p, qm->s.ng));
 }
 
-/* t = 1: light vertex qs, after qm, joined to the pinhole. */
-float4 densities_to_camera(const RenderParams *p, const Vertex *qs, const Vertex *qm)
+/* t = 1: light vertex qs, after qm, joined to the lens at point `lens`. */
+float4 densities_to_camera(const RenderParams *p, const Vertex *qs, const Vertex *qm, float3 lens)
 {
-    float3 w = unit(p->eye.xyz - qs->s.p);
+    float3 w = unit(lens - qs->s.p);
     return (float4)(0.0f, 0.0f,
-                    convert_density(pdf_perspective_direction(p, -w), p->eye.xyz, qs->s.p, qs->s.ng),
+                    convert_density(pdf_camera_direction(p, -w), lens, qs->s.p, qs->s.ng),
                     convert_density(pdf_scattering(qs, w, qs->wo), qs->s.p, qm->s.p, qm->s.ng));
 }
 
@@ -424,76 +425,62 @@ void splat(global float4 *film, const RenderParams *p, float2 at, float3 c)
     }
 }
 
-/* Strategy t = 1, s >= 2: light vertex s - 1 joined to the pinhole (pbrt-v4's
- * PerspectiveCamera::SampleWi), splatted where it lands on the film; weighted, or with
- * LIGHT_TRACING alone. */
+/* Strategy t = 1, s >= 2: light vertex s - 1 joined to a point of the lens (kernels/camera.cl:
+ * sample_importance), splatted where it lands on the film; weighted, or with LIGHT_TRACING
+ * alone. */
 void connect_camera(const SceneData *sc, const RenderParams *p, const Vertex *lt, int s, const Vertex *cam,
-                    global float4 *film, int *rays)
+                    Rng *rng, global float4 *film, int *rays)
 {
     const Vertex *qs = &lt[s - 1], *qm = &lt[s - 2];
-    float3 w = p->eye.xyz - qs->s.p;          /* towards the eye */
-    float d2 = dot(w, w);
-    if (!(d2 > 0.0f))
+    CameraImportance ci;
+    if (!sample_importance(p, qs->s.p, next_uniform4(rng).xy, &ci))
         return;
-    w *= rsqrt(d2);
-    float2 at;
-    float cos_t;
-    if (!perspective_film_point(p, -w, &at, &cos_t))
-        return;
-    float area = perspective_film_area(p);
+    float3 w = unit(ci.lens - qs->s.p);           /* towards the lens */
     float3 f = eval_scattering(qs, qs->wo, w) * correct_shading_normal(&qs->s, qs->wo, w);
-    /* We cos_lens / (dist^2 pdf_lens), We = 1 / (A cos^4), with cos_lens = cos theta */
-    float3 c = qs->beta * f * fabs(dot(w, qs->s.ns)) / (area * cos_t * cos_t * cos_t * d2);
+    float3 c = qs->beta * f * (fabs(dot(w, qs->s.ns)) * ci.weight);
     if (all(c == 0.0f) || !all(isfinite(c)))
         return;
 #ifndef LIGHT_TRACING
-    c *= bdpt_mis_weight(lt, s, cam, 1, densities_to_camera(p, qs, qm), 0.0f, 0);
+    c *= bdpt_mis_weight(lt, s, cam, 1, densities_to_camera(p, qs, qm, ci.lens), 0.0f, 0);
 #endif
-    if (!segment_blocked(sc, qs, p->eye.xyz, rays))
-        splat(film, p, at, c);
+    if (!segment_blocked(sc, qs, ci.lens, rays))
+        splat(film, p, ci.at, c);
 }
 
 #ifdef LIGHT_TRACING
 /* Strategy s = 1, t = 1 of light tracing alone: the point a light subpath leaves an area light
- * from, seen by the pinhole (Mitsuba 3's ptracer sees emitters so); a point or spot light, which
+ * from, seen by the camera (Mitsuba 3's ptracer sees emitters so); a point or spot light, which
  * no camera ray sees either, is not. */
-void connect_light_to_camera(const SceneData *sc, const RenderParams *p, const Vertex *light,
+void connect_light_to_camera(const SceneData *sc, const RenderParams *p, const Vertex *light, Rng *rng,
                              global float4 *film, int *rays)
 {
     int prim = light->s.prim;
-    if (prim < 0)
+    CameraImportance ci;
+    if (prim < 0 || !sample_importance(p, light->s.p, next_uniform4(rng).xy, &ci))
         return;
-    float3 w = p->eye.xyz - light->s.p;
-    float d2 = dot(w, w);
-    if (!(d2 > 0.0f))
-        return;
-    w *= rsqrt(d2);
-    float cos_l = dot(emitter_normal(sc, prim, light->s.p), w);
+    float cos_l = dot(emitter_normal(sc, prim, light->s.p), unit(ci.lens - light->s.p));
     if (emits_back(sc, prim))
         cos_l = fabs(cos_l);
-    float2 at;
-    float cos_t;
-    if (!(cos_l > 0.0f) || !perspective_film_point(p, -w, &at, &cos_t))
+    if (!(cos_l > 0.0f))
         return;
-    /* Le cos_l / pdf_origin, times We cos_lens / dist^2 as in connect_camera */
-    float3 c = light->beta * cos_l
-               / (light->pdf_fwd * perspective_film_area(p) * cos_t * cos_t * cos_t * d2);
-    if (all(isfinite(c)) && !segment_blocked(sc, light, p->eye.xyz, rays))
-        splat(film, p, at, c);
+    /* Le cos_l / pdf_origin, times the lens's weight as in connect_camera */
+    float3 c = light->beta * (cos_l * ci.weight / light->pdf_fwd);
+    if (all(isfinite(c)) && !segment_blocked(sc, light, ci.lens, rays))
+        splat(film, p, ci.at, c);
 }
 
 /* One sample of light tracing alone (Mitsuba 3's ptracer): a light subpath, each of its
- * vertices joined to the pinhole with weight 1; no camera subpath, the pixel's own radiance 0. */
+ * vertices joined to the lens with weight 1; no camera subpath, the pixel's own radiance 0. */
 float3 sample_light_tracing(const SceneData *sc, const RenderParams *p, Rng *rng, global float4 *film, int *rays)
 {
     Vertex lt[BDPT_LIGHT_VERTICES];
     int light_delta = 0;
     int nl = trace_light_subpath(sc, p, lt, BDPT_LIGHT_VERTICES, rng, rays, &light_delta);
     if (nl > 0)
-        connect_light_to_camera(sc, p, &lt[0], film, rays);
+        connect_light_to_camera(sc, p, &lt[0], rng, film, rays);
     for (int s = 2; s <= nl; ++s)
         if (lt[s - 1].connectible)
-            connect_camera(sc, p, lt, s, 0, film, rays);
+            connect_camera(sc, p, lt, s, 0, rng, film, rays);
     return (float3)(0.0f);
 }
 #endif
@@ -515,7 +502,7 @@ float3 sample_bidirectional(const SceneData *sc, const RenderParams *p, int x, i
     cam[0].emits = 0;
     float3 l = (float3)(0.0f);
     int nc = extend_subpath(sc, p, cam, 1, BDPT_CAMERA_VERTICES, ray.o, ray.d, (float3)(1.0f),
-                            pdf_perspective_direction(p, ray.d), NO_PRIM, 0, rng, rays, &l);
+                            pdf_camera_direction(p, ray.d), NO_PRIM, 0, rng, rays, &l);
     int light_delta = 0;
     int nl = trace_light_subpath(sc, p, lt, BDPT_LIGHT_VERTICES, rng, rays, &light_delta);
     /* s = 1 samples a light of its own, with or without a light subpath */
@@ -526,7 +513,7 @@ float3 sample_bidirectional(const SceneData *sc, const RenderParams *p, int x, i
                 continue;
             if (t == 1) {
                 if (lt[s - 1].connectible)
-                    connect_camera(sc, p, lt, s, cam, film, rays);
+                    connect_camera(sc, p, lt, s, cam, rng, film, rays);
             } else if (s == 0) {
                 l += connect_emitter(sc, lt, cam, t);
             } else if (s == 1) {

@@ -95,11 +95,21 @@ def cbox_gaussian():
     return cbox().with_settings(filter=PixelFilter("gaussian"))
 
 
+def cbox_thinlens():
+    """The Cornell box through a thin lens focused before the back wall: light tracing joins each
+    vertex to a point of the aperture."""
+    scene = cbox()
+    camera = replace(scene.camera, aperture=0.15, focus_distance=3.0)
+    return replace(scene, camera=camera)
+
+
 # (scene, the integrator against the path tracer, its samples per pixel per batch, the path
 # tracer's samples per pixel): the Cornell box's diffuse walls with light tracing alone and
-# with BDPT, through a box and a gaussian filter; glass, gold and a caustic; delta lights
+# with BDPT, through a box and a gaussian filter and a thin lens; glass, gold and a caustic;
+# delta lights
 CASES = {"cbox-ptracer": (cbox, "ptracer", 32, 2048), "cbox-bdpt": (cbox, "bdpt", 16, 2048),
          "cbox-gaussian-ptracer": (cbox_gaussian, "ptracer", 32, 2048),
+         "cbox-thinlens-ptracer": (cbox_thinlens, "ptracer", 32, 2048),
          "glass-bdpt": (glass_scene, "bdpt", 16, 4096), "spot-bdpt": (spot_scene, "bdpt", 16, 2048)}
 SIZE = (24, 24)
 
@@ -198,7 +208,7 @@ kernel void mis_sums(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *out
         int rays = 0;
         float3 escaped = (float3)(0.0f);
         n = extend_subpath(&sc, &p, cam, 1, BDPT_CAMERA_VERTICES, ray.o, ray.d, (float3)(1.0f),
-                           pdf_perspective_direction(&p, ray.d), NO_PRIM, 0, &rng, &rays, &escaped);
+                           pdf_camera_direction(&p, ray.d), NO_PRIM, 0, &rng, &rays, &escaped);
         if (n < 3 || !cam[n - 1].emits || all(VERTEX_MATERIAL(&cam[n - 1])->emission.xyz == 0.0f))
             n = 0;
     }
@@ -239,7 +249,7 @@ kernel void mis_sums(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *out
         } else if (!qs->connectible) {
             continue;
         } else if (t == 1) {
-            rev = densities_to_camera(&p, qs, &lt[s - 2]);
+            rev = densities_to_camera(&p, qs, &lt[s - 2], p.eye.xyz);
         } else if (!pt->connectible) {
             continue;
         } else {

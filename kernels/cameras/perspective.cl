@@ -16,37 +16,10 @@ CameraRay generate_perspective_ray(const RenderParams *p, float sx, float sy, fl
 }
 
 #ifdef BDPT
-/* The pinhole's importance, for light subpaths that reach it (kernels/bdpt.cl), in the
- * conventions of pbrt-v4's PerspectiveCamera (cameras.cpp: We, PDF_We, SampleWi): the film is
- * the plane one unit ahead, of area A = 4 |right| |up|, and a camera ray of direction d at angle
- * theta from `forward` has density 1 / (A cos^3 theta) per solid angle (pixel and filter offset
- * uniform over the film), its importance being We = 1 / (A cos^4 theta). */
-
-/* The area of the film at unit distance. */
-float perspective_film_area(const RenderParams *p)
+/* Joins point x to the pinhole (pbrt-v4's PerspectiveCamera::SampleWi): the eye is the only
+ * point of its lens (kernels/camera.cl: CameraImportance). */
+int sample_perspective_importance(const RenderParams *p, float3 x, float2 u, CameraImportance *ci)
 {
-    return 4.0f * norm(p->right.xyz) * norm(p->up.xyz);
-}
-
-/* The density per solid angle of camera rays along unit direction d from the eye (0 behind). */
-float pdf_perspective_direction(const RenderParams *p, float3 d)
-{
-    float c = dot(d, p->forward.xyz);
-    return c > 0.0f ? 1.0f / (perspective_film_area(p) * c * c * c) : 0.0f;
-}
-
-/* Where unit direction d from the eye crosses the film, in pixels from the image's top-left
- * corner (the inverse of generate_perspective_ray), with cos theta in *cos_t; 0 behind. */
-int perspective_film_point(const RenderParams *p, float3 d, float2 *film, float *cos_t)
-{
-    float c = dot(d, p->forward.xyz);
-    if (!(c > 0.0f))
-        return 0;
-    float3 q = d / c;
-    float x = dot(q, p->right.xyz) / dot(p->right.xyz, p->right.xyz);
-    float y = dot(q, p->up.xyz) / dot(p->up.xyz, p->up.xyz);
-    *film = (float2)(0.5f * (x + 1.0f) * p->width, 0.5f * (1.0f - y) * p->height);
-    *cos_t = c;
-    return 1;
+    return join_camera(p, p->eye.xyz, x, ci);
 }
 #endif

@@ -23,3 +23,22 @@ CameraRay generate_thinlens_ray(const RenderParams *p, float sx, float sy, float
     CameraRay ray = {o, unit(p->eye.xyz + p->lens.y * d - o)};
     return ray;
 }
+
+#ifdef BDPT
+/* Joins point x to a point of the aperture drawn uniformly from u (pbrt-v4's PerspectiveCamera::
+ * SampleWi with a lens): the lens's area density 1 / (pi r^2) and its importance
+ * 1 / (A pi r^2 cos^4) cancel their pi r^2 (kernels/camera.cl: join_camera), and the film point
+ * is where the line from the lens point through x crosses the plane in focus, seen from the
+ * lens's centre (the inverse of generate_thinlens_ray). */
+int sample_thinlens_importance(const RenderParams *p, float3 x, float2 u, CameraImportance *ci)
+{
+    float2 lens = p->lens.x * sample_concentric_disk(u);
+    float3 o = p->eye.xyz + lens.x * unit(p->right.xyz) + lens.y * unit(p->up.xyz);
+    if (!join_camera(p, o, x, ci))
+        return 0;
+    float3 d = unit(x - o);
+    float3 focus = o + (p->lens.y / dot(d, p->forward.xyz)) * d;
+    return film_point(p, unit(focus - p->eye.xyz), &ci->at);
+}
+#endif
+
