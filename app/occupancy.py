@@ -34,7 +34,7 @@ LOWEST_FRACTION = 0.8
 FEWEST_WARPS = 16           # a quarter of an SM's: fewer leave the BVH walk's latency unhidden
 SPILLING_WARPS = 20         # where a program needs more registers than FEWEST_WARPS allow
 MOST_SPILLED = 2048         # bytes of spill stores per kernel allowed for SPILLING_WARPS: the most
-                            # measured to gain was 1932 (docs/performance.md); beyond, not measured
+                            # measured to gain was 1932 (docs/notes/performance-2026-11.md); beyond, not measured
 LIGHT_WARPS = 24            # where a light program keeps fewer without spills
 LIGHT_SPILLED = 512         # bytes of spill stores per kernel allowed for LIGHT_WARPS: the most
                             # measured was 472 (the textured teapot, which neither gained nor lost)
