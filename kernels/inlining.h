@@ -15,8 +15,8 @@
 
 /* The dispatch over every kind of BSDF, texture and light, in a generic program on a GPU, is
  * called rather than inlined: NVIDIA's compiler inlined every kind into each of its call sites
- * in every kernel, 8.9 MB of PTX that took its driver 245 s to build on an H200
- * (docs/notes/performance-2026-11.md, 2026-11-28). A scene's own program, which compiles only its kinds, and
+ * in every kernel, a program that took its driver minutes to build (docs/notes/performance-2026-11.md,
+ * 2026-11-28 evening). A scene's own program, which compiles only its kinds, and
  * CPUs, whose calls pass a path's state through memory, keep them inlined. */
 #if defined(GENERIC) && !defined(CPU_DEVICE)
 #define DISPATCH __attribute__((noinline))
