@@ -528,7 +528,7 @@ run()
 
 
 def test_a_pbrt_render_to_exr_imports_no_other_scene_reader_and_no_opencv(tmp_path):
-    """What a command imports is part of the wait for its first image (docs/performance.md,
+    """What a command imports is part of the wait for its first image (docs/notes/performance-2026-11.md,
     2026-11-26): a pbrt-v4 scene rendered to EXR loads neither the other scene readers nor
     OpenCV, and a PNG then does load OpenCV, which encodes it."""
     readers = ("pathtrace.scene.mitsuba", "pathtrace.scene.toml_reader", "pathtrace.scene.builtin")
