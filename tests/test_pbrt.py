@@ -315,6 +315,28 @@ def test_bad_input_is_one_line_naming_the_file(tmp_path, text, expected):
     assert "s.pbrt" in message and expected in message, message
 
 
+@pytest.mark.parametrize("text,expected", [
+    # pbrt-v4 looks a parameter up by its name and its type as written (src/pbrt/paramdict.cpp,
+    # lookupSingle and lookupArray): another type is never read, and ReportUnused refuses the file
+    ('WorldBegin\nShape "sphere" "integer radius" 2\n',
+     's.pbrt:2: \'radius\': pbrt-v4 reads a float here and refuses an integer ("radius": unused parameter); '
+     'write "float radius"'),
+    ('Camera "perspective" "integer fov" 45\nWorldBegin\n' + FLOOR, "s.pbrt:1: 'fov': pbrt-v4 reads a float here"),
+    ('WorldBegin\nLightSource "point" "vector3 from" [ 0 1 0 ]\n' + FLOOR, "s.pbrt:2: 'from': must be point3, got vector3"),
+    ('Film "rgb" "float pixelbounds" [ 0 1 0 1 ]\nWorldBegin\n' + FLOOR, "s.pbrt:1: 'pixelbounds': must be integer"),
+    # pbrt-v3's type names: pbrt-v4 knows them only when --upgrade rewrites the file
+    # (ParameterDictionary::checkParameterTypes: "unknown parameter type")
+    ('WorldBegin\nMaterial "diffuse" "color reflectance" [ 0.5 0.5 0.5 ]\n' + FLOOR,
+     's.pbrt:2: "color reflectance": color is pbrt-v3\'s parameter type, which pbrt-v4 refuses; '
+     'write "rgb reflectance"'),
+    ('WorldBegin\nShape "trianglemesh" "point P" [ 0 0 0 1 0 0 0 1 0 ]\n', "s.pbrt:2: \"point P\": point is pbrt-v3's"),
+    ('WorldBegin\nLightSource "distant" "vector to" [ 0 0 1 ]\n' + FLOOR, "vector is pbrt-v3's"),
+])
+def test_a_file_pbrt_v4_refuses_is_one_line_naming_the_line(tmp_path, text, expected):
+    message = fails(tmp_path, text)
+    assert expected in message and "\n" not in message.strip(), message
+
+
 def test_an_include_cycle_and_a_fifo_are_refused(tmp_path):
     (tmp_path / "a.pbrt").write_text('Include "b.pbrt"\n')
     (tmp_path / "b.pbrt").write_text('Include "a.pbrt"\n')

@@ -30,7 +30,7 @@ def spectrum_rgb(params, name, default, kind="reflectance"):
     ptype = params.type_of(name)
     if ptype is None:
         return None if default is None else np.broadcast_to(np.asarray(default, np.float64), 3).copy()
-    if ptype in ("rgb", "color"):
+    if ptype == "rgb":
         return np.asarray(params.get(name, (ptype,)), np.float64)
     if ptype == "float":
         return np.full(3, params.float(name))

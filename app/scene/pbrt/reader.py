@@ -327,7 +327,7 @@ class PbrtReader:
         params.string("filename")
         for name in ("cropwindow", "pixelbounds"):
             if params.type_of(name):
-                params.floats(name, ("float", "integer"))
+                params.floats(name, ("float",) if name == "cropwindow" else ("integer",))
                 warn(f"{params.where(name)}: pathtrace renders the whole film; ignored")
         if kind not in ("rgb", "gbuffer", "spectral"):
             warn(f"{tokens.where(offset)}: pathtrace has no {kind} film; it renders RGB")
@@ -795,7 +795,7 @@ class PbrtReader:
     def indexed_polygons(params, kind, corners, where):
         """A mesh's "point3 P" and its "integer indices", `corners` per polygon (which may be
         left out where P holds exactly one polygon): vertices (V, 3) and indices (N, corners)."""
-        p = params.get("P", ("point3", "point"), 0)
+        p = params.get("P", ("point3",), 0)
         if p is None:
             raise UserError(f'{where}: a {kind} needs "point3 P"')
         vertices = p.reshape(-1, 3)
@@ -944,7 +944,7 @@ class PbrtReader:
                 p.used = True
             return
         if params.type_of("portal"):
-            params.floats("portal", ("point3", "point"))
+            params.floats("portal", ("point3",))
             warn(f"{params.where('portal')}: pathtrace does not sample portals; the light is sampled whole")
         # pbrt-v4's Light::Create: "illuminance" E_v scales a constant L by E_v / pi, and a map
         # by E_v over its upper_illuminance
