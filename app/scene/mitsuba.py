@@ -639,6 +639,10 @@ class _Reader:
         self.settings.width, self.settings.height = w, h
         if node.attrs.get("type") not in ("hdrfilm", "specfilm", None):
             warn(f"{node.where()}: pathtrace writes the image format of the output file's name")
+        # the output's format is its file name's (render -o), whatever these say; a specfilm's
+        # channels are its sensitivity functions', and it has no pixel_format
+        for name in ("file_format", "component_format") + (("pixel_format",) if node.attrs.get("type") != "specfilm" else ()):
+            props.get(name)
         for child in node.children:
             if child.tag == "rfilter":
                 self.filter = self.rfilter(child)
