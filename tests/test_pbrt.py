@@ -307,7 +307,8 @@ def test_convert_writes_a_pbrt_scene_as_toml_that_reads_the_same(tmp_path):
     ('WorldBegin\nLightSource "point" "rgb I" [ -1 1 1 ]\n' + FLOOR, "'I'"),
     ('WorldBegin\nLightSource "distant" "point3 to" [ 0 0 0 ]\n' + FLOOR, "'to'"),
     ('Camera "perspective" "float lensradius" -1\nWorldBegin\n' + FLOOR, "'lensradius'"),
-    ('PixelFilter "gaussian" "float xradius" 0 "float yradius" 0\nWorldBegin\n', "radius"),
+    ('PixelFilter "gaussian" "float xradius" 0 "float yradius" 0\nWorldBegin\n', "s.pbrt:1: 'xradius' and 'yradius': "),
+    ('PixelFilter "gaussian" "float sigma" 0\nWorldBegin\n', "s.pbrt:1: 'sigma': must be in"),
     ('WorldBegin\n' + FLOOR.replace("0 3 2", "0 3 9"), "refers to vertex"),
 ])
 def test_bad_input_is_one_line_naming_the_file(tmp_path, text, expected):

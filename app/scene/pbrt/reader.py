@@ -392,7 +392,9 @@ class PbrtReader:
             sigma = params.float("sigma", 0.5) if kind == "gaussian" else 0.5
             self.filter = PixelFilter(name, radius, sigma).check()
         except ValueError as e:
-            raise UserError(f"{tokens.where(offset)}: {e}") from None
+            field, problem = str(e).split(": ", 1)
+            field = {"radius": "xradius' and 'yradius", "stddev": "sigma"}.get(field, field)
+            raise UserError(f"{tokens.where(offset)}: '{field}': {problem}") from None
         self.unused(params, f"{kind} filter")
 
     # -- the graphics state --
