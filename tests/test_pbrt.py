@@ -332,6 +332,8 @@ def test_bad_input_is_one_line_naming_the_file(tmp_path, text, expected):
      'write "rgb reflectance"'),
     ('WorldBegin\nShape "trianglemesh" "point P" [ 0 0 0 1 0 0 0 1 0 ]\n', "s.pbrt:2: \"point P\": point is pbrt-v3's"),
     ('WorldBegin\nLightSource "distant" "vector to" [ 0 0 1 ]\n' + FLOOR, "vector is pbrt-v3's"),
+    ('WorldBegin\nShape "trianglemesh" "point3 P" [ 0 0 0 1 0 0 0 1 0 ] "float uv" [ 0 0 1 0 0 1 ]\n',
+     "s.pbrt:2: 'uv': must be point2, got float"),
 ])
 def test_a_file_pbrt_v4_refuses_is_one_line_naming_the_line(tmp_path, text, expected):
     message = fails(tmp_path, text)

@@ -814,7 +814,7 @@ class PbrtReader:
         """A mesh's normals N and uvs; `unused_names` are read and not used (tangents S, the
         faces' indices for ptex)."""
         n = params.get("N", ("normal", "normal3"), 0)
-        uv = params.get("uv", ("point2", "float"), 0)
+        uv = params.get("uv", ("point2",), 0)          # pbrt-v4: GetPoint2fArray("uv"); pbrt-v3 wrote floats
         if n is not None and len(n) != 3 * count:
             params.fail("N", f"has {len(n) // 3} normals for {count} vertices")
         if uv is not None and len(uv) != 2 * count:
