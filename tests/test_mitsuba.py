@@ -422,3 +422,15 @@ def test_bad_lights_cameras_and_filters_are_one_line(tmp_path, body, message):
     with pytest.raises(UserError) as e:
         read_mitsuba_file(write(tmp_path, SPHERE + body))
     assert message in str(e.value) and "scene.xml:" in str(e.value) and "\n" not in str(e.value)
+
+
+@pytest.mark.parametrize("scale, radius", [("1 2 3", 1.0), ("3 2 1", 3.0)])
+def test_a_non_uniformly_scaled_sphere_takes_the_x_scale_as_mitsuba_3(tmp_path, capsys, scale, radius):
+    # Mitsuba 3.9.1 gives these spheres the bounding boxes [-1, 1]^3 and [-3, 3]^3
+    # (src/shapes/sphere.cpp, update(): m_radius = norm(m_to_world * (1, 0, 0)))
+    x, y, z = scale.split()
+    path = write(tmp_path, f'<shape type="sphere"><transform name="to_world"><scale x="{x}" y="{y}" z="{z}"/>'
+                           '<translate x="1"/></transform></shape>')
+    scene = read_mitsuba_file(path)
+    np.testing.assert_allclose(scene.spheres[0], [1, 0, 0, radius], rtol=1e-6)
+    assert f"of its to_world's x scale {radius:g}, as Mitsuba 3 does" in capsys.readouterr().err

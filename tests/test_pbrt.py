@@ -307,12 +307,37 @@ def test_convert_writes_a_pbrt_scene_as_toml_that_reads_the_same(tmp_path):
     ('WorldBegin\nLightSource "point" "rgb I" [ -1 1 1 ]\n' + FLOOR, "'I'"),
     ('WorldBegin\nLightSource "distant" "point3 to" [ 0 0 0 ]\n' + FLOOR, "'to'"),
     ('Camera "perspective" "float lensradius" -1\nWorldBegin\n' + FLOOR, "'lensradius'"),
-    ('PixelFilter "gaussian" "float xradius" 0 "float yradius" 0\nWorldBegin\n', "radius"),
+    ('PixelFilter "gaussian" "float xradius" 0 "float yradius" 0\nWorldBegin\n', "s.pbrt:1: 'xradius' and 'yradius': "),
+    ('PixelFilter "gaussian" "float sigma" 0\nWorldBegin\n', "s.pbrt:1: 'sigma': must be in"),
     ('WorldBegin\n' + FLOOR.replace("0 3 2", "0 3 9"), "refers to vertex"),
 ])
 def test_bad_input_is_one_line_naming_the_file(tmp_path, text, expected):
     message = fails(tmp_path, text)
     assert "s.pbrt" in message and expected in message, message
+
+
+@pytest.mark.parametrize("text,expected", [
+    # pbrt-v4 looks a parameter up by its name and its type as written (src/pbrt/paramdict.cpp,
+    # lookupSingle and lookupArray): another type is never read, and ReportUnused refuses the file
+    ('WorldBegin\nShape "sphere" "integer radius" 2\n',
+     's.pbrt:2: \'radius\': pbrt-v4 reads a float here and refuses an integer ("radius": unused parameter); '
+     'write "float radius"'),
+    ('Camera "perspective" "integer fov" 45\nWorldBegin\n' + FLOOR, "s.pbrt:1: 'fov': pbrt-v4 reads a float here"),
+    ('WorldBegin\nLightSource "point" "vector3 from" [ 0 1 0 ]\n' + FLOOR, "s.pbrt:2: 'from': must be point3, got vector3"),
+    ('Film "rgb" "float pixelbounds" [ 0 1 0 1 ]\nWorldBegin\n' + FLOOR, "s.pbrt:1: 'pixelbounds': must be integer"),
+    # pbrt-v3's type names: pbrt-v4 knows them only when --upgrade rewrites the file
+    # (ParameterDictionary::checkParameterTypes: "unknown parameter type")
+    ('WorldBegin\nMaterial "diffuse" "color reflectance" [ 0.5 0.5 0.5 ]\n' + FLOOR,
+     's.pbrt:2: "color reflectance": color is pbrt-v3\'s parameter type, which pbrt-v4 refuses; '
+     'write "rgb reflectance"'),
+    ('WorldBegin\nShape "trianglemesh" "point P" [ 0 0 0 1 0 0 0 1 0 ]\n', "s.pbrt:2: \"point P\": point is pbrt-v3's"),
+    ('WorldBegin\nLightSource "distant" "vector to" [ 0 0 1 ]\n' + FLOOR, "vector is pbrt-v3's"),
+    ('WorldBegin\nShape "trianglemesh" "point3 P" [ 0 0 0 1 0 0 0 1 0 ] "float uv" [ 0 0 1 0 0 1 ]\n',
+     "s.pbrt:2: 'uv': must be point2, got float"),
+])
+def test_a_file_pbrt_v4_refuses_is_one_line_naming_the_line(tmp_path, text, expected):
+    message = fails(tmp_path, text)
+    assert expected in message and "\n" not in message.strip(), message
 
 
 def test_an_include_cycle_and_a_fifo_are_refused(tmp_path):

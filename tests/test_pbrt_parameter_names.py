@@ -1,6 +1,9 @@
 """The parameter names the pbrt reader reads, per pbrt-v4 type, against those pbrt-v4's Create()
-functions read (tests/pbrt_parameter_names.json, extracted from pbrt-v4's sources): a name the
-reader takes that pbrt-v4 does not know (as `conedelta` was, for `conedeltaangle`) fails."""
+functions read (tests/pbrt_parameter_names.json, extracted from pbrt-v4's sources), for every
+directive whose parameters it reads: lights, materials, textures, media, shapes, cameras, the
+film, samplers, integrators and filters. A name the reader takes that pbrt-v4 does not know (as
+`conedelta` was, for `conedeltaangle`) fails, as does one the reader reads and the table does not
+list; the reader warns of every name it does not read."""
 
 import json
 from pathlib import Path
@@ -14,7 +17,21 @@ from pathtrace.scene.pbrt.tokens import ParamList
 
 TABLE = json.loads((Path(__file__).parent / "pbrt_parameter_names.json").read_text())
 
-# one directive of each type, with what it cannot do without; the line's key in TABLE
+# one directive of each type, with what it cannot do without; the line's key in TABLE. OPTIONS
+# come before WorldBegin; a Camera's parameters are read once the file is read, so each file
+# has one camera
+OPTIONS = [
+    ("film rgb", 'Film "rgb"'),
+    ("sampler independent", 'Sampler "independent"'),
+    ("sampler stratified", 'Sampler "stratified"'),
+    ("sampler zsobol", 'Sampler "zsobol"'),
+    ("integrator volpath", 'Integrator "volpath"'),
+    ("integrator path", 'Integrator "path"'),
+    ("filter triangle", 'PixelFilter "triangle"'),
+    ("filter box", 'PixelFilter "box"'),
+    ("filter gaussian", 'PixelFilter "gaussian"'),
+]
+CAMERAS = [("camera perspective", 'Camera "perspective"'), ("camera orthographic", 'Camera "orthographic"')]
 CORPUS = [
     ("light point", 'LightSource "point"'),
     ("light spot", 'LightSource "spot"'),
@@ -36,40 +53,60 @@ CORPUS = [
     ("texture imagemap", 'Texture "t4" "spectrum" "imagemap" "string filename" "t.png"'),
     ("texture mix", 'Texture "t5" "spectrum" "mix"'),
     ("texture scale", 'Texture "t6" "spectrum" "scale"'),
+    ("medium homogeneous", 'MakeNamedMedium "m" "string type" "homogeneous"'),
+    ("shape sphere", 'Shape "sphere"'),
+    ("shape disk", 'Shape "disk"'),
+    ("shape trianglemesh", 'Shape "trianglemesh" "point3 P" [ 0 0 0 1 0 0 0 1 0 ]'),
+    ("shape bilinearmesh", 'Shape "bilinearmesh" "point3 P" [ 0 0 0 1 0 0 0 1 0 1 1 0 ]'),
+    ("shape loopsubdiv", 'Shape "loopsubdiv" "point3 P" [ 0 0 0 1 0 0 0 1 0 ] "integer indices" [ 0 1 2 ]'),
+    ("shape plymesh", 'Shape "plymesh" "string filename" "t.ply"'),
 ]
 
 
-def names_read(tmp_path, monkeypatch) -> dict:
-    """Per key of CORPUS, the names the reader looked up (ParamList.get or type_of) in that
-    directive's parameters, from a file of CORPUS's lines."""
+def names_read(tmp_path, monkeypatch, options, world) -> dict:
+    """Per key of `options` and `world` (lists like CORPUS), the names the reader looked up
+    (ParamList.get or type_of) in that directive's parameters, from a file of their lines."""
     from PIL import Image
     Image.fromarray(np.zeros((2, 2, 3), np.uint8)).save(tmp_path / "t.png")
+    (tmp_path / "t.ply").write_text("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                                    "property float z\nelement face 1\nproperty list uchar int vertex_indices\n"
+                                    "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")
     lines, keys = [], {}
-    for key, text in CORPUS:
+    for key, text in options + [(None, "WorldBegin")] + world:
         lines += text.split("\n")
-        keys[len(lines)] = key                  # the key of the directive on the last line
-    (tmp_path / "s.pbrt").write_text("WorldBegin\n" + "\n".join(lines) + '\nShape "sphere"\n')
+        keys[len(lines)] = key                  # the key of the directive on the last line (1-based)
+    (tmp_path / "s.pbrt").write_text("\n".join(lines) + '\nShape "sphere"\n')
     read, owner = {}, {}
     original_parameters, get, type_of = pbrt_reader.parameters, ParamList.get, ParamList.type_of
 
     def parameters(tokens):
         params = original_parameters(tokens)
-        owner[id(params)] = int(tokens.where(tokens.peek()[2] - 1).rsplit(":", 1)[1]) - 1   # the directive's line
+        owner[id(params)] = int(tokens.where(tokens.peek()[2] - 1).rsplit(":", 1)[1])   # the directive's line
         return params
 
     def note(params, name):
         key = keys.get(owner.get(id(params)))
         if key:
             read.setdefault(key, set()).add(name)
-    monkeypatch.setattr(pbrt_reader, "parameters", parameters)
-    monkeypatch.setattr(ParamList, "get", lambda self, name, *a, **k: (note(self, name), get(self, name, *a, **k))[1])
-    monkeypatch.setattr(ParamList, "type_of", lambda self, name: (note(self, name), type_of(self, name))[1])
-    load_scene(str(tmp_path / "s.pbrt"))
+    with monkeypatch.context() as m:
+        m.setattr(pbrt_reader, "parameters", parameters)
+        m.setattr(ParamList, "get", lambda self, name, *a, **k: (note(self, name), get(self, name, *a, **k))[1])
+        m.setattr(ParamList, "type_of", lambda self, name: (note(self, name), type_of(self, name))[1])
+        load_scene(str(tmp_path / "s.pbrt"))
+    return read
+
+
+def all_names_read(tmp_path, monkeypatch) -> dict:
+    read = {}
+    for i, camera in enumerate(CAMERAS):
+        folder = tmp_path / str(i)
+        folder.mkdir()
+        read.update(names_read(folder, monkeypatch, [camera] + (OPTIONS if i == 0 else []), CORPUS if i == 0 else []))
     return read
 
 
 def test_the_table_lists_what_the_reader_reads(tmp_path, monkeypatch):
-    read = names_read(tmp_path, monkeypatch)
+    read = all_names_read(tmp_path, monkeypatch)
     assert {k: sorted(v) for k, v in read.items()} == {k: sorted(v) for k, v in TABLE["reader"].items()}
 
 
@@ -77,3 +114,8 @@ def test_the_table_lists_what_the_reader_reads(tmp_path, monkeypatch):
 def test_every_name_the_reader_reads_is_pbrt_v4s(key):
     unknown = set(TABLE["reader"][key]) - set(TABLE["pbrt-v4"][key])
     assert not unknown, f"{key}: the reader reads {sorted(unknown)}, which pbrt-v4 does not"
+
+
+def test_every_type_has_its_source():
+    assert {k.split(" ")[0] for k in TABLE["pbrt-v4"]} == set(TABLE["sources"])
+    assert set(TABLE["reader"]) <= set(TABLE["pbrt-v4"])

@@ -116,6 +116,39 @@ def parse_xml(path: Path, budget: list = None, where: str = None) -> Node:
 
 # --- property values ---------------------------------------------------------------------
 
+class Props(dict):
+    """An element's properties, {name: Node}, noting each name the reader looks up: once the
+    scene is read, the reader warns of every property it never looked up (Mitsuba 3 refuses
+    them: "Unreferenced property", src/core/xml.cpp, where it instantiates a plugin), naming it and
+    the element. Nested BSDFs are left out: the BSDFs that wrap them, and shapes, take them by
+    their place, whatever their name."""
+
+    def __init__(self, node, items):
+        super().__init__(items)
+        self.node = node
+        self.read = set()
+
+    def get(self, name, default=None):
+        self.read.add(name)
+        return super().get(name, default)
+
+    def __contains__(self, name):
+        self.read.add(name)
+        return super().__contains__(name)
+
+    def __getitem__(self, name):
+        self.read.add(name)
+        return super().__getitem__(name)
+
+    def ignore(self):
+        """An element left out or replaced whole, with a warning of its own: its properties
+        get no warnings more."""
+        self.read.update(self.keys())
+
+    def unread(self) -> list:
+        return [node for name, node in self.items() if name not in self.read]
+
+
 def _fail(node, problem):
     raise UserError(f"{node.where()}: {problem}")
 
@@ -254,6 +287,7 @@ class _Reader:
         self.medium_rows = {}       # id(medium Node) -> row of self.media
         self.camera_medium = -1
         self.mesh_files = MeshFiles()   # the obj and ply shapes' files, read ahead
+        self.props = {}             # id(Node) -> its Props (properties())
 
     # -- properties of an element: {name: Node} after $substitution --
 
@@ -290,14 +324,21 @@ class _Reader:
             out.append(child)
         return out
 
-    def properties(self, node):
-        props = {}
-        for c in node.children:
-            if "name" in c.attrs and c.tag in ("float", "integer", "boolean", "string", "rgb",
-                                                "spectrum", "point", "vector", "transform",
-                                                "texture", "ref", "bsdf"):
-                props[c.attrs["name"]] = c
-        return props
+    def properties(self, node) -> Props:
+        """The element's Props, one per element however often it is read."""
+        if id(node) not in self.props:
+            self.props[id(node)] = Props(node, {
+                c.attrs["name"]: c for c in node.children
+                if "name" in c.attrs and c.tag in ("float", "integer", "boolean", "string", "rgb", "spectrum", "point",
+                                                   "vector", "transform", "texture", "ref", "bsdf", "volume")})
+        return self.props[id(node)]
+
+    def warn_unread(self):
+        for props in self.props.values():
+            kind = f"{props.node.attrs.get('type')} {props.node.tag}".strip()
+            for node in props.unread():
+                if node.tag != "bsdf":
+                    warn(f"{node.where()}: '{node.attrs['name']}' is not a property pathtrace's {kind} reads; ignored")
 
     def value(self, node):
         """The value of a property element."""
@@ -379,6 +420,7 @@ class _Reader:
             params["color1"] = self.color(props, "color1", 0.2)
         else:
             warn(f"{node.where()}: pathtrace has no {kind} texture; it uses a constant grey of 0.5 instead")
+            props.ignore()
             kind, params = "constant", {"value": 0.5}
         try:
             params = TEXTURES[kind].complete(params)
@@ -470,6 +512,7 @@ class _Reader:
                     warn(f"{node.where()}: not supported; pathtrace ignores it")
         if not self.builder.spheres and not self.builder.meshes and not self.builder.instance_object:
             raise UserError(f"{self.path}: the scene has no shapes pathtrace can render")
+        self.warn_unread()
         settings = self.settings
         settings.max_depth, settings.russian_roulette = self.max_depth, self.rr
         settings.filter = self.filter or PixelFilter("gaussian")      # Mitsuba's default
@@ -502,6 +545,7 @@ class _Reader:
             self.settings.integrator = kind        # Mitsuba 0.6's bdpt, Mitsuba 3's particle tracer
         elif kind not in ("path", "volpath", "prb", "prbvolpath"):
             warn(f"{node.where()}: pathtrace renders with its path tracer instead")
+            props.ignore()          # that integrator's own settings: only max_depth and rr_depth are read
         max_depth = self.get(props, "max_depth", -1, ("integer",))
         if not -1 <= max_depth < 2**31:
             _fail(props["max_depth"], f"must be -1 (unlimited) to {2**31 - 1}, got {max_depth}")
@@ -597,6 +641,10 @@ class _Reader:
         self.settings.width, self.settings.height = w, h
         if node.attrs.get("type") not in ("hdrfilm", "specfilm", None):
             warn(f"{node.where()}: pathtrace writes the image format of the output file's name")
+        # the output's format is its file name's (render -o), whatever these say; a specfilm's
+        # channels are its sensitivity functions', and it has no pixel_format
+        for name in ("file_format", "component_format") + (("pixel_format",) if node.attrs.get("type") != "specfilm" else ()):
+            props.get(name)
         for child in node.children:
             if child.tag == "rfilter":
                 self.filter = self.rfilter(child)
@@ -607,6 +655,7 @@ class _Reader:
         kind = node.attrs.get("type")
         props = self.properties(node)
         if kind not in FILTERS:
+            props.ignore()
             warn(f"{node.where()}: pathtrace has no {kind} filter (its weights go negative, which filter "
                  f"importance sampling cannot follow); it uses Mitsuba's gaussian")
             return PixelFilter("gaussian")
@@ -623,6 +672,7 @@ class _Reader:
         props = self.properties(node)
         if self.environment is not None and kind in ("constant", "envmap"):
             warn(f"{node.where()}: a second environment; pathtrace keeps the first")
+            props.ignore()
             return
         if kind == "constant":
             self.environment = Environment.constant(self.color(props, "radiance", 1.0, textures=False))
@@ -640,6 +690,7 @@ class _Reader:
             self.lights.append(self.delta_light(node, kind, props))
         else:
             warn(f"{node.where()}: pathtrace has no {kind} emitters; it ignores this one")
+            props.ignore()
 
     def delta_light(self, node, kind, props):
         """A point, spot or directional emitter, placed as Mitsuba places it: a point's
@@ -744,6 +795,7 @@ class _Reader:
         albedo = self.color(props, "base_color", None, False) if "base_color" in props else \
             self.color(props, "reflectance", 0.5, False) if "reflectance" in props else np.full(3, 0.5)
         albedo = np.clip(albedo, 0, 1)
+        props.ignore()
         warn(f"{node.where()}: not supported; pathtrace uses a diffuse BSDF of albedo "
              f"{', '.join(f'{c:.3g}' for c in albedo)}")
         return Material("diffuse", {"rho_d": albedo})
@@ -782,6 +834,8 @@ class _Reader:
             maps = [c for c in maps if c.attrs.get("name") == "normalmap"]
         if not maps:
             _fail(node, 'needs a <texture name="normalmap">' if kind == "normalmap" else "needs a <texture>")
+        if "name" in maps[0].attrs:          # the map is taken by its place, whatever its name
+            props.read.add(maps[0].attrs["name"])
         target = self.resolve(maps[0]) if maps[0].tag == "ref" else maps[0]
         if target.tag != "texture":
             _fail(maps[0], "must be a texture")
@@ -844,10 +898,8 @@ class _Reader:
             target = self.resolve(c) if c.tag == "ref" else c
             values["alpha"] = self.texture(target) if target.tag == "texture" else \
                 self.get(props, "alpha_u", kinds=("float",))
-        known = {p.name for p in bsdf.params} | {"sample_visible"} | ({"alpha_u"} if anisotropic else set())
-        for name in props:
-            if name not in known:
-                warn(f"{props[name].where()}: not a parameter pathtrace's {kind} has; ignored")
+        if kind.startswith("rough"):
+            props.get("sample_visible")      # pathtrace samples visible normals always (kernels/microfacet.cl)
         for p in bsdf.params:        # the range of what the file gave (the TOML reader's Param bounds)
             if p.kind in ("name", "bool") or p.name not in values or isinstance(values[p.name], str):
                 continue
@@ -877,20 +929,21 @@ class _Reader:
         kind = node.attrs.get("type")
         if kind != "homogeneous":
             _fail(node, f"pathtrace has homogeneous media only, not {short(kind)}")
-        props = {c.attrs["name"]: c for c in node.children if "name" in c.attrs}
-        for name, child in props.items():
-            if name not in ("albedo", "sigma_t", "scale", "sample_emitters", "has_spectral_extinction"):
-                warn(f"{child.where()}: not a parameter of pathtrace's homogeneous medium; ignored")
-            elif child.tag == "volume":
-                _fail(child, f"{name}: pathtrace's media are homogeneous; give a float or an rgb")
+        props = self.properties(node)
+        for name in ("albedo", "sigma_t"):
+            if name in props and props[name].tag == "volume":
+                _fail(props[name], f"{name}: pathtrace's media are homogeneous; give a float or an rgb")
+        props.get("has_spectral_extinction")    # spectral variants' choice; pathtrace is RGB
         if not self.get(props, "sample_emitters", True, ("boolean",)):
             warn(f"{props['sample_emitters'].where()}: pathtrace samples emitters in every medium")
         scale = self.get(props, "scale", 1.0, ("float",))
         g = 0.0
         for phase in (c for c in node.children if c.tag == "phase"):
+            phase_props = self.properties(phase)
             if phase.attrs.get("type") == "hg":
-                g = self.get(self.properties(phase), "g", 0.8, ("float",))     # Mitsuba 3's default
+                g = self.get(phase_props, "g", 0.8, ("float",))     # Mitsuba 3's default
             elif phase.attrs.get("type") != "isotropic":
+                phase_props.ignore()
                 warn(f"{phase.where()}: pathtrace has no {phase.attrs.get('type')} phase function; "
                      "it scatters isotropically instead")
         try:
@@ -948,6 +1001,7 @@ class _Reader:
                 emission = self.color(self.properties(child), "radiance", 1.0)
             elif child.tag in ("medium", "ref") and child.attrs.get("name") in ("interior", "exterior"):
                 media[child.attrs["name"]] = self.medium(child)
+                props.read.add(child.attrs["name"])
             elif child.tag in ("medium", "sensor"):
                 warn(f"{child.where()}: not supported; ignored")
         if emission is not None and bsdf is not None and self.material_node(bsdf).attrs.get("type") == "null":
@@ -961,8 +1015,10 @@ class _Reader:
             center = m[:3, :3] @ self.get(props, "center", np.zeros(3), ("point", "vector")) + m[:3, 3]
             scales = np.linalg.norm(m[:3, :3], axis=0)
             if not np.allclose(scales, scales[0], rtol=1e-5):
-                warn(f"{node.where()}: a non-uniformly scaled sphere; pathtrace renders a sphere of the mean scale")
-            radius = self.get(props, "radius", 1.0, ("float",)) * float(np.mean(scales))
+                warn(f"{node.where()}: a non-uniformly scaled sphere; pathtrace renders it round, of its "
+                     f"to_world's x scale {scales[0]:.4g}, as Mitsuba 3 does")
+            # Mitsuba 3 (src/shapes/sphere.cpp, update()): radius = |to_world (1, 0, 0)|
+            radius = self.get(props, "radius", 1.0, ("float",)) * float(scales[0])
             if radius <= 0:
                 _fail(node, f"the radius must be positive, got {radius}")
             if np.any(np.abs(center) + radius > MAX_COORDINATE):
@@ -996,6 +1052,7 @@ class _Reader:
             name = name or Path(filename).stem
         else:
             warn(f"{node.where()}: pathtrace has no {kind} shape; it ignores this one")
+            props.ignore()
             return
         if kind not in ("obj", "ply"):
             vertices, faces, normals, uvs = check_mesh(vertices, faces, None, uvs, node.where())

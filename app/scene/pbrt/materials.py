@@ -30,7 +30,7 @@ def spectrum_rgb(params, name, default, kind="reflectance"):
     ptype = params.type_of(name)
     if ptype is None:
         return None if default is None else np.broadcast_to(np.asarray(default, np.float64), 3).copy()
-    if ptype in ("rgb", "color"):
+    if ptype == "rgb":
         return np.asarray(params.get(name, (ptype,)), np.float64)
     if ptype == "float":
         return np.full(3, params.float(name))
@@ -202,8 +202,10 @@ class MaterialMapper:
         if cls == "bilerp":
             corners = [inp(k, d) for k, d in (("v00", 0.0), ("v01", 1.0), ("v10", 0.0), ("v11", 1.0))]
             mean = np.mean([np.asarray(c, np.float64) for c in corners if not isinstance(c, Texture)] or [0.5], axis=0)
-            warn(f"{where}: pathtrace has no bilerp texture; it uses the corners' mean")
-            return float(np.mean(mean)) if is_float else np.broadcast_to(mean, 3).copy()
+            value = float(np.mean(mean)) if is_float else np.broadcast_to(mean, 3).copy()
+            warn(f"{where}: pathtrace has no bilerp texture; it uses the mean of its constant corners, "
+                 f"{', '.join(f'{v:.3g}' for v in np.atleast_1d(value))}")
+            return value
         warn(f"{where}: pathtrace has no {cls} texture; it uses a constant 0.5 instead")
         return 0.5 if is_float else np.full(3, 0.5)
 

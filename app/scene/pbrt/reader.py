@@ -258,8 +258,8 @@ class PbrtReader:
         camera.mirrored = bool(np.dot(np.cross(forward, up), right) < 0)
         w, h = self.settings.width, self.settings.height
         if kind not in ("perspective", "orthographic"):
-            warn(f"{where}: pathtrace has no {kind} camera; it uses a perspective one")
-            kind = "perspective"
+            warn(f"{where}: pathtrace has no {kind} camera; it uses a perspective one of pbrt-v4's defaults")
+            kind, params = "perspective", None
         get = (lambda name, default: default) if params is None else \
             (lambda name, default: params.float(name, default))          # noqa: E731
         half_height = self.screen_half_height(params, w, h)
@@ -327,21 +327,28 @@ class PbrtReader:
         params.string("filename")
         for name in ("cropwindow", "pixelbounds"):
             if params.type_of(name):
-                params.floats(name, ("float", "integer"))
+                params.floats(name, ("float",) if name == "cropwindow" else ("integer",))
                 warn(f"{params.where(name)}: pathtrace renders the whole film; ignored")
         if kind not in ("rgb", "gbuffer", "spectral"):
             warn(f"{tokens.where(offset)}: pathtrace has no {kind} film; it renders RGB")
         self.unused(params, "film")
 
     def _sampler(self, tokens, offset):
-        string(tokens, "Sampler")
+        """The samples per pixel: `pixelsamples` (16), or for a `stratified` sampler `xsamples`
+        times `ysamples` (4 each), as pbrt-v4's samplers take them (src/pbrt/samplers.cpp, the
+        samplers' Create). Their seeds, jitter and randomization are their own: warned of, as
+        any name not read."""
+        kind = string(tokens, "Sampler")
         params = parameters(tokens)
-        spp = params.int("pixelsamples", 16)
-        if not 1 <= spp <= 1 << 24:
-            params.fail("pixelsamples", f"must be in 1..{1 << 24}, got {spp}")
+        names = ("xsamples", "ysamples") if kind == "stratified" else ("pixelsamples",)
+        spp = 1
+        for name in names:
+            n = params.int(name, 4 if kind == "stratified" else 16)
+            if not 1 <= n <= 1 << 24 or not spp * n <= 1 << 24:
+                params.fail(name, f"must be in 1..{1 << 24}, samples per pixel in all, got {n}")
+            spp *= n
         self.settings.spp = spp
-        for p in params.unused():
-            p.used = True          # the sampler's own settings (seed, randomization) do not apply
+        self.unused(params, f"{kind} sampler")
 
     def _integrator(self, tokens, offset):
         kind = string(tokens, "Integrator")
@@ -362,8 +369,10 @@ class PbrtReader:
         if sampler not in ("bvh", "power", "uniform"):
             params.fail("lightsampler", f"must be bvh, power or uniform, got {sampler!r}")
         self.settings.light_sampler = {"bvh": "auto", "power": "power", "uniform": "power"}[sampler]
+        if kind in ("path", "volpath"):
+            self.unused(params, f"{kind} integrator")
         for p in params.unused():
-            p.used = True          # the other integrators' settings
+            p.used = True          # another integrator's settings: it is replaced whole, with its warning
 
     def _pixel_filter(self, tokens, offset):
         kind = string(tokens, "PixelFilter")
@@ -383,9 +392,13 @@ class PbrtReader:
                 p.used = True
         name = {"triangle": "tent"}.get(kind, kind)
         try:
-            self.filter = PixelFilter(name, radius, params.float("sigma", 0.5)).check()
+            # only pbrt-v4's gaussian has a sigma (src/pbrt/filters.cpp, GaussianFilter::Create)
+            sigma = params.float("sigma", 0.5) if kind == "gaussian" else 0.5
+            self.filter = PixelFilter(name, radius, sigma).check()
         except ValueError as e:
-            raise UserError(f"{tokens.where(offset)}: {e}") from None
+            field, problem = str(e).split(": ", 1)
+            field = {"radius": "xradius' and 'yradius", "stddev": "sigma"}.get(field, field)
+            raise UserError(f"{tokens.where(offset)}: '{field}': {problem}") from None
         self.unused(params, f"{kind} filter")
 
     # -- the graphics state --
@@ -724,13 +737,14 @@ class PbrtReader:
         source, normals, uvs = "", None, None
         if kind == "trianglemesh":
             vertices, faces = self.indexed_polygons(params, kind, 3, where)
-            normals, uvs = self.vertex_attributes(params, len(vertices))
+            normals, uvs = self.vertex_attributes(params, len(vertices), ("S", "faceIndices"))
             vertices, faces, normals, uvs = check_mesh(vertices, faces, normals, uvs, where, degenerate=self.degenerate)
         elif kind == "bilinearmesh":
             vertices, q = self.indexed_polygons(params, kind, 4, where)
             # corners p00, p10, p01, p11: two triangles of the patch's orientation
             faces = np.concatenate([q[:, [0, 1, 3]], q[:, [0, 3, 2]]])
-            normals, uvs = self.vertex_attributes(params, len(vertices))
+            # pbrt-v4's BilinearPatch::CreateMesh reads no tangents "S"
+            normals, uvs = self.vertex_attributes(params, len(vertices), ("faceIndices",))
             vertices, faces, normals, uvs = check_mesh(vertices, faces, normals, uvs, where, degenerate=self.degenerate)
         elif kind in ("plymesh",):
             filename = params.string("filename")
@@ -787,7 +801,7 @@ class PbrtReader:
     def indexed_polygons(params, kind, corners, where):
         """A mesh's "point3 P" and its "integer indices", `corners` per polygon (which may be
         left out where P holds exactly one polygon): vertices (V, 3) and indices (N, corners)."""
-        p = params.get("P", ("point3", "point"), 0)
+        p = params.get("P", ("point3",), 0)
         if p is None:
             raise UserError(f'{where}: a {kind} needs "point3 P"')
         vertices = p.reshape(-1, 3)
@@ -800,14 +814,16 @@ class PbrtReader:
             params.fail("indices", f"takes polygons of {corners} indices each; got {len(idx)}")
         return vertices, idx.reshape(-1, corners)
 
-    def vertex_attributes(self, params, count):
+    def vertex_attributes(self, params, count, unused_names):
+        """A mesh's normals N and uvs; `unused_names` are read and not used (tangents S, the
+        faces' indices for ptex)."""
         n = params.get("N", ("normal", "normal3"), 0)
-        uv = params.get("uv", ("point2", "float"), 0)
+        uv = params.get("uv", ("point2",), 0)          # pbrt-v4: GetPoint2fArray("uv"); pbrt-v3 wrote floats
         if n is not None and len(n) != 3 * count:
             params.fail("N", f"has {len(n) // 3} normals for {count} vertices")
         if uv is not None and len(uv) != 2 * count:
             params.fail("uv", f"has {len(uv) // 2} uvs for {count} vertices")
-        for name in ("S", "faceIndices"):
+        for name in unused_names:
             if params.type_of(name):
                 params.get(name, (params.type_of(name),), 0)
         uvs = None if uv is None else np.column_stack([uv[0::2], 1 - uv[1::2]])
@@ -934,7 +950,7 @@ class PbrtReader:
                 p.used = True
             return
         if params.type_of("portal"):
-            params.floats("portal", ("point3", "point"))
+            params.floats("portal", ("point3",))
             warn(f"{params.where('portal')}: pathtrace does not sample portals; the light is sampled whole")
         # pbrt-v4's Light::Create: "illuminance" E_v scales a constant L by E_v / pi, and a map
         # by E_v over its upper_illuminance

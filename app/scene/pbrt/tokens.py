@@ -18,8 +18,12 @@ FLOAT32_MAX = float(np.finfo(np.float32).max)
 
 # pbrt-v4's parameter types, and the number of values each element takes
 PARAM_TYPES = {"integer": 1, "float": 1, "point2": 2, "vector2": 2, "point3": 3, "vector3": 3,
-               "normal3": 3, "normal": 3, "point": 3, "vector": 3, "rgb": 3, "color": 3,
-               "spectrum": 1, "blackbody": 1, "bool": 1, "string": 1, "texture": 1}
+               "normal3": 3, "normal": 3, "rgb": 3, "spectrum": 1, "blackbody": 1, "bool": 1, "string": 1,
+               "texture": 1}
+# pbrt-v3's names of types, which pbrt-v4 refuses ("unknown parameter type",
+# ParameterDictionary::checkParameterTypes, src/pbrt/paramdict.cpp): only its --upgrade renames
+# them (src/pbrt/parser.cpp, the parameters' "formatting" branch)
+PBRT_V3_TYPES = {"point": "point3", "vector": "vector3", "color": "rgb"}
 NUMERIC = {name for name in PARAM_TYPES if name not in ("bool", "string", "texture", "spectrum")}
 
 
@@ -187,7 +191,12 @@ class ParamList:
         return p.type if p else None
 
     def float(self, name, default=None):
-        v = self.get(name, ("float", "integer"))
+        if self.type_of(name) == "integer":
+            # pbrt-v4's lookups match the type as written (src/pbrt/paramdict.cpp, lookupSingle):
+            # an "integer" is never read as a float, and pbrt-v4 refuses it as unused
+            self.fail(name, f'pbrt-v4 reads a float here and refuses an integer ("{name}": unused parameter); '
+                            f'write "float {name}"')
+        v = self.get(name, ("float",))
         return default if v is None else float(v[0])
 
     def int(self, name, default=None):
@@ -206,7 +215,7 @@ class ParamList:
         return self.get(name, types, 0)
 
     def point(self, name, default=None):
-        v = self.get(name, ("point3", "point", "vector3", "vector", "normal", "normal3"))
+        v = self.get(name, ("point3",))
         return default if v is None else np.asarray(v, np.float64)
 
     def unused(self) -> list:
@@ -225,6 +234,9 @@ def parameters(tokens: Tokens) -> ParamList:
         if len(words) != 2:
             tokens.fail(offset, f'"{cut(decl)}": a parameter is declared as "type name"')
         ptype, name = words
+        if ptype in PBRT_V3_TYPES:
+            tokens.fail(offset, f'"{cut(decl)}": {ptype} is pbrt-v3\'s parameter type, which pbrt-v4 refuses; '
+                                f'write "{PBRT_V3_TYPES[ptype]} {cut(name)}" (as pbrt-v4\'s --upgrade does)')
         if ptype not in PARAM_TYPES:
             tokens.fail(offset, f'"{cut(decl)}": unknown parameter type {cut(ptype)!r} '
                                 f"(pbrt-v4 has {', '.join(PARAM_TYPES)})")
