@@ -591,7 +591,7 @@ class PbrtReader:
             return
         if self.objects[name] is None:
             self.make_object(name)
-        self.builder.add_instance(self.objects[name], self.state.ctm)
+        self.builder.add_instance(self.objects[name], self.state.ctm, tokens.where(offset))
 
     def make_object(self, name: str):
         """The object `name`, its shapes made now, each in the graphics state it was read in."""
