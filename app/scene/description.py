@@ -199,13 +199,13 @@ class SceneBuilder:
         (pbrt-v4 intersects a sphere in its object space). A reader gives `where` (its file and
         line), which an error names; the API's instances are checked at render
         (instances.check_instances)."""
-        from pathtrace.scene.instances import MIN_DETERMINANT, near_singular
+        from pathtrace.scene.instances import MIN_DETERMINANT, determinant, near_singular
         from pathtrace.scene.transform import transform_points
         m = np.asarray(to_world, np.float64)
         o = self.objects[obj]
         if where is not None and o.meshes and near_singular(m):
             raise UserError(f"{where}: the instance's transform is too near singular for pathtrace's instances "
-                            f"(the determinant of its 3x3 part is {np.linalg.det(m[:3, :3]):.3g}; they need "
+                            f"(the determinant of its 3x3 part is {determinant(m):.3g}; they need "
                             f"at least {MIN_DETERMINANT:g} in magnitude)")
         if o.meshes:
             self.instance_object.append(obj)
