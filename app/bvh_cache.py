@@ -101,21 +101,4 @@ def write_entry(path: Path, bvh: BVH):
     header["nodes"], header["primitives"], header["depth"], header["cost"] = \
         len(bvh.nodes), len(bvh.order), bvh.depth, bvh.cost
     if cache_files.write_entry(path, header, np.ascontiguousarray(bvh.nodes), bvh.order.astype(np.int32)):
-        prune(path.parent)
-
-
-def prune(where: Path, limit: int = MAX_BYTES):
-    """Removes the least recently used entries until the rest take at most `limit` bytes."""
-    try:
-        entries = [(e.stat().st_mtime, e.stat().st_size, e) for e in where.glob("*.bvh")]
-    except OSError:
-        return
-    total = sum(size for _, size, _ in entries)
-    for _, size, entry in sorted(entries, key=lambda e: e[0]):
-        if total <= limit:
-            break
-        try:
-            entry.unlink()
-            total -= size
-        except OSError:
-            pass
+        cache_files.prune(path.parent, "*.bvh", MAX_BYTES)

@@ -1,5 +1,5 @@
-"""Entries of pathtrace's caches on disk: the kernels' binaries (app/device.py) and large scenes'
-BVHs (app/bvh_cache.py). An entry is the SHA-256 digest of its payload, then the payload. It is
+"""Entries of pathtrace's caches on disk: the kernels' binaries (app/device.py), large scenes'
+BVHs (app/bvh_cache.py) and the scenes read from slow files (app/scene/read_cache.py). An entry is the SHA-256 digest of its payload, then the payload. It is
 written whole or not at all, and read back only where it is a regular file whose digest matches,
 so that a damaged entry is a miss: never a hang (an entry that is a FIFO), a crash (a truncated
 binary handed to a driver can crash it: PoCL segfaulted on the first half of a valid one) or a
@@ -54,3 +54,21 @@ def write_entry(path: Path, *chunks) -> bool:
         except OSError:
             pass
         return False
+
+
+def prune(where: Path, pattern: str, limit: int):
+    """Removes the least recently used entries of `where` that match `pattern` until the rest
+    take at most `limit` bytes (a read entry's time is touched: pathtrace.bvh_cache)."""
+    try:
+        entries = [(e.stat().st_mtime, e.stat().st_size, e) for e in where.glob(pattern)]
+    except OSError:
+        return
+    total = sum(size for _, size, _ in entries)
+    for _, size, entry in sorted(entries, key=lambda e: e[0]):
+        if total <= limit:
+            break
+        try:
+            entry.unlink()
+            total -= size
+        except OSError:
+            pass

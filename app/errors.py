@@ -29,6 +29,12 @@ def warn(message: str):
     print(f"pathtrace: warning: {message}", file=sys.stderr)
 
 
+def held_warnings() -> list:
+    """The warnings that the innermost grouped_warnings() of this thread holds so far."""
+    held = _held()
+    return list(held[-1]) if held else []
+
+
 class grouped_warnings:
     """Around the reading of a file: its warnings each once, with a count of the others like it
     ("3 like this; the first: scene.pbrt:7: 'bogus' is not a parameter ..."), where "like" is

@@ -1,8 +1,11 @@
 """Files the user names: the one check made before reading any of them (scene files, maps,
-meshes), and paths as messages show them."""
+meshes), which also notes what a scene's reading read (pathtrace.scene.read_cache), and paths as
+messages show them."""
 
 import os
 import stat
+import threading
+from contextlib import contextmanager
 from pathlib import Path
 
 from pathtrace.errors import UserError, cut, escape
@@ -36,3 +39,29 @@ def check_regular_file(path: Path, where: str, what: str, max_bytes: int):
         raise UserError(f"{where}: {what} '{cut(shown(path), 100)}' is not a regular file")
     if info.st_size > max_bytes:
         raise UserError(f"{where}: {what} '{cut(shown(path), 100)}' is larger than {max_bytes >> 20} MB")
+    with _noting:
+        for notes in _notes:
+            notes.append(stamp(path, info))
+
+
+_notes = []                  # the lists that noting_files() holds open, in any thread
+_noting = threading.Lock()   # mesh files are read in threads (pathtrace.scene.meshes.MeshFiles)
+
+
+def stamp(path, info: os.stat_result) -> tuple:
+    """What says that a file is unchanged: its path, size and time of last change."""
+    return str(Path(path).absolute()), info.st_size, info.st_mtime_ns
+
+
+@contextmanager
+def noting_files():
+    """A list of the stamps of the files checked (check_regular_file) while it is open, by any
+    thread."""
+    notes = []
+    with _noting:
+        _notes.append(notes)
+    try:
+        yield notes
+    finally:
+        with _noting:
+            _notes.remove(notes)

@@ -5,8 +5,9 @@ times the same command once they are built). Each row times `python -m pathtrace
 and imports included, and checks that the image was written:
 
 - cold: once, with every cache the render reads empty: a fresh XDG_CACHE_HOME, which holds
-  pathtrace's kernel and BVH caches (app/device.py cache_dir, app/bvh_cache.py; PATHTRACE_CACHE
-  and PATHTRACE_BVH_CACHE are unset), a fresh POCL_CACHE_DIR (PoCL's cache of the programs it
+  pathtrace's kernel, BVH and scene caches (app/device.py cache_dir, app/bvh_cache.py,
+  app/scene/read_cache.py; PATHTRACE_CACHE, PATHTRACE_BVH_CACHE and PATHTRACE_SCENE_CACHE are
+  unset), a fresh POCL_CACHE_DIR (PoCL's cache of the programs it
   built, which pathtrace relies on there in place of its own) and a fresh CUDA_CACHE_PATH (the
   NVIDIA driver's cache of compiled kernels): a first start;
 - warm: the same command with the same folders, which the cold run filled, the best of
@@ -42,7 +43,7 @@ from pathtrace.scene import load_scene
 MESHES = "meshes850"
 SIZE = (640, 360)
 # the variables that would point pathtrace at caches other than the fresh folders
-PATHTRACE_CACHES = ("PATHTRACE_CACHE", "PATHTRACE_BVH_CACHE")
+PATHTRACE_CACHES = ("PATHTRACE_CACHE", "PATHTRACE_BVH_CACHE", "PATHTRACE_SCENE_CACHE")
 
 
 @dataclass

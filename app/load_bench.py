@@ -28,7 +28,7 @@ class LoadTime:
     what: str                   # its size in words
     device: str                 # pathtrace's --device
     seconds: float              # pathtrace, command to image, the best of the repeats
-    cached_seconds: float       # the same, the BVH read from the BVH cache
+    cached_seconds: float       # the same, the scene and its BVH read from their caches
     mitsuba_variant: str = ""
     mitsuba_seconds: float = None
 
@@ -67,12 +67,12 @@ def run_load(device: str, scene_files, repeats: int, mitsuba_python: str = None,
         rows = [write_height_field(folder), write_meshes(folder)]
         rows += [(str(Path(f).resolve()), str(Path(f).resolve()) if f.lower().endswith(".xml") else None,
                   "/".join(Path(f).resolve().parts[-3:])[-36:], (64, 64)) for f in scene_files]
-        built = {**os.environ, "PATHTRACE_BVH_CACHE": "0"}
-        cached = {**os.environ, "PATHTRACE_BVH_CACHE": str(folder / "bvh")}
+        built = {**os.environ, "PATHTRACE_BVH_CACHE": "0", "PATHTRACE_SCENE_CACHE": "0"}
+        cached = {**os.environ, "PATHTRACE_BVH_CACHE": str(folder / "bvh"), "PATHTRACE_SCENE_CACHE": str(folder / "scenes")}
         for scene, xml, what, size in rows:
             render = [sys.executable, "-m", "pathtrace", "render", scene, "--size", f"{size[0]}x{size[1]}",
                       "--spp", "1", "--device", device, "-o", str(folder / "out.exr"), "-q"]
-            best_time(render, 1, folder, cached)            # fills the kernel and BVH caches
+            best_time(render, 1, folder, cached)            # fills the kernel, BVH and scene caches
             r = LoadTime(Path(scene).stem, what, device, best_time(render, repeats, folder, built),
                          best_time(render, repeats, folder, cached))
             if mitsuba_python and xml:
@@ -85,7 +85,7 @@ def run_load(device: str, scene_files, repeats: int, mitsuba_python: str = None,
     return results
 
 
-LOAD_HEADER = (f"{'scene':<16} {'what':<36} {'device':<8} {'pathtrace s':>11} {'BVH cached s':>12} "
+LOAD_HEADER = (f"{'scene':<16} {'what':<36} {'device':<8} {'pathtrace s':>11} {'cached s':>12} "
                f"{'Mitsuba 3 s':>22} {'ratio':>6}")
 
 

@@ -10,6 +10,15 @@ def vector(v) -> str:
     return "(" + ", ".join(f"{float(x):.4g}" for x in v) + ")"
 
 
+def own_name(i: int, item) -> str:
+    return item.name
+
+
+def name_and_index(i: int, item) -> str:
+    """The name of a thing that has none of its own: its type's and its index, "point 2"."""
+    return f"{item.name} {i}"
+
+
 class NamedList(list):
     """A list of named things: `key(i, item)` gives each one's name (a mesh's own, or a light's
     type and index where lights have none). Indexing by number and iteration are a list's; a
@@ -17,7 +26,7 @@ class NamedList(list):
 
     def __init__(self, items=(), key=None, kind=("entry", "entries")):
         super().__init__(items)
-        self._key = key or (lambda i, item: item.name)
+        self._key = key or own_name
         self._kind = kind              # (singular, plural), for messages and the repr
 
     def keys(self) -> list:

@@ -18,6 +18,8 @@ ROOT = Path(__file__).resolve().parent.parent
 # The BVH cache (pathtrace.bvh_cache) is off in the tests, theirs and their commands': every
 # scene is built, and nothing is written to the user's cache; tests/test_bvh_cache.py turns it on.
 os.environ.setdefault("PATHTRACE_BVH_CACHE", "0")
+# Nor are scenes read from its cache of scenes (pathtrace.scene.read_cache): tests/test_read_cache.py.
+os.environ.setdefault("PATHTRACE_SCENE_CACHE", "0")
 # Nor to its cache of kernel binaries and path-queue verdicts (Renderer.choose_queue_plan), whose
 # verdicts would spare a later run the trials that tests count.
 os.environ.setdefault("PATHTRACE_CACHE", tempfile.mkdtemp(prefix="pathtrace-tests-"))

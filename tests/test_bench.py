@@ -108,7 +108,7 @@ def test_the_obj_scene_is_meshes850_as_obj_files(tmp_path):
 
 def test_load_bench_rows(tmp_path):
     """`bench --load`: a row per generated scene and per --load-scene file, with pathtrace's
-    seconds, the BVH built and read from the BVH cache; Mitsuba's column only when asked for, and
+    seconds, the scene read and its BVH built, and both from their caches; Mitsuba's column only when asked for, and
     a Python without Mitsuba is one line."""
     scene = tmp_path / "one.toml"
     scene.write_text('[[spheres]]\ncenter = [0, 0, -3]\nradius = 1\nmaterial = { type = "diffuse", rho_d = 0.5 }\n')
@@ -119,7 +119,7 @@ def test_load_bench_rows(tmp_path):
     assert [row["scene"] for row in rows] == ["heightfield1M", "meshes850", "one"]
     assert all(row["seconds"] > 0 and row["cached_seconds"] > 0 and row["mitsuba_seconds"] is None
                and row["device"] == "cpu" for row in rows)
-    assert "pathtrace s" in r.stdout and "BVH cached s" in r.stdout and "870,400 triangles" in r.stdout
+    assert "pathtrace s" in r.stdout and "cached s" in r.stdout and "870,400 triangles" in r.stdout
     r = pathtrace("bench", "--load-scene", tmp_path / "missing.toml", "--repeats", "1", "--device", "cpu")
     assert r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1 and "missing.toml" in r.stderr
     r = pathtrace("bench", "--load-scene", scene, "--repeats", "1", "--device", "cpu",

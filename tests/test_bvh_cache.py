@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 import pathtrace.bvh_cache as cache
+from pathtrace import cache_files
 from pathtrace.bvh import build_bvh
 from tests.conftest import ROOT
 
@@ -103,7 +104,7 @@ def test_the_least_recently_used_entries_go_first(folder):
     for age, entry in enumerate(entries):
         os.utime(entry, (1000 + age, 1000 + age))
     cache.read_entry(entries[0], N)        # used: now the newest
-    cache.prune(folder, limit=entries[0].stat().st_size + entries[2].stat().st_size)
+    cache_files.prune(folder, "*.bvh", entries[0].stat().st_size + entries[2].stat().st_size)
     assert sorted(p.name for p in folder.glob("*.bvh")) == sorted(p.name for p in (entries[0], entries[2]))
 
 

@@ -469,7 +469,7 @@ def test_screenshot_matches_a_headless_render(viewer, backend):
     viewer.renderer.reset()
     while viewer.renderer.samples < 32:
         viewer.frame()
-    png, exr = viewer.screenshot()
+    png, exr = viewer.screenshot().result()
     viewer.denoise = True
     assert png.exists() and exr.exists() and png.read_bytes()[:4] == b"\x89PNG"
     shot = read_hdr(exr, "screenshot")
@@ -498,12 +498,36 @@ def test_at_rest_the_denoised_image_is_shown_and_saved(viewer):
     shown = shown[..., :3] / shown[..., 3:]
     roughness = lambda image: np.abs(np.diff(image, axis=1)).mean()       # noqa: E731
     assert roughness(shown) < 0.5 * roughness(viewer.renderer.mean())    # the smooth one is shown
-    png, exr = viewer.screenshot()
+    png, exr = viewer.screenshot().result()
     with OpenEXR.File(str(exr)) as f:
         channels = f.channels()
         denoised, noisy = channels["RGB"].pixels, channels["noisy"].pixels
     np.testing.assert_allclose(noisy, viewer.renderer.mean(), rtol=1e-6)
     assert np.abs(denoised - noisy).mean() > 0 and np.all(np.isfinite(denoised))
+
+
+def test_escape_closes_the_window_while_a_screenshot_is_written(display, backend, tmp_path, monkeypatch):
+    """A screenshot is denoised and written in a thread of its own: while it is (held here until
+    the window has closed), the window keeps turning and Esc hides it at once; closing then waits
+    for the files, which are whole."""
+    from pathtrace.viewer.window import Viewer
+    release = threading.Event()
+    v = Viewer(backend, load_scene("simple").with_settings(width=W, height=H), tmp_path)
+    try:
+        frames(v, 3)
+        save = v._save_screenshot
+        monkeypatch.setattr(v, "_save_screenshot", lambda *args: (release.wait(), save(*args))[1])
+        shot = v.screenshot()
+        xdo("windowfocus", "--sync", window_id(v))
+        xdo("key", "Escape")
+        frames_until(v, lambda: v.glfw.window_should_close(v.window))
+        assert v.glfw.window_should_close(v.window) and not shot.done()
+        assert not v.glfw.get_window_attrib(v.window, v.glfw.VISIBLE)
+    finally:
+        release.set()
+        v.close()
+    png, exr = shot.result()
+    assert png.read_bytes()[:4] == b"\x89PNG" and read_hdr(exr, "screenshot").shape == (H, W, 3)
 
 
 def test_coming_to_rest_shows_a_denoised_draft_first(viewer, monkeypatch):

@@ -33,9 +33,11 @@ def named(scene: Scene, path: Path) -> Scene:
 def load_scene(name_or_path: str) -> Scene:
     """A scene file path or a built-in scene's name: the two are interchangeable. Only the
     reader a scene needs is imported (each is a few tens of milliseconds of a command's start).
-    Its warnings are told each once, with a count of those like it (grouped_warnings)."""
+    Its warnings are told each once, with a count of those like it (grouped_warnings). A scene
+    read before, whose files are unchanged, comes from pathtrace.scene.read_cache."""
+    from pathtrace.scene.read_cache import cached_read
     with grouped_warnings():
-        return _read_scene(name_or_path)
+        return cached_read(name_or_path, _read_scene)
 
 
 def _read_scene(name_or_path: str) -> Scene:

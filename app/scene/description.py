@@ -12,7 +12,7 @@ from pathtrace.errors import UserError, warn
 from pathtrace.filters import PixelFilter
 from pathtrace.materials import NULL, TRANSMISSIVE, Material, MaterialTable
 from pathtrace.media import MediumInterface
-from pathtrace.named import NamedList, vector
+from pathtrace.named import NamedList, name_and_index, vector
 from pathtrace.scene.meshes import ellipsoid, is_closed, is_similarity
 
 
@@ -103,7 +103,7 @@ class Scene:
         if not isinstance(self.meshes, NamedList):
             self.meshes = NamedList(self.meshes, kind=("mesh", "meshes"))
         if not isinstance(self.lights, NamedList):
-            self.lights = NamedList(self.lights, lambda i, light: f"{light.name} {i}", ("light", "lights"))
+            self.lights = NamedList(self.lights, name_and_index, ("light", "lights"))
 
     def __repr__(self) -> str:
         """One line: what it holds, where it is, the camera and the image it renders; never its

@@ -178,6 +178,8 @@ class Viewer:
         self.denoise = True
         self._denoiser = None
         self._worker = ThreadPoolExecutor(1, thread_name_prefix="denoise")
+        self._writer = ThreadPoolExecutor(1, thread_name_prefix="screenshot")
+        self._denoiser_lock = threading.Lock()
         self._denoising = None        # (future, resets, samples) of the denoise under way
         self._readback = None         # (event, arrays, resets, samples) read for the denoiser
         self.denoised_at = None       # (resets, samples) of the denoised image shown, or None
@@ -589,7 +591,7 @@ class Viewer:
                 # OIDN's first run at a size prepares it (a third of a second on two cores):
                 # done now, in the worker, it is not waited for when the camera stops
                 for scale in (DRAFT_SCALE, 1):
-                    self._worker.submit(self._denoiser.prepare, self.size[1] // scale, self.size[0] // scale)
+                    self._worker.submit(self._prepare_denoiser, self.size[1] // scale, self.size[0] // scale)
             except Exception as e:     # no pyoidn, or OIDN cannot run here: say so, keep going
                 self.denoise_error = f"denoiser unavailable: {e}"
                 self.set_message(self.denoise_error, error=True)
@@ -635,8 +637,12 @@ class Viewer:
         """In the worker thread: the means, then OIDN (which runs outside the GIL)."""
         start = time.perf_counter()
         aovs = aov_means(albedo_sum, normal_sum)
-        image = self._denoiser(per_pixel_mean(sums), aovs["albedo"], aovs["normal"])
+        image = self._denoise(per_pixel_mean(sums), aovs["albedo"], aovs["normal"])
         return image, time.perf_counter() - start
+
+    def _prepare_denoiser(self, height: int, width: int):
+        with self._denoiser_lock:
+            self._denoiser.prepare(height, width)
 
     def _upload(self, pixels: np.ndarray):
         """(H, W, 4) float32 or float16 pixels (radiance in rgb, divided by a) into the display
@@ -677,36 +683,54 @@ class Viewer:
     def screenshot(self):
         """Writes the image as shown: tonemapped (PNG) and as radiance (EXR); where it is the
         denoised one, the EXR keeps the noisy one as its layer "noisy". The pass under way is
-        finished first, so that every pixel holds the same samples."""
-        from pathtrace.image_io import Output, write_images
+        finished first, so that every pixel holds the same samples. The image is read now; it is
+        denoised and written in a thread of its own, so that the window stays live (Esc closes
+        it at once) while a large image is denoised. Returns the future of the two paths (None
+        where writing failed, which the panel's message line then says)."""
         self.progressive.finish_pass()
         r = self.renderer
         stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S-%f")[:-3]
         base = self.screenshot_dir / f"pathtrace-{r.scene.name}-{stamp}"
         noisy = r.mean()
+        denoised = self.denoised_at is not None and self.denoised_at[0] == r.resets and self.denoise and self.resting
+        aovs = r.read_aovs() if denoised else None
+        look = (self.exposure, self.tonemap)
+        self.set_message(f"saving {base.name} ({r.samples} spp{', denoised' if denoised else ''})")
+        return self._writer.submit(self._save_screenshot, base, noisy, aovs, look, r.samples)
+
+    def _save_screenshot(self, base: Path, noisy: np.ndarray, aovs, look: tuple, samples: int):
+        """In the screenshot thread: denoised where `aovs` are given, then both files written."""
+        from pathtrace.image_io import Output, write_images
         shown, layers = noisy, {}
         try:
-            if self.denoised_at is not None and self.denoised_at[0] == r.resets and self.denoise and self.resting:
-                # through the worker: the denoiser's buffers are not for two threads at once
-                aovs = r.read_aovs()
-                denoised = self._worker.submit(self._denoiser, noisy, aovs["albedo"], aovs["normal"]).result()
-                shown, layers = denoised, {"noisy": noisy}
+            if aovs is not None:
+                shown, layers = self._denoise(noisy, aovs["albedo"], aovs["normal"]), {"noisy": noisy}
             outputs = [Output(base.with_suffix(".png"), shown), Output(base.with_suffix(".exr"), shown, layers)]
-            self.screenshot_dir.mkdir(parents=True, exist_ok=True)
-            write_images(outputs, self.exposure, self.tonemap, what="screenshot")
+            base.parent.mkdir(parents=True, exist_ok=True)
+            write_images(outputs, *look, what="screenshot")
         except (UserError, OSError) as e:
             self.set_message(f"screenshot failed: {e}", error=True)
             return None
+        finally:
+            self.redraw_soon()
         paths = [out.path for out in outputs]
-        self.set_message(f"saved {paths[0]} and .exr ({r.samples} spp{', denoised' if layers else ''})")
+        self.set_message(f"saved {paths[0]} and .exr ({samples} spp{', denoised' if layers else ''})")
         return paths
+
+    def _denoise(self, image, albedo, normal):
+        """The denoiser, from the worker or the screenshot thread: its buffers are for one
+        thread at a time."""
+        with self._denoiser_lock:
+            return self._denoiser(image, albedo, normal)
 
     def close(self):
         """Hides the window at once, then lets the work under way end: a denoise in the worker
-        (those queued behind it are dropped) and the launches queued on the device."""
+        (those queued behind it are dropped), the screenshots being written and the launches
+        queued on the device."""
         self.glfw.hide_window(self.window)
         self.glfw.poll_events()
         self._worker.shutdown(wait=True, cancel_futures=True)
+        self._writer.shutdown(wait=True)          # the screenshots asked for are all written
         if self._denoiser is not None:
             self._denoiser.close()
         self.renderer.finish()

@@ -1,0 +1,113 @@
+"""Scenes read from files kept on disk between runs, as their BVHs and kernels are: a scene opened
+again is one file's read, not its meshes' parsing (850 OBJ files were most of the 10.5 s a warm
+start took on the H200; #55).
+
+An entry holds the scene as read (pickled), the warnings its reading gave, which are told again
+when it is used, and a stamp (path, size, time of last change) of every file the reading checked
+(pathtrace.files.check_regular_file: the scene file, its includes, meshes, images). It is used
+only while every stamp still holds. It is keyed by the scene file's absolute path (a built-in
+scene's name) and by the digest of pathtrace's Python source, so that a changed reader never
+reads an old entry. Scenes read in less than MIN_SECONDS are not kept. Entries are files of
+pathtrace.cache_files (a damaged one is a miss); the least recently used go once they exceed
+MAX_BYTES. The folder is cache_dir()/scenes, or the one PATHTRACE_SCENE_CACHE names;
+PATHTRACE_SCENE_CACHE=0 turns the cache off."""
+
+import hashlib
+import io
+import os
+import pickle
+import time
+from pathlib import Path
+
+from pathtrace import cache_files
+from pathtrace.errors import held_warnings, warn
+from pathtrace.files import noting_files, stamp
+
+MIN_SECONDS = 0.1
+MAX_BYTES = 2 << 30
+_source_digest = None
+
+
+def source_digest() -> bytes:
+    """The digest of every Python file of pathtrace: what reads scenes and the types they hold."""
+    global _source_digest
+    if _source_digest is None:
+        package = Path(__file__).resolve().parent.parent
+        h = hashlib.sha256()
+        for path in sorted(package.rglob("*.py")):
+            h.update(str(path.relative_to(package)).encode())
+            h.update(path.read_bytes())
+        _source_digest = h.digest()
+    return _source_digest
+
+
+def folder():
+    """The cache's folder, or None where it is turned off."""
+    from pathtrace.device import cache_dir
+    chosen = os.environ.get("PATHTRACE_SCENE_CACHE", "")
+    return None if chosen == "0" else Path(chosen) if chosen else cache_dir() / "scenes"
+
+
+def entry_path(where: Path, name: str) -> Path:
+    path = Path(name)
+    try:
+        key = f"file:{path.resolve()}" if path.is_file() else f"built-in:{name}"
+    except (OSError, ValueError):         # a name no file can have: the reader says what is wrong
+        key = f"built-in:{name}"
+    return where / f"{hashlib.sha256(source_digest() + key.encode()).hexdigest()[:32]}.scene"
+
+
+def cached_read(name: str, read):
+    """read(name)'s scene, from the cache where an entry for it holds; a scene read slowly is
+    stored there. Within grouped_warnings(), as load_scene calls it."""
+    where = folder()
+    if where is None:
+        return read(name)
+    path = entry_path(where, name)
+    kept = _read_entry(path)
+    if kept is not None:
+        notes, scene = kept
+        for note in notes:
+            warn(note)
+        return scene
+    before = len(held_warnings())
+    start = time.perf_counter()
+    with noting_files() as files:
+        scene = read(name)
+    if time.perf_counter() - start >= MIN_SECONDS:
+        _write_entry(path, files, held_warnings()[before:], scene)
+    return scene
+
+
+def _read_entry(path: Path):
+    """(warnings, scene) of the entry at path, or None where there is none, it is damaged, or a
+    file it was read from has changed since."""
+    data = cache_files.read_entry(path)
+    if data is None:
+        return None
+    try:
+        with io.BytesIO(data) as f:
+            stamps, notes = pickle.load(f)
+            for name, size, changed in stamps:
+                if stamp(name, os.stat(name)) != (name, size, changed):
+                    return None
+            scene = pickle.load(f)
+    except (OSError, ValueError, EOFError, pickle.UnpicklingError, AttributeError, ImportError, TypeError):
+        return None            # a file gone, or an entry this pathtrace cannot read: a miss
+    try:
+        os.utime(path)         # recently used: removed last
+    except OSError:
+        pass
+    return notes, scene
+
+
+def _write_entry(path: Path, files: list, notes: list, scene):
+    """Stores the scene (whole or not at all) and removes the oldest entries beyond MAX_BYTES. A
+    scene that cannot be pickled (one holding objects made in Python by the user) is not kept."""
+    try:
+        head = pickle.dumps((sorted(set(files)), notes), protocol=pickle.HIGHEST_PROTOCOL)
+        body = pickle.dumps(scene, protocol=pickle.HIGHEST_PROTOCOL)
+    except (pickle.PicklingError, TypeError, AttributeError):
+        return
+    if cache_files.write_entry(path, head, body):
+        cache_files.prune(path.parent, "*.scene", MAX_BYTES)

@@ -1,0 +1,100 @@
+"""The cache of scenes read (pathtrace.scene.read_cache): a scene opened again comes from it, as
+read the first time, with its warnings told again; a changed, gone or damaged file is read anew."""
+
+import os
+import shutil
+
+import numpy as np
+import pytest
+
+import pathtrace.scene.meshes as meshes
+import pathtrace.scene.read_cache as read_cache
+from pathtrace.errors import UserError
+from pathtrace.scene import load_scene
+from tests.conftest import ROOT
+
+SCENE = """<scene version="1.0.0">
+  <sensor type="perspective"><float name="fov" value="40"/>
+    <transform name="to_world"><lookat origin="0,0,4" target="0,0,0" up="0,1,0"/></transform>
+    <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/></film>
+  </sensor>
+  <shape type="obj"><string name="filename" value="quad.obj"/>
+    <bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></shape>
+  <emitter type="constant"/>
+</scene>
+"""
+
+
+@pytest.fixture
+def scene_file(tmp_path, monkeypatch):
+    """A Mitsuba scene of one OBJ mesh, whose version draws a warning; the cache on in a folder
+    of its own, keeping every scene however fast it reads; and a count of the meshes parsed."""
+    shutil.copy(ROOT / "tests/scenes/quad.obj", tmp_path / "quad.obj")
+    (tmp_path / "s.xml").write_text(SCENE)
+    monkeypatch.setenv("PATHTRACE_SCENE_CACHE", str(tmp_path / "cache"))
+    monkeypatch.setattr(read_cache, "MIN_SECONDS", 0.0)
+    parsed = []
+    read_obj = meshes._read_obj
+    monkeypatch.setattr(meshes, "_read_obj", lambda *args: (parsed.append(args), read_obj(*args))[1])
+    return tmp_path / "s.xml", parsed
+
+
+def same(a, b) -> bool:
+    return repr(a) == repr(b) and len(a.meshes) == len(b.meshes) and all(
+        np.array_equal(m.vertices, n.vertices) and np.array_equal(m.faces, n.faces) for m, n in zip(a.meshes, b.meshes))
+
+
+def test_a_scene_read_again_comes_from_the_cache_with_its_warnings(scene_file, capsys):
+    path, parsed = scene_file
+    first = load_scene(str(path))
+    warned = capsys.readouterr().err
+    again = load_scene(str(path))
+    assert len(parsed) == 1 and same(first, again)
+    assert "version 1.0.0" in warned and capsys.readouterr().err == warned
+
+
+def test_a_changed_mesh_file_is_read_again(scene_file):
+    path, parsed = scene_file
+    first = load_scene(str(path))
+    mesh = path.parent / "quad.obj"
+    mesh.write_text(mesh.read_text().replace("v 1", "v 2", 1))
+    again = load_scene(str(path))
+    assert len(parsed) == 2 and not np.array_equal(first.meshes[0].vertices, again.meshes[0].vertices)
+
+
+def test_a_changed_scene_file_is_read_again(scene_file):
+    path, parsed = scene_file
+    load_scene(str(path))
+    stat = path.stat()
+    path.write_text(SCENE.replace('value="0.5"', 'value="0.25"'))
+    os.utime(path, ns=(stat.st_atime_ns, stat.st_mtime_ns + 10**9))
+    assert load_scene(str(path)).materials[0].params["rho_d"][0] == pytest.approx(0.25)
+    assert len(parsed) == 2
+
+
+def test_a_damaged_entry_is_read_again_and_replaced(scene_file):
+    path, parsed = scene_file
+    first = load_scene(str(path))
+    entry, = (path.parent / "cache").glob("*.scene")
+    entry.write_bytes(entry.read_bytes()[:-10])
+    assert same(load_scene(str(path)), first) and len(parsed) == 2
+    assert same(load_scene(str(path)), first) and len(parsed) == 2
+
+
+def test_a_file_that_shadows_a_built_in_name_is_read_as_the_file(scene_file, monkeypatch):
+    """A built-in scene's entry is not used for a file of its name, which is read (here as TOML,
+    the format of a file without a scene suffix, which it is not)."""
+    path, _ = scene_file
+    assert load_scene("simple").name == "simple"
+    monkeypatch.chdir(path.parent)
+    shutil.copy(path, path.parent / "simple")
+    with pytest.raises(UserError):
+        load_scene("simple")
+
+
+def test_without_a_writable_folder_the_scene_is_still_read(scene_file, monkeypatch):
+    path, parsed = scene_file
+    blocker = path.parent / "blocker"
+    blocker.write_text("")
+    monkeypatch.setenv("PATHTRACE_SCENE_CACHE", str(blocker / "cache"))
+    assert same(load_scene(str(path)), load_scene(str(path))) and len(parsed) == 2
