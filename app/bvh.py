@@ -10,20 +10,16 @@ laid out as the 4-wide BVHNode array that kernels/bvh.cl walks. In three steps:
 2. Over the remaining clusters, two candidate tops: PLOC's passes continued, and a top-down split
    by the binned surface area heuristic (Wald, "On fast Construction of SAH-based Bounding Volume
    Hierarchies", 2007) here in NumPy; the one of smaller SAH cost is kept. PLOC's greedy merges
-   make poorer trees than the binned split on evenly spread primitives (3-4 % more traversal
-   time on the H100 for spheres64k), the binned split a poorer top on the teapot over its floor
-   (a sixth more SAH cost). PLOC stops at min(N, TOP_CLUSTERS) clusters: scenes of up to 65536
-   primitives are split whole, larger ones above 65536 clusters. The split's time grows with
-   its clusters, not with N (0.2-0.3 s on two cores for 65536), and its gain is largest where
-   PLOC's clusters straddle empty space: against PLOC down to 2^32 / N clusters (the rule
-   before), 400 tori on a grid (410k triangles) get a fifth less SAH cost and trace 13-15 %
-   faster on the H100, a 1M-triangle height field 5 % less and 4 % faster (docs/performance.md).
+   make poorer trees than the binned split on evenly spread primitives, the binned split a
+   poorer top on the teapot over its floor. PLOC stops at min(N, TOP_CLUSTERS) clusters: scenes
+   of up to 65536 primitives are split whole, larger ones above 65536 clusters. The split's time
+   grows with its clusters, not with N, and its gain is largest where PLOC's clusters straddle
+   empty space (docs/notes/performance-2026-11.md, 2026-11-22 and 2026-11-25: the binned split).
 3. Collapsed by the SAH (as pbrt-v4's builder decides): a subtree of at most MAX_LEAF_SIZE
    primitives becomes one leaf where that is cheaper than its split; then every other level of
    the binary tree is folded into its parent, giving 4-wide nodes, laid out depth-first
-   (kernels/build/collapse.cl). Testing four boxes with float4 operations traces the BVH
-   scenes 17-39 % faster on the H100 and 23-43 % on PoCL than the binary tree did
-   (docs/performance.md).
+   (kernels/build/collapse.cl). Testing four boxes with float4 operations traces faster than a
+   binary tree on GPUs and on PoCL alike (docs/performance.md, The BVH).
 
 Leaves hold one kind of primitive (kernels/types.h): spheres and triangles are built apart and
 their two trees joined at the root. Nodes are made in batches (a PLOC pass, a level of the top

@@ -105,10 +105,9 @@ kernel fewer registers, hence more threads in flight, on a GPU (docs/performance
 LONE_MAX = 4
 """The most spheres a scene of more primitives than FLAT_MAX may have for its rays to test them
 before the walk, outside the BVH (app/compiled.py), rather than in its leaves: a tree of
-triangles alone walks without the sphere leaves' branch and code. tori400-textured's lamp and
-teapot-sky's ball cost them 9.5 % and 13.6 % of their renders in the tree on the H100
-(docs/performance.md). Each such sphere costs every ray one test, as a box of a 4-wide node
-does; four were level on two cores."""
+triangles alone walks without the sphere leaves' branch and code (docs/notes/performance-2026-11.md,
+2026-11-27: lone spheres). Each such sphere costs every ray one test, as a box of a 4-wide node
+does."""
 
 
 def stack_size(binary_depth: int) -> int:

@@ -1,20 +1,14 @@
 """Register caps on NVIDIA GPUs: a path tracer's kernel is latency-bound, and how many warps an
 SM keeps in flight to hide that latency is set by how many registers each thread holds. ptxas
-allocates what it likes, and small source changes move it across an occupancy step (the same
-path tracer took 96 registers, 20 resident warps of the 8x8 work groups, or 116 and 16 warps,
-after an unrelated change to the light interface: 5-8 % of the H100's time on sphere scenes).
+allocates what it likes, and small source changes move it across an occupancy step.
 So on NVIDIA's OpenCL the kernels are built once with ptxas's report (-cl-nv-verbose), and again
 under the register caps that would keep more warps resident, down to 4/5 of what ptxas chose;
 the lowest cap that compiles without spilling is kept, unless it leaves fewer than FEWEST_WARPS
 resident: such a heavy program is built for SPILLING_WARPS instead, if no kernel spills more than
-MOST_SPILLED bytes there. Measured on the H100 (docs/performance.md), every heavy program ran
-faster at 20 warps, spills and all, than as tuned before (14 warps without spills, or
-uncapped) or at the 16 warps of 128 registers: tori400-textured's 7-9 %, the pbrt-v4 scenes
-coffee and staircase2 9-10 % with one to two kilobytes spilled. A light program, one that keeps
-FEWEST_WARPS or more without spills but fewer than LIGHT_WARPS, is built for LIGHT_WARPS if no
-kernel spills more than LIGHT_SPILLED bytes there: the height field, simple-diffuse,
-spheres8k-diffuse and teapot-sky with four spheres (16-20 warps as tuned) ran 2-14 % faster at 24
-warps, spilling 40-288 bytes, the textured teapot the same, teapot-sky 6-7 % slower (2026-11-27).
+MOST_SPILLED bytes there: its kernels wait on memory, and spills to the L1-cached local memory
+cost less than the warps they buy. A light program, one that keeps FEWEST_WARPS or more without
+spills but fewer than LIGHT_WARPS, is built for LIGHT_WARPS if no kernel spills more than
+LIGHT_SPILLED bytes there. Each rule's figures: docs/performance.md (Register caps by trial).
 Other platforms build as they are."""
 
 import math
@@ -34,7 +28,7 @@ LOWEST_FRACTION = 0.8
 FEWEST_WARPS = 16           # a quarter of an SM's: fewer leave the BVH walk's latency unhidden
 SPILLING_WARPS = 20         # where a program needs more registers than FEWEST_WARPS allow
 MOST_SPILLED = 2048         # bytes of spill stores per kernel allowed for SPILLING_WARPS: the most
-                            # measured to gain was 1932 (docs/performance.md); beyond, not measured
+                            # measured to gain was 1932 (docs/notes/performance-2026-11.md); beyond, not measured
 LIGHT_WARPS = 24            # where a light program keeps fewer without spills
 LIGHT_SPILLED = 512         # bytes of spill stores per kernel allowed for LIGHT_WARPS: the most
                             # measured was 472 (the textured teapot, which neither gained nor lost)
@@ -96,12 +90,12 @@ def build_for_occupancy(context: cl.Context, device: cl.Device, source: str, opt
     The driver keeps compiled code in its own cache (~/.nv/ComputeCache), keyed by the PTX and
     the options: where it already holds this PTX, ptxas does not run and reports nothing, and a
     scene of the same PTX as one tuned before (another version's source, the same kernels) got
-    no cap (5-9 % of the H100's time on sphere scenes). A kernel named by a random token makes
+    no cap. A kernel named by a random token makes
     the PTX new, so that ptxas runs and reports for every build here; the binary kept is the
     one built under the chosen options, which the driver then finds in its cache. The options
     returned are the whole of those it was built with, the report's included: the driver's cache
-    is keyed by them too, and without it the next start ran ptxas on the cached PTX again (25-35 s
-    on the H100, docs/performance.md)."""
+    is keyed by them too, and without it the next start ran ptxas on the cached PTX again
+    (docs/notes/performance-2026-11.md, 2026-11-25: a first start on NVIDIA)."""
     source += f"\nkernel void occupancy_probe_{os.urandom(8).hex()}(void) {{}}\n"
     program = cl.Program(context, source).build(options=options + [REPORT], devices=[device])
     found = kernel_registers(program.get_build_info(device, cl.program_build_info.LOG))

@@ -42,9 +42,9 @@ QUEUE_PASSES = 4          # passes of continue_paths that trace one vertex each,
                           # that go on again; a last pass traces them to their ends
 QUEUE_POOL = 1 << 23      # pixel samples a launch with the queue renders (a few per pixel): enough
                           # paths going on to fill a GPU when continue_paths traces them, and the
-                          # passes' cost per launch spread (docs/performance.md, 2026-11-26)
+                          # passes' cost per launch spread (docs/notes/performance-2026-11.md, 2026-11-26)
 QUEUE_GROUP = 64          # work-items per group of continue_paths (32 and 128 were no faster:
-                          # docs/performance.md, 2026-11-26)
+                          # docs/notes/performance-2026-11.md, 2026-11-26)
 MAX_QUEUED = 1 << 23      # entries of each of the two queues (PATH_RECORD, 128 bytes; at most a
                           # sixteenth of the device's memory); paths that find one full go on where
                           # they are
@@ -52,7 +52,7 @@ MAX_QUEUED = 1 << 23      # entries of each of the two queues (PATH_RECORD, 128 
 # is built with, whether launches use the queue): no queue; the queue after the first vertex; and
 # the queue's program with its queue unused. The three trace the same rays into the same image,
 # but NVIDIA's compiler schedules the queue's program differently, and which of the three is
-# fastest depends on the scene as much as on the paths (docs/performance.md, 2026-11-27: the
+# fastest depends on the scene as much as on the paths (docs/notes/performance-2026-11.md, 2026-11-27: the
 # queue chosen by trial renders).
 AUTO_PLANS = ((0, False), (1, True), (1, False))
 PLAN_NAMES = dict(zip(AUTO_PLANS, ("no queue", "queue", "queue unused")))

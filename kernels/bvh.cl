@@ -145,8 +145,7 @@ uint leaf_bits(int4 leaf)
  * only) and LONE_SPHERES (whose tree holds triangles only: trace_ray) the sphere code. Sphere
  * leaves are short, so the four slots are tested unrolled; with triangles, one copy of the
  * (inlined) primitive tests in a loop over the leaves' bits keeps the kernel's registers down
- * (the teapot's NEE kernel ran 26 % slower on the H100 with four copies, the sphere scenes 6-8 %
- * faster). */
+ * (docs/notes/performance-2026-11.md, 2026-11-22: a 4-wide BVH). */
 CPU_INLINE float4 intersect_leaves(const SceneData *sc, float4 t, int4 count, int4 index, float3 o,
                                    float3 d, PrimId self, int instance, Hit *hit)
 {

@@ -31,8 +31,8 @@ CameraRay sample_camera_ray(const RenderParams *p, int x, int y, Rng *rng)
 {
     float4 u = next_uniform4(rng);
     float2 offset = sample_filter(p, u.xy, rng);
-    /* the offset from the centre first, then the pixel: in the other order the H100's compiler
-       gave a mesh scene's path tracer (render) 20 more registers */
+    /* the offset from the centre first, then the pixel: the other order costs NVIDIA's compiler
+       registers (docs/notes/performance-2026-11.md, 2026-11-24: lights, cameras and pixel filters) */
     return generate_ray(p, (float)x + (0.5f + offset.x), (float)y + (0.5f + offset.y), u.zw);
 }
 

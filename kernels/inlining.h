@@ -2,7 +2,7 @@
  * passes what its caller keeps in registers (a path's state, a hit's barycentric weights)
  * through memory: at every leaf of the traversal, for the triangle tests. NVIDIA's compiler
  * inlines those already (no call is left in the PTX of a textured pbrt-v4 scene's program), so
- * GPUs compile the form measured there (docs/performance.md, 2026-11-27). */
+ * GPUs compile the form measured there (docs/notes/performance-2026-11.md, 2026-11-27). */
 
 #ifndef PATHTRACE_INLINING_H
 #define PATHTRACE_INLINING_H
@@ -15,8 +15,8 @@
 
 /* The dispatch over every kind of BSDF, texture and light, in a generic program on a GPU, is
  * called rather than inlined: NVIDIA's compiler inlined every kind into each of its call sites
- * in every kernel, 8.9 MB of PTX that took its driver 245 s to build on an H200
- * (docs/performance.md, 2026-11-28). A scene's own program, which compiles only its kinds, and
+ * in every kernel, a program that took its driver minutes to build (docs/notes/performance-2026-11.md,
+ * 2026-11-28 evening). A scene's own program, which compiles only its kinds, and
  * CPUs, whose calls pass a path's state through memory, keep them inlined. */
 #if defined(GENERIC) && !defined(CPU_DEVICE)
 #define DISPATCH __attribute__((noinline))

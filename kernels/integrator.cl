@@ -198,12 +198,11 @@ PathRecord start_path(const RenderParams *p, float3 o, float3 d, Rng *rng)
  * paths in step until the longest ends: where a few paths go on bouncing among meshes, the
  * others' lanes idle for every vertex they add (Laine, Karras and Aila 2013, "Megakernels
  * Considered Harmful"); gathered into a queue, the paths that go on fill whole warps, at the
- * cost of storing and loading them (docs/performance.md, 2026-11-26, says where that pays).
+ * cost of storing and loading them (docs/notes/performance-2026-11.md, 2026-11-26, says where that pays).
  *
  * On CPUs it is inlined (CPU_INLINE), so that the start state stays in registers: PoCL left the call out of
- * line and passed the state through memory (simple-diffuse 7-8 % slower on two cores). NVIDIA's
- * compiler keeps it out of line too; inlined there, the default program's PTX grew from 2.45 to
- * 3.26 MB, a change not timed, so GPUs keep the form measured in docs/performance.md. */
+ * line and passed the state through memory. NVIDIA's compiler keeps it out of line too, and GPUs
+ * keep that form, the one measured (docs/notes/performance-2026-11.md, 2026-11-26: the continuation queue). */
 CPU_INLINE float3 trace_path(const SceneData *sc, const RenderParams *p, const PathRecord *start,
                              Rng *rng, int *rays, const int nee, PathQueue queue, int *queued)
 {

@@ -109,7 +109,7 @@ float3 radiance_weight(const BSDFSample *s)
  * density: the coating's towards -w from wi). pbrt-v4
  * weighs it against the coating's density of wi from -w instead, whose weights and the other
  * technique's do not sum to 1: that estimated 5-10 % more than the walk samples for roughness
- * 0.1-0.5 (tests/test_materials.py). */
+ * 0.1-0.5 (tests/test_bsdfs.py: sampling against the quadrature of eval). */
 float exit_through_coating(Interface top, float3 w, float3 wi, float w_pdf)
 {
     float pdf, from_wi;

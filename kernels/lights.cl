@@ -10,8 +10,9 @@
  *                                            intensity / r^2, or irradiance); returns 0 when none
  *
  * and app/lights/registry.py generates the dispatch on the type tag (LIGHT_<NAME>), so that the
- * integrator never names a light type. The radiance comes with the sample: a second dispatch
- * on the type after the BSDF's evaluation cost 8 % of a simple scene's time on an H100. Area
+ * integrator never names a light type. The radiance comes with the sample, sparing a second
+ * dispatch on the type after the BSDF's evaluation (docs/notes/performance-2026-11.md, 2026-11-24: lights as
+ * interfaces). Area
  * lights and the environment also give the density with which they would have sampled a
  * direction that a path found by itself (pdf_light, pdf_environment), for multiple importance
  * sampling; delta lights cannot be found so, and carry no MIS weight. */

@@ -3,10 +3,10 @@
 #define PI_F 3.14159265358979323846f
 
 /* cos(2 pi t) and sin(2 pi t) of t turns: every sampler's azimuth. On a CPU (PoCL) cos and sin
- * reduce their argument modulo pi / 2 the slow way, 12 % of simple-diffuse's kernel time there;
- * cospi and sinpi reduce a multiple of pi exactly and cheaply, and 2 t needs no rounded product
- * with pi, so CPUs take them (-16 % on simple-diffuse). On the H100 they gained nothing that
- * could be told from noise (docs/performance.md), so GPUs compile the code they had. */
+ * reduce their argument modulo pi / 2 the slow way; cospi and sinpi reduce a multiple of pi
+ * exactly and cheaply, and 2 t needs no rounded product with pi, so CPUs take them. GPUs gained
+ * nothing from them, and compile the code they had (docs/notes/performance-2026-11.md, 2026-11-25:
+ * azimuths in turns). */
 #ifdef CPU_DEVICE
 #define COS_TURNS(t) cospi(2.0f * (t))
 #define SIN_TURNS(t) sinpi(2.0f * (t))

@@ -1,7 +1,7 @@
 /* Length and direction of a vector, by sqrt and rsqrt of dot(v, v). OpenCL's length and
  * normalize rescale v first, to guard dot(v, v) against overflow and underflow; that costs
- * registers and time in every bounce (on the H100, simple-diffuse with NEE ran 13 % faster without
- * it: docs/performance.md). The vectors given here cannot need the guard: directions, and
+ * registers and time in every bounce (docs/notes/performance-2026-11.md, 2026-11-22: vectors without
+ * OpenCL's guard). The vectors given here cannot need the guard: directions, and
  * distances within a scene, which would have to exceed sqrt(FLT_MAX) = 1.8e19, where the sphere
  * test's own dot(f, f) fails first. Triangles' edge products, which can be tiny, keep OpenCL's. */
 

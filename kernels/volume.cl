@@ -34,8 +34,8 @@ int medium_after(const SceneData *sc, const Surface *s, float3 w, int current)
  * transmittances, each exact for a homogeneous medium, across null boundaries; 0 where a
  * surface is in the way. Without null surfaces (NULL_SURFACES) nothing changes the medium
  * along the way, and any surface blocks it: an any-hit query answers, as in scenes without
- * media, where finding the nearest hit cost staircase2 (a medium inside a glass panel) half
- * its render time again on an H100. */
+ * media, where finding the nearest hit is much slower (docs/notes/performance-2026-11.md, 2026-11-24:
+ * participating media). */
 float3 transmittance_along(const SceneData *sc, float3 o, float3 d, float t_max, PrimId self, int medium,
                            int *rays)
 {

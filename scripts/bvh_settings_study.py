@@ -1,4 +1,4 @@
-"""How the BVH builder's settings change `tori400-textured`'s tree (docs/performance.md,
+"""How the BVH builder's settings change `tori400-textured`'s tree (docs/notes/performance-2026-11.md,
 2026-11-26): the SAH cost, the time to compile the scene and the nodes and primitives a ray
 meets (pathtrace.traversal_stats), for PLOC's search radius, the top split's bins and the
 clusters it takes (app/bvh.py: RADIUS, MAX_BINS, TOP_CLUSTERS); then with its ground quad (two

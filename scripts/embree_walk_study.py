@@ -1,5 +1,5 @@
 """Embree's walk against pathtrace's on CPUs, an experiment for #31's CPU goal
-(docs/performance.md, 2026-11-27): the same rays, recorded as the megakernel traces them (the
+(docs/notes/performance-2026-11.md, 2026-11-27): the same rays, recorded as the megakernel traces them (the
 trace split's record_rays, kernels/trace_split.cl: per pixel a camera ray, and at its hit one
 light sample's shadow ray and one BSDF sample's bounce), traced by pathtrace's trace_rays on
 the OpenCL device and by Embree 4 (Intel's CPU ray tracing kernels, through the `embreex`

@@ -1,6 +1,6 @@
 """A field of instances of one 100,000-triangle object (a million by default: 1e11 triangles
 drawn), compiled into a two-level BVH and rendered at 1920x1080 with NEE: the scale that
-docs/scene-format.md's Instances section promises (docs/performance.md has the H100's figures).
+docs/scene-format.md's Instances section promises (docs/notes/performance-2026-11.md has the H100's figures).
 
     python scripts/many_instances.py [instances] [device] [small]
 

@@ -1,4 +1,4 @@
-"""Rays traced in packets on CPUs, an experiment for #31's CPU goal (docs/performance.md,
+"""Rays traced in packets on CPUs, an experiment for #31's CPU goal (docs/notes/performance-2026-11.md,
 2026-11-26): how much faster the BVH walk gets when each work-item walks the rays of a tile of
 pixels together in SIMD lanes, and a whole render with each tile's paths kept in step
 (scripts/packets_study.cl). Neither is part of the renderer.

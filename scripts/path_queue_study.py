@@ -1,4 +1,4 @@
-"""Where a render's time goes along its paths (docs/performance.md, 2026-11-26):
+"""Where a render's time goes along its paths (docs/notes/performance-2026-11.md, 2026-11-26):
 
   python scripts/path_queue_study.py depths SCENE... [--device gpu] [--size WxH] [--spp N]
       the megakernel's milliseconds per sample per pixel at max depth 1, 2, 3, 4, 6 and 8 (next-event

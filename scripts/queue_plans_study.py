@@ -1,5 +1,5 @@
 """The launch plans of path_queue "auto" (pathtrace.renderer.AUTO_PLANS) timed over whole renders
-(docs/performance.md, 2026-11-27: the queue chosen by trial renders):
+(docs/notes/performance-2026-11.md, 2026-11-27: the queue chosen by trial renders):
 
   python scripts/queue_plans_study.py SCENE... [--device gpu] [--size WxH] [--spp N] [--rounds N]
 

@@ -1,5 +1,5 @@
 """What differs between a scene's program built without the continuation queue and with it, on
-NVIDIA's OpenCL (docs/performance.md, 2026-11-27: the queue chosen by trial renders):
+NVIDIA's OpenCL (docs/notes/performance-2026-11.md, 2026-11-27: the queue chosen by trial renders):
 
   python scripts/queue_program_study.py SCENE...
 

@@ -1,4 +1,4 @@
-"""Whole paths in SIMD lanes on CPUs, an experiment for #31's CPU goal (docs/performance.md,
+"""Whole paths in SIMD lanes on CPUs, an experiment for #31's CPU goal (docs/notes/performance-2026-11.md,
 2026-11-27): pathtrace's estimator (depth 8, next-event estimation, the power heuristic) written
 with LANES paths per work-item in OpenCL vectors (scripts/simd_paths_study.cl), for scenes of
 spheres with diffuse or emitting materials under a constant sky, such as simple-diffuse, timed

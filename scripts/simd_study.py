@@ -1,5 +1,5 @@
 """Which shapes of kernel PoCL runs in SIMD lanes, an experiment for #31's CPU goal
-(docs/performance.md, 2026-11-27): a diffuse bounce among five spheres (scripts/simd_study.cl)
+(docs/notes/performance-2026-11.md, 2026-11-27): a diffuse bounce among five spheres (scripts/simd_study.cl)
 written one path per work-item in scalar floats, or LANES paths per work-item in OpenCL
 vectors, and the whole path in one kernel with and without a barrier at each bounce. Not part
 of the renderer.

@@ -23,12 +23,12 @@ os.environ.setdefault("PATHTRACE_SCENE_CACHE", "0")
 # Nor to its cache of kernel binaries and path-queue verdicts (Renderer.choose_queue_plan), whose
 # verdicts would spare a later run the trials that tests count.
 os.environ.setdefault("PATHTRACE_CACHE", tempfile.mkdtemp(prefix="pathtrace-tests-"))
-# Renders wait for their scene's own program, so that each is repeatable (pathtrace.programs);
-# tests/test_programs.py renders with the generic program and switches between the two. Tests
-# marked `specialised` keep the scenes' own programs whatever PATHTRACE_PROGRAM says: with
-# PATHTRACE_PROGRAM=generic the rest share one build (a faster suite; 2026-11-28, under a load
-# of 10 on two cores, 9 tests about traced rays, counts and caches failed that way, still to sort).
-os.environ.setdefault("PATHTRACE_PROGRAM", "specialised")
+# Renders draw from the generic program alone (pathtrace.programs), one build shared by every
+# test, where each scene's own program would be a build of its own (about 220 of them, most of
+# the suite's time on two cores). Tests marked `specialised` render with the scenes' own
+# programs: those about what those programs compile, trace and cache, and the references, which
+# check what a render converges with; tests/test_programs.py compares the two on every test scene.
+os.environ.setdefault("PATHTRACE_PROGRAM", "generic")
 
 
 def pytest_configure(config):

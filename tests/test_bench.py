@@ -4,6 +4,8 @@ import json
 import sys
 from pathlib import Path
 
+import pytest
+
 from tests.test_cli import pathtrace
 
 
@@ -128,6 +130,7 @@ def test_load_bench_rows(tmp_path):
     assert len(r.stderr.strip().splitlines()) == 1 and not r.stdout    # before any timed run
 
 
+@pytest.mark.specialised     # the counts of the scenes' own programs
 def test_bench_without_the_cold_build_and_with_traversal_counts_and_the_trace_split(tmp_path):
     out = tmp_path / "bench.json"
     media = str(Path(__file__).parent / "scenes" / "media-fog.xml")

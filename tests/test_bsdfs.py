@@ -1,11 +1,17 @@
-"""The BSDFs of kernels/bsdfs/ through the dispatch of kernels/bsdf.cl: sampling against the pdf,
-the pdf's normalisation, energy conservation, and the sample weight against eval cos / pdf."""
+"""Every registered BSDF type, through the examples it declares (BSDFType.examples), by one
+suite in the manner of Mitsuba 3's chi-square harness (mitsuba.chi2.BSDFAdapter): its sampling
+against its pdf (a chi-square test over the whole sphere), the pdf's normalisation, the sample
+weight against eval |cos| / pdf (draw by draw, and over every region of directions),
+reciprocity, and energy conservation. A new type is tested by being registered. The cases of
+every type are batched: one sampling launch per case, one quadrature launch for all of them
+(the kernels below, one build). Its helpers (sample, evaluate, the grids) serve the closed-form
+tests of test_materials.py and test_principled.py."""
 
 import numpy as np
 import pytest
 from pyopencl import cltypes
 
-from pathtrace.materials import pack
+from pathtrace.materials import BSDFS, DELTA, pack
 from tests.test_sampling import chi_square
 
 SOURCE = """
@@ -25,16 +31,38 @@ kernel void bsdf_eval(global const Material *mat, float4 wo, global const float4
     int i = get_global_id(0);
     out[i] = (float4)(eval_bsdf(mat, wo.xyz, wi[i].xyz), pdf_bsdf(mat, wo.xyz, wi[i].xyz));
 }
+kernel void bsdf_pairs(global const Material *mat, global const float4 *wo, global const float4 *wi,
+                       global float4 *out)
+{
+    int i = get_global_id(0);
+    out[i] = (float4)(eval_bsdf(mat, wo[i].xyz, wi[i].xyz), pdf_bsdf(mat, wo[i].xyz, wi[i].xyz));
+}
+/* Per case c (material mat[c], outgoing wo[c]) and bin of ny x nphi: the integrals over the bin
+ * of f |cos| (xyz) and of the pdf (w), by the midpoint rule on sub x sub cells. The bins are even
+ * in y (the pole along y, away from lobes about the xz plane, where even steps stay fine in
+ * angle) and in the azimuth atan2(z, x). */
+kernel void bsdf_bins(global const Material *mat, global const float4 *wo, int ny, int nphi, int sub,
+                      global float4 *out)
+{
+    int i = get_global_id(0), c = i / (ny * nphi), b = i % (ny * nphi);
+    float dy = 2.0f / (ny * sub), dphi = 2.0f * M_PI_F / (nphi * sub);
+    float4 sum = (float4)(0.0f);
+    for (int j = 0; j < sub; ++j) {
+        float y = -1.0f + ((b / nphi) * sub + j + 0.5f) * dy, s = sqrt(1.0f - y * y);
+        for (int k = 0; k < sub; ++k) {
+            float phi = -M_PI_F + ((b % nphi) * sub + k + 0.5f) * dphi;
+            float3 wi = (float3)(s * cos(phi), y, s * sin(phi));
+            sum += (float4)(eval_bsdf(&mat[c], wo[c].xyz, wi) * fabs(wi.z), pdf_bsdf(&mat[c], wo[c].xyz, wi));
+        }
+    }
+    out[i] = sum * (dy * dphi);
+}
 """
 def direction(theta_deg, phi_deg=0.0):
     """The outgoing direction at theta degrees from the normal (and phi from the tangent), as a
     kernel argument."""
     t, p = np.radians(theta_deg), np.radians(phi_deg)
     return cltypes.make_float4(np.sin(t) * np.cos(p), np.sin(t) * np.sin(p), np.cos(t), 0)
-
-
-def material(rho_d, rho_s, n):
-    return pack("phong", {"rho_d": rho_d, "rho_s": rho_s, "n": n})
 
 
 def sample(kernels, m, wo, count=400_000, seed=0):
@@ -62,88 +90,213 @@ def hemisphere_grid(nz=1500, nphi=1500):
     return np.stack([s * np.cos(pp), s * np.sin(pp), zz], -1).reshape(-1, 3), (1 / nz) * (2 * np.pi / nphi)
 
 
-@pytest.mark.parametrize("rho_d,rho_s,n", [(0.5, 0.5, 1.0), (0.3, 0.6, 20.0), (0.0, 1.0, 50.0), (1.0, 0.0, 1.0)])
-def test_pdf_integrates_to_one_at_normal_incidence(kernels, rho_d, rho_s, n):
-    grid, cell = hemisphere_grid()
-    _, pdf = evaluate(kernels, material(rho_d, rho_s, n), direction(0), grid)
-    assert pdf.sum() * cell == pytest.approx(1.0, abs=2e-3)
+# -- the conformance suite --
+
+COUNT = 200_000                       # draws per case
+NY, NPHI = 32, 16                     # bins over the sphere (see bsdf_bins)
+SUB = {False: 40, True: 12}           # quadrature cells per bin edge: exact types, estimated ones
+PAIRS = 2000                          # draws per case whose eval, pdf and reverse are checked
+ALPHA = 0.01                          # the chi-square tests' level, for all cases together
+EXAMPLES = [(f"{name}-{k}", name, params) for name, bsdf in BSDFS.items() if bsdf.kernel and not bsdf.resolved_first
+            for k, params in enumerate(bsdf.examples)]
 
 
-@pytest.mark.parametrize("theta", [0, 35, 70])
-@pytest.mark.parametrize("rho_d,rho_s,n", [(0.3, 0.6, 20.0), (0.1, 0.9, 200.0)])
-def test_sampled_directions_follow_the_pdf(kernels, theta, rho_d, rho_s, n):
-    """Every draw yields a direction or (glossy, below the surface) ends the path; the yielded
-    directions' histogram matches the pdf integrated over each bin."""
-    m, wo = material(rho_d, rho_s, n), direction(theta)
-    wi, weight = sample(kernels, m, wo, seed=theta)
-    ok = weight[:, 3] > 0
-    assert np.all(wi[ok, 2] > 0)
-    # bins in (z, phi) around the normal; the pdf integrated over each on a fine grid
-    nz, nphi = 16, 16
-    grid, cell = hemisphere_grid(nz * 60, nphi * 60)
-    _, pdf = evaluate(kernels, m, wo, grid)
-    expected = (pdf * cell).reshape(nz, 60, nphi, 60).sum(axis=(1, 3)) * len(wi)
-    counts, _, _ = np.histogram2d(wi[ok, 2], np.arctan2(wi[ok, 1], wi[ok, 0]),
-                                  [np.linspace(0, 1, nz + 1), np.linspace(-np.pi, np.pi, nphi + 1)])
-    assert expected.sum() == pytest.approx(ok.sum(), rel=0.01)   # the mass below the surface
-    assert chi_square(counts.ravel(), expected.ravel()) > 1e-3
+def thetas(bsdf, values):
+    """wo's angles from the normal: outside, and inside for a type seen from both sides."""
+    return (15, 50, 78) + ((125, 165) if bsdf.transmits(values) else ())
 
 
-@pytest.mark.parametrize("theta", [0, 45, 80])
-@pytest.mark.parametrize("rho_d,rho_s,n", [(0.8, 0.2, 1.0), (0.5, 0.5, 10.0), (0.0, 1.0, 100.0),
-                                           ((0.9, 0.1, 0.2), (0.1, 0.9, 0.3), 30.0)])
-def test_albedo_is_at_most_one_and_the_estimator_finds_it(kernels, theta, rho_d, rho_s, n):
-    """Directional albedo = integral of f cos over the hemisphere, by quadrature; it is at most
-    1 (energy conservation), and the mean sample weight is an unbiased estimate of it."""
-    m, wo = material(rho_d, rho_s, n), direction(theta)
-    grid, cell = hemisphere_grid(3000, 1500)
-    f, _ = evaluate(kernels, m, wo, grid)
-    albedo = (f * grid[:, 2:3]).sum(axis=0) * cell
-    assert np.all(albedo <= 1.0 + 2e-3)
-    wi, weight = sample(kernels, m, wo, seed=theta)
-    mean = weight[:, :3].mean(axis=0)
-    err = weight[:, :3].std(axis=0) / np.sqrt(len(weight))
-    assert np.all(np.abs(mean - albedo) < 5 * err + 2e-3), (mean, albedo)
+def row(name, params):
+    return pack(name, BSDFS[name].resolve(params))
 
 
-@pytest.mark.parametrize("rho_d,rho_s,n", [(0.3, 0.6, 20.0), ((0.9, 0.1, 0.2), (0.1, 0.9, 0.3), 30.0)])
-def test_sample_weights_carry_f_cos_into_every_region(kernels, rho_d, rho_s, n):
-    """For a lobe-mixture the one-sample weight is f_lobe cos / (P_lobe pdf_lobe), not eval cos
-    / pdf sample by sample; but over any region of directions, the sum of the weights of the
-    samples that land there, over the number drawn, estimates the integral of f cos over it.
-    Tested per (z, phi) bin against quadrature, with each bin's standard error."""
-    m, wo = material(rho_d, rho_s, n), direction(40)
-    count = 400_000
-    wi, weight = sample(kernels, m, wo, count=count, seed=7)
-    ok = weight[:, 3] > 0
-    nz, nphi, sub = 8, 8, 100
-    edges = [np.linspace(0, 1, nz + 1), np.linspace(-np.pi, np.pi, nphi + 1)]
-    where = (wi[ok, 2], np.arctan2(wi[ok, 1], wi[ok, 0]))
-    grid, cell = hemisphere_grid(nz * sub, nphi * sub)
-    f, _ = evaluate(kernels, m, wo, grid)
-    for c in range(3):
-        expected = (f[:, c] * grid[:, 2] * cell).reshape(nz, sub, nphi, sub).sum(axis=(1, 3))
-        w = weight[ok, c].astype(np.float64)
-        total, _, _ = np.histogram2d(*where, edges, weights=w)
-        total_sq, _, _ = np.histogram2d(*where, edges, weights=w * w)
-        mean = total / count
-        se = np.sqrt(np.maximum(total_sq / count - mean ** 2, 0) / count)
-        assert np.all(np.abs(mean - expected) < 5 * se + 1e-3 * expected.max()), \
-            np.max(np.abs(mean - expected) / (se + 1e-12))
+def as_vectors(w):
+    return np.array([[float(v[a]) for a in "xyz"] for v in w])
 
 
-@pytest.mark.parametrize("rho_d,rho_s,n", [(0.3, 0.6, 20.0), ((0.9, 0.1, 0.2), (0.1, 0.9, 0.3), 30.0)])
-def test_reported_pdf_is_the_pdf_and_eval_is_reciprocal(kernels, rho_d, rho_s, n):
-    """Per sample: the pdf sample() reports equals pdf_bsdf, and eval is symmetric in (wo, wi)."""
-    m = material(rho_d, rho_s, n)
-    wo = direction(40)
-    wi, weight = sample(kernels, m, wo, count=2000, seed=3)
-    ok = weight[:, 3] > 0
-    f, pdf = evaluate(kernels, m, wo, wi[ok])
-    np.testing.assert_allclose(wi[ok, 3], pdf, rtol=1e-4)
-    # reciprocity: f(wo, wi) == f(wi, wo)
-    wo_vec = np.array([wo["x"], wo["y"], wo["z"]], np.float64)
-    for k in np.flatnonzero(ok)[:50]:
-        back, _ = evaluate(kernels, m, cltypes.make_float4(*wi[k, :3], 0), wo_vec[None])
-        fwd, _ = evaluate(kernels, m, wo, wi[k:k + 1, :3])
-        np.testing.assert_allclose(back, fwd, rtol=1e-4, atol=1e-7)
+def evaluate_pairs(kernels, m, wo, wi):
+    """eval and pdf at each pair (wo[i], wi[i]), at most PAIRS of them. Launched over PAIRS
+    work-items whatever their number, as PoCL compiles a kernel again for each new size."""
+    def four(v):
+        padded = np.zeros((PAIRS, 4), np.float32)
+        padded[:len(v), :3], padded[len(v):, 2] = v[:, :3], 1.0
+        return padded
+    out = np.zeros((PAIRS, 4), np.float32)
+    kernels(SOURCE)("bsdf_pairs", PAIRS, m, four(wo), four(wi), out)
+    return out[:len(wi), :3].astype(np.float64), out[:len(wi), 3].astype(np.float64)
+
+
+def bins_of(w):
+    """Each direction's bin of bsdf_bins, and whether it has one (a direction drawn)."""
+    y = np.clip(((w[:, 1] + 1) / 2 * NY).astype(int), 0, NY - 1)
+    phi = np.clip(((np.arctan2(w[:, 2], w[:, 0]) + np.pi) / (2 * np.pi) * NPHI).astype(int), 0, NPHI - 1)
+    return y * NPHI + phi
+
+
+def quadrature(kernels, rows, wo, sub):
+    """Per case and bin: the integrals of f |cos| (rgb) and of the pdf."""
+    out = np.zeros((len(rows) * NY * NPHI, 4), np.float32)
+    wo4 = np.array([[v["x"], v["y"], v["z"], 0] for v in wo], np.float32)
+    kernels(SOURCE)("bsdf_bins", len(out), np.concatenate(rows), wo4, np.int32(NY), np.int32(NPHI),
+                    np.int32(sub), out)
+    return out.reshape(len(rows), NY * NPHI, 4).astype(np.float64)
+
+
+@pytest.fixture(scope="module")
+def cases(kernels):
+    """For every example and wo: the draws' statistics per bin, and the first PAIRS draws."""
+    found = {}
+    for key, name, params in EXAMPLES:
+        bsdf, m = BSDFS[name], row(name, params)
+        transmits = bsdf.transmits(bsdf.complete(params))
+        for theta in thetas(bsdf, bsdf.complete(params)):
+            wo = direction(theta, 30)
+            wi, weight = sample(kernels, m, wo, count=COUNT, seed=theta)
+            smooth = weight[:, 3] == 1
+            where = bins_of(wi[smooth])
+            per_bin = lambda v: np.bincount(where, v, NY * NPHI)     # noqa: E731
+            found[key, theta] = {
+                "name": name, "m": m, "wo": wo, "transmits": transmits, "smooth": smooth.mean(),
+                "crossed": np.count_nonzero(smooth & (np.sign(wi[:, 2]) != np.sign(wo["z"]))),
+                "counts": per_bin(None), "wi": wi[:PAIRS], "weight": weight[:PAIRS],
+                "sums": np.stack([per_bin(weight[smooth, c]) for c in range(3)], -1),
+                "squares": np.stack([per_bin(weight[smooth, c].astype(np.float64) ** 2) for c in range(3)], -1),
+                "total": weight[:, :3].mean(axis=0), "total_se": weight[:, :3].std(axis=0) / np.sqrt(COUNT)}
+    for estimated in (False, True):
+        keys = [k for k, c in found.items() if BSDFS[c["name"]].estimated == estimated
+                and not BSDFS[c["name"]].flags & DELTA]
+        if keys:
+            q = quadrature(kernels, [found[k]["m"] for k in keys], [found[k]["wo"] for k in keys], SUB[estimated])
+            for k, b in zip(keys, q):
+                found[k]["f_cos"], found[k]["pdf"] = b[:, :3], b[:, 3]
+    return found
+
+
+def of(cases, key, smooth=True):
+    """The cases of example `key` (for smooth=True, of a type with non-delta lobes)."""
+    chosen = [c for (k, _), c in cases.items() if k == key]
+    return [c for c in chosen if "pdf" in c] if smooth else chosen
+
+
+SMOOTH = [key for key, name, _ in EXAMPLES if not BSDFS[name].flags & DELTA]
+EXACT = [key for key, name, _ in EXAMPLES if not BSDFS[name].flags & DELTA and not BSDFS[name].estimated]
+DELTAS = [key for key, name, _ in EXAMPLES if BSDFS[name].flags & DELTA]
+
+
+def test_every_registered_type_declares_examples_that_pack_and_unpack():
+    """Each type its own examples (not a parent's), each complete, and the viewer's editor's round
+    trip (unpack a row, pack it again) keeps its row."""
+    for name, bsdf in BSDFS.items():
+        assert type(bsdf).__dict__.get("examples"), f"{name} declares no examples"
+        for params in bsdf.examples:
+            rows = row(name, params)
+            again = pack(name, bsdf.unpack(rows[0]))
+            for field in rows.dtype.names:
+                np.testing.assert_allclose(again[field], rows[field], rtol=1e-6, err_msg=f"{name}.{field}")
+
+
+def test_every_type_with_a_bsdf_kernel_is_in_the_suite():
+    assert {name for _, name, _ in EXAMPLES} == {n for n, b in BSDFS.items() if b.kernel and not b.resolved_first}
+
+
+@pytest.mark.parametrize("key", EXACT)
+def test_sampling_follows_the_pdf_over_the_sphere(cases, key):
+    """The non-delta draws' histogram matches the pdf integrated over each bin (chi-square, at
+    level ALPHA over all cases of the suite, Sidak-corrected)."""
+    tests = sum(len(of(cases, k)) for k in EXACT)
+    threshold = 1 - (1 - ALPHA) ** (1 / tests)
+    for c in of(cases, key):
+        expected = c["pdf"] * COUNT
+        p = chi_square(c["counts"], expected)
+        assert p > threshold, (c["wo"], p, threshold)
+
+
+@pytest.mark.parametrize("key", EXACT)
+def test_the_pdf_integrates_to_the_share_of_draws_that_gave_a_direction(cases, key):
+    """The pdf's integral over the sphere is the probability that a draw yields a non-delta
+    direction (the rest went to a delta lobe or below the surface), at most 1; a surface that
+    transmits nothing draws no direction through it."""
+    for c in of(cases, key):
+        total = c["pdf"].sum()
+        se = np.sqrt(c["smooth"] * (1 - c["smooth"]) / COUNT)
+        assert abs(total - c["smooth"]) < 5 * se + 2e-3, (c["wo"], total, c["smooth"])
+        assert total <= 1 + 2e-3
+        assert c["transmits"] or c["crossed"] == 0
+
+
+@pytest.mark.parametrize("key", SMOOTH)
+def test_weights_carry_f_cos_into_every_region(cases, key):
+    """Over any region of directions, the sum of the weights of the draws that land there, over
+    the number drawn, estimates the integral of f |cos| over it (whatever the weights' form, per
+    lobe or not): per bin, with each bin's standard error. For a type whose f is an estimate, over
+    the whole sphere, where the quadrature's own noise averages out."""
+    for c in of(cases, key):
+        mean = c["sums"] / COUNT
+        se = np.sqrt(np.maximum(c["squares"] / COUNT - mean ** 2, 0) / COUNT)
+        if BSDFS[c["name"]].estimated:
+            total, albedo = mean.sum(axis=0), c["f_cos"].sum(axis=0)
+            assert np.all(np.abs(total - albedo) < 5 * np.sqrt((se ** 2).sum(axis=0)) + 0.01 * albedo + 2e-3), \
+                (c["wo"], total, albedo)
+        else:
+            # where few draws land, their sample variance understates the error: a bin's k
+            # expected draws (pdf x COUNT) carry weights whose sum has a variance of at least
+            # (integral of f |cos|)^2 / k, the count's Poisson noise alone
+            expected = np.maximum(c["pdf"] * COUNT, 1)[:, None]
+            se = np.maximum(se, c["f_cos"] / np.sqrt(expected))
+            gap = np.abs(mean - c["f_cos"]) - 5 * se - 1e-3 * c["f_cos"].max()
+            assert np.all(gap < 0), (c["wo"], np.max(np.abs(mean - c["f_cos"]) / (se + 1e-12)))
+            # and no direction where f is seen is one that sampling never draws
+            assert not np.any((c["f_cos"].max(axis=1) > 1e-3 * c["f_cos"].max()) & (c["pdf"] == 0)), c["wo"]
+
+
+@pytest.mark.parametrize("key", SMOOTH)
+def test_each_draw_reports_pdf_bsdf_and_weighs_eval_cos_over_pdf(kernels, cases, key):
+    """Draw by draw: the pdf sample() reports is pdf_bsdf's (MIS divides by it), and the weight is
+    eval |cos| / pdf, but for a type that weighs by the chosen lobe (lobe_weights) or estimates
+    f (estimated)."""
+    for c in of(cases, key):
+        ok = c["weight"][:, 3] == 1
+        wo = np.broadcast_to(as_vectors([c["wo"]]), (ok.sum(), 3))
+        f, pdf = evaluate_pairs(kernels, c["m"], wo, c["wi"][ok])
+        np.testing.assert_allclose(c["wi"][ok, 3], pdf, rtol=2e-4)
+        bsdf = BSDFS[c["name"]]
+        if not (bsdf.lobe_weights or bsdf.estimated):
+            np.testing.assert_allclose(c["weight"][ok, :3], f * np.abs(c["wi"][ok, 2:3]) / pdf[:, None], rtol=2e-3, atol=1e-6)
+
+
+@pytest.mark.parametrize("key", EXACT)
+def test_eval_is_reciprocal(kernels, cases, key):
+    """f(wo, wi) = f(wi, wo) at the directions drawn: for every pair of a reciprocal type, and the
+    reflected ones of a refracting type."""
+    for c in of(cases, key):
+        ok = c["weight"][:, 3] == 1
+        wi = c["wi"][ok, :3]
+        wo = np.broadcast_to(as_vectors([c["wo"]]), wi.shape)
+        if not BSDFS[c["name"]].reciprocal:
+            same = np.sign(wi[:, 2]) == np.sign(wo[:, 2])
+            wi, wo = wi[same], wo[same]
+        forward, _ = evaluate_pairs(kernels, c["m"], wo, wi)
+        back, _ = evaluate_pairs(kernels, c["m"], wi, wo)
+        np.testing.assert_allclose(back, forward, rtol=2e-3, atol=1e-7)
+
+
+@pytest.mark.parametrize("key", [key for key, _, _ in EXAMPLES])
+def test_a_surface_that_transmits_nothing_reflects_at_most_what_it_receives(cases, key):
+    """The mean weight of all draws (delta ones included) is the directional albedo: at most 1 for
+    a type that only reflects (refraction's radiance scaling makes a transmitted weight exceed 1
+    legitimately)."""
+    for c in of(cases, key, smooth=False):
+        if not c["transmits"]:
+            assert np.all(c["total"] <= 1 + 5 * c["total_se"] + 1e-3), (c["wo"], c["total"])
+
+
+@pytest.mark.parametrize("key", DELTAS)
+def test_a_delta_type_draws_only_deltas(kernels, cases, key):
+    """Every draw of a type whose every lobe is a delta is a delta one, and eval and pdf are 0
+    there (no light sampling can meet it)."""
+    for c in of(cases, key, smooth=False):
+        assert c["smooth"] == 0
+        ok = c["weight"][:, 3] == 2
+        wo = np.broadcast_to(as_vectors([c["wo"]]), (ok.sum(), 3))
+        f, pdf = evaluate_pairs(kernels, c["m"], wo, c["wi"][ok])
+        assert not f.any() and not pdf.any()

@@ -289,6 +289,7 @@ run()
     assert not list(tmp_path.iterdir())
 
 
+@pytest.mark.specialised     # the scene's own program, which is cached where the generic one is not
 @pytest.mark.parametrize("damage", ["truncated", "garbage", "empty"])
 def test_a_damaged_kernel_cache_is_rebuilt(tmp_path, damage):
     """A truncated cache file (the first half of a valid one) crashed PoCL at every start. (PoCL
@@ -343,7 +344,7 @@ def test_a_bad_option_shows_its_subcommands_usage():
 def test_the_progress_bar_ends_with_the_real_rate(tmp_path):
     r = pathtrace("render", "simple", "-o", tmp_path / "a.png", "--size", "64x36", "--spp", "16")
     assert r.returncode == 0
-    last = r.stderr.replace("\r", "\n").strip().splitlines()[-2]       # before "wrote ..."
+    last = [line for line in r.stderr.replace("\r", "\n").splitlines() if line.startswith("simple 64x36: ")][-1]
     assert last.startswith("simple 64x36: 100%") and "16/16 spp" in last
     assert float(last.split("Msamples/s")[0].split()[-1]) > 0
 
@@ -527,7 +528,7 @@ run()
 
 
 def test_a_pbrt_render_to_exr_imports_no_other_scene_reader_and_no_opencv(tmp_path):
-    """What a command imports is part of the wait for its first image (docs/performance.md,
+    """What a command imports is part of the wait for its first image (docs/notes/performance-2026-11.md,
     2026-11-26): a pbrt-v4 scene rendered to EXR loads neither the other scene readers nor
     OpenCV, and a PNG then does load OpenCV, which encodes it."""
     readers = ("pathtrace.scene.mitsuba", "pathtrace.scene.toml_reader", "pathtrace.scene.builtin")

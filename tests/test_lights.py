@@ -285,13 +285,6 @@ def test_a_directional_light_gives_its_irradiance_times_the_cosine(backend):
     np.testing.assert_allclose(image, RHO / np.pi * 3.0 * cos, rtol=1e-5)
 
 
-def test_delta_lights_are_dark_without_next_event_estimation(backend):
-    """No path can hit a point, so the estimator without NEE never sees one: the scene is black,
-    and `render` says so (test_cli.py)."""
-    image, _, _, _ = floor_under({"type": "point", "position": [0, H, 0], "intensity": 3.0}, backend, nee=False)
-    assert image.max() == 0
-
-
 def test_delta_lights_join_the_table_by_power():
     from pathtrace.lights import DirectionalLight, PointLight, SpotLight
     point = PointLight([0, 1, 0], [1.0, 1.0, 1.0])

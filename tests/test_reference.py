@@ -10,6 +10,10 @@ from pathtrace.renderer import Renderer
 from pathtrace.scene import load_scene
 from tests.stats import z_test
 
+# What a render converges with is the scene's own program, which replaces the generic one once
+# built (pathtrace.programs); tests/test_programs.py compares the two on every test scene.
+pytestmark = pytest.mark.specialised
+
 REFERENCES = sorted((Path(__file__).parent / "references").glob("*.npz"))
 XML_SCENES = Path(__file__).parent / "scenes"    # Mitsuba XML, read by app/scene/mitsuba.py
 

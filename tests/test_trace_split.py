@@ -13,6 +13,8 @@ from pathtrace.trace_split import trace_split
 from pathtrace.traversal_stats import traversal_stats
 from tests.test_instances import instanced_scene
 
+pytestmark = pytest.mark.specialised     # what the scenes' own programs trace
+
 SCENES = Path(__file__).parent / "scenes"
 
 

@@ -2,6 +2,7 @@
 sample."""
 
 import numpy as np
+import pytest
 
 from pathtrace.camera import Camera
 from pathtrace.renderer import Renderer
@@ -9,6 +10,8 @@ from pathtrace.scene import load_scene
 from pathtrace.scene import SceneBuilder, diffuse
 from pathtrace.environment import Environment
 from pathtrace.traversal_stats import traversal_stats
+
+pytestmark = pytest.mark.specialised     # what the scenes' own programs walk
 
 
 def test_one_sphere_is_tested_once_per_ray_without_a_tree(backend):

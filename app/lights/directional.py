@@ -16,6 +16,7 @@ class DirectionalLight(DeltaLight):
     irradiance: np.ndarray
     name = "directional"
     fields = ("direction", "irradiance")
+    examples = ({"direction": [1.0, -2.0, 0.5], "irradiance": [3.0, 2.5, 1.0]},)
 
     def check(self):
         self.direction = check_direction("direction", self.direction)

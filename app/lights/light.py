@@ -17,6 +17,10 @@ class DeltaLight:
     and so dark in the estimator without it (RenderSettings.nee off)."""
     name: str
     fields: tuple           # its parameters, in the order scene files list them
+    # parameter sets, as a scene file's [[lights]] entry gives them (a spot may aim by look_at),
+    # that the conformance suite (tests/test_light_conformance.py) renders with next-event
+    # estimation, the light chosen by power and by the light tree; each type declares its own
+    examples: tuple = ()
 
     def check(self):
         """Raises ValueError("<parameter>: <problem>") for the first parameter out of range."""

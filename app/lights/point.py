@@ -15,6 +15,7 @@ class PointLight(DeltaLight):
     intensity: np.ndarray
     name = "point"
     fields = ("position", "intensity")
+    examples = ({"position": [0.3, 1.0, -0.2], "intensity": [3.0, 2.0, 1.0]},)
 
     def check(self):
         self.position = check_point("position", self.position)

@@ -1,7 +1,8 @@
 """The registry of light types: each type's tag, and the kernels' dispatch (sample_light_of_type)
 generated from it. Adding a light type takes its kernel file (kernels/lights/<name>.cl), its host
-module and its entry here, and each scene reader's mapping of its format's light onto it (written
-by hand in app/scene/toml_reader.py, mitsuba.py and pbrt/reader.py). Area lights and the
+module (with its examples) and its entry here, and each scene reader's mapping of its format's
+light onto it (written by hand in app/scene/toml_reader.py, mitsuba.py and pbrt/reader.py); its
+examples put it through tests/test_light_conformance.py by its registration alone. Area lights and the
 environment are always compiled in, as the integrator weighs the emitters its paths hit against
 them; the delta lights only into the programs of scenes that have them."""
 

@@ -27,6 +27,10 @@ class SpotLight(DeltaLight):
     falloff: str = "linear"
     name = "spot"
     fields = ("position", "direction", "intensity", "cutoff_angle", "beam_width", "falloff")
+    examples = ({"position": [0.0, 1.0, 0.0], "look_at": [0.4, 0.0, 0.1], "intensity": 2.0, "cutoff_angle": 40.0,
+                 "beam_width": 25.0},
+                {"position": [0.2, 1.5, 0.0], "direction": [0.0, -1.0, 0.3], "intensity": [4.0, 3.0, 2.0],
+                 "cutoff_angle": 30.0, "beam_width": 30.0, "falloff": "smoothstep"})
 
     def check(self):
         self.position = check_point("position", self.position)

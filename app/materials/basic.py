@@ -8,6 +8,7 @@ from pathtrace.materials.bsdf import NULL, BSDFType, Param, check_sum_at_most_on
 
 class Black(BSDFType):
     name = "black"
+    examples = ({},)
     doc = "reflects nothing; with Le an emitter (the `emitter` type of scene files)"
     kernel = False
 
@@ -20,6 +21,7 @@ class Black(BSDFType):
 
 class Null(BSDFType):
     name = "null"
+    examples = ({},)
     doc = ("no surface: paths and shadow rays cross it unchanged, and it counts as no bounce; with "
            "media, the boundary of a medium (Mitsuba 3's null BSDF, pbrt-v4's interface material)")
     kernel = False
@@ -34,6 +36,7 @@ class Null(BSDFType):
 
 class Diffuse(BSDFType):
     name = "diffuse"
+    examples = ({"rho_d": [0.8, 0.5, 0.2]},)
     params = (Param("rho_d", "color", high=1.0, doc="albedo (Mitsuba: reflectance)", slot="p0.xyz"),)
     doc = "Lambertian, f = rho_d / pi"
 
@@ -49,6 +52,9 @@ class Diffuse(BSDFType):
 
 class Phong(BSDFType):
     name = "phong"
+    examples = ({"rho_d": 0.3, "rho_s": 0.6, "n": 20.0}, {"rho_d": 0.1, "rho_s": 0.9, "n": 200.0},
+                {"rho_d": [0.9, 0.1, 0.2], "rho_s": [0.1, 0.9, 0.3], "n": 30.0})
+    lobe_weights = True
     params = (Param("rho_d", "color", high=1.0, doc="diffuse albedo", slot="p0.xyz"),
               Param("rho_s", "color", default=0.0, high=1.0, doc="glossy albedo", slot="p1.xyz"),
               Param("n", "number", doc="Phong exponent", slot="p1.w"))

@@ -12,6 +12,7 @@ MAX_BLEND_DEPTH = 8     # blends nested in blends, at most (kernels/bsdfs/blendb
 
 class BlendBSDF(BSDFType):
     name = "blendbsdf"
+    examples = ({"weight": 0.3},)
     params = (Param("weight", "number", default=0.5, high=1.0, slot="p0.x",
                     doc="the share of the second material: 0 is the first alone, 1 the second"),)
     doc = ("two materials mixed, f = (1 - weight) f_1 + weight f_2, by taking the second with "

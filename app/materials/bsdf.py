@@ -67,6 +67,17 @@ class BSDFType:
     resolved_first: bool = False   # the kernels turn it into another material before any BSDF
                                    # call (a blend): its file has no eval, pdf or sample
     requires: tuple = ()      # kernel files its own builds on, compiled before it (kernels/)
+    # What the conformance suite (tests/test_bsdfs.py) runs every type through:
+    examples: tuple = ()      # parameter sets, as a scene file gives them; each type declares
+                              # its own (a subclass does not inherit them), one at least
+    reciprocal: bool = True   # f(wo, wi) = f(wi, wo) with wi on either side; refraction scales
+                              # radiance by (n_i / n_t)^2 (Veach 1997, 5.2), so a refracting
+                              # type is reciprocal in its reflection only
+    lobe_weights: bool = False    # sample() weighs a draw by its chosen lobe alone, f_lobe cos /
+                                  # (P_lobe pdf_lobe): unbiased for f cos over any region of
+                                  # directions, but not eval cos / pdf draw by draw
+    estimated: bool = False   # eval and pdf are stochastic estimates (pbrt-v4's LayeredBxDF):
+                              # sampling is checked against them by albedo, not bin by bin
 
     def resolve(self, values: dict) -> dict:
         """Turns names into the numbers they stand for (a named IOR; a "name" parameter, in the

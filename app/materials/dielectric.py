@@ -29,6 +29,7 @@ _DIELECTRIC_PARAMS = (
 
 class Dielectric(BSDFType):
     name = "dielectric"
+    examples = ({"int_ior": 1.5}, {"int_ior": "water", "specular_transmittance": [0.9, 0.7, 0.5]})
     params = _DIELECTRIC_PARAMS
     flags = DELTA | TRANSMISSIVE
     doc = "smooth glass: Fresnel reflection and refraction, total internal reflection"
@@ -50,12 +51,18 @@ class Dielectric(BSDFType):
 
 class ThinDielectric(Dielectric):
     name = "thindielectric"
+    examples = ({"int_ior": 1.5}, {"int_ior": "diamond", "specular_reflectance": 0.5})
     doc = ("a thin sheet of glass: light is reflected or passes straight through, with the "
            "sheet's inner reflections summed")
 
 
 class RoughDielectric(AnisotropicRoughness, Dielectric):
     name = "roughdielectric"
+    examples = ({"alpha": 0.1, "int_ior": 1.5}, {"alpha": 0.5, "int_ior": "water"},
+                {"alpha": 0.3, "int_ior": 1.5, "distribution": "beckmann"},
+                {"alpha": 0.8, "int_ior": "diamond", "distribution": "beckmann"},
+                {"alpha": 0.4, "alpha_v": 0.08, "int_ior": 1.5, "distribution": "ggx"})
+    reciprocal = False
     params = _DIELECTRIC_PARAMS + anisotropic_params("p0.z", "p1.w") + (DISTRIBUTION,)
     flags = TRANSMISSIVE
     doc = ("rough glass: reflection and refraction by GGX or Beckmann microfacets (Walter et al. "

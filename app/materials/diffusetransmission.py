@@ -8,6 +8,8 @@ from pathtrace.materials.bsdf import TRANSMISSIVE, BSDFType, Param, check_sum_at
 
 class DiffuseTransmission(BSDFType):
     name = "diffusetransmission"
+    examples = ({"reflectance": [0.6, 0.3, 0.2], "transmittance": [0.3, 0.5, 0.1]},
+                {"reflectance": 0.1, "transmittance": 0.8}, {"reflectance": 0.5, "transmittance": 0.0})
     params = (Param("reflectance", "color", default=0.25, high=1.0, doc="R: the share reflected, f = R / pi",
                     slot="p0.xyz"),
               Param("transmittance", "color", default=0.25, high=1.0,

@@ -41,6 +41,10 @@ LAYERED_FILES = ("bsdfs/roughconductor.cl", "layered.cl")
 
 class CoatedDiffuse(BSDFType):
     name = "coateddiffuse"
+    examples = ({"reflectance": [0.7, 0.3, 0.1]}, {"reflectance": [0.2, 0.6, 0.9], "alpha": 0.1},
+                {"reflectance": 0.8, "alpha": 0.4, "thickness": 0.3, "eta": 1.33},
+                {"reflectance": 0.5, "alpha": 0.2, "thickness": 0.5, "albedo": [0.9, 0.5, 0.2], "g": 0.4, "nsamples": 2})
+    estimated = True
     requires = LAYERED_FILES
     params = (
         Param("reflectance", "color", default=0.5, high=1.0, doc="the base's albedo", slot="p0.xyz"),
@@ -74,6 +78,12 @@ class CoatedDiffuse(BSDFType):
 
 class CoatedConductor(BSDFType):
     name = "coatedconductor"
+    # behind a mirror base, f is estimated by the coating's transmission towards wi alone (no
+    # MIS): its heavy tail needs more walks per estimate for a quadrature to find its mean
+    examples = ({"material": "Au", "alpha": 0.2, "nsamples": 16}, {"material": "Cu", "conductor_alpha": 0.3},
+                {"material": "Al", "alpha": 0.1, "conductor_alpha": 0.2, "alpha_v": 0.3, "thickness": 0.2,
+                 "albedo": [0.8, 0.6, 0.3], "g": -0.3})
+    estimated = True
     requires = LAYERED_FILES
     params = (
         *METAL_PARAMS,          # material, or eta and k: the base's metal

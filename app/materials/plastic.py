@@ -11,6 +11,8 @@ from pathtrace.materials.optics import IOR, diffuse_fresnel_reflectance
 
 class Plastic(BSDFType):
     name = "plastic"
+    examples = ({"diffuse_reflectance": [0.7, 0.3, 0.1], "int_ior": 1.5},
+                {"diffuse_reflectance": 0.9, "nonlinear": True, "int_ior": "diamond"})
     params = (
         Param("diffuse_reflectance", "color", default=0.5, high=1.0, doc="the base's albedo",
               slot="p0.xyz"),
@@ -57,6 +59,9 @@ class Plastic(BSDFType):
 
 class RoughPlastic(Plastic):
     name = "roughplastic"
+    examples = ({"diffuse_reflectance": [0.7, 0.3, 0.1], "alpha": 0.1, "int_ior": 1.5},
+                {"diffuse_reflectance": [0.2, 0.9, 0.5], "alpha": 0.6, "nonlinear": True, "specular_reflectance": 0.7},
+                {"diffuse_reflectance": [0.7, 0.3, 0.1], "alpha": 0.2, "distribution": "beckmann"})
     params = Plastic.params + GGX_PARAMS + (DISTRIBUTION,)
     doc = ("a diffuse base under a rough (GGX or Beckmann) dielectric coating: the coating's glossy "
            "reflection plus the light it lets through to the base and back out")

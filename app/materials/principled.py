@@ -21,6 +21,14 @@ def eta_of_specular(specular):
 
 class Principled(BSDFType):
     name = "principled"
+    examples = ({"base_color": [0.8, 0.3, 0.1], "roughness": 0.3, "metallic": 0.4, "spec_tint": 0.6,
+                 "sheen": 0.8, "clearcoat": 0.9, "clearcoat_gloss": 0.7},
+                {"base_color": [0.95, 0.7, 0.3], "roughness": 0.5, "anisotropic": 0.8, "metallic": 1.0},
+                {"base_color": [0.9, 0.8, 0.6], "roughness": 0.2, "spec_trans": 0.8, "eta": 1.45},
+                {"base_color": [0.3, 0.6, 0.2], "roughness": 0.6, "spec_trans": 0.5, "metallic": 0.2,
+                 "specular": 0.7, "clearcoat": 0.5, "flatness": 0.6, "anisotropic": 0.4, "sheen": 0.5,
+                 "clearcoat_sampling_rate": 3.0, "diffuse_reflectance_sampling_rate": 0.5})
+    reciprocal = False
     params = (
         Param("base_color", "color", default=0.5, high=1.0, slot="p0.xyz",
               doc="the colour of the diffuse lobe, the metal, and the tints"),

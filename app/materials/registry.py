@@ -1,7 +1,9 @@
 """The registry of material types: each type's tag, and the kernels' dispatch (eval_bsdf,
 pdf_bsdf, sample_bsdf) generated from it. Adding a material takes its kernel file
-(kernels/bsdfs/<name>.cl), its host BSDFType (its parameters, packing and checks) and its entry
-here; the Mitsuba and pbrt readers map their formats' names onto it by hand."""
+(kernels/bsdfs/<name>.cl), its host BSDFType (its parameters, packing, checks and examples) and
+its entry here; the Mitsuba and pbrt readers map their formats' names onto it by hand. Its
+examples put it through tests/test_bsdfs.py (chi-square of its sampling against its
+pdf, the pdf's normalisation, the sample weight, reciprocity, energy) by its registration alone."""
 
 from pathtrace.materials.basic import Black, Diffuse, Null, Phong
 from pathtrace.materials.blend import BlendBSDF

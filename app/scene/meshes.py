@@ -82,7 +82,7 @@ class MeshFiles:
 
     Only files of LARGE bytes or more are read ahead: NumPy releases the interpreter's lock in
     each operation on an array, and a small file's reading is hundreds of short ones, whose lock
-    handovers between threads cost more than another core gives (docs/performance.md,
+    handovers between threads cost more than another core gives (docs/notes/performance-2026-11.md,
     2026-11-28)."""
 
     LARGE = 512 << 10

@@ -133,6 +133,12 @@ class Bitmap(TextureType):
     doc = ("an image file (PNG, JPEG, TGA, BMP: 8-bit sRGB unless raw; HDR, EXR, PFM: linear), "
            "with wrap mode repeat, mirror or clamp and filter bilinear or nearest")
     defaults = {"wrap": "repeat", "filter": "bilinear"}
+    # repeat wrap: a bilinear lookup's mean over the unit square is then its texels' mean
+    examples = ({"image": Image(np.array([[[255, 0, 0], [0, 255, 0], [0, 0, 255]],
+                                          [[255, 255, 255], [128, 64, 32], [0, 0, 0]]], np.uint8))},
+                {"image": Image(np.array([[[0.5], [3.0]], [[40.0], [0.0]]], np.float32), linear=True),
+                 "filter": "nearest", "wrap": "mirror"},
+                {"image": Image(np.array([[[10, 200, 30, 255], [90, 0, 250, 128]]], np.uint8), linear=True)})
 
     def complete(self, params):
         values = super().complete(params)

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from pathtrace.textures.texture import TextureType, input_bounds, input_mean
+from pathtrace.textures.texture import Texture, TextureType, input_bounds, input_mean
 
 
 class Checkerboard(TextureType):
@@ -10,6 +10,8 @@ class Checkerboard(TextureType):
     doc = "color0 and color1 in alternating squares of the unit of uv (Mitsuba 3's checkerboard)"
     inputs = ("color0", "color1")
     defaults = {"color0": 0.4, "color1": 0.2}     # Mitsuba 3's
+    examples = ({}, {"color0": [0.9, 0.1, 0.2], "color1": 0.3, "to_uv": np.diag([4.0, 2.0, 1.0])},
+                {"color0": Texture("constant", {"value": [0.1, 0.7, 0.3]}), "color1": [1.5, 0.0, 0.25]})
 
     def mean(self, texture):
         return (input_mean(texture.params["color0"]) + input_mean(texture.params["color1"])) / 2

@@ -9,6 +9,7 @@ class Constant(TextureType):
     name = "constant"
     doc = "one colour everywhere"
     defaults = {"value": 1.0}
+    examples = ({"value": [0.2, 0.5, 0.9]}, {"value": 3.5})
 
     def complete(self, params):
         values = super().complete(params)

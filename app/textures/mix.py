@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from pathtrace.textures.texture import TextureType, input_bounds, input_mean
+from pathtrace.textures.texture import Texture, TextureType, input_bounds, input_mean
 
 
 class Mix(TextureType):
@@ -10,6 +10,9 @@ class Mix(TextureType):
     doc = "(1 - amount) tex1 + amount tex2 (pbrt-v4's mix; amount's first channel)"
     inputs = ("tex1", "tex2", "amount")
     defaults = {"tex1": 0.0, "tex2": 1.0, "amount": 0.5}   # pbrt-v4's
+    examples = ({"tex1": Texture("checkerboard", {}), "tex2": [0.1, 0.9, 0.4], "amount": 0.6},
+                {"tex1": 0.2, "tex2": Texture("checkerboard", {"to_uv": np.diag([3.0, 3.0, 1.0])}), "amount": 0.25},
+                {"tex1": [0.8, 0.4, 0.1], "tex2": 0.0, "amount": Texture("checkerboard", {"color0": 0.9, "color1": 0.1})})
 
     def mean(self, texture):
         a = float(input_mean(texture.params["amount"])[0])

@@ -1,7 +1,9 @@
 """The registry of texture types: each type's tag, and the kernels' dispatch (eval_leaf_texture,
 eval_input, eval_combined, eval_texture) generated from it. Adding a texture type takes its
-kernel file (kernels/textures/<name>.cl), its host class (a TextureType: its inputs, pack, mean
-and bounds) and its entry here; a scene reader that has a name for it maps it by hand."""
+kernel file (kernels/textures/<name>.cl), its host class (a TextureType: its inputs, pack, mean,
+bounds and examples) and its entry here; a scene reader that has a name for it maps it by hand.
+Its examples put it through tests/test_texture_conformance.py (the kernel's values against its
+mean and bounds) by its registration alone."""
 
 from pathtrace.textures.bitmap import Bitmap
 from pathtrace.textures.checkerboard import Checkerboard

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from pathtrace.textures.texture import TextureType, input_bounds, input_mean
+from pathtrace.textures.texture import Texture, TextureType, input_bounds, input_mean
 
 
 class Scale(TextureType):
@@ -10,6 +10,8 @@ class Scale(TextureType):
     doc = "tex times scale (pbrt-v4's scale)"
     inputs = ("tex", "scale")
     defaults = {"tex": 1.0, "scale": 1.0}
+    examples = ({"tex": [0.5, 0.25, 1.0], "scale": Texture("checkerboard", {"color0": 2.0, "color1": 0.5})},
+                {"tex": Texture("checkerboard", {"color0": [0.9, 0.1, 0.2], "color1": 0.3}), "scale": [2.0, 0.5, 1.0]})
 
     def mean(self, texture):
         # exact where either input is constant; otherwise an estimate that is 0 only where the

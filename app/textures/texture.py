@@ -103,6 +103,11 @@ class TextureType:
     doc: str = ""
     inputs: tuple = ()
     defaults: dict = {}
+    # parameter sets that the conformance suite (tests/test_texture_conformance.py) evaluates in
+    # the kernel against mean and bounds; an input may be a Texture of other parameters, which
+    # the suite completes. Each type declares its own, one at least, where its mean is exact
+    # (a combining type's mean is an estimate where two of its inputs vary together)
+    examples: tuple = ()
 
     @property
     def leaf(self) -> bool:

@@ -11,8 +11,8 @@
  *
  * Sampled by visible normals of either distribution: the weight f cos / pdf is
  * F(wo.h) G1(wi, h). One-sided. Beckmann's code is compiled only into the programs of scenes
- * that have it (BECKMANN, app/materials/conductor.py): the branch cost scenes of GGX metals
- * 3-6 % on an H100. */
+ * that have it (BECKMANN, app/materials/conductor.py): as a branch it cost scenes of GGX metals
+ * time (docs/notes/performance-2026-11.md, 2026-11-24: Beckmann microfacets). */
 
 #ifdef BECKMANN
 #define IS_BECKMANN(m) ((m)->p2.w > 0.5f)

@@ -21,8 +21,8 @@
  * accurate computation of 2x2 determinants", Math. Comp. 82, 2013). So its sign is exact, and it
  * is zero only where the exact value is (products above the float range's 1e-38, where
  * underflow would lose the error term): what the paper's fallback to double precision gave,
- * without doubles (1-3.5 % faster on the H100's triangle scenes, docs/performance.md,
- * 2026-11-27). Its products must not be contracted: FP_CONTRACT is off here. */
+ * without doubles, which is faster (docs/notes/performance-2026-11.md, 2026-11-27: the edge
+ * function without doubles). Its products must not be contracted: FP_CONTRACT is off here. */
 float edge_function(float ax, float ay, float bx, float by)
 {
     float q = ay * bx;

@@ -34,8 +34,8 @@
 
 /* A texel coordinate x of an image n texels wide brought into [0, n) by the wrap mode. x lies
  * in [-1, 2n]: eval_bitmap first brings uv into one period of the wrap in floating point, so
- * that no integer division is needed (with remainders of arbitrary coordinates the textured
- * teapot bench took 11 % longer on the H100). */
+ * that no integer division is needed, which is slow on GPUs (docs/notes/performance-2026-11.md, 2026-11-24:
+ * textures). */
 int wrap_texel(int x, int n, int wrap)
 {
     if (wrap == WRAP_CLAMP)
@@ -49,8 +49,8 @@ int wrap_texel(int x, int n, int wrap)
 
 /* Texel i of an image of `channels` values per texel (1 or 4) as rgb, in one aligned load (an
  * rgb image is stored as rgba: a quarter more memory than three separate loads of its values
- * take, for one branch-free load; the textured teapot bench measured the same on the H100 both
- * ways, 2.8 s). */
+ * take, for one branch-free load, which was no slower: docs/notes/performance-2026-11.md, 2026-11-24:
+ * textures). */
 float3 read_texel(const SceneData *sc, const global Texture *t, size_t i)
 {
     const global uchar *texels = sc->texels + (size_t)t->texels * 4;
