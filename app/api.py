@@ -342,7 +342,8 @@ def denoise(image: np.ndarray, albedo: np.ndarray = None, normal: np.ndarray = N
 def _rgb(name: str, image, shape=None) -> np.ndarray:
     """An (H, W, 3) float32 array from an image argument; (H, W) is taken as grey."""
     try:
-        a = np.asarray(image, np.float32)
+        with np.errstate(over="ignore"):          # beyond float32: infinite, refused below
+            a = np.asarray(image, np.float32)
     except (TypeError, ValueError):
         raise UserError(f"{name}: give an (H, W, 3) or (H, W) array of numbers, got {short(image)}") from None
     if a.ndim == 2:
@@ -351,6 +352,13 @@ def _rgb(name: str, image, shape=None) -> np.ndarray:
         raise UserError(f"{name}: give an (H, W, 3) or (H, W) array, got shape {a.shape}")
     if shape is not None and a.shape != shape:
         raise UserError(f"{name}: its shape {a.shape} is not the image's {shape}")
+    bad = ~np.isfinite(a)
+    if bad.any():
+        # no display value for them, the denoiser spreads them over their neighbours as finite
+        # garbage, and pathtrace's readers refuse a file that holds them
+        y, x, _ = np.argwhere(bad)[0]
+        raise UserError(f"{name}: {int(bad.any(axis=-1).sum())} pixel(s) hold NaN or infinity (beyond float32), "
+                        f"the first at x={x}, y={y}")
     return np.ascontiguousarray(a)
 
 

@@ -220,6 +220,23 @@ def test_tonemap_write_and_show(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.exr", "a.png", "d.exr"]
 
 
+def test_images_with_nan_or_infinity_are_refused_naming_the_argument_and_pixel(tmp_path, recwarn):
+    image = np.zeros((4, 5, 3))
+    image[2, 3, 1] = np.nan
+    huge = np.zeros((4, 5))
+    huge[1, 0] = 1e39                         # finite in float64, infinite in float32
+    calls = {"image": [lambda: pathtrace.tonemap(image), lambda: pathtrace.write(tmp_path / "a.png", image),
+                       lambda: pathtrace.write(tmp_path / "a.exr", image), lambda: pathtrace.show(image),
+                       lambda: pathtrace.denoise(image)],
+             "albedo": [lambda: pathtrace.denoise(np.zeros((4, 5, 3)), albedo=image)]}
+    for name, bad in [(name, call) for name, group in calls.items() for call in group]:
+        with pytest.raises(UserError, match=rf"^{name}: 1 pixel\(s\) hold NaN or infinity .*, the first at x=3, y=2$"):
+            bad()
+    with pytest.raises(UserError, match=r"^image: 1 pixel\(s\) hold NaN or infinity .*, the first at x=0, y=1$"):
+        pathtrace.write(tmp_path / "b.exr", huge)
+    assert not list(tmp_path.iterdir()) and not recwarn.list        # nothing written, nothing from NumPy
+
+
 def test_denoise():
     scene = pathtrace.load("demo")
     out = pathtrace.render(scene, spp=2, size=(64, 36), device=DEVICE, aovs=("albedo", "normal"))

@@ -196,6 +196,28 @@ def test_bad_pbrt_instances_are_one_line(tmp_path, text, problem):
     assert problem in str(e.value) and "s.pbrt" in str(e.value) and "\n" not in str(e.value)
 
 
+@pytest.mark.parametrize("name,text,where", [
+    ("s.pbrt", 'Camera "perspective"\nWorldBegin\nObjectBegin "a"\n'
+     'Shape "trianglemesh" "point3 P" [0 0 0 1 0 0 0 1 0] "integer indices" [0 1 2]\nObjectEnd\n'
+     'Scale 1e-11 1e-11 1e-11\nObjectInstance "a"\n', "s.pbrt:7: "),
+    ("s.xml", '<scene version="3.0.0">\n<shape type="sphere"/>\n<shape type="shapegroup" id="g"><shape type="cube"/></shape>\n'
+     '<shape type="instance"><ref id="g"/><transform name="to_world"><scale value="1e-11"/></transform></shape>\n'
+     '</scene>', "s.xml:4: "),
+    ("s.toml", '[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = { type = "diffuse", rho_d = 0.5 }\n'
+     '[[objects.o.meshes]]\nvertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]\nfaces = [[0, 1, 2]]\n'
+     'material = { type = "diffuse", rho_d = 0.5 }\n[[instances]]\nobject = "o"\nscale = [1e-11, 1e-11, 1e-11]\n',
+     "s.toml: instances[0]: "),
+])
+def test_an_instance_too_near_singular_is_refused_where_the_file_gives_it(tmp_path, name, text, where):
+    # its determinant, 1e-33, is below instancing.MIN_DETERMINANT but its inverse is finite: the
+    # readers refuse it with the file's place, not the renderer with an instance's number
+    (tmp_path / name).write_text(text)
+    with pytest.raises(UserError) as e:
+        load_scene(str(tmp_path / name))
+    message = str(e.value)
+    assert where in message and "too near singular" in message and "1e-33" in message and "\n" not in message, message
+
+
 @pytest.mark.parametrize("body,problem", [
     ('<shape type="instance"><transform name="to_world"><translate x="1"/></transform></shape>', "shapegroup"),
     ('<shape type="shapegroup" id="g"><shape type="cube"/></shape>'

@@ -893,3 +893,49 @@ def test_the_title_names_the_scene_after_it_opens(display, backend, tmp_path):
     finally:
         v.glfw.set_window_title = set_title
         v.close()
+
+
+def _bad_scene_files(folder: Path) -> dict:
+    """What a user may type in the file field that opens no scene, each with a part of the one
+    line the panel must then show."""
+    (folder / "folder.toml").mkdir()
+    os.mkfifo(folder / "fifo.toml")           # reading one would block the window for ever
+    os.mkfifo(folder / "fifo.pbrt")
+    garbage = np.random.default_rng(61).integers(0, 256, 3000, np.uint8).tobytes()
+    for name in ("garbage.toml", "garbage.pbrt", "garbage.xml"):
+        (folder / name).write_bytes(garbage)
+    (folder / "radius.toml").write_text('[[spheres]]\ncenter = [0, 0, 0]\nradius = -1\n'
+                                        'material = { type = "diffuse", rho_d = 0.5 }\n')
+    (folder / "fov.pbrt").write_text('Camera "perspective" "float fov" "wide"\nWorldBegin\n')
+    with open(folder / "huge.pbrt", "wb") as f:   # sparse: 5 GB that take no disk
+        f.truncate(5 << 30)
+    return {"": "is empty", str(folder / "missing.toml"): "does not exist", str(folder / "folder.toml"): "not a regular file",
+            str(folder / "fifo.toml"): "not a regular file", str(folder / "fifo.pbrt"): "not a regular file",
+            str(folder / "garbage.toml"): "garbage.toml", str(folder / "garbage.pbrt"): "not a text file",
+            str(folder / "garbage.xml"): "not well-formed XML", str(folder / "radius.toml"): "spheres[0].radius: must be positive",
+            str(folder / "fov.pbrt"): "fov.pbrt:1: 'fov'", str(folder / "huge.pbrt"): "larger than",
+            "x" * 100_000: "File name too long", str(folder / "a\nb.toml"): "does not exist"}
+
+
+def test_the_file_field_shows_one_line_for_a_file_it_cannot_open_and_keeps_the_scene(viewer, tmp_path, capsys):
+    """Each bad path typed in the panel's file field and opened as its button opens it (the panel
+    sets requested_scene to the field's text, which the next frame opens through
+    Viewer.load_scene): one line in the panel, marked an error and printed once, never a
+    traceback nor a library's error, and the scene shown before renders on."""
+    settle(viewer)
+    before, p = viewer.renderer.scene, viewer.progressive
+    for path, expected in _bad_scene_files(tmp_path).items():
+        viewer.message, viewer.error = "", False
+        capsys.readouterr()
+        viewer.scene_file = path
+        viewer.requested_scene = viewer.scene_file            # app/viewer/panel.py, "open file"
+        frames(viewer, 1)
+        printed = capsys.readouterr().err
+        message = viewer.message
+        assert viewer.error and expected in message and "\n" not in message and len(message) < 400, (path[:80], message)
+        assert not message.startswith("cannot open"), message     # a library's error, not pathtrace's
+        assert printed == f"pathtrace: {message}\n", printed
+        assert viewer.renderer.scene is before and viewer.scene_file == path
+        passes = p.passes_done
+        frames_until(viewer, lambda: p.passes_done > passes, timeout=30)
+        assert p.passes_done > passes, f"the scene stopped rendering after {path[:80]!r}"

@@ -41,6 +41,8 @@ def load_scene(name_or_path: str) -> Scene:
 
 
 def _read_scene(name_or_path: str) -> Scene:
+    if not str(name_or_path).strip():     # Path("") is the current folder, which no reader means
+        raise UserError("no scene given: the scene's name or path is empty")
     path = Path(name_or_path)
     try:
         exists = path.exists()

@@ -8,7 +8,7 @@ import numpy as np
 
 from pathtrace.camera import Camera
 from pathtrace.environment import Environment
-from pathtrace.errors import warn
+from pathtrace.errors import UserError, warn
 from pathtrace.filters import PixelFilter
 from pathtrace.materials import NULL, TRANSMISSIVE, Material, MaterialTable
 from pathtrace.media import MediumInterface
@@ -197,14 +197,21 @@ class SceneBuilder:
         self.objects.append(SceneObject(name))
         return len(self.objects) - 1
 
-    def add_instance(self, obj: int, to_world: np.ndarray):
+    def add_instance(self, obj: int, to_world: np.ndarray, where: str = None):
         """An instance of object `obj` through the 4x4 world-from-object transform: its meshes
         drawn through it (Scene.instances), its spheres copied into the world, as spheres where
         the transform keeps them round, else as meshes of the ellipsoids it makes of them
-        (pbrt-v4 intersects a sphere in its object space)."""
+        (pbrt-v4 intersects a sphere in its object space). A reader gives `where` (its file and
+        line), which an error names; the API's instances are checked at render
+        (instances.check_instances)."""
+        from pathtrace.scene.instances import MIN_DETERMINANT, determinant, near_singular
         from pathtrace.scene.transform import transform_points
         m = np.asarray(to_world, np.float64)
         o = self.objects[obj]
+        if where is not None and o.meshes and near_singular(m):
+            raise UserError(f"{where}: the instance's transform is too near singular for pathtrace's instances "
+                            f"(the determinant of its 3x3 part is {determinant(m):.3g}; they need "
+                            f"at least {MIN_DETERMINANT:g} in magnitude)")
         if o.meshes:
             self.instance_object.append(obj)
             self.instance_to_world.append(m)

@@ -50,6 +50,25 @@ class Instances:
         return int(counts[self.object].sum()) if len(self.object) else 0
 
 
+# the least |determinant| of an instance's linear part: the traversal carries rays into the
+# object by the transform's inverse, stored in float32 (app/two_level.py, to_object), whose
+# entries grow as the determinant shrinks
+MIN_DETERMINANT = 1e-30
+
+
+def determinant(m: np.ndarray) -> float:
+    """The determinant of a 4x4 transform's 3x3 part, in Python floats: a reader calls it per
+    instance, where NumPy's det costs 10 times as much."""
+    (a, b, c, _), (d, e, f, _), (g, h, i, _) = m[:3].tolist()
+    return a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g)
+
+
+def near_singular(m: np.ndarray) -> bool:
+    """Whether a 4x4 world-from-object transform is too near singular for an instance (NaN
+    included)."""
+    return not abs(determinant(m)) >= MIN_DETERMINANT
+
+
 def check_instances(instances: Instances, materials) -> str | None:
     """A problem with the instances, or None: each object one of `objects`, none of its meshes
     emitting (the readers make them so; the API may not), each transform finite, affine and
@@ -63,7 +82,7 @@ def check_instances(instances: Instances, materials) -> str | None:
             return (f"mesh '{mesh.name}' of an instanced object emits; instances have no area lights "
                     "(as in pbrt-v4 and Mitsuba 3)")
     bad = ~np.all(np.isfinite(m), axis=(1, 2)) | np.any(m[:, 3] != (0, 0, 0, 1), axis=1)
-    bad[~bad] = np.abs(np.linalg.det(m[~bad, :3, :3])) < 1e-30
+    bad[~bad] = np.abs(np.linalg.det(m[~bad, :3, :3])) < MIN_DETERMINANT
     if np.any(bad):
         return f"instance {int(np.argmax(bad))}: its transform is not finite, affine and invertible"
     lo, hi = world_boxes(instances)

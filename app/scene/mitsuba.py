@@ -978,7 +978,8 @@ class _Reader:
         target = self.resolve(refs[0]) if refs and refs[0].tag == "ref" else refs[0] if refs else None
         if target is None or target.tag != "shape" or target.attrs.get("type") != "shapegroup":
             _fail(node, "needs a shapegroup (a <ref> to one)")
-        self.builder.add_instance(self.shapegroup(target), self.get(props, "to_world", np.eye(4), ("transform",)))
+        self.builder.add_instance(self.shapegroup(target), self.get(props, "to_world", np.eye(4), ("transform",)),
+                                  node.where())
 
     def shape(self, node, group: int = None):
         """A shape of the scene, or of the shapegroup whose object is `group`."""

@@ -643,7 +643,7 @@ class _Reader:
             name = inst.get("object")
             if name not in index:
                 self.fail(f"{where}.object", f"must name an entry of [objects], got {short(name)}")
-            builder.add_instance(index[name], self.transform(inst, where))
+            builder.add_instance(index[name], self.transform(inst, where), f"{self.label}: {where}")
 
     def inline_geometry(self, data, where):
         vertices, faces = data.get("vertices"), data.get("faces")

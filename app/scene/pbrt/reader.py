@@ -20,6 +20,7 @@ Instances (`ObjectBegin`/`ObjectInstance`) are the scene's objects and instances
 (app/scene/instances.py: a two-level BVH, or world-space copies where they are few); spheres in
 an object are copied into world space at each instance."""
 
+import gc
 import gzip
 import math
 import os
@@ -55,7 +56,7 @@ MAX_FILM = 16384
 # the most material rows one `power` area light's triangles take (PbrtReader.area_emission)
 MAX_POWER_ROWS = 256
 # a plymesh shape and its file name, as MeshFiles reads them ahead (PbrtReader.named_mesh_files)
-_PLYMESH = re.compile(r'\bShape\s+"plymesh"')
+_PLYMESH = re.compile(r'Shape\s+"plymesh"')
 _FILENAME = re.compile(r'"string\s+filename"\s*\[?\s*"([^"]*)"')
 
 
@@ -68,8 +69,9 @@ class GraphicsState:
     media: tuple = ("", "")               # MediumInterface: the inside and outside media's names
 
     def copy(self):
-        # not dataclasses.replace, which costs 25 us: an attribute block per shape is common
-        return GraphicsState(self.ctm.copy(), self.reverse, self.material, self.area_light, self.media)
+        # not dataclasses.replace, which costs 25 us: an attribute block per shape is common;
+        # the ctm shared, as the reader replaces it and never changes it in place
+        return GraphicsState(self.ctm, self.reverse, self.material, self.area_light, self.media)
 
 
 class PbrtReader:
@@ -115,8 +117,18 @@ class PbrtReader:
         self.dropped[1] += total
 
     def read(self) -> Scene:
-        with self.mesh_files:
-            self.parse_file(self.path, "scene")
+        # the cyclic garbage collector off while reading: a large file's tokens, parameters and
+        # graphics states all live until the scene is built, and the collections that their
+        # allocation sets off, each walking them all again, found nothing and took a third of
+        # the time of reading 100,000 small directives
+        collecting = gc.isenabled()
+        gc.disable()
+        try:
+            with self.mesh_files:
+                self.parse_file(self.path, "scene")
+        finally:
+            if collecting:
+                gc.enable()
         if self.dropped[0]:
             # pbrt-v4 keeps them, but its IntersectTriangle returns no intersection for a
             # triangle of zero area (src/pbrt/shapes.h), nor does its area light sample one
@@ -412,7 +424,7 @@ class PbrtReader:
         self.state = self.stack.pop()[1]
 
     def _transform_begin(self, tokens, offset):
-        self.stack.append(("transform", self.state.ctm.copy(), offset))
+        self.stack.append(("transform", self.state.ctm, offset))
 
     def _transform_end(self, tokens, offset):
         if not self.stack or self.stack[-1][0] != "transform":
@@ -596,7 +608,7 @@ class PbrtReader:
             return
         if self.objects[name] is None:
             self.make_object(name)
-        self.builder.add_instance(self.objects[name], self.state.ctm)
+        self.builder.add_instance(self.objects[name], self.state.ctm, tokens.where(offset))
 
     def make_object(self, name: str):
         """The object `name`, its shapes made now, each in the graphics state it was read in."""
