@@ -24,7 +24,7 @@ from pathtrace.resources import resource_dir
 # a scene has and their dispatch (app/lights/registry.py), its camera and pixel filter, the media
 # where it has them, the rest, and bidirectional path tracing where a render asks for it.
 BASIC_FILES = ("inlining.h", "types.h", "vector.cl", "color.cl", "rng.cl", "sampling.cl", "scene.cl")
-SHAPE_FILES = ("spawn.cl", "shapes/sphere.cl", "shapes/triangle.cl")
+SHAPE_FILES = ("spawn.cl", "transform.cl", "shapes/sphere.cl", "shapes/triangle.cl")
 BSDF_FILES = ("bsdf.cl", "fresnel.cl", "microfacet.cl", "coating.cl", "interface.cl", "phase.cl")
 MEDIA_FILES = ("media/homogeneous.cl", "volume.cl")
 LATER_FILES = ("integrator.cl", "aovs.cl", "display.cl")
@@ -39,7 +39,7 @@ CACHE_FORMAT = "2"
 def kernel_source(extra: str = "", features: Features = Features()) -> str:
     """The kernels as one source text, each file introduced by a #line marker so that compiler
     messages name the file and line."""
-    from pathtrace import camera, filters, lights
+    from pathtrace import camera, filters, lights, shapes
     from pathtrace.materials import dispatch_source, kernel_files, tag_source
     from pathtrace.textures import kernel_parts
 
@@ -47,7 +47,11 @@ def kernel_source(extra: str = "", features: Features = Features()) -> str:
     texts = [(name, (folder / name).read_text()) for name in BASIC_FILES]
     texts += [(name, text if text is not None else (folder / name).read_text())
               for name, text in kernel_parts(features.textures)]
-    files = (*SHAPE_FILES, *(("masks.cl",) if features.masks else ()), "bvh.cl", "frame.cl",
+    texts += [(name, (folder / name).read_text()) for name in (*SHAPE_FILES, *shapes.kernel_files(features.shapes))]
+    if features.shapes:
+        texts += [("app/shapes/registry.py: dispatch_source", shapes.dispatch_source(features.shapes)),
+                  ("shapes/analytic.cl", (folder / "shapes/analytic.cl").read_text())]
+    files = (*(("masks.cl",) if features.masks else ()), "bvh.cl", "frame.cl",
              *(("normal_maps.cl",) if features.normal_maps else ()),
              *(("shading.cl",) if features.textures else ()), *BSDF_FILES, *kernel_files(features.bsdfs))
     texts.append(("app/materials/registry.py: tag_source", tag_source()))

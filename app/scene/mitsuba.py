@@ -30,6 +30,7 @@ from pathtrace.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, orient_by_normals, unit_disk, vertex_normals
+from pathtrace.shapes import SHAPES, Shape
 from pathtrace.textures import TEXTURES, Texture, read_image
 
 MAX_XML_BYTES = 64 << 20
@@ -510,7 +511,7 @@ class _Reader:
                     continue                   # used where referenced
                 else:
                     warn(f"{node.where()}: not supported; pathtrace ignores it")
-        if not self.builder.spheres and not self.builder.meshes and not self.builder.instance_object:
+        if not (self.builder.spheres or self.builder.meshes or self.builder.shapes or self.builder.instance_object):
             raise UserError(f"{self.path}: the scene has no shapes pathtrace can render")
         self.warn_unread()
         settings = self.settings
@@ -1012,6 +1013,21 @@ class _Reader:
         interface = MediumInterface(media.get("interior", -1), media.get("exterior", -1)) if media else None
         m = self.get(props, "to_world", np.eye(4), ("transform",))
         name = node.attrs.get("id")
+        mapped = SHAPES[kind].from_mitsuba(lambda *a: self.get(props, *a)) if kind in SHAPES else None
+        if mapped is not None:
+            values, local, swap_uv, flip = mapped
+            problem = SHAPES[kind].check(values)
+            if problem:
+                _fail(node, f"the {kind}'s {problem}")
+            shape = Shape(name or f"{kind} {len(self.builder.shapes)}", kind, values, m @ local, material,
+                          flip=flip, swap_uv=swap_uv, media=interface)
+            if np.any(np.abs(np.array(shape.bounds(SHAPES[kind]))) > MAX_COORDINATE):
+                _fail(node, f"the {kind} reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace")
+            if group is not None:
+                self.builder.objects[group].shapes.append(shape)
+            else:
+                self.builder.add_shape(shape)
+            return
         if kind == "sphere":
             center = m[:3, :3] @ self.get(props, "center", np.zeros(3), ("point", "vector")) + m[:3, 3]
             scales = np.linalg.norm(m[:3, :3], axis=0)
