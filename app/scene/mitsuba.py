@@ -29,7 +29,7 @@ from pathtrace.materials.table import check_bump_map
 from pathtrace.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
-from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, orient_by_normals, unit_disk, vertex_normals
+from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, orient_by_normals, vertex_normals
 from pathtrace.shapes import SHAPES, Shape
 from pathtrace.textures import TEXTURES, Texture, read_image
 
@@ -1052,8 +1052,6 @@ class _Reader:
             uvs = (vertices[:, :2] + 1) / 2             # Mitsuba's: (0, 0) at (-1, -1)
         elif kind == "cube":
             vertices, faces, uvs = _cube()
-        elif kind == "disk":
-            vertices, faces, uvs = unit_disk()
         elif kind in ("obj", "ply"):
             filename = self.get(props, "filename", kinds=("string",))
             if filename is None:

@@ -41,7 +41,7 @@ from pathtrace.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.meshes import (ELLIPSOID_RINGS, MAX_COORDINATE, MeshFiles, check_mesh, ellipsoid, is_similarity,
-                                     orient_by_normals, unit_disk, vertex_normals)
+                                     orient_by_normals, vertex_normals)
 from pathtrace.scene.pbrt.equal_area import to_latlong, upper_illuminance
 from pathtrace.scene.pbrt.materials import MaterialMapper, make, spectrum_rgb
 from pathtrace.textures import Texture
@@ -798,16 +798,6 @@ class PbrtReader:
                 if params.type_of(name):
                     params.get(name, (params.type_of(name),), 0)
                     warn(f"{params.where(name)}: pathtrace does not displace meshes; ignored")
-        elif kind == "disk":
-            radius = params.float("radius", 1.0)
-            if radius <= 0:
-                params.fail("radius", f"must be positive, got {radius:g}")
-            if params.float("innerradius", 0.0) != 0 or params.float("phimax", 360.0) != 360:
-                warn(f"{where}: pathtrace's disks are whole; innerradius and phimax are ignored")
-            vertices, faces, uvs = unit_disk()
-            vertices = vertices * [radius, radius, 1.0]
-            vertices[:, 2] = params.float("height", 0.0)
-            uvs = None
         elif kind == "loopsubdiv":
             vertices, faces = self.indexed_polygons(params, kind, 3, where)
             params.int("levels", 3)
