@@ -24,7 +24,7 @@ from pathtrace.resources import resource_dir
 # a scene has and their dispatch (app/lights/registry.py), its camera and pixel filter, the media
 # where it has them, the rest, and bidirectional path tracing where a render asks for it.
 BASIC_FILES = ("inlining.h", "types.h", "vector.cl", "color.cl", "rng.cl", "sampling.cl", "scene.cl")
-SHAPE_FILES = ("spawn.cl", "transform.cl", "shapes/sphere.cl", "shapes/triangle.cl")
+SHAPE_FILES = ("spawn.cl", "shapes/sphere.cl", "shapes/triangle.cl")
 BSDF_FILES = ("bsdf.cl", "fresnel.cl", "microfacet.cl", "coating.cl", "interface.cl", "phase.cl")
 MEDIA_FILES = ("media/homogeneous.cl", "volume.cl")
 LATER_FILES = ("integrator.cl", "aovs.cl", "display.cl")
@@ -47,14 +47,17 @@ def kernel_source(extra: str = "", features: Features = Features()) -> str:
     texts = [(name, (folder / name).read_text()) for name in BASIC_FILES]
     texts += [(name, text if text is not None else (folder / name).read_text())
               for name, text in kernel_parts(features.textures)]
-    texts += [(name, (folder / name).read_text()) for name in (*SHAPE_FILES, *shapes.kernel_files(features.shapes))]
+    texts.append(("app/materials/registry.py: tag_source", tag_source()))
+    # the transforms of instances and analytic shapes, where the scene has either
+    moved = ("transform.cl",) if features.shapes or features.instance_stack else ()
+    texts += [(name, (folder / name).read_text())
+              for name in (*SHAPE_FILES, *moved, *shapes.kernel_files(features.shapes))]
     if features.shapes:
         texts += [("app/shapes/registry.py: dispatch_source", shapes.dispatch_source(features.shapes)),
                   ("shapes/analytic.cl", (folder / "shapes/analytic.cl").read_text())]
     files = (*(("masks.cl",) if features.masks else ()), "bvh.cl", "frame.cl",
              *(("normal_maps.cl",) if features.normal_maps else ()),
              *(("shading.cl",) if features.textures else ()), *BSDF_FILES, *kernel_files(features.bsdfs))
-    texts.append(("app/materials/registry.py: tag_source", tag_source()))
     texts += [(name, (folder / name).read_text()) for name in files]
     texts.append(("app/materials/registry.py: dispatch_source", dispatch_source(features.bsdfs)))
     parts = [("environment.cl", None), *lights.kernel_parts(features.lights, features.light_tree, bool(features.bdpt)),
