@@ -21,12 +21,14 @@ from pathtrace.camera import Camera
 from pathtrace.environment import Environment
 from pathtrace.errors import UserError, cut, short, warn
 from pathtrace.filters import FILTERS, PixelFilter
-from pathtrace.lights import DELTA_LIGHTS, DirectionalLight, PointLight, SpotLight
+from pathtrace import parameters
+from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.blend import check_blend, transmits
 from pathtrace.materials.bsdf import LUMINANCE, constant_of
 from pathtrace.materials.table import check_bump_map
 from pathtrace.media import Medium, MediumInterface
+from pathtrace.parameters import FRAME
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, orient_by_normals, unit_disk, vertex_normals
@@ -37,6 +39,7 @@ MAX_ELEMENTS = 1_000_000   # in a file and its includes together, as MAX_XML_BYT
 MAX_NESTING = 64           # elements inside elements (a Mitsuba scene needs a handful)
 MAX_INCLUDE_DEPTH = 8
 MAX_FILM = 16384
+LIGHTS_BY_NAME = parameters.by_format(DELTA_LIGHTS.values(), "mitsuba")
 
 
 @dataclass
@@ -686,35 +689,47 @@ class _Reader:
             self.environment = Environment.from_file(node.file.parent / name, scale,
                                                      self.envmap_rotation(node, props),
                                                      where=node.where())
-        elif kind in DELTA_LIGHTS:
+        elif kind in LIGHTS_BY_NAME:
             self.lights.append(self.delta_light(node, kind, props))
         else:
             warn(f"{node.where()}: pathtrace has no {kind} emitters; it ignores this one")
             props.ignore()
 
     def delta_light(self, node, kind, props):
-        """A point, spot or directional emitter, placed as Mitsuba places it: a point's
-        `position` or its to_world's origin; a spot's to_world (it shines along local +z); a
-        directional's `direction` or its to_world's +z."""
+        """A delta light of pathtrace.lights by its declared Mitsuba names; a point or vector
+        that the emitter places by its to_world (app/parameters.py: FRAME) is to_world's origin
+        or +z, where Mitsuba's point, spot and directional emitters shine along local +z."""
+        cls = LIGHTS_BY_NAME[kind]
         m = self.get(props, "to_world", np.eye(4), ("transform",))
-        if kind == "point":
-            position = self.get(props, "position", m[:3, 3], ("point", "vector"))
-            light = PointLight(position, self.color(props, "intensity", 1.0, textures=False))
-        elif kind == "spot":
-            light = SpotLight(m[:3, 3], m[:3, :3] @ [0, 0, 1.0], self.color(props, "intensity", 1.0, textures=False),
-                              self.get(props, "cutoff_angle", 20.0, ("float",)),
-                              self.get(props, "beam_width", None, ("float",)))
-            if "texture" in props:
-                warn(f"{props['texture'].where()}: pathtrace's spot lights have no texture; ignored")
-        else:
-            direction = self.get(props, "direction", m[:3, :3] @ [0, 0, 1.0], ("vector", "point"))
-            light = DirectionalLight(direction, self.color(props, "irradiance", 1.0, textures=False))
+        frame = {"point": m[:3, 3], "vector": m[:3, :3] @ [0, 0, 1.0]}
+        values = parameters.read(cls.parameters, "mitsuba", lambda p, name: self.parameter(props, p, name))
+        kinds = {p.name: p.kind for p in cls.parameters}
+        values = {k: frame[kinds[k]] if v is FRAME else v for k, v in values.items()}
+        for name, why in cls.unsupported.get("mitsuba", {}).items():
+            if name in props:
+                warn(f"{props[name].where()}: {why}; ignored")
         try:
-            light.check()
+            return cls.from_values(values)
         except ValueError as e:
             field, problem = str(e).split(": ", 1)
             _fail(props.get(field, node), f"{field}: {problem}")
-        return light
+
+    def parameter(self, props, p, name):
+        """The value of the declared parameter p (app/parameters.py) that the property `name`
+        gives, by p's kind; None where the element has no such property."""
+        if name not in props:
+            return None
+        if p.kind == "color":
+            return self.color(props, name, None, textures=p.texture)
+        c = props[name]
+        target = self.resolve(c) if c.tag == "ref" else c
+        if p.texture and target.tag == "texture":
+            return self.texture(target)
+        kinds = {"number": ("float",), "integer": ("integer",), "bool": ("boolean",), "string": ("string",),
+                 "name": ("string",), "point": ("point", "vector"), "vector": ("vector", "point")}[p.kind]
+        if p.kind == "number" and getattr(p, "names", None) and target.tag == "string":
+            kinds = ("string",)          # a named value (an IOR's name), which the type resolves
+        return self.get(props, name, kinds=kinds)
 
     def envmap_rotation(self, node, props):
         """pathtrace's rotation about +y for a Mitsuba envmap's to_world: Mitsuba puts the map's
