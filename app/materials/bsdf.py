@@ -2,7 +2,7 @@
 where Mitsuba has the material), their checks, and how they pack into the MATERIAL struct that
 its kernel file kernels/bsdfs/<name>.cl reads (which documents the packed layout at its top)."""
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -83,6 +83,13 @@ class BSDFType:
                                   # directions, but not eval cos / pdf draw by draw
     estimated: bool = False   # eval and pdf are stochastic estimates (pbrt-v4's LayeredBxDF):
                               # sampling is checked against them by albedo, not bin by bin
+
+    def __init_subclass__(cls, **kwargs):
+        """A type that Mitsuba 3 has takes its parameters by pathtrace's names there too (pathtrace
+        follows Mitsuba's), except where a parameter names its own."""
+        super().__init_subclass__(**kwargs)
+        if "mitsuba" in cls.formats:
+            cls.params = tuple(replace(p, mitsuba=p.mitsuba or p.name) for p in cls.params)
 
     def resolve(self, values: dict) -> dict:
         """Turns names into the numbers they stand for (a named IOR; a "name" parameter, in the

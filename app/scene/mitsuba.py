@@ -40,6 +40,7 @@ MAX_NESTING = 64           # elements inside elements (a Mitsuba scene needs a h
 MAX_INCLUDE_DEPTH = 8
 MAX_FILM = 16384
 LIGHTS_BY_NAME = parameters.by_format(DELTA_LIGHTS.values(), "mitsuba")
+BSDFS_BY_NAME = parameters.by_format(BSDFS.values(), "mitsuba")
 
 
 @dataclass
@@ -797,15 +798,7 @@ class _Reader:
             return m
         if kind in ("bumpmap", "normalmap"):
             return self.mapped_material(node, kind, props)
-        if kind == "null":
-            return Material("null")
-        if kind == "diffuse":
-            rho = self.color(props, "reflectance", 0.5)
-            if np.any(constant_of(rho, "color", Texture.maximum) > 1):
-                _fail(props["reflectance"], "a reflectance must lie in [0, 1]")
-            return Material("diffuse", {"rho_d": rho})
-        if kind in ("conductor", "roughconductor", "dielectric", "roughdielectric", "thindielectric", "plastic",
-                    "roughplastic", "principled"):
+        if kind in BSDFS_BY_NAME:
             return self.mitsuba_material(node, kind, props)
         albedo = self.color(props, "base_color", None, False) if "base_color" in props else \
             self.color(props, "reflectance", 0.5, False) if "reflectance" in props else np.full(3, 0.5)
@@ -884,36 +877,16 @@ class _Reader:
         return value if isinstance(value, Texture) else float(np.dot(value, LUMINANCE))
 
     def mitsuba_material(self, node, kind, props):
-        """The types that share Mitsuba's parameter names (app/materials)."""
-        bsdf = BSDFS[kind]
-        values = {}
-        for p in bsdf.params:
-            if p.name not in props:
-                continue
-            if p.kind == "color":
-                values[p.name] = self.color(props, p.name, p.default)
-            elif p.kind == "bool":
-                values[p.name] = self.get(props, p.name, kinds=("boolean",))
-            elif p.kind == "name":
-                values[p.name] = self.get(props, p.name, kinds=("string",))
-            else:
-                c = props[p.name]
-                target = self.resolve(c) if c.tag == "ref" else c
-                values[p.name] = c.attrs.get("value") if c.tag == "string" else \
-                    self.texture(target) if target.tag == "texture" else self.get(props, p.name, kinds=("float",))
-        if kind.startswith("rough"):
-            values.setdefault("distribution", "beckmann")             # Mitsuba's default
-        anisotropic = any(p.name == "alpha_v" for p in bsdf.params)
-        if anisotropic and ("alpha_v" in props or "alpha_u" in props):
-            # Mitsuba's anisotropic roughness: alpha_u (pathtrace's alpha) and alpha_v, both
-            # required (its MicrofacetDistribution refuses one without the other)
+        """A material type of pathtrace's that Mitsuba 3 has, by its declared Mitsuba names
+        (app/materials); Mitsuba's anisotropic roughness is alpha_u (pathtrace's alpha) and
+        alpha_v, both required (its MicrofacetDistribution refuses one without the other)."""
+        bsdf = BSDFS_BY_NAME[kind]
+        values = parameters.read(bsdf.params, "mitsuba", lambda p, name: self.parameter(props, p, name))
+        if any(p.name == "alpha_v" for p in bsdf.params) and ("alpha_v" in values or "alpha_u" in props):
             if "alpha" in props or "alpha_u" not in props or "alpha_v" not in props:
                 _fail(node, "give alpha, or alpha_u and alpha_v, not a mixture")
-            c = props["alpha_u"]
-            target = self.resolve(c) if c.tag == "ref" else c
-            values["alpha"] = self.texture(target) if target.tag == "texture" else \
-                self.get(props, "alpha_u", kinds=("float",))
-        if kind.startswith("rough"):
+            values["alpha"] = self.parameter(props, next(p for p in bsdf.params if p.name == "alpha"), "alpha_u")
+        if "distribution" in values:
             props.get("sample_visible")      # pathtrace samples visible normals always (kernels/microfacet.cl)
         for p in bsdf.params:        # the range of what the file gave (the TOML reader's Param bounds)
             if p.kind in ("name", "bool") or p.name not in values or isinstance(values[p.name], str):
@@ -922,12 +895,12 @@ class _Reader:
             high = np.asarray(constant_of(values[p.name], p.kind, Texture.maximum), np.float64)
             if np.any(low < p.low) or (p.high is not None and np.any(high > p.high)):
                 bound = f"[{p.low}, {p.high}]" if p.high is not None else f"at least {p.low}"
-                _fail(props.get(p.name, node), f"{p.name} must lie in {bound}")
+                _fail(props.get(p.mitsuba, node), f"{'an' if p.mitsuba[0] in 'aeiou' else 'a'} {p.mitsuba} must lie in {bound}")
         try:
             values = bsdf.complete(values)
         except ValueError as e:
             _fail(node, str(e))
-        return Material(kind, values)
+        return Material(bsdf.name, values)
 
     # -- media --
 
@@ -951,20 +924,17 @@ class _Reader:
         props.get("has_spectral_extinction")    # spectral variants' choice; pathtrace is RGB
         if not self.get(props, "sample_emitters", True, ("boolean",)):
             warn(f"{props['sample_emitters'].where()}: pathtrace samples emitters in every medium")
-        scale = self.get(props, "scale", 1.0, ("float",))
-        g = 0.0
+        values = parameters.read(Medium.parameters, "mitsuba", lambda p, name: self.parameter(props, p, name))
         for phase in (c for c in node.children if c.tag == "phase"):
             phase_props = self.properties(phase)
             if phase.attrs.get("type") == "hg":
-                g = self.get(phase_props, "g", 0.8, ("float",))     # Mitsuba 3's default
+                values["g"] = self.get(phase_props, "g", 0.8, ("float",))     # Mitsuba 3's default
             elif phase.attrs.get("type") != "isotropic":
                 phase_props.ignore()
                 warn(f"{phase.where()}: pathtrace has no {phase.attrs.get('type')} phase function; "
                      "it scatters isotropically instead")
         try:
-            medium = Medium.from_albedo(node.attrs.get("id") or f"medium {len(self.media)}",
-                                        self.color(props, "sigma_t", 1.0, False) * scale,
-                                        self.color(props, "albedo", 0.75, False), g)
+            medium = Medium.from_values(node.attrs.get("id") or f"medium {len(self.media)}", values)
         except ValueError as e:
             field, problem = str(e).split(": ", 1)
             _fail(props.get(field, node), f"{field}: {problem}")

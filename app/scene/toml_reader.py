@@ -372,24 +372,15 @@ class _Reader:
         return cam
 
     def medium(self, data, where) -> Medium:
-        """One [media] table: sigma_a and sigma_s (pbrt-v4's), or sigma_t and albedo (Mitsuba
-        3's), each times `scale`, and the phase function's g."""
-        self.table(data, where, {"sigma_a", "sigma_s", "sigma_t", "albedo", "scale", "g"})
-        pbrt, mitsuba = {"sigma_a", "sigma_s"} & set(data), {"sigma_t", "albedo"} & set(data)
-        if pbrt and mitsuba:
-            self.fail(where, "give either sigma_a and sigma_s, or sigma_t and albedo, not both")
-        scale = self.number(data, "scale", where, default=1.0, low=0.0)
-        g = self.number(data, "g", where, default=0.0)
-        name = where.split(".", 1)[1]
+        """One [media] table, by Medium's declared parameters."""
+        self.table(data, where, {p.name for p in Medium.parameters})
+        values = parameters.read(Medium.parameters, "toml",
+                                 lambda p, name: self.parameter(data, p, where) if name in data else None)
         try:
-            if mitsuba:
-                return Medium.from_albedo(name, self.color(data, "sigma_t", where, default=1.0) * scale,
-                                          self.color(data, "albedo", where, default=0.75, high=1.0), g)
-            return Medium.checked(name, self.color(data, "sigma_a", where, default=1.0) * scale,
-                                  self.color(data, "sigma_s", where, default=1.0) * scale, g)
+            return Medium.from_values(where.split(".", 1)[1], values)
         except ValueError as e:
-            field, problem = str(e).split(": ", 1)
-            self.fail(f"{where}.{field}", problem)
+            field, sep, problem = str(e).partition(": ")
+            self.fail(f"{where}.{field}", problem) if sep else self.fail(where, str(e))
 
     def medium_row(self, data, key, where) -> int:
         """The row of the medium `key` names ([media]), -1 where the key is absent (vacuum)."""

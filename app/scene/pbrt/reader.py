@@ -512,11 +512,9 @@ class PbrtReader:
             if params.type_of(emission):
                 warn(f"{params.where(emission)}: pathtrace's media do not emit; ignored")
                 params.get(emission, (params.type_of(emission),), 0)
-        scale = params.float("scale", 1.0)
+        values = declared.read(Medium.parameters, "pbrt", lambda p, name: self.mapper.parameter(params, p, name))
         try:
-            self.media[row] = Medium.checked(name, spectrum_rgb(params, "sigma_a", 1.0, "unbounded") * scale,
-                                             spectrum_rgb(params, "sigma_s", 1.0, "unbounded") * scale,
-                                             params.float("g", 0.0))
+            self.media[row] = Medium.from_values(name, values)
         except ValueError as e:
             field, problem = str(e).split(": ", 1)
             if field in params.params:
