@@ -18,8 +18,10 @@ from typing import Callable
 #   color    rgb: a number (grey) or three, or a spectrum (pbrt-v4's and Mitsuba 3's spectra,
 #            converted as `spectrum` says); a texture too where `texture` is set;
 #   point    a position, transformed by the element's frame (Mitsuba's to_world, pbrt's CTM);
-#   vector   a direction, transformed likewise.
-KINDS = ("number", "integer", "bool", "string", "name", "color", "point", "vector")
+#   vector   a direction, transformed likewise;
+#   image    an image file, named relative to the scene file, which the reader reads
+#            (app/textures/bitmap.py: read_image) into an Image.
+KINDS = ("number", "integer", "bool", "string", "name", "color", "point", "vector", "image")
 FORMATS = ("toml", "mitsuba", "pbrt")
 # how a spectrum becomes rgb (app/spectra.py): a reflectance (bounded by 1), an illuminant
 # (luminance 1, as pbrt-v4 normalises a light's spectrum) or unbounded (an IOR: its mean)

@@ -141,6 +141,8 @@ class MaterialMapper:
             return self.texture_input(params, name, None, p.kind == "number")
         if p.kind == "color":
             return spectrum_rgb(params, name, None, p.spectrum)
+        if p.kind == "image":
+            return read_image(self.reader.resolve(params.string(name)), params.where(name), False, self.images)
         read = {"number": params.float, "integer": params.int, "bool": params.bool, "string": params.string,
                 "name": params.string, "point": params.point, "vector": params.point}[p.kind]
         return read(name)
