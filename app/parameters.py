@@ -3,7 +3,7 @@ format, in Mitsuba 3 and in pbrt-v4 (any but the first may be absent), its kind,
 conversion from each format, and its one-line documentation. The three scene readers read a type's
 parameters through these declarations (each reading a kind in its own syntax), and the parameter
 tables of docs/scene-format.md, docs/mitsuba.md and docs/pbrt.md are generated from them
-(parameter_table; scripts/scene_format_tables.py writes them, tests/test_parameters.py keeps them in
+(parameter_table; app/scene/format_tables.py writes them, tests/test_parameters.py keeps them in
 step).
 
 This module imports nothing of pathtrace's, so that any type's host module may import it (the
