@@ -26,7 +26,7 @@ def _types(kind: str) -> list:
         return [(c.name, c.formats, " ".join(sys.modules[c.__module__].__doc__.split()), c.parameters)
                 for c in DELTA_LIGHTS.values()]
     if kind == "materials":
-        return [(b.name, b.formats, b.doc, b.params) for b in BSDFS.values() if b.params]
+        return [(b.name, b.formats, b.doc, b.params + b.format_only) for b in BSDFS.values() if b.params]
     if kind == "media":
         return [("homogeneous", Medium.formats, "", Medium.parameters)]
     raise ValueError(f"no parameter tables of {kind!r}")
