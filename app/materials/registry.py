@@ -23,8 +23,12 @@ TAGS = {name: i for i, name in enumerate(BSDFS)}
 
 
 def tag_source() -> str:
-    """The BSDF_<NAME> tags of every type, which the kernel files may name."""
-    return "".join(f"#define BSDF_{name.upper()} {TAGS[name]}\n" for name in BSDFS)
+    """The BSDF_<NAME> tags of every type, which the kernel files may name, and the accessors of
+    each type's parameters in the MATERIAL slots its host declares (Param.slot), <TYPE>_<PARAM>(m),
+    so that the slots are defined once, on the host."""
+    tags = "".join(f"#define BSDF_{name.upper()} {TAGS[name]}\n" for name in BSDFS)
+    return tags + "".join(f"#define {name.upper()}_{p.name.upper()}(m) ((m)->{p.slot})\n"
+                          for name, b in BSDFS.items() for p in b.params if p.slot)
 
 
 def dispatch_source(names=None) -> str:
