@@ -1001,9 +1001,11 @@ class _Reader:
         interface = MediumInterface(media.get("interior", -1), media.get("exterior", -1)) if media else None
         m = self.get(props, "to_world", np.eye(4), ("transform",))
         name = node.attrs.get("id")
-        mapped = SHAPES[kind].from_mitsuba(lambda *a: self.get(props, *a)) if kind in SHAPES else None
-        if mapped is not None:
-            values, local, swap_uv, flip = mapped
+        if kind in SHAPES:
+            values = {p.mitsuba: self.parameter(props, p, p.mitsuba) for p in SHAPES[kind].mitsuba_parameters}
+            values = {p.mitsuba: p.mitsuba_default if values[p.mitsuba] is None else values[p.mitsuba]
+                      for p in SHAPES[kind].mitsuba_parameters}
+            values, local, swap_uv, flip = SHAPES[kind].from_mitsuba(values, m)
             problem = SHAPES[kind].check(values)
             if problem:
                 _fail(node, f"the {kind}'s {problem}")

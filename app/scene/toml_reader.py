@@ -551,7 +551,8 @@ class _Reader:
         k = SHAPES[kind]
         self.table(data, where, {"kind", "material", "name", "interior", "exterior", "flip", "swap_uv", "matrix",
                                  "translate", "rotate", "scale", *(p.name for p in k.parameters)})
-        values = k.params_from(lambda p: self.number(data, p.name, where, p.default))
+        values = k.params_from(parameters.read(k.parameters, "toml",
+                                               lambda p, name: self.parameter(data, p, where) if name in data else None))
         problem = k.check(values)
         if problem:
             self.fail(where, problem)

@@ -3,7 +3,6 @@
 as a matrix); shapes a file generated (rectangles, cubes, disks) are written out inline."""
 
 import json
-import math
 import os
 from pathlib import Path
 
@@ -225,8 +224,8 @@ def _shape_lines(shape, names: dict, medium_names: list) -> list:
     lines = [f"kind = {_value(shape.kind)}", f"name = {_value(shape.name)}",
              f"material = {_value(names[shape.material])}"]
     lines += _interface_lines(shape.media, medium_names)
-    for p, v in zip(SHAPES[shape.kind].parameters, shape.params):
-        lines.append(f"{p.name} = {_value(math.degrees(v) if p.degrees else float(v))}")
+    for name, v in SHAPES[shape.kind].file_values(shape.params).items():
+        lines.append(f"{name} = {_value(v)}")
     lines.append(f"matrix = {_value(np.asarray(shape.to_world, np.float64).tolist())}")
     lines += (["flip = true"] if shape.flip else []) + (["swap_uv = true"] if shape.swap_uv else [])
     return lines

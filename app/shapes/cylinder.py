@@ -5,15 +5,25 @@ import math
 
 import numpy as np
 
-from pathtrace.shapes.shape import ShapeKind, ShapeParameter
+from pathtrace.parameters import Parameter
+from pathtrace.shapes.shape import ShapeKind
 
 
 class Cylinder(ShapeKind):
     name = "cylinder"
-    parameters = (ShapeParameter("radius", "radius", 1.0, doc="distance from the z axis"),
-                  ShapeParameter("z_min", "zmin", -1.0, doc="lower end on the z axis"),
-                  ShapeParameter("z_max", "zmax", 1.0, doc="upper end on the z axis"),
-                  ShapeParameter("phi_max", "phimax", 360.0, True, "the angle it spans, degrees"))
+    formats = {"mitsuba": "cylinder", "pbrt": "cylinder"}
+    doc = ("The wall at distance radius from the z axis, z_min to z_max, no caps, facing away from "
+           "the axis; uv (phi / phi_max, (z - z_min) / (z_max - z_min)). Mitsuba's runs from p0 to p1.")
+    parameters = (Parameter("radius", "number", 1.0, doc="distance from the z axis", pbrt="radius"),
+                  Parameter("z_min", "number", -1.0, doc="lower end on the z axis", pbrt="zmin"),
+                  Parameter("z_max", "number", 1.0, doc="upper end on the z axis", pbrt="zmax"),
+                  Parameter("phi_max", "number", 360.0, doc="the angle it spans, degrees", pbrt="phimax"))
+    angles = ("phi_max",)
+    mitsuba_parameters = (Parameter(None, "number", doc="radius", mitsuba="radius", mitsuba_default=1.0),
+                          Parameter(None, "point", doc="start of the axis", mitsuba="p0", mitsuba_default=(0.0, 0.0, 0.0)),
+                          Parameter(None, "point", doc="end of the axis", mitsuba="p1", mitsuba_default=(0.0, 0.0, 1.0)),
+                          Parameter(None, "bool", doc="its front turned round", mitsuba="flip_normals",
+                                    mitsuba_default=False))
     examples = ((1.0, -1.0, 1.0, 2 * math.pi), (0.5, 0.2, 1.4, math.radians(200)))
 
     def normalised(self, params):
@@ -46,16 +56,15 @@ class Cylinder(ShapeKind):
     def normal_cone(self, params):
         return np.array([0.0, 0.0, 1.0]), -1.0        # pbrt-v4: DirectionCone::EntireSphere
 
-    def from_mitsuba(self, get):
+    def from_mitsuba(self, values, to_world):
         """Mitsuba 3's cylinder (src/shapes/cylinder.cpp): the unit cylinder, z in [0, 1] and a
         whole turn, under translate(p0) to_frame(p1 - p0) scale(radius, radius, |p1 - p0|), its
         frame's x and y those of Mitsuba's coordinate_system (Duff et al., "Building an
         Orthonormal Basis, Revisited", JCGT 6(1), 2017), which place phi = 0. Its normal is the
         cross product of its world tangents, turned by flip_normals: under a transform that
         swaps handedness, the opposite of the object normal moved."""
-        radius = get("radius", 1.0, ("float",))
-        p0 = np.asarray(get("p0", np.zeros(3), ("point", "vector")), np.float64)
-        p1 = np.asarray(get("p1", np.array([0.0, 0.0, 1.0]), ("point", "vector")), np.float64)
+        radius = float(values["radius"])
+        p0, p1 = np.asarray(values["p0"], np.float64), np.asarray(values["p1"], np.float64)
         length = float(np.linalg.norm(p1 - p0))
         if not (radius > 0 and length > 0):
             return (radius, 0.0, length, 2 * math.pi), np.eye(4), False, False
@@ -68,6 +77,5 @@ class Cylinder(ShapeKind):
         local = np.eye(4)
         local[:3, :3] = np.column_stack([s, t, n]) @ np.diag([radius, radius, length])
         local[:3, 3] = p0
-        to_world = np.asarray(get("to_world", np.eye(4), ("transform",)), np.float64)
-        flip = bool(get("flip_normals", False, ("boolean",))) != (np.linalg.det(to_world[:3, :3]) < 0)
+        flip = bool(values["flip_normals"]) != (np.linalg.det(np.asarray(to_world, np.float64)[:3, :3]) < 0)
         return (1.0, 0.0, 1.0, 2 * math.pi), local, False, flip

@@ -5,25 +5,32 @@ import math
 
 import numpy as np
 
-from pathtrace.shapes.shape import ShapeKind, ShapeParameter
+from pathtrace.parameters import Parameter
+from pathtrace.shapes.shape import ShapeKind
 
 
 class Disk(ShapeKind):
     name = "disk"
-    parameters = (ShapeParameter("radius", "radius", 1.0, doc="outer radius"),
-                  ShapeParameter("inner_radius", "innerradius", 0.0, doc="inner radius: an annulus"),
-                  ShapeParameter("height", "height", 0.0, doc="its plane's z in object space"),
-                  ShapeParameter("phi_max", "phimax", 360.0, True, "the angle it spans, degrees"))
+    formats = {"mitsuba": "disk", "pbrt": "disk"}
+    doc = ("An annulus sector at z = height facing +z; uv (phi / phi_max, (radius - r) / (radius - "
+           "inner_radius)), pbrt-v4's. Mitsuba's is the unit disk, uv (r, phi / 2 pi).")
+    parameters = (Parameter("radius", "number", 1.0, doc="outer radius", pbrt="radius"),
+                  Parameter("inner_radius", "number", 0.0, doc="inner radius: an annulus", pbrt="innerradius"),
+                  Parameter("height", "number", 0.0, doc="its plane's z in object space", pbrt="height"),
+                  Parameter("phi_max", "number", 360.0, doc="the angle it spans, degrees", pbrt="phimax"))
+    angles = ("phi_max",)
+    mitsuba_parameters = (Parameter(None, "bool", doc="its front turned round", mitsuba="flip_normals",
+                                    mitsuba_default=False),)
     examples = ((1.0, 0.0, 0.0, 2 * math.pi), (1.5, 0.6, 0.25, math.radians(250)))
 
     def normalised(self, params):
         radius, inner, height, phi_max = params
         return radius, inner, height, min(max(phi_max, 0.0), 2 * math.pi)    # pbrt-v4 clamps phimax to [0, 360]
 
-    def from_mitsuba(self, get):
+    def from_mitsuba(self, values, to_world):
         """Mitsuba 3's disk is the unit disk facing +z of its to_world, its texture coordinates
         (r, phi / 2 pi) (src/shapes/disk.cpp), flip_normals turning its normal."""
-        return (1.0, 0.0, 0.0, 2 * math.pi), np.eye(4), True, bool(get("flip_normals", False, ("boolean",)))
+        return (1.0, 0.0, 0.0, 2 * math.pi), np.eye(4), True, bool(values["flip_normals"])
 
     def check(self, params):
         radius, inner, _, phi_max = params

@@ -14,44 +14,42 @@ ROWS = 8
 """float4 rows of the side table per shape (kernels/shapes/analytic.cl)."""
 
 
-@dataclass(frozen=True)
-class ShapeParameter:
-    """One of a kind's four parameters: its name in pathtrace's TOML and the Python API, its
-    name in pbrt-v4 (None: pbrt has none), its default, whether files give it in degrees (the
-    kernels take radians), and what it means."""
-    name: str
-    pbrt: str | None
-    default: float
-    degrees: bool = False
-    doc: str = ""
-
-
 class ShapeKind:
     """One kind of analytic shape, the four numbers of whose parameters (row 6 of its rows)
-    its kernel file documents, declared in `parameters` in that order."""
+    its kernel file documents, declared in `parameters` in that order (app/parameters.py: their
+    TOML and pbrt-v4 names, defaults and documentation, from which the readers read them and
+    docs/scene-format.md's tables are generated)."""
     name = ""
+    formats: dict = {}            # its names in Mitsuba 3 and pbrt-v4 ({format: name})
+    doc = ""
     parameters: tuple = ()
-    examples: tuple = ()          # parameter sets the registry's tests put it through
+    angles: tuple = ()            # the parameters files give in degrees (the kernels take radians)
+    mitsuba_parameters: tuple = ()   # Mitsuba 3's (no TOML name; mitsuba_default), which from_mitsuba
+                                     # maps onto the shape
+    examples: tuple = ()          # parameter sets (the kernels') the registry's tests put it through
 
-    def params_from(self, read) -> tuple:
-        """The kernels' four numbers from read(parameter), which gives a parameter's value as a
-        file states it (degrees where it says so) or None for its default."""
-        values = []
+    def params_from(self, values: dict) -> tuple:
+        """The kernels' four numbers from the declared parameters' values by name (as files give
+        them: degrees for `angles`; absent ones take their defaults)."""
+        out = []
         for p in self.parameters:
-            v = read(p)
-            v = p.default if v is None else float(v)
-            values.append(math.radians(v) if p.degrees else v)
-        return self.normalised(tuple(values))
+            v = float(values.get(p.name, p.default))
+            out.append(math.radians(v) if p.name in self.angles else v)
+        return self.normalised(tuple(out))
+
+    def file_values(self, params) -> dict:
+        """params_from's inverse, by name: what a file states."""
+        return {p.name: math.degrees(v) if p.name in self.angles else float(v) for p, v in zip(self.parameters, params)}
 
     def normalised(self, params) -> tuple:
         """params as the kernels take them, from a file's values (pbrt-v4 clamps and orders some)."""
         return params
 
-    def from_mitsuba(self, get) -> tuple:
-        """(params, object transform, swap_uv, flip) of Mitsuba 3's shape of this kind, from
-        get(name, default, kinds) of its properties; the object transform goes before to_world.
-        None: Mitsuba has no such shape."""
-        return None
+    def from_mitsuba(self, values: dict, to_world: np.ndarray) -> tuple:
+        """(params, object transform, swap_uv, flip) of Mitsuba 3's shape of this kind, from the
+        values of its mitsuba_parameters (given or their mitsuba_default), by their Mitsuba names;
+        the object transform goes before to_world."""
+        raise NotImplementedError
 
     def check(self, params) -> str | None:
         """What is wrong with parameters `params`, or None."""

@@ -734,7 +734,7 @@ class PbrtReader:
         moved by the transform, turned by ReverseOrientation and by a transform that swaps
         handedness (pbrt-v4's Disk and Cylinder: reverseOrientation ^ transformSwapsHandedness)."""
         k = SHAPES[kind]
-        values = k.params_from(lambda p: params.float(p.pbrt) if p.pbrt else None)
+        values = k.params_from(declared.read(k.parameters, "pbrt", lambda p, name: self.mapper.parameter(params, p, name)))
         problem = k.check(values)
         if problem:
             raise UserError(f"{where}: the {kind}'s {problem}")
