@@ -163,6 +163,22 @@ def test_an_emitting_shape_with_nee_light_tree_and_bdpt_matches_paths_alone(back
 
 
 @pytest.mark.parametrize("kind", KINDS)
+def test_the_generic_program_renders_shapes_as_the_scenes_own(backend, kind):
+    """The generic program (every kind compiled in, the layout read at run time) renders the
+    kind's emitting scene as the scene's own program does, with next-event estimation."""
+    from tests.test_programs import same_image, with_mode
+    images = []
+    for mode in ("generic", "specialised"):
+        r = Renderer(with_mode(backend, mode), emitter_scene(kind).with_settings(nee=True, seed=5), 32, 24)
+        for _ in range(2):
+            r.add_samples(512)
+        r.finish()
+        images.append(r)
+    assert images[0].uses_generic_program and not images[1].uses_generic_program
+    same_image(*images)
+
+
+@pytest.mark.parametrize("kind", KINDS)
 def test_toml_writes_and_reads_back_every_shape(tmp_path, kind):
     rng = np.random.default_rng(3)
     scene = shapes_scene(kind, rng, 4)
