@@ -42,6 +42,7 @@ MAX_INCLUDE_DEPTH = 8
 MAX_FILM = 16384
 LIGHTS_BY_NAME = parameters.by_format(DELTA_LIGHTS.values(), "mitsuba")
 BSDFS_BY_NAME = parameters.by_format(BSDFS.values(), "mitsuba")
+TEXTURES_BY_NAME = parameters.by_format(TEXTURES.values(), "mitsuba")
 
 
 @dataclass
@@ -412,17 +413,11 @@ class _Reader:
         kind = node.attrs.get("type")
         props = self.properties(node)
         params = {"to_uv": self.get(props, "to_uv", np.eye(4), ("transform",))}
-        if kind == "bitmap":
-            filename = self.get(props, "filename", kinds=("string",))
-            if filename is None:
+        if kind in TEXTURES_BY_NAME:
+            params.update(parameters.read(TEXTURES_BY_NAME[kind].parameters, "mitsuba",
+                                          lambda p, name: self.parameter(props, p, name)))
+            if kind == "bitmap" and "file" not in params:
                 _fail(node, "a bitmap needs a filename")
-            raw = self.get(props, "raw", False, ("boolean",))
-            params["image"] = read_image(node.file.parent / filename, f"{node.where()}: filename", raw, self.images)
-            params["filter"] = self.get(props, "filter_type", "bilinear", ("string",))
-            params["wrap"] = self.get(props, "wrap_mode", "repeat", ("string",))
-        elif kind == "checkerboard":
-            params["color0"] = self.color(props, "color0", 0.4)
-            params["color1"] = self.color(props, "color1", 0.2)
         else:
             warn(f"{node.where()}: pathtrace has no {kind} texture; it uses a constant grey of 0.5 instead")
             props.ignore()
@@ -728,8 +723,8 @@ class _Reader:
         if p.texture and target.tag == "texture":
             return self.texture(target)
         if p.kind == "image":
-            return read_image(props.node.file.parent / self.get(props, name, kinds=("string",)), c.where(), False,
-                              self.images)
+            return read_image(props.node.file.parent / self.get(props, name, kinds=("string",)), c.where(),
+                              self.get(props, "raw", False, ("boolean",)), self.images)
         kinds = {"number": ("float",), "integer": ("integer",), "bool": ("boolean",), "string": ("string",),
                  "name": ("string",), "point": ("point", "vector"), "vector": ("vector", "point")}[p.kind]
         if p.kind == "number" and getattr(p, "names", None) and target.tag == "string":

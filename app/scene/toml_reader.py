@@ -27,7 +27,6 @@ from pathtrace.scene.description import INTEGRATORS, RUSSIAN_ROULETTE, Mesh, Mes
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, triangulate, vertex_normals
 from pathtrace.shapes import SHAPES, Shape
 from pathtrace.textures import TEXTURES, Texture, read_image
-from pathtrace.textures.bitmap import FILTERS, WRAP_MODES
 
 # the scene-file types besides the registry's: "emitter" is a black BSDF with emission, and
 # "twosided" wraps another material (Mitsuba 3's plugin; `twosided = true` says the same)
@@ -141,28 +140,11 @@ class _Reader:
         if not isinstance(kind, str) or kind not in TEXTURES:
             self.fail(f"{where}.type", f"must be one of {', '.join(TEXTURES)}, got {short(kind)}")
         texture_type = TEXTURES[kind]
-        extra = {"bitmap": {"file", "raw", "filter", "wrap"}, "constant": {"value"}}.get(kind, set())
         self.table(data, where, {"type", "uv_scale", "uv_offset", "uv_rotate", "uv_matrix",
-                                 *texture_type.inputs, *extra})
-        params = {"to_uv": self.uv_transform(data, where)}
-        for key in texture_type.inputs:
-            if key in data:
-                params[key] = self.color_or_texture(data, key, where)
-        if kind == "constant" and "value" in data:
-            params["value"] = self.color(data, "value", where)
-        if kind == "bitmap":
-            file = data.get("file")
-            if not isinstance(file, str) or not file:
-                self.fail(f"{where}.file", f"must be an image file name, got {short(file)}")
-            raw = data.get("raw", False)
-            if not isinstance(raw, bool):
-                self.fail(f"{where}.raw", f"must be true or false, got {short(raw)}")
-            for key, choices in (("filter", FILTERS), ("wrap", WRAP_MODES)):
-                if key in data and (not isinstance(data[key], str) or data[key] not in choices):
-                    self.fail(f"{where}.{key}", f"must be one of {', '.join(choices)}, got {short(data[key])}")
-                if key in data:
-                    params[key] = data[key]
-            params["image"] = read_image(self.path.parent / file, f"{self.label}: {where}.file", raw, self.images)
+                                 *(p.name for p in texture_type.parameters)})
+        params = {"to_uv": self.uv_transform(data, where),
+                  **parameters.read(texture_type.parameters, "toml",
+                                    lambda p, name: self.parameter(data, p, where) if name in data else None)}
         try:
             return Texture(kind, texture_type.complete(params), name)
         except ValueError as e:
@@ -325,10 +307,11 @@ class _Reader:
         if param.kind == "image":
             if not isinstance(value, str) or not value:
                 self.fail(key, f"must be an image file name, got {short(value)}")
-            return read_image(self.path.parent / value, f"{self.label}: {key}", False, self.images)
+            return read_image(self.path.parent / value, f"{self.label}: {key}", data.get("raw") is True, self.images)
         if param.choices and not getattr(param, "names", None):
             if value not in param.choices:
-                self.fail(key, f"must be {', '.join(param.choices[:-1])} or {param.choices[-1]}, got {short(value)}")
+                choices = " or ".join(param.choices) if len(param.choices) == 2 else "one of " + ", ".join(param.choices)
+                self.fail(key, f"must be {choices}, got {short(value)}")
             return value
         names = getattr(param, "names", None)
         if isinstance(value, str) and names:
