@@ -328,7 +328,7 @@ def denoise(image: np.ndarray, albedo: np.ndarray = None, normal: np.ndarray = N
     """The image denoised by Intel Open Image Denoise, guided by the albedo and normal that
     render(aovs=("albedo", "normal")) gives (better) or not; quality "high", "balanced" or
     "fast". Each array (H, W, 3)."""
-    from pathtrace.denoiser import QUALITIES, Denoiser
+    from pathtrace.io.denoiser import QUALITIES, Denoiser
     if quality not in QUALITIES:
         raise UserError(f"quality: give one of {', '.join(QUALITIES)}, got {short(quality)}")
     image = _rgb("image", image)
@@ -366,8 +366,8 @@ def tonemap(image: np.ndarray, exposure: float = 0.0, curve: str = "standard") -
     """Linear radiance to display sRGB, (H, W, 3) uint8: exposure in stops, then the tone curve
     ("standard" clips at 1, "aces" is Narkowicz's fit of ACES), then the sRGB transfer function;
     what a .png output holds."""
-    from pathtrace.tonecurve import TONEMAPS, to_8bit
-    from pathtrace.tonecurve import tonemap as display
+    from pathtrace.io.tonecurve import TONEMAPS, to_8bit
+    from pathtrace.io.tonecurve import tonemap as display
     if curve not in TONEMAPS:
         raise UserError(f"curve: give one of {', '.join(TONEMAPS)}, got {short(curve)}")
     if isinstance(exposure, bool) or not isinstance(exposure, (int, float, np.number)) or not -100 <= exposure <= 100:
@@ -378,7 +378,7 @@ def tonemap(image: np.ndarray, exposure: float = 0.0, curve: str = "standard") -
 def write(path, image: np.ndarray, exposure: float = 0.0, curve: str = "standard"):
     """Writes an image file, atomically: .png and .jpg tonemapped (as tonemap() does), .exr,
     .hdr and .pfm as linear float radiance. (H, W) arrays (a depth) are written as grey."""
-    from pathtrace.image_io import write_image
+    from pathtrace.io.images import write_image
     if not isinstance(path, (str, Path)):
         raise UserError(f"path: give a file name (str or Path), got {short(path)}")
     tonemap(np.zeros((1, 1, 3)), exposure, curve)         # the same checks

@@ -337,7 +337,7 @@ def run_display(device_specs, width, height, log=print):
 
 def run_denoise(width, height, log=print):
     """Open Image Denoise on the demo's 4-sample image and guides, at each quality."""
-    from pathtrace.denoiser import QUALITIES, Denoiser
+    from pathtrace.io.denoiser import QUALITIES, Denoiser
     from pathtrace.device import choose_device
     r = Renderer(choose_device("auto"), load_scene("demo"), width, height)
     r.set_aovs(True)
@@ -388,7 +388,7 @@ def write_json(path, results, argv):
         "host": platform.node(), "python": sys.version.split()[0], "pyopencl": cl.VERSION_TEXT,
         "results": [asdict(r) for r in results],
     }
-    from pathtrace.image_io import write_text
+    from pathtrace.io.images import write_text
     write_text(path, json.dumps(data, indent=2) + "\n")
 
 

@@ -5,7 +5,7 @@ command to first image for a million triangles on two CPU cores; docs/benchmarks
 An entry is keyed by the digest of what the tree is built from, the primitives' boxes and where
 the spheres end, together with the source of the builder (app/bvh.py and kernels/build/) and of
 this file, so that a changed builder or entry format never reads an old entry. Any device's tree serves every device: each is a
-valid BVH over the same boxes. Entries are files of pathtrace.cache_files (a damaged one is built
+valid BVH over the same boxes. Entries are files of pathtrace.io.cache_files (a damaged one is built
 again and replaced), and the least recently used are removed once the entries exceed MAX_BYTES.
 Scenes of fewer than MIN_PRIMITIVES primitives build in a fraction of a second and are not
 cached. The folder is cache_dir()/bvh, or the folder that
@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pathtrace import cache_files
+from pathtrace.io import cache_files
 from pathtrace.bvh import BVH, build_bvh
 from pathtrace.resources import resource_dir
 from pathtrace.types import BVH_NODE
@@ -95,7 +95,7 @@ def read_entry(path: Path, primitives: int):
 
 
 def write_entry(path: Path, bvh: BVH):
-    """Stores bvh at path (pathtrace.cache_files: whole or not at all), then removes the oldest
+    """Stores bvh at path (pathtrace.io.cache_files: whole or not at all), then removes the oldest
     entries beyond MAX_BYTES."""
     header = np.zeros(1, _HEADER)
     header["nodes"], header["primitives"], header["depth"], header["cost"] = \

@@ -29,7 +29,7 @@ PROGRESS_AFTER = 1.0    # seconds before a BVH build shows its progress
 
 
 class FinalWrite:
-    """Around the writing of a command's outputs (all or none, app/image_io.py): Ctrl-C and
+    """Around the writing of a command's outputs (all or none, app/io/images.py): Ctrl-C and
     SIGTERM wait until it ends, and once the outputs are complete they are ignored, so that a
     signal arriving then cannot turn a finished command into an 'interrupted' exit (130). A
     write that fails restores the handlers, and a signal received meanwhile then interrupts."""
@@ -151,7 +151,7 @@ def _exposure(text):
 
 def add_output_options(p: argparse.ArgumentParser):
     """Options of the commands that write images (render, farm render)."""
-    from pathtrace.tonecurve import TONEMAPS
+    from pathtrace.io.tonecurve import TONEMAPS
     p.add_argument("--exposure", type=_exposure, default=0.0, metavar="EV",
                    help="exposure in stops, -100 to 100, for .png/.jpg (default 0)")
     p.add_argument("--tonemap", choices=TONEMAPS, default="standard",
@@ -293,8 +293,8 @@ def cmd_render(args):
     from tqdm import tqdm
 
     from pathtrace import api
-    from pathtrace.files import shown
-    from pathtrace.image_io import check_writable, write_images
+    from pathtrace.io.files import shown
+    from pathtrace.io.images import check_writable, write_images
 
     written = {}
     for path in args.output:
@@ -308,7 +308,7 @@ def cmd_render(args):
     phase = Phases(args.quiet)
     denoiser = None
     if args.denoise:                 # before rendering: a missing or failing OIDN says so now
-        from pathtrace.denoiser import Denoiser
+        from pathtrace.io.denoiser import Denoiser
         denoiser = Denoiser("high")
         phase(f"opened Open Image Denoise ({denoiser.device_name})")
     scene = apply_render_options(api.load(args.scene), args)
@@ -402,7 +402,7 @@ def render_outputs(result, args, denoiser=None) -> list:
     --denoise; an EXR then keeps the noisy one as its layer "noisy") to every --output, and with
     --aov the albedo and normal beside each (normals stored as n / 2 + 1/2 in PNG and JPEG, the
     usual encoding)."""
-    from pathtrace.image_io import HDR_FORMATS, Output
+    from pathtrace.io.images import HDR_FORMATS, Output
     noisy = result["image"] if isinstance(result, dict) else result
     image, layers = noisy, {}
     if isinstance(result, dict):
@@ -425,7 +425,7 @@ def cmd_convert(args):
     checked, then written under temporary names and renamed into place together, so that a
     failure (a read-only folder, a full disk, a FIFO where a file goes) leaves none of them."""
     from pathtrace.api import load
-    from pathtrace.image_io import Staged, _write_exr, check_writable
+    from pathtrace.io.images import Staged, _write_exr, check_writable
     from pathtrace.scene.toml_writer import scene_toml
 
     out = Path(args.output)
@@ -510,8 +510,8 @@ def cmd_farm_render(args):
 
     from pathtrace import farm
     from pathtrace.compiled import compile_scene
-    from pathtrace.files import shown
-    from pathtrace.image_io import Output, check_writable, write_images
+    from pathtrace.io.files import shown
+    from pathtrace.io.images import Output, check_writable, write_images
     from pathtrace.scene import load_scene
 
     scenes = [apply_render_options(load_scene(name), args) for name in args.scene]
@@ -598,7 +598,7 @@ def cmd_bench(args):
     else:
         bench.validate(args)
     if args.json:
-        from pathtrace.image_io import check_writable
+        from pathtrace.io.images import check_writable
         check_writable(args.json, "--json", formats=None)
     if args.mitsuba:
         from pathtrace.mitsuba_timing import check_mitsuba

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pyopencl as cl
 
-from pathtrace.cache_files import read_entry, write_entry
+from pathtrace.io.cache_files import read_entry, write_entry
 from pathtrace.errors import UserError, format_bytes, short
 from pathtrace.features import Features
 from pathtrace.occupancy import TUNING_RULE, build_for_occupancy, is_nvidia
@@ -188,7 +188,7 @@ def build_cached(context: cl.Context, device: cl.Device, source: str, options: l
 
 def _read_cached(path: Path):
     """A cached binary and the build options it was made with, or None where there is none or
-    it is damaged (pathtrace.cache_files)."""
+    it is damaged (pathtrace.io.cache_files)."""
     data = read_entry(path)
     data = bytes(data) if data is not None else b""
     if b"\n" not in data:

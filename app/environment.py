@@ -30,7 +30,7 @@ class Environment:
 
     @classmethod
     def from_file(cls, path: Path, intensity=1.0, rotation=0.0, where="environment.map"):
-        from pathtrace.image_io import read_hdr
+        from pathtrace.io.images import read_hdr
         return cls(read_hdr(path, where), intensity, rotation, str(path))
 
     def sampling_cdfs(self):

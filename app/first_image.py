@@ -35,7 +35,7 @@ from pathlib import Path
 from pathtrace.bench import FIRST_IMAGE_SCENES, GENERATED_FILES, mitsuba_twin, scene_file
 from pathtrace.bench_scenes import write_meshes
 from pathtrace.errors import UserError
-from pathtrace.files import shown
+from pathtrace.io.files import shown
 from pathtrace.load_bench import best_time
 from pathtrace.mitsuba_timing import mitsuba_load_command
 from pathtrace.scene import load_scene

@@ -18,7 +18,7 @@ from pathlib import Path
 
 from pathtrace.bench_scenes import write_height_field, write_meshes
 from pathtrace.errors import UserError
-from pathtrace.files import shown
+from pathtrace.io.files import shown
 from pathtrace.mitsuba_timing import last_line, mitsuba_load_command, run_command
 
 

@@ -129,7 +129,7 @@ class Programs:
             future.set_running_or_notify_cancel()
         if background:
             # a daemon thread: a process that ends before the build does neither waits for it
-            # nor leaves a torn cache entry (app/cache_files.py writes whole files)
+            # nor leaves a torn cache entry (app/io/cache_files.py writes whole files)
             thread = threading.Thread(target=self._run, args=(key, future), daemon=True, name=BUILD_THREAD)
             thread.start()
         else:

@@ -14,7 +14,7 @@ import pyopencl as cl
 from pathtrace import bdpt
 from pathtrace.camera import CAMERA_KERNELS, Camera, kernel_name
 from pathtrace.compiled import SCENE_BUFFERS, CompiledScene, compile_scene
-from pathtrace.cache_files import read_entry, write_entry
+from pathtrace.io.cache_files import read_entry, write_entry
 from pathtrace.device import Backend, cache_dir, check_fits
 from pathtrace.errors import UserError, format_bytes
 from pathtrace.environment import Environment
@@ -290,7 +290,7 @@ class Renderer:
 
     def _plan_verdict_path(self) -> Path:
         """Where the trials' verdict for this scene's program, image size and device is kept, so
-        that they run once, not before every render (pathtrace.cache_files)."""
+        that they run once, not before every render (pathtrace.io.cache_files)."""
         d = self.backend.device.device
         features = replace(self.compiled.features(self.settings, self.camera), path_queue=0)
         key = hashlib.sha256("\0".join(map(str, (

@@ -12,8 +12,8 @@ import pytest
 
 import pathtrace
 from pathtrace.errors import UserError
-from pathtrace.image_io import read_hdr
-from pathtrace.tonecurve import tonemap as display
+from pathtrace.io.images import read_hdr
+from pathtrace.io.tonecurve import tonemap as display
 
 ROOT = Path(__file__).resolve().parent.parent
 DEVICE = os.environ.get("PATHTRACE_TEST_DEVICE", "cpu")

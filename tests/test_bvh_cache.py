@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import pathtrace.bvh_cache as cache
-from pathtrace import cache_files
+from pathtrace.io import cache_files
 from pathtrace.bvh import build_bvh
 from tests.conftest import ROOT
 

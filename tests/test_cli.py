@@ -40,7 +40,7 @@ material = { type = "diffuse", rho_d = 0.5 }
 
 
 def test_render_writes_png_and_exr(tmp_path):
-    from pathtrace.image_io import read_hdr
+    from pathtrace.io.images import read_hdr
     png, exr = tmp_path / "a.png", tmp_path / "a.exr"
     r = pathtrace("render", "simple", "-o", png, "-o", exr, "--size", "32x18", "--spp", "4", "-q")
     assert r.returncode == 0, r.stderr
@@ -63,7 +63,7 @@ def test_render_denoise_writes_the_denoised_image_the_noisy_layer_and_the_aovs(t
     "noisy", which is the image a render without --denoise writes; --aov: the albedo and normal
     beside each output (PNG normals encoded as n / 2 + 1/2)."""
     import OpenEXR
-    from pathtrace.image_io import read_hdr
+    from pathtrace.io.images import read_hdr
     png, exr, plain = tmp_path / "d.png", tmp_path / "d.exr", tmp_path / "plain.exr"
     common = ("--size", "48x27", "--spp", "4", "-q")
     r = pathtrace("render", "demo", "-o", png, "-o", exr, "--denoise", "--aov", "albedo,normal", *common)
@@ -166,7 +166,7 @@ def test_bad_scene_file_gets_one_clear_message(tmp_path, text, message):
 def test_a_huge_environment_rotation_wraps(tmp_path):
     """A rotation near float32's limit (1e42, beyond it, crashed the kernel; it is refused now):
     the angle is wrapped to [0, 360) in float64 before it reaches the device."""
-    from pathtrace.image_io import read_hdr
+    from pathtrace.io.images import read_hdr
     scene = write(tmp_path, GOOD.replace("color = 0.5", 'map = "studio_small_03_1k.hdr"\nrotation = 3e38'))
     out = tmp_path / "o.exr"
     r = pathtrace("render", scene, "-o", out, "--spp", "2", "--size", "16x8", "-q")
@@ -472,7 +472,7 @@ def test_a_signal_after_the_outputs_are_written_does_not_fail_the_command(tmp_pa
     the writes): the render is whole, so the exit is 0, not 'interrupted' (130)."""
     code = f"""
 import os, signal, sys
-import pathtrace.image_io as io
+import pathtrace.io.images as io
 from pathtrace.console import run
 commit = io.Staged.commit
 def commit_then_signal(self):

@@ -1,12 +1,12 @@
 """The denoiser's auxiliary images (kernels/aovs.cl) against closed forms, and Intel Open Image
-Denoise on them (app/denoiser.py): its error against a converged reference at 4 samples per
+Denoise on them (app/io/denoiser.py): its error against a converged reference at 4 samples per
 pixel, and no bias at many."""
 
 import numpy as np
 import pytest
 
 from pathtrace.camera import Camera
-from pathtrace.denoiser import Denoiser
+from pathtrace.io.denoiser import Denoiser
 from pathtrace.environment import Environment
 from pathtrace.materials import Material
 from pathtrace.renderer import Renderer

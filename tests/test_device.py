@@ -38,7 +38,7 @@ def test_a_cache_entry_that_is_a_fifo_is_not_opened(backend, tmp_path):
 
 def test_a_full_disk_leaves_no_partial_cache_file(tmp_path):
     """The write fails half-way (ENOSPC): the build still succeeds, and no .tmp file is left."""
-    full = ("import builtins, errno, io, pathtrace.cache_files as files\n"
+    full = ("import builtins, errno, io, pathtrace.io.cache_files as files\n"
             "class Full(io.FileIO):\n"
             "    def write(self, data):\n"
             "        super().write(bytes(data)[: len(data) // 2])\n"
@@ -95,7 +95,7 @@ def test_a_damaged_cache_entry_is_built_again_and_replaced(backend, tmp_path, mo
 
 def test_a_foreign_binary_in_a_cache_entry_is_built_again(backend, tmp_path, monkeypatch):
     """A whole entry whose binary the driver refuses (another driver's, or garbage): rebuilt."""
-    from pathtrace.cache_files import write_entry
+    from pathtrace.io.cache_files import write_entry
     assert build(tmp_path).stdout.strip() == "built"
     entry = only_entry(backend, tmp_path, monkeypatch)
     write_entry(entry, b"\n", b"\x7fELF not a binary this driver reads" * 8)

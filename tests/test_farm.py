@@ -12,7 +12,7 @@ import ray
 from pathtrace import farm
 from pathtrace.compiled import compile_scene
 from pathtrace.errors import UserError
-from pathtrace.image_io import read_hdr
+from pathtrace.io.images import read_hdr
 from pathtrace.renderer import Renderer
 from pathtrace.scene import load_scene
 

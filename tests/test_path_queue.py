@@ -105,7 +105,7 @@ def test_changing_the_setting_sizes_the_queue_and_renders_the_same(backend):
 @pytest.mark.parametrize("setting", ["2", "auto"])
 def test_render_command_takes_the_setting(tmp_path, setting):
     """`pathtrace render --path-queue N` (or auto) renders the image it renders without."""
-    from pathtrace.image_io import read_hdr
+    from pathtrace.io.images import read_hdr
     images = []
     for value in ("0", setting):
         out = tmp_path / f"q{value}.exr"

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pathtrace.image_io import read_hdr
+from pathtrace.io.images import read_hdr
 from pathtrace.renderer import Renderer
 from pathtrace.scene import load_scene
 from tests.stats import z_test

@@ -479,7 +479,7 @@ def test_a_bump_map_and_the_normal_map_of_its_normal_render_alike(backend, tmp_p
     PerturbedBSDF: Schuessler's flip and the shadowing term of the tilt); pathtrace's bump map
     lacked both, and lit this floor under a grazing lamp brighter (review 2026-11-28, F9)."""
     from pathtrace.api import load_dict
-    from pathtrace.image_io import write_image
+    from pathtrace.io.images import write_image
     from pathtrace.renderer import Renderer
     width, step, scale = 64, 2, 20.0
     ramp = np.tile((np.arange(width) * step).astype(np.uint8)[None, :, None], (4, 1, 3))

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from pathtrace.errors import UserError
-from pathtrace.image_io import read_hdr
+from pathtrace.io.images import read_hdr
 from pathtrace.renderer import Renderer
 from pathtrace.scene import load_scene
 
@@ -382,10 +382,10 @@ def test_a_scene_that_fails_to_open_leaves_the_viewer_as_it_was(viewer, monkeypa
 @pytest.mark.parametrize("curve,exposure", [("standard", 0.0), ("aces", 0.5), ("standard", -1.0)])
 def test_the_display_shader_matches_tonemap(viewer, curve, exposure):
     """shaders/display.frag (mean = rgb / a, exposure, tone curve, sRGB) draws what
-    app/tonecurve.py writes, to one 8-bit step, on a ramp of radiances from 0 to 4."""
+    app/io/tonecurve.py writes, to one 8-bit step, on a ramp of radiances from 0 to 4."""
     import moderngl
 
-    from pathtrace.tonecurve import to_8bit, tonemap
+    from pathtrace.io.tonecurve import to_8bit, tonemap
     v = viewer
     radiance = np.stack([np.linspace(0, 4, 64), np.linspace(0, 1, 64), np.linspace(0, 0.05, 64)], -1)[None]
     pixels = np.concatenate([radiance * 4, np.full((1, 64, 1), 4.0)], -1).astype(np.float32)  # 4 samples

@@ -4,7 +4,7 @@
 from pathlib import Path
 
 from pathtrace.errors import UserError, cut, did_you_mean, grouped_warnings
-from pathtrace.files import missing, shown
+from pathtrace.io.files import missing, shown
 from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder, diffuse, emitter, phong
 
 __all__ = ["Mesh", "RenderSettings", "Scene", "SceneBuilder", "diffuse", "emitter", "phong",

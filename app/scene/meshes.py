@@ -20,7 +20,7 @@ from typing import NamedTuple
 import numpy as np
 
 from pathtrace.errors import UserError, warn
-from pathtrace.files import check_regular_file
+from pathtrace.io.files import check_regular_file
 from pathtrace.scene.transform import transform_normals, transform_points
 
 FORMATS = (".ply", ".ply.gz", ".obj", ".stl", ".gltf", ".glb")

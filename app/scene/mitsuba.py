@@ -58,7 +58,7 @@ def parse_xml(path: Path, budget: list = None, where: str = None) -> Node:
     """The element tree of one file, each element with its line; a malformed file is one
     UserError naming the line. budget: [bytes, elements] left for this file and the others of
     its scene (its includes), which it decreases; where: what names the file (an <include>)."""
-    from pathtrace.files import check_regular_file, missing, shown
+    from pathtrace.io.files import check_regular_file, missing, shown
     budget = [MAX_XML_BYTES, MAX_ELEMENTS] if budget is None else budget
     try:
         os.stat(path)

@@ -749,7 +749,7 @@ MAX_SCENE_BYTES = 64 << 20    # a scene file; meshes go in files of their own
 
 
 def read_scene_file(path) -> Scene:
-    from pathtrace.files import check_regular_file, missing, shown
+    from pathtrace.io.files import check_regular_file, missing, shown
     path = Path(path)
     try:
         os.stat(path)

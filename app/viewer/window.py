@@ -2,7 +2,7 @@
 moves the camera, lets pathtrace.launches.Progressive collect finished launches and queue new ones
 (bands of rows sized to a fraction of a frame), and shows the newest image that has reached the
 host (pathtrace.display, drawn by shaders/display.frag), then the imgui panel. While the
-camera rests the image is denoised (pathtrace.denoiser) in a worker thread, every time its samples
+camera rests the image is denoised (pathtrace.io.denoiser) in a worker thread, every time its samples
 have doubled."""
 
 import datetime
@@ -586,7 +586,7 @@ class Viewer:
     def _denoiser_ready(self) -> bool:
         if self._denoiser is None and self.denoise_error is None:
             try:
-                from pathtrace.denoiser import Denoiser
+                from pathtrace.io.denoiser import Denoiser
                 self._denoiser = Denoiser(lambda device: DENOISE_QUALITY[device])
                 # OIDN's first run at a size prepares it (a third of a second on two cores):
                 # done now, in the worker, it is not waited for when the camera stops
@@ -700,7 +700,7 @@ class Viewer:
 
     def _save_screenshot(self, base: Path, noisy: np.ndarray, aovs, look: tuple, samples: int):
         """In the screenshot thread: denoised where `aovs` are given, then both files written."""
-        from pathtrace.image_io import Output, write_images
+        from pathtrace.io.images import Output, write_images
         shown, layers = noisy, {}
         try:
             if aovs is not None:

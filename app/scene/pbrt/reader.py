@@ -33,7 +33,7 @@ import numpy as np
 from pathtrace.camera import Camera
 from pathtrace.environment import Environment
 from pathtrace.errors import UserError, cut, warn
-from pathtrace.files import check_regular_file
+from pathtrace.io.files import check_regular_file
 from pathtrace.filters import PixelFilter
 from pathtrace.lights import DirectionalLight, PointLight, SpotLight
 from pathtrace.lights.light import MAX_RADIANCE
@@ -971,7 +971,7 @@ class PbrtReader:
         if filename is not None:
             if params.type_of("L"):
                 params.fail("L", "an infinite light takes L or a filename, not both")
-            from pathtrace.image_io import read_hdr
+            from pathtrace.io.images import read_hdr
             path = self.resolve(filename)
             image = read_hdr(path, f"{where}: filename")
             if image.shape[0] != image.shape[1]:

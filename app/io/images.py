@@ -19,8 +19,8 @@ from pathlib import Path
 import numpy as np
 
 from pathtrace.errors import UserError, cut
-from pathtrace.files import check_regular_file, shown
-from pathtrace.tonecurve import tonemap, to_8bit
+from pathtrace.io.files import check_regular_file, shown
+from pathtrace.io.tonecurve import tonemap, to_8bit
 
 HDR_FORMATS = (".exr", ".hdr", ".pfm")
 LDR_FORMATS = (".png", ".jpg", ".jpeg")
