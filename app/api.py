@@ -55,7 +55,7 @@ def material(data: dict):
 def devices() -> list:
     """The OpenCL devices found, each with .index, .name, .kind ('GPU' or 'CPU') and
     .describe(); `device=` takes an index, a kind, or part of a name."""
-    from pathtrace.device import list_devices
+    from pathtrace.device.opencl import list_devices
     return list_devices()
 
 
@@ -68,7 +68,7 @@ def queue_plans(scene) -> list:
 
 
 def programs_used(scene) -> list:
-    """Where the generic program (pathtrace.programs) drew samples of `scene`'s last render, in
+    """Where the generic program (pathtrace.device.programs) drew samples of `scene`'s last render, in
     words, one per device that it did on; empty where the scenes' own programs drew them all."""
     prepared = scene.__dict__.get("_prepared")
     return prepared.group.programs_used() if prepared else []
@@ -80,7 +80,7 @@ _backends = {}            # device specs -> opened backends, kept for the next r
 def open_devices(device="auto") -> list:
     """The backends for `device`: a spec as `--device` takes it ('auto', 'gpu', 'cpu', 'gpu:1',
     an index, part of a name, or 'all') or a list of specs. Opened once and kept."""
-    from pathtrace.device import choose_devices
+    from pathtrace.device.opencl import choose_devices
     specs = (device,) if isinstance(device, str) else tuple(device) if isinstance(device, (list, tuple)) else ()
     if not specs or not all(isinstance(s, str) for s in specs):
         raise UserError(f"device: give a device spec such as 'auto', 'gpu', 'cpu:0' or a list of them, "

@@ -27,7 +27,7 @@ def depth(max_depth: int) -> int:
 
 def check(name: str, features, integrator: str, lights):
     """Raises a UserError, one line, for what `integrator` (bdpt or ptracer) cannot render yet
-    in a scene (its name) whose program needs `features` (app/features.py) and whose light table
+    in a scene (its name) whose program needs `features` (app/device/features.py) and whose light table
     is `lights`: participating media and null surfaces (no volumetric BDPT), the orthographic
     camera; for light tracing alone, light from the environment or a
     directional light, which start no light subpath (app/lights/registry.py: EMITTERS)."""

@@ -32,7 +32,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from statistics import median
 
-from pathtrace.device import build_program, choose_devices
+from pathtrace.device.opencl import build_program, choose_devices
 from pathtrace.errors import UserError
 from pathtrace.multidevice import DeviceGroup
 from pathtrace.renderer import Renderer
@@ -99,7 +99,7 @@ def measure(backends, scene, estimator, width, height, spp, builds, rounds: int 
     samples: pathtrace.multidevice); with rounds > 1, that many renders of the same samples,
     whose median counts."""
     scene = scene.with_settings(**estimator_settings(estimator))
-    # the scene's own kernels (pathtrace.features), built and launched once outside the timed region
+    # the scene's own kernels (pathtrace.device.features), built and launched once outside the timed region
     for backend in backends:
         Renderer(backend, scene, 16, 16).add_samples(1)
         backend.queue.finish()
@@ -131,7 +131,7 @@ def measure(backends, scene, estimator, width, height, spp, builds, rounds: int 
 
 def kernel_build_times(backend, cold: bool = True):
     """Seconds to build the kernels without our binary cache (None unless `cold`: on NVIDIA's
-    OpenCL that build tunes register caps, app/occupancy.py, a minute on the H100) and from it."""
+    OpenCL that build tunes register caps, app/device/occupancy.py, a minute on the H100) and from it."""
     cold = build_program(backend.context, backend.device.device, use_cache=False).seconds if cold else None
     build_program(backend.context, backend.device.device)          # fills the cache if empty
     warm = build_program(backend.context, backend.device.device).seconds
@@ -338,7 +338,7 @@ def run_display(device_specs, width, height, log=print):
 def run_denoise(width, height, log=print):
     """Open Image Denoise on the demo's 4-sample image and guides, at each quality."""
     from pathtrace.io.denoiser import QUALITIES, Denoiser
-    from pathtrace.device import choose_device
+    from pathtrace.device.opencl import choose_device
     r = Renderer(choose_device("auto"), load_scene("demo"), width, height)
     r.set_aovs(True)
     r.add_samples(4)

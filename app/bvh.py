@@ -34,7 +34,7 @@ from typing import Callable
 import numpy as np
 import pyopencl as cl
 
-from pathtrace.types import BVH_NODE
+from pathtrace.device.types import BVH_NODE
 
 # these three reach kernels/build/collapse.cl as build options
 MAX_LEAF_SIZE = 4
@@ -88,7 +88,7 @@ class Builder:
     """The build kernels (kernels/build/) on one OpenCL device."""
 
     def __init__(self, queue: cl.CommandQueue):
-        from pathtrace.device import build_cached
+        from pathtrace.device.opencl import build_cached
         from pathtrace.resources import resource_dir
 
         self.queue = queue
@@ -138,7 +138,7 @@ def builder_for(queue: cl.CommandQueue = None) -> Builder:
 
 
 def _first_working_builder() -> Builder:
-    from pathtrace.device import HOW_TO_GET_ONE, list_devices
+    from pathtrace.device.opencl import HOW_TO_GET_ONE, list_devices
     from pathtrace.errors import UserError
 
     for d in sorted(list_devices(), key=lambda d: d.kind != "GPU"):

@@ -20,7 +20,7 @@ import numpy as np
 from pathtrace.io import cache_files
 from pathtrace.bvh import BVH, build_bvh
 from pathtrace.resources import resource_dir
-from pathtrace.types import BVH_NODE
+from pathtrace.device.types import BVH_NODE
 
 MIN_PRIMITIVES = 65536
 MAX_BYTES = 1 << 30
@@ -44,7 +44,7 @@ def builder_digest() -> bytes:
 
 def folder():
     """The cache's folder, or None where it is turned off."""
-    from pathtrace.device import cache_dir
+    from pathtrace.device.opencl import cache_dir
     chosen = os.environ.get("PATHTRACE_BVH_CACHE", "")
     return None if chosen == "0" else Path(chosen) if chosen else cache_dir() / "bvh"
 

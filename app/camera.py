@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from pathtrace.features import GENERIC, choice_glue
+from pathtrace.device.features import GENERIC, choice_glue
 
 PROJECTIONS = ("perspective", "orthographic")
 CAMERA_KERNELS = ("perspective", "thinlens", "orthographic")   # kernel_name's; RenderParams.camera_type

@@ -161,7 +161,7 @@ def add_output_options(p: argparse.ArgumentParser):
 
 
 def add_program_option(p: argparse.ArgumentParser, default: str):
-    from pathtrace.programs import PROGRAM_ENV, PROGRAM_MODES
+    from pathtrace.device.programs import PROGRAM_ENV, PROGRAM_MODES
     p.add_argument("--program", choices=PROGRAM_MODES,
                    help="which kernels render: auto (a generic program, built once and cached, until "
                         "the scene's own is built in the background), specialised (wait for the "
@@ -257,8 +257,8 @@ def apply_render_options(scene, args):
 
 
 def cmd_devices(args):
-    from pathtrace.device import NO_DEVICE, build_error_line, list_devices, open_device
-    from pathtrace.programs import warm_up
+    from pathtrace.device.opencl import NO_DEVICE, build_error_line, list_devices, open_device
+    from pathtrace.device.programs import warm_up
     import pyopencl as cl
 
     devices = list_devices()
@@ -792,7 +792,7 @@ def build_parser():
     p.set_defaults(func=cmd_convert)
 
     p = sub.add_parser("devices", help="list OpenCL platforms and devices")
-    p.add_argument("--check", action="store_true", help="also build the generic kernels on each and render with them once, which fills the drivers' caches (pathtrace.programs)")
+    p.add_argument("--check", action="store_true", help="also build the generic kernels on each and render with them once, which fills the drivers' caches (pathtrace.device.programs)")
     p.set_defaults(func=cmd_devices)
 
     p = sub.add_parser("scenes", help="list the built-in scenes")
@@ -847,9 +847,9 @@ def parse(parser: argparse.ArgumentParser, argv):
 
 def choose_program_mode(args):
     """--program, for every device this process opens and the renders it starts
-    (pathtrace.programs). bench times the scenes' own programs' renders unless asked otherwise;
+    (pathtrace.device.programs). bench times the scenes' own programs' renders unless asked otherwise;
     its --load and --first-image time commands as a user runs them."""
-    from pathtrace.programs import PROGRAM_ENV
+    from pathtrace.device.programs import PROGRAM_ENV
     times_renders = args.command == "bench" and not (args.load or args.first_image)
     mode = getattr(args, "program", None) or (
         "specialised" if times_renders and not os.environ.get(PROGRAM_ENV) else None)

@@ -15,7 +15,7 @@ from pathtrace.bvh import BVH, column_max, column_min, primitive_boxes
 from pathtrace.bvh_cache import cached_bvh
 from pathtrace.environment import LUMINANCE
 from pathtrace.errors import UserError, format_bytes, short
-from pathtrace.features import FLAT_MAX, LONE_MAX, Features, stack_size
+from pathtrace.device.features import FLAT_MAX, LONE_MAX, Features, stack_size
 from pathtrace.lights.light import MAX_RADIANCE
 from pathtrace.lights import LightTable, build_light_table, emitted_power, primitive_bounds
 from pathtrace.materials import BSDFS, EMITS_BACK, NULL, TAGS
@@ -27,7 +27,7 @@ from pathtrace.scene.description import RenderSettings, Scene
 from pathtrace.textures import TextureTables, compile_textures
 from pathtrace.scene import instances as instancing
 from pathtrace.two_level import build_two_level
-from pathtrace.types import BVH_NODE, INSTANCE, TRIANGLE
+from pathtrace.device.types import BVH_NODE, INSTANCE, TRIANGLE
 
 
 @dataclass
@@ -208,7 +208,7 @@ class CompiledScene:
 
     @property
     def flat(self) -> bool:
-        """Whether rays test every primitive, with no tree (app/features.py: FLAT_MAX)."""
+        """Whether rays test every primitive, with no tree (app/device/features.py: FLAT_MAX)."""
         return self.num_spheres + self.num_triangles <= FLAT_MAX and not self.two_level
 
     @property
@@ -293,7 +293,7 @@ def check_memory(name: str, n_spheres: int, n_triangles: int, device: cl.Device 
                  n_instances: int = 0):
     """Refuses, with one line and before anything is allocated, a scene whose BVH build would not
     fit in the host's available memory, or whose buffers would not fit on `device`."""
-    from pathtrace.device import check_fits
+    from pathtrace.device.opencl import check_fits
 
     n = n_spheres + n_triangles + n_instances
     available = available_host_memory()

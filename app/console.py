@@ -58,8 +58,8 @@ def run():
 
 
 def _building() -> bool:
-    """Whether a scene's program is still being built in the background (pathtrace.programs):
+    """Whether a scene's program is still being built in the background (pathtrace.device.programs):
     NVIDIA's driver crashed the interpreter's teardown around a build under way (SIGSEGV after a
     render that had written its image), so the command leaves past it, the build dropped."""
-    programs = sys.modules.get("pathtrace.programs")
+    programs = sys.modules.get("pathtrace.device.programs")
     return programs is not None and programs.builds_under_way()

@@ -57,7 +57,7 @@ def _actor_class(ray):
         """One OpenCL device of one node with the farm's scenes uploaded."""
 
         def __init__(self, scenes, device_spec: str):
-            from pathtrace.device import choose_device, list_devices
+            from pathtrace.device.opencl import choose_device, list_devices
             from pathtrace.renderer import Renderer
             if device_spec == "gpu":
                 # Ray reserves a GPU for this actor and hides the others from CUDA; should the

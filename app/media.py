@@ -11,7 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pathtrace.types import MEDIUM
+from pathtrace.device.types import MEDIUM
 
 # The most media a scene may have: a primitive's two are packed into 16 bits each (kernels/types.h).
 MAX_MEDIA = 0xfffe

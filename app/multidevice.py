@@ -16,7 +16,7 @@ import time
 import numpy as np
 
 from pathtrace.compiled import CompiledScene, compile_scene
-from pathtrace.device import Backend
+from pathtrace.device.opencl import Backend
 from pathtrace.launches import next_launch_size
 from pathtrace.renderer import Renderer, aov_means, variance_of
 

@@ -15,15 +15,15 @@ from pathtrace import bdpt
 from pathtrace.camera import CAMERA_KERNELS, Camera, kernel_name
 from pathtrace.compiled import SCENE_BUFFERS, CompiledScene, compile_scene
 from pathtrace.io.cache_files import read_entry, write_entry
-from pathtrace.device import Backend, cache_dir, check_fits
+from pathtrace.device.opencl import Backend, cache_dir, check_fits
 from pathtrace.errors import UserError, format_bytes
 from pathtrace.environment import Environment
 from pathtrace.memory import available_host_memory
-from pathtrace.occupancy import TUNING_RULE
+from pathtrace.device.occupancy import TUNING_RULE
 from pathtrace.scene import Scene
 from pathtrace.filters import FILTERS
 from pathtrace.scene.description import PATH_QUEUE_AUTO, RUSSIAN_ROULETTE
-from pathtrace.types import PATH_RECORD, RENDER_PARAMS
+from pathtrace.device.types import PATH_RECORD, RENDER_PARAMS
 
 RR_DEPTH = 5           # where Russian roulette on throughput starts (Mitsuba 3's default)
 READ_BACK_BYTES = 64   # host memory per pixel to read an image back and write it: the float4
@@ -105,7 +105,7 @@ class Renderer:
         self.plan_seconds = {}    # and the seconds of each plan's fastest trial
         self.plan_cached = False  # whether it is the verdict of earlier trials (_plan_verdict_path)
         self.samples = 0          # samples per pixel accumulated so far (whole passes)
-        self.generic_samples = 0  # of which the generic program drew (pathtrace.programs)
+        self.generic_samples = 0  # of which the generic program drew (pathtrace.device.programs)
         self.aovs = False         # whether the denoiser's albedo and normal are accumulated too
         self.resets = 0           # how many times the image restarted (pathtrace.launches.Progressive)
         self.traversal_stats = 0  # Features.traversal_stats: set through count_traversal()
@@ -154,8 +154,8 @@ class Renderer:
 
     def _select_program(self):
         """The kernels for the scene: its own, specialised to its shapes, materials and settings
-        (pathtrace.features.Features), or the backend's generic program, by the backend's mode
-        (pathtrace.programs). With "auto", the scene's own program, tuned, is built in the
+        (pathtrace.device.features.Features), or the backend's generic program, by the backend's mode
+        (pathtrace.device.programs). With "auto", the scene's own program, tuned, is built in the
         background, and add_samples switches to it once it is there, the average going on;
         until then the generic program renders, or where that is not built (NVIDIA's driver
         takes 46 s over it: `pathtrace devices --check` builds it) the scene's own program
@@ -191,7 +191,7 @@ class Renderer:
         if program is self.program:
             return
         self.program = program
-        self.uses_generic_program = generic     # (pathtrace.programs)
+        self.uses_generic_program = generic     # (pathtrace.device.programs)
         self.kernels = {False: cl.Kernel(program, "render"), True: cl.Kernel(program, "render_nee")}
         # the queue's kernels are in a scene's program built with a queue depth, never in the
         # generic program, which renders without the queue until the scene's own is built

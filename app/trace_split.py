@@ -11,7 +11,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 import pyopencl as cl
 
-from pathtrace.device import build_program, check_fits
+from pathtrace.device.opencl import build_program, check_fits
 from pathtrace.errors import UserError
 from pathtrace.renderer import Renderer
 from pathtrace.resources import resource_dir

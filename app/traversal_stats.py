@@ -1,6 +1,6 @@
 """Where a render's tracing time goes, counted: the rays a render traces, and per ray the BVH
 nodes it visits and the primitives it tests (`pathtrace bench --traversal`). The render kernels,
-built with TRAVERSAL_STATS (app/features.py), count one of the two in place of the rays they
+built with TRAVERSAL_STATS (app/device/features.py), count one of the two in place of the rays they
 report (kernels/scene.cl: COUNT_WORK); as a render is deterministic for a seed, three renders of
 the same samples, counting rays, nodes and primitives in turn, give the ratios. Counting costs
 the kernels nothing when it is off: the counters are compiled in only with the define."""

@@ -12,7 +12,7 @@ from pathtrace.bvh import BVH
 from pathtrace.bvh_cache import cached_bvh
 from pathtrace.errors import UserError
 from pathtrace.scene.instances import world_boxes
-from pathtrace.types import INSTANCE
+from pathtrace.device.types import INSTANCE
 
 
 @dataclass

@@ -11,7 +11,7 @@ import numpy as np
 import OpenEXR
 from PIL import Image
 
-from pathtrace.device import choose_device
+from pathtrace.device.opencl import choose_device
 from pathtrace.renderer import Renderer
 from pathtrace.scene import load_scene
 

@@ -20,7 +20,7 @@ import pathtrace.bvh as bvh
 from pathtrace.bench import estimator_settings
 from pathtrace.bench_scenes import write_textured_tori
 from pathtrace.compiled import compile_scene
-from pathtrace.device import choose_device
+from pathtrace.device.opencl import choose_device
 from pathtrace.scene import load_scene
 from pathtrace.scene.mitsuba_writer import ply_bytes
 from pathtrace.traversal_stats import traversal_stats

@@ -45,9 +45,9 @@ def main():
         sys.exit("embree_walk_study: Embree's binding is missing: pip install embreex")
 
     from pathtrace.bench import scene_file
-    from pathtrace.device import choose_device
+    from pathtrace.device.opencl import choose_device
     from pathtrace.errors import UserError
-    from pathtrace.features import LONE_MAX
+    from pathtrace.device.features import LONE_MAX
     from pathtrace.scene import load_scene
     from pathtrace.trace_split import split_renderer
 

@@ -12,7 +12,7 @@ import time
 import numpy as np
 
 from pathtrace.camera import Camera
-from pathtrace.device import choose_device
+from pathtrace.device.opencl import choose_device
 from pathtrace.renderer import Renderer
 from pathtrace.scene import Mesh, SceneBuilder, diffuse
 

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pathtrace.device import choose_device
+from pathtrace.device.opencl import choose_device
 from pathtrace.io.images import write_image
 from pathtrace.renderer import Renderer
 from pathtrace.scene import load_scene

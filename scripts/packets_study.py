@@ -22,7 +22,7 @@ import numpy as np
 import pyopencl as cl
 
 from pathtrace.bench import estimator_settings, scene_file
-from pathtrace.device import build_program, choose_device
+from pathtrace.device.opencl import build_program, choose_device
 from pathtrace.renderer import Renderer
 from pathtrace.resources import resource_dir
 from pathtrace.scene import load_scene

@@ -17,7 +17,7 @@ import time
 import numpy as np
 import pyopencl as cl
 
-from pathtrace.device import choose_device
+from pathtrace.device.opencl import choose_device
 from pathtrace.renderer import QUEUE_PASSES, Renderer
 from pathtrace.scene import load_scene
 

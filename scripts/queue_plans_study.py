@@ -11,7 +11,7 @@ import argparse
 import json
 import time
 
-from pathtrace.device import choose_device
+from pathtrace.device.opencl import choose_device
 from pathtrace.renderer import AUTO_PLANS, PLAN_NAMES, Renderer
 from pathtrace.scene import load_scene
 from pathtrace.scene.description import PATH_QUEUE_AUTO

@@ -4,7 +4,7 @@ NVIDIA's OpenCL (docs/notes/performance-2026-11.md, 2026-11-27: the queue chosen
   python scripts/queue_program_study.py SCENE...
 
 For each scene and path_queue 0 and 1 (render setting), the render kernels' registers and bytes
-of spill stores from ptxas's report, untuned and as app/occupancy.py tunes them (with the cap it
+of spill stores from ptxas's report, untuned and as app/device/occupancy.py tunes them (with the cap it
 chose and the warps resident per SM), and the PTX instructions of render_nee. Prints one JSON
 line per program."""
 
@@ -16,8 +16,8 @@ from dataclasses import replace
 import pyopencl as cl
 
 from pathtrace.compiled import compile_scene
-from pathtrace.device import BUILD_OPTIONS, choose_device, kernel_source
-from pathtrace.occupancy import REPORT, build_for_occupancy, is_nvidia, kernel_registers, resident_warps
+from pathtrace.device.opencl import BUILD_OPTIONS, choose_device, kernel_source
+from pathtrace.device.occupancy import REPORT, build_for_occupancy, is_nvidia, kernel_registers, resident_warps
 from pathtrace.scene import load_scene
 
 KERNELS = ("render_nee", "continue_paths_nee")

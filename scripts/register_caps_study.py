@@ -1,5 +1,5 @@
 """Scenes' programs under forced register caps on NVIDIA's OpenCL, against the cap that
-app/occupancy.py's tuning chooses (docs/notes/performance-2026-11.md, 2026-11-26 and 2026-11-27):
+app/device/occupancy.py's tuning chooses (docs/notes/performance-2026-11.md, 2026-11-26 and 2026-11-27):
 
   python scripts/register_caps_study.py SCENE... [--queue 0 1] [--caps 128 96] [--spp 32]
       for each scene and path_queue setting (render setting; 0: off), the program as tuned and
@@ -17,9 +17,9 @@ from dataclasses import replace
 
 import pyopencl as cl
 
-import pathtrace.device as device
+import pathtrace.device.opencl as device
 from path_queue_study import settings, timed
-from pathtrace.occupancy import REPORT, is_nvidia, kernel_registers
+from pathtrace.device.occupancy import REPORT, is_nvidia, kernel_registers
 from pathtrace.renderer import Renderer
 from pathtrace.scene import load_scene
 

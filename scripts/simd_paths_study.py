@@ -21,7 +21,7 @@ import pyopencl as cl
 
 from pathtrace.bench import estimator_settings, measure
 from pathtrace.cli import _int_range, _size
-from pathtrace.device import choose_device
+from pathtrace.device.opencl import choose_device
 from pathtrace.errors import UserError
 from pathtrace.scene import load_scene
 from simd_study import lanes_header

@@ -20,7 +20,7 @@ import numpy as np
 import pyopencl as cl
 
 from pathtrace.cli import _int_range
-from pathtrace.device import choose_device
+from pathtrace.device.opencl import choose_device
 from pathtrace.errors import UserError
 
 HERE = Path(__file__).resolve().parent

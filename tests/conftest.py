@@ -10,8 +10,8 @@ import pyopencl as cl
 import pytest
 
 from pathtrace.compiled import SCENE_BUFFERS
-from pathtrace.device import build_cached, build_program, choose_device
-from pathtrace.features import Features
+from pathtrace.device.opencl import build_cached, build_program, choose_device
+from pathtrace.device.features import Features
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -23,7 +23,7 @@ os.environ.setdefault("PATHTRACE_SCENE_CACHE", "0")
 # Nor to its cache of kernel binaries and path-queue verdicts (Renderer.choose_queue_plan), whose
 # verdicts would spare a later run the trials that tests count.
 os.environ.setdefault("PATHTRACE_CACHE", tempfile.mkdtemp(prefix="pathtrace-tests-"))
-# Renders draw from the generic program alone (pathtrace.programs), one build shared by every
+# Renders draw from the generic program alone (pathtrace.device.programs), one build shared by every
 # test, where each scene's own program would be a build of its own (about 220 of them, most of
 # the suite's time on two cores). Tests marked `specialised` render with the scenes' own
 # programs: those about what those programs compile, trace and cache, and the references, which

@@ -140,7 +140,7 @@ def test_bench_without_the_cold_build_and_with_traversal_counts_and_the_trace_sp
     row, fog = json.loads(out.read_text())["results"]
     assert row["build_cold_seconds"] is None and row["build_warm_seconds"] >= 0 and row["seconds"] > 0
     assert " -/" in r.stdout
-    # simple's five spheres have no tree: every ray tests all five (app/features.py: FLAT_MAX)
+    # simple's five spheres have no tree: every ray tests all five (app/device/features.py: FLAT_MAX)
     assert row["nodes_per_ray"] == 0 and row["primitives_per_ray"] == 5 and row["rays_per_sample"] >= 1
     assert "traversal: " in r.stdout
     split = row["trace_split"]

@@ -9,7 +9,7 @@ import pathtrace.bvh as bvh_module
 
 from pathtrace.bvh import MAX_DEPTH, MAX_LEAF_SIZE, RADIUS, TRAVERSAL_COST, build_bvh, builder_for
 from pathtrace.compiled import compile_scene
-from pathtrace.features import LONE_MAX
+from pathtrace.device.features import LONE_MAX
 from pathtrace.scene import Mesh, SceneBuilder, diffuse
 from tests.conftest import layout_features, scene_arrays
 
@@ -350,9 +350,9 @@ def most_pushes(nodes) -> int:
 
 @pytest.mark.parametrize("build", ["chain", "random", "ploc"])
 def test_the_stack_each_scene_gets_holds_its_tree(build, monkeypatch):
-    """pathtrace.features.stack_size, from the binary depth, bounds what traversal can push, for the
+    """pathtrace.device.features.stack_size, from the binary depth, bounds what traversal can push, for the
     deepest tree app/bvh.py makes (a chain cut at MAX_DEPTH) and for random ones."""
-    from pathtrace.features import stack_size
+    from pathtrace.device.features import stack_size
     rng = np.random.default_rng(5)
     if build == "chain":
         lo = np.column_stack([2.0 ** np.arange(60), np.zeros(60), np.zeros(60)]).astype(np.float32)
@@ -392,7 +392,7 @@ material = { type = "diffuse", rho_d = 0.5 }
 @pytest.mark.parametrize("scene", ["simple", "mixed"])
 @pytest.mark.parametrize("nee", [False, True])
 def test_a_flat_scene_renders_as_its_tree_does(backend, monkeypatch, tmp_path, scene, nee):
-    """A scene of at most FLAT_MAX primitives is built without traversal (app/features.py): its
+    """A scene of at most FLAT_MAX primitives is built without traversal (app/device/features.py): its
     rays find the hits its BVH gives, so the same samples make the same image."""
     from dataclasses import replace
 
@@ -421,7 +421,7 @@ def test_a_flat_scene_renders_as_its_tree_does(backend, monkeypatch, tmp_path, s
 @pytest.mark.parametrize("scene", ["cornell-box", "teapot"])
 def test_a_scene_of_triangles_only_renders_without_the_sphere_code(backend, monkeypatch, scene):
     """A scene without spheres compiles its traversal without the sphere test (NO_SPHERES,
-    app/features.py), which a scene does not pay for where it has none: the same samples make the
+    app/device/features.py), which a scene does not pay for where it has none: the same samples make the
     same image as the program with it."""
     from dataclasses import replace
 

@@ -10,9 +10,9 @@ import pytest
 from scipy import integrate
 
 from pathtrace.camera import Camera, kernel_name
-from pathtrace.features import Features
+from pathtrace.device.features import Features
 from pathtrace.filters import PixelFilter
-from pathtrace.types import RENDER_PARAMS
+from pathtrace.device.types import RENDER_PARAMS
 from tests.test_sampling import chi_square
 
 SOURCE = """

@@ -293,10 +293,10 @@ run()
 @pytest.mark.parametrize("damage", ["truncated", "garbage", "empty"])
 def test_a_damaged_kernel_cache_is_rebuilt(tmp_path, damage):
     """A truncated cache file (the first half of a valid one) crashed PoCL at every start. (PoCL
-    keeps its kernels in its own cache, app/device.py keeps_own_cache: here it uses ours, as the
+    keeps its kernels in its own cache, app/device/opencl.py keeps_own_cache: here it uses ours, as the
     drivers that keep none do.)"""
     env_cache = tmp_path / "cache"
-    ours = ("import sys, pathtrace.device as d; d.keeps_own_cache = lambda device: False; "
+    ours = ("import sys, pathtrace.device.opencl as d; d.keeps_own_cache = lambda device: False; "
             "sys.argv[0] = 'pathtrace'; from pathtrace.console import run; run()")
     run = lambda: subprocess.run([sys.executable, "-c", ours, "render", "simple", "-o", str(tmp_path / "o.png"),
                                   "--size", "8x8", "--spp", "1", "-q"], cwd=ROOT, capture_output=True, text=True,

@@ -8,7 +8,7 @@ from scipy import stats
 
 from pathtrace.environment import LUMINANCE, Environment
 from pathtrace.lights import alias_table, build_light_table, emitted_power
-from pathtrace.types import RENDER_PARAMS
+from pathtrace.device.types import RENDER_PARAMS
 from tests.test_sampling import chi_square
 
 SOURCE = """

@@ -14,7 +14,7 @@ from pathtrace.camera import Camera
 from pathtrace.compiled import compile_scene
 from pathtrace.environment import Environment
 from pathtrace.errors import UserError
-from pathtrace.features import Features
+from pathtrace.device.features import Features
 from pathtrace.lights import DirectionalLight
 from pathtrace.materials import Material
 from pathtrace.media import Medium, MediumInterface

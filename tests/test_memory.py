@@ -8,7 +8,7 @@ import pytest
 
 from pathtrace import cli, compiled
 from pathtrace.compiled import BUILD_HOST_BYTES, check_memory
-from pathtrace.device import check_fits
+from pathtrace.device.opencl import check_fits
 from pathtrace.errors import UserError
 from pathtrace.renderer import Renderer
 from pathtrace.scene import load_scene

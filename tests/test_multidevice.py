@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from pathtrace.cli import main
-from pathtrace.device import open_device
+from pathtrace.device.opencl import open_device
 from pathtrace.multidevice import DeviceGroup, SampleCounter
 from pathtrace.renderer import Renderer
 from pathtrace.scene import load_scene

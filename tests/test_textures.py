@@ -12,13 +12,13 @@ import pytest
 from PIL import Image as PILImage
 
 from pathtrace.errors import UserError
-from pathtrace.features import Features
+from pathtrace.device.features import Features
 from pathtrace.materials import Material, MaterialTable
 from pathtrace.scene.meshes import read_mesh
 from pathtrace.scene.mitsuba import read_mitsuba_file
 from pathtrace.textures import TEXTURES, Image, Texture, compile_textures, read_image
 from pathtrace.textures.bitmap import srgb_to_linear
-from pathtrace.types import MATERIAL
+from pathtrace.device.types import MATERIAL
 from tests.test_mitsuba import SPHERE, write
 
 ALL_TEXTURES = Features(textures=tuple(TEXTURES))
@@ -239,7 +239,7 @@ def test_a_material_reads_its_textured_parameters_at_the_hit(kernels):
 
 def test_a_scene_without_textures_compiles_no_texture_code():
     from pathtrace.compiled import CompiledScene
-    from pathtrace.device import kernel_source
+    from pathtrace.device.opencl import kernel_source
     from pathtrace.scene import load_scene
     scene = load_scene("simple")
     features = CompiledScene(scene).features(scene.settings, scene.camera)

@@ -15,7 +15,7 @@ pytestmark = pytest.mark.specialised     # what the scenes' own programs walk
 
 
 def test_one_sphere_is_tested_once_per_ray_without_a_tree(backend):
-    """A scene this small has no tree (app/features.py: FLAT_MAX): each camera ray tests its one
+    """A scene this small has no tree (app/device/features.py: FLAT_MAX): each camera ray tests its one
     sphere and visits no node; with max depth 1 every sample is one ray."""
     b = SceneBuilder()
     b.add_sphere((0, 0, 0), 1.0, diffuse(0.5))

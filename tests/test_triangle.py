@@ -72,7 +72,7 @@ def f4(a):
 
 
 def triangles(corners):
-    from pathtrace.types import TRIANGLE
+    from pathtrace.device.types import TRIANGLE
     t = np.zeros(len(corners), TRIANGLE)
     for k, f in enumerate(("v0", "v1", "v2")):
         t[f][:, :3] = corners[:, k]

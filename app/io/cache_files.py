@@ -1,4 +1,4 @@
-"""Entries of pathtrace's caches on disk: the kernels' binaries (app/device.py), large scenes'
+"""Entries of pathtrace's caches on disk: the kernels' binaries (app/device/opencl.py), large scenes'
 BVHs (app/bvh_cache.py) and the scenes read from slow files (app/scene/read_cache.py). An entry is the SHA-256 digest of its payload, then the payload. It is
 written whole or not at all, and read back only where it is a regular file whose digest matches,
 so that a damaged entry is a miss: never a hang (an entry that is a FIFO), a crash (a truncated

@@ -12,7 +12,7 @@ from pathtrace.materials.blend import check_blend
 from pathtrace.materials.bsdf import EMITS_BACK, MASKED, NULL, TRANSMISSIVE, TWOSIDED, constant_of
 from pathtrace.materials.registry import BSDFS, TAGS
 from pathtrace.textures.texture import Texture
-from pathtrace.types import MATERIAL
+from pathtrace.device.types import MATERIAL
 
 
 @dataclass

@@ -43,7 +43,7 @@ def source_digest() -> bytes:
 
 def folder():
     """The cache's folder, or None where it is turned off."""
-    from pathtrace.device import cache_dir
+    from pathtrace.device.opencl import cache_dir
     chosen = os.environ.get("PATHTRACE_SCENE_CACHE", "")
     return None if chosen == "0" else Path(chosen) if chosen else cache_dir() / "scenes"
 

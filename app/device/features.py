@@ -1,4 +1,4 @@
-"""What a scene needs of the kernels: the device-independent key by which app/device.py
+"""What a scene needs of the kernels: the device-independent key by which app/device/opencl.py
 specialises the kernel program to a scene."""
 
 from dataclasses import dataclass
@@ -61,7 +61,7 @@ class Features:
         rule and the compiled scene's layout (kernels/scene.cl: LAYOUT_*) read from the launch's
         RenderParams (GENERIC). Built once per device and driver and cached, it draws a scene's
         first images while the scene's own program, specialised by these features, builds
-        (pathtrace.programs)."""
+        (pathtrace.device.programs)."""
         from pathtrace.textures import TEXTURES
         return Features(textures=tuple(TEXTURES), masks=True, normal_maps=True, light_tree=True,
                         media=True, null_surfaces=True, camera=GENERIC, filter=GENERIC,

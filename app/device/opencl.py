@@ -12,9 +12,9 @@ import pyopencl as cl
 
 from pathtrace.io.cache_files import read_entry, write_entry
 from pathtrace.errors import UserError, format_bytes, short
-from pathtrace.features import Features
-from pathtrace.occupancy import TUNING_RULE, build_for_occupancy, is_nvidia
-from pathtrace.programs import Programs, default_mode
+from pathtrace.device.features import Features
+from pathtrace.device.occupancy import TUNING_RULE, build_for_occupancy, is_nvidia
+from pathtrace.device.programs import Programs, default_mode
 from pathtrace.resources import resource_dir
 
 # The order in which the kernel files are joined into one program: the basics, the texture
@@ -159,7 +159,7 @@ def build_cached(context: cl.Context, device: cl.Device, source: str, options: l
                  use_cache: bool = True, tune: bool = True) -> BuildResult:
     """Builds a program for one device. Unless the driver keeps its own cache, the binary is
     cached under cache_dir() (cache_entry). `tune`: on NVIDIA, try the register caps of
-    app/occupancy.py (up to four more builds of the program)."""
+    app/device/occupancy.py (up to four more builds of the program)."""
     use_cache = use_cache and not keeps_own_cache(device)
     path = cache_entry(device, source, options, tune)
     tune = tune and is_nvidia(device)
@@ -199,7 +199,7 @@ def _read_cached(path: Path):
 
 @dataclass
 class Backend:
-    """A chosen device with its context and queue, and its programs (pathtrace.programs): the
+    """A chosen device with its context and queue, and its programs (pathtrace.device.programs): the
     generic program (Features.generic_program) and those specialised to scenes' features, built
     when first asked for. `opened`: what open_device built to show that the platform builds
     kernels. `mode`: one of programs.PROGRAM_MODES, how a renderer on it chooses among them."""
@@ -235,7 +235,7 @@ class Backend:
 
     def program_for(self, features: Features, tuned: bool = True) -> cl.Program:
         """The kernels specialised to `features` (on NVIDIA with `tuned`, under the register caps
-        of app/occupancy.py), built once per backend; waits for them."""
+        of app/device/occupancy.py), built once per backend; waits for them."""
         return self.programs.get(features, tuned)
 
     def ready_program(self, features: Features):
@@ -248,7 +248,7 @@ def open_device(device: Device, extra: str = "", use_cache: bool = True, mode: s
     """The device with its queue. Where building the generic program will not compile it afresh
     (its binary is in pathtrace's cache, or the driver keeps its own cache and builds from it:
     PoCL, whose first build of it takes 2 s on two cores), it is built now: it shows that the
-    platform builds the kernels and draws every scene's first images (pathtrace.programs).
+    platform builds the kernels and draws every scene's first images (pathtrace.device.programs).
     Elsewhere (NVIDIA's driver takes 46 s over it on an H200, and a build in a background thread
     held up the scene's own build behind it) the display's small program shows that the
     platform builds, and the generic program waits for `pathtrace devices --check` (./install.sh

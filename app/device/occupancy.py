@@ -33,7 +33,7 @@ LIGHT_WARPS = 24            # where a light program keeps fewer without spills
 LIGHT_SPILLED = 512         # bytes of spill stores per kernel allowed for LIGHT_WARPS: the most
                             # measured was 472 (the textured teapot, which neither gained nor lost)
 # What a program tuned under this rule is tuned by: part of the program cache's key, so that
-# binaries tuned under another rule are not reused (app/device.py)
+# binaries tuned under another rule are not reused (app/device/opencl.py)
 TUNING_RULE = (f"{FEWEST_WARPS}/{SPILLING_WARPS} warps, {MOST_SPILLED} bytes; "
                f"light {LIGHT_WARPS} warps, {LIGHT_SPILLED} bytes")
 

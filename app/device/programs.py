@@ -1,17 +1,17 @@
 """The programs a device renders with: one generic program that renders any scene, and each
-scene's own program, specialised to its features (app/features.py), built in the background.
+scene's own program, specialised to its features (app/device/features.py), built in the background.
 
 A specialised program is the fastest a scene can have (on a GPU every branch a kernel could take
 costs registers, hence occupancy), but building it can take seconds on a GPU's driver, longer
-with the register-cap trials of app/occupancy.py, and every new mix of materials, textures and
+with the register-cap trials of app/device/occupancy.py, and every new mix of materials, textures and
 lights is a new program. The generic program (Features.generic_program) is built once per
-device, driver and pathtrace version and cached (app/device.py: open_device builds it where that
+device, driver and pathtrace version and cached (app/device/opencl.py: open_device builds it where that
 is fast, `pathtrace devices --check` everywhere), so that a scene's first images need no build:
 they come from the generic program while the scene's own builds in a thread (the drivers'
 builds release Python's lock), started once the first pass is queued so that it takes no core
 from the first image (Renderer.switch_when_built), and launches switch to it once it is there. Where the generic
 program is not built, the first image waits for one untuned build of the scene's own, and the
-tuned one (app/occupancy.py) follows in the background. Nothing else builds behind a first
+tuned one (app/device/occupancy.py) follows in the background. Nothing else builds behind a first
 image: NVIDIA's driver takes 46 s over the generic program on an H200, and a scene's build in
 another thread waited for it (docs/notes/performance-2026-11.md, 2026-11-28).
 
@@ -29,7 +29,7 @@ from concurrent.futures import Future
 import pyopencl as cl
 
 from pathtrace.errors import UserError, warn
-from pathtrace.features import Features
+from pathtrace.device.features import Features
 
 PROGRAM_MODES = ("auto", "specialised", "generic")
 """auto: the generic program until the scene's own is built (in the background); specialised:
@@ -63,8 +63,8 @@ def default_mode() -> str:
 
 class Programs:
     """Programs of one device, each built once, now or in a background thread, on request.
-    `build(features, tune)` builds one (pathtrace.device.build_program, bound to the device);
-    `tunes`: whether a tuned build differs from an untuned one (NVIDIA: app/occupancy.py)."""
+    `build(features, tune)` builds one (pathtrace.device.opencl.build_program, bound to the device);
+    `tunes`: whether a tuned build differs from an untuned one (NVIDIA: app/device/occupancy.py)."""
 
     def __init__(self, build, name: str, tunes: bool):
         self._build = build
