@@ -146,7 +146,7 @@ class _Prepared:
     that the next render uploads only what changed."""
 
     def __init__(self, scene: Scene, backends: list, build_progress=None, phases=None):
-        from pathtrace.compiled import compile_scene
+        from pathtrace.compiler.compiled import compile_scene
         from pathtrace.multidevice import DeviceGroup
         self.backends = backends
         self.geometry = _geometry_digest(scene)
@@ -221,7 +221,7 @@ def _geometry_digest(scene: Scene) -> bytes:
         a = np.ascontiguousarray(a)
         h.update(str((a.dtype.str, a.shape)).encode())
         h.update(a.data)
-    # the media and what bounds them compile with the primitives (pathtrace.compiled)
+    # the media and what bounds them compile with the primitives (pathtrace.compiler.compiled)
     h.update(repr((scene.media, scene.sphere_media, [m.media for m in meshes])).encode())
     return h.digest()
 

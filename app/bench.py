@@ -15,7 +15,7 @@ alone timed, beside pathtrace's render alone (the launches and the read-back, wi
 build and uploads): the per-sample ratio of docs/benchmarks.md. Scenes that are files written
 on demand (pathtrace.bench_scenes: `tori400-textured`) are named like built-in ones.
 
-`pathtrace bench --builds` times BVH builds instead (app/bvh.py, on each device asked for): random
+`pathtrace bench --builds` times BVH builds instead (app/compiler/bvh.py, on each device asked for): random
 spheres and a height field of triangles at 64k, 1M and 4M primitives, the median of three builds
 each, with the tree's SAH cost. `--display` times the viewer's way from the device's image to
 the host (docs/performance.md), and `--denoise` Open Image Denoise at each quality.
@@ -262,7 +262,7 @@ class BuildTime:
     device: str
     primitives: int
     seconds: float            # the median of three builds
-    sah_cost: float           # pathtrace.bvh.BVH.cost
+    sah_cost: float           # pathtrace.compiler.bvh.BVH.cost
     nodes: int
     node_megabytes: float
 
@@ -271,7 +271,7 @@ def run_builds(device_specs, sizes, log=print):
     """A row per device, size and kind of primitive (spheres, triangles)."""
     import numpy as np
 
-    from pathtrace.bvh import build_bvh, primitive_boxes
+    from pathtrace.compiler.bvh import build_bvh, primitive_boxes
     from pathtrace.scene.builtin import count_name
 
     results = []

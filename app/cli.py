@@ -509,7 +509,7 @@ def cmd_farm_render(args):
     from tqdm import tqdm
 
     from pathtrace import farm
-    from pathtrace.compiled import compile_scene
+    from pathtrace.compiler.compiled import compile_scene
     from pathtrace.io.files import shown
     from pathtrace.io.images import Output, check_writable, write_images
     from pathtrace.scene import load_scene

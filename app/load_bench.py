@@ -4,7 +4,7 @@ heightfield1M and meshes850) or takes a scene file given, and times `pathtrace r
 64x64 (64x36 for the height field) with 1 spp from process start to exit, Python's start-up and
 imports included, best of --repeats after one untimed run that fills the kernel cache: with the
 BVH built (the BVH cache turned off), then with the BVH read from the cache that run filled
-(pathtrace.bvh_cache), as a scene opened a second time loads. With --mitsuba PYTHON the same
+(pathtrace.compiler.bvh_cache), as a scene opened a second time loads. With --mitsuba PYTHON the same
 scene's Mitsuba 3 XML is loaded and rendered with 1 spp in a fresh process of that Python, timed
 the same way, in the same run (pathtrace.mitsuba_timing); the ratio is against the build."""
 

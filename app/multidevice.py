@@ -15,7 +15,7 @@ import time
 
 import numpy as np
 
-from pathtrace.compiled import CompiledScene, compile_scene
+from pathtrace.compiler.compiled import CompiledScene, compile_scene
 from pathtrace.device.opencl import Backend
 from pathtrace.launches import next_launch_size
 from pathtrace.renderer import Renderer, aov_means, variance_of

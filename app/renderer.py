@@ -13,12 +13,12 @@ import pyopencl as cl
 
 from pathtrace import bdpt
 from pathtrace.camera import CAMERA_KERNELS, Camera, kernel_name
-from pathtrace.compiled import SCENE_BUFFERS, CompiledScene, compile_scene
+from pathtrace.compiler.compiled import SCENE_BUFFERS, CompiledScene, compile_scene
 from pathtrace.io.cache_files import read_entry, write_entry
 from pathtrace.device.opencl import Backend, cache_dir, check_fits
 from pathtrace.errors import UserError, format_bytes
 from pathtrace.environment import Environment
-from pathtrace.memory import available_host_memory
+from pathtrace.compiler.memory import available_host_memory
 from pathtrace.device.occupancy import TUNING_RULE
 from pathtrace.scene import Scene
 from pathtrace.filters import FILTERS

@@ -171,7 +171,7 @@ CPU_INLINE float4 intersect_leaves(const SceneData *sc, float4 t, int4 count, in
     return select(t, (float4)(INFINITY), leaf);
 }
 
-/* app/bvh.py keeps the binary tree at most 30 levels deep, so the 4-wide one at most 15, and
+/* app/compiler/bvh.py keeps the binary tree at most 30 levels deep, so the 4-wide one at most 15, and
  * traversal pushes at most three nodes per level: 48 entries. A scene's program is built with
  * the size its own tree needs (app/device/features.py: stack_size). */
 #ifndef BVH_STACK_SIZE

@@ -1,7 +1,7 @@
 """How the BVH builder's settings change `tori400-textured`'s tree (docs/notes/performance-2026-11.md,
 2026-11-26): the SAH cost, the time to compile the scene and the nodes and primitives a ray
 meets (pathtrace.traversal_stats), for PLOC's search radius, the top split's bins and the
-clusters it takes (app/bvh.py: RADIUS, MAX_BINS, TOP_CLUSTERS); then with its ground quad (two
+clusters it takes (app/compiler/bvh.py: RADIUS, MAX_BINS, TOP_CLUSTERS); then with its ground quad (two
 triangles the size of the scene) left out or made a grid of smaller ones.
 
     python scripts/bvh_settings_study.py [--device D] [--size WxH] [--spp N]
@@ -16,16 +16,16 @@ from pathlib import Path
 
 import numpy as np
 
-import pathtrace.bvh as bvh
+import pathtrace.compiler.bvh as bvh
 from pathtrace.bench import estimator_settings
 from pathtrace.bench_scenes import write_textured_tori
-from pathtrace.compiled import compile_scene
+from pathtrace.compiler.compiled import compile_scene
 from pathtrace.device.opencl import choose_device
 from pathtrace.scene import load_scene
 from pathtrace.scene.mitsuba_writer import ply_bytes
 from pathtrace.traversal_stats import traversal_stats
 
-SETTINGS = [   # (TOP_CLUSTERS, RADIUS, MAX_BINS); the first is app/bvh.py's
+SETTINGS = [   # (TOP_CLUSTERS, RADIUS, MAX_BINS); the first is app/compiler/bvh.py's
     (bvh.TOP_CLUSTERS, bvh.RADIUS, bvh.MAX_BINS), (65536, 16, 16), (65536, 8, 32), (262144, 8, 16), (1 << 30, 8, 16)]
 
 
@@ -63,7 +63,7 @@ def main():
     parser.add_argument("--size", default="240x135")
     parser.add_argument("--spp", type=int, default=4)
     args = parser.parse_args()
-    os.environ["PATHTRACE_BVH_CACHE"] = "0"       # each row builds its tree (pathtrace.bvh_cache)
+    os.environ["PATHTRACE_BVH_CACHE"] = "0"       # each row builds its tree (pathtrace.compiler.bvh_cache)
     width, height = map(int, args.size.split("x"))
     backend = choose_device(args.device)
     print(backend.device.describe())

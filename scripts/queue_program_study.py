@@ -15,7 +15,7 @@ from dataclasses import replace
 
 import pyopencl as cl
 
-from pathtrace.compiled import compile_scene
+from pathtrace.compiler.compiled import compile_scene
 from pathtrace.device.opencl import BUILD_OPTIONS, choose_device, kernel_source
 from pathtrace.device.occupancy import REPORT, build_for_occupancy, is_nvidia, kernel_registers, resident_warps
 from pathtrace.scene import load_scene

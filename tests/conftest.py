@@ -9,13 +9,13 @@ import numpy as np
 import pyopencl as cl
 import pytest
 
-from pathtrace.compiled import SCENE_BUFFERS
+from pathtrace.compiler.compiled import SCENE_BUFFERS
 from pathtrace.device.opencl import build_cached, build_program, choose_device
 from pathtrace.device.features import Features
 
 ROOT = Path(__file__).resolve().parent.parent
 
-# The BVH cache (pathtrace.bvh_cache) is off in the tests, theirs and their commands': every
+# The BVH cache (pathtrace.compiler.bvh_cache) is off in the tests, theirs and their commands': every
 # scene is built, and nothing is written to the user's cache; tests/test_bvh_cache.py turns it on.
 os.environ.setdefault("PATHTRACE_BVH_CACHE", "0")
 # Nor are scenes read from its cache of scenes (pathtrace.scene.read_cache): tests/test_read_cache.py.

@@ -10,7 +10,7 @@ import pytest
 import ray
 
 from pathtrace import farm
-from pathtrace.compiled import compile_scene
+from pathtrace.compiler.compiled import compile_scene
 from pathtrace.errors import UserError
 from pathtrace.io.images import read_hdr
 from pathtrace.renderer import Renderer

@@ -1,4 +1,4 @@
-"""Instancing (app/scene/instances.py, app/two_level.py, kernels/bvh.cl: INSTANCES): the
+"""Instancing (app/scene/instances.py, app/compiler/two_level.py, kernels/bvh.cl: INSTANCES): the
 two-level BVH finds the hits and surfaces the flattened copies have, a ray leaving one
 instance's triangle meets the same triangle of another, the readers map pbrt-v4's and Mitsuba
 3's instances, scenes of many instances fit and render, and tests/scenes/instances.xml renders
@@ -11,7 +11,7 @@ import pytest
 from pyopencl import cltypes
 
 import pathtrace.scene.instances as instancing
-from pathtrace.compiled import compile_scene
+from pathtrace.compiler.compiled import compile_scene
 from pathtrace.errors import UserError
 from pathtrace.renderer import Renderer
 from pathtrace.scene import Mesh, SceneBuilder, diffuse, emitter, load_scene

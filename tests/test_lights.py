@@ -374,7 +374,7 @@ def test_the_light_tree_picks_each_light_with_the_probability_nee_divides_by(ker
     recomputed from its leaf says (which MIS divides by), those probabilities sum to 1, and a
     light behind the point's surface is never picked."""
     from pyopencl import cltypes
-    from pathtrace.compiled import CompiledScene
+    from pathtrace.compiler.compiled import CompiledScene
     from tests.conftest import scene_arrays
     scene = lamp_field(n=400, size=8.0).with_settings(light_sampler="tree")
     c = CompiledScene(scene)

@@ -315,7 +315,7 @@ def test_beckmann_normals_are_normalised_and_its_g1_is_walters(kernels, alpha):
 def test_only_scenes_with_beckmann_metals_compile_beckmann(tmp_path):
     """The distribution's branch cost GGX scenes 3-6 % on an H100: BECKMANN is defined for the
     programs of scenes that have a Beckmann roughconductor only."""
-    from pathtrace.compiled import CompiledScene
+    from pathtrace.compiler.compiled import CompiledScene
     from pathtrace.scene import load_scene
 
     def defines(distribution):
@@ -329,7 +329,7 @@ def test_only_scenes_with_beckmann_metals_compile_beckmann(tmp_path):
 def test_only_scenes_with_anisotropic_roughness_keep_tangents(tmp_path):
     """A tangent per hit (kernels/frame.cl) is compiled in for anisotropic roughness only; an
     alpha_v left out follows alpha."""
-    from pathtrace.compiled import CompiledScene
+    from pathtrace.compiler.compiled import CompiledScene
     from pathtrace.scene import load_scene
 
     def compiled(params):

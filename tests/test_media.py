@@ -11,7 +11,7 @@ import pytest
 from pyopencl import cltypes
 
 from pathtrace.camera import Camera
-from pathtrace.compiled import compile_scene
+from pathtrace.compiler.compiled import compile_scene
 from pathtrace.environment import Environment
 from pathtrace.errors import UserError
 from pathtrace.device.features import Features

@@ -6,8 +6,10 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from pathtrace import cli, compiled
-from pathtrace.compiled import BUILD_HOST_BYTES, check_memory
+from pathtrace import cli
+
+from pathtrace.compiler import compiled
+from pathtrace.compiler.compiled import BUILD_HOST_BYTES, check_memory
 from pathtrace.device.opencl import check_fits
 from pathtrace.errors import UserError
 from pathtrace.renderer import Renderer
@@ -87,7 +89,7 @@ def fake_cgroup(tmp_path, membership, files):
 def test_a_control_group_limit_caps_the_memory_available(tmp_path, layout):
     """A container's or a batch job's memory limit less its usage, cgroup v2 or v1, whether the
     group's files sit at its path or (inside a container) at the hierarchy's root."""
-    from pathtrace.memory import cgroup_memory_left
+    from pathtrace.compiler.memory import cgroup_memory_left
     at_root = layout.endswith("root")
     if layout.startswith("v2"):
         folder = "" if at_root else "job/"
@@ -102,7 +104,7 @@ def test_a_control_group_limit_caps_the_memory_available(tmp_path, layout):
 
 @pytest.mark.parametrize("limit", ["max\n", "9223372036854771712\n"])
 def test_no_control_group_limit_leaves_meminfo_in_charge(tmp_path, limit):
-    from pathtrace.memory import cgroup_memory_left
+    from pathtrace.compiler.memory import cgroup_memory_left
     name = "memory.max" if limit == "max\n" else "memory/memory.limit_in_bytes"
     usage = "memory.current" if limit == "max\n" else "memory/memory.usage_in_bytes"
     line = "0::/\n" if limit == "max\n" else "4:memory:/\n"
@@ -123,7 +125,7 @@ def test_an_address_space_limit_is_respected(tmp_path):
         resource.setrlimit(resource.RLIMIT_AS, (3 << 30, resource.RLIM_INFINITY))
     root = Path(__file__).resolve().parent.parent
     run = lambda size: subprocess.run(  # noqa: E731
-        [sys.executable, "-c", "import pathtrace.memory as m; print(m.address_space_left())"] if size is None else
+        [sys.executable, "-c", "import pathtrace.compiler.memory as m; print(m.address_space_left())"] if size is None else
         [sys.executable, "-m", "pathtrace", "render", "simple", "-o", str(tmp_path / "o.png"), "--size", size, "--spp", "1"],
         cwd=root, preexec_fn=limited, capture_output=True, text=True, timeout=300)
     left = int(run(None).stdout)

@@ -238,7 +238,7 @@ def test_a_material_reads_its_textured_parameters_at_the_hit(kernels):
 
 
 def test_a_scene_without_textures_compiles_no_texture_code():
-    from pathtrace.compiled import CompiledScene
+    from pathtrace.compiler.compiled import CompiledScene
     from pathtrace.device.opencl import kernel_source
     from pathtrace.scene import load_scene
     scene = load_scene("simple")

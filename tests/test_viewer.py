@@ -576,7 +576,7 @@ def test_movement_speed_is_at_the_scenes_scale(backend):
     """A quarter of the eye's distance to its look-at point a second, at most a tenth of the
     bounds' diagonal: the demo (a 1000-unit ground sphere) moves as before, a small scene seen
     from a far look-at point slowly; the wheel scales it from there."""
-    from pathtrace.compiled import compile_scene
+    from pathtrace.compiler.compiled import compile_scene
     from pathtrace.viewer.controls import FlyControls, speed_for
 
     def speed(scene):

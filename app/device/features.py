@@ -109,7 +109,7 @@ kernel fewer registers, hence more threads in flight, on a GPU (docs/performance
 
 LONE_MAX = 4
 """The most spheres a scene of more primitives than FLAT_MAX may have for its rays to test them
-before the walk, outside the BVH (app/compiled.py), rather than in its leaves: a tree of
+before the walk, outside the BVH (app/compiler/compiled.py), rather than in its leaves: a tree of
 triangles alone walks without the sphere leaves' branch and code (docs/notes/performance-2026-11.md,
 2026-11-27: lone spheres). Each such sphere costs every ray one test, as a box of a 4-wide node
 does."""
@@ -118,7 +118,7 @@ does."""
 def stack_size(binary_depth: int) -> int:
     """Traversal stack entries for a tree whose binary form is `binary_depth` deep: its 4-wide
     form has at most half as many levels and one more, and traversal pushes at most three
-    children per 4-wide node on its way down (kernels/bvh.cl); 48 at app/bvh.py's deepest.
+    children per 4-wide node on its way down (kernels/bvh.cl); 48 at app/compiler/bvh.py's deepest.
     Rounded up to a multiple of 8, so that scenes share programs; a small stack is private
     memory a GPU need not reserve, hence occupancy."""
     return min(48, max(8, -(-(3 * ((binary_depth + 1) // 2) + 3) // 8) * 8))

@@ -1,5 +1,5 @@
 """Entries of pathtrace's caches on disk: the kernels' binaries (app/device/opencl.py), large scenes'
-BVHs (app/bvh_cache.py) and the scenes read from slow files (app/scene/read_cache.py). An entry is the SHA-256 digest of its payload, then the payload. It is
+BVHs (app/compiler/bvh_cache.py) and the scenes read from slow files (app/scene/read_cache.py). An entry is the SHA-256 digest of its payload, then the payload. It is
 written whole or not at all, and read back only where it is a regular file whose digest matches,
 so that a damaged entry is a miss: never a hang (an entry that is a FIFO), a crash (a truncated
 binary handed to a driver can crash it: PoCL segfaulted on the first half of a valid one) or a
@@ -58,7 +58,7 @@ def write_entry(path: Path, *chunks) -> bool:
 
 def prune(where: Path, pattern: str, limit: int):
     """Removes the least recently used entries of `where` that match `pattern` until the rest
-    take at most `limit` bytes (a read entry's time is touched: pathtrace.bvh_cache)."""
+    take at most `limit` bytes (a read entry's time is touched: pathtrace.compiler.bvh_cache)."""
     try:
         entries = [(e.stat().st_mtime, e.stat().st_size, e) for e in where.glob(pattern)]
     except OSError:

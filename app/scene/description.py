@@ -1,5 +1,5 @@
 """A scene as its file states it, in file order: spheres and triangle meshes with materials, an
-environment, a camera and render settings. app/compiled.py turns it into the flat,
+environment, a camera and render settings. app/compiler/compiled.py turns it into the flat,
 device-independent form the kernels read."""
 
 from dataclasses import dataclass, field, replace

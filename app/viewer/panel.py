@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pathtrace.compiled import MAX_RADIANCE
+from pathtrace.compiler.compiled import MAX_RADIANCE
 from pathtrace.materials import BSDFS
 from pathtrace.materials.bsdf import constant_of
 from pathtrace.scene.builtin import BUILTIN_SCENES
@@ -211,7 +211,7 @@ def draw_panel(v):
         if changed:
             r.set_settings(nee=nee)
         env = r.environment
-        most = MAX_RADIANCE / max(float(np.max(env.image)), 1e-30)    # (pathtrace.compiled)
+        most = MAX_RADIANCE / max(float(np.max(env.image)), 1e-30)    # (pathtrace.compiler.compiled)
         changed, value = imgui.drag_float("env intensity", env.intensity, max(env.intensity, 0.01) * 0.01,
                                           0.0, min(most, FLOAT_MAX), "%.4g", imgui.SliderFlags_.always_clamp)
         layout.check("env intensity")

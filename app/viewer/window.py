@@ -21,7 +21,7 @@ import pyopencl as cl
 from pathtrace.display import Display
 from pathtrace.errors import UserError
 from pathtrace.launches import Progressive
-from pathtrace.compiled import compile_scene
+from pathtrace.compiler.compiled import compile_scene
 from pathtrace.renderer import Renderer, aov_means, per_pixel_mean
 from pathtrace.resources import resource_dir
 from pathtrace.scene import load_scene

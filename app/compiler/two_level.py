@@ -8,8 +8,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pathtrace.bvh import BVH
-from pathtrace.bvh_cache import cached_bvh
+from pathtrace.compiler.bvh import BVH
+from pathtrace.compiler.bvh_cache import cached_bvh
 from pathtrace.errors import UserError
 from pathtrace.scene.instances import world_boxes
 from pathtrace.device.types import INSTANCE

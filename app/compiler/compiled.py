@@ -11,8 +11,8 @@ from dataclasses import dataclass
 import numpy as np
 import pyopencl as cl
 
-from pathtrace.bvh import BVH, column_max, column_min, primitive_boxes
-from pathtrace.bvh_cache import cached_bvh
+from pathtrace.compiler.bvh import BVH, column_max, column_min, primitive_boxes
+from pathtrace.compiler.bvh_cache import cached_bvh
 from pathtrace.environment import LUMINANCE
 from pathtrace.errors import UserError, format_bytes, short
 from pathtrace.device.features import FLAT_MAX, LONE_MAX, Features, stack_size
@@ -21,12 +21,12 @@ from pathtrace.lights import LightTable, build_light_table, emitted_power, primi
 from pathtrace.materials import BSDFS, EMITS_BACK, NULL, TAGS
 from pathtrace.materials.blend import reachable
 from pathtrace.media import media_table, packed_interfaces
-from pathtrace.memory import available_host_memory
+from pathtrace.compiler.memory import available_host_memory
 from pathtrace.camera import Camera, kernel_name
 from pathtrace.scene.description import RenderSettings, Scene
 from pathtrace.textures import TextureTables, compile_textures
 from pathtrace.scene import instances as instancing
-from pathtrace.two_level import build_two_level
+from pathtrace.compiler.two_level import build_two_level
 from pathtrace.device.types import BVH_NODE, INSTANCE, TRIANGLE
 
 
@@ -50,7 +50,7 @@ BUILD_HOST_BYTES = 320
 
 class CompiledScene:
     def __init__(self, scene: Scene, queue: cl.CommandQueue = None, progress=None):
-        """queue: the device that builds the BVH (pathtrace.bvh.build_bvh, or pathtrace.bvh_cache reads it) and whose memory the scene
+        """queue: the device that builds the BVH (pathtrace.compiler.bvh.build_bvh, or pathtrace.compiler.bvh_cache reads it) and whose memory the scene
         must fit; progress(fraction) is called as the BVH build goes."""
         self.scene = scene
         n_spheres = len(scene.spheres)

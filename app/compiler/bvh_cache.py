@@ -3,7 +3,7 @@ again skips its build, the longest step of loading a large mesh (about 1 s of th
 command to first image for a million triangles on two CPU cores; docs/benchmarks.md, Loading).
 
 An entry is keyed by the digest of what the tree is built from, the primitives' boxes and where
-the spheres end, together with the source of the builder (app/bvh.py and kernels/build/) and of
+the spheres end, together with the source of the builder (app/compiler/bvh.py and kernels/build/) and of
 this file, so that a changed builder or entry format never reads an old entry. Any device's tree serves every device: each is a
 valid BVH over the same boxes. Entries are files of pathtrace.io.cache_files (a damaged one is built
 again and replaced), and the least recently used are removed once the entries exceed MAX_BYTES.
@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from pathtrace.io import cache_files
-from pathtrace.bvh import BVH, build_bvh
+from pathtrace.compiler.bvh import BVH, build_bvh
 from pathtrace.resources import resource_dir
 from pathtrace.device.types import BVH_NODE
 
@@ -30,7 +30,7 @@ _builder_digest = None
 
 
 def builder_digest() -> bytes:
-    """The digest of the builder's source (app/bvh.py and its kernels) and of this file's, which
+    """The digest of the builder's source (app/compiler/bvh.py and its kernels) and of this file's, which
     writes and reads the entries."""
     global _builder_digest
     if _builder_digest is None:
