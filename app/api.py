@@ -61,7 +61,7 @@ def devices() -> list:
 
 def queue_plans(scene) -> list:
     """What settings.path_queue PATH_QUEUE_AUTO chose for `scene`'s last render, in words, one
-    per device (pathtrace.renderer: the plan and each plan's trial); empty where it was not
+    per device (pathtrace.rendering.renderer: the plan and each plan's trial); empty where it was not
     asked for or the scene was not rendered."""
     prepared = scene.__dict__.get("_prepared")
     return prepared.group.queue_plans() if prepared else []
@@ -147,7 +147,7 @@ class _Prepared:
 
     def __init__(self, scene: Scene, backends: list, build_progress=None, phases=None):
         from pathtrace.compiler.compiled import compile_scene
-        from pathtrace.multidevice import DeviceGroup
+        from pathtrace.rendering.multidevice import DeviceGroup
         self.backends = backends
         self.geometry = _geometry_digest(scene)
         start = time.perf_counter()

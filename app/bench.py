@@ -34,8 +34,8 @@ from statistics import median
 
 from pathtrace.device.opencl import build_program, choose_devices
 from pathtrace.errors import UserError
-from pathtrace.multidevice import DeviceGroup
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.multidevice import DeviceGroup
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 
 TARGET_SCENES = ("simple", "spheres8k", "spheres64k",
@@ -76,7 +76,7 @@ class Result:
     trace_split: object = None      # with --trace-split: a pathtrace.trace_split.TraceSplit
     path_queue: int = 0             # the render setting (--path-queue; -1: auto)
     queue_plan: str = ""            # with --path-queue auto: the plan its trials chose, and
-                                    # each plan's fastest trial in seconds (pathtrace.renderer)
+                                    # each plan's fastest trial in seconds (pathtrace.rendering.renderer)
 
 
 def default_estimator(scene) -> str:
@@ -96,7 +96,7 @@ def estimator_settings(estimator: str) -> dict:
 
 def measure(backends, scene, estimator, width, height, spp, builds, rounds: int = 1) -> Result:
     """A timed render of `scene` on `backends` together (one device, or several sharing the
-    samples: pathtrace.multidevice); with rounds > 1, that many renders of the same samples,
+    samples: pathtrace.rendering.multidevice); with rounds > 1, that many renders of the same samples,
     whose median counts."""
     scene = scene.with_settings(**estimator_settings(estimator))
     # the scene's own kernels (pathtrace.device.features), built and launched once outside the timed region

@@ -97,7 +97,7 @@ def kernel_parts(projection: str) -> list:
     glue = choice_glue("CameraRay generate_ray(const RenderParams *p, float sx, float sy, float2 u)",
                        "generate_{}_ray(p, sx, sy, u)", CAMERA_KERNELS, projection, "camera_type")
     # bidirectional path tracing's join to the lens (a BDPT program is never generic, and its
-    # camera a perspective one: app/bdpt.py)
+    # camera a perspective one: app/rendering/bdpt.py)
     glue += "#ifdef BDPT\n" + choice_glue("int sample_importance(const RenderParams *p, float3 x, float2 u, CameraImportance *ci)",
                                           "sample_{}_importance(p, x, u, ci)", CAMERA_KERNELS, projection,
                                           "camera_type") + "#endif\n"

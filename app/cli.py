@@ -508,7 +508,7 @@ def cmd_farm_render(args):
     import numpy as np
     from tqdm import tqdm
 
-    from pathtrace import farm
+    from pathtrace.rendering import farm
     from pathtrace.compiler.compiled import compile_scene
     from pathtrace.io.files import shown
     from pathtrace.io.images import Output, check_writable, write_images

@@ -13,7 +13,7 @@ import pyopencl as cl
 
 from pathtrace.device.opencl import build_program, check_fits
 from pathtrace.errors import UserError
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.resources import resource_dir
 
 RAY_KINDS = ("camera", "bounce", "shadow")      # the rays of kernels/trace_split.cl, in its order

@@ -7,7 +7,7 @@ the kernels nothing when it is off: the counters are compiled in only with the d
 
 from dataclasses import dataclass
 
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 
 NODES_VISITED, PRIMITIVES_TESTED = 1, 2       # kernels/scene.cl
 

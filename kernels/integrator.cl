@@ -367,7 +367,7 @@ CPU_INLINE float3 trace_path(const SceneData *sc, const RenderParams *p, const P
  * float32 sum of N samples rounds each new one by up to 2^-24 N of the total (a viewer left
  * running for hours stopped converging). No reassociation is allowed (no
  * -cl-fast-relaxed-math), so the compiler keeps (t - s) - y. Within a launch the samples are
- * summed plainly, in registers: a launch adds at most MAX_LAUNCH_SAMPLES (app/renderer.py). */
+ * summed plainly, in registers: a launch adds at most MAX_LAUNCH_SAMPLES (app/rendering/renderer.py). */
 void add_compensated(float4 *s, float4 *c, float4 x)
 {
     float4 y = x - *c;

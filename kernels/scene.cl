@@ -1,4 +1,4 @@
-/* The compiled scene as the kernels see it (app/compiler/compiled.py builds it; app/renderer.py uploads
+/* The compiled scene as the kernels see it (app/compiler/compiled.py builds it; app/rendering/renderer.py uploads
  * it): every table in one struct, so that helpers take one argument however the scene grows.
  * The order of the arguments is app/compiler/compiled.py's SCENE_BUFFERS. */
 

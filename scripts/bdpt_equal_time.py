@@ -12,7 +12,7 @@ import OpenEXR
 from PIL import Image
 
 from pathtrace.device.opencl import choose_device
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 
 be = choose_device("gpu")

@@ -13,7 +13,7 @@ import numpy as np
 
 from pathtrace.camera import Camera
 from pathtrace.device.opencl import choose_device
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import Mesh, SceneBuilder, diffuse
 
 TRIANGLES = 100_000

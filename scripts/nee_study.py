@@ -22,7 +22,7 @@ import numpy as np
 
 from pathtrace.device.opencl import choose_device
 from pathtrace.io.images import write_image
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 
 

@@ -23,7 +23,7 @@ import pyopencl as cl
 
 from pathtrace.bench import estimator_settings, scene_file
 from pathtrace.device.opencl import build_program, choose_device
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.resources import resource_dir
 from pathtrace.scene import load_scene
 

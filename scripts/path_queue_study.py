@@ -18,7 +18,7 @@ import numpy as np
 import pyopencl as cl
 
 from pathtrace.device.opencl import choose_device
-from pathtrace.renderer import QUEUE_PASSES, Renderer
+from pathtrace.rendering.renderer import QUEUE_PASSES, Renderer
 from pathtrace.scene import load_scene
 
 DEPTHS = (1, 2, 3, 4, 6, 8)

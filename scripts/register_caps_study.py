@@ -20,7 +20,7 @@ import pyopencl as cl
 import pathtrace.device.opencl as device
 from path_queue_study import settings, timed
 from pathtrace.device.occupancy import REPORT, is_nvidia, kernel_registers
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 
 RENDER_KERNELS = ("render", "continue_paths")     # with _nee where the scene has it

@@ -295,7 +295,7 @@ def test_a_bad_path_queue_setting_is_one_user_error(value):
 def test_auto_chooses_its_plan_for_the_whole_render(monkeypatch):
     """A render's first snapshot has 1 spp; "auto" chooses for the render's samples, so that a
     long render runs its trials (which a render shorter than them skips)."""
-    from pathtrace.renderer import Renderer
+    from pathtrace.rendering.renderer import Renderer
     asked = []
     choose = Renderer.choose_queue_plan
     monkeypatch.setattr(Renderer, "choose_queue_plan", lambda self, samples, trials=None:

@@ -8,7 +8,7 @@ import pytest
 from pathtrace.compiler.compiled import CompiledScene
 from pathtrace.errors import UserError
 from pathtrace.materials import Material, MaterialTable
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 
 SCENE = """

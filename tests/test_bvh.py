@@ -397,7 +397,7 @@ def test_a_flat_scene_renders_as_its_tree_does(backend, monkeypatch, tmp_path, s
     from dataclasses import replace
 
     from pathtrace.compiler.compiled import CompiledScene
-    from pathtrace.renderer import Renderer
+    from pathtrace.rendering.renderer import Renderer
     from pathtrace.scene import load_scene
     if scene == "mixed":
         (tmp_path / "mixed.toml").write_text(FLAT_MIXED)
@@ -426,7 +426,7 @@ def test_a_scene_of_triangles_only_renders_without_the_sphere_code(backend, monk
     from dataclasses import replace
 
     from pathtrace.compiler.compiled import CompiledScene
-    from pathtrace.renderer import Renderer
+    from pathtrace.rendering.renderer import Renderer
     from pathtrace.scene import load_scene
     loaded = load_scene(scene)
 
@@ -451,7 +451,7 @@ def test_a_few_spheres_beside_triangles_stay_out_of_the_tree(backend, monkeypatc
     (LONE_SPHERES), whose leaves hold triangles only, and the same samples make the same image as
     with the sphere in the tree."""
     import pathtrace.compiler.compiled as compiled_module
-    from pathtrace.renderer import Renderer
+    from pathtrace.rendering.renderer import Renderer
     from pathtrace.scene import load_scene
     loaded = load_scene("teapot-sky")
 

@@ -456,7 +456,7 @@ def test_a_nul_byte_in_a_file_name_is_one_line(tmp_path, field):
 
 def test_farm_patterns_and_addresses_of_odd_text_are_one_line():
     from pathtrace.cli import farm_output
-    from pathtrace.farm import _check_reachable
+    from pathtrace.rendering.farm import _check_reachable
     for pattern in ("{name.x}.png", "{frame[0]}.png", "{0}.png", "{name!z}.png"):
         with pytest.raises(UserError, match="only {name} and {frame} may stand in braces"):
             farm_output(pattern, "simple", 0, 1)

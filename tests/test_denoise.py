@@ -9,7 +9,7 @@ from pathtrace.camera import Camera
 from pathtrace.io.denoiser import Denoiser
 from pathtrace.environment import Environment
 from pathtrace.materials import Material
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import Mesh, RenderSettings, SceneBuilder, diffuse, load_scene
 
 QUAD = np.array([[0, 1, 2], [0, 2, 3]], np.int32)

@@ -1,4 +1,4 @@
-"""The render farm on a local Ray cluster of CPU actors (app/farm.py): the merged image equals
+"""The render farm on a local Ray cluster of CPU actors (app/rendering/farm.py): the merged image equals
 the one-process render of the same samples, also when an actor is killed mid-render, and each
 bad input is one line."""
 
@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 import ray
 
-from pathtrace import farm
+from pathtrace.rendering import farm
 from pathtrace.compiler.compiled import compile_scene
 from pathtrace.errors import UserError
 from pathtrace.io.images import read_hdr
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 
 

@@ -13,7 +13,7 @@ from pyopencl import cltypes
 import pathtrace.scene.instances as instancing
 from pathtrace.compiler.compiled import compile_scene
 from pathtrace.errors import UserError
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import Mesh, SceneBuilder, diffuse, emitter, load_scene
 from pathtrace.scene.transform import rotation, scaling, translation
 from tests.conftest import KernelRunner, scene_arrays

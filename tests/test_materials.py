@@ -10,7 +10,7 @@ import pytest
 from pyopencl import cltypes
 
 from pathtrace.materials import BSDFS, Material, pack
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.materials.microfacet import TABLE_COSINES, rough_coating, rough_dielectric_albedo
 from pathtrace.materials.optics import diffuse_fresnel_reflectance, fresnel_dielectric
 from tests.test_bsdfs import direction, evaluate, hemisphere_grid, sample

@@ -18,7 +18,7 @@ from pathtrace.device.features import Features
 from pathtrace.lights import DirectionalLight
 from pathtrace.materials import Material
 from pathtrace.media import Medium, MediumInterface
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 from pathtrace.scene.description import Mesh, SceneBuilder
 from pathtrace.scene.mitsuba import _cube

@@ -12,7 +12,7 @@ from pathtrace.compiler import compiled
 from pathtrace.compiler.compiled import BUILD_HOST_BYTES, check_memory
 from pathtrace.device.opencl import check_fits
 from pathtrace.errors import UserError
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 
 SMALL_DEVICE = SimpleNamespace(name="Tiny GPU ", max_mem_alloc_size=1 << 20, global_mem_size=3 << 20)
@@ -68,9 +68,9 @@ def test_a_slow_build_shows_its_progress(monkeypatch, tmp_path, capsys):
 
 
 def test_an_image_too_large_to_read_back_is_refused(backend, monkeypatch):
-    import pathtrace.renderer
+    import pathtrace.rendering.renderer
     r = Renderer(backend, load_scene("simple"), 8, 8)
-    monkeypatch.setattr(pathtrace.renderer, "available_host_memory", lambda: 1 << 20)
+    monkeypatch.setattr(pathtrace.rendering.renderer, "available_host_memory", lambda: 1 << 20)
     with pytest.raises(UserError, match="the 4096x4096 image of simple needs about .* of memory to render, read back"):
         r.resize(4096, 4096)
     assert (r.width, r.height) == (8, 8)

@@ -13,7 +13,7 @@ import pytest
 
 from pathtrace import renderer as renderer_module
 from pathtrace.errors import UserError
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 from pathtrace.traversal_stats import traversal_stats
 
@@ -119,7 +119,7 @@ def test_render_command_takes_the_setting(tmp_path, setting):
 
 
 def test_bands_of_rows_render_the_same(backend):
-    """The viewer's launches cover bands of rows (pathtrace.launches.Progressive); a band's passes
+    """The viewer's launches cover bands of rows (pathtrace.rendering.launches.Progressive); a band's passes
     take only as many paths as its pixels can queue."""
     scene = load_scene("cornell-box").with_settings(max_depth=6, russian_roulette="off")
     plain = render(backend, scene, 0)

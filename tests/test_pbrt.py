@@ -11,7 +11,7 @@ import pytest
 
 from pathtrace.errors import UserError
 from pathtrace.materials.optics import CONDUCTORS
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 import pathtrace.scene.instances as instancing
 from pathtrace.scene.instances import flattened_meshes

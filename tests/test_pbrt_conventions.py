@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from tests.test_pbrt import FLOOR, scene
 
 LIGHT_QUAD = '"point3 P" [ -0.5 1.5 -0.5  0.5 1.5 -0.5  0.5 1.5 0.5  -0.5 1.5 0.5 ] "integer indices" [ 0 1 2  0 2 3 ]'

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from pathtrace.io.images import read_hdr
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 from tests.stats import z_test
 

@@ -14,7 +14,7 @@ from pathtrace.device.opencl import Backend
 from pathtrace.device.features import Features
 from pathtrace.filters import PixelFilter
 from pathtrace.device.programs import Programs
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 from tests.stats import z_test
 

@@ -5,7 +5,7 @@ import pytest
 
 from pathtrace.camera import Camera
 from pathtrace.environment import Environment
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import RenderSettings, SceneBuilder, diffuse, load_scene
 from pathtrace.scene.builtin import BUILTIN_SCENES
 from tests.stats import z_test

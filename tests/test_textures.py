@@ -374,7 +374,7 @@ def test_a_masked_surface_lets_through_one_minus_its_opacity(backend, opacity, n
     """The pixels' mean is the sky times 1 - opacity: 0.7 for a constant 0.3, and 0.5 for a fine
     checkerboard of opaque and clear squares; a Binomial count, so the tolerance is its standard
     error."""
-    from pathtrace.renderer import Renderer
+    from pathtrace.rendering.renderer import Renderer
     r = Renderer(backend, masked_wall_scene(opacity, nee))
     r.add_samples(64)
     expected = 0.7 if opacity == 0.3 else 0.5
@@ -461,7 +461,7 @@ def flat_map_scene(kind, tmp_path):
 def test_a_map_that_perturbs_nothing_changes_nothing(backend, tmp_path, kind):
     """The 8-bit (0, 0, 1) normal is (128, 128, 255): within 1/255 of the geometric normal, so
     the image moves by less than a percent; a constant height has no slopes: the same image."""
-    from pathtrace.renderer import Renderer
+    from pathtrace.rendering.renderer import Renderer
     images = []
     for k in (None, kind):
         r = Renderer(backend, flat_map_scene(k, tmp_path))
@@ -480,7 +480,7 @@ def test_a_bump_map_and_the_normal_map_of_its_normal_render_alike(backend, tmp_p
     lacked both, and lit this floor under a grazing lamp brighter (review 2026-11-28, F9)."""
     from pathtrace.api import load_dict
     from pathtrace.io.images import write_image
-    from pathtrace.renderer import Renderer
+    from pathtrace.rendering.renderer import Renderer
     width, step, scale = 64, 2, 20.0
     ramp = np.tile((np.arange(width) * step).astype(np.uint8)[None, :, None], (4, 1, 3))
     PILImage.fromarray(ramp).save(tmp_path / "ramp.png")

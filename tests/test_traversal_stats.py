@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from pathtrace.camera import Camera
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 from pathtrace.scene import SceneBuilder, diffuse
 from pathtrace.environment import Environment

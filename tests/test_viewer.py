@@ -17,7 +17,7 @@ import pytest
 
 from pathtrace.errors import UserError
 from pathtrace.io.images import read_hdr
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -673,7 +673,7 @@ def test_frames_never_wait_for_the_device_and_launches_fit_the_frame_budget(disp
     samples where a pass takes less, a band of rows where it takes more (or a single row)."""
     import pyopencl as cl
 
-    from pathtrace.launches import QUEUE_AHEAD
+    from pathtrace.rendering.launches import QUEUE_AHEAD
     from pathtrace.viewer.window import LAUNCH_BUDGET, Viewer
     v = Viewer(backend, load_scene("demo").with_settings(width=640, height=360), tmp_path, window_size=(1280, 960))
     try:

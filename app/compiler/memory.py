@@ -1,6 +1,6 @@
 """How much memory this process can still take on the host: the checks that refuse, in one line
 and before anything is allocated, a scene or an image that would not fit (app/compiler/compiled.py,
-app/renderer.py), where a failed allocation would end in a MemoryError deep in NumPy or an
+app/rendering/renderer.py), where a failed allocation would end in a MemoryError deep in NumPy or an
 assertion inside the OpenCL driver."""
 
 import os

@@ -49,7 +49,7 @@ class Features:
                                            # continuation queue (PATH_QUEUE, kernels/integrator.cl;
                                            # the render setting path_queue); 0: no queue
     bdpt: int = 0                          # bidirectional path tracing (kernels/bdpt.cl) of paths
-                                           # up to this depth (app/bdpt.py); 0: the path tracer alone
+                                           # up to this depth (app/rendering/bdpt.py); 0: the path tracer alone
     light_tracing: bool = False            # with bdpt: light tracing alone (LIGHT_TRACING), the
                                            # integrator "ptracer"
     generic: bool = False                  # renders any scene (Features.generic_program)

@@ -149,7 +149,7 @@ def warm_up(backend) -> float:
     without next-event estimation, so that a driver that compiles kernels at their first launch
     (PoCL, for each work-group size) has them in its cache before a user's first image; the
     seconds it took."""
-    from pathtrace.renderer import Renderer
+    from pathtrace.rendering.renderer import Renderer
     from pathtrace.scene import load_scene
     generic = backend.with_mode("generic")
     start = time.perf_counter()

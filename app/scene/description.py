@@ -21,9 +21,9 @@ from pathtrace.scene.meshes import ellipsoid, is_closed, is_similarity
 # vertex with the material's albedo; "off", at max_depth only.
 RUSSIAN_ROULETTE = ("off", "albedo", "throughput")
 MAX_PATH_QUEUE = 64     # RenderSettings.path_queue's largest value (no path that long is short)
-PATH_QUEUE_AUTO = -1    # RenderSettings.path_queue "auto": chosen by trial renders (pathtrace.renderer)
+PATH_QUEUE_AUTO = -1    # RenderSettings.path_queue "auto": chosen by trial renders (pathtrace.rendering.renderer)
 # The estimators a render can use: "path", the path tracer (kernels/integrator.cl); "bdpt",
-# bidirectional path tracing (kernels/bdpt.cl, app/bdpt.py); "ptracer", its light tracing alone
+# bidirectional path tracing (kernels/bdpt.cl, app/rendering/bdpt.py); "ptracer", its light tracing alone
 # (Mitsuba 3's particle tracer).
 INTEGRATORS = ("path", "bdpt", "ptracer")
 

@@ -1,5 +1,5 @@
 """The viewer's window and loop. The window never waits for the renderer: each frame polls input,
-moves the camera, lets pathtrace.launches.Progressive collect finished launches and queue new ones
+moves the camera, lets pathtrace.rendering.launches.Progressive collect finished launches and queue new ones
 (bands of rows sized to a fraction of a frame), and shows the newest image that has reached the
 host (pathtrace.display, drawn by shaders/display.frag), then the imgui panel. While the
 camera rests the image is denoised (pathtrace.io.denoiser) in a worker thread, every time its samples
@@ -20,16 +20,16 @@ import pyopencl as cl
 
 from pathtrace.display import Display
 from pathtrace.errors import UserError
-from pathtrace.launches import Progressive
+from pathtrace.rendering.launches import Progressive
 from pathtrace.compiler.compiled import compile_scene
-from pathtrace.renderer import Renderer, aov_means, per_pixel_mean
+from pathtrace.rendering.renderer import Renderer, aov_means, per_pixel_mean
 from pathtrace.resources import resource_dir
 from pathtrace.scene import load_scene
 from pathtrace.viewer.controls import FlyControls, pick_ray, speed_for
 from pathtrace.viewer.panel import MARGIN, draw_help, draw_notice, draw_panel
 
 LAUNCH_BUDGET = 1 / 120        # device seconds per launch: a reset waits for at most three
-                               # (pathtrace.launches.QUEUE_AHEAD); larger ones made the 99th-percentile
+                               # (pathtrace.rendering.launches.QUEUE_AHEAD); larger ones made the 99th-percentile
                                # frame 50-80 ms on two cores
 MOVE_BUDGET = 1 / 30           # device seconds for a whole preview pass while the camera moves
 MAX_PREVIEW_SCALE = 16         # the coarsest preview: 1/16 of the resolution on each axis

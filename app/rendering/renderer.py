@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pyopencl as cl
 
-from pathtrace import bdpt
+from pathtrace.rendering import bdpt
 from pathtrace.camera import CAMERA_KERNELS, Camera, kernel_name
 from pathtrace.compiler.compiled import SCENE_BUFFERS, CompiledScene, compile_scene
 from pathtrace.io.cache_files import read_entry, write_entry
@@ -107,7 +107,7 @@ class Renderer:
         self.samples = 0          # samples per pixel accumulated so far (whole passes)
         self.generic_samples = 0  # of which the generic program drew (pathtrace.device.programs)
         self.aovs = False         # whether the denoiser's albedo and normal are accumulated too
-        self.resets = 0           # how many times the image restarted (pathtrace.launches.Progressive)
+        self.resets = 0           # how many times the image restarted (pathtrace.rendering.launches.Progressive)
         self.traversal_stats = 0  # Features.traversal_stats: set through count_traversal()
         self.set_scene(scene, progress)
         self.resize(width or self.scene.settings.width, height or self.scene.settings.height)
@@ -472,7 +472,7 @@ class Renderer:
         renderer), so that several renderers can share one render's sample indices.
 
         rows = (first, end) adds them to those rows only: a band of a pass, so that no launch
-        holds a window up (pathtrace.launches.Progressive). Bands go top to bottom; `samples` counts
+        holds a window up (pathtrace.rendering.launches.Progressive). Bands go top to bottom; `samples` counts
         whole passes, so it grows with the band that ends at the last row. A pass split into
         bands adds the very samples one launch would."""
         self.switch_when_built()

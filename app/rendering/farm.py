@@ -22,7 +22,7 @@ import numpy as np
 
 from pathtrace.camera import Camera
 from pathtrace.errors import UserError, cut, short
-from pathtrace.launches import next_launch_size
+from pathtrace.rendering.launches import next_launch_size
 
 BATCH_SECONDS = 1.0       # a batch's target duration: long enough that transfers are amortised
 
@@ -58,7 +58,7 @@ def _actor_class(ray):
 
         def __init__(self, scenes, device_spec: str):
             from pathtrace.device.opencl import choose_device, list_devices
-            from pathtrace.renderer import Renderer
+            from pathtrace.rendering.renderer import Renderer
             if device_spec == "gpu":
                 # Ray reserves a GPU for this actor and hides the others from CUDA; should the
                 # OpenCL driver still list them all, take the reserved one by its number

@@ -5,7 +5,7 @@ its absolute index (kernels/rng.cl), so the image does not depend on which devic
 sample: it equals a one-device render of the same samples up to the order of float additions.
 
 Balancing follows the idea of Cycles' work balancer: each device takes launches sized to its own
-measured speed (pathtrace.launches.next_launch_size), so a fast device takes more samples and a device
+measured speed (pathtrace.rendering.launches.next_launch_size), so a fast device takes more samples and a device
 that slows down takes fewer; near the end a device takes no more than its share of what is left,
 by the measured speeds, so that no device is left finishing a long launch alone."""
 
@@ -17,8 +17,8 @@ import numpy as np
 
 from pathtrace.compiler.compiled import CompiledScene, compile_scene
 from pathtrace.device.opencl import Backend
-from pathtrace.launches import next_launch_size
-from pathtrace.renderer import Renderer, aov_means, variance_of
+from pathtrace.rendering.launches import next_launch_size
+from pathtrace.rendering.renderer import Renderer, aov_means, variance_of
 
 
 FIRST_BANDS = 16       # the first sample of a render is split into this many launches of rows,
