@@ -38,7 +38,7 @@ class Camera:
         self.up = np.asarray(self.up, np.float64)
 
     def __repr__(self) -> str:
-        from pathtrace.named import vector
+        from pathtrace.scene.named import vector
         lens = (f", vfov {self.vfov:g}" + (f", aperture {self.aperture:g} focused at {self.focus_distance:g}"
                                           if self.aperture > 0 else "")) if self.projection != "orthographic" \
             else f", height {self.height:g}"

@@ -7,7 +7,7 @@ import pytest
 
 from pathtrace.camera import Camera
 from pathtrace.io.denoiser import Denoiser
-from pathtrace.environment import Environment
+from pathtrace.scene.environment import Environment
 from pathtrace.materials import Material
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import Mesh, RenderSettings, SceneBuilder, diffuse, load_scene

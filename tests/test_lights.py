@@ -6,7 +6,7 @@ import pytest
 from pyopencl import cltypes
 from scipy import stats
 
-from pathtrace.environment import LUMINANCE, Environment
+from pathtrace.scene.environment import LUMINANCE, Environment
 from pathtrace.lights import alias_table, build_light_table, emitted_power
 from pathtrace.device.types import RENDER_PARAMS
 from tests.test_sampling import chi_square

@@ -473,7 +473,7 @@ def test_an_invisible_coating_over_a_rough_metal_is_the_rough_metal(kernels):
 def test_coated_light_sampling_and_bsdf_sampling_agree(backend, kind, params):
     """A rough coated sphere under a sky and a lamp: the image with next-event estimation (its
     MIS weights read the estimated pdf) and the one without agree to within noise."""
-    from pathtrace.environment import Environment
+    from pathtrace.scene.environment import Environment
     from pathtrace.scene.description import SceneBuilder
     from tests.stats import z_test
     b = SceneBuilder()

@@ -17,7 +17,7 @@ import pathtrace.scene.instances as instancing
 from pathtrace.scene.instances import flattened_meshes
 from pathtrace.scene.pbrt.equal_area import sphere_to_square
 from pathtrace.scene.transform import scaling, translation
-from pathtrace.spectra import blackbody_rgb, named_spectrum, reflectance_rgb, sampled
+from pathtrace.scene.spectra import blackbody_rgb, named_spectrum, reflectance_rgb, sampled
 from tests.stats import z_test
 from tests.test_reference import REFERENCE_BIAS
 

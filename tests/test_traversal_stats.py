@@ -8,7 +8,7 @@ from pathtrace.camera import Camera
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 from pathtrace.scene import SceneBuilder, diffuse
-from pathtrace.environment import Environment
+from pathtrace.scene.environment import Environment
 from pathtrace.traversal_stats import traversal_stats
 
 pytestmark = pytest.mark.specialised     # what the scenes' own programs walk

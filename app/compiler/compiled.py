@@ -13,14 +13,14 @@ import pyopencl as cl
 
 from pathtrace.compiler.bvh import BVH, column_max, column_min, primitive_boxes
 from pathtrace.compiler.bvh_cache import cached_bvh
-from pathtrace.environment import LUMINANCE
+from pathtrace.scene.environment import LUMINANCE
 from pathtrace.errors import UserError, format_bytes, short
 from pathtrace.device.features import FLAT_MAX, LONE_MAX, Features, stack_size
 from pathtrace.lights.light import MAX_RADIANCE
 from pathtrace.lights import LightTable, build_light_table, emitted_power, primitive_bounds
 from pathtrace.materials import BSDFS, EMITS_BACK, NULL, TAGS
 from pathtrace.materials.blend import reachable
-from pathtrace.media import media_table, packed_interfaces
+from pathtrace.scene.media import media_table, packed_interfaces
 from pathtrace.compiler.memory import available_host_memory
 from pathtrace.camera import Camera, kernel_name
 from pathtrace.scene.description import RenderSettings, Scene

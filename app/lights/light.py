@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from pathtrace.environment import LUMINANCE
+from pathtrace.scene.environment import LUMINANCE
 
 
 class DeltaLight:

@@ -241,7 +241,7 @@ class MaterialTable:
         return not isinstance(key, bool) and isinstance(key, (int, np.integer)) and -len(self) <= key < len(self)
 
     def __repr__(self) -> str:
-        from pathtrace.named import summary
+        from pathtrace.scene.named import summary
         types = [list(BSDFS)[int(t)] for t in self.rows["type"]]
         return f"<{len(self)} material{'' if len(self) == 1 else 's'}" + (
             f": {summary(f'{k} ({t})' for k, t in zip(self.keys(), types))}>" if len(self) else ">")

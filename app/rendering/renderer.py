@@ -17,7 +17,7 @@ from pathtrace.compiler.compiled import SCENE_BUFFERS, CompiledScene, compile_sc
 from pathtrace.io.cache_files import read_entry, write_entry
 from pathtrace.device.opencl import Backend, cache_dir, check_fits
 from pathtrace.errors import UserError, format_bytes
-from pathtrace.environment import Environment
+from pathtrace.scene.environment import Environment
 from pathtrace.compiler.memory import available_host_memory
 from pathtrace.device.occupancy import TUNING_RULE
 from pathtrace.scene import Scene

@@ -7,12 +7,12 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from pathtrace.camera import Camera
-from pathtrace.environment import Environment
+from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError, warn
 from pathtrace.filters import PixelFilter
 from pathtrace.materials import NULL, TRANSMISSIVE, Material, MaterialTable
-from pathtrace.media import MediumInterface
-from pathtrace.named import NamedList, name_and_index, vector
+from pathtrace.scene.media import MediumInterface
+from pathtrace.scene.named import NamedList, name_and_index, vector
 from pathtrace.scene.meshes import ellipsoid, is_closed, is_similarity
 
 
@@ -96,14 +96,14 @@ class Scene:
     source: str = ""              # the file it was read from (for messages), if any
     lights: list = field(default_factory=list)   # its delta lights (pathtrace.lights: point, spot,
                                                  # directional); emissive shapes are its area lights
-    media: list = field(default_factory=list)    # its participating media (pathtrace.media.Medium)
+    media: list = field(default_factory=list)    # its participating media (pathtrace.scene.media.Medium)
     sphere_media: list = None     # per sphere, the MediumInterface it bounds or None; None: none does
     camera_medium: int = -1       # the medium the camera is in (a row of `media`), or -1: none
     instances: object = None      # pathtrace.scene.instances.Instances: meshes drawn many times,
                                   # or None. Their meshes are not among `meshes`
 
     def __post_init__(self):
-        # lists that also answer by name (pathtrace.named), for notebooks; kept as they are
+        # lists that also answer by name (pathtrace.scene.named), for notebooks; kept as they are
         # where they already are, so that with_settings shares them
         if not isinstance(self.meshes, NamedList):
             self.meshes = NamedList(self.meshes, kind=("mesh", "meshes"))

@@ -18,7 +18,7 @@ from xml.parsers import expat
 import numpy as np
 
 from pathtrace.camera import Camera
-from pathtrace.environment import Environment
+from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError, cut, short, warn
 from pathtrace.filters import FILTERS, PixelFilter
 from pathtrace.lights import DELTA_LIGHTS, DirectionalLight, PointLight, SpotLight
@@ -26,7 +26,7 @@ from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.blend import check_blend, transmits
 from pathtrace.materials.bsdf import LUMINANCE, constant_of
 from pathtrace.materials.table import check_bump_map
-from pathtrace.media import Medium, MediumInterface
+from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, orient_by_normals, unit_disk, vertex_normals

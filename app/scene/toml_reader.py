@@ -15,13 +15,13 @@ from pathtrace.camera import Camera
 from pathtrace import filters
 from pathtrace.filters import PixelFilter
 from pathtrace.lights import DELTA_LIGHTS, LIGHT_SAMPLERS
-from pathtrace.environment import Environment
+from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError, short
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.blend import check_blend, transmits
 from pathtrace.materials.bsdf import NULL, constant_of
 from pathtrace.materials.table import check_bump_map
-from pathtrace.media import Medium, MediumInterface
+from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.resources import resource_dir
 from pathtrace.scene import transform
 from pathtrace.scene.description import INTEGRATORS, RUSSIAN_ROULETTE, Mesh, MeshFile, RenderSettings, Scene, SceneBuilder

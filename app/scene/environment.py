@@ -18,7 +18,7 @@ class Environment:
     resampled: bool = False    # the image is not the file's (a pbrt equal-area map made lat-long)
 
     def __repr__(self) -> str:
-        from pathtrace.named import vector
+        from pathtrace.scene.named import vector
         h, w, _ = self.image.shape
         what = f"constant {vector(self.image[0, 0])}" if (h, w) == (1, 1) else f"{self.source} ({w}x{h})"
         return f"<Environment {what}, intensity {self.intensity:g}, rotation {self.rotation:g}>"
