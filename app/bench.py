@@ -316,9 +316,9 @@ def _median_ms(step, repeats: int = 30) -> float:
 
 
 def run_display(device_specs, width, height, log=print):
-    """The image's way from the device to the host each frame, each of pathtrace.display's ways (the
+    """The image's way from the device to the host each frame, each of pathtrace.viewer.display's ways (the
     texture upload that follows is OpenGL's and is not timed here)."""
-    from pathtrace.display import MODES, Display
+    from pathtrace.viewer.display import MODES, Display
     results = []
     for backend in choose_devices(device_specs):
         r = Renderer(backend, load_scene("simple"), width, height)

@@ -1,7 +1,7 @@
 """The viewer's window and loop. The window never waits for the renderer: each frame polls input,
 moves the camera, lets pathtrace.rendering.launches.Progressive collect finished launches and queue new ones
 (bands of rows sized to a fraction of a frame), and shows the newest image that has reached the
-host (pathtrace.display, drawn by shaders/display.frag), then the imgui panel. While the
+host (pathtrace.viewer.display, drawn by shaders/display.frag), then the imgui panel. While the
 camera rests the image is denoised (pathtrace.io.denoiser) in a worker thread, every time its samples
 have doubled."""
 
@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pyopencl as cl
 
-from pathtrace.display import Display
+from pathtrace.viewer.display import Display
 from pathtrace.errors import UserError
 from pathtrace.rendering.launches import Progressive
 from pathtrace.compiler.compiled import compile_scene
@@ -201,7 +201,7 @@ class Viewer:
 
     @property
     def display_path(self) -> str:
-        """How the image reaches the screen. PyPI's pyopencl has no CL/GL sharing, so pathtrace.display
+        """How the image reaches the screen. PyPI's pyopencl has no CL/GL sharing, so pathtrace.viewer.display
         copies it through the host."""
         return {"sums": "float sums", "half": "half-float means"}[self.display.mode] + " copied to a texture"
 
