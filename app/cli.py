@@ -589,11 +589,11 @@ def cmd_view(args):
 
 
 def cmd_bench(args):
-    from pathtrace import bench
+    from pathtrace.bench import report as bench
 
     timing_size = args.size or ((320, 180) if args.quick else (1280, 720))
     if args.first_image:
-        from pathtrace import first_image
+        from pathtrace.bench import first_image
         first_image.validate(args)
     else:
         bench.validate(args)
@@ -601,7 +601,7 @@ def cmd_bench(args):
         from pathtrace.io.images import check_writable
         check_writable(args.json, "--json", formats=None)
     if args.mitsuba:
-        from pathtrace.mitsuba_timing import check_mitsuba
+        from pathtrace.bench.mitsuba_timing import check_mitsuba
         check_mitsuba(args.mitsuba, args.mitsuba_variant)
     if args.first_image:
         print(first_image.HEADER)
@@ -625,7 +625,7 @@ def cmd_bench(args):
             print(f"wrote {args.json}", file=sys.stderr)
         return 0
     if args.load or args.load_scene:
-        from pathtrace import load_bench
+        from pathtrace.bench import load as load_bench
         from pathtrace.scene import load_scene
         for name in args.load_scene or []:
             load_scene(name)     # fail on a bad file before the timed runs
@@ -692,7 +692,7 @@ def build_parser():
     add_render_options(p, queue_auto=False)     # no trial renders in the viewer: its panel sets N
     p.set_defaults(func=cmd_view)
 
-    from pathtrace.bench import FIRST_IMAGE_SCENES, TARGET_SCENES
+    from pathtrace.bench.report import FIRST_IMAGE_SCENES, TARGET_SCENES
     p = sub.add_parser("bench", help="time renders of the benchmark scenes (the table of the report "
                                      "pathtrace grew from)",
                        description="Times renders of the benchmark scenes, by default at 1920x1080 "

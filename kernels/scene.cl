@@ -34,7 +34,7 @@ typedef struct {
 #endif
 } SceneData;
 
-/* Counts k units of traversal work where a kernel asked for them (app/traversal_stats.py). */
+/* Counts k units of traversal work where a kernel asked for them (app/bench/traversal_stats.py). */
 #ifdef TRAVERSAL_STATS
 #define COUNT_WORK(sc, kind, k) if ((kind) == TRAVERSAL_STATS && (sc)->work) *(sc)->work += (k)
 #else

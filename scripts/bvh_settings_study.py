@@ -1,6 +1,6 @@
 """How the BVH builder's settings change `tori400-textured`'s tree (docs/notes/performance-2026-11.md,
 2026-11-26): the SAH cost, the time to compile the scene and the nodes and primitives a ray
-meets (pathtrace.traversal_stats), for PLOC's search radius, the top split's bins and the
+meets (pathtrace.bench.traversal_stats), for PLOC's search radius, the top split's bins and the
 clusters it takes (app/compiler/bvh.py: RADIUS, MAX_BINS, TOP_CLUSTERS); then with its ground quad (two
 triangles the size of the scene) left out or made a grid of smaller ones.
 
@@ -17,20 +17,20 @@ from pathlib import Path
 import numpy as np
 
 import pathtrace.compiler.bvh as bvh
-from pathtrace.bench import estimator_settings
-from pathtrace.bench_scenes import write_textured_tori
+from pathtrace.bench.report import estimator_settings
+from pathtrace.bench.scenes import write_textured_tori
 from pathtrace.compiler.compiled import compile_scene
 from pathtrace.device.opencl import choose_device
 from pathtrace.scene import load_scene
 from pathtrace.scene.mitsuba_writer import ply_bytes
-from pathtrace.traversal_stats import traversal_stats
+from pathtrace.bench.traversal_stats import traversal_stats
 
 SETTINGS = [   # (TOP_CLUSTERS, RADIUS, MAX_BINS); the first is app/compiler/bvh.py's
     (bvh.TOP_CLUSTERS, bvh.RADIUS, bvh.MAX_BINS), (65536, 16, 16), (65536, 8, 32), (262144, 8, 16), (1 << 30, 8, 16)]
 
 
 def ground_grid(folder: Path, rect: str, n: int, side: int = 20) -> str:
-    """The tori's ground rectangle (app/bench_scenes.py) as a PLY grid of n x n quads with the
+    """The tori's ground rectangle (app/bench/scenes.py) as a PLY grid of n x n quads with the
     same corners, uvs and material: the same surface, in smaller triangles."""
     extent, middle = side * 2.5 + 2, side * 1.25 - 1.25
     u = np.linspace(0, 1, n + 1)

@@ -44,12 +44,12 @@ def main():
     except ImportError:
         sys.exit("embree_walk_study: Embree's binding is missing: pip install embreex")
 
-    from pathtrace.bench import scene_file
+    from pathtrace.bench.report import scene_file
     from pathtrace.device.opencl import choose_device
     from pathtrace.errors import UserError
     from pathtrace.device.features import LONE_MAX
     from pathtrace.scene import load_scene
-    from pathtrace.trace_split import split_renderer
+    from pathtrace.bench.trace_split import split_renderer
 
     width, height = args.size
     backend = choose_device("cpu")

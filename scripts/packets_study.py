@@ -21,7 +21,7 @@ import tempfile
 import numpy as np
 import pyopencl as cl
 
-from pathtrace.bench import estimator_settings, scene_file
+from pathtrace.bench.report import estimator_settings, scene_file
 from pathtrace.device.opencl import build_program, choose_device
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.resources import resource_dir

@@ -7,7 +7,7 @@ against the renderer's megakernel on the same device in the same run. Not part o
     python scripts/simd_paths_study.py [SCENE] [--device cpu] [--size 480x270] [--spp 32]
                                        [--lanes 8 16]
 
-Prints, best of three each, the megakernel's seconds (pathtrace.bench.measure, the timed region
+Prints, best of three each, the megakernel's seconds (pathtrace.bench.report.measure, the timed region
 of `pathtrace bench`) and each lane width's, and the images' means, which agree within noise (the
 two draw different random numbers and choose lights with different probabilities)."""
 
@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pyopencl as cl
 
-from pathtrace.bench import estimator_settings, measure
+from pathtrace.bench.report import estimator_settings, measure
 from pathtrace.cli import _int_range, _size
 from pathtrace.device.opencl import choose_device
 from pathtrace.errors import UserError

@@ -15,7 +15,7 @@ from pathtrace import renderer as renderer_module
 from pathtrace.errors import UserError
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
-from pathtrace.traversal_stats import traversal_stats
+from pathtrace.bench.traversal_stats import traversal_stats
 
 pytestmark = pytest.mark.specialised     # the queue is in the scenes' own programs alone
 

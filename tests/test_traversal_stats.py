@@ -1,4 +1,4 @@
-"""app/traversal_stats.py: the counts of the BVH's work per ray, and that counting changes no
+"""app/bench/traversal_stats.py: the counts of the BVH's work per ray, and that counting changes no
 sample."""
 
 import numpy as np
@@ -9,7 +9,7 @@ from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 from pathtrace.scene import SceneBuilder, diffuse
 from pathtrace.scene.environment import Environment
-from pathtrace.traversal_stats import traversal_stats
+from pathtrace.bench.traversal_stats import traversal_stats
 
 pytestmark = pytest.mark.specialised     # what the scenes' own programs walk
 

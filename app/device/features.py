@@ -44,7 +44,7 @@ class Features:
                                            # such as BECKMANN); None: all
     traversal_stats: int = 0               # 1 or 2: the render kernels count nodes visited or
                                            # primitives tested in place of rays
-                                           # (app/traversal_stats.py); 0: they count rays
+                                           # (app/bench/traversal_stats.py); 0: they count rays
     path_queue: int = 0                    # paths going on past this many vertices wait in the
                                            # continuation queue (PATH_QUEUE, kernels/integrator.cl;
                                            # the render setting path_queue); 0: no queue

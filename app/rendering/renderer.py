@@ -354,7 +354,7 @@ class Renderer:
 
     def scene_args(self) -> tuple:
         """The scene's device buffers in the order of the kernels' SCENE_KERNEL_ARGS
-        (kernels/scene.cl), for kernels beside the renderer's (app/trace_split.py)."""
+        (kernels/scene.cl), for kernels beside the renderer's (app/bench/trace_split.py)."""
         return tuple(self._buffers[name] for name in SCENE_BUFFERS)
 
     def set_camera(self, camera: Camera):

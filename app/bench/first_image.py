@@ -13,13 +13,13 @@ and imports included, and checks that the image was written:
 - warm: the same command with the same folders, which the cold run filled, the best of
   --repeats: a scene opened again.
 
-The rows: --scenes (by default pathtrace.bench.FIRST_IMAGE_SCENES): built-in scenes, `meshes850`
-(850 PLY tori in a Mitsuba XML file, pathtrace.bench_scenes.write_meshes, written with the rows'
-size) and the files `pathtrace bench` writes (pathtrace.bench.GENERATED_FILES); then each
+The rows: --scenes (by default pathtrace.bench.report.FIRST_IMAGE_SCENES): built-in scenes, `meshes850`
+(850 PLY tori in a Mitsuba XML file, pathtrace.bench.scenes.write_meshes, written with the rows'
+size) and the files `pathtrace bench` writes (pathtrace.bench.report.GENERATED_FILES); then each
 --load-scene file.
 With --mitsuba PYTHON, Mitsuba 3 loads and renders with 1 spp the row's XML (the scene's own file,
-or a twin written for a built-in one: pathtrace.bench.mitsuba_twin) in a fresh process of that
-Python (pathtrace.mitsuba_timing), cold and then warm in the same way: Dr.Jit keeps its kernels
+or a twin written for a built-in one: pathtrace.bench.report.mitsuba_twin) in a fresh process of that
+Python (pathtrace.bench.mitsuba_timing), cold and then warm in the same way: Dr.Jit keeps its kernels
 in ~/.drjit and CUDA in ~/.nv, so Mitsuba runs with a fresh HOME (Python's user site kept through
 PYTHONUSERBASE). Mitsuba renders an XML file as it is, so a file whose film is not the rows' size
 gets no Mitsuba column, and a line says so."""
@@ -32,12 +32,12 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from pathtrace.bench import FIRST_IMAGE_SCENES, GENERATED_FILES, mitsuba_twin, scene_file
-from pathtrace.bench_scenes import write_meshes
+from pathtrace.bench.report import FIRST_IMAGE_SCENES, GENERATED_FILES, mitsuba_twin, scene_file
+from pathtrace.bench.scenes import write_meshes
 from pathtrace.errors import UserError
 from pathtrace.io.files import shown
-from pathtrace.load_bench import best_time
-from pathtrace.mitsuba_timing import mitsuba_load_command
+from pathtrace.bench.load import best_time
+from pathtrace.bench.mitsuba_timing import mitsuba_load_command
 from pathtrace.scene import load_scene
 
 MESHES = "meshes850"

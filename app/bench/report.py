@@ -9,11 +9,11 @@ its first launch; it renders the scene itself, so that the kernels specialised t
 
 With `--mitsuba PYTHON`, each row of the comparison mode with NEE (depth8+nee: max depth 8, no
 Russian roulette, as Mitsuba's `path` with rr_depth beyond 8) is rendered by Mitsuba 3 too, in a
-process of that Python (pathtrace.mitsuba_timing), from the scene's own XML file or from its twin
+process of that Python (pathtrace.bench.mitsuba_timing), from the scene's own XML file or from its twin
 written by pathtrace.scene.mitsuba_writer: the same view, size, samples and depth, its render
 alone timed, beside pathtrace's render alone (the launches and the read-back, without the BVH
 build and uploads): the per-sample ratio of docs/benchmarks.md. Scenes that are files written
-on demand (pathtrace.bench_scenes: `tori400-textured`) are named like built-in ones.
+on demand (pathtrace.bench.scenes: `tori400-textured`) are named like built-in ones.
 
 `pathtrace bench --builds` times BVH builds instead (app/compiler/bvh.py, on each device asked for): random
 spheres and a height field of triangles at 64k, 1M and 4M primitives, the median of three builds
@@ -41,8 +41,8 @@ from pathtrace.scene import load_scene
 TARGET_SCENES = ("simple", "spheres8k", "spheres64k",
                  "simple-diffuse", "spheres8k-diffuse", "spheres64k-diffuse", "teapot-sky",
                  "teapot-textured")
-GENERATED_FILES = ("tori400-textured",)      # pathtrace.bench_scenes
-FIRST_IMAGE_SCENES = ("simple", "cornell-box", "teapot-sky", "meshes850")    # pathtrace.first_image
+GENERATED_FILES = ("tori400-textured",)      # pathtrace.bench.scenes
+FIRST_IMAGE_SCENES = ("simple", "cornell-box", "teapot-sky", "meshes850")    # pathtrace.bench.first_image
 COMPARISON_DEPTH = 8
 ESTIMATORS = ("rr", "depth8", "rr+nee", "depth8+nee")
 
@@ -70,10 +70,10 @@ class Result:
     mitsuba_seconds: float = None   # the median of its rounds
     mitsuba_rounds: list = None     # with --rounds N > 1: each round's seconds
     mitsuba_mean: float = None
-    rays_per_sample: float = None   # with --traversal (app/traversal_stats.py)
+    rays_per_sample: float = None   # with --traversal (app/bench/traversal_stats.py)
     nodes_per_ray: float = None
     primitives_per_ray: float = None
-    trace_split: object = None      # with --trace-split: a pathtrace.trace_split.TraceSplit
+    trace_split: object = None      # with --trace-split: a pathtrace.bench.trace_split.TraceSplit
     path_queue: int = 0             # the render setting (--path-queue; -1: auto)
     queue_plan: str = ""            # with --path-queue auto: the plan its trials chose, and
                                     # each plan's fastest trial in seconds (pathtrace.rendering.renderer)
@@ -185,8 +185,8 @@ SPLIT_SPP = 8           # of the trace split's renders (the first untimed)
 
 
 def count_traversal(r: Result, backend, scene):
-    """The row's rays per sample and BVH work per ray (app/traversal_stats.py), into r."""
-    from pathtrace.traversal_stats import traversal_stats
+    """The row's rays per sample and BVH work per ray (app/bench/traversal_stats.py), into r."""
+    from pathtrace.bench.traversal_stats import traversal_stats
     stats = traversal_stats(backend, scene.with_settings(**estimator_settings(r.estimator)), r.width, r.height,
                             min(r.spp, TRAVERSAL_SPP))
     r.rays_per_sample, r.nodes_per_ray, r.primitives_per_ray = \
@@ -194,9 +194,9 @@ def count_traversal(r: Result, backend, scene):
 
 
 def split_row(r: Result, backend, scene) -> str:
-    """The row's trace split (app/trace_split.py) into r, and its line; for a scene the split's
+    """The row's trace split (app/bench/trace_split.py) into r, and its line; for a scene the split's
     kernels do not follow, the line that says so."""
-    from pathtrace.trace_split import format_split, trace_split
+    from pathtrace.bench.trace_split import format_split, trace_split
     try:
         r.trace_split = trace_split(backend, scene, r.width, r.height, SPLIT_SPP)
     except UserError as e:
@@ -213,7 +213,7 @@ def scene_file(name: str, folder: Path) -> str:
     """A scene name as load_scene takes it: one of GENERATED_FILES written into `folder`."""
     if name not in GENERATED_FILES:
         return name
-    from pathtrace.bench_scenes import write_textured_tori
+    from pathtrace.bench.scenes import write_textured_tori
     where = folder / name
     where.mkdir(exist_ok=True)
     return str(write_textured_tori(where))
@@ -235,7 +235,7 @@ def mitsuba_twin(scene, size: tuple, spp: int, folder: Path):
 
 def time_mitsuba(r: Result, scene, xml, mitsuba: tuple, rounds: int = 1):
     """Mitsuba 3's render of `xml`, the row's scene, into r: the median of `rounds` renders."""
-    from pathtrace.mitsuba_timing import mitsuba_render
+    from pathtrace.bench.mitsuba_timing import mitsuba_render
     python, variant = mitsuba
     r.mitsuba_variant = variant
     times, r.mitsuba_mean = mitsuba_render(python, variant, xml, scene.camera, r.width, r.height, r.spp,

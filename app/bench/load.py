@@ -1,12 +1,12 @@
 """`pathtrace bench --load`: the seconds from a command to its first image, what a user waits
-for before anything else. Each row writes a scene's files (pathtrace.bench_scenes:
+for before anything else. Each row writes a scene's files (pathtrace.bench.scenes:
 heightfield1M and meshes850) or takes a scene file given, and times `pathtrace render FILE` at
 64x64 (64x36 for the height field) with 1 spp from process start to exit, Python's start-up and
 imports included, best of --repeats after one untimed run that fills the kernel cache: with the
 BVH built (the BVH cache turned off), then with the BVH read from the cache that run filled
 (pathtrace.compiler.bvh_cache), as a scene opened a second time loads. With --mitsuba PYTHON the same
 scene's Mitsuba 3 XML is loaded and rendered with 1 spp in a fresh process of that Python, timed
-the same way, in the same run (pathtrace.mitsuba_timing); the ratio is against the build."""
+the same way, in the same run (pathtrace.bench.mitsuba_timing); the ratio is against the build."""
 
 import os
 import shutil
@@ -16,10 +16,10 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from pathtrace.bench_scenes import write_height_field, write_meshes
+from pathtrace.bench.scenes import write_height_field, write_meshes
 from pathtrace.errors import UserError
 from pathtrace.io.files import shown
-from pathtrace.mitsuba_timing import last_line, mitsuba_load_command, run_command
+from pathtrace.bench.mitsuba_timing import last_line, mitsuba_load_command, run_command
 
 
 @dataclass
@@ -53,7 +53,7 @@ def best_time(command, repeats: int, cwd, env=None, output: Path = None) -> floa
 
 def command_line(command, words: int = 7) -> str:
     """The start of a command, on one line: its first `words` words, a script given with -c
-    (Mitsuba's, pathtrace.mitsuba_timing) as '...'."""
+    (Mitsuba's, pathtrace.bench.mitsuba_timing) as '...'."""
     shown_words = ["..." if k and str(command[k - 1]) == "-c" else shown(word) for k, word in enumerate(command)]
     return " ".join(shown_words[:words]) + (" ..." if len(command) > words else "")
 
