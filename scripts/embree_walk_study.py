@@ -26,7 +26,7 @@ from pathlib import Path
 
 
 def main():
-    from pathtrace.cli import _int_range, _size
+    from pathtrace.cli.options import _int_range, _size
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("scenes", nargs="*", default=["teapot-sky", "heightfield1M", "tori400-textured"])
     ap.add_argument("--size", type=_size, default=(480, 272), metavar="WxH")

@@ -20,7 +20,7 @@ import numpy as np
 import pyopencl as cl
 
 from pathtrace.bench.report import estimator_settings, measure
-from pathtrace.cli import _int_range, _size
+from pathtrace.cli.options import _int_range, _size
 from pathtrace.device.opencl import choose_device
 from pathtrace.errors import UserError
 from pathtrace.scene import load_scene

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pyopencl as cl
 
-from pathtrace.cli import _int_range
+from pathtrace.cli.options import _int_range
 from pathtrace.device.opencl import choose_device
 from pathtrace.errors import UserError
 

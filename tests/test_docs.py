@@ -98,7 +98,7 @@ def test_every_module_named_imports():
 
 @pytest.mark.parametrize("command", ["render", "view", "convert"])
 def test_help_names_every_built_in_scene(command, capsys):
-    from pathtrace.cli import build_parser
+    from pathtrace.cli.main import build_parser
     from pathtrace.scene.builtin import BUILTIN_SCENES
     with pytest.raises(SystemExit):
         build_parser().parse_args([command, "--help"])

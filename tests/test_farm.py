@@ -117,7 +117,7 @@ def test_no_cluster_at_the_address_is_one_line(tmp_path):
 
 
 def test_output_names_must_tell_the_images_apart(tmp_path, capsys):
-    from pathtrace.cli import main
+    from pathtrace.cli.main import main
     assert main(["farm", "render", "simple", "demo", "-o", str(tmp_path / "x.png")]) == 1
     assert "several images would share a name" in capsys.readouterr().err
     assert main(["farm", "render", "simple", "-o", str(tmp_path / "{nope}.png")]) == 1

@@ -246,7 +246,7 @@ def test_instances_the_api_makes_are_checked():
 
 
 def test_convert_writes_objects_and_instances_that_read_back_the_same(tmp_path):
-    from pathtrace.cli import main
+    from pathtrace.cli.main import main
     xml = Path(__file__).parent / "scenes" / "instances.xml"
     out = tmp_path / "instances.toml"
     assert main(["convert", str(xml), "-o", str(out)]) == 0

@@ -6,7 +6,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from pathtrace import cli
+import pathtrace.cli.main as cli
+import pathtrace.cli.progress
 
 from pathtrace.compiler import compiled
 from pathtrace.compiler.compiled import BUILD_HOST_BYTES, check_memory
@@ -61,7 +62,7 @@ def test_the_command_line_says_what_does_not_fit(monkeypatch, tmp_path, capsys):
 
 
 def test_a_slow_build_shows_its_progress(monkeypatch, tmp_path, capsys):
-    monkeypatch.setattr(cli, "PROGRESS_AFTER", 0.0)
+    monkeypatch.setattr(pathtrace.cli.progress, "PROGRESS_AFTER", 0.0)
     code = cli.main(["render", "spheres8k", "-o", str(tmp_path / "a.png"), "--size", "8x8", "--spp", "1"])
     assert code == 0
     assert "spheres8k: building the BVH: 100%" in capsys.readouterr().err

@@ -4,7 +4,7 @@ reported in one line naming the file."""
 import numpy as np
 import pytest
 
-from pathtrace.cli import main
+from pathtrace.cli.main import main
 from pathtrace.errors import UserError
 from pathtrace.scene import load_scene
 from pathtrace.scene.meshes import read_mesh

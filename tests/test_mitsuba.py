@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pathtrace.cli import main
+from pathtrace.cli.main import main
 from pathtrace.errors import UserError
 from pathtrace.filters import PixelFilter
 from pathtrace.scene import load_scene

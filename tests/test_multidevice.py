@@ -7,7 +7,7 @@ import time
 import numpy as np
 import pytest
 
-from pathtrace.cli import main
+from pathtrace.cli.main import main
 from pathtrace.device.opencl import open_device
 from pathtrace.rendering.multidevice import DeviceGroup, SampleCounter
 from pathtrace.rendering.renderer import Renderer

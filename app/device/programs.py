@@ -23,7 +23,6 @@ renders."""
 import atexit
 import os
 import threading
-import time
 from concurrent.futures import Future
 
 import pyopencl as cl
@@ -48,7 +47,7 @@ def builds_under_way() -> bool:
 def _finish_builds():
     """A script or notebook that ends while a program builds waits for the build (which its
     cache then keeps): the interpreter's teardown under a build in NVIDIA's driver crashed the
-    process. The commands leave without waiting (pathtrace.console)."""
+    process. The commands leave without waiting (pathtrace.cli.console)."""
     for thread in threading.enumerate():
         if thread.name == BUILD_THREAD:
             thread.join()
@@ -142,22 +141,4 @@ class Programs:
             future.set_result(self._build(*key))
         except Exception as e:
             future.set_exception(e)
-
-
-def warm_up(backend) -> float:
-    """Renders one sample of a small built-in scene with `backend`'s generic program, with and
-    without next-event estimation, so that a driver that compiles kernels at their first launch
-    (PoCL, for each work-group size) has them in its cache before a user's first image; the
-    seconds it took."""
-    from pathtrace.rendering.renderer import Renderer
-    from pathtrace.scene import load_scene
-    generic = backend.with_mode("generic")
-    start = time.perf_counter()
-    scene = load_scene("simple")
-    for nee in (True, False):
-        r = Renderer(generic, scene.with_settings(nee=nee), 8, 8)
-        r.set_aovs(True)
-        r.add_samples(1)
-        r.finish()
-    return time.perf_counter() - start
 
