@@ -19,7 +19,7 @@ from pathtrace.device.features import FLAT_MAX, LONE_MAX, Features, stack_size
 from pathtrace.lights.light import MAX_RADIANCE
 from pathtrace.lights import LightTable, build_light_table, emitted_power, primitive_bounds
 from pathtrace.materials import BSDFS, EMITS_BACK, NULL, TAGS
-from pathtrace.materials.blend import reachable
+from pathtrace.materials.table import reachable
 from pathtrace.scene.media import media_table, packed_interfaces
 from pathtrace.compiler.memory import available_host_memory
 from pathtrace.camera import Camera, kernel_name

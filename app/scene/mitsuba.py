@@ -23,9 +23,8 @@ from pathtrace.errors import UserError, cut, short, warn
 from pathtrace.filters import FILTERS, PixelFilter
 from pathtrace.lights import DELTA_LIGHTS, DirectionalLight, PointLight, SpotLight
 from pathtrace.materials import BSDFS, Material
-from pathtrace.materials.blend import check_blend, transmits
 from pathtrace.materials.bsdf import LUMINANCE, constant_of
-from pathtrace.materials.table import check_bump_map
+from pathtrace.materials.table import check_blend, check_bump_map, transmits
 from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder

@@ -18,9 +18,8 @@ from pathtrace.lights import DELTA_LIGHTS, LIGHT_SAMPLERS
 from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError, short
 from pathtrace.materials import BSDFS, Material
-from pathtrace.materials.blend import check_blend, transmits
 from pathtrace.materials.bsdf import NULL, constant_of
-from pathtrace.materials.table import check_bump_map
+from pathtrace.materials.table import check_blend, check_bump_map, transmits
 from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.resources import resource_dir
 from pathtrace.scene import transform

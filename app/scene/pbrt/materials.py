@@ -11,8 +11,7 @@ import numpy as np
 from pathtrace.errors import UserError, warn
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import TRANSMISSIVE
-from pathtrace.materials.blend import check_blend, transmits
-from pathtrace.materials.table import check_bump_map
+from pathtrace.materials.table import check_blend, check_bump_map, transmits
 from pathtrace.scene.spectra import blackbody_rgb, emission_rgb, named_spectrum, reflectance_rgb, sampled
 from pathtrace.textures import TEXTURES, Texture
 from pathtrace.textures.bitmap import Image, read_image
