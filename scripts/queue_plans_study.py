@@ -1,4 +1,4 @@
-"""The launch plans of path_queue "auto" (pathtrace.rendering.renderer.AUTO_PLANS) timed over whole renders
+"""The launch plans of path_queue "auto" (pathtrace.rendering.queue_plans.AUTO_PLANS) timed over whole renders
 (docs/notes/performance-2026-11.md, 2026-11-27: the queue chosen by trial renders):
 
   python scripts/queue_plans_study.py SCENE... [--device gpu] [--size WxH] [--spp N] [--rounds N]
@@ -12,7 +12,8 @@ import json
 import time
 
 from pathtrace.device.opencl import choose_device
-from pathtrace.rendering.renderer import AUTO_PLANS, PLAN_NAMES, Renderer
+from pathtrace.rendering.queue_plans import AUTO_PLANS, PLAN_NAMES
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 from pathtrace.scene.description import PATH_QUEUE_AUTO
 
