@@ -292,7 +292,7 @@ def test_opening_a_scene_says_what_it_is_busy_with(viewer, monkeypatch):
     it does (a notice over the window, and the title): the BVH build's progress, then the kernels'
     compilation. Each step waits until the window has drawn it, so that a window that froze
     fails here. Then the first pass is named until an image arrives."""
-    import pathtrace.viewer.window as window
+    import pathtrace.viewer.opening as opening
     titles, notices = [], []
     drawn = {"bvh": threading.Event(), "kernels": threading.Event()}
     set_title = viewer.glfw.set_window_title
@@ -307,13 +307,13 @@ def test_opening_a_scene_says_what_it_is_busy_with(viewer, monkeypatch):
             drawn["kernels"].set()
         show(text, fraction)
     monkeypatch.setattr(viewer, "show_progress", shown)
-    compile_scene = window.compile_scene
+    compile_scene = opening.compile_scene
 
     def slow_compile(scene, queue, progress):
         progress(0.5)
         assert drawn["bvh"].wait(30), "the window did not show the BVH build's progress"
         return compile_scene(scene, queue, progress)
-    monkeypatch.setattr(window, "compile_scene", slow_compile)
+    monkeypatch.setattr(opening, "compile_scene", slow_compile)
     set_scene = viewer.renderer.set_scene
 
     def slow_set_scene(compiled):
@@ -366,11 +366,11 @@ def test_the_window_opens_before_its_scene_is_read(display, backend, tmp_path, m
 
 
 def test_a_scene_that_fails_to_open_leaves_the_viewer_as_it_was(viewer, monkeypatch, capsys):
-    import pathtrace.viewer.window as window
+    import pathtrace.viewer.opening as opening
 
     def broken(name):
         raise RuntimeError("a library failed")
-    monkeypatch.setattr(window, "load_scene", broken)
+    monkeypatch.setattr(opening, "load_scene", broken)
     before = viewer.renderer.scene.name
     viewer.load_scene("whatever.toml")
     frames(viewer, 2)
