@@ -1,5 +1,5 @@
 """Equal-time path tracing against BDPT at half the references' resolution, against Tungsten's
-renders (docs/notes/performance-2026-11.md, 2026-11-29): python scripts/bdpt_equal_time.py
+renders (docs/notes/performance-2026-11.md, 2026-11-29): python docs/notes/studies/bdpt_equal_time.py
 SECONDS OUT_FOLDER SCENE... with each SCENE's folder unpacked from ../shared/scenes into
 $BITTERLI (SCENE/pbrt/scene-v4.pbrt and TungstenRender.exr); prints samples, time per sample,
 means and the mean relative error of 8x8-pixel blocks, and writes reference | path | bdpt."""

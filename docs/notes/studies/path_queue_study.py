@@ -1,9 +1,9 @@
 """Where a render's time goes along its paths (docs/notes/performance-2026-11.md, 2026-11-26):
 
-  python scripts/path_queue_study.py depths SCENE... [--device gpu] [--size WxH] [--spp N]
+  python docs/notes/studies/path_queue_study.py depths SCENE... [--device gpu] [--size WxH] [--spp N]
       the megakernel's milliseconds per sample per pixel at max depth 1, 2, 3, 4, 6 and 8 (next-event
       estimation, no roulette): what each further vertex costs, however few paths reach it
-  python scripts/path_queue_study.py passes SCENE... [--queue 1 2] [...]
+  python docs/notes/studies/path_queue_study.py passes SCENE... [--queue 1 2] [...]
       with the continuation queue (render setting path_queue): each kernel's time per sample (the
       render launch, each pass of continue_paths, add_queued_paths, from the queue's profiling
       events) and the paths each pass took in the last launch

@@ -1,4 +1,4 @@
-/* Kernels of scripts/simd_study.py: one diffuse bounce among five spheres under a white sky, in
+/* Kernels of docs/notes/studies/simd_study.py: one diffuse bounce among five spheres under a white sky, in
  * three shapes, to see which of them PoCL runs in SIMD lanes. Each path's state is a structure
  * of arrays of n floats (origin, direction, throughput, radiance), so that consecutive paths lie
  * in consecutive words; random numbers are a hash of (path, dimension), as in kernels/rng.cl.

@@ -8,7 +8,7 @@ Each renderer renders K independent images (seeds 0..K-1); a wall's figure is th
 its pixels, which pathtrace's albedo AOV finds (the pixels whose first-hit albedo is the wall's
 reflectance), and its noise the standard error of that mean over the K images.
 
-    python scripts/spectral_study.py [--size N] [--spp S] [--renders K]
+    python docs/notes/studies/spectral_study.py [--size N] [--spp S] [--renders K]
 """
 
 import argparse
@@ -20,7 +20,7 @@ import numpy as np
 
 import pathtrace.api as pt
 
-SCENE = Path(__file__).resolve().parent.parent / "tests" / "scenes" / "cbox.xml"
+SCENE = Path(__file__).resolve().parents[3] / "tests" / "scenes" / "cbox.xml"
 WALLS = {"red": (0.63, 0.065, 0.05), "green": (0.14, 0.45, 0.091)}
 
 

@@ -1,7 +1,7 @@
 """What differs between a scene's program built without the continuation queue and with it, on
 NVIDIA's OpenCL (docs/notes/performance-2026-11.md, 2026-11-27: the queue chosen by trial renders):
 
-  python scripts/queue_program_study.py SCENE...
+  python docs/notes/studies/queue_program_study.py SCENE...
 
 For each scene and path_queue 0 and 1 (render setting), the render kernels' registers and bytes
 of spill stores from ptxas's report, untuned and as app/device/occupancy.py tunes them (with the cap it

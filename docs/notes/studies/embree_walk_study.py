@@ -6,7 +6,7 @@ the OpenCL device and by Embree 4 (Intel's CPU ray tracing kernels, through the 
 binding: `pip install embreex`) over the same triangles. Not part of the renderer, and embreex
 is not one of its dependencies.
 
-    python scripts/embree_walk_study.py [SCENE ...] [--size 480x272] [--spp 4] [--threads N]
+    python docs/notes/studies/embree_walk_study.py [SCENE ...] [--size 480x272] [--spp 4] [--threads N]
 
 --threads sets PoCL's threads (POCL_MAX_PTHREAD_COUNT) before the device opens: embreex traces
 a batch of rays on one thread, so `--threads 1` compares one core with one core. Prints, per

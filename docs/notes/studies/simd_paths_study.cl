@@ -1,4 +1,4 @@
-/* Kernel of scripts/simd_paths_study.py: pathtrace's estimator (depth-limited paths with
+/* Kernel of docs/notes/studies/simd_paths_study.py: pathtrace's estimator (depth-limited paths with
  * next-event estimation and the power heuristic, kernels/integrator.cl) for scenes of spheres with
  * diffuse or emitting materials under a constant sky, with LANES paths per work-item in OpenCL
  * vectors, as Mitsuba 3's LLVM backend runs its wavefront: every step of every path is computed

@@ -1,7 +1,7 @@
 """The launch plans of path_queue "auto" (pathtrace.rendering.queue_plans.AUTO_PLANS) timed over whole renders
 (docs/notes/performance-2026-11.md, 2026-11-27: the queue chosen by trial renders):
 
-  python scripts/queue_plans_study.py SCENE... [--device gpu] [--size WxH] [--spp N] [--rounds N]
+  python docs/notes/studies/queue_plans_study.py SCENE... [--device gpu] [--size WxH] [--spp N] [--rounds N]
 
 Each scene is rendered with max depth 8 and next-event estimation, no roulette, with each plan in
 turn (after a launch that builds and warms its kernels), in each round. Prints one JSON line per

@@ -4,7 +4,7 @@ meets (pathtrace.bench.traversal_stats), for PLOC's search radius, the top split
 clusters it takes (app/compiler/bvh.py: RADIUS, MAX_BINS, TOP_CLUSTERS); then with its ground quad (two
 triangles the size of the scene) left out or made a grid of smaller ones.
 
-    python scripts/bvh_settings_study.py [--device D] [--size WxH] [--spp N]
+    python docs/notes/studies/bvh_settings_study.py [--device D] [--size WxH] [--spp N]
 """
 
 import argparse

@@ -1,10 +1,10 @@
 """Whole paths in SIMD lanes on CPUs, an experiment for #31's CPU goal (docs/notes/performance-2026-11.md,
 2026-11-27): pathtrace's estimator (depth 8, next-event estimation, the power heuristic) written
-with LANES paths per work-item in OpenCL vectors (scripts/simd_paths_study.cl), for scenes of
+with LANES paths per work-item in OpenCL vectors (docs/notes/studies/simd_paths_study.cl), for scenes of
 spheres with diffuse or emitting materials under a constant sky, such as simple-diffuse, timed
 against the renderer's megakernel on the same device in the same run. Not part of the renderer.
 
-    python scripts/simd_paths_study.py [SCENE] [--device cpu] [--size 480x270] [--spp 32]
+    python docs/notes/studies/simd_paths_study.py [SCENE] [--device cpu] [--size 480x270] [--spp 32]
                                        [--lanes 8 16]
 
 Prints, best of three each, the megakernel's seconds (pathtrace.bench.report.measure, the timed region

@@ -6,7 +6,7 @@ progressively, one sample per pixel per launch, and after every launch we note t
 time and the relative MSE against the reference, mean((x - ref)^2 / (ref^2 + 0.01)) (the
 usual relative error of rendering papers; 0.01 keeps dark pixels from dominating).
 
-    python scripts/nee_study.py [--device D] [--size WxH] [--seconds S] [--ref-spp N] [--json F]
+    python docs/notes/studies/nee_study.py [--device D] [--size WxH] [--seconds S] [--ref-spp N] [--json F]
                                 [--light-samplers power tree ...]
 
 With several --light-samplers, NEE runs once with each (pathtrace.lights.LIGHT_SAMPLERS): the
@@ -58,7 +58,7 @@ def mitsuba_curve(scene, seconds, ref):
     integrator, which samples lights with MIS) on the same scene: one render per sample count,
     doubling, each timed whole."""
     import mitsuba as mi
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    sys.path.insert(0, str(Path(__file__).resolve().parents[3] / "scripts"))
     from make_references import mitsuba_scene
     mi.set_variant("scalar_rgb")
     h, w, _ = ref.shape

@@ -2,7 +2,7 @@
 drawn), compiled into a two-level BVH and rendered at 1920x1080 with NEE: the scale that
 docs/scene-format.md's Instances section promises (docs/notes/performance-2026-11.md has the H100's figures).
 
-    python scripts/many_instances.py [instances] [device] [small]
+    python docs/notes/studies/many_instances.py [instances] [device] [small]
 
 `small` renders 64x36 at 4 spp instead (for a CPU)."""
 

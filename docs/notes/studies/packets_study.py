@@ -1,10 +1,10 @@
 """Rays traced in packets on CPUs, an experiment for #31's CPU goal (docs/notes/performance-2026-11.md,
 2026-11-26): how much faster the BVH walk gets when each work-item walks the rays of a tile of
 pixels together in SIMD lanes, and a whole render with each tile's paths kept in step
-(scripts/packets_study.cl). Neither is part of the renderer.
+(docs/notes/studies/packets_study.cl). Neither is part of the renderer.
 
-    python scripts/packets_study.py walk [--size WxH] [--spp N] [--lanes 4 8 16] [SCENE ...]
-    python scripts/packets_study.py render [--size WxH] [--spp N] [SCENE ...]
+    python docs/notes/studies/packets_study.py walk [--size WxH] [--spp N] [--lanes 4 8 16] [SCENE ...]
+    python docs/notes/studies/packets_study.py render [--size WxH] [--spp N] [SCENE ...]
 
 `walk` records the depth-2 rays of the trace split (kernels/trace_split.cl) and traces each kind
 by trace_rays (one ray per work-item) and by packets, in turn in one run: ms per sample per

@@ -1,4 +1,4 @@
-/* scripts/packets_study.py: rays traced in packets on CPUs, an experiment (docs/notes/performance-2026-11.md,
+/* docs/notes/studies/packets_study.py: rays traced in packets on CPUs, an experiment (docs/notes/performance-2026-11.md,
  * 2026-11-26). Appended to a scene's program after kernels/trace_split.cl, with LANES (4, 8 or
  * 16), floatN and intN (float and int vectors of LANES), and the tile TILE_W x TILE_H of pixels
  * whose rays form one packet, defined by the script.

@@ -1,7 +1,7 @@
 """Scenes' programs under forced register caps on NVIDIA's OpenCL, against the cap that
 app/device/occupancy.py's tuning chooses (docs/notes/performance-2026-11.md, 2026-11-26 and 2026-11-27):
 
-  python scripts/register_caps_study.py SCENE... [--queue 0 1] [--caps 128 96] [--spp 32]
+  python docs/notes/studies/register_caps_study.py SCENE... [--queue 0 1] [--caps 128 96] [--spp 32]
       for each scene and path_queue setting (render setting; 0: off), the program as tuned and
       then built under each cap with -cl-nv-maxrregcount, spills allowed (the tuning and the
       program cache bypassed): milliseconds per sample per pixel of two renders after two

@@ -1,10 +1,10 @@
 """Which shapes of kernel PoCL runs in SIMD lanes, an experiment for #31's CPU goal
-(docs/notes/performance-2026-11.md, 2026-11-27): a diffuse bounce among five spheres (scripts/simd_study.cl)
+(docs/notes/performance-2026-11.md, 2026-11-27): a diffuse bounce among five spheres (docs/notes/studies/simd_study.cl)
 written one path per work-item in scalar floats, or LANES paths per work-item in OpenCL
 vectors, and the whole path in one kernel with and without a barrier at each bounce. Not part
 of the renderer.
 
-    python scripts/simd_study.py [--device cpu] [--paths 262144] [--depth 8] [--lanes 4 8 16]
+    python docs/notes/studies/simd_study.py [--device cpu] [--paths 262144] [--depth 8] [--lanes 4 8 16]
 
 Prints, per shape, the best of three runs of DEPTH bounces of every path (in millions of
 bounces per second) and the mean radiance, which is the same for every shape: they draw the same
