@@ -1,14 +1,17 @@
 """The interface every light type implements on the host. Area lights (emissive shapes) and the
 environment come from the materials and the environment; the others are delta lights a scene
-file names one by one (point, spot, directional), each a dataclass here with Mitsuba 3's
-parameter names, its checks, its power (by which next-event estimation chooses it) and how it
-packs into the LIGHT struct that its kernel file kernels/lights/<name>.cl reads (which documents
-the packed layout at its top)."""
+file names one by one (point, spot, directional), each a dataclass here with its parameters
+declared once (app/parameters.py: their names in TOML, Mitsuba 3 and pbrt-v4, conversions and
+defaults), its checks, its power (by which next-event estimation chooses it) and how it packs into
+the LIGHT struct that its kernel file kernels/lights/<name>.cl reads (which documents the packed
+layout at its top)."""
 
+import dataclasses
 import math
 
 import numpy as np
 
+from pathtrace.parameters import Parameter
 from pathtrace.scene.environment import LUMINANCE
 
 
@@ -16,11 +19,37 @@ class DeltaLight:
     """A light that no ray can hit: reached by next-event estimation only (kernels/lights.cl),
     and so dark in the estimator without it (RenderSettings.nee off)."""
     name: str
-    fields: tuple           # its parameters, in the order scene files list them
+    parameters: tuple       # its Parameters (app/parameters.py), in the order scene files list them
+    fields: tuple           # those of pathtrace's that are its dataclass fields (set from parameters)
+    formats: dict = {}      # its names in the other formats: {"mitsuba": name, "pbrt": name}
+    unsupported: dict = {}  # {format: {name: why}}: what a format's light has and pathtrace has
+                            # not, warned of where a file gives it
     # parameter sets, as a scene file's [[lights]] entry gives them (a spot may aim by look_at),
     # that the conformance suite (tests/test_light_conformance.py) renders with next-event
     # estimation, the light chosen by power and by the light tree; each type declares its own
     examples: tuple = ()
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        cls.fields = tuple(p.name for p in cls.parameters if p.name in cls.__annotations__)
+
+    @classmethod
+    def from_values(cls, values: dict):
+        """The light of a file's values (app/parameters.py: read), checked. Raises ValueError
+        ("<parameter>: <problem>", or "missing '<parameter>'")."""
+        values = cls.resolve(dict(values))
+        missing = [name for name in cls.fields
+                   if name not in values and cls.__dataclass_fields__[name].default is dataclasses.MISSING]
+        if missing:
+            raise ValueError(f"missing '{missing[0]}'")
+        light = cls(**{k: v for k, v in values.items() if k in cls.fields})
+        light.check()
+        return light
+
+    @classmethod
+    def resolve(cls, values: dict) -> dict:
+        """Turns the parameters that are another way to give one (a spot's look_at) into it."""
+        return values
 
     def check(self):
         """Raises ValueError("<parameter>: <problem>") for the first parameter out of range."""
@@ -28,9 +57,14 @@ class DeltaLight:
     def power(self, radius: float) -> float:
         """Its luminance power in watts; `radius` bounds the scene (for lights at infinity)."""
 
-    def pack(self, row: np.ndarray):
+    def textures(self) -> list:
+        """The Textures it reads (an image), which the scene's texture table holds."""
+        return []
+
+    def pack(self, row: np.ndarray, texture_rows: dict):
         """Fills a LIGHT row's parameters: by default its fields' values, in order, into p0.xyz,
-        p1.xyz, ... (a type whose layout differs says so)."""
+        p1.xyz, ... (a type whose layout differs says so); texture_rows: {id(texture): its row of
+        the texture table} of its textures()."""
         for k, name in enumerate(self.fields):
             row[f"p{k}"][:3] = getattr(self, name)
 
@@ -39,6 +73,33 @@ class DeltaLight:
         axis, cos(theta_o), cos(theta_e)); None for a light at infinity, which the tree leaves
         out."""
         return None
+
+
+def frame_quaternion(direction, up) -> np.ndarray:
+    """The unit quaternion (x, y, z, w) of the rotation from a light's own space to the world's:
+    its +z along `direction`, its +y along `up` made perpendicular to it, +x = y cross z
+    (kernels/lights.cl: to_light_space turns a world direction back). Raises ValueError where up
+    is (nearly) parallel to direction."""
+    z = check_direction("direction", direction)
+    u = check_direction("up", up)
+    y = u - np.dot(u, z) * z
+    if not np.linalg.norm(y) > 1e-6:
+        raise ValueError("up: must not be parallel to direction")
+    y /= np.linalg.norm(y)
+    x = np.cross(y, z)
+    m = np.column_stack([x, y, z])
+    # Shepperd's method: the largest of 1 + trace and the diagonal's differences, for stability
+    t = np.trace(m)
+    k = int(np.argmax([t, m[0, 0], m[1, 1], m[2, 2]]))
+    if k == 0:
+        s = 2 * math.sqrt(1 + t)
+        q = [(m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, s / 4]
+    else:
+        i, j, l = k - 1, k % 3, (k + 1) % 3
+        s = 2 * math.sqrt(1 + m[i, i] - m[j, j] - m[l, l])
+        q = [0.0] * 4
+        q[i], q[j], q[l], q[3] = s / 4, (m[j, i] + m[i, j]) / s, (m[l, i] + m[i, l]) / s, (m[l, j] - m[j, l]) / s
+    return np.array(q)
 
 
 def check_point(name: str, value) -> np.ndarray:
@@ -79,3 +140,19 @@ def check_angle(name: str, value, high: float) -> float:
 
 def luminance(rgb) -> float:
     return float(np.dot(rgb, LUMINANCE))
+
+
+def pbrt_scaled(k_e):
+    """The conversion of a pbrt-v4 light's spectrum: times its `scale`, and where `power` is given
+    (> 0), times power / k_e, k_e(given) being the power of a unit spectrum (pbrt-v4's
+    PointLight::Create and SpotLight::Create, src/pbrt/lights.cpp)."""
+    def convert(value, given):
+        value = np.asarray(value, np.float64) * given["scale"]
+        return value * given["power"] / k_e(given) if given["power"] > 0 else value
+    return convert
+
+
+# pbrt-v4's parameters of every light, which become the others
+PBRT_SCALE = Parameter(None, "number", pbrt="scale", pbrt_default=1.0, doc="a factor on the emitted spectrum")
+PBRT_POWER = Parameter(None, "number", pbrt="power", pbrt_default=-1.0,
+                       doc="the power in watts the light is scaled to, where positive")

@@ -3,7 +3,6 @@ the file and the field, e.g.
     scenes/room.toml: spheres[3].radius: must be positive, got -1
 """
 
-import dataclasses
 import math
 import os
 import tomllib
@@ -12,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from pathtrace.camera import Camera
-from pathtrace import filters
+from pathtrace import filters, parameters
 from pathtrace.filters import PixelFilter
 from pathtrace.lights import DELTA_LIGHTS, LIGHT_SAMPLERS
 from pathtrace.scene.environment import Environment
@@ -26,7 +25,6 @@ from pathtrace.scene import transform
 from pathtrace.scene.description import INTEGRATORS, RUSSIAN_ROULETTE, Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, triangulate, vertex_normals
 from pathtrace.textures import TEXTURES, Texture, read_image
-from pathtrace.textures.bitmap import FILTERS, WRAP_MODES
 
 # the scene-file types besides the registry's: "emitter" is a black BSDF with emission, and
 # "twosided" wraps another material (Mitsuba 3's plugin; `twosided = true` says the same)
@@ -140,28 +138,11 @@ class _Reader:
         if not isinstance(kind, str) or kind not in TEXTURES:
             self.fail(f"{where}.type", f"must be one of {', '.join(TEXTURES)}, got {short(kind)}")
         texture_type = TEXTURES[kind]
-        extra = {"bitmap": {"file", "raw", "filter", "wrap"}, "constant": {"value"}}.get(kind, set())
         self.table(data, where, {"type", "uv_scale", "uv_offset", "uv_rotate", "uv_matrix",
-                                 *texture_type.inputs, *extra})
-        params = {"to_uv": self.uv_transform(data, where)}
-        for key in texture_type.inputs:
-            if key in data:
-                params[key] = self.color_or_texture(data, key, where)
-        if kind == "constant" and "value" in data:
-            params["value"] = self.color(data, "value", where)
-        if kind == "bitmap":
-            file = data.get("file")
-            if not isinstance(file, str) or not file:
-                self.fail(f"{where}.file", f"must be an image file name, got {short(file)}")
-            raw = data.get("raw", False)
-            if not isinstance(raw, bool):
-                self.fail(f"{where}.raw", f"must be true or false, got {short(raw)}")
-            for key, choices in (("filter", FILTERS), ("wrap", WRAP_MODES)):
-                if key in data and (not isinstance(data[key], str) or data[key] not in choices):
-                    self.fail(f"{where}.{key}", f"must be one of {', '.join(choices)}, got {short(data[key])}")
-                if key in data:
-                    params[key] = data[key]
-            params["image"] = read_image(self.path.parent / file, f"{self.label}: {where}.file", raw, self.images)
+                                 *(p.name for p in texture_type.parameters)})
+        params = {"to_uv": self.uv_transform(data, where),
+                  **parameters.read(texture_type.parameters, "toml",
+                                    lambda p, name: self.parameter(data, p, where) if name in data else None)}
         try:
             return Texture(kind, texture_type.complete(params), name)
         except ValueError as e:
@@ -304,32 +285,40 @@ class _Reader:
         return self.number(data, "opacity", where, default=1.0, low=0.0, high=1.0)
 
     def parameter(self, data, param, where):
-        """One material parameter as its Param declares it (app/materials/bsdf.py); one with a
-        slot may be a texture: a name of [textures] or an inline table."""
-        value = data[param.name]
-        if param.slot and (isinstance(value, dict) or (isinstance(value, str) and value in self.texture_tables)):
-            texture = self.texture_value(value, f"{where}.{param.name}")
+        """One declared parameter (app/parameters.py) by its kind; one that may be a texture may
+        be a name of [textures] or an inline table, whose values must lie in its range."""
+        value, key = data[param.name], f"{where}.{param.name}"
+        if param.texture and (isinstance(value, dict) or (isinstance(value, str) and value in self.texture_tables)):
+            texture = self.texture_value(value, key)
             low = np.min(constant_of(texture, param.kind, Texture.minimum))
             high = np.max(constant_of(texture, param.kind, Texture.maximum))
-            if low < param.low or (param.high is not None and high > param.high):
+            if (param.low is not None and low < param.low) or (param.high is not None and high > param.high):
                 bound = f"in [{param.low}, {param.high}]" if param.high is not None else f"at least {param.low}"
-                self.fail(f"{where}.{param.name}", f"the texture's values must lie {bound}, "
-                                                   f"but reach from {low:.4g} to {high:.4g}")
+                self.fail(key, f"the texture's values must lie {bound}, but reach from {low:.4g} to {high:.4g}")
             return texture
         if param.kind == "color":
             return self.color(data, param.name, where, high=param.high)
         if param.kind == "bool":
-            if not isinstance(value, bool):
-                self.fail(f"{where}.{param.name}", f"must be true or false, got {short(value)}")
+            return self.boolean(data, param.name, where, None)
+        if param.kind in ("point", "vector"):
+            return self.vector(data, param.name, where)
+        if param.kind == "image":
+            if not isinstance(value, str) or not value:
+                self.fail(key, f"must be an image file name, got {short(value)}")
+            return read_image(self.path.parent / value, f"{self.label}: {key}", data.get("raw") is True, self.images)
+        if param.choices and not getattr(param, "names", None):
+            if value not in param.choices:
+                choices = " or ".join(param.choices) if len(param.choices) == 2 else "one of " + ", ".join(param.choices)
+                self.fail(key, f"must be {choices}, got {short(value)}")
             return value
-        if isinstance(value, str) and param.names:
-            if value not in param.names:
-                self.fail(f"{where}.{param.name}",
-                          f"unknown name {short(value)} (known: {', '.join(sorted(param.names))})")
-            return value             # BSDFType.resolve turns it into its number
-        if param.kind == "name":
-            self.fail(f"{where}.{param.name}", f"must be a name, got {short(value)}")
-        return self.number(data, param.name, where, low=param.low, high=param.high)
+        names = getattr(param, "names", None)
+        if isinstance(value, str) and names:
+            if value not in names:
+                self.fail(key, f"unknown name {short(value)} (known: {', '.join(sorted(names))})")
+            return value             # BSDFType.resolve turns a material's into its number
+        if param.kind in ("name", "string"):
+            self.fail(key, f"must be a name, got {short(value)}")
+        return self.number(data, param.name, where, low=param.low, high=param.high, integer=param.kind == "integer")
 
     def camera(self, data):
         where = "camera"
@@ -369,24 +358,15 @@ class _Reader:
         return cam
 
     def medium(self, data, where) -> Medium:
-        """One [media] table: sigma_a and sigma_s (pbrt-v4's), or sigma_t and albedo (Mitsuba
-        3's), each times `scale`, and the phase function's g."""
-        self.table(data, where, {"sigma_a", "sigma_s", "sigma_t", "albedo", "scale", "g"})
-        pbrt, mitsuba = {"sigma_a", "sigma_s"} & set(data), {"sigma_t", "albedo"} & set(data)
-        if pbrt and mitsuba:
-            self.fail(where, "give either sigma_a and sigma_s, or sigma_t and albedo, not both")
-        scale = self.number(data, "scale", where, default=1.0, low=0.0)
-        g = self.number(data, "g", where, default=0.0)
-        name = where.split(".", 1)[1]
+        """One [media] table, by Medium's declared parameters."""
+        self.table(data, where, {p.name for p in Medium.parameters})
+        values = parameters.read(Medium.parameters, "toml",
+                                 lambda p, name: self.parameter(data, p, where) if name in data else None)
         try:
-            if mitsuba:
-                return Medium.from_albedo(name, self.color(data, "sigma_t", where, default=1.0) * scale,
-                                          self.color(data, "albedo", where, default=0.75, high=1.0), g)
-            return Medium.checked(name, self.color(data, "sigma_a", where, default=1.0) * scale,
-                                  self.color(data, "sigma_s", where, default=1.0) * scale, g)
+            return Medium.from_values(where.split(".", 1)[1], values)
         except ValueError as e:
-            field, problem = str(e).split(": ", 1)
-            self.fail(f"{where}.{field}", problem)
+            field, sep, problem = str(e).partition(": ")
+            self.fail(f"{where}.{field}", problem) if sep else self.fail(where, str(e))
 
     def medium_row(self, data, key, where) -> int:
         """The row of the medium `key` names ([media]), -1 where the key is absent (vacuum)."""
@@ -405,42 +385,21 @@ class _Reader:
         return MediumInterface(self.medium_row(data, "interior", where), self.medium_row(data, "exterior", where))
 
     def light(self, data, where):
-        """One [[lights]] entry: a point, spot or directional light (pathtrace.lights), with
-        Mitsuba 3's parameter names; a spot may aim by `look_at` instead of `direction`."""
+        """One [[lights]] entry: a delta light of pathtrace.lights, by its declared parameters."""
         if not isinstance(data, dict):
             self.fail(where, f"must be a table, got {type(data).__name__}")
         kind = data.get("type")
         if kind not in DELTA_LIGHTS:
             self.fail(f"{where}.type", f"must be one of {', '.join(DELTA_LIGHTS)}, got {short(kind)}")
         cls = DELTA_LIGHTS[kind]
-        self.table(data, where, {"type", *cls.fields, *(("look_at",) if kind == "spot" else ())})
-        values = {}
-        for key in cls.fields:
-            if key not in data:
-                continue
-            if key in ("position", "direction"):
-                values[key] = self.vector(data, key, where)
-            elif key in ("intensity", "irradiance"):
-                values[key] = self.color(data, key, where)
-            elif key == "falloff":
-                values[key] = data[key]
-            else:
-                values[key] = self.number(data, key, where)
-        if kind == "spot" and "look_at" in data:
-            if "direction" in data:
-                self.fail(where, "give either 'direction' or 'look_at', not both")
-            values["direction"] = self.vector(data, "look_at", where) - values.get("position", np.zeros(3))
-        required = [f.name for f in dataclasses.fields(cls)
-                    if f.default is dataclasses.MISSING and f.name not in values]
-        if required:
-            self.fail(where, f"missing '{required[0]}'")
-        light = cls(**values)
+        self.table(data, where, {"type", *(p.name for p in cls.parameters if p.name)})
+        values = parameters.read(cls.parameters, "toml",
+                                 lambda p, name: self.parameter(data, p, where) if name in data else None)
         try:
-            light.check()
+            return cls.from_values(values)
         except ValueError as e:
-            field, problem = str(e).split(": ", 1)
-            self.fail(f"{where}.{field}", problem)
-        return light
+            field, sep, problem = str(e).partition(": ")
+            self.fail(f"{where}.{field}", problem) if sep else self.fail(where, str(e))
 
     def environment(self, data):
         where = "environment"

@@ -12,10 +12,12 @@ from pathtrace.errors import UserError, warn
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import TRANSMISSIVE
 from pathtrace.materials.table import check_blend, check_bump_map, transmits
+from pathtrace.parameters import by_format, read
 from pathtrace.scene.spectra import blackbody_rgb, emission_rgb, named_spectrum, reflectance_rgb, sampled
 from pathtrace.textures import TEXTURES, Texture
 from pathtrace.textures.bitmap import Image, read_image
 
+BSDFS_BY_NAME = by_format(BSDFS.values(), "pbrt")
 SMOOTH_ALPHA = 1e-3     # pbrt-v4's TrowbridgeReitzDistribution::EffectivelySmooth
 # a conductor's reflectance r becomes k = 2 sqrt(r) / sqrt(1 - r) (below): r at most
 # 100^2 / (4 + 100^2), 0.9996, keeps k within the conductor's bound of 100
@@ -128,6 +130,23 @@ class MaterialMapper:
         if float_texture:
             return params.float(name, default)
         return spectrum_rgb(params, name, default)
+
+    def parameter(self, params, p, name):
+        """The value of the declared parameter p (app/parameters.py) that the parameter `name`
+        gives, by p's kind (a colour from a spectrum as p.spectrum says); None where it is not
+        given."""
+        ptype = params.type_of(name)
+        if ptype is None:
+            return None
+        if p.texture and ptype == "texture":
+            return self.texture_input(params, name, None, p.kind == "number")
+        if p.kind == "color":
+            return spectrum_rgb(params, name, None, p.spectrum)
+        if p.kind == "image":
+            return read_image(self.reader.resolve(params.string(name)), params.where(name), False, self.images)
+        read = {"number": params.float, "integer": params.int, "bool": params.bool, "string": params.string,
+                "name": params.string, "point": params.point, "vector": params.point}[p.kind]
+        return read(name)
 
     def define_texture(self, name, kind, cls, params, where):
         """Texture "name" "spectrum"|"float" "class" ..."""
@@ -276,8 +295,10 @@ class MaterialMapper:
     def _material(self, kind, params, where) -> Material | None:
         if kind in ("interface", "", "none"):
             return None
-        if kind == "diffuse":
-            return make("diffuse", {"rho_d": self.texture_input(params, "reflectance", 0.5)}, where)
+        if kind in BSDFS_BY_NAME:         # the types that declare their pbrt-v4 parameters
+            bsdf = BSDFS_BY_NAME[kind]
+            return make(bsdf.name, read(bsdf.params + bsdf.format_only, "pbrt",
+                                        lambda p, name: self.parameter(params, p, name)), where)
         if kind == "conductor":
             return self._conductor(params, where)
         if kind in ("dielectric", "thindielectric"):
@@ -296,16 +317,6 @@ class MaterialMapper:
             return make(kind, iors, where)
         if kind in ("coateddiffuse", "coatedconductor"):
             return self._coated(kind, params, where)
-        if kind == "diffusetransmission":
-            scale = params.float("scale", 1.0)
-            values = {}
-            for name in ("reflectance", "transmittance"):
-                value = self.texture_input(params, name, 0.25)
-                if scale != 1.0:
-                    value = Texture("scale", TEXTURES["scale"].complete({"tex": value, "scale": scale})) \
-                        if isinstance(value, Texture) else value * scale
-                values[name] = value
-            return make("diffusetransmission", values, where)
         if kind == "mix":
             return self._mix(params, where)
         warn(f"{where}: pathtrace has no {kind} material; it uses a diffuse one of albedo 0.5")
