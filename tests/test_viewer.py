@@ -250,8 +250,7 @@ def test_ctrl_click_focuses_the_lens_on_the_surface_under_the_cursor(viewer):
     from pathtrace.viewer.controls import pick_ray
     v = viewer
     settle(v)
-    camera = load_scene("simple").camera
-    camera.aperture = 0.3
+    camera = load_scene("simple").camera.as_type("thinlens", aperture=0.3)
     v.renderer.set_camera(camera)
     v.selected = None
     settle(v)

@@ -1,0 +1,103 @@
+"""The registry of camera types: every module of this package that defines a Camera subclass
+with a `type` is one, found by import (so adding a camera takes its module, its kernel file
+kernels/cameras/<kernel>.cl and its test, nothing else), and the kernels' generate_ray (and,
+for bidirectional path tracing, sample_importance) dispatch generated from it."""
+
+import importlib
+import pkgutil
+
+from pathtrace.cameras.camera import Camera
+from pathtrace.features import GENERIC, choice_glue
+
+
+def _discover() -> dict:
+    import pathtrace.cameras as package
+    for module in sorted(m.name for m in pkgutil.iter_modules(package.__path__)):
+        importlib.import_module(f"pathtrace.cameras.{module}")
+    found, todo = {}, list(Camera.__subclasses__())
+    while todo:
+        cls = todo.pop(0)
+        todo += cls.__subclasses__()
+        if cls.type is not None and cls.__module__.startswith("pathtrace.cameras."):
+            found[cls.type] = cls
+    return dict(sorted(found.items()))
+
+
+CAMERAS = _discover()
+"""type name -> Camera subclass, in name order."""
+
+KERNELS = tuple(dict.fromkeys(k for cls in CAMERAS.values() for k in (cls.kernels or (cls.type,))))
+"""Every camera kernel file's name; RenderParams.camera_type is an index into it."""
+
+
+def toml_class(kind: str, keys) -> type:
+    """The camera type of a TOML [camera] table of type `kind` giving `keys`: the type of that
+    name, or a type that takes that name as an alias (ThinLensCamera: a perspective camera with
+    a lens) where the table gives one of its own fields; None: no such type."""
+    if not isinstance(kind, str):
+        return None
+    cls = CAMERAS.get(kind)
+    for other in CAMERAS.values():
+        own = {p.toml for p in other.parameters} - {p.toml for p in (cls.parameters if cls else ())}
+        if kind in getattr(other, "toml_aliases", ()) and own & set(keys):
+            return other
+    return cls
+
+
+def format_class(fmt: str, kind: str):
+    """The camera type that reads a `fmt` ("mitsuba" or "pbrt") camera of type `kind`, the one
+    of that name first where several map to it (pbrt's perspective: PerspectiveCamera, which
+    makes a ThinLensCamera where there is a lens); None: none."""
+    found = [cls for cls in CAMERAS.values() if getattr(cls, fmt) == kind]
+    return min(found, key=lambda cls: cls.type != kind, default=None)
+
+
+def toml_names() -> list:
+    """The types a TOML [camera] table may give."""
+    return sorted({*CAMERAS, *(a for cls in CAMERAS.values() for a in getattr(cls, "toml_aliases", ()))})
+
+
+def kernel_parts(kernel: str) -> list:
+    """(name, source) of the camera kernels of a program: the interface (kernels/camera.cl), the
+    kernel file `kernel` (GENERIC: every one of KERNELS) and the generate_ray that calls it; with
+    BDPT, the sample_importance of a camera that has one (a BDPT program is never generic, and
+    app/bdpt.py refuses a camera without one)."""
+    names = KERNELS if kernel == GENERIC else (kernel,)
+    glue = choice_glue("CameraRay generate_ray(const RenderParams *p, float sx, float sy, float2 u)",
+                       "generate_{}_ray(p, sx, sy, u)", KERNELS, kernel, "camera_type")
+    if kernel != GENERIC and supports_importance(kernel):
+        glue += ("#ifdef BDPT\n" + choice_glue("int sample_importance(const RenderParams *p, float3 x, float2 u, "
+                                               "CameraImportance *ci)", "sample_{}_importance(p, x, u, ci)",
+                                               KERNELS, kernel, "camera_type") + "#endif\n")
+    return [("camera.cl", None), *((f"cameras/{n}.cl", None) for n in names),
+            ("app/cameras/registry.py: kernel_parts", glue)]
+
+
+def supports_importance(kernel: str) -> bool:
+    """Whether the camera kernel file `kernel` joins light subpaths to its lens (BDPT)."""
+    return any(cls.importance and kernel in (cls.kernels or (cls.type,)) for cls in CAMERAS.values())
+
+
+def docs_table() -> str:
+    """docs/scene-format.md's table of the camera types, from their declarations (kept in step
+    by tests/test_camera.py)."""
+    import sys
+
+    def fields(cls, fmt):
+        names = [f"`{getattr(p, fmt)}`" for p in cls.parameters if getattr(p, fmt)]
+        return ", ".join(names)
+
+    def toml(p):
+        default = "required" if p.default is None else f"default {p.default}" if p.names else f"default {p.default:g}"
+        choice = f"one of {', '.join(f'`{n}`' for n in p.names)}; " if p.names else ""
+        return f"`{p.toml}` ({choice}{default}{', ' + p.unit if p.unit else ''}): {p.doc}"
+
+    rows = ["| type | TOML fields | Mitsuba 3 | pbrt-v4 | what it is |", "|---|---|---|---|---|"]
+    for name, cls in CAMERAS.items():
+        doc = " ".join(sys.modules[cls.__module__].__doc__.split())
+        mitsuba = f"`{cls.mitsuba}`" + (f" ({fields(cls, 'mitsuba')})" if fields(cls, "mitsuba") else "") \
+            if cls.mitsuba else "none (Mitsuba 3 has none built in)"
+        pbrt = f"`{cls.pbrt}`" + (f" ({fields(cls, 'pbrt')})" if fields(cls, "pbrt") else "") if cls.pbrt else "none"
+        rows.append(f"| `{name}` | {'; '.join(toml(p) for p in cls.parameters) or 'none'} | {mitsuba} | {pbrt} | "
+                    f"{doc}{'' if cls.importance else ' BDPT cannot render through it yet.'} |")
+    return "\n".join(rows) + "\n"
