@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pathtrace.parameters import Parameter
 from pathtrace.types import MEDIUM
 
 # The most media a scene may have: a primitive's two are packed into 16 bits each (kernels/types.h).
@@ -26,6 +27,37 @@ class Medium:
     sigma_a: np.ndarray           # (3,) absorption coefficient per unit length
     sigma_s: np.ndarray           # (3,) scattering coefficient per unit length
     g: float = 0.0                # the Henyey-Greenstein phase function's mean cosine
+
+    # a homogeneous medium in the three formats (app/parameters.py): pbrt-v4's coefficients or
+    # Mitsuba 3's (a TOML table gives either pair), both times scale; Mitsuba's g is its nested
+    # <phase type="hg">'s, which its reader reads
+    formats = {"mitsuba": "homogeneous", "pbrt": "homogeneous"}
+    parameters = (
+        Parameter("sigma_a", "color", 1.0, doc="absorption per unit length", spectrum="unbounded",
+                  pbrt="sigma_a"),
+        Parameter("sigma_s", "color", 1.0, doc="scattering per unit length", spectrum="unbounded",
+                  pbrt="sigma_s"),
+        Parameter("sigma_t", "color", optional=True, doc="extinction per unit length, instead of sigma_a "
+                  "and sigma_s", mitsuba="sigma_t", mitsuba_default=1.0),
+        Parameter("albedo", "color", optional=True, low=0.0, high=1.0, doc="single-scattering albedo, with "
+                  "sigma_t (default 0.75)", mitsuba="albedo", mitsuba_default=0.75),
+        Parameter("scale", "number", 1.0, low=0.0, doc="a factor on the coefficients", mitsuba="scale",
+                  pbrt="scale"),
+        Parameter("g", "number", 0.0, doc="the phase function's mean cosine, in (-1, 1)", pbrt="g"),
+    )
+
+    @classmethod
+    def from_values(cls, name: str, values: dict) -> "Medium":
+        """The medium of a file's values (app/parameters.py: read): sigma_t and albedo, or sigma_a
+        and sigma_s, times scale. Raises ValueError naming the field with a problem."""
+        scale, g = values.get("scale", 1.0), values.get("g", 0.0)
+        if {"sigma_t", "albedo"} & set(values):
+            if {"sigma_a", "sigma_s"} & set(values):
+                raise ValueError("give either sigma_a and sigma_s, or sigma_t and albedo, not both")
+            return cls.from_albedo(name, np.asarray(values.get("sigma_t", 1.0), np.float64) * scale,
+                                   values.get("albedo", 0.75), g)
+        return cls.checked(name, np.asarray(values.get("sigma_a", 1.0), np.float64) * scale,
+                           np.asarray(values.get("sigma_s", 1.0), np.float64) * scale, g)
 
     @classmethod
     def from_albedo(cls, name: str, sigma_t, albedo, g: float = 0.0) -> "Medium":

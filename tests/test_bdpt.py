@@ -100,7 +100,7 @@ def cbox_thinlens():
     """The Cornell box through a thin lens focused before the back wall: light tracing joins each
     vertex to a point of the aperture."""
     scene = cbox()
-    camera = scene.camera.as_type("thinlens", aperture=0.15, focus_distance=3.0)
+    camera = scene.camera.as_type("thinlens", aperture_radius=0.15, focus_distance=3.0)
     return replace(scene, camera=camera)
 
 

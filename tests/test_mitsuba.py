@@ -391,7 +391,7 @@ def test_thinlens_orthographic_and_filters_read_as_mitsuba_means_them(tmp_path):
         <sensor type="thinlens"><float name="fov" value="40"/><float name="aperture_radius" value="0.25"/>
             {film.format('<rfilter type="tent"><float name="radius" value="1.5"/></rfilter>')}</sensor>"""))
     cam = scene.camera
-    assert (cam.type, cam.aperture, cam.focus_distance) == ("thinlens", 0.25, 10000.0)
+    assert (cam.type, cam.aperture_radius, cam.focus_distance) == ("thinlens", 0.25, 10000.0)
     assert scene.settings.filter == PixelFilter("tent", 1.5)
     scene = read_mitsuba_file(write(tmp_path, SPHERE + f"""
         <sensor type="orthographic"><transform name="to_world"><scale value="3"/>

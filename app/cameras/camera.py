@@ -1,8 +1,8 @@
 """The camera interface: what every projection shares, its frame (eye, look_at, up and whether
 the image is mirrored, which the viewer's moves and the readers' transforms set), and what each
 projection declares in its own module app/cameras/<type>.py beside its kernel file
-kernels/cameras/<kernel>.cl: its fields (Parameter: their names in pathtrace's TOML, Mitsuba 3
-and pbrt-v4, ranges and docs), its rays, its packing into RenderParams and its readings of
+kernels/cameras/<kernel>.cl: its fields (app/parameters.py: their names in pathtrace's TOML,
+Mitsuba 3 and pbrt-v4, defaults and docs), their ranges, its rays, its packing into RenderParams and its readings of
 Mitsuba's and pbrt's cameras. app/cameras/registry.py finds the modules and generates the
 kernels' dispatch."""
 
@@ -15,39 +15,14 @@ import numpy as np
 MAX_EXTENT = 1e30     # the largest aperture, focus distance or view height a file may give
 
 
-@dataclass(frozen=True)
-class Parameter:
-    """One field of a camera type, as each format names it."""
-    name: str                  # the dataclass field (and the Python API's attribute)
-    toml: str                  # its key in a TOML [camera] table
-    default: float = None      # in TOML and the Python API; None: a TOML table must give it
-    mitsuba: str = None        # its name in a Mitsuba 3 sensor (None: the sensor has none)
-    pbrt: str = None           # its name in a pbrt-v4 Camera (None: pbrt's has none)
-    low: float = 0.0           # its range: (low, high], or [low, high] where closed
-    high: float = MAX_EXTENT
-    closed: bool = False
-    names: tuple = None        # a choice among these names, in place of a number
-    unit: str = ""             # for the docs and the viewer's slider
-    doc: str = ""
-    viewer: tuple = None       # (low, high, logarithmic) of its slider in the viewer's panel;
-                               # None: the panel has none
-
-    @property
-    def label(self) -> str:
-        """Its label in the viewer's panel."""
-        return self.name.replace("_", " ")
-
-    def check(self, value):
-        """Raises ValueError("<name>: <problem>") where value is out of range."""
-        if self.names:
-            if value not in self.names:
-                raise ValueError(f"{self.name}: must be one of {', '.join(self.names)}, got {value!r}")
-            return
-        inside = (self.low <= value if self.closed else self.low < value) and value <= self.high
-        if isinstance(value, bool) or not isinstance(value, (int, float, np.number)) or not inside:
-            shown = f"{value:g}" if isinstance(value, (int, float, np.number)) else repr(value)
-            raise ValueError(f"{self.name}: must be in {'[' if self.closed else '('}{self.low:g}, "
-                             f"{self.high:g}]{' ' + self.unit if self.unit else ''}, got {shown}")
+def check_range(name: str, value, low: float, high: float, open_low: bool = False, open_high: bool = False):
+    """Raises ValueError("<name>: <problem>") where value is not a number in the range."""
+    inside = isinstance(value, (int, float, np.number)) and not isinstance(value, bool) and \
+        (low < value if open_low else low <= value) and (value < high if open_high else value <= high)
+    if not inside:
+        shown = f"{value:g}" if isinstance(value, (int, float, np.number)) else repr(value)
+        raise ValueError(f"{name}: must be in {'(' if open_low else '['}{low:g}, {high:g}{')' if open_high else ']'}, "
+                         f"got {shown}")
 
 
 def _normalize(v):
@@ -65,7 +40,10 @@ class Camera:
     # the image's right is -(forward x up): a left-handed camera, as pbrt's LookAt gives
 
     type: ClassVar[str] = None           # its name in TOML and the registry
-    parameters: ClassVar[tuple] = ()     # its own fields' Parameter declarations
+    parameters: ClassVar[tuple] = ()     # its own fields, declared (app/parameters.py: Parameter;
+                                         # a name's field holds one of its choices)
+    sliders: ClassVar[dict] = {}         # {field: (low, high, logarithmic)}: the viewer panel's
+                                         # slider of a number field
     kernels: ClassVar[tuple] = ()        # its kernel files' names (kernels/cameras/<name>.cl;
                                          # default (type,)), which `kernel` chooses among
     importance: ClassVar[bool] = False   # its kernel files define sample_<kernel>_importance, the
@@ -103,16 +81,18 @@ class Camera:
 
     def __repr__(self) -> str:
         from pathtrace.named import vector
-        own = "".join(f", {p.name} {getattr(self, p.name) if p.names else format(getattr(self, p.name), 'g')}"
+        own = "".join(f", {p.name} {getattr(self, p.name) if p.choices else format(getattr(self, p.name), 'g')}"
                       for p in self.parameters)
         return (f"<Camera {self.type} at {vector(self.eye)} looking at {vector(self.look_at)}, up "
                 f"{vector(self.up)}{own}{', mirrored' if self.mirrored else ''}>")
 
     def check(self):
         """Raises ValueError("<field>: <problem>") for the first of its own fields out of range
-        (the view itself, eye, look_at and up, the readers check)."""
+        (the view itself, eye, look_at and up, the readers check); a name must be one of its
+        choices. A type checks its numbers' ranges on top of this."""
         for p in self.parameters:
-            p.check(getattr(self, p.name))
+            if p.choices and getattr(self, p.name) not in p.choices:
+                raise ValueError(f"{p.name}: must be one of {', '.join(p.choices)}, got {getattr(self, p.name)!r}")
         return self
 
     def frame(self):
@@ -154,6 +134,6 @@ class Camera:
         """Its [camera] table, without the medium."""
         table = {"type": self.type, "eye": self.eye.tolist(), "look_at": self.look_at.tolist(),
                  "up": self.up.tolist()}
-        table.update({p.toml: getattr(self, p.name) if p.names else float(getattr(self, p.name))
+        table.update({p.name: getattr(self, p.name) if p.choices else float(getattr(self, p.name))
                       for p in self.parameters})
         return {**table, "mirrored": True} if self.mirrored else table

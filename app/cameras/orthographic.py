@@ -6,10 +6,11 @@ import math
 from dataclasses import dataclass
 from typing import ClassVar
 
-from pathtrace.cameras.camera import Camera, Parameter
+from pathtrace.cameras.camera import MAX_EXTENT, Camera, check_range
+from pathtrace.parameters import Parameter
 
-HEIGHT = Parameter("height", "height", 2.0, unit="scene units", doc="the view's height (Mitsuba's and "
-                   "pbrt's come from the transform's scale and the screen window)", viewer=(1e-3, 1e4, True))
+HEIGHT = Parameter("height", "number", 2.0, doc="the view's height, scene units (Mitsuba's and pbrt's come from "
+                   "the transform's scale and the screen window)")
 
 
 @dataclass(repr=False)
@@ -18,9 +19,14 @@ class OrthographicCamera(Camera):
 
     type: ClassVar[str] = "orthographic"
     parameters: ClassVar[tuple] = (HEIGHT,)
+    sliders: ClassVar[dict] = {"height": (1e-3, 1e4, True)}
     kernels: ClassVar[tuple] = ("orthographic",)
     mitsuba: ClassVar[str] = "orthographic"
     pbrt: ClassVar[str] = "orthographic"
+
+    def check(self):
+        check_range("height", self.height, 0.0, MAX_EXTENT, open_low=True)
+        return super().check()
 
     def half_height(self) -> float:
         return self.height / 2

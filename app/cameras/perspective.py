@@ -7,11 +7,12 @@ from typing import ClassVar
 
 import numpy as np
 
-from pathtrace.cameras.camera import Camera, Parameter
+from pathtrace.cameras.camera import Camera, check_range
+from pathtrace.parameters import Parameter
 
-VFOV = Parameter("vfov", "vfov", 45.0, mitsuba="fov", pbrt="fov", high=180.0, unit="degrees",
-                 doc="the vertical field of view (Mitsuba's `fov` along `fov_axis`, pbrt's on the "
-                     "shorter image axis, are converted)", viewer=(0.1, 179.9, False))
+VFOV = Parameter("vfov", "number", 45.0, doc="the vertical field of view, degrees in (0, 180) (Mitsuba's "
+                 "fov along fov_axis, pbrt's on the shorter image axis, converted)", mitsuba="fov", pbrt="fov",
+                 pbrt_default=90.0)
 
 
 @dataclass(repr=False)
@@ -20,6 +21,7 @@ class PerspectiveCamera(Camera):
 
     type: ClassVar[str] = "perspective"
     parameters: ClassVar[tuple] = (VFOV,)
+    sliders: ClassVar[dict] = {"vfov": (0.1, 179.9, False)}
     kernels: ClassVar[tuple] = ("perspective",)
     importance: ClassVar[bool] = True
     mitsuba: ClassVar[str] = "perspective"
@@ -30,8 +32,7 @@ class PerspectiveCamera(Camera):
 
     def check(self):
         # a field of view of 180 degrees or more has no film plane
-        if not self.vfov < 180:
-            raise ValueError(f"vfov: must be between 0 and 180 degrees, got {self.vfov:g}")
+        check_range("vfov", self.vfov, 0.0, 180.0, open_low=True, open_high=True)
         return super().check()
 
     def ray(self, aspect: float, x: float, y: float):
@@ -54,7 +55,8 @@ class PerspectiveCamera(Camera):
         lens = camera.get("lensradius", 0.0)
         if lens > 0:
             from pathtrace.cameras.thinlens import ThinLensCamera
-            return ThinLensCamera(**frame, vfov=vfov, aperture=lens, focus_distance=camera.get("focaldistance", 1e6))
+            return ThinLensCamera(**frame, vfov=vfov, aperture_radius=lens,
+                                  focus_distance=camera.get("focaldistance", 1e6))
         if lens < 0:
             camera.fail("lensradius", f"must be in [0, 1e+30], got {lens:g}")
         camera.get("focaldistance", 1e6)      # read: without a lens it changes nothing

@@ -38,7 +38,7 @@ def toml_class(kind: str, keys) -> type:
         return None
     cls = CAMERAS.get(kind)
     for other in CAMERAS.values():
-        own = {p.toml for p in other.parameters} - {p.toml for p in (cls.parameters if cls else ())}
+        own = {p.name for p in other.parameters} - {p.name for p in (cls.parameters if cls else ())}
         if kind in getattr(other, "toml_aliases", ()) and own & set(keys):
             return other
     return cls
@@ -79,25 +79,18 @@ def supports_importance(kernel: str) -> bool:
 
 
 def docs_table() -> str:
-    """docs/scene-format.md's table of the camera types, from their declarations (kept in step
-    by tests/test_camera.py)."""
+    """docs/scene-format.md's section on the camera types, from their declarations (kept in
+    step by tests/test_camera.py): for each, what it is (its module's docstring), its names in
+    Mitsuba 3 and pbrt-v4, and its parameters' table (app/parameters.py: parameter_table)."""
     import sys
 
-    def fields(cls, fmt):
-        names = [f"`{getattr(p, fmt)}`" for p in cls.parameters if getattr(p, fmt)]
-        return ", ".join(names)
-
-    def toml(p):
-        default = "required" if p.default is None else f"default {p.default}" if p.names else f"default {p.default:g}"
-        choice = f"one of {', '.join(f'`{n}`' for n in p.names)}; " if p.names else ""
-        return f"`{p.toml}` ({choice}{default}{', ' + p.unit if p.unit else ''}): {p.doc}"
-
-    rows = ["| type | TOML fields | Mitsuba 3 | pbrt-v4 | what it is |", "|---|---|---|---|---|"]
+    from pathtrace.parameters import parameter_table
+    parts = []
     for name, cls in CAMERAS.items():
         doc = " ".join(sys.modules[cls.__module__].__doc__.split())
-        mitsuba = f"`{cls.mitsuba}`" + (f" ({fields(cls, 'mitsuba')})" if fields(cls, "mitsuba") else "") \
-            if cls.mitsuba else "none (Mitsuba 3 has none built in)"
-        pbrt = f"`{cls.pbrt}`" + (f" ({fields(cls, 'pbrt')})" if fields(cls, "pbrt") else "") if cls.pbrt else "none"
-        rows.append(f"| `{name}` | {'; '.join(toml(p) for p in cls.parameters) or 'none'} | {mitsuba} | {pbrt} | "
-                    f"{doc}{'' if cls.importance else ' BDPT cannot render through it yet.'} |")
-    return "\n".join(rows) + "\n"
+        formats = [f"Mitsuba 3: {f'`{cls.mitsuba}`' if cls.mitsuba else 'none (Mitsuba 3 has none built in)'}",
+                   f"pbrt-v4: {f'`{cls.pbrt}`' if cls.pbrt else 'none'}"]
+        if not cls.importance:
+            formats.append("BDPT: not yet (no importance)")
+        parts.append(f"### `{name}`\n\n{doc} ({'; '.join(formats)}.)\n\n" + parameter_table(cls.parameters))
+    return "\n".join(parts)

@@ -7,24 +7,26 @@ is one."""
 from dataclasses import dataclass
 from typing import ClassVar
 
-from pathtrace.cameras.camera import Parameter
+from pathtrace.cameras.camera import MAX_EXTENT, check_range
 from pathtrace.cameras.perspective import PerspectiveCamera, mitsuba_vfov
+from pathtrace.parameters import Parameter
 
-APERTURE = Parameter("aperture", "aperture_radius", mitsuba="aperture_radius", pbrt="lensradius",
-                     closed=True, unit="scene units", doc="the lens's radius (0: a pinhole)",
-                     viewer=(0.0, 10.0, True))
-FOCUS = Parameter("focus_distance", "focus_distance", mitsuba="focus_distance", pbrt="focaldistance",
-                  unit="scene units", doc="the distance along the view direction to the plane in focus "
-                  "(Mitsuba's default 10,000, pbrt's 10^6)", viewer=(1e-3, 1e4, True))
+APERTURE = Parameter("aperture_radius", "number", 0.0, doc="the lens's radius, scene units (0: a pinhole)",
+                     mitsuba="aperture_radius", pbrt="lensradius")
+FOCUS = Parameter("focus_distance", "number", doc="the distance along the view direction to the plane in focus, "
+                  "scene units", mitsuba="focus_distance", mitsuba_default=10000.0, pbrt="focaldistance",
+                  pbrt_default=1e6)
 
 
 @dataclass(repr=False)
 class ThinLensCamera(PerspectiveCamera):
-    aperture: float = 0.0
+    aperture_radius: float = APERTURE.default
     focus_distance: float = 1.0
 
     type: ClassVar[str] = "thinlens"
     parameters: ClassVar[tuple] = (*PerspectiveCamera.parameters, APERTURE, FOCUS)
+    sliders: ClassVar[dict] = {**PerspectiveCamera.sliders, "aperture_radius": (0.0, 10.0, True),
+                               "focus_distance": (1e-3, 1e4, True)}
     kernels: ClassVar[tuple] = ("thinlens",)
     importance: ClassVar[bool] = True
     mitsuba: ClassVar[str] = "thinlens"
@@ -33,14 +35,19 @@ class ThinLensCamera(PerspectiveCamera):
 
     @property
     def kernel(self) -> str:
-        return "thinlens" if self.aperture > 0 else "perspective"
+        return "thinlens" if self.aperture_radius > 0 else "perspective"
+
+    def check(self):
+        check_range("aperture_radius", self.aperture_radius, 0.0, MAX_EXTENT)
+        check_range("focus_distance", self.focus_distance, 0.0, MAX_EXTENT, open_low=True)
+        return super().check()
 
     def lens(self) -> tuple:
-        return (self.aperture, self.focus_distance, 0.0, 0.0)
+        return (self.aperture_radius, self.focus_distance, 0.0, 0.0)
 
     @classmethod
     def from_mitsuba(cls, sensor, **frame):
         if not sensor.has("aperture_radius"):
             sensor.fail(None, "a thinlens camera needs an aperture_radius")
-        return cls(**frame, vfov=mitsuba_vfov(sensor), aperture=sensor.get("aperture_radius"),
-                   focus_distance=sensor.get("focus_distance", 10000.0))       # Mitsuba's default
+        return cls(**frame, vfov=mitsuba_vfov(sensor), aperture_radius=sensor.get("aperture_radius"),
+                   focus_distance=sensor.get("focus_distance", FOCUS.mitsuba_default))

@@ -1,26 +1,55 @@
 """The interface every light type implements on the host. Area lights (emissive shapes) and the
 environment come from the materials and the environment; the others are delta lights a scene
-file names one by one (point, spot, directional), each a dataclass here with Mitsuba 3's
-parameter names, its checks, its power (by which next-event estimation chooses it) and how it
-packs into the LIGHT struct that its kernel file kernels/lights/<name>.cl reads (which documents
-the packed layout at its top)."""
+file names one by one (point, spot, directional), each a dataclass here with its parameters
+declared once (app/parameters.py: their names in TOML, Mitsuba 3 and pbrt-v4, conversions and
+defaults), its checks, its power (by which next-event estimation chooses it) and how it packs into
+the LIGHT struct that its kernel file kernels/lights/<name>.cl reads (which documents the packed
+layout at its top)."""
 
+import dataclasses
 import math
 
 import numpy as np
 
 from pathtrace.environment import LUMINANCE
+from pathtrace.parameters import Parameter
 
 
 class DeltaLight:
     """A light that no ray can hit: reached by next-event estimation only (kernels/lights.cl),
     and so dark in the estimator without it (RenderSettings.nee off)."""
     name: str
-    fields: tuple           # its parameters, in the order scene files list them
+    parameters: tuple       # its Parameters (app/parameters.py), in the order scene files list them
+    fields: tuple           # those of pathtrace's that are its dataclass fields (set from parameters)
+    formats: dict = {}      # its names in the other formats: {"mitsuba": name, "pbrt": name}
+    unsupported: dict = {}  # {format: {name: why}}: what a format's light has and pathtrace has
+                            # not, warned of where a file gives it
     # parameter sets, as a scene file's [[lights]] entry gives them (a spot may aim by look_at),
     # that the conformance suite (tests/test_light_conformance.py) renders with next-event
     # estimation, the light chosen by power and by the light tree; each type declares its own
     examples: tuple = ()
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        cls.fields = tuple(p.name for p in cls.parameters if p.name in cls.__annotations__)
+
+    @classmethod
+    def from_values(cls, values: dict):
+        """The light of a file's values (app/parameters.py: read), checked. Raises ValueError
+        ("<parameter>: <problem>", or "missing '<parameter>'")."""
+        values = cls.resolve(dict(values))
+        missing = [name for name in cls.fields
+                   if name not in values and cls.__dataclass_fields__[name].default is dataclasses.MISSING]
+        if missing:
+            raise ValueError(f"missing '{missing[0]}'")
+        light = cls(**{k: v for k, v in values.items() if k in cls.fields})
+        light.check()
+        return light
+
+    @classmethod
+    def resolve(cls, values: dict) -> dict:
+        """Turns the parameters that are another way to give one (a spot's look_at) into it."""
+        return values
 
     def check(self):
         """Raises ValueError("<parameter>: <problem>") for the first parameter out of range."""
@@ -79,3 +108,19 @@ def check_angle(name: str, value, high: float) -> float:
 
 def luminance(rgb) -> float:
     return float(np.dot(rgb, LUMINANCE))
+
+
+def pbrt_scaled(k_e):
+    """The conversion of a pbrt-v4 light's spectrum: times its `scale`, and where `power` is given
+    (> 0), times power / k_e, k_e(given) being the power of a unit spectrum (pbrt-v4's
+    PointLight::Create and SpotLight::Create, src/pbrt/lights.cpp)."""
+    def convert(value, given):
+        value = np.asarray(value, np.float64) * given["scale"]
+        return value * given["power"] / k_e(given) if given["power"] > 0 else value
+    return convert
+
+
+# pbrt-v4's parameters of every light, which become the others
+PBRT_SCALE = Parameter(None, "number", pbrt="scale", pbrt_default=1.0, doc="a factor on the emitted spectrum")
+PBRT_POWER = Parameter(None, "number", pbrt="power", pbrt_default=-1.0,
+                       doc="the power in watts the light is scaled to, where positive")

@@ -6,7 +6,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pathtrace.lights.light import DeltaLight, check_color, check_point, luminance
+from pathtrace.lights.light import PBRT_POWER, PBRT_SCALE, DeltaLight, check_color, check_point, luminance, pbrt_scaled
+from pathtrace.parameters import FRAME, Parameter
 
 
 @dataclass
@@ -14,7 +15,14 @@ class PointLight(DeltaLight):
     position: np.ndarray
     intensity: np.ndarray
     name = "point"
-    fields = ("position", "intensity")
+    formats = {"mitsuba": "point", "pbrt": "point"}
+    parameters = (
+        Parameter("position", "point", doc="where it is", mitsuba="position", mitsuba_default=FRAME,
+                  pbrt="from", pbrt_default=(0.0, 0.0, 0.0)),
+        Parameter("intensity", "color", doc="radiant intensity, W/sr", spectrum="illuminant",
+                  mitsuba="intensity", mitsuba_default=1.0, pbrt="I", pbrt_default=1.0,
+                  from_pbrt=pbrt_scaled(lambda given: 4 * math.pi)),
+        PBRT_SCALE, PBRT_POWER)
     examples = ({"position": [0.3, 1.0, -0.2], "intensity": [3.0, 2.0, 1.0]},)
 
     def check(self):

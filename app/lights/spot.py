@@ -9,12 +9,21 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pathtrace.lights.light import DeltaLight, check_angle, check_color, check_direction, check_point, luminance
+from pathtrace.lights.light import (PBRT_POWER, PBRT_SCALE, DeltaLight, check_angle, check_color, check_direction,
+                                    check_point, luminance, pbrt_scaled)
+from pathtrace.parameters import FRAME, Parameter
 
 FALLOFFS = ("linear", "smoothstep")
 
 
 SLOP_COS_E = 0.999     # pbrt-v4's SpotLight::Bounds
+
+
+def _pbrt_k_e(given) -> float:
+    """pbrt-v4's SpotLight::Create: the power of a unit intensity, 2 pi (1 - (cos start + cos end) / 2)."""
+    cos_end = math.cos(math.radians(given["coneangle"]))
+    cos_start = math.cos(math.radians(given["coneangle"] - given["conedeltaangle"]))
+    return 2 * math.pi * (1 - 0.5 * (cos_start + cos_end))
 
 
 @dataclass
@@ -26,11 +35,37 @@ class SpotLight(DeltaLight):
     beam_width: float = None        # None: 3/4 of cutoff_angle, Mitsuba's default
     falloff: str = "linear"
     name = "spot"
-    fields = ("position", "direction", "intensity", "cutoff_angle", "beam_width", "falloff")
+    formats = {"mitsuba": "spot", "pbrt": "spot"}
+    parameters = (
+        Parameter("position", "point", doc="where it is", mitsuba_default=FRAME, pbrt="from",
+                  pbrt_default=(0.0, 0.0, 0.0)),
+        Parameter("direction", "vector", doc="its axis (or give look_at)", mitsuba_default=FRAME, pbrt="to",
+                  pbrt_default=(0.0, 0.0, 1.0), from_pbrt=lambda to, given: np.asarray(to) - given["from"]),
+        Parameter("look_at", "point", doc="a point on its axis, instead of direction", optional=True),
+        Parameter("intensity", "color", doc="radiant intensity on the axis, W/sr", spectrum="illuminant",
+                  mitsuba="intensity", mitsuba_default=1.0, pbrt="I", pbrt_default=1.0,
+                  from_pbrt=pbrt_scaled(_pbrt_k_e)),
+        Parameter("cutoff_angle", "number", 20.0, doc="degrees from the axis where the light ends",
+                  mitsuba="cutoff_angle", pbrt="coneangle", pbrt_default=30.0),
+        Parameter("beam_width", "number", doc="degrees from the axis of full intensity; 3/4 of the cutoff "
+                  "where left out", optional=True, mitsuba="beam_width", pbrt="conedeltaangle", pbrt_default=5.0,
+                  from_pbrt=lambda delta, given: min(max(given["coneangle"] - delta, 0.0), given["coneangle"])),
+        Parameter("falloff", "name", "linear", doc="between beam and cutoff: Mitsuba 3's or pbrt-v4's",
+                  choices=FALLOFFS, pbrt_default="smoothstep"),
+        PBRT_SCALE, PBRT_POWER)
+    unsupported = {"mitsuba": {"texture": "pathtrace's spot lights have no texture"}}
     examples = ({"position": [0.0, 1.0, 0.0], "look_at": [0.4, 0.0, 0.1], "intensity": 2.0, "cutoff_angle": 40.0,
                  "beam_width": 25.0},
                 {"position": [0.2, 1.5, 0.0], "direction": [0.0, -1.0, 0.3], "intensity": [4.0, 3.0, 2.0],
                  "cutoff_angle": 30.0, "beam_width": 30.0, "falloff": "smoothstep"})
+
+    @classmethod
+    def resolve(cls, values):
+        if "look_at" in values:
+            if "direction" in values:
+                raise ValueError("give either 'direction' or 'look_at', not both")
+            values["direction"] = np.asarray(values.pop("look_at")) - values.get("position", np.zeros(3))
+        return values
 
     def check(self):
         self.position = check_point("position", self.position)

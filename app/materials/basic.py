@@ -26,6 +26,7 @@ class Null(BSDFType):
            "media, the boundary of a medium (Mitsuba 3's null BSDF, pbrt-v4's interface material)")
     kernel = False
     flags = NULL
+    formats = {"mitsuba": "null"}
 
     def pack(self, values, rows):
         pass
@@ -37,7 +38,10 @@ class Null(BSDFType):
 class Diffuse(BSDFType):
     name = "diffuse"
     examples = ({"rho_d": [0.8, 0.5, 0.2]},)
-    params = (Param("rho_d", "color", high=1.0, doc="albedo (Mitsuba: reflectance)", slot="p0.xyz"),)
+    formats = {"mitsuba": "diffuse"}
+    # (low and high are integers for Mitsuba's message: "a reflectance must lie in [0, 1]")
+    params = (Param("rho_d", "color", low=0, high=1, doc="albedo", slot="p0.xyz", mitsuba="reflectance",
+                    mitsuba_default=0.5),)
     doc = "Lambertian, f = rho_d / pi"
 
     def pack(self, values, rows):

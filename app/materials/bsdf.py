@@ -2,10 +2,11 @@
 where Mitsuba has the material), their checks, and how they pack into the MATERIAL struct that
 its kernel file kernels/bsdfs/<name>.cl reads (which documents the packed layout at its top)."""
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from pathtrace.parameters import Parameter
 from pathtrace.textures.texture import Texture
 
 # MATERIAL.flags bits, as kernels/types.h defines them
@@ -18,20 +19,23 @@ EMITS_BACK = 32     # its emission leaves its back as well as its front (pbrt's 
 
 
 @dataclass(frozen=True)
-class Param:
-    name: str
-    kind: str                 # "color" (a number or three), "number", "bool", or "name" (a
-                              # string of `names`, which resolve() turns into other parameters)
-    default: object = None    # None: required
+class Param(Parameter):
+    """A material's parameter (app/parameters.py): its kind "color" (a number or three),
+    "number", "bool", or "name" (a string of `names`, which resolve() turns into other
+    parameters); its range [low, high] (high None: unbounded); its names in the formats."""
     low: float = 0.0
-    high: float = None        # None: unbounded
-    doc: str = ""
     names: dict = None        # for "number": named values accepted too; for "name": the choices
     slot: str = None          # where the kernel reads it, as "p0.xyz" or "p1.w" (a colour's
                               # slot is .xyz): a parameter with a slot may be a texture, whose
                               # value at each hit goes there (kernels/shading.cl)
     into: str = None          # another way to give parameter `into`, which resolve() turns it
                               # into (principled's specular, its eta): never kept itself
+
+    def __post_init__(self):
+        super().__post_init__()
+        object.__setattr__(self, "texture", self.slot is not None)
+        if self.kind == "name" and self.names and not self.choices:
+            object.__setattr__(self, "choices", tuple(self.names))
 
 
 def constant_of(value, kind: str, summary=Texture.mean):
@@ -62,6 +66,7 @@ class BSDFType:
     name: str
     params: tuple = ()
     doc: str = ""
+    formats: dict = {}        # its names in other formats: {"mitsuba": name, "pbrt": name or names}
     flags: int = 0            # DELTA, TRANSMISSIVE, NULL
     kernel: bool = True       # has kernels/bsdfs/<name>.cl
     resolved_first: bool = False   # the kernels turn it into another material before any BSDF
@@ -78,6 +83,13 @@ class BSDFType:
                                   # directions, but not eval cos / pdf draw by draw
     estimated: bool = False   # eval and pdf are stochastic estimates (pbrt-v4's LayeredBxDF):
                               # sampling is checked against them by albedo, not bin by bin
+
+    def __init_subclass__(cls, **kwargs):
+        """A type that Mitsuba 3 has takes its parameters by pathtrace's names there too (pathtrace
+        follows Mitsuba's), except where a parameter names its own."""
+        super().__init_subclass__(**kwargs)
+        if "mitsuba" in cls.formats:
+            cls.params = tuple(replace(p, mitsuba=p.mitsuba or p.name) for p in cls.params)
 
     def resolve(self, values: dict) -> dict:
         """Turns names into the numbers they stand for (a named IOR; a "name" parameter, in the

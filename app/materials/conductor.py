@@ -35,6 +35,7 @@ def resolve_metal(values: dict) -> dict:
 
 class Conductor(BSDFType):
     name = "conductor"
+    formats = {"mitsuba": "conductor"}
     examples = ({"material": "Au"}, {"eta": [0.2, 0.9, 1.1], "k": [3.9, 2.4, 2.2], "specular_reflectance": 0.8})
     params = _CONDUCTOR_PARAMS
     flags = DELTA
@@ -55,6 +56,7 @@ class Conductor(BSDFType):
 
 class RoughConductor(AnisotropicRoughness, Conductor):
     name = "roughconductor"
+    formats = {"mitsuba": "roughconductor"}
     examples = ({"material": "Au", "alpha": 0.15}, {"alpha": 0.5}, {"material": "Al", "alpha": 0.9},
                 {"material": "Au", "alpha": 0.1, "distribution": "beckmann"}, {"alpha": 0.6, "distribution": "beckmann"},
                 {"material": "Cu", "alpha": 0.05, "alpha_v": 0.4, "distribution": "ggx"},

@@ -29,6 +29,7 @@ _DIELECTRIC_PARAMS = (
 
 class Dielectric(BSDFType):
     name = "dielectric"
+    formats = {"mitsuba": "dielectric"}
     examples = ({"int_ior": 1.5}, {"int_ior": "water", "specular_transmittance": [0.9, 0.7, 0.5]})
     params = _DIELECTRIC_PARAMS
     flags = DELTA | TRANSMISSIVE
@@ -51,6 +52,7 @@ class Dielectric(BSDFType):
 
 class ThinDielectric(Dielectric):
     name = "thindielectric"
+    formats = {"mitsuba": "thindielectric"}
     examples = ({"int_ior": 1.5}, {"int_ior": "diamond", "specular_reflectance": 0.5})
     doc = ("a thin sheet of glass: light is reflected or passes straight through, with the "
            "sheet's inner reflections summed")
@@ -58,6 +60,7 @@ class ThinDielectric(Dielectric):
 
 class RoughDielectric(AnisotropicRoughness, Dielectric):
     name = "roughdielectric"
+    formats = {"mitsuba": "roughdielectric"}
     examples = ({"alpha": 0.1, "int_ior": 1.5}, {"alpha": 0.5, "int_ior": "water"},
                 {"alpha": 0.3, "int_ior": 1.5, "distribution": "beckmann"},
                 {"alpha": 0.8, "int_ior": "diamond", "distribution": "beckmann"},

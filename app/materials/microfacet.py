@@ -49,7 +49,8 @@ class AnisotropicRoughness:
 # given by name
 DISTRIBUTIONS = {"ggx": 0.0, "beckmann": 1.0}
 DISTRIBUTION = Param("distribution", "number", default=0.0, low=0.0, high=1.0, names=DISTRIBUTIONS,
-                     doc="the microfacet distribution: ggx (0) or beckmann (1; Mitsuba's default)")
+                     doc="the microfacet distribution: ggx (0) or beckmann (1; Mitsuba's default)",
+                     mitsuba_default="beckmann")
 
 
 def check_distribution(values) -> str | None:

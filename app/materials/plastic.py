@@ -11,6 +11,7 @@ from pathtrace.materials.optics import IOR, diffuse_fresnel_reflectance
 
 class Plastic(BSDFType):
     name = "plastic"
+    formats = {"mitsuba": "plastic"}
     examples = ({"diffuse_reflectance": [0.7, 0.3, 0.1], "int_ior": 1.5},
                 {"diffuse_reflectance": 0.9, "nonlinear": True, "int_ior": "diamond"})
     params = (
@@ -59,6 +60,7 @@ class Plastic(BSDFType):
 
 class RoughPlastic(Plastic):
     name = "roughplastic"
+    formats = {"mitsuba": "roughplastic"}
     examples = ({"diffuse_reflectance": [0.7, 0.3, 0.1], "alpha": 0.1, "int_ior": 1.5},
                 {"diffuse_reflectance": [0.2, 0.9, 0.5], "alpha": 0.6, "nonlinear": True, "specular_reflectance": 0.7},
                 {"diffuse_reflectance": [0.7, 0.3, 0.1], "alpha": 0.2, "distribution": "beckmann"})

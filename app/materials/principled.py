@@ -21,6 +21,7 @@ def eta_of_specular(specular):
 
 class Principled(BSDFType):
     name = "principled"
+    formats = {"mitsuba": "principled"}
     examples = ({"base_color": [0.8, 0.3, 0.1], "roughness": 0.3, "metallic": 0.4, "spec_tint": 0.6,
                  "sheen": 0.8, "clearcoat": 0.9, "clearcoat_gloss": 0.7},
                 {"base_color": [0.95, 0.7, 0.3], "roughness": 0.5, "anisotropic": 0.8, "metallic": 1.0},

@@ -22,12 +22,14 @@ from pathtrace.cameras.perspective import PerspectiveCamera, vertical_fov
 from pathtrace.environment import Environment
 from pathtrace.errors import UserError, cut, short, warn
 from pathtrace.filters import FILTERS, PixelFilter
-from pathtrace.lights import DELTA_LIGHTS, DirectionalLight, PointLight, SpotLight
+from pathtrace import parameters
+from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.blend import check_blend, transmits
 from pathtrace.materials.bsdf import LUMINANCE, constant_of
 from pathtrace.materials.table import check_bump_map
 from pathtrace.media import Medium, MediumInterface
+from pathtrace.parameters import FRAME
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, orient_by_normals, unit_disk, vertex_normals
@@ -38,6 +40,8 @@ MAX_ELEMENTS = 1_000_000   # in a file and its includes together, as MAX_XML_BYT
 MAX_NESTING = 64           # elements inside elements (a Mitsuba scene needs a handful)
 MAX_INCLUDE_DEPTH = 8
 MAX_FILM = 16384
+LIGHTS_BY_NAME = parameters.by_format(DELTA_LIGHTS.values(), "mitsuba")
+BSDFS_BY_NAME = parameters.by_format(BSDFS.values(), "mitsuba")
 
 
 @dataclass
@@ -674,35 +678,47 @@ class _Reader:
             self.environment = Environment.from_file(node.file.parent / name, scale,
                                                      self.envmap_rotation(node, props),
                                                      where=node.where())
-        elif kind in DELTA_LIGHTS:
+        elif kind in LIGHTS_BY_NAME:
             self.lights.append(self.delta_light(node, kind, props))
         else:
             warn(f"{node.where()}: pathtrace has no {kind} emitters; it ignores this one")
             props.ignore()
 
     def delta_light(self, node, kind, props):
-        """A point, spot or directional emitter, placed as Mitsuba places it: a point's
-        `position` or its to_world's origin; a spot's to_world (it shines along local +z); a
-        directional's `direction` or its to_world's +z."""
+        """A delta light of pathtrace.lights by its declared Mitsuba names; a point or vector
+        that the emitter places by its to_world (app/parameters.py: FRAME) is to_world's origin
+        or +z, where Mitsuba's point, spot and directional emitters shine along local +z."""
+        cls = LIGHTS_BY_NAME[kind]
         m = self.get(props, "to_world", np.eye(4), ("transform",))
-        if kind == "point":
-            position = self.get(props, "position", m[:3, 3], ("point", "vector"))
-            light = PointLight(position, self.color(props, "intensity", 1.0, textures=False))
-        elif kind == "spot":
-            light = SpotLight(m[:3, 3], m[:3, :3] @ [0, 0, 1.0], self.color(props, "intensity", 1.0, textures=False),
-                              self.get(props, "cutoff_angle", 20.0, ("float",)),
-                              self.get(props, "beam_width", None, ("float",)))
-            if "texture" in props:
-                warn(f"{props['texture'].where()}: pathtrace's spot lights have no texture; ignored")
-        else:
-            direction = self.get(props, "direction", m[:3, :3] @ [0, 0, 1.0], ("vector", "point"))
-            light = DirectionalLight(direction, self.color(props, "irradiance", 1.0, textures=False))
+        frame = {"point": m[:3, 3], "vector": m[:3, :3] @ [0, 0, 1.0]}
+        values = parameters.read(cls.parameters, "mitsuba", lambda p, name: self.parameter(props, p, name))
+        kinds = {p.name: p.kind for p in cls.parameters}
+        values = {k: frame[kinds[k]] if v is FRAME else v for k, v in values.items()}
+        for name, why in cls.unsupported.get("mitsuba", {}).items():
+            if name in props:
+                warn(f"{props[name].where()}: {why}; ignored")
         try:
-            light.check()
+            return cls.from_values(values)
         except ValueError as e:
             field, problem = str(e).split(": ", 1)
             _fail(props.get(field, node), f"{field}: {problem}")
-        return light
+
+    def parameter(self, props, p, name):
+        """The value of the declared parameter p (app/parameters.py) that the property `name`
+        gives, by p's kind; None where the element has no such property."""
+        if name not in props:
+            return None
+        if p.kind == "color":
+            return self.color(props, name, None, textures=p.texture)
+        c = props[name]
+        target = self.resolve(c) if c.tag == "ref" else c
+        if p.texture and target.tag == "texture":
+            return self.texture(target)
+        kinds = {"number": ("float",), "integer": ("integer",), "bool": ("boolean",), "string": ("string",),
+                 "name": ("string",), "point": ("point", "vector"), "vector": ("vector", "point")}[p.kind]
+        if p.kind == "number" and getattr(p, "names", None) and target.tag == "string":
+            kinds = ("string",)          # a named value (an IOR's name), which the type resolves
+        return self.get(props, name, kinds=kinds)
 
     def envmap_rotation(self, node, props):
         """pathtrace's rotation about +y for a Mitsuba envmap's to_world: Mitsuba puts the map's
@@ -770,15 +786,7 @@ class _Reader:
             return m
         if kind in ("bumpmap", "normalmap"):
             return self.mapped_material(node, kind, props)
-        if kind == "null":
-            return Material("null")
-        if kind == "diffuse":
-            rho = self.color(props, "reflectance", 0.5)
-            if np.any(constant_of(rho, "color", Texture.maximum) > 1):
-                _fail(props["reflectance"], "a reflectance must lie in [0, 1]")
-            return Material("diffuse", {"rho_d": rho})
-        if kind in ("conductor", "roughconductor", "dielectric", "roughdielectric", "thindielectric", "plastic",
-                    "roughplastic", "principled"):
+        if kind in BSDFS_BY_NAME:
             return self.mitsuba_material(node, kind, props)
         albedo = self.color(props, "base_color", None, False) if "base_color" in props else \
             self.color(props, "reflectance", 0.5, False) if "reflectance" in props else np.full(3, 0.5)
@@ -857,36 +865,16 @@ class _Reader:
         return value if isinstance(value, Texture) else float(np.dot(value, LUMINANCE))
 
     def mitsuba_material(self, node, kind, props):
-        """The types that share Mitsuba's parameter names (app/materials)."""
-        bsdf = BSDFS[kind]
-        values = {}
-        for p in bsdf.params:
-            if p.name not in props:
-                continue
-            if p.kind == "color":
-                values[p.name] = self.color(props, p.name, p.default)
-            elif p.kind == "bool":
-                values[p.name] = self.get(props, p.name, kinds=("boolean",))
-            elif p.kind == "name":
-                values[p.name] = self.get(props, p.name, kinds=("string",))
-            else:
-                c = props[p.name]
-                target = self.resolve(c) if c.tag == "ref" else c
-                values[p.name] = c.attrs.get("value") if c.tag == "string" else \
-                    self.texture(target) if target.tag == "texture" else self.get(props, p.name, kinds=("float",))
-        if kind.startswith("rough"):
-            values.setdefault("distribution", "beckmann")             # Mitsuba's default
-        anisotropic = any(p.name == "alpha_v" for p in bsdf.params)
-        if anisotropic and ("alpha_v" in props or "alpha_u" in props):
-            # Mitsuba's anisotropic roughness: alpha_u (pathtrace's alpha) and alpha_v, both
-            # required (its MicrofacetDistribution refuses one without the other)
+        """A material type of pathtrace's that Mitsuba 3 has, by its declared Mitsuba names
+        (app/materials); Mitsuba's anisotropic roughness is alpha_u (pathtrace's alpha) and
+        alpha_v, both required (its MicrofacetDistribution refuses one without the other)."""
+        bsdf = BSDFS_BY_NAME[kind]
+        values = parameters.read(bsdf.params, "mitsuba", lambda p, name: self.parameter(props, p, name))
+        if any(p.name == "alpha_v" for p in bsdf.params) and ("alpha_v" in values or "alpha_u" in props):
             if "alpha" in props or "alpha_u" not in props or "alpha_v" not in props:
                 _fail(node, "give alpha, or alpha_u and alpha_v, not a mixture")
-            c = props["alpha_u"]
-            target = self.resolve(c) if c.tag == "ref" else c
-            values["alpha"] = self.texture(target) if target.tag == "texture" else \
-                self.get(props, "alpha_u", kinds=("float",))
-        if kind.startswith("rough"):
+            values["alpha"] = self.parameter(props, next(p for p in bsdf.params if p.name == "alpha"), "alpha_u")
+        if "distribution" in values:
             props.get("sample_visible")      # pathtrace samples visible normals always (kernels/microfacet.cl)
         for p in bsdf.params:        # the range of what the file gave (the TOML reader's Param bounds)
             if p.kind in ("name", "bool") or p.name not in values or isinstance(values[p.name], str):
@@ -895,12 +883,12 @@ class _Reader:
             high = np.asarray(constant_of(values[p.name], p.kind, Texture.maximum), np.float64)
             if np.any(low < p.low) or (p.high is not None and np.any(high > p.high)):
                 bound = f"[{p.low}, {p.high}]" if p.high is not None else f"at least {p.low}"
-                _fail(props.get(p.name, node), f"{p.name} must lie in {bound}")
+                _fail(props.get(p.mitsuba, node), f"{'an' if p.mitsuba[0] in 'aeiou' else 'a'} {p.mitsuba} must lie in {bound}")
         try:
             values = bsdf.complete(values)
         except ValueError as e:
             _fail(node, str(e))
-        return Material(kind, values)
+        return Material(bsdf.name, values)
 
     # -- media --
 
@@ -924,20 +912,17 @@ class _Reader:
         props.get("has_spectral_extinction")    # spectral variants' choice; pathtrace is RGB
         if not self.get(props, "sample_emitters", True, ("boolean",)):
             warn(f"{props['sample_emitters'].where()}: pathtrace samples emitters in every medium")
-        scale = self.get(props, "scale", 1.0, ("float",))
-        g = 0.0
+        values = parameters.read(Medium.parameters, "mitsuba", lambda p, name: self.parameter(props, p, name))
         for phase in (c for c in node.children if c.tag == "phase"):
             phase_props = self.properties(phase)
             if phase.attrs.get("type") == "hg":
-                g = self.get(phase_props, "g", 0.8, ("float",))     # Mitsuba 3's default
+                values["g"] = self.get(phase_props, "g", 0.8, ("float",))     # Mitsuba 3's default
             elif phase.attrs.get("type") != "isotropic":
                 phase_props.ignore()
                 warn(f"{phase.where()}: pathtrace has no {phase.attrs.get('type')} phase function; "
                      "it scatters isotropically instead")
         try:
-            medium = Medium.from_albedo(node.attrs.get("id") or f"medium {len(self.media)}",
-                                        self.color(props, "sigma_t", 1.0, False) * scale,
-                                        self.color(props, "albedo", 0.75, False), g)
+            medium = Medium.from_values(node.attrs.get("id") or f"medium {len(self.media)}", values)
         except ValueError as e:
             field, problem = str(e).split(": ", 1)
             _fail(props.get(field, node), f"{field}: {problem}")

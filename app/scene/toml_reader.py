@@ -3,7 +3,6 @@ the file and the field, e.g.
     scenes/room.toml: spheres[3].radius: must be positive, got -1
 """
 
-import dataclasses
 import math
 import os
 import tomllib
@@ -11,8 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pathtrace import cameras
-from pathtrace import filters
+from pathtrace import cameras, filters, parameters
 from pathtrace.filters import PixelFilter
 from pathtrace.lights import DELTA_LIGHTS, LIGHT_SAMPLERS
 from pathtrace.environment import Environment
@@ -305,53 +303,54 @@ class _Reader:
         return self.number(data, "opacity", where, default=1.0, low=0.0, high=1.0)
 
     def parameter(self, data, param, where):
-        """One material parameter as its Param declares it (app/materials/bsdf.py); one with a
-        slot may be a texture: a name of [textures] or an inline table."""
-        value = data[param.name]
-        if param.slot and (isinstance(value, dict) or (isinstance(value, str) and value in self.texture_tables)):
-            texture = self.texture_value(value, f"{where}.{param.name}")
+        """One declared parameter (app/parameters.py) by its kind; one that may be a texture may
+        be a name of [textures] or an inline table, whose values must lie in its range."""
+        value, key = data[param.name], f"{where}.{param.name}"
+        if param.texture and (isinstance(value, dict) or (isinstance(value, str) and value in self.texture_tables)):
+            texture = self.texture_value(value, key)
             low = np.min(constant_of(texture, param.kind, Texture.minimum))
             high = np.max(constant_of(texture, param.kind, Texture.maximum))
-            if low < param.low or (param.high is not None and high > param.high):
+            if (param.low is not None and low < param.low) or (param.high is not None and high > param.high):
                 bound = f"in [{param.low}, {param.high}]" if param.high is not None else f"at least {param.low}"
-                self.fail(f"{where}.{param.name}", f"the texture's values must lie {bound}, "
-                                                   f"but reach from {low:.4g} to {high:.4g}")
+                self.fail(key, f"the texture's values must lie {bound}, but reach from {low:.4g} to {high:.4g}")
             return texture
         if param.kind == "color":
             return self.color(data, param.name, where, high=param.high)
         if param.kind == "bool":
-            if not isinstance(value, bool):
-                self.fail(f"{where}.{param.name}", f"must be true or false, got {short(value)}")
+            return self.boolean(data, param.name, where, None)
+        if param.kind in ("point", "vector"):
+            return self.vector(data, param.name, where)
+        if param.choices and not getattr(param, "names", None):
+            if value not in param.choices:
+                self.fail(key, f"must be {', '.join(param.choices[:-1])} or {param.choices[-1]}, got {short(value)}")
             return value
-        if isinstance(value, str) and param.names:
-            if value not in param.names:
-                self.fail(f"{where}.{param.name}",
-                          f"unknown name {short(value)} (known: {', '.join(sorted(param.names))})")
-            return value             # BSDFType.resolve turns it into its number
-        if param.kind == "name":
-            self.fail(f"{where}.{param.name}", f"must be a name, got {short(value)}")
-        return self.number(data, param.name, where, low=param.low, high=param.high)
+        names = getattr(param, "names", None)
+        if isinstance(value, str) and names:
+            if value not in names:
+                self.fail(key, f"unknown name {short(value)} (known: {', '.join(sorted(names))})")
+            return value             # BSDFType.resolve turns a material's into its number
+        if param.kind in ("name", "string"):
+            self.fail(key, f"must be a name, got {short(value)}")
+        return self.number(data, param.name, where, low=param.low, high=param.high, integer=param.kind == "integer")
 
     def camera(self, data):
-        """The [camera] table: the frame, and the fields its type declares (app/cameras/)."""
+        """The [camera] table: the frame, and the parameters its type declares (app/cameras/)."""
         where = "camera"
         kind = data.get("type", "perspective")
         cls = cameras.registry.toml_class(kind, data)
         if cls is None:
             self.fail("camera.type", f"must be one of {', '.join(cameras.registry.toml_names())}, got {short(kind)}")
-        own = {p.toml: p for p in cls.parameters}
+        own = {p.name for p in cls.parameters}
         common = {"type", "eye", "look_at", "up", "mirrored", "medium"}
         for key in data:
-            if key not in common and key not in own and any(key in {p.toml for p in c.parameters}
-                                                           for c in cameras.CAMERAS.values()):
+            if key not in common | own and any(key in {p.name for p in c.parameters} for c in cameras.CAMERAS.values()):
                 self.fail(f"camera.{key}", f"a {kind} camera has no {key}")
-        self.table(data, where, common | set(own))
-        missing = [p.toml for p in cls.parameters if p.default is None and p.toml not in data]
+        self.table(data, where, common | own)
+        missing = [p.name for p in cls.parameters if p.default is None and p.name not in data]
         if missing:
             self.fail("camera", f"a {cls.type} camera needs {' and '.join(repr(m) for m in missing)}")
-        # a choice of names is checked by check() below
-        values = {p.name: data.get(p.toml, p.default) if p.names else self.number(data, p.toml, where, default=p.default)
-                  for p in cls.parameters}
+        values = parameters.read(cls.parameters, "toml",
+                                 lambda p, name: self.parameter(data, p, where) if name in data else None)
         cam = cls(self.vector(data, "eye", where), self.vector(data, "look_at", where),
                   self.vector(data, "up", where, default=(0, 1, 0)),
                   mirrored=self.boolean(data, "mirrored", where, False), **values)
@@ -359,7 +358,7 @@ class _Reader:
             cam.check()
         except ValueError as e:
             field, problem = str(e).split(": ", 1)
-            self.fail(f"camera.{ {p.name: p.toml for p in cls.parameters}.get(field, field)}", problem)
+            self.fail(f"camera.{field}", problem)
         forward = cam.look_at - cam.eye
         if np.linalg.norm(forward) == 0:
             self.fail("camera.look_at", "must differ from camera.eye")
@@ -370,24 +369,15 @@ class _Reader:
         return cam
 
     def medium(self, data, where) -> Medium:
-        """One [media] table: sigma_a and sigma_s (pbrt-v4's), or sigma_t and albedo (Mitsuba
-        3's), each times `scale`, and the phase function's g."""
-        self.table(data, where, {"sigma_a", "sigma_s", "sigma_t", "albedo", "scale", "g"})
-        pbrt, mitsuba = {"sigma_a", "sigma_s"} & set(data), {"sigma_t", "albedo"} & set(data)
-        if pbrt and mitsuba:
-            self.fail(where, "give either sigma_a and sigma_s, or sigma_t and albedo, not both")
-        scale = self.number(data, "scale", where, default=1.0, low=0.0)
-        g = self.number(data, "g", where, default=0.0)
-        name = where.split(".", 1)[1]
+        """One [media] table, by Medium's declared parameters."""
+        self.table(data, where, {p.name for p in Medium.parameters})
+        values = parameters.read(Medium.parameters, "toml",
+                                 lambda p, name: self.parameter(data, p, where) if name in data else None)
         try:
-            if mitsuba:
-                return Medium.from_albedo(name, self.color(data, "sigma_t", where, default=1.0) * scale,
-                                          self.color(data, "albedo", where, default=0.75, high=1.0), g)
-            return Medium.checked(name, self.color(data, "sigma_a", where, default=1.0) * scale,
-                                  self.color(data, "sigma_s", where, default=1.0) * scale, g)
+            return Medium.from_values(where.split(".", 1)[1], values)
         except ValueError as e:
-            field, problem = str(e).split(": ", 1)
-            self.fail(f"{where}.{field}", problem)
+            field, sep, problem = str(e).partition(": ")
+            self.fail(f"{where}.{field}", problem) if sep else self.fail(where, str(e))
 
     def medium_row(self, data, key, where) -> int:
         """The row of the medium `key` names ([media]), -1 where the key is absent (vacuum)."""
@@ -406,42 +396,21 @@ class _Reader:
         return MediumInterface(self.medium_row(data, "interior", where), self.medium_row(data, "exterior", where))
 
     def light(self, data, where):
-        """One [[lights]] entry: a point, spot or directional light (pathtrace.lights), with
-        Mitsuba 3's parameter names; a spot may aim by `look_at` instead of `direction`."""
+        """One [[lights]] entry: a delta light of pathtrace.lights, by its declared parameters."""
         if not isinstance(data, dict):
             self.fail(where, f"must be a table, got {type(data).__name__}")
         kind = data.get("type")
         if kind not in DELTA_LIGHTS:
             self.fail(f"{where}.type", f"must be one of {', '.join(DELTA_LIGHTS)}, got {short(kind)}")
         cls = DELTA_LIGHTS[kind]
-        self.table(data, where, {"type", *cls.fields, *(("look_at",) if kind == "spot" else ())})
-        values = {}
-        for key in cls.fields:
-            if key not in data:
-                continue
-            if key in ("position", "direction"):
-                values[key] = self.vector(data, key, where)
-            elif key in ("intensity", "irradiance"):
-                values[key] = self.color(data, key, where)
-            elif key == "falloff":
-                values[key] = data[key]
-            else:
-                values[key] = self.number(data, key, where)
-        if kind == "spot" and "look_at" in data:
-            if "direction" in data:
-                self.fail(where, "give either 'direction' or 'look_at', not both")
-            values["direction"] = self.vector(data, "look_at", where) - values.get("position", np.zeros(3))
-        required = [f.name for f in dataclasses.fields(cls)
-                    if f.default is dataclasses.MISSING and f.name not in values]
-        if required:
-            self.fail(where, f"missing '{required[0]}'")
-        light = cls(**values)
+        self.table(data, where, {"type", *(p.name for p in cls.parameters if p.name)})
+        values = parameters.read(cls.parameters, "toml",
+                                 lambda p, name: self.parameter(data, p, where) if name in data else None)
         try:
-            light.check()
+            return cls.from_values(values)
         except ValueError as e:
-            field, problem = str(e).split(": ", 1)
-            self.fail(f"{where}.{field}", problem)
-        return light
+            field, sep, problem = str(e).partition(": ")
+            self.fail(f"{where}.{field}", problem) if sep else self.fail(where, str(e))
 
     def environment(self, data):
         where = "environment"

@@ -103,7 +103,7 @@ def _camera(camera):
         raise UserError(f"{where}.up: must be neither zero nor parallel to the view direction, got {up.tolist()}")
     for p in camera.parameters:
         value = getattr(camera, p.name)
-        if not p.names and (isinstance(value, bool) or not isinstance(value, (int, float, np.number))
+        if not p.choices and (isinstance(value, bool) or not isinstance(value, (int, float, np.number))
                             or not math.isfinite(value)):
             raise UserError(f"{where}.{p.name}: give a finite number, got {short(value)}")
     try:

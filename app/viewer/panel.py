@@ -34,7 +34,7 @@ KEYS = (("W A S D", "move"), ("Q / E, Ctrl / Space", "down / up"), ("right mouse
 LABELS = ("exposure (EV)", "tone curve", "max depth (0: none)", "Russian roulette", "env intensity",
           "env rotation", "path queue (0: off)", "speed", "camera type", "built-in", "file", "folder", "emission") + \
     tuple({p.name for bsdf in BSDFS.values() for p in bsdf.params}) + \
-    tuple({p.label for camera in CAMERAS.values() for p in camera.parameters if p.viewer})
+    tuple({name.replace("_", " ") for camera in CAMERAS.values() for name in camera.sliders})
 
 
 # a parameter's name longer than this (principled's sampling rates) goes on a line of its own
@@ -237,17 +237,14 @@ def draw_panel(v):
         if changed:
             camera = camera.as_type(types[index])
             r.set_camera(camera)
-        # the sliders of the camera type's own fields (app/cameras/: Parameter.viewer)
-        for p in camera.parameters:
-            if p.viewer is None:
-                continue
-            low, high, log = p.viewer
-            changed, value = imgui.slider_float(p.label, getattr(camera, p.name), low, high,
-                                                "%.3g" + (f" {p.unit}" if p.unit == "degrees" else ""),
+        # the sliders of the camera type's own fields (app/cameras/: Camera.sliders)
+        for name, (low, high, log) in camera.sliders.items():
+            label = name.replace("_", " ")
+            changed, value = imgui.slider_float(label, getattr(camera, name), low, high, "%.3g",
                                                 imgui.SliderFlags_.logarithmic if log else 0)
-            layout.check(p.label)
+            layout.check(label)
             if changed:
-                setattr(camera, p.name, min(max(value, low), high))
+                setattr(camera, name, min(max(value, low), high))
                 r.set_camera(camera)
         imgui.text_wrapped("H shows the keys; R resets the camera" + ("; Ctrl + left click focuses on the "
                            "surface under the cursor" if hasattr(camera, "focus_distance") else ""))

@@ -130,6 +130,21 @@ class MaterialMapper:
             return params.float(name, default)
         return spectrum_rgb(params, name, default)
 
+    def parameter(self, params, p, name):
+        """The value of the declared parameter p (app/parameters.py) that the parameter `name`
+        gives, by p's kind (a colour from a spectrum as p.spectrum says); None where it is not
+        given."""
+        ptype = params.type_of(name)
+        if ptype is None:
+            return None
+        if p.texture and ptype == "texture":
+            return self.texture_input(params, name, None, p.kind == "number")
+        if p.kind == "color":
+            return spectrum_rgb(params, name, None, p.spectrum)
+        read = {"number": params.float, "integer": params.int, "bool": params.bool, "string": params.string,
+                "name": params.string, "point": params.point, "vector": params.point}[p.kind]
+        return read(name)
+
     def define_texture(self, name, kind, cls, params, where):
         """Texture "name" "spectrum"|"float" "class" ..."""
         if kind not in ("spectrum", "float"):

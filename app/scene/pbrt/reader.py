@@ -36,7 +36,8 @@ from pathtrace.environment import Environment
 from pathtrace.errors import UserError, cut, warn
 from pathtrace.files import check_regular_file
 from pathtrace.filters import PixelFilter
-from pathtrace.lights import DirectionalLight, PointLight, SpotLight
+from pathtrace import parameters as declared
+from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.lights.light import MAX_RADIANCE
 from pathtrace.media import Medium, MediumInterface
 from pathtrace.scene import transform
@@ -54,6 +55,7 @@ MAX_INCLUDE_DEPTH = 16
 # a tree of includes (12 wide and 8 deep: 470 million reads) is refused at once, not read for ever
 MAX_INCLUDES = 4096
 MAX_FILM = 16384
+LIGHTS_BY_NAME = declared.by_format(DELTA_LIGHTS.values(), "pbrt")
 # the most material rows one `power` area light's triangles take (PbrtReader.area_emission)
 MAX_POWER_ROWS = 256
 # a plymesh shape and its file name, as MeshFiles reads them ahead (PbrtReader.named_mesh_files)
@@ -522,11 +524,9 @@ class PbrtReader:
             if params.type_of(emission):
                 warn(f"{params.where(emission)}: pathtrace's media do not emit; ignored")
                 params.get(emission, (params.type_of(emission),), 0)
-        scale = params.float("scale", 1.0)
+        values = declared.read(Medium.parameters, "pbrt", lambda p, name: self.mapper.parameter(params, p, name))
         try:
-            self.media[row] = Medium.checked(name, spectrum_rgb(params, "sigma_a", 1.0, "unbounded") * scale,
-                                             spectrum_rgb(params, "sigma_s", 1.0, "unbounded") * scale,
-                                             params.float("g", 0.0))
+            self.media[row] = Medium.from_values(name, values)
         except ValueError as e:
             field, problem = str(e).split(": ", 1)
             if field in params.params:
@@ -918,51 +918,32 @@ class PbrtReader:
     # -- lights --
 
     def _light(self, tokens, offset):
+        """LightSource: the infinite light (the environment), or a delta light of
+        pathtrace.lights by its declared pbrt-v4 names, its points and vectors in the CTM."""
         kind = string(tokens, "LightSource")
         params = parameters(tokens)
         where = tokens.where(offset)
         m = self.state.ctm
-        scale = params.float("scale", 1.0)
-        if kind in ("point", "spot"):
-            color = spectrum_rgb(params, "I", 1.0, "illuminant") * scale
-            p_from = params.point("from", np.zeros(3))
-            position = transform.transform_points(m, p_from[None])[0]
-            power = params.float("power", -1.0)
-            if kind == "point":
-                if power > 0:
-                    color = color * power / (4 * math.pi)
-                light = PointLight(position, color)
-            else:
-                p_to = params.point("to", np.array([0, 0, 1.0]))
-                cone, delta = params.float("coneangle", 30.0), params.float("conedeltaangle", 5.0)
-                if power > 0:
-                    cos_end, cos_start = math.cos(math.radians(cone)), math.cos(math.radians(cone - delta))
-                    color = color * power / (2 * math.pi * (1 - 0.5 * (cos_start + cos_end)))
-                light = SpotLight(position, m[:3, :3] @ (p_to - p_from), color, cone,
-                                  min(max(cone - delta, 0.0), cone), "smoothstep")
-        elif kind == "distant":
-            color = spectrum_rgb(params, "L", 1.0, "illuminant") * scale
-            p_from = params.point("from", np.zeros(3))
-            p_to = params.point("to", np.array([0, 0, 1.0]))
-            illuminance = params.float("illuminance", -1.0)
-            if illuminance > 0:
-                color = color * illuminance
-            light = DirectionalLight(m[:3, :3] @ (p_to - p_from), color)
-        elif kind == "infinite":
-            self.infinite_light(params, where, scale)
+        if kind == "infinite":
+            self.infinite_light(params, where, params.float("scale", 1.0))
             self.unused(params, "infinite light")
             return
-        else:
+        cls = LIGHTS_BY_NAME.get(kind)
+        if cls is None:
             for p in params.params.values():
                 p.used = True
             warn(f"{where}: pathtrace has no {kind} light; it leaves it out")
             return
+        values = declared.read(cls.parameters, "pbrt", lambda p, name: self.mapper.parameter(params, p, name))
+        for p in cls.parameters:
+            if p.name in values and p.kind in ("point", "vector"):
+                v = np.asarray(values[p.name], np.float64)
+                values[p.name] = transform.transform_points(m, v[None])[0] if p.kind == "point" else m[:3, :3] @ v
         try:
-            light.check()
+            light = cls.from_values(values)
         except ValueError as e:
             name, problem = str(e).split(": ", 1)
-            pbrt_name = {"intensity": "I", "irradiance": "L", "direction": "to",
-                         "cutoff_angle": "coneangle", "beam_width": "conedeltaangle"}.get(name, name)
+            pbrt_name = next((p.pbrt for p in cls.parameters if p.name == name and p.pbrt), name)
             raise UserError(f"{where}: '{pbrt_name}' {problem}") from None
         self.lights.append(light)
         self.unused(params, f"{kind} light")

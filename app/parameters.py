@@ -1,0 +1,146 @@
+"""A type's parameters, declared once, beside the type: each parameter's name in pathtrace's TOML
+format, in Mitsuba 3 and in pbrt-v4 (any but the first may be absent), its kind, its default, its
+conversion from each format, and its one-line documentation. The three scene readers read a type's
+parameters through these declarations (each reading a kind in its own syntax), and the parameter
+tables of docs/scene-format.md, docs/mitsuba.md and docs/pbrt.md are generated from them
+(parameter_table; scripts/scene_format_tables.py writes them, tests/test_parameters.py keeps them in
+step).
+
+This module imports nothing of pathtrace's, so that any type's host module may import it (the
+material, texture, light and camera modules are imported by pathtrace.scene, not the reverse)."""
+
+from dataclasses import dataclass
+from typing import Callable
+
+# What a parameter holds, which decides how each reader reads it:
+#   number, integer, bool, string;
+#   name     a string among `choices` (an enumeration);
+#   color    rgb: a number (grey) or three, or a spectrum (pbrt-v4's and Mitsuba 3's spectra,
+#            converted as `spectrum` says); a texture too where `texture` is set;
+#   point    a position, transformed by the element's frame (Mitsuba's to_world, pbrt's CTM);
+#   vector   a direction, transformed likewise.
+KINDS = ("number", "integer", "bool", "string", "name", "color", "point", "vector")
+FORMATS = ("toml", "mitsuba", "pbrt")
+# how a spectrum becomes rgb (app/spectra.py): a reflectance (bounded by 1), an illuminant
+# (luminance 1, as pbrt-v4 normalises a light's spectrum) or unbounded (an IOR: its mean)
+SPECTRA = ("reflectance", "illuminant", "unbounded")
+
+
+class _Same:
+    """The format's default is pathtrace's (the type's own default applies)."""
+
+    def __repr__(self):
+        return "SAME"
+
+
+SAME = _Same()
+FRAME = "frame"     # a point's or vector's default in a format: the element's frame's origin or +z
+
+
+@dataclass(frozen=True)
+class Parameter:
+    name: str                    # pathtrace's name, in TOML files and the Python API
+    kind: str                    # one of KINDS
+    default: object = None       # pathtrace's default; None: required, unless `optional`
+    low: float = None            # the range of a number or colour (a texture's bounds): None, open
+    high: float = None
+    doc: str = ""                # one line, for the generated tables
+    choices: tuple = ()          # a name's values
+    texture: bool = False        # a colour or number that a texture may give
+    spectrum: str = "reflectance"    # how a colour given as a spectrum is read (SPECTRA)
+    mitsuba: str = None          # Mitsuba 3's name; None: Mitsuba's plugin has no such parameter
+    pbrt: str = None             # pbrt-v4's name; None: likewise
+    mitsuba_default: object = SAME   # the format's default where it differs from pathtrace's
+    pbrt_default: object = SAME      # (FRAME: a point's or vector's, the element's frame)
+    from_mitsuba: Callable = None    # (value as the file gives it, {format name: value} of the
+    from_pbrt: Callable = None       # element) -> pathtrace's value; None: the value as it is
+    optional: bool = False       # without a default, and not required (the type makes do)
+
+    def __post_init__(self):
+        assert self.kind in KINDS and self.spectrum in SPECTRA, self
+
+    def named(self, fmt: str) -> str | None:
+        """Its name in the format fmt (FORMATS), None where that format has none."""
+        return self.name if fmt == "toml" else getattr(self, fmt)
+
+    def default_in(self, fmt: str):
+        """Its default in fmt: SAME, FRAME, or a value of pathtrace's."""
+        return SAME if fmt == "toml" else getattr(self, f"{fmt}_default")
+
+    def convert(self, fmt: str, value, given: dict):
+        """pathtrace's value of what a file of format fmt gives, `given` holding the element's
+        values by the format's names (a conversion may need another)."""
+        convert = None if fmt == "toml" else getattr(self, f"from_{fmt}")
+        return value if convert is None else convert(value, given)
+
+
+def read(parameters, fmt: str, get: Callable) -> dict:
+    """The values of `parameters` that an element of a file in format fmt gives, by pathtrace's
+    names, converted: get(parameter, the format's name) is the value the element gives (read by the
+    parameter's kind, in the format's syntax), or None. A parameter absent from the element takes
+    its format default where that differs from pathtrace's (in the format's terms, converted as a
+    given value is; FRAME is left to the reader); the others are left out, for the type's own
+    defaults to fill in. Format-only parameters (name None) are read for the conversions alone."""
+    given = {}
+    for p in parameters:
+        name = p.named(fmt)
+        if name is not None:
+            value = get(p, name)
+            given[name] = p.default_in(fmt) if value is None else value
+    values = {}
+    for p in parameters:
+        name = p.named(fmt)
+        value = given.get(name) if name is not None else p.default_in(fmt)
+        if p.name is None or value is None or value is SAME:
+            continue
+        values[p.name] = value if value is FRAME else p.convert(fmt, value, given)
+    return values
+
+
+def by_format(types, fmt: str) -> dict:
+    """{a type's name in the format fmt: the type} of the types (with a `formats` attribute: {format:
+    name or tuple of names}) that fmt has."""
+    out = {}
+    for t in types:
+        names = getattr(t, "formats", {}).get(fmt, ())
+        for name in (names,) if isinstance(names, str) else names:
+            out[name] = t
+    return out
+
+
+def _shown(value) -> str:
+    if value is None:
+        return "required"
+    if value is SAME:
+        return "="
+    if isinstance(value, float) and value == int(value) and abs(value) < 1e6:
+        return f"{value:g}"
+    if isinstance(value, (list, tuple)):
+        return " ".join(_shown(v) for v in value)
+    return str(value) if not isinstance(value, bool) else str(value).lower()
+
+
+def parameter_table(parameters, formats=FORMATS) -> str:
+    """A Markdown table of `parameters`: pathtrace's name, kind and default, each format's name
+    (and default, where it differs), and the documentation. Generated into the docs."""
+    heads = {"toml": "TOML", "mitsuba": "Mitsuba 3", "pbrt": "pbrt-v4"}
+    lines = ["| " + " | ".join([heads[f] for f in formats] + ["kind", "default", "meaning"]) + " |",
+             "|" + "---|" * (len(formats) + 3)]
+    for p in parameters:
+        cells = []
+        for f in formats:
+            name = p.named(f)
+            default = p.default_in(f)
+            cell = f"`{name}`" if name else "—" if default is SAME else ""
+            if default is not SAME:
+                cell += (" " if cell else "") + ("(its frame)" if default == FRAME else f"(default {_shown(default)})")
+            if f != "toml" and getattr(p, f"from_{f}") is not None:
+                cell += " †"
+            cells.append(cell)
+        kind = p.kind + (" or texture" if p.texture else "")
+        if p.choices:
+            kind += ": " + ", ".join(p.choices)
+        default = "—" if p.name is None else "" if p.optional else _shown(p.default)
+        cells += [kind, default, p.doc.replace("|", "\\|")]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
