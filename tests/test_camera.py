@@ -10,6 +10,7 @@ import pytest
 from scipy import integrate
 
 from pathtrace.cameras import OrthographicCamera, PerspectiveCamera, ThinLensCamera
+from pathtrace.cameras.registry import toml_names
 from pathtrace.features import Features
 from pathtrace.filters import PixelFilter
 from pathtrace.types import RENDER_PARAMS
@@ -153,8 +154,8 @@ SPHERE = {"center": [0, 0, 0], "radius": 1, "material": {"type": "diffuse", "rho
     ({"aperture_radius": 0.1, "focus_distance": 0}, "camera.focus_distance: must be in (0, 1e+30]"),
     ({"type": "orthographic", "height": 1e31}, "camera.height: must be in (0, 1e+30]"),
     ({"type": "orthographic", "vfov": 30}, "camera.vfov: a orthographic camera has no vfov"),
-    ({"type": "fisheye"}, "camera.type: must be one of orthographic, perspective, thinlens"),
-    ({"type": ["perspective"]}, "camera.type: must be one of orthographic, perspective, thinlens")])
+    ({"type": "fisheye"}, f"camera.type: must be one of {', '.join(toml_names())}, got 'fisheye'"),
+    ({"type": ["perspective"]}, f"camera.type: must be one of {', '.join(toml_names())}, got ['perspective']")])
 def test_bad_cameras_are_one_line_naming_the_field(camera, problem):
     from pathtrace.errors import UserError
     from pathtrace.scene.toml_reader import read_scene_dict
