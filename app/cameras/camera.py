@@ -2,9 +2,9 @@
 the image is mirrored, which the viewer's moves and the readers' transforms set), and what each
 projection declares in its own module app/cameras/<type>.py beside its kernel file
 kernels/cameras/<kernel>.cl: its fields (app/parameters.py: their names in pathtrace's TOML,
-Mitsuba 3 and pbrt-v4, defaults and docs), their ranges, its rays, its packing into RenderParams and its readings of
-Mitsuba's and pbrt's cameras. app/cameras/registry.py finds the modules and generates the
-kernels' dispatch."""
+Mitsuba 3 and pbrt-v4, defaults and docs), their ranges, its rays, its packing into
+RenderParams and its readings of Mitsuba's and pbrt's cameras. app/cameras/registry.py finds
+the modules and generates the kernels' dispatch."""
 
 import dataclasses
 from dataclasses import dataclass, field
@@ -51,6 +51,8 @@ class Camera:
                                          # bidirectional path tracing can render through it
     mitsuba: ClassVar[str] = None        # the Mitsuba 3 sensor type it reads (from_mitsuba)
     pbrt: ClassVar[str] = None           # the pbrt-v4 Camera type it reads (from_pbrt)
+    toml_aliases: ClassVar[tuple] = ()   # other TOML types that are this one where a table gives
+                                         # its own fields (a perspective camera with a lens)
 
     def __post_init__(self):
         self.eye = np.asarray(self.eye, np.float64)

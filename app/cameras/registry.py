@@ -39,7 +39,7 @@ def toml_class(kind: str, keys) -> type:
     cls = CAMERAS.get(kind)
     for other in CAMERAS.values():
         own = {p.name for p in other.parameters} - {p.name for p in (cls.parameters if cls else ())}
-        if kind in getattr(other, "toml_aliases", ()) and own & set(keys):
+        if kind in other.toml_aliases and own & set(keys):
             return other
     return cls
 
@@ -54,7 +54,7 @@ def format_class(fmt: str, kind: str):
 
 def toml_names() -> list:
     """The types a TOML [camera] table may give."""
-    return sorted({*CAMERAS, *(a for cls in CAMERAS.values() for a in getattr(cls, "toml_aliases", ()))})
+    return sorted({*CAMERAS, *(a for cls in CAMERAS.values() for a in cls.toml_aliases)})
 
 
 def kernel_parts(kernel: str) -> list:
