@@ -151,12 +151,18 @@ class CompiledScene:
         or an environment change)."""
         table = self.scene.materials
         self.material_source = (table.rows.copy(), [list(t) for t in table.textures])
+        # the images lights read (a goniometric light's) are textures of the same table, bound
+        # after the materials' as if to materials of their own
+        light_textures = [t for light in self.scene.lights for t in light.textures()]
         try:
-            self.textures: TextureTables = compile_textures([[t[1:] for t in entries] for entries in table.textures])
+            self.textures: TextureTables = compile_textures([[t[1:] for t in entries] for entries in table.textures]
+                                                            + [[(0, 3, t)] for t in light_textures])
         except ValueError as e:
             raise UserError(f"{self.scene.source or self.scene.name}: {e}") from None
         self.materials = table.rows.copy()
-        self.materials["textures"] = self.textures.first
+        self.materials["textures"] = self.textures.first[:len(table.rows)]
+        texture_rows = {id(t): int(self.textures.bindings["texture"][first]) for t, first
+                        in zip(light_textures, self.textures.first[len(table.rows):])}
         check_radiance(self.scene)
         # each material's luminance, gathered per primitive (8 bytes a primitive, not 24)
         luminance = np.take(self.materials["emission"][:, :3].astype(np.float64) @ LUMINANCE, self.prim_material)
@@ -170,7 +176,7 @@ class CompiledScene:
         self.lights: LightTable = build_light_table(power, self.scene.environment, self.scene.lights,
                                                     max(self.radius, 1e-6),
                                                     lambda prims: primitive_bounds(self.spheres, corners, prims, both_sides[prims]),
-                                                    self.light_sampler)
+                                                    self.light_sampler, texture_rows)
 
     def geometry_arrays(self) -> dict:
         """The buffers of the shapes, by their names in SCENE_BUFFERS."""

@@ -3,7 +3,7 @@ format, in Mitsuba 3 and in pbrt-v4 (any but the first may be absent), its kind,
 conversion from each format, and its one-line documentation. The three scene readers read a type's
 parameters through these declarations (each reading a kind in its own syntax), and the parameter
 tables of docs/scene-format.md, docs/mitsuba.md and docs/pbrt.md are generated from them
-(parameter_table; scripts/scene_format_tables.py writes them, tests/test_parameters.py keeps them in
+(parameter_table; app/scene/format_tables.py writes them, tests/test_parameters.py keeps them in
 step).
 
 This module imports nothing of pathtrace's, so that any type's host module may import it (the
@@ -18,8 +18,10 @@ from typing import Callable
 #   color    rgb: a number (grey) or three, or a spectrum (pbrt-v4's and Mitsuba 3's spectra,
 #            converted as `spectrum` says); a texture too where `texture` is set;
 #   point    a position, transformed by the element's frame (Mitsuba's to_world, pbrt's CTM);
-#   vector   a direction, transformed likewise.
-KINDS = ("number", "integer", "bool", "string", "name", "color", "point", "vector")
+#   vector   a direction, transformed likewise;
+#   image    an image file, named relative to the scene file, which the reader reads
+#            (app/textures/bitmap.py: read_image) into an Image.
+KINDS = ("number", "integer", "bool", "string", "name", "color", "point", "vector", "image")
 FORMATS = ("toml", "mitsuba", "pbrt")
 # how a spectrum becomes rgb (app/spectra.py): a reflectance (bounded by 1), an illuminant
 # (luminance 1, as pbrt-v4 normalises a light's spectrum) or unbounded (an IOR: its mean)

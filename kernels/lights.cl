@@ -77,6 +77,15 @@ int aim_at_position(float3 position, float3 x, LightSample *ls, float *r2)
     return 1;
 }
 
+/* A world direction w in the own space of a light whose rotation to the world is the unit
+ * quaternion q = (x, y, z, w) (app/lights/light.py: frame_quaternion): w turned by q's
+ * conjugate, v + 2 u x (u x v + s v) with u = -q.xyz and s = q.w. */
+float3 to_light_space(float4 q, float3 w)
+{
+    float3 u = -q.xyz;
+    return w + 2.0f * cross(u, cross(u, w) + q.w * w);
+}
+
 /* The generated dispatch (app/lights/registry.py), defined after the types' files. */
 int sample_light_of_type(const SceneData *sc, const RenderParams *p, const global Light *l,
                          float3 x, float3 n, float2 u, LightSample *ls);

@@ -57,9 +57,14 @@ class DeltaLight:
     def power(self, radius: float) -> float:
         """Its luminance power in watts; `radius` bounds the scene (for lights at infinity)."""
 
-    def pack(self, row: np.ndarray):
+    def textures(self) -> list:
+        """The Textures it reads (an image), which the scene's texture table holds."""
+        return []
+
+    def pack(self, row: np.ndarray, texture_rows: dict):
         """Fills a LIGHT row's parameters: by default its fields' values, in order, into p0.xyz,
-        p1.xyz, ... (a type whose layout differs says so)."""
+        p1.xyz, ... (a type whose layout differs says so); texture_rows: {id(texture): its row of
+        the texture table} of its textures()."""
         for k, name in enumerate(self.fields):
             row[f"p{k}"][:3] = getattr(self, name)
 
@@ -68,6 +73,33 @@ class DeltaLight:
         axis, cos(theta_o), cos(theta_e)); None for a light at infinity, which the tree leaves
         out."""
         return None
+
+
+def frame_quaternion(direction, up) -> np.ndarray:
+    """The unit quaternion (x, y, z, w) of the rotation from a light's own space to the world's:
+    its +z along `direction`, its +y along `up` made perpendicular to it, +x = y cross z
+    (kernels/lights.cl: to_light_space turns a world direction back). Raises ValueError where up
+    is (nearly) parallel to direction."""
+    z = check_direction("direction", direction)
+    u = check_direction("up", up)
+    y = u - np.dot(u, z) * z
+    if not np.linalg.norm(y) > 1e-6:
+        raise ValueError("up: must not be parallel to direction")
+    y /= np.linalg.norm(y)
+    x = np.cross(y, z)
+    m = np.column_stack([x, y, z])
+    # Shepperd's method: the largest of 1 + trace and the diagonal's differences, for stability
+    t = np.trace(m)
+    k = int(np.argmax([t, m[0, 0], m[1, 1], m[2, 2]]))
+    if k == 0:
+        s = 2 * math.sqrt(1 + t)
+        q = [(m[2, 1] - m[1, 2]) / s, (m[0, 2] - m[2, 0]) / s, (m[1, 0] - m[0, 1]) / s, s / 4]
+    else:
+        i, j, l = k - 1, k % 3, (k + 1) % 3
+        s = 2 * math.sqrt(1 + m[i, i] - m[j, j] - m[l, l])
+        q = [0.0] * 4
+        q[i], q[j], q[l], q[3] = s / 4, (m[j, i] + m[i, j]) / s, (m[l, i] + m[i, l]) / s, (m[l, j] - m[j, l]) / s
+    return np.array(q)
 
 
 def check_point(name: str, value) -> np.ndarray:

@@ -1,16 +1,37 @@
 """The registry of light types: each type's tag, and the kernels' dispatch (sample_light_of_type)
-generated from it. Adding a light type takes its kernel file (kernels/lights/<name>.cl), its host
-module (with its examples) and its entry here, and each scene reader's mapping of its format's
-light onto it (written by hand in app/scene/toml_reader.py, mitsuba.py and pbrt/reader.py); its
-examples put it through tests/test_light_conformance.py by its registration alone. Area lights and the
+generated from it. Adding a delta light type takes its kernel file (kernels/lights/<name>.cl)
+and its host module in app/lights (a DeltaLight with its parameters declared for the three
+formats, app/parameters.py, and its examples), which the registry finds by itself; the scene
+readers read it through its declarations, and its examples put it through
+tests/test_light_conformance.py. Area lights and the
 environment are always compiled in, as the integrator weighs the emitters its paths hit against
 them; the delta lights only into the programs of scenes that have them."""
 
-from pathtrace.lights.directional import DirectionalLight
-from pathtrace.lights.point import PointLight
-from pathtrace.lights.spot import SpotLight
+import importlib
+import pkgutil
+from pathlib import Path
 
-DELTA_LIGHTS = {cls.name: cls for cls in (PointLight, SpotLight, DirectionalLight)}
+from pathtrace.lights.light import DeltaLight
+
+# the modules of app/lights that are the interface and its tables, not light types
+INTERFACE = ("light", "registry", "table", "tree")
+
+
+def _delta_light_types() -> list:
+    """The DeltaLight types that the modules of app/lights define, in their modules' order (the
+    first three as they were listed by hand: point, spot, directional)."""
+    first = ("point", "spot", "directional")
+    modules = sorted((m.name for m in pkgutil.iter_modules([str(Path(__file__).parent)]) if m.name not in INTERFACE),
+                     key=lambda n: (first.index(n) if n in first else len(first), n))
+    found = []
+    for name in modules:
+        module = importlib.import_module(f"pathtrace.lights.{name}")
+        found += [c for c in vars(module).values() if isinstance(c, type) and issubclass(c, DeltaLight)
+                  and c is not DeltaLight and c.__module__ == module.__name__]
+    return found
+
+
+DELTA_LIGHTS = {cls.name: cls for cls in _delta_light_types()}
 LIGHTS = ("area", "environment", *DELTA_LIGHTS)
 TAGS = {name: i for i, name in enumerate(LIGHTS)}
 EMITTERS = {"area": "pdf_area_emission(sc, l->prim, n, w)", "point": "pdf_point_emission(l, w)",

@@ -86,7 +86,7 @@ class SpotLight(DeltaLight):
         cos_mid = math.cos(math.radians(0.5 * (self.cutoff_angle + self.beam_width)))
         return 2 * math.pi * (1 - cos_mid) * luminance(self.intensity)
 
-    def pack(self, row):
+    def pack(self, row, texture_rows):
         row["p0"][:3] = self.position
         row["p0"][3] = math.cos(math.radians(self.cutoff_angle))
         row["p1"][:3] = self.intensity

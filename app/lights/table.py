@@ -87,7 +87,7 @@ def emitted_power(spheres, triangles, sphere_luminance, triangle_luminance):
 
 
 def build_light_table(power: np.ndarray, environment, delta_lights=(), radius: float = 1.0,
-                      prim_bounds=None, sampler: str = "power") -> LightTable:
+                      prim_bounds=None, sampler: str = "power", texture_rows: dict = None) -> LightTable:
     """power: per primitive, in BVH order; delta_lights: the scene's point, spot and directional
     lights (app/lights/light.py), `radius` the scene's bounding sphere's; prim_bounds(prims):
     the light bounds of primitives `prims` (app/lights/tree.py: primitive_bounds), asked for a
@@ -95,6 +95,7 @@ def build_light_table(power: np.ndarray, environment, delta_lights=(), radius: f
     together (half the time), or always when there are none. sampler "power" chooses every
     light in proportion to its power; "tree" chooses the lights that have a place (emitters,
     points, spots) through a light tree; "auto" the tree from TREE_MIN such lights on.
+    texture_rows: {id(texture): its row of the texture table} of the textures lights read.
 
     The entries: with a tree, its root, the lights at infinity and the environment (which the
     alias table chooses among), then the tree's lights in the order of its leaves; without,
@@ -134,7 +135,7 @@ def build_light_table(power: np.ndarray, environment, delta_lights=(), radius: f
     table["prim"][slot[:len(emitters)]] = emitters
     for k, (light, _) in [*zip(slot[len(emitters):], placed), *enumerate(at_infinity, rest)]:
         table["type"][k] = TAGS[light.name]
-        light.pack(table[k])
+        light.pack(table[k], texture_rows or {})
     if env_lit:
         table["type"][count - 1] = TAGS["environment"]
     keep, alias = alias_table(weights)

@@ -38,10 +38,10 @@ class Null(BSDFType):
 class Diffuse(BSDFType):
     name = "diffuse"
     examples = ({"rho_d": [0.8, 0.5, 0.2]},)
-    formats = {"mitsuba": "diffuse"}
+    formats = {"mitsuba": "diffuse", "pbrt": "diffuse"}
     # (low and high are integers for Mitsuba's message: "a reflectance must lie in [0, 1]")
     params = (Param("rho_d", "color", low=0, high=1, doc="albedo", slot="p0.xyz", mitsuba="reflectance",
-                    mitsuba_default=0.5),)
+                    mitsuba_default=0.5, pbrt="reflectance", pbrt_default=0.5),)
     doc = "Lambertian, f = rho_d / pi"
 
     def pack(self, values, rows):

@@ -67,6 +67,8 @@ class BSDFType:
     params: tuple = ()
     doc: str = ""
     formats: dict = {}        # its names in other formats: {"mitsuba": name, "pbrt": name or names}
+    format_only: tuple = ()   # Parameters a format's material has and this type keeps none of
+                              # (name None), read for the others' conversions (pbrt-v4's scale)
     flags: int = 0            # DELTA, TRANSMISSIVE, NULL
     kernel: bool = True       # has kernels/bsdfs/<name>.cl
     resolved_first: bool = False   # the kernels turn it into another material before any BSDF

@@ -4,16 +4,33 @@ transmission with their own colours; kernels/bsdfs/diffusetransmission.cl."""
 import numpy as np
 
 from pathtrace.materials.bsdf import TRANSMISSIVE, BSDFType, Param, check_sum_at_most_one
+from pathtrace.parameters import Parameter
+from pathtrace.textures.texture import Texture
+
+
+def _pbrt_scaled(value, given):
+    """pbrt-v4's DiffuseTransmissionMaterial: reflectance and transmittance times `scale`."""
+    scale = given["scale"]
+    if scale == 1.0:
+        return value
+    if isinstance(value, Texture):
+        from pathtrace.textures.registry import TEXTURES
+        return Texture("scale", TEXTURES["scale"].complete({"tex": value, "scale": scale}))
+    return np.asarray(value, np.float64) * scale
 
 
 class DiffuseTransmission(BSDFType):
     name = "diffusetransmission"
     examples = ({"reflectance": [0.6, 0.3, 0.2], "transmittance": [0.3, 0.5, 0.1]},
                 {"reflectance": 0.1, "transmittance": 0.8}, {"reflectance": 0.5, "transmittance": 0.0})
+    formats = {"pbrt": "diffusetransmission"}
     params = (Param("reflectance", "color", default=0.25, high=1.0, doc="R: the share reflected, f = R / pi",
-                    slot="p0.xyz"),
+                    slot="p0.xyz", pbrt="reflectance", pbrt_default=0.25, from_pbrt=_pbrt_scaled),
               Param("transmittance", "color", default=0.25, high=1.0,
-                    doc="T: the share transmitted, f = T / pi through the surface", slot="p1.xyz"))
+                    doc="T: the share transmitted, f = T / pi through the surface", slot="p1.xyz",
+                    pbrt="transmittance", pbrt_default=0.25, from_pbrt=_pbrt_scaled))
+    format_only = (Parameter(None, "number", pbrt="scale", pbrt_default=1.0,
+                             doc="a factor on reflectance and transmittance"),)
     flags = TRANSMISSIVE
     doc = ("Lambertian reflection and transmission, the same from either side (pbrt-v4's "
            "diffusetransmission); reflectance + transmittance <= 1 in each channel")

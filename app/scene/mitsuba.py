@@ -714,6 +714,9 @@ class _Reader:
         target = self.resolve(c) if c.tag == "ref" else c
         if p.texture and target.tag == "texture":
             return self.texture(target)
+        if p.kind == "image":
+            return read_image(props.node.file.parent / self.get(props, name, kinds=("string",)), c.where(), False,
+                              self.images)
         kinds = {"number": ("float",), "integer": ("integer",), "bool": ("boolean",), "string": ("string",),
                  "name": ("string",), "point": ("point", "vector"), "vector": ("vector", "point")}[p.kind]
         if p.kind == "number" and getattr(p, "names", None) and target.tag == "string":

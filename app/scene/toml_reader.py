@@ -320,6 +320,10 @@ class _Reader:
             return self.boolean(data, param.name, where, None)
         if param.kind in ("point", "vector"):
             return self.vector(data, param.name, where)
+        if param.kind == "image":
+            if not isinstance(value, str) or not value:
+                self.fail(key, f"must be an image file name, got {short(value)}")
+            return read_image(self.path.parent / value, f"{self.label}: {key}", False, self.images)
         if param.choices and not getattr(param, "names", None):
             if value not in param.choices:
                 self.fail(key, f"must be {', '.join(param.choices[:-1])} or {param.choices[-1]}, got {short(value)}")

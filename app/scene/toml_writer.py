@@ -105,8 +105,11 @@ def filter_table(f) -> dict:
     return table
 
 
-def _plain(value):
-    """A light's parameter as TOML holds it: arrays as lists of floats."""
+def _plain(value, rel):
+    """A light's parameter as TOML holds it: arrays as lists of floats, an image as its file's
+    name relative to the scene (rel)."""
+    if hasattr(value, "texels"):
+        return rel(value.path)
     return np.asarray(value, np.float64).tolist() if isinstance(value, np.ndarray) else value
 
 
@@ -134,7 +137,7 @@ def scene_toml(scene: Scene, out: Path) -> str:
               f"integrator = {_value(s.integrator)}", ""]
     for light in scene.lights:
         lines += ["[[lights]]", f"type = {_value(light.name)}"]
-        lines += [f"{name} = {_value(_plain(getattr(light, name)))}" for name in light.fields]
+        lines += [f"{name} = {_value(_plain(getattr(light, name), rel))}" for name in light.fields]
         lines.append("")
     textures = scene.materials.all_textures()
     texture_names, taken = {}, set()

@@ -13,10 +13,12 @@ from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import TRANSMISSIVE
 from pathtrace.materials.blend import check_blend, transmits
 from pathtrace.materials.table import check_bump_map
+from pathtrace.parameters import by_format, read
 from pathtrace.spectra import blackbody_rgb, emission_rgb, named_spectrum, reflectance_rgb, sampled
 from pathtrace.textures import TEXTURES, Texture
 from pathtrace.textures.bitmap import Image, read_image
 
+BSDFS_BY_NAME = by_format(BSDFS.values(), "pbrt")
 SMOOTH_ALPHA = 1e-3     # pbrt-v4's TrowbridgeReitzDistribution::EffectivelySmooth
 # a conductor's reflectance r becomes k = 2 sqrt(r) / sqrt(1 - r) (below): r at most
 # 100^2 / (4 + 100^2), 0.9996, keeps k within the conductor's bound of 100
@@ -141,6 +143,8 @@ class MaterialMapper:
             return self.texture_input(params, name, None, p.kind == "number")
         if p.kind == "color":
             return spectrum_rgb(params, name, None, p.spectrum)
+        if p.kind == "image":
+            return read_image(self.reader.resolve(params.string(name)), params.where(name), False, self.images)
         read = {"number": params.float, "integer": params.int, "bool": params.bool, "string": params.string,
                 "name": params.string, "point": params.point, "vector": params.point}[p.kind]
         return read(name)
@@ -292,8 +296,10 @@ class MaterialMapper:
     def _material(self, kind, params, where) -> Material | None:
         if kind in ("interface", "", "none"):
             return None
-        if kind == "diffuse":
-            return make("diffuse", {"rho_d": self.texture_input(params, "reflectance", 0.5)}, where)
+        if kind in BSDFS_BY_NAME:         # the types that declare their pbrt-v4 parameters
+            bsdf = BSDFS_BY_NAME[kind]
+            return make(bsdf.name, read(bsdf.params + bsdf.format_only, "pbrt",
+                                        lambda p, name: self.parameter(params, p, name)), where)
         if kind == "conductor":
             return self._conductor(params, where)
         if kind in ("dielectric", "thindielectric"):
@@ -312,16 +318,6 @@ class MaterialMapper:
             return make(kind, iors, where)
         if kind in ("coateddiffuse", "coatedconductor"):
             return self._coated(kind, params, where)
-        if kind == "diffusetransmission":
-            scale = params.float("scale", 1.0)
-            values = {}
-            for name in ("reflectance", "transmittance"):
-                value = self.texture_input(params, name, 0.25)
-                if scale != 1.0:
-                    value = Texture("scale", TEXTURES["scale"].complete({"tex": value, "scale": scale})) \
-                        if isinstance(value, Texture) else value * scale
-                values[name] = value
-            return make("diffusetransmission", values, where)
         if kind == "mix":
             return self._mix(params, where)
         warn(f"{where}: pathtrace has no {kind} material; it uses a diffuse one of albedo 0.5")

@@ -1,0 +1,52 @@
+"""The parameter tables of docs/scene-format.md, generated from the types' declarations
+(app/parameters.py): each block between `<!-- parameters: KIND -->` and `<!-- end parameters -->`
+is the tables of the types of KIND (lights, materials, media), one per type, with a column for
+each format that has the type. `python -m pathtrace.scene.format_tables` rewrites the file;
+tests/test_parameters.py fails where the file and the declarations differ."""
+
+import re
+import sys
+from pathlib import Path
+
+from pathtrace.lights import DELTA_LIGHTS
+from pathtrace.materials import BSDFS
+from pathtrace.media import Medium
+from pathtrace.parameters import parameter_table
+
+DOC = Path(__file__).resolve().parents[2] / "docs" / "scene-format.md"
+MARKER = re.compile(r"(<!-- parameters: (\w+) -->\n).*?(<!-- end parameters -->)", re.S)
+NOTE = ("Generated from the types' declarations (`python -m pathtrace.scene.format_tables`). A blank "
+        "default is optional; † marks a value the reader converts (pbrt-v4's power, a spot's cone); "
+        "\"its frame\": the element's transform places it (Mitsuba's `to_world`).\n")
+
+
+def _types(kind: str) -> list:
+    """(name, its formats' names, doc, parameters) of each type of KIND."""
+    if kind == "lights":
+        return [(c.name, c.formats, " ".join(sys.modules[c.__module__].__doc__.split()), c.parameters)
+                for c in DELTA_LIGHTS.values()]
+    if kind == "materials":
+        return [(b.name, b.formats, b.doc, b.params + b.format_only) for b in BSDFS.values() if b.params]
+    if kind == "media":
+        return [("homogeneous", Medium.formats, "", Medium.parameters)]
+    raise ValueError(f"no parameter tables of {kind!r}")
+
+
+def section(kind: str) -> str:
+    out = [NOTE]
+    for name, formats, doc, parameters in _types(kind):
+        others = ", ".join(f"{label} `{formats[f]}`" for f, label in (("mitsuba", "Mitsuba 3"), ("pbrt", "pbrt-v4"))
+                           if f in formats)
+        out.append(f"\n#### `{name}`" + (f" ({others})" if others else " (pathtrace's own)") + "\n\n"
+                   + (f"{doc}\n\n" if doc else "")
+                   + parameter_table(parameters, ("toml", *(f for f in ("mitsuba", "pbrt") if f in formats))))
+    return "".join(out)
+
+
+def update(text: str) -> str:
+    """The text with each marked block regenerated."""
+    return MARKER.sub(lambda m: m.group(1) + section(m.group(2)) + m.group(3), text)
+
+
+if __name__ == "__main__":
+    DOC.write_text(update(DOC.read_text()))

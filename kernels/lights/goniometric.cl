@@ -1,0 +1,46 @@
+/* A goniometric light (app/lights/goniometric.py, pbrt-v4's `goniometric`): a point light of
+ * radiant intensity I(w) = I image(s(w')), w' the direction w in the light's own space with y
+ * and z swapped (the map's pole is the light's +y), s the equal-area mapping of the sphere onto
+ * the square, the image (its channels' mean) looked up at the nearest texel.
+ *
+ *   p0.xyz  position           p0.w  the image's row of the texture table
+ *   p1.xyz  intensity I
+ *   p2      the rotation from the light's space to the world's, a unit quaternion
+ *
+ * A delta light: the only direction towards it is sampled, and it delivers I(w) / r^2. */
+
+/* Clarberg's equal-area mapping of a unit direction onto [0, 1]^2 (pbrt-v4's
+ * EqualAreaSphereToSquare, src/pbrt/util/math.cpp; app/scene/pbrt/equal_area.py:
+ * sphere_to_square): +z at the centre, -z at the corners, the image's first row at v = 0. */
+float2 equal_area_square(float3 d)
+{
+    float x = fabs(d.x), y = fabs(d.y);
+    float r = sqrt(fmax(0.0f, 1.0f - fabs(d.z)));
+    float a = fmax(x, y), b = fmin(x, y);
+    float phi = atan(a > 0.0f ? b / a : 0.0f) * (2.0f / PI_F);
+    if (x < y)
+        phi = 1.0f - phi;
+    float v = phi * r, u = r - v;
+    if (d.z < 0.0f) {
+        float t = u;
+        u = 1.0f - v;
+        v = 1.0f - t;
+    }
+    return (float2)(copysign(u, d.x) + 1.0f, copysign(v, d.y) + 1.0f) * 0.5f;
+}
+
+int sample_goniometric_light(const SceneData *sc, const RenderParams *p, const global Light *l, float3 x,
+                             float3 n, float2 u, LightSample *ls)
+{
+#ifdef TEXTURES
+    float r2;
+    if (!aim_at_position(l->p0.xyz, x, ls, &r2))
+        return 0;
+    float3 w = to_light_space(l->p2, -ls->wi);
+    float3 value = eval_texture(sc, (int)l->p0.w, equal_area_square((float3)(w.x, w.z, w.y)));
+    ls->le = l->p1.xyz * (value.x / r2);
+    return 1;
+#else
+    return 0;        /* a program without textures has no goniometric light's image */
+#endif
+}

@@ -1,0 +1,34 @@
+/* A projection light (app/lights/projection.py, pbrt-v4's `projection`): a point light that
+ * projects an image through a perspective frustum. In the light's space, its y turned round (as
+ * pbrt-v4 flips it), a direction w with w.z above the hither plane meets the screen at
+ * s = w.xy / (w.z tan(fov / 2)); inside the screen's half extents the radiant intensity is scale
+ * times the image's nearest texel at (s + half) / (2 half), outside none.
+ *
+ *   p0.xyz  position           p0.w  the image's row of the texture table
+ *   p1.x    scale              p1.y  tan(fov / 2)           p1.zw  the screen's half extents
+ *   p2      the rotation from the light's space to the world's, a unit quaternion
+ *
+ * A delta light: the only direction towards it is sampled, and it delivers I(w) / r^2. */
+
+#define PROJECTION_HITHER 1e-3f     /* pbrt-v4's ProjectionLight: no light below it */
+
+int sample_projection_light(const SceneData *sc, const RenderParams *p, const global Light *l, float3 x,
+                            float3 n, float2 u, LightSample *ls)
+{
+#ifdef TEXTURES
+    float r2;
+    if (!aim_at_position(l->p0.xyz, x, ls, &r2))
+        return 0;
+    float3 w = to_light_space(l->p2, -ls->wi);
+    if (w.z < PROJECTION_HITHER)
+        return 0;
+    float2 half_extent = l->p1.zw;
+    float2 s = (float2)(w.x, -w.y) / (w.z * l->p1.y);
+    if (fabs(s.x) > half_extent.x || fabs(s.y) > half_extent.y)
+        return 0;
+    ls->le = eval_texture(sc, (int)l->p0.w, (s + half_extent) / (2.0f * half_extent)) * (l->p1.x / r2);
+    return 1;
+#else
+    return 0;        /* a program without textures has no projection light's image */
+#endif
+}

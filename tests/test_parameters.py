@@ -1,0 +1,51 @@
+"""The parameter declarations (app/parameters.py): how a reader's values are read through them, and
+the tables of docs/scene-format.md, which must be what the declarations generate."""
+
+import numpy as np
+
+from pathtrace.lights import DELTA_LIGHTS
+from pathtrace.materials import BSDFS
+from pathtrace.parameters import FRAME, SAME, Parameter, by_format, read
+from pathtrace.scene import format_tables
+
+
+def test_the_docs_tables_are_the_declarations():
+    """Run `python -m pathtrace.scene.format_tables` after changing a type's parameters."""
+    text = format_tables.DOC.read_text()
+    assert format_tables.update(text) == text
+    for kind in ("lights", "materials", "media"):
+        assert f"<!-- parameters: {kind} -->" in text
+
+
+def test_a_format_reads_its_names_defaults_and_conversions():
+    params = (Parameter("a", "number", 1.0, pbrt="x", pbrt_default=2.0, from_pbrt=lambda v, given: v * given["k"]),
+              Parameter(None, "number", pbrt="k", pbrt_default=10.0),
+              Parameter("b", "point", mitsuba="b", mitsuba_default=FRAME),
+              Parameter("c", "number", 3.0, mitsuba="cc"))
+    given = {"x": 4.0}
+    assert read(params, "pbrt", lambda p, name: given.get(name)) == {"a": 40.0}
+    assert read(params, "pbrt", lambda p, name: None) == {"a": 20.0}    # the format's default, converted
+    values = read(params, "mitsuba", lambda p, name: {"cc": 5.0}.get(name))
+    assert values == {"b": FRAME, "c": 5.0}                            # a left as the type's own default
+    assert read(params, "toml", lambda p, name: {"a": 7.0}.get(name)) == {"a": 7.0}
+    assert params[0].default_in("toml") is SAME
+
+
+def test_every_type_a_format_names_is_found_by_that_name():
+    assert by_format(DELTA_LIGHTS.values(), "pbrt") == {
+        c.formats["pbrt"]: c for c in DELTA_LIGHTS.values() if "pbrt" in c.formats}
+    mitsuba = by_format(BSDFS.values(), "mitsuba")
+    assert mitsuba["diffuse"] is BSDFS["diffuse"] and "coateddiffuse" not in mitsuba
+    # a BSDF Mitsuba has takes pathtrace's names there unless one is declared (diffuse's reflectance)
+    assert {p.mitsuba for p in BSDFS["diffuse"].params} == {"reflectance"}
+    assert all(p.mitsuba == p.name for p in BSDFS["plastic"].params)
+
+
+def test_a_light_reads_the_same_from_each_format_it_has():
+    """A spot of pbrt-v4's cone and Mitsuba's to_world: the same light as the TOML values say."""
+    spot = DELTA_LIGHTS["spot"]
+    values = read(spot.parameters, "pbrt", lambda p, name: {"from": np.array([0, 2.0, 0]), "to": np.zeros(3),
+                                                            "coneangle": 40.0, "conedeltaangle": 10.0}.get(name))
+    light = spot.from_values(values)
+    assert np.allclose(light.direction, [0, -1, 0]) and light.cutoff_angle == 40 and light.beam_width == 30
+    assert light.falloff == "smoothstep" and np.allclose(light.intensity, 1)
