@@ -213,17 +213,6 @@ def test_fly_controls_move_and_turn_towards_the_images_right(mirrored):
     assert np.dot(turned.look_at - turned.eye, image_right) > 0
 
 
-def test_the_docs_table_of_cameras_is_generated_from_their_declarations():
-    """docs/scene-format.md's Cameras table is app/cameras/registry.py's docs_table: a camera
-    type's names in TOML, Mitsuba 3 and pbrt-v4 are documented by its declaration alone."""
-    from pathlib import Path
-
-    from pathtrace.cameras.registry import docs_table
-    text = (Path(__file__).resolve().parent.parent / "docs" / "scene-format.md").read_text(encoding="utf-8")
-    assert docs_table() in text, "regenerate it: python -c 'from pathtrace.cameras.registry import docs_table; " \
-                                 "print(docs_table())'"
-
-
 def test_a_camera_refuses_the_fields_of_other_types_and_changes_type_keeping_its_frame():
     camera = PerspectiveCamera([0.0, 1.0, 5.0], [0.0, 0.5, 0.0], [0, 1, 0], 30.0, mirrored=True)
     with pytest.raises(AttributeError, match="a perspective camera has no 'aperture'"):

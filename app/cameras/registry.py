@@ -77,20 +77,3 @@ def supports_importance(kernel: str) -> bool:
     """Whether the camera kernel file `kernel` joins light subpaths to its lens (BDPT)."""
     return any(cls.importance and kernel in (cls.kernels or (cls.type,)) for cls in CAMERAS.values())
 
-
-def docs_table() -> str:
-    """docs/scene-format.md's section on the camera types, from their declarations (kept in
-    step by tests/test_camera.py): for each, what it is (its module's docstring), its names in
-    Mitsuba 3 and pbrt-v4, and its parameters' table (app/parameters.py: parameter_table)."""
-    import sys
-
-    from pathtrace.parameters import parameter_table
-    parts = []
-    for name, cls in CAMERAS.items():
-        doc = " ".join(sys.modules[cls.__module__].__doc__.split())
-        formats = [f"Mitsuba 3: {f'`{cls.mitsuba}`' if cls.mitsuba else 'none (Mitsuba 3 has none built in)'}",
-                   f"pbrt-v4: {f'`{cls.pbrt}`' if cls.pbrt else 'none'}"]
-        if not cls.importance:
-            formats.append("BDPT: not yet (no importance)")
-        parts.append(f"### `{name}`\n\n{doc} ({'; '.join(formats)}.)\n\n" + parameter_table(cls.parameters))
-    return "\n".join(parts)
