@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from pathtrace.cameras import OrthographicCamera, PerspectiveCamera, ThinLensCamera
+from pathtrace.cameras import Camera, OrthographicCamera, PerspectiveCamera, ThinLensCamera
 from pathtrace.cameras.registry import toml_names
 from pathtrace.features import Features
 from pathtrace.filters import PixelFilter
@@ -217,6 +217,8 @@ def test_a_camera_refuses_the_fields_of_other_types_and_changes_type_keeping_its
     camera = PerspectiveCamera([0.0, 1.0, 5.0], [0.0, 0.5, 0.0], [0, 1, 0], 30.0, mirrored=True)
     with pytest.raises(AttributeError, match="a perspective camera has no 'aperture'"):
         camera.aperture = 0.3
+    with pytest.raises(TypeError, match="Camera is the cameras' base"):
+        Camera()
     lens = camera.as_type("thinlens", aperture_radius=0.3, focus_distance=4.0)
     assert (type(lens), lens.vfov, lens.aperture_radius, lens.mirrored, lens.kernel) == (ThinLensCamera, 30.0, 0.3, True, "thinlens")
     np.testing.assert_array_equal(lens.eye, camera.eye)

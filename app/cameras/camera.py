@@ -55,6 +55,9 @@ class Camera:
                                          # its own fields (a perspective camera with a lens)
 
     def __post_init__(self):
+        if self.type is None:
+            raise TypeError("Camera is the cameras' base; make one of pathtrace.cameras.CAMERAS' types "
+                            "(PerspectiveCamera, ...)")
         self.eye = np.asarray(self.eye, np.float64)
         self.look_at = np.asarray(self.look_at, np.float64)
         self.up = np.asarray(self.up, np.float64)
