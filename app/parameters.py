@@ -20,7 +20,8 @@ from typing import Callable
 #   point    a position, transformed by the element's frame (Mitsuba's to_world, pbrt's CTM);
 #   vector   a direction, transformed likewise;
 #   image    an image file, named relative to the scene file, which the reader reads
-#            (app/textures/bitmap.py: read_image) into an Image.
+#            (app/textures/bitmap.py: read_image) into an Image, raw (8-bit values as linear,
+#            not sRGB) where the element's `raw` is true.
 KINDS = ("number", "integer", "bool", "string", "name", "color", "point", "vector", "image")
 FORMATS = ("toml", "mitsuba", "pbrt")
 # how a spectrum becomes rgb (app/spectra.py): a reflectance (bounded by 1), an illuminant

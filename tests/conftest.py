@@ -43,9 +43,12 @@ def program_mode(request, monkeypatch):
     if request.node.get_closest_marker("specialised") is None:
         return
     from pathtrace import api
+    # the session's backend is opened (if this is its first test) before the mode changes, so
+    # that it keeps the generic mode, which the undo below restores, for the tests after this one
+    backend = request.getfixturevalue("backend")
     monkeypatch.setenv("PATHTRACE_PROGRAM", "specialised")
     monkeypatch.setattr(api, "_backends", dict(api._backends))    # those it opens go with it
-    for backend in [request.getfixturevalue("backend"), *(b for group in api._backends.values() for b in group)]:
+    for backend in [backend, *(b for group in api._backends.values() for b in group)]:
         monkeypatch.setattr(backend, "mode", "specialised")
 
 
@@ -98,8 +101,8 @@ def kernels(backend):
 def layout_features(compiled) -> Features:
     """The features of the default program (which test kernels are built with) that a compiled
     scene's layout needs: its few spheres outside the tree (LONE_SPHERES), which a kernel built
-    without would never meet."""
-    return Features(lone_spheres=compiled.lone_spheres)
+    without would never meet, and its analytic shapes' kinds."""
+    return Features(lone_spheres=compiled.lone_spheres, shapes=compiled.shape_kinds)
 
 
 def scene_arrays(compiled):

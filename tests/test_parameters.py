@@ -13,7 +13,7 @@ def test_the_docs_tables_are_the_declarations():
     """Run `python -m pathtrace.scene.format_tables` after changing a type's parameters."""
     text = format_tables.DOC.read_text()
     assert format_tables.update(text) == text
-    for kind in ("lights", "materials", "media"):
+    for kind in ("lights", "materials", "textures", "media"):
         assert f"<!-- parameters: {kind} -->" in text
 
 

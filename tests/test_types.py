@@ -44,3 +44,44 @@ def test_node_and_sphere_sizes(kernels):
     out = np.zeros(2, np.int32)
     kernels(SOURCE)("layout_node", 1, out)
     assert out.tolist() == [BVH_NODE.itemsize, 16]
+
+
+# -- the MATERIAL slots each material type declares (Param.slot), whose accessors the kernels
+#    read (app/materials/registry.py: tag_source) --
+
+def slot_components(slot: str) -> list:
+    """'p1.xyz' -> [4, 5, 6]: the floats of p0..p2 (12 in all) it names."""
+    field, components = slot.split(".")
+    return [4 * int(field[1]) + "xyzw".index(c) for c in components]
+
+
+def test_each_material_types_slots_are_distinct_floats_of_its_kind():
+    from pathtrace.materials import BSDFS
+    for name, bsdf in BSDFS.items():
+        taken = []
+        for p in bsdf.params:
+            if p.slot is None:
+                continue
+            floats = slot_components(p.slot)
+            assert len(floats) == (3 if p.kind == "color" else 1), (name, p.name, p.slot)
+            assert all(0 <= f < 12 for f in floats) and not set(floats) & set(taken), (name, p.name, p.slot)
+            taken += floats
+
+
+def test_pack_writes_each_slotted_parameter_where_its_slot_says():
+    """A texture's value is written into the slot at each hit (kernels/shading.cl), so pack must
+    put the constant there too, as it is: the slot is the parameter's one place."""
+    from pathtrace.materials import BSDFS
+    from pathtrace.textures.texture import Texture
+    for name, bsdf in BSDFS.items():
+        for example in bsdf.__class__.__dict__.get("examples", ()):
+            values = bsdf.complete(example)
+            rows = np.zeros(1, MATERIAL)
+            bsdf.pack({k: (v if isinstance(v, (str, Texture)) else np.atleast_2d(v) if np.ndim(v) else np.atleast_1d(v))
+                       for k, v in values.items()}, rows)
+            floats = np.concatenate([rows["p0"][0], rows["p1"][0], rows["p2"][0]])
+            for p in bsdf.params:
+                if p.slot is None or isinstance(values.get(p.name), Texture) or p.name not in values:
+                    continue
+                assert np.allclose(floats[slot_components(p.slot)], np.ravel(values[p.name]).astype(np.float32)
+                                   * np.ones(len(slot_components(p.slot))), rtol=1e-6), (name, p.name, example)

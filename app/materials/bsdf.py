@@ -1,6 +1,7 @@
 """The interface every material type implements on the host: its parameters (Mitsuba 3's names
 where Mitsuba has the material), their checks, and how they pack into the MATERIAL struct that
-its kernel file kernels/bsdfs/<name>.cl reads (which documents the packed layout at its top)."""
+its kernel file kernels/bsdfs/<name>.cl reads, through accessors generated from the slots its
+parameters declare (Param.slot; app/materials/registry.py: tag_source)."""
 
 from dataclasses import dataclass, replace
 

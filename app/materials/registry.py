@@ -1,7 +1,9 @@
 """The registry of material types: each type's tag, and the kernels' dispatch (eval_bsdf,
 pdf_bsdf, sample_bsdf) generated from it. Adding a material takes its kernel file
-(kernels/bsdfs/<name>.cl), its host BSDFType (its parameters, packing, checks and examples) and
-its entry here; the Mitsuba and pbrt readers map their formats' names onto it by hand. Its
+(kernels/bsdfs/<name>.cl), its host BSDFType (its parameters with their names in the formats,
+app/parameters.py, packing, checks and examples) and its entry here; the readers read it through
+its declarations (pbrt-v4's materials that map onto several types are still mapped by hand, in
+app/scene/pbrt/materials.py). Its
 examples put it through tests/test_bsdfs.py (chi-square of its sampling against its
 pdf, the pdf's normalisation, the sample weight, reciprocity, energy) by its registration alone."""
 
@@ -23,8 +25,12 @@ TAGS = {name: i for i, name in enumerate(BSDFS)}
 
 
 def tag_source() -> str:
-    """The BSDF_<NAME> tags of every type, which the kernel files may name."""
-    return "".join(f"#define BSDF_{name.upper()} {TAGS[name]}\n" for name in BSDFS)
+    """The BSDF_<NAME> tags of every type, which the kernel files may name, and the accessors of
+    each type's parameters in the MATERIAL slots its host declares (Param.slot), <TYPE>_<PARAM>(m),
+    so that the slots are defined once, on the host."""
+    tags = "".join(f"#define BSDF_{name.upper()} {TAGS[name]}\n" for name in BSDFS)
+    return tags + "".join(f"#define {name.upper()}_{p.name.upper()}(m) ((m)->{p.slot})\n"
+                          for name, b in BSDFS.items() for p in b.params if p.slot)
 
 
 def dispatch_source(names=None) -> str:

@@ -1,6 +1,6 @@
 """The parameter tables of docs/scene-format.md, generated from the types' declarations
 (app/parameters.py): each block between `<!-- parameters: KIND -->` and `<!-- end parameters -->`
-is the tables of the types of KIND (lights, materials, media, cameras), one per type, with a column for
+is the tables of the types of KIND (lights, materials, textures, media, shapes, cameras), one per type, with a column for
 each format that has the type. `python -m pathtrace.scene.format_tables` rewrites the file;
 tests/test_parameters.py fails where the file and the declarations differ."""
 
@@ -13,6 +13,7 @@ from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.materials import BSDFS
 from pathtrace.media import Medium
 from pathtrace.parameters import parameter_table
+from pathtrace.textures import TEXTURES
 
 DOC = Path(__file__).resolve().parents[2] / "docs" / "scene-format.md"
 MARKER = re.compile(r"(<!-- parameters: (\w+) -->\n).*?(<!-- end parameters -->)", re.S)
@@ -28,6 +29,8 @@ def _types(kind: str) -> list:
                 for c in DELTA_LIGHTS.values()]
     if kind == "materials":
         return [(b.name, b.formats, b.doc, b.params + b.format_only) for b in BSDFS.values() if b.params]
+    if kind == "textures":
+        return [(t.name, t.formats, t.doc, t.parameters) for t in TEXTURES.values()]
     if kind == "media":
         return [("homogeneous", Medium.formats, "", Medium.parameters)]
     if kind == "cameras":
@@ -35,6 +38,9 @@ def _types(kind: str) -> list:
                  " ".join(sys.modules[c.__module__].__doc__.split())
                  + ("" if c.importance else " BDPT cannot render through it yet (no importance)."), c.parameters)
                 for c in CAMERAS.values()]
+    if kind == "shapes":
+        from pathtrace.shapes import SHAPES
+        return [(k.name, k.formats, k.doc, k.parameters + k.mitsuba_parameters) for k in SHAPES.values()]
     raise ValueError(f"no parameter tables of {kind!r}")
 
 

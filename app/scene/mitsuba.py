@@ -32,7 +32,8 @@ from pathtrace.media import Medium, MediumInterface
 from pathtrace.parameters import FRAME
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
-from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, orient_by_normals, unit_disk, vertex_normals
+from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, orient_by_normals, vertex_normals
+from pathtrace.shapes import SHAPES, Shape
 from pathtrace.textures import TEXTURES, Texture, read_image
 
 MAX_XML_BYTES = 64 << 20
@@ -42,6 +43,7 @@ MAX_INCLUDE_DEPTH = 8
 MAX_FILM = 16384
 LIGHTS_BY_NAME = parameters.by_format(DELTA_LIGHTS.values(), "mitsuba")
 BSDFS_BY_NAME = parameters.by_format(BSDFS.values(), "mitsuba")
+TEXTURES_BY_NAME = parameters.by_format(TEXTURES.values(), "mitsuba")
 
 
 @dataclass
@@ -434,17 +436,11 @@ class _Reader:
         kind = node.attrs.get("type")
         props = self.properties(node)
         params = {"to_uv": self.get(props, "to_uv", np.eye(4), ("transform",))}
-        if kind == "bitmap":
-            filename = self.get(props, "filename", kinds=("string",))
-            if filename is None:
+        if kind in TEXTURES_BY_NAME:
+            params.update(parameters.read(TEXTURES_BY_NAME[kind].parameters, "mitsuba",
+                                          lambda p, name: self.parameter(props, p, name)))
+            if kind == "bitmap" and "file" not in params:
                 _fail(node, "a bitmap needs a filename")
-            raw = self.get(props, "raw", False, ("boolean",))
-            params["image"] = read_image(node.file.parent / filename, f"{node.where()}: filename", raw, self.images)
-            params["filter"] = self.get(props, "filter_type", "bilinear", ("string",))
-            params["wrap"] = self.get(props, "wrap_mode", "repeat", ("string",))
-        elif kind == "checkerboard":
-            params["color0"] = self.color(props, "color0", 0.4)
-            params["color1"] = self.color(props, "color1", 0.2)
         else:
             warn(f"{node.where()}: pathtrace has no {kind} texture; it uses a constant grey of 0.5 instead")
             props.ignore()
@@ -537,7 +533,7 @@ class _Reader:
                     continue                   # used where referenced
                 else:
                     warn(f"{node.where()}: not supported; pathtrace ignores it")
-        if not self.builder.spheres and not self.builder.meshes and not self.builder.instance_object:
+        if not (self.builder.spheres or self.builder.meshes or self.builder.shapes or self.builder.instance_object):
             raise UserError(f"{self.path}: the scene has no shapes pathtrace can render")
         self.warn_unread()
         settings = self.settings
@@ -715,8 +711,8 @@ class _Reader:
         if p.texture and target.tag == "texture":
             return self.texture(target)
         if p.kind == "image":
-            return read_image(props.node.file.parent / self.get(props, name, kinds=("string",)), c.where(), False,
-                              self.images)
+            return read_image(props.node.file.parent / self.get(props, name, kinds=("string",)), c.where(),
+                              self.get(props, "raw", False, ("boolean",)), self.images)
         kinds = {"number": ("float",), "integer": ("integer",), "bool": ("boolean",), "string": ("string",),
                  "name": ("string",), "point": ("point", "vector"), "vector": ("vector", "point")}[p.kind]
         if p.kind == "number" and getattr(p, "names", None) and target.tag == "string":
@@ -988,6 +984,23 @@ class _Reader:
         interface = MediumInterface(media.get("interior", -1), media.get("exterior", -1)) if media else None
         m = self.get(props, "to_world", np.eye(4), ("transform",))
         name = node.attrs.get("id")
+        if kind in SHAPES:
+            values = {p.mitsuba: self.parameter(props, p, p.mitsuba) for p in SHAPES[kind].mitsuba_parameters}
+            values = {p.mitsuba: p.mitsuba_default if values[p.mitsuba] is None else values[p.mitsuba]
+                      for p in SHAPES[kind].mitsuba_parameters}
+            values, local, swap_uv, flip = SHAPES[kind].from_mitsuba(values, m)
+            problem = SHAPES[kind].check(values)
+            if problem:
+                _fail(node, f"the {kind}'s {problem}")
+            shape = Shape(name or f"{kind} {len(self.builder.shapes)}", kind, values, m @ local, material,
+                          flip=flip, swap_uv=swap_uv, media=interface)
+            if np.any(np.abs(np.array(shape.bounds(SHAPES[kind]))) > MAX_COORDINATE):
+                _fail(node, f"the {kind} reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace")
+            if group is not None:
+                self.builder.objects[group].shapes.append(shape)
+            else:
+                self.builder.add_shape(shape)
+            return
         if kind == "sphere":
             center = m[:3, :3] @ self.get(props, "center", np.zeros(3), ("point", "vector")) + m[:3, 3]
             scales = np.linalg.norm(m[:3, :3], axis=0)
@@ -1012,8 +1025,6 @@ class _Reader:
             uvs = (vertices[:, :2] + 1) / 2             # Mitsuba's: (0, 0) at (-1, -1)
         elif kind == "cube":
             vertices, faces, uvs = _cube()
-        elif kind == "disk":
-            vertices, faces, uvs = unit_disk()
         elif kind in ("obj", "ply"):
             filename = self.get(props, "filename", kinds=("string",))
             if filename is None:

@@ -24,8 +24,8 @@ from pathtrace.resources import resource_dir
 from pathtrace.scene import transform
 from pathtrace.scene.description import INTEGRATORS, RUSSIAN_ROULETTE, Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, triangulate, vertex_normals
+from pathtrace.shapes import SHAPES, Shape
 from pathtrace.textures import TEXTURES, Texture, read_image
-from pathtrace.textures.bitmap import FILTERS, WRAP_MODES
 
 # the scene-file types besides the registry's: "emitter" is a black BSDF with emission, and
 # "twosided" wraps another material (Mitsuba 3's plugin; `twosided = true` says the same)
@@ -139,28 +139,11 @@ class _Reader:
         if not isinstance(kind, str) or kind not in TEXTURES:
             self.fail(f"{where}.type", f"must be one of {', '.join(TEXTURES)}, got {short(kind)}")
         texture_type = TEXTURES[kind]
-        extra = {"bitmap": {"file", "raw", "filter", "wrap"}, "constant": {"value"}}.get(kind, set())
         self.table(data, where, {"type", "uv_scale", "uv_offset", "uv_rotate", "uv_matrix",
-                                 *texture_type.inputs, *extra})
-        params = {"to_uv": self.uv_transform(data, where)}
-        for key in texture_type.inputs:
-            if key in data:
-                params[key] = self.color_or_texture(data, key, where)
-        if kind == "constant" and "value" in data:
-            params["value"] = self.color(data, "value", where)
-        if kind == "bitmap":
-            file = data.get("file")
-            if not isinstance(file, str) or not file:
-                self.fail(f"{where}.file", f"must be an image file name, got {short(file)}")
-            raw = data.get("raw", False)
-            if not isinstance(raw, bool):
-                self.fail(f"{where}.raw", f"must be true or false, got {short(raw)}")
-            for key, choices in (("filter", FILTERS), ("wrap", WRAP_MODES)):
-                if key in data and (not isinstance(data[key], str) or data[key] not in choices):
-                    self.fail(f"{where}.{key}", f"must be one of {', '.join(choices)}, got {short(data[key])}")
-                if key in data:
-                    params[key] = data[key]
-            params["image"] = read_image(self.path.parent / file, f"{self.label}: {where}.file", raw, self.images)
+                                 *(p.name for p in texture_type.parameters)})
+        params = {"to_uv": self.uv_transform(data, where),
+                  **parameters.read(texture_type.parameters, "toml",
+                                    lambda p, name: self.parameter(data, p, where) if name in data else None)}
         try:
             return Texture(kind, texture_type.complete(params), name)
         except ValueError as e:
@@ -323,10 +306,11 @@ class _Reader:
         if param.kind == "image":
             if not isinstance(value, str) or not value:
                 self.fail(key, f"must be an image file name, got {short(value)}")
-            return read_image(self.path.parent / value, f"{self.label}: {key}", False, self.images)
+            return read_image(self.path.parent / value, f"{self.label}: {key}", data.get("raw") is True, self.images)
         if param.choices and not getattr(param, "names", None):
             if value not in param.choices:
-                self.fail(key, f"must be {', '.join(param.choices[:-1])} or {param.choices[-1]}, got {short(value)}")
+                choices = " or ".join(param.choices) if len(param.choices) == 2 else "one of " + ", ".join(param.choices)
+                self.fail(key, f"must be {choices}, got {short(value)}")
             return value
         names = getattr(param, "names", None)
         if isinstance(value, str) and names:
@@ -535,6 +519,30 @@ class _Reader:
             m = transform.translation(self.vector(data, "translate", where)) @ m
         return m
 
+    def shape(self, data, where, builder, rows) -> Shape:
+        """A [[shapes]] entry: an analytic shape of `kind` (pathtrace.shapes.SHAPES), its kind's
+        parameters by name (ShapeParameter: angles in degrees), its transform, `flip` (the front
+        turned round) and `swap_uv` (texture coordinates (1 - v, u), Mitsuba's disk)."""
+        if not isinstance(data, dict):
+            self.fail(where, f"must be a table, got {type(data).__name__}")
+        kind = data.get("kind")
+        if kind not in SHAPES:
+            self.fail(f"{where}.kind", f"must be one of {', '.join(SHAPES)}, got {short(kind)}")
+        k = SHAPES[kind]
+        self.table(data, where, {"kind", "material", "name", "interior", "exterior", "flip", "swap_uv", "matrix",
+                                 "translate", "rotate", "scale", *(p.name for p in k.parameters)})
+        values = k.params_from(parameters.read(k.parameters, "toml",
+                                               lambda p, name: self.parameter(data, p, where) if name in data else None))
+        problem = k.check(values)
+        if problem:
+            self.fail(where, problem)
+        shape = Shape(self.name(data, where, f"{kind} {where[7:-1]}"), kind, values, self.transform(data, where),
+                      self.material_ref(builder, rows, data, where), self.boolean(data, "flip", where, False),
+                      self.boolean(data, "swap_uv", where, False), self.interface(data, where))
+        if np.any(np.abs(np.array(shape.bounds(k))) > MAX_COORDINATE):
+            self.fail(where, f"the {kind} reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace")
+        return shape
+
     def mesh(self, data, where, material) -> Mesh:
         """A mesh from a file, or written inline as vertices and faces (polygons of 3 or more
         corners, counter-clockwise seen from the front)."""
@@ -638,7 +646,7 @@ class _Reader:
 
     def scene(self, data) -> Scene:
         self.table(data, "top level", {"camera", "environment", "render", "textures", "materials", "spheres",
-                                       "meshes", "lights", "media", "objects", "instances"})
+                                       "meshes", "shapes", "lights", "media", "objects", "instances"})
         builder = SceneBuilder()
         self.texture_tables = data.get("textures", {})
         self.table(self.texture_tables, "textures",
@@ -657,15 +665,15 @@ class _Reader:
         rows = {}
         for name, m in named.items():
             rows[name] = builder.materials.add(self.material(m, f"materials.{name}"), name)
-        spheres, meshes = data.get("spheres", []), data.get("meshes", [])
-        for key, value in (("spheres", spheres), ("meshes", meshes)):
+        spheres, meshes, shapes = data.get("spheres", []), data.get("meshes", []), data.get("shapes", [])
+        for key, value in (("spheres", spheres), ("meshes", meshes), ("shapes", shapes)):
             if not isinstance(value, list):
                 self.fail(key, f"must be an array of tables ([[{key}]]), got {type(value).__name__}")
         instances = data.get("instances", [])
         if not isinstance(instances, list):
             self.fail("instances", f"must be an array of tables ([[instances]]), got {type(instances).__name__}")
-        if not spheres and not meshes and not instances:
-            self.fail("spheres", "the scene needs at least one [[spheres]], [[meshes]] or [[instances]] entry")
+        if not spheres and not meshes and not shapes and not instances:
+            self.fail("spheres", "the scene needs at least one [[spheres]], [[meshes]], [[shapes]] or [[instances]] entry")
         lights = data.get("lights", [])
         if not isinstance(lights, list):
             self.fail("lights", f"must be an array of tables ([[lights]]), got {type(lights).__name__}")
@@ -680,6 +688,8 @@ class _Reader:
                 self.fail(where, f"the sphere reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace")
             builder.add_sphere(center, radius, self.material_ref(builder, rows, s, where),
                                self.name(s, where, f"sphere {i}"), self.interface(s, where))
+        for i, s in enumerate(shapes):
+            builder.add_shape(self.shape(s, f"shapes[{i}]", builder, rows))
         with MeshFiles(self.named_mesh_files(meshes, data.get("objects"))) as self.mesh_files:
             for i, m in enumerate(meshes):
                 where = f"meshes[{i}]"

@@ -12,6 +12,7 @@ import numpy as np
 
 from pathtrace.errors import UserError
 from pathtrace.files import check_regular_file, shown
+from pathtrace.parameters import Parameter
 from pathtrace.textures.texture import TextureType
 
 # TEXELS_*, WRAP_* and FILTER_* of kernels/textures/bitmap.cl
@@ -132,7 +133,12 @@ class Bitmap(TextureType):
     name = "bitmap"
     doc = ("an image file (PNG, JPEG, TGA, BMP: 8-bit sRGB unless raw; HDR, EXR, PFM: linear), "
            "with wrap mode repeat, mirror or clamp and filter bilinear or nearest")
-    defaults = {"wrap": "repeat", "filter": "bilinear"}
+    formats = {"mitsuba": "bitmap"}
+    parameters = (
+        Parameter("file", "image", doc="the image file, relative to the scene file", mitsuba="filename"),
+        Parameter("raw", "bool", False, doc="8-bit values taken as linear, not sRGB", mitsuba="raw"),
+        Parameter("filter", "name", "bilinear", choices=tuple(FILTERS), doc="the lookup", mitsuba="filter_type"),
+        Parameter("wrap", "name", "repeat", choices=tuple(WRAP_MODES), doc="beyond [0, 1]", mitsuba="wrap_mode"))
     # repeat wrap: a bilinear lookup's mean over the unit square is then its texels' mean
     examples = ({"image": Image(np.array([[[255, 0, 0], [0, 255, 0], [0, 0, 255]],
                                           [[255, 255, 255], [128, 64, 32], [0, 0, 0]]], np.uint8))},
@@ -142,6 +148,9 @@ class Bitmap(TextureType):
 
     def complete(self, params):
         values = super().complete(params)
+        values.pop("raw")                           # the reader read the file so (Image.linear)
+        if "file" in values:
+            values["image"] = values.pop("file")
         if not isinstance(values.get("image"), Image):
             raise ValueError("needs an image (read_image)")
         for key, choices in (("wrap", WRAP_MODES), ("filter", FILTERS)):

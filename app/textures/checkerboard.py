@@ -2,14 +2,16 @@
 
 import numpy as np
 
+from pathtrace.parameters import Parameter
 from pathtrace.textures.texture import Texture, TextureType, input_bounds, input_mean
 
 
 class Checkerboard(TextureType):
     name = "checkerboard"
     doc = "color0 and color1 in alternating squares of the unit of uv (Mitsuba 3's checkerboard)"
-    inputs = ("color0", "color1")
-    defaults = {"color0": 0.4, "color1": 0.2}     # Mitsuba 3's
+    formats = {"mitsuba": "checkerboard"}
+    parameters = (Parameter("color0", "color", 0.4, texture=True, mitsuba="color0", doc="where u's and v's halves agree"),
+                  Parameter("color1", "color", 0.2, texture=True, mitsuba="color1", doc="elsewhere"))   # Mitsuba 3's
     examples = ({}, {"color0": [0.9, 0.1, 0.2], "color1": 0.3, "to_uv": np.diag([4.0, 2.0, 1.0])},
                 {"color0": Texture("constant", {"value": [0.1, 0.7, 0.3]}), "color1": [1.5, 0.0, 0.25]})
 

@@ -2,13 +2,14 @@
 
 import numpy as np
 
+from pathtrace.parameters import Parameter
 from pathtrace.textures.texture import TextureType
 
 
 class Constant(TextureType):
     name = "constant"
     doc = "one colour everywhere"
-    defaults = {"value": 1.0}
+    parameters = (Parameter("value", "color", 1.0, doc="the colour"),)
     examples = ({"value": [0.2, 0.5, 0.9]}, {"value": 3.5})
 
     def complete(self, params):

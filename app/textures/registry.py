@@ -1,7 +1,9 @@
 """The registry of texture types: each type's tag, and the kernels' dispatch (eval_leaf_texture,
 eval_input, eval_combined, eval_texture) generated from it. Adding a texture type takes its
-kernel file (kernels/textures/<name>.cl), its host class (a TextureType: its inputs, pack, mean,
-bounds and examples) and its entry here; a scene reader that has a name for it maps it by hand.
+kernel file (kernels/textures/<name>.cl), its host class (a TextureType: its parameters with
+their names in the formats, app/parameters.py, pack, mean, bounds and examples) and its entry
+here; the TOML and Mitsuba readers read it through its declarations (pbrt-v4's textures, with
+their own uv mappings, are mapped by hand in app/scene/pbrt/materials.py).
 Its examples put it through tests/test_texture_conformance.py (the kernel's values against its
 mean and bounds) by its registration alone."""
 

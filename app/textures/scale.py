@@ -2,14 +2,15 @@
 
 import numpy as np
 
+from pathtrace.parameters import Parameter
 from pathtrace.textures.texture import Texture, TextureType, input_bounds, input_mean
 
 
 class Scale(TextureType):
     name = "scale"
     doc = "tex times scale (pbrt-v4's scale)"
-    inputs = ("tex", "scale")
-    defaults = {"tex": 1.0, "scale": 1.0}
+    parameters = (Parameter("tex", "color", 1.0, texture=True, doc="the texture scaled"),
+                  Parameter("scale", "color", 1.0, texture=True, doc="the factor"))
     examples = ({"tex": [0.5, 0.25, 1.0], "scale": Texture("checkerboard", {"color0": 2.0, "color1": 0.5})},
                 {"tex": Texture("checkerboard", {"color0": [0.9, 0.1, 0.2], "color1": 0.3}), "scale": [2.0, 0.5, 1.0]})
 

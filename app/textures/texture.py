@@ -97,12 +97,20 @@ def uv_matrix(to_uv) -> np.ndarray:
 
 
 class TextureType:
-    """One texture type. Subclasses set name, doc, inputs (the names of inputs 0 to 2, each with
-    its default in `defaults`) and define pack (the type's own fields) and mean."""
+    """One texture type. Subclasses set name, doc, parameters (app/parameters.py: their names in
+    the formats, defaults, docs; those that a texture may give, `texture` set, are its inputs 0 to
+    2, in order) and define pack (the type's own fields) and mean."""
     name: str
     doc: str = ""
-    inputs: tuple = ()
-    defaults: dict = {}
+    parameters: tuple = ()
+    formats: dict = {}        # its names in other formats: {"mitsuba": name}
+    inputs: tuple = ()        # set from parameters
+    defaults: dict = {}       # likewise
+
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        cls.inputs = tuple(p.name for p in cls.parameters if p.texture)
+        cls.defaults = {p.name: p.default for p in cls.parameters if p.default is not None}
     # parameter sets that the conformance suite (tests/test_texture_conformance.py) evaluates in
     # the kernel against mean and bounds; an input may be a Texture of other parameters, which
     # the suite completes. Each type declares its own, one at least, where its mean is exact

@@ -1,10 +1,8 @@
 /* diffusetransmission: Lambertian reflection and transmission (pbrt-v4's
  * `diffusetransmission`, for lampshades, curtains, leaves): f = R / pi towards wo's side of the
- * surface and T / pi through it, the same seen from either side.
- *
- * Parameters (Material):
- *   p0.xyz  R, the reflectance, in [0, 1] per channel
- *   p1.xyz  T, the transmittance, in [0, 1] per channel (R + T <= 1 in each)
+ * surface and T / pi through it, the same seen from either side. R and T are read through
+ * DIFFUSETRANSMISSION_REFLECTANCE and _TRANSMITTANCE, generated from their slots on the host
+ * (app/materials/diffusetransmission.py; app/materials/registry.py: tag_source).
  *
  * Sampled as pbrt-v4 samples it: reflection or transmission, chosen in proportion to the
  * largest channel of R and of T, then a cosine-distributed direction on that side. The
@@ -13,7 +11,8 @@
 /* The probability of choosing reflection. */
 float reflect_share(MaterialRef m)
 {
-    float r = fmax(fmax(m->p0.x, m->p0.y), m->p0.z), t = fmax(fmax(m->p1.x, m->p1.y), m->p1.z);
+    float3 r3 = DIFFUSETRANSMISSION_REFLECTANCE(m), t3 = DIFFUSETRANSMISSION_TRANSMITTANCE(m);
+    float r = fmax(fmax(r3.x, r3.y), r3.z), t = fmax(fmax(t3.x, t3.y), t3.z);
     return r + t > 0.0f ? r / (r + t) : 1.0f;
 }
 
@@ -22,7 +21,7 @@ float3 eval_diffusetransmission(MaterialRef m, float3 wo, float3 wi)
     float side = wo.z * wi.z;
     if (side == 0.0f)
         return (float3)(0.0f);
-    return (side > 0.0f ? m->p0.xyz : m->p1.xyz) / PI_F;
+    return (side > 0.0f ? DIFFUSETRANSMISSION_REFLECTANCE(m) : DIFFUSETRANSMISSION_TRANSMITTANCE(m)) / PI_F;
 }
 
 float pdf_diffusetransmission(MaterialRef m, float3 wo, float3 wi)
@@ -44,7 +43,7 @@ int sample_diffusetransmission(MaterialRef m, float3 wo, float3 u, BSDFSample *s
     s->wi = (float3)(w.x, w.y, (reflect == (wo.z > 0.0f)) ? w.z : -w.z);
     float chosen = reflect ? share : 1.0f - share;
     s->pdf = chosen * pdf_cosine_hemisphere(w.z);
-    s->weight = (reflect ? m->p0.xyz : m->p1.xyz) / chosen;      /* (X / pi) cos / (chosen cos / pi) */
+    s->weight = (reflect ? DIFFUSETRANSMISSION_REFLECTANCE(m) : DIFFUSETRANSMISSION_TRANSMITTANCE(m)) / chosen;      /* (X / pi) cos / (chosen cos / pi) */
     s->lobe = LOBE_DIFFUSE | (reflect ? LOBE_REFLECTION : LOBE_TRANSMISSION);
     return s->pdf > 0.0f;
 }
