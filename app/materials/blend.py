@@ -5,7 +5,7 @@ materials are the Material's components; the table gives each blend rows of its 
 
 import numpy as np
 
-from pathtrace.materials.bsdf import NULL, BSDFType, Param
+from pathtrace.materials.bsdf import NULL, BSDFType, Derived, Param, read_slot, write_slot
 
 MAX_BLEND_DEPTH = 8     # blends nested in blends, at most (kernels/bsdfs/blendbsdf.cl)
 
@@ -15,6 +15,9 @@ class BlendBSDF(BSDFType):
     examples = ({"weight": 0.3},)
     params = (Param("weight", "number", default=0.5, high=1.0, slot="p0.x",
                     doc="the share of the second material: 0 is the first alone, 1 the second"),)
+    # written by MaterialTable.set, which gives the components rows of their own
+    derived = (Derived("first", "p0.y", "the first component's row of the material table", packed=False),
+               Derived("second", "p0.z", "the second component's row", packed=False))
     doc = ("two materials mixed, f = (1 - weight) f_1 + weight f_2, by taking the second with "
            "probability weight at each hit (Mitsuba 3's blendbsdf, pbrt-v4's mix); `bsdfs` names "
            "or holds the two")
@@ -23,12 +26,6 @@ class BlendBSDF(BSDFType):
 
     def defines(self, rows):
         return ("BLEND",) if len(rows) else ()
-
-    def pack(self, values, rows):
-        rows["p0"][:, 0] = values["weight"]
-
-    def unpack(self, row):
-        return {"weight": float(row["p0"][0])}
 
 
 def depth(material) -> int:
@@ -63,11 +60,23 @@ def check_blend(material) -> str | None:
     return None
 
 
+def components_of(rows) -> np.ndarray:
+    """The rows of the two components of blend rows (MATERIAL rows, or one), as (n, 2) (or (2,))."""
+    slots = BlendBSDF().slots()
+    return np.stack([read_slot(rows, slots["first"]), read_slot(rows, slots["second"])], axis=-1).astype(np.int64)
+
+
+def set_components(rows: np.ndarray, components):
+    """Writes the rows of a blend's two components into its MATERIAL rows."""
+    slots = BlendBSDF().slots()
+    write_slot(rows, slots["first"], components[0])
+    write_slot(rows, slots["second"], components[1])
+
+
 def component_rows(rows: np.ndarray) -> np.ndarray:
     """The rows of the two components of each blend among `rows` (MATERIAL rows)."""
     from pathtrace.materials.registry import TAGS
-    blends = rows[rows["type"] == TAGS["blendbsdf"]]
-    return blends["p0"][:, 1:3].astype(np.int64).ravel()
+    return components_of(rows[rows["type"] == TAGS["blendbsdf"]]).ravel()
 
 
 def reachable(table_rows: np.ndarray, used) -> np.ndarray:

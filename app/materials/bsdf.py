@@ -3,6 +3,7 @@ where Mitsuba has the material), their checks, and how they pack into the MATERI
 its kernel file kernels/bsdfs/<name>.cl reads, through accessors generated from the slots its
 parameters declare (Param.slot; app/materials/registry.py: tag_source)."""
 
+import re
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -26,17 +27,87 @@ class Param(Parameter):
     parameters); its range [low, high] (high None: unbounded); its names in the formats."""
     low: float = 0.0
     names: dict = None        # for "number": named values accepted too; for "name": the choices
-    slot: str = None          # where the kernel reads it, as "p0.xyz" or "p1.w" (a colour's
-                              # slot is .xyz): a parameter with a slot may be a texture, whose
-                              # value at each hit goes there (kernels/shading.cl)
+    slot: str = None          # where the kernels read it (SLOT_SYNTAX), through the accessor
+                              # <TYPE>_<NAME>(m) generated from it (registry.py: tag_source): a
+                              # parameter with a slot in p0..p2 may be a texture, whose value at
+                              # each hit goes there (kernels/shading.cl), unless `constant`
+    constant: bool = False    # read from its slot, never given by a texture (the host derives
+                              # other slots from it, or its slot is in the table)
     into: str = None          # another way to give parameter `into`, which resolve() turns it
                               # into (principled's specular, its eta): never kept itself
 
     def __post_init__(self):
         super().__post_init__()
-        object.__setattr__(self, "texture", self.slot is not None)
+        object.__setattr__(self, "texture", self.slot is not None and not self.constant)
         if self.kind == "name" and self.names and not self.choices:
             object.__setattr__(self, "choices", tuple(self.names))
+
+
+# A slot names MATERIAL floats: "p0.xyz" (a colour) or "p1.w" of p0..p2, "table[3]" or
+# "table[7:10]" (a colour) of the table, or "table", all 16 of it (a tabulated function).
+SLOT_SYNTAX = re.compile(r"(p[012])\.([xyzw]+)|table(?:\[(\d+)(?::(\d+))?\])?")
+
+
+def slot_floats(slot: str) -> list:
+    """The MATERIAL floats a slot names, counted over p0, p1, p2 and the table (p0.x: 0,
+    table[0]: 12): 'p1.xyz' -> [4, 5, 6], 'table[7:10]' -> [19, 20, 21]."""
+    match = SLOT_SYNTAX.fullmatch(slot)
+    if match is None:
+        raise ValueError(f"slot {slot!r}: not of the form p0.xyz, p1.w, table[3], table[7:10] or table")
+    field, components, first, end = match.groups()
+    if field:
+        return [4 * int(field[1]) + "xyzw".index(c) for c in components]
+    if first is None:
+        return list(range(12, 28))
+    return list(range(12 + int(first), 12 + int(end if end is not None else int(first) + 1)))
+
+
+def slot_accessor(slot: str) -> str:
+    """The C expression of a slot of MaterialRef m: a float, a float3, or (the whole table) its
+    array."""
+    floats = slot_floats(slot)
+    if slot.startswith("p"):
+        return f"((m)->{slot})"
+    if slot == "table":
+        return "((m)->table)"
+    reads = ", ".join(f"(m)->table[{f - 12}]" for f in floats)
+    return f"((m)->table[{floats[0] - 12}])" if len(floats) == 1 else f"((float{len(floats)})({reads}))"
+
+
+def _field_range(slot: str) -> tuple:
+    """(MATERIAL field, first index in it, width) of a slot."""
+    floats = slot_floats(slot)
+    field = "table" if floats[0] >= 12 else f"p{floats[0] // 4}"
+    return field, floats[0] - (12 if field == "table" else 4 * int(field[1])), len(floats)
+
+
+def read_slot(rows, slot: str):
+    """A slot's values in MATERIAL rows (or one row): a number's as (n,), several floats' as
+    (n, width)."""
+    field, first, width = _field_range(slot)
+    values = rows[field][..., first:first + width]
+    return values[..., 0] if width == 1 else values
+
+
+def write_slot(rows: np.ndarray, slot: str, values):
+    """Writes values (one for all rows, or one per row) into a slot of MATERIAL rows."""
+    field, first, width = _field_range(slot)
+    if width == 1:
+        rows[field][:, first] = values
+    else:
+        rows[field][:, first:first + width] = values
+
+
+@dataclass(frozen=True)
+class Derived:
+    """A MATERIAL slot that pack() computes from the parameters rather than takes from one
+    (Phong's lobe choice, a plastic's eta and its coating's mean internal reflectance): declared
+    beside the parameters so that the kernels read it, as they read those, through the accessor
+    <TYPE>_<NAME>(m) generated from its slot; doc gives its formula."""
+    name: str
+    slot: str
+    doc: str
+    packed: bool = True     # written by pack(); False: by the material table (a blend's rows)
 
 
 def constant_of(value, kind: str, summary=Texture.mean):
@@ -75,6 +146,11 @@ class BSDFType:
     resolved_first: bool = False   # the kernels turn it into another material before any BSDF
                                    # call (a blend): its file has no eval, pdf or sample
     requires: tuple = ()      # kernel files its own builds on, compiled before it (kernels/)
+    derived: tuple = ()       # the slots pack() computes (Derived), beside the parameters' own
+    host_only: tuple = ()     # slotted parameters no kernel reads, kept for unpack (the editor)
+    reads_as: dict = {}       # other types whose accessors the kernels apply to this type's rows
+                              # (a coatedconductor's base is read as a roughconductor): {type:
+                              # {their slot's name: this type's}}, slots that must coincide
     # What the conformance suite (tests/test_bsdfs.py) runs every type through:
     examples: tuple = ()      # parameter sets, as a scene file gives them; each type declares
                               # its own (a subclass does not inherit them), one at least
@@ -117,7 +193,7 @@ class BSDFType:
                 if p.default is None:
                     raise ValueError(f"missing '{p.name}'")
                 values[p.name] = p.default
-            if isinstance(values.get(p.name), Texture) and p.slot is None:
+            if isinstance(values.get(p.name), Texture) and not p.texture:
                 raise ValueError(f"{p.name}: {self.name}'s {p.name} cannot be a texture (the host "
                                  "derives constants from it)")
         # a texture is checked by its largest values
@@ -146,6 +222,11 @@ class BSDFType:
                 return p.name, f"must lie in {bound}, got {shown}"
         return None
 
+    def slots(self) -> dict:
+        """{name: slot} of every slotted parameter and derived slot, which tag_source makes the
+        kernels' accessors of."""
+        return {**{p.name: p.slot for p in self.params if p.slot}, **{d.name: d.slot for d in self.derived}}
+
     def kind_of(self, name: str) -> str:
         return next((p.kind for p in self.params if p.name == name), "number")
 
@@ -171,10 +252,15 @@ class BSDFType:
         return np.full(n, self.flags, np.int32)
 
     def pack(self, values: dict, rows: np.ndarray):
-        raise NotImplementedError
+        """Writes each slotted parameter into its slot; a type with derived slots writes those too."""
+        for p in self.params:
+            if p.slot:
+                write_slot(rows, p.slot, values[p.name])
 
     def unpack(self, row) -> dict:
-        raise NotImplementedError
+        """The slotted parameters of one row; a type whose others derive from its slots adds them."""
+        return {p.name: read_slot(row, p.slot).copy() if p.kind == "color" else
+                (bool if p.kind == "bool" else float)(read_slot(row, p.slot)) for p in self.params if p.slot}
 
     def continuation(self, values: dict) -> np.ndarray:
         """The probability with which the report's Russian roulette goes on from this material:

@@ -9,7 +9,7 @@ pdf, the pdf's normalisation, the sample weight, reciprocity, energy) by its reg
 
 from pathtrace.materials.basic import Black, Diffuse, Null, Phong
 from pathtrace.materials.blend import BlendBSDF
-from pathtrace.materials.bsdf import DELTA
+from pathtrace.materials.bsdf import DELTA, slot_accessor
 from pathtrace.materials.conductor import Conductor, RoughConductor
 from pathtrace.materials.dielectric import Dielectric, RoughDielectric, ThinDielectric
 from pathtrace.materials.diffusetransmission import DiffuseTransmission
@@ -25,12 +25,13 @@ TAGS = {name: i for i, name in enumerate(BSDFS)}
 
 
 def tag_source() -> str:
-    """The BSDF_<NAME> tags of every type, which the kernel files may name, and the accessors of
-    each type's parameters in the MATERIAL slots its host declares (Param.slot), <TYPE>_<PARAM>(m),
-    so that the slots are defined once, on the host."""
+    """The BSDF_<NAME> tags of every type, which the kernel files may name, and the accessors
+    <TYPE>_<NAME>(m) of each type's slots, its parameters' (Param.slot) and those pack() derives
+    (BSDFType.derived), so that the slots are defined once, on the host: the kernels read a
+    material's p0..p2 and table through them alone (tests/test_types.py)."""
     tags = "".join(f"#define BSDF_{name.upper()} {TAGS[name]}\n" for name in BSDFS)
-    return tags + "".join(f"#define {name.upper()}_{p.name.upper()}(m) ((m)->{p.slot})\n"
-                          for name, b in BSDFS.items() for p in b.params if p.slot)
+    return tags + "".join(f"#define {name.upper()}_{slot_name.upper()}(m) {slot_accessor(slot)}\n"
+                          for name, b in BSDFS.items() for slot_name, slot in b.slots().items())
 
 
 def dispatch_source(names=None) -> str:

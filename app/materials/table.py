@@ -8,7 +8,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from pathtrace.errors import UserError, short
-from pathtrace.materials.blend import check_blend
+from pathtrace.materials.blend import check_blend, components_of, set_components
 from pathtrace.materials.bsdf import EMITS_BACK, MASKED, NULL, TRANSMISSIVE, TWOSIDED, constant_of
 from pathtrace.materials.registry import BSDFS, TAGS
 from pathtrace.textures.texture import Texture
@@ -166,19 +166,19 @@ class MaterialTable:
                 material.params[name] = texture
         if type_name == "blendbsdf":
             material.components = tuple(replace(self.get(int(r)), emission=np.zeros(3), twosided=False, emits_back=False,
-                                                normal_map=None, bump_map=None) for r in row["p0"][1:3])
+                                                normal_map=None, bump_map=None) for r in components_of(row))
         return material
 
     def set(self, index: int, material: Material):
         params, emission = material.constants()
-        row = pack(material.type, params, emission, material.twosided, material.emits_back)[0]
+        rows = pack(material.type, params, emission, material.twosided, material.emits_back)
         if material.masked:
-            row["flags"] |= MASKED
+            rows["flags"] |= MASKED
         if material.type == "blendbsdf":
             components = self._set_components(index, material)
-            row["p0"][1:3] = components
-            row["flags"] |= self.rows[components[0]]["flags"] & TRANSMISSIVE
-        self.rows[index] = row
+            set_components(rows, components)
+            rows["flags"] |= self.rows[components[0]]["flags"] & TRANSMISSIVE
+        self.rows[index] = rows[0]
         self.textures[index] = material.textures()
 
     def _set_components(self, index: int, material: Material) -> list:
@@ -189,7 +189,7 @@ class MaterialTable:
         if problem:
             raise ValueError(problem)
         old = self.rows[index]
-        rows = [int(r) for r in old["p0"][1:3]] if old["type"] == TAGS["blendbsdf"] else [None, None]
+        rows = [int(r) for r in components_of(old)] if old["type"] == TAGS["blendbsdf"] else [None, None]
         for k, c in enumerate(material.components):
             c = replace(c, emission=material.emission, twosided=material.twosided, emits_back=material.emits_back,
                         normal_map=material.normal_map, bump_map=material.bump_map)
