@@ -93,7 +93,7 @@ LIGHT = np.dtype([
     ("type", np.int32),             # LIGHT_* tag (app/lights/registry.py)
     ("prim", np.int32),             # an area light's primitive, else -1
     ("pad", np.int32, 3),
-    ("p0", np.float32, 4),          # the type's parameters (kernels/lights/<type>.cl)
+    ("p0", np.float32, 4),          # the type's values, in the slots it declares (app/lights/)
     ("p1", np.float32, 4),
     ("p2", np.float32, 4),
 ])

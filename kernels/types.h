@@ -139,8 +139,8 @@ typedef struct {
 } RenderParams;
 
 /* One entry of the light table: a light of type `type` (the LIGHT_* tags of
- * app/lights/registry.py) whose parameters p0..p2 each kernels/lights/ file documents at its
- * top; an area light names its emissive primitive (`prim`, else -1). Lights are chosen in
+ * app/lights/registry.py) whose values lie in p0..p2 in the slots its host declares, read
+ * through the accessors <NAME>_LIGHT_<SLOT>(l) generated from them (app/slots.py); an area light names its emissive primitive (`prim`, else -1). Lights are chosen in
  * proportion to power through Walker's alias method (Vose's construction): entry i is kept when
  * a uniform 32-bit word is below `keep` (a probability times 2^32), else its `alias` is taken.
  * `pick` is the overall probability of choosing this light. */

@@ -56,6 +56,8 @@ KERNELS = Path(__file__).resolve().parent.parent / "kernels"
 # Files that touch p0..p2 by index for every type alike: shading.cl writes a texture's value into
 # the slot its binding names (the host's Param.slot, app/materials/table.py: slot_index).
 GENERIC = {"shading.cl"}
+# the light kernels, whose Light has p0..p2 of its own (app/lights/registry.py: kernel_parts)
+LIGHT_FILES = sorted((KERNELS / "lights").glob("*.cl"))
 RAW_SLOT = re.compile(r"(->|\.)\s*(p[012]|table)\b")
 
 
@@ -65,10 +67,9 @@ def code_of(path: Path) -> str:
 
 
 def material_kernel_files() -> list:
-    """Every kernel file that may read a material, but the light kernels (whose Light has p0..p2
-    of its own)."""
+    """Every kernel file that may read a material, but the light kernels."""
     return [f for f in sorted(KERNELS.rglob("*.cl")) + sorted(KERNELS.rglob("*.h"))
-            if "lights" not in f.relative_to(KERNELS).parts and f.name not in GENERIC]
+            if f not in LIGHT_FILES and f.name not in GENERIC]
 
 
 def each_slot():
@@ -84,7 +85,7 @@ def each_slot():
 def test_each_material_types_slots_are_distinct_floats_of_its_kind():
     """A parameter's slot holds its kind (a colour 3 floats, a number or bool 1), a textured
     one lies in p0..p2 (where the texture bindings write), and no two slots of a type overlap."""
-    from pathtrace.materials.bsdf import slot_floats
+    from pathtrace.slots import slot_floats
     taken = {}
     for name, _, slot_name, slot, p in each_slot():
         floats = slot_floats(slot)
@@ -109,7 +110,7 @@ def test_pack_writes_each_slotted_parameter_where_its_slot_says():
     """A texture's value is written into the slot at each hit (kernels/shading.cl), so pack must
     put the constant there too, as it is: the slot is the parameter's one place."""
     from pathtrace.materials import BSDFS
-    from pathtrace.materials.bsdf import slot_floats
+    from pathtrace.slots import slot_floats
     from pathtrace.textures.texture import Texture
     for name, bsdf in BSDFS.items():
         for example in bsdf.__class__.__dict__.get("examples", ()):
@@ -127,7 +128,7 @@ def test_pack_writes_the_declared_slots_and_no_others():
     declares (a derived slot that the table writes, a blend's rows, excepted): a slot pack()
     writes by hand without declaring it is caught, and so is a declared one it forgets."""
     from pathtrace.materials import BSDFS
-    from pathtrace.materials.bsdf import slot_floats
+    from pathtrace.slots import slot_floats
     for name, bsdf in BSDFS.items():
         declared = {f for n, _, _, slot, p in each_slot() if n == name and getattr(p, "packed", True)
                     for f in slot_floats(slot)}
@@ -154,8 +155,9 @@ def test_kernels_read_material_slots_only_through_the_generated_accessors():
     from the host's declarations (app/materials/registry.py: tag_source), and defines none of
     those names itself."""
     from pathtrace.materials import tag_source
-    generated = set(re.findall(r"#define (\w+)\(m\)", tag_source()))
-    for path in material_kernel_files():
+    from pathtrace.lights.registry import kernel_parts
+    generated = set(re.findall(r"#define (\w+)\([ml]\)", tag_source() + kernel_parts()[0][1]))
+    for path in material_kernel_files() + LIGHT_FILES:
         code = code_of(path)
         raw = [m.group(0) for m in RAW_SLOT.finditer(code)]
         assert not raw, (path.name, raw)
@@ -174,3 +176,46 @@ def test_every_declared_slot_is_read_by_a_kernel_or_kept_for_the_host():
                                                       for other, names in bsdf.reads_as.items()
                                                       for their, ours in names.items() if ours == slot_name}
         assert readers & named or slot_name in bsdf.host_only, (name, slot_name)
+
+
+# -- the LIGHT slots each delta light type declares (DeltaLight.slots), read by kernels/lights/
+#    through <NAME>_LIGHT_<SLOT>(l) (app/lights/registry.py: kernel_parts) --
+
+def example_lights():
+    """(type, light) of each delta light type's examples, read as a scene file gives them."""
+    from pathtrace.lights.registry import DELTA_LIGHTS
+    from pathtrace.scene.toml_reader import read_scene_dict
+    for name, cls in DELTA_LIGHTS.items():
+        for example in cls.examples:
+            scene = read_scene_dict({"camera": {"eye": [0, 2, 3], "look_at": [0, 0, 0]},
+                                     "materials": {"m": {"type": "diffuse", "rho_d": 0.5}},
+                                     "spheres": [{"center": [0, 0, 0], "radius": 0.5, "material": "m"}],
+                                     "lights": [{"type": name, **example}]}, name)
+            yield name, scene.lights[0]
+
+
+def test_each_light_types_slots_are_distinct_floats_of_p0_to_p2_that_pack_writes_alone():
+    """Rows filled with NaN: after pack, the floats no longer NaN are exactly those of the
+    declared slots, which do not overlap; one named after a field holds its value."""
+    from pathtrace.slots import read_slot, slot_floats
+    from pathtrace.types import LIGHT
+    for name, light in example_lights():
+        floats = [f for s in light.slots for f in slot_floats(s.slot)]
+        assert len(floats) == len(set(floats)) and max(floats) < 12, name
+        rows = np.zeros(1, LIGHT)
+        for field in ("p0", "p1", "p2"):
+            rows[field] = np.nan
+        light.pack(rows[0], {id(t): 7 for t in light.textures()})
+        written = np.flatnonzero(~np.isnan(np.concatenate([rows["p0"][0], rows["p1"][0], rows["p2"][0]])))
+        assert sorted(written.tolist()) == sorted(floats), name
+        for s in light.slots:
+            if s.name in light.fields:
+                assert np.allclose(read_slot(rows[0], s.slot), getattr(light, s.name)), (name, s.name)
+
+
+def test_every_light_slot_is_read_by_its_kernel():
+    from pathtrace.lights.registry import DELTA_LIGHTS
+    for name, cls in DELTA_LIGHTS.items():
+        code = code_of(KERNELS / "lights" / f"{name}.cl")
+        for s in cls.slots:
+            assert re.search(rf"\b{name.upper()}_LIGHT_{s.name.upper()}\(", code), (name, s.name)

@@ -3,7 +3,8 @@ null, no surface at all."""
 
 import numpy as np
 
-from pathtrace.materials.bsdf import NULL, BSDFType, Derived, Param, check_sum_at_most_one, read_slot, write_slot
+from pathtrace.materials.bsdf import NULL, BSDFType, Param, check_sum_at_most_one
+from pathtrace.slots import Slot, read_slot, write_slot
 
 
 class Black(BSDFType):
@@ -58,9 +59,9 @@ class Phong(BSDFType):
               Param("n", "number", doc="Phong exponent", slot="p1.w"))
     # the lobes are chosen in the ratio max(rho_d) : max(rho_s), so that with Russian roulette
     # going on with max(rho_d) + max(rho_s) (continuation) every channel's weight stays <= 1
-    derived = (Derived("diffuse_share", "p0.w", "max(rho_d) / (max(rho_d) + max(rho_s)), 1 where both are 0: "
+    derived = (Slot("diffuse_share", "p0.w", "max(rho_d) / (max(rho_d) + max(rho_s)), 1 where both are 0: "
                        "the probability of sampling the diffuse lobe"),
-               Derived("glossy_share", "p2.x", "1 - diffuse_share: the probability of sampling the glossy lobe"))
+               Slot("glossy_share", "p2.x", "1 - diffuse_share: the probability of sampling the glossy lobe"))
     doc = ("modified Phong (Lafortune & Willems 1994), f = rho_d / pi + rho_s (n + 2) / (2 pi) "
            "cos^n(alpha); rho_d + rho_s <= 1 in each channel")
 

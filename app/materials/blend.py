@@ -5,7 +5,8 @@ materials are the Material's components; the table gives each blend rows of its 
 
 import numpy as np
 
-from pathtrace.materials.bsdf import NULL, BSDFType, Derived, Param, read_slot, write_slot
+from pathtrace.materials.bsdf import NULL, BSDFType, Param
+from pathtrace.slots import Slot, read_slot, write_slot
 
 MAX_BLEND_DEPTH = 8     # blends nested in blends, at most (kernels/bsdfs/blendbsdf.cl)
 
@@ -16,8 +17,8 @@ class BlendBSDF(BSDFType):
     params = (Param("weight", "number", default=0.5, high=1.0, slot="p0.x",
                     doc="the share of the second material: 0 is the first alone, 1 the second"),)
     # written by MaterialTable.set, which gives the components rows of their own
-    derived = (Derived("first", "p0.y", "the first component's row of the material table", packed=False),
-               Derived("second", "p0.z", "the second component's row", packed=False))
+    derived = (Slot("first", "p0.y", "the first component's row of the material table", packed=False),
+               Slot("second", "p0.z", "the second component's row", packed=False))
     doc = ("two materials mixed, f = (1 - weight) f_1 + weight f_2, by taking the second with "
            "probability weight at each hit (Mitsuba 3's blendbsdf, pbrt-v4's mix); `bsdfs` names "
            "or holds the two")

@@ -1,14 +1,14 @@
 """The interface every material type implements on the host: its parameters (Mitsuba 3's names
 where Mitsuba has the material), their checks, and how they pack into the MATERIAL struct that
 its kernel file kernels/bsdfs/<name>.cl reads, through accessors generated from the slots its
-parameters declare (Param.slot; app/materials/registry.py: tag_source)."""
+parameters and derived values declare (Param.slot, BSDFType.derived; app/slots.py)."""
 
-import re
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from pathtrace.parameters import Parameter
+from pathtrace.slots import read_slot, write_slot
 from pathtrace.textures.texture import Texture
 
 # MATERIAL.flags bits, as kernels/types.h defines them
@@ -41,73 +41,6 @@ class Param(Parameter):
         object.__setattr__(self, "texture", self.slot is not None and not self.constant)
         if self.kind == "name" and self.names and not self.choices:
             object.__setattr__(self, "choices", tuple(self.names))
-
-
-# A slot names MATERIAL floats: "p0.xyz" (a colour) or "p1.w" of p0..p2, "table[3]" or
-# "table[7:10]" (a colour) of the table, or "table", all 16 of it (a tabulated function).
-SLOT_SYNTAX = re.compile(r"(p[012])\.([xyzw]+)|table(?:\[(\d+)(?::(\d+))?\])?")
-
-
-def slot_floats(slot: str) -> list:
-    """The MATERIAL floats a slot names, counted over p0, p1, p2 and the table (p0.x: 0,
-    table[0]: 12): 'p1.xyz' -> [4, 5, 6], 'table[7:10]' -> [19, 20, 21]."""
-    match = SLOT_SYNTAX.fullmatch(slot)
-    if match is None:
-        raise ValueError(f"slot {slot!r}: not of the form p0.xyz, p1.w, table[3], table[7:10] or table")
-    field, components, first, end = match.groups()
-    if field:
-        return [4 * int(field[1]) + "xyzw".index(c) for c in components]
-    if first is None:
-        return list(range(12, 28))
-    return list(range(12 + int(first), 12 + int(end if end is not None else int(first) + 1)))
-
-
-def slot_accessor(slot: str) -> str:
-    """The C expression of a slot of MaterialRef m: a float, a float3, or (the whole table) its
-    array."""
-    floats = slot_floats(slot)
-    if slot.startswith("p"):
-        return f"((m)->{slot})"
-    if slot == "table":
-        return "((m)->table)"
-    reads = ", ".join(f"(m)->table[{f - 12}]" for f in floats)
-    return f"((m)->table[{floats[0] - 12}])" if len(floats) == 1 else f"((float{len(floats)})({reads}))"
-
-
-def _field_range(slot: str) -> tuple:
-    """(MATERIAL field, first index in it, width) of a slot."""
-    floats = slot_floats(slot)
-    field = "table" if floats[0] >= 12 else f"p{floats[0] // 4}"
-    return field, floats[0] - (12 if field == "table" else 4 * int(field[1])), len(floats)
-
-
-def read_slot(rows, slot: str):
-    """A slot's values in MATERIAL rows (or one row): a number's as (n,), several floats' as
-    (n, width)."""
-    field, first, width = _field_range(slot)
-    values = rows[field][..., first:first + width]
-    return values[..., 0] if width == 1 else values
-
-
-def write_slot(rows: np.ndarray, slot: str, values):
-    """Writes values (one for all rows, or one per row) into a slot of MATERIAL rows."""
-    field, first, width = _field_range(slot)
-    if width == 1:
-        rows[field][:, first] = values
-    else:
-        rows[field][:, first:first + width] = values
-
-
-@dataclass(frozen=True)
-class Derived:
-    """A MATERIAL slot that pack() computes from the parameters rather than takes from one
-    (Phong's lobe choice, a plastic's eta and its coating's mean internal reflectance): declared
-    beside the parameters so that the kernels read it, as they read those, through the accessor
-    <TYPE>_<NAME>(m) generated from its slot; doc gives its formula."""
-    name: str
-    slot: str
-    doc: str
-    packed: bool = True     # written by pack(); False: by the material table (a blend's rows)
 
 
 def constant_of(value, kind: str, summary=Texture.mean):
@@ -146,7 +79,7 @@ class BSDFType:
     resolved_first: bool = False   # the kernels turn it into another material before any BSDF
                                    # call (a blend): its file has no eval, pdf or sample
     requires: tuple = ()      # kernel files its own builds on, compiled before it (kernels/)
-    derived: tuple = ()       # the slots pack() computes (Derived), beside the parameters' own
+    derived: tuple = ()       # the slots pack() computes (Slot), beside the parameters' own
     host_only: tuple = ()     # slotted parameters no kernel reads, kept for unpack (the editor)
     reads_as: dict = {}       # other types whose accessors the kernels apply to this type's rows
                               # (a coatedconductor's base is read as a roughconductor): {type:

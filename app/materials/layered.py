@@ -7,9 +7,10 @@ from dataclasses import replace
 
 import numpy as np
 
-from pathtrace.materials.bsdf import DELTA, BSDFType, Derived, Param, read_slot, write_slot
+from pathtrace.materials.bsdf import DELTA, BSDFType, Param
 from pathtrace.materials.conductor import METAL_PARAMS, RoughConductor, resolve_metal
 from pathtrace.materials.microfacet import GGX_PARAMS
+from pathtrace.slots import Slot, read_slot, write_slot
 
 MAX_WALK_DEPTH = 100      # maxdepth: events per random walk
 MAX_WALKS = 16            # nsamples: walks per estimate
@@ -96,9 +97,9 @@ class CoatedConductor(BSDFType):
     ) + _LAYER_PARAMS, conductor_alpha=_ROUGH["alpha"], conductor_alpha_v=_ROUGH["alpha_v"],
         interface_eta="table[0]", g="table[1]", maxdepth="table[2]", nsamples="table[3]", alpha="table[4]",
         alpha_v="table[5]", thickness="table[6]", albedo="table[7:10]")
-    derived = (Derived("specular_reflectance", _ROUGH["specular_reflectance"],
+    derived = (Slot("specular_reflectance", _ROUGH["specular_reflectance"],
                        "1: the base roughconductor's factor on its reflectance, none here"),
-               Derived("distribution", _ROUGH["distribution"], "0: the base is GGX's"))
+               Slot("distribution", _ROUGH["distribution"], "0: the base is GGX's"))
     doc = ("pbrt-v4's coatedconductor: a smooth or rough metal under a smooth or rough dielectric "
            "coating, light followed between them by random walks (Guo et al. 2018)")
     variant_defines = ("ANISOTROPIC",)

@@ -4,10 +4,11 @@ kernels/coating.cl reads for both."""
 
 import numpy as np
 
-from pathtrace.materials.bsdf import BSDFType, Derived, Param, read_slot, write_slot
+from pathtrace.materials.bsdf import BSDFType, Param
 from pathtrace.materials.dielectric import check_interface
 from pathtrace.materials.microfacet import DISTRIBUTION, GGX_PARAMS, check_distribution, rough_coating
 from pathtrace.materials.optics import IOR, diffuse_fresnel_reflectance
+from pathtrace.slots import Slot, read_slot, write_slot
 
 
 class Plastic(BSDFType):
@@ -28,10 +29,10 @@ class Plastic(BSDFType):
               doc="account for the colour shift of light bouncing inside the coating"),
     )
     derived = (
-        Derived("eta", "p0.w", "int_ior / ext_ior, the coating's relative IOR"),
-        Derived("f_int", "p1.w", "the coating's reflectance seen from inside, averaged over the base's "
+        Slot("eta", "p0.w", "int_ior / ext_ior, the coating's relative IOR"),
+        Slot("f_int", "p1.w", "the coating's reflectance seen from inside, averaged over the base's "
                                  "cosine-weighted light (pack_coating)"),
-        Derived("specular_share", "p2.x", "mean(specular_reflectance) / (mean(diffuse_reflectance) + "
+        Slot("specular_share", "p2.x", "mean(specular_reflectance) / (mean(diffuse_reflectance) + "
                                           "mean(specular_reflectance)), 1 where both are 0: the specular "
                                           "lobe's share in the lobe choice, as Mitsuba's plastics"),
     )
@@ -71,8 +72,8 @@ class RoughPlastic(Plastic):
                 {"diffuse_reflectance": [0.7, 0.3, 0.1], "alpha": 0.2, "distribution": "beckmann"})
     params = Plastic.params + GGX_PARAMS + (DISTRIBUTION,)
     derived = Plastic.derived + (
-        Derived("signed_alpha", "p2.w", "alpha, negated for Beckmann"),
-        Derived("transmittance", "table", "the rough coating's transmittance T(cos) from outside, at cos = "
+        Slot("signed_alpha", "p2.w", "alpha, negated for Beckmann"),
+        Slot("transmittance", "table", "the rough coating's transmittance T(cos) from outside, at cos = "
                                           "(k / 15)^2 (microfacet.py: rough_coating)"),
     )
     reads_as = {"plastic": {name: name for name in Plastic().slots()}}      # kernels/coating.cl

@@ -5,8 +5,9 @@ and metal, GGX transmission and a GTR1 clearcoat, each weighted by artist-friend
 
 import numpy as np
 
-from pathtrace.materials.bsdf import TRANSMISSIVE, BSDFType, Param, read_slot
+from pathtrace.materials.bsdf import TRANSMISSIVE, BSDFType, Param
 from pathtrace.textures.texture import Texture
+from pathtrace.slots import read_slot
 
 
 def _unit(name, default, slot, doc):

@@ -9,13 +9,14 @@ pdf, the pdf's normalisation, the sample weight, reciprocity, energy) by its reg
 
 from pathtrace.materials.basic import Black, Diffuse, Null, Phong
 from pathtrace.materials.blend import BlendBSDF
-from pathtrace.materials.bsdf import DELTA, slot_accessor
+from pathtrace.materials.bsdf import DELTA
 from pathtrace.materials.conductor import Conductor, RoughConductor
 from pathtrace.materials.dielectric import Dielectric, RoughDielectric, ThinDielectric
 from pathtrace.materials.diffusetransmission import DiffuseTransmission
 from pathtrace.materials.layered import CoatedConductor, CoatedDiffuse
 from pathtrace.materials.plastic import Plastic, RoughPlastic
 from pathtrace.materials.principled import Principled
+from pathtrace.slots import slot_accessor
 
 BSDFS = {cls.name: cls() for cls in (Black, Diffuse, Phong, Conductor, RoughConductor,
                                      Dielectric, RoughDielectric, ThinDielectric, Plastic,
