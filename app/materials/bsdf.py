@@ -27,7 +27,7 @@ class Param(Parameter):
     parameters); its range [low, high] (high None: unbounded); its names in the formats."""
     low: float = 0.0
     names: dict = None        # for "number": named values accepted too; for "name": the choices
-    slot: str = None          # where the kernels read it (SLOT_SYNTAX), through the accessor
+    slot: str = None          # where the kernels read it (app/slots.py), through the accessor
                               # <TYPE>_<NAME>(m) generated from it (registry.py: tag_source): a
                               # parameter with a slot in p0..p2 may be a texture, whose value at
                               # each hit goes there (kernels/shading.cl), unless `constant`
