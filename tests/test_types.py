@@ -219,3 +219,15 @@ def test_every_light_slot_is_read_by_its_kernel():
         code = code_of(KERNELS / "lights" / f"{name}.cl")
         for s in cls.slots:
             assert re.search(rf"\b{name.upper()}_LIGHT_{s.name.upper()}\(", code), (name, s.name)
+
+
+def test_combining_textures_name_their_inputs_by_the_generated_indices():
+    """A combining texture's kernel reads each input by <TYPE>_INPUT_<NAME>, its index in the
+    type's declaration (app/textures/registry.py: kernel_parts), never by a number, and reads
+    every one of them."""
+    from pathtrace.textures.registry import TEXTURES
+    for name, texture in TEXTURES.items():
+        code = code_of(KERNELS / "textures" / f"{name}.cl")
+        assert not re.search(r"eval_input\([^,]*,[^,]*,\s*\d", code), name
+        for input_name in texture.inputs:
+            assert f"{name.upper()}_INPUT_{input_name.upper()}" in code, (name, input_name)
