@@ -11,8 +11,6 @@ floats): "p0.xyz" (a colour) or "p1.w" or "p1.zw", "table[3]", "table[7:10]" (a 
 import re
 from dataclasses import dataclass
 
-import numpy as np
-
 SLOT_SYNTAX = re.compile(r"(p[012])\.([xyzw]+)|table(?:\[(\d+)(?::(\d+))?\])?")
 
 

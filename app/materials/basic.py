@@ -60,7 +60,7 @@ class Phong(BSDFType):
     # the lobes are chosen in the ratio max(rho_d) : max(rho_s), so that with Russian roulette
     # going on with max(rho_d) + max(rho_s) (continuation) every channel's weight stays <= 1
     derived = (Slot("diffuse_share", "p0.w", "max(rho_d) / (max(rho_d) + max(rho_s)), 1 where both are 0: "
-                       "the probability of sampling the diffuse lobe"),
+                    "the probability of sampling the diffuse lobe"),
                Slot("glossy_share", "p2.x", "1 - diffuse_share: the probability of sampling the glossy lobe"))
     doc = ("modified Phong (Lafortune & Willems 1994), f = rho_d / pi + rho_s (n + 2) / (2 pi) "
            "cos^n(alpha); rho_d + rho_s <= 1 in each channel")

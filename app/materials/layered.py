@@ -31,6 +31,8 @@ def in_slots(params: tuple, **slots) -> tuple:
     """params with the slots `slots` gives by name, constants the kernels read (the random walks
     need them as they are, not a texture's value)."""
     return tuple(replace(p, slot=slots[p.name], constant=True) if p.name in slots else p for p in params)
+
+
 _ALPHA = replace(GGX_PARAMS[0], default=0.0, low=0.0,
                  doc="the coating's GGX roughness (pbrt's roughness, remapped or not); 0: smooth")
 
@@ -98,7 +100,7 @@ class CoatedConductor(BSDFType):
         interface_eta="table[0]", g="table[1]", maxdepth="table[2]", nsamples="table[3]", alpha="table[4]",
         alpha_v="table[5]", thickness="table[6]", albedo="table[7:10]")
     derived = (Slot("specular_reflectance", _ROUGH["specular_reflectance"],
-                       "1: the base roughconductor's factor on its reflectance, none here"),
+                    "1: the base roughconductor's factor on its reflectance, none here"),
                Slot("distribution", _ROUGH["distribution"], "0: the base is GGX's"))
     doc = ("pbrt-v4's coatedconductor: a smooth or rough metal under a smooth or rough dielectric "
            "coating, light followed between them by random walks (Guo et al. 2018)")
@@ -130,4 +132,3 @@ class CoatedConductor(BSDFType):
         super().pack(values, rows)
         write_slot(rows, self.slots()["specular_reflectance"], 1.0)
         write_slot(rows, self.slots()["distribution"], 0.0)
-

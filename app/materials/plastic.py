@@ -31,10 +31,10 @@ class Plastic(BSDFType):
     derived = (
         Slot("eta", "p0.w", "int_ior / ext_ior, the coating's relative IOR"),
         Slot("f_int", "p1.w", "the coating's reflectance seen from inside, averaged over the base's "
-                                 "cosine-weighted light (pack_coating)"),
+                              "cosine-weighted light (pack_coating)"),
         Slot("specular_share", "p2.x", "mean(specular_reflectance) / (mean(diffuse_reflectance) + "
-                                          "mean(specular_reflectance)), 1 where both are 0: the specular "
-                                          "lobe's share in the lobe choice, as Mitsuba's plastics"),
+                                       "mean(specular_reflectance)), 1 where both are 0: the specular "
+                                       "lobe's share in the lobe choice, as Mitsuba's plastics"),
     )
     host_only = ("ext_ior",)      # with eta, int_ior for unpack; the kernels read eta
     doc = ("a diffuse base under a smooth dielectric coating: the coating's specular reflection "
@@ -74,7 +74,7 @@ class RoughPlastic(Plastic):
     derived = Plastic.derived + (
         Slot("signed_alpha", "p2.w", "alpha, negated for Beckmann"),
         Slot("transmittance", "table", "the rough coating's transmittance T(cos) from outside, at cos = "
-                                          "(k / 15)^2 (microfacet.py: rough_coating)"),
+                                      "(k / 15)^2 (microfacet.py: rough_coating)"),
     )
     reads_as = {"plastic": {name: name for name in Plastic().slots()}}      # kernels/coating.cl
     doc = ("a diffuse base under a rough (GGX or Beckmann) dielectric coating: the coating's glossy "
