@@ -1,7 +1,8 @@
 """The registry of material types: each type's tag, and the kernels' dispatch (eval_bsdf,
 pdf_bsdf, sample_bsdf) generated from it. Adding a material takes its kernel file
 (kernels/bsdfs/<name>.cl), its host BSDFType (its parameters with their names in the formats,
-app/parameters.py, packing, checks and examples) and its entry here; the readers read it through
+app/parameters.py, their slots and those it derives, which its kernel reads through the accessors
+tag_source generates, checks and examples) and its entry here; the readers read it through
 its declarations (pbrt-v4's materials that map onto several types are still mapped by hand, in
 app/scene/pbrt/materials.py). Its
 examples put it through tests/test_bsdfs.py (chi-square of its sampling against its
