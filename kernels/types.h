@@ -1,5 +1,5 @@
 /* Structs shared by the host and the kernels. Each one is mirrored, field for field, by a NumPy
- * dtype in app/types.py; tests/test_types.py checks sizes and offsets on the device.
+ * dtype in app/device/types.py; tests/test_types.py checks sizes and offsets on the device.
  * Only float4 and 4-byte scalars are used, so the layout is the same on every OpenCL device.
  *
  * Primitives have one index space, their BVH order: spheres are primitives [0, num_spheres),
@@ -108,11 +108,10 @@ typedef struct {
 typedef struct {
     float4 eye;        /* camera position */
     float4 forward;    /* unit view direction */
-    float4 right;      /* camera right, scaled by tan(vfov / 2) * aspect */
-    float4 up;         /* camera up, scaled by tan(vfov / 2) */
+    float4 right;      /* the image's right and up, as the camera type scales them */
+    float4 up;         /* (app/cameras/: Camera.basis; kernels/cameras/<name>.cl) */
     float4 env_scale;  /* environment radiance multiplier (rgb) */
-    float4 lens;       /* the camera's: x its aperture radius (0: a pinhole), y the distance to
-                          the plane in focus (kernels/cameras/) */
+    float4 lens;       /* what else the camera type reads (app/cameras/: Camera.lens) */
     float4 filter;     /* the pixel filter's parameters (kernels/filters/<name>.cl) */
     int width;         /* image size in pixels */
     int height;
@@ -130,9 +129,9 @@ typedef struct {
     int row_start;       /* the launch covers image rows [row_start, row_end): a band of a pass */
     int row_end;
     int camera_medium;   /* the medium the camera is in (a row of the media table), or -1 */
-    /* What a GENERIC program (app/features.py: Features.generic_program) chooses at run time, and a
+    /* What a GENERIC program (app/device/features.py: Features.generic_program) chooses at run time, and a
        scene's program by build options: */
-    int camera_type;     /* the camera's kernel (app/camera.py: CAMERA_KERNELS index) */
+    int camera_type;     /* the camera's kernel (app/cameras/registry.py: KERNELS index) */
     int filter_type;     /* the pixel filter (app/filters.py: FILTERS index) */
     int rr_rule;         /* Russian roulette's rule (RR_OFF, RR_ALBEDO, RR_THROUGHPUT) */
     int layout;          /* the compiled scene's LAYOUT_* bits (kernels/scene.cl) */
@@ -140,7 +139,7 @@ typedef struct {
 
 /* One entry of the light table: a light of type `type` (the LIGHT_* tags of
  * app/lights/registry.py) whose values lie in p0..p2 in the slots its host declares, read
- * through the accessors <NAME>_LIGHT_<SLOT>(l) generated from them (app/slots.py); an area light names its emissive primitive (`prim`, else -1). Lights are chosen in
+ * through the accessors <NAME>_LIGHT_<SLOT>(l) generated from them (app/device/slots.py); an area light names its emissive primitive (`prim`, else -1). Lights are chosen in
  * proportion to power through Walker's alias method (Vose's construction): entry i is kept when
  * a uniform 32-bit word is below `keep` (a probability times 2^32), else its `alias` is taken.
  * `pick` is the overall probability of choosing this light. */

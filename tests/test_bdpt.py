@@ -8,10 +8,11 @@ import numpy as np
 import pyopencl as cl
 import pytest
 
-from pathtrace.device import build_program
+from pathtrace.cameras import CAMERAS
+from pathtrace.device.opencl import build_program
 from pathtrace.errors import UserError
 from pathtrace.filters import PixelFilter
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 from pathtrace.scene.toml_reader import read_scene_dict
 from tests.conftest import ROOT
@@ -99,7 +100,7 @@ def cbox_thinlens():
     """The Cornell box through a thin lens focused before the back wall: light tracing joins each
     vertex to a point of the aperture."""
     scene = cbox()
-    camera = replace(scene.camera, aperture=0.15, focus_distance=3.0)
+    camera = scene.camera.as_type("thinlens", aperture_radius=0.15, focus_distance=3.0)
     return replace(scene, camera=camera)
 
 
@@ -292,8 +293,18 @@ def test_a_scene_with_a_medium_is_one_line_for_bdpt(backend):
         Renderer(backend, scene, 8, 8)
 
 
+@pytest.mark.parametrize("kind", [name for name, cls in CAMERAS.items() if not cls.importance])
+def test_a_camera_without_importance_is_one_line_for_bdpt(backend, kind):
+    """A camera type whose kernel cannot join light subpaths to its lens (app/cameras/:
+    Camera.importance) is refused in one line, not rendered wrong."""
+    scene = cbox()
+    scene = replace(scene, camera=scene.camera.as_type(kind)).with_settings(integrator="bdpt")
+    with pytest.raises(UserError, match=f"integrator bdpt: the {kind} camera has no importance"):
+        Renderer(backend, scene, 8, 8)
+
+
 def test_the_path_tracers_program_compiles_nothing_of_bdpt(backend):
-    from pathtrace.device import kernel_source
+    from pathtrace.device.opencl import kernel_source
     scene = cbox()
     r = Renderer(backend, scene, 8, 8)
     features = r.compiled.features(r.settings, r.camera)
@@ -384,9 +395,9 @@ def test_splats_of_samples_split_by_index_and_rows_add_up(backend):
 
 def test_two_devices_splat_the_one_device_image(backend):
     """One device split twice (two contexts and queues): the merged sums of a BDPT render equal
-    a one-device render of the same samples (pathtrace.multidevice), splats included."""
-    from pathtrace.device import open_device
-    from pathtrace.multidevice import DeviceGroup
+    a one-device render of the same samples (pathtrace.rendering.multidevice), splats included."""
+    from pathtrace.device.opencl import open_device
+    from pathtrace.rendering.multidevice import DeviceGroup
     scene = cbox().with_settings(integrator="bdpt", width=16, height=16)
     second = open_device(backend.device)
     group = DeviceGroup([backend, second], scene)

@@ -1,15 +1,15 @@
 """The denoiser's auxiliary images (kernels/aovs.cl) against closed forms, and Intel Open Image
-Denoise on them (app/denoiser.py): its error against a converged reference at 4 samples per
+Denoise on them (app/io/denoiser.py): its error against a converged reference at 4 samples per
 pixel, and no bias at many."""
 
 import numpy as np
 import pytest
 
-from pathtrace.camera import Camera
-from pathtrace.denoiser import Denoiser
-from pathtrace.environment import Environment
+from pathtrace.cameras import PerspectiveCamera
+from pathtrace.io.denoiser import Denoiser
+from pathtrace.scene.environment import Environment
 from pathtrace.materials import Material
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import Mesh, RenderSettings, SceneBuilder, diffuse, load_scene
 
 QUAD = np.array([[0, 1, 2], [0, 2, 3]], np.int32)
@@ -53,7 +53,7 @@ def test_albedo_normal_and_depth_of_a_diffuse_plane_and_a_sphere(backend):
     b.add_mesh(Mesh("floor", floor, QUAD, None, b.material(diffuse(FLOOR_RHO))))
     centre, radius = np.array([0.0, 1.0, 0.0]), 1.0
     b.add_sphere(centre, radius, diffuse(SPHERE_RHO))
-    camera = Camera(np.array([0.0, 1.6, 4.0]), np.array([0.0, 0.6, 0.0]), np.array([0.0, 1.0, 0.0]), 50.0)
+    camera = PerspectiveCamera(np.array([0.0, 1.6, 4.0]), np.array([0.0, 0.6, 0.0]), np.array([0.0, 1.0, 0.0]), 50.0)
     w, h = 48, 32
     scene = b.build("aovs", camera=camera, environment=Environment.constant((SKY, SKY, SKY)),
                     settings=RenderSettings(width=w, height=h))
@@ -104,7 +104,7 @@ def test_through_a_mirror_the_next_surface_counts(backend):
     ceiling = floor[::-1] + np.array([0, 6, 0], np.float32)        # facing down
     b.add_mesh(Mesh("mirror", floor, QUAD, None, b.material(mirror)))
     b.add_mesh(Mesh("ceiling", np.ascontiguousarray(ceiling), QUAD, None, b.material(diffuse(SPHERE_RHO))))
-    camera = Camera(np.array([0.0, 2.0, 0.0]), np.array([0.0, 0.0, -1.0]), np.array([0.0, 1.0, 0.0]), 60.0)
+    camera = PerspectiveCamera(np.array([0.0, 2.0, 0.0]), np.array([0.0, 0.0, -1.0]), np.array([0.0, 1.0, 0.0]), 60.0)
     scene = b.build("mirror", camera=camera, environment=Environment.constant((0, 0, 0)),
                     settings=RenderSettings(width=24, height=16))
     r = Renderer(backend, scene)

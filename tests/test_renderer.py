@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from pathtrace.camera import Camera
-from pathtrace.environment import Environment
-from pathtrace.renderer import Renderer
+from pathtrace.cameras import PerspectiveCamera
+from pathtrace.scene.environment import Environment
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import RenderSettings, SceneBuilder, diffuse, load_scene
 from pathtrace.scene.builtin import BUILTIN_SCENES
 from tests.stats import z_test
@@ -82,7 +82,7 @@ def test_nan_samples_are_left_out_and_counted(backend):
 
 
 def test_the_command_line_reports_nan_samples(monkeypatch, tmp_path, capsys):
-    from pathtrace import cli
+    import pathtrace.cli.main as cli
     import pathtrace.scene
     monkeypatch.setattr(pathtrace.scene, "load_scene", lambda name: poisoned_simple())
     assert cli.main(["render", "simple", "-o", str(tmp_path / "a.png"), "--size", "16x9", "--spp", "2", "-q"]) == 0
@@ -97,7 +97,7 @@ def test_an_environment_edit_updates_the_light_choice(backend):
     b = SceneBuilder()
     b.add_sphere((0, 0, 0), 1.0, diffuse(0.5))
     b.add_sphere((0, 4, 0), 0.5, emitter(10.0))
-    scene = b.build("lights", camera=Camera([0, 0, 5], [0, 0, 0], [0, 1, 0], 40.0),
+    scene = b.build("lights", camera=PerspectiveCamera([0, 0, 5], [0, 0, 0], [0, 1, 0], 40.0),
                     environment=Environment.constant((1, 1, 1), intensity=0.0),
                     settings=RenderSettings(width=16, height=16))
     r = Renderer(backend, scene)
@@ -118,7 +118,7 @@ def test_sums_stay_exact_over_millions_of_samples(backend):
     rays traced exact. (The launches, 65,536 of one pixel, are what this test's time goes on.)"""
     b = SceneBuilder()
     b.add_sphere((0, 0, 10), 1.0, diffuse(0.5))              # behind the camera
-    scene = b.build("sky", camera=Camera([0, 0, 0], [0, 0, -1], [0, 1, 0], 1.0),
+    scene = b.build("sky", camera=PerspectiveCamera([0, 0, 0], [0, 0, -1], [0, 1, 0], 1.0),
                     environment=Environment.constant((0.1, 0.1, 0.1)),
                     settings=RenderSettings(width=1, height=1, nee=False))
     r = Renderer(backend, scene)

@@ -1,4 +1,4 @@
-"""The NumPy dtypes of app/types.py match the device's layout of kernels/types.h, field by field
+"""The NumPy dtypes of app/device/types.py match the device's layout of kernels/types.h, field by field
 (so that swapped fields of equal size are caught too)."""
 
 import re
@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pathtrace.types import (BVH_NODE, INSTANCE, LIGHT, LIGHT_NODE, MATERIAL, MEDIUM, PATH_RECORD, RENDER_PARAMS,
+from pathtrace.device.types import (BVH_NODE, INSTANCE, LIGHT, LIGHT_NODE, MATERIAL, MEDIUM, PATH_RECORD, RENDER_PARAMS,
                              TEXTURE, TEXTURE_BINDING, TRIANGLE)
 
 STRUCTS = {
@@ -85,7 +85,7 @@ def each_slot():
 def test_each_material_types_slots_are_distinct_floats_of_its_kind():
     """A parameter's slot holds its kind (a colour 3 floats, a number or bool 1), a textured
     one lies in p0..p2 (where the texture bindings write), and no two slots of a type overlap."""
-    from pathtrace.slots import slot_floats
+    from pathtrace.device.slots import slot_floats
     taken = {}
     for name, _, slot_name, slot, p in each_slot():
         floats = slot_floats(slot)
@@ -110,7 +110,7 @@ def test_pack_writes_each_slotted_parameter_where_its_slot_says():
     """A texture's value is written into the slot at each hit (kernels/shading.cl), so pack must
     put the constant there too, as it is: the slot is the parameter's one place."""
     from pathtrace.materials import BSDFS
-    from pathtrace.slots import slot_floats
+    from pathtrace.device.slots import slot_floats
     from pathtrace.textures.texture import Texture
     for name, bsdf in BSDFS.items():
         for example in bsdf.__class__.__dict__.get("examples", ()):
@@ -128,7 +128,7 @@ def test_pack_writes_the_declared_slots_and_no_others():
     declares (a derived slot that the table writes, a blend's rows, excepted): a slot pack()
     writes by hand without declaring it is caught, and so is a declared one it forgets."""
     from pathtrace.materials import BSDFS
-    from pathtrace.slots import slot_floats
+    from pathtrace.device.slots import slot_floats
     for name, bsdf in BSDFS.items():
         declared = {f for n, _, _, slot, p in each_slot() if n == name and getattr(p, "packed", True)
                     for f in slot_floats(slot)}
@@ -197,7 +197,7 @@ def example_lights():
 def test_each_light_types_slots_are_distinct_floats_of_p0_to_p2_that_pack_writes_alone():
     """Rows filled with NaN: after pack, the floats no longer NaN are exactly those of the
     declared slots, which do not overlap; one named after a field holds its value."""
-    from pathtrace.slots import read_slot, slot_floats
+    from pathtrace.device.slots import read_slot, slot_floats
     from pathtrace.types import LIGHT
     for name, light in example_lights():
         floats = [f for s in light.slots for f in slot_floats(s.slot)]

@@ -9,7 +9,7 @@ import numpy as np
 
 from pathtrace.lights.light import PBRT_SCALE, DeltaLight, check_color, check_direction, luminance
 from pathtrace.parameters import FRAME, Parameter
-from pathtrace.slots import Slot
+from pathtrace.device.slots import Slot
 
 
 def _pbrt_irradiance(value, given):

@@ -18,7 +18,7 @@ from pathtrace.lights.light import (PBRT_POWER, PBRT_SCALE, DeltaLight, check_co
                                     luminance, pbrt_scaled)
 from pathtrace.parameters import Parameter
 from pathtrace.resources import resource_dir
-from pathtrace.slots import Slot, write_slot
+from pathtrace.device.slots import Slot, write_slot
 from pathtrace.textures import TEXTURES, Image, Texture
 
 

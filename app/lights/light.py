@@ -3,7 +3,7 @@ environment come from the materials and the environment; the others are delta li
 file names one by one (point, spot, directional), each a dataclass here with its parameters
 declared once (app/parameters.py: their names in TOML, Mitsuba 3 and pbrt-v4, conversions and
 defaults), its checks, its power (by which next-event estimation chooses it) and its slots in the
-LIGHT struct (app/slots.py), which its kernel file kernels/lights/<name>.cl reads through the
+LIGHT struct (app/device/slots.py), which its kernel file kernels/lights/<name>.cl reads through the
 accessors <NAME>_LIGHT_<SLOT>(l) generated from them (app/lights/registry.py: kernel_parts)."""
 
 import dataclasses
@@ -11,9 +11,9 @@ import math
 
 import numpy as np
 
-from pathtrace.environment import LUMINANCE
 from pathtrace.parameters import Parameter
-from pathtrace.slots import write_slot
+from pathtrace.scene.environment import LUMINANCE
+from pathtrace.device.slots import write_slot
 
 
 class DeltaLight:
@@ -22,7 +22,7 @@ class DeltaLight:
     name: str
     parameters: tuple       # its Parameters (app/parameters.py), in the order scene files list them
     fields: tuple           # those of pathtrace's that are its dataclass fields (set from parameters)
-    slots: tuple = ()       # its Slots (app/slots.py) in LIGHT's p0..p2: where its kernel reads
+    slots: tuple = ()       # its Slots (app/device/slots.py) in LIGHT's p0..p2: where its kernel reads
                             # each value; one named after a field holds that field's value
     formats: dict = {}      # its names in the other formats: {"mitsuba": name, "pbrt": name}
     unsupported: dict = {}  # {format: {name: why}}: what a format's light has and pathtrace has

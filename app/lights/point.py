@@ -8,7 +8,7 @@ import numpy as np
 
 from pathtrace.lights.light import PBRT_POWER, PBRT_SCALE, DeltaLight, check_color, check_point, luminance, pbrt_scaled
 from pathtrace.parameters import FRAME, Parameter
-from pathtrace.slots import Slot
+from pathtrace.device.slots import Slot
 
 
 @dataclass

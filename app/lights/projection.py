@@ -14,11 +14,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pathtrace.environment import LUMINANCE
+from pathtrace.scene.environment import LUMINANCE
 from pathtrace.lights.light import PBRT_POWER, DeltaLight, check_point, frame_quaternion
 from pathtrace.parameters import Parameter
 from pathtrace.resources import resource_dir
-from pathtrace.slots import Slot, write_slot
+from pathtrace.device.slots import Slot, write_slot
 from pathtrace.textures import TEXTURES, Image, Texture
 
 HITHER = 1e-3       # pbrt-v4's ProjectionLight: no light at w.z below it

@@ -12,7 +12,7 @@ import numpy as np
 from pathtrace.lights.light import (PBRT_POWER, PBRT_SCALE, DeltaLight, check_angle, check_color, check_direction,
                                     check_point, luminance, pbrt_scaled)
 from pathtrace.parameters import FRAME, Parameter
-from pathtrace.slots import Slot, write_slot
+from pathtrace.device.slots import Slot, write_slot
 
 FALLOFFS = ("linear", "smoothstep")
 

@@ -4,7 +4,7 @@ null, no surface at all."""
 import numpy as np
 
 from pathtrace.materials.bsdf import NULL, BSDFType, Param, check_sum_at_most_one
-from pathtrace.slots import Slot, read_slot, write_slot
+from pathtrace.device.slots import Slot, read_slot, write_slot
 
 
 class Black(BSDFType):

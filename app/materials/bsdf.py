@@ -1,14 +1,14 @@
 """The interface every material type implements on the host: its parameters (Mitsuba 3's names
 where Mitsuba has the material), their checks, and how they pack into the MATERIAL struct that
 its kernel file kernels/bsdfs/<name>.cl reads, through accessors generated from the slots its
-parameters and derived values declare (Param.slot, BSDFType.derived; app/slots.py)."""
+parameters and derived values declare (Param.slot, BSDFType.derived; app/device/slots.py)."""
 
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from pathtrace.parameters import Parameter
-from pathtrace.slots import read_slot, write_slot
+from pathtrace.device.slots import read_slot, write_slot
 from pathtrace.textures.texture import Texture
 
 # MATERIAL.flags bits, as kernels/types.h defines them
@@ -27,7 +27,7 @@ class Param(Parameter):
     parameters); its range [low, high] (high None: unbounded); its names in the formats."""
     low: float = 0.0
     names: dict = None        # for "number": named values accepted too; for "name": the choices
-    slot: str = None          # where the kernels read it (app/slots.py), through the accessor
+    slot: str = None          # where the kernels read it (app/device/slots.py), through the accessor
                               # <TYPE>_<NAME>(m) generated from it (registry.py: tag_source): a
                               # parameter with a slot in p0..p2 may be a texture, whose value at
                               # each hit goes there (kernels/shading.cl), unless `constant`

@@ -8,7 +8,7 @@ import numpy as np
 from pathtrace.materials.bsdf import DELTA, BSDFType, Param
 from pathtrace.materials.microfacet import DISTRIBUTION, AnisotropicRoughness, anisotropic_params, check_distribution
 from pathtrace.materials.optics import CONDUCTORS
-from pathtrace.slots import read_slot
+from pathtrace.device.slots import read_slot
 
 _CONDUCTOR_PARAMS = (
     Param("material", "name", default="none", names=CONDUCTORS,

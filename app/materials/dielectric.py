@@ -9,7 +9,7 @@ import numpy as np
 from pathtrace.materials.bsdf import DELTA, TRANSMISSIVE, BSDFType, Param
 from pathtrace.materials.microfacet import DISTRIBUTION, AnisotropicRoughness, anisotropic_params, check_distribution
 from pathtrace.materials.optics import IOR
-from pathtrace.slots import read_slot
+from pathtrace.device.slots import read_slot
 
 def check_interface(values) -> str | None:
     """The two IORs of an interface (glass, a plastic's coating) must differ."""

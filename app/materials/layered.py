@@ -10,7 +10,7 @@ import numpy as np
 from pathtrace.materials.bsdf import DELTA, BSDFType, Param
 from pathtrace.materials.conductor import METAL_PARAMS, RoughConductor, resolve_metal
 from pathtrace.materials.microfacet import GGX_PARAMS
-from pathtrace.slots import Slot, read_slot, write_slot
+from pathtrace.device.slots import Slot, read_slot, write_slot
 
 MAX_WALK_DEPTH = 100      # maxdepth: events per random walk
 MAX_WALKS = 16            # nsamples: walks per estimate

@@ -8,7 +8,7 @@ from pathtrace.materials.bsdf import BSDFType, Param
 from pathtrace.materials.dielectric import check_interface
 from pathtrace.materials.microfacet import DISTRIBUTION, GGX_PARAMS, check_distribution, rough_coating
 from pathtrace.materials.optics import IOR, diffuse_fresnel_reflectance
-from pathtrace.slots import Slot, read_slot, write_slot
+from pathtrace.device.slots import Slot, read_slot, write_slot
 
 
 class Plastic(BSDFType):

@@ -7,7 +7,7 @@ import numpy as np
 
 from pathtrace.materials.bsdf import TRANSMISSIVE, BSDFType, Param
 from pathtrace.textures.texture import Texture
-from pathtrace.slots import read_slot
+from pathtrace.device.slots import read_slot
 
 
 def _unit(name, default, slot, doc):

@@ -17,7 +17,7 @@ from pathtrace.materials.diffusetransmission import DiffuseTransmission
 from pathtrace.materials.layered import CoatedConductor, CoatedDiffuse
 from pathtrace.materials.plastic import Plastic, RoughPlastic
 from pathtrace.materials.principled import Principled
-from pathtrace.slots import slot_accessor
+from pathtrace.device.slots import slot_accessor
 
 BSDFS = {cls.name: cls() for cls in (Black, Diffuse, Phong, Conductor, RoughConductor,
                                      Dielectric, RoughDielectric, ThinDielectric, Plastic,
