@@ -198,7 +198,6 @@ def test_each_light_types_slots_are_distinct_floats_of_p0_to_p2_that_pack_writes
     """Rows filled with NaN: after pack, the floats no longer NaN are exactly those of the
     declared slots, which do not overlap; one named after a field holds its value."""
     from pathtrace.device.slots import read_slot, slot_floats
-    from pathtrace.types import LIGHT
     for name, light in example_lights():
         floats = [f for s in light.slots for f in slot_floats(s.slot)]
         assert len(floats) == len(set(floats)) and max(floats) < 12, name
