@@ -28,8 +28,9 @@
 
 typedef struct {
     Interface top;       /* the coating */
-    int metal;           /* the base: 1 the metal of `base`, a roughconductor's row (alpha 0: a
-                            mirror), 0 Lambertian of reflectance `rho` */
+    int metal;           /* the base: 1 the metal of `base`, a coatedconductor's row read as a
+                            roughconductor's (conductor_alpha 0: a mirror), 0 Lambertian of
+                            reflectance `rho` */
     MaterialRef base;
     float3 rho;
     float3 albedo;       /* the layer's single-scattering albedo (0: it only absorbs) */
@@ -43,7 +44,7 @@ typedef struct {
  * the coating, its eta and k relative to the coating's IOR (eval_rough_metal) */
 int base_is_delta(const Layers *l)
 {
-    return l->metal && l->base->p0.w == 0.0f;
+    return l->metal && COATEDCONDUCTOR_CONDUCTOR_ALPHA(l->base) == 0.0f;
 }
 
 float3 eval_base(const Layers *l, float3 wo, float3 wi)
@@ -64,7 +65,7 @@ int sample_base(const Layers *l, float3 wo, float2 u, BSDFSample *s)
 {
     if (base_is_delta(l)) {                     /* a mirror */
         s->wi = reflect_local(wo);
-        s->weight = fresnel_conductor(wo.z, l->base->p0.xyz / l->top.eta, l->base->p1.xyz / l->top.eta);
+        s->weight = fresnel_conductor(wo.z, COATEDCONDUCTOR_ETA(l->base) / l->top.eta, COATEDCONDUCTOR_K(l->base) / l->top.eta);
         s->pdf = 1.0f;
         s->eta = 1.0f;
         s->lobe = LOBE_REFLECTION | LOBE_DELTA;

@@ -23,8 +23,10 @@ typedef struct {
 } Triangle;
 
 /* A material: a BSDF chosen by `type` (the BSDF_* tags of kernels/bsdf.cl) with up to twelve
- * parameters in p0..p2 (and a table, for those that tabulate one), whose meaning each
- * kernels/bsdfs/ file documents at its top, and the radiance its surface emits. Parameters that
+ * parameters in p0..p2 (and a table, for those that tabulate one or need more), which the
+ * kernels read through the accessors <TYPE>_<NAME>(m) generated from the slots each type
+ * declares on the host (app/materials/registry.py: tag_source), and the radiance its surface
+ * emits. Parameters that
  * a texture gives are looked up at each hit (kernels/texture.cl: shade_material) and written
  * over their slots; the slots hold their mean, from which the host derives what the BSDF needs
  * as a constant (lobe choices, the light's power). */
@@ -37,8 +39,8 @@ typedef struct {
     int flags;            /* MATERIAL_* bits */
     float continuation;   /* the report's Russian roulette: probability of going on from here */
     int textures;         /* its first row of the texture bindings, or -1: none */
-    float table[16];      /* a function of cos(theta) that a BSDF tabulates on the host, at
-                             cos = (k / 15)^2 (app/materials/microfacet.py; lookup_cos_table) */
+    float table[16];      /* more of the BSDF's slots: parameters that p0..p2 have no room
+                             for, or a function of cos(theta) tabulated on the host */
 } Material;
 
 #define MATERIAL_TWOSIDED 1      /* the same BSDF on both sides (front-side frame mirrored) */
@@ -136,8 +138,8 @@ typedef struct {
 } RenderParams;
 
 /* One entry of the light table: a light of type `type` (the LIGHT_* tags of
- * app/lights/registry.py) whose parameters p0..p2 each kernels/lights/ file documents at its
- * top; an area light names its emissive primitive (`prim`, else -1). Lights are chosen in
+ * app/lights/registry.py) whose values lie in p0..p2 in the slots its host declares, read
+ * through the accessors <NAME>_LIGHT_<SLOT>(l) generated from them (app/device/slots.py); an area light names its emissive primitive (`prim`, else -1). Lights are chosen in
  * proportion to power through Walker's alias method (Vose's construction): entry i is kept when
  * a uniform 32-bit word is below `keep` (a probability times 2^32), else its `alias` is taken.
  * `pick` is the overall probability of choosing this light. */

@@ -100,7 +100,7 @@ def textures(draw, depth=0):
 
 def param_values(param):
     """Valid values of one material parameter, as its Param declares them (app/materials/bsdf.py);
-    one with a slot now and then a texture."""
+    one that a texture may give (Param.texture) now and then a texture."""
     if param.kind == "bool":
         return st.booleans()
     if param.kind == "name":
@@ -112,7 +112,7 @@ def param_values(param):
     else:
         values = st.floats(max(param.low, 1e-3), high)
         values = st.one_of(values, st.sampled_from(sorted(param.names))) if param.names else values
-    if param.slot:
+    if param.texture:
         return st.integers(0, 5).flatmap(lambda k: textures() if k == 0 else values)
     return values
 

@@ -1,4 +1,5 @@
 """The device program and its assembly: OpenCL devices and the kernels' build with its binary
 cache (opencl.py), what a scene needs of the kernels (features.py), the generic and the
-specialised programs (programs.py), NVIDIA register caps (occupancy.py), and the NumPy mirrors
-of kernels/types.h (types.py)."""
+specialised programs (programs.py), NVIDIA register caps (occupancy.py), the NumPy mirrors
+of kernels/types.h (types.py), and where each type's values lie in the packed material and light
+rows, from which the kernels' accessors are generated (slots.py)."""

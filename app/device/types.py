@@ -12,7 +12,7 @@ TRIANGLE = np.dtype([
 ])
 
 MATERIAL = np.dtype([
-    ("p0", np.float32, 4),          # the BSDF's parameters (kernels/bsdfs/<type>.cl)
+    ("p0", np.float32, 4),          # the BSDF's parameters, in the slots its type declares
     ("p1", np.float32, 4),
     ("p2", np.float32, 4),
     ("emission", np.float32, 4),    # Le rgb
@@ -20,7 +20,7 @@ MATERIAL = np.dtype([
     ("flags", np.int32),            # MATERIAL_* bits
     ("continuation", np.float32),   # the report's Russian roulette: probability of going on
     ("textures", np.int32),         # first row of its TEXTURE_BINDINGs, or -1
-    ("table", np.float32, 16),      # a function of cos(theta) a BSDF tabulates on the host
+    ("table", np.float32, 16),      # more of the BSDF's slots (a tabulated function among them)
 ])
 
 TEXTURE_BINDING = np.dtype([
@@ -93,7 +93,7 @@ LIGHT = np.dtype([
     ("type", np.int32),             # LIGHT_* tag (app/lights/registry.py)
     ("prim", np.int32),             # an area light's primitive, else -1
     ("pad", np.int32, 3),
-    ("p0", np.float32, 4),          # the type's parameters (kernels/lights/<type>.cl)
+    ("p0", np.float32, 4),          # the type's values, in the slots it declares (app/lights/)
     ("p1", np.float32, 4),
     ("p2", np.float32, 4),
 ])

@@ -9,6 +9,7 @@ import numpy as np
 
 from pathtrace.lights.light import PBRT_SCALE, DeltaLight, check_color, check_direction, luminance
 from pathtrace.parameters import FRAME, Parameter
+from pathtrace.device.slots import Slot
 
 
 def _pbrt_irradiance(value, given):
@@ -33,6 +34,8 @@ class DirectionalLight(DeltaLight):
         PBRT_SCALE,
         Parameter(None, "number", pbrt="illuminance", pbrt_default=-1.0,
                   doc="the illuminance (lux) the light is scaled to, where positive"))
+    slots = (Slot("direction", "p0.xyz", "the unit direction the light travels"),
+             Slot("irradiance", "p1.xyz", "irradiance E, W/m^2, on a surface facing it"))
     examples = ({"direction": [1.0, -2.0, 0.5], "irradiance": [3.0, 2.5, 1.0]},)
 
     def check(self):

@@ -18,6 +18,7 @@ from pathtrace.lights.light import (PBRT_POWER, PBRT_SCALE, DeltaLight, check_co
                                     luminance, pbrt_scaled)
 from pathtrace.parameters import Parameter
 from pathtrace.resources import resource_dir
+from pathtrace.device.slots import Slot, write_slot
 from pathtrace.textures import TEXTURES, Image, Texture
 
 
@@ -46,6 +47,9 @@ class GoniometricLight(DeltaLight):
         Parameter("image", "image", doc="a square equal-area map of directions (its channels' mean)",
                   pbrt="filename"),
         PBRT_SCALE, PBRT_POWER)
+    slots = (Slot("position", "p0.xyz", "where it is"), Slot("map", "p0.w", "the image's row of the texture table"),
+             Slot("intensity", "p1.xyz", "radiant intensity I where the image is 1"),
+             Slot("rotation", "p2.xyzw", "the rotation from the light's space to the world's, a unit quaternion"))
     examples = ({"position": [0.1, 1.2, -0.2], "intensity": [3.0, 2.0, 1.0], "up": [0.3, -1.0, 0.2],
                  "image": str(resource_dir("assets") / "textures" / "tiles.png")},)
 
@@ -69,10 +73,9 @@ class GoniometricLight(DeltaLight):
         return [self.map]
 
     def pack(self, row, texture_rows):
-        row["p0"][:3] = self.position
-        row["p0"][3] = texture_rows[id(self.map)]
-        row["p1"][:3] = self.intensity
-        row["p2"][:] = self.rotation
+        super().pack(row, texture_rows)
+        write_slot(row, self.slot_of("map"), texture_rows[id(self.map)])
+        write_slot(row, self.slot_of("rotation"), self.rotation)
 
     def tree_bounds(self):
         """Bounded as an isotropic point light (pbrt-v4's GoniometricLight::Bounds)."""

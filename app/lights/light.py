@@ -2,9 +2,9 @@
 environment come from the materials and the environment; the others are delta lights a scene
 file names one by one (point, spot, directional), each a dataclass here with its parameters
 declared once (app/parameters.py: their names in TOML, Mitsuba 3 and pbrt-v4, conversions and
-defaults), its checks, its power (by which next-event estimation chooses it) and how it packs into
-the LIGHT struct that its kernel file kernels/lights/<name>.cl reads (which documents the packed
-layout at its top)."""
+defaults), its checks, its power (by which next-event estimation chooses it) and its slots in the
+LIGHT struct (app/device/slots.py), which its kernel file kernels/lights/<name>.cl reads through the
+accessors <NAME>_LIGHT_<SLOT>(l) generated from them (app/lights/registry.py: kernel_parts)."""
 
 import dataclasses
 import math
@@ -13,6 +13,7 @@ import numpy as np
 
 from pathtrace.parameters import Parameter
 from pathtrace.scene.environment import LUMINANCE
+from pathtrace.device.slots import write_slot
 
 
 class DeltaLight:
@@ -21,6 +22,8 @@ class DeltaLight:
     name: str
     parameters: tuple       # its Parameters (app/parameters.py), in the order scene files list them
     fields: tuple           # those of pathtrace's that are its dataclass fields (set from parameters)
+    slots: tuple = ()       # its Slots (app/device/slots.py) in LIGHT's p0..p2: where its kernel reads
+                            # each value; one named after a field holds that field's value
     formats: dict = {}      # its names in the other formats: {"mitsuba": name, "pbrt": name}
     unsupported: dict = {}  # {format: {name: why}}: what a format's light has and pathtrace has
                             # not, warned of where a file gives it
@@ -62,11 +65,17 @@ class DeltaLight:
         return []
 
     def pack(self, row: np.ndarray, texture_rows: dict):
-        """Fills a LIGHT row's parameters: by default its fields' values, in order, into p0.xyz,
-        p1.xyz, ... (a type whose layout differs says so); texture_rows: {id(texture): its row of
-        the texture table} of its textures()."""
-        for k, name in enumerate(self.fields):
-            row[f"p{k}"][:3] = getattr(self, name)
+        """Fills a LIGHT row's slots: by default each field's value into the slot named after
+        it (a type with slots of other values writes those too); texture_rows: {id(texture):
+        its row of the texture table} of its textures()."""
+        for slot in self.slots:
+            if slot.name in self.fields:
+                write_slot(row, slot.slot, getattr(self, slot.name))
+
+    @classmethod
+    def slot_of(cls, name: str) -> str:
+        """The slot of one of its Slots, by name."""
+        return next(s.slot for s in cls.slots if s.name == name)
 
     def tree_bounds(self):
         """Where and which way it shines, for the light tree (app/lights/tree.py): (point, cone

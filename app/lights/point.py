@@ -8,6 +8,7 @@ import numpy as np
 
 from pathtrace.lights.light import PBRT_POWER, PBRT_SCALE, DeltaLight, check_color, check_point, luminance, pbrt_scaled
 from pathtrace.parameters import FRAME, Parameter
+from pathtrace.device.slots import Slot
 
 
 @dataclass
@@ -23,6 +24,7 @@ class PointLight(DeltaLight):
                   mitsuba="intensity", mitsuba_default=1.0, pbrt="I", pbrt_default=1.0,
                   from_pbrt=pbrt_scaled(lambda given: 4 * math.pi)),
         PBRT_SCALE, PBRT_POWER)
+    slots = (Slot("position", "p0.xyz", "where it is"), Slot("intensity", "p1.xyz", "radiant intensity I, W/sr"))
     examples = ({"position": [0.3, 1.0, -0.2], "intensity": [3.0, 2.0, 1.0]},)
 
     def check(self):

@@ -18,6 +18,7 @@ from pathtrace.scene.environment import LUMINANCE
 from pathtrace.lights.light import PBRT_POWER, DeltaLight, check_point, frame_quaternion
 from pathtrace.parameters import Parameter
 from pathtrace.resources import resource_dir
+from pathtrace.device.slots import Slot, write_slot
 from pathtrace.textures import TEXTURES, Image, Texture
 
 HITHER = 1e-3       # pbrt-v4's ProjectionLight: no light at w.z below it
@@ -69,6 +70,10 @@ class ProjectionLight(DeltaLight):
         Parameter("scale", "number", 1.0, low=0.0, doc="a factor on the image", pbrt="scale", pbrt_default=1.0,
                   from_pbrt=_pbrt_scale),
         PBRT_POWER)
+    slots = (Slot("position", "p0.xyz", "where it is"), Slot("slide", "p0.w", "the image's row of the texture table"),
+             Slot("scale", "p1.x", "the factor on the image"), Slot("tan_half_fov", "p1.y", "tan(fov / 2)"),
+             Slot("half_extent", "p1.zw", "the screen's half extents"),
+             Slot("rotation", "p2.xyzw", "the rotation from the light's space to the world's, a unit quaternion"))
     examples = ({"position": [0.1, 1.2, -0.1], "direction": [0.2, -1.0, 0.1], "up": [0.0, 0.0, -1.0],
                  "scale": 3.0, "fov": 70.0, "image": str(resource_dir("assets") / "textures" / "tiles.png")},)
 
@@ -91,11 +96,10 @@ class ProjectionLight(DeltaLight):
         return [self.slide]
 
     def pack(self, row, texture_rows):
-        row["p0"][:3] = self.position
-        row["p0"][3] = texture_rows[id(self.slide)]
-        row["p1"][:2] = self.scale, math.tan(math.radians(self.fov) / 2)
-        row["p1"][2:] = screen(self.image)
-        row["p2"][:] = self.rotation
+        super().pack(row, texture_rows)
+        for name, value in (("slide", texture_rows[id(self.slide)]), ("tan_half_fov", math.tan(math.radians(self.fov) / 2)),
+                            ("half_extent", screen(self.image)), ("rotation", self.rotation)):
+            write_slot(row, self.slot_of(name), value)
 
     def tree_bounds(self):
         """Its axis, and every direction out to the screen's corner (pbrt-v4's

@@ -12,6 +12,7 @@ import pkgutil
 from pathlib import Path
 
 from pathtrace.lights.light import DeltaLight
+from pathtrace.device.slots import slot_accessor
 
 # the modules of app/lights that are the interface and its tables, not light types
 INTERFACE = ("light", "registry", "table", "tree")
@@ -48,6 +49,9 @@ def kernel_parts(names=None, tree: bool = False, bidirectional: bool = False) ->
     `bidirectional`, also over the light they emit: EMITTERS)."""
     used = [n for n in LIGHTS if n in ("area", "environment") or names is None or n in names]
     tags = "".join(f"#define LIGHT_{n.upper()} {TAGS[n]}\n" for n in LIGHTS) + f"#define LIGHT_TREE_ROOT {len(LIGHTS)}\n"
+    # each type's slots, read through <NAME>_LIGHT_<SLOT>(l) (app/device/slots.py)
+    tags += "".join(f"#define {n.upper()}_LIGHT_{s.name.upper()}(l) {slot_accessor(s.slot, 'l')}\n"
+                    for n, cls in DELTA_LIGHTS.items() for s in cls.slots)
 
     def switch(call, default, kinds=used):
         cases = "".join(f"    case LIGHT_{n.upper()}: return {call(n) if callable(call) else call.format(n)};\n"

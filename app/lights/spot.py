@@ -12,6 +12,7 @@ import numpy as np
 from pathtrace.lights.light import (PBRT_POWER, PBRT_SCALE, DeltaLight, check_angle, check_color, check_direction,
                                     check_point, luminance, pbrt_scaled)
 from pathtrace.parameters import FRAME, Parameter
+from pathtrace.device.slots import Slot, write_slot
 
 FALLOFFS = ("linear", "smoothstep")
 
@@ -54,6 +55,11 @@ class SpotLight(DeltaLight):
                   choices=FALLOFFS, pbrt_default="smoothstep"),
         PBRT_SCALE, PBRT_POWER)
     unsupported = {"mitsuba": {"texture": "pathtrace's spot lights have no texture"}}
+    slots = (Slot("position", "p0.xyz", "where it is"), Slot("cos_cutoff", "p0.w", "cos(cutoff_angle)"),
+             Slot("intensity", "p1.xyz", "radiant intensity I on the axis"), Slot("cos_beam", "p1.w", "cos(beam_width)"),
+             Slot("direction", "p2.xyz", "the unit axis"),
+             Slot("falloff_rate", "p2.w", "the falloff: linear, 1 / (cutoff - beam) in radians (0 where there is "
+                                     "no band between them), or the smoothstep, -1"))
     examples = ({"position": [0.0, 1.0, 0.0], "look_at": [0.4, 0.0, 0.1], "intensity": 2.0, "cutoff_angle": 40.0,
                  "beam_width": 25.0},
                 {"position": [0.2, 1.5, 0.0], "direction": [0.0, -1.0, 0.3], "intensity": [4.0, 3.0, 2.0],
@@ -87,15 +93,12 @@ class SpotLight(DeltaLight):
         return 2 * math.pi * (1 - cos_mid) * luminance(self.intensity)
 
     def pack(self, row, texture_rows):
-        row["p0"][:3] = self.position
-        row["p0"][3] = math.cos(math.radians(self.cutoff_angle))
-        row["p1"][:3] = self.intensity
-        row["p1"][3] = math.cos(math.radians(self.beam_width))
-        row["p2"][:3] = self.direction
-        # the falloff: linear, by 1 / (cutoff - beam) in radians (0 where there is no band
-        # between them), or the smoothstep, marked by -1
+        super().pack(row, texture_rows)
         width = math.radians(self.cutoff_angle - self.beam_width)
-        row["p2"][3] = (1.0 / width if width > 0 else 0.0) if self.falloff == "linear" else -1.0
+        for name, value in (("cos_cutoff", math.cos(math.radians(self.cutoff_angle))),
+                            ("cos_beam", math.cos(math.radians(self.beam_width))),
+                            ("falloff_rate", (1.0 / width if width > 0 else 0.0) if self.falloff == "linear" else -1.0)):
+            write_slot(row, self.slot_of(name), value)
 
     def tree_bounds(self):
         """pbrt-v4's spot bounds: its axis, full out to the beam, then falling off to the cutoff

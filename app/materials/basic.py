@@ -4,6 +4,7 @@ null, no surface at all."""
 import numpy as np
 
 from pathtrace.materials.bsdf import NULL, BSDFType, Param, check_sum_at_most_one
+from pathtrace.device.slots import Slot, read_slot, write_slot
 
 
 class Black(BSDFType):
@@ -44,12 +45,6 @@ class Diffuse(BSDFType):
                     mitsuba_default=0.5, pbrt="reflectance", pbrt_default=0.5),)
     doc = "Lambertian, f = rho_d / pi"
 
-    def pack(self, values, rows):
-        rows["p0"][:, :3] = values["rho_d"]
-
-    def unpack(self, row):
-        return {"rho_d": row["p0"][:3].copy()}
-
     def continuation(self, values):
         return np.max(values["rho_d"], axis=-1)
 
@@ -62,6 +57,11 @@ class Phong(BSDFType):
     params = (Param("rho_d", "color", high=1.0, doc="diffuse albedo", slot="p0.xyz"),
               Param("rho_s", "color", default=0.0, high=1.0, doc="glossy albedo", slot="p1.xyz"),
               Param("n", "number", doc="Phong exponent", slot="p1.w"))
+    # the lobes are chosen in the ratio max(rho_d) : max(rho_s), so that with Russian roulette
+    # going on with max(rho_d) + max(rho_s) (continuation) every channel's weight stays <= 1
+    derived = (Slot("diffuse_share", "p0.w", "max(rho_d) / (max(rho_d) + max(rho_s)), 1 where both are 0: "
+                    "the probability of sampling the diffuse lobe"),
+               Slot("glossy_share", "p2.x", "1 - diffuse_share: the probability of sampling the glossy lobe"))
     doc = ("modified Phong (Lafortune & Willems 1994), f = rho_d / pi + rho_s (n + 2) / (2 pi) "
            "cos^n(alpha); rho_d + rho_s <= 1 in each channel")
 
@@ -73,17 +73,14 @@ class Phong(BSDFType):
         return np.max(values["rho_d"], axis=-1), np.max(values["rho_s"], axis=-1)
 
     def pack(self, values, rows):
+        super().pack(values, rows)
         p_d, p_s = self.lobe_albedos(values)
         total = p_d + p_s
         # a black Phong material never samples; give it a harmless diffuse choice
-        rows["p0"][:, :3] = values["rho_d"]
-        rows["p0"][:, 3] = np.where(total > 0, p_d / np.where(total > 0, total, 1), 1.0)
-        rows["p1"][:, :3] = values["rho_s"]
-        rows["p1"][:, 3] = values["n"]
-        rows["p2"][:, 0] = 1.0 - rows["p0"][:, 3]
-
-    def unpack(self, row):
-        return {"rho_d": row["p0"][:3].copy(), "rho_s": row["p1"][:3].copy(), "n": float(row["p1"][3])}
+        diffuse_share = np.where(total > 0, p_d / np.where(total > 0, total, 1), 1.0)
+        write_slot(rows, self.slots()["diffuse_share"], diffuse_share)
+        # the share as stored, so that the two sum to 1 in float32
+        write_slot(rows, self.slots()["glossy_share"], 1.0 - read_slot(rows, self.slots()["diffuse_share"]))
 
     def continuation(self, values):
         p_d, p_s = self.lobe_albedos(values)

@@ -5,6 +5,7 @@ materials are the Material's components; the table gives each blend rows of its 
 check_blend)."""
 
 from pathtrace.materials.bsdf import BSDFType, Param
+from pathtrace.device.slots import Slot
 
 MAX_BLEND_DEPTH = 8     # blends nested in blends, at most (kernels/bsdfs/blendbsdf.cl)
 
@@ -14,6 +15,9 @@ class BlendBSDF(BSDFType):
     examples = ({"weight": 0.3},)
     params = (Param("weight", "number", default=0.5, high=1.0, slot="p0.x",
                     doc="the share of the second material: 0 is the first alone, 1 the second"),)
+    # written by MaterialTable.set, which gives the components rows of their own
+    derived = (Slot("first", "p0.y", "the first component's row of the material table", packed=False),
+               Slot("second", "p0.z", "the second component's row", packed=False))
     doc = ("two materials mixed, f = (1 - weight) f_1 + weight f_2, by taking the second with "
            "probability weight at each hit (Mitsuba 3's blendbsdf, pbrt-v4's mix); `bsdfs` names "
            "or holds the two")
@@ -22,10 +26,4 @@ class BlendBSDF(BSDFType):
 
     def defines(self, rows):
         return ("BLEND",) if len(rows) else ()
-
-    def pack(self, values, rows):
-        rows["p0"][:, 0] = values["weight"]
-
-    def unpack(self, row):
-        return {"weight": float(row["p0"][0])}
 

@@ -1,13 +1,14 @@
 """The interface every material type implements on the host: its parameters (Mitsuba 3's names
 where Mitsuba has the material), their checks, and how they pack into the MATERIAL struct that
 its kernel file kernels/bsdfs/<name>.cl reads, through accessors generated from the slots its
-parameters declare (Param.slot; app/materials/registry.py: tag_source)."""
+parameters and derived values declare (Param.slot, BSDFType.derived; app/device/slots.py)."""
 
 from dataclasses import dataclass, replace
 
 import numpy as np
 
 from pathtrace.parameters import Parameter
+from pathtrace.device.slots import read_slot, write_slot
 from pathtrace.textures.texture import Texture
 
 # MATERIAL.flags bits, as kernels/types.h defines them
@@ -26,15 +27,18 @@ class Param(Parameter):
     parameters); its range [low, high] (high None: unbounded); its names in the formats."""
     low: float = 0.0
     names: dict = None        # for "number": named values accepted too; for "name": the choices
-    slot: str = None          # where the kernel reads it, as "p0.xyz" or "p1.w" (a colour's
-                              # slot is .xyz): a parameter with a slot may be a texture, whose
-                              # value at each hit goes there (kernels/shading.cl)
+    slot: str = None          # where the kernels read it (app/device/slots.py), through the accessor
+                              # <TYPE>_<NAME>(m) generated from it (registry.py: tag_source): a
+                              # parameter with a slot in p0..p2 may be a texture, whose value at
+                              # each hit goes there (kernels/shading.cl), unless `constant`
+    constant: bool = False    # read from its slot, never given by a texture (the host derives
+                              # other slots from it, or its slot is in the table)
     into: str = None          # another way to give parameter `into`, which resolve() turns it
                               # into (principled's specular, its eta): never kept itself
 
     def __post_init__(self):
         super().__post_init__()
-        object.__setattr__(self, "texture", self.slot is not None)
+        object.__setattr__(self, "texture", self.slot is not None and not self.constant)
         if self.kind == "name" and self.names and not self.choices:
             object.__setattr__(self, "choices", tuple(self.names))
 
@@ -75,6 +79,11 @@ class BSDFType:
     resolved_first: bool = False   # the kernels turn it into another material before any BSDF
                                    # call (a blend): its file has no eval, pdf or sample
     requires: tuple = ()      # kernel files its own builds on, compiled before it (kernels/)
+    derived: tuple = ()       # the slots pack() computes (Slot), beside the parameters' own
+    host_only: tuple = ()     # slotted parameters no kernel reads, kept for unpack (the editor)
+    reads_as: dict = {}       # other types whose accessors the kernels apply to this type's rows
+                              # (a coatedconductor's base is read as a roughconductor): {type:
+                              # {their slot's name: this type's}}, slots that must coincide
     # What the conformance suite (tests/test_bsdfs.py) runs every type through:
     examples: tuple = ()      # parameter sets, as a scene file gives them; each type declares
                               # its own (a subclass does not inherit them), one at least
@@ -117,7 +126,7 @@ class BSDFType:
                 if p.default is None:
                     raise ValueError(f"missing '{p.name}'")
                 values[p.name] = p.default
-            if isinstance(values.get(p.name), Texture) and p.slot is None:
+            if isinstance(values.get(p.name), Texture) and not p.texture:
                 raise ValueError(f"{p.name}: {self.name}'s {p.name} cannot be a texture (the host "
                                  "derives constants from it)")
         # a texture is checked by its largest values
@@ -146,6 +155,11 @@ class BSDFType:
                 return p.name, f"must lie in {bound}, got {shown}"
         return None
 
+    def slots(self) -> dict:
+        """{name: slot} of every slotted parameter and derived slot, which tag_source makes the
+        kernels' accessors of."""
+        return {**{p.name: p.slot for p in self.params if p.slot}, **{d.name: d.slot for d in self.derived}}
+
     def kind_of(self, name: str) -> str:
         return next((p.kind for p in self.params if p.name == name), "number")
 
@@ -171,10 +185,15 @@ class BSDFType:
         return np.full(n, self.flags, np.int32)
 
     def pack(self, values: dict, rows: np.ndarray):
-        raise NotImplementedError
+        """Writes each slotted parameter into its slot; a type with derived slots writes those too."""
+        for p in self.params:
+            if p.slot:
+                write_slot(rows, p.slot, values[p.name])
 
     def unpack(self, row) -> dict:
-        raise NotImplementedError
+        """The slotted parameters of one row; a type whose others derive from its slots adds them."""
+        return {p.name: read_slot(row, p.slot).copy() if p.kind == "color" else
+                (bool if p.kind == "bool" else float)(read_slot(row, p.slot)) for p in self.params if p.slot}
 
     def continuation(self, values: dict) -> np.ndarray:
         """The probability with which the report's Russian roulette goes on from this material:

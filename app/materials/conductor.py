@@ -1,11 +1,14 @@
 """Metals: a smooth conductor (a mirror with the Fresnel reflectance of a complex IOR) and a
 rough one (the GGX or Beckmann microfacet model), with Mitsuba 3's parameters."""
 
+from dataclasses import replace
+
 import numpy as np
 
 from pathtrace.materials.bsdf import DELTA, BSDFType, Param
 from pathtrace.materials.microfacet import DISTRIBUTION, AnisotropicRoughness, anisotropic_params, check_distribution
 from pathtrace.materials.optics import CONDUCTORS
+from pathtrace.device.slots import read_slot
 
 _CONDUCTOR_PARAMS = (
     Param("material", "name", default="none", names=CONDUCTORS,
@@ -44,15 +47,6 @@ class Conductor(BSDFType):
     def resolve(self, values):
         return resolve_metal(super().resolve(values))
 
-    def pack(self, values, rows):
-        rows["p0"][:, :3] = values["eta"]
-        rows["p1"][:, :3] = values["k"]
-        rows["p2"][:, :3] = values["specular_reflectance"]
-
-    def unpack(self, row):
-        return {"eta": row["p0"][:3].copy(), "k": row["p1"][:3].copy(),
-                "specular_reflectance": row["p2"][:3].copy()}
-
 
 class RoughConductor(AnisotropicRoughness, Conductor):
     name = "roughconductor"
@@ -61,7 +55,7 @@ class RoughConductor(AnisotropicRoughness, Conductor):
                 {"material": "Au", "alpha": 0.1, "distribution": "beckmann"}, {"alpha": 0.6, "distribution": "beckmann"},
                 {"material": "Cu", "alpha": 0.05, "alpha_v": 0.4, "distribution": "ggx"},
                 {"alpha": 0.5, "alpha_v": 0.1, "distribution": "beckmann"})
-    params = _CONDUCTOR_PARAMS + anisotropic_params("p0.w", "p1.w") + (DISTRIBUTION,)
+    params = _CONDUCTOR_PARAMS + anisotropic_params("p0.w", "p1.w") + (replace(DISTRIBUTION, slot="p2.w", constant=True),)
     flags = 0
     doc = ("rough metal: the GGX or Beckmann microfacet BRDF with Smith's separable shadowing, "
            "isotropic or anisotropic, sampled by visible normals (Heitz 2018; Jakob 2014)")
@@ -72,15 +66,7 @@ class RoughConductor(AnisotropicRoughness, Conductor):
     variant_defines = ("BECKMANN",) + AnisotropicRoughness.variant_defines
 
     def defines(self, rows):
-        return ((("BECKMANN",) if np.any(rows["p2"][:, 3] > 0.5) else ())
-                + (("ANISOTROPIC",) if self.anisotropic(rows, rows["p0"][:, 3], rows["p1"][:, 3]) else ()))
-
-    def pack(self, values, rows):
-        super().pack(values, rows)
-        rows["p0"][:, 3] = values["alpha"]
-        rows["p1"][:, 3] = values["alpha_v"]
-        rows["p2"][:, 3] = values["distribution"]
-
-    def unpack(self, row):
-        return {**super().unpack(row), "alpha": float(row["p0"][3]), "alpha_v": float(row["p1"][3]),
-                "distribution": float(row["p2"][3])}
+        slots = self.slots()
+        return ((("BECKMANN",) if np.any(read_slot(rows, slots["distribution"]) > 0.5) else ())
+                + (("ANISOTROPIC",) if self.anisotropic(rows, read_slot(rows, slots["alpha"]),
+                                                        read_slot(rows, slots["alpha_v"])) else ()))

@@ -2,11 +2,14 @@
 rough one (Walter et al.'s microfacet model), and a thin sheet of glass (no refraction), with
 Mitsuba 3's parameters."""
 
+from dataclasses import replace
+
 import numpy as np
 
 from pathtrace.materials.bsdf import DELTA, TRANSMISSIVE, BSDFType, Param
 from pathtrace.materials.microfacet import DISTRIBUTION, AnisotropicRoughness, anisotropic_params, check_distribution
 from pathtrace.materials.optics import IOR
+from pathtrace.device.slots import read_slot
 
 def check_interface(values) -> str | None:
     """The two IORs of an interface (glass, a plastic's coating) must differ."""
@@ -16,10 +19,10 @@ def check_interface(values) -> str | None:
 
 
 _DIELECTRIC_PARAMS = (
-    Param("int_ior", "number", default=1.5046, low=1.0, high=10.0, names=IOR,
+    Param("int_ior", "number", default=1.5046, low=1.0, high=10.0, names=IOR, slot="p0.x", constant=True,
           doc="IOR inside (the side opposite the normal): a number or a name such as bk7, water, "
               "diamond"),
-    Param("ext_ior", "number", default=1.000277, low=1.0, high=10.0, names=IOR,
+    Param("ext_ior", "number", default=1.000277, low=1.0, high=10.0, names=IOR, slot="p0.y", constant=True,
           doc="IOR outside"),
     Param("specular_reflectance", "color", default=1.0, high=1.0, doc="factor on reflection", slot="p1.xyz"),
     Param("specular_transmittance", "color", default=1.0, high=1.0, doc="factor on transmission",
@@ -38,17 +41,6 @@ class Dielectric(BSDFType):
     def check(self, values):
         return check_interface(values)
 
-    def pack(self, values, rows):
-        rows["p0"][:, 0] = values["int_ior"]
-        rows["p0"][:, 1] = values["ext_ior"]
-        rows["p1"][:, :3] = values["specular_reflectance"]
-        rows["p2"][:, :3] = values["specular_transmittance"]
-
-    def unpack(self, row):
-        return {"int_ior": float(row["p0"][0]), "ext_ior": float(row["p0"][1]),
-                "specular_reflectance": row["p1"][:3].copy(),
-                "specular_transmittance": row["p2"][:3].copy()}
-
 
 class ThinDielectric(Dielectric):
     name = "thindielectric"
@@ -66,7 +58,7 @@ class RoughDielectric(AnisotropicRoughness, Dielectric):
                 {"alpha": 0.8, "int_ior": "diamond", "distribution": "beckmann"},
                 {"alpha": 0.4, "alpha_v": 0.08, "int_ior": 1.5, "distribution": "ggx"})
     reciprocal = False
-    params = _DIELECTRIC_PARAMS + anisotropic_params("p0.z", "p1.w") + (DISTRIBUTION,)
+    params = _DIELECTRIC_PARAMS + anisotropic_params("p0.z", "p1.w") + (replace(DISTRIBUTION, slot="p0.w", constant=True),)
     flags = TRANSMISSIVE
     doc = ("rough glass: reflection and refraction by GGX or Beckmann microfacets (Walter et al. "
            "2007), sampled by the normals visible from the outgoing direction")
@@ -77,15 +69,7 @@ class RoughDielectric(AnisotropicRoughness, Dielectric):
     variant_defines = ("BECKMANN",) + AnisotropicRoughness.variant_defines
 
     def defines(self, rows):
-        return ((("BECKMANN",) if np.any(rows["p0"][:, 3] > 0.5) else ())
-                + (("ANISOTROPIC",) if self.anisotropic(rows, rows["p0"][:, 2], rows["p1"][:, 3]) else ()))
-
-    def pack(self, values, rows):
-        super().pack(values, rows)
-        rows["p0"][:, 2] = values["alpha"]
-        rows["p1"][:, 3] = values["alpha_v"]
-        rows["p0"][:, 3] = values["distribution"]
-
-    def unpack(self, row):
-        return {**super().unpack(row), "alpha": float(row["p0"][2]), "alpha_v": float(row["p1"][3]),
-                "distribution": float(row["p0"][3])}
+        slots = self.slots()
+        return ((("BECKMANN",) if np.any(read_slot(rows, slots["distribution"]) > 0.5) else ())
+                + (("ANISOTROPIC",) if self.anisotropic(rows, read_slot(rows, slots["alpha"]),
+                                                        read_slot(rows, slots["alpha_v"])) else ()))

@@ -38,12 +38,5 @@ class DiffuseTransmission(BSDFType):
     def check(self, values):
         return check_sum_at_most_one(values, "reflectance", "transmittance")
 
-    def pack(self, values, rows):
-        rows["p0"][:, :3] = values["reflectance"]
-        rows["p1"][:, :3] = values["transmittance"]
-
-    def unpack(self, row):
-        return {"reflectance": row["p0"][:3].copy(), "transmittance": row["p1"][:3].copy()}
-
     def continuation(self, values):
         return np.minimum(np.max(values["reflectance"] + values["transmittance"], axis=-1), 1.0)

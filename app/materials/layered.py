@@ -8,8 +8,9 @@ from dataclasses import replace
 import numpy as np
 
 from pathtrace.materials.bsdf import DELTA, BSDFType, Param
-from pathtrace.materials.conductor import METAL_PARAMS, resolve_metal
+from pathtrace.materials.conductor import METAL_PARAMS, RoughConductor, resolve_metal
 from pathtrace.materials.microfacet import GGX_PARAMS
+from pathtrace.device.slots import Slot, read_slot, write_slot
 
 MAX_WALK_DEPTH = 100      # maxdepth: events per random walk
 MAX_WALKS = 16            # nsamples: walks per estimate
@@ -24,6 +25,14 @@ _LAYER_PARAMS = (
     Param("maxdepth", "number", default=10, low=1, high=MAX_WALK_DEPTH, doc="events per random walk"),
     Param("nsamples", "number", default=1, low=1, high=MAX_WALKS, doc="random walks per estimate"),
 )
+
+
+def in_slots(params: tuple, **slots) -> tuple:
+    """params with the slots `slots` gives by name, constants the kernels read (the random walks
+    need them as they are, not a texture's value)."""
+    return tuple(replace(p, slot=slots[p.name], constant=True) if p.name in slots else p for p in params)
+
+
 _ALPHA = replace(GGX_PARAMS[0], default=0.0, low=0.0,
                  doc="the coating's GGX roughness (pbrt's roughness, remapped or not); 0: smooth")
 
@@ -34,6 +43,8 @@ def check_walks(values) -> str | None:
             return f"{name}: must be a whole number, got {np.ravel(values[name])[0]:g}"
     return None
 
+
+_ROUGH = {p.name: p.slot for p in RoughConductor.params}     # the base's slots (kernels/layered.cl)
 
 # the random walks, whose metal base is a roughconductor's (kernels/layered.cl)
 LAYERED_FILES = ("bsdfs/roughconductor.cl", "layered.cl")
@@ -46,31 +57,17 @@ class CoatedDiffuse(BSDFType):
                 {"reflectance": 0.5, "alpha": 0.2, "thickness": 0.5, "albedo": [0.9, 0.5, 0.2], "g": 0.4, "nsamples": 2})
     estimated = True
     requires = LAYERED_FILES
-    params = (
+    params = in_slots((
         Param("reflectance", "color", default=0.5, high=1.0, doc="the base's albedo", slot="p0.xyz"),
         _ALPHA,
         Param("eta", "number", default=1.5, low=1.0001, high=10.0, doc="the coating's IOR"),
-    ) + _LAYER_PARAMS
+    ) + _LAYER_PARAMS, alpha="p0.w", eta="p1.x", thickness="p1.y", g="p1.z", maxdepth="p1.w", albedo="p2.xyz",
+        nsamples="p2.w")
     doc = ("pbrt-v4's coateddiffuse: a diffuse base under a smooth or rough dielectric coating, "
            "light followed between them by random walks (Guo et al. 2018)")
 
     def check(self, values):
         return check_walks(values)
-
-    def pack(self, values, rows):
-        rows["p0"][:, :3] = values["reflectance"]
-        rows["p0"][:, 3] = values["alpha"]
-        rows["p1"][:, 0] = values["eta"]
-        rows["p1"][:, 1] = values["thickness"]
-        rows["p1"][:, 2] = values["g"]
-        rows["p1"][:, 3] = values["maxdepth"]
-        rows["p2"][:, :3] = values["albedo"]
-        rows["p2"][:, 3] = values["nsamples"]
-
-    def unpack(self, row):
-        return {"reflectance": row["p0"][:3].copy(), "alpha": float(row["p0"][3]), "eta": float(row["p1"][0]),
-                "thickness": float(row["p1"][1]), "g": float(row["p1"][2]), "maxdepth": float(row["p1"][3]),
-                "albedo": row["p2"][:3].copy(), "nsamples": float(row["p2"][3])}
 
     def continuation(self, values):
         return np.maximum(np.max(values["reflectance"], axis=-1), 0.1)
@@ -85,7 +82,11 @@ class CoatedConductor(BSDFType):
                  "albedo": [0.8, 0.6, 0.3], "g": -0.3})
     estimated = True
     requires = LAYERED_FILES
-    params = (
+    # the base is read as a roughconductor (kernels/layered.cl), in its slots
+    _BASE = {"eta": "eta", "k": "k", "alpha": "conductor_alpha", "alpha_v": "conductor_alpha_v",
+             "specular_reflectance": "specular_reflectance", "distribution": "distribution"}
+    reads_as = {"roughconductor": _BASE}
+    params = in_slots((
         *METAL_PARAMS,          # material, or eta and k: the base's metal
         _ALPHA,
         Param("alpha_v", "number", default=0.0, low=0.0, high=1.0,
@@ -95,7 +96,12 @@ class CoatedConductor(BSDFType):
               doc="the metal's GGX roughness along the tangent; 0: a mirror"),
         Param("conductor_alpha_v", "number", default=0.0, low=0.0, high=1.0,
               doc="the metal's roughness along the bitangent; conductor_alpha where left out"),
-    ) + _LAYER_PARAMS
+    ) + _LAYER_PARAMS, conductor_alpha=_ROUGH["alpha"], conductor_alpha_v=_ROUGH["alpha_v"],
+        interface_eta="table[0]", g="table[1]", maxdepth="table[2]", nsamples="table[3]", alpha="table[4]",
+        alpha_v="table[5]", thickness="table[6]", albedo="table[7:10]")
+    derived = (Slot("specular_reflectance", _ROUGH["specular_reflectance"],
+                    "1: the base roughconductor's factor on its reflectance, none here"),
+               Slot("distribution", _ROUGH["distribution"], "0: the base is GGX's"))
     doc = ("pbrt-v4's coatedconductor: a smooth or rough metal under a smooth or rough dielectric "
            "coating, light followed between them by random walks (Guo et al. 2018)")
     variant_defines = ("ANISOTROPIC",)
@@ -114,27 +120,15 @@ class CoatedConductor(BSDFType):
         return check_walks(values)
 
     def defines(self, rows):
-        apart = (rows["p0"][:, 3] != rows["p1"][:, 3]) | (rows["table"][:, 4] != rows["table"][:, 5])
-        return ("ANISOTROPIC",) if np.any(apart) else ()
+        apart = [read_slot(rows, self.slots()[u]) != read_slot(rows, self.slots()[v])
+                 for u, v in (("conductor_alpha", "conductor_alpha_v"), ("alpha", "alpha_v"))]
+        return ("ANISOTROPIC",) if np.any(apart[0] | apart[1]) else ()
 
     def row_flags(self, values, n):
         delta = (values["alpha"] == 0) & (values["conductor_alpha"] == 0) & np.all(values["albedo"] == 0, axis=-1)
         return np.where(np.broadcast_to(delta, n), DELTA, 0).astype(np.int32)
 
-    # the rest, after a roughconductor's p0..p2 (kernels/bsdfs/coatedconductor.cl)
-    TABLE = ("interface_eta", "g", "maxdepth", "nsamples", "alpha", "alpha_v", "thickness")
-
     def pack(self, values, rows):
-        rows["p0"][:, :3] = values["eta"]
-        rows["p0"][:, 3] = values["conductor_alpha"]
-        rows["p1"][:, :3] = values["k"]
-        rows["p1"][:, 3] = values["conductor_alpha_v"]
-        rows["p2"] = (1.0, 1.0, 1.0, 0.0)
-        for i, name in enumerate(self.TABLE):
-            rows["table"][:, i] = values[name]
-        rows["table"][:, 7:10] = values["albedo"]
-
-    def unpack(self, row):
-        return {"eta": row["p0"][:3].copy(), "k": row["p1"][:3].copy(), "conductor_alpha": float(row["p0"][3]),
-                "conductor_alpha_v": float(row["p1"][3]), "albedo": row["table"][7:10].copy(),
-                **{name: float(row["table"][i]) for i, name in enumerate(self.TABLE)}}
+        super().pack(values, rows)
+        write_slot(rows, self.slots()["specular_reflectance"], 1.0)
+        write_slot(rows, self.slots()["distribution"], 0.0)

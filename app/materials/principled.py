@@ -7,6 +7,7 @@ import numpy as np
 
 from pathtrace.materials.bsdf import TRANSMISSIVE, BSDFType, Param
 from pathtrace.textures.texture import Texture
+from pathtrace.device.slots import read_slot
 
 
 def _unit(name, default, slot, doc):
@@ -42,25 +43,22 @@ class Principled(BSDFType):
         _unit("clearcoat", 0.0, "p2.y", "the GTR1 clearcoat lobe's strength"),
         _unit("clearcoat_gloss", 0.0, "p2.z", "the clearcoat's gloss: 0 (alpha 0.1) to 1 (alpha 0.001)"),
         _unit("spec_trans", 0.0, "p2.w", "the share of the dielectric that transmits (glass at 1)"),
-        Param("eta", "number", default=float(eta_of_specular(0.5)), low=1.0, high=10.0,
-              doc="the IOR inside over outside; or give specular"),
+        Param("eta", "number", default=float(eta_of_specular(0.5)), low=1.0, high=10.0, slot="table[0]",
+              constant=True, doc="the IOR inside over outside; or give specular"),
         Param("specular", "number", default=0.5, high=1.0, into="eta",
               doc="the dielectric's reflectance at normal incidence over 0.08 (0.5: 4 %), instead of eta"),
-        Param("flatness", "number", default=0.0, high=1.0,
+        Param("flatness", "number", default=0.0, high=1.0, slot="table[1]", constant=True,
               doc="the diffuse lobe's blend towards Hanrahan-Krueger's fake subsurface (a constant)"),
-        Param("main_specular_sampling_rate", "number", default=1.0, high=1e3,
+        Param("main_specular_sampling_rate", "number", default=1.0, high=1e3, slot="table[2]", constant=True,
               doc="the specular lobes' weight in the choice of a lobe to sample"),
-        Param("clearcoat_sampling_rate", "number", default=1.0, high=1e3,
+        Param("clearcoat_sampling_rate", "number", default=1.0, high=1e3, slot="table[3]", constant=True,
               doc="the clearcoat's weight in that choice"),
-        Param("diffuse_reflectance_sampling_rate", "number", default=1.0, high=1e3,
+        Param("diffuse_reflectance_sampling_rate", "number", default=1.0, high=1e3, slot="table[4]", constant=True,
               doc="the diffuse lobe's weight in that choice"),
     )
     doc = ("Disney's principled BSDF as Mitsuba 3 has it (Burley 2012, 2015): diffuse with "
            "retro-reflection, sheen, anisotropic GGX specular, metal, GGX transmission, GTR1 clearcoat")
     variant_defines = ("ANISOTROPIC",)
-    # MATERIAL.table: constants that no texture gives
-    TABLE = ("eta", "flatness", "main_specular_sampling_rate", "clearcoat_sampling_rate",
-             "diffuse_reflectance_sampling_rate")
 
     def resolve(self, values):
         values = super().resolve(values)
@@ -79,27 +77,11 @@ class Principled(BSDFType):
         return isinstance(spec_trans, Texture) or bool(np.any(np.asarray(spec_trans) > 0))
 
     def defines(self, rows):
-        return ("ANISOTROPIC",) if np.any((rows["p1"][:, 2] != 0) | (rows["textures"] >= 0)) else ()
+        anisotropic = read_slot(rows, self.slots()["anisotropic"])
+        return ("ANISOTROPIC",) if np.any((anisotropic != 0) | (rows["textures"] >= 0)) else ()
 
     def row_flags(self, values, n):
         return np.where(np.broadcast_to(values["spec_trans"] > 0, n), TRANSMISSIVE, 0).astype(np.int32)
-
-    def pack(self, values, rows):
-        rows["p0"][:, :3] = values["base_color"]
-        for name in ("roughness", "metallic", "spec_tint", "anisotropic", "sheen", "sheen_tint", "clearcoat",
-                     "clearcoat_gloss", "spec_trans"):
-            field, component = next(p.slot for p in self.params if p.name == name).split(".")
-            rows[field][:, "xyzw".index(component)] = values[name]
-        for i, name in enumerate(self.TABLE):
-            rows["table"][:, i] = values[name]
-
-    def unpack(self, row):
-        out = {"base_color": row["p0"][:3].copy()}
-        for p in self.params:
-            if p.slot is not None and p.kind == "number":
-                field, component = p.slot.split(".")
-                out[p.name] = float(row[field]["xyzw".index(component)])
-        return {**out, **{name: float(row["table"][i]) for i, name in enumerate(self.TABLE)}}
 
     def continuation(self, values):
         # any value in (0, 1] is unbiased: the diffuse albedo, or more where light is specular

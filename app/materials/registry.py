@@ -1,7 +1,8 @@
 """The registry of material types: each type's tag, and the kernels' dispatch (eval_bsdf,
 pdf_bsdf, sample_bsdf) generated from it. Adding a material takes its kernel file
 (kernels/bsdfs/<name>.cl), its host BSDFType (its parameters with their names in the formats,
-app/parameters.py, packing, checks and examples) and its entry here; the readers read it through
+app/parameters.py, their slots and those it derives, which its kernel reads through the accessors
+tag_source generates, checks and examples) and its entry here; the readers read it through
 its declarations (pbrt-v4's materials that map onto several types are still mapped by hand, in
 app/scene/pbrt/materials.py). Its
 examples put it through tests/test_bsdfs.py (chi-square of its sampling against its
@@ -16,6 +17,7 @@ from pathtrace.materials.diffusetransmission import DiffuseTransmission
 from pathtrace.materials.layered import CoatedConductor, CoatedDiffuse
 from pathtrace.materials.plastic import Plastic, RoughPlastic
 from pathtrace.materials.principled import Principled
+from pathtrace.device.slots import slot_accessor
 
 BSDFS = {cls.name: cls() for cls in (Black, Diffuse, Phong, Conductor, RoughConductor,
                                      Dielectric, RoughDielectric, ThinDielectric, Plastic,
@@ -25,12 +27,13 @@ TAGS = {name: i for i, name in enumerate(BSDFS)}
 
 
 def tag_source() -> str:
-    """The BSDF_<NAME> tags of every type, which the kernel files may name, and the accessors of
-    each type's parameters in the MATERIAL slots its host declares (Param.slot), <TYPE>_<PARAM>(m),
-    so that the slots are defined once, on the host."""
+    """The BSDF_<NAME> tags of every type, which the kernel files may name, and the accessors
+    <TYPE>_<NAME>(m) of each type's slots, its parameters' (Param.slot) and those pack() derives
+    (BSDFType.derived), so that the slots are defined once, on the host: the kernels read a
+    material's p0..p2 and table through them alone (tests/test_types.py)."""
     tags = "".join(f"#define BSDF_{name.upper()} {TAGS[name]}\n" for name in BSDFS)
-    return tags + "".join(f"#define {name.upper()}_{p.name.upper()}(m) ((m)->{p.slot})\n"
-                          for name, b in BSDFS.items() for p in b.params if p.slot)
+    return tags + "".join(f"#define {name.upper()}_{slot_name.upper()}(m) {slot_accessor(slot)}\n"
+                          for name, b in BSDFS.items() for slot_name, slot in b.slots().items())
 
 
 def dispatch_source(names=None) -> str:

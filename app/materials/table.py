@@ -11,6 +11,7 @@ from pathtrace.errors import UserError, short
 from pathtrace.materials.blend import MAX_BLEND_DEPTH
 from pathtrace.materials.bsdf import EMITS_BACK, MASKED, NULL, TRANSMISSIVE, TWOSIDED, constant_of
 from pathtrace.materials.registry import BSDFS, TAGS
+from pathtrace.device.slots import read_slot, write_slot
 from pathtrace.textures.texture import Texture
 from pathtrace.device.types import MATERIAL
 
@@ -108,10 +109,23 @@ def check_blend(material) -> str | None:
     return None
 
 
+def components_of(rows) -> np.ndarray:
+    """The rows of the two components of blend rows (MATERIAL rows, or one), as (n, 2) (or (2,)),
+    from the slots the blend declares (app/materials/blend.py)."""
+    slots = BSDFS["blendbsdf"].slots()
+    return np.stack([read_slot(rows, slots["first"]), read_slot(rows, slots["second"])], axis=-1).astype(np.int64)
+
+
+def set_components(rows: np.ndarray, components):
+    """Writes the rows of a blend's two components into its MATERIAL rows."""
+    slots = BSDFS["blendbsdf"].slots()
+    write_slot(rows, slots["first"], components[0])
+    write_slot(rows, slots["second"], components[1])
+
+
 def component_rows(rows: np.ndarray) -> np.ndarray:
     """The rows of the two components of each blend among `rows` (MATERIAL rows)."""
-    blends = rows[rows["type"] == TAGS["blendbsdf"]]
-    return blends["p0"][:, 1:3].astype(np.int64).ravel()
+    return components_of(rows[rows["type"] == TAGS["blendbsdf"]]).ravel()
 
 
 def reachable(table_rows: np.ndarray, used) -> np.ndarray:
@@ -214,19 +228,19 @@ class MaterialTable:
                 material.params[name] = texture
         if type_name == "blendbsdf":
             material.components = tuple(replace(self.get(int(r)), emission=np.zeros(3), twosided=False, emits_back=False,
-                                                normal_map=None, bump_map=None) for r in row["p0"][1:3])
+                                                normal_map=None, bump_map=None) for r in components_of(row))
         return material
 
     def set(self, index: int, material: Material):
         params, emission = material.constants()
-        row = pack(material.type, params, emission, material.twosided, material.emits_back)[0]
+        rows = pack(material.type, params, emission, material.twosided, material.emits_back)
         if material.masked:
-            row["flags"] |= MASKED
+            rows["flags"] |= MASKED
         if material.type == "blendbsdf":
             components = self._set_components(index, material)
-            row["p0"][1:3] = components
-            row["flags"] |= self.rows[components[0]]["flags"] & TRANSMISSIVE
-        self.rows[index] = row
+            set_components(rows, components)
+            rows["flags"] |= self.rows[components[0]]["flags"] & TRANSMISSIVE
+        self.rows[index] = rows[0]
         self.textures[index] = material.textures()
 
     def _set_components(self, index: int, material: Material) -> list:
@@ -237,7 +251,7 @@ class MaterialTable:
         if problem:
             raise ValueError(problem)
         old = self.rows[index]
-        rows = [int(r) for r in old["p0"][1:3]] if old["type"] == TAGS["blendbsdf"] else [None, None]
+        rows = [int(r) for r in components_of(old)] if old["type"] == TAGS["blendbsdf"] else [None, None]
         for k, c in enumerate(material.components):
             c = replace(c, emission=material.emission, twosided=material.twosided, emits_back=material.emits_back,
                         normal_map=material.normal_map, bump_map=material.bump_map)

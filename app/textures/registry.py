@@ -33,6 +33,9 @@ def kernel_parts(names) -> list:
     combined = [n for n in TEXTURES if n in names and not TEXTURES[n].leaf]
     tags = "".join(f"#define TEXTURE_{n.upper()} {TAGS[n]}\n" for n in TEXTURES) \
         + f"#define TEXTURE_REGISTERS {TEXTURE_REGISTERS}\n"
+    # each combining type's inputs by name, <TYPE>_INPUT_<NAME>: their order in its declaration
+    tags += "".join(f"#define {n.upper()}_INPUT_{name.upper()} {k}\n"
+                    for n, t in TEXTURES.items() for k, name in enumerate(t.inputs))
 
     def dispatch(signature, types, args):
         cases = "".join(f"    case TEXTURE_{n.upper()}: return eval_{n}({args});\n" for n in types)

@@ -8,10 +8,8 @@
  * The components are rows of the material table of their own, which carry the blend's
  * emission, sides and shading maps (app/materials/table.py); blends may nest, at most
  * MAX_BLEND_DEPTH deep (app/materials/blend.py). Compiled in for scenes with a blend (BLEND).
- *
- * Parameters (Material):
- *   p0.x  weight, the second component's probability
- *   p0.y  the first component's row of the material table     p0.z  the second's */
+ * Its weight and its components' rows are read through BLENDBSDF_WEIGHT, _FIRST and _SECOND,
+ * generated from their slots on the host (app/materials/blend.py). */
 
 #define MAX_BLEND_DEPTH 8
 
@@ -21,17 +19,17 @@ const global Material *choose_component(const SceneData *sc, const global Materi
                                         const Surface *s, float3 wo)
 {
     for (uint level = 0; row->type == BSDF_BLENDBSDF && level < MAX_BLEND_DEPTH; ++level) {
-        float weight = row->p0.x;
+        float weight = BLENDBSDF_WEIGHT(row);
 #ifdef TEXTURES
         if (row->textures >= 0) {
             Material shaded = *row;
             apply_textures(sc, &shaded, surface_uv(sc, s->prim, s->b, s->p));
-            weight = shaded.p0.x;
+            weight = BLENDBSDF_WEIGHT(&shaded);
         }
 #endif
         uint4 h = pcg4d(as_uint4((float4)(s->p, wo.x)) ^ (uint4)(as_uint(wo.y), as_uint(wo.z), level, 0x9e3779b9u));
         float u = (float)(h.x >> 8) * 0x1.0p-24f;
-        row = &sc->materials[(int)(u < weight ? row->p0.z : row->p0.y)];
+        row = &sc->materials[(int)(u < weight ? BLENDBSDF_SECOND(row) : BLENDBSDF_FIRST(row))];
     }
     return row;
 }

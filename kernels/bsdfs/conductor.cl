@@ -1,10 +1,7 @@
 /* conductor: a smooth metal, a perfect mirror whose reflectance is the conductor Fresnel
- * equations' (Mitsuba 3's `conductor`).
- *
- * Parameters (Material):
- *   p0.xyz  eta, the real part of the complex IOR (relative to the outside), per channel
- *   p1.xyz  k, its imaginary part
- *   p2.xyz  specular_reflectance, a factor on the reflectance
+ * equations' (Mitsuba 3's `conductor`), of the complex IOR eta + i k relative to the outside
+ * and a factor specular_reflectance, read through CONDUCTOR_ETA, _K and _SPECULAR_REFLECTANCE,
+ * generated from their slots on the host (app/materials/conductor.py).
  *
  * A delta BRDF (sample only: only sampling finds it). One-sided. */
 
@@ -14,7 +11,7 @@ int sample_conductor(MaterialRef m, float3 wo, float3 u, BSDFSample *s)
         return 0;
     s->wi = reflect_local(wo);
     s->pdf = 1.0f;
-    s->weight = m->p2.xyz * fresnel_conductor(wo.z, m->p0.xyz, m->p1.xyz);
+    s->weight = CONDUCTOR_SPECULAR_REFLECTANCE(m) * fresnel_conductor(wo.z, CONDUCTOR_ETA(m), CONDUCTOR_K(m));
     s->lobe = LOBE_DELTA | LOBE_REFLECTION;
     return 1;
 }

@@ -18,12 +18,8 @@
  * interface alone, its reflection weighted by bsdf. Directions the microfacets cannot connect
  * (wo and wi not on the sides of h they lie on) get no specular, transmission or clearcoat.
  *
- * Parameters (Material):
- *   p0.xyz  base_color                              p0.w  roughness
- *   p1.x    metallic    p1.y  spec_tint             p1.z  anisotropic     p1.w  sheen
- *   p2.x    sheen_tint  p2.y  clearcoat             p2.z  clearcoat_gloss p2.w  spec_trans
- *   table[0] eta, n inside / n outside (at least 1)   table[1] flatness
- *   table[2..4] the sampling rates of the specular lobes, the clearcoat and the diffuse lobe
+ * The parameters are read through PRINCIPLED_<PARAM> (eta, n inside / n outside, at least 1),
+ * generated from their slots on the host (app/materials/principled.py).
  *
  * Sampling picks a lobe with probabilities proportional to (outside) specular rate (1 - bsdf
  * (1 - F)), specular rate bsdf (1 - F), 0.25 clearcoat clearcoat rate and brdf diffuse rate,
@@ -32,20 +28,18 @@
  * consistent with pdf_principled at the direction it yields. The clearcoat draws GTR1's normals
  * (not visible ones), the diffuse lobe the cosine. */
 
-#define PRINCIPLED_ETA(m) ((m)->table[0])
-
 /* GGX's (alpha_x, alpha_y) from roughness and anisotropic (Burley 2012, addendum B.2: aspect
  * sqrt(1 - 0.9 anisotropic)), at least 0.001, as Mitsuba's calc_dist_params. */
 float2 principled_alpha(MaterialRef m)
 {
-    float r2 = m->p0.w * m->p0.w, aspect = sqrt(1.0f - 0.9f * m->p1.z);
+    float r2 = PRINCIPLED_ROUGHNESS(m) * PRINCIPLED_ROUGHNESS(m), aspect = sqrt(1.0f - 0.9f * PRINCIPLED_ANISOTROPIC(m));
     return fmax((float2)(r2 / aspect, r2 * aspect), 0.001f);
 }
 
 /* The clearcoat's GTR1 roughness: 0.1 at gloss 0 to 0.001 at gloss 1 (Burley 2012, B.2). */
 float clearcoat_alpha(MaterialRef m)
 {
-    return mix(0.1f, 0.001f, m->p2.z);
+    return mix(0.1f, 0.001f, PRINCIPLED_CLEARCOAT_GLOSS(m));
 }
 
 /* Schlick's Fresnel weight (1 - cos)^5 */
@@ -91,10 +85,10 @@ float3 sample_gtr1(float a, float u1, float u2)
  * exact reflectance f_dielectric (Mitsuba's principled_fresnel). */
 float3 principled_fresnel(MaterialRef m, float f_dielectric, float cos_h)
 {
-    float metallic = m->p1.x, tint = m->p1.y, eta = PRINCIPLED_ETA(m);
+    float metallic = PRINCIPLED_METALLIC(m), tint = PRINCIPLED_SPEC_TINT(m), eta = PRINCIPLED_ETA(m);
     float r0 = (eta - 1.0f) / (eta + 1.0f);
-    float3 tinted = schlick(principled_tint(m->p0.xyz) * (r0 * r0), cos_h);
-    return (1.0f - metallic) * (1.0f - tint) * f_dielectric + metallic * schlick(m->p0.xyz, cos_h)
+    float3 tinted = schlick(principled_tint(PRINCIPLED_BASE_COLOR(m)) * (r0 * r0), cos_h);
+    return (1.0f - metallic) * (1.0f - tint) * f_dielectric + metallic * schlick(PRINCIPLED_BASE_COLOR(m), cos_h)
            + (1.0f - metallic) * tint * tinted;
 }
 
@@ -102,10 +96,12 @@ float3 principled_fresnel(MaterialRef m, float f_dielectric, float cos_h)
  * outside or not: specular reflection, transmission, clearcoat and diffuse, summing to 1. */
 float4 principled_lobes(MaterialRef m, int outside, float fr)
 {
-    float metallic = m->p1.x, spec_trans = m->p2.w;
+    float metallic = PRINCIPLED_METALLIC(m), spec_trans = PRINCIPLED_SPEC_TRANS(m);
     float bsdf = (1.0f - metallic) * spec_trans;
-    float4 p = outside ? (float4)(m->table[2] * (1.0f - bsdf * (1.0f - fr)), m->table[2] * bsdf * (1.0f - fr),
-                                  0.25f * m->p2.y * m->table[3], (1.0f - metallic) * (1.0f - spec_trans) * m->table[4])
+    float specular = PRINCIPLED_MAIN_SPECULAR_SAMPLING_RATE(m);
+    float4 p = outside ? (float4)(specular * (1.0f - bsdf * (1.0f - fr)), specular * bsdf * (1.0f - fr),
+                                  0.25f * PRINCIPLED_CLEARCOAT(m) * PRINCIPLED_CLEARCOAT_SAMPLING_RATE(m),
+                                  (1.0f - metallic) * (1.0f - spec_trans) * PRINCIPLED_DIFFUSE_REFLECTANCE_SAMPLING_RATE(m))
                        : (float4)(fr, 1.0f - fr, 0.0f, 0.0f);
     return p / (p.x + p.y + p.z + p.w);
 }
@@ -122,8 +118,8 @@ float3 eval_principled(MaterialRef m, float3 wo, float3 wi)
 {
     if (wo.z == 0.0f || wi.z == 0.0f)
         return (float3)(0.0f);
-    float3 base = m->p0.xyz;
-    float metallic = m->p1.x, spec_trans = m->p2.w, eta = PRINCIPLED_ETA(m);
+    float3 base = PRINCIPLED_BASE_COLOR(m);
+    float metallic = PRINCIPLED_METALLIC(m), spec_trans = PRINCIPLED_SPEC_TRANS(m), eta = PRINCIPLED_ETA(m);
     float brdf = (1.0f - metallic) * (1.0f - spec_trans), bsdf = (1.0f - metallic) * spec_trans;
     int outside = wo.z > 0.0f, reflect = wo.z * wi.z > 0.0f;
     float e = reflect ? 1.0f : (outside ? eta : 1.0f / eta);
@@ -143,24 +139,24 @@ float3 eval_principled(MaterialRef m, float3 wo, float3 wi)
             float denom = wo_h + e * wi_h;
             f += sqrt(base) * (bsdf * (1.0f - fr) * dg * fabs(wo_h * wi_h) / (denom * denom * fabs(wo.z * wi.z)));
         }
-        if (reflect && outside && m->p2.y > 0.0f) {
+        if (reflect && outside && PRINCIPLED_CLEARCOAT(m) > 0.0f) {
             float a = 0.25f;
             float g = ggx_g1(wo, h, (float2)(a)) * ggx_g1(wi, h, (float2)(a));
             float fc = 0.04f + 0.96f * schlick_weight(wo_h);
-            f += (float3)(0.25f * m->p2.y * fc * gtr1_d(h, clearcoat_alpha(m)) * g);
+            f += (float3)(0.25f * PRINCIPLED_CLEARCOAT(m) * fc * gtr1_d(h, clearcoat_alpha(m)) * g);
         }
     }
     if (reflect && outside && brdf > 0.0f) {
         float fo = schlick_weight(wi.z), fi = schlick_weight(wo.z);
         float cos_d = dot(h, wi);
-        float rr = 2.0f * m->p0.w * cos_d * cos_d;                /* retro-reflection */
+        float rr = 2.0f * PRINCIPLED_ROUGHNESS(m) * cos_d * cos_d;                /* retro-reflection */
         float diffuse = (1.0f - 0.5f * fi) * (1.0f - 0.5f * fo) + rr * (fo + fi + fo * fi * (rr - 1.0f));
         /* Hanrahan-Krueger's fake subsurface (Burley 2012, B.1) */
         float fss = mix(1.0f, 0.5f * rr, fo) * mix(1.0f, 0.5f * rr, fi);
         float subsurface = 1.25f * (fss * (1.0f / (wi.z + wo.z) - 0.5f) + 0.5f);
-        f += base * (brdf / PI_F * mix(diffuse, subsurface, m->table[1]));
-        if (m->p1.w > 0.0f)
-            f += mix((float3)(1.0f), principled_tint(base), m->p2.x) * (m->p1.w * (1.0f - metallic) * schlick_weight(fabs(cos_d)));
+        f += base * (brdf / PI_F * mix(diffuse, subsurface, PRINCIPLED_FLATNESS(m)));
+        if (PRINCIPLED_SHEEN(m) > 0.0f)
+            f += mix((float3)(1.0f), principled_tint(base), PRINCIPLED_SHEEN_TINT(m)) * (PRINCIPLED_SHEEN(m) * (1.0f - metallic) * schlick_weight(fabs(cos_d)));
     }
     return f;
 }
@@ -169,7 +165,7 @@ float pdf_principled(MaterialRef m, float3 wo, float3 wi)
 {
     int outside = wo.z > 0.0f, reflect = wo.z * wi.z > 0.0f;
     float eta = PRINCIPLED_ETA(m);
-    if (wo.z == 0.0f || wi.z == 0.0f || (!outside && m->p2.w * (1.0f - m->p1.x) <= 0.0f))
+    if (wo.z == 0.0f || wi.z == 0.0f || (!outside && PRINCIPLED_SPEC_TRANS(m) * (1.0f - PRINCIPLED_METALLIC(m)) <= 0.0f))
         return 0.0f;
     float e = reflect ? 1.0f : (outside ? eta : 1.0f / eta);
     float3 h = principled_half_vector(wo, wi, e);
@@ -193,7 +189,7 @@ float pdf_principled(MaterialRef m, float3 wo, float3 wi)
 int sample_principled(MaterialRef m, float3 wo, float3 u, BSDFSample *s)
 {
     int outside = wo.z > 0.0f;
-    if (wo.z == 0.0f || (!outside && m->p2.w * (1.0f - m->p1.x) <= 0.0f))
+    if (wo.z == 0.0f || (!outside && PRINCIPLED_SPEC_TRANS(m) * (1.0f - PRINCIPLED_METALLIC(m)) <= 0.0f))
         return 0;
     float3 up = outside ? wo : -wo;
     float3 h = sample_ggx_visible(up, principled_alpha(m), u.y, u.z);

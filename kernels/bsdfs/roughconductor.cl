@@ -1,13 +1,11 @@
 /* roughconductor: a rough metal, the microfacet BRDF of a GGX or Beckmann distribution
  * (kernels/microfacet.cl)
  *     f(wo, wi) = F(wo.h) D(h) G1(wo, h) G1(wi, h) / (4 cos(theta_o) cos(theta_i)),
- * h the half vector, F the conductor Fresnel reflectance (Mitsuba 3's `roughconductor`).
- *
- * Parameters (Material):
- *   p0.xyz  eta, the real part of the complex IOR     p0.w  alpha, the roughness along the tangent
- *   p1.xyz  k, its imaginary part                     p1.w  alpha_v, along the bitangent
- *   p2.xyz  specular_reflectance, a factor on the reflectance
- *                                                      p2.w  1 for Beckmann, 0 for GGX
+ * h the half vector, F the conductor Fresnel reflectance (Mitsuba 3's `roughconductor`). Its
+ * parameters (eta + i k, the complex IOR; alpha and alpha_v, the roughness along the tangent
+ * and the bitangent; specular_reflectance; distribution, 1 for Beckmann, 0 for GGX) are read
+ * through ROUGHCONDUCTOR_<PARAM>, generated from their slots on the host
+ * (app/materials/conductor.py), and so are a coatedconductor's base's, in the same slots.
  *
  * Sampled by visible normals of either distribution: the weight f cos / pdf is
  * F(wo.h) G1(wi, h). One-sided. Beckmann's code is compiled only into the programs of scenes
@@ -15,12 +13,12 @@
  * time (docs/notes/performance-2026-11.md, 2026-11-24: Beckmann microfacets). */
 
 #ifdef BECKMANN
-#define IS_BECKMANN(m) ((m)->p2.w > 0.5f)
+#define IS_BECKMANN(m) (ROUGHCONDUCTOR_DISTRIBUTION(m) > 0.5f)
 #else
 #define IS_BECKMANN(m) 0
 #endif
 
-#define CONDUCTOR_ALPHA(m) ((float2)((m)->p0.w, (m)->p1.w))
+#define CONDUCTOR_ALPHA(m) ((float2)(ROUGHCONDUCTOR_ALPHA(m), ROUGHCONDUCTOR_ALPHA_V(m)))
 
 float conductor_d(MaterialRef m, float3 h)
 {
@@ -47,8 +45,8 @@ float3 eval_rough_metal(MaterialRef m, float n_outside, float3 wo, float3 wi)
         return (float3)(0.0f);
     float3 h = unit(wo + wi);
     float g = conductor_g1(m, wo, h) * conductor_g1(m, wi, h);
-    float3 f = fresnel_conductor(dot(wo, h), m->p0.xyz / n_outside, m->p1.xyz / n_outside);
-    return m->p2.xyz * f * (conductor_d(m, h) * g / (4.0f * wo.z * wi.z));
+    float3 f = fresnel_conductor(dot(wo, h), ROUGHCONDUCTOR_ETA(m) / n_outside, ROUGHCONDUCTOR_K(m) / n_outside);
+    return ROUGHCONDUCTOR_SPECULAR_REFLECTANCE(m) * f * (conductor_d(m, h) * g / (4.0f * wo.z * wi.z));
 }
 
 float3 eval_roughconductor(MaterialRef m, float3 wo, float3 wi)
@@ -79,7 +77,8 @@ int sample_rough_metal(MaterialRef m, float n_outside, float3 wo, float3 u, BSDF
     if (s->wi.z <= 0.0f || wo_h <= 0.0f)
         return 0;
     s->pdf = pdf_conductor_normal(m, wo, h) / (4.0f * wo_h);
-    s->weight = m->p2.xyz * fresnel_conductor(wo_h, m->p0.xyz / n_outside, m->p1.xyz / n_outside)
+    s->weight = ROUGHCONDUCTOR_SPECULAR_REFLECTANCE(m) * fresnel_conductor(wo_h, ROUGHCONDUCTOR_ETA(m) / n_outside,
+                                                                  ROUGHCONDUCTOR_K(m) / n_outside)
                 * conductor_g1(m, s->wi, h);
     s->lobe = LOBE_GLOSSY | LOBE_REFLECTION;
     return s->pdf > 0.0f;

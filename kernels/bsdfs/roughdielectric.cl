@@ -3,13 +3,9 @@
  * model of Walter et al. 2007 with the GGX or Beckmann distribution and Smith's separable
  * shadowing (kernels/interface.cl), its reflection times R and its transmission times T and the
  * (n_wo / n_wi)^2 by which radiance is compressed into a denser medium, as the smooth
- * dielectric's.
- *
- * Parameters (Material):
- *   p0.x    int_ior, the IOR inside (opposite the normal)     p0.y  ext_ior, outside
- *   p0.z    alpha, the roughness along the tangent            p0.w  1 for Beckmann, 0 for GGX
- *   p1.xyz  specular_reflectance R, a factor on reflection    p1.w  alpha_v, along the bitangent
- *   p2.xyz  specular_transmittance T, a factor on transmission
+ * dielectric's. Its parameters (a dielectric's, with alpha and alpha_v, the roughness along
+ * the tangent and the bitangent, and distribution, 1 for Beckmann, 0 for GGX) are read through
+ * ROUGHDIELECTRIC_<PARAM>, generated from their slots on the host (app/materials/dielectric.py).
  *
  * Transmissive: wo may lie on either side. Sampling draws a normal visible from wo (mirrored
  * to the outside when wo is inside, as Mitsuba 3 does), then reflects with the probability
@@ -17,14 +13,15 @@
  * compiled only where a scene has it (BECKMANN). */
 
 #ifdef BECKMANN
-#define ROUGH_GLASS_IS_BECKMANN(m) ((m)->p0.w > 0.5f)
+#define ROUGH_GLASS_IS_BECKMANN(m) (ROUGHDIELECTRIC_DISTRIBUTION(m) > 0.5f)
 #else
 #define ROUGH_GLASS_IS_BECKMANN(m) 0
 #endif
 
 Interface rough_glass(MaterialRef m)
 {
-    Interface c = {m->p0.x / m->p0.y, (float2)(m->p0.z, m->p1.w), ROUGH_GLASS_IS_BECKMANN(m)};
+    Interface c = {ROUGHDIELECTRIC_INT_IOR(m) / ROUGHDIELECTRIC_EXT_IOR(m),
+                   (float2)(ROUGHDIELECTRIC_ALPHA(m), ROUGHDIELECTRIC_ALPHA_V(m)), ROUGH_GLASS_IS_BECKMANN(m)};
     return c;
 }
 
@@ -34,9 +31,9 @@ float3 eval_roughdielectric(MaterialRef m, float3 wo, float3 wi)
     float pdf;
     float f = eval_interface(c, wo, wi, LOBE_REFLECTION | LOBE_TRANSMISSION, &pdf);
     if (wo.z * wi.z > 0.0f)
-        return m->p1.xyz * f;
+        return ROUGHDIELECTRIC_SPECULAR_REFLECTANCE(m) * f;
     float e = wo.z > 0.0f ? c.eta : 1.0f / c.eta;          /* n(wi's side) / n(wo's side) */
-    return m->p2.xyz * (f / (e * e));
+    return ROUGHDIELECTRIC_SPECULAR_TRANSMITTANCE(m) * (f / (e * e));
 }
 
 float pdf_roughdielectric(MaterialRef m, float3 wo, float3 wi)
@@ -50,6 +47,7 @@ int sample_roughdielectric(MaterialRef m, float3 wo, float3 u, BSDFSample *s)
 {
     if (!sample_interface(rough_glass(m), wo, u, LOBE_REFLECTION | LOBE_TRANSMISSION, s))
         return 0;
-    s->weight *= (s->lobe & LOBE_REFLECTION) ? m->p1.xyz : m->p2.xyz / (s->eta * s->eta);
+    s->weight *= (s->lobe & LOBE_REFLECTION) ? ROUGHDIELECTRIC_SPECULAR_REFLECTANCE(m)
+                                              : ROUGHDIELECTRIC_SPECULAR_TRANSMITTANCE(m) / (s->eta * s->eta);
     return 1;
 }

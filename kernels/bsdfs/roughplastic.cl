@@ -6,17 +6,16 @@
  *               + rho' / (pi eta^2) T(cos_o) T(cos_i),
  * rho' the base's albedo after its bounces (coated_base_albedo).
  *
- * Parameters (Material): those of kernels/coating.cl, F_int being the rough coating's mean
- * internal reflectance, and
- *   p2.w    alpha, the roughness; negated for Beckmann (compiled in only where a scene has it:
- *           BECKMANN)
- *   table   T(cos), the coating's transmittance from outside
+ * Parameters: those of kernels/coating.cl, PLASTIC_F_INT being the rough coating's mean
+ * internal reflectance, and ROUGHPLASTIC_SIGNED_ALPHA, alpha negated for Beckmann (compiled in
+ * only where a scene has it: BECKMANN), and ROUGHPLASTIC_TRANSMITTANCE, T(cos) from outside
+ * (app/materials/plastic.py: RoughPlastic).
  *
  * The lobe is chosen as Mitsuba does, from the tabulated reflectance 1 - T(cos_o); eval and pdf
  * hold both lobes, so a sample's weight is f cos / pdf of the whole. One-sided. */
 
 #ifdef BECKMANN
-#define PLASTIC_IS_BECKMANN(m) ((m)->p2.w < 0.0f)
+#define PLASTIC_IS_BECKMANN(m) (ROUGHPLASTIC_SIGNED_ALPHA(m) < 0.0f)
 #else
 #define PLASTIC_IS_BECKMANN(m) 0
 #endif
@@ -24,7 +23,7 @@
 /* The coating as an interface of kernels/interface.cl */
 Interface plastic_coating(MaterialRef m)
 {
-    Interface c = {m->p0.w, (float2)(fabs(m->p2.w)), PLASTIC_IS_BECKMANN(m)};
+    Interface c = {PLASTIC_ETA(m), (float2)(fabs(ROUGHPLASTIC_SIGNED_ALPHA(m))), PLASTIC_IS_BECKMANN(m)};
     return c;
 }
 
@@ -33,12 +32,12 @@ float3 eval_roughplastic(MaterialRef m, float3 wo, float3 wi)
     if (wo.z <= 0.0f || wi.z <= 0.0f)
         return (float3)(0.0f);
     Interface c = plastic_coating(m);
-    float eta = m->p0.w;
+    float eta = PLASTIC_ETA(m);
     float3 h = unit(wo + wi);
     float cos_t, eta_ti;
     float f = fresnel_dielectric(dot(wo, h), eta, &cos_t, &eta_ti);
     float g = interface_g1(c, wo, h) * interface_g1(c, wi, h);
-    float3 specular = m->p1.xyz * (f * interface_d(c, h) * g / (4.0f * wo.z * wi.z));
+    float3 specular = PLASTIC_SPECULAR_REFLECTANCE(m) * (f * interface_d(c, h) * g / (4.0f * wo.z * wi.z));
     float t = lookup_cos_table(m, wo.z) * lookup_cos_table(m, wi.z);
     return specular + coated_base_albedo(m) * (t / (PI_F * eta * eta));
 }

@@ -2,10 +2,8 @@
  * radiant intensity I(w) = I image(s(w')), w' the direction w in the light's own space with y
  * and z swapped (the map's pole is the light's +y), s the equal-area mapping of the sphere onto
  * the square, the image (its channels' mean) looked up at the nearest texel.
- *
- *   p0.xyz  position           p0.w  the image's row of the texture table
- *   p1.xyz  intensity I
- *   p2      the rotation from the light's space to the world's, a unit quaternion
+ * Its values are read through GONIOMETRIC_LIGHT_<SLOT>, generated from their slots on the host
+ * (app/lights/goniometric.py).
  *
  * A delta light: the only direction towards it is sampled, and it delivers I(w) / r^2. */
 
@@ -34,11 +32,11 @@ int sample_goniometric_light(const SceneData *sc, const RenderParams *p, const g
 {
 #ifdef TEXTURES
     float r2;
-    if (!aim_at_position(l->p0.xyz, x, ls, &r2))
+    if (!aim_at_position(GONIOMETRIC_LIGHT_POSITION(l), x, ls, &r2))
         return 0;
-    float3 w = to_light_space(l->p2, -ls->wi);
-    float3 value = eval_texture(sc, (int)l->p0.w, equal_area_square((float3)(w.x, w.z, w.y)));
-    ls->le = l->p1.xyz * (value.x / r2);
+    float3 w = to_light_space(GONIOMETRIC_LIGHT_ROTATION(l), -ls->wi);
+    float3 value = eval_texture(sc, (int)GONIOMETRIC_LIGHT_MAP(l), equal_area_square((float3)(w.x, w.z, w.y)));
+    ls->le = GONIOMETRIC_LIGHT_INTENSITY(l) * (value.x / r2);
     return 1;
 #else
     return 0;        /* a program without textures has no goniometric light's image */

@@ -1,7 +1,6 @@
-/* A point light (app/lights/point.py): radiant intensity I in every direction from a point.
- *
- *   p0.xyz  position
- *   p1.xyz  intensity I (W/sr, rgb)
+/* A point light (app/lights/point.py): radiant intensity I in every direction from a point, its
+ * position and I read through POINT_LIGHT_POSITION and _INTENSITY, generated from their slots
+ * on the host.
  *
  * A delta light: the only direction towards it is sampled, and it delivers I / r^2. */
 
@@ -9,9 +8,9 @@ int sample_point_light(const SceneData *sc, const RenderParams *p, const global 
                        float3 n, float2 u, LightSample *ls)
 {
     float r2;
-    if (!aim_at_position(l->p0.xyz, x, ls, &r2))
+    if (!aim_at_position(POINT_LIGHT_POSITION(l), x, ls, &r2))
         return 0;
-    ls->le = l->p1.xyz / r2;
+    ls->le = POINT_LIGHT_INTENSITY(l) / r2;
     return 1;
 }
 
@@ -20,12 +19,12 @@ int sample_point_light(const SceneData *sc, const RenderParams *p, const global 
  * PointLight::SampleLe); le is the intensity. */
 int emit_point_light(const SceneData *sc, const global Light *l, float4 u, LightEmission *e)
 {
-    e->p = l->p0.xyz;
+    e->p = POINT_LIGHT_POSITION(l);
     e->n = (float3)(0.0f);
     e->d = sample_uniform_sphere(u.x, u.y);
     e->pdf_pos = 1.0f;
     e->pdf_dir = 1.0f / (4.0f * PI_F);
-    e->le = l->p1.xyz;
+    e->le = POINT_LIGHT_INTENSITY(l);
     e->offset = 0.0f;
     e->prim = -1;
     e->delta = 1;

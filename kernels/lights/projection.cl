@@ -3,10 +3,8 @@
  * pbrt-v4 flips it), a direction w with w.z above the hither plane meets the screen at
  * s = w.xy / (w.z tan(fov / 2)); inside the screen's half extents the radiant intensity is scale
  * times the image's nearest texel at (s + half) / (2 half), outside none.
- *
- *   p0.xyz  position           p0.w  the image's row of the texture table
- *   p1.x    scale              p1.y  tan(fov / 2)           p1.zw  the screen's half extents
- *   p2      the rotation from the light's space to the world's, a unit quaternion
+ * Its values are read through PROJECTION_LIGHT_<SLOT>, generated from their slots on the host
+ * (app/lights/projection.py).
  *
  * A delta light: the only direction towards it is sampled, and it delivers I(w) / r^2. */
 
@@ -17,16 +15,16 @@ int sample_projection_light(const SceneData *sc, const RenderParams *p, const gl
 {
 #ifdef TEXTURES
     float r2;
-    if (!aim_at_position(l->p0.xyz, x, ls, &r2))
+    if (!aim_at_position(PROJECTION_LIGHT_POSITION(l), x, ls, &r2))
         return 0;
-    float3 w = to_light_space(l->p2, -ls->wi);
+    float3 w = to_light_space(PROJECTION_LIGHT_ROTATION(l), -ls->wi);
     if (w.z < PROJECTION_HITHER)
         return 0;
-    float2 half_extent = l->p1.zw;
-    float2 s = (float2)(w.x, -w.y) / (w.z * l->p1.y);
+    float2 half_extent = PROJECTION_LIGHT_HALF_EXTENT(l);
+    float2 s = (float2)(w.x, -w.y) / (w.z * PROJECTION_LIGHT_TAN_HALF_FOV(l));
     if (fabs(s.x) > half_extent.x || fabs(s.y) > half_extent.y)
         return 0;
-    ls->le = eval_texture(sc, (int)l->p0.w, (s + half_extent) / (2.0f * half_extent)) * (l->p1.x / r2);
+    ls->le = eval_texture(sc, (int)PROJECTION_LIGHT_SLIDE(l), (s + half_extent) / (2.0f * half_extent)) * (PROJECTION_LIGHT_SCALE(l) / r2);
     return 1;
 #else
     return 0;        /* a program without textures has no projection light's image */

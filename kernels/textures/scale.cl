@@ -1,11 +1,8 @@
 /* scale: a texture times a factor (pbrt-v4's `scale`; Mitsuba's <texture> inside a `scale`).
- *
- * Fields (Texture):
- *   input 0   the texture (pbrt's tex)
- *   input 1   the factor (pbrt's scale), a constant or a texture
- */
+ * Its inputs, tex and scale (a constant or a texture), are read by the indices generated from
+ * their declaration (app/textures/scale.py). */
 
 float3 eval_scale(const SceneData *sc, const global Texture *t, float2 uv, const float3 *r)
 {
-    return eval_input(sc, t, 0, uv, r) * eval_input(sc, t, 1, uv, r);
+    return eval_input(sc, t, SCALE_INPUT_TEX, uv, r) * eval_input(sc, t, SCALE_INPUT_SCALE, uv, r);
 }
