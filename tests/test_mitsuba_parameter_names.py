@@ -155,3 +155,17 @@ def test_a_property_mitsuba_3_knows_and_pathtrace_does_not_read_is_warned_of_onc
     r.add_samples(1)
     r.finish()
     assert np.all(np.isfinite(r.mean())) and r.mean().max() > 0
+
+
+def test_a_shape_takes_its_bsdf_by_its_place_whatever_its_name(tmp_path, capsys):
+    """Mitsuba 3's Shape takes any BSDF object it holds (src/render/shape.cpp), as its exporters
+    write it: <ref id="..." name="bsdf"/>."""
+    path = tmp_path / "s.xml"
+    path.write_text('<scene version="3.0.0"><bsdf type="diffuse" id="red"><rgb name="reflectance" value="0.8, 0, 0"/>'
+                    '</bsdf><shape type="sphere"><ref id="red" name="bsdf"/></shape>'
+                    '<shape type="sphere"><bsdf type="conductor" name="surface"/></shape></scene>')
+    scene = load_scene(str(path))
+    assert capsys.readouterr().err == ""
+    red, metal = (scene.materials.get(row) for row in scene.sphere_material)
+    assert red.type == "diffuse" and np.allclose(red.params["rho_d"], [0.8, 0, 0]), red
+    assert metal.type == "conductor", metal

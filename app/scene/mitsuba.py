@@ -983,8 +983,14 @@ class _Reader:
             return self.instance(node, props)
         bsdf, emission, media = None, None, {}
         for child in node.children:
-            if child.tag in ("bsdf", "ref") and "name" not in child.attrs:
+            # Mitsuba 3's Shape takes a BSDF by its place, whatever its name (src/render/shape.cpp,
+            # the constructor's loop over props.objects()): a <ref name="bsdf"> as its exporters
+            # write it, too
+            if child.tag == "bsdf" or child.tag == "ref" and ("name" not in child.attrs
+                                                              or self.resolve(child).tag == "bsdf"):
                 bsdf = child
+                if "name" in child.attrs:
+                    props.read.add(child.attrs["name"])
             elif child.tag == "emitter":
                 if child.attrs.get("type") != "area":
                     warn(f"{child.where()}: a shape's emitter must be area; ignored")
