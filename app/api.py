@@ -201,7 +201,9 @@ def prepare(scene: Scene, device="auto", build_progress=None, phases=None) -> _P
 
 def _contents(compiled) -> str:
     """What a compiled scene holds, in words: '5 spheres', '126,504 triangles, 1 sphere'."""
-    counts = [(compiled.num_triangles, "triangle"), (compiled.num_spheres, "sphere")]
+    n_shapes = len(compiled.shape_prims)
+    counts = [(compiled.num_triangles - n_shapes, "triangle"), (compiled.num_spheres, "sphere"),
+              (n_shapes, "analytic shape")]
     return ", ".join(f"{n:,} {what}{'s' * (n != 1)}" for n, what in counts if n) or "nothing"
 
 
@@ -223,6 +225,9 @@ def _geometry_digest(scene: Scene) -> bytes:
         h.update(a.data)
     # the media and what bounds them compile with the primitives (pathtrace.compiled)
     h.update(repr((scene.media, scene.sphere_media, [m.media for m in meshes])).encode())
+    # analytic shapes (objects' are copied into scene.shapes)
+    h.update(repr([(s.kind, tuple(map(float, s.params)), np.asarray(s.to_world, np.float64).tolist(), s.material,
+                    s.flip, s.swap_uv, s.media) for s in scene.shapes]).encode())
     return h.digest()
 
 

@@ -24,6 +24,8 @@ from pathtrace.media import media_table, packed_interfaces
 from pathtrace.memory import available_host_memory
 from pathtrace.camera import Camera, kernel_name
 from pathtrace.scene.description import RenderSettings, Scene
+from pathtrace.shapes import ROWS, SHAPES, Shape
+from pathtrace.shapes import TAGS as SHAPE_TAGS
 from pathtrace.textures import TextureTables, compile_textures
 from pathtrace.scene import instances as instancing
 from pathtrace.two_level import build_two_level
@@ -33,8 +35,8 @@ from pathtrace.types import BVH_NODE, INSTANCE, TRIANGLE
 @dataclass
 class ShapeRef:
     """A shape of the description, as picking reports it."""
-    kind: str          # "sphere" or "mesh"
-    index: int         # into scene.spheres, or the compiled scene's meshes (scene.meshes first)
+    kind: str          # "sphere", "mesh" or "shape" (analytic)
+    index: int         # into scene.spheres, the compiled scene's meshes (scene.meshes first) or scene.shapes
     name: str
     material: int      # row of scene.materials
 
@@ -62,7 +64,15 @@ class CompiledScene:
         self.two_level = instances is not None and instances.triangle_count > instancing.FLATTEN_MAX
         # the meshes whose triangles the kernels hold: the scene's (and its instances' copies),
         # then, with a two-level BVH, its objects', in their own space
-        meshes = list(scene.meshes)
+        # the scene's analytic shapes (app/shapes/) are primitives of the triangle range, one each,
+        # after its own meshes: the per-mesh tables below take them as meshes of one triangle
+        for s in scene.shapes:
+            problem = s.kind not in SHAPES and f"no shape kind {s.kind!r}" or SHAPES[s.kind].check(s.params)
+            if not problem and abs(s.det) < 1e-12:
+                problem = "its transform is singular"
+            if problem:
+                raise UserError(f"{scene.source or scene.name}: shape {short(s.name)}: {problem}")
+        meshes = list(scene.meshes) + list(scene.shapes)
         if instances is not None and not self.two_level:
             meshes += instancing.flattened_meshes(instances)
         mesh_ends = [len(meshes)]            # where the scene's own meshes and each object's end
@@ -79,7 +89,8 @@ class CompiledScene:
         # from float32 vertices (half the bytes of float64 to move) by np.take, which is 3-4x
         # faster than NumPy's indexing with an array; whole 48-byte rows are then put in BVH
         # order by one more np.take, 3x faster than a gather into the rows' xyz
-        corners = np.concatenate([np.take(float4_rows(m.vertices), m.faces, axis=0) for m in meshes]) if meshes \
+        corners = np.concatenate([np.take(float4_rows(m.vertices), m.faces, axis=0) if not isinstance(m, Shape)
+                                  else shape_corners(m) for m in meshes]) if meshes \
             else np.zeros((0, 3, 4), np.float32)
         lo, hi = primitive_boxes(scene.spheres, corners[:, :, :3])
         # a few spheres beside many triangles stay out of the tree (LONE_MAX), in their order
@@ -115,6 +126,7 @@ class CompiledScene:
         self.triangles["v0"][:, 3] = normal_index.view(np.float32)
         self.uvs, uv_index = corner_table(meshes, "uvs", triangle_order)
         self.triangles["v1"][:, 3] = uv_index.view(np.float32)
+        self.shape_prims = self.place_shapes(mesh_of[triangle_order])
 
         # one index space: spheres, then triangles, each in BVH order
         mesh_material = np.array([m.material for m in meshes], np.int32)
@@ -124,6 +136,18 @@ class CompiledScene:
         self.media = self.compile_media(scene, sphere_order, mesh_of[triangle_order])
         self.light_sampler = scene.settings.light_sampler    # pathtrace.lights.LIGHT_SAMPLERS
         self.update_materials()
+
+    def place_shapes(self, triangle_mesh: np.ndarray) -> np.ndarray:
+        """Points the records of the analytic shapes (rows of the triangle range whose mesh is a
+        Shape) at their rows of the side table (`normals`, appended there); returns their
+        primitive indices."""
+        is_shape = np.array([isinstance(m, Shape) for m in self.meshes], bool)
+        rows = np.flatnonzero(is_shape[triangle_mesh]) if len(triangle_mesh) else np.zeros(0, np.int64)
+        if len(rows):
+            first = len(self.normals)
+            self.normals = np.concatenate([self.normals] + [self.meshes[triangle_mesh[r]].rows() for r in rows])
+            self.triangles["v0"][rows, 3] = (first + ROWS * np.arange(len(rows), dtype=np.int32)).view(np.float32)
+        return (self.num_spheres + rows).astype(np.int64)
 
     def compile_media(self, scene: Scene, sphere_order: np.ndarray, triangle_mesh: np.ndarray) -> np.ndarray:
         """The media table, and self.prim_media: per primitive, the media it bounds (one
@@ -141,6 +165,11 @@ class CompiledScene:
             return media_table(scene.media)
         except ValueError as e:
             raise UserError(f"{scene.source or scene.name}: {e}") from None
+
+    @property
+    def shape_kinds(self) -> tuple:
+        """The analytic shape kinds the scene has (Features.shapes)."""
+        return tuple(sorted({s.kind for s in self.scene.shapes}))
 
     @property
     def num_triangles(self) -> int:
@@ -173,10 +202,28 @@ class CompiledScene:
         # the corners as a view of the triangles' rows (v0, v1, v2 are consecutive float4s), not a copy
         corners = self.triangles.view(np.float32).reshape(-1, 3, 4)[:, :, :3]
         power = emitted_power(self.spheres, corners, luminance[:self.num_spheres], luminance[self.num_spheres:])
+        shapes = [self.meshes[int(self.prim_shape[p]) - self.num_spheres] for p in self.shape_prims]
+        power[self.shape_prims] = [np.pi * luminance[p] * s.world_area(SHAPES[s.kind])
+                                   for p, s in zip(self.shape_prims, shapes)]
         self.lights: LightTable = build_light_table(power, self.scene.environment, self.scene.lights,
                                                     max(self.radius, 1e-6),
-                                                    lambda prims: primitive_bounds(self.spheres, corners, prims, both_sides[prims]),
+                                                    lambda prims: self.light_bounds(prims, corners, both_sides),
                                                     self.light_sampler, texture_rows)
+
+    def light_bounds(self, prims: np.ndarray, corners: np.ndarray, both_sides: np.ndarray) -> dict:
+        """The light tree's bounds of primitives `prims`: an analytic shape's normals are its
+        kind's cone (app/shapes/shape.py), every direction where it emits from both sides."""
+        bounds = primitive_bounds(self.spheres, corners, prims, both_sides[prims])
+        # primitive_bounds' rows: the spheres of prims, then its triangles, each in prims' order
+        sphere = prims < self.num_spheres
+        row = np.empty(len(prims), np.int64)
+        row[np.concatenate([np.flatnonzero(sphere), np.flatnonzero(~sphere)])] = np.arange(len(prims))
+        for i in np.flatnonzero(np.isin(prims, self.shape_prims)):
+            s = self.meshes[int(self.prim_shape[prims[i]]) - self.num_spheres]
+            axis, cos = s.world_normal_cone(SHAPES[s.kind])
+            bounds["axis"][row[i]] = axis
+            bounds["cos_o"][row[i]] = -1.0 if both_sides[prims[i]] else cos
+        return bounds
 
     def geometry_arrays(self) -> dict:
         """The buffers of the shapes, by their names in SCENE_BUFFERS."""
@@ -201,6 +248,7 @@ class CompiledScene:
         variants = tuple(sorted({d for name, tag in TAGS.items() if tag in used
                                  for d in BSDFS[name].defines(rows[rows["type"] == tag])}))
         return Features(spheres=self.num_spheres > 0, triangles=self.num_triangles > 0,
+                        shapes=self.shape_kinds,
                         bsdf_defines=variants, bsdfs=tuple(name for name, tag in TAGS.items() if tag in used),
                         textures=self.textures.types, masks=self.textures.masks,
                         normal_maps=self.textures.normal_maps, lights=self.lights.types,
@@ -232,6 +280,8 @@ class CompiledScene:
             return ShapeRef("sphere", shape, self.scene.sphere_name(shape),
                             int(self.scene.sphere_material[shape]))
         mesh = self.meshes[shape - self.num_spheres]
+        if isinstance(mesh, Shape):
+            return ShapeRef("shape", list(self.scene.shapes).index(mesh), mesh.name, mesh.material)
         return ShapeRef("mesh", shape - self.num_spheres, mesh.name, mesh.material)
 
 
@@ -244,6 +294,19 @@ def float4_rows(rows) -> np.ndarray:
     """(N, 3) rows (vertices, normals) as the kernels' float4s: (N, 4) float32, w 0."""
     out = np.zeros((len(rows), 4), np.float32)
     out[:, :3] = rows
+    return out
+
+
+def shape_corners(shape: Shape) -> np.ndarray:
+    """An analytic shape's record in the triangle range, (1, 3, 4): its world box's corners in
+    the corners' places (lower, upper, lower), so that the BVH and the light tree see its box as
+    a triangle's; its kind's tag in v2.w (kernels/shapes/analytic.cl), its side-table row in v0.w
+    (CompiledScene.place_shapes) and -1 in v1.w (no uv table)."""
+    lo, hi = shape.bounds(SHAPES[shape.kind])
+    out = np.zeros((1, 3, 4), np.float32)
+    out[0, :, :3] = [lo, hi, lo]
+    out[0, 1, 3] = np.int32(-1).view(np.float32)
+    out[0, 2, 3] = np.int32(SHAPE_TAGS[shape.kind]).view(np.float32)
     return out
 
 

@@ -39,7 +39,7 @@ CACHE_FORMAT = "2"
 def kernel_source(extra: str = "", features: Features = Features()) -> str:
     """The kernels as one source text, each file introduced by a #line marker so that compiler
     messages name the file and line."""
-    from pathtrace import camera, filters, lights
+    from pathtrace import camera, filters, lights, shapes
     from pathtrace.materials import dispatch_source, kernel_files, tag_source
     from pathtrace.textures import kernel_parts
 
@@ -47,10 +47,17 @@ def kernel_source(extra: str = "", features: Features = Features()) -> str:
     texts = [(name, (folder / name).read_text()) for name in BASIC_FILES]
     texts += [(name, text if text is not None else (folder / name).read_text())
               for name, text in kernel_parts(features.textures)]
-    files = (*SHAPE_FILES, *(("masks.cl",) if features.masks else ()), "bvh.cl", "frame.cl",
+    texts.append(("app/materials/registry.py: tag_source", tag_source()))
+    # the transforms of instances and analytic shapes, where the scene has either
+    moved = ("transform.cl",) if features.shapes or features.instance_stack else ()
+    texts += [(name, (folder / name).read_text())
+              for name in (*SHAPE_FILES, *moved, *shapes.kernel_files(features.shapes))]
+    if features.shapes:
+        texts += [("app/shapes/registry.py: dispatch_source", shapes.dispatch_source(features.shapes)),
+                  ("shapes/analytic.cl", (folder / "shapes/analytic.cl").read_text())]
+    files = (*(("masks.cl",) if features.masks else ()), "bvh.cl", "frame.cl",
              *(("normal_maps.cl",) if features.normal_maps else ()),
              *(("shading.cl",) if features.textures else ()), *BSDF_FILES, *kernel_files(features.bsdfs))
-    texts.append(("app/materials/registry.py: tag_source", tag_source()))
     texts += [(name, (folder / name).read_text()) for name in files]
     texts.append(("app/materials/registry.py: dispatch_source", dispatch_source(features.bsdfs)))
     parts = [("environment.cl", None), *lights.kernel_parts(features.lights, features.light_tree, bool(features.bdpt)),

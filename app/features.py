@@ -18,6 +18,8 @@ class Features:
     is the program the tests build their kernels beside."""
     spheres: bool = True                   # the scene has spheres (else NO_SPHERES: no sphere test)
     triangles: bool = True                 # the scene has triangles (else NO_TRIANGLES)
+    shapes: tuple = ()                     # the analytic shape kinds it has (pathtrace.shapes.SHAPES;
+                                           # SHAPES, kernels/shapes/analytic.cl); () leaves them out
     bsdfs: tuple = None                    # names of pathtrace.materials.BSDFS; None: all of them
     textures: tuple = ()                   # names of pathtrace.textures.TEXTURES the scene uses;
                                            # () leaves all texture code out
@@ -62,13 +64,15 @@ class Features:
         RenderParams (GENERIC). Built once per device and driver and cached, it draws a scene's
         first images while the scene's own program, specialised by these features, builds
         (pathtrace.programs)."""
+        from pathtrace.shapes import SHAPES
         from pathtrace.textures import TEXTURES
-        return Features(textures=tuple(TEXTURES), masks=True, normal_maps=True, light_tree=True,
+        return Features(shapes=tuple(SHAPES), textures=tuple(TEXTURES), masks=True, normal_maps=True, light_tree=True,
                         media=True, null_surfaces=True, camera=GENERIC, filter=GENERIC,
                         russian_roulette=GENERIC, stack=48, instance_stack=48, generic=True)
 
     def defines(self) -> tuple:
         return ((() if self.spheres else ("NO_SPHERES",)) + (() if self.triangles else ("NO_TRIANGLES",))
+                + (("SHAPES",) if self.shapes else ())
                 + (("TEXTURES",) if self.textures else ())
                 + (("ALPHA_MASKS",) if self.masks else ()) + (("NORMAL_MAPS",) if self.normal_maps else ())
                 + (("LIGHT_TREE",) if self.light_tree else ()) + (("MEDIA",) if self.media else ())

@@ -94,20 +94,39 @@ float pdf_scattering(const Vertex *v, float3 wo, float3 wi)
 float3 emitter_normal(const SceneData *sc, int prim, float3 y)
 {
 #ifndef NO_TRIANGLES
-    if (prim >= sc->num_spheres)
-        return triangle_normal(&sc->triangles[prim - sc->num_spheres]);
+    if (prim >= sc->num_spheres) {
+        const global Triangle *tri = &sc->triangles[prim - sc->num_spheres];
+#ifdef SHAPES
+        if (SHAPE_KIND(tri)) {
+            const global float4 *f = SHAPE_ROWS(sc, tri);
+            float3 p, error, n;
+            analytic_surface(SHAPE_KIND(tri), f, analytic_params(SHAPE_KIND(tri), f, y), &p, &error, &n);
+            return n;
+        }
+#endif
+        return triangle_normal(tri);
+    }
 #endif
     Sphere s = sc->spheres[prim];
     return (y - s.xyz) / s.w;
 }
 
-/* The density per area with which a light subpath starts at a point of emissive primitive
- * `prim`: the light's choice by power times its area's inverse (pbrt's PdfLightOrigin). */
-float pdf_emitter_origin(const SceneData *sc, int prim)
+/* The density per area with which a light subpath starts at point y of emissive primitive
+ * `prim`: the light's choice by power times its area's inverse (pbrt's PdfLightOrigin), or an
+ * analytic shape's density there. */
+float pdf_emitter_origin(const SceneData *sc, int prim, float3 y)
 {
 #ifndef NO_TRIANGLES
-    if (prim >= sc->num_spheres)
-        return sc->light_pick[prim] / triangle_area(&sc->triangles[prim - sc->num_spheres]);
+    if (prim >= sc->num_spheres) {
+        const global Triangle *tri = &sc->triangles[prim - sc->num_spheres];
+#ifdef SHAPES
+        if (SHAPE_KIND(tri)) {
+            const global float4 *f = SHAPE_ROWS(sc, tri);
+            return sc->light_pick[prim] * analytic_pdf_area(SHAPE_KIND(tri), f, analytic_params(SHAPE_KIND(tri), f, y));
+        }
+#endif
+        return sc->light_pick[prim] / triangle_area(tri);
+    }
 #endif
     float r = sc->spheres[prim].w;
     return sc->light_pick[prim] / (4.0f * PI_F * r * r);
@@ -299,7 +318,7 @@ float4 densities_from_emitter(const SceneData *sc, const Vertex *pt, const Verte
 {
     int prim = pt->s.prim;
     float3 n = emitter_normal(sc, prim, pt->s.p);
-    return (float4)(pdf_emitter_origin(sc, prim),
+    return (float4)(pdf_emitter_origin(sc, prim, pt->s.p),
                     convert_density(pdf_area_emission(sc, prim, n, pt->wo), pt->s.p, pm->s.p, pm->s.ng), 0.0f, 0.0f);
 }
 
@@ -366,7 +385,7 @@ float3 connect_light_sample(const SceneData *sc, const RenderParams *p, const Ve
         const global Light *l = &sc->lights[ls.light];
         int delta = (ls.flags & LIGHT_DELTA) != 0;
         float3 n = delta ? (float3)(0.0f) : emitter_normal(sc, l->prim, ls.y);
-        float origin = delta ? l->pick : pdf_emitter_origin(sc, l->prim);
+        float origin = delta ? l->pick : pdf_emitter_origin(sc, l->prim, ls.y);
         w = bdpt_mis_weight(lt, 1, cam, t, densities_to_light(sc, l, ls.y, n, pt, pm), origin, delta);
     }
     float3 o = offset_ray_origin(pt->s.p, pt->s.offset, pt->s.ng, ls.wi);

@@ -105,6 +105,27 @@ CPU_INLINE void intersect_triangles(const SceneData *sc, int first, int count, f
     triangle_shear(d, &row_x, &row_y, &row_z);
     COUNT_WORK(sc, PRIMITIVES_TESTED, count);
     for (int i = first; i < first + count; ++i) {
+#ifdef SHAPES
+        /* an analytic shape: a curved one may be met again by a ray leaving it, so `self` is not
+           skipped; the offset origin keeps the ray off the surface it leaves, as a sphere's */
+        int kind = SHAPE_KIND(&sc->triangles[i]);
+        if (kind) {
+            float2 uv;
+            float t = intersect_analytic(kind, SHAPE_ROWS(sc, &sc->triangles[i]), o, d, hit->t, &uv);
+#ifdef ALPHA_MASKS
+            if (t < hit->t && masked_out(sc, sc->num_spheres + i, uv, o + t * d, d))
+                continue;
+#endif
+            if (t < hit->t) {
+                hit->t = t;
+                hit->prim = sc->num_spheres + i;
+                hit->b1 = uv.x;
+                hit->b2 = uv.y;
+                SET_INSTANCE(hit, instance);
+            }
+            continue;
+        }
+#endif
         if (IS_SELF(self, sc->num_spheres + i, instance))
             continue;
         float b1, b2;
@@ -194,19 +215,6 @@ CPU_INLINE float4 intersect_leaves(const SceneData *sc, float4 t, int4 count, in
         int i_ = swap ? ib : ia; ib = swap ? ia : ib; ia = i_;   \
     }
 
-#ifdef INSTANCES
-/* A point and a vector moved by an instance's 3x4 transform (its rows). */
-float3 transform_point(const global float4 *rows, float3 p)
-{
-    return (float3)(dot(rows[0].xyz, p), dot(rows[1].xyz, p), dot(rows[2].xyz, p))
-           + (float3)(rows[0].w, rows[1].w, rows[2].w);
-}
-
-float3 transform_vector(const global float4 *rows, float3 v)
-{
-    return (float3)(dot(rows[0].xyz, v), dot(rows[1].xyz, v), dot(rows[2].xyz, v));
-}
-#endif
 
 /* Sets `node` to the node to visit next, from a node's children entered at distances t
  * (INFINITY: not entered, or a leaf already tested) with `index` their nodes: the nearest child
@@ -379,25 +387,6 @@ typedef struct {
 #endif
 } Surface;
 
-#ifdef INSTANCES
-/* p's error bound after p (in object space, error `error`) was moved to the world by the
- * instance's transform (pbrt-v4's Transform of a Point3fi: the rounding of the product added). */
-float3 transform_error(const global float4 *rows, float3 p, float3 error)
-{
-    float3 m0 = fabs(rows[0].xyz), m1 = fabs(rows[1].xyz), m2 = fabs(rows[2].xyz);
-    float3 moved = (float3)(dot(m0, error), dot(m1, error), dot(m2, error));
-    float3 size = (float3)(dot(m0, fabs(p)), dot(m1, fabs(p)), dot(m2, fabs(p)))
-                  + fabs((float3)(rows[0].w, rows[1].w, rows[2].w));
-    return (1.0f + gamma_bound(3)) * moved + gamma_bound(3) * size;
-}
-
-/* A normal turned to the world: by the inverse transpose of world from object, the transpose of
- * to_object's rows. */
-float3 transform_normal(const global float4 *to_object, float3 n)
-{
-    return unit(n.x * to_object[0].xyz + n.y * to_object[1].xyz + n.z * to_object[2].xyz);
-}
-#endif
 
 /* The surface at hit, found along o + t d, in world space. */
 Surface surface_at(const SceneData *sc, const Hit *hit, float3 o, float3 d)
@@ -422,6 +411,12 @@ Surface surface_at(const SceneData *sc, const Hit *hit, float3 o, float3 d)
 #ifndef NO_TRIANGLES
     if (hit->prim >= sc->num_spheres) {
         const global Triangle *tri = &sc->triangles[hit->prim - sc->num_spheres];
+#ifdef SHAPES
+        if (SHAPE_KIND(tri)) {
+            analytic_surface(SHAPE_KIND(tri), SHAPE_ROWS(sc, tri), (float2)(hit->b1, hit->b2), &s.p, &error, &s.ng);
+            s.ns = s.ng;
+        } else
+#endif
         triangle_surface(tri, sc->normals, hit->b1, hit->b2, &s.p, &error, &s.ng, &s.ns);
     } else
 #endif
@@ -455,13 +450,19 @@ void turn_round(Surface *s)
 #endif
 }
 
-/* The texture coordinates of point p on primitive prim, a triangle's barycentric weights b (a
- * program for a scene with textures has them). */
+/* The texture coordinates of point p on primitive prim, a triangle's barycentric weights b or
+ * an analytic shape's parameters (a program for a scene with textures has them). */
 float2 surface_uv(const SceneData *sc, int prim, float2 b, float3 p)
 {
 #ifndef NO_TRIANGLES
-    if (prim >= sc->num_spheres)
-        return triangle_uv(&sc->triangles[prim - sc->num_spheres], sc->uvs, b.x, b.y);
+    if (prim >= sc->num_spheres) {
+        const global Triangle *tri = &sc->triangles[prim - sc->num_spheres];
+#ifdef SHAPES
+        if (SHAPE_KIND(tri))
+            return analytic_texture_uv(SHAPE_ROWS(sc, tri), b);
+#endif
+        return triangle_uv(tri, sc->uvs, b.x, b.y);
+    }
 #endif
     return sphere_uv(sc->spheres[prim], p);
 }

@@ -29,6 +29,18 @@ void surface_derivatives(const SceneData *sc, const Surface *s, float3 *dpdu, fl
 #ifndef NO_TRIANGLES
     if (s->prim >= sc->num_spheres) {
         const global Triangle *tri = &sc->triangles[s->prim - sc->num_spheres];
+#ifdef SHAPES
+        if (SHAPE_KIND(tri)) {
+            float3 p = s->p;
+#ifdef INSTANCES
+            if (INSTANCED(s->instance))
+                p = transform_point(sc->instances[s->instance].to_object, p);
+#endif
+            analytic_derivatives(SHAPE_KIND(tri), SHAPE_ROWS(sc, tri), p, dpdu, dpdv);
+            instanced_derivatives(sc, s, dpdu, dpdv);
+            return;
+        }
+#endif
         int k = as_int(tri->v1.w);
         if (k >= 0) {
             float2 duv02 = sc->uvs[k] - sc->uvs[k + 2], duv12 = sc->uvs[k + 1] - sc->uvs[k + 2];

@@ -32,9 +32,14 @@ int masked_out(const SceneData *sc, int prim, float2 b, float3 p, float3 d)
         return 0;
     float2 uv;
 #ifndef NO_TRIANGLES
-    if (prim >= sc->num_spheres)
-        uv = triangle_uv(&sc->triangles[prim - sc->num_spheres], sc->uvs, b.x, b.y);
-    else
+    if (prim >= sc->num_spheres) {
+        const global Triangle *tri = &sc->triangles[prim - sc->num_spheres];
+#ifdef SHAPES
+        uv = SHAPE_KIND(tri) ? analytic_texture_uv(SHAPE_ROWS(sc, tri), b) : triangle_uv(tri, sc->uvs, b.x, b.y);
+#else
+        uv = triangle_uv(tri, sc->uvs, b.x, b.y);
+#endif
+    } else
 #endif
         uv = sphere_uv(sc->spheres[prim], p);
     float opacity = opacity_at(sc, m, uv);

@@ -101,8 +101,8 @@ def kernels(backend):
 def layout_features(compiled) -> Features:
     """The features of the default program (which test kernels are built with) that a compiled
     scene's layout needs: its few spheres outside the tree (LONE_SPHERES), which a kernel built
-    without would never meet."""
-    return Features(lone_spheres=compiled.lone_spheres)
+    without would never meet, and its analytic shapes' kinds."""
+    return Features(lone_spheres=compiled.lone_spheres, shapes=compiled.shape_kinds)
 
 
 def scene_arrays(compiled):

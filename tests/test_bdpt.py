@@ -221,7 +221,7 @@ kernel void mis_sums(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *out
     cam[n - 1].pdf_rev = from_light.x;
     cam[n - 2].pdf_rev = from_light.y;
     int prim = cam[n - 1].s.prim;
-    float origin = pdf_emitter_origin(&sc, prim);
+    float origin = pdf_emitter_origin(&sc, prim, cam[n - 1].s.p);
     float3 normal = emitter_normal(&sc, prim, cam[n - 1].s.p);
     for (int s = 1; s < n; ++s) {
         int t = n - s;

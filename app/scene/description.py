@@ -101,6 +101,7 @@ class Scene:
     camera_medium: int = -1       # the medium the camera is in (a row of `media`), or -1: none
     instances: object = None      # pathtrace.scene.instances.Instances: meshes drawn many times,
                                   # or None. Their meshes are not among `meshes`
+    shapes: list = field(default_factory=list)   # its analytic shapes (pathtrace.shapes.Shape)
 
     def __post_init__(self):
         # lists that also answer by name (pathtrace.named), for notebooks; kept as they are
@@ -109,6 +110,8 @@ class Scene:
             self.meshes = NamedList(self.meshes, kind=("mesh", "meshes"))
         if not isinstance(self.lights, NamedList):
             self.lights = NamedList(self.lights, name_and_index, ("light", "lights"))
+        if not isinstance(self.shapes, NamedList):
+            self.shapes = NamedList(self.shapes, kind=("shape", "shapes"))
 
     def __repr__(self) -> str:
         """One line: what it holds, where it is, the camera and the image it renders; never its
@@ -116,6 +119,8 @@ class Scene:
         s, c = self.settings, self.camera
         parts = [f"{len(self.spheres)} sphere{'' if len(self.spheres) == 1 else 's'}",
                  f"{len(self.meshes)} mesh{'' if len(self.meshes) == 1 else 'es'} ({self.triangle_count} triangles)"]
+        if len(self.shapes):
+            parts.append(f"{len(self.shapes)} analytic shape{'' if len(self.shapes) == 1 else 's'}")
         if self.instances is not None and len(self.instances):
             parts.append(f"{len(self.instances)} instances ({self.instances.triangle_count} triangles)")
         parts += [f"{len(self.materials)} material{'' if len(self.materials) == 1 else 's'}",
@@ -129,8 +134,8 @@ class Scene:
                 f"{f'; from {self.source}' if self.source else ''}>")
 
     def bounds(self):
-        """(lower, upper) corners of the box round its spheres and meshes (world space; instances
-        left out), or None where it has neither."""
+        """(lower, upper) corners of the box round its spheres, meshes and analytic shapes (world
+        space; instances left out), or None where it has none."""
         lows, highs = [], []
         if len(self.spheres):
             centre, radius = self.spheres[:, :3], self.spheres[:, 3:4]
@@ -140,6 +145,12 @@ class Scene:
             if len(m.vertices):
                 lows.append(m.vertices.min(0))
                 highs.append(m.vertices.max(0))
+        if len(self.shapes):
+            from pathtrace.shapes import SHAPES
+            for s in self.shapes:
+                lo, hi = s.bounds(SHAPES[s.kind])
+                lows.append(lo)
+                highs.append(hi)
         return (np.min(lows, 0), np.max(highs, 0)) if lows else None
 
     @property
@@ -168,6 +179,7 @@ class SceneBuilder:
         self.materials = MaterialTable()
         self.spheres, self.sphere_material, self.sphere_names, self.meshes = [], [], [], []
         self.sphere_media = []
+        self.shapes = []
         self.objects, self.instance_object, self.instance_to_world = [], [], []
         self.ellipsoid_objects = set()     # objects whose spheres an instance made ellipsoids (warned once)
 
@@ -190,6 +202,10 @@ class SceneBuilder:
             warn(f"mesh {mesh.name!r}{f' ({mesh.source})' if mesh.source else ''}: bounds a medium but is not "
                  "closed; rays that miss it never enter or leave the medium")
         self.meshes.append(mesh)
+
+    def add_shape(self, shape):
+        """Adds an analytic shape (pathtrace.shapes.Shape)."""
+        self.shapes.append(shape)
 
     def add_object(self, name: str) -> int:
         """A new, empty object (SceneObject) that instances may draw; its index."""
@@ -220,6 +236,8 @@ class SceneBuilder:
             self.ellipsoid_objects.add(obj)
             warn(f"object {o.name}: an instance under a non-uniform transform makes ellipsoids of its spheres, "
                  "which pathtrace draws as meshes")
+        for s in o.shapes:          # an analytic shape takes any affine transform: copied
+            self.add_shape(replace(s, to_world=m @ np.asarray(s.to_world, np.float64)))
         scale = float(np.linalg.norm(m[:3, 0]))
         for center, radius, material, name, media in o.spheres:
             if round_:
@@ -239,7 +257,7 @@ class SceneBuilder:
                      np.asarray(self.sphere_material, np.int32).reshape(-1), self.materials,
                      self.meshes, self.sphere_names or None,
                      sphere_media=self.sphere_media if any(m is not None for m in self.sphere_media) else None,
-                     **kwargs)
+                     shapes=self.shapes, **kwargs)
 
 
 def diffuse(rho_d) -> Material:

@@ -1,6 +1,6 @@
 """The parameter tables of docs/scene-format.md, generated from the types' declarations
 (app/parameters.py): each block between `<!-- parameters: KIND -->` and `<!-- end parameters -->`
-is the tables of the types of KIND (lights, materials, textures, media), one per type, with a column for
+is the tables of the types of KIND (lights, materials, textures, media, shapes), one per type, with a column for
 each format that has the type. `python -m pathtrace.scene.format_tables` rewrites the file;
 tests/test_parameters.py fails where the file and the declarations differ."""
 
@@ -32,6 +32,9 @@ def _types(kind: str) -> list:
         return [(t.name, t.formats, t.doc, t.parameters) for t in TEXTURES.values()]
     if kind == "media":
         return [("homogeneous", Medium.formats, "", Medium.parameters)]
+    if kind == "shapes":
+        from pathtrace.shapes import SHAPES
+        return [(k.name, k.formats, k.doc, k.parameters + k.mitsuba_parameters) for k in SHAPES.values()]
     raise ValueError(f"no parameter tables of {kind!r}")
 
 

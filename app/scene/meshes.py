@@ -24,7 +24,6 @@ from pathtrace.files import check_regular_file
 from pathtrace.scene.transform import transform_normals, transform_points
 
 FORMATS = (".ply", ".ply.gz", ".obj", ".stl", ".gltf", ".glb")
-DISK_SEGMENTS = 256       # a disk is a fan of this many triangles (area within 0.01 % of pi r^2)
 MAX_FILE_BYTES = 4 << 30            # a mesh file larger than this is refused before reading
 MAX_TRIANGLES = 64_000_000          # ~6 GB of device memory (docs/performance.md)
 # the largest coordinate a shape may reach: the BVH's float32 surface areas, (2 x)^2, stay finite
@@ -494,19 +493,6 @@ def _concatenate(parts):
             return np.concatenate([np.asarray(p[k], np.float64).reshape(-1, width) for p in parts])
         return None
     return MeshData(vertices, faces, joined(2, 3), joined(3, 2))
-
-
-def unit_disk():
-    """Mitsuba's disk, the unit disk in the xy plane facing +z, as a fan of DISK_SEGMENTS
-    triangles with its uvs, u = r and v = phi / 2 pi: each triangle has its own corners, so that
-    v runs on to 1 at the seam and the centre takes its wedge's middle angle."""
-    k = np.arange(DISK_SEGMENTS)
-    a0, a1 = k / DISK_SEGMENTS, (k + 1) / DISK_SEGMENTS
-    rim = lambda a: np.column_stack([np.cos(2 * np.pi * a), np.sin(2 * np.pi * a), np.zeros_like(a)])  # noqa: E731
-    vertices = np.stack([np.zeros((DISK_SEGMENTS, 3)), rim(a0), rim(a1)], axis=1).reshape(-1, 3)
-    uvs = np.stack([np.column_stack([np.zeros_like(a0), (a0 + a1) / 2]), np.column_stack([np.ones_like(a0), a0]),
-                    np.column_stack([np.ones_like(a1), a1])], axis=1).reshape(-1, 2)
-    return vertices, np.arange(3 * DISK_SEGMENTS).reshape(-1, 3), uvs
 
 
 def write_ply(path: Path, vertices, faces, normals=None, uvs=None):

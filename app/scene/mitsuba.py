@@ -32,7 +32,8 @@ from pathtrace.parameters import FRAME
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.known_names import Unread
-from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, orient_by_normals, unit_disk, vertex_normals
+from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, orient_by_normals, vertex_normals
+from pathtrace.shapes import SHAPES, Shape
 from pathtrace.textures import TEXTURES, Texture, read_image
 
 MAX_XML_BYTES = 64 << 20
@@ -520,7 +521,7 @@ class _Reader:
                     continue                   # used where referenced
                 else:
                     warn(f"{node.where()}: not supported; pathtrace ignores it")
-        if not self.builder.spheres and not self.builder.meshes and not self.builder.instance_object:
+        if not (self.builder.spheres or self.builder.meshes or self.builder.shapes or self.builder.instance_object):
             raise UserError(f"{self.path}: the scene has no shapes pathtrace can render")
         self.warn_unread()
         settings = self.settings
@@ -1012,6 +1013,23 @@ class _Reader:
         interface = MediumInterface(media.get("interior", -1), media.get("exterior", -1)) if media else None
         m = self.get(props, "to_world", np.eye(4), ("transform",))
         name = node.attrs.get("id")
+        if kind in SHAPES:
+            values = {p.mitsuba: self.parameter(props, p, p.mitsuba) for p in SHAPES[kind].mitsuba_parameters}
+            values = {p.mitsuba: p.mitsuba_default if values[p.mitsuba] is None else values[p.mitsuba]
+                      for p in SHAPES[kind].mitsuba_parameters}
+            values, local, swap_uv, flip = SHAPES[kind].from_mitsuba(values, m)
+            problem = SHAPES[kind].check(values)
+            if problem:
+                _fail(node, f"the {kind}'s {problem}")
+            shape = Shape(name or f"{kind} {len(self.builder.shapes)}", kind, values, m @ local, material,
+                          flip=flip, swap_uv=swap_uv, media=interface)
+            if np.any(np.abs(np.array(shape.bounds(SHAPES[kind]))) > MAX_COORDINATE):
+                _fail(node, f"the {kind} reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace")
+            if group is not None:
+                self.builder.objects[group].shapes.append(shape)
+            else:
+                self.builder.add_shape(shape)
+            return
         if kind == "sphere":
             center = m[:3, :3] @ self.get(props, "center", np.zeros(3), ("point", "vector")) + m[:3, 3]
             scales = np.linalg.norm(m[:3, :3], axis=0)
@@ -1036,8 +1054,6 @@ class _Reader:
             uvs = (vertices[:, :2] + 1) / 2             # Mitsuba's: (0, 0) at (-1, -1)
         elif kind == "cube":
             vertices, faces, uvs = _cube()
-        elif kind == "disk":
-            vertices, faces, uvs = unit_disk()
         elif kind in ("obj", "ply"):
             filename = self.get(props, "filename", kinds=("string",))
             if filename is None:

@@ -65,8 +65,8 @@ def write_mitsuba(scene: Scene, path: Path) -> Path:
     env = scene.environment
     if env.image.shape[:2] != (1, 1):
         raise UserError(f"{where}: environment maps are not written as Mitsuba XML")
-    if scene.lights or scene.instances is not None or scene.media:
-        raise UserError(f"{where}: lights other than emitting shapes, instances and media are not "
+    if scene.lights or scene.instances is not None or scene.media or scene.shapes:
+        raise UserError(f"{where}: lights other than emitting shapes, instances, media and analytic shapes are not "
                         f"written as Mitsuba XML")
     s = scene.settings
     radiance = env.image[0, 0, :3] * env.intensity

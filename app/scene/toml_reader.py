@@ -25,6 +25,7 @@ from pathtrace.resources import resource_dir
 from pathtrace.scene import transform
 from pathtrace.scene.description import INTEGRATORS, RUSSIAN_ROULETTE, Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, triangulate, vertex_normals
+from pathtrace.shapes import SHAPES, Shape
 from pathtrace.textures import TEXTURES, Texture, read_image
 
 # the scene-file types besides the registry's: "emitter" is a black BSDF with emission, and
@@ -521,6 +522,30 @@ class _Reader:
             m = transform.translation(self.vector(data, "translate", where)) @ m
         return m
 
+    def shape(self, data, where, builder, rows) -> Shape:
+        """A [[shapes]] entry: an analytic shape of `kind` (pathtrace.shapes.SHAPES), its kind's
+        parameters by name (ShapeParameter: angles in degrees), its transform, `flip` (the front
+        turned round) and `swap_uv` (texture coordinates (1 - v, u), Mitsuba's disk)."""
+        if not isinstance(data, dict):
+            self.fail(where, f"must be a table, got {type(data).__name__}")
+        kind = data.get("kind")
+        if kind not in SHAPES:
+            self.fail(f"{where}.kind", f"must be one of {', '.join(SHAPES)}, got {short(kind)}")
+        k = SHAPES[kind]
+        self.table(data, where, {"kind", "material", "name", "interior", "exterior", "flip", "swap_uv", "matrix",
+                                 "translate", "rotate", "scale", *(p.name for p in k.parameters)})
+        values = k.params_from(parameters.read(k.parameters, "toml",
+                                               lambda p, name: self.parameter(data, p, where) if name in data else None))
+        problem = k.check(values)
+        if problem:
+            self.fail(where, problem)
+        shape = Shape(self.name(data, where, f"{kind} {where[7:-1]}"), kind, values, self.transform(data, where),
+                      self.material_ref(builder, rows, data, where), self.boolean(data, "flip", where, False),
+                      self.boolean(data, "swap_uv", where, False), self.interface(data, where))
+        if np.any(np.abs(np.array(shape.bounds(k))) > MAX_COORDINATE):
+            self.fail(where, f"the {kind} reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace")
+        return shape
+
     def mesh(self, data, where, material) -> Mesh:
         """A mesh from a file, or written inline as vertices and faces (polygons of 3 or more
         corners, counter-clockwise seen from the front)."""
@@ -624,7 +649,7 @@ class _Reader:
 
     def scene(self, data) -> Scene:
         self.table(data, "top level", {"camera", "environment", "render", "textures", "materials", "spheres",
-                                       "meshes", "lights", "media", "objects", "instances"})
+                                       "meshes", "shapes", "lights", "media", "objects", "instances"})
         builder = SceneBuilder()
         self.texture_tables = data.get("textures", {})
         self.table(self.texture_tables, "textures",
@@ -643,15 +668,15 @@ class _Reader:
         rows = {}
         for name, m in named.items():
             rows[name] = builder.materials.add(self.material(m, f"materials.{name}"), name)
-        spheres, meshes = data.get("spheres", []), data.get("meshes", [])
-        for key, value in (("spheres", spheres), ("meshes", meshes)):
+        spheres, meshes, shapes = data.get("spheres", []), data.get("meshes", []), data.get("shapes", [])
+        for key, value in (("spheres", spheres), ("meshes", meshes), ("shapes", shapes)):
             if not isinstance(value, list):
                 self.fail(key, f"must be an array of tables ([[{key}]]), got {type(value).__name__}")
         instances = data.get("instances", [])
         if not isinstance(instances, list):
             self.fail("instances", f"must be an array of tables ([[instances]]), got {type(instances).__name__}")
-        if not spheres and not meshes and not instances:
-            self.fail("spheres", "the scene needs at least one [[spheres]], [[meshes]] or [[instances]] entry")
+        if not spheres and not meshes and not shapes and not instances:
+            self.fail("spheres", "the scene needs at least one [[spheres]], [[meshes]], [[shapes]] or [[instances]] entry")
         lights = data.get("lights", [])
         if not isinstance(lights, list):
             self.fail("lights", f"must be an array of tables ([[lights]]), got {type(lights).__name__}")
@@ -666,6 +691,8 @@ class _Reader:
                 self.fail(where, f"the sphere reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace")
             builder.add_sphere(center, radius, self.material_ref(builder, rows, s, where),
                                self.name(s, where, f"sphere {i}"), self.interface(s, where))
+        for i, s in enumerate(shapes):
+            builder.add_shape(self.shape(s, f"shapes[{i}]", builder, rows))
         with MeshFiles(self.named_mesh_files(meshes, data.get("objects"))) as self.mesh_files:
             for i, m in enumerate(meshes):
                 where = f"meshes[{i}]"

@@ -13,6 +13,7 @@ from pathtrace.materials.blend import component_rows
 from pathtrace.errors import UserError
 from pathtrace.scene.description import Scene
 from pathtrace.scene.toml_reader import MAX_INLINE
+from pathtrace.shapes import SHAPES
 from pathtrace.textures import Texture
 
 
@@ -184,6 +185,8 @@ def scene_toml(scene: Scene, out: Path) -> str:
         lines += _interface_lines(scene.sphere_media[i] if scene.sphere_media else None, medium_names)
     for mesh in scene.meshes:
         lines += ["", "[[meshes]]"] + _mesh_lines(mesh, names, medium_names, rel)
+    for shape in scene.shapes:
+        lines += ["", "[[shapes]]"] + _shape_lines(shape, names, medium_names)
     if scene.instances is not None:
         for o in scene.instances.objects:
             for mesh in o.meshes:
@@ -213,6 +216,18 @@ def _mesh_lines(mesh, names: dict, medium_names: list, rel) -> list:
                   f"faces = {_value(mesh.faces.tolist())}"]
         if mesh.uvs is not None:
             lines.append(f"uvs = {_value(mesh.uvs.astype(np.float64).tolist())}")
+    return lines
+
+
+def _shape_lines(shape, names: dict, medium_names: list) -> list:
+    """The keys of an analytic shape's table (toml_reader: shape)."""
+    lines = [f"kind = {_value(shape.kind)}", f"name = {_value(shape.name)}",
+             f"material = {_value(names[shape.material])}"]
+    lines += _interface_lines(shape.media, medium_names)
+    for name, v in SHAPES[shape.kind].file_values(shape.params).items():
+        lines.append(f"{name} = {_value(v)}")
+    lines.append(f"matrix = {_value(np.asarray(shape.to_world, np.float64).tolist())}")
+    lines += (["flip = true"] if shape.flip else []) + (["swap_uv = true"] if shape.swap_uv else [])
     return lines
 
 

@@ -29,6 +29,8 @@ def check_scene(scene: Scene):
     _spheres(scene, materials)
     for i, mesh in enumerate(scene.meshes):
         _mesh(mesh, f"scene.meshes[{i}]", materials)
+    for i, shape in enumerate(scene.shapes):
+        _shape(shape, f"scene.shapes[{i}]", materials)
     if scene.instances is not None:
         for k, o in enumerate(scene.instances.objects):
             for i, mesh in enumerate(o.meshes):
@@ -155,6 +157,22 @@ def _mesh(mesh, where: str, materials: int):
                               or not np.all(np.isfinite(a))):
             raise UserError(f"{where}.{name}: give None or a ({len(v)}, {width}) array of finite numbers")
     integer(f"{where}.material (a row of scene.materials)", mesh.material, 0, materials - 1)
+
+
+def _shape(shape, where: str, materials: int):
+    from pathtrace.shapes import SHAPES, Shape
+    if not isinstance(shape, Shape) or shape.kind not in SHAPES:
+        raise UserError(f"{where}: give a pathtrace.shapes.Shape of a kind of {', '.join(SHAPES)}, got {short(shape)}")
+    params = np.asarray(shape.params, np.float64)
+    if params.shape != (4,) or not np.all(np.isfinite(params)):
+        raise UserError(f"{where}.params: give the {shape.kind}'s 4 finite parameters, got {short(shape.params)}")
+    problem = SHAPES[shape.kind].check(tuple(params))
+    if problem:
+        raise UserError(f"{where}.params: {problem}")
+    m = np.asarray(shape.to_world, np.float64)
+    if m.shape != (4, 4) or not np.all(np.isfinite(m)) or abs(np.linalg.det(m[:3, :3])) < 1e-12:
+        raise UserError(f"{where}.to_world: give an invertible 4x4 affine transform, got {short(shape.to_world)}")
+    integer(f"{where}.material (a row of scene.materials)", shape.material, 0, materials - 1)
 
 
 MAX_NESTING = 64          # levels of dicts and lists a scene dict may hold (a TOML file's hold a few)

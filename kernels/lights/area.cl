@@ -24,8 +24,14 @@ float pdf_light(const SceneData *sc, int prim, float3 x, float3 n, float3 y)
         pick *= tree_pick_probability(sc, sc->light_leaf[prim], x, n);
 #endif
 #ifndef NO_TRIANGLES
-    if (prim >= sc->num_spheres)
-        return pick * pdf_triangle_solid_angle(&sc->triangles[prim - sc->num_spheres], x, y, emits_back(sc, prim));
+    if (prim >= sc->num_spheres) {
+        const global Triangle *tri = &sc->triangles[prim - sc->num_spheres];
+#ifdef SHAPES
+        if (SHAPE_KIND(tri))
+            return pick * pdf_analytic_solid_angle(SHAPE_KIND(tri), SHAPE_ROWS(sc, tri), x, y, emits_back(sc, prim));
+#endif
+        return pick * pdf_triangle_solid_angle(tri, x, y, emits_back(sc, prim));
+    }
 #endif
     return pick * pdf_sphere_cone(sc->spheres[prim], x);
 }
@@ -59,6 +65,23 @@ int sample_area_light(const SceneData *sc, const RenderParams *p, const global L
 #ifndef NO_TRIANGLES
     if (l->prim >= sc->num_spheres) {
         const global Triangle *tri = &sc->triangles[l->prim - sc->num_spheres];
+#ifdef SHAPES
+        if (SHAPE_KIND(tri)) {
+            const global float4 *f = SHAPE_ROWS(sc, tri);
+            float3 n, error;
+            float pdf_area;
+            ls->y = sample_analytic(SHAPE_KIND(tri), f, u, &b, &n, &error, &pdf_area);
+            float3 w = ls->y - x;
+            float dist2 = dot(w, w);
+            ls->wi = w * rsqrt(dist2);
+            float cos_l = -dot(n, ls->wi);
+            if (emits_back(sc, l->prim))
+                cos_l = fabs(cos_l);
+            ls->pdf = cos_l > 0.0f ? pdf_area * dist2 / cos_l : 0.0f;
+            ls->le = area_light_radiance(sc, l->prim, ls->y, b);
+            return ls->pdf > 0.0f;
+        }
+#endif
         ls->y = sample_triangle_area(tri, u.x, u.y, &b);
         ls->wi = unit(ls->y - x);
         ls->pdf = pdf_triangle_solid_angle(tri, x, ls->y, emits_back(sc, l->prim));
@@ -96,12 +119,23 @@ int emit_area_light(const SceneData *sc, const global Light *l, float4 u, LightE
 #ifndef NO_TRIANGLES
     if (l->prim >= sc->num_spheres) {
         const global Triangle *tri = &sc->triangles[l->prim - sc->num_spheres];
+#ifdef SHAPES
+        if (SHAPE_KIND(tri)) {
+            float3 error;
+            e->p = sample_analytic(SHAPE_KIND(tri), SHAPE_ROWS(sc, tri), u.xy, &b, &e->n, &error, &e->pdf_pos);
+            e->n *= side;
+            e->offset = error_offset(e->n, error);
+        } else {
+#endif
         e->p = sample_triangle_area(tri, u.x, u.y, &b);
         e->n = side * triangle_normal(tri);
         e->pdf_pos = 1.0f / triangle_area(tri);
         /* the point's rounding error is within gamma(7) of the corners' magnitudes (pbrt-v4
            eq. 6.29, |b_i v_i| <= |v_i|) */
         e->offset = error_offset(e->n, gamma_bound(7) * (fabs(tri->v0.xyz) + fabs(tri->v1.xyz) + fabs(tri->v2.xyz)));
+#ifdef SHAPES
+        }
+#endif
     } else
 #endif
     {

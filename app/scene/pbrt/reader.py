@@ -43,11 +43,12 @@ from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.known_names import Unread
 from pathtrace.scene.meshes import (ELLIPSOID_RINGS, MAX_COORDINATE, MeshFiles, check_mesh, ellipsoid, is_similarity,
-                                     orient_by_normals, unit_disk, vertex_normals)
+                                     orient_by_normals, vertex_normals)
 from pathtrace.scene.pbrt.equal_area import to_latlong, upper_illuminance
 from pathtrace.scene.pbrt.materials import MaterialMapper, make, spectrum_rgb
 from pathtrace.textures import Texture
 from pathtrace.scene.pbrt.tokens import Tokens, numbers, parameters, string
+from pathtrace.shapes import SHAPES, Shape
 
 MAX_FILE_BYTES = 4 << 30
 MAX_INCLUDE_DEPTH = 16
@@ -140,7 +141,7 @@ class PbrtReader:
                  f"{self.dropped[1]} in the meshes that had any (pbrt-v4 never hits them)")
         if self.stack:
             warn(f"{self.path}: {len(self.stack)} AttributeBegin without AttributeEnd")
-        if not self.builder.spheres and not self.builder.meshes and not self.builder.instance_object:
+        if not (self.builder.spheres or self.builder.meshes or self.builder.shapes or self.builder.instance_object):
             raise UserError(f"{self.path}: the scene has no shapes pathtrace can render")
         self.settings.filter = self.filter
         for name, row in self.medium_rows.items():
@@ -691,20 +692,29 @@ class PbrtReader:
             # shape is left out (as degenerate triangles are)
             warn(f"{where}: the current transform is singular (it flattens the shape); pathtrace leaves the shape out")
             return
-        mesh = self.shape_mesh(kind, params, where)
+        shape = self.analytic_shape(kind, params, media, where) if kind in SHAPES else None
+        mesh = self.shape_mesh(kind, params, where) if shape is None else (None, None, None, None, "")
         if mesh is None:
             return
         vertices, faces, normals, uvs, source = mesh
-        parts, twosided = self.area_emission(vertices, faces, where)
+        parts, twosided = self.area_emission(vertices, faces, where,
+                                             None if shape is None else shape.world_area(SHAPES[kind]))
         if self.current_object is not None and parts[0][1] is not None:
             warn(f"{where}: pbrt-v4 has no area lights in instances; this shape does not emit")
             parts = [(None, None)]
         alpha = self.mapper.texture_input(params, "alpha", 1.0, float_texture=True) \
             if params.type_of("alpha") else 1.0
-        if twosided and faces is None:
+        if twosided and faces is None and shape is None:
             warn(f"{where}: pathtrace's sphere lights emit outwards only; 'twosided' is ignored")
             twosided = False
         self.unused(params, "shape", kind)
+        if shape is not None:
+            shape.material = self.material_row(parts[0][1], alpha, twosided)
+            if self.current_object is not None:
+                self.builder.objects[self.objects[self.current_object]].shapes.append(shape)
+            else:
+                self.builder.add_shape(shape)
+            return
         name = Path(source).stem if source else f"{kind} {len(self.builder.meshes)}"
         if faces is None:
             center, radius = vertices
@@ -726,6 +736,23 @@ class PbrtReader:
                 self.builder.objects[self.objects[self.current_object]].meshes.append(record)
             else:
                 self.builder.add_mesh(record)
+
+    def analytic_shape(self, kind, params, media, where) -> Shape:
+        """An analytic shape (app/shapes/), its parameters read by their pbrt-v4 names
+        (ShapeParameter.pbrt), its material set by add_shape. Its front is the kind's normal
+        moved by the transform, turned by ReverseOrientation and by a transform that swaps
+        handedness (pbrt-v4's Disk and Cylinder: reverseOrientation ^ transformSwapsHandedness)."""
+        k = SHAPES[kind]
+        values = k.params_from(declared.read(k.parameters, "pbrt", lambda p, name: self.mapper.parameter(params, p, name)))
+        problem = k.check(values)
+        if problem:
+            raise UserError(f"{where}: the {kind}'s {problem}")
+        m = self.state.ctm
+        shape = Shape(f"{kind} {len(self.builder.shapes)}", kind, values, m, 0,
+                      flip=self.state.reverse != transform.flips_handedness(m), media=media)
+        lo, hi = shape.bounds(k)
+        self.check_extent(np.abs(np.array([lo, hi])), where)
+        return shape
 
     def shape_mesh(self, kind, params, where):
         """(vertices, faces, normals, uvs, file) in world space, fronts as pbrt has them; for a
@@ -780,16 +807,6 @@ class PbrtReader:
                 if params.type_of(name):
                     params.get(name, (params.type_of(name),), 0)
                     warn(f"{params.where(name)}: pathtrace does not displace meshes; ignored")
-        elif kind == "disk":
-            radius = params.float("radius", 1.0)
-            if radius <= 0:
-                params.fail("radius", f"must be positive, got {radius:g}")
-            if params.float("innerradius", 0.0) != 0 or params.float("phimax", 360.0) != 360:
-                warn(f"{where}: pathtrace's disks are whole; innerradius and phimax are ignored")
-            vertices, faces, uvs = unit_disk()
-            vertices = vertices * [radius, radius, 1.0]
-            vertices[:, 2] = params.float("height", 0.0)
-            uvs = None
         elif kind == "loopsubdiv":
             vertices, faces = self.indexed_polygons(params, kind, 3, where)
             params.int("levels", 3)
@@ -850,7 +867,7 @@ class PbrtReader:
         uvs = None if uv is None else np.column_stack([uv[0::2], 1 - uv[1::2]])
         return None if n is None else n.reshape(-1, 3), uvs
 
-    def area_emission(self, vertices, faces, where):
+    def area_emission(self, vertices, faces, where, area=None):
         """The emitted radiance of a shape under an AreaLightSource, as [(faces, radiance)]
         (faces an index array of the mesh's, or None for all), and whether it emits from both
         sides; [(None, None)] where the shape is no light.
@@ -879,7 +896,7 @@ class PbrtReader:
         if power <= 0:
             parts, cause = [(None, le)], "'L' times 'scale'"
         else:
-            parts, area = self.powered(le, power, math.pi * (2 if twosided else 1), vertices, faces, light_where)
+            parts, area = self.powered(le, power, math.pi * (2 if twosided else 1), vertices, faces, light_where, area)
             cause = f"'power' {power:g} over the shape's area of {area:.3g}" + \
                 ("" if faces is None else " (its smallest triangle's: each triangle emits the power, as pbrt-v4's do)")
         top = max(float(np.max(e)) for _, e in parts)
@@ -889,9 +906,12 @@ class PbrtReader:
         return parts, twosided
 
     @staticmethod
-    def powered(le, power, k_e, vertices, faces, light_where) -> list:
+    def powered(le, power, k_e, vertices, faces, light_where, area=None) -> list:
         """area_emission's [(faces, radiance)] of a light given `power`, L power / (k_e area) with
-        each triangle's own area (a sphere's, 4 pi r^2), and the least area."""
+        each triangle's own area (a sphere's, 4 pi r^2; an analytic shape's `area`), and the least
+        area."""
+        if area is not None:
+            return [(None, le * power / (k_e * area))], area
         if faces is None:                   # a sphere: (center, radius)
             area = 4 * math.pi * vertices[1] ** 2
             return [(None, le * power / (k_e * area))], area

@@ -1,0 +1,57 @@
+"""The disk (kernels/shapes/disk.cl): pbrt-v4's `disk` (radius, innerradius, height, phimax)
+and Mitsuba 3's `disk` (the unit disk, texture coordinates (r, phi / 2 pi))."""
+
+import math
+
+import numpy as np
+
+from pathtrace.parameters import Parameter
+from pathtrace.shapes.shape import ShapeKind
+
+
+class Disk(ShapeKind):
+    name = "disk"
+    formats = {"mitsuba": "disk", "pbrt": "disk"}
+    doc = ("An annulus sector at z = height facing +z; uv (phi / phi_max, (radius - r) / (radius - "
+           "inner_radius)), pbrt-v4's. Mitsuba's is the unit disk, uv (r, phi / 2 pi).")
+    parameters = (Parameter("radius", "number", 1.0, doc="outer radius", pbrt="radius"),
+                  Parameter("inner_radius", "number", 0.0, doc="inner radius: an annulus", pbrt="innerradius"),
+                  Parameter("height", "number", 0.0, doc="its plane's z in object space", pbrt="height"),
+                  Parameter("phi_max", "number", 360.0, doc="the angle it spans, degrees", pbrt="phimax"))
+    angles = ("phi_max",)
+    mitsuba_parameters = (Parameter(None, "bool", doc="its front turned round", mitsuba="flip_normals",
+                                    mitsuba_default=False),)
+    examples = ((1.0, 0.0, 0.0, 2 * math.pi), (1.5, 0.6, 0.25, math.radians(250)))
+
+    def normalised(self, params):
+        radius, inner, height, phi_max = params
+        return radius, inner, height, min(max(phi_max, 0.0), 2 * math.pi)    # pbrt-v4 clamps phimax to [0, 360]
+
+    def from_mitsuba(self, values, to_world):
+        """Mitsuba 3's disk is the unit disk facing +z of its to_world, its texture coordinates
+        (r, phi / 2 pi) (src/shapes/disk.cpp), flip_normals turning its normal."""
+        return (1.0, 0.0, 0.0, 2 * math.pi), np.eye(4), True, bool(values["flip_normals"])
+
+    def check(self, params):
+        radius, inner, _, phi_max = params
+        if not radius > 0:
+            return f"radius must be positive, got {radius:g}"
+        if not 0 <= inner < radius:
+            return f"inner_radius must be at least 0 and below the radius {radius:g}, got {inner:g}"
+        if not 0 < phi_max <= 2 * math.pi:
+            return f"phi_max must be in (0, 360] degrees, got {math.degrees(phi_max):g}"
+        return None
+
+    def object_bounds(self, params):
+        radius, _, height, _ = params
+        return np.array([-radius, -radius, height]), np.array([radius, radius, height])
+
+    def area(self, params):
+        radius, inner, _, phi_max = params
+        return 0.5 * phi_max * (radius ** 2 - inner ** 2)
+
+    def object_normals(self, params, n):
+        return np.tile([0.0, 0.0, 1.0], (n, 1))
+
+    def normal_cone(self, params):
+        return np.array([0.0, 0.0, 1.0]), 1.0

@@ -1,0 +1,133 @@
+"""Analytic shapes: what every kind provides on the host, and a shape of a scene. A kind
+(app/shapes/<kind>.py, registered in app/shapes/registry.py) gives its parameters' checks,
+its object-space bounds, area and normals, for the BVH, the light table and the light tree;
+its kernel file (kernels/shapes/<kind>.cl) intersects, parameterises and samples it. The
+kernels keep a shape as a primitive of the triangle range that names its kind
+(kernels/shapes/analytic.cl), so the BVH, its builders and the light tree see only its bounds."""
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+ROWS = 8
+"""float4 rows of the side table per shape (kernels/shapes/analytic.cl)."""
+
+
+class ShapeKind:
+    """One kind of analytic shape, the four numbers of whose parameters (row 6 of its rows)
+    its kernel file documents, declared in `parameters` in that order (app/parameters.py: their
+    TOML and pbrt-v4 names, defaults and documentation, from which the readers read them and
+    docs/scene-format.md's tables are generated)."""
+    name = ""
+    formats: dict = {}            # its names in Mitsuba 3 and pbrt-v4 ({format: name})
+    doc = ""
+    parameters: tuple = ()
+    angles: tuple = ()            # the parameters files give in degrees (the kernels take radians)
+    mitsuba_parameters: tuple = ()   # Mitsuba 3's (no TOML name; mitsuba_default), which from_mitsuba
+                                     # maps onto the shape
+    examples: tuple = ()          # parameter sets (the kernels') the registry's tests put it through
+
+    def params_from(self, values: dict) -> tuple:
+        """The kernels' four numbers from the declared parameters' values by name (as files give
+        them: degrees for `angles`; absent ones take their defaults)."""
+        out = []
+        for p in self.parameters:
+            v = float(values.get(p.name, p.default))
+            out.append(math.radians(v) if p.name in self.angles else v)
+        return self.normalised(tuple(out))
+
+    def file_values(self, params) -> dict:
+        """params_from's inverse, by name: what a file states."""
+        return {p.name: math.degrees(v) if p.name in self.angles else float(v) for p, v in zip(self.parameters, params)}
+
+    def normalised(self, params) -> tuple:
+        """params as the kernels take them, from a file's values (pbrt-v4 clamps and orders some)."""
+        return params
+
+    def from_mitsuba(self, values: dict, to_world: np.ndarray) -> tuple:
+        """(params, object transform, swap_uv, flip) of Mitsuba 3's shape of this kind, from the
+        values of its mitsuba_parameters (given or their mitsuba_default), by their Mitsuba names;
+        the object transform goes before to_world."""
+        raise NotImplementedError
+
+    def check(self, params) -> str | None:
+        """What is wrong with parameters `params`, or None."""
+        raise NotImplementedError
+
+    def object_bounds(self, params) -> tuple:
+        """(lower, upper) corners of the box round the shape in its object's space."""
+        raise NotImplementedError
+
+    def area(self, params) -> float:
+        """The area in its object's space."""
+        raise NotImplementedError
+
+    def object_normals(self, params, n: int) -> np.ndarray:
+        """(n, 3) unit normals at n points spread evenly over the area (for the world area under
+        a transform that stretches unevenly)."""
+        raise NotImplementedError
+
+    def normal_cone(self, params) -> tuple:
+        """(axis, cos of its spread) of the cone holding every normal, in its object's space."""
+        raise NotImplementedError
+
+
+@dataclass
+class Shape:
+    """An analytic shape of a scene: a kind's shape in its object's space, placed by `to_world`."""
+    name: str
+    kind: str                     # a name of pathtrace.shapes.SHAPES
+    params: tuple                 # its four parameters (kernels/shapes/<kind>.cl)
+    to_world: np.ndarray          # (4, 4) world from object
+    material: int                 # row of the scene's MaterialTable
+    flip: bool = False            # its front is the opposite of the kind's normal
+    swap_uv: bool = False         # texture coordinates (1 - v, u) of the kind's (u, v) (Mitsuba's disk)
+    media: object = None          # the MediumInterface it bounds, or None
+
+    # as the compiled scene's per-mesh tables read it: one primitive, no corner normals or uvs
+    faces = np.zeros((1, 3), np.int32)
+    normals = None
+    uvs = None
+
+    def __repr__(self) -> str:
+        return f"<Shape {self.name!r}: {self.kind} {tuple(float(p) for p in self.params)}, material {self.material}>"
+
+    @property
+    def det(self) -> float:
+        return float(np.linalg.det(np.asarray(self.to_world, np.float64)[:3, :3]))
+
+    def rows(self) -> np.ndarray:
+        """Its ROWS float4 rows of the side table."""
+        m = np.asarray(self.to_world, np.float64)
+        out = np.zeros((ROWS, 4), np.float32)
+        out[0:3] = m[:3]
+        out[3:6] = np.linalg.inv(m)[:3]
+        out[6] = self.params
+        out[7, :3] = (-1.0 if self.flip else 1.0, 1.0 if self.swap_uv else 0.0, abs(self.det))
+        return out
+
+    def bounds(self, kind: ShapeKind) -> tuple:
+        """(lower, upper) of its box in the world: its object box's corners moved."""
+        lo, hi = kind.object_bounds(self.params)
+        corners = np.array([[x, y, z, 1.0] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])])
+        world = corners @ np.asarray(self.to_world, np.float64)[:3].T
+        return world.min(0), world.max(0)
+
+    def world_normals(self, normals: np.ndarray) -> np.ndarray:
+        """Object normals moved to the world (by the inverse transpose), on the front, unscaled."""
+        inverse = np.linalg.inv(np.asarray(self.to_world, np.float64))[:3, :3]
+        return (-1.0 if self.flip else 1.0) * normals @ inverse
+
+    def world_area(self, kind: ShapeKind, samples: int = 64) -> float:
+        """Its area in the world: the object area times the mean stretch |det M| |M^-T n| (the
+        mean over an even spread of points, exact where the stretch is the same everywhere)."""
+        stretch = abs(self.det) * np.linalg.norm(self.world_normals(kind.object_normals(self.params, samples)), axis=1)
+        return kind.area(self.params) * float(stretch.mean())
+
+    def world_normal_cone(self, kind: ShapeKind) -> tuple:
+        """(unit axis, cos spread) of its front normals in the world. A full sphere of normals
+        stays one; a single normal stays single."""
+        axis, cos = kind.normal_cone(self.params)
+        w = self.world_normals(np.array([axis], np.float64))[0]
+        return w / np.linalg.norm(w), cos
