@@ -57,7 +57,7 @@ CORPUS = {
     "texture bitmap": f'<shape type="sphere"><bsdf type="diffuse">{BITMAP.format(name="reflectance")}</bsdf></shape>',
     "texture checkerboard": '<shape type="sphere"><bsdf type="diffuse"><texture type="checkerboard" '
                             'name="reflectance"/></bsdf></shape>',
-    **{f"shape {kind}": f'<shape type="{kind}"/>' for kind in ("sphere", "rectangle", "cube", "disk")},
+    **{f"shape {kind}": f'<shape type="{kind}"/>' for kind in ("sphere", "rectangle", "cube", "disk", "cylinder")},
     "shape obj": '<shape type="obj"><string name="filename" value="t.obj"/></shape>',
     "shape ply": '<shape type="ply"><string name="filename" value="t.ply"/></shape>',
     "shape instance": f'<shape type="shapegroup" id="g">{SPHERE}</shape><shape type="instance"><ref id="g"/></shape>',

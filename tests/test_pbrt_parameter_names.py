@@ -60,6 +60,7 @@ CORPUS = [
     ("medium homogeneous", 'MakeNamedMedium "m" "string type" "homogeneous"'),
     ("shape sphere", 'Shape "sphere"'),
     ("shape disk", 'Shape "disk"'),
+    ("shape cylinder", 'Shape "cylinder"'),
     ("shape trianglemesh", 'Shape "trianglemesh" "point3 P" [ 0 0 0 1 0 0 0 1 0 ]'),
     ("shape bilinearmesh", 'Shape "bilinearmesh" "point3 P" [ 0 0 0 1 0 0 0 1 0 1 1 0 ]'),
     ("shape loopsubdiv", 'Shape "loopsubdiv" "point3 P" [ 0 0 0 1 0 0 0 1 0 ] "integer indices" [ 0 1 2 ]'),
