@@ -36,6 +36,6 @@ else
     .venv/bin/python -m pip install -q .
 fi
 # builds the generic kernels on each device and renders with them once, so that the drivers'
-# caches hold them before the first `pathtrace view` (app/programs.py)
+# caches hold them before the first `pathtrace view` (app/device/programs.py)
 .venv/bin/pathtrace devices --check || echo "pathtrace: no OpenCL device builds the kernels yet (see above)"
 echo "pathtrace installed: .venv/bin/pathtrace"

@@ -16,7 +16,7 @@ _EXPORTS = {
     "RenderSettings": "pathtrace.scene.description",
     "PATH_QUEUE_AUTO": "pathtrace.scene.description",
     "Camera": "pathtrace.camera",
-    "Environment": "pathtrace.environment",
+    "Environment": "pathtrace.scene.environment",
     "Material": "pathtrace.materials.table",
     "UserError": "pathtrace.errors",
 }

@@ -1,3 +1,3 @@
-from pathtrace.console import run
+from pathtrace.cli.console import run
 
 run()

@@ -55,20 +55,20 @@ def material(data: dict):
 def devices() -> list:
     """The OpenCL devices found, each with .index, .name, .kind ('GPU' or 'CPU') and
     .describe(); `device=` takes an index, a kind, or part of a name."""
-    from pathtrace.device import list_devices
+    from pathtrace.device.opencl import list_devices
     return list_devices()
 
 
 def queue_plans(scene) -> list:
     """What settings.path_queue PATH_QUEUE_AUTO chose for `scene`'s last render, in words, one
-    per device (pathtrace.renderer: the plan and each plan's trial); empty where it was not
+    per device (pathtrace.rendering.renderer: the plan and each plan's trial); empty where it was not
     asked for or the scene was not rendered."""
     prepared = scene.__dict__.get("_prepared")
     return prepared.group.queue_plans() if prepared else []
 
 
 def programs_used(scene) -> list:
-    """Where the generic program (pathtrace.programs) drew samples of `scene`'s last render, in
+    """Where the generic program (pathtrace.device.programs) drew samples of `scene`'s last render, in
     words, one per device that it did on; empty where the scenes' own programs drew them all."""
     prepared = scene.__dict__.get("_prepared")
     return prepared.group.programs_used() if prepared else []
@@ -80,7 +80,7 @@ _backends = {}            # device specs -> opened backends, kept for the next r
 def open_devices(device="auto") -> list:
     """The backends for `device`: a spec as `--device` takes it ('auto', 'gpu', 'cpu', 'gpu:1',
     an index, part of a name, or 'all') or a list of specs. Opened once and kept."""
-    from pathtrace.device import choose_devices
+    from pathtrace.device.opencl import choose_devices
     specs = (device,) if isinstance(device, str) else tuple(device) if isinstance(device, (list, tuple)) else ()
     if not specs or not all(isinstance(s, str) for s in specs):
         raise UserError(f"device: give a device spec such as 'auto', 'gpu', 'cpu:0' or a list of them, "
@@ -146,8 +146,8 @@ class _Prepared:
     that the next render uploads only what changed."""
 
     def __init__(self, scene: Scene, backends: list, build_progress=None, phases=None):
-        from pathtrace.compiled import compile_scene
-        from pathtrace.multidevice import DeviceGroup
+        from pathtrace.compiler.compiled import compile_scene
+        from pathtrace.rendering.multidevice import DeviceGroup
         self.backends = backends
         self.geometry = _geometry_digest(scene)
         start = time.perf_counter()
@@ -223,7 +223,7 @@ def _geometry_digest(scene: Scene) -> bytes:
         a = np.ascontiguousarray(a)
         h.update(str((a.dtype.str, a.shape)).encode())
         h.update(a.data)
-    # the media and what bounds them compile with the primitives (pathtrace.compiled)
+    # the media and what bounds them compile with the primitives (pathtrace.compiler.compiled)
     h.update(repr((scene.media, scene.sphere_media, [m.media for m in meshes])).encode())
     # analytic shapes (objects' are copied into scene.shapes)
     h.update(repr([(s.kind, tuple(map(float, s.params)), np.asarray(s.to_world, np.float64).tolist(), s.material,
@@ -333,7 +333,7 @@ def denoise(image: np.ndarray, albedo: np.ndarray = None, normal: np.ndarray = N
     """The image denoised by Intel Open Image Denoise, guided by the albedo and normal that
     render(aovs=("albedo", "normal")) gives (better) or not; quality "high", "balanced" or
     "fast". Each array (H, W, 3)."""
-    from pathtrace.denoiser import QUALITIES, Denoiser
+    from pathtrace.io.denoiser import QUALITIES, Denoiser
     if quality not in QUALITIES:
         raise UserError(f"quality: give one of {', '.join(QUALITIES)}, got {short(quality)}")
     image = _rgb("image", image)
@@ -371,8 +371,8 @@ def tonemap(image: np.ndarray, exposure: float = 0.0, curve: str = "standard") -
     """Linear radiance to display sRGB, (H, W, 3) uint8: exposure in stops, then the tone curve
     ("standard" clips at 1, "aces" is Narkowicz's fit of ACES), then the sRGB transfer function;
     what a .png output holds."""
-    from pathtrace.tonecurve import TONEMAPS, to_8bit
-    from pathtrace.tonecurve import tonemap as display
+    from pathtrace.io.tonecurve import TONEMAPS, to_8bit
+    from pathtrace.io.tonecurve import tonemap as display
     if curve not in TONEMAPS:
         raise UserError(f"curve: give one of {', '.join(TONEMAPS)}, got {short(curve)}")
     if isinstance(exposure, bool) or not isinstance(exposure, (int, float, np.number)) or not -100 <= exposure <= 100:
@@ -383,7 +383,7 @@ def tonemap(image: np.ndarray, exposure: float = 0.0, curve: str = "standard") -
 def write(path, image: np.ndarray, exposure: float = 0.0, curve: str = "standard"):
     """Writes an image file, atomically: .png and .jpg tonemapped (as tonemap() does), .exr,
     .hdr and .pfm as linear float radiance. (H, W) arrays (a depth) are written as grey."""
-    from pathtrace.image_io import write_image
+    from pathtrace.io.images import write_image
     if not isinstance(path, (str, Path)):
         raise UserError(f"path: give a file name (str or Path), got {short(path)}")
     tonemap(np.zeros((1, 1, 3)), exposure, curve)         # the same checks

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from pathtrace.features import GENERIC, choice_glue
+from pathtrace.device.features import GENERIC, choice_glue
 
 PROJECTIONS = ("perspective", "orthographic")
 CAMERA_KERNELS = ("perspective", "thinlens", "orthographic")   # kernel_name's; RenderParams.camera_type
@@ -38,7 +38,7 @@ class Camera:
         self.up = np.asarray(self.up, np.float64)
 
     def __repr__(self) -> str:
-        from pathtrace.named import vector
+        from pathtrace.scene.named import vector
         lens = (f", vfov {self.vfov:g}" + (f", aperture {self.aperture:g} focused at {self.focus_distance:g}"
                                           if self.aperture > 0 else "")) if self.projection != "orthographic" \
             else f", height {self.height:g}"
@@ -97,7 +97,7 @@ def kernel_parts(projection: str) -> list:
     glue = choice_glue("CameraRay generate_ray(const RenderParams *p, float sx, float sy, float2 u)",
                        "generate_{}_ray(p, sx, sy, u)", CAMERA_KERNELS, projection, "camera_type")
     # bidirectional path tracing's join to the lens (a BDPT program is never generic, and its
-    # camera a perspective one: app/bdpt.py)
+    # camera a perspective one: app/rendering/bdpt.py)
     glue += "#ifdef BDPT\n" + choice_glue("int sample_importance(const RenderParams *p, float3 x, float2 u, CameraImportance *ci)",
                                           "sample_{}_importance(p, x, u, ci)", CAMERA_KERNELS, projection,
                                           "camera_type") + "#endif\n"

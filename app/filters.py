@@ -6,7 +6,7 @@ gaussian (stddev 0.5; radius 4 stddev, pbrt-v4's 1.5)."""
 import math
 from dataclasses import dataclass
 
-from pathtrace.features import GENERIC, choice_glue
+from pathtrace.device.features import GENERIC, choice_glue
 
 FILTERS = ("box", "tent", "gaussian")
 DEFAULT_RADIUS = {"box": 0.5, "tent": 1.0, "gaussian": None}    # gaussian: 4 stddev

@@ -24,7 +24,7 @@ from typing import Callable
 #            not sRGB) where the element's `raw` is true.
 KINDS = ("number", "integer", "bool", "string", "name", "color", "point", "vector", "image")
 FORMATS = ("toml", "mitsuba", "pbrt")
-# how a spectrum becomes rgb (app/spectra.py): a reflectance (bounded by 1), an illuminant
+# how a spectrum becomes rgb (app/scene/spectra.py): a reflectance (bounded by 1), an illuminant
 # (luminance 1, as pbrt-v4 normalises a light's spectrum) or unbounded (an IOR: its mean)
 SPECTRA = ("reflectance", "illuminant", "unbounded")
 

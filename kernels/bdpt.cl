@@ -2,7 +2,7 @@
  * src/pbrt/cpu/integrators.cpp BDPTIntegrator and pbrt-v3's bdpt.cpp): for each sample, a camera
  * subpath from the pixel and a light subpath from a light chosen by power, then every connection
  * (s light vertices, t camera vertices) of total depth at most BDPT, the program's longest path
- * (app/features.py), each weighted by multiple importance sampling (power heuristic) over the
+ * (app/device/features.py), each weighted by multiple importance sampling (power heuristic) over the
  * strategies that could have drawn the same path, from the forward and reverse densities the
  * vertices store (bdpt_mis_weight), as pbrt does, not by drawing each strategy again.
  *

@@ -192,9 +192,9 @@ CPU_INLINE float4 intersect_leaves(const SceneData *sc, float4 t, int4 count, in
     return select(t, (float4)(INFINITY), leaf);
 }
 
-/* app/bvh.py keeps the binary tree at most 30 levels deep, so the 4-wide one at most 15, and
+/* app/compiler/bvh.py keeps the binary tree at most 30 levels deep, so the 4-wide one at most 15, and
  * traversal pushes at most three nodes per level: 48 entries. A scene's program is built with
- * the size its own tree needs (app/features.py: stack_size). */
+ * the size its own tree needs (app/device/features.py: stack_size). */
 #ifndef BVH_STACK_SIZE
 #define BVH_STACK_SIZE 48
 #endif
@@ -236,7 +236,7 @@ CPU_INLINE float4 intersect_leaves(const SceneData *sc, float4 t, int4 count, in
     }
 
 #ifdef FLAT_SPHERES
-/* A scene of a few primitives (app/features.py: FLAT_MAX) is not traversed: each ray tests them
+/* A scene of a few primitives (app/device/features.py: FLAT_MAX) is not traversed: each ray tests them
  * all, FLAT_SPHERES spheres and FLAT_TRIANGLES triangles, constants that let the loops unroll. */
 Hit trace_ray(const SceneData *sc, float3 o, float3 d, float t_max, PrimId self, const int any_hit)
 {
@@ -307,7 +307,7 @@ Hit walk_instances(const SceneData *sc, float3 o, float3 d, float t_max, PrimId 
 #endif
 
 /* A one-level tree over the world's primitives. With LONE_SPHERES, a scene's few spheres
- * (app/features.py: LONE_MAX) are not in the tree, which holds its triangles alone: every ray
+ * (app/device/features.py: LONE_MAX) are not in the tree, which holds its triangles alone: every ray
  * tests them first, and their nearest hit bounds the walk. Its hits are drawn by no instance
  * (-1), which a GENERIC program, built with INSTANCES, tells apart (surface_at). */
 Hit walk_world(const SceneData *sc, float3 o, float3 d, float t_max, PrimId self, const int any_hit)

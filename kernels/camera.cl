@@ -14,7 +14,7 @@
  * Filter importance sampling (pbrt-v4, section 8.8): each sample lands where the filter says,
  * with weight 1, so that a pixel's samples stay independent and averaging them, as the
  * accumulation and the merge of several devices do, gives the filtered image. A program has one
- * camera type and one filter (app/features.py), named by the generated generate_ray and
+ * camera type and one filter (app/device/features.py), named by the generated generate_ray and
  * sample_filter (app/camera.py, app/filters.py). */
 
 typedef struct {

@@ -1,4 +1,4 @@
-/* The image on its way to a window over a discrete GPU's bus (app/display.py): the mean
+/* The image on its way to a window over a discrete GPU's bus (app/viewer/display.py): the mean
  * radiance of each pixel as half floats, 8 bytes a pixel for the host to copy instead of the 16
  * of the float sums, with a count of 1 in w. The window's shader (shaders/display.frag) then
  * applies exposure, the tone curve and sRGB, so that changing them needs no new copy.

@@ -14,7 +14,7 @@
 
 #define SHADOW_EPSILON 1e-4f
 
-/* How paths end: the build option RUSSIAN_ROULETTE (app/features.py) picks one rule per
+/* How paths end: the build option RUSSIAN_ROULETTE (app/device/features.py) picks one rule per
  * program, so that the others cost no registers. */
 #define RR_OFF 0
 #define RR_ALBEDO 1        /* the report's: at every vertex, go on with the material's albedo
@@ -192,7 +192,7 @@ PathRecord start_path(const RenderParams *p, float3 o, float3 d, Rng *rng)
  * (kernels/phase.cl), with light sampling as at a surface, or reaches the surface, whose
  * crossing may change the medium (kernels/volume.cl).
  *
- * With PATH_QUEUE (the render setting path_queue, app/features.py), a path about to trace its
+ * With PATH_QUEUE (the render setting path_queue, app/device/features.py), a path about to trace its
  * ray to vertex queue.depth is stored in `queue` instead, where it has room (*queued set, the
  * radiance returned is not the path's), and continue_paths traces it on. A GPU runs a warp's 32
  * paths in step until the longest ends: where a few paths go on bouncing among meshes, the
@@ -367,7 +367,7 @@ CPU_INLINE float3 trace_path(const SceneData *sc, const RenderParams *p, const P
  * float32 sum of N samples rounds each new one by up to 2^-24 N of the total (a viewer left
  * running for hours stopped converging). No reassociation is allowed (no
  * -cl-fast-relaxed-math), so the compiler keeps (t - s) - y. Within a launch the samples are
- * summed plainly, in registers: a launch adds at most MAX_LAUNCH_SAMPLES (app/renderer.py). */
+ * summed plainly, in registers: a launch adds at most MAX_LAUNCH_SAMPLES (app/rendering/renderer.py). */
 void add_compensated(float4 *s, float4 *c, float4 x)
 {
     float4 y = x - *c;

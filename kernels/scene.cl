@@ -1,6 +1,6 @@
-/* The compiled scene as the kernels see it (app/compiled.py builds it; app/renderer.py uploads
+/* The compiled scene as the kernels see it (app/compiler/compiled.py builds it; app/rendering/renderer.py uploads
  * it): every table in one struct, so that helpers take one argument however the scene grows.
- * The order of the arguments is app/compiled.py's SCENE_BUFFERS. */
+ * The order of the arguments is app/compiler/compiled.py's SCENE_BUFFERS. */
 
 typedef struct {
     const global BVHNode *nodes;
@@ -34,7 +34,7 @@ typedef struct {
 #endif
 } SceneData;
 
-/* Counts k units of traversal work where a kernel asked for them (app/traversal_stats.py). */
+/* Counts k units of traversal work where a kernel asked for them (app/bench/traversal_stats.py). */
 #ifdef TRAVERSAL_STATS
 #define COUNT_WORK(sc, kind, k) if ((kind) == TRAVERSAL_STATS && (sc)->work) *(sc)->work += (k)
 #else
@@ -58,7 +58,7 @@ typedef struct {
      texels, env, lights, light_pick, light_leaf, light_nodes, env_marginal, env_conditional,      \
      media, prim_media, instances, num_spheres, layout}
 
-/* How a compiled scene is laid out (app/compiled.py: CompiledScene.layout). A scene's own program
+/* How a compiled scene is laid out (app/compiler/compiled.py: CompiledScene.layout). A scene's own program
  * is built for its layout (LONE_SPHERES, INSTANCES, MEDIA); a GENERIC program, which renders any
  * scene, reads these bits instead. */
 #define LAYOUT_LONE_SPHERES 1   /* the spheres are outside the BVH, which holds the triangles */

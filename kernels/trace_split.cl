@@ -1,5 +1,5 @@
 /* Where a path tracer's time goes, tracing against the rest (`pathtrace bench --trace-split`,
- * app/trace_split.py). The megakernel (kernels/integrator.cl) keeps a path's whole state live
+ * app/bench/trace_split.py). The megakernel (kernels/integrator.cl) keeps a path's whole state live
  * while each ray walks the BVH, which on a GPU costs registers, hence threads in flight, hence
  * hidden memory latency. A wavefront path tracer (Laine, Karras and Aila, "Megakernels
  * Considered Harmful", HPG 2013) traces rays in a kernel that holds nothing else. These kernels
@@ -12,7 +12,7 @@
  *           t_max, then the unit direction and, as int bits, the primitive the ray leaves (-1:
  *           none). A zero direction is no ray (the camera ray escaped, the surface was a back
  *           face, the sample was refused). Scenes with media or a two-level BVH are not split
- *           (app/trace_split.py refuses them).
+ *           (app/bench/trace_split.py refuses them).
  *   which   0, 1 or 2: trace_rays traces each pixel's camera, bounce or shadow ray.
  *   hits    per pixel, the primitive hit (-1: none), 1 or 0 for an occluded shadow ray or not,
  *           and -2 where there was no ray. */

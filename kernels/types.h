@@ -1,5 +1,5 @@
 /* Structs shared by the host and the kernels. Each one is mirrored, field for field, by a NumPy
- * dtype in app/types.py; tests/test_types.py checks sizes and offsets on the device.
+ * dtype in app/device/types.py; tests/test_types.py checks sizes and offsets on the device.
  * Only float4 and 4-byte scalars are used, so the layout is the same on every OpenCL device.
  *
  * Primitives have one index space, their BVH order: spheres are primitives [0, num_spheres),
@@ -128,7 +128,7 @@ typedef struct {
     int row_start;       /* the launch covers image rows [row_start, row_end): a band of a pass */
     int row_end;
     int camera_medium;   /* the medium the camera is in (a row of the media table), or -1 */
-    /* What a GENERIC program (app/features.py: Features.generic_program) chooses at run time, and a
+    /* What a GENERIC program (app/device/features.py: Features.generic_program) chooses at run time, and a
        scene's program by build options: */
     int camera_type;     /* the camera's kernel (app/camera.py: CAMERA_KERNELS index) */
     int filter_type;     /* the pixel filter (app/filters.py: FILTERS index) */

@@ -1,7 +1,7 @@
 #version 330 core
 // The image as the user sees it: mean = rgb / a, exposure, tone curve, sRGB. The same steps as
-// app/tonecurve.py, which writes the PNG screenshots.
-uniform sampler2D radiance;       // rgb: radiance summed over a samples (app/display.py: the
+// app/io/tonecurve.py, which writes the PNG screenshots.
+uniform sampler2D radiance;       // rgb: radiance summed over a samples (app/viewer/display.py: the
                                   // accumulation buffer; or a mean, or the denoised image, a = 1)
 uniform float exposure;           // stops
 uniform int curve;                // 0: standard (clip), 1: ACES fit (Narkowicz 2015)

@@ -9,13 +9,13 @@ import numpy as np
 import pyopencl as cl
 import pytest
 
-from pathtrace.compiled import SCENE_BUFFERS
-from pathtrace.device import build_cached, build_program, choose_device
-from pathtrace.features import Features
+from pathtrace.compiler.compiled import SCENE_BUFFERS
+from pathtrace.device.opencl import build_cached, build_program, choose_device
+from pathtrace.device.features import Features
 
 ROOT = Path(__file__).resolve().parent.parent
 
-# The BVH cache (pathtrace.bvh_cache) is off in the tests, theirs and their commands': every
+# The BVH cache (pathtrace.compiler.bvh_cache) is off in the tests, theirs and their commands': every
 # scene is built, and nothing is written to the user's cache; tests/test_bvh_cache.py turns it on.
 os.environ.setdefault("PATHTRACE_BVH_CACHE", "0")
 # Nor are scenes read from its cache of scenes (pathtrace.scene.read_cache): tests/test_read_cache.py.
@@ -23,7 +23,7 @@ os.environ.setdefault("PATHTRACE_SCENE_CACHE", "0")
 # Nor to its cache of kernel binaries and path-queue verdicts (Renderer.choose_queue_plan), whose
 # verdicts would spare a later run the trials that tests count.
 os.environ.setdefault("PATHTRACE_CACHE", tempfile.mkdtemp(prefix="pathtrace-tests-"))
-# Renders draw from the generic program alone (pathtrace.programs), one build shared by every
+# Renders draw from the generic program alone (pathtrace.device.programs), one build shared by every
 # test, where each scene's own program would be a build of its own (about 220 of them, most of
 # the suite's time on two cores). Tests marked `specialised` render with the scenes' own
 # programs: those about what those programs compile, trace and cache, and the references, which

@@ -2,7 +2,7 @@
 limit), so that the device is opened and the generic kernels built once for all of them:
 `python -m tests.fuzz_batch cases.json results.json`.
 
-A case is {"cwd": folder, and "argv": a command line for pathtrace.cli.main, or "code": Python
+A case is {"cwd": folder, and "argv": a command line for pathtrace.cli.main.main, or "code": Python
 run with `pathtrace`, `np` and `UserError` in scope}. Its result: {"status": the command's exit
 status (a code case: 0 where it ran through, 1 where it raised pathtrace.UserError, None where it
 raised anything else), "stderr": what it printed to standard error (Python's warnings, NumPy's
@@ -22,7 +22,7 @@ def run_case(case: dict) -> dict:
     import numpy as np
 
     import pathtrace
-    from pathtrace.cli import main
+    from pathtrace.cli.main.main import main
     from pathtrace.errors import UserError
 
     err = io.StringIO()

@@ -12,8 +12,8 @@ import pytest
 
 import pathtrace
 from pathtrace.errors import UserError
-from pathtrace.image_io import read_hdr
-from pathtrace.tonecurve import tonemap as display
+from pathtrace.io.images import read_hdr
+from pathtrace.io.tonecurve import tonemap as display
 
 ROOT = Path(__file__).resolve().parent.parent
 DEVICE = os.environ.get("PATHTRACE_TEST_DEVICE", "cpu")
@@ -295,7 +295,7 @@ def test_a_bad_path_queue_setting_is_one_user_error(value):
 def test_auto_chooses_its_plan_for_the_whole_render(monkeypatch):
     """A render's first snapshot has 1 spp; "auto" chooses for the render's samples, so that a
     long render runs its trials (which a render shorter than them skips)."""
-    from pathtrace.renderer import Renderer
+    from pathtrace.rendering.renderer import Renderer
     asked = []
     choose = Renderer.choose_queue_plan
     monkeypatch.setattr(Renderer, "choose_queue_plan", lambda self, samples, trials=None:

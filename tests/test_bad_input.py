@@ -11,7 +11,7 @@ from pathtrace.errors import UserError
 from pathtrace.materials.table import MaterialTable
 from pathtrace.scene import load_scene
 from pathtrace.scene.pbrt.reader import MAX_INCLUDES, PbrtReader
-from pathtrace.types import MATERIAL
+from pathtrace.device.types import MATERIAL
 
 HEAD = 'LookAt 0 0 5  0 0 0  0 1 0\nCamera "perspective"\nWorldBegin\n'
 TRIANGLE = 'Shape "trianglemesh" "point3 P" [ -1 -1 0  1 -1 0  0 1 0 ] "integer indices" [ 0 1 2 ]\n'

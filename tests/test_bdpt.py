@@ -8,10 +8,10 @@ import numpy as np
 import pyopencl as cl
 import pytest
 
-from pathtrace.device import build_program
+from pathtrace.device.opencl import build_program
 from pathtrace.errors import UserError
 from pathtrace.filters import PixelFilter
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 from pathtrace.scene.toml_reader import read_scene_dict
 from tests.conftest import ROOT
@@ -293,7 +293,7 @@ def test_a_scene_with_a_medium_is_one_line_for_bdpt(backend):
 
 
 def test_the_path_tracers_program_compiles_nothing_of_bdpt(backend):
-    from pathtrace.device import kernel_source
+    from pathtrace.device.opencl import kernel_source
     scene = cbox()
     r = Renderer(backend, scene, 8, 8)
     features = r.compiled.features(r.settings, r.camera)
@@ -384,9 +384,9 @@ def test_splats_of_samples_split_by_index_and_rows_add_up(backend):
 
 def test_two_devices_splat_the_one_device_image(backend):
     """One device split twice (two contexts and queues): the merged sums of a BDPT render equal
-    a one-device render of the same samples (pathtrace.multidevice), splats included."""
-    from pathtrace.device import open_device
-    from pathtrace.multidevice import DeviceGroup
+    a one-device render of the same samples (pathtrace.rendering.multidevice), splats included."""
+    from pathtrace.device.opencl import open_device
+    from pathtrace.rendering.multidevice import DeviceGroup
     scene = cbox().with_settings(integrator="bdpt", width=16, height=16)
     second = open_device(backend.device)
     group = DeviceGroup([backend, second], scene)

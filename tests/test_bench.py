@@ -81,7 +81,7 @@ def test_load_bench_scenes_say_the_same_in_each_format(tmp_path):
     import numpy as np
 
     from pathtrace import api
-    from pathtrace.load_bench import write_height_field, write_meshes
+    from pathtrace.bench.load import write_height_field, write_meshes
     for ours, xml, what, size in (write_meshes(tmp_path, 6), write_height_field(tmp_path)):
         a, b = api.load(tmp_path / ours), api.load(tmp_path / xml)
         assert sum(len(m.faces) for m in a.meshes) == sum(len(m.faces) for m in b.meshes) == int(what.split()[3].replace(",", ""))
@@ -99,7 +99,7 @@ def test_the_obj_scene_is_meshes850_as_obj_files(tmp_path):
     import numpy as np
 
     from pathtrace import api
-    from pathtrace.bench_scenes import write_meshes, write_obj_meshes
+    from pathtrace.bench.scenes import write_meshes, write_obj_meshes
     ply = api.load(tmp_path / write_meshes(tmp_path, 5)[0])
     obj = api.load(write_obj_meshes(tmp_path, 5))
     assert [len(m.faces) for m in obj.meshes] == [len(m.faces) for m in ply.meshes] == [1024] * 5
@@ -140,7 +140,7 @@ def test_bench_without_the_cold_build_and_with_traversal_counts_and_the_trace_sp
     row, fog = json.loads(out.read_text())["results"]
     assert row["build_cold_seconds"] is None and row["build_warm_seconds"] >= 0 and row["seconds"] > 0
     assert " -/" in r.stdout
-    # simple's five spheres have no tree: every ray tests all five (app/features.py: FLAT_MAX)
+    # simple's five spheres have no tree: every ray tests all five (app/device/features.py: FLAT_MAX)
     assert row["nodes_per_ray"] == 0 and row["primitives_per_ray"] == 5 and row["rays_per_sample"] >= 1
     assert "traversal: " in r.stdout
     split = row["trace_split"]

@@ -5,10 +5,10 @@ test_reference.py (tests/scenes/blend.xml)."""
 import numpy as np
 import pytest
 
-from pathtrace.compiled import CompiledScene
+from pathtrace.compiler.compiled import CompiledScene
 from pathtrace.errors import UserError
 from pathtrace.materials import Material, MaterialTable
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 
 SCENE = """

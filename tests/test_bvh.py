@@ -5,11 +5,11 @@ and degenerate triangles, mixed scenes, and every primitive at one point."""
 import numpy as np
 import pytest
 
-import pathtrace.bvh as bvh_module
+import pathtrace.compiler.bvh as bvh_module
 
-from pathtrace.bvh import MAX_DEPTH, MAX_LEAF_SIZE, RADIUS, TRAVERSAL_COST, build_bvh, builder_for
-from pathtrace.compiled import compile_scene
-from pathtrace.features import LONE_MAX
+from pathtrace.compiler.bvh import MAX_DEPTH, MAX_LEAF_SIZE, RADIUS, TRAVERSAL_COST, build_bvh, builder_for
+from pathtrace.compiler.compiled import compile_scene
+from pathtrace.device.features import LONE_MAX
 from pathtrace.scene import Mesh, SceneBuilder, diffuse
 from tests.conftest import layout_features, scene_arrays
 
@@ -304,7 +304,7 @@ def test_sah_cost_is_near_a_full_sweep_build(top_work):
 
 
 def full_sweep_sah(lo, hi):
-    """The SAH cost (as pathtrace.bvh.BVH.cost counts it) of a top-down full-sweep build with leaves of at
+    """The SAH cost (as pathtrace.compiler.bvh.BVH.cost counts it) of a top-down full-sweep build with leaves of at
     most MAX_LEAF_SIZE, recursive and slow: a reference for small inputs only."""
     def area(l, h):
         d = h - l
@@ -350,9 +350,9 @@ def most_pushes(nodes) -> int:
 
 @pytest.mark.parametrize("build", ["chain", "random", "ploc"])
 def test_the_stack_each_scene_gets_holds_its_tree(build, monkeypatch):
-    """pathtrace.features.stack_size, from the binary depth, bounds what traversal can push, for the
-    deepest tree app/bvh.py makes (a chain cut at MAX_DEPTH) and for random ones."""
-    from pathtrace.features import stack_size
+    """pathtrace.device.features.stack_size, from the binary depth, bounds what traversal can push, for the
+    deepest tree app/compiler/bvh.py makes (a chain cut at MAX_DEPTH) and for random ones."""
+    from pathtrace.device.features import stack_size
     rng = np.random.default_rng(5)
     if build == "chain":
         lo = np.column_stack([2.0 ** np.arange(60), np.zeros(60), np.zeros(60)]).astype(np.float32)
@@ -392,12 +392,12 @@ material = { type = "diffuse", rho_d = 0.5 }
 @pytest.mark.parametrize("scene", ["simple", "mixed"])
 @pytest.mark.parametrize("nee", [False, True])
 def test_a_flat_scene_renders_as_its_tree_does(backend, monkeypatch, tmp_path, scene, nee):
-    """A scene of at most FLAT_MAX primitives is built without traversal (app/features.py): its
+    """A scene of at most FLAT_MAX primitives is built without traversal (app/device/features.py): its
     rays find the hits its BVH gives, so the same samples make the same image."""
     from dataclasses import replace
 
-    from pathtrace.compiled import CompiledScene
-    from pathtrace.renderer import Renderer
+    from pathtrace.compiler.compiled import CompiledScene
+    from pathtrace.rendering.renderer import Renderer
     from pathtrace.scene import load_scene
     if scene == "mixed":
         (tmp_path / "mixed.toml").write_text(FLAT_MIXED)
@@ -421,12 +421,12 @@ def test_a_flat_scene_renders_as_its_tree_does(backend, monkeypatch, tmp_path, s
 @pytest.mark.parametrize("scene", ["cornell-box", "teapot"])
 def test_a_scene_of_triangles_only_renders_without_the_sphere_code(backend, monkeypatch, scene):
     """A scene without spheres compiles its traversal without the sphere test (NO_SPHERES,
-    app/features.py), which a scene does not pay for where it has none: the same samples make the
+    app/device/features.py), which a scene does not pay for where it has none: the same samples make the
     same image as the program with it."""
     from dataclasses import replace
 
-    from pathtrace.compiled import CompiledScene
-    from pathtrace.renderer import Renderer
+    from pathtrace.compiler.compiled import CompiledScene
+    from pathtrace.rendering.renderer import Renderer
     from pathtrace.scene import load_scene
     loaded = load_scene(scene)
 
@@ -450,8 +450,8 @@ def test_a_few_spheres_beside_triangles_stay_out_of_the_tree(backend, monkeypatc
     """teapot-sky, a teapot on a ground quad with one sphere: the sphere is outside the tree
     (LONE_SPHERES), whose leaves hold triangles only, and the same samples make the same image as
     with the sphere in the tree."""
-    import pathtrace.compiled as compiled_module
-    from pathtrace.renderer import Renderer
+    import pathtrace.compiler.compiled as compiled_module
+    from pathtrace.rendering.renderer import Renderer
     from pathtrace.scene import load_scene
     loaded = load_scene("teapot-sky")
 

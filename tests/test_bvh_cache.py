@@ -8,9 +8,9 @@ import sys
 import numpy as np
 import pytest
 
-import pathtrace.bvh_cache as cache
-from pathtrace import cache_files
-from pathtrace.bvh import build_bvh
+import pathtrace.compiler.bvh_cache as cache
+from pathtrace.io import cache_files
+from pathtrace.compiler.bvh import build_bvh
 from tests.conftest import ROOT
 
 N = cache.MIN_PRIMITIVES

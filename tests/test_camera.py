@@ -10,9 +10,9 @@ import pytest
 from scipy import integrate
 
 from pathtrace.camera import Camera, kernel_name
-from pathtrace.features import Features
+from pathtrace.device.features import Features
 from pathtrace.filters import PixelFilter
-from pathtrace.types import RENDER_PARAMS
+from pathtrace.device.types import RENDER_PARAMS
 from tests.test_sampling import chi_square
 
 SOURCE = """
@@ -184,7 +184,8 @@ def test_the_command_line_filter_overrides_the_scenes(tmp_path):
     scene.write_text('[render]\nfilter = "box"\n[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\n'
                      'material = { type = "emitter", Le = 1 }\n[[lights]]\ntype = "point"\nposition = [0, 3, 0]\n'
                      'intensity = 1\n')
-    from pathtrace.cli import apply_render_options, build_parser
+    from pathtrace.cli.main import build_parser
+    from pathtrace.cli.options import apply_render_options
     from pathtrace.scene import load_scene
     args = build_parser().parse_args(["render", str(scene), "-o", "x.png", "--filter", "gaussian:1.5:0.25"])
     assert apply_render_options(load_scene(str(scene)), args).settings.filter == PixelFilter("gaussian", 1.5, 0.25)

@@ -40,7 +40,7 @@ material = { type = "diffuse", rho_d = 0.5 }
 
 
 def test_render_writes_png_and_exr(tmp_path):
-    from pathtrace.image_io import read_hdr
+    from pathtrace.io.images import read_hdr
     png, exr = tmp_path / "a.png", tmp_path / "a.exr"
     r = pathtrace("render", "simple", "-o", png, "-o", exr, "--size", "32x18", "--spp", "4", "-q")
     assert r.returncode == 0, r.stderr
@@ -63,7 +63,7 @@ def test_render_denoise_writes_the_denoised_image_the_noisy_layer_and_the_aovs(t
     "noisy", which is the image a render without --denoise writes; --aov: the albedo and normal
     beside each output (PNG normals encoded as n / 2 + 1/2)."""
     import OpenEXR
-    from pathtrace.image_io import read_hdr
+    from pathtrace.io.images import read_hdr
     png, exr, plain = tmp_path / "d.png", tmp_path / "d.exr", tmp_path / "plain.exr"
     common = ("--size", "48x27", "--spp", "4", "-q")
     r = pathtrace("render", "demo", "-o", png, "-o", exr, "--denoise", "--aov", "albedo,normal", *common)
@@ -111,7 +111,7 @@ def test_argparses_own_messages_echo_values_short(tmp_path, args):
 
 
 def test_an_aov_named_twice_is_written_once():
-    from pathtrace.cli import _aovs
+    from pathtrace.cli.render import _aovs
     assert _aovs("normal, albedo,normal") == ("normal", "albedo")
 
 
@@ -166,7 +166,7 @@ def test_bad_scene_file_gets_one_clear_message(tmp_path, text, message):
 def test_a_huge_environment_rotation_wraps(tmp_path):
     """A rotation near float32's limit (1e42, beyond it, crashed the kernel; it is refused now):
     the angle is wrapped to [0, 360) in float64 before it reaches the device."""
-    from pathtrace.image_io import read_hdr
+    from pathtrace.io.images import read_hdr
     scene = write(tmp_path, GOOD.replace("color = 0.5", 'map = "studio_small_03_1k.hdr"\nrotation = 3e38'))
     out = tmp_path / "o.exr"
     r = pathtrace("render", scene, "-o", out, "--spp", "2", "--size", "16x8", "-q")
@@ -268,7 +268,7 @@ def test_ctrl_c_stops_cleanly_and_writes_nothing(tmp_path):
     assert not out.exists() and not list(tmp_path.iterdir())
 
 
-@pytest.mark.parametrize("module", ["numpy", "pyopencl", "pathtrace.cli"])
+@pytest.mark.parametrize("module", ["numpy", "pyopencl", "pathtrace.cli.main"])
 def test_ctrl_c_while_the_package_imports_gets_one_line(tmp_path, module):
     """SIGINT sent as the console entry point starts importing `module` (an audit hook fires at
     that moment, so the test hits the window every time; a real Ctrl-C there is a matter of
@@ -280,7 +280,7 @@ def hook(event, args):
         os.kill(os.getpid(), signal.SIGINT)
 sys.addaudithook(hook)
 sys.argv = ["pathtrace", "render", "simple", "-o", {str(tmp_path / "o.png")!r}]
-from pathtrace.console import run
+from pathtrace.cli.console import run
 run()
 """
     r = subprocess.run([sys.executable, "-c", child], cwd=ROOT,
@@ -293,11 +293,11 @@ run()
 @pytest.mark.parametrize("damage", ["truncated", "garbage", "empty"])
 def test_a_damaged_kernel_cache_is_rebuilt(tmp_path, damage):
     """A truncated cache file (the first half of a valid one) crashed PoCL at every start. (PoCL
-    keeps its kernels in its own cache, app/device.py keeps_own_cache: here it uses ours, as the
+    keeps its kernels in its own cache, app/device/opencl.py keeps_own_cache: here it uses ours, as the
     drivers that keep none do.)"""
     env_cache = tmp_path / "cache"
-    ours = ("import sys, pathtrace.device as d; d.keeps_own_cache = lambda device: False; "
-            "sys.argv[0] = 'pathtrace'; from pathtrace.console import run; run()")
+    ours = ("import sys, pathtrace.device.opencl as d; d.keeps_own_cache = lambda device: False; "
+            "sys.argv[0] = 'pathtrace'; from pathtrace.cli.console import run; run()")
     run = lambda: subprocess.run([sys.executable, "-c", ours, "render", "simple", "-o", str(tmp_path / "o.png"),
                                   "--size", "8x8", "--spp", "1", "-q"], cwd=ROOT, capture_output=True, text=True,
                                  env={**os.environ, "PATHTRACE_CACHE": str(env_cache)}, timeout=300)
@@ -371,7 +371,7 @@ def test_render_prints_each_phase_with_its_time_unless_quiet(tmp_path):
 
 
 def test_running_out_of_memory_gets_one_line(monkeypatch, capsys):
-    from pathtrace import cli
+    import pathtrace.cli.main as cli
     import pathtrace.scene
 
     def huge(name):
@@ -455,8 +455,8 @@ def test_a_nul_byte_in_a_file_name_is_one_line(tmp_path, field):
 
 
 def test_farm_patterns_and_addresses_of_odd_text_are_one_line():
-    from pathtrace.cli import farm_output
-    from pathtrace.farm import _check_reachable
+    from pathtrace.cli.farm import farm_output
+    from pathtrace.rendering.farm import _check_reachable
     for pattern in ("{name.x}.png", "{frame[0]}.png", "{0}.png", "{name!z}.png"):
         with pytest.raises(UserError, match="only {name} and {frame} may stand in braces"):
             farm_output(pattern, "simple", 0, 1)
@@ -472,8 +472,8 @@ def test_a_signal_after_the_outputs_are_written_does_not_fail_the_command(tmp_pa
     the writes): the render is whole, so the exit is 0, not 'interrupted' (130)."""
     code = f"""
 import os, signal, sys
-import pathtrace.image_io as io
-from pathtrace.console import run
+import pathtrace.io.images as io
+from pathtrace.cli.console import run
 commit = io.Staged.commit
 def commit_then_signal(self):
     commit(self)
@@ -518,7 +518,7 @@ def update(self, n=1):          # the progress bar's update, in the main thread
     return original(self, n)
 tqdm.tqdm.update = update
 sys.argv = ["pathtrace", "render", "simple", "-o", {str(out)!r}, "--spp", "3000", "--size", "32x18"]
-from pathtrace.console import run
+from pathtrace.cli.console import run
 run()
 """
     r = subprocess.run([sys.executable, "-c", child], cwd=ROOT, capture_output=True, text=True, timeout=120)
@@ -533,7 +533,7 @@ def test_a_pbrt_render_to_exr_imports_no_other_scene_reader_and_no_opencv(tmp_pa
     OpenCV, and a PNG then does load OpenCV, which encodes it."""
     readers = ("pathtrace.scene.mitsuba", "pathtrace.scene.toml_reader", "pathtrace.scene.builtin")
     for out, expected in (("x.exr", []), ("x.png", ["cv2"])):
-        code = ("import sys\nfrom pathtrace.cli import main\n"
+        code = ("import sys\nfrom pathtrace.cli.main import main\n"
                 f"code = main(['render', {str(ROOT / 'tests' / 'scenes' / 'cbox.pbrt')!r}, '--size', '8x8', "
                 f"'--spp', '1', '--device', 'cpu', '-q', '-o', {str(tmp_path / out)!r}])\n"
                 f"print(code, sorted(m for m in {('cv2',) + readers!r} if m in sys.modules))\n")

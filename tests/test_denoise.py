@@ -1,15 +1,15 @@
 """The denoiser's auxiliary images (kernels/aovs.cl) against closed forms, and Intel Open Image
-Denoise on them (app/denoiser.py): its error against a converged reference at 4 samples per
+Denoise on them (app/io/denoiser.py): its error against a converged reference at 4 samples per
 pixel, and no bias at many."""
 
 import numpy as np
 import pytest
 
 from pathtrace.camera import Camera
-from pathtrace.denoiser import Denoiser
-from pathtrace.environment import Environment
+from pathtrace.io.denoiser import Denoiser
+from pathtrace.scene.environment import Environment
 from pathtrace.materials import Material
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import Mesh, RenderSettings, SceneBuilder, diffuse, load_scene
 
 QUAD = np.array([[0, 1, 2], [0, 2, 3]], np.int32)

@@ -1,4 +1,4 @@
-"""The kernel cache (app/device.py build_cached): an entry that is not a regular file is not
+"""The kernel cache (app/device/opencl.py build_cached): an entry that is not a regular file is not
 opened (a FIFO blocked for ever), a write that fails (a full disk) leaves nothing behind, and on
 PoCL, which keeps its own, it is not used."""
 
@@ -6,13 +6,13 @@ import os
 import subprocess
 import sys
 
-from pathtrace.device import build_cached
+from pathtrace.device.opencl import build_cached
 
 SOURCE = "kernel void one(global int *a) { a[0] = 1; }"
 BUILD = f"""
 import pyopencl as cl
-import pathtrace.device as d
-from pathtrace.device import build_cached, choose_device
+import pathtrace.device.opencl as d
+from pathtrace.device.opencl import build_cached, choose_device
 b = choose_device({os.environ.get("PATHTRACE_TEST_DEVICE", "cpu")!r})
 d.keeps_own_cache = lambda device: False      # PoCL keeps its own cache, which leaves ours unused
 r = build_cached(b.context, b.device.device, {SOURCE!r}, [])
@@ -26,7 +26,7 @@ def build(cache, extra=""):
 
 
 def test_a_cache_entry_that_is_a_fifo_is_not_opened(backend, tmp_path):
-    from pathtrace.device import cache_entry
+    from pathtrace.device.opencl import cache_entry
     assert build(tmp_path).stdout.strip() == "built"
     assert build(tmp_path).stdout.strip() == "cached"
     entry = tmp_path / cache_entry(backend.device.device, SOURCE, [], True).name
@@ -38,7 +38,7 @@ def test_a_cache_entry_that_is_a_fifo_is_not_opened(backend, tmp_path):
 
 def test_a_full_disk_leaves_no_partial_cache_file(tmp_path):
     """The write fails half-way (ENOSPC): the build still succeeds, and no .tmp file is left."""
-    full = ("import builtins, errno, io, pathtrace.cache_files as files\n"
+    full = ("import builtins, errno, io, pathtrace.io.cache_files as files\n"
             "class Full(io.FileIO):\n"
             "    def write(self, data):\n"
             "        super().write(bytes(data)[: len(data) // 2])\n"
@@ -50,10 +50,10 @@ def test_a_full_disk_leaves_no_partial_cache_file(tmp_path):
 
 
 def test_a_cache_entry_keeps_the_options_its_binary_was_built_with(tmp_path):
-    """A register cap chosen at build time (app/occupancy.py) must apply again when the cached
+    """A register cap chosen at build time (app/device/occupancy.py) must apply again when the cached
     binary is built for the device: the entry carries the options."""
-    from pathtrace.device import _read_cached
-    r = build(tmp_path, "import pathtrace.device as d\n"
+    from pathtrace.device.opencl import _read_cached
+    r = build(tmp_path, "import pathtrace.device.opencl as d\n"
                         "cached = d.build_cached\n"
                         "d.build_cached = lambda c, dev, s, o, *rest: cached(c, dev, s, o + ['-DONE=1'], *rest)\n")
     assert r.returncode == 0, r.stderr
@@ -64,7 +64,7 @@ def test_pocl_keeps_the_kernels_in_its_own_cache_alone(backend, tmp_path, monkey
     """Asking PoCL for a program's binary, to store it, compiled every kernel of the program first
     (4 s for the render program on two cores): where the driver is PoCL, pathtrace's cache
     stays empty and every build is PoCL's, which its own cache makes fast the second time."""
-    from pathtrace.device import keeps_own_cache
+    from pathtrace.device.opencl import keeps_own_cache
     device = backend.device.device
     assert keeps_own_cache(device) == ("Portable Computing Language" in device.platform.name)
     monkeypatch.setenv("PATHTRACE_CACHE", str(tmp_path))
@@ -76,7 +76,7 @@ def test_pocl_keeps_the_kernels_in_its_own_cache_alone(backend, tmp_path, monkey
 
 def only_entry(backend, cache, monkeypatch):
     """The one-line kernel's cache entry (choose_device caches other programs beside it)."""
-    from pathtrace.device import cache_entry
+    from pathtrace.device.opencl import cache_entry
     monkeypatch.setenv("PATHTRACE_CACHE", str(cache))
     entry = cache_entry(backend.device.device, SOURCE, [], True)
     assert entry.is_file()
@@ -95,7 +95,7 @@ def test_a_damaged_cache_entry_is_built_again_and_replaced(backend, tmp_path, mo
 
 def test_a_foreign_binary_in_a_cache_entry_is_built_again(backend, tmp_path, monkeypatch):
     """A whole entry whose binary the driver refuses (another driver's, or garbage): rebuilt."""
-    from pathtrace.cache_files import write_entry
+    from pathtrace.io.cache_files import write_entry
     assert build(tmp_path).stdout.strip() == "built"
     entry = only_entry(backend, tmp_path, monkeypatch)
     write_entry(entry, b"\n", b"\x7fELF not a binary this driver reads" * 8)
@@ -106,7 +106,7 @@ def test_a_foreign_binary_in_a_cache_entry_is_built_again(backend, tmp_path, mon
 def test_two_processes_building_the_same_program_leave_one_whole_entry(tmp_path):
     """Each writes a temporary file of its own and renames it over the entry: whichever rename
     comes last, the entry is whole, and no temporary file stays."""
-    from pathtrace.device import _read_cached
+    from pathtrace.device.opencl import _read_cached
     env = {**os.environ, "PATHTRACE_CACHE": str(tmp_path)}
     runs = [subprocess.Popen([sys.executable, "-c", BUILD], env=env, stdout=subprocess.PIPE, text=True)
             for _ in range(2)]

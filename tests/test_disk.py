@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from pathtrace.camera import Camera
-from pathtrace.environment import Environment
-from pathtrace.renderer import Renderer
+from pathtrace.scene.environment import Environment
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import Mesh, SceneBuilder, diffuse, load_scene
 from pathtrace.scene import transform
 from pathtrace.shapes import SHAPES, Shape

@@ -1,6 +1,6 @@
-"""The viewer's way to the screen, headless: what pathtrace.display brings to the host (the float sums,
+"""The viewer's way to the screen, headless: what pathtrace.viewer.display brings to the host (the float sums,
 or kernels/display.cl's half floats) against the mean computed on the host; and
-pathtrace.launches.Progressive, which feeds a renderer in bands without ever waiting for it."""
+pathtrace.rendering.launches.Progressive, which feeds a renderer in bands without ever waiting for it."""
 
 import threading
 
@@ -8,9 +8,9 @@ import numpy as np
 import pyopencl as cl
 import pytest
 
-from pathtrace.display import MODES, Display
-from pathtrace.launches import Progressive
-from pathtrace.renderer import Renderer, per_pixel_mean
+from pathtrace.viewer.display import MODES, Display
+from pathtrace.rendering.launches import Progressive
+from pathtrace.rendering.renderer import Renderer, per_pixel_mean
 from pathtrace.scene import load_scene
 
 

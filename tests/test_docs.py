@@ -18,7 +18,7 @@ MODULE = re.compile(r"(?<![\w./-])(?:pathtrace|app)((?:\.[a-z_][a-z0-9_]*)+)")
 def texts():
     """The documents, and every source file's text (comments and docstrings name paths too)."""
     files = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md")), ROOT / "assets" / "README.md"]
-    for folder in ("app", "kernels", "shaders", "tests", "scripts", "examples"):
+    for folder in ("app", "kernels", "shaders", "tests", "scripts", "examples", "docs/notes/studies"):
         files += sorted(f for f in (ROOT / folder).rglob("*") if f.suffix in (".py", ".cl", ".h", ".frag", ".vert"))
     return [(f, f.read_text(encoding="utf-8")) for f in files]
 
@@ -98,7 +98,7 @@ def test_every_module_named_imports():
 
 @pytest.mark.parametrize("command", ["render", "view", "convert"])
 def test_help_names_every_built_in_scene(command, capsys):
-    from pathtrace.cli import build_parser
+    from pathtrace.cli.main import build_parser
     from pathtrace.scene.builtin import BUILTIN_SCENES
     with pytest.raises(SystemExit):
         build_parser().parse_args([command, "--help"])

@@ -1,4 +1,4 @@
-"""The render farm on a local Ray cluster of CPU actors (app/farm.py): the merged image equals
+"""The render farm on a local Ray cluster of CPU actors (app/rendering/farm.py): the merged image equals
 the one-process render of the same samples, also when an actor is killed mid-render, and each
 bad input is one line."""
 
@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 import ray
 
-from pathtrace import farm
-from pathtrace.compiled import compile_scene
+from pathtrace.rendering import farm
+from pathtrace.compiler.compiled import compile_scene
 from pathtrace.errors import UserError
-from pathtrace.image_io import read_hdr
-from pathtrace.renderer import Renderer
+from pathtrace.io.images import read_hdr
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 
 
@@ -117,7 +117,7 @@ def test_no_cluster_at_the_address_is_one_line(tmp_path):
 
 
 def test_output_names_must_tell_the_images_apart(tmp_path, capsys):
-    from pathtrace.cli import main
+    from pathtrace.cli.main import main
     assert main(["farm", "render", "simple", "demo", "-o", str(tmp_path / "x.png")]) == 1
     assert "several images would share a name" in capsys.readouterr().err
     assert main(["farm", "render", "simple", "-o", str(tmp_path / "{nope}.png")]) == 1

@@ -1,4 +1,4 @@
-"""`pathtrace bench --first-image` (app/first_image.py): command to first image, cold and warm."""
+"""`pathtrace bench --first-image` (app/bench/first_image.py): command to first image, cold and warm."""
 
 import json
 import sys
@@ -9,7 +9,7 @@ import pytest
 from pathtrace.errors import UserError
 from tests.test_cli import pathtrace
 
-# Mitsuba's load measurement (pathtrace.mitsuba_timing.LOAD) against a stand-in that writes its
+# Mitsuba's load measurement (pathtrace.bench.mitsuba_timing.LOAD) against a stand-in that writes its
 # image and records, per run, whether Dr.Jit's kernel cache (~/.drjit) was there already.
 FAKE_MITSUBA = """
 import json, os
@@ -71,7 +71,7 @@ def test_mitsuba_is_timed_cold_in_a_fresh_home_then_warm(tmp_path):
 
 def test_no_mitsuba_column_without_an_xml_of_the_rows_size(tmp_path):
     """A scene a twin cannot say, and an XML file whose film is another size, get a reason."""
-    from pathtrace.first_image import FirstImage, time_mitsuba
+    from pathtrace.bench.first_image import FirstImage, time_mitsuba
     row = lambda name: FirstImage(name, "", "cpu", 64, 64, 1.0, 1.0, "", 0, 1)   # noqa: E731
     fog = str(Path(__file__).parent / "scenes" / "media-fog.xml")
     assert time_mitsuba(row("simple"), "simple", tmp_path / "a", sys.executable, "scalar_rgb", 1) \
@@ -85,6 +85,6 @@ def test_a_failed_render_or_a_missing_image_is_one_line_naming_the_command(tmp_p
                   "--device", "nosuch")
     assert r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1, r.stderr
     assert "-m pathtrace render simple --size 16x9 ... failed: " in r.stderr and "nosuch" in r.stderr
-    from pathtrace.load_bench import best_time
+    from pathtrace.bench.load import best_time
     with pytest.raises(UserError, match=r"-c \.\.\. exited 0 but wrote no out\.exr$"):
         best_time([sys.executable, "-c", "pass"], 1, tmp_path, output=tmp_path / "out.exr")

@@ -17,7 +17,7 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from pathtrace.image_io import write_image
+from pathtrace.io.images import write_image
 from tests.test_fuzz_scenes import check_case
 
 ODD_TEXT = ["", "nan", "inf", "-1", "0", "1e40", "-1e40", "1e-300", "3.5e38", "²", "9" * 60, "1, 2",

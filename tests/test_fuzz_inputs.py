@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pathtrace.image_io import read_hdr, write_image
+from pathtrace.io.images import read_hdr, write_image
 
 ROOT = Path(__file__).resolve().parent.parent
 DEVICE = os.environ.get("PATHTRACE_TEST_DEVICE", "cpu")

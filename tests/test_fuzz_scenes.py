@@ -21,7 +21,7 @@ from hypothesis import HealthCheck, event, given, settings
 from PIL import Image as PILImage
 from hypothesis import strategies as st
 
-from pathtrace.image_io import read_hdr
+from pathtrace.io.images import read_hdr
 from pathtrace.scene.toml_reader import FILE_TYPES, MATERIAL_TYPES
 
 ROOT = Path(__file__).resolve().parent.parent

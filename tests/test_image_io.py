@@ -8,9 +8,9 @@ import stat
 import numpy as np
 import pytest
 
-from pathtrace import image_io
+from pathtrace.io import images as image_io
 from pathtrace.errors import UserError
-from pathtrace.image_io import Output, read_hdr, write_image, write_images
+from pathtrace.io.images import Output, read_hdr, write_image, write_images
 from tests.test_cli import GOOD, pathtrace, write
 
 IMAGE = np.random.default_rng(0).random((6, 8, 3)).astype(np.float32)

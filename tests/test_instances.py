@@ -1,4 +1,4 @@
-"""Instancing (app/scene/instances.py, app/two_level.py, kernels/bvh.cl: INSTANCES): the
+"""Instancing (app/scene/instances.py, app/compiler/two_level.py, kernels/bvh.cl: INSTANCES): the
 two-level BVH finds the hits and surfaces the flattened copies have, a ray leaving one
 instance's triangle meets the same triangle of another, the readers map pbrt-v4's and Mitsuba
 3's instances, scenes of many instances fit and render, and tests/scenes/instances.xml renders
@@ -11,9 +11,9 @@ import pytest
 from pyopencl import cltypes
 
 import pathtrace.scene.instances as instancing
-from pathtrace.compiled import compile_scene
+from pathtrace.compiler.compiled import compile_scene
 from pathtrace.errors import UserError
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import Mesh, SceneBuilder, diffuse, emitter, load_scene
 from pathtrace.scene.transform import rotation, scaling, translation
 from tests.conftest import KernelRunner, scene_arrays
@@ -246,7 +246,7 @@ def test_instances_the_api_makes_are_checked():
 
 
 def test_convert_writes_objects_and_instances_that_read_back_the_same(tmp_path):
-    from pathtrace.cli import main
+    from pathtrace.cli.main import main
     xml = Path(__file__).parent / "scenes" / "instances.xml"
     out = tmp_path / "instances.toml"
     assert main(["convert", str(xml), "-o", str(out)]) == 0

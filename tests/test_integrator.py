@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from pathtrace.camera import Camera
-from pathtrace.environment import Environment
-from pathtrace.renderer import Renderer
+from pathtrace.scene.environment import Environment
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import RenderSettings, SceneBuilder, diffuse, emitter
 from tests.stats import z_test
 

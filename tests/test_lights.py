@@ -6,9 +6,9 @@ import pytest
 from pyopencl import cltypes
 from scipy import stats
 
-from pathtrace.environment import LUMINANCE, Environment
+from pathtrace.scene.environment import LUMINANCE, Environment
 from pathtrace.lights import alias_table, build_light_table, emitted_power
-from pathtrace.types import RENDER_PARAMS
+from pathtrace.device.types import RENDER_PARAMS
 from tests.test_sampling import chi_square
 
 SOURCE = """
@@ -208,7 +208,7 @@ def floor_under(light, backend, nee=True, sampler="power"):
     the floor's x and z at an 8 x 8 grid of points in each pixel (axes 2 and 3), over which the
     closed forms are averaged as the pixel averages its samples; and the standard error of each
     pixel's mean (the samples differ only by where in the pixel they land)."""
-    from pathtrace.renderer import Renderer
+    from pathtrace.rendering.renderer import Renderer
     from pathtrace.scene.toml_reader import read_scene_dict
     scene = read_scene_dict({
         "camera": {"type": "orthographic", "eye": [0, 5, 0], "look_at": [0, 0, 0], "up": [0, 0, -1],
@@ -374,7 +374,7 @@ def test_the_light_tree_picks_each_light_with_the_probability_nee_divides_by(ker
     recomputed from its leaf says (which MIS divides by), those probabilities sum to 1, and a
     light behind the point's surface is never picked."""
     from pyopencl import cltypes
-    from pathtrace.compiled import CompiledScene
+    from pathtrace.compiler.compiled import CompiledScene
     from tests.conftest import scene_arrays
     scene = lamp_field(n=400, size=8.0).with_settings(light_sampler="tree")
     c = CompiledScene(scene)
@@ -403,7 +403,7 @@ def test_the_light_tree_lowers_the_variance_of_many_lights_and_keeps_the_mean(ba
     per-pixel variance (median over pixels) is at least 3x lower than the choice by power
     (measured 4.2x, 2026-11-24, PoCL), and its image has the mean of the estimator without NEE,
     pixel by pixel (a Z-test, pooled over 4x4 blocks)."""
-    from pathtrace.renderer import Renderer
+    from pathtrace.rendering.renderer import Renderer
     from tests.stats import z_test
     scene = lamp_field().with_settings(max_depth=2, russian_roulette="off")
     images = {}

@@ -10,7 +10,7 @@ import pytest
 from pyopencl import cltypes
 
 from pathtrace.materials import BSDFS, Material, pack
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.materials.microfacet import TABLE_COSINES, rough_coating, rough_dielectric_albedo
 from pathtrace.materials.optics import diffuse_fresnel_reflectance, fresnel_dielectric
 from tests.test_bsdfs import direction, evaluate, hemisphere_grid, sample
@@ -315,7 +315,7 @@ def test_beckmann_normals_are_normalised_and_its_g1_is_walters(kernels, alpha):
 def test_only_scenes_with_beckmann_metals_compile_beckmann(tmp_path):
     """The distribution's branch cost GGX scenes 3-6 % on an H100: BECKMANN is defined for the
     programs of scenes that have a Beckmann roughconductor only."""
-    from pathtrace.compiled import CompiledScene
+    from pathtrace.compiler.compiled import CompiledScene
     from pathtrace.scene import load_scene
 
     def defines(distribution):
@@ -329,7 +329,7 @@ def test_only_scenes_with_beckmann_metals_compile_beckmann(tmp_path):
 def test_only_scenes_with_anisotropic_roughness_keep_tangents(tmp_path):
     """A tangent per hit (kernels/frame.cl) is compiled in for anisotropic roughness only; an
     alpha_v left out follows alpha."""
-    from pathtrace.compiled import CompiledScene
+    from pathtrace.compiler.compiled import CompiledScene
     from pathtrace.scene import load_scene
 
     def compiled(params):
@@ -473,7 +473,7 @@ def test_an_invisible_coating_over_a_rough_metal_is_the_rough_metal(kernels):
 def test_coated_light_sampling_and_bsdf_sampling_agree(backend, kind, params):
     """A rough coated sphere under a sky and a lamp: the image with next-event estimation (its
     MIS weights read the estimated pdf) and the one without agree to within noise."""
-    from pathtrace.environment import Environment
+    from pathtrace.scene.environment import Environment
     from pathtrace.scene.description import SceneBuilder
     from tests.stats import z_test
     b = SceneBuilder()

@@ -1,4 +1,4 @@
-"""Participating media (app/media.py, kernels/media/, kernels/phase.cl, kernels/volume.cl): the
+"""Participating media (app/scene/media.py, kernels/media/, kernels/phase.cl, kernels/volume.cl): the
 phase function against its density, the volumetric path tracer against closed forms
 (transmittance, single scattering, white furnaces), and the media of the TOML, Mitsuba and
 pbrt-v4 readers with their bad input. tests/test_reference.py compares three scenes with
@@ -11,14 +11,14 @@ import pytest
 from pyopencl import cltypes
 
 from pathtrace.camera import Camera
-from pathtrace.compiled import compile_scene
-from pathtrace.environment import Environment
+from pathtrace.compiler.compiled import compile_scene
+from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError
-from pathtrace.features import Features
+from pathtrace.device.features import Features
 from pathtrace.lights import DirectionalLight
 from pathtrace.materials import Material
-from pathtrace.media import Medium, MediumInterface
-from pathtrace.renderer import Renderer
+from pathtrace.scene.media import Medium, MediumInterface
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 from pathtrace.scene.description import Mesh, SceneBuilder
 from pathtrace.scene.mitsuba import _cube

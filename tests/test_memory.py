@@ -6,11 +6,14 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from pathtrace import cli, compiled
-from pathtrace.compiled import BUILD_HOST_BYTES, check_memory
-from pathtrace.device import check_fits
+import pathtrace.cli.main as cli
+import pathtrace.cli.progress
+
+from pathtrace.compiler import compiled
+from pathtrace.compiler.compiled import BUILD_HOST_BYTES, check_memory
+from pathtrace.device.opencl import check_fits
 from pathtrace.errors import UserError
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 
 SMALL_DEVICE = SimpleNamespace(name="Tiny GPU ", max_mem_alloc_size=1 << 20, global_mem_size=3 << 20)
@@ -59,16 +62,16 @@ def test_the_command_line_says_what_does_not_fit(monkeypatch, tmp_path, capsys):
 
 
 def test_a_slow_build_shows_its_progress(monkeypatch, tmp_path, capsys):
-    monkeypatch.setattr(cli, "PROGRESS_AFTER", 0.0)
+    monkeypatch.setattr(pathtrace.cli.progress, "PROGRESS_AFTER", 0.0)
     code = cli.main(["render", "spheres8k", "-o", str(tmp_path / "a.png"), "--size", "8x8", "--spp", "1"])
     assert code == 0
     assert "spheres8k: building the BVH: 100%" in capsys.readouterr().err
 
 
 def test_an_image_too_large_to_read_back_is_refused(backend, monkeypatch):
-    import pathtrace.renderer
+    import pathtrace.rendering.renderer
     r = Renderer(backend, load_scene("simple"), 8, 8)
-    monkeypatch.setattr(pathtrace.renderer, "available_host_memory", lambda: 1 << 20)
+    monkeypatch.setattr(pathtrace.rendering.renderer, "available_host_memory", lambda: 1 << 20)
     with pytest.raises(UserError, match="the 4096x4096 image of simple needs about .* of memory to render, read back"):
         r.resize(4096, 4096)
     assert (r.width, r.height) == (8, 8)
@@ -87,7 +90,7 @@ def fake_cgroup(tmp_path, membership, files):
 def test_a_control_group_limit_caps_the_memory_available(tmp_path, layout):
     """A container's or a batch job's memory limit less its usage, cgroup v2 or v1, whether the
     group's files sit at its path or (inside a container) at the hierarchy's root."""
-    from pathtrace.memory import cgroup_memory_left
+    from pathtrace.compiler.memory import cgroup_memory_left
     at_root = layout.endswith("root")
     if layout.startswith("v2"):
         folder = "" if at_root else "job/"
@@ -102,7 +105,7 @@ def test_a_control_group_limit_caps_the_memory_available(tmp_path, layout):
 
 @pytest.mark.parametrize("limit", ["max\n", "9223372036854771712\n"])
 def test_no_control_group_limit_leaves_meminfo_in_charge(tmp_path, limit):
-    from pathtrace.memory import cgroup_memory_left
+    from pathtrace.compiler.memory import cgroup_memory_left
     name = "memory.max" if limit == "max\n" else "memory/memory.limit_in_bytes"
     usage = "memory.current" if limit == "max\n" else "memory/memory.usage_in_bytes"
     line = "0::/\n" if limit == "max\n" else "4:memory:/\n"
@@ -123,7 +126,7 @@ def test_an_address_space_limit_is_respected(tmp_path):
         resource.setrlimit(resource.RLIMIT_AS, (3 << 30, resource.RLIM_INFINITY))
     root = Path(__file__).resolve().parent.parent
     run = lambda size: subprocess.run(  # noqa: E731
-        [sys.executable, "-c", "import pathtrace.memory as m; print(m.address_space_left())"] if size is None else
+        [sys.executable, "-c", "import pathtrace.compiler.memory as m; print(m.address_space_left())"] if size is None else
         [sys.executable, "-m", "pathtrace", "render", "simple", "-o", str(tmp_path / "o.png"), "--size", size, "--spp", "1"],
         cwd=root, preexec_fn=limited, capture_output=True, text=True, timeout=300)
     left = int(run(None).stdout)

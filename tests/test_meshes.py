@@ -4,7 +4,7 @@ reported in one line naming the file."""
 import numpy as np
 import pytest
 
-from pathtrace.cli import main
+from pathtrace.cli.main import main
 from pathtrace.errors import UserError
 from pathtrace.scene import load_scene
 from pathtrace.scene.meshes import read_mesh
@@ -316,7 +316,7 @@ def test_obj_forms_split_vertices_and_fans():
 def test_obj_as_blender_writes_it_is_the_torus_it_was_written_from(tmp_path):
     """The benchmark's OBJ torus (each point once, the uv seams doubled in vt only, v/vt/vn
     corners) reads as the torus: its points split where the seams give them two uvs."""
-    from pathtrace.bench_scenes import torus, torus_obj
+    from pathtrace.bench.scenes import torus, torus_obj
     (tmp_path / "t.obj").write_text(torus_obj())
     mesh = read_mesh(tmp_path / "t.obj", "test")
     points, normals, uvs, faces = torus()
@@ -372,7 +372,7 @@ def test_mesh_files_hand_out_what_read_mesh_reads_in_the_order_asked(tmp_path, m
     warning or problem line when it is asked for: in the order asked, the first bad file in
     file order the one reported; a file read ahead under another `where` than asked for speaks
     of the one asked for."""
-    from pathtrace.bench_scenes import torus_obj
+    from pathtrace.bench.scenes import torus_obj
     from pathtrace.scene.meshes import MeshFiles
     monkeypatch.setattr(MeshFiles, "LARGE", 0)          # every file read ahead, however small
     paths = [tmp_path / f"m{k}.obj" for k in range(9)]

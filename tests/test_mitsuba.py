@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pathtrace.cli import main
+from pathtrace.cli.main import main
 from pathtrace.errors import UserError
 from pathtrace.filters import PixelFilter
 from pathtrace.scene import load_scene
@@ -122,7 +122,7 @@ def test_a_mesh_whose_normals_oppose_its_winding_is_lit_on_its_normals_side(back
     emitter and one-sided BSDFs test the side there (src/render/mesh.cpp; area.cpp, diffuse.cpp):
     a quad wound to face +z with normals along -z emits towards -z. pathtrace once decided the
     side by the winding and lit the other (review 2026-11-28, F8)."""
-    from pathtrace.renderer import Renderer
+    from pathtrace.rendering.renderer import Renderer
     (tmp_path / "quad.obj").write_text("v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nvn 0 0 -1\n"
                                        "f 1//1 2//1 3//1 4//1\n")
     path = write(tmp_path, f"""<sensor type="perspective"><float name="fov" value="20"/>

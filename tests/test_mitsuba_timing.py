@@ -1,4 +1,4 @@
-"""Mitsuba 3 timed beside pathtrace (app/mitsuba_timing.py), against a stand-in Mitsuba and Dr.Jit
+"""Mitsuba 3 timed beside pathtrace (app/bench/mitsuba_timing.py), against a stand-in Mitsuba and Dr.Jit
 that record the renders asked of them: the timed render must find its kernels compiled."""
 
 import json
@@ -7,7 +7,7 @@ import types
 
 import pytest
 
-from pathtrace.mitsuba_timing import mitsuba_render
+from pathtrace.bench.mitsuba_timing import mitsuba_render
 
 # Records each render (its sample count and seed) to the file named by $RENDERS.
 FAKE_MITSUBA = """

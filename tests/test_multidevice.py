@@ -1,4 +1,4 @@
-"""Several devices in one render (app/multidevice.py): the merged image equals a one-device
+"""Several devices in one render (app/rendering/multidevice.py): the merged image equals a one-device
 render of the same samples, whatever the split; sample ranges are issued exactly once."""
 
 import threading
@@ -7,10 +7,10 @@ import time
 import numpy as np
 import pytest
 
-from pathtrace.cli import main
-from pathtrace.device import open_device
-from pathtrace.multidevice import DeviceGroup, SampleCounter
-from pathtrace.renderer import Renderer
+from pathtrace.cli.main import main
+from pathtrace.device.opencl import open_device
+from pathtrace.rendering.multidevice import DeviceGroup, SampleCounter
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 
 
@@ -58,7 +58,7 @@ def test_slow_samples_are_split_into_bands_of_rows(backend, scene, monkeypatch):
     """The first sample is split into FIRST_BANDS launches of rows, and a sample slower than the
     launch budget into bands too (so that Ctrl-C never waits for a whole image's sample); the
     image is the one of whole-image launches."""
-    from pathtrace.multidevice import FIRST_BANDS, row_bands
+    from pathtrace.rendering.multidevice import FIRST_BANDS, row_bands
     assert row_bands(24, 5) == [(0, 5), (5, 10), (10, 14), (14, 19), (19, 24)]
     assert row_bands(3, 16) == [(0, 1), (1, 2), (2, 3)]
     launches = []

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from pathtrace.camera import Camera
-from pathtrace.environment import Environment
+from pathtrace.scene.environment import Environment
 from pathtrace.materials import pack
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import Mesh, SceneBuilder, diffuse, load_scene
 from tests.stats import z_test
 

@@ -1,8 +1,8 @@
-"""Register caps on NVIDIA GPUs (app/occupancy.py): ptxas's report read per kernel, and the
+"""Register caps on NVIDIA GPUs (app/device/occupancy.py): ptxas's report read per kernel, and the
 caps that would keep more warps resident."""
 
 
-from pathtrace.occupancy import kernel_registers, most_registers, register_caps, resident_warps
+from pathtrace.device.occupancy import kernel_registers, most_registers, register_caps, resident_warps
 
 # An H100's report for a scene's program (-cl-nv-verbose), as the driver wrote it.
 REPORT = """
@@ -89,7 +89,7 @@ class FakeDevice:
 def tune(monkeypatch, **program) -> tuple:
     """build_for_occupancy on the stand-in driver (FakeProgram's settings replaced by `program`):
     the options kept, which must be those of the program returned, and each build's options."""
-    import pathtrace.occupancy as occupancy
+    import pathtrace.device.occupancy as occupancy
     Program = type("Program", (FakeProgram,), dict(program, built=[]))
     monkeypatch.setattr(occupancy.cl, "Program", Program)
     built, options = occupancy.build_for_occupancy(None, FakeDevice(), "kernel void k(void) {}", ["-DA"])
@@ -124,7 +124,7 @@ def test_a_light_program_spilling_little_at_24_warps_is_built_for_them(monkeypat
     tried (96, 112): it is no heavy program, so it is not built for 20 warps, but as it keeps
     fewer than LIGHT_WARPS and spills no more than LIGHT_SPILLED at 80 registers (24 warps),
     it is built there."""
-    from pathtrace.occupancy import LIGHT_SPILLED
+    from pathtrace.device.occupancy import LIGHT_SPILLED
     assert 64 <= LIGHT_SPILLED
     options, builds = tune(monkeypatch, uncapped=116, spills_below=200)
     assert options == capped(80)
@@ -134,7 +134,7 @@ def test_a_light_program_spilling_little_at_24_warps_is_built_for_them(monkeypat
 def test_a_light_program_spilling_much_at_24_warps_keeps_its_registers(monkeypatch):
     """The same program spilling 1000 bytes at every cap, more than LIGHT_SPILLED: it stays
     uncapped (16 warps), neither at 20 warps nor at 24."""
-    from pathtrace.occupancy import LIGHT_SPILLED
+    from pathtrace.device.occupancy import LIGHT_SPILLED
     assert 1000 > LIGHT_SPILLED
     options, builds = tune(monkeypatch, uncapped=116, spills_below=200, spill_bytes=1000)
     assert options == ["-DA", "-cl-nv-verbose"]
@@ -160,7 +160,7 @@ def test_a_program_of_ten_warps_is_built_for_20(monkeypatch):
 def test_a_program_that_would_spill_much_for_20_warps_keeps_its_cap_without_spills(monkeypatch):
     """As the heavy program above, but spilling 4000 bytes at 96 registers, more than
     MOST_SPILLED: the caps of fewer warps are tried after all, and 144, without spills, kept."""
-    from pathtrace.occupancy import MOST_SPILLED
+    from pathtrace.device.occupancy import MOST_SPILLED
     assert 4000 > MOST_SPILLED
     options, builds = tune(monkeypatch, uncapped=157, spills_below=140, spill_bytes=4000)
     assert options == capped(144)

@@ -11,11 +11,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pathtrace import renderer as renderer_module
+from pathtrace.rendering import queue_plans
+from pathtrace.rendering import renderer as renderer_module
 from pathtrace.errors import UserError
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
-from pathtrace.traversal_stats import traversal_stats
+from pathtrace.scene.description import PATH_QUEUE_AUTO
+from pathtrace.bench.traversal_stats import traversal_stats
 
 pytestmark = pytest.mark.specialised     # the queue is in the scenes' own programs alone
 
@@ -105,7 +107,7 @@ def test_changing_the_setting_sizes_the_queue_and_renders_the_same(backend):
 @pytest.mark.parametrize("setting", ["2", "auto"])
 def test_render_command_takes_the_setting(tmp_path, setting):
     """`pathtrace render --path-queue N` (or auto) renders the image it renders without."""
-    from pathtrace.image_io import read_hdr
+    from pathtrace.io.images import read_hdr
     images = []
     for value in ("0", setting):
         out = tmp_path / f"q{value}.exr"
@@ -119,7 +121,7 @@ def test_render_command_takes_the_setting(tmp_path, setting):
 
 
 def test_bands_of_rows_render_the_same(backend):
-    """The viewer's launches cover bands of rows (pathtrace.launches.Progressive); a band's passes
+    """The viewer's launches cover bands of rows (pathtrace.rendering.launches.Progressive); a band's passes
     take only as many paths as its pixels can queue."""
     scene = load_scene("cornell-box").with_settings(max_depth=6, russian_roulette="off")
     plain = render(backend, scene, 0)
@@ -143,16 +145,16 @@ def test_auto_trials_each_plan_and_keeps_the_fastest(backend, monkeypatch, tmp_p
         return add_samples(self, count, *args, **kwargs)
 
     monkeypatch.setattr(Renderer, "add_samples", timed_add_samples)
-    monkeypatch.setattr(renderer_module.time, "perf_counter", lambda: clock[0])
+    monkeypatch.setattr(queue_plans.time, "perf_counter", lambda: clock[0])
     scene = load_scene("cornell-box").with_settings(max_depth=6, russian_roulette="off",
-                                                   path_queue=renderer_module.PATH_QUEUE_AUTO)
+                                                   path_queue=PATH_QUEUE_AUTO)
     for cheapest in ((1, True), (1, False), (0, False)):
         monkeypatch.setenv("PATHTRACE_CACHE", str(tmp_path / str(cheapest)))
         cost[cheapest] = 0.5
         r = Renderer(backend, scene, *SIZE)
         r.choose_queue_plan(1000, trials=True)
         assert r.auto_plan == cheapest
-        assert r.plan_seconds == {plan: c * renderer_module.TRIAL_SAMPLES for plan, c in cost.items()}
+        assert r.plan_seconds == {plan: c * queue_plans.TRIAL_SAMPLES for plan, c in cost.items()}
         assert r.samples == 0 and not r.read_sum().any()
         assert "trials of 16 spp" in r.describe_queue_plan()
         before = clock[0]
@@ -176,7 +178,7 @@ def test_auto_leaves_out_a_queue_that_does_not_fit(backend, monkeypatch, tmp_pat
     monkeypatch.setattr(renderer_module, "check_fits", queue_never_fits)
     monkeypatch.setenv("PATHTRACE_CACHE", str(tmp_path))       # no verdict of earlier trials
     scene = load_scene("cornell-box").with_settings(max_depth=6, russian_roulette="off",
-                                                   path_queue=renderer_module.PATH_QUEUE_AUTO)
+                                                   path_queue=PATH_QUEUE_AUTO)
     r = Renderer(backend, scene, *SIZE)
     r.choose_queue_plan(1000, trials=True)
     assert set(r.plan_seconds) == {(0, False), (1, False)} and r.auto_plan in r.plan_seconds
@@ -185,13 +187,13 @@ def test_auto_leaves_out_a_queue_that_does_not_fit(backend, monkeypatch, tmp_pat
     assert_same_render(render(backend, scene, 0), (r.read_sum(), r._read("sum_sq"), r))
 
 
-@pytest.mark.parametrize("plan", renderer_module.AUTO_PLANS)
+@pytest.mark.parametrize("plan", queue_plans.AUTO_PLANS)
 def test_every_plan_renders_the_megakernels_image(backend, plan):
     """The plans "auto" chooses among, the queue's program with its queue unused included, render
     the image without the queue."""
     scene = load_scene("teapot-textured").with_settings(max_depth=8, russian_roulette="off")
     plain = render(backend, scene, 0)
-    r = Renderer(backend, scene.with_settings(path_queue=renderer_module.PATH_QUEUE_AUTO), *SIZE)
+    r = Renderer(backend, scene.with_settings(path_queue=PATH_QUEUE_AUTO), *SIZE)
     r.use_queue_plan(plan)
     assert r.queue_plan() == plan
     r.add_samples(SPP)
@@ -205,16 +207,16 @@ def test_auto_runs_no_trials_on_cpus_or_for_short_renders(backend, monkeypatch, 
     monkeypatch.setenv("PATHTRACE_CACHE", str(tmp_path))       # no verdict of earlier trials
     trials = []
     monkeypatch.setattr(Renderer, "add_samples", lambda self, *a, **k: trials.append(a))
-    scene = load_scene("cornell-box").with_settings(path_queue=renderer_module.PATH_QUEUE_AUTO)
+    scene = load_scene("cornell-box").with_settings(path_queue=PATH_QUEUE_AUTO)
     r = Renderer(backend, scene, *SIZE)
     r.choose_queue_plan(10**6)
     r.choose_queue_plan(95, trials=True)
     assert r.queue_plan() == (0, False) and not trials and not r.plan_seconds
     assert r.describe_queue_plan() == "no queue"
-    r.set_settings(path_queue=renderer_module.PATH_QUEUE_AUTO)
+    r.set_settings(path_queue=PATH_QUEUE_AUTO)
     assert r.auto_plan is None and not r.plan_seconds
     r.choose_queue_plan(96, trials=True)
-    assert len(trials) == 6 and r.auto_plan in renderer_module.AUTO_PLANS
+    assert len(trials) == 6 and r.auto_plan in queue_plans.AUTO_PLANS
 
 
 def test_the_viewer_refuses_auto():

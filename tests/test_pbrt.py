@@ -11,13 +11,13 @@ import pytest
 
 from pathtrace.errors import UserError
 from pathtrace.materials.optics import CONDUCTORS
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 import pathtrace.scene.instances as instancing
 from pathtrace.scene.instances import flattened_meshes
 from pathtrace.scene.pbrt.equal_area import sphere_to_square
 from pathtrace.scene.transform import scaling, translation
-from pathtrace.spectra import blackbody_rgb, named_spectrum, reflectance_rgb, sampled
+from pathtrace.scene.spectra import blackbody_rgb, named_spectrum, reflectance_rgb, sampled
 from tests.stats import z_test
 from tests.test_reference import REFERENCE_BIAS
 
@@ -264,7 +264,7 @@ def test_the_equal_area_square_is_pbrts_layout_and_equal_area():
 def test_an_equal_area_map_is_resampled_through_the_lights_transform(tmp_path):
     """A map bright only around light-space +z, turned by Rotate -90 about x, is bright at the
     lat-long map's top (+y)."""
-    from pathtrace.image_io import _write_exr
+    from pathtrace.io.images import _write_exr
     n = 32
     square = np.zeros((n, n, 3), np.float32)
     square[n // 2 - 2:n // 2 + 2, n // 2 - 2:n // 2 + 2] = 100.0
@@ -364,7 +364,7 @@ def test_convert_writes_turned_meshes_and_resampled_maps_beside_the_toml(tmp_pat
     import subprocess
     import sys
 
-    from pathtrace.image_io import _write_exr
+    from pathtrace.io.images import _write_exr
     _write_exr(str(tmp_path / "sky.exr"), np.full((8, 8, 3), 0.5, np.float32))
     (tmp_path / "s.pbrt").write_text(
         'LookAt 0 2 5  0 0 0  0 1 0\nCamera "perspective"\nWorldBegin\n'

@@ -6,7 +6,7 @@ import math
 import numpy as np
 import pytest
 
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from tests.test_pbrt import FLOOR, scene
 
 LIGHT_QUAD = '"point3 P" [ -0.5 1.5 -0.5  0.5 1.5 -0.5  0.5 1.5 0.5  -0.5 1.5 0.5 ] "integer indices" [ 0 1 2  0 2 3 ]'
@@ -209,7 +209,7 @@ def test_an_area_light_on_an_interface_shape_is_no_light(tmp_path, capsys):
 def test_an_infinite_lights_illuminance_scales_it_as_pbrt(tmp_path):
     """pbrt-v4 Light::Create: a constant L times illuminance / pi; a map times illuminance over
     the sum, over its texels above the horizon (z > 0), of luminance cos theta 2 pi / N^2."""
-    from pathtrace.image_io import _write_exr
+    from pathtrace.io.images import _write_exr
     from pathtrace.scene.pbrt.equal_area import sphere_to_square, square_to_sphere
     rng = np.random.default_rng(2)
     d = rng.normal(size=(1000, 3))

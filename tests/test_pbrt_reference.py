@@ -10,8 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pathtrace.image_io import read_hdr
-from pathtrace.renderer import Renderer
+from pathtrace.io.images import read_hdr
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 from tests.stats import z_test
 
@@ -83,7 +83,7 @@ def test_matches_pbrt_v4(backend, monkeypatch, name):
     # the file's own film size and maxdepth (pbrt's N bounces, N + 1 vertices here); pbrt's
     # PathIntegrator and VolPathIntegrator play Russian roulette, which changes no expectation
     scene = load_scene(str(REFERENCES / f"{name}.pbrt")).with_settings(russian_roulette="off")
-    # one program for every scene (app/programs.py): the same estimator as each scene's own,
+    # one program for every scene (app/device/programs.py): the same estimator as each scene's own,
     # which would be a build per scene, most of this file's time on two cores
     monkeypatch.setenv("PATHTRACE_PROGRAM", "generic")
     assert ref.shape[:2] == (scene.settings.height, scene.settings.width)

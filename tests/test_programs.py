@@ -1,4 +1,4 @@
-"""The generic program and the switch to a scene's own (app/programs.py): the generic program
+"""The generic program and the switch to a scene's own (app/device/programs.py): the generic program
 renders every test scene as the scene's own program does, within noise, whatever the camera,
 filter, Russian roulette rule and scene layout it reads at run time; a renderer switches to the
 scene's program mid-accumulation once it is built, the average going on; a build that fails
@@ -10,11 +10,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pathtrace.device import Backend
-from pathtrace.features import Features
+from pathtrace.device.opencl import Backend
+from pathtrace.device.features import Features
 from pathtrace.filters import PixelFilter
-from pathtrace.programs import Programs
-from pathtrace.renderer import Renderer
+from pathtrace.device.programs import Programs
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 from tests.stats import z_test
 
@@ -191,7 +191,7 @@ def test_path_queue_plans_render_with_the_generic_program_until_theirs_is_built(
 def test_without_the_generic_program_the_first_image_waits_for_one_untuned_build(backend, specialised):
     """Where the generic program is not built (NVIDIA's driver takes minutes over it, which
     `pathtrace devices --check` spends once): the scene's own program is built once, untuned, for
-    the first image, nothing else building beside it, and the tuned one (app/occupancy.py),
+    the first image, nothing else building beside it, and the tuned one (app/device/occupancy.py),
     built after it in the background, replaces it once built."""
     tuned = threading.Event()
     built = []
@@ -224,7 +224,7 @@ def gpu_form(backend):
     called rather than inlined (kernels/inlining.h: DISPATCH), which CPUs do not build, built
     here without CPU_DEVICE."""
     import pyopencl as cl
-    from pathtrace.device import kernel_source, program_options
+    from pathtrace.device.opencl import kernel_source, program_options
     generic = Features.generic_program()
     options = [o for o in program_options(backend.device.device, generic) if o != "-DCPU_DEVICE"]
     program = cl.Program(backend.context, kernel_source(backend.extra, generic)).build(

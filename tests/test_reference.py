@@ -6,12 +6,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 from tests.stats import z_test
 
 # What a render converges with is the scene's own program, which replaces the generic one once
-# built (pathtrace.programs); tests/test_programs.py compares the two on every test scene.
+# built (pathtrace.device.programs); tests/test_programs.py compares the two on every test scene.
 pytestmark = pytest.mark.specialised
 
 REFERENCES = sorted((Path(__file__).parent / "references").glob("*.npz"))

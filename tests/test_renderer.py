@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from pathtrace.camera import Camera
-from pathtrace.environment import Environment
-from pathtrace.renderer import Renderer
+from pathtrace.scene.environment import Environment
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import RenderSettings, SceneBuilder, diffuse, load_scene
 from pathtrace.scene.builtin import BUILTIN_SCENES
 from tests.stats import z_test
@@ -82,7 +82,7 @@ def test_nan_samples_are_left_out_and_counted(backend):
 
 
 def test_the_command_line_reports_nan_samples(monkeypatch, tmp_path, capsys):
-    from pathtrace import cli
+    import pathtrace.cli.main as cli
     import pathtrace.scene
     monkeypatch.setattr(pathtrace.scene, "load_scene", lambda name: poisoned_simple())
     assert cli.main(["render", "simple", "-o", str(tmp_path / "a.png"), "--size", "16x9", "--spp", "2", "-q"]) == 0

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from pathtrace.device import BUILD_OPTIONS
+from pathtrace.device.opencl import BUILD_OPTIONS
 from pathtrace.resources import resource_dir
 from tests.conftest import KernelRunner
 

@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 
 from pathtrace.camera import Camera
-from pathtrace.compiled import compile_scene
-from pathtrace.environment import Environment
+from pathtrace.compiler.compiled import compile_scene
+from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError
 from pathtrace.materials import pack
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import Mesh, SceneBuilder, diffuse, load_scene
 from pathtrace.scene import transform
 from pathtrace.scene.toml_writer import scene_toml

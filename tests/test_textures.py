@@ -12,13 +12,13 @@ import pytest
 from PIL import Image as PILImage
 
 from pathtrace.errors import UserError
-from pathtrace.features import Features
+from pathtrace.device.features import Features
 from pathtrace.materials import Material, MaterialTable
 from pathtrace.scene.meshes import read_mesh
 from pathtrace.scene.mitsuba import read_mitsuba_file
 from pathtrace.textures import TEXTURES, Image, Texture, compile_textures, read_image
 from pathtrace.textures.bitmap import srgb_to_linear
-from pathtrace.types import MATERIAL
+from pathtrace.device.types import MATERIAL
 from tests.test_mitsuba import SPHERE, write
 
 ALL_TEXTURES = Features(textures=tuple(TEXTURES))
@@ -238,8 +238,8 @@ def test_a_material_reads_its_textured_parameters_at_the_hit(kernels):
 
 
 def test_a_scene_without_textures_compiles_no_texture_code():
-    from pathtrace.compiled import CompiledScene
-    from pathtrace.device import kernel_source
+    from pathtrace.compiler.compiled import CompiledScene
+    from pathtrace.device.opencl import kernel_source
     from pathtrace.scene import load_scene
     scene = load_scene("simple")
     features = CompiledScene(scene).features(scene.settings, scene.camera)
@@ -374,7 +374,7 @@ def test_a_masked_surface_lets_through_one_minus_its_opacity(backend, opacity, n
     """The pixels' mean is the sky times 1 - opacity: 0.7 for a constant 0.3, and 0.5 for a fine
     checkerboard of opaque and clear squares; a Binomial count, so the tolerance is its standard
     error."""
-    from pathtrace.renderer import Renderer
+    from pathtrace.rendering.renderer import Renderer
     r = Renderer(backend, masked_wall_scene(opacity, nee))
     r.add_samples(64)
     expected = 0.7 if opacity == 0.3 else 0.5
@@ -461,7 +461,7 @@ def flat_map_scene(kind, tmp_path):
 def test_a_map_that_perturbs_nothing_changes_nothing(backend, tmp_path, kind):
     """The 8-bit (0, 0, 1) normal is (128, 128, 255): within 1/255 of the geometric normal, so
     the image moves by less than a percent; a constant height has no slopes: the same image."""
-    from pathtrace.renderer import Renderer
+    from pathtrace.rendering.renderer import Renderer
     images = []
     for k in (None, kind):
         r = Renderer(backend, flat_map_scene(k, tmp_path))
@@ -479,8 +479,8 @@ def test_a_bump_map_and_the_normal_map_of_its_normal_render_alike(backend, tmp_p
     PerturbedBSDF: Schuessler's flip and the shadowing term of the tilt); pathtrace's bump map
     lacked both, and lit this floor under a grazing lamp brighter (review 2026-11-28, F9)."""
     from pathtrace.api import load_dict
-    from pathtrace.image_io import write_image
-    from pathtrace.renderer import Renderer
+    from pathtrace.io.images import write_image
+    from pathtrace.rendering.renderer import Renderer
     width, step, scale = 64, 2, 20.0
     ramp = np.tile((np.arange(width) * step).astype(np.uint8)[None, :, None], (4, 1, 3))
     PILImage.fromarray(ramp).save(tmp_path / "ramp.png")

@@ -1,11 +1,11 @@
-"""app/tonecurve.py against closed forms: the sRGB transfer function's defining points, exposure
+"""app/io/tonecurve.py against closed forms: the sRGB transfer function's defining points, exposure
 as a power of two, Narkowicz's ACES fit, and 8-bit rounding. tests/test_viewer.py checks that
 shaders/display.frag draws the same values."""
 
 import numpy as np
 import pytest
 
-from pathtrace.tonecurve import aces_fit, linear_to_srgb, tonemap, to_8bit
+from pathtrace.io.tonecurve import aces_fit, linear_to_srgb, tonemap, to_8bit
 
 
 def test_srgb_transfer_function_at_its_defining_points():

@@ -1,4 +1,4 @@
-"""app/trace_split.py and kernels/trace_split.cl: the rays that the trace split times are the
+"""app/bench/trace_split.py and kernels/trace_split.cl: the rays that the trace split times are the
 megakernel's own, and a scene its kernels cannot walk is refused in one line."""
 
 from pathlib import Path
@@ -9,8 +9,8 @@ import pytest
 import pathtrace.scene.instances as instancing
 from pathtrace.errors import UserError
 from pathtrace.scene import load_scene
-from pathtrace.trace_split import trace_split
-from pathtrace.traversal_stats import traversal_stats
+from pathtrace.bench.trace_split import trace_split
+from pathtrace.bench.traversal_stats import traversal_stats
 from tests.test_instances import instanced_scene
 
 pytestmark = pytest.mark.specialised     # what the scenes' own programs trace
@@ -23,7 +23,7 @@ def test_the_rays_recorded_are_the_megakernels_own(backend, name):
     """record_rays draws the megakernel's random numbers in its order and keeps its rules at the
     first vertex (no light sample at a delta BSDF, none where the BSDF is zero or the normals
     disagree; no bounce where sampling fails), so that it writes exactly the rays that the
-    megakernel's depth-2 paths trace for the same sample, counted by app/traversal_stats.py:
+    megakernel's depth-2 paths trace for the same sample, counted by app/bench/traversal_stats.py:
     over the metals, glass and plastics of `materials` and the quads of `cornell-box`."""
     scene = load_scene(name)
     split = trace_split(backend, scene, 32, 24, 2)

@@ -1,21 +1,21 @@
-"""app/traversal_stats.py: the counts of the BVH's work per ray, and that counting changes no
+"""app/bench/traversal_stats.py: the counts of the BVH's work per ray, and that counting changes no
 sample."""
 
 import numpy as np
 import pytest
 
 from pathtrace.camera import Camera
-from pathtrace.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 from pathtrace.scene import SceneBuilder, diffuse
-from pathtrace.environment import Environment
-from pathtrace.traversal_stats import traversal_stats
+from pathtrace.scene.environment import Environment
+from pathtrace.bench.traversal_stats import traversal_stats
 
 pytestmark = pytest.mark.specialised     # what the scenes' own programs walk
 
 
 def test_one_sphere_is_tested_once_per_ray_without_a_tree(backend):
-    """A scene this small has no tree (app/features.py: FLAT_MAX): each camera ray tests its one
+    """A scene this small has no tree (app/device/features.py: FLAT_MAX): each camera ray tests its one
     sphere and visits no node; with max depth 1 every sample is one ray."""
     b = SceneBuilder()
     b.add_sphere((0, 0, 0), 1.0, diffuse(0.5))

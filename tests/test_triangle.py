@@ -5,7 +5,7 @@ spheres: a ray leaving a surface never meets that surface again by error."""
 import numpy as np
 import pytest
 
-from pathtrace.compiled import compile_scene
+from pathtrace.compiler.compiled import compile_scene
 from pathtrace.scene import Mesh, SceneBuilder, diffuse
 from tests.conftest import layout_features, scene_arrays
 from tests.geometry import height_field, icosphere
@@ -72,7 +72,7 @@ def f4(a):
 
 
 def triangles(corners):
-    from pathtrace.types import TRIANGLE
+    from pathtrace.device.types import TRIANGLE
     t = np.zeros(len(corners), TRIANGLE)
     for k, f in enumerate(("v0", "v1", "v2")):
         t[f][:, :3] = corners[:, k]

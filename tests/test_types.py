@@ -1,10 +1,10 @@
-"""The NumPy dtypes of app/types.py match the device's layout of kernels/types.h, field by field
+"""The NumPy dtypes of app/device/types.py match the device's layout of kernels/types.h, field by field
 (so that swapped fields of equal size are caught too)."""
 
 import numpy as np
 import pytest
 
-from pathtrace.types import (BVH_NODE, INSTANCE, LIGHT, LIGHT_NODE, MATERIAL, MEDIUM, PATH_RECORD, RENDER_PARAMS,
+from pathtrace.device.types import (BVH_NODE, INSTANCE, LIGHT, LIGHT_NODE, MATERIAL, MEDIUM, PATH_RECORD, RENDER_PARAMS,
                              TEXTURE, TEXTURE_BINDING, TRIANGLE)
 
 STRUCTS = {

@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 from pathtrace.errors import UserError
-from pathtrace.image_io import read_hdr
-from pathtrace.renderer import Renderer
+from pathtrace.io.images import read_hdr
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -292,7 +292,7 @@ def test_opening_a_scene_says_what_it_is_busy_with(viewer, monkeypatch):
     it does (a notice over the window, and the title): the BVH build's progress, then the kernels'
     compilation. Each step waits until the window has drawn it, so that a window that froze
     fails here. Then the first pass is named until an image arrives."""
-    import pathtrace.viewer.window as window
+    import pathtrace.viewer.opening as opening
     titles, notices = [], []
     drawn = {"bvh": threading.Event(), "kernels": threading.Event()}
     set_title = viewer.glfw.set_window_title
@@ -307,13 +307,13 @@ def test_opening_a_scene_says_what_it_is_busy_with(viewer, monkeypatch):
             drawn["kernels"].set()
         show(text, fraction)
     monkeypatch.setattr(viewer, "show_progress", shown)
-    compile_scene = window.compile_scene
+    compile_scene = opening.compile_scene
 
     def slow_compile(scene, queue, progress):
         progress(0.5)
         assert drawn["bvh"].wait(30), "the window did not show the BVH build's progress"
         return compile_scene(scene, queue, progress)
-    monkeypatch.setattr(window, "compile_scene", slow_compile)
+    monkeypatch.setattr(opening, "compile_scene", slow_compile)
     set_scene = viewer.renderer.set_scene
 
     def slow_set_scene(compiled):
@@ -366,11 +366,11 @@ def test_the_window_opens_before_its_scene_is_read(display, backend, tmp_path, m
 
 
 def test_a_scene_that_fails_to_open_leaves_the_viewer_as_it_was(viewer, monkeypatch, capsys):
-    import pathtrace.viewer.window as window
+    import pathtrace.viewer.opening as opening
 
     def broken(name):
         raise RuntimeError("a library failed")
-    monkeypatch.setattr(window, "load_scene", broken)
+    monkeypatch.setattr(opening, "load_scene", broken)
     before = viewer.renderer.scene.name
     viewer.load_scene("whatever.toml")
     frames(viewer, 2)
@@ -382,10 +382,10 @@ def test_a_scene_that_fails_to_open_leaves_the_viewer_as_it_was(viewer, monkeypa
 @pytest.mark.parametrize("curve,exposure", [("standard", 0.0), ("aces", 0.5), ("standard", -1.0)])
 def test_the_display_shader_matches_tonemap(viewer, curve, exposure):
     """shaders/display.frag (mean = rgb / a, exposure, tone curve, sRGB) draws what
-    app/tonecurve.py writes, to one 8-bit step, on a ramp of radiances from 0 to 4."""
+    app/io/tonecurve.py writes, to one 8-bit step, on a ramp of radiances from 0 to 4."""
     import moderngl
 
-    from pathtrace.tonecurve import to_8bit, tonemap
+    from pathtrace.io.tonecurve import to_8bit, tonemap
     v = viewer
     radiance = np.stack([np.linspace(0, 4, 64), np.linspace(0, 1, 64), np.linspace(0, 0.05, 64)], -1)[None]
     pixels = np.concatenate([radiance * 4, np.full((1, 64, 1), 4.0)], -1).astype(np.float32)  # 4 samples
@@ -576,7 +576,7 @@ def test_movement_speed_is_at_the_scenes_scale(backend):
     """A quarter of the eye's distance to its look-at point a second, at most a tenth of the
     bounds' diagonal: the demo (a 1000-unit ground sphere) moves as before, a small scene seen
     from a far look-at point slowly; the wheel scales it from there."""
-    from pathtrace.compiled import compile_scene
+    from pathtrace.compiler.compiled import compile_scene
     from pathtrace.viewer.controls import FlyControls, speed_for
 
     def speed(scene):
@@ -673,7 +673,7 @@ def test_frames_never_wait_for_the_device_and_launches_fit_the_frame_budget(disp
     samples where a pass takes less, a band of rows where it takes more (or a single row)."""
     import pyopencl as cl
 
-    from pathtrace.launches import QUEUE_AHEAD
+    from pathtrace.rendering.launches import QUEUE_AHEAD
     from pathtrace.viewer.window import LAUNCH_BUDGET, Viewer
     v = Viewer(backend, load_scene("demo").with_settings(width=640, height=360), tmp_path, window_size=(1280, 960))
     try:

@@ -11,8 +11,8 @@ import math
 
 import numpy as np
 
-from pathtrace.environment import LUMINANCE
 from pathtrace.parameters import Parameter
+from pathtrace.scene.environment import LUMINANCE
 
 
 class DeltaLight:

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pathtrace.environment import LUMINANCE
+from pathtrace.scene.environment import LUMINANCE
 from pathtrace.lights.light import PBRT_POWER, DeltaLight, check_point, frame_quaternion
 from pathtrace.parameters import Parameter
 from pathtrace.resources import resource_dir

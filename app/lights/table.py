@@ -6,10 +6,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pathtrace.environment import LUMINANCE
+from pathtrace.scene.environment import LUMINANCE
 from pathtrace.lights.registry import TAGS
 from pathtrace.lights.tree import build_light_tree, light_bounds
-from pathtrace.types import LIGHT, LIGHT_NODE
+from pathtrace.device.types import LIGHT, LIGHT_NODE
 
 
 LIGHT_SAMPLERS = ("auto", "power", "tree")   # how next-event estimation chooses a light

@@ -13,7 +13,7 @@ walking up from its leaf."""
 
 import numpy as np
 
-from pathtrace.types import LIGHT_NODE
+from pathtrace.device.types import LIGHT_NODE
 
 EMPTY_COS = 2.0      # an empty cone's cos(theta_o): no direction at all
 

@@ -1,11 +1,10 @@
 """Mixtures of two materials: Mitsuba 3's `blendbsdf` (weight) and pbrt-v4's `mix` (amount), the
 second material taken with probability weight at each hit (kernels/bsdfs/blendbsdf.cl). The two
 materials are the Material's components; the table gives each blend rows of its own for them
-(MaterialTable.set), whose numbers the blend's row holds."""
+(MaterialTable.set), whose numbers the blend's row holds, and checks them (app/materials/table.py:
+check_blend)."""
 
-import numpy as np
-
-from pathtrace.materials.bsdf import NULL, BSDFType, Param
+from pathtrace.materials.bsdf import BSDFType, Param
 
 MAX_BLEND_DEPTH = 8     # blends nested in blends, at most (kernels/bsdfs/blendbsdf.cl)
 
@@ -30,51 +29,3 @@ class BlendBSDF(BSDFType):
     def unpack(self, row):
         return {"weight": float(row["p0"][0])}
 
-
-def depth(material) -> int:
-    """How deep blends nest in a Material: 0 for any other type."""
-    if material.type != "blendbsdf":
-        return 0
-    return 1 + max((depth(c) for c in material.components), default=0)
-
-
-def transmits(material) -> bool:
-    """Whether a Material is seen from both sides (a transmissive one, or a blend of them)."""
-    from pathtrace.materials.registry import BSDFS
-    if material.type == "blendbsdf":
-        return any(transmits(c) for c in material.components)
-    return BSDFS[material.type].transmits(material.params)
-
-
-def check_blend(material) -> str | None:
-    """A problem with a blend's components, or None."""
-    from pathtrace.materials.registry import BSDFS
-    if len(material.components) != 2:
-        return f"a blendbsdf mixes two materials, got {len(material.components)}"
-    for c in material.components:
-        if BSDFS[c.type].flags & NULL:
-            return "a blendbsdf cannot mix in a null material (no surface)"
-        if c.masked:
-            return "the materials a blendbsdf mixes cannot have an opacity: give the blend one"
-    if depth(material) > MAX_BLEND_DEPTH:
-        return f"blendbsdfs nest deeper than {MAX_BLEND_DEPTH}"
-    if len({transmits(c) for c in material.components}) > 1:
-        return "a blendbsdf cannot mix a transmissive material with a one-sided one"
-    return None
-
-
-def component_rows(rows: np.ndarray) -> np.ndarray:
-    """The rows of the two components of each blend among `rows` (MATERIAL rows)."""
-    from pathtrace.materials.registry import TAGS
-    blends = rows[rows["type"] == TAGS["blendbsdf"]]
-    return blends["p0"][:, 1:3].astype(np.int64).ravel()
-
-
-def reachable(table_rows: np.ndarray, used) -> np.ndarray:
-    """The rows `used` (indices of table_rows) and every row their blends choose from."""
-    found = np.unique(np.asarray(used, np.int64))
-    while True:
-        more = np.union1d(found, component_rows(table_rows[found]))
-        if len(more) == len(found):
-            return found
-        found = more

@@ -8,11 +8,11 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from pathtrace.errors import UserError, short
-from pathtrace.materials.blend import check_blend
+from pathtrace.materials.blend import MAX_BLEND_DEPTH
 from pathtrace.materials.bsdf import EMITS_BACK, MASKED, NULL, TRANSMISSIVE, TWOSIDED, constant_of
 from pathtrace.materials.registry import BSDFS, TAGS
 from pathtrace.textures.texture import Texture
-from pathtrace.types import MATERIAL
+from pathtrace.device.types import MATERIAL
 
 
 @dataclass
@@ -74,6 +74,54 @@ def check_bump_map(texture: Texture):
         inner, factor = texture.params["tex"], texture.params["scale"]
     if not isinstance(inner, Texture) or inner.type != "bitmap" or isinstance(factor, Texture):
         raise ValueError("a bump map must be a bitmap texture, or a scale of one by a number")
+
+
+# blends (app/materials/blend.py): their components are Materials, checked and packed here, where
+# every type of the registry is known
+def depth(material) -> int:
+    """How deep blends nest in a Material: 0 for any other type."""
+    if material.type != "blendbsdf":
+        return 0
+    return 1 + max((depth(c) for c in material.components), default=0)
+
+
+def transmits(material) -> bool:
+    """Whether a Material is seen from both sides (a transmissive one, or a blend of them)."""
+    if material.type == "blendbsdf":
+        return any(transmits(c) for c in material.components)
+    return BSDFS[material.type].transmits(material.params)
+
+
+def check_blend(material) -> str | None:
+    """A problem with a blend's components, or None."""
+    if len(material.components) != 2:
+        return f"a blendbsdf mixes two materials, got {len(material.components)}"
+    for c in material.components:
+        if BSDFS[c.type].flags & NULL:
+            return "a blendbsdf cannot mix in a null material (no surface)"
+        if c.masked:
+            return "the materials a blendbsdf mixes cannot have an opacity: give the blend one"
+    if depth(material) > MAX_BLEND_DEPTH:
+        return f"blendbsdfs nest deeper than {MAX_BLEND_DEPTH}"
+    if len({transmits(c) for c in material.components}) > 1:
+        return "a blendbsdf cannot mix a transmissive material with a one-sided one"
+    return None
+
+
+def component_rows(rows: np.ndarray) -> np.ndarray:
+    """The rows of the two components of each blend among `rows` (MATERIAL rows)."""
+    blends = rows[rows["type"] == TAGS["blendbsdf"]]
+    return blends["p0"][:, 1:3].astype(np.int64).ravel()
+
+
+def reachable(table_rows: np.ndarray, used) -> np.ndarray:
+    """The rows `used` (indices of table_rows) and every row their blends choose from."""
+    found = np.unique(np.asarray(used, np.int64))
+    while True:
+        more = np.union1d(found, component_rows(table_rows[found]))
+        if len(more) == len(found):
+            return found
+        found = more
 
 
 _FIELDS = {"p0": 0, "p1": 4, "p2": 8, "emission": 12, "opacity": 16, "normal_map": 20, "bump_map": 24}
@@ -241,7 +289,7 @@ class MaterialTable:
         return not isinstance(key, bool) and isinstance(key, (int, np.integer)) and -len(self) <= key < len(self)
 
     def __repr__(self) -> str:
-        from pathtrace.named import summary
+        from pathtrace.scene.named import summary
         types = [list(BSDFS)[int(t)] for t in self.rows["type"]]
         return f"<{len(self)} material{'' if len(self) == 1 else 's'}" + (
             f": {summary(f'{k} ({t})' for k, t in zip(self.keys(), types))}>" if len(self) else ">")

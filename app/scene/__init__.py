@@ -1,10 +1,12 @@
 """Scene descriptions: what scene files say (description.py), read from pathtrace's TOML format
-(toml_reader.py) with meshes from common formats (meshes.py), or built in (builtin.py)."""
+(toml_reader.py) with meshes from common formats (meshes.py), or built in (builtin.py); the
+description's parts that are no type registry of their own: the environment (environment.py),
+media (media.py), spectra as RGB (spectra.py), and the lists read by name (named.py)."""
 
 from pathlib import Path
 
 from pathtrace.errors import UserError, cut, did_you_mean, grouped_warnings
-from pathtrace.files import missing, shown
+from pathtrace.io.files import missing, shown
 from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder, diffuse, emitter, phong
 
 __all__ = ["Mesh", "RenderSettings", "Scene", "SceneBuilder", "diffuse", "emitter", "phong",

@@ -7,7 +7,7 @@ import re
 import numpy as np
 
 from pathtrace.camera import Camera
-from pathtrace.environment import Environment
+from pathtrace.scene.environment import Environment
 from pathtrace.materials import pack
 from pathtrace.resources import resource_dir
 from pathtrace.scene.description import RenderSettings, Scene, SceneBuilder

@@ -1,5 +1,5 @@
 """A scene as its file states it, in file order: spheres and triangle meshes with materials, an
-environment, a camera and render settings. app/compiled.py turns it into the flat,
+environment, a camera and render settings. app/compiler/compiled.py turns it into the flat,
 device-independent form the kernels read."""
 
 from dataclasses import dataclass, field, replace
@@ -7,12 +7,12 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from pathtrace.camera import Camera
-from pathtrace.environment import Environment
+from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError, warn
 from pathtrace.filters import PixelFilter
 from pathtrace.materials import NULL, TRANSMISSIVE, Material, MaterialTable
-from pathtrace.media import MediumInterface
-from pathtrace.named import NamedList, name_and_index, vector
+from pathtrace.scene.media import MediumInterface
+from pathtrace.scene.named import NamedList, name_and_index, vector
 from pathtrace.scene.meshes import ellipsoid, is_closed, is_similarity
 
 
@@ -21,9 +21,9 @@ from pathtrace.scene.meshes import ellipsoid, is_closed, is_similarity
 # vertex with the material's albedo; "off", at max_depth only.
 RUSSIAN_ROULETTE = ("off", "albedo", "throughput")
 MAX_PATH_QUEUE = 64     # RenderSettings.path_queue's largest value (no path that long is short)
-PATH_QUEUE_AUTO = -1    # RenderSettings.path_queue "auto": chosen by trial renders (pathtrace.renderer)
+PATH_QUEUE_AUTO = -1    # RenderSettings.path_queue "auto": chosen by trial renders (pathtrace.rendering.renderer)
 # The estimators a render can use: "path", the path tracer (kernels/integrator.cl); "bdpt",
-# bidirectional path tracing (kernels/bdpt.cl, app/bdpt.py); "ptracer", its light tracing alone
+# bidirectional path tracing (kernels/bdpt.cl, app/rendering/bdpt.py); "ptracer", its light tracing alone
 # (Mitsuba 3's particle tracer).
 INTEGRATORS = ("path", "bdpt", "ptracer")
 
@@ -96,7 +96,7 @@ class Scene:
     source: str = ""              # the file it was read from (for messages), if any
     lights: list = field(default_factory=list)   # its delta lights (pathtrace.lights: point, spot,
                                                  # directional); emissive shapes are its area lights
-    media: list = field(default_factory=list)    # its participating media (pathtrace.media.Medium)
+    media: list = field(default_factory=list)    # its participating media (pathtrace.scene.media.Medium)
     sphere_media: list = None     # per sphere, the MediumInterface it bounds or None; None: none does
     camera_medium: int = -1       # the medium the camera is in (a row of `media`), or -1: none
     instances: object = None      # pathtrace.scene.instances.Instances: meshes drawn many times,
@@ -104,7 +104,7 @@ class Scene:
     shapes: list = field(default_factory=list)   # its analytic shapes (pathtrace.shapes.Shape)
 
     def __post_init__(self):
-        # lists that also answer by name (pathtrace.named), for notebooks; kept as they are
+        # lists that also answer by name (pathtrace.scene.named), for notebooks; kept as they are
         # where they already are, so that with_settings shares them
         if not isinstance(self.meshes, NamedList):
             self.meshes = NamedList(self.meshes, kind=("mesh", "meshes"))

@@ -10,7 +10,7 @@ from pathlib import Path
 
 from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.materials import BSDFS
-from pathtrace.media import Medium
+from pathtrace.scene.media import Medium
 from pathtrace.parameters import parameter_table
 from pathtrace.textures import TEXTURES
 

@@ -3,7 +3,7 @@ Mitsuba 3's shapegroup) and drawn many times, each instance through its own tran
 (ObjectInstance, instance). The compiled scene either copies each instance's meshes into world
 space (flattening, for scenes of few instanced triangles, whose one-level BVH traces fastest) or
 builds one BVH per object and a BVH over the instances' world boxes, whose traversal turns each
-ray into an instance's object space (a two-level BVH: app/two_level.py, kernels/bvh.cl), so that
+ray into an instance's object space (a two-level BVH: app/compiler/two_level.py, kernels/bvh.cl), so that
 memory grows with the objects' triangles and the number of instances, not their product."""
 
 from dataclasses import dataclass, field, replace
@@ -53,7 +53,7 @@ class Instances:
 
 
 # the least |determinant| of an instance's linear part: the traversal carries rays into the
-# object by the transform's inverse, stored in float32 (app/two_level.py, to_object), whose
+# object by the transform's inverse, stored in float32 (app/compiler/two_level.py, to_object), whose
 # entries grow as the determinant shrinks
 MIN_DETERMINANT = 1e-30
 

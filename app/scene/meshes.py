@@ -20,7 +20,7 @@ from typing import NamedTuple
 import numpy as np
 
 from pathtrace.errors import UserError, warn
-from pathtrace.files import check_regular_file
+from pathtrace.io.files import check_regular_file
 from pathtrace.scene.transform import transform_normals, transform_points
 
 FORMATS = (".ply", ".ply.gz", ".obj", ".stl", ".gltf", ".glb")
@@ -270,7 +270,7 @@ def orient_by_normals(vertices: np.ndarray, faces: np.ndarray, normals: np.ndarr
     normal's side, and Mitsuba 3 decides the side by the shading frame (its one-sided BSDFs and
     area emitters test cos_theta(si.wi) there, src/render/mesh.cpp keeping the interpolated
     normal unturned): either way the side of the normals."""
-    # rows gathered by np.take, faster than indexing with the faces (as app/compiled.py's)
+    # rows gathered by np.take, faster than indexing with the faces (as app/compiler/compiled.py's)
     f0, f1, f2 = faces[:, 0], faces[:, 1], faces[:, 2]
     p0 = np.take(vertices, f0, axis=0)
     a, b = (np.take(vertices, f1, axis=0) - p0).T, (np.take(vertices, f2, axis=0) - p0).T

@@ -18,17 +18,16 @@ from xml.parsers import expat
 import numpy as np
 
 from pathtrace.camera import Camera
-from pathtrace.environment import Environment
+from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError, cut, short, warn
 from pathtrace.filters import FILTERS, PixelFilter
 from pathtrace import parameters
 from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.materials import BSDFS, Material
-from pathtrace.materials.blend import check_blend, transmits
 from pathtrace.materials.bsdf import LUMINANCE, constant_of
-from pathtrace.materials.table import check_bump_map
-from pathtrace.media import Medium, MediumInterface
+from pathtrace.materials.table import check_blend, check_bump_map, transmits
 from pathtrace.parameters import FRAME
+from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.known_names import Unread
@@ -65,7 +64,7 @@ def parse_xml(path: Path, budget: list = None, where: str = None) -> Node:
     """The element tree of one file, each element with its line; a malformed file is one
     UserError naming the line. budget: [bytes, elements] left for this file and the others of
     its scene (its includes), which it decreases; where: what names the file (an <include>)."""
-    from pathtrace.files import check_regular_file, missing, shown
+    from pathtrace.io.files import check_regular_file, missing, shown
     budget = [MAX_XML_BYTES, MAX_ELEMENTS] if budget is None else budget
     try:
         os.stat(path)

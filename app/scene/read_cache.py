@@ -4,11 +4,11 @@ start took on the H200; #55).
 
 An entry holds the scene as read (pickled), the warnings its reading gave, which are told again
 when it is used, and a stamp (path, size, time of last change) of every file the reading checked
-(pathtrace.files.check_regular_file: the scene file, its includes, meshes, images). It is used
+(pathtrace.io.files.check_regular_file: the scene file, its includes, meshes, images). It is used
 only while every stamp still holds. It is keyed by the scene file's absolute path (a built-in
 scene's name) and by the digest of pathtrace's Python source, so that a changed reader never
 reads an old entry. Scenes read in less than MIN_SECONDS are not kept. Entries are files of
-pathtrace.cache_files (a damaged one is a miss); the least recently used go once they exceed
+pathtrace.io.cache_files (a damaged one is a miss); the least recently used go once they exceed
 MAX_BYTES. The folder is cache_dir()/scenes, or the one PATHTRACE_SCENE_CACHE names;
 PATHTRACE_SCENE_CACHE=0 turns the cache off."""
 
@@ -19,9 +19,9 @@ import pickle
 import time
 from pathlib import Path
 
-from pathtrace import cache_files
+from pathtrace.io import cache_files
 from pathtrace.errors import held_warnings, warn
-from pathtrace.files import noting_files, stamp
+from pathtrace.io.files import noting_files, stamp
 
 MIN_SECONDS = 0.1
 MAX_BYTES = 2 << 30
@@ -43,7 +43,7 @@ def source_digest() -> bytes:
 
 def folder():
     """The cache's folder, or None where it is turned off."""
-    from pathtrace.device import cache_dir
+    from pathtrace.device.opencl import cache_dir
     chosen = os.environ.get("PATHTRACE_SCENE_CACHE", "")
     return None if chosen == "0" else Path(chosen) if chosen else cache_dir() / "scenes"
 

@@ -14,13 +14,12 @@ from pathtrace.camera import Camera
 from pathtrace import filters, parameters
 from pathtrace.filters import PixelFilter
 from pathtrace.lights import DELTA_LIGHTS, LIGHT_SAMPLERS
-from pathtrace.environment import Environment
+from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError, short
 from pathtrace.materials import BSDFS, Material
-from pathtrace.materials.blend import check_blend, transmits
 from pathtrace.materials.bsdf import NULL, constant_of
-from pathtrace.materials.table import check_bump_map
-from pathtrace.media import Medium, MediumInterface
+from pathtrace.materials.table import check_blend, check_bump_map, transmits
+from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.resources import resource_dir
 from pathtrace.scene import transform
 from pathtrace.scene.description import INTEGRATORS, RUSSIAN_ROULETTE, Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
@@ -735,7 +734,7 @@ MAX_SCENE_BYTES = 64 << 20    # a scene file; meshes go in files of their own
 
 
 def read_scene_file(path) -> Scene:
-    from pathtrace.files import check_regular_file, missing, shown
+    from pathtrace.io.files import check_regular_file, missing, shown
     path = Path(path)
     try:
         os.stat(path)

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from pathtrace.materials import BSDFS
-from pathtrace.materials.blend import component_rows
+from pathtrace.materials.table import component_rows
 from pathtrace.errors import UserError
 from pathtrace.scene.description import Scene
 from pathtrace.scene.toml_reader import MAX_INLINE

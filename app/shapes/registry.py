@@ -7,14 +7,14 @@ it is tested by tests/test_shapes.py. Tag 0 is the triangle (kernels/shapes/anal
 
 import importlib
 import pkgutil
+from pathlib import Path
 
 from pathtrace.shapes.shape import ShapeKind
 
 
 def _kinds() -> dict:
-    import pathtrace.shapes as package
     kinds = {}
-    for module in sorted(m.name for m in pkgutil.iter_modules(package.__path__)):
+    for module in sorted(m.name for m in pkgutil.iter_modules([str(Path(__file__).parent)])):
         if module in ("registry", "shape"):
             continue
         for value in vars(importlib.import_module(f"pathtrace.shapes.{module}")).values():

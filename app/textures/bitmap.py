@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from pathtrace.errors import UserError
-from pathtrace.files import check_regular_file, shown
+from pathtrace.io.files import check_regular_file, shown
 from pathtrace.parameters import Parameter
 from pathtrace.textures.texture import TextureType
 
@@ -82,7 +82,7 @@ def read_image(path: Path, where: str, raw: bool = False, cache: dict = None) ->
     16-bit decoded to float), HDR, EXR and PFM as linear float. Every problem is one line naming
     `where` and the file. A scene reader passes its `cache`, so that textures sharing a file
     share its Image (and its texels on the device)."""
-    from pathtrace.image_io import read_hdr
+    from pathtrace.io.images import read_hdr
 
     path = Path(path)
     suffix = path.suffix.lower()

@@ -12,9 +12,11 @@ from pathtrace.textures.checkerboard import Checkerboard
 from pathtrace.textures.constant import Constant
 from pathtrace.textures.mix import Mix
 from pathtrace.textures.scale import Scale
+from pathtrace.textures.texture import KINDS
 
 TEXTURES = {cls.name: cls() for cls in (Constant, Bitmap, Checkerboard, Scale, Mix)}
 TAGS = {name: i for i, name in enumerate(TEXTURES)}
+KINDS.update(TEXTURES)         # what Texture.kind looks up
 # the registers of a texture program (kernels/texture.cl): enough for any chain, and for a tree of
 # combining textures of up to 2^(TEXTURE_REGISTERS - 1) of them in the worst (balanced) shape
 TEXTURE_REGISTERS = 8

@@ -9,7 +9,7 @@ import numpy as np
 from pathtrace.textures.bitmap import SRGB_TABLE
 from pathtrace.textures.registry import TAGS, TEXTURE_REGISTERS, TEXTURES
 from pathtrace.textures.texture import Texture
-from pathtrace.types import TEXTURE, TEXTURE_BINDING
+from pathtrace.device.types import TEXTURE, TEXTURE_BINDING
 
 
 OPACITY_SLOT = 16        # kernels/masks.cl: SLOT_OPACITY
@@ -46,7 +46,7 @@ class TextureTables:
     texels: np.ndarray         # uint8
     bindings: np.ndarray       # TEXTURE_BINDING rows
     first: np.ndarray          # per material row: its first binding, or -1
-    types: tuple               # the texture types used (pathtrace.features.Features.textures)
+    types: tuple               # the texture types used (pathtrace.device.features.Features.textures)
     masks: bool                # a binding is an opacity (Features.masks)
     normal_maps: bool          # a binding is a normal or bump map (Features.normal_maps)
 

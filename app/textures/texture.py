@@ -10,6 +10,10 @@ import numpy as np
 
 IDENTITY_UV = np.eye(3)
 
+# name -> TextureType, filled by app/textures/registry.py: the types' modules import this one, so
+# it cannot import them (or the registry) itself
+KINDS = {}
+
 
 @dataclass(eq=False)
 class Texture:
@@ -35,8 +39,7 @@ class Texture:
 
     @property
     def kind(self):
-        from pathtrace.textures.registry import TEXTURES
-        return TEXTURES[self.type]
+        return KINDS[self.type]
 
     def mean(self) -> np.ndarray:
         """The texture's mean colour over the unit square of uv (an estimate for those that

@@ -12,13 +12,13 @@ from pathlib import Path
 
 import numpy as np
 
-from pathtrace.compiled import MAX_RADIANCE
+from pathtrace.compiler.compiled import MAX_RADIANCE
 from pathtrace.materials import BSDFS
 from pathtrace.materials.bsdf import constant_of
 from pathtrace.scene.builtin import BUILTIN_SCENES
 from pathtrace.scene.description import RUSSIAN_ROULETTE
 from pathtrace.textures import Texture
-from pathtrace.tonecurve import TONEMAPS
+from pathtrace.io.tonecurve import TONEMAPS
 
 MARGIN = 10                 # pixels between the panel and the window's edges
 WIDGET_MIN = 150            # the narrowest a widget may get, in pixels
@@ -211,7 +211,7 @@ def draw_panel(v):
         if changed:
             r.set_settings(nee=nee)
         env = r.environment
-        most = MAX_RADIANCE / max(float(np.max(env.image)), 1e-30)    # (pathtrace.compiled)
+        most = MAX_RADIANCE / max(float(np.max(env.image)), 1e-30)    # (pathtrace.compiler.compiled)
         changed, value = imgui.drag_float("env intensity", env.intensity, max(env.intensity, 0.01) * 0.01,
                                           0.0, min(most, FLOAT_MAX), "%.4g", imgui.SliderFlags_.always_clamp)
         layout.check("env intensity")

@@ -1,11 +1,11 @@
 """The viewer's window and loop. The window never waits for the renderer: each frame polls input,
-moves the camera, lets pathtrace.launches.Progressive collect finished launches and queue new ones
+moves the camera, lets pathtrace.rendering.launches.Progressive collect finished launches and queue new ones
 (bands of rows sized to a fraction of a frame), and shows the newest image that has reached the
-host (pathtrace.display, drawn by shaders/display.frag), then the imgui panel. While the
-camera rests the image is denoised (pathtrace.denoiser) in a worker thread, every time its samples
-have doubled."""
+host (pathtrace.viewer.display, drawn by shaders/display.frag), then the imgui panel. While the
+camera rests the image is denoised (pathtrace.io.denoiser) in a worker thread, every time its samples
+have doubled. The Viewer's parts: opening.py (scenes opened in the background), denoising.py and
+screenshots.py."""
 
-import datetime
 import math
 import os
 import sys
@@ -16,29 +16,26 @@ from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 import numpy as np
-import pyopencl as cl
 
-from pathtrace.display import Display
+from pathtrace.viewer.display import Display
 from pathtrace.errors import UserError
-from pathtrace.launches import Progressive
-from pathtrace.compiled import compile_scene
-from pathtrace.renderer import Renderer, aov_means, per_pixel_mean
+from pathtrace.rendering.launches import Progressive
+from pathtrace.rendering.renderer import Renderer
 from pathtrace.resources import resource_dir
-from pathtrace.scene import load_scene
-from pathtrace.viewer.controls import FlyControls, pick_ray, speed_for
+from pathtrace.viewer.controls import FlyControls, pick_ray
+from pathtrace.viewer.denoising import DRAFT_SCALE, Denoising
+from pathtrace.viewer.opening import SceneOpening
+from pathtrace.viewer.screenshots import Screenshots
 from pathtrace.viewer.panel import MARGIN, draw_help, draw_notice, draw_panel
 
 LAUNCH_BUDGET = 1 / 120        # device seconds per launch: a reset waits for at most three
-                               # (pathtrace.launches.QUEUE_AHEAD); larger ones made the 99th-percentile
+                               # (pathtrace.rendering.launches.QUEUE_AHEAD); larger ones made the 99th-percentile
                                # frame 50-80 ms on two cores
 MOVE_BUDGET = 1 / 30           # device seconds for a whole preview pass while the camera moves
 MAX_PREVIEW_SCALE = 16         # the coarsest preview: 1/16 of the resolution on each axis
-DRAFT_SCALE = 2                # the first denoised image after a move: at half the resolution
 REST_DELAY = 0.1               # seconds without a move before returning to full resolution
 UPLOAD_INTERVAL = 0.1          # at rest the noisy image reaches the screen at most this often
                                # (while moving, each preview pass as soon as it is done)
-DENOISE_QUALITY = {"CPU": "fast", "CUDA": "high"}   # OIDN's preset for the viewer, by its device:
-                               # on two cores "fast" denoises 1280x720 in 0.35 s, "high" in 0.65 s
 DEFAULT_SIZE = (1280, 720)     # the window's size before its scene is read (fitted to the screen)
 FRAME_RATE = 60                # turns of the loop per second at most: the window's work leaves
                                # the rest of the CPU to the renderer (PoCL) and the denoiser
@@ -95,7 +92,7 @@ def preview_scale(seconds_per_pixel: float, width: int, height: int) -> int:
                    MAX_PREVIEW_SCALE))
 
 
-class Viewer:
+class Viewer(SceneOpening, Denoising, Screenshots):
     def __init__(self, backend, scene, screenshot_dir="screenshots", window_size=None):
         """Renders `scene` at its settings' size (pathtrace view --size sets it), in a window of
         window_size (default: that size, fitted to the screen).
@@ -201,7 +198,7 @@ class Viewer:
 
     @property
     def display_path(self) -> str:
-        """How the image reaches the screen. PyPI's pyopencl has no CL/GL sharing, so pathtrace.display
+        """How the image reaches the screen. PyPI's pyopencl has no CL/GL sharing, so pathtrace.viewer.display
         copies it through the host."""
         return {"sums": "float sums", "half": "half-float means"}[self.display.mode] + " copied to a texture"
 
@@ -353,28 +350,6 @@ class Viewer:
         self.message, self.error = text, error
         print(f"pathtrace: {text}", file=sys.stderr)
 
-    def _start(self, backend, scene) -> Renderer:
-        """In the worker thread: the device opened and the scene read, where they are functions
-        that do so, and the scene compiled for the device."""
-        if callable(scene):
-            self._status = ("reading the scene", None)
-            scene = scene()
-        if callable(backend):
-            self._status = ("opening the device", None)
-            backend = backend()
-        self.backend = backend
-        return self._open(scene)
-
-    def _open(self, scene, renderer=None) -> Renderer:
-        """In the worker thread: the scene compiled (its BVH build's progress shown) and given to
-        `renderer` (or a new one), the kernels compiled for it (said while they are)."""
-        compiled = compile_scene(scene, self.backend.queue, self._build_progress(scene.name))
-        self._status = (f"preparing the kernels for {scene.name} on {self.backend.device.name}", None)
-        if renderer is None:
-            return Renderer(self.backend, compiled)
-        renderer.set_scene(compiled)
-        return renderer
-
     def _in_background(self, work, text: str) -> Renderer:
         """work()'s renderer (or its exception), work called in a worker thread while this one keeps
         the window live: it draws what the work says it is doing (self._status, starting at
@@ -409,37 +384,6 @@ class Viewer:
         if "error" in outcome:
             raise outcome["error"]
         return outcome["value"]
-
-    def load_scene(self, name: str):
-        """Opens a scene, at its own size; whatever goes wrong is shown in the panel and
-        printed, and the window keeps the scene it had. Call it between turns of the loop (the
-        panel asks through requested_scene): it draws frames of its own as it goes."""
-        try:
-            scene = self._in_background(lambda: self._open(load_scene(name), self.renderer),
-                                        f"opening {name}").scene
-            self.renderer.resize(scene.settings.width, scene.settings.height)
-        except Exception as e:   # a viewer must outlive any bad file, ours or a library's error
-            self.set_message(str(e) if isinstance(e, UserError) else
-                             f"cannot open {name}: {type(e).__name__}: {e}", error=True)
-            return
-        self.size = (scene.settings.width, scene.settings.height)
-        self.selected = None
-        self._scene_opened(self.renderer.compiled)
-        self.set_message(f"loaded {scene.name}")
-
-    def _scene_opened(self, compiled):
-        """Movement at the scene's scale (the wheel changes it from there), and the panel's file
-        field naming the scene's file, if it has one."""
-        self.controls.speed = speed_for(compiled.scene.camera, compiled.radius)
-        if compiled.scene.source:
-            self.scene_file = compiled.scene.source
-
-    def _build_progress(self, name: str):
-        """A progress callback for a scene's BVH build, from the worker thread: the window, live
-        in its own thread, shows how far it is."""
-        def show(fraction):
-            self._status = (f"building the BVH of {name}", fraction)
-        return show
 
     def show_progress(self, text: str, fraction: float = None):
         """One frame, outside the loop, that says what the window is busy with (a BVH build,
@@ -583,67 +527,6 @@ class Viewer:
             self._shown, self._last_upload = current, now
         return self._new_image
 
-    def _denoiser_ready(self) -> bool:
-        if self._denoiser is None and self.denoise_error is None:
-            try:
-                from pathtrace.denoiser import Denoiser
-                self._denoiser = Denoiser(lambda device: DENOISE_QUALITY[device])
-                # OIDN's first run at a size prepares it (a third of a second on two cores):
-                # done now, in the worker, it is not waited for when the camera stops
-                for scale in (DRAFT_SCALE, 1):
-                    self._worker.submit(self._prepare_denoiser, self.size[1] // scale, self.size[0] // scale)
-            except Exception as e:     # no pyoidn, or OIDN cannot run here: say so, keep going
-                self.denoise_error = f"denoiser unavailable: {e}"
-                self.set_message(self.denoise_error, error=True)
-        return self._denoiser is not None
-
-    def _advance_denoise(self):
-        """One step of denoising, never waiting: read the image back once its passes have doubled
-        since the last denoise, hand it to the worker thread when it has arrived, and show
-        the result when the worker is done. Results of an image since reset are dropped."""
-        r, p = self.renderer, self.progressive
-        if self._denoising is not None and self._denoising[0].done():
-            future, resets, samples = self._denoising
-            self._denoising = None
-            try:
-                image, seconds = future.result()
-            except Exception as e:     # a viewer must outlive any failure of the library
-                self.denoise_error = str(e)
-                self.set_message(f"denoising failed: {e}", error=True)
-                self.denoise = False
-                return
-            if resets == r.resets:
-                self.denoised_at, self.denoise_seconds = (resets, samples), seconds
-                self._upload(np.concatenate([image, np.ones_like(image[..., :1])], -1))
-                self.clean = True
-                self._shown = None            # the noisy image is no longer what is shown
-        if self._readback is not None:
-            event, arrays, resets, samples = self._readback
-            if event.command_execution_status != cl.command_execution_status.COMPLETE:
-                return
-            self._readback = None
-            if resets == r.resets and self._denoising is None:
-                future = self._worker.submit(self._denoise_job, *arrays)
-                self._denoising = (future, resets, samples)
-            return
-        if self._denoising is not None or p.passes_done < 1:
-            return
-        last = self.denoised_at[1] if self.denoised_at and self.denoised_at[0] == r.resets else 0
-        if p.passes_done >= 2 * last:
-            event, arrays = r.read_async(("sum", "albedo_sum", "normal_sum"))
-            self._readback = (event, arrays, r.resets, p.passes_done)
-
-    def _denoise_job(self, sums, albedo_sum, normal_sum):
-        """In the worker thread: the means, then OIDN (which runs outside the GIL)."""
-        start = time.perf_counter()
-        aovs = aov_means(albedo_sum, normal_sum)
-        image = self._denoise(per_pixel_mean(sums), aovs["albedo"], aovs["normal"])
-        return image, time.perf_counter() - start
-
-    def _prepare_denoiser(self, height: int, width: int):
-        with self._denoiser_lock:
-            self._denoiser.prepare(height, width)
-
     def _upload(self, pixels: np.ndarray):
         """(H, W, 4) float32 or float16 pixels (radiance in rgb, divided by a) into the display
         texture."""
@@ -679,49 +562,6 @@ class Viewer:
         while not self.glfw.window_should_close(self.window) and (frames is None or count < frames):
             self.frame()
             count += 1
-
-    def screenshot(self):
-        """Writes the image as shown: tonemapped (PNG) and as radiance (EXR); where it is the
-        denoised one, the EXR keeps the noisy one as its layer "noisy". The pass under way is
-        finished first, so that every pixel holds the same samples. The image is read now; it is
-        denoised and written in a thread of its own, so that the window stays live (Esc closes
-        it at once) while a large image is denoised. Returns the future of the two paths (None
-        where writing failed, which the panel's message line then says)."""
-        self.progressive.finish_pass()
-        r = self.renderer
-        stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S-%f")[:-3]
-        base = self.screenshot_dir / f"pathtrace-{r.scene.name}-{stamp}"
-        noisy = r.mean()
-        denoised = self.denoised_at is not None and self.denoised_at[0] == r.resets and self.denoise and self.resting
-        aovs = r.read_aovs() if denoised else None
-        look = (self.exposure, self.tonemap)
-        self.set_message(f"saving {base.name} ({r.samples} spp{', denoised' if denoised else ''})")
-        return self._writer.submit(self._save_screenshot, base, noisy, aovs, look, r.samples)
-
-    def _save_screenshot(self, base: Path, noisy: np.ndarray, aovs, look: tuple, samples: int):
-        """In the screenshot thread: denoised where `aovs` are given, then both files written."""
-        from pathtrace.image_io import Output, write_images
-        shown, layers = noisy, {}
-        try:
-            if aovs is not None:
-                shown, layers = self._denoise(noisy, aovs["albedo"], aovs["normal"]), {"noisy": noisy}
-            outputs = [Output(base.with_suffix(".png"), shown), Output(base.with_suffix(".exr"), shown, layers)]
-            base.parent.mkdir(parents=True, exist_ok=True)
-            write_images(outputs, *look, what="screenshot")
-        except (UserError, OSError) as e:
-            self.set_message(f"screenshot failed: {e}", error=True)
-            return None
-        finally:
-            self.redraw_soon()
-        paths = [out.path for out in outputs]
-        self.set_message(f"saved {paths[0]} and .exr ({samples} spp{', denoised' if layers else ''})")
-        return paths
-
-    def _denoise(self, image, albedo, normal):
-        """The denoiser, from the worker or the screenshot thread: its buffers are for one
-        thread at a time."""
-        with self._denoiser_lock:
-            return self._denoiser(image, albedo, normal)
 
     def close(self):
         """Hides the window at once, then lets the work under way end: a denoise in the worker

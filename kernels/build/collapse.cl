@@ -1,5 +1,5 @@
 /* The clustered binary tree made into the 4-wide BVHNode array that kernels/bvh.cl walks, in sweeps
- * over the batches of app/bvh.py's build (a batch's nodes depend only on earlier batches below
+ * over the batches of app/compiler/bvh.py's build (a batch's nodes depend only on earlier batches below
  * them, so one launch per batch and sweep, bottom-up or top-down):
  *
  * 1. collapse_up: primitives under each node and its SAH cost relative to its own area; a
@@ -19,7 +19,7 @@
 
 #pragma OPENCL FP_CONTRACT OFF
 
-/* MAX_LEAF_SIZE, MAX_DEPTH and TRAVERSAL_COST come as build options from app/bvh.py. */
+/* MAX_LEAF_SIZE, MAX_DEPTH and TRAVERSAL_COST come as build options from app/compiler/bvh.py. */
 
 /* Half the surface area; extents clamped to FLT_MAX so that a huge flat box gives inf, never NaN. */
 float half_area(global const float4 *box, int k)

@@ -1,6 +1,6 @@
 /* Morton codes of primitives' centroids (Morton 1966; Lauterbach et al., "Fast BVH Construction
  * on GPUs", 2009): 21 bits per axis of the centroid's place in the centroids' bounds, interleaved
- * into 63 bits, so that sorting by code lays the primitives along a Z-order curve. app/bvh.py
+ * into 63 bits, so that sorting by code lays the primitives along a Z-order curve. app/compiler/bvh.py
  * sorts them; PLOC's clusters then look for neighbours along that order.
  *
  * box: per node two float4, lo then hi; primitives first..first+count-1 are coded.

@@ -1,6 +1,6 @@
 """pbrt-v4's materials and textures, mapped onto pathtrace's (app/materials, app/textures) as
 pbrt-v4 means them: roughness remapped as pbrt remaps it, texture coordinates flipped as pbrt's
-image lookups flip them, colours from spectra (app/spectra.py). What pathtrace does not have yet
+image lookups flip them, colours from spectra (app/scene/spectra.py). What pathtrace does not have yet
 is approximated by its nearest material, with one warning each (docs/pbrt.md)."""
 
 import math
@@ -11,10 +11,9 @@ import numpy as np
 from pathtrace.errors import UserError, warn
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import TRANSMISSIVE
-from pathtrace.materials.blend import check_blend, transmits
-from pathtrace.materials.table import check_bump_map
+from pathtrace.materials.table import check_blend, check_bump_map, transmits
 from pathtrace.parameters import by_format, read
-from pathtrace.spectra import blackbody_rgb, emission_rgb, named_spectrum, reflectance_rgb, sampled
+from pathtrace.scene.spectra import blackbody_rgb, emission_rgb, named_spectrum, reflectance_rgb, sampled
 from pathtrace.textures import TEXTURES, Texture
 from pathtrace.textures.bitmap import Image, read_image
 

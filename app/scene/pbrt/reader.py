@@ -31,14 +31,14 @@ from pathlib import Path
 import numpy as np
 
 from pathtrace.camera import Camera
-from pathtrace.environment import Environment
+from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError, cut, warn
-from pathtrace.files import check_regular_file
+from pathtrace.io.files import check_regular_file
 from pathtrace.filters import PixelFilter
 from pathtrace import parameters as declared
 from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.lights.light import MAX_RADIANCE
-from pathtrace.media import Medium, MediumInterface
+from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.known_names import Unread
@@ -981,7 +981,7 @@ class PbrtReader:
         if filename is not None:
             if params.type_of("L"):
                 params.fail("L", "an infinite light takes L or a filename, not both")
-            from pathtrace.image_io import read_hdr
+            from pathtrace.io.images import read_hdr
             path = self.resolve(filename)
             image = read_hdr(path, f"{where}: filename")
             if image.shape[0] != image.shape[1]:

@@ -1,0 +1,36 @@
+"""The console entry point (`pathtrace`, `python -m pathtrace`). It puts its signal handling in place
+before it imports the rest of the package (NumPy, PyOpenCL: about 0.2 s), so that Ctrl-C or
+SIGTERM during those imports ends the run with one line, as at any later moment, instead of a
+KeyboardInterrupt traceback."""
+
+import os
+import sys
+
+from pathtrace.cli.interrupts import INTERRUPTED, install
+
+
+def run():
+    """pathtrace.cli.main.main(), then the exit. After an interrupt, or with a kernel build under way
+    (_building), it leaves at once (os._exit), past the interpreter's teardown: tearing down PoCL
+    while it still winds down an interrupted launch aborted the process (std::terminate) now and
+    then; every temporary file is removed by then."""
+    install()
+    try:
+        from pathtrace.cli.main import main
+        code = main()
+    except KeyboardInterrupt:        # main() reports its own; this is one during the imports
+        print("pathtrace: interrupted", file=sys.stderr)
+        code = INTERRUPTED
+    if code == INTERRUPTED or _building():
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    raise SystemExit(code)
+
+
+def _building() -> bool:
+    """Whether a scene's program is still being built in the background (pathtrace.device.programs):
+    NVIDIA's driver crashed the interpreter's teardown around a build under way (SIGSEGV after a
+    render that had written its image), so the command leaves past it, the build dropped."""
+    programs = sys.modules.get("pathtrace.device.programs")
+    return programs is not None and programs.builds_under_way()

@@ -1,0 +1,74 @@
+"""`pathtrace devices` and `pathtrace scenes`: what this machine and pathtrace offer."""
+
+import time
+
+from pathtrace.errors import UserError
+
+GENERATED_SCENES = (("spheresN[-diffuse]", "N random spheres, e.g. spheres512k, spheres1M-diffuse"),
+                    ("heightfieldN", "a height field of about N triangles, e.g. heightfield1M"))
+
+
+def epilog() -> str:
+    from pathtrace.scene.builtin import BUILTIN_SCENES
+    return ("A scene is a .toml file, a Mitsuba 3 .xml file, a pbrt-v4 .pbrt file or a built-in name (pathtrace scenes lists them): "
+            + ", ".join(BUILTIN_SCENES) + "; and " + ", ".join(name for name, _ in GENERATED_SCENES) + ".")
+
+
+def cmd_devices(args):
+    from pathtrace.device.opencl import NO_DEVICE, build_error_line, list_devices, open_device
+    import pyopencl as cl
+
+    devices = list_devices()
+    if not devices:
+        raise UserError(NO_DEVICE)
+    for d in devices:
+        line = f"[{d.index}] {d.describe()}, {d.device.max_compute_units} compute units"
+        if args.check:
+            try:
+                b = open_device(d, mode="generic")
+                start = time.perf_counter()
+                cached = b.built_generic() is not None and b.opened.cached
+                b.program
+                line += (f": builds the generic kernels ({time.perf_counter() - start + b.opened.seconds:.2f} s"
+                         f"{', cached' if cached else ''}) and renders with them ({warm_up(b):.2f} s)")
+            except cl.Error as e:
+                line += f": cannot build the kernels: {build_error_line(e)}"
+        print(line)
+    return 0
+
+
+def cmd_scenes(args):
+    from pathtrace.scene.builtin import BUILTIN_SCENES
+    for name in BUILTIN_SCENES:
+        print(name)
+    for name, what in GENERATED_SCENES:
+        print(f"{name}: {what}")
+    return 0
+
+
+def warm_up(backend) -> float:
+    """Renders one sample of a small built-in scene with `backend`'s generic program, with and
+    without next-event estimation, so that a driver that compiles kernels at their first launch
+    (PoCL, for each work-group size) has them in its cache before a user's first image; the
+    seconds it took."""
+    from pathtrace.rendering.renderer import Renderer
+    from pathtrace.scene import load_scene
+    generic = backend.with_mode("generic")
+    start = time.perf_counter()
+    scene = load_scene("simple")
+    for nee in (True, False):
+        r = Renderer(generic, scene.with_settings(nee=nee), 8, 8)
+        r.set_aovs(True)
+        r.add_samples(1)
+        r.finish()
+    return time.perf_counter() - start
+
+
+def add_parser(sub):
+    """The `devices` and `scenes` commands' parsers."""
+    p = sub.add_parser("devices", help="list OpenCL platforms and devices")
+    p.add_argument("--check", action="store_true", help="also build the generic kernels on each and render with them once, which fills the drivers' caches (pathtrace.device.programs)")
+    p.set_defaults(func=cmd_devices)
+
+    p = sub.add_parser("scenes", help="list the built-in scenes")
+    p.set_defaults(func=cmd_scenes)

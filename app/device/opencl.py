@@ -1,0 +1,360 @@
+"""OpenCL devices: listing them, choosing one from the --device flag, and building the kernels
+(with a binary cache where the driver keeps none, so that a second start does not recompile)."""
+
+import hashlib
+import os
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import pyopencl as cl
+
+from pathtrace.io.cache_files import read_entry, write_entry
+from pathtrace.errors import UserError, format_bytes, short
+from pathtrace.device.features import Features
+from pathtrace.device.occupancy import TUNING_RULE, build_for_occupancy, is_nvidia
+from pathtrace.device.programs import Programs, default_mode
+from pathtrace.resources import resource_dir
+
+# The order in which the kernel files are joined into one program: the basics, the texture
+# kernels of the types a scene uses (app/textures/registry.py: kernel_parts), the shapes and
+# traversal (with alpha masks where a scene has them), the shading of textured materials, the
+# BSDFs of the material registry and their generated dispatch, the environment, the light types
+# a scene has and their dispatch (app/lights/registry.py), its camera and pixel filter, the media
+# where it has them, the rest, and bidirectional path tracing where a render asks for it.
+BASIC_FILES = ("inlining.h", "types.h", "vector.cl", "color.cl", "rng.cl", "sampling.cl", "scene.cl")
+SHAPE_FILES = ("spawn.cl", "shapes/sphere.cl", "shapes/triangle.cl")
+BSDF_FILES = ("bsdf.cl", "fresnel.cl", "microfacet.cl", "coating.cl", "interface.cl", "phase.cl")
+MEDIA_FILES = ("media/homogeneous.cl", "volume.cl")
+LATER_FILES = ("integrator.cl", "aovs.cl", "display.cl")
+
+# No -cl-fast-relaxed-math: it implies finite math, and the kernels rely on INFINITY.
+BUILD_OPTIONS = ("-cl-mad-enable", "-cl-no-signed-zeros")
+# A cache entry: the SHA-256 of the rest, the build options the binary was made with (NUL
+# separated) and a newline, the binary.
+CACHE_FORMAT = "2"
+
+
+def kernel_source(extra: str = "", features: Features = Features()) -> str:
+    """The kernels as one source text, each file introduced by a #line marker so that compiler
+    messages name the file and line."""
+    from pathtrace import camera, filters, lights, shapes
+    from pathtrace.materials import dispatch_source, kernel_files, tag_source
+    from pathtrace.textures import kernel_parts
+
+    folder = resource_dir("kernels")
+    texts = [(name, (folder / name).read_text()) for name in BASIC_FILES]
+    texts += [(name, text if text is not None else (folder / name).read_text())
+              for name, text in kernel_parts(features.textures)]
+    texts.append(("app/materials/registry.py: tag_source", tag_source()))
+    # the transforms of instances and analytic shapes, where the scene has either
+    moved = ("transform.cl",) if features.shapes or features.instance_stack else ()
+    texts += [(name, (folder / name).read_text())
+              for name in (*SHAPE_FILES, *moved, *shapes.kernel_files(features.shapes))]
+    if features.shapes:
+        texts += [("app/shapes/registry.py: dispatch_source", shapes.dispatch_source(features.shapes)),
+                  ("shapes/analytic.cl", (folder / "shapes/analytic.cl").read_text())]
+    files = (*(("masks.cl",) if features.masks else ()), "bvh.cl", "frame.cl",
+             *(("normal_maps.cl",) if features.normal_maps else ()),
+             *(("shading.cl",) if features.textures else ()), *BSDF_FILES, *kernel_files(features.bsdfs))
+    texts += [(name, (folder / name).read_text()) for name in files]
+    texts.append(("app/materials/registry.py: dispatch_source", dispatch_source(features.bsdfs)))
+    parts = [("environment.cl", None), *lights.kernel_parts(features.lights, features.light_tree, bool(features.bdpt)),
+             *camera.kernel_parts(features.camera), *filters.kernel_parts(features.filter)]
+    texts += [(name, text if text is not None else (folder / name).read_text()) for name, text in parts]
+    texts += [(name, (folder / name).read_text())
+              for name in (*(MEDIA_FILES if features.media else ()), *LATER_FILES,
+                           *(("bdpt.cl",) if features.bdpt else ()))]
+    if extra:
+        texts.append(("extra", extra))
+    return "\n".join(f'#line 1 "{name}"\n{text}' for name, text in texts)
+
+
+@dataclass
+class Device:
+    index: int
+    platform: cl.Platform
+    device: cl.Device
+
+    @property
+    def name(self) -> str:
+        return self.device.name.strip()
+
+    @property
+    def kind(self) -> str:
+        return "GPU" if self.device.type & cl.device_type.GPU else "CPU" \
+            if self.device.type & cl.device_type.CPU else "other"
+
+    def describe(self) -> str:
+        return f"{self.name} ({self.kind}, {self.platform.name.strip()})"
+
+
+HOW_TO_GET_ONE = ("for the CPU without root, pip install pocl-binary-distribution (pathtrace's extra [cpu]); "
+                  "on Debian/Ubuntu, apt install pocl-opencl-icd; for a GPU, its vendor's OpenCL driver")
+NO_DEVICE = f"no OpenCL device found: {HOW_TO_GET_ONE}"     # the one line wherever none is found
+
+
+def list_devices() -> list[Device]:
+    devices = []
+    try:
+        platforms = cl.get_platforms()
+    except cl.Error:
+        platforms = []
+    for platform in platforms:
+        try:
+            found = platform.get_devices()
+        except cl.Error:
+            continue
+        first = len(devices)      # not inside the generator: extend() grows the list as it goes
+        devices.extend(Device(first + i, platform, d) for i, d in enumerate(found))
+    return devices
+
+
+def cache_dir() -> Path:
+    base = os.environ.get("PATHTRACE_CACHE") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "pathtrace")
+    return Path(base)
+
+
+@dataclass
+class BuildResult:
+    program: cl.Program
+    seconds: float
+    cached: bool
+
+
+def program_options(device: cl.Device, features: Features) -> list[str]:
+    """The build options of the kernels specialised to `features` and to the kind of device
+    (CPU_DEVICE: on CPUs the samplers' azimuths take cospi: kernels/sampling.cl, COS_TURNS)."""
+    options = list(BUILD_OPTIONS) + [f"-D{d}" for d in features.defines()]
+    if device.type & cl.device_type.CPU:
+        options.append("-DCPU_DEVICE")
+    return options
+
+
+def build_program(context: cl.Context, device: cl.Device, extra: str = "",
+                  use_cache: bool = True, features: Features = Features(), tune: bool = True) -> BuildResult:
+    """Builds the kernels specialised to `features` for one device. `tune`: see build_cached."""
+    return build_cached(context, device, kernel_source(extra, features), program_options(device, features),
+                        use_cache, tune)
+
+
+def cache_entry(device: cl.Device, source: str, options: list[str], tune: bool) -> Path:
+    """Where the binary of a build is cached: keyed by the source, the options, whether it is
+    tuned and under which rule (occupancy.TUNING_RULE), the exact device and driver and the
+    entry's format."""
+    tune = tune and is_nvidia(device)
+    key = hashlib.sha256("\0".join([
+        CACHE_FORMAT, source, " ".join(options), f"tuned, {TUNING_RULE}" if tune else "",
+        device.platform.name, device.platform.version,
+        device.name, device.version, device.driver_version]).encode()).hexdigest()[:32]
+    return cache_dir() / f"{key}.bin"
+
+
+def keeps_own_cache(device: cl.Device) -> bool:
+    """Whether the driver caches what it compiles well enough that pathtrace's cache only costs:
+    PoCL keeps each program it has built (a rebuild from source reads it back in 0.06 s) and each
+    kernel it has compiled for a work-group size. Asking PoCL for a program's binary compiles
+    every kernel in it for a generic work-group size first, about 4 s for the render program on
+    two cores, kernels a scene may never launch and which its launches compile again for their
+    size (docs/performance.md)."""
+    return device.platform.name.strip() == "Portable Computing Language"
+
+
+def build_cached(context: cl.Context, device: cl.Device, source: str, options: list[str],
+                 use_cache: bool = True, tune: bool = True) -> BuildResult:
+    """Builds a program for one device. Unless the driver keeps its own cache, the binary is
+    cached under cache_dir() (cache_entry). `tune`: on NVIDIA, try the register caps of
+    app/device/occupancy.py (up to four more builds of the program)."""
+    use_cache = use_cache and not keeps_own_cache(device)
+    path = cache_entry(device, source, options, tune)
+    tune = tune and is_nvidia(device)
+    start = time.perf_counter()
+    cached = _read_cached(path) if use_cache else None
+    if cached is not None:
+        built_with, binary = cached
+        try:
+            program = cl.Program(context, [device], [binary]).build(options=built_with)
+            return BuildResult(program, time.perf_counter() - start, True)
+        except cl.Error:
+            pass   # a stale or foreign binary: rebuild from source below
+    if tune:
+        program, options = build_for_occupancy(context, device, source, options)
+    else:
+        program = cl.Program(context, source).build(options=options, devices=[device])
+    seconds = time.perf_counter() - start
+    if use_cache:
+        binary = program.get_info(cl.program_info.BINARIES)[0]
+        if binary:
+            # the options it was built with go with it: a register cap applies when a driver
+            # compiles the cached intermediate code (NVIDIA's PTX) for the device
+            write_entry(path, "\0".join(options).encode() + b"\n", binary)
+    return BuildResult(program, seconds, False)
+
+
+def _read_cached(path: Path):
+    """A cached binary and the build options it was made with, or None where there is none or
+    it is damaged (pathtrace.io.cache_files)."""
+    data = read_entry(path)
+    data = bytes(data) if data is not None else b""
+    if b"\n" not in data:
+        return None
+    options, binary = data.split(b"\n", 1)
+    return ([o for o in options.decode().split("\0") if o], binary) if binary else None
+
+
+@dataclass
+class Backend:
+    """A chosen device with its context and queue, and its programs (pathtrace.device.programs): the
+    generic program (Features.generic_program) and those specialised to scenes' features, built
+    when first asked for. `opened`: what open_device built to show that the platform builds
+    kernels. `mode`: one of programs.PROGRAM_MODES, how a renderer on it chooses among them."""
+    device: Device
+    context: cl.Context
+    queue: cl.CommandQueue
+    opened: BuildResult
+    extra: str = ""
+    use_cache: bool = True
+    mode: str = "auto"
+    programs: Programs = None     # shared with the backends made from this one (with_mode)
+
+    def __post_init__(self):
+        if self.programs is None:
+            self.programs = Programs(lambda features, tune: build_program(
+                self.context, self.device.device, self.extra, self.use_cache, features, tune).program,
+                self.device.name, is_nvidia(self.device.device))
+
+    def with_mode(self, mode: str) -> "Backend":
+        """The same device, context, queue and programs, choosing among them by `mode`."""
+        return Backend(self.device, self.context, self.queue, self.opened, self.extra, self.use_cache, mode,
+                       self.programs)
+
+    @property
+    def program(self) -> cl.Program:
+        """The generic program; waits for it."""
+        return self.programs.get(Features.generic_program(), tuned=False)
+
+    def built_generic(self):
+        """The generic program if it is built, else None (it is built at open where that is
+        fast, and by `pathtrace devices --check`, never behind a scene's first image)."""
+        return self.programs.built(Features.generic_program(), tuned=False)
+
+    def program_for(self, features: Features, tuned: bool = True) -> cl.Program:
+        """The kernels specialised to `features` (on NVIDIA with `tuned`, under the register caps
+        of app/device/occupancy.py), built once per backend; waits for them."""
+        return self.programs.get(features, tuned)
+
+    def ready_program(self, features: Features):
+        """The tuned kernels specialised to `features` if they are built, else None, their build
+        started in the background."""
+        return self.programs.ready(features, tuned=True)
+
+
+def open_device(device: Device, extra: str = "", use_cache: bool = True, mode: str = None) -> Backend:
+    """The device with its queue. Where building the generic program will not compile it afresh
+    (its binary is in pathtrace's cache, or the driver keeps its own cache and builds from it:
+    PoCL, whose first build of it takes 2 s on two cores), it is built now: it shows that the
+    platform builds the kernels and draws every scene's first images (pathtrace.device.programs).
+    Elsewhere (NVIDIA's driver takes 46 s over it on an H200, and a build in a background thread
+    held up the scene's own build behind it) the display's small program shows that the
+    platform builds, and the generic program waits for `pathtrace devices --check` (./install.sh
+    runs it)."""
+    context = cl.Context([device.device])
+    queue = cl.CommandQueue(context, properties=cl.command_queue_properties.PROFILING_ENABLE)
+    generic = Features.generic_program()
+    source, options = kernel_source(extra, generic), program_options(device.device, generic)
+    fast = keeps_own_cache(device.device) or cache_entry(device.device, source, options, False).is_file()
+    if not fast:
+        source, options = display_source(), list(BUILD_OPTIONS)
+    opened = build_cached(context, device.device, source, options, use_cache, False)
+    backend = Backend(device, context, queue, opened, extra, use_cache, mode or default_mode())
+    if fast:
+        backend.programs.add(generic, False, opened.program)
+    return backend
+
+
+def display_source() -> str:
+    """kernels/display.cl alone: the window's kernel, which needs nothing of the renderer's."""
+    return (resource_dir("kernels") / "display.cl").read_text()
+
+
+def check_fits(device: cl.Device, buffers: dict, what: str):
+    """Refuses, with one line, buffers (name: bytes) that `device` cannot hold: one larger than its
+    largest allocation, or all together more than its global memory."""
+    name = device.name.strip()
+    largest = max(buffers, key=buffers.get)
+    if buffers[largest] > device.max_mem_alloc_size:
+        raise UserError(f"{what}: its {largest} need {format_bytes(buffers[largest])} in one buffer; "
+                        f"{name} allocates at most {format_bytes(device.max_mem_alloc_size)} at once")
+    total = sum(buffers.values())
+    if total > device.global_mem_size:
+        raise UserError(f"{what} needs {format_bytes(total)} of device memory; "
+                        f"{name} has {format_bytes(device.global_mem_size)}")
+
+
+def build_error_line(error: Exception) -> str:
+    """The compiler's first error line, else the first line of the message."""
+    lines = [line.strip() for line in str(error).strip().splitlines() if line.strip()]
+    errors = [line for line in lines if line.startswith("error")]
+    return (errors or lines or [type(error).__name__])[0]
+
+
+def _index(text: str) -> bool:
+    """Whether text is a device index: ASCII digits, few of them (str.isdigit also takes '²',
+    which int() refuses, and int() refuses 5000 digits)."""
+    return text.isascii() and text.isdigit() and len(text) <= 9
+
+
+def _matches(spec: str, d: Device, devices: list[Device]) -> bool:
+    spec_l = spec.lower()
+    kind, _, nth = spec_l.partition(":")
+    if kind in ("gpu", "cpu") and _index(nth):       # the nth device of a kind, from 0
+        of_kind = [e for e in devices if e.kind.lower() == kind]
+        return int(nth) < len(of_kind) and of_kind[int(nth)] is d
+    if spec_l in ("auto", "any"):
+        return True
+    if spec_l in ("gpu", "cpu"):
+        return d.kind.lower() == spec_l
+    if _index(spec):
+        return d.index == int(spec)
+    return spec_l in d.name.lower() or spec_l in d.platform.name.lower()
+
+
+def choose_devices(specs: list[str], log=lambda line: print(line, file=sys.stderr)) -> list[Backend]:
+    """Repeated --device options: one backend per spec (a spec named twice opens its device
+    twice, as two independent queues), or 'all': every device that builds the kernels."""
+    if "all" not in (s.lower() for s in specs):
+        return [choose_device(spec, log=log) for spec in specs]
+    backends = []
+    for d in list_devices():
+        try:
+            backends.append(open_device(d))
+        except cl.Error as e:
+            log(f"skipping {d.describe()}: cannot build the kernels: {build_error_line(e)}")
+    if not backends:
+        raise UserError("--device all: no OpenCL device can build the kernels "
+                        "(see 'pathtrace devices --check')")
+    return backends
+
+
+def choose_device(spec: str = "auto", extra: str = "", use_cache: bool = True,
+                  log=lambda line: print(line, file=sys.stderr)) -> Backend:
+    """--device: 'auto' (the first GPU whose platform builds our kernels, else a CPU), 'gpu',
+    'cpu', 'gpu:N' or 'cpu:N' (the Nth of that kind, from 0), an index from `pathtrace
+    devices`, or a fragment of a device or platform name.
+    A device whose platform cannot build the kernels is skipped with one line saying why."""
+    devices = list_devices()
+    if not devices:
+        raise UserError(NO_DEVICE)
+    candidates = [d for d in devices if _matches(spec, d, devices)]
+    if not candidates:
+        raise UserError(f"--device: no OpenCL device matches {short(spec)} "
+                        f"(see 'pathtrace devices'; {len(devices)} found)")
+    candidates.sort(key=lambda d: d.kind != "GPU")   # stable: GPUs first, then listing order
+    for d in candidates:
+        try:
+            return open_device(d, extra, use_cache)
+        except cl.Error as e:
+            log(f"skipping {d.describe()}: cannot build the kernels: {build_error_line(e)}")
+    raise UserError(f"--device: no device matching {short(spec)} can build the kernels")

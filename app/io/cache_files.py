@@ -1,0 +1,74 @@
+"""Entries of pathtrace's caches on disk: the kernels' binaries (app/device/opencl.py), large scenes'
+BVHs (app/compiler/bvh_cache.py) and the scenes read from slow files (app/scene/read_cache.py). An entry is the SHA-256 digest of its payload, then the payload. It is
+written whole or not at all, and read back only where it is a regular file whose digest matches,
+so that a damaged entry is a miss: never a hang (an entry that is a FIFO), a crash (a truncated
+binary handed to a driver can crash it: PoCL segfaulted on the first half of a valid one) or a
+wrong tree. The caches are an optimisation: a disk that refuses an entry still renders."""
+
+import hashlib
+import os
+import stat
+from pathlib import Path
+
+DIGEST_BYTES = 32
+
+
+def read_entry(path: Path):
+    """The payload of the entry at path, as a writable memoryview, or None where there is none,
+    it is not a regular file or its digest does not match."""
+    try:
+        info = os.stat(path)
+        if not stat.S_ISREG(info.st_mode):      # a FIFO would block the open for ever
+            return None
+        data = bytearray(info.st_size)
+        with open(path, "rb") as f:
+            if f.readinto(data) != len(data):
+                return None
+    except OSError:
+        return None
+    payload = memoryview(data)[DIGEST_BYTES:]
+    if len(data) < DIGEST_BYTES or hashlib.sha256(payload).digest() != data[:DIGEST_BYTES]:
+        return None
+    return payload
+
+
+def write_entry(path: Path, *chunks) -> bool:
+    """Writes an entry whose payload is the chunks (bytes-like) end to end: to a temporary file
+    renamed over path, so that the entry is whole or absent. False where the disk refuses it (a
+    read-only or full disk), leaving no partial file."""
+    digest = hashlib.sha256()
+    for chunk in chunks:
+        digest.update(chunk)
+    tmp = path.with_suffix(f".tmp{os.getpid()}")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with open(tmp, "wb") as f:
+            f.write(digest.digest())
+            for chunk in chunks:
+                f.write(chunk)
+        os.replace(tmp, path)
+        return True
+    except OSError:
+        try:
+            tmp.unlink()
+        except OSError:
+            pass
+        return False
+
+
+def prune(where: Path, pattern: str, limit: int):
+    """Removes the least recently used entries of `where` that match `pattern` until the rest
+    take at most `limit` bytes (a read entry's time is touched: pathtrace.compiler.bvh_cache)."""
+    try:
+        entries = [(e.stat().st_mtime, e.stat().st_size, e) for e in where.glob(pattern)]
+    except OSError:
+        return
+    total = sum(size for _, size, _ in entries)
+    for _, size, entry in sorted(entries, key=lambda e: e[0]):
+        if total <= limit:
+            break
+        try:
+            entry.unlink()
+            total -= size
+        except OSError:
+            pass

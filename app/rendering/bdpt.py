@@ -1,0 +1,42 @@
+"""What bidirectional path tracing (kernels/bdpt.cl) takes of a scene and its settings: the
+depth its program is built for, the light sampler it needs, and the one line that says what it
+cannot render yet."""
+
+from pathtrace.errors import UserError, warn
+
+MAX_DEPTH = 10
+"""The longest path BDPT draws, in the path tracer's depth (vertices after the camera): its
+subpaths' vertices live in each work-item's private arrays, sized at compile time. pbrt-v4's
+BDPT defaults to 5 bounces (depth 6)."""
+
+_warned = set()
+
+
+def depth(max_depth: int) -> int:
+    """The depth a BDPT program is built for: max_depth, or MAX_DEPTH where that asks for more
+    (0: no limit), said once per value. BDPT has no Russian roulette (pbrt-v4's has none):
+    paths end at this depth."""
+    if 1 <= max_depth <= MAX_DEPTH:
+        return max_depth
+    if max_depth not in _warned:
+        _warned.add(max_depth)
+        asked = "no limit" if max_depth == 0 else f"max_depth {max_depth}"
+        warn(f"bdpt: paths end at depth {MAX_DEPTH} (the scene asks for {asked})")
+    return MAX_DEPTH
+
+
+def check(name: str, features, integrator: str, lights):
+    """Raises a UserError, one line, for what `integrator` (bdpt or ptracer) cannot render yet
+    in a scene (its name) whose program needs `features` (app/device/features.py) and whose light table
+    is `lights`: participating media and null surfaces (no volumetric BDPT), the orthographic
+    camera; for light tracing alone, light from the environment or a
+    directional light, which start no light subpath (app/lights/registry.py: EMITTERS)."""
+    if features.media:
+        raise UserError(f"{name}: integrator {integrator}: participating media are not supported yet "
+                        "(render it with --integrator path)")
+    if features.camera not in ("perspective", "thinlens"):
+        raise UserError(f"{name}: integrator {integrator}: only perspective cameras (a pinhole or a thin lens) are "
+                        f"supported yet, not {features.camera} (render it with --integrator path)")
+    if integrator == "ptracer" and (lights.env_pick > 0 or "directional" in lights.types):
+        raise UserError(f"{name}: integrator ptracer: light from the environment or a directional light is not "
+                        "traced from the light (render it with --integrator bdpt or path)")

@@ -1,0 +1,545 @@
+"""The progressive renderer: device buffers for a scene and an accumulation buffer, to which
+each add_samples() call adds samples per pixel. The command line, the benchmarks and the viewer
+all drive this API; it imports nothing from the window or the GUI."""
+
+from dataclasses import replace
+
+import numpy as np
+import pyopencl as cl
+
+from pathtrace.rendering import bdpt
+from pathtrace.rendering.queue_plans import QueuePlans
+from pathtrace.camera import CAMERA_KERNELS, Camera, kernel_name
+from pathtrace.compiler.compiled import SCENE_BUFFERS, CompiledScene, compile_scene
+from pathtrace.device.opencl import Backend, check_fits
+from pathtrace.errors import UserError, format_bytes
+from pathtrace.scene.environment import Environment
+from pathtrace.compiler.memory import available_host_memory
+from pathtrace.scene import Scene
+from pathtrace.filters import FILTERS
+from pathtrace.scene.description import RUSSIAN_ROULETTE
+from pathtrace.device.types import PATH_RECORD, RENDER_PARAMS
+
+RR_DEPTH = 5           # where Russian roulette on throughput starts (Mitsuba 3's default)
+READ_BACK_BYTES = 64   # host memory per pixel to read an image back and write it: the float4
+                       # sums, the float32 mean and the encoded copies
+AOV_PASSES = 16        # the denoiser's albedo and normal are accumulated over the first passes
+                       # only: by then they hardly change (kernels/aovs.cl takes 4 BSDF samples
+                       # a pass), and the path tracer runs at full speed after
+AOV_BUFFERS = ("albedo_sum", "normal_sum")   # kernels/aovs.cl: albedo rgb and the samples
+                                             # kept in w; normal xyz and the depth in w
+
+
+SUM_BUFFERS = ("sum", "sum_sq", "sum_c", "sum_sq_c")   # kernels/integrator.cl: the sums and
+                                                       # what their rounding lost (Kahan)
+MAX_LAUNCH_SAMPLES = 64   # samples a launch adds to a pixel, summed plainly in float32 before the
+                          # compensated running sum takes them: within 64 ulps of their sum
+QUEUE_PASSES = 4          # passes of continue_paths that trace one vertex each, queueing the paths
+                          # that go on again; a last pass traces them to their ends
+QUEUE_POOL = 1 << 23      # pixel samples a launch with the queue renders (a few per pixel): enough
+                          # paths going on to fill a GPU when continue_paths traces them, and the
+                          # passes' cost per launch spread (docs/notes/performance-2026-11.md, 2026-11-26)
+QUEUE_GROUP = 64          # work-items per group of continue_paths (32 and 128 were no faster:
+                          # docs/notes/performance-2026-11.md, 2026-11-26)
+MAX_QUEUED = 1 << 23      # entries of each of the two queues (PATH_RECORD, 128 bytes; at most a
+                          # sixteenth of the device's memory); paths that find one full go on where
+                          # they are
+
+
+def image_buffers(aovs: bool) -> tuple:
+    """The per-pixel float4 buffers: the sums, and with `aovs` the denoiser's albedo and normal."""
+    return SUM_BUFFERS + (AOV_BUFFERS if aovs else ())
+
+
+def per_pixel_mean(sums: np.ndarray) -> np.ndarray:
+    """rgb / w of float4 sums whose w counts each pixel's samples (0 where there are none):
+    the mean of a pass under way, whose rows differ by a sample."""
+    w = sums[..., 3:4]
+    return np.divide(sums[..., :3], w, out=np.zeros(sums.shape[:-1] + (3,), np.float32), where=w > 0)
+
+
+def aov_means(albedo_sum: np.ndarray, normal_sum: np.ndarray) -> dict:
+    """The auxiliary images from their sums (kernels/aovs.cl), each (H, W, 3) float32 but the
+    depth (H, W): "albedo" (clamped to [0, 1], the denoiser's range), "normal" and "depth"."""
+    w = albedo_sum[..., 3:4]
+    sums = np.concatenate([albedo_sum[..., :3], normal_sum], axis=-1)
+    means = np.divide(sums, w, out=np.zeros(sums.shape, np.float32), where=w > 0)
+    return {"albedo": np.clip(means[..., :3], 0.0, 1.0), "normal": means[..., 3:6], "depth": means[..., 6]}
+
+
+def variance_of(sum: np.ndarray, sum_sq: np.ndarray, samples: int) -> np.ndarray:
+    """The per-sample variance of each pixel and channel from the running sums of `samples`
+    samples (of one sample, not of the mean)."""
+    n = max(samples, 1)
+    m = sum[..., :3].astype(np.float64) / n
+    return np.maximum(sum_sq[..., :3] / n - m * m, 0.0).astype(np.float32)
+
+
+class Renderer(QueuePlans):
+    def __init__(self, backend: Backend, scene, width: int = None, height: int = None, progress=None):
+        """scene: a CompiledScene, or a Scene to compile (on this device, calling progress(fraction)
+        as its BVH build goes)."""
+        self.backend = backend
+        self.program = None       # the kernels launches run (_select_program)
+        self.uses_generic_program = False
+        self._awaited = None      # the features of the scene's own program while it builds
+        self._build_due = False   # whether a pass is drawn, after which that build may start
+        self._buffers = {}
+        self.width = self.height = 0
+        self._queued_for = None   # whether the queue's buffers are sized for launches that use it
+        self.auto_plan = None     # with path_queue "auto": the plan its trials chose (choose_queue_plan)
+        self.plan_seconds = {}    # and the seconds of each plan's fastest trial
+        self.plan_cached = False  # whether it is the verdict of earlier trials (_plan_verdict_path)
+        self.samples = 0          # samples per pixel accumulated so far (whole passes)
+        self.generic_samples = 0  # of which the generic program drew (pathtrace.device.programs)
+        self.aovs = False         # whether the denoiser's albedo and normal are accumulated too
+        self.resets = 0           # how many times the image restarted (pathtrace.rendering.launches.Progressive)
+        self.traversal_stats = 0  # Features.traversal_stats: set through count_traversal()
+        self.set_scene(scene, progress)
+        self.resize(width or self.scene.settings.width, height or self.scene.settings.height)
+
+    # --- what is rendered ------------------------------------------------------------------
+    def set_scene(self, scene, progress=None):
+        """Uploads a compiled scene (compiling a Scene first, on this device); takes its camera and
+        settings; resets."""
+        self.compiled = scene if isinstance(scene, CompiledScene) \
+            else compile_scene(scene, self.backend.queue, progress)
+        self.scene: Scene = self.compiled.scene
+        self.camera = self.scene.camera.copy()
+        self.settings = self.scene.settings
+        self.auto_plan, self.plan_seconds, self.plan_cached = None, {}, False  # "auto" chooses again
+        if self.compiled.light_sampler != self._light_sampler():
+            self.compiled.light_sampler = self._light_sampler()
+            self.compiled.update_materials()
+        self._select_program()
+        self._size_queue()
+        for name, array in self.compiled.geometry_arrays().items():
+            self._upload(name, array)
+        self._upload_environment()
+        self._upload_materials()
+        self.reset()
+
+    @property
+    def bvh_seconds(self) -> float:
+        return self.compiled.bvh_seconds
+
+    @property
+    def environment(self) -> Environment:
+        return self.scene.environment
+
+    @property
+    def lights(self):
+        return self.compiled.lights
+
+    def upload_materials(self):
+        """Uploads the scene's material table and the light table after an edit; resets."""
+        self.compiled.update_materials()
+        self._select_program()
+        self._upload_materials()
+        self.reset()
+
+    def _select_program(self):
+        """The kernels for the scene: its own, specialised to its shapes, materials and settings
+        (pathtrace.device.features.Features), or the backend's generic program, by the backend's mode
+        (pathtrace.device.programs). With "auto", the scene's own program, tuned, is built in the
+        background, and add_samples switches to it once it is there, the average going on;
+        until then the generic program renders, or where that is not built (NVIDIA's driver
+        takes 46 s over it: `pathtrace devices --check` builds it) the scene's own program
+        untuned, one build. The background build starts once the first pass is queued, so that
+        it takes no core from the first image, and a render of one pass builds nothing more
+        (switch_when_built)."""
+        features = replace(self.compiled.features(self.settings, self.camera),
+                           traversal_stats=self.traversal_stats, path_queue=self.queue_plan()[0])
+        mode = self.backend.mode
+        self._awaited, self._build_due = None, False
+        if self.settings.integrator != "path":
+            # the generic program has no bidirectional code (a path tracer's scene compiles none)
+            bdpt.check(self.scene.name, features, self.settings.integrator, self.compiled.lights)
+            features = replace(features, bdpt=bdpt.depth(self.settings.max_depth),
+                               light_tracing=self.settings.integrator == "ptracer")
+            self._use_program(self.backend.program_for(features), generic=False)
+            return
+        if mode == "specialised" or self.traversal_stats:      # the generic program counts rays
+            self._use_program(self.backend.program_for(features), generic=False)
+        elif mode == "generic":
+            self._use_program(self.backend.program, generic=True)
+        else:
+            own = self.backend.programs.built(features)
+            if own is not None:
+                self._use_program(own, generic=False)
+                return
+            generic = self.backend.built_generic()
+            self._use_program(generic if generic is not None else self.backend.program_for(features, tuned=False),
+                              generic=generic is not None)
+            self._awaited = features
+
+    def _use_program(self, program: cl.Program, generic: bool):
+        if program is self.program:
+            return
+        self.program = program
+        self.uses_generic_program = generic     # (pathtrace.device.programs)
+        self.kernels = {False: cl.Kernel(program, "render"), True: cl.Kernel(program, "render_nee")}
+        # the queue's kernels are in a scene's program built with a queue depth, never in the
+        # generic program, which renders without the queue until the scene's own is built
+        queue = self.queue_plan()[0] and not generic
+        self.continue_kernels = {False: cl.Kernel(program, "continue_paths"),
+                                 True: cl.Kernel(program, "continue_paths_nee")} if queue else None
+        self.add_queued = cl.Kernel(program, "add_queued_paths") if queue else None
+        self.aov_kernel = cl.Kernel(program, "render_aovs")
+        bidirectional = self.settings.integrator != "path"
+        self.bdpt_kernels = (cl.Kernel(program, "render_bdpt"), cl.Kernel(program, "add_splats")) if bidirectional else None
+
+    def switch_when_built(self, wait: bool = False) -> bool:
+        """Switches to the scene's own tuned program if it is built (with `wait`, once it is);
+        the average goes on. Its build starts at the first call after a whole pass is queued.
+        Whether the scene's own program renders now."""
+        if self._awaited is not None and (wait or self._build_due):
+            program = self.backend.program_for(self._awaited) if wait else self.backend.ready_program(self._awaited)
+            if program is not None:
+                self._awaited = None
+                self._use_program(program, generic=False)
+            elif self.backend.programs.failed(self._awaited):    # said once, by the backend
+                self._awaited = None
+        return not self.uses_generic_program
+
+    def describe_programs(self) -> str:
+        """Which program drew the samples since the last reset, in words, where the generic
+        program drew any (else "")."""
+        if not self.generic_samples:
+            return ""
+        if self.generic_samples == self.samples:
+            return (f"{self.samples} spp from the generic kernels"
+                    + (" (the scene's own were still building)"
+                       if self._awaited is not None and self.backend.programs.under_way(self._awaited) else ""))
+        return f"the first {self.generic_samples} of {self.samples} spp from the generic kernels, the rest from the scene's own"
+
+    @property
+    def building_program(self) -> bool:
+        """Whether the scene's own program is being built, to switch to (switch_when_built)."""
+        return self._awaited is not None
+
+    def set_environment(self, environment: Environment):
+        self.scene.environment = environment
+        self.compiled.update_materials()
+        self._upload_environment()
+        self._upload_materials()
+        self.reset()
+
+    def _upload_environment(self):
+        self._upload("env", self.environment.rgba())
+        marginal, conditional = self.environment.sampling_cdfs()
+        self._upload("env_marginal", marginal)
+        self._upload("env_conditional", conditional)
+
+    def _upload_materials(self):
+        for name, array in self.compiled.material_arrays().items():
+            self._upload(name, array)
+
+    def _nearest_hit(self, origin, direction) -> tuple:
+        """(primitive, distance) of the nearest hit along a ray; primitive -1 where there is none."""
+        out = cl.Buffer(self.backend.context, cl.mem_flags.WRITE_ONLY, 8)
+        kernel = cl.Kernel(self.program, "pick")
+        kernel(self.backend.queue, (1,), None, *self.scene_args(),
+               np.int32(self.compiled.num_spheres), np.int32(self.compiled.layout), np.append(np.float32(origin), 0).astype(np.float32),
+               np.append(np.float32(direction), 0).astype(np.float32), out)
+        hit = np.zeros(2, np.int32)
+        cl.enqueue_copy(self.backend.queue, hit, out)
+        return int(hit[0]), float(hit[1:].view(np.float32)[0])
+
+    def pick(self, origin, direction):
+        """The shape seen along a ray (a ShapeRef), or None."""
+        prim, _ = self._nearest_hit(origin, direction)
+        return self.compiled.shape(prim) if prim >= 0 else None
+
+    def hit_distance(self, origin, direction):
+        """The distance along a ray (of unit direction) to the first surface, or None."""
+        prim, t = self._nearest_hit(origin, direction)
+        return t if prim >= 0 else None
+
+    def scene_args(self) -> tuple:
+        """The scene's device buffers in the order of the kernels' SCENE_KERNEL_ARGS
+        (kernels/scene.cl), for kernels beside the renderer's (app/bench/trace_split.py)."""
+        return tuple(self._buffers[name] for name in SCENE_BUFFERS)
+
+    def set_camera(self, camera: Camera):
+        self.camera = camera.copy()
+        self._select_program()
+        self.reset()
+
+    def set_settings(self, **changes):
+        if "path_queue" in changes:
+            self.auto_plan, self.plan_seconds, self.plan_cached = None, {}, False  # "auto" chooses again
+        self.settings = replace(self.settings, **changes)
+        if self._light_sampler() != self.compiled.light_sampler:
+            self.compiled.light_sampler = self._light_sampler()
+            self.upload_materials()
+        self._select_program()
+        self._size_queue()
+        self.reset()
+
+    def _light_sampler(self) -> str:
+        """How the compiled scene chooses lights: as the settings say, or for BDPT by power
+        alone, which light subpaths start from (pbrt-v4's BDPT uses its power sampler too)."""
+        return self.settings.light_sampler if self.settings.integrator == "path" else "power"
+
+    def resize(self, width: int, height: int):
+        if (width, height) == (self.width, self.height):
+            return
+        self._allocate_images(width, height, self.aovs)
+
+    def set_aovs(self, on: bool):
+        """Starts (or stops) accumulating the denoiser's albedo and normal beside the radiance;
+        resets."""
+        if on != self.aovs:
+            self._allocate_images(self.width, self.height, on)
+
+    def _allocate_images(self, width: int, height: int, aovs: bool):
+        nbytes = width * height * 16
+        images = image_buffers(aovs)
+        entries = PATH_RECORD.itemsize * max(self.queue_capacity(width, height), 1)   # (a buffer has bytes)
+        results = width * height * self.queue_samples(width, height) if self.queue_plan()[1] else 1
+        queue = {"queue": entries, "queue_next": entries, "counters": 4 * (QUEUE_PASSES + 2), "results": 16 * results}
+        others = {name: b.size for name, b in self._buffers.items()
+                  if name not in image_buffers(True) and name not in queue}
+        what = f"the {width}x{height} image of {self.scene.name}"
+        check_fits(self.backend.device.device, {**others, **{name: nbytes for name in images}, **queue}, what)
+        host = READ_BACK_BYTES * width * height
+        if self.backend.device.device.host_unified_memory:    # a CPU device's buffers are the host's
+            host += nbytes * len(images)
+        available = available_host_memory()
+        if available is not None and host > available:
+            raise UserError(f"{what} needs about {format_bytes(host)} of memory to render, read back "
+                            f"and write; {format_bytes(available)} is available")
+        self.width, self.height, self.aovs = width, height, aovs
+        for name in (*AOV_BUFFERS, "splats"):
+            self._buffers.pop(name, None)
+        for name in images:
+            self._buffers[name] = cl.Buffer(self.backend.context, cl.mem_flags.READ_WRITE, nbytes)
+        for name, size in queue.items():
+            self._buffers[name] = cl.Buffer(self.backend.context, cl.mem_flags.READ_WRITE, size)
+        self._queued_for = self.queue_plan()[1]
+        self.reset()
+
+    def queue_samples(self, width: int, height: int) -> int:
+        """Samples per pixel of a launch with the continuation queue."""
+        return max(1, min(MAX_LAUNCH_SAMPLES, QUEUE_POOL // (width * height)))
+
+    def queue_capacity(self, width: int, height: int) -> int:
+        """Entries of the continuation queue for a width x height image (0 where launches do
+        not use it)."""
+        if not self.queue_plan()[1]:
+            return 0
+        memory = self.backend.device.device.global_mem_size // 16 // PATH_RECORD.itemsize
+        return min(width * height * self.queue_samples(width, height), MAX_QUEUED, memory)
+
+    def reset(self):
+        """Restarts the progressive average."""
+        if "sum" in self._buffers:
+            for name in image_buffers(self.aovs):
+                cl.enqueue_fill_buffer(self.backend.queue, self._buffers[name], np.float32(0), 0,
+                                       self.width * self.height * 16)
+        self.samples = self.generic_samples = 0
+        self.resets += 1
+
+    # --- rendering -------------------------------------------------------------------------
+    def params(self, sample_count: int) -> np.ndarray:
+        p = np.zeros((), RENDER_PARAMS)
+        forward, right, up = self.camera.basis(self.width / self.height)
+        p["eye"][:3] = self.camera.eye
+        p["forward"][:3], p["right"][:3], p["up"][:3] = forward, right, up
+        p["lens"][:2] = self.camera.aperture, self.camera.focus_distance
+        p["filter"] = self.settings.filter.params()
+        p["env_scale"][:3] = self.environment.intensity
+        p["width"], p["height"] = self.width, self.height
+        p["sample_start"], p["sample_count"] = self.samples, sample_count
+        p["seed"] = self.settings.seed
+        p["max_depth"] = self.settings.max_depth
+        h, w, _ = self.environment.image.shape
+        p["env_width"], p["env_height"] = w, h
+        p["env_rotation"] = self.environment.rotation / 360.0
+        p["num_lights"] = self.lights.count
+        p["env_pick"] = self.lights.env_pick
+        p["num_spheres"] = self.compiled.num_spheres
+        p["rr_depth"] = RR_DEPTH
+        p["camera_medium"] = self.scene.camera_medium
+        p["camera_type"] = CAMERA_KERNELS.index(kernel_name(self.camera))
+        p["filter_type"] = FILTERS.index(self.settings.filter.name)
+        p["rr_rule"] = RUSSIAN_ROULETTE.index(self.settings.russian_roulette)
+        p["layout"] = self.compiled.layout
+        return p
+
+    def add_samples(self, count: int = 1, start: int = None, rows: tuple = None) -> list:
+        """Queues the launches that add `count` samples to every pixel (one per
+        MAX_LAUNCH_SAMPLES, and one for the albedo and normal, with set_aovs); returns their
+        events. The
+        samples are those of index start, start + 1, ... (default: the next ones of this
+        renderer), so that several renderers can share one render's sample indices.
+
+        rows = (first, end) adds them to those rows only: a band of a pass, so that no launch
+        holds a window up (pathtrace.rendering.launches.Progressive). Bands go top to bottom; `samples` counts
+        whole passes, so it grows with the band that ends at the last row. A pass split into
+        bands adds the very samples one launch would."""
+        self.switch_when_built()
+        b = self._buffers
+        first, end = rows if rows is not None else (0, self.height)
+        start = self.samples if start is None else start
+        local = (8, 8)
+        global_size = tuple(-(-n // l) * l for n, l in zip((self.width, end - first), local))
+        params = self.params(count)
+        params["row_start"], params["row_end"], params["sample_start"] = first, end, start
+        add = self._add_bidirectional if self.bdpt_kernels is not None else self._add_paths
+        events = add(params, count, start, global_size, local)
+        if self.aovs and self.samples < AOV_PASSES:
+            self.aov_kernel.set_args(*self.scene_args(), params, b["albedo_sum"], b["normal_sum"])
+            events.append(cl.enqueue_nd_range_kernel(self.backend.queue, self.aov_kernel, global_size, local))
+        if end >= self.height:
+            self.samples += count
+            self._build_due = True
+            self.generic_samples += count if self.uses_generic_program else 0
+        return events
+
+    def _add_paths(self, params, count: int, start: int, global_size: tuple, local: tuple) -> list:
+        """Queues the path tracer's launches that add `count` samples to the rows of `params`
+        (with the continuation queue where the plan uses it); returns their events."""
+        b = self._buffers
+        kernel = self.kernels[self.settings.nee]
+        events = []
+        sums = tuple(b[name] for name in SUM_BUFFERS)
+        capacity = np.int32(self.queue_capacity(self.width, self.height))
+        # with the continuation queue, a few samples per launch (queue_samples), for which the
+        # launch's pixels have room in `results` (kernels/integrator.cl: render_pixel)
+        queued = self.queue_plan()[1] and self.continue_kernels is not None
+        step = self.queue_samples(self.width, self.height) if queued else MAX_LAUNCH_SAMPLES
+        for offset in range(0, count, step):
+            launch = params.copy()
+            launch["sample_start"], launch["sample_count"] = start + offset, min(step, count - offset)
+            if queued:
+                events.append(cl.enqueue_fill_buffer(self.backend.queue, b["counters"], np.int32(0), 0,
+                                                     b["counters"].size))
+            kernel.set_args(*self.scene_args(), launch, *sums, b["queue"], b["counters"], capacity, b["results"])
+            events.append(cl.enqueue_nd_range_kernel(self.backend.queue, kernel, global_size, local))
+            if queued:
+                events += self._continue_paths(launch, capacity, global_size)
+        return events
+
+    def _add_bidirectional(self, params, count: int, start: int, global_size: tuple, local: tuple) -> list:
+        """Queues the launches of render_bdpt (kernels/bdpt.cl) that add `count` samples to the
+        rows of `params`, each followed by add_splats over the whole image, which adds the light
+        tracing's splats (they land anywhere in the image) to the sums; returns their events."""
+        b = self._buffers
+        if "splats" not in b:
+            b["splats"] = cl.Buffer(self.backend.context, cl.mem_flags.READ_WRITE, self.width * self.height * 16)
+            cl.enqueue_fill_buffer(self.backend.queue, b["splats"], np.float32(0), 0, self.width * self.height * 16)
+        render, add = self.bdpt_kernels
+        whole = tuple(-(-n // l) * l for n, l in zip((self.width, self.height), local))
+        events = []
+        for offset in range(0, count, MAX_LAUNCH_SAMPLES):
+            launch = params.copy()
+            launch["sample_start"], launch["sample_count"] = start + offset, min(MAX_LAUNCH_SAMPLES, count - offset)
+            render.set_args(*self.scene_args(), launch, *(b[name] for name in SUM_BUFFERS), b["splats"])
+            events.append(cl.enqueue_nd_range_kernel(self.backend.queue, render, global_size, local))
+            add.set_args(launch, b["sum"], b["sum_c"], b["splats"])
+            events.append(cl.enqueue_nd_range_kernel(self.backend.queue, add, whole, local))
+        return events
+
+    def _continue_paths(self, launch, capacity, global_size) -> list:
+        """Queues the passes of continue_paths over the paths that the render launch `launch`
+        queued, each taking them from one of the two queues and queueing those that go on in the
+        other, then add_queued_paths; returns their events."""
+        b, events = self._buffers, []
+        queues = (b["queue"], b["queue_next"])
+        follow = self.continue_kernels[self.settings.nee]
+        rows = int(launch["row_end"] - launch["row_start"])
+        paths = min(int(capacity), self.width * rows * int(launch["sample_count"]))   # at most one a sample
+        size = (-(-paths // QUEUE_GROUP) * QUEUE_GROUP,)
+        for k in range(QUEUE_PASSES + 1):
+            steps = 1 if k < QUEUE_PASSES else 0
+            follow.set_args(*self.scene_args(), launch, queues[k % 2], queues[(k + 1) % 2], b["counters"],
+                            np.int32(k), capacity, np.int32(steps), b["results"])
+            events.append(cl.enqueue_nd_range_kernel(self.backend.queue, follow, size, (QUEUE_GROUP,)))
+        self.add_queued.set_args(launch, *(b[name] for name in SUM_BUFFERS), b["results"])
+        events.append(cl.enqueue_nd_range_kernel(self.backend.queue, self.add_queued, global_size, (8, 8)))
+        return events
+
+    def finish(self):
+        self.backend.queue.finish()
+
+    def buffer(self, name: str) -> cl.Buffer:
+        """One of the device buffers of image_buffers, for kernels beside the renderer's."""
+        return self._buffers[name]
+
+    def _read(self, name) -> np.ndarray:
+        out = np.empty((self.height, self.width, 4), np.float32)
+        cl.enqueue_copy(self.backend.queue, out, self._buffers[name])
+        return out
+
+    def _read_compensated(self, name) -> np.ndarray:
+        """A compensated sum (kernels/integrator.cl add_compensated) as float64: sum - c."""
+        return self._read(name).astype(np.float64) - self._read(f"{name}_c")
+
+    def read_sum(self) -> np.ndarray:
+        """The radiance sums, (H, W, 4) float32: rgb, and the samples kept in a (within an ulp
+        of the compensated sums: exact counts come from dropped_samples)."""
+        return self._read("sum")
+
+    def mean(self) -> np.ndarray:
+        """The image so far: mean radiance per pixel, (H, W, 3) float32."""
+        return self._read("sum")[..., :3] / max(self.samples, 1)
+
+    def read_aovs(self) -> dict:
+        """The auxiliary images so far (set_aovs): "albedo", the mean albedo clamped to [0, 1],
+        and "normal", the mean shading normal (not renormalised; 0 where paths escaped), each
+        (H, W, 3) float32; "depth", the mean distance from the camera to the first surface
+        (0 where the camera ray escaped), (H, W) float32."""
+        return aov_means(self.read_albedo_sum(), self.read_normal_sum())
+
+    def read_albedo_sum(self) -> np.ndarray:
+        """The raw albedo sums (set_aovs), (H, W, 4) float32: rgb, and the samples in w."""
+        return self._read("albedo_sum")
+
+    def read_normal_sum(self) -> np.ndarray:
+        """The raw normal sums (set_aovs), (H, W, 4) float32: xyz, and the depths in w."""
+        return self._read("normal_sum")
+
+    def read_async(self, names: tuple) -> tuple:
+        """Queues copies of the named buffers (of image_buffers) to new host arrays without
+        waiting; returns (the last copy's event, the arrays)."""
+        arrays = [np.empty((self.height, self.width, 4), np.float32) for _ in names]
+        events = [cl.enqueue_copy(self.backend.queue, a, self._buffers[n], is_blocking=False)
+                  for a, n in zip(arrays, names)]
+        self.backend.queue.flush()
+        return events[-1], arrays
+
+    def dropped_samples(self) -> int:
+        """Samples left out since the last reset because they were NaN or infinite
+        (kernels/integrator.cl counts the kept ones), all pixels together."""
+        return self.samples * self.width * self.height - int(round(self._read_compensated("sum")[..., 3].sum()))
+
+    def count_traversal(self, kind: int):
+        """From now on, rays_traced() counts nodes visited (kind 1) or primitives tested (2) in
+        the BVH instead of rays (0: rays again); resets."""
+        self.traversal_stats = kind
+        self._select_program()
+        self.reset()
+
+    def rays_traced(self) -> int:
+        """Rays traced since the last reset (camera rays and bounces), all pixels together."""
+        return int(round(self._read_compensated("sum_sq")[..., 3].sum()))
+
+    def read_sum_sq(self) -> np.ndarray:
+        """The sums of squares, (H, W, 4) float32: rgb, and rays traced in a."""
+        return self._read("sum_sq")
+
+    def variance(self) -> np.ndarray:
+        """The per-sample variance of each pixel and channel (of one sample, not of the mean). With
+        bdpt or ptracer, of the camera subpaths' part alone: light tracing's splats land in other
+        pixels' sums, not one sample's (kernels/bdpt.cl: add_splats)."""
+        return variance_of(self.read_sum(), self.read_sum_sq(), self.samples)
+
+    def _upload(self, name, array):
+        array = np.ascontiguousarray(array)
+        if array.size == 0:       # OpenCL has no empty buffers; the kernels never read this one
+            array = np.zeros(1, array.dtype)
+        self._buffers[name] = cl.Buffer(self.backend.context,
+                                        cl.mem_flags.READ_ONLY | cl.mem_flags.COPY_HOST_PTR,
+                                        hostbuf=array)

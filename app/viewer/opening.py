@@ -1,0 +1,66 @@
+"""The viewer's scenes: opened (read, compiled with the BVH build's progress shown, and given to
+the renderer) in a worker thread while the window stays live. A part of the Viewer
+(app/viewer/window.py), which is one."""
+
+from pathtrace.compiler.compiled import compile_scene
+from pathtrace.errors import UserError
+from pathtrace.rendering.renderer import Renderer
+from pathtrace.scene import load_scene
+from pathtrace.viewer.controls import speed_for
+
+
+class SceneOpening:
+    """The Viewer's opening of scenes (_in_background draws frames while they open)."""
+
+    def _start(self, backend, scene) -> Renderer:
+        """In the worker thread: the device opened and the scene read, where they are functions
+        that do so, and the scene compiled for the device."""
+        if callable(scene):
+            self._status = ("reading the scene", None)
+            scene = scene()
+        if callable(backend):
+            self._status = ("opening the device", None)
+            backend = backend()
+        self.backend = backend
+        return self._open(scene)
+
+    def _open(self, scene, renderer=None) -> Renderer:
+        """In the worker thread: the scene compiled (its BVH build's progress shown) and given to
+        `renderer` (or a new one), the kernels compiled for it (said while they are)."""
+        compiled = compile_scene(scene, self.backend.queue, self._build_progress(scene.name))
+        self._status = (f"preparing the kernels for {scene.name} on {self.backend.device.name}", None)
+        if renderer is None:
+            return Renderer(self.backend, compiled)
+        renderer.set_scene(compiled)
+        return renderer
+
+    def load_scene(self, name: str):
+        """Opens a scene, at its own size; whatever goes wrong is shown in the panel and
+        printed, and the window keeps the scene it had. Call it between turns of the loop (the
+        panel asks through requested_scene): it draws frames of its own as it goes."""
+        try:
+            scene = self._in_background(lambda: self._open(load_scene(name), self.renderer),
+                                        f"opening {name}").scene
+            self.renderer.resize(scene.settings.width, scene.settings.height)
+        except Exception as e:   # a viewer must outlive any bad file, ours or a library's error
+            self.set_message(str(e) if isinstance(e, UserError) else
+                             f"cannot open {name}: {type(e).__name__}: {e}", error=True)
+            return
+        self.size = (scene.settings.width, scene.settings.height)
+        self.selected = None
+        self._scene_opened(self.renderer.compiled)
+        self.set_message(f"loaded {scene.name}")
+
+    def _scene_opened(self, compiled):
+        """Movement at the scene's scale (the wheel changes it from there), and the panel's file
+        field naming the scene's file, if it has one."""
+        self.controls.speed = speed_for(compiled.scene.camera, compiled.radius)
+        if compiled.scene.source:
+            self.scene_file = compiled.scene.source
+
+    def _build_progress(self, name: str):
+        """A progress callback for a scene's BVH build, from the worker thread: the window, live
+        in its own thread, shows how far it is."""
+        def show(fraction):
+            self._status = (f"building the BVH of {name}", fraction)
+        return show

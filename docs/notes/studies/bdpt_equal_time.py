@@ -1,0 +1,51 @@
+"""Equal-time path tracing against BDPT at half the references' resolution, against Tungsten's
+renders (docs/notes/performance-2026-11.md, 2026-11-29): python docs/notes/studies/bdpt_equal_time.py
+SECONDS OUT_FOLDER SCENE... with each SCENE's folder unpacked from ../shared/scenes into
+$BITTERLI (SCENE/pbrt/scene-v4.pbrt and TungstenRender.exr); prints samples, time per sample,
+means and the mean relative error of 8x8-pixel blocks, and writes reference | path | bdpt."""
+import os
+import sys
+import time
+
+import numpy as np
+import OpenEXR
+from PIL import Image
+
+from pathtrace.device.opencl import choose_device
+from pathtrace.rendering.renderer import Renderer
+from pathtrace.scene import load_scene
+
+be = choose_device("gpu")
+budget = float(sys.argv[1])
+out = sys.argv[2]
+for name in sys.argv[3:]:
+    folder = f"{os.environ.get('BITTERLI', '.')}/{name}/pbrt"
+    sc = load_scene(f"{folder}/scene-v4.pbrt")
+    with OpenEXR.File(f"{folder}/TungstenRender.exr") as f:
+        ch = f.channels()
+        ref = ch["RGB"].pixels if "RGB" in ch else np.stack([ch[c].pixels for c in "RGB"], -1)
+    # Tungsten's water-caustic holds NaN and negative pixels: taken as black
+    ref = np.clip(np.nan_to_num(np.asarray(ref, np.float64), nan=0.0, posinf=0.0), 0, None)
+    H, W = ref.shape[0] // 2, ref.shape[1] // 2
+    ref = ref.reshape(H, 2, W, 2, 3).mean((1, 3))
+    imgs = [ref]
+    print(name, W, H, sc.settings.max_depth, flush=True)
+    for integ in ("path", "bdpt"):
+        t0 = time.perf_counter()
+        r = Renderer(be, sc.with_settings(integrator=integ, seed=1), W, H)
+        r.add_samples(1); r.finish(); r.reset()
+        built = time.perf_counter() - t0
+        t = time.perf_counter(); spp = 1
+        while time.perf_counter() - t < budget:
+            r.add_samples(spp); r.finish(); spp = min(spp * 2, 16)
+        sec = time.perf_counter() - t
+        m = r.mean()
+        b = lambda im: im.reshape(H // 8, 8, W // 8, 8, 3).mean((1, 3)).mean(-1)
+        rel = np.abs(b(m) - b(ref)) / np.maximum(b(ref), 1e-3)
+        print(f"  {integ}: {r.samples} spp in {sec:.1f} s ({sec / r.samples * 1e3:.2f} ms/spp, "
+              f"{sec / r.samples / (W * H) * 1e9:.1f} ns/sample; first pass after {built:.1f} s); "
+              f"mean {m.mean():.4f} ref {ref.mean():.4f}; 8x8-block rel err {rel.mean():.4f}", flush=True)
+        imgs.append(m)
+    im = np.concatenate(imgs, 1)
+    im = np.clip(np.where(im <= 0.0031308, 12.92 * im, 1.055 * np.power(np.maximum(im, 0), 1 / 2.4) - 0.055), 0, 1)
+    Image.fromarray((im * 255).astype(np.uint8)).save(f"{out}/{name}-ref-path-bdpt.png")
