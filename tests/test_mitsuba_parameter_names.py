@@ -138,7 +138,7 @@ def test_a_property_mitsuba_3_does_not_know_is_one_line_naming_the_element_and_c
 
 def test_a_property_mitsuba_3_knows_and_pathtrace_does_not_read_is_warned_of_once_and_renders(tmp_path, capsys,
                                                                                             backend):
-    from pathtrace.renderer import Renderer
+    from pathtrace.rendering.renderer import Renderer
     path = tmp_path / "s.xml"
     path.write_text('<scene version="3.0.0">\n<integrator type="path"><boolean name="hide_emitters" value="true"/>'
                     '</integrator>\n<shape type="sphere"><boolean name="flip_normals" value="false"/></shape>\n'

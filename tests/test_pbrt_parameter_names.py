@@ -157,7 +157,7 @@ def test_a_name_pbrt_v4_does_not_know_is_one_line_naming_the_file_line_type_and_
 
 
 def test_a_name_pbrt_v4_knows_and_pathtrace_does_not_read_is_warned_of_once_and_renders(tmp_path, capsys, backend):
-    from pathtrace.renderer import Renderer
+    from pathtrace.rendering.renderer import Renderer
     # pbrt-v4's coateddiffuse reads 'twosided' and its samplers 'seed'; pathtrace's do not
     (tmp_path / "s.pbrt").write_text('Sampler "zsobol" "integer seed" 3 "integer pixelsamples" 1\n' + HEAD
                                      + 'Material "coateddiffuse" "bool twosided" true\nShape "sphere"\n'
