@@ -15,7 +15,7 @@ _EXPORTS = {
     "Scene": "pathtrace.scene.description",
     "RenderSettings": "pathtrace.scene.description",
     "PATH_QUEUE_AUTO": "pathtrace.scene.description",
-    "Camera": "pathtrace.camera",
+    "Camera": "pathtrace.cameras",
     "Environment": "pathtrace.scene.environment",
     "Material": "pathtrace.materials.table",
     "UserError": "pathtrace.errors",

@@ -15,7 +15,7 @@
  * with weight 1, so that a pixel's samples stay independent and averaging them, as the
  * accumulation and the merge of several devices do, gives the filtered image. A program has one
  * camera type and one filter (app/device/features.py), named by the generated generate_ray and
- * sample_filter (app/camera.py, app/filters.py). */
+ * sample_filter (app/cameras/registry.py, app/filters.py). */
 
 typedef struct {
     float3 o;
@@ -52,7 +52,8 @@ float2 film_to_ndc(const RenderParams *p, float sx, float sy)
  *
  *   sample_X_importance(p, x, u, &ci)   a point of its lens joined to point x, from two uniforms
  *
- * and sample_importance (app/camera.py) calls the program's. */
+ * and sample_importance (app/cameras/registry.py) calls the program's; a camera type without it
+ * (Camera.importance False) is refused by app/rendering/bdpt.py. */
 typedef struct {
     float3 lens;     /* the lens point joined to x */
     float2 at;       /* the film point, in pixels from the image's top-left corner */

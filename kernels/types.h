@@ -106,11 +106,10 @@ typedef struct {
 typedef struct {
     float4 eye;        /* camera position */
     float4 forward;    /* unit view direction */
-    float4 right;      /* camera right, scaled by tan(vfov / 2) * aspect */
-    float4 up;         /* camera up, scaled by tan(vfov / 2) */
+    float4 right;      /* the image's right and up, as the camera type scales them */
+    float4 up;         /* (app/cameras/: Camera.basis; kernels/cameras/<name>.cl) */
     float4 env_scale;  /* environment radiance multiplier (rgb) */
-    float4 lens;       /* the camera's: x its aperture radius (0: a pinhole), y the distance to
-                          the plane in focus (kernels/cameras/) */
+    float4 lens;       /* what else the camera type reads (app/cameras/: Camera.lens) */
     float4 filter;     /* the pixel filter's parameters (kernels/filters/<name>.cl) */
     int width;         /* image size in pixels */
     int height;
@@ -130,7 +129,7 @@ typedef struct {
     int camera_medium;   /* the medium the camera is in (a row of the media table), or -1 */
     /* What a GENERIC program (app/device/features.py: Features.generic_program) chooses at run time, and a
        scene's program by build options: */
-    int camera_type;     /* the camera's kernel (app/camera.py: CAMERA_KERNELS index) */
+    int camera_type;     /* the camera's kernel (app/cameras/registry.py: KERNELS index) */
     int filter_type;     /* the pixel filter (app/filters.py: FILTERS index) */
     int rr_rule;         /* Russian roulette's rule (RR_OFF, RR_ALBEDO, RR_THROUGHPUT) */
     int layout;          /* the compiled scene's LAYOUT_* bits (kernels/scene.cl) */

@@ -167,7 +167,7 @@ def test_changed_lights_filter_and_camera_type_are_rendered_as_a_fresh_scene_ren
     def change(s):
         s.lights.append(PointLight([0.5, 2.0, 1.0], [3.0, 2.0, 1.0]))
         s.lights[-1].check()
-        s.camera.aperture, s.camera.focus_distance = 0.2, 4.0
+        s.camera = s.camera.as_type("thinlens", aperture_radius=0.2, focus_distance=4.0)
         s.settings.filter = PixelFilter("tent")
         s.settings.light_sampler = "tree"
     scene = pathtrace.load_dict(small_scene())

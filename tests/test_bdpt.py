@@ -8,6 +8,7 @@ import numpy as np
 import pyopencl as cl
 import pytest
 
+from pathtrace.cameras import CAMERAS
 from pathtrace.device.opencl import build_program
 from pathtrace.errors import UserError
 from pathtrace.filters import PixelFilter
@@ -99,7 +100,7 @@ def cbox_thinlens():
     """The Cornell box through a thin lens focused before the back wall: light tracing joins each
     vertex to a point of the aperture."""
     scene = cbox()
-    camera = replace(scene.camera, aperture=0.15, focus_distance=3.0)
+    camera = scene.camera.as_type("thinlens", aperture_radius=0.15, focus_distance=3.0)
     return replace(scene, camera=camera)
 
 
@@ -289,6 +290,16 @@ def test_a_scene_with_a_medium_is_one_line_for_bdpt(backend):
     scene = load_scene(str(ROOT / "tests/scenes/media-fog.xml")).with_settings(filter=PixelFilter(),
                                                                                integrator="bdpt")
     with pytest.raises(UserError, match="integrator bdpt: participating media are not supported yet"):
+        Renderer(backend, scene, 8, 8)
+
+
+@pytest.mark.parametrize("kind", [name for name, cls in CAMERAS.items() if not cls.importance])
+def test_a_camera_without_importance_is_one_line_for_bdpt(backend, kind):
+    """A camera type whose kernel cannot join light subpaths to its lens (app/cameras/:
+    Camera.importance) is refused in one line, not rendered wrong."""
+    scene = cbox()
+    scene = replace(scene, camera=scene.camera.as_type(kind)).with_settings(integrator="bdpt")
+    with pytest.raises(UserError, match=f"integrator bdpt: the {kind} camera has no importance"):
         Renderer(backend, scene, 8, 8)
 
 

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from pathtrace.camera import Camera, kernel_name
+from pathtrace.cameras import Camera, OrthographicCamera, PerspectiveCamera, ThinLensCamera
+from pathtrace.cameras.registry import toml_names
 from pathtrace.device.features import Features
 from pathtrace.filters import PixelFilter
 from pathtrace.device.types import RENDER_PARAMS
@@ -42,9 +43,7 @@ W, H = 64, 48
 
 def params(camera, pixel_filter=PixelFilter()):
     p = np.zeros((), RENDER_PARAMS)
-    forward, right, up = camera.basis(W / H)
-    p["eye"][:3], p["forward"][:3], p["right"][:3], p["up"][:3] = camera.eye, forward, right, up
-    p["lens"][:2] = camera.aperture, camera.focus_distance
+    camera.pack(p, W / H)
     p["filter"] = pixel_filter.params()
     p["width"], p["height"] = W, H
     return p
@@ -52,7 +51,7 @@ def params(camera, pixel_filter=PixelFilter()):
 
 def rays(kernels, camera, film):
     o, d = np.zeros((len(film), 4), np.float32), np.zeros((len(film), 4), np.float32)
-    kernels(SOURCE, Features(camera=kernel_name(camera)))("rays", len(film), params(camera),
+    kernels(SOURCE, Features(camera=camera.kernel))("rays", len(film), params(camera),
                                                          np.ascontiguousarray(film, np.float32), o, d)
     return o[:, :3].astype(np.float64), d[:, :3].astype(np.float64)
 
@@ -70,7 +69,7 @@ def test_concentric_disk_samples_are_uniform(kernels):
 
 
 def test_a_thin_lens_focuses_every_lens_point_on_the_plane_in_focus(kernels):
-    camera = Camera([1.0, 2.0, 6.0], [0.0, 0.5, 0.0], [0, 1, 0], 40.0, aperture=0.3, focus_distance=4.0)
+    camera = ThinLensCamera([1.0, 2.0, 6.0], [0.0, 0.5, 0.0], [0, 1, 0], 40.0, aperture_radius=0.3, focus_distance=4.0)
     forward = camera.basis(W / H)[0]
     rng = np.random.default_rng(2)
     n = 2000
@@ -82,7 +81,7 @@ def test_a_thin_lens_focuses_every_lens_point_on_the_plane_in_focus(kernels):
     assert np.linalg.norm(offset, axis=1).max() <= 0.3 + 1e-5
     assert np.linalg.norm(offset, axis=1).mean() == pytest.approx(0.2, abs=0.01)   # 2/3 of the radius
     # every ray of one film point meets the plane in focus at the pinhole ray's point there
-    pinhole = Camera(camera.eye, camera.look_at, camera.up, camera.vfov)
+    pinhole = camera.as_type("perspective")
     _, d0 = rays(kernels, pinhole, film)
     t = (4.0 - offset @ forward) / (d @ forward)
     hits = o + t[:, None] * d
@@ -91,7 +90,7 @@ def test_a_thin_lens_focuses_every_lens_point_on_the_plane_in_focus(kernels):
 
 
 def test_an_orthographic_camera_sends_parallel_rays_from_a_rectangle(kernels):
-    camera = Camera([0.0, 3.0, 0.0], [0.0, 0.0, 0.0], [0, 0, -1], projection="orthographic", height=4.0)
+    camera = OrthographicCamera([0.0, 3.0, 0.0], [0.0, 0.0, 0.0], [0, 0, -1], height=4.0)
     film = np.array([[0, 0, 0.5, 0.5], [W, H, 0.5, 0.5], [W / 2, H / 2, 0.1, 0.9], [W, 0, 0.5, 0.5]])
     o, d = rays(kernels, camera, film)
     np.testing.assert_allclose(d, np.tile([0, -1, 0], (4, 1)), atol=1e-6)
@@ -119,7 +118,7 @@ def test_filter_samples_follow_the_filter(kernels, pixel_filter):
     8.8), over a 16 x 16 grid of cells covering its support; the gaussian's second case is a
     radius below two stddev, sampled from uniform candidates."""
     out = np.zeros((N, 2), np.float32)
-    camera = Camera()
+    camera = PerspectiveCamera()
     kernels(SOURCE, Features(filter=pixel_filter.name))("offsets", N, params(camera, pixel_filter), out)
     r = pixel_filter.radius
     assert np.abs(out).max() <= r * (1 + 1e-6)
@@ -148,13 +147,15 @@ SPHERE = {"center": [0, 0, 0], "radius": 1, "material": {"type": "diffuse", "rho
 
 
 @pytest.mark.parametrize("camera,problem", [
-    ({"aperture_radius": 0.1}, "camera.aperture_radius: an aperture needs a 'focus_distance'"),
-    ({"type": "thinlens", "aperture_radius": 0.1}, "a thinlens camera needs both 'aperture_radius' and 'focus_distance'"),
+    ({"aperture_radius": 0.1}, "camera: a thinlens camera needs 'focus_distance'"),
+    ({"type": "thinlens", "aperture_radius": 0.1}, "camera: a thinlens camera needs 'focus_distance'"),
+    ({"type": "thinlens"}, "camera: a thinlens camera needs 'focus_distance'"),
     ({"aperture_radius": -0.1, "focus_distance": 2}, "camera.aperture_radius: must be in [0, 1e+30]"),
     ({"aperture_radius": 0.1, "focus_distance": 0}, "camera.focus_distance: must be in (0, 1e+30]"),
     ({"type": "orthographic", "height": 1e31}, "camera.height: must be in (0, 1e+30]"),
     ({"type": "orthographic", "vfov": 30}, "camera.vfov: a orthographic camera has no vfov"),
-    ({"type": "fisheye"}, "camera.type: must be perspective, thinlens or orthographic")])
+    ({"type": "fisheye"}, f"camera.type: must be one of {', '.join(toml_names())}, got 'fisheye'"),
+    ({"type": ["perspective"]}, f"camera.type: must be one of {', '.join(toml_names())}, got ['perspective']")])
 def test_bad_cameras_are_one_line_naming_the_field(camera, problem):
     from pathtrace.errors import UserError
     from pathtrace.scene.toml_reader import read_scene_dict
@@ -202,12 +203,24 @@ def test_fly_controls_move_and_turn_towards_the_images_right(mirrored):
     """D strafes, and a mouse move to the right turns the view, towards the side of the image
     that is on the right: -(forward x up) for a mirrored camera."""
     from pathtrace.viewer.controls import FlyControls
-    camera = Camera((0, 0, 5), (0, 0, 0), (0, 1, 0), mirrored=mirrored)
+    camera = PerspectiveCamera((0, 0, 5), (0, 0, 0), (0, 1, 0), mirrored=mirrored)
     image_right = camera.basis(1.0)[1]
     controls = FlyControls(held={"D"})
     before = camera.eye.copy()
     assert controls.update(camera, 0.1)
     assert np.dot(camera.eye - before, image_right) > 0
-    turned = Camera((0, 0, 5), (0, 0, 0), (0, 1, 0), mirrored=mirrored)
+    turned = PerspectiveCamera((0, 0, 5), (0, 0, 0), (0, 1, 0), mirrored=mirrored)
     FlyControls().update(turned, 0.0, look_dx=20)
     assert np.dot(turned.look_at - turned.eye, image_right) > 0
+
+
+def test_a_camera_refuses_the_fields_of_other_types_and_changes_type_keeping_its_frame():
+    camera = PerspectiveCamera([0.0, 1.0, 5.0], [0.0, 0.5, 0.0], [0, 1, 0], 30.0, mirrored=True)
+    with pytest.raises(AttributeError, match="a perspective camera has no 'aperture'"):
+        camera.aperture = 0.3
+    with pytest.raises(TypeError, match="Camera is the cameras' base"):
+        Camera()
+    lens = camera.as_type("thinlens", aperture_radius=0.3, focus_distance=4.0)
+    assert (type(lens), lens.vfov, lens.aperture_radius, lens.mirrored, lens.kernel) == (ThinLensCamera, 30.0, 0.3, True, "thinlens")
+    np.testing.assert_array_equal(lens.eye, camera.eye)
+    assert lens.as_type("thinlens", aperture_radius=0.0).kernel == "perspective"   # a pinhole compiles as one

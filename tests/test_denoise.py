@@ -5,7 +5,7 @@ pixel, and no bias at many."""
 import numpy as np
 import pytest
 
-from pathtrace.camera import Camera
+from pathtrace.cameras import PerspectiveCamera
 from pathtrace.io.denoiser import Denoiser
 from pathtrace.scene.environment import Environment
 from pathtrace.materials import Material
@@ -53,7 +53,7 @@ def test_albedo_normal_and_depth_of_a_diffuse_plane_and_a_sphere(backend):
     b.add_mesh(Mesh("floor", floor, QUAD, None, b.material(diffuse(FLOOR_RHO))))
     centre, radius = np.array([0.0, 1.0, 0.0]), 1.0
     b.add_sphere(centre, radius, diffuse(SPHERE_RHO))
-    camera = Camera(np.array([0.0, 1.6, 4.0]), np.array([0.0, 0.6, 0.0]), np.array([0.0, 1.0, 0.0]), 50.0)
+    camera = PerspectiveCamera(np.array([0.0, 1.6, 4.0]), np.array([0.0, 0.6, 0.0]), np.array([0.0, 1.0, 0.0]), 50.0)
     w, h = 48, 32
     scene = b.build("aovs", camera=camera, environment=Environment.constant((SKY, SKY, SKY)),
                     settings=RenderSettings(width=w, height=h))
@@ -104,7 +104,7 @@ def test_through_a_mirror_the_next_surface_counts(backend):
     ceiling = floor[::-1] + np.array([0, 6, 0], np.float32)        # facing down
     b.add_mesh(Mesh("mirror", floor, QUAD, None, b.material(mirror)))
     b.add_mesh(Mesh("ceiling", np.ascontiguousarray(ceiling), QUAD, None, b.material(diffuse(SPHERE_RHO))))
-    camera = Camera(np.array([0.0, 2.0, 0.0]), np.array([0.0, 0.0, -1.0]), np.array([0.0, 1.0, 0.0]), 60.0)
+    camera = PerspectiveCamera(np.array([0.0, 2.0, 0.0]), np.array([0.0, 0.0, -1.0]), np.array([0.0, 1.0, 0.0]), 60.0)
     scene = b.build("mirror", camera=camera, environment=Environment.constant((0, 0, 0)),
                     settings=RenderSettings(width=24, height=16))
     r = Renderer(backend, scene)

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from pathtrace.camera import Camera
+from pathtrace.cameras import PerspectiveCamera
 from pathtrace.scene.environment import Environment
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import Mesh, SceneBuilder, diffuse, load_scene
@@ -132,7 +132,7 @@ def test_the_analytic_disk_renders_as_the_old_triangle_fan(backend):
             b.add_mesh(Mesh("fan", (v @ m[:3, :3].T + m[:3, 3]).astype(np.float32), f, None, row))
         floor = np.array([[-4, -0.5, -4], [-4, -0.5, 4], [4, -0.5, 4], [4, -0.5, -4]], np.float32)
         b.add_mesh(Mesh("floor", floor, np.array([[0, 1, 2], [0, 2, 3]], np.int32), None, b.material(diffuse(0.5))))
-        scene = b.build("disk", camera=Camera([0, 1.5, 4], [0, 0, 0], [0, 1, 0], 40.0),
+        scene = b.build("disk", camera=PerspectiveCamera([0, 1.5, 4], [0, 0, 0], [0, 1, 0], 40.0),
                         environment=Environment.constant((1.0, 0.9, 0.8)))
         r = Renderer(backend, scene.with_settings(max_depth=3, seed=3 if analytic else 4), 48, 36)
         for _ in range(4):

@@ -6,7 +6,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from pathtrace.camera import Camera
+from pathtrace.cameras import PerspectiveCamera
 from pathtrace.scene.environment import Environment
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import RenderSettings, SceneBuilder, diffuse, emitter
@@ -25,7 +25,7 @@ def furnace_scene(albedo, env=1.0, material=None, **settings):
     """A unit sphere (diffuse of `albedo`, or `material`) under a uniform environment."""
     b = SceneBuilder()
     b.add_sphere((0, 0, 0), 1.0, material if material is not None else diffuse(albedo))
-    return b.build("furnace", camera=Camera([0, 0, 4], [0, 0, 0], [0, 1, 0], 40.0),
+    return b.build("furnace", camera=PerspectiveCamera([0, 0, 4], [0, 0, 0], [0, 1, 0], 40.0),
                    environment=Environment.constant((env, env, env)),
                    settings=RenderSettings(width=48, height=32, **settings))
 
@@ -105,7 +105,7 @@ def test_sphere_light_irradiance(backend, nee):
     b = SceneBuilder()
     b.add_sphere((0, -1e4, 0), 1e4, diffuse(rho))     # a floor, flat to 1e-4 over the view
     b.add_sphere(centre, r_light, emitter(le))
-    scene = b.build("irradiance", camera=Camera([0, 6, 6], [0, 0, 0], [0, 1, 0], 50.0),
+    scene = b.build("irradiance", camera=PerspectiveCamera([0, 6, 6], [0, 0, 0], [0, 1, 0], 50.0),
                     environment=Environment.constant((0, 0, 0)),
                     settings=RenderSettings(width=40, height=30, max_depth=2, russian_roulette="off", nee=nee))
     mean, var, r = render(backend, scene, 1024)
@@ -156,7 +156,7 @@ def test_bare_environment_reproduces_the_map(backend):
     env = Environment(smooth(u, v).astype(np.float32), intensity=2.0, rotation=90.0)
     b = SceneBuilder()
     b.add_sphere((0, 0, 50), 0.1, diffuse(0.5))       # behind the camera, out of view
-    scene = b.build("sky", camera=Camera([0, 0, 0], [0, 0.3, -1], [0, 1, 0], 60.0), environment=env,
+    scene = b.build("sky", camera=PerspectiveCamera([0, 0, 0], [0, 0.3, -1], [0, 1, 0], 60.0), environment=env,
                     settings=RenderSettings(width=32, height=24, max_depth=1, russian_roulette="off"))
     mean, _, r = render(backend, scene, 64)
     fwd, right, up = scene.camera.basis(32 / 24)
@@ -196,7 +196,7 @@ def test_square_light_irradiance_matches_lambert(backend, nee):
     quad = np.array([[0, 1, 2], [0, 2, 3]], np.int32)
     b.add_mesh(Mesh("floor", floor, quad, None, b.material(diffuse(rho))))
     b.add_mesh(Mesh("light", light.astype(np.float32), quad, None, b.material(emitter(le))))
-    scene = b.build("lambert", camera=Camera([0, 2.5, 2.5], [0, 0, 0], [0, 1, 0], 55.0),
+    scene = b.build("lambert", camera=PerspectiveCamera([0, 2.5, 2.5], [0, 0, 0], [0, 1, 0], 55.0),
                     environment=Environment.constant((0, 0, 0)),
                     settings=RenderSettings(width=40, height=30, max_depth=2, russian_roulette="off", nee=nee))
     # the light faces down, so its (black) back is what the camera sees of it
@@ -243,7 +243,7 @@ def test_closed_mesh_white_furnace_renders_one(backend, nee):
     v, f = icosphere(2)
     b = SceneBuilder()
     b.add_mesh(Mesh("ball", v.astype(np.float32), f.astype(np.int32), None, b.material(diffuse(1.0))))
-    scene = b.build("furnace", camera=Camera([0, 0, 4], [0, 0, 0], [0, 1, 0], 40.0),
+    scene = b.build("furnace", camera=PerspectiveCamera([0, 0, 4], [0, 0, 0], [0, 1, 0], 40.0),
                     environment=Environment.constant((1, 1, 1)),
                     settings=RenderSettings(width=32, height=24, nee=nee))
     mean, var, _ = render(backend, scene, 64)
@@ -259,7 +259,7 @@ def test_no_light_leaks_into_a_closed_box(backend, nee):
     v, f = cube(1.0, inward=True)
     b = SceneBuilder()
     b.add_mesh(Mesh("box", v.astype(np.float32), f.astype(np.int32), None, b.material(diffuse(0.9))))
-    scene = b.build("box", camera=Camera([0.3, -0.2, 0.5], [-1, 1, -1], [0, 1, 0], 90.0),
+    scene = b.build("box", camera=PerspectiveCamera([0.3, -0.2, 0.5], [-1, 1, -1], [0, 1, 0], 90.0),
                     environment=Environment.constant((100, 100, 100)),
                     settings=RenderSettings(width=48, height=48, nee=nee, max_depth=16, russian_roulette="off"))
     mean, _, _ = render(backend, scene, 64)

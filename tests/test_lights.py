@@ -330,7 +330,7 @@ def lamp_field(n=20_000, size=60.0, seed=5):
     """n small emissive triangles facing down, 1 to 1.5 above a diffuse floor, spread over
     size x size, their radiance over three decades; the camera, below them, sees the floor
     only: many lights, lit from out of view, most of them far from any one point."""
-    from pathtrace.camera import Camera
+    from pathtrace.cameras import PerspectiveCamera
     from pathtrace.materials.table import pack
     from pathtrace.scene.description import Mesh, SceneBuilder, diffuse
     rng = np.random.default_rng(seed)
@@ -346,7 +346,7 @@ def lamp_field(n=20_000, size=60.0, seed=5):
     one = np.array([[0, 1, 2]], np.int32)
     for k in range(n):
         b.add_mesh(Mesh(f"lamp {k}", lamps[k], one, None, int(rows[k])))
-    return b.build("lamp-field", camera=Camera([0, 0.6, 0], [0, 0, -1], [0, 1, 0], 40.0),
+    return b.build("lamp-field", camera=PerspectiveCamera([0, 0.6, 0], [0, 0, -1], [0, 1, 0], 40.0),
                    environment=Environment.constant((0, 0, 0)))
 
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from pyopencl import cltypes
 
-from pathtrace.camera import Camera
+from pathtrace.cameras import OrthographicCamera, PerspectiveCamera
 from pathtrace.compiler.compiled import compile_scene
 from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError
@@ -117,7 +117,7 @@ def medium_scene(boundary: str, medium: Medium, shape="cube", **build):
     else:
         vertices, faces, _ = _cube()
         b.add_mesh(Mesh("box", vertices.astype(np.float32), faces.astype(np.int32), None, row, media=inside))
-    build.setdefault("camera", Camera((0, 0, 4), (0, 0, 0), (0, 1, 0), 40))
+    build.setdefault("camera", PerspectiveCamera((0, 0, 4), (0, 0, 0), (0, 1, 0), 40))
     build.setdefault("environment", Environment.constant((1, 1, 1)))
     return b.build("media", media=[medium], **build)
 
@@ -127,7 +127,7 @@ def test_transmittance_through_a_slab_is_beer_lambert(backend, nee):
     """An orthographic view through a cube of absorbing medium (albedo 0) of side 2 against a
     white sky: every pixel inside it is exp(-2 sigma_t), per channel."""
     sigma_t = np.array([0.2, 0.7, 1.5])
-    camera = Camera((0, 0, 4), (0, 0, 0), (0, 1, 0), projection="orthographic", height=1.5)
+    camera = OrthographicCamera((0, 0, 4), (0, 0, 0), (0, 1, 0), height=1.5)
     scene = medium_scene("null", Medium.checked("ink", sigma_t, np.zeros(3)), camera=camera)
     mean, var = render(backend, scene, (16, 16), 256, nee)
     within_noise(mean, var, np.exp(-2 * sigma_t))
@@ -149,7 +149,7 @@ def test_single_scattering_of_a_thin_slab_under_a_sun(backend):
                     media=MediumInterface(0, -1)))
     sun = DirectionalLight(np.array([0, -1.0, 0]), np.full(3, E))
     sun.check()
-    camera = Camera((0, 5, 0), (0, 0, 0), (0, 0, -1), projection="orthographic", height=1.0)
+    camera = OrthographicCamera((0, 5, 0), (0, 0, 0), (0, 0, -1), height=1.0)
     scene = b.build("slab", media=[Medium.checked("haze", sigma_a, sigma_s, g)], camera=camera,
                     environment=Environment.constant((0, 0, 0)), lights=[sun]).with_settings(
         max_depth=2, russian_roulette="off")
@@ -178,7 +178,7 @@ def test_the_camera_inside_a_medium_sees_it(backend):
     vertices, faces, _ = _cube()
     b.add_mesh(Mesh("room", (vertices * 4).astype(np.float32), faces.astype(np.int32), None, row,
                     media=MediumInterface(0, -1)))
-    camera = Camera((0, 0, 0), (0, 0, -1), (0, 1, 0), projection="orthographic", height=0.5)
+    camera = OrthographicCamera((0, 0, 0), (0, 0, -1), (0, 1, 0), height=0.5)
     scene = b.build("inside", media=[Medium.checked("ink", sigma_t, np.zeros(3))], camera=camera,
                     environment=Environment.constant((1, 1, 1)), camera_medium=0)
     mean, var = render(backend, scene, (8, 8), 128)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from pathtrace import api
-from pathtrace.camera import Camera
+from pathtrace.cameras import ThinLensCamera
 from pathtrace.errors import UserError
 from pathtrace.scene import load_scene
 from pathtrace.scene.mitsuba_writer import write_mitsuba
@@ -36,7 +36,7 @@ def test_what_a_twin_cannot_say_is_refused(tmp_path):
         write_mitsuba(load_scene("simple"), tmp_path / "s.xml")          # its Phong spheres
     scene = load_scene("simple-diffuse")
     with pytest.raises(UserError, match="only pinhole perspective cameras"):
-        write_mitsuba(replace(scene, camera=Camera([0, 2, 9], [0, 1, 0], [0, 1, 0], 40.0, aperture=0.1)),
+        write_mitsuba(replace(scene, camera=ThinLensCamera([0, 2, 9], [0, 1, 0], [0, 1, 0], 40.0, aperture_radius=0.1)),
                       tmp_path / "s.xml")
     with pytest.raises(UserError, match="only diffuse and black materials without textures"):
         write_mitsuba(load_scene("teapot-textured"), tmp_path / "t.xml")

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pathtrace.camera import Camera
+from pathtrace.cameras import PerspectiveCamera
 from pathtrace.scene.environment import Environment
 from pathtrace.materials import pack
 from pathtrace.rendering.renderer import Renderer
@@ -55,7 +55,7 @@ def many_lights_scene(n=128):
     one = np.array([[0, 1, 2]], np.int32)
     for k, (t, row) in enumerate(zip(triangles, rows)):
         b.add_mesh(Mesh(f"lamp {k}", t, one, None, int(row)))
-    return b.build("many-lights", camera=Camera([0, 1.0, 4.5], [0, 0.4, 0], [0, 1, 0], 50.0),
+    return b.build("many-lights", camera=PerspectiveCamera([0, 1.0, 4.5], [0, 0.4, 0], [0, 1, 0], 50.0),
                    environment=Environment.constant((0, 0, 0)))
 
 
@@ -136,7 +136,7 @@ def bilinear_map(image, factor=4):
 def test_hdr_lit_sphere_matches_quadrature(backend, nee):
     """A lone diffuse sphere (albedo a) under an HDR map, direct light only: its radiance at
     normal n is a / pi * integral of L(w) max(0, n . w) dw, summed here over the map."""
-    from pathtrace.camera import Camera
+    from pathtrace.cameras import PerspectiveCamera
     from pathtrace.scene import RenderSettings, SceneBuilder, diffuse
 
     env = box_filtered(load_scene("demo").environment)
@@ -144,7 +144,7 @@ def test_hdr_lit_sphere_matches_quadrature(backend, nee):
     albedo, w, h = 0.8, 48, 32
     b = SceneBuilder()
     b.add_sphere((0, 0, 0), 1.0, diffuse(albedo))
-    camera = Camera([0, 0.5, 4], [0, 0, 0], [0, 1, 0], 35.0)
+    camera = PerspectiveCamera([0, 0.5, 4], [0, 0, 0], [0, 1, 0], 35.0)
     scene = b.build("sphere", camera=camera, environment=env,
                     settings=RenderSettings(width=w, height=h, max_depth=2, russian_roulette="off", nee=nee))
     radiance, theta, u, solid_angle = bilinear_map(env.image)

@@ -97,8 +97,7 @@ def test_the_generic_program_walks_a_two_level_bvh(generic, specialised, monkeyp
 
 def test_an_orthographic_camera_through_the_generic_program(generic, specialised):
     scene = load_scene("cornell-box")
-    camera = scene.camera.copy()
-    camera.projection, camera.height = "orthographic", 1.2
+    camera = scene.camera.as_type("orthographic", height=1.2)
     a, b = Renderer(generic, scene, SIZE, SIZE), Renderer(specialised, scene, SIZE, SIZE)
     for r in (a, b):
         r.set_camera(camera)

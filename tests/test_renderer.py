@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from pathtrace.camera import Camera
+from pathtrace.cameras import PerspectiveCamera
 from pathtrace.scene.environment import Environment
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import RenderSettings, SceneBuilder, diffuse, load_scene
@@ -97,7 +97,7 @@ def test_an_environment_edit_updates_the_light_choice(backend):
     b = SceneBuilder()
     b.add_sphere((0, 0, 0), 1.0, diffuse(0.5))
     b.add_sphere((0, 4, 0), 0.5, emitter(10.0))
-    scene = b.build("lights", camera=Camera([0, 0, 5], [0, 0, 0], [0, 1, 0], 40.0),
+    scene = b.build("lights", camera=PerspectiveCamera([0, 0, 5], [0, 0, 0], [0, 1, 0], 40.0),
                     environment=Environment.constant((1, 1, 1), intensity=0.0),
                     settings=RenderSettings(width=16, height=16))
     r = Renderer(backend, scene)
@@ -118,7 +118,7 @@ def test_sums_stay_exact_over_millions_of_samples(backend):
     rays traced exact. (The launches, 65,536 of one pixel, are what this test's time goes on.)"""
     b = SceneBuilder()
     b.add_sphere((0, 0, 10), 1.0, diffuse(0.5))              # behind the camera
-    scene = b.build("sky", camera=Camera([0, 0, 0], [0, 0, -1], [0, 1, 0], 1.0),
+    scene = b.build("sky", camera=PerspectiveCamera([0, 0, 0], [0, 0, -1], [0, 1, 0], 1.0),
                     environment=Environment.constant((0.1, 0.1, 0.1)),
                     settings=RenderSettings(width=1, height=1, nee=False))
     r = Renderer(backend, scene)

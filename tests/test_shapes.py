@@ -6,7 +6,7 @@ an emitting one, and TOML writes and reads it back. A kind is tested by being re
 import numpy as np
 import pytest
 
-from pathtrace.camera import Camera
+from pathtrace.cameras import PerspectiveCamera
 from pathtrace.compiler.compiled import compile_scene
 from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError
@@ -133,7 +133,7 @@ def emitter_scene(kind, light_sampler="power"):
     b.add_shape(Shape("lamp", kind, examples[0], down, lamp))
     standing = transform.translation([0.8, 0.4, 0.3]) @ transform.rotation([0, 1, 0], 30) @ transform.scaling([0.4] * 3)
     b.add_shape(Shape("standing", kind, examples[-1], standing, b.material(diffuse(0.8))))
-    scene = b.build(f"{kind} light", camera=Camera([0, 2.2, 4.5], [0, 0.4, 0], [0, 1, 0], 50.0),
+    scene = b.build(f"{kind} light", camera=PerspectiveCamera([0, 2.2, 4.5], [0, 0.4, 0], [0, 1, 0], 50.0),
                     environment=Environment.constant((0, 0, 0)))
     return scene.with_settings(light_sampler=light_sampler, max_depth=4)
 

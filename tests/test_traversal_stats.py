@@ -4,7 +4,7 @@ sample."""
 import numpy as np
 import pytest
 
-from pathtrace.camera import Camera
+from pathtrace.cameras import PerspectiveCamera
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 from pathtrace.scene import SceneBuilder, diffuse
@@ -19,7 +19,7 @@ def test_one_sphere_is_tested_once_per_ray_without_a_tree(backend):
     sphere and visits no node; with max depth 1 every sample is one ray."""
     b = SceneBuilder()
     b.add_sphere((0, 0, 0), 1.0, diffuse(0.5))
-    scene = b.build("one", camera=Camera([0, 0, 4], [0, 0, 0], [0, 1, 0], 40.0),
+    scene = b.build("one", camera=PerspectiveCamera([0, 0, 4], [0, 0, 0], [0, 1, 0], 40.0),
                     environment=Environment.constant((1, 1, 1))).with_settings(max_depth=1, nee=False)
     stats = traversal_stats(backend, scene, 16, 9, 2)
     assert (stats.rays_per_sample, stats.nodes_per_ray, stats.primitives_per_ray) == (1.0, 0.0, 1.0)

@@ -250,8 +250,7 @@ def test_ctrl_click_focuses_the_lens_on_the_surface_under_the_cursor(viewer):
     from pathtrace.viewer.controls import pick_ray
     v = viewer
     settle(v)
-    camera = load_scene("simple").camera
-    camera.aperture = 0.3
+    camera = load_scene("simple").camera.as_type("thinlens", aperture_radius=0.3)
     v.renderer.set_camera(camera)
     v.selected = None
     settle(v)
@@ -267,7 +266,7 @@ def test_ctrl_click_focuses_the_lens_on_the_surface_under_the_cursor(viewer):
     t = -b - np.sqrt(b * b - (np.dot(o - c, o - c) - radius * radius))
     forward = camera.basis(1.0)[0]
     assert v.renderer.camera.focus_distance == pytest.approx(t * np.dot(d, forward), rel=2e-2)
-    assert v.renderer.camera.aperture == 0.3 and v.selected is None
+    assert v.renderer.camera.aperture_radius == 0.3 and v.selected is None
     v.renderer.set_camera(load_scene("simple").camera)
 
 

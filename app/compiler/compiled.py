@@ -22,7 +22,7 @@ from pathtrace.materials import BSDFS, EMITS_BACK, NULL, TAGS
 from pathtrace.materials.table import reachable
 from pathtrace.scene.media import media_table, packed_interfaces
 from pathtrace.compiler.memory import available_host_memory
-from pathtrace.camera import Camera, kernel_name
+from pathtrace.cameras import Camera
 from pathtrace.scene.description import RenderSettings, Scene
 from pathtrace.shapes import ROWS, SHAPES, Shape
 from pathtrace.shapes import TAGS as SHAPE_TAGS
@@ -254,7 +254,7 @@ class CompiledScene:
                         normal_maps=self.textures.normal_maps, lights=self.lights.types,
                         light_tree=self.lights.tree, media=bool(self.scene.media) or null_surfaces,
                         null_surfaces=null_surfaces,
-                        camera=kernel_name(camera), filter=settings.filter.name,
+                        camera=camera.kernel, filter=settings.filter.name,
                         russian_roulette=settings.russian_roulette, stack=stack_size(self.bvh.depth),
                         instance_stack=stack_size(self.instance_depth) if self.two_level else 0,
                         lone_spheres=self.lone_spheres,

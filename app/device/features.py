@@ -31,7 +31,7 @@ class Features:
     light_tree: bool = False               # lights are chosen through a light tree (kernels/light_tree.cl)
     media: bool = False                    # participating media or null surfaces (kernels/volume.cl)
     null_surfaces: bool = False            # a material is null: rays cross it (NULL_SURFACES)
-    camera: str = "perspective"            # its kernel file: pathtrace.camera.kernel_name
+    camera: str = "perspective"            # its kernel file: pathtrace.cameras.Camera.kernel
     filter: str = "box"                    # one of pathtrace.filters.FILTERS
     russian_roulette: str = "throughput"   # one of pathtrace.scene.description.RUSSIAN_ROULETTE
     stack: int = 48                        # BVH traversal stack entries the tree can need

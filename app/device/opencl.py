@@ -39,7 +39,7 @@ CACHE_FORMAT = "2"
 def kernel_source(extra: str = "", features: Features = Features()) -> str:
     """The kernels as one source text, each file introduced by a #line marker so that compiler
     messages name the file and line."""
-    from pathtrace import camera, filters, lights, shapes
+    from pathtrace import cameras, filters, lights, shapes
     from pathtrace.materials import dispatch_source, kernel_files, tag_source
     from pathtrace.textures import kernel_parts
 
@@ -61,7 +61,7 @@ def kernel_source(extra: str = "", features: Features = Features()) -> str:
     texts += [(name, (folder / name).read_text()) for name in files]
     texts.append(("app/materials/registry.py: dispatch_source", dispatch_source(features.bsdfs)))
     parts = [("environment.cl", None), *lights.kernel_parts(features.lights, features.light_tree, bool(features.bdpt)),
-             *camera.kernel_parts(features.camera), *filters.kernel_parts(features.filter)]
+             *cameras.kernel_parts(features.camera), *filters.kernel_parts(features.filter)]
     texts += [(name, text if text is not None else (folder / name).read_text()) for name, text in parts]
     texts += [(name, (folder / name).read_text())
               for name in (*(MEDIA_FILES if features.media else ()), *LATER_FILES,

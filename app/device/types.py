@@ -62,7 +62,7 @@ RENDER_PARAMS = np.dtype([
     ("right", np.float32, 4),
     ("up", np.float32, 4),
     ("env_scale", np.float32, 4),
-    ("lens", np.float32, 4),        # aperture radius, focus distance (kernels/cameras/)
+    ("lens", np.float32, 4),        # what else the camera type reads (app/cameras/: Camera.lens)
     ("filter", np.float32, 4),      # the pixel filter's parameters (kernels/filters/)
     ("width", np.int32),
     ("height", np.int32),

@@ -2,6 +2,7 @@
 depth its program is built for, the light sampler it needs, and the one line that says what it
 cannot render yet."""
 
+from pathtrace.cameras.registry import supports_importance
 from pathtrace.errors import UserError, warn
 
 MAX_DEPTH = 10
@@ -28,15 +29,15 @@ def depth(max_depth: int) -> int:
 def check(name: str, features, integrator: str, lights):
     """Raises a UserError, one line, for what `integrator` (bdpt or ptracer) cannot render yet
     in a scene (its name) whose program needs `features` (app/device/features.py) and whose light table
-    is `lights`: participating media and null surfaces (no volumetric BDPT), the orthographic
-    camera; for light tracing alone, light from the environment or a
-    directional light, which start no light subpath (app/lights/registry.py: EMITTERS)."""
+    is `lights`: participating media and null surfaces (no volumetric BDPT), a camera without
+    importance (app/cameras/: Camera.importance); for light tracing alone, light from the
+    environment or a directional light, which start no light subpath (app/lights/registry.py: EMITTERS)."""
     if features.media:
         raise UserError(f"{name}: integrator {integrator}: participating media are not supported yet "
                         "(render it with --integrator path)")
-    if features.camera not in ("perspective", "thinlens"):
-        raise UserError(f"{name}: integrator {integrator}: only perspective cameras (a pinhole or a thin lens) are "
-                        f"supported yet, not {features.camera} (render it with --integrator path)")
+    if not supports_importance(features.camera):
+        raise UserError(f"{name}: integrator {integrator}: the {features.camera} camera has no importance to join "
+                        "light subpaths to yet (render it with --integrator path)")
     if integrator == "ptracer" and (lights.env_pick > 0 or "directional" in lights.types):
         raise UserError(f"{name}: integrator ptracer: light from the environment or a directional light is not "
                         "traced from the light (render it with --integrator bdpt or path)")

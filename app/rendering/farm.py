@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from pathtrace.camera import Camera
+from pathtrace.cameras import Camera
 from pathtrace.errors import UserError, cut, short
 from pathtrace.rendering.launches import next_launch_size
 

@@ -9,7 +9,7 @@ import pyopencl as cl
 
 from pathtrace.rendering import bdpt
 from pathtrace.rendering.queue_plans import QueuePlans
-from pathtrace.camera import CAMERA_KERNELS, Camera, kernel_name
+from pathtrace.cameras import KERNELS as CAMERA_KERNELS, Camera
 from pathtrace.compiler.compiled import SCENE_BUFFERS, CompiledScene, compile_scene
 from pathtrace.device.opencl import Backend, check_fits
 from pathtrace.errors import UserError, format_bytes
@@ -344,10 +344,7 @@ class Renderer(QueuePlans):
     # --- rendering -------------------------------------------------------------------------
     def params(self, sample_count: int) -> np.ndarray:
         p = np.zeros((), RENDER_PARAMS)
-        forward, right, up = self.camera.basis(self.width / self.height)
-        p["eye"][:3] = self.camera.eye
-        p["forward"][:3], p["right"][:3], p["up"][:3] = forward, right, up
-        p["lens"][:2] = self.camera.aperture, self.camera.focus_distance
+        self.camera.pack(p, self.width / self.height)
         p["filter"] = self.settings.filter.params()
         p["env_scale"][:3] = self.environment.intensity
         p["width"], p["height"] = self.width, self.height
@@ -362,7 +359,7 @@ class Renderer(QueuePlans):
         p["num_spheres"] = self.compiled.num_spheres
         p["rr_depth"] = RR_DEPTH
         p["camera_medium"] = self.scene.camera_medium
-        p["camera_type"] = CAMERA_KERNELS.index(kernel_name(self.camera))
+        p["camera_type"] = CAMERA_KERNELS.index(self.camera.kernel)
         p["filter_type"] = FILTERS.index(self.settings.filter.name)
         p["rr_rule"] = RUSSIAN_ROULETTE.index(self.settings.russian_roulette)
         p["layout"] = self.compiled.layout

@@ -6,7 +6,7 @@ import re
 
 import numpy as np
 
-from pathtrace.camera import Camera
+from pathtrace.cameras import PerspectiveCamera
 from pathtrace.scene.environment import Environment
 from pathtrace.materials import pack
 from pathtrace.resources import resource_dir
@@ -55,7 +55,7 @@ def random_spheres(n: int, diffuse_only: bool) -> Scene:
     material[emitter] = b.materials.add_rows(pack("black", {}, emission=4.0 * albedo[emitter]))
     return Scene(f"spheres{count_name(n)}{'-diffuse' if diffuse_only else ''}",
                  np.column_stack([centres, np.full(n, radius)]).astype(np.float32), material,
-                 b.materials, camera=Camera([28, 20, 36], [0, 0, 0], [0, 1, 0], 45.0),
+                 b.materials, camera=PerspectiveCamera([28, 20, 36], [0, 0, 0], [0, 1, 0], 45.0),
                  environment=Environment.constant((1, 1, 1)),
                  settings=RenderSettings(width=1920, height=1080, spp=64))
 
@@ -69,7 +69,7 @@ def height_field(triangles: int) -> Scene:
     builder = SceneBuilder()
     builder.add_mesh(Mesh("height field", v, f, None, builder.material(diffuse(0.6))))
     builder.add_sphere((0.3, 0.35, 0.2), 0.25, diffuse((0.8, 0.3, 0.2)), "ball")
-    return builder.build(f"heightfield{count_name(triangles)}", camera=Camera([0, 1.6, 2.4], [0, 0, 0], [0, 1, 0], 45.0),
+    return builder.build(f"heightfield{count_name(triangles)}", camera=PerspectiveCamera([0, 1.6, 2.4], [0, 0, 0], [0, 1, 0], 45.0),
                          environment=Environment.constant((0.8, 0.85, 1.0)),
                          settings=RenderSettings(width=1920, height=1080, spp=64))
 

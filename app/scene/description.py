@@ -6,7 +6,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from pathtrace.camera import Camera
+from pathtrace.cameras import Camera, PerspectiveCamera
 from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError, warn
 from pathtrace.filters import PixelFilter
@@ -90,7 +90,7 @@ class Scene:
     materials: MaterialTable
     meshes: list = field(default_factory=list)
     sphere_names: list = None     # None: "sphere i"
-    camera: Camera = field(default_factory=Camera)
+    camera: Camera = field(default_factory=PerspectiveCamera)
     environment: Environment = field(default_factory=lambda: Environment.constant((1, 1, 1)))
     settings: RenderSettings = field(default_factory=RenderSettings)
     source: str = ""              # the file it was read from (for messages), if any

@@ -1,6 +1,6 @@
 """The parameter tables of docs/scene-format.md, generated from the types' declarations
 (app/parameters.py): each block between `<!-- parameters: KIND -->` and `<!-- end parameters -->`
-is the tables of the types of KIND (lights, materials, textures, media, shapes), one per type, with a column for
+is the tables of the types of KIND (lights, materials, textures, media, shapes, cameras), one per type, with a column for
 each format that has the type. `python -m pathtrace.scene.format_tables` rewrites the file;
 tests/test_parameters.py fails where the file and the declarations differ."""
 
@@ -8,6 +8,7 @@ import re
 import sys
 from pathlib import Path
 
+from pathtrace.cameras import CAMERAS
 from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.materials import BSDFS
 from pathtrace.scene.media import Medium
@@ -32,6 +33,11 @@ def _types(kind: str) -> list:
         return [(t.name, t.formats, t.doc, t.parameters) for t in TEXTURES.values()]
     if kind == "media":
         return [("homogeneous", Medium.formats, "", Medium.parameters)]
+    if kind == "cameras":
+        return [(c.type, {f: getattr(c, f) for f in ("mitsuba", "pbrt") if getattr(c, f)},
+                 " ".join(sys.modules[c.__module__].__doc__.split())
+                 + ("" if c.importance else " BDPT cannot render through it yet (no importance)."), c.parameters)
+                for c in CAMERAS.values()]
     if kind == "shapes":
         from pathtrace.shapes import SHAPES
         return [(k.name, k.formats, k.doc, k.parameters + k.mitsuba_parameters) for k in SHAPES.values()]

@@ -17,7 +17,8 @@ from xml.parsers import expat
 
 import numpy as np
 
-from pathtrace.camera import Camera
+from pathtrace import cameras
+from pathtrace.cameras.perspective import PerspectiveCamera, vertical_fov
 from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError, cut, short, warn
 from pathtrace.filters import FILTERS, PixelFilter
@@ -121,6 +122,28 @@ def parse_xml(path: Path, budget: list = None, where: str = None) -> Node:
 
 
 # --- property values ---------------------------------------------------------------------
+
+class _Sensor:
+    """What a camera type reads of a Mitsuba sensor (app/cameras/: Camera.from_mitsuba): its
+    properties, the film's size, and the scale of to_world along x and y."""
+
+    def __init__(self, reader, node, props, scale_x, scale_y):
+        self.reader, self.node, self.props = reader, node, props
+        self.width, self.height = reader.settings.width, reader.settings.height
+        self.scale_x, self.scale_y = scale_x, scale_y
+
+    def has(self, name) -> bool:
+        return name in self.props
+
+    def get(self, name, default=None, kind="float"):
+        return self.reader.get(self.props, name, default, (kind,))
+
+    def fail(self, name, problem):
+        _fail(self.props.get(name, self.node) if name else self.node, problem)
+
+    def warn(self, text):
+        warn(f"{self.node.where()}: {text}")
+
 
 class Props(dict):
     """An element's properties, {name: Node}, noting each name the reader looks up: once the
@@ -546,7 +569,8 @@ class _Reader:
 
     def default_camera(self):
         """Mitsuba's default sensor: at the origin, looking down +z, fov 45 on x."""
-        return Camera((0, 0, 0), (0, 0, 1), (0, 1, 0), self.vertical_fov(45.0, "x"))
+        return PerspectiveCamera((0, 0, 0), (0, 0, 1), (0, 1, 0),
+                                 vertical_fov(45.0, "x", self.settings.width, self.settings.height))
 
     def integrator(self, node):
         kind = node.attrs.get("type")
@@ -569,17 +593,12 @@ class _Reader:
             else:
                 warn(f"{node.where()}: pathtrace starts Russian roulette at depth 5, not {rr_depth}")
 
-    def vertical_fov(self, fov, axis):
-        w, h = self.settings.width, self.settings.height
-        t = math.tan(math.radians(fov) / 2)
-        scale = {"x": h / w, "y": 1.0, "diagonal": h / math.hypot(w, h),
-                 "smaller": h / w if w < h else 1.0, "larger": h / w if w > h else 1.0}[axis]
-        return math.degrees(2 * math.atan(t * scale))
-
     def sensor(self, node):
         kind = node.attrs.get("type")
-        if kind not in ("perspective", "thinlens", "orthographic"):
-            _fail(node, "pathtrace has perspective, thinlens and orthographic cameras only")
+        cls = cameras.registry.format_class("mitsuba", kind)
+        if cls is None:
+            names = sorted(c.mitsuba for c in cameras.CAMERAS.values() if c.mitsuba)
+            _fail(node, f"pathtrace has the {', '.join(names)} sensors only")
         props = self.properties(node)
         for child in node.children:
             if child.tag == "film":
@@ -597,49 +616,18 @@ class _Reader:
         eye = m[:3, 3]
         forward, up = m[:3, :3] @ [0, 0, 1.0], m[:3, :3] @ [0, 1.0, 0]
         left = m[:3, :3] @ [1.0, 0, 0]
-        camera = Camera(eye, eye + forward / np.linalg.norm(forward), up)
         # Mitsuba's camera space has +x to the image's left: a transform that turns it to the
         # right mirrors the image
-        camera.mirrored = bool(np.dot(np.cross(up, forward), left) < 0)
-        if kind == "orthographic":
-            # Mitsuba's orthographic view spans [-1, 1] across the film's width in camera space,
-            # scaled by to_world
-            w, h = self.settings.width, self.settings.height
-            if not math.isclose(np.linalg.norm(left), np.linalg.norm(up), rel_tol=1e-4):
-                warn(f"{node.where()}: to_world scales x and y differently; pathtrace keeps the view's width")
-            camera.projection, camera.height = "orthographic", 2 * np.linalg.norm(left) * h / w
-        else:
-            camera.vfov = self.field_of_view(node, props)
-        if kind == "thinlens":
-            camera.aperture = self.get(props, "aperture_radius", kinds=("float",))
-            if camera.aperture is None:
-                _fail(node, "a thinlens camera needs an aperture_radius")
-            camera.focus_distance = self.get(props, "focus_distance", 10000.0, ("float",))  # Mitsuba's default
+        frame = dict(eye=eye, look_at=eye + forward / np.linalg.norm(forward), up=up,
+                     mirrored=bool(np.dot(np.cross(up, forward), left) < 0))
+        camera = cls.from_mitsuba(_Sensor(self, node, props, np.linalg.norm(left), np.linalg.norm(up)), **frame)
         try:
             camera.check()
         except ValueError as e:
             field, problem = str(e).split(": ", 1)
-            field = {"aperture": "aperture_radius", "vfov": "fov"}.get(field, field)
+            field = {p.name: p.mitsuba for p in camera.parameters if p.mitsuba}.get(field, field)
             _fail(props.get(field, node), f"{field}: {problem}")
         self.camera = camera
-
-    def field_of_view(self, node, props):
-        """The vertical field of view of a perspective or thin-lens sensor's fov and fov_axis, or
-        its focal_length (on a 36 x 24 mm film's diagonal, as Mitsuba takes it)."""
-        axis = self.get(props, "fov_axis", "x", ("string",))
-        if axis not in ("x", "y", "diagonal", "smaller", "larger"):
-            _fail(props["fov_axis"], f"must be x, y, diagonal, smaller or larger, got {short(axis)}")
-        if "fov" in props:
-            fov = self.get(props, "fov", kinds=("float",))
-        else:
-            text = self.get(props, "focal_length", "50mm", ("string",))
-            f = _float(props.get("focal_length", node), text.removesuffix("mm"), "focal_length")
-            if f <= 0:
-                _fail(props.get("focal_length", node), f"focal_length must be positive, got {short(text)}")
-            fov, axis = math.degrees(2 * math.atan(math.hypot(36, 24) / (2 * f))), "diagonal"
-        if not 0 < fov < 180:
-            _fail(props.get("fov", node), f"the field of view must lie in (0, 180) degrees, got {fov}")
-        return self.vertical_fov(fov, axis)
 
     def film(self, node):
         props = self.properties(node)

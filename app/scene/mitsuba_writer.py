@@ -60,7 +60,7 @@ def write_mitsuba(scene: Scene, path: Path) -> Path:
     path = Path(path)
     where = scene.source or scene.name
     cam = scene.camera
-    if cam.projection != "perspective" or cam.aperture > 0 or cam.mirrored:
+    if cam.kernel != "perspective" or cam.mirrored:
         raise UserError(f"{where}: only pinhole perspective cameras (right-handed) are written as Mitsuba XML")
     env = scene.environment
     if env.image.shape[:2] != (1, 1):

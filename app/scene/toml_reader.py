@@ -10,8 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pathtrace.camera import Camera
-from pathtrace import filters, parameters
+from pathtrace import cameras, filters, parameters
 from pathtrace.filters import PixelFilter
 from pathtrace.lights import DELTA_LIGHTS, LIGHT_SAMPLERS
 from pathtrace.scene.environment import Environment
@@ -322,33 +321,31 @@ class _Reader:
         return self.number(data, param.name, where, low=param.low, high=param.high, integer=param.kind == "integer")
 
     def camera(self, data):
+        """The [camera] table: the frame, and the parameters its type declares (app/cameras/)."""
         where = "camera"
-        self.table(data, where, {"type", "eye", "look_at", "up", "vfov", "aperture_radius", "focus_distance",
-                                 "height", "mirrored", "medium"})
         kind = data.get("type", "perspective")
-        if kind not in ("perspective", "thinlens", "orthographic"):
-            self.fail("camera.type", f"must be perspective, thinlens or orthographic, got {short(kind)}")
-        if kind == "thinlens" and ("aperture_radius" not in data or "focus_distance" not in data):
-            self.fail("camera", "a thinlens camera needs both 'aperture_radius' and 'focus_distance'")
-        if "aperture_radius" in data and "focus_distance" not in data:
-            self.fail("camera.aperture_radius", "an aperture needs a 'focus_distance', the distance in focus")
-        for key, kinds in (("aperture_radius", ("perspective", "thinlens")), ("focus_distance", ("perspective", "thinlens")),
-                           ("vfov", ("perspective", "thinlens")), ("height", ("orthographic",))):
-            if key in data and kind not in kinds:
+        cls = cameras.registry.toml_class(kind, data)
+        if cls is None:
+            self.fail("camera.type", f"must be one of {', '.join(cameras.registry.toml_names())}, got {short(kind)}")
+        own = {p.name for p in cls.parameters}
+        common = {"type", "eye", "look_at", "up", "mirrored", "medium"}
+        for key in data:
+            if key not in common | own and any(key in {p.name for p in c.parameters} for c in cameras.CAMERAS.values()):
                 self.fail(f"camera.{key}", f"a {kind} camera has no {key}")
-        cam = Camera(self.vector(data, "eye", where), self.vector(data, "look_at", where),
-                     self.vector(data, "up", where, default=(0, 1, 0)),
-                     self.number(data, "vfov", where, default=45.0),
-                     "orthographic" if kind == "orthographic" else "perspective",
-                     self.number(data, "aperture_radius", where, default=0.0),
-                     self.number(data, "focus_distance", where, default=1.0),
-                     self.number(data, "height", where, default=2.0))
-        cam.mirrored = self.boolean(data, "mirrored", where, False)
+        self.table(data, where, common | own)
+        missing = [p.name for p in cls.parameters if p.default is None and p.name not in data]
+        if missing:
+            self.fail("camera", f"a {cls.type} camera needs {' and '.join(repr(m) for m in missing)}")
+        values = parameters.read(cls.parameters, "toml",
+                                 lambda p, name: self.parameter(data, p, where) if name in data else None)
+        cam = cls(self.vector(data, "eye", where), self.vector(data, "look_at", where),
+                  self.vector(data, "up", where, default=(0, 1, 0)),
+                  mirrored=self.boolean(data, "mirrored", where, False), **values)
         try:
             cam.check()
         except ValueError as e:
             field, problem = str(e).split(": ", 1)
-            self.fail(f"camera.{ {'aperture': 'aperture_radius'}.get(field, field)}", problem)
+            self.fail(f"camera.{field}", problem)
         forward = cam.look_at - cam.eye
         if np.linalg.norm(forward) == 0:
             self.fail("camera.look_at", "must differ from camera.eye")

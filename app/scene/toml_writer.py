@@ -121,20 +121,7 @@ def scene_toml(scene: Scene, out: Path) -> str:
 
     s, cam, env = scene.settings, scene.camera, scene.environment
     lines = [f"# {scene.name}, converted by pathtrace convert", "", "[camera]"]
-    if cam.projection == "orthographic":
-        lines += ['type = "orthographic"']
-    elif cam.aperture > 0:
-        lines += ['type = "thinlens"']
-    lines += [f"eye = {_value(cam.eye.tolist())}", f"look_at = {_value(cam.look_at.tolist())}",
-              f"up = {_value(cam.up.tolist())}"]
-    if cam.projection == "orthographic":
-        lines += [f"height = {_value(cam.height)}"]
-    else:
-        lines += [f"vfov = {_value(cam.vfov)}"]
-    if cam.mirrored:
-        lines += ["mirrored = true"]
-    if cam.projection == "perspective" and cam.aperture > 0:
-        lines += [f"aperture_radius = {_value(cam.aperture)}", f"focus_distance = {_value(cam.focus_distance)}"]
+    lines += [f"{key} = {_value(value)}" for key, value in cam.toml().items()]
     medium_names = _medium_names(scene.media)
     if scene.camera_medium >= 0:
         lines.append(f"medium = {_value(medium_names[scene.camera_medium])}")

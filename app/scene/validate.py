@@ -8,6 +8,7 @@ import math
 
 import numpy as np
 
+from pathtrace.cameras import Camera
 from pathtrace.errors import UserError, cut, short
 from pathtrace.scene.description import INTEGRATORS, MAX_PATH_QUEUE, PATH_QUEUE_AUTO, RUSSIAN_ROULETTE, Scene
 from pathtrace.scene.meshes import MAX_COORDINATE
@@ -93,6 +94,8 @@ def _number(name: str, value, low: float, high: float, open_low: bool = False) -
 
 def _camera(camera):
     where = "scene.camera"
+    if not isinstance(camera, Camera):
+        raise UserError(f"{where}: give a pathtrace.Camera (pathtrace.cameras), got {short(camera)}")
     eye, look_at = _vector(f"{where}.eye", camera.eye), _vector(f"{where}.look_at", camera.look_at)
     up = _vector(f"{where}.up", camera.up, limit=np.inf)      # a direction: of any length
     forward = look_at - eye
@@ -100,10 +103,11 @@ def _camera(camera):
         raise UserError(f"{where}.look_at: must differ from {where}.eye, got {look_at.tolist()} for both")
     if not np.linalg.norm(np.cross(forward, up)) > 1e-9 * np.linalg.norm(forward) * np.linalg.norm(up):
         raise UserError(f"{where}.up: must be neither zero nor parallel to the view direction, got {up.tolist()}")
-    for name in ("vfov", "aperture", "focus_distance", "height"):
-        value = getattr(camera, name)
-        if isinstance(value, bool) or not isinstance(value, (int, float, np.number)) or not math.isfinite(value):
-            raise UserError(f"{where}.{name}: give a finite number, got {short(value)}")
+    for p in camera.parameters:
+        value = getattr(camera, p.name)
+        if not p.choices and (isinstance(value, bool) or not isinstance(value, (int, float, np.number))
+                            or not math.isfinite(value)):
+            raise UserError(f"{where}.{p.name}: give a finite number, got {short(value)}")
     try:
         camera.check()
     except ValueError as e:

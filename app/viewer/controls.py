@@ -6,7 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from pathtrace.camera import Camera
+from pathtrace.cameras import Camera
 
 # key names, mapped to GLFW's codes by the window
 MOVES = {

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from pathtrace.cameras import CAMERAS
 from pathtrace.compiler.compiled import MAX_RADIANCE
 from pathtrace.materials import BSDFS
 from pathtrace.materials.bsdf import constant_of
@@ -31,8 +32,9 @@ KEYS = (("W A S D", "move"), ("Q / E, Ctrl / Space", "down / up"), ("right mouse
 
 # every label the panel draws beside a widget, to size the label column
 LABELS = ("exposure (EV)", "tone curve", "max depth (0: none)", "Russian roulette", "env intensity",
-          "env rotation", "path queue (0: off)", "speed", "vertical fov", "view height", "aperture", "focus distance", "built-in", "file", "folder", "emission") + \
-    tuple({p.name for bsdf in BSDFS.values() for p in bsdf.params})
+          "env rotation", "path queue (0: off)", "speed", "camera type", "built-in", "file", "folder", "emission") + \
+    tuple({p.name for bsdf in BSDFS.values() for p in bsdf.params}) + \
+    tuple({name.replace("_", " ") for camera in CAMERAS.values() for name in camera.sliders})
 
 
 # a parameter's name longer than this (principled's sampling rates) goes on a line of its own
@@ -229,37 +231,23 @@ def draw_panel(v):
                                                  imgui.SliderFlags_.logarithmic)
         layout.check("speed")
         camera = r.camera
-        if camera.projection == "orthographic":
-            changed, height = imgui.slider_float("view height", camera.height, 1e-3, 1e4, "%.3g",
-                                                 imgui.SliderFlags_.logarithmic)
-            layout.check("view height")
-            if changed:
-                camera.height = height
-                r.set_camera(camera)
-        else:
-            changed, fov = imgui.slider_float("vertical fov", camera.vfov, 0.1, 179.9, "%.1f deg")
-            layout.check("vertical fov")
-            if changed:
-                camera.vfov = fov
-                r.set_camera(camera)
-        imgui.text_wrapped("H shows the keys; R resets the camera")
-
-    if r.camera.projection == "perspective" and layout.header("Lens"):
-        # a thin lens: the aperture's radius and the distance in focus, in scene units
-        camera = r.camera
-        changed, aperture = imgui.slider_float("aperture", camera.aperture, 0.0, 10.0, "%.3g",
-                                               imgui.SliderFlags_.logarithmic)
-        layout.check("aperture")
+        types = list(CAMERAS)
+        changed, index = imgui.combo("camera type", types.index(camera.type), types)
+        layout.check("camera type")
         if changed:
-            camera.aperture = max(aperture, 0.0)
+            camera = camera.as_type(types[index])
             r.set_camera(camera)
-        changed, focus = imgui.slider_float("focus distance", camera.focus_distance, 1e-3, 1e4, "%.3g",
-                                            imgui.SliderFlags_.logarithmic)
-        layout.check("focus distance")
-        if changed:
-            camera.focus_distance = max(focus, 1e-3)
-            r.set_camera(camera)
-        imgui.text_wrapped("aperture 0 is a pinhole; Ctrl + left click focuses on the surface under the cursor")
+        # the sliders of the camera type's own fields (app/cameras/: Camera.sliders)
+        for name, (low, high, log) in camera.sliders.items():
+            label = name.replace("_", " ")
+            changed, value = imgui.slider_float(label, getattr(camera, name), low, high, "%.3g",
+                                                imgui.SliderFlags_.logarithmic if log else 0)
+            layout.check(label)
+            if changed:
+                setattr(camera, name, min(max(value, low), high))
+                r.set_camera(camera)
+        imgui.text_wrapped("H shows the keys; R resets the camera" + ("; Ctrl + left click focuses on the "
+                           "surface under the cursor" if hasattr(camera, "focus_distance") else ""))
 
     if layout.header("Scene", imgui.TreeNodeFlags_.default_open):
         names = list(BUILTIN_SCENES)

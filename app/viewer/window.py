@@ -286,13 +286,13 @@ class Viewer(SceneOpening, Denoising, Screenshots):
                     self.selected = self.renderer.pick(o, d)
 
     def focus_at(self, origin, direction):
-        """Puts the plane in focus through the surface seen along a ray (a perspective camera;
-        the aperture stays as it is). Returns whether a surface was there."""
+        """Puts the plane in focus through the surface seen along a ray (a camera with a
+        focus_distance; the aperture stays as it is). Returns whether a surface was there."""
         camera = self.renderer.camera
         t = self.renderer.hit_distance(origin, direction)
-        if camera.projection != "perspective" or t is None:
+        if not hasattr(camera, "focus_distance") or t is None:
             return False
-        forward = camera.basis(1.0)[0]
+        forward = camera.frame()[0]
         camera.focus_distance = float(t * np.dot(direction, forward))
         self.renderer.set_camera(camera)
         return True

@@ -1,4 +1,4 @@
-/* An orthographic camera (app/camera.py; Mitsuba 3's and pbrt-v4's `orthographic`): parallel
+/* An orthographic camera (app/cameras/orthographic.py; Mitsuba 3's and pbrt-v4's `orthographic`): parallel
  * rays along the view direction from the points of a rectangle.
  *
  *   p->eye       the rectangle's centre

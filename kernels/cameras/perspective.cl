@@ -1,4 +1,4 @@
-/* A perspective camera with a pinhole (app/camera.py; Mitsuba 3's `perspective`, pbrt-v4's
+/* A perspective camera with a pinhole (app/cameras/perspective.py; Mitsuba 3's `perspective`, pbrt-v4's
  * `perspective` without a lens).
  *
  *   p->eye       the centre of projection

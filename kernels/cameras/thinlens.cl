@@ -1,4 +1,4 @@
-/* A perspective camera with a thin lens (app/camera.py; Mitsuba 3's `thinlens`, pbrt-v4's
+/* A perspective camera with a thin lens (app/cameras/thinlens.py; Mitsuba 3's `thinlens`, pbrt-v4's
  * `perspective` with `lensradius` and `focaldistance`): a program of its own, as its registers
  * would cost the pinhole's scenes occupancy (docs/performance.md).
  *

@@ -30,7 +30,8 @@ from pathlib import Path
 
 import numpy as np
 
-from pathtrace.camera import Camera
+from pathtrace import cameras
+from pathtrace.cameras import Camera
 from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError, cut, warn
 from pathtrace.io.files import check_regular_file
@@ -62,6 +63,33 @@ MAX_POWER_ROWS = 256
 # a plymesh shape and its file name, as MeshFiles reads them ahead (PbrtReader.named_mesh_files)
 _PLYMESH = re.compile(r'Shape\s+"plymesh"')
 _FILENAME = re.compile(r'"string\s+filename"\s*\[?\s*"([^"]*)"')
+
+
+class _CameraParams:
+    """What a camera type reads of a pbrt Camera (app/cameras/: Camera.from_pbrt): its
+    parameters (pbrt-v4's defaults where there is no Camera directive), the film's screen window
+    and the scale of the camera's transform along y."""
+
+    def __init__(self, reader, params, where, scale_y):
+        self.reader, self.params, self.where, self.scale_y = reader, params, where, scale_y
+        self.width, self.height = reader.settings.width, reader.settings.height
+
+    def get(self, name, default):
+        return default if self.params is None else self.params.float(name, default)
+
+    def string(self, name, default):
+        return default if self.params is None else self.params.string(name, default)
+
+    def fail(self, name, problem):
+        if self.params is None:
+            raise UserError(f"{self.where}: '{name}' {problem}")
+        self.params.fail(name, problem)
+
+    def warn(self, text):
+        warn(f"{self.where}: {text}")
+
+    def screen_half_height(self) -> float:
+        return self.reader.screen_half_height(self.params, self.width, self.height)
 
 
 @dataclass
@@ -278,34 +306,18 @@ class PbrtReader:
         r = world_from_camera[:3, :3]
         eye = world_from_camera[:3, 3]
         forward, up, right = r @ [0, 0, 1.0], r @ [0, 1.0, 0], r @ [1.0, 0, 0]
-        camera = Camera(eye, eye + forward / np.linalg.norm(forward), up)
-        camera.mirrored = bool(np.dot(np.cross(forward, up), right) < 0)
-        w, h = self.settings.width, self.settings.height
-        if kind not in ("perspective", "orthographic"):
+        frame = dict(eye=eye, look_at=eye + forward / np.linalg.norm(forward), up=up,
+                     mirrored=bool(np.dot(np.cross(forward, up), right) < 0))
+        cls = cameras.registry.format_class("pbrt", kind)
+        if cls is None:
             warn(f"{where}: pathtrace has no {kind} camera; it uses a perspective one of pbrt-v4's defaults")
-            kind, params = "perspective", None
-        get = (lambda name, default: default) if params is None else \
-            (lambda name, default: params.float(name, default))          # noqa: E731
-        half_height = self.screen_half_height(params, w, h)
-        if kind == "orthographic":
-            camera.projection = "orthographic"
-            camera.height = 2.0 * np.linalg.norm(up) * half_height
-        else:
-            fov = get("fov", 90.0)
-            if not 0 < fov < 180:
-                params.fail("fov", f"must lie in (0, 180) degrees, got {fov:g}")
-            # screen space spans tan(fov / 2) per unit (pbrt-v4's Perspective(fov, n, f))
-            camera.vfov = math.degrees(2 * math.atan(math.tan(math.radians(fov) / 2) * half_height))
-        camera.aperture = get("lensradius", 0.0)
-        camera.focus_distance = get("focaldistance", 1e6)
-        if camera.aperture > 0 and kind == "orthographic":
-            warn(f"{where}: pathtrace's orthographic camera has no lens; 'lensradius' is ignored")
-            camera.aperture = 0.0
+            kind, params, cls = "perspective", None, cameras.registry.format_class("pbrt", "perspective")
+        camera = cls.from_pbrt(_CameraParams(self, params, where, np.linalg.norm(up)), **frame)
         try:
             camera.check()
         except ValueError as e:
             name, problem = str(e).split(": ", 1)
-            name = {"aperture": "lensradius", "focus_distance": "focaldistance", "vfov": "fov"}.get(name, name)
+            name = {p.name: p.pbrt for p in camera.parameters if p.pbrt}.get(name, name)
             raise UserError(f"{where}: '{name}' {problem}") from None
         if params is not None:
             self.unused(params, "camera", kind)

@@ -11,7 +11,7 @@ import time
 
 import numpy as np
 
-from pathtrace.camera import Camera
+from pathtrace.cameras import PerspectiveCamera
 from pathtrace.device.opencl import choose_device
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import Mesh, SceneBuilder, diffuse
@@ -36,7 +36,7 @@ def field_of_bushes(count: int):
         t = np.eye(4)
         t[0, 3], t[2, 3] = (i % side - side / 2) * 4.0, (i // side - side / 2) * 4.0
         b.add_instance(bush, t)
-    return b.build("bushes", camera=Camera(eye=np.array([0.0, 60.0, -200.0]), look_at=np.zeros(3), vfov=40.0))
+    return b.build("bushes", camera=PerspectiveCamera(eye=np.array([0.0, 60.0, -200.0]), look_at=np.zeros(3), vfov=40.0))
 
 
 def main(argv):

@@ -1,0 +1,156 @@
+"""The camera interface: what every projection shares, its frame (eye, look_at, up and whether
+the image is mirrored, which the viewer's moves and the readers' transforms set), and what each
+projection declares in its own module app/cameras/<type>.py beside its kernel file
+kernels/cameras/<kernel>.cl: its fields (app/parameters.py: their names in pathtrace's TOML,
+Mitsuba 3 and pbrt-v4, defaults and docs), their ranges, its rays, its packing into
+RenderParams and its readings of Mitsuba's and pbrt's cameras. app/cameras/registry.py finds
+the modules and generates the kernels' dispatch."""
+
+import dataclasses
+from dataclasses import dataclass, field
+from typing import ClassVar
+
+import numpy as np
+
+MAX_EXTENT = 1e30     # the largest aperture, focus distance or view height a file may give
+
+
+def check_range(name: str, value, low: float, high: float, open_low: bool = False, open_high: bool = False):
+    """Raises ValueError("<name>: <problem>") where value is not a number in the range."""
+    inside = isinstance(value, (int, float, np.number)) and not isinstance(value, bool) and \
+        (low < value if open_low else low <= value) and (value < high if open_high else value <= high)
+    if not inside:
+        shown = f"{value:g}" if isinstance(value, (int, float, np.number)) else repr(value)
+        raise ValueError(f"{name}: must be in {'(' if open_low else '['}{low:g}, {high:g}{')' if open_high else ']'}, "
+                         f"got {shown}")
+
+
+def _normalize(v):
+    return v / np.linalg.norm(v)
+
+
+@dataclass
+class Camera:
+    """A camera's frame. A projection subclasses it with its own fields (keyword or after up),
+    and sets the class attributes below."""
+    eye: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, 5.0]))
+    look_at: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    up: np.ndarray = field(default_factory=lambda: np.array([0.0, 1.0, 0.0]))
+    mirrored: bool = field(default=False, kw_only=True)
+    # the image's right is -(forward x up): a left-handed camera, as pbrt's LookAt gives
+
+    type: ClassVar[str] = None           # its name in TOML and the registry
+    parameters: ClassVar[tuple] = ()     # its own fields, declared (app/parameters.py: Parameter;
+                                         # a name's field holds one of its choices)
+    sliders: ClassVar[dict] = {}         # {field: (low, high, logarithmic)}: the viewer panel's
+                                         # slider of a number field
+    kernels: ClassVar[tuple] = ()        # its kernel files' names (kernels/cameras/<name>.cl;
+                                         # default (type,)), which `kernel` chooses among
+    importance: ClassVar[bool] = False   # its kernel files define sample_<kernel>_importance, the
+                                         # join of a light subpath to its lens (kernels/camera.cl):
+                                         # bidirectional path tracing can render through it
+    mitsuba: ClassVar[str] = None        # the Mitsuba 3 sensor type it reads (from_mitsuba)
+    pbrt: ClassVar[str] = None           # the pbrt-v4 Camera type it reads (from_pbrt)
+    toml_aliases: ClassVar[tuple] = ()   # other TOML types that are this one where a table gives
+                                         # its own fields (a perspective camera with a lens)
+
+    def __post_init__(self):
+        if self.type is None:
+            raise TypeError("Camera is the cameras' base; make one of pathtrace.cameras.CAMERAS' types "
+                            "(PerspectiveCamera, ...)")
+        self.eye = np.asarray(self.eye, np.float64)
+        self.look_at = np.asarray(self.look_at, np.float64)
+        self.up = np.asarray(self.up, np.float64)
+
+    def __setattr__(self, name, value):
+        # a field of another camera type set on this one would change nothing: say so
+        names = [f.name for f in dataclasses.fields(self)]
+        if name not in names:
+            raise AttributeError(f"a {self.type} camera has no {name!r} (its fields: {', '.join(names)}; "
+                                 "Camera.as_type makes another type)")
+        super().__setattr__(name, value)
+
+    def as_type(self, type_name: str, **fields) -> "Camera":
+        """A camera of the registered type `type_name` with this one's frame, the fields the two
+        types share, and `fields`."""
+        cls = Camera.types()[type_name]
+        theirs = {f.name for f in dataclasses.fields(cls)}
+        shared = {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name in theirs}
+        return cls(**{**shared, **fields}).copy()
+
+    @staticmethod
+    def types() -> dict:
+        """Every subclass of Camera with a `type`, defined in this package, by type name in name
+        order: the registry's CAMERAS, once it has imported the package's modules (which
+        importing any of them does first)."""
+        found, todo = {}, list(Camera.__subclasses__())
+        while todo:
+            cls = todo.pop(0)
+            todo += cls.__subclasses__()
+            if cls.type is not None and cls.__module__.startswith("pathtrace.cameras."):
+                found[cls.type] = cls
+        return dict(sorted(found.items()))
+
+    @property
+    def kernel(self) -> str:
+        """Its kernel file's name (kernels/cameras/<kernel>.cl), RenderParams.camera_type's."""
+        return self.type
+
+    def __repr__(self) -> str:
+        from pathtrace.scene.named import vector
+        own = "".join(f", {p.name} {getattr(self, p.name) if p.choices else format(getattr(self, p.name), 'g')}"
+                      for p in self.parameters)
+        return (f"<Camera {self.type} at {vector(self.eye)} looking at {vector(self.look_at)}, up "
+                f"{vector(self.up)}{own}{', mirrored' if self.mirrored else ''}>")
+
+    def check(self):
+        """Raises ValueError("<field>: <problem>") for the first of its own fields out of range
+        (the view itself, eye, look_at and up, the readers check); a name must be one of its
+        choices. A type checks its numbers' ranges on top of this."""
+        for p in self.parameters:
+            if p.choices and getattr(self, p.name) not in p.choices:
+                raise ValueError(f"{p.name}: must be one of {', '.join(p.choices)}, got {getattr(self, p.name)!r}")
+        return self
+
+    def frame(self):
+        """Unit forward, right (the image's) and up."""
+        forward = _normalize(self.look_at - self.eye)
+        right = _normalize(np.cross(forward, self.up))
+        up = np.cross(right, forward)
+        return forward, -right if self.mirrored else right, up
+
+    def basis(self, aspect: float):
+        """forward, right and up as RenderParams holds them (kernels/cameras/): by default the
+        frame with right and up scaled to the image's half width and half height."""
+        forward, right, up = self.frame()
+        h = self.half_height()
+        return forward, right * h * aspect, up * h
+
+    def half_height(self) -> float:
+        return 1.0
+
+    def lens(self) -> tuple:
+        """RenderParams.lens: what else its kernel reads."""
+        return (0.0, 0.0, 0.0, 0.0)
+
+    def pack(self, p, aspect: float):
+        """Writes its fields into RenderParams p (app/device/types.py) for an image of `aspect`."""
+        p["eye"][:3] = self.eye
+        p["forward"][:3], p["right"][:3], p["up"][:3] = self.basis(aspect)
+        p["lens"] = self.lens()
+
+    def ray(self, aspect: float, x: float, y: float):
+        """The ray through the image's point (x, y) in [-1, 1]^2, +y up, from the lens's centre:
+        (origin, unit direction), as its kernel draws it."""
+        raise NotImplementedError
+
+    def copy(self):
+        return dataclasses.replace(self, eye=self.eye.copy(), look_at=self.look_at.copy(), up=self.up.copy())
+
+    def toml(self) -> dict:
+        """Its [camera] table, without the medium."""
+        table = {"type": self.type, "eye": self.eye.tolist(), "look_at": self.look_at.tolist(),
+                 "up": self.up.tolist()}
+        table.update({p.name: getattr(self, p.name) if p.choices else float(getattr(self, p.name))
+                      for p in self.parameters})
+        return {**table, "mirrored": True} if self.mirrored else table

@@ -1,0 +1,52 @@
+"""The orthographic camera (kernels/cameras/orthographic.cl; Mitsuba 3's and pbrt-v4's
+`orthographic`): parallel rays along the view direction from the points of a rectangle `height`
+high, as wide as the image's aspect makes it."""
+
+import math
+from dataclasses import dataclass
+from typing import ClassVar
+
+from pathtrace.cameras.camera import MAX_EXTENT, Camera, check_range
+from pathtrace.parameters import Parameter
+
+HEIGHT = Parameter("height", "number", 2.0, doc="the view's height, scene units (Mitsuba's and pbrt's come from "
+                   "the transform's scale and the screen window)")
+
+
+@dataclass(repr=False)
+class OrthographicCamera(Camera):
+    height: float = HEIGHT.default
+
+    type: ClassVar[str] = "orthographic"
+    parameters: ClassVar[tuple] = (HEIGHT,)
+    sliders: ClassVar[dict] = {"height": (1e-3, 1e4, True)}
+    kernels: ClassVar[tuple] = ("orthographic",)
+    mitsuba: ClassVar[str] = "orthographic"
+    pbrt: ClassVar[str] = "orthographic"
+
+    def check(self):
+        check_range("height", self.height, 0.0, MAX_EXTENT, open_low=True)
+        return super().check()
+
+    def half_height(self) -> float:
+        return self.height / 2
+
+    def ray(self, aspect: float, x: float, y: float):
+        forward, right, up = self.basis(aspect)
+        return self.eye + x * right + y * up, forward
+
+    @classmethod
+    def from_mitsuba(cls, sensor, **frame):
+        # Mitsuba's orthographic view spans [-1, 1] across the film's width in camera space,
+        # scaled by to_world
+        if not math.isclose(sensor.scale_x, sensor.scale_y, rel_tol=1e-4):
+            sensor.warn("to_world scales x and y differently; pathtrace keeps the view's width")
+        return cls(**frame, height=2 * sensor.scale_x * sensor.height / sensor.width)
+
+    @classmethod
+    def from_pbrt(cls, camera, **frame):
+        # the screen window spans one world unit per unit, scaled by the transform
+        if camera.get("lensradius", 0.0) > 0:
+            camera.warn("pathtrace's orthographic camera has no lens; 'lensradius' is ignored")
+        camera.get("focaldistance", 1e6)
+        return cls(**frame, height=2.0 * camera.scale_y * camera.screen_half_height())
