@@ -35,7 +35,8 @@ OPTIONS = [
     ("filter box", 'PixelFilter "box"'),
     ("filter gaussian", 'PixelFilter "gaussian"'),
 ]
-CAMERAS = [("camera perspective", 'Camera "perspective"'), ("camera orthographic", 'Camera "orthographic"')]
+CAMERAS = [("camera perspective", 'Camera "perspective"'), ("camera orthographic", 'Camera "orthographic"'),
+           ("camera spherical", 'Camera "spherical"')]
 CORPUS = [
     ("light point", 'LightSource "point"'),
     ("light spot", 'LightSource "spot"'),
