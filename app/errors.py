@@ -75,12 +75,12 @@ def escape(text: str) -> str:
     return text if text.isprintable() else "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
 
 
-def did_you_mean(given: str, choices) -> str:
-    """"; did you mean X?" where one of `choices` is close to what was given (difflib's ratio
-    of at least 0.6), else ""."""
+def did_you_mean(given: str, choices, quoted=False) -> str:
+    """"; did you mean X?" (X in single quotes where `quoted`) where one of `choices` is close to
+    what was given (difflib's ratio of at least 0.6), else ""."""
     import difflib
     close = difflib.get_close_matches(given, list(choices), n=1)
-    return f"; did you mean {close[0]}?" if close else ""
+    return f"; did you mean {repr(close[0]) if quoted else close[0]}?" if close else ""
 
 
 def short(value) -> str:

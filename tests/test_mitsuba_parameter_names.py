@@ -1,7 +1,9 @@
 """The property names the Mitsuba reader reads, per plugin, against those Mitsuba 3's plugins read
-(tests/mitsuba_parameter_names.json, extracted from mitsuba-renderer/mitsuba3's sources): a name
-the reader takes that Mitsuba 3 does not know fails, as does a name the reader reads and the
-table does not list. Every property the reader does not read is warned of, naming it."""
+(app/scene/mitsuba_known_properties.json, extracted from mitsuba-renderer/mitsuba3's sources: the
+list the reader refuses unknown names by): a name the reader takes that Mitsuba 3 does not know
+fails, as does a name the reader reads and tests/mitsuba_parameter_names.json does not list. A
+property Mitsuba 3's plugin does not know is refused (Mitsuba 3 stops at it: "unreferenced
+property"), one it knows and the reader does not read is warned of."""
 
 import json
 from pathlib import Path
@@ -10,9 +12,11 @@ import numpy as np
 import pytest
 
 import pathtrace.scene.mitsuba as mitsuba
-from pathtrace.scene import load_scene
+from pathtrace.errors import UserError
+from pathtrace.scene import known_names, load_scene
 
-TABLE = json.loads((Path(__file__).parent / "mitsuba_parameter_names.json").read_text())
+TABLE = json.loads((Path(__file__).parent / "mitsuba_parameter_names.json").read_text())    # what the reader reads
+MITSUBA = known_names.document("mitsuba")                # what Mitsuba 3 reads, and where that was read
 
 SPHERE = '<shape type="sphere"/>'
 DIFFUSE = '<bsdf type="diffuse"/>'
@@ -53,7 +57,7 @@ CORPUS = {
     "texture bitmap": f'<shape type="sphere"><bsdf type="diffuse">{BITMAP.format(name="reflectance")}</bsdf></shape>',
     "texture checkerboard": '<shape type="sphere"><bsdf type="diffuse"><texture type="checkerboard" '
                             'name="reflectance"/></bsdf></shape>',
-    **{f"shape {kind}": f'<shape type="{kind}"/>' for kind in ("sphere", "rectangle", "cube", "disk")},
+    **{f"shape {kind}": f'<shape type="{kind}"/>' for kind in ("sphere", "rectangle", "cube", "disk", "cylinder")},
     "shape obj": '<shape type="obj"><string name="filename" value="t.obj"/></shape>',
     "shape ply": '<shape type="ply"><string name="filename" value="t.ply"/></shape>',
     "shape instance": f'<shape type="shapegroup" id="g">{SPHERE}</shape><shape type="instance"><ref id="g"/></shape>',
@@ -99,24 +103,69 @@ def test_the_table_lists_what_the_reader_reads(folder, monkeypatch, key):
 
 @pytest.mark.parametrize("key", sorted(TABLE["reader"]))
 def test_every_name_the_reader_reads_is_mitsuba_3s(key):
-    unknown = set(TABLE["reader"][key]) - set(TABLE["mitsuba3"][key])
+    unknown = set(TABLE["reader"][key]) - set(MITSUBA["mitsuba3"][key])
     assert not unknown, f"{key}: the reader reads {sorted(unknown)}, which Mitsuba 3's {key} does not"
 
 
 def test_every_plugin_has_its_source():
-    assert set(TABLE["reader"]) == set(CORPUS) == set(TABLE["mitsuba3"]) == set(TABLE["sources"])
+    assert set(TABLE["reader"]) == set(CORPUS) == set(MITSUBA["mitsuba3"]) == set(MITSUBA["sources"])
 
 
-def test_a_property_the_reader_does_not_read_is_warned_of(tmp_path, capsys):
+@pytest.mark.parametrize("element,expected", [
+    ('<shape type="sphere">\n<float name="radiuss" value="2"/>\n</shape>',
+     "3: <float name=\"radiuss\">: 'radiuss' is not a property of Mitsuba 3's sphere shape, which Mitsuba 3 refuses; "
+     "did you mean 'radius'?"),
+    ('<shape type="sphere">\n<bsdf type="diffuse">\n<rgb name="reflectanse" value="0.5"/></bsdf>\n</shape>',
+     "4: <rgb name=\"reflectanse\">: 'reflectanse' is not a property of Mitsuba 3's diffuse bsdf, which Mitsuba 3 "
+     "refuses; did you mean 'reflectance'?"),
+    # a texture is a property by its name too
+    ('<shape type="sphere">\n<bsdf type="diffuse">\n<texture type="checkerboard" name="reflectence"/></bsdf>\n</shape>',
+     "did you mean 'reflectance'?"),
+    # a smooth dielectric has no microfacets to sample: Mitsuba 3's dielectric reads no sample_visible
+    ('<shape type="sphere">\n<bsdf type="dielectric">\n<boolean name="sample_visible" value="true"/></bsdf>\n</shape>',
+     "4: <boolean name=\"sample_visible\">: 'sample_visible' is not a property of Mitsuba 3's dielectric bsdf, which "
+     "Mitsuba 3 refuses"),
+])
+def test_a_property_mitsuba_3_does_not_know_is_one_line_naming_the_element_and_closest_name(tmp_path, element,
+                                                                                          expected):
     path = tmp_path / "s.xml"
-    path.write_text('<scene version="3.0.0">\n<shape type="sphere">\n<float name="radiuss" value="2"/>\n'
-                    '<bsdf type="dielectric"><boolean name="sample_visible" value="true"/></bsdf>\n'
-                    '</shape>\n<integrator type="path"><boolean name="hide_emitters" value="true"/></integrator>\n'
-                    '</scene>')
-    load_scene(str(path))
-    err = capsys.readouterr().err
-    assert f"{path}:3: <float name=\"radiuss\">: 'radiuss' is not a property pathtrace's sphere shape reads; " \
-           "ignored" in err
-    # a smooth dielectric has no microfacets to sample (Mitsuba 3's dielectric does not read it)
-    assert "'sample_visible' is not a property pathtrace's dielectric bsdf reads" in err
-    assert "'hide_emitters' is not a property pathtrace's path integrator reads" in err
+    path.write_text(f'<scene version="3.0.0">\n{element}\n</scene>')
+    with pytest.raises(UserError) as e:
+        load_scene(str(path))
+    message = str(e.value)
+    assert message.startswith(f"{path}:") and expected in message and "\n" not in message, message
+
+
+def test_a_property_mitsuba_3_knows_and_pathtrace_does_not_read_is_warned_of_once_and_renders(tmp_path, capsys,
+                                                                                            backend):
+    from pathtrace.rendering.renderer import Renderer
+    path = tmp_path / "s.xml"
+    path.write_text('<scene version="3.0.0">\n<integrator type="path"><boolean name="hide_emitters" value="true"/>'
+                    '</integrator>\n<shape type="sphere"><boolean name="flip_normals" value="false"/></shape>\n'
+                    '<shape type="sphere"><float name="radius" value="0.5"/><boolean name="flip_normals" value="false"/>'
+                    '</shape>\n<emitter type="constant"/><sensor type="perspective"><transform name="to_world">'
+                    '<lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform></sensor>\n</scene>')
+    scene = load_scene(str(path))
+    lines = capsys.readouterr().err.splitlines()
+    assert lines == [f"pathtrace: warning: {path}:2: <boolean name=\"hide_emitters\">: 'hide_emitters' is not a "
+                     "property pathtrace's path integrator reads; ignored",
+                     f"pathtrace: warning: {path}:3: <boolean name=\"flip_normals\">: 'flip_normals' is not a "
+                     "property pathtrace's sphere shape reads; ignored"], lines
+    r = Renderer(backend, scene, 8, 8)
+    r.add_samples(1)
+    r.finish()
+    assert np.all(np.isfinite(r.mean())) and r.mean().max() > 0
+
+
+def test_a_shape_takes_its_bsdf_by_its_place_whatever_its_name(tmp_path, capsys):
+    """Mitsuba 3's Shape takes any BSDF object it holds (src/render/shape.cpp), as its exporters
+    write it: <ref id="..." name="bsdf"/>."""
+    path = tmp_path / "s.xml"
+    path.write_text('<scene version="3.0.0"><bsdf type="diffuse" id="red"><rgb name="reflectance" value="0.8, 0, 0"/>'
+                    '</bsdf><shape type="sphere"><ref id="red" name="bsdf"/></shape>'
+                    '<shape type="sphere"><bsdf type="conductor" name="surface"/></shape></scene>')
+    scene = load_scene(str(path))
+    assert capsys.readouterr().err == ""
+    red, metal = (scene.materials.get(row) for row in scene.sphere_material)
+    assert red.type == "diffuse" and np.allclose(red.params["rho_d"], [0.8, 0, 0]), red
+    assert metal.type == "conductor", metal

@@ -1,9 +1,11 @@
 """The parameter names the pbrt reader reads, per pbrt-v4 type, against those pbrt-v4's Create()
-functions read (tests/pbrt_parameter_names.json, extracted from pbrt-v4's sources), for every
-directive whose parameters it reads: lights, materials, textures, media, shapes, cameras, the
-film, samplers, integrators and filters. A name the reader takes that pbrt-v4 does not know (as
-`conedelta` was, for `conedeltaangle`) fails, as does one the reader reads and the table does not
-list; the reader warns of every name it does not read."""
+functions read (app/scene/pbrt/known_parameters.json, extracted from pbrt-v4's sources: the list
+the reader refuses unknown names by), for every directive whose parameters it reads: lights,
+materials, textures, media, shapes, cameras, the film, samplers, integrators and filters. A name
+the reader takes that pbrt-v4 does not know (as `conedelta` was, for `conedeltaangle`) fails, as
+does one the reader reads and tests/pbrt_parameter_names.json does not list. A name pbrt-v4 does
+not know is refused (pbrt-v4 stops at it: ParameterDictionary::ReportUnused), one it knows and
+the reader does not read is warned of."""
 
 import json
 from pathlib import Path
@@ -12,10 +14,12 @@ import numpy as np
 import pytest
 
 import pathtrace.scene.pbrt.reader as pbrt_reader
-from pathtrace.scene import load_scene
+from pathtrace.scene import known_names, load_scene
 from pathtrace.scene.pbrt.tokens import ParamList
 
-TABLE = json.loads((Path(__file__).parent / "pbrt_parameter_names.json").read_text())
+
+TABLE = json.loads((Path(__file__).parent / "pbrt_parameter_names.json").read_text())    # what the reader reads
+PBRT = known_names.document("pbrt")                      # what pbrt-v4 reads, and where that was read
 
 # one directive of each type, with what it cannot do without; the line's key in TABLE. OPTIONS
 # come before WorldBegin; a Camera's parameters are read once the file is read, so each file
@@ -31,7 +35,8 @@ OPTIONS = [
     ("filter box", 'PixelFilter "box"'),
     ("filter gaussian", 'PixelFilter "gaussian"'),
 ]
-CAMERAS = [("camera perspective", 'Camera "perspective"'), ("camera orthographic", 'Camera "orthographic"')]
+CAMERAS = [("camera perspective", 'Camera "perspective"'), ("camera orthographic", 'Camera "orthographic"'),
+           ("camera spherical", 'Camera "spherical"')]
 CORPUS = [
     ("light point", 'LightSource "point"'),
     ("light spot", 'LightSource "spot"'),
@@ -56,6 +61,7 @@ CORPUS = [
     ("medium homogeneous", 'MakeNamedMedium "m" "string type" "homogeneous"'),
     ("shape sphere", 'Shape "sphere"'),
     ("shape disk", 'Shape "disk"'),
+    ("shape cylinder", 'Shape "cylinder"'),
     ("shape trianglemesh", 'Shape "trianglemesh" "point3 P" [ 0 0 0 1 0 0 0 1 0 ]'),
     ("shape bilinearmesh", 'Shape "bilinearmesh" "point3 P" [ 0 0 0 1 0 0 0 1 0 1 1 0 ]'),
     ("shape loopsubdiv", 'Shape "loopsubdiv" "point3 P" [ 0 0 0 1 0 0 0 1 0 ] "integer indices" [ 0 1 2 ]'),
@@ -112,10 +118,59 @@ def test_the_table_lists_what_the_reader_reads(tmp_path, monkeypatch):
 
 @pytest.mark.parametrize("key", sorted(TABLE["reader"]))
 def test_every_name_the_reader_reads_is_pbrt_v4s(key):
-    unknown = set(TABLE["reader"][key]) - set(TABLE["pbrt-v4"][key])
+    unknown = set(TABLE["reader"][key]) - set(PBRT["pbrt-v4"][key])
     assert not unknown, f"{key}: the reader reads {sorted(unknown)}, which pbrt-v4 does not"
 
 
 def test_every_type_has_its_source():
-    assert {k.split(" ")[0] for k in TABLE["pbrt-v4"]} == set(TABLE["sources"])
-    assert set(TABLE["reader"]) <= set(TABLE["pbrt-v4"])
+    assert {k.split(" ")[0] for k in PBRT["pbrt-v4"]} == set(PBRT["sources"])
+    assert set(TABLE["reader"]) <= set(PBRT["pbrt-v4"])
+
+
+HEAD = 'LookAt 0 0 5  0 0 0  0 1 0\nCamera "perspective"\nWorldBegin\nLightSource "point" "rgb I" [ 5 5 5 ] "point3 from" [ 0 0 4 ]\n'
+
+
+@pytest.mark.parametrize("line,expected", [
+    ('Shape "sphere" "float radisu" 1', "'radisu' is not a parameter of pbrt-v4's sphere shape, which pbrt-v4 "
+                                        "refuses; did you mean 'radius'?"),
+    ('Material "diffuse" "rgb reflectanse" [ 1 0 0 ]\nShape "sphere"',
+     "'reflectanse' is not a parameter of pbrt-v4's diffuse material, which pbrt-v4 refuses; did you mean 'reflectance'?"),
+    # the name the reader once took for pbrt-v4's
+    ('LightSource "spot" "float conedelta" 5\nShape "sphere"', "spot light, which pbrt-v4 refuses; did you mean "
+                                                               "'conedeltaangle'?"),
+    ('AreaLightSource "diffuse" "bool two_sided" true\nShape "sphere"',
+     "'two_sided' is not a parameter of pbrt-v4's diffuse area light, which pbrt-v4 refuses; did you mean 'twosided'?"),
+    # nothing close: no guess
+    ('Shape "sphere" "float zzz" 1', "'zzz' is not a parameter of pbrt-v4's sphere shape, which pbrt-v4 refuses"),
+])
+def test_a_name_pbrt_v4_does_not_know_is_one_line_naming_the_file_line_type_and_closest_name(tmp_path, line, expected):
+    import subprocess
+    import sys
+    (tmp_path / "s.pbrt").write_text(HEAD + line + "\n")
+    r = subprocess.run([sys.executable, "-m", "pathtrace", "render", str(tmp_path / "s.pbrt"), "-o",
+                        str(tmp_path / "x.exr"), "--size", "8x8", "--spp", "1"], capture_output=True, text=True,
+                       timeout=300)
+    lines = r.stderr.strip().splitlines()
+    assert r.returncode == 1 and len(lines) == 1 and "Traceback" not in r.stderr, r.stderr
+    assert lines[0].startswith(f"pathtrace: error: {tmp_path / 's.pbrt'}:5: ") and expected in lines[0], lines[0]
+    assert expected.endswith("refuses") == ("did you mean" not in lines[0])
+    assert not (tmp_path / "x.exr").exists()
+
+
+def test_a_name_pbrt_v4_knows_and_pathtrace_does_not_read_is_warned_of_once_and_renders(tmp_path, capsys, backend):
+    from pathtrace.rendering.renderer import Renderer
+    # pbrt-v4's coateddiffuse reads 'twosided' and its samplers 'seed'; pathtrace's do not
+    (tmp_path / "s.pbrt").write_text('Sampler "zsobol" "integer seed" 3 "integer pixelsamples" 1\n' + HEAD
+                                     + 'Material "coateddiffuse" "bool twosided" true\nShape "sphere"\n'
+                                     + 'Material "coateddiffuse" "bool twosided" false\nShape "sphere" "float radius" 2\n')
+    scene = load_scene(str(tmp_path / "s.pbrt"))
+    lines = capsys.readouterr().err.splitlines()
+    assert lines == [f"pathtrace: warning: {tmp_path / 's.pbrt'}:1: 'seed' is not a parameter pathtrace's zsobol "
+                     "sampler reads; ignored",
+                     f"pathtrace: warning: {tmp_path / 's.pbrt'}:6: 'twosided' is not a parameter pathtrace's "
+                     "coateddiffuse material reads; ignored"], lines
+    r = Renderer(backend, scene, 8, 8)
+    r.add_samples(1)
+    r.finish()
+    assert np.all(np.isfinite(r.mean())) and r.mean().max() > 0
+

@@ -67,6 +67,16 @@ def test_every_reference_has_its_scene_and_two_seeds():
         assert (REFERENCES / f"{name}.exr").exists() and (REFERENCES / f"{name}.seed1.exr").exists(), name
 
 
+def test_every_reference_scene_loads_with_no_parameter_refused_or_ignored(capsys):
+    """pbrt-v4 read each file (it rendered it); pathtrace reads each with no parameter that
+    pbrt-v4 does not know (which it refuses) and none that it knows and pathtrace ignores
+    (app/scene/known_names.py)."""
+    for path in sorted(REFERENCES.glob("*.pbrt")):
+        load_scene(str(path))
+    err = capsys.readouterr().err
+    assert "is not a parameter" not in err, err
+
+
 @pytest.mark.parametrize("name", SCENES)
 def test_matches_pbrt_v4(backend, monkeypatch, name):
     ref, ref_var = pbrt_render(name)

@@ -31,6 +31,7 @@ from pathtrace.parameters import FRAME
 from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
+from pathtrace.scene.known_names import Unread
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, orient_by_normals, vertex_normals
 from pathtrace.shapes import SHAPES, Shape
 from pathtrace.textures import TEXTURES, Texture, read_image
@@ -146,10 +147,9 @@ class _Sensor:
 
 class Props(dict):
     """An element's properties, {name: Node}, noting each name the reader looks up: once the
-    scene is read, the reader warns of every property it never looked up (Mitsuba 3 refuses
-    them: "Unreferenced property", src/core/xml.cpp, where it instantiates a plugin), naming it and
-    the element. Nested BSDFs are left out: the BSDFs that wrap them, and shapes, take them by
-    their place, whatever their name."""
+    scene is read, the reader refuses or warns of every property it never looked up
+    (_Reader.warn_unread; Mitsuba 3 refuses them all: "unreferenced property", src/core/xml.cpp,
+    instantiate_node)."""
 
     def __init__(self, node, items):
         super().__init__(items)
@@ -362,11 +362,22 @@ class _Reader:
         return self.props[id(node)]
 
     def warn_unread(self):
+        """The properties the reader never looked up: refused where Mitsuba 3's plugin does not
+        know them either, else warned of, once per name and plugin in a file
+        (app/scene/known_names.py). Nested BSDFs are their readers' (shapes and the BSDFs that
+        wrap them take them by their place), and references and volumes, which Mitsuba 3 may
+        take by their place too, are warned of, never refused."""
+        unread = Unread("mitsuba")
         for props in self.props.values():
-            kind = f"{props.node.attrs.get('type')} {props.node.tag}".strip()
-            for node in props.unread():
-                if node.tag != "bsdf":
-                    warn(f"{node.where()}: '{node.attrs['name']}' is not a property pathtrace's {kind} reads; ignored")
+            node = props.node
+            kind = node.attrs.get("type")
+            for child in props.unread():
+                if child.tag == "bsdf":
+                    continue
+                message = unread.check(child.where(), f"{node.tag} {kind}", f"{kind} {node.tag}".strip(),
+                                       child.attrs["name"], str(child.file), refusable=child.tag not in ("ref", "volume"))
+                if message:
+                    warn(message)
 
     def value(self, node):
         """The value of a property element."""
@@ -960,8 +971,14 @@ class _Reader:
             return self.instance(node, props)
         bsdf, emission, media = None, None, {}
         for child in node.children:
-            if child.tag in ("bsdf", "ref") and "name" not in child.attrs:
+            # Mitsuba 3's Shape takes a BSDF by its place, whatever its name (src/render/shape.cpp,
+            # the constructor's loop over props.objects()): a <ref name="bsdf"> as its exporters
+            # write it, too
+            if child.tag == "bsdf" or child.tag == "ref" and ("name" not in child.attrs
+                                                              or self.resolve(child).tag == "bsdf"):
                 bsdf = child
+                if "name" in child.attrs:
+                    props.read.add(child.attrs["name"])
             elif child.tag == "emitter":
                 if child.attrs.get("type") != "area":
                     warn(f"{child.where()}: a shape's emitter must be area; ignored")

@@ -42,6 +42,7 @@ from pathtrace.lights.light import MAX_RADIANCE
 from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder
+from pathtrace.scene.known_names import Unread
 from pathtrace.scene.meshes import (ELLIPSOID_RINGS, MAX_COORDINATE, MeshFiles, check_mesh, ellipsoid, is_similarity,
                                      orient_by_normals, vertex_normals)
 from pathtrace.scene.pbrt.equal_area import to_latlong, upper_illuminance
@@ -133,6 +134,7 @@ class PbrtReader:
         self.material_rows = {}
         self.default_material = None
         self.warned = set()
+        self.unread = Unread("pbrt")     # the parameters not read: refused or warned of
         self.mesh_files = MeshFiles()     # the plymesh shapes' files, read ahead
         self.dropped = [0, 0]             # degenerate triangles dropped, of the meshes' triangles
 
@@ -228,9 +230,16 @@ class PbrtReader:
             self.warned.add(key)
             warn(message)
 
-    def unused(self, params, what):
+    def unused(self, params, category, kind):
+        """The parameters of a directive of pbrt-v4's `category` ("shape") and `kind` ("sphere")
+        that the reader did not read: refused where pbrt-v4 does not know them either, else
+        warned of, once per name in a file (app/scene/known_names.py)."""
+        label = f"{kind} {'area light' if category == 'arealight' else category}"
         for p in params.unused():
-            warn(f"{params.tokens.where(p.offset)}: '{p.name}' is not a parameter pathtrace's {what} reads; ignored")
+            message = self.unread.check(params.tokens.where(p.offset), f"{category} {kind}", label, p.name,
+                                        params.tokens.name)
+            if message:
+                warn(message)
 
     # -- transforms --
 
@@ -311,7 +320,7 @@ class PbrtReader:
             name = {p.name: p.pbrt for p in camera.parameters if p.pbrt}.get(name, name)
             raise UserError(f"{where}: '{name}' {problem}") from None
         if params is not None:
-            self.unused(params, f"{kind} camera")
+            self.unused(params, "camera", kind)
         return camera
 
     @staticmethod
@@ -358,7 +367,7 @@ class PbrtReader:
                 warn(f"{params.where(name)}: pathtrace renders the whole film; ignored")
         if kind not in ("rgb", "gbuffer", "spectral"):
             warn(f"{tokens.where(offset)}: pathtrace has no {kind} film; it renders RGB")
-        self.unused(params, "film")
+        self.unused(params, "film", kind)
 
     def _sampler(self, tokens, offset):
         """The samples per pixel: `pixelsamples` (16), or for a `stratified` sampler `xsamples`
@@ -375,7 +384,7 @@ class PbrtReader:
                 params.fail(name, f"must be in 1..{1 << 24}, samples per pixel in all, got {n}")
             spp *= n
         self.settings.spp = spp
-        self.unused(params, f"{kind} sampler")
+        self.unused(params, "sampler", kind)
 
     def _integrator(self, tokens, offset):
         kind = string(tokens, "Integrator")
@@ -397,7 +406,7 @@ class PbrtReader:
             params.fail("lightsampler", f"must be bvh, power or uniform, got {sampler!r}")
         self.settings.light_sampler = {"bvh": "auto", "power": "power", "uniform": "power"}[sampler]
         if kind in ("path", "volpath"):
-            self.unused(params, f"{kind} integrator")
+            self.unused(params, "integrator", kind)
         for p in params.unused():
             p.used = True          # another integrator's settings: it is replaced whole, with its warning
 
@@ -426,7 +435,7 @@ class PbrtReader:
             field, problem = str(e).split(": ", 1)
             field = {"radius": "xradius' and 'yradius", "stddev": "sigma"}.get(field, field)
             raise UserError(f"{tokens.where(offset)}: '{field}': {problem}") from None
-        self.unused(params, f"{kind} filter")
+        self.unused(params, "filter", kind)
 
     # -- the graphics state --
 
@@ -454,7 +463,7 @@ class PbrtReader:
         kind = string(tokens, "Material")
         params = parameters(tokens)
         self.state.material = self.mapper.material(kind, params, tokens.where(offset))
-        self.unused(params, f"{kind} material")
+        self.unused(params, "material", kind)
 
     def _make_named_material(self, tokens, offset):
         name = string(tokens, "MakeNamedMaterial")
@@ -463,7 +472,7 @@ class PbrtReader:
         if kind is None:
             tokens.fail(offset, f"MakeNamedMaterial '{cut(name)}' needs a \"string type\"")
         self.named_materials[name] = self.mapper.material(kind, params, tokens.where(offset))
-        self.unused(params, f"{kind} material")
+        self.unused(params, "material", kind)
 
     def named_material(self, name, where):
         if name not in self.named_materials:
@@ -479,7 +488,7 @@ class PbrtReader:
         cls = string(tokens, "Texture")
         params = parameters(tokens)
         self.mapper.define_texture(name, kind, cls, params, tokens.where(offset))
-        self.unused(params, f"{cls} texture")
+        self.unused(params, "texture", cls)
 
     def _area_light(self, tokens, offset):
         kind = string(tokens, "AreaLightSource")
@@ -533,7 +542,7 @@ class PbrtReader:
             if field in params.params:
                 params.fail(field, problem)
             raise UserError(f"{where}: {field}: {problem}") from None
-        self.unused(params, "homogeneous medium")
+        self.unused(params, "medium", "homogeneous")
 
     def _medium_interface(self, tokens, offset):
         """MediumInterface "inside" "outside" (one name: both sides)."""
@@ -710,7 +719,7 @@ class PbrtReader:
         if twosided and faces is None and shape is None:
             warn(f"{where}: pathtrace's sphere lights emit outwards only; 'twosided' is ignored")
             twosided = False
-        self.unused(params, f"{kind} shape")
+        self.unused(params, "shape", kind)
         if shape is not None:
             shape.material = self.material_row(parts[0][1], alpha, twosided)
             if self.current_object is not None:
@@ -895,7 +904,7 @@ class PbrtReader:
         power = params.float("power", -1.0)
         if np.any(le < 0):
             params.fail("scale" if scale < 0 else "L", "an emitted radiance must not be negative")
-        self.unused(params, "diffuse area light")
+        self.unused(params, "arealight", "diffuse")
         if power <= 0:
             parts, cause = [(None, le)], "'L' times 'scale'"
         else:
@@ -946,7 +955,7 @@ class PbrtReader:
         m = self.state.ctm
         if kind == "infinite":
             self.infinite_light(params, where, params.float("scale", 1.0))
-            self.unused(params, "infinite light")
+            self.unused(params, "light", "infinite")
             return
         cls = LIGHTS_BY_NAME.get(kind)
         if cls is None:
@@ -966,7 +975,7 @@ class PbrtReader:
             pbrt_name = next((p.pbrt for p in cls.parameters if p.name == name and p.pbrt), name)
             raise UserError(f"{where}: '{pbrt_name}' {problem}") from None
         self.lights.append(light)
-        self.unused(params, f"{kind} light")
+        self.unused(params, "light", kind)
 
     def infinite_light(self, params, where, scale):
         if self.environment is not None:
