@@ -22,7 +22,7 @@ def run_case(case: dict) -> dict:
     import numpy as np
 
     import pathtrace
-    from pathtrace.cli.main.main import main
+    from pathtrace.cli.main import main
     from pathtrace.errors import UserError
 
     err = io.StringIO()
