@@ -86,7 +86,7 @@ void intersect_spheres(const SceneData *sc, int first, int count, float3 o, floa
             }
         }
 #else
-        float t = intersect_sphere(sc->spheres[i], o, d, hit->t);
+        float t = intersect_range_sphere(sc->spheres[i], o, d, hit->t);
 #endif
         if (t < hit->t) {
             hit->t = t;
@@ -464,5 +464,5 @@ float2 surface_uv(const SceneData *sc, int prim, float2 b, float3 p)
         return triangle_uv(tri, sc->uvs, b.x, b.y);
     }
 #endif
-    return sphere_uv(sc->spheres[prim], p);
+    return range_sphere_uv(sc->spheres[prim], p);
 }

@@ -41,7 +41,7 @@ int masked_out(const SceneData *sc, int prim, float2 b, float3 p, float3 d)
 #endif
     } else
 #endif
-        uv = sphere_uv(sc->spheres[prim], p);
+        uv = range_sphere_uv(sc->spheres[prim], p);
     float opacity = opacity_at(sc, m, uv);
     if (opacity >= 1.0f)
         return 0;

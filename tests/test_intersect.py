@@ -8,7 +8,7 @@ kernel void hit_sphere(global const float4 *spheres, global const float4 *o, glo
                        global float *t)
 {
     int i = get_global_id(0);
-    t[i] = intersect_sphere(spheres[i], o[i].xyz, normalize(d[i].xyz), INFINITY);
+    t[i] = intersect_range_sphere(spheres[i], o[i].xyz, normalize(d[i].xyz), INFINITY);
 }
 """
 

@@ -140,17 +140,19 @@ def test_a_property_mitsuba_3_knows_and_pathtrace_does_not_read_is_warned_of_onc
                                                                                             backend):
     from pathtrace.rendering.renderer import Renderer
     path = tmp_path / "s.xml"
+    (tmp_path / "tri.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n")
     path.write_text('<scene version="3.0.0">\n<integrator type="path"><boolean name="hide_emitters" value="true"/>'
-                    '</integrator>\n<shape type="sphere"><boolean name="flip_normals" value="false"/></shape>\n'
-                    '<shape type="sphere"><float name="radius" value="0.5"/><boolean name="flip_normals" value="false"/>'
-                    '</shape>\n<emitter type="constant"/><sensor type="perspective"><transform name="to_world">'
+                    '</integrator>\n<shape type="obj"><string name="filename" value="tri.obj"/>'
+                    '<boolean name="flip_tex_coords" value="false"/></shape>\n'
+                    '<shape type="obj"><string name="filename" value="tri.obj"/><boolean name="flip_tex_coords" '
+                    'value="false"/></shape>\n<emitter type="constant"/><sensor type="perspective"><transform name="to_world">'
                     '<lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform></sensor>\n</scene>')
     scene = load_scene(str(path))
     lines = capsys.readouterr().err.splitlines()
-    assert lines == [f"pathtrace: warning: {path}:2: <boolean name=\"hide_emitters\">: 'hide_emitters' is not a "
-                     "property pathtrace's path integrator reads; ignored",
-                     f"pathtrace: warning: {path}:3: <boolean name=\"flip_normals\">: 'flip_normals' is not a "
-                     "property pathtrace's sphere shape reads; ignored"], lines
+    assert lines == [f"pathtrace: warning: {path}:3: <boolean name=\"flip_tex_coords\">: 'flip_tex_coords' is not a "
+                     "property pathtrace's obj shape reads; ignored",
+                     f"pathtrace: warning: {path}:2: <boolean name=\"hide_emitters\">: 'hide_emitters' is not a "
+                     "property pathtrace's path integrator reads; ignored"], lines
     r = Renderer(backend, scene, 8, 8)
     r.add_samples(1)
     r.finish()

@@ -131,26 +131,19 @@ def test_a_twosided_area_light_is_one_surface_emitting_from_both_sides(tmp_path)
 
 def test_a_sphere_under_a_non_uniform_transform_is_the_ellipsoid_pbrt_intersects(tmp_path):
     """pbrt-v4 intersects a sphere in its object space, so a non-uniform Scale, in the shape's
-    own transform or an instance's, makes an ellipsoid; pathtrace's spheres are round, and the
-    reader once rounded it to the mean scale. It is drawn as a mesh of the ellipsoid, its
-    normals the ellipsoid's, facing out; tests/test_pbrt_reference.py renders pbrt-v4's
-    instancing scene against pbrt-v4."""
+    own transform or an instance's, makes an ellipsoid: an analytic sphere under that transform
+    (tests/test_sphere_shape.py renders it; tests/test_pbrt_reference.py renders pbrt-v4's
+    instancing scene against pbrt-v4). A uniform one, untextured, stays in the sphere range."""
     body = ('AttributeBegin\nTranslate 1 0 0\nScale 1 2 1\nShape "sphere" "float radius" 0.5\nAttributeEnd\n'
             'ObjectBegin "ball"\nShape "sphere" "float radius" 0.5\nObjectEnd\n'
             'AttributeBegin\nTranslate 1 0 0\nScale 1 2 1\nObjectInstance "ball"\nAttributeEnd\n'
             'AttributeBegin\nTranslate 0 3 0\nScale 2 2 2\nObjectInstance "ball"\nAttributeEnd\n')
     s = scene(tmp_path, body)
-    assert len(s.meshes) == 2 and np.allclose(s.spheres, [[0, 3, 0, 1]])      # the uniform instance stays a sphere
-    for mesh in s.meshes:
-        p = mesh.vertices.astype(np.float64) - [1, 0, 0]
-        np.testing.assert_allclose((p / [0.5, 1.0, 0.5]) ** 2 @ np.ones(3), 1.0, atol=1e-5)
-        gradient = p / np.array([0.25, 1.0, 0.25])            # the implicit surface's normal
-        n = mesh.normals.astype(np.float64)
-        np.testing.assert_allclose(np.einsum("ij,ij->i", n, gradient / np.linalg.norm(gradient, axis=1, keepdims=True)),
-                                   1.0, atol=1e-5)
-        v = mesh.vertices[mesh.faces].astype(np.float64)
-        outward = np.einsum("ij,ij->i", np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]), v.mean(axis=1) - [1, 0, 0])
-        assert np.all(outward > 0)
+    assert not s.meshes and np.allclose(s.spheres, [[0, 3, 0, 1]])
+    assert [sh.kind for sh in s.shapes] == ["sphere", "sphere"]
+    for shape in s.shapes:
+        assert shape.params == pytest.approx((0.5, -0.5, 0.5, 2 * np.pi)) and not shape.flip
+        np.testing.assert_allclose(shape.to_world, translation([1, 0, 0]) @ scaling([1, 2, 1]))
 
 
 def test_named_spectra_blackbodies_and_sampled_spectra(tmp_path):
@@ -300,7 +293,7 @@ def test_convert_writes_a_pbrt_scene_as_toml_that_reads_the_same(tmp_path):
     ('Camera "perspective" "point3 fov" [ 1 2 ]\nWorldBegin\n', "groups of 3"),
     ('WorldBegin\nShape "sphere" "integer radius" [ 1.5 ]\n', "whole numbers"),
     ('WorldBegin\nShape "sphere" "float radius" [ 1 2 ]\n', "takes 1 value"),
-    ('WorldBegin\nShape "sphere" "float radius" -1\n', "'radius': must be positive"),
+    ('WorldBegin\nShape "sphere" "float radius" -1\n', "sphere's radius must be positive"),
     ('WorldBegin\nAttributeEnd\n', "AttributeEnd without AttributeBegin"),
     ('WorldBegin\nNamedMaterial "nothing"\n', "no material named 'nothing'"),
     ('WorldBegin\nLightSource "spot" "float coneangle" 200\n' + FLOOR, "'coneangle'"),

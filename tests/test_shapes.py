@@ -40,7 +40,7 @@ def shapes_scene(kind, rng, n, triangles=()):
     examples = SHAPES[kind].examples
     for i in range(n):
         b.add_shape(Shape(f"s{i}", kind, examples[i % len(examples)], random_transform(rng, i % 3 == 0), m,
-                          flip=bool(i % 2)))
+                          flip=bool(i % 2)), keep_kind=True)
     if len(triangles):
         t = np.asarray(triangles, np.float32)
         b.add_mesh(Mesh("soup", t.reshape(-1, 3), np.arange(3 * len(t), dtype=np.int32).reshape(-1, 3), None, m))
@@ -94,7 +94,7 @@ def test_area_sampling_density_integrates_to_the_area(kernels, kind, uniform):
     for example in SHAPES[kind].examples:
         b = SceneBuilder()
         m = transform.rotation([1, 2, 3], 40) @ transform.scaling([1.3, 1.3, 1.3] if uniform else [0.5, 1.7, 1.1])
-        b.add_shape(Shape("s", kind, example, m, b.material(diffuse(0.5))))
+        b.add_shape(Shape("s", kind, example, m, b.material(diffuse(0.5))), keep_kind=True)
         c = compile_scene(b.build("one"))
         n = 200_000
         u = rng.random((n, 2)).astype(np.float32)
@@ -130,9 +130,9 @@ def emitter_scene(kind, light_sampler="power"):
     lamp = int(b.materials.add_rows(pack("black", {}, emission=np.array([[4.0, 4.0, 4.0]])))[0])
     examples = SHAPES[kind].examples
     down = transform.translation([0, 1.5, 0]) @ transform.rotation([1, 0, 0], 90) @ transform.scaling([0.6] * 3)
-    b.add_shape(Shape("lamp", kind, examples[0], down, lamp))
+    b.add_shape(Shape("lamp", kind, examples[0], down, lamp), keep_kind=True)
     standing = transform.translation([0.8, 0.4, 0.3]) @ transform.rotation([0, 1, 0], 30) @ transform.scaling([0.4] * 3)
-    b.add_shape(Shape("standing", kind, examples[-1], standing, b.material(diffuse(0.8))))
+    b.add_shape(Shape("standing", kind, examples[-1], standing, b.material(diffuse(0.8))), keep_kind=True)
     scene = b.build(f"{kind} light", camera=PerspectiveCamera([0, 2.2, 4.5], [0, 0.4, 0], [0, 1, 0], 50.0),
                     environment=Environment.constant((0, 0, 0)))
     return scene.with_settings(light_sampler=light_sampler, max_depth=4)
@@ -248,5 +248,5 @@ def one_shape_scene(shape: Shape):
     """A scene of `shape` alone (its material row 0, diffuse)."""
     b = SceneBuilder()
     b.material(diffuse(0.5))
-    b.add_shape(shape)
+    b.add_shape(shape, keep_kind=True)
     return b.build("one")

@@ -231,6 +231,14 @@ class MaterialTable:
                                                 normal_map=None, bump_map=None) for r in components_of(row))
         return material
 
+    def reads_frame(self, index: int) -> bool:
+        """Whether row `index` reads a surface's texture coordinates or tangents: a texture (an
+        alpha mask, a normal or bump map among them), or a variant whose kernels take the
+        tangent frame (anisotropic roughness) or whose components may (a blend)."""
+        row = self.rows[index:index + 1]
+        type_name = list(BSDFS)[int(row["type"][0])]
+        return bool(self.textures[index]) or bool({"ANISOTROPIC", "BLEND"} & set(BSDFS[type_name].defines(row)))
+
     def set(self, index: int, material: Material):
         params, emission = material.constants()
         rows = pack(material.type, params, emission, material.twosided, material.emits_back)

@@ -13,7 +13,7 @@ from pathtrace.filters import PixelFilter
 from pathtrace.materials import NULL, TRANSMISSIVE, Material, MaterialTable
 from pathtrace.scene.media import MediumInterface
 from pathtrace.scene.named import NamedList, name_and_index, vector
-from pathtrace.scene.meshes import ellipsoid, is_closed, is_similarity
+from pathtrace.scene.meshes import is_closed
 
 
 # How paths end (kernels/integrator.cl, RR_*): "throughput", Russian roulette on the path's
@@ -181,7 +181,6 @@ class SceneBuilder:
         self.sphere_media = []
         self.shapes = []
         self.objects, self.instance_object, self.instance_to_world = [], [], []
-        self.ellipsoid_objects = set()     # objects whose spheres an instance made ellipsoids (warned once)
 
     def material(self, material) -> int:
         """A row for a Material (added) or an existing row index."""
@@ -203,9 +202,15 @@ class SceneBuilder:
                  "closed; rays that miss it never enter or leave the medium")
         self.meshes.append(mesh)
 
-    def add_shape(self, shape):
-        """Adds an analytic shape (pathtrace.shapes.Shape)."""
-        self.shapes.append(shape)
+    def add_shape(self, shape, keep_kind=False):
+        """Adds an analytic shape (pathtrace.shapes.Shape), as a sphere of the sphere range where
+        one renders it alike (ShapeKind.fast_range) unless `keep_kind` (the kinds' own tests)."""
+        from pathtrace.shapes import SHAPES
+        fast = None if keep_kind else SHAPES[shape.kind].fast_range(shape, self.materials.reads_frame(shape.material))
+        if fast is not None:
+            self.add_sphere(*fast, shape.material, shape.name, shape.media)
+        else:
+            self.shapes.append(shape)
 
     def add_object(self, name: str) -> int:
         """A new, empty object (SceneObject) that instances may draw; its index."""
@@ -215,13 +220,11 @@ class SceneBuilder:
 
     def add_instance(self, obj: int, to_world: np.ndarray, where: str = None):
         """An instance of object `obj` through the 4x4 world-from-object transform: its meshes
-        drawn through it (Scene.instances), its spheres copied into the world, as spheres where
-        the transform keeps them round, else as meshes of the ellipsoids it makes of them
-        (pbrt-v4 intersects a sphere in its object space). A reader gives `where` (its file and
-        line), which an error names; the API's instances are checked at render
-        (instances.check_instances)."""
+        drawn through it (Scene.instances), its analytic shapes copied into the world (an analytic
+        shape takes any affine transform: a sphere under one that stretches unevenly is the
+        ellipsoid pbrt-v4 intersects). A reader gives `where` (its file and line), which an error
+        names; the API's instances are checked at render (instances.check_instances)."""
         from pathtrace.scene.instances import MIN_DETERMINANT, determinant, near_singular
-        from pathtrace.scene.transform import transform_points
         m = np.asarray(to_world, np.float64)
         o = self.objects[obj]
         if where is not None and o.meshes and near_singular(m):
@@ -231,22 +234,8 @@ class SceneBuilder:
         if o.meshes:
             self.instance_object.append(obj)
             self.instance_to_world.append(m)
-        round_ = is_similarity(m)
-        if o.spheres and not round_ and obj not in self.ellipsoid_objects:
-            self.ellipsoid_objects.add(obj)
-            warn(f"object {o.name}: an instance under a non-uniform transform makes ellipsoids of its spheres, "
-                 "which pathtrace draws as meshes")
-        for s in o.shapes:          # an analytic shape takes any affine transform: copied
+        for s in o.shapes:
             self.add_shape(replace(s, to_world=m @ np.asarray(s.to_world, np.float64)))
-        scale = float(np.linalg.norm(m[:3, 0]))
-        for center, radius, material, name, media in o.spheres:
-            if round_:
-                self.add_sphere(transform_points(m, np.asarray(center, np.float64)[None])[0], radius * scale, material,
-                                name, media)
-                continue
-            v, f, n, uv = ellipsoid(m, center, radius)
-            self.add_mesh(Mesh(name or f"ellipsoid {len(self.meshes)}", v.astype(np.float32), f.astype(np.int32),
-                               n.astype(np.float32), material, "", None, uv.astype(np.float32), media))
 
     def build(self, name, **kwargs) -> Scene:
         if self.instance_object:

@@ -21,12 +21,10 @@ FLATTEN_MAX = 1 << 20
 @dataclass
 class SceneObject:
     """A named group of meshes (vertices in the object's space) that instances draw, and of
-    spheres (center, radius, material, name, media) and analytic shapes (pathtrace.shapes.Shape,
-    in the object's space), which SceneBuilder.add_instance copies into the world at each
-    instance."""
+    analytic shapes (pathtrace.shapes.Shape, in the object's space), which
+    SceneBuilder.add_instance copies into the world at each instance."""
     name: str
     meshes: list = field(default_factory=list)
-    spheres: list = field(default_factory=list)
     shapes: list = field(default_factory=list)
 
     @property

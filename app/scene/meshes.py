@@ -21,7 +21,6 @@ import numpy as np
 
 from pathtrace.errors import UserError, warn
 from pathtrace.io.files import check_regular_file
-from pathtrace.scene.transform import transform_normals, transform_points
 
 FORMATS = (".ply", ".ply.gz", ".obj", ".stl", ".gltf", ".glb")
 MAX_FILE_BYTES = 4 << 30            # a mesh file larger than this is refused before reading
@@ -227,40 +226,6 @@ def check_mesh(vertices, faces, normals, uvs=None, where="", warn=warn, degenera
         if len(faces) == 0:
             raise UserError(f"{where}: every triangle of the mesh is degenerate")
     return MeshData(vertices, faces, normals, uvs)
-
-
-ELLIPSOID_RINGS = 64      # a sphere drawn as a mesh: rings from pole to pole, twice as many
-                          # segments round; 2 x 64 x 128 triangles, whose silhouette lies within
-                          # 1 - cos(pi / 128), 3e-4 of the radius, of the true surface's
-
-
-def is_similarity(m: np.ndarray) -> bool:
-    """Whether the 4x4 transform keeps a sphere round: rotation, reflection, uniform scale."""
-    g = m[:3, :3].T @ m[:3, :3]
-    return bool(np.allclose(g, g[0, 0] * np.eye(3), rtol=1e-5, atol=1e-9 * abs(g[0, 0])))
-
-
-def ellipsoid(m: np.ndarray, center=(0.0, 0.0, 0.0), radius: float = 1.0) -> MeshData:
-    """The sphere of `center` and `radius` under the 4x4 transform m, an ellipsoid where m is
-    no similarity, as a mesh with the ellipsoid's own normals (transformed by m's inverse
-    transpose), its front outside (or as m mirrors it, turned to the normals), and pbrt-v4's
-    sphere coordinates u = phi / 2 pi, v = theta / pi about z (v turned round, as the pbrt
-    reader turns every mesh's). pathtrace's spheres are round; pbrt-v4 intersects a sphere in
-    its object space, so that any transform gives an ellipsoid."""
-    rings = ELLIPSOID_RINGS
-    theta = np.linspace(0.0, np.pi, rings + 1)
-    phi = np.linspace(0.0, 2 * np.pi, 2 * rings + 1)
-    t, f = np.meshgrid(theta, phi, indexing="ij")
-    unit = np.stack([np.sin(t) * np.cos(f), np.sin(t) * np.sin(f), np.cos(t)], -1).reshape(-1, 3)
-    uvs = np.column_stack([(f / (2 * np.pi)).ravel(), 1.0 - (t / np.pi).ravel()])
-    row = lambda i, j: i * (2 * rings + 1) + j  # noqa: E731
-    i, j = np.meshgrid(np.arange(rings), np.arange(2 * rings), indexing="ij")
-    a, b, c, d = row(i, j), row(i, j + 1), row(i + 1, j + 1), row(i + 1, j)
-    # each quad as two triangles, less the one that the pole row makes degenerate
-    faces = np.concatenate([np.stack([a, c, b], -1)[1:].reshape(-1, 3), np.stack([a, d, c], -1)[:-1].reshape(-1, 3)])
-    vertices = transform_points(m, np.asarray(center, np.float64) + radius * unit)
-    normals = transform_normals(m, unit)
-    return MeshData(vertices, orient_by_normals(vertices, faces, normals), normals, uvs)
 
 
 def orient_by_normals(vertices: np.ndarray, faces: np.ndarray, normals: np.ndarray) -> np.ndarray:

@@ -1004,7 +1004,7 @@ class _Reader:
             values = {p.mitsuba: self.parameter(props, p, p.mitsuba) for p in SHAPES[kind].mitsuba_parameters}
             values = {p.mitsuba: p.mitsuba_default if values[p.mitsuba] is None else values[p.mitsuba]
                       for p in SHAPES[kind].mitsuba_parameters}
-            values, local, swap_uv, flip = SHAPES[kind].from_mitsuba(values, m)
+            values, local, swap_uv, flip = SHAPES[kind].from_mitsuba(values, m, node.where())
             problem = SHAPES[kind].check(values)
             if problem:
                 _fail(node, f"the {kind}'s {problem}")
@@ -1016,23 +1016,6 @@ class _Reader:
                 self.builder.objects[group].shapes.append(shape)
             else:
                 self.builder.add_shape(shape)
-            return
-        if kind == "sphere":
-            center = m[:3, :3] @ self.get(props, "center", np.zeros(3), ("point", "vector")) + m[:3, 3]
-            scales = np.linalg.norm(m[:3, :3], axis=0)
-            if not np.allclose(scales, scales[0], rtol=1e-5):
-                warn(f"{node.where()}: a non-uniformly scaled sphere; pathtrace renders it round, of its "
-                     f"to_world's x scale {scales[0]:.4g}, as Mitsuba 3 does")
-            # Mitsuba 3 (src/shapes/sphere.cpp, update()): radius = |to_world (1, 0, 0)|
-            radius = self.get(props, "radius", 1.0, ("float",)) * float(scales[0])
-            if radius <= 0:
-                _fail(node, f"the radius must be positive, got {radius}")
-            if np.any(np.abs(center) + radius > MAX_COORDINATE):
-                _fail(node, f"the sphere reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace")
-            if group is not None:
-                self.builder.objects[group].spheres.append((center, radius, material, name, interface))
-            else:
-                self.builder.add_sphere(center, radius, material, name, interface)
             return
         normals = uvs = None
         if kind == "rectangle":

@@ -688,7 +688,7 @@ class _Reader:
             builder.add_sphere(center, radius, self.material_ref(builder, rows, s, where),
                                self.name(s, where, f"sphere {i}"), self.interface(s, where))
         for i, s in enumerate(shapes):
-            builder.add_shape(self.shape(s, f"shapes[{i}]", builder, rows))
+            builder.add_shape(self.shape(s, f"shapes[{i}]", builder, rows), keep_kind=True)   # as the file states it
         with MeshFiles(self.named_mesh_files(meshes, data.get("objects"))) as self.mesh_files:
             for i, m in enumerate(meshes):
                 where = f"meshes[{i}]"

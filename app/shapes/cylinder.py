@@ -56,7 +56,7 @@ class Cylinder(ShapeKind):
     def normal_cone(self, params):
         return np.array([0.0, 0.0, 1.0]), -1.0        # pbrt-v4: DirectionCone::EntireSphere
 
-    def from_mitsuba(self, values, to_world):
+    def from_mitsuba(self, values, to_world, where):
         """Mitsuba 3's cylinder (src/shapes/cylinder.cpp): the unit cylinder, z in [0, 1] and a
         whole turn, under translate(p0) to_frame(p1 - p0) scale(radius, radius, |p1 - p0|), its
         frame's x and y those of Mitsuba's coordinate_system (Duff et al., "Building an

@@ -27,7 +27,7 @@ class Disk(ShapeKind):
         radius, inner, height, phi_max = params
         return radius, inner, height, min(max(phi_max, 0.0), 2 * math.pi)    # pbrt-v4 clamps phimax to [0, 360]
 
-    def from_mitsuba(self, values, to_world):
+    def from_mitsuba(self, values, to_world, where):
         """Mitsuba 3's disk is the unit disk facing +z of its to_world, its texture coordinates
         (r, phi / 2 pi) (src/shapes/disk.cpp), flip_normals turning its normal."""
         return (1.0, 0.0, 0.0, 2 * math.pi), np.eye(4), True, bool(values["flip_normals"])

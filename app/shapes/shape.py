@@ -33,8 +33,9 @@ class ShapeKind:
         them: degrees for `angles`; absent ones take their defaults)."""
         out = []
         for p in self.parameters:
-            v = float(values.get(p.name, p.default))
-            out.append(math.radians(v) if p.name in self.angles else v)
+            v = values.get(p.name, p.default)
+            v = None if v is None else float(v)      # None: optional, its default the kind's (normalised)
+            out.append(math.radians(v) if v is not None and p.name in self.angles else v)
         return self.normalised(tuple(out))
 
     def file_values(self, params) -> dict:
@@ -45,10 +46,10 @@ class ShapeKind:
         """params as the kernels take them, from a file's values (pbrt-v4 clamps and orders some)."""
         return params
 
-    def from_mitsuba(self, values: dict, to_world: np.ndarray) -> tuple:
+    def from_mitsuba(self, values: dict, to_world: np.ndarray, where: str) -> tuple:
         """(params, object transform, swap_uv, flip) of Mitsuba 3's shape of this kind, from the
         values of its mitsuba_parameters (given or their mitsuba_default), by their Mitsuba names;
-        the object transform goes before to_world."""
+        the object transform goes before to_world; `where` (file:line) for its warnings."""
         raise NotImplementedError
 
     def check(self, params) -> str | None:
@@ -71,6 +72,13 @@ class ShapeKind:
     def normal_cone(self, params) -> tuple:
         """(axis, cos of its spread) of the cone holding every normal, in its object's space."""
         raise NotImplementedError
+
+    @staticmethod
+    def fast_range(shape, reads_frame: bool) -> tuple | None:
+        """(centre, radius) of a sphere of the sphere range that renders `shape` alike, or None
+        (SceneBuilder.add_shape keeps such a shape there); `reads_frame`: whether its material
+        reads texture coordinates or tangents (MaterialTable.reads_frame)."""
+        return None
 
 
 @dataclass

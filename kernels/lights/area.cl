@@ -94,7 +94,7 @@ int sample_area_light(const SceneData *sc, const RenderParams *p, const global L
     ls->pdf = pdf_sphere_cone(s, x);
     /* the point the direction meets; on the cone's rim, where rounding may miss the sphere, the
        tangent point */
-    float t = intersect_sphere(s, x, ls->wi, INFINITY);
+    float t = intersect_range_sphere(s, x, ls->wi, INFINITY);
     ls->y = x + (isinf(t) ? dot(s.xyz - x, ls->wi) : t) * ls->wi;
     ls->le = area_light_radiance(sc, l->prim, ls->y, b);
     return 1;

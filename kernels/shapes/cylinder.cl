@@ -16,7 +16,7 @@ float2 cylinder_uv(const global float4 *f, float3 p)
 /* The nearer of the two crossings of the infinite cylinder within the ray's (0, t_max) whose
  * point lies in the cylinder's z range and angle. The roots of |o.xy + t d.xy|^2 = r^2 are
  * taken as c / s and s / a with the discriminant r^2 a - (o x d).z^2 (Lagrange's identity), as
- * kernels/shapes/sphere.cl takes a sphere's (Haines et al., Ray Tracing Gems, ch. 7): both stay
+ * kernels/shapes/sphere_range.cl takes a sphere's (Haines et al., Ray Tracing Gems, ch. 7): both stay
  * accurate for a thin cylinder seen from afar. */
 float intersect_cylinder(const global float4 *f, float3 o, float3 d, float t_max, float2 *uv)
 {

@@ -1,84 +1,95 @@
-/* The sphere: intersection, the surface at a hit, and sampling the cone of directions it
- * subtends (for next-event estimation). Spheres are solid: their outward normal is the front. */
+/* The sphere (pbrt-v4's Sphere, pbrt-v4 section 6.2; Mitsuba 3's sphere), in its object's space:
+ * the points at distance radius from the origin with z_min <= z <= z_max and angles 0 to
+ * phi_max; its normal points away from the centre. Under a transform that stretches unevenly it
+ * is an ellipsoid, as pbrt-v4's is. Parameters (kernels/shapes/analytic.cl, row 6): (radius,
+ * z_min, z_max, phi_max in radians), z_min and z_max within [-radius, radius]. Its (u, v) are
+ * pbrt-v4's: u = phi / phi_max, v = (theta - theta_zmin) / (theta_zmax - theta_zmin), theta the
+ * angle from +z, so v = 0 at z_min (Mitsuba's v = theta / pi is pbrt's whole sphere with z
+ * turned round: app/shapes/sphere.py). */
 
-/* Nearest t in (0, t_max) where o + t d meets the sphere, or INFINITY; d must be unit length.
- * The discriminant is computed as r^2 - |f - (f.d) d|^2 rather than b^2 - c, and the two roots
- * as c / q and q, following Haines et al., "Precision Improvements for Ray/Sphere Intersection",
- * Ray Tracing Gems, ch. 7 (2019): both stay accurate for the r = 1000 ground seen from afar. */
-/* Both t where the line o + t d meets the sphere, nearer first, or INFINITY twice. */
-float2 sphere_crossings(Sphere s, float3 o, float3 d)
+/* The angle from +z of the points at height z, as atan2 of the ring's radius: acos(z / r)
+ * loses its precision near the poles. */
+float sphere_theta(float r, float z)
 {
-    float3 f = o - s.xyz;
-    float b = dot(f, d);
-    float3 l = f - b * d;
-    float disc = s.w * s.w - dot(l, l);
-    if (disc < 0.0f)
-        return (float2)(INFINITY);
-    float c = dot(f, f) - s.w * s.w;
-    float q = -(b + copysign(sqrt(disc), b));
-    float t0 = c / q, t1 = q;
-    return (float2)(fmin(t0, t1), fmax(t0, t1));
+    return atan2(sqrt(max(0.0f, (r - z) * (r + z))), z);
 }
 
-float intersect_sphere(Sphere s, float3 o, float3 d, float t_max)
+/* (theta_zmin, theta_zmax): pi and 0 for the whole height. */
+float2 sphere_theta_range(float4 q)
 {
-    float2 t = sphere_crossings(s, o, d);
-    /* A ray starting inside the sphere meets it only on the way out. */
-    float t_hit = t.x > 0.0f ? t.x : t.y;
-    return (t_hit > 0.0f && t_hit < t_max) ? t_hit : INFINITY;
+    return (float2)(q.y <= -q.x ? PI_F : sphere_theta(q.x, q.y), q.z >= q.x ? 0.0f : sphere_theta(q.x, q.z));
 }
 
-/* The hit point of o + t d, projected back onto the sphere, with its error bound and outward
- * unit normal. pbrt-v4 (section 6.8.5) bounds the reprojected point relative to the centre by
- * gamma(5) |p| for a correctly rounded sqrt and division; here the scale is r rsqrt(|p|^2):
- * gamma(3) in the dot product, halved by the square root, OpenCL's 2 ulp (4 epsilon) for rsqrt
- * and two products make 7.5 epsilon, so gamma(8); plus the rounding of adding the centre back. */
-void sphere_surface(Sphere s, float3 o, float3 d, float t, float3 *p, float3 *error, float3 *n)
+float2 sphere_uv(const global float4 *f, float3 p)
 {
-    float3 rel = o + t * d - s.xyz;
-    rel *= s.w * rsqrt(dot(rel, rel));
-    *n = rel / s.w;
-    *p = s.xyz + rel;
-    *error = gamma_bound(8) * fabs(rel) + gamma_bound(2) * fabs(*p);
-}
-
-/* Texture coordinates of point p on the sphere, as Mitsuba 3's `sphere` gives them:
- * u = phi / 2 pi, phi = atan2(y, x) in [0, 2 pi), and v = theta / pi, theta the angle from +z,
- * in the sphere's frame (a sphere keeps no rotation: the world's axes). */
-float2 sphere_uv(Sphere s, float3 p)
-{
-    float3 n = (p - s.xyz) / s.w;
-    float phi = atan2(n.y, n.x);
+    float4 q = f[6];
+    float phi = atan2(p.y, p.x);
     phi = phi < 0.0f ? phi + 2.0f * PI_F : phi;
-    return (float2)(phi / (2.0f * PI_F), acos(clamp(n.z, -1.0f, 1.0f)) / PI_F);
+    float2 range = sphere_theta_range(q);
+    float theta = atan2(sqrt(p.x * p.x + p.y * p.y), p.z);
+    return (float2)(phi / q.w, (theta - range.x) / (range.y - range.x));
 }
 
-/* 1 - cos(theta_max) of the cone a sphere subtends from p, as sin^2 / (1 + cos) to keep
- * precision for small, far spheres; 0 when p is inside the sphere. */
-float cone_solid_angle_factor(Sphere s, float3 p)
+/* The nearer of the two crossings within the ray's (0, t_max) whose point lies in the sphere's
+ * z range and angle (pbrt-v4's Sphere::BasicIntersect tests the far one where the near one is
+ * cut away). The crossings are the sphere range's (kernels/shapes/sphere_range.cl), of the
+ * direction made unit: d stays unnormalised in the object's space, so that t is the world's. */
+float intersect_sphere(const global float4 *f, float3 o, float3 d, float t_max, float2 *uv)
 {
-    float3 c = s.xyz - p;
-    float sin2 = s.w * s.w / dot(c, c);
-    if (sin2 >= 1.0f)
-        return 0.0f;
-    return sin2 / (1.0f + sqrt(1.0f - sin2));
+    float4 q = f[6];
+    float inv_length = rsqrt(dot(d, d));
+    float2 t = sphere_crossings((float4)(0.0f, 0.0f, 0.0f, q.x), o, d * inv_length) * inv_length;
+    for (int k = 0; k < 2; ++k) {
+        float tk = k == 0 ? t.x : t.y;
+        if (!(tk > 0.0f && tk < t_max))
+            continue;
+        float3 p = o + tk * d;
+        /* as pbrt-v4, a z bound at a pole cuts nothing: a point rounded past it stays */
+        if ((q.y > -q.x && p.z < q.y) || (q.z < q.x && p.z > q.z))
+            continue;
+        float2 h = sphere_uv(f, p);
+        if (h.x <= 1.0f) {
+            *uv = h;
+            return tk;
+        }
+    }
+    return INFINITY;
 }
 
-/* Density (per solid angle) of sample_sphere_cone's directions: uniform over the cone. */
-float pdf_sphere_cone(Sphere s, float3 p)
+/* The point of parameters uv on the sphere, its error bound, the outward normal and pbrt-v4's
+ * dp/du = phi_max (-y, x, 0), dp/dv = (theta_zmax - theta_zmin) (z cos phi, z sin phi,
+ * -r sin theta). The point is r (sin theta cos phi, sin theta sin phi, cos theta): each
+ * coordinate a product of two of OpenCL's sin and cos (4 ulp each, OpenCL 1.2 section 7.4) and
+ * the radius, within 9 ulp of its value, gamma(18) of it. A point moved along the angles stays
+ * on the sphere, so the error of the angles read from a hit moves it along the surface only. */
+void sphere_point(const global float4 *f, float2 uv, float3 *p, float3 *error, float3 *n, float3 *dpdu,
+                  float3 *dpdv)
 {
-    float k = cone_solid_angle_factor(s, p);
-    return k > 0.0f ? 1.0f / (2.0f * PI_F * k) : 0.0f;
+    float4 q = f[6];
+    float2 range = sphere_theta_range(q);
+    float theta = range.x + uv.y * (range.y - range.x), phi = uv.x * q.w;
+    float sin_theta = sin(theta), cos_theta = cos(theta);
+    float2 dir = (float2)(cos(phi), sin(phi));
+    *n = (float3)(sin_theta * dir, cos_theta);
+    *p = q.x * *n;
+    *error = gamma_bound(18) * fabs(*p);
+    *dpdu = q.w * (float3)(-p->y, p->x, 0.0f);
+    *dpdv = (range.y - range.x) * (float3)(p->z * dir, -q.x * sin_theta);
 }
 
-/* A direction from p, uniform in the cone subtended by the sphere (pbrt-v4, section 6.2.4):
- * cos(theta) = 1 - u1 (1 - cos(theta_max)). */
-float3 sample_sphere_cone(Sphere s, float3 p, float u1, float u2)
+float sphere_area(const global float4 *f)
 {
-    float k = cone_solid_angle_factor(s, p);
-    float one_minus_cos = u1 * k;
-    float cos_t = 1.0f - one_minus_cos;
-    float sin_t = sqrt(max(0.0f, one_minus_cos * (2.0f - one_minus_cos)));
-    float3 v = (float3)(COS_TURNS(u2) * sin_t, SIN_TURNS(u2) * sin_t, cos_t);
-    return to_world(v, unit(s.xyz - p));
+    float4 q = f[6];
+    return q.w * q.x * (q.z - q.y);
+}
+
+/* Parameters of a point uniform over the area: z uniform in [z_min, z_max] (Archimedes: a
+ * zone's area is 2 pi r times its height) and phi uniform. pbrt-v4's Sphere::Sample(u) samples
+ * the whole sphere whatever z_min, z_max and phi_max. */
+float2 sample_sphere(const global float4 *f, float2 u)
+{
+    float4 q = f[6];
+    float2 range = sphere_theta_range(q);
+    float theta = sphere_theta(q.x, q.y + u.y * (q.z - q.y));
+    return (float2)(u.x, (theta - range.x) / (range.y - range.x));
 }

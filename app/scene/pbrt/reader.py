@@ -18,7 +18,7 @@ Conventions, each as pbrt-v4 has it:
   outside medium current at `Camera`; `interface` shapes are null surfaces.
 Instances (`ObjectBegin`/`ObjectInstance`) are the scene's objects and instances
 (app/scene/instances.py: a two-level BVH, or world-space copies where they are few); spheres in
-an object are copied into world space at each instance."""
+an object, analytic shapes, are copied into world space at each instance."""
 
 import gc
 import gzip
@@ -43,8 +43,7 @@ from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.known_names import Unread
-from pathtrace.scene.meshes import (ELLIPSOID_RINGS, MAX_COORDINATE, MeshFiles, check_mesh, ellipsoid, is_similarity,
-                                     orient_by_normals, vertex_normals)
+from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, orient_by_normals, vertex_normals
 from pathtrace.scene.pbrt.equal_area import to_latlong, upper_illuminance
 from pathtrace.scene.pbrt.materials import MaterialMapper, make, spectrum_rgb
 from pathtrace.textures import Texture
@@ -710,15 +709,12 @@ class PbrtReader:
             return
         vertices, faces, normals, uvs, source = mesh
         parts, twosided = self.area_emission(vertices, faces, where,
-                                             None if shape is None else shape.world_area(SHAPES[kind]))
+                                             None if shape is None else SHAPES[kind].area(shape.params))
         if self.current_object is not None and parts[0][1] is not None:
             warn(f"{where}: pbrt-v4 has no area lights in instances; this shape does not emit")
             parts = [(None, None)]
         alpha = self.mapper.texture_input(params, "alpha", 1.0, float_texture=True) \
             if params.type_of("alpha") else 1.0
-        if twosided and faces is None and shape is None:
-            warn(f"{where}: pathtrace's sphere lights emit outwards only; 'twosided' is ignored")
-            twosided = False
         self.unused(params, "shape", kind)
         if shape is not None:
             shape.material = self.material_row(parts[0][1], alpha, twosided)
@@ -728,14 +724,6 @@ class PbrtReader:
                 self.builder.add_shape(shape)
             return
         name = Path(source).stem if source else f"{kind} {len(self.builder.meshes)}"
-        if faces is None:
-            center, radius = vertices
-            row = self.material_row(parts[0][1], alpha, twosided)
-            if self.current_object is not None:
-                self.builder.objects[self.objects[self.current_object]].spheres.append((center, radius, row, name, media))
-            else:
-                self.builder.add_sphere(center, radius, row, name, media)
-            return
         for subset, emission in parts:
             row = self.material_row(emission, alpha, twosided)
             part = faces if subset is None else faces[subset]
@@ -767,33 +755,9 @@ class PbrtReader:
         return shape
 
     def shape_mesh(self, kind, params, where):
-        """(vertices, faces, normals, uvs, file) in world space, fronts as pbrt has them; for a
-        sphere (center, radius) and None (a mesh where the transform makes it an ellipsoid).
-        None for a shape pathtrace leaves out."""
+        """(vertices, faces, normals, uvs, file) in world space, fronts as pbrt has them; None
+        for a shape pathtrace leaves out."""
         m = self.state.ctm
-        if kind == "sphere":
-            radius = params.float("radius", 1.0)
-            if radius <= 0:
-                params.fail("radius", f"must be positive, got {radius:g}")
-            for name, default in (("zmin", -radius), ("zmax", radius), ("phimax", 360.0)):
-                if params.float(name, default) != default:
-                    warn(f"{params.where(name)}: pathtrace's spheres are whole; the partial sphere is rendered whole")
-            if not is_similarity(m):
-                warn(f"{where}: a sphere under a non-uniform transform is an ellipsoid, which pathtrace draws as a mesh "
-                     f"of {4 * ELLIPSOID_RINGS * (ELLIPSOID_RINGS - 1)} triangles")
-                vertices, faces, normals, uvs = ellipsoid(m, radius=radius)
-                self.check_extent(vertices, where)
-                if self.state.reverse:
-                    normals = -normals
-                    faces = orient_by_normals(vertices, faces, normals)
-                return vertices, faces, normals, uvs, ""
-            scales = np.linalg.norm(m[:3, :3], axis=0)
-            if self.state.reverse:
-                warn(f"{where}: pathtrace's spheres face outwards; ReverseOrientation is ignored")
-            center = m[:3, 3].copy()
-            r = radius * float(np.mean(scales))
-            self.check_extent(np.abs(center) + r, where)
-            return (center, r), None, None, None, ""
         source, normals, uvs = "", None, None
         if kind == "trianglemesh":
             vertices, faces = self.indexed_polygons(params, kind, 3, where)
@@ -887,7 +851,9 @@ class PbrtReader:
         `power` is applied as pbrt-v4 applies it: a mesh is one DiffuseAreaLight per triangle
         (src/pbrt/scene.cpp, the area lights' loop over the shapes Shape::Create returns), and
         DiffuseAreaLight::Create (src/pbrt/lights.cpp) scales L by power / k_e with
-        k_e = (twosided ? 2 : 1) * shape.Area() * Pi, the area being the triangle's own. An RGB
+        k_e = (twosided ? 2 : 1) * shape.Area() * Pi, the area being the triangle's own (in the
+        world) and an analytic shape's in its object's space (pbrt-v4's Sphere, Disk and
+        Cylinder::Area, src/pbrt/shapes.h, ignore the transform). An RGB
         L keeps its magnitude (scale /= SpectrumToPhotometric(L) sees only the colour space's
         illuminant), so L is not divided by its luminance. Triangles of one area share a
         radiance, and a material row."""
@@ -920,12 +886,8 @@ class PbrtReader:
     @staticmethod
     def powered(le, power, k_e, vertices, faces, light_where, area=None) -> list:
         """area_emission's [(faces, radiance)] of a light given `power`, L power / (k_e area) with
-        each triangle's own area (a sphere's, 4 pi r^2; an analytic shape's `area`), and the least
-        area."""
+        each triangle's own area (an analytic shape's `area`), and the least area."""
         if area is not None:
-            return [(None, le * power / (k_e * area))], area
-        if faces is None:                   # a sphere: (center, radius)
-            area = 4 * math.pi * vertices[1] ** 2
             return [(None, le * power / (k_e * area))], area
         p = vertices[faces]
         area = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
