@@ -36,9 +36,10 @@ The metrics (each a ratio of sums, hence a mean over warp-executions):
   grad_bitmap, a bilinear one reading four texels; opacity masks met by the path's rays included)
   over the lanes tracing a ray, i.e. per ray of a path (shadow rays are not counted as rays).
 
-The records follow the path tracer without the continuation queue (path_queue 0), whose
-compaction is what would regroup the paths; paths longer than the iterations recorded go on
-unrecorded (the kernels record one iteration more, which says how many: DivergenceStats.unrecorded)."""
+The records follow the megakernel's loop: a scene set to the continuation queue (path_queue),
+whose compaction is what would regroup the paths, renders without it while they are taken.
+Paths longer than the iterations recorded go on unrecorded (the kernels record one iteration
+more, which says how many: DivergenceStats.unrecorded)."""
 
 from dataclasses import dataclass
 
@@ -188,7 +189,7 @@ def divergence_stats(backend, scene, width: int, height: int, spp: int, warp: in
         raise UserError(f"{scene.name}: the divergence stats follow the path tracer (integrator 'path'), "
                         f"not '{scene.settings.integrator}'")
     tally = Tally(iterations or recorded_iterations(scene.settings.max_depth), warp)
-    renderer = Renderer(backend, scene.with_settings(path_queue=0), width, height)
+    renderer = Renderer(backend, scene, width, height)
     (columns, rows), _ = renderer.launch_grid(height)
     recorded = len(tally.executions) + 1                 # one more, to count the paths that go on
     per_sample = recorded * len(FIELDS) * columns * rows
