@@ -47,14 +47,14 @@ import numpy as np
 import pyopencl as cl
 
 from pathtrace.errors import UserError
-from pathtrace.rendering.renderer import MAX_LAUNCH_SAMPLES, Renderer
+from pathtrace.rendering.renderer import MAX_LAUNCH_SAMPLES, PIXEL_GROUP, Renderer
 
 FIELDS = ("shading", "textures", "light")       # kernels/divergence.cl: LOG_SHADING, LOG_TEXTURES, LOG_LIGHT
 SHADING_NAMES = {1: "traced, ended", 2: "escaped", 3: "last vertex", 4: "null surface", 5: "medium"}
 SHADING_BSDF = 6                                # kernels/divergence.cl: SHADING_*, a BSDF's tag added
 MAX_ITERATIONS = 64       # iterations recorded where the scene bounds no depth (Russian roulette alone)
 RECORD_BYTES = 1 << 28    # the records of one launch at most: a launch renders fewer samples beyond
-GROUP = 64                # work-items per work-group of the render launches (Renderer.launch_grid)
+GROUP = PIXEL_GROUP[0] * PIXEL_GROUP[1]    # work-items per work-group of the render launches
 
 
 @dataclass
@@ -91,7 +91,7 @@ class DivergenceStats:
 def shading_name(code: int) -> str:
     from pathtrace.materials.registry import TAGS
     if code >= SHADING_BSDF:
-        return "bsdf " + {t: n for n, t in TAGS.items()}.get(code - SHADING_BSDF, f"#{code - SHADING_BSDF}")
+        return "bsdf " + {t: n for n, t in TAGS.items()}[code - SHADING_BSDF]
     return SHADING_NAMES[code]
 
 

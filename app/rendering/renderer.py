@@ -32,6 +32,7 @@ AOV_BUFFERS = ("albedo_sum", "normal_sum")   # kernels/aovs.cl: albedo rgb and t
 
 SUM_BUFFERS = ("sum", "sum_sq", "sum_c", "sum_sq_c")   # kernels/integrator.cl: the sums and
                                                        # what their rounding lost (Kahan)
+PIXEL_GROUP = (8, 8)      # the work-group of the render launches: 8x8 pixels (launch_grid)
 MAX_LAUNCH_SAMPLES = 64   # samples a launch adds to a pixel, summed plainly in float32 before the
                           # compensated running sum takes them: within 64 ulps of their sum
 QUEUE_PASSES = 4          # passes of continue_paths that trace one vertex each, queueing the paths
@@ -399,9 +400,8 @@ class Renderer(QueuePlans):
 
     def launch_grid(self, rows: int) -> tuple:
         """(global size, local size) of the render launches over `rows` rows: a work-item per
-        pixel, in groups of 8x8, the image padded to whole groups."""
-        local = (8, 8)
-        return tuple(-(-n // l) * l for n, l in zip((self.width, rows), local)), local
+        pixel, in groups of PIXEL_GROUP, the image padded to whole groups."""
+        return tuple(-(-n // l) * l for n, l in zip((self.width, rows), PIXEL_GROUP)), PIXEL_GROUP
 
     def _add_paths(self, params, count: int, start: int, global_size: tuple, local: tuple) -> list:
         """Queues the path tracer's launches that add `count` samples to the rows of `params`
