@@ -21,7 +21,9 @@
                               calls, opacity masks on its rays' way included), at most 255 */
 #define LOG_LIGHT 2        /* 1 + the LIGHT_* type of the light its next-event estimation sampled
                               (LIGHT_TREE_ROOT where a light tree chose none); 0: none sampled */
-#define LOG_FIELDS 3
+#define LOG_MATERIAL 3     /* with the next field, the low and high bytes of 1 + the material row
+                              of the surface it shaded (a blend's own row; at most 65535); 0: none */
+#define LOG_FIELDS 5
 
 /* The shading codes (app/bench/divergence_stats.py: SHADING_NAMES) */
 #define SHADING_TRACED 1        /* traced its ray and ended without shading (a medium's
@@ -68,6 +70,15 @@ void log_value(const SceneData *sc, int field, int value)
         *r = (uchar)value;
 }
 
+/* The surface of primitive `prim` is shaded with its BSDF of tag `type`. */
+void log_bsdf(const SceneData *sc, int prim, int type)
+{
+    log_value(sc, LOG_SHADING, SHADING_BSDF + type);
+    int row = min(sc->prim_material[prim] + 1, 65535);
+    log_value(sc, LOG_MATERIAL, row & 255);
+    log_value(sc, LOG_MATERIAL + 1, row >> 8);
+}
+
 /* The next iteration of the loop begins: the work-item traces its ray (SHADING_TRACED until
  * what follows says more). */
 void log_iteration(const SceneData *sc)
@@ -90,6 +101,7 @@ void log_texture_lookup(const SceneData *sc)
 #define LOG_SAMPLE(sc, i) if ((sc)->shading_log) { (sc)->shading_log->sample = (i); (sc)->shading_log->iteration = -1; }
 #define LOG_ITERATION(sc) log_iteration(sc)
 #define LOG_SHADED(sc, code) log_value(sc, LOG_SHADING, code)
+#define LOG_BSDF(sc, prim, type) log_bsdf(sc, prim, type)
 #define LOG_LIGHT_SAMPLED(sc, ls) \
     log_value(sc, LOG_LIGHT, 1 + ((ls).light >= 0 ? (sc)->lights[(ls).light].type : LIGHT_TREE_ROOT))
 #define LOG_TEXTURE_LOOKUP(sc) log_texture_lookup(sc)
@@ -99,6 +111,7 @@ void log_texture_lookup(const SceneData *sc)
 #define LOG_SAMPLE(sc, i)
 #define LOG_ITERATION(sc)
 #define LOG_SHADED(sc, code)
+#define LOG_BSDF(sc, prim, type)
 #define LOG_LIGHT_SAMPLED(sc, ls)
 #define LOG_TEXTURE_LOOKUP(sc)
 #endif

@@ -327,7 +327,7 @@ CPU_INLINE float3 trace_path(const SceneData *sc, const RenderParams *p, const P
             return radiance;
         }
         MATERIAL_AT(m, sc, s, d);
-        LOG_SHADED(sc, SHADING_BSDF + m->type);
+        LOG_BSDF(sc, hit.prim, m->type);
         if (emits && any(m->emission.xyz > 0.0f))
             radiance += throughput * m->emission.xyz
                         * emission_weight(sc, hit.prim, nee, pdf_prev, prev_x, prev_n, s.p);

@@ -19,14 +19,18 @@ from pathtrace.scene.environment import Environment
 from tests.test_cli import pathtrace
 
 DIFFUSE, PHONG = SHADING_BSDF + TAGS["diffuse"], SHADING_BSDF + TAGS["phong"]
-SHADING, TEXTURES, LIGHT = range(len(FIELDS))
+SHADING, TEXTURES, LIGHT, MATERIAL_LOW, MATERIAL_HIGH = range(len(FIELDS))
 
 
-def records(shading, textures=None, light=None, went_on=None):
+def records(shading, textures=None, light=None, went_on=None, materials=None):
     """Records of one sample and len(shading) iterations, each a row of lanes, and the row that
-    says which paths went on past them."""
+    says which paths went on past them; the lanes that shade a BSDF shade material row 0 unless
+    `materials` gives their rows."""
     rows = np.zeros((1, len(shading) + 1, len(FIELDS), len(shading[0])), np.uint8)
     rows[0, :-1, SHADING] = shading
+    shaded = np.asarray(shading) >= SHADING_BSDF
+    row = np.where(shaded, 1 + (np.asarray(materials) if materials is not None else 0), 0)
+    rows[0, :-1, MATERIAL_LOW], rows[0, :-1, MATERIAL_HIGH] = row & 255, row >> 8
     if textures is not None:
         rows[0, :-1, TEXTURES] = textures
     if light is not None:
@@ -58,6 +62,15 @@ def test_alternate_lanes_of_two_materials_use_half_the_warp_each():
     assert s.overall.active_share == 1 and s.overall.bsdf_efficiency == 0.5 and s.overall.distinct_bsdfs == 2
     assert branch(s, "bsdf diffuse").efficiency == branch(s, "bsdf phong").efficiency == 0.5
     assert branch(s, "bsdf diffuse").executions == 2 and branch(s, "bsdf diffuse").lanes == 32
+    assert s.overall.distinct_materials == 1          # both types' lanes of the one row 0
+
+
+def test_materials_of_one_type_count_apart():
+    """Rows 300 and 44 share their low byte once 1 is added (45): the high byte tells them apart."""
+    s = stats_of(records([[DIFFUSE] * 64], materials=[[300, 44] * 32]))
+    assert s.overall.distinct_bsdfs == 1 and s.overall.bsdf_efficiency == 1 and s.overall.distinct_materials == 2
+    s = stats_of(records([[DIFFUSE] * 32 + [2] * 32], materials=[[7] * 64]))
+    assert s.overall.distinct_materials == 1 and s.overall.executions == 2   # an escaped warp shades none
 
 
 def test_the_warp_width_decides_what_shares_a_warp():
@@ -117,8 +130,11 @@ def test_halves_of_two_materials_share_no_warp_where_warps_do_not_straddle_the_m
         assert (branch(s, name).executions, branch(s, name).lanes, branch(s, name).efficiency) == (16, 512, 1)
     straddling = divergence_stats(backend, scene, 20, 16, 2).per_iteration[0]
     # a row of groups holds 3 groups of 2 warps, the middle group's two mixed
-    assert straddling.distinct_bsdfs == (2 * 2 + 4 * 1) / 6
+    assert straddling.distinct_bsdfs == straddling.distinct_materials == (2 * 2 + 4 * 1) / 6
     assert straddling.active_share == 20 * 16 / (24 * 16)           # padding to whole groups of 8 columns
+    # two diffuse materials: one BSDF's code, but the straddling warps shade two materials
+    two = divergence_stats(backend, halves_scene(diffuse(0.5), diffuse(0.2)), 20, 16, 2).per_iteration[0]
+    assert two.distinct_bsdfs == 1 and two.distinct_materials == (2 * 2 + 4 * 1) / 6
 
 
 @pytest.mark.specialised

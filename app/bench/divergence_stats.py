@@ -6,7 +6,8 @@ code, each with a few lanes. The render kernels, built with DIVERGENCE_STATS
 (app/device/features.py; kernels/divergence.cl), record for each work-item and each iteration of
 the loop what it shaded: the branch it took after tracing its ray (the BSDF type of the surface
 it shaded, or the environment, an emitter at the last vertex, a null surface, a medium), the
-light type its next-event estimation sampled, and how many image textures it looked up. The
+material row it shaded, the light type its next-event estimation sampled, and how many image
+textures it looked up. The
 host groups the work-items into warps of `warp` lanes in the order GPUs form them (consecutive
 linear ids of a work-group, x fastest: CUDA C++ Programming Guide, "SIMT Architecture") and
 counts, under the model of that guide: a warp runs iteration k of its loop while any of its
@@ -31,7 +32,8 @@ The metrics (each a ratio of sums, hence a mean over warp-executions):
   next-event estimation.
 - distinct BSDF types: over the warp-iterations in which some lane shades a BSDF, the mean number
   of BSDF types its lanes shade: how many BSDFs' code the warp runs one after another (a blend's
-  is the component it chose).
+  is the component it chose). Distinct materials: the same of the rows of the material table
+  (a blend's own row), whose parameters and textures differ even where their code does not.
 - texture lookups per ray: image texture lookups (kernels/textures/bitmap.cl: eval_bitmap and
   grad_bitmap, a bilinear one reading four texels; opacity masks met by the path's rays included)
   over the lanes tracing a ray, i.e. per ray of a path (shadow rays are not counted as rays).
@@ -49,7 +51,7 @@ import pyopencl as cl
 from pathtrace.errors import UserError
 from pathtrace.rendering.renderer import MAX_LAUNCH_SAMPLES, PIXEL_GROUP, Renderer
 
-FIELDS = ("shading", "textures", "light")       # kernels/divergence.cl: LOG_SHADING, LOG_TEXTURES, LOG_LIGHT
+FIELDS = ("shading", "textures", "light", "material low", "material high")   # kernels/divergence.cl: LOG_*
 SHADING_NAMES = {1: "traced, ended", 2: "escaped", 3: "last vertex", 4: "null surface", 5: "medium"}
 SHADING_BSDF = 6                                # kernels/divergence.cl: SHADING_*, a BSDF's tag added
 MAX_ITERATIONS = 64       # iterations recorded where the scene bounds no depth (Russian roulette alone)
@@ -73,6 +75,7 @@ class Iteration:
     shading_efficiency: float
     bsdf_efficiency: float          # None where no lane shaded a BSDF
     distinct_bsdfs: float           # None where no lane shaded a BSDF
+    distinct_materials: float       # None where no lane shaded a BSDF
     light_efficiency: float         # None where no lane sampled a light
     texture_lookups_per_ray: float
 
@@ -116,6 +119,7 @@ class Tally:
         self.active = np.zeros(iterations, np.int64)       # lanes tracing their ray
         self.lookups = np.zeros(iterations, np.int64)      # image texture lookups
         self.distinct = np.zeros(iterations, np.int64)     # BSDF types summed over warp-iterations
+        self.materials = np.zeros(iterations, np.int64)    # materials summed over warp-iterations
         self.shading_bsdfs = np.zeros(iterations, np.int64)   # warp-iterations shading a BSDF
         self.branches = {}       # (field, code) -> per-iteration [lanes, executions]
         self.unrecorded = 0      # paths that went on past the iterations
@@ -127,7 +131,11 @@ class Tally:
         records = records[:, :-1]
         samples, iterations, _, lanes = records.shape
         warps = records.reshape(samples, iterations, len(FIELDS), lanes // self.warp, self.warp)
-        shading, textures, light = (warps[:, :, f] for f in range(len(FIELDS)))
+        shading, textures, light, low, high = (warps[:, :, f] for f in range(len(FIELDS)))
+        # the distinct nonzero material rows of each warp: where the sorted rows change, or begin
+        rows = np.sort(low.astype(np.uint16) | (high.astype(np.uint16) << 8), axis=-1)
+        distinct = (rows[..., 0] > 0) + ((rows[..., 1:] != rows[..., :-1]) & (rows[..., 1:] > 0)).sum(-1)
+        self.materials += distinct.sum((0, 2))
         active = (shading > 0).sum(-1)           # (samples, iterations, warps)
         self.executions += (active > 0).sum((0, 2))
         self.active += active.sum((0, 2))
@@ -162,6 +170,7 @@ class Tally:
         executions, active = int(self.executions[k].sum()), int(self.active[k].sum())
         return Iteration(index, executions, active / (self.warp * executions), self._pooled(shading, k),
                          self._pooled(bsdfs, k), float(self.distinct[k].sum() / shaded) if shaded else None,
+                         float(self.materials[k].sum() / shaded) if shaded else None,
                          self._pooled(lights, k), float(self.lookups[k].sum() / active))
 
     def stats(self, paths: int) -> DivergenceStats:
@@ -208,7 +217,7 @@ def divergence_stats(backend, scene, width: int, height: int, spp: int, warp: in
 
 
 HEADER = (f"{'iteration':>9} {'warp-its':>9} {'active':>7} {'shading':>8} {'bsdf':>6} {'types':>6} "
-          f"{'light':>6} {'tex/ray':>7}")
+          f"{'mats':>6} {'light':>6} {'tex/ray':>7}")
 
 
 def format_stats(s: DivergenceStats) -> str:
@@ -216,9 +225,12 @@ def format_stats(s: DivergenceStats) -> str:
     def share(x):
         return "-" if x is None else f"{x:.3f}"
 
+    def mean(x):
+        return "-" if x is None else f"{x:.2f}"
+
     def row(it: Iteration, label):
         return (f"{label:>9} {it.executions:>9} {share(it.active_share):>7} {share(it.shading_efficiency):>8} "
-                f"{share(it.bsdf_efficiency):>6} {'-' if it.distinct_bsdfs is None else f'{it.distinct_bsdfs:.2f}':>6} "
+                f"{share(it.bsdf_efficiency):>6} {mean(it.distinct_bsdfs):>6} {mean(it.distinct_materials):>6} "
                 f"{share(it.light_efficiency):>6} {it.texture_lookups_per_ray:>7.2f}")
     lines = [f"divergence in warps of {s.warp} ({s.paths} paths, {s.iterations} iterations recorded; "
              f"{s.unrecorded:.4f} of the paths went on past them)", HEADER]

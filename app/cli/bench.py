@@ -129,9 +129,10 @@ def add_parser(sub):
     p.add_argument("--divergence", nargs="?", const=32, type=_warp_width, metavar="WARP",
                    help="also count, for each row, how much of a warp's width the path tracer's shading "
                         "uses: per iteration of its loop, the lanes active, each branch's (BSDF type, "
-                        "light type, image textures) share of the warp while it runs, the BSDF types per "
-                        "warp, texture lookups per ray (a render of 4 spp at the row's size, without the "
-                        "path queue; warps of WARP lanes, default 32, AMD's 64: docs/benchmarks.md)")
+                        "light type, image textures) share of the warp while it runs, the BSDF types and "
+                        "materials per warp, texture lookups per ray (a render of 4 spp at the row's "
+                        "size, without the path queue; warps of WARP lanes, default 32, AMD's 64: "
+                        "docs/benchmarks.md)")
     p.add_argument("--load", action="store_true",
                    help="time loading instead: seconds from 'pathtrace render FILE' to its first image "
                         "(1 spp) for a 1M-triangle PLY file and for 850 PLY meshes in a pbrt-v4 file")
