@@ -23,7 +23,8 @@ from pathtrace.resources import resource_dir
 # BSDFs of the material registry and their generated dispatch, the environment, the light types
 # a scene has and their dispatch (app/lights/registry.py), its camera and pixel filter, the media
 # where it has them, the rest, and bidirectional path tracing where a render asks for it.
-BASIC_FILES = ("inlining.h", "types.h", "vector.cl", "color.cl", "rng.cl", "sampling.cl", "scene.cl")
+BASIC_FILES = ("inlining.h", "types.h", "vector.cl", "color.cl", "rng.cl", "sampling.cl", "scene.cl",
+               "divergence.cl")
 SHAPE_FILES = ("spawn.cl", "shapes/sphere.cl", "shapes/triangle.cl")
 BSDF_FILES = ("bsdf.cl", "fresnel.cl", "microfacet.cl", "coating.cl", "interface.cl", "phase.cl")
 MEDIA_FILES = ("media/homogeneous.cl", "volume.cl")
