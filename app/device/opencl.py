@@ -270,7 +270,7 @@ def open_device(device: Device, extra: str = "", use_cache: bool = True, mode: s
     fast = keeps_own_cache(device.device) or cache_entry(device.device, source, options, True).is_file()
     if not fast:
         source, options = display_source(), list(BUILD_OPTIONS)
-    opened = build_cached(context, device.device, source, options, use_cache, tune=fast)
+    opened = build_cached(context, device.device, source, options, use_cache, fast)   # tuned: the generic program
     backend = Backend(device, context, queue, opened, extra, use_cache, mode or default_mode())
     if fast:
         backend.programs.add(generic, True, opened.program)
