@@ -59,6 +59,15 @@ class _Reader:
             self.fail(where, f"unknown key '{unknown[0]}' (allowed: {', '.join(sorted(allowed))})")
         return data
 
+    def kind_of(self, data, where, kinds, key="type") -> str:
+        """The name among `kinds` that a table entry gives by `key`."""
+        if not isinstance(data, dict):
+            self.fail(where, f"must be a table, got {short(data)}")
+        kind = data.get(key)
+        if not isinstance(kind, str) or kind not in kinds:
+            self.fail(f"{where}.{key}", f"must be one of {', '.join(kinds)}, got {short(kind)}")
+        return kind
+
     def boolean(self, data, key, where, default):
         value = data.get(key, default)
         if not isinstance(value, bool):
@@ -132,11 +141,7 @@ class _Reader:
     def texture(self, data, where, name=None) -> Texture:
         """One texture table: its type, the type's inputs (a colour, a texture name or an inline
         table each), a bitmap's file, raw, filter and wrap, and a uv transform."""
-        if not isinstance(data, dict):
-            self.fail(where, f"must be a table, got {short(data)}")
-        kind = data.get("type")
-        if not isinstance(kind, str) or kind not in TEXTURES:
-            self.fail(f"{where}.type", f"must be one of {', '.join(TEXTURES)}, got {short(kind)}")
+        kind = self.kind_of(data, where, TEXTURES)
         texture_type = TEXTURES[kind]
         self.table(data, where, {"type", "uv_scale", "uv_offset", "uv_rotate", "uv_matrix",
                                  *(p.name for p in texture_type.parameters)})
@@ -184,11 +189,7 @@ class _Reader:
         return np.asarray(value, np.float64)
 
     def material(self, data, where) -> Material:
-        if not isinstance(data, dict):
-            self.fail(where, f"must be a table, got {short(data)}")
-        kind = data.get("type")
-        if not isinstance(kind, str) or kind not in MATERIAL_TYPES:
-            self.fail(f"{where}.type", f"must be one of {', '.join(MATERIAL_TYPES)}, got {short(kind)}")
+        kind = self.kind_of(data, where, MATERIAL_TYPES)
         if kind == "emitter":
             self.table(data, where, {"type", "Le", "emits_back", "opacity"})
             return Material("black", emission=self.color_or_texture(data, "Le", where),
@@ -384,12 +385,7 @@ class _Reader:
 
     def light(self, data, where):
         """One [[lights]] entry: a delta light of pathtrace.lights, by its declared parameters."""
-        if not isinstance(data, dict):
-            self.fail(where, f"must be a table, got {type(data).__name__}")
-        kind = data.get("type")
-        if kind not in DELTA_LIGHTS:
-            self.fail(f"{where}.type", f"must be one of {', '.join(DELTA_LIGHTS)}, got {short(kind)}")
-        cls = DELTA_LIGHTS[kind]
+        cls = DELTA_LIGHTS[self.kind_of(data, where, DELTA_LIGHTS)]
         self.table(data, where, {"type", *(p.name for p in cls.parameters if p.name)})
         values = parameters.read(cls.parameters, "toml",
                                  lambda p, name: self.parameter(data, p, where) if name in data else None)
@@ -522,11 +518,7 @@ class _Reader:
         """A [[shapes]] entry: an analytic shape of `kind` (pathtrace.shapes.SHAPES), its kind's
         parameters by name (ShapeParameter: angles in degrees), its transform, `flip` (the front
         turned round) and `swap_uv` (texture coordinates (1 - v, u), Mitsuba's disk)."""
-        if not isinstance(data, dict):
-            self.fail(where, f"must be a table, got {type(data).__name__}")
-        kind = data.get("kind")
-        if kind not in SHAPES:
-            self.fail(f"{where}.kind", f"must be one of {', '.join(SHAPES)}, got {short(kind)}")
+        kind = self.kind_of(data, where, SHAPES, "kind")
         k = SHAPES[kind]
         self.table(data, where, {"kind", "material", "name", "interior", "exterior", "flip", "swap_uv", "matrix",
                                  "translate", "rotate", "scale", *(p.name for p in k.parameters)})
