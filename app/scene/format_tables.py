@@ -30,7 +30,7 @@ def _types(kind: str) -> list:
     if kind == "materials":
         return [(b.name, b.formats, b.doc, b.params + b.format_only) for b in BSDFS.values() if b.params]
     if kind == "textures":
-        return [(t.name, t.formats, t.doc, t.parameters) for t in TEXTURES.values()]
+        return [(t.name, t.formats, t.doc, t.parameters + t.format_only) for t in TEXTURES.values()]
     if kind == "media":
         return [("homogeneous", Medium.formats, "", Medium.parameters)]
     if kind == "cameras":

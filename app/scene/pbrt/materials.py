@@ -15,9 +15,10 @@ from pathtrace.materials.table import check_blend, check_bump_map, transmits
 from pathtrace.parameters import by_format, read
 from pathtrace.scene.spectra import blackbody_rgb, emission_rgb, named_spectrum, reflectance_rgb, sampled
 from pathtrace.textures import TEXTURES, Texture
-from pathtrace.textures.bitmap import Image, read_image
+from pathtrace.textures.bitmap import read_image
 
 BSDFS_BY_NAME = by_format(BSDFS.values(), "pbrt")
+TEXTURES_BY_NAME = by_format(TEXTURES.values(), "pbrt")
 SMOOTH_ALPHA = 1e-3     # pbrt-v4's TrowbridgeReitzDistribution::EffectivelySmooth
 # a conductor's reflectance r becomes k = 2 sqrt(r) / sqrt(1 - r) (below): r at most
 # 100^2 / (4 + 100^2), 0.9996, keeps k within the conductor's bound of 100
@@ -68,18 +69,6 @@ def spectrum_rgb(params, name, default, kind="reflectance"):
                 params.fail(name, f"the spectrum {e}")
         return reflectance_rgb(curve) if kind == "reflectance" else np.full(3, float(np.mean(curve)))
     params.fail(name, f"must be a colour (rgb, spectrum, blackbody, float), got {ptype}")
-
-
-def inverted(image: Image, scale: float) -> Image:
-    """An imagemap's `invert`, as pbrt-v4's image textures have it (src/pbrt/textures.cpp,
-    SpectrumImageTexture::Evaluate: rgb = scale * lookup, then ClampZero(1 - rgb) per channel;
-    FloatImageTexture::Evaluate: max(0, 1 - v)): applied to the texels, in linear float, which
-    bilinear filtering then interpolates as pbrt interpolates before inverting (the two differ
-    only next to texels that the clamp at zero cuts). An alpha channel is kept."""
-    values = image.linear_values()
-    rgb = np.maximum(1.0 - scale * values[..., :3], 0.0)
-    texels = np.concatenate([rgb, values[..., 3:]], axis=2) if values.shape[2] == 4 else rgb
-    return Image(np.ascontiguousarray(texels, np.float32), True, image.path)
 
 
 # pathtrace's parameters that the pbrt materials' parameters become, for messages
@@ -133,8 +122,8 @@ class MaterialMapper:
 
     def parameter(self, params, p, name):
         """The value of the declared parameter p (app/parameters.py) that the parameter `name`
-        gives, by p's kind (a colour from a spectrum as p.spectrum says); None where it is not
-        given."""
+        gives, by p's kind (its pbrt_kind where set; a colour from a spectrum as p.spectrum
+        says); None where it is not given."""
         ptype = params.type_of(name)
         if ptype is None:
             return None
@@ -145,7 +134,7 @@ class MaterialMapper:
         if p.kind == "image":
             return read_image(self.reader.resolve(params.string(name)), params.where(name), False, self.images)
         read = {"number": params.float, "integer": params.int, "bool": params.bool, "string": params.string,
-                "name": params.string, "point": params.point, "vector": params.point}[p.kind]
+                "name": params.string, "point": params.point, "vector": params.point}[p.pbrt_kind or p.kind]
         return read(name)
 
     def define_texture(self, name, kind, cls, params, where):
@@ -156,69 +145,55 @@ class MaterialMapper:
         value = self._texture(cls, params, is_float, where)
         (self.float_textures if is_float else self.textures)[name] = value
 
-    def _mapping(self, params, where, half=False):
+    def _mapping(self, params, where, scale):
         """pbrt's uv mapping (su u + du, sv v + dv) as pathtrace's to_uv, on the flipped v that
-        the reader gives meshes: t = 1 - (sv v_pbrt + dv) with v_pbrt = 1 - v."""
+        the reader gives meshes: t = 1 - (sv v_pbrt + dv) with v_pbrt = 1 - v; times `scale`
+        (a TextureType's pbrt_uv)."""
         mapping = params.string("mapping", "uv")
         if mapping != "uv":
             warn(f"{where}: pathtrace maps textures by uv only; the {mapping} mapping is taken as uv")
         su, sv = params.float("uscale", 1.0), params.float("vscale", 1.0)
         du, dv = params.float("udelta", 0.0), params.float("vdelta", 0.0)
         m = np.array([[su, 0, du], [0, sv, 1 - sv - dv], [0, 0, 1.0]])
-        if half:
-            m[:2] *= 0.5
+        m[:2] *= scale
         return m
 
     def _texture(self, cls, params, is_float, where):
-        inp = lambda n, d: self.texture_input(params, n, d, is_float)      # noqa: E731
-        if cls == "constant":
-            return inp("value", 1.0)
-        if cls == "imagemap":
-            filename = params.string("filename")
-            if filename is None:
-                raise UserError(f"{where}: an imagemap needs a filename")
-            # pbrt-v4 SpectrumImageTexture::Create: sRGB for a PNG, else linear, by default
-            encoding = params.string("encoding", "sRGB" if filename.lower().endswith(".png") else "linear")
-            if encoding not in ("sRGB", "linear") and not encoding.startswith("gamma "):
-                raise UserError(f"{where}: 'encoding' must be sRGB, linear or gamma <g>, got {encoding!r}")
-            if encoding.startswith("gamma "):
-                warn(f"{where}: pathtrace decodes 8-bit images as sRGB or linear; {encoding} is taken as sRGB")
-            image = read_image(self.reader.resolve(filename), f"{where}: filename", encoding == "linear",
-                               self.images)
-            wrap = params.string("wrap", "repeat")
-            if wrap not in ("repeat", "clamp", "black", "octahedralsphere"):
-                raise UserError(f"{where}: 'wrap' must be repeat, black, clamp or octahedralsphere, got {wrap!r}")
-            if wrap in ("black", "octahedralsphere"):
-                warn(f"{where}: pathtrace has no {wrap} wrap; it clamps")
-                wrap = "clamp"
-            filt = params.string("filter", "bilinear")
-            if filt not in ("point", "bilinear", "trilinear", "ewa"):
-                raise UserError(f"{where}: 'filter' must be point, bilinear, trilinear or ewa, got {filt!r}")
-            scale = params.float("scale", 1.0)
-            if params.bool("invert", False):
-                image = inverted(image, scale)
-                scale = 1.0
-            texture = Texture("bitmap", TEXTURES["bitmap"].complete(
-                {"image": image, "wrap": wrap, "filter": "nearest" if filt == "point" else "bilinear",
-                 "to_uv": self._mapping(params, where)}))
-            if scale != 1.0:
-                texture = Texture("scale", TEXTURES["scale"].complete({"tex": texture, "scale": scale}))
+        """A texture of the type that declares pbrt-v4's `cls` (its parameters' pbrt-v4 names,
+        its from_pbrt): its colour inputs float textures (or numbers) in a float texture, and
+        those pbrt-v4 reads as float textures; its image read as its `raw` (encoding) says."""
+        kind = TEXTURES_BY_NAME.get(cls)
+        if kind is None:
+            return self._unknown_texture(cls, params, is_float, where)
+
+        def get(p, name):
+            if p.kind == "color":
+                return self.texture_input(params, name, None, is_float or p.name in kind.pbrt_floats)
+            return self.reader.resolve(params.string(name)) if p.kind == "image" and params.type_of(name) \
+                else self.parameter(params, p, name)
+        given = {}
+        try:
+            values = read(kind.parameters + kind.format_only, "pbrt", get, given)
+            for p in kind.parameters:
+                if p.kind == "image":
+                    if p.name not in values:
+                        raise UserError(f"{where}: an {cls} needs a {p.pbrt}")
+                    values[p.name] = read_image(values[p.name], f"{where}: {p.pbrt}", values["raw"], self.images)
+            if kind.pbrt_uv:
+                values["to_uv"] = self._mapping(params, where, kind.pbrt_uv)
+            texture = kind.from_pbrt(values, given, lambda text: warn(f"{where}: {text}"))
+        except ValueError as e:
+            raise UserError(f"{where}: {e}") from None
+        if is_float or isinstance(texture, Texture):
             return texture
-        if cls == "checkerboard":
-            if params.int("dimension", 2) != 2:
-                warn(f"{where}: pathtrace's checkerboard is 2D; the 3D one is taken as 2D")
-            # pbrt's squares are a unit of (s, t) and Mitsuba's half a unit: (s, t) / 2
-            return Texture("checkerboard", TEXTURES["checkerboard"].complete(
-                {"color0": inp("tex1", 1.0), "color1": inp("tex2", 0.0), "to_uv": self._mapping(params, where, True)}))
-        if cls == "scale":
-            return Texture("scale", TEXTURES["scale"].complete(
-                {"tex": inp("tex", 1.0), "scale": self.texture_input(params, "scale", 1.0, True)}))
-        if cls == "mix":
-            return Texture("mix", TEXTURES["mix"].complete(
-                {"tex1": inp("tex1", 0.0), "tex2": inp("tex2", 1.0),
-                 "amount": self.texture_input(params, "amount", 0.5, True)}))
+        return np.broadcast_to(np.asarray(texture, np.float64), 3).copy()
+
+    def _unknown_texture(self, cls, params, is_float, where):
+        """A constant for a texture pathtrace has not: a bilerp's the mean of its constant
+        corners, another's 0.5, with a warning."""
         if cls == "bilerp":
-            corners = [inp(k, d) for k, d in (("v00", 0.0), ("v01", 1.0), ("v10", 0.0), ("v11", 1.0))]
+            corners = [self.texture_input(params, k, d, is_float)
+                       for k, d in (("v00", 0.0), ("v01", 1.0), ("v10", 0.0), ("v11", 1.0))]
             mean = np.mean([np.asarray(c, np.float64) for c in corners if not isinstance(c, Texture)] or [0.5], axis=0)
             value = float(np.mean(mean)) if is_float else np.broadcast_to(mean, 3).copy()
             warn(f"{where}: pathtrace has no bilerp texture; it uses the mean of its constant corners, "
