@@ -93,6 +93,8 @@ def read(parameters, fmt: str, get: Callable, given: dict = None) -> dict:
         if name is not None:
             value = get(p, name)
             given[name] = p.default_in(fmt) if value is None else value
+            if p.name is None and given[name] is SAME:
+                given[name] = None          # a format-only parameter absent, of no default
     values = {}
     for p in parameters:
         name = p.named(fmt)

@@ -3,7 +3,6 @@ pbrt-v4 means them: roughness remapped as pbrt remaps it, texture coordinates fl
 image lookups flip them, colours from spectra (app/scene/spectra.py). What pathtrace does not have yet
 is approximated by its nearest material, with one warning each (docs/pbrt.md)."""
 
-import math
 from dataclasses import replace
 
 import numpy as np
@@ -19,10 +18,6 @@ from pathtrace.textures.bitmap import read_image
 
 BSDFS_BY_NAME = by_format(BSDFS.values(), "pbrt")
 TEXTURES_BY_NAME = by_format(TEXTURES.values(), "pbrt")
-SMOOTH_ALPHA = 1e-3     # pbrt-v4's TrowbridgeReitzDistribution::EffectivelySmooth
-# a conductor's reflectance r becomes k = 2 sqrt(r) / sqrt(1 - r) (below): r at most
-# 100^2 / (4 + 100^2), 0.9996, keeps k within the conductor's bound of 100
-MAX_REFLECTANCE = 100.0 ** 2 / (4 + 100.0 ** 2)
 
 
 def spectrum_rgb(params, name, default, kind="reflectance"):
@@ -204,27 +199,14 @@ class MaterialMapper:
 
     # -- materials --
 
-    def roughness(self, params, where, prefix=""):
-        """pbrt-v4's microfacet alphas (along dp/du and dp/dv, as its BSDF frame has them) from
-        roughness / uroughness / vroughness and remaproughness (alpha = sqrt(roughness):
-        RoughnessToAlpha)."""
-        r = params.float(prefix + "roughness", 0.0)
-        ru, rv = params.float(prefix + "uroughness", r), params.float(prefix + "vroughness", r)
-        for name, v in (("roughness", r), ("uroughness", ru), ("vroughness", rv)):
-            if v < 0 or v > 1e3 or not math.isfinite(v):
-                params.fail(prefix + name, f"must lie in [0, 1000], got {v:g}")
-        remap = params.bool("remaproughness", True)
-        return (math.sqrt(ru), math.sqrt(rv)) if remap else (ru, rv)
-
     @staticmethod
-    def rough_values(alphas) -> dict | None:
-        """The alpha and alpha_v of a rough material (GGX, pbrt-v4's TrowbridgeReitz) for a
-        pair of alphas, or None where pbrt deems them smooth (EffectivelySmooth: both below
-        SMOOTH_ALPHA)."""
-        if max(alphas) < SMOOTH_ALPHA:
-            return None
-        au, av = (min(max(a, 1e-4), 1.0) for a in alphas)
-        return {"alpha": au, "alpha_v": av, "distribution": "ggx"}
+    def fail(params, where, error: ValueError):
+        """A type's ValueError ("<pbrt name>: <problem>") as one line naming the parameter's
+        file:line, or the directive's (`where`)."""
+        name, _, problem = str(error).partition(": ")
+        if name in params.params:
+            params.fail(name, problem)
+        raise UserError(f"{where}: {error}") from None
 
     def material(self, kind, params, where) -> Material | None:
         """The Material of a pbrt material, or None for `interface` (and "" / "none"): no
@@ -271,27 +253,18 @@ class MaterialMapper:
         if kind in ("interface", "", "none"):
             return None
         if kind in BSDFS_BY_NAME:         # the types that declare their pbrt-v4 parameters
-            bsdf = BSDFS_BY_NAME[kind]
-            return make(bsdf.name, read(bsdf.params + bsdf.format_only, "pbrt",
-                                        lambda p, name: self.parameter(params, p, name)), where)
-        if kind == "conductor":
-            return self._conductor(params, where)
-        if kind in ("dielectric", "thindielectric"):
-            eta = self._eta(params, where)
-            # pbrt-v4's ThinDielectricMaterial::Create reads no roughness: thin glass is smooth
-            rough = self.rough_values(self.roughness(params, where)) if kind == "dielectric" else None
-            if eta == 1.0:
-                warn(f"{where}: a dielectric of eta 1 is invisible; pathtrace leaves the surface out")
-                return None
-            # pbrt-v4's eta is the inside's IOR over the outside's, any positive value (its
-            # DielectricBxDF takes etap = eta or 1 / eta by the side wo is on): below 1 the
-            # outside is the denser, an air bubble in water
-            iors = {"int_ior": eta, "ext_ior": 1.0} if eta > 1 else {"int_ior": 1.0, "ext_ior": 1 / eta}
-            if kind == "dielectric" and rough:      # pbrt-v4's rough glass: GGX
-                return make("roughdielectric", {**iors, **rough}, where)
-            return make(kind, iors, where)
-        if kind in ("coateddiffuse", "coatedconductor"):
-            return self._coated(kind, params, where)
+            bsdf, given = BSDFS_BY_NAME[kind], {}
+            values = read(bsdf.params + bsdf.format_only, "pbrt", lambda p, name: self.parameter(params, p, name), given)
+            # the numbers a file gives as they are checked at their own lines (a layer's walks)
+            problem = bsdf.out_of_range({p.name: values[p.name] for p in bsdf.params
+                                         if p.kind == "number" and p.pbrt and not p.from_pbrt and p.name in values})
+            if problem:
+                params.fail(next(p.pbrt for p in bsdf.params if p.name == problem[0]), problem[1])
+            try:
+                chosen = bsdf.from_pbrt(values, given, lambda text: warn(f"{where}: {text}"))
+            except ValueError as e:
+                self.fail(params, where, e)
+            return None if chosen is None else make(*chosen, where)
         if kind == "mix":
             return self._mix(params, where)
         warn(f"{where}: pathtrace has no {kind} material; it uses a diffuse one of albedo 0.5")
@@ -320,69 +293,3 @@ class MaterialMapper:
             raise UserError(f"{where}: amount: {e}") from None
         blend.twosided = not transmits(blend)
         return blend
-
-    def _eta(self, params, where, name="eta") -> float:
-        ptype = params.type_of(name)
-        if ptype == "spectrum":
-            eta = float(np.mean(spectrum_rgb(params, name, None, "unbounded")))
-        else:
-            eta = params.float(name, 1.5)
-        if not 0.1 <= eta <= 10 or not math.isfinite(eta):
-            params.fail(name, f"must lie in [0.1, 10], got {eta:g}")
-        return eta
-
-    def _coating_eta(self, params, where, name="eta") -> float:
-        """A layered material's coating IOR, which pathtrace's coatings take above 1."""
-        eta = self._eta(params, where, name)
-        if eta < 1:
-            warn(f"{where}: {name} {eta:g} < 1: pathtrace's coatings are denser than the outside; it uses {1 / eta:.4g}")
-            eta = 1 / eta
-        return eta
-
-    def _conductor(self, params, where):
-        if params.type_of("reflectance") is not None:
-            # pbrt-v4: the Fresnel reflectance of eta 1 and k = 2 sqrt(r) / sqrt(1 - r)
-            r = np.clip(spectrum_rgb(params, "reflectance", 0.0), 0.0, MAX_REFLECTANCE)
-            eta, k = np.ones(3), 2 * np.sqrt(r) / np.sqrt(1 - r)
-        else:
-            eta = spectrum_rgb(params, "eta", None, "unbounded")
-            k = spectrum_rgb(params, "k", None, "unbounded")
-            if eta is None:
-                eta = named_spectrum("metal-Cu-eta")[0]        # pbrt-v4's default: copper
-            if k is None:
-                k = named_spectrum("metal-Cu-k")[0]
-        rough = self.rough_values(self.roughness(params, where))
-        values = {"eta": eta, "k": k}
-        if not rough:
-            return make("conductor", values, where)
-        return make("roughconductor", {**values, **rough}, where)
-
-    def _coated(self, kind, params, where):
-        """pbrt-v4's layered materials, as pathtrace's (the same random walks): coateddiffuse,
-        and coatedconductor, whose coating's and metal's parameters are prefixed interface. and
-        conductor. (its metal copper by default, or of a `reflectance`)."""
-        layer = {"thickness": params.float("thickness", 0.01), "g": params.float("g", 0.0),
-                 "albedo": spectrum_rgb(params, "albedo", 0.0),
-                 "maxdepth": params.int("maxdepth", 10), "nsamples": params.int("nsamples", 1)}
-        for p in BSDFS[kind].params:       # the walks' bounds (a walk per sample costs time)
-            if p.name in ("maxdepth", "nsamples", "thickness", "g") and not p.low <= layer[p.name] <= p.high:
-                params.fail(p.name, f"must lie in [{p.low:g}, {p.high:g}], got {layer[p.name]:g}")
-        if kind == "coatedconductor":
-            metal = {"eta": spectrum_rgb(params, "conductor.eta", named_spectrum("metal-Cu-eta")[0], "unbounded"),
-                     "k": spectrum_rgb(params, "conductor.k", named_spectrum("metal-Cu-k")[0], "unbounded")}
-            if params.type_of("reflectance") is not None:
-                r = np.clip(spectrum_rgb(params, "reflectance", 0.0), 0.0, MAX_REFLECTANCE)
-                metal = {"eta": np.ones(3), "k": 2 * np.sqrt(r) / np.sqrt(1 - r)}
-            coating = self.rough_values(self.roughness(params, where, "interface.")) or {"alpha": 0.0, "alpha_v": 0.0}
-            base = self.rough_values(self.roughness(params, where, "conductor.")) or {"alpha": 0.0, "alpha_v": 0.0}
-            return make("coatedconductor", {**metal, **layer, "alpha": coating["alpha"], "alpha_v": coating["alpha_v"],
-                                            "conductor_alpha": base["alpha"], "conductor_alpha_v": base["alpha_v"],
-                                            "interface_eta": self._coating_eta(params, where, "interface.eta")}, where)
-        au, av = self.roughness(params, where)
-        if not math.isclose(au, av, rel_tol=1e-6):
-            warn(f"{where}: pathtrace's coateddiffuse coating is isotropic; it uses alpha {(au + av) / 2:.3g}")
-        alpha = (au + av) / 2
-        values = {"reflectance": self.texture_input(params, "reflectance", 0.5), "eta": self._coating_eta(params, where),
-                  "alpha": min(alpha, 1.0) if alpha >= SMOOTH_ALPHA else 0.0, **layer}
-        return make("coateddiffuse", values, where)
-
