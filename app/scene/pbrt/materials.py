@@ -178,7 +178,7 @@ class MaterialMapper:
                 values["to_uv"] = self._mapping(params, where, kind.pbrt_uv)
             texture = kind.from_pbrt(values, given, lambda text: warn(f"{where}: {text}"))
         except ValueError as e:
-            raise UserError(f"{where}: {e}") from None
+            self.fail(params, where, e)
         if is_float or isinstance(texture, Texture):
             return texture
         return np.broadcast_to(np.asarray(texture, np.float64), 3).copy()
