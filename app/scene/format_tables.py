@@ -19,7 +19,8 @@ DOC = Path(__file__).resolve().parents[2] / "docs" / "scene-format.md"
 MARKER = re.compile(r"(<!-- parameters: (\w+) -->\n).*?(<!-- end parameters -->)", re.S)
 NOTE = ("Generated from the types' declarations (`python -m pathtrace.scene.format_tables`). A blank "
         "default is optional; † marks a value the reader converts (pbrt-v4's power, a spot's cone); "
-        "\"its frame\": the element's transform places it (Mitsuba's `to_world`).\n")
+        "\"its frame\": the element's transform places it (Mitsuba's `to_world`); a row with no TOML name is "
+        "a format's own, which the type maps onto its parameters (pbrt-v4's roughness onto alpha).\n")
 
 
 def _types(kind: str) -> list:
