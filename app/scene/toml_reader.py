@@ -317,8 +317,10 @@ class _Reader:
             if value not in names:
                 self.fail(key, f"unknown name {short(value)} (known: {', '.join(sorted(names))})")
             return value             # BSDFType.resolve turns a material's into its number
+        if param.kind == "string" and isinstance(value, str):
+            return value
         if param.kind in ("name", "string"):
-            self.fail(key, f"must be a name, got {short(value)}")
+            self.fail(key, f"must be a {param.kind}, got {short(value)}")
         return self.number(data, param.name, where, low=param.low, high=param.high, integer=param.kind == "integer")
 
     def camera(self, data):
@@ -396,21 +398,18 @@ class _Reader:
             self.fail(f"{where}.{field}", problem) if sep else self.fail(where, str(e))
 
     def environment(self, data):
+        """[environment], by its declared parameters (app/scene/environment.py): a colour or a map."""
         where = "environment"
-        self.table(data, where, {"color", "map", "intensity", "rotation"})
-        intensity = self.number(data, "intensity", where, default=1.0, low=0)
-        rotation = self.number(data, "rotation", where, default=0.0) % 360.0   # an angle: wrapped in float64
+        self.table(data, where, {p.name for p in Environment.parameters if p.name})
         if "map" in data and "color" in data:
             self.fail(where, "give either 'color' or 'map', not both")
-        if "map" in data:
-            name = data["map"]
-            if not isinstance(name, str):
-                self.fail("environment.map", f"must be a file name, got {short(name)}")
-            return Environment.from_file(self.find_asset(name), intensity, rotation,
+        values = parameters.read(Environment.parameters, "toml",
+                                 lambda p, name: self.parameter(data, p, where) if name in data else None)
+        intensity, rotation = values.get("intensity", 1.0), values.get("rotation", 0.0) % 360.0   # wrapped in float64
+        if "map" in values:
+            return Environment.from_file(self.find_asset(values["map"]), intensity, rotation,
                                          where=f"{self.label}: environment.map")
-        env = Environment.constant(self.color(data, "color", where, default=(1, 1, 1)), intensity)
-        env.rotation = rotation
-        return env
+        return Environment(Environment.constant(values.get("color", 1.0)).image, intensity, rotation)
 
     def find_asset(self, name):
         """A map path is relative to the scene file; a bare name may also be a shipped map."""
