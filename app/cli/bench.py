@@ -8,6 +8,10 @@ def cmd_bench(args):
     from pathtrace.bench import report as bench
 
     timing_size = args.size or ((320, 180) if args.quick else (1280, 720))
+    load_rows = None     # with --load, the generated rows --scenes names (before validate's default)
+    if (args.load or args.load_scene) and not args.first_image and args.scenes:
+        from pathtrace.bench.load import check_rows
+        load_rows, args.scenes = check_rows(args.scenes), None
     if args.first_image:
         from pathtrace.bench import first_image
         first_image.validate(args)
@@ -48,7 +52,7 @@ def cmd_bench(args):
         print(load_bench.LOAD_HEADER)
         results = [r for device in args.device or ["auto"]
                    for r in load_bench.run_load(device, args.load_scene or [], args.repeats, args.mitsuba,
-                                                args.mitsuba_variant)]
+                                                args.mitsuba_variant, generated=load_rows or load_bench.GENERATED_ROWS)]
         if args.json:
             bench.write_json(args.json, results, sys.argv[1:])
             print(f"wrote {args.json}", file=sys.stderr)
@@ -87,7 +91,8 @@ def add_parser(sub):
     add_program_option(p, "specialised")
     p.add_argument("--scenes", nargs="+", metavar="SCENE",
                    help="built-in names or scene files (default: " + " ".join(TARGET_SCENES) + "; with "
-                        "--first-image: " + " ".join(FIRST_IMAGE_SCENES) + ")")
+                        "--first-image: " + " ".join(FIRST_IMAGE_SCENES) + "; with --load, the generated rows: "
+                        "heightfield1M meshes850)")
     p.add_argument("--estimator", action="append", metavar="EST",
                    help="rr (the report's), depth8 (comparison mode), or either with +nee "
                         "(next-event estimation); repeatable; default: rr for the report's "
