@@ -33,7 +33,7 @@ def building_with(backend: Backend, build, tunes: bool = False, generic: bool = 
     auto = with_mode(backend, "auto")
     auto.programs = Programs(build, auto.device.name, tunes)
     if generic:
-        auto.programs.add(Features.generic_program(), False, backend.program)
+        auto.programs.add(Features.generic_program(), True, backend.program)
     return auto
 
 

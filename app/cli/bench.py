@@ -1,5 +1,6 @@
 """`pathtrace bench`: the command line of the benchmark tooling (app/bench/)."""
 
+import argparse
 import sys
 
 from pathtrace.cli.options import _count, _int_range, _size, add_path_queue_option, add_program_option
@@ -69,11 +70,22 @@ def cmd_bench(args):
     results = bench.run(args.device or ["auto"], args.scenes, args.estimator, width, height, args.spp,
                         args.together, not args.no_cold,
                         (args.mitsuba, args.mitsuba_variant) if args.mitsuba else None, args.traversal,
-                        args.trace_split, args.path_queue or 0, args.rounds)
+                        args.trace_split, args.path_queue or 0, args.rounds, args.divergence or 0)
     if args.json:
         bench.write_json(args.json, results, sys.argv[1:])
         print(f"wrote {args.json}", file=sys.stderr)
     return 0
+
+
+def _warp_width(text: str) -> int:
+    from pathtrace.bench.divergence_stats import check_warp
+    from pathtrace.errors import UserError
+    width = _int_range(1)(text)
+    try:
+        check_warp(width)
+    except UserError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+    return width
 
 
 def add_parser(sub):
@@ -121,6 +133,13 @@ def add_parser(sub):
                               "to its image written, in fresh processes, cold (every kernel and BVH cache "
                               "empty) and warm (the caches the cold run filled), for --scenes and --load-scene")):
         p.add_argument(flag, action="store_true", help=text)
+    p.add_argument("--divergence", nargs="?", const=32, type=_warp_width, metavar="WARP",
+                   help="also count, for each row, how much of a warp's width the path tracer's shading "
+                        "uses: per iteration of its loop, the lanes active, each branch's (BSDF type, "
+                        "light type, image textures) share of the warp while it runs, the BSDF types and "
+                        "materials per warp, texture lookups per ray (a render of 4 spp at the row's "
+                        "size, without the path queue; warps of WARP lanes, default 32, AMD's 64: "
+                        "docs/benchmarks.md)")
     p.add_argument("--load-scene", action="append", metavar="FILE",
                    help="with --load or --first-image, also time this scene file (repeatable)")
     p.add_argument("--repeats", type=_int_range(1, 100), default=3,
