@@ -117,20 +117,22 @@ def add_parser(sub):
     p.add_argument("--builds", nargs="*", type=_count, metavar="N",
                    help="time BVH builds instead of renders: random spheres and a height field of "
                         "N primitives each (a k or M suffix allowed; default 64k 1M 4M)")
-    p.add_argument("--display", action="store_true",
-                   help="time the viewer's copy of the image to the host each frame (default size 1280x720)")
-    p.add_argument("--denoise", action="store_true",
-                   help="time Open Image Denoise at each quality (default size 1280x720)")
-    p.add_argument("--no-cold", action="store_true",
-                   help="skip timing the kernels' build without the cache (on NVIDIA's OpenCL it tunes "
-                        "register caps, about a minute)")
-    p.add_argument("--traversal", action="store_true",
-                   help="also count, for each row, the rays per sample and the BVH nodes visited and "
-                        "primitives tested per ray (three renders of 4 spp at the row's size)")
-    p.add_argument("--trace-split", action="store_true",
-                   help="also time, for each row, its depth-2 paths against the same rays traced by a "
-                        "kernel that only walks the BVH: how much of the time is tracing (8 spp at the "
-                        "row's size)")
+    for flag, text in (    # what is timed instead of renders, or what more each row times or counts
+            ("--display", "time the viewer's copy of the image to the host each frame (default size 1280x720)"),
+            ("--denoise", "time Open Image Denoise at each quality (default size 1280x720)"),
+            ("--no-cold", "skip timing the kernels' build without the cache (on NVIDIA's OpenCL it tunes "
+                          "register caps, about a minute)"),
+            ("--traversal", "also count, for each row, the rays per sample and the BVH nodes visited and "
+                            "primitives tested per ray (three renders of 4 spp at the row's size)"),
+            ("--trace-split", "also time, for each row, its depth-2 paths against the same rays traced by a "
+                              "kernel that only walks the BVH: how much of the time is tracing (8 spp at the "
+                              "row's size)"),
+            ("--load", "time loading instead: seconds from 'pathtrace render FILE' to its first image "
+                       "(1 spp) for a 1M-triangle PLY file and for 850 PLY meshes in a pbrt-v4 file"),
+            ("--first-image", "time the first image instead: seconds from 'pathtrace render SCENE --spp 1' "
+                              "to its image written, in fresh processes, cold (every kernel and BVH cache "
+                              "empty) and warm (the caches the cold run filled), for --scenes and --load-scene")):
+        p.add_argument(flag, action="store_true", help=text)
     p.add_argument("--divergence", nargs="?", const=32, type=_warp_width, metavar="WARP",
                    help="also count, for each row, how much of a warp's width the path tracer's shading "
                         "uses: per iteration of its loop, the lanes active, each branch's (BSDF type, "
@@ -138,13 +140,6 @@ def add_parser(sub):
                         "materials per warp, texture lookups per ray (a render of 4 spp at the row's "
                         "size, without the path queue; warps of WARP lanes, default 32, AMD's 64: "
                         "docs/benchmarks.md)")
-    p.add_argument("--load", action="store_true",
-                   help="time loading instead: seconds from 'pathtrace render FILE' to its first image "
-                        "(1 spp) for a 1M-triangle PLY file and for 850 PLY meshes in a pbrt-v4 file")
-    p.add_argument("--first-image", action="store_true",
-                   help="time the first image instead: seconds from 'pathtrace render SCENE --spp 1' "
-                        "to its image written, in fresh processes, cold (every kernel and BVH cache "
-                        "empty) and warm (the caches the cold run filled), for --scenes and --load-scene")
     p.add_argument("--load-scene", action="append", metavar="FILE",
                    help="with --load or --first-image, also time this scene file (repeatable)")
     p.add_argument("--repeats", type=_int_range(1, 100), default=3,
