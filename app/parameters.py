@@ -58,9 +58,10 @@ class Parameter:
     from_mitsuba: Callable = None    # (value as the file gives it, {format name: value} of the
     from_pbrt: Callable = None       # element) -> pathtrace's value; None: the value as it is
     optional: bool = False       # without a default, and not required (the type makes do)
+    pbrt_kind: str = None        # the kind pbrt-v4 gives it as, where not `kind` (from_pbrt converts it)
 
     def __post_init__(self):
-        assert self.kind in KINDS and self.spectrum in SPECTRA, self
+        assert self.kind in KINDS and self.pbrt_kind in (None, *KINDS) and self.spectrum in SPECTRA, self
 
     def named(self, fmt: str) -> str | None:
         """Its name in the format fmt (FORMATS), None where that format has none."""
@@ -77,19 +78,23 @@ class Parameter:
         return value if convert is None else convert(value, given)
 
 
-def read(parameters, fmt: str, get: Callable) -> dict:
+def read(parameters, fmt: str, get: Callable, given: dict = None) -> dict:
     """The values of `parameters` that an element of a file in format fmt gives, by pathtrace's
     names, converted: get(parameter, the format's name) is the value the element gives (read by the
     parameter's kind, in the format's syntax), or None. A parameter absent from the element takes
     its format default where that differs from pathtrace's (in the format's terms, converted as a
     given value is; FRAME is left to the reader); the others are left out, for the type's own
-    defaults to fill in. Format-only parameters (name None) are read for the conversions alone."""
-    given = {}
+    defaults to fill in. Format-only parameters (name None) are read for the conversions alone.
+    `given`, where passed, is filled with the element's values by the format's names (defaults
+    included), for a type's own mapping of the format's element (a pbrt-v4 texture's from_pbrt)."""
+    given = {} if given is None else given
     for p in parameters:
         name = p.named(fmt)
         if name is not None:
             value = get(p, name)
             given[name] = p.default_in(fmt) if value is None else value
+            if p.name is None and given[name] is SAME:
+                given[name] = None          # a format-only parameter absent, of no default
     values = {}
     for p in parameters:
         name = p.named(fmt)

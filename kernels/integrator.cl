@@ -68,6 +68,7 @@ float3 sample_direct_light(const SceneData *sc, const RenderParams *p, MaterialR
                            int *rays)
 {
     LightSample ls = sample_light(sc, p, s->p, s->ns, r, rng);
+    LOG_LIGHT_SAMPLED(sc, ls);
     float3 wi = to_shading(s, ls.wi);
     /* the shading and geometric normals must agree on the side wi leaves on (no light leaks) */
     if (ls.pdf <= 0.0f || dot(ls.wi, s->ng) * wi.z <= 0.0f)
@@ -97,6 +98,7 @@ float3 sample_direct_light_in_medium(const SceneData *sc, const RenderParams *p,
 {
     /* no normal: the light tree weighs no cosine, a constant environment is sampled uniformly */
     LightSample ls = sample_light(sc, p, x, (float3)(0.0f), r, rng);
+    LOG_LIGHT_SAMPLED(sc, ls);
     if (ls.pdf <= 0.0f)
         return (float3)(0.0f);
     float phase = eval_hg(g, wo, ls.wi);
@@ -251,6 +253,7 @@ CPU_INLINE float3 trace_path(const SceneData *sc, const RenderParams *p, const P
             }
         }
 #endif
+        LOG_ITERATION(sc);          /* the divergence stats build's record (kernels/divergence.cl) */
         ++*rays;
         Hit hit = intersect_scene(sc, o, d, INFINITY, self);
 #ifdef MEDIA
@@ -267,6 +270,7 @@ CPU_INLINE float3 trace_path(const SceneData *sc, const RenderParams *p, const P
             if (flight.scattered) {
                 if (depth >= max_depth || all(throughput == 0.0f))
                     return radiance;
+                LOG_SHADED(sc, SHADING_MEDIUM);
                 float3 x = o + flight.t * d, wo = -d;
                 float g = med->sigma_s.w;
                 if (nee && p->num_lights > 0)
@@ -285,6 +289,7 @@ CPU_INLINE float3 trace_path(const SceneData *sc, const RenderParams *p, const P
         }
 #endif
         if (hit.prim < 0) {
+            LOG_SHADED(sc, SHADING_ESCAPED);
             float w = 1.0f;
             if (nee && pdf_prev > 0.0f && p->env_pick > 0.0f)
                 w = mis_weight(pdf_prev, p->env_pick * pdf_environment(sc, p, prev_n, d));
@@ -295,6 +300,7 @@ CPU_INLINE float3 trace_path(const SceneData *sc, const RenderParams *p, const P
 #ifdef NULL_SURFACES
         if (flags & MATERIAL_NULL) {
             /* no vertex: the ray goes on through, into the medium beyond */
+            LOG_SHADED(sc, SHADING_NULL);
             medium = medium_after(sc, &s, d, medium);
             o = offset_ray_origin(s.p, s.offset, s.ng, d);
             self = HIT_ID(hit);
@@ -314,12 +320,14 @@ CPU_INLINE float3 trace_path(const SceneData *sc, const RenderParams *p, const P
         if (depth >= max_depth || !scatters) {
             /* the last vertex: only the light it emits counts, so its material is not shaded
                (pbrt-v4's PathIntegrator also ends a path at maxDepth before getting its BSDF) */
+            LOG_SHADED(sc, SHADING_LAST_VERTEX);
             float3 le = emits ? EMISSION_AT(sc, s, d) : (float3)(0.0f);
             if (any(le > 0.0f))
                 radiance += throughput * le * emission_weight(sc, hit.prim, nee, pdf_prev, prev_x, prev_n, s.p);
             return radiance;
         }
         MATERIAL_AT(m, sc, s, d);
+        LOG_BSDF(sc, hit.prim, m->type);
         if (emits && any(m->emission.xyz > 0.0f))
             radiance += throughput * m->emission.xyz
                         * emission_weight(sc, hit.prim, nee, pdf_prev, prev_x, prev_n, s.p);
@@ -429,6 +437,7 @@ void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum
     int rays = 0, kept = 0;
     for (uint i = 0; i < p->sample_count; ++i) {
         Rng rng = make_rng(x, y, p->sample_start + i, p->seed);
+        LOG_SAMPLE(sc, i);
         CameraRay ray = sample_camera_ray(p, x, y, &rng);
         PathRecord start = start_path(p, ray.o, ray.d, &rng);
         int queued = 0;
@@ -447,7 +456,8 @@ void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum
 }
 
 /* queue, counters, queue_capacity, results: PATH_QUEUE's continuation queue, which paths enter
- * before their vertex PATH_QUEUE + 1, its count being counters[0] (queue_capacity 0: no queue) */
+ * before their vertex PATH_QUEUE + 1, its count being counters[0] (queue_capacity 0: no queue);
+ * in the divergence stats build, a last argument: the records' buffer (kernels/divergence.cl) */
 #ifdef PATH_QUEUE
 #define FIRST_QUEUED_VERTEX (PATH_QUEUE + 1)
 #else
@@ -457,10 +467,11 @@ void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum
     kernel void name(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *sum,                 \
                      global float4 *sum_sq, global float4 *sum_c, global float4 *sum_sq_c,       \
                      global float4 *queue, volatile global int *counters, int queue_capacity,     \
-                     global float4 *results)                                                     \
+                     global float4 *results LOG_KERNEL_ARG)                                      \
     {                                                                                            \
         SceneData sc = SCENE_DATA(p.num_spheres, p.layout);                                      \
         COUNT_WORK_INTO(sc);                                                                     \
+        LOG_SHADING_INTO(sc);                                                                    \
         PathQueue q = {queue, counters, queue_capacity, FIRST_QUEUED_VERTEX};                    \
         render_pixel(&sc, &p, sum, sum_sq, sum_c, sum_sq_c, q, results, nee);                    \
     }

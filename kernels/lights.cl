@@ -86,6 +86,17 @@ float3 to_light_space(float4 q, float3 w)
     return w + 2.0f * cross(u, cross(u, w) + q.w * w);
 }
 
+/* aim_at_position for a light with a frame of its own, its rotation to the world the unit
+ * quaternion q: also *w, the direction from the light towards x in the light's space, by which
+ * an image light (goniometric, projection) looks up its image. */
+int aim_from_frame(float3 position, float4 q, float3 x, LightSample *ls, float *r2, float3 *w)
+{
+    if (!aim_at_position(position, x, ls, r2))
+        return 0;
+    *w = to_light_space(q, -ls->wi);
+    return 1;
+}
+
 /* The generated dispatch (app/lights/registry.py), defined after the types' files. */
 int sample_light_of_type(const SceneData *sc, const RenderParams *p, const global Light *l,
                          float3 x, float3 n, float2 u, LightSample *ls);

@@ -32,6 +32,10 @@ typedef struct {
                                                nodes visited (TRAVERSAL_STATS 1) or primitives
                                                tested (2); NULL in the other kernels */
 #endif
+#ifdef DIVERGENCE_STATS
+    struct ShadingLog *shading_log;         /* the render kernels' record of their shading
+                                               (kernels/divergence.cl); NULL in the others */
+#endif
 } SceneData;
 
 /* Counts k units of traversal work where a kernel asked for them (app/bench/traversal_stats.py). */

@@ -18,11 +18,18 @@ def z_test(mean, var_of_mean, ref, ref_var_of_mean=0.0, alpha=0.001, block=1, re
     would fail by chance after each such change (three did on 2026-11-28; each passed again
     with 8x the samples); at 0.001 one in four changes costs a look. Pixels are first averaged over block x block tiles (which makes the
     sums closer to normal). A standard deviation floor of rel_floor * |ref| covers float32
-    rounding where the variance is zero (a sky seen directly). Returns (passed, smallest
+    rounding where the variance is zero (a sky seen directly). The whole image's mean per channel
+    is tested beside the blocks: a bias spread over the image, which each block's noise hides, is
+    sqrt(blocks) times plainer there, so a test at a given spp detects a global bias
+    sqrt(blocks) times smaller than its blocks can. Returns (passed, smallest
     p-value, Sidak-corrected threshold)."""
     n = block * block
     m, r = block_mean(mean, block), block_mean(ref, block)
     v = block_mean(var_of_mean, block) / n + block_mean(np.broadcast_to(ref_var_of_mean, mean.shape), block) / n
+    blocks = [x.reshape(-1, x.shape[-1]) for x in (m, r, v)]
+    # the blocks, then the whole image: the blocks' mean, whose variance is theirs over the count
+    m, r, v = (np.concatenate([x, x.mean(axis=0, keepdims=True) / (len(x) if k == 2 else 1)])
+               for k, x in enumerate(blocks))
     z = (m - r) / np.sqrt(v + (rel_floor * np.abs(r)) ** 2 + 1e-30)
     p = 2 * stats.norm.sf(np.abs(z))
     threshold = 1 - (1 - alpha) ** (1 / p.size)

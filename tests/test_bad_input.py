@@ -35,6 +35,7 @@ def _pfm(path, value):
      "s.pbrt:7: an infinite light's map needs the current transform's inverse"),
     (HEAD + 'Material "mix" "float amount" 0.5\n' + TRIANGLE, 's.pbrt:4: a mix material needs "string materials"'),
     (HEAD + 'AreaLightSource "diffuse" "float scale" -1\n' + TRIANGLE, "s.pbrt:4: 'scale': an emitted radiance"),
+    (HEAD + 'LightSource "infinite" "float scale" -1\n' + TRIANGLE, "s.pbrt:4: 'scale': must not be negative"),
     (HEAD + TRIANGLE.replace("0 1 2 ]", "0 1 1e20 ]"), "'indices': integer values must fit in 32 bits, got 1e20"),
     (HEAD + TRIANGLE.replace("0 1 2 ]", "0 1 9223372036854775808 ]"), "got 9223372036854775808"),
     (HEAD + 'AreaLightSource "diffuse" "float power" 100\n'

@@ -109,19 +109,24 @@ def test_the_obj_scene_is_meshes850_as_obj_files(tmp_path):
         assert a.uvs is not None and a.normals is not None
 
 def test_load_bench_rows(tmp_path):
-    """`bench --load`: a row per generated scene and per --load-scene file, with pathtrace's
+    """`bench --load`: a row per generated scene (those --scenes names) and per --load-scene file, with pathtrace's
     seconds, the scene read and its BVH built, and both from their caches; Mitsuba's column only when asked for, and
     a Python without Mitsuba is one line."""
     scene = tmp_path / "one.toml"
     scene.write_text('[[spheres]]\ncenter = [0, 0, -3]\nradius = 1\nmaterial = { type = "diffuse", rho_d = 0.5 }\n')
     out = tmp_path / "load.json"
-    r = pathtrace("bench", "--load", "--repeats", "1", "--device", "cpu", "--load-scene", scene, "--json", out)
+    r = pathtrace("bench", "--load", "--scenes", "meshes850", "--repeats", "1", "--device", "cpu",
+                  "--load-scene", scene, "--json", out)
     assert r.returncode == 0, r.stderr
     rows = json.loads(out.read_text())["results"]
-    assert [row["scene"] for row in rows] == ["heightfield1M", "meshes850", "one"]
+    assert [row["scene"] for row in rows] == ["meshes850", "one"]
     assert all(row["seconds"] > 0 and row["cached_seconds"] > 0 and row["mitsuba_seconds"] is None
                and row["device"] == "cpu" for row in rows)
     assert "pathtrace s" in r.stdout and "cached s" in r.stdout and "870,400 triangles" in r.stdout
+    r = pathtrace("bench", "--load", "--scenes", "meshes85", "--device", "cpu")
+    assert r.returncode == 1 and r.stderr.strip().splitlines() == [
+        "pathtrace: error: --scenes: with --load, 'meshes85' is not a generated row (one of heightfield1M, "
+        "meshes850); did you mean meshes850?"], r.stderr
     r = pathtrace("bench", "--load-scene", tmp_path / "missing.toml", "--repeats", "1", "--device", "cpu")
     assert r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1 and "missing.toml" in r.stderr
     r = pathtrace("bench", "--load-scene", scene, "--repeats", "1", "--device", "cpu",

@@ -11,6 +11,7 @@ import pytest
 from pathtrace.scene import load_scene
 from pathtrace.scene import transform
 from pathtrace.shapes import SHAPES, Shape
+from tests.analytic_shapes import hits_as_pbrt, moved, pbrt_emitter
 from tests.test_shapes import one_shape_scene, shape_hits
 
 RADIUS, Z_MIN, Z_MAX, PHI_MAX = 0.8, -0.4, 1.1, math.radians(300)
@@ -41,12 +42,8 @@ def test_hits_follow_pbrts_formulas(kernels, flip, uniform):
     inside = rng.random(n) < 0.5
     start = np.where(inside[:, None], np.column_stack([np.zeros((n, 2)), z]),
                      local + outward * rng.uniform(0.5, 3, (n, 1)))
-    world = lambda p: p @ m[:3, :3].T + m[:3, 3]                           # noqa: E731
-    h = shape_hits(kernels, scene, world(start), world(local))
-    np.testing.assert_allclose(h["p"], world(local), atol=3e-5)
-    np.testing.assert_allclose(h["uv"], np.column_stack([phi / PHI_MAX, (z - Z_MIN) / (Z_MAX - Z_MIN)]), atol=2e-5)
-    dpdu = PHI_MAX * np.column_stack([-local[:, 1], local[:, 0], np.zeros(n)]) @ m[:3, :3].T
-    np.testing.assert_allclose(h["dpdu"], dpdu, atol=3e-4)
+    h = hits_as_pbrt(kernels, scene, m, start, local, np.column_stack([phi / PHI_MAX, (z - Z_MIN) / (Z_MAX - Z_MIN)]),
+                     PHI_MAX, 3e-5, 3e-4)
     normal = outward @ np.linalg.inv(m[:3, :3])
     normal = (-1 if flip else 1) * normal / np.linalg.norm(normal, axis=1, keepdims=True)
     np.testing.assert_allclose(h["n"], normal, atol=1e-5)
@@ -56,32 +53,15 @@ def test_hits_follow_pbrts_formulas(kernels, flip, uniform):
     gap = rng.uniform(PHI_MAX + 0.01, 2 * math.pi - 0.01, n - n // 2)
     above[n // 2:, :2] = RADIUS * np.column_stack([np.cos(gap), np.sin(gap)])
     start = np.column_stack([np.zeros((n, 2)), above[:, 2]])
-    assert np.all(np.isnan(shape_hits(kernels, scene, world(start), world(above))["p"][:, 0]))
-
-
-PBRT_CYLINDER = """LookAt 0 0 5  0 0 0  0 1 0
-Camera "perspective" "float fov" 45
-Film "rgb" "integer xresolution" 16 "integer yresolution" 16 "string filename" "x.exr"
-WorldBegin
-AttributeBegin
-AreaLightSource "diffuse" "rgb L" [1 1 1] "float power" 10
-Material "diffuse"
-ReverseOrientation
-Shape "cylinder" "float radius" 0.5 "float zmin" 2 "float zmax" -1 "float phimax" 400
-AttributeEnd
-"""
+    assert np.all(np.isnan(shape_hits(kernels, scene, moved(m, start), moved(m, above))["p"][:, 0]))
 
 
 def test_pbrt_cylinder_orders_its_ends_and_clamps_phimax(tmp_path, capfd):
     """pbrt-v4's Cylinder::Create orders zmin and zmax and clamps phimax to 360; `power` is
     spread over its area 2 pi r (zmax - zmin); ReverseOrientation turns it inside out."""
-    path = tmp_path / "c.pbrt"
-    path.write_text(PBRT_CYLINDER)
-    scene = load_scene(str(path))
-    assert "warning" not in capfd.readouterr().err
-    (c,) = scene.shapes
+    c, emission = pbrt_emitter(tmp_path, capfd, 'ReverseOrientation\nShape "cylinder" "float radius" 0.5 '
+                               '"float zmin" 2 "float zmax" -1 "float phimax" 400')
     assert c.kind == "cylinder" and c.flip and c.params == pytest.approx((0.5, -1.0, 2.0, 2 * math.pi))
-    emission = scene.materials.rows["emission"][c.material][:3]
     np.testing.assert_allclose(emission, 10 / (math.pi * 2 * math.pi * 0.5 * 3), rtol=1e-5)
 
 

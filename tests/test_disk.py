@@ -15,6 +15,7 @@ from pathtrace.scene import Mesh, SceneBuilder, diffuse, load_scene
 from pathtrace.scene import transform
 from pathtrace.shapes import SHAPES, Shape
 from tests.stats import z_test
+from tests.analytic_shapes import hits_as_pbrt, moved, pbrt_emitter
 from tests.test_shapes import one_shape_scene, shape_hits
 
 RADIUS, INNER, HEIGHT, PHI_MAX = 1.5, 0.6, 0.25, math.radians(250)
@@ -42,12 +43,8 @@ def test_hits_follow_pbrts_formulas(kernels, flip, uniform):
     local = np.column_stack([r * np.cos(phi), r * np.sin(phi), np.full(n, HEIGHT)])
     side = np.where(rng.random(n) < 0.5, 1.0, -1.0)[:, None]
     above = local + side * rng.uniform(0.5, 3, (n, 1)) * np.array([0.3, -0.2, 1.0])
-    world = lambda p: p @ m[:3, :3].T + m[:3, 3]                           # noqa: E731
-    h = shape_hits(kernels, scene, world(above), world(local))
-    np.testing.assert_allclose(h["p"], world(local), atol=2e-5)
-    np.testing.assert_allclose(h["uv"], np.column_stack([phi / PHI_MAX, (RADIUS - r) / (RADIUS - INNER)]), atol=2e-5)
-    dpdu = PHI_MAX * np.column_stack([-local[:, 1], local[:, 0], np.zeros(n)]) @ m[:3, :3].T
-    np.testing.assert_allclose(h["dpdu"], dpdu, atol=2e-4)
+    h = hits_as_pbrt(kernels, scene, m, above, local, np.column_stack([phi / PHI_MAX, (RADIUS - r) / (RADIUS - INNER)]),
+                     PHI_MAX, 2e-5, 2e-4)
     normal = np.linalg.inv(m[:3, :3]).T @ [0, 0, 1]
     normal = (-1 if flip else 1) * normal / np.linalg.norm(normal)
     np.testing.assert_allclose(h["n"], np.broadcast_to(normal, (n, 3)), atol=1e-5)
@@ -56,7 +53,7 @@ def test_hits_follow_pbrts_formulas(kernels, flip, uniform):
                             rng.uniform(INNER, RADIUS, n - 2 * (n // 3))])
     phi_out = np.concatenate([phi[:2 * (n // 3)], rng.uniform(PHI_MAX + 0.01, 2 * math.pi - 0.01, n - 2 * (n // 3))])
     miss = np.column_stack([r_out * np.cos(phi_out), r_out * np.sin(phi_out), np.full(n, HEIGHT)])
-    assert np.all(np.isnan(shape_hits(kernels, scene, world(miss + [0, 0, 1]), world(miss))["p"][:, 0]))
+    assert np.all(np.isnan(shape_hits(kernels, scene, moved(m, miss + [0, 0, 1]), moved(m, miss))["p"][:, 0]))
 
 
 def test_mitsuba_disk_has_mitsubas_uv(kernels, tmp_path):
@@ -76,20 +73,6 @@ def test_mitsuba_disk_has_mitsubas_uv(kernels, tmp_path):
     np.testing.assert_allclose(h["n"], np.broadcast_to([0, 0, -1], (500, 3)), atol=1e-6)
 
 
-PBRT_DISK = """LookAt 0 0 5  0 0 0  0 1 0
-Camera "perspective" "float fov" 45
-Film "rgb" "integer xresolution" 16 "integer yresolution" 16 "string filename" "x.exr"
-WorldBegin
-AttributeBegin
-AreaLightSource "diffuse" "rgb L" [1 1 1] "float power" 10
-Material "diffuse"
-Translate 0 1 0
-{transform}
-Shape "disk" "float radius" 2 "float innerradius" 0.5 "float phimax" 270 "float height" 0.1
-AttributeEnd
-"""
-
-
 @pytest.mark.parametrize("transform_line, flipped", [("", False), ("ReverseOrientation", True),
                                                       ("Scale 1 1 -1", True), ("ReverseOrientation Scale -1 1 1", False)])
 def test_pbrt_disk_is_analytic_with_pbrts_front_and_power(tmp_path, capfd, transform_line, flipped):
@@ -97,15 +80,11 @@ def test_pbrt_disk_is_analytic_with_pbrts_front_and_power(tmp_path, capfd, trans
     front is turned by ReverseOrientation and by a transform that swaps handedness; `power` is
     spread over its area, pi (r^2 - ri^2) phimax / 2 pi (DiffuseAreaLight::Create's
     L power / (pi area))."""
-    path = tmp_path / "d.pbrt"
-    path.write_text(PBRT_DISK.format(transform=transform_line))
-    scene = load_scene(str(path))
-    assert "warning" not in capfd.readouterr().err
-    (disk,) = scene.shapes
-    assert not scene.meshes and disk.kind == "disk" and disk.flip == flipped
+    disk, emission = pbrt_emitter(tmp_path, capfd, f'Translate 0 1 0\n{transform_line}\nShape "disk" "float radius" 2 '
+                                  '"float innerradius" 0.5 "float phimax" 270 "float height" 0.1')
+    assert disk.kind == "disk" and disk.flip == flipped
     assert disk.params == pytest.approx((2.0, 0.5, 0.1, math.radians(270)))
     area = math.pi * (4 - 0.25) * 0.75
-    emission = scene.materials.rows["emission"][disk.material][:3]
     np.testing.assert_allclose(emission, 10 / (math.pi * area), rtol=1e-5)
 
 

@@ -219,7 +219,7 @@ def render(folder: Path, scene: Path):
     return r.returncode, r.stderr
 
 
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,
                                                                  HealthCheck.too_slow])
 @given(scene=scenes())
 def test_a_scene_file_renders_finite_pixels_or_is_refused_in_one_line(tmp_path, scene):

@@ -8,33 +8,21 @@ import math
 
 import numpy as np
 import pytest
-from PIL import Image as PILImage
 
 from pathtrace.errors import UserError
 from pathtrace.lights.light import luminance
-from pathtrace.scene import load_scene
 from pathtrace.scene.pbrt.equal_area import sphere_to_square
 from pathtrace.scene.toml_reader import read_scene_dict
+from tests.image_lights import floor_directions, pbrt_light_turned_down, write_image
 from tests.test_lights import H, RHO, assert_within_noise, floor_under
-
-
-def write_map(path, texels):
-    PILImage.fromarray(np.asarray(texels, np.uint8)).save(path)
-    return str(path)
 
 
 def closed_form(light, x, z):
     """Each pixel's RHO / pi E, E = I(w) cos / r^2 over the pixel's grid of floor points, I(w) the
     nearest texel of the light's grey map at the equal-area square of w in the light's space
     (y and z swapped)."""
-    d = np.stack([x - light.position[0], np.full_like(x, -light.position[1]), z - light.position[2]], axis=-1)
-    r = np.linalg.norm(d, axis=-1)
-    w = d / r[..., None]
-    zl = np.asarray(light.direction, np.float64) / np.linalg.norm(light.direction)
-    yl = np.asarray(light.up, np.float64) - np.dot(light.up, zl) * zl
-    yl /= np.linalg.norm(yl)
-    xl = np.cross(yl, zl)
-    local = np.stack([w @ xl, w @ zl, w @ yl], axis=-1)     # (x, z, y): the map's pole is +y
+    w, r = floor_directions(light, x, z)
+    local = w[..., [0, 2, 1]]     # (x, z, y): the map's pole is +y
     texels = light.map.params["image"].texels[..., 0]
     n = texels.shape[0]
     uv = sphere_to_square(local.reshape(-1, 3))
@@ -48,7 +36,7 @@ def test_a_goniometric_light_lights_the_floor_as_its_map_says(backend, tmp_path)
     rng = np.random.default_rng(3)
     texels = rng.integers(20, 255, (8, 8, 3))
     light = {"type": "goniometric", "position": [0.2, H, -0.1], "intensity": [3, 2, 1], "up": [0.3, -1, 0.4],
-             "direction": [1, 0, 0], "image": write_map(tmp_path / "map.png", texels)}
+             "direction": [1, 0, 0], "image": write_image(tmp_path / "map.png", texels)}
     image, x, z, error = floor_under(light, backend)
     placed = read_scene_dict({"spheres": [{"center": [0, 0, 0], "radius": 1, "material": {"type": "diffuse",
                                                                                            "rho_d": 0.5}}],
@@ -63,7 +51,7 @@ def test_a_constant_map_is_a_point_light_of_its_value(backend, tmp_path):
     8-bit PNG decodes from sRGB, 128 to 0.2158)."""
     g = ((128 / 255 + 0.055) / 1.055) ** 2.4
     light = {"type": "goniometric", "position": [0, H, 0], "intensity": [3, 2, 1], "up": [1, 0, 0],
-             "image": write_map(tmp_path / "grey.png", np.full((4, 4, 3), 128))}
+             "image": write_image(tmp_path / "grey.png", np.full((4, 4, 3), 128))}
     image, x, z, error = floor_under(light, backend)
     d2 = H * H + x * x + z * z
     expected = RHO / np.pi * g * np.array([3, 2, 1]) * (H / np.sqrt(d2) / d2).mean(axis=(2, 3))[..., None]
@@ -71,15 +59,10 @@ def test_a_constant_map_is_a_point_light_of_its_value(backend, tmp_path):
 
 
 def test_pbrt_places_it_by_the_ctm_and_scales_it_to_its_power(tmp_path):
-    write_map(tmp_path / "map.png", np.random.default_rng(1).integers(0, 255, (8, 8, 3)))
-    (tmp_path / "scene.pbrt").write_text(
-        'LookAt 0 3 3  0 0 0  0 1 0\nCamera "perspective"\nWorldBegin\nAttributeBegin\nTranslate 0 1 0\n'
-        'Rotate 90 1 0 0\nLightSource "goniometric" "string filename" "map.png" "rgb I" [1 1 1] "float power" 10\n'
-        'AttributeEnd\nShape "sphere" "float radius" 0.5\n')
-    light = load_scene(tmp_path / "scene.pbrt").lights[0]
-    assert np.allclose(light.position, [0, 1, 0])
+    write_image(tmp_path / "map.png", np.random.default_rng(1).integers(0, 255, (8, 8, 3)))
     # Rotate 90 about x: the light's +z is the world's -y, its +y (the map's pole) the world's +z
-    assert np.allclose(light.direction, [0, -1, 0], atol=1e-12) and np.allclose(light.up, [0, 0, 1], atol=1e-12)
+    light = pbrt_light_turned_down(tmp_path, 1, 'LightSource "goniometric" "string filename" "map.png" "rgb I" '
+                                   '[1 1 1] "float power" 10')
     # pbrt-v4: I scale power / k_e, k_e = 4 pi mean(map): the power is `power` times I's luminance
     assert math.isclose(light.power(1.0), 10 * luminance(np.ones(3)), rel_tol=1e-6)
 
@@ -91,7 +74,7 @@ def test_pbrt_places_it_by_the_ctm_and_scales_it_to_its_power(tmp_path):
 ])
 def test_bad_goniometric_lights_are_one_line_naming_the_field(tmp_path, change, problem):
     light = {"type": "goniometric", "position": [0, 1, 0], "intensity": 1,
-             "image": write_map(tmp_path / "map.png", np.zeros((2, 2, 3))), **change}
+             "image": write_image(tmp_path / "map.png", np.zeros((2, 2, 3))), **change}
     light = {k: v for k, v in light.items() if v is not None}
     with pytest.raises(UserError) as e:
         read_scene_dict({"spheres": [{"center": [0, 0, 0], "radius": 1, "material": {"type": "diffuse",
@@ -102,7 +85,7 @@ def test_bad_goniometric_lights_are_one_line_naming_the_field(tmp_path, change, 
 
 def test_a_map_that_is_not_square_is_refused(tmp_path):
     light = {"type": "goniometric", "position": [0, 1, 0], "intensity": 1,
-             "image": write_map(tmp_path / "wide.png", np.zeros((2, 4, 3)))}
+             "image": write_image(tmp_path / "wide.png", np.zeros((2, 4, 3)))}
     with pytest.raises(UserError, match=r"lights\[0\]\.image: an equal-area map is square, got 4x2"):
         read_scene_dict({"spheres": [{"center": [0, 0, 0], "radius": 1, "material": {"type": "diffuse",
                                                                                        "rho_d": 0.5}}],

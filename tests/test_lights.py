@@ -313,6 +313,7 @@ def test_delta_lights_join_the_table_by_power():
     ({"type": "point", "position": [0, 1, 0], "intensity": 1e30}, "lights[0].intensity: must be three numbers in [0, 1e20]"),
     ({"type": "point", "intensity": 1}, "lights[0]: missing 'position'"),
     ({"type": "lamp", "position": [0, 1, 0]}, "lights[0].type: must be one of point, spot, directional"),
+    ({"type": ["point"], "position": [0, 1, 0]}, "lights[0].type: must be one of point, spot, directional"),
     ({"type": "spot", "position": [0, 1, 0], "direction": [0, -1, 0], "intensity": 1, "falloff": "cubic"},
      "lights[0].falloff: must be linear or smoothstep")])
 def test_bad_lights_are_one_line_naming_the_field(light, problem):

@@ -45,15 +45,16 @@ def assert_same_render(a, b):
                                atol=1e-6 * max(float(np.abs(sq_a[..., :3]).max()), 1e-6))
 
 
-@pytest.mark.parametrize("name, settings", [
-    ("teapot-textured", dict(max_depth=8, russian_roulette="off")),    # textures, NEE, fixed depth
-    ("cornell-box", dict(nee=False)),                                   # the report's estimator
-    ("material-spheres", dict()),                                       # glass and metals, roulette
-    (str(SCENES / "media-fog.xml"), dict()),                            # media: hero channels
-    (str(SCENES / "instances.xml"), dict()),                            # a two-level BVH
-    (str(SCENES / "masks.xml"), dict()),                                # alpha masks
+# Each scene's features with one queue depth, each depth on three of them: a depth and a scene
+# make a program of their own (PATH_QUEUE), about 5 s of the suite on two cores each
+@pytest.mark.parametrize("name, settings, depth", [
+    ("teapot-textured", dict(max_depth=8, russian_roulette="off"), 1),    # textures, NEE, fixed depth
+    ("cornell-box", dict(nee=False), 2),                                   # the report's estimator
+    ("material-spheres", dict(), 1),                                       # glass and metals, roulette
+    (str(SCENES / "media-fog.xml"), dict(), 2),                            # media: hero channels
+    (str(SCENES / "instances.xml"), dict(), 1),                            # a two-level BVH
+    (str(SCENES / "masks.xml"), dict(), 2),                                # alpha masks
 ])
-@pytest.mark.parametrize("depth", [1, 2])
 def test_queued_paths_render_the_megakernels_image(backend, name, settings, depth):
     scene = load_scene(name).with_settings(**settings)
     plain = render(backend, scene, 0)

@@ -7,19 +7,13 @@ import math
 
 import numpy as np
 import pytest
-from PIL import Image as PILImage
 
 from pathtrace.errors import UserError
-from pathtrace.scene import load_scene
 from pathtrace.scene.toml_reader import read_scene_dict
+from tests.image_lights import floor_directions, pbrt_light_turned_down, write_image
 from tests.test_lights import H, RHO, assert_within_noise, floor_under
 
 BALL = [{"center": [0, 0, 0], "radius": 1, "material": {"type": "diffuse", "rho_d": 0.5}}]
-
-
-def write_image(path, texels):
-    PILImage.fromarray(np.asarray(texels, np.uint8)).save(path)
-    return str(path)
 
 
 def placed(light):
@@ -29,14 +23,8 @@ def placed(light):
 def closed_form(light, x, z):
     """Each pixel's RHO / pi E over its grid of floor points: E = I(w) cos / r^2, I(w) scale times
     the nearest texel where w, in the light's frame with y turned round, meets the screen."""
-    d = np.stack([x - light.position[0], np.full_like(x, -light.position[1]), z - light.position[2]], axis=-1)
-    r = np.linalg.norm(d, axis=-1)
-    w = d / r[..., None]
-    zl = np.asarray(light.direction, np.float64) / np.linalg.norm(light.direction)
-    yl = np.asarray(light.up, np.float64) - np.dot(light.up, zl) * zl
-    yl /= np.linalg.norm(yl)
-    xl = np.cross(yl, zl)
-    wx, wy, wz = w @ xl, -(w @ yl), w @ zl
+    w, r = floor_directions(light, x, z)
+    wx, wy, wz = w[..., 0], -w[..., 1], w[..., 2]
     tan = math.tan(math.radians(light.fov) / 2)
     width, height = light.image.size
     half = np.array([width / height, 1.0]) if width > height else np.array([1.0, height / width])
@@ -76,13 +64,9 @@ def test_a_constant_image_is_a_rectangular_spot(backend, tmp_path):
 
 def test_pbrt_places_it_by_the_ctm_and_scales_it_to_its_power(tmp_path):
     write_image(tmp_path / "slide.png", np.random.default_rng(2).integers(0, 255, (4, 6, 3)))
-    (tmp_path / "scene.pbrt").write_text(
-        'LookAt 0 3 3  0 0 0  0 1 0\nCamera "perspective"\nWorldBegin\nAttributeBegin\nTranslate 0 2 0\n'
-        'Rotate 90 1 0 0\nLightSource "projection" "string filename" "slide.png" "float fov" 45 "float power" 7\n'
-        'AttributeEnd\nShape "sphere" "float radius" 0.5\n')
-    light = load_scene(tmp_path / "scene.pbrt").lights[0]
-    assert np.allclose(light.position, [0, 2, 0]) and light.fov == 45
-    assert np.allclose(light.direction, [0, -1, 0], atol=1e-12) and np.allclose(light.up, [0, 0, 1], atol=1e-12)
+    light = pbrt_light_turned_down(tmp_path, 2, 'LightSource "projection" "string filename" "slide.png" '
+                                   '"float fov" 45 "float power" 7')
+    assert light.fov == 45
     assert math.isclose(light.power(1.0), 7.0, rel_tol=1e-6)      # pbrt-v4: scale power / (A mean(Y cos^3))
 
 

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from pathtrace.bench.scenes import write_height_field, write_meshes
-from pathtrace.errors import UserError
+from pathtrace.errors import UserError, did_you_mean, short
 from pathtrace.io.files import shown
 from pathtrace.bench.mitsuba_timing import last_line, mitsuba_load_command, run_command
 
@@ -58,13 +58,26 @@ def command_line(command, words: int = 7) -> str:
     return " ".join(shown_words[:words]) + (" ..." if len(command) > words else "")
 
 
+GENERATED_ROWS = {"heightfield1M": write_height_field, "meshes850": write_meshes}
+
+
+def check_rows(names) -> list:
+    """--scenes with --load: `names` where each is one of GENERATED_ROWS, else one line."""
+    for name in names:
+        if name not in GENERATED_ROWS:
+            raise UserError(f"--scenes: with --load, {short(name)} is not a generated row (one of "
+                            f"{', '.join(GENERATED_ROWS)}){did_you_mean(name, GENERATED_ROWS)}")
+    return list(names)
+
+
 def run_load(device: str, scene_files, repeats: int, mitsuba_python: str = None,
-             variant: str = "llvm_ad_rgb", log=print) -> list[LoadTime]:
-    """The generated rows, then one per file of scene_files (Mitsuba's column for XML files)."""
+             variant: str = "llvm_ad_rgb", log=print, generated=tuple(GENERATED_ROWS)) -> list[LoadTime]:
+    """The generated rows named in `generated`, then one per file of scene_files (Mitsuba's
+    column for XML files)."""
     folder = Path(tempfile.mkdtemp(prefix="pathtrace-load-"))
     results = []
     try:
-        rows = [write_height_field(folder), write_meshes(folder)]
+        rows = [GENERATED_ROWS[name](folder) for name in generated]
         rows += [(str(Path(f).resolve()), str(Path(f).resolve()) if f.lower().endswith(".xml") else None,
                   "/".join(Path(f).resolve().parts[-3:])[-36:], (64, 64)) for f in scene_files]
         built = {**os.environ, "PATHTRACE_BVH_CACHE": "0", "PATHTRACE_SCENE_CACHE": "0"}

@@ -74,6 +74,7 @@ class Result:
     nodes_per_ray: float = None
     primitives_per_ray: float = None
     trace_split: object = None      # with --trace-split: a pathtrace.bench.trace_split.TraceSplit
+    divergence: object = None       # with --divergence: a pathtrace.bench.divergence_stats.DivergenceStats
     path_queue: int = 0             # the render setting (--path-queue; -1: auto)
     queue_plan: str = ""            # with --path-queue auto: the plan its trials chose, and
                                     # each plan's fastest trial in seconds (pathtrace.rendering.renderer)
@@ -140,12 +141,13 @@ def kernel_build_times(backend, cold: bool = True):
 
 def run(device_specs, scene_names, estimators, width, height, spp, together=False, cold=True,
         mitsuba: tuple = None, traversal: bool = False, split: bool = False, path_queue: int = 0,
-        rounds: int = 1, log=print):
+        rounds: int = 1, divergence: int = 0, log=print):
     """A row per device and scene, or with `together` a row per scene for all the devices
     rendering it as one (the multi-device scaling measurement). mitsuba: (python, variant) to
     time Mitsuba 3 on the rows of the comparison mode with NEE (depth8+nee). path_queue: the
     render setting (pathtrace render --path-queue) for every row. rounds: the renders timed per
-    row, pathtrace's and then Mitsuba's, whose medians count."""
+    row, pathtrace's and then Mitsuba's, whose medians count. divergence: the lanes of a warp with
+    which to count each row's divergence (app/bench/divergence_stats.py); 0: none."""
     backends = choose_devices(device_specs)
     groups = [backends] if together else [[b] for b in backends]
     results = []
@@ -166,6 +168,8 @@ def run(device_specs, scene_names, estimators, width, height, spp, together=Fals
                         log(format_traversal(r))
                     if split:
                         log(split_row(r, group[0], scene))
+                    if divergence:
+                        log(divergence_table(r, group[0], scene, divergence))
                     if mitsuba and est == "depth8+nee":
                         try:
                             twin = mitsuba_twin(scene, (r.width, r.height), r.spp, folder)
@@ -182,6 +186,7 @@ def run(device_specs, scene_names, estimators, width, height, spp, together=Fals
 
 TRAVERSAL_SPP = 4       # samples per pixel of the counting renders: the ratios settle long before
 SPLIT_SPP = 8           # of the trace split's renders (the first untimed)
+DIVERGENCE_SPP = 4      # of the divergence stats' render
 
 
 def count_traversal(r: Result, backend, scene):
@@ -191,6 +196,18 @@ def count_traversal(r: Result, backend, scene):
                             min(r.spp, TRAVERSAL_SPP))
     r.rays_per_sample, r.nodes_per_ray, r.primitives_per_ray = \
         stats.rays_per_sample, stats.nodes_per_ray, stats.primitives_per_ray
+
+
+def divergence_table(r: Result, backend, scene, warp: int) -> str:
+    """The row's divergence stats (app/bench/divergence_stats.py) into r, and their table; for a
+    scene they do not follow, the line that says so."""
+    from pathtrace.bench.divergence_stats import divergence_stats, format_stats
+    try:
+        r.divergence = divergence_stats(backend, scene.with_settings(**estimator_settings(r.estimator)), r.width,
+                                        r.height, min(r.spp, DIVERGENCE_SPP), warp)
+    except UserError as e:
+        return f"{'':<20} {e}"
+    return format_stats(r.divergence)
 
 
 def split_row(r: Result, backend, scene) -> str:

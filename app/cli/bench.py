@@ -1,5 +1,6 @@
 """`pathtrace bench`: the command line of the benchmark tooling (app/bench/)."""
 
+import argparse
 import sys
 
 from pathtrace.cli.options import _count, _int_range, _size, add_path_queue_option, add_program_option
@@ -8,6 +9,10 @@ def cmd_bench(args):
     from pathtrace.bench import report as bench
 
     timing_size = args.size or ((320, 180) if args.quick else (1280, 720))
+    load_rows = None     # with --load, the generated rows --scenes names (before validate's default)
+    if (args.load or args.load_scene) and not args.first_image and args.scenes:
+        from pathtrace.bench.load import check_rows
+        load_rows, args.scenes = check_rows(args.scenes), None
     if args.first_image:
         from pathtrace.bench import first_image
         first_image.validate(args)
@@ -48,7 +53,7 @@ def cmd_bench(args):
         print(load_bench.LOAD_HEADER)
         results = [r for device in args.device or ["auto"]
                    for r in load_bench.run_load(device, args.load_scene or [], args.repeats, args.mitsuba,
-                                                args.mitsuba_variant)]
+                                                args.mitsuba_variant, generated=load_rows or load_bench.GENERATED_ROWS)]
         if args.json:
             bench.write_json(args.json, results, sys.argv[1:])
             print(f"wrote {args.json}", file=sys.stderr)
@@ -65,11 +70,22 @@ def cmd_bench(args):
     results = bench.run(args.device or ["auto"], args.scenes, args.estimator, width, height, args.spp,
                         args.together, not args.no_cold,
                         (args.mitsuba, args.mitsuba_variant) if args.mitsuba else None, args.traversal,
-                        args.trace_split, args.path_queue or 0, args.rounds)
+                        args.trace_split, args.path_queue or 0, args.rounds, args.divergence or 0)
     if args.json:
         bench.write_json(args.json, results, sys.argv[1:])
         print(f"wrote {args.json}", file=sys.stderr)
     return 0
+
+
+def _warp_width(text: str) -> int:
+    from pathtrace.bench.divergence_stats import check_warp
+    from pathtrace.errors import UserError
+    width = _int_range(1)(text)
+    try:
+        check_warp(width)
+    except UserError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+    return width
 
 
 def add_parser(sub):
@@ -87,7 +103,8 @@ def add_parser(sub):
     add_program_option(p, "specialised")
     p.add_argument("--scenes", nargs="+", metavar="SCENE",
                    help="built-in names or scene files (default: " + " ".join(TARGET_SCENES) + "; with "
-                        "--first-image: " + " ".join(FIRST_IMAGE_SCENES) + ")")
+                        "--first-image: " + " ".join(FIRST_IMAGE_SCENES) + "; with --load, the generated rows: "
+                        "heightfield1M meshes850)")
     p.add_argument("--estimator", action="append", metavar="EST",
                    help="rr (the report's), depth8 (comparison mode), or either with +nee "
                         "(next-event estimation); repeatable; default: rr for the report's "
@@ -100,27 +117,29 @@ def add_parser(sub):
     p.add_argument("--builds", nargs="*", type=_count, metavar="N",
                    help="time BVH builds instead of renders: random spheres and a height field of "
                         "N primitives each (a k or M suffix allowed; default 64k 1M 4M)")
-    p.add_argument("--display", action="store_true",
-                   help="time the viewer's copy of the image to the host each frame (default size 1280x720)")
-    p.add_argument("--denoise", action="store_true",
-                   help="time Open Image Denoise at each quality (default size 1280x720)")
-    p.add_argument("--no-cold", action="store_true",
-                   help="skip timing the kernels' build without the cache (on NVIDIA's OpenCL it tunes "
-                        "register caps, about a minute)")
-    p.add_argument("--traversal", action="store_true",
-                   help="also count, for each row, the rays per sample and the BVH nodes visited and "
-                        "primitives tested per ray (three renders of 4 spp at the row's size)")
-    p.add_argument("--trace-split", action="store_true",
-                   help="also time, for each row, its depth-2 paths against the same rays traced by a "
-                        "kernel that only walks the BVH: how much of the time is tracing (8 spp at the "
-                        "row's size)")
-    p.add_argument("--load", action="store_true",
-                   help="time loading instead: seconds from 'pathtrace render FILE' to its first image "
-                        "(1 spp) for a 1M-triangle PLY file and for 850 PLY meshes in a pbrt-v4 file")
-    p.add_argument("--first-image", action="store_true",
-                   help="time the first image instead: seconds from 'pathtrace render SCENE --spp 1' "
-                        "to its image written, in fresh processes, cold (every kernel and BVH cache "
-                        "empty) and warm (the caches the cold run filled), for --scenes and --load-scene")
+    for flag, text in (    # what is timed instead of renders, or what more each row times or counts
+            ("--display", "time the viewer's copy of the image to the host each frame (default size 1280x720)"),
+            ("--denoise", "time Open Image Denoise at each quality (default size 1280x720)"),
+            ("--no-cold", "skip timing the kernels' build without the cache (on NVIDIA's OpenCL it tunes "
+                          "register caps, about a minute)"),
+            ("--traversal", "also count, for each row, the rays per sample and the BVH nodes visited and "
+                            "primitives tested per ray (three renders of 4 spp at the row's size)"),
+            ("--trace-split", "also time, for each row, its depth-2 paths against the same rays traced by a "
+                              "kernel that only walks the BVH: how much of the time is tracing (8 spp at the "
+                              "row's size)"),
+            ("--load", "time loading instead: seconds from 'pathtrace render FILE' to its first image "
+                       "(1 spp) for a 1M-triangle PLY file and for 850 PLY meshes in a pbrt-v4 file"),
+            ("--first-image", "time the first image instead: seconds from 'pathtrace render SCENE --spp 1' "
+                              "to its image written, in fresh processes, cold (every kernel and BVH cache "
+                              "empty) and warm (the caches the cold run filled), for --scenes and --load-scene")):
+        p.add_argument(flag, action="store_true", help=text)
+    p.add_argument("--divergence", nargs="?", const=32, type=_warp_width, metavar="WARP",
+                   help="also count, for each row, how much of a warp's width the path tracer's shading "
+                        "uses: per iteration of its loop, the lanes active, each branch's (BSDF type, "
+                        "light type, image textures) share of the warp while it runs, the BSDF types and "
+                        "materials per warp, texture lookups per ray (a render of 4 spp at the row's "
+                        "size, without the path queue; warps of WARP lanes, default 32, AMD's 64: "
+                        "docs/benchmarks.md)")
     p.add_argument("--load-scene", action="append", metavar="FILE",
                    help="with --load or --first-image, also time this scene file (repeatable)")
     p.add_argument("--repeats", type=_int_range(1, 100), default=3,

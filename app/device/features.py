@@ -47,6 +47,10 @@ class Features:
     traversal_stats: int = 0               # 1 or 2: the render kernels count nodes visited or
                                            # primitives tested in place of rays
                                            # (app/bench/traversal_stats.py); 0: they count rays
+    divergence_stats: int = 0              # the render kernels record their shading for this many
+                                           # iterations of each path (DIVERGENCE_STATS,
+                                           # kernels/divergence.cl; app/bench/divergence_stats.py);
+                                           # 0: they record nothing
     path_queue: int = 0                    # paths going on past this many vertices wait in the
                                            # continuation queue (PATH_QUEUE, kernels/integrator.cl;
                                            # the render setting path_queue); 0: no queue
@@ -84,6 +88,7 @@ class Features:
                 + (("INSTANCES", f"INSTANCE_STACK_SIZE={self.instance_stack}") if self.instance_stack else ())
                 + (self.bsdf_defines if self.bsdf_defines is not None else all_bsdf_defines())
                 + ((f"TRAVERSAL_STATS={self.traversal_stats}",) if self.traversal_stats else ())
+                + ((f"DIVERGENCE_STATS={self.divergence_stats}",) if self.divergence_stats else ())
                 + ((f"PATH_QUEUE={self.path_queue}",) if self.path_queue else ())
                 + ((f"BDPT={self.bdpt}",) if self.bdpt else ()) + (("LIGHT_TRACING",) if self.light_tracing else ()))
 

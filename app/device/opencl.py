@@ -23,7 +23,8 @@ from pathtrace.resources import resource_dir
 # BSDFs of the material registry and their generated dispatch, the environment, the light types
 # a scene has and their dispatch (app/lights/registry.py), its camera and pixel filter, the media
 # where it has them, the rest, and bidirectional path tracing where a render asks for it.
-BASIC_FILES = ("inlining.h", "types.h", "vector.cl", "color.cl", "rng.cl", "sampling.cl", "scene.cl")
+BASIC_FILES = ("inlining.h", "types.h", "vector.cl", "color.cl", "rng.cl", "sampling.cl", "scene.cl",
+               "divergence.cl")
 SHAPE_FILES = ("spawn.cl", "shapes/sphere_range.cl", "shapes/triangle.cl")
 BSDF_FILES = ("bsdf.cl", "fresnel.cl", "microfacet.cl", "coating.cl", "interface.cl", "phase.cl")
 MEDIA_FILES = ("media/homogeneous.cl", "volume.cl")
@@ -232,13 +233,15 @@ class Backend:
 
     @property
     def program(self) -> cl.Program:
-        """The generic program; waits for it."""
-        return self.programs.get(Features.generic_program(), tuned=False)
+        """The generic program, tuned (on NVIDIA under the register caps of app/device/occupancy.py:
+        its render kernels hold 250 registers untuned, and capped they drew their samples 11-22 %
+        sooner on an H200, docs/notes/performance-2026-11.md); waits for it."""
+        return self.programs.get(Features.generic_program(), tuned=True)
 
     def built_generic(self):
         """The generic program if it is built, else None (it is built at open where that is
         fast, and by `pathtrace devices --check`, never behind a scene's first image)."""
-        return self.programs.built(Features.generic_program(), tuned=False)
+        return self.programs.built(Features.generic_program(), tuned=True)
 
     def program_for(self, features: Features, tuned: bool = True) -> cl.Program:
         """The kernels specialised to `features` (on NVIDIA with `tuned`, under the register caps
@@ -264,13 +267,13 @@ def open_device(device: Device, extra: str = "", use_cache: bool = True, mode: s
     queue = cl.CommandQueue(context, properties=cl.command_queue_properties.PROFILING_ENABLE)
     generic = Features.generic_program()
     source, options = kernel_source(extra, generic), program_options(device.device, generic)
-    fast = keeps_own_cache(device.device) or cache_entry(device.device, source, options, False).is_file()
+    fast = keeps_own_cache(device.device) or cache_entry(device.device, source, options, True).is_file()
     if not fast:
         source, options = display_source(), list(BUILD_OPTIONS)
-    opened = build_cached(context, device.device, source, options, use_cache, False)
+    opened = build_cached(context, device.device, source, options, use_cache, fast)   # tuned: the generic program
     backend = Backend(device, context, queue, opened, extra, use_cache, mode or default_mode())
     if fast:
-        backend.programs.add(generic, False, opened.program)
+        backend.programs.add(generic, True, opened.program)
     return backend
 
 

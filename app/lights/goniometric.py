@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pathtrace.lights.light import (PBRT_POWER, PBRT_SCALE, DeltaLight, check_color, check_point, frame_quaternion,
-                                    luminance, pbrt_scaled)
+                                    luminance, pbrt_scaled, placed_in_frame)
 from pathtrace.parameters import Parameter
 from pathtrace.resources import resource_dir
 from pathtrace.device.slots import Slot, write_slot
@@ -38,9 +38,7 @@ class GoniometricLight(DeltaLight):
     name = "goniometric"
     formats = {"pbrt": "goniometric"}
     parameters = (
-        Parameter("position", "point", doc="where it is", pbrt_default=(0.0, 0.0, 0.0)),
-        Parameter("direction", "vector", (0.0, 0.0, 1.0), doc="its frame's +z", pbrt_default=(0.0, 0.0, 1.0)),
-        Parameter("up", "vector", (0.0, 1.0, 0.0), doc="its frame's +y, the map's pole", pbrt_default=(0.0, 1.0, 0.0)),
+        *placed_in_frame("its frame's +z", "its frame's +y, the map's pole"),
         Parameter("intensity", "color", doc="radiant intensity where the image is 1, W/sr", spectrum="illuminant",
                   pbrt="I", pbrt_default=1.0,
                   from_pbrt=pbrt_scaled(lambda given: 4 * math.pi * float(np.mean(grey(given["filename"]).texels)))),

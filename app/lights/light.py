@@ -111,6 +111,15 @@ def frame_quaternion(direction, up) -> np.ndarray:
     return np.array(q)
 
 
+def placed_in_frame(direction_doc: str, up_doc: str) -> tuple:
+    """The Parameters of a point light with a frame of its own (goniometric, projection): its
+    position, and its frame's +z (`direction`) and +y (`up`), by pbrt-v4's defaults those of its
+    CTM (frame_quaternion)."""
+    return (Parameter("position", "point", doc="where it is", pbrt_default=(0.0, 0.0, 0.0)),
+            Parameter("direction", "vector", (0.0, 0.0, 1.0), doc=direction_doc, pbrt_default=(0.0, 0.0, 1.0)),
+            Parameter("up", "vector", (0.0, 1.0, 0.0), doc=up_doc, pbrt_default=(0.0, 1.0, 0.0)))
+
+
 def check_point(name: str, value) -> np.ndarray:
     v = np.asarray(value, np.float64)
     if v.shape != (3,) or not np.all(np.isfinite(v)) or np.max(np.abs(v)) > 1e30:

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from pathtrace.scene.environment import LUMINANCE
-from pathtrace.lights.light import PBRT_POWER, DeltaLight, check_point, frame_quaternion
+from pathtrace.lights.light import PBRT_POWER, DeltaLight, check_point, frame_quaternion, placed_in_frame
 from pathtrace.parameters import Parameter
 from pathtrace.resources import resource_dir
 from pathtrace.device.slots import Slot, write_slot
@@ -60,10 +60,7 @@ class ProjectionLight(DeltaLight):
     name = "projection"
     formats = {"pbrt": "projection"}
     parameters = (
-        Parameter("position", "point", doc="where it is", pbrt_default=(0.0, 0.0, 0.0)),
-        Parameter("direction", "vector", (0.0, 0.0, 1.0), doc="its frame's +z, the frustum's axis",
-                  pbrt_default=(0.0, 0.0, 1.0)),
-        Parameter("up", "vector", (0.0, 1.0, 0.0), doc="its frame's +y, the image's up", pbrt_default=(0.0, 1.0, 0.0)),
+        *placed_in_frame("its frame's +z, the frustum's axis", "its frame's +y, the image's up"),
         Parameter("image", "image", doc="the image projected (rgb intensities, W/sr, times scale)", pbrt="filename"),
         Parameter("fov", "number", 90.0, low=0.0, high=180.0, doc="the frustum's angle across the image's "
                   "shorter axis, degrees", pbrt="fov", pbrt_default=90.0),

@@ -103,6 +103,13 @@ class BSDFType:
         if "mitsuba" in cls.formats:
             cls.params = tuple(replace(p, mitsuba=p.mitsuba or p.name) for p in cls.params)
 
+    def from_pbrt(self, values: dict, given: dict, warn) -> tuple | None:
+        """(pathtrace's type, its values) of a pbrt-v4 material of this type's pbrt name, from its
+        declared parameters' values by pathtrace's names and by pbrt-v4's (`given`; its
+        format_only too), or None for no surface; warn(text) tells what pathtrace approximates.
+        Raises ValueError ("<pbrt name>: <problem>")."""
+        return self.name, values
+
     def resolve(self, values: dict) -> dict:
         """Turns names into the numbers they stand for (a named IOR; a "name" parameter, in the
         subclasses that have one); values holds the parameters a file gave. Raises ValueError

@@ -2,14 +2,28 @@
 rough one (Walter et al.'s microfacet model), and a thin sheet of glass (no refraction), with
 Mitsuba 3's parameters."""
 
+import math
 from dataclasses import replace
 
 import numpy as np
 
 from pathtrace.materials.bsdf import DELTA, TRANSMISSIVE, BSDFType, Param
-from pathtrace.materials.microfacet import DISTRIBUTION, AnisotropicRoughness, anisotropic_params, check_distribution
+from pathtrace.materials.microfacet import (DISTRIBUTION, PBRT_REMAP, AnisotropicRoughness, anisotropic_params,
+                                            check_distribution, pbrt_alphas, pbrt_rough, pbrt_roughness)
 from pathtrace.materials.optics import IOR
+from pathtrace.parameters import Parameter
 from pathtrace.device.slots import read_slot
+
+PBRT_ETA = Parameter(None, "color", spectrum="unbounded", pbrt="eta", pbrt_default=1.5,
+                     doc="the inside's IOR over the outside's (a spectrum: its mean)")
+
+
+def pbrt_eta(given: dict, name: str = "eta") -> float:
+    """pbrt-v4's eta (a float, or a spectrum's mean), in [0.1, 10]. Raises ValueError."""
+    eta = float(np.mean(given[name]))
+    if not 0.1 <= eta <= 10 or not math.isfinite(eta):
+        raise ValueError(f"{name}: must lie in [0.1, 10], got {eta:g}")
+    return eta
 
 def check_interface(values) -> str | None:
     """The two IORs of an interface (glass, a plastic's coating) must differ."""
@@ -32,7 +46,8 @@ _DIELECTRIC_PARAMS = (
 
 class Dielectric(BSDFType):
     name = "dielectric"
-    formats = {"mitsuba": "dielectric"}
+    formats = {"mitsuba": "dielectric", "pbrt": "dielectric"}
+    format_only = (PBRT_ETA, *pbrt_roughness(), PBRT_REMAP)
     examples = ({"int_ior": 1.5}, {"int_ior": "water", "specular_transmittance": [0.9, 0.7, 0.5]})
     params = _DIELECTRIC_PARAMS
     flags = DELTA | TRANSMISSIVE
@@ -41,10 +56,25 @@ class Dielectric(BSDFType):
     def check(self, values):
         return check_interface(values)
 
+    def from_pbrt(self, values, given, warn):
+        """pbrt-v4's dielectric (a roughdielectric, GGX, where rough) or thindielectric (which
+        reads no roughness: thin glass is smooth); eta 1 is no surface (None). pbrt-v4's eta is
+        the inside's IOR over the outside's, any positive value (its DielectricBxDF takes etap =
+        eta or 1 / eta by the side wo is on): below 1 the outside is the denser, an air bubble
+        in water."""
+        eta = pbrt_eta(given)
+        rough = pbrt_rough(pbrt_alphas(given)) if "roughness" in given else None
+        if eta == 1.0:
+            warn("a dielectric of eta 1 is invisible; pathtrace leaves the surface out")
+            return None
+        iors = {"int_ior": eta, "ext_ior": 1.0} if eta > 1 else {"int_ior": 1.0, "ext_ior": 1 / eta}
+        return ("roughdielectric", {**iors, **rough}) if rough else (self.name, iors)
+
 
 class ThinDielectric(Dielectric):
     name = "thindielectric"
-    formats = {"mitsuba": "thindielectric"}
+    formats = {"mitsuba": "thindielectric", "pbrt": "thindielectric"}
+    format_only = (PBRT_ETA,)
     examples = ({"int_ior": 1.5}, {"int_ior": "diamond", "specular_reflectance": 0.5})
     doc = ("a thin sheet of glass: light is reflected or passes straight through, with the "
            "sheet's inner reflections summed")
@@ -53,6 +83,7 @@ class ThinDielectric(Dielectric):
 class RoughDielectric(AnisotropicRoughness, Dielectric):
     name = "roughdielectric"
     formats = {"mitsuba": "roughdielectric"}
+    format_only = ()
     examples = ({"alpha": 0.1, "int_ior": 1.5}, {"alpha": 0.5, "int_ior": "water"},
                 {"alpha": 0.3, "int_ior": 1.5, "distribution": "beckmann"},
                 {"alpha": 0.8, "int_ior": "diamond", "distribution": "beckmann"},

@@ -10,6 +10,7 @@ import numpy as np
 
 from pathtrace.materials.bsdf import Param
 from pathtrace.materials.optics import fresnel_dielectric
+from pathtrace.parameters import Parameter
 
 GGX_PARAMS = (
     Param("alpha", "number", default=0.1, low=1e-4, high=1.0,
@@ -44,6 +45,41 @@ class AnisotropicRoughness:
     def anisotropic(self, rows, alpha, alpha_v) -> bool:
         """Whether any of these rows, whose alphas are alpha and alpha_v, needs a tangent."""
         return bool(np.any((alpha != alpha_v) | (rows["textures"] >= 0)))
+
+SMOOTH_ALPHA = 1e-3     # pbrt-v4's TrowbridgeReitzDistribution::EffectivelySmooth
+PBRT_REMAP = Parameter(None, "bool", pbrt="remaproughness", pbrt_default=True,
+                       doc="alpha = sqrt(roughness) (pbrt-v4's RoughnessToAlpha)")
+
+
+def pbrt_roughness(prefix: str = "") -> tuple:
+    """pbrt-v4's roughness parameters of a material (a layered one's prefixed `interface.` or
+    `conductor.`): roughness, and uroughness and vroughness along dp/du and dp/dv, by default
+    roughness (pbrt_alphas reads them)."""
+    return (Parameter(None, "number", pbrt=prefix + "roughness", pbrt_default=0.0, doc="the microfacet roughness"),
+            Parameter(None, "number", pbrt=prefix + "uroughness", pbrt_default="roughness", doc="along dp/du"),
+            Parameter(None, "number", pbrt=prefix + "vroughness", pbrt_default="roughness", doc="along dp/dv"))
+
+
+def pbrt_alphas(given: dict, prefix: str = "") -> tuple:
+    """pbrt-v4's microfacet alphas (along dp/du and dp/dv, as its BSDF frame has them) from the
+    values of pbrt_roughness(prefix) and PBRT_REMAP, by pbrt-v4's names. Raises ValueError
+    ("<pbrt name>: <problem>")."""
+    r = given[prefix + "roughness"]
+    ru, rv = (r if isinstance(given[prefix + n], str) else given[prefix + n] for n in ("uroughness", "vroughness"))
+    for name, v in (("roughness", r), ("uroughness", ru), ("vroughness", rv)):
+        if v < 0 or v > 1e3 or not math.isfinite(v):
+            raise ValueError(f"{prefix}{name}: must lie in [0, 1000], got {v:g}")
+    return (math.sqrt(ru), math.sqrt(rv)) if given["remaproughness"] else (ru, rv)
+
+
+def pbrt_rough(alphas) -> dict | None:
+    """The alpha and alpha_v of a rough material (GGX, pbrt-v4's TrowbridgeReitz) for a pair of
+    alphas, or None where pbrt-v4 deems them smooth (EffectivelySmooth: both below SMOOTH_ALPHA)."""
+    if max(alphas) < SMOOTH_ALPHA:
+        return None
+    au, av = (min(max(a, 1e-4), 1.0) for a in alphas)
+    return {"alpha": au, "alpha_v": av, "distribution": "ggx"}
+
 
 # roughconductor's distribution: a number the kernel reads (kernels/bsdfs/roughconductor.cl),
 # given by name

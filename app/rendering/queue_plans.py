@@ -39,8 +39,8 @@ class QueuePlans:
     def queue_plan(self) -> tuple:
         """(the queue depth the program is built with, whether launches use the queue): from
         settings.path_queue, or with "auto" the plan its trials chose (no queue until then)."""
-        if self.settings.integrator != "path":
-            return AUTO_PLANS[0]                               # BDPT has no queue
+        if self.settings.integrator != "path" or self.divergence_stats:
+            return AUTO_PLANS[0]       # BDPT has no queue; the divergence stats follow the megakernel
         if self.settings.path_queue == PATH_QUEUE_AUTO:
             return self.auto_plan or AUTO_PLANS[0]
         return self.settings.path_queue, self.settings.path_queue > 0

@@ -32,6 +32,7 @@ AOV_BUFFERS = ("albedo_sum", "normal_sum")   # kernels/aovs.cl: albedo rgb and t
 
 SUM_BUFFERS = ("sum", "sum_sq", "sum_c", "sum_sq_c")   # kernels/integrator.cl: the sums and
                                                        # what their rounding lost (Kahan)
+PIXEL_GROUP = (8, 8)      # the work-group of the render launches: 8x8 pixels (launch_grid)
 MAX_LAUNCH_SAMPLES = 64   # samples a launch adds to a pixel, summed plainly in float32 before the
                           # compensated running sum takes them: within 64 ulps of their sum
 QUEUE_PASSES = 4          # passes of continue_paths that trace one vertex each, queueing the paths
@@ -95,6 +96,8 @@ class Renderer(QueuePlans):
         self.aovs = False         # whether the denoiser's albedo and normal are accumulated too
         self.resets = 0           # how many times the image restarted (pathtrace.rendering.launches.Progressive)
         self.traversal_stats = 0  # Features.traversal_stats: set through count_traversal()
+        self.divergence_stats = 0 # Features.divergence_stats: set through record_shading(),
+        self.shading_records = None   # with the buffer the launches record into
         self.set_scene(scene, progress)
         self.resize(width or self.scene.settings.width, height or self.scene.settings.height)
 
@@ -149,7 +152,8 @@ class Renderer(QueuePlans):
         it takes no core from the first image, and a render of one pass builds nothing more
         (switch_when_built)."""
         features = replace(self.compiled.features(self.settings, self.camera),
-                           traversal_stats=self.traversal_stats, path_queue=self.queue_plan()[0])
+                           traversal_stats=self.traversal_stats, divergence_stats=self.divergence_stats,
+                           path_queue=self.queue_plan()[0])
         mode = self.backend.mode
         self._awaited, self._build_due = None, False
         if self.settings.integrator != "path":
@@ -159,7 +163,7 @@ class Renderer(QueuePlans):
                                light_tracing=self.settings.integrator == "ptracer")
             self._use_program(self.backend.program_for(features), generic=False)
             return
-        if mode == "specialised" or self.traversal_stats:      # the generic program counts rays
+        if mode == "specialised" or self.traversal_stats or self.divergence_stats:  # the generic one counts rays
             self._use_program(self.backend.program_for(features), generic=False)
         elif mode == "generic":
             self._use_program(self.backend.program, generic=True)
@@ -380,8 +384,7 @@ class Renderer(QueuePlans):
         b = self._buffers
         first, end = rows if rows is not None else (0, self.height)
         start = self.samples if start is None else start
-        local = (8, 8)
-        global_size = tuple(-(-n // l) * l for n, l in zip((self.width, end - first), local))
+        global_size, local = self.launch_grid(end - first)
         params = self.params(count)
         params["row_start"], params["row_end"], params["sample_start"] = first, end, start
         add = self._add_bidirectional if self.bdpt_kernels is not None else self._add_paths
@@ -394,6 +397,11 @@ class Renderer(QueuePlans):
             self._build_due = True
             self.generic_samples += count if self.uses_generic_program else 0
         return events
+
+    def launch_grid(self, rows: int) -> tuple:
+        """(global size, local size) of the render launches over `rows` rows: a work-item per
+        pixel, in groups of PIXEL_GROUP, the image padded to whole groups."""
+        return tuple(-(-n // l) * l for n, l in zip((self.width, rows), PIXEL_GROUP)), PIXEL_GROUP
 
     def _add_paths(self, params, count: int, start: int, global_size: tuple, local: tuple) -> list:
         """Queues the path tracer's launches that add `count` samples to the rows of `params`
@@ -413,7 +421,9 @@ class Renderer(QueuePlans):
             if queued:
                 events.append(cl.enqueue_fill_buffer(self.backend.queue, b["counters"], np.int32(0), 0,
                                                      b["counters"].size))
-            kernel.set_args(*self.scene_args(), launch, *sums, b["queue"], b["counters"], capacity, b["results"])
+            records = (self.shading_records,) if self.divergence_stats else ()   # (kernels/divergence.cl)
+            kernel.set_args(*self.scene_args(), launch, *sums, b["queue"], b["counters"], capacity, b["results"],
+                            *records)
             events.append(cl.enqueue_nd_range_kernel(self.backend.queue, kernel, global_size, local))
             if queued:
                 events += self._continue_paths(launch, capacity, global_size)
@@ -517,6 +527,16 @@ class Renderer(QueuePlans):
         the BVH instead of rays (0: rays again); resets."""
         self.traversal_stats = kind
         self._select_program()
+        self.reset()
+
+    def record_shading(self, records: cl.Buffer, iterations: int):
+        """From now on, the path tracer's launches record the shading of the first `iterations`
+        iterations of each path into `records` (app/bench/divergence_stats.py, kernels/divergence.cl:
+        one byte per sample of the launch, iteration, field and work-item of launch_grid), without
+        the continuation queue, whose kernels record nothing; `iterations` 0: no more. Resets."""
+        self.divergence_stats, self.shading_records = iterations, records if iterations else None
+        self._select_program()
+        self._size_queue()
         self.reset()
 
     def rays_traced(self) -> int:

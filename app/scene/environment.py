@@ -1,10 +1,15 @@
 """The environment: a constant colour or an HDR latitude-longitude map, with an intensity and a
-rotation about the up axis (kernels/environment.cl gives the mapping)."""
+rotation about the up axis (kernels/environment.cl gives the mapping), and its parameters in the
+three formats: pathtrace's [environment], Mitsuba 3's `constant` and `envmap` emitters,
+pbrt-v4's `infinite` light (app/parameters.py; the readers place a map by the element's
+to_world or CTM, and pbrt-v4's equal-area square becomes a latitude-longitude map)."""
 
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+
+from pathtrace.parameters import Parameter
 
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])   # Rec. 709 weights of linear R, G, B
 
@@ -17,6 +22,22 @@ class Environment:
     source: str = "constant"   # a file path, or "constant"
     resampled: bool = False    # the image is not the file's (a pbrt equal-area map made lat-long)
 
+    name = "environment"
+    formats = {"mitsuba": ("constant", "envmap"), "pbrt": "infinite"}
+    doc = ("radiance arriving from infinitely far away: a constant colour, or an HDR map (Mitsuba 3's "
+           "constant emitter has radiance, its envmap filename and scale)")
+    parameters = (
+        Parameter("color", "color", 1.0, spectrum="illuminant", mitsuba="radiance", pbrt="L",
+                  doc="its radiance, where it has no map"),
+        Parameter("map", "string", optional=True, mitsuba="filename", pbrt="filename",
+                  doc="an HDR latitude-longitude map (pbrt-v4's: an equal-area square), relative to the "
+                      "scene file (TOML: or a map of assets/envmaps)"),
+        Parameter("intensity", "number", 1.0, low=0, mitsuba="scale", pbrt="scale", doc="a factor on it"),
+        Parameter("rotation", "number", 0.0, doc="degrees about +y (Mitsuba 3's to_world and pbrt-v4's CTM turn it)"),
+        Parameter(None, "number", pbrt="illuminance", pbrt_default=-1.0,
+                  doc="where positive, the illuminance it gives an upward surface (pbrt-v4's Light::Create)"))
+    mitsuba_plugins = {"constant": ("color",), "envmap": ("map", "intensity")}     # which each emitter has
+
     def __repr__(self) -> str:
         from pathtrace.scene.named import vector
         h, w, _ = self.image.shape
@@ -25,7 +46,7 @@ class Environment:
 
     @classmethod
     def constant(cls, color, intensity=1.0):
-        image = np.asarray(color, np.float32).reshape(1, 1, 3)
+        image = np.broadcast_to(np.asarray(color, np.float32), 3).reshape(1, 1, 3)
         return cls(image=image, intensity=intensity, source="constant")
 
     @classmethod

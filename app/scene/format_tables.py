@@ -1,6 +1,6 @@
 """The parameter tables of docs/scene-format.md, generated from the types' declarations
 (app/parameters.py): each block between `<!-- parameters: KIND -->` and `<!-- end parameters -->`
-is the tables of the types of KIND (lights, materials, textures, media, shapes, cameras), one per type, with a column for
+is the tables of the types of KIND (lights, environment, materials, textures, media, shapes, cameras), one per type, with a column for
 each format that has the type. `python -m pathtrace.scene.format_tables` rewrites the file;
 tests/test_parameters.py fails where the file and the declarations differ."""
 
@@ -11,6 +11,7 @@ from pathlib import Path
 from pathtrace.cameras import CAMERAS
 from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.materials import BSDFS
+from pathtrace.scene.environment import Environment
 from pathtrace.scene.media import Medium
 from pathtrace.parameters import parameter_table
 from pathtrace.textures import TEXTURES
@@ -19,7 +20,8 @@ DOC = Path(__file__).resolve().parents[2] / "docs" / "scene-format.md"
 MARKER = re.compile(r"(<!-- parameters: (\w+) -->\n).*?(<!-- end parameters -->)", re.S)
 NOTE = ("Generated from the types' declarations (`python -m pathtrace.scene.format_tables`). A blank "
         "default is optional; † marks a value the reader converts (pbrt-v4's power, a spot's cone); "
-        "\"its frame\": the element's transform places it (Mitsuba's `to_world`).\n")
+        "\"its frame\": the element's transform places it (Mitsuba's `to_world`); a row with no TOML name is "
+        "a format's own, which the type maps onto its parameters (pbrt-v4's roughness onto alpha).\n")
 
 
 def _types(kind: str) -> list:
@@ -30,7 +32,7 @@ def _types(kind: str) -> list:
     if kind == "materials":
         return [(b.name, b.formats, b.doc, b.params + b.format_only) for b in BSDFS.values() if b.params]
     if kind == "textures":
-        return [(t.name, t.formats, t.doc, t.parameters) for t in TEXTURES.values()]
+        return [(t.name, t.formats, t.doc, t.parameters + t.format_only) for t in TEXTURES.values()]
     if kind == "media":
         return [("homogeneous", Medium.formats, "", Medium.parameters)]
     if kind == "cameras":
@@ -38,6 +40,8 @@ def _types(kind: str) -> list:
                  " ".join(sys.modules[c.__module__].__doc__.split())
                  + ("" if c.importance else " BDPT cannot render through it yet (no importance)."), c.parameters)
                 for c in CAMERAS.values()]
+    if kind == "environment":
+        return [(Environment.name, Environment.formats, Environment.doc, Environment.parameters)]
     if kind == "shapes":
         from pathtrace.shapes import SHAPES
         return [(k.name, k.formats, k.doc, k.parameters + k.mitsuba_parameters) for k in SHAPES.values()]
@@ -47,8 +51,9 @@ def _types(kind: str) -> list:
 def section(kind: str) -> str:
     out = [NOTE]
     for name, formats, doc, parameters in _types(kind):
-        others = ", ".join(f"{label} `{formats[f]}`" for f, label in (("mitsuba", "Mitsuba 3"), ("pbrt", "pbrt-v4"))
-                           if f in formats)
+        others = ", ".join(f"{label} " + " and ".join(f"`{n}`" for n in ((formats[f],) if isinstance(formats[f], str)
+                                                                         else formats[f]))
+                           for f, label in (("mitsuba", "Mitsuba 3"), ("pbrt", "pbrt-v4")) if f in formats)
         out.append(f"\n#### `{name}`" + (f" ({others})" if others else " (pathtrace's own)") + "\n\n"
                    + (f"{doc}\n\n" if doc else "")
                    + parameter_table(parameters, ("toml", *(f for f in ("mitsuba", "pbrt") if f in formats))))

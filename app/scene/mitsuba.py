@@ -668,22 +668,22 @@ class _Reader:
     def emitter(self, node):
         kind = node.attrs.get("type")
         props = self.properties(node)
-        if self.environment is not None and kind in ("constant", "envmap"):
+        if self.environment is not None and kind in Environment.mitsuba_plugins:
             warn(f"{node.where()}: a second environment; pathtrace keeps the first")
             props.ignore()
             return
-        if kind == "constant":
-            self.environment = Environment.constant(self.color(props, "radiance", 1.0, textures=False))
-        elif kind == "envmap":
-            name = self.get(props, "filename", kinds=("string",))
-            if name is None:
+        if kind in Environment.mitsuba_plugins:       # by its declared Mitsuba names, those this emitter has
+            values = parameters.read([p for p in Environment.parameters if p.name in Environment.mitsuba_plugins[kind]],
+                                     "mitsuba", lambda p, name: self.parameter(props, p, name))
+            if kind == "constant":
+                self.environment = Environment.constant(values.get("color", 1.0))
+                return
+            if "map" not in values:
                 _fail(node, "needs a filename")
-            scale = self.get(props, "scale", 1.0, ("float",))
-            if scale < 0:
+            if values.get("intensity", 1.0) < 0:
                 _fail(props["scale"], "must not be negative")
-            self.environment = Environment.from_file(node.file.parent / name, scale,
-                                                     self.envmap_rotation(node, props),
-                                                     where=node.where())
+            self.environment = Environment.from_file(node.file.parent / values["map"], values.get("intensity", 1.0),
+                                                     self.envmap_rotation(node, props), where=node.where())
         elif kind in LIGHTS_BY_NAME:
             self.lights.append(self.delta_light(node, kind, props))
         else:

@@ -59,6 +59,15 @@ class _Reader:
             self.fail(where, f"unknown key '{unknown[0]}' (allowed: {', '.join(sorted(allowed))})")
         return data
 
+    def kind_of(self, data, where, kinds, key="type") -> str:
+        """The name among `kinds` that a table entry gives by `key`."""
+        if not isinstance(data, dict):
+            self.fail(where, f"must be a table, got {short(data)}")
+        kind = data.get(key)
+        if not isinstance(kind, str) or kind not in kinds:
+            self.fail(f"{where}.{key}", f"must be one of {', '.join(kinds)}, got {short(kind)}")
+        return kind
+
     def boolean(self, data, key, where, default):
         value = data.get(key, default)
         if not isinstance(value, bool):
@@ -132,11 +141,7 @@ class _Reader:
     def texture(self, data, where, name=None) -> Texture:
         """One texture table: its type, the type's inputs (a colour, a texture name or an inline
         table each), a bitmap's file, raw, filter and wrap, and a uv transform."""
-        if not isinstance(data, dict):
-            self.fail(where, f"must be a table, got {short(data)}")
-        kind = data.get("type")
-        if not isinstance(kind, str) or kind not in TEXTURES:
-            self.fail(f"{where}.type", f"must be one of {', '.join(TEXTURES)}, got {short(kind)}")
+        kind = self.kind_of(data, where, TEXTURES)
         texture_type = TEXTURES[kind]
         self.table(data, where, {"type", "uv_scale", "uv_offset", "uv_rotate", "uv_matrix",
                                  *(p.name for p in texture_type.parameters)})
@@ -184,11 +189,7 @@ class _Reader:
         return np.asarray(value, np.float64)
 
     def material(self, data, where) -> Material:
-        if not isinstance(data, dict):
-            self.fail(where, f"must be a table, got {short(data)}")
-        kind = data.get("type")
-        if not isinstance(kind, str) or kind not in MATERIAL_TYPES:
-            self.fail(f"{where}.type", f"must be one of {', '.join(MATERIAL_TYPES)}, got {short(kind)}")
+        kind = self.kind_of(data, where, MATERIAL_TYPES)
         if kind == "emitter":
             self.table(data, where, {"type", "Le", "emits_back", "opacity"})
             return Material("black", emission=self.color_or_texture(data, "Le", where),
@@ -316,8 +317,10 @@ class _Reader:
             if value not in names:
                 self.fail(key, f"unknown name {short(value)} (known: {', '.join(sorted(names))})")
             return value             # BSDFType.resolve turns a material's into its number
+        if param.kind == "string" and isinstance(value, str):
+            return value
         if param.kind in ("name", "string"):
-            self.fail(key, f"must be a name, got {short(value)}")
+            self.fail(key, f"must be a {param.kind}, got {short(value)}")
         return self.number(data, param.name, where, low=param.low, high=param.high, integer=param.kind == "integer")
 
     def camera(self, data):
@@ -384,12 +387,7 @@ class _Reader:
 
     def light(self, data, where):
         """One [[lights]] entry: a delta light of pathtrace.lights, by its declared parameters."""
-        if not isinstance(data, dict):
-            self.fail(where, f"must be a table, got {type(data).__name__}")
-        kind = data.get("type")
-        if kind not in DELTA_LIGHTS:
-            self.fail(f"{where}.type", f"must be one of {', '.join(DELTA_LIGHTS)}, got {short(kind)}")
-        cls = DELTA_LIGHTS[kind]
+        cls = DELTA_LIGHTS[self.kind_of(data, where, DELTA_LIGHTS)]
         self.table(data, where, {"type", *(p.name for p in cls.parameters if p.name)})
         values = parameters.read(cls.parameters, "toml",
                                  lambda p, name: self.parameter(data, p, where) if name in data else None)
@@ -400,21 +398,18 @@ class _Reader:
             self.fail(f"{where}.{field}", problem) if sep else self.fail(where, str(e))
 
     def environment(self, data):
+        """[environment], by its declared parameters (app/scene/environment.py): a colour or a map."""
         where = "environment"
-        self.table(data, where, {"color", "map", "intensity", "rotation"})
-        intensity = self.number(data, "intensity", where, default=1.0, low=0)
-        rotation = self.number(data, "rotation", where, default=0.0) % 360.0   # an angle: wrapped in float64
+        self.table(data, where, {p.name for p in Environment.parameters if p.name})
         if "map" in data and "color" in data:
             self.fail(where, "give either 'color' or 'map', not both")
-        if "map" in data:
-            name = data["map"]
-            if not isinstance(name, str):
-                self.fail("environment.map", f"must be a file name, got {short(name)}")
-            return Environment.from_file(self.find_asset(name), intensity, rotation,
+        values = parameters.read(Environment.parameters, "toml",
+                                 lambda p, name: self.parameter(data, p, where) if name in data else None)
+        intensity, rotation = values.get("intensity", 1.0), values.get("rotation", 0.0) % 360.0   # wrapped in float64
+        if "map" in values:
+            return Environment.from_file(self.find_asset(values["map"]), intensity, rotation,
                                          where=f"{self.label}: environment.map")
-        env = Environment.constant(self.color(data, "color", where, default=(1, 1, 1)), intensity)
-        env.rotation = rotation
-        return env
+        return Environment(Environment.constant(values.get("color", 1.0)).image, intensity, rotation)
 
     def find_asset(self, name):
         """A map path is relative to the scene file; a bare name may also be a shipped map."""
@@ -522,11 +517,7 @@ class _Reader:
         """A [[shapes]] entry: an analytic shape of `kind` (pathtrace.shapes.SHAPES), its kind's
         parameters by name (ShapeParameter: angles in degrees), its transform, `flip` (the front
         turned round) and `swap_uv` (texture coordinates (1 - v, u), Mitsuba's disk)."""
-        if not isinstance(data, dict):
-            self.fail(where, f"must be a table, got {type(data).__name__}")
-        kind = data.get("kind")
-        if kind not in SHAPES:
-            self.fail(f"{where}.kind", f"must be one of {', '.join(SHAPES)}, got {short(kind)}")
+        kind = self.kind_of(data, where, SHAPES, "kind")
         k = SHAPES[kind]
         self.table(data, where, {"kind", "material", "name", "interior", "exterior", "flip", "swap_uv", "matrix",
                                  "translate", "rotate", "scale", *(p.name for p in k.parameters)})

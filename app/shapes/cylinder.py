@@ -6,10 +6,10 @@ import math
 import numpy as np
 
 from pathtrace.parameters import Parameter
-from pathtrace.shapes.shape import ShapeKind
+from pathtrace.shapes.shape import Quadric
 
 
-class Cylinder(ShapeKind):
+class Cylinder(Quadric):
     name = "cylinder"
     formats = {"mitsuba": "cylinder", "pbrt": "cylinder"}
     doc = ("The wall at distance radius from the z axis, z_min to z_max, no caps, facing away from "
@@ -31,19 +31,12 @@ class Cylinder(ShapeKind):
         radius, z0, z1, phi_max = params
         return radius, min(z0, z1), max(z0, z1), min(max(phi_max, 0.0), 2 * math.pi)
 
-    def check(self, params):
-        radius, z_min, z_max, phi_max = params
-        if not radius > 0:
-            return f"radius must be positive, got {radius:g}"
-        if not z_max > z_min:
-            return f"z_max must be above z_min, got {z_min:g} to {z_max:g}"
-        if not 0 < phi_max <= 2 * math.pi:
-            return f"phi_max must be in (0, 360] degrees, got {math.degrees(phi_max):g}"
-        return None
+    def own_problem(self, params):
+        z_min, z_max = params[1:3]
+        return None if z_max > z_min else f"z_max must be above z_min, got {z_min:g} to {z_max:g}"
 
-    def object_bounds(self, params):
-        radius, z_min, z_max, _ = params
-        return np.array([-radius, -radius, z_min]), np.array([radius, radius, z_max])
+    def z_range(self, params):
+        return params[1], params[2]
 
     def area(self, params):
         radius, z_min, z_max, phi_max = params

@@ -6,10 +6,10 @@ import math
 import numpy as np
 
 from pathtrace.parameters import Parameter
-from pathtrace.shapes.shape import ShapeKind
+from pathtrace.shapes.shape import Quadric
 
 
-class Disk(ShapeKind):
+class Disk(Quadric):
     name = "disk"
     formats = {"mitsuba": "disk", "pbrt": "disk"}
     doc = ("An annulus sector at z = height facing +z; uv (phi / phi_max, (radius - r) / (radius - "
@@ -32,19 +32,14 @@ class Disk(ShapeKind):
         (r, phi / 2 pi) (src/shapes/disk.cpp), flip_normals turning its normal."""
         return (1.0, 0.0, 0.0, 2 * math.pi), np.eye(4), True, bool(values["flip_normals"])
 
-    def check(self, params):
-        radius, inner, _, phi_max = params
-        if not radius > 0:
-            return f"radius must be positive, got {radius:g}"
+    def own_problem(self, params):
+        radius, inner = params[:2]
         if not 0 <= inner < radius:
             return f"inner_radius must be at least 0 and below the radius {radius:g}, got {inner:g}"
-        if not 0 < phi_max <= 2 * math.pi:
-            return f"phi_max must be in (0, 360] degrees, got {math.degrees(phi_max):g}"
         return None
 
-    def object_bounds(self, params):
-        radius, _, height, _ = params
-        return np.array([-radius, -radius, height]), np.array([radius, radius, height])
+    def z_range(self, params):
+        return params[2], params[2]
 
     def area(self, params):
         radius, inner, _, phi_max = params

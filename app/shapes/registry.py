@@ -18,7 +18,7 @@ def _kinds() -> dict:
         if module in ("registry", "shape"):
             continue
         for value in vars(importlib.import_module(f"pathtrace.shapes.{module}")).values():
-            if isinstance(value, type) and issubclass(value, ShapeKind) and value is not ShapeKind:
+            if isinstance(value, type) and issubclass(value, ShapeKind) and value.name:     # not a base
                 kinds[value.name] = value()
     return kinds
 

@@ -81,6 +81,31 @@ class ShapeKind:
         return None
 
 
+class Quadric(ShapeKind):
+    """A pbrt-v4 quadric about the z axis (disk, cylinder), its first parameter the radius and
+    its last phi_max (radians): its checks and its box from what each such kind adds."""
+
+    def own_problem(self, params) -> str | None:
+        """What is wrong with its parameters besides the radius and phi_max, or None."""
+        return None
+
+    def z_range(self, params) -> tuple:
+        """(lowest, highest) z of its points in its object's space."""
+        raise NotImplementedError
+
+    def check(self, params):
+        radius, phi_max = params[0], params[-1]
+        if not radius > 0:
+            return f"radius must be positive, got {radius:g}"
+        return self.own_problem(params) or (
+            None if 0 < phi_max <= 2 * math.pi else f"phi_max must be in (0, 360] degrees, got {math.degrees(phi_max):g}")
+
+    def object_bounds(self, params):
+        radius = params[0]
+        z_min, z_max = self.z_range(params)
+        return np.array([-radius, -radius, z_min]), np.array([radius, radius, z_max])
+
+
 @dataclass
 class Shape:
     """An analytic shape of a scene: a kind's shape in its object's space, placed by `to_world`."""

@@ -13,7 +13,7 @@ import numpy as np
 from pathtrace.errors import UserError
 from pathtrace.io.files import check_regular_file, shown
 from pathtrace.parameters import Parameter
-from pathtrace.textures.texture import TextureType
+from pathtrace.textures.texture import KINDS, Texture, TextureType
 
 # TEXELS_*, WRAP_* and FILTER_* of kernels/textures/bitmap.cl
 SRGB8, LINEAR8, HALF, FLOAT = range(4)
@@ -129,16 +129,62 @@ def _read_ldr(path: Path, where: str) -> np.ndarray:
     return texels[..., None] if texels.ndim == 2 else texels
 
 
+PBRT_ENCODING = "sRGB for a PNG, else linear"      # pbrt-v4's default (SpectrumImageTexture::Create)
+
+
+def _pbrt_linear(encoding, given) -> bool:
+    """pbrt-v4's `encoding`: whether 8-bit values are linear; `gamma g` decodes as sRGB
+    (from_pbrt warns)."""
+    if encoding == PBRT_ENCODING:
+        encoding = "sRGB" if str(given["filename"]).lower().endswith(".png") else "linear"
+    if encoding not in ("sRGB", "linear") and not encoding.startswith("gamma "):
+        raise ValueError(f"'encoding' must be sRGB, linear or gamma <g>, got {encoding!r}")
+    return encoding == "linear"
+
+
+def _pbrt_filter(name, given) -> str:
+    """pbrt-v4's filters: point is nearest, the others (trilinear, ewa) bilinear."""
+    if name not in ("point", "bilinear", "trilinear", "ewa"):
+        raise ValueError(f"'filter' must be point, bilinear, trilinear or ewa, got {name!r}")
+    return "nearest" if name == "point" else "bilinear"
+
+
+def _pbrt_wrap(wrap, given) -> str:
+    """pbrt-v4's wraps: black and octahedralsphere clamp (from_pbrt warns)."""
+    if wrap not in ("repeat", "clamp", "black", "octahedralsphere"):
+        raise ValueError(f"'wrap' must be repeat, black, clamp or octahedralsphere, got {wrap!r}")
+    return "repeat" if wrap == "repeat" else "clamp"
+
+
+def inverted(image: Image, scale: float) -> Image:
+    """pbrt-v4's imagemap `invert` (src/pbrt/textures.cpp, SpectrumImageTexture::Evaluate:
+    rgb = scale * lookup, then ClampZero(1 - rgb) per channel; FloatImageTexture::Evaluate:
+    max(0, 1 - v)): applied to the texels, in linear float, which bilinear filtering then
+    interpolates as pbrt interpolates before inverting (the two differ only next to texels that
+    the clamp at zero cuts). An alpha channel is kept."""
+    values = image.linear_values()
+    rgb = np.maximum(1.0 - scale * values[..., :3], 0.0)
+    texels = np.concatenate([rgb, values[..., 3:]], axis=2) if values.shape[2] == 4 else rgb
+    return Image(np.ascontiguousarray(texels, np.float32), True, image.path)
+
+
 class Bitmap(TextureType):
     name = "bitmap"
     doc = ("an image file (PNG, JPEG, TGA, BMP: 8-bit sRGB unless raw; HDR, EXR, PFM: linear), "
            "with wrap mode repeat, mirror or clamp and filter bilinear or nearest")
-    formats = {"mitsuba": "bitmap"}
+    formats = {"mitsuba": "bitmap", "pbrt": "imagemap"}
     parameters = (
-        Parameter("file", "image", doc="the image file, relative to the scene file", mitsuba="filename"),
-        Parameter("raw", "bool", False, doc="8-bit values taken as linear, not sRGB", mitsuba="raw"),
-        Parameter("filter", "name", "bilinear", choices=tuple(FILTERS), doc="the lookup", mitsuba="filter_type"),
-        Parameter("wrap", "name", "repeat", choices=tuple(WRAP_MODES), doc="beyond [0, 1]", mitsuba="wrap_mode"))
+        Parameter("file", "image", doc="the image file, relative to the scene file", mitsuba="filename",
+                  pbrt="filename"),
+        Parameter("raw", "bool", False, doc="8-bit values taken as linear, not sRGB", mitsuba="raw",
+                  pbrt="encoding", pbrt_kind="string", pbrt_default=PBRT_ENCODING, from_pbrt=_pbrt_linear),
+        Parameter("filter", "name", "bilinear", choices=tuple(FILTERS), doc="the lookup", mitsuba="filter_type",
+                  pbrt="filter", pbrt_default="bilinear", from_pbrt=_pbrt_filter),
+        Parameter("wrap", "name", "repeat", choices=tuple(WRAP_MODES), doc="beyond [0, 1]", mitsuba="wrap_mode",
+                  pbrt="wrap", pbrt_default="repeat", from_pbrt=_pbrt_wrap))
+    format_only = (Parameter(None, "number", pbrt="scale", pbrt_default=1.0, doc="a factor on the texels"),
+                   Parameter(None, "bool", pbrt="invert", pbrt_default=False, doc="max(0, 1 - scale texel)"))
+    pbrt_uv = 1.0
     # repeat wrap: a bilinear lookup's mean over the unit square is then its texels' mean
     examples = ({"image": Image(np.array([[[255, 0, 0], [0, 255, 0], [0, 0, 255]],
                                           [[255, 255, 255], [128, 64, 32], [0, 0, 0]]], np.uint8))},
@@ -158,6 +204,18 @@ class Bitmap(TextureType):
                 raise ValueError(f"{key}: unknown {key} {values[key]!r} (known: {', '.join(choices)})")
         values["image"] = check_texels(values["image"])
         return values
+
+    def from_pbrt(self, values, given, warn):
+        """pbrt-v4's imagemap: its image, times `scale` (a scale texture over it), or inverted."""
+        if given["encoding"].startswith("gamma "):
+            warn(f"pathtrace decodes 8-bit images as sRGB or linear; {given['encoding']} is taken as sRGB")
+        if given["wrap"] in ("black", "octahedralsphere"):
+            warn(f"pathtrace has no {given['wrap']} wrap; it clamps")
+        scale = given["scale"]
+        if given["invert"]:
+            values["file"], scale = inverted(values["file"], scale), 1.0
+        texture = Texture(self.name, self.complete(values))
+        return texture if scale == 1.0 else Texture("scale", KINDS["scale"].complete({"tex": texture, "scale": scale}))
 
     def pack(self, texture, row, texels):
         image = texture.params["image"]

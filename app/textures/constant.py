@@ -9,7 +9,8 @@ from pathtrace.textures.texture import TextureType
 class Constant(TextureType):
     name = "constant"
     doc = "one colour everywhere"
-    parameters = (Parameter("value", "color", 1.0, doc="the colour"),)
+    formats = {"pbrt": "constant"}
+    parameters = (Parameter("value", "color", 1.0, doc="the colour", pbrt="value"),)
     examples = ({"value": [0.2, 0.5, 0.9]}, {"value": 3.5})
 
     def complete(self, params):
@@ -19,6 +20,10 @@ class Constant(TextureType):
             raise ValueError("value must be a number or three numbers")
         values["value"] = np.broadcast_to(v.reshape(-1), 3).copy()
         return values
+
+    def from_pbrt(self, values, given, warn):
+        """pbrt-v4's constant texture is its value (a number for a float texture)."""
+        return values.get("value", self.defaults["value"])
 
     def pack(self, texture, row, texels):
         row["value"][0, :3] = texture.params["value"]

@@ -9,9 +9,11 @@ from pathtrace.textures.texture import Texture, TextureType, input_bounds, input
 class Mix(TextureType):
     name = "mix"
     doc = "(1 - amount) tex1 + amount tex2 (pbrt-v4's mix; amount's first channel)"
-    parameters = (Parameter("tex1", "color", 0.0, texture=True, doc="where amount is 0"),      # pbrt-v4's defaults
-                  Parameter("tex2", "color", 1.0, texture=True, doc="where amount is 1"),
-                  Parameter("amount", "color", 0.5, texture=True, doc="the blend, its first channel"))
+    formats = {"pbrt": "mix"}
+    parameters = (Parameter("tex1", "color", 0.0, texture=True, doc="where amount is 0", pbrt="tex1"),  # pbrt-v4's defaults
+                  Parameter("tex2", "color", 1.0, texture=True, doc="where amount is 1", pbrt="tex2"),
+                  Parameter("amount", "color", 0.5, texture=True, doc="the blend, its first channel", pbrt="amount"))
+    pbrt_floats = ("amount",)
     examples = ({"tex1": Texture("checkerboard", {}), "tex2": [0.1, 0.9, 0.4], "amount": 0.6},
                 {"tex1": 0.2, "tex2": Texture("checkerboard", {"to_uv": np.diag([3.0, 3.0, 1.0])}), "amount": 0.25},
                 {"tex1": [0.8, 0.4, 0.1], "tex2": 0.0, "amount": Texture("checkerboard", {"color0": 0.9, "color1": 0.1})})

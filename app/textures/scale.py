@@ -9,8 +9,10 @@ from pathtrace.textures.texture import Texture, TextureType, input_bounds, input
 class Scale(TextureType):
     name = "scale"
     doc = "tex times scale (pbrt-v4's scale)"
-    parameters = (Parameter("tex", "color", 1.0, texture=True, doc="the texture scaled"),
-                  Parameter("scale", "color", 1.0, texture=True, doc="the factor"))
+    formats = {"pbrt": "scale"}
+    parameters = (Parameter("tex", "color", 1.0, texture=True, doc="the texture scaled", pbrt="tex"),
+                  Parameter("scale", "color", 1.0, texture=True, doc="the factor", pbrt="scale"))
+    pbrt_floats = ("scale",)
     examples = ({"tex": [0.5, 0.25, 1.0], "scale": Texture("checkerboard", {"color0": 2.0, "color1": 0.5})},
                 {"tex": Texture("checkerboard", {"color0": [0.9, 0.1, 0.2], "color1": 0.3}), "scale": [2.0, 0.5, 1.0]})
 

@@ -106,7 +106,12 @@ class TextureType:
     name: str
     doc: str = ""
     parameters: tuple = ()
-    formats: dict = {}        # its names in other formats: {"mitsuba": name}
+    formats: dict = {}        # its names in other formats: {"mitsuba": name, "pbrt": name}
+    format_only: tuple = ()   # Parameters a format's texture has and this type keeps none of (name
+                              # None), read for the conversions and from_pbrt
+    pbrt_floats: tuple = ()   # its inputs that pbrt-v4 reads as float textures whatever the texture's
+    pbrt_uv: float = 0.0      # the scale of pbrt-v4's (s, t), mapped by uscale, vscale, udelta and
+                              # vdelta, in its uv; 0: pbrt-v4's texture reads no mapping
     inputs: tuple = ()        # set from parameters
     defaults: dict = {}       # likewise
 
@@ -137,6 +142,12 @@ class TextureType:
                     raise ValueError(f"{name} must be a number, three numbers or a texture")
                 values[name] = np.broadcast_to(v.reshape(-1), 3).copy()
         return values
+
+    def from_pbrt(self, values: dict, given: dict, warn):
+        """What a pbrt-v4 Texture of this type is: a Texture (or a constant), from its declared
+        parameters' values by pathtrace's names (converted; to_uv its mapping) and by pbrt-v4's
+        (`given`); warn(text) tells what pathtrace approximates. Raises ValueError."""
+        return Texture(self.name, self.complete(values))
 
     def pack(self, texture: Texture, row, texels):
         """Fills the type's own fields of `row` (a TEXTURE record), storing any image in

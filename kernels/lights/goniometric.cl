@@ -32,9 +32,9 @@ int sample_goniometric_light(const SceneData *sc, const RenderParams *p, const g
 {
 #ifdef TEXTURES
     float r2;
-    if (!aim_at_position(GONIOMETRIC_LIGHT_POSITION(l), x, ls, &r2))
+    float3 w;
+    if (!aim_from_frame(GONIOMETRIC_LIGHT_POSITION(l), GONIOMETRIC_LIGHT_ROTATION(l), x, ls, &r2, &w))
         return 0;
-    float3 w = to_light_space(GONIOMETRIC_LIGHT_ROTATION(l), -ls->wi);
     float3 value = eval_texture(sc, (int)GONIOMETRIC_LIGHT_MAP(l), equal_area_square((float3)(w.x, w.z, w.y)));
     ls->le = GONIOMETRIC_LIGHT_INTENSITY(l) * (value.x / r2);
     return 1;

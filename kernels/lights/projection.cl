@@ -15,10 +15,9 @@ int sample_projection_light(const SceneData *sc, const RenderParams *p, const gl
 {
 #ifdef TEXTURES
     float r2;
-    if (!aim_at_position(PROJECTION_LIGHT_POSITION(l), x, ls, &r2))
-        return 0;
-    float3 w = to_light_space(PROJECTION_LIGHT_ROTATION(l), -ls->wi);
-    if (w.z < PROJECTION_HITHER)
+    float3 w;
+    if (!aim_from_frame(PROJECTION_LIGHT_POSITION(l), PROJECTION_LIGHT_ROTATION(l), x, ls, &r2, &w)
+        || w.z < PROJECTION_HITHER)
         return 0;
     float2 half_extent = PROJECTION_LIGHT_HALF_EXTENT(l);
     float2 s = (float2)(w.x, -w.y) / (w.z * PROJECTION_LIGHT_TAN_HALF_FOV(l));

@@ -111,6 +111,7 @@ void bilinear_texels(const global Texture *t, float2 uv, ulong4 *texel, float2 *
 
 float3 eval_bitmap(const SceneData *sc, const global Texture *t, float2 uv)
 {
+    LOG_TEXTURE_LOOKUP(sc);      /* the divergence stats build counts lookups (kernels/divergence.cl) */
     uv = wrap_period(transform_uv(t, uv), t->wrap);
     if (t->filter == FILTER_NEAREST) {
         int x = wrap_texel(texel_coordinate(uv.x * t->width), t->width, t->wrap);
@@ -131,6 +132,7 @@ float3 eval_bitmap(const SceneData *sc, const global Texture *t, float2 uv)
  * value is piecewise constant (a bump map's slopes, kernels/normal_maps.cl). */
 float2 grad_bitmap(const SceneData *sc, const global Texture *t, float2 uv)
 {
+    LOG_TEXTURE_LOOKUP(sc);
     if (t->filter == FILTER_NEAREST)
         return (float2)(0.0f);
     ulong4 i;

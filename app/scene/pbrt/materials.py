@@ -3,7 +3,6 @@ pbrt-v4 means them: roughness remapped as pbrt remaps it, texture coordinates fl
 image lookups flip them, colours from spectra (app/scene/spectra.py). What pathtrace does not have yet
 is approximated by its nearest material, with one warning each (docs/pbrt.md)."""
 
-import math
 from dataclasses import replace
 
 import numpy as np
@@ -15,13 +14,10 @@ from pathtrace.materials.table import check_blend, check_bump_map, transmits
 from pathtrace.parameters import by_format, read
 from pathtrace.scene.spectra import blackbody_rgb, emission_rgb, named_spectrum, reflectance_rgb, sampled
 from pathtrace.textures import TEXTURES, Texture
-from pathtrace.textures.bitmap import Image, read_image
+from pathtrace.textures.bitmap import read_image
 
 BSDFS_BY_NAME = by_format(BSDFS.values(), "pbrt")
-SMOOTH_ALPHA = 1e-3     # pbrt-v4's TrowbridgeReitzDistribution::EffectivelySmooth
-# a conductor's reflectance r becomes k = 2 sqrt(r) / sqrt(1 - r) (below): r at most
-# 100^2 / (4 + 100^2), 0.9996, keeps k within the conductor's bound of 100
-MAX_REFLECTANCE = 100.0 ** 2 / (4 + 100.0 ** 2)
+TEXTURES_BY_NAME = by_format(TEXTURES.values(), "pbrt")
 
 
 def spectrum_rgb(params, name, default, kind="reflectance"):
@@ -68,18 +64,6 @@ def spectrum_rgb(params, name, default, kind="reflectance"):
                 params.fail(name, f"the spectrum {e}")
         return reflectance_rgb(curve) if kind == "reflectance" else np.full(3, float(np.mean(curve)))
     params.fail(name, f"must be a colour (rgb, spectrum, blackbody, float), got {ptype}")
-
-
-def inverted(image: Image, scale: float) -> Image:
-    """An imagemap's `invert`, as pbrt-v4's image textures have it (src/pbrt/textures.cpp,
-    SpectrumImageTexture::Evaluate: rgb = scale * lookup, then ClampZero(1 - rgb) per channel;
-    FloatImageTexture::Evaluate: max(0, 1 - v)): applied to the texels, in linear float, which
-    bilinear filtering then interpolates as pbrt interpolates before inverting (the two differ
-    only next to texels that the clamp at zero cuts). An alpha channel is kept."""
-    values = image.linear_values()
-    rgb = np.maximum(1.0 - scale * values[..., :3], 0.0)
-    texels = np.concatenate([rgb, values[..., 3:]], axis=2) if values.shape[2] == 4 else rgb
-    return Image(np.ascontiguousarray(texels, np.float32), True, image.path)
 
 
 # pathtrace's parameters that the pbrt materials' parameters become, for messages
@@ -133,8 +117,8 @@ class MaterialMapper:
 
     def parameter(self, params, p, name):
         """The value of the declared parameter p (app/parameters.py) that the parameter `name`
-        gives, by p's kind (a colour from a spectrum as p.spectrum says); None where it is not
-        given."""
+        gives, by p's kind (its pbrt_kind where set; a colour from a spectrum as p.spectrum
+        says); None where it is not given."""
         ptype = params.type_of(name)
         if ptype is None:
             return None
@@ -145,7 +129,7 @@ class MaterialMapper:
         if p.kind == "image":
             return read_image(self.reader.resolve(params.string(name)), params.where(name), False, self.images)
         read = {"number": params.float, "integer": params.int, "bool": params.bool, "string": params.string,
-                "name": params.string, "point": params.point, "vector": params.point}[p.kind]
+                "name": params.string, "point": params.point, "vector": params.point}[p.pbrt_kind or p.kind]
         return read(name)
 
     def define_texture(self, name, kind, cls, params, where):
@@ -156,69 +140,55 @@ class MaterialMapper:
         value = self._texture(cls, params, is_float, where)
         (self.float_textures if is_float else self.textures)[name] = value
 
-    def _mapping(self, params, where, half=False):
+    def _mapping(self, params, where, scale):
         """pbrt's uv mapping (su u + du, sv v + dv) as pathtrace's to_uv, on the flipped v that
-        the reader gives meshes: t = 1 - (sv v_pbrt + dv) with v_pbrt = 1 - v."""
+        the reader gives meshes: t = 1 - (sv v_pbrt + dv) with v_pbrt = 1 - v; times `scale`
+        (a TextureType's pbrt_uv)."""
         mapping = params.string("mapping", "uv")
         if mapping != "uv":
             warn(f"{where}: pathtrace maps textures by uv only; the {mapping} mapping is taken as uv")
         su, sv = params.float("uscale", 1.0), params.float("vscale", 1.0)
         du, dv = params.float("udelta", 0.0), params.float("vdelta", 0.0)
         m = np.array([[su, 0, du], [0, sv, 1 - sv - dv], [0, 0, 1.0]])
-        if half:
-            m[:2] *= 0.5
+        m[:2] *= scale
         return m
 
     def _texture(self, cls, params, is_float, where):
-        inp = lambda n, d: self.texture_input(params, n, d, is_float)      # noqa: E731
-        if cls == "constant":
-            return inp("value", 1.0)
-        if cls == "imagemap":
-            filename = params.string("filename")
-            if filename is None:
-                raise UserError(f"{where}: an imagemap needs a filename")
-            # pbrt-v4 SpectrumImageTexture::Create: sRGB for a PNG, else linear, by default
-            encoding = params.string("encoding", "sRGB" if filename.lower().endswith(".png") else "linear")
-            if encoding not in ("sRGB", "linear") and not encoding.startswith("gamma "):
-                raise UserError(f"{where}: 'encoding' must be sRGB, linear or gamma <g>, got {encoding!r}")
-            if encoding.startswith("gamma "):
-                warn(f"{where}: pathtrace decodes 8-bit images as sRGB or linear; {encoding} is taken as sRGB")
-            image = read_image(self.reader.resolve(filename), f"{where}: filename", encoding == "linear",
-                               self.images)
-            wrap = params.string("wrap", "repeat")
-            if wrap not in ("repeat", "clamp", "black", "octahedralsphere"):
-                raise UserError(f"{where}: 'wrap' must be repeat, black, clamp or octahedralsphere, got {wrap!r}")
-            if wrap in ("black", "octahedralsphere"):
-                warn(f"{where}: pathtrace has no {wrap} wrap; it clamps")
-                wrap = "clamp"
-            filt = params.string("filter", "bilinear")
-            if filt not in ("point", "bilinear", "trilinear", "ewa"):
-                raise UserError(f"{where}: 'filter' must be point, bilinear, trilinear or ewa, got {filt!r}")
-            scale = params.float("scale", 1.0)
-            if params.bool("invert", False):
-                image = inverted(image, scale)
-                scale = 1.0
-            texture = Texture("bitmap", TEXTURES["bitmap"].complete(
-                {"image": image, "wrap": wrap, "filter": "nearest" if filt == "point" else "bilinear",
-                 "to_uv": self._mapping(params, where)}))
-            if scale != 1.0:
-                texture = Texture("scale", TEXTURES["scale"].complete({"tex": texture, "scale": scale}))
+        """A texture of the type that declares pbrt-v4's `cls` (its parameters' pbrt-v4 names,
+        its from_pbrt): its colour inputs float textures (or numbers) in a float texture, and
+        those pbrt-v4 reads as float textures; its image read as its `raw` (encoding) says."""
+        kind = TEXTURES_BY_NAME.get(cls)
+        if kind is None:
+            return self._unknown_texture(cls, params, is_float, where)
+
+        def get(p, name):
+            if p.kind == "color":
+                return self.texture_input(params, name, None, is_float or p.name in kind.pbrt_floats)
+            return self.reader.resolve(params.string(name)) if p.kind == "image" and params.type_of(name) \
+                else self.parameter(params, p, name)
+        given = {}
+        try:
+            values = read(kind.parameters + kind.format_only, "pbrt", get, given)
+            for p in kind.parameters:
+                if p.kind == "image":
+                    if p.name not in values:
+                        raise UserError(f"{where}: an {cls} needs a {p.pbrt}")
+                    values[p.name] = read_image(values[p.name], f"{where}: {p.pbrt}", values["raw"], self.images)
+            if kind.pbrt_uv:
+                values["to_uv"] = self._mapping(params, where, kind.pbrt_uv)
+            texture = kind.from_pbrt(values, given, lambda text: warn(f"{where}: {text}"))
+        except ValueError as e:
+            self.fail(params, where, e)
+        if is_float or isinstance(texture, Texture):
             return texture
-        if cls == "checkerboard":
-            if params.int("dimension", 2) != 2:
-                warn(f"{where}: pathtrace's checkerboard is 2D; the 3D one is taken as 2D")
-            # pbrt's squares are a unit of (s, t) and Mitsuba's half a unit: (s, t) / 2
-            return Texture("checkerboard", TEXTURES["checkerboard"].complete(
-                {"color0": inp("tex1", 1.0), "color1": inp("tex2", 0.0), "to_uv": self._mapping(params, where, True)}))
-        if cls == "scale":
-            return Texture("scale", TEXTURES["scale"].complete(
-                {"tex": inp("tex", 1.0), "scale": self.texture_input(params, "scale", 1.0, True)}))
-        if cls == "mix":
-            return Texture("mix", TEXTURES["mix"].complete(
-                {"tex1": inp("tex1", 0.0), "tex2": inp("tex2", 1.0),
-                 "amount": self.texture_input(params, "amount", 0.5, True)}))
+        return np.broadcast_to(np.asarray(texture, np.float64), 3).copy()
+
+    def _unknown_texture(self, cls, params, is_float, where):
+        """A constant for a texture pathtrace has not: a bilerp's the mean of its constant
+        corners, another's 0.5, with a warning."""
         if cls == "bilerp":
-            corners = [inp(k, d) for k, d in (("v00", 0.0), ("v01", 1.0), ("v10", 0.0), ("v11", 1.0))]
+            corners = [self.texture_input(params, k, d, is_float)
+                       for k, d in (("v00", 0.0), ("v01", 1.0), ("v10", 0.0), ("v11", 1.0))]
             mean = np.mean([np.asarray(c, np.float64) for c in corners if not isinstance(c, Texture)] or [0.5], axis=0)
             value = float(np.mean(mean)) if is_float else np.broadcast_to(mean, 3).copy()
             warn(f"{where}: pathtrace has no bilerp texture; it uses the mean of its constant corners, "
@@ -229,27 +199,14 @@ class MaterialMapper:
 
     # -- materials --
 
-    def roughness(self, params, where, prefix=""):
-        """pbrt-v4's microfacet alphas (along dp/du and dp/dv, as its BSDF frame has them) from
-        roughness / uroughness / vroughness and remaproughness (alpha = sqrt(roughness):
-        RoughnessToAlpha)."""
-        r = params.float(prefix + "roughness", 0.0)
-        ru, rv = params.float(prefix + "uroughness", r), params.float(prefix + "vroughness", r)
-        for name, v in (("roughness", r), ("uroughness", ru), ("vroughness", rv)):
-            if v < 0 or v > 1e3 or not math.isfinite(v):
-                params.fail(prefix + name, f"must lie in [0, 1000], got {v:g}")
-        remap = params.bool("remaproughness", True)
-        return (math.sqrt(ru), math.sqrt(rv)) if remap else (ru, rv)
-
     @staticmethod
-    def rough_values(alphas) -> dict | None:
-        """The alpha and alpha_v of a rough material (GGX, pbrt-v4's TrowbridgeReitz) for a
-        pair of alphas, or None where pbrt deems them smooth (EffectivelySmooth: both below
-        SMOOTH_ALPHA)."""
-        if max(alphas) < SMOOTH_ALPHA:
-            return None
-        au, av = (min(max(a, 1e-4), 1.0) for a in alphas)
-        return {"alpha": au, "alpha_v": av, "distribution": "ggx"}
+    def fail(params, where, error: ValueError):
+        """A type's ValueError ("<pbrt name>: <problem>") as one line naming the parameter's
+        file:line, or the directive's (`where`)."""
+        name, _, problem = str(error).partition(": ")
+        if name in params.params:
+            params.fail(name, problem)
+        raise UserError(f"{where}: {error}") from None
 
     def material(self, kind, params, where) -> Material | None:
         """The Material of a pbrt material, or None for `interface` (and "" / "none"): no
@@ -296,27 +253,18 @@ class MaterialMapper:
         if kind in ("interface", "", "none"):
             return None
         if kind in BSDFS_BY_NAME:         # the types that declare their pbrt-v4 parameters
-            bsdf = BSDFS_BY_NAME[kind]
-            return make(bsdf.name, read(bsdf.params + bsdf.format_only, "pbrt",
-                                        lambda p, name: self.parameter(params, p, name)), where)
-        if kind == "conductor":
-            return self._conductor(params, where)
-        if kind in ("dielectric", "thindielectric"):
-            eta = self._eta(params, where)
-            # pbrt-v4's ThinDielectricMaterial::Create reads no roughness: thin glass is smooth
-            rough = self.rough_values(self.roughness(params, where)) if kind == "dielectric" else None
-            if eta == 1.0:
-                warn(f"{where}: a dielectric of eta 1 is invisible; pathtrace leaves the surface out")
-                return None
-            # pbrt-v4's eta is the inside's IOR over the outside's, any positive value (its
-            # DielectricBxDF takes etap = eta or 1 / eta by the side wo is on): below 1 the
-            # outside is the denser, an air bubble in water
-            iors = {"int_ior": eta, "ext_ior": 1.0} if eta > 1 else {"int_ior": 1.0, "ext_ior": 1 / eta}
-            if kind == "dielectric" and rough:      # pbrt-v4's rough glass: GGX
-                return make("roughdielectric", {**iors, **rough}, where)
-            return make(kind, iors, where)
-        if kind in ("coateddiffuse", "coatedconductor"):
-            return self._coated(kind, params, where)
+            bsdf, given = BSDFS_BY_NAME[kind], {}
+            values = read(bsdf.params + bsdf.format_only, "pbrt", lambda p, name: self.parameter(params, p, name), given)
+            # the numbers a file gives as they are checked at their own lines (a layer's walks)
+            problem = bsdf.out_of_range({p.name: values[p.name] for p in bsdf.params
+                                         if p.kind == "number" and p.pbrt and not p.from_pbrt and p.name in values})
+            if problem:
+                params.fail(next(p.pbrt for p in bsdf.params if p.name == problem[0]), problem[1])
+            try:
+                chosen = bsdf.from_pbrt(values, given, lambda text: warn(f"{where}: {text}"))
+            except ValueError as e:
+                self.fail(params, where, e)
+            return None if chosen is None else make(*chosen, where)
         if kind == "mix":
             return self._mix(params, where)
         warn(f"{where}: pathtrace has no {kind} material; it uses a diffuse one of albedo 0.5")
@@ -345,69 +293,3 @@ class MaterialMapper:
             raise UserError(f"{where}: amount: {e}") from None
         blend.twosided = not transmits(blend)
         return blend
-
-    def _eta(self, params, where, name="eta") -> float:
-        ptype = params.type_of(name)
-        if ptype == "spectrum":
-            eta = float(np.mean(spectrum_rgb(params, name, None, "unbounded")))
-        else:
-            eta = params.float(name, 1.5)
-        if not 0.1 <= eta <= 10 or not math.isfinite(eta):
-            params.fail(name, f"must lie in [0.1, 10], got {eta:g}")
-        return eta
-
-    def _coating_eta(self, params, where, name="eta") -> float:
-        """A layered material's coating IOR, which pathtrace's coatings take above 1."""
-        eta = self._eta(params, where, name)
-        if eta < 1:
-            warn(f"{where}: {name} {eta:g} < 1: pathtrace's coatings are denser than the outside; it uses {1 / eta:.4g}")
-            eta = 1 / eta
-        return eta
-
-    def _conductor(self, params, where):
-        if params.type_of("reflectance") is not None:
-            # pbrt-v4: the Fresnel reflectance of eta 1 and k = 2 sqrt(r) / sqrt(1 - r)
-            r = np.clip(spectrum_rgb(params, "reflectance", 0.0), 0.0, MAX_REFLECTANCE)
-            eta, k = np.ones(3), 2 * np.sqrt(r) / np.sqrt(1 - r)
-        else:
-            eta = spectrum_rgb(params, "eta", None, "unbounded")
-            k = spectrum_rgb(params, "k", None, "unbounded")
-            if eta is None:
-                eta = named_spectrum("metal-Cu-eta")[0]        # pbrt-v4's default: copper
-            if k is None:
-                k = named_spectrum("metal-Cu-k")[0]
-        rough = self.rough_values(self.roughness(params, where))
-        values = {"eta": eta, "k": k}
-        if not rough:
-            return make("conductor", values, where)
-        return make("roughconductor", {**values, **rough}, where)
-
-    def _coated(self, kind, params, where):
-        """pbrt-v4's layered materials, as pathtrace's (the same random walks): coateddiffuse,
-        and coatedconductor, whose coating's and metal's parameters are prefixed interface. and
-        conductor. (its metal copper by default, or of a `reflectance`)."""
-        layer = {"thickness": params.float("thickness", 0.01), "g": params.float("g", 0.0),
-                 "albedo": spectrum_rgb(params, "albedo", 0.0),
-                 "maxdepth": params.int("maxdepth", 10), "nsamples": params.int("nsamples", 1)}
-        for p in BSDFS[kind].params:       # the walks' bounds (a walk per sample costs time)
-            if p.name in ("maxdepth", "nsamples", "thickness", "g") and not p.low <= layer[p.name] <= p.high:
-                params.fail(p.name, f"must lie in [{p.low:g}, {p.high:g}], got {layer[p.name]:g}")
-        if kind == "coatedconductor":
-            metal = {"eta": spectrum_rgb(params, "conductor.eta", named_spectrum("metal-Cu-eta")[0], "unbounded"),
-                     "k": spectrum_rgb(params, "conductor.k", named_spectrum("metal-Cu-k")[0], "unbounded")}
-            if params.type_of("reflectance") is not None:
-                r = np.clip(spectrum_rgb(params, "reflectance", 0.0), 0.0, MAX_REFLECTANCE)
-                metal = {"eta": np.ones(3), "k": 2 * np.sqrt(r) / np.sqrt(1 - r)}
-            coating = self.rough_values(self.roughness(params, where, "interface.")) or {"alpha": 0.0, "alpha_v": 0.0}
-            base = self.rough_values(self.roughness(params, where, "conductor.")) or {"alpha": 0.0, "alpha_v": 0.0}
-            return make("coatedconductor", {**metal, **layer, "alpha": coating["alpha"], "alpha_v": coating["alpha_v"],
-                                            "conductor_alpha": base["alpha"], "conductor_alpha_v": base["alpha_v"],
-                                            "interface_eta": self._coating_eta(params, where, "interface.eta")}, where)
-        au, av = self.roughness(params, where)
-        if not math.isclose(au, av, rel_tol=1e-6):
-            warn(f"{where}: pathtrace's coateddiffuse coating is isotropic; it uses alpha {(au + av) / 2:.3g}")
-        alpha = (au + av) / 2
-        values = {"reflectance": self.texture_input(params, "reflectance", 0.5), "eta": self._coating_eta(params, where),
-                  "alpha": min(alpha, 1.0) if alpha >= SMOOTH_ALPHA else 0.0, **layer}
-        return make("coateddiffuse", values, where)
-

@@ -916,7 +916,7 @@ class PbrtReader:
         where = tokens.where(offset)
         m = self.state.ctm
         if kind == "infinite":
-            self.infinite_light(params, where, params.float("scale", 1.0))
+            self.infinite_light(params, where)
             self.unused(params, "light", "infinite")
             return
         cls = LIGHTS_BY_NAME.get(kind)
@@ -939,7 +939,9 @@ class PbrtReader:
         self.lights.append(light)
         self.unused(params, "light", kind)
 
-    def infinite_light(self, params, where, scale):
+    def infinite_light(self, params, where):
+        """The environment, by its declared pbrt-v4 names (app/scene/environment.py): pbrt-v4's
+        equal-area square map made latitude-longitude in the CTM, or L."""
         if self.environment is not None:
             warn(f"{where}: a second infinite light; pathtrace keeps the first")
             for p in params.params.values():
@@ -948,15 +950,17 @@ class PbrtReader:
         if params.type_of("portal"):
             params.floats("portal", ("point3",))
             warn(f"{params.where('portal')}: pathtrace does not sample portals; the light is sampled whole")
+        given = {}
+        values = declared.read(Environment.parameters, "pbrt", lambda p, name: self.mapper.parameter(params, p, name),
+                               given)
         # pbrt-v4's Light::Create: "illuminance" E_v scales a constant L by E_v / pi, and a map
         # by E_v over its upper_illuminance
-        illuminance = params.float("illuminance", -1.0)
-        filename = params.string("filename")
-        if filename is not None:
-            if params.type_of("L"):
+        scale, illuminance = values.get("intensity", 1.0), given["illuminance"]
+        if "map" in values:
+            if "color" in values:
                 params.fail("L", "an infinite light takes L or a filename, not both")
             from pathtrace.io.images import read_hdr
-            path = self.resolve(filename)
+            path = self.resolve(values["map"])
             image = read_hdr(path, f"{where}: filename")
             if image.shape[0] != image.shape[1]:
                 raise UserError(f"{where}: {path}: pbrt-v4's environment maps are square (equal-area), "
@@ -969,9 +973,9 @@ class PbrtReader:
             latlong = to_latlong(image[..., :3], self.inverse(where, "an infinite light's map")[:3, :3])
             self.environment = Environment(latlong, scale, 0.0, str(path), resampled=True)
             return
-        color = spectrum_rgb(params, "L", 1.0, "illuminant") * scale
+        color = np.broadcast_to(values.get("color", 1.0), 3) * scale
         if np.any(color < 0):
-            params.fail("L", "must not be negative")
+            params.fail("scale" if scale < 0 else "L", "must not be negative")
         if illuminance > 0:
             color = color * illuminance / math.pi
         self.environment = Environment.constant(color)
