@@ -3,7 +3,8 @@
 ellipsoid pbrt-v4 intersects, and Mitsuba 3's sphere, which stays round. Its hits, uv, dp/du and
 normals against pbrt-v4's formulas, an ellipsoid's and a partial sphere's silhouette against
 their closed-form areas (rendered from pbrt files), an emitting ellipsoid lit by next-event
-estimation and by paths alone, the readers' spheres and their bad parameters. The registry's
+estimation and by paths alone, the sphere range against the kind it stands for, the readers'
+spheres (pbrt's `power`, fronts and bad parameters; Mitsuba's round spheres). The registry's
 tests (tests/test_shapes.py) cover its BVH hits, area sampling and lighting."""
 
 import math
@@ -21,6 +22,7 @@ from pathtrace.scene import transform
 from pathtrace.scene.environment import Environment
 from pathtrace.shapes import SHAPES, Shape
 from pathtrace.shapes.sphere import TURN_Z
+from tests.analytic_shapes import hits_as_pbrt, moved, pbrt_emitter
 from tests.stats import z_test
 from tests.test_shapes import one_shape_scene, render, shape_hits
 
@@ -56,7 +58,6 @@ def test_hits_follow_pbrts_formulas(kernels, flip, uniform):
     m = transform.translation([0.3, -0.2, 1.0]) @ transform.rotation([1, 2, 0], 50) \
         @ transform.scaling([1.2] * 3 if uniform else [0.7, 1.6, 1.1])
     scene = one_shape_scene(Shape("s", "sphere", (RADIUS, Z_MIN, Z_MAX, PHI_MAX), m, 0, flip=flip))
-    world = lambda p: p @ m[:3, :3].T + m[:3, 3]                           # noqa: E731
     n = 2000
     phi = rng.uniform(0.001, 0.999, n) * PHI_MAX
     z = rng.uniform(Z_MIN + 1e-3, Z_MAX - 1e-3, n)
@@ -65,12 +66,9 @@ def test_hits_follow_pbrts_formulas(kernels, flip, uniform):
     local = RADIUS * outward
     inside = rng.random(n) < 0.5
     start = np.where(inside[:, None], 0.0, local + outward * rng.uniform(0.5, 3, (n, 1)))
-    h = shape_hits(kernels, scene, world(start), world(local))
-    np.testing.assert_allclose(h["p"], world(local), atol=3e-5)
     t0, t1 = theta_of(Z_MIN), theta_of(Z_MAX)
-    np.testing.assert_allclose(h["uv"], np.column_stack([phi / PHI_MAX, (theta - t0) / (t1 - t0)]), atol=3e-5)
-    dpdu = PHI_MAX * np.column_stack([-local[:, 1], local[:, 0], np.zeros(n)]) @ m[:3, :3].T
-    np.testing.assert_allclose(h["dpdu"], dpdu, atol=3e-4)
+    h = hits_as_pbrt(kernels, scene, m, start, local, np.column_stack([phi / PHI_MAX, (theta - t0) / (t1 - t0)]),
+                     PHI_MAX, 3e-5, 3e-4)
     normal = outward @ np.linalg.inv(m[:3, :3])
     normal = (-1 if flip else 1) * normal / np.linalg.norm(normal, axis=1, keepdims=True)
     np.testing.assert_allclose(h["n"], normal, atol=2e-5)
@@ -78,14 +76,14 @@ def test_hits_follow_pbrts_formulas(kernels, flip, uniform):
     height = rng.uniform(Z_MAX + 0.01, -Z_MIN - 0.01, n)
     ring = np.sqrt(RADIUS ** 2 - height ** 2)
     below = np.column_stack([ring * np.cos(phi), ring * np.sin(phi), -height])
-    h = shape_hits(kernels, scene, world(below * [1, 1, -1] + [0, 0, 2]), world(below))
-    np.testing.assert_allclose(h["p"], world(below), atol=3e-5)
+    h = shape_hits(kernels, scene, moved(m, below * [1, 1, -1] + [0, 0, 2]), moved(m, below))
+    np.testing.assert_allclose(h["p"], moved(m, below), atol=3e-5)
     # from the centre to points of the whole sphere above z_max and in the missing sector
     cut_theta = np.concatenate([theta_of(rng.uniform(Z_MAX + 0.01, RADIUS - 0.01, n // 2)), theta[n // 2:]])
     cut_phi = np.concatenate([phi[: n // 2], rng.uniform(PHI_MAX + 0.01, 2 * math.pi - 0.01, n - n // 2)])
     miss = RADIUS * np.column_stack([np.sin(cut_theta) * np.cos(cut_phi), np.sin(cut_theta) * np.sin(cut_phi),
                                      np.cos(cut_theta)])
-    assert np.all(np.isnan(shape_hits(kernels, scene, world(np.zeros_like(miss)), world(miss))["p"][:, 0]))
+    assert np.all(np.isnan(shape_hits(kernels, scene, moved(m, np.zeros_like(miss)), moved(m, miss))["p"][:, 0]))
 
 
 PBRT_SILHOUETTE = """LookAt 0 0 5  0 0 0  0 1 0
@@ -179,6 +177,16 @@ def test_the_sphere_range_meets_rays_as_the_analytic_sphere_it_stands_for(kernel
     # float32 rounding apart: the analytic sphere's point comes back through its angles' sin and cos
     for key, tolerance in (("p", 1e-5), ("n", 1e-5), ("uv", 1e-5), ("dpdu", 1e-4)):
         np.testing.assert_allclose(a[key], b[key], atol=tolerance, err_msg=key)
+
+
+def test_pbrt_power_is_spread_over_the_object_space_area(tmp_path, capfd):
+    """pbrt-v4's DiffuseAreaLight::Create divides `power` by pi times the shape's Area(), which
+    for a sphere is phi_max r (z_max - z_min) in its object's space (src/pbrt/shapes.h): a Scale
+    does not enter it. The partial sphere's uniform scale keeps it in the analytic kind."""
+    s, emission = pbrt_emitter(tmp_path, capfd, 'Scale 2 2 2\nShape "sphere" "float radius" 0.5 "float zmin" -0.2 '
+                               '"float phimax" 180')
+    assert s.kind == "sphere" and s.params == pytest.approx((0.5, -0.2, 0.5, math.pi))
+    np.testing.assert_allclose(emission, 10 / (math.pi * math.pi * 0.5 * 0.7), rtol=1e-5)
 
 
 @pytest.mark.parametrize("params, field", [('"float radius" -1', "radius"),
