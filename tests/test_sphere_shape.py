@@ -185,7 +185,7 @@ def test_pbrt_power_is_spread_over_the_object_space_area(tmp_path, capfd):
     does not enter it. The partial sphere's uniform scale keeps it in the analytic kind."""
     s, emission = pbrt_emitter(tmp_path, capfd, 'Scale 2 2 2\nShape "sphere" "float radius" 0.5 "float zmin" -0.2 '
                                '"float phimax" 180')
-    assert s.kind == "sphere" and s.params == pytest.approx((0.5, -0.2, 0.5, math.pi))
+    assert s.kind == "sphere" and s.params == pytest.approx((0.5, -0.5, 0.2, math.pi))     # z turned round
     np.testing.assert_allclose(emission, 10 / (math.pi * math.pi * 0.5 * 0.7), rtol=1e-5)
 
 
@@ -234,9 +234,9 @@ AttributeEnd
     assert len(scene.spheres) == 0 and not scene.meshes
     reversed_, mirrored, instanced = scene.shapes
     assert reversed_.flip and mirrored.flip and not instanced.flip
-    assert mirrored.params == pytest.approx((1.0, -1.0, 0.5, 2 * math.pi))
+    assert mirrored.params == pytest.approx((1.0, -0.5, 1.0, 2 * math.pi))          # z turned round: from_pbrt
     assert scene.materials.rows["flags"][mirrored.material] & EMITS_BACK
-    np.testing.assert_allclose(instanced.to_world[:3, :3], np.diag([1, 2, 1]))
+    np.testing.assert_allclose(instanced.to_world[:3, :3], np.diag([1, 2, -1]))
 
 
 def test_mitsuba_spheres_stay_round_with_mitsubas_uv(kernels, tmp_path, capfd):

@@ -52,6 +52,11 @@ class ShapeKind:
         the object transform goes before to_world; `where` (file:line) for its warnings."""
         raise NotImplementedError
 
+    def from_pbrt(self, params) -> tuple:
+        """(params, object transform) of pbrt-v4's shape of parameters `params`, the object
+        transform going before the CTM (identity: the kind's own)."""
+        return params, np.eye(4)
+
     def check(self, params) -> str | None:
         """What is wrong with parameters `params`, or None."""
         raise NotImplementedError

@@ -44,6 +44,13 @@ class Sphere(ShapeKind):
         clamp = lambda z: min(max(z, -abs(radius)), abs(radius))      # noqa: E731
         return radius, clamp(min(z0, z1)), clamp(max(z0, z1)), min(max(phi_max, 0.0), 2 * math.pi)
 
+    def from_pbrt(self, params):
+        """pbrt-v4's sphere with z turned round (TURN_Z, the z range mirrored): the same surface,
+        its texture v = 1 - pbrt's v, as the pbrt reader turns every mesh's v (pathtrace's
+        images have v = 0 at the top), and the sphere range's uv where it is whole."""
+        radius, z_min, z_max, phi_max = params
+        return (radius, -z_max, -z_min, phi_max), TURN_Z.copy()
+
     def check(self, params):
         radius, z_min, z_max, phi_max = params
         if not radius > 0:
@@ -100,7 +107,8 @@ class Sphere(ShapeKind):
         """(centre, radius) of the sphere range (kernels/shapes/sphere_range.cl) that renders the
         analytic sphere `shape` alike, or None: a whole sphere facing outwards under a
         similarity, whose rotation is TURN_Z where its material reads texture coordinates or
-        tangents (the range's are Mitsuba's about the world's axes: pbrt's would differ).
+        tangents (the range's are Mitsuba's about the world's axes, which from_mitsuba and
+        from_pbrt give an unrotated sphere).
         (Two cores, 2026-11-29: every sphere as this kind made simple-diffuse 3-5 times
         slower; docs/notes/performance-2026-11.md.)"""
         radius, z_min, z_max, phi_max = shape.params

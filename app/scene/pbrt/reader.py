@@ -748,7 +748,8 @@ class PbrtReader:
         if problem:
             raise UserError(f"{where}: the {kind}'s {problem}")
         m = self.state.ctm
-        shape = Shape(f"{kind} {len(self.builder.shapes)}", kind, values, m, 0,
+        values, local = k.from_pbrt(values)
+        shape = Shape(f"{kind} {len(self.builder.shapes)}", kind, values, m @ local, 0,
                       flip=self.state.reverse != transform.flips_handedness(m), media=media)
         lo, hi = shape.bounds(k)
         self.check_extent(np.abs(np.array([lo, hi])), where)
