@@ -238,7 +238,7 @@ def gpu_form(backend):
 
 @pytest.mark.parametrize("name", ["textures.xml", "lights.xml", "blend.xml"])
 def test_the_generic_program_in_its_gpu_form_renders_as_its_own_program(gpu_form, specialised, name):
-    scene = load_scene(str(Path(__file__).parent / "scenes" / name))
+    scene = load_scene(str(Path(__file__).parent / "scenes" / name)).with_settings(max_depth=8, russian_roulette="off")
     a, b = render(gpu_form, scene), render(specialised, scene)
     assert a.uses_generic_program and a.program is gpu_form.program
     same_image(a, b)
