@@ -4,8 +4,9 @@ emitting shape."""
 
 import numpy as np
 
-from pathtrace.scene import load_scene
-from tests.test_shapes import shape_hits
+from pathtrace.scene import load_scene, transform
+from pathtrace.shapes import Shape
+from tests.test_shapes import one_shape_scene, shape_hits
 
 PBRT_EMITTER = """LookAt 0 0 5  0 0 0  0 1 0
 Camera "perspective" "float fov" 45
@@ -22,6 +23,15 @@ AttributeEnd
 def moved(m, points):
     """(n, 3) points moved by the (4, 4) transform m."""
     return points @ m[:3, :3].T + m[:3, 3]
+
+
+def placed_quadric(kind, params, uniform, flip, rng, n):
+    """(scene, m, phi): a one-shape scene of `kind` (params: radius, z_min, z_max, phi_max) under
+    m, which moves, turns and scales it (evenly where `uniform`), and n angles in (0, phi_max)."""
+    m = transform.translation([0.3, -0.2, 1.0]) @ transform.rotation([1, 2, 0], 50) \
+        @ transform.scaling([1.2] * 3 if uniform else [0.7, 1.6, 1.1])
+    scene = one_shape_scene(Shape(kind[0], kind, params, m, 0, flip=flip))
+    return scene, m, rng.uniform(0.001, 0.999, n) * params[3]
 
 
 def hits_as_pbrt(kernels, scene, m, start, local, uv, phi_max, atol, dpdu_atol):

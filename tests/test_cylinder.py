@@ -9,10 +9,9 @@ import numpy as np
 import pytest
 
 from pathtrace.scene import load_scene
-from pathtrace.scene import transform
-from pathtrace.shapes import SHAPES, Shape
-from tests.analytic_shapes import hits_as_pbrt, moved, pbrt_emitter
-from tests.test_shapes import one_shape_scene, shape_hits
+from pathtrace.shapes import SHAPES
+from tests.analytic_shapes import hits_as_pbrt, moved, pbrt_emitter, placed_quadric
+from tests.test_shapes import shape_hits
 
 RADIUS, Z_MIN, Z_MAX, PHI_MAX = 0.8, -0.4, 1.1, math.radians(300)
 
@@ -30,12 +29,8 @@ def test_hits_follow_pbrts_formulas(kernels, flip, uniform):
     pbrt-v4's u = phi / phi_max, v = (z - z_min) / (z_max - z_min), dp/du = phi_max (-y, x, 0)
     moved to the world, and the outward normal moved as a normal (turned by `flip`); beyond
     z_max or phi_max rays miss (no caps)."""
-    rng = np.random.default_rng(4)
-    m = transform.translation([0.3, -0.2, 1.0]) @ transform.rotation([1, 2, 0], 50) \
-        @ transform.scaling([1.2] * 3 if uniform else [0.7, 1.6, 1.1])
-    scene = one_shape_scene(Shape("c", "cylinder", (RADIUS, Z_MIN, Z_MAX, PHI_MAX), m, 0, flip=flip))
-    n = 2000
-    phi = rng.uniform(0.001, 0.999, n) * PHI_MAX
+    rng, n = np.random.default_rng(4), 2000
+    scene, m, phi = placed_quadric("cylinder", (RADIUS, Z_MIN, Z_MAX, PHI_MAX), uniform, flip, rng, n)
     z = Z_MIN + rng.uniform(0.001, 0.999, n) * (Z_MAX - Z_MIN)
     local = np.column_stack([RADIUS * np.cos(phi), RADIUS * np.sin(phi), z])
     outward = np.column_stack([np.cos(phi), np.sin(phi), np.zeros(n)])

@@ -22,7 +22,7 @@ from pathtrace.scene import transform
 from pathtrace.scene.environment import Environment
 from pathtrace.shapes import SHAPES, Shape
 from pathtrace.shapes.sphere import TURN_Z
-from tests.analytic_shapes import hits_as_pbrt, moved, pbrt_emitter
+from tests.analytic_shapes import hits_as_pbrt, moved, pbrt_emitter, placed_quadric
 from tests.stats import z_test
 from tests.test_shapes import one_shape_scene, render, shape_hits
 
@@ -54,12 +54,8 @@ def test_hits_follow_pbrts_formulas(kernels, flip, uniform):
     phi_max (-y, x, 0) moved to the world and the outward normal moved as a normal (turned by
     `flip`); a ray through the missing cap meets the inside of the far wall (pbrt-v4 tests the
     far crossing); rays beyond z_max or phi_max miss."""
-    rng = np.random.default_rng(4)
-    m = transform.translation([0.3, -0.2, 1.0]) @ transform.rotation([1, 2, 0], 50) \
-        @ transform.scaling([1.2] * 3 if uniform else [0.7, 1.6, 1.1])
-    scene = one_shape_scene(Shape("s", "sphere", (RADIUS, Z_MIN, Z_MAX, PHI_MAX), m, 0, flip=flip))
-    n = 2000
-    phi = rng.uniform(0.001, 0.999, n) * PHI_MAX
+    rng, n = np.random.default_rng(4), 2000
+    scene, m, phi = placed_quadric("sphere", (RADIUS, Z_MIN, Z_MAX, PHI_MAX), uniform, flip, rng, n)
     z = rng.uniform(Z_MIN + 1e-3, Z_MAX - 1e-3, n)
     theta = theta_of(z)
     outward = np.column_stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)])
