@@ -178,3 +178,15 @@ def test_a_dict_that_holds_itself_or_nests_deep_is_refused():
         x = x["a"]
     with pytest.raises(UserError, match="nested more than"):
         pathtrace.load_dict({"spheres": [{"center": [0, 0, 0], "radius": 1, "material": deep}]})
+
+
+def test_an_analytic_shape_too_near_flat_to_trace_is_left_out_with_a_warning(tmp_path, capsys):
+    """A sphere or a disk under a transform that is not singular but whose determinant is below
+    what the kernels' inverse holds (pathtrace.shapes.shape.MIN_DETERMINANT): left out, as a
+    singular one is, rather than refused at render naming no line."""
+    (tmp_path / "s.pbrt").write_text(HEAD + TRIANGLE + 'AttributeBegin\nScale 1e-30 1 1\nShape "sphere"\n'
+                                     'Shape "disk"\nAttributeEnd\n')
+    s = load_scene(str(tmp_path / "s.pbrt"))
+    assert s.triangle_count == 1 and len(s.spheres) == 0 and not s.shapes
+    lines = capsys.readouterr().err.splitlines()
+    assert len(lines) == 1 and "singular" in lines[0] and "2 like this" in lines[0], lines

@@ -165,6 +165,7 @@ def _mesh(mesh, where: str, materials: int):
 
 def _shape(shape, where: str, materials: int):
     from pathtrace.shapes import SHAPES, Shape
+    from pathtrace.shapes.shape import flattened
     if not isinstance(shape, Shape) or shape.kind not in SHAPES:
         raise UserError(f"{where}: give a pathtrace.shapes.Shape of a kind of {', '.join(SHAPES)}, got {short(shape)}")
     params = np.asarray(shape.params, np.float64)
@@ -174,7 +175,7 @@ def _shape(shape, where: str, materials: int):
     if problem:
         raise UserError(f"{where}.params: {problem}")
     m = np.asarray(shape.to_world, np.float64)
-    if m.shape != (4, 4) or not np.all(np.isfinite(m)) or abs(np.linalg.det(m[:3, :3])) < 1e-12:
+    if m.shape != (4, 4) or not np.all(np.isfinite(m)) or flattened(m):
         raise UserError(f"{where}.to_world: give an invertible 4x4 affine transform, got {short(shape.to_world)}")
     integer(f"{where}.material (a row of scene.materials)", shape.material, 0, materials - 1)
 

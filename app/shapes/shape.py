@@ -13,6 +13,15 @@ import numpy as np
 ROWS = 8
 """float4 rows of the side table per shape (kernels/shapes/analytic.cl)."""
 
+MIN_DETERMINANT = 1e-12
+"""The least magnitude of the determinant of a shape's to_world's 3x3 part: nearer singular, the
+inverse that the kernels intersect with (kernels/shapes/analytic.cl) is beyond float32's precision."""
+
+
+def flattened(to_world) -> bool:
+    """Whether a shape under the 4x4 transform `to_world` is too near flat to be traced."""
+    return not abs(np.linalg.det(np.asarray(to_world, np.float64)[:3, :3])) >= MIN_DETERMINANT
+
 
 class ShapeKind:
     """One kind of analytic shape, the four numbers of whose parameters (row 6 of its rows)

@@ -49,6 +49,7 @@ from pathtrace.scene.pbrt.materials import MaterialMapper, make, spectrum_rgb
 from pathtrace.textures import Texture
 from pathtrace.scene.pbrt.tokens import Tokens, numbers, parameters, string
 from pathtrace.shapes import SHAPES, Shape
+from pathtrace.shapes.shape import flattened
 
 MAX_FILE_BYTES = 4 << 30
 MAX_INCLUDE_DEPTH = 16
@@ -696,10 +697,11 @@ class PbrtReader:
             self.once(("interface", where), f"{where}: a shape of the interface material that bounds no "
                                             "medium is nothing; pathtrace leaves it out")
             return
-        if self.singular():
+        if self.singular() or (kind in SHAPES and flattened(self.state.ctm)):
             for p in params.params.values():
                 p.used = True
-            # pbrt-v4 would carry NaN normals and a NaN inverse: flattened to nothing, the
+            # pbrt-v4 would carry NaN normals and a NaN inverse: flattened to nothing (or, for
+            # an analytic shape, too near it for the inverse the kernels intersect with), the
             # shape is left out (as degenerate triangles are)
             warn(f"{where}: the current transform is singular (it flattens the shape); pathtrace leaves the shape out")
             return
