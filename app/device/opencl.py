@@ -233,9 +233,8 @@ class Backend:
 
     @property
     def program(self) -> cl.Program:
-        """The generic program, tuned (on NVIDIA under the register caps of app/device/occupancy.py:
-        its render kernels hold 250 registers untuned, and capped they drew their samples 11-22 %
-        sooner on an H200, docs/notes/performance-2026-11.md); waits for it."""
+        """The generic program, tuned (on NVIDIA under the register caps of app/device/occupancy.py,
+        which the heaviest program gains most from: docs/notes/performance-2026-11.md); waits for it."""
         return self.programs.get(Features.generic_program(), tuned=True)
 
     def built_generic(self):
