@@ -178,7 +178,7 @@ class _Prepared:
                 r.upload_materials()
             r.set_camera(scene.camera)
             r.set_settings(**{k: getattr(settings, k) for k in ("max_depth", "russian_roulette", "seed", "nee",
-                                                                "filter", "light_sampler", "path_queue",
+                                                                "filter", "light_sampler", "path_queue", "path_sort",
                                                                 "integrator")})
             r.resize(settings.width, settings.height)
             r.set_aovs(aovs)

@@ -8,12 +8,13 @@
  *
  * Records: one byte per (sample of the launch, iteration, field, work-item), the work-items
  * innermost, in the order in which GPUs form warps (log_lane), so that the host reads each warp's
- * lanes as consecutive bytes. The buffer is zeroed before each launch: 0 is an idle lane. */
+ * lanes as consecutive bytes. The buffer is zeroed before each launch: 0 is an idle lane. In the
+ * continuation queue's kernels (PATH_QUEUE: continue_paths) a work-item is a queue entry, taken
+ * in the order that its 1-D work-groups form warps, and each pass records into a buffer of its
+ * own, as one sample whose iterations are numbered from the camera ray as the megakernel's are
+ * (LOG_RESUME). */
 
 #ifdef DIVERGENCE_STATS
-#ifdef PATH_QUEUE
-#error "DIVERGENCE_STATS records the megakernel's loop: it is built without PATH_QUEUE"
-#endif
 
 /* The fields, each one byte (app/bench/divergence_stats.py: FIELDS) */
 #define LOG_SHADING 0      /* the SHADING_* code of what the iteration did after tracing its ray */
@@ -26,6 +27,9 @@
 #define LOG_FIELDS 5
 
 /* The shading codes (app/bench/divergence_stats.py: SHADING_NAMES) */
+#define SHADING_IDLE 0          /* did nothing: its path ended, or (PATH_SORT) waits in the queue
+                                   having traced its ray, whose vertex the kernel that takes it
+                                   records */
 #define SHADING_TRACED 1        /* traced its ray and ended without shading (a medium's
                                    scattering at the last vertex) */
 #define SHADING_ESCAPED 2       /* met nothing: the environment is looked up */
@@ -100,6 +104,8 @@ void log_texture_lookup(const SceneData *sc)
 #define LOG_SHADING_INTO(sc) struct ShadingLog log_ = {shading_records, 0, -1}; (sc).shading_log = &log_
 #define LOG_SAMPLE(sc, i) if ((sc)->shading_log) { (sc)->shading_log->sample = (i); (sc)->shading_log->iteration = -1; }
 #define LOG_ITERATION(sc) log_iteration(sc)
+/* a path taken from the continuation queue: its next iteration is `iteration` */
+#define LOG_RESUME(sc, iteration) if ((sc)->shading_log) { (sc)->shading_log->iteration = (iteration) - 1; }
 #define LOG_SHADED(sc, code) log_value(sc, LOG_SHADING, code)
 #define LOG_BSDF(sc, prim, type) log_bsdf(sc, prim, type)
 #define LOG_LIGHT_SAMPLED(sc, ls) \
@@ -110,6 +116,7 @@ void log_texture_lookup(const SceneData *sc)
 #define LOG_SHADING_INTO(sc)
 #define LOG_SAMPLE(sc, i)
 #define LOG_ITERATION(sc)
+#define LOG_RESUME(sc, iteration)
 #define LOG_SHADED(sc, code)
 #define LOG_BSDF(sc, prim, type)
 #define LOG_LIGHT_SAMPLED(sc, ls)

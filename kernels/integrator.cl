@@ -119,13 +119,19 @@ int survives_roulette(float3 *throughput, float eta_scale, float u)
     return 1;
 }
 
-/* Where a path about to trace its ray to vertex `depth` waits instead: `records` holds
- * `capacity` paths, `count` counts those handed in (beyond capacity: not taken, they go on). */
+/* Where a path about to trace its ray to vertex `depth` waits instead (with PATH_SORT: having
+ * traced it): `records` holds `capacity` paths, `count` counts those handed in (beyond capacity:
+ * not taken, they go on). With PATH_SORT, keys[slot] is the sort key of the path in `slot`
+ * (kernels/path_sort.cl) and key_counts[key] counts the paths of each key. */
 typedef struct {
     global float4 *records;
     volatile global int *count;
     int capacity;    /* 0: no queue */
     int depth;
+#ifdef PATH_SORT
+    global int *keys;
+    volatile global int *key_counts;
+#endif
 } PathQueue;
 
 /* A queue holds its paths as a structure of arrays: the k-th float4 of PathRecord for slot s at
@@ -146,6 +152,9 @@ void store_path(global float4 *records, int capacity, int slot, const PathRecord
     r[6 * capacity] = path->ratios;
 #endif
     r[7 * capacity] = as_float4(path->rng);
+#ifdef PATH_SORT
+    r[8 * capacity] = path->hit;
+#endif
 }
 
 PathRecord load_path(const global float4 *records, int capacity, int slot)
@@ -164,8 +173,27 @@ PathRecord load_path(const global float4 *records, int capacity, int slot)
     path.ratios = (float4)(1.0f);
 #endif
     path.rng = as_uint4(r[7 * capacity]);
+#ifdef PATH_SORT
+    path.hit = r[8 * capacity];
+#endif
     return path;
 }
+
+#ifdef PATH_QUEUE
+/* Hands path r to the queue, with sort key `key` (PATH_SORT); returns whether it had room. */
+int enqueue_path(PathQueue queue, const PathRecord *r, int key)
+{
+    int slot = atomic_inc(queue.count);
+    if (slot >= queue.capacity)
+        return 0;
+    store_path(queue.records, queue.capacity, slot, r);
+#ifdef PATH_SORT
+    queue.keys[slot] = key;
+    atomic_inc(&queue.key_counts[key]);
+#endif
+    return 1;
+}
+#endif
 
 /* A path leaving the camera along o + t d (with MEDIA, it draws its hero channel from rng). */
 PathRecord start_path(const RenderParams *p, float3 o, float3 d, Rng *rng)
@@ -182,6 +210,7 @@ PathRecord start_path(const RenderParams *p, float3 o, float3 d, Rng *rng)
     path.ratios.w = as_float(min((int)(next_uniform4(rng).x * 3.0f), 2));
 #endif
     path.rng = (uint4)(rng->key.xyz, rng->dim);
+    path.hit = (float4)(0.0f);                                   /* its ray not traced */
     return path;
 }
 
@@ -201,6 +230,8 @@ PathRecord start_path(const RenderParams *p, float3 o, float3 d, Rng *rng)
  * others' lanes idle for every vertex they add (Laine, Karras and Aila 2013, "Megakernels
  * Considered Harmful"); gathered into a queue, the paths that go on fill whole warps, at the
  * cost of storing and loading them (docs/notes/performance-2026-11.md, 2026-11-26, says where that pays).
+ * With PATH_SORT a path traces that ray first and waits with its hit, so that continue_paths can
+ * take the queue's paths in the order of the material each will shade (kernels/path_sort.cl).
  *
  * On CPUs it is inlined (CPU_INLINE), so that the start state stays in registers: PoCL left the call out of
  * line and passed the state through memory. NVIDIA's compiler keeps it out of line too, and GPUs
@@ -230,32 +261,59 @@ CPU_INLINE float3 trace_path(const SceneData *sc, const RenderParams *p, const P
     int hero = as_int(start->ratios.w);
     float3 ratios = start->ratios.xyz;
 #endif
+#ifdef PATH_SORT
+    int resumed = start->hit.w != 0.0f;     /* its first ray was traced before it waited */
+#endif
     for (int depth = as_int(start->throughput.w);; ++depth) {
+#ifdef PATH_SORT
+        LOG_ITERATION(sc);          /* the divergence stats build's record (kernels/divergence.cl) */
+        Hit hit;
+        if (resumed) {
+            hit = resumed_hit(start);
+            resumed = 0;
+        } else {
+            ++*rays;
+            hit = intersect_scene(sc, o, d, INFINITY, self);
+        }
+#endif
 #ifdef PATH_QUEUE
         if (depth == queue.depth && queue.capacity > 0) {
-            int slot = atomic_inc(queue.count);
-            if (slot < queue.capacity) {
-                int2 left = PRIM_ID_PAIR(self);
-                PathRecord r;
-                r.o = (float4)(o, eta_scale);
-                r.d = (float4)(d, pdf_prev);
-                r.throughput = (float4)(throughput, as_float(depth));
-                r.radiance = (float4)(radiance, as_float(medium));
-                r.prev_x = (float4)(prev_x, as_float(left.x));
-                r.prev_n = (float4)(prev_n, as_float(left.y));
-#ifdef MEDIA
-                r.ratios = (float4)(ratios, as_float(hero));
+#ifdef PATH_SORT
+            int2 left = PRIM_ID_PAIR(HIT_ID(hit));     /* what it hit, in place of what it left */
+#else
+            int2 left = PRIM_ID_PAIR(self);
 #endif
-                r.rng = (uint4)(rng->key.xyz, rng->dim);
-                store_path(queue.records, queue.capacity, slot, &r);
+            PathRecord r;
+            r.o = (float4)(o, eta_scale);
+            r.d = (float4)(d, pdf_prev);
+            r.throughput = (float4)(throughput, as_float(depth));
+            r.radiance = (float4)(radiance, as_float(medium));
+            r.prev_x = (float4)(prev_x, as_float(left.x));
+            r.prev_n = (float4)(prev_n, as_float(left.y));
+#ifdef MEDIA
+            r.ratios = (float4)(ratios, as_float(hero));
+#endif
+            r.rng = (uint4)(rng->key.xyz, rng->dim);
+#ifdef PATH_SORT
+            r.hit = (float4)(hit.t, hit.b1, hit.b2, 1.0f);
+            int key = sort_key(sc, hit.prim);
+#else
+            int key = 0;
+#endif
+            if (enqueue_path(queue, &r, key)) {
+#ifdef PATH_SORT
+                LOG_SHADED(sc, SHADING_IDLE);   /* the kernel that takes it shades this vertex */
+#endif
                 *queued = 1;
                 return radiance;
             }
         }
 #endif
-        LOG_ITERATION(sc);          /* the divergence stats build's record (kernels/divergence.cl) */
+#ifndef PATH_SORT
+        LOG_ITERATION(sc);
         ++*rays;
         Hit hit = intersect_scene(sc, o, d, INFINITY, self);
+#endif
 #ifdef MEDIA
         if (medium >= 0) {
             const global Medium *med = &sc->media[medium];
@@ -457,7 +515,9 @@ void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum
 
 /* queue, counters, queue_capacity, results: PATH_QUEUE's continuation queue, which paths enter
  * before their vertex PATH_QUEUE + 1, its count being counters[0] (queue_capacity 0: no queue);
- * in the divergence stats build, a last argument: the records' buffer (kernels/divergence.cl) */
+ * with PATH_SORT, two more: the queue's keys and their counts (SORT_KERNEL_ARGS,
+ * kernels/path_sort.cl); in the divergence stats build, a last argument: the records' buffer
+ * (kernels/divergence.cl) */
 #ifdef PATH_QUEUE
 #define FIRST_QUEUED_VERTEX (PATH_QUEUE + 1)
 #else
@@ -467,12 +527,12 @@ void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum
     kernel void name(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *sum,                 \
                      global float4 *sum_sq, global float4 *sum_c, global float4 *sum_sq_c,       \
                      global float4 *queue, volatile global int *counters, int queue_capacity,     \
-                     global float4 *results LOG_KERNEL_ARG)                                      \
+                     global float4 *results SORT_KERNEL_ARGS LOG_KERNEL_ARG)                     \
     {                                                                                            \
         SceneData sc = SCENE_DATA(p.num_spheres, p.layout);                                      \
         COUNT_WORK_INTO(sc);                                                                     \
         LOG_SHADING_INTO(sc);                                                                    \
-        PathQueue q = {queue, counters, queue_capacity, FIRST_QUEUED_VERTEX};                    \
+        PathQueue q = {queue, counters, queue_capacity, FIRST_QUEUED_VERTEX SORT_QUEUE(0)};     \
         render_pixel(&sc, &p, sum, sum_sq, sum_c, sum_sq_c, q, results, nee);                    \
     }
 
@@ -489,6 +549,7 @@ void continue_path(const SceneData *sc, const RenderParams *p, const global floa
     Rng rng = make_rng(start.rng.x, start.rng.y, start.rng.z, p->seed);
     rng.dim = start.rng.w;
     next.depth = steps > 0 ? as_int(start.throughput.w) + steps : -1;
+    LOG_RESUME(sc, as_int(start.throughput.w) - 1);   /* its next iteration: the vertex's */
     int rays = 0, queued = 0;
     float3 l = trace_path(sc, p, &start, &rng, &rays, nee, next, &queued);
 #ifdef TRAVERSAL_STATS
@@ -500,17 +561,21 @@ void continue_path(const SceneData *sc, const RenderParams *p, const global floa
 }
 
 /* One work-item per path the launch could have queued; those beyond the paths in the queue end
- * at once (the host does not wait to read how many there are). */
+ * at once (the host does not wait to read how many there are). With PATH_SORT, work-item i takes
+ * the path in slot order[i] (CONTINUE_SORT_ARGS, kernels/path_sort.cl: sort_paths), so that
+ * neighbouring work-items shade the same material. */
 #define CONTINUE_KERNEL(name, nee)                                                               \
     kernel void name(SCENE_KERNEL_ARGS, const RenderParams p, const global float4 *queue,        \
                      global float4 *next, volatile global int *counters, int pass,                \
-                     int queue_capacity, int steps, global float4 *results)                      \
+                     int queue_capacity, int steps, global float4 *results                       \
+                     CONTINUE_SORT_ARGS LOG_KERNEL_ARG)                                          \
     {                                                                                            \
         SceneData sc = SCENE_DATA(p.num_spheres, p.layout);                                      \
         COUNT_WORK_INTO(sc);                                                                     \
-        PathQueue q = {next, counters + pass + 1, queue_capacity, 0};                            \
+        LOG_SHADING_INTO(sc);                                                                    \
+        PathQueue q = {next, counters + pass + 1, queue_capacity, 0 SORT_QUEUE(pass + 1)};       \
         if (get_global_id(0) < min(counters[pass], queue_capacity))                              \
-            continue_path(&sc, &p, queue, get_global_id(0), q, steps, results, nee);             \
+            continue_path(&sc, &p, queue, QUEUE_SLOT(get_global_id(0)), q, steps, results, nee); \
     }
 
 /* One work-item per pixel, after the passes of continue_paths: adds the launch's samples of the

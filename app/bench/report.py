@@ -76,6 +76,7 @@ class Result:
     trace_split: object = None      # with --trace-split: a pathtrace.bench.trace_split.TraceSplit
     divergence: object = None       # with --divergence: a pathtrace.bench.divergence_stats.DivergenceStats
     path_queue: int = 0             # the render setting (--path-queue; -1: auto)
+    path_sort: bool = False         # the render setting (--path-sort)
     queue_plan: str = ""            # with --path-queue auto: the plan its trials chose, and
                                     # each plan's fastest trial in seconds (pathtrace.rendering.renderer)
 
@@ -127,7 +128,7 @@ def measure(backends, scene, estimator, width, height, spp, builds, rounds: int 
                   width * height * spp / seconds / 1e6, rays / seconds / 1e6,
                   group.bvh_seconds, *builds, render_seconds=render_seconds,
                   render_rounds=times if rounds > 1 else None, mean=float(image.mean()),
-                  path_queue=scene.settings.path_queue, queue_plan="; ".join(group.queue_plans()))
+                  path_queue=scene.settings.path_queue, path_sort=scene.settings.path_sort, queue_plan="; ".join(group.queue_plans()))
 
 
 def kernel_build_times(backend, cold: bool = True):
@@ -141,11 +142,11 @@ def kernel_build_times(backend, cold: bool = True):
 
 def run(device_specs, scene_names, estimators, width, height, spp, together=False, cold=True,
         mitsuba: tuple = None, traversal: bool = False, split: bool = False, path_queue: int = 0,
-        rounds: int = 1, divergence: int = 0, log=print):
+        rounds: int = 1, divergence: int = 0, log=print, path_sort: bool = False):
     """A row per device and scene, or with `together` a row per scene for all the devices
     rendering it as one (the multi-device scaling measurement). mitsuba: (python, variant) to
     time Mitsuba 3 on the rows of the comparison mode with NEE (depth8+nee). path_queue: the
-    render setting (pathtrace render --path-queue) for every row. rounds: the renders timed per
+    render setting (pathtrace render --path-queue) for every row, and path_sort its --path-sort. rounds: the renders timed per
     row, pathtrace's and then Mitsuba's, whose medians count. divergence: the lanes of a warp with
     which to count each row's divergence (app/bench/divergence_stats.py); 0: none."""
     backends = choose_devices(device_specs)
@@ -157,7 +158,7 @@ def run(device_specs, scene_names, estimators, width, height, spp, together=Fals
         for group in groups:
             builds = kernel_build_times(group[0], cold)
             for name in scenes:
-                scene = load_scene(name).with_settings(path_queue=path_queue)
+                scene = load_scene(name).with_settings(path_queue=path_queue, path_sort=path_sort)
                 for est in estimators or [default_estimator(scene)]:
                     r = measure(group, scene, est, width, height, spp, builds, rounds)
                     log(format_row(r))

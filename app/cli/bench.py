@@ -3,7 +3,9 @@
 import argparse
 import sys
 
-from pathtrace.cli.options import _count, _int_range, _size, add_path_queue_option, add_program_option
+from pathtrace.cli.options import (PATH_SORT_ALONE, _count, _int_range, _size, add_path_queue_option,
+                                   add_program_option)
+
 
 def cmd_bench(args):
     from pathtrace.bench import report as bench
@@ -66,11 +68,15 @@ def cmd_bench(args):
             print(f"wrote {args.json}", file=sys.stderr)
         return 0
     width, height = args.size
+    if args.path_sort and not args.path_queue:
+        from pathtrace.errors import UserError
+        raise UserError(PATH_SORT_ALONE)
     print(bench.HEADER)
     results = bench.run(args.device or ["auto"], args.scenes, args.estimator, width, height, args.spp,
                         args.together, not args.no_cold,
                         (args.mitsuba, args.mitsuba_variant) if args.mitsuba else None, args.traversal,
-                        args.trace_split, args.path_queue or 0, args.rounds, args.divergence or 0)
+                        args.trace_split, args.path_queue or 0, args.rounds, args.divergence or 0,
+                        path_sort=args.path_sort)
     if args.json:
         bench.write_json(args.json, results, sys.argv[1:])
         print(f"wrote {args.json}", file=sys.stderr)

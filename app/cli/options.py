@@ -121,6 +121,13 @@ def add_path_queue_option(p: argparse.ArgumentParser, auto: bool = True):
                         "so that a GPU's warps stay full where few paths go on long (the same image; "
                         "faster on some scenes, slower on others: docs/performance.md); 0 = off, the default"
                         + ("; auto: on a GPU, chosen by trial renders before the render" if auto else ""))
+    p.add_argument("--path-sort", action="store_true",
+                   help="with --path-queue: trace the queue's paths in the order of the material each "
+                        "shades next, so that a GPU's warps shade one material at a time (the same image; "
+                        "docs/performance.md)")
+
+
+PATH_SORT_ALONE = "--path-sort sorts the continuation queue's paths: give --path-queue N (N >= 1) or auto too"
 
 
 def _path_queue(text: str) -> int:
@@ -157,9 +164,12 @@ def apply_render_options(scene, args):
                    nee=s.nee if args.nee is None else args.nee,
                    filter=args.filter or s.filter, light_sampler=args.light_sampler or s.light_sampler,
                    path_queue=s.path_queue if args.path_queue is None else args.path_queue,
+                   path_sort=s.path_sort or args.path_sort,
                    integrator=getattr(args, "integrator", None) or s.integrator)
     if not replace(s, **changes).paths_end:
         raise UserError("--rr off needs --max-depth N (N >= 1), or paths would never end")
+    if changes["path_sort"] and not changes["path_queue"]:
+        raise UserError(PATH_SORT_ALONE)
     if not changes["nee"] and scene.lights:
         warn(f"{scene.name}: its {len(scene.lights)} point, spot or directional light(s) are reached by "
              f"next-event estimation only; without it (--no-nee) they light nothing")

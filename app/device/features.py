@@ -54,6 +54,9 @@ class Features:
     path_queue: int = 0                    # paths going on past this many vertices wait in the
                                            # continuation queue (PATH_QUEUE, kernels/integrator.cl;
                                            # the render setting path_queue); 0: no queue
+    path_sort: bool = False                # with path_queue: the queue's paths are sorted by the
+                                           # material they shade next (PATH_SORT,
+                                           # kernels/path_sort.cl; the render setting path_sort)
     bdpt: int = 0                          # bidirectional path tracing (kernels/bdpt.cl) of paths
                                            # up to this depth (app/rendering/bdpt.py); 0: the path tracer alone
     light_tracing: bool = False            # with bdpt: light tracing alone (LIGHT_TRACING), the
@@ -90,6 +93,7 @@ class Features:
                 + ((f"TRAVERSAL_STATS={self.traversal_stats}",) if self.traversal_stats else ())
                 + ((f"DIVERGENCE_STATS={self.divergence_stats}",) if self.divergence_stats else ())
                 + ((f"PATH_QUEUE={self.path_queue}",) if self.path_queue else ())
+                + (("PATH_SORT",) if self.path_sort else ())
                 + ((f"BDPT={self.bdpt}",) if self.bdpt else ()) + (("LIGHT_TRACING",) if self.light_tracing else ()))
 
 

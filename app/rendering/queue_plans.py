@@ -32,15 +32,21 @@ class QueuePlans:
 
     def _size_queue(self):
         """After a change of settings or plan: the continuation queue's buffers sized for whether
-        launches use it (which queue depth does not change)."""
-        if self.width and self._queued_for != self.queue_plan()[1]:
+        launches use it and sort it (which queue depth does not change)."""
+        if self.width and self._queued_for != (self.queue_plan()[1], self.sorts_queue()):
             self._allocate_images(self.width, self.height, self.aovs)
+
+    def sorts_queue(self) -> bool:
+        """Whether launches sort the continuation queue's paths by material (settings.path_sort,
+        kernels/path_sort.cl): only where they use the queue, so that "auto"'s plans without it and
+        BDPT build no sort."""
+        return bool(self.settings.path_sort) and self.queue_plan()[1]
 
     def queue_plan(self) -> tuple:
         """(the queue depth the program is built with, whether launches use the queue): from
         settings.path_queue, or with "auto" the plan its trials chose (no queue until then)."""
-        if self.settings.integrator != "path" or self.divergence_stats:
-            return AUTO_PLANS[0]       # BDPT has no queue; the divergence stats follow the megakernel
+        if self.settings.integrator != "path":
+            return AUTO_PLANS[0]       # BDPT has no queue
         if self.settings.path_queue == PATH_QUEUE_AUTO:
             return self.auto_plan or AUTO_PLANS[0]
         return self.settings.path_queue, self.settings.path_queue > 0

@@ -42,9 +42,13 @@ QUEUE_POOL = 1 << 23      # pixel samples a launch with the queue renders (a few
                           # passes' cost per launch spread (docs/notes/performance-2026-11.md, 2026-11-26)
 QUEUE_GROUP = 64          # work-items per group of continue_paths (32 and 128 were no faster:
                           # docs/notes/performance-2026-11.md, 2026-11-26)
-MAX_QUEUED = 1 << 23      # entries of each of the two queues (PATH_RECORD, 128 bytes; at most a
-                          # sixteenth of the device's memory); paths that find one full go on where
-                          # they are
+MAX_QUEUED = 1 << 23      # entries of each of the two queues (PATH_RECORD, 128 bytes, 144 with
+                          # path_sort; at most a sixteenth of the device's memory); paths that find
+                          # one full go on where they are
+SORT_BUFFERS = ("keys", "keys_next", "order")   # with path_sort, an int per queue entry
+                                                # (kernels/path_sort.cl): the two queues' keys and the
+                                                # sorted order of the queue a pass takes
+SORT_GROUP = 256          # kernels/path_sort.cl: SORT_GROUP, sort_offsets' one work-group
 
 
 def image_buffers(aovs: bool) -> tuple:
@@ -98,6 +102,7 @@ class Renderer(QueuePlans):
         self.traversal_stats = 0  # Features.traversal_stats: set through count_traversal()
         self.divergence_stats = 0 # Features.divergence_stats: set through record_shading(),
         self.shading_records = None   # with the buffer the launches record into
+        self.pass_records = None      # and those of the passes of continue_paths
         self.set_scene(scene, progress)
         self.resize(width or self.scene.settings.width, height or self.scene.settings.height)
 
@@ -153,7 +158,7 @@ class Renderer(QueuePlans):
         (switch_when_built)."""
         features = replace(self.compiled.features(self.settings, self.camera),
                            traversal_stats=self.traversal_stats, divergence_stats=self.divergence_stats,
-                           path_queue=self.queue_plan()[0])
+                           path_queue=self.queue_plan()[0], path_sort=self.sorts_queue())
         mode = self.backend.mode
         self._awaited, self._build_due = None, False
         if self.settings.integrator != "path":
@@ -189,6 +194,8 @@ class Renderer(QueuePlans):
         self.continue_kernels = {False: cl.Kernel(program, "continue_paths"),
                                  True: cl.Kernel(program, "continue_paths_nee")} if queue else None
         self.add_queued = cl.Kernel(program, "add_queued_paths") if queue else None
+        sort = queue and self.sorts_queue()
+        self.sort_kernels = (cl.Kernel(program, "sort_offsets"), cl.Kernel(program, "sort_paths")) if sort else None
         self.aov_kernel = cl.Kernel(program, "render_aovs")
         bidirectional = self.settings.integrator != "path"
         self.bdpt_kernels = (cl.Kernel(program, "render_bdpt"), cl.Kernel(program, "add_splats")) if bidirectional else None
@@ -300,9 +307,14 @@ class Renderer(QueuePlans):
     def _allocate_images(self, width: int, height: int, aovs: bool):
         nbytes = width * height * 16
         images = image_buffers(aovs)
-        entries = PATH_RECORD.itemsize * max(self.queue_capacity(width, height), 1)   # (a buffer has bytes)
+        capacity = max(self.queue_capacity(width, height), 1)       # (a buffer has bytes)
+        entries = self.record_bytes() * capacity
         results = width * height * self.queue_samples(width, height) if self.queue_plan()[1] else 1
         queue = {"queue": entries, "queue_next": entries, "counters": 4 * (QUEUE_PASSES + 2), "results": 16 * results}
+        sort = self.sorts_queue()
+        queue.update({name: 4 * (capacity if sort else 1) for name in SORT_BUFFERS})
+        queue.update(key_counts=4 * ((QUEUE_PASSES + 1) * self.sort_keys() if sort else 1),
+                     offsets=4 * (self.sort_keys() if sort else 1))
         others = {name: b.size for name, b in self._buffers.items()
                   if name not in image_buffers(True) and name not in queue}
         what = f"the {width}x{height} image of {self.scene.name}"
@@ -321,8 +333,17 @@ class Renderer(QueuePlans):
             self._buffers[name] = cl.Buffer(self.backend.context, cl.mem_flags.READ_WRITE, nbytes)
         for name, size in queue.items():
             self._buffers[name] = cl.Buffer(self.backend.context, cl.mem_flags.READ_WRITE, size)
-        self._queued_for = self.queue_plan()[1]
+        self._queued_for = (self.queue_plan()[1], sort)
         self.reset()
+
+    def record_bytes(self) -> int:
+        """Bytes of a queue entry: PATH_RECORD, less its hit where launches do not sort."""
+        return PATH_RECORD.itemsize - (0 if self.sorts_queue() else PATH_RECORD["hit"].itemsize)
+
+    def sort_keys(self) -> int:
+        """The keys by which path_sort sorts (kernels/path_sort.cl: sort_key): the environment and
+        each material row."""
+        return len(self.compiled.materials) + 1
 
     def queue_samples(self, width: int, height: int) -> int:
         """Samples per pixel of a launch with the continuation queue."""
@@ -419,11 +440,12 @@ class Renderer(QueuePlans):
             launch = params.copy()
             launch["sample_start"], launch["sample_count"] = start + offset, min(step, count - offset)
             if queued:
-                events.append(cl.enqueue_fill_buffer(self.backend.queue, b["counters"], np.int32(0), 0,
-                                                     b["counters"].size))
+                for name in ("counters", "key_counts") if self.sort_kernels else ("counters",):
+                    events.append(cl.enqueue_fill_buffer(self.backend.queue, b[name], np.int32(0), 0, b[name].size))
             records = (self.shading_records,) if self.divergence_stats else ()   # (kernels/divergence.cl)
+            sort = (b["keys"], b["key_counts"], np.int32(self.sort_keys())) if self.sort_kernels else ()
             kernel.set_args(*self.scene_args(), launch, *sums, b["queue"], b["counters"], capacity, b["results"],
-                            *records)
+                            *sort, *records)
             events.append(cl.enqueue_nd_range_kernel(self.backend.queue, kernel, global_size, local))
             if queued:
                 events += self._continue_paths(launch, capacity, global_size)
@@ -454,19 +476,39 @@ class Renderer(QueuePlans):
         queued, each taking them from one of the two queues and queueing those that go on in the
         other, then add_queued_paths; returns their events."""
         b, events = self._buffers, []
-        queues = (b["queue"], b["queue_next"])
+        queues, keys = (b["queue"], b["queue_next"]), (b["keys"], b["keys_next"])
         follow = self.continue_kernels[self.settings.nee]
-        rows = int(launch["row_end"] - launch["row_start"])
-        paths = min(int(capacity), self.width * rows * int(launch["sample_count"]))   # at most one a sample
-        size = (-(-paths // QUEUE_GROUP) * QUEUE_GROUP,)
+        size = (self.queue_launch_size(launch, capacity),)
         for k in range(QUEUE_PASSES + 1):
             steps = 1 if k < QUEUE_PASSES else 0
+            sort = ()
+            if self.sort_kernels:
+                events += self._sort_queue(k, keys[k % 2], capacity, size)
+                sort = (b["order"], keys[(k + 1) % 2], b["key_counts"], np.int32(self.sort_keys()))
+            records = (self.pass_records[k],) if self.divergence_stats else ()   # (kernels/divergence.cl)
             follow.set_args(*self.scene_args(), launch, queues[k % 2], queues[(k + 1) % 2], b["counters"],
-                            np.int32(k), capacity, np.int32(steps), b["results"])
+                            np.int32(k), capacity, np.int32(steps), b["results"], *sort, *records)
             events.append(cl.enqueue_nd_range_kernel(self.backend.queue, follow, size, (QUEUE_GROUP,)))
         self.add_queued.set_args(launch, *(b[name] for name in SUM_BUFFERS), b["results"])
         events.append(cl.enqueue_nd_range_kernel(self.backend.queue, self.add_queued, global_size, (8, 8)))
         return events
+
+    def queue_launch_size(self, launch, capacity) -> int:
+        """The work-items of each pass of continue_paths after render launch `launch`: one per path
+        it could have queued, in whole work-groups."""
+        rows = int(launch["row_end"] - launch["row_start"])
+        paths = min(int(capacity), self.width * rows * int(launch["sample_count"]))   # at most one a sample
+        return -(-paths // QUEUE_GROUP) * QUEUE_GROUP
+
+    def _sort_queue(self, k: int, keys: cl.Buffer, capacity, size: tuple) -> list:
+        """Queues the counting sort of the queue that pass k takes (kernels/path_sort.cl): its keys'
+        first positions from their counts, then the order of its slots by key; returns the events."""
+        b = self._buffers
+        offsets, scatter = self.sort_kernels
+        offsets.set_args(b["key_counts"], np.int32(k), np.int32(self.sort_keys()), b["offsets"])
+        scatter.set_args(keys, b["counters"], np.int32(k), capacity, b["offsets"], b["order"])
+        return [cl.enqueue_nd_range_kernel(self.backend.queue, offsets, (SORT_GROUP,), (SORT_GROUP,)),
+                cl.enqueue_nd_range_kernel(self.backend.queue, scatter, size, (QUEUE_GROUP,))]
 
     def finish(self):
         self.backend.queue.finish()
@@ -529,12 +571,15 @@ class Renderer(QueuePlans):
         self._select_program()
         self.reset()
 
-    def record_shading(self, records: cl.Buffer, iterations: int):
+    def record_shading(self, records: cl.Buffer, iterations: int, pass_records: tuple = None):
         """From now on, the path tracer's launches record the shading of the first `iterations`
         iterations of each path into `records` (app/bench/divergence_stats.py, kernels/divergence.cl:
-        one byte per sample of the launch, iteration, field and work-item of launch_grid), without
-        the continuation queue, whose kernels record nothing; `iterations` 0: no more. Resets."""
+        one byte per sample of the launch, iteration, field and work-item of launch_grid), and
+        where launches use the continuation queue, pass k of continue_paths into pass_records[k]
+        (the same as one sample, its work-items those of queue_launch_size); `iterations` 0: no
+        more. Resets."""
         self.divergence_stats, self.shading_records = iterations, records if iterations else None
+        self.pass_records = pass_records if iterations else None
         self._select_program()
         self._size_queue()
         self.reset()

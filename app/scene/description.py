@@ -43,6 +43,9 @@ class RenderSettings:
                                   # (kernels/integrator.cl, PATH_QUEUE): the same image, sooner on
                                   # GPUs where few paths go on long; 0: no queue;
                                   # PATH_QUEUE_AUTO: chosen by trial renders on GPUs
+    path_sort: bool = False       # the queue's paths traced on in the order of the material they
+                                  # shade next (kernels/path_sort.cl, PATH_SORT): the same image;
+                                  # only where launches use the queue
     integrator: str = "path"      # one of INTEGRATORS
 
     @property
