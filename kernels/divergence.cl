@@ -104,8 +104,8 @@ void log_texture_lookup(const SceneData *sc)
 #define LOG_SHADING_INTO(sc) struct ShadingLog log_ = {shading_records, 0, -1}; (sc).shading_log = &log_
 #define LOG_SAMPLE(sc, i) if ((sc)->shading_log) { (sc)->shading_log->sample = (i); (sc)->shading_log->iteration = -1; }
 #define LOG_ITERATION(sc) log_iteration(sc)
-/* a path taken from the continuation queue: its next iteration is `iteration` */
-#define LOG_RESUME(sc, iteration) if ((sc)->shading_log) { (sc)->shading_log->iteration = (iteration) - 1; }
+/* a path taken from the continuation queue: its next iteration is `next` */
+#define LOG_RESUME(sc, next) if ((sc)->shading_log) { (sc)->shading_log->iteration = (next) - 1; }
 #define LOG_SHADED(sc, code) log_value(sc, LOG_SHADING, code)
 #define LOG_BSDF(sc, prim, type) log_bsdf(sc, prim, type)
 #define LOG_LIGHT_SAMPLED(sc, ls) \
@@ -116,7 +116,7 @@ void log_texture_lookup(const SceneData *sc)
 #define LOG_SHADING_INTO(sc)
 #define LOG_SAMPLE(sc, i)
 #define LOG_ITERATION(sc)
-#define LOG_RESUME(sc, iteration)
+#define LOG_RESUME(sc, next)
 #define LOG_SHADED(sc, code)
 #define LOG_BSDF(sc, prim, type)
 #define LOG_LIGHT_SAMPLED(sc, ls)

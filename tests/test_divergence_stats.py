@@ -157,9 +157,8 @@ def test_one_diffuse_material_shades_one_type_where_every_active_lane_shades(bac
 
 @pytest.mark.specialised
 def test_the_stats_build_renders_the_same_samples(backend):
-    """The same image with the records as without; the records follow the megakernel, so that a
-    scene set to the path queue renders without it while they are taken."""
-    scene = halves_scene(diffuse(0.5), phong(0.3, 0.3, 20.0)).with_settings(path_queue=1)
+    """The same image with the records as without (with the path queue: tests/test_path_sort.py)."""
+    scene = halves_scene(diffuse(0.5), phong(0.3, 0.3, 20.0))
     r = Renderer(backend, scene, 24, 16)
     r.add_samples(2)
     plain = r.mean()
@@ -170,7 +169,6 @@ def test_the_stats_build_renders_the_same_samples(backend):
     cl.enqueue_fill_buffer(backend.queue, records, np.uint8(0), 0, size)
     r.record_shading(records, 4)
     assert r.kernels[True].get_info(cl.kernel_info.NUM_ARGS) == arguments + 1   # the records: the stats build's alone
-    assert r.queue_plan() == (0, False)
     r.add_samples(2)
     assert np.array_equal(r.mean(), plain)          # the same paths, only recorded
     host = np.empty((2, 4, len(FIELDS), columns * rows), np.uint8)

@@ -38,10 +38,13 @@ The metrics (each a ratio of sums, hence a mean over warp-executions):
   grad_bitmap, a bilinear one reading four texels; opacity masks met by the path's rays included)
   over the lanes tracing a ray, i.e. per ray of a path (shadow rays are not counted as rays).
 
-The records follow the megakernel's loop: a scene set to the continuation queue (path_queue),
-whose compaction is what would regroup the paths, renders without it while they are taken.
-Paths longer than the iterations recorded go on unrecorded (the kernels record one iteration
-more, which says how many: DivergenceStats.unrecorded)."""
+With the continuation queue (path_queue), the render launch records the iterations before a
+path waits, and each pass of continue_paths those it traces: its work-items, a queue entry each,
+form warps as 1-D work-groups do (consecutive ids), so that the figures show how the queue's
+compaction, and with path_sort its sorting by material (kernels/path_sort.cl), regroup the
+paths. A pass's warp-iterations count as the iteration its paths are at, numbered from the
+camera ray as the megakernel's. Paths longer than the iterations recorded go on unrecorded (the
+kernels record one iteration more, which says how many: DivergenceStats.unrecorded)."""
 
 from dataclasses import dataclass
 
@@ -49,7 +52,7 @@ import numpy as np
 import pyopencl as cl
 
 from pathtrace.errors import UserError
-from pathtrace.rendering.renderer import MAX_LAUNCH_SAMPLES, PIXEL_GROUP, Renderer
+from pathtrace.rendering.renderer import MAX_LAUNCH_SAMPLES, PIXEL_GROUP, QUEUE_PASSES, Renderer
 
 FIELDS = ("shading", "textures", "light", "material low", "material high")   # kernels/divergence.cl: LOG_*
 SHADING_NAMES = {1: "traced, ended", 2: "escaped", 3: "last vertex", 4: "null surface", 5: "medium"}
@@ -202,16 +205,33 @@ def divergence_stats(backend, scene, width: int, height: int, spp: int, warp: in
     (columns, rows), _ = renderer.launch_grid(height)
     recorded = len(tally.executions) + 1                 # one more, to count the paths that go on
     per_sample = recorded * len(FIELDS) * columns * rows
-    batch = max(1, min(spp, MAX_LAUNCH_SAMPLES, RECORD_BYTES // per_sample))
+    queued = renderer.queue_plan()[1]
+    # with the queue, each pass records a sample's paths as one (at most one queue entry each)
+    per_pass_sample = recorded * len(FIELDS) * width * height if queued else 0
+    batch = max(1, min(spp, MAX_LAUNCH_SAMPLES, RECORD_BYTES // (per_sample + (QUEUE_PASSES + 1) * per_pass_sample)))
+    if queued:
+        batch = min(batch, renderer.queue_samples(width, height))     # one render launch a batch
+
+    def pass_lanes(count):    # the work-items of each pass after a launch of `count` samples
+        launch = {"row_start": 0, "row_end": height, "sample_count": count}
+        return renderer.queue_launch_size(launch, renderer.queue_capacity(width, height))
+
     records = cl.Buffer(backend.context, cl.mem_flags.READ_WRITE, batch * per_sample)
-    renderer.record_shading(records, recorded)
+    passes = tuple(cl.Buffer(backend.context, cl.mem_flags.READ_WRITE, recorded * len(FIELDS) * pass_lanes(batch))
+                   for _ in range(QUEUE_PASSES + 1)) if queued else ()
+    renderer.record_shading(records, recorded, passes)
     host = np.empty((batch, recorded, len(FIELDS), columns * rows), np.uint8)
     for start in range(0, spp, batch):
         count = min(batch, spp - start)
-        cl.enqueue_fill_buffer(backend.queue, records, np.uint8(0), 0, batch * per_sample)
+        for buffer in (records, *passes):
+            cl.enqueue_fill_buffer(backend.queue, buffer, np.uint8(0), 0, buffer.size)
         renderer.add_samples(count)
         cl.enqueue_copy(backend.queue, host, records)
         tally.add(host[:count])
+        for buffer in passes:
+            taken = np.empty((1, recorded, len(FIELDS), pass_lanes(count)), np.uint8)
+            cl.enqueue_copy(backend.queue, taken, buffer)
+            tally.add(taken)
     renderer.finish()
     return tally.stats(width * height * spp)
 

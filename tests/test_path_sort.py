@@ -1,0 +1,148 @@
+"""Shading sorted by material (render setting path_sort, kernels/path_sort.cl PATH_SORT): the
+continuation queue's paths trace their ray before they wait, keyed by the material row they hit,
+and each pass of continue_paths takes them in the order of a counting sort by key. A path's
+random numbers travel with it, so the image is the megakernel's up to the order in which a
+pixel's samples are summed, and the rays traced are the same."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pyopencl as cl
+import pytest
+
+from pathtrace.bench.divergence_stats import divergence_stats
+from pathtrace.device.features import Features
+from pathtrace.rendering import renderer as renderer_module
+from pathtrace.rendering.renderer import Renderer
+from pathtrace.scene import load_scene
+from tests.stats import z_test
+from tests.test_path_queue import SCENES, SIZE, SPP, assert_same_render, render
+
+pytestmark = pytest.mark.specialised     # the queue is in the scenes' own programs alone
+
+
+def sorted_render(backend, scene, path_queue=1, spp=SPP):
+    return render(backend, scene.with_settings(path_sort=True), path_queue, spp)
+
+
+@pytest.mark.parametrize("name, settings, depth", [
+    ("material-spheres", dict(max_depth=6, russian_roulette="off"), 1),  # glass and metals
+    ("teapot-textured", dict(), 2),                                      # textures, Russian roulette
+    (str(SCENES / "media-fog.xml"), dict(), 1),                          # media: a flight from the stored hit
+    (str(SCENES / "instances.xml"), dict(), 1),                          # a two-level BVH: the hit's instance
+    (str(SCENES / "masks.xml"), dict(nee=False), 1),                     # alpha masks, the report's estimator
+])
+def test_sorted_paths_render_the_megakernels_image(backend, name, settings, depth):
+    scene = load_scene(name).with_settings(**settings)
+    plain = render(backend, scene, 0)
+    assert plain[0][..., 3].sum() == SIZE[0] * SIZE[1] * SPP
+    assert_same_render(plain, sorted_render(backend, scene, depth))
+
+
+def test_paths_that_find_the_sorted_queue_full_go_on_from_their_hit(backend, monkeypatch):
+    scene = load_scene("material-spheres").with_settings(max_depth=6, russian_roulette="off")
+    plain = render(backend, scene, 0)
+    monkeypatch.setattr(renderer_module, "MAX_QUEUED", 16)
+    assert_same_render(plain, sorted_render(backend, scene))
+
+
+def test_the_sorted_render_agrees_with_the_unsorted_one_in_expectation(backend):
+    """Independent samples (other seeds) of the sorted and the unsorted queue: the same
+    expectation pixel by pixel, by the variance of each mean."""
+    scene = load_scene("material-spheres").with_settings(max_depth=6, russian_roulette="off")
+    images = []
+    for seed, sort in ((0, False), (1, True)):
+        r = Renderer(backend, scene.with_settings(path_queue=1, path_sort=sort, seed=seed), 32, 24)
+        r.add_samples(64)
+        images.append((r.mean(), r.variance() / r.samples))
+    (m, v), (ref, ref_v) = images
+    assert not np.array_equal(m, ref)                      # the seeds drew other samples
+    ok, p, threshold = z_test(m, v, ref, ref_v, block=4)
+    assert ok, (p, threshold)
+
+
+def read_ints(backend, r, name) -> np.ndarray:
+    buffer = r.buffer(name)
+    out = np.empty(buffer.size // 4, np.int32)
+    cl.enqueue_copy(backend.queue, out, buffer)
+    return out
+
+
+def test_each_pass_takes_its_queue_in_the_order_of_the_keys(backend):
+    """After a launch, `order` holds the sort of the queue that the last pass took: a permutation
+    of its slots whose keys do not decrease, each key counted as often as it occurs, and each key
+    1 + the material row of the primitive stored as the path's hit (0: none)."""
+    scene = load_scene("material-spheres").with_settings(max_depth=6, russian_roulette="off")
+    _, _, r = sorted_render(backend, scene)
+    k, capacity, keys_of = renderer_module.QUEUE_PASSES, r.queue_capacity(*SIZE), r.sort_keys()
+    count = min(int(read_ints(backend, r, "counters")[k]), capacity)
+    assert count > 100                                     # paths went on to the last pass
+    order = read_ints(backend, r, "order")[:count]
+    keys = read_ints(backend, r, ("keys", "keys_next")[k % 2])[:count]
+    assert np.array_equal(np.sort(order), np.arange(count))
+    assert np.all(np.diff(keys[order]) >= 0)
+    assert len(np.unique(keys)) > 3                        # several materials waited
+    counts = read_ints(backend, r, "key_counts")[k * keys_of:(k + 1) * keys_of]
+    assert np.array_equal(counts, np.bincount(keys, minlength=keys_of))
+    # the queue's structure of arrays (kernels/integrator.cl: store_path): field f of slot s at f * capacity + s
+    fields = np.empty((r.record_bytes() // 16, capacity, 4), np.float32)
+    cl.enqueue_copy(backend.queue, fields, r.buffer(("queue", "queue_next")[k % 2]))
+    prims = fields[renderer_module.PATH_RECORD.names.index("prev_x"), :count, 3].view(np.int32)
+    assert np.array_equal(keys, np.where(prims >= 0, r.compiled.prim_material[np.maximum(prims, 0)] + 1, 0))
+
+
+def test_sorting_shades_fewer_materials_per_warp(backend):
+    """The divergence records follow the queue's passes: the same paths, hence the same lanes at
+    each iteration and branch, as the megakernel's; sorted, a warp of the passes shades fewer
+    material rows and BSDF types an iteration than unsorted."""
+    scene = load_scene("material-spheres").with_settings(max_depth=5, russian_roulette="off")
+    plain, queued, ordered = (divergence_stats(backend, scene.with_settings(path_queue=q, path_sort=s), 32, 24, 2)
+                              for q, s in ((0, False), (1, False), (1, True)))
+    lanes = [{b.name: b.lanes for b in s.branches} for s in (plain, queued, ordered)]
+    assert lanes[0] == lanes[1] == lanes[2]
+    for k in range(1, 4):   # the passes shade vertices 2 to 4 (iterations 1 to 3); vertex 5 is the last, unshaded
+        a, b = ordered.per_iteration[k], queued.per_iteration[k]
+        assert a.distinct_materials < b.distinct_materials and a.distinct_bsdfs < b.distinct_bsdfs, (k, a, b)
+        assert a.shading_efficiency > b.shading_efficiency, (k, a, b)
+
+
+def test_the_setting_sizes_the_sort_and_the_hits(backend):
+    scene = load_scene("cornell-box").with_settings(max_depth=5, russian_roulette="off", path_queue=1)
+    r = Renderer(backend, scene, *SIZE)
+    unsorted = r.buffer("queue").size
+    assert r.buffer("order").size == 4
+    r.set_settings(path_sort=True)
+    capacity = r.queue_capacity(*SIZE)
+    assert r.buffer("queue").size == renderer_module.PATH_RECORD.itemsize * capacity == unsorted + 16 * capacity
+    assert r.buffer("order").size == r.buffer("keys_next").size == 4 * capacity
+    assert r.buffer("key_counts").size == 4 * r.sort_keys() * (renderer_module.QUEUE_PASSES + 1)
+    r.set_settings(path_queue=0)        # no queue, no sort
+    assert not r.sorts_queue() and r.buffer("order").size == 4
+
+
+def test_programs_without_the_setting_compile_no_sort():
+    assert "PATH_SORT" not in Features(path_queue=1).defines()
+    assert "PATH_SORT" in Features(path_queue=1, path_sort=True).defines()
+
+
+def test_the_sort_needs_the_queue(tmp_path):
+    r = subprocess.run([sys.executable, "-m", "pathtrace", "render", "cornell-box", "--size", "8x8", "--spp", "1",
+                        "--path-sort", "-q", "-o", str(tmp_path / "x.exr")], capture_output=True, text=True)
+    assert r.returncode != 0 and not (tmp_path / "x.exr").exists()
+    assert r.stderr.strip().splitlines()[-1].endswith("--path-sort sorts the continuation queue's paths: "
+                                                      "give --path-queue N (N >= 1) or auto too")
+
+
+def test_render_command_takes_the_setting(tmp_path):
+    """`pathtrace render --path-queue 1 --path-sort` renders the image it renders without."""
+    from pathtrace.io.images import read_hdr
+    images = []
+    for extra in ((), ("--path-queue", "1", "--path-sort")):
+        out = tmp_path / f"s{len(extra)}.exr"
+        r = subprocess.run([sys.executable, "-m", "pathtrace", "render", "cornell-box", "--size", "24x16", "--spp", "4",
+                            "--max-depth", "6", "--rr", "off", *extra, "-q", "-o", str(out)],
+                           capture_output=True, text=True)
+        assert r.returncode == 0, r.stderr
+        images.append(read_hdr(out, "test"))
+    np.testing.assert_allclose(images[1], images[0], rtol=1e-5, atol=1e-6)
