@@ -210,7 +210,9 @@ PathRecord start_path(const RenderParams *p, float3 o, float3 d, Rng *rng)
     path.ratios.w = as_float(min((int)(next_uniform4(rng).x * 3.0f), 2));
 #endif
     path.rng = (uint4)(rng->key.xyz, rng->dim);
+#ifdef PATH_SORT
     path.hit = (float4)(0.0f);                                   /* its ray not traced */
+#endif
     return path;
 }
 
