@@ -75,7 +75,7 @@ def test_each_pass_takes_its_queue_in_the_order_of_the_keys(backend):
     1 + the material row of the primitive stored as the path's hit (0: none)."""
     scene = load_scene("material-spheres").with_settings(max_depth=6, russian_roulette="off")
     _, _, r = sorted_render(backend, scene)
-    k, capacity, keys_of = renderer_module.QUEUE_PASSES, r.queue_capacity(*SIZE), r.sort_keys()
+    k, capacity, keys_of = r.queue_passes(), r.queue_capacity(*SIZE), r.sort_keys()
     count = min(int(read_ints(backend, r, "counters")[k]), capacity)
     assert count > 100                                     # paths went on to the last pass
     order = read_ints(backend, r, "order")[:count]
@@ -116,7 +116,12 @@ def test_the_setting_sizes_the_sort_and_the_hits(backend):
     capacity = r.queue_capacity(*SIZE)
     assert r.buffer("queue").size == renderer_module.PATH_RECORD.itemsize * capacity == unsorted + 16 * capacity
     assert r.buffer("order").size == r.buffer("keys_next").size == 4 * capacity
-    assert r.buffer("key_counts").size == 4 * r.sort_keys() * (renderer_module.QUEUE_PASSES + 1)
+    assert r.queue_passes() == 5 - 1 - 1          # vertices 2 to 4 shaded a pass each, then the last
+    assert r.buffer("key_counts").size == 4 * r.sort_keys() * (r.queue_passes() + 1)
+    r.set_settings(max_depth=7)
+    assert r.queue_passes() == 5 and r.buffer("counters").size == 4 * (5 + 2)
+    r.set_settings(max_depth=0, russian_roulette="throughput")
+    assert r.queue_passes() == renderer_module.SORT_PASSES
     r.set_settings(path_queue=0)        # no queue, no sort
     assert not r.sorts_queue() and r.buffer("order").size == 4
 

@@ -52,7 +52,7 @@ import numpy as np
 import pyopencl as cl
 
 from pathtrace.errors import UserError
-from pathtrace.rendering.renderer import MAX_LAUNCH_SAMPLES, PIXEL_GROUP, QUEUE_PASSES, Renderer
+from pathtrace.rendering.renderer import MAX_LAUNCH_SAMPLES, PIXEL_GROUP, Renderer
 
 FIELDS = ("shading", "textures", "light", "material low", "material high")   # kernels/divergence.cl: LOG_*
 SHADING_NAMES = {1: "traced, ended", 2: "escaped", 3: "last vertex", 4: "null surface", 5: "medium"}
@@ -208,7 +208,8 @@ def divergence_stats(backend, scene, width: int, height: int, spp: int, warp: in
     queued = renderer.queue_plan()[1]
     # with the queue, each pass records a sample's paths as one (at most one queue entry each)
     per_pass_sample = recorded * len(FIELDS) * width * height if queued else 0
-    batch = max(1, min(spp, MAX_LAUNCH_SAMPLES, RECORD_BYTES // (per_sample + (QUEUE_PASSES + 1) * per_pass_sample)))
+    passes = renderer.queue_passes() + 1
+    batch = max(1, min(spp, MAX_LAUNCH_SAMPLES, RECORD_BYTES // (per_sample + passes * per_pass_sample)))
     if queued:
         batch = min(batch, renderer.queue_samples(width, height))     # one render launch a batch
 
@@ -218,7 +219,7 @@ def divergence_stats(backend, scene, width: int, height: int, spp: int, warp: in
 
     records = cl.Buffer(backend.context, cl.mem_flags.READ_WRITE, batch * per_sample)
     passes = tuple(cl.Buffer(backend.context, cl.mem_flags.READ_WRITE, recorded * len(FIELDS) * pass_lanes(batch))
-                   for _ in range(QUEUE_PASSES + 1)) if queued else ()
+                   for _ in range(passes)) if queued else ()
     renderer.record_shading(records, recorded, passes)
     host = np.empty((batch, recorded, len(FIELDS), columns * rows), np.uint8)
     for start in range(0, spp, batch):

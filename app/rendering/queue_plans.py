@@ -32,8 +32,8 @@ class QueuePlans:
 
     def _size_queue(self):
         """After a change of settings or plan: the continuation queue's buffers sized for whether
-        launches use it and sort it (which queue depth does not change)."""
-        if self.width and self._queued_for != (self.queue_plan()[1], self.sorts_queue()):
+        launches use it and sort it, and for its passes (which queue depth does not change)."""
+        if self.width and self._queued_for != (self.queue_plan()[1], self.sorts_queue(), self.queue_passes()):
             self._allocate_images(self.width, self.height, self.aovs)
 
     def sorts_queue(self) -> bool:

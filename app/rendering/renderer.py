@@ -49,6 +49,7 @@ SORT_BUFFERS = ("keys", "keys_next", "order")   # with path_sort, an int per que
                                                 # (kernels/path_sort.cl): the two queues' keys and the
                                                 # sorted order of the queue a pass takes
 SORT_GROUP = 256          # kernels/path_sort.cl: SORT_GROUP, sort_offsets' one work-group
+SORT_PASSES = 16          # with path_sort, the most passes of one vertex (queue_passes)
 
 
 def image_buffers(aovs: bool) -> tuple:
@@ -310,10 +311,11 @@ class Renderer(QueuePlans):
         capacity = max(self.queue_capacity(width, height), 1)       # (a buffer has bytes)
         entries = self.record_bytes() * capacity
         results = width * height * self.queue_samples(width, height) if self.queue_plan()[1] else 1
-        queue = {"queue": entries, "queue_next": entries, "counters": 4 * (QUEUE_PASSES + 2), "results": 16 * results}
+        passes = self.queue_passes()
+        queue = {"queue": entries, "queue_next": entries, "counters": 4 * (passes + 2), "results": 16 * results}
         sort = self.sorts_queue()
         queue.update({name: 4 * (capacity if sort else 1) for name in SORT_BUFFERS})
-        queue.update(key_counts=4 * ((QUEUE_PASSES + 1) * self.sort_keys() if sort else 1),
+        queue.update(key_counts=4 * ((passes + 1) * self.sort_keys() if sort else 1),
                      offsets=4 * (self.sort_keys() if sort else 1))
         others = {name: b.size for name, b in self._buffers.items()
                   if name not in image_buffers(True) and name not in queue}
@@ -333,8 +335,20 @@ class Renderer(QueuePlans):
             self._buffers[name] = cl.Buffer(self.backend.context, cl.mem_flags.READ_WRITE, nbytes)
         for name, size in queue.items():
             self._buffers[name] = cl.Buffer(self.backend.context, cl.mem_flags.READ_WRITE, size)
-        self._queued_for = (self.queue_plan()[1], sort)
+        self._queued_for = (self.queue_plan()[1], sort, passes)
         self.reset()
+
+    def queue_passes(self) -> int:
+        """The passes of continue_paths that trace one vertex each, before the last, which traces
+        the paths to their ends: QUEUE_PASSES; with path_sort, one for every vertex its paths can
+        shade past the render launch's and before max_depth (at most SORT_PASSES), since a pass
+        sorts its paths by the material of its first vertex alone, and the warps of the last pass
+        diverge again after it (docs/notes/performance-2026-11.md, 2026-11-29: shading sorted by
+        material)."""
+        if not self.sorts_queue():
+            return QUEUE_PASSES
+        depth = self.settings.max_depth
+        return max(1, min(SORT_PASSES, depth - self.queue_plan()[0] - 1 if depth > 0 else SORT_PASSES))
 
     def record_bytes(self) -> int:
         """Bytes of a queue entry: PATH_RECORD, less its hit where launches do not sort."""
@@ -479,8 +493,9 @@ class Renderer(QueuePlans):
         queues, keys = (b["queue"], b["queue_next"]), (b["keys"], b["keys_next"])
         follow = self.continue_kernels[self.settings.nee]
         size = (self.queue_launch_size(launch, capacity),)
-        for k in range(QUEUE_PASSES + 1):
-            steps = 1 if k < QUEUE_PASSES else 0
+        passes = self.queue_passes()
+        for k in range(passes + 1):
+            steps = 1 if k < passes else 0
             sort = ()
             if self.sort_kernels:
                 events += self._sort_queue(k, keys[k % 2], capacity, size)
