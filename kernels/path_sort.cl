@@ -7,14 +7,16 @@
  * --divergence` measured why: on Bitterli's classroom a warp shaded 2.7 to 3 BSDF types and 6 to
  * 7 material rows each iteration, a shading SIMD efficiency of 0.29 (docs/notes/
  * performance-2026-11.md, 2026-11-29). This is the wavefront design of Laine, Karras and Aila
- * 2013 ("Megakernels Considered Harmful", HPG, section 4: a queue per material, so that each
- * material's kernel runs on full warps), of pbrt-v4's GPU integrator (src/pbrt/wavefront/
- * integrator.cpp: after intersection each ray is pushed to the queue of its material's type, one
- * kernel per type) and of Cycles (intern/cycles/integrator/path_trace_work_gpu.cpp: the shading
- * kernels take their paths through an index array sorted by shader, a counting sort by key).
- * As Cycles does, the records stay where they were written and only their order is sorted: the
- * paths' results do not depend on which work-item traces them, so the image is the unsorted
- * queue's exactly.
+ * 2013 ("Megakernels Considered Harmful", HPG: a queue per material, whose kernel runs on full
+ * warps), of pbrt-v4's wavefront integrator (src/pbrt/wavefront/intersect.h:
+ * EnqueueWorkAfterIntersection pushes each hit to the queue of its material's type;
+ * surfscatter.cpp: EvaluateMaterialsAndBSDFs runs one kernel per type over its queue) and of
+ * Cycles (intern/cycles/integrator/path_trace_work_gpu.cpp: compute_sorted_queued_paths, "array
+ * of active paths, sorted by shader", through which the shading kernel takes its paths). As
+ * Cycles does, the records stay where they were written and only an index array is sorted. The
+ * key is the material row, finer than pbrt-v4's type: rows of one type differ in parameters and
+ * textures, and bench --divergence counted 6 to 7 rows against 3 types a warp. A path's result
+ * does not depend on which work-item traces it, so the sorted queue renders the unsorted one's samples.
  *
  * The counting sort, per queue: the kernel that queues a path stores its key beside it and
  * counts it (enqueue_path); sort_offsets turns the counts into the first position of each key
@@ -23,7 +25,6 @@
  * define none of this is compiled: the macros at the end are empty. */
 
 #ifdef PATH_SORT
-#define SORT_GROUP 256     /* the work-items of sort_offsets' one work-group */
 
 /* The key of a path whose ray hit primitive `prim` (-1: nothing): 0 for the environment, else
  * 1 + the material row it shades there (a blend's own row: the component it picks differs from
@@ -46,13 +47,14 @@ Hit resumed_hit(const PathRecord *r)
 }
 
 /* offsets[k] = the sum of counts[pass * num_keys + j] over j < k, for the num_keys keys of the
- * queue filled by pass `pass` (0: the render launch), in one work-group of SORT_GROUP: each
- * work-item sums a run of keys, one sums the runs' totals, each writes its run's offsets. */
-kernel void sort_offsets(const global int *key_counts, int pass, int num_keys, global int *offsets)
+ * queue filled by pass `pass` (0: the render launch), in one work-group (app/rendering/renderer.py:
+ * SORT_GROUP work-items, `runs` an int of local memory each): each work-item sums a run of keys,
+ * one sums the runs' totals, each writes its run's offsets. */
+kernel void sort_offsets(const global int *key_counts, int pass, int num_keys, global int *offsets,
+                         local int *runs)
 {
-    local int runs[SORT_GROUP];
     const global int *counts = key_counts + pass * num_keys;
-    int i = get_local_id(0), run = (num_keys + SORT_GROUP - 1) / SORT_GROUP;
+    int i = get_local_id(0), group = get_local_size(0), run = (num_keys + group - 1) / group;
     int first = min(i * run, num_keys), end = min(first + run, num_keys);
     int sum = 0;
     for (int k = first; k < end; ++k)
@@ -61,7 +63,7 @@ kernel void sort_offsets(const global int *key_counts, int pass, int num_keys, g
     barrier(CLK_LOCAL_MEM_FENCE);
     if (i == 0) {
         int total = 0;
-        for (int j = 0; j < SORT_GROUP; ++j) {
+        for (int j = 0; j < group; ++j) {
             int n = runs[j];
             runs[j] = total;
             total += n;

@@ -48,7 +48,7 @@ MAX_QUEUED = 1 << 23      # entries of each of the two queues (PATH_RECORD, 128 
 SORT_BUFFERS = ("keys", "keys_next", "order")   # with path_sort, an int per queue entry
                                                 # (kernels/path_sort.cl): the two queues' keys and the
                                                 # sorted order of the queue a pass takes
-SORT_GROUP = 256          # kernels/path_sort.cl: SORT_GROUP, sort_offsets' one work-group
+SORT_GROUP = 256          # the work-items of sort_offsets' one work-group (kernels/path_sort.cl)
 SORT_PASSES = 16          # with path_sort, the most passes of one vertex (queue_passes)
 
 
@@ -520,7 +520,8 @@ class Renderer(QueuePlans):
         first positions from their counts, then the order of its slots by key; returns the events."""
         b = self._buffers
         offsets, scatter = self.sort_kernels
-        offsets.set_args(b["key_counts"], np.int32(k), np.int32(self.sort_keys()), b["offsets"])
+        offsets.set_args(b["key_counts"], np.int32(k), np.int32(self.sort_keys()), b["offsets"],
+                         cl.LocalMemory(4 * SORT_GROUP))
         scatter.set_args(keys, b["counters"], np.int32(k), capacity, b["offsets"], b["order"])
         return [cl.enqueue_nd_range_kernel(self.backend.queue, offsets, (SORT_GROUP,), (SORT_GROUP,)),
                 cl.enqueue_nd_range_kernel(self.backend.queue, scatter, size, (QUEUE_GROUP,))]
