@@ -202,6 +202,7 @@ ODD_VALUES = ["0", "-1", "2**64", "1.5", "float('nan')", "float('inf')", "None",
               "object()", "np.zeros(3)", "np.array([0, 0, 0])", "10**400 if False else 1e308"]
 FIELDS = ["s.settings.width", "s.settings.height", "s.settings.spp", "s.settings.seed", "s.settings.max_depth",
           "s.settings.russian_roulette", "s.settings.nee", "s.settings.light_sampler", "s.settings.path_queue",
+          "s.settings.path_sort",
           "s.camera.eye", "s.camera.look_at", "s.camera.up", "s.camera.vfov", "s.camera",
           "s.spheres[0, 0]", "s.spheres[0, 3]", "s.meshes[0].faces[0, 1]", "s.meshes[0].vertices[1, 2]",
           "s.meshes[0].normals", "s.meshes[0].material", "s.sphere_material[0]", "s.materials[0]",
