@@ -16,7 +16,7 @@ from pathtrace.rendering import renderer as renderer_module
 from pathtrace.errors import UserError
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
-from pathtrace.scene.description import PATH_QUEUE_AUTO
+from pathtrace.rendering.choices import PATH_QUEUE_AUTO
 from pathtrace.bench.traversal_stats import traversal_stats
 
 pytestmark = pytest.mark.specialised     # the queue is in the scenes' own programs alone
