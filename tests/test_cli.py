@@ -1,10 +1,14 @@
 """The command line: renders, and one clear message with a non-zero exit for each bad input."""
 
+import contextlib
+import io
 import os
 import shlex
+import signal
 import stat
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -16,8 +20,47 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def pathtrace(*args, cwd=ROOT):
+    """`python -m pathtrace ARGS`, the real entry point, in a process of its own: for what only a
+    process shows (its exit status as the shell sees it, what a driver prints, signals, the
+    interpreter's exit)."""
     return subprocess.run([sys.executable, "-m", "pathtrace", *map(str, args)], cwd=cwd,
                           capture_output=True, text=True, timeout=300)
+
+
+def in_process(*args, cwd=ROOT):
+    """The same command run by pathtrace.cli.main.main in this process, as the result of
+    `pathtrace`: a process's start and imports (about a second of CPU each) spared for the
+    tests of messages and exit statuses (issue #60; test_in_process_runs_are_what_the_entry_point_prints
+    compares the two). The status is main()'s, or that of the SystemExit argparse raises;
+    Python's warnings are printed, each once (as tests/fuzz_batch.py runs its cases), where a
+    process would print most and pytest would keep them; an exception that escapes main() (a
+    traceback in a process) fails the test. What a command may change of the process is put
+    back: the current folder, the environment (--program sets PATHTRACE_PROGRAM), the SIGINT and
+    SIGTERM handlers (a finished write ignores both: pathtrace.cli.interrupts.FinalWrite) and the
+    devices the API keeps open (their program mode is the environment's when opened)."""
+    from pathtrace import api
+    from pathtrace.cli.main import main
+    out, err = io.StringIO(), io.StringIO()
+    folder, environ, backends = os.getcwd(), dict(os.environ), dict(api._backends)
+    handlers = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    os.chdir(cwd)
+    try:
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), warnings.catch_warnings():
+            warnings.simplefilter("default")
+            try:
+                code = main([str(a) for a in args])
+            except SystemExit as e:
+                code = 0 if e.code is None else e.code
+    finally:
+        os.chdir(folder)
+        for name in set(os.environ) - set(environ):
+            del os.environ[name]
+        os.environ.update({name: value for name, value in environ.items() if os.environ.get(name) != value})
+        api._backends.clear()
+        api._backends.update(backends)
+        for s, handler in handlers.items():
+            signal.signal(s, handler)
+    return subprocess.CompletedProcess(["pathtrace", *map(str, args)], code, out.getvalue(), err.getvalue())
 
 
 def write(tmp_path, text, name="scene.toml"):
@@ -88,7 +131,7 @@ def test_render_denoise_writes_the_denoised_image_the_noisy_layer_and_the_aovs(t
 def test_a_huge_or_binary_option_value_is_echoed_short(tmp_path, flag):
     """A value of 100k characters, or one with control characters, is quoted and cut to 60."""
     for value in ("9" * 100_000 + "x", "1\x1b[2J\x07x"):
-        r = pathtrace("render", "simple", "-o", tmp_path / "o.png", flag, value)
+        r = in_process("render", "simple", "-o", tmp_path / "o.png", flag, value)
         assert r.returncode == 2 and flag in r.stderr and "Traceback" not in r.stderr
         last = r.stderr.strip().splitlines()[-1]
         assert len(last) < 200 and "\x1b" not in last, last
@@ -103,7 +146,7 @@ def test_a_huge_or_binary_option_value_is_echoed_short(tmp_path, flag):
     ["render", "simple", "-o", "o.png"] + ["--ab"] * 2_000,            # 8 kB echoed (argparse is quadratic in them)
 ])
 def test_argparses_own_messages_echo_values_short(tmp_path, args):
-    r = pathtrace(*args, cwd=tmp_path)
+    r = in_process(*args, cwd=tmp_path)
     assert r.returncode == 2 and "Traceback" not in r.stderr
     last = r.stderr.strip().splitlines()[-1]
     assert "error:" in last and len(last) < 500 and last.isprintable(), last
@@ -117,7 +160,7 @@ def test_an_aov_named_twice_is_written_once():
 
 @pytest.mark.parametrize("value", ["depth", "albedo,foo", ","])
 def test_render_refuses_an_unknown_aov(tmp_path, value):
-    r = pathtrace("render", "simple", "-o", tmp_path / "o.png", "--aov", value)
+    r = in_process("render", "simple", "-o", tmp_path / "o.png", "--aov", value)
     assert r.returncode == 2 and "--aov" in r.stderr and "Traceback" not in r.stderr
     assert not list(tmp_path.iterdir())
 
@@ -156,7 +199,7 @@ BAD_FILES = [
 def test_bad_scene_file_gets_one_clear_message(tmp_path, text, message):
     scene = write(tmp_path, text)
     out = tmp_path / "out.png"
-    r = pathtrace("render", scene, "-o", out, "--spp", "1", "--size", "8x8")
+    r = in_process("render", scene, "-o", out, "--spp", "1", "--size", "8x8")
     assert r.returncode != 0
     assert message in r.stderr and str(scene) in r.stderr, r.stderr
     assert "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1
@@ -180,7 +223,7 @@ def test_unreadable_environment_map(tmp_path, name, data):
     """Garbage, an empty file (OpenCV's decoder failed an assertion on it) or a bare header."""
     (tmp_path / name).write_bytes(data)
     scene = write(tmp_path, GOOD.replace("color = 0.5", f'map = "{name}"'))
-    r = pathtrace("render", scene, "-o", tmp_path / "o.png", "--spp", "1")
+    r = in_process("render", scene, "-o", tmp_path / "o.png", "--spp", "1")
     assert r.returncode == 1 and r.stderr.count("\n") == 1, r.stderr
     assert "environment.map: '" in r.stderr and f"{name}' is not a readable HDR image" in r.stderr
 
@@ -208,7 +251,7 @@ def test_unreadable_environment_map(tmp_path, name, data):
 ])
 def test_bad_arguments_get_one_clear_message(tmp_path, args, message):
     out = tmp_path / "o.png"
-    r = pathtrace("render", *args, "-o", out)
+    r = in_process("render", *args, "-o", out)
     assert r.returncode != 0 and message in r.stderr, r.stderr
     assert "Traceback" not in r.stderr
     assert not out.exists()
@@ -218,7 +261,7 @@ def test_bad_arguments_get_one_clear_message(tmp_path, args, message):
 def test_a_scene_name_that_does_not_print_is_shown_on_one_line(tmp_path, name):
     """A name with a newline or an escape sequence, or one too long for the file system, is
     shown escaped and cut, in one line."""
-    r = pathtrace("render", name, "-o", tmp_path / "o.png")
+    r = in_process("render", name, "-o", tmp_path / "o.png")
     assert r.returncode == 1 and r.stderr.count("\n") == 1 and "\x1b" not in r.stderr, r.stderr
     assert len(r.stderr) < 400 and "Traceback" not in r.stderr
 
@@ -228,7 +271,7 @@ def test_a_scene_name_that_does_not_print_is_shown_on_one_line(tmp_path, name):
     ("o.tiff", "unknown image format"),
 ])
 def test_bad_output_fails_before_rendering(tmp_path, output, message):
-    r = pathtrace("render", "simple", "-o", tmp_path / output if "/" not in output else output, "--spp", "1",
+    r = in_process("render", "simple", "-o", tmp_path / output if "/" not in output else output, "--spp", "1",
                   cwd=tmp_path)
     assert r.returncode == 1 and message in r.stderr, r.stderr
 
@@ -240,7 +283,7 @@ def test_unwritable_output_folder(tmp_path):
         folder = tmp_path / "ro"
         folder.mkdir(mode=0o500)
         out = folder / "o.png"
-    r = pathtrace("render", "simple", "-o", out, "--spp", "1", "--size", "8x8")
+    r = in_process("render", "simple", "-o", out, "--spp", "1", "--size", "8x8")
     assert r.returncode == 1 and "not writable" in r.stderr, r.stderr
 
 
@@ -335,9 +378,56 @@ def test_sigterm_stops_a_render_and_leaves_no_file(tmp_path):
 
 
 def test_a_bad_option_shows_its_subcommands_usage():
-    r = pathtrace("render", "simple", "-o", "x.png", "--bogus")
+    r = in_process("render", "simple", "-o", "x.png", "--bogus")
     assert r.returncode == 2 and r.stderr.startswith("usage: pathtrace render")
     assert r.stderr.strip().endswith("pathtrace render: error: unrecognized arguments: --bogus")
+
+
+
+@pytest.mark.parametrize("case", ["unknown option", "invalid choice", "bad value", "bad scene file", "no such scene",
+                                  "listing"])
+def test_in_process_runs_are_what_the_entry_point_prints(tmp_path, case):
+    """in_process, which most tests of messages use, against `python -m pathtrace`: the same exit
+    status as the shell sees it, the same standard output and the same standard error, byte for
+    byte, for each kind of ending (argparse's exit 2, a UserError's 1, a listing's 0)."""
+    scene = write(tmp_path, GOOD.replace("radius = 1", "radius = -1"))
+    args = {"unknown option": ["render", "simple", "-o", "o.png", "--sppp", "4"],
+            "invalid choice": ["render", "simple", "-o", "o.png", "--tonemap", "acse"],
+            "bad value": ["render", "simple", "-o", "o.png", "--size", "0x10"],
+            "bad scene file": ["render", scene, "-o", "o.png"],
+            "no such scene": ["render", "cornel-box", "-o", "o.png"],
+            "listing": ["scenes"]}[case]
+    here, there = in_process(*args, cwd=tmp_path), pathtrace(*args, cwd=tmp_path)
+    assert (here.returncode, here.stdout, here.stderr) == (there.returncode, there.stdout, there.stderr)
+    assert there.returncode == (0 if case == "listing" else 2 if case in ("unknown option", "invalid choice", "bad value") else 1)
+    assert (there.stdout if case == "listing" else there.stderr).strip()
+    assert list(tmp_path.iterdir()) == [scene]
+
+
+def test_the_parser_loads_no_numpy_pyopencl_or_scene_module():
+    """Building the command line's parser and refusing a bad option (each command's parser, and
+    each kind of refusal) imports neither NumPy nor PyOpenCL nor the scene, light or material
+    modules: the constants the options offer live in modules that import nothing
+    (pathtrace.rendering.choices, pathtrace.device.programs, pathtrace.bench.default_scenes), so that
+    a mistyped command ends in a fifth of a second, not one (issue #60)."""
+    heavy = ("numpy", "pyopencl", "cv2", "pathtrace.scene", "pathtrace.lights", "pathtrace.materials")
+    code = f"""
+import sys
+from pathtrace.cli.main import main
+for argv in (["render", "simple", "-o", "o.png", "--tonemap", "acse"], ["render", "simple", "-o", "o.png", "--bogus"],
+             ["render", "simple", "-o", "o.png", "--filter", "gauss"], ["render", "simple", "-o", "o.png", "--aov", "x"],
+             ["view", "simple", "--light-sampler", "x"], ["bench", "--program", "x"], ["convert", "simple"],
+             ["farm", "render", "simple", "--rr", "x"], ["devices", "--bogus"], ["nosuchcommand"]):
+    try:
+        main(argv)
+    except SystemExit as e:
+        assert e.code == 2, (argv, e.code)
+    else:
+        raise AssertionError(argv)
+print(sorted(m for m in {heavy!r} if m in sys.modules))
+"""
+    r = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0 and r.stdout == "[]\n", (r.stdout, r.stderr[-2000:])
 
 
 def test_the_progress_bar_ends_with_the_real_rate(tmp_path):
@@ -382,7 +472,7 @@ def test_running_out_of_memory_gets_one_line(monkeypatch, capsys):
 
 def test_a_huge_or_binary_value_is_not_echoed_whole(tmp_path):
     scene = write(tmp_path, GOOD.replace('type = "diffuse"', 'type = "' + "x" * 1_000_000 + '\\u0000"'))
-    r = pathtrace("render", scene, "-o", tmp_path / "o.png", "--spp", "1")
+    r = in_process("render", scene, "-o", tmp_path / "o.png", "--spp", "1")
     assert r.returncode == 1 and "material.type: must be one of" in r.stderr
     assert len(r.stderr) < 600 and "\0" not in r.stderr
 
@@ -392,7 +482,7 @@ def test_a_name_too_long_for_the_file_system_gets_one_line(tmp_path, where):
     long = "b" * 300
     scene = tmp_path / f"{long}.toml" if where == "scene" else \
         write(tmp_path, GOOD.replace("color = 0.5", f'map = "{long}.hdr"'))
-    r = pathtrace("render", scene, "-o", tmp_path / "o.png", "--spp", "1")
+    r = in_process("render", scene, "-o", tmp_path / "o.png", "--spp", "1")
     assert r.returncode == 1 and r.stderr.strip().endswith("File name too long") and "Traceback" not in r.stderr
 
 
@@ -402,7 +492,7 @@ def test_an_output_named_twice_is_refused(tmp_path, outputs):
     """Two outputs (or an output and another's --aov image) that are one file: one line, nothing
     written, where it used to write the file twice without a word."""
     args = [a for o in outputs for a in ("-o", o)]
-    r = pathtrace("render", "simple", *args, "--aov", "albedo", "--size", "8x8", "--spp", "1", "-q", cwd=tmp_path)
+    r = in_process("render", "simple", *args, "--aov", "albedo", "--size", "8x8", "--spp", "1", "-q", cwd=tmp_path)
     assert r.returncode == 1 and "would be written twice" in r.stderr and len(r.stderr.splitlines()) == 1
     assert list(tmp_path.iterdir()) == []
 
@@ -411,7 +501,7 @@ def test_an_output_named_twice_is_refused(tmp_path, outputs):
 
 @pytest.mark.parametrize("spec", ["²", "cpu:²", "9" * 5000, "gpu:0\nx"])
 def test_a_device_spec_of_odd_digits_is_one_line(spec):
-    r = pathtrace("render", "simple", "-o", "o.png", "--spp", "1", "--device", spec, "-q")   # no "loaded" line
+    r = in_process("render", "simple", "-o", "o.png", "--spp", "1", "--device", spec, "-q")   # no "loaded" line
     assert r.returncode == 1 and len(r.stderr.splitlines()) == 1, r.stderr
     assert "no OpenCL device matches" in r.stderr and len(r.stderr) < 300
 
@@ -420,7 +510,7 @@ def test_a_device_spec_of_odd_digits_is_one_line(spec):
                                      ["bench", "--quick", "--json"]], ids=["render", "convert", "bench"])
 def test_an_output_name_too_long_for_the_file_system_is_one_line(tmp_path, command):
     suffix = {"render": ".png", "convert": ".toml", "bench": ".json"}[command[0]]
-    r = pathtrace(*command, tmp_path / ("a" * 300 + suffix))
+    r = in_process(*command, tmp_path / ("a" * 300 + suffix))
     assert r.returncode == 1 and "File name too long" in r.stderr and len(r.stderr.splitlines()) == 1
     assert list(tmp_path.iterdir()) == []
 
@@ -431,7 +521,7 @@ def test_outputs_that_are_not_regular_files_are_refused_and_kept(tmp_path):
     os.mkfifo(tmp_path / "fifo.png")
     (tmp_path / "dir.png").mkdir()
     for name in ("full.png", "fifo.png", "dir.png"):
-        r = pathtrace("render", "simple", "-o", tmp_path / name, "--size", "8x6", "--spp", "1", "-q")
+        r = in_process("render", "simple", "-o", tmp_path / name, "--size", "8x6", "--spp", "1", "-q")
         assert r.returncode == 1 and len(r.stderr.splitlines()) == 1, r.stderr
     assert os.readlink(tmp_path / "full.png") == "/dev/full" and stat.S_ISFIFO(os.lstat(tmp_path / "fifo.png").st_mode)
 
@@ -448,7 +538,7 @@ def test_listing_to_a_closed_standard_output_is_one_line():
 def test_a_nul_byte_in_a_file_name_is_one_line(tmp_path, field):
     scene = tmp_path / "s.toml"
     scene.write_text(field + '[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = { type = "diffuse", rho_d = 0.5 }\n')
-    r = pathtrace("render", scene, "-o", tmp_path / "o.png", "--spp", "1")
+    r = in_process("render", scene, "-o", tmp_path / "o.png", "--spp", "1")
     assert r.returncode == 1 and "a file name cannot hold a NUL byte" in r.stderr and "\\x00" in r.stderr
     assert len(r.stderr.splitlines()) == 1
 
