@@ -1,66 +1,19 @@
 """The command line: renders, and one clear message with a non-zero exit for each bad input."""
 
-import contextlib
-import io
 import os
 import shlex
-import signal
 import stat
 import subprocess
 import sys
-import warnings
 from pathlib import Path
 
 import numpy as np
 import pytest
 
 from pathtrace.errors import UserError
+from tests.commands import in_process, pathtrace
 
 ROOT = Path(__file__).resolve().parent.parent
-
-
-def pathtrace(*args, cwd=ROOT):
-    """`python -m pathtrace ARGS`, the real entry point, in a process of its own: for what only a
-    process shows (its exit status as the shell sees it, what a driver prints, signals, the
-    interpreter's exit)."""
-    return subprocess.run([sys.executable, "-m", "pathtrace", *map(str, args)], cwd=cwd,
-                          capture_output=True, text=True, timeout=300)
-
-
-def in_process(*args, cwd=ROOT):
-    """The same command run by pathtrace.cli.main.main in this process, as the result of
-    `pathtrace`: a process's start and imports (about a second of CPU each) spared for the
-    tests of messages and exit statuses (issue #60; test_in_process_runs_are_what_the_entry_point_prints
-    compares the two). The status is main()'s, or that of the SystemExit argparse raises;
-    Python's warnings are printed, each once (as tests/fuzz_batch.py runs its cases), where a
-    process would print most and pytest would keep them; an exception that escapes main() (a
-    traceback in a process) fails the test. What a command may change of the process is put
-    back: the current folder, the environment (--program sets PATHTRACE_PROGRAM), the SIGINT and
-    SIGTERM handlers (a finished write ignores both: pathtrace.cli.interrupts.FinalWrite) and the
-    devices the API keeps open (their program mode is the environment's when opened)."""
-    from pathtrace import api
-    from pathtrace.cli.main import main
-    out, err = io.StringIO(), io.StringIO()
-    folder, environ, backends = os.getcwd(), dict(os.environ), dict(api._backends)
-    handlers = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
-    os.chdir(cwd)
-    try:
-        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), warnings.catch_warnings():
-            warnings.simplefilter("default")
-            try:
-                code = main([str(a) for a in args])
-            except SystemExit as e:
-                code = 0 if e.code is None else e.code
-    finally:
-        os.chdir(folder)
-        for name in set(os.environ) - set(environ):
-            del os.environ[name]
-        os.environ.update({name: value for name, value in environ.items() if os.environ.get(name) != value})
-        api._backends.clear()
-        api._backends.update(backends)
-        for s, handler in handlers.items():
-            signal.signal(s, handler)
-    return subprocess.CompletedProcess(["pathtrace", *map(str, args)], code, out.getvalue(), err.getvalue())
 
 
 def write(tmp_path, text, name="scene.toml"):
@@ -109,9 +62,9 @@ def test_render_denoise_writes_the_denoised_image_the_noisy_layer_and_the_aovs(t
     from pathtrace.io.images import read_hdr
     png, exr, plain = tmp_path / "d.png", tmp_path / "d.exr", tmp_path / "plain.exr"
     common = ("--size", "48x27", "--spp", "4", "-q")
-    r = pathtrace("render", "demo", "-o", png, "-o", exr, "--denoise", "--aov", "albedo,normal", *common)
+    r = in_process("render", "demo", "-o", png, "-o", exr, "--denoise", "--aov", "albedo,normal", *common)
     assert r.returncode == 0, r.stderr
-    assert pathtrace("render", "demo", "-o", plain, *common).returncode == 0
+    assert in_process("render", "demo", "-o", plain, *common).returncode == 0
     with OpenEXR.File(str(exr)) as f:
         channels = f.channels()
         denoised, noisy = channels["RGB"].pixels, channels["noisy"].pixels
@@ -212,7 +165,7 @@ def test_a_huge_environment_rotation_wraps(tmp_path):
     from pathtrace.io.images import read_hdr
     scene = write(tmp_path, GOOD.replace("color = 0.5", 'map = "studio_small_03_1k.hdr"\nrotation = 3e38'))
     out = tmp_path / "o.exr"
-    r = pathtrace("render", scene, "-o", out, "--spp", "2", "--size", "16x8", "-q")
+    r = in_process("render", scene, "-o", out, "--spp", "2", "--size", "16x8", "-q")
     assert r.returncode == 0, r.stderr
     assert np.all(np.isfinite(read_hdr(out, "test")))
 
@@ -384,23 +337,27 @@ def test_a_bad_option_shows_its_subcommands_usage():
 
 
 
-@pytest.mark.parametrize("case", ["unknown option", "invalid choice", "bad value", "bad scene file", "no such scene",
-                                  "listing"])
+ENDINGS = {    # a command line of each kind of ending, and its exit status
+    "unknown option": (["render", "simple", "-o", "o.png", "--sppp", "4"], 2),
+    "invalid choice": (["render", "simple", "-o", "o.png", "--tonemap", "acse"], 2),
+    "bad value": (["render", "simple", "-o", "o.png", "--size", "0x10"], 2),
+    "bad scene file": (["render", "scene.toml", "-o", "o.png"], 1),
+    "no such scene": (["render", "cornel-box", "-o", "o.png"], 1),
+    "listing": (["scenes"], 0),
+}
+
+
+@pytest.mark.parametrize("case", ENDINGS)
 def test_in_process_runs_are_what_the_entry_point_prints(tmp_path, case):
-    """in_process, which most tests of messages use, against `python -m pathtrace`: the same exit
-    status as the shell sees it, the same standard output and the same standard error, byte for
-    byte, for each kind of ending (argparse's exit 2, a UserError's 1, a listing's 0)."""
+    """in_process (tests/commands.py), which the tests of messages use, against `python -m
+    pathtrace`: the same exit status as the shell sees it, the same standard output and the same
+    standard error, byte for byte, for each kind of ending (argparse's exit 2, a UserError's 1, a
+    listing's 0)."""
     scene = write(tmp_path, GOOD.replace("radius = 1", "radius = -1"))
-    args = {"unknown option": ["render", "simple", "-o", "o.png", "--sppp", "4"],
-            "invalid choice": ["render", "simple", "-o", "o.png", "--tonemap", "acse"],
-            "bad value": ["render", "simple", "-o", "o.png", "--size", "0x10"],
-            "bad scene file": ["render", scene, "-o", "o.png"],
-            "no such scene": ["render", "cornel-box", "-o", "o.png"],
-            "listing": ["scenes"]}[case]
+    args, status = ENDINGS[case]
     here, there = in_process(*args, cwd=tmp_path), pathtrace(*args, cwd=tmp_path)
     assert (here.returncode, here.stdout, here.stderr) == (there.returncode, there.stdout, there.stderr)
-    assert there.returncode == (0 if case == "listing" else 2 if case in ("unknown option", "invalid choice", "bad value") else 1)
-    assert (there.stdout if case == "listing" else there.stderr).strip()
+    assert there.returncode == status and (there.stderr if status else there.stdout).strip()
     assert list(tmp_path.iterdir()) == [scene]
 
 
@@ -411,13 +368,14 @@ def test_the_parser_loads_no_numpy_pyopencl_or_scene_module():
     (pathtrace.rendering.choices, pathtrace.device.programs, pathtrace.bench.default_scenes), so that
     a mistyped command ends in a fifth of a second, not one (issue #60)."""
     heavy = ("numpy", "pyopencl", "cv2", "pathtrace.scene", "pathtrace.lights", "pathtrace.materials")
+    render = ["render", "simple", "-o", "o.png"]
+    refused = [render + ["--tonemap", "acse"], render + ["--bogus"], render + ["--filter", "gauss"], render + ["--aov", "x"],
+               ["view", "simple", "--light-sampler", "x"], ["bench", "--program", "x"], ["convert", "simple"],
+               ["farm", "render", "simple", "--rr", "x"], ["devices", "--bogus"], ["nosuchcommand"]]
     code = f"""
 import sys
 from pathtrace.cli.main import main
-for argv in (["render", "simple", "-o", "o.png", "--tonemap", "acse"], ["render", "simple", "-o", "o.png", "--bogus"],
-             ["render", "simple", "-o", "o.png", "--filter", "gauss"], ["render", "simple", "-o", "o.png", "--aov", "x"],
-             ["view", "simple", "--light-sampler", "x"], ["bench", "--program", "x"], ["convert", "simple"],
-             ["farm", "render", "simple", "--rr", "x"], ["devices", "--bogus"], ["nosuchcommand"]):
+for argv in {refused!r}:
     try:
         main(argv)
     except SystemExit as e:
@@ -431,7 +389,7 @@ print(sorted(m for m in {heavy!r} if m in sys.modules))
 
 
 def test_the_progress_bar_ends_with_the_real_rate(tmp_path):
-    r = pathtrace("render", "simple", "-o", tmp_path / "a.png", "--size", "64x36", "--spp", "16")
+    r = in_process("render", "simple", "-o", tmp_path / "a.png", "--size", "64x36", "--spp", "16")
     assert r.returncode == 0
     last = [line for line in r.stderr.replace("\r", "\n").splitlines() if line.startswith("simple 64x36: ")][-1]
     assert last.startswith("simple 64x36: 100%") and "16/16 spp" in last
@@ -577,7 +535,7 @@ run()
 
 
 def test_a_name_with_a_newline_is_shown_on_one_line(tmp_path):
-    r = pathtrace("render", "simple", "-o", tmp_path / "a\nb.png", "--size", "8x6", "--spp", "1", "-q")
+    r = in_process("render", "simple", "-o", tmp_path / "a\nb.png", "--size", "8x6", "--spp", "1", "-q")
     assert r.returncode == 0 and r.stderr.splitlines()[-1] == f"wrote {tmp_path}/a\\nb.png"
 
 
