@@ -37,16 +37,16 @@ def in_process(*args, cwd=ROOT):
 
 
 @contextlib.contextmanager
-def as_a_command(cwd):
+def as_a_command(cwd, keep_devices: bool = False):
     """Around a command run in this process, from the folder `cwd`: its standard output and
     error captured (yielded, as two StringIO), Python's warnings printed there, each once, where
     a process prints most of them and pytest would keep them, and what a command may change of
     the process put back afterwards: the current folder, the environment (--program sets
     PATHTRACE_PROGRAM), the SIGINT and SIGTERM handlers (a finished write ignores both:
-    pathtrace.cli.interrupts.FinalWrite), and, where the environment changed, the devices the
-    API keeps open (a device takes its program mode from the environment when opened; those
-    opened under the unchanged environment are kept, as a process of the same environment
-    would open them, for the commands after)."""
+    pathtrace.cli.interrupts.FinalWrite), and the devices the API keeps open (a device takes its
+    program mode from the environment it was opened in, which a test may have changed: each
+    command opens its own, a few tenths of a second, as a process would), unless `keep_devices`
+    (tests/fuzz_batch.py: its cases share one process, one environment and the devices)."""
     from pathtrace import api
     out, err = io.StringIO(), io.StringIO()
     folder, environ, backends = os.getcwd(), dict(os.environ), dict(api._backends)
@@ -60,9 +60,9 @@ def as_a_command(cwd):
         os.chdir(folder)
         for s, handler in handlers.items():
             signal.signal(s, handler)
-        if dict(os.environ) != environ:
-            for name in set(os.environ) - set(environ):
-                del os.environ[name]
-            os.environ.update(environ)
-            api._backends.clear()
+        for name in set(os.environ) - set(environ):
+            del os.environ[name]
+        os.environ.update(environ)
+        if not keep_devices:
+            api._backends.clear()        # the devices it opened go with it
             api._backends.update(backends)

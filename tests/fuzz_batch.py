@@ -24,7 +24,7 @@ def run_case(case: dict) -> dict:
     from pathtrace.errors import UserError
 
     result = {"status": None, "stderr": "", "error": "", "traceback": ""}
-    with as_a_command(case["cwd"]) as (_, err):
+    with as_a_command(case["cwd"], keep_devices=True) as (_, err):
         try:
             if "argv" in case:
                 result["status"] = main(case["argv"])

@@ -361,6 +361,24 @@ def test_in_process_runs_are_what_the_entry_point_prints(tmp_path, case):
     assert list(tmp_path.iterdir()) == [scene]
 
 
+
+def test_a_command_in_process_leaves_the_process_as_it_found_it(tmp_path):
+    """What a command changes of its process, in_process puts back for the tests after it: a render
+    with --program specialised sets PATHTRACE_PROGRAM and opens a device in that mode, and its
+    finished write leaves SIGINT and SIGTERM ignored (pathtrace.cli.interrupts.FinalWrite)."""
+    import signal
+
+    from pathtrace import api
+
+    def state():
+        return (os.getcwd(), dict(os.environ), dict(api._backends),
+                signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM))
+    before = state()
+    r = in_process("render", "simple", "-o", "o.png", "--size", "8x6", "--spp", "1", "-q", "--program", "specialised",
+                   cwd=tmp_path)
+    assert r.returncode == 0 and (tmp_path / "o.png").read_bytes()[:4] == b"\x89PNG", r.stderr
+    assert state() == before
+
 def test_the_parser_loads_no_numpy_pyopencl_or_scene_module():
     """Building the command line's parser and refusing a bad option (each command's parser, and
     each kind of refusal) imports neither NumPy nor PyOpenCL nor the scene, light or material
