@@ -241,7 +241,7 @@ def test_unwritable_output_folder(tmp_path):
 
 
 def test_devices_lists_the_cpu():
-    r = pathtrace("devices", "--check")
+    r = in_process("devices", "--check")
     assert r.returncode == 0 and "builds the generic kernels" in r.stdout, r.stdout + r.stderr
 
 
