@@ -14,7 +14,7 @@ _EXPORTS = {
                                           "programs_used", "Snapshot", "AOVS")},
     "Scene": "pathtrace.scene.description",
     "RenderSettings": "pathtrace.scene.description",
-    "PATH_QUEUE_AUTO": "pathtrace.scene.description",
+    "PATH_QUEUE_AUTO": "pathtrace.rendering.choices",
     "Camera": "pathtrace.cameras",
     "Environment": "pathtrace.scene.environment",
     "Material": "pathtrace.materials.table",

@@ -16,7 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from pathtrace.errors import UserError, short, warn
-from pathtrace.scene.description import INTEGRATORS, Scene
+from pathtrace.rendering.choices import INTEGRATORS, TONEMAPS
+from pathtrace.scene.description import Scene
 from pathtrace.scene.validate import SETTING_RANGES, check_scene, check_tables, russian_roulette
 from pathtrace.scene.validate import integer as _integer
 
@@ -371,7 +372,7 @@ def tonemap(image: np.ndarray, exposure: float = 0.0, curve: str = "standard") -
     """Linear radiance to display sRGB, (H, W, 3) uint8: exposure in stops, then the tone curve
     ("standard" clips at 1, "aces" is Narkowicz's fit of ACES), then the sRGB transfer function;
     what a .png output holds."""
-    from pathtrace.io.tonecurve import TONEMAPS, to_8bit
+    from pathtrace.io.tonecurve import to_8bit
     from pathtrace.io.tonecurve import tonemap as display
     if curve not in TONEMAPS:
         raise UserError(f"curve: give one of {', '.join(TONEMAPS)}, got {short(curve)}")

@@ -6,16 +6,14 @@ A case is {"cwd": folder, and "argv": a command line for pathtrace.cli.main.main
 run with `pathtrace`, `np` and `UserError` in scope}. Its result: {"status": the command's exit
 status (a code case: 0 where it ran through, 1 where it raised pathtrace.UserError, None where it
 raised anything else), "stderr": what it printed to standard error (Python's warnings, NumPy's
-among them, included), "error": a code case's UserError message, "traceback": where anything
-else escaped}."""
+among them, included: tests/commands.py, as_a_command), "error": a code case's UserError message,
+"traceback": where anything else escaped}."""
 
-import contextlib
-import io
 import json
-import os
 import sys
 import traceback
-import warnings
+
+from tests.commands import as_a_command
 
 
 def run_case(case: dict) -> dict:
@@ -25,28 +23,20 @@ def run_case(case: dict) -> dict:
     from pathtrace.cli.main import main
     from pathtrace.errors import UserError
 
-    err = io.StringIO()
     result = {"status": None, "stderr": "", "error": "", "traceback": ""}
-    cwd = os.getcwd()
-    os.chdir(case["cwd"])
-    try:
-        with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()), \
-                warnings.catch_warnings():
-            warnings.simplefilter("default")      # each warning printed, none raised
-            try:
-                if "argv" in case:
-                    result["status"] = main(case["argv"])
-                else:
-                    exec(case["code"], {"pathtrace": pathtrace, "np": np, "UserError": UserError})
-                    result["status"] = 0
-            except UserError as e:
-                result["status"], result["error"] = 1, str(e)
-            except SystemExit as e:
-                result["status"] = e.code
-            except BaseException:
-                result["traceback"] = traceback.format_exc()
-    finally:
-        os.chdir(cwd)
+    with as_a_command(case["cwd"], keep_devices=True) as (_, err):
+        try:
+            if "argv" in case:
+                result["status"] = main(case["argv"])
+            else:
+                exec(case["code"], {"pathtrace": pathtrace, "np": np, "UserError": UserError})
+                result["status"] = 0
+        except UserError as e:
+            result["status"], result["error"] = 1, str(e)
+        except SystemExit as e:
+            result["status"] = e.code
+        except BaseException:
+            result["traceback"] = traceback.format_exc()
     result["stderr"] = err.getvalue()
     return result
 

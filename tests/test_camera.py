@@ -14,6 +14,7 @@ from pathtrace.cameras.registry import toml_names
 from pathtrace.device.features import Features
 from pathtrace.filters import PixelFilter
 from pathtrace.device.types import RENDER_PARAMS
+from tests.commands import in_process
 from tests.test_sampling import chi_square
 
 SOURCE = """
@@ -179,8 +180,6 @@ def test_bad_filters_are_one_line_naming_the_field(pixel_filter, problem):
 
 def test_the_command_line_filter_overrides_the_scenes(tmp_path):
     """--filter NAME[:RADIUS[:STDDEV]]; a bad one is one line and exit 2 (a usage error)."""
-    import subprocess
-    import sys
     scene = tmp_path / "s.toml"
     scene.write_text('[render]\nfilter = "box"\n[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\n'
                      'material = { type = "emitter", Le = 1 }\n[[lights]]\ntype = "point"\nposition = [0, 3, 0]\n'
@@ -190,11 +189,9 @@ def test_the_command_line_filter_overrides_the_scenes(tmp_path):
     from pathtrace.scene import load_scene
     args = build_parser().parse_args(["render", str(scene), "-o", "x.png", "--filter", "gaussian:1.5:0.25"])
     assert apply_render_options(load_scene(str(scene)), args).settings.filter == PixelFilter("gaussian", 1.5, 0.25)
-    run = subprocess.run([sys.executable, "-m", "pathtrace", "render", str(scene), "--filter", "tent:0",
-                          "-o", str(tmp_path / "x.png")], capture_output=True, text=True)
+    run = in_process("render", scene, "--filter", "tent:0", "-o", tmp_path / "x.png")
     assert run.returncode == 2 and "radius: must be in [0.001, 32] pixels" in run.stderr
-    run = subprocess.run([sys.executable, "-m", "pathtrace", "render", str(scene), "--no-nee", "--size", "8x8",
-                          "--spp", "1", "-q", "-o", str(tmp_path / "x.png")], capture_output=True, text=True)
+    run = in_process("render", scene, "--no-nee", "--size", "8x8", "--spp", "1", "-q", "-o", tmp_path / "x.png")
     assert run.returncode == 0 and "without it (--no-nee) they light nothing" in run.stderr
 
 

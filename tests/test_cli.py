@@ -11,13 +11,9 @@ import numpy as np
 import pytest
 
 from pathtrace.errors import UserError
+from tests.commands import in_process, pathtrace
 
 ROOT = Path(__file__).resolve().parent.parent
-
-
-def pathtrace(*args, cwd=ROOT):
-    return subprocess.run([sys.executable, "-m", "pathtrace", *map(str, args)], cwd=cwd,
-                          capture_output=True, text=True, timeout=300)
 
 
 def write(tmp_path, text, name="scene.toml"):
@@ -66,9 +62,9 @@ def test_render_denoise_writes_the_denoised_image_the_noisy_layer_and_the_aovs(t
     from pathtrace.io.images import read_hdr
     png, exr, plain = tmp_path / "d.png", tmp_path / "d.exr", tmp_path / "plain.exr"
     common = ("--size", "48x27", "--spp", "4", "-q")
-    r = pathtrace("render", "demo", "-o", png, "-o", exr, "--denoise", "--aov", "albedo,normal", *common)
+    r = in_process("render", "demo", "-o", png, "-o", exr, "--denoise", "--aov", "albedo,normal", *common)
     assert r.returncode == 0, r.stderr
-    assert pathtrace("render", "demo", "-o", plain, *common).returncode == 0
+    assert in_process("render", "demo", "-o", plain, *common).returncode == 0
     with OpenEXR.File(str(exr)) as f:
         channels = f.channels()
         denoised, noisy = channels["RGB"].pixels, channels["noisy"].pixels
@@ -88,7 +84,7 @@ def test_render_denoise_writes_the_denoised_image_the_noisy_layer_and_the_aovs(t
 def test_a_huge_or_binary_option_value_is_echoed_short(tmp_path, flag):
     """A value of 100k characters, or one with control characters, is quoted and cut to 60."""
     for value in ("9" * 100_000 + "x", "1\x1b[2J\x07x"):
-        r = pathtrace("render", "simple", "-o", tmp_path / "o.png", flag, value)
+        r = in_process("render", "simple", "-o", tmp_path / "o.png", flag, value)
         assert r.returncode == 2 and flag in r.stderr and "Traceback" not in r.stderr
         last = r.stderr.strip().splitlines()[-1]
         assert len(last) < 200 and "\x1b" not in last, last
@@ -103,7 +99,7 @@ def test_a_huge_or_binary_option_value_is_echoed_short(tmp_path, flag):
     ["render", "simple", "-o", "o.png"] + ["--ab"] * 2_000,            # 8 kB echoed (argparse is quadratic in them)
 ])
 def test_argparses_own_messages_echo_values_short(tmp_path, args):
-    r = pathtrace(*args, cwd=tmp_path)
+    r = in_process(*args, cwd=tmp_path)
     assert r.returncode == 2 and "Traceback" not in r.stderr
     last = r.stderr.strip().splitlines()[-1]
     assert "error:" in last and len(last) < 500 and last.isprintable(), last
@@ -117,7 +113,7 @@ def test_an_aov_named_twice_is_written_once():
 
 @pytest.mark.parametrize("value", ["depth", "albedo,foo", ","])
 def test_render_refuses_an_unknown_aov(tmp_path, value):
-    r = pathtrace("render", "simple", "-o", tmp_path / "o.png", "--aov", value)
+    r = in_process("render", "simple", "-o", tmp_path / "o.png", "--aov", value)
     assert r.returncode == 2 and "--aov" in r.stderr and "Traceback" not in r.stderr
     assert not list(tmp_path.iterdir())
 
@@ -156,7 +152,7 @@ BAD_FILES = [
 def test_bad_scene_file_gets_one_clear_message(tmp_path, text, message):
     scene = write(tmp_path, text)
     out = tmp_path / "out.png"
-    r = pathtrace("render", scene, "-o", out, "--spp", "1", "--size", "8x8")
+    r = in_process("render", scene, "-o", out, "--spp", "1", "--size", "8x8")
     assert r.returncode != 0
     assert message in r.stderr and str(scene) in r.stderr, r.stderr
     assert "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1
@@ -169,7 +165,7 @@ def test_a_huge_environment_rotation_wraps(tmp_path):
     from pathtrace.io.images import read_hdr
     scene = write(tmp_path, GOOD.replace("color = 0.5", 'map = "studio_small_03_1k.hdr"\nrotation = 3e38'))
     out = tmp_path / "o.exr"
-    r = pathtrace("render", scene, "-o", out, "--spp", "2", "--size", "16x8", "-q")
+    r = in_process("render", scene, "-o", out, "--spp", "2", "--size", "16x8", "-q")
     assert r.returncode == 0, r.stderr
     assert np.all(np.isfinite(read_hdr(out, "test")))
 
@@ -180,7 +176,7 @@ def test_unreadable_environment_map(tmp_path, name, data):
     """Garbage, an empty file (OpenCV's decoder failed an assertion on it) or a bare header."""
     (tmp_path / name).write_bytes(data)
     scene = write(tmp_path, GOOD.replace("color = 0.5", f'map = "{name}"'))
-    r = pathtrace("render", scene, "-o", tmp_path / "o.png", "--spp", "1")
+    r = in_process("render", scene, "-o", tmp_path / "o.png", "--spp", "1")
     assert r.returncode == 1 and r.stderr.count("\n") == 1, r.stderr
     assert "environment.map: '" in r.stderr and f"{name}' is not a readable HDR image" in r.stderr
 
@@ -208,7 +204,7 @@ def test_unreadable_environment_map(tmp_path, name, data):
 ])
 def test_bad_arguments_get_one_clear_message(tmp_path, args, message):
     out = tmp_path / "o.png"
-    r = pathtrace("render", *args, "-o", out)
+    r = in_process("render", *args, "-o", out)
     assert r.returncode != 0 and message in r.stderr, r.stderr
     assert "Traceback" not in r.stderr
     assert not out.exists()
@@ -218,7 +214,7 @@ def test_bad_arguments_get_one_clear_message(tmp_path, args, message):
 def test_a_scene_name_that_does_not_print_is_shown_on_one_line(tmp_path, name):
     """A name with a newline or an escape sequence, or one too long for the file system, is
     shown escaped and cut, in one line."""
-    r = pathtrace("render", name, "-o", tmp_path / "o.png")
+    r = in_process("render", name, "-o", tmp_path / "o.png")
     assert r.returncode == 1 and r.stderr.count("\n") == 1 and "\x1b" not in r.stderr, r.stderr
     assert len(r.stderr) < 400 and "Traceback" not in r.stderr
 
@@ -228,7 +224,7 @@ def test_a_scene_name_that_does_not_print_is_shown_on_one_line(tmp_path, name):
     ("o.tiff", "unknown image format"),
 ])
 def test_bad_output_fails_before_rendering(tmp_path, output, message):
-    r = pathtrace("render", "simple", "-o", tmp_path / output if "/" not in output else output, "--spp", "1",
+    r = in_process("render", "simple", "-o", tmp_path / output if "/" not in output else output, "--spp", "1",
                   cwd=tmp_path)
     assert r.returncode == 1 and message in r.stderr, r.stderr
 
@@ -240,12 +236,12 @@ def test_unwritable_output_folder(tmp_path):
         folder = tmp_path / "ro"
         folder.mkdir(mode=0o500)
         out = folder / "o.png"
-    r = pathtrace("render", "simple", "-o", out, "--spp", "1", "--size", "8x8")
+    r = in_process("render", "simple", "-o", out, "--spp", "1", "--size", "8x8")
     assert r.returncode == 1 and "not writable" in r.stderr, r.stderr
 
 
 def test_devices_lists_the_cpu():
-    r = pathtrace("devices", "--check")
+    r = in_process("devices", "--check")
     assert r.returncode == 0 and "builds the generic kernels" in r.stdout, r.stdout + r.stderr
 
 
@@ -335,13 +331,83 @@ def test_sigterm_stops_a_render_and_leaves_no_file(tmp_path):
 
 
 def test_a_bad_option_shows_its_subcommands_usage():
-    r = pathtrace("render", "simple", "-o", "x.png", "--bogus")
+    r = in_process("render", "simple", "-o", "x.png", "--bogus")
     assert r.returncode == 2 and r.stderr.startswith("usage: pathtrace render")
     assert r.stderr.strip().endswith("pathtrace render: error: unrecognized arguments: --bogus")
 
 
+
+ENDINGS = {    # a command line of each kind of ending, and its exit status
+    "unknown option": (["render", "simple", "-o", "o.png", "--sppp", "4"], 2),
+    "invalid choice": (["render", "simple", "-o", "o.png", "--tonemap", "acse"], 2),
+    "bad value": (["render", "simple", "-o", "o.png", "--size", "0x10"], 2),
+    "bad scene file": (["render", "scene.toml", "-o", "o.png"], 1),
+    "no such scene": (["render", "cornel-box", "-o", "o.png"], 1),
+    "listing": (["scenes"], 0),
+}
+
+
+@pytest.mark.parametrize("case", ENDINGS)
+def test_in_process_runs_are_what_the_entry_point_prints(tmp_path, case):
+    """in_process (tests/commands.py), which the tests of messages use, against `python -m
+    pathtrace`: the same exit status as the shell sees it, the same standard output and the same
+    standard error, byte for byte, for each kind of ending (argparse's exit 2, a UserError's 1, a
+    listing's 0)."""
+    scene = write(tmp_path, GOOD.replace("radius = 1", "radius = -1"))
+    args, status = ENDINGS[case]
+    here, there = in_process(*args, cwd=tmp_path), pathtrace(*args, cwd=tmp_path)
+    assert (here.returncode, here.stdout, here.stderr) == (there.returncode, there.stdout, there.stderr)
+    assert there.returncode == status and (there.stderr if status else there.stdout).strip()
+    assert list(tmp_path.iterdir()) == [scene]
+
+
+
+def test_a_command_in_process_leaves_the_process_as_it_found_it(tmp_path):
+    """What a command changes of its process, in_process puts back for the tests after it: a render
+    with --program specialised sets PATHTRACE_PROGRAM and opens a device in that mode, and its
+    finished write leaves SIGINT and SIGTERM ignored (pathtrace.cli.interrupts.FinalWrite)."""
+    import signal
+
+    from pathtrace import api
+
+    def state():
+        return (os.getcwd(), dict(os.environ), dict(api._backends),
+                signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM))
+    before = state()
+    r = in_process("render", "simple", "-o", "o.png", "--size", "8x6", "--spp", "1", "-q", "--program", "specialised",
+                   cwd=tmp_path)
+    assert r.returncode == 0 and (tmp_path / "o.png").read_bytes()[:4] == b"\x89PNG", r.stderr
+    assert state() == before
+
+def test_the_parser_loads_no_numpy_pyopencl_or_scene_module():
+    """Building the command line's parser and refusing a bad option (each command's parser, and
+    each kind of refusal) imports neither NumPy nor PyOpenCL nor the scene, light or material
+    modules: the constants the options offer live in modules that import nothing
+    (pathtrace.rendering.choices, pathtrace.device.programs, pathtrace.bench.default_scenes), so that
+    a mistyped command ends in a fifth of a second, not one (issue #60)."""
+    heavy = ("numpy", "pyopencl", "cv2", "pathtrace.scene", "pathtrace.lights", "pathtrace.materials")
+    render = ["render", "simple", "-o", "o.png"]
+    refused = [render + ["--tonemap", "acse"], render + ["--bogus"], render + ["--filter", "gauss"], render + ["--aov", "x"],
+               ["view", "simple", "--light-sampler", "x"], ["bench", "--program", "x"], ["convert", "simple"],
+               ["farm", "render", "simple", "--rr", "x"], ["devices", "--bogus"], ["nosuchcommand"]]
+    code = f"""
+import sys
+from pathtrace.cli.main import main
+for argv in {refused!r}:
+    try:
+        main(argv)
+    except SystemExit as e:
+        assert e.code == 2, (argv, e.code)
+    else:
+        raise AssertionError(argv)
+print(sorted(m for m in {heavy!r} if m in sys.modules))
+"""
+    r = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0 and r.stdout == "[]\n", (r.stdout, r.stderr[-2000:])
+
+
 def test_the_progress_bar_ends_with_the_real_rate(tmp_path):
-    r = pathtrace("render", "simple", "-o", tmp_path / "a.png", "--size", "64x36", "--spp", "16")
+    r = in_process("render", "simple", "-o", tmp_path / "a.png", "--size", "64x36", "--spp", "16")
     assert r.returncode == 0
     last = [line for line in r.stderr.replace("\r", "\n").splitlines() if line.startswith("simple 64x36: ")][-1]
     assert last.startswith("simple 64x36: 100%") and "16/16 spp" in last
@@ -382,7 +448,7 @@ def test_running_out_of_memory_gets_one_line(monkeypatch, capsys):
 
 def test_a_huge_or_binary_value_is_not_echoed_whole(tmp_path):
     scene = write(tmp_path, GOOD.replace('type = "diffuse"', 'type = "' + "x" * 1_000_000 + '\\u0000"'))
-    r = pathtrace("render", scene, "-o", tmp_path / "o.png", "--spp", "1")
+    r = in_process("render", scene, "-o", tmp_path / "o.png", "--spp", "1")
     assert r.returncode == 1 and "material.type: must be one of" in r.stderr
     assert len(r.stderr) < 600 and "\0" not in r.stderr
 
@@ -392,7 +458,7 @@ def test_a_name_too_long_for_the_file_system_gets_one_line(tmp_path, where):
     long = "b" * 300
     scene = tmp_path / f"{long}.toml" if where == "scene" else \
         write(tmp_path, GOOD.replace("color = 0.5", f'map = "{long}.hdr"'))
-    r = pathtrace("render", scene, "-o", tmp_path / "o.png", "--spp", "1")
+    r = in_process("render", scene, "-o", tmp_path / "o.png", "--spp", "1")
     assert r.returncode == 1 and r.stderr.strip().endswith("File name too long") and "Traceback" not in r.stderr
 
 
@@ -402,7 +468,7 @@ def test_an_output_named_twice_is_refused(tmp_path, outputs):
     """Two outputs (or an output and another's --aov image) that are one file: one line, nothing
     written, where it used to write the file twice without a word."""
     args = [a for o in outputs for a in ("-o", o)]
-    r = pathtrace("render", "simple", *args, "--aov", "albedo", "--size", "8x8", "--spp", "1", "-q", cwd=tmp_path)
+    r = in_process("render", "simple", *args, "--aov", "albedo", "--size", "8x8", "--spp", "1", "-q", cwd=tmp_path)
     assert r.returncode == 1 and "would be written twice" in r.stderr and len(r.stderr.splitlines()) == 1
     assert list(tmp_path.iterdir()) == []
 
@@ -411,7 +477,7 @@ def test_an_output_named_twice_is_refused(tmp_path, outputs):
 
 @pytest.mark.parametrize("spec", ["²", "cpu:²", "9" * 5000, "gpu:0\nx"])
 def test_a_device_spec_of_odd_digits_is_one_line(spec):
-    r = pathtrace("render", "simple", "-o", "o.png", "--spp", "1", "--device", spec, "-q")   # no "loaded" line
+    r = in_process("render", "simple", "-o", "o.png", "--spp", "1", "--device", spec, "-q")   # no "loaded" line
     assert r.returncode == 1 and len(r.stderr.splitlines()) == 1, r.stderr
     assert "no OpenCL device matches" in r.stderr and len(r.stderr) < 300
 
@@ -420,7 +486,7 @@ def test_a_device_spec_of_odd_digits_is_one_line(spec):
                                      ["bench", "--quick", "--json"]], ids=["render", "convert", "bench"])
 def test_an_output_name_too_long_for_the_file_system_is_one_line(tmp_path, command):
     suffix = {"render": ".png", "convert": ".toml", "bench": ".json"}[command[0]]
-    r = pathtrace(*command, tmp_path / ("a" * 300 + suffix))
+    r = in_process(*command, tmp_path / ("a" * 300 + suffix))
     assert r.returncode == 1 and "File name too long" in r.stderr and len(r.stderr.splitlines()) == 1
     assert list(tmp_path.iterdir()) == []
 
@@ -431,7 +497,7 @@ def test_outputs_that_are_not_regular_files_are_refused_and_kept(tmp_path):
     os.mkfifo(tmp_path / "fifo.png")
     (tmp_path / "dir.png").mkdir()
     for name in ("full.png", "fifo.png", "dir.png"):
-        r = pathtrace("render", "simple", "-o", tmp_path / name, "--size", "8x6", "--spp", "1", "-q")
+        r = in_process("render", "simple", "-o", tmp_path / name, "--size", "8x6", "--spp", "1", "-q")
         assert r.returncode == 1 and len(r.stderr.splitlines()) == 1, r.stderr
     assert os.readlink(tmp_path / "full.png") == "/dev/full" and stat.S_ISFIFO(os.lstat(tmp_path / "fifo.png").st_mode)
 
@@ -448,7 +514,7 @@ def test_listing_to_a_closed_standard_output_is_one_line():
 def test_a_nul_byte_in_a_file_name_is_one_line(tmp_path, field):
     scene = tmp_path / "s.toml"
     scene.write_text(field + '[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = { type = "diffuse", rho_d = 0.5 }\n')
-    r = pathtrace("render", scene, "-o", tmp_path / "o.png", "--spp", "1")
+    r = in_process("render", scene, "-o", tmp_path / "o.png", "--spp", "1")
     assert r.returncode == 1 and "a file name cannot hold a NUL byte" in r.stderr and "\\x00" in r.stderr
     assert len(r.stderr.splitlines()) == 1
 
@@ -487,7 +553,7 @@ run()
 
 
 def test_a_name_with_a_newline_is_shown_on_one_line(tmp_path):
-    r = pathtrace("render", "simple", "-o", tmp_path / "a\nb.png", "--size", "8x6", "--spp", "1", "-q")
+    r = in_process("render", "simple", "-o", tmp_path / "a\nb.png", "--size", "8x6", "--spp", "1", "-q")
     assert r.returncode == 0 and r.stderr.splitlines()[-1] == f"wrote {tmp_path}/a\\nb.png"
 
 

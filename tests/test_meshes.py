@@ -8,6 +8,7 @@ from pathtrace.cli.main import main
 from pathtrace.errors import UserError
 from pathtrace.scene import load_scene
 from pathtrace.scene.meshes import read_mesh
+from tests.commands import in_process
 from tests.geometry import cube
 
 QUAD_OBJ = """# a unit quad in the x-y plane, facing +z, with normals, as one polygon
@@ -165,8 +166,6 @@ def test_a_gltf_buffer_that_is_a_fifo_is_refused_without_opening_it(tmp_path):
 def test_nan_indices_and_huge_coordinates_print_nothing_but_our_line(tmp_path):
     """NumPy's own warnings reached the terminal before pathtrace's line (a NaN face index cast
     to int, a cross product of 1e17 coordinates squared in float32)."""
-    import subprocess
-    import sys
     (tmp_path / "n.ply").write_text("ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
                                     "property float z\nelement face 1\nproperty list uchar float vertex_indices\n"
                                     "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 nan\n")
@@ -174,12 +173,9 @@ def test_nan_indices_and_huge_coordinates_print_nothing_but_our_line(tmp_path):
     for name, status in (("n.ply", 1), ("big.obj", 0)):
         scene = tmp_path / f"{name}.toml"
         scene.write_text(f'[[meshes]]\nfile = "{name}"\nmaterial = {{ type = "diffuse", rho_d = 0.5 }}\n')
-        r = subprocess.run([sys.executable, "-W", "default", "-m", "pathtrace", "render", scene, "-o", tmp_path / "o.exr",
-                            "--size", "8x6", "--spp", "1", "-q"], capture_output=True, text=True, timeout=120)
+        r = in_process("render", scene, "-o", tmp_path / "o.exr", "--size", "8x6", "--spp", "1", "-q")   # warnings shown
         assert r.returncode == status and "Warning" not in r.stderr, r.stderr
-    assert "whole numbers" in subprocess.run(
-        [sys.executable, "-m", "pathtrace", "render", tmp_path / "n.ply.toml", "-o", tmp_path / "o.exr"],
-        capture_output=True, text=True, timeout=120).stderr
+    assert "whole numbers" in in_process("render", tmp_path / "n.ply.toml", "-o", tmp_path / "o.exr").stderr
 
 
 @pytest.mark.parametrize("order", ["<", ">"])

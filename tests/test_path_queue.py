@@ -4,8 +4,6 @@ same random numbers in the same order either way, so the image is the megakernel
 order in which a pixel's samples are summed (within float32 rounding of the sums) and the rays
 traced are exactly the same."""
 
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -16,8 +14,9 @@ from pathtrace.rendering import renderer as renderer_module
 from pathtrace.errors import UserError
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
-from pathtrace.scene.description import PATH_QUEUE_AUTO
+from pathtrace.rendering.choices import PATH_QUEUE_AUTO
 from pathtrace.bench.traversal_stats import traversal_stats
+from tests.commands import in_process
 
 pytestmark = pytest.mark.specialised     # the queue is in the scenes' own programs alone
 
@@ -114,9 +113,8 @@ def test_render_command_takes_the_setting(tmp_path, setting):
     images = []
     for value in ("0", setting):
         out = tmp_path / f"q{value}.exr"
-        r = subprocess.run([sys.executable, "-m", "pathtrace", "render", "cornell-box", "--size", "24x16",
-                            "--spp", "4", "--max-depth", "6", "--rr", "off", "--path-queue", value, "-q",
-                            "-o", str(out)], capture_output=True, text=True)
+        r = in_process("render", "cornell-box", "--size", "24x16", "--spp", "4", "--max-depth", "6", "--rr", "off",
+                       "--path-queue", value, "-q", "-o", out)
         assert r.returncode == 0, r.stderr
         assert ("path queue auto: no queue" in r.stderr) == (value == "auto"), r.stderr
         images.append(read_hdr(out, "test"))
@@ -224,6 +222,5 @@ def test_auto_runs_no_trials_on_cpus_or_for_short_renders(backend, monkeypatch, 
 
 def test_the_viewer_refuses_auto():
     """The viewer runs no trials (its panel sets the queue): `view --path-queue auto` is one line."""
-    r = subprocess.run([sys.executable, "-m", "pathtrace", "view", "cornell-box", "--path-queue", "auto"],
-                       capture_output=True, text=True)
+    r = in_process("view", "cornell-box", "--path-queue", "auto")
     assert r.returncode != 0 and "'auto' is not an integer" in r.stderr and "Traceback" not in r.stderr

@@ -4,9 +4,6 @@ and each pass of continue_paths takes them in the order of a counting sort by ke
 random numbers travel with it, so the image is the megakernel's up to the order in which a
 pixel's samples are summed, and the rays traced are the same."""
 
-import subprocess
-import sys
-
 import numpy as np
 import pyopencl as cl
 import pytest
@@ -16,6 +13,7 @@ from pathtrace.device.features import Features
 from pathtrace.rendering import renderer as renderer_module
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
+from tests.commands import in_process
 from tests.stats import z_test
 from tests.test_path_queue import SCENES, SIZE, SPP, assert_same_render, render
 
@@ -132,11 +130,12 @@ def test_programs_without_the_setting_compile_no_sort():
 
 
 def test_the_sort_needs_the_queue(tmp_path):
-    r = subprocess.run([sys.executable, "-m", "pathtrace", "render", "cornell-box", "--size", "8x8", "--spp", "1",
-                        "--path-sort", "-q", "-o", str(tmp_path / "x.exr")], capture_output=True, text=True)
+    r = in_process("render", "cornell-box", "--size", "8x8", "--spp", "1", "--path-sort", "-q", "-o", tmp_path / "x.exr")
     assert r.returncode != 0 and not (tmp_path / "x.exr").exists()
     assert r.stderr.strip().splitlines()[-1].endswith("--path-sort sorts the continuation queue's paths: "
                                                       "give --path-queue N (N >= 1) or auto too")
+    r = in_process("bench", "--device", "cpu", "--scenes", "cornell-box", "--path-sort")
+    assert r.returncode != 0 and "--path-sort sorts the continuation queue's paths" in r.stderr
 
 
 def test_render_command_takes_the_setting(tmp_path):
@@ -145,9 +144,8 @@ def test_render_command_takes_the_setting(tmp_path):
     images = []
     for extra in ((), ("--path-queue", "1", "--path-sort")):
         out = tmp_path / f"s{len(extra)}.exr"
-        r = subprocess.run([sys.executable, "-m", "pathtrace", "render", "cornell-box", "--size", "24x16", "--spp", "4",
-                            "--max-depth", "6", "--rr", "off", *extra, "-q", "-o", str(out)],
-                           capture_output=True, text=True)
+        r = in_process("render", "cornell-box", "--size", "24x16", "--spp", "4", "--max-depth", "6", "--rr", "off",
+                       *extra, "-q", "-o", out)
         assert r.returncode == 0, r.stderr
         images.append(read_hdr(out, "test"))
     np.testing.assert_allclose(images[1], images[0], rtol=1e-5, atol=1e-6)

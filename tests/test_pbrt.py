@@ -18,6 +18,7 @@ from pathtrace.scene.instances import flattened_meshes
 from pathtrace.scene.pbrt.equal_area import sphere_to_square
 from pathtrace.scene.transform import scaling, translation
 from pathtrace.scene.spectra import blackbody_rgb, named_spectrum, reflectance_rgb, sampled
+from tests.commands import in_process
 from tests.stats import z_test
 from tests.test_reference import REFERENCE_BIAS
 
@@ -354,9 +355,6 @@ def test_a_ply_gz_that_is_not_gzip_and_a_huge_vertex_claim_are_refused(tmp_path)
 def test_convert_writes_turned_meshes_and_resampled_maps_beside_the_toml(tmp_path):
     """A mesh with normals (which TOML cannot hold inline) and the lat-long form of an
     equal-area map go to files beside the TOML; the converted scene reads the same."""
-    import subprocess
-    import sys
-
     from pathtrace.io.images import _write_exr
     _write_exr(str(tmp_path / "sky.exr"), np.full((8, 8, 3), 0.5, np.float32))
     (tmp_path / "s.pbrt").write_text(
@@ -364,8 +362,7 @@ def test_convert_writes_turned_meshes_and_resampled_maps_beside_the_toml(tmp_pat
         'LightSource "infinite" "string filename" "sky.exr"\n'
         'Shape "trianglemesh" "point3 P" [ -1 0 -1  1 0 -1  1 0 1  -1 0 1 ] "integer indices" [ 0 2 1  0 3 2 ]'
         ' "normal N" [ 0 -1 0  0 -1 0  0 -1 0  0 -1 0 ] "point2 uv" [ 0 0  1 0  1 1  0 1 ]\n')
-    r = subprocess.run([sys.executable, "-m", "pathtrace", "convert", str(tmp_path / "s.pbrt"), "-o",
-                        str(tmp_path / "out.toml")], capture_output=True, text=True, timeout=120)
+    r = in_process("convert", tmp_path / "s.pbrt", "-o", tmp_path / "out.toml")
     assert r.returncode == 0, r.stderr
     assert (tmp_path / "out.environment.exr").is_file() and list((tmp_path / "out.meshes").glob("*.ply"))
     a, b = load_scene(str(tmp_path / "s.pbrt")), load_scene(str(tmp_path / "out.toml"))

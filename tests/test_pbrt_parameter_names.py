@@ -16,6 +16,7 @@ import pytest
 import pathtrace.scene.pbrt.reader as pbrt_reader
 from pathtrace.scene import known_names, load_scene
 from pathtrace.scene.pbrt.tokens import ParamList
+from tests.commands import in_process
 from tests.warned_scene import warnings_of_a_scene_that_renders
 
 
@@ -145,12 +146,8 @@ HEAD = 'LookAt 0 0 5  0 0 0  0 1 0\nCamera "perspective"\nWorldBegin\nLightSourc
     ('Shape "sphere" "float zzz" 1', "'zzz' is not a parameter of pbrt-v4's sphere shape, which pbrt-v4 refuses"),
 ])
 def test_a_name_pbrt_v4_does_not_know_is_one_line_naming_the_file_line_type_and_closest_name(tmp_path, line, expected):
-    import subprocess
-    import sys
     (tmp_path / "s.pbrt").write_text(HEAD + line + "\n")
-    r = subprocess.run([sys.executable, "-m", "pathtrace", "render", str(tmp_path / "s.pbrt"), "-o",
-                        str(tmp_path / "x.exr"), "--size", "8x8", "--spp", "1"], capture_output=True, text=True,
-                       timeout=300)
+    r = in_process("render", tmp_path / "s.pbrt", "-o", tmp_path / "x.exr", "--size", "8x8", "--spp", "1")
     lines = r.stderr.strip().splitlines()
     assert r.returncode == 1 and len(lines) == 1 and "Traceback" not in r.stderr, r.stderr
     assert lines[0].startswith(f"pathtrace: error: {tmp_path / 's.pbrt'}:5: ") and expected in lines[0], lines[0]

@@ -13,7 +13,7 @@ and imports included, and checks that the image was written:
 - warm: the same command with the same folders, which the cold run filled, the best of
   --repeats: a scene opened again.
 
-The rows: --scenes (by default pathtrace.bench.report.FIRST_IMAGE_SCENES): built-in scenes, `meshes850`
+The rows: --scenes (by default pathtrace.bench.default_scenes.FIRST_IMAGE_SCENES): built-in scenes, `meshes850`
 (850 PLY tori in a Mitsuba XML file, pathtrace.bench.scenes.write_meshes, written with the rows'
 size) and the files `pathtrace bench` writes (pathtrace.bench.report.GENERATED_FILES); then each
 --load-scene file.
@@ -32,7 +32,8 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from pathtrace.bench.report import FIRST_IMAGE_SCENES, GENERATED_FILES, mitsuba_twin, scene_file
+from pathtrace.bench.default_scenes import FIRST_IMAGE_SCENES
+from pathtrace.bench.report import GENERATED_FILES, mitsuba_twin, scene_file
 from pathtrace.bench.scenes import write_meshes
 from pathtrace.errors import UserError
 from pathtrace.io.files import shown

@@ -32,17 +32,14 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from statistics import median
 
+from pathtrace.bench.default_scenes import TARGET_SCENES
 from pathtrace.device.opencl import build_program, choose_devices
 from pathtrace.errors import UserError
 from pathtrace.rendering.multidevice import DeviceGroup
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 
-TARGET_SCENES = ("simple", "spheres8k", "spheres64k",
-                 "simple-diffuse", "spheres8k-diffuse", "spheres64k-diffuse", "teapot-sky",
-                 "teapot-textured")
 GENERATED_FILES = ("tori400-textured",)      # pathtrace.bench.scenes
-FIRST_IMAGE_SCENES = ("simple", "cornell-box", "teapot-sky", "meshes850")    # pathtrace.bench.first_image
 COMPARISON_DEPTH = 8
 ESTIMATORS = ("rr", "depth8", "rr+nee", "depth8+nee")
 

@@ -3,9 +3,9 @@
 import argparse
 import sys
 
+from pathtrace.bench.default_scenes import FIRST_IMAGE_SCENES, TARGET_SCENES
 from pathtrace.cli.options import (PATH_SORT_ALONE, _count, _int_range, _size, add_path_queue_option,
                                    add_program_option)
-
 
 def cmd_bench(args):
     from pathtrace.bench import report as bench
@@ -96,8 +96,6 @@ def _warp_width(text: str) -> int:
 
 def add_parser(sub):
     """The `bench` command's parser."""
-    from pathtrace.bench.report import FIRST_IMAGE_SCENES, TARGET_SCENES
-
     p = sub.add_parser("bench", help="time renders of the benchmark scenes (the table of the report "
                                      "pathtrace grew from)",
                        description="Times renders of the benchmark scenes, by default at 1920x1080 "

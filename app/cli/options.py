@@ -5,8 +5,8 @@ import argparse
 from dataclasses import replace
 
 from pathtrace.errors import UserError, short, warn
-from pathtrace.lights import LIGHT_SAMPLERS
-from pathtrace.scene.description import INTEGRATORS, MAX_PATH_QUEUE, PATH_QUEUE_AUTO, RUSSIAN_ROULETTE
+from pathtrace.rendering.choices import (INTEGRATORS, LIGHT_SAMPLERS, MAX_PATH_QUEUE, PATH_QUEUE_AUTO, RUSSIAN_ROULETTE,
+                                         TONEMAPS)
 
 # The epilog of the commands that take a scene, written out only when help is shown: the names
 # of the built-in scenes come from their module, which no other command need import
@@ -63,7 +63,6 @@ def _exposure(text):
 
 def add_output_options(p: argparse.ArgumentParser):
     """Options of the commands that write images (render, farm render)."""
-    from pathtrace.io.tonecurve import TONEMAPS
     p.add_argument("--exposure", type=_exposure, default=0.0, metavar="EV",
                    help="exposure in stops, -100 to 100, for .png/.jpg (default 0)")
     p.add_argument("--tonemap", choices=TONEMAPS, default="standard",

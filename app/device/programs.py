@@ -25,8 +25,8 @@ import os
 import threading
 from concurrent.futures import Future
 
-import pyopencl as cl
-
+# No PyOpenCL here: the programs are the builder's (pathtrace.device.opencl), named in annotations
+# only, so that the command line reads PROGRAM_MODES and PROGRAM_ENV without loading it (issue #60)
 from pathtrace.errors import UserError, warn
 from pathtrace.device.features import Features
 
@@ -76,14 +76,14 @@ class Programs:
     def _key(self, features: Features, tuned: bool) -> tuple:
         return features, tuned and self._tunes
 
-    def add(self, features: Features, tuned: bool, program: cl.Program):
+    def add(self, features: Features, tuned: bool, program: "pyopencl.Program"):
         """A program built elsewhere."""
         future = Future()
         future.set_result(program)
         with self._lock:
             self._futures[self._key(features, tuned)] = future
 
-    def get(self, features: Features, tuned: bool = True) -> cl.Program:
+    def get(self, features: Features, tuned: bool = True) -> "pyopencl.Program":
         """The program for `features`, built now if no build of it is under way or done."""
         return self._future(self._key(features, tuned)).result()
 

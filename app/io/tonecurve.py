@@ -1,9 +1,8 @@
-"""Linear radiance to display sRGB: exposure, a tone curve, and the sRGB transfer function.
+"""Linear radiance to display sRGB: exposure, a tone curve (by the names of
+pathtrace.rendering.choices.TONEMAPS), and the sRGB transfer function.
 shaders/display.frag applies the same steps on the GPU; tests/test_tonemap.py checks they agree."""
 
 import numpy as np
-
-TONEMAPS = ("standard", "aces")
 
 
 def aces_fit(x):

@@ -6,10 +6,10 @@ from pathtrace.lights.light import DeltaLight
 from pathtrace.lights.point import PointLight
 from pathtrace.lights.registry import DELTA_LIGHTS, LIGHTS, TAGS, kernel_parts
 from pathtrace.lights.spot import SpotLight
-from pathtrace.lights.table import (LIGHT_SAMPLERS, LightTable, alias_table, build_light_table, emitted_power,
+from pathtrace.lights.table import (LightTable, alias_table, build_light_table, emitted_power,
                                     keep_threshold)
 from pathtrace.lights.tree import primitive_bounds
 
-__all__ = ["DELTA_LIGHTS", "LIGHTS", "LIGHT_SAMPLERS", "TAGS", "DeltaLight", "DirectionalLight", "LightTable",
+__all__ = ["DELTA_LIGHTS", "LIGHTS", "TAGS", "DeltaLight", "DirectionalLight", "LightTable",
            "PointLight", "SpotLight", "alias_table", "build_light_table", "emitted_power", "keep_threshold",
            "kernel_parts", "primitive_bounds"]

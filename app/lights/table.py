@@ -12,7 +12,6 @@ from pathtrace.lights.tree import build_light_tree, light_bounds
 from pathtrace.device.types import LIGHT, LIGHT_NODE
 
 
-LIGHT_SAMPLERS = ("auto", "power", "tree")   # how next-event estimation chooses a light
 # Lights with a place from which "auto" chooses by the light tree: its walk costs more than it
 # saves below (PoCL, depth 8, per-pixel variance times time: 0.8x on 242 and 1,862 spheres, 3.7x
 # on 20,000 lamps; docs/performance.md)

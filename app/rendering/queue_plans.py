@@ -14,7 +14,7 @@ from pathtrace.device.occupancy import TUNING_RULE
 from pathtrace.device.opencl import cache_dir
 from pathtrace.errors import UserError
 from pathtrace.io.cache_files import read_entry, write_entry
-from pathtrace.scene.description import PATH_QUEUE_AUTO
+from pathtrace.rendering.choices import PATH_QUEUE_AUTO
 
 # The launch plans that path_queue "auto" chooses among on a GPU, as (the queue depth the program
 # is built with, whether launches use the queue): no queue; the queue after the first vertex; and

@@ -17,7 +17,7 @@ from pathtrace.scene.environment import Environment
 from pathtrace.compiler.memory import available_host_memory
 from pathtrace.scene import Scene
 from pathtrace.filters import FILTERS
-from pathtrace.scene.description import RUSSIAN_ROULETTE
+from pathtrace.rendering.choices import RUSSIAN_ROULETTE
 from pathtrace.device.types import PATH_RECORD, RENDER_PARAMS
 
 RR_DEPTH = 5           # where Russian roulette on throughput starts (Mitsuba 3's default)

@@ -16,37 +16,25 @@ from pathtrace.scene.named import NamedList, name_and_index, vector
 from pathtrace.scene.meshes import is_closed
 
 
-# How paths end (kernels/integrator.cl, RR_*): "throughput", Russian roulette on the path's
-# throughput from depth 5 on (Mitsuba 3's and pbrt-v4's); "albedo", the report's, at every
-# vertex with the material's albedo; "off", at max_depth only.
-RUSSIAN_ROULETTE = ("off", "albedo", "throughput")
-MAX_PATH_QUEUE = 64     # RenderSettings.path_queue's largest value (no path that long is short)
-PATH_QUEUE_AUTO = -1    # RenderSettings.path_queue "auto": chosen by trial renders (pathtrace.rendering.renderer)
-# The estimators a render can use: "path", the path tracer (kernels/integrator.cl); "bdpt",
-# bidirectional path tracing (kernels/bdpt.cl, app/rendering/bdpt.py); "ptracer", its light tracing alone
-# (Mitsuba 3's particle tracer).
-INTEGRATORS = ("path", "bdpt", "ptracer")
-
-
 @dataclass
 class RenderSettings:
     width: int = 960
     height: int = 540
     spp: int = 64
     max_depth: int = 0            # 0: paths end by Russian roulette alone
-    russian_roulette: str = "throughput"   # one of RUSSIAN_ROULETTE
+    russian_roulette: str = "throughput"   # one of pathtrace.rendering.choices.RUSSIAN_ROULETTE
     seed: int = 0
     nee: bool = True              # next-event estimation with MIS; off: the report's estimator
     filter: PixelFilter = field(default_factory=PixelFilter)   # where samples land in a pixel
-    light_sampler: str = "auto"   # how NEE chooses a light: one of pathtrace.lights.LIGHT_SAMPLERS
+    light_sampler: str = "auto"   # how NEE chooses a light: one of pathtrace.rendering.choices.LIGHT_SAMPLERS
     path_queue: int = 0           # paths going on past this many vertices are traced on from a queue
                                   # (kernels/integrator.cl, PATH_QUEUE): the same image, sooner on
                                   # GPUs where few paths go on long; 0: no queue;
-                                  # PATH_QUEUE_AUTO: chosen by trial renders on GPUs
+                                  # PATH_QUEUE_AUTO (pathtrace.rendering.choices): chosen by trial renders on GPUs
     path_sort: bool = False       # the queue's paths traced on in the order of the material they
                                   # shade next (kernels/path_sort.cl, PATH_SORT): the same image;
                                   # only where launches use the queue
-    integrator: str = "path"      # one of INTEGRATORS
+    integrator: str = "path"      # one of pathtrace.rendering.choices.INTEGRATORS
 
     @property
     def paths_end(self) -> bool:

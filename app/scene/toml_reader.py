@@ -12,7 +12,8 @@ import numpy as np
 
 from pathtrace import cameras, filters, parameters
 from pathtrace.filters import PixelFilter
-from pathtrace.lights import DELTA_LIGHTS, LIGHT_SAMPLERS
+from pathtrace.lights import DELTA_LIGHTS
+from pathtrace.rendering.choices import INTEGRATORS, LIGHT_SAMPLERS, RUSSIAN_ROULETTE
 from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError, short
 from pathtrace.materials import BSDFS, Material
@@ -21,7 +22,7 @@ from pathtrace.materials.table import check_blend, check_bump_map, transmits
 from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.resources import resource_dir
 from pathtrace.scene import transform
-from pathtrace.scene.description import INTEGRATORS, RUSSIAN_ROULETTE, Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
+from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, triangulate, vertex_normals
 from pathtrace.shapes import SHAPES, Shape
 from pathtrace.textures import TEXTURES, Texture, read_image

@@ -10,7 +10,8 @@ import numpy as np
 
 from pathtrace.cameras import Camera
 from pathtrace.errors import UserError, cut, short
-from pathtrace.scene.description import INTEGRATORS, MAX_PATH_QUEUE, PATH_QUEUE_AUTO, RUSSIAN_ROULETTE, Scene
+from pathtrace.rendering.choices import INTEGRATORS, LIGHT_SAMPLERS, MAX_PATH_QUEUE, PATH_QUEUE_AUTO, RUSSIAN_ROULETTE
+from pathtrace.scene.description import Scene
 from pathtrace.scene.meshes import MAX_COORDINATE
 
 MAX_SIZE = 16384          # pixels on a side, as `--size` and the TOML format allow
@@ -53,7 +54,6 @@ def russian_roulette(name: str, value) -> str:
 
 
 def _settings(s):
-    from pathtrace.lights import LIGHT_SAMPLERS
     where = "scene.settings"
     for field, (low, high) in SETTING_RANGES.items():
         integer(f"{where}.{field}", getattr(s, field), low, high)

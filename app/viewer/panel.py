@@ -17,9 +17,8 @@ from pathtrace.compiler.compiled import MAX_RADIANCE
 from pathtrace.materials import BSDFS
 from pathtrace.materials.bsdf import constant_of
 from pathtrace.scene.builtin import BUILTIN_SCENES
-from pathtrace.scene.description import RUSSIAN_ROULETTE
+from pathtrace.rendering.choices import RUSSIAN_ROULETTE, TONEMAPS
 from pathtrace.textures import Texture
-from pathtrace.io.tonecurve import TONEMAPS
 
 MARGIN = 10                 # pixels between the panel and the window's edges
 WIDGET_MIN = 150            # the narrowest a widget may get, in pixels

@@ -9,7 +9,7 @@ usual relative error of rendering papers; 0.01 keeps dark pixels from dominating
     python docs/notes/studies/nee_study.py [--device D] [--size WxH] [--seconds S] [--ref-spp N] [--json F]
                                 [--light-samplers power tree ...]
 
-With several --light-samplers, NEE runs once with each (pathtrace.lights.LIGHT_SAMPLERS): the
+With several --light-samplers, NEE runs once with each (pathtrace.rendering.choices.LIGHT_SAMPLERS): the
 choice of lights by power against the light tree."""
 
 import argparse

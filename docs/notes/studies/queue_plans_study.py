@@ -15,7 +15,7 @@ from pathtrace.device.opencl import choose_device
 from pathtrace.rendering.queue_plans import AUTO_PLANS, PLAN_NAMES
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
-from pathtrace.scene.description import PATH_QUEUE_AUTO
+from pathtrace.rendering.choices import PATH_QUEUE_AUTO
 
 
 def main():
