@@ -16,13 +16,14 @@
  * Cycles does, the records stay where they were written and only an index array is sorted. The
  * key is the material row, finer than pbrt-v4's type: rows of one type differ in parameters and
  * textures, and bench --divergence counted 6 to 7 rows against 3 types a warp. A path's result
- * does not depend on which work-item traces it, so the sorted queue renders the unsorted one's samples.
+ * does not depend on which work-item traces it, so the sorted queue renders the unsorted one's
+ * samples.
  *
  * The counting sort, per queue: the kernel that queues a path stores its key beside it and
- * counts it (enqueue_path); sort_offsets turns the counts into the first position of each key
- * (an exclusive prefix sum); sort_paths writes each slot to the next position of its key. The
- * order within a key is that of the atomic increments, which changes no result. Without the
- * define none of this is compiled: the macros at the end are empty. */
+ * counts it (kernels/path_queue.cl: enqueue_path); sort_offsets turns the counts into the first
+ * position of each key (an exclusive prefix sum); sort_paths writes each slot to the next
+ * position of its key. The order within a key is that of the atomic increments, which changes no
+ * result. Without the define none of this is compiled: the macros at the end are empty. */
 
 #ifdef PATH_SORT
 

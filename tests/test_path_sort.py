@@ -11,6 +11,7 @@ import pytest
 from pathtrace.bench.divergence_stats import divergence_stats
 from pathtrace.device.features import Features
 from pathtrace.rendering import renderer as renderer_module
+from pathtrace.rendering.choices import PATH_QUEUE_AUTO
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 from tests.commands import in_process
@@ -83,7 +84,7 @@ def test_each_pass_takes_its_queue_in_the_order_of_the_keys(backend):
     assert len(np.unique(keys)) > 3                        # several materials waited
     counts = read_ints(backend, r, "key_counts")[k * keys_of:(k + 1) * keys_of]
     assert np.array_equal(counts, np.bincount(keys, minlength=keys_of))
-    # the queue's structure of arrays (kernels/integrator.cl: store_path): field f of slot s at f * capacity + s
+    # the queue's structure of arrays (kernels/path_queue.cl: store_path): field f of slot s at f * capacity + s
     fields = np.empty((r.record_bytes() // 16, capacity, 4), np.float32)
     cl.enqueue_copy(backend.queue, fields, r.buffer(("queue", "queue_next")[k % 2]))
     prims = fields[renderer_module.PATH_RECORD.names.index("prev_x"), :count, 3].view(np.int32)
@@ -122,6 +123,16 @@ def test_the_setting_sizes_the_sort_and_the_hits(backend):
     assert r.queue_passes() == renderer_module.SORT_PASSES
     r.set_settings(path_queue=0)        # no queue, no sort
     assert not r.sorts_queue() and r.buffer("order").size == 4
+
+
+def test_auto_keeps_the_sorted_queues_verdict_apart(backend):
+    """path_queue "auto" remembers which plan its trials chose (queue_plans.py); with path_sort its
+    queue plan is the sorted one, which may win where the unsorted one lost."""
+    r = Renderer(backend, load_scene("cornell-box").with_settings(path_queue=PATH_QUEUE_AUTO), *SIZE)
+    unsorted = r._plan_verdict_path()
+    r.set_settings(path_sort=True)
+    assert not r.sorts_queue()                 # no plan chosen yet: no queue, no sort
+    assert r._plan_verdict_path() != unsorted
 
 
 def test_programs_without_the_setting_compile_no_sort():

@@ -28,7 +28,7 @@ BASIC_FILES = ("inlining.h", "types.h", "vector.cl", "color.cl", "rng.cl", "samp
 SHAPE_FILES = ("spawn.cl", "shapes/sphere_range.cl", "shapes/triangle.cl")
 BSDF_FILES = ("bsdf.cl", "fresnel.cl", "microfacet.cl", "coating.cl", "interface.cl", "phase.cl")
 MEDIA_FILES = ("media/homogeneous.cl", "volume.cl")
-LATER_FILES = ("path_sort.cl", "integrator.cl", "aovs.cl", "display.cl")
+LATER_FILES = ("path_queue.cl", "path_sort.cl", "integrator.cl", "aovs.cl", "display.cl")
 
 # No -cl-fast-relaxed-math: it implies finite math, and the kernels rely on INFINITY.
 BUILD_OPTIONS = ("-cl-mad-enable", "-cl-no-signed-zeros")

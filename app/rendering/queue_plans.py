@@ -36,12 +36,6 @@ class QueuePlans:
         if self.width and self._queued_for != (self.queue_plan()[1], self.sorts_queue(), self.queue_passes()):
             self._allocate_images(self.width, self.height, self.aovs)
 
-    def sorts_queue(self) -> bool:
-        """Whether launches sort the continuation queue's paths by material (settings.path_sort,
-        kernels/path_sort.cl): only where they use the queue, so that "auto"'s plans without it and
-        BDPT build no sort."""
-        return bool(self.settings.path_sort) and self.queue_plan()[1]
-
     def queue_plan(self) -> tuple:
         """(the queue depth the program is built with, whether launches use the queue): from
         settings.path_queue, or with "auto" the plan its trials chose (no queue until then)."""
@@ -94,9 +88,11 @@ class QueuePlans:
 
     def _plan_verdict_path(self) -> Path:
         """Where the trials' verdict for this scene's program, image size and device is kept, so
-        that they run once, not before every render (pathtrace.io.cache_files)."""
+        that they run once, not before every render (pathtrace.io.cache_files). With path_sort
+        the queue's plan is the sorted queue's, whose verdict is kept apart."""
         d = self.backend.device.device
-        features = replace(self.compiled.features(self.settings, self.camera), path_queue=0)
+        features = replace(self.compiled.features(self.settings, self.camera), path_queue=0,
+                           path_sort=bool(self.settings.path_sort))
         key = hashlib.sha256("\0".join(map(str, (
             features, self.width, self.height, AUTO_PLANS, TRIAL_SAMPLES, TUNING_RULE,
             d.platform.name, d.platform.version, d.name, d.version, d.driver_version))).encode()).hexdigest()[:32]

@@ -8,6 +8,7 @@ import numpy as np
 import pyopencl as cl
 
 from pathtrace.rendering import bdpt
+from pathtrace.rendering.path_sort import SORT_BUFFERS, PathSort
 from pathtrace.rendering.queue_plans import QueuePlans
 from pathtrace.cameras import KERNELS as CAMERA_KERNELS, Camera
 from pathtrace.compiler.compiled import SCENE_BUFFERS, CompiledScene, compile_scene
@@ -45,10 +46,6 @@ QUEUE_GROUP = 64          # work-items per group of continue_paths (32 and 128 w
 MAX_QUEUED = 1 << 23      # entries of each of the two queues (PATH_RECORD, 128 bytes, 144 with
                           # path_sort; at most a sixteenth of the device's memory); paths that find
                           # one full go on where they are
-SORT_BUFFERS = ("keys", "keys_next", "order")   # with path_sort, an int per queue entry
-                                                # (kernels/path_sort.cl): the two queues' keys and the
-                                                # sorted order of the queue a pass takes
-SORT_GROUP = 256          # the work-items of sort_offsets' one work-group (kernels/path_sort.cl)
 SORT_PASSES = 16          # with path_sort, the most passes of one vertex (queue_passes)
 
 
@@ -81,7 +78,7 @@ def variance_of(sum: np.ndarray, sum_sq: np.ndarray, samples: int) -> np.ndarray
     return np.maximum(sum_sq[..., :3] / n - m * m, 0.0).astype(np.float32)
 
 
-class Renderer(QueuePlans):
+class Renderer(QueuePlans, PathSort):
     def __init__(self, backend: Backend, scene, width: int = None, height: int = None, progress=None):
         """scene: a CompiledScene, or a Scene to compile (on this device, calling progress(fraction)
         as its BVH build goes)."""
@@ -350,15 +347,6 @@ class Renderer(QueuePlans):
         depth = self.settings.max_depth
         return max(1, min(SORT_PASSES, depth - self.queue_plan()[0] - 1 if depth > 0 else SORT_PASSES))
 
-    def record_bytes(self) -> int:
-        """Bytes of a queue entry: PATH_RECORD, less its hit where launches do not sort."""
-        return PATH_RECORD.itemsize - (0 if self.sorts_queue() else PATH_RECORD["hit"].itemsize)
-
-    def sort_keys(self) -> int:
-        """The keys by which path_sort sorts (kernels/path_sort.cl: sort_key): the environment and
-        each material row."""
-        return len(self.compiled.materials) + 1
-
     def queue_samples(self, width: int, height: int) -> int:
         """Samples per pixel of a launch with the continuation queue."""
         return max(1, min(MAX_LAUNCH_SAMPLES, QUEUE_POOL // (width * height)))
@@ -498,7 +486,7 @@ class Renderer(QueuePlans):
             steps = 1 if k < passes else 0
             sort = ()
             if self.sort_kernels:
-                events += self._sort_queue(k, keys[k % 2], capacity, size)
+                events += self._sort_queue(k, keys[k % 2], capacity, size, (QUEUE_GROUP,))
                 sort = (b["order"], keys[(k + 1) % 2], b["key_counts"], np.int32(self.sort_keys()))
             records = (self.pass_records[k],) if self.divergence_stats else ()   # (kernels/divergence.cl)
             follow.set_args(*self.scene_args(), launch, queues[k % 2], queues[(k + 1) % 2], b["counters"],
@@ -514,17 +502,6 @@ class Renderer(QueuePlans):
         rows = int(launch["row_end"] - launch["row_start"])
         paths = min(int(capacity), self.width * rows * int(launch["sample_count"]))   # at most one a sample
         return -(-paths // QUEUE_GROUP) * QUEUE_GROUP
-
-    def _sort_queue(self, k: int, keys: cl.Buffer, capacity, size: tuple) -> list:
-        """Queues the counting sort of the queue that pass k takes (kernels/path_sort.cl): its keys'
-        first positions from their counts, then the order of its slots by key; returns the events."""
-        b = self._buffers
-        offsets, scatter = self.sort_kernels
-        offsets.set_args(b["key_counts"], np.int32(k), np.int32(self.sort_keys()), b["offsets"],
-                         cl.LocalMemory(4 * SORT_GROUP))
-        scatter.set_args(keys, b["counters"], np.int32(k), capacity, b["offsets"], b["order"])
-        return [cl.enqueue_nd_range_kernel(self.backend.queue, offsets, (SORT_GROUP,), (SORT_GROUP,)),
-                cl.enqueue_nd_range_kernel(self.backend.queue, scatter, size, (QUEUE_GROUP,))]
 
     def finish(self):
         self.backend.queue.finish()
