@@ -34,7 +34,7 @@ from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, S
 from pathtrace.scene.known_names import Unread
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, orient_by_normals, vertex_normals
 from pathtrace.shapes import SHAPES, Shape
-from pathtrace.shapes.shape import MIN_DETERMINANT, flattened
+from pathtrace.shapes.shape import MIN_DETERMINANT
 from pathtrace.textures import TEXTURES, Texture, read_image
 
 MAX_XML_BYTES = 64 << 20
@@ -1009,14 +1009,14 @@ class _Reader:
             problem = SHAPES[kind].check(values)
             if problem:
                 _fail(node, f"the {kind}'s {problem}")
-            if flattened(m @ local):
+            shape = Shape(name or f"{kind} {len(self.builder.shapes)}", kind, values, m @ local, material,
+                          flip=flip, swap_uv=swap_uv, media=interface)
+            if SHAPES[kind].too_flat(shape):
                 # Mitsuba 3 would intersect it through a near-singular inverse; the kernels cannot
                 # (pathtrace.shapes.shape.MIN_DETERMINANT), and what it covers is next to nothing
                 warn(f"{node.where()}: to_world shrinks or flattens the {kind} beyond what the kernels can "
                      f"invert (|det| below {MIN_DETERMINANT:g}); pathtrace leaves it out")
                 return
-            shape = Shape(name or f"{kind} {len(self.builder.shapes)}", kind, values, m @ local, material,
-                          flip=flip, swap_uv=swap_uv, media=interface)
             if np.any(np.abs(np.array(shape.bounds(SHAPES[kind]))) > MAX_COORDINATE):
                 _fail(node, f"the {kind} reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace")
             if group is not None:
