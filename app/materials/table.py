@@ -300,7 +300,10 @@ class MaterialTable:
         if not isinstance(material, Material):
             raise UserError(f"materials[{short(key)}]: give a pathtrace.Material (pathtrace.material({{...}}) "
                             f"makes one), got {short(material)}")
-        self.set(self.index(key), material)
+        try:
+            self.set(self.index(key), material)
+        except ValueError as e:     # a parameter it lacks or left out (pack), a combination refused
+            raise UserError(f"materials[{short(key)}]: {e}") from None
 
     def keys(self) -> list:
         """Each row's name, or its number where it has none, in row order."""
