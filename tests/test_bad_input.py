@@ -190,3 +190,37 @@ def test_an_analytic_shape_too_near_flat_to_trace_is_left_out_with_a_warning(tmp
     assert s.triangle_count == 1 and len(s.spheres) == 0 and not s.shapes
     lines = capsys.readouterr().err.splitlines()
     assert len(lines) == 1 and "singular" in lines[0] and "2 like this" in lines[0], lines
+
+
+def test_a_mitsuba_analytic_shape_too_near_flat_is_left_out_with_the_line_that_placed_it(tmp_path, capsys):
+    """As in pbrt: Mitsuba 3 would intersect it through its near-singular inverse; the kernels
+    cannot, so it is left out with a warning naming its line, not refused at render naming
+    scene.shapes[i]. A tiny sphere is such a shape where it stays analytic (its normals flipped),
+    and kept where the sphere range, which needs no inverse, renders it."""
+    (tmp_path / "s.xml").write_text(
+        '<scene version="3.0.0">\n<shape type="rectangle"/>\n'
+        '<shape type="disk"><transform name="to_world"><scale x="1e-13" y="1" z="1"/></transform></shape>\n'
+        '<shape type="sphere"><boolean name="flip_normals" value="true"/>'
+        '<transform name="to_world"><scale value="1e-5"/></transform></shape>\n'
+        '<shape type="sphere"><transform name="to_world"><scale value="1e-5"/></transform></shape>\n</scene>\n')
+    s = load_scene(str(tmp_path / "s.xml"))
+    assert s.triangle_count == 2 and len(s.spheres) == 1 and not s.shapes
+    lines = capsys.readouterr().err.splitlines()
+    assert len(lines) == 2 and all("leaves it out" in line for line in lines), lines
+    assert "s.xml:3:" in lines[0] and "disk" in lines[0] and "s.xml:4:" in lines[1] and "sphere" in lines[1], lines
+
+
+def test_a_toml_analytic_shape_too_near_flat_is_refused_naming_the_shape(tmp_path):
+    (tmp_path / "s.toml").write_text('[materials]\nm = {type = "diffuse", rho_d = 0.5}\n'
+                                     '[[shapes]]\nkind = "disk"\nmaterial = "m"\nscale = [1e-13, 1, 1]\n')
+    with pytest.raises(UserError) as e:
+        load_scene(str(tmp_path / "s.toml"))
+    assert "s.toml" in str(e.value) and "shapes[0]" in str(e.value) and "flattens the disk" in str(e.value)
+
+
+def test_a_tiny_pbrt_sphere_stays_in_the_sphere_range(tmp_path, capsys):
+    """Too small for an analytic shape's inverse, but whole and placed by a similarity: the sphere
+    range, which needs no inverse, renders it, so it is kept without a warning."""
+    (tmp_path / "s.pbrt").write_text(HEAD + TRIANGLE + 'AttributeBegin\nScale 1e-5 1e-5 1e-5\nShape "sphere"\nAttributeEnd\n')
+    s = load_scene(str(tmp_path / "s.pbrt"))
+    assert len(s.spheres) == 1 and not s.shapes and capsys.readouterr().err == ""

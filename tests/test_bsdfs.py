@@ -11,7 +11,9 @@ import numpy as np
 import pytest
 from pyopencl import cltypes
 
-from pathtrace.materials import BSDFS, DELTA, pack
+from pathtrace.errors import UserError
+from pathtrace.materials import BSDFS, DELTA, Material, pack
+from pathtrace.scene import SceneBuilder
 from tests.test_sampling import chi_square
 
 SOURCE = """
@@ -194,6 +196,29 @@ def test_every_registered_type_declares_examples_that_pack_and_unpack():
             again = pack(name, bsdf.unpack(rows[0]))
             for field in rows.dtype.names:
                 np.testing.assert_allclose(again[field], rows[field], rtol=1e-6, err_msg=f"{name}.{field}")
+
+
+def test_a_parameter_a_type_lacks_or_a_required_one_left_out_is_refused_not_packed_as_nan():
+    """pack and the scene builder's materials: a name the type does not have (a format's name,
+    Mitsuba's "reflectance" for rho_d) or a parameter without a default left out raises, naming
+    the type and the parameter (a UserError naming the row where a scene's row is set), where
+    both packed NaN (a diffuse emitter so packed made NEE and BDPT disagree with paths alone,
+    each dropping the samples it happened to)."""
+    for name, bsdf in BSDFS.items():
+        with pytest.raises(ValueError, match=f"^{name}: unknown parameter 'no_such_parameter'"):
+            pack(name, {**bsdf.examples[0], "no_such_parameter": 1.0})
+        for example in bsdf.examples:
+            for p in bsdf.params:
+                if p.name in example and p.kind != "name" and p.into is None and p.default is None:
+                    with pytest.raises(ValueError, match=f"^{name}: missing '{p.name}'"):
+                        pack(name, {k: v for k, v in example.items() if k != p.name})
+    b = SceneBuilder()
+    with pytest.raises(ValueError, match="^diffuse: unknown parameter 'reflectance'"):
+        b.material(Material("diffuse", {"reflectance": 0.8}, emission=np.full(3, 0.5)))
+    # the API's scene.materials[k] = ...: one line naming the row (docs/python.md)
+    k = b.material(Material("diffuse", {"rho_d": 0.8}))
+    with pytest.raises(UserError, match=rf"^materials\[{k}\]: diffuse: unknown parameter 'reflectance'"):
+        b.materials[k] = Material("diffuse", {"reflectance": 0.8})
 
 
 def test_every_type_with_a_bsdf_kernel_is_in_the_suite():

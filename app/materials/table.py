@@ -151,9 +151,22 @@ def pack(type_name: str, params: dict, emission=(0, 0, 0), twosided=False, emits
     """Rows of MATERIAL for one type. Each parameter and the emission hold one value for all
     rows or one per row: a colour is a number, 3 numbers or an (N, 3) array, a number a scalar
     or an (N,) array. Names are resolved (BSDFType.resolve), and parameters left out take their
-    defaults."""
+    defaults. Raises ValueError for a parameter the type does not have (a format's name for
+    one it has: Mitsuba's "reflectance" for rho_d) and for one left out that has no default,
+    which would be packed as NaN (np.asarray(None, float)): the kernels drop the samples of the
+    paths that meet such a material, each estimator different ones, so that they disagree as if
+    one of them were biased."""
     bsdf = BSDFS[type_name]
+    known = [p.name for p in bsdf.params]
+    unknown = sorted(set(params) - set(known))
+    if unknown:
+        raise ValueError(f"{type_name}: unknown parameter '{unknown[0]}' "
+                         f"(its parameters: {', '.join(known) or 'none'})")
     params = bsdf.resolve(params)
+    missing = [p.name for p in bsdf.params if p.kind != "name" and p.into is None and p.default is None
+               and p.name not in params]
+    if missing:
+        raise ValueError(f"{type_name}: missing '{missing[0]}'")
     if twosided and bsdf.transmits(params):
         # Mitsuba 3 refuses the combination too: a transmissive BSDF already has two sides, and
         # turning its frame round for back hits would send light through glass the wrong way
@@ -287,7 +300,10 @@ class MaterialTable:
         if not isinstance(material, Material):
             raise UserError(f"materials[{short(key)}]: give a pathtrace.Material (pathtrace.material({{...}}) "
                             f"makes one), got {short(material)}")
-        self.set(self.index(key), material)
+        try:
+            self.set(self.index(key), material)
+        except ValueError as e:     # a parameter it lacks or left out (pack), a combination refused
+            raise UserError(f"materials[{short(key)}]: {e}") from None
 
     def keys(self) -> list:
         """Each row's name, or its number where it has none, in row order."""

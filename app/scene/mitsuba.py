@@ -34,6 +34,7 @@ from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, S
 from pathtrace.scene.known_names import Unread
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, orient_by_normals, vertex_normals
 from pathtrace.shapes import SHAPES, Shape
+from pathtrace.shapes.shape import MIN_DETERMINANT
 from pathtrace.textures import TEXTURES, Texture, read_image
 
 MAX_XML_BYTES = 64 << 20
@@ -1010,6 +1011,12 @@ class _Reader:
                 _fail(node, f"the {kind}'s {problem}")
             shape = Shape(name or f"{kind} {len(self.builder.shapes)}", kind, values, m @ local, material,
                           flip=flip, swap_uv=swap_uv, media=interface)
+            if SHAPES[kind].too_flat(shape):
+                # Mitsuba 3 would intersect it through a near-singular inverse; the kernels cannot
+                # (pathtrace.shapes.shape.MIN_DETERMINANT), and what it covers is next to nothing
+                warn(f"{node.where()}: to_world shrinks or flattens the {kind} beyond what the kernels can "
+                     f"invert (|det| below {MIN_DETERMINANT:g}); pathtrace leaves it out")
+                return
             if np.any(np.abs(np.array(shape.bounds(SHAPES[kind]))) > MAX_COORDINATE):
                 _fail(node, f"the {kind} reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace")
             if group is not None:

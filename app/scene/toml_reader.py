@@ -25,6 +25,7 @@ from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, triangulate, vertex_normals
 from pathtrace.shapes import SHAPES, Shape
+from pathtrace.shapes.shape import MIN_DETERMINANT
 from pathtrace.textures import TEXTURES, Texture, read_image
 
 # the scene-file types besides the registry's: "emitter" is a black BSDF with emission, and
@@ -530,6 +531,9 @@ class _Reader:
         shape = Shape(self.name(data, where, f"{kind} {where[7:-1]}"), kind, values, self.transform(data, where),
                       self.material_ref(builder, rows, data, where), self.boolean(data, "flip", where, False),
                       self.boolean(data, "swap_uv", where, False), self.interface(data, where))
+        if k.too_flat(shape):
+            self.fail(where, f"the transform shrinks or flattens the {kind} beyond what the kernels can invert "
+                             f"(|det| below {MIN_DETERMINANT:g})")
         if np.any(np.abs(np.array(shape.bounds(k))) > MAX_COORDINATE):
             self.fail(where, f"the {kind} reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace")
         return shape

@@ -87,6 +87,12 @@ class ShapeKind:
         """(axis, cos of its spread) of the cone holding every normal, in its object's space."""
         raise NotImplementedError
 
+    def too_flat(self, shape) -> bool:
+        """Whether `shape` is under a transform too near singular for the inverse the kernels
+        intersect it through (flattened) and stays this kind: a whole sphere that the sphere range
+        can render (fast_range, its material reading no frame) needs no inverse."""
+        return flattened(shape.to_world) and self.fast_range(shape, False) is None
+
     @staticmethod
     def fast_range(shape, reads_frame: bool) -> tuple | None:
         """(centre, radius) of a sphere of the sphere range that renders `shape` alike, or None

@@ -49,7 +49,6 @@ from pathtrace.scene.pbrt.materials import MaterialMapper, make, spectrum_rgb
 from pathtrace.textures import Texture
 from pathtrace.scene.pbrt.tokens import Tokens, numbers, parameters, string
 from pathtrace.shapes import SHAPES, Shape
-from pathtrace.shapes.shape import flattened
 
 MAX_FILE_BYTES = 4 << 30
 MAX_INCLUDE_DEPTH = 16
@@ -697,7 +696,8 @@ class PbrtReader:
             self.once(("interface", where), f"{where}: a shape of the interface material that bounds no "
                                             "medium is nothing; pathtrace leaves it out")
             return
-        if self.singular() or (kind in SHAPES and flattened(self.state.ctm)):
+        shape = None if self.singular() or kind not in SHAPES else self.analytic_shape(kind, params, media, where)
+        if self.singular() or (shape is not None and SHAPES[kind].too_flat(shape)):
             for p in params.params.values():
                 p.used = True
             # pbrt-v4 would carry NaN normals and a NaN inverse: flattened to nothing (or, for
@@ -705,7 +705,6 @@ class PbrtReader:
             # shape is left out (as degenerate triangles are)
             warn(f"{where}: the current transform is singular (it flattens the shape); pathtrace leaves the shape out")
             return
-        shape = self.analytic_shape(kind, params, media, where) if kind in SHAPES else None
         mesh = self.shape_mesh(kind, params, where) if shape is None else (None, None, None, None, "")
         if mesh is None:
             return
