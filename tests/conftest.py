@@ -115,11 +115,11 @@ def scene_arrays(compiled):
             for a in (arrays[name] for name in SCENE_BUFFERS)]
 
 
-# The longest test files, longest first (their times on two cores, 2026-11-25: the references
-# about 250 s, the rest 60-100 s each). The workers take whole files (--dist loadfile), so a long
-# one begun last leaves the other worker idle at the end.
-LONGEST_FILES = ("test_reference.py", "test_viewer.py", "test_materials.py", "test_cli.py", "test_bench.py",
-                 "test_nee.py")
+# The longest test files, longest first (their shares of the suite's time on two cores,
+# 2026-11-29: the references 12 %, the next nine 4-7 % each). The workers take whole files
+# (--dist loadfile), so a long one begun last leaves the other worker idle at the end.
+LONGEST_FILES = ("test_reference.py", "test_nee.py", "test_programs.py", "test_bench.py", "test_path_queue.py",
+                 "test_bdpt.py", "test_shapes.py", "test_cli.py", "test_viewer.py", "test_bvh.py", "test_pbrt.py")
 
 
 def pytest_collection_modifyitems(items):
