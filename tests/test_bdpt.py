@@ -30,6 +30,7 @@ def render(backend, scene, integrator, spp, size, batches=BATCHES):
         r = Renderer(backend, scene.with_settings(integrator=integrator, seed=1000 * k + 7), *size)
         r.add_samples(spp)
         r.finish()
+        assert r.dropped_samples() == 0     # a NaN dropped would show as a bias, not as what it is
         means.append(r.mean())
     means = np.array(means, np.float64)
     return means.mean(0), means.var(0, ddof=1) / batches
@@ -42,6 +43,7 @@ def path_reference(backend, scene, spp, size):
     for _ in range(spp // 256):
         r.add_samples(256)
     r.finish()
+    assert r.dropped_samples() == 0
     return r.mean().astype(np.float64), r.variance().astype(np.float64) / r.samples
 
 

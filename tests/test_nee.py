@@ -80,6 +80,7 @@ def render(backend, scene, nee, seed, spp):
     for _ in range(spp // 256):
         r.add_samples(256)
     r.finish()
+    assert r.dropped_samples() == 0     # a NaN dropped would show as a bias, not as what it is
     return r.mean(), r.variance()
 
 
@@ -214,6 +215,7 @@ def image_mean(backend, scene, spp):
     r = Renderer(backend, scene, *SCENE_SIZE)
     r.add_samples(spp)
     r.finish()
+    assert r.dropped_samples() == 0
     pixels = SCENE_SIZE[0] * SCENE_SIZE[1]
     return r.mean().mean(axis=(0, 1)), np.sqrt(r.variance().sum(axis=(0, 1)) / r.samples) / pixels
 

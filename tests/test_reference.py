@@ -71,6 +71,7 @@ def test_matches_mitsuba(backend, path, nee):
     for _ in range(8 if nee and path.stem not in SUN_THROUGH_DELTAS else 32):
         r.add_samples(128)
     r.finish()
+    assert r.dropped_samples() == 0     # a NaN dropped would show as a bias, not as what it is
     ok, p, threshold = z_test(r.mean(), r.variance() / r.samples, ref["mean"], ref["var_of_mean"], block=4,
                               rel_floor=REFERENCE_BIAS.get(path.stem, 1e-5))
     assert ok, f"smallest p-value {p:.3g} below the Sidak threshold {threshold:.3g}"
