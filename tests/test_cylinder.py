@@ -53,10 +53,11 @@ def test_hits_follow_pbrts_formulas(kernels, flip, uniform):
 
 def test_pbrt_cylinder_orders_its_ends_and_clamps_phimax(tmp_path, capfd):
     """pbrt-v4's Cylinder::Create orders zmin and zmax and clamps phimax to 360; `power` is
-    spread over its area 2 pi r (zmax - zmin); ReverseOrientation turns it inside out."""
+    spread over its area 2 pi r (zmax - zmin); ReverseOrientation turns it inside out. (The z
+    range is mirrored, under a turned z: from_pbrt.)"""
     c, emission = pbrt_emitter(tmp_path, capfd, 'ReverseOrientation\nShape "cylinder" "float radius" 0.5 '
                                '"float zmin" 2 "float zmax" -1 "float phimax" 400')
-    assert c.kind == "cylinder" and c.flip and c.params == pytest.approx((0.5, -1.0, 2.0, 2 * math.pi))
+    assert c.kind == "cylinder" and c.flip and c.params == pytest.approx((0.5, -2.0, 1.0, 2 * math.pi))
     np.testing.assert_allclose(emission, 10 / (math.pi * 2 * math.pi * 0.5 * 3), rtol=1e-5)
 
 
@@ -80,3 +81,22 @@ def test_mitsuba_cylinder_runs_from_p0_to_p1(kernels, tmp_path):
     np.testing.assert_allclose(h["uv"][:, 1], y / 2, atol=2e-5)
     np.testing.assert_allclose(h["n"], -(target - axis) / 0.5, atol=1e-5)
     assert np.ptp(h["uv"][:, 0]) > 0.9               # u runs round the whole turn
+
+
+def test_a_pbrt_cylinder_is_textured_at_pbrts_image_coordinates(kernels, tmp_path):
+    """pbrt-v4 looks images up at (u, 1 - v) (ImageTexture), and the pbrt reader turns every
+    mesh's v round once so that pathtrace's lookup at (u, v) reads the same texel: a pbrt
+    cylinder's hit must carry v = 1 - pbrt's (z - zmin) / (zmax - zmin), its front still outward."""
+    path = tmp_path / "c.pbrt"
+    path.write_text('LookAt 0 0 5  0 0 0  0 1 0\nCamera "perspective"\nWorldBegin\nTranslate 0.3 0 0\n'
+                    'Shape "cylinder" "float radius" 0.8 "float zmin" -0.5 "float zmax" 1.5 "float phimax" 300\n')
+    scene = load_scene(str(path))
+    rng, n = np.random.default_rng(7), 500
+    phi = rng.uniform(0.01, math.radians(300) - 0.01, n)
+    z = rng.uniform(-0.49, 1.49, n)
+    wall = np.column_stack([0.8 * np.cos(phi) + 0.3, 0.8 * np.sin(phi), z])
+    outward = np.column_stack([np.cos(phi), np.sin(phi), np.zeros(n)])
+    h = shape_hits(kernels, scene, wall + 2 * outward, wall)
+    np.testing.assert_allclose(h["p"], wall, atol=3e-5)
+    np.testing.assert_allclose(h["uv"], np.column_stack([phi / math.radians(300), 1 - (z + 0.5) / 2.0]), atol=2e-5)
+    np.testing.assert_allclose(h["n"], outward, atol=1e-5)

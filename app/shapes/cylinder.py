@@ -6,7 +6,7 @@ import math
 import numpy as np
 
 from pathtrace.parameters import Parameter
-from pathtrace.shapes.shape import Quadric
+from pathtrace.shapes.shape import Quadric, turned_z
 
 
 class Cylinder(Quadric):
@@ -48,6 +48,10 @@ class Cylinder(Quadric):
 
     def normal_cone(self, params):
         return np.array([0.0, 0.0, 1.0]), -1.0        # pbrt-v4: DirectionCone::EntireSphere
+
+    def from_pbrt(self, params):
+        """pbrt-v4's cylinder with z turned round (turned_z): its texture v = 1 - pbrt's v."""
+        return turned_z(params)
 
     def from_mitsuba(self, values, to_world, where):
         """Mitsuba 3's cylinder (src/shapes/cylinder.cpp): the unit cylinder, z in [0, 1] and a

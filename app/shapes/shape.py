@@ -18,6 +18,21 @@ MIN_DETERMINANT = 1e-12
 inverse that the kernels intersect with (kernels/shapes/analytic.cl) is beyond float32's precision."""
 
 
+TURN_Z = np.diag([1.0, 1.0, -1.0, 1.0])
+"""The mirror of z. Mitsuba's sphere v = theta / pi is pbrt-v4's v of the sphere with z turned
+round (theta -> pi - theta)."""
+
+
+def turned_z(params) -> tuple:
+    """(params, object transform) of pbrt-v4's shape of parameters (radius, z_min, z_max,
+    phi_max), a sphere or a cylinder, with z turned round (TURN_Z, the z range mirrored): the same
+    surface, its normal the same, its texture v = 1 - pbrt's v, as the pbrt reader turns every
+    mesh's v (pbrt-v4's ImageTexture looks images up at (u, 1 - v); pathtrace's images have
+    v = 0 at the top)."""
+    radius, z_min, z_max, phi_max = params
+    return (radius, -z_max, -z_min, phi_max), TURN_Z.copy()
+
+
 def flattened(to_world) -> bool:
     """Whether a shape under the 4x4 transform `to_world` is too near flat to be traced."""
     return not abs(np.linalg.det(np.asarray(to_world, np.float64)[:3, :3])) >= MIN_DETERMINANT

@@ -9,11 +9,9 @@ import numpy as np
 
 from pathtrace.errors import warn
 from pathtrace.parameters import Parameter
-from pathtrace.shapes.shape import ShapeKind
+from pathtrace.shapes.shape import TURN_Z, ShapeKind, turned_z
 
 GOLDEN_ANGLE = math.pi * (3 - math.sqrt(5))
-# Mitsuba's v = theta / pi is pbrt-v4's v of the sphere with z turned round (theta -> pi - theta)
-TURN_Z = np.diag([1.0, 1.0, -1.0, 1.0])
 
 
 class Sphere(ShapeKind):
@@ -45,11 +43,9 @@ class Sphere(ShapeKind):
         return radius, clamp(min(z0, z1)), clamp(max(z0, z1)), min(max(phi_max, 0.0), 2 * math.pi)
 
     def from_pbrt(self, params):
-        """pbrt-v4's sphere with z turned round (TURN_Z, the z range mirrored): the same surface,
-        its texture v = 1 - pbrt's v, as the pbrt reader turns every mesh's v (pathtrace's
-        images have v = 0 at the top), and the sphere range's uv where it is whole."""
-        radius, z_min, z_max, phi_max = params
-        return (radius, -z_max, -z_min, phi_max), TURN_Z.copy()
+        """pbrt-v4's sphere with z turned round (turned_z), which is also the sphere range's uv
+        where it is whole."""
+        return turned_z(params)
 
     def check(self, params):
         radius, z_min, z_max, phi_max = params
