@@ -696,8 +696,9 @@ class PbrtReader:
             self.once(("interface", where), f"{where}: a shape of the interface material that bounds no "
                                             "medium is nothing; pathtrace leaves it out")
             return
-        shape = None if self.singular() or kind not in SHAPES else self.analytic_shape(kind, params, media, where)
-        if self.singular() or (shape is not None and SHAPES[kind].too_flat(shape)):
+        singular = self.singular()
+        shape = None if singular or kind not in SHAPES else self.analytic_shape(kind, params, media, where)
+        if singular or (shape is not None and SHAPES[kind].too_flat(shape)):
             for p in params.params.values():
                 p.used = True
             # pbrt-v4 would carry NaN normals and a NaN inverse: flattened to nothing (or, for
