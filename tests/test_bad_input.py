@@ -224,3 +224,11 @@ def test_a_tiny_pbrt_sphere_stays_in_the_sphere_range(tmp_path, capsys):
     (tmp_path / "s.pbrt").write_text(HEAD + TRIANGLE + 'AttributeBegin\nScale 1e-5 1e-5 1e-5\nShape "sphere"\nAttributeEnd\n')
     s = load_scene(str(tmp_path / "s.pbrt"))
     assert len(s.spheres) == 1 and not s.shapes and capsys.readouterr().err == ""
+
+
+@pytest.mark.parametrize("table", ["camera", "environment", "render", "lights", "objects"])
+def test_a_top_level_table_given_as_a_number_is_refused_naming_it(table):
+    """Found by tests/test_fuzz_scenes.py: `camera = 0` was a traceback."""
+    with pytest.raises(UserError) as e:
+        pathtrace.load_dict({**BASE, table: 0})
+    assert f"'scene': {table}: must be" in str(e.value), str(e.value)

@@ -328,6 +328,8 @@ class _Reader:
     def camera(self, data):
         """The [camera] table: the frame, and the parameters its type declares (app/cameras/)."""
         where = "camera"
+        if not isinstance(data, dict):
+            self.fail(where, f"must be a table, got {short(data)}")
         kind = data.get("type", "perspective")
         cls = cameras.registry.toml_class(kind, data)
         if cls is None:
