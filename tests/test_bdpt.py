@@ -120,11 +120,11 @@ def cbox_thinlens():
 # (scene, the integrator against the path tracer, its samples per pixel per batch, the path
 # tracer's samples per pixel): the Cornell box's diffuse walls with light tracing alone and
 # with BDPT, through a box and a gaussian filter and a thin lens; glass, gold and a caustic;
-# delta lights. The path tracer's variance of the mean at 1024 samples per pixel is, in the median
-# pixel, 11-20 % (cbox, ptracer and bdpt, thin lens), 39 % (gaussian filter) and 18 % (spot) of the tested estimator's
-# (measured on PoCL, 2026-11-29), so the difference's standard error is within 3-8 % of the
-# tested estimator's alone; the caustic's reference keeps 4096, for its sample variance to have
-# seen the rare paths through the glass.
+# delta lights. The path tracer's variance of the mean at 1024 samples per pixel is, in the
+# median pixel, 11-20 % of the tested estimator's (cbox with ptracer, bdpt and the thin lens;
+# spot), 39 % through the gaussian filter (measured on PoCL, 2026-11-29): the difference's
+# standard error is 5-18 % above the tested estimator's alone. The caustic's reference keeps
+# 4096, for its sample variance to have seen the rare paths through the glass.
 CASES = {"cbox-ptracer": (cbox, "ptracer", 32, 1024), "cbox-bdpt": (cbox, "bdpt", 16, 1024),
          "cbox-gaussian-ptracer": (cbox_gaussian, "ptracer", 32, 1024),
          "cbox-thinlens-ptracer": (cbox_thinlens, "ptracer", 32, 1024),
