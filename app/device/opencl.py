@@ -30,8 +30,14 @@ BSDF_FILES = ("bsdf.cl", "fresnel.cl", "microfacet.cl", "coating.cl", "interface
 MEDIA_FILES = ("media/homogeneous.cl", "volume.cl")
 LATER_FILES = ("path_queue.cl", "path_sort.cl", "integrator.cl", "aovs.cl", "display.cl")
 
-# No -cl-fast-relaxed-math: it implies finite math, and the kernels rely on INFINITY.
-BUILD_OPTIONS = ("-cl-mad-enable", "-cl-no-signed-zeros")
+# No -cl-fast-relaxed-math: it implies finite math, and the kernels rely on INFINITY. Denormal
+# floats flushed to zero: an x86 core takes a microcode assist of about a hundred cycles on each
+# denormal operand or result, and some scenes' paths make many (PoCL rendered the Cornell box
+# 2.5-4x faster with them flushed), and on an H200 the flush-to-zero instructions took 2-11 % off
+# every scene measured (docs/notes/performance-2026-11.md, 2026-11-29). A value below 1.2e-38 is
+# as good as zero to a radiance or a density, and the kernels handle zero densities and zero
+# direction components already (kernels/sampling.cl: mis_weight; the slab test).
+BUILD_OPTIONS = ("-cl-mad-enable", "-cl-no-signed-zeros", "-cl-denorms-are-zero")
 # A cache entry: the SHA-256 of the rest, the build options the binary was made with (NUL
 # separated) and a newline, the binary.
 CACHE_FORMAT = "2"
