@@ -88,6 +88,29 @@ def test_pbrt_disk_is_analytic_with_pbrts_front_and_power(tmp_path, capfd, trans
     np.testing.assert_allclose(emission, 10 / (math.pi * area), rtol=1e-5)
 
 
+def test_a_pbrt_disk_is_textured_at_pbrts_image_coordinates(kernels, tmp_path):
+    """pbrt-v4 looks images up at (u, 1 - v) (src/pbrt/textures.cpp, SpectrumImageTexture::
+    Evaluate) of its disk's u = phi / phimax, v = (radius - r) / (radius - innerradius)
+    (src/pbrt/shapes.h, Disk::InteractionFromIntersection), and pathtrace at (u, v): a pbrt
+    disk's hit must carry (u, 1 - v), its tangents along them pbrt's dp/du = phimax (-y, x, 0)
+    and -dp/dv = (radius - innerradius) (cos phi, sin phi, 0), its front still +z."""
+    path = tmp_path / "d.pbrt"
+    path.write_text('LookAt 0 0 5  0 0 0  0 1 0\nCamera "perspective"\nWorldBegin\nTranslate 0.3 0 0\n'
+                    'Shape "disk" "float radius" 1.5 "float innerradius" 0.6 "float height" 0.25 "float phimax" 250\n')
+    scene = load_scene(str(path))
+    rng, n = np.random.default_rng(8), 500
+    phi = rng.uniform(0.01, math.radians(250) - 0.01, n)
+    r = rng.uniform(0.61, 1.49, n)
+    local = np.column_stack([r * np.cos(phi), r * np.sin(phi), np.full(n, 0.25)])
+    h = shape_hits(kernels, scene, local + [0.3, 0, 2], local + [0.3, 0, 0])
+    np.testing.assert_allclose(h["p"], local + [0.3, 0, 0], atol=2e-5)
+    np.testing.assert_allclose(h["uv"], np.column_stack([phi / math.radians(250), 1 - (1.5 - r) / 0.9]), atol=2e-5)
+    np.testing.assert_allclose(h["dpdu"], math.radians(250) * np.column_stack([-local[:, 1], local[:, 0], np.zeros(n)]),
+                               atol=1e-4)
+    np.testing.assert_allclose(h["dpdv"], 0.9 * np.column_stack([np.cos(phi), np.sin(phi), np.zeros(n)]), atol=1e-5)
+    np.testing.assert_allclose(h["n"], np.broadcast_to([0, 0, 1], (n, 3)), atol=1e-6)
+
+
 def fan(segments=256):
     """The unit disk as the fan of `segments` triangles that pathtrace drew for a disk before."""
     a = np.arange(segments + 1) / segments * 2 * math.pi
