@@ -12,19 +12,20 @@ import numpy as np
 
 
 class TextureUV(Enum):
-    """A mode, by the TOML value that names it ([[shapes]] texture_uv): its matrix A, offset b
-    and what it is for. The first is the default."""
-    KIND = ("u,v", ((1, 0), (0, 1)), (0, 0), "the kind's own (u, v)")
-    MITSUBA_DISK = ("1-v,u", ((0, -1), (1, 0)), (1, 0),
-                    "Mitsuba 3's disk: the unit disk's (1 - v, u) = (r, phi / 2 pi) (src/shapes/disk.cpp)")
-    PBRT = ("u,1-v", ((1, 0), (0, -1)), (0, 1),
-            "pbrt-v4's: its images are looked up at (u, 1 - v) (src/pbrt/textures.cpp, "
-            "SpectrumImageTexture::Evaluate), and pathtrace's at (u, v), v = 0 an image's top row")
+    """A mode, by the TOML value that names it ([[shapes]] texture_uv), with its matrix A and
+    offset b. The first is the default."""
+    # the kind's own (u, v)
+    KIND = ("u,v", ((1, 0), (0, 1)), (0, 0))
+    # Mitsuba 3's disk: the unit disk's (1 - v, u) = (r, phi / 2 pi) (src/shapes/disk.cpp)
+    MITSUBA_DISK = ("1-v,u", ((0, -1), (1, 0)), (1, 0))
+    # pbrt-v4's: its images are looked up at (u, 1 - v) (src/pbrt/textures.cpp,
+    # SpectrumImageTexture::Evaluate), pathtrace's at (u, v), v = 0 an image's top row
+    PBRT = ("u,1-v", ((1, 0), (0, -1)), (0, 1))
 
-    def __new__(cls, formula, matrix, offset, doc):
+    def __new__(cls, formula, matrix, offset):
         mode = object.__new__(cls)
         mode._value_ = formula
-        mode.matrix, mode.offset, mode.doc = np.array(matrix, np.float64), np.array(offset, np.float64), doc
+        mode.matrix, mode.offset = np.array(matrix, np.float64), np.array(offset, np.float64)
         return mode
 
     @property
