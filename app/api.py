@@ -228,7 +228,7 @@ def _geometry_digest(scene: Scene) -> bytes:
     h.update(repr((scene.media, scene.sphere_media, [m.media for m in meshes])).encode())
     # analytic shapes (objects' are copied into scene.shapes)
     h.update(repr([(s.kind, tuple(map(float, s.params)), np.asarray(s.to_world, np.float64).tolist(), s.material,
-                    s.flip, s.swap_uv, s.media) for s in scene.shapes]).encode())
+                    s.flip, s.texture_uv, s.media) for s in scene.shapes]).encode())
     return h.digest()
 
 

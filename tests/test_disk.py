@@ -1,7 +1,8 @@
 """The analytic disk (kernels/shapes/disk.cl, app/shapes/disk.py): its area, points, normals, uv
 and dp/du against pbrt-v4's formulas (section 6.4) and Mitsuba 3's, the pbrt-v4 and Mitsuba 3
-readers' disks, and its image against the 256-triangle fan that stood for it before. The
-registry's tests (tests/test_shapes.py) cover its BVH hits, sampling and lighting."""
+readers' disks (a pbrt disk's texture coordinates (u, 1 - v), and its image as a pbrt mesh of its
+uv), and its image against the 256-triangle fan that stood for it before. The registry's tests
+(tests/test_shapes.py) cover its BVH hits, sampling and lighting."""
 
 import math
 
@@ -86,6 +87,73 @@ def test_pbrt_disk_is_analytic_with_pbrts_front_and_power(tmp_path, capfd, trans
     assert disk.params == pytest.approx((2.0, 0.5, 0.1, math.radians(270)))
     area = math.pi * (4 - 0.25) * 0.75
     np.testing.assert_allclose(emission, 10 / (math.pi * area), rtol=1e-5)
+
+
+def test_a_pbrt_disk_is_textured_at_pbrts_image_coordinates(kernels, tmp_path):
+    """pbrt-v4 looks images up at (u, 1 - v) (src/pbrt/textures.cpp, SpectrumImageTexture::
+    Evaluate) of its disk's u = phi / phimax, v = (radius - r) / (radius - innerradius)
+    (src/pbrt/shapes.h, Disk::InteractionFromIntersection), and pathtrace at (u, v): a pbrt
+    disk's hit must carry (u, 1 - v), its tangents along them pbrt's dp/du = phimax (-y, x, 0)
+    and -dp/dv = (radius - innerradius) (cos phi, sin phi, 0), its front still +z."""
+    path = tmp_path / "d.pbrt"
+    path.write_text('LookAt 0 0 5  0 0 0  0 1 0\nCamera "perspective"\nWorldBegin\nTranslate 0.3 0 0\n'
+                    'Shape "disk" "float radius" 1.5 "float innerradius" 0.6 "float height" 0.25 "float phimax" 250\n')
+    scene = load_scene(str(path))
+    rng, n = np.random.default_rng(8), 500
+    phi = rng.uniform(0.01, math.radians(250) - 0.01, n)
+    r = rng.uniform(0.61, 1.49, n)
+    local = np.column_stack([r * np.cos(phi), r * np.sin(phi), np.full(n, 0.25)])
+    h = shape_hits(kernels, scene, local + [0.3, 0, 2], local + [0.3, 0, 0])
+    np.testing.assert_allclose(h["p"], local + [0.3, 0, 0], atol=2e-5)
+    np.testing.assert_allclose(h["uv"], np.column_stack([phi / math.radians(250), 1 - (1.5 - r) / 0.9]), atol=2e-5)
+    np.testing.assert_allclose(h["dpdu"], math.radians(250) * np.column_stack([-local[:, 1], local[:, 0], np.zeros(n)]),
+                               atol=1e-4)
+    np.testing.assert_allclose(h["dpdv"], 0.9 * np.column_stack([np.cos(phi), np.sin(phi), np.zeros(n)]), atol=1e-5)
+    np.testing.assert_allclose(h["n"], np.broadcast_to([0, 0, 1], (n, 3)), atol=1e-6)
+
+
+def annulus_mesh(radius, inner, segments=256, rings=8):
+    """(P, uv, indices) text of a pbrt-v4 trianglemesh over the annulus of `radius` and `inner`
+    at z = 0, its uv at each corner pbrt-v4's Disk's (phi / 2 pi, (radius - r) / (radius - inner)),
+    its faces facing +z as the disk does."""
+    phi, r = np.meshgrid(np.arange(segments + 1) / segments * 2 * math.pi, np.linspace(radius, inner, rings + 1))
+    points = np.stack([r * np.cos(phi), r * np.sin(phi), np.zeros_like(r)], -1)
+    uv = np.stack([phi / (2 * math.pi), (radius - r) / (radius - inner)], -1)
+    corner = np.arange(rings)[:, None] * (segments + 1) + np.arange(segments)     # ring i from the rim, angle j
+    step = segments + 1                                                           # to the next ring in
+    faces = np.stack([corner, corner + 1, corner + step + 1, corner, corner + step + 1, corner + step], -1)
+    return tuple(" ".join(f"{x:.9g}" for x in np.ravel(a)) for a in (points, uv, faces))
+
+
+def test_a_pbrt_disk_renders_as_a_pbrt_mesh_of_its_uv(backend, tmp_path):
+    """An image whose rows run from red to blue, on a pbrt disk and on a pbrt trianglemesh over
+    the same annulus whose corners carry the disk's uv: pbrt-v4 looks both up at (u, 1 - v) of
+    their uv (ImageTexture), and so renders them alike; pathtrace's images of the two, lit by a
+    uniform sky, agree within noise (a per-pixel Z-test), where the disk's v read unturned puts
+    the blue rows at the rim."""
+    from PIL import Image
+    rows = np.linspace(0, 255, 8).astype(np.uint8)
+    Image.fromarray(np.stack([rows[::-1], np.full(8, 40, np.uint8), rows], -1)[:, None].repeat(2, 1)).save(
+        tmp_path / "rows.png")
+    head = ('LookAt 0 0 3  0 0 0  0 1 0\nCamera "perspective" "float fov" 45\nWorldBegin\n'
+            'LightSource "infinite" "rgb L" [1 1 1]\n'
+            'Texture "t" "spectrum" "imagemap" "string filename" "rows.png"\nMaterial "diffuse" "texture reflectance" "t"\n')
+    points, uv, faces = annulus_mesh(1.0, 0.3)
+    images = []
+    for seed, shape in enumerate(('Shape "disk" "float radius" 1 "float innerradius" 0.3',
+                                  f'Shape "trianglemesh" "point3 P" [{points}] "point2 uv" [{uv}] "integer indices" [{faces}]')):
+        path = tmp_path / f"s{seed}.pbrt"
+        path.write_text(head + shape + "\n")
+        scene = load_scene(str(path))
+        assert bool(scene.shapes) == (seed == 0)
+        r = Renderer(backend, scene.with_settings(max_depth=2, seed=seed), 32, 32)
+        for _ in range(4):
+            r.add_samples(64)
+        r.finish()
+        images.append((r.mean(), r.variance() / 256))
+    (m0, v0), (m1, v1) = images
+    ok, p, threshold = z_test(m0, v0, m1, v1, block=2)
+    assert ok, (p, threshold)
 
 
 def fan(segments=256):

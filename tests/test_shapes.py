@@ -3,6 +3,8 @@ finds its nearest hits as brute force does, its area sampling's density integrat
 area, next-event estimation, the light tree and bidirectional paths agree with paths alone on
 an emitting one, and TOML writes and reads it back. A kind is tested by being registered."""
 
+import itertools
+
 import numpy as np
 import pytest
 
@@ -15,7 +17,7 @@ from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import Mesh, SceneBuilder, diffuse, load_scene
 from pathtrace.scene import transform
 from pathtrace.scene.toml_writer import scene_toml
-from pathtrace.shapes import SHAPES, Shape
+from pathtrace.shapes import SHAPES, Shape, TextureUV
 from tests.conftest import layout_features, scene_arrays
 from tests.stats import z_test
 from tests.test_bvh import nearest, nearest_rays, triangle_soup
@@ -197,7 +199,8 @@ def test_the_generic_program_renders_shapes_as_the_scenes_own(backend, kind):
 def test_toml_writes_and_reads_back_every_shape(tmp_path, kind):
     rng = np.random.default_rng(3)
     scene = shapes_scene(kind, rng, 4)
-    scene.shapes[1].swap_uv = True
+    for shape, mode in zip(scene.shapes, itertools.cycle(TextureUV)):
+        shape.texture_uv = mode
     out = tmp_path / "s.toml"
     out.write_text(scene_toml(scene, out))
     back = load_scene(str(out)).shapes
@@ -205,7 +208,7 @@ def test_toml_writes_and_reads_back_every_shape(tmp_path, kind):
     for a, b in zip(scene.shapes, back):      # written to float32's precision, which the kernels take
         np.testing.assert_allclose(b.params, a.params, rtol=1e-6)
         np.testing.assert_allclose(b.to_world, a.to_world, rtol=1e-6, atol=1e-6)
-        assert (b.flip, b.swap_uv, b.name) == (a.flip, a.swap_uv, a.name)
+        assert (b.flip, b.texture_uv, b.name) == (a.flip, a.texture_uv, a.name)
 
 
 @pytest.mark.parametrize("kind", KINDS)
@@ -225,7 +228,8 @@ def test_a_bad_shape_is_one_line_naming_the_field(tmp_path, kind):
 
 HIT_SOURCE = """
 kernel void shape_hits(SCENE_KERNEL_ARGS, int num_spheres, global const float4 *o, global const float4 *d,
-                       global float4 *point, global float4 *normal, global float4 *uv, global float4 *dpdu)
+                       global float4 *point, global float4 *normal, global float4 *uv, global float4 *dpdu,
+                       global float4 *dpdv)
 {
     SceneData sc = SCENE_DATA(num_spheres, 0);
     int k = get_global_id(0);
@@ -241,22 +245,24 @@ kernel void shape_hits(SCENE_KERNEL_ARGS, int num_spheres, global const float4 *
     normal[k] = (float4)(s.ng, 0.0f);
     uv[k] = (float4)(surface_uv(&sc, h.prim, (float2)(h.b1, h.b2), s.p), 0.0f, 0.0f);
     dpdu[k] = (float4)(du, 0.0f);
+    dpdv[k] = (float4)(dv, 0.0f);
 }
 """
 
 
 def shape_hits(kernels, scene, origins, targets) -> dict:
     """Where rays from `origins` towards `targets` ((n, 3) world points) meet `scene`: the
-    point (NaN: a miss), t, the unit front normal, the texture coordinates and dp/du."""
+    point (NaN: a miss), t, the unit front normal, the texture coordinates, dp/du and dp/dv."""
     c = compile_scene(scene)
     n = len(origins)
     o = np.zeros((n, 4), np.float32)
     d = np.zeros((n, 4), np.float32)
     o[:, :3] = origins
     d[:, :3] = targets - origins
-    out = [np.zeros((n, 4), np.float32) for _ in range(4)]
+    out = [np.zeros((n, 4), np.float32) for _ in range(5)]
     kernels(HIT_SOURCE, layout_features(c))("shape_hits", n, *scene_arrays(c), np.int32(c.num_spheres), o, d, *out)
-    return dict(p=out[0][:, :3], t=out[0][:, 3], n=out[1][:, :3], uv=out[2][:, :2], dpdu=out[3][:, :3])
+    return dict(p=out[0][:, :3], t=out[0][:, 3], n=out[1][:, :3], uv=out[2][:, :2], dpdu=out[3][:, :3],
+                dpdv=out[4][:, :3])
 
 
 def one_shape_scene(shape: Shape):

@@ -61,6 +61,7 @@ def kernel_source(extra: str = "", features: Features = Features()) -> str:
               for name in (*SHAPE_FILES, *moved, *shapes.kernel_files(features.shapes))]
     if features.shapes:
         texts += [("app/shapes/registry.py: dispatch_source", shapes.dispatch_source(features.shapes)),
+                  ("app/shapes/texture_uv.py: texture_uv_source", shapes.texture_uv_source()),
                   ("shapes/analytic.cl", (folder / "shapes/analytic.cl").read_text())]
     files = (*(("masks.cl",) if features.masks else ()), "bvh.cl", "frame.cl",
              *(("normal_maps.cl",) if features.normal_maps else ()),

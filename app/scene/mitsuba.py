@@ -1005,12 +1005,12 @@ class _Reader:
             values = {p.mitsuba: self.parameter(props, p, p.mitsuba) for p in SHAPES[kind].mitsuba_parameters}
             values = {p.mitsuba: p.mitsuba_default if values[p.mitsuba] is None else values[p.mitsuba]
                       for p in SHAPES[kind].mitsuba_parameters}
-            values, local, swap_uv, flip = SHAPES[kind].from_mitsuba(values, m, node.where())
+            values, local, texture_uv, flip = SHAPES[kind].from_mitsuba(values, m, node.where())
             problem = SHAPES[kind].check(values)
             if problem:
                 _fail(node, f"the {kind}'s {problem}")
             shape = Shape(name or f"{kind} {len(self.builder.shapes)}", kind, values, m @ local, material,
-                          flip=flip, swap_uv=swap_uv, media=interface)
+                          flip=flip, texture_uv=texture_uv, media=interface)
             if SHAPES[kind].too_flat(shape):
                 # Mitsuba 3 would intersect it through a near-singular inverse; the kernels cannot
                 # (pathtrace.shapes.shape.MIN_DETERMINANT), and what it covers is next to nothing

@@ -24,7 +24,7 @@ from pathtrace.resources import resource_dir
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, triangulate, vertex_normals
-from pathtrace.shapes import SHAPES, Shape
+from pathtrace.shapes import SHAPES, Shape, TextureUV
 from pathtrace.shapes.shape import MIN_DETERMINANT
 from pathtrace.textures import TEXTURES, Texture, read_image
 
@@ -520,10 +520,10 @@ class _Reader:
     def shape(self, data, where, builder, rows) -> Shape:
         """A [[shapes]] entry: an analytic shape of `kind` (pathtrace.shapes.SHAPES), its kind's
         parameters by name (ShapeParameter: angles in degrees), its transform, `flip` (the front
-        turned round) and `swap_uv` (texture coordinates (1 - v, u), Mitsuba's disk)."""
+        turned round) and `texture_uv` (its texture coordinates of the kind's (u, v): TextureUV)."""
         kind = self.kind_of(data, where, SHAPES, "kind")
         k = SHAPES[kind]
-        self.table(data, where, {"kind", "material", "name", "interior", "exterior", "flip", "swap_uv", "matrix",
+        self.table(data, where, {"kind", "material", "name", "interior", "exterior", "flip", "texture_uv", "matrix",
                                  "translate", "rotate", "scale", *(p.name for p in k.parameters)})
         values = k.params_from(parameters.read(k.parameters, "toml",
                                                lambda p, name: self.parameter(data, p, where) if name in data else None))
@@ -532,13 +532,21 @@ class _Reader:
             self.fail(where, problem)
         shape = Shape(self.name(data, where, f"{kind} {where[7:-1]}"), kind, values, self.transform(data, where),
                       self.material_ref(builder, rows, data, where), self.boolean(data, "flip", where, False),
-                      self.boolean(data, "swap_uv", where, False), self.interface(data, where))
+                      self.texture_uv(data, where), self.interface(data, where))
         if k.too_flat(shape):
             self.fail(where, f"the transform shrinks or flattens the {kind} beyond what the kernels can invert "
                              f"(|det| below {MIN_DETERMINANT:g})")
         if np.any(np.abs(np.array(shape.bounds(k))) > MAX_COORDINATE):
             self.fail(where, f"the {kind} reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace")
         return shape
+
+    def texture_uv(self, data, where) -> TextureUV:
+        """A shape's `texture_uv`, the TextureUV its value names (by default the kind's own)."""
+        value = data.get("texture_uv", TextureUV.KIND.value)
+        modes = [m.value for m in TextureUV]
+        if value not in modes:
+            self.fail(f"{where}.texture_uv", f"must be one of {', '.join(map(repr, modes))}, got {short(value)}")
+        return TextureUV(value)
 
     def mesh(self, data, where, material) -> Mesh:
         """A mesh from a file, or written inline as vertices and faces (polygons of 3 or more

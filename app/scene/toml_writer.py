@@ -13,7 +13,7 @@ from pathtrace.materials.table import component_rows
 from pathtrace.errors import UserError
 from pathtrace.scene.description import Scene
 from pathtrace.scene.toml_reader import MAX_INLINE
-from pathtrace.shapes import SHAPES
+from pathtrace.shapes import SHAPES, TextureUV
 from pathtrace.textures import Texture
 
 
@@ -214,7 +214,8 @@ def _shape_lines(shape, names: dict, medium_names: list) -> list:
     for name, v in SHAPES[shape.kind].file_values(shape.params).items():
         lines.append(f"{name} = {_value(v)}")
     lines.append(f"matrix = {_value(np.asarray(shape.to_world, np.float64).tolist())}")
-    lines += (["flip = true"] if shape.flip else []) + (["swap_uv = true"] if shape.swap_uv else [])
+    lines += (["flip = true"] if shape.flip else []) + (
+        [f"texture_uv = {_value(shape.texture_uv.value)}"] if shape.texture_uv is not TextureUV.KIND else [])
     return lines
 
 

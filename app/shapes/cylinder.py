@@ -7,6 +7,7 @@ import numpy as np
 
 from pathtrace.parameters import Parameter
 from pathtrace.shapes.shape import Quadric, turned_z
+from pathtrace.shapes.texture_uv import TextureUV
 
 
 class Cylinder(Quadric):
@@ -51,7 +52,7 @@ class Cylinder(Quadric):
 
     def from_pbrt(self, params):
         """pbrt-v4's cylinder with z turned round (turned_z): its texture v = 1 - pbrt's v."""
-        return turned_z(params)
+        return (*turned_z(params), TextureUV.KIND)
 
     def from_mitsuba(self, values, to_world, where):
         """Mitsuba 3's cylinder (src/shapes/cylinder.cpp): the unit cylinder, z in [0, 1] and a
@@ -64,7 +65,7 @@ class Cylinder(Quadric):
         p0, p1 = np.asarray(values["p0"], np.float64), np.asarray(values["p1"], np.float64)
         length = float(np.linalg.norm(p1 - p0))
         if not (radius > 0 and length > 0):
-            return (radius, 0.0, length, 2 * math.pi), np.eye(4), False, False
+            return (radius, 0.0, length, 2 * math.pi), np.eye(4), TextureUV.KIND, False
         n = (p1 - p0) / length
         sign = math.copysign(1.0, n[2])
         a = -1.0 / (sign + n[2])
@@ -75,4 +76,4 @@ class Cylinder(Quadric):
         local[:3, :3] = np.column_stack([s, t, n]) @ np.diag([radius, radius, length])
         local[:3, 3] = p0
         flip = bool(values["flip_normals"]) != (np.linalg.det(np.asarray(to_world, np.float64)[:3, :3]) < 0)
-        return (1.0, 0.0, 1.0, 2 * math.pi), local, False, flip
+        return (1.0, 0.0, 1.0, 2 * math.pi), local, TextureUV.KIND, flip

@@ -10,6 +10,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from pathtrace.shapes.texture_uv import TextureUV
+
 ROWS = 8
 """float4 rows of the side table per shape (kernels/shapes/analytic.cl)."""
 
@@ -71,15 +73,16 @@ class ShapeKind:
         return params
 
     def from_mitsuba(self, values: dict, to_world: np.ndarray, where: str) -> tuple:
-        """(params, object transform, swap_uv, flip) of Mitsuba 3's shape of this kind, from the
+        """(params, object transform, TextureUV, flip) of Mitsuba 3's shape of this kind, from the
         values of its mitsuba_parameters (given or their mitsuba_default), by their Mitsuba names;
         the object transform goes before to_world; `where` (file:line) for its warnings."""
         raise NotImplementedError
 
     def from_pbrt(self, params) -> tuple:
-        """(params, object transform) of pbrt-v4's shape of parameters `params`, the object
-        transform going before the CTM (identity: the kind's own)."""
-        return params, np.eye(4)
+        """(params, object transform, TextureUV) of pbrt-v4's shape of parameters `params`, the
+        object transform going before the CTM (identity: the kind's own), its texture coordinates
+        those at which pathtrace's lookup reads the texel pbrt-v4's reads at (u, 1 - v)."""
+        raise NotImplementedError
 
     def check(self, params) -> str | None:
         """What is wrong with parameters `params`, or None."""
@@ -150,7 +153,7 @@ class Shape:
     to_world: np.ndarray          # (4, 4) world from object
     material: int                 # row of the scene's MaterialTable
     flip: bool = False            # its front is the opposite of the kind's normal
-    swap_uv: bool = False         # texture coordinates (1 - v, u) of the kind's (u, v) (Mitsuba's disk)
+    texture_uv: TextureUV = TextureUV.KIND   # its texture coordinates of the kind's (u, v)
     media: object = None          # the MediumInterface it bounds, or None
 
     # as the compiled scene's per-mesh tables read it: one primitive, no corner normals or uvs
@@ -172,7 +175,7 @@ class Shape:
         out[0:3] = m[:3]
         out[3:6] = np.linalg.inv(m)[:3]
         out[6] = self.params
-        out[7, :3] = (-1.0 if self.flip else 1.0, 1.0 if self.swap_uv else 0.0, abs(self.det))
+        out[7, :3] = (-1.0 if self.flip else 1.0, self.texture_uv.index, abs(self.det))
         return out
 
     def bounds(self, kind: ShapeKind) -> tuple:

@@ -10,6 +10,7 @@ import numpy as np
 from pathtrace.errors import warn
 from pathtrace.parameters import Parameter
 from pathtrace.shapes.shape import TURN_Z, ShapeKind, turned_z
+from pathtrace.shapes.texture_uv import TextureUV
 
 GOLDEN_ANGLE = math.pi * (3 - math.sqrt(5))
 
@@ -45,7 +46,7 @@ class Sphere(ShapeKind):
     def from_pbrt(self, params):
         """pbrt-v4's sphere with z turned round (turned_z), which is also the sphere range's uv
         where it is whole."""
-        return turned_z(params)
+        return (*turned_z(params), TextureUV.KIND)
 
     def check(self, params):
         radius, z_min, z_max, phi_max = params
@@ -88,7 +89,7 @@ class Sphere(ShapeKind):
         centre = m[:3, :3] @ np.asarray(values["center"], np.float64) + m[:3, 3]
         radius = float(np.linalg.norm(linear[:, 0]))
         if not (radius > 0 and abs(np.linalg.det(m[:3, :3])) > 0):
-            return (radius, -radius, radius, 2 * math.pi), np.eye(4), False, False
+            return (radius, -radius, radius, 2 * math.pi), np.eye(4), TextureUV.KIND, False
         u, s, vt = np.linalg.svd(linear)
         if not np.allclose(s, s[0], rtol=1e-5):
             warn(f"{where}: a sphere whose to_world shears or scales unevenly; Mitsuba 3 renders it round, "
@@ -96,7 +97,7 @@ class Sphere(ShapeKind):
         world = np.eye(4)
         world[:3, :3] = radius * (u @ vt)
         world[:3, 3] = centre
-        return (1.0, -1.0, 1.0, 2 * math.pi), np.linalg.inv(m) @ world @ TURN_Z, False, bool(values["flip_normals"])
+        return (1.0, -1.0, 1.0, 2 * math.pi), np.linalg.inv(m) @ world @ TURN_Z, TextureUV.KIND, bool(values["flip_normals"])
 
     @staticmethod
     def fast_range(shape, reads_frame):
@@ -108,7 +109,7 @@ class Sphere(ShapeKind):
         (Two cores, 2026-11-29: every sphere as this kind made simple-diffuse 3-5 times
         slower; docs/notes/performance-2026-11.md.)"""
         radius, z_min, z_max, phi_max = shape.params
-        if shape.flip or shape.swap_uv or z_min > -radius or z_max < radius or phi_max < 2 * math.pi:
+        if shape.flip or shape.texture_uv is not TextureUV.KIND or z_min > -radius or z_max < radius or phi_max < 2 * math.pi:
             return None
         m = np.asarray(shape.to_world, np.float64)
         scale = float(np.linalg.norm(m[:3, 0]))
