@@ -413,7 +413,10 @@ def test_screenshot_matches_a_headless_render(viewer, backend):
     settle(viewer)
     viewer.denoise = False
     viewer.renderer.reset()
-    while viewer.renderer.samples < 32:
+    # a few whole passes, each of many launches (bands of rows sized to LAUNCH_BUDGET, a 640x360
+    # pass taking longer on a CPU): the equality below is exact, so more samples (32 until
+    # issue #60) test nothing more, and the headless render repeats each
+    while viewer.renderer.samples < 4:
         viewer.frame()
     png, exr = viewer.screenshot().result()
     viewer.denoise = True
