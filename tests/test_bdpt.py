@@ -15,6 +15,7 @@ from pathtrace.filters import PixelFilter
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 from pathtrace.scene.toml_reader import read_scene_dict
+from tests.commands import in_process
 from tests.conftest import ROOT
 from tests.stats import z_test
 
@@ -36,9 +37,19 @@ def render(backend, scene, integrator, spp, size, batches=BATCHES):
     return means.mean(0), means.var(0, ddof=1) / batches
 
 
-def path_reference(backend, scene, spp, size):
-    """The path tracer's image (with next-event estimation) and its variance of the mean, from
-    its per-pixel sample variance."""
+def path_reference(backend, make, spp, size):
+    """The path tracer's image (with next-event estimation) of scene make() and its variance of
+    the mean, from its per-pixel sample variance; once per scene, for the cases that share it."""
+    key = make, spp, size
+    if key not in _PATH_REFERENCES:
+        _PATH_REFERENCES[key] = _path_reference(backend, make(), spp, size)
+    return _PATH_REFERENCES[key]
+
+
+_PATH_REFERENCES = {}
+
+
+def _path_reference(backend, scene, spp, size):
     r = Renderer(backend, scene.with_settings(integrator="path", seed=99), *size)
     for _ in range(spp // 256):
         r.add_samples(256)
@@ -109,11 +120,15 @@ def cbox_thinlens():
 # (scene, the integrator against the path tracer, its samples per pixel per batch, the path
 # tracer's samples per pixel): the Cornell box's diffuse walls with light tracing alone and
 # with BDPT, through a box and a gaussian filter and a thin lens; glass, gold and a caustic;
-# delta lights
-CASES = {"cbox-ptracer": (cbox, "ptracer", 32, 2048), "cbox-bdpt": (cbox, "bdpt", 16, 2048),
-         "cbox-gaussian-ptracer": (cbox_gaussian, "ptracer", 32, 2048),
-         "cbox-thinlens-ptracer": (cbox_thinlens, "ptracer", 32, 2048),
-         "glass-bdpt": (glass_scene, "bdpt", 16, 4096), "spot-bdpt": (spot_scene, "bdpt", 16, 2048)}
+# delta lights. The path tracer's variance of the mean at 1024 samples per pixel is, in the
+# median pixel, 11-20 % of the tested estimator's (cbox with ptracer, bdpt and the thin lens;
+# spot), 39 % through the gaussian filter (measured on PoCL, 2026-11-29): the difference's
+# standard error is 5-18 % above the tested estimator's alone. The caustic's reference keeps
+# 4096, for its sample variance to have seen the rare paths through the glass.
+CASES = {"cbox-ptracer": (cbox, "ptracer", 32, 1024), "cbox-bdpt": (cbox, "bdpt", 16, 1024),
+         "cbox-gaussian-ptracer": (cbox_gaussian, "ptracer", 32, 1024),
+         "cbox-thinlens-ptracer": (cbox_thinlens, "ptracer", 32, 1024),
+         "glass-bdpt": (glass_scene, "bdpt", 16, 4096), "spot-bdpt": (spot_scene, "bdpt", 16, 1024)}
 SIZE = (24, 24)
 
 
@@ -122,7 +137,7 @@ def test_converges_to_the_path_tracer(backend, case):
     make, integrator, spp, path_spp = CASES[case]
     scene = make()
     m, v = render(backend, scene, integrator, spp, SIZE)
-    ref, ref_v = path_reference(backend, scene, path_spp, SIZE)
+    ref, ref_v = path_reference(backend, make, path_spp, SIZE)
     assert np.all(np.isfinite(m))
     ok, p, threshold = z_test(m, v, ref, ref_v, block=4)     # its blocks and the whole image's mean
     assert ok, (p, threshold)
@@ -362,12 +377,11 @@ def test_the_api_renders_with_the_integrator_it_is_given(backend):
 
 
 def test_the_command_line_renders_with_bdpt_and_refuses_a_medium_in_one_line(tmp_path):
-    from tests.test_cli import pathtrace
     out = tmp_path / "a.exr"
-    r = pathtrace("render", "tests/scenes/cbox.xml", "--integrator", "bdpt", "--size", "12x12", "--spp", "2",
+    r = in_process("render", "tests/scenes/cbox.xml", "--integrator", "bdpt", "--size", "12x12", "--spp", "2",
                   "-o", out, "-q")
     assert r.returncode == 0 and out.exists(), r.stderr
-    r = pathtrace("render", "tests/scenes/media-fog.xml", "--integrator", "bdpt", "--filter", "box", "--size", "8x8",
+    r = in_process("render", "tests/scenes/media-fog.xml", "--integrator", "bdpt", "--filter", "box", "--size", "8x8",
                   "--spp", "1", "-o", tmp_path / "b.exr", "-q")
     lines = [line for line in r.stderr.splitlines() if not line.startswith("device: ")]
     assert r.returncode != 0 and len(lines) == 1 and "participating media are not supported yet" in lines[0], r.stderr
