@@ -6,7 +6,7 @@ from pathlib import Path
 
 import pytest
 
-from tests.test_cli import pathtrace
+from tests.commands import in_process
 
 
 def fake_mitsuba(tmp_path):
@@ -24,7 +24,7 @@ def test_quick_bench_writes_a_table_and_json(tmp_path):
     """A sphere scene and the textured mesh scene, both estimators: each (scene, estimator) one row
     (every target scene would cost the suite half a minute of kernel builds)."""
     out = tmp_path / "bench.json"
-    r = pathtrace("bench", "--quick", "--device", "cpu", "--json", out, "--scenes", "simple", "teapot-textured",
+    r = in_process("bench", "--quick", "--device", "cpu", "--json", out, "--scenes", "simple", "teapot-textured",
                   "--estimator", "rr", "--estimator", "depth8+nee")
     assert r.returncode == 0, r.stderr
     data = json.loads(out.read_text())
@@ -41,17 +41,17 @@ def test_quick_bench_writes_a_table_and_json(tmp_path):
 
 
 def test_bench_rejects_bad_input(tmp_path):
-    r = pathtrace("bench", "--quick", "--scenes", "nosuch")
+    r = in_process("bench", "--quick", "--scenes", "nosuch")
     assert r.returncode == 1 and "neither a scene file nor a built-in scene" in r.stderr
-    r = pathtrace("bench", "--quick", "--estimator", "fast")
+    r = in_process("bench", "--quick", "--estimator", "fast")
     assert r.returncode == 1 and "--estimator: unknown 'fast'" in r.stderr
-    r = pathtrace("bench", "--quick", "--json", tmp_path / "no" / "b.json")
+    r = in_process("bench", "--quick", "--json", tmp_path / "no" / "b.json")
     assert r.returncode == 1 and "does not exist" in r.stderr
 
 
 def test_build_bench_times_spheres_and_triangles(tmp_path):
     out = tmp_path / "builds.json"
-    r = pathtrace("bench", "--builds", "2k", "20k", "--device", "cpu", "--json", out)
+    r = in_process("bench", "--builds", "2k", "20k", "--device", "cpu", "--json", out)
     assert r.returncode == 0, r.stderr
     rows = json.loads(out.read_text())["results"]
     assert [row["scene"] for row in rows] == ["spheres2k-diffuse", "heightfield2k", "spheres20k-diffuse", "heightfield20k"]
@@ -60,13 +60,13 @@ def test_build_bench_times_spheres_and_triangles(tmp_path):
         assert 0 < row["nodes"] < row["primitives"] and row["node_megabytes"] == row["nodes"] * 128 / 2**20
     assert rows[0]["primitives"] == 2000 and abs(rows[3]["primitives"] - 20000) < 400   # a square grid, and its ball
     assert "build s" in r.stdout and "heightfield20k" in r.stdout
-    r = pathtrace("bench", "--builds", "1")
+    r = in_process("bench", "--builds", "1")
     assert r.returncode == 2 and "'1' is not a count from 2 to 100M" in r.stderr
 
 
 def test_display_and_denoise_timings(tmp_path):
     out = tmp_path / "timings.json"
-    r = pathtrace("bench", "--display", "--denoise", "--size", "64x36", "--device", "cpu", "--json", out)
+    r = in_process("bench", "--display", "--denoise", "--size", "64x36", "--device", "cpu", "--json", out)
     assert r.returncode == 0, r.stderr
     rows = json.loads(out.read_text())["results"]
     steps = [row["what"] for row in rows]
@@ -115,7 +115,7 @@ def test_load_bench_rows(tmp_path):
     scene = tmp_path / "one.toml"
     scene.write_text('[[spheres]]\ncenter = [0, 0, -3]\nradius = 1\nmaterial = { type = "diffuse", rho_d = 0.5 }\n')
     out = tmp_path / "load.json"
-    r = pathtrace("bench", "--load", "--scenes", "meshes850", "--repeats", "1", "--device", "cpu",
+    r = in_process("bench", "--load", "--scenes", "meshes850", "--repeats", "1", "--device", "cpu",
                   "--load-scene", scene, "--json", out)
     assert r.returncode == 0, r.stderr
     rows = json.loads(out.read_text())["results"]
@@ -123,13 +123,13 @@ def test_load_bench_rows(tmp_path):
     assert all(row["seconds"] > 0 and row["cached_seconds"] > 0 and row["mitsuba_seconds"] is None
                and row["device"] == "cpu" for row in rows)
     assert "pathtrace s" in r.stdout and "cached s" in r.stdout and "870,400 triangles" in r.stdout
-    r = pathtrace("bench", "--load", "--scenes", "meshes85", "--device", "cpu")
+    r = in_process("bench", "--load", "--scenes", "meshes85", "--device", "cpu")
     assert r.returncode == 1 and r.stderr.strip().splitlines() == [
         "pathtrace: error: --scenes: with --load, 'meshes85' is not a generated row (one of heightfield1M, "
         "meshes850); did you mean meshes850?"], r.stderr
-    r = pathtrace("bench", "--load-scene", tmp_path / "missing.toml", "--repeats", "1", "--device", "cpu")
+    r = in_process("bench", "--load-scene", tmp_path / "missing.toml", "--repeats", "1", "--device", "cpu")
     assert r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1 and "missing.toml" in r.stderr
-    r = pathtrace("bench", "--load-scene", scene, "--repeats", "1", "--device", "cpu",
+    r = in_process("bench", "--load-scene", scene, "--repeats", "1", "--device", "cpu",
                   "--mitsuba", sys.executable, "--mitsuba-variant", "scalar_rgb")
     assert r.returncode == 1 and "No module named 'mitsuba'" in r.stderr, r.stderr
     assert len(r.stderr.strip().splitlines()) == 1 and not r.stdout    # before any timed run
@@ -139,7 +139,7 @@ def test_load_bench_rows(tmp_path):
 def test_bench_without_the_cold_build_and_with_traversal_counts_and_the_trace_split(tmp_path):
     out = tmp_path / "bench.json"
     media = str(Path(__file__).parent / "scenes" / "media-fog.xml")
-    r = pathtrace("bench", "--quick", "--device", "cpu", "--scenes", "simple", media, "--no-cold", "--traversal",
+    r = in_process("bench", "--quick", "--device", "cpu", "--scenes", "simple", media, "--no-cold", "--traversal",
                   "--trace-split", "--json", out)
     assert r.returncode == 0, r.stderr
     row, fog = json.loads(out.read_text())["results"]
@@ -158,7 +158,7 @@ def test_bench_renders_the_generated_textured_scene_and_asks_mitsuba(tmp_path):
     """`tori400-textured` is written on demand and rendered; --mitsuba then runs the Python
     given, whose failure (here: a Mitsuba that cannot load a scene) is one line after
     pathtrace's row."""
-    r = pathtrace("bench", "--device", "cpu", "--no-cold", "--scenes", "tori400-textured", "--size", "32x18",
+    r = in_process("bench", "--device", "cpu", "--no-cold", "--scenes", "tori400-textured", "--size", "32x18",
                   "--spp", "1", "--mitsuba", fake_mitsuba(tmp_path))
     assert r.returncode == 1, r.stderr
     assert "tori400-textured" in r.stdout and "depth8+nee" in r.stdout
@@ -168,11 +168,11 @@ def test_bench_renders_the_generated_textured_scene_and_asks_mitsuba(tmp_path):
 def test_bench_mitsuba_column_without_a_twin_or_a_python(tmp_path):
     """A scene a twin cannot say (simple's Phong spheres) gets a line saying so and the bench goes
     on; a Python that is not there is one error line."""
-    r = pathtrace("bench", "--quick", "--device", "cpu", "--no-cold", "--scenes", "simple", "--estimator",
+    r = in_process("bench", "--quick", "--device", "cpu", "--no-cold", "--scenes", "simple", "--estimator",
                   "depth8+nee", "--mitsuba", fake_mitsuba(tmp_path))
     assert r.returncode == 0, r.stderr
     assert "Mitsuba 3: no twin of simple" in r.stdout and "(phong)" in r.stdout
-    r = pathtrace("bench", "--quick", "--device", "cpu", "--no-cold", "--scenes", "simple-diffuse", "--estimator",
+    r = in_process("bench", "--quick", "--device", "cpu", "--no-cold", "--scenes", "simple-diffuse", "--estimator",
                   "depth8+nee", "--mitsuba", tmp_path / "no-python")
     assert r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1
     assert "cannot run" in r.stderr and "no-python" in r.stderr
@@ -189,7 +189,7 @@ def test_bench_rounds_count_the_medians_of_both_renderers(tmp_path):
                       f'exec "{sys.executable}" "$@"\n')
     python.chmod(0o755)
     out = tmp_path / "bench.json"
-    r = pathtrace("bench", "--quick", "--device", "cpu", "--no-cold", "--scenes", "simple-diffuse", "--estimator",
+    r = in_process("bench", "--quick", "--device", "cpu", "--no-cold", "--scenes", "simple-diffuse", "--estimator",
                   "depth8+nee", "--rounds", "3", "--mitsuba", python, "--mitsuba-variant", "scalar_rgb",
                   "--json", out)
     assert r.returncode == 0, r.stderr
@@ -199,5 +199,5 @@ def test_bench_rounds_count_the_medians_of_both_renderers(tmp_path):
     assert len(row["mitsuba_rounds"]) == 3 and row["mitsuba_seconds"] == median(row["mitsuba_rounds"])
     assert len((tmp_path / "renders.jsonl").read_text().splitlines()) == 4     # one untimed, three timed
     assert "(medians of 3 renders)" in r.stdout
-    r = pathtrace("bench", "--quick", "--rounds", "0")
+    r = in_process("bench", "--quick", "--rounds", "0")
     assert r.returncode == 2 and "--rounds" in r.stderr

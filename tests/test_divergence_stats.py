@@ -16,7 +16,7 @@ from pathtrace.materials.registry import TAGS
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import Mesh, SceneBuilder, diffuse, emitter, phong
 from pathtrace.scene.environment import Environment
-from tests.test_cli import pathtrace
+from tests.commands import in_process
 
 DIFFUSE, PHONG = SHADING_BSDF + TAGS["diffuse"], SHADING_BSDF + TAGS["phong"]
 SHADING, TEXTURES, LIGHT, MATERIAL_LOW, MATERIAL_HIGH = range(len(FIELDS))
@@ -185,12 +185,12 @@ def test_the_stats_follow_the_path_tracer_alone(backend):
 @pytest.mark.specialised
 def test_bench_prints_the_table_and_writes_the_stats(tmp_path):
     out = tmp_path / "bench.json"
-    r = pathtrace("bench", "--device", "cpu", "--no-cold", "--scenes", "cornell-box", "--estimator", "depth8+nee",
+    r = in_process("bench", "--device", "cpu", "--no-cold", "--scenes", "cornell-box", "--estimator", "depth8+nee",
                   "--size", "16x16", "--spp", "2", "--divergence", "64", "--json", out)
     assert r.returncode == 0, r.stderr
     stats = json.loads(out.read_text())["results"][0]["divergence"]
     assert stats["warp"] == 64 and stats["paths"] == 16 * 16 * 2 and stats["iterations"] == 8
     assert stats["per_iteration"][0]["active_share"] == 1 and 0 < stats["overall"]["active_share"] < 1
     assert "divergence in warps of 64" in r.stdout and "bsdf diffuse" in r.stdout
-    r = pathtrace("bench", "--device", "cpu", "--scenes", "cornell-box", "--divergence", "48")
+    r = in_process("bench", "--device", "cpu", "--scenes", "cornell-box", "--divergence", "48")
     assert r.returncode == 2 and "a warp of 48 lanes" in r.stderr.strip().splitlines()[-1]

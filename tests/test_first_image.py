@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from pathtrace.errors import UserError
-from tests.test_cli import pathtrace
+from tests.commands import in_process
 
 # Mitsuba's load measurement (pathtrace.bench.mitsuba_timing.LOAD) against a stand-in that writes its
 # image and records, per run, whether Dr.Jit's kernel cache (~/.drjit) was there already.
@@ -40,7 +40,7 @@ def fake_mitsuba(tmp_path) -> Path:
 
 def test_a_row_is_timed_cold_from_empty_caches_then_warm(tmp_path):
     out = tmp_path / "first.json"
-    r = pathtrace("bench", "--first-image", "--scenes", "simple", "--size", "16x9", "--repeats", "1",
+    r = in_process("bench", "--first-image", "--scenes", "simple", "--size", "16x9", "--repeats", "1",
                   "--device", "cpu", "--json", out)
     assert r.returncode == 0, r.stderr
     row, = json.loads(out.read_text())["results"]
@@ -57,7 +57,7 @@ def test_mitsuba_is_timed_cold_in_a_fresh_home_then_warm(tmp_path):
     """The row's Mitsuba runs: the first finds no kernel cache, the warm ones find the one the
     first left; the ratios are printed."""
     out = tmp_path / "first.json"
-    r = pathtrace("bench", "--first-image", "--scenes", "cornell-box", "--size", "16x16", "--repeats", "2",
+    r = in_process("bench", "--first-image", "--scenes", "cornell-box", "--size", "16x16", "--repeats", "2",
                   "--device", "cpu", "--mitsuba", fake_mitsuba(tmp_path), "--mitsuba-variant", "scalar_rgb",
                   "--json", out)
     assert r.returncode == 0, r.stderr
@@ -81,7 +81,7 @@ def test_no_mitsuba_column_without_an_xml_of_the_rows_size(tmp_path):
 
 
 def test_a_failed_render_or_a_missing_image_is_one_line_naming_the_command(tmp_path):
-    r = pathtrace("bench", "--first-image", "--scenes", "simple", "--size", "16x9", "--repeats", "1",
+    r = in_process("bench", "--first-image", "--scenes", "simple", "--size", "16x9", "--repeats", "1",
                   "--device", "nosuch")
     assert r.returncode == 1 and len(r.stderr.strip().splitlines()) == 1, r.stderr
     assert "-m pathtrace render simple --size 16x9 ... failed: " in r.stderr and "nosuch" in r.stderr

@@ -170,7 +170,13 @@ def sample_beckmann_visible(wo, alpha, u1, u2):
             e = erfinv_approx(np.clip(b, -1 + 1e-12, 1 - 1e-12))
             value = norm * (1.0 + b + tan_t * np.exp(-e * e) / np.sqrt(np.pi)) - u1
             hi, lo = np.where(value > 0, b, hi), np.where(value > 0, lo, b)
-            b = b - value / (norm * (1.0 - e * tan_t))
+            step = value / (norm * (1.0 - e * tan_t))
+            b = b - step
+            # Newton's steps shrink quadratically, below 1e-12 after 4 to 6 of them for every
+            # direction the tables ask for; the steps after that only move b by rounding (1e-15),
+            # and stopping there spares two thirds of rough_coating's time
+            if np.all(np.abs(step) < 1e-12):
+                break
         sx, sy = erfinv_approx(np.clip(b, -1 + 1e-12, 1 - 1e-12)), erfinv_approx(np.clip(2.0 * u2 - 1.0, -1 + 1e-12, 1 - 1e-12))
     rx, ry = (cos_phi * sx - sin_phi * sy) * alpha, (sin_phi * sx + cos_phi * sy) * alpha
     m = np.stack([-rx, -ry, np.ones_like(rx)], axis=-1)
