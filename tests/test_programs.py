@@ -33,7 +33,8 @@ def building_with(backend: Backend, build, tunes: bool = False, generic: bool = 
     auto = with_mode(backend, "auto")
     auto.programs = Programs(build, auto.device.name, tunes)
     if generic:
-        auto.programs.add(Features.generic_program(), True, backend.program)
+        for media in (False, True):
+            auto.programs.add(Features.generic_program(media), True, backend.generic(media))
     return auto
 
 
@@ -68,6 +69,17 @@ def test_the_generic_program_renders_each_test_scene_as_its_own_program(generic,
     a, b = render(generic, scene), render(specialised, scene)
     assert a.uses_generic_program and not b.uses_generic_program
     same_image(a, b)
+
+
+def test_scenes_without_media_render_with_the_generic_program_without_them(generic):
+    """Two generic programs (Features.generic_program): a scene with neither media nor null
+    surfaces draws from the one that compiles no volumetric code."""
+    plain = Renderer(generic, load_scene("cornell-box"), SIZE, SIZE)
+    fog = Renderer(generic, load_scene(str(Path(__file__).parent / "scenes" / "media-fog.xml")), SIZE, SIZE)
+    assert plain.uses_generic_program and fog.uses_generic_program
+    assert plain.program is generic.generic(media=False) and fog.program is generic.generic(media=True)
+    assert plain.program is not fog.program
+    assert "MEDIA" not in Features.generic_program(media=False).defines()
 
 
 @pytest.mark.parametrize("name,settings", [
@@ -226,7 +238,7 @@ def gpu_form(backend):
     here without CPU_DEVICE."""
     import pyopencl as cl
     from pathtrace.device.opencl import kernel_source, program_options
-    generic = Features.generic_program()
+    generic = Features.generic_program(media=False)       # the test's scenes have no media
     options = [o for o in program_options(backend.device.device, generic) if o != "-DCPU_DEVICE"]
     program = cl.Program(backend.context, kernel_source(backend.extra, generic)).build(
         options=options, devices=[backend.device.device])
@@ -240,5 +252,5 @@ def gpu_form(backend):
 def test_the_generic_program_in_its_gpu_form_renders_as_its_own_program(gpu_form, specialised, name):
     scene = load_scene(str(Path(__file__).parent / "scenes" / name)).with_settings(max_depth=8, russian_roulette="off")
     a, b = render(gpu_form, scene), render(specialised, scene)
-    assert a.uses_generic_program and a.program is gpu_form.program
+    assert a.uses_generic_program and a.program is gpu_form.generic(media=False)
     same_image(a, b)

@@ -27,9 +27,10 @@ def cmd_devices(args):
             try:
                 b = open_device(d, mode="generic")
                 start = time.perf_counter()
-                cached = b.built_generic() is not None and b.opened.cached
-                b.program
-                line += (f": builds the generic kernels ({time.perf_counter() - start + b.opened.seconds:.2f} s"
+                cached = b.built_generic(media=False) is not None and b.opened.cached
+                for media in (False, True):
+                    b.generic(media)
+                line += (f": builds the generic kernels, without media and with ({time.perf_counter() - start + b.opened.seconds:.2f} s"
                          f"{', cached' if cached else ''}) and renders with them ({warm_up(b):.2f} s)")
             except cl.Error as e:
                 line += f": cannot build the kernels: {build_error_line(e)}"
@@ -47,21 +48,29 @@ def cmd_scenes(args):
 
 
 def warm_up(backend) -> float:
-    """Renders one sample of a small built-in scene with `backend`'s generic program, with and
-    without next-event estimation, so that a driver that compiles kernels at their first launch
+    """Renders one sample of small built-in scenes with `backend`'s generic programs, without
+    media and with, with and without next-event estimation, so that a driver that compiles kernels at their first launch
     (PoCL, for each work-group size) has them in its cache before a user's first image; the
     seconds it took."""
     from pathtrace.rendering.renderer import Renderer
     from pathtrace.scene import load_scene
     generic = backend.with_mode("generic")
     start = time.perf_counter()
-    scene = load_scene("simple")
-    for nee in (True, False):
-        r = Renderer(generic, scene.with_settings(nee=nee), 8, 8)
-        r.set_aovs(True)
-        r.add_samples(1)
-        r.finish()
+    for scene in (load_scene("simple"), fog()):
+        for nee in (True, False):
+            r = Renderer(generic, scene.with_settings(nee=nee), 8, 8)
+            r.set_aovs(True)
+            r.add_samples(1)
+            r.finish()
     return time.perf_counter() - start
+
+
+def fog():
+    """A sphere of fog (the warm-up's scene with a medium)."""
+    from pathtrace.scene.toml_reader import read_scene_dict
+    return read_scene_dict({"media": {"fog": {"sigma_a": 0.1, "sigma_s": 0.5}},
+                            "spheres": [{"center": [0, 0, 0], "radius": 1, "material": {"type": "null"},
+                                         "interior": "fog"}]}, "fog")
 
 
 def add_parser(sub):

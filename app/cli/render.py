@@ -38,7 +38,7 @@ def cmd_render(args):
     backends = api.open_devices(args.device or ["auto"])
     for backend in backends:
         print(f"device: {backend.device.describe()}", file=sys.stderr)
-    generic = all(b.built_generic() is not None for b in backends)
+    generic = all(b.built_generic(media=False) is not None for b in backends)    # open_device's
     cached = " (from the kernel cache)" if generic and all(b.opened.cached for b in backends) else ""
     phase(f"opened the device{'s' * (len(backends) > 1)}" + (" and built the generic kernels" if generic else ""),
           cached)

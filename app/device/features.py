@@ -64,18 +64,25 @@ class Features:
     generic: bool = False                  # renders any scene (Features.generic_program)
 
     @staticmethod
-    def generic_program() -> "Features":
-        """The program that renders every scene pathtrace can load, with every shape, BSDF,
+    def generic_program(media: bool) -> "Features":
+        """A program that renders every scene pathtrace can load, with every shape, BSDF,
         texture, light and medium compiled in and the camera, pixel filter, Russian roulette
         rule and the compiled scene's layout (kernels/scene.cl: LAYOUT_*) read from the launch's
         RenderParams (GENERIC). Built once per device and driver and cached, it draws a scene's
         first images while the scene's own program, specialised by these features, builds
-        (pathtrace.device.programs)."""
+        (pathtrace.device.programs). There are two: with participating media and null surfaces
+        (`media`) and without, for the scenes that have neither, whose paths the volumetric
+        code slowed by 21-50 % on an H200 (docs/notes/performance-2026-11.md, 2026-11-29: the
+        generic program's ablation)."""
         from pathtrace.shapes import SHAPES
         from pathtrace.textures import TEXTURES
         return Features(shapes=tuple(SHAPES), textures=tuple(TEXTURES), masks=True, normal_maps=True, light_tree=True,
-                        media=True, null_surfaces=True, camera=GENERIC, filter=GENERIC,
+                        media=media, null_surfaces=media, camera=GENERIC, filter=GENERIC,
                         russian_roulette=GENERIC, stack=48, instance_stack=48, generic=True)
+
+    def generic_variant(self) -> "Features":
+        """The generic program that renders a scene of these features."""
+        return Features.generic_program(media=self.media)
 
     def defines(self) -> tuple:
         return ((() if self.spheres else ("NO_SPHERES",)) + (() if self.triangles else ("NO_TRIANGLES",))

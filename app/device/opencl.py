@@ -240,14 +240,20 @@ class Backend:
 
     @property
     def program(self) -> cl.Program:
-        """The generic program, tuned (on NVIDIA under the register caps of app/device/occupancy.py,
-        which the heaviest program gains most from: docs/notes/performance-2026-11.md); waits for it."""
-        return self.programs.get(Features.generic_program(), tuned=True)
+        """The generic program with media, which renders every scene; waits for it."""
+        return self.generic(media=True)
 
-    def built_generic(self):
-        """The generic program if it is built, else None (it is built at open where that is
-        fast, and by `pathtrace devices --check`, never behind a scene's first image)."""
-        return self.programs.built(Features.generic_program(), tuned=True)
+    def generic(self, media: bool) -> cl.Program:
+        """The generic program with or without media (Features.generic_program), tuned (on
+        NVIDIA under the register caps of app/device/occupancy.py, which the heaviest programs gain
+        most from: docs/notes/performance-2026-11.md); waits for it."""
+        return self.programs.get(Features.generic_program(media), tuned=True)
+
+    def built_generic(self, media: bool):
+        """The generic program with or without media if it is built, else None (the one without
+        is built at open where that is fast; `pathtrace devices --check` builds both; neither is
+        built behind a scene's first image)."""
+        return self.programs.built(Features.generic_program(media), tuned=True)
 
     def program_for(self, features: Features, tuned: bool = True) -> cl.Program:
         """The kernels specialised to `features` (on NVIDIA with `tuned`, under the register caps
@@ -261,17 +267,18 @@ class Backend:
 
 
 def open_device(device: Device, extra: str = "", use_cache: bool = True, mode: str = None) -> Backend:
-    """The device with its queue. Where building the generic program will not compile it afresh
-    (its binary is in pathtrace's cache, or the driver keeps its own cache and builds from it:
-    PoCL, whose first build of it takes 2 s on two cores), it is built now: it shows that the
-    platform builds the kernels and draws every scene's first images (pathtrace.device.programs).
+    """The device with its queue. Where building the generic program without media will not
+    compile it afresh (its binary is in pathtrace's cache, or the driver keeps its own cache and
+    builds from it: PoCL, whose first build of it takes 2 s on two cores), it is built now: it
+    shows that the platform builds the kernels and draws the first images of every scene without
+    media (pathtrace.device.programs); the one with media is built where a scene asks for it.
     Elsewhere (NVIDIA's driver takes 46 s over it on an H200, and a build in a background thread
     held up the scene's own build behind it) the display's small program shows that the
     platform builds, and the generic program waits for `pathtrace devices --check` (./install.sh
     runs it)."""
     context = cl.Context([device.device])
     queue = cl.CommandQueue(context, properties=cl.command_queue_properties.PROFILING_ENABLE)
-    generic = Features.generic_program()
+    generic = Features.generic_program(media=False)     # most scenes' (the viewer's first)
     source, options = kernel_source(extra, generic), program_options(device.device, generic)
     fast = keeps_own_cache(device.device) or cache_entry(device.device, source, options, True).is_file()
     if not fast:

@@ -1,12 +1,13 @@
-"""The programs a device renders with: one generic program that renders any scene, and each
-scene's own program, specialised to its features (app/device/features.py), built in the background.
+"""The programs a device renders with: a generic program that renders any scene (two: with
+media and null surfaces, and without, for the scenes that have neither), and each scene's own
+program, specialised to its features (app/device/features.py), built in the background.
 
 A specialised program is the fastest a scene can have (on a GPU every branch a kernel could take
 costs registers, hence occupancy), but building it can take seconds on a GPU's driver, longer
 with the register-cap trials of app/device/occupancy.py, and every new mix of materials, textures and
-lights is a new program. The generic program (Features.generic_program) is built once per
-device, driver and pathtrace version and cached (app/device/opencl.py: open_device builds it where that
-is fast, `pathtrace devices --check` everywhere), so that a scene's first images need no build:
+lights is a new program. The generic programs (Features.generic_program) are built once per
+device, driver and pathtrace version and cached (app/device/opencl.py: open_device builds the one
+without media where that is fast, `pathtrace devices --check` both everywhere), so that a scene's first images need no build:
 they come from the generic program while the scene's own builds in a thread (the drivers'
 builds release Python's lock), started once the first pass is queued so that it takes no core
 from the first image (Renderer.switch_when_built), and launches switch to it once it is there. Where the generic

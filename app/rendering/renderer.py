@@ -169,13 +169,13 @@ class Renderer(QueuePlans, PathSort):
         if mode == "specialised" or self.traversal_stats or self.divergence_stats:  # the generic one counts rays
             self._use_program(self.backend.program_for(features), generic=False)
         elif mode == "generic":
-            self._use_program(self.backend.program, generic=True)
+            self._use_program(self.backend.generic(features.media), generic=True)
         else:
             own = self.backend.programs.built(features)
             if own is not None:
                 self._use_program(own, generic=False)
                 return
-            generic = self.backend.built_generic()
+            generic = self.backend.built_generic(features.media)
             self._use_program(generic if generic is not None else self.backend.program_for(features, tuned=False),
                               generic=generic is not None)
             self._awaited = features
