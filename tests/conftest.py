@@ -23,8 +23,8 @@ os.environ.setdefault("PATHTRACE_SCENE_CACHE", "0")
 # Nor to its cache of kernel binaries and path-queue verdicts (Renderer.choose_queue_plan), whose
 # verdicts would spare a later run the trials that tests count.
 os.environ.setdefault("PATHTRACE_CACHE", tempfile.mkdtemp(prefix="pathtrace-tests-"))
-# Renders draw from the generic program alone (pathtrace.device.programs), one build shared by every
-# test, where each scene's own program would be a build of its own (about 220 of them, most of
+# Renders draw from the generic programs alone (pathtrace.device.programs: with media and
+# without), two builds shared by every test, where each scene's own program would be a build of its own (about 220 of them, most of
 # the suite's time on two cores). Tests marked `specialised` render with the scenes' own
 # programs: those about what those programs compile, trace and cache, and the references, which
 # check what a render converges with; tests/test_programs.py compares the two on every test scene.
