@@ -11,6 +11,7 @@ import pytest
 from pyopencl import cltypes
 
 import pathtrace.scene.instances as instancing
+from pathtrace.cameras import PerspectiveCamera
 from pathtrace.compiler.compiled import compile_scene
 from pathtrace.errors import UserError
 from pathtrace.rendering.renderer import Renderer
@@ -151,7 +152,9 @@ def test_a_hundred_thousand_instances_fit_and_render(backend, monkeypatch):
     t[:, :3, 3] = rng.uniform((-100, -2, -100), (100, 2, 100), (n, 3))      # a field under the sky
     for k in range(n):
         b.add_instance(obj, t[k])
-    scene = b.build("forest")
+    # seen from above, under the sky: the walks through the field find lit surfaces in many
+    # pixels (from inside the field, at the default camera, nearly every path stayed dark)
+    scene = b.build("forest", camera=PerspectiveCamera([0, 12, 0], [0, 0, 0], [0, 0, 1], 60.0))
     assert scene.instances.triangle_count == 2 * 10 ** 8
     c = compile_scene(scene)
     assert c.two_level and c.num_triangles == 2000 and len(c.instances) == n
@@ -160,7 +163,8 @@ def test_a_hundred_thousand_instances_fit_and_render(backend, monkeypatch):
     r.add_samples(2)
     r.finish()
     img = r.mean()
-    assert np.all(np.isfinite(img)) and img.mean() > 0
+    lit = np.mean(img.max(-1) > 0)          # 0.43 at 2 samples per pixel (PoCL, 2026-11-29)
+    assert np.all(np.isfinite(img)) and lit > 0.2
 
 
 REFERENCE = Path(__file__).parent / "references" / "instances.npz"
