@@ -20,6 +20,13 @@ AttributeEnd
 """
 
 
+def pbrt_scene(tmp_path, lines: str):
+    """The scene of a pbrt-v4 file of `lines` after a camera on the z axis, 5 units out."""
+    path = tmp_path / "s.pbrt"
+    path.write_text('LookAt 0 0 5  0 0 0  0 1 0\nCamera "perspective"\nWorldBegin\n' + lines + "\n")
+    return load_scene(str(path))
+
+
 def moved(m, points):
     """(n, 3) points moved by the (4, 4) transform m."""
     return points @ m[:3, :3].T + m[:3, 3]

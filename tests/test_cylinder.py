@@ -10,7 +10,7 @@ import pytest
 
 from pathtrace.scene import load_scene
 from pathtrace.shapes import SHAPES
-from tests.analytic_shapes import hits_as_pbrt, moved, pbrt_emitter, placed_quadric
+from tests.analytic_shapes import hits_as_pbrt, moved, pbrt_emitter, pbrt_scene, placed_quadric
 from tests.test_shapes import shape_hits
 
 RADIUS, Z_MIN, Z_MAX, PHI_MAX = 0.8, -0.4, 1.1, math.radians(300)
@@ -87,10 +87,8 @@ def test_a_pbrt_cylinder_is_textured_at_pbrts_image_coordinates(kernels, tmp_pat
     """pbrt-v4 looks images up at (u, 1 - v) (ImageTexture), and the pbrt reader turns every
     mesh's v round once so that pathtrace's lookup at (u, v) reads the same texel: a pbrt
     cylinder's hit must carry v = 1 - pbrt's (z - zmin) / (zmax - zmin), its front still outward."""
-    path = tmp_path / "c.pbrt"
-    path.write_text('LookAt 0 0 5  0 0 0  0 1 0\nCamera "perspective"\nWorldBegin\nTranslate 0.3 0 0\n'
-                    'Shape "cylinder" "float radius" 0.8 "float zmin" -0.5 "float zmax" 1.5 "float phimax" 300\n')
-    scene = load_scene(str(path))
+    scene = pbrt_scene(tmp_path, 'Translate 0.3 0 0\n'
+                              'Shape "cylinder" "float radius" 0.8 "float zmin" -0.5 "float zmax" 1.5 "float phimax" 300')
     rng, n = np.random.default_rng(7), 500
     phi = rng.uniform(0.01, math.radians(300) - 0.01, n)
     z = rng.uniform(-0.49, 1.49, n)

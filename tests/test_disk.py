@@ -16,7 +16,7 @@ from pathtrace.scene import Mesh, SceneBuilder, diffuse, load_scene
 from pathtrace.scene import transform
 from pathtrace.shapes import SHAPES, Shape
 from tests.stats import z_test
-from tests.analytic_shapes import hits_as_pbrt, moved, pbrt_emitter
+from tests.analytic_shapes import hits_as_pbrt, moved, pbrt_emitter, pbrt_scene
 from tests.test_shapes import one_shape_scene, shape_hits
 
 RADIUS, INNER, HEIGHT, PHI_MAX = 1.5, 0.6, 0.25, math.radians(250)
@@ -95,10 +95,8 @@ def test_a_pbrt_disk_is_textured_at_pbrts_image_coordinates(kernels, tmp_path):
     (src/pbrt/shapes.h, Disk::InteractionFromIntersection), and pathtrace at (u, v): a pbrt
     disk's hit must carry (u, 1 - v), its tangents along them pbrt's dp/du = phimax (-y, x, 0)
     and -dp/dv = (radius - innerradius) (cos phi, sin phi, 0), its front still +z."""
-    path = tmp_path / "d.pbrt"
-    path.write_text('LookAt 0 0 5  0 0 0  0 1 0\nCamera "perspective"\nWorldBegin\nTranslate 0.3 0 0\n'
-                    'Shape "disk" "float radius" 1.5 "float innerradius" 0.6 "float height" 0.25 "float phimax" 250\n')
-    scene = load_scene(str(path))
+    scene = pbrt_scene(tmp_path, 'Translate 0.3 0 0\n'
+                              'Shape "disk" "float radius" 1.5 "float innerradius" 0.6 "float height" 0.25 "float phimax" 250')
     rng, n = np.random.default_rng(8), 500
     phi = rng.uniform(0.01, math.radians(250) - 0.01, n)
     r = rng.uniform(0.61, 1.49, n)
@@ -146,14 +144,19 @@ def test_a_pbrt_disk_renders_as_a_pbrt_mesh_of_its_uv(backend, tmp_path):
         path.write_text(head + shape + "\n")
         scene = load_scene(str(path))
         assert bool(scene.shapes) == (seed == 0)
-        r = Renderer(backend, scene.with_settings(max_depth=2, seed=seed), 32, 32)
-        for _ in range(4):
-            r.add_samples(64)
-        r.finish()
-        images.append((r.mean(), r.variance() / 256))
+        images.append(mean_and_variance(backend, scene.with_settings(max_depth=2, seed=seed), (32, 32), 64))
     (m0, v0), (m1, v1) = images
     ok, p, threshold = z_test(m0, v0, m1, v1, block=2)
     assert ok, (p, threshold)
+
+
+def mean_and_variance(backend, scene, size, spp):
+    """The mean of four launches of `spp` samples per pixel and its per-pixel variance."""
+    r = Renderer(backend, scene, *size)
+    for _ in range(4):
+        r.add_samples(spp)
+    r.finish()
+    return r.mean(), r.variance() / r.samples
 
 
 def fan(segments=256):
@@ -181,11 +184,7 @@ def test_the_analytic_disk_renders_as_the_old_triangle_fan(backend):
         b.add_mesh(Mesh("floor", floor, np.array([[0, 1, 2], [0, 2, 3]], np.int32), None, b.material(diffuse(0.5))))
         scene = b.build("disk", camera=PerspectiveCamera([0, 1.5, 4], [0, 0, 0], [0, 1, 0], 40.0),
                         environment=Environment.constant((1.0, 0.9, 0.8)))
-        r = Renderer(backend, scene.with_settings(max_depth=3, seed=3 if analytic else 4), 48, 36)
-        for _ in range(4):
-            r.add_samples(256)
-        r.finish()
-        images.append((r.mean(), r.variance() / 1024))
+        images.append(mean_and_variance(backend, scene.with_settings(max_depth=3, seed=3 if analytic else 4), (48, 36), 256))
     (m0, v0), (m1, v1) = images
     ok, p, threshold = z_test(m0, v0, m1, v1, block=2)
     assert ok, (p, threshold)

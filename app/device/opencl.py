@@ -238,11 +238,6 @@ class Backend:
         return Backend(self.device, self.context, self.queue, self.opened, self.extra, self.use_cache, mode,
                        self.programs)
 
-    @property
-    def program(self) -> cl.Program:
-        """The generic program with media, which renders every scene; waits for it."""
-        return self.generic(media=True)
-
     def generic(self, media: bool) -> cl.Program:
         """The generic program with or without media (Features.generic_program), tuned (on
         NVIDIA under the register caps of app/device/occupancy.py, which the heaviest programs gain
