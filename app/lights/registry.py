@@ -15,7 +15,7 @@ from pathtrace.lights.light import DeltaLight
 from pathtrace.device.slots import slot_accessor
 
 # the modules of app/lights that are the interface and its tables, not light types
-INTERFACE = ("light", "registry", "table", "tree")
+INTERFACE = ("area", "light", "registry", "table", "tree")
 
 
 def _delta_light_types() -> list:

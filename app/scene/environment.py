@@ -4,6 +4,7 @@ three formats: pathtrace's [environment], Mitsuba 3's `constant` and `envmap` em
 pbrt-v4's `infinite` light (app/parameters.py; the readers place a map by the element's
 to_world or CTM, and pbrt-v4's equal-area square becomes a latitude-longitude map)."""
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -53,6 +54,61 @@ class Environment:
     def from_file(cls, path: Path, intensity=1.0, rotation=0.0, where="environment.map"):
         from pathtrace.io.images import read_hdr
         return cls(read_hdr(path, where), intensity, rotation, str(path))
+
+    @classmethod
+    def from_mitsuba(cls, kind: str, values: dict, to_world, folder: Path, where: str, warn):
+        """Mitsuba 3's `constant` or `envmap` emitter of the values its declared names give
+        (mitsuba_plugins), its map turned by to_world() (read where there is a map). Raises ValueError("<Mitsuba name>: <problem>")."""
+        if kind == "constant":
+            return cls.constant(values.get("color", 1.0))
+        if "map" not in values:
+            raise ValueError("filename: needs a filename")
+        if values.get("intensity", 1.0) < 0:
+            raise ValueError("scale: must not be negative")
+        return cls.from_file(folder / values["map"], values.get("intensity", 1.0),
+                             cls.mitsuba_rotation(to_world(), where, warn), where=where)
+
+    @staticmethod
+    def mitsuba_rotation(to_world: np.ndarray, where: str, warn) -> float:
+        """pathtrace's rotation about +y for a Mitsuba envmap's to_world: Mitsuba puts the map's
+        u = 0 at -z where pathtrace puts u = 1/2, half a turn apart; rotations about other axes
+        are not supported."""
+        r = to_world[:3, :3]
+        if not np.allclose(r[1], [0, 1, 0], atol=1e-6) or not np.allclose(r[:, 1], [0, 1, 0], atol=1e-6) \
+                or abs(np.linalg.det(r) - 1) > 1e-6:
+            warn(f"{where}: pathtrace rotates maps about +y only; it ignores this to_world")
+            return 180.0
+        return (180.0 + math.degrees(math.atan2(r[0, 2], r[0, 0]))) % 360.0
+
+    @classmethod
+    def from_pbrt(cls, values: dict, given: dict, resolve, inverse, where: str):
+        """pbrt-v4's `infinite` light of the values its declared names give (`given`: by pbrt's
+        names): its equal-area square map made latitude-longitude through inverse() (the CTM's
+        inverse; resolve(name) finds the file), or L; both times scale and, where
+        `illuminance` is positive, as pbrt-v4's Light::Create scales them: a constant L by
+        E_v / pi, a map by E_v over its upper_illuminance. Raises ValueError("<pbrt name>: <problem>")."""
+        from pathtrace.scene.pbrt.equal_area import to_latlong, upper_illuminance
+        scale, illuminance = values.get("intensity", 1.0), given["illuminance"]
+        if "map" in values:
+            if "color" in values:
+                raise ValueError("L: an infinite light takes L or a filename, not both")
+            from pathtrace.io.images import read_hdr
+            path = resolve(values["map"])
+            image = read_hdr(path, f"{where}: filename")
+            if image.shape[0] != image.shape[1]:
+                raise ValueError(f"{path}: pbrt-v4's environment maps are square (equal-area), "
+                                 f"got {image.shape[1]}x{image.shape[0]}")
+            if illuminance > 0:
+                upper = upper_illuminance(image)
+                if upper <= 0:
+                    raise ValueError("illuminance: the map is black above its horizon, which no scale brightens")
+                scale *= illuminance / upper
+            latlong = to_latlong(image[..., :3], inverse()[:3, :3])
+            return cls(latlong, scale, 0.0, str(path), resampled=True)
+        color = np.broadcast_to(values.get("color", 1.0), 3) * scale
+        if np.any(color < 0):
+            raise ValueError(f"{'scale' if scale < 0 else 'L'}: must not be negative")
+        return cls.constant(color * illuminance / math.pi if illuminance > 0 else color)
 
     def sampling_cdfs(self):
         """The piecewise-constant distribution kernels/environment.cl samples: luminance times

@@ -676,15 +676,12 @@ class _Reader:
         if kind in Environment.mitsuba_plugins:       # by its declared Mitsuba names, those this emitter has
             values = parameters.read([p for p in Environment.parameters if p.name in Environment.mitsuba_plugins[kind]],
                                      "mitsuba", lambda p, name: self.parameter(props, p, name))
-            if kind == "constant":
-                self.environment = Environment.constant(values.get("color", 1.0))
-                return
-            if "map" not in values:
-                _fail(node, "needs a filename")
-            if values.get("intensity", 1.0) < 0:
-                _fail(props["scale"], "must not be negative")
-            self.environment = Environment.from_file(node.file.parent / values["map"], values.get("intensity", 1.0),
-                                                     self.envmap_rotation(node, props), where=node.where())
+            try:
+                self.environment = Environment.from_mitsuba(kind, values, lambda: self.get(
+                    props, "to_world", np.eye(4), ("transform",)), node.file.parent, node.where(), warn)
+            except ValueError as e:
+                field, problem = str(e).split(": ", 1)
+                _fail(props.get(field, node), problem)
         elif kind in LIGHTS_BY_NAME:
             self.lights.append(self.delta_light(node, kind, props))
         else:
@@ -729,18 +726,6 @@ class _Reader:
         if p.kind == "number" and getattr(p, "names", None) and target.tag == "string":
             kinds = ("string",)          # a named value (an IOR's name), which the type resolves
         return self.get(props, name, kinds=kinds)
-
-    def envmap_rotation(self, node, props):
-        """pathtrace's rotation about +y for a Mitsuba envmap's to_world: Mitsuba puts the map's
-        u = 0 at -z where pathtrace puts u = 1/2, half a turn apart; rotations about other axes
-        are not supported."""
-        m = self.get(props, "to_world", np.eye(4), ("transform",))
-        r = m[:3, :3]
-        if not np.allclose(r[1], [0, 1, 0], atol=1e-6) or not np.allclose(r[:, 1], [0, 1, 0], atol=1e-6) \
-                or abs(np.linalg.det(r) - 1) > 1e-6:
-            warn(f"{node.where()}: pathtrace rotates maps about +y only; it ignores this to_world")
-            return 180.0
-        return (180.0 + math.degrees(math.atan2(r[0, 2], r[0, 0]))) % 360.0
 
     # -- materials --
 

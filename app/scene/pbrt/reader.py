@@ -38,13 +38,12 @@ from pathtrace.io.files import check_regular_file
 from pathtrace.filters import PixelFilter
 from pathtrace import parameters as declared
 from pathtrace.lights import DELTA_LIGHTS
-from pathtrace.lights.light import MAX_RADIANCE
+from pathtrace.lights.area import pbrt_radiance
 from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.known_names import Unread
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, orient_by_normals, vertex_normals
-from pathtrace.scene.pbrt.equal_area import to_latlong, upper_illuminance
 from pathtrace.scene.pbrt.materials import MaterialMapper, make, spectrum_rgb
 from pathtrace.textures import Texture
 from pathtrace.scene.pbrt.tokens import Tokens, numbers, parameters, string
@@ -57,8 +56,6 @@ MAX_INCLUDE_DEPTH = 16
 MAX_INCLUDES = 4096
 MAX_FILM = 16384
 LIGHTS_BY_NAME = declared.by_format(DELTA_LIGHTS.values(), "pbrt")
-# the most material rows one `power` area light's triangles take (PbrtReader.area_emission)
-MAX_POWER_ROWS = 256
 # a plymesh shape and its file name, as MeshFiles reads them ahead (PbrtReader.named_mesh_files)
 _PLYMESH = re.compile(r'Shape\s+"plymesh"')
 _FILENAME = re.compile(r'"string\s+filename"\s*\[?\s*"([^"]*)"')
@@ -848,18 +845,8 @@ class PbrtReader:
 
     def area_emission(self, vertices, faces, where, area=None):
         """The emitted radiance of a shape under an AreaLightSource, as [(faces, radiance)]
-        (faces an index array of the mesh's, or None for all), and whether it emits from both
-        sides; [(None, None)] where the shape is no light.
-
-        `power` is applied as pbrt-v4 applies it: a mesh is one DiffuseAreaLight per triangle
-        (src/pbrt/scene.cpp, the area lights' loop over the shapes Shape::Create returns), and
-        DiffuseAreaLight::Create (src/pbrt/lights.cpp) scales L by power / k_e with
-        k_e = (twosided ? 2 : 1) * shape.Area() * Pi, the area being the triangle's own (in the
-        world) and an analytic shape's in its object's space (pbrt-v4's Sphere, Disk and
-        Cylinder::Area, src/pbrt/shapes.h, ignore the transform). An RGB
-        L keeps its magnitude (scale /= SpectrumToPhotometric(L) sees only the colour space's
-        illuminant), so L is not divided by its luminance. Triangles of one area share a
-        radiance, and a material row."""
+        (app/lights/area.py: pbrt_radiance; faces an index array of the mesh's, or None for
+        all), and whether it emits from both sides; [(None, None)] where the shape is no light."""
         if self.state.area_light is None or self.state.material is None:
             return [(None, None)], False
         params, light_where = self.state.area_light
@@ -867,47 +854,15 @@ class PbrtReader:
             params.string("filename")
             warn(f"{light_where}: pathtrace's area lights have no image; it uses L "
                  f"({', '.join(f'{c:g}' for c in spectrum_rgb(params, 'L', 1.0, 'illuminant'))})")
-        scale = params.float("scale", 1.0)
-        le = spectrum_rgb(params, "L", 1.0, "illuminant") * scale
         twosided = params.bool("twosided", False)
-        power = params.float("power", -1.0)
-        if np.any(le < 0):
-            params.fail("scale" if scale < 0 else "L", "an emitted radiance must not be negative")
+        try:
+            parts = pbrt_radiance(spectrum_rgb(params, "L", 1.0, "illuminant"), params.float("scale", 1.0), twosided,
+                                  params.float("power", -1.0), vertices, faces, area,
+                                  lambda text: warn(f"{light_where}: {text}"))
+        except ValueError as e:
+            self.mapper.fail(params, light_where, e)
         self.unused(params, "arealight", "diffuse")
-        if power <= 0:
-            parts, cause = [(None, le)], "'L' times 'scale'"
-        else:
-            parts, area = self.powered(le, power, math.pi * (2 if twosided else 1), vertices, faces, light_where, area)
-            cause = f"'power' {power:g} over the shape's area of {area:.3g}" + \
-                ("" if faces is None else " (its smallest triangle's: each triangle emits the power, as pbrt-v4's do)")
-        top = max(float(np.max(e)) for _, e in parts)
-        if not top <= MAX_RADIANCE:
-            raise UserError(f"{light_where}: {cause} gives an emitted radiance of {top:.3g}, "
-                            f"beyond {MAX_RADIANCE:g}, where the sums of samples overflow")
         return parts, twosided
-
-    @staticmethod
-    def powered(le, power, k_e, vertices, faces, light_where, area=None) -> list:
-        """area_emission's [(faces, radiance)] of a light given `power`, L power / (k_e area) with
-        each triangle's own area (an analytic shape's `area`), and the least area."""
-        if area is not None:
-            return [(None, le * power / (k_e * area))], area
-        p = vertices[faces]
-        area = 0.5 * np.linalg.norm(np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0]), axis=1)
-        # areas equal in float32 (a quad's two halves, but for rounding) share a row, at their mean
-        _, group = np.unique(area.astype(np.float32), return_inverse=True)
-        areas = np.bincount(group, weights=area) / np.bincount(group)
-        if len(areas) > MAX_POWER_ROWS:
-            # a row per triangle would outgrow the material table: areas in MAX_POWER_ROWS
-            # bins of equal ratio, each triangle given its bin's geometric mean
-            edges = np.geomspace(areas[0], areas[-1], MAX_POWER_ROWS + 1)
-            bins = np.clip(np.searchsorted(edges, areas, side="right") - 1, 0, MAX_POWER_ROWS - 1)
-            spread = float(edges[1] / edges[0]) ** 0.5 - 1
-            warn(f"{light_where}: 'power' over {len(areas)} triangle areas; pathtrace gives each triangle the "
-                 f"radiance of one of {MAX_POWER_ROWS} area classes, within {spread:.1%} of pbrt-v4's")
-            areas, group = np.sqrt(edges[:-1] * edges[1:]), bins[group]
-        return [(np.flatnonzero(group == g), le * power / (k_e * float(a)))
-                for g, a in enumerate(areas) if np.any(group == g)], float(area.min())
 
     # -- lights --
 
@@ -956,32 +911,11 @@ class PbrtReader:
         given = {}
         values = declared.read(Environment.parameters, "pbrt", lambda p, name: self.mapper.parameter(params, p, name),
                                given)
-        # pbrt-v4's Light::Create: "illuminance" E_v scales a constant L by E_v / pi, and a map
-        # by E_v over its upper_illuminance
-        scale, illuminance = values.get("intensity", 1.0), given["illuminance"]
-        if "map" in values:
-            if "color" in values:
-                params.fail("L", "an infinite light takes L or a filename, not both")
-            from pathtrace.io.images import read_hdr
-            path = self.resolve(values["map"])
-            image = read_hdr(path, f"{where}: filename")
-            if image.shape[0] != image.shape[1]:
-                raise UserError(f"{where}: {path}: pbrt-v4's environment maps are square (equal-area), "
-                                f"got {image.shape[1]}x{image.shape[0]}")
-            if illuminance > 0:
-                upper = upper_illuminance(image)
-                if upper <= 0:
-                    params.fail("illuminance", "the map is black above its horizon, which no scale brightens")
-                scale *= illuminance / upper
-            latlong = to_latlong(image[..., :3], self.inverse(where, "an infinite light's map")[:3, :3])
-            self.environment = Environment(latlong, scale, 0.0, str(path), resampled=True)
-            return
-        color = np.broadcast_to(values.get("color", 1.0), 3) * scale
-        if np.any(color < 0):
-            params.fail("scale" if scale < 0 else "L", "must not be negative")
-        if illuminance > 0:
-            color = color * illuminance / math.pi
-        self.environment = Environment.constant(color)
+        try:
+            self.environment = Environment.from_pbrt(values, given, self.resolve,
+                                                     lambda: self.inverse(where, "an infinite light's map"), where)
+        except ValueError as e:
+            self.mapper.fail(params, where, e)
 
     def _reverse_orientation(self, tokens, offset):
         self.state.reverse = not self.state.reverse
