@@ -7,6 +7,7 @@ RenderParams and its readings of Mitsuba's and pbrt's cameras. app/cameras/regis
 the modules and generates the kernels' dispatch."""
 
 import dataclasses
+import math
 from dataclasses import dataclass, field
 from typing import ClassVar
 
@@ -23,6 +24,46 @@ def check_range(name: str, value, low: float, high: float, open_low: bool = Fals
         shown = f"{value:g}" if isinstance(value, (int, float, np.number)) else repr(value)
         raise ValueError(f"{name}: must be in {'(' if open_low else '['}{low:g}, {high:g}{')' if open_high else ']'}, "
                          f"got {shown}")
+
+
+def frame_of(world_from_camera: np.ndarray, x_right: bool) -> dict:
+    """A Camera's frame (eye, look_at, up, mirrored) of a file's camera-to-world transform,
+    camera space looking down +z with +y up and +x the image's right (pbrt-v4) or left
+    (Mitsuba 3): a transform that turns +x the other way mirrors the image."""
+    r, eye = world_from_camera[:3, :3], world_from_camera[:3, 3]
+    forward, up, x = r @ [0, 0, 1.0], r @ [0, 1.0, 0], r @ [1.0, 0, 0]
+    side = np.dot(np.cross(forward, up), x)
+    return dict(eye=eye, look_at=eye + forward / np.linalg.norm(forward), up=up,
+                mirrored=bool(side < 0 if x_right else side > 0))
+
+
+def pbrt_screen_half_height(camera) -> float:
+    """Half the image's height in pbrt's screen space, where the fov spans [-1, 1] (or an
+    orthographic camera one world unit each way), of a pbrt camera (the pbrt reader's view of
+    it: get, has, floats, fail, warn): pbrt-v4's CameraBase screen window (src/pbrt/cameras.cpp,
+    CameraBaseParameters / the cameras' Create: frame = frameaspectratio, else the film's x / y;
+    the window [-frame, frame] x [-1, 1] where frame > 1, else [-1, 1] x [-1/frame, 1/frame];
+    or the file's `screenwindow` x0 x1 y0 y1). pathtrace's image is centred and its pixels
+    square, so the window's height frames it; a window off centre or of another aspect than the
+    film's is taken so, with a warning."""
+    w, h = camera.width, camera.height
+    frame = camera.get("frameaspectratio", w / h)
+    if not frame > 0 or not math.isfinite(frame):
+        camera.fail("frameaspectratio", f"must be positive, got {frame:g}")
+    window = (-frame, frame, -1.0, 1.0) if frame > 1 else (-1.0, 1.0, -1 / frame, 1 / frame)
+    if camera.has("screenwindow"):
+        window = tuple(float(v) for v in camera.floats("screenwindow"))
+        if len(window) != 4 or not window[0] < window[1] or not window[2] < window[3]:
+            camera.fail("screenwindow", "takes x0 x1 y0 y1 with x0 < x1 and y0 < y1")
+    x0, x1, y0, y1 = window
+    name = "screenwindow" if camera.has("screenwindow") else "frameaspectratio"
+    if not math.isclose(x0, -x1, abs_tol=1e-6 * (x1 - x0)) or not math.isclose(y0, -y1, abs_tol=1e-6 * (y1 - y0)):
+        camera.warn(f"pathtrace's image is centred on the view; it uses a centred window of the same size, "
+                    f"[{-(x1 - x0) / 2:g} {(x1 - x0) / 2:g} {-(y1 - y0) / 2:g} {(y1 - y0) / 2:g}]", name)
+    if not math.isclose((x1 - x0) / (y1 - y0), w / h, rel_tol=1e-4):
+        camera.warn(f"a window of aspect {(x1 - x0) / (y1 - y0):g} on a film of {w / h:g} has pixels that are not "
+                    "square; pathtrace's are, and it frames the window's height", name)
+    return (y1 - y0) / 2
 
 
 def _normalize(v):

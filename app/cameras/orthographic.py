@@ -6,7 +6,7 @@ import math
 from dataclasses import dataclass
 from typing import ClassVar
 
-from pathtrace.cameras.camera import MAX_EXTENT, Camera, check_range
+from pathtrace.cameras.camera import MAX_EXTENT, Camera, check_range, pbrt_screen_half_height
 from pathtrace.parameters import Parameter
 
 HEIGHT = Parameter("height", "number", 2.0, doc="the view's height, scene units (Mitsuba's and pbrt's come from "
@@ -49,4 +49,4 @@ class OrthographicCamera(Camera):
         if camera.get("lensradius", 0.0) > 0:
             camera.warn("pathtrace's orthographic camera has no lens; 'lensradius' is ignored")
         camera.get("focaldistance", 1e6)
-        return cls(**frame, height=2.0 * camera.scale_y * camera.screen_half_height())
+        return cls(**frame, height=2.0 * camera.scale_y * pbrt_screen_half_height(camera))

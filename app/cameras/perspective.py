@@ -7,7 +7,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from pathtrace.cameras.camera import Camera, check_range
+from pathtrace.cameras.camera import Camera, check_range, pbrt_screen_half_height
 from pathtrace.parameters import Parameter
 
 VFOV = Parameter("vfov", "number", 45.0, doc="the vertical field of view, degrees in (0, 180) (Mitsuba's "
@@ -50,8 +50,8 @@ class PerspectiveCamera(Camera):
         if not 0 < fov < 180:
             camera.fail("fov", f"must lie in (0, 180) degrees, got {fov:g}")
         # screen space spans tan(fov / 2) per unit (pbrt-v4's Perspective(fov, n, f)), and the
-        # screen window's height frames the image (pbrt/reader.py: screen_half_height)
-        vfov = math.degrees(2 * math.atan(math.tan(math.radians(fov) / 2) * camera.screen_half_height()))
+        # screen window's height frames the image (camera.py: pbrt_screen_half_height)
+        vfov = math.degrees(2 * math.atan(math.tan(math.radians(fov) / 2) * pbrt_screen_half_height(camera)))
         lens = camera.get("lensradius", 0.0)
         if lens > 0:
             return cls(**frame, vfov=vfov).as_type("thinlens", aperture_radius=lens,

@@ -18,6 +18,7 @@ from xml.parsers import expat
 import numpy as np
 
 from pathtrace import cameras
+from pathtrace.cameras.camera import frame_of
 from pathtrace.cameras.perspective import PerspectiveCamera, vertical_fov
 from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError, cut, short, warn
@@ -231,23 +232,14 @@ def _color(node):
 
 
 def _lookat(node):
-    o = np.array(_floats(node, node.attrs.get("origin", ""), "origin"))
-    t = np.array(_floats(node, node.attrs.get("target", ""), "target"))
-    up = np.array(_floats(node, node.attrs.get("up", "0, 1, 0"), "up"))
+    o, t, up = (np.array(_floats(node, node.attrs.get(k, d), k)) for k, d in
+                (("origin", ""), ("target", ""), ("up", "0, 1, 0")))
     if len(o) != 3 or len(t) != 3 or len(up) != 3:
         _fail(node, "origin, target and up must be 3 numbers each")
-    d = t - o
-    if np.linalg.norm(d) == 0:
-        _fail(node, "target must differ from origin")
-    d /= np.linalg.norm(d)
-    left = np.cross(up, d)
-    if not np.linalg.norm(left) > 1e-9 * np.linalg.norm(up):     # a zero up vector too
-        _fail(node, "up must be a vector not parallel to the view direction")
-    left /= np.linalg.norm(left)
-    # Mitsuba's look_at: the columns are left (+x), up (+y), forward (+z) and the origin
-    m = np.eye(4)
-    m[:3, 0], m[:3, 1], m[:3, 2], m[:3, 3] = left, np.cross(d, left), d, o
-    return m
+    try:
+        return transform.look_at(o, t, up)      # x is the image's left in Mitsuba's camera space
+    except ValueError as e:
+        _fail(node, str(e))
 
 
 def _transform(node):
@@ -614,14 +606,9 @@ class _Reader:
         if self.filter is None:
             self.filter = PixelFilter("gaussian")     # Mitsuba's default
         m = self.get(props, "to_world", np.eye(4), ("transform",))
-        eye = m[:3, 3]
-        forward, up = m[:3, :3] @ [0, 0, 1.0], m[:3, :3] @ [0, 1.0, 0]
-        left = m[:3, :3] @ [1.0, 0, 0]
-        # Mitsuba's camera space has +x to the image's left: a transform that turns it to the
-        # right mirrors the image
-        frame = dict(eye=eye, look_at=eye + forward / np.linalg.norm(forward), up=up,
-                     mirrored=bool(np.dot(np.cross(up, forward), left) < 0))
-        camera = cls.from_mitsuba(_Sensor(self, node, props, np.linalg.norm(left), np.linalg.norm(up)), **frame)
+        frame = frame_of(m, x_right=False)        # Mitsuba's camera space has +x to the image's left
+        camera = cls.from_mitsuba(_Sensor(self, node, props, np.linalg.norm(m[:3, 0]), np.linalg.norm(m[:3, 1])),
+                                  **frame)
         try:
             camera.check()
         except ValueError as e:

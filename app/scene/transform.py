@@ -41,3 +41,22 @@ def transform_normals(m: np.ndarray, normals: np.ndarray) -> np.ndarray:
 def flips_handedness(m: np.ndarray) -> bool:
     """A mirroring transform turns counter-clockwise corners clockwise."""
     return np.linalg.det(m[:3, :3]) < 0
+
+
+def look_at(eye, target, up) -> np.ndarray:
+    """The camera-to-world transform of a camera at `eye` looking at `target`: its columns x =
+    up x forward (normalised), y = forward x x, z = forward and the eye, as Mitsuba 3's lookat
+    and pbrt-v4's LookAt (whose CTM is its inverse) build it. Raises ValueError where the view
+    direction or the x axis is undefined."""
+    eye, target, up = (np.asarray(v, np.float64) for v in (eye, target, up))
+    d = target - eye
+    if np.linalg.norm(d) == 0:
+        raise ValueError("the point looked at must differ from the eye")
+    d /= np.linalg.norm(d)
+    x = np.cross(up, d)
+    if not np.linalg.norm(x) > 1e-9 * np.linalg.norm(up):     # a zero up vector too
+        raise ValueError("up must be a vector not parallel to the view direction")
+    m = np.eye(4)
+    m[:3, 0] = x / np.linalg.norm(x)
+    m[:3, 1], m[:3, 2], m[:3, 3] = np.cross(d, m[:3, 0]), d, eye
+    return m

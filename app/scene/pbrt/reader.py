@@ -22,7 +22,6 @@ an object, analytic shapes, are copied into world space at each instance."""
 
 import gc
 import gzip
-import math
 import os
 import re
 from dataclasses import dataclass, field, replace
@@ -32,6 +31,7 @@ import numpy as np
 
 from pathtrace import cameras
 from pathtrace.cameras import Camera
+from pathtrace.cameras.camera import frame_of
 from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError, cut, warn
 from pathtrace.io.files import check_regular_file
@@ -81,11 +81,14 @@ class _CameraParams:
             raise UserError(f"{self.where}: '{name}' {problem}")
         self.params.fail(name, problem)
 
-    def warn(self, text):
-        warn(f"{self.where}: {text}")
+    def has(self, name) -> bool:
+        return self.params is not None and self.params.type_of(name) is not None
 
-    def screen_half_height(self) -> float:
-        return self.reader.screen_half_height(self.params, self.width, self.height)
+    def floats(self, name):
+        return self.params.floats(name)
+
+    def warn(self, text, name=None):
+        warn(f"{self.params.where(name) if name else self.where}: {text}")
 
 
 @dataclass
@@ -267,20 +270,10 @@ class PbrtReader:
 
     def _lookat(self, tokens, offset):
         v = numbers(tokens, 9, "LookAt")
-        eye, look, up = v[:3], v[3:6], v[6:]
-        d = look - eye
-        if np.linalg.norm(d) == 0:
-            tokens.fail(offset, "LookAt: the eye and the point looked at coincide")
-        d = d / np.linalg.norm(d)
-        right = np.cross(up / max(np.linalg.norm(up), 1e-300), d)
-        if np.linalg.norm(right) < 1e-9:
-            tokens.fail(offset, "LookAt: the up vector is parallel to the view direction")
-        right /= np.linalg.norm(right)
-        new_up = np.cross(d, right)
-        world_from_camera = np.eye(4)
-        world_from_camera[:3, 0], world_from_camera[:3, 1], world_from_camera[:3, 2] = right, new_up, d
-        world_from_camera[:3, 3] = eye
-        self.concat(np.linalg.inv(world_from_camera))
+        try:
+            self.concat(np.linalg.inv(transform.look_at(v[:3], v[3:6], v[6:])))
+        except ValueError as e:
+            tokens.fail(offset, f"LookAt: {e}")
 
     # -- scene-wide options --
 
@@ -298,17 +291,12 @@ class PbrtReader:
             kind, params, where, ctm = "perspective", None, str(self.path), np.eye(4)
         else:
             kind, params, where, ctm, _ = self.camera_params
-        world_from_camera = np.linalg.inv(ctm)
-        r = world_from_camera[:3, :3]
-        eye = world_from_camera[:3, 3]
-        forward, up, right = r @ [0, 0, 1.0], r @ [0, 1.0, 0], r @ [1.0, 0, 0]
-        frame = dict(eye=eye, look_at=eye + forward / np.linalg.norm(forward), up=up,
-                     mirrored=bool(np.dot(np.cross(forward, up), right) < 0))
+        frame = frame_of(np.linalg.inv(ctm), x_right=True)
         cls = cameras.registry.format_class("pbrt", kind)
         if cls is None:
             warn(f"{where}: pathtrace has no {kind} camera; it uses a perspective one of pbrt-v4's defaults")
             kind, params, cls = "perspective", None, cameras.registry.format_class("pbrt", "perspective")
-        camera = cls.from_pbrt(_CameraParams(self, params, where, np.linalg.norm(up)), **frame)
+        camera = cls.from_pbrt(_CameraParams(self, params, where, np.linalg.norm(frame["up"])), **frame)
         try:
             camera.check()
         except ValueError as e:
@@ -318,35 +306,6 @@ class PbrtReader:
         if params is not None:
             self.unused(params, "camera", kind)
         return camera
-
-    @staticmethod
-    def screen_half_height(params, w, h) -> float:
-        """Half the image's height in pbrt's screen space, where the fov spans [-1, 1] (or an
-        orthographic camera one world unit each way): pbrt-v4's CameraBase screen window
-        (src/pbrt/cameras.cpp, CameraBaseParameters / the cameras' Create: frame =
-        frameaspectratio, else the film's x / y; the window [-frame, frame] x [-1, 1] where
-        frame > 1, else [-1, 1] x [-1/frame, 1/frame]; or the file's `screenwindow` x0 x1 y0
-        y1). pathtrace's image is centred and its pixels square, so the window's height frames
-        it; a window off centre or of another aspect than the film's is taken so, with a warning."""
-        if params is None:
-            return 1.0 if w >= h else h / w
-        frame = params.float("frameaspectratio", w / h)
-        if not frame > 0 or not math.isfinite(frame):
-            params.fail("frameaspectratio", f"must be positive, got {frame:g}")
-        window = (-frame, frame, -1.0, 1.0) if frame > 1 else (-1.0, 1.0, -1 / frame, 1 / frame)
-        if params.type_of("screenwindow"):
-            window = tuple(float(v) for v in params.floats("screenwindow"))
-            if len(window) != 4 or not window[0] < window[1] or not window[2] < window[3]:
-                params.fail("screenwindow", "takes x0 x1 y0 y1 with x0 < x1 and y0 < y1")
-        x0, x1, y0, y1 = window
-        name = "screenwindow" if params.type_of("screenwindow") else "frameaspectratio"
-        if not math.isclose(x0, -x1, abs_tol=1e-6 * (x1 - x0)) or not math.isclose(y0, -y1, abs_tol=1e-6 * (y1 - y0)):
-            warn(f"{params.where(name)}: pathtrace's image is centred on the view; it uses a centred window "
-                 f"of the same size, [{-(x1 - x0) / 2:g} {(x1 - x0) / 2:g} {-(y1 - y0) / 2:g} {(y1 - y0) / 2:g}]")
-        if not math.isclose((x1 - x0) / (y1 - y0), w / h, rel_tol=1e-4):
-            warn(f"{params.where(name)}: a window of aspect {(x1 - x0) / (y1 - y0):g} on a film of {w / h:g} "
-                 "has pixels that are not square; pathtrace's are, and it frames the window's height")
-        return (y1 - y0) / 2
 
     def _film(self, tokens, offset):
         kind = string(tokens, "Film")
