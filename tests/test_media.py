@@ -21,7 +21,7 @@ from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 from pathtrace.scene.description import Mesh, SceneBuilder
-from pathtrace.scene.mitsuba import _cube
+from pathtrace.scene.meshes import mitsuba_cube
 from tests.test_sampling import chi_square
 
 MEDIA = Features(media=True)
@@ -115,7 +115,7 @@ def medium_scene(boundary: str, medium: Medium, shape="cube", **build):
     if shape == "sphere":
         b.add_sphere((0, 0, 0), 1.0, row, "medium", inside)
     else:
-        vertices, faces, _ = _cube()
+        vertices, faces, _ = mitsuba_cube()
         b.add_mesh(Mesh("box", vertices.astype(np.float32), faces.astype(np.int32), None, row, media=inside))
     build.setdefault("camera", PerspectiveCamera((0, 0, 4), (0, 0, 0), (0, 1, 0), 40))
     build.setdefault("environment", Environment.constant((1, 1, 1)))
@@ -143,7 +143,7 @@ def test_single_scattering_of_a_thin_slab_under_a_sun(backend):
     sigma_t = sigma_s + sigma_a
     b = SceneBuilder()
     row = b.material(Material("null"))
-    vertices, faces, _ = _cube()
+    vertices, faces, _ = mitsuba_cube()
     vertices = vertices * [50, h / 2, 50] + [0, h / 2, 0]
     b.add_mesh(Mesh("slab", vertices.astype(np.float32), faces.astype(np.int32), None, row,
                     media=MediumInterface(0, -1)))
@@ -175,7 +175,7 @@ def test_the_camera_inside_a_medium_sees_it(backend):
     sigma_t = np.array([0.05, 0.2, 0.4])
     b = SceneBuilder()
     row = b.material(Material("null"))
-    vertices, faces, _ = _cube()
+    vertices, faces, _ = mitsuba_cube()
     b.add_mesh(Mesh("room", (vertices * 4).astype(np.float32), faces.astype(np.int32), None, row,
                     media=MediumInterface(0, -1)))
     camera = OrthographicCamera((0, 0, 0), (0, 0, -1), (0, 1, 0), height=0.5)

@@ -21,6 +21,7 @@ import numpy as np
 
 from pathtrace.errors import UserError, warn
 from pathtrace.io.files import check_regular_file
+from pathtrace.scene.transform import flips_handedness, transform_normals, transform_points
 
 FORMATS = (".ply", ".ply.gz", ".obj", ".stl", ".gltf", ".glb")
 MAX_FILE_BYTES = 4 << 30            # a mesh file larger than this is refused before reading
@@ -248,6 +249,56 @@ def orient_by_normals(vertices: np.ndarray, faces: np.ndarray, normals: np.ndarr
     faces = faces.copy()
     faces[flip] = faces[flip][:, ::-1]
     return faces
+
+
+def place_mesh(vertices, faces, normals, m: np.ndarray, flip: bool, orient: bool, where: str) -> tuple:
+    """(vertices, faces, normals, turned) of a mesh of the object's space moved into the world by
+    m: its faces turned round where `flip` (Mitsuba's flip_normals, pbrt's ReverseOrientation; its
+    normals too) and where m swaps handedness (the front kept where it was), and where `orient`,
+    each wound to its normals' side (orient_by_normals; `turned`: whether any face was)."""
+    if flip:
+        faces = faces[:, ::-1]
+        normals = None if normals is None else -normals
+    vertices = transform_points(m, vertices)
+    if np.any(np.abs(vertices) > MAX_COORDINATE):
+        raise UserError(f"{where}: the transformed vertices lie beyond {MAX_COORDINATE:g}, which float32 cannot trace")
+    if normals is not None:
+        normals = transform_normals(m, normals)
+    if flips_handedness(m):
+        faces = faces[:, ::-1]
+    oriented = orient_by_normals(vertices, faces, normals) if orient and normals is not None else faces
+    return vertices, oriented, normals, oriented is not faces
+
+
+# Mitsuba 3's cube texture coordinates per face (axis, sign): u and v each (s * p[k] + 1) / 2 for
+# the point's coordinate k and a sign s, as (k_u, s_u, k_v, s_v); read off Mitsuba 3.9's cube
+_CUBE_UV = {(2, 1): (1, 1, 0, 1), (2, -1): (1, -1, 0, 1), (0, 1): (1, 1, 2, -1),
+            (0, -1): (1, 1, 2, 1), (1, 1): (0, -1, 2, -1), (1, -1): (2, 1, 0, 1)}
+
+
+def mitsuba_cube():
+    """Mitsuba 3's cube: [-1, 1]^3, faces counter-clockwise seen from outside, with its uvs."""
+    vertices, faces, uvs = [], [], []
+    for axis in range(3):
+        for sign in (-1, 1):
+            u, v = (axis + 1) % 3, (axis + 2) % 3
+            base = len(vertices)
+            ku, su, kv, sv = _CUBE_UV[axis, sign]
+            for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+                p = np.zeros(3)
+                p[axis], p[u], p[v] = sign, a, b
+                vertices.append(p)
+                uvs.append(((su * p[ku] + 1) / 2, (sv * p[kv] + 1) / 2))
+            # (u, v, axis) is right-handed, so these corners run counter-clockwise about +axis
+            quad = [base, base + 1, base + 2, base + 3] if sign > 0 else [base, base + 3, base + 2, base + 1]
+            faces += [[quad[0], quad[1], quad[2]], [quad[0], quad[2], quad[3]]]
+    return np.array(vertices), np.array(faces), np.array(uvs)
+
+
+def mitsuba_rectangle():
+    """Mitsuba 3's rectangle: [-1, 1]^2 at z = 0 facing +z, uv (0, 0) at (-1, -1)."""
+    vertices = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], np.float64)
+    return vertices, np.array([[0, 1, 2], [0, 2, 3]]), (vertices[:, :2] + 1) / 2
 
 
 def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:

@@ -33,7 +33,8 @@ from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.known_names import Unread
-from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, orient_by_normals, vertex_normals
+from pathtrace.scene.meshes import (MAX_COORDINATE, MeshFiles, check_mesh, mitsuba_cube, mitsuba_rectangle, place_mesh,
+                                    vertex_normals)
 from pathtrace.shapes import SHAPES, Shape
 from pathtrace.shapes.shape import MIN_DETERMINANT
 from pathtrace.textures import TEXTURES, Texture, read_image
@@ -996,13 +997,9 @@ class _Reader:
             else:
                 self.builder.add_shape(shape)
             return
-        normals = uvs = None
-        if kind == "rectangle":
-            vertices = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], np.float64)
-            faces = np.array([[0, 1, 2], [0, 2, 3]])
-            uvs = (vertices[:, :2] + 1) / 2             # Mitsuba's: (0, 0) at (-1, -1)
-        elif kind == "cube":
-            vertices, faces, uvs = _cube()
+        normals = None
+        if kind in ("rectangle", "cube"):
+            vertices, faces, uvs = mitsuba_rectangle() if kind == "rectangle" else mitsuba_cube()
         elif kind in ("obj", "ply"):
             filename = self.get(props, "filename", kinds=("string",))
             if filename is None:
@@ -1022,21 +1019,9 @@ class _Reader:
             return
         if kind not in ("obj", "ply"):
             vertices, faces, normals, uvs = check_mesh(vertices, faces, None, uvs, node.where())
-        if self.get(props, "flip_normals", False, ("boolean",)):
-            faces = faces[:, ::-1]
-            normals = None if normals is None else -normals
-        vertices = transform.transform_points(m, vertices)
-        if np.any(np.abs(vertices) > MAX_COORDINATE):
-            _fail(node, f"the transformed vertices lie beyond {MAX_COORDINATE:g}, which float32 cannot trace")
-        if normals is not None:
-            normals = transform.transform_normals(m, normals)
-        if transform.flips_handedness(m):
-            faces = faces[:, ::-1]
-        if normals is not None:
-            oriented = orient_by_normals(vertices, faces, normals)
-            if oriented is not faces:        # turned: a converted scene writes the mesh anew
-                faces, origin = oriented, None
-        origin = origin if kind in ("obj", "ply") else None
+        vertices, faces, normals, turned = place_mesh(vertices, faces, normals, m, self.get(
+            props, "flip_normals", False, ("boolean",)), True, node.where())
+        origin = origin if kind in ("obj", "ply") and not turned else None     # turned: written anew
         mesh = Mesh(name or f"{kind} {len(self.builder.meshes)}", vertices.astype(np.float32), faces.astype(np.int32),
                     None if normals is None else normals.astype(np.float32), material,
                     origin.path if origin else "", origin, None if uvs is None else uvs.astype(np.float32), interface)
@@ -1044,31 +1029,6 @@ class _Reader:
             self.builder.objects[group].meshes.append(mesh)
         else:
             self.builder.add_mesh(mesh)
-
-
-# Mitsuba 3's cube texture coordinates per face (axis, sign): u and v each (s * p[k] + 1) / 2 for
-# the point's coordinate k and a sign s, as (k_u, s_u, k_v, s_v); read off Mitsuba 3.9's cube
-_CUBE_UV = {(2, 1): (1, 1, 0, 1), (2, -1): (1, -1, 0, 1), (0, 1): (1, 1, 2, -1),
-            (0, -1): (1, 1, 2, 1), (1, 1): (0, -1, 2, -1), (1, -1): (2, 1, 0, 1)}
-
-
-def _cube():
-    """Mitsuba's cube: [-1, 1]^3, faces counter-clockwise seen from outside, with its uvs."""
-    vertices, faces, uvs = [], [], []
-    for axis in range(3):
-        for sign in (-1, 1):
-            u, v = (axis + 1) % 3, (axis + 2) % 3
-            base = len(vertices)
-            ku, su, kv, sv = _CUBE_UV[axis, sign]
-            for a, b in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
-                p = np.zeros(3)
-                p[axis], p[u], p[v] = sign, a, b
-                vertices.append(p)
-                uvs.append(((su * p[ku] + 1) / 2, (sv * p[kv] + 1) / 2))
-            # (u, v, axis) is right-handed, so these corners run counter-clockwise about +axis
-            quad = [base, base + 1, base + 2, base + 3] if sign > 0 else [base, base + 3, base + 2, base + 1]
-            faces += [[quad[0], quad[1], quad[2]], [quad[0], quad[2], quad[3]]]
-    return np.array(vertices), np.array(faces), np.array(uvs)
 
 
 def read_mitsuba_file(path) -> Scene:

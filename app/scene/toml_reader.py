@@ -23,7 +23,7 @@ from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.resources import resource_dir
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
-from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, triangulate, vertex_normals
+from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, place_mesh, triangulate, vertex_normals
 from pathtrace.shapes import SHAPES, Shape, TextureUV
 from pathtrace.shapes.shape import MIN_DETERMINANT
 from pathtrace.textures import TEXTURES, Texture, read_image
@@ -578,16 +578,8 @@ class _Reader:
             vertices, faces, uvs = self.inline_geometry(data, where)
             vertices, faces, normals, uvs = check_mesh(vertices, faces, None, uvs, f"{self.label}: {where}")
             source, default_name, origin = "", f"mesh {where[7:-1]}", None
-        if flags["flip_normals"]:
-            faces = faces[:, ::-1]
-            normals = None if normals is None else -normals
-        vertices = transform.transform_points(m, vertices)
-        if np.any(np.abs(vertices) > MAX_COORDINATE):
-            self.fail(where, f"the transformed vertices lie beyond {MAX_COORDINATE:g}, which float32 cannot trace")
-        if normals is not None:
-            normals = transform.transform_normals(m, normals)
-        if transform.flips_handedness(m):     # keep the front side where it was
-            faces = faces[:, ::-1]
+        vertices, faces, normals, _ = place_mesh(vertices, faces, normals, m, flags["flip_normals"], False,
+                                                 f"{self.label}: {where}")
         return Mesh(self.name(data, where, default_name), vertices.astype(np.float32),
                     faces.astype(np.int32), None if normals is None else normals.astype(np.float32),
                     material, str(source), origin, None if uvs is None else uvs.astype(np.float32),

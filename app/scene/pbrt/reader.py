@@ -43,7 +43,7 @@ from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.known_names import Unread
-from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, orient_by_normals, vertex_normals
+from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, place_mesh, vertex_normals
 from pathtrace.scene.pbrt.materials import MaterialMapper, make, spectrum_rgb
 from pathtrace.textures import Texture
 from pathtrace.scene.pbrt.tokens import Tokens, numbers, parameters, string
@@ -757,18 +757,7 @@ class PbrtReader:
             warn(f"{where}: every triangle of the {kind} is degenerate (pbrt-v4 intersects none of them); "
                  "pathtrace leaves the shape out")
             return None
-        vertices = transform.transform_points(m, vertices)
-        self.check_extent(vertices, where)
-        if transform.flips_handedness(m):
-            faces = faces[:, ::-1]
-        if normals is not None:
-            normals = transform.transform_normals(m, normals)
-            if self.state.reverse:
-                normals = -normals
-            faces = orient_by_normals(vertices, faces, normals)
-        elif self.state.reverse:
-            faces = faces[:, ::-1]
-        return vertices, faces, normals, uvs, source
+        return *place_mesh(vertices, faces, normals, m, self.state.reverse, True, where)[:3], uvs, source
 
     @staticmethod
     def indexed_polygons(params, kind, corners, where):
