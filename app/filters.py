@@ -7,9 +7,11 @@ import math
 from dataclasses import dataclass
 
 from pathtrace.device.features import GENERIC, choice_glue
+from pathtrace.errors import cut
 
 FILTERS = ("box", "tent", "gaussian")
 DEFAULT_RADIUS = {"box": 0.5, "tent": 1.0, "gaussian": None}    # gaussian: 4 stddev
+PBRT_RADIUS = {"box": 0.5, "triangle": 2.0, "gaussian": 1.5, "mitchell": 2.0, "lanczos": 4.0}   # pbrt-v4's defaults
 MAX_RADIUS = 32.0       # pixels: wider is no longer a pixel filter
 MIN_WIDTH = 1e-3        # pixels: the narrowest radius or stddev (float32 squares of less underflow)
 
@@ -34,6 +36,40 @@ class PixelFilter:
         if not MIN_WIDTH <= self.radius <= MAX_RADIUS:
             raise ValueError(f"radius: must be in [{MIN_WIDTH:g}, {MAX_RADIUS:g}] pixels, got {self.radius:g}")
         return self
+
+    @classmethod
+    def from_mitsuba(cls, kind: str, get, warn) -> "PixelFilter":
+        """Mitsuba 3's rfilter `kind` (get(name, default): a float property): its box (radius
+        0.5), tent (radius, 1) and gaussian (stddev 0.5, radius 4 stddev); the filters of
+        negative lobes become its gaussian, with a warning. Raises ValueError as check()."""
+        if kind not in FILTERS:
+            warn(f"pathtrace has no {kind} filter (its weights go negative, which filter importance sampling "
+                 "cannot follow); it uses Mitsuba's gaussian")
+            return cls("gaussian")
+        return cls(kind, get("radius", None) if kind == "tent" else None,
+                   get("stddev", 0.5) if kind == "gaussian" else 0.5).check()
+
+    @classmethod
+    def from_pbrt(cls, kind: str, get, warn) -> "PixelFilter":
+        """pbrt-v4's PixelFilter `kind` (get(name, default): a float parameter): box, triangle and
+        gaussian of their xradius and yradius (one radius, their mean, with a warning where they
+        differ) and the gaussian's sigma (src/pbrt/filters.cpp, the filters' Create); mitchell and
+        lanczos, of negative lobes, become its gaussian, with a warning. Raises ValueError
+        ("<pbrt name>: <problem>")."""
+        if kind not in PBRT_RADIUS:
+            raise ValueError(f"type: unknown pixel filter '{cut(kind)}' (pbrt-v4 has {', '.join(PBRT_RADIUS)})")
+        rx, ry = get("xradius", PBRT_RADIUS[kind]), get("yradius", PBRT_RADIUS[kind])
+        if rx != ry:
+            warn(f"pathtrace's filters have one radius; it uses {(rx + ry) / 2:g}")
+        if kind in ("mitchell", "lanczos"):
+            warn(f"pathtrace has no {kind} filter (its weights go negative); it uses pbrt's gaussian")
+            return cls("gaussian", 1.5, 0.5)
+        name = {"triangle": "tent"}.get(kind, kind)
+        try:
+            return cls(name, (rx + ry) / 2, get("sigma", 0.5) if kind == "gaussian" else 0.5).check()
+        except ValueError as e:
+            field, problem = str(e).split(": ", 1)
+            raise ValueError(f"{ {'radius': 'xradius', 'stddev': 'sigma'}[field]}: {problem}") from None
 
     def params(self) -> tuple:
         """RenderParams.filter (kernels/filters/<name>.cl)."""

@@ -637,19 +637,14 @@ class _Reader:
                 self.filter = self.rfilter(child)
 
     def rfilter(self, node) -> PixelFilter:
-        """Mitsuba's box (radius 0.5), tent (radius, 1) and gaussian (stddev 0.5, radius 4
-        stddev); the filters with negative lobes become the gaussian, with a warning."""
-        kind = node.attrs.get("type")
+        """Mitsuba's box, tent or gaussian filter (PixelFilter.from_mitsuba), or its gaussian for
+        one of negative lobes."""
         props = self.properties(node)
-        if kind not in FILTERS:
+        if node.attrs.get("type") not in FILTERS:
             props.ignore()
-            warn(f"{node.where()}: pathtrace has no {kind} filter (its weights go negative, which filter "
-                 f"importance sampling cannot follow); it uses Mitsuba's gaussian")
-            return PixelFilter("gaussian")
-        stddev = self.get(props, "stddev", 0.5, ("float",)) if kind == "gaussian" else 0.5
-        radius = self.get(props, "radius", None, ("float",)) if kind == "tent" else None
         try:
-            return PixelFilter(kind, radius, stddev).check()
+            return PixelFilter.from_mitsuba(node.attrs.get("type"), lambda name, default: self.get(
+                props, name, default, ("float",)), lambda text: warn(f"{node.where()}: {text}"))
         except ValueError as e:
             field, problem = str(e).split(": ", 1)
             _fail(props.get(field, node), f"{field}: {problem}")

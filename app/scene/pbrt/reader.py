@@ -368,28 +368,17 @@ class PbrtReader:
     def _pixel_filter(self, tokens, offset):
         kind = string(tokens, "PixelFilter")
         params = parameters(tokens)
-        defaults = {"box": 0.5, "triangle": 2.0, "gaussian": 1.5, "mitchell": 2.0, "lanczos": 4.0}
-        if kind not in defaults:
-            tokens.fail(offset, f"unknown pixel filter '{cut(kind)}' (pbrt-v4 has {', '.join(defaults)})")
-        rx, ry = params.float("xradius", defaults[kind]), params.float("yradius", defaults[kind])
-        if rx != ry:
-            warn(f"{tokens.where(offset)}: pathtrace's filters have one radius; it uses {(rx + ry) / 2:g}")
-        radius = (rx + ry) / 2
-        if kind in ("mitchell", "lanczos"):
-            warn(f"{tokens.where(offset)}: pathtrace has no {kind} filter (its weights go negative); "
-                 "it uses pbrt's gaussian")
-            kind, radius = "gaussian", 1.5
-            for p in params.unused():
-                p.used = True
-        name = {"triangle": "tent"}.get(kind, kind)
+        where = tokens.where(offset)
         try:
-            # only pbrt-v4's gaussian has a sigma (src/pbrt/filters.cpp, GaussianFilter::Create)
-            sigma = params.float("sigma", 0.5) if kind == "gaussian" else 0.5
-            self.filter = PixelFilter(name, radius, sigma).check()
+            self.filter = PixelFilter.from_pbrt(kind, params.float, lambda text: warn(f"{where}: {text}"))
         except ValueError as e:
             field, problem = str(e).split(": ", 1)
-            field = {"radius": "xradius' and 'yradius", "stddev": "sigma"}.get(field, field)
-            raise UserError(f"{tokens.where(offset)}: '{field}': {problem}") from None
+            if field == "type":
+                tokens.fail(offset, problem)
+            raise UserError(f"{where}: '{field}' and 'yradius': {problem}" if field == "xradius" else
+                            f"{where}: '{field}': {problem}") from None
+        for p in params.unused() if kind in ("mitchell", "lanczos") else ():
+            p.used = True
         self.unused(params, "filter", kind)
 
     # -- the graphics state --
