@@ -62,7 +62,7 @@ class Environment:
         if kind == "constant":
             return cls.constant(values.get("color", 1.0))
         if "map" not in values:
-            raise ValueError("filename: needs a filename")
+            raise ValueError("filename: an envmap needs one")
         if values.get("intensity", 1.0) < 0:
             raise ValueError("scale: must not be negative")
         return cls.from_file(folder / values["map"], values.get("intensity", 1.0),

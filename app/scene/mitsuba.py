@@ -184,6 +184,14 @@ def _fail(node, problem):
     raise UserError(f"{node.where()}: {problem}")
 
 
+def _refuse(props, node, error: ValueError, names: dict = None):
+    """A type's ValueError ("<field>: <problem>") as one line naming the property's element
+    (`names`: the Mitsuba name of a field of pathtrace's), or the element's where it has none."""
+    field, sep, problem = str(error).partition(": ")
+    field = (names or {}).get(field, field)
+    _fail(props.get(field, node) if sep else node, str(error) if not sep else f"{field}: {problem}")
+
+
 def _float(node, text, what="value"):
     try:
         value = float(text)
@@ -613,9 +621,7 @@ class _Reader:
         try:
             camera.check()
         except ValueError as e:
-            field, problem = str(e).split(": ", 1)
-            field = {p.name: p.mitsuba for p in camera.parameters if p.mitsuba}.get(field, field)
-            _fail(props.get(field, node), f"{field}: {problem}")
+            _refuse(props, node, e, {p.name: p.mitsuba for p in camera.parameters if p.mitsuba})
         self.camera = camera
 
     def film(self, node):
@@ -646,8 +652,7 @@ class _Reader:
             return PixelFilter.from_mitsuba(node.attrs.get("type"), lambda name, default: self.get(
                 props, name, default, ("float",)), lambda text: warn(f"{node.where()}: {text}"))
         except ValueError as e:
-            field, problem = str(e).split(": ", 1)
-            _fail(props.get(field, node), f"{field}: {problem}")
+            _refuse(props, node, e)
 
     def emitter(self, node):
         kind = node.attrs.get("type")
@@ -663,8 +668,7 @@ class _Reader:
                 self.environment = Environment.from_mitsuba(kind, values, lambda: self.get(
                     props, "to_world", np.eye(4), ("transform",)), node.file.parent, node.where(), warn)
             except ValueError as e:
-                field, problem = str(e).split(": ", 1)
-                _fail(props.get(field, node), problem)
+                _refuse(props, node, e)
         elif kind in LIGHTS_BY_NAME:
             self.lights.append(self.delta_light(node, kind, props))
         else:
@@ -687,8 +691,7 @@ class _Reader:
         try:
             return cls.from_values(values)
         except ValueError as e:
-            field, problem = str(e).split(": ", 1)
-            _fail(props.get(field, node), f"{field}: {problem}")
+            _refuse(props, node, e)
 
     def parameter(self, props, p, name):
         """The value of the declared parameter p (app/parameters.py) that the property `name`
@@ -902,8 +905,7 @@ class _Reader:
         try:
             medium = Medium.from_values(node.attrs.get("id") or f"medium {len(self.media)}", values)
         except ValueError as e:
-            field, problem = str(e).split(": ", 1)
-            _fail(props.get(field, node), f"{field}: {problem}")
+            _refuse(props, node, e)
         self.media.append(medium)
         self.medium_rows[id(node)] = len(self.media) - 1
         return self.medium_rows[id(node)]

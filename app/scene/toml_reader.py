@@ -53,6 +53,11 @@ class _Reader:
     def fail(self, where, problem):
         raise UserError(f"{self.label}: {where}: {problem}")
 
+    def refuse(self, where, error: ValueError):
+        """A type's ValueError ("<field>: <problem>", or a problem of the whole) naming the field."""
+        field, sep, problem = str(error).partition(": ")
+        self.fail(f"{where}.{field}", problem) if sep else self.fail(where, str(error))
+
     def table(self, data, where, allowed):
         if not isinstance(data, dict):
             self.fail(where, f"must be a table, got {type(data).__name__}")
@@ -351,8 +356,7 @@ class _Reader:
         try:
             cam.check()
         except ValueError as e:
-            field, problem = str(e).split(": ", 1)
-            self.fail(f"camera.{field}", problem)
+            self.refuse(where, e)
         forward = cam.look_at - cam.eye
         if np.linalg.norm(forward) == 0:
             self.fail("camera.look_at", "must differ from camera.eye")
@@ -370,8 +374,7 @@ class _Reader:
         try:
             return Medium.from_values(where.split(".", 1)[1], values)
         except ValueError as e:
-            field, sep, problem = str(e).partition(": ")
-            self.fail(f"{where}.{field}", problem) if sep else self.fail(where, str(e))
+            self.refuse(where, e)
 
     def medium_row(self, data, key, where) -> int:
         """The row of the medium `key` names ([media]), -1 where the key is absent (vacuum)."""
@@ -398,8 +401,7 @@ class _Reader:
         try:
             return cls.from_values(values)
         except ValueError as e:
-            field, sep, problem = str(e).partition(": ")
-            self.fail(f"{where}.{field}", problem) if sep else self.fail(where, str(e))
+            self.refuse(where, e)
 
     def environment(self, data):
         """[environment], by its declared parameters (app/scene/environment.py): a colour or a map."""
@@ -468,8 +470,7 @@ class _Reader:
         try:
             return PixelFilter(kind, radius, self.number(data, "stddev", where, default=0.5)).check()
         except ValueError as e:
-            field, problem = str(e).split(": ", 1)
-            self.fail(f"{where}.{field}", problem)
+            self.refuse(where, e)
 
     def material_ref(self, builder, named, data, where):
         m = data.get("material")

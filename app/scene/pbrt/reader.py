@@ -300,9 +300,7 @@ class PbrtReader:
         try:
             camera.check()
         except ValueError as e:
-            name, problem = str(e).split(": ", 1)
-            name = {p.name: p.pbrt for p in camera.parameters if p.pbrt}.get(name, name)
-            raise UserError(f"{where}: '{name}' {problem}") from None
+            raise _refused(where, e, camera.parameters) from None
         if params is not None:
             self.unused(params, "camera", kind)
         return camera
@@ -482,10 +480,7 @@ class PbrtReader:
         try:
             self.media[row] = Medium.from_values(name, values)
         except ValueError as e:
-            field, problem = str(e).split(": ", 1)
-            if field in params.params:
-                params.fail(field, problem)
-            raise UserError(f"{where}: {field}: {problem}") from None
+            self.mapper.fail(params, where, e)
         self.unused(params, "medium", "homogeneous")
 
     def _medium_interface(self, tokens, offset):
@@ -828,9 +823,7 @@ class PbrtReader:
         try:
             light = cls.from_values(values)
         except ValueError as e:
-            name, problem = str(e).split(": ", 1)
-            pbrt_name = next((p.pbrt for p in cls.parameters if p.name == name and p.pbrt), name)
-            raise UserError(f"{where}: '{pbrt_name}' {problem}") from None
+            raise _refused(where, e, cls.parameters) from None
         self.lights.append(light)
         self.unused(params, "light", kind)
 
@@ -856,6 +849,14 @@ class PbrtReader:
 
     def _reverse_orientation(self, tokens, offset):
         self.state.reverse = not self.state.reverse
+
+
+def _refused(where: str, error: ValueError, declared) -> UserError:
+    """A type's ValueError ("<field>: <problem>") as one line naming the field by its pbrt-v4
+    name among the `declared` Parameters."""
+    name, _, problem = str(error).partition(": ")
+    name = next((p.pbrt for p in declared if p.name == name and p.pbrt), name)
+    return UserError(f"{where}: '{name}' {problem}")
 
 
 def _inverse(m: np.ndarray):
