@@ -67,6 +67,12 @@ class Mesh:
                                   # row (Mitsuba 3's convention), or None: (0, 0)
     media: MediumInterface | None = None   # the media it bounds, or None: it changes no medium
 
+    def __post_init__(self):
+        # the kernels' types, whatever a reader computed them in
+        self.vertices, self.faces = np.asarray(self.vertices, np.float32), np.asarray(self.faces, np.int32)
+        self.normals = None if self.normals is None else np.asarray(self.normals, np.float32)
+        self.uvs = None if self.uvs is None else np.asarray(self.uvs, np.float32)
+
     def __repr__(self) -> str:
         return (f"<Mesh {self.name!r}: {len(self.vertices)} vertices, {len(self.faces)} triangles, material "
                 f"{self.material}{', smooth normals' if self.normals is not None else ''}"
@@ -202,6 +208,14 @@ class SceneBuilder:
             self.add_sphere(*fast, shape.material, shape.name, shape.media)
         else:
             self.shapes.append(shape)
+
+    def add_to(self, group: int | None, item):
+        """Adds a Mesh or an analytic Shape to the object `group` (add_object's index), or to the
+        scene where it is None."""
+        if group is not None:
+            (self.objects[group].meshes if isinstance(item, Mesh) else self.objects[group].shapes).append(item)
+        else:
+            self.add_mesh(item) if isinstance(item, Mesh) else self.add_shape(item)
 
     def add_object(self, name: str) -> int:
         """A new, empty object (SceneObject) that instances may draw; its index."""

@@ -989,11 +989,7 @@ class _Reader:
                 return
             if np.any(np.abs(np.array(shape.bounds(SHAPES[kind]))) > MAX_COORDINATE):
                 _fail(node, f"the {kind} reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace")
-            if group is not None:
-                self.builder.objects[group].shapes.append(shape)
-            else:
-                self.builder.add_shape(shape)
-            return
+            return self.builder.add_to(group, shape)
         normals = None
         if kind in ("rectangle", "cube"):
             vertices, faces, uvs = mitsuba_rectangle() if kind == "rectangle" else mitsuba_cube()
@@ -1019,13 +1015,8 @@ class _Reader:
         vertices, faces, normals, turned = place_mesh(vertices, faces, normals, m, self.get(
             props, "flip_normals", False, ("boolean",)), True, node.where())
         origin = origin if kind in ("obj", "ply") and not turned else None     # turned: written anew
-        mesh = Mesh(name or f"{kind} {len(self.builder.meshes)}", vertices.astype(np.float32), faces.astype(np.int32),
-                    None if normals is None else normals.astype(np.float32), material,
-                    origin.path if origin else "", origin, None if uvs is None else uvs.astype(np.float32), interface)
-        if group is not None:
-            self.builder.objects[group].meshes.append(mesh)
-        else:
-            self.builder.add_mesh(mesh)
+        self.builder.add_to(group, Mesh(name or f"{kind} {len(self.builder.meshes)}", vertices, faces, normals, material,
+                                        origin.path if origin else "", origin, uvs, interface))
 
 
 def read_mitsuba_file(path) -> Scene:

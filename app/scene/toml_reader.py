@@ -581,9 +581,7 @@ class _Reader:
             source, default_name, origin = "", f"mesh {where[7:-1]}", None
         vertices, faces, normals, _ = place_mesh(vertices, faces, normals, m, flags["flip_normals"], False,
                                                  f"{self.label}: {where}")
-        return Mesh(self.name(data, where, default_name), vertices.astype(np.float32),
-                    faces.astype(np.int32), None if normals is None else normals.astype(np.float32),
-                    material, str(source), origin, None if uvs is None else uvs.astype(np.float32),
+        return Mesh(self.name(data, where, default_name), vertices, faces, normals, material, str(source), origin, uvs,
                     self.interface(data, where))
 
     def named_mesh_files(self, meshes, objects):

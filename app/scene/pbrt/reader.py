@@ -658,26 +658,17 @@ class PbrtReader:
         alpha = self.mapper.texture_input(params, "alpha", 1.0, float_texture=True) \
             if params.type_of("alpha") else 1.0
         self.unused(params, "shape", kind)
+        group = None if self.current_object is None else self.objects[self.current_object]
         if shape is not None:
             shape.material = self.material_row(parts[0][1], alpha, twosided)
-            if self.current_object is not None:
-                self.builder.objects[self.objects[self.current_object]].shapes.append(shape)
-            else:
-                self.builder.add_shape(shape)
-            return
+            return self.builder.add_to(group, shape)
         name = Path(source).stem if source else f"{kind} {len(self.builder.meshes)}"
         for subset, emission in parts:
             row = self.material_row(emission, alpha, twosided)
             part = faces if subset is None else faces[subset]
             # no MeshFile: the file's faces were turned and its uvs flipped, which a converted
             # scene's reference to the file could not say (convert writes the mesh anew)
-            record = Mesh(name, vertices.astype(np.float32), part.astype(np.int32),
-                          None if normals is None else normals.astype(np.float32), row, source, None,
-                          None if uvs is None else uvs.astype(np.float32), media)
-            if self.current_object is not None:
-                self.builder.objects[self.objects[self.current_object]].meshes.append(record)
-            else:
-                self.builder.add_mesh(record)
+            self.builder.add_to(group, Mesh(name, vertices, part, normals, row, source, None, uvs, media))
 
     def analytic_shape(self, kind, params, media, where) -> Shape:
         """An analytic shape (app/shapes/), its parameters read by their pbrt-v4 names
