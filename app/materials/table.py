@@ -77,6 +77,31 @@ def check_bump_map(texture: Texture):
         raise ValueError("a bump map must be a bitmap texture, or a scale of one by a number")
 
 
+def scaled_bump_map(texture: Texture, scale: float) -> Texture:
+    """The bump map of heights `texture` times `scale`, checked (check_bump_map): the map itself
+    first, as a scale of a texture that combines others cannot be built. Raises ValueError."""
+    check_bump_map(texture)
+    if scale == 1.0:
+        return texture
+    from pathtrace.textures import TEXTURES
+    scaled = Texture("scale", TEXTURES["scale"].complete({"tex": texture, "scale": scale}))
+    check_bump_map(scaled)
+    return scaled
+
+
+def blend(weight, components: tuple) -> "Material":
+    """A blendbsdf of two Materials, the second taken with probability `weight` (a number or a
+    texture), checked. Raises ValueError ("weight: <problem>", or check_blend's)."""
+    problem = BSDFS["blendbsdf"].out_of_range({"weight": weight})
+    if problem:
+        raise ValueError(": ".join(problem))
+    material = Material("blendbsdf", BSDFS["blendbsdf"].complete({"weight": weight}), components=tuple(components))
+    problem = check_blend(material)
+    if problem:
+        raise ValueError(problem)
+    return material
+
+
 # blends (app/materials/blend.py): their components are Materials, checked and packed here, where
 # every type of the registry is known
 def depth(material) -> int:

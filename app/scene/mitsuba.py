@@ -27,7 +27,7 @@ from pathtrace import parameters
 from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import LUMINANCE, constant_of
-from pathtrace.materials.table import check_blend, check_bump_map, transmits
+from pathtrace.materials.table import blend, scaled_bump_map, transmits
 from pathtrace.parameters import FRAME
 from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.scene import transform
@@ -783,21 +783,11 @@ class _Reader:
         inner = [c for c in node.children if c.tag in ("bsdf", "ref") and c.attrs.get("name") != "weight"]
         if len(inner) != 2:
             _fail(node, f"needs two nested BSDFs, got {len(inner)}")
-        weight = 0.5
-        if "weight" in props:
-            c = props["weight"]
-            target = self.resolve(c) if c.tag == "ref" else c
-            weight = self.texture(target) if target.tag == "texture" else self.get(props, "weight", kinds=("float",))
-            low = constant_of(weight, "number", Texture.minimum)
-            high = constant_of(weight, "number", Texture.maximum)
-            if not 0 <= low <= high <= 1:
-                _fail(c, "weight must lie in [0, 1]")
-        m = Material("blendbsdf", BSDFS["blendbsdf"].complete({"weight": weight}),
-                     components=tuple(self.material(c) for c in inner))
-        problem = check_blend(m)
-        if problem:
-            _fail(node, problem)
-        return m
+        weight = self.parameter(props, next(p for p in BSDFS["blendbsdf"].params if p.name == "weight"), "weight")
+        try:
+            return blend(0.5 if weight is None else weight, tuple(self.material(c) for c in inner))
+        except ValueError as e:
+            _refuse(props, node, e)
 
     def mapped_material(self, node, kind, props):
         """A `normalmap` (its texture `normalmap`) or `bumpmap` (its one texture, times `scale`)
@@ -823,14 +813,10 @@ class _Reader:
         if kind == "normalmap":
             m.normal_map = texture
             return m
-        scale = self.get(props, "scale", 1.0, ("float",))
-        try:                  # the map itself first: a scale of a combining texture cannot be built
-            check_bump_map(texture)
-            if scale != 1.0:
-                texture = Texture("scale", TEXTURES["scale"].complete({"tex": texture, "scale": scale}))
+        try:
+            m.bump_map = scaled_bump_map(texture, self.get(props, "scale", 1.0, ("float",)))
         except ValueError as e:
             _fail(target, str(e))
-        m.bump_map = texture
         return m
 
     def opacity(self, props, node):

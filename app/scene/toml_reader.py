@@ -18,7 +18,7 @@ from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError, short
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import NULL, constant_of
-from pathtrace.materials.table import check_blend, check_bump_map, transmits
+from pathtrace.materials.table import check_blend, scaled_bump_map, transmits
 from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.resources import resource_dir
 from pathtrace.scene import transform
@@ -270,13 +270,8 @@ class _Reader:
         if "bump_scale" in data and "bump_map" not in data:
             self.fail(f"{where}.bump_scale", "scales a bump_map, and there is none")
         if material.bump_map is not None:
-            # the map itself first: a scale of a texture that combines others cannot be built
             try:
-                check_bump_map(material.bump_map)
-                if scale != 1.0:
-                    material.bump_map = Texture("scale", TEXTURES["scale"].complete({"tex": material.bump_map,
-                                                                                      "scale": scale}))
-                    check_bump_map(material.bump_map)
+                material.bump_map = scaled_bump_map(material.bump_map, scale)
             except ValueError as e:
                 self.fail(f"{where}.bump_map", str(e))
 
