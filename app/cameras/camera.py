@@ -3,13 +3,14 @@ the image is mirrored, which the viewer's moves and the readers' transforms set)
 projection declares in its own module app/cameras/<type>.py beside its kernel file
 kernels/cameras/<kernel>.cl: its fields (app/parameters.py: their names in pathtrace's TOML,
 Mitsuba 3 and pbrt-v4, defaults and docs), their ranges, its rays, its packing into
-RenderParams and its readings of Mitsuba's and pbrt's cameras. app/cameras/registry.py finds
-the modules and generates the kernels' dispatch."""
+RenderParams and its readings of Mitsuba's and pbrt's cameras (through FileCamera, the readers'
+one view of a file's camera, and frame_of). app/cameras/registry.py finds the modules and
+generates the kernels' dispatch."""
 
 import dataclasses
 import math
 from dataclasses import dataclass, field
-from typing import ClassVar
+from typing import Callable, ClassVar
 
 import numpy as np
 
@@ -26,6 +27,30 @@ def check_range(name: str, value, low: float, high: float, open_low: bool = Fals
                          f"got {shown}")
 
 
+@dataclass
+class FileCamera:
+    """A scene file's camera as a camera type reads it (from_mitsuba, from_pbrt), whichever the
+    format: get(name, default=None, kind="float") its value by the format's name ("float",
+    "string" or "floats"; default where absent), has(name), fail(name, problem) (one line naming
+    the value, or the element where name is None), warn(text, name=None); the film's size, and
+    the camera's transform to the world (from which `frame_of` takes its frame)."""
+    get: Callable
+    has: Callable
+    fail: Callable
+    warn: Callable
+    width: int
+    height: int
+    to_world: np.ndarray
+
+    @property
+    def scale_x(self) -> float:
+        return float(np.linalg.norm(self.to_world[:3, 0]))
+
+    @property
+    def scale_y(self) -> float:
+        return float(np.linalg.norm(self.to_world[:3, 1]))
+
+
 def frame_of(world_from_camera: np.ndarray, x_right: bool) -> dict:
     """A Camera's frame (eye, look_at, up, mirrored) of a file's camera-to-world transform,
     camera space looking down +z with +y up and +x the image's right (pbrt-v4) or left
@@ -39,8 +64,7 @@ def frame_of(world_from_camera: np.ndarray, x_right: bool) -> dict:
 
 def pbrt_screen_half_height(camera) -> float:
     """Half the image's height in pbrt's screen space, where the fov spans [-1, 1] (or an
-    orthographic camera one world unit each way), of a pbrt camera (the pbrt reader's view of
-    it: get, has, floats, fail, warn): pbrt-v4's CameraBase screen window (src/pbrt/cameras.cpp,
+    orthographic camera one world unit each way), of a pbrt camera (FileCamera): pbrt-v4's CameraBase screen window (src/pbrt/cameras.cpp,
     CameraBaseParameters / the cameras' Create: frame = frameaspectratio, else the film's x / y;
     the window [-frame, frame] x [-1, 1] where frame > 1, else [-1, 1] x [-1/frame, 1/frame];
     or the file's `screenwindow` x0 x1 y0 y1). pathtrace's image is centred and its pixels
@@ -52,7 +76,7 @@ def pbrt_screen_half_height(camera) -> float:
         camera.fail("frameaspectratio", f"must be positive, got {frame:g}")
     window = (-frame, frame, -1.0, 1.0) if frame > 1 else (-1.0, 1.0, -1 / frame, 1 / frame)
     if camera.has("screenwindow"):
-        window = tuple(float(v) for v in camera.floats("screenwindow"))
+        window = tuple(float(v) for v in camera.get("screenwindow", None, "floats"))
         if len(window) != 4 or not window[0] < window[1] or not window[2] < window[3]:
             camera.fail("screenwindow", "takes x0 x1 y0 y1 with x0 < x1 and y0 < y1")
     x0, x1, y0, y1 = window

@@ -48,7 +48,7 @@ class SphericalCamera(Camera):
 
     @classmethod
     def from_pbrt(cls, camera, **frame):
-        mapping = camera.string("mapping", MAPPING.default)
+        mapping = camera.get("mapping", MAPPING.default, "string")
         if mapping not in MAPPING.choices:
             camera.fail("mapping", f"must be {' or '.join(MAPPING.choices)}, got {mapping!r}")
         return cls(**frame, mapping=mapping)

@@ -18,7 +18,7 @@ from xml.parsers import expat
 import numpy as np
 
 from pathtrace import cameras
-from pathtrace.cameras.camera import frame_of
+from pathtrace.cameras.camera import FileCamera, frame_of
 from pathtrace.cameras.perspective import PerspectiveCamera, vertical_fov
 from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError, cut, short, warn
@@ -125,28 +125,6 @@ def parse_xml(path: Path, budget: list = None, where: str = None) -> Node:
 
 
 # --- property values ---------------------------------------------------------------------
-
-class _Sensor:
-    """What a camera type reads of a Mitsuba sensor (app/cameras/: Camera.from_mitsuba): its
-    properties, the film's size, and the scale of to_world along x and y."""
-
-    def __init__(self, reader, node, props, scale_x, scale_y):
-        self.reader, self.node, self.props = reader, node, props
-        self.width, self.height = reader.settings.width, reader.settings.height
-        self.scale_x, self.scale_y = scale_x, scale_y
-
-    def has(self, name) -> bool:
-        return name in self.props
-
-    def get(self, name, default=None, kind="float"):
-        return self.reader.get(self.props, name, default, (kind,))
-
-    def fail(self, name, problem):
-        _fail(self.props.get(name, self.node) if name else self.node, problem)
-
-    def warn(self, text):
-        warn(f"{self.node.where()}: {text}")
-
 
 class Props(dict):
     """An element's properties, {name: Node}, noting each name the reader looks up: once the
@@ -616,8 +594,12 @@ class _Reader:
             self.filter = PixelFilter("gaussian")     # Mitsuba's default
         m = self.get(props, "to_world", np.eye(4), ("transform",))
         frame = frame_of(m, x_right=False)        # Mitsuba's camera space has +x to the image's left
-        camera = cls.from_mitsuba(_Sensor(self, node, props, np.linalg.norm(m[:3, 0]), np.linalg.norm(m[:3, 1])),
-                                  **frame)
+        sensor = FileCamera(lambda name, default=None, kind="float": self.get(props, name, default, (kind,)),
+                            props.__contains__, lambda name, problem: _fail(props.get(name, node) if name else node,
+                                                                           problem),
+                            lambda text, name=None: warn(f"{node.where()}: {text}"), self.settings.width,
+                            self.settings.height, m)
+        camera = cls.from_mitsuba(sensor, **frame)
         try:
             camera.check()
         except ValueError as e:

@@ -31,7 +31,7 @@ import numpy as np
 
 from pathtrace import cameras
 from pathtrace.cameras import Camera
-from pathtrace.cameras.camera import frame_of
+from pathtrace.cameras.camera import FileCamera, frame_of
 from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError, cut, warn
 from pathtrace.io.files import check_regular_file
@@ -59,36 +59,6 @@ LIGHTS_BY_NAME = declared.by_format(DELTA_LIGHTS.values(), "pbrt")
 # a plymesh shape and its file name, as MeshFiles reads them ahead (PbrtReader.named_mesh_files)
 _PLYMESH = re.compile(r'Shape\s+"plymesh"')
 _FILENAME = re.compile(r'"string\s+filename"\s*\[?\s*"([^"]*)"')
-
-
-class _CameraParams:
-    """What a camera type reads of a pbrt Camera (app/cameras/: Camera.from_pbrt): its
-    parameters (pbrt-v4's defaults where there is no Camera directive), the film's screen window
-    and the scale of the camera's transform along y."""
-
-    def __init__(self, reader, params, where, scale_y):
-        self.reader, self.params, self.where, self.scale_y = reader, params, where, scale_y
-        self.width, self.height = reader.settings.width, reader.settings.height
-
-    def get(self, name, default):
-        return default if self.params is None else self.params.float(name, default)
-
-    def string(self, name, default):
-        return default if self.params is None else self.params.string(name, default)
-
-    def fail(self, name, problem):
-        if self.params is None:
-            raise UserError(f"{self.where}: '{name}' {problem}")
-        self.params.fail(name, problem)
-
-    def has(self, name) -> bool:
-        return self.params is not None and self.params.type_of(name) is not None
-
-    def floats(self, name):
-        return self.params.floats(name)
-
-    def warn(self, text, name=None):
-        warn(f"{self.params.where(name) if name else self.where}: {text}")
 
 
 @dataclass
@@ -291,12 +261,13 @@ class PbrtReader:
             kind, params, where, ctm = "perspective", None, str(self.path), np.eye(4)
         else:
             kind, params, where, ctm, _ = self.camera_params
-        frame = frame_of(np.linalg.inv(ctm), x_right=True)
+        world_from_camera = np.linalg.inv(ctm)
+        frame = frame_of(world_from_camera, x_right=True)
         cls = cameras.registry.format_class("pbrt", kind)
         if cls is None:
             warn(f"{where}: pathtrace has no {kind} camera; it uses a perspective one of pbrt-v4's defaults")
             kind, params, cls = "perspective", None, cameras.registry.format_class("pbrt", "perspective")
-        camera = cls.from_pbrt(_CameraParams(self, params, where, np.linalg.norm(frame["up"])), **frame)
+        camera = cls.from_pbrt(self.file_camera(params, where, world_from_camera), **frame)
         try:
             camera.check()
         except ValueError as e:
@@ -304,6 +275,22 @@ class PbrtReader:
         if params is not None:
             self.unused(params, "camera", kind)
         return camera
+
+    def file_camera(self, params, where, world_from_camera) -> FileCamera:
+        """The Camera directive's parameters as the camera types read them (pbrt-v4's defaults
+        where there is none), through the camera's transform."""
+        def get(name, default=None, kind="float"):
+            if params is None:
+                return default
+            return params.floats(name) if kind == "floats" else getattr(params, kind)(name, default)
+
+        def fail(name, problem):
+            if params is None:
+                raise UserError(f"{where}: '{name}' {problem}")
+            params.fail(name, problem)
+        return FileCamera(get, lambda name: params is not None and params.type_of(name) is not None, fail,
+                          lambda text, name=None: warn(f"{params.where(name) if name else where}: {text}"),
+                          self.settings.width, self.settings.height, world_from_camera)
 
     def _film(self, tokens, offset):
         kind = string(tokens, "Film")
