@@ -33,6 +33,7 @@ from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.known_names import Unread
+from pathtrace.scene.validate import MAX_SIZE
 from pathtrace.scene.meshes import (MAX_COORDINATE, MeshFiles, check_mesh, mitsuba_cube, mitsuba_rectangle, place_mesh,
                                     vertex_normals)
 from pathtrace.shapes import SHAPES, Shape
@@ -43,7 +44,6 @@ MAX_XML_BYTES = 64 << 20
 MAX_ELEMENTS = 1_000_000   # in a file and its includes together, as MAX_XML_BYTES
 MAX_NESTING = 64           # elements inside elements (a Mitsuba scene needs a handful)
 MAX_INCLUDE_DEPTH = 8
-MAX_FILM = 16384
 LIGHTS_BY_NAME = parameters.by_format(DELTA_LIGHTS.values(), "mitsuba")
 BSDFS_BY_NAME = parameters.by_format(BSDFS.values(), "mitsuba")
 TEXTURES_BY_NAME = parameters.by_format(TEXTURES.values(), "mitsuba")
@@ -611,8 +611,8 @@ class _Reader:
         w = self.get(props, "width", 768, ("integer",))
         h = self.get(props, "height", 576, ("integer",))
         for name, v in (("width", w), ("height", h)):
-            if not 1 <= v <= MAX_FILM:
-                _fail(props[name], f"must be in 1..{MAX_FILM}, got {v}")
+            if not 1 <= v <= MAX_SIZE:
+                _fail(props[name], f"must be in 1..{MAX_SIZE}, got {v}")
         self.settings.width, self.settings.height = w, h
         if node.attrs.get("type") not in ("hdrfilm", "specfilm", None):
             warn(f"{node.where()}: pathtrace writes the image format of the output file's name")

@@ -23,6 +23,7 @@ from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.resources import resource_dir
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
+from pathtrace.scene.validate import MAX_SIZE
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, place_mesh, triangulate, vertex_normals
 from pathtrace.shapes import SHAPES, Shape, TextureUV
 from pathtrace.shapes.shape import MIN_DETERMINANT
@@ -439,8 +440,8 @@ class _Reader:
         if not isinstance(nee, bool):
             self.fail("render.nee", f"must be true or false, got {short(nee)}")
         s = RenderSettings(
-            width=self.number(data, "width", where, default=960, low=1, high=16384, integer=True),
-            height=self.number(data, "height", where, default=540, low=1, high=16384, integer=True),
+            width=self.number(data, "width", where, default=960, low=1, high=MAX_SIZE, integer=True),
+            height=self.number(data, "height", where, default=540, low=1, high=MAX_SIZE, integer=True),
             spp=self.number(data, "spp", where, default=64, low=1, integer=True),
             max_depth=self.number(data, "max_depth", where, default=0, low=0, integer=True),
             russian_roulette=rr, nee=nee,

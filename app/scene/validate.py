@@ -14,7 +14,7 @@ from pathtrace.rendering.choices import INTEGRATORS, LIGHT_SAMPLERS, MAX_PATH_QU
 from pathtrace.scene.description import Scene
 from pathtrace.scene.meshes import MAX_COORDINATE
 
-MAX_SIZE = 16384          # pixels on a side, as `--size` and the TOML format allow
+MAX_SIZE = 16384          # pixels on a side, as `--size` and the three formats allow (a film, a [render] table)
 SETTING_RANGES = {"width": (1, MAX_SIZE), "height": (1, MAX_SIZE), "spp": (1, 2**31 - 1),
                   "seed": (0, 2**32 - 1), "max_depth": (0, 2**31 - 1)}
 """The integer render settings' ranges, for a scene's fields and the API's arguments alike."""

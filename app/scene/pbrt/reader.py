@@ -43,6 +43,7 @@ from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.known_names import Unread
+from pathtrace.scene.validate import MAX_SIZE
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, place_mesh, vertex_normals
 from pathtrace.scene.pbrt.materials import MaterialMapper, make, spectrum_rgb
 from pathtrace.textures import Texture
@@ -54,7 +55,6 @@ MAX_INCLUDE_DEPTH = 16
 # Include directives read in all: a file included from many places counts each time, so that
 # a tree of includes (12 wide and 8 deep: 470 million reads) is refused at once, not read for ever
 MAX_INCLUDES = 4096
-MAX_FILM = 16384
 LIGHTS_BY_NAME = declared.by_format(DELTA_LIGHTS.values(), "pbrt")
 # a plymesh shape and its file name, as MeshFiles reads them ahead (PbrtReader.named_mesh_files)
 _PLYMESH = re.compile(r'Shape\s+"plymesh"')
@@ -297,8 +297,8 @@ class PbrtReader:
         params = parameters(tokens)
         for name, default in (("xresolution", 1280), ("yresolution", 720)):
             v = params.int(name, default)
-            if not 1 <= v <= MAX_FILM:
-                params.fail(name, f"must be in 1..{MAX_FILM}, got {v}")
+            if not 1 <= v <= MAX_SIZE:
+                params.fail(name, f"must be in 1..{MAX_SIZE}, got {v}")
         self.settings.width, self.settings.height = params.int("xresolution", 1280), params.int("yresolution", 720)
         params.string("filename")
         for name in ("cropwindow", "pixelbounds"):
