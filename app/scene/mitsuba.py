@@ -730,10 +730,7 @@ class _Reader:
         kind = node.attrs.get("type")
         props = self.properties(node)
         if kind == "twosided":
-            inner = [c for c in node.children if c.tag in ("bsdf", "ref")]
-            if not inner:
-                _fail(node, "needs a nested <bsdf>")
-            m = self.material(inner[0])
+            m = self.nested_material(node, named=True)
             if transmits(m):
                 _fail(node, f"a twosided BSDF cannot hold a {m.type}: it transmits (Mitsuba 3 refuses it too)")
             m.twosided = True
@@ -741,10 +738,7 @@ class _Reader:
         if kind == "blendbsdf":
             return self.blend(node, props)
         if kind == "mask":
-            inner = [c for c in node.children if c.tag in ("bsdf", "ref") and "name" not in c.attrs]
-            if not inner:
-                _fail(node, "needs a nested <bsdf>")
-            m = self.material(inner[0])
+            m = self.nested_material(node)
             m.opacity = self.opacity(props, node)
             return m
         if kind in ("bumpmap", "normalmap"):
@@ -758,6 +752,14 @@ class _Reader:
         warn(f"{node.where()}: not supported; pathtrace uses a diffuse BSDF of albedo "
              f"{', '.join(f'{c:.3g}' for c in albedo)}")
         return Material("diffuse", {"rho_d": albedo})
+
+    def nested_material(self, node, named=False) -> Material:
+        """The Material of the BSDF a wrapper (twosided, mask, bumpmap, normalmap) holds: its
+        first nested <bsdf> or <ref>, one of a name too where `named`."""
+        inner = [c for c in node.children if c.tag in ("bsdf", "ref") and (named or "name" not in c.attrs)]
+        if not inner:
+            _fail(node, "needs a nested <bsdf>")
+        return self.material(inner[0])
 
     def blend(self, node, props) -> Material:
         """A `blendbsdf`: its two nested BSDFs, the second taken with probability `weight` (a
@@ -774,10 +776,7 @@ class _Reader:
     def mapped_material(self, node, kind, props):
         """A `normalmap` (its texture `normalmap`) or `bumpmap` (its one texture, times `scale`)
         around a nested BSDF."""
-        inner = [c for c in node.children if c.tag in ("bsdf", "ref") and "name" not in c.attrs]
-        if not inner:
-            _fail(node, "needs a nested <bsdf>")
-        m = self.material(inner[0])
+        m = self.nested_material(node)
         maps = [c for c in node.children if c.tag == "texture" or (c.tag == "ref" and "name" in c.attrs)]
         if kind == "normalmap":
             maps = [c for c in maps if c.attrs.get("name") == "normalmap"]

@@ -67,6 +67,18 @@ class _Reader:
             self.fail(where, f"unknown key '{unknown[0]}' (allowed: {', '.join(sorted(allowed))})")
         return data
 
+    def named_tables(self, data, key) -> dict:
+        """The top-level table `key` ([textures], [media], ...): a table of tables by name."""
+        tables = data.get(key, {})
+        return self.table(tables, key, set(tables) if isinstance(tables, dict) else set())
+
+    def array(self, data, key) -> list:
+        """The top-level array of tables `key` ([[lights]], ...)."""
+        value = data.get(key, [])
+        if not isinstance(value, list):
+            self.fail(key, f"must be an array of tables ([[{key}]]), got {type(value).__name__}")
+        return value
+
     def kind_of(self, data, where, kinds, key="type") -> str:
         """The name among `kinds` that a table entry gives by `key`."""
         if not isinstance(data, dict):
@@ -590,12 +602,11 @@ class _Reader:
         return [(self.path.parent / m["file"], f"{self.label}: {where}.file") for where, m in tables
                 if isinstance(m, dict) and isinstance(m.get("file"), str) and m["file"]]
 
-    def instances(self, objects, instances, builder, rows):
+    def instances(self, data, instances, builder, rows):
         """[objects.NAME] (its `meshes`: an array of mesh tables, in the object's space) and
         [[instances]] (an `object`'s name and a transform, as a mesh's) into the builder."""
-        self.table(objects, "objects", set(objects) if isinstance(objects, dict) else set())
         index = {}
-        for name, o in objects.items():
+        for name, o in self.named_tables(data, "objects").items():
             where = f"objects.{name}"
             self.table(o, where, {"meshes"})
             meshes = o.get("meshes")
@@ -640,35 +651,21 @@ class _Reader:
         self.table(data, "top level", {"camera", "environment", "render", "textures", "materials", "spheres",
                                        "meshes", "shapes", "lights", "media", "objects", "instances"})
         builder = SceneBuilder()
-        self.texture_tables = data.get("textures", {})
-        self.table(self.texture_tables, "textures",
-                   set(self.texture_tables) if isinstance(self.texture_tables, dict) else set())
+        self.texture_tables = self.named_tables(data, "textures")
         for name in self.texture_tables:
             self.named_texture(name, f"textures.{name}")
-        tables = data.get("media", {})
-        self.table(tables, "media", set(tables) if isinstance(tables, dict) else set())
         media = []
-        for name, m in tables.items():
+        for name, m in self.named_tables(data, "media").items():
             media.append(self.medium(m, f"media.{name}"))
             self.media[name] = len(media) - 1
-        named = data.get("materials", {})
-        self.table(named, "materials", set(named) if isinstance(named, dict) else set())
-        self.material_tables = named
+        self.material_tables = self.named_tables(data, "materials")
         rows = {}
-        for name, m in named.items():
+        for name, m in self.material_tables.items():
             rows[name] = builder.materials.add(self.material(m, f"materials.{name}"), name)
-        spheres, meshes, shapes = data.get("spheres", []), data.get("meshes", []), data.get("shapes", [])
-        for key, value in (("spheres", spheres), ("meshes", meshes), ("shapes", shapes)):
-            if not isinstance(value, list):
-                self.fail(key, f"must be an array of tables ([[{key}]]), got {type(value).__name__}")
-        instances = data.get("instances", [])
-        if not isinstance(instances, list):
-            self.fail("instances", f"must be an array of tables ([[instances]]), got {type(instances).__name__}")
+        spheres, meshes, shapes, instances = (self.array(data, key) for key in ("spheres", "meshes", "shapes", "instances"))
         if not spheres and not meshes and not shapes and not instances:
             self.fail("spheres", "the scene needs at least one [[spheres]], [[meshes]], [[shapes]] or [[instances]] entry")
-        lights = data.get("lights", [])
-        if not isinstance(lights, list):
-            self.fail("lights", f"must be an array of tables ([[lights]]), got {type(lights).__name__}")
+        lights = self.array(data, "lights")
         for i, s in enumerate(spheres):
             where = f"spheres[{i}]"
             self.table(s, where, {"center", "radius", "material", "name", "interior", "exterior"})
@@ -688,7 +685,7 @@ class _Reader:
                 if not isinstance(m, dict):
                     self.fail(where, f"must be a table, got {type(m).__name__}")
                 builder.add_mesh(self.mesh(m, where, self.material_ref(builder, rows, m, where)))
-            self.instances(data.get("objects", {}), instances, builder, rows)
+            self.instances(data, instances, builder, rows)
         camera = data.get("camera", {"eye": [0, 0, 5], "look_at": [0, 0, 0]})
         return builder.build(
             self.path.stem, media=media,
