@@ -347,8 +347,7 @@ class PbrtReader:
         self.settings.light_sampler = {"bvh": "auto", "power": "power", "uniform": "power"}[sampler]
         if kind in ("path", "volpath"):
             self.unused(params, "integrator", kind)
-        for p in params.unused():
-            p.used = True          # another integrator's settings: it is replaced whole, with its warning
+        params.ignore()            # another integrator's settings: it is replaced whole, with its warning
 
     def _pixel_filter(self, tokens, offset):
         kind = string(tokens, "PixelFilter")
@@ -362,8 +361,8 @@ class PbrtReader:
                 tokens.fail(offset, problem)
             raise UserError(f"{where}: '{field}' and 'yradius': {problem}" if field == "xradius" else
                             f"{where}: '{field}': {problem}") from None
-        for p in params.unused() if kind in ("mitchell", "lanczos") else ():
-            p.used = True
+        if kind in ("mitchell", "lanczos"):
+            params.ignore()
         self.unused(params, "filter", kind)
 
     # -- the graphics state --
@@ -450,8 +449,7 @@ class PbrtReader:
             tokens.fail(offset, f"a second medium named '{cut(name)}'")
         row = self.medium_row(name, where)
         if kind != "homogeneous":
-            for p in params.params.values():
-                p.used = True
+            params.ignore()
             warn(f"{where}: pathtrace has homogeneous media only; the {cut(kind)} medium '{cut(name)}' "
                  "is rendered as vacuum")
             self.media[row] = Medium(name, np.zeros(3), np.zeros(3))
@@ -618,16 +616,14 @@ class PbrtReader:
             warn(f"{where}: pbrt-v4 makes no area light of a shape of the interface material; "
                  "neither does pathtrace, and the shape does not emit")
         if self.state.material is None and media is None:
-            for p in params.params.values():
-                p.used = True
+            params.ignore()
             self.once(("interface", where), f"{where}: a shape of the interface material that bounds no "
                                             "medium is nothing; pathtrace leaves it out")
             return
         singular = self.singular()
         shape = None if singular or kind not in SHAPES else self.analytic_shape(kind, params, media, where)
         if singular or (shape is not None and SHAPES[kind].too_flat(shape)):
-            for p in params.params.values():
-                p.used = True
+            params.ignore()
             # pbrt-v4 would carry NaN normals and a NaN inverse: flattened to nothing (or, for
             # an analytic shape, too near it for the inverse the kernels intersect with), the
             # shape is left out (as degenerate triangles are)
@@ -711,8 +707,7 @@ class PbrtReader:
             vertices, faces, normals, uvs = check_mesh(vertices, faces, None, None, where, degenerate=self.degenerate)
             normals = vertex_normals(vertices, faces)
         else:
-            for p in params.params.values():
-                p.used = True
+            params.ignore()
             warn(f"{where}: pathtrace has no {kind} shape; it leaves it out")
             return None
         if len(faces) == 0:
@@ -789,8 +784,7 @@ class PbrtReader:
             return
         cls = LIGHTS_BY_NAME.get(kind)
         if cls is None:
-            for p in params.params.values():
-                p.used = True
+            params.ignore()
             warn(f"{where}: pathtrace has no {kind} light; it leaves it out")
             return
         values = declared.read(cls.parameters, "pbrt", lambda p, name: self.mapper.parameter(params, p, name))
@@ -810,8 +804,7 @@ class PbrtReader:
         equal-area square map made latitude-longitude in the CTM, or L."""
         if self.environment is not None:
             warn(f"{where}: a second infinite light; pathtrace keeps the first")
-            for p in params.params.values():
-                p.used = True
+            params.ignore()
             return
         if params.type_of("portal"):
             params.floats("portal", ("point3",))

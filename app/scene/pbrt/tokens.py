@@ -268,6 +268,12 @@ class ParamList:
     def unused(self) -> list:
         return [p for p in self.params.values() if not p.used]
 
+    def ignore(self):
+        """A directive left out or replaced whole, with a warning of its own: its parameters get
+        no warnings more."""
+        for p in self.params.values():
+            p.used = True
+
 
 def parameters(tokens: Tokens) -> ParamList:
     """The "type name" value pairs that follow a directive's own arguments."""
