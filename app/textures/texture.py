@@ -8,7 +8,16 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from pathtrace.parameters import Parameter
+
 IDENTITY_UV = np.eye(3)
+# pbrt-v4's uv mapping, which every texture of a pbrt_uv reads (src/pbrt/textures.cpp,
+# TextureMapping2D::Create: UVMapping su u + du, sv v + dv); TextureType.pbrt_to_uv maps it
+PBRT_MAPPING = (Parameter(None, "string", pbrt="mapping", pbrt_default="uv"),
+                Parameter(None, "number", pbrt="uscale", pbrt_default=1.0),
+                Parameter(None, "number", pbrt="vscale", pbrt_default=1.0),
+                Parameter(None, "number", pbrt="udelta", pbrt_default=0.0),
+                Parameter(None, "number", pbrt="vdelta", pbrt_default=0.0))
 
 # name -> TextureType, filled by app/textures/registry.py: the types' modules import this one, so
 # it cannot import them (or the registry) itself
@@ -148,6 +157,17 @@ class TextureType:
         parameters' values by pathtrace's names (converted; to_uv its mapping) and by pbrt-v4's
         (`given`); warn(text) tells what pathtrace approximates. Raises ValueError."""
         return Texture(self.name, self.complete(values))
+
+    def pbrt_to_uv(self, given: dict, warn) -> np.ndarray:
+        """pbrt-v4's uv mapping (PBRT_MAPPING's values in `given`) as pathtrace's to_uv, on the
+        flipped v that the pbrt reader gives meshes: t = 1 - (sv v_pbrt + dv) with v_pbrt = 1 - v;
+        times pbrt_uv."""
+        if given["mapping"] != "uv":
+            warn(f"pathtrace maps textures by uv only; the {given['mapping']} mapping is taken as uv")
+        su, sv, du, dv = given["uscale"], given["vscale"], given["udelta"], given["vdelta"]
+        m = np.array([[su, 0, du], [0, sv, 1 - sv - dv], [0, 0, 1.0]])
+        m[:2] *= self.pbrt_uv
+        return m
 
     def pack(self, texture: Texture, row, texels):
         """Fills the type's own fields of `row` (a TEXTURE record), storing any image in

@@ -14,6 +14,7 @@ from pathtrace.materials.table import check_blend, check_bump_map, transmits
 from pathtrace.parameters import by_format, read
 from pathtrace.scene.spectra import blackbody_rgb, emission_rgb, named_spectrum, reflectance_rgb, sampled
 from pathtrace.textures import TEXTURES, Texture
+from pathtrace.textures.texture import PBRT_MAPPING
 from pathtrace.textures.bitmap import read_image
 
 BSDFS_BY_NAME = by_format(BSDFS.values(), "pbrt")
@@ -140,19 +141,6 @@ class MaterialMapper:
         value = self._texture(cls, params, is_float, where)
         (self.float_textures if is_float else self.textures)[name] = value
 
-    def _mapping(self, params, where, scale):
-        """pbrt's uv mapping (su u + du, sv v + dv) as pathtrace's to_uv, on the flipped v that
-        the reader gives meshes: t = 1 - (sv v_pbrt + dv) with v_pbrt = 1 - v; times `scale`
-        (a TextureType's pbrt_uv)."""
-        mapping = params.string("mapping", "uv")
-        if mapping != "uv":
-            warn(f"{where}: pathtrace maps textures by uv only; the {mapping} mapping is taken as uv")
-        su, sv = params.float("uscale", 1.0), params.float("vscale", 1.0)
-        du, dv = params.float("udelta", 0.0), params.float("vdelta", 0.0)
-        m = np.array([[su, 0, du], [0, sv, 1 - sv - dv], [0, 0, 1.0]])
-        m[:2] *= scale
-        return m
-
     def _texture(self, cls, params, is_float, where):
         """A texture of the type that declares pbrt-v4's `cls` (its parameters' pbrt-v4 names,
         its from_pbrt): its colour inputs float textures (or numbers) in a float texture, and
@@ -168,14 +156,14 @@ class MaterialMapper:
                 else self.parameter(params, p, name)
         given = {}
         try:
-            values = read(kind.parameters + kind.format_only, "pbrt", get, given)
+            values = read(kind.parameters + kind.format_only + (PBRT_MAPPING if kind.pbrt_uv else ()), "pbrt", get, given)
             for p in kind.parameters:
                 if p.kind == "image":
                     if p.name not in values:
                         raise UserError(f"{where}: an {cls} needs a {p.pbrt}")
                     values[p.name] = read_image(values[p.name], f"{where}: {p.pbrt}", values["raw"], self.images)
             if kind.pbrt_uv:
-                values["to_uv"] = self._mapping(params, where, kind.pbrt_uv)
+                values["to_uv"] = kind.pbrt_to_uv(given, lambda text: warn(f"{where}: {text}"))
             texture = kind.from_pbrt(values, given, lambda text: warn(f"{where}: {text}"))
         except ValueError as e:
             self.fail(params, where, e)
