@@ -316,8 +316,8 @@ def test_an_include_that_is_a_fifo_is_refused_without_opening_it(tmp_path):
 def test_includes_share_one_budget(tmp_path, monkeypatch):
     """A fan-out of includes (each file including the next level several times) is bounded by
     the bytes and elements of all files together, not per file."""
-    import pathtrace.scene.mitsuba as mitsuba
-    monkeypatch.setattr(mitsuba, "MAX_ELEMENTS", 5000)
+    import pathtrace.scene.mitsuba_xml as mitsuba_xml
+    monkeypatch.setattr(mitsuba_xml, "MAX_ELEMENTS", 5000)
     for level in range(6):
         inner = f'<include filename="l{level + 1}.xml"/>' * 12 if level < 5 else SPHERE
         write(tmp_path, inner, name=f"l{level}.xml")
