@@ -12,7 +12,7 @@ from pathtrace.materials import BSDFS
 from pathtrace.materials.table import component_rows
 from pathtrace.errors import UserError
 from pathtrace.scene.description import Scene
-from pathtrace.scene.toml_reader import MAX_INLINE
+from pathtrace.scene.toml_values import MAX_INLINE
 from pathtrace.shapes import SHAPES, TextureUV
 from pathtrace.textures import Texture
 
