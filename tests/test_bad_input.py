@@ -10,7 +10,8 @@ import pathtrace
 from pathtrace.errors import UserError
 from pathtrace.materials.table import MaterialTable
 from pathtrace.scene import load_scene
-from pathtrace.scene.pbrt.reader import MAX_INCLUDES, PbrtReader
+from pathtrace.scene.pbrt.reader import PbrtReader
+from pathtrace.scene.pbrt.state import MAX_INCLUDES
 from pathtrace.device.types import MATERIAL
 
 HEAD = 'LookAt 0 0 5  0 0 0  0 1 0\nCamera "perspective"\nWorldBegin\n'

@@ -11,7 +11,6 @@ the package's name; importing pathtrace.x.y is not counted as importing pathtrac
 runs first but which is the package's own business (its __init__ gathers its modules)."""
 
 import ast
-import warnings
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -19,8 +18,6 @@ APP = ROOT / "app"
 
 MAX_TOP_LEVEL_MODULES = 8
 MAX_LINES = 600
-# being shrunk to generic readers (issue 56, step 1): exempt until then, and named in a warning
-EXEMPT = ("app/scene/pbrt/reader.py",)
 
 
 def module_name(path: Path) -> str:
@@ -106,9 +103,4 @@ def test_the_top_level_holds_few_modules():
 def test_no_source_file_is_too_long():
     files = [*APP.rglob("*.py"), *(ROOT / "kernels").rglob("*.cl"), *(ROOT / "kernels").rglob("*.h")]
     lengths = {str(f.relative_to(ROOT)): len(f.read_text().splitlines()) for f in files}
-    long = {f: n for f, n in lengths.items() if n > MAX_LINES}
-    exempt = {f: n for f, n in long.items() if f in EXEMPT}
-    if exempt:
-        warnings.warn(f"over {MAX_LINES} lines, exempt while they are made generic: "
-                      + ", ".join(f"{f} ({n})" for f, n in sorted(exempt.items())))
-    assert {f: n for f, n in long.items() if f not in EXEMPT} == {}
+    assert {f: n for f, n in lengths.items() if n > MAX_LINES} == {}

@@ -13,7 +13,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import pathtrace.scene.pbrt.options as pbrt_options
 import pathtrace.scene.pbrt.reader as pbrt_reader
+import pathtrace.scene.pbrt.state as pbrt_state
 from pathtrace.scene import known_names, load_scene
 from pathtrace.scene.pbrt.tokens import ParamList
 from tests.commands import in_process
@@ -97,7 +99,8 @@ def names_read(tmp_path, monkeypatch, options, world) -> dict:
         if key:
             read.setdefault(key, set()).add(name)
     with monkeypatch.context() as m:
-        m.setattr(pbrt_reader, "parameters", parameters)
+        for module in (pbrt_reader, pbrt_options, pbrt_state):     # each reads its directives' parameters
+            m.setattr(module, "parameters", parameters)
         m.setattr(ParamList, "get", lambda self, name, *a, **k: (note(self, name), get(self, name, *a, **k))[1])
         m.setattr(ParamList, "type_of", lambda self, name: (note(self, name), type_of(self, name))[1])
         load_scene(str(tmp_path / "s.pbrt"))

@@ -1,13 +1,8 @@
-"""The pbrt-v4 scene reader: directives and the graphics state (pbrt-v4's file format, "pbrt-v4
-User's Guide" and its src/pbrt/scene.cpp), mapped onto pathtrace's scene description.
+"""The pbrt-v4 scene reader: the scene's directives (pbrt-v4's file format, "pbrt-v4 User's
+Guide" and its src/pbrt/scene.cpp) mapped onto pathtrace's scene description, on the graphics
+state (state.py) and the scene-wide options (options.py).
 
 Conventions, each as pbrt-v4 has it:
-- transforms: `Transform`/`ConcatTransform` take 16 numbers in column-major order; `Rotate`,
-  `Scale`, `Translate`, `LookAt` post-multiply the current transform (CTM);
-- the camera's CTM is camera-from-world; camera space looks down +z with +y up and +x to the
-  image's right, so that a plain `LookAt` gives the mirror image of a right-handed camera
-  (pathtrace's Camera.mirrored); `fov` spans the shorter image axis;
-- `maxdepth` counts bounces: pbrt's N is pathtrace's (Mitsuba's) N + 1 vertices;
 - a triangle's front is its winding's side (turned by `ReverseOrientation`), or where it has
   normals `N`, their side; an area light emits from its front unless `twosided`;
 - texture coordinates: pbrt looks images up at (u, 1 - v); the reader turns every mesh's v
@@ -24,14 +19,11 @@ import gc
 import gzip
 import os
 import re
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 
-from pathtrace import cameras
-from pathtrace.cameras import Camera
-from pathtrace.cameras.camera import FileCamera, frame_of
 from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError, cut, warn
 from pathtrace.io.files import check_regular_file
@@ -43,45 +35,23 @@ from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.known_names import Unread
-from pathtrace.scene.validate import MAX_SIZE
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, place_mesh, vertex_normals
 from pathtrace.scene.pbrt.materials import MaterialMapper, make, spectrum_rgb
+from pathtrace.scene.pbrt.options import OPTION_DIRECTIVES, OptionDirectives, refused
+from pathtrace.scene.pbrt.state import MAX_FILE_BYTES, MAX_INCLUDE_DEPTH, STATE_DIRECTIVES, GraphicsStateDirectives
 from pathtrace.textures import Texture
-from pathtrace.scene.pbrt.tokens import Tokens, numbers, parameters, string
+from pathtrace.scene.pbrt.tokens import Tokens, parameters, string
 from pathtrace.shapes import SHAPES, Shape
 
-MAX_FILE_BYTES = 4 << 30
-MAX_INCLUDE_DEPTH = 16
-# Include directives read in all: a file included from many places counts each time, so that
-# a tree of includes (12 wide and 8 deep: 470 million reads) is refused at once, not read for ever
-MAX_INCLUDES = 4096
 LIGHTS_BY_NAME = declared.by_format(DELTA_LIGHTS.values(), "pbrt")
 # a plymesh shape and its file name, as MeshFiles reads them ahead (PbrtReader.named_mesh_files)
 _PLYMESH = re.compile(r'Shape\s+"plymesh"')
 _FILENAME = re.compile(r'"string\s+filename"\s*\[?\s*"([^"]*)"')
 
 
-@dataclass
-class GraphicsState:
-    ctm: np.ndarray = field(default_factory=lambda: np.eye(4))
-    reverse: bool = False
-    material: object = "default"          # a Material, None (an interface), or "default"
-    area_light: object = None             # (ParamList, where) of an AreaLightSource
-    media: tuple = ("", "")               # MediumInterface: the inside and outside media's names
-
-    def copy(self):
-        # not dataclasses.replace, which costs 25 us: an attribute block per shape is common;
-        # the ctm shared, as the reader replaces it and never changes it in place
-        return GraphicsState(self.ctm, self.reverse, self.material, self.area_light, self.media)
-
-
-class PbrtReader:
+class PbrtReader(GraphicsStateDirectives, OptionDirectives):
     def __init__(self, path: Path):
-        self.path = Path(path)
-        self.folder = self.path.parent
-        self.state = GraphicsState()
-        self.stack = []                   # saved states of AttributeBegin / TransformBegin
-        self.named_systems = {}
+        super().__init__(path)
         self.named_materials = {}
         self.mapper = MaterialMapper(self)
         self.builder = SceneBuilder()
@@ -90,28 +60,17 @@ class PbrtReader:
         self.camera_params = None
         self.environment = None
         self.lights = []
-        self.objects = {}                 # ObjectBegin name: its builder object
-        self.current_object = None
-        self.object_shapes = {}           # ObjectBegin name: its shapes, until it is instanced
-        self.including = []
-        self.includes = 0                 # Include directives read so far
-        self.inverted = (None, None)      # (the bytes of a transform, its inverse): singular()
         self.media = []                   # the scene's media, None where named but not yet made
         self.medium_rows = {}             # medium name -> row of self.media
         self.medium_mentions = {}         # medium name -> where it was first named
         self.null_material = make("null", {}, "")    # the interface material's, one row for all
         self.material_rows = {}
         self.default_material = None
-        self.warned = set()
         self.unread = Unread("pbrt")     # the parameters not read: refused or warned of
         self.mesh_files = MeshFiles()     # the plymesh shapes' files, read ahead
         self.dropped = [0, 0]             # degenerate triangles dropped, of the meshes' triangles
 
     # -- files --
-
-    def resolve(self, name: str) -> Path:
-        p = Path(name)
-        return p if p.is_absolute() else self.folder / p
 
     def degenerate(self, dropped, total):
         """check_mesh's count of a mesh's degenerate triangles, which read() reports once."""
@@ -194,11 +153,6 @@ class PbrtReader:
                 found.append((self.resolve(name.group(1)), f"{tokens.where(start)}: filename"))
         return found
 
-    def once(self, key, message):
-        if key not in self.warned:
-            self.warned.add(key)
-            warn(message)
-
     def unused(self, params, category, kind):
         """The parameters of a directive of pbrt-v4's `category` ("shape") and `kind` ("sphere")
         that the reader did not read: refused where pbrt-v4 does not know them either, else
@@ -209,183 +163,6 @@ class PbrtReader:
                                         params.tokens.name)
             if message:
                 warn(message)
-
-    # -- transforms --
-
-    def inverse(self, where: str, what: str) -> np.ndarray:
-        """The inverse of the current transform, which `what` needs; an error naming the line
-        where it is singular (a Scale of 0, or factors whose product underflows to 0): pbrt-v4
-        goes on with an inverse of NaNs there, which would render nothing meaningful."""
-        inverse = None if self.singular() else self.inverted[1]
-        if inverse is None:
-            raise UserError(f"{where}: {what} needs the current transform's inverse, but the transform is singular")
-        return inverse
-
-    def singular(self) -> bool:
-        """Whether the current transform is singular; its inverse kept, with the transform's
-        bytes, for the shapes that follow under the same transform."""
-        key = self.state.ctm.tobytes()
-        if self.inverted[0] != key:
-            self.inverted = key, _inverse(self.state.ctm)
-        return self.inverted[1] is None
-
-    def concat(self, m):
-        self.state.ctm = self.state.ctm @ m
-
-    def _transform(self, tokens, offset, concat):
-        m = numbers(tokens, 16, "Transform").reshape(4, 4).T
-        if abs(np.linalg.det(m[:3, :3])) < 1e-12 or np.any(m[3] != [0, 0, 0, 1]):
-            tokens.fail(offset, "a singular or projective transform")
-        self.state.ctm = self.state.ctm @ m if concat else m
-
-    def _lookat(self, tokens, offset):
-        v = numbers(tokens, 9, "LookAt")
-        try:
-            self.concat(np.linalg.inv(transform.look_at(v[:3], v[3:6], v[6:])))
-        except ValueError as e:
-            tokens.fail(offset, f"LookAt: {e}")
-
-    # -- scene-wide options --
-
-    def _camera(self, tokens, offset):
-        kind = string(tokens, "Camera")
-        params = parameters(tokens)
-        # pbrt-v4: the camera is in the current outside medium
-        self.camera_params = (kind, params, tokens.where(offset), self.state.ctm.copy(),
-                              self.medium_row(self.state.media[1], tokens.where(offset)))
-        self.named_systems["camera"] = self.inverse(tokens.where(offset), "the camera")
-
-    def make_camera(self) -> Camera:
-        """pathtrace's camera for pbrt's, once the film's size is known."""
-        if self.camera_params is None:
-            kind, params, where, ctm = "perspective", None, str(self.path), np.eye(4)
-        else:
-            kind, params, where, ctm, _ = self.camera_params
-        world_from_camera = np.linalg.inv(ctm)
-        frame = frame_of(world_from_camera, x_right=True)
-        cls = cameras.registry.format_class("pbrt", kind)
-        if cls is None:
-            warn(f"{where}: pathtrace has no {kind} camera; it uses a perspective one of pbrt-v4's defaults")
-            kind, params, cls = "perspective", None, cameras.registry.format_class("pbrt", "perspective")
-        camera = cls.from_pbrt(self.file_camera(params, where, world_from_camera), **frame)
-        try:
-            camera.check()
-        except ValueError as e:
-            raise _refused(where, e, camera.parameters) from None
-        if params is not None:
-            self.unused(params, "camera", kind)
-        return camera
-
-    def file_camera(self, params, where, world_from_camera) -> FileCamera:
-        """The Camera directive's parameters as the camera types read them (pbrt-v4's defaults
-        where there is none), through the camera's transform."""
-        def get(name, default=None, kind="float"):
-            if params is None:
-                return default
-            return params.floats(name) if kind == "floats" else getattr(params, kind)(name, default)
-
-        def fail(name, problem):
-            if params is None:
-                raise UserError(f"{where}: '{name}' {problem}")
-            params.fail(name, problem)
-        return FileCamera(get, lambda name: params is not None and params.type_of(name) is not None, fail,
-                          lambda text, name=None: warn(f"{params.where(name) if name else where}: {text}"),
-                          self.settings.width, self.settings.height, world_from_camera)
-
-    def _film(self, tokens, offset):
-        kind = string(tokens, "Film")
-        params = parameters(tokens)
-        for name, default in (("xresolution", 1280), ("yresolution", 720)):
-            v = params.int(name, default)
-            if not 1 <= v <= MAX_SIZE:
-                params.fail(name, f"must be in 1..{MAX_SIZE}, got {v}")
-        self.settings.width, self.settings.height = params.int("xresolution", 1280), params.int("yresolution", 720)
-        params.string("filename")
-        for name in ("cropwindow", "pixelbounds"):
-            if params.type_of(name):
-                params.floats(name, ("float",) if name == "cropwindow" else ("integer",))
-                warn(f"{params.where(name)}: pathtrace renders the whole film; ignored")
-        if kind not in ("rgb", "gbuffer", "spectral"):
-            warn(f"{tokens.where(offset)}: pathtrace has no {kind} film; it renders RGB")
-        self.unused(params, "film", kind)
-
-    def _sampler(self, tokens, offset):
-        """The samples per pixel: `pixelsamples` (16), or for a `stratified` sampler `xsamples`
-        times `ysamples` (4 each), as pbrt-v4's samplers take them (src/pbrt/samplers.cpp, the
-        samplers' Create). Their seeds, jitter and randomization are their own: warned of, as
-        any name not read."""
-        kind = string(tokens, "Sampler")
-        params = parameters(tokens)
-        names = ("xsamples", "ysamples") if kind == "stratified" else ("pixelsamples",)
-        spp = 1
-        for name in names:
-            n = params.int(name, 4 if kind == "stratified" else 16)
-            if not 1 <= n <= 1 << 24 or not spp * n <= 1 << 24:
-                params.fail(name, f"must be in 1..{1 << 24}, samples per pixel in all, got {n}")
-            spp *= n
-        self.settings.spp = spp
-        self.unused(params, "sampler", kind)
-
-    def _integrator(self, tokens, offset):
-        kind = string(tokens, "Integrator")
-        params = parameters(tokens)
-        if kind in ("bdpt", "mlt", "sppm"):
-            self.settings.integrator = "bdpt"
-            if kind != "bdpt":
-                warn(f"{tokens.where(offset)}: pathtrace renders {kind} with bdpt, the nearest method it has")
-        elif kind not in ("path", "volpath"):
-            warn(f"{tokens.where(offset)}: pathtrace renders with its path tracer instead of {kind}")
-        depth = params.int("maxdepth", 5)
-        if not 0 <= depth < 2 ** 31 - 1:
-            params.fail("maxdepth", f"must be in 0..{2 ** 31 - 2}, got {depth}")
-        self.settings.max_depth = depth + 1
-        if params.bool("regularize", False):
-            warn(f"{params.where('regularize')}: pathtrace does not regularize; ignored")
-        sampler = params.string("lightsampler", "bvh")
-        if sampler not in ("bvh", "power", "uniform"):
-            params.fail("lightsampler", f"must be bvh, power or uniform, got {sampler!r}")
-        self.settings.light_sampler = {"bvh": "auto", "power": "power", "uniform": "power"}[sampler]
-        if kind in ("path", "volpath"):
-            self.unused(params, "integrator", kind)
-        params.ignore()            # another integrator's settings: it is replaced whole, with its warning
-
-    def _pixel_filter(self, tokens, offset):
-        kind = string(tokens, "PixelFilter")
-        params = parameters(tokens)
-        where = tokens.where(offset)
-        try:
-            self.filter = PixelFilter.from_pbrt(kind, params.float, lambda text: warn(f"{where}: {text}"))
-        except ValueError as e:
-            field, problem = str(e).split(": ", 1)
-            if field == "type":
-                tokens.fail(offset, problem)
-            raise UserError(f"{where}: '{field}' and 'yradius': {problem}" if field == "xradius" else
-                            f"{where}: '{field}': {problem}") from None
-        if kind in ("mitchell", "lanczos"):
-            params.ignore()
-        self.unused(params, "filter", kind)
-
-    # -- the graphics state --
-
-    def _attribute_begin(self, tokens, offset):
-        self.stack.append(("attribute", self.state.copy(), offset))
-
-    def _attribute_end(self, tokens, offset):
-        if not self.stack or self.stack[-1][0] != "attribute":
-            tokens.fail(offset, "AttributeEnd without AttributeBegin")
-        self.state = self.stack.pop()[1]
-
-    def _transform_begin(self, tokens, offset):
-        self.stack.append(("transform", self.state.ctm, offset))
-
-    def _transform_end(self, tokens, offset):
-        if not self.stack or self.stack[-1][0] != "transform":
-            tokens.fail(offset, "TransformEnd without TransformBegin")
-        self.state.ctm = self.stack.pop()[1]
-
-    def _world_begin(self, tokens, offset):
-        self.state.ctm = np.eye(4)
-        self.named_systems["world"] = np.eye(4)
 
     def _material(self, tokens, offset):
         kind = string(tokens, "Material")
@@ -468,14 +245,6 @@ class PbrtReader:
             self.mapper.fail(params, where, e)
         self.unused(params, "medium", "homogeneous")
 
-    def _medium_interface(self, tokens, offset):
-        """MediumInterface "inside" "outside" (one name: both sides)."""
-        inside = string(tokens, "MediumInterface")
-        outside = inside
-        if tokens.peek()[0] == "string" and " " not in tokens.peek()[1]:
-            outside = tokens.next()[1]
-        self.state.media = (inside, outside)
-
     def medium_interface(self, where) -> MediumInterface | None:
         """The media the current shape bounds, or None where both sides are the same (pbrt-v4:
         no transition, the ray keeps its medium)."""
@@ -484,63 +253,7 @@ class PbrtReader:
             return None
         return MediumInterface(self.medium_row(inside, where), self.medium_row(outside, where))
 
-    def _coordinate_system(self, tokens, offset):
-        self.named_systems[string(tokens, "CoordinateSystem")] = self.state.ctm.copy()
-
-    def _coord_sys_transform(self, tokens, offset):
-        name = string(tokens, "CoordSysTransform")
-        if name not in self.named_systems:
-            tokens.fail(offset, f"no coordinate system named '{cut(name)}'")
-        self.state.ctm = self.named_systems[name].copy()
-
-    def _include(self, tokens, offset):
-        name = string(tokens, "Include")
-        self.includes += 1
-        if self.includes > MAX_INCLUDES:
-            tokens.fail(offset, f"more than {MAX_INCLUDES} Includes in all (each time a file is included counts)")
-        self.parse_file(self.resolve(name), tokens.where(offset))
-
-    def _ignored(what, instead, count=0, takes_params=False):
-        def handler(self, tokens, offset):
-            for _ in range(count):
-                string(tokens, what)
-            if takes_params:
-                parameters(tokens)
-            self.once(what, f"{tokens.where(offset)}: {what} is not supported; ignored ({instead})")
-        return handler
-
-    def _option(self, tokens, offset):
-        parameters(tokens)
-        self.once("Option", f"{tokens.where(offset)}: Option is not supported; ignored")
-
-    def _transform_times(self, tokens, offset):
-        numbers(tokens, 2, "TransformTimes")
-
-    def _active_transform(self, tokens, offset):
-        kind, value, at = tokens.next()
-        if value not in ("All", "StartTime", "EndTime"):
-            tokens.fail(at, "ActiveTransform takes All, StartTime or EndTime")
-        if value != "All":
-            self.once("motion", f"{tokens.where(offset)}: pathtrace has no motion blur; it uses the start transform")
-
     # -- instancing --
-
-    def _object_begin(self, tokens, offset):
-        name = string(tokens, "ObjectBegin")
-        if self.current_object is not None:
-            tokens.fail(offset, "ObjectBegin inside another ObjectBegin")
-        self._attribute_begin(tokens, offset)
-        self.current_object = name
-        # its shapes are kept as read and made at its first ObjectInstance: a file of 100,000
-        # objects never instanced costs their reading only (pbrt-v4 reads one in under a second)
-        self.objects[name] = None
-        self.object_shapes[name] = []
-
-    def _object_end(self, tokens, offset):
-        if self.current_object is None:
-            tokens.fail(offset, "ObjectEnd without ObjectBegin")
-        self.current_object = None
-        self._attribute_end(tokens, offset)
 
     def _object_instance(self, tokens, offset):
         name = string(tokens, "ObjectInstance")
@@ -795,7 +508,7 @@ class PbrtReader:
         try:
             light = cls.from_values(values)
         except ValueError as e:
-            raise _refused(where, e, cls.parameters) from None
+            raise refused(where, e, cls.parameters) from None
         self.lights.append(light)
         self.unused(params, "light", kind)
 
@@ -818,75 +531,10 @@ class PbrtReader:
         except ValueError as e:
             self.mapper.fail(params, where, e)
 
-    def _reverse_orientation(self, tokens, offset):
-        self.state.reverse = not self.state.reverse
-
-
-def _refused(where: str, error: ValueError, declared) -> UserError:
-    """A type's ValueError ("<field>: <problem>") as one line naming the field by its pbrt-v4
-    name among the `declared` Parameters."""
-    name, _, problem = str(error).partition(": ")
-    name = next((p.pbrt for p in declared if p.name == name and p.pbrt), name)
-    return UserError(f"{where}: '{name}' {problem}")
-
-
-def _inverse(m: np.ndarray):
-    """m's inverse, or None where m is singular (or its inverse overflows)."""
-    try:
-        inverse = np.linalg.inv(m)
-    except np.linalg.LinAlgError:
-        return None
-    return inverse if np.all(np.isfinite(inverse)) else None
-
-
-def _three(what, make):
-    def handler(self, tokens, offset):
-        self.concat(make(numbers(tokens, 3, what)))
-    return handler
-
-
-def _rotate(self, tokens, offset):
-    v = numbers(tokens, 4, "Rotate")
-    if np.linalg.norm(v[1:]) == 0:
-        tokens.fail(offset, "Rotate: the axis is zero")
-    self.concat(transform.rotation(v[1:], v[0]))
-
-
-def _scale_directive(self, tokens, offset):
-    v = numbers(tokens, 3, "Scale")
-    if np.any(v == 0):
-        tokens.fail(offset, "Scale: a zero factor flattens everything after it")
-    self.concat(transform.scaling(v))
-
 
 DIRECTIVES = {
-    "Identity": lambda self, tokens, offset: setattr(self.state, "ctm", np.eye(4)),
-    "Translate": _three("Translate", transform.translation),
-    "Scale": _scale_directive,
-    "Rotate": _rotate,
-    "LookAt": PbrtReader._lookat,
-    "Transform": lambda self, tokens, offset: self._transform(tokens, offset, False),
-    "ConcatTransform": lambda self, tokens, offset: self._transform(tokens, offset, True),
-    "CoordinateSystem": PbrtReader._coordinate_system,
-    "CoordSysTransform": PbrtReader._coord_sys_transform,
-    "TransformTimes": PbrtReader._transform_times,
-    "ActiveTransform": PbrtReader._active_transform,
-    "ReverseOrientation": PbrtReader._reverse_orientation,
-    "Camera": PbrtReader._camera,
-    "Film": PbrtReader._film,
-    "Sampler": PbrtReader._sampler,
-    "Integrator": PbrtReader._integrator,
-    "PixelFilter": PbrtReader._pixel_filter,
-    "Accelerator": PbrtReader._ignored("Accelerator", "pathtrace builds its own BVH", 1, True),
-    "ColorSpace": PbrtReader._ignored("ColorSpace", "pathtrace takes colours as linear sRGB", 1),
-    "Option": PbrtReader._option,
-    "WorldBegin": PbrtReader._world_begin,
-    "WorldEnd": lambda self, tokens, offset: None,          # pbrt-v3's; v4 accepts and ignores it
-    "AttributeBegin": PbrtReader._attribute_begin,
-    "AttributeEnd": PbrtReader._attribute_end,
-    "TransformBegin": PbrtReader._transform_begin,
-    "TransformEnd": PbrtReader._transform_end,
-    "Attribute": PbrtReader._ignored("Attribute", "each directive uses its own parameters and pbrt-v4's defaults", 1, True),
+    **STATE_DIRECTIVES,
+    **OPTION_DIRECTIVES,
     "Material": PbrtReader._material,
     "MakeNamedMaterial": PbrtReader._make_named_material,
     "NamedMaterial": PbrtReader._named_material,
@@ -895,12 +543,7 @@ DIRECTIVES = {
     "LightSource": PbrtReader._light,
     "Shape": PbrtReader._shape,
     "MakeNamedMedium": PbrtReader._medium,
-    "MediumInterface": PbrtReader._medium_interface,
-    "ObjectBegin": PbrtReader._object_begin,
-    "ObjectEnd": PbrtReader._object_end,
     "ObjectInstance": PbrtReader._object_instance,
-    "Include": PbrtReader._include,
-    "Import": PbrtReader._include,
 }
 
 

@@ -1,0 +1,157 @@
+"""pbrt-v4's scene-wide options as pathtrace's render settings and camera: Camera (its type by
+the camera types' pbrt-v4 names, app/cameras/, read once the film's size is known), Film,
+Sampler, Integrator and PixelFilter, with pbrt-v4's defaults. The camera's CTM is
+camera-from-world; camera space looks down +z with +y up and +x to the image's right, so that
+a plain `LookAt` gives the mirror image of a right-handed camera (Camera.mirrored); `fov` spans
+the shorter image axis; `maxdepth` counts bounces: pbrt's N is pathtrace's (Mitsuba's) N + 1
+vertices. The pbrt reader (reader.py) is an OptionDirectives."""
+
+import numpy as np
+
+from pathtrace import cameras
+from pathtrace.cameras import Camera
+from pathtrace.cameras.camera import FileCamera, frame_of
+from pathtrace.errors import UserError, warn
+from pathtrace.filters import PixelFilter
+from pathtrace.scene.pbrt.tokens import parameters, string
+from pathtrace.scene.validate import MAX_SIZE
+
+
+class OptionDirectives:
+    """The directives of the scene-wide options, on the pbrt reader's settings, filter and
+    camera_params."""
+
+    def _camera(self, tokens, offset):
+        kind = string(tokens, "Camera")
+        params = parameters(tokens)
+        # pbrt-v4: the camera is in the current outside medium
+        self.camera_params = (kind, params, tokens.where(offset), self.state.ctm.copy(),
+                              self.medium_row(self.state.media[1], tokens.where(offset)))
+        self.named_systems["camera"] = self.inverse(tokens.where(offset), "the camera")
+
+    def make_camera(self) -> Camera:
+        """pathtrace's camera for pbrt's, once the film's size is known."""
+        if self.camera_params is None:
+            kind, params, where, ctm = "perspective", None, str(self.path), np.eye(4)
+        else:
+            kind, params, where, ctm, _ = self.camera_params
+        world_from_camera = np.linalg.inv(ctm)
+        frame = frame_of(world_from_camera, x_right=True)
+        cls = cameras.registry.format_class("pbrt", kind)
+        if cls is None:
+            warn(f"{where}: pathtrace has no {kind} camera; it uses a perspective one of pbrt-v4's defaults")
+            kind, params, cls = "perspective", None, cameras.registry.format_class("pbrt", "perspective")
+        camera = cls.from_pbrt(self.file_camera(params, where, world_from_camera), **frame)
+        try:
+            camera.check()
+        except ValueError as e:
+            raise refused(where, e, camera.parameters) from None
+        if params is not None:
+            self.unused(params, "camera", kind)
+        return camera
+
+    def file_camera(self, params, where, world_from_camera) -> FileCamera:
+        """The Camera directive's parameters as the camera types read them (pbrt-v4's defaults
+        where there is none), through the camera's transform."""
+        def get(name, default=None, kind="float"):
+            if params is None:
+                return default
+            return params.floats(name) if kind == "floats" else getattr(params, kind)(name, default)
+
+        def fail(name, problem):
+            if params is None:
+                raise UserError(f"{where}: '{name}' {problem}")
+            params.fail(name, problem)
+        return FileCamera(get, lambda name: params is not None and params.type_of(name) is not None, fail,
+                          lambda text, name=None: warn(f"{params.where(name) if name else where}: {text}"),
+                          self.settings.width, self.settings.height, world_from_camera)
+
+    def _film(self, tokens, offset):
+        kind = string(tokens, "Film")
+        params = parameters(tokens)
+        for name, default in (("xresolution", 1280), ("yresolution", 720)):
+            v = params.int(name, default)
+            if not 1 <= v <= MAX_SIZE:
+                params.fail(name, f"must be in 1..{MAX_SIZE}, got {v}")
+        self.settings.width, self.settings.height = params.int("xresolution", 1280), params.int("yresolution", 720)
+        params.string("filename")
+        for name in ("cropwindow", "pixelbounds"):
+            if params.type_of(name):
+                params.floats(name, ("float",) if name == "cropwindow" else ("integer",))
+                warn(f"{params.where(name)}: pathtrace renders the whole film; ignored")
+        if kind not in ("rgb", "gbuffer", "spectral"):
+            warn(f"{tokens.where(offset)}: pathtrace has no {kind} film; it renders RGB")
+        self.unused(params, "film", kind)
+
+    def _sampler(self, tokens, offset):
+        """The samples per pixel: `pixelsamples` (16), or for a `stratified` sampler `xsamples`
+        times `ysamples` (4 each), as pbrt-v4's samplers take them (src/pbrt/samplers.cpp, the
+        samplers' Create). Their seeds, jitter and randomization are their own: warned of, as
+        any name not read."""
+        kind = string(tokens, "Sampler")
+        params = parameters(tokens)
+        names = ("xsamples", "ysamples") if kind == "stratified" else ("pixelsamples",)
+        spp = 1
+        for name in names:
+            n = params.int(name, 4 if kind == "stratified" else 16)
+            if not 1 <= n <= 1 << 24 or not spp * n <= 1 << 24:
+                params.fail(name, f"must be in 1..{1 << 24}, samples per pixel in all, got {n}")
+            spp *= n
+        self.settings.spp = spp
+        self.unused(params, "sampler", kind)
+
+    def _integrator(self, tokens, offset):
+        kind = string(tokens, "Integrator")
+        params = parameters(tokens)
+        if kind in ("bdpt", "mlt", "sppm"):
+            self.settings.integrator = "bdpt"
+            if kind != "bdpt":
+                warn(f"{tokens.where(offset)}: pathtrace renders {kind} with bdpt, the nearest method it has")
+        elif kind not in ("path", "volpath"):
+            warn(f"{tokens.where(offset)}: pathtrace renders with its path tracer instead of {kind}")
+        depth = params.int("maxdepth", 5)
+        if not 0 <= depth < 2 ** 31 - 1:
+            params.fail("maxdepth", f"must be in 0..{2 ** 31 - 2}, got {depth}")
+        self.settings.max_depth = depth + 1
+        if params.bool("regularize", False):
+            warn(f"{params.where('regularize')}: pathtrace does not regularize; ignored")
+        sampler = params.string("lightsampler", "bvh")
+        if sampler not in ("bvh", "power", "uniform"):
+            params.fail("lightsampler", f"must be bvh, power or uniform, got {sampler!r}")
+        self.settings.light_sampler = {"bvh": "auto", "power": "power", "uniform": "power"}[sampler]
+        if kind in ("path", "volpath"):
+            self.unused(params, "integrator", kind)
+        params.ignore()            # another integrator's settings: it is replaced whole, with its warning
+
+    def _pixel_filter(self, tokens, offset):
+        kind = string(tokens, "PixelFilter")
+        params = parameters(tokens)
+        where = tokens.where(offset)
+        try:
+            self.filter = PixelFilter.from_pbrt(kind, params.float, lambda text: warn(f"{where}: {text}"))
+        except ValueError as e:
+            field, problem = str(e).split(": ", 1)
+            if field == "type":
+                tokens.fail(offset, problem)
+            raise UserError(f"{where}: '{field}' and 'yradius': {problem}" if field == "xradius" else
+                            f"{where}: '{field}': {problem}") from None
+        if kind in ("mitchell", "lanczos"):
+            params.ignore()
+        self.unused(params, "filter", kind)
+
+
+def refused(where: str, error: ValueError, declared) -> UserError:
+    """A type's ValueError ("<field>: <problem>") as one line naming the field by its pbrt-v4
+    name among the `declared` Parameters."""
+    name, _, problem = str(error).partition(": ")
+    name = next((p.pbrt for p in declared if p.name == name and p.pbrt), name)
+    return UserError(f"{where}: '{name}' {problem}")
+
+
+OPTION_DIRECTIVES = {
+    "Camera": OptionDirectives._camera,
+    "Film": OptionDirectives._film,
+    "Sampler": OptionDirectives._sampler,
+    "Integrator": OptionDirectives._integrator,
+    "PixelFilter": OptionDirectives._pixel_filter,
+}
