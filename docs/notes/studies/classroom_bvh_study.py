@@ -19,7 +19,8 @@ not changed):
   area saved first. The tree is built over the references' boxes by the builder as it is; a
   triangle's row is then held once per reference (CompiledScene gathers the rows by the tree's
   order). A ray does not skip a copy of the triangle it leaves, so these counts are close, not
-  exact.
+  exact. With --keep-whole F, a triangle whose box holds more than F of the root box's area
+  (the classroom's 221 m Floor) is never cut.
 
 Then, per scene, with the tree as it is: a pixel's work per sample (nodes + primitives, over all
 its rays) and a bound on the walk's SIMT efficiency: over warps of 32 lanes (an 8x8 work-group
@@ -28,6 +29,7 @@ as long as its busiest lane, so a GPU's walk uses at most that share of its lane
 
     python docs/notes/studies/classroom_bvh_study.py SCENE [SCENE ...] [--device D] [--size WxH]
         [--spp N] [--variants main,radius16,binned,sweep,presplit-area:0.1,presplit-sah:0.03]
+        [--keep-whole F]
 """
 
 import argparse
@@ -154,13 +156,14 @@ def cut(triangle, lo, hi, axis, plane):
     return boxes
 
 
-def split_references(corners: np.ndarray, budget: float, rule: str):
+def split_references(corners: np.ndarray, budget: float, rule: str, keep_whole: float):
     """References (triangle, box) to the triangles (T, 3, 3), with up to budget * T more made by
     cutting (module docstring); returns each reference's triangle and its box, float32 rounded
     outwards."""
     triangles = corners.astype(np.float64).tolist()
     lo, hi = corners.min(axis=1).astype(np.float64), corners.max(axis=1).astype(np.float64)
     refs = [(i, list(lo[i]), list(hi[i])) for i in range(len(corners))]
+    whole = half_area(lo, hi) > keep_whole * half_area(lo.min(axis=0), hi.max(axis=0))
 
     def candidate(r):
         """(priority, the halves) of cutting reference r, or None where the rule does not cut it."""
@@ -175,7 +178,7 @@ def split_references(corners: np.ndarray, budget: float, rule: str):
         return (saved, halves) if saved > 0 else None
 
     heap = []
-    for r in range(len(refs)):
+    for r in np.flatnonzero(~whole):
         c = candidate(r)
         if c is not None:
             heap.append((-c[0], r, c[1]))
@@ -203,7 +206,7 @@ def split_references(corners: np.ndarray, budget: float, rule: str):
 
 # --- the rows ----------------------------------------------------------------------------------
 
-def builder(variant: str, captured: dict):
+def builder(variant: str, captured: dict, keep_whole: float):
     """A stand-in for compiled.cached_bvh building the variant's tree; `captured` receives the
     triangles' corners (from compiled.primitive_boxes) and what was built."""
     name, _, budget = variant.partition(":")
@@ -224,7 +227,7 @@ def builder(variant: str, captured: dict):
                 tree, references = sweep_bvh(lo, hi, queue), len(lo)
             else:
                 corners = captured["corners"][-len(lo):]
-                triangle, r_lo, r_hi = split_references(corners, float(budget), name.split("-")[1])
+                triangle, r_lo, r_hi = split_references(corners, float(budget), name.split("-")[1], keep_whole)
                 built = bvh.build_bvh(r_lo, r_hi, 0, queue)
                 tree, references = bvh.BVH(built.nodes, triangle[built.order], built.depth, built.cost), len(r_lo)
         captured.update(seconds=time.perf_counter() - start, references=references)
@@ -264,6 +267,7 @@ def main():
     parser.add_argument("--size", default="320x176")
     parser.add_argument("--spp", type=int, default=4)
     parser.add_argument("--variants", default="main,radius16,binned,sweep,presplit-area:0.1,presplit-sah:0.03")
+    parser.add_argument("--keep-whole", type=float, default=np.inf, metavar="F")
     args = parser.parse_args()
     os.environ["PATHTRACE_BVH_CACHE"] = "0"       # each row builds its tree (pathtrace.compiler.bvh_cache)
     width, height = map(int, args.size.split("x"))
@@ -285,7 +289,7 @@ def main():
             if variant != "main" and scene.shapes:
                 print(f"{path}: {variant}: skipped (analytic shapes are not triangles to split)")
                 continue
-            compiled_module.cached_bvh = builder(variant, captured)
+            compiled_module.cached_bvh = builder(variant, captured, args.keep_whole)
             captured.clear()
             c = compile_scene(scene, backend.queue)
             if c.two_level:
