@@ -24,6 +24,7 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from pathtrace.io.images import read_hdr, write_image
 from tests.fuzz_batch import run_batch
@@ -315,3 +316,14 @@ def _prepare(folder: Path, how: str):
         (folder / "s.meshes").write_text("not a folder")
     elif how == "toml folder":
         (folder / "s.toml").mkdir()
+
+
+def test_a_batch_fails_on_a_line_below_pythons_capture(tmp_path):
+    """What a driver or OpenCV writes to the file descriptor itself, which no case's capture
+    sees, fails the batch that printed it (tests/fuzz_batch.py: run_batch)."""
+    import pytest
+    case = {"cwd": str(tmp_path), "code": "import os; os.write(2, b'[ WARN:0] imread_: a line from below\\n')"}
+    with pytest.raises(AssertionError, match="a line from below"):
+        run_batch([case], tmp_path)
+    assert run_batch([{"cwd": str(tmp_path), "code": "import sys; print('captured', file=sys.stderr)"}],
+                     tmp_path)[0]["stderr"] == "captured\n"
