@@ -101,8 +101,11 @@ def kernels(backend):
 def layout_features(compiled) -> Features:
     """The features of the default program (which test kernels are built with) that a compiled
     scene's layout needs: its few spheres outside the tree (LONE_SPHERES), which a kernel built
-    without would never meet, and its analytic shapes' kinds."""
-    return Features(lone_spheres=compiled.lone_spheres, shapes=compiled.shape_kinds)
+    without would never meet, and, where it has analytic shapes, every kind of them: one program
+    for the scenes of each kind, as the generic program dispatches them (a build saved per kind;
+    the scenes' own programs, with their kinds alone, are tests/test_shapes.py's renders)."""
+    from pathtrace.shapes import SHAPES
+    return Features(lone_spheres=compiled.lone_spheres, shapes=tuple(SHAPES) if compiled.shape_kinds else ())
 
 
 def scene_arrays(compiled):

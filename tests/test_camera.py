@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 from scipy import integrate
 
-from pathtrace.cameras import Camera, OrthographicCamera, PerspectiveCamera, ThinLensCamera
+from pathtrace.cameras import KERNELS as CAMERA_KERNELS, Camera, OrthographicCamera, PerspectiveCamera, ThinLensCamera
 from pathtrace.cameras.registry import toml_names
-from pathtrace.device.features import Features
-from pathtrace.filters import PixelFilter
+from pathtrace.device.features import GENERIC, Features
+from pathtrace.filters import FILTERS, PixelFilter
 from pathtrace.device.types import RENDER_PARAMS
 from tests.commands import in_process
 from tests.test_sampling import chi_square
@@ -40,19 +40,26 @@ kernel void offsets(const RenderParams p, global float2 *out)
 """
 N = 300_000
 W, H = 64, 48
+# every camera and filter in one program, chosen at run time from RenderParams as the generic
+# program chooses them (a build where there was one per kind); the scenes' own programs, with
+# one camera and filter compiled in, are the renders' (tests/test_reference.py, test_bdpt.py)
+FEATURES = Features(camera=GENERIC, filter=GENERIC)
 
 
 def params(camera, pixel_filter=PixelFilter()):
     p = np.zeros((), RENDER_PARAMS)
     camera.pack(p, W / H)
     p["filter"] = pixel_filter.params()
+    # the generic program's choices, as the renderer packs them (Renderer.params)
+    p["camera_type"] = CAMERA_KERNELS.index(camera.kernel)
+    p["filter_type"] = FILTERS.index(pixel_filter.name)
     p["width"], p["height"] = W, H
     return p
 
 
 def rays(kernels, camera, film):
     o, d = np.zeros((len(film), 4), np.float32), np.zeros((len(film), 4), np.float32)
-    kernels(SOURCE, Features(camera=camera.kernel))("rays", len(film), params(camera),
+    kernels(SOURCE, FEATURES)("rays", len(film), params(camera),
                                                          np.ascontiguousarray(film, np.float32), o, d)
     return o[:, :3].astype(np.float64), d[:, :3].astype(np.float64)
 
@@ -60,7 +67,7 @@ def rays(kernels, camera, film):
 def test_concentric_disk_samples_are_uniform(kernels):
     u = np.random.default_rng(1).random((N, 4), np.float32)
     out = np.zeros((N, 2), np.float32)
-    kernels(SOURCE)("disk", N, u, out)
+    kernels(SOURCE, FEATURES)("disk", N, u, out)
     r2 = (out.astype(np.float64) ** 2).sum(axis=1)
     assert r2.max() <= 1 + 1e-6
     # uniform on the disk: r^2 and the angle uniform and independent, 16 x 16 cells of equal area
@@ -120,7 +127,7 @@ def test_filter_samples_follow_the_filter(kernels, pixel_filter):
     radius below two stddev, sampled from uniform candidates."""
     out = np.zeros((N, 2), np.float32)
     camera = PerspectiveCamera()
-    kernels(SOURCE, Features(filter=pixel_filter.name))("offsets", N, params(camera, pixel_filter), out)
+    kernels(SOURCE, FEATURES)("offsets", N, params(camera, pixel_filter), out)
     r = pixel_filter.radius
     assert np.abs(out).max() <= r * (1 + 1e-6)
     edges = np.linspace(-r, r, 17)

@@ -1,7 +1,7 @@
 """Fuzzers of the files a scene names and of Mitsuba XML scenes (#28), beside the TOML one
 (tests/test_fuzz_scenes.py), with the same bar: each case, rendered by the command line in a
-process of its own, exits 0 with finite pixels or 1 with one error line naming the file; no
-traceback, hang, foreign line or leftover file.
+batch run in a process of its own (tests/fuzz_batch.py), exits 0 with finite pixels or 1 with one
+error line naming the file; no traceback, hang, foreign line or leftover file.
 
 - Mitsuba XML: a valid scene whose attribute values are sometimes replaced by odd text (huge,
   tiny, non-finite, negative, Unicode digits, NUL, wavelength lists), whose elements are
@@ -18,7 +18,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from pathtrace.io.images import write_image
-from tests.test_fuzz_scenes import check_case
+from tests.test_fuzz_scenes import check_batch
 
 ODD_TEXT = ["", "nan", "inf", "-1", "0", "1e40", "-1e40", "1e-300", "3.5e38", "²", "9" * 60, "1, 2",
             "400:0.5:1", "a\x00b", "\n", "$x", "../../x", "1 2 3 4 5 6 7 8 9 10 11 12 13 14 15 16", "0mm"]
@@ -87,19 +87,25 @@ def _attribute_values(text: str):
     return [(m.start(2), m.end(2)) for m in re.finditer(r'\b(value|x|y|z|angle|origin|target|up)="([^"]*)"', text)]
 
 
-FUZZ = settings(max_examples=15, deadline=None,
+# 15 cases a test: three examples, each a batch of five rendered in one process (tests/fuzz_batch.py)
+BATCH = 5
+FUZZ = settings(max_examples=15 // BATCH, deadline=None,
                 suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow])
 
 
 @FUZZ
-@given(text=xml_scenes())
-def test_a_mitsuba_scene_renders_finite_pixels_or_is_refused_in_one_line(tmp_path, text):
-    with tempfile.TemporaryDirectory(dir=tmp_path) as folder:
-        folder = Path(folder)
-        path = folder / "fuzzed.xml"
-        path.write_text(text)
-        (folder / "t.png").write_bytes(VALID["tex.png"])
-        check_case(folder, path, ["t.png"], text)
+@given(texts=st.lists(xml_scenes(), min_size=BATCH, max_size=BATCH))
+def test_mitsuba_scenes_render_finite_pixels_or_are_refused_in_one_line(tmp_path, texts):
+    with tempfile.TemporaryDirectory(dir=tmp_path) as root:
+        cases = []
+        for k, text in enumerate(texts):
+            folder = Path(root) / f"case{k}"
+            folder.mkdir()
+            path = folder / "fuzzed.xml"
+            path.write_text(text)
+            (folder / "t.png").write_bytes(VALID["tex.png"])
+            cases.append((folder, path, ["t.png"], text, None))
+        check_batch(Path(root), cases)
 
 
 def _valid_files() -> dict:
@@ -161,21 +167,23 @@ def damaged_files(draw):
 
 
 @FUZZ
-@given(damaged=damaged_files())
-def test_a_damaged_mesh_or_map_renders_finite_pixels_or_is_refused_in_one_line(tmp_path, damaged):
-    name, data = damaged
-    with tempfile.TemporaryDirectory(dir=tmp_path) as folder:
-        folder = Path(folder)
-        (folder / name).write_bytes(data)
-        before = [name]
-        material = '{ type = "diffuse", rho_d = 0.5 }'
-        if name.startswith("map"):
-            scene = f'[environment]\nmap = "{name}"\n[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = {material}\n'
-        elif name.startswith("tex"):
-            material = f'{{ type = "diffuse", rho_d = {{ type = "bitmap", file = "{name}" }}, opacity = {{ type = "bitmap", file = "{name}" }} }}'
-            scene = f'[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = {material}\n'
-        else:
-            scene = f'[camera]\neye = [0, 2, 5]\nlook_at = [0, 0, 0]\n[[meshes]]\nfile = "{name}"\nmaterial = {material}\n'
-        path = folder / "fuzzed.toml"
-        path.write_text(scene)
-        check_case(folder, path, before, f"{name}: {data[:200]!r}...", named=name)
+@given(batch=st.lists(damaged_files(), min_size=BATCH, max_size=BATCH))
+def test_damaged_meshes_and_maps_render_finite_pixels_or_are_refused_in_one_line(tmp_path, batch):
+    with tempfile.TemporaryDirectory(dir=tmp_path) as root:
+        cases = []
+        for k, (name, data) in enumerate(batch):
+            folder = Path(root) / f"case{k}"
+            folder.mkdir()
+            (folder / name).write_bytes(data)
+            material = '{ type = "diffuse", rho_d = 0.5 }'
+            if name.startswith("map"):
+                scene = f'[environment]\nmap = "{name}"\n[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = {material}\n'
+            elif name.startswith("tex"):
+                material = f'{{ type = "diffuse", rho_d = {{ type = "bitmap", file = "{name}" }}, opacity = {{ type = "bitmap", file = "{name}" }} }}'
+                scene = f'[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = {material}\n'
+            else:
+                scene = f'[camera]\neye = [0, 2, 5]\nlook_at = [0, 0, 0]\n[[meshes]]\nfile = "{name}"\nmaterial = {material}\n'
+            path = folder / "fuzzed.toml"
+            path.write_text(scene)
+            cases.append((folder, path, [name], f"{name}: {data[:200]!r}...", name))
+        check_batch(Path(root), cases)

@@ -20,35 +20,17 @@ so that the device is opened and the kernels built once; the generic program ren
 
 import json
 import os
-import subprocess
-import sys
 import tempfile
 from pathlib import Path
 
 import numpy as np
+import pytest
 
 from pathtrace.io.images import read_hdr, write_image
+from tests.fuzz_batch import run_batch
 
-ROOT = Path(__file__).resolve().parent.parent
 DEVICE = os.environ.get("PATHTRACE_TEST_DEVICE", "cpu")
-BATCH_SECONDS = 240         # a batch's time limit: the generic kernels' build, then cases of 8x6 pixels
 ALLOWED = ("device: ", "wrote ", "pathtrace: warning: ", "pathtrace: error: ")
-
-
-def run_batch(cases: list, folder: Path) -> list:
-    """Each case's result (tests/fuzz_batch.py), the batch run in a process of its own."""
-    path, out = folder / "cases.json", folder / "results.json"
-    path.write_text(json.dumps(cases))
-    env = {**os.environ, "PATHTRACE_PROGRAM": "generic"}
-    try:
-        subprocess.run([sys.executable, "-m", "tests.fuzz_batch", str(path), str(out)], cwd=ROOT, env=env,
-                       timeout=BATCH_SECONDS, capture_output=True, text=True)
-    except subprocess.TimeoutExpired:
-        pass
-    results = json.loads(out.read_text()) if out.exists() else []
-    assert len(results) == len(cases), f"no result for case {len(results)} within {BATCH_SECONDS} s: " \
-        + json.dumps(cases[len(results)])[:2000]
-    return results
 
 
 def check_result(case: dict, result: dict, names: tuple, before: set, outputs: list):
@@ -334,3 +316,14 @@ def _prepare(folder: Path, how: str):
         (folder / "s.meshes").write_text("not a folder")
     elif how == "toml folder":
         (folder / "s.toml").mkdir()
+
+
+def test_a_batch_fails_on_a_line_below_pythons_capture(tmp_path):
+    """What a driver or OpenCV writes to the file descriptor itself, which no case's capture
+    sees, fails the batch that printed it (tests/fuzz_batch.py: run_batch)."""
+    import pytest
+    case = {"cwd": str(tmp_path), "code": "import os; os.write(2, b'[ WARN:0] imread_: a line from below\\n')"}
+    with pytest.raises(AssertionError, match="a line from below"):
+        run_batch([case], tmp_path)
+    assert run_batch([{"cwd": str(tmp_path), "code": "import sys; print('captured', file=sys.stderr)"}],
+                     tmp_path)[0]["stderr"] == "captured\n"

@@ -2,17 +2,15 @@
 sometimes replaced by a value of another type, a huge or tiny or non-finite number, an empty or
 nested container, or left out; the environment map sometimes a good file, sometimes a damaged
 one, a folder or none; material parameters, opacities and normal and bump maps sometimes
-textures, whose images are good, damaged or missing files) are rendered by the command line, each in a process of its own
-with a time limit, on the tests' device. Each must either exit 0 having written an image of
-finite pixels, or exit 1 with one error line that names the file; never a traceback, a signal, a
-hang, a warning from below (NumPy's, OpenCV's) or a file left behind. A bounded number of
-examples runs on every CI run."""
+textures, whose images are good, damaged or missing files) are rendered by the command line, in batches of BATCH in a process
+with a time limit (tests/fuzz_batch.py), on the tests' device. Each must either exit 0 having
+written an image of finite pixels, or exit 1 with one error line that names the file; never a
+traceback, a signal, a hang, a warning from below (NumPy's, OpenCV's) or a file left behind. A
+bounded number of examples runs on every CI run."""
 
 import json
 import math
 import os
-import subprocess
-import sys
 import tempfile
 from pathlib import Path
 
@@ -23,6 +21,7 @@ from hypothesis import strategies as st
 
 from pathtrace.io.images import read_hdr
 from pathtrace.scene.toml_reader import FILE_TYPES, MATERIAL_TYPES
+from tests.fuzz_batch import run_batch
 
 ROOT = Path(__file__).resolve().parent.parent
 GOOD_MAP = ROOT / "assets" / "envmaps" / "studio_small_03_1k.hdr"
@@ -45,8 +44,7 @@ IMAGES = {
     "cut.png": lambda path: path.write_bytes(b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR\x00\x00"),
     "text.jpg": lambda path: path.write_text("not an image"),
 }
-CASE_SECONDS = 120      # a case's time limit: a kernel program for a new mix of materials
-                        # builds in a few seconds on two PoCL cores; a render of 8x6 pixels takes less
+BATCH = 10          # cases a process renders (tests/fuzz_batch.py); a hypothesis example is a batch
 
 ODD_NUMBERS = [0, -1, 1e-320, 1e-45, 3e38, 3.5e38, 1e300, -1e300, math.inf, -math.inf, math.nan,
                2**31, 2**31 - 1, -2**31, 10**400, 0.5, 1, 2, 179.9, 1e8]
@@ -207,42 +205,51 @@ def toml_text(scene: dict) -> str:
     return "\n".join(top + lines) + "\n"
 
 
-def render(folder: Path, scene: Path):
-    """`pathtrace render` of the scene in a process of its own: (exit status, standard error),
-    the status None where it outlived CASE_SECONDS (and was killed)."""
-    command = [sys.executable, "-m", "pathtrace", "render", str(scene), "-o", str(folder / "out.exr"),
-               "--size", "8x6", "-q", "--device", os.environ.get("PATHTRACE_TEST_DEVICE", "cpu")]
-    try:
-        r = subprocess.run(command, cwd=folder, capture_output=True, text=True, timeout=CASE_SECONDS)
-    except subprocess.TimeoutExpired as e:
-        return None, e.stderr or ""
-    return r.returncode, r.stderr
+DEVICE = os.environ.get("PATHTRACE_TEST_DEVICE", "cpu")
 
 
-@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,
-                                                                 HealthCheck.too_slow])
-@given(scene=scenes())
-def test_a_scene_file_renders_finite_pixels_or_is_refused_in_one_line(tmp_path, scene):
-    with tempfile.TemporaryDirectory(dir=tmp_path) as folder:
-        folder = Path(folder)
-        for name, make in {**MAPS, **IMAGES}.items():
-            make(folder / name)
-        before = sorted(p.name for p in folder.iterdir())
-        path = folder / "fuzzed.toml"
-        path.write_text(toml_text(scene))
-        check_case(folder, path, before, path.read_text())
+def render_case(folder: Path, scene: Path) -> dict:
+    """The batch case that renders `scene` in `folder` as `pathtrace render` does."""
+    return {"cwd": str(folder), "argv": ["render", str(scene), "-o", str(folder / "out.exr"), "--size", "8x6", "-q",
+                                         "--device", DEVICE]}
 
 
-def check_case(folder: Path, path: Path, before: list, shown: str, named: str = None):
-    """Renders scene `path` in `folder` (whose files were `before`, the scene written since) and
-    checks the outcome: exit 0 with an image of finite pixels, or exit 1 with one error line that
-    names the scene (or `named`, the fuzzed file it refers to); nothing else on standard error,
-    and no file left behind. `shown` is what a failure prints of the case."""
-    status, err = render(folder, path)
+def check_batch(root: Path, cases: list):
+    """Renders each case (folder, scene path, the folder's files before, what a failure shows,
+    and the fuzzed file an error must name, or None) in one batch, and checks each (check_case)."""
+    results = run_batch([render_case(folder, path) for folder, path, *_ in cases], root)
+    for (folder, path, before, shown, named), result in zip(cases, results):
+        check_case(folder, path, before, shown, result, named)
+
+
+@settings(max_examples=30 // BATCH, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,
+                                                                          HealthCheck.too_slow])
+@given(batch=st.lists(scenes(), min_size=BATCH, max_size=BATCH))
+def test_scene_files_render_finite_pixels_or_are_refused_in_one_line(tmp_path, batch):
+    with tempfile.TemporaryDirectory(dir=tmp_path) as root:
+        cases = []
+        for k, scene in enumerate(batch):
+            folder = Path(root) / f"case{k}"
+            folder.mkdir()
+            for name, make in {**MAPS, **IMAGES}.items():
+                make(folder / name)
+            before = sorted(p.name for p in folder.iterdir())
+            path = folder / "fuzzed.toml"
+            path.write_text(toml_text(scene))
+            cases.append((folder, path, before, path.read_text(), None))
+        check_batch(Path(root), cases)
+
+
+def check_case(folder: Path, path: Path, before: list, shown: str, result: dict, named: str = None):
+    """The outcome of rendering scene `path` in `folder` (whose files were `before`, the scene
+    written since; `result` tests/fuzz_batch.py's): exit 0 with an image of finite pixels, or exit
+    1 with one error line that names the scene (or `named`, the fuzzed file it refers to); nothing
+    else on standard error, no traceback, and no file left behind. `shown` is what a failure
+    prints of the case."""
+    status, err = result["status"], result["stderr"]
     event(f"exit {status}")           # shown by pytest --hypothesis-show-statistics
-    case = f"{shown}\nexit {status}, standard error:\n{err}"
-    assert status is not None, f"no exit within {CASE_SECONDS} s: " + case
-    assert status in (0, 1), case              # negative: a signal; 2: a usage error
+    case = f"{shown}\nexit {status}, standard error:\n{err}{result['traceback']}"
+    assert not result["traceback"] and status in (0, 1), case     # 2: a usage error
     lines = err.splitlines()
     assert all(line.startswith(("device: ", "wrote ", "pathtrace: warning: ", "pathtrace: error: "))
                for line in lines), case

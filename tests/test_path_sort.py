@@ -27,9 +27,9 @@ def sorted_render(backend, scene, path_queue=1, spp=SPP):
 
 @pytest.mark.parametrize("name, settings, depth", [
     ("material-spheres", dict(max_depth=6, russian_roulette="off"), 1),  # glass and metals
-    ("teapot-textured", dict(), 2),                                      # textures, Russian roulette
-    (str(SCENES / "media-fog.xml"), dict(), 1),                          # media: a flight from the stored hit
-    (str(SCENES / "instances.xml"), dict(), 1),                          # a two-level BVH: the hit's instance
+    ("teapot-textured", dict(max_depth=8, russian_roulette="off"), 2),   # textures
+    (str(SCENES / "media-fog.xml"), dict(max_depth=8, russian_roulette="off"), 1),   # media: a flight from the stored hit
+    (str(SCENES / "instances.xml"), dict(max_depth=8, russian_roulette="off"), 1),   # a two-level BVH: the hit's instance
     (str(SCENES / "masks.xml"), dict(nee=False), 1),                     # alpha masks, the report's estimator
 ])
 def test_sorted_paths_render_the_megakernels_image(backend, name, settings, depth):
