@@ -104,3 +104,10 @@ def test_no_source_file_is_too_long():
     files = [*APP.rglob("*.py"), *(ROOT / "kernels").rglob("*.cl"), *(ROOT / "kernels").rglob("*.h")]
     lengths = {str(f.relative_to(ROOT)): len(f.read_text().splitlines()) for f in files}
     assert {f: n for f, n in lengths.items() if n > MAX_LINES} == {}
+
+
+def test_the_performance_summary_stays_a_summary():
+    """docs/performance.md holds today's design decisions and their measured reasons, at most
+    400 lines (issue #56); their history is the dated log under docs/notes/."""
+    lines = len((ROOT / "docs" / "performance.md").read_text().splitlines())
+    assert lines <= 400, f"docs/performance.md has {lines} lines: move history to docs/notes/"
