@@ -4,7 +4,8 @@
  * (s light vertices, t camera vertices) of total depth at most BDPT, the program's longest path
  * (app/device/features.py), each weighted by multiple importance sampling (power heuristic) over the
  * strategies that could have drawn the same path, from the forward and reverse densities the
- * vertices store (bdpt_mis_weight), as pbrt does, not by drawing each strategy again.
+ * vertices store (bdpt_mis_weight), as pbrt does, not by drawing each strategy again; the sums
+ * of the densities' ratios along each subpath are accumulated once per subpath (sum_mis_ratios).
  *
  * A path's vertices: the camera (or the light) is vertex 0 of its subpath; a path of s + t
  * vertices has depth s + t - 1 in the path tracer's sense (kernels/integrator.cl: the camera
@@ -25,33 +26,6 @@
  * end at depth BDPT. Light subpaths carry importance: BSDFs are evaluated as their adjoints
  * (arguments swapped, kernels/bsdf.cl's radiance convention), a delta refraction keeps the eta^2
  * that radiance loses, and shading normals are corrected as Veach's section 5.3 says. */
-
-#define BDPT_CAMERA_VERTICES (BDPT + 1)
-#define BDPT_LIGHT_VERTICES BDPT
-
-/* One vertex of a subpath. The camera and a light are vertices of their own: s.p is their
- * point and s.ng an area light's normal (0 for the camera and a point). */
-typedef struct {
-    Surface s;            /* a surface vertex's surface, its shading frame complete */
-#ifdef TEXTURES
-    Material m;           /* its material with the textures looked up there */
-#else
-    const global Material *m;
-#endif
-    float3 wo;            /* unit direction towards the vertex before it on its subpath */
-    float3 beta;          /* the subpath's throughput up to it */
-    float pdf_fwd;        /* density per area of drawing it along its own subpath */
-    float pdf_rev;        /* density per area of drawing it from the other end */
-    int delta;            /* its sampled lobe was a delta */
-    int connectible;      /* a surface that scatters light into more than a delta lobe */
-    int emits;            /* a surface that emits towards wo */
-} Vertex;
-
-#ifdef TEXTURES
-#define VERTEX_MATERIAL(v) ((MaterialRef)&(v)->m)
-#else
-#define VERTEX_MATERIAL(v) ((v)->m)
-#endif
 
 /* A density per solid angle at `from` as a density per area at `to`, whose geometric normal is
  * n (0: a point, no cosine): pbrt's Vertex::ConvertDensity. */
@@ -130,46 +104,6 @@ float pdf_emitter_origin(const SceneData *sc, int prim, float3 y)
 #endif
     float r = sc->spheres[prim].w;
     return sc->light_pick[prim] / (4.0f * PI_F * r * r);
-}
-
-/* The ratio of two strategies' densities as pbrt's MISWeight takes it, a delta's 0 read as 1,
- * squared for the power heuristic. */
-float density_ratio2(float rev, float fwd)
-{
-    float r = (rev != 0.0f ? rev : 1.0f) / (fwd != 0.0f ? fwd : 1.0f);
-    return r * r;
-}
-
-/* The power heuristic's weight of strategy (s, t) for the path made of light vertices
- * lt[0, s) and camera vertices cam[0, t) (pbrt-v4's BDPTIntegrator MISWeight with beta = 2):
- * the other strategies' densities relative to this one's, as products of the ratios of reverse
- * to forward densities along each subpath. The connection changes four reverse densities, of
- * camera vertices t - 1 and t - 2 and light vertices s - 1 and s - 2, given in rev (x, y, z, w);
- * the connected vertices count as non-delta. For s = 1 the light vertex is the one sampled
- * from camera vertex t - 1, not lt[0]: its forward density is origin_pdf. light_delta: the
- * light's position is a delta (a point or spot), which no camera subpath hits. */
-float bdpt_mis_weight(const Vertex *lt, int s, const Vertex *cam, int t, float4 rev, float origin_pdf,
-                      int light_delta)
-{
-    if (s + t == 2)
-        return 1.0f;
-    float sum = 0.0f, r = 1.0f;
-    for (int i = t - 1; i > 0; --i) {
-        float pdf_rev = i == t - 1 ? rev.x : i == t - 2 ? rev.y : cam[i].pdf_rev;
-        r *= density_ratio2(pdf_rev, cam[i].pdf_fwd);
-        if ((i == t - 1 || !cam[i].delta) && !cam[i - 1].delta)
-            sum += r;
-    }
-    r = 1.0f;
-    for (int i = s - 1; i >= 0; --i) {
-        float pdf_rev = i == s - 1 ? rev.z : i == s - 2 ? rev.w : lt[i].pdf_rev;
-        float pdf_fwd = s == 1 ? origin_pdf : lt[i].pdf_fwd;
-        r *= density_ratio2(pdf_rev, pdf_fwd);
-        int delta_before = i > 0 ? lt[i - 1].delta : light_delta;
-        if ((i == s - 1 || !lt[i].delta) && !delta_before)
-            sum += r;
-    }
-    return 1.0f / (1.0f + sum);
 }
 
 /* Traces subpath `path` on from its vertex k - 1 along the ray o + t d (leaving surface `self`),
@@ -524,6 +458,8 @@ float3 sample_bidirectional(const SceneData *sc, const RenderParams *p, int x, i
                             pdf_camera_direction(p, ray.d), NO_PRIM, 0, rng, rays, &l);
     int light_delta = 0;
     int nl = trace_light_subpath(sc, p, lt, BDPT_LIGHT_VERTICES, rng, rays, &light_delta);
+    sum_mis_ratios(cam, nc, 1, 0);
+    sum_mis_ratios(lt, nl, 0, light_delta);
     /* s = 1 samples a light of its own, with or without a light subpath */
     int s_max = max(nl, 1);
     for (int t = 1; t <= nc; ++t) {

@@ -229,6 +229,7 @@ kernel void mis_sums(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *out
     }
     if (n == 0)
         return;
+    sum_mis_ratios(cam, n, 1, 0);
     /* the densities of the light's end of the path: drawn from the light, as a light subpath's */
     float4 from_light = densities_from_emitter(&sc, &cam[n - 1], &cam[n - 2]);
     float sum = bdpt_mis_weight(lt, 0, cam, n, from_light, 0.0f, 0);
@@ -251,6 +252,7 @@ kernel void mis_sums(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *out
         lt[0].pdf_fwd = origin;
         lt[0].s.ng = normal;
         lt[0].delta = 0;
+        sum_mis_ratios(lt, s, 0, 0);
         const Vertex *qs = &lt[s - 1], *pt = &cam[t - 1];
         float4 rev;
         if (s == 1) {

@@ -1,0 +1,101 @@
+/* A vertex of a bidirectional path tracer's subpath (kernels/bdpt.cl), and the weights of
+ * multiple importance sampling computed from the densities vertices store (Veach 1997, section
+ * 10.2; pbrt-v4's BDPTIntegrator MISWeight). */
+
+#define BDPT_CAMERA_VERTICES (BDPT + 1)
+#define BDPT_LIGHT_VERTICES BDPT
+
+/* One vertex of a subpath. The camera and a light are vertices of their own: s.p is their
+ * point and s.ng an area light's normal (0 for the camera and a point). */
+typedef struct {
+    Surface s;            /* a surface vertex's surface, its shading frame complete */
+#ifdef TEXTURES
+    Material m;           /* its material with the textures looked up there */
+#else
+    const global Material *m;
+#endif
+    float3 wo;            /* unit direction towards the vertex before it on its subpath */
+    float3 beta;          /* the subpath's throughput up to it */
+    float pdf_fwd;        /* density per area of drawing it along its own subpath */
+    float pdf_rev;        /* density per area of drawing it from the other end */
+    int delta;            /* its sampled lobe was a delta */
+    int connectible;      /* a surface that scatters light into more than a delta lobe */
+    int emits;            /* a surface that emits towards wo */
+    float mis_sum;        /* the MIS sum of the vertices up to it that no connection changes (sum_mis_ratios) */
+} Vertex;
+
+#ifdef TEXTURES
+#define VERTEX_MATERIAL(v) ((MaterialRef)&(v)->m)
+#else
+#define VERTEX_MATERIAL(v) ((v)->m)
+#endif
+
+/* The ratio of two strategies' densities as pbrt's MISWeight takes it, a delta's 0 read as 1,
+ * squared for the power heuristic. */
+float density_ratio2(float rev, float fwd)
+{
+    float r = (rev != 0.0f ? rev : 1.0f) / (fwd != 0.0f ? fwd : 1.0f);
+    return r * r;
+}
+
+/* The power heuristic's weight of strategy (s, t) for the path made of light vertices
+ * lt[0, s) and camera vertices cam[0, t) (pbrt-v4's BDPTIntegrator MISWeight with beta = 2):
+ * the other strategies' densities relative to this one's, as products of the ratios of reverse
+ * to forward densities along each subpath. The connection changes four reverse densities, of
+ * camera vertices t - 1 and t - 2 and light vertices s - 1 and s - 2, given in rev (x, y, z, w);
+ * the connected vertices count as non-delta. For s = 1 the light vertex is the one sampled
+ * from camera vertex t - 1, not lt[0]: its forward density is origin_pdf. light_delta: the
+ * light's position is a delta (a point or spot), which no camera subpath hits. The terms of
+ * the vertices before those two are the subpaths' mis_sum (sum_mis_ratios), times the two
+ * ratios the connection gives: the weight reads four vertices, not every vertex of both
+ * subpaths as pbrt's loop does (on a GPU the subpaths live in local memory). */
+float bdpt_mis_weight(const Vertex *lt, int s, const Vertex *cam, int t, float4 rev, float origin_pdf,
+                      int light_delta)
+{
+    if (s + t == 2)
+        return 1.0f;
+    float sum = 0.0f;
+    if (t > 1) {
+        float r = density_ratio2(rev.x, cam[t - 1].pdf_fwd);
+        if (!cam[t - 2].delta)
+            sum += r;
+        if (t > 2) {
+            r *= density_ratio2(rev.y, cam[t - 2].pdf_fwd);
+            if (!cam[t - 2].delta && !cam[t - 3].delta)
+                sum += r;
+            if (t > 3)
+                sum += r * cam[t - 3].mis_sum;
+        }
+    }
+    if (s > 0) {
+        float r = density_ratio2(rev.z, s == 1 ? origin_pdf : lt[s - 1].pdf_fwd);
+        if (!(s > 1 ? lt[s - 2].delta : light_delta))
+            sum += r;
+        if (s > 1) {
+            r *= density_ratio2(rev.w, lt[s - 2].pdf_fwd);
+            if (!lt[s - 2].delta && !(s > 2 ? lt[s - 3].delta : light_delta))
+                sum += r;
+            if (s > 2)
+                sum += r * lt[s - 3].mis_sum;
+        }
+    }
+    return 1.0f / (1.0f + sum);
+}
+
+/* Each vertex k of a traced subpath of n vertices gets the part of bdpt_mis_weight's sum that
+ * no connection changes: Q(k), the sum over the vertices i <= k that count (neither i nor the
+ * vertex before it a delta) of the products of the ratios of reverse to forward density of
+ * vertices i to k, by the recurrence Q(k) = ratio(k) (Q(k - 1) + [k counts]), as the recursive
+ * weights of van Antwerpen (2011) and Georgiev et al.'s vertex connection and merging (2012)
+ * accumulate theirs. first: the first vertex that counts (1 on a camera subpath, whose vertex 0
+ * is the lens; 0 on a light subpath); delta_origin: whether the position before vertex 0 is a
+ * delta (a light subpath's point or spot light). */
+void sum_mis_ratios(Vertex *path, int n, int first, int delta_origin)
+{
+    float q = 0.0f;
+    for (int k = first; k < n; ++k) {
+        int counts = !path[k].delta && !(k > 0 ? path[k - 1].delta : delta_origin);
+        q = density_ratio2(path[k].pdf_rev, path[k].pdf_fwd) * (q + (counts ? 1.0f : 0.0f));
+        path[k].mis_sum = q;
+    }
+}
