@@ -96,17 +96,12 @@ FUZZ = settings(max_examples=15 // BATCH, deadline=None,
 @FUZZ
 @given(texts=st.lists(xml_scenes(), min_size=BATCH, max_size=BATCH))
 def test_mitsuba_scenes_render_finite_pixels_or_are_refused_in_one_line(tmp_path, texts):
-    with tempfile.TemporaryDirectory(dir=tmp_path) as root:
-        cases = []
-        for k, text in enumerate(texts):
-            folder = Path(root) / f"case{k}"
-            folder.mkdir()
-            path = folder / "fuzzed.xml"
-            path.write_text(text)
-            (folder / "t.png").write_bytes(VALID["tex.png"])
-            cases.append((folder, path, ["t.png"], text, None))
-        check_batch(Path(root), cases)
-
+    def write(folder, text):
+        path = folder / "fuzzed.xml"
+        path.write_text(text)
+        (folder / "t.png").write_bytes(VALID["tex.png"])
+        return path, ["t.png"], text, None
+    check_batch(tmp_path, texts, write)
 
 def _valid_files() -> dict:
     """Small valid files of each format, as bytes."""
@@ -169,21 +164,18 @@ def damaged_files(draw):
 @FUZZ
 @given(batch=st.lists(damaged_files(), min_size=BATCH, max_size=BATCH))
 def test_damaged_meshes_and_maps_render_finite_pixels_or_are_refused_in_one_line(tmp_path, batch):
-    with tempfile.TemporaryDirectory(dir=tmp_path) as root:
-        cases = []
-        for k, (name, data) in enumerate(batch):
-            folder = Path(root) / f"case{k}"
-            folder.mkdir()
-            (folder / name).write_bytes(data)
-            material = '{ type = "diffuse", rho_d = 0.5 }'
-            if name.startswith("map"):
-                scene = f'[environment]\nmap = "{name}"\n[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = {material}\n'
-            elif name.startswith("tex"):
-                material = f'{{ type = "diffuse", rho_d = {{ type = "bitmap", file = "{name}" }}, opacity = {{ type = "bitmap", file = "{name}" }} }}'
-                scene = f'[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = {material}\n'
-            else:
-                scene = f'[camera]\neye = [0, 2, 5]\nlook_at = [0, 0, 0]\n[[meshes]]\nfile = "{name}"\nmaterial = {material}\n'
-            path = folder / "fuzzed.toml"
-            path.write_text(scene)
-            cases.append((folder, path, [name], f"{name}: {data[:200]!r}...", name))
-        check_batch(Path(root), cases)
+    def write(folder, damaged):
+        name, data = damaged
+        (folder / name).write_bytes(data)
+        material = '{ type = "diffuse", rho_d = 0.5 }'
+        if name.startswith("map"):
+            scene = f'[environment]\nmap = "{name}"\n[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = {material}\n'
+        elif name.startswith("tex"):
+            material = f'{{ type = "diffuse", rho_d = {{ type = "bitmap", file = "{name}" }}, opacity = {{ type = "bitmap", file = "{name}" }} }}'
+            scene = f'[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = {material}\n'
+        else:
+            scene = f'[camera]\neye = [0, 2, 5]\nlook_at = [0, 0, 0]\n[[meshes]]\nfile = "{name}"\nmaterial = {material}\n'
+        path = folder / "fuzzed.toml"
+        path.write_text(scene)
+        return path, [name], f"{name}: {data[:200]!r}...", name
+    check_batch(tmp_path, batch, write)

@@ -214,30 +214,34 @@ def render_case(folder: Path, scene: Path) -> dict:
                                          "--device", DEVICE]}
 
 
-def check_batch(root: Path, cases: list):
-    """Renders each case (folder, scene path, the folder's files before, what a failure shows,
-    and the fuzzed file an error must name, or None) in one batch, and checks each (check_case)."""
-    results = run_batch([render_case(folder, path) for folder, path, *_ in cases], root)
-    for (folder, path, before, shown, named), result in zip(cases, results):
-        check_case(folder, path, before, shown, result, named)
+def check_batch(tmp_path: Path, items: list, write):
+    """Renders a case per item in one batch, each in a folder of its own, and checks each
+    (check_case). write(folder, item) writes the case's files into its folder and returns (the
+    scene's path, the folder's files before the scene was written, what a failure shows, the
+    fuzzed file an error must name or None)."""
+    with tempfile.TemporaryDirectory(dir=tmp_path) as root:
+        cases = []
+        for k, item in enumerate(items):
+            folder = Path(root) / f"case{k}"
+            folder.mkdir()
+            cases.append((folder, *write(folder, item)))
+        results = run_batch([render_case(folder, path) for folder, path, *_ in cases], Path(root))
+        for (folder, path, before, shown, named), result in zip(cases, results):
+            check_case(folder, path, before, shown, result, named)
 
 
 @settings(max_examples=30 // BATCH, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture,
                                                                           HealthCheck.too_slow])
 @given(batch=st.lists(scenes(), min_size=BATCH, max_size=BATCH))
 def test_scene_files_render_finite_pixels_or_are_refused_in_one_line(tmp_path, batch):
-    with tempfile.TemporaryDirectory(dir=tmp_path) as root:
-        cases = []
-        for k, scene in enumerate(batch):
-            folder = Path(root) / f"case{k}"
-            folder.mkdir()
-            for name, make in {**MAPS, **IMAGES}.items():
-                make(folder / name)
-            before = sorted(p.name for p in folder.iterdir())
-            path = folder / "fuzzed.toml"
-            path.write_text(toml_text(scene))
-            cases.append((folder, path, before, path.read_text(), None))
-        check_batch(Path(root), cases)
+    def write(folder, scene):
+        for name, make in {**MAPS, **IMAGES}.items():
+            make(folder / name)
+        before = sorted(p.name for p in folder.iterdir())
+        path = folder / "fuzzed.toml"
+        path.write_text(toml_text(scene))
+        return path, before, path.read_text(), None
+    check_batch(tmp_path, batch, write)
 
 
 def check_case(folder: Path, path: Path, before: list, shown: str, result: dict, named: str = None):
