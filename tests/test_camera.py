@@ -59,8 +59,7 @@ def params(camera, pixel_filter=PixelFilter()):
 
 def rays(kernels, camera, film):
     o, d = np.zeros((len(film), 4), np.float32), np.zeros((len(film), 4), np.float32)
-    kernels(SOURCE, FEATURES)("rays", len(film), params(camera),
-                                                         np.ascontiguousarray(film, np.float32), o, d)
+    kernels(SOURCE, FEATURES)("rays", len(film), params(camera), np.ascontiguousarray(film, np.float32), o, d)
     return o[:, :3].astype(np.float64), d[:, :3].astype(np.float64)
 
 
