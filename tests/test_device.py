@@ -101,7 +101,7 @@ def test_a_damaged_cache_entry_is_built_again_and_replaced(backend, tmp_path, mo
     assert build_here(backend, tmp_path, monkeypatch) == "built"
     entry = only_entry(backend, tmp_path, monkeypatch)
     data = bytearray(entry.read_bytes())
-    data[len(data) // 2] ^= 0xFF                 # a flipped bit: its digest no longer matches
+    data[len(data) // 2] ^= 0xFF                 # a flipped bit: its checksum no longer matches
     entry.write_bytes(bytes(data))
     assert build_here(backend, tmp_path, monkeypatch) == "built"
     assert build_here(backend, tmp_path, monkeypatch) == "cached"

@@ -38,9 +38,9 @@ LATER_FILES = ("path_queue.cl", "path_sort.cl", "integrator.cl", "aovs.cl", "dis
 # as good as zero to a radiance or a density, and the kernels handle zero densities and zero
 # direction components already (kernels/sampling.cl: mis_weight; the slab test).
 BUILD_OPTIONS = ("-cl-mad-enable", "-cl-no-signed-zeros", "-cl-denorms-are-zero")
-# A cache entry: the SHA-256 of the rest, the build options the binary was made with (NUL
-# separated) and a newline, the binary.
-CACHE_FORMAT = "2"
+# A cache entry's payload (app/io/cache_files.py: a checksum, then the payload): the build options
+# the binary was made with (NUL separated) and a newline, the binary.
+CACHE_FORMAT = "3"
 
 
 def kernel_source(extra: str = "", features: Features = Features()) -> str:

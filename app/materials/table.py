@@ -154,8 +154,9 @@ def component_rows(rows: np.ndarray) -> np.ndarray:
 
 
 def reachable(table_rows: np.ndarray, used) -> np.ndarray:
-    """The rows `used` (indices of table_rows) and every row their blends choose from."""
-    found = np.unique(np.asarray(used, np.int64))
+    """The rows `used` (indices of table_rows, one per primitive) and every row their blends
+    choose from, in order."""
+    found = np.flatnonzero(np.bincount(np.asarray(used, np.int64).ravel(), minlength=len(table_rows)))
     while True:
         more = np.union1d(found, component_rows(table_rows[found]))
         if len(more) == len(found):
