@@ -7,7 +7,8 @@
  * the normal, p' = p + h n (Blinn 1978, with Mitsuba's first-order terms), and the normal is
  * their cross product. The integrator weighs what a perturbed surface reflects by
  * shadow_terminator, as Mitsuba 3.9's normal and bump maps both do (their common PerturbedBSDF,
- * eval_shadow_terminator, since commit e32d7180 "Improve bump and normal mapping"). */
+ * eval_shadow_terminator, since commit e32d7180 "Improve bump and normal mapping"); pbrt-v4's,
+ * which a pbrt file's materials take, do not (perturb_normal). */
 
 #define SLOT_NORMAL_MAP 20   /* app/materials/table.py */
 #define SLOT_BUMP_MAP 24
@@ -41,12 +42,14 @@ float shadow_terminator(const Surface *s, float3 w)
 }
 
 /* s's shading normal perturbed by material `row`'s normal or bump map, if it has one, seen from
- * direction wo, as Mitsuba 3.9's `normalmap` and `bumpmap` (one base class, PerturbedBSDF): the
- * perturbed normal m in the frame (t_s, t_t, ns), t_s = dp/du made orthogonal to ns and
- * t_t = ns x t_s (the front's, on a two-sided back whose ns is turned round), is a normal map's
- * 2 rgb - 1, or a bump map's normal of the tilted derivatives, on the geometric normal's side;
- * one that faces away from wo has its tangential part turned round (Schuessler et al. 2017's
- * flip); its tilt sets the shadowing term. */
+ * direction wo: the perturbed normal m in the frame (t_s, t_t, ns), t_s = dp/du made orthogonal to
+ * ns and t_t = ns x t_s (the front's, on a two-sided back whose ns is turned round), is a normal
+ * map's 2 rgb - 1, or a bump map's normal of the tilted derivatives, on the geometric normal's
+ * side. As Mitsuba 3.9's `normalmap` and `bumpmap` (one base class, PerturbedBSDF): one that faces
+ * away from wo has its tangential part turned round (Schuessler et al. 2017's flip), and its tilt
+ * sets the shadowing term. As pbrt-v4's (MATERIAL_PBRT_PERTURBATION; materials.h: NormalMap,
+ * BumpMap), m is turned whole to the geometric normal's side (interaction.h:
+ * SetShadingGeometry, FaceForward), with no shadowing term. */
 void perturb_normal(const SceneData *sc, const global Material *row, float2 uv, float3 wo, Surface *s)
 {
     for (int i = row->textures;; ++i) {
@@ -68,15 +71,20 @@ void perturb_normal(const SceneData *sc, const global Material *row, float2 uv, 
                     bumped = -bumped;
                 m = (float3)(dot(bumped, t_s), dot(bumped, t_t), dot(bumped, n));
             }
-            float3 wo_local = (float3)(dot(wo, t_s), dot(wo, t_t), dot(wo, n));
-            if (wo_local.z * dot(wo_local, m) <= 0.0f)
-                m.xy = -m.xy;
             float len_m = length(m);
             if (!(len_m > 0.0f) || !isfinite(len_m))
                 return;
             m /= len_m;
+            float3 ns = m.x * t_s + m.y * t_t + m.z * n;
+            if (row->flags & MATERIAL_PBRT_PERTURBATION) {
+                s->ns = dot(ns, s->ng) < 0.0f ? -ns : ns;
+                return;
+            }
+            float3 wo_local = (float3)(dot(wo, t_s), dot(wo, t_t), dot(wo, n));
+            if (wo_local.z * dot(wo_local, m) <= 0.0f)
+                ns = 2.0f * m.z * n - ns;     /* m.xy turned round */
             s->terminator = fmin(0.125f * fmax(0.0f, 1.0f - m.z * m.z) / fmax(m.z * m.z, 1e-12f), 1.0f);
-            s->ns = m.x * t_s + m.y * t_t + m.z * n;
+            s->ns = ns;
             return;
         }
         if (b.last)

@@ -50,6 +50,7 @@ typedef struct {
 #define MATERIAL_NULL 16         /* no surface, only a boundary between media (kernels/volume.cl) */
 #define MATERIAL_EMITS_BACK 32   /* one surface emitting from both sides: pbrt-v4's DiffuseAreaLight
                                     with twoSided (lights.h, L: no test of the side) */
+#define MATERIAL_PBRT_PERTURBATION 64   /* its normal or bump map perturbs as pbrt-v4's (normal_maps.cl) */
 
 /* A parameter of a material that a texture gives: the texture's value at the hit goes into the
  * material's floats from `slot` on (p0.x is 0, p1.x 4, p2.x 8, emission.x 12). A material's

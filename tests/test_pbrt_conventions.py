@@ -145,6 +145,29 @@ def test_displacement_is_a_bump_map_and_normalmap_a_normal_map(tmp_path, capsys)
     assert "the surface is rendered unbumped" in capsys.readouterr().err
 
 
+def test_pbrt_shading_maps_perturb_as_pbrts_and_convert_keeps_it(tmp_path):
+    """pbrt-v4's NormalMap and BumpMap leave the normal on the geometric normal's side with no
+    shadow-terminator term, Mitsuba 3's mirror it about the normal and weigh by one
+    (Material.perturbation; against pbrt-v4's own render: tests/test_pbrt_reference.py, normalmap,
+    which was 1.3 % dark with Mitsuba's). The reader says "pbrt" for both maps, and a TOML file
+    written by convert keeps it."""
+    from PIL import Image
+    from pathtrace.scene import load_scene
+    from tests.commands import in_process
+    Image.fromarray(np.array([[10, 200], [30, 90]], np.uint8)).save(tmp_path / "h.png")
+    Image.fromarray(np.array([[[128, 128, 255], [200, 128, 200]]], np.uint8)).save(tmp_path / "n.png")
+    s = scene(tmp_path, 'Texture "bump" "float" "imagemap" "string filename" "h.png"\n'
+                        'Material "diffuse" "texture displacement" "bump"\n' + FLOOR
+              + 'Material "conductor" "string normalmap" "n.png"\nTranslate 0 1 0\n' + FLOOR)
+    rows = [s.materials.get(m.material) for m in s.meshes]
+    assert [(m.bump_map is not None, m.normal_map is not None, m.perturbation) for m in rows] == \
+        [(True, False, "pbrt"), (False, True, "pbrt")]
+    r = in_process("convert", tmp_path / "s.pbrt", "-o", tmp_path / "out.toml")
+    assert r.returncode == 0, r.stderr
+    assert [b.materials.get(m.material).perturbation for b in [load_scene(str(tmp_path / "out.toml"))]
+            for m in b.meshes] == ["pbrt", "pbrt"]
+
+
 def test_textures_nest_as_pbrt_nests_them(tmp_path):
     """A mix of a checkerboard and a colour (tex_mix of ../shared/references/pbrt-v4), and a
     scale of a scale of a checkerboard of checkerboards: read as the trees they are."""

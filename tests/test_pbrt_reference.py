@@ -34,15 +34,13 @@ REFERENCES = Path(__file__).parent / "references" / "pbrt-v4"
 #   checkered floor of camera_screenwindow_wide).
 # - Bump mapping: pbrt-v4 takes a finite difference of the heights over the pixel's footprint,
 #   pathtrace the bitmap's analytic gradient (displacement).
-# - Normal maps: pathtrace's applies Mitsuba 3's shadow-terminator term and flip, which pbrt-v4's
-#   does not (normalmap, 1.3 % darker; docs/pbrt.md).
 # - The equal-area sky: resampled once to a latitude-longitude map of 8x its resolution, taking
 #   pbrt's nearest texel (infinite_equal_area).
 KNOWN_BIAS = {"mat_coatedconductor_gold": 0.02, "mat_conductor_remap": 0.03, "mat_conductor_reflectance": 0.01,
               "mat_coateddiffuse": 0.015, "tex_imagemap_scale": 0.005, "tex_imagemap_linear": 0.003,
               "tex_checkerboard": 0.01, "point_power": 0.002, "distant_illuminance": 0.002,
               "tex_imagemap_invert": 0.001, "camera_screenwindow_wide": 0.005, "displacement": 0.001,
-              "normalmap": 0.01, "infinite_equal_area": 0.001, "tex_mix": 0.015}
+              "infinite_equal_area": 0.001, "tex_mix": 0.015}
 SCENES = ["alpha", "area_twosided_back", "area_twosided_front", "area_twosided_lit_floor",
           "camera_thinlens_portrait", "distant_illuminance", "instancing", "mat_coatedconductor_gold", "mat_coateddiffuse",
           "mat_conductor_reflectance", "mat_conductor_remap", "mat_dielectric_eta_below_one",

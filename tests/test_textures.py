@@ -14,6 +14,7 @@ from PIL import Image as PILImage
 from pathtrace.errors import UserError
 from pathtrace.device.features import Features
 from pathtrace.materials import Material, MaterialTable
+from pathtrace.materials.bsdf import PBRT_PERTURBATION
 from pathtrace.scene.meshes import read_mesh
 from pathtrace.scene.mitsuba import read_mitsuba_file
 from pathtrace.textures import TEXTURES, Image, Texture, compile_textures, read_image
@@ -524,8 +525,18 @@ def test_shading_maps_in_scene_files(tmp_path):
                                                    "bump_scale": 0.1}}}, folder=tmp_path)
     bump = scene.materials.get(0).bump_map
     assert bump.type == "scale" and bump.params["scale"][0] == pytest.approx(0.1)
+    assert scene.materials.get(0).perturbation == "mitsuba"
+    pbrt_like = {"type": "diffuse", "rho_d": 0.5, "normal_map": bitmap, "perturbation": "pbrt"}
+    scene = load_dict({**base, "materials": {"m": pbrt_like}}, folder=tmp_path)
+    assert scene.materials.get(0).perturbation == "pbrt"
+    assert scene.materials.rows[0]["flags"] & PBRT_PERTURBATION
     for material, message in [({"normal_map": bitmap, "bump_map": bitmap}, "give a normal_map or a bump_map, not both"),
                                ({"bump_scale": 2}, "materials.m.bump_scale: scales a bump_map, and there is none"),
+                               ({"perturbation": "pbrt"}, "materials.m.perturbation: says how a normal_map or bump_map "
+                                                          "perturbs, and there is none"),
+                               ({"bump_map": bitmap, "perturbation": "pbtr"},
+                                "materials.m.perturbation: must be 'mitsuba' or 'pbrt', got 'pbtr'; did you mean 'pbrt'"),
+                               ({"bump_map": bitmap, "perturbation": 1}, "must be 'mitsuba' or 'pbrt', got 1$"),
                                ({"bump_map": {"type": "checkerboard"}}, "must be a bitmap texture")]:
         with pytest.raises(UserError, match=message):
             load_dict({**base, "materials": {"m": {"type": "diffuse", "rho_d": 0.5, **material}}}, folder=tmp_path)

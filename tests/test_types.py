@@ -230,3 +230,15 @@ def test_combining_textures_name_their_inputs_by_the_generated_indices():
         assert not re.search(r"eval_input\([^,]*,[^,]*,\s*\d", code), name
         for input_name in texture.inputs:
             assert f"{name.upper()}_INPUT_{input_name.upper()}" in code, (name, input_name)
+
+
+def test_the_material_flags_are_the_kernels():
+    """MATERIAL.flags' bits of app/materials/bsdf.py are kernels/types.h's MATERIAL_* defines,
+    each bit once."""
+    from pathtrace.materials import bsdf
+    defined = {name: int(value) for name, value in
+               re.findall(r"#define MATERIAL_([A-Z_]+)\s+(\d+)", (KERNELS / "types.h").read_text())}
+    host = {name: getattr(bsdf, name) for name in ("TWOSIDED", "DELTA", "TRANSMISSIVE", "MASKED", "NULL", "EMITS_BACK",
+                                                    "PBRT_PERTURBATION")}
+    assert defined == host
+    assert len(set(host.values())) == len(host) and all(v & (v - 1) == 0 for v in host.values())

@@ -18,6 +18,7 @@ TRANSMISSIVE = 4    # an interface seen from both sides
 MASKED = 8          # it has an opacity (an alpha mask), the BSDF telling them apart
 NULL = 16           # no surface, only a boundary between media (kernels/volume.cl)
 EMITS_BACK = 32     # its emission leaves its back as well as its front (pbrt's twosided area light)
+PBRT_PERTURBATION = 64     # its normal or bump map perturbs as pbrt-v4's do (Material.perturbation)
 
 
 @dataclass(frozen=True)

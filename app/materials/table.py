@@ -9,11 +9,19 @@ import numpy as np
 
 from pathtrace.errors import UserError, short
 from pathtrace.materials.blend import MAX_BLEND_DEPTH
-from pathtrace.materials.bsdf import EMITS_BACK, MASKED, NULL, TRANSMISSIVE, TWOSIDED, constant_of
+from pathtrace.materials.bsdf import EMITS_BACK, MASKED, NULL, PBRT_PERTURBATION, TRANSMISSIVE, TWOSIDED, constant_of
 from pathtrace.materials.registry import BSDFS, TAGS
 from pathtrace.device.slots import read_slot, write_slot
 from pathtrace.textures.texture import Texture
 from pathtrace.device.types import MATERIAL
+
+
+# The two conventions of a normal or bump map (kernels/normal_maps.cl: perturb_normal). Mitsuba 3's:
+# a perturbed normal that faces away from the outgoing direction has its tangential part turned
+# round, and the light is weighed by the shadow-terminator term. pbrt-v4's: the normal is turned
+# to the geometric normal's side (SurfaceInteraction::SetShadingGeometry's FaceForward), with no
+# such term (materials.h: NormalMap, BumpMap). The readers of each format choose its own.
+PERTURBATIONS = ("mitsuba", "pbrt")
 
 
 @dataclass
@@ -30,6 +38,7 @@ class Material:
     bump_map: Texture = None      # bitmap, or a scale of one), kernels/normal_maps.cl
     components: tuple = ()        # a blendbsdf's two Materials (app/materials/blend.py)
     emits_back: bool = False      # the emission leaves both sides (pbrt's twosided area light)
+    perturbation: str = "mitsuba"  # how a normal or bump map perturbs (PERTURBATIONS)
 
     @property
     def masked(self) -> bool:
@@ -259,7 +268,8 @@ class MaterialTable:
         type_name = list(BSDFS)[int(row["type"])]
         material = Material(type_name, BSDFS[type_name].unpack(row), row["emission"][:3].astype(np.float64),
                             bool(row["flags"] & TWOSIDED),
-                            emits_back=bool(row["flags"] & EMITS_BACK))
+                            emits_back=bool(row["flags"] & EMITS_BACK),
+                            perturbation=PERTURBATIONS[bool(row["flags"] & PBRT_PERTURBATION)])
         for name, _, _, texture in self.textures[index]:
             if name in ("emission", "opacity", "normal_map", "bump_map"):
                 setattr(material, name, texture)
@@ -283,6 +293,10 @@ class MaterialTable:
         rows = pack(material.type, params, emission, material.twosided, material.emits_back)
         if material.masked:
             rows["flags"] |= MASKED
+        if material.perturbation not in PERTURBATIONS:
+            raise ValueError(f"perturbation must be one of {', '.join(PERTURBATIONS)}, got {material.perturbation!r}")
+        if material.perturbation == "pbrt":
+            rows["flags"] |= PBRT_PERTURBATION
         if material.type == "blendbsdf":
             components = self._set_components(index, material)
             set_components(rows, components)
@@ -301,7 +315,7 @@ class MaterialTable:
         rows = [int(r) for r in components_of(old)] if old["type"] == TAGS["blendbsdf"] else [None, None]
         for k, c in enumerate(material.components):
             c = replace(c, emission=material.emission, twosided=material.twosided, emits_back=material.emits_back,
-                        normal_map=material.normal_map, bump_map=material.bump_map)
+                        normal_map=material.normal_map, bump_map=material.bump_map, perturbation=material.perturbation)
             if rows[k] is None:
                 rows[k] = self.add(c)
             else:

@@ -14,10 +14,10 @@ from pathtrace.filters import PixelFilter
 from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.rendering.choices import INTEGRATORS, LIGHT_SAMPLERS, RUSSIAN_ROULETTE
 from pathtrace.scene.environment import Environment
-from pathtrace.errors import UserError, short
+from pathtrace.errors import UserError, did_you_mean, short
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import NULL, constant_of
-from pathtrace.materials.table import check_blend, scaled_bump_map, transmits
+from pathtrace.materials.table import PERTURBATIONS, check_blend, scaled_bump_map, transmits
 from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.resources import resource_dir
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
@@ -108,6 +108,7 @@ class _Reader(TomlValues):
             return inner
         bsdf = FILE_TYPES[kind]
         self.table(data, where, {"type", "Le", "emits_back", "twosided", "opacity", "normal_map", "bump_map", "bump_scale",
+                                 "perturbation",
                                  *(p.name for p in bsdf.params), *(("bsdfs",) if kind == "blendbsdf" else ())})
         given = {p.name: self.parameter(data, p, where) for p in bsdf.params if p.name in data}
         try:
@@ -153,7 +154,8 @@ class _Reader(TomlValues):
 
     def shading_maps(self, data, where, material):
         """normal_map (a texture of tangent-space normals, 2 rgb - 1), or bump_map (a bitmap of
-        heights) times bump_scale."""
+        heights) times bump_scale; either perturbing as `perturbation` says (Material.perturbation:
+        "mitsuba", the default, or "pbrt")."""
         if "normal_map" in data and "bump_map" in data:
             self.fail(where, "give a normal_map or a bump_map, not both")
         for key in ("normal_map", "bump_map"):
@@ -170,6 +172,14 @@ class _Reader(TomlValues):
                 material.bump_map = scaled_bump_map(material.bump_map, scale)
             except ValueError as e:
                 self.fail(f"{where}.bump_map", str(e))
+        if "perturbation" in data:
+            value = data["perturbation"]
+            if material.normal_map is None and material.bump_map is None:
+                self.fail(f"{where}.perturbation", "says how a normal_map or bump_map perturbs, and there is none")
+            if value not in PERTURBATIONS:
+                hint = did_you_mean(value, PERTURBATIONS, True) if isinstance(value, str) else ""
+                self.fail(f"{where}.perturbation", f"must be 'mitsuba' or 'pbrt', got {short(value)}{hint}")
+            material.perturbation = value
 
     def opacity(self, data, where):
         """An alpha mask: a number in [0, 1] (default 1, opaque) or a texture whose luminance is

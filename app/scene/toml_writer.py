@@ -71,6 +71,8 @@ def material_table(material, texture_names: dict = {}) -> dict:
     for key in ("normal_map", "bump_map"):
         if getattr(material, key) is not None:
             table[key] = value(getattr(material, key), "color")
+            if material.perturbation != "mitsuba":
+                table["perturbation"] = material.perturbation
     if material.components:
         table["bsdfs"] = [material_table(c, texture_names) for c in material.components]
     return table
