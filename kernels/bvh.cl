@@ -73,21 +73,23 @@ void intersect_spheres(const SceneData *sc, int first, int count, float3 o, floa
 {
     COUNT_WORK(sc, PRIMITIVES_TESTED, count);
     for (int i = first; i < first + count; ++i) {
+        float t;
 #ifdef ALPHA_MASKS
-        /* the ray crosses a sphere's surface twice: where the mask cuts the nearer crossing out,
-           the farther one may be met */
-        float2 crossings = sphere_crossings(sc->spheres[i], o, d);
-        float t = INFINITY;
-        for (int k = 0; k < 2; ++k) {
-            float tk = k == 0 ? crossings.x : crossings.y;
-            if (tk > 0.0f && tk < hit->t && !masked_out(sc, i, (float2)(0.0f), o + tk * d, d)) {
-                t = tk;
-                break;
+        if (HAS_MASKS(sc)) {
+            /* the ray crosses a sphere's surface twice: where the mask cuts the nearer crossing
+               out, the farther one may be met */
+            float2 crossings = sphere_crossings(sc->spheres[i], o, d);
+            t = INFINITY;
+            for (int k = 0; k < 2; ++k) {
+                float tk = k == 0 ? crossings.x : crossings.y;
+                if (tk > 0.0f && tk < hit->t && !masked_out(sc, i, (float2)(0.0f), o + tk * d, d)) {
+                    t = tk;
+                    break;
+                }
             }
-        }
-#else
-        float t = intersect_range_sphere(sc->spheres[i], o, d, hit->t);
+        } else
 #endif
+            t = intersect_range_sphere(sc->spheres[i], o, d, hit->t);
         if (t < hit->t) {
             hit->t = t;
             hit->prim = i;
@@ -108,12 +110,12 @@ CPU_INLINE void intersect_triangles(const SceneData *sc, int first, int count, f
 #ifdef SHAPES
         /* an analytic shape: a curved one may be met again by a ray leaving it, so `self` is not
            skipped; the offset origin keeps the ray off the surface it leaves, as a sphere's */
-        int kind = SHAPE_KIND(&sc->triangles[i]);
+        int kind = HAS_SHAPES(sc) ? SHAPE_KIND(&sc->triangles[i]) : 0;
         if (kind) {
             float2 uv;
             float t = intersect_analytic(kind, SHAPE_ROWS(sc, &sc->triangles[i]), o, d, hit->t, &uv);
 #ifdef ALPHA_MASKS
-            if (t < hit->t && masked_out(sc, sc->num_spheres + i, uv, o + t * d, d))
+            if (t < hit->t && HAS_MASKS(sc) && masked_out(sc, sc->num_spheres + i, uv, o + t * d, d))
                 continue;
 #endif
             if (t < hit->t) {
@@ -131,7 +133,7 @@ CPU_INLINE void intersect_triangles(const SceneData *sc, int first, int count, f
         float b1, b2;
         float t = intersect_triangle(&sc->triangles[i], o, row_x, row_y, row_z, hit->t, &b1, &b2);
 #ifdef ALPHA_MASKS
-        if (t < hit->t && masked_out(sc, sc->num_spheres + i, (float2)(b1, b2), o + t * d, d))
+        if (t < hit->t && HAS_MASKS(sc) && masked_out(sc, sc->num_spheres + i, (float2)(b1, b2), o + t * d, d))
             continue;
 #endif
         if (t < hit->t) {

@@ -71,8 +71,17 @@ typedef struct {
 #define LAYOUT_LIGHT_TREE 8     /* lights are chosen through a light tree (kernels/light_tree.cl) */
 #define LAYOUT_FLAT 16          /* a few primitives, tested all (kernels/bvh.cl: FLAT_SPHERES), */
 #define LAYOUT_FLAT_TRIANGLES 8 /* the triangles' count in the bits from this one up */
+#define LAYOUT_MASKS 32         /* a material has an opacity (kernels/masks.cl) */
+#define LAYOUT_SHAPES 64        /* some primitives are analytic shapes (kernels/shapes/analytic.cl) */
+/* A GENERIC program skips what a scene lacks by a test of its layout, the same for every ray,
+ * before any work per primitive (docs/notes/performance-2026-11.md, 2026-11-29 seventh session);
+ * a scene's own program has what it is built with. */
 #ifdef GENERIC
 #define HAS_LIGHT_TREE(sc) ((sc)->layout & LAYOUT_LIGHT_TREE)
+#define HAS_MASKS(sc) ((sc)->layout & LAYOUT_MASKS)
+#define HAS_SHAPES(sc) ((sc)->layout & LAYOUT_SHAPES)
 #else
 #define HAS_LIGHT_TREE(sc) 1    /* LIGHT_TREE is a scene's program's only where it has a tree */
+#define HAS_MASKS(sc) 1         /* as ALPHA_MASKS */
+#define HAS_SHAPES(sc) 1        /* as SHAPES */
 #endif

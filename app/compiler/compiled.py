@@ -271,7 +271,8 @@ class CompiledScene:
         buffers."""
         return ((LAYOUT_LONE_SPHERES if self.lone_spheres else 0) | (LAYOUT_INSTANCES if self.two_level else 0)
                 | (LAYOUT_MEDIA if self.media_per_primitive else 0) | (LAYOUT_LIGHT_TREE if self.lights.tree else 0)
-                | (LAYOUT_FLAT | self.num_triangles << LAYOUT_FLAT_TRIANGLES if self.flat else 0))
+                | (LAYOUT_FLAT | self.num_triangles << LAYOUT_FLAT_TRIANGLES if self.flat else 0)
+                | (LAYOUT_MASKS if self.textures.masks else 0) | (LAYOUT_SHAPES if self.shape_kinds else 0))
 
     def shape(self, prim: int) -> ShapeRef:
         """The description's shape that primitive `prim` (BVH order) belongs to."""
@@ -288,6 +289,7 @@ class CompiledScene:
 # kernels/scene.cl
 LAYOUT_LONE_SPHERES, LAYOUT_INSTANCES, LAYOUT_MEDIA, LAYOUT_LIGHT_TREE, LAYOUT_FLAT = 1, 2, 4, 8, 16
 LAYOUT_FLAT_TRIANGLES = 8
+LAYOUT_MASKS, LAYOUT_SHAPES = 32, 64
 
 
 def float4_rows(rows) -> np.ndarray:
