@@ -118,8 +118,8 @@ def as_vectors(w):
 
 
 def evaluate_pairs(kernels, m, wo, wi):
-    """eval and pdf at each pair (wo[i], wi[i]), at most PAIRS of them. Launched over PAIRS
-    work-items whatever their number, as PoCL compiles a kernel again for each new size."""
+    """eval and pdf at each pair (wo[i], wi[i]), at most PAIRS of them (launched over PAIRS
+    work-items whatever their number: never an empty launch)."""
     def four(v):
         padded = np.zeros((PAIRS, 4), np.float32)
         padded[:len(v), :3], padded[len(v):, 2] = v[:, :3], 1.0
