@@ -134,6 +134,8 @@ def materials(draw):
         m[key] = draw(maybe(st.one_of(textures(), st.floats(0, 1))))
         if key == "bump_map" and draw(st.booleans()):
             m["bump_scale"] = draw(maybe(st.floats(-2, 2)))
+        if key in ("normal_map", "bump_map") and draw(st.booleans()):
+            m["perturbation"] = draw(maybe(st.sampled_from(["mitsuba", "pbrt"])))
     if draw(st.integers(0, 19)) == 7:
         m[draw(st.sampled_from(["Le", "twosided", "bogus"]))] = draw(ODD_VALUES)
     return m
