@@ -366,7 +366,11 @@ def test_a_toml_file_chooses_its_integrator_and_keeps_it(tmp_path):
     (tmp_path / "t.toml").write_text(scene_toml(scene, tmp_path / "t.toml"))
     assert load_scene(str(tmp_path / "t.toml")).settings.integrator == "bdpt"
     path.write_text('[render]\nintegrator = "mlt"\n' + sphere)
-    with pytest.raises(UserError, match=r"render.integrator: must be one of path, bdpt, ptracer, got 'mlt'"):
+    with pytest.raises(UserError, match=r"render.integrator: must be one of path, bdpt, ptracer, got 'mlt'$"):
+        load_scene(str(path))
+    path.write_text('[render]\nintegrator = "bdtp"\n' + sphere)
+    with pytest.raises(UserError, match=r"render.integrator: must be one of path, bdpt, ptracer, got 'bdtp'; "
+                                        r"did you mean bdpt\?$"):
         load_scene(str(path))
 
 

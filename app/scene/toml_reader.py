@@ -14,7 +14,7 @@ from pathtrace.filters import PixelFilter
 from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.rendering.choices import INTEGRATORS, LIGHT_SAMPLERS, RUSSIAN_ROULETTE
 from pathtrace.scene.environment import Environment
-from pathtrace.errors import UserError, did_you_mean, short
+from pathtrace.errors import UserError, short
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import NULL, constant_of
 from pathtrace.materials.table import PERTURBATIONS, check_blend, scaled_bump_map, transmits
@@ -177,8 +177,7 @@ class _Reader(TomlValues):
             if material.normal_map is None and material.bump_map is None:
                 self.fail(f"{where}.perturbation", "says how a normal_map or bump_map perturbs, and there is none")
             if value not in PERTURBATIONS:
-                hint = did_you_mean(value, PERTURBATIONS, True) if isinstance(value, str) else ""
-                self.fail(f"{where}.perturbation", f"must be 'mitsuba' or 'pbrt', got {short(value)}{hint}")
+                self.not_one_of(f"{where}.perturbation", value, PERTURBATIONS, quoted=True)
             material.perturbation = value
 
     def opacity(self, data, where):
@@ -217,8 +216,7 @@ class _Reader(TomlValues):
             return read_image(self.path.parent / value, f"{self.label}: {key}", data.get("raw") is True, self.images)
         if param.choices and not getattr(param, "names", None):
             if value not in param.choices:
-                choices = " or ".join(param.choices) if len(param.choices) == 2 else "one of " + ", ".join(param.choices)
-                self.fail(key, f"must be {choices}, got {short(value)}")
+                self.not_one_of(key, value, param.choices)
             return value
         names = getattr(param, "names", None)
         if isinstance(value, str) and names:
@@ -239,7 +237,7 @@ class _Reader(TomlValues):
         kind = data.get("type", "perspective")
         cls = cameras.registry.toml_class(kind, data)
         if cls is None:
-            self.fail("camera.type", f"must be one of {', '.join(cameras.registry.toml_names())}, got {short(kind)}")
+            self.not_one_of("camera.type", kind, cameras.registry.toml_names())
         own = {p.name for p in cls.parameters}
         common = {"type", "eye", "look_at", "up", "mirrored", "medium"}
         for key in data:
@@ -332,16 +330,15 @@ class _Reader(TomlValues):
                                  "light_sampler", "integrator"})
         integrator = data.get("integrator", "path")
         if integrator not in INTEGRATORS:
-            self.fail("render.integrator", f"must be one of {', '.join(INTEGRATORS)}, got {short(integrator)}")
+            self.not_one_of("render.integrator", integrator, INTEGRATORS)
         sampler = data.get("light_sampler", "auto")
         if sampler not in LIGHT_SAMPLERS:
-            self.fail("render.light_sampler", f"must be one of {', '.join(LIGHT_SAMPLERS)}, got {short(sampler)}")
+            self.not_one_of("render.light_sampler", sampler, LIGHT_SAMPLERS)
         rr, nee = data.get("russian_roulette", "throughput"), data.get("nee", True)
         if rr is True or rr is False:
             rr = "throughput" if rr else "off"
         if rr not in RUSSIAN_ROULETTE:
-            self.fail("render.russian_roulette",
-                      f"must be one of {', '.join(RUSSIAN_ROULETTE)} (or true, false), got {short(rr)}")
+            self.not_one_of("render.russian_roulette", rr, RUSSIAN_ROULETTE, also=" (or true, false)")
         if not isinstance(nee, bool):
             self.fail("render.nee", f"must be true or false, got {short(nee)}")
         s = RenderSettings(
@@ -364,7 +361,7 @@ class _Reader(TomlValues):
         self.table(data, where, {"type", "radius", "stddev"})
         kind = data.get("type", "box")
         if kind not in filters.FILTERS:
-            self.fail(f"{where}.type", f"must be one of {', '.join(filters.FILTERS)}, got {short(kind)}")
+            self.not_one_of(f"{where}.type", kind, filters.FILTERS)
         if "stddev" in data and kind != "gaussian":
             self.fail(f"{where}.stddev", f"a {kind} filter has no stddev")
         radius = self.number(data, "radius", where) if "radius" in data else None
@@ -411,7 +408,7 @@ class _Reader(TomlValues):
         value = data.get("texture_uv", TextureUV.KIND.value)
         modes = [m.value for m in TextureUV]
         if value not in modes:
-            self.fail(f"{where}.texture_uv", f"must be one of {', '.join(map(repr, modes))}, got {short(value)}")
+            self.not_one_of(f"{where}.texture_uv", value, modes, quoted=True)
         return TextureUV(value)
 
     def mesh(self, data, where, material) -> Mesh:

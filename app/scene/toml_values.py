@@ -8,7 +8,7 @@ import math
 
 import numpy as np
 
-from pathtrace.errors import UserError, short
+from pathtrace.errors import UserError, did_you_mean, short
 from pathtrace.scene import transform
 from pathtrace.scene.meshes import triangulate
 
@@ -24,6 +24,14 @@ class TomlValues:
 
     def fail(self, where, problem):
         raise UserError(f"{self.label}: {where}: {problem}")
+
+    def not_one_of(self, where, value, choices, quoted=False, also=""):
+        """Fails at `where`, whose `value` is none of the names `choices`: one line listing them
+        (quoted where `quoted`, then `also`), what was given, and the name closest to it."""
+        names = [repr(c) if quoted else c for c in choices]
+        listed = " or ".join(names) if len(names) == 2 else "one of " + ", ".join(names)
+        hint = did_you_mean(value, choices, quoted) if isinstance(value, str) else ""
+        self.fail(where, f"must be {listed}{also}, got {short(value)}{hint}")
 
     def refuse(self, where, error: ValueError):
         """A type's ValueError ("<field>: <problem>", or a problem of the whole) naming the field."""
@@ -56,7 +64,7 @@ class TomlValues:
             self.fail(where, f"must be a table, got {short(data)}")
         kind = data.get(key)
         if not isinstance(kind, str) or kind not in kinds:
-            self.fail(f"{where}.{key}", f"must be one of {', '.join(kinds)}, got {short(kind)}")
+            self.not_one_of(f"{where}.{key}", kind, kinds)
         return kind
 
     def boolean(self, data, key, where, default):
