@@ -389,3 +389,19 @@ def test_a_file_of_a_generic_name_is_named_after_its_folder(tmp_path, source, ge
     assert pathtrace.load(tmp_path / "coffee" / generic).name == "coffee"
     assert pathtrace.load(tmp_path / "coffee" / "pbrt" / generic).name == "coffee"     # Bitterli's layout
     assert pathtrace.load(ROOT / "tests" / "scenes" / source).name == source.split(".")[0]
+
+
+def test_devices_open_in_a_thread_of_their_own_and_give_their_error_when_asked(monkeypatch):
+    """DevicesOpening (the render command's and the viewer's, begun before the scene is read):
+    the backends open_devices keeps, with their BVH build kernels built; a device that cannot
+    be opened is the same one line, raised where the backends are asked for."""
+    from pathtrace import api
+    from pathtrace.compiler import bvh
+    monkeypatch.setattr(bvh, "_builders", {})        # none built by the tests before this one
+    opening = api.DevicesOpening(DEVICE)
+    backends = opening.result()
+    assert backends == api.open_devices(DEVICE) and opening.seconds > 0
+    assert all(b.queue in bvh._builders for b in backends)
+    failing = api.DevicesOpening("no-such-device")
+    with pytest.raises(UserError, match="no OpenCL device matches 'no-such-device'"):
+        failing.result()

@@ -27,6 +27,7 @@ def cmd_render(args):
                                 f"(as {short(str(written[key]))} too)")
             written[key] = target
     phase = Phases(args.quiet)
+    opening = api.DevicesOpening(args.device or ["auto"])     # while the scene is read
     denoiser = None
     if args.denoise:                 # before rendering: a missing or failing OIDN says so now
         from pathtrace.io.denoiser import Denoiser
@@ -35,13 +36,13 @@ def cmd_render(args):
     scene = apply_render_options(api.load(args.scene), args)
     phase(f"loaded {escape(scene.name)}")
     s = scene.settings
-    backends = api.open_devices(args.device or ["auto"])
+    backends = opening.result()
     for backend in backends:
         print(f"device: {backend.device.describe()}", file=sys.stderr)
     generic = all(b.built_generic(media=False) is not None for b in backends)    # open_device's
-    cached = " (from the kernel cache)" if generic and all(b.opened.cached for b in backends) else ""
+    cached = "from the kernel cache, " if generic and all(b.opened.cached for b in backends) else ""
     phase(f"opened the device{'s' * (len(backends) > 1)}" + (" and built the generic kernels" if generic else ""),
-          cached)
+          f" ({cached}beside the reading)", seconds=opening.seconds)
     pixels = s.width * s.height
     build_progress = BuildProgress(scene.name, args.quiet)
     bar = None
