@@ -25,6 +25,22 @@ def cluster():
     ray.shutdown()
 
 
+@pytest.fixture
+def start_actors(cluster):
+    """farm.start_actors on the cluster, the actors killed as the test ends: an actor whose
+    handles are dropped gives its CPU back only when Ray gets round to it (15 s once), and the
+    next test's actors waited for it."""
+    started = []
+
+    def start(scenes, **options):
+        actors = farm.start_actors(cluster, scenes, **options)
+        started.extend(actor for actor, _ in actors)
+        return actors
+    yield start
+    for actor in started:
+        cluster.kill(actor)
+
+
 @pytest.fixture(scope="module")
 def scenes():
     return [compile_scene(load_scene(name).with_settings(width=40, height=24, spp=40))
@@ -38,8 +54,8 @@ def one_process(backend, compiled, camera, spp):
     return r.read_sum().astype(np.float64)
 
 
-def test_farm_image_equals_the_one_process_render(cluster, scenes, backend):
-    actors = farm.start_actors(cluster, scenes, cpu_actors=3)
+def test_farm_image_equals_the_one_process_render(cluster, start_actors, scenes, backend):
+    actors = start_actors(scenes, cpu_actors=3)
     assert len(actors) == 3
     jobs = [farm.Job(0, scenes[0].scene.camera, 40), farm.Job(1, scenes[1].scene.camera, 24)]
     jobs += [farm.Job(0, c, 16) for c in farm.orbit(scenes[0].scene.camera, 2, 90)]
@@ -54,8 +70,8 @@ def test_farm_image_equals_the_one_process_render(cluster, scenes, backend):
     assert not np.allclose(sums[2], sums[3])
 
 
-def test_killing_an_actor_mid_render_keeps_the_exact_samples(cluster, scenes, backend):
-    actors = farm.start_actors(cluster, scenes, cpu_actors=3)
+def test_killing_an_actor_mid_render_keeps_the_exact_samples(cluster, start_actors, scenes, backend):
+    actors = start_actors(scenes, cpu_actors=3)
     f = farm.Farm(cluster, actors, scenes)
     victim = actors[1][0]
     killed = []
@@ -73,14 +89,15 @@ def test_killing_an_actor_mid_render_keeps_the_exact_samples(cluster, scenes, ba
     np.testing.assert_allclose(s[..., :3], ref[..., :3], rtol=1e-5, atol=1e-5)
 
 
-def test_a_worker_killed_by_the_system_is_reported_in_one_line_not_by_ray(cluster, scenes, backend, capfd):
+def test_a_worker_killed_by_the_system_is_reported_in_one_line_not_by_ray(cluster, start_actors, scenes, backend,
+                                                                          capfd):
     """A worker process killed outright (SIGKILL, as the OOM killer does) used to bring Ray's
     'A worker died or was killed ...' paragraph to the terminal while the render went on; the
     farm reports the loss itself (Farm.lost_workers) and the image still holds every sample."""
     import os
     import signal
     import time
-    actors = farm.start_actors(cluster, scenes, cpu_actors=2)
+    actors = start_actors(scenes, cpu_actors=2)
     f = farm.Farm(cluster, actors, scenes)
     victim = actors[0][0]
     pid = ray.get(victim.__ray_call__.remote(lambda self: os.getpid()))
