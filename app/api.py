@@ -97,7 +97,7 @@ class DevicesOpening:
     kernels built after it (pathtrace.compiler.bvh.builder_for), so that a command reads its
     scene meanwhile: the drivers build programs with the GIL released, and a first start pays
     for them beside the reading (PoCL's first build of the generic program takes 1.2 s on two
-    cores, NVIDIA's of the display's kernel, where no generic program is cached, 0.4 s)."""
+    cores; NVIDIA's of the display's kernel, where no generic program is cached, 0.2 s)."""
 
     def __init__(self, device="auto"):
         self.seconds = 0.0      # what the opening took, in its thread
