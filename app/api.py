@@ -462,7 +462,7 @@ def view(scene="simple", device: str = "auto", size=None, frames: int = None,
     from pathtrace.viewer.window import Viewer, require_display
     if not isinstance(device, str):
         raise UserError("device: the viewer renders on one device; give one spec (several are for render)")
-    require_display()              # before any device work
+    require_display(scene if isinstance(scene, str) else "simple")    # before any device work
     if frames is not None:
         frames = _integer("frames", frames, 1, 2**31 - 1)
 

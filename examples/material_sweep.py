@@ -27,7 +27,7 @@ SCENE = {
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])   # the first paragraph, whole
     parser.add_argument("-o", "--output", default="sweep.png")
     parser.add_argument("--size", default="240x180")
     parser.add_argument("--spp", type=int, default=64)

@@ -188,6 +188,10 @@ def test_unreadable_environment_map(tmp_path, name, data):
     (["nosuchscene"], "neither a scene file nor a built-in scene (built-ins: simple,"),
     (["cornel-box"], "cornel-box: neither a scene file nor a built-in scene; did you mean cornell-box? (built-ins: "),
     (["simple", "--tonemap", "acse"], "invalid choice: 'acse' (choose from 'standard', 'aces'); did you mean aces?\n"),
+    (["simple", "--filter", "gausian:2"], "invalid choice: 'gausian' (choose from 'box', 'tent', 'gaussian'); did you "
+                                          "mean gaussian?\n"),
+    (["README.md"], "README.md: not a scene file: pathtrace reads .toml (its own format), .xml (Mitsuba 3) and .pbrt or "
+                    ".pbrt.gz (pbrt-v4)\n"),
     (["simple", "--sppp", "4"], "unrecognized arguments: --sppp 4; did you mean --spp?\n"),
     (["simple", "--rr=throughput", "--max-deph", "4"], "unrecognized arguments: --max-deph 4; did you mean --max-depth?\n"),
     (["simple", "--device", "no-such-device"], "--device: no OpenCL device matches 'no-such-device'"),

@@ -789,6 +789,10 @@ def test_without_a_display_it_says_how_to_render_headless(tmp_path):
     assert r.returncode == 1
     assert f"{sys.executable} -m pathtrace render simple -o out.png" in r.stderr and "xvfb-run" in r.stderr
     assert len(r.stderr.strip().splitlines()) == 1 and "Traceback" not in r.stderr
+    r = subprocess.run([sys.executable, "-m", "pathtrace", "view", "cornell-box"], env=env, capture_output=True,
+                       text=True, timeout=60)      # the commands name the scene asked for
+    assert r.returncode == 1 and "render cornell-box -o out.png" in r.stderr, r.stderr
+    assert r.stderr.rstrip().endswith("-m pathtrace view cornell-box") and len(r.stderr.strip().splitlines()) == 1
 
 
 def test_the_image_edges_do_not_wrap_round(viewer):

@@ -139,8 +139,12 @@ def _path_queue(text: str) -> int:
 
 
 def _pixel_filter(text: str):
-    from pathtrace.filters import PixelFilter
+    from pathtrace.errors import did_you_mean
+    from pathtrace.filters import FILTERS, PixelFilter
     name, *numbers = text.split(":")
+    if name not in FILTERS:         # worded as argparse words a bad choice of the other options
+        raise argparse.ArgumentTypeError(f"invalid choice: {short(name)} (choose from "
+                                         f"{', '.join(map(repr, FILTERS))}){did_you_mean(name, FILTERS)}")
     try:
         values = [float(x) for x in numbers]
     except ValueError:

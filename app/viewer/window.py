@@ -49,24 +49,26 @@ DOCKED_SHARE = 1 / 3           # the panel docks beside the image only where the
                                # floats over the image
 
 
-def no_display_message() -> str:
+def no_display_message(scene: str = "simple") -> str:
     """What to do without a display, with commands that paste as they are: this very program
-    (the virtual environment is rarely on PATH) and xvfb-run, or how to install it."""
+    (the virtual environment is rarely on PATH) on the scene asked for, and xvfb-run, or how to
+    install it."""
     import shlex
     import shutil
     program = shlex.quote(sys.argv[0]) if os.path.basename(sys.argv[0]) == "pathtrace" \
         else f"{shlex.quote(sys.executable)} -m pathtrace"
-    xvfb = f'xvfb-run -s "-screen 0 1280x800x24" {program} view'
+    named = shlex.quote(scene)
+    xvfb = f'xvfb-run -s "-screen 0 1280x800x24" {program} view' + (f" {named}" if scene != "simple" else "")
     if not shutil.which("xvfb-run"):
         xvfb = f"sudo apt install xvfb, then {xvfb}"
     return (f"pathtrace view needs a display, and none was found. To render headless: "
-            f"{program} render simple -o out.png   To run the viewer on a virtual display: {xvfb}")
+            f"{program} render {named} -o out.png   To run the viewer on a virtual display: {xvfb}")
 
 
-def require_display():
+def require_display(scene: str = "simple"):
     """On Linux a window needs an X11 or Wayland display; say so in one line, not a traceback."""
     if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
-        raise UserError(no_display_message())
+        raise UserError(no_display_message(scene))
 
 
 def fit_window(width: int, height: int, screen: tuple) -> tuple:
