@@ -342,6 +342,15 @@ def test_a_bad_option_shows_its_subcommands_usage():
     assert r.stderr.strip().endswith("pathtrace render: error: unrecognized arguments: --bogus")
 
 
+def test_no_command_names_the_commands():
+    r = in_process()
+    assert r.returncode == 2 and r.stderr.strip().endswith(
+        "pathtrace: error: give a command: render, view, bench, farm, convert, devices, scenes "
+        "('pathtrace COMMAND -h' says what it takes)"), r.stderr
+    r = in_process("farm")
+    assert r.returncode == 2 and "pathtrace farm: error: give a command: render ('pathtrace farm COMMAND -h'" in r.stderr
+
+
 
 ENDINGS = {    # a command line of each kind of ending, and its exit status
     "unknown option": (["render", "simple", "-o", "o.png", "--sppp", "4"], 2),

@@ -34,6 +34,9 @@ class Parser(argparse.ArgumentParser):
         return super().format_help()
 
     def error(self, message):
+        commands = next((a.choices for a in self._actions if isinstance(a, argparse._SubParsersAction)), None)
+        if commands and message == "the following arguments are required: COMMAND":
+            message = f"give a command: {', '.join(commands)} ('{self.prog} COMMAND -h' says what it takes)"
         super().error(cut(" ".join(cut(word) for word in message.split(" ")), self.MESSAGE_LIMIT)
                       + self.suggestion(message))
 
