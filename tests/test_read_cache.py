@@ -82,8 +82,8 @@ def test_a_damaged_entry_is_read_again_and_replaced(scene_file):
 
 
 def test_a_file_that_shadows_a_built_in_name_is_read_as_the_file(scene_file, monkeypatch):
-    """A built-in scene's entry is not used for a file of its name, which is read (here as TOML,
-    the format of a file without a scene suffix, which it is not)."""
+    """A built-in scene's entry is not used for a file of its name, which is taken as the file
+    (and refused here: it has no scene format's suffix)."""
     path, _ = scene_file
     assert load_scene("simple").name == "simple"
     monkeypatch.chdir(path.parent)

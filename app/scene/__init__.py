@@ -59,15 +59,15 @@ def _read_scene(name_or_path: str) -> Scene:
     if pbrt:
         from pathtrace.scene.pbrt import read_pbrt_file
         return named(read_pbrt_file(path), path)
-    if exists and path.suffix.lower() == ".toml":
+    if exists:      # a file of a built-in scene's name is the file
+        if path.is_file() and path.suffix.lower() != ".toml":
+            raise UserError(f"{cut(shown(path), 100)}: not a scene file: pathtrace reads .toml (its own format), "
+                            ".xml (Mitsuba 3) and .pbrt or .pbrt.gz (pbrt-v4)")
         from pathtrace.scene.toml_reader import read_scene_file
-        return read_scene_file(path)
+        return read_scene_file(path)        # which refuses a folder, a fifo or a device in one line
     from pathtrace.scene.builtin import BUILTIN_SCENES, builtin_scene
     scene = builtin_scene(name_or_path)
     if scene is not None:
         return scene
-    if exists:
-        raise UserError(f"{cut(shown(path), 100)}: not a scene file: pathtrace reads .toml (its own format), "
-                        ".xml (Mitsuba 3) and .pbrt or .pbrt.gz (pbrt-v4)")
     raise UserError(f"{cut(shown(name_or_path), 100)}: neither a scene file nor a built-in scene"
                     f"{did_you_mean(str(name_or_path), BUILTIN_SCENES)} (built-ins: {', '.join(BUILTIN_SCENES)})")
