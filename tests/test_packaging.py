@@ -70,3 +70,47 @@ def test_installed_api_renders_to_numpy(wheel, tmp_path):
                                        "spp=4, size=(64, 36)).shape)"], tmp_path)
     assert r.returncode == 0, r.stderr
     assert r.stdout.strip() == "(36, 64, 3)"
+
+
+def test_the_cpu_extra_renders_with_the_system_opencl_hidden(tmp_path):
+    """`pip install 'pathtrace[cpu]'` without root: the extra's PoCL from PyPI
+    (pocl-binary-distribution, downloaded here as pip does) ships its ICD inside PyOpenCL's
+    package, where PyOpenCL's loader looks (PYOPENCL_HOME/.libs). With the system's ICDs hidden
+    (OCL_ICD_VENDORS an empty folder), a PyOpenCL with it lists that PoCL alone and renders the
+    image the system's PoCL renders. (PyOpenCL is copied beside the extra's files, as one
+    site-packages would hold them, rather than a whole environment installed.)"""
+    import shutil
+    import tomllib
+
+    import numpy as np
+    import pyopencl
+
+    from pathtrace.io.images import read_hdr
+    extra = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["optional-dependencies"]["cpu"]
+    site = tmp_path / "site"
+    r = subprocess.run([sys.executable, "-m", "pip", "--disable-pip-version-check", "-q", "install", "--no-deps",
+                        "--target", site, *extra], capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    shutil.copytree(Path(pyopencl.__file__).parent, site / "pyopencl", dirs_exist_ok=True)
+    (tmp_path / "no-vendors").mkdir()
+    env = {**os.environ, "PYTHONPATH": f"{site}{os.pathsep}{os.environ.get('PYTHONPATH', '')}",
+           "OCL_ICD_VENDORS": str(tmp_path / "no-vendors"), "POCL_CACHE_DIR": str(tmp_path / "pocl"),
+           "XDG_CACHE_HOME": str(tmp_path / "cache")}
+    hidden = subprocess.run([sys.executable, "-m", "pathtrace", "devices"], env={**env, "PYTHONPATH": ""},
+                            capture_output=True, text=True, timeout=60)
+    assert hidden.returncode == 1 and "no OpenCL device found" in hidden.stderr    # nothing else to find
+    listed = subprocess.run([sys.executable, "-m", "pathtrace", "devices"], env=env, capture_output=True, text=True,
+                            timeout=60)
+    assert listed.returncode == 0 and len(listed.stdout.splitlines()) == 1, listed.stdout + listed.stderr
+    assert "Portable Computing Language" in listed.stdout and str(site) in subprocess.run(
+        [sys.executable, "-c", "import pyopencl; print(pyopencl.__file__)"], env=env, capture_output=True,
+        text=True, timeout=60).stdout
+    args = ["render", "cornell-box", "--size", "32x32", "--spp", "16", "--program", "generic", "-q"]
+    r = subprocess.run([sys.executable, "-m", "pathtrace", *args, "-o", tmp_path / "pypi.exr"], env=env,
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    r = subprocess.run([sys.executable, "-m", "pathtrace", *args, "-o", tmp_path / "system.exr", "--device", "cpu"],
+                       capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    pypi, system = (read_hdr(tmp_path / f"{n}.exr", n, "image") for n in ("pypi", "system"))
+    np.testing.assert_allclose(pypi, system, rtol=1e-4, atol=1e-5)
