@@ -187,13 +187,15 @@ def test_unreadable_environment_map(tmp_path, name, data):
     (["missing.pbrt"], "error: scene file 'missing.pbrt' does not exist\n"),
     (["nosuchscene"], "neither a scene file nor a built-in scene (built-ins: simple,"),
     (["cornel-box"], "cornel-box: neither a scene file nor a built-in scene; did you mean cornell-box? (built-ins: "),
-    (["simple", "--tonemap", "acse"], "invalid choice: 'acse' (choose from 'standard', 'aces'); did you mean aces?\n"),
+    (["simple", "--tonemap", "acse"], "invalid choice: 'acse' (choose from 'standard', 'aces'); did you mean aces? "
+                                      "(see 'pathtrace render -h')\n"),
     (["simple", "--filter", "gausian:2"], "invalid choice: 'gausian' (choose from 'box', 'tent', 'gaussian'); did you "
-                                          "mean gaussian?\n"),
+                                          "mean gaussian? (see 'pathtrace render -h')\n"),
     (["README.md"], "README.md: not a scene file: pathtrace reads .toml (its own format), .xml (Mitsuba 3) and .pbrt or "
                     ".pbrt.gz (pbrt-v4)\n"),
-    (["simple", "--sppp", "4"], "unrecognized arguments: --sppp 4; did you mean --spp?\n"),
-    (["simple", "--rr=throughput", "--max-deph", "4"], "unrecognized arguments: --max-deph 4; did you mean --max-depth?\n"),
+    (["simple", "--sppp", "4"], "unrecognized arguments: --sppp 4; did you mean --spp? (see 'pathtrace render -h')\n"),
+    (["simple", "--rr=throughput", "--max-deph", "4"], "unrecognized arguments: --max-deph 4; did you mean --max-depth? "
+                                                     "(see 'pathtrace render -h')\n"),
     (["simple", "--device", "no-such-device"], "--device: no OpenCL device matches 'no-such-device'"),
     (["simple", "--size", "0x10"], "width and height must be 1 to 16384"),
     (["simple", "--size", "big"], "is not WIDTHxHEIGHT"),
@@ -336,19 +338,18 @@ def test_sigterm_stops_a_render_and_leaves_no_file(tmp_path):
     assert not list(tmp_path.iterdir())
 
 
-def test_a_bad_option_shows_its_subcommands_usage():
+def test_a_bad_option_is_one_line_pointing_at_its_subcommands_help():
     r = in_process("render", "simple", "-o", "x.png", "--bogus")
-    assert r.returncode == 2 and r.stderr.startswith("usage: pathtrace render")
-    assert r.stderr.strip().endswith("pathtrace render: error: unrecognized arguments: --bogus")
+    assert r.returncode == 2 and r.stderr == ("pathtrace render: error: unrecognized arguments: --bogus "
+                                              "(see 'pathtrace render -h')\n"), r.stderr
 
 
 def test_no_command_names_the_commands():
     r = in_process()
-    assert r.returncode == 2 and r.stderr.strip().endswith(
-        "pathtrace: error: give a command: render, view, bench, farm, convert, devices, scenes "
-        "('pathtrace COMMAND -h' says what it takes)"), r.stderr
+    assert r.returncode == 2 and r.stderr == ("pathtrace: error: give a command: render, view, bench, farm, convert, "
+                                              "devices, scenes (see 'pathtrace -h')\n"), r.stderr
     r = in_process("farm")
-    assert r.returncode == 2 and "pathtrace farm: error: give a command: render ('pathtrace farm COMMAND -h'" in r.stderr
+    assert r.returncode == 2 and r.stderr == "pathtrace farm: error: give a command: render (see 'pathtrace farm -h')\n"
 
 
 

@@ -36,9 +36,10 @@ class Parser(argparse.ArgumentParser):
     def error(self, message):
         commands = next((a.choices for a in self._actions if isinstance(a, argparse._SubParsersAction)), None)
         if commands and message == "the following arguments are required: COMMAND":
-            message = f"give a command: {', '.join(commands)} ('{self.prog} COMMAND -h' says what it takes)"
-        super().error(cut(" ".join(cut(word) for word in message.split(" ")), self.MESSAGE_LIMIT)
-                      + self.suggestion(message))
+            message = f"give a command: {', '.join(commands)}"
+        # one line, as every other error's (no usage block): what was wrong, and where help is
+        self.exit(2, f"{self.prog}: error: {cut(' '.join(cut(word) for word in message.split(' ')), self.MESSAGE_LIMIT)}"
+                     f"{self.suggestion(message)} (see '{self.prog} -h')\n")
 
     def suggestion(self, message: str) -> str:
         """"; did you mean ...?" for an unknown option (among this parser's) or an invalid
