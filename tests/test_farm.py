@@ -70,6 +70,23 @@ def test_farm_image_equals_the_one_process_render(cluster, start_actors, scenes,
     assert not np.allclose(sums[2], sums[3])
 
 
+def test_the_actors_splats_add_up_to_the_one_process_render(cluster, start_actors, backend):
+    """Bidirectional path tracing through the farm: each actor's sums hold the light tracing
+    splats of its own samples, wherever on the image they land, and the merged sums equal a
+    one-process render of the same samples (the splats' atomic additions in any order: float
+    rounding apart)."""
+    bdpt = [compile_scene(load_scene("cornell-box").with_settings(width=24, height=16, spp=24,
+                                                                   integrator="bdpt", max_depth=4))]
+    actors = start_actors(bdpt, cpu_actors=2)
+    job = farm.Job(0, bdpt[0].scene.camera, 24)
+    f = farm.Farm(cluster, actors, bdpt)
+    (s,), _ = f.render([job], None)
+    assert s[..., 3].min() == s[..., 3].max() == 24
+    assert f.lost == 0 and len(f.actors) == 2
+    ref = one_process(backend, bdpt[0], job.camera, 24)
+    np.testing.assert_allclose(s[..., :3], ref[..., :3], rtol=2e-5, atol=1e-6)
+
+
 def test_killing_an_actor_mid_render_keeps_the_exact_samples(cluster, start_actors, scenes, backend):
     actors = start_actors(scenes, cpu_actors=3)
     f = farm.Farm(cluster, actors, scenes)
