@@ -9,8 +9,8 @@ the settings, the materials, the environment) is uploaded again; a change of geo
 or meshes) compiles it anew."""
 
 import hashlib
-import threading
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -101,27 +101,24 @@ class DevicesOpening:
 
     def __init__(self, device="auto"):
         self.seconds = 0.0      # what the opening took, in its thread
-        self._outcome = {}
-        self._thread = threading.Thread(target=self._open, args=(device,), name="open-devices")
-        self._thread.start()
+        pool = ThreadPoolExecutor(1, thread_name_prefix="open-devices")
+        self._opened = pool.submit(self._open, device)
+        pool.shutdown(wait=False)       # the thread ends with its work
 
-    def _open(self, device):
+    def _open(self, device) -> list:
         from pathtrace.compiler.bvh import builder_for
         start = time.perf_counter()
         try:
-            self._outcome["backends"] = open_devices(device)
-            for backend in self._outcome["backends"]:
+            backends = open_devices(device)
+            for backend in backends:
                 builder_for(backend.queue)
-        except BaseException as e:      # handed to result()'s caller
-            self._outcome["error"] = e
-        self.seconds = time.perf_counter() - start
+            return backends
+        finally:
+            self.seconds = time.perf_counter() - start
 
     def result(self) -> list:
         """open_devices' backends, once opened, or its error."""
-        self._thread.join()
-        if "error" in self._outcome:
-            raise self._outcome["error"]
-        return self._outcome["backends"]
+        return self._opened.result()
 
 
 @dataclass

@@ -30,7 +30,7 @@ class PixelFilter:
     def check(self) -> "PixelFilter":
         """Raises ValueError("<field>: <problem>") for the first field out of range."""
         if self.name not in FILTERS:
-            raise ValueError(f"type: must be box, tent or gaussian, got {self.name!r}")
+            raise ValueError(f"type: must be {', '.join(FILTERS[:-1])} or {FILTERS[-1]}, got {self.name!r}")
         if self.name == "gaussian" and not MIN_WIDTH <= self.stddev <= MAX_RADIUS:
             raise ValueError(f"stddev: must be in [{MIN_WIDTH:g}, {MAX_RADIUS:g}] pixels, got {self.stddev:g}")
         if not MIN_WIDTH <= self.radius <= MAX_RADIUS:

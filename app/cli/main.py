@@ -34,9 +34,9 @@ class Parser(argparse.ArgumentParser):
         return super().format_help()
 
     def error(self, message):
-        commands = next((a.choices for a in self._actions if isinstance(a, argparse._SubParsersAction)), None)
-        if commands and message == "the following arguments are required: COMMAND":
-            message = f"give a command: {', '.join(commands)}"
+        commands = next((a for a in self._actions if isinstance(a, argparse._SubParsersAction)), None)
+        if commands and message == f"the following arguments are required: {commands.metavar}":
+            message = f"give a command: {', '.join(commands.choices)}"
         # one line, as every other error's (no usage block): what was wrong, and where help is
         self.exit(2, f"{self.prog}: error: {cut(' '.join(cut(word) for word in message.split(' ')), self.MESSAGE_LIMIT)}"
                      f"{self.suggestion(message)} (see '{self.prog} -h')\n")
