@@ -25,7 +25,17 @@
  * other as the path tracer does. There is no Russian roulette (pbrt-v4's BDPT has none): paths
  * end at depth BDPT. Light subpaths carry importance: BSDFs are evaluated as their adjoints
  * (arguments swapped, kernels/bsdf.cl's radiance convention), a delta refraction keeps the eta^2
- * that radiance loses, and shading normals are corrected as Veach's section 5.3 says. */
+ * that radiance loses, and shading normals are corrected as Veach's section 5.3 says.
+ *
+ * In a scene with participating media (MEDIA), both subpaths sample free flights in the media
+ * they cross, as the path tracer does, and a scattering inside a medium is a vertex like a
+ * surface's, its phase function in place of a BSDF, with no cosine; connections carry the
+ * transmittance along them, across null boundaries (kernels/volume.cl), and null surfaces are
+ * no vertices (Veach's volumetric path space; pbrt-v4's BDPT RandomWalk). A free flight's
+ * density is the mean of the three channels' (its hero channel drawn uniformly per flight: the
+ * balance heuristic over channels, per event), a scalar as the vertices' densities must be; the
+ * MIS weights leave the distances' densities out, as pbrt's do: the weights of a path's
+ * strategies still sum to 1. */
 
 /* A density per solid angle at `from` as a density per area at `to`, whose geometric normal is
  * n (0: a point, no cosine): pbrt's Vertex::ConvertDensity. */
@@ -39,28 +49,76 @@ float convert_density(float pdf, float3 from, float3 to, float3 n)
     return pdf * c / d2;
 }
 
-/* Veach's correction of the adjoint BSDF for shading normals (thesis, eq. 5.19; pbrt-v3's
- * CorrectShadingNormal): importance arriving along wo and leaving along wi. */
-float correct_shading_normal(const Surface *s, float3 wo, float3 wi)
+/* Whether vertex v is a scattering inside a medium. */
+int in_medium(const Vertex *v)
 {
+#ifdef MEDIA
+    return v->in_medium;
+#else
+    return 0;
+#endif
+}
+
+/* The phase function's mean cosine at medium vertex v. */
+float phase_g(const SceneData *sc, const Vertex *v)
+{
+#ifdef MEDIA
+    return sc->media[v->medium].sigma_s.w;
+#else
+    return 0.0f;
+#endif
+}
+
+/* |cos| of direction w at vertex v, with its shading normal; 1 inside a medium, whose phase
+ * function has no cosine. */
+float vertex_cos(const Vertex *v, float3 w)
+{
+    return in_medium(v) ? 1.0f : fabs(dot(w, v->s.ns));
+}
+
+/* The medium a ray leaving vertex v in direction w crosses first: beyond v's surface on w's
+ * side, or where v lies on no primitive (a medium vertex, the camera, a point light) the
+ * medium around it. -1 without media. */
+int medium_towards(const SceneData *sc, const Vertex *v, float3 w)
+{
+#ifdef MEDIA
+    return v->s.prim < 0 ? v->medium : medium_after(sc, &v->s, w, v->medium);
+#else
+    return -1;
+#endif
+}
+
+/* Veach's correction of the adjoint BSDF for shading normals (thesis, eq. 5.19; pbrt-v3's
+ * CorrectShadingNormal): importance arriving along wo and leaving along wi; none inside a
+ * medium. */
+float correct_shading_normal(const Vertex *v, float3 wo, float3 wi)
+{
+    if (in_medium(v))
+        return 1.0f;
+    const Surface *s = &v->s;
     float den = fabs(dot(wo, s->ng)) * fabs(dot(wi, s->ns));
     return den > 0.0f ? fabs(dot(wo, s->ns)) * fabs(dot(wi, s->ng)) / den : 0.0f;
 }
 
 /* The BSDF of surface vertex v for light arriving along world direction `from` and leaving
  * along `to` (radiance flows from `from` to `to`), without the cosine; 0 where the shading and
- * geometric normals disagree on either side (no light leaks, as next-event estimation tests). */
-float3 eval_scattering(const Vertex *v, float3 from, float3 to)
+ * geometric normals disagree on either side (no light leaks, as next-event estimation tests).
+ * A medium vertex's phase function, which is symmetric. */
+float3 eval_scattering(const SceneData *sc, const Vertex *v, float3 from, float3 to)
 {
+    if (in_medium(v))
+        return (float3)(eval_hg(phase_g(sc, v), to, from));
     float3 a = to_shading(&v->s, from), b = to_shading(&v->s, to);
     if (dot(from, v->s.ng) * a.z <= 0.0f || dot(to, v->s.ng) * b.z <= 0.0f)
         return (float3)(0.0f);
     return eval_bsdf(VERTEX_MATERIAL(v), b, a);
 }
 
-/* The density per solid angle with which surface vertex v, reached along `wo`, samples `wi`. */
-float pdf_scattering(const Vertex *v, float3 wo, float3 wi)
+/* The density per solid angle with which vertex v, reached along `wo`, samples `wi`. */
+float pdf_scattering(const SceneData *sc, const Vertex *v, float3 wo, float3 wi)
 {
+    if (in_medium(v))
+        return eval_hg(phase_g(sc, v), wo, wi);
     return pdf_bsdf(VERTEX_MATERIAL(v), to_shading(&v->s, wo), to_shading(&v->s, wi));
 }
 
@@ -106,21 +164,57 @@ float pdf_emitter_origin(const SceneData *sc, int prim, float3 y)
     return sc->light_pick[prim] / (4.0f * PI_F * r * r);
 }
 
-/* Traces subpath `path` on from its vertex k - 1 along the ray o + t d (leaving surface `self`),
- * whose direction was drawn with density pdf_dir per solid angle (0: a delta lobe), with
- * throughput beta, to at most max_vertices vertices; returns its vertex count. Each new
- * vertex stores its forward density, and the reverse density of the one before it. A camera
- * subpath (importance 0) that escapes adds the environment's radiance to *escaped, weighted
- * against light sampling as the path tracer weighs it; a light subpath (importance 1) scatters
- * by the adjoint BSDFs. */
+/* Traces subpath `path` on from its vertex k - 1 along the ray o + t d (leaving surface `self`,
+ * in `medium`), whose direction was drawn with density pdf_dir per solid angle (0: a delta
+ * lobe), with throughput beta, to at most max_vertices vertices; returns its vertex count.
+ * Each new vertex stores its forward density, and the reverse density of the one before it. A
+ * camera subpath (importance 0) that escapes adds the environment's radiance to *escaped,
+ * weighted against light sampling as the path tracer weighs it; a light subpath (importance 1)
+ * scatters by the adjoint BSDFs. */
 int extend_subpath(const SceneData *sc, const RenderParams *p, Vertex *path, int k, int max_vertices,
-                   float3 o, float3 d, float3 beta, float pdf_dir, PrimId self, const int importance,
+                   float3 o, float3 d, float3 beta, float pdf_dir, PrimId self, int medium, const int importance,
                    Rng *rng, int *rays, float3 *escaped)
 {
-    for (; k < max_vertices; ++k) {
-        Vertex *prev = &path[k - 1];
+    while (k < max_vertices) {
+        Vertex *prev = &path[k - 1], *v = &path[k];
         ++*rays;
         Hit hit = intersect_scene(sc, o, d, INFINITY, self);
+#ifdef MEDIA
+        v->medium = medium;
+        v->in_medium = 0;
+        if (medium >= 0) {
+            const global Medium *med = &sc->media[medium];
+            float4 u = next_uniform4(rng);
+            FreeFlight flight = sample_free_flight(med, hit.t, min((int)(3.0f * u.x), 2), u.y);
+            beta *= flight.weight / dot(flight.ratio, (float3)(1.0f / 3.0f));
+            if (flight.scattered) {
+                v->s.p = o + flight.t * d;
+                v->s.ng = v->s.ns = (float3)(0.0f);
+                v->s.offset = 0.0f;
+                v->s.prim = -1;
+#ifdef INSTANCES
+                v->s.instance = -1;
+#endif
+                v->in_medium = 1;
+                v->wo = -d;
+                v->beta = beta;
+                v->pdf_fwd = convert_density(pdf_dir, prev->s.p, v->s.p, v->s.ng);
+                v->pdf_rev = 0.0f;
+                v->delta = 0;
+                v->connectible = 1;
+                v->emits = 0;
+                if (++k >= max_vertices || all(beta == 0.0f))
+                    return k;
+                /* the phase function is sampled exactly (weight 1) and is symmetric: the
+                   reverse density is the forward one */
+                d = sample_hg(med->sigma_s.w, -d, u.zw, &pdf_dir);
+                prev->pdf_rev = convert_density(pdf_dir, v->s.p, prev->s.p, prev->s.ng);
+                o = v->s.p;
+                self = NO_PRIM;
+                continue;
+            }
+        }
+#endif
         if (hit.prim < 0) {
             if (!importance) {
                 /* the camera ray itself has no light-sampling rival (the path tracer's pdf_prev 0) */
@@ -133,12 +227,20 @@ int extend_subpath(const SceneData *sc, const RenderParams *p, Vertex *path, int
         }
         Surface s = surface_at(sc, &hit, o, d);
         int flags = sc->materials[sc->prim_material[hit.prim]].flags;
+#ifdef NULL_SURFACES
+        if (flags & MATERIAL_NULL) {
+            /* no vertex: the ray goes on through, into the medium beyond */
+            medium = medium_after(sc, &s, d, medium);
+            o = offset_ray_origin(s.p, s.offset, s.ng, d);
+            self = HIT_ID(hit);
+            continue;
+        }
+#endif
         int front = dot(s.ng, d) < 0.0f;
         /* one-sided, as the path tracer's surfaces (kernels/integrator.cl: trace_path) */
         int scatters = front || (flags & (MATERIAL_TWOSIDED | MATERIAL_TRANSMISSIVE));
         if (!front && (flags & MATERIAL_TWOSIDED))
             turn_round(&s);
-        Vertex *v = &path[k];
 #ifdef TEXTURES
         v->m = shade_material(sc, MATERIAL_ROW(sc, s, d), &s, -d);
 #else
@@ -171,7 +273,7 @@ int extend_subpath(const SceneData *sc, const RenderParams *p, Vertex *path, int
            (kernels/layered.cl) keeps this form, where f(wi, wo) / pdf would not */
         float3 weight = bs.weight;
         if (importance)
-            weight *= bs.eta * bs.eta * correct_shading_normal(&s, -d, wi);
+            weight *= bs.eta * bs.eta * correct_shading_normal(v, -d, wi);
         float pdf_rev = 0.0f;
         if (bs.lobe & LOBE_DELTA) {
             v->delta = 1;
@@ -187,6 +289,10 @@ int extend_subpath(const SceneData *sc, const RenderParams *p, Vertex *path, int
         o = offset_ray_origin(s.p, s.offset, s.ng, wi);
         d = wi;
         self = HIT_ID(hit);
+#ifdef MEDIA
+        medium = medium_after(sc, &s, wi, medium);
+#endif
+        ++k;
     }
     return k;
 }
@@ -219,6 +325,15 @@ int trace_light_subpath(const SceneData *sc, const RenderParams *p, Vertex *lt, 
     lt[0].delta = 0;
     lt[0].connectible = 0;
     lt[0].emits = 0;
+#ifdef MEDIA
+    /* e.n is on the side light leaves, which for an emitter of both sides may be its back */
+    lt[0].s.side = e.prim >= 0 && dot(e.n, emitter_normal(sc, e.prim, e.p)) < 0.0f ? -1.0f : 1.0f;
+    lt[0].in_medium = 0;
+    /* where the emitter bounds media, medium_towards reads its side; elsewhere the light is in
+       the medium around it */
+    lt[0].medium = e.prim >= 0 && sc->prim_media[e.prim] != NO_MEDIUM_CHANGE
+                   ? -1 : medium_at(sc, p->eye.xyz, p->camera_medium, e.p, rays);
+#endif
     *light_delta = e.delta;
     float c = e.prim >= 0 ? fabs(dot(e.n, e.d)) : 1.0f;
     float3 beta = e.le * (c / (origin * e.pdf_dir));
@@ -229,18 +344,26 @@ int trace_light_subpath(const SceneData *sc, const RenderParams *p, Vertex *lt, 
     PrimId self = e.prim >= 0 ? e.prim : NO_PRIM;
 #endif
     float3 unused = (float3)(0.0f);
-    return extend_subpath(sc, p, lt, 1, max_vertices, o, e.d, beta, e.pdf_dir, self, 1, rng, rays, &unused);
+    return extend_subpath(sc, p, lt, 1, max_vertices, o, e.d, beta, e.pdf_dir, self, medium_towards(sc, &lt[0], e.d),
+                          1, rng, rays, &unused);
 }
 
-/* Whether the segment from surface vertex a towards point b is blocked (b itself excluded,
- * stopping just short of it as light_visibility does). */
-int segment_blocked(const SceneData *sc, const Vertex *a, float3 b, int *rays)
+/* The fraction of light that crosses the segment from vertex a to point b: 0 or 1 by whether
+ * anything blocks it (b itself excluded, stopping just short of it as light_visibility does),
+ * or with media the transmittance along it. */
+float3 segment_transmittance(const SceneData *sc, const Vertex *a, float3 b, int *rays)
 {
     float3 w = b - a->s.p;
     float3 o = offset_ray_origin(a->s.p, a->s.offset, a->s.ng, w);
     float dist = norm(b - o);
+    float3 d = (b - o) / dist;
     ++*rays;
-    return occluded(sc, o, (b - o) / dist, dist * (1.0f - SHADOW_EPSILON), SURFACE_ID(a->s));
+#ifdef MEDIA
+    return transmittance_along(sc, o, d, dist * (1.0f - SHADOW_EPSILON), SURFACE_ID(a->s), medium_towards(sc, a, w),
+                               rays);
+#else
+    return occluded(sc, o, d, dist * (1.0f - SHADOW_EPSILON), SURFACE_ID(a->s)) ? (float3)(0.0f) : (float3)(1.0f);
+#endif
 }
 
 /* The reverse densities of bdpt_mis_weight (camera vertices t - 1 and t - 2, light vertices
@@ -262,27 +385,29 @@ float4 densities_to_light(const SceneData *sc, const global Light *l, float3 y, 
 {
     float3 wi = unit(y - pt->s.p);
     return (float4)(convert_density(pdf_emission_of_type(sc, l, n, -wi), y, pt->s.p, pt->s.ng),
-                    convert_density(pdf_scattering(pt, wi, pt->wo), pt->s.p, pm->s.p, pm->s.ng),
-                    convert_density(pdf_scattering(pt, pt->wo, wi), pt->s.p, y, n), 0.0f);
+                    convert_density(pdf_scattering(sc, pt, wi, pt->wo), pt->s.p, pm->s.p, pm->s.ng),
+                    convert_density(pdf_scattering(sc, pt, pt->wo, wi), pt->s.p, y, n), 0.0f);
 }
 
 /* s >= 2, t >= 2: light vertex qs, after qm, joined to camera vertex pt, after pm. */
-float4 densities_between(const Vertex *qs, const Vertex *qm, const Vertex *pt, const Vertex *pm)
+float4 densities_between(const SceneData *sc, const Vertex *qs, const Vertex *qm, const Vertex *pt,
+                         const Vertex *pm)
 {
     float3 w = unit(qs->s.p - pt->s.p);
-    return (float4)(convert_density(pdf_scattering(qs, qs->wo, -w), qs->s.p, pt->s.p, pt->s.ng),
-                    convert_density(pdf_scattering(pt, w, pt->wo), pt->s.p, pm->s.p, pm->s.ng),
-                    convert_density(pdf_scattering(pt, pt->wo, w), pt->s.p, qs->s.p, qs->s.ng),
-                    convert_density(pdf_scattering(qs, -w, qs->wo), qs->s.p, qm->s.p, qm->s.ng));
+    return (float4)(convert_density(pdf_scattering(sc, qs, qs->wo, -w), qs->s.p, pt->s.p, pt->s.ng),
+                    convert_density(pdf_scattering(sc, pt, w, pt->wo), pt->s.p, pm->s.p, pm->s.ng),
+                    convert_density(pdf_scattering(sc, pt, pt->wo, w), pt->s.p, qs->s.p, qs->s.ng),
+                    convert_density(pdf_scattering(sc, qs, -w, qs->wo), qs->s.p, qm->s.p, qm->s.ng));
 }
 
 /* t = 1: light vertex qs, after qm, joined to the lens at point `lens`. */
-float4 densities_to_camera(const RenderParams *p, const Vertex *qs, const Vertex *qm, float3 lens)
+float4 densities_to_camera(const SceneData *sc, const RenderParams *p, const Vertex *qs, const Vertex *qm,
+                           float3 lens)
 {
     float3 w = unit(lens - qs->s.p);
     return (float4)(0.0f, 0.0f,
                     convert_density(pdf_camera_direction(p, -w), lens, qs->s.p, qs->s.ng),
-                    convert_density(pdf_scattering(qs, w, qs->wo), qs->s.p, qm->s.p, qm->s.ng));
+                    convert_density(pdf_scattering(sc, qs, w, qs->wo), qs->s.p, qm->s.p, qm->s.ng));
 }
 
 /* Strategy s = 0: camera vertex t - 1 (t >= 2) lies on an emitter; the radiance it sends back
@@ -308,13 +433,13 @@ float3 connect_light_sample(const SceneData *sc, const RenderParams *p, const Ve
     LightSample ls = sample_light(sc, p, pt->s.p, pt->s.ns, next_bits4(rng), rng);
     if (!(ls.pdf > 0.0f))
         return (float3)(0.0f);
-    float3 f = eval_scattering(pt, ls.wi, pt->wo);
-    float3 c = pt->beta * f * fabs(dot(ls.wi, pt->s.ns)) * ls.le / ls.pdf;
+    float3 f = eval_scattering(sc, pt, ls.wi, pt->wo);
+    float3 c = pt->beta * f * vertex_cos(pt, ls.wi) * ls.le / ls.pdf;
     if (all(c == 0.0f))
         return (float3)(0.0f);
     float w;
     if (ls.flags & LIGHT_AT_INFINITY) {
-        w = (ls.flags & LIGHT_DELTA) ? 1.0f : mis_weight(ls.pdf, pdf_scattering(pt, pt->wo, ls.wi));
+        w = (ls.flags & LIGHT_DELTA) ? 1.0f : mis_weight(ls.pdf, pdf_scattering(sc, pt, pt->wo, ls.wi));
     } else {
         const global Light *l = &sc->lights[ls.light];
         int delta = (ls.flags & LIGHT_DELTA) != 0;
@@ -323,7 +448,7 @@ float3 connect_light_sample(const SceneData *sc, const RenderParams *p, const Ve
         w = bdpt_mis_weight(lt, 1, cam, t, densities_to_light(sc, l, ls.y, n, pt, pm), origin, delta);
     }
     float3 o = offset_ray_origin(pt->s.p, pt->s.offset, pt->s.ng, ls.wi);
-    return c * w * light_visibility(sc, o, &ls, SURFACE_ID(pt->s), -1, rays);
+    return c * w * light_visibility(sc, o, &ls, SURFACE_ID(pt->s), medium_towards(sc, pt, ls.wi), rays);
 }
 
 /* Strategy s >= 2, t >= 2: light vertex s - 1 joined to camera vertex t - 1, weighted. */
@@ -336,14 +461,14 @@ float3 connect_vertices(const SceneData *sc, const Vertex *lt, int s, const Vert
         return (float3)(0.0f);
     w *= rsqrt(d2);
     /* radiance flows from qs's past through qs, along -w to pt, and on to pt's past */
-    float3 f_q = eval_scattering(qs, qs->wo, -w) * correct_shading_normal(&qs->s, qs->wo, -w);
-    float3 f_p = eval_scattering(pt, w, pt->wo);
-    float g = fabs(dot(w, qs->s.ns)) * fabs(dot(w, pt->s.ns)) / d2;
+    float3 f_q = eval_scattering(sc, qs, qs->wo, -w) * correct_shading_normal(qs, qs->wo, -w);
+    float3 f_p = eval_scattering(sc, pt, w, pt->wo);
+    float g = vertex_cos(qs, w) * vertex_cos(pt, w) / d2;
     float3 c = qs->beta * f_q * f_p * pt->beta * g;
     if (all(c == 0.0f))
         return (float3)(0.0f);
-    c *= bdpt_mis_weight(lt, s, cam, t, densities_between(qs, qm, pt, pm), 0.0f, 0);
-    return segment_blocked(sc, pt, qs->s.p, rays) ? (float3)(0.0f) : c;
+    c *= bdpt_mis_weight(lt, s, cam, t, densities_between(sc, qs, qm, pt, pm), 0.0f, 0);
+    return c * segment_transmittance(sc, pt, qs->s.p, rays);
 }
 
 /* Adds v to *a by compare-and-swap on its bits: OpenCL 1.2 has no atomic float add. */
@@ -389,14 +514,15 @@ void connect_camera(const SceneData *sc, const RenderParams *p, const Vertex *lt
     if (!sample_importance(p, qs->s.p, next_uniform4(rng).xy, &ci))
         return;
     float3 w = unit(ci.lens - qs->s.p);           /* towards the lens */
-    float3 f = eval_scattering(qs, qs->wo, w) * correct_shading_normal(&qs->s, qs->wo, w);
-    float3 c = qs->beta * f * (fabs(dot(w, qs->s.ns)) * ci.weight);
+    float3 f = eval_scattering(sc, qs, qs->wo, w) * correct_shading_normal(qs, qs->wo, w);
+    float3 c = qs->beta * f * (vertex_cos(qs, w) * ci.weight);
     if (all(c == 0.0f) || !all(isfinite(c)))
         return;
 #ifndef LIGHT_TRACING
-    c *= bdpt_mis_weight(lt, s, cam, 1, densities_to_camera(p, qs, qm, ci.lens), 0.0f, 0);
+    c *= bdpt_mis_weight(lt, s, cam, 1, densities_to_camera(sc, p, qs, qm, ci.lens), 0.0f, 0);
 #endif
-    if (!segment_blocked(sc, qs, ci.lens, rays))
+    c *= segment_transmittance(sc, qs, ci.lens, rays);
+    if (any(c != 0.0f))
         splat(film, p, ci.at, c);
 }
 
@@ -418,7 +544,9 @@ void connect_light_to_camera(const SceneData *sc, const RenderParams *p, const V
         return;
     /* Le cos_l / pdf_origin, times the lens's weight as in connect_camera */
     float3 c = light->beta * (cos_l * ci.weight / light->pdf_fwd);
-    if (all(isfinite(c)) && !segment_blocked(sc, light, ci.lens, rays))
+    if (all(isfinite(c)))
+        c *= segment_transmittance(sc, light, ci.lens, rays);
+    if (all(isfinite(c)) && any(c != 0.0f))
         splat(film, p, ci.at, c);
 }
 
@@ -453,9 +581,15 @@ float3 sample_bidirectional(const SceneData *sc, const RenderParams *p, int x, i
     cam[0].delta = 0;
     cam[0].connectible = 0;
     cam[0].emits = 0;
+    cam[0].s.prim = -1;
+#ifdef MEDIA
+    cam[0].medium = p->camera_medium;
+    cam[0].in_medium = 0;
+#endif
     float3 l = (float3)(0.0f);
     int nc = extend_subpath(sc, p, cam, 1, BDPT_CAMERA_VERTICES, ray.o, ray.d, (float3)(1.0f),
-                            pdf_camera_direction(p, ray.d), NO_PRIM, 0, rng, rays, &l);
+                            pdf_camera_direction(p, ray.d), NO_PRIM, medium_towards(sc, &cam[0], ray.d), 0, rng,
+                            rays, &l);
     int light_delta = 0;
     int nl = trace_light_subpath(sc, p, lt, BDPT_LIGHT_VERTICES, rng, rays, &light_delta);
     sum_mis_ratios(cam, nc, 1, 0);

@@ -6,7 +6,8 @@
 #define BDPT_LIGHT_VERTICES BDPT
 
 /* One vertex of a subpath. The camera and a light are vertices of their own: s.p is their
- * point and s.ng an area light's normal (0 for the camera and a point). */
+ * point and s.ng an area light's normal (0 for the camera and a point). A scattering inside a
+ * medium is a vertex with no surface: s.ng and s.ns 0, s.prim -1. */
 typedef struct {
     Surface s;            /* a surface vertex's surface, its shading frame complete */
 #ifdef TEXTURES
@@ -22,6 +23,11 @@ typedef struct {
     int connectible;      /* a surface that scatters light into more than a delta lobe */
     int emits;            /* a surface that emits towards wo */
     float mis_sum;        /* the MIS sum of the vertices up to it that no connection changes (sum_mis_ratios) */
+#ifdef MEDIA
+    int medium;           /* the medium around it: a medium vertex's own, the camera's or a light's,
+                             or the one a surface vertex was reached through (-1: none) */
+    int in_medium;        /* a scattering inside that medium, by its phase function */
+#endif
 } Vertex;
 
 #ifdef TEXTURES

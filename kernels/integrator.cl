@@ -12,8 +12,6 @@
  * closed scene of albedo 1 could reach it. */
 #define UNLIMITED_DEPTH 1024
 
-#define SHADOW_EPSILON 1e-4f
-
 /* How paths end: the build option RUSSIAN_ROULETTE (app/device/features.py) picks one rule per
  * program, so that the others cost no registers. */
 #define RR_OFF 0

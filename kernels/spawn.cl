@@ -4,6 +4,10 @@
  * meet the surface it leaves, whatever the shape (concave meshes, overlapping shapes, refraction
  * later), with no scene-dependent epsilon. */
 
+/* A ray towards a point stops this fraction of its length short of it (pbrt-v4's ShadowEpsilon,
+ * in SpawnRayTo), so that it does not find the surface it is aimed at. */
+#define SHADOW_EPSILON 1e-4f
+
 /* gamma(n) of pbrt section 6.8.1: a bound on the relative error of n float operations. */
 #define MACHINE_EPSILON 0x1.0p-24f
 float gamma_bound(int n)

@@ -29,6 +29,19 @@ int medium_after(const SceneData *sc, const Surface *s, float3 w, int current)
     return (dot(w, s->ng) * s->side > 0.0f ? ((uint)media >> 16) : (media & 0xffff)) - 1;
 }
 
+/* Moves the ray *o + t d, which ends at *t_max and hit `hit`, on through the surface it hit:
+ * its origin just beyond the surface, *t_max what is left of it, *self the surface; returns
+ * the medium it is in beyond (`medium` where the surface bounds none). */
+int cross_surface(const SceneData *sc, const Hit *hit, float3 *o, float3 d, float *t_max, PrimId *self, int medium)
+{
+    Surface s = surface_at(sc, hit, *o, d);
+    float3 next = offset_ray_origin(s.p, s.offset, s.ng, d);
+    *t_max -= dot(next - *o, d);
+    *o = next;
+    *self = HIT_ID(*hit);
+    return medium_after(sc, &s, d, medium);
+}
+
 /* The fraction of radiance that reaches o from t_max away along unit direction d, the ray
  * starting in `medium` and leaving primitive `self`: the product of the media's
  * transmittances, each exact for a homogeneous medium, across null boundaries; 0 where a
@@ -53,14 +66,31 @@ float3 transmittance_along(const SceneData *sc, float3 o, float3 d, float t_max,
             return tr;
         if (!(sc->materials[sc->prim_material[hit.prim]].flags & MATERIAL_NULL) || all(tr == 0.0f))
             return (float3)(0.0f);
-        Surface s = surface_at(sc, &hit, o, d);
-        medium = medium_after(sc, &s, d, medium);
-        float3 next = offset_ray_origin(s.p, s.offset, s.ng, d);
-        t_max -= dot(next - o, d);
-        o = next;
-        self = HIT_ID(hit);
+        medium = cross_surface(sc, &hit, &o, d, &t_max, &self, medium);
         ++*rays;
     }
     return (float3)(0.0f);
 #endif
+}
+
+/* The medium around point y (a light's): the one a ray from `eye`, starting in `medium` (the
+ * camera's), is in on reaching it, changing medium at every primitive that bounds media on the
+ * way, surfaces or not (a path from the camera to y would meet the same boundaries). pbrt-v4
+ * gives a light the medium its file declares it in and Mitsuba 3 a point light's nested medium;
+ * this finds the medium the boundaries say y is in, which both agree with wherever a file's
+ * media are consistent. -1 past MAX_NULL_CROSSINGS boundaries. */
+int medium_at(const SceneData *sc, float3 eye, int medium, float3 y, int *rays)
+{
+    float t_max = norm(y - eye);
+    float3 d = (y - eye) / t_max, o = eye;
+    t_max *= 1.0f - SHADOW_EPSILON;
+    PrimId self = NO_PRIM;
+    for (int crossing = 0; crossing < MAX_NULL_CROSSINGS; ++crossing) {
+        ++*rays;
+        Hit hit = intersect_scene(sc, o, d, t_max, self);
+        if (hit.prim < 0)
+            return medium;
+        medium = cross_surface(sc, &hit, &o, d, &t_max, &self, medium);
+    }
+    return -1;
 }

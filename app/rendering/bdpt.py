@@ -29,12 +29,9 @@ def depth(max_depth: int) -> int:
 def check(name: str, features, integrator: str, lights):
     """Raises a UserError, one line, for what `integrator` (bdpt or ptracer) cannot render yet
     in a scene (its name) whose program needs `features` (app/device/features.py) and whose light table
-    is `lights`: participating media and null surfaces (no volumetric BDPT), a camera without
-    importance (app/cameras/: Camera.importance); for light tracing alone, light from the
-    environment or a directional light, which start no light subpath (app/lights/registry.py: EMITTERS)."""
-    if features.media:
-        raise UserError(f"{name}: integrator {integrator}: participating media are not supported yet "
-                        "(render it with --integrator path)")
+    is `lights`: a camera without importance (app/cameras/: Camera.importance); for light tracing
+    alone, light from the environment or a directional light, which start no light subpath
+    (app/lights/registry.py: EMITTERS)."""
     if not supports_importance(features.camera):
         raise UserError(f"{name}: integrator {integrator}: the {features.camera} camera has no importance to join "
                         "light subpaths to yet (render it with --integrator path)")
