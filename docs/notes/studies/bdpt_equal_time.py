@@ -1,8 +1,11 @@
-"""Equal-time path tracing against BDPT at half the references' resolution, against Tungsten's
-renders (docs/notes/performance-2026-11.md, 2026-11-29): python docs/notes/studies/bdpt_equal_time.py
-SECONDS OUT_FOLDER SCENE... with each SCENE's folder unpacked from ../shared/scenes into
-$BITTERLI (SCENE/pbrt/scene-v4.pbrt and TungstenRender.exr); prints samples, time per sample,
-means and the mean relative error of 8x8-pixel blocks, and writes reference | path | bdpt."""
+"""Equal-time path tracing against BDPT, against reference renders (docs/notes/performance-2026-11.md,
+2026-11-29 and 2026-11-30): python docs/notes/studies/bdpt_equal_time.py SECONDS OUT_FOLDER SCENE...
+where a SCENE is a name, whose folder is unpacked from ../shared/scenes into $BITTERLI
+(SCENE/pbrt/scene-v4.pbrt and Tungsten's TungstenRender.exr, rendered at half its resolution), or
+FILE=REFERENCE, a scene file and a reference EXR rendered at the reference's own resolution
+(volumetric-caustic's pbrt-v4 BDPT render in ../shared/references/pbrt-v4/bitterli); prints
+samples, time per sample, means and the mean relative error of 8x8-pixel blocks, and writes
+reference | path | bdpt."""
 import os
 import sys
 import time
@@ -18,16 +21,21 @@ from pathtrace.scene import load_scene
 be = choose_device("gpu")
 budget = float(sys.argv[1])
 out = sys.argv[2]
-for name in sys.argv[3:]:
-    folder = f"{os.environ.get('BITTERLI', '.')}/{name}/pbrt"
-    sc = load_scene(f"{folder}/scene-v4.pbrt")
-    with OpenEXR.File(f"{folder}/TungstenRender.exr") as f:
+for arg in sys.argv[3:]:
+    if "=" in arg:
+        scene_file, reference = arg.split("=")
+        name, shrink = os.path.basename(scene_file).split(".")[0], 1
+    else:
+        folder = f"{os.environ.get('BITTERLI', '.')}/{arg}/pbrt"
+        scene_file, reference, name, shrink = f"{folder}/scene-v4.pbrt", f"{folder}/TungstenRender.exr", arg, 2
+    sc = load_scene(scene_file)
+    with OpenEXR.File(reference) as f:
         ch = f.channels()
         ref = ch["RGB"].pixels if "RGB" in ch else np.stack([ch[c].pixels for c in "RGB"], -1)
     # Tungsten's water-caustic holds NaN and negative pixels: taken as black
-    ref = np.clip(np.nan_to_num(np.asarray(ref, np.float64), nan=0.0, posinf=0.0), 0, None)
-    H, W = ref.shape[0] // 2, ref.shape[1] // 2
-    ref = ref.reshape(H, 2, W, 2, 3).mean((1, 3))
+    ref = np.clip(np.nan_to_num(np.asarray(ref, np.float64)[..., :3], nan=0.0, posinf=0.0), 0, None)
+    H, W = ref.shape[0] // shrink, ref.shape[1] // shrink
+    ref = ref.reshape(H, shrink, W, shrink, 3).mean((1, 3))
     imgs = [ref]
     print(name, W, H, sc.settings.max_depth, flush=True)
     for integ in ("path", "bdpt"):
@@ -37,7 +45,7 @@ for name in sys.argv[3:]:
         built = time.perf_counter() - t0
         t = time.perf_counter(); spp = 1
         while time.perf_counter() - t < budget:
-            r.add_samples(spp); r.finish(); spp = min(spp * 2, 16)
+            r.add_samples(spp); r.finish(); spp = min(spp * 2, 64)
         sec = time.perf_counter() - t
         m = r.mean()
         b = lambda im: im.reshape(H // 8, 8, W // 8, 8, 3).mean((1, 3)).mean(-1)
