@@ -1,6 +1,6 @@
-/* A vertex of a bidirectional path tracer's subpath (kernels/bdpt.cl), and the weights of
- * multiple importance sampling computed from the densities vertices store (Veach 1997, section
- * 10.2; pbrt-v4's BDPTIntegrator MISWeight). */
+/* A vertex of a bidirectional path tracer's subpath (kernels/bdpt.cl): how light scatters there
+ * and with what density, and the weights of multiple importance sampling computed from the
+ * densities vertices store (Veach 1997, section 10.2; pbrt-v4's BDPTIntegrator MISWeight). */
 
 #define BDPT_CAMERA_VERTICES (BDPT + 1)
 #define BDPT_LIGHT_VERTICES BDPT
@@ -35,6 +35,91 @@ typedef struct {
 #else
 #define VERTEX_MATERIAL(v) ((v)->m)
 #endif
+
+/* A density per solid angle at `from` as a density per area at `to`, whose geometric normal is
+ * n (0: a point, no cosine): pbrt's Vertex::ConvertDensity. */
+float convert_density(float pdf, float3 from, float3 to, float3 n)
+{
+    float3 w = to - from;
+    float d2 = dot(w, w);
+    if (!(d2 > 0.0f))
+        return 0.0f;
+    float c = any(n != 0.0f) ? fabs(dot(n, w)) * rsqrt(d2) : 1.0f;
+    return pdf * c / d2;
+}
+
+/* Whether vertex v is a scattering inside a medium. */
+int in_medium(const Vertex *v)
+{
+#ifdef MEDIA
+    return v->in_medium;
+#else
+    return 0;
+#endif
+}
+
+/* The phase function's mean cosine at medium vertex v. */
+float phase_g(const SceneData *sc, const Vertex *v)
+{
+#ifdef MEDIA
+    return sc->media[v->medium].sigma_s.w;
+#else
+    return 0.0f;
+#endif
+}
+
+/* |cos| of direction w at vertex v, with its shading normal; 1 inside a medium, whose phase
+ * function has no cosine. */
+float vertex_cos(const Vertex *v, float3 w)
+{
+    return in_medium(v) ? 1.0f : fabs(dot(w, v->s.ns));
+}
+
+/* The medium a ray leaving vertex v in direction w crosses first: beyond v's surface on w's
+ * side, or where v lies on no primitive (a medium vertex, the camera, a point light) the
+ * medium around it. -1 without media. */
+int medium_towards(const SceneData *sc, const Vertex *v, float3 w)
+{
+#ifdef MEDIA
+    return v->s.prim < 0 ? v->medium : medium_after(sc, &v->s, w, v->medium);
+#else
+    return -1;
+#endif
+}
+
+/* Veach's correction of the adjoint BSDF for shading normals (thesis, eq. 5.19; pbrt-v3's
+ * CorrectShadingNormal): importance arriving along wo and leaving along wi; none inside a
+ * medium. */
+float correct_shading_normal(const Vertex *v, float3 wo, float3 wi)
+{
+    if (in_medium(v))
+        return 1.0f;
+    const Surface *s = &v->s;
+    float den = fabs(dot(wo, s->ng)) * fabs(dot(wi, s->ns));
+    return den > 0.0f ? fabs(dot(wo, s->ns)) * fabs(dot(wi, s->ng)) / den : 0.0f;
+}
+
+/* The BSDF of surface vertex v for light arriving along world direction `from` and leaving
+ * along `to` (radiance flows from `from` to `to`), without the cosine; 0 where the shading and
+ * geometric normals disagree on either side (no light leaks, as next-event estimation tests).
+ * A medium vertex's phase function, which is symmetric. */
+float3 eval_scattering(const SceneData *sc, const Vertex *v, float3 from, float3 to)
+{
+    if (in_medium(v))
+        return (float3)(eval_hg(phase_g(sc, v), to, from));
+    float3 a = to_shading(&v->s, from), b = to_shading(&v->s, to);
+    if (dot(from, v->s.ng) * a.z <= 0.0f || dot(to, v->s.ng) * b.z <= 0.0f)
+        return (float3)(0.0f);
+    return eval_bsdf(VERTEX_MATERIAL(v), b, a);
+}
+
+/* The density per solid angle with which vertex v, reached along `wo`, samples `wi`. */
+float pdf_scattering(const SceneData *sc, const Vertex *v, float3 wo, float3 wi)
+{
+    if (in_medium(v))
+        return eval_hg(phase_g(sc, v), wo, wi);
+    return pdf_bsdf(VERTEX_MATERIAL(v), to_shading(&v->s, wo), to_shading(&v->s, wi));
+}
 
 /* The ratio of two strategies' densities as pbrt's MISWeight takes it, a delta's 0 read as 1,
  * squared for the power heuristic. */

@@ -579,6 +579,36 @@ def test_the_speed_slider_turns_the_path_queue_on(viewer):
         frames(v, 1)
 
 
+def test_the_panel_switches_the_integrator_once_its_kernels_are_built(viewer):
+    """The panel's "integrator" asks for BDPT: its kernels build in the background while the path
+    tracer's image goes on (the window says so at its foot), then it renders with BDPT, and back;
+    a camera that BDPT cannot join to is one line in the panel, the path tracer rendering on."""
+    v = viewer
+    settle(v)
+    assert "integrator" in v.widgets
+    v.request_integrator("bdpt")
+    frames(v, 1)
+    notices = set()
+    frames_until(v, lambda: notices.add(v.notice) or v.renderer.settings.integrator == "bdpt", timeout=300)
+    assert v.renderer.settings.integrator == "bdpt" and v.message == "rendering with bdpt", v.message
+    assert any("building the bdpt kernels" in n for n in notices) or v.renderer.backend.programs.built(
+        v.renderer._features("bdpt")) is not None, notices
+    resets = v.renderer.resets
+    frames_until(v, lambda: v.renderer.samples >= 2, timeout=60)
+    assert v.renderer.samples >= 2 and v.renderer.resets == resets
+    assert np.isfinite(v.renderer.mean()).all()
+    v.request_integrator("path")
+    frames(v, 2)
+    assert v.renderer.settings.integrator == "path"
+    camera = v.renderer.camera
+    v.renderer.set_camera(camera.as_type("orthographic"))
+    v.request_integrator("bdpt")
+    frames(v, 2)
+    assert v.renderer.settings.integrator == "path" and v.requested_integrator is None
+    assert v.error and "the orthographic camera has no importance" in v.message, v.message
+    v.renderer.set_camera(camera)
+
+
 def test_movement_speed_is_at_the_scenes_scale(backend):
     """A quarter of the eye's distance to its look-at point a second, at most a tenth of the
     bounds' diagonal: the demo (a 1000-unit ground sphere) moves as before, a small scene seen

@@ -7,8 +7,8 @@ from dataclasses import replace
 import numpy as np
 import pyopencl as cl
 
-from pathtrace.rendering import bdpt
 from pathtrace.rendering.path_sort import SORT_BUFFERS, PathSort
+from pathtrace.rendering.program_choice import ProgramChoice
 from pathtrace.rendering.queue_plans import QueuePlans
 from pathtrace.cameras import KERNELS as CAMERA_KERNELS, Camera
 from pathtrace.compiler.compiled import SCENE_BUFFERS, CompiledScene, compile_scene
@@ -78,7 +78,7 @@ def variance_of(sum: np.ndarray, sum_sq: np.ndarray, samples: int) -> np.ndarray
     return np.maximum(sum_sq[..., :3] / n - m * m, 0.0).astype(np.float32)
 
 
-class Renderer(QueuePlans, PathSort):
+class Renderer(ProgramChoice, QueuePlans, PathSort):
     def __init__(self, backend: Backend, scene, width: int = None, height: int = None, progress=None):
         """scene: a CompiledScene, or a Scene to compile (on this device, calling progress(fraction)
         as its BVH build goes)."""
@@ -143,89 +143,6 @@ class Renderer(QueuePlans, PathSort):
         self._select_program()
         self._upload_materials()
         self.reset()
-
-    def _select_program(self):
-        """The kernels for the scene: its own, specialised to its shapes, materials and settings
-        (pathtrace.device.features.Features), or the backend's generic program, by the backend's mode
-        (pathtrace.device.programs). With "auto", the scene's own program, tuned, is built in the
-        background, and add_samples switches to it once it is there, the average going on;
-        until then the generic program renders, or where that is not built (NVIDIA's driver
-        takes 46 s over it: `pathtrace devices --check` builds it) the scene's own program
-        untuned, one build. The background build starts once the first pass is queued, so that
-        it takes no core from the first image, and a render of one pass builds nothing more
-        (switch_when_built)."""
-        features = replace(self.compiled.features(self.settings, self.camera),
-                           traversal_stats=self.traversal_stats, divergence_stats=self.divergence_stats,
-                           path_queue=self.queue_plan()[0], path_sort=self.sorts_queue())
-        mode = self.backend.mode
-        self._awaited, self._build_due = None, False
-        if self.settings.integrator != "path":
-            # the generic program has no bidirectional code (a path tracer's scene compiles none)
-            bdpt.check(self.scene.name, features, self.settings.integrator, self.compiled.lights)
-            features = replace(features, bdpt=bdpt.depth(self.settings.max_depth),
-                               light_tracing=self.settings.integrator == "ptracer")
-            self._use_program(self.backend.program_for(features), generic=False)
-            return
-        if mode == "specialised" or self.traversal_stats or self.divergence_stats:  # the generic one counts rays
-            self._use_program(self.backend.program_for(features), generic=False)
-        elif mode == "generic":
-            self._use_program(self.backend.generic(features.media), generic=True)
-        else:
-            own = self.backend.programs.built(features)
-            if own is not None:
-                self._use_program(own, generic=False)
-                return
-            generic = self.backend.built_generic(features.media)
-            self._use_program(generic if generic is not None else self.backend.program_for(features, tuned=False),
-                              generic=generic is not None)
-            self._awaited = features
-
-    def _use_program(self, program: cl.Program, generic: bool):
-        if program is self.program:
-            return
-        self.program = program
-        self.uses_generic_program = generic     # (pathtrace.device.programs)
-        self.kernels = {False: cl.Kernel(program, "render"), True: cl.Kernel(program, "render_nee")}
-        # the queue's kernels are in a scene's program built with a queue depth, never in the
-        # generic program, which renders without the queue until the scene's own is built
-        queue = self.queue_plan()[0] and not generic
-        self.continue_kernels = {False: cl.Kernel(program, "continue_paths"),
-                                 True: cl.Kernel(program, "continue_paths_nee")} if queue else None
-        self.add_queued = cl.Kernel(program, "add_queued_paths") if queue else None
-        sort = queue and self.sorts_queue()
-        self.sort_kernels = (cl.Kernel(program, "sort_offsets"), cl.Kernel(program, "sort_paths")) if sort else None
-        self.aov_kernel = cl.Kernel(program, "render_aovs")
-        bidirectional = self.settings.integrator != "path"
-        self.bdpt_kernels = (cl.Kernel(program, "render_bdpt"), cl.Kernel(program, "add_splats")) if bidirectional else None
-
-    def switch_when_built(self, wait: bool = False) -> bool:
-        """Switches to the scene's own tuned program if it is built (with `wait`, once it is);
-        the average goes on. Its build starts at the first call after a whole pass is queued.
-        Whether the scene's own program renders now."""
-        if self._awaited is not None and (wait or self._build_due):
-            program = self.backend.program_for(self._awaited) if wait else self.backend.ready_program(self._awaited)
-            if program is not None:
-                self._awaited = None
-                self._use_program(program, generic=False)
-            elif self.backend.programs.failed(self._awaited):    # said once, by the backend
-                self._awaited = None
-        return not self.uses_generic_program
-
-    def describe_programs(self) -> str:
-        """Which program drew the samples since the last reset, in words, where the generic
-        program drew any (else "")."""
-        if not self.generic_samples:
-            return ""
-        if self.generic_samples == self.samples:
-            return (f"{self.samples} spp from the generic kernels"
-                    + (" (the scene's own were still building)"
-                       if self._awaited is not None and self.backend.programs.under_way(self._awaited) else ""))
-        return f"the first {self.generic_samples} of {self.samples} spp from the generic kernels, the rest from the scene's own"
-
-    @property
-    def building_program(self) -> bool:
-        """Whether the scene's own program is being built, to switch to (switch_when_built)."""
-        return self._awaited is not None
 
     def set_environment(self, environment: Environment):
         self.scene.environment = environment

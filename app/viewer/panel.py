@@ -17,7 +17,7 @@ from pathtrace.compiler.compiled import MAX_RADIANCE
 from pathtrace.materials import BSDFS
 from pathtrace.materials.bsdf import constant_of
 from pathtrace.scene.builtin import BUILTIN_SCENES
-from pathtrace.rendering.choices import RUSSIAN_ROULETTE, TONEMAPS
+from pathtrace.rendering.choices import INTEGRATORS, RUSSIAN_ROULETTE, TONEMAPS
 from pathtrace.textures import Texture
 
 MARGIN = 10                 # pixels between the panel and the window's edges
@@ -224,6 +224,11 @@ def draw_panel(v):
         if changed:
             env.rotation = value % 360.0
             r.reset()
+        current = INTEGRATORS.index(v.requested_integrator or s.integrator)
+        changed, current = imgui.combo("integrator", current, list(INTEGRATORS))
+        layout.check("integrator")
+        if changed:
+            v.request_integrator(INTEGRATORS[current])
 
     if layout.header("Camera", imgui.TreeNodeFlags_.default_open):
         _, v.controls.speed = imgui.slider_float("speed", v.controls.speed, 0.01, 1000.0, "%.3g",

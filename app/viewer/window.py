@@ -24,6 +24,7 @@ from pathtrace.rendering.renderer import Renderer
 from pathtrace.resources import resource_dir
 from pathtrace.viewer.controls import FlyControls, pick_ray
 from pathtrace.viewer.denoising import DRAFT_SCALE, Denoising
+from pathtrace.viewer.integrators import IntegratorSwitch
 from pathtrace.viewer.opening import SceneOpening
 from pathtrace.viewer.screenshots import Screenshots
 from pathtrace.viewer.panel import MARGIN, draw_help, draw_notice, draw_panel
@@ -94,7 +95,7 @@ def preview_scale(seconds_per_pixel: float, width: int, height: int) -> int:
                    MAX_PREVIEW_SCALE))
 
 
-class Viewer(SceneOpening, Denoising, Screenshots):
+class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
     def __init__(self, backend, scene, screenshot_dir="screenshots", window_size=None):
         """Renders `scene` at its settings' size (pathtrace view --size sets it), in a window of
         window_size (default: that size, fitted to the screen).
@@ -424,6 +425,7 @@ class Viewer(SceneOpening, Denoising, Screenshots):
             name, self.requested_scene = self.requested_scene, None
             self.load_scene(name)
             self.redraw_soon()
+        self.switch_integrator()
         events = self._events
         glfw.poll_events()
         now = time.perf_counter()
@@ -466,9 +468,9 @@ class Viewer(SceneOpening, Denoising, Screenshots):
             self.panel_rect, self.panel_open = (0, 0, 0, 0), False
         if self.texture is None:
             draw_notice(self, f"rendering the first pass of {self.renderer.scene.name}")
-        elif self.renderer.building_program:
-            draw_notice(self, f"building the kernels of {self.renderer.scene.name} in the background",
-                        bottom=True)
+        elif self.renderer.building_program or self.requested_integrator:
+            kernels = f"the {self.requested_integrator} kernels" if self.requested_integrator else "the kernels"
+            draw_notice(self, f"building {kernels} of {self.renderer.scene.name} in the background", bottom=True)
         else:
             self.notice = ""
         if self.show_help:

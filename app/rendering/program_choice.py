@@ -1,0 +1,117 @@
+"""Which kernels render (the scene's own program, the generic one, or BDPT's) and the switch
+from one to another: a part of the Renderer (app/rendering/renderer.py), which is one."""
+
+from dataclasses import replace
+
+import pyopencl as cl
+
+from pathtrace.device.features import Features
+from pathtrace.errors import UserError
+from pathtrace.rendering import bdpt
+
+
+class ProgramChoice:
+    """The Renderer's choice of program (self.program and its kernels)."""
+
+    def _select_program(self):
+        """The kernels for the scene: its own, specialised to its shapes, materials and settings
+        (pathtrace.device.features.Features), or the backend's generic program, by the backend's mode
+        (pathtrace.device.programs). With "auto", the scene's own program, tuned, is built in the
+        background, and add_samples switches to it once it is there, the average going on;
+        until then the generic program renders, or where that is not built (NVIDIA's driver
+        takes 46 s over it: `pathtrace devices --check` builds it) the scene's own program
+        untuned, one build. The background build starts once the first pass is queued, so that
+        it takes no core from the first image, and a render of one pass builds nothing more
+        (switch_when_built)."""
+        features = self._features(self.settings.integrator)
+        mode = self.backend.mode
+        self._awaited, self._build_due = None, False
+        if self.settings.integrator != "path":
+            # the generic program has no bidirectional code (a path tracer's scene compiles none)
+            self._use_program(self.backend.program_for(features), generic=False)
+            return
+        if mode == "specialised" or self.traversal_stats or self.divergence_stats:  # the generic one counts rays
+            self._use_program(self.backend.program_for(features), generic=False)
+        elif mode == "generic":
+            self._use_program(self.backend.generic(features.media), generic=True)
+        else:
+            own = self.backend.programs.built(features)
+            if own is not None:
+                self._use_program(own, generic=False)
+                return
+            generic = self.backend.built_generic(features.media)
+            self._use_program(generic if generic is not None else self.backend.program_for(features, tuned=False),
+                              generic=generic is not None)
+            self._awaited = features
+
+    def _features(self, integrator: str) -> Features:
+        """What the scene's own program needs to render with these settings and `integrator`:
+        for BDPT and light tracing (a UserError, one line, for what they cannot render), their
+        depth, and no light tree, since they choose lights by power (_light_sampler)."""
+        features = replace(self.compiled.features(self.settings, self.camera),
+                           traversal_stats=self.traversal_stats, divergence_stats=self.divergence_stats,
+                           path_queue=self.queue_plan()[0], path_sort=self.sorts_queue())
+        if integrator == "path":
+            return features
+        bdpt.check(self.scene.name, features, integrator, self.compiled.lights)
+        return replace(features, light_tree=False, bdpt=bdpt.depth(self.settings.max_depth),
+                       light_tracing=integrator == "ptracer")
+
+    def integrator_ready(self, integrator: str) -> bool:
+        """Whether set_settings(integrator=...) would switch without waiting for a build: the
+        kernels it needs are built, else their build is started in the background (the viewer
+        switches once they are). A UserError, one line, where `integrator` cannot render the
+        scene."""
+        features = self._features(integrator)
+        if integrator == "path":
+            return True
+        if self.backend.programs.failed(features):
+            raise UserError(f"{self.scene.name}: the {integrator} kernels did not build")
+        return self.backend.ready_program(features) is not None
+
+    def _use_program(self, program: cl.Program, generic: bool):
+        if program is self.program:
+            return
+        self.program = program
+        self.uses_generic_program = generic     # (pathtrace.device.programs)
+        self.kernels = {False: cl.Kernel(program, "render"), True: cl.Kernel(program, "render_nee")}
+        # the queue's kernels are in a scene's program built with a queue depth, never in the
+        # generic program, which renders without the queue until the scene's own is built
+        queue = self.queue_plan()[0] and not generic
+        self.continue_kernels = {False: cl.Kernel(program, "continue_paths"),
+                                 True: cl.Kernel(program, "continue_paths_nee")} if queue else None
+        self.add_queued = cl.Kernel(program, "add_queued_paths") if queue else None
+        sort = queue and self.sorts_queue()
+        self.sort_kernels = (cl.Kernel(program, "sort_offsets"), cl.Kernel(program, "sort_paths")) if sort else None
+        self.aov_kernel = cl.Kernel(program, "render_aovs")
+        bidirectional = self.settings.integrator != "path"
+        self.bdpt_kernels = (cl.Kernel(program, "render_bdpt"), cl.Kernel(program, "add_splats")) if bidirectional else None
+
+    def switch_when_built(self, wait: bool = False) -> bool:
+        """Switches to the scene's own tuned program if it is built (with `wait`, once it is);
+        the average goes on. Its build starts at the first call after a whole pass is queued.
+        Whether the scene's own program renders now."""
+        if self._awaited is not None and (wait or self._build_due):
+            program = self.backend.program_for(self._awaited) if wait else self.backend.ready_program(self._awaited)
+            if program is not None:
+                self._awaited = None
+                self._use_program(program, generic=False)
+            elif self.backend.programs.failed(self._awaited):    # said once, by the backend
+                self._awaited = None
+        return not self.uses_generic_program
+
+    def describe_programs(self) -> str:
+        """Which program drew the samples since the last reset, in words, where the generic
+        program drew any (else "")."""
+        if not self.generic_samples:
+            return ""
+        if self.generic_samples == self.samples:
+            return (f"{self.samples} spp from the generic kernels"
+                    + (" (the scene's own were still building)"
+                       if self._awaited is not None and self.backend.programs.under_way(self._awaited) else ""))
+        return f"the first {self.generic_samples} of {self.samples} spp from the generic kernels, the rest from the scene's own"
+
+    @property
+    def building_program(self) -> bool:
+        """Whether the scene's own program is being built, to switch to (switch_when_built)."""
+        return self._awaited is not None
