@@ -332,6 +332,10 @@ float3 connect_emitter(const SceneData *sc, const Vertex *lt, const Vertex *cam,
     const Vertex *pt = &cam[t - 1], *pm = &cam[t - 2];
     if (!pt->emits)
         return (float3)(0.0f);
+#ifdef PHOTONS
+    if (photons_estimate(cam, t))
+        return (float3)(0.0f);        /* the photons count this path (kernels/photons.cl) */
+#endif
     float3 le = VERTEX_MATERIAL(pt)->emission.xyz;
     if (all(le == 0.0f))
         return (float3)(0.0f);
@@ -384,38 +388,6 @@ float3 connect_vertices(const SceneData *sc, const Vertex *lt, int s, const Vert
         return (float3)(0.0f);
     c *= bdpt_mis_weight(lt, s, cam, t, densities_between(sc, qs, qm, pt, pm), 0.0f, 0);
     return c * segment_transmittance(sc, pt, qs->s.p, rays);
-}
-
-/* Adds v to *a by compare-and-swap on its bits: OpenCL 1.2 has no atomic float add. */
-void atomic_add_float(volatile global float *a, float v)
-{
-    volatile global uint *bits = (volatile global uint *)a;
-    uint old = *bits, seen;
-    while ((seen = atomic_cmpxchg(bits, old, as_uint(as_float(old) + v))) != old)
-        old = seen;
-}
-
-/* Adds contribution c of film point `at` (pixels) to the splat film, to every pixel whose filter
- * reaches the point, weighted by the density with which that pixel's camera rays land there
- * (filter importance sampling, kernels/camera.cl: pdf_filter along each axis): a light-traced
- * point counts for each pixel as its camera rays would. */
-void splat(global float4 *film, const RenderParams *p, float2 at, float3 c)
-{
-    float r = p->filter.x;
-    int x0 = max((int)ceil(at.x - r - 0.5f), 0), x1 = min((int)floor(at.x + r - 0.5f), (int)p->width - 1);
-    int y0 = max((int)ceil(at.y - r - 0.5f), 0), y1 = min((int)floor(at.y + r - 0.5f), (int)p->height - 1);
-    for (int y = y0; y <= y1; ++y) {
-        float wy = pdf_filter(p, at.y - ((float)y + 0.5f));
-        for (int x = x0; x <= x1; ++x) {
-            float w = wy * pdf_filter(p, at.x - ((float)x + 0.5f));
-            if (!(w > 0.0f))
-                continue;
-            volatile global float *px = (volatile global float *)&film[y * p->width + x];
-            atomic_add_float(px, w * c.x);
-            atomic_add_float(px + 1, w * c.y);
-            atomic_add_float(px + 2, w * c.z);
-        }
-    }
 }
 
 /* Strategy t = 1, s >= 2: light vertex s - 1 joined to a point of the lens (kernels/camera.cl:
@@ -482,9 +454,15 @@ float3 sample_light_tracing(const SceneData *sc, const RenderParams *p, Rng *rng
 #endif
 
 /* One sample of pixel (x, y): its camera subpath's strategies (t >= 2) as the radiance
- * returned, the light tracing of its light subpath (t = 1) splatted. */
+ * returned (with PHOTONS, and the caustic photons it gathers), the light tracing of its light
+ * subpath (t = 1) splatted. */
 float3 sample_bidirectional(const SceneData *sc, const RenderParams *p, int x, int y, Rng *rng,
-                            global float4 *film, int *rays)
+                            global float4 *film, int *rays
+#ifdef PHOTONS
+                            , global const Photon *photons, global const int *photon_next,
+                            global const int *photon_heads, const PhotonMap *map
+#endif
+                            )
 {
     Vertex cam[BDPT_CAMERA_VERTICES], lt[BDPT_LIGHT_VERTICES];
     CameraRay ray = sample_camera_ray(p, x, y, rng);
@@ -509,6 +487,9 @@ float3 sample_bidirectional(const SceneData *sc, const RenderParams *p, int x, i
     int nl = trace_light_subpath(sc, p, lt, BDPT_LIGHT_VERTICES, rng, rays, &light_delta);
     sum_mis_ratios(cam, nc, 1, 0);
     sum_mis_ratios(lt, nl, 0, light_delta);
+#ifdef PHOTONS
+    l += caustic_radiance(sc, cam, nc, photons, photon_next, photon_heads, map);
+#endif
     /* s = 1 samples a light of its own, with or without a light subpath */
     int s_max = max(nl, 1);
     for (int t = 1; t <= nc; ++t) {
@@ -535,7 +516,7 @@ float3 sample_bidirectional(const SceneData *sc, const RenderParams *p, int x, i
  * pixel's running sums, as render_pixel does (kernels/integrator.cl), and splats its light
  * subpaths' contributions onto `film`, which add_splats then adds to the sums. */
 kernel void render_bdpt(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *sum, global float4 *sum_sq,
-                        global float4 *sum_c, global float4 *sum_sq_c, global float4 *film)
+                        global float4 *sum_c, global float4 *sum_sq_c, global float4 *film PHOTON_ARGS)
 {
     SceneData sc = SCENE_DATA(p.num_spheres, p.layout);
     COUNT_WORK_INTO(sc);
@@ -549,7 +530,7 @@ kernel void render_bdpt(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *
 #ifdef LIGHT_TRACING
         add_sample(sample_light_tracing(&sc, &p, &rng, film, &rays), &acc, &acc_sq, &kept);
 #else
-        add_sample(sample_bidirectional(&sc, &p, x, y, &rng, film, &rays), &acc, &acc_sq, &kept);
+        add_sample(sample_bidirectional(&sc, &p, x, y, &rng, film, &rays PHOTONS_PASSED), &acc, &acc_sq, &kept);
 #endif
     }
 #ifdef TRAVERSAL_STATS
@@ -557,6 +538,32 @@ kernel void render_bdpt(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *
 #endif
     add_to_pixel(sum, sum_sq, sum_c, sum_sq_c, y * p.width + x, acc, kept, acc_sq, rays);
 }
+
+#ifdef PHOTONS
+/* One pass's caustic photons (kernels/photons.cl), one light subpath per work-item (pixel) of
+ * the whole image, drawn from random numbers of their own: a photon where the subpath first meets
+ * a surface with more than a delta lobe after delta bounces alone. `count` counts them. */
+kernel void trace_photons(SCENE_KERNEL_ARGS, const RenderParams p, global Photon *photons, global int *photon_next,
+                          global int *photon_heads, global int *count, const PhotonMap map)
+{
+    SceneData sc = SCENE_DATA(p.num_spheres, p.layout);
+    int x = get_global_id(0), y = get_global_id(1);
+    if (x >= p.width || y >= p.height)
+        return;
+    Rng rng = make_rng(x, y, p.sample_start, ~p.seed);
+    Vertex lt[BDPT_LIGHT_VERTICES];
+    int rays = 0, light_delta = 0;
+    int n = trace_light_subpath(&sc, &p, lt, BDPT_LIGHT_VERTICES, &rng, &rays, &light_delta);
+    for (int k = 1; k < n && !in_medium(&lt[k]); ++k) {
+        if (k >= 2 && lt[k].connectible) {
+            store_photon(photons, photon_next, photon_heads, count, &map, &lt[k], k);
+            return;
+        }
+        if (!lt[k].delta)
+            return;
+    }
+}
+#endif
 
 /* One work-item per pixel of the whole image, after a launch of render_bdpt: adds the launch's
  * splats to the pixel's radiance sum (compensated, counting no sample: the splats are part of

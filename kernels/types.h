@@ -191,6 +191,25 @@ typedef struct {
     float4 sigma_t;   /* extinction coefficient sigma_a + sigma_s (rgb); w unused */
 } Medium;
 
+/* A caustic photon (kernels/photons.cl): where a light subpath first met a surface that is not
+ * a delta after delta bounces alone. */
+typedef struct {
+    float4 p;        /* xyz: the point; w: its vertex's index on the light subpath (2 or more) */
+    float4 beta;     /* xyz: the light subpath's throughput there (its flux times the subpaths
+                        of the pass) */
+    float4 wo;       /* xyz: the unit direction back along the subpath */
+    float4 n;        /* xyz: the surface's unit geometric normal, on wo's side */
+} Photon;
+
+/* A pass's photon map: its gather radius, the light subpaths traced, and the mask of its grid's
+ * hash (a power of two less one; photons.cl). */
+typedef struct {
+    float radius;
+    int paths;
+    uint mask;
+    int pad;
+} PhotonMap;
+
 /* A primitive's media (scene.cl: prim_media): NO_MEDIUM_CHANGE where crossing or leaving it
  * keeps the medium a ray is in, else (interior + 1) | (exterior + 1) << 16, a row of the media
  * table on each side, 0 standing for none (vacuum). */

@@ -142,6 +142,19 @@ def fog_glass_scene():
                                           "exterior": "fog"}])
 
 
+def pool_scene():
+    """A pool: its floor seen through a flat water surface and lit through it by a lamp above, every
+    path to it specular-diffuse-specular (E S D S L), which BDPT finds only as the path tracer does,
+    by a camera subpath that happens to hit the lamp: caustic photons estimate them. The lamp is
+    large enough for the path tracer to converge there."""
+    return floor_scene(objects=[{"center": [0.3, 1.6, -0.4], "radius": 0.35, "material": "lamp"}],
+                       meshes=[{"vertices": [[-1.2, 0.4, -1.2], [1.2, 0.4, -1.2], [1.2, 0.4, 1.2], [-1.2, 0.4, 1.2]],
+                                "faces": [[0, 3, 2, 1]], "material": "water"}],
+                       materials={"lamp": LAMP, "water": {"type": "dielectric", "int_ior": 1.33}},
+                       camera={"eye": [0, 2.0, 1.6], "look_at": [0, 0, 0], "up": [0, 1, 0], "vfov": 50}
+                       ).with_settings(photon_radius=0.08)
+
+
 def media_fog():
     """Mitsuba's fog room: the camera in the fog, a spot light outside it (tests/scenes)."""
     return load_scene(str(ROOT / "tests/scenes/media-fog.xml")).with_settings(filter=PixelFilter(), max_depth=5)
@@ -178,7 +191,8 @@ CASES = {"cbox-ptracer": (cbox, "ptracer", 32, 1024), "cbox-bdpt": (cbox, "bdpt"
          "cbox-thinlens-ptracer": (cbox_thinlens, "ptracer", 32, 1024),
          "glass-bdpt": (glass_scene, "bdpt", 16, 4096), "spot-bdpt": (spot_scene, "bdpt", 16, 1024),
          "fog-lamp-bdpt": (fog_lamp_scene, "bdpt", 16, 1024), "fog-lamp-ptracer": (fog_lamp_scene, "ptracer", 32, 1024),
-         "fog-glass-bdpt": (fog_glass_scene, "bdpt", 16, 4096), "media-fog-bdpt": (media_fog, "bdpt", 16, 1024)}
+         "fog-glass-bdpt": (fog_glass_scene, "bdpt", 16, 4096), "media-fog-bdpt": (media_fog, "bdpt", 16, 1024),
+         "pool-photons-bdpt": (pool_scene, "bdpt", 16, 4096)}
 SIZE = (24, 24)
 
 
@@ -397,16 +411,28 @@ def test_the_path_tracers_program_compiles_nothing_of_bdpt(backend):
 
 # --- choosing the integrator: the scene file, the command line, the Python API -------------------
 
-@pytest.mark.parametrize("kind,integrator,note", [("bdpt", "bdpt", None), ("path", "path", None),
-                                                  ("sppm", "bdpt", "renders sppm with bdpt, the nearest method"),
-                                                  ("mlt", "bdpt", "renders mlt with bdpt, the nearest method")])
-def test_a_pbrt_file_chooses_its_integrator(tmp_path, capsys, kind, integrator, note):
+@pytest.mark.parametrize("kind,integrator,radius,note", [
+    ("bdpt", "bdpt", 0, None), ("path", "path", 0, None),
+    ('sppm" "float radius" [ 0.05 ]', "bdpt", 0.05, "renders sppm with bdpt and caustic photons of radius 0.05"),
+    ('sppm"', "bdpt", 1.0, "renders sppm with bdpt and caustic photons of radius 1"),     # pbrt-v4's default
+    ("mlt", "bdpt", 0, "renders mlt with bdpt, the nearest method")])
+def test_a_pbrt_file_chooses_its_integrator(tmp_path, capsys, kind, integrator, radius, note):
     path = tmp_path / "s.pbrt"
-    path.write_text(f'Integrator "{kind}"\nWorldBegin\n'
+    kind = kind if kind.startswith("sppm") else kind + '"'
+    path.write_text(f'Integrator "{kind}\nWorldBegin\n'
                     'Shape "trianglemesh" "point3 P" [ -1 0 -1  1 0 -1  1 0 1 ] "integer indices" [ 0 2 1 ]\n')
-    assert load_scene(str(path)).settings.integrator == integrator
+    settings = load_scene(str(path)).settings
+    assert settings.integrator == integrator and settings.photon_radius == pytest.approx(radius)
     err = capsys.readouterr().err
     assert (note in err and len(err.strip().splitlines()) == 1) if note else note is None
+
+
+@pytest.mark.parametrize("radius", ["0", "-1", "1e400"])
+def test_a_pbrt_sppm_radius_out_of_range_is_one_line(tmp_path, radius):
+    path = tmp_path / "s.pbrt"
+    path.write_text(f'Integrator "sppm" "float radius" [ {radius} ]\nWorldBegin\n')
+    with pytest.raises(UserError, match="'radius': (must be in|1e400 is not finite)"):
+        load_scene(str(path))
 
 
 @pytest.mark.parametrize("kind", ["bdpt", "ptracer"])
@@ -461,10 +487,12 @@ def test_the_command_line_renders_with_bdpt_and_refuses_what_it_cannot_in_one_li
 
 # --- splats add up wherever the samples are drawn -------------------------------------------------
 
-def test_splats_of_samples_split_by_index_and_rows_add_up(backend):
+@pytest.mark.parametrize("make", [cbox, pool_scene])
+def test_splats_of_samples_split_by_index_and_rows_add_up(backend, make):
     """Samples 0-11 added as 4-7, 0-3 and 8-11, the last in two bands of rows, give the image of
-    one launch of 12: each launch's splats land in the whole image, whatever rows it renders."""
-    scene = cbox().with_settings(integrator="bdpt")
+    one launch of 12: each launch's splats land in the whole image, whatever rows it renders, and
+    a sample's caustic photons and their radius are the sample's, whoever draws it."""
+    scene = make().with_settings(integrator="bdpt")
     whole = Renderer(backend, scene, 16, 16)
     whole.add_samples(12)
     parts = Renderer(backend, scene, 16, 16)
@@ -490,3 +518,14 @@ def test_two_devices_splat_the_one_device_image(backend):
     single.add_samples(24)
     assert group.samples == 24
     np.testing.assert_allclose(group.mean(), single.mean(), rtol=2e-5, atol=1e-7)
+
+
+def test_the_photon_radius_shrinks_by_knaus_and_zwickers_rule():
+    """The closed form of the radius before each sample is the recurrence r_{i+1}^2 = r_i^2
+    (i + alpha) / (i + 1) from r_1, and it tends to 0 (the photons' bias vanishes)."""
+    from pathtrace.rendering.photons import ALPHA, photon_radius
+    r2 = 0.3 ** 2
+    for i in range(1, 200):
+        assert photon_radius(0.3, i - 1) == pytest.approx(np.sqrt(r2), rel=1e-9)
+        r2 *= (i + ALPHA) / (i + 1)
+    assert photon_radius(0.3, 10 ** 6) < 0.3 * 0.2

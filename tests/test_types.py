@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from pathtrace.device.types import (BVH_NODE, INSTANCE, LIGHT, LIGHT_NODE, MATERIAL, MEDIUM, PATH_RECORD, RENDER_PARAMS,
-                             TEXTURE, TEXTURE_BINDING, TRIANGLE)
+from pathtrace.device.types import (BVH_NODE, INSTANCE, LIGHT, LIGHT_NODE, MATERIAL, MEDIUM, PATH_RECORD, PHOTON,
+                                    PHOTON_MAP, RENDER_PARAMS, TEXTURE, TEXTURE_BINDING, TRIANGLE)
 
 STRUCTS = {
     "Material": MATERIAL,
@@ -22,6 +22,8 @@ STRUCTS = {
     "Medium": MEDIUM,
     "Instance": INSTANCE,
     "PathRecord": PATH_RECORD,
+    "Photon": PHOTON,
+    "PhotonMap": PHOTON_MAP,
 }
 
 

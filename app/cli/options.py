@@ -107,6 +107,10 @@ def add_render_options(p: argparse.ArgumentParser, device: bool = True, queue_au
     p.add_argument("--integrator", choices=INTEGRATORS,
                    help="path (the path tracer, the default), bdpt (bidirectional path tracing: "
                         "caustics) or ptracer (its light tracing alone); default: the scene's")
+    p.add_argument("--photon-radius", type=_photon_radius, metavar="R",
+                   help="with --integrator bdpt: caustic photons, gathered within R (scene units) at "
+                        "first, for what BDPT cannot find (a floor seen and lit through water); 0: none "
+                        "(default: the scene's; pbrt's sppm asks for them)")
     p.add_argument("--filter", type=_pixel_filter, metavar="NAME[:RADIUS[:STDDEV]]",
                    help="pixel filter: box (radius 0.5), tent (1) or gaussian (stddev 0.5, radius 4 "
                         "stddev), radius and stddev in pixels (default: the scene's)")
@@ -157,6 +161,17 @@ def _pixel_filter(text: str):
         raise argparse.ArgumentTypeError(str(e)) from None
 
 
+def _photon_radius(text: str) -> float:
+    from pathtrace.scene.meshes import MAX_COORDINATE
+    try:
+        radius = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{short(text)}: not a number") from None
+    if not 0 <= radius <= MAX_COORDINATE:
+        raise argparse.ArgumentTypeError(f"{short(text)}: give a distance in [0, {MAX_COORDINATE:g}] (0: no photons)")
+    return radius
+
+
 def apply_render_options(scene, args):
     s = scene.settings
     width, height = args.size or (s.width, s.height)
@@ -168,7 +183,8 @@ def apply_render_options(scene, args):
                    filter=args.filter or s.filter, light_sampler=args.light_sampler or s.light_sampler,
                    path_queue=s.path_queue if args.path_queue is None else args.path_queue,
                    path_sort=s.path_sort or args.path_sort,
-                   integrator=getattr(args, "integrator", None) or s.integrator)
+                   integrator=getattr(args, "integrator", None) or s.integrator,
+                   photon_radius=s.photon_radius if getattr(args, "photon_radius", None) is None else args.photon_radius)
     if not replace(s, **changes).paths_end:
         raise UserError("--rr off needs --max-depth N (N >= 1), or paths would never end")
     if changes["path_sort"] and not changes["path_queue"]:

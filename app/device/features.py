@@ -61,6 +61,7 @@ class Features:
                                            # up to this depth (app/rendering/bdpt.py); 0: the path tracer alone
     light_tracing: bool = False            # with bdpt: light tracing alone (LIGHT_TRACING), the
                                            # integrator "ptracer"
+    photons: bool = False                  # with bdpt: caustic photons (PHOTONS, kernels/photons.cl)
     generic: bool = False                  # renders any scene (Features.generic_program)
 
     @staticmethod
@@ -101,7 +102,8 @@ class Features:
                 + ((f"DIVERGENCE_STATS={self.divergence_stats}",) if self.divergence_stats else ())
                 + ((f"PATH_QUEUE={self.path_queue}",) if self.path_queue else ())
                 + (("PATH_SORT",) if self.path_sort else ())
-                + ((f"BDPT={self.bdpt}",) if self.bdpt else ()) + (("LIGHT_TRACING",) if self.light_tracing else ()))
+                + ((f"BDPT={self.bdpt}",) if self.bdpt else ()) + (("LIGHT_TRACING",) if self.light_tracing else ())
+                + (("PHOTONS",) if self.photons else ()))
 
 
 def choice_glue(signature: str, call: str, names: tuple, chosen: str, field: str) -> str:

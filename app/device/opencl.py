@@ -73,7 +73,7 @@ def kernel_source(extra: str = "", features: Features = Features()) -> str:
     texts += [(name, text if text is not None else (folder / name).read_text()) for name, text in parts]
     texts += [(name, (folder / name).read_text())
               for name in (*(MEDIA_FILES if features.media else ()), *LATER_FILES,
-                           *(("bdpt_vertex.cl", "bdpt.cl") if features.bdpt else ()))]
+                           *(("bdpt_vertex.cl", "splats.cl", "photons.cl", "bdpt.cl") if features.bdpt else ()))]
     if extra:
         texts.append(("extra", extra))
     return "\n".join(f'#line 1 "{name}"\n{text}' for name, text in texts)

@@ -55,7 +55,8 @@ class ProgramChoice:
             return features
         bdpt.check(self.scene.name, features, integrator, self.compiled.lights)
         return replace(features, light_tree=False, bdpt=bdpt.depth(self.settings.max_depth),
-                       light_tracing=integrator == "ptracer")
+                       light_tracing=integrator == "ptracer",
+                       photons=integrator == "bdpt" and self.settings.photon_radius > 0)
 
     def integrator_ready(self, integrator: str) -> bool:
         """Whether set_settings(integrator=...) would switch without waiting for a build: the
@@ -86,6 +87,7 @@ class ProgramChoice:
         self.aov_kernel = cl.Kernel(program, "render_aovs")
         bidirectional = self.settings.integrator != "path"
         self.bdpt_kernels = (cl.Kernel(program, "render_bdpt"), cl.Kernel(program, "add_splats")) if bidirectional else None
+        self.photon_kernel = cl.Kernel(program, "trace_photons") if self.uses_photons() else None
 
     def switch_when_built(self, wait: bool = False) -> bool:
         """Switches to the scene's own tuned program if it is built (with `wait`, once it is);

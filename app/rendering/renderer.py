@@ -8,6 +8,7 @@ import numpy as np
 import pyopencl as cl
 
 from pathtrace.rendering.path_sort import SORT_BUFFERS, PathSort
+from pathtrace.rendering.photons import PHOTON_BUFFERS, PhotonPasses
 from pathtrace.rendering.program_choice import ProgramChoice
 from pathtrace.rendering.queue_plans import QueuePlans
 from pathtrace.cameras import KERNELS as CAMERA_KERNELS, Camera
@@ -78,7 +79,7 @@ def variance_of(sum: np.ndarray, sum_sq: np.ndarray, samples: int) -> np.ndarray
     return np.maximum(sum_sq[..., :3] / n - m * m, 0.0).astype(np.float32)
 
 
-class Renderer(ProgramChoice, QueuePlans, PathSort):
+class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
     def __init__(self, backend: Backend, scene, width: int = None, height: int = None, progress=None):
         """scene: a CompiledScene, or a Scene to compile (on this device, calling progress(fraction)
         as its BVH build goes)."""
@@ -243,7 +244,7 @@ class Renderer(ProgramChoice, QueuePlans, PathSort):
             raise UserError(f"{what} needs about {format_bytes(host)} of memory to render, read back "
                             f"and write; {format_bytes(available)} is available")
         self.width, self.height, self.aovs = width, height, aovs
-        for name in (*AOV_BUFFERS, "splats"):
+        for name in (*AOV_BUFFERS, "splats", *PHOTON_BUFFERS):
             self._buffers.pop(name, None)
         for name in images:
             self._buffers[name] = cl.Buffer(self.backend.context, cl.mem_flags.READ_WRITE, nbytes)
@@ -372,8 +373,12 @@ class Renderer(ProgramChoice, QueuePlans, PathSort):
 
     def _add_bidirectional(self, params, count: int, start: int, global_size: tuple, local: tuple) -> list:
         """Queues the launches of render_bdpt (kernels/bdpt.cl) that add `count` samples to the
-        rows of `params`, each followed by add_splats over the whole image, which adds the light
-        tracing's splats (they land anywhere in the image) to the sums; returns their events."""
+        rows of `params`, one sample a launch (with caustic photons, after its photon pass:
+        app/rendering/photons.py), each followed by add_splats over the whole image, which adds
+        the light tracing's splats (they land anywhere in the image) to the sums. Returns their
+        events. One sample a launch: on an H200 a launch of 64 samples a work-item took 3.1-3.7x
+        the time per sample of 64 launches of one; on PoCL they are level
+        (docs/notes/performance-2026-11.md, 2026-11-30)."""
         b = self._buffers
         if "splats" not in b:
             b["splats"] = cl.Buffer(self.backend.context, cl.mem_flags.READ_WRITE, self.width * self.height * 16)
@@ -381,10 +386,14 @@ class Renderer(ProgramChoice, QueuePlans, PathSort):
         render, add = self.bdpt_kernels
         whole = tuple(-(-n // l) * l for n, l in zip((self.width, self.height), local))
         events = []
-        for offset in range(0, count, MAX_LAUNCH_SAMPLES):
+        for offset in range(count):
             launch = params.copy()
-            launch["sample_start"], launch["sample_count"] = start + offset, min(MAX_LAUNCH_SAMPLES, count - offset)
-            render.set_args(*self.scene_args(), launch, *(b[name] for name in SUM_BUFFERS), b["splats"])
+            launch["sample_start"], launch["sample_count"] = start + offset, 1
+            photons = ()
+            if self.uses_photons():
+                passed, photons = self._photon_pass(launch, whole, local)
+                events += passed
+            render.set_args(*self.scene_args(), launch, *(b[name] for name in SUM_BUFFERS), b["splats"], *photons)
             events.append(cl.enqueue_nd_range_kernel(self.backend.queue, render, global_size, local))
             add.set_args(launch, b["sum"], b["sum_c"], b["splats"])
             events.append(cl.enqueue_nd_range_kernel(self.backend.queue, add, whole, local))

@@ -35,6 +35,8 @@ class RenderSettings:
                                   # shade next (kernels/path_sort.cl, PATH_SORT): the same image;
                                   # only where launches use the queue
     integrator: str = "path"      # one of pathtrace.rendering.choices.INTEGRATORS
+    photon_radius: float = 0.0    # with bdpt: caustic photons (kernels/photons.cl) gathered within
+                                  # this radius at the first pass, shrinking after; 0: none
 
     @property
     def paths_end(self) -> bool:

@@ -327,7 +327,7 @@ class _Reader(TomlValues):
     def settings(self, data):
         where = "render"
         self.table(data, where, {"width", "height", "spp", "max_depth", "russian_roulette", "seed", "nee", "filter",
-                                 "light_sampler", "integrator"})
+                                 "light_sampler", "integrator", "photon_radius"})
         integrator = data.get("integrator", "path")
         if integrator not in INTEGRATORS:
             self.not_one_of("render.integrator", integrator, INTEGRATORS)
@@ -348,7 +348,8 @@ class _Reader(TomlValues):
             max_depth=self.number(data, "max_depth", where, default=0, low=0, integer=True),
             russian_roulette=rr, nee=nee,
             seed=self.number(data, "seed", where, default=0, low=0, high=2**32 - 1, integer=True),
-            filter=self.pixel_filter(data.get("filter", "box")), light_sampler=sampler, integrator=integrator)
+            filter=self.pixel_filter(data.get("filter", "box")), light_sampler=sampler, integrator=integrator,
+            photon_radius=self.number(data, "photon_radius", where, default=0.0, low=0.0, high=MAX_COORDINATE))
         if not s.paths_end:
             self.fail("render.russian_roulette", "off needs a max_depth above 0, or paths never end")
         return s

@@ -137,7 +137,7 @@ def scene_toml(scene: Scene, out: Path) -> str:
               f"max_depth = {s.max_depth}", f"russian_roulette = {_value(s.russian_roulette)}",
               f"seed = {s.seed}", f"nee = {_value(s.nee)}",
               f"filter = {_inline(filter_table(s.filter))}", f"light_sampler = {_value(s.light_sampler)}",
-              f"integrator = {_value(s.integrator)}", ""]
+              f"integrator = {_value(s.integrator)}", f"photon_radius = {_value(s.photon_radius)}", ""]
     for light in scene.lights:
         lines += ["[[lights]]", f"type = {_value(light.name)}"]
         lines += [f"{name} = {_value(_plain(getattr(light, name), rel))}" for name in light.fields]

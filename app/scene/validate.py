@@ -66,6 +66,9 @@ def _settings(s):
         raise UserError(f"{where}.integrator: give one of {', '.join(INTEGRATORS)}, got {short(s.integrator)}")
     if not (type(s.path_queue) is int and s.path_queue == PATH_QUEUE_AUTO):
         integer(f"{where}.path_queue (or PATH_QUEUE_AUTO)", s.path_queue, 0, MAX_PATH_QUEUE)
+    if not (isinstance(s.photon_radius, (int, float, np.floating)) and 0 <= s.photon_radius <= MAX_COORDINATE):
+        raise UserError(f"{where}.photon_radius: give a distance in [0, {MAX_COORDINATE:g}] (0: no photons), "
+                        f"got {short(s.photon_radius)}")
     if not isinstance(s.path_sort, (bool, np.bool_)):
         raise UserError(f"{where}.path_sort: give True or False, got {short(s.path_sort)}")
     if not s.paths_end:

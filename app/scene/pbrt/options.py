@@ -14,6 +14,7 @@ from pathtrace.cameras.camera import FileCamera, frame_of
 from pathtrace.errors import UserError, warn
 from pathtrace.filters import PixelFilter
 from pathtrace.scene.pbrt.tokens import parameters, string
+from pathtrace.scene.meshes import MAX_COORDINATE
 from pathtrace.scene.validate import MAX_SIZE
 
 
@@ -105,8 +106,16 @@ class OptionDirectives:
         params = parameters(tokens)
         if kind in ("bdpt", "mlt", "sppm"):
             self.settings.integrator = "bdpt"
-            if kind != "bdpt":
-                warn(f"{tokens.where(offset)}: pathtrace renders {kind} with bdpt, the nearest method it has")
+            if kind == "sppm":
+                # the paths photon mapping finds and BDPT does not, photons estimate
+                # (kernels/photons.cl), from pbrt-v4's initial search radius (SPPMIntegrator::Create)
+                radius = params.float("radius", 1.0)
+                if not 0 < radius <= MAX_COORDINATE:
+                    params.fail("radius", f"must be in (0, {MAX_COORDINATE:g}], got {radius}")
+                self.settings.photon_radius = radius
+                warn(f"{tokens.where(offset)}: pathtrace renders sppm with bdpt and caustic photons of radius {radius:g}")
+            elif kind == "mlt":
+                warn(f"{tokens.where(offset)}: pathtrace renders mlt with bdpt, the nearest method it has")
         elif kind not in ("path", "volpath"):
             warn(f"{tokens.where(offset)}: pathtrace renders with its path tracer instead of {kind}")
         depth = params.int("maxdepth", 5)
