@@ -609,6 +609,25 @@ def test_the_panel_switches_the_integrator_once_its_kernels_are_built(viewer):
     v.renderer.set_camera(camera)
 
 
+def test_a_scene_that_asks_for_bdpt_shows_the_path_tracers_images_while_its_kernels_build(viewer, tmp_path):
+    """A file whose integrator is bdpt opens with the path tracer (the same image in expectation:
+    a first image without waiting for BDPT's build), then switches to BDPT once its kernels are
+    built; the panel shows bdpt from the start."""
+    v = viewer
+    path = tmp_path / "bdpt.toml"
+    path.write_text(f'[render]\nintegrator = "bdpt"\nmax_depth = 4\nwidth = {W}\nheight = {H}\n'
+                    '[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = { type = "diffuse", rho_d = 0.5 }\n'
+                    '[[lights]]\ntype = "point"\nposition = [2, 3, 2]\nintensity = 10\n')
+    v.load_scene(str(path))
+    assert v.renderer.settings.integrator == "path" and v.requested_integrator == "bdpt"
+    frames_until(v, lambda: v.renderer.settings.integrator == "bdpt", timeout=300)
+    assert v.renderer.settings.integrator == "bdpt" and v.requested_integrator is None
+    frames_until(v, lambda: v.renderer.samples >= 2, timeout=60)
+    assert v.renderer.samples >= 2
+    back_to_simple(v)
+    assert v.renderer.settings.integrator == "path" and v.requested_integrator is None
+
+
 def test_movement_speed_is_at_the_scenes_scale(backend):
     """A quarter of the eye's distance to its look-at point a second, at most a tenth of the
     bounds' diagonal: the demo (a 1000-unit ground sphere) moves as before, a small scene seen

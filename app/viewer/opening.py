@@ -26,12 +26,18 @@ class SceneOpening:
 
     def _open(self, scene, renderer=None) -> Renderer:
         """In the worker thread: the scene compiled (its BVH build's progress shown) and given to
-        `renderer` (or a new one), the kernels compiled for it (said while they are)."""
+        `renderer` (or a new one), the kernels compiled for it (said while they are). A scene
+        that asks for BDPT or light tracing shows the path tracer's first images (the same image
+        in expectation) while their kernels build, then switches (app/viewer/integrators.py)."""
+        integrator = scene.settings.integrator
+        scene = scene.with_settings(integrator="path")
         compiled = compile_scene(scene, self.backend.queue, self._build_progress(scene.name))
         self._status = (f"preparing the kernels for {scene.name} on {self.backend.device.name}", None)
         if renderer is None:
-            return Renderer(self.backend, compiled)
-        renderer.set_scene(compiled)
+            renderer = Renderer(self.backend, compiled)
+        else:
+            renderer.set_scene(compiled)
+        self.requested_integrator = None if integrator == "path" else integrator
         return renderer
 
     def load_scene(self, name: str):
