@@ -23,10 +23,11 @@
 #endif
 
 #ifdef PHOTONS
-/* The grid cell (2r wide) of point x. */
+/* The grid cell (2r wide) of point x; cells beyond int's range are one cell (the distance test
+ * sorts their photons out). */
 int3 photon_cell(float3 x, float radius)
 {
-    return convert_int3(floor(x / (2.0f * radius)));
+    return convert_int3_sat(floor(x / (2.0f * radius)));
 }
 
 /* The list a cell's photons are in (Teschner et al.'s spatial hash, 2003). */
@@ -87,7 +88,7 @@ float3 gather_photons(const SceneData *sc, const Vertex *v, int j, global const 
                     sum += ph.beta.xyz * eval_scattering(sc, v, ph.wo.xyz, v->wo);
                 }
             }
-    return sum / ((float)map->paths * PI_F * r * r);
+    return sum / ((float)map->paths * fmax(PI_F * r * r, FLT_MIN));     /* a radius too small to hold a square */
 }
 
 /* The photons' estimate along camera subpath cam (nc vertices) at each vertex j >= 2 that sees a

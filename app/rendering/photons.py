@@ -26,8 +26,9 @@ def photon_radius(first: float, sample: int) -> float:
 class PhotonPasses:
     """The Renderer's photon passes (BDPT with settings.photon_radius)."""
 
-    def uses_photons(self) -> bool:
-        return self.settings.integrator == "bdpt" and self.settings.photon_radius > 0
+    def uses_photons(self, integrator: str = None) -> bool:
+        """Whether rendering with `integrator` (by default the settings') traces caustic photons."""
+        return (integrator or self.settings.integrator) == "bdpt" and self.settings.photon_radius > 0
 
     def _photon_pass(self, launch, whole: tuple, local: tuple) -> tuple:
         """Queues the photon pass of launch `launch` (one sample): the lists' heads cleared, then

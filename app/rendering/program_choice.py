@@ -56,7 +56,7 @@ class ProgramChoice:
         bdpt.check(self.scene.name, features, integrator, self.compiled.lights)
         return replace(features, light_tree=False, bdpt=bdpt.depth(self.settings.max_depth),
                        light_tracing=integrator == "ptracer",
-                       photons=integrator == "bdpt" and self.settings.photon_radius > 0)
+                       photons=self.uses_photons(integrator))
 
     def integrator_ready(self, integrator: str) -> bool:
         """Whether set_settings(integrator=...) would switch without waiting for a build: the
