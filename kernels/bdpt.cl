@@ -35,7 +35,10 @@
  * density is the mean of the three channels' (its hero channel drawn uniformly per flight: the
  * balance heuristic over channels, per event), a scalar as the vertices' densities must be; the
  * MIS weights leave the distances' densities out, as pbrt's do: the weights of a path's
- * strategies still sum to 1. */
+ * strategies still sum to 1.
+ *
+ * With PHOTONS, the paths that only s = 0 samples and only by chance (a surface seen and lit
+ * through delta bounces alone) are left to caustic photons instead (kernels/photons.cl). */
 
 /* The unit normal on the front of emissive primitive `prim` at its point y. */
 float3 emitter_normal(const SceneData *sc, int prim, float3 y)
