@@ -529,3 +529,17 @@ def test_the_photon_radius_shrinks_by_knaus_and_zwickers_rule():
         assert photon_radius(0.3, i - 1) == pytest.approx(np.sqrt(r2), rel=1e-9)
         r2 *= (i + ALPHA) / (i + 1)
     assert photon_radius(0.3, 10 ** 6) < 0.3 * 0.2
+
+
+@pytest.mark.parametrize("name", ["media-fog", "media-sphere", "media-glass"])
+def test_bdpt_in_media_matches_mitsuba(backend, name):
+    """BDPT's image of the medium scenes against Mitsuba 3's volpath references (tests/references,
+    scripts/make_references.py): an independent renderer, not pathtrace's path tracer. BDPT's
+    variance comes from its renders' spread (the splats are not in a pixel's sums of squares)."""
+    ref = np.load(ROOT / "tests/references" / f"{name}.npz")
+    h, w, _ = ref["mean"].shape
+    scene = load_scene(str(ROOT / "tests/scenes" / f"{name}.xml")).with_settings(
+        max_depth=int(ref["max_depth"]), russian_roulette="off")
+    m, v = render(backend, scene, "bdpt", 48, (w, h))
+    ok, p, threshold = z_test(m, v, ref["mean"].astype(np.float64), ref["var_of_mean"].astype(np.float64), block=4)
+    assert ok, (p, threshold)
