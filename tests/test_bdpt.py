@@ -489,18 +489,21 @@ def test_the_command_line_renders_with_bdpt_and_refuses_what_it_cannot_in_one_li
 
 @pytest.mark.parametrize("make", [cbox, pool_scene])
 def test_splats_of_samples_split_by_index_and_rows_add_up(backend, make):
-    """Samples 0-11 added as 4-7, 0-3 and 8-11, the last in two bands of rows, give the image of
-    one launch of 12: each launch's splats land in the whole image, whatever rows it renders, and
-    a sample's caustic photons and their radius are the sample's, whoever draws it."""
+    """Samples 0-12 added as 4-7, 0-3, 8-11 in two bands of rows and 12 in two bands one after
+    the other (whose second band gathers the photons its first traced) give the image of one
+    launch of 13: each launch's splats land in the whole image, whatever rows it renders, and a
+    sample's caustic photons and their radius are the sample's, whoever draws it."""
     scene = make().with_settings(integrator="bdpt")
     whole = Renderer(backend, scene, 16, 16)
-    whole.add_samples(12)
+    whole.add_samples(13)
     parts = Renderer(backend, scene, 16, 16)
     parts.add_samples(4, 4)
     parts.add_samples(4, 0)
     parts.add_samples(4, 8, rows=(0, 7))
     parts.add_samples(4, 8, rows=(7, 16))
-    assert parts.samples == 12
+    parts.add_samples(1, 12, rows=(0, 5))
+    parts.add_samples(1, 12, rows=(5, 16))
+    assert parts.samples == 13
     # the splats' atomic additions come in any order: float rounding apart
     np.testing.assert_allclose(parts.mean(), whole.mean(), rtol=2e-5, atol=1e-7)
 

@@ -26,6 +26,9 @@ def photon_radius(first: float, sample: int) -> float:
 class PhotonPasses:
     """The Renderer's photon passes (BDPT with settings.photon_radius)."""
 
+    _photons_for = None       # (resets, sample) of the photon map in the buffers, and the
+    _photon_args = None       # render_bdpt arguments that gather it
+
     def uses_photons(self, integrator: str = None) -> bool:
         """Whether rendering with `integrator` (by default the settings') traces caustic photons."""
         return (integrator or self.settings.integrator) == "bdpt" and self.settings.photon_radius > 0
@@ -33,7 +36,11 @@ class PhotonPasses:
     def _photon_pass(self, launch, whole: tuple, local: tuple) -> tuple:
         """Queues the photon pass of launch `launch` (one sample): the lists' heads cleared, then
         trace_photons over the whole image. Returns its events and the arguments by which
-        render_bdpt gathers them."""
+        render_bdpt gathers them. A sample drawn in bands of rows (the viewer's launches, several
+        devices) traces its photons once: the map stays until the next sample or reset."""
+        key = (self.resets, int(launch["sample_start"]))
+        if key == self._photons_for:
+            return [], self._photon_args
         paths = self.width * self.height
         lists = 1 << (paths - 1).bit_length()        # a power of two, at least one list per photon
         b, queue = self._buffers, self.backend.queue
@@ -49,4 +56,5 @@ class PhotonPasses:
                   cl.enqueue_fill_buffer(queue, b["photon_count"], np.int32(0), 0, 4)]
         self.photon_kernel.set_args(*self.scene_args(), launch, *(b[name] for name in PHOTON_BUFFERS), photon_map)
         events.append(cl.enqueue_nd_range_kernel(queue, self.photon_kernel, whole, local))
-        return events, (b["photons"], b["photon_next"], b["photon_heads"], photon_map)
+        self._photons_for, self._photon_args = key, (b["photons"], b["photon_next"], b["photon_heads"], photon_map)
+        return events, self._photon_args
