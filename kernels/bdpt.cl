@@ -544,8 +544,11 @@ kernel void render_bdpt(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *
 
 #ifdef PHOTONS
 /* One pass's caustic photons (kernels/photons.cl), one light subpath per work-item (pixel) of
- * the whole image, drawn from random numbers of their own: a photon where the subpath first meets
- * a surface with more than a delta lobe after delta bounces alone. `count` counts them. */
+ * the whole image, drawn from random numbers of their own: a photon where the subpath meets a
+ * surface with more than a delta lobe after delta bounces alone. A subpath that meets several
+ * (the first sampled a delta lobe of its own: a coating's mirror) leaves one of them, chosen
+ * uniformly and weighted by their number, so that each has its due in expectation and the map
+ * holds at most a photon per subpath. `count` counts them. */
 kernel void trace_photons(SCENE_KERNEL_ARGS, const RenderParams p, global Photon *photons, global int *photon_next,
                           global int *photon_heads, global int *count, const PhotonMap map)
 {
@@ -557,13 +560,16 @@ kernel void trace_photons(SCENE_KERNEL_ARGS, const RenderParams p, global Photon
     Vertex lt[BDPT_LIGHT_VERTICES];
     int rays = 0, light_delta = 0;
     int n = trace_light_subpath(&sc, &p, lt, BDPT_LIGHT_VERTICES, &rng, &rays, &light_delta);
+    int landings[BDPT_LIGHT_VERTICES], m = 0;
     for (int k = 1; k < n && !in_medium(&lt[k]); ++k) {
-        if (k >= 2 && lt[k].connectible) {
-            store_photon(photons, photon_next, photon_heads, count, &map, &lt[k], k);
-            return;
-        }
+        if (k >= 2 && lt[k].connectible)
+            landings[m++] = k;
         if (!lt[k].delta)
-            return;
+            break;
+    }
+    if (m > 0) {
+        int k = landings[min((int)(next_uniform4(&rng).x * m), m - 1)];
+        store_photon(photons, photon_next, photon_heads, count, &map, &lt[k], k, (float)m);
     }
 }
 #endif

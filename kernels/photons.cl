@@ -7,7 +7,7 @@
  * mapping: a probabilistic approach", 2011; app/rendering/photons.py).
  *
  * Each pass, one light subpath per pixel (kernels/bdpt.cl: trace_photons) leaves a photon where it
- * first meets a surface that is not a delta after one or more delta bounces (L S+ D). Photons go
+ * meets a surface that is not a delta after one or more delta bounces alone (L S+ D). Photons go
  * into a hashed grid of cells 2r wide, each cell a list linked through `next` from its head in
  * `heads`. A camera subpath gathers them where it meets such a surface after delta bounces alone
  * (E S+ D, the lens's own vertex aside), and its strategy s = 0 leaves out the paths of that form
@@ -42,15 +42,15 @@ float3 normal_towards(const Vertex *v, float3 w)
     return dot(v->s.ng, w) < 0.0f ? -v->s.ng : v->s.ng;
 }
 
-/* Stores light subpath vertex k, v, as photon number *count (counted up), at the head of its
- * cell's list. */
+/* Stores light subpath vertex k, v, its throughput times `weight`, as photon number *count
+ * (counted up), at the head of its cell's list. */
 void store_photon(global Photon *photons, global int *next, volatile global int *heads, volatile global int *count,
-                  const PhotonMap *map, const Vertex *v, int k)
+                  const PhotonMap *map, const Vertex *v, int k, float weight)
 {
     int i = atomic_inc(count);
     Photon ph;
     ph.p = (float4)(v->s.p, (float)k);
-    ph.beta = (float4)(v->beta, 0.0f);
+    ph.beta = (float4)(v->beta * weight, 0.0f);
     ph.wo = (float4)(v->wo, 0.0f);
     ph.n = (float4)(normal_towards(v, v->wo), 0.0f);
     photons[i] = ph;

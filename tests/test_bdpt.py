@@ -146,11 +146,15 @@ def pool_scene():
     """A pool: its floor seen through a flat water surface and lit through it by a lamp above, every
     path to it specular-diffuse-specular (E S D S L), which BDPT finds only as the path tracer does,
     by a camera subpath that happens to hit the lamp: caustic photons estimate them. The lamp is
-    large enough for the path tracer to converge there."""
-    return floor_scene(objects=[{"center": [0.3, 1.6, -0.4], "radius": 0.35, "material": "lamp"}],
+    large enough for the path tracer to converge there. A smooth plastic sphere under the water
+    mirrors some of the light on to the floor: light subpaths that land on it and then on the
+    floor, one photon chosen of the two."""
+    return floor_scene(objects=[{"center": [0.3, 1.6, -0.4], "radius": 0.35, "material": "lamp"},
+                                {"center": [-0.3, 0.2, 0.1], "radius": 0.2, "material": "plastic"}],
                        meshes=[{"vertices": [[-1.2, 0.4, -1.2], [1.2, 0.4, -1.2], [1.2, 0.4, 1.2], [-1.2, 0.4, 1.2]],
                                 "faces": [[0, 3, 2, 1]], "material": "water"}],
-                       materials={"lamp": LAMP, "water": {"type": "dielectric", "int_ior": 1.33}},
+                       materials={"lamp": LAMP, "water": {"type": "dielectric", "int_ior": 1.33},
+                                  "plastic": {"type": "plastic", "diffuse_reflectance": 0.5, "int_ior": 3.0}},
                        camera={"eye": [0, 2.0, 1.6], "look_at": [0, 0, 0], "up": [0, 1, 0], "vfov": 50}
                        ).with_settings(photon_radius=0.08)
 
