@@ -98,38 +98,33 @@ def main(folder: Path):
             <rgb name="radiance" value="10000, 8900, 7200"/>
         </emitter>
     </shape>
-    <shape type="rectangle">
+""" + rectangle('<rotate x="1" angle="-90"/>', "0.62, 0.5, 0.38")      # the table
+      + rectangle('<translate z="-2"/>', "0.7, 0.7, 0.7")                # the wall behind
+      + dielectric("glass.ply", 1.5) + dielectric("water.ply", 1.33) + "</scene>\n")
+
+
+def rectangle(placement: str, reflectance: str) -> str:
+    """A diffuse 6 x 6 square, placed by `placement` after its scaling."""
+    return f"""    <shape type="rectangle">
         <transform name="to_world">
             <scale value="3"/>
-            <rotate x="1" angle="-90"/>
+            {placement}
         </transform>
         <bsdf type="diffuse">
-            <rgb name="reflectance" value="0.62, 0.5, 0.38"/>
+            <rgb name="reflectance" value="{reflectance}"/>
         </bsdf>
     </shape>
-    <shape type="rectangle">
-        <transform name="to_world">
-            <scale value="3"/>
-            <translate z="-2"/>
-        </transform>
-        <bsdf type="diffuse">
-            <rgb name="reflectance" value="0.7, 0.7, 0.7"/>
-        </bsdf>
-    </shape>
-    <shape type="ply">
-        <string name="filename" value="glass.ply"/>
+"""
+
+
+def dielectric(ply: str, ior: float) -> str:
+    return f"""    <shape type="ply">
+        <string name="filename" value="{ply}"/>
         <bsdf type="dielectric">
-            <float name="int_ior" value="1.5"/>
+            <float name="int_ior" value="{ior}"/>
         </bsdf>
     </shape>
-    <shape type="ply">
-        <string name="filename" value="water.ply"/>
-        <bsdf type="dielectric">
-            <float name="int_ior" value="1.33"/>
-        </bsdf>
-    </shape>
-</scene>
-""")
+"""
 
 
 if __name__ == "__main__":
