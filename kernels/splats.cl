@@ -2,13 +2,20 @@
  * point of their own, wherever it is, added to a per-launch film by atomics and added to the
  * pixels' sums after the launch (add_splats). */
 
-/* Adds v to *a by compare-and-swap on its bits: OpenCL 1.2 has no atomic float add. */
+/* Adds v to *a. OpenCL 1.2 has no atomic float add, so elsewhere it is a compare-and-swap loop
+ * on its bits; on NVIDIA's OpenCL it is PTX's reduction, which the thread does not wait for,
+ * where each attempt of the loop waits for a load and an atomic's round trip: on an H200 the
+ * loop took 60 % of BDPT's time (docs/notes/performance-2026-11.md, 2026-11-30). */
 void atomic_add_float(volatile global float *a, float v)
 {
+#ifdef NVIDIA_PTX
+    asm volatile("red.global.add.f32 [%0], %1;" :: "l"(a), "f"(v) : "memory");
+#else
     volatile global uint *bits = (volatile global uint *)a;
     uint old = *bits, seen;
     while ((seen = atomic_cmpxchg(bits, old, as_uint(as_float(old) + v))) != old)
         old = seen;
+#endif
 }
 
 /* Adds contribution c of film point `at` (pixels) to the splat film, to every pixel whose filter

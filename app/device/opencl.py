@@ -134,10 +134,13 @@ class BuildResult:
 
 def program_options(device: cl.Device, features: Features) -> list[str]:
     """The build options of the kernels specialised to `features` and to the kind of device
-    (CPU_DEVICE: on CPUs the samplers' azimuths take cospi: kernels/sampling.cl, COS_TURNS)."""
+    (CPU_DEVICE: on CPUs the samplers' azimuths take cospi: kernels/sampling.cl, COS_TURNS;
+    NVIDIA_PTX: NVIDIA's compiler takes inline PTX, for float atomics: kernels/splats.cl)."""
     options = list(BUILD_OPTIONS) + [f"-D{d}" for d in features.defines()]
     if device.type & cl.device_type.CPU:
         options.append("-DCPU_DEVICE")
+    if is_nvidia(device):
+        options.append("-DNVIDIA_PTX")
     return options
 
 
