@@ -254,3 +254,40 @@ def test_the_generic_program_in_its_gpu_form_renders_as_its_own_program(gpu_form
     a, b = render(gpu_form, scene), render(specialised, scene)
     assert a.uses_generic_program and a.program is gpu_form.generic(media=False)
     same_image(a, b)
+
+
+def test_devices_check_refuses_a_generic_program_that_miscounts_samples(backend, tmp_path, monkeypatch):
+    """`pathtrace devices --check` renders with the generic programs and checks that every pixel
+    kept each of its samples, a count no sound program gets wrong (NVIDIA's driver 580 compiled
+    the generic program so that pixels counted a third to three times their samples). Where one
+    did not, it says so and marks them: no render uses them, the first image waits for the
+    scene's own program, and asking for them is one line."""
+    from pathtrace.cli.listing import warm_up
+    from pathtrace.device.opencl import generic_refused
+    from pathtrace.errors import UserError
+    from tests.commands import in_process
+    monkeypatch.setenv("PATHTRACE_CACHE", str(tmp_path))      # the marks go here
+    assert warm_up(backend)[1] == ""
+    read_sum = Renderer.read_sum
+
+    def miscounted(self):
+        sums = read_sum(self).copy()
+        sums[3, 5, 3] += 1.0
+        return sums
+    with monkeypatch.context() as m:
+        m.setattr(Renderer, "read_sum", miscounted)
+        assert warm_up(backend)[1] == "simple: pixels kept 4 to 5 of 4 samples"
+        r = in_process("devices", "--check")
+    assert r.returncode == 0 and "render wrongly here (simple: pixels kept 4 to 5 of 4 samples)" in r.stdout, r.stdout
+    device = backend.device.device
+    assert generic_refused(device) and backend.built_generic(False) is None
+    with pytest.raises(UserError, match="the generic kernels rendered wrongly on this device"):
+        backend.generic(False)
+    r = Renderer(backend.with_mode("auto"), load_scene("cornell-box"), SIZE, SIZE)
+    assert not r.uses_generic_program
+    out = tmp_path / "o.png"
+    r = in_process("render", "simple", "-q", "--program", "generic", "--spp", "1", "--size", "8x8", "-o", out)
+    errors = [line for line in r.stderr.splitlines() if "error" in line]
+    assert r.returncode == 1 and len(errors) == 1 and "rendered wrongly" in errors[0] and not out.exists(), r.stderr
+    monkeypatch.setenv("PATHTRACE_CACHE", str(tmp_path / "elsewhere"))
+    assert not generic_refused(device) and backend.built_generic(False) is not None

@@ -244,14 +244,34 @@ class Backend:
     def generic(self, media: bool) -> cl.Program:
         """The generic program with or without media (Features.generic_program), tuned (on
         NVIDIA under the register caps of app/device/occupancy.py, which the heaviest programs gain
-        most from: docs/notes/performance-2026-11.md); waits for it."""
+        most from: docs/notes/performance-2026-11.md); waits for it. Refused in one line where
+        `pathtrace devices --check` found it rendering wrongly on this device and driver."""
+        if generic_refused(self.device.device, self.extra):
+            raise UserError(f"{self.device.name}: the generic kernels rendered wrongly on this device and driver "
+                            "(pathtrace devices --check); render with --program specialised or auto")
         return self.programs.get(Features.generic_program(media), tuned=True)
 
     def built_generic(self, media: bool):
         """The generic program with or without media if it is built, else None (the one without
         is built at open where that is fast; `pathtrace devices --check` builds both; neither is
-        built behind a scene's first image)."""
+        built behind a scene's first image), and None where that check refused it."""
+        if generic_refused(self.device.device, self.extra):
+            return None
         return self.programs.built(Features.generic_program(media), tuned=True)
+
+    def refuse_generic(self):
+        """Marks the generic programs as rendering wrongly on this device and driver (found by
+        `pathtrace devices --check`), so that no render uses them: scenes then wait for their
+        own program's untuned build. Drops their cached binaries; an unwritable cache marks
+        nothing, and the check says so again at the next run."""
+        for media in (False, True):
+            entry = generic_entry(self.device.device, self.extra, media)
+            try:
+                entry.unlink(missing_ok=True)
+                entry.parent.mkdir(parents=True, exist_ok=True)
+                entry.with_suffix(".wrong").touch()
+            except OSError:
+                pass
 
     def program_for(self, features: Features, tuned: bool = True) -> cl.Program:
         """The kernels specialised to `features` (on NVIDIA with `tuned`, under the register caps
@@ -278,7 +298,8 @@ def open_device(device: Device, extra: str = "", use_cache: bool = True, mode: s
     queue = cl.CommandQueue(context, properties=cl.command_queue_properties.PROFILING_ENABLE)
     generic = Features.generic_program(media=False)     # most scenes' (the viewer's first)
     source, options = kernel_source(extra, generic), program_options(device.device, generic)
-    fast = keeps_own_cache(device.device) or cache_entry(device.device, source, options, True).is_file()
+    fast = ((keeps_own_cache(device.device) or cache_entry(device.device, source, options, True).is_file())
+            and not generic_refused(device.device, extra))
     if not fast:
         source, options = display_source(), list(BUILD_OPTIONS)
     opened = build_cached(context, device.device, source, options, use_cache, fast)   # tuned: the generic program
@@ -286,6 +307,18 @@ def open_device(device: Device, extra: str = "", use_cache: bool = True, mode: s
     if fast:
         backend.programs.add(generic, True, opened.program)
     return backend
+
+
+def generic_entry(device: cl.Device, extra: str, media: bool) -> Path:
+    """The cache entry of the tuned generic program with or without media (cache_entry)."""
+    generic = Features.generic_program(media)
+    return cache_entry(device, kernel_source(extra, generic), program_options(device, generic), True)
+
+
+def generic_refused(device: cl.Device, extra: str = "") -> bool:
+    """Whether `pathtrace devices --check` found the generic programs rendering wrongly on this
+    device and driver (Backend.refuse_generic): a mark beside the one without media's entry."""
+    return generic_entry(device, extra, False).with_suffix(".wrong").is_file()
 
 
 def display_source() -> str:
