@@ -264,14 +264,14 @@ class Backend:
         `pathtrace devices --check`), so that no render uses them: scenes then wait for their
         own program's untuned build. Drops their cached binaries; an unwritable cache marks
         nothing, and the check says so again at the next run."""
-        for media in (False, True):
-            entry = generic_entry(self.device.device, self.extra, media)
-            try:
-                entry.unlink(missing_ok=True)
-                entry.parent.mkdir(parents=True, exist_ok=True)
-                entry.with_suffix(".wrong").touch()
-            except OSError:
-                pass
+        try:
+            for media in (False, True):
+                generic_entry(self.device.device, self.extra, media).unlink(missing_ok=True)
+            mark = generic_entry(self.device.device, self.extra, False).with_suffix(".wrong")
+            mark.parent.mkdir(parents=True, exist_ok=True)
+            mark.touch()
+        except OSError:
+            pass
 
     def program_for(self, features: Features, tuned: bool = True) -> cl.Program:
         """The kernels specialised to `features` (on NVIDIA with `tuned`, under the register caps
