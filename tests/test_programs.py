@@ -281,6 +281,8 @@ def test_devices_check_refuses_a_generic_program_that_miscounts_samples(backend,
     assert r.returncode == 0 and "render wrongly here (simple: pixels kept 4 to 5 of 4 samples)" in r.stdout, r.stdout
     device = backend.device.device
     assert generic_refused(device) and backend.built_generic(False) is None
+    r = in_process("devices", "--check")          # again: the mark is reported, nothing rebuilt
+    assert r.returncode == 0 and "rendered wrongly at an earlier check" in r.stdout, r.stdout + r.stderr
     with pytest.raises(UserError, match="the generic kernels rendered wrongly on this device"):
         backend.generic(False)
     r = Renderer(backend.with_mode("auto"), load_scene("cornell-box"), SIZE, SIZE)

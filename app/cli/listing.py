@@ -15,7 +15,7 @@ def epilog() -> str:
 
 
 def cmd_devices(args):
-    from pathtrace.device.opencl import NO_DEVICE, build_error_line, list_devices, open_device
+    from pathtrace.device.opencl import NO_DEVICE, build_error_line, generic_refused, list_devices, open_device
     import pyopencl as cl
 
     devices = list_devices()
@@ -23,7 +23,10 @@ def cmd_devices(args):
         raise UserError(NO_DEVICE)
     for d in devices:
         line = f"[{d.index}] {d.describe()}, {d.device.max_compute_units} compute units"
-        if args.check:
+        if args.check and generic_refused(d.device):
+            line += (": its generic kernels rendered wrongly at an earlier check (marked in the kernel cache, "
+                     "which a new version or driver checks again): scenes render with their own kernels")
+        elif args.check:
             try:
                 b = open_device(d, mode="generic")
                 start = time.perf_counter()
