@@ -294,11 +294,16 @@ def progressive(scene, spp=None, steps=None, size=None, device="auto", seed=None
             start = time.perf_counter()
             group.render(target, on_progress)
             seconds += time.perf_counter() - start
+            dropped = group.dropped_samples()
+            if dropped < 0:
+                # a pixel keeps at most the samples drawn: more is a program its driver compiled
+                # wrongly (docs/notes/performance-2026-11.md, 2026-11-30), whose image is wrong too
+                raise UserError(f"{scene.name}: the kernels counted {-dropped} samples more than they drew, "
+                                "so this device's driver built them wrongly; no image is given")
             read = group.read_aovs() if aovs else {}
             yield Snapshot(target, seconds, group.mean(), {name: read[name] for name in aovs})
     finally:
         close()
-    dropped = group.dropped_samples()
     if dropped:
         warn(f"{scene.name}: {dropped} of {steps[-1] * settings.width * settings.height} samples were NaN "
              f"or infinite and were left out (as black)")

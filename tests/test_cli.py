@@ -623,3 +623,17 @@ def test_a_pbrt_render_to_exr_imports_no_other_scene_reader_and_no_opencv(tmp_pa
                 f"print(code, sorted(m for m in {('cv2',) + readers!r} if m in sys.modules))\n")
         r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
         assert r.returncode == 0 and r.stdout.strip().splitlines()[-1] == f"0 {expected}", (r.stdout, r.stderr)
+
+
+def test_kernels_that_count_more_samples_than_they_drew_write_no_image(tmp_path, monkeypatch):
+    """A pixel keeps at most the samples drawn; more is a program its driver compiled wrongly
+    (NVIDIA's driver 580 and the generic program: docs/notes/performance-2026-11.md, 2026-11-30),
+    whose image is wrong too: one line, a non-zero exit and no file."""
+    from pathtrace.rendering.renderer import Renderer
+    monkeypatch.setattr(Renderer, "dropped_samples", lambda self: -7)
+    out = tmp_path / "o.png"
+    r = in_process("render", "simple", "-q", "--spp", "2", "--size", "8x8", "-o", out)
+    errors = [line for line in r.stderr.splitlines() if "error" in line]
+    assert r.returncode == 1 and not out.exists(), r.stderr
+    assert errors == ["pathtrace: error: simple: the kernels counted 7 samples more than they drew, so this "
+                      "device's driver built them wrongly; no image is given"], r.stderr
