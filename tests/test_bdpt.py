@@ -211,6 +211,41 @@ def test_converges_to_the_path_tracer(backend, case):
     assert ok, (p, threshold)
 
 
+# -- BDPT against the path tracer on every scene of tests/scenes and tests/references/pbrt-v4 --
+# Each file as it is (its lights, delta ones included, textures, media, instances, cameras), by
+# the whole image's mean per channel within five standard errors (and float32's rounding, for a
+# channel without variance), as the NEE invariant over the same files is tested
+# (tests/test_nee.py): a small image, so that every file's BDPT program is one quick build. The
+# path tracer's error comes from its pixels' sample variances; BDPT's from its batches' spread
+# (its splats are not in the sums of squares). A 10 % error in the light samples' (s = 1) MIS
+# weights fails 6 of the 28 files of tests/scenes. A file whose camera has no importance
+# (app/cameras/: Camera.importance) is refused by BDPT in one line instead.
+
+SCENE_FILES = sorted([*(ROOT / "tests" / "scenes").glob("*.xml"), *(ROOT / "tests" / "scenes").glob("*.pbrt"),
+                      *(ROOT / "tests" / "references" / "pbrt-v4").glob("*.pbrt")])
+FILE_SIZE = (16, 12)
+
+
+@pytest.mark.parametrize("path", SCENE_FILES, ids=lambda p: f"{p.parent.name}/{p.name}")
+def test_bdpt_converges_to_the_path_tracer_on_every_test_scene(backend, path):
+    scene = load_scene(str(path)).with_settings(russian_roulette="off")
+    if not type(scene.camera).importance:
+        with pytest.raises(UserError, match="has no importance"):
+            Renderer(backend, scene.with_settings(integrator="bdpt"), *FILE_SIZE)
+        return
+    m, v = render(backend, scene, "bdpt", 32, FILE_SIZE, batches=4)
+    pixels = FILE_SIZE[0] * FILE_SIZE[1]
+    bdpt, bdpt_error = m.mean(axis=(0, 1)), np.sqrt(v.sum(axis=(0, 1))) / pixels
+    r = Renderer(backend, scene.with_settings(integrator="path", seed=5), *FILE_SIZE)
+    r.add_samples(512)
+    r.finish()
+    path_mean = r.mean().mean(axis=(0, 1))
+    path_error = np.sqrt(r.variance().sum(axis=(0, 1)) / r.samples) / pixels
+    assert np.all(np.isfinite(m))
+    assert np.all(np.abs(bdpt - path_mean) <= 5 * np.hypot(bdpt_error, path_error) + 1e-5 * path_mean), \
+        (bdpt, bdpt_error, path_mean, path_error)
+
+
 def floor_radiance(scene, size, intensity, light, sub=4):
     """Each pixel's mean radiance of the floor under a point light of `intensity` at `light`,
     direct light only: RHO / pi * I cos / r^2 at the floor point each of sub x sub film points of
