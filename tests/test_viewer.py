@@ -559,16 +559,21 @@ def test_the_speed_slider_turns_the_path_queue_on(viewer):
         xdo("click", 5)           # each notch waited for: one seen late would move the slider after
         frames_until(v, lambda: v.widgets.get(label) != before, timeout=10)
         scrolls += 1
-    # the slider where it has stayed for three frames: a notch delivered late would move it from
-    # under the pointer
-    seen = []
-    frames_until(v, lambda: seen.append(v.widgets[label]) or seen[-3:] == [seen[-1]] * 3)
-    x0, y0, x1, y1 = v.widgets[label]
-    slider_end = x1 - v.imgui.calc_text_size(label).x - v.imgui.get_style().item_inner_spacing.x
-    move(v, int(x0 + 0.3 * (slider_end - x0)), int((y0 + y1) / 2))
-    press(v)
-    frames_until(v, lambda: v.renderer.settings.path_queue == 1, timeout=2)   # the release's frame, late on a loaded machine
-    assert v.renderer.settings.path_queue == 1, (v.widgets[label], v.panel_rect, scrolls)
+    for attempt in range(3):
+        # the slider where it has stayed for three frames: a notch delivered late would move it
+        # from under the pointer
+        seen = []
+        frames_until(v, lambda: seen.append(v.widgets[label]) or seen[-3:] == [seen[-1]] * 3)
+        rect = x0, y0, x1, y1 = v.widgets[label]
+        slider_end = x1 - v.imgui.calc_text_size(label).x - v.imgui.get_style().item_inner_spacing.x
+        move(v, int(x0 + 0.3 * (slider_end - x0)), int((y0 + y1) / 2))
+        press(v)
+        frames_until(v, lambda: v.renderer.settings.path_queue == 1, timeout=2)   # the release's frame, late on a loaded machine
+        if v.renderer.settings.path_queue == 1 or v.widgets[label] == rect:
+            break
+        # the slider moved from under the pointer before the press (a scroll notch delivered
+        # later than three frames, seen on a loaded machine): pressed again where it now is
+    assert v.renderer.settings.path_queue == 1, (v.widgets[label], rect, v.panel_rect, scrolls, attempt)
     resets = v.renderer.resets
     frames_until(v, lambda: v.renderer.samples >= 2, timeout=300)     # its first launches compile on PoCL
     assert v.renderer.samples >= 2 and v.renderer.resets == resets
