@@ -626,14 +626,22 @@ def test_a_pbrt_render_to_exr_imports_no_other_scene_reader_and_no_opencv(tmp_pa
 
 
 def test_kernels_that_count_more_samples_than_they_drew_write_no_image(tmp_path, monkeypatch):
-    """A pixel keeps at most the samples drawn; more is a program its driver compiled wrongly
+    """A pixel keeps at most the samples drawn; more is a program built wrongly for its device
     (NVIDIA's driver 580 and the generic program: docs/notes/performance-2026-11.md, 2026-11-30),
-    whose image is wrong too: one line, a non-zero exit and no file."""
+    whose image is wrong too: one line, a non-zero exit and no file (one pixel's count one over
+    here)."""
     from pathtrace.rendering.renderer import Renderer
-    monkeypatch.setattr(Renderer, "dropped_samples", lambda self: -7)
+    read_sum = Renderer.read_sum
+
+    def overcounted(self):
+        sums = read_sum(self).copy()
+        sums[2, 3, 3] += 1.0
+        return sums
+    monkeypatch.setattr(Renderer, "read_sum", overcounted)
     out = tmp_path / "o.png"
     r = in_process("render", "simple", "-q", "--spp", "2", "--size", "8x8", "-o", out)
     errors = [line for line in r.stderr.splitlines() if "error" in line]
     assert r.returncode == 1 and not out.exists(), r.stderr
-    assert errors == ["pathtrace: error: simple: the kernels counted 7 samples more than they drew, so this "
-                      "device's driver built them wrongly; no image is given"], r.stderr
+    assert errors == ["pathtrace: error: simple: 1 pixels kept more samples than were drawn (up to 3 of 2): the "
+                      "kernels were built wrongly for this device; no image is given (pathtrace devices --check "
+                      "tests the generic kernels; --program specialised avoids them)"], r.stderr

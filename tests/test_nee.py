@@ -2,7 +2,6 @@
 estimator), and it lowers the variance by the factors measured below."""
 
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,6 +11,7 @@ from pathtrace.scene.environment import Environment
 from pathtrace.materials import pack
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import Mesh, SceneBuilder, diffuse, load_scene
+from tests.scene_files import SCENE_FILES, image_mean
 from tests.stats import z_test
 
 SPP = 2048
@@ -203,21 +203,7 @@ def test_a_phong_lobe_of_exponent_1e8_stays_finite_and_unbiased(backend, tmp_pat
 # measured 5.8 and 6.5 standard errors before the fix, 0.3 and 0.2 after. Delta lights, which
 # no path can hit, are taken out of the scenes.
 
-ROOT = Path(__file__).resolve().parent.parent
-SCENE_FILES = sorted([*(ROOT / "tests" / "scenes").glob("*.xml"), *(ROOT / "tests" / "scenes").glob("*.pbrt"),
-                      *(ROOT / "assets" / "scenes").glob("*.toml"), *(ROOT / "tests" / "references" / "pbrt-v4").glob("*.pbrt")])
-SCENE_SIZE = (16, 12)
 SCENE_SPP_BY_NEE = {False: 512, True: 128}
-
-
-def image_mean(backend, scene, spp):
-    """The image's mean per channel and its standard error, from the pixels' sample variances."""
-    r = Renderer(backend, scene, *SCENE_SIZE)
-    r.add_samples(spp)
-    r.finish()
-    assert r.dropped_samples() == 0
-    pixels = SCENE_SIZE[0] * SCENE_SIZE[1]
-    return r.mean().mean(axis=(0, 1)), np.sqrt(r.variance().sum(axis=(0, 1)) / r.samples) / pixels
 
 
 def test_every_kind_of_test_scene_is_here():

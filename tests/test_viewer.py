@@ -559,6 +559,7 @@ def test_the_speed_slider_turns_the_path_queue_on(viewer):
         xdo("click", 5)           # each notch waited for: one seen late would move the slider after
         frames_until(v, lambda: v.widgets.get(label) != before, timeout=10)
         scrolls += 1
+    settings = v.renderer.settings
     for attempt in range(3):
         # the slider where it has stayed for three frames: a notch delivered late would move it
         # from under the pointer
@@ -572,7 +573,9 @@ def test_the_speed_slider_turns_the_path_queue_on(viewer):
         if v.renderer.settings.path_queue == 1 or v.widgets[label] == rect:
             break
         # the slider moved from under the pointer before the press (a scroll notch delivered
-        # later than three frames, seen on a loaded machine): pressed again where it now is
+        # later than three frames, seen on a loaded machine): pressed again where it now is,
+        # the press that missed having changed no setting
+        assert v.renderer.settings == settings, (v.renderer.settings, settings)
     assert v.renderer.settings.path_queue == 1, (v.widgets[label], rect, v.panel_rect, scrolls, attempt)
     resets = v.renderer.resets
     frames_until(v, lambda: v.renderer.samples >= 2, timeout=300)     # its first launches compile on PoCL

@@ -24,8 +24,8 @@ def cmd_devices(args):
     for d in devices:
         line = f"[{d.index}] {d.describe()}, {d.device.max_compute_units} compute units"
         if args.check and generic_refused(d.device):
-            line += (": its generic kernels rendered wrongly at an earlier check (marked in the kernel cache, "
-                     "which a new version or driver checks again): scenes render with their own kernels")
+            line += (": its generic kernels rendered wrongly at an earlier check (a mark in the kernel cache, "
+                     "which a new version or driver does not have): scenes render with their own kernels")
         elif args.check:
             try:
                 b = open_device(d, mode="generic")
@@ -36,10 +36,12 @@ def cmd_devices(args):
                 line += (f": builds the generic kernels, without media and with ({time.perf_counter() - start + b.opened.seconds:.2f} s"
                          f"{', cached' if cached else ''})")
                 seconds, wrong = warm_up(b)
-                if wrong:
-                    b.refuse_generic()
+                if wrong and b.refuse_generic():
                     line += (f", and they render wrongly here ({wrong}): scenes render with their own kernels, "
                              "built before their first image")
+                elif wrong:
+                    line += (f", and they render wrongly here ({wrong}); the kernel cache is not writable, so no "
+                             "generic kernels are kept for renders to use")
                 else:
                     line += f" and renders with them ({seconds:.2f} s)"
             except cl.Error as e:
@@ -62,10 +64,10 @@ def warm_up(backend) -> tuple:
     media and with, with and without next-event estimation, so that a driver that compiles
     kernels at their first launch (PoCL, for each work-group size) has them in its cache before
     a user's first image; the seconds it took, and what was wrong with the renders ("" where
-    nothing was): every pixel of these scenes keeps each of its samples, a count no sound
-    program gets wrong (NVIDIA's driver 580 compiled the generic program's calls so that
-    pixels counted from a third to three times their samples, and their radiance with them:
-    docs/notes/performance-2026-11.md, 2026-11-30)."""
+    nothing was): every pixel of these scenes keeps each of its samples, none of which is NaN
+    or infinite in a sound program, a count it cannot get wrong (NVIDIA's driver 580 compiled
+    the generic program's calls so that pixels counted from a third to three times their
+    samples, and their radiance with them: docs/notes/performance-2026-11.md, 2026-11-30)."""
     from pathtrace.rendering.renderer import Renderer
     from pathtrace.scene import load_scene
     generic = backend.with_mode("generic")
@@ -95,7 +97,7 @@ def fog():
 def add_parser(sub):
     """The `devices` and `scenes` commands' parsers."""
     p = sub.add_parser("devices", help="list OpenCL platforms and devices")
-    p.add_argument("--check", action="store_true", help="also build the generic kernels on each and render with them once, which fills the drivers' caches (pathtrace.device.programs)")
+    p.add_argument("--check", action="store_true", help="also build the generic kernels on each and render with them once, which fills the drivers' caches (pathtrace.device.programs) and checks that each pixel kept its samples: where not, no render uses them")
     p.set_defaults(func=cmd_devices)
 
     p = sub.add_parser("scenes", help="list the built-in scenes")

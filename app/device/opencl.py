@@ -1,6 +1,7 @@
 """OpenCL devices: listing them, choosing one from the --device flag, and building the kernels
 (with a binary cache where the driver keeps none, so that a second start does not recompile)."""
 
+import functools
 import hashlib
 import os
 import sys
@@ -259,19 +260,20 @@ class Backend:
             return None
         return self.programs.built(Features.generic_program(media), tuned=True)
 
-    def refuse_generic(self):
+    def refuse_generic(self) -> bool:
         """Marks the generic programs as rendering wrongly on this device and driver (found by
         `pathtrace devices --check`), so that no render uses them: scenes then wait for their
-        own program's untuned build. Drops their cached binaries; an unwritable cache marks
-        nothing, and the check says so again at the next run."""
+        own program's untuned build. Drops their cached binaries. Whether the mark was made:
+        an unwritable cache holds none (nor, then, a generic program that a render would use)."""
         try:
             for media in (False, True):
                 generic_entry(self.device.device, self.extra, media).unlink(missing_ok=True)
             mark = generic_entry(self.device.device, self.extra, False).with_suffix(".wrong")
             mark.parent.mkdir(parents=True, exist_ok=True)
             mark.touch()
+            return True
         except OSError:
-            pass
+            return False
 
     def program_for(self, features: Features, tuned: bool = True) -> cl.Program:
         """The kernels specialised to `features` (on NVIDIA with `tuned`, under the register caps
@@ -311,13 +313,22 @@ def open_device(device: Device, extra: str = "", use_cache: bool = True, mode: s
 
 def generic_entry(device: cl.Device, extra: str, media: bool) -> Path:
     """The cache entry of the tuned generic program with or without media (cache_entry)."""
+    return _generic_entry(device, extra, media, cache_dir())
+
+
+@functools.lru_cache(maxsize=None)
+def _generic_entry(device: cl.Device, extra: str, media: bool, folder: Path) -> Path:
+    """generic_entry under cache folder `folder`: the kernels' source is assembled and hashed
+    once per process, not at every choice of a program."""
     generic = Features.generic_program(media)
     return cache_entry(device, kernel_source(extra, generic), program_options(device, generic), True)
 
 
 def generic_refused(device: cl.Device, extra: str = "") -> bool:
     """Whether `pathtrace devices --check` found the generic programs rendering wrongly on this
-    device and driver (Backend.refuse_generic): a mark beside the one without media's entry."""
+    device and driver (Backend.refuse_generic): a mark beside the one without media's entry. A
+    new pathtrace version or driver has entries of its own, without the mark, and the next
+    check tests them; deleting the `.wrong` file under the kernel cache tests them again."""
     return generic_entry(device, extra, False).with_suffix(".wrong").is_file()
 
 

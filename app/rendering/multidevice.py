@@ -166,8 +166,12 @@ class DeviceGroup:
         """The albedo, normal and depth over all devices (Renderer.read_aovs)."""
         return aov_means(self._merged(Renderer.read_albedo_sum), self._merged(Renderer.read_normal_sum))
 
+    def read_sum(self) -> np.ndarray:
+        """The radiance sums over all devices (Renderer.read_sum)."""
+        return self._merged(Renderer.read_sum)
+
     def mean(self) -> np.ndarray:
-        return (self._merged(Renderer.read_sum)[..., :3] / max(self.samples, 1)).astype(np.float32)
+        return (self.read_sum()[..., :3] / max(self.samples, 1)).astype(np.float32)
 
     def variance(self) -> np.ndarray:
         return variance_of(self._merged(Renderer.read_sum), self._merged(Renderer.read_sum_sq), self.samples)

@@ -3,8 +3,10 @@ what the file says (docs/notes/performance-2026-11.md, 2026-11-30, tenth session
 half stands 3-8 % above Tungsten's reference in pathtrace's path tracer and BDPT alike. Written
 from the file by hand, not by pathtrace's reader: the camera from the file's Transform (pbrt's
 world-to-camera, its 16 numbers column by column), the shapes' PLY files as they are, the two
-emitting quads as PLY files, pbrt's diffuse and conductor two-sided as pbrt's BSDFs are, and
-maxdepth 7 (bounces) as Mitsuba's max_depth 8 (segments).
+emitting quads as PLY files, pbrt's diffuse and conductor two-sided as pbrt's BSDFs are,
+maxdepth 7 (bounces) as Mitsuba's max_depth 8 (segments), and the file's triangle filter of
+radius 1 as Mitsuba's tent (radius 1), at 64x64. The sampler's count is a placeholder: the
+samples per pixel are given to mi.render(scene, spp=...).
 python docs/notes/studies/veach_bidir_mitsuba.py FOLDER OUT.xml, where FOLDER holds
 scene-v4.pbrt and its models/."""
 import sys
