@@ -81,10 +81,6 @@ class Features:
                         media=media, null_surfaces=media, camera=GENERIC, filter=GENERIC,
                         russian_roulette=GENERIC, stack=48, instance_stack=48, generic=True)
 
-    def generic_variant(self) -> "Features":
-        """The generic program that renders a scene of these features."""
-        return Features.generic_program(media=self.media)
-
     def defines(self) -> tuple:
         return ((() if self.spheres else ("NO_SPHERES",)) + (() if self.triangles else ("NO_TRIANGLES",))
                 + (("SHAPES",) if self.shapes else ())

@@ -3,8 +3,6 @@ them against the device's own sizeof and offsetof)."""
 
 import numpy as np
 
-SPHERE = np.dtype((np.float32, 4))  # centre xyz, radius w
-
 TRIANGLE = np.dtype([
     ("v0", np.float32, 4),          # w: first shading normal's index (int bits), or -1
     ("v1", np.float32, 4),          # w: first texture coordinate's index (int bits), or -1

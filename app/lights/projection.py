@@ -21,8 +21,6 @@ from pathtrace.resources import resource_dir
 from pathtrace.device.slots import Slot, write_slot
 from pathtrace.textures import TEXTURES, Image, Texture
 
-HITHER = 1e-3       # pbrt-v4's ProjectionLight: no light at w.z below it
-
 
 def screen(image: Image) -> np.ndarray:
     """The screen's half extents (x, y) for an image of its size: 1 on the shorter axis."""
