@@ -9,6 +9,7 @@ from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import RenderSettings, SceneBuilder, diffuse, load_scene
 from pathtrace.scene.builtin import BUILTIN_SCENES
 from tests.stats import z_test
+from tests.test_bdpt import pool_scene
 
 
 def accumulate(renderer, launches):
@@ -130,3 +131,32 @@ def test_sums_stay_exact_over_millions_of_samples(backend):
     np.testing.assert_allclose(r.mean(), np.float32(0.1), rtol=3e-6)
     assert r.read_sum()[0, 0, 3] == n and r.dropped_samples() == 0 and r.rays_traced() == n
     np.testing.assert_allclose(r.variance(), 0.0, atol=1e-8)
+
+
+@pytest.mark.parametrize("settings", [{"integrator": "path", "path_queue": 1}, {"integrator": "bdpt", "photon_radius": 0.0},
+                                      {"integrator": "bdpt", "photon_radius": 0.05}],
+                         ids=["path-queue", "bdpt", "bdpt-photons"])
+def test_a_render_reads_nothing_it_has_not_written(backend, monkeypatch, settings):
+    """A GPU's fresh buffers hold whatever was there, where PoCL's are zeroed: with every buffer
+    the renderer makes without data filled with random bytes first, the image is the one of
+    zeroed buffers (the path queue's, BDPT's splat film and the photon map included; BDPT's
+    splats are added by atomics in any order, so to float rounding)."""
+    import pyopencl as cl
+    scene = pool_scene().with_settings(seed=5, **settings)
+
+    def image():
+        r = Renderer(backend, scene, 24, 16)
+        r.add_samples(4)
+        r.finish()
+        assert r.dropped_samples() == 0
+        return r.mean()
+    clean = image()
+    rng, buffer = np.random.default_rng(2), cl.Buffer
+
+    def garbage(context, flags, size=0, hostbuf=None):
+        buf = buffer(context, flags, size, hostbuf)
+        if hostbuf is None and size:
+            cl.enqueue_copy(backend.queue, buf, rng.integers(0, 256, size, dtype=np.uint8))
+        return buf
+    monkeypatch.setattr(cl, "Buffer", garbage)
+    assert np.allclose(image(), clean, rtol=1e-5, atol=1e-7)
