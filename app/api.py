@@ -294,8 +294,6 @@ def progressive(scene, spp=None, steps=None, size=None, device="auto", seed=None
             start = time.perf_counter()
             group.render(target, on_progress)
             seconds += time.perf_counter() - start
-            if target == steps[-1]:
-                _check_counts(scene, group)
             read = group.read_aovs() if aovs else {}
             yield Snapshot(target, seconds, group.mean(), {name: read[name] for name in aovs})
     finally:
@@ -304,20 +302,6 @@ def progressive(scene, spp=None, steps=None, size=None, device="auto", seed=None
     if dropped:
         warn(f"{scene.name}: {dropped} of {steps[-1] * settings.width * settings.height} samples were NaN "
              f"or infinite and were left out (as black)")
-
-
-def _check_counts(scene, group):
-    """Refuses the image of a render in which a pixel kept more samples than were drawn: no
-    sound program does that, and a program built wrongly for its device does (the generic
-    program as NVIDIA's driver 580 builds it: docs/notes/performance-2026-11.md, 2026-11-30),
-    its radiance wrong too. A program that keeps fewer is not told from one that drops NaN
-    samples (the warning after the render)."""
-    kept = group.read_sum()[..., 3]
-    over = int((kept > group.samples + 0.5).sum())
-    if over:
-        raise UserError(f"{scene.name}: {over} pixels kept more samples than were drawn (up to {kept.max():.0f} of "
-                        f"{group.samples}): the kernels were built wrongly for this device; no image is given "
-                        "(pathtrace devices --check tests the generic kernels; --program specialised avoids them)")
 
 
 def render(scene, spp=None, size=None, device="auto", seed=None, max_depth=None, rr=None, nee=None,

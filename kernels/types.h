@@ -191,8 +191,8 @@ typedef struct {
     float4 sigma_t;   /* extinction coefficient sigma_a + sigma_s (rgb); w unused */
 } Medium;
 
-/* A caustic photon (kernels/photons.cl): where a light subpath first met a surface that is not
- * a delta after delta bounces alone. */
+/* A caustic photon (kernels/photons.cl): where a light subpath met a surface that is not a
+ * delta after delta bounces alone (one such surface chosen, where it met several). */
 typedef struct {
     float4 p;        /* xyz: the point; w: its vertex's index on the light subpath (2 or more) */
     float4 beta;     /* xyz: the light subpath's throughput there (its flux times the subpaths

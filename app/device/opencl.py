@@ -298,30 +298,29 @@ def open_device(device: Device, extra: str = "", use_cache: bool = True, mode: s
     runs it)."""
     context = cl.Context([device.device])
     queue = cl.CommandQueue(context, properties=cl.command_queue_properties.PROFILING_ENABLE)
-    generic = Features.generic_program(media=False)     # most scenes' (the viewer's first)
-    source, options = kernel_source(extra, generic), program_options(device.device, generic)
-    fast = ((keeps_own_cache(device.device) or cache_entry(device.device, source, options, True).is_file())
-            and not generic_refused(device.device, extra))
+    source, options, entry = _generic_build(device.device, extra, False, cache_dir())   # most scenes' (the viewer's first)
+    fast = (keeps_own_cache(device.device) or entry.is_file()) and not generic_refused(device.device, extra)
     if not fast:
         source, options = display_source(), list(BUILD_OPTIONS)
     opened = build_cached(context, device.device, source, options, use_cache, fast)   # tuned: the generic program
     backend = Backend(device, context, queue, opened, extra, use_cache, mode or default_mode())
     if fast:
-        backend.programs.add(generic, True, opened.program)
+        backend.programs.add(Features.generic_program(media=False), True, opened.program)
     return backend
 
 
 def generic_entry(device: cl.Device, extra: str, media: bool) -> Path:
     """The cache entry of the tuned generic program with or without media (cache_entry)."""
-    return _generic_entry(device, extra, media, cache_dir())
+    return _generic_build(device, extra, media, cache_dir())[2]
 
 
 @functools.lru_cache(maxsize=None)
-def _generic_entry(device: cl.Device, extra: str, media: bool, folder: Path) -> Path:
-    """generic_entry under cache folder `folder`: the kernels' source is assembled and hashed
-    once per process, not at every choice of a program."""
+def _generic_build(device: cl.Device, extra: str, media: bool, folder: Path) -> tuple:
+    """The generic program's source, build options and cache entry under cache folder `folder`:
+    assembled and hashed once per process, for open_device and for every choice of a program."""
     generic = Features.generic_program(media)
-    return cache_entry(device, kernel_source(extra, generic), program_options(device, generic), True)
+    source, options = kernel_source(extra, generic), program_options(device, generic)
+    return source, options, cache_entry(device, source, options, True)
 
 
 def generic_refused(device: cl.Device, extra: str = "") -> bool:

@@ -17,6 +17,7 @@ import numpy as np
 
 from pathtrace.compiler.compiled import CompiledScene, compile_scene
 from pathtrace.device.opencl import Backend
+from pathtrace.errors import UserError
 from pathtrace.rendering.launches import next_launch_size
 from pathtrace.rendering.renderer import Renderer, aov_means, variance_of
 
@@ -166,12 +167,21 @@ class DeviceGroup:
         """The albedo, normal and depth over all devices (Renderer.read_aovs)."""
         return aov_means(self._merged(Renderer.read_albedo_sum), self._merged(Renderer.read_normal_sum))
 
-    def read_sum(self) -> np.ndarray:
-        """The radiance sums over all devices (Renderer.read_sum)."""
-        return self._merged(Renderer.read_sum)
-
     def mean(self) -> np.ndarray:
-        return (self.read_sum()[..., :3] / max(self.samples, 1)).astype(np.float32)
+        """The image so far. Refused where a pixel kept more samples than were drawn: no sound
+        program does that, and one built wrongly for its device does (the generic program as
+        NVIDIA's driver 580 builds it: docs/notes/performance-2026-11.md, 2026-11-30), its
+        radiance wrong too. One that keeps fewer is not told from one that drops NaN samples
+        (dropped_samples)."""
+        sums = self._merged(Renderer.read_sum)
+        kept = sums[..., 3]
+        over = int((kept > self.samples + 0.5).sum())
+        if over:
+            raise UserError(f"{self.compiled.scene.name}: {over} pixels kept more samples than were drawn (up to "
+                            f"{kept.max():.0f} of {self.samples}): the kernels were built wrongly for this device; "
+                            "no image is given (pathtrace devices --check tests the generic kernels; "
+                            "--program specialised avoids them)")
+        return (sums[..., :3] / max(self.samples, 1)).astype(np.float32)
 
     def variance(self) -> np.ndarray:
         return variance_of(self._merged(Renderer.read_sum), self._merged(Renderer.read_sum_sq), self.samples)
