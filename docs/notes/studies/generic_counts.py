@@ -24,7 +24,7 @@ device = sys.argv[1] if len(sys.argv) > 1 else "gpu"
 inlined = DISPATCH if sys.argv[2:] == ["all"] else tuple(sys.argv[2:])
 unknown = set(inlined) - set(DISPATCH)
 if unknown:
-    sys.exit(f"not a dispatch function: {', '.join(sorted(unknown))} (they are: {', '.join(DISPATCH)})")
+    sys.exit(f"not a dispatch function: {', '.join(map(repr, sorted(unknown)))} (they are: {', '.join(DISPATCH)})")
 
 source_of = opencl.kernel_source
 
