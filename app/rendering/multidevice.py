@@ -170,8 +170,8 @@ class DeviceGroup:
     def mean(self) -> np.ndarray:
         """The image so far. Refused where a pixel kept more samples than were drawn: no sound
         program does that, and one built wrongly for its device does (the generic program as
-        NVIDIA's driver 580 builds it: docs/notes/performance-2026-11.md, 2026-11-30), its
-        radiance wrong too. One that keeps fewer is not told from one that drops NaN samples
+        NVIDIA's driver 580 built it with eval_leaf_texture called: docs/notes/performance-2026-11.md,
+        2026-11-30), its radiance wrong too. One that keeps fewer is not told from one that drops NaN samples
         (dropped_samples)."""
         sums = self._merged(Renderer.read_sum)
         kept = sums[..., 3]

@@ -41,7 +41,11 @@ def kernel_parts(names) -> list:
         cases = "".join(f"    case TEXTURE_{n.upper()}: return eval_{n}({args});\n" for n in types)
         return (f"{signature}\n{{\n" + ("    const global Texture *t = &sc->textures[i];\n" if "int i" in signature else "")
                 + f"    switch (t->type) {{\n{cases}    default: return (float3)(0.0f);\n    }}\n}}\n")
-    leaf_dispatch = (dispatch("DISPATCH float3 eval_leaf_texture(const SceneData *sc, int i, float2 uv)", leaves, "sc, t, uv")
+    # eval_leaf_texture stays inlined even in a GPU's generic program: NVIDIA's driver 580 built
+    # a generic program with it called (DISPATCH) that kept 101 to 765 of a pixel's 256 samples,
+    # where inlining it alone of the dispatch functions made the program keep every sample
+    # (docs/notes/performance-2026-11.md, 2026-11-30 eleventh session)
+    leaf_dispatch = (dispatch("float3 eval_leaf_texture(const SceneData *sc, int i, float2 uv)", leaves, "sc, t, uv")
                      + "float3 eval_input(const SceneData *sc, const global Texture *t, int k, float2 uv, const float3 *r)\n"
                        "{\n    int i = t->input[k];\n"
                        "    return i >= 0 ? eval_leaf_texture(sc, i, uv) : (i == -1 ? t->value[k].xyz : r[-2 - i]);\n}\n")

@@ -18,7 +18,7 @@ from pathtrace.filters import PixelFilter                                       
 from pathtrace.rendering.renderer import Renderer                                 # noqa: E402
 from pathtrace.scene import load_scene                                            # noqa: E402
 
-DISPATCH = ("eval_bsdf", "pdf_bsdf", "sample_bsdf", "sample_light_of_type", "eval_leaf_texture", "eval_combined",
+DISPATCH = ("eval_bsdf", "pdf_bsdf", "sample_bsdf", "sample_light_of_type", "eval_combined",
             "eval_texture")
 device = sys.argv[1] if len(sys.argv) > 1 else "gpu"
 inlined = DISPATCH if sys.argv[2:] == ["all"] else tuple(sys.argv[2:])
