@@ -192,6 +192,10 @@ int extend_subpath(const SceneData *sc, const RenderParams *p, Vertex *path, int
         float3 weight = bs.weight;
         if (importance)
             weight *= bs.eta * bs.eta * correct_shading_normal(v, -d, wi);
+#ifdef NORMAL_MAPS
+        /* the shadowing of the side light comes from (eval_scattering) */
+        weight *= shadow_terminator(&s, importance ? -d : wi);
+#endif
         float pdf_rev = 0.0f;
         if (bs.lobe & LOBE_DELTA) {
             v->delta = 1;

@@ -102,6 +102,8 @@ float correct_shading_normal(const Vertex *v, float3 wo, float3 wi)
 /* The BSDF of surface vertex v for light arriving along world direction `from` and leaving
  * along `to` (radiance flows from `from` to `to`), without the cosine; 0 where the shading and
  * geometric normals disagree on either side (no light leaks, as next-event estimation tests).
+ * A perturbed normal's shadowing of `from`, the side light comes from, as the path tracer
+ * weighs it (kernels/normal_maps.cl: shadow_terminator), so that both estimate one image.
  * A medium vertex's phase function, which is symmetric. */
 float3 eval_scattering(const SceneData *sc, const Vertex *v, float3 from, float3 to)
 {
@@ -110,7 +112,11 @@ float3 eval_scattering(const SceneData *sc, const Vertex *v, float3 from, float3
     float3 a = to_shading(&v->s, from), b = to_shading(&v->s, to);
     if (dot(from, v->s.ng) * a.z <= 0.0f || dot(to, v->s.ng) * b.z <= 0.0f)
         return (float3)(0.0f);
+#ifdef NORMAL_MAPS
+    return eval_bsdf(VERTEX_MATERIAL(v), b, a) * shadow_terminator(&v->s, from);
+#else
     return eval_bsdf(VERTEX_MATERIAL(v), b, a);
+#endif
 }
 
 /* The density per solid angle with which vertex v, reached along `wo`, samples `wi`. */

@@ -30,7 +30,13 @@ def z_test(mean, var_of_mean, ref, ref_var_of_mean=0.0, alpha=0.001, block=1, re
     # the blocks, then the whole image: the blocks' mean, whose variance is theirs over the count
     m, r, v = (np.concatenate([x, x.mean(axis=0, keepdims=True) / (len(x) if k == 2 else 1)])
                for k, x in enumerate(blocks))
-    z = (m - r) / np.sqrt(v + (rel_floor * np.abs(r)) ** 2 + 1e-30)
+    return z_test_of(m, v, r, alpha, rel_floor)
+
+
+def z_test_of(mean, variance, ref, alpha=0.001, rel_floor=1e-5):
+    """z_test's test of values (blocks' means, an image's) against `ref`, given the variance of
+    their differences, with the Sidak correction for their count."""
+    z = (mean - ref) / np.sqrt(variance + (rel_floor * np.abs(ref)) ** 2 + 1e-30)
     p = 2 * stats.norm.sf(np.abs(z))
     threshold = 1 - (1 - alpha) ** (1 / p.size)
     return bool(p.min() >= threshold), float(p.min()), threshold
