@@ -20,9 +20,12 @@
  * Delta lobes are not joined (their vertices are not connectible) and delta lights are not hit,
  * as in pbrt; the lens (a pinhole or a thin lens) is reached by joins, never by a light subpath
  * hitting it (t = 0, which pbrt leaves out too).
- * Directional lights and the environment start no light subpath (app/lights/registry.py:
- * EMITTERS): a path that ends there has two strategies, s = 0 and s = 1, weighed against each
- * other as the path tracer does. There is no Russian roulette (pbrt-v4's BDPT has none): paths
+ * The environment and directional lights start light subpaths too, from a disk across the
+ * scene (kernels/lights.cl: leave_world_disk), and their vertices are directions, whose
+ * densities are per solid angle, as pbrt-v4's infinite lights' are (kernels/bdpt_vertex.cl:
+ * at_infinity): a camera subpath that escapes ends on such a vertex (s = 0), and a light
+ * subpath's second vertex is drawn with the disk's density per area times its cosine. There is
+ * no Russian roulette (pbrt-v4's BDPT has none): paths
  * end at depth BDPT. Light subpaths carry importance: BSDFs are evaluated as their adjoints
  * (arguments swapped, kernels/bsdf.cl's radiance convention), a delta refraction keeps the eta^2
  * that radiance loses, and shading normals are corrected as Veach's section 5.3 says.
@@ -39,236 +42,6 @@
  *
  * With PHOTONS, the paths that only s = 0 samples and only by chance (a surface seen and lit
  * through delta bounces alone) are left to caustic photons instead (kernels/photons.cl). */
-
-/* The unit normal on the front of emissive primitive `prim` at its point y. */
-float3 emitter_normal(const SceneData *sc, int prim, float3 y)
-{
-#ifndef NO_TRIANGLES
-    if (prim >= sc->num_spheres) {
-        const global Triangle *tri = &sc->triangles[prim - sc->num_spheres];
-#ifdef SHAPES
-        if (SHAPE_KIND(tri)) {
-            const global float4 *f = SHAPE_ROWS(sc, tri);
-            float3 p, error, n;
-            analytic_surface(SHAPE_KIND(tri), f, analytic_params(SHAPE_KIND(tri), f, y), &p, &error, &n);
-            return n;
-        }
-#endif
-        return triangle_normal(tri);
-    }
-#endif
-    Sphere s = sc->spheres[prim];
-    return (y - s.xyz) / s.w;
-}
-
-/* The density per area with which a light subpath starts at point y of emissive primitive
- * `prim`: the light's choice by power times its area's inverse (pbrt's PdfLightOrigin), or an
- * analytic shape's density there. */
-float pdf_emitter_origin(const SceneData *sc, int prim, float3 y)
-{
-#ifndef NO_TRIANGLES
-    if (prim >= sc->num_spheres) {
-        const global Triangle *tri = &sc->triangles[prim - sc->num_spheres];
-#ifdef SHAPES
-        if (SHAPE_KIND(tri)) {
-            const global float4 *f = SHAPE_ROWS(sc, tri);
-            return sc->light_pick[prim] * analytic_pdf_area(SHAPE_KIND(tri), f, analytic_params(SHAPE_KIND(tri), f, y));
-        }
-#endif
-        return sc->light_pick[prim] / triangle_area(tri);
-    }
-#endif
-    float r = sc->spheres[prim].w;
-    return sc->light_pick[prim] / (4.0f * PI_F * r * r);
-}
-
-/* Traces subpath `path` on from its vertex k - 1 along the ray o + t d (leaving surface `self`,
- * in `medium`), whose direction was drawn with density pdf_dir per solid angle (0: a delta
- * lobe), with throughput beta, to at most max_vertices vertices; returns its vertex count.
- * Each new vertex stores its forward density, and the reverse density of the one before it. A
- * camera subpath (importance 0) that escapes adds the environment's radiance to *escaped,
- * weighted against light sampling as the path tracer weighs it; a light subpath (importance 1)
- * scatters by the adjoint BSDFs. */
-int extend_subpath(const SceneData *sc, const RenderParams *p, Vertex *path, int k, int max_vertices,
-                   float3 o, float3 d, float3 beta, float pdf_dir, PrimId self, int medium, const int importance,
-                   Rng *rng, int *rays, float3 *escaped)
-{
-    while (k < max_vertices) {
-        Vertex *prev = &path[k - 1], *v = &path[k];
-        ++*rays;
-        Hit hit = intersect_scene(sc, o, d, INFINITY, self);
-#ifdef MEDIA
-        v->medium = medium;
-        v->in_medium = 0;
-        if (medium >= 0) {
-            const global Medium *med = &sc->media[medium];
-            float4 u = next_uniform4(rng);
-            FreeFlight flight = sample_free_flight(med, hit.t, min((int)(3.0f * u.x), 2), u.y);
-            beta *= flight.weight / dot(flight.ratio, (float3)(1.0f / 3.0f));
-            if (flight.scattered) {
-                v->s.p = o + flight.t * d;
-                v->s.ng = v->s.ns = (float3)(0.0f);
-                v->s.offset = 0.0f;
-                v->s.prim = -1;
-#ifdef INSTANCES
-                v->s.instance = -1;
-#endif
-                v->in_medium = 1;
-                v->wo = -d;
-                v->beta = beta;
-                v->pdf_fwd = convert_density(pdf_dir, prev->s.p, v->s.p, v->s.ng);
-                v->pdf_rev = 0.0f;
-                v->delta = 0;
-                v->connectible = 1;
-                v->emits = 0;
-                if (++k >= max_vertices || all(beta == 0.0f))
-                    return k;
-                /* the phase function is sampled exactly (weight 1) and is symmetric: the
-                   reverse density is the forward one */
-                d = sample_hg(med->sigma_s.w, -d, u.zw, &pdf_dir);
-                prev->pdf_rev = convert_density(pdf_dir, v->s.p, prev->s.p, prev->s.ng);
-                o = v->s.p;
-                self = NO_PRIM;
-                continue;
-            }
-        }
-#endif
-        if (hit.prim < 0) {
-            if (!importance) {
-                /* the camera ray itself has no light-sampling rival (the path tracer's pdf_prev 0) */
-                float w = 1.0f;
-                if (k > 1 && pdf_dir > 0.0f && p->env_pick > 0.0f)
-                    w = mis_weight(pdf_dir, p->env_pick * pdf_environment(sc, p, prev->s.ns, d));
-                *escaped += beta * lookup_environment(sc->env, p, d) * w;
-            }
-            return k;
-        }
-        Surface s = surface_at(sc, &hit, o, d);
-        int flags = sc->materials[sc->prim_material[hit.prim]].flags;
-#ifdef NULL_SURFACES
-        if (flags & MATERIAL_NULL) {
-            /* no vertex: the ray goes on through, into the medium beyond */
-            medium = medium_after(sc, &s, d, medium);
-            o = offset_ray_origin(s.p, s.offset, s.ng, d);
-            self = HIT_ID(hit);
-            continue;
-        }
-#endif
-        int front = dot(s.ng, d) < 0.0f;
-        /* one-sided, as the path tracer's surfaces (kernels/integrator.cl: trace_path) */
-        int scatters = front || (flags & (MATERIAL_TWOSIDED | MATERIAL_TRANSMISSIVE));
-        if (!front && (flags & MATERIAL_TWOSIDED))
-            turn_round(&s);
-#ifdef TEXTURES
-        v->m = shade_material(sc, MATERIAL_ROW(sc, s, d), &s, -d);
-#else
-        v->m = MATERIAL_ROW(sc, s, d);
-#endif
-        complete_frame(sc, &s);
-        v->s = s;
-        v->wo = -d;
-        v->beta = beta;
-        v->pdf_fwd = convert_density(pdf_dir, prev->s.p, s.p, s.ng);
-        v->pdf_rev = 0.0f;
-        v->delta = 0;
-        MaterialRef m = VERTEX_MATERIAL(v);
-        v->emits = front || (flags & MATERIAL_EMITS_BACK);
-        v->connectible = scatters && !(m->flags & MATERIAL_DELTA);
-        if (!scatters || k + 1 >= max_vertices)
-            return k + 1;
-        float3 wo = to_shading(&s, -d);
-        float4 u = next_uniform4(rng);
-        BSDFSample bs;
-        bs.eta = 1.0f;
-        if (!sample_bsdf(m, wo, u.xyz, &bs))
-            return k + 1;
-        float3 wi = from_shading(&s, bs.wi);
-        if (dot(wi, s.ng) * bs.wi.z <= 0.0f)
-            return k + 1;                    /* the normals disagree on wi's side */
-        /* importance scatters by the adjoint BSDF f(wi, wo): the BSDFs are reciprocal but for
-           a refraction's 1 / eta^2, which radiance takes and importance not (pbrt's
-           TransportMode), so its weight is radiance's times eta^2; a layered BSDF's estimate
-           (kernels/layered.cl) keeps this form, where f(wi, wo) / pdf would not */
-        float3 weight = bs.weight;
-        if (importance)
-            weight *= bs.eta * bs.eta * correct_shading_normal(v, -d, wi);
-#ifdef NORMAL_MAPS
-        /* the shadowing of the side light comes from (eval_scattering) */
-        weight *= shadow_terminator(&s, importance ? -d : wi);
-#endif
-        float pdf_rev = 0.0f;
-        if (bs.lobe & LOBE_DELTA) {
-            v->delta = 1;
-            pdf_dir = 0.0f;
-        } else {
-            pdf_dir = bs.pdf;
-            pdf_rev = pdf_bsdf(m, bs.wi, wo);
-        }
-        beta *= weight;
-        if (all(beta == 0.0f))
-            return k + 1;
-        prev->pdf_rev = convert_density(pdf_rev, s.p, prev->s.p, prev->s.ng);
-        o = offset_ray_origin(s.p, s.offset, s.ng, wi);
-        d = wi;
-        self = HIT_ID(hit);
-#ifdef MEDIA
-        medium = medium_after(sc, &s, wi, medium);
-#endif
-        ++k;
-    }
-    return k;
-}
-
-/* A light subpath in lt (at most max_vertices vertices, the light's own first): a light
- * chosen by power through the alias table, light leaving it (emit_light_of_type); returns its
- * vertex count, 0 where the light chosen starts none. *light_delta: its position is a delta. */
-int trace_light_subpath(const SceneData *sc, const RenderParams *p, Vertex *lt, int max_vertices, Rng *rng,
-                        int *rays, int *light_delta)
-{
-    uint4 r = next_bits4(rng);
-    float4 u = next_uniform4(rng);
-    if (p->num_lights <= 0 || max_vertices < 1)
-        return 0;
-    const global Light *l = &sc->lights[pick_light(sc->lights, p->num_lights, r.w, r.x)];
-    LightEmission e;
-    if (!emit_light_of_type(sc, l, u, &e) || all(e.le == 0.0f))
-        return 0;
-    float origin = l->pick * e.pdf_pos;
-    lt[0].s.p = e.p;
-    lt[0].s.ng = e.n;
-    lt[0].s.prim = e.prim;
-    lt[0].s.offset = e.offset;
-#ifdef INSTANCES
-    lt[0].s.instance = -1;
-#endif
-    lt[0].beta = e.le;
-    lt[0].pdf_fwd = origin;
-    lt[0].pdf_rev = 0.0f;
-    lt[0].delta = 0;
-    lt[0].connectible = 0;
-    lt[0].emits = 0;
-#ifdef MEDIA
-    /* e.n is on the side light leaves, which for an emitter of both sides may be its back */
-    lt[0].s.side = e.prim >= 0 && dot(e.n, emitter_normal(sc, e.prim, e.p)) < 0.0f ? -1.0f : 1.0f;
-    lt[0].in_medium = 0;
-    /* where the emitter bounds media, medium_towards reads its side; elsewhere the light is in
-       the medium around it */
-    lt[0].medium = e.prim >= 0 && sc->prim_media[e.prim] != NO_MEDIUM_CHANGE
-                   ? -1 : medium_at(sc, p->eye.xyz, p->camera_medium, e.p, rays);
-#endif
-    *light_delta = e.delta;
-    float c = e.prim >= 0 ? fabs(dot(e.n, e.d)) : 1.0f;
-    float3 beta = e.le * (c / (origin * e.pdf_dir));
-    float3 o = e.prim >= 0 ? offset_ray_origin(e.p, e.offset, e.n, e.d) : e.p;
-#ifdef INSTANCES
-    PrimId self = NO_PRIM;    /* the light table's primitives are not instanced */
-#else
-    PrimId self = e.prim >= 0 ? e.prim : NO_PRIM;
-#endif
-    float3 unused = (float3)(0.0f);
-    return extend_subpath(sc, p, lt, 1, max_vertices, o, e.d, beta, e.pdf_dir, self, medium_towards(sc, &lt[0], e.d),
-                          1, rng, rays, &unused);
-}
 
 /* The fraction of light that crosses the segment from vertex a to point b: 0 or 1 by whether
  * anything blocks it (b itself excluded, stopping just short of it as light_visibility does),
@@ -292,9 +65,13 @@ float3 segment_transmittance(const SceneData *sc, const Vertex *a, float3 b, int
  * s - 1 and s - 2) for each kind of connection: pbrt's Vertex::Pdf and PdfLight, PdfLightOrigin
  * as pbrt-v4's MISWeight assigns them. */
 
-/* s = 0: camera vertex pt, after pm, lies on an emitter. */
-float4 densities_from_emitter(const SceneData *sc, const Vertex *pt, const Vertex *pm)
+/* s = 0: camera vertex pt, after pm, lies on an emitter, or is the environment's at infinity. */
+float4 densities_from_emitter(const SceneData *sc, const RenderParams *p, const Vertex *pt, const Vertex *pm)
 {
+    if (pt->at_infinity) {
+        float3 d = -pt->wo;
+        return (float4)(p->env_pick * pdf_environment_emission(sc, p, d), density_from_infinity(p, d, pm), 0.0f, 0.0f);
+    }
     int prim = pt->s.prim;
     float3 n = emitter_normal(sc, prim, pt->s.p);
     return (float4)(pdf_emitter_origin(sc, prim, pt->s.p),
@@ -302,13 +79,22 @@ float4 densities_from_emitter(const SceneData *sc, const Vertex *pt, const Verte
 }
 
 /* s = 1: light l sampled at point y (normal n, 0 for a point) from camera vertex pt, after pm. */
-float4 densities_to_light(const SceneData *sc, const global Light *l, float3 y, float3 n, const Vertex *pt,
-                          const Vertex *pm)
+float4 densities_to_light(const SceneData *sc, const RenderParams *p, const global Light *l, float3 y, float3 n,
+                          const Vertex *pt, const Vertex *pm)
 {
     float3 wi = unit(y - pt->s.p);
-    return (float4)(convert_density(pdf_emission_of_type(sc, l, n, -wi), y, pt->s.p, pt->s.ng),
+    return (float4)(convert_density(pdf_emission_of_type(sc, p, l, n, -wi), y, pt->s.p, pt->s.ng),
                     convert_density(pdf_scattering(sc, pt, wi, pt->wo), pt->s.p, pm->s.p, pm->s.ng),
                     convert_density(pdf_scattering(sc, pt, pt->wo, wi), pt->s.p, y, n), 0.0f);
+}
+
+/* s = 1: a light at infinity sampled in direction wi from camera vertex pt, after pm. */
+float4 densities_to_infinity(const SceneData *sc, const RenderParams *p, float3 wi, const Vertex *pt,
+                             const Vertex *pm)
+{
+    return (float4)(density_from_infinity(p, -wi, pt),
+                    convert_density(pdf_scattering(sc, pt, wi, pt->wo), pt->s.p, pm->s.p, pm->s.ng),
+                    pdf_scattering(sc, pt, pt->wo, wi), 0.0f);
 }
 
 /* s >= 2, t >= 2: light vertex qs, after qm, joined to camera vertex pt, after pm. */
@@ -319,7 +105,7 @@ float4 densities_between(const SceneData *sc, const Vertex *qs, const Vertex *qm
     return (float4)(convert_density(pdf_scattering(sc, qs, qs->wo, -w), qs->s.p, pt->s.p, pt->s.ng),
                     convert_density(pdf_scattering(sc, pt, w, pt->wo), pt->s.p, pm->s.p, pm->s.ng),
                     convert_density(pdf_scattering(sc, pt, pt->wo, w), pt->s.p, qs->s.p, qs->s.ng),
-                    convert_density(pdf_scattering(sc, qs, -w, qs->wo), qs->s.p, qm->s.p, qm->s.ng));
+                    density_at(pdf_scattering(sc, qs, -w, qs->wo), qs->s.p, qm));
 }
 
 /* t = 1: light vertex qs, after qm, joined to the lens at point `lens`. */
@@ -329,12 +115,12 @@ float4 densities_to_camera(const SceneData *sc, const RenderParams *p, const Ver
     float3 w = unit(lens - qs->s.p);
     return (float4)(0.0f, 0.0f,
                     convert_density(pdf_camera_direction(p, -w), lens, qs->s.p, qs->s.ng),
-                    convert_density(pdf_scattering(sc, qs, w, qs->wo), qs->s.p, qm->s.p, qm->s.ng));
+                    density_at(pdf_scattering(sc, qs, w, qs->wo), qs->s.p, qm));
 }
 
 /* Strategy s = 0: camera vertex t - 1 (t >= 2) lies on an emitter; the radiance it sends back
  * along the camera subpath, weighted. */
-float3 connect_emitter(const SceneData *sc, const Vertex *lt, const Vertex *cam, int t)
+float3 connect_emitter(const SceneData *sc, const RenderParams *p, const Vertex *lt, const Vertex *cam, int t)
 {
     const Vertex *pt = &cam[t - 1], *pm = &cam[t - 2];
     if (!pt->emits)
@@ -343,15 +129,19 @@ float3 connect_emitter(const SceneData *sc, const Vertex *lt, const Vertex *cam,
     if (photons_estimate(cam, t))
         return (float3)(0.0f);        /* the photons count this path (kernels/photons.cl) */
 #endif
-    float3 le = VERTEX_MATERIAL(pt)->emission.xyz;
+    float3 le = pt->at_infinity ? lookup_environment(sc->env, p, -pt->wo) : VERTEX_MATERIAL(pt)->emission.xyz;
     if (all(le == 0.0f))
         return (float3)(0.0f);
-    return pt->beta * le * bdpt_mis_weight(lt, 0, cam, t, densities_from_emitter(sc, pt, pm), 0.0f, 0);
+    /* an environment that is no light (no power) has no other strategy */
+    if (pt->at_infinity && !(p->env_pick > 0.0f))
+        return pt->beta * le;
+    return pt->beta * le * bdpt_mis_weight(lt, 0, cam, t, densities_from_emitter(sc, p, pt, pm), 0.0f, 0);
 }
 
 /* Strategy s = 1: a light sampled from camera vertex t - 1 (t >= 2), as next-event estimation
- * samples one (kernels/lights.cl: sample_light, by power), weighted. A light at infinity, which
- * starts no light subpath, is weighed against the camera subpath's finding it alone. */
+ * samples one (kernels/lights.cl: sample_light, by power), weighted; its vertex's densities are
+ * a light subpath's first (trace_light_subpath), as pbrt's are, whatever next-event estimation
+ * drew it by: the weights still sum to 1 over the strategies. */
 float3 connect_light_sample(const SceneData *sc, const RenderParams *p, const Vertex *lt, const Vertex *cam,
                             int t, Rng *rng, int *rays)
 {
@@ -363,22 +153,26 @@ float3 connect_light_sample(const SceneData *sc, const RenderParams *p, const Ve
     float3 c = pt->beta * f * vertex_cos(pt, ls.wi) * ls.le / ls.pdf;
     if (all(c == 0.0f))
         return (float3)(0.0f);
+    const global Light *l = &sc->lights[ls.light];
+    int delta = (ls.flags & LIGHT_DELTA) != 0;
     float w;
     if (ls.flags & LIGHT_AT_INFINITY) {
-        w = (ls.flags & LIGHT_DELTA) ? 1.0f : mis_weight(ls.pdf, pdf_scattering(sc, pt, pt->wo, ls.wi));
+        /* its vertex is the direction -wi, drawn as a light subpath's first (trace_light_subpath) */
+        float origin = l->pick * (delta ? 1.0f : pdf_environment_emission(sc, p, ls.wi));
+        w = bdpt_mis_weight(lt, 1, cam, t, densities_to_infinity(sc, p, ls.wi, pt, pm), origin, delta);
     } else {
-        const global Light *l = &sc->lights[ls.light];
-        int delta = (ls.flags & LIGHT_DELTA) != 0;
         float3 n = delta ? (float3)(0.0f) : emitter_normal(sc, l->prim, ls.y);
         float origin = delta ? l->pick : pdf_emitter_origin(sc, l->prim, ls.y);
-        w = bdpt_mis_weight(lt, 1, cam, t, densities_to_light(sc, l, ls.y, n, pt, pm), origin, delta);
+        w = bdpt_mis_weight(lt, 1, cam, t, densities_to_light(sc, p, l, ls.y, n, pt, pm), origin, delta);
     }
     float3 o = offset_ray_origin(pt->s.p, pt->s.offset, pt->s.ng, ls.wi);
     return c * w * light_visibility(sc, o, &ls, SURFACE_ID(pt->s), medium_towards(sc, pt, ls.wi), rays);
 }
 
-/* Strategy s >= 2, t >= 2: light vertex s - 1 joined to camera vertex t - 1, weighted. */
-float3 connect_vertices(const SceneData *sc, const Vertex *lt, int s, const Vertex *cam, int t, int *rays)
+/* Strategy s >= 2, t >= 2: light vertex s - 1 joined to camera vertex t - 1, weighted;
+ * light_delta: as connect_camera's. */
+float3 connect_vertices(const SceneData *sc, const Vertex *lt, int s, const Vertex *cam, int t, int light_delta,
+                        int *rays)
 {
     const Vertex *qs = &lt[s - 1], *qm = &lt[s - 2], *pt = &cam[t - 1], *pm = &cam[t - 2];
     float3 w = qs->s.p - pt->s.p;
@@ -393,15 +187,15 @@ float3 connect_vertices(const SceneData *sc, const Vertex *lt, int s, const Vert
     float3 c = qs->beta * f_q * f_p * pt->beta * g;
     if (all(c == 0.0f))
         return (float3)(0.0f);
-    c *= bdpt_mis_weight(lt, s, cam, t, densities_between(sc, qs, qm, pt, pm), 0.0f, 0);
+    c *= bdpt_mis_weight(lt, s, cam, t, densities_between(sc, qs, qm, pt, pm), 0.0f, light_delta);
     return c * segment_transmittance(sc, pt, qs->s.p, rays);
 }
 
 /* Strategy t = 1, s >= 2: light vertex s - 1 joined to a point of the lens (kernels/camera.cl:
  * sample_importance), splatted where it lands on the film; weighted, or with LIGHT_TRACING
- * alone. */
+ * alone. light_delta: the light subpath's light is a delta (bdpt_mis_weight). */
 void connect_camera(const SceneData *sc, const RenderParams *p, const Vertex *lt, int s, const Vertex *cam,
-                    Rng *rng, global float4 *film, int *rays)
+                    int light_delta, Rng *rng, global float4 *film, int *rays)
 {
     const Vertex *qs = &lt[s - 1], *qm = &lt[s - 2];
     CameraImportance ci;
@@ -413,7 +207,7 @@ void connect_camera(const SceneData *sc, const RenderParams *p, const Vertex *lt
     if (all(c == 0.0f) || !all(isfinite(c)))
         return;
 #ifndef LIGHT_TRACING
-    c *= bdpt_mis_weight(lt, s, cam, 1, densities_to_camera(sc, p, qs, qm, ci.lens), 0.0f, 0);
+    c *= bdpt_mis_weight(lt, s, cam, 1, densities_to_camera(sc, p, qs, qm, ci.lens), 0.0f, light_delta);
 #endif
     c *= segment_transmittance(sc, qs, ci.lens, rays);
     if (any(c != 0.0f))
@@ -451,11 +245,11 @@ float3 sample_light_tracing(const SceneData *sc, const RenderParams *p, Rng *rng
     Vertex lt[BDPT_LIGHT_VERTICES];
     int light_delta = 0;
     int nl = trace_light_subpath(sc, p, lt, BDPT_LIGHT_VERTICES, rng, rays, &light_delta);
-    if (nl > 0)
+    if (nl > 0 && !lt[0].at_infinity)      /* a light at infinity is no point to see */
         connect_light_to_camera(sc, p, &lt[0], rng, film, rays);
     for (int s = 2; s <= nl; ++s)
         if (lt[s - 1].connectible)
-            connect_camera(sc, p, lt, s, 0, rng, film, rays);
+            connect_camera(sc, p, lt, s, 0, light_delta, rng, film, rays);
     return (float3)(0.0f);
 }
 #endif
@@ -481,19 +275,20 @@ float3 sample_bidirectional(const SceneData *sc, const RenderParams *p, int x, i
     cam[0].delta = 0;
     cam[0].connectible = 0;
     cam[0].emits = 0;
+    cam[0].at_infinity = 0;
     cam[0].s.prim = -1;
 #ifdef MEDIA
     cam[0].medium = p->camera_medium;
     cam[0].in_medium = 0;
 #endif
-    float3 l = (float3)(0.0f);
     int nc = extend_subpath(sc, p, cam, 1, BDPT_CAMERA_VERTICES, ray.o, ray.d, (float3)(1.0f),
                             pdf_camera_direction(p, ray.d), NO_PRIM, medium_towards(sc, &cam[0], ray.d), 0, rng,
-                            rays, &l);
+                            rays);
     int light_delta = 0;
     int nl = trace_light_subpath(sc, p, lt, BDPT_LIGHT_VERTICES, rng, rays, &light_delta);
     sum_mis_ratios(cam, nc, 1, 0);
     sum_mis_ratios(lt, nl, 0, light_delta);
+    float3 l = (float3)(0.0f);
 #ifdef PHOTONS
     l += caustic_radiance(sc, cam, nc, photons, photon_next, photon_heads, map);
 #endif
@@ -505,14 +300,14 @@ float3 sample_bidirectional(const SceneData *sc, const RenderParams *p, int x, i
                 continue;
             if (t == 1) {
                 if (lt[s - 1].connectible)
-                    connect_camera(sc, p, lt, s, cam, rng, film, rays);
+                    connect_camera(sc, p, lt, s, cam, light_delta, rng, film, rays);
             } else if (s == 0) {
-                l += connect_emitter(sc, lt, cam, t);
+                l += connect_emitter(sc, p, lt, cam, t);
             } else if (s == 1) {
                 if (cam[t - 1].connectible && p->num_lights > 0)
                     l += connect_light_sample(sc, p, lt, cam, t, rng, rays);
             } else if (cam[t - 1].connectible && lt[s - 1].connectible) {
-                l += connect_vertices(sc, lt, s, cam, t, rays);
+                l += connect_vertices(sc, lt, s, cam, t, light_delta, rays);
             }
         }
     }

@@ -7,7 +7,11 @@
 
 /* One vertex of a subpath. The camera and a light are vertices of their own: s.p is their
  * point and s.ng an area light's normal (0 for the camera and a point). A scattering inside a
- * medium is a vertex with no surface: s.ng and s.ns 0, s.prim -1. */
+ * medium is a vertex with no surface: s.ng and s.ns 0, s.prim -1. A light at infinity (the
+ * environment, a directional light) is a vertex at_infinity: a direction rather than a point,
+ * its densities per solid angle (pbrt-v4's infinite light vertices): a light subpath's first,
+ * s.p the point on the scene's disk it left (kernels/lights.cl: leave_world_disk), or a camera
+ * subpath's last, where it escaped, wo back along the escaping ray. */
 typedef struct {
     Surface s;            /* a surface vertex's surface, its shading frame complete */
 #ifdef TEXTURES
@@ -21,7 +25,8 @@ typedef struct {
     float pdf_rev;        /* density per area of drawing it from the other end */
     int delta;            /* its sampled lobe was a delta */
     int connectible;      /* a surface that scatters light into more than a delta lobe */
-    int emits;            /* a surface that emits towards wo */
+    int emits;            /* a surface that emits towards wo, or the environment */
+    int at_infinity;      /* a light at infinity (above) */
     float mis_sum;        /* the MIS sum of the vertices up to it that no connection changes (sum_mis_ratios) */
 #ifdef MEDIA
     int medium;           /* the medium around it: a medium vertex's own, the camera's or a light's,
@@ -46,6 +51,23 @@ float convert_density(float pdf, float3 from, float3 to, float3 n)
         return 0.0f;
     float c = any(n != 0.0f) ? fabs(dot(n, w)) * rsqrt(d2) : 1.0f;
     return pdf * c / d2;
+}
+
+/* A density per solid angle at `from` towards vertex v as v's density: per area
+ * (convert_density), or for a vertex at infinity, a direction, unchanged (pbrt's
+ * Vertex::ConvertDensity). */
+float density_at(float pdf, float3 from, const Vertex *v)
+{
+    return v->at_infinity ? pdf : convert_density(pdf, from, v->s.p, v->s.ng);
+}
+
+/* The density per area with which light from infinity, travelling along d, reaches vertex v:
+ * its disk's 1 / (pi r^2) (kernels/lights.cl: leave_world_disk) times the cosine at v's surface
+ * (none inside a medium; pbrt's Vertex::PdfLight of an infinite light). */
+float density_from_infinity(const RenderParams *p, float3 d, const Vertex *v)
+{
+    float c = any(v->s.ng != 0.0f) ? fabs(dot(v->s.ng, d)) : 1.0f;
+    return c / (PI_F * p->world.w * p->world.w);
 }
 
 /* Whether vertex v is a scattering inside a medium. */
@@ -112,11 +134,11 @@ float3 eval_scattering(const SceneData *sc, const Vertex *v, float3 from, float3
     float3 a = to_shading(&v->s, from), b = to_shading(&v->s, to);
     if (dot(from, v->s.ng) * a.z <= 0.0f || dot(to, v->s.ng) * b.z <= 0.0f)
         return (float3)(0.0f);
+    float3 f = eval_bsdf(VERTEX_MATERIAL(v), b, a);
 #ifdef NORMAL_MAPS
-    return eval_bsdf(VERTEX_MATERIAL(v), b, a) * shadow_terminator(&v->s, from);
-#else
-    return eval_bsdf(VERTEX_MATERIAL(v), b, a);
+    f *= shadow_terminator(&v->s, from);
 #endif
+    return f;
 }
 
 /* The density per solid angle with which vertex v, reached along `wo`, samples `wi`. */

@@ -16,8 +16,10 @@
 /* The dispatch over every kind of BSDF, texture and light, in a generic program on a GPU, is
  * called rather than inlined: NVIDIA's compiler inlined every kind into each of its call sites
  * in every kernel, a program that took its driver minutes to build (docs/notes/performance-2026-11.md,
- * 2026-11-28 evening). A scene's own program, which compiles only its kinds, and
- * CPUs, whose calls pass a path's state through memory, keep them inlined. */
+ * 2026-11-28 evening). But for the textures that read no other (eval_leaf_texture,
+ * app/textures/registry.py: called, NVIDIA's driver 580 built a program that miscounted). A
+ * scene's own program, which compiles only its kinds, and CPUs, whose calls pass a path's state
+ * through memory, keep them inlined. */
 #if defined(GENERIC) && !defined(CPU_DEVICE)
 #define DISPATCH __attribute__((noinline))
 #else

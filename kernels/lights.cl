@@ -43,11 +43,31 @@ typedef struct {
     float pdf_dir;   /* density of d per solid angle */
     float offset;    /* how far rays leaving p start from it along n (kernels/spawn.cl) */
     int prim;        /* an area light's primitive, else -1 */
-    int delta;       /* a point or spot light: no path finds it */
+    int delta;       /* a point, spot or directional light: no path finds it */
+    int at_infinity; /* the environment or a directional light (leave_world_disk) */
 } LightEmission;
 
-int emit_light_of_type(const SceneData *sc, const global Light *l, float4 u, LightEmission *e);
-float pdf_emission_of_type(const SceneData *sc, const global Light *l, float3 n, float3 w);
+int emit_light_of_type(const SceneData *sc, const RenderParams *p, const global Light *l, float4 u,
+                       LightEmission *e);
+float pdf_emission_of_type(const SceneData *sc, const RenderParams *p, const global Light *l, float3 n, float3 w);
+
+/* Where light from infinitely far away, travelling in direction d, starts a light subpath: a
+ * point uniform on the disk of the scene's bounding sphere's radius across d, beyond the sphere
+ * on the side it comes from, so that the parallel rays from the disk cover the scene (pbrt-v4's
+ * SampleLe of its infinite and distant lights). Its density per area is 1 / (pi r^2), the
+ * density per area of the subpath's first hit times the cosine there (kernels/bdpt.cl). */
+void leave_world_disk(const RenderParams *p, float3 d, float2 u, LightEmission *e)
+{
+    float r = p->world.w;
+    float2 c = r * sample_concentric_disk(u);
+    e->p = p->world.xyz + to_world((float3)(c, -r), d);
+    e->d = d;
+    e->n = (float3)(0.0f);
+    e->pdf_pos = 1.0f / (PI_F * r * r);
+    e->offset = 0.0f;
+    e->prim = -1;
+    e->at_infinity = 1;
+}
 #endif
 
 /* Walker's alias method: a bin chosen uniformly, then kept or replaced by its alias, picks a

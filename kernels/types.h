@@ -114,6 +114,7 @@ typedef struct {
     float4 env_scale;  /* environment radiance multiplier (rgb) */
     float4 lens;       /* what else the camera type reads (app/cameras/: Camera.lens) */
     float4 filter;     /* the pixel filter's parameters (kernels/filters/<name>.cl) */
+    float4 world;      /* the scene's bounding sphere: centre (xyz) and radius (w) */
     int width;         /* image size in pixels */
     int height;
     uint sample_start; /* index of the first sample of this launch (keys the RNG) */

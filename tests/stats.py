@@ -23,14 +23,26 @@ def z_test(mean, var_of_mean, ref, ref_var_of_mean=0.0, alpha=0.001, block=1, re
     sqrt(blocks) times plainer there, so a test at a given spp detects a global bias
     sqrt(blocks) times smaller than its blocks can. Returns (passed, smallest
     p-value, Sidak-corrected threshold)."""
-    n = block * block
-    m, r = block_mean(mean, block), block_mean(ref, block)
-    v = block_mean(var_of_mean, block) / n + block_mean(np.broadcast_to(ref_var_of_mean, mean.shape), block) / n
-    blocks = [x.reshape(-1, x.shape[-1]) for x in (m, r, v)]
-    # the blocks, then the whole image: the blocks' mean, whose variance is theirs over the count
-    m, r, v = (np.concatenate([x, x.mean(axis=0, keepdims=True) / (len(x) if k == 2 else 1)])
-               for k, x in enumerate(blocks))
-    return z_test_of(m, v, r, alpha, rel_floor)
+    variance = variance_of_means(var_of_mean, block) \
+        + variance_of_means(np.broadcast_to(ref_var_of_mean, mean.shape), block)
+    return z_test_of(blocks_and_image(mean, block), variance, blocks_and_image(ref, block), alpha, rel_floor)
+
+
+def blocks_and_image(images, block):
+    """The means of (..., H, W, C) images' block x block-pixel blocks (the rows and columns beyond
+    a whole block left out), then the whole image's, the blocks' mean: (..., blocks + 1, C)."""
+    h, w = images.shape[-3] // block, images.shape[-2] // block
+    blocks = images[..., :h * block, :w * block, :].reshape(*images.shape[:-3], h, block, w, block, images.shape[-1])
+    blocks = blocks.mean(axis=(-4, -2)).reshape(*images.shape[:-3], h * w, images.shape[-1])
+    return np.concatenate([blocks, blocks.mean(axis=-2, keepdims=True)], axis=-2)
+
+
+def variance_of_means(variance, block):
+    """The variances of blocks_and_image's means from their pixels' (H, W, C) variances, the
+    pixels taken as independent: a mean's is its pixels' mean variance over their count."""
+    means = blocks_and_image(variance, block)
+    counts = np.array([block * block] * (means.shape[0] - 1) + [block * block * (means.shape[0] - 1)])
+    return means / counts[:, None]
 
 
 def z_test_of(mean, variance, ref, alpha=0.001, rel_floor=1e-5):

@@ -3,6 +3,7 @@
 media too, and for fixed paths the MIS weights of all the strategies that can draw a path sum
 to 1."""
 
+import copy
 from dataclasses import replace
 
 import numpy as np
@@ -13,13 +14,14 @@ from pathtrace.cameras import CAMERAS
 from pathtrace.device.opencl import build_program
 from pathtrace.errors import UserError
 from pathtrace.filters import PixelFilter
+from pathtrace.materials.bsdf import PBRT_PERTURBATION
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 from pathtrace.scene.toml_reader import read_scene_dict
 from tests.commands import in_process
 from tests.conftest import ROOT
 from tests.scene_files import SCENE_FILES, SCENE_SIZE
-from tests.stats import z_test, z_test_of
+from tests.stats import blocks_and_image, variance_of_means, z_test, z_test_of
 
 BATCHES = 6    # independent renders (seeds) whose spread gives a BDPT pixel's variance: its
                # sums of squares hold the camera subpaths' part alone (the splats are shared)
@@ -69,12 +71,13 @@ RHO = 0.6
 LAMP = {"type": "emitter", "Le": [8.0, 7.2, 6.0]}
 
 
-def floor_scene(lights=(), objects=(), materials=None, max_depth=5, camera=None, meshes=(), media=None):
+def floor_scene(lights=(), objects=(), materials=None, max_depth=5, camera=None, meshes=(), media=None,
+                environment=None):
     """A diffuse floor (y = 0) of albedo RHO under `lights`, with `objects` (spheres) and
-    `meshes` on it, in a black world, seen by a pinhole."""
+    `meshes` on it, in a black world (or `environment`), seen by a pinhole."""
     return read_scene_dict({
         "camera": camera or {"eye": [0, 2.2, 3.2], "look_at": [0, 0.4, 0], "up": [0, 1, 0], "vfov": 40},
-        "environment": {"color": 0},
+        "environment": environment or {"color": 0},
         "render": {"max_depth": max_depth, "russian_roulette": "off"},
         "materials": {"floor": {"type": "diffuse", "rho_d": RHO}, **(materials or {})},
         "media": media or {},
@@ -92,6 +95,17 @@ def glass_scene():
                                 {"center": [-0.9, 0.3, 0.2], "radius": 0.3, "material": "metal"}],
                        materials={"glass": {"type": "dielectric"}, "lamp": LAMP,
                                   "metal": {"type": "roughconductor", "material": "Au", "alpha": 0.3}})
+
+
+def sky_scene():
+    """A diffuse and a glossy sphere on the floor under a sunset's map: light from the
+    environment, which starts light subpaths from a disk across the scene, and paths that escape
+    to it after bounces."""
+    return floor_scene(objects=[{"center": [0, 0.5, 0], "radius": 0.5, "material": "white"},
+                                {"center": [-0.9, 0.3, 0.2], "radius": 0.3, "material": "metal"}],
+                       materials={"white": {"type": "diffuse", "rho_d": 0.8},
+                                  "metal": {"type": "roughconductor", "material": "Au", "alpha": 0.3}},
+                       environment={"map": "venice_sunset_1k.hdr", "rotation": 200})
 
 
 def spot_scene():
@@ -202,7 +216,7 @@ CASES = {"cbox-ptracer": (cbox, "ptracer", 32, 1024), "cbox-bdpt": (cbox, "bdpt"
          "glass-bdpt": (glass_scene, "bdpt", 16, 4096), "spot-bdpt": (spot_scene, "bdpt", 16, 1024),
          "fog-lamp-bdpt": (fog_lamp_scene, "bdpt", 16, 1024), "fog-lamp-ptracer": (fog_lamp_scene, "ptracer", 32, 1024),
          "fog-glass-bdpt": (fog_glass_scene, "bdpt", 16, 4096), "media-fog-bdpt": (media_fog, "bdpt", 16, 1024),
-         "pool-photons-bdpt": (pool_scene, "bdpt", 16, 4096)}
+         "pool-photons-bdpt": (pool_scene, "bdpt", 16, 4096), "sky-bdpt": (sky_scene, "bdpt", 16, 1024)}
 SIZE = (24, 24)
 
 
@@ -225,47 +239,52 @@ def test_converges_to_the_path_tracer(backend, case):
 # sample variances. BDPT's is the larger of two estimates: from its pixels' spread over the
 # batches (its splats are not in the sums of squares), which leaves out that one light
 # subpath's splats land in several pixels, and from the spread of the batches' own block and
-# image means, which has few degrees of freedom. A 10 % error in the light samples' (s = 1) MIS
-# weights fails 9 of the 65 files by their means alone; BDPT without the normal maps' shadowing
-# term that the path tracer applies fails normal-maps.xml. A file whose camera has no
-# importance (app/cameras/: Camera.importance) is refused by BDPT in one line.
+# image means. A 10 % error in the light samples' (s = 1)
+# contributions fails 56 of the 64 files (a review's measurement with 6 batches of 32 samples, 2026-11-30). A file whose camera
+# has no importance (app/cameras/: Camera.importance) is refused by BDPT in one line.
 SCENE_BLOCK = 4
-
-
-def blocks_and_image(images):
-    """Per channel, the means of (..., H, W, 3) images' SCENE_BLOCK x SCENE_BLOCK-pixel blocks,
-    then the whole image's: (..., blocks + 1, 3)."""
-    h, w = images.shape[-3] // SCENE_BLOCK, images.shape[-2] // SCENE_BLOCK
-    blocks = images.reshape(*images.shape[:-3], h, SCENE_BLOCK, w, SCENE_BLOCK, 3).mean(axis=(-4, -2))
-    blocks = blocks.reshape(*images.shape[:-3], h * w, 3)
-    return np.concatenate([blocks, images.mean(axis=(-3, -2))[..., None, :]], axis=-2)
-
-
-def pixel_variance_of_means(variance):
-    """The variances of blocks_and_image's means from their pixels' (H, W, 3) variances, the
-    pixels taken as independent: a mean's is its pixels' mean variance over their count."""
-    pixels = np.array([SCENE_BLOCK * SCENE_BLOCK] * (len(blocks_and_image(variance)) - 1) + [variance[..., 0].size])
-    return blocks_and_image(variance) / pixels[:, None]
+SCENE_BATCHES = 12   # of 16 samples per pixel: the batches' spread is BDPT's error estimate where
+                     # light subpaths' splats are heavy-tailed (lights at infinity through media),
+                     # where 6 of 32 underestimated it (|z| 3.2-4.3 on media-sphere.xml, by chance)
+RECIPROCAL = {"normal-maps.xml": "Mitsuba's normal maps turn a perturbed normal that faces away from the "
+                                 "direction light leaves along (Material.perturbation), which the path tracer "
+                                 "knows and a light subpath does not: there BDPT renders them as pbrt-v4's"}
+"""Files whose materials are tested with pbrt-v4's normal and bump maps, which are reciprocal
+(README, Integrators, says what BDPT does with Mitsuba's): with Mitsuba's, BDPT's image is 1.6 %
+darker than the path tracer's on normal-maps.xml, up to 5 % in some blocks."""
+PATH_TRACER_MISSES = {
+    "mat_thindielectric.pbrt": "its sun, a delta light, through the thin glass sphere, a delta surface, onto the floor: "
+                               "light the path tracer cannot sample, and pbrt-v4's cannot",
+    "mat_dielectric_eta_below_one.pbrt": "its sun focused by the glass sphere onto the floor, likewise"}
+"""Files where BDPT renders light that the path tracer cannot: there BDPT's image is the path
+tracer's or brighter, block by block, and brighter in some block (with 4x the samples, which
+puts that block's z near 9)."""
 
 
 @pytest.mark.parametrize("path", SCENE_FILES, ids=lambda p: f"{p.parent.name}/{p.name}")
 def test_bdpt_converges_to_the_path_tracer_on_every_test_scene(backend, path):
     scene = load_scene(str(path)).with_settings(russian_roulette="off")
+    if path.name in RECIPROCAL:
+        materials = copy.deepcopy(scene.materials)
+        materials.rows["flags"] |= PBRT_PERTURBATION
+        scene = replace(scene, materials=materials)
     if not type(scene.camera).importance:
         with pytest.raises(UserError, match="has no importance"):
             Renderer(backend, scene.with_settings(integrator="bdpt"), *SCENE_SIZE)
         return
-    batches = render_batches(backend, scene, "bdpt", 32, SCENE_SIZE)
+    batches = render_batches(backend, scene, "bdpt", 64 if path.name in PATH_TRACER_MISSES else 16, SCENE_SIZE,
+                             SCENE_BATCHES)
     assert np.all(np.isfinite(batches))
-    means = blocks_and_image(batches)
-    bdpt_variance = np.maximum(pixel_variance_of_means(batches.var(0, ddof=1) / BATCHES),
-                               means.var(0, ddof=1) / BATCHES)
-    path = Renderer(backend, scene.with_settings(integrator="path", seed=5), *SCENE_SIZE)
-    path.add_samples(512)
-    path.finish()
-    assert path.dropped_samples() == 0
-    path_variance = pixel_variance_of_means(path.variance() / path.samples)
-    ok, p, threshold = z_test_of(means.mean(0), bdpt_variance + path_variance, blocks_and_image(path.mean()))
+    means = blocks_and_image(batches, SCENE_BLOCK)
+    bdpt_variance = np.maximum(variance_of_means(batches.var(0, ddof=1) / SCENE_BATCHES, SCENE_BLOCK),
+                               means.var(0, ddof=1) / SCENE_BATCHES)
+    path_mean, path_variance = _path_reference(backend, scene, 512, SCENE_SIZE)
+    path_mean, path_variance = blocks_and_image(path_mean, SCENE_BLOCK), variance_of_means(path_variance, SCENE_BLOCK)
+    if path.name in PATH_TRACER_MISSES:
+        z = (means.mean(0) - path_mean) / np.sqrt(bdpt_variance + path_variance + 1e-30)
+        assert z.min() > -5 and z.max() > 5, z
+        return
+    ok, p, threshold = z_test_of(means.mean(0), bdpt_variance + path_variance, path_mean)
     assert ok, (p, threshold)
 
 def floor_radiance(scene, size, intensity, light, sub=4):
@@ -301,6 +320,40 @@ def test_a_floor_under_a_point_light_has_the_closed_form(backend, integrator):
     assert abs(m.mean() / expected.mean() - 1) < 0.01
 
 
+@pytest.mark.parametrize("integrator", ["ptracer", "bdpt"])
+def test_a_floor_under_a_directional_light_has_the_closed_form(backend, integrator):
+    """L = rho / pi E cos: light from infinity leaves a disk across the scene (kernels/lights.cl:
+    leave_world_disk), and light tracing alone joins the floor it reaches to the pinhole; BDPT
+    weighs that against sampling the light from the floor."""
+    d = np.array([0.3, -1.0, 0.2]) / np.linalg.norm([0.3, -1.0, 0.2])
+    irradiance = np.array([2.0, 1.0, 0.5])
+    scene = read_scene_dict({
+        "camera": {"eye": [0, 3.0, 0.01], "look_at": [0, 0, 0], "up": [0, 0, -1], "vfov": 40},
+        "environment": {"color": 0}, "render": {"max_depth": 2, "russian_roulette": "off"},
+        "materials": {"floor": {"type": "diffuse", "rho_d": RHO}},
+        # a floor just wider than the view, so that most light subpaths from the disk over it are seen
+        "meshes": [{"vertices": [[-1.5, 0, -1.5], [1.5, 0, -1.5], [1.5, 0, 1.5], [-1.5, 0, 1.5]], "faces": [[0, 3, 2, 1]],
+                    "material": "floor"}],
+        "lights": [{"type": "directional", "direction": d.tolist(), "irradiance": irradiance.tolist()}]}, "sun")
+    m, v = render(backend, scene, integrator, 32, (16, 16))
+    expected = RHO / np.pi * irradiance * -d[1]
+    ok, p, threshold = z_test(m, v, np.broadcast_to(expected, m.shape), block=2)
+    assert ok, (p, threshold)
+    assert np.allclose(m.mean(axis=(0, 1)) / expected, 1, atol=0.01), m.mean(axis=(0, 1)) / expected
+
+
+def test_a_floor_under_a_constant_sky_has_the_closed_form(backend):
+    """L = rho Le on a floor that sees the whole sky above it: every strategy (the floor's path
+    escaping, the sky sampled from the floor, light subpaths from the sky's disk joined to the
+    pinhole) weighs in."""
+    camera = {"eye": [0, 3.0, 0.01], "look_at": [0, 0, 0], "up": [0, 0, -1], "vfov": 40}
+    scene = floor_scene(environment={"color": 0.5}, max_depth=2, camera=camera)
+    m, v = render(backend, scene, "bdpt", 32, (16, 16))
+    ok, p, threshold = z_test(m, v, np.full_like(m, RHO * 0.5), block=2)
+    assert ok, (p, threshold)
+    assert abs(m.mean() / (RHO * 0.5) - 1) < 0.005, m.mean() / (RHO * 0.5)
+
+
 def test_a_furnace_of_emitting_walls_has_the_closed_form(backend):
     """A closed box whose inner walls emit Le and reflect diffusely with albedo rho: every path of
     depth D sees Le (1 + rho + ... + rho^(D-1)), whatever its strategy, and every pixel too."""
@@ -325,7 +378,8 @@ def test_a_furnace_of_emitting_walls_has_the_closed_form(backend):
 
 
 MIS_SUMS = """
-/* For pixel (x, y), a camera subpath that ends on an emitter (t vertices), taken as a path of n
+/* For pixel (x, y), a camera subpath that ends on an emitter or escapes to the environment (t
+ * vertices, the last at infinity), taken as a path of n
  * = t vertices drawn by every strategy (s, n - s): the weights bdpt_mis_weight gives them, from
  * the densities the connections compute, summed over the strategies that can draw it (their
  * joined vertices not deltas). out: (sum, strategies, n, 0), or n = 0 where there is none. */
@@ -345,31 +399,33 @@ kernel void mis_sums(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *out
         cam[0].s.ng = (float3)(0.0f);
         cam[0].delta = 0;
         cam[0].pdf_fwd = 1.0f;
+        cam[0].at_infinity = 0;
         cam[0].s.prim = -1;
 #ifdef MEDIA
         cam[0].medium = p.camera_medium;
         cam[0].in_medium = 0;
 #endif
         int rays = 0;
-        float3 escaped = (float3)(0.0f);
         n = extend_subpath(&sc, &p, cam, 1, BDPT_CAMERA_VERTICES, ray.o, ray.d, (float3)(1.0f),
                            pdf_camera_direction(&p, ray.d), NO_PRIM, medium_towards(&sc, &cam[0], ray.d), 0, &rng,
-                           &rays, &escaped);
-        if (n < 3 || !cam[n - 1].emits || all(VERTEX_MATERIAL(&cam[n - 1])->emission.xyz == 0.0f))
+                           &rays);
+        if (n < 3 || !cam[n - 1].emits
+            || (cam[n - 1].at_infinity ? !(p.env_pick > 0.0f) : all(VERTEX_MATERIAL(&cam[n - 1])->emission.xyz == 0.0f)))
             n = 0;
     }
     if (n == 0)
         return;
     sum_mis_ratios(cam, n, 1, 0);
     /* the densities of the light's end of the path: drawn from the light, as a light subpath's */
-    float4 from_light = densities_from_emitter(&sc, &cam[n - 1], &cam[n - 2]);
+    float4 from_light = densities_from_emitter(&sc, &p, &cam[n - 1], &cam[n - 2]);
     float sum = bdpt_mis_weight(lt, 0, cam, n, from_light, 0.0f, 0);
     int strategies = 1;
     cam[n - 1].pdf_rev = from_light.x;
     cam[n - 2].pdf_rev = from_light.y;
-    int prim = cam[n - 1].s.prim;
-    float origin = pdf_emitter_origin(&sc, prim, cam[n - 1].s.p);
-    float3 normal = emitter_normal(&sc, prim, cam[n - 1].s.p);
+    int prim = cam[n - 1].s.prim, infinity = cam[n - 1].at_infinity;
+    float3 to_light = -cam[n - 1].wo;    /* at infinity: the direction towards the environment */
+    float origin = infinity ? from_light.x : pdf_emitter_origin(&sc, prim, cam[n - 1].s.p);
+    float3 normal = infinity ? (float3)(0.0f) : emitter_normal(&sc, prim, cam[n - 1].s.p);
     for (int s = 1; s < n; ++s) {
         int t = n - s;
         /* the light subpath: the camera subpath's last s vertices, reversed */
@@ -378,7 +434,7 @@ kernel void mis_sums(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *out
             lt[j].pdf_fwd = cam[n - 1 - j].pdf_rev;
             lt[j].pdf_rev = cam[n - 1 - j].pdf_fwd;
             if (j > 0)
-                lt[j].wo = unit(cam[n - j].s.p - cam[n - 1 - j].s.p);
+                lt[j].wo = cam[n - j].at_infinity ? to_light : unit(cam[n - j].s.p - cam[n - 1 - j].s.p);
         }
         lt[0].pdf_fwd = origin;
         lt[0].s.ng = normal;
@@ -393,7 +449,8 @@ kernel void mis_sums(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *out
             for (int i = 0; i < p.num_lights; ++i)
                 if (sc.lights[i].prim == prim)
                     l = &sc.lights[i];
-            rev = densities_to_light(&sc, l, qs->s.p, normal, pt, &cam[t - 2]);
+            rev = infinity ? densities_to_infinity(&sc, &p, to_light, pt, &cam[t - 2])
+                           : densities_to_light(&sc, &p, l, qs->s.p, normal, pt, &cam[t - 2]);
         } else if (!qs->connectible) {
             continue;
         } else if (t == 1) {
@@ -411,12 +468,12 @@ kernel void mis_sums(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *out
 """
 
 
-@pytest.mark.parametrize("make", [cbox, glass_scene, fog_glass_scene])
+@pytest.mark.parametrize("make", [cbox, glass_scene, fog_glass_scene, sky_scene])
 def test_the_mis_weights_of_a_path_sum_to_one(backend, make):
     """As pbrt-v4's BDPT tests check its weights: for each path a camera subpath draws to an
-    emitter, the weights of every strategy that could draw it, computed as the renders compute
-    them, sum to 1 (the glass scene's paths through the sphere have delta vertices, whose
-    strategies are left out)."""
+    emitter, or out to the environment, the weights of every strategy that could draw it,
+    computed as the renders compute them, sum to 1 (the glass scene's paths through the sphere
+    have delta vertices, whose strategies are left out)."""
     # at the scenes' depth 5, as test_converges_to_the_path_tracer renders them: its programs
     r = Renderer(backend, make().with_settings(integrator="bdpt"), 32, 32)
     features = replace(r.compiled.features(r.settings, r.camera), bdpt=5)
@@ -431,7 +488,7 @@ def test_the_mis_weights_of_a_path_sum_to_one(backend, make):
     np.testing.assert_allclose(out[paths][:, 0], 1.0, rtol=2e-3, err_msg=str(out[paths][:20]))
     # every strategy of a path draws it in the Cornell box; through glass, some cannot
     all_strategies = out[paths][:, 1] == out[paths][:, 2]
-    assert all_strategies.all() if make is cbox else not all_strategies.all()
+    assert all_strategies.all() if make in (cbox, sky_scene) else not all_strategies.all()
 
 
 def test_bdpt_and_light_tracing_agree_on_a_point_light_in_fog(backend):
@@ -463,7 +520,7 @@ def test_the_path_tracers_program_compiles_nothing_of_bdpt(backend):
     features = r.compiled.features(r.settings, r.camera)
     assert features.bdpt == 0 and not any(d.startswith("BDPT") for d in features.defines())
     source = kernel_source(features=features)
-    emitters = "int emit_light_of_type(const SceneData *sc, const global Light *l, float4 u, LightEmission *e)\n{"
+    emitters = "return emit_area_light(sc, p, l, u, e);"     # the generated dispatch of light subpaths
     assert '"bdpt.cl"' not in source and emitters not in source and "render_bdpt" not in source
     assert source == kernel_source(features=replace(features, bdpt=0))
     bidirectional = kernel_source(features=replace(features, bdpt=5))
@@ -542,7 +599,7 @@ def test_the_command_line_renders_with_bdpt_and_refuses_what_it_cannot_in_one_li
     r = in_process("render", "tests/scenes/envmap-spheres.xml", "--integrator", "ptracer", "--size", "8x8",
                   "--spp", "1", "-o", tmp_path / "b.exr", "-q")
     lines = [line for line in r.stderr.splitlines() if not line.startswith("device: ")]
-    assert r.returncode != 0 and len(lines) == 1 and "is not traced from the light" in lines[0], r.stderr
+    assert r.returncode != 0 and len(lines) == 1 and "not reached by light tracing" in lines[0], r.stderr
     assert not (tmp_path / "b.exr").exists()
 
 

@@ -108,8 +108,10 @@ class CompiledScene:
         else:
             self.bvh = cached_bvh(lo, hi, n_spheres, queue, progress)
             order = self.bvh.order
-        # the scene's bounding sphere, by which a light at infinity's power is reckoned
+        # the scene's bounding sphere, by which a light at infinity's power is reckoned and from
+        # whose disks its light subpaths leave (kernels/lights.cl: leave_world_disk)
         self.radius = float(np.linalg.norm(column_max(hi) - column_min(lo)) / 2) if len(lo) else 1.0
+        self.center = (column_max(hi) + column_min(lo)) / 2 if len(lo) else np.zeros(3)
         self.bvh_seconds = time.perf_counter() - start
 
         sphere_order = order[order < n_spheres]

@@ -30,6 +30,7 @@ SHAPE_FILES = ("spawn.cl", "shapes/sphere_range.cl", "shapes/triangle.cl")
 BSDF_FILES = ("bsdf.cl", "fresnel.cl", "microfacet.cl", "coating.cl", "interface.cl", "phase.cl")
 MEDIA_FILES = ("media/homogeneous.cl", "volume.cl")
 LATER_FILES = ("path_queue.cl", "path_sort.cl", "integrator.cl", "aovs.cl", "display.cl")
+BDPT_FILES = ("bdpt_vertex.cl", "bdpt_subpaths.cl", "splats.cl", "photons.cl", "bdpt.cl")
 
 # No -cl-fast-relaxed-math: it implies finite math, and the kernels rely on INFINITY. Denormal
 # floats flushed to zero: an x86 core takes a microcode assist of about a hundred cycles on each
@@ -74,7 +75,7 @@ def kernel_source(extra: str = "", features: Features = Features()) -> str:
     texts += [(name, text if text is not None else (folder / name).read_text()) for name, text in parts]
     texts += [(name, (folder / name).read_text())
               for name in (*(MEDIA_FILES if features.media else ()), *LATER_FILES,
-                           *(("bdpt_vertex.cl", "splats.cl", "photons.cl", "bdpt.cl") if features.bdpt else ()))]
+                           *(BDPT_FILES if features.bdpt else ()))]
     if extra:
         texts.append(("extra", extra))
     return "\n".join(f'#line 1 "{name}"\n{text}' for name, text in texts)
@@ -292,7 +293,7 @@ def open_device(device: Device, extra: str = "", use_cache: bool = True, mode: s
     builds from it: PoCL, whose first build of it takes 2 s on two cores), it is built now: it
     shows that the platform builds the kernels and draws the first images of every scene without
     media (pathtrace.device.programs); the one with media is built where a scene asks for it.
-    Elsewhere (NVIDIA's driver takes 46 s over it on an H200, and a build in a background thread
+    Elsewhere (NVIDIA's driver takes minutes over it on an H200, and a build in a background thread
     held up the scene's own build behind it) the display's small program shows that the
     platform builds, and the generic program waits for `pathtrace devices --check` (./install.sh
     runs it)."""

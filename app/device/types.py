@@ -62,6 +62,7 @@ RENDER_PARAMS = np.dtype([
     ("env_scale", np.float32, 4),
     ("lens", np.float32, 4),        # what else the camera type reads (app/cameras/: Camera.lens)
     ("filter", np.float32, 4),      # the pixel filter's parameters (kernels/filters/)
+    ("world", np.float32, 4),       # the scene's bounding sphere: centre, radius (CompiledScene)
     ("width", np.int32),
     ("height", np.int32),
     ("sample_start", np.uint32),

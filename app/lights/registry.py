@@ -36,10 +36,12 @@ DELTA_LIGHTS = {cls.name: cls for cls in _delta_light_types()}
 LIGHTS = ("area", "environment", *DELTA_LIGHTS)
 TAGS = {name: i for i, name in enumerate(LIGHTS)}
 EMITTERS = {"area": "pdf_area_emission(sc, l->prim, n, w)", "point": "pdf_point_emission(l, w)",
-            "spot": "pdf_spot_emission(l, w)"}
+            "spot": "pdf_spot_emission(l, w)", "environment": "pdf_environment_emission(sc, p, -w)",
+            "directional": "0.0f"}
 """The types that start light subpaths in bidirectional path tracing (kernels/bdpt.cl), each with
-its direction density's call: a directional light or the environment would need a disk over the
-whole scene to leave from, not built yet; BDPT reaches them from camera subpaths alone."""
+the density of the direction w it leaves in towards a point of normal n, as a call (a
+directional light's one direction is a delta). Lights at infinity leave a disk across the scene
+(kernels/lights.cl: leave_world_disk)."""
 
 
 def kernel_parts(names=None, tree: bool = False, bidirectional: bool = False) -> list:
@@ -62,9 +64,11 @@ def kernel_parts(names=None, tree: bool = False, bidirectional: bool = False) ->
                 + switch("sample_{}_light(sc, p, l, x, n, u, ls)", "0") + "}\n")
     if bidirectional:
         emitters = [n for n in used if n in EMITTERS]
-        dispatch += ("int emit_light_of_type(const SceneData *sc, const global Light *l, float4 u, LightEmission *e)\n{\n"
-                     + switch("emit_{}_light(sc, l, u, e)", "0", emitters) + "}\n"
-                     "float pdf_emission_of_type(const SceneData *sc, const global Light *l, float3 n, float3 w)\n{\n"
+        dispatch += ("int emit_light_of_type(const SceneData *sc, const RenderParams *p, const global Light *l, float4 u,\n"
+                     "                       LightEmission *e)\n{\n"
+                     + switch("emit_{}_light(sc, p, l, u, e)", "0", emitters) + "}\n"
+                     "float pdf_emission_of_type(const SceneData *sc, const RenderParams *p, const global Light *l, float3 n,\n"
+                     "                            float3 w)\n{\n"
                      + switch(lambda n: EMITTERS[n], "0.0f", emitters) + "}\n")
     files = [f"lights/{n}.cl" for n in used]
     here = "app/lights/registry.py: kernel_parts"

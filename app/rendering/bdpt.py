@@ -30,11 +30,12 @@ def check(name: str, features, integrator: str, lights):
     """Raises a UserError, one line, for what `integrator` (bdpt or ptracer) cannot render yet
     in a scene (its name) whose program needs `features` (app/device/features.py) and whose light table
     is `lights`: a camera without importance (app/cameras/: Camera.importance); for light tracing
-    alone, light from the environment or a directional light, which start no light subpath
-    (app/lights/registry.py: EMITTERS)."""
+    alone, light from the environment, which the camera sees directly where nothing is in the
+    way, and light tracing cannot join to the lens (its light subpaths leave a disk across the
+    scene, kernels/lights.cl: leave_world_disk)."""
     if not supports_importance(features.camera):
         raise UserError(f"{name}: integrator {integrator}: the {features.camera} camera has no importance to join "
                         "light subpaths to yet (render it with --integrator path)")
-    if integrator == "ptracer" and (lights.env_pick > 0 or "directional" in lights.types):
-        raise UserError(f"{name}: integrator ptracer: light from the environment or a directional light is not "
-                        "traced from the light (render it with --integrator bdpt or path)")
+    if integrator == "ptracer" and lights.env_pick > 0:
+        raise UserError(f"{name}: integrator ptracer: the environment, seen directly, is not reached by light "
+                        "tracing (render it with --integrator bdpt or path)")

@@ -19,7 +19,7 @@ class ProgramChoice:
         (pathtrace.device.programs). With "auto", the scene's own program, tuned, is built in the
         background, and add_samples switches to it once it is there, the average going on;
         until then the generic program renders, or where that is not built (NVIDIA's driver
-        takes 46 s over it: `pathtrace devices --check` builds it, and marks it unused where a
+        takes minutes over it: `pathtrace devices --check` builds it, and marks it unused where a
         driver builds it wrongly) the scene's own program untuned, one build. The background build starts once the first pass is queued, so that
         it takes no core from the first image, and a render of one pass builds nothing more
         (switch_when_built)."""

@@ -292,6 +292,7 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
         self.camera.pack(p, self.width / self.height)
         p["filter"] = self.settings.filter.params()
         p["env_scale"][:3] = self.environment.intensity
+        p["world"] = (*self.compiled.center, self.compiled.radius)
         p["width"], p["height"] = self.width, self.height
         p["sample_start"], p["sample_count"] = self.samples, sample_count
         p["seed"] = self.settings.seed

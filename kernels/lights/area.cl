@@ -105,7 +105,7 @@ int sample_area_light(const SceneData *sc, const RenderParams *p, const global L
  * SampleLe): a point uniform over the primitive's area (a sphere's whole surface, whose back
  * half faces away from any point that sees it), and a cosine-weighted direction about its
  * normal, on its front or, for an emitter of both sides, on either with probability 1/2. */
-int emit_area_light(const SceneData *sc, const global Light *l, float4 u, LightEmission *e)
+int emit_area_light(const SceneData *sc, const RenderParams *p, const global Light *l, float4 u, LightEmission *e)
 {
     float2 b = (float2)(0.0f);
     float3 d = sample_cosine_hemisphere(u.z, u.w);

@@ -45,3 +45,31 @@ int sample_environment_light(const SceneData *sc, const RenderParams *p, const g
     ls->flags = LIGHT_AT_INFINITY;
     return 1;
 }
+
+#ifdef BDPT
+/* The density per solid angle of the directions d towards it (light travelling along -d) that
+ * emit_environment_light draws: a map's importance, a constant colour's uniform sphere (pbrt-v4's
+ * ImageInfiniteLight and UniformInfiniteLight PDF_Le). */
+float pdf_environment_emission(const SceneData *sc, const RenderParams *p, float3 d)
+{
+    if (p->env_width == 1 && p->env_height == 1)
+        return 1.0f / (4.0f * PI_F);
+    return pdf_environment_map(sc->env_marginal, sc->env_conditional, p, d);
+}
+
+/* Light leaving the environment (kernels/bdpt.cl's light subpaths): a direction d towards it by
+ * pdf_environment_emission, and light travelling along -d from the scene's disk across it
+ * (leave_world_disk); le is the radiance from d. */
+int emit_environment_light(const SceneData *sc, const RenderParams *p, const global Light *l, float4 u,
+                           LightEmission *e)
+{
+    float3 d = (p->env_width == 1 && p->env_height == 1)
+                   ? sample_uniform_sphere(u.x, u.y)
+                   : sample_environment_map(sc->env_marginal, sc->env_conditional, p, u.x, u.y);
+    e->pdf_dir = pdf_environment_emission(sc, p, d);
+    e->le = lookup_environment(sc->env, p, d);
+    e->delta = 0;
+    leave_world_disk(p, -d, u.zw, e);
+    return e->pdf_dir > 0.0f;
+}
+#endif

@@ -17,7 +17,7 @@ int sample_point_light(const SceneData *sc, const RenderParams *p, const global 
 #ifdef BDPT
 /* Light leaving a point light (kernels/bdpt.cl): every direction, uniformly (pbrt-v4's
  * PointLight::SampleLe); le is the intensity. */
-int emit_point_light(const SceneData *sc, const global Light *l, float4 u, LightEmission *e)
+int emit_point_light(const SceneData *sc, const RenderParams *p, const global Light *l, float4 u, LightEmission *e)
 {
     e->p = POINT_LIGHT_POSITION(l);
     e->n = (float3)(0.0f);

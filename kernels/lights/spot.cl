@@ -41,7 +41,7 @@ float pdf_spot_emission(const global Light *l, float3 w)
 
 /* Light leaving a spot light (kernels/bdpt.cl): directions uniform in the cone of its cutoff
  * (pbrt-v4's SpotLight::SampleLe); le is the intensity times the falloff. */
-int emit_spot_light(const SceneData *sc, const global Light *l, float4 u, LightEmission *e)
+int emit_spot_light(const SceneData *sc, const RenderParams *p, const global Light *l, float4 u, LightEmission *e)
 {
     float cos_cutoff = SPOT_LIGHT_COS_CUTOFF(l);
     float cos_t = 1.0f - u.x * (1.0f - cos_cutoff);

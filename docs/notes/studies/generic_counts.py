@@ -3,7 +3,9 @@
 spp) rendered by the generic program, built untuned with the dispatch functions named on the
 command line inlined (their DISPATCH attribute, kernels/inlining.h, dropped), and by the
 scene's own program; prints each program's samples kept per pixel (min, max; a sound program
-keeps 256 everywhere) and its mean radiance per sample.
+keeps 256 everywhere) and its mean radiance per sample. The eleventh session's table (the same
+note) was run at commit 10962f8, where eval_leaf_texture was one of the dispatch functions; it
+is inlined since (app/textures/registry.py).
 python docs/notes/studies/generic_counts.py [DEVICE] [FUNCTION ...], DEVICE as --device takes
 it (default gpu), a FUNCTION among the dispatch functions below, or all of them with `all`."""
 import os
