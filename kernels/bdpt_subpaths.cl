@@ -235,6 +235,10 @@ int trace_light_subpath(const SceneData *sc, const RenderParams *p, Vertex *lt, 
        the medium around it */
     lt[0].medium = e.prim >= 0 && sc->prim_media[e.prim] != NO_MEDIUM_CHANGE
                    ? -1 : medium_at(sc, p->eye.xyz, p->camera_medium, e.p, rays);
+    /* light from infinity crosses an unbounded medium with transmittance 0, as the path tracer's
+       shadow rays find: none reaches the scene */
+    if (e.at_infinity && lt[0].medium >= 0)
+        return 0;
 #endif
     *light_delta = e.delta;
     float c = e.prim >= 0 ? fabs(dot(e.n, e.d)) : 1.0f;

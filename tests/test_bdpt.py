@@ -108,6 +108,15 @@ def sky_scene():
                        environment={"map": "venice_sunset_1k.hdr", "rotation": 200})
 
 
+def goniometric_scene():
+    """A goniometric light over the floor and a sphere: a delta light that starts no light subpath
+    (app/lights/registry.py: EMITTERS), whose paths next-event estimation alone draws."""
+    return floor_scene(lights=[{"type": "goniometric", "position": [0.1, 1.2, -0.2], "intensity": [3.0, 2.0, 1.0],
+                                "up": [0.3, -1.0, 0.2], "image": str(ROOT / "assets" / "textures" / "tiles.png")}],
+                       objects=[{"center": [0, 0.5, 0], "radius": 0.5, "material": "white"}],
+                       materials={"white": {"type": "diffuse", "rho_d": 0.8}})
+
+
 def spot_scene():
     """A spot and a point light over the floor, a diffuse and a glossy sphere: delta lights,
     which light subpaths start from and no camera subpath hits."""
@@ -216,7 +225,8 @@ CASES = {"cbox-ptracer": (cbox, "ptracer", 32, 1024), "cbox-bdpt": (cbox, "bdpt"
          "glass-bdpt": (glass_scene, "bdpt", 16, 4096), "spot-bdpt": (spot_scene, "bdpt", 16, 1024),
          "fog-lamp-bdpt": (fog_lamp_scene, "bdpt", 16, 1024), "fog-lamp-ptracer": (fog_lamp_scene, "ptracer", 32, 1024),
          "fog-glass-bdpt": (fog_glass_scene, "bdpt", 16, 4096), "media-fog-bdpt": (media_fog, "bdpt", 16, 1024),
-         "pool-photons-bdpt": (pool_scene, "bdpt", 16, 4096), "sky-bdpt": (sky_scene, "bdpt", 16, 1024)}
+         "pool-photons-bdpt": (pool_scene, "bdpt", 16, 4096), "sky-bdpt": (sky_scene, "bdpt", 16, 1024),
+         "goniometric-bdpt": (goniometric_scene, "bdpt", 16, 1024)}
 SIZE = (24, 24)
 
 
@@ -342,16 +352,39 @@ def test_a_floor_under_a_directional_light_has_the_closed_form(backend, integrat
     assert np.allclose(m.mean(axis=(0, 1)) / expected, 1, atol=0.01), m.mean(axis=(0, 1)) / expected
 
 
-def test_a_floor_under_a_constant_sky_has_the_closed_form(backend):
-    """L = rho Le on a floor that sees the whole sky above it: every strategy (the floor's path
-    escaping, the sky sampled from the floor, light subpaths from the sky's disk joined to the
-    pinhole) weighs in."""
-    camera = {"eye": [0, 3.0, 0.01], "look_at": [0, 0, 0], "up": [0, 0, -1], "vfov": 40}
-    scene = floor_scene(environment={"color": 0.5}, max_depth=2, camera=camera)
+@pytest.mark.parametrize("material,albedo", [({"type": "diffuse", "rho_d": RHO}, RHO),
+                                             ({"type": "diffusetransmission", "reflectance": 0.1,
+                                               "transmittance": 0.8}, 0.9)])
+def test_a_quad_under_a_constant_sky_has_the_closed_form(backend, material, albedo):
+    """L = (R + T) Le on a lone quad that sees the sky on both sides: every strategy (the quad's
+    path escaping, the sky sampled from the quad, light subpaths from the sky's disk joined to the
+    pinhole) weighs in, on both sides of a transmitting quad (next-event estimation drawing the
+    sky behind it too: kernels/lights/environment.cl, uniform_environment)."""
+    scene = read_scene_dict({
+        "camera": {"eye": [0, 3.0, 0.01], "look_at": [0, 0, 0], "up": [0, 0, -1], "vfov": 30},
+        "environment": {"color": 0.5}, "render": {"max_depth": 2, "russian_roulette": "off"},
+        "materials": {"quad": material},
+        "meshes": [{"vertices": [[-1.5, 0, -1.5], [1.5, 0, -1.5], [1.5, 0, 1.5], [-1.5, 0, 1.5]], "faces": [[0, 3, 2, 1]],
+                    "material": "quad"}]}, "sky")
     m, v = render(backend, scene, "bdpt", 32, (16, 16))
-    ok, p, threshold = z_test(m, v, np.full_like(m, RHO * 0.5), block=2)
+    ok, p, threshold = z_test(m, v, np.full_like(m, albedo * 0.5), block=2)
     assert ok, (p, threshold)
-    assert abs(m.mean() / (RHO * 0.5) - 1) < 0.005, m.mean() / (RHO * 0.5)
+    assert abs(m.mean() / (albedo * 0.5) - 1) < 0.005, m.mean() / (albedo * 0.5)
+
+
+def test_light_from_infinity_does_not_cross_an_unbounded_medium(backend):
+    """A camera in fog that bounds nothing, under a sun and a sky: no light from infinity
+    reaches the scene, by the path tracer's shadow rays or by BDPT's light subpaths."""
+    scene = read_scene_dict({
+        "camera": {"eye": [0, 0.5, 3], "look_at": [0, 0, 0], "up": [0, 1, 0], "vfov": 30, "medium": "fog"},
+        "environment": {"color": 0.5}, "render": {"max_depth": 4, "russian_roulette": "off"},
+        "materials": {"white": {"type": "diffuse", "rho_d": 0.6}},
+        "media": {"fog": {"sigma_a": 0.02, "sigma_s": 0.1, "g": 0.0}},
+        "spheres": [{"center": [0, 0, 0], "radius": 0.5, "material": "white"}],
+        "lights": [{"type": "directional", "direction": [0.3, -1, 0.2], "irradiance": [2, 2, 2]}]}, "fog")
+    for integrator in ("path", "bdpt"):
+        m, _ = render(backend, scene, integrator, 16, (12, 12), batches=2)
+        assert np.all(m == 0.0), (integrator, m.max())
 
 
 def test_a_furnace_of_emitting_walls_has_the_closed_form(backend):

@@ -69,7 +69,11 @@ def kernel_parts(names=None, tree: bool = False, bidirectional: bool = False) ->
                      + switch("emit_{}_light(sc, p, l, u, e)", "0", emitters) + "}\n"
                      "float pdf_emission_of_type(const SceneData *sc, const RenderParams *p, const global Light *l, float3 n,\n"
                      "                            float3 w)\n{\n"
-                     + switch(lambda n: EMITTERS[n], "0.0f", emitters) + "}\n")
+                     + switch(lambda n: EMITTERS[n], "0.0f", emitters) + "}\n"
+                     # whether light l starts light subpaths: a delta light that does not (goniometric,
+                     # projection) leaves next-event estimation the only strategy for its paths
+                     "int starts_light_subpaths(const global Light *l)\n{\n"
+                     + switch(lambda n: "1", "0", emitters) + "}\n")
     files = [f"lights/{n}.cl" for n in used]
     here = "app/lights/registry.py: kernel_parts"
     return ([(here, tags), ("lights.cl", None)] + ([("light_tree.cl", None)] if tree else [])

@@ -5,24 +5,33 @@
  *
  * A constant colour is sampled by cosine about the shading normal (uniformly over the sphere at
  * a point inside a medium, which has none: n = 0), a map by its importance
- * (environment.cl: sample_environment_map). */
+ * (environment.cl: sample_environment_map). In a BDPT program a constant colour is sampled
+ * uniformly everywhere: BDPT's weights give next-event estimation a share of every direction
+ * towards the environment, the hemisphere behind a surface's normal too (light a transmitting
+ * surface lets through), which only a density over the whole sphere draws (pbrt-v4's complete
+ * densities for BDPT). */
+
+/* The constant colour's sampling over the whole sphere at normal n. */
+int uniform_environment(float3 n)
+{
+#ifdef BDPT
+    return 1;
+#elif defined(MEDIA)
+    return all(n == 0.0f);
+#else
+    return 0;
+#endif
+}
 
 float pdf_constant_environment(float3 n, float3 d)
 {
-#ifdef MEDIA
-    if (all(n == 0.0f))
-        return 1.0f / (4.0f * PI_F);
-#endif
-    return pdf_cosine_hemisphere(dot(n, d));
+    return uniform_environment(n) ? 1.0f / (4.0f * PI_F) : pdf_cosine_hemisphere(dot(n, d));
 }
 
 float3 sample_constant_environment(float3 n, float2 u)
 {
-#ifdef MEDIA
-    if (all(n == 0.0f))
-        return sample_uniform_sphere(u.x, u.y);
-#endif
-    return to_world(sample_cosine_hemisphere(u.x, u.y), n);
+    return uniform_environment(n) ? sample_uniform_sphere(u.x, u.y)
+                                  : to_world(sample_cosine_hemisphere(u.x, u.y), n);
 }
 
 /* Density with which next-event estimation at a vertex of normal n samples direction d towards
