@@ -109,10 +109,20 @@ def sky_scene():
 
 
 def goniometric_scene():
-    """A goniometric light over the floor and a sphere: a delta light that starts no light subpath
-    (app/lights/registry.py: EMITTERS), whose paths next-event estimation alone draws."""
+    """A goniometric light over the floor and a sphere: a delta light whose intensity an image
+    gives, which light subpaths leave in every direction."""
     return floor_scene(lights=[{"type": "goniometric", "position": [0.1, 1.2, -0.2], "intensity": [3.0, 2.0, 1.0],
                                 "up": [0.3, -1.0, 0.2], "image": str(ROOT / "assets" / "textures" / "tiles.png")}],
+                       objects=[{"center": [0, 0.5, 0], "radius": 0.5, "material": "white"}],
+                       materials={"white": {"type": "diffuse", "rho_d": 0.8}})
+
+
+def projection_scene():
+    """A projection light over the floor and a sphere: a delta light that starts no light subpath
+    (app/lights/registry.py: EMITTERS), whose paths next-event estimation alone draws."""
+    return floor_scene(lights=[{"type": "projection", "position": [0.1, 1.6, 0.3], "direction": [0, -1, -0.2],
+                                "up": [0, 0, -1], "fov": 60, "scale": 2.0,
+                                "image": str(ROOT / "assets" / "textures" / "tiles.png")}],
                        objects=[{"center": [0, 0.5, 0], "radius": 0.5, "material": "white"}],
                        materials={"white": {"type": "diffuse", "rho_d": 0.8}})
 
@@ -226,7 +236,8 @@ CASES = {"cbox-ptracer": (cbox, "ptracer", 32, 1024), "cbox-bdpt": (cbox, "bdpt"
          "fog-lamp-bdpt": (fog_lamp_scene, "bdpt", 16, 1024), "fog-lamp-ptracer": (fog_lamp_scene, "ptracer", 32, 1024),
          "fog-glass-bdpt": (fog_glass_scene, "bdpt", 16, 4096), "media-fog-bdpt": (media_fog, "bdpt", 16, 1024),
          "pool-photons-bdpt": (pool_scene, "bdpt", 16, 4096), "sky-bdpt": (sky_scene, "bdpt", 16, 1024),
-         "goniometric-bdpt": (goniometric_scene, "bdpt", 16, 1024)}
+         "goniometric-bdpt": (goniometric_scene, "bdpt", 16, 1024),
+         "projection-bdpt": (projection_scene, "bdpt", 16, 1024)}
 SIZE = (24, 24)
 
 

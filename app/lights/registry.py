@@ -36,8 +36,8 @@ DELTA_LIGHTS = {cls.name: cls for cls in _delta_light_types()}
 LIGHTS = ("area", "environment", *DELTA_LIGHTS)
 TAGS = {name: i for i, name in enumerate(LIGHTS)}
 EMITTERS = {"area": "pdf_area_emission(sc, l->prim, n, w)", "point": "pdf_point_emission(l, w)",
-            "spot": "pdf_spot_emission(l, w)", "environment": "pdf_environment_emission(sc, p, -w)",
-            "directional": "0.0f"}
+            "spot": "pdf_spot_emission(l, w)", "goniometric": "pdf_goniometric_emission(l, w)",
+            "environment": "pdf_environment_emission(sc, p, -w)", "directional": "0.0f"}
 """The types that start light subpaths in bidirectional path tracing (kernels/bdpt.cl), each with
 the density of the direction w it leaves in towards a point of normal n, as a call (a
 directional light's one direction is a delta). Lights at infinity leave a disk across the scene
@@ -70,8 +70,8 @@ def kernel_parts(names=None, tree: bool = False, bidirectional: bool = False) ->
                      "float pdf_emission_of_type(const SceneData *sc, const RenderParams *p, const global Light *l, float3 n,\n"
                      "                            float3 w)\n{\n"
                      + switch(lambda n: EMITTERS[n], "0.0f", emitters) + "}\n"
-                     # whether light l starts light subpaths: a delta light that does not (goniometric,
-                     # projection) leaves next-event estimation the only strategy for its paths
+                     # whether light l starts light subpaths: a delta light that does not (a
+                     # projection light) leaves next-event estimation the only strategy for its paths
                      "int starts_light_subpaths(const global Light *l)\n{\n"
                      + switch(lambda n: "1", "0", emitters) + "}\n")
     files = [f"lights/{n}.cl" for n in used]

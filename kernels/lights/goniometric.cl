@@ -42,3 +42,34 @@ int sample_goniometric_light(const SceneData *sc, const RenderParams *p, const g
     return 0;        /* a program without textures has no goniometric light's image */
 #endif
 }
+
+#ifdef BDPT
+/* Light leaving a goniometric light (kernels/bdpt.cl): every direction uniformly (pbrt-v4's
+ * GoniometricLight::SampleLe); le is the intensity I(w) along it. */
+int emit_goniometric_light(const SceneData *sc, const RenderParams *p, const global Light *l, float4 u,
+                           LightEmission *e)
+{
+#ifdef TEXTURES
+    e->p = GONIOMETRIC_LIGHT_POSITION(l);
+    e->n = (float3)(0.0f);
+    e->d = sample_uniform_sphere(u.x, u.y);
+    float3 w = to_light_space(GONIOMETRIC_LIGHT_ROTATION(l), e->d);
+    float3 value = eval_texture(sc, (int)GONIOMETRIC_LIGHT_MAP(l), equal_area_square((float3)(w.x, w.z, w.y)));
+    e->le = GONIOMETRIC_LIGHT_INTENSITY(l) * value.x;
+    e->pdf_pos = 1.0f;
+    e->pdf_dir = 1.0f / (4.0f * PI_F);
+    e->offset = 0.0f;
+    e->prim = -1;
+    e->delta = 1;
+    return 1;
+#else
+    return 0;
+#endif
+}
+
+/* The density per solid angle with which emit_goniometric_light leaves in direction w. */
+float pdf_goniometric_emission(const global Light *l, float3 w)
+{
+    return 1.0f / (4.0f * PI_F);
+}
+#endif
