@@ -43,12 +43,18 @@ float pdf_environment(const SceneData *sc, const RenderParams *p, float3 n, floa
     return pdf_environment_map(sc->env_marginal, sc->env_conditional, p, d);
 }
 
+/* A direction towards the environment from a vertex of normal n, drawn with pdf_environment. */
+float3 sample_environment(const SceneData *sc, const RenderParams *p, float3 n, float2 u)
+{
+    return (p->env_width == 1 && p->env_height == 1)
+               ? sample_constant_environment(n, u)
+               : sample_environment_map(sc->env_marginal, sc->env_conditional, p, u.x, u.y);
+}
+
 int sample_environment_light(const SceneData *sc, const RenderParams *p, const global Light *l,
                              float3 x, float3 n, float2 u, LightSample *ls)
 {
-    ls->wi = (p->env_width == 1 && p->env_height == 1)
-                 ? sample_constant_environment(n, u)
-                 : sample_environment_map(sc->env_marginal, sc->env_conditional, p, u.x, u.y);
+    ls->wi = sample_environment(sc, p, n, u);
     ls->pdf = pdf_environment(sc, p, n, ls->wi);
     ls->le = lookup_environment(sc->env, p, ls->wi);
     ls->flags = LIGHT_AT_INFINITY;
@@ -57,13 +63,12 @@ int sample_environment_light(const SceneData *sc, const RenderParams *p, const g
 
 #ifdef BDPT
 /* The density per solid angle of the directions d towards it (light travelling along -d) that
- * emit_environment_light draws: a map's importance, a constant colour's uniform sphere (pbrt-v4's
- * ImageInfiniteLight and UniformInfiniteLight PDF_Le). */
+ * emit_environment_light draws: next-event estimation's, which a BDPT program draws over the
+ * whole sphere whatever the normal (uniform_environment; pbrt-v4's ImageInfiniteLight and
+ * UniformInfiniteLight PDF_Le). */
 float pdf_environment_emission(const SceneData *sc, const RenderParams *p, float3 d)
 {
-    if (p->env_width == 1 && p->env_height == 1)
-        return 1.0f / (4.0f * PI_F);
-    return pdf_environment_map(sc->env_marginal, sc->env_conditional, p, d);
+    return pdf_environment(sc, p, (float3)(0.0f), d);
 }
 
 /* Light leaving the environment (kernels/bdpt.cl's light subpaths): a direction d towards it by
@@ -72,9 +77,7 @@ float pdf_environment_emission(const SceneData *sc, const RenderParams *p, float
 int emit_environment_light(const SceneData *sc, const RenderParams *p, const global Light *l, float4 u,
                            LightEmission *e)
 {
-    float3 d = (p->env_width == 1 && p->env_height == 1)
-                   ? sample_uniform_sphere(u.x, u.y)
-                   : sample_environment_map(sc->env_marginal, sc->env_conditional, p, u.x, u.y);
+    float3 d = sample_environment(sc, p, (float3)(0.0f), u.xy);
     e->pdf_dir = pdf_environment_emission(sc, p, d);
     e->le = lookup_environment(sc->env, p, d);
     e->delta = 0;
