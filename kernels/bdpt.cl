@@ -156,9 +156,7 @@ float3 connect_light_sample(const SceneData *sc, const RenderParams *p, const Ve
     const global Light *l = &sc->lights[ls.light];
     int delta = (ls.flags & LIGHT_DELTA) != 0;
     float w;
-    if (delta && !starts_light_subpaths(l)) {
-        w = 1.0f;                     /* nothing else draws its paths (app/lights/registry.py: EMITTERS) */
-    } else if (ls.flags & LIGHT_AT_INFINITY) {
+    if (ls.flags & LIGHT_AT_INFINITY) {
         /* its vertex is the direction -wi, drawn as a light subpath's first (trace_light_subpath) */
         float origin = l->pick * (delta ? 1.0f : pdf_environment_emission(sc, p, ls.wi));
         w = bdpt_mis_weight(lt, 1, cam, t, densities_to_infinity(sc, p, ls.wi, pt, pm), origin, delta);

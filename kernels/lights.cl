@@ -50,7 +50,6 @@ typedef struct {
 int emit_light_of_type(const SceneData *sc, const RenderParams *p, const global Light *l, float4 u,
                        LightEmission *e);
 float pdf_emission_of_type(const SceneData *sc, const RenderParams *p, const global Light *l, float3 n, float3 w);
-int starts_light_subpaths(const global Light *l);
 
 /* Where light from infinitely far away, travelling in direction d, starts a light subpath: a
  * point uniform on the disk of the scene's bounding sphere's radius across d, beyond the sphere

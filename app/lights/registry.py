@@ -37,11 +37,13 @@ LIGHTS = ("area", "environment", *DELTA_LIGHTS)
 TAGS = {name: i for i, name in enumerate(LIGHTS)}
 EMITTERS = {"area": "pdf_area_emission(sc, l->prim, n, w)", "point": "pdf_point_emission(l, w)",
             "spot": "pdf_spot_emission(l, w)", "goniometric": "pdf_goniometric_emission(l, w)",
-            "environment": "pdf_environment_emission(sc, p, -w)", "directional": "0.0f"}
-"""The types that start light subpaths in bidirectional path tracing (kernels/bdpt.cl), each with
+            "projection": "pdf_projection_emission(l, w)", "environment": "pdf_environment_emission(sc, p, -w)",
+            "directional": "0.0f"}
+"""How each type of light starts light subpaths in bidirectional path tracing (kernels/bdpt.cl):
 the density of the direction w it leaves in towards a point of normal n, as a call (a
 directional light's one direction is a delta). Lights at infinity leave a disk across the scene
-(kernels/lights.cl: leave_world_disk)."""
+(kernels/lights.cl: leave_world_disk). Every type has one (tests/test_bdpt.py): BDPT's weights
+count light subpaths from every light."""
 
 
 def kernel_parts(names=None, tree: bool = False, bidirectional: bool = False) -> list:
@@ -69,11 +71,7 @@ def kernel_parts(names=None, tree: bool = False, bidirectional: bool = False) ->
                      + switch("emit_{}_light(sc, p, l, u, e)", "0", emitters) + "}\n"
                      "float pdf_emission_of_type(const SceneData *sc, const RenderParams *p, const global Light *l, float3 n,\n"
                      "                            float3 w)\n{\n"
-                     + switch(lambda n: EMITTERS[n], "0.0f", emitters) + "}\n"
-                     # whether light l starts light subpaths: a delta light that does not (a
-                     # projection light) leaves next-event estimation the only strategy for its paths
-                     "int starts_light_subpaths(const global Light *l)\n{\n"
-                     + switch(lambda n: "1", "0", emitters) + "}\n")
+                     + switch(lambda n: EMITTERS[n], "0.0f", emitters) + "}\n")
     files = [f"lights/{n}.cl" for n in used]
     here = "app/lights/registry.py: kernel_parts"
     return ([(here, tags), ("lights.cl", None)] + ([("light_tree.cl", None)] if tree else [])
