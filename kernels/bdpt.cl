@@ -73,8 +73,9 @@ float4 densities_from_emitter(const SceneData *sc, const RenderParams *p, const 
         return (float4)(p->env_pick * pdf_environment_emission(sc, p, d), density_from_infinity(p, d, pm), 0.0f, 0.0f);
     }
     int prim = pt->s.prim;
-    float3 n = emitter_normal(sc, prim, pt->s.p);
-    return (float4)(pdf_emitter_origin(sc, prim, pt->s.p),
+    float3 n;
+    float origin = emitter_at(sc, prim, pt->s.p, &n);
+    return (float4)(origin,
                     convert_density(pdf_area_emission(sc, prim, n, pt->wo), pt->s.p, pm->s.p, pm->s.ng), 0.0f, 0.0f);
 }
 
@@ -132,9 +133,6 @@ float3 connect_emitter(const SceneData *sc, const RenderParams *p, const Vertex 
     float3 le = pt->at_infinity ? lookup_environment(sc->env, p, -pt->wo) : VERTEX_MATERIAL(pt)->emission.xyz;
     if (all(le == 0.0f))
         return (float3)(0.0f);
-    /* an environment that is no light (no power) has no other strategy */
-    if (pt->at_infinity && !(p->env_pick > 0.0f))
-        return pt->beta * le;
     return pt->beta * le * bdpt_mis_weight(lt, 0, cam, t, densities_from_emitter(sc, p, pt, pm), 0.0f, 0);
 }
 
@@ -161,8 +159,8 @@ float3 connect_light_sample(const SceneData *sc, const RenderParams *p, const Ve
         float origin = l->pick * (delta ? 1.0f : pdf_environment_emission(sc, p, ls.wi));
         w = bdpt_mis_weight(lt, 1, cam, t, densities_to_infinity(sc, p, ls.wi, pt, pm), origin, delta);
     } else {
-        float3 n = delta ? (float3)(0.0f) : emitter_normal(sc, l->prim, ls.y);
-        float origin = delta ? l->pick : pdf_emitter_origin(sc, l->prim, ls.y);
+        float3 n = (float3)(0.0f);
+        float origin = delta ? l->pick : emitter_at(sc, l->prim, ls.y, &n);
         w = bdpt_mis_weight(lt, 1, cam, t, densities_to_light(sc, p, l, ls.y, n, pt, pm), origin, delta);
     }
     float3 o = offset_ray_origin(pt->s.p, pt->s.offset, pt->s.ng, ls.wi);
@@ -225,7 +223,9 @@ void connect_light_to_camera(const SceneData *sc, const RenderParams *p, const V
     CameraImportance ci;
     if (prim < 0 || !sample_importance(p, light->s.p, next_uniform4(rng).xy, &ci))
         return;
-    float cos_l = dot(emitter_normal(sc, prim, light->s.p), unit(ci.lens - light->s.p));
+    float3 n;
+    emitter_at(sc, prim, light->s.p, &n);
+    float cos_l = dot(n, unit(ci.lens - light->s.p));
     if (emits_back(sc, prim))
         cos_l = fabs(cos_l);
     if (!(cos_l > 0.0f))

@@ -3,31 +3,10 @@
  * which its own subpath and the other end would draw it (kernels/bdpt_vertex.cl), as pbrt-v4's
  * RandomWalk and GenerateLightSubpath store theirs. */
 
-/* The unit normal on the front of emissive primitive `prim` at its point y. */
-float3 emitter_normal(const SceneData *sc, int prim, float3 y)
-{
-#ifndef NO_TRIANGLES
-    if (prim >= sc->num_spheres) {
-        const global Triangle *tri = &sc->triangles[prim - sc->num_spheres];
-#ifdef SHAPES
-        if (SHAPE_KIND(tri)) {
-            const global float4 *f = SHAPE_ROWS(sc, tri);
-            float3 p, error, n;
-            analytic_surface(SHAPE_KIND(tri), f, analytic_params(SHAPE_KIND(tri), f, y), &p, &error, &n);
-            return n;
-        }
-#endif
-        return triangle_normal(tri);
-    }
-#endif
-    Sphere s = sc->spheres[prim];
-    return (y - s.xyz) / s.w;
-}
-
 /* The density per area with which a light subpath starts at point y of emissive primitive
- * `prim`: the light's choice by power times its area's inverse (pbrt's PdfLightOrigin), or an
- * analytic shape's density there. */
-float pdf_emitter_origin(const SceneData *sc, int prim, float3 y)
+ * `prim` (the light's choice by power times its area's inverse, pbrt's PdfLightOrigin, or an
+ * analytic shape's density there), and *n, the unit normal on its front there. */
+float emitter_at(const SceneData *sc, int prim, float3 y, float3 *n)
 {
 #ifndef NO_TRIANGLES
     if (prim >= sc->num_spheres) {
@@ -35,22 +14,27 @@ float pdf_emitter_origin(const SceneData *sc, int prim, float3 y)
 #ifdef SHAPES
         if (SHAPE_KIND(tri)) {
             const global float4 *f = SHAPE_ROWS(sc, tri);
-            return sc->light_pick[prim] * analytic_pdf_area(SHAPE_KIND(tri), f, analytic_params(SHAPE_KIND(tri), f, y));
+            float2 params = analytic_params(SHAPE_KIND(tri), f, y);
+            float3 p, error;
+            analytic_surface(SHAPE_KIND(tri), f, params, &p, &error, n);
+            return sc->light_pick[prim] * analytic_pdf_area(SHAPE_KIND(tri), f, params);
         }
 #endif
+        *n = triangle_normal(tri);
         return sc->light_pick[prim] / triangle_area(tri);
     }
 #endif
-    float r = sc->spheres[prim].w;
-    return sc->light_pick[prim] / (4.0f * PI_F * r * r);
+    Sphere s = sc->spheres[prim];
+    *n = (y - s.xyz) / s.w;
+    return sc->light_pick[prim] / (4.0f * PI_F * s.w * s.w);
 }
 
 /* Traces subpath `path` on from its vertex k - 1 along the ray o + t d (leaving surface `self`,
  * in `medium`), whose direction was drawn with density pdf_dir per solid angle (0: a delta
  * lobe), with throughput beta, to at most max_vertices vertices; returns its vertex count.
  * Each new vertex stores its forward density, and the reverse density of the one before it. A
- * camera subpath (importance 0) that escapes ends on a vertex at infinity, the environment's; a
- * light subpath (importance 1) scatters by the adjoint BSDFs. */
+ * camera subpath (importance 0) that escapes to a lit environment ends on a vertex at infinity,
+ * the environment's; a light subpath (importance 1) scatters by the adjoint BSDFs. */
 int extend_subpath(const SceneData *sc, const RenderParams *p, Vertex *path, int k, int max_vertices,
                    float3 o, float3 d, float3 beta, float pdf_dir, PrimId self, int medium, const int importance,
                    Rng *rng, int *rays)
@@ -97,7 +81,8 @@ int extend_subpath(const SceneData *sc, const RenderParams *p, Vertex *path, int
         }
 #endif
         if (hit.prim < 0) {
-            if (importance)
+            /* only a lit environment, which is a light (p->env_pick > 0), ends a camera subpath */
+            if (importance || !(p->env_pick > 0.0f))
                 return k;
             v->s.p = o;
             v->s.ng = v->s.ns = (float3)(0.0f);
@@ -229,7 +214,10 @@ int trace_light_subpath(const SceneData *sc, const RenderParams *p, Vertex *lt, 
     lt[0].at_infinity = e.at_infinity;
 #ifdef MEDIA
     /* e.n is on the side light leaves, which for an emitter of both sides may be its back */
-    lt[0].s.side = e.prim >= 0 && dot(e.n, emitter_normal(sc, e.prim, e.p)) < 0.0f ? -1.0f : 1.0f;
+    float3 front = e.n;
+    if (e.prim >= 0)
+        emitter_at(sc, e.prim, e.p, &front);
+    lt[0].s.side = dot(e.n, front) < 0.0f ? -1.0f : 1.0f;
     lt[0].in_medium = 0;
     /* where the emitter bounds media, medium_towards reads its side; elsewhere the light is in
        the medium around it */

@@ -457,7 +457,7 @@ kernel void mis_sums(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *out
                            pdf_camera_direction(&p, ray.d), NO_PRIM, medium_towards(&sc, &cam[0], ray.d), 0, &rng,
                            &rays);
         if (n < 3 || !cam[n - 1].emits
-            || (cam[n - 1].at_infinity ? !(p.env_pick > 0.0f) : all(VERTEX_MATERIAL(&cam[n - 1])->emission.xyz == 0.0f)))
+            || (!cam[n - 1].at_infinity && all(VERTEX_MATERIAL(&cam[n - 1])->emission.xyz == 0.0f)))
             n = 0;
     }
     if (n == 0)
@@ -471,8 +471,8 @@ kernel void mis_sums(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *out
     cam[n - 2].pdf_rev = from_light.y;
     int prim = cam[n - 1].s.prim, infinity = cam[n - 1].at_infinity;
     float3 to_light = -cam[n - 1].wo;    /* at infinity: the direction towards the environment */
-    float origin = infinity ? from_light.x : pdf_emitter_origin(&sc, prim, cam[n - 1].s.p);
-    float3 normal = infinity ? (float3)(0.0f) : emitter_normal(&sc, prim, cam[n - 1].s.p);
+    float3 normal = (float3)(0.0f);
+    float origin = infinity ? from_light.x : emitter_at(&sc, prim, cam[n - 1].s.p, &normal);
     for (int s = 1; s < n; ++s) {
         int t = n - s;
         /* the light subpath: the camera subpath's last s vertices, reversed */
