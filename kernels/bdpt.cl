@@ -85,8 +85,8 @@ float4 densities_to_light(const SceneData *sc, const RenderParams *p, const glob
 {
     float3 wi = unit(y - pt->s.p);
     return (float4)(convert_density(pdf_emission_of_type(sc, p, l, n, -wi), y, pt->s.p, pt->s.ng),
-                    convert_density(pdf_scattering(sc, pt, wi, pt->wo), pt->s.p, pm->s.p, pm->s.ng),
-                    convert_density(pdf_scattering(sc, pt, pt->wo, wi), pt->s.p, y, n), 0.0f);
+                    convert_density(pdf_scattering(sc, pt, wi, pt->wo, 1), pt->s.p, pm->s.p, pm->s.ng),
+                    convert_density(pdf_scattering(sc, pt, pt->wo, wi, 0), pt->s.p, y, n), 0.0f);
 }
 
 /* s = 1: a light at infinity sampled in direction wi from camera vertex pt, after pm. */
@@ -94,8 +94,8 @@ float4 densities_to_infinity(const SceneData *sc, const RenderParams *p, float3 
                              const Vertex *pm)
 {
     return (float4)(density_from_infinity(p, -wi, pt),
-                    convert_density(pdf_scattering(sc, pt, wi, pt->wo), pt->s.p, pm->s.p, pm->s.ng),
-                    pdf_scattering(sc, pt, pt->wo, wi), 0.0f);
+                    convert_density(pdf_scattering(sc, pt, wi, pt->wo, 1), pt->s.p, pm->s.p, pm->s.ng),
+                    pdf_scattering(sc, pt, pt->wo, wi, 0), 0.0f);
 }
 
 /* s >= 2, t >= 2: light vertex qs, after qm, joined to camera vertex pt, after pm. */
@@ -103,10 +103,10 @@ float4 densities_between(const SceneData *sc, const Vertex *qs, const Vertex *qm
                          const Vertex *pm)
 {
     float3 w = unit(qs->s.p - pt->s.p);
-    return (float4)(convert_density(pdf_scattering(sc, qs, qs->wo, -w), qs->s.p, pt->s.p, pt->s.ng),
-                    convert_density(pdf_scattering(sc, pt, w, pt->wo), pt->s.p, pm->s.p, pm->s.ng),
-                    convert_density(pdf_scattering(sc, pt, pt->wo, w), pt->s.p, qs->s.p, qs->s.ng),
-                    density_at(pdf_scattering(sc, qs, -w, qs->wo), qs->s.p, qm));
+    return (float4)(convert_density(pdf_scattering(sc, qs, qs->wo, -w, 1), qs->s.p, pt->s.p, pt->s.ng),
+                    convert_density(pdf_scattering(sc, pt, w, pt->wo, 1), pt->s.p, pm->s.p, pm->s.ng),
+                    convert_density(pdf_scattering(sc, pt, pt->wo, w, 0), pt->s.p, qs->s.p, qs->s.ng),
+                    density_at(pdf_scattering(sc, qs, -w, qs->wo, 0), qs->s.p, qm));
 }
 
 /* t = 1: light vertex qs, after qm, joined to the lens at point `lens`. */
@@ -116,7 +116,7 @@ float4 densities_to_camera(const SceneData *sc, const RenderParams *p, const Ver
     float3 w = unit(lens - qs->s.p);
     return (float4)(0.0f, 0.0f,
                     convert_density(pdf_camera_direction(p, -w), lens, qs->s.p, qs->s.ng),
-                    density_at(pdf_scattering(sc, qs, w, qs->wo), qs->s.p, qm));
+                    density_at(pdf_scattering(sc, qs, w, qs->wo, 0), qs->s.p, qm));
 }
 
 /* Strategy s = 0: camera vertex t - 1 (t >= 2) lies on an emitter; the radiance it sends back
@@ -147,8 +147,8 @@ float3 connect_light_sample(const SceneData *sc, const RenderParams *p, const Ve
     LightSample ls = sample_light(sc, p, pt->s.p, pt->s.ns, next_bits4(rng), rng);
     if (!(ls.pdf > 0.0f))
         return (float3)(0.0f);
-    float3 f = eval_scattering(sc, pt, ls.wi, pt->wo);
-    float3 c = pt->beta * f * vertex_cos(pt, ls.wi) * ls.le / ls.pdf;
+    float3 f = eval_scattering(sc, pt, ls.wi, pt->wo) * joined_cos(sc, pt, ls.wi, pt->wo, 0);
+    float3 c = pt->beta * f * ls.le / ls.pdf;
     if (all(c == 0.0f))
         return (float3)(0.0f);
     const global Light *l = &sc->lights[ls.light];
@@ -179,10 +179,9 @@ float3 connect_vertices(const SceneData *sc, const Vertex *lt, int s, const Vert
         return (float3)(0.0f);
     w *= rsqrt(d2);
     /* radiance flows from qs's past through qs, along -w to pt, and on to pt's past */
-    float3 f_q = eval_scattering(sc, qs, qs->wo, -w) * correct_shading_normal(qs, qs->wo, -w);
-    float3 f_p = eval_scattering(sc, pt, w, pt->wo);
-    float g = vertex_cos(qs, w) * vertex_cos(pt, w) / d2;
-    float3 c = qs->beta * f_q * f_p * pt->beta * g;
+    float3 f_q = eval_scattering(sc, qs, qs->wo, -w) * joined_cos(sc, qs, qs->wo, -w, 1);
+    float3 f_p = eval_scattering(sc, pt, w, pt->wo) * joined_cos(sc, pt, w, pt->wo, 0);
+    float3 c = qs->beta * f_q * f_p * pt->beta / d2;
     if (all(c == 0.0f))
         return (float3)(0.0f);
     c *= bdpt_mis_weight(lt, s, cam, t, densities_between(sc, qs, qm, pt, pm), 0.0f, light_delta);
@@ -200,8 +199,8 @@ void connect_camera(const SceneData *sc, const RenderParams *p, const Vertex *lt
     if (!sample_importance(p, qs->s.p, next_uniform4(rng).xy, &ci))
         return;
     float3 w = unit(ci.lens - qs->s.p);           /* towards the lens */
-    float3 f = eval_scattering(sc, qs, qs->wo, w) * correct_shading_normal(qs, qs->wo, w);
-    float3 c = qs->beta * f * (vertex_cos(qs, w) * ci.weight);
+    float3 f = eval_scattering(sc, qs, qs->wo, w) * joined_cos(sc, qs, qs->wo, w, 1);
+    float3 c = qs->beta * f * ci.weight;
     if (all(c == 0.0f) || !all(isfinite(c)))
         return;
 #ifndef LIGHT_TRACING

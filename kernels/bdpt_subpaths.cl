@@ -118,7 +118,7 @@ int extend_subpath(const SceneData *sc, const RenderParams *p, Vertex *path, int
         if (!front && (flags & MATERIAL_TWOSIDED))
             turn_round(&s);
 #ifdef TEXTURES
-        v->m = shade_material(sc, MATERIAL_ROW(sc, s, d), &s, -d);
+        v->m = shade_material(sc, MATERIAL_ROW(sc, s, d), &s);
 #else
         v->m = MATERIAL_ROW(sc, s, d);
 #endif
@@ -135,22 +135,44 @@ int extend_subpath(const SceneData *sc, const RenderParams *p, Vertex *path, int
         v->connectible = scatters && !(m->flags & MATERIAL_DELTA);
         if (!scatters || k + 1 >= max_vertices)
             return k + 1;
-        float3 wo = to_shading(&s, -d);
         float4 u = next_uniform4(rng);
+        /* f, the frame it scatters in, is the one the camera's side sees (seen_from): on a
+           camera subpath the ray's; on a light subpath one drawn before the direction, which
+           must then see it (turn_probability). p_frame: the probability of drawing f;
+           p_frame_rev: a light subpath's of drawing a camera subpath's f */
+        Surface f = s;
+        float p_frame = 1.0f, p_frame_rev = 1.0f;
+#ifdef NORMAL_MAPS
+        float p_turn = turn_probability(&s);
+        int turned = importance ? u.w < p_turn : turns_perturbed_normal(&s, -d);
+        if (turned) {
+            turn_perturbed_normal(&f);
+            complete_frame(sc, &f);
+        }
+        if (importance)
+            p_frame = turned ? p_turn : 1.0f - p_turn;
+        else
+            p_frame_rev = turned ? p_turn : 1.0f - p_turn;
+#endif
+        float3 wo = to_shading(&f, -d);
         BSDFSample bs;
         bs.eta = 1.0f;
         if (!sample_bsdf(m, wo, u.xyz, &bs))
             return k + 1;
-        float3 wi = from_shading(&s, bs.wi);
+        float3 wi = from_shading(&f, bs.wi);
         if (dot(wi, s.ng) * bs.wi.z <= 0.0f)
             return k + 1;                    /* the normals disagree on wi's side */
+#ifdef NORMAL_MAPS
+        if (importance && turns_perturbed_normal(&s, wi) != turned)
+            return k + 1;                    /* wi sees the other frame */
+#endif
         /* importance scatters by the adjoint BSDF f(wi, wo): the BSDFs are reciprocal but for
            a refraction's 1 / eta^2, which radiance takes and importance not (pbrt's
            TransportMode), so its weight is radiance's times eta^2; a layered BSDF's estimate
            (kernels/layered.cl) keeps this form, where f(wi, wo) / pdf would not */
-        float3 weight = bs.weight;
+        float3 weight = bs.weight / p_frame;
         if (importance)
-            weight *= bs.eta * bs.eta * correct_shading_normal(v, -d, wi);
+            weight *= bs.eta * bs.eta * correct_shading_normal(&f, -d, wi);
 #ifdef NORMAL_MAPS
         /* the path tracer shadows the direction light arrives from (eval_scattering): on a light
            subpath the one it came along, on a camera subpath the one sampled */
@@ -161,8 +183,8 @@ int extend_subpath(const SceneData *sc, const RenderParams *p, Vertex *path, int
             v->delta = 1;
             pdf_dir = 0.0f;
         } else {
-            pdf_dir = bs.pdf;
-            pdf_rev = pdf_bsdf(m, bs.wi, wo);
+            pdf_dir = bs.pdf * p_frame;
+            pdf_rev = pdf_bsdf(m, bs.wi, wo) * p_frame_rev;
         }
         beta *= weight;
         if (all(beta == 0.0f))

@@ -90,13 +90,6 @@ float phase_g(const SceneData *sc, const Vertex *v)
 #endif
 }
 
-/* |cos| of direction w at vertex v, with its shading normal; 1 inside a medium, whose phase
- * function has no cosine. */
-float vertex_cos(const Vertex *v, float3 w)
-{
-    return in_medium(v) ? 1.0f : fabs(dot(w, v->s.ns));
-}
-
 /* The medium a ray leaving vertex v in direction w crosses first: beyond v's surface on w's
  * side, or where v lies on no primitive (a medium vertex, the camera, a point light) the
  * medium around it. -1 without media. */
@@ -109,44 +102,96 @@ int medium_towards(const SceneData *sc, const Vertex *v, float3 w)
 #endif
 }
 
-/* Veach's correction of the adjoint BSDF for shading normals (thesis, eq. 5.19; pbrt-v3's
- * CorrectShadingNormal): importance arriving along wo and leaving along wi; none inside a
- * medium. */
-float correct_shading_normal(const Vertex *v, float3 wo, float3 wi)
+/* Surface vertex v's surface as seen from `to`, the direction towards the camera's side: with
+ * Mitsuba's normal maps, its perturbed normal turned as the path tracer turns it for that side
+ * (kernels/normal_maps.cl: face_perturbed_normal). A vertex keeps the normal unturned, since a
+ * light subpath's vertex learns the camera's side only when it is joined or scattered on; so
+ * BDPT evaluates the path tracer's BSDF, which is not reciprocal, and not its adjoint's
+ * transpose, as Mitsuba 3's particle tracer does. */
+Surface seen_from(const SceneData *sc, const Vertex *v, float3 to)
 {
-    if (in_medium(v))
-        return 1.0f;
-    const Surface *s = &v->s;
+    Surface s = v->s;
+#ifdef NORMAL_MAPS
+    if (face_perturbed_normal(&s, to))
+        complete_frame(sc, &s);
+#endif
+    return s;
+}
+
+/* Veach's correction of the adjoint BSDF for shading normals (thesis, eq. 5.19; pbrt-v3's
+ * CorrectShadingNormal): importance arriving along wo and leaving along wi, at surface s. */
+float correct_shading_normal(const Surface *s, float3 wo, float3 wi)
+{
     float den = fabs(dot(wo, s->ng)) * fabs(dot(wi, s->ns));
     return den > 0.0f ? fabs(dot(wo, s->ns)) * fabs(dot(wi, s->ng)) / den : 0.0f;
 }
 
 /* The BSDF of surface vertex v for light arriving along world direction `from` and leaving
- * along `to` (radiance flows from `from` to `to`), without the cosine; 0 where the shading and
- * geometric normals disagree on either side (no light leaks, as next-event estimation tests).
- * A perturbed normal's shadowing of `from`, the side light comes from, as the path tracer
- * weighs it (kernels/normal_maps.cl: shadow_terminator), so that both estimate one image.
- * A medium vertex's phase function, which is symmetric. */
+ * along `to` (radiance flows from `from` to `to`), without the cosine, with the shading normal
+ * `to` sees (seen_from); 0 where the shading and geometric normals disagree on either side (no
+ * light leaks, as next-event estimation tests). A perturbed normal's shadowing of `from`, the
+ * side light comes from, as the path tracer weighs it (kernels/normal_maps.cl:
+ * shadow_terminator), so that both estimate one image. A medium vertex's phase function, which
+ * is symmetric. */
 float3 eval_scattering(const SceneData *sc, const Vertex *v, float3 from, float3 to)
 {
     if (in_medium(v))
         return (float3)(eval_hg(phase_g(sc, v), to, from));
-    float3 a = to_shading(&v->s, from), b = to_shading(&v->s, to);
-    if (dot(from, v->s.ng) * a.z <= 0.0f || dot(to, v->s.ng) * b.z <= 0.0f)
+    Surface s = seen_from(sc, v, to);
+    float3 a = to_shading(&s, from), b = to_shading(&s, to);
+    if (dot(from, s.ng) * a.z <= 0.0f || dot(to, s.ng) * b.z <= 0.0f)
         return (float3)(0.0f);
     float3 f = eval_bsdf(VERTEX_MATERIAL(v), b, a);
 #ifdef NORMAL_MAPS
-    f *= shadow_terminator(&v->s, from);
+    f *= shadow_terminator(&s, from);
 #endif
     return f;
 }
 
-/* The density per solid angle with which vertex v, reached along `wo`, samples `wi`. */
-float pdf_scattering(const SceneData *sc, const Vertex *v, float3 wo, float3 wi)
+/* The cosine that goes with eval_scattering(v, from, to) where vertex v is joined to another
+ * along `to`: |cos from| with the shading normal `to` sees, or where importance flows (v on a
+ * light subpath, joined to a camera vertex or the lens) the adjoint's, Veach's correction times
+ * |cos to|; 1 inside a medium, whose phase function has no cosine. */
+float joined_cos(const SceneData *sc, const Vertex *v, float3 from, float3 to, const int importance)
+{
+    if (in_medium(v))
+        return 1.0f;
+    Surface s = seen_from(sc, v, to);
+    return importance ? correct_shading_normal(&s, from, to) * fabs(dot(to, s.ns)) : fabs(dot(from, s.ns));
+}
+
+/* The probability with which a light subpath scatters at surface s in the frame of its perturbed
+ * normal turned (turn_perturbed_normal): it draws the direction towards the camera's side
+ * before it knows whether the path tracer's BSDF turns the normal for that direction, so it
+ * draws the frame first, turned with this probability, and keeps the direction only where that
+ * frame is the one the direction sees (kernels/bdpt_subpaths.cl: extend_subpath). Any
+ * probability in (0, 1) reaches every direction the BSDF scatters into; this one grows with the
+ * tilt, 0 where nothing turns, so that an untilted normal wastes no subpath. */
+#ifdef NORMAL_MAPS
+float turn_probability(const Surface *s)
+{
+    return s->terminator > 0.0f ? 0.5f * (1.0f - dot(s->ns, s->ns_unperturbed)) : 0.0f;
+}
+#endif
+
+/* The density per solid angle with which vertex v, reached along `wo`, samples `wi`: by the
+ * camera subpath's sampling (wo towards the camera's side) or, with importance, the light
+ * subpath's (wi towards the camera's side), times the probability of the frame it drew
+ * (turn_probability). */
+float pdf_scattering(const SceneData *sc, const Vertex *v, float3 wo, float3 wi, const int importance)
 {
     if (in_medium(v))
         return eval_hg(phase_g(sc, v), wo, wi);
-    return pdf_bsdf(VERTEX_MATERIAL(v), to_shading(&v->s, wo), to_shading(&v->s, wi));
+    float3 to = importance ? wi : wo;
+    Surface s = seen_from(sc, v, to);
+    float pdf = pdf_bsdf(VERTEX_MATERIAL(v), to_shading(&s, wo), to_shading(&s, wi));
+#ifdef NORMAL_MAPS
+    if (importance) {
+        float p_turn = turn_probability(&v->s);
+        pdf *= turns_perturbed_normal(&v->s, to) ? p_turn : 1.0f - p_turn;
+    }
+#endif
+    return pdf;
 }
 
 /* The ratio of two strategies' densities as pbrt's MISWeight takes it, a delta's 0 read as 1,

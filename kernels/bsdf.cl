@@ -37,11 +37,18 @@ typedef const global Material *MaterialRef;
 #endif
 
 /* Declares `m`, the MaterialRef of surface s's material (a Surface, kernels/bvh.cl), seen along
- * ray direction d, and completes s's shading frame (kernels/frame.cl). */
+ * ray direction d, and completes s's shading frame (kernels/frame.cl), a perturbed normal
+ * turned for the side d sees (kernels/normal_maps.cl). */
+#ifdef NORMAL_MAPS
+#define FACE_PERTURBED_NORMAL(s, wo) face_perturbed_normal(s, wo)
+#else
+#define FACE_PERTURBED_NORMAL(s, wo)
+#endif
 #ifdef TEXTURES
 #define MATERIAL_AT(m, sc, s, d)                                                                  \
-    Material m##_shaded = shade_material(sc, MATERIAL_ROW(sc, s, d), &(s), -(d));               \
+    Material m##_shaded = shade_material(sc, MATERIAL_ROW(sc, s, d), &(s));                      \
     MaterialRef m = &m##_shaded;                                                                 \
+    FACE_PERTURBED_NORMAL(&(s), -(d));                                                           \
     complete_frame(sc, &(s))
 #else
 #define MATERIAL_AT(m, sc, s, d)                                                                  \

@@ -41,16 +41,16 @@ float shadow_terminator(const Surface *s, float3 w)
     return 2.0f / (1.0f + sqrt(1.0f + s->terminator * tan2));
 }
 
-/* s's shading normal perturbed by material `row`'s normal or bump map, if it has one, seen from
- * direction wo: the perturbed normal m in the frame (t_s, t_t, ns), t_s = dp/du made orthogonal to
- * ns and t_t = ns x t_s (the front's, on a two-sided back whose ns is turned round), is a normal
- * map's 2 rgb - 1, or a bump map's normal of the tilted derivatives, on the geometric normal's
- * side. As Mitsuba 3.9's `normalmap` and `bumpmap` (one base class, PerturbedBSDF): one that faces
- * away from wo has its tangential part turned round (Schuessler et al. 2017's flip), and its tilt
- * sets the shadowing term. As pbrt-v4's (MATERIAL_PBRT_PERTURBATION; materials.h: NormalMap,
- * BumpMap), m is turned whole to the geometric normal's side (interaction.h:
- * SetShadingGeometry, FaceForward), with no shadowing term. */
-void perturb_normal(const SceneData *sc, const global Material *row, float2 uv, float3 wo, Surface *s)
+/* s's shading normal perturbed by material `row`'s normal or bump map, if it has one: the
+ * perturbed normal m in the frame (t_s, t_t, ns), t_s = dp/du made orthogonal to ns and
+ * t_t = ns x t_s (the front's, on a two-sided back whose ns is turned round), is a normal map's
+ * 2 rgb - 1, or a bump map's normal of the tilted derivatives, on the geometric normal's side. As
+ * Mitsuba 3.9's `normalmap` and `bumpmap` (one base class, PerturbedBSDF), m's tilt sets the
+ * shadowing term, and m is left for face_perturbed_normal to turn by the side it is seen from. As
+ * pbrt-v4's (MATERIAL_PBRT_PERTURBATION; materials.h: NormalMap, BumpMap), m is turned whole to
+ * the geometric normal's side (interaction.h: SetShadingGeometry, FaceForward), with no
+ * shadowing term. */
+void perturb_normal(const SceneData *sc, const global Material *row, float2 uv, Surface *s)
 {
     for (int i = row->textures;; ++i) {
         TextureBinding b = sc->bindings[i];
@@ -80,9 +80,6 @@ void perturb_normal(const SceneData *sc, const global Material *row, float2 uv, 
                 s->ns = dot(ns, s->ng) < 0.0f ? -ns : ns;
                 return;
             }
-            float3 wo_local = (float3)(dot(wo, t_s), dot(wo, t_t), dot(wo, n));
-            if (wo_local.z * dot(wo_local, m) <= 0.0f)
-                ns = 2.0f * m.z * n - ns;     /* m.xy turned round */
             s->terminator = fmin(0.125f * fmax(0.0f, 1.0f - m.z * m.z) / fmax(m.z * m.z, 1e-12f), 1.0f);
             s->ns = ns;
             return;
@@ -90,4 +87,30 @@ void perturb_normal(const SceneData *sc, const global Material *row, float2 uv, 
         if (b.last)
             return;
     }
+}
+
+/* Whether Mitsuba's normal maps turn s's perturbed normal m for wo, the direction towards the
+ * camera's side: where m faces away from wo, m's tangential part is turned round (Schuessler et
+ * al., "Microfacet-based Normal Mapping for Robust Monte Carlo Path Tracing", 2017, the flip
+ * Mitsuba 3's PerturbedBSDF makes). Never for pbrt's maps or an unperturbed normal, whose
+ * terminator is 0. */
+int turns_perturbed_normal(const Surface *s, float3 wo)
+{
+    return s->terminator > 0.0f && dot(wo, s->ns_unperturbed) * dot(wo, s->ns) <= 0.0f;
+}
+
+/* Turns s's perturbed normal m round about the unperturbed n: m.xy negated, 2 m.z n - m. */
+void turn_perturbed_normal(Surface *s)
+{
+    s->ns = 2.0f * dot(s->ns, s->ns_unperturbed) * s->ns_unperturbed - s->ns;
+}
+
+/* s's perturbed normal as wo, the camera's side, sees it (turns_perturbed_normal); whether it
+ * turned. */
+int face_perturbed_normal(Surface *s, float3 wo)
+{
+    if (!turns_perturbed_normal(s, wo))
+        return 0;
+    turn_perturbed_normal(s);
+    return 1;
 }

@@ -32,10 +32,10 @@ void apply_textures(const SceneData *sc, Material *m, float2 uv)
     }
 }
 
-/* The material `row` at surface s (kernels/bvh.cl), seen from direction wo, whose uv is found
- * only if a texture needs it; a normal or bump map perturbs s's shading normal
- * (kernels/normal_maps.cl). */
-Material shade_material(const SceneData *sc, const global Material *row, Surface *s, float3 wo)
+/* The material `row` at surface s (kernels/bvh.cl), whose uv is found only if a texture needs
+ * it; a normal or bump map perturbs s's shading normal, before the side it is seen from turns it
+ * (kernels/normal_maps.cl: perturb_normal, face_perturbed_normal). */
+Material shade_material(const SceneData *sc, const global Material *row, Surface *s)
 {
     Material m = *row;
 #ifdef NORMAL_MAPS
@@ -46,7 +46,7 @@ Material shade_material(const SceneData *sc, const global Material *row, Surface
         float2 uv = surface_uv(sc, s->prim, s->b, s->p);
         apply_textures(sc, &m, uv);
 #ifdef NORMAL_MAPS
-        perturb_normal(sc, row, uv, wo, s);
+        perturb_normal(sc, row, uv, s);
 #endif
     }
     return m;
