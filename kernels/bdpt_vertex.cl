@@ -104,19 +104,25 @@ int medium_towards(const SceneData *sc, const Vertex *v, float3 w)
 
 /* Surface vertex v's surface as seen from `to`, the direction towards the camera's side: with
  * Mitsuba's normal maps, its perturbed normal turned as the path tracer turns it for that side
- * (kernels/normal_maps.cl: face_perturbed_normal). A vertex keeps the normal unturned, since a
- * light subpath's vertex learns the camera's side only when it is joined or scattered on; so
- * BDPT evaluates the path tracer's BSDF, which is not reciprocal, and not its adjoint's
- * transpose, as Mitsuba 3's particle tracer does. */
-Surface seen_from(const SceneData *sc, const Vertex *v, float3 to)
-{
-    Surface s = v->s;
+ * (kernels/normal_maps.cl: turns_perturbed_normal), in `turned`, or else v's own. A vertex
+ * keeps the normal unturned, since a light subpath's vertex learns the camera's side only when
+ * it is joined or scattered on; so BDPT evaluates the path tracer's BSDF, which is not
+ * reciprocal, and not its adjoint's transpose, as Mitsuba 3's particle tracer does. SEEN_FROM
+ * declares `s`, that surface (v's own without normal maps). */
 #ifdef NORMAL_MAPS
-    if (face_perturbed_normal(&s, to))
-        complete_frame(sc, &s);
-#endif
-    return s;
+const Surface *seen_from(const SceneData *sc, const Vertex *v, float3 to, Surface *turned)
+{
+    if (!turns_perturbed_normal(&v->s, to))
+        return &v->s;
+    *turned = v->s;
+    turn_perturbed_normal(turned);
+    complete_frame(sc, turned);
+    return turned;
 }
+#define SEEN_FROM(s, sc, v, to) Surface s##_turned; const Surface *s = seen_from(sc, v, to, &s##_turned)
+#else
+#define SEEN_FROM(s, sc, v, to) const Surface *s = &(v)->s
+#endif
 
 /* Veach's correction of the adjoint BSDF for shading normals (thesis, eq. 5.19; pbrt-v3's
  * CorrectShadingNormal): importance arriving along wo and leaving along wi, at surface s. */
@@ -137,13 +143,13 @@ float3 eval_scattering(const SceneData *sc, const Vertex *v, float3 from, float3
 {
     if (in_medium(v))
         return (float3)(eval_hg(phase_g(sc, v), to, from));
-    Surface s = seen_from(sc, v, to);
-    float3 a = to_shading(&s, from), b = to_shading(&s, to);
-    if (dot(from, s.ng) * a.z <= 0.0f || dot(to, s.ng) * b.z <= 0.0f)
+    SEEN_FROM(s, sc, v, to);
+    float3 a = to_shading(s, from), b = to_shading(s, to);
+    if (dot(from, s->ng) * a.z <= 0.0f || dot(to, s->ng) * b.z <= 0.0f)
         return (float3)(0.0f);
     float3 f = eval_bsdf(VERTEX_MATERIAL(v), b, a);
 #ifdef NORMAL_MAPS
-    f *= shadow_terminator(&s, from);
+    f *= shadow_terminator(s, from);
 #endif
     return f;
 }
@@ -156,8 +162,8 @@ float joined_cos(const SceneData *sc, const Vertex *v, float3 from, float3 to, c
 {
     if (in_medium(v))
         return 1.0f;
-    Surface s = seen_from(sc, v, to);
-    return importance ? correct_shading_normal(&s, from, to) * fabs(dot(to, s.ns)) : fabs(dot(from, s.ns));
+    SEEN_FROM(s, sc, v, to);
+    return importance ? correct_shading_normal(s, from, to) * fabs(dot(to, s->ns)) : fabs(dot(from, s->ns));
 }
 
 /* The probability with which a light subpath scatters at surface s in the frame of its perturbed
@@ -182,13 +188,12 @@ float pdf_scattering(const SceneData *sc, const Vertex *v, float3 wo, float3 wi,
 {
     if (in_medium(v))
         return eval_hg(phase_g(sc, v), wo, wi);
-    float3 to = importance ? wi : wo;
-    Surface s = seen_from(sc, v, to);
-    float pdf = pdf_bsdf(VERTEX_MATERIAL(v), to_shading(&s, wo), to_shading(&s, wi));
+    SEEN_FROM(s, sc, v, importance ? wi : wo);
+    float pdf = pdf_bsdf(VERTEX_MATERIAL(v), to_shading(s, wo), to_shading(s, wi));
 #ifdef NORMAL_MAPS
     if (importance) {
         float p_turn = turn_probability(&v->s);
-        pdf *= turns_perturbed_normal(&v->s, to) ? p_turn : 1.0f - p_turn;
+        pdf *= s != &v->s ? p_turn : 1.0f - p_turn;     /* s turned, or v's own */
     }
 #endif
     return pdf;

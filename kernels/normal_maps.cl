@@ -105,12 +105,9 @@ void turn_perturbed_normal(Surface *s)
     s->ns = 2.0f * dot(s->ns, s->ns_unperturbed) * s->ns_unperturbed - s->ns;
 }
 
-/* s's perturbed normal as wo, the camera's side, sees it (turns_perturbed_normal); whether it
- * turned. */
-int face_perturbed_normal(Surface *s, float3 wo)
+/* s's perturbed normal as wo, the camera's side, sees it (turns_perturbed_normal). */
+void face_perturbed_normal(Surface *s, float3 wo)
 {
-    if (!turns_perturbed_normal(s, wo))
-        return 0;
-    turn_perturbed_normal(s);
-    return 1;
+    if (turns_perturbed_normal(s, wo))
+        turn_perturbed_normal(s);
 }
