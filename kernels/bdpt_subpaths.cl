@@ -155,6 +155,12 @@ int extend_subpath(const SceneData *sc, const RenderParams *p, Vertex *path, int
             p_frame_rev = turned ? p_turn : 1.0f - p_turn;
 #endif
         float3 wo = to_shading(&f, -d);
+        /* the path tracer carries no light whose direction the shading and geometric normals put
+           on different sides (its sampled wi is tested below, eval_scattering tests both); a
+           light subpath's frame is drawn for the camera's side, so -d must be tested too: a
+           transmissive BSDF would read a wo below the frame as coming from inside */
+        if (importance && dot(-d, s.ng) * wo.z <= 0.0f)
+            return k + 1;
         BSDFSample bs;
         bs.eta = 1.0f;
         if (!sample_bsdf(m, wo, u.xyz, &bs))
@@ -166,8 +172,8 @@ int extend_subpath(const SceneData *sc, const RenderParams *p, Vertex *path, int
         if (importance && turns_perturbed_normal(&s, wi) != turned)
             return k + 1;                    /* wi sees the other frame */
 #endif
-        /* importance scatters by the adjoint BSDF f(wi, wo): the BSDFs are reciprocal but for
-           a refraction's 1 / eta^2, which radiance takes and importance not (pbrt's
+        /* importance scatters by the adjoint BSDF f(wi, wo): in one frame the BSDFs are
+           reciprocal but for a refraction's 1 / eta^2, which radiance takes and importance not (pbrt's
            TransportMode), so its weight is radiance's times eta^2; a layered BSDF's estimate
            (kernels/layered.cl) keeps this form, where f(wi, wo) / pdf would not */
         float3 weight = bs.weight / p_frame;

@@ -13,7 +13,8 @@
  * s.p the point on the scene's disk it left (kernels/lights.cl: leave_world_disk), or a camera
  * subpath's last, where it escaped, wo back along the escaping ray. */
 typedef struct {
-    Surface s;            /* a surface vertex's surface, its shading frame complete */
+    Surface s;            /* a surface vertex's surface, its shading frame complete, a perturbed
+                             normal unturned (seen_from turns it) */
 #ifdef TEXTURES
     Material m;           /* its material with the textures looked up there */
 #else
@@ -106,9 +107,10 @@ int medium_towards(const SceneData *sc, const Vertex *v, float3 w)
  * Mitsuba's normal maps, its perturbed normal turned as the path tracer turns it for that side
  * (kernels/normal_maps.cl: turns_perturbed_normal), in `turned`, or else v's own. A vertex
  * keeps the normal unturned, since a light subpath's vertex learns the camera's side only when
- * it is joined or scattered on; so BDPT evaluates the path tracer's BSDF, which is not
- * reciprocal, and not its adjoint's transpose, as Mitsuba 3's particle tracer does. SEEN_FROM
- * declares `s`, that surface (v's own without normal maps). */
+ * it is joined or scattered on. So both subpaths evaluate the path tracer's BSDF, which is not
+ * reciprocal, in the frame the camera's side chooses, where Mitsuba 3's particle tracer turns
+ * the normal by the side light arrives from. SEEN_FROM declares `s`, that surface (v's own
+ * without normal maps). */
 #ifdef NORMAL_MAPS
 const Surface *seen_from(const SceneData *sc, const Vertex *v, float3 to, Surface *turned)
 {
@@ -176,7 +178,7 @@ float joined_cos(const SceneData *sc, const Vertex *v, float3 from, float3 to, c
 #ifdef NORMAL_MAPS
 float turn_probability(const Surface *s)
 {
-    return s->terminator > 0.0f ? 0.5f * (1.0f - dot(s->ns, s->ns_unperturbed)) : 0.0f;
+    return s->terminator > 0.0f ? fmax(0.0f, 0.5f * (1.0f - dot(s->ns, s->ns_unperturbed))) : 0.0f;
 }
 #endif
 

@@ -85,7 +85,12 @@ float3 gather_photons(const SceneData *sc, const Vertex *v, int j, global const 
                     /* a surface at an angle (a corner's other wall) is not this one */
                     if (dot(d, d) > r * r || dot(ph.n.xyz, n) < 0.5f || j + (int)ph.p.w > BDPT)
                         continue;
-                    sum += ph.beta.xyz * eval_scattering(sc, v, ph.wo.xyz, v->wo);
+                    /* the photons' density is per area: the path tracer's |cos| with the shading
+                       normal over the geometric normal's (Veach's correction at the last vertex) */
+                    float cos_g = fabs(dot(ph.wo.xyz, v->s.ng));
+                    if (cos_g > 0.0f)
+                        sum += ph.beta.xyz * eval_scattering(sc, v, ph.wo.xyz, v->wo)
+                               * (joined_cos(sc, v, ph.wo.xyz, v->wo, 0) / cos_g);
                 }
             }
     return sum / ((float)map->paths * fmax(PI_F * r * r, FLT_MIN));     /* a radius too small to hold a square */

@@ -506,6 +506,34 @@ def test_a_bump_map_and_the_normal_map_of_its_normal_render_alike(backend, tmp_p
     np.testing.assert_allclose(images[0], images[1], rtol=2e-3, atol=1e-5)
 
 
+@pytest.mark.specialised
+@pytest.mark.parametrize("integrator", ["path", "bdpt"])
+def test_a_constant_normal_map_builds_the_scenes_own_program(backend, tmp_path, integrator):
+    """A normal map may be any texture; kernels/normal_maps.cl reads a bump map's slopes from a
+    bitmap, so a scene whose only normal map is a constant still compiles the bitmap's kernel
+    (its own program failed to build: grad_bitmap undeclared). The constant tilts the floor's
+    normal as the same normal in a bitmap does."""
+    from pathtrace.api import load_dict
+    from pathtrace.io.images import write_image
+    from pathtrace.rendering.renderer import Renderer
+    write_image(tmp_path / "normal.exr", np.full((2, 2, 3), [0.6, 0.5, 0.9], np.float32))
+    images = []
+    for normal_map in ({"type": "constant", "value": [0.6, 0.5, 0.9]}, {"type": "bitmap", "file": "normal.exr", "raw": True}):
+        scene = load_dict({
+            "camera": {"eye": [0, 3, 2], "look_at": [0, 0, 0], "vfov": 30},
+            "render": {"width": 12, "height": 8, "max_depth": 3, "integrator": integrator},
+            "materials": {"m": {"type": "diffuse", "rho_d": 0.6, "normal_map": normal_map},
+                          "lamp": {"type": "emitter", "Le": 20}},
+            "spheres": [{"center": [2, 1, 0], "radius": 0.3, "material": "lamp"}],
+            "meshes": [{"material": "m", "vertices": [[-3, 0, -3], [-3, 0, 3], [3, 0, 3], [3, 0, -3]],
+                        "faces": [[0, 1, 2, 3]], "uvs": [[0, 0], [0, 1], [1, 1], [1, 0]]}]}, folder=tmp_path)
+        r = Renderer(backend, scene)
+        assert not r.uses_generic_program
+        r.add_samples(64)
+        images.append(r.mean())
+    np.testing.assert_allclose(images[0].mean(), images[1].mean(), rtol=0.03)
+
+
 def test_a_map_around_a_map_keeps_the_inner_one(tmp_path, capsys):
     PILImage.fromarray(np.full((2, 2, 3), 128, np.uint8)).save(tmp_path / "m.png")
     bitmap = '<texture type="bitmap" name="normalmap"><string name="filename" value="m.png"/></texture>'

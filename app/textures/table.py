@@ -158,8 +158,9 @@ def compile_textures(bindings: list) -> TextureTables:
             else:
                 row["input"][k] = leaves[id(value)] if value.kind.leaf else -2 - registers[k]
         kind.pack(texture, row, store)
+    normal_maps = any(slot in NORMAL_MAP_SLOTS for _, slot, _, _ in table)
+    # kernels/normal_maps.cl reads a bump map's slopes from a bitmap, whatever its normal map is
+    types = tuple(n for n in TEXTURES if any(t.type == n for t, _, _ in order) or (normal_maps and n == "bitmap"))
     return TextureTables(textures if len(textures) else np.zeros(1, TEXTURE), store.buffer(),
                          np.array(table, TEXTURE_BINDING) if table else np.zeros(1, TEXTURE_BINDING),
-                         first, tuple(n for n in TEXTURES if any(t.type == n for t, _, _ in order)),
-                         any(slot == OPACITY_SLOT for _, slot, _, _ in table),
-                         any(slot in NORMAL_MAP_SLOTS for _, slot, _, _ in table))
+                         first, types, any(slot == OPACITY_SLOT for _, slot, _, _ in table), normal_maps)
