@@ -698,6 +698,22 @@ def test_the_api_renders_with_the_integrator_it_is_given(backend):
         api.render(scene, spp=1, size=(4, 4), device="cpu", integrator="sppm")
 
 
+def test_bdpt_gives_the_denoiser_the_camera_paths_first_vertex(backend):
+    """Light tracing's splats have no albedo or normal of their own: BDPT's AOVs are the camera
+    ray's first hit, as the path tracer's are, and the denoiser smooths BDPT's image with them."""
+    from pathtrace import api
+    out = {integrator: api.render(cbox(), spp=4, size=(64, 64), device="cpu", integrator=integrator, seed=3,
+                                  aovs=("albedo", "normal"))
+           for integrator in ("path", "bdpt")}
+    for aov in ("albedo", "normal"):
+        np.testing.assert_allclose(out["bdpt"][aov], out["path"][aov], atol=0.05)
+    image = out["bdpt"]["image"]
+    denoised = api.denoise(image, out["bdpt"]["albedo"], out["bdpt"]["normal"])
+    converged = api.render(cbox(), spp=512, size=(64, 64), device="cpu", seed=5)
+    error = lambda x: np.abs(x - converged).mean()     # noqa: E731
+    assert np.isfinite(denoised).all() and error(denoised) < 0.7 * error(image), (error(denoised), error(image))
+
+
 def test_the_command_line_renders_with_bdpt_and_refuses_what_it_cannot_in_one_line(tmp_path):
     out = tmp_path / "a.exr"
     r = in_process("render", "tests/scenes/cbox.xml", "--integrator", "bdpt", "--size", "12x12", "--spp", "2",
