@@ -166,8 +166,11 @@ int extend_subpath(const SceneData *sc, const RenderParams *p, Vertex *path, int
         if (!sample_bsdf(m, wo, u.xyz, &bs))
             return k + 1;
         float3 wi = from_shading(&f, bs.wi);
-        if (dot(wi, s.ng) * bs.wi.z <= 0.0f)
-            return k + 1;                    /* the normals disagree on wi's side */
+        /* the normals disagree on wi's side: where light arrives from (a camera subpath's) the
+           path tracer carries nothing; towards the camera a transmitting BSDF scatters on, as
+           eval_scattering lets it */
+        if (dot(wi, s.ng) * bs.wi.z <= 0.0f && !(importance && (flags & MATERIAL_TRANSMISSIVE)))
+            return k + 1;
 #ifdef NORMAL_MAPS
         if (importance && turns_perturbed_normal(&s, wi) != turned)
             return k + 1;                    /* wi sees the other frame */

@@ -136,8 +136,10 @@ float correct_shading_normal(const Surface *s, float3 wo, float3 wi)
 
 /* The BSDF of surface vertex v for light arriving along world direction `from` and leaving
  * along `to` (radiance flows from `from` to `to`), without the cosine, with the shading normal
- * `to` sees (seen_from); 0 where the shading and geometric normals disagree on either side (no
- * light leaks, as next-event estimation tests). A perturbed normal's shadowing of `from`, the
+ * `to` sees (seen_from); 0 where the shading and geometric normals disagree on `from`'s side (no
+ * light leaks, as the path tracer tests its light's direction), or on `to`'s side of an opaque
+ * surface, which the path tracer reaches from its front alone and whose BSDF is 0 below its
+ * frame; a transmitting BSDF reads such a `to` as the other side, as the path tracer does. A perturbed normal's shadowing of `from`, the
  * side light comes from, as the path tracer weighs it (kernels/normal_maps.cl:
  * shadow_terminator), so that both estimate one image. A medium vertex's phase function, which
  * is symmetric. */
@@ -147,7 +149,8 @@ float3 eval_scattering(const SceneData *sc, const Vertex *v, float3 from, float3
         return (float3)(eval_hg(phase_g(sc, v), to, from));
     SEEN_FROM(s, sc, v, to);
     float3 a = to_shading(s, from), b = to_shading(s, to);
-    if (dot(from, s->ng) * a.z <= 0.0f || dot(to, s->ng) * b.z <= 0.0f)
+    if (dot(from, s->ng) * a.z <= 0.0f
+        || (!(VERTEX_MATERIAL(v)->flags & MATERIAL_TRANSMISSIVE) && dot(to, s->ng) * b.z <= 0.0f))
         return (float3)(0.0f);
     float3 f = eval_bsdf(VERTEX_MATERIAL(v), b, a);
 #ifdef NORMAL_MAPS
