@@ -178,9 +178,11 @@ def keeps_own_cache(device: cl.Device) -> bool:
 def build_cached(context: cl.Context, device: cl.Device, source: str, options: list[str],
                  use_cache: bool = True, tune: bool = True) -> BuildResult:
     """Builds a program for one device. Unless the driver keeps its own cache, the binary is
-    cached under cache_dir() (cache_entry). `tune`: on NVIDIA, try the register caps of
-    app/device/occupancy.py (up to four more builds of the program)."""
-    use_cache = use_cache and not keeps_own_cache(device)
+    cached under cache_dir() (cache_entry); where it does, an empty entry beside it marks that
+    the driver's cache holds the build (built_before). `tune`: on NVIDIA, try the register caps
+    of app/device/occupancy.py (up to four more builds of the program)."""
+    marks = use_cache and keeps_own_cache(device)
+    use_cache = use_cache and not marks
     path = cache_entry(device, source, options, tune)
     tune = tune and is_nvidia(device)
     start = time.perf_counter()
@@ -203,7 +205,16 @@ def build_cached(context: cl.Context, device: cl.Device, source: str, options: l
             # the options it was built with go with it: a register cap applies when a driver
             # compiles the cached intermediate code (NVIDIA's PTX) for the device
             write_entry(path, "\0".join(options).encode() + b"\n", binary)
+    elif marks:
+        write_entry(path.with_suffix(".built"))
     return BuildResult(program, seconds, False)
+
+
+def built_before(device: cl.Device, entry: Path) -> bool:
+    """Whether the program whose cache entry is `entry` (cache_entry) builds from a cache on
+    `device`: its binary is in pathtrace's cache, or the driver keeps its own cache and
+    build_cached marked the build (PoCL: else its first build compiles it afresh)."""
+    return entry.is_file() or (keeps_own_cache(device) and entry.with_suffix(".built").is_file())
 
 
 def _read_cached(path: Path):
@@ -255,7 +266,7 @@ class Backend:
 
     def built_generic(self, media: bool):
         """The generic program with or without media if it is built, else None (the one without
-        is built at open where that is fast; `pathtrace devices --check` builds both; neither is
+        is built at open where it renders from a cache; `pathtrace devices --check` builds both; neither is
         built behind a scene's first image), and None where that check refused it."""
         if generic_refused(self.device.device, self.extra):
             return None
@@ -288,23 +299,28 @@ class Backend:
 
 
 def open_device(device: Device, extra: str = "", use_cache: bool = True, mode: str = None) -> Backend:
-    """The device with its queue. Where building the generic program without media will not
-    compile it afresh (its binary is in pathtrace's cache, or the driver keeps its own cache and
-    builds from it: PoCL, whose first build of it takes 2 s on two cores), it is built now: it
-    shows that the platform builds the kernels and draws the first images of every scene without
-    media (pathtrace.device.programs); the one with media is built where a scene asks for it.
-    Elsewhere (NVIDIA's driver takes minutes over it on an H200, and a build in a background thread
-    held up the scene's own build behind it) the display's small program shows that the
-    platform builds, and the generic program waits for `pathtrace devices --check` (./install.sh
-    runs it)."""
+    """The device with its queue. Where the generic program without media will render, and
+    building it will not compile it afresh (built_before: its binary is in pathtrace's cache, or
+    PoCL's cache holds it), or the mode renders with nothing else and PoCL builds it in 2 s on two
+    cores, it is built now: it shows that the platform builds the kernels and draws the first
+    images of every scene without media (pathtrace.device.programs); the one with media is built
+    where a scene asks for it. Elsewhere the display's small program shows that the platform
+    builds, and a first image waits for the scene's own program, one build: NVIDIA's driver takes
+    minutes over the generic program on an H200 (a build in a background thread held up the
+    scene's own build behind it), and PoCL's first build and launch of it take longer than a
+    scene's own (cornell-box cold on two cores: 4.1 s to the first image, 3.0 s with its own).
+    `pathtrace devices --check` (./install.sh runs it) builds the generic programs."""
     context = cl.Context([device.device])
     queue = cl.CommandQueue(context, properties=cl.command_queue_properties.PROFILING_ENABLE)
+    mode = mode or default_mode()
     source, options, entry = _generic_build(device.device, extra, False, cache_dir())   # most scenes' (the viewer's first)
-    fast = (keeps_own_cache(device.device) or entry.is_file()) and not generic_refused(device.device, extra)
+    renders = mode == "generic" or (mode == "auto" and built_before(device.device, entry))
+    fast = renders and (built_before(device.device, entry) or keeps_own_cache(device.device)) \
+        and not generic_refused(device.device, extra)
     if not fast:
         source, options = display_source(), list(BUILD_OPTIONS)
     opened = build_cached(context, device.device, source, options, use_cache, fast)   # tuned: the generic program
-    backend = Backend(device, context, queue, opened, extra, use_cache, mode or default_mode())
+    backend = Backend(device, context, queue, opened, extra, use_cache, mode)
     if fast:
         backend.programs.add(Features.generic_program(media=False), True, opened.program)
     return backend

@@ -7,7 +7,7 @@ costs registers, hence occupancy), but building it can take seconds on a GPU's d
 with the register-cap trials of app/device/occupancy.py, and every new mix of materials, textures and
 lights is a new program. The generic programs (Features.generic_program) are built once per
 device, driver and pathtrace version and cached (app/device/opencl.py: open_device builds the one
-without media where that is fast, `pathtrace devices --check` both everywhere), so that a scene's first images need no build:
+without media where it renders from a cache, `pathtrace devices --check` both everywhere), so that a scene's first images need no build:
 they come from the generic program while the scene's own builds in a thread (the drivers'
 builds release Python's lock), started once the first pass is queued so that it takes no core
 from the first image (Renderer.switch_when_built), and launches switch to it once it is there. Where the generic
