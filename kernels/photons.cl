@@ -58,7 +58,7 @@ void store_photon(global Photon *photons, global int *next, volatile global int 
 }
 
 /* The radiance camera vertex v (the subpath's j-th) sends back along v->wo from the photons within
- * the radius: sum of f(wo, wi_p) beta_p / (N pi r^2) over those on a surface facing the same way
+ * the radius: sum of f(wo, wi_p) beta_p / (N pi r^2) over those on the same surface, either side
  * (the eight cells a disc of radius r about v can reach; a list two cells share read once) and
  * of light subpaths short enough that the joined path stays within the program's depth. */
 float3 gather_photons(const SceneData *sc, const Vertex *v, int j, global const Photon *photons,
@@ -82,8 +82,10 @@ float3 gather_photons(const SceneData *sc, const Vertex *v, int j, global const 
                 for (int i = heads[list]; i >= 0; i = next[i]) {
                     Photon ph = photons[i];
                     float3 d = ph.p.xyz - v->s.p;
-                    /* a surface at an angle (a corner's other wall) is not this one */
-                    if (dot(d, d) > r * r || dot(ph.n.xyz, n) < 0.5f || j + (int)ph.p.w > BDPT)
+                    /* a surface at an angle (a corner's other wall) is not this one; its other
+                       side is, where light arrives through a transmitting BSDF (an opaque one's
+                       is 0 there) */
+                    if (dot(d, d) > r * r || fabs(dot(ph.n.xyz, n)) < 0.5f || j + (int)ph.p.w > BDPT)
                         continue;
                     /* the photons' density is per area: the path tracer's |cos| with the shading
                        normal over the geometric normal's (Veach's correction at the last vertex) */

@@ -243,6 +243,24 @@ def normal_map_glass_scene():
                                                "vfov": 30}), "normal-maps-glass")
 
 
+def lampshade_scene():
+    """A diffuse-transmission panel seen through water and lit from below through glass by a
+    lamp: every path to the lamp crosses the panel between delta bounces, which caustic photons
+    estimate from the panel's other side (BDPT with photons rendered 2 % of the path tracer's
+    image when the gather kept only photons on the camera's side)."""
+    def quad(y, material, size=1.5):
+        return {"vertices": [[-size, y, -size], [size, y, -size], [size, y, size], [-size, y, size]],
+                "faces": [[0, 3, 2, 1]], "material": material}
+    return read_scene_dict({
+        "camera": {"eye": [0, 2.0, 1.2], "look_at": [0, 0, 0], "up": [0, 1, 0], "vfov": 45},
+        "environment": {"color": 0}, "render": {"max_depth": 6, "russian_roulette": "off"},
+        "materials": {"water": {"type": "dielectric", "int_ior": 1.33}, "glass": {"type": "dielectric", "int_ior": 1.5},
+                      "panel": {"type": "diffusetransmission", "reflectance": 0.1, "transmittance": 0.8}, "lamp": LAMP},
+        "meshes": [quad(0.5, "water", 3), quad(0.2, "panel"), quad(0.0, "glass", 3)],
+        "spheres": [{"center": [0.2, -0.8, 0.1], "radius": 0.5, "material": "lamp"}]}, "lampshade"
+    ).with_settings(photon_radius=0.05)
+
+
 def normal_mapped_pool_scene():
     """pool_scene with a normal-mapped floor: the photons' density is per area of the geometric
     normal, which the path tracer's cosine with the shading normal corrects (photons.cl:
@@ -294,7 +312,8 @@ CASES = {"cbox-ptracer": (cbox, "ptracer", 32, 1024), "cbox-bdpt": (cbox, "bdpt"
          "projection-ptracer": (projection_scene, "ptracer", 32, 1024),
          "normal-maps-bdpt": (normal_map_scene, "bdpt", 16, 1024),
          "normal-maps-ptracer": (normal_map_scene, "ptracer", 32, 1024),
-         "pool-normal-map-photons-bdpt": (normal_mapped_pool_scene, "bdpt", 16, 4096)}
+         "pool-normal-map-photons-bdpt": (normal_mapped_pool_scene, "bdpt", 16, 4096),
+         "lampshade-photons-bdpt": (lampshade_scene, "bdpt", 16, 4096)}
 SIZE = (24, 24)
 
 
