@@ -138,38 +138,30 @@ int extend_subpath(const SceneData *sc, const RenderParams *p, Vertex *path, int
         float4 u = next_uniform4(rng);
         /* f, the frame it scatters in, is the one the camera's side sees (seen_from): on a
            camera subpath the ray's; on a light subpath one drawn before the direction, which
-           must then see it (turn_probability). p_frame: the probability of drawing f;
+           must then see it (frame_probability). p_frame: the probability of drawing f;
            p_frame_rev: a light subpath's of drawing a camera subpath's f */
         Surface f = s;
         float p_frame = 1.0f, p_frame_rev = 1.0f;
 #ifdef NORMAL_MAPS
-        float p_turn = turn_probability(&s);
-        int turned = importance ? u.w < p_turn : turns_perturbed_normal(&s, -d);
+        int turned = importance ? u.w < frame_probability(&s, 1) : turns_perturbed_normal(&s, -d);
         if (turned) {
             turn_perturbed_normal(&f);
             complete_frame(sc, &f);
         }
         if (importance)
-            p_frame = turned ? p_turn : 1.0f - p_turn;
+            p_frame = frame_probability(&s, turned);
         else
-            p_frame_rev = turned ? p_turn : 1.0f - p_turn;
+            p_frame_rev = frame_probability(&s, turned);
 #endif
         float3 wo = to_shading(&f, -d);
-        /* the path tracer carries no light whose direction the shading and geometric normals put
-           on different sides (its sampled wi is tested below, eval_scattering tests both); a
-           light subpath's frame is drawn for the camera's side, so -d must be tested too: a
-           transmissive BSDF would read a wo below the frame as coming from inside */
-        if (importance && dot(-d, s.ng) * wo.z <= 0.0f)
-            return k + 1;
         BSDFSample bs;
         bs.eta = 1.0f;
         if (!sample_bsdf(m, wo, u.xyz, &bs))
             return k + 1;
         float3 wi = from_shading(&f, bs.wi);
-        /* the normals disagree on wi's side: where light arrives from (a camera subpath's) the
-           path tracer carries nothing; towards the camera a transmitting BSDF scatters on, as
-           eval_scattering lets it */
-        if (dot(wi, s.ng) * bs.wi.z <= 0.0f && !(importance && (flags & MATERIAL_TRANSMISSIVE)))
+        /* light arrives along -d on a light subpath, along wi on a camera subpath */
+        if (importance ? !carries_light(&f, flags & MATERIAL_TRANSMISSIVE, -d, wo, wi, bs.wi)
+                       : !carries_light(&f, flags & MATERIAL_TRANSMISSIVE, wi, bs.wi, -d, wo))
             return k + 1;
 #ifdef NORMAL_MAPS
         if (importance && turns_perturbed_normal(&s, wi) != turned)

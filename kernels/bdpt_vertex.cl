@@ -134,12 +134,20 @@ float correct_shading_normal(const Surface *s, float3 wo, float3 wi)
     return den > 0.0f ? fabs(dot(wo, s->ns)) * fabs(dot(wi, s->ng)) / den : 0.0f;
 }
 
+/* Whether the path tracer carries light through surface s (its material transmitting or not)
+ * arriving along world direction `from` and leaving along `to`, a and b in s's shading frame:
+ * the shading and geometric normals agree on the side light comes from (no light leaks, as the
+ * path tracer tests its light's direction), and on the side towards the camera where s is
+ * opaque, which the path tracer reaches from its front alone and whose BSDF is 0 below its
+ * frame; a transmitting BSDF reads such a `to` as the other side, as the path tracer's does. */
+int carries_light(const Surface *s, int transmitting, float3 from, float3 a, float3 to, float3 b)
+{
+    return dot(from, s->ng) * a.z > 0.0f && (transmitting || dot(to, s->ng) * b.z > 0.0f);
+}
+
 /* The BSDF of surface vertex v for light arriving along world direction `from` and leaving
  * along `to` (radiance flows from `from` to `to`), without the cosine, with the shading normal
- * `to` sees (seen_from); 0 where the shading and geometric normals disagree on `from`'s side (no
- * light leaks, as the path tracer tests its light's direction), or on `to`'s side of an opaque
- * surface, which the path tracer reaches from its front alone and whose BSDF is 0 below its
- * frame; a transmitting BSDF reads such a `to` as the other side, as the path tracer does. A perturbed normal's shadowing of `from`, the
+ * `to` sees (seen_from); 0 where the path tracer carries no such light (carries_light). A perturbed normal's shadowing of `from`, the
  * side light comes from, as the path tracer weighs it (kernels/normal_maps.cl:
  * shadow_terminator), so that both estimate one image. A medium vertex's phase function, which
  * is symmetric. */
@@ -149,8 +157,7 @@ float3 eval_scattering(const SceneData *sc, const Vertex *v, float3 from, float3
         return (float3)(eval_hg(phase_g(sc, v), to, from));
     SEEN_FROM(s, sc, v, to);
     float3 a = to_shading(s, from), b = to_shading(s, to);
-    if (dot(from, s->ng) * a.z <= 0.0f
-        || (!(VERTEX_MATERIAL(v)->flags & MATERIAL_TRANSMISSIVE) && dot(to, s->ng) * b.z <= 0.0f))
+    if (!carries_light(s, VERTEX_MATERIAL(v)->flags & MATERIAL_TRANSMISSIVE, from, a, to, b))
         return (float3)(0.0f);
     float3 f = eval_bsdf(VERTEX_MATERIAL(v), b, a);
 #ifdef NORMAL_MAPS
@@ -172,23 +179,25 @@ float joined_cos(const SceneData *sc, const Vertex *v, float3 from, float3 to, c
 }
 
 /* The probability with which a light subpath scatters at surface s in the frame of its perturbed
- * normal turned (turn_perturbed_normal): it draws the direction towards the camera's side
- * before it knows whether the path tracer's BSDF turns the normal for that direction, so it
- * draws the frame first, turned with this probability, and keeps the direction only where that
- * frame is the one the direction sees (kernels/bdpt_subpaths.cl: extend_subpath). Any
- * probability in (0, 1) reaches every direction the BSDF scatters into; this one grows with the
- * tilt, 0 where nothing turns, so that an untilted normal wastes no subpath. */
+ * normal turned (turn_perturbed_normal) or, `turned` 0, unturned: it draws the direction
+ * towards the camera's side before it knows whether the path tracer's BSDF turns the normal for
+ * that direction, so it draws the frame first, turned with probability (1 - m.n) / 2, and keeps
+ * the direction only where that frame is the one the direction sees (kernels/bdpt_subpaths.cl:
+ * extend_subpath). Any probability in (0, 1) reaches every direction the BSDF scatters into;
+ * this one grows with the tilt, 0 where nothing turns, so that an untilted normal wastes no
+ * subpath. */
 #ifdef NORMAL_MAPS
-float turn_probability(const Surface *s)
+float frame_probability(const Surface *s, int turned)
 {
-    return s->terminator > 0.0f ? fmax(0.0f, 0.5f * (1.0f - dot(s->ns, s->ns_unperturbed))) : 0.0f;
+    float p_turn = s->terminator > 0.0f ? fmax(0.0f, 0.5f * (1.0f - dot(s->ns, s->ns_unperturbed))) : 0.0f;
+    return turned ? p_turn : 1.0f - p_turn;
 }
 #endif
 
 /* The density per solid angle with which vertex v, reached along `wo`, samples `wi`: by the
  * camera subpath's sampling (wo towards the camera's side) or, with importance, the light
  * subpath's (wi towards the camera's side), times the probability of the frame it drew
- * (turn_probability). */
+ * (frame_probability). */
 float pdf_scattering(const SceneData *sc, const Vertex *v, float3 wo, float3 wi, const int importance)
 {
     if (in_medium(v))
@@ -196,10 +205,8 @@ float pdf_scattering(const SceneData *sc, const Vertex *v, float3 wo, float3 wi,
     SEEN_FROM(s, sc, v, importance ? wi : wo);
     float pdf = pdf_bsdf(VERTEX_MATERIAL(v), to_shading(s, wo), to_shading(s, wi));
 #ifdef NORMAL_MAPS
-    if (importance) {
-        float p_turn = turn_probability(&v->s);
-        pdf *= s != &v->s ? p_turn : 1.0f - p_turn;     /* s turned, or v's own */
-    }
+    if (importance)
+        pdf *= frame_probability(&v->s, s != &v->s);     /* s turned, or v's own */
 #endif
     return pdf;
 }

@@ -227,7 +227,7 @@ def normal_map_scene():
     the camera's side (kernels/normal_maps.cl: face_perturbed_normal), which BDPT's light
     subpaths learn only when joined (kernels/bdpt_vertex.cl: seen_from); light that the floor
     reflects onto the wall, and the wall onto the floor, is drawn in a frame a light subpath
-    chooses before its direction (turn_probability). Nothing casts a shadow, where light
+    chooses before its direction (frame_probability). Nothing casts a shadow, where light
     tracing's few splats would misjudge their variance."""
     return read_scene_dict(normal_maps(), "normal-maps")
 

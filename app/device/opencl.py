@@ -314,8 +314,8 @@ def open_device(device: Device, extra: str = "", use_cache: bool = True, mode: s
     queue = cl.CommandQueue(context, properties=cl.command_queue_properties.PROFILING_ENABLE)
     mode = mode or default_mode()
     source, options, entry = _generic_build(device.device, extra, False, cache_dir())   # most scenes' (the viewer's first)
-    renders = mode == "generic" or (mode == "auto" and built_before(device.device, entry))
-    fast = renders and (built_before(device.device, entry) or keeps_own_cache(device.device)) \
+    cached = built_before(device.device, entry)
+    fast = mode != "specialised" and (cached or (mode == "generic" and keeps_own_cache(device.device))) \
         and not generic_refused(device.device, extra)
     if not fast:
         source, options = display_source(), list(BUILD_OPTIONS)
