@@ -182,16 +182,15 @@ class _Prepared:
         self.backends = backends
         self.geometry = _geometry_digest(scene)
         start = time.perf_counter()
-        compiled = compile_scene(scene, backends[0].queue, build_progress)
-        if phases:
-            phases(f"compiled the scene ({_contents(compiled)}, BVH in {compiled.bvh_seconds:.2f} s)",
-                   time.perf_counter() - start)
-        start = time.perf_counter()
+        # the tree is built by the first renderer, beside its program's build (Renderer.set_scene)
+        compiled = compile_scene(scene, backends[0].queue, build_progress, tree=False)
         self.group = DeviceGroup(backends, compiled)
         if phases:
             # the renderers' construction includes building the kernels specialised to the
-            # scene, which it does not report on its own
-            phases(f"prepared the renderer{'s' * (len(backends) > 1)}", time.perf_counter() - start)
+            # scene, which it does not report on its own: what is left of it once the tree is built
+            phases(f"compiled the scene ({_contents(compiled)}, BVH in {compiled.bvh_seconds:.2f} s)",
+                   compiled.tree_ended - start)
+            phases(f"prepared the renderer{'s' * (len(backends) > 1)}", time.perf_counter() - compiled.tree_ended)
         self.environment = _environment_key(scene.environment)
         self.lights = _lights_key(scene.lights)
 

@@ -195,11 +195,11 @@ CPU_INLINE float4 intersect_leaves(const SceneData *sc, float4 t, int4 count, in
 }
 
 /* app/compiler/bvh.py keeps the binary tree at most 30 levels deep, so the 4-wide one at most 15, and
- * traversal pushes at most three nodes per level: 48 entries. A scene's program is built with
- * the size its own tree needs (app/device/features.py: stack_size). */
-#ifndef BVH_STACK_SIZE
+ * traversal pushes at most three nodes per level: 48 entries, for every tree, so that a scene's
+ * program can build before its tree does (app/compiler/compiled.py). Sized to each tree (8 to 48
+ * entries) it had rendered level on the H100 and on PoCL (docs/notes/performance-2026-11.md,
+ * 2026-11-22: the traversal stack sized to the tree). */
 #define BVH_STACK_SIZE 48
-#endif
 
 /* The hit along o + t d, t in (0, t_max): the nearest one, or with any_hit (a constant at each
  * call, so the compiler builds two traversals) the first one found, which is all a shadow ray
@@ -275,12 +275,12 @@ Hit walk_tree(const SceneData *sc, int root, float3 o, float3 d, PrimId self, in
 #ifdef INSTANCES
 /* The tree over the instances, whose leaves' instances the ray enters in their objects' space
  * (d is not normalised there, so that t stays the world's). Objects hold no instances, so the
- * two walks have stacks of their own (INSTANCE_STACK_SIZE for this one). */
+ * two walks have stacks of their own. */
 Hit walk_instances(const SceneData *sc, float3 o, float3 d, float t_max, PrimId self, const int any_hit)
 {
     Hit hit = {t_max, -1, 0.0f, 0.0f, -1};
     float3 inv_d = 1.0f / d;
-    int stack[INSTANCE_STACK_SIZE];
+    int stack[BVH_STACK_SIZE];
     int top = 0;
     int node = 0;
     do {

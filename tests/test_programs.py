@@ -231,6 +231,67 @@ def test_without_the_generic_program_the_first_image_waits_for_one_untuned_build
 
 
 
+def test_the_scenes_program_builds_beside_its_tree(backend, specialised, monkeypatch):
+    """A scene compiled without its tree (what `render` and the Python API do) starts its own
+    program's build before the tree's: on a first start the two had run one after the other
+    (the tree waits here, at most 30 s, until the build has begun)."""
+    from pathtrace.compiler.compiled import CompiledScene, compile_scene
+    asked, before_tree = threading.Event(), []
+    build_tree = CompiledScene.build_tree
+
+    def tree_after_the_build_began(compiled):
+        if compiled.bvh is None:
+            asked.wait(30)
+        build_tree(compiled)
+    monkeypatch.setattr(CompiledScene, "build_tree", tree_after_the_build_began)
+
+    def build(features, tune):
+        before_tree.append(compiled.bvh is None)
+        asked.set()
+        return specialised.program_for(features)
+    auto = building_with(backend, build, generic=False)
+    scene = load_scene("cornell-box")
+    compiled = compile_scene(scene, auto.queue, tree=False)
+    r = Renderer(auto, compiled, SIZE, SIZE)
+    assert before_tree == [True] and compiled.bvh is not None
+    r.add_samples(SPP)
+    r.finish()
+    same_image(r, render(specialised, scene))
+
+
+def lamps(extra: int):
+    """TREE_MIN + extra lamps, two of them without area, and a point light: TREE_MIN - 1 + extra
+    lights with a place, so that "auto" chooses them through the light tree for extra 1, not 0
+    (app/lights/table.py: TREE_MIN), which the plan before the tree must foresee."""
+    from pathtrace.lights import PointLight
+    from pathtrace.lights.table import TREE_MIN
+    from tests.test_lights import lamp_field
+    scene = lamp_field(TREE_MIN + extra)
+    for mesh in scene.meshes[1:3]:
+        mesh.vertices[:] = mesh.vertices[0]
+    scene.lights = [PointLight(np.array([0.0, 2.0, 0.0]), np.ones(3))]
+    return scene
+
+
+@pytest.mark.parametrize("name", [p.name for p in SCENES] + ["cornell-box", "teapot-sky", "materials", "lamps 0",
+                                                             "lamps 1"])
+def test_what_a_program_needs_is_known_before_the_tree(name):
+    """CompiledScene.features before the tree is built (from which the program builds beside
+    it) is what it is after, for every test scene, built-in scenes, and lamps at the light
+    tree's threshold, two of which have no area."""
+    from pathtrace.compiler.compiled import CompiledScene, compile_scene
+    extra = int(name.split()[1]) if name.startswith("lamps") else None
+    scene = lamps(extra) if extra is not None else load_scene(next((p for p in SCENES if p.name == name), name))
+    before = CompiledScene(scene, tree=False)
+    features = before.features(scene.settings, scene.camera)
+    assert before.bvh is None
+    after = compile_scene(scene)
+    assert features == after.features(scene.settings, scene.camera)
+    if extra is not None:
+        assert features.light_tree == bool(extra) and features.lights == ("point",)
+        assert np.count_nonzero(after.lights.prim_light >= 0) == len(scene.meshes) - 3
+
+
 @pytest.fixture(scope="module")
 def gpu_form(backend):
     """The generic program in the form GPUs build: its dispatch over BSDFs, textures and lights

@@ -98,3 +98,19 @@ def test_without_a_writable_folder_the_scene_is_still_read(scene_file, monkeypat
     blocker.write_text("")
     monkeypatch.setenv("PATHTRACE_SCENE_CACHE", str(blocker / "cache"))
     assert same(load_scene(str(path)), load_scene(str(path))) and len(parsed) == 2
+
+
+def test_reading_a_scene_imports_no_pyopencl(tmp_path):
+    """A command reads its scene while the devices open in a thread that imports PyOpenCL
+    (api.DevicesOpening): the reading, from its file and then from the cache, imports none of
+    it, else it waits for that import (0.2 s of a warm start on the H200's host)."""
+    import subprocess
+    import sys
+    code = ("import sys\nimport pathtrace.scene.read_cache as read_cache\nread_cache.MIN_SECONDS = 0\n"
+            "from pathtrace.scene import load_scene\n"
+            f"load_scene({str(ROOT / 'tests' / 'scenes' / 'cbox.pbrt')!r})\nprint('pyopencl' in sys.modules)\n")
+    env = {**os.environ, "PATHTRACE_SCENE_CACHE": str(tmp_path)}
+    for cached in (0, 1):
+        assert len(list(tmp_path.glob("*.scene"))) == cached
+        r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
+        assert r.stdout.strip() == "False", (r.stdout, r.stderr)

@@ -5,7 +5,7 @@ times the same command once they are built). Each row times `python -m pathtrace
 and imports included, and checks that the image was written:
 
 - cold: once, with every cache the render reads empty: a fresh XDG_CACHE_HOME, which holds
-  pathtrace's kernel, BVH and scene caches (app/device/opencl.py cache_dir, app/compiler/bvh_cache.py,
+  pathtrace's kernel, BVH and scene caches (app/io/cache_files.py cache_dir, app/compiler/bvh_cache.py,
   app/scene/read_cache.py; PATHTRACE_CACHE, PATHTRACE_BVH_CACHE and PATHTRACE_SCENE_CACHE are
   unset), a fresh POCL_CACHE_DIR (PoCL's cache of the programs it
   built, which pathtrace relies on there in place of its own) and a fresh CUDA_CACHE_PATH (the

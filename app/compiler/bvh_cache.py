@@ -44,9 +44,8 @@ def builder_digest() -> bytes:
 
 def folder():
     """The cache's folder, or None where it is turned off."""
-    from pathtrace.device.opencl import cache_dir
     chosen = os.environ.get("PATHTRACE_BVH_CACHE", "")
-    return None if chosen == "0" else Path(chosen) if chosen else cache_dir() / "bvh"
+    return None if chosen == "0" else Path(chosen) if chosen else cache_files.cache_dir() / "bvh"
 
 
 def entry_key(lo: np.ndarray, hi: np.ndarray, num_spheres: int) -> str:

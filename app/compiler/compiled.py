@@ -15,9 +15,9 @@ from pathtrace.compiler.bvh import BVH, column_max, column_min, primitive_boxes
 from pathtrace.compiler.bvh_cache import cached_bvh
 from pathtrace.scene.environment import LUMINANCE
 from pathtrace.errors import UserError, format_bytes, short
-from pathtrace.device.features import FLAT_MAX, LONE_MAX, Features, stack_size
+from pathtrace.device.features import FLAT_MAX, LONE_MAX, Features
 from pathtrace.lights.light import MAX_RADIANCE
-from pathtrace.lights import LightTable, build_light_table, emitted_power, primitive_bounds
+from pathtrace.lights import LightPlan, LightTable, build_light_table, emitted_power, light_plan, primitive_bounds
 from pathtrace.materials import BSDFS, EMITS_BACK, NULL, TAGS
 from pathtrace.materials.table import reachable
 from pathtrace.scene.media import media_table, packed_interfaces
@@ -51,9 +51,12 @@ BUILD_HOST_BYTES = 320
 
 
 class CompiledScene:
-    def __init__(self, scene: Scene, queue: cl.CommandQueue = None, progress=None):
+    def __init__(self, scene: Scene, queue: cl.CommandQueue = None, progress=None, tree: bool = True):
         """queue: the device that builds the BVH (pathtrace.compiler.bvh.build_bvh, or pathtrace.compiler.bvh_cache reads it) and whose memory the scene
-        must fit; progress(fraction) is called as the BVH build goes."""
+        must fit; progress(fraction) is called as the BVH build goes. tree: whether the BVH is
+        built now. Without it, features() answers already (nothing it asks is changed by the
+        tree's order) and build_tree() does the rest, so that a scene's program can build beside
+        its tree (Renderer.set_scene): on a first start the two had run one after the other."""
         self.scene = scene
         n_spheres = len(scene.spheres)
         instances = scene.instances
@@ -75,32 +78,64 @@ class CompiledScene:
         meshes = list(scene.meshes) + list(scene.shapes)
         if instances is not None and not self.two_level:
             meshes += instancing.flattened_meshes(instances)
-        mesh_ends = [len(meshes)]            # where the scene's own meshes and each object's end
+        self._mesh_ends = [len(meshes)]      # where the scene's own meshes and each object's end
         if self.two_level:
             for o in instances.objects:
                 meshes += o.meshes
-                mesh_ends.append(len(meshes))
+                self._mesh_ends.append(len(meshes))
         self.meshes = meshes
-        n_triangles = sum(len(m.faces) for m in meshes)
-        check_memory(scene.name, n_spheres, n_triangles, queue.device if queue else None,
+        self.num_spheres = n_spheres
+        self.num_triangles = sum(len(m.faces) for m in meshes)
+        check_memory(scene.name, n_spheres, self.num_triangles, queue.device if queue else None,
                      scene.materials.texel_bytes(), len(instances) if self.two_level else 0)
-        start = time.perf_counter()
+        # a few spheres beside many triangles stay out of the tree (LONE_MAX), in their order
+        self.lone_spheres = n_spheres if n_spheres <= LONE_MAX and n_spheres + self.num_triangles > FLAT_MAX \
+            and not self.two_level else 0
+        # the materials the shapes name, which a program compiles (features)
+        self.shape_materials = np.concatenate([scene.sphere_material,
+                                               [m.material for m in meshes if len(m.faces)]]).astype(np.int64)
+        self.light_sampler = scene.settings.light_sampler    # pathtrace.lights.LIGHT_SAMPLERS
+        self._build = (queue, progress)
+        self.bvh: BVH = None
         # the corners as the kernels' triangle rows hold them (float4s, w filled below), gathered
         # from float32 vertices (half the bytes of float64 to move) by np.take, which is 3-4x
         # faster than NumPy's indexing with an array; whole 48-byte rows are then put in BVH
         # order by one more np.take, 3x faster than a gather into the rows' xyz
-        corners = np.concatenate([np.take(float4_rows(m.vertices), m.faces, axis=0) if not isinstance(m, Shape)
-                                  else shape_corners(m) for m in meshes]) if meshes \
+        self._corners = np.concatenate([np.take(float4_rows(m.vertices), m.faces, axis=0) if not isinstance(m, Shape)
+                                        else shape_corners(m) for m in meshes]) if meshes \
             else np.zeros((0, 3, 4), np.float32)
+        self.compile_materials()
+        self.light_plan = self._light_plan_before_tree()
+        if tree:
+            self.build_tree()
+
+    def _light_plan_before_tree(self) -> LightPlan:
+        """light_plan of the primitives in the scene's order: the plan the light table will have."""
+        counts = [len(m.faces) for m in self.meshes]
+        mesh_of = np.repeat(np.arange(len(self.meshes)), counts).astype(np.int64)
+        mesh_material = np.array([m.material for m in self.meshes], np.int32)
+        prim_material = np.concatenate([self.scene.sphere_material, mesh_material[mesh_of]]).astype(np.int64)
+        is_shape = np.array([isinstance(m, Shape) for m in self.meshes], bool)
+        shape_prims = self.num_spheres + np.flatnonzero(is_shape[mesh_of])
+        power, _ = self.emitted_power(self.scene.spheres, self._corners[:, :, :3], prim_material, shape_prims,
+                                      [self.meshes[m] for m in mesh_of[shape_prims - self.num_spheres]])
+        lo, hi = primitive_boxes(self.scene.spheres, self._corners[:, :, :3])
+        radius = float(np.linalg.norm(column_max(hi) - column_min(lo)) / 2) if len(lo) else 1.0
+        return light_plan(power, self.scene.lights, max(radius, 1e-6), self.light_sampler)
+
+    def build_tree(self):
+        """The BVH, and in its order the primitives' tables, their media and the light table:
+        what the constructor leaves to this with tree=False. Once."""
+        if self.bvh is not None:
+            return
+        scene, meshes, n_spheres, (queue, progress) = self.scene, self.meshes, self.num_spheres, self._build
+        corners, self._corners = self._corners, None
+        start = time.perf_counter()
         lo, hi = primitive_boxes(scene.spheres, corners[:, :, :3])
-        # a few spheres beside many triangles stay out of the tree (LONE_MAX), in their order
-        self.lone_spheres = n_spheres if n_spheres <= LONE_MAX and n_spheres + n_triangles > FLAT_MAX \
-            and not self.two_level else 0
         self.instances = np.zeros(1, INSTANCE)
-        self.bvh: BVH
         if self.two_level:
-            two = build_two_level(scene, lo, hi, mesh_ends, meshes, queue, progress)
-            self.bvh, self.instances, self.instance_depth, lo, hi = two.bvh, two.instances, two.depth, two.lo, two.hi
+            two = build_two_level(scene, lo, hi, self._mesh_ends, meshes, queue, progress)
+            self.bvh, self.instances, lo, hi = two.bvh, two.instances, two.lo, two.hi
             order = self.bvh.order
         elif self.lone_spheres:
             self.bvh = cached_bvh(lo[n_spheres:], hi[n_spheres:], 0, queue, progress)
@@ -116,7 +151,6 @@ class CompiledScene:
 
         sphere_order = order[order < n_spheres]
         triangle_order = order[order >= n_spheres] - n_spheres
-        self.num_spheres = n_spheres
         self.spheres = np.ascontiguousarray(scene.spheres[sphere_order], np.float32)
 
         counts = [len(m.faces) for m in meshes]
@@ -136,8 +170,8 @@ class CompiledScene:
         self.prim_material = np.concatenate([scene.sphere_material[sphere_order],
                                              mesh_material[mesh_of[triangle_order]] if meshes else []]).astype(np.int32)
         self.media = self.compile_media(scene, sphere_order, mesh_of[triangle_order])
-        self.light_sampler = scene.settings.light_sampler    # pathtrace.lights.LIGHT_SAMPLERS
-        self.update_materials()
+        self.compile_lights()
+        self.tree_ended = time.perf_counter()
 
     def place_shapes(self, triangle_mesh: np.ndarray) -> np.ndarray:
         """Points the records of the analytic shapes (rows of the triangle range whose mesh is a
@@ -173,44 +207,54 @@ class CompiledScene:
         """The analytic shape kinds the scene has (Features.shapes)."""
         return tuple(sorted({s.kind for s in self.scene.shapes}))
 
-    @property
-    def num_triangles(self) -> int:
-        return len(self.triangles)
-
     def update_materials(self):
         """Re-reads the material table, its textures and the light table (after a material edit
         or an environment change)."""
+        self.compile_materials()
+        self.compile_lights()
+
+    def compile_materials(self):
+        """The material table and its textures, which the primitives' order does not change."""
         table = self.scene.materials
         self.material_source = (table.rows.copy(), [list(t) for t in table.textures])
         # the images lights read (a goniometric light's) are textures of the same table, bound
         # after the materials' as if to materials of their own
-        light_textures = [t for light in self.scene.lights for t in light.textures()]
+        self._light_textures = [t for light in self.scene.lights for t in light.textures()]
         try:
             self.textures: TextureTables = compile_textures([[t[1:] for t in entries] for entries in table.textures]
-                                                            + [[(0, 3, t)] for t in light_textures])
+                                                            + [[(0, 3, t)] for t in self._light_textures])
         except ValueError as e:
             raise UserError(f"{self.scene.source or self.scene.name}: {e}") from None
         self.materials = table.rows.copy()
         self.materials["textures"] = self.textures.first[:len(table.rows)]
-        texture_rows = {id(t): int(self.textures.bindings["texture"][first]) for t, first
-                        in zip(light_textures, self.textures.first[len(table.rows):])}
         check_radiance(self.scene)
+
+    def emitted_power(self, spheres, corners, prim_material, shape_prims, shapes) -> tuple:
+        """Per primitive (spheres, then triangles), the power it emits, and whether it emits
+        from both sides; shape_prims: the analytic shapes' primitives, `shapes` their shapes."""
         # each material's luminance, gathered per primitive (8 bytes a primitive, not 24)
-        luminance = np.take(self.materials["emission"][:, :3].astype(np.float64) @ LUMINANCE, self.prim_material)
+        luminance = np.take(self.materials["emission"][:, :3].astype(np.float64) @ LUMINANCE, prim_material)
         # a triangle emitting from both sides sends out twice the power of one side
-        both_sides = np.take((self.materials["flags"] & EMITS_BACK) != 0, self.prim_material)
+        both_sides = np.take((self.materials["flags"] & EMITS_BACK) != 0, prim_material)
         both_sides[:self.num_spheres] = False
         luminance[both_sides] *= 2
+        power = emitted_power(spheres, corners, luminance[:self.num_spheres], luminance[self.num_spheres:])
+        power[shape_prims] = [np.pi * luminance[p] * s.world_area(SHAPES[s.kind]) for p, s in zip(shape_prims, shapes)]
+        return power, both_sides
+
+    def compile_lights(self):
+        """The light table of the primitives in BVH order, and its plan (light_plan)."""
+        texture_rows = {id(t): int(self.textures.bindings["texture"][first]) for t, first
+                        in zip(self._light_textures, self.textures.first[len(self.scene.materials.rows):])}
         # the corners as a view of the triangles' rows (v0, v1, v2 are consecutive float4s), not a copy
         corners = self.triangles.view(np.float32).reshape(-1, 3, 4)[:, :, :3]
-        power = emitted_power(self.spheres, corners, luminance[:self.num_spheres], luminance[self.num_spheres:])
         shapes = [self.meshes[int(self.prim_shape[p]) - self.num_spheres] for p in self.shape_prims]
-        power[self.shape_prims] = [np.pi * luminance[p] * s.world_area(SHAPES[s.kind])
-                                   for p, s in zip(self.shape_prims, shapes)]
+        power, both_sides = self.emitted_power(self.spheres, corners, self.prim_material, self.shape_prims, shapes)
         self.lights: LightTable = build_light_table(power, self.scene.environment, self.scene.lights,
                                                     max(self.radius, 1e-6),
                                                     lambda prims: self.light_bounds(prims, corners, both_sides),
                                                     self.light_sampler, texture_rows)
+        self.light_plan = LightPlan(self.lights.types, self.lights.tree)
 
     def light_bounds(self, prims: np.ndarray, corners: np.ndarray, both_sides: np.ndarray) -> dict:
         """The light tree's bounds of primitives `prims`: an analytic shape's normals are its
@@ -244,7 +288,7 @@ class CompiledScene:
         """What the kernels need for this scene: which shapes (spheres, triangles), the material and
         light types it uses, and the Russian roulette rule, pixel filter and camera of its
         settings."""
-        rows = self.materials[reachable(self.materials, self.prim_material)]
+        rows = self.materials[reachable(self.materials, self.shape_materials)]
         used = np.unique(rows["type"])
         null_surfaces = bool(np.any(rows["flags"] & NULL))     # rays cross them (NULL_SURFACES)
         variants = tuple(sorted({d for name, tag in TAGS.items() if tag in used
@@ -253,12 +297,11 @@ class CompiledScene:
                         shapes=self.shape_kinds,
                         bsdf_defines=variants, bsdfs=tuple(name for name, tag in TAGS.items() if tag in used),
                         textures=self.textures.types, masks=self.textures.masks,
-                        normal_maps=self.textures.normal_maps, lights=self.lights.types,
-                        light_tree=self.lights.tree, media=bool(self.scene.media) or null_surfaces,
+                        normal_maps=self.textures.normal_maps, lights=self.light_plan.types,
+                        light_tree=self.light_plan.tree, media=bool(self.scene.media) or null_surfaces,
                         null_surfaces=null_surfaces,
                         camera=camera.kernel, filter=settings.filter.name,
-                        russian_roulette=settings.russian_roulette, stack=stack_size(self.bvh.depth),
-                        instance_stack=stack_size(self.instance_depth) if self.two_level else 0,
+                        russian_roulette=settings.russian_roulette, instances=self.two_level,
                         lone_spheres=self.lone_spheres,
                         flat=(self.num_spheres, self.num_triangles) if self.flat else ())
 
@@ -358,8 +401,8 @@ def check_radiance(scene: Scene):
                         f"beyond {MAX_RADIANCE:g}, where the sums of samples overflow")
 
 
-def compile_scene(scene: Scene, queue: cl.CommandQueue = None, progress=None) -> CompiledScene:
-    return CompiledScene(scene, queue, progress)
+def compile_scene(scene: Scene, queue: cl.CommandQueue = None, progress=None, tree: bool = True) -> CompiledScene:
+    return CompiledScene(scene, queue, progress, tree)
 
 
 def check_memory(name: str, n_spheres: int, n_triangles: int, device: cl.Device = None, texel_bytes: int = 0,

@@ -20,7 +20,6 @@ class TwoLevel:
     bvh: BVH                 # all nodes, the top's first; order: the primitives' (as one BVH's);
                              # depth: the deepest object tree's
     instances: np.ndarray    # INSTANCE rows, in the top tree's order
-    depth: int               # the top tree's depth
     lo: np.ndarray           # the instances' world boxes
     hi: np.ndarray
 
@@ -89,4 +88,4 @@ def build_two_level(scene, lo: np.ndarray, hi: np.ndarray, mesh_ends: list, mesh
     # the primitives' order: spheres, then triangles, each kind in its trees' order
     order = np.concatenate(orders)
     order = np.concatenate([order[order < n_spheres], order[order >= n_spheres]])
-    return TwoLevel(BVH(np.concatenate(parts), order, depth, top.cost), table, top.depth, inst_lo, inst_hi)
+    return TwoLevel(BVH(np.concatenate(parts), order, depth, top.cost), table, inst_lo, inst_hi)

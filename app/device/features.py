@@ -34,9 +34,8 @@ class Features:
     camera: str = "perspective"            # its kernel file: pathtrace.cameras.Camera.kernel
     filter: str = "box"                    # one of pathtrace.filters.FILTERS
     russian_roulette: str = "throughput"   # one of pathtrace.scene.description.RUSSIAN_ROULETTE
-    stack: int = 48                        # BVH traversal stack entries the tree can need
-    instance_stack: int = 0                # with a two-level BVH (INSTANCES): the stack entries of
-                                           # the tree over its instances; 0: one level
+    instances: bool = False                # a two-level BVH (INSTANCES): a tree over instances of
+                                           # objects' trees
     flat: tuple = ()                       # (spheres, triangles) of a scene of at most FLAT_MAX
                                            # primitives, which rays test all, with no tree
     lone_spheres: int = 0                  # the spheres of a scene of triangles and at most LONE_MAX
@@ -79,7 +78,7 @@ class Features:
         from pathtrace.textures import TEXTURES
         return Features(shapes=tuple(SHAPES), textures=tuple(TEXTURES), masks=True, normal_maps=True, light_tree=True,
                         media=media, null_surfaces=media, camera=GENERIC, filter=GENERIC,
-                        russian_roulette=GENERIC, stack=48, instance_stack=48, generic=True)
+                        russian_roulette=GENERIC, instances=True, generic=True)
 
     def defines(self) -> tuple:
         return ((() if self.spheres else ("NO_SPHERES",)) + (() if self.triangles else ("NO_TRIANGLES",))
@@ -89,10 +88,9 @@ class Features:
                 + (("LIGHT_TREE",) if self.light_tree else ()) + (("MEDIA",) if self.media else ())
                 + (("NULL_SURFACES",) if self.null_surfaces else ())
                 + (("GENERIC",) if self.generic else (f"RUSSIAN_ROULETTE=RR_{self.russian_roulette.upper()}",))
-                + (f"BVH_STACK_SIZE={self.stack}",)
                 + ((f"FLAT_SPHERES={self.flat[0]}", f"FLAT_TRIANGLES={self.flat[1]}") if self.flat else ())
                 + ((f"LONE_SPHERES={self.lone_spheres}",) if self.lone_spheres else ())
-                + (("INSTANCES", f"INSTANCE_STACK_SIZE={self.instance_stack}") if self.instance_stack else ())
+                + (("INSTANCES",) if self.instances else ())
                 + (self.bsdf_defines if self.bsdf_defines is not None else all_bsdf_defines())
                 + ((f"TRAVERSAL_STATS={self.traversal_stats}",) if self.traversal_stats else ())
                 + ((f"DIVERGENCE_STATS={self.divergence_stats}",) if self.divergence_stats else ())
@@ -131,12 +129,3 @@ before the walk, outside the BVH (app/compiler/compiled.py), rather than in its 
 triangles alone walks without the sphere leaves' branch and code (docs/notes/performance-2026-11.md,
 2026-11-27: lone spheres). Each such sphere costs every ray one test, as a box of a 4-wide node
 does."""
-
-
-def stack_size(binary_depth: int) -> int:
-    """Traversal stack entries for a tree whose binary form is `binary_depth` deep: its 4-wide
-    form has at most half as many levels and one more, and traversal pushes at most three
-    children per 4-wide node on its way down (kernels/bvh.cl); 48 at app/compiler/bvh.py's deepest.
-    Rounded up to a multiple of 8, so that scenes share programs; a small stack is private
-    memory a GPU need not reserve, hence occupancy."""
-    return min(48, max(8, -(-(3 * ((binary_depth + 1) // 2) + 3) // 8) * 8))

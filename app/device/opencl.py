@@ -3,7 +3,6 @@
 
 import functools
 import hashlib
-import os
 import sys
 import time
 from dataclasses import dataclass
@@ -11,7 +10,7 @@ from pathlib import Path
 
 import pyopencl as cl
 
-from pathtrace.io.cache_files import read_entry, write_entry
+from pathtrace.io.cache_files import cache_dir, read_entry, write_entry
 from pathtrace.errors import UserError, format_bytes, short
 from pathtrace.device.features import Features
 from pathtrace.device.occupancy import TUNING_RULE, build_for_occupancy, is_nvidia
@@ -58,7 +57,7 @@ def kernel_source(extra: str = "", features: Features = Features()) -> str:
               for name, text in kernel_parts(features.textures)]
     texts.append(("app/materials/registry.py: tag_source", tag_source()))
     # the transforms of instances and analytic shapes, where the scene has either
-    moved = ("transform.cl",) if features.shapes or features.instance_stack else ()
+    moved = ("transform.cl",) if features.shapes or features.instances else ()
     texts += [(name, (folder / name).read_text())
               for name in (*SHAPE_FILES, *moved, *shapes.kernel_files(features.shapes))]
     if features.shapes:
@@ -119,12 +118,6 @@ def list_devices() -> list[Device]:
         first = len(devices)      # not inside the generator: extend() grows the list as it goes
         devices.extend(Device(first + i, platform, d) for i, d in enumerate(found))
     return devices
-
-
-def cache_dir() -> Path:
-    base = os.environ.get("PATHTRACE_CACHE") or os.path.join(
-        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "pathtrace")
-    return Path(base)
 
 
 @dataclass

@@ -88,6 +88,11 @@ class Programs:
         """The program for `features`, built now if no build of it is under way or done."""
         return self._future(self._key(features, tuned)).result()
 
+    def start(self, features: Features, tuned: bool = True):
+        """Starts the build of the program for `features` in the background, unless it is built
+        or under way."""
+        self._future(self._key(features, tuned), background=True)
+
     def ready(self, features: Features, tuned: bool = True):
         """The program for `features` if it is built, else None, its build started in the
         background. A build that failed leaves None and says why once."""

@@ -18,6 +18,16 @@ from pathlib import Path
 CHECKSUM_BYTES = 4
 
 
+def cache_dir() -> Path:
+    """pathtrace's cache folder: PATHTRACE_CACHE, else pathtrace under XDG_CACHE_HOME (~/.cache).
+    Here rather than beside the kernels' cache, so that a scene's reading asks for it without
+    importing PyOpenCL, which the devices' opening imports meanwhile in a thread of its own
+    (api.DevicesOpening): the reading had waited for that import."""
+    base = os.environ.get("PATHTRACE_CACHE") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "pathtrace")
+    return Path(base)
+
+
 def checksum(chunks) -> bytes:
     crc = 0
     for chunk in chunks:

@@ -6,10 +6,10 @@ from pathtrace.lights.light import DeltaLight
 from pathtrace.lights.point import PointLight
 from pathtrace.lights.registry import DELTA_LIGHTS, LIGHTS, TAGS, kernel_parts
 from pathtrace.lights.spot import SpotLight
-from pathtrace.lights.table import (LightTable, alias_table, build_light_table, emitted_power,
-                                    keep_threshold)
+from pathtrace.lights.table import (LightPlan, LightTable, alias_table, build_light_table, emitted_power,
+                                    keep_threshold, light_plan)
 from pathtrace.lights.tree import primitive_bounds
 
-__all__ = ["DELTA_LIGHTS", "LIGHTS", "TAGS", "DeltaLight", "DirectionalLight", "LightTable",
+__all__ = ["DELTA_LIGHTS", "LIGHTS", "TAGS", "DeltaLight", "DirectionalLight", "LightPlan", "LightTable",
            "PointLight", "SpotLight", "alias_table", "build_light_table", "emitted_power", "keep_threshold",
-           "kernel_parts", "primitive_bounds"]
+           "kernel_parts", "light_plan", "primitive_bounds"]

@@ -85,6 +85,23 @@ def emitted_power(spheres, triangles, sphere_luminance, triangle_luminance):
     return np.concatenate([sphere_power, triangle_power])
 
 
+@dataclass(frozen=True)
+class LightPlan:
+    """What a scene's kernels compile for its lights (Features.lights, Features.light_tree)."""
+    types: tuple = ()         # the delta light types that emit (app/lights/registry.py)
+    tree: bool = False        # whether lights with a place are chosen through the light tree
+
+
+def light_plan(power: np.ndarray, delta_lights=(), radius: float = 1.0, sampler: str = "power") -> LightPlan:
+    """The plan of build_light_table's table for the same arguments, `power` in any primitive
+    order: known before the BVH orders the primitives, so that a scene's program can build
+    beside its tree (app/compiler/compiled.py)."""
+    delta = [light for light in delta_lights if light.power(radius) > 0]
+    bounded = np.count_nonzero(power > 0) + sum(light.tree_bounds() is not None for light in delta)
+    return LightPlan(tuple(dict.fromkeys(light.name for light in delta)),
+                     bounded > 0 and (sampler == "tree" or (sampler == "auto" and bounded >= TREE_MIN)))
+
+
 def build_light_table(power: np.ndarray, environment, delta_lights=(), radius: float = 1.0,
                       prim_bounds=None, sampler: str = "power", texture_rows: dict = None) -> LightTable:
     """power: per primitive, in BVH order; delta_lights: the scene's point, spot and directional
@@ -106,7 +123,8 @@ def build_light_table(power: np.ndarray, environment, delta_lights=(), radius: f
     at_infinity = [(light, w) for light, w in delta if light.tree_bounds() is None]
     env_lit = bool(np.any(environment.image > 0)) and environment.intensity > 0
     bounded = len(emitters) + len(placed)
-    tree = bounded > 0 and (sampler == "tree" or (sampler == "auto" and bounded >= TREE_MIN))
+    plan = light_plan(power, delta_lights, radius, sampler)
+    tree = plan.tree
     bounded_power = np.concatenate([power[emitters], [w for _, w in placed]])
     weights = np.concatenate([[bounded_power.sum()] if tree else bounded_power, [w for _, w in at_infinity]])
     if env_lit:
@@ -145,8 +163,7 @@ def build_light_table(power: np.ndarray, environment, delta_lights=(), radius: f
         table["pick"][count:] = table["pick"][0]
     prim_light = np.full(len(power), -1, np.int32)
     prim_light[emitters] = slot[:len(emitters)]
-    types = tuple(dict.fromkeys(light.name for light, _ in delta))
-    return LightTable(table, count, prim_light, float(table["pick"][count - 1]) if env_lit else 0.0, types,
+    return LightTable(table, count, prim_light, float(table["pick"][count - 1]) if env_lit else 0.0, plan.types,
                       nodes, tree)
 
 

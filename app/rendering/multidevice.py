@@ -70,9 +70,9 @@ class DeviceGroup:
     def __init__(self, backends: list[Backend], scene, width: int = None, height: int = None,
                  progress=None):
         """scene: a CompiledScene, or a Scene to compile on the first device (progress as for
-        Renderer)."""
+        Renderer), whose renderer builds its tree (Renderer.set_scene)."""
         compiled = scene if isinstance(scene, CompiledScene) \
-            else compile_scene(scene, backends[0].queue, progress)
+            else compile_scene(scene, backends[0].queue, progress, tree=False)
         self.renderers = [Renderer(b, compiled, width, height) for b in backends]
         self.compiled = compiled
 

@@ -24,25 +24,40 @@ class ProgramChoice:
         it takes no core from the first image, and a render of one pass builds nothing more
         (switch_when_built)."""
         features = self._features(self.settings.integrator)
+        program, generic, awaited = self._choice(features)
+        self._awaited, self._build_due = awaited, False
+        self._use_program(program if program is not None else self.backend.program_for(features, tuned=awaited is None),
+                          generic)
+
+    def _choice(self, features: Features) -> tuple:
+        """(the program that renders now, or None where it is the scene's own, to be built:
+        untuned where the third is not None; whether it is the generic one; the features of the
+        program to switch to once its tuned build is there, or None)."""
         mode = self.backend.mode
-        self._awaited, self._build_due = None, False
+        # the generic program has no bidirectional code (a path tracer's scene compiles none),
+        # nor does it count rays
+        if self.settings.integrator != "path" or mode == "specialised" or self.traversal_stats \
+                or self.divergence_stats:
+            return None, False, None
+        if mode == "generic":
+            return self.backend.generic(features.media), True, None
+        own = self.backend.programs.built(features)
+        if own is not None:
+            return own, False, None
+        generic = self.backend.built_generic(features.media)
+        return generic, generic is not None, features
+
+    def start_program(self):
+        """Starts, in the background, the build of the scene's own program where _select_program
+        would wait for it: a path tracer's program needs nothing of the scene's tree
+        (CompiledScene.features), so Renderer.set_scene starts it before building the tree. BDPT's
+        checks the light table, which the tree orders."""
         if self.settings.integrator != "path":
-            # the generic program has no bidirectional code (a path tracer's scene compiles none)
-            self._use_program(self.backend.program_for(features), generic=False)
             return
-        if mode == "specialised" or self.traversal_stats or self.divergence_stats:  # the generic one counts rays
-            self._use_program(self.backend.program_for(features), generic=False)
-        elif mode == "generic":
-            self._use_program(self.backend.generic(features.media), generic=True)
-        else:
-            own = self.backend.programs.built(features)
-            if own is not None:
-                self._use_program(own, generic=False)
-                return
-            generic = self.backend.built_generic(features.media)
-            self._use_program(generic if generic is not None else self.backend.program_for(features, tuned=False),
-                              generic=generic is not None)
-            self._awaited = features
+        features = self._features("path")
+        program, _, awaited = self._choice(features)
+        if program is None:
+            self.backend.programs.start(features, tuned=awaited is None)
 
     def _features(self, integrator: str) -> Features:
         """What the scene's own program needs to render with these settings and `integrator`:

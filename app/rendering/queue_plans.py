@@ -11,7 +11,7 @@ from pathlib import Path
 import pyopencl as cl
 
 from pathtrace.device.occupancy import TUNING_RULE
-from pathtrace.device.opencl import cache_dir
+from pathtrace.io.cache_files import cache_dir
 from pathtrace.errors import UserError
 from pathtrace.io.cache_files import read_entry, write_entry
 from pathtrace.rendering.choices import PATH_QUEUE_AUTO

@@ -108,13 +108,16 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
     # --- what is rendered ------------------------------------------------------------------
     def set_scene(self, scene, progress=None):
         """Uploads a compiled scene (compiling a Scene first, on this device); takes its camera and
-        settings; resets."""
+        settings; resets. Where the scene's tree is not built yet (compile_scene(tree=False)),
+        the scene's own program, if it is to be built, builds beside it (start_program)."""
         self.compiled = scene if isinstance(scene, CompiledScene) \
-            else compile_scene(scene, self.backend.queue, progress)
+            else compile_scene(scene, self.backend.queue, progress, tree=False)
         self.scene: Scene = self.compiled.scene
         self.camera = self.scene.camera.copy()
         self.settings = self.scene.settings
         self.auto_plan, self.plan_seconds, self.plan_cached = None, {}, False  # "auto" chooses again
+        self.start_program()
+        self.compiled.build_tree()
         if self.compiled.light_sampler != self._light_sampler():
             self.compiled.light_sampler = self._light_sampler()
             self.compiled.update_materials()

@@ -43,9 +43,8 @@ def source_digest() -> bytes:
 
 def folder():
     """The cache's folder, or None where it is turned off."""
-    from pathtrace.device.opencl import cache_dir
     chosen = os.environ.get("PATHTRACE_SCENE_CACHE", "")
-    return None if chosen == "0" else Path(chosen) if chosen else cache_dir() / "scenes"
+    return None if chosen == "0" else Path(chosen) if chosen else cache_files.cache_dir() / "scenes"
 
 
 def entry_path(where: Path, name: str) -> Path:
