@@ -292,6 +292,34 @@ def test_what_a_program_needs_is_known_before_the_tree(name):
         assert np.count_nonzero(after.lights.prim_light >= 0) == len(scene.meshes) - 3
 
 
+def test_a_tree_whose_build_failed_is_built_again_and_an_edit_builds_it(monkeypatch):
+    """A scene compiled without its tree: a build of it that fails (here the BVH's, once) leaves
+    it to be built again, whole; an edit's update_materials builds it where it is not built."""
+    import pathtrace.compiler.compiled as compiled_module
+    from pathtrace.compiler.compiled import CompiledScene, compile_scene
+    scene = load_scene("cornell-box")
+    cached_bvh, calls = compiled_module.cached_bvh, []
+
+    def failing_once(*args, **kwargs):
+        calls.append(None)
+        if len(calls) == 1:
+            raise MemoryError("the first build")
+        return cached_bvh(*args, **kwargs)
+    monkeypatch.setattr(compiled_module, "cached_bvh", failing_once)
+    compiled = CompiledScene(scene, tree=False)
+    with pytest.raises(MemoryError):
+        compiled.build_tree()
+    compiled.build_tree()
+    whole = compile_scene(scene)
+    assert len(calls) == 3 and compiled.tree_ended is not None
+    arrays = {**compiled.geometry_arrays(), **compiled.material_arrays()}
+    for name, array in {**whole.geometry_arrays(), **whole.material_arrays()}.items():
+        assert arrays[name].tobytes() == array.tobytes(), name       # bytes: indices are NaN floats
+    edited = CompiledScene(scene, tree=False)
+    edited.update_materials()
+    assert edited.tree_ended is not None and len(edited.material_arrays()["lights"]) == len(whole.lights.lights)
+
+
 @pytest.fixture(scope="module")
 def gpu_form(backend):
     """The generic program in the form GPUs build: its dispatch over BSDFs, textures and lights

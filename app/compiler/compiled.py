@@ -95,8 +95,13 @@ class CompiledScene:
         self.shape_materials = np.concatenate([scene.sphere_material,
                                                [m.material for m in meshes if len(m.faces)]]).astype(np.int64)
         self.light_sampler = scene.settings.light_sampler    # pathtrace.lights.LIGHT_SAMPLERS
-        self._build = (queue, progress)
+        try:         # here, so that a problem is told before a program's build has begun beside the tree
+            self.media = media_table(scene.media)
+        except ValueError as e:
+            raise UserError(f"{scene.source or scene.name}: {e}") from None
+        self._build = (queue, progress)      # for build_tree
         self.bvh: BVH = None
+        self.tree_ended = None               # when build_tree ended (perf_counter), once it has
         # the corners as the kernels' triangle rows hold them (float4s, w filled below), gathered
         # from float32 vertices (half the bytes of float64 to move) by np.take, which is 3-4x
         # faster than NumPy's indexing with an array; whole 48-byte rows are then put in BVH
@@ -105,9 +110,10 @@ class CompiledScene:
                                         else shape_corners(m) for m in meshes]) if meshes \
             else np.zeros((0, 3, 4), np.float32)
         self.compile_materials()
-        self.light_plan = self._light_plan_before_tree()
         if tree:
             self.build_tree()
+        else:
+            self.light_plan = self._light_plan_before_tree()
 
     def _light_plan_before_tree(self) -> LightPlan:
         """light_plan of the primitives in the scene's order: the plan the light table will have."""
@@ -119,17 +125,18 @@ class CompiledScene:
         shape_prims = self.num_spheres + np.flatnonzero(is_shape[mesh_of])
         power, _ = self.emitted_power(self.scene.spheres, self._corners[:, :, :3], prim_material, shape_prims,
                                       [self.meshes[m] for m in mesh_of[shape_prims - self.num_spheres]])
-        lo, hi = primitive_boxes(self.scene.spheres, self._corners[:, :, :3])
-        radius = float(np.linalg.norm(column_max(hi) - column_min(lo)) / 2) if len(lo) else 1.0
-        return light_plan(power, self.scene.lights, max(radius, 1e-6), self.light_sampler)
+        # the scene's radius, unknown before the tree's boxes, scales a light at infinity's power
+        # (pi r^2 E) but not whether it emits, which is all the plan asks
+        return light_plan(power, self.scene.lights, 1.0, self.light_sampler)
 
     def build_tree(self):
-        """The BVH, and in its order the primitives' tables, their media and the light table:
-        what the constructor leaves to this with tree=False. Once."""
-        if self.bvh is not None:
+        """The BVH, and in its order the primitives' tables, where each primitive's media are
+        and the light table: what the constructor leaves to this with tree=False. Once: a build
+        that fails can be tried again."""
+        if self.tree_ended is not None:
             return
         scene, meshes, n_spheres, (queue, progress) = self.scene, self.meshes, self.num_spheres, self._build
-        corners, self._corners = self._corners, None
+        corners = self._corners
         start = time.perf_counter()
         lo, hi = primitive_boxes(scene.spheres, corners[:, :, :3])
         self.instances = np.zeros(1, INSTANCE)
@@ -169,8 +176,9 @@ class CompiledScene:
         self.prim_shape = np.concatenate([sphere_order, n_spheres + mesh_of[triangle_order]]).astype(np.int32)
         self.prim_material = np.concatenate([scene.sphere_material[sphere_order],
                                              mesh_material[mesh_of[triangle_order]] if meshes else []]).astype(np.int32)
-        self.media = self.compile_media(scene, sphere_order, mesh_of[triangle_order])
+        self.place_media(scene, sphere_order, mesh_of[triangle_order])
         self.compile_lights()
+        self._corners = self._build = None
         self.tree_ended = time.perf_counter()
 
     def place_shapes(self, triangle_mesh: np.ndarray) -> np.ndarray:
@@ -185,9 +193,9 @@ class CompiledScene:
             self.triangles["v0"][rows, 3] = (first + ROWS * np.arange(len(rows), dtype=np.int32)).view(np.float32)
         return (self.num_spheres + rows).astype(np.int64)
 
-    def compile_media(self, scene: Scene, sphere_order: np.ndarray, triangle_mesh: np.ndarray) -> np.ndarray:
-        """The media table, and self.prim_media: per primitive, the media it bounds (one
-        element, unread, in a scene without media or interfaces)."""
+    def place_media(self, scene: Scene, sphere_order: np.ndarray, triangle_mesh: np.ndarray):
+        """self.prim_media: per primitive, the media it bounds (one element, unread, in a scene
+        without media or interfaces)."""
         spheres = scene.sphere_media
         interfaces = [m.media for m in self.meshes]
         self.media_per_primitive = bool(scene.media) or spheres is not None or any(i is not None for i in interfaces)
@@ -197,10 +205,6 @@ class CompiledScene:
             sphere_codes = packed_interfaces(spheres if spheres is not None else [None] * self.num_spheres)
             mesh_codes = packed_interfaces(interfaces)
             self.prim_media = np.concatenate([sphere_codes[sphere_order], mesh_codes[triangle_mesh]]).astype(np.int32)
-        try:
-            return media_table(scene.media)
-        except ValueError as e:
-            raise UserError(f"{scene.source or scene.name}: {e}") from None
 
     @property
     def shape_kinds(self) -> tuple:
@@ -209,9 +213,13 @@ class CompiledScene:
 
     def update_materials(self):
         """Re-reads the material table, its textures and the light table (after a material edit
-        or an environment change)."""
+        or an environment change); builds the tree where it is not built, which makes the light
+        table."""
         self.compile_materials()
-        self.compile_lights()
+        if self.tree_ended is None:
+            self.build_tree()
+        else:
+            self.compile_lights()
 
     def compile_materials(self):
         """The material table and its textures, which the primitives' order does not change."""

@@ -52,8 +52,8 @@ class ProgramChoice:
         would wait for it: a path tracer's program needs nothing of the scene's tree
         (CompiledScene.features), so Renderer.set_scene starts it before building the tree. BDPT's
         checks the light table, which the tree orders."""
-        if self.settings.integrator != "path":
-            return
+        if self.settings.integrator != "path" or self.backend.mode == "generic":
+            return       # the generic mode's program: built at open, or built by _select_program
         features = self._features("path")
         program, _, awaited = self._choice(features)
         if program is None:
