@@ -363,14 +363,27 @@ def test_obj_decimals_read_as_float_reads_them():
     assert np.array_equal(vertices, np.array([float(w) for w in words]).reshape(-1, 3))
 
 
-def test_mesh_files_hand_out_what_read_mesh_reads_in_the_order_asked(tmp_path, monkeypatch, capsys):
-    """MeshFiles, read ahead in threads, hands out each file as read_mesh reads it, with its
-    warning or problem line when it is asked for: in the order asked, the first bad file in
-    file order the one reported; a file read ahead under another `where` than asked for speaks
-    of the one asked for."""
+def read_ahead_in(way: str, monkeypatch):
+    """MeshFiles set to read every file ahead, however small, in threads, or every OBJ file in
+    processes."""
+    from pathtrace.scene.meshes import MeshFiles
+    if way == "threads":
+        monkeypatch.setattr(MeshFiles, "LARGE", 0)
+    else:
+        monkeypatch.setattr(MeshFiles, "MANY", 1)
+        monkeypatch.setattr(MeshFiles, "PROCESS_BYTES", 0)
+        monkeypatch.setattr(MeshFiles, "PROCESS_CORES", 1)
+
+
+@pytest.mark.parametrize("way", ["threads", "processes"])
+def test_mesh_files_hand_out_what_read_mesh_reads_in_the_order_asked(tmp_path, monkeypatch, capsys, way):
+    """MeshFiles, read ahead in threads or in processes, hands out each file as read_mesh reads
+    it, with its warning or problem line when it is asked for: in the order asked, the first bad
+    file in file order the one reported; a file read ahead under another `where` than asked for
+    speaks of the one asked for."""
     from pathtrace.bench.scenes import torus_obj
     from pathtrace.scene.meshes import MeshFiles
-    monkeypatch.setattr(MeshFiles, "LARGE", 0)          # every file read ahead, however small
+    read_ahead_in(way, monkeypatch)
     paths = [tmp_path / f"m{k}.obj" for k in range(9)]
     for k, path in enumerate(paths):
         path.write_text(torus_obj(8 + k, 4) + ("f 1 1 2\n" if k in (1, 3) else "f 1 2 999999\n" if k in (6, 7) else ""))
@@ -391,12 +404,33 @@ def test_mesh_files_hand_out_what_read_mesh_reads_in_the_order_asked(tmp_path, m
     assert capsys.readouterr().err.startswith("pathtrace: warning: shape 1: ")
 
 
+def test_mesh_files_whose_processes_fail_are_read_here(tmp_path, monkeypatch):
+    """A reading process that cannot start (or dies) leaves its files to this one: the same
+    meshes, nothing else said."""
+    import pathtrace.scene.mesh_processes as mesh_processes
+    from pathtrace.bench.scenes import torus_obj
+    from pathtrace.scene.meshes import MeshFiles
+    read_ahead_in("processes", monkeypatch)
+    paths = [tmp_path / f"m{k}.obj" for k in range(4)]
+    for k, path in enumerate(paths):
+        path.write_text(torus_obj(8 + k, 4))
+    monkeypatch.setattr(mesh_processes.sys, "executable", str(tmp_path / "no-python"))
+    with MeshFiles([(path, "shape") for path in paths]) as files:
+        for path in paths:
+            assert all(np.array_equal(a, b) for a, b in zip(files.read(path, "shape"), read_mesh(path, "shape")))
+
+
+@pytest.mark.parametrize("way", ["threads", "processes"])
 @pytest.mark.parametrize("kind", ["xml", "pbrt", "toml"])
-def test_a_scene_of_many_mesh_files_names_its_first_bad_one(tmp_path, monkeypatch, kind):
+def test_a_scene_of_many_mesh_files_names_its_first_bad_one(tmp_path, monkeypatch, kind, way):
     """Each reader reads its scene's mesh files ahead (MeshFiles) and still reports the first
-    bad file in file order, in one line; a scene of good files has its meshes in file order."""
-    from pathtrace.scene.meshes import MeshFiles, write_ply
-    monkeypatch.setattr(MeshFiles, "LARGE", 0)
+    bad file in file order, in one line; a scene of good files has its meshes in file order,
+    and the scene's cache knows them: a file changed after is read again."""
+    import pathtrace.scene.read_cache as read_cache
+    from pathtrace.scene.meshes import write_ply
+    read_ahead_in(way, monkeypatch)
+    monkeypatch.setenv("PATHTRACE_SCENE_CACHE", str(tmp_path / "cache"))
+    monkeypatch.setattr(read_cache, "MIN_SECONDS", 0)
     v, f = cube()
     suffix = "ply" if kind == "pbrt" else "obj"
     names = [f"m{k}.{suffix}" for k in range(6)]
@@ -417,6 +451,7 @@ def test_a_scene_of_many_mesh_files_names_its_first_bad_one(tmp_path, monkeypatc
         scene.write_text("".join(f'[[meshes]]\nfile = "{n}"\nmaterial = {{ type = "diffuse", rho_d = 0.5 }}\n'
                                  for n in names))
     s = load_scene(str(scene))
+    assert any((tmp_path / "cache").iterdir())
     assert [m.name for m in s.meshes] == [f"m{k}" for k in range(6)]
     assert [float(m.vertices[:, 0].min()) for m in s.meshes] == [float(np.min(v, axis=0)[0]) + k for k in range(6)]
     for k in (4, 2):

@@ -39,9 +39,15 @@ def check_regular_file(path: Path, where: str, what: str, max_bytes: int):
         raise UserError(f"{where}: {what} '{cut(shown(path), 100)}' is not a regular file")
     if info.st_size > max_bytes:
         raise UserError(f"{where}: {what} '{cut(shown(path), 100)}' is larger than {max_bytes >> 20} MB")
+    noted([stamp(path, info)])
+
+
+def noted(stamps):
+    """Stamps of files checked (stamp) added to the noting_files() lists open: check_regular_file's,
+    or those of a process that read files for this one (pathtrace.scene.meshes.MeshFiles)."""
     with _noting:
         for notes in _notes:
-            notes.append(stamp(path, info))
+            notes.extend(stamps)
 
 
 _notes = []                  # the lists that noting_files() holds open, in any thread

@@ -9,6 +9,8 @@ reader and the glTF format place them (trimesh gives both with v = 0 at the bott
 import gzip
 import io
 import os
+import pickle
+import sys
 import threading
 import warnings
 from collections import deque
@@ -20,7 +22,7 @@ from typing import NamedTuple
 import numpy as np
 
 from pathtrace.errors import UserError, warn
-from pathtrace.io.files import check_regular_file
+from pathtrace.io.files import check_regular_file, noting_files
 from pathtrace.scene.transform import flips_handedness, transform_normals, transform_points
 
 FORMATS = (".ply", ".ply.gz", ".obj", ".stl", ".gltf", ".glb")
@@ -79,12 +81,19 @@ class MeshFiles:
     reported. A file read ahead under another `where` than read()'s (a reader's guess), with a
     problem or a warning, is read again for read()'s lines.
 
-    Only files of LARGE bytes or more are read ahead: NumPy releases the interpreter's lock in
-    each operation on an array, and a small file's reading is hundreds of short ones, whose lock
-    handovers between threads cost more than another core gives (docs/notes/performance-2026-11.md,
-    2026-11-28)."""
+    Only files of LARGE bytes or more are read ahead in threads: NumPy releases the interpreter's
+    lock in each operation on an array, and a small file's reading is hundreds of short ones,
+    whose lock handovers between threads cost more than another core gives
+    (docs/notes/performance-2026-11.md, 2026-11-28). Where there are MANY small OBJ files of
+    PROCESS_BYTES or more in all, and PROCESS_CORES cores or more, they are read in other
+    processes, all at once (pathtrace.scene.mesh_processes). Not binary PLY files, which NumPy
+    reads as views of their bytes, faster than the processes start (docs/notes/performance-2026-11.md,
+    2026-11-30: OBJ files read in other processes)."""
 
     LARGE = 512 << 10
+    MANY = 64
+    PROCESS_BYTES = 32 << 20
+    PROCESS_CORES = 4
 
     def __init__(self, requests=()):
         self.requests = []
@@ -93,11 +102,14 @@ class MeshFiles:
         self.submitted = 0
         self.taken = 0         # the requests before the latest read() one
         self.pool = None
+        self.processes = None
+        self.processed = {}    # path -> (where, Future) of its requests read in processes, not read() yet
         cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
         self.workers = min(cores, 32)
         self.add(requests)
 
     def add(self, requests):
+        small_obj, small_bytes = [], 0
         for path, where in requests:
             path = Path(path)
             try:
@@ -107,7 +119,19 @@ class MeshFiles:
             if size >= self.LARGE:
                 self.waiting.setdefault(path, deque()).append(len(self.requests))
                 self.requests.append((path, where))
+            elif path.suffix.lower() == ".obj":
+                small_obj.append((path, where))
+                small_bytes += size
+        if len(small_obj) >= self.MANY and small_bytes >= self.PROCESS_BYTES and self.workers >= self.PROCESS_CORES \
+                and self.processes is None:
+            self._read_in_processes(small_obj)
         self._submit()
+
+    def _read_in_processes(self, requests):
+        from pathtrace.scene.mesh_processes import Reading
+        self.processes = Reading(requests, self.workers)
+        for (path, where), future in zip(requests, self.processes.futures):
+            self.processed.setdefault(path, deque()).append((where, future))
 
     def _submit(self):
         """Reads ahead up to two files a thread past the reader's latest, where there are two
@@ -125,23 +149,28 @@ class MeshFiles:
         """The mesh, as read_mesh(path, where, degenerate=degenerate) reads it. A file read
         ahead with a problem or a warning (a degenerate triangle among them) is read again
         where `degenerate` is given, which the threads do not take."""
-        indices = self.waiting.get(Path(path))
-        if not indices:
-            return read_mesh(path, where, degenerate=degenerate)
-        i = indices.popleft()
-        self.taken = max(self.taken, i + 1)
-        self._submit()
-        future = self.futures.pop(i, None)
-        if future is None:
-            return read_mesh(path, where, degenerate=degenerate)
-        again = self.requests[i][1] != where or degenerate is not None
+        queued = self.processed.get(Path(path))
+        if queued:
+            read_as, future = queued.popleft()
+        else:
+            indices = self.waiting.get(Path(path))
+            if not indices:
+                return read_mesh(path, where, degenerate=degenerate)
+            i = indices.popleft()
+            self.taken = max(self.taken, i + 1)
+            self._submit()
+            future = self.futures.pop(i, None)
+            if future is None:
+                return read_mesh(path, where, degenerate=degenerate)
+            read_as = self.requests[i][1]
+        again = read_as != where or degenerate is not None
         try:
             mesh, notes = future.result()
         except UserError:
             if again:
                 return read_mesh(path, where, degenerate=degenerate)
             raise
-        if notes and again:
+        if mesh is None or notes and again:     # None: its process failed (mesh_processes)
             return read_mesh(path, where, degenerate=degenerate)
         for note in notes:
             warn(note)
@@ -152,6 +181,8 @@ class MeshFiles:
             future.cancel()
         if self.pool is not None:
             self.pool.shutdown(wait=True)
+        if self.processes is not None:
+            self.processes.close()
 
     def __enter__(self):
         return self
@@ -528,3 +559,24 @@ def write_ply(path: Path, vertices, faces, normals=None, uvs=None):
         + "".join(f"property float {name}\n" for name, _ in columns) \
         + f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n"
     Path(path).write_bytes(header.encode() + records.tobytes() + triangles.tobytes())
+
+
+def serve_reading():
+    """A process's reading for another (pathtrace.scene.mesh_processes): (path, where) requests
+    from standard input; per request, the mesh and its warning lines or its problem, and the
+    stamps of the files checked, to standard output."""
+    out = []
+    for path, where in pickle.load(sys.stdin.buffer):
+        notes = []
+        with noting_files() as files:
+            try:
+                out.append(((read_mesh(path, where, notes.append), notes), None, files))
+            except UserError as e:
+                out.append((None, e, files))
+    sys.stdout.buffer.write(pickle.dumps(out, protocol=pickle.HIGHEST_PROTOCOL))
+
+
+if __name__ == "__main__":
+    # the package's module, not this __main__ copy, whose MeshData the reading process could not unpickle
+    from pathtrace.scene.meshes import serve_reading as serve
+    serve()
