@@ -21,8 +21,12 @@ from typing import Callable
 #   vector   a direction, transformed likewise;
 #   image    an image file, named relative to the scene file, which the reader reads
 #            (app/textures/bitmap.py: read_image) into an Image, raw (8-bit values as linear,
-#            not sRGB) where the element's `raw` is true.
-KINDS = ("number", "integer", "bool", "string", "name", "color", "point", "vector", "image")
+#            not sRGB) where the element's `raw` is true;
+#   points, normals, pairs, integers
+#            arrays (a mesh's vertices, normals, texture coordinates and indices), as a format
+#            writes them out: pbrt-v4's point3, normal, point2 and integer arrays, flat.
+KINDS = ("number", "integer", "bool", "string", "name", "color", "point", "vector", "image", "points", "normals",
+         "pairs", "integers")
 FORMATS = ("toml", "mitsuba", "pbrt")
 # how a spectrum becomes rgb (app/scene/spectra.py): a reflectance (bounded by 1), an illuminant
 # (luminance 1, as pbrt-v4 normalises a light's spectrum) or unbounded (an IOR: its mean)
@@ -103,6 +107,12 @@ def read(parameters, fmt: str, get: Callable, given: dict = None) -> dict:
             continue
         values[p.name] = value if value is FRAME else p.convert(fmt, value, given)
     return values
+
+
+def format_names(parameters, fmt: str) -> dict:
+    """{pathtrace's name: the format fmt's} of `parameters` that fmt has, by which a reader's
+    message names the parameter that a type's ValueError ("<name>: <problem>") names."""
+    return {p.name: p.named(fmt) for p in parameters if p.name and p.named(fmt)}
 
 
 def by_format(types, fmt: str) -> dict:

@@ -21,13 +21,13 @@ from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import LUMINANCE, constant_of
 from pathtrace.materials.table import blend, scaled_bump_map, transmits
-from pathtrace.parameters import FRAME
+from pathtrace.parameters import FRAME, format_names
 from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.mitsuba_xml import XmlScene, fail, refuse
 from pathtrace.scene.validate import MAX_SIZE
-from pathtrace.scene.meshes import (MAX_COORDINATE, MeshFiles, check_mesh, mitsuba_cube, mitsuba_rectangle, place_mesh,
-                                    vertex_normals)
+from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, place_mesh
+from pathtrace.scene.mesh_shapes import MESH_SHAPES, MeshSource
 from pathtrace.shapes import SHAPES, Shape
 from pathtrace.shapes.shape import MIN_DETERMINANT
 from pathtrace.textures import TEXTURES, Texture, read_image
@@ -35,6 +35,7 @@ from pathtrace.textures import TEXTURES, Texture, read_image
 LIGHTS_BY_NAME = parameters.by_format(DELTA_LIGHTS.values(), "mitsuba")
 BSDFS_BY_NAME = parameters.by_format(BSDFS.values(), "mitsuba")
 TEXTURES_BY_NAME = parameters.by_format(TEXTURES.values(), "mitsuba")
+MESHES_BY_NAME = parameters.by_format(MESH_SHAPES.values(), "mitsuba")
 
 
 class _Reader(XmlScene):
@@ -142,7 +143,7 @@ class _Reader(XmlScene):
         found, todo = [], list(reversed(nodes))
         while todo:
             node = todo.pop()
-            if node.tag == "shape" and node.attrs.get("type") in ("obj", "ply"):
+            if node.tag == "shape" and node.attrs.get("type") in MESH_SHAPES["file"].formats["mitsuba"]:
                 filename = self.properties(node).get("filename")
                 if filename is not None and filename.tag == "string" and filename.attrs.get("value"):
                     found.append((node.file.parent / filename.attrs["value"], node.where()))
@@ -205,7 +206,7 @@ class _Reader(XmlScene):
         try:
             camera.check()
         except ValueError as e:
-            refuse(props, node, e, {p.name: p.mitsuba for p in camera.parameters if p.mitsuba})
+            refuse(props, node, e, format_names(camera.parameters, "mitsuba"))
         self.camera = camera
 
     def film(self, node):
@@ -559,33 +560,26 @@ class _Reader(XmlScene):
             if np.any(np.abs(np.array(shape.bounds(SHAPES[kind]))) > MAX_COORDINATE):
                 fail(node, f"the {kind} reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace")
             return self.builder.add_to(group, shape)
-        normals = None
-        if kind in ("rectangle", "cube"):
-            vertices, faces, uvs = mitsuba_rectangle() if kind == "rectangle" else mitsuba_cube()
-        elif kind in ("obj", "ply"):
-            filename = self.get(props, "filename", kinds=("string",))
-            if filename is None:
-                fail(node, "needs a filename")
-            vertices, faces, normals, uvs = self.mesh_files.read(node.file.parent / filename, node.where())
-            if self.get(props, "face_normals", False, ("boolean",)):
-                normals = None
-            smooth = normals is None and not self.get(props, "face_normals", False, ("boolean",))
-            if smooth:                        # Mitsuba 3 smooths a mesh that has no normals
-                normals = vertex_normals(vertices, faces)
-            origin = MeshFile(str(node.file.parent / filename), m, normals is None,
-                              self.get(props, "flip_normals", False, ("boolean",)), smooth)
-            name = name or Path(filename).stem
-        else:
+        if kind not in MESHES_BY_NAME:
             warn(f"{node.where()}: pathtrace has no {kind} shape; it ignores this one")
             props.ignore()
             return
-        if kind not in ("obj", "ply"):
-            vertices, faces, normals, uvs = check_mesh(vertices, faces, None, uvs, node.where())
-        vertices, faces, normals, turned = place_mesh(vertices, faces, normals, m, self.get(
-            props, "flip_normals", False, ("boolean",)), True, node.where())
-        origin = origin if kind in ("obj", "ply") and not turned else None     # turned: written anew
-        self.builder.add_to(group, Mesh(name or f"{kind} {len(self.builder.meshes)}", vertices, faces, normals, material,
-                                        origin.path if origin else "", origin, uvs, interface))
+        k = MESHES_BY_NAME[kind]
+        values = parameters.read(k.parameters, "mitsuba", lambda p, name: self.parameter(props, p, name))
+        try:
+            (vertices, faces, normals, uvs), path, smoothed = k.triangles(values, MeshSource(
+                lambda filename: (self.mesh_files.read(node.file.parent / filename, node.where()),
+                                  str(node.file.parent / filename)),
+                lambda *mesh: check_mesh(*mesh, node.where())))
+        except ValueError as e:
+            refuse(props, node, e, format_names(k.parameters, "mitsuba"))
+        flip = values.get("flip_normals", False)
+        vertices, faces, normals, turned = place_mesh(vertices, faces, normals, m, flip, True, node.where())
+        # a file's faces turned to its normals' side: written anew by convert
+        origin = MeshFile(path, m, values.get("face_normals", False), flip, smoothed) if path and not turned else None
+        self.builder.add_to(group, Mesh(name or (Path(path).stem if path else f"{kind} {len(self.builder.meshes)}"),
+                                        vertices, faces, normals, material, origin.path if origin else "", origin, uvs,
+                                        interface))
 
 
 def read_mitsuba_file(path) -> Scene:

@@ -22,7 +22,8 @@ from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.resources import resource_dir
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
 from pathtrace.scene.validate import MAX_SIZE
-from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, place_mesh, vertex_normals
+from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, place_mesh
+from pathtrace.scene.mesh_shapes import MESH_SHAPES, MeshSource
 from pathtrace.scene.toml_values import TomlValues, as_toml
 from pathtrace.shapes import SHAPES, Shape, TextureUV
 from pathtrace.shapes.shape import MIN_DETERMINANT
@@ -32,6 +33,7 @@ from pathtrace.textures import TEXTURES, Texture, read_image
 # "twosided" wraps another material (Mitsuba 3's plugin; `twosided = true` says the same)
 FILE_TYPES = {name: b for name, b in BSDFS.items() if name != "black"}
 MATERIAL_TYPES = ["emitter", "twosided", *FILE_TYPES]
+FILE_MESH = MESH_SHAPES["file"]
 
 
 class _Reader(TomlValues):
@@ -418,33 +420,26 @@ class _Reader(TomlValues):
         self.table(data, where, {"file", "vertices", "faces", "uvs", "material", "name", "translate",
                                  "rotate", "scale", "matrix", "face_normals", "flip_normals", "smooth",
                                  "interior", "exterior"})
-        flags = {}
-        for key in ("face_normals", "flip_normals", "smooth"):
-            flags[key] = data.get(key, False)
-            if not isinstance(flags[key], bool):
-                self.fail(f"{where}.{key}", f"must be true or false, got {short(flags[key])}")
-        m = self.transform(data, where)
+        values = parameters.read(FILE_MESH.parameters, "toml",
+                                 lambda p, name: self.parameter(data, p, where) if name in data else None)
+        m, flip = self.transform(data, where), values.get("flip_normals", False)
         if "file" in data:
             if "vertices" in data or "faces" in data:
                 self.fail(where, "give either 'file' or 'vertices' and 'faces', not both")
-            name = data["file"]
-            if not isinstance(name, str) or not name:
-                self.fail(f"{where}.file", f"must be a file name, got {short(name)}")
-            source = self.path.parent / name
-            vertices, faces, normals, uvs = self.mesh_files.read(source, f"{self.label}: {where}.file")
-            if flags["face_normals"]:
-                normals = None
-            elif normals is None and flags["smooth"]:
-                normals = vertex_normals(vertices, faces)
-            origin = MeshFile(str(source), m, flags["face_normals"], flags["flip_normals"], flags["smooth"])
-            default_name = Path(name).stem
+            try:
+                (vertices, faces, normals, uvs), source, smoothed = FILE_MESH.triangles(values, MeshSource(
+                    lambda name: (self.mesh_files.read(self.path.parent / name, f"{self.label}: {where}.file"),
+                                  str(self.path.parent / name))))
+            except ValueError as e:
+                self.refuse(where, e)
+            origin = MeshFile(source, m, values.get("face_normals", False), flip, smoothed)
+            default_name = Path(source).stem
         else:
             vertices, faces, uvs = self.inline_geometry(data, where)
             vertices, faces, normals, uvs = check_mesh(vertices, faces, None, uvs, f"{self.label}: {where}")
             source, default_name, origin = "", f"mesh {where[7:-1]}", None
-        vertices, faces, normals, _ = place_mesh(vertices, faces, normals, m, flags["flip_normals"], False,
-                                                 f"{self.label}: {where}")
-        return Mesh(self.name(data, where, default_name), vertices, faces, normals, material, str(source), origin, uvs,
+        vertices, faces, normals, _ = place_mesh(vertices, faces, normals, m, flip, False, f"{self.label}: {where}")
+        return Mesh(self.name(data, where, default_name), vertices, faces, normals, material, source, origin, uvs,
                     self.interface(data, where))
 
     def named_mesh_files(self, meshes, objects):

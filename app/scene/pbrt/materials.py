@@ -18,6 +18,8 @@ from pathtrace.textures.texture import PBRT_MAPPING
 from pathtrace.textures.bitmap import read_image
 
 BSDFS_BY_NAME = by_format(BSDFS.values(), "pbrt")
+# the parameter types of the array kinds (app/parameters.py)
+ARRAYS = {"points": ("point3",), "normals": ("normal", "normal3"), "pairs": ("point2",), "integers": ("integer",)}
 TEXTURES_BY_NAME = by_format(TEXTURES.values(), "pbrt")
 
 
@@ -129,6 +131,8 @@ class MaterialMapper:
             return spectrum_rgb(params, name, None, p.spectrum)
         if p.kind == "image":
             return read_image(self.reader.resolve(params.string(name)), params.where(name), False, self.images)
+        if p.kind in ARRAYS:
+            return params.get(name, ARRAYS[p.kind], 0)
         read = {"number": params.float, "integer": params.int, "bool": params.bool, "string": params.string,
                 "name": params.string, "point": params.point, "vector": params.point}[p.pbrt_kind or p.kind]
         return read(name)
