@@ -270,13 +270,19 @@ class _Reader(XmlScene):
         values = parameters.read(cls.parameters, "mitsuba", lambda p, name: self.parameter(props, p, name))
         kinds = {p.name: p.kind for p in cls.parameters}
         values = {k: frame[kinds[k]] if v is FRAME else v for k, v in values.items()}
-        for name, why in cls.unsupported.get("mitsuba", {}).items():
-            if name in props:
-                warn(f"{props[name].where()}: {why}; ignored")
+        self.read_unsupported(props, cls)
         try:
             return cls.from_values(values)
         except ValueError as e:
             refuse(props, node, e)
+
+    @staticmethod
+    def read_unsupported(props, kind):
+        """Reads the properties Mitsuba 3's `kind` has and pathtrace has not (its `unsupported`),
+        with a warning of each given where the kind says why."""
+        for name, why in kind.unsupported.get("mitsuba", {}).items():
+            if name in props and why:
+                warn(f"{props[name].where()}: {why}; ignored")
 
     def parameter(self, props, p, name):
         """The value of the declared parameter p (app/parameters.py) that the property `name`
@@ -460,7 +466,7 @@ class _Reader(XmlScene):
         for name in ("albedo", "sigma_t"):
             if name in props and props[name].tag == "volume":
                 fail(props[name], f"{name}: pathtrace's media are homogeneous; give a float or an rgb")
-        props.get("has_spectral_extinction")    # spectral variants' choice; pathtrace is RGB
+        self.read_unsupported(props, Medium)
         if not self.get(props, "sample_emitters", True, ("boolean",)):
             warn(f"{props['sample_emitters'].where()}: pathtrace samples emitters in every medium")
         values = parameters.read(Medium.parameters, "mitsuba", lambda p, name: self.parameter(props, p, name))

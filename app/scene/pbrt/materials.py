@@ -10,7 +10,7 @@ import numpy as np
 from pathtrace.errors import UserError, warn
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import TRANSMISSIVE
-from pathtrace.materials.table import check_blend, check_bump_map, transmits
+from pathtrace.materials.table import blend, check_bump_map, transmits
 from pathtrace.parameters import by_format, read
 from pathtrace.scene.spectra import blackbody_rgb, emission_rgb, named_spectrum, reflectance_rgb, sampled
 from pathtrace.textures import TEXTURES, Texture
@@ -278,13 +278,10 @@ class MaterialMapper:
             other = next((p for p in parts if p is not None), None)
             warn(f"{where}: pathtrace cannot mix a surface with an interface; it uses the other material alone")
             return other
-        blend = Material("blendbsdf", {"weight": amount}, components=tuple(parts))
-        problem = check_blend(blend)
-        if problem:
-            raise UserError(f"{where}: {problem}")
         try:
-            blend.params = BSDFS["blendbsdf"].complete(blend.params)
+            mixed = blend(amount, parts)
         except ValueError as e:
-            raise UserError(f"{where}: amount: {e}") from None
-        blend.twosided = not transmits(blend)
-        return blend
+            field, sep, problem = str(e).partition(": ")
+            raise UserError(f"{where}: amount: {problem}" if sep and field == "weight" else f"{where}: {e}") from None
+        mixed.twosided = not transmits(mixed)
+        return mixed

@@ -233,13 +233,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
                  "is rendered as vacuum")
             self.media[row] = Medium(name, np.zeros(3), np.zeros(3))
             return
-        if params.type_of("preset"):
-            warn(f"{params.where('preset')}: pathtrace has no named scattering presets; it uses sigma_a and sigma_s")
-            params.string("preset")
-        for emission in ("Le", "Lescale"):
-            if params.type_of(emission):
-                warn(f"{params.where(emission)}: pathtrace's media do not emit; ignored")
-                params.get(emission, (params.type_of(emission),), 0)
+        self.read_unsupported(params, Medium)
         values = declared.read(Medium.parameters, "pbrt", lambda p, name: self.mapper.parameter(params, p, name))
         try:
             self.media[row] = Medium.from_values(name, values)
