@@ -109,6 +109,19 @@ def read(parameters, fmt: str, get: Callable, given: dict = None) -> dict:
     return values
 
 
+def out_of_range(parameters, values: dict) -> ValueError | None:
+    """The first of the integer `values` outside its parameter's range [low, high], as a type's
+    ValueError ("<name>: must be in low..high, got value"), or None: the check of a reader whose
+    format's values are converted (the TOML reader checks each value as it reads it)."""
+    for p in parameters:
+        value = values.get(p.name)
+        if p.kind != "integer" or value is None:
+            continue
+        if not ((p.low is None or value >= p.low) and (p.high is None or value <= p.high)):
+            return ValueError(f"{p.name}: must be in {p.low}..{p.high}, got {value}")
+    return None
+
+
 def format_names(parameters, fmt: str) -> dict:
     """{pathtrace's name: the format fmt's} of `parameters` that fmt has, by which a reader's
     message names the parameter that a type's ValueError ("<name>: <problem>") names."""

@@ -21,11 +21,11 @@ from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import LUMINANCE, constant_of
 from pathtrace.materials.table import blend, scaled_bump_map, transmits
-from pathtrace.parameters import FRAME, format_names
+from pathtrace.parameters import FRAME, format_names, out_of_range
 from pathtrace.scene.media import Medium, MediumInterface
-from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
+from pathtrace.scene.description import Mesh, MeshFile, Scene, SceneBuilder
 from pathtrace.scene.mitsuba_xml import XmlScene, fail, refuse
-from pathtrace.scene.validate import MAX_SIZE
+from pathtrace.scene import settings
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, place_mesh
 from pathtrace.scene.mesh_shapes import MESH_SHAPES, MeshSource
 from pathtrace.shapes import SHAPES, Shape
@@ -49,11 +49,10 @@ class _Reader(XmlScene):
         self.textures = {}          # id(texture Node) -> Texture, so that a shared one is one
         self.images = {}            # the images read (read_image's cache)
         self.camera = None
-        self.settings = RenderSettings(width=768, height=576, spp=4)
+        self.settings = settings.defaults("mitsuba")
         self.environment = None
         self.lights = []            # point, spot and directional emitters
         self.filter = None          # the film's rfilter
-        self.max_depth, self.rr = 0, "throughput"
         self.media = []             # the scene's participating media
         self.medium_rows = {}       # id(medium Node) -> row of self.media
         self.camera_medium = -1
@@ -129,12 +128,10 @@ class _Reader(XmlScene):
         if not (self.builder.spheres or self.builder.meshes or self.builder.shapes or self.builder.instance_object):
             raise UserError(f"{self.path}: the scene has no shapes pathtrace can render")
         self.warn_unread()
-        settings = self.settings
-        settings.max_depth, settings.russian_roulette = self.max_depth, self.rr
-        settings.filter = self.filter or PixelFilter("gaussian")      # Mitsuba's default
+        self.settings.filter = self.filter or PixelFilter("gaussian")      # Mitsuba's default
         return self.builder.build(self.path.stem, camera=self.camera or self.default_camera(),
                                   environment=self.environment or Environment.constant((0, 0, 0)),
-                                  settings=settings, source=str(self.path), lights=self.lights,
+                                  settings=self.settings, source=str(self.path), lights=self.lights,
                                   media=self.media, camera_medium=self.camera_medium)
 
     def named_mesh_files(self, nodes) -> list:
@@ -163,16 +160,11 @@ class _Reader(XmlScene):
         elif kind not in ("path", "volpath", "prb", "prbvolpath"):
             warn(f"{node.where()}: pathtrace renders with its path tracer instead")
             props.ignore()          # that integrator's own settings: only max_depth and rr_depth are read
-        max_depth = self.get(props, "max_depth", -1, ("integer",))
-        if not -1 <= max_depth < 2**31:
-            fail(props["max_depth"], f"must be -1 (unlimited) to {2**31 - 1}, got {max_depth}")
-        self.max_depth = 0 if max_depth == -1 else max_depth
+        self.settings.max_depth = self.declared(settings.Integrator, props, node)["max_depth"]
         rr_depth = self.get(props, "rr_depth", 5, ("integer",))
-        if max_depth == 0:
-            fail(props["max_depth"], "0 renders nothing; pathtrace needs 1 or more (or -1)")
         if rr_depth != 5:
-            if max_depth > 0 and rr_depth >= max_depth:
-                self.rr = "off"
+            if 0 < self.settings.max_depth <= rr_depth:
+                self.settings.russian_roulette = "off"
             else:
                 warn(f"{node.where()}: pathtrace starts Russian roulette at depth 5, not {rr_depth}")
 
@@ -187,10 +179,7 @@ class _Reader(XmlScene):
             if child.tag == "film":
                 self.film(child)
             elif child.tag == "sampler":
-                count = self.get(self.properties(child), "sample_count", 4, ("integer",))
-                if not 1 <= count <= 1 << 24:
-                    fail(child, f"sample_count must be in 1..{1 << 24}, got {count}")
-                self.settings.spp = count
+                self.settings.spp = self.declared(settings.Sampler, self.properties(child), child)["spp"]
             elif child.tag == "medium" or (child.tag == "ref" and self.resolve(child).tag == "medium"):
                 self.camera_medium = self.medium(child)       # Mitsuba 3: the sensor's one medium
         if self.filter is None:
@@ -211,18 +200,12 @@ class _Reader(XmlScene):
 
     def film(self, node):
         props = self.properties(node)
-        w = self.get(props, "width", 768, ("integer",))
-        h = self.get(props, "height", 576, ("integer",))
-        for name, v in (("width", w), ("height", h)):
-            if not 1 <= v <= MAX_SIZE:
-                fail(props[name], f"must be in 1..{MAX_SIZE}, got {v}")
-        self.settings.width, self.settings.height = w, h
+        values = self.declared(settings.Film, props, node)
+        self.settings.width, self.settings.height = values["width"], values["height"]
         if node.attrs.get("type") not in ("hdrfilm", "specfilm", None):
             warn(f"{node.where()}: pathtrace writes the image format of the output file's name")
-        # the output's format is its file name's (render -o), whatever these say; a specfilm's
-        # channels are its sensitivity functions', and it has no pixel_format
-        for name in ("file_format", "component_format") + (("pixel_format",) if node.attrs.get("type") != "specfilm" else ()):
-            props.get(name)
+        if node.attrs.get("type") != "specfilm":    # whose channels are its sensitivity functions'
+            props.get("pixel_format")
         for child in node.children:
             if child.tag == "rfilter":
                 self.filter = self.rfilter(child)
@@ -275,6 +258,19 @@ class _Reader(XmlScene):
             return cls.from_values(values)
         except ValueError as e:
             refuse(props, node, e)
+
+    def declared(self, kind, props, node) -> dict:
+        """The values of the parameters `kind` declares (the settings' Film, Sampler, Integrator)
+        that an element gives, converted and in range, and its `unsupported` read."""
+        self.read_unsupported(props, kind)
+        try:
+            values = parameters.read(kind.parameters, "mitsuba", lambda p, name: self.parameter(props, p, name))
+            error = out_of_range(kind.parameters, values)
+            if error:
+                raise error
+        except ValueError as e:
+            refuse(props, node, e, format_names(kind.parameters, "mitsuba"))
+        return values
 
     @staticmethod
     def read_unsupported(props, kind):

@@ -12,7 +12,7 @@ import numpy as np
 from pathtrace import cameras, filters, parameters
 from pathtrace.filters import PixelFilter
 from pathtrace.lights import DELTA_LIGHTS
-from pathtrace.rendering.choices import INTEGRATORS, LIGHT_SAMPLERS, RUSSIAN_ROULETTE
+from pathtrace.rendering.choices import RUSSIAN_ROULETTE
 from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError, short
 from pathtrace.materials import BSDFS, Material
@@ -21,7 +21,7 @@ from pathtrace.materials.table import PERTURBATIONS, check_blend, scaled_bump_ma
 from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.resources import resource_dir
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
-from pathtrace.scene.validate import MAX_SIZE
+from pathtrace.scene.settings import RENDER
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, place_mesh
 from pathtrace.scene.mesh_shapes import MESH_SHAPES, MeshSource
 from pathtrace.scene.toml_values import TomlValues, as_toml
@@ -86,8 +86,7 @@ class _Reader(TomlValues):
         self.table(data, where, {"type", "uv_scale", "uv_offset", "uv_rotate", "uv_matrix",
                                  *(p.name for p in texture_type.parameters)})
         params = {"to_uv": self.uv_transform(data, where),
-                  **parameters.read(texture_type.parameters, "toml",
-                                    lambda p, name: self.parameter(data, p, where) if name in data else None)}
+                  **self.declared(texture_type.parameters, data, where)}
         try:
             return Texture(kind, texture_type.complete(params), name)
         except ValueError as e:
@@ -112,9 +111,8 @@ class _Reader(TomlValues):
         self.table(data, where, {"type", "Le", "emits_back", "twosided", "opacity", "normal_map", "bump_map", "bump_scale",
                                  "perturbation",
                                  *(p.name for p in bsdf.params), *(("bsdfs",) if kind == "blendbsdf" else ())})
-        given = {p.name: self.parameter(data, p, where) for p in bsdf.params if p.name in data}
         try:
-            values = bsdf.complete(given)
+            values = bsdf.complete(self.declared(bsdf.params, data, where))
         except ValueError as e:
             self.fail(where, str(e))
         twosided = self.boolean(data, "twosided", where, False)
@@ -194,6 +192,10 @@ class _Reader(TomlValues):
             return texture
         return self.number(data, "opacity", where, default=1.0, low=0.0, high=1.0)
 
+    def declared(self, declared, data, where) -> dict:
+        """The values a table gives of the `declared` parameters (app/parameters.py: read)."""
+        return parameters.read(declared, "toml", lambda p, name: self.parameter(data, p, where) if name in data else None)
+
     def parameter(self, data, param, where):
         """One declared parameter (app/parameters.py) by its kind; one that may be a texture may
         be a name of [textures] or an inline table, whose values must lie in its range."""
@@ -249,8 +251,7 @@ class _Reader(TomlValues):
         missing = [p.name for p in cls.parameters if p.default is None and p.name not in data]
         if missing:
             self.fail("camera", f"a {cls.type} camera needs {' and '.join(repr(m) for m in missing)}")
-        values = parameters.read(cls.parameters, "toml",
-                                 lambda p, name: self.parameter(data, p, where) if name in data else None)
+        values = self.declared(cls.parameters, data, where)
         cam = cls(self.vector(data, "eye", where), self.vector(data, "look_at", where),
                   self.vector(data, "up", where, default=(0, 1, 0)),
                   mirrored=self.boolean(data, "mirrored", where, False), **values)
@@ -270,8 +271,7 @@ class _Reader(TomlValues):
     def medium(self, data, where) -> Medium:
         """One [media] table, by Medium's declared parameters."""
         self.table(data, where, {p.name for p in Medium.parameters})
-        values = parameters.read(Medium.parameters, "toml",
-                                 lambda p, name: self.parameter(data, p, where) if name in data else None)
+        values = self.declared(Medium.parameters, data, where)
         try:
             return Medium.from_values(where.split(".", 1)[1], values)
         except ValueError as e:
@@ -297,8 +297,7 @@ class _Reader(TomlValues):
         """One [[lights]] entry: a delta light of pathtrace.lights, by its declared parameters."""
         cls = DELTA_LIGHTS[self.kind_of(data, where, DELTA_LIGHTS)]
         self.table(data, where, {"type", *(p.name for p in cls.parameters if p.name)})
-        values = parameters.read(cls.parameters, "toml",
-                                 lambda p, name: self.parameter(data, p, where) if name in data else None)
+        values = self.declared(cls.parameters, data, where)
         try:
             return cls.from_values(values)
         except ValueError as e:
@@ -310,8 +309,7 @@ class _Reader(TomlValues):
         self.table(data, where, {p.name for p in Environment.parameters if p.name})
         if "map" in data and "color" in data:
             self.fail(where, "give either 'color' or 'map', not both")
-        values = parameters.read(Environment.parameters, "toml",
-                                 lambda p, name: self.parameter(data, p, where) if name in data else None)
+        values = self.declared(Environment.parameters, data, where)
         intensity, rotation = values.get("intensity", 1.0), values.get("rotation", 0.0) % 360.0   # wrapped in float64
         if "map" in values:
             return Environment.from_file(self.find_asset(values["map"]), intensity, rotation,
@@ -327,31 +325,17 @@ class _Reader(TomlValues):
         return shipped if _exists(shipped) else candidate   # read_hdr says what is wrong with it
 
     def settings(self, data):
+        """[render], by the settings' declarations (app/scene/settings.py), its filter and its Russian
+        roulette (a name, or true and false)."""
         where = "render"
-        self.table(data, where, {"width", "height", "spp", "max_depth", "russian_roulette", "seed", "nee", "filter",
-                                 "light_sampler", "integrator", "photon_radius"})
-        integrator = data.get("integrator", "path")
-        if integrator not in INTEGRATORS:
-            self.not_one_of("render.integrator", integrator, INTEGRATORS)
-        sampler = data.get("light_sampler", "auto")
-        if sampler not in LIGHT_SAMPLERS:
-            self.not_one_of("render.light_sampler", sampler, LIGHT_SAMPLERS)
-        rr, nee = data.get("russian_roulette", "throughput"), data.get("nee", True)
+        self.table(data, where, {*(p.name for p in RENDER), "russian_roulette", "filter"})
+        rr = data.get("russian_roulette", "throughput")
         if rr is True or rr is False:
             rr = "throughput" if rr else "off"
         if rr not in RUSSIAN_ROULETTE:
             self.not_one_of("render.russian_roulette", rr, RUSSIAN_ROULETTE, also=" (or true, false)")
-        if not isinstance(nee, bool):
-            self.fail("render.nee", f"must be true or false, got {short(nee)}")
-        s = RenderSettings(
-            width=self.number(data, "width", where, default=960, low=1, high=MAX_SIZE, integer=True),
-            height=self.number(data, "height", where, default=540, low=1, high=MAX_SIZE, integer=True),
-            spp=self.number(data, "spp", where, default=64, low=1, integer=True),
-            max_depth=self.number(data, "max_depth", where, default=0, low=0, integer=True),
-            russian_roulette=rr, nee=nee,
-            seed=self.number(data, "seed", where, default=0, low=0, high=2**32 - 1, integer=True),
-            filter=self.pixel_filter(data.get("filter", "box")), light_sampler=sampler, integrator=integrator,
-            photon_radius=self.number(data, "photon_radius", where, default=0.0, low=0.0, high=MAX_COORDINATE))
+        s = RenderSettings(**self.declared(RENDER, data, where), russian_roulette=rr,
+                           filter=self.pixel_filter(data.get("filter", "box")))
         if not s.paths_end:
             self.fail("render.russian_roulette", "off needs a max_depth above 0, or paths never end")
         return s
@@ -391,8 +375,7 @@ class _Reader(TomlValues):
         k = SHAPES[kind]
         self.table(data, where, {"kind", "material", "name", "interior", "exterior", "flip", "texture_uv", "matrix",
                                  "translate", "rotate", "scale", *(p.name for p in k.parameters)})
-        values = k.params_from(parameters.read(k.parameters, "toml",
-                                               lambda p, name: self.parameter(data, p, where) if name in data else None))
+        values = k.params_from(self.declared(k.parameters, data, where))
         problem = k.check(values)
         if problem:
             self.fail(where, problem)
@@ -420,8 +403,7 @@ class _Reader(TomlValues):
         self.table(data, where, {"file", "vertices", "faces", "uvs", "material", "name", "translate",
                                  "rotate", "scale", "matrix", "face_normals", "flip_normals", "smooth",
                                  "interior", "exterior"})
-        values = parameters.read(FILE_MESH.parameters, "toml",
-                                 lambda p, name: self.parameter(data, p, where) if name in data else None)
+        values = self.declared(FILE_MESH.parameters, data, where)
         m, flip = self.transform(data, where), values.get("flip_normals", False)
         if "file" in data:
             if "vertices" in data or "faces" in data:

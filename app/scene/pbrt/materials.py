@@ -11,7 +11,7 @@ from pathtrace.errors import UserError, warn
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import TRANSMISSIVE
 from pathtrace.materials.table import blend, check_bump_map, transmits
-from pathtrace.parameters import by_format, read
+from pathtrace.parameters import by_format, format_names, read
 from pathtrace.scene.spectra import blackbody_rgb, emission_rgb, named_spectrum, reflectance_rgb, sampled
 from pathtrace.textures import TEXTURES, Texture
 from pathtrace.textures.texture import PBRT_MAPPING
@@ -192,10 +192,12 @@ class MaterialMapper:
     # -- materials --
 
     @staticmethod
-    def fail(params, where, error: ValueError):
-        """A type's ValueError ("<pbrt name>: <problem>") as one line naming the parameter's
-        file:line, or the directive's (`where`)."""
+    def fail(params, where, error: ValueError, declared=()):
+        """A type's ValueError ("<name>: <problem>", the name pbrt-v4's or that of one of the
+        `declared` Parameters) as one line naming the parameter's file:line, or the directive's
+        (`where`)."""
         name, _, problem = str(error).partition(": ")
+        name = format_names(declared, "pbrt").get(name, name)
         if name in params.params:
             params.fail(name, problem)
         raise UserError(f"{where}: {error}") from None

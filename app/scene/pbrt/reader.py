@@ -33,7 +33,8 @@ from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.lights.area import pbrt_radiance
 from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.scene import transform
-from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder
+from pathtrace.scene.description import Mesh, Scene, SceneBuilder
+from pathtrace.scene import settings
 from pathtrace.scene.known_names import Unread
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, place_mesh
 from pathtrace.scene.mesh_shapes import MESH_SHAPES, MeshSource
@@ -57,7 +58,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         self.named_materials = {}
         self.mapper = MaterialMapper(self)
         self.builder = SceneBuilder()
-        self.settings = RenderSettings(width=1280, height=720, spp=16, max_depth=6)
+        self.settings = settings.defaults("pbrt")
         self.filter = PixelFilter("gaussian", 1.5, 0.5)        # pbrt-v4's default
         self.camera_params = None
         self.environment = None
@@ -407,6 +408,19 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
             return None
         uvs = None if uvs is None else np.column_stack([uvs[:, 0], 1 - uvs[:, 1]])
         return *place_mesh(vertices, faces, normals, self.state.ctm, self.state.reverse, True, where)[:3], uvs, source
+
+    def read_declared(self, kind, params, where) -> dict:
+        """The values of the parameters `kind` declares (app/parameters.py) that a directive gives,
+        converted and in range, and its `unsupported` read."""
+        self.read_unsupported(params, kind)
+        try:
+            values = declared.read(kind.parameters, "pbrt", lambda p, name: self.mapper.parameter(params, p, name))
+            error = declared.out_of_range(kind.parameters, values)
+            if error:
+                raise error
+        except ValueError as e:
+            self.mapper.fail(params, where, e, kind.parameters)
+        return values
 
     def read_unsupported(self, params, kind):
         """Reads the parameters pbrt-v4's `kind` has and pathtrace has not (its `unsupported`),
