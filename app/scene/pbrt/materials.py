@@ -12,7 +12,6 @@ from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import TRANSMISSIVE
 from pathtrace.materials.table import blend, check_bump_map, transmits
 from pathtrace.parameters import by_format, format_names, read
-from pathtrace.scene.spectra import blackbody_rgb, emission_rgb, named_spectrum, reflectance_rgb, sampled
 from pathtrace.textures import TEXTURES, Texture
 from pathtrace.textures.texture import PBRT_MAPPING
 from pathtrace.textures.bitmap import read_image
@@ -21,52 +20,6 @@ BSDFS_BY_NAME = by_format(BSDFS.values(), "pbrt")
 # the parameter types of the array kinds (app/parameters.py)
 ARRAYS = {"points": ("point3",), "normals": ("normal", "normal3"), "pairs": ("point2",), "integers": ("integer",)}
 TEXTURES_BY_NAME = by_format(TEXTURES.values(), "pbrt")
-
-
-def spectrum_rgb(params, name, default, kind="reflectance"):
-    """A colour parameter: rgb, blackbody, a named spectrum, (wavelength, value) pairs or a
-    float; `kind` "reflectance", "illuminant" (luminance 1, as pbrt-v4 normalises a light's
-    spectrum) or "unbounded" (an IOR)."""
-    ptype = params.type_of(name)
-    if ptype is None:
-        return None if default is None else np.broadcast_to(np.asarray(default, np.float64), 3).copy()
-    if ptype == "rgb":
-        return np.asarray(params.get(name, (ptype,)), np.float64)
-    if ptype == "float":
-        return np.full(3, params.float(name))
-    if ptype == "blackbody":
-        kelvin = float(params.get(name, ("blackbody",))[0])
-        if kelvin <= 0:
-            params.fail(name, f"a blackbody's temperature must be positive, got {kelvin:g}")
-        try:
-            return blackbody_rgb(kelvin)
-        except ValueError as e:
-            params.fail(name, f"a blackbody of {kelvin:g} K {e}")
-    if ptype == "spectrum":
-        values = params.get(name, ("spectrum",), 0)
-        if isinstance(values, list):
-            if len(values) != 1:
-                params.fail(name, "a named spectrum is one quoted name")
-            try:
-                rgb, note = named_spectrum(values[0])
-            except KeyError:
-                params.fail(name, f"unknown named spectrum {values[0]!r}")
-            if note:
-                warn(f"{params.where(name)}: {values[0]} is taken as {note}")
-            return rgb
-        if len(values) % 2:
-            params.fail(name, "a spectrum is (wavelength, value) pairs")
-        try:
-            curve = sampled(values)
-        except ValueError as e:
-            params.fail(name, str(e))
-        if kind == "illuminant":
-            try:
-                return emission_rgb(curve)
-            except ValueError as e:
-                params.fail(name, f"the spectrum {e}")
-        return reflectance_rgb(curve) if kind == "reflectance" else np.full(3, float(np.mean(curve)))
-    params.fail(name, f"must be a colour (rgb, spectrum, blackbody, float), got {ptype}")
 
 
 # pathtrace's parameters that the pbrt materials' parameters become, for messages
@@ -116,7 +69,7 @@ class MaterialMapper:
             return table[ref]
         if float_texture:
             return params.float(name, default)
-        return spectrum_rgb(params, name, default)
+        return params.spectrum(name, default)
 
     def parameter(self, params, p, name):
         """The value of the declared parameter p (app/parameters.py) that the parameter `name`
@@ -128,7 +81,7 @@ class MaterialMapper:
         if p.texture and ptype == "texture":
             return self.texture_input(params, name, None, p.kind == "number")
         if p.kind == "color":
-            return spectrum_rgb(params, name, None, p.spectrum)
+            return params.spectrum(name, None, p.spectrum)
         if p.kind == "image":
             return read_image(self.reader.resolve(params.string(name)), params.where(name), False, self.images)
         if p.kind in ARRAYS:

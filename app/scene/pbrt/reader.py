@@ -38,7 +38,7 @@ from pathtrace.scene import settings
 from pathtrace.scene.known_names import Unread
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, place_mesh
 from pathtrace.scene.mesh_shapes import MESH_SHAPES, MeshSource
-from pathtrace.scene.pbrt.materials import MaterialMapper, make, spectrum_rgb
+from pathtrace.scene.pbrt.materials import MaterialMapper, make
 from pathtrace.scene.pbrt.options import OPTION_DIRECTIVES, OptionDirectives, refused
 from pathtrace.scene.pbrt.state import MAX_FILE_BYTES, MAX_INCLUDE_DEPTH, STATE_DIRECTIVES, GraphicsStateDirectives
 from pathtrace.textures import Texture
@@ -441,10 +441,10 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         if params.type_of("filename"):
             params.string("filename")
             warn(f"{light_where}: pathtrace's area lights have no image; it uses L "
-                 f"({', '.join(f'{c:g}' for c in spectrum_rgb(params, 'L', 1.0, 'illuminant'))})")
+                 f"({', '.join(f'{c:g}' for c in params.spectrum('L', 1.0, 'illuminant'))})")
         twosided = params.bool("twosided", False)
         try:
-            parts = pbrt_radiance(spectrum_rgb(params, "L", 1.0, "illuminant"), params.float("scale", 1.0), twosided,
+            parts = pbrt_radiance(params.spectrum("L", 1.0, "illuminant"), params.float("scale", 1.0), twosided,
                                   params.float("power", -1.0), vertices, faces, area,
                                   lambda text: warn(f"{light_where}: {text}"))
         except ValueError as e:
