@@ -16,8 +16,9 @@ from pathtrace.rendering.choices import RUSSIAN_ROULETTE
 from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError, short
 from pathtrace.materials import BSDFS, Material
-from pathtrace.materials.bsdf import NULL, constant_of
-from pathtrace.materials.table import PERTURBATIONS, check_blend, scaled_bump_map, transmits
+from pathtrace.materials.bsdf import constant_of
+from pathtrace.materials.surface import SURFACE, dressed
+from pathtrace.materials.table import PERTURBATIONS, check_blend, transmits
 from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.resources import resource_dir
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
@@ -50,13 +51,6 @@ class _Reader(TomlValues):
         self.material_tables = {}    # the [materials] tables, by name (a blend's bsdfs name them)
         self.blending = []           # the named materials being read as a blend's components
         self.mesh_files = MeshFiles()  # the scene's mesh files, read ahead
-
-    def color_or_texture(self, data, key, where, default=None):
-        """A colour, or a texture (by name or inline) where one may stand."""
-        value = data.get(key)
-        if isinstance(value, dict) or (isinstance(value, str) and value in self.texture_tables):
-            return self.texture_value(value, f"{where}.{key}")
-        return self.color(data, key, where, default)
 
     # -- textures --
 
@@ -93,11 +87,9 @@ class _Reader(TomlValues):
             self.fail(where, str(e))
 
     def material(self, data, where) -> Material:
+        """One material table: its type's parameters (`twosided` wraps another material, an
+        `emitter` is black and emits), and what any material carries (app/materials/surface.py)."""
         kind = self.kind_of(data, where, MATERIAL_TYPES)
-        if kind == "emitter":
-            self.table(data, where, {"type", "Le", "emits_back", "opacity"})
-            return Material("black", emission=self.color_or_texture(data, "Le", where),
-                            opacity=self.opacity(data, where), emits_back=self.boolean(data, "emits_back", where, False))
         if kind == "twosided":
             self.table(data, where, {"type", "bsdf"})
             if "bsdf" not in data:
@@ -107,31 +99,30 @@ class _Reader(TomlValues):
                 self.fail(f"{where}.bsdf", f"a {inner.type} cannot be two-sided: it transmits")
             inner.twosided = True
             return inner
-        bsdf = FILE_TYPES[kind]
-        self.table(data, where, {"type", "Le", "emits_back", "twosided", "opacity", "normal_map", "bump_map", "bump_scale",
-                                 "perturbation",
-                                 *(p.name for p in bsdf.params), *(("bsdfs",) if kind == "blendbsdf" else ())})
+        if kind == "emitter":
+            self.table(data, where, {"type", "Le", "emits_back", "opacity"})
+            if "Le" not in data:
+                self.fail(where, "missing 'Le'")
+            material = Material("black")
+        else:
+            bsdf = FILE_TYPES[kind]
+            self.table(data, where, {"type", *(p.name for p in SURFACE + bsdf.params),
+                                     *(("bsdfs",) if kind == "blendbsdf" else ())})
+            try:
+                material = Material(kind, bsdf.complete(self.declared(bsdf.params, data, where)))
+            except ValueError as e:
+                self.fail(where, str(e))
+            if kind == "blendbsdf":
+                material.components = self.components(data, where)
+                problem = check_blend(material)
+                if problem:
+                    self.fail(where, problem)
+        if data.get("perturbation", PERTURBATIONS[0]) not in PERTURBATIONS:     # its names quoted, as a file writes them
+            self.not_one_of(f"{where}.perturbation", data["perturbation"], PERTURBATIONS, quoted=True)
         try:
-            values = bsdf.complete(self.declared(bsdf.params, data, where))
+            return dressed(material, self.declared(SURFACE, data, where))
         except ValueError as e:
-            self.fail(where, str(e))
-        twosided = self.boolean(data, "twosided", where, False)
-        if twosided and bsdf.transmits(values):
-            self.fail(f"{where}.twosided", f"a {kind} cannot be two-sided: it transmits, and is seen from both sides already")
-        emission = self.color_or_texture(data, "Le", where, default=(0, 0, 0))
-        if bsdf.flags & NULL and (isinstance(emission, Texture) or np.any(emission > 0)):
-            self.fail(f"{where}.Le", "a null material is no surface, and cannot emit")
-        material = Material(kind, values, emission, twosided, self.opacity(data, where),
-                            emits_back=self.boolean(data, "emits_back", where, False))
-        self.shading_maps(data, where, material)
-        if kind == "blendbsdf":
-            material.components = self.components(data, where)
-            problem = check_blend(material)
-            if problem:
-                self.fail(where, problem)
-            if twosided and transmits(material):
-                self.fail(f"{where}.twosided", "a blend of transmissive materials cannot be two-sided")
-        return material
+            self.refuse(where, e)
 
     def components(self, data, where) -> tuple:
         """A blend's `bsdfs`: two materials, each a table or the name of one in [materials]."""
@@ -152,46 +143,6 @@ class _Reader(TomlValues):
                 out.append(self.material(m, f"{where}.bsdfs[{k}]"))
         return tuple(out)
 
-    def shading_maps(self, data, where, material):
-        """normal_map (a texture of tangent-space normals, 2 rgb - 1), or bump_map (a bitmap of
-        heights) times bump_scale; either perturbing as `perturbation` says (Material.perturbation:
-        "mitsuba", the default, or "pbrt")."""
-        if "normal_map" in data and "bump_map" in data:
-            self.fail(where, "give a normal_map or a bump_map, not both")
-        for key in ("normal_map", "bump_map"):
-            if key in data:
-                value = data[key]
-                if not (isinstance(value, dict) or isinstance(value, str)):
-                    self.fail(f"{where}.{key}", f"must be a texture (a name or a table), got {short(value)}")
-                setattr(material, key, self.texture_value(value, f"{where}.{key}"))
-        scale = self.number(data, "bump_scale", where, default=1.0)
-        if "bump_scale" in data and "bump_map" not in data:
-            self.fail(f"{where}.bump_scale", "scales a bump_map, and there is none")
-        if material.bump_map is not None:
-            try:
-                material.bump_map = scaled_bump_map(material.bump_map, scale)
-            except ValueError as e:
-                self.fail(f"{where}.bump_map", str(e))
-        if "perturbation" in data:
-            value = data["perturbation"]
-            if material.normal_map is None and material.bump_map is None:
-                self.fail(f"{where}.perturbation", "says how a normal_map or bump_map perturbs, and there is none")
-            if value not in PERTURBATIONS:
-                self.not_one_of(f"{where}.perturbation", value, PERTURBATIONS, quoted=True)
-            material.perturbation = value
-
-    def opacity(self, data, where):
-        """An alpha mask: a number in [0, 1] (default 1, opaque) or a texture whose luminance is
-        the probability that a ray meets the surface."""
-        value = data.get("opacity", 1.0)
-        if isinstance(value, dict) or (isinstance(value, str) and value in self.texture_tables):
-            texture = self.texture_value(value, f"{where}.opacity")
-            low, high = np.min(texture.minimum()), np.max(texture.maximum())
-            if low < 0 or high > 1:
-                self.fail(f"{where}.opacity", f"the texture's values must lie in [0, 1], but reach from {low:.4g} to {high:.4g}")
-            return texture
-        return self.number(data, "opacity", where, default=1.0, low=0.0, high=1.0)
-
     def declared(self, declared, data, where) -> dict:
         """The values a table gives of the `declared` parameters (app/parameters.py: read)."""
         return parameters.read(declared, "toml", lambda p, name: self.parameter(data, p, where) if name in data else None)
@@ -200,6 +151,10 @@ class _Reader(TomlValues):
         """One declared parameter (app/parameters.py) by its kind; one that may be a texture may
         be a name of [textures] or an inline table, whose values must lie in its range."""
         value, key = data[param.name], f"{where}.{param.name}"
+        if param.kind == "texture":
+            if not isinstance(value, (dict, str)):
+                self.fail(key, f"must be a texture (a name or a table), got {short(value)}")
+            return self.texture_value(value, key)
         if param.texture and (isinstance(value, dict) or (isinstance(value, str) and value in self.texture_tables)):
             texture = self.texture_value(value, key)
             low = np.min(constant_of(texture, param.kind, Texture.minimum))
