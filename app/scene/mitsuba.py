@@ -250,18 +250,16 @@ class _Reader(XmlScene):
         cls = LIGHTS_BY_NAME[kind]
         m = self.get(props, "to_world", np.eye(4), ("transform",))
         frame = {"point": m[:3, 3], "vector": m[:3, :3] @ [0, 0, 1.0]}
-        values = parameters.read(cls.parameters, "mitsuba", lambda p, name: self.parameter(props, p, name))
         kinds = {p.name: p.kind for p in cls.parameters}
-        values = {k: frame[kinds[k]] if v is FRAME else v for k, v in values.items()}
-        self.read_unsupported(props, cls)
+        values = {k: frame[kinds[k]] if v is FRAME else v for k, v in self.declared(cls, props, node).items()}
         try:
             return cls.from_values(values)
         except ValueError as e:
             refuse(props, node, e)
 
     def declared(self, kind, props, node) -> dict:
-        """The values of the parameters `kind` declares (the settings' Film, Sampler, Integrator)
-        that an element gives, converted and in range, and its `unsupported` read."""
+        """The values of the parameters a type `kind` declares (app/parameters.py) that an element
+        gives, converted and in range, what it has and pathtrace has not read (`unsupported`)."""
         self.read_unsupported(props, kind)
         try:
             values = parameters.read(kind.parameters, "mitsuba", lambda p, name: self.parameter(props, p, name))
@@ -462,10 +460,9 @@ class _Reader(XmlScene):
         for name in ("albedo", "sigma_t"):
             if name in props and props[name].tag == "volume":
                 fail(props[name], f"{name}: pathtrace's media are homogeneous; give a float or an rgb")
-        self.read_unsupported(props, Medium)
         if not self.get(props, "sample_emitters", True, ("boolean",)):
             warn(f"{props['sample_emitters'].where()}: pathtrace samples emitters in every medium")
-        values = parameters.read(Medium.parameters, "mitsuba", lambda p, name: self.parameter(props, p, name))
+        values = self.declared(Medium, props, node)
         for phase in (c for c in node.children if c.tag == "phase"):
             phase_props = self.properties(phase)
             if phase.attrs.get("type") == "hg":
@@ -544,10 +541,10 @@ class _Reader(XmlScene):
         m = self.get(props, "to_world", np.eye(4), ("transform",))
         name = node.attrs.get("id")
         if kind in SHAPES:
-            values = {p.mitsuba: self.parameter(props, p, p.mitsuba) for p in SHAPES[kind].mitsuba_parameters}
-            values = {p.mitsuba: p.mitsuba_default if values[p.mitsuba] is None else values[p.mitsuba]
-                      for p in SHAPES[kind].mitsuba_parameters}
-            values, local, texture_uv, flip = SHAPES[kind].from_mitsuba(values, m, node.where())
+            given = {}          # the shape's Mitsuba parameters, by their names (format-only: none of pathtrace's)
+            parameters.read(SHAPES[kind].mitsuba_parameters, "mitsuba", lambda p, name: self.parameter(props, p, name),
+                            given)
+            values, local, texture_uv, flip = SHAPES[kind].from_mitsuba(given, m, node.where())
             problem = SHAPES[kind].check(values)
             if problem:
                 fail(node, f"the {kind}'s {problem}")
@@ -567,7 +564,7 @@ class _Reader(XmlScene):
             props.ignore()
             return
         k = MESHES_BY_NAME[kind]
-        values = parameters.read(k.parameters, "mitsuba", lambda p, name: self.parameter(props, p, name))
+        values = self.declared(k, props, node)
         try:
             (vertices, faces, normals, uvs), path, smoothed = k.triangles(values, MeshSource(
                 lambda filename: (self.mesh_files.read(node.file.parent / filename, node.where()),

@@ -234,8 +234,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
                  "is rendered as vacuum")
             self.media[row] = Medium(name, np.zeros(3), np.zeros(3))
             return
-        self.read_unsupported(params, Medium)
-        values = declared.read(Medium.parameters, "pbrt", lambda p, name: self.mapper.parameter(params, p, name))
+        values = self.read_declared(Medium, params, where)
         try:
             self.media[row] = Medium.from_values(name, values)
         except ValueError as e:
@@ -369,7 +368,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         moved by the transform, turned by ReverseOrientation and by a transform that swaps
         handedness (pbrt-v4's Disk and Cylinder: reverseOrientation ^ transformSwapsHandedness)."""
         k = SHAPES[kind]
-        values = k.params_from(declared.read(k.parameters, "pbrt", lambda p, name: self.mapper.parameter(params, p, name)))
+        values = k.params_from(self.read_declared(k, params, where))
         problem = k.check(values)
         if problem:
             raise UserError(f"{where}: the {kind}'s {problem}")
@@ -390,8 +389,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
             params.ignore()
             warn(f"{where}: pathtrace has no {kind} shape; it leaves it out")
             return None
-        self.read_unsupported(params, k)
-        values = declared.read(k.parameters, "pbrt", lambda p, name: self.mapper.parameter(params, p, name))
+        values = self.read_declared(k, params, where)
 
         def read(name):
             path = self.resolve(name)
@@ -401,7 +399,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
                 read, lambda *mesh: check_mesh(*mesh, where, degenerate=self.degenerate),
                 lambda text: warn(f"{where}: {text}")))
         except ValueError as e:
-            self.mapper.fail(params, where, e)
+            self.mapper.fail(params, where, e, k.parameters)
         if len(faces) == 0:
             warn(f"{where}: every triangle of the {kind} is degenerate (pbrt-v4 intersects none of them); "
                  "pathtrace leaves the shape out")
@@ -410,8 +408,9 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         return *place_mesh(vertices, faces, normals, self.state.ctm, self.state.reverse, True, where)[:3], uvs, source
 
     def read_declared(self, kind, params, where) -> dict:
-        """The values of the parameters `kind` declares (app/parameters.py) that a directive gives,
-        converted and in range, and its `unsupported` read."""
+        """The values of the parameters a type `kind` declares (app/parameters.py) that a
+        directive gives, converted and in range, what it has and pathtrace has not read
+        (`unsupported`)."""
         self.read_unsupported(params, kind)
         try:
             values = declared.read(kind.parameters, "pbrt", lambda p, name: self.mapper.parameter(params, p, name))
@@ -470,7 +469,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
             params.ignore()
             warn(f"{where}: pathtrace has no {kind} light; it leaves it out")
             return
-        values = declared.read(cls.parameters, "pbrt", lambda p, name: self.mapper.parameter(params, p, name))
+        values = self.read_declared(cls, params, where)
         for p in cls.parameters:
             if p.name in values and p.kind in ("point", "vector"):
                 v = np.asarray(values[p.name], np.float64)
