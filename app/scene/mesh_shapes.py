@@ -104,9 +104,9 @@ class TriangleMesh(MeshShape):
         vertices, polygons = self.polygons(values)
         normals, uvs = values.get("normals"), values.get("uvs")
         if normals is not None and len(normals) != 3 * len(vertices):
-            raise ValueError(f"N: has {len(normals) // 3} normals for {len(vertices)} vertices")
+            raise ValueError(f"normals: has {len(normals) // 3} normals for {len(vertices)} vertices")
         if uvs is not None and len(uvs) != 2 * len(vertices):
-            raise ValueError(f"uv: has {len(uvs) // 2} uvs for {len(vertices)} vertices")
+            raise ValueError(f"uvs: has {len(uvs) // 2} uvs for {len(vertices)} vertices")
         return source.check(vertices, self.split(polygons), None if normals is None else normals.reshape(-1, 3),
                             None if uvs is None else uvs.reshape(-1, 2)), "", False
 
