@@ -110,6 +110,11 @@ def read(parameters, fmt: str, get: Callable, given: dict = None) -> dict:
     return values
 
 
+def missing(parameters, values: dict) -> list:
+    """The required `parameters` (no default, not optional) that `values` lacks."""
+    return [p for p in parameters if p.name and p.default is None and not p.optional and p.name not in values]
+
+
 def out_of_range(parameters, values: dict) -> ValueError | None:
     """The first of the integer `values` outside its parameter's range [low, high], as a type's
     ValueError ("<name>: must be in low..high, got value"), or None: the check of a reader whose

@@ -92,8 +92,9 @@ class _Reader(XmlScene):
         if kind in TEXTURES_BY_NAME:
             params.update(parameters.read(TEXTURES_BY_NAME[kind].parameters, "mitsuba",
                                           lambda p, name: self.parameter(props, p, name)))
-            if kind == "bitmap" and "file" not in params:
-                fail(node, "a bitmap needs a filename")
+            absent = parameters.missing(TEXTURES_BY_NAME[kind].parameters, params)
+            if absent:
+                fail(node, f"a {kind} needs a {absent[0].mitsuba}")
         else:
             warn(f"{node.where()}: pathtrace has no {kind} texture; it uses a constant grey of 0.5 instead")
             props.ignore()

@@ -203,9 +203,9 @@ class _Reader(TomlValues):
             if key not in common | own and any(key in {p.name for p in c.parameters} for c in cameras.CAMERAS.values()):
                 self.fail(f"camera.{key}", f"a {kind} camera has no {key}")
         self.table(data, where, common | own)
-        missing = [p.name for p in cls.parameters if p.default is None and p.name not in data]
-        if missing:
-            self.fail("camera", f"a {cls.type} camera needs {' and '.join(repr(m) for m in missing)}")
+        absent = parameters.missing(cls.parameters, data)
+        if absent:
+            self.fail("camera", f"a {cls.type} camera needs {' and '.join(repr(p.name) for p in absent)}")
         values = self.declared(cls.parameters, data, where)
         cam = cls(self.vector(data, "eye", where), self.vector(data, "look_at", where),
                   self.vector(data, "up", where, default=(0, 1, 0)),

@@ -11,7 +11,7 @@ from pathtrace.errors import UserError, warn
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import TRANSMISSIVE
 from pathtrace.materials.table import blend, check_bump_map, transmits
-from pathtrace.parameters import by_format, format_names, read
+from pathtrace.parameters import by_format, format_names, missing, read
 from pathtrace.textures import TEXTURES, Texture
 from pathtrace.textures.texture import PBRT_MAPPING
 from pathtrace.textures.bitmap import read_image
@@ -114,10 +114,11 @@ class MaterialMapper:
         given = {}
         try:
             values = read(kind.parameters + kind.format_only + (PBRT_MAPPING if kind.pbrt_uv else ()), "pbrt", get, given)
+            absent = missing(kind.parameters, values)
+            if absent:
+                raise UserError(f"{where}: {'an' if cls[0] in 'aeiou' else 'a'} {cls} needs a {absent[0].pbrt}")
             for p in kind.parameters:
                 if p.kind == "image":
-                    if p.name not in values:
-                        raise UserError(f"{where}: an {cls} needs a {p.pbrt}")
                     values[p.name] = read_image(values[p.name], f"{where}: {p.pbrt}", values["raw"], self.images)
             if kind.pbrt_uv:
                 values["to_uv"] = kind.pbrt_to_uv(given, lambda text: warn(f"{where}: {text}"))
