@@ -88,7 +88,7 @@ RENDER = Film.parameters + Sampler.parameters + Integrator.parameters + (
               doc="with bdpt: caustic photons gathered within it at first; 0: none"))
 
 
-
 def defaults(fmt: str) -> RenderSettings:
     """The settings of a file of format fmt that gives none: the defaults of its elements."""
-    return RenderSettings(**read(Film.parameters + Sampler.parameters + Integrator.parameters, fmt, lambda p, name: None))
+    elements = Film.parameters + Sampler.parameters + Integrator.parameters
+    return RenderSettings(**read(elements, fmt, lambda p, name: None))
