@@ -21,8 +21,13 @@ from typing import Callable
 #   vector   a direction, transformed likewise;
 #   image    an image file, named relative to the scene file, which the reader reads
 #            (app/textures/bitmap.py: read_image) into an Image, raw (8-bit values as linear,
-#            not sRGB) where the element's `raw` is true.
-KINDS = ("number", "integer", "bool", "string", "name", "color", "point", "vector", "image")
+#            not sRGB) where the element's `raw` is true;
+#   texture  a texture, never a constant (a normal map);
+#   points, normals, pairs, integers
+#            arrays (a mesh's vertices, normals, texture coordinates and indices), as a format
+#            writes them out: pbrt-v4's point3, normal, point2 and integer arrays, flat.
+KINDS = ("number", "integer", "bool", "string", "name", "color", "point", "vector", "image", "texture", "points",
+         "normals", "pairs", "integers")
 FORMATS = ("toml", "mitsuba", "pbrt")
 # how a spectrum becomes rgb (app/scene/spectra.py): a reflectance (bounded by 1), an illuminant
 # (luminance 1, as pbrt-v4 normalises a light's spectrum) or unbounded (an IOR: its mean)
@@ -103,6 +108,30 @@ def read(parameters, fmt: str, get: Callable, given: dict = None) -> dict:
             continue
         values[p.name] = value if value is FRAME else p.convert(fmt, value, given)
     return values
+
+
+def missing(parameters, values: dict) -> list:
+    """The required `parameters` (no default, not optional) that `values` lacks."""
+    return [p for p in parameters if p.name and p.default is None and not p.optional and p.name not in values]
+
+
+def out_of_range(parameters, values: dict) -> ValueError | None:
+    """The first of the integer `values` outside its parameter's range [low, high], as a type's
+    ValueError ("<name>: must be in low..high, got value"), or None: the check of a reader whose
+    format's values are converted (the TOML reader checks each value as it reads it)."""
+    for p in parameters:
+        value = values.get(p.name)
+        if p.kind != "integer" or value is None:
+            continue
+        if not ((p.low is None or value >= p.low) and (p.high is None or value <= p.high)):
+            return ValueError(f"{p.name}: must be in {p.low}..{p.high}, got {value}")
+    return None
+
+
+def format_names(parameters, fmt: str) -> dict:
+    """{pathtrace's name: the format fmt's} of `parameters` that fmt has, by which a reader's
+    message names the parameter that a type's ValueError ("<name>: <problem>") names."""
+    return {p.name: p.named(fmt) for p in parameters if p.name and p.named(fmt)}
 
 
 def by_format(types, fmt: str) -> dict:

@@ -2,6 +2,7 @@
 the tables of docs/scene-format.md, which must be what the declarations generate."""
 
 import numpy as np
+import pytest
 
 from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.materials import BSDFS
@@ -49,3 +50,18 @@ def test_a_light_reads_the_same_from_each_format_it_has():
     light = spot.from_values(values)
     assert np.allclose(light.direction, [0, -1, 0]) and light.cutoff_angle == 40 and light.beam_width == 30
     assert light.falloff == "smoothstep" and np.allclose(light.intensity, 1)
+
+
+def test_the_render_settings_read_each_format_s_defaults_and_conversions():
+    """A file without a film, sampler or integrator renders at its renderer's defaults; Mitsuba's
+    max_depth -1 is unlimited, pbrt-v4's maxdepth counts bounces, and a bad one names its field."""
+    from pathtrace.scene import settings
+    mitsuba, pbrt = settings.defaults("mitsuba"), settings.defaults("pbrt")
+    assert (mitsuba.width, mitsuba.height, mitsuba.spp, mitsuba.max_depth) == (768, 576, 4, 0)
+    assert (pbrt.width, pbrt.height, pbrt.spp, pbrt.max_depth, pbrt.light_sampler) == (1280, 720, 16, 6, "auto")
+    given = {"maxdepth": 3, "lightsampler": "uniform"}
+    assert read(settings.Integrator.parameters, "pbrt", lambda p, name: given.get(name)) == {
+        "max_depth": 4, "light_sampler": "power"}
+    for fmt, value, message in (("mitsuba", 0, "^max_depth: 0 renders nothing"), ("pbrt", -1, "^maxdepth: must be in")):
+        with pytest.raises(ValueError, match=message):
+            read(settings.Integrator.parameters, fmt, lambda p, name: value if name in ("max_depth", "maxdepth") else None)

@@ -1,6 +1,7 @@
 """The parameter tables of docs/scene-format.md, generated from the types' declarations
 (app/parameters.py): each block between `<!-- parameters: KIND -->` and `<!-- end parameters -->`
-is the tables of the types of KIND (lights, environment, materials, textures, media, shapes, cameras), one per type, with a column for
+is the tables of the types of KIND (lights, environment, materials, textures, media, shapes, cameras,
+surface: what any material carries, render: the [render] table), one per type, with a column for
 each format that has the type. `python -m pathtrace.scene.format_tables` rewrites the file;
 tests/test_parameters.py fails where the file and the declarations differ."""
 
@@ -42,6 +43,13 @@ def _types(kind: str) -> list:
                 for c in CAMERAS.values()]
     if kind == "environment":
         return [(Environment.name, Environment.formats, Environment.doc, Environment.parameters)]
+    if kind == "surface":
+        from pathtrace.materials.surface import SURFACE
+        return [("any material", {}, "", SURFACE)]
+    if kind == "render":
+        from pathtrace.scene.settings import RENDER
+        return [("render", {"mitsuba": ("film", "sampler", "integrator"), "pbrt": ("Film", "Sampler", "Integrator")},
+                 "", RENDER)]
     if kind == "shapes":
         from pathtrace.shapes import SHAPES
         return [(k.name, k.formats, k.doc, k.parameters + k.mitsuba_parameters) for k in SHAPES.values()]

@@ -21,13 +21,13 @@ from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import LUMINANCE, constant_of
 from pathtrace.materials.table import blend, scaled_bump_map, transmits
-from pathtrace.parameters import FRAME
+from pathtrace.parameters import FRAME, format_names, out_of_range
 from pathtrace.scene.media import Medium, MediumInterface
-from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
+from pathtrace.scene.description import Mesh, MeshFile, Scene, SceneBuilder
 from pathtrace.scene.mitsuba_xml import XmlScene, fail, refuse
-from pathtrace.scene.validate import MAX_SIZE
-from pathtrace.scene.meshes import (MAX_COORDINATE, MeshFiles, check_mesh, mitsuba_cube, mitsuba_rectangle, place_mesh,
-                                    vertex_normals)
+from pathtrace.scene import settings
+from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, place_mesh
+from pathtrace.scene.mesh_shapes import MESH_SHAPES, MeshSource
 from pathtrace.shapes import SHAPES, Shape
 from pathtrace.shapes.shape import MIN_DETERMINANT
 from pathtrace.textures import TEXTURES, Texture, read_image
@@ -35,6 +35,7 @@ from pathtrace.textures import TEXTURES, Texture, read_image
 LIGHTS_BY_NAME = parameters.by_format(DELTA_LIGHTS.values(), "mitsuba")
 BSDFS_BY_NAME = parameters.by_format(BSDFS.values(), "mitsuba")
 TEXTURES_BY_NAME = parameters.by_format(TEXTURES.values(), "mitsuba")
+MESHES_BY_NAME = parameters.by_format(MESH_SHAPES.values(), "mitsuba")
 
 
 class _Reader(XmlScene):
@@ -48,11 +49,10 @@ class _Reader(XmlScene):
         self.textures = {}          # id(texture Node) -> Texture, so that a shared one is one
         self.images = {}            # the images read (read_image's cache)
         self.camera = None
-        self.settings = RenderSettings(width=768, height=576, spp=4)
+        self.settings = settings.defaults("mitsuba")
         self.environment = None
         self.lights = []            # point, spot and directional emitters
         self.filter = None          # the film's rfilter
-        self.max_depth, self.rr = 0, "throughput"
         self.media = []             # the scene's participating media
         self.medium_rows = {}       # id(medium Node) -> row of self.media
         self.camera_medium = -1
@@ -92,8 +92,9 @@ class _Reader(XmlScene):
         if kind in TEXTURES_BY_NAME:
             params.update(parameters.read(TEXTURES_BY_NAME[kind].parameters, "mitsuba",
                                           lambda p, name: self.parameter(props, p, name)))
-            if kind == "bitmap" and "file" not in params:
-                fail(node, "a bitmap needs a filename")
+            absent = parameters.missing(TEXTURES_BY_NAME[kind].parameters, params)
+            if absent:
+                fail(node, f"a {kind} needs a {absent[0].mitsuba}")
         else:
             warn(f"{node.where()}: pathtrace has no {kind} texture; it uses a constant grey of 0.5 instead")
             props.ignore()
@@ -128,12 +129,10 @@ class _Reader(XmlScene):
         if not (self.builder.spheres or self.builder.meshes or self.builder.shapes or self.builder.instance_object):
             raise UserError(f"{self.path}: the scene has no shapes pathtrace can render")
         self.warn_unread()
-        settings = self.settings
-        settings.max_depth, settings.russian_roulette = self.max_depth, self.rr
-        settings.filter = self.filter or PixelFilter("gaussian")      # Mitsuba's default
+        self.settings.filter = self.filter or PixelFilter("gaussian")      # Mitsuba's default
         return self.builder.build(self.path.stem, camera=self.camera or self.default_camera(),
                                   environment=self.environment or Environment.constant((0, 0, 0)),
-                                  settings=settings, source=str(self.path), lights=self.lights,
+                                  settings=self.settings, source=str(self.path), lights=self.lights,
                                   media=self.media, camera_medium=self.camera_medium)
 
     def named_mesh_files(self, nodes) -> list:
@@ -142,7 +141,7 @@ class _Reader(XmlScene):
         found, todo = [], list(reversed(nodes))
         while todo:
             node = todo.pop()
-            if node.tag == "shape" and node.attrs.get("type") in ("obj", "ply"):
+            if node.tag == "shape" and node.attrs.get("type") in MESH_SHAPES["file"].formats["mitsuba"]:
                 filename = self.properties(node).get("filename")
                 if filename is not None and filename.tag == "string" and filename.attrs.get("value"):
                     found.append((node.file.parent / filename.attrs["value"], node.where()))
@@ -162,16 +161,11 @@ class _Reader(XmlScene):
         elif kind not in ("path", "volpath", "prb", "prbvolpath"):
             warn(f"{node.where()}: pathtrace renders with its path tracer instead")
             props.ignore()          # that integrator's own settings: only max_depth and rr_depth are read
-        max_depth = self.get(props, "max_depth", -1, ("integer",))
-        if not -1 <= max_depth < 2**31:
-            fail(props["max_depth"], f"must be -1 (unlimited) to {2**31 - 1}, got {max_depth}")
-        self.max_depth = 0 if max_depth == -1 else max_depth
+        self.settings.max_depth = self.declared(settings.Integrator, props, node)["max_depth"]
         rr_depth = self.get(props, "rr_depth", 5, ("integer",))
-        if max_depth == 0:
-            fail(props["max_depth"], "0 renders nothing; pathtrace needs 1 or more (or -1)")
         if rr_depth != 5:
-            if max_depth > 0 and rr_depth >= max_depth:
-                self.rr = "off"
+            if 0 < self.settings.max_depth <= rr_depth:
+                self.settings.russian_roulette = "off"
             else:
                 warn(f"{node.where()}: pathtrace starts Russian roulette at depth 5, not {rr_depth}")
 
@@ -186,10 +180,7 @@ class _Reader(XmlScene):
             if child.tag == "film":
                 self.film(child)
             elif child.tag == "sampler":
-                count = self.get(self.properties(child), "sample_count", 4, ("integer",))
-                if not 1 <= count <= 1 << 24:
-                    fail(child, f"sample_count must be in 1..{1 << 24}, got {count}")
-                self.settings.spp = count
+                self.settings.spp = self.declared(settings.Sampler, self.properties(child), child)["spp"]
             elif child.tag == "medium" or (child.tag == "ref" and self.resolve(child).tag == "medium"):
                 self.camera_medium = self.medium(child)       # Mitsuba 3: the sensor's one medium
         if self.filter is None:
@@ -205,23 +196,17 @@ class _Reader(XmlScene):
         try:
             camera.check()
         except ValueError as e:
-            refuse(props, node, e, {p.name: p.mitsuba for p in camera.parameters if p.mitsuba})
+            refuse(props, node, e, format_names(camera.parameters, "mitsuba"))
         self.camera = camera
 
     def film(self, node):
         props = self.properties(node)
-        w = self.get(props, "width", 768, ("integer",))
-        h = self.get(props, "height", 576, ("integer",))
-        for name, v in (("width", w), ("height", h)):
-            if not 1 <= v <= MAX_SIZE:
-                fail(props[name], f"must be in 1..{MAX_SIZE}, got {v}")
-        self.settings.width, self.settings.height = w, h
+        values = self.declared(settings.Film, props, node)
+        self.settings.width, self.settings.height = values["width"], values["height"]
         if node.attrs.get("type") not in ("hdrfilm", "specfilm", None):
             warn(f"{node.where()}: pathtrace writes the image format of the output file's name")
-        # the output's format is its file name's (render -o), whatever these say; a specfilm's
-        # channels are its sensitivity functions', and it has no pixel_format
-        for name in ("file_format", "component_format") + (("pixel_format",) if node.attrs.get("type") != "specfilm" else ()):
-            props.get(name)
+        if node.attrs.get("type") != "specfilm":    # whose channels are its sensitivity functions'
+            props.get("pixel_format")
         for child in node.children:
             if child.tag == "rfilter":
                 self.filter = self.rfilter(child)
@@ -266,16 +251,33 @@ class _Reader(XmlScene):
         cls = LIGHTS_BY_NAME[kind]
         m = self.get(props, "to_world", np.eye(4), ("transform",))
         frame = {"point": m[:3, 3], "vector": m[:3, :3] @ [0, 0, 1.0]}
-        values = parameters.read(cls.parameters, "mitsuba", lambda p, name: self.parameter(props, p, name))
         kinds = {p.name: p.kind for p in cls.parameters}
-        values = {k: frame[kinds[k]] if v is FRAME else v for k, v in values.items()}
-        for name, why in cls.unsupported.get("mitsuba", {}).items():
-            if name in props:
-                warn(f"{props[name].where()}: {why}; ignored")
+        values = {k: frame[kinds[k]] if v is FRAME else v for k, v in self.declared(cls, props, node).items()}
         try:
             return cls.from_values(values)
         except ValueError as e:
             refuse(props, node, e)
+
+    def declared(self, kind, props, node) -> dict:
+        """The values of the parameters a type `kind` declares (app/parameters.py) that an element
+        gives, converted and in range, what it has and pathtrace has not read (`unsupported`)."""
+        self.read_unsupported(props, kind)
+        try:
+            values = parameters.read(kind.parameters, "mitsuba", lambda p, name: self.parameter(props, p, name))
+            error = out_of_range(kind.parameters, values)
+            if error:
+                raise error
+        except ValueError as e:
+            refuse(props, node, e, format_names(kind.parameters, "mitsuba"))
+        return values
+
+    @staticmethod
+    def read_unsupported(props, kind):
+        """Reads the properties Mitsuba 3's `kind` has and pathtrace has not (its `unsupported`),
+        with a warning of each given where the kind says why."""
+        for name, why in kind.unsupported.get("mitsuba", {}).items():
+            if name in props and why:
+                warn(f"{props[name].where()}: {why}; ignored")
 
     def parameter(self, props, p, name):
         """The value of the declared parameter p (app/parameters.py) that the property `name`
@@ -459,10 +461,9 @@ class _Reader(XmlScene):
         for name in ("albedo", "sigma_t"):
             if name in props and props[name].tag == "volume":
                 fail(props[name], f"{name}: pathtrace's media are homogeneous; give a float or an rgb")
-        props.get("has_spectral_extinction")    # spectral variants' choice; pathtrace is RGB
         if not self.get(props, "sample_emitters", True, ("boolean",)):
             warn(f"{props['sample_emitters'].where()}: pathtrace samples emitters in every medium")
-        values = parameters.read(Medium.parameters, "mitsuba", lambda p, name: self.parameter(props, p, name))
+        values = self.declared(Medium, props, node)
         for phase in (c for c in node.children if c.tag == "phase"):
             phase_props = self.properties(phase)
             if phase.attrs.get("type") == "hg":
@@ -541,10 +542,10 @@ class _Reader(XmlScene):
         m = self.get(props, "to_world", np.eye(4), ("transform",))
         name = node.attrs.get("id")
         if kind in SHAPES:
-            values = {p.mitsuba: self.parameter(props, p, p.mitsuba) for p in SHAPES[kind].mitsuba_parameters}
-            values = {p.mitsuba: p.mitsuba_default if values[p.mitsuba] is None else values[p.mitsuba]
-                      for p in SHAPES[kind].mitsuba_parameters}
-            values, local, texture_uv, flip = SHAPES[kind].from_mitsuba(values, m, node.where())
+            given = {}          # the shape's Mitsuba parameters, by their names (format-only: none of pathtrace's)
+            parameters.read(SHAPES[kind].mitsuba_parameters, "mitsuba", lambda p, name: self.parameter(props, p, name),
+                            given)
+            values, local, texture_uv, flip = SHAPES[kind].from_mitsuba(given, m, node.where())
             problem = SHAPES[kind].check(values)
             if problem:
                 fail(node, f"the {kind}'s {problem}")
@@ -559,33 +560,26 @@ class _Reader(XmlScene):
             if np.any(np.abs(np.array(shape.bounds(SHAPES[kind]))) > MAX_COORDINATE):
                 fail(node, f"the {kind} reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace")
             return self.builder.add_to(group, shape)
-        normals = None
-        if kind in ("rectangle", "cube"):
-            vertices, faces, uvs = mitsuba_rectangle() if kind == "rectangle" else mitsuba_cube()
-        elif kind in ("obj", "ply"):
-            filename = self.get(props, "filename", kinds=("string",))
-            if filename is None:
-                fail(node, "needs a filename")
-            vertices, faces, normals, uvs = self.mesh_files.read(node.file.parent / filename, node.where())
-            if self.get(props, "face_normals", False, ("boolean",)):
-                normals = None
-            smooth = normals is None and not self.get(props, "face_normals", False, ("boolean",))
-            if smooth:                        # Mitsuba 3 smooths a mesh that has no normals
-                normals = vertex_normals(vertices, faces)
-            origin = MeshFile(str(node.file.parent / filename), m, normals is None,
-                              self.get(props, "flip_normals", False, ("boolean",)), smooth)
-            name = name or Path(filename).stem
-        else:
+        if kind not in MESHES_BY_NAME:
             warn(f"{node.where()}: pathtrace has no {kind} shape; it ignores this one")
             props.ignore()
             return
-        if kind not in ("obj", "ply"):
-            vertices, faces, normals, uvs = check_mesh(vertices, faces, None, uvs, node.where())
-        vertices, faces, normals, turned = place_mesh(vertices, faces, normals, m, self.get(
-            props, "flip_normals", False, ("boolean",)), True, node.where())
-        origin = origin if kind in ("obj", "ply") and not turned else None     # turned: written anew
-        self.builder.add_to(group, Mesh(name or f"{kind} {len(self.builder.meshes)}", vertices, faces, normals, material,
-                                        origin.path if origin else "", origin, uvs, interface))
+        k = MESHES_BY_NAME[kind]
+        values = self.declared(k, props, node)
+        try:
+            (vertices, faces, normals, uvs), path, smoothed = k.triangles(values, MeshSource(
+                lambda filename: (self.mesh_files.read(node.file.parent / filename, node.where()),
+                                  str(node.file.parent / filename)),
+                lambda *mesh: check_mesh(*mesh, node.where())))
+        except ValueError as e:
+            refuse(props, node, e, format_names(k.parameters, "mitsuba"))
+        flip = values.get("flip_normals", False)
+        vertices, faces, normals, turned = place_mesh(vertices, faces, normals, m, flip, True, node.where())
+        # a file's faces turned to its normals' side: written anew by convert
+        origin = MeshFile(path, m, values.get("face_normals", False), flip, smoothed) if path and not turned else None
+        self.builder.add_to(group, Mesh(name or (Path(path).stem if path else f"{kind} {len(self.builder.meshes)}"),
+                                        vertices, faces, normals, material, origin.path if origin else "", origin, uvs,
+                                        interface))
 
 
 def read_mitsuba_file(path) -> Scene:

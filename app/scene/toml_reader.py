@@ -12,17 +12,19 @@ import numpy as np
 from pathtrace import cameras, filters, parameters
 from pathtrace.filters import PixelFilter
 from pathtrace.lights import DELTA_LIGHTS
-from pathtrace.rendering.choices import INTEGRATORS, LIGHT_SAMPLERS, RUSSIAN_ROULETTE
+from pathtrace.rendering.choices import RUSSIAN_ROULETTE
 from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError, short
 from pathtrace.materials import BSDFS, Material
-from pathtrace.materials.bsdf import NULL, constant_of
-from pathtrace.materials.table import PERTURBATIONS, check_blend, scaled_bump_map, transmits
+from pathtrace.materials.bsdf import constant_of
+from pathtrace.materials.surface import SURFACE, dressed
+from pathtrace.materials.table import PERTURBATIONS, check_blend, transmits
 from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.resources import resource_dir
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
-from pathtrace.scene.validate import MAX_SIZE
-from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, place_mesh, vertex_normals
+from pathtrace.scene.settings import RENDER
+from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, place_mesh
+from pathtrace.scene.mesh_shapes import MESH_SHAPES, MeshSource
 from pathtrace.scene.toml_values import TomlValues, as_toml
 from pathtrace.shapes import SHAPES, Shape, TextureUV
 from pathtrace.shapes.shape import MIN_DETERMINANT
@@ -32,6 +34,7 @@ from pathtrace.textures import TEXTURES, Texture, read_image
 # "twosided" wraps another material (Mitsuba 3's plugin; `twosided = true` says the same)
 FILE_TYPES = {name: b for name, b in BSDFS.items() if name != "black"}
 MATERIAL_TYPES = ["emitter", "twosided", *FILE_TYPES]
+FILE_MESH = MESH_SHAPES["file"]
 
 
 class _Reader(TomlValues):
@@ -48,13 +51,6 @@ class _Reader(TomlValues):
         self.material_tables = {}    # the [materials] tables, by name (a blend's bsdfs name them)
         self.blending = []           # the named materials being read as a blend's components
         self.mesh_files = MeshFiles()  # the scene's mesh files, read ahead
-
-    def color_or_texture(self, data, key, where, default=None):
-        """A colour, or a texture (by name or inline) where one may stand."""
-        value = data.get(key)
-        if isinstance(value, dict) or (isinstance(value, str) and value in self.texture_tables):
-            return self.texture_value(value, f"{where}.{key}")
-        return self.color(data, key, where, default)
 
     # -- textures --
 
@@ -84,19 +80,16 @@ class _Reader(TomlValues):
         self.table(data, where, {"type", "uv_scale", "uv_offset", "uv_rotate", "uv_matrix",
                                  *(p.name for p in texture_type.parameters)})
         params = {"to_uv": self.uv_transform(data, where),
-                  **parameters.read(texture_type.parameters, "toml",
-                                    lambda p, name: self.parameter(data, p, where) if name in data else None)}
+                  **self.declared(texture_type.parameters, data, where)}
         try:
             return Texture(kind, texture_type.complete(params), name)
         except ValueError as e:
             self.fail(where, str(e))
 
     def material(self, data, where) -> Material:
+        """One material table: its type's parameters (`twosided` wraps another material, an
+        `emitter` is black and emits), and what any material carries (app/materials/surface.py)."""
         kind = self.kind_of(data, where, MATERIAL_TYPES)
-        if kind == "emitter":
-            self.table(data, where, {"type", "Le", "emits_back", "opacity"})
-            return Material("black", emission=self.color_or_texture(data, "Le", where),
-                            opacity=self.opacity(data, where), emits_back=self.boolean(data, "emits_back", where, False))
         if kind == "twosided":
             self.table(data, where, {"type", "bsdf"})
             if "bsdf" not in data:
@@ -106,32 +99,30 @@ class _Reader(TomlValues):
                 self.fail(f"{where}.bsdf", f"a {inner.type} cannot be two-sided: it transmits")
             inner.twosided = True
             return inner
-        bsdf = FILE_TYPES[kind]
-        self.table(data, where, {"type", "Le", "emits_back", "twosided", "opacity", "normal_map", "bump_map", "bump_scale",
-                                 "perturbation",
-                                 *(p.name for p in bsdf.params), *(("bsdfs",) if kind == "blendbsdf" else ())})
-        given = {p.name: self.parameter(data, p, where) for p in bsdf.params if p.name in data}
+        if kind == "emitter":
+            self.table(data, where, {"type", "Le", "emits_back", "opacity"})
+            if "Le" not in data:
+                self.fail(where, "missing 'Le'")
+            material = Material("black")
+        else:
+            bsdf = FILE_TYPES[kind]
+            self.table(data, where, {"type", *(p.name for p in SURFACE + bsdf.params),
+                                     *(("bsdfs",) if kind == "blendbsdf" else ())})
+            try:
+                material = Material(kind, bsdf.complete(self.declared(bsdf.params, data, where)))
+            except ValueError as e:
+                self.fail(where, str(e))
+            if kind == "blendbsdf":
+                material.components = self.components(data, where)
+                problem = check_blend(material)
+                if problem:
+                    self.fail(where, problem)
+        if data.get("perturbation", PERTURBATIONS[0]) not in PERTURBATIONS:     # its names quoted, as a file writes them
+            self.not_one_of(f"{where}.perturbation", data["perturbation"], PERTURBATIONS, quoted=True)
         try:
-            values = bsdf.complete(given)
+            return dressed(material, self.declared(SURFACE, data, where))
         except ValueError as e:
-            self.fail(where, str(e))
-        twosided = self.boolean(data, "twosided", where, False)
-        if twosided and bsdf.transmits(values):
-            self.fail(f"{where}.twosided", f"a {kind} cannot be two-sided: it transmits, and is seen from both sides already")
-        emission = self.color_or_texture(data, "Le", where, default=(0, 0, 0))
-        if bsdf.flags & NULL and (isinstance(emission, Texture) or np.any(emission > 0)):
-            self.fail(f"{where}.Le", "a null material is no surface, and cannot emit")
-        material = Material(kind, values, emission, twosided, self.opacity(data, where),
-                            emits_back=self.boolean(data, "emits_back", where, False))
-        self.shading_maps(data, where, material)
-        if kind == "blendbsdf":
-            material.components = self.components(data, where)
-            problem = check_blend(material)
-            if problem:
-                self.fail(where, problem)
-            if twosided and transmits(material):
-                self.fail(f"{where}.twosided", "a blend of transmissive materials cannot be two-sided")
-        return material
+            self.refuse(where, e)
 
     def components(self, data, where) -> tuple:
         """A blend's `bsdfs`: two materials, each a table or the name of one in [materials]."""
@@ -152,50 +143,18 @@ class _Reader(TomlValues):
                 out.append(self.material(m, f"{where}.bsdfs[{k}]"))
         return tuple(out)
 
-    def shading_maps(self, data, where, material):
-        """normal_map (a texture of tangent-space normals, 2 rgb - 1), or bump_map (a bitmap of
-        heights) times bump_scale; either perturbing as `perturbation` says (Material.perturbation:
-        "mitsuba", the default, or "pbrt")."""
-        if "normal_map" in data and "bump_map" in data:
-            self.fail(where, "give a normal_map or a bump_map, not both")
-        for key in ("normal_map", "bump_map"):
-            if key in data:
-                value = data[key]
-                if not (isinstance(value, dict) or isinstance(value, str)):
-                    self.fail(f"{where}.{key}", f"must be a texture (a name or a table), got {short(value)}")
-                setattr(material, key, self.texture_value(value, f"{where}.{key}"))
-        scale = self.number(data, "bump_scale", where, default=1.0)
-        if "bump_scale" in data and "bump_map" not in data:
-            self.fail(f"{where}.bump_scale", "scales a bump_map, and there is none")
-        if material.bump_map is not None:
-            try:
-                material.bump_map = scaled_bump_map(material.bump_map, scale)
-            except ValueError as e:
-                self.fail(f"{where}.bump_map", str(e))
-        if "perturbation" in data:
-            value = data["perturbation"]
-            if material.normal_map is None and material.bump_map is None:
-                self.fail(f"{where}.perturbation", "says how a normal_map or bump_map perturbs, and there is none")
-            if value not in PERTURBATIONS:
-                self.not_one_of(f"{where}.perturbation", value, PERTURBATIONS, quoted=True)
-            material.perturbation = value
-
-    def opacity(self, data, where):
-        """An alpha mask: a number in [0, 1] (default 1, opaque) or a texture whose luminance is
-        the probability that a ray meets the surface."""
-        value = data.get("opacity", 1.0)
-        if isinstance(value, dict) or (isinstance(value, str) and value in self.texture_tables):
-            texture = self.texture_value(value, f"{where}.opacity")
-            low, high = np.min(texture.minimum()), np.max(texture.maximum())
-            if low < 0 or high > 1:
-                self.fail(f"{where}.opacity", f"the texture's values must lie in [0, 1], but reach from {low:.4g} to {high:.4g}")
-            return texture
-        return self.number(data, "opacity", where, default=1.0, low=0.0, high=1.0)
+    def declared(self, declared, data, where) -> dict:
+        """The values a table gives of the `declared` parameters (app/parameters.py: read)."""
+        return parameters.read(declared, "toml", lambda p, name: self.parameter(data, p, where) if name in data else None)
 
     def parameter(self, data, param, where):
         """One declared parameter (app/parameters.py) by its kind; one that may be a texture may
         be a name of [textures] or an inline table, whose values must lie in its range."""
         value, key = data[param.name], f"{where}.{param.name}"
+        if param.kind == "texture":
+            if not isinstance(value, (dict, str)):
+                self.fail(key, f"must be a texture (a name or a table), got {short(value)}")
+            return self.texture_value(value, key)
         if param.texture and (isinstance(value, dict) or (isinstance(value, str) and value in self.texture_tables)):
             texture = self.texture_value(value, key)
             low = np.min(constant_of(texture, param.kind, Texture.minimum))
@@ -244,11 +203,10 @@ class _Reader(TomlValues):
             if key not in common | own and any(key in {p.name for p in c.parameters} for c in cameras.CAMERAS.values()):
                 self.fail(f"camera.{key}", f"a {kind} camera has no {key}")
         self.table(data, where, common | own)
-        missing = [p.name for p in cls.parameters if p.default is None and p.name not in data]
-        if missing:
-            self.fail("camera", f"a {cls.type} camera needs {' and '.join(repr(m) for m in missing)}")
-        values = parameters.read(cls.parameters, "toml",
-                                 lambda p, name: self.parameter(data, p, where) if name in data else None)
+        absent = parameters.missing(cls.parameters, data)
+        if absent:
+            self.fail("camera", f"a {cls.type} camera needs {' and '.join(repr(p.name) for p in absent)}")
+        values = self.declared(cls.parameters, data, where)
         cam = cls(self.vector(data, "eye", where), self.vector(data, "look_at", where),
                   self.vector(data, "up", where, default=(0, 1, 0)),
                   mirrored=self.boolean(data, "mirrored", where, False), **values)
@@ -268,8 +226,7 @@ class _Reader(TomlValues):
     def medium(self, data, where) -> Medium:
         """One [media] table, by Medium's declared parameters."""
         self.table(data, where, {p.name for p in Medium.parameters})
-        values = parameters.read(Medium.parameters, "toml",
-                                 lambda p, name: self.parameter(data, p, where) if name in data else None)
+        values = self.declared(Medium.parameters, data, where)
         try:
             return Medium.from_values(where.split(".", 1)[1], values)
         except ValueError as e:
@@ -295,8 +252,7 @@ class _Reader(TomlValues):
         """One [[lights]] entry: a delta light of pathtrace.lights, by its declared parameters."""
         cls = DELTA_LIGHTS[self.kind_of(data, where, DELTA_LIGHTS)]
         self.table(data, where, {"type", *(p.name for p in cls.parameters if p.name)})
-        values = parameters.read(cls.parameters, "toml",
-                                 lambda p, name: self.parameter(data, p, where) if name in data else None)
+        values = self.declared(cls.parameters, data, where)
         try:
             return cls.from_values(values)
         except ValueError as e:
@@ -308,8 +264,7 @@ class _Reader(TomlValues):
         self.table(data, where, {p.name for p in Environment.parameters if p.name})
         if "map" in data and "color" in data:
             self.fail(where, "give either 'color' or 'map', not both")
-        values = parameters.read(Environment.parameters, "toml",
-                                 lambda p, name: self.parameter(data, p, where) if name in data else None)
+        values = self.declared(Environment.parameters, data, where)
         intensity, rotation = values.get("intensity", 1.0), values.get("rotation", 0.0) % 360.0   # wrapped in float64
         if "map" in values:
             return Environment.from_file(self.find_asset(values["map"]), intensity, rotation,
@@ -325,31 +280,17 @@ class _Reader(TomlValues):
         return shipped if _exists(shipped) else candidate   # read_hdr says what is wrong with it
 
     def settings(self, data):
+        """[render], by the settings' declarations (app/scene/settings.py), its filter and its Russian
+        roulette (a name, or true and false)."""
         where = "render"
-        self.table(data, where, {"width", "height", "spp", "max_depth", "russian_roulette", "seed", "nee", "filter",
-                                 "light_sampler", "integrator", "photon_radius"})
-        integrator = data.get("integrator", "path")
-        if integrator not in INTEGRATORS:
-            self.not_one_of("render.integrator", integrator, INTEGRATORS)
-        sampler = data.get("light_sampler", "auto")
-        if sampler not in LIGHT_SAMPLERS:
-            self.not_one_of("render.light_sampler", sampler, LIGHT_SAMPLERS)
-        rr, nee = data.get("russian_roulette", "throughput"), data.get("nee", True)
+        self.table(data, where, {*(p.name for p in RENDER), "russian_roulette", "filter"})
+        rr = data.get("russian_roulette", "throughput")
         if rr is True or rr is False:
             rr = "throughput" if rr else "off"
         if rr not in RUSSIAN_ROULETTE:
             self.not_one_of("render.russian_roulette", rr, RUSSIAN_ROULETTE, also=" (or true, false)")
-        if not isinstance(nee, bool):
-            self.fail("render.nee", f"must be true or false, got {short(nee)}")
-        s = RenderSettings(
-            width=self.number(data, "width", where, default=960, low=1, high=MAX_SIZE, integer=True),
-            height=self.number(data, "height", where, default=540, low=1, high=MAX_SIZE, integer=True),
-            spp=self.number(data, "spp", where, default=64, low=1, integer=True),
-            max_depth=self.number(data, "max_depth", where, default=0, low=0, integer=True),
-            russian_roulette=rr, nee=nee,
-            seed=self.number(data, "seed", where, default=0, low=0, high=2**32 - 1, integer=True),
-            filter=self.pixel_filter(data.get("filter", "box")), light_sampler=sampler, integrator=integrator,
-            photon_radius=self.number(data, "photon_radius", where, default=0.0, low=0.0, high=MAX_COORDINATE))
+        s = RenderSettings(**self.declared(RENDER, data, where), russian_roulette=rr,
+                           filter=self.pixel_filter(data.get("filter", "box")))
         if not s.paths_end:
             self.fail("render.russian_roulette", "off needs a max_depth above 0, or paths never end")
         return s
@@ -389,8 +330,7 @@ class _Reader(TomlValues):
         k = SHAPES[kind]
         self.table(data, where, {"kind", "material", "name", "interior", "exterior", "flip", "texture_uv", "matrix",
                                  "translate", "rotate", "scale", *(p.name for p in k.parameters)})
-        values = k.params_from(parameters.read(k.parameters, "toml",
-                                               lambda p, name: self.parameter(data, p, where) if name in data else None))
+        values = k.params_from(self.declared(k.parameters, data, where))
         problem = k.check(values)
         if problem:
             self.fail(where, problem)
@@ -418,33 +358,25 @@ class _Reader(TomlValues):
         self.table(data, where, {"file", "vertices", "faces", "uvs", "material", "name", "translate",
                                  "rotate", "scale", "matrix", "face_normals", "flip_normals", "smooth",
                                  "interior", "exterior"})
-        flags = {}
-        for key in ("face_normals", "flip_normals", "smooth"):
-            flags[key] = data.get(key, False)
-            if not isinstance(flags[key], bool):
-                self.fail(f"{where}.{key}", f"must be true or false, got {short(flags[key])}")
-        m = self.transform(data, where)
+        values = self.declared(FILE_MESH.parameters, data, where)
+        m, flip = self.transform(data, where), values.get("flip_normals", False)
         if "file" in data:
             if "vertices" in data or "faces" in data:
                 self.fail(where, "give either 'file' or 'vertices' and 'faces', not both")
-            name = data["file"]
-            if not isinstance(name, str) or not name:
-                self.fail(f"{where}.file", f"must be a file name, got {short(name)}")
-            source = self.path.parent / name
-            vertices, faces, normals, uvs = self.mesh_files.read(source, f"{self.label}: {where}.file")
-            if flags["face_normals"]:
-                normals = None
-            elif normals is None and flags["smooth"]:
-                normals = vertex_normals(vertices, faces)
-            origin = MeshFile(str(source), m, flags["face_normals"], flags["flip_normals"], flags["smooth"])
-            default_name = Path(name).stem
+            try:
+                (vertices, faces, normals, uvs), source, smoothed = FILE_MESH.triangles(values, MeshSource(
+                    lambda name: (self.mesh_files.read(self.path.parent / name, f"{self.label}: {where}.file"),
+                                  str(self.path.parent / name))))
+            except ValueError as e:
+                self.refuse(where, e)
+            origin = MeshFile(source, m, values.get("face_normals", False), flip, smoothed)
+            default_name = Path(source).stem
         else:
             vertices, faces, uvs = self.inline_geometry(data, where)
             vertices, faces, normals, uvs = check_mesh(vertices, faces, None, uvs, f"{self.label}: {where}")
             source, default_name, origin = "", f"mesh {where[7:-1]}", None
-        vertices, faces, normals, _ = place_mesh(vertices, faces, normals, m, flags["flip_normals"], False,
-                                                 f"{self.label}: {where}")
-        return Mesh(self.name(data, where, default_name), vertices, faces, normals, material, str(source), origin, uvs,
+        vertices, faces, normals, _ = place_mesh(vertices, faces, normals, m, flip, False, f"{self.label}: {where}")
+        return Mesh(self.name(data, where, default_name), vertices, faces, normals, material, source, origin, uvs,
                     self.interface(data, where))
 
     def named_mesh_files(self, meshes, objects):

@@ -52,6 +52,8 @@ class ShapeKind:
     angles: tuple = ()            # the parameters files give in degrees (the kernels take radians)
     mitsuba_parameters: tuple = ()   # Mitsuba 3's (no TOML name; mitsuba_default), which from_mitsuba
                                      # maps onto the shape
+    unsupported: dict = {}        # {format: {name: why}}: what a format's shape has and pathtrace's has
+                                  # not (as a light's), none yet
     examples: tuple = ()          # parameter sets (the kernels') the registry's tests put it through
 
     def params_from(self, values: dict) -> tuple:

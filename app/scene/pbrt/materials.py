@@ -10,61 +10,16 @@ import numpy as np
 from pathtrace.errors import UserError, warn
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import TRANSMISSIVE
-from pathtrace.materials.table import check_blend, check_bump_map, transmits
-from pathtrace.parameters import by_format, read
-from pathtrace.scene.spectra import blackbody_rgb, emission_rgb, named_spectrum, reflectance_rgb, sampled
+from pathtrace.materials.table import blend, check_bump_map, transmits
+from pathtrace.parameters import by_format, format_names, missing, read
 from pathtrace.textures import TEXTURES, Texture
 from pathtrace.textures.texture import PBRT_MAPPING
 from pathtrace.textures.bitmap import read_image
 
 BSDFS_BY_NAME = by_format(BSDFS.values(), "pbrt")
+# the parameter types of the array kinds (app/parameters.py)
+ARRAYS = {"points": ("point3",), "normals": ("normal", "normal3"), "pairs": ("point2",), "integers": ("integer",)}
 TEXTURES_BY_NAME = by_format(TEXTURES.values(), "pbrt")
-
-
-def spectrum_rgb(params, name, default, kind="reflectance"):
-    """A colour parameter: rgb, blackbody, a named spectrum, (wavelength, value) pairs or a
-    float; `kind` "reflectance", "illuminant" (luminance 1, as pbrt-v4 normalises a light's
-    spectrum) or "unbounded" (an IOR)."""
-    ptype = params.type_of(name)
-    if ptype is None:
-        return None if default is None else np.broadcast_to(np.asarray(default, np.float64), 3).copy()
-    if ptype == "rgb":
-        return np.asarray(params.get(name, (ptype,)), np.float64)
-    if ptype == "float":
-        return np.full(3, params.float(name))
-    if ptype == "blackbody":
-        kelvin = float(params.get(name, ("blackbody",))[0])
-        if kelvin <= 0:
-            params.fail(name, f"a blackbody's temperature must be positive, got {kelvin:g}")
-        try:
-            return blackbody_rgb(kelvin)
-        except ValueError as e:
-            params.fail(name, f"a blackbody of {kelvin:g} K {e}")
-    if ptype == "spectrum":
-        values = params.get(name, ("spectrum",), 0)
-        if isinstance(values, list):
-            if len(values) != 1:
-                params.fail(name, "a named spectrum is one quoted name")
-            try:
-                rgb, note = named_spectrum(values[0])
-            except KeyError:
-                params.fail(name, f"unknown named spectrum {values[0]!r}")
-            if note:
-                warn(f"{params.where(name)}: {values[0]} is taken as {note}")
-            return rgb
-        if len(values) % 2:
-            params.fail(name, "a spectrum is (wavelength, value) pairs")
-        try:
-            curve = sampled(values)
-        except ValueError as e:
-            params.fail(name, str(e))
-        if kind == "illuminant":
-            try:
-                return emission_rgb(curve)
-            except ValueError as e:
-                params.fail(name, f"the spectrum {e}")
-        return reflectance_rgb(curve) if kind == "reflectance" else np.full(3, float(np.mean(curve)))
-    params.fail(name, f"must be a colour (rgb, spectrum, blackbody, float), got {ptype}")
 
 
 # pathtrace's parameters that the pbrt materials' parameters become, for messages
@@ -114,7 +69,7 @@ class MaterialMapper:
             return table[ref]
         if float_texture:
             return params.float(name, default)
-        return spectrum_rgb(params, name, default)
+        return params.spectrum(name, default)
 
     def parameter(self, params, p, name):
         """The value of the declared parameter p (app/parameters.py) that the parameter `name`
@@ -126,9 +81,11 @@ class MaterialMapper:
         if p.texture and ptype == "texture":
             return self.texture_input(params, name, None, p.kind == "number")
         if p.kind == "color":
-            return spectrum_rgb(params, name, None, p.spectrum)
+            return params.spectrum(name, None, p.spectrum)
         if p.kind == "image":
             return read_image(self.reader.resolve(params.string(name)), params.where(name), False, self.images)
+        if p.kind in ARRAYS:
+            return params.get(name, ARRAYS[p.kind], 0)
         read = {"number": params.float, "integer": params.int, "bool": params.bool, "string": params.string,
                 "name": params.string, "point": params.point, "vector": params.point}[p.pbrt_kind or p.kind]
         return read(name)
@@ -157,10 +114,11 @@ class MaterialMapper:
         given = {}
         try:
             values = read(kind.parameters + kind.format_only + (PBRT_MAPPING if kind.pbrt_uv else ()), "pbrt", get, given)
+            absent = missing(kind.parameters, values)
+            if absent:
+                raise UserError(f"{where}: {'an' if cls[0] in 'aeiou' else 'a'} {cls} needs a {absent[0].pbrt}")
             for p in kind.parameters:
                 if p.kind == "image":
-                    if p.name not in values:
-                        raise UserError(f"{where}: an {cls} needs a {p.pbrt}")
                     values[p.name] = read_image(values[p.name], f"{where}: {p.pbrt}", values["raw"], self.images)
             if kind.pbrt_uv:
                 values["to_uv"] = kind.pbrt_to_uv(given, lambda text: warn(f"{where}: {text}"))
@@ -188,10 +146,12 @@ class MaterialMapper:
     # -- materials --
 
     @staticmethod
-    def fail(params, where, error: ValueError):
-        """A type's ValueError ("<pbrt name>: <problem>") as one line naming the parameter's
-        file:line, or the directive's (`where`)."""
+    def fail(params, where, error: ValueError, declared=()):
+        """A type's ValueError ("<name>: <problem>", the name pbrt-v4's or that of one of the
+        `declared` Parameters) as one line naming the parameter's file:line, or the directive's
+        (`where`)."""
         name, _, problem = str(error).partition(": ")
+        name = format_names(declared, "pbrt").get(name, name)
         if name in params.params:
             params.fail(name, problem)
         raise UserError(f"{where}: {error}") from None
@@ -274,13 +234,10 @@ class MaterialMapper:
             other = next((p for p in parts if p is not None), None)
             warn(f"{where}: pathtrace cannot mix a surface with an interface; it uses the other material alone")
             return other
-        blend = Material("blendbsdf", {"weight": amount}, components=tuple(parts))
-        problem = check_blend(blend)
-        if problem:
-            raise UserError(f"{where}: {problem}")
         try:
-            blend.params = BSDFS["blendbsdf"].complete(blend.params)
+            mixed = blend(amount, parts)
         except ValueError as e:
-            raise UserError(f"{where}: amount: {e}") from None
-        blend.twosided = not transmits(blend)
-        return blend
+            field, sep, problem = str(e).partition(": ")
+            raise UserError(f"{where}: amount: {problem}" if sep and field == "weight" else f"{where}: {e}") from None
+        mixed.twosided = not transmits(mixed)
+        return mixed

@@ -15,7 +15,7 @@ from pathtrace.errors import UserError, warn
 from pathtrace.filters import PixelFilter
 from pathtrace.scene.pbrt.tokens import parameters, string
 from pathtrace.scene.meshes import MAX_COORDINATE
-from pathtrace.scene.validate import MAX_SIZE
+from pathtrace.scene import settings
 
 
 class OptionDirectives:
@@ -70,12 +70,8 @@ class OptionDirectives:
     def _film(self, tokens, offset):
         kind = string(tokens, "Film")
         params = parameters(tokens)
-        for name, default in (("xresolution", 1280), ("yresolution", 720)):
-            v = params.int(name, default)
-            if not 1 <= v <= MAX_SIZE:
-                params.fail(name, f"must be in 1..{MAX_SIZE}, got {v}")
-        self.settings.width, self.settings.height = params.int("xresolution", 1280), params.int("yresolution", 720)
-        params.string("filename")
+        values = self.read_declared(settings.Film, params, tokens.where(offset))
+        self.settings.width, self.settings.height = values["width"], values["height"]
         for name in ("cropwindow", "pixelbounds"):
             if params.type_of(name):
                 params.floats(name, ("float",) if name == "cropwindow" else ("integer",))
@@ -91,14 +87,16 @@ class OptionDirectives:
         any name not read."""
         kind = string(tokens, "Sampler")
         params = parameters(tokens)
-        names = ("xsamples", "ysamples") if kind == "stratified" else ("pixelsamples",)
-        spp = 1
-        for name in names:
-            n = params.int(name, 4 if kind == "stratified" else 16)
-            if not 1 <= n <= 1 << 24 or not spp * n <= 1 << 24:
-                params.fail(name, f"must be in 1..{1 << 24}, samples per pixel in all, got {n}")
-            spp *= n
-        self.settings.spp = spp
+        if kind != "stratified":
+            self.settings.spp = self.read_declared(settings.Sampler, params, tokens.where(offset))["spp"]
+        else:
+            most, spp = settings.Sampler.parameters[0].high, 1
+            for name in ("xsamples", "ysamples"):
+                n = params.int(name, 4)
+                if not 1 <= n <= most // spp:
+                    params.fail(name, f"must be in 1..{most // spp} (samples per pixel at most {most} in all), got {n}")
+                spp *= n
+            self.settings.spp = spp
         self.unused(params, "sampler", kind)
 
     def _integrator(self, tokens, offset):
@@ -118,16 +116,10 @@ class OptionDirectives:
                 warn(f"{tokens.where(offset)}: pathtrace renders mlt with bdpt, the nearest method it has")
         elif kind not in ("path", "volpath"):
             warn(f"{tokens.where(offset)}: pathtrace renders with its path tracer instead of {kind}")
-        depth = params.int("maxdepth", 5)
-        if not 0 <= depth < 2 ** 31 - 1:
-            params.fail("maxdepth", f"must be in 0..{2 ** 31 - 2}, got {depth}")
-        self.settings.max_depth = depth + 1
+        values = self.read_declared(settings.Integrator, params, tokens.where(offset))
+        self.settings.max_depth, self.settings.light_sampler = values["max_depth"], values["light_sampler"]
         if params.bool("regularize", False):
             warn(f"{params.where('regularize')}: pathtrace does not regularize; ignored")
-        sampler = params.string("lightsampler", "bvh")
-        if sampler not in ("bvh", "power", "uniform"):
-            params.fail("lightsampler", f"must be bvh, power or uniform, got {sampler!r}")
-        self.settings.light_sampler = {"bvh": "auto", "power": "power", "uniform": "power"}[sampler]
         if kind in ("path", "volpath"):
             self.unused(params, "integrator", kind)
         params.ignore()            # another integrator's settings: it is replaced whole, with its warning

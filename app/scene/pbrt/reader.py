@@ -33,10 +33,12 @@ from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.lights.area import pbrt_radiance
 from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.scene import transform
-from pathtrace.scene.description import Mesh, RenderSettings, Scene, SceneBuilder
+from pathtrace.scene.description import Mesh, Scene, SceneBuilder
+from pathtrace.scene import settings
 from pathtrace.scene.known_names import Unread
-from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, place_mesh, vertex_normals
-from pathtrace.scene.pbrt.materials import MaterialMapper, make, spectrum_rgb
+from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, place_mesh
+from pathtrace.scene.mesh_shapes import MESH_SHAPES, MeshSource
+from pathtrace.scene.pbrt.materials import MaterialMapper, make
 from pathtrace.scene.pbrt.options import OPTION_DIRECTIVES, OptionDirectives, refused
 from pathtrace.scene.pbrt.state import MAX_FILE_BYTES, MAX_INCLUDE_DEPTH, STATE_DIRECTIVES, GraphicsStateDirectives
 from pathtrace.textures import Texture
@@ -44,6 +46,7 @@ from pathtrace.scene.pbrt.tokens import Tokens, parameters, string
 from pathtrace.shapes import SHAPES, Shape
 
 LIGHTS_BY_NAME = declared.by_format(DELTA_LIGHTS.values(), "pbrt")
+MESHES_BY_NAME = declared.by_format(MESH_SHAPES.values(), "pbrt")
 # a plymesh shape and its file name, as MeshFiles reads them ahead (PbrtReader.named_mesh_files)
 _PLYMESH = re.compile(r'Shape\s+"plymesh"')
 _FILENAME = re.compile(r'"string\s+filename"\s*\[?\s*"([^"]*)"')
@@ -55,7 +58,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         self.named_materials = {}
         self.mapper = MaterialMapper(self)
         self.builder = SceneBuilder()
-        self.settings = RenderSettings(width=1280, height=720, spp=16, max_depth=6)
+        self.settings = settings.defaults("pbrt")
         self.filter = PixelFilter("gaussian", 1.5, 0.5)        # pbrt-v4's default
         self.camera_params = None
         self.environment = None
@@ -231,14 +234,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
                  "is rendered as vacuum")
             self.media[row] = Medium(name, np.zeros(3), np.zeros(3))
             return
-        if params.type_of("preset"):
-            warn(f"{params.where('preset')}: pathtrace has no named scattering presets; it uses sigma_a and sigma_s")
-            params.string("preset")
-        for emission in ("Le", "Lescale"):
-            if params.type_of(emission):
-                warn(f"{params.where(emission)}: pathtrace's media do not emit; ignored")
-                params.get(emission, (params.type_of(emission),), 0)
-        values = declared.read(Medium.parameters, "pbrt", lambda p, name: self.mapper.parameter(params, p, name))
+        values = self.read_declared(Medium, params, where)
         try:
             self.media[row] = Medium.from_values(name, values)
         except ValueError as e:
@@ -372,7 +368,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         moved by the transform, turned by ReverseOrientation and by a transform that swaps
         handedness (pbrt-v4's Disk and Cylinder: reverseOrientation ^ transformSwapsHandedness)."""
         k = SHAPES[kind]
-        values = k.params_from(declared.read(k.parameters, "pbrt", lambda p, name: self.mapper.parameter(params, p, name)))
+        values = k.params_from(self.read_declared(k, params, where))
         problem = k.check(values)
         if problem:
             raise UserError(f"{where}: the {kind}'s {problem}")
@@ -385,81 +381,54 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         return shape
 
     def shape_mesh(self, kind, params, where):
-        """(vertices, faces, normals, uvs, file) in world space, fronts as pbrt has them; None
+        """(vertices, faces, normals, uvs, file) in world space of a mesh shape (app/scene/mesh_shapes.py)
+        by its declared pbrt-v4 names, fronts as pbrt has them and texture v turned round; None
         for a shape pathtrace leaves out."""
-        m = self.state.ctm
-        source, normals, uvs = "", None, None
-        if kind == "trianglemesh":
-            vertices, faces = self.indexed_polygons(params, kind, 3, where)
-            normals, uvs = self.vertex_attributes(params, len(vertices), ("S", "faceIndices"))
-            vertices, faces, normals, uvs = check_mesh(vertices, faces, normals, uvs, where, degenerate=self.degenerate)
-        elif kind == "bilinearmesh":
-            vertices, q = self.indexed_polygons(params, kind, 4, where)
-            # corners p00, p10, p01, p11: two triangles of the patch's orientation
-            faces = np.concatenate([q[:, [0, 1, 3]], q[:, [0, 3, 2]]])
-            # pbrt-v4's BilinearPatch::CreateMesh reads no tangents "S"
-            normals, uvs = self.vertex_attributes(params, len(vertices), ("faceIndices",))
-            vertices, faces, normals, uvs = check_mesh(vertices, faces, normals, uvs, where, degenerate=self.degenerate)
-        elif kind in ("plymesh",):
-            filename = params.string("filename")
-            if filename is None:
-                raise UserError(f"{where}: a plymesh needs a filename")
-            path = self.resolve(filename)
-            source = str(path)
-            vertices, faces, normals, uvs = self.mesh_files.read(path, f"{where}: filename", self.degenerate)
-            if uvs is not None:
-                uvs = np.column_stack([uvs[:, 0], 1 - uvs[:, 1]])
-            for name in ("displacement", "edgelength"):
-                if params.type_of(name):
-                    params.get(name, (params.type_of(name),), 0)
-                    warn(f"{params.where(name)}: pathtrace does not displace meshes; ignored")
-        elif kind == "loopsubdiv":
-            vertices, faces = self.indexed_polygons(params, kind, 3, where)
-            params.int("levels", 3)
-            warn(f"{where}: pathtrace does not subdivide; the control mesh is rendered with smooth normals")
-            vertices, faces, normals, uvs = check_mesh(vertices, faces, None, None, where, degenerate=self.degenerate)
-            normals = vertex_normals(vertices, faces)
-        else:
+        k = MESHES_BY_NAME.get(kind)
+        if k is None:
             params.ignore()
             warn(f"{where}: pathtrace has no {kind} shape; it leaves it out")
             return None
+        values = self.read_declared(k, params, where)
+
+        def read(name):
+            path = self.resolve(name)
+            return self.mesh_files.read(path, f"{where}: filename", self.degenerate), str(path)
+        try:
+            (vertices, faces, normals, uvs), source, _ = k.triangles(values, MeshSource(
+                read, lambda *mesh: check_mesh(*mesh, where, degenerate=self.degenerate),
+                lambda text: warn(f"{where}: {text}")))
+        except ValueError as e:
+            self.mapper.fail(params, where, e, k.parameters)
         if len(faces) == 0:
             warn(f"{where}: every triangle of the {kind} is degenerate (pbrt-v4 intersects none of them); "
                  "pathtrace leaves the shape out")
             return None
-        return *place_mesh(vertices, faces, normals, m, self.state.reverse, True, where)[:3], uvs, source
+        uvs = None if uvs is None else np.column_stack([uvs[:, 0], 1 - uvs[:, 1]])
+        return *place_mesh(vertices, faces, normals, self.state.ctm, self.state.reverse, True, where)[:3], uvs, source
 
-    @staticmethod
-    def indexed_polygons(params, kind, corners, where):
-        """A mesh's "point3 P" and its "integer indices", `corners` per polygon (which may be
-        left out where P holds exactly one polygon): vertices (V, 3) and indices (N, corners)."""
-        p = params.get("P", ("point3",), 0)
-        if p is None:
-            raise UserError(f'{where}: a {kind} needs "point3 P"')
-        vertices = p.reshape(-1, 3)
-        idx = params.get("indices", ("integer",), 0)
-        if idx is None:
-            if len(vertices) != corners:
-                raise UserError(f'{where}: a {kind} needs "integer indices" unless it has {corners} vertices')
-            idx = np.arange(corners)
-        if len(idx) % corners:
-            params.fail("indices", f"takes polygons of {corners} indices each; got {len(idx)}")
-        return vertices, idx.reshape(-1, corners)
+    def read_declared(self, kind, params, where) -> dict:
+        """The values of the parameters a type `kind` declares (app/parameters.py) that a
+        directive gives, converted and in range, what it has and pathtrace has not read
+        (`unsupported`)."""
+        self.read_unsupported(params, kind)
+        try:
+            values = declared.read(kind.parameters, "pbrt", lambda p, name: self.mapper.parameter(params, p, name))
+            error = declared.out_of_range(kind.parameters, values)
+            if error:
+                raise error
+        except ValueError as e:
+            self.mapper.fail(params, where, e, kind.parameters)
+        return values
 
-    def vertex_attributes(self, params, count, unused_names):
-        """A mesh's normals N and uvs; `unused_names` are read and not used (tangents S, the
-        faces' indices for ptex)."""
-        n = params.get("N", ("normal", "normal3"), 0)
-        uv = params.get("uv", ("point2",), 0)          # pbrt-v4: GetPoint2fArray("uv"); pbrt-v3 wrote floats
-        if n is not None and len(n) != 3 * count:
-            params.fail("N", f"has {len(n) // 3} normals for {count} vertices")
-        if uv is not None and len(uv) != 2 * count:
-            params.fail("uv", f"has {len(uv) // 2} uvs for {count} vertices")
-        for name in unused_names:
+    def read_unsupported(self, params, kind):
+        """Reads the parameters pbrt-v4's `kind` has and pathtrace has not (its `unsupported`),
+        with a warning of each given where the kind says why."""
+        for name, why in kind.unsupported.get("pbrt", {}).items():
             if params.type_of(name):
                 params.get(name, (params.type_of(name),), 0)
-        uvs = None if uv is None else np.column_stack([uv[0::2], 1 - uv[1::2]])
-        return None if n is None else n.reshape(-1, 3), uvs
+                if why:
+                    warn(f"{params.where(name)}: {why}; ignored")
 
     def area_emission(self, vertices, faces, where, area=None):
         """The emitted radiance of a shape under an AreaLightSource, as [(faces, radiance)]
@@ -471,10 +440,10 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         if params.type_of("filename"):
             params.string("filename")
             warn(f"{light_where}: pathtrace's area lights have no image; it uses L "
-                 f"({', '.join(f'{c:g}' for c in spectrum_rgb(params, 'L', 1.0, 'illuminant'))})")
+                 f"({', '.join(f'{c:g}' for c in params.spectrum('L', 1.0, 'illuminant'))})")
         twosided = params.bool("twosided", False)
         try:
-            parts = pbrt_radiance(spectrum_rgb(params, "L", 1.0, "illuminant"), params.float("scale", 1.0), twosided,
+            parts = pbrt_radiance(params.spectrum("L", 1.0, "illuminant"), params.float("scale", 1.0), twosided,
                                   params.float("power", -1.0), vertices, faces, area,
                                   lambda text: warn(f"{light_where}: {text}"))
         except ValueError as e:
@@ -500,7 +469,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
             params.ignore()
             warn(f"{where}: pathtrace has no {kind} light; it leaves it out")
             return
-        values = declared.read(cls.parameters, "pbrt", lambda p, name: self.mapper.parameter(params, p, name))
+        values = self.read_declared(cls, params, where)
         for p in cls.parameters:
             if p.name in values and p.kind in ("point", "vector"):
                 v = np.asarray(values[p.name], np.float64)

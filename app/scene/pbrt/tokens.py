@@ -1,5 +1,6 @@
 """pbrt-v4's scene file syntax: tokens (words, quoted strings, brackets; '#' comments) and
-parameter lists ("type name" value). The text is cut into tokens by one regular expression pass,
+parameter lists ("type name" value), and their values: numbers, strings, points and colours
+(spectra made rgb: app/scene/spectra.py). The text is cut into tokens by one regular expression pass,
 and the bracketed lists of numbers, which is where a large file's bytes are (inline meshes), are
 converted by NumPy in bulk, so that reading costs time in proportion to the file's size: 100 MB of
 numbers, or 100,000 small directives, read in seconds."""
@@ -13,7 +14,8 @@ from pathlib import Path
 
 import numpy as np
 
-from pathtrace.errors import UserError, cut
+from pathtrace.errors import UserError, cut, warn
+from pathtrace.scene.spectra import blackbody_rgb, emission_rgb, named_spectrum, reflectance_rgb, sampled
 
 # one token, its kind the name of the group it matches: a comment (matched so that its words are
 # skipped), a quoted string (its text the group), a quote that the line ends before closing, a
@@ -264,6 +266,51 @@ class ParamList:
     def point(self, name, default=None):
         v = self.get(name, ("point3",))
         return default if v is None else np.asarray(v, np.float64)
+
+    def spectrum(self, name, default=None, kind="reflectance"):
+        """A colour as rgb: rgb, blackbody, a named spectrum, (wavelength, value) pairs or a float;
+        `kind` "reflectance", "illuminant" (luminance 1, as pbrt-v4 normalises a light's spectrum)
+        or "unbounded" (an IOR: the mean); the default where absent (None, or a grey or rgb)."""
+        ptype = self.type_of(name)
+        if ptype is None:
+            return None if default is None else np.broadcast_to(np.asarray(default, np.float64), 3).copy()
+        if ptype == "rgb":
+            return np.asarray(self.get(name, (ptype,)), np.float64)
+        if ptype == "float":
+            return np.full(3, self.float(name))
+        if ptype == "blackbody":
+            kelvin = float(self.get(name, ("blackbody",))[0])
+            if kelvin <= 0:
+                self.fail(name, f"a blackbody's temperature must be positive, got {kelvin:g}")
+            try:
+                return blackbody_rgb(kelvin)
+            except ValueError as e:
+                self.fail(name, f"a blackbody of {kelvin:g} K {e}")
+        if ptype == "spectrum":
+            values = self.get(name, ("spectrum",), 0)
+            if isinstance(values, list):
+                if len(values) != 1:
+                    self.fail(name, "a named spectrum is one quoted name")
+                try:
+                    rgb, note = named_spectrum(values[0])
+                except KeyError:
+                    self.fail(name, f"unknown named spectrum {values[0]!r}")
+                if note:
+                    warn(f"{self.where(name)}: {values[0]} is taken as {note}")
+                return rgb
+            if len(values) % 2:
+                self.fail(name, "a spectrum is (wavelength, value) pairs")
+            try:
+                curve = sampled(values)
+            except ValueError as e:
+                self.fail(name, str(e))
+            if kind == "illuminant":
+                try:
+                    return emission_rgb(curve)
+                except ValueError as e:
+                    self.fail(name, f"the spectrum {e}")
+            return reflectance_rgb(curve) if kind == "reflectance" else np.full(3, float(np.mean(curve)))
+        self.fail(name, f"must be a colour (rgb, spectrum, blackbody, float), got {ptype}")
 
     def unused(self) -> list:
         return [p for p in self.params.values() if not p.used]
