@@ -328,6 +328,14 @@ def test_bad_input_is_one_line_naming_the_file(tmp_path, text, expected):
     ('WorldBegin\nLightSource "distant" "vector to" [ 0 0 1 ]\n' + FLOOR, "vector is pbrt-v3's"),
     ('WorldBegin\nShape "trianglemesh" "point3 P" [ 0 0 0 1 0 0 0 1 0 ] "float uv" [ 0 0 1 0 0 1 ]\n',
      "s.pbrt:2: 'uv': must be point2, got float"),
+    # what pbrt-v4 reads and pathtrace does not is read as pbrt-v4 reads it (a type's `unsupported`)
+    ('Film "rgb" "float filename" 3\nWorldBegin\n' + FLOOR, "s.pbrt:1: 'filename': must be string, got float"),
+    ('Film "rgb" "string filename" [ "a.exr" "b.exr" ]\nWorldBegin\n' + FLOOR, "s.pbrt:1: 'filename': takes 1 value, got 2"),
+    ('WorldBegin\nShape "loopsubdiv" "string levels" "x" "point3 P" [ 0 0 0 1 0 0 0 1 0 ] "integer indices" [ 0 1 2 ]\n',
+     "s.pbrt:2: 'levels': must be integer, got string"),
+    ('WorldBegin\nMakeNamedMedium "m" "string type" "homogeneous" "float preset" 1\n' + FLOOR,
+     "s.pbrt:2: 'preset': must be string, got float"),
+    ('WorldBegin\nShape "plymesh"\n', 's.pbrt:2: Shape "plymesh": needs a filename'),
 ])
 def test_a_file_pbrt_v4_refuses_is_one_line_naming_the_line(tmp_path, text, expected):
     message = fails(tmp_path, text)

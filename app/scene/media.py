@@ -46,7 +46,7 @@ class Medium:
         Parameter("g", "number", 0.0, doc="the phase function's mean cosine, in (-1, 1)", pbrt="g"),
     )
     # what the formats' homogeneous media have and pathtrace's have not (as a light's `unsupported`)
-    unsupported = {"pbrt": {"preset": "pathtrace has no named scattering presets (it uses sigma_a and sigma_s)",
+    unsupported = {"pbrt": {"string preset": "pathtrace has no named scattering presets (it uses sigma_a and sigma_s)",
                             "Le": "pathtrace's media do not emit", "Lescale": "pathtrace's media do not emit"},
                    "mitsuba": {"has_spectral_extinction": None}}     # spectral variants' choice; pathtrace is RGB
 

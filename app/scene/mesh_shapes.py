@@ -148,7 +148,7 @@ class LoopSubdivision(TriangleMesh):
     name = "loopsubdiv"
     formats = {"pbrt": "loopsubdiv"}
     parameters = TriangleMesh.parameters[:2]
-    unsupported = {"pbrt": {"levels": None}}
+    unsupported = {"pbrt": {"integer levels": None}}
 
     def triangles(self, values, source):
         vertices, polygons = self.polygons(values)

@@ -59,7 +59,7 @@ class Film(Element):
                   _integer("height", doc="its height", mitsuba="height", mitsuba_default=576, pbrt="yresolution",
                            pbrt_default=720))
     # the output's format and name are its file name's (render -o), whatever these say
-    unsupported = {"mitsuba": dict.fromkeys(("file_format", "component_format")), "pbrt": {"filename": None}}
+    unsupported = {"mitsuba": dict.fromkeys(("file_format", "component_format")), "pbrt": {"string filename": None}}
 
 
 class Sampler(Element):

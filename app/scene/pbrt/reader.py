@@ -398,8 +398,8 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
             (vertices, faces, normals, uvs), source, _ = k.triangles(values, MeshSource(
                 read, lambda *mesh: check_mesh(*mesh, where, degenerate=self.degenerate),
                 lambda text: warn(f"{where}: {text}")))
-        except ValueError as e:
-            self.mapper.fail(params, where, e, k.parameters)
+        except ValueError as e:      # a problem of the whole shape names its directive, as Mitsuba's reader does
+            self.mapper.fail(params, f'{where}: Shape "{kind}"', e, k.parameters)
         if len(faces) == 0:
             warn(f"{where}: every triangle of the {kind} is degenerate (pbrt-v4 intersects none of them); "
                  "pathtrace leaves the shape out")
@@ -423,10 +423,13 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
 
     def read_unsupported(self, params, kind):
         """Reads the parameters pbrt-v4's `kind` has and pathtrace has not (its `unsupported`),
-        with a warning of each given where the kind says why."""
-        for name, why in kind.unsupported.get("pbrt", {}).items():
+        with a warning of each given where the kind says why. A name declared with its type
+        ("string filename") is one value of that type, as pbrt-v4 reads it: another is a
+        parameter pbrt-v4 leaves unused, and refuses; a bare name is taken as the file writes it."""
+        for key, why in kind.unsupported.get("pbrt", {}).items():
+            expected, _, name = key.rpartition(" ")
             if params.type_of(name):
-                params.get(name, (params.type_of(name),), 0)
+                params.get(name, (expected,), 1) if expected else params.get(name, (params.type_of(name),), 0)
                 if why:
                     warn(f"{params.where(name)}: {why}; ignored")
 
