@@ -53,6 +53,18 @@ def test_a_row_is_timed_cold_from_empty_caches_then_warm(tmp_path):
     assert "cold s" in header and "warm s" in header and line.startswith("simple ")
 
 
+def test_the_obj_scene_is_a_row_bench_writes(tmp_path):
+    """`meshes850-obj` (#55's "several hundred OBJ meshes"): 850 OBJ files bench writes, each
+    read from its file cold and the scene from its cache warm."""
+    out = tmp_path / "obj.json"
+    r = in_process("bench", "--first-image", "--scenes", "meshes850-obj", "--size", "16x9", "--repeats", "1",
+                   "--device", "cpu", "--json", out)
+    assert r.returncode == 0, r.stderr
+    row, = json.loads(out.read_text())["results"]
+    assert (row["scene"], row["what"]) == ("meshes850-obj", "written by bench")
+    assert row["cold_seconds"] > row["warm_seconds"] > 0 and row["cache_files_after"] > 0
+
+
 def test_mitsuba_is_timed_cold_in_a_fresh_home_then_warm(tmp_path, monkeypatch):
     """The row's Mitsuba runs: the first finds no kernel cache, the warm ones find the one the
     first left; the ratios are printed. pathtrace's own runs build the scene's program, which PoCL

@@ -5,4 +5,4 @@ command's help lists them: building the command line's parser loads no PyOpenCL 
 TARGET_SCENES = ("simple", "spheres8k", "spheres64k",
                  "simple-diffuse", "spheres8k-diffuse", "spheres64k-diffuse", "teapot-sky",
                  "teapot-textured")
-FIRST_IMAGE_SCENES = ("simple", "cornell-box", "teapot-sky", "meshes850")
+FIRST_IMAGE_SCENES = ("simple", "cornell-box", "teapot-sky", "meshes850", "meshes850-obj")

@@ -13,7 +13,7 @@ process of that Python (pathtrace.bench.mitsuba_timing), from the scene's own XM
 written by pathtrace.scene.mitsuba_writer: the same view, size, samples and depth, its render
 alone timed, beside pathtrace's render alone (the launches and the read-back, without the BVH
 build and uploads): the per-sample ratio of docs/benchmarks.md. Scenes that are files written
-on demand (pathtrace.bench.scenes: `tori400-textured`) are named like built-in ones.
+on demand (pathtrace.bench.scenes: `tori400-textured`, `meshes850-obj`) are named like built-in ones.
 
 `pathtrace bench --builds` times BVH builds instead (app/compiler/bvh.py, on each device asked for): random
 spheres and a height field of triangles at 64k, 1M and 4M primitives, the median of three builds
@@ -39,7 +39,7 @@ from pathtrace.rendering.multidevice import DeviceGroup
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 
-GENERATED_FILES = ("tori400-textured",)      # pathtrace.bench.scenes
+GENERATED_FILES = ("tori400-textured", "meshes850-obj")      # pathtrace.bench.scenes
 COMPARISON_DEPTH = 8
 ESTIMATORS = ("rr", "depth8", "rr+nee", "depth8+nee")
 
@@ -228,10 +228,10 @@ def scene_file(name: str, folder: Path) -> str:
     """A scene name as load_scene takes it: one of GENERATED_FILES written into `folder`."""
     if name not in GENERATED_FILES:
         return name
-    from pathtrace.bench.scenes import write_textured_tori
+    from pathtrace.bench.scenes import write_obj_meshes, write_textured_tori
     where = folder / name
     where.mkdir(exist_ok=True)
-    return str(write_textured_tori(where))
+    return str((write_textured_tori if name == "tori400-textured" else write_obj_meshes)(where))
 
 
 def mitsuba_twin(scene, size: tuple, spp: int, folder: Path):

@@ -7,8 +7,8 @@ and `pathtrace bench --scenes tori400-textured`).
 - `meshes850`: 850 binary PLY files of tori (1,024 triangles each, with vertex normals) on a
   grid, in a pbrt-v4 scene (the layout of published scenes of many meshes);
 - `meshes850-obj`: the same tori as OBJ files written as Blender writes them, in Mitsuba XML
-  (the layout of scenes exported from Blender): not a row of `bench --load`, but a file for its
-  `--load-scene` (docs/notes/performance-2026-11.md);
+  (the layout of scenes exported from Blender): a row of `bench --first-image` and of the
+  report's table (`--scenes meshes850-obj`), not of `bench --load`;
 - `tori400-textured`: 400 tori with uvs, each with its own 256x256 bitmap texture (a PNG file),
   on a textured ground, under a sky and a sphere lamp, in Mitsuba XML (which pathtrace reads too):
   the "several hundred textured meshes" row of the mesh benchmarks."""
