@@ -420,6 +420,34 @@ def test_mesh_files_whose_processes_fail_are_read_here(tmp_path, monkeypatch):
             assert all(np.array_equal(a, b) for a, b in zip(files.read(path, "shape"), read_mesh(path, "shape")))
 
 
+def test_mesh_files_whose_answers_fail_here_are_read_here_without_waiting(tmp_path, monkeypatch):
+    """An error in this process while it takes a reading process's answers (here in noting the
+    files' stamps) leaves none of the reads waiting: their files are read here."""
+    import threading
+    import pathtrace.scene.mesh_processes as mesh_processes
+    from pathtrace.bench.scenes import torus_obj
+    from pathtrace.scene.meshes import MeshFiles
+    read_ahead_in("processes", monkeypatch)
+    paths = [tmp_path / f"m{k}.obj" for k in range(4)]
+    for k, path in enumerate(paths):
+        path.write_text(torus_obj(8 + k, 4))
+
+    def failing(files):
+        raise MemoryError("noting")
+    monkeypatch.setattr(mesh_processes, "noted", failing)
+    meshes = []
+
+    def read():
+        with MeshFiles([(path, "shape") for path in paths]) as files:
+            meshes.extend(files.read(path, "shape") for path in paths)
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    reader.join(120)
+    assert not reader.is_alive() and len(meshes) == len(paths)
+    for mesh, path in zip(meshes, paths):
+        assert all(np.array_equal(a, b) for a, b in zip(mesh, read_mesh(path, "shape")))
+
+
 @pytest.mark.parametrize("way", ["threads", "processes"])
 @pytest.mark.parametrize("kind", ["xml", "pbrt", "toml"])
 def test_a_scene_of_many_mesh_files_names_its_first_bad_one(tmp_path, monkeypatch, kind, way):

@@ -4,14 +4,14 @@ them: a small file's reading is hundreds of short NumPy operations, which thread
 time under the interpreter's lock (docs/notes/performance-2026-11.md, 2026-11-30: OBJ files
 read in other processes).
 
-Each process is `python -m pathtrace.scene.meshes` (serve_reading there), given its share of the
-files (in the reader's order, pickled, on its standard input) and answering on its standard output
-with, per file, the mesh and its warning lines or its problem, and the stamps of the files it
-checked, which this process notes for the scene's cache (pathtrace.io.files.noted). Not multiprocessing:
-its start methods other than fork import the user's main module again in each process (a script
-without a main guard would run again), and a fork of a process whose other threads may hold
-locks (the devices' opening, beside the reading) is not safe. A process that fails leaves its
-files to be read in this one: their results are (None, [])."""
+Each process runs pathtrace.scene.meshes.serve_reading, given its share of the files (in the
+reader's order, pickled, on its standard input) and answering on its standard output with, per
+file, the mesh and its warning lines or its problem, and the stamps of the files it checked, which
+this process notes for the scene's cache (pathtrace.io.files.noted). Not multiprocessing: its
+start methods other than fork import the user's main module again in each process (a script
+without a main guard would run again), and a fork of a process whose other threads may hold locks
+(the devices' opening, beside the reading) is not safe. A process that fails (its standard
+error is not kept) leaves its files to be read in this one: their results are (None, [])."""
 
 import os
 import pickle
@@ -19,7 +19,6 @@ import subprocess
 import sys
 import threading
 from concurrent.futures import Future, ThreadPoolExecutor
-from pathlib import Path
 
 from pathtrace.io.files import noted
 
@@ -39,33 +38,40 @@ class Reading:
             self._pool.submit(self._read, requests[k:k + share], self.futures[k:k + share])
 
     def _read(self, requests: list, futures: list):
-        for future, (result, problem, files) in zip(futures, self._in_a_process(requests)):
-            noted(files)
-            if problem is not None:
-                future.set_exception(problem)
-            else:
-                future.set_result(result)
+        try:
+            answers = self._in_a_process(requests)
+            for future, (result, problem, files) in zip(futures, answers):
+                noted(files)
+                if problem is not None:
+                    future.set_exception(problem)
+                else:
+                    future.set_result(result)
+        finally:          # whatever went wrong, no read waits: a file without an answer the reader reads itself
+            for future in futures:
+                if not future.done():
+                    future.set_result((None, []))
 
     def _in_a_process(self, requests: list) -> list:
-        # the folder the running pathtrace was imported from, first: a checkout run in place
-        package_parent = str(Path(sys.modules["pathtrace"].__file__).parent.parent)
-        path = os.pathsep.join([package_parent] + [p for p in os.environ.get("PYTHONPATH", "").split(os.pathsep) if p])
+        """The answers of a process that reads `requests`, one per request, or [] where it fails.
+        It imports pathtrace as this process did (sys.path, as PYTHONPATH), with nothing before
+        it (-P), and the reading function by name rather than by running meshes.py as __main__,
+        whose import after its package's (which imports it) Python warns of."""
         try:
             with self._lock:
                 if self._closed:
-                    raise OSError("closed")
-                process = subprocess.Popen([sys.executable, "-m", "pathtrace.scene.meshes"], stdin=subprocess.PIPE,
-                                           stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
-                                           env={**os.environ, "PYTHONPATH": path})
+                    return []
+                process = subprocess.Popen(
+                    [sys.executable, "-P", "-c", "from pathtrace.scene.meshes import serve_reading; serve_reading()"],
+                    stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
+                    env={**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)})
                 self._running.add(process)
             out, _ = process.communicate(pickle.dumps(requests))
             with self._lock:
                 self._running.discard(process)
-            if process.returncode == 0:
-                return pickle.loads(out)
-        except Exception:      # whatever the process or its answer did: read here instead
-            pass
-        return [((None, []), None, [])] * len(requests)
+            answers = pickle.loads(out) if process.returncode == 0 else []
+            return answers if len(answers) == len(requests) else []
+        except Exception:      # whatever the process or its answer did: the reader reads them itself
+            return []
 
     def close(self):
         """Ends the processes still reading (a problem found stops the reader) and waits."""

@@ -574,9 +574,3 @@ def serve_reading():
             except UserError as e:
                 out.append((None, e, files))
     sys.stdout.buffer.write(pickle.dumps(out, protocol=pickle.HIGHEST_PROTOCOL))
-
-
-if __name__ == "__main__":
-    # the package's module, not this __main__ copy, whose MeshData the reading process could not unpickle
-    from pathtrace.scene.meshes import serve_reading as serve
-    serve()
