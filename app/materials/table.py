@@ -100,11 +100,13 @@ def scaled_bump_map(texture: Texture, scale: float) -> Texture:
 
 def blend(weight, components: tuple) -> "Material":
     """A blendbsdf of two Materials, the second taken with probability `weight` (a number or a
-    texture), checked. Raises ValueError ("weight: <problem>", or check_blend's)."""
-    problem = BSDFS["blendbsdf"].out_of_range({"weight": weight})
+    texture; None: the declared default), checked. Raises ValueError ("weight: <problem>", or
+    check_blend's)."""
+    given = {} if weight is None else {"weight": weight}
+    problem = BSDFS["blendbsdf"].out_of_range(given)
     if problem:
         raise ValueError(": ".join(problem))
-    material = Material("blendbsdf", BSDFS["blendbsdf"].complete({"weight": weight}), components=tuple(components))
+    material = Material("blendbsdf", BSDFS["blendbsdf"].complete(given), components=tuple(components))
     problem = check_blend(material)
     if problem:
         raise ValueError(problem)

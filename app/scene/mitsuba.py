@@ -373,7 +373,7 @@ class _Reader(XmlScene):
             fail(node, f"needs two nested BSDFs, got {len(inner)}")
         weight = self.parameter(props, next(p for p in BSDFS["blendbsdf"].params if p.name == "weight"), "weight")
         try:
-            return blend(0.5 if weight is None else weight, tuple(self.material(c) for c in inner))
+            return blend(weight, tuple(self.material(c) for c in inner))
         except ValueError as e:
             refuse(props, node, e)
 

@@ -18,7 +18,7 @@ from pathtrace.errors import UserError, short
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import constant_of
 from pathtrace.materials.surface import SURFACE, dressed
-from pathtrace.materials.table import PERTURBATIONS, check_blend, transmits
+from pathtrace.materials.table import PERTURBATIONS, blend, transmits
 from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.resources import resource_dir
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
@@ -108,15 +108,12 @@ class _Reader(TomlValues):
             bsdf = FILE_TYPES[kind]
             self.table(data, where, {"type", *(p.name for p in SURFACE + bsdf.params),
                                      *(("bsdfs",) if kind == "blendbsdf" else ())})
+            values = self.declared(bsdf.params, data, where)
             try:
-                material = Material(kind, bsdf.complete(self.declared(bsdf.params, data, where)))
+                material = blend(values.get("weight"), self.components(data, where)) if kind == "blendbsdf" else \
+                    Material(kind, bsdf.complete(values))
             except ValueError as e:
                 self.fail(where, str(e))
-            if kind == "blendbsdf":
-                material.components = self.components(data, where)
-                problem = check_blend(material)
-                if problem:
-                    self.fail(where, problem)
         if data.get("perturbation", PERTURBATIONS[0]) not in PERTURBATIONS:     # its names quoted, as a file writes them
             self.not_one_of(f"{where}.perturbation", data["perturbation"], PERTURBATIONS, quoted=True)
         try:
