@@ -6,13 +6,8 @@ shape, its area light and its material: their readers set them one at a time."""
 
 from dataclasses import replace
 
-import numpy as np
-
-from pathtrace.materials.bsdf import NULL
-from pathtrace.materials.registry import BSDFS
-from pathtrace.materials.table import PERTURBATIONS, Material, scaled_bump_map, transmits
+from pathtrace.materials.table import PERTURBATIONS, Material, scaled_bump_map, surface_problem
 from pathtrace.parameters import Parameter
-from pathtrace.textures.texture import Texture
 
 SURFACE = (
     Parameter("Le", "color", 0.0, texture=True, doc="emitted radiance"),
@@ -31,26 +26,20 @@ FIELDS = {"Le": "emission", "emits_back": "emits_back", "twosided": "twosided", 
 
 
 def dressed(material: Material, values: dict) -> Material:
-    """material carrying the SURFACE values given (by their names), checked. Raises ValueError
-    ("<name>: <problem>", or a problem of them together)."""
+    """material carrying the SURFACE values given (by their names), checked (those with the
+    BSDF and each other by table.surface_problem). Raises ValueError ("<name>: <problem>")."""
     maps = {"normal_map", "bump_map"} & set(values)
-    if len(maps) == 2:
-        raise ValueError("give a normal_map or a bump_map, not both")
     if "bump_scale" in values and "bump_map" not in values:
         raise ValueError("bump_scale: scales a bump_map, and there is none")
     if "perturbation" in values and not maps:
         raise ValueError("perturbation: says how a normal_map or bump_map perturbs, and there is none")
-    if values.get("twosided") and transmits(material):
-        raise ValueError(f"twosided: a {material.type} cannot be two-sided: it transmits, and is seen from both "
-                         "sides already")
-    emission = values.get("Le")
-    if emission is not None and BSDFS[material.type].flags & NULL and (isinstance(emission, Texture)
-                                                                       or np.any(emission > 0)):
-        raise ValueError("Le: a null material is no surface, and cannot emit")
-    values = dict(values)
+    material = replace(material, **{FIELDS[k]: v for k, v in values.items() if k in FIELDS})
+    problem = surface_problem(material)
+    if problem:
+        raise ValueError(": ".join(problem))
     if "bump_map" in values:
         try:
-            values["bump_map"] = scaled_bump_map(values["bump_map"], values.get("bump_scale", 1.0))
+            material.bump_map = scaled_bump_map(values["bump_map"], values.get("bump_scale", 1.0))
         except ValueError as e:
             raise ValueError(f"bump_map: {e}") from None
-    return replace(material, **{FIELDS[k]: v for k, v in values.items() if k in FIELDS})
+    return material
