@@ -1,26 +1,32 @@
 """What any material carries besides its BSDF's parameters: emission, two sides, an alpha mask
 and a normal or bump map (Material's own fields), declared once (app/parameters.py) as a TOML
-material table's keys, and set on a Material, checked together, by `dressed`. Mitsuba 3 wraps a
-BSDF in a plugin for each (twosided, mask, normalmap, bumpmap) and pbrt-v4 gives them to the
-shape, its area light and its material: their readers set them one at a time."""
+material table's keys and Mitsuba 3's wrapper plugins, and set on a Material, checked together,
+by `dressed`. pbrt-v4 gives them to the shape, its area light and its material: its reader sets
+them one at a time."""
 
 from dataclasses import replace
 
 from pathtrace.materials.table import PERTURBATIONS, Material, scaled_bump_map, surface_problem
 from pathtrace.parameters import Parameter
 
+# Mitsuba 3 gives a field by a plugin wrapped round a nested BSDF: its Mitsuba name is the
+# plugin's, "plugin.property" for a property of it, the plugin alone for the plugin's presence (a
+# bool) or its one texture, whatever that texture's name (a bumpmap's)
 SURFACE = (
     Parameter("Le", "color", 0.0, texture=True, doc="emitted radiance"),
     Parameter("emits_back", "bool", False, doc="its emission leaves its back too (pbrt-v4's two-sided area lights)"),
-    Parameter("twosided", "bool", False, doc="the BSDF on both sides (not for one that transmits)"),
-    Parameter("opacity", "number", 1.0, low=0.0, high=1.0, texture=True,
+    Parameter("twosided", "bool", False, doc="the BSDF on both sides (not for one that transmits)", mitsuba="twosided"),
+    Parameter("opacity", "number", 1.0, low=0.0, high=1.0, texture=True, mitsuba="mask.opacity", mitsuba_default=0.5,
               doc="an alpha mask: the probability that a ray meets the surface (a texture's luminance)"),
-    Parameter("normal_map", "texture", optional=True, doc="tangent-space normals, 2 rgb - 1 (a bitmap, raw)"),
-    Parameter("bump_map", "texture", optional=True, doc="heights: a bitmap, or a scale of one by a number"),
-    Parameter("bump_scale", "number", 1.0, doc="a factor on the bump map's heights"),
+    Parameter("normal_map", "texture", optional=True, doc="tangent-space normals, 2 rgb - 1 (a bitmap, raw)",
+              mitsuba="normalmap.normalmap"),
+    Parameter("bump_map", "texture", optional=True, doc="heights: a bitmap, or a scale of one by a number",
+              mitsuba="bumpmap"),
+    Parameter("bump_scale", "number", 1.0, doc="a factor on the bump map's heights", mitsuba="bumpmap.scale"),
     Parameter("perturbation", "name", "mitsuba", choices=PERTURBATIONS,
               doc="how a normal or bump map perturbs: as Mitsuba 3's or as pbrt-v4's"),
 )
+MITSUBA_WRAPPERS = tuple(dict.fromkeys(p.mitsuba.partition(".")[0] for p in SURFACE if p.mitsuba))
 FIELDS = {"Le": "emission", "emits_back": "emits_back", "twosided": "twosided", "opacity": "opacity",
           "normal_map": "normal_map", "bump_map": "bump_map", "perturbation": "perturbation"}
 

@@ -20,7 +20,8 @@ from pathtrace import parameters
 from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import LUMINANCE, constant_of
-from pathtrace.materials.table import blend, scaled_bump_map, transmits
+from pathtrace.materials.surface import MITSUBA_WRAPPERS, SURFACE, dressed
+from pathtrace.materials.table import blend
 from pathtrace.parameters import FRAME, format_names, out_of_range
 from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.scene.description import Mesh, MeshFile, Scene, SceneBuilder
@@ -333,20 +334,10 @@ class _Reader(XmlScene):
                 fail(node, "a shape's <ref> must name a <bsdf>")
         kind = node.attrs.get("type")
         props = self.properties(node)
-        if kind == "twosided":
-            m = self.nested_material(node, named=True)
-            if transmits(m):
-                fail(node, f"a twosided BSDF cannot hold a {m.type}: it transmits (Mitsuba 3 refuses it too)")
-            m.twosided = True
-            return m
+        if kind in MITSUBA_WRAPPERS:
+            return self.wrapper(node, kind, props)
         if kind == "blendbsdf":
             return self.blend(node, props)
-        if kind == "mask":
-            m = self.nested_material(node)
-            m.opacity = self.opacity(props, node)
-            return m
-        if kind in ("bumpmap", "normalmap"):
-            return self.mapped_material(node, kind, props)
         if kind in BSDFS_BY_NAME:
             return self.mitsuba_material(node, kind, props)
         albedo = self.color(props, "base_color", None, False) if "base_color" in props else \
@@ -377,43 +368,52 @@ class _Reader(XmlScene):
         except ValueError as e:
             refuse(props, node, e)
 
-    def mapped_material(self, node, kind, props):
-        """A `normalmap` (its texture `normalmap`) or `bumpmap` (its one texture, times `scale`)
-        around a nested BSDF."""
-        m = self.nested_material(node)
+    def wrapper(self, node, kind, props) -> Material:
+        """A plugin wrapped round a nested BSDF (twosided, mask, normalmap, bumpmap): the nested
+        material carrying the fields of what any material carries that the plugin gives, by their
+        declared Mitsuba names (app/materials/surface.py: SURFACE), checked by `dressed`."""
+        m = self.nested_material(node, named=kind == "twosided")     # Mitsuba 3's names its front and back
+        fields = [p for p in SURFACE if p.mitsuba and p.mitsuba.partition(".")[0] == kind]
+
+        def get(p, name):
+            prop = name.partition(".")[2]
+            if p.kind == "bool":
+                return True                     # the plugin itself says it
+            if p.kind == "texture":
+                return self.wrapped_texture(node, props, prop)
+            return self.fraction(props, p, prop, node) if p.texture else self.parameter(props, p, prop)
+        values = parameters.read(fields, "mitsuba", get)
+        if {"normal_map", "bump_map"} & set(values) and (m.normal_map is not None or m.bump_map is not None):
+            warn(f"{node.where()}: a {kind} around another map; pathtrace applies the inner one only")
+            return m
+        try:
+            return dressed(m, values)
+        except ValueError as e:
+            refuse(props, node, e, {p.name: p.mitsuba.partition(".")[2] or kind for p in fields})
+
+    def wrapped_texture(self, node, props, name) -> Texture:
+        """The texture of a wrapper plugin: its nested <texture> (or <ref>) of that name, or
+        (name "") its first whatever its name (a bumpmap's)."""
         maps = [c for c in node.children if c.tag == "texture" or (c.tag == "ref" and "name" in c.attrs)]
-        if kind == "normalmap":
-            maps = [c for c in maps if c.attrs.get("name") == "normalmap"]
+        maps = [c for c in maps if not name or c.attrs.get("name") == name]
         if not maps:
-            fail(node, 'needs a <texture name="normalmap">' if kind == "normalmap" else "needs a <texture>")
+            fail(node, f'needs a <texture name="{name}">' if name else "needs a <texture>")
         if "name" in maps[0].attrs:          # the map is taken by its place, whatever its name
             props.read.add(maps[0].attrs["name"])
         target = self.resolve(maps[0]) if maps[0].tag == "ref" else maps[0]
         if target.tag != "texture":
             fail(maps[0], "must be a texture")
-        texture = self.texture(target)
-        if m.normal_map is not None or m.bump_map is not None:
-            warn(f"{node.where()}: a {kind} around another map; pathtrace applies the inner one only")
-            return m
-        if kind == "normalmap":
-            m.normal_map = texture
-            return m
-        try:
-            m.bump_map = scaled_bump_map(texture, self.get(props, "scale", 1.0, ("float",)))
-        except ValueError as e:
-            fail(target, str(e))
-        return m
+        return self.texture(target)
 
-    def opacity(self, props, node):
-        """A mask's `opacity` (Mitsuba's default 0.5): a number in [0, 1] or a texture, whose
-        luminance is the probability that a ray meets the surface."""
-        value = self.color(props, "opacity", 0.5)
-        if isinstance(value, Texture):
-            low, high = value.minimum(), value.maximum()
-        else:
-            low = high = value
-        if np.min(low) < 0 or np.max(high) > 1:
-            fail(props.get("opacity", node), "an opacity must lie in [0, 1]")
+    def fraction(self, props, p, name, node):
+        """A number in p's range that may be a texture (a mask's opacity): a float, a colour's
+        luminance or a texture, whose luminance the kernels read."""
+        if name not in props:
+            return None
+        value = self.color(props, name, None)
+        low, high = (value.minimum(), value.maximum()) if isinstance(value, Texture) else (value, value)
+        if np.min(low) < p.low or np.max(high) > p.high:
+            fail(props.get(name, node), f"{'an' if name[0] in 'aeiou' else 'a'} {name} must lie in [{p.low:g}, {p.high:g}]")
         return value if isinstance(value, Texture) else float(np.dot(value, LUMINANCE))
 
     def mitsuba_material(self, node, kind, props):
