@@ -19,7 +19,7 @@ from pathtrace.filters import FILTERS, PixelFilter
 from pathtrace import parameters
 from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.materials import BSDFS, Material
-from pathtrace.materials.bsdf import LUMINANCE, constant_of
+from pathtrace.materials.bsdf import LUMINANCE
 from pathtrace.materials.surface import MITSUBA_WRAPPERS, SURFACE, dressed
 from pathtrace.materials.table import blend
 from pathtrace.parameters import FRAME, format_names, out_of_range
@@ -428,18 +428,13 @@ class _Reader(XmlScene):
             values["alpha"] = self.parameter(props, next(p for p in bsdf.params if p.name == "alpha"), "alpha_u")
         if "distribution" in values:
             props.get("sample_visible")      # pathtrace samples visible normals always (kernels/microfacet.cl)
-        for p in bsdf.params:        # the range of what the file gave (the TOML reader's Param bounds)
-            if p.kind in ("name", "bool") or p.name not in values or isinstance(values[p.name], str):
-                continue
-            low = np.asarray(constant_of(values[p.name], p.kind, Texture.minimum), np.float64)
-            high = np.asarray(constant_of(values[p.name], p.kind, Texture.maximum), np.float64)
-            if np.any(low < p.low) or (p.high is not None and np.any(high > p.high)):
-                bound = f"[{p.low}, {p.high}]" if p.high is not None else f"at least {p.low}"
-                fail(props.get(p.mitsuba, node), f"{'an' if p.mitsuba[0] in 'aeiou' else 'a'} {p.mitsuba} must lie in {bound}")
         try:
+            problem = bsdf.out_of_range(values)      # of what the file gave (the TOML reader's Param bounds)
+            if problem:
+                raise ValueError(": ".join(problem))
             values = bsdf.complete(values)
         except ValueError as e:
-            fail(node, str(e))
+            refuse(props, node, e, format_names(bsdf.params, "mitsuba"))
         return Material(bsdf.name, values)
 
     # -- media --

@@ -18,7 +18,7 @@ from pathtrace.errors import UserError, short
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import constant_of
 from pathtrace.materials.surface import SURFACE, dressed
-from pathtrace.materials.table import PERTURBATIONS, blend, transmits
+from pathtrace.materials.table import PERTURBATIONS, blend
 from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.resources import resource_dir
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
@@ -94,11 +94,10 @@ class _Reader(TomlValues):
             self.table(data, where, {"type", "bsdf"})
             if "bsdf" not in data:
                 self.fail(where, "missing 'bsdf' (the material to make two-sided)")
-            inner = self.material(data["bsdf"], f"{where}.bsdf")
-            if transmits(inner):
-                self.fail(f"{where}.bsdf", f"a {inner.type} cannot be two-sided: it transmits")
-            inner.twosided = True
-            return inner
+            try:
+                return dressed(self.material(data["bsdf"], f"{where}.bsdf"), {"twosided": True})
+            except ValueError as e:           # the field is the wrapped material's, and there is no such key
+                self.fail(f"{where}.bsdf", str(e).partition(": ")[2])
         if kind == "emitter":
             self.table(data, where, {"type", "Le", "emits_back", "opacity"})
             if "Le" not in data:
