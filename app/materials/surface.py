@@ -17,7 +17,7 @@ SURFACE = (
     Parameter("emits_back", "bool", False, doc="its emission leaves its back too (pbrt-v4's two-sided area lights)"),
     Parameter("twosided", "bool", False, doc="the BSDF on both sides (not for one that transmits)", mitsuba="twosided"),
     Parameter("opacity", "number", 1.0, low=0.0, high=1.0, texture=True, mitsuba="mask.opacity", mitsuba_default=0.5,
-              doc="an alpha mask: the probability that a ray meets the surface (a texture's luminance)"),
+              pbrt="alpha", doc="an alpha mask: the probability that a ray meets the surface (a texture's luminance)"),
     Parameter("normal_map", "texture", optional=True, doc="tangent-space normals, 2 rgb - 1 (a bitmap, raw)",
               mitsuba="normalmap.normalmap"),
     Parameter("bump_map", "texture", optional=True, doc="heights: a bitmap, or a scale of one by a number",
@@ -26,6 +26,7 @@ SURFACE = (
     Parameter("perturbation", "name", "mitsuba", choices=PERTURBATIONS,
               doc="how a normal or bump map perturbs: as Mitsuba 3's or as pbrt-v4's"),
 )
+OPACITY = next(p for p in SURFACE if p.name == "opacity")
 MITSUBA_WRAPPERS = tuple(dict.fromkeys(p.mitsuba.partition(".")[0] for p in SURFACE if p.mitsuba))
 FIELDS = {"Le": "emission", "emits_back": "emits_back", "twosided": "twosided", "opacity": "opacity",
           "normal_map": "normal_map", "bump_map": "bump_map", "perturbation": "perturbation"}

@@ -45,7 +45,7 @@ def _types(kind: str) -> list:
         return [(Environment.name, Environment.formats, Environment.doc, Environment.parameters)]
     if kind == "surface":
         from pathtrace.materials.surface import MITSUBA_WRAPPERS, SURFACE
-        return [("any material", {"mitsuba": MITSUBA_WRAPPERS}, "", SURFACE)]
+        return [("any material", {"mitsuba": MITSUBA_WRAPPERS, "pbrt": "Shape"}, "", SURFACE)]
     if kind == "render":
         from pathtrace.scene.settings import RENDER
         return [("render", {"mitsuba": ("film", "sampler", "integrator"), "pbrt": ("Film", "Sampler", "Integrator")},
