@@ -261,6 +261,9 @@ ERRORS = [
      '</transform></sensor>' + SPHERE, None, "up must be a vector not parallel to the view direction"),
     ('<shape type="rectangle"><transform name="to_world"><scale value="1e-20"/><scale value="1e-20"/></transform>'
      '</shape>', None, "singular or beyond float32"),
+    # a null BSDF wrapped in another, emitting: a ValueError's traceback until #56
+    ('<shape type="sphere"><bsdf type="twosided"><bsdf type="null"/></bsdf><emitter type="area"/></shape>', None,
+     '<emitter type="area">: radiance: a null material is no surface, and cannot emit'),
     ('<shape type="sphere"><bsdf type="roughconductor"><float name="alpha_u" value="0.1"/></bsdf></shape>', None,
      "give alpha, or alpha_u and alpha_v, not a mixture"),
     ('<shape type="sphere"><bsdf type="roughdielectric"><float name="alpha_u" value="0.1"/>'

@@ -302,8 +302,8 @@ class _Reader(XmlScene):
 
     # -- materials --
 
-    def material_row(self, bsdf, emission):
-        """The material row of a shape's <bsdf> or <ref> and its area emitter's radiance; shapes
+    def material_row(self, bsdf, emission, emitter=None):
+        """The material row of a shape's <bsdf> or <ref> and its area `emitter`'s radiance; shapes
         that share a BSDF and emit nothing share a row. Without a <bsdf>, Mitsuba 3 gives a shape
         a diffuse BSDF of reflectance 0.5, and an emitting one a black BSDF: a lamp then reflects
         nothing, which in the tests' scenes is 0.2 % of what the floor below it receives."""
@@ -316,15 +316,13 @@ class _Reader(XmlScene):
         else:
             material = Material("diffuse", {"rho_d": np.full(3, 0.0 if emission is not None else 0.5)})
         if emission is not None:
-            material.emission = emission
-            return self.builder.material(material)
+            try:
+                return self.builder.material(dressed(material, {"Le": emission}))
+            except ValueError as e:          # a null BSDF's, which is no surface
+                refuse(self.properties(emitter), emitter, e, {"Le": "radiance"})
         name = target.attrs.get("id") if target is not None else None
         self.material_rows[key] = self.builder.materials.add(material, name)
         return self.material_rows[key]
-
-    def material_node(self, node):
-        """The <bsdf> a shape's <bsdf> or <ref> stands for."""
-        return self.resolve(node) if node.tag == "ref" else node
 
     def material(self, node) -> Material:
         """The Material of a <bsdf> (or <ref> to one)."""
@@ -505,7 +503,7 @@ class _Reader(XmlScene):
         props = self.properties(node)
         if kind == "instance":
             return self.instance(node, props)
-        bsdf, emission, media = None, None, {}
+        bsdf, emission, emitter, media = None, None, None, {}
         for child in node.children:
             # Mitsuba 3's Shape takes a BSDF by its place, whatever its name (src/render/shape.cpp,
             # the constructor's loop over props.objects()): a <ref name="bsdf"> as its exporters
@@ -523,15 +521,13 @@ class _Reader(XmlScene):
                     warn(f"{child.where()}: an emitter in a shapegroup; instances have no area lights "
                          "(nor do Mitsuba's), so pathtrace ignores it")
                     continue
-                emission = self.color(self.properties(child), "radiance", 1.0)
+                emitter, emission = child, self.color(self.properties(child), "radiance", 1.0)
             elif child.tag in ("medium", "ref") and child.attrs.get("name") in ("interior", "exterior"):
                 media[child.attrs["name"]] = self.medium(child)
                 props.read.add(child.attrs["name"])
             elif child.tag in ("medium", "sensor"):
                 warn(f"{child.where()}: not supported; ignored")
-        if emission is not None and bsdf is not None and self.material_node(bsdf).attrs.get("type") == "null":
-            fail(node, "an area emitter on a null BSDF: pathtrace's null surfaces cannot emit")
-        material = self.material_row(bsdf, emission)
+        material = self.material_row(bsdf, emission, emitter)
         # Mitsuba 3: a shape with a medium on either side is a transition, the other side vacuum
         interface = MediumInterface(media.get("interior", -1), media.get("exterior", -1)) if media else None
         m = self.get(props, "to_world", np.eye(4), ("transform",))
