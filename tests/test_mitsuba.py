@@ -242,7 +242,7 @@ ERRORS = [
     ('<shape type="sphere"><emitter type="area"><rgb name="radiance" value="-1"/></emitter></shape>',
      None, "a colour must not be negative"),
     ('<shape type="sphere"><bsdf type="diffuse"><rgb name="reflectance" value="1.5"/></bsdf></shape>',
-     None, "a reflectance must lie in [0, 1]"),
+     None, '<rgb name="reflectance">: reflectance: must lie in [0, 1], got 1.5'),
     # the fuzzer's tracebacks of round 3 (#28), each now one line
     ("<shape type='sphere'>" * 1000 + "</shape>" * 1000, None, "elements nest deeper than 64"),
     ('<bsdf type="twosided" id="a"><ref id="b"/></bsdf><bsdf type="twosided" id="b"><ref id="a"/></bsdf>'
@@ -261,10 +261,14 @@ ERRORS = [
      '</transform></sensor>' + SPHERE, None, "up must be a vector not parallel to the view direction"),
     ('<shape type="rectangle"><transform name="to_world"><scale value="1e-20"/><scale value="1e-20"/></transform>'
      '</shape>', None, "singular or beyond float32"),
+    # a null BSDF wrapped in another, emitting: a ValueError's traceback until #56
+    ('<shape type="sphere"><bsdf type="twosided"><bsdf type="null"/></bsdf><emitter type="area"/></shape>', None,
+     '<emitter type="area">: radiance: a null material is no surface, and cannot emit'),
     ('<shape type="sphere"><bsdf type="roughconductor"><float name="alpha_u" value="0.1"/></bsdf></shape>', None,
      "give alpha, or alpha_u and alpha_v, not a mixture"),
     ('<shape type="sphere"><bsdf type="roughdielectric"><float name="alpha_u" value="0.1"/>'
-     '<float name="alpha_v" value="1.5"/></bsdf></shape>', None, "alpha_v must lie in [0.0001, 1.0]"),
+     '<float name="alpha_v" value="1.5"/></bsdf></shape>', None,
+     '<float name="alpha_v">: alpha_v: must lie in [0.0001, 1], got 1.5'),
 ]
 
 

@@ -36,6 +36,8 @@ class Param(Parameter):
                               # other slots from it, or its slot is in the table)
     into: str = None          # another way to give parameter `into`, which resolve() turns it
                               # into (principled's specular, its eta): never kept itself
+    pbrt_from: str = None     # the pbrt-v4 parameter a type's from_pbrt computes it from, where it
+                              # has no pbrt name of its own: the pbrt reader's messages name it
 
     def __post_init__(self):
         super().__post_init__()

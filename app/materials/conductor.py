@@ -41,8 +41,10 @@ _CONDUCTOR_PARAMS = (
     Param("material", "name", default="none", names=CONDUCTORS,
           doc="a named metal (Mitsuba's: Au, Ag, Cu, Al, Cr, ... or gold, silver, copper, "
               "aluminium), or none, a perfect mirror; instead of eta and k"),
-    Param("eta", "color", default=0.0, high=100.0, doc="real part of the complex IOR", slot="p0.xyz"),
-    Param("k", "color", default=1.0, high=100.0, doc="imaginary part (absorption) of the IOR", slot="p1.xyz"),
+    Param("eta", "color", default=0.0, high=100.0, doc="real part of the complex IOR", slot="p0.xyz",
+          pbrt_from="eta"),
+    Param("k", "color", default=1.0, high=100.0, doc="imaginary part (absorption) of the IOR", slot="p1.xyz",
+          pbrt_from="k or reflectance"),
     Param("specular_reflectance", "color", default=1.0, high=1.0,
           doc="a factor on the reflectance (not physical; Mitsuba's)", slot="p2.xyz"),
 )

@@ -35,7 +35,7 @@ def check_interface(values) -> str | None:
 _DIELECTRIC_PARAMS = (
     Param("int_ior", "number", default=1.5046, low=1.0, high=10.0, names=IOR, slot="p0.x", constant=True,
           doc="IOR inside (the side opposite the normal): a number or a name such as bk7, water, "
-              "diamond"),
+              "diamond", pbrt_from="eta"),
     Param("ext_ior", "number", default=1.000277, low=1.0, high=10.0, names=IOR, slot="p0.y", constant=True,
           doc="IOR outside"),
     Param("specular_reflectance", "color", default=1.0, high=1.0, doc="factor on reflection", slot="p1.xyz"),

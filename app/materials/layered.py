@@ -80,7 +80,7 @@ class CoatedDiffuse(BSDFType):
     params = in_slots((
         Param("reflectance", "color", default=0.5, high=1.0, doc="the base's albedo", slot="p0.xyz", pbrt="reflectance"),
         _ALPHA,
-        Param("eta", "number", default=1.5, low=1.0001, high=10.0, doc="the coating's IOR"),
+        Param("eta", "number", default=1.5, low=1.0001, high=10.0, doc="the coating's IOR", pbrt_from="eta"),
     ) + _LAYER_PARAMS, alpha="p0.w", eta="p1.x", thickness="p1.y", g="p1.z", maxdepth="p1.w", albedo="p2.xyz",
         nsamples="p2.w")
     doc = ("pbrt-v4's coateddiffuse: a diffuse base under a smooth or rough dielectric coating, "
@@ -123,7 +123,7 @@ class CoatedConductor(BSDFType):
         *METAL_PARAMS,          # material, or eta and k: the base's metal
         _ALPHA,
         Param("alpha_v", "number", default=0.0, low=0.0, high=1.0,
-              doc="the coating's roughness along the bitangent; alpha where left out"),
+              doc="the coating's roughness along the bitangent; alpha where left out", pbrt_from="vroughness"),
         Param("interface_eta", "number", default=1.5, low=1.0001, high=10.0, doc="the coating's IOR"),
         Param("conductor_alpha", "number", default=0.0, low=0.0, high=1.0,
               doc="the metal's GGX roughness along the tangent; 0: a mirror"),

@@ -14,7 +14,7 @@ from pathtrace.parameters import Parameter
 
 GGX_PARAMS = (
     Param("alpha", "number", default=0.1, low=1e-4, high=1.0,
-          doc="the microfacet roughness (Mitsuba's alpha: the root mean square slope)"),
+          doc="the microfacet roughness (Mitsuba's alpha: the root mean square slope)", pbrt_from="roughness"),
 )
 
 
@@ -26,7 +26,7 @@ def anisotropic_params(alpha_slot: str, alpha_v_slot: str) -> tuple:
                     doc="the microfacet roughness (Mitsuba's alpha: the root mean square slope); "
                         "with alpha_v, the roughness along dp/du (Mitsuba's alpha_u)"),
             Param("alpha_v", "number", default=GGX_PARAMS[0].default, low=1e-4, high=1.0, slot=alpha_v_slot,
-                  doc="the roughness along the bitangent; alpha where left out (isotropic)"))
+                  doc="the roughness along the bitangent; alpha where left out (isotropic)", pbrt_from="vroughness"))
 
 
 class AnisotropicRoughness:

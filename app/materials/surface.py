@@ -1,56 +1,52 @@
 """What any material carries besides its BSDF's parameters: emission, two sides, an alpha mask
 and a normal or bump map (Material's own fields), declared once (app/parameters.py) as a TOML
-material table's keys, and set on a Material, checked together, by `dressed`. Mitsuba 3 wraps a
-BSDF in a plugin for each (twosided, mask, normalmap, bumpmap) and pbrt-v4 gives them to the
-shape, its area light and its material: their readers set them one at a time."""
+material table's keys and Mitsuba 3's wrapper plugins, and set on a Material, checked together,
+by `dressed`. pbrt-v4 gives them to the shape, its area light and its material: its reader sets
+them one at a time."""
 
 from dataclasses import replace
 
-import numpy as np
-
-from pathtrace.materials.bsdf import NULL
-from pathtrace.materials.registry import BSDFS
-from pathtrace.materials.table import PERTURBATIONS, Material, scaled_bump_map, transmits
+from pathtrace.materials.table import PERTURBATIONS, Material, scaled_bump_map, surface_problem
 from pathtrace.parameters import Parameter
-from pathtrace.textures.texture import Texture
 
+# Mitsuba 3 gives a field by a plugin wrapped round a nested BSDF: its Mitsuba name is the
+# plugin's, "plugin.property" for a property of it, the plugin alone for the plugin's presence (a
+# bool) or its one texture, whatever that texture's name (a bumpmap's)
 SURFACE = (
     Parameter("Le", "color", 0.0, texture=True, doc="emitted radiance"),
     Parameter("emits_back", "bool", False, doc="its emission leaves its back too (pbrt-v4's two-sided area lights)"),
-    Parameter("twosided", "bool", False, doc="the BSDF on both sides (not for one that transmits)"),
-    Parameter("opacity", "number", 1.0, low=0.0, high=1.0, texture=True,
-              doc="an alpha mask: the probability that a ray meets the surface (a texture's luminance)"),
-    Parameter("normal_map", "texture", optional=True, doc="tangent-space normals, 2 rgb - 1 (a bitmap, raw)"),
-    Parameter("bump_map", "texture", optional=True, doc="heights: a bitmap, or a scale of one by a number"),
-    Parameter("bump_scale", "number", 1.0, doc="a factor on the bump map's heights"),
+    Parameter("twosided", "bool", False, doc="the BSDF on both sides (not for one that transmits)", mitsuba="twosided"),
+    Parameter("opacity", "number", 1.0, low=0.0, high=1.0, texture=True, mitsuba="mask.opacity", mitsuba_default=0.5,
+              pbrt="alpha", doc="an alpha mask: the probability that a ray meets the surface (a texture's luminance)"),
+    Parameter("normal_map", "texture", optional=True, doc="tangent-space normals, 2 rgb - 1 (a bitmap, raw)",
+              mitsuba="normalmap.normalmap"),
+    Parameter("bump_map", "texture", optional=True, doc="heights: a bitmap, or a scale of one by a number",
+              mitsuba="bumpmap"),
+    Parameter("bump_scale", "number", 1.0, doc="a factor on the bump map's heights", mitsuba="bumpmap.scale"),
     Parameter("perturbation", "name", "mitsuba", choices=PERTURBATIONS,
               doc="how a normal or bump map perturbs: as Mitsuba 3's or as pbrt-v4's"),
 )
+OPACITY = next(p for p in SURFACE if p.name == "opacity")
+MITSUBA_WRAPPERS = tuple(dict.fromkeys(p.mitsuba.partition(".")[0] for p in SURFACE if p.mitsuba))
 FIELDS = {"Le": "emission", "emits_back": "emits_back", "twosided": "twosided", "opacity": "opacity",
           "normal_map": "normal_map", "bump_map": "bump_map", "perturbation": "perturbation"}
 
 
 def dressed(material: Material, values: dict) -> Material:
-    """material carrying the SURFACE values given (by their names), checked. Raises ValueError
-    ("<name>: <problem>", or a problem of them together)."""
+    """material carrying the SURFACE values given (by their names), checked (those with the
+    BSDF and each other by table.surface_problem). Raises ValueError ("<name>: <problem>")."""
     maps = {"normal_map", "bump_map"} & set(values)
-    if len(maps) == 2:
-        raise ValueError("give a normal_map or a bump_map, not both")
     if "bump_scale" in values and "bump_map" not in values:
         raise ValueError("bump_scale: scales a bump_map, and there is none")
     if "perturbation" in values and not maps:
         raise ValueError("perturbation: says how a normal_map or bump_map perturbs, and there is none")
-    if values.get("twosided") and transmits(material):
-        raise ValueError(f"twosided: a {material.type} cannot be two-sided: it transmits, and is seen from both "
-                         "sides already")
-    emission = values.get("Le")
-    if emission is not None and BSDFS[material.type].flags & NULL and (isinstance(emission, Texture)
-                                                                       or np.any(emission > 0)):
-        raise ValueError("Le: a null material is no surface, and cannot emit")
-    values = dict(values)
+    material = replace(material, **{FIELDS[k]: v for k, v in values.items() if k in FIELDS})
+    problem = surface_problem(material)
+    if problem:
+        raise ValueError(": ".join(problem))
     if "bump_map" in values:
         try:
-            values["bump_map"] = scaled_bump_map(values["bump_map"], values.get("bump_scale", 1.0))
+            material.bump_map = scaled_bump_map(values["bump_map"], values.get("bump_scale", 1.0))
         except ValueError as e:
             raise ValueError(f"bump_map: {e}") from None
-    return replace(material, **{FIELDS[k]: v for k, v in values.items() if k in FIELDS})
+    return material

@@ -59,8 +59,6 @@ class Material:
             opacity = self.opacity if isinstance(self.opacity, Texture) else \
                 Texture("constant", {"value": np.full(3, float(self.opacity)), "to_uv": np.eye(3)})
             out.append(("opacity", *slot_index("opacity.x"), opacity))
-        if self.normal_map is not None and self.bump_map is not None:
-            raise ValueError("give a normal map or a bump map, not both")
         if self.normal_map is not None:
             out.append(("normal_map", *slot_index("normal_map.xyz"), self.normal_map))
         if self.bump_map is not None:
@@ -98,13 +96,30 @@ def scaled_bump_map(texture: Texture, scale: float) -> Texture:
     return scaled
 
 
+def surface_problem(material: Material) -> tuple | None:
+    """(the field of app/materials/surface.py's SURFACE, the problem) of what a Material carries
+    that cannot go with its BSDF or each other, or None: the one check of the readers (dressed)
+    and of the table (pack)."""
+    if material.normal_map is not None and material.bump_map is not None:
+        return "normal_map", "give a normal_map or a bump_map, not both"
+    if material.twosided and transmits(material):
+        # Mitsuba 3 refuses the combination too: a transmissive BSDF already has two sides, and
+        # turning its frame round for back hits would send light through glass the wrong way
+        return "twosided", f"a {material.type} cannot be two-sided: it transmits, and is seen from both sides already"
+    if BSDFS[material.type].flags & NULL and (isinstance(material.emission, Texture) or np.any(material.emission > 0)):
+        return "Le", "a null material is no surface, and cannot emit"
+    return None
+
+
 def blend(weight, components: tuple) -> "Material":
     """A blendbsdf of two Materials, the second taken with probability `weight` (a number or a
-    texture), checked. Raises ValueError ("weight: <problem>", or check_blend's)."""
-    problem = BSDFS["blendbsdf"].out_of_range({"weight": weight})
+    texture; None: the declared default), checked. Raises ValueError ("weight: <problem>", or
+    check_blend's)."""
+    given = {} if weight is None else {"weight": weight}
+    problem = BSDFS["blendbsdf"].out_of_range(given)
     if problem:
         raise ValueError(": ".join(problem))
-    material = Material("blendbsdf", BSDFS["blendbsdf"].complete({"weight": weight}), components=tuple(components))
+    material = Material("blendbsdf", BSDFS["blendbsdf"].complete(given), components=tuple(components))
     problem = check_blend(material)
     if problem:
         raise ValueError(problem)
@@ -202,15 +217,12 @@ def pack(type_name: str, params: dict, emission=(0, 0, 0), twosided=False, emits
                and p.name not in params]
     if missing:
         raise ValueError(f"{type_name}: missing '{missing[0]}'")
-    if twosided and bsdf.transmits(params):
-        # Mitsuba 3 refuses the combination too: a transmissive BSDF already has two sides, and
-        # turning its frame round for back hits would send light through glass the wrong way
-        raise ValueError(f"a {type_name} cannot be two-sided: it transmits, and is seen from both sides already")
+    emission = _as_rows(emission, "color")
+    problem = surface_problem(Material(type_name, params, emission, twosided))
+    if problem:
+        raise ValueError(problem[1])
     values = {p.name: _as_rows(params.get(p.name, p.default), p.kind)
               for p in bsdf.params if p.kind != "name" and p.into is None}
-    emission = _as_rows(emission, "color")
-    if bsdf.flags & NULL and np.any(emission > 0):
-        raise ValueError("a null material is no surface, and cannot emit")
     lengths = [len(v) for v in values.values()] + [len(emission)]
     n = 0 if 0 in lengths else max(lengths)
     values = {k: np.broadcast_to(v, (n,) + v.shape[1:]) for k, v in values.items()}
@@ -289,6 +301,9 @@ class MaterialTable:
         return bool(self.textures[index]) or bool({"ANISOTROPIC", "BLEND"} & set(BSDFS[type_name].defines(row)))
 
     def set(self, index: int, material: Material):
+        problem = surface_problem(material)      # of its maps and textures, which pack does not see
+        if problem:
+            raise ValueError(problem[1])
         params, emission = material.constants()
         rows = pack(material.type, params, emission, material.twosided, material.emits_back)
         if material.masked:

@@ -19,8 +19,9 @@ from pathtrace.filters import FILTERS, PixelFilter
 from pathtrace import parameters
 from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.materials import BSDFS, Material
-from pathtrace.materials.bsdf import LUMINANCE, constant_of
-from pathtrace.materials.table import blend, scaled_bump_map, transmits
+from pathtrace.materials.bsdf import LUMINANCE
+from pathtrace.materials.surface import MITSUBA_WRAPPERS, SURFACE, dressed
+from pathtrace.materials.table import blend
 from pathtrace.parameters import FRAME, format_names, out_of_range
 from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.scene.description import Mesh, MeshFile, Scene, SceneBuilder
@@ -301,8 +302,8 @@ class _Reader(XmlScene):
 
     # -- materials --
 
-    def material_row(self, bsdf, emission):
-        """The material row of a shape's <bsdf> or <ref> and its area emitter's radiance; shapes
+    def material_row(self, bsdf, emission, emitter=None):
+        """The material row of a shape's <bsdf> or <ref> and its area `emitter`'s radiance; shapes
         that share a BSDF and emit nothing share a row. Without a <bsdf>, Mitsuba 3 gives a shape
         a diffuse BSDF of reflectance 0.5, and an emitting one a black BSDF: a lamp then reflects
         nothing, which in the tests' scenes is 0.2 % of what the floor below it receives."""
@@ -315,15 +316,13 @@ class _Reader(XmlScene):
         else:
             material = Material("diffuse", {"rho_d": np.full(3, 0.0 if emission is not None else 0.5)})
         if emission is not None:
-            material.emission = emission
-            return self.builder.material(material)
+            try:
+                return self.builder.material(dressed(material, {"Le": emission}))
+            except ValueError as e:          # a null BSDF's, which is no surface
+                refuse(self.properties(emitter), emitter, e, {"Le": "radiance"})
         name = target.attrs.get("id") if target is not None else None
         self.material_rows[key] = self.builder.materials.add(material, name)
         return self.material_rows[key]
-
-    def material_node(self, node):
-        """The <bsdf> a shape's <bsdf> or <ref> stands for."""
-        return self.resolve(node) if node.tag == "ref" else node
 
     def material(self, node) -> Material:
         """The Material of a <bsdf> (or <ref> to one)."""
@@ -333,20 +332,10 @@ class _Reader(XmlScene):
                 fail(node, "a shape's <ref> must name a <bsdf>")
         kind = node.attrs.get("type")
         props = self.properties(node)
-        if kind == "twosided":
-            m = self.nested_material(node, named=True)
-            if transmits(m):
-                fail(node, f"a twosided BSDF cannot hold a {m.type}: it transmits (Mitsuba 3 refuses it too)")
-            m.twosided = True
-            return m
+        if kind in MITSUBA_WRAPPERS:
+            return self.wrapper(node, kind, props)
         if kind == "blendbsdf":
             return self.blend(node, props)
-        if kind == "mask":
-            m = self.nested_material(node)
-            m.opacity = self.opacity(props, node)
-            return m
-        if kind in ("bumpmap", "normalmap"):
-            return self.mapped_material(node, kind, props)
         if kind in BSDFS_BY_NAME:
             return self.mitsuba_material(node, kind, props)
         albedo = self.color(props, "base_color", None, False) if "base_color" in props else \
@@ -373,47 +362,56 @@ class _Reader(XmlScene):
             fail(node, f"needs two nested BSDFs, got {len(inner)}")
         weight = self.parameter(props, next(p for p in BSDFS["blendbsdf"].params if p.name == "weight"), "weight")
         try:
-            return blend(0.5 if weight is None else weight, tuple(self.material(c) for c in inner))
+            return blend(weight, tuple(self.material(c) for c in inner))
         except ValueError as e:
             refuse(props, node, e)
 
-    def mapped_material(self, node, kind, props):
-        """A `normalmap` (its texture `normalmap`) or `bumpmap` (its one texture, times `scale`)
-        around a nested BSDF."""
-        m = self.nested_material(node)
+    def wrapper(self, node, kind, props) -> Material:
+        """A plugin wrapped round a nested BSDF (twosided, mask, normalmap, bumpmap): the nested
+        material carrying the fields of what any material carries that the plugin gives, by their
+        declared Mitsuba names (app/materials/surface.py: SURFACE), checked by `dressed`."""
+        m = self.nested_material(node, named=kind == "twosided")     # Mitsuba 3's names its front and back
+        fields = [p for p in SURFACE if p.mitsuba and p.mitsuba.partition(".")[0] == kind]
+
+        def get(p, name):
+            prop = name.partition(".")[2]
+            if p.kind == "bool":
+                return True                     # the plugin itself says it
+            if p.kind == "texture":
+                return self.wrapped_texture(node, props, prop)
+            return self.fraction(props, p, prop, node) if p.texture else self.parameter(props, p, prop)
+        values = parameters.read(fields, "mitsuba", get)
+        if {"normal_map", "bump_map"} & set(values) and (m.normal_map is not None or m.bump_map is not None):
+            warn(f"{node.where()}: a {kind} around another map; pathtrace applies the inner one only")
+            return m
+        try:
+            return dressed(m, values)
+        except ValueError as e:
+            refuse(props, node, e, {p.name: p.mitsuba.partition(".")[2] or kind for p in fields})
+
+    def wrapped_texture(self, node, props, name) -> Texture:
+        """The texture of a wrapper plugin: its nested <texture> (or <ref>) of that name, or
+        (name "") its first whatever its name (a bumpmap's)."""
         maps = [c for c in node.children if c.tag == "texture" or (c.tag == "ref" and "name" in c.attrs)]
-        if kind == "normalmap":
-            maps = [c for c in maps if c.attrs.get("name") == "normalmap"]
+        maps = [c for c in maps if not name or c.attrs.get("name") == name]
         if not maps:
-            fail(node, 'needs a <texture name="normalmap">' if kind == "normalmap" else "needs a <texture>")
+            fail(node, f'needs a <texture name="{name}">' if name else "needs a <texture>")
         if "name" in maps[0].attrs:          # the map is taken by its place, whatever its name
             props.read.add(maps[0].attrs["name"])
         target = self.resolve(maps[0]) if maps[0].tag == "ref" else maps[0]
         if target.tag != "texture":
             fail(maps[0], "must be a texture")
-        texture = self.texture(target)
-        if m.normal_map is not None or m.bump_map is not None:
-            warn(f"{node.where()}: a {kind} around another map; pathtrace applies the inner one only")
-            return m
-        if kind == "normalmap":
-            m.normal_map = texture
-            return m
-        try:
-            m.bump_map = scaled_bump_map(texture, self.get(props, "scale", 1.0, ("float",)))
-        except ValueError as e:
-            fail(target, str(e))
-        return m
+        return self.texture(target)
 
-    def opacity(self, props, node):
-        """A mask's `opacity` (Mitsuba's default 0.5): a number in [0, 1] or a texture, whose
-        luminance is the probability that a ray meets the surface."""
-        value = self.color(props, "opacity", 0.5)
-        if isinstance(value, Texture):
-            low, high = value.minimum(), value.maximum()
-        else:
-            low = high = value
-        if np.min(low) < 0 or np.max(high) > 1:
-            fail(props.get("opacity", node), "an opacity must lie in [0, 1]")
+    def fraction(self, props, p, name, node):
+        """A number in p's range that may be a texture (a mask's opacity): a float, a colour's
+        luminance or a texture, whose luminance the kernels read."""
+        if name not in props:
+            return None
+        value = self.color(props, name, None)
+        low, high = (value.minimum(), value.maximum()) if isinstance(value, Texture) else (value, value)
+        if np.min(low) < p.low or np.max(high) > p.high:
+            fail(props.get(name, node), f"{'an' if name[0] in 'aeiou' else 'a'} {name} must lie in [{p.low:g}, {p.high:g}]")
         return value if isinstance(value, Texture) else float(np.dot(value, LUMINANCE))
 
     def mitsuba_material(self, node, kind, props):
@@ -428,18 +426,13 @@ class _Reader(XmlScene):
             values["alpha"] = self.parameter(props, next(p for p in bsdf.params if p.name == "alpha"), "alpha_u")
         if "distribution" in values:
             props.get("sample_visible")      # pathtrace samples visible normals always (kernels/microfacet.cl)
-        for p in bsdf.params:        # the range of what the file gave (the TOML reader's Param bounds)
-            if p.kind in ("name", "bool") or p.name not in values or isinstance(values[p.name], str):
-                continue
-            low = np.asarray(constant_of(values[p.name], p.kind, Texture.minimum), np.float64)
-            high = np.asarray(constant_of(values[p.name], p.kind, Texture.maximum), np.float64)
-            if np.any(low < p.low) or (p.high is not None and np.any(high > p.high)):
-                bound = f"[{p.low}, {p.high}]" if p.high is not None else f"at least {p.low}"
-                fail(props.get(p.mitsuba, node), f"{'an' if p.mitsuba[0] in 'aeiou' else 'a'} {p.mitsuba} must lie in {bound}")
         try:
+            problem = bsdf.out_of_range(values)      # of what the file gave (the TOML reader's Param bounds)
+            if problem:
+                raise ValueError(": ".join(problem))
             values = bsdf.complete(values)
         except ValueError as e:
-            fail(node, str(e))
+            refuse(props, node, e, format_names(bsdf.params, "mitsuba"))
         return Material(bsdf.name, values)
 
     # -- media --
@@ -510,7 +503,7 @@ class _Reader(XmlScene):
         props = self.properties(node)
         if kind == "instance":
             return self.instance(node, props)
-        bsdf, emission, media = None, None, {}
+        bsdf, emission, emitter, media = None, None, None, {}
         for child in node.children:
             # Mitsuba 3's Shape takes a BSDF by its place, whatever its name (src/render/shape.cpp,
             # the constructor's loop over props.objects()): a <ref name="bsdf"> as its exporters
@@ -528,15 +521,13 @@ class _Reader(XmlScene):
                     warn(f"{child.where()}: an emitter in a shapegroup; instances have no area lights "
                          "(nor do Mitsuba's), so pathtrace ignores it")
                     continue
-                emission = self.color(self.properties(child), "radiance", 1.0)
+                emitter, emission = child, self.color(self.properties(child), "radiance", 1.0)
             elif child.tag in ("medium", "ref") and child.attrs.get("name") in ("interior", "exterior"):
                 media[child.attrs["name"]] = self.medium(child)
                 props.read.add(child.attrs["name"])
             elif child.tag in ("medium", "sensor"):
                 warn(f"{child.where()}: not supported; ignored")
-        if emission is not None and bsdf is not None and self.material_node(bsdf).attrs.get("type") == "null":
-            fail(node, "an area emitter on a null BSDF: pathtrace's null surfaces cannot emit")
-        material = self.material_row(bsdf, emission)
+        material = self.material_row(bsdf, emission, emitter)
         # Mitsuba 3: a shape with a medium on either side is a transition, the other side vacuum
         interface = MediumInterface(media.get("interior", -1), media.get("exterior", -1)) if media else None
         m = self.get(props, "to_world", np.eye(4), ("transform",))

@@ -18,7 +18,7 @@ from pathtrace.errors import UserError, short
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import constant_of
 from pathtrace.materials.surface import SURFACE, dressed
-from pathtrace.materials.table import PERTURBATIONS, check_blend, transmits
+from pathtrace.materials.table import PERTURBATIONS, blend
 from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.resources import resource_dir
 from pathtrace.scene.description import Mesh, MeshFile, RenderSettings, Scene, SceneBuilder
@@ -94,11 +94,10 @@ class _Reader(TomlValues):
             self.table(data, where, {"type", "bsdf"})
             if "bsdf" not in data:
                 self.fail(where, "missing 'bsdf' (the material to make two-sided)")
-            inner = self.material(data["bsdf"], f"{where}.bsdf")
-            if transmits(inner):
-                self.fail(f"{where}.bsdf", f"a {inner.type} cannot be two-sided: it transmits")
-            inner.twosided = True
-            return inner
+            try:
+                return dressed(self.material(data["bsdf"], f"{where}.bsdf"), {"twosided": True})
+            except ValueError as e:           # the field is the wrapped material's, and there is no such key
+                self.fail(f"{where}.bsdf", str(e).partition(": ")[2])
         if kind == "emitter":
             self.table(data, where, {"type", "Le", "emits_back", "opacity"})
             if "Le" not in data:
@@ -108,15 +107,12 @@ class _Reader(TomlValues):
             bsdf = FILE_TYPES[kind]
             self.table(data, where, {"type", *(p.name for p in SURFACE + bsdf.params),
                                      *(("bsdfs",) if kind == "blendbsdf" else ())})
+            values = self.declared(bsdf.params, data, where)
             try:
-                material = Material(kind, bsdf.complete(self.declared(bsdf.params, data, where)))
+                material = blend(values.get("weight"), self.components(data, where)) if kind == "blendbsdf" else \
+                    Material(kind, bsdf.complete(values))
             except ValueError as e:
                 self.fail(where, str(e))
-            if kind == "blendbsdf":
-                material.components = self.components(data, where)
-                problem = check_blend(material)
-                if problem:
-                    self.fail(where, problem)
         if data.get("perturbation", PERTURBATIONS[0]) not in PERTURBATIONS:     # its names quoted, as a file writes them
             self.not_one_of(f"{where}.perturbation", data["perturbation"], PERTURBATIONS, quoted=True)
         try:

@@ -22,11 +22,6 @@ ARRAYS = {"points": ("point3",), "normals": ("normal", "normal3"), "pairs": ("po
 TEXTURES_BY_NAME = by_format(TEXTURES.values(), "pbrt")
 
 
-# pathtrace's parameters that the pbrt materials' parameters become, for messages
-PBRT_NAMES = {"rho_d": "reflectance", "reflectance": "reflectance", "transmittance": "transmittance",
-              "int_ior": "eta", "eta": "eta", "alpha": "roughness", "alpha_v": "vroughness", "albedo": "albedo",
-              "thickness": "thickness", "g": "g", "weight": "amount", "k": "k or reflectance"}
-
 
 def make(kind, values, where) -> Material:
     """A Material of pathtrace's type `kind`, its values completed and checked by the type."""
@@ -39,7 +34,7 @@ def make(kind, values, where) -> Material:
     problem = BSDFS[kind].out_of_range(complete)     # the TOML reader's ranges (a reflectance in [0, 1])
     if problem:
         name, text = problem
-        pbrt_name = PBRT_NAMES.get(name)
+        pbrt_name = next(p.pbrt or p.pbrt_from for p in BSDFS[kind].params if p.name == name)
         raise UserError(f"{where}: the {kind} material's {name}" + (f" (from '{pbrt_name}')" if pbrt_name else "")
                         + f" {text}")
     return Material(kind, complete, twosided=not BSDFS[kind].flags & TRANSMISSIVE)

@@ -13,6 +13,7 @@ from pathtrace.cameras import Camera
 from pathtrace.cameras.camera import FileCamera, frame_of
 from pathtrace.errors import UserError, warn
 from pathtrace.filters import PixelFilter
+from pathtrace.parameters import format_names
 from pathtrace.scene.pbrt.tokens import parameters, string
 from pathtrace.scene.meshes import MAX_COORDINATE
 from pathtrace.scene import settings
@@ -145,7 +146,7 @@ def refused(where: str, error: ValueError, declared) -> UserError:
     """A type's ValueError ("<field>: <problem>") as one line naming the field by its pbrt-v4
     name among the `declared` Parameters."""
     name, _, problem = str(error).partition(": ")
-    name = next((p.pbrt for p in declared if p.name == name and p.pbrt), name)
+    name = format_names(declared, "pbrt").get(name, name)
     return UserError(f"{where}: '{name}' {problem}")
 
 

@@ -31,6 +31,7 @@ from pathtrace.filters import PixelFilter
 from pathtrace import parameters as declared
 from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.lights.area import pbrt_radiance
+from pathtrace.materials.surface import OPACITY
 from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, Scene, SceneBuilder
@@ -292,8 +293,6 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         if material is None:              # pbrt's interface: no surface, only a boundary of media
             material = self.null_material
         if alpha is not None and not (isinstance(alpha, float) and alpha == 1.0):
-            if not isinstance(alpha, Texture) and not 0 <= alpha <= 1:
-                raise UserError(f"'alpha' must lie in [0, 1], got {alpha:g}")
             material = replace(material, opacity=alpha)
             if emission is None:
                 return self.builder.material(material)
@@ -347,8 +346,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         if self.current_object is not None and parts[0][1] is not None:
             warn(f"{where}: pbrt-v4 has no area lights in instances; this shape does not emit")
             parts = [(None, None)]
-        alpha = self.mapper.texture_input(params, "alpha", 1.0, float_texture=True) \
-            if params.type_of("alpha") else 1.0
+        alpha = self.alpha(params)
         self.unused(params, "shape", kind)
         group = None if self.current_object is None else self.objects[self.current_object]
         if shape is not None:
@@ -361,6 +359,16 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
             # no MeshFile: the file's faces were turned and its uvs flipped, which a converted
             # scene's reference to the file could not say (convert writes the mesh anew)
             self.builder.add_to(group, Mesh(name, vertices, part, normals, row, source, None, uvs, media))
+
+    def alpha(self, params):
+        """A shape's alpha: a number in range or a float texture, by the declaration of what any
+        material carries (app/materials/surface.py: OPACITY)."""
+        alpha = self.mapper.parameter(params, OPACITY, OPACITY.pbrt)
+        if alpha is None:
+            return 1.0
+        if not isinstance(alpha, Texture) and not OPACITY.low <= alpha <= OPACITY.high:
+            params.fail(OPACITY.pbrt, f"must lie in [{OPACITY.low:g}, {OPACITY.high:g}], got {alpha:g}")
+        return alpha
 
     def analytic_shape(self, kind, params, media, where) -> Shape:
         """An analytic shape (app/shapes/), its parameters read by their pbrt-v4 names
