@@ -336,6 +336,9 @@ def test_bad_input_is_one_line_naming_the_file(tmp_path, text, expected):
     ('WorldBegin\nMakeNamedMedium "m" "string type" "homogeneous" "float preset" 1\n' + FLOOR,
      "s.pbrt:2: 'preset': must be string, got float"),
     ('WorldBegin\nShape "plymesh"\n', 's.pbrt:2: Shape "plymesh": needs a filename'),
+    # a coated conductor's metal is pbrt-v4's conductor.eta, not a conductor's eta
+    ('WorldBegin\nMaterial "coatedconductor" "rgb conductor.eta" [ 200 1 1 ]\n' + FLOOR,
+     "s.pbrt:2: the coatedconductor material's eta (from 'conductor.eta') must lie in [0, 100]"),
 ])
 def test_a_file_pbrt_v4_refuses_is_one_line_naming_the_line(tmp_path, text, expected):
     message = fails(tmp_path, text)

@@ -120,15 +120,19 @@ class CoatedConductor(BSDFType):
              "specular_reflectance": "specular_reflectance", "distribution": "distribution"}
     reads_as = {"roughconductor": _BASE}
     params = in_slots((
-        *METAL_PARAMS,          # material, or eta and k: the base's metal
-        _ALPHA,
+        # material, or eta and k: the base's metal, which pbrt-v4 names conductor.eta and conductor.k
+        *(replace(p, pbrt_from=f"conductor.{p.pbrt_from}") if p.pbrt_from else p for p in METAL_PARAMS),
+        replace(_ALPHA, pbrt_from="interface.roughness"),
         Param("alpha_v", "number", default=0.0, low=0.0, high=1.0,
-              doc="the coating's roughness along the bitangent; alpha where left out", pbrt_from="vroughness"),
-        Param("interface_eta", "number", default=1.5, low=1.0001, high=10.0, doc="the coating's IOR"),
+              doc="the coating's roughness along the bitangent; alpha where left out",
+              pbrt_from="interface.vroughness"),
+        Param("interface_eta", "number", default=1.5, low=1.0001, high=10.0, doc="the coating's IOR",
+              pbrt_from="interface.eta"),
         Param("conductor_alpha", "number", default=0.0, low=0.0, high=1.0,
-              doc="the metal's GGX roughness along the tangent; 0: a mirror"),
+              doc="the metal's GGX roughness along the tangent; 0: a mirror", pbrt_from="conductor.roughness"),
         Param("conductor_alpha_v", "number", default=0.0, low=0.0, high=1.0,
-              doc="the metal's roughness along the bitangent; conductor_alpha where left out"),
+              doc="the metal's roughness along the bitangent; conductor_alpha where left out",
+              pbrt_from="conductor.vroughness"),
     ) + _LAYER_PARAMS, conductor_alpha=_ROUGH["alpha"], conductor_alpha_v=_ROUGH["alpha_v"],
         interface_eta="table[0]", g="table[1]", maxdepth="table[2]", nsamples="table[3]", alpha="table[4]",
         alpha_v="table[5]", thickness="table[6]", albedo="table[7:10]")
