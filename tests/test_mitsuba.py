@@ -266,6 +266,8 @@ ERRORS = [
      '<emitter type="area">: radiance: a null material is no surface, and cannot emit'),
     ('<shape type="sphere"><bsdf type="roughconductor"><float name="alpha_u" value="0.1"/></bsdf></shape>', None,
      "give alpha, or alpha_u and alpha_v, not a mixture"),
+    ('<shape type="sphere"><bsdf type="twosided"><bsdf type="diffuse"/><bsdf type="diffuse"/><bsdf type="diffuse"/>'
+     '</bsdf></shape>', None, '<bsdf type="twosided">: takes a front and a back BSDF, as Mitsuba 3\'s twosided does; got 3'),
     ('<shape type="sphere"><bsdf type="roughdielectric"><float name="alpha_u" value="0.1"/>'
      '<float name="alpha_v" value="1.5"/></bsdf></shape>', None,
      '<float name="alpha_v">: alpha_v: must lie in [0.0001, 1], got 1.5'),
@@ -281,6 +283,17 @@ def test_bad_files_fail_with_one_line(tmp_path, capsys, body, header, message):
     assert main(["render", str(path), "-o", str(tmp_path / "x.png")]) == 1
     err = capsys.readouterr().err
     assert "Traceback" not in err and not (tmp_path / "x.png").exists()
+
+
+def test_a_twosided_back_bsdf_is_left_out_with_a_line(tmp_path, capsys):
+    """Mitsuba 3's twosided takes a second BSDF for the back; pathtrace's two-sided materials
+    have one BSDF, so the front one serves both sides, and a warning says the back's is left out."""
+    scene = read_mitsuba_file(write(tmp_path, '<shape type="sphere"><bsdf type="twosided"><bsdf type="diffuse">'
+                                              '<rgb name="reflectance" value="0.2"/></bsdf><bsdf type="conductor"/>'
+                                              '</bsdf></shape>'))
+    material = scene.materials[int(scene.sphere_material[0])]
+    assert material.type == "diffuse" and material.twosided
+    assert "this back BSDF is left out" in capsys.readouterr().err
 
 
 def test_entity_expansion_bomb_is_refused_quickly(tmp_path):

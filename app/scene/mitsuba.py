@@ -352,6 +352,11 @@ class _Reader(XmlScene):
         inner = [c for c in node.children if c.tag in ("bsdf", "ref") and (named or "name" not in c.attrs)]
         if not inner:
             fail(node, "needs a nested <bsdf>")
+        if named and len(inner) > 2:
+            fail(node, f"takes a front and a back BSDF, as Mitsuba 3's twosided does; got {len(inner)}")
+        if named and len(inner) == 2:
+            warn(f"{inner[1].where()}: pathtrace's two-sided materials have one BSDF on both sides; "
+                 "this back BSDF is left out (the front one is used on both)")
         return self.material(inner[0])
 
     def blend(self, node, props) -> Material:
