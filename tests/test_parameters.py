@@ -62,6 +62,8 @@ def test_the_render_settings_read_each_format_s_defaults_and_conversions():
     given = {"maxdepth": 3, "lightsampler": "uniform"}
     assert read(settings.Integrator.parameters, "pbrt", lambda p, name: given.get(name)) == {
         "max_depth": 4, "light_sampler": "power"}
+    given = {"lightsampler": "exhaustive"}        # pbrt-v4 takes it: pathtrace's light tree
+    assert read(settings.Integrator.parameters, "pbrt", lambda p, name: given.get(name))["light_sampler"] == "auto"
     for fmt, value, message in (("mitsuba", 0, "^max_depth: 0 renders nothing"), ("pbrt", -1, "^maxdepth: must be in")):
         with pytest.raises(ValueError, match=message):
             read(settings.Integrator.parameters, fmt, lambda p, name: value if name in ("max_depth", "maxdepth") else None)

@@ -13,7 +13,9 @@ from pathtrace.scene.validate import SETTING_RANGES
 
 # pbrt-v4's light samplers as pathtrace's: its BVH light sampler is the light tree, chosen by the
 # scene (auto); its uniform one pathtrace has not, which the power sampler stands in for
-PBRT_LIGHT_SAMPLERS = {"bvh": "auto", "power": "power", "uniform": "power"}
+# pbrt-v4's light samplers (LightSampler::Create) as pathtrace's: each unbiased, so a choice by
+# power or by pathtrace's light tree draws the same image in expectation, with more or less noise
+PBRT_LIGHT_SAMPLERS = {"bvh": "auto", "exhaustive": "auto", "power": "power", "uniform": "power"}
 
 
 def _integer(name: str, **formats) -> Parameter:
@@ -41,7 +43,7 @@ def _pbrt_depth(depth, given):
 
 def _pbrt_light_sampler(name, given):
     if name not in PBRT_LIGHT_SAMPLERS:
-        raise ValueError(f"lightsampler: must be bvh, power or uniform, got {name!r}")
+        raise ValueError(f"lightsampler: must be {', '.join(sorted(PBRT_LIGHT_SAMPLERS))}, got {name!r}")
     return PBRT_LIGHT_SAMPLERS[name]
 
 
