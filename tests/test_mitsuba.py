@@ -296,6 +296,15 @@ def test_a_twosided_back_bsdf_is_left_out_with_a_line(tmp_path, capsys):
     assert "this back BSDF is left out" in capsys.readouterr().err
 
 
+def test_a_wrapper_takes_its_nested_bsdf_whatever_its_name(tmp_path):
+    """Mitsuba 3's mask, bumpmap and normalmap take the nested BSDF whatever it is named (its
+    props.objects())."""
+    scene = read_mitsuba_file(write(tmp_path, '<shape type="sphere"><bsdf type="mask"><float name="opacity" value="0.5"/>'
+                                              '<bsdf type="roughplastic" name="bsdf"/></bsdf></shape>'))
+    material = scene.materials[int(scene.sphere_material[0])]
+    assert material.type == "roughplastic" and material.masked
+
+
 def test_entity_expansion_bomb_is_refused_quickly(tmp_path):
     """A billion laughs: refused at its declaration, before any expansion."""
     entities = '<!ENTITY l0 "ha">' + "".join(

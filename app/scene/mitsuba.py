@@ -348,8 +348,10 @@ class _Reader(XmlScene):
 
     def nested_material(self, node, named=False) -> Material:
         """The Material of the BSDF a wrapper (twosided, mask, bumpmap, normalmap) holds: its
-        first nested <bsdf> or <ref>, one of a name too where `named`."""
-        inner = [c for c in node.children if c.tag in ("bsdf", "ref") and (named or "name" not in c.attrs)]
+        first nested <bsdf>, whatever its name (Mitsuba 3 takes the nested objects), or <ref>
+        without a name (a named one, such as a mask's opacity, can be a texture), or with one
+        too where `named`."""
+        inner = [c for c in node.children if c.tag == "bsdf" or c.tag == "ref" and (named or "name" not in c.attrs)]
         if not inner:
             fail(node, "needs a nested <bsdf>")
         if named and len(inner) > 2:
