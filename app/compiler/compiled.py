@@ -112,11 +112,13 @@ class CompiledScene:
         self.compile_materials()
         if tree:
             self.build_tree()
-        else:
-            self.light_plan = self._light_plan_before_tree()
 
-    def _light_plan_before_tree(self) -> LightPlan:
-        """light_plan of the primitives in the scene's order: the plan the light table will have."""
+    @property
+    def light_plan(self) -> LightPlan:
+        """What the kernels compile for the lights (light_plan): the light table's, or before the
+        tree, the plan of the primitives in the scene's order, which the table will have."""
+        if self.tree_ended is not None:
+            return LightPlan(self.lights.types, self.lights.tree)
         counts = [len(m.faces) for m in self.meshes]
         mesh_of = np.repeat(np.arange(len(self.meshes)), counts).astype(np.int64)
         mesh_material = np.array([m.material for m in self.meshes], np.int32)
@@ -251,7 +253,7 @@ class CompiledScene:
         return power, both_sides
 
     def compile_lights(self):
-        """The light table of the primitives in BVH order, and its plan (light_plan)."""
+        """The light table of the primitives in BVH order."""
         texture_rows = {id(t): int(self.textures.bindings["texture"][first]) for t, first
                         in zip(self._light_textures, self.textures.first[len(self.scene.materials.rows):])}
         # the corners as a view of the triangles' rows (v0, v1, v2 are consecutive float4s), not a copy
@@ -262,7 +264,6 @@ class CompiledScene:
                                                     max(self.radius, 1e-6),
                                                     lambda prims: self.light_bounds(prims, corners, both_sides),
                                                     self.light_sampler, texture_rows)
-        self.light_plan = LightPlan(self.lights.types, self.lights.tree)
 
     def light_bounds(self, prims: np.ndarray, corners: np.ndarray, both_sides: np.ndarray) -> dict:
         """The light tree's bounds of primitives `prims`: an analytic shape's normals are its

@@ -97,8 +97,14 @@ def light_plan(power: np.ndarray, delta_lights=(), radius: float = 1.0, sampler:
     order: known before the BVH orders the primitives, so that a scene's program can build
     beside its tree (app/compiler/compiled.py)."""
     delta = [light for light in delta_lights if light.power(radius) > 0]
-    bounded = np.count_nonzero(power > 0) + sum(light.tree_bounds() is not None for light in delta)
-    return LightPlan(tuple(dict.fromkeys(light.name for light in delta)),
+    return _plan(np.count_nonzero(power > 0) + sum(light.tree_bounds() is not None for light in delta),
+                 [light.name for light in delta], sampler)
+
+
+def _plan(bounded: int, delta_names: list, sampler: str) -> LightPlan:
+    """The plan of `bounded` lights with a place (emitters, points, spots) and delta lights of
+    these types, chosen by `sampler`."""
+    return LightPlan(tuple(dict.fromkeys(delta_names)),
                      bounded > 0 and (sampler == "tree" or (sampler == "auto" and bounded >= TREE_MIN)))
 
 
@@ -123,7 +129,7 @@ def build_light_table(power: np.ndarray, environment, delta_lights=(), radius: f
     at_infinity = [(light, w) for light, w in delta if light.tree_bounds() is None]
     env_lit = bool(np.any(environment.image > 0)) and environment.intensity > 0
     bounded = len(emitters) + len(placed)
-    plan = light_plan(power, delta_lights, radius, sampler)
+    plan = _plan(bounded, [light.name for light, _ in delta], sampler)
     tree = plan.tree
     bounded_power = np.concatenate([power[emitters], [w for _, w in placed]])
     weights = np.concatenate([[bounded_power.sum()] if tree else bounded_power, [w for _, w in at_infinity]])

@@ -116,11 +116,12 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
         self.camera = self.scene.camera.copy()
         self.settings = self.scene.settings
         self.auto_plan, self.plan_seconds, self.plan_cached = None, {}, False  # "auto" chooses again
-        self.start_program()
-        self.compiled.build_tree()
         if self.compiled.light_sampler != self._light_sampler():
             self.compiled.light_sampler = self._light_sampler()
-            self.compiled.update_materials()
+            if self.compiled.tree_ended is not None:     # given whole: its light table again
+                self.compiled.compile_lights()
+        self.start_program()
+        self.compiled.build_tree()
         self._select_program()
         self._size_queue()
         for name, array in self.compiled.geometry_arrays().items():

@@ -11,8 +11,6 @@ from pathtrace.scene.description import RenderSettings
 from pathtrace.scene.meshes import MAX_COORDINATE
 from pathtrace.scene.validate import SETTING_RANGES
 
-# pbrt-v4's light samplers as pathtrace's: its BVH light sampler is the light tree, chosen by the
-# scene (auto); its uniform one pathtrace has not, which the power sampler stands in for
 # pbrt-v4's light samplers (LightSampler::Create) as pathtrace's: each unbiased, so a choice by
 # power or by pathtrace's light tree draws the same image in expectation, with more or less noise
 PBRT_LIGHT_SAMPLERS = {"bvh": "auto", "exhaustive": "auto", "power": "power", "uniform": "power"}
