@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from pathtrace.cli.main import main
+from pathtrace.compiler.compiled import CompiledScene
 from pathtrace.device.opencl import open_device
 from pathtrace.rendering.multidevice import DeviceGroup, SampleCounter
 from pathtrace.rendering.renderer import Renderer
@@ -54,6 +55,29 @@ def test_two_devices_give_the_one_device_image(backend, scene):
     assert group.rays_traced() == single.rays_traced()
 
 
+def test_a_groups_renderers_are_made_at_once_and_build_one_tree(backend, scene, monkeypatch):
+    """DeviceGroup makes each device's renderer in a thread of its own: both ask for the tree
+    at once (a barrier that only two callers at once pass), and it is built once, by one of
+    them, the other waiting for it."""
+    both_asked = threading.Barrier(2, timeout=30)
+    build_tree, _build_tree, built = CompiledScene.build_tree, CompiledScene._build_tree, []
+
+    def asked_at_once(compiled):
+        both_asked.wait()
+        build_tree(compiled)
+
+    def counted(compiled):
+        time.sleep(0.2)          # long enough for the other to reach the tree meanwhile
+        built.append(threading.current_thread().name)
+        _build_tree(compiled)
+    monkeypatch.setattr(CompiledScene, "build_tree", asked_at_once)
+    monkeypatch.setattr(CompiledScene, "_build_tree", counted)
+    group = DeviceGroup([backend, open_device(backend.device)], scene)
+    assert len(built) == 1 and all(r.compiled.bvh is not None for r in group.renderers)
+    group.render(2)
+    assert group.samples == 2 and np.isfinite(group.mean()).all()
+
+
 def test_slow_samples_are_split_into_bands_of_rows(backend, scene, monkeypatch):
     """The first sample is split into FIRST_BANDS launches of rows, and a sample slower than the
     launch budget into bands too (so that Ctrl-C never waits for a whole image's sample); the
@@ -97,11 +121,24 @@ def test_sample_counter_issues_every_index_once_across_threads():
 
 def test_near_the_end_a_device_takes_only_its_share():
     """With 10 samples left, a device of a third of the measured speed takes 4, not the 100
-    its launch size asks for."""
+    its launch size asks for; the fast one then takes the other 6, which it draws in the time
+    the slow one takes over its 4."""
     counter = SampleCounter(10)
-    counter.take("fast", 0, rate=200.0)
-    assert counter.take("slow", 100, rate=100.0) == (0, 4)
-    assert counter.take("fast", 100, rate=200.0) == (4, 4)
+    counter.take("fast", 0, rate=200.0, now=0.0)
+    assert counter.take("slow", 100, rate=100.0, now=0.0) == (0, 4)
+    assert counter.take("fast", 100, rate=200.0, now=0.0) == (4, 6)
+
+
+def test_the_devices_end_together_counting_the_launches_they_have_yet_to_finish():
+    """Two devices of one speed (100 samples/s): the first took 20 samples at 0 s, which it ends
+    at 0.2 s. The second, asking at 0.1 s with 20 left, takes 15 (ending at 0.25 s), and the
+    first the last 5 at 0.2 s (ending at 0.25 s too), where half of what was left, 10, would
+    have left the first drawing alone from 0.2 to 0.3 s."""
+    counter = SampleCounter(40)
+    assert counter.take("a", 20, rate=100.0, now=0.0) == (0, 20)
+    assert counter.take("b", 100, rate=100.0, now=0.1) == (20, 15)
+    assert counter.take("a", 100, rate=100.0, now=0.2) == (35, 5)
+    assert counter.take("b", 100, rate=100.0, now=0.25) is None
 
 
 def test_a_device_error_stops_the_render_and_is_raised(backend, scene):

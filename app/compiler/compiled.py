@@ -5,6 +5,7 @@ uploads it. A scene's textures compile into their own tables (app/textures/table
 Primitives have one index space (kernels/types.h); prim_shape maps each back to the
 shape of the description it came from, so that users only ever see the description's shapes."""
 
+import threading
 import time
 from dataclasses import dataclass
 
@@ -102,6 +103,7 @@ class CompiledScene:
         self._build = (queue, progress)      # for build_tree
         self.bvh: BVH = None
         self.tree_ended = None               # when build_tree ended (perf_counter), once it has
+        self._tree_lock = threading.Lock()   # a device group's renderers ask for it at once
         # the corners as the kernels' triangle rows hold them (float4s, w filled below), gathered
         # from float32 vertices (half the bytes of float64 to move) by np.take, which is 3-4x
         # faster than NumPy's indexing with an array; whole 48-byte rows are then put in BVH
@@ -134,9 +136,16 @@ class CompiledScene:
     def build_tree(self):
         """The BVH, and in its order the primitives' tables, where each primitive's media are
         and the light table: what the constructor leaves to this with tree=False. Once: a build
-        that fails can be tried again."""
-        if self.tree_ended is not None:
+        that fails can be tried again. Callers in other threads wait for the one building it;
+        the lock goes with what the build needs (a compiled scene is pickled for the farm)."""
+        lock = self._tree_lock
+        if lock is None:
             return
+        with lock:
+            if self.tree_ended is None:
+                self._build_tree()
+
+    def _build_tree(self):
         scene, meshes, n_spheres, (queue, progress) = self.scene, self.meshes, self.num_spheres, self._build
         corners = self._corners
         start = time.perf_counter()
@@ -182,6 +191,7 @@ class CompiledScene:
         self.compile_lights()
         self._corners = self._build = None
         self.tree_ended = time.perf_counter()
+        self._tree_lock = None
 
     def place_shapes(self, triangle_mesh: np.ndarray) -> np.ndarray:
         """Points the records of the analytic shapes (rows of the triangle range whose mesh is a

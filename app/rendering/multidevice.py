@@ -7,11 +7,13 @@ sample: it equals a one-device render of the same samples up to the order of flo
 Balancing follows the idea of Cycles' work balancer: each device takes launches sized to its own
 measured speed (pathtrace.rendering.launches.next_launch_size), so a fast device takes more samples and a device
 that slows down takes fewer; near the end a device takes no more than its share of what is left,
-by the measured speeds, so that no device is left finishing a long launch alone."""
+by the measured speeds and the launches the others have yet to finish, so that all end together
+and none is left finishing a long launch alone."""
 
 import math
 import threading
 import time
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
@@ -41,11 +43,17 @@ class SampleCounter:
         self.stopped = False
         self._lock = threading.Lock()
         self._rates = {}        # taker -> its last measured samples per second
+        self._busy_until = {}   # taker -> when the launch it took last should end (perf_counter)
 
-    def take(self, taker, wanted: int, rate: float = None):
+    def take(self, taker, wanted: int, rate: float = None, now: float = None):
         """Up to `wanted` sample indices for `taker` (rate: its speed, samples/s), as
-        (start, count), or None when all are issued or the render was stopped."""
+        (start, count), or None when all are issued or the render was stopped. Near the end a
+        taker gets its share of what is left: with every taker of a known speed busy until
+        the ends of the launches it took, and then working on what is left, all would end at
+        one time T, and this taker's share is what it draws by then (`now`: the time,
+        perf_counter's unless given)."""
         with self._lock:
+            now = time.perf_counter() if now is None else now
             if rate:
                 self._rates[taker] = rate
             left = self.total - self.issued
@@ -53,8 +61,12 @@ class SampleCounter:
                 return None
             count = min(wanted, left)
             if rate and len(self._rates) > 1:
-                share = left * rate / sum(self._rates.values())
-                count = max(1, min(count, math.ceil(share)))
+                others = [(r, max(self._busy_until.get(t, now) - now, 0.0))
+                          for t, r in self._rates.items() if t != taker]
+                seconds = (left + sum(r * busy for r, busy in others)) / sum(self._rates.values())
+                count = max(1, min(count, math.ceil(rate * seconds)))
+            if rate:
+                self._busy_until[taker] = now + count / rate
             start = self.issued
             self.issued += count
             return start, count
@@ -70,10 +82,12 @@ class DeviceGroup:
     def __init__(self, backends: list[Backend], scene, width: int = None, height: int = None,
                  progress=None):
         """scene: a CompiledScene, or a Scene to compile on the first device (progress as for
-        Renderer), whose renderer builds its tree (Renderer.set_scene)."""
+        Renderer), whose tree the first renderer to ask builds (Renderer.set_scene). The
+        renderers are made at once, each in a thread: each device builds its program, takes
+        its uploads and clears its buffers beside the others."""
         compiled = scene if isinstance(scene, CompiledScene) \
             else compile_scene(scene, backends[0].queue, progress, tree=False)
-        self.renderers = [Renderer(b, compiled, width, height) for b in backends]
+        self.renderers = _each(lambda b: Renderer(b, compiled, width, height), backends)
         self.compiled = compiled
 
     @property
@@ -154,9 +168,9 @@ class DeviceGroup:
 
     def _merged(self, read) -> np.ndarray:
         """The sum over devices of one of each renderer's buffers (read: Renderer.read_sum or
-        read_sum_sq), in float64."""
-        return sum((read(r).astype(np.float64) for r in self.renderers[1:]),
-                   read(self.renderers[0]).astype(np.float64))
+        read_sum_sq), in float64; the devices read back at once."""
+        first, *others = _each(read, self.renderers)
+        return sum((a.astype(np.float64) for a in others), first.astype(np.float64))
 
     def set_aovs(self, on: bool):
         """Accumulate the denoiser's albedo and normal too (Renderer.set_aovs), on every device."""
@@ -191,3 +205,12 @@ class DeviceGroup:
 
     def dropped_samples(self) -> int:
         return sum(r.dropped_samples() for r in self.renderers)
+
+
+def _each(call, items) -> list:
+    """[call(item) for item in items], each in a thread of its own (one item: in this one); the
+    first error raised is raised here."""
+    if len(items) == 1:
+        return [call(items[0])]
+    with ThreadPoolExecutor(len(items)) as pool:
+        return list(pool.map(call, items))
