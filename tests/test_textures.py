@@ -57,7 +57,7 @@ def texture(kind, **params):
 
 def lookup(kernels, tex, uv):
     """The kernel's values of `tex` at uv (N, 2)."""
-    tables = compile_textures([[(0, 3, tex)]])
+    tables = compile_textures([[("", 0, 3, tex)]])
     out = np.zeros((len(uv), 4), np.float32)
     kernels(SOURCE, ALL_TEXTURES)("lookup_texture", len(uv), tables.textures, tables.texels,
                                   tables.bindings[0]["texture"], np.ascontiguousarray(uv, np.float32), out)
@@ -206,9 +206,9 @@ def test_a_tree_beyond_the_kernels_registers_is_refused():
         if levels == 0:
             return texture("checkerboard")
         return texture("scale", tex=tree(levels - 1), scale=tree(levels - 1))
-    compile_textures([[(0, 3, tree(7))]])
+    compile_textures([[("", 0, 3, tree(7))]])
     with pytest.raises(ValueError, match="needs 9 registers"):
-        compile_textures([[(0, 3, tree(8))]])
+        compile_textures([[("", 0, 3, tree(8))]])
 
 
 def test_a_material_reads_its_textured_parameters_at_the_hit(kernels):
@@ -221,7 +221,7 @@ def test_a_material_reads_its_textured_parameters_at_the_hit(kernels):
     row = table.add(Material("roughconductor", {"specular_reflectance": texture("bitmap", image=colours),
                                                 "alpha": texture("bitmap", image=grey, filter="nearest"),
                                                 "eta": 0.2, "k": 3.0}))
-    tables = compile_textures([[entry[1:] for entry in entries] for entries in table.textures])
+    tables = compile_textures(table.textures)
     materials = table.rows.copy()
     materials["textures"] = tables.first
     uv = rng.uniform(0, 1, (64, 2))
@@ -349,7 +349,7 @@ def test_a_shared_texture_is_stored_once(tmp_path):
             '<ref name="diffuse_reflectance" id="t"/></bsdf></shape>' + SPHERE)
     scene = read_mitsuba_file(write(tmp_path, body))
     assert len(scene.materials.all_textures()) == 1
-    tables = compile_textures([[e[1:] for e in entries] for entries in scene.materials.textures])
+    tables = compile_textures(scene.materials.textures)
     assert len(tables.texels) == 1024 + 8 * 8 * 4      # the sRGB table, then the image once (rgb as rgba)
 
 
@@ -422,7 +422,7 @@ def test_bitmap_gradient_is_the_slope_of_its_bilinear_lookup(kernels, mode):
     image = Image(rng.integers(0, 256, (6, 5, 3)).astype(np.uint8), linear=True)
     to_uv = np.array([[1.3, 0.4, 0.1], [-0.3, 0.9, 0.2], [0, 0, 1]])
     tex = texture("bitmap", image=image, wrap=mode, to_uv=to_uv)
-    tables = compile_textures([[(24, 1, tex)]])
+    tables = compile_textures([[("", 24, 1, tex)]])
     uv = rng.uniform(0.05, 0.95, (300, 2))
     out = np.zeros((len(uv), 2), np.float32)
     kernels(GRADIENT_SOURCE, Features(textures=("bitmap",)))("gradient", len(uv), tables.textures, tables.texels,

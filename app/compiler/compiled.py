@@ -236,13 +236,14 @@ class CompiledScene:
     def compile_materials(self):
         """The material table and its textures, which the primitives' order does not change."""
         table = self.scene.materials
-        self.material_source = (table.rows.copy(), [list(t) for t in table.textures])
+        # a table's entries of textures are replaced, never changed in place (MaterialTable.set)
+        self.material_source = (table.rows.copy(), list(table.textures))
         # the images lights read (a goniometric light's) are textures of the same table, bound
         # after the materials' as if to materials of their own
         self._light_textures = [t for light in self.scene.lights for t in light.textures()]
         try:
-            self.textures: TextureTables = compile_textures([[t[1:] for t in entries] for entries in table.textures]
-                                                            + [[(0, 3, t)] for t in self._light_textures])
+            self.textures: TextureTables = compile_textures(table.textures
+                                                            + [[("", 0, 3, t)] for t in self._light_textures])
         except ValueError as e:
             raise UserError(f"{self.scene.source or self.scene.name}: {e}") from None
         self.materials = table.rows.copy()

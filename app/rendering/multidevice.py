@@ -166,11 +166,14 @@ class DeviceGroup:
     def samples_per_device(self) -> list[int]:
         return [r.samples for r in self.renderers]
 
-    def _merged(self, read) -> np.ndarray:
+    def _merged(self, read, dtype=np.float64) -> np.ndarray:
         """The sum over devices of one of each renderer's buffers (read: Renderer.read_sum or
-        read_sum_sq), in float64; the devices read back at once."""
+        read_sum_sq), in `dtype`; the devices read back at once."""
         first, *others = _each(read, self.renderers)
-        return sum((a.astype(np.float64) for a in others), first.astype(np.float64))
+        total = first.astype(dtype, copy=False)
+        for other in others:
+            np.add(total, other, out=total)
+        return total
 
     def set_aovs(self, on: bool):
         """Accumulate the denoiser's albedo and normal too (Renderer.set_aovs), on every device."""
@@ -187,7 +190,9 @@ class DeviceGroup:
         NVIDIA's driver 580 built it with eval_leaf_texture called: docs/notes/performance-2026-11.md,
         2026-11-30), its radiance wrong too. One that keeps fewer is not told from one that drops NaN samples
         (dropped_samples)."""
-        sums = self._merged(Renderer.read_sum)
+        # in float32, as one device's (Renderer.mean): each device's sums are float32 already,
+        # and a float64 copy of a 1080p image's is 66 MB more to write and read at every snapshot
+        sums = self._merged(Renderer.read_sum, np.float32)
         kept = sums[..., 3]
         over = int((kept > self.samples + 0.5).sum())
         if over:
@@ -195,7 +200,7 @@ class DeviceGroup:
                             f"{kept.max():.0f} of {self.samples}): the kernels were built wrongly for this device; "
                             "no image is given (pathtrace devices --check tests the generic kernels; "
                             "--program specialised avoids them)")
-        return (sums[..., :3] / max(self.samples, 1)).astype(np.float32)
+        return sums[..., :3] / np.float32(max(self.samples, 1))
 
     def variance(self) -> np.ndarray:
         return variance_of(self._merged(Renderer.read_sum), self._merged(Renderer.read_sum_sq), self.samples)

@@ -109,7 +109,8 @@ def program(root: Texture) -> list:
 
 
 def compile_textures(bindings: list) -> TextureTables:
-    """bindings: per material row, a list of (slot, width, Texture). A texture that combines none
+    """bindings: per material row, a list of (parameter name, slot, width, Texture), as
+    MaterialTable.textures holds them (the name is not compiled). A texture that combines none
     is a row; one that combines others, the last row of its program (its tree's combining
     textures, kernels/texture.cl), which a tree shared by several materials shares. Raises
     ValueError for a tree that needs more registers than the kernels have."""
@@ -134,7 +135,7 @@ def compile_textures(bindings: list) -> TextureTables:
     for material, entries in enumerate(bindings):
         if entries:
             first[material] = len(table)
-        for k, (slot, width, texture) in enumerate(entries):
+        for k, (_, slot, width, texture) in enumerate(entries):
             table.append((row_of(texture), slot, width, int(k == len(entries) - 1)))
     for texture, registers, _ in list(order):
         if registers is not None:
