@@ -231,29 +231,52 @@ def test_without_the_generic_program_the_first_image_waits_for_one_untuned_build
 
 
 
-def test_the_scenes_program_builds_beside_its_tree(backend, specialised, monkeypatch):
-    """A scene compiled without its tree (what `render` and the Python API do) starts its own
-    program's build before the tree's: on a first start the two had run one after the other
-    (the tree waits here, at most 30 s, until the build has begun)."""
-    from pathtrace.compiler.compiled import CompiledScene, compile_scene
+def open_as_render_does(backend, scene):
+    from pathtrace.compiler.compiled import compile_scene
+    return Renderer(backend, compile_scene(scene, backend.queue, tree=False), SIZE, SIZE)
+
+
+def open_as_the_viewer_does(backend, scene):
+    from pathtrace.viewer.opening import SceneOpening
+
+    class Opening(SceneOpening):          # the viewer's part that opens scenes, its statuses kept
+        def __setattr__(self, name, value):
+            if name == "_status":
+                statuses.append(value)
+            super().__setattr__(name, value)
+    opening, statuses = Opening(), []
+    opening.backend = backend
+    r = opening._open(scene)
+    r.resize(SIZE, SIZE)
+    # what the window said last: that the kernels, which the tree did not wait for, are coming
+    assert statuses[-1][0].startswith("preparing the kernels for cornell-box")
+    return r
+
+
+@pytest.mark.parametrize("open_scene", [open_as_render_does, open_as_the_viewer_does])
+def test_the_scenes_program_builds_beside_its_tree(backend, specialised, monkeypatch, open_scene):
+    """A scene compiled without its tree (what `render`, the Python API and the viewer do) starts
+    its own program's build before the tree's: on a first start the two had run one after the
+    other (the tree waits here, at most 30 s, until the build has begun)."""
+    from pathtrace.compiler.compiled import CompiledScene
     asked, before_tree = threading.Event(), []
-    build_tree = CompiledScene.build_tree
+    build_tree, trees = CompiledScene.build_tree, []
 
     def tree_after_the_build_began(compiled):
         if compiled.bvh is None:
             asked.wait(30)
+        trees.append(compiled)
         build_tree(compiled)
     monkeypatch.setattr(CompiledScene, "build_tree", tree_after_the_build_began)
 
     def build(features, tune):
-        before_tree.append(compiled.bvh is None)
+        before_tree.append(trees[-1].bvh is None if trees else True)
         asked.set()
         return specialised.program_for(features)
     auto = building_with(backend, build, generic=False)
     scene = load_scene("cornell-box")
-    compiled = compile_scene(scene, auto.queue, tree=False)
-    r = Renderer(auto, compiled, SIZE, SIZE)
-    assert before_tree == [True] and compiled.bvh is not None
+    r = open_scene(auto, scene)
+    assert before_tree == [True] and r.compiled.bvh is not None
     r.add_samples(SPP)
     r.finish()
     same_image(r, render(specialised, scene))

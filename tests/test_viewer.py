@@ -308,10 +308,10 @@ def test_opening_a_scene_says_what_it_is_busy_with(viewer, monkeypatch):
     monkeypatch.setattr(viewer, "show_progress", shown)
     compile_scene = opening.compile_scene
 
-    def slow_compile(scene, queue, progress):
+    def slow_compile(scene, queue, progress, tree=True):
         progress(0.5)
         assert drawn["bvh"].wait(30), "the window did not show the BVH build's progress"
-        return compile_scene(scene, queue, progress)
+        return compile_scene(scene, queue, progress, tree=tree)
     monkeypatch.setattr(opening, "compile_scene", slow_compile)
     set_scene = viewer.renderer.set_scene
 

@@ -25,17 +25,19 @@ class SceneOpening:
         return self._open(scene)
 
     def _open(self, scene, renderer=None) -> Renderer:
-        """In the worker thread: the scene compiled (its BVH build's progress shown) and given to
-        `renderer` (or a new one), the kernels compiled for it (said while they are). A scene
-        that asks for BDPT or light tracing shows the path tracer's first images (the same image
-        in expectation) while their kernels build, then switches (app/viewer/integrators.py)."""
+        """In the worker thread: the scene compiled and given to `renderer` (or a new one, which
+        starts the build of the scene's kernels and builds its BVH beside it: Renderer.set_scene),
+        the BVH's progress shown and then that the kernels are still building. A scene that asks
+        for BDPT or light tracing shows the path tracer's first images (the same image in
+        expectation) while their kernels build, then switches (app/viewer/integrators.py)."""
         integrator = scene.settings.integrator
         scene = scene.with_settings(integrator="path")
-        compiled = compile_scene(scene, self.backend.queue, self._build_progress(scene.name))
-        self._status = (f"preparing the kernels for {scene.name} on {self.backend.device.name}", None)
+        compiled = compile_scene(scene, self.backend.queue, self._build_progress(scene.name), tree=False)
+        self._status = self._preparing(scene.name)
         if renderer is None:
             renderer = Renderer(self.backend, compiled)
         else:
+            compiled.build_tree()     # before the renderer lets its scene go: a build that fails leaves it
             renderer.set_scene(compiled)
         self.requested_integrator = None if integrator == "path" else integrator
         return renderer
@@ -66,7 +68,11 @@ class SceneOpening:
 
     def _build_progress(self, name: str):
         """A progress callback for a scene's BVH build, from the worker thread: the window, live
-        in its own thread, shows how far it is."""
+        in its own thread, shows how far it is, and once it is built, that the kernels, which
+        began building beside it, may still be."""
         def show(fraction):
-            self._status = (f"building the BVH of {name}", fraction)
+            self._status = (f"building the BVH of {name}", fraction) if fraction < 1 else self._preparing(name)
         return show
+
+    def _preparing(self, name: str) -> tuple:
+        return f"preparing the kernels for {name} on {self.backend.device.name}", None
