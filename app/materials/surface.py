@@ -7,7 +7,7 @@ them one at a time."""
 from dataclasses import replace
 
 from pathtrace.materials.table import PERTURBATIONS, Material, scaled_bump_map, surface_problem
-from pathtrace.parameters import Parameter
+from pathtrace.parameters import Parameter, out_of_range
 
 # Mitsuba 3 gives a field by a plugin wrapped round a nested BSDF: its Mitsuba name is the
 # plugin's, "plugin.property" for a property of it, the plugin alone for the plugin's presence (a
@@ -33,14 +33,18 @@ FIELDS = {"Le": "emission", "emits_back": "emits_back", "twosided": "twosided", 
 
 
 def dressed(material: Material, values: dict) -> Material:
-    """material carrying the SURFACE values given (by their names), checked (those with the
-    BSDF and each other by table.surface_problem). Raises ValueError ("<name>: <problem>")."""
+    """material carrying the SURFACE values given (by their names), checked: each in its range,
+    those with the BSDF and each other by table.surface_problem. Raises ValueError ("<name>:
+    <problem>")."""
     maps = {"normal_map", "bump_map"} & set(values)
     if "bump_scale" in values and "bump_map" not in values:
         raise ValueError("bump_scale: scales a bump_map, and there is none")
     if "perturbation" in values and not maps:
         raise ValueError("perturbation: says how a normal_map or bump_map perturbs, and there is none")
     material = replace(material, **{FIELDS[k]: v for k, v in values.items() if k in FIELDS})
+    error = out_of_range(SURFACE, values)
+    if error:
+        raise error
     problem = surface_problem(material)
     if problem:
         raise ValueError(": ".join(problem))

@@ -11,6 +11,7 @@ from pathtrace.errors import UserError, short
 from pathtrace.materials.blend import MAX_BLEND_DEPTH
 from pathtrace.materials.bsdf import EMITS_BACK, MASKED, NULL, PBRT_PERTURBATION, TRANSMISSIVE, TWOSIDED, constant_of
 from pathtrace.materials.registry import BSDFS, TAGS
+from pathtrace.parameters import out_of_range
 from pathtrace.device.slots import read_slot, write_slot
 from pathtrace.textures.texture import Texture
 from pathtrace.device.types import MATERIAL
@@ -116,9 +117,9 @@ def blend(weight, components: tuple) -> "Material":
     texture; None: the declared default), checked. Raises ValueError ("weight: <problem>", or
     check_blend's)."""
     given = {} if weight is None else {"weight": weight}
-    problem = BSDFS["blendbsdf"].out_of_range(given)
-    if problem:
-        raise ValueError(": ".join(problem))
+    error = out_of_range(BSDFS["blendbsdf"].params, given)
+    if error:
+        raise error
     material = Material("blendbsdf", BSDFS["blendbsdf"].complete(given), components=tuple(components))
     problem = check_blend(material)
     if problem:

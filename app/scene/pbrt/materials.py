@@ -11,7 +11,7 @@ from pathtrace.errors import UserError, warn
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import TRANSMISSIVE
 from pathtrace.materials.table import blend, check_bump_map, transmits
-from pathtrace.parameters import by_format, format_names, missing, read
+from pathtrace.parameters import by_format, format_names, missing, out_of_range, read
 from pathtrace.textures import TEXTURES, Texture
 from pathtrace.textures.texture import PBRT_MAPPING
 from pathtrace.textures.bitmap import read_image
@@ -31,9 +31,9 @@ def make(kind, values, where) -> Material:
         complete = BSDFS[kind].complete(values)
     except ValueError as e:
         raise UserError(f"{where}: {e}") from None
-    problem = BSDFS[kind].out_of_range(complete)     # the TOML reader's ranges (a reflectance in [0, 1])
-    if problem:
-        name, text = problem
+    error = out_of_range(BSDFS[kind].params, complete)     # the TOML reader's ranges (a reflectance in [0, 1])
+    if error:
+        name, _, text = str(error).partition(": ")
         pbrt_name = next(p.pbrt or p.pbrt_from for p in BSDFS[kind].params if p.name == name)
         raise UserError(f"{where}: the {kind} material's {name}" + (f" (from '{pbrt_name}')" if pbrt_name else "")
                         + f" {text}")
@@ -202,10 +202,9 @@ class MaterialMapper:
             bsdf, given = BSDFS_BY_NAME[kind], {}
             values = read(bsdf.params + bsdf.format_only, "pbrt", lambda p, name: self.parameter(params, p, name), given)
             # the numbers a file gives as they are checked at their own lines (a layer's walks)
-            problem = bsdf.out_of_range({p.name: values[p.name] for p in bsdf.params
-                                         if p.kind == "number" and p.pbrt and not p.from_pbrt and p.name in values})
-            if problem:
-                params.fail(next(p.pbrt for p in bsdf.params if p.name == problem[0]), problem[1])
+            error = out_of_range([p for p in bsdf.params if p.kind == "number" and p.pbrt and not p.from_pbrt], values)
+            if error:
+                self.fail(params, where, error, bsdf.params)
             try:
                 chosen = bsdf.from_pbrt(values, given, lambda text: warn(f"{where}: {text}"))
             except ValueError as e:

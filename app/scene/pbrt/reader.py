@@ -42,7 +42,6 @@ from pathtrace.scene.mesh_shapes import MESH_SHAPES, MeshSource
 from pathtrace.scene.pbrt.materials import MaterialMapper, make
 from pathtrace.scene.pbrt.options import OPTION_DIRECTIVES, OptionDirectives, refused
 from pathtrace.scene.pbrt.state import MAX_FILE_BYTES, MAX_INCLUDE_DEPTH, STATE_DIRECTIVES, GraphicsStateDirectives
-from pathtrace.textures import Texture
 from pathtrace.scene.pbrt.tokens import Tokens, parameters, string
 from pathtrace.shapes import SHAPES, Shape
 
@@ -346,7 +345,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         if self.current_object is not None and parts[0][1] is not None:
             warn(f"{where}: pbrt-v4 has no area lights in instances; this shape does not emit")
             parts = [(None, None)]
-        alpha = self.alpha(params)
+        alpha = self.read_declared((OPACITY,), params, where).get("opacity", 1.0)
         self.unused(params, "shape", kind)
         group = None if self.current_object is None else self.objects[self.current_object]
         if shape is not None:
@@ -359,16 +358,6 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
             # no MeshFile: the file's faces were turned and its uvs flipped, which a converted
             # scene's reference to the file could not say (convert writes the mesh anew)
             self.builder.add_to(group, Mesh(name, vertices, part, normals, row, source, None, uvs, media))
-
-    def alpha(self, params):
-        """A shape's alpha: a number in range or a float texture, by the declaration of what any
-        material carries (app/materials/surface.py: OPACITY)."""
-        alpha = self.mapper.parameter(params, OPACITY, OPACITY.pbrt)
-        if alpha is None:
-            return 1.0
-        if not isinstance(alpha, Texture) and not OPACITY.low <= alpha <= OPACITY.high:
-            params.fail(OPACITY.pbrt, f"must lie in [{OPACITY.low:g}, {OPACITY.high:g}], got {alpha:g}")
-        return alpha
 
     def analytic_shape(self, kind, params, media, where) -> Shape:
         """An analytic shape (app/shapes/), its parameters read by their pbrt-v4 names
@@ -416,30 +405,27 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         return *place_mesh(vertices, faces, normals, self.state.ctm, self.state.reverse, True, where)[:3], uvs, source
 
     def read_declared(self, kind, params, where) -> dict:
-        """The values of the parameters a type `kind` declares (app/parameters.py) that a
-        directive gives, converted and in range, what it has and pathtrace has not read
-        (`unsupported`)."""
-        self.read_unsupported(params, kind)
-        try:
-            values = declared.read(kind.parameters, "pbrt", lambda p, name: self.mapper.parameter(params, p, name))
-            error = declared.out_of_range(kind.parameters, values)
-            if error:
-                raise error
-        except ValueError as e:
-            self.mapper.fail(params, where, e, kind.parameters)
-        return values
-
-    def read_unsupported(self, params, kind):
-        """Reads the parameters pbrt-v4's `kind` has and pathtrace has not (its `unsupported`),
-        with a warning of each given where the kind says why. A name declared with its type
-        ("string filename") is one value of that type, as pbrt-v4 reads it: another is a
-        parameter pbrt-v4 leaves unused, and refuses; a bare name is taken as the file writes it."""
-        for key, why in kind.unsupported.get("pbrt", {}).items():
+        """The values of the parameters that a type `kind` declares (app/parameters.py), or of a
+        tuple of Parameters, that a directive gives, converted and in range; of what pbrt-v4's
+        kind has and pathtrace has not (`unsupported`), a warning of each given where the kind
+        says why. A name declared with its type ("string filename") is one value of that type,
+        as pbrt-v4 reads it: another is a parameter pbrt-v4 leaves unused, and refuses; a bare
+        name is taken as the file writes it."""
+        fields = kind if isinstance(kind, tuple) else kind.parameters
+        for key, why in ({} if isinstance(kind, tuple) else kind.unsupported.get("pbrt", {})).items():
             expected, _, name = key.rpartition(" ")
             if params.type_of(name):
                 params.get(name, (expected,), 1) if expected else params.get(name, (params.type_of(name),), 0)
                 if why:
                     warn(f"{params.where(name)}: {why}; ignored")
+        try:
+            values = declared.read(fields, "pbrt", lambda p, name: self.mapper.parameter(params, p, name))
+            error = declared.out_of_range(fields, values)
+            if error:
+                raise error
+        except ValueError as e:
+            self.mapper.fail(params, where, e, fields)
+        return values
 
     def area_emission(self, vertices, faces, where, area=None):
         """The emitted radiance of a shape under an AreaLightSource, as [(faces, radiance)]
