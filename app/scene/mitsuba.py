@@ -366,9 +366,9 @@ class _Reader(XmlScene):
         inner = [c for c in node.children if c.tag in ("bsdf", "ref") and c.attrs.get("name") != "weight"]
         if len(inner) != 2:
             fail(node, f"needs two nested BSDFs, got {len(inner)}")
-        weight = self.parameter(props, next(p for p in BSDFS["blendbsdf"].params if p.name == "weight"), "weight")
+        values = parameters.read(BSDFS["blendbsdf"].params, "mitsuba", lambda p, name: self.parameter(props, p, name))
         try:
-            return blend(weight, tuple(self.material(c) for c in inner))
+            return blend(values.get("weight"), tuple(self.material(c) for c in inner))
         except ValueError as e:
             refuse(props, node, e)
 

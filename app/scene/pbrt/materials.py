@@ -198,6 +198,8 @@ class MaterialMapper:
     def _material(self, kind, params, where) -> Material | None:
         if kind in ("interface", "", "none"):
             return None
+        if kind == "mix":
+            return self._mix(params, where)
         if kind in BSDFS_BY_NAME:         # the types that declare their pbrt-v4 parameters
             bsdf, given = BSDFS_BY_NAME[kind], {}
             values = read(bsdf.params + bsdf.format_only, "pbrt", lambda p, name: self.parameter(params, p, name), given)
@@ -210,8 +212,6 @@ class MaterialMapper:
             except ValueError as e:
                 self.fail(params, where, e)
             return None if chosen is None else make(*chosen, where)
-        if kind == "mix":
-            return self._mix(params, where)
         warn(f"{where}: pathtrace has no {kind} material; it uses a diffuse one of albedo 0.5")
         return make("diffuse", {"rho_d": np.full(3, 0.5)}, where)
 
@@ -223,15 +223,14 @@ class MaterialMapper:
         if names is None:
             raise UserError(f'{where}: a mix material needs "string materials" [ "first" "second" ]')
         parts = [self.reader.named_material(n, where) for n in names]
-        amount = self.texture_input(params, "amount", 0.5, True)
+        values = read(BSDFS["blendbsdf"].params, "pbrt", lambda p, name: self.parameter(params, p, name))
         if any(p is None for p in parts):
             other = next((p for p in parts if p is not None), None)
             warn(f"{where}: pathtrace cannot mix a surface with an interface; it uses the other material alone")
             return other
         try:
-            mixed = blend(amount, parts)
+            mixed = blend(values.get("weight"), parts)
         except ValueError as e:
-            field, sep, problem = str(e).partition(": ")
-            raise UserError(f"{where}: amount: {problem}" if sep and field == "weight" else f"{where}: {e}") from None
+            self.fail(params, where, e, BSDFS["blendbsdf"].params)
         mixed.twosided = not transmits(mixed)
         return mixed
