@@ -99,8 +99,8 @@ def scaled_bump_map(texture: Texture, scale: float) -> Texture:
 
 def surface_problem(material: Material) -> tuple | None:
     """(the field of app/materials/surface.py's SURFACE, the problem) of what a Material carries
-    that cannot go with its BSDF or each other, or None: the one check of the readers (dressed)
-    and of the table (pack)."""
+    that cannot go with its BSDF or each other, or None: the check of the readers (dressed), which
+    name the field, and of the table (MaterialTable.set), whatever made the Material."""
     if material.normal_map is not None and material.bump_map is not None:
         return "normal_map", "give a normal_map or a bump_map, not both"
     if material.twosided and transmits(material):
@@ -206,7 +206,8 @@ def pack(type_name: str, params: dict, emission=(0, 0, 0), twosided=False, emits
     one it has: Mitsuba's "reflectance" for rho_d) and for one left out that has no default,
     which would be packed as NaN (np.asarray(None, float)): the kernels drop the samples of the
     paths that meet such a material, each estimator different ones, so that they disagree as if
-    one of them were biased."""
+    one of them were biased. What the type cannot go with (a two-sided transmitter) is the
+    table's to refuse (MaterialTable.set: surface_problem), which packs each row through here."""
     bsdf = BSDFS[type_name]
     known = [p.name for p in bsdf.params]
     unknown = sorted(set(params) - set(known))
@@ -219,9 +220,6 @@ def pack(type_name: str, params: dict, emission=(0, 0, 0), twosided=False, emits
     if missing:
         raise ValueError(f"{type_name}: missing '{missing[0]}'")
     emission = _as_rows(emission, "color")
-    problem = surface_problem(Material(type_name, params, emission, twosided))
-    if problem:
-        raise ValueError(problem[1])
     values = {p.name: _as_rows(params.get(p.name, p.default), p.kind)
               for p in bsdf.params if p.kind != "name" and p.into is None}
     lengths = [len(v) for v in values.values()] + [len(emission)]
@@ -302,7 +300,7 @@ class MaterialTable:
         return bool(self.textures[index]) or bool({"ANISOTROPIC", "BLEND"} & set(BSDFS[type_name].defines(row)))
 
     def set(self, index: int, material: Material):
-        problem = surface_problem(material)      # of its maps and textures, which pack does not see
+        problem = surface_problem(material)      # its one check here: pack makes none
         if problem:
             raise ValueError(problem[1])
         params, emission = material.constants()
