@@ -67,6 +67,7 @@ class Parameter:
     from_pbrt: Callable = None       # element) -> pathtrace's value; None: the value as it is
     optional: bool = False       # without a default, and not required (the type makes do)
     pbrt_kind: str = None        # the kind pbrt-v4 gives it as, where not `kind` (from_pbrt converts it)
+    raw: bool = False            # an image of data, read raw whatever the element says (a normal map)
 
     def __post_init__(self):
         assert self.kind in KINDS and self.pbrt_kind in (None, *KINDS) and self.spectrum in SPECTRA, self

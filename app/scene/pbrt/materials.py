@@ -10,7 +10,8 @@ import numpy as np
 from pathtrace.errors import UserError, warn
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import TRANSMISSIVE
-from pathtrace.materials.table import blend, check_bump_map, transmits
+from pathtrace.materials.surface import PBRT_MAPS, from_pbrt
+from pathtrace.materials.table import blend, transmits
 from pathtrace.parameters import by_format, format_names, missing, out_of_range, read
 from pathtrace.textures import TEXTURES, Texture
 from pathtrace.textures.texture import PBRT_MAPPING
@@ -77,8 +78,9 @@ class MaterialMapper:
             return self.texture_input(params, name, None, p.kind == "number")
         if p.kind == "color":
             return params.spectrum(name, None, p.spectrum)
-        if p.kind == "image":
-            return read_image(self.reader.resolve(params.string(name)), params.where(name), False, self.images)
+        if p.kind == "image":        # pbrt-v4's empty file name is none
+            file = params.string(name)
+            return read_image(self.reader.resolve(file), params.where(name), p.raw, self.images) if file else None
         if p.kind in ARRAYS:
             return params.get(name, ARRAYS[p.kind], 0)
         read = {"number": params.float, "integer": params.int, "bool": params.bool, "string": params.string,
@@ -153,47 +155,14 @@ class MaterialMapper:
 
     def material(self, kind, params, where) -> Material | None:
         """The Material of a pbrt material, or None for `interface` (and "" / "none"): no
-        surface, only a boundary between media; with its `normalmap` or `displacement`."""
+        surface, only a boundary between media; with its normalmap or displacement (surface.py:
+        PBRT_MAPS), which a mix's materials carry (MixMaterial reads none)."""
         material = self._material(kind, params, where)
-        if material is None or kind == "mix":      # a mix's are its materials' (MixMaterial reads none)
+        if material is None or kind == "mix":
             return material
-        return self.shading_maps(material, params, where)
-
-    def shading_maps(self, material, params, where) -> Material:
-        """pbrt-v4's `string normalmap` (an image read with a linear encoding, looked up
-        bilinearly with repeat wrapping at (u, 1 - v), 2 rgb - 1 in the frame of dp/du and the
-        shading normal: src/pbrt/materials.h, NormalMap) as pathtrace's normal map, which is
-        the same frame and lookup (the reader's v is pbrt's 1 - v); and its `texture
-        displacement`, a float texture of heights along the shading normal (BumpMap: dp/du +
-        dd/du n, the normal their cross product, on the geometric normal's side) as pathtrace's
-        bump map, whose slopes are the bitmap's analytic gradient where pbrt takes a finite
-        difference over the pixel's footprint. Both perturb as pbrt-v4's do (Material.perturbation:
-        the normal turned to the geometric normal's side, no shadow-terminator term: in
-        tests/references/pbrt-v4's normalmap scene Mitsuba's term made the image 1.3 % darker
-        than pbrt-v4's). pbrt-v4's materials take either
-        (src/pbrt/materials.cpp, each Create: GetFloatTextureOrNull("displacement"); scene.cpp
-        reads "normalmap" for every material), and evaluate the normal map where both are given."""
-        normal_file = params.string("normalmap") if params.type_of("normalmap") else None
-        displacement = self.texture_input(params, "displacement", 0.0, True) if params.type_of("displacement") else None
-        if normal_file:
-            if displacement is not None:
-                warn(f"{params.where('displacement')}: pbrt-v4 uses the normal map where a material has both; "
-                     "so does pathtrace, and the displacement is ignored")
-            image = read_image(self.reader.resolve(normal_file), f"{params.where('normalmap')}", True, self.images)
-            texture = Texture("bitmap", TEXTURES["bitmap"].complete({"image": image, "wrap": "repeat",
-                                                                   "filter": "bilinear"}))
-            return replace(material, normal_map=texture, perturbation="pbrt")
-        if isinstance(displacement, Texture):
-            try:
-                check_bump_map(displacement)
-            except ValueError as e:
-                warn(f"{params.where('displacement')}: pathtrace cannot bump by this texture ({e}); "
-                     "the surface is rendered unbumped")
-                return material
-            return replace(material, bump_map=displacement, perturbation="pbrt")
-        if displacement is not None and displacement != 0:
-            warn(f"{params.where('displacement')}: a constant displacement moves no normal; ignored")
-        return material
+        given = {}
+        read(PBRT_MAPS, "pbrt", lambda p, name: self.parameter(params, p, name), given)
+        return replace(material, **from_pbrt(given, lambda name, text: warn(f"{params.where(name)}: {text}")))
 
     def _material(self, kind, params, where) -> Material | None:
         if kind in ("interface", "", "none"):
