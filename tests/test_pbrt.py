@@ -297,7 +297,7 @@ def test_convert_writes_a_pbrt_scene_as_toml_that_reads_the_same(tmp_path):
     ('WorldBegin\nShape "sphere" "float radius" -1\n', "sphere's radius must be positive"),
     ('WorldBegin\nAttributeEnd\n', "AttributeEnd without AttributeBegin"),
     ('WorldBegin\nNamedMaterial "nothing"\n', "no material named 'nothing'"),
-    ('WorldBegin\nLightSource "spot" "float coneangle" 200\n' + FLOOR, "'coneangle'"),
+    ('WorldBegin\nLightSource "spot" "float coneangle" 200\n' + FLOOR, "s.pbrt:2: 'coneangle': must be in (0, 180]"),
     ('WorldBegin\nLightSource "point" "rgb I" [ -1 1 1 ]\n' + FLOOR, "'I'"),
     ('WorldBegin\nLightSource "distant" "point3 to" [ 0 0 0 ]\n' + FLOOR, "'to'"),
     ('Camera "perspective" "float lensradius" -1\nWorldBegin\n' + FLOOR, "'lensradius'"),

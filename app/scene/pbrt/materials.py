@@ -146,10 +146,10 @@ class MaterialMapper:
     def fail(params, where, error: ValueError, declared=()):
         """A type's ValueError ("<name>: <problem>", the name pbrt-v4's or that of one of the
         `declared` Parameters) as one line naming the parameter's file:line, or the directive's
-        (`where`)."""
+        (`where`) where the directive does not give it (or there is none: pbrt-v4's default camera)."""
         name, _, problem = str(error).partition(": ")
         name = format_names(declared, "pbrt").get(name, name)
-        if name in params.params:
+        if params is not None and name in params.params:
             params.fail(name, problem)
         raise UserError(f"{where}: {error}") from None
 

@@ -13,7 +13,6 @@ from pathtrace.cameras import Camera
 from pathtrace.cameras.camera import FileCamera, frame_of
 from pathtrace.errors import UserError, warn
 from pathtrace.filters import PixelFilter
-from pathtrace.parameters import format_names
 from pathtrace.scene.pbrt.tokens import parameters, string
 from pathtrace.scene.meshes import MAX_COORDINATE
 from pathtrace.scene import settings
@@ -47,7 +46,7 @@ class OptionDirectives:
         try:
             camera.check()
         except ValueError as e:
-            raise refused(where, e, camera.parameters) from None
+            self.mapper.fail(params, where, e, camera.parameters)
         if params is not None:
             self.unused(params, "camera", kind)
         return camera
@@ -140,14 +139,6 @@ class OptionDirectives:
         if kind in ("mitchell", "lanczos"):
             params.ignore()
         self.unused(params, "filter", kind)
-
-
-def refused(where: str, error: ValueError, declared) -> UserError:
-    """A type's ValueError ("<field>: <problem>") as one line naming the field by its pbrt-v4
-    name among the `declared` Parameters."""
-    name, _, problem = str(error).partition(": ")
-    name = format_names(declared, "pbrt").get(name, name)
-    return UserError(f"{where}: '{name}' {problem}")
 
 
 OPTION_DIRECTIVES = {

@@ -40,7 +40,7 @@ from pathtrace.scene.known_names import Unread
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, place_mesh
 from pathtrace.scene.mesh_shapes import MESH_SHAPES, MeshSource
 from pathtrace.scene.pbrt.materials import MaterialMapper, make
-from pathtrace.scene.pbrt.options import OPTION_DIRECTIVES, OptionDirectives, refused
+from pathtrace.scene.pbrt.options import OPTION_DIRECTIVES, OptionDirectives
 from pathtrace.scene.pbrt.state import MAX_FILE_BYTES, MAX_INCLUDE_DEPTH, STATE_DIRECTIVES, GraphicsStateDirectives
 from pathtrace.scene.pbrt.tokens import Tokens, parameters, string
 from pathtrace.shapes import SHAPES, Shape
@@ -474,7 +474,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         try:
             light = cls.from_values(values)
         except ValueError as e:
-            raise refused(where, e, cls.parameters) from None
+            self.mapper.fail(params, where, e, cls.parameters)
         self.lights.append(light)
         self.unused(params, "light", kind)
 
