@@ -58,8 +58,8 @@ def from_pbrt(given: dict, warn) -> dict:
         if displacement is not None:
             warn("displacement", "pbrt-v4 uses the normal map where a material has both; so does pathtrace, and "
                                  "the displacement is ignored")
-        texture = Texture("bitmap", TEXTURES["bitmap"].complete({"image": image, "wrap": "repeat", "filter": "bilinear"}))
-        return {"normal_map": texture, "perturbation": "pbrt"}
+        bitmap = TEXTURES["bitmap"].complete({"image": image, "wrap": "repeat", "filter": "bilinear"})
+        return {"normal_map": Texture("bitmap", bitmap), "perturbation": "pbrt"}
     if isinstance(displacement, Texture):
         try:
             check_bump_map(displacement)

@@ -113,20 +113,16 @@ class _Reader(XmlScene):
         nodes = self.elements()
         with MeshFiles(self.named_mesh_files(nodes)) as self.mesh_files:
             for node in nodes:
-                if node.tag == "shape" and node.attrs.get("type") == "shapegroup":
-                    continue                   # drawn where an instance refers to it
-                if node.tag == "shape":
-                    self.shape(node)
-                elif node.tag == "sensor":
-                    self.sensor(node)
-                elif node.tag == "integrator":
-                    self.integrator(node)
-                elif node.tag == "emitter":
-                    self.emitter(node)
-                elif node.tag in ("bsdf", "texture", "medium"):
-                    continue                   # used where referenced
-                else:
+                # bsdfs, textures, media and shapegroups are read where they are referred to
+                if node.tag in ("bsdf", "texture", "medium") or \
+                        node.tag == "shape" and node.attrs.get("type") == "shapegroup":
+                    continue
+                handler = {"shape": self.shape, "sensor": self.sensor, "integrator": self.integrator,
+                           "emitter": self.emitter}.get(node.tag)
+                if handler is None:
                     warn(f"{node.where()}: not supported; pathtrace ignores it")
+                else:
+                    handler(node)
         if not (self.builder.spheres or self.builder.meshes or self.builder.shapes or self.builder.instance_object):
             raise UserError(f"{self.path}: the scene has no shapes pathtrace can render")
         self.warn_unread()
@@ -157,9 +153,8 @@ class _Reader(XmlScene):
     def integrator(self, node):
         kind = node.attrs.get("type")
         props = self.properties(node)
-        if kind in ("bdpt", "ptracer"):
-            self.settings.integrator = kind        # Mitsuba 0.6's bdpt, Mitsuba 3's particle tracer
-        elif kind not in ("path", "volpath", "prb", "prbvolpath"):
+        self.settings.integrator = settings.Integrator.types["mitsuba"].get(kind, ("path",))[0]
+        if kind not in settings.Integrator.types["mitsuba"]:
             warn(f"{node.where()}: pathtrace renders with its path tracer instead")
             props.ignore()          # that integrator's own settings: only max_depth and rr_depth are read
         self.settings.max_depth = self.declared(settings.Integrator, props, node)["max_depth"]

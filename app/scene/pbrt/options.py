@@ -102,20 +102,18 @@ class OptionDirectives:
     def _integrator(self, tokens, offset):
         kind = string(tokens, "Integrator")
         params = parameters(tokens)
-        if kind in ("bdpt", "mlt", "sppm"):
-            self.settings.integrator = "bdpt"
-            if kind == "sppm":
-                # the paths photon mapping finds and BDPT does not, photons estimate
-                # (kernels/photons.cl), from pbrt-v4's initial search radius (SPPMIntegrator::Create)
-                radius = params.float("radius", 1.0)
-                if not 0 < radius <= MAX_COORDINATE:
-                    params.fail("radius", f"must be in (0, {MAX_COORDINATE:g}], got {radius}")
-                self.settings.photon_radius = radius
-                warn(f"{tokens.where(offset)}: pathtrace renders sppm with bdpt and caustic photons of radius {radius:g}")
-            elif kind == "mlt":
-                warn(f"{tokens.where(offset)}: pathtrace renders mlt with bdpt, the nearest method it has")
-        elif kind not in ("path", "volpath"):
-            warn(f"{tokens.where(offset)}: pathtrace renders with its path tracer instead of {kind}")
+        self.settings.integrator, note = settings.Integrator.types["pbrt"].get(
+            kind, ("path", f"pathtrace renders with its path tracer instead of {kind}"))
+        if kind == "sppm":
+            # the paths photon mapping finds and BDPT does not, photons estimate
+            # (kernels/photons.cl), from pbrt-v4's initial search radius (SPPMIntegrator::Create)
+            radius = params.float("radius", 1.0)
+            if not 0 < radius <= MAX_COORDINATE:
+                params.fail("radius", f"must be in (0, {MAX_COORDINATE:g}], got {radius}")
+            self.settings.photon_radius = radius
+            note = f"pathtrace renders sppm with bdpt and caustic photons of radius {radius:g}"
+        if note:
+            warn(f"{tokens.where(offset)}: {note}")
         values = self.read_declared(settings.Integrator, params, tokens.where(offset))
         self.settings.max_depth, self.settings.light_sampler = values["max_depth"], values["light_sampler"]
         if params.bool("regularize", False):
