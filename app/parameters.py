@@ -6,11 +6,14 @@ tables of docs/scene-format.md, docs/mitsuba.md and docs/pbrt.md are generated f
 (parameter_table; app/scene/format_tables.py writes them, tests/test_parameters.py keeps them in
 step).
 
-This module imports nothing of pathtrace's, so that any type's host module may import it (the
-material, texture, light and camera modules are imported by pathtrace.scene, not the reverse)."""
+This module imports nothing of pathtrace's (it knows a texture by its bounds_as), so that any
+type's host module may import it (the material, texture, light and camera modules are imported by
+pathtrace.scene, not the reverse)."""
 
 from dataclasses import dataclass
 from typing import Callable
+
+import numpy as np
 
 # What a parameter holds, which decides how each reader reads it:
 #   number, integer, bool, string;
@@ -64,6 +67,7 @@ class Parameter:
     from_pbrt: Callable = None       # element) -> pathtrace's value; None: the value as it is
     optional: bool = False       # without a default, and not required (the type makes do)
     pbrt_kind: str = None        # the kind pbrt-v4 gives it as, where not `kind` (from_pbrt converts it)
+    raw: bool = False            # an image of data, read raw whatever the element says (a normal map)
 
     def __post_init__(self):
         assert self.kind in KINDS and self.pbrt_kind in (None, *KINDS) and self.spectrum in SPECTRA, self
@@ -116,15 +120,26 @@ def missing(parameters, values: dict) -> list:
 
 
 def out_of_range(parameters, values: dict) -> ValueError | None:
-    """The first of the integer `values` outside its parameter's range [low, high], as a type's
-    ValueError ("<name>: must be in low..high, got value"), or None: the check of a reader whose
-    format's values are converted (the TOML reader checks each value as it reads it)."""
+    """The first of `values` outside its parameter's range [low, high] or not finite, as a type's
+    ValueError ("<name>: <problem>"), or None: the one range check of the readers' values (the
+    TOML reader's numbers are checked as its syntax reads them, its textures here). A texture is
+    checked by its bounds (Texture.bounds_as: a number's by their luminance, as the kernels read
+    it)."""
     for p in parameters:
         value = values.get(p.name)
-        if p.kind != "integer" or value is None:
+        if p.kind not in ("integer", "number", "color") or value is None or isinstance(value, str) or \
+                (p.low is None and p.high is None):
             continue
-        if not ((p.low is None or value >= p.low) and (p.high is None or value <= p.high)):
+        low, high = value.bounds_as(p.kind) if hasattr(value, "bounds_as") else (np.min(value), np.max(value))
+        if np.isfinite(low) and np.isfinite(high) and (p.low is None or low >= p.low) and \
+                (p.high is None or high <= p.high):
+            continue
+        if p.kind == "integer":
             return ValueError(f"{p.name}: must be in {p.low}..{p.high}, got {value}")
+        bound = f"[{p.low:g}, " if p.low is not None else "(-inf, "
+        bound += f"{p.high:g}]" if p.high is not None else "inf)"
+        return ValueError(f"{p.name}: must lie in {bound}, got " + (f"{low:.4g}" if not low < high else
+                                                                   f"from {low:.4g} to {high:.4g}"))
     return None
 
 

@@ -44,7 +44,7 @@ def _pfm(path, value):
     (HEAD + 'AreaLightSource "diffuse" "blackbody L" [ 1e-30 ]\n' + TRIANGLE, "'L': a blackbody of 1e-30 K emits no"),
     (HEAD + 'AreaLightSource "diffuse" "spectrum L" [ 400 0 700 0 ]\n' + TRIANGLE, "'L': the spectrum emits no"),
     (HEAD + 'Material "diffuse" "rgb reflectance" [ -1 0 0 ]\n' + TRIANGLE, "(from 'reflectance') must lie in [0, 1]"),
-    (HEAD + TRIANGLE.replace("]\n", '] "float alpha" 1.5\n'), "s.pbrt:4: 'alpha': must lie in [0, 1], got 1.5"),
+    (HEAD + TRIANGLE.replace("]\n", '] "float alpha" nan\n'), "s.pbrt:4: 'alpha': nan is not finite"),
     (HEAD + 'Texture "t" "spectrum" "imagemap" "string filename" "huge.pfm"\n'
      'Material "diffuse" "texture reflectance" "t"\n' + TRIANGLE, "got 3e+38"),
 ])

@@ -114,3 +114,7 @@ def test_pbrt_mix_is_a_blend_whose_amount_is_the_weight(tmp_path):
     m = s.materials.get(int(s.sphere_material[0]))
     assert m.type == "blendbsdf" and m.params["weight"] == pytest.approx(0.2) and m.twosided
     assert [c.type for c in m.components] == ["diffuse", "roughconductor"]
+    # its amount read by the blend's declaration (weight: pbrt-v4's amount), checked in its range
+    (tmp_path / "s.pbrt").write_text((tmp_path / "s.pbrt").read_text().replace('"float amount" 0.2', '"float amount" 1.5'))
+    with pytest.raises(UserError, match=r"s\.pbrt:5: 'amount': must lie in \[0, 1\], got 1.5"):
+        load_scene(str(tmp_path / "s.pbrt"))

@@ -328,7 +328,7 @@ def test_mitsuba_media(tmp_path):
 
 @pytest.mark.parametrize("edit,expected", [
     (('type="homogeneous" id="smoke"', 'type="heterogeneous" id="smoke"'), "homogeneous media only"),
-    (('<float name="scale" value="4"/>', '<float name="scale" value="-4"/>'), "sigma_t: "),
+    (('<float name="scale" value="4"/>', '<float name="scale" value="-4"/>'), "scale: must lie in [0, inf), got -4"),
     (('<rgb name="albedo" value="0.2, 0.5, 0.8"/>', '<float name="albedo" value="2"/>'), "albedo: "),
     (('<phase type="hg"/>', '<phase type="hg"><float name="g" value="1"/></phase>'), "g: "),
     (('<ref name="interior" id="smoke"/>', '<ref name="interior" id="fog"/>'), "no element has id"),

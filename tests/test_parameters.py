@@ -6,8 +6,9 @@ import pytest
 
 from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.materials import BSDFS
-from pathtrace.parameters import FRAME, SAME, Parameter, by_format, read
+from pathtrace.parameters import FRAME, SAME, Parameter, by_format, out_of_range, read
 from pathtrace.scene import format_tables
+from pathtrace.textures import Texture
 
 
 def test_the_docs_tables_are_the_declarations():
@@ -30,6 +31,19 @@ def test_a_format_reads_its_names_defaults_and_conversions():
     assert values == {"b": FRAME, "c": 5.0}                            # a left as the type's own default
     assert read(params, "toml", lambda p, name: {"a": 7.0}.get(name)) == {"a": 7.0}
     assert params[0].default_in("toml") is SAME
+
+
+def test_one_range_check_serves_every_kind_and_a_texture_by_its_bounds():
+    params = (Parameter("n", "integer", 1, low=1, high=8), Parameter("x", "number", 0.5, low=0.0, high=1.0),
+              Parameter("c", "color", 0.5, low=0.0), Parameter("free", "number", 0.0))
+    assert out_of_range(params, {"n": 8, "x": 1.0, "c": [0, 2, 3], "free": -1e30}) is None
+    assert str(out_of_range(params, {"n": 9})) == "n: must be in 1..8, got 9"
+    assert str(out_of_range(params, {"x": float("nan")})) == "x: must lie in [0, 1], got nan"
+    assert str(out_of_range(params, {"c": [1, -2, 3]})) == "c: must lie in [0, inf), got from -2 to 3"
+    # a number's texture by its luminance, as the kernels read it; a colour's by its channels
+    red = Texture("constant", {"value": np.array([5.0, 0.0, 0.0]), "to_uv": np.eye(3)})
+    assert str(out_of_range(params, {"x": red})) == "x: must lie in [0, 1], got 1.063"
+    assert out_of_range(params, {"c": red}) is None
 
 
 def test_every_type_a_format_names_is_found_by_that_name():

@@ -163,6 +163,20 @@ def test_named_spectra_blackbodies_and_sampled_spectra(tmp_path):
     assert np.allclose(reflectance_rgb(constant), 0.4)
 
 
+def test_a_shapes_alpha_beyond_0_and_1_is_taken_as_pbrt_v4_takes_it(tmp_path):
+    """pbrt-v4 takes any finite alpha, a number or a texture: its stochastic test keeps every hit
+    where the alpha is at least 1 and none where it is at most 0 (GeometricPrimitive::Intersect),
+    as kernels/masks.cl does with the opacity; the reader refuses none of them."""
+    def opacity(alpha, texture=""):
+        s = scene(tmp_path, texture + FLOOR.replace("]\n", f"] {alpha}\n"))
+        material = s.materials.get(s.meshes[0].material)
+        return material.masked, material.opacity
+    assert opacity('"float alpha" 1.5') == (False, pytest.approx(1.0))              # opaque
+    assert opacity('"texture alpha" "a"', 'Texture "a" "float" "constant" "float value" 2\n')[0] is False
+    masked, cut = opacity('"float alpha" -0.5')
+    assert masked and cut.params["value"][0] <= 0                                  # never hit
+
+
 def test_roughness_is_remapped_as_pbrt_remaps_it(tmp_path):
     def alpha(params):
         s = scene(tmp_path, f'Material "conductor" {params}\n' + FLOOR)
@@ -297,7 +311,7 @@ def test_convert_writes_a_pbrt_scene_as_toml_that_reads_the_same(tmp_path):
     ('WorldBegin\nShape "sphere" "float radius" -1\n', "sphere's radius must be positive"),
     ('WorldBegin\nAttributeEnd\n', "AttributeEnd without AttributeBegin"),
     ('WorldBegin\nNamedMaterial "nothing"\n', "no material named 'nothing'"),
-    ('WorldBegin\nLightSource "spot" "float coneangle" 200\n' + FLOOR, "'coneangle'"),
+    ('WorldBegin\nLightSource "spot" "float coneangle" 200\n' + FLOOR, "s.pbrt:2: 'coneangle': must be in (0, 180]"),
     ('WorldBegin\nLightSource "point" "rgb I" [ -1 1 1 ]\n' + FLOOR, "'I'"),
     ('WorldBegin\nLightSource "distant" "point3 to" [ 0 0 0 ]\n' + FLOOR, "'to'"),
     ('Camera "perspective" "float lensradius" -1\nWorldBegin\n' + FLOOR, "'lensradius'"),

@@ -12,8 +12,9 @@ MAX_BLEND_DEPTH = 8     # blends nested in blends, at most (kernels/bsdfs/blendb
 
 class BlendBSDF(BSDFType):
     name = "blendbsdf"
+    formats = {"mitsuba": "blendbsdf", "pbrt": "mix"}     # their materials are the readers' to find
     examples = ({"weight": 0.3},)
-    params = (Param("weight", "number", default=0.5, high=1.0, slot="p0.x",
+    params = (Param("weight", "number", default=0.5, high=1.0, slot="p0.x", pbrt="amount",
                     doc="the share of the second material: 0 is the first alone, 1 the second"),)
     # written by MaterialTable.set, which gives the components rows of their own
     derived = (Slot("first", "p0.y", "the first component's row of the material table", packed=False),

@@ -9,7 +9,7 @@ import numpy as np
 
 from pathtrace.parameters import Parameter
 from pathtrace.device.slots import read_slot, write_slot
-from pathtrace.textures.texture import Texture
+from pathtrace.textures.texture import LUMINANCE, Texture
 
 # MATERIAL.flags bits, as kernels/types.h defines them
 TWOSIDED = 1        # the same BSDF on both sides
@@ -54,9 +54,6 @@ def constant_of(value, kind: str, summary=Texture.mean):
         return value
     rgb = summary(value)
     return rgb if kind == "color" else float(np.dot(rgb, LUMINANCE))
-
-
-LUMINANCE = np.array([0.212671, 0.715160, 0.072169])     # kernels/texture.cl: luminance
 
 
 def check_sum_at_most_one(values, a: str, b: str) -> str | None:
@@ -146,24 +143,6 @@ class BSDFType:
         if problem:
             raise ValueError(problem)
         return values
-
-    def out_of_range(self, values: dict) -> tuple | None:
-        """The first parameter whose values (a texture's, its bounds) leave the parameter's
-        declared range [low, high] or are not finite, as (its name, the problem); None where
-        all lie in it.
-        The TOML reader checks each field so as it reads it; this is the check for readers
-        that compute parameters from a file's (pbrt-v4's)."""
-        for p in self.params:
-            value = values.get(p.name)
-            if p.kind not in ("color", "number") or value is None or isinstance(value, str):
-                continue
-            low = np.min(constant_of(value, p.kind, Texture.minimum))
-            high = np.max(constant_of(value, p.kind, Texture.maximum))
-            if not (np.isfinite(low) and np.isfinite(high) and low >= p.low and (p.high is None or high <= p.high)):
-                bound = f"[{p.low:g}, {p.high:g}]" if p.high is not None else f"[{p.low:g}, inf)"
-                shown = f"{low:.4g}" if low == high else f"from {low:.4g} to {high:.4g}"
-                return p.name, f"must lie in {bound}, got {shown}"
-        return None
 
     def slots(self) -> dict:
         """{name: slot} of every slotted parameter and derived slot, which tag_source makes the

@@ -6,8 +6,9 @@ them one at a time."""
 
 from dataclasses import replace
 
-from pathtrace.materials.table import PERTURBATIONS, Material, scaled_bump_map, surface_problem
-from pathtrace.parameters import Parameter
+from pathtrace.materials.table import PERTURBATIONS, Material, check_bump_map, scaled_bump_map, surface_problem
+from pathtrace.parameters import Parameter, out_of_range
+from pathtrace.textures import TEXTURES, Texture
 
 # Mitsuba 3 gives a field by a plugin wrapped round a nested BSDF: its Mitsuba name is the
 # plugin's, "plugin.property" for a property of it, the plugin alone for the plugin's presence (a
@@ -26,21 +27,64 @@ SURFACE = (
     Parameter("perturbation", "name", "mitsuba", choices=PERTURBATIONS,
               doc="how a normal or bump map perturbs: as Mitsuba 3's or as pbrt-v4's"),
 )
+# pbrt-v4's normal and bump maps, which a material gives (scene.cpp reads "normalmap" for every
+# material, each Create GetFloatTextureOrNull("displacement")): from_pbrt maps them onto SURFACE's
+PBRT_MAPS = (
+    Parameter(None, "image", raw=True, pbrt="normalmap", doc="a normal map (pathtrace's normal_map, pbrt-v4's lookup)"),
+    Parameter(None, "number", texture=True, pbrt="displacement",
+              doc="a float texture of heights along the normal (pathtrace's bump_map); the normal map wins"),
+)
 OPACITY = next(p for p in SURFACE if p.name == "opacity")
 MITSUBA_WRAPPERS = tuple(dict.fromkeys(p.mitsuba.partition(".")[0] for p in SURFACE if p.mitsuba))
 FIELDS = {"Le": "emission", "emits_back": "emits_back", "twosided": "twosided", "opacity": "opacity",
           "normal_map": "normal_map", "bump_map": "bump_map", "perturbation": "perturbation"}
 
 
+def from_pbrt(given: dict, warn) -> dict:
+    """The SURFACE values of pbrt-v4's maps (PBRT_MAPS, by their names in `given`, None where
+    absent); warn(name, text) tells what pathtrace leaves out.
+    pbrt-v4's normalmap (an image read with a linear encoding, looked up bilinearly with repeat
+    wrapping at (u, 1 - v), 2 rgb - 1 in the frame of dp/du and the shading normal:
+    src/pbrt/materials.h, NormalMap) is pathtrace's normal map, the same frame and lookup (the
+    pbrt reader's v is pbrt's 1 - v); its displacement, a float texture of heights along the
+    shading normal (BumpMap: dp/du + dd/du n, the normal their cross product, on the geometric
+    normal's side), pathtrace's bump map, whose slopes are the bitmap's analytic gradient where
+    pbrt takes a finite difference over the pixel's footprint. Both perturb as pbrt-v4's do
+    (Material.perturbation: the normal turned to the geometric normal's side, no
+    shadow-terminator term: in tests/references/pbrt-v4's normalmap scene Mitsuba's term made the
+    image 1.3 % darker than pbrt-v4's); pbrt-v4 evaluates the normal map where both are given."""
+    image, displacement = given["normalmap"], given["displacement"]
+    if image is not None:
+        if displacement is not None:
+            warn("displacement", "pbrt-v4 uses the normal map where a material has both; so does pathtrace, and "
+                                 "the displacement is ignored")
+        bitmap = TEXTURES["bitmap"].complete({"image": image, "wrap": "repeat", "filter": "bilinear"})
+        return {"normal_map": Texture("bitmap", bitmap), "perturbation": "pbrt"}
+    if isinstance(displacement, Texture):
+        try:
+            check_bump_map(displacement)
+        except ValueError as e:
+            warn("displacement", f"pathtrace cannot bump by this texture ({e}); the surface is rendered unbumped")
+            return {}
+        return {"bump_map": displacement, "perturbation": "pbrt"}
+    if displacement is not None and displacement != 0:
+        warn("displacement", "a constant displacement moves no normal; ignored")
+    return {}
+
+
 def dressed(material: Material, values: dict) -> Material:
-    """material carrying the SURFACE values given (by their names), checked (those with the
-    BSDF and each other by table.surface_problem). Raises ValueError ("<name>: <problem>")."""
+    """material carrying the SURFACE values given (by their names), checked: each in its range,
+    those with the BSDF and each other by table.surface_problem. Raises ValueError ("<name>:
+    <problem>")."""
     maps = {"normal_map", "bump_map"} & set(values)
     if "bump_scale" in values and "bump_map" not in values:
         raise ValueError("bump_scale: scales a bump_map, and there is none")
     if "perturbation" in values and not maps:
         raise ValueError("perturbation: says how a normal_map or bump_map perturbs, and there is none")
     material = replace(material, **{FIELDS[k]: v for k, v in values.items() if k in FIELDS})
+    error = out_of_range(SURFACE, values)
+    if error:
+        raise error
     problem = surface_problem(material)
     if problem:
         raise ValueError(": ".join(problem))

@@ -11,6 +11,7 @@ from pathtrace.errors import UserError, short
 from pathtrace.materials.blend import MAX_BLEND_DEPTH
 from pathtrace.materials.bsdf import EMITS_BACK, MASKED, NULL, PBRT_PERTURBATION, TRANSMISSIVE, TWOSIDED, constant_of
 from pathtrace.materials.registry import BSDFS, TAGS
+from pathtrace.parameters import out_of_range
 from pathtrace.device.slots import read_slot, write_slot
 from pathtrace.textures.texture import Texture
 from pathtrace.device.types import MATERIAL
@@ -98,8 +99,8 @@ def scaled_bump_map(texture: Texture, scale: float) -> Texture:
 
 def surface_problem(material: Material) -> tuple | None:
     """(the field of app/materials/surface.py's SURFACE, the problem) of what a Material carries
-    that cannot go with its BSDF or each other, or None: the one check of the readers (dressed)
-    and of the table (pack)."""
+    that cannot go with its BSDF or each other, or None: the check of the readers (dressed), which
+    name the field, and of the table (MaterialTable.set), whatever made the Material."""
     if material.normal_map is not None and material.bump_map is not None:
         return "normal_map", "give a normal_map or a bump_map, not both"
     if material.twosided and transmits(material):
@@ -116,9 +117,9 @@ def blend(weight, components: tuple) -> "Material":
     texture; None: the declared default), checked. Raises ValueError ("weight: <problem>", or
     check_blend's)."""
     given = {} if weight is None else {"weight": weight}
-    problem = BSDFS["blendbsdf"].out_of_range(given)
-    if problem:
-        raise ValueError(": ".join(problem))
+    error = out_of_range(BSDFS["blendbsdf"].params, given)
+    if error:
+        raise error
     material = Material("blendbsdf", BSDFS["blendbsdf"].complete(given), components=tuple(components))
     problem = check_blend(material)
     if problem:
@@ -205,7 +206,8 @@ def pack(type_name: str, params: dict, emission=(0, 0, 0), twosided=False, emits
     one it has: Mitsuba's "reflectance" for rho_d) and for one left out that has no default,
     which would be packed as NaN (np.asarray(None, float)): the kernels drop the samples of the
     paths that meet such a material, each estimator different ones, so that they disagree as if
-    one of them were biased."""
+    one of them were biased. What the type cannot go with (a two-sided transmitter) is the
+    table's to refuse (MaterialTable.set: surface_problem), which packs each row through here."""
     bsdf = BSDFS[type_name]
     known = [p.name for p in bsdf.params]
     unknown = sorted(set(params) - set(known))
@@ -218,9 +220,6 @@ def pack(type_name: str, params: dict, emission=(0, 0, 0), twosided=False, emits
     if missing:
         raise ValueError(f"{type_name}: missing '{missing[0]}'")
     emission = _as_rows(emission, "color")
-    problem = surface_problem(Material(type_name, params, emission, twosided))
-    if problem:
-        raise ValueError(problem[1])
     values = {p.name: _as_rows(params.get(p.name, p.default), p.kind)
               for p in bsdf.params if p.kind != "name" and p.into is None}
     lengths = [len(v) for v in values.values()] + [len(emission)]
@@ -301,7 +300,7 @@ class MaterialTable:
         return bool(self.textures[index]) or bool({"ANISOTROPIC", "BLEND"} & set(BSDFS[type_name].defines(row)))
 
     def set(self, index: int, material: Material):
-        problem = surface_problem(material)      # of its maps and textures, which pack does not see
+        problem = surface_problem(material)      # its one check here: pack makes none
         if problem:
             raise ValueError(problem[1])
         params, emission = material.constants()

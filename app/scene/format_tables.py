@@ -44,8 +44,8 @@ def _types(kind: str) -> list:
     if kind == "environment":
         return [(Environment.name, Environment.formats, Environment.doc, Environment.parameters)]
     if kind == "surface":
-        from pathtrace.materials.surface import MITSUBA_WRAPPERS, SURFACE
-        return [("any material", {"mitsuba": MITSUBA_WRAPPERS, "pbrt": "Shape"}, "", SURFACE)]
+        from pathtrace.materials.surface import MITSUBA_WRAPPERS, PBRT_MAPS, SURFACE
+        return [("any material", {"mitsuba": MITSUBA_WRAPPERS, "pbrt": "Shape"}, "", SURFACE + PBRT_MAPS)]
     if kind == "render":
         from pathtrace.scene.settings import RENDER
         return [("render", {"mitsuba": ("film", "sampler", "integrator"), "pbrt": ("Film", "Sampler", "Integrator")},

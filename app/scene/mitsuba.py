@@ -19,7 +19,6 @@ from pathtrace.filters import FILTERS, PixelFilter
 from pathtrace import parameters
 from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.materials import BSDFS, Material
-from pathtrace.materials.bsdf import LUMINANCE
 from pathtrace.materials.surface import MITSUBA_WRAPPERS, SURFACE, dressed
 from pathtrace.materials.table import blend
 from pathtrace.parameters import FRAME, format_names, out_of_range
@@ -32,6 +31,7 @@ from pathtrace.scene.mesh_shapes import MESH_SHAPES, MeshSource
 from pathtrace.shapes import SHAPES, Shape
 from pathtrace.shapes.shape import MIN_DETERMINANT
 from pathtrace.textures import TEXTURES, Texture, read_image
+from pathtrace.textures.texture import LUMINANCE
 
 LIGHTS_BY_NAME = parameters.by_format(DELTA_LIGHTS.values(), "mitsuba")
 BSDFS_BY_NAME = parameters.by_format(BSDFS.values(), "mitsuba")
@@ -113,20 +113,16 @@ class _Reader(XmlScene):
         nodes = self.elements()
         with MeshFiles(self.named_mesh_files(nodes)) as self.mesh_files:
             for node in nodes:
-                if node.tag == "shape" and node.attrs.get("type") == "shapegroup":
-                    continue                   # drawn where an instance refers to it
-                if node.tag == "shape":
-                    self.shape(node)
-                elif node.tag == "sensor":
-                    self.sensor(node)
-                elif node.tag == "integrator":
-                    self.integrator(node)
-                elif node.tag == "emitter":
-                    self.emitter(node)
-                elif node.tag in ("bsdf", "texture", "medium"):
-                    continue                   # used where referenced
-                else:
+                # bsdfs, textures, media and shapegroups are read where they are referred to
+                if node.tag in ("bsdf", "texture", "medium") or \
+                        node.tag == "shape" and node.attrs.get("type") == "shapegroup":
+                    continue
+                handler = {"shape": self.shape, "sensor": self.sensor, "integrator": self.integrator,
+                           "emitter": self.emitter}.get(node.tag)
+                if handler is None:
                     warn(f"{node.where()}: not supported; pathtrace ignores it")
+                else:
+                    handler(node)
         if not (self.builder.spheres or self.builder.meshes or self.builder.shapes or self.builder.instance_object):
             raise UserError(f"{self.path}: the scene has no shapes pathtrace can render")
         self.warn_unread()
@@ -157,9 +153,8 @@ class _Reader(XmlScene):
     def integrator(self, node):
         kind = node.attrs.get("type")
         props = self.properties(node)
-        if kind in ("bdpt", "ptracer"):
-            self.settings.integrator = kind        # Mitsuba 0.6's bdpt, Mitsuba 3's particle tracer
-        elif kind not in ("path", "volpath", "prb", "prbvolpath"):
+        self.settings.integrator = settings.Integrator.types["mitsuba"].get(kind, ("path",))[0]
+        if kind not in settings.Integrator.types["mitsuba"]:
             warn(f"{node.where()}: pathtrace renders with its path tracer instead")
             props.ignore()          # that integrator's own settings: only max_depth and rr_depth are read
         self.settings.max_depth = self.declared(settings.Integrator, props, node)["max_depth"]
@@ -261,8 +256,11 @@ class _Reader(XmlScene):
 
     def declared(self, kind, props, node) -> dict:
         """The values of the parameters a type `kind` declares (app/parameters.py) that an element
-        gives, converted and in range, what it has and pathtrace has not read (`unsupported`)."""
-        self.read_unsupported(props, kind)
+        gives, converted and in range; of what it has and pathtrace has not (`unsupported`), a
+        warning of each given where the kind says why."""
+        for name, why in kind.unsupported.get("mitsuba", {}).items():
+            if name in props and why:
+                warn(f"{props[name].where()}: {why}; ignored")
         try:
             values = parameters.read(kind.parameters, "mitsuba", lambda p, name: self.parameter(props, p, name))
             error = out_of_range(kind.parameters, values)
@@ -271,14 +269,6 @@ class _Reader(XmlScene):
         except ValueError as e:
             refuse(props, node, e, format_names(kind.parameters, "mitsuba"))
         return values
-
-    @staticmethod
-    def read_unsupported(props, kind):
-        """Reads the properties Mitsuba 3's `kind` has and pathtrace has not (its `unsupported`),
-        with a warning of each given where the kind says why."""
-        for name, why in kind.unsupported.get("mitsuba", {}).items():
-            if name in props and why:
-                warn(f"{props[name].where()}: {why}; ignored")
 
     def parameter(self, props, p, name):
         """The value of the declared parameter p (app/parameters.py) that the property `name`
@@ -291,6 +281,8 @@ class _Reader(XmlScene):
         target = self.resolve(c) if c.tag == "ref" else c
         if p.texture and target.tag == "texture":
             return self.texture(target)
+        if p.texture and target.tag in ("rgb", "spectrum"):     # a constant texture, read by its luminance
+            return float(np.dot(self.value(target), LUMINANCE))
         if p.kind == "image":
             return read_image(props.node.file.parent / self.get(props, name, kinds=("string",)), c.where(),
                               self.get(props, "raw", False, ("boolean",)), self.images)
@@ -298,6 +290,8 @@ class _Reader(XmlScene):
                  "name": ("string",), "point": ("point", "vector"), "vector": ("vector", "point")}[p.kind]
         if p.kind == "number" and getattr(p, "names", None) and target.tag == "string":
             kinds = ("string",)          # a named value (an IOR's name), which the type resolves
+        if p.texture:
+            kinds += ("rgb", "texture")     # (named for the message: read above)
         return self.get(props, name, kinds=kinds)
 
     # -- materials --
@@ -367,9 +361,9 @@ class _Reader(XmlScene):
         inner = [c for c in node.children if c.tag in ("bsdf", "ref") and c.attrs.get("name") != "weight"]
         if len(inner) != 2:
             fail(node, f"needs two nested BSDFs, got {len(inner)}")
-        weight = self.parameter(props, next(p for p in BSDFS["blendbsdf"].params if p.name == "weight"), "weight")
+        values = parameters.read(BSDFS["blendbsdf"].params, "mitsuba", lambda p, name: self.parameter(props, p, name))
         try:
-            return blend(weight, tuple(self.material(c) for c in inner))
+            return blend(values.get("weight"), tuple(self.material(c) for c in inner))
         except ValueError as e:
             refuse(props, node, e)
 
@@ -384,9 +378,7 @@ class _Reader(XmlScene):
             prop = name.partition(".")[2]
             if p.kind == "bool":
                 return True                     # the plugin itself says it
-            if p.kind == "texture":
-                return self.wrapped_texture(node, props, prop)
-            return self.fraction(props, p, prop, node) if p.texture else self.parameter(props, p, prop)
+            return self.wrapped_texture(node, props, prop) if p.kind == "texture" else self.parameter(props, p, prop)
         values = parameters.read(fields, "mitsuba", get)
         if {"normal_map", "bump_map"} & set(values) and (m.normal_map is not None or m.bump_map is not None):
             warn(f"{node.where()}: a {kind} around another map; pathtrace applies the inner one only")
@@ -410,17 +402,6 @@ class _Reader(XmlScene):
             fail(maps[0], "must be a texture")
         return self.texture(target)
 
-    def fraction(self, props, p, name, node):
-        """A number in p's range that may be a texture (a mask's opacity): a float, a colour's
-        luminance or a texture, whose luminance the kernels read."""
-        if name not in props:
-            return None
-        value = self.color(props, name, None)
-        low, high = (value.minimum(), value.maximum()) if isinstance(value, Texture) else (value, value)
-        if np.min(low) < p.low or np.max(high) > p.high:
-            fail(props.get(name, node), f"{'an' if name[0] in 'aeiou' else 'a'} {name} must lie in [{p.low:g}, {p.high:g}]")
-        return value if isinstance(value, Texture) else float(np.dot(value, LUMINANCE))
-
     def mitsuba_material(self, node, kind, props):
         """A material type of pathtrace's that Mitsuba 3 has, by its declared Mitsuba names
         (app/materials); Mitsuba's anisotropic roughness is alpha_u (pathtrace's alpha) and
@@ -434,9 +415,9 @@ class _Reader(XmlScene):
         if "distribution" in values:
             props.get("sample_visible")      # pathtrace samples visible normals always (kernels/microfacet.cl)
         try:
-            problem = bsdf.out_of_range(values)      # of what the file gave (the TOML reader's Param bounds)
-            if problem:
-                raise ValueError(": ".join(problem))
+            error = out_of_range(bsdf.params, values)      # of what the file gave (the TOML reader's Param bounds)
+            if error:
+                raise error
             values = bsdf.complete(values)
         except ValueError as e:
             refuse(props, node, e, format_names(bsdf.params, "mitsuba"))

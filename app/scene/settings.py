@@ -68,6 +68,14 @@ class Sampler(Element):
 
 
 class Integrator(Element):
+    # each format's integrators that pathtrace has (README, Integrators) or renders with its
+    # nearest, {type: (pathtrace's, a note of the approximation or None)}; its others are
+    # rendered with the path tracer, with a warning
+    types = {"mitsuba": {**dict.fromkeys(("path", "volpath", "prb", "prbvolpath"), ("path", None)),
+                         "bdpt": ("bdpt", None), "ptracer": ("ptracer", None)},     # Mitsuba 0.6's bdpt
+             "pbrt": {"path": ("path", None), "volpath": ("path", None), "bdpt": ("bdpt", None),
+                      "mlt": ("bdpt", "pathtrace renders mlt with bdpt, the nearest method it has"),
+                      "sppm": ("bdpt", None)}}     # its photons' radius a note of its own (pbrt/options.py)
     parameters = (
         _integer("max_depth", doc="the longest path in vertices (1: emitters seen directly), 0 unlimited; "
                  "Mitsuba's -1 is unlimited, pbrt-v4's counts bounces (N + 1 vertices)", mitsuba="max_depth",

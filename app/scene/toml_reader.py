@@ -16,7 +16,6 @@ from pathtrace.rendering.choices import RUSSIAN_ROULETTE
 from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError, short
 from pathtrace.materials import BSDFS, Material
-from pathtrace.materials.bsdf import constant_of
 from pathtrace.materials.surface import SURFACE, dressed
 from pathtrace.materials.table import PERTURBATIONS, blend
 from pathtrace.scene.media import Medium, MediumInterface
@@ -153,11 +152,9 @@ class _Reader(TomlValues):
             return self.texture_value(value, key)
         if param.texture and (isinstance(value, dict) or (isinstance(value, str) and value in self.texture_tables)):
             texture = self.texture_value(value, key)
-            low = np.min(constant_of(texture, param.kind, Texture.minimum))
-            high = np.max(constant_of(texture, param.kind, Texture.maximum))
-            if (param.low is not None and low < param.low) or (param.high is not None and high > param.high):
-                bound = f"in [{param.low}, {param.high}]" if param.high is not None else f"at least {param.low}"
-                self.fail(key, f"the texture's values must lie {bound}, but reach from {low:.4g} to {high:.4g}")
+            error = parameters.out_of_range((param,), {param.name: texture})
+            if error:
+                self.fail(key, f"the texture's values {str(error).partition(': ')[2]}")
             return texture
         if param.kind == "color":
             return self.color(data, param.name, where, high=param.high)

@@ -63,11 +63,18 @@ class Texture:
         """A lower bound of its values, rgb."""
         return deep(lambda: self.kind.bounds(self))[0]
 
+    def bounds_as(self, kind: str) -> tuple:
+        """(lowest, highest) of its values as a parameter of `kind` reads them: a colour's
+        channels, a number's luminance (kernels/texture.cl)."""
+        low, high = deep(lambda: self.kind.bounds(self))
+        return (np.min(low), np.max(high)) if kind == "color" else (float(low @ LUMINANCE), float(high @ LUMINANCE))
+
     def inputs(self) -> list:
         """Its inputs that are textures."""
         return [self.params[n] for n in self.kind.inputs if isinstance(self.params.get(n), Texture)]
 
 
+LUMINANCE = np.array([0.212671, 0.715160, 0.072169])     # kernels/texture.cl: luminance
 # the recursion limit while a texture tree's mean or bounds are computed, a few calls per level:
 # pbrt-v4 files chain textures thousands deep. Python >= 3.11 (pyproject.toml) makes pure-Python
 # calls without growing the C stack, so the limit only bounds memory

@@ -10,8 +10,9 @@ import numpy as np
 from pathtrace.errors import UserError, warn
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import TRANSMISSIVE
-from pathtrace.materials.table import blend, check_bump_map, transmits
-from pathtrace.parameters import by_format, format_names, missing, read
+from pathtrace.materials.surface import PBRT_MAPS, from_pbrt
+from pathtrace.materials.table import blend, transmits
+from pathtrace.parameters import by_format, format_names, missing, out_of_range, read
 from pathtrace.textures import TEXTURES, Texture
 from pathtrace.textures.texture import PBRT_MAPPING
 from pathtrace.textures.bitmap import read_image
@@ -31,9 +32,9 @@ def make(kind, values, where) -> Material:
         complete = BSDFS[kind].complete(values)
     except ValueError as e:
         raise UserError(f"{where}: {e}") from None
-    problem = BSDFS[kind].out_of_range(complete)     # the TOML reader's ranges (a reflectance in [0, 1])
-    if problem:
-        name, text = problem
+    error = out_of_range(BSDFS[kind].params, complete)     # the TOML reader's ranges (a reflectance in [0, 1])
+    if error:
+        name, _, text = str(error).partition(": ")
         pbrt_name = next(p.pbrt or p.pbrt_from for p in BSDFS[kind].params if p.name == name)
         raise UserError(f"{where}: the {kind} material's {name}" + (f" (from '{pbrt_name}')" if pbrt_name else "")
                         + f" {text}")
@@ -77,8 +78,9 @@ class MaterialMapper:
             return self.texture_input(params, name, None, p.kind == "number")
         if p.kind == "color":
             return params.spectrum(name, None, p.spectrum)
-        if p.kind == "image":
-            return read_image(self.reader.resolve(params.string(name)), params.where(name), False, self.images)
+        if p.kind == "image":        # pbrt-v4's empty file name is none
+            file = params.string(name)
+            return read_image(self.reader.resolve(file), params.where(name), p.raw, self.images) if file else None
         if p.kind in ARRAYS:
             return params.get(name, ARRAYS[p.kind], 0)
         read = {"number": params.float, "integer": params.int, "bool": params.bool, "string": params.string,
@@ -144,75 +146,41 @@ class MaterialMapper:
     def fail(params, where, error: ValueError, declared=()):
         """A type's ValueError ("<name>: <problem>", the name pbrt-v4's or that of one of the
         `declared` Parameters) as one line naming the parameter's file:line, or the directive's
-        (`where`)."""
+        (`where`) where the directive does not give it (or there is none: pbrt-v4's default camera)."""
         name, _, problem = str(error).partition(": ")
         name = format_names(declared, "pbrt").get(name, name)
-        if name in params.params:
+        if params is not None and name in params.params:
             params.fail(name, problem)
         raise UserError(f"{where}: {error}") from None
 
     def material(self, kind, params, where) -> Material | None:
         """The Material of a pbrt material, or None for `interface` (and "" / "none"): no
-        surface, only a boundary between media; with its `normalmap` or `displacement`."""
+        surface, only a boundary between media; with its normalmap or displacement (surface.py:
+        PBRT_MAPS), which a mix's materials carry (MixMaterial reads none)."""
         material = self._material(kind, params, where)
-        if material is None or kind == "mix":      # a mix's are its materials' (MixMaterial reads none)
+        if material is None or kind == "mix":
             return material
-        return self.shading_maps(material, params, where)
-
-    def shading_maps(self, material, params, where) -> Material:
-        """pbrt-v4's `string normalmap` (an image read with a linear encoding, looked up
-        bilinearly with repeat wrapping at (u, 1 - v), 2 rgb - 1 in the frame of dp/du and the
-        shading normal: src/pbrt/materials.h, NormalMap) as pathtrace's normal map, which is
-        the same frame and lookup (the reader's v is pbrt's 1 - v); and its `texture
-        displacement`, a float texture of heights along the shading normal (BumpMap: dp/du +
-        dd/du n, the normal their cross product, on the geometric normal's side) as pathtrace's
-        bump map, whose slopes are the bitmap's analytic gradient where pbrt takes a finite
-        difference over the pixel's footprint. Both perturb as pbrt-v4's do (Material.perturbation:
-        the normal turned to the geometric normal's side, no shadow-terminator term: in
-        tests/references/pbrt-v4's normalmap scene Mitsuba's term made the image 1.3 % darker
-        than pbrt-v4's). pbrt-v4's materials take either
-        (src/pbrt/materials.cpp, each Create: GetFloatTextureOrNull("displacement"); scene.cpp
-        reads "normalmap" for every material), and evaluate the normal map where both are given."""
-        normal_file = params.string("normalmap") if params.type_of("normalmap") else None
-        displacement = self.texture_input(params, "displacement", 0.0, True) if params.type_of("displacement") else None
-        if normal_file:
-            if displacement is not None:
-                warn(f"{params.where('displacement')}: pbrt-v4 uses the normal map where a material has both; "
-                     "so does pathtrace, and the displacement is ignored")
-            image = read_image(self.reader.resolve(normal_file), f"{params.where('normalmap')}", True, self.images)
-            texture = Texture("bitmap", TEXTURES["bitmap"].complete({"image": image, "wrap": "repeat",
-                                                                   "filter": "bilinear"}))
-            return replace(material, normal_map=texture, perturbation="pbrt")
-        if isinstance(displacement, Texture):
-            try:
-                check_bump_map(displacement)
-            except ValueError as e:
-                warn(f"{params.where('displacement')}: pathtrace cannot bump by this texture ({e}); "
-                     "the surface is rendered unbumped")
-                return material
-            return replace(material, bump_map=displacement, perturbation="pbrt")
-        if displacement is not None and displacement != 0:
-            warn(f"{params.where('displacement')}: a constant displacement moves no normal; ignored")
-        return material
+        given = {}
+        read(PBRT_MAPS, "pbrt", lambda p, name: self.parameter(params, p, name), given)
+        return replace(material, **from_pbrt(given, lambda name, text: warn(f"{params.where(name)}: {text}")))
 
     def _material(self, kind, params, where) -> Material | None:
         if kind in ("interface", "", "none"):
             return None
+        if kind == "mix":
+            return self._mix(params, where)
         if kind in BSDFS_BY_NAME:         # the types that declare their pbrt-v4 parameters
             bsdf, given = BSDFS_BY_NAME[kind], {}
             values = read(bsdf.params + bsdf.format_only, "pbrt", lambda p, name: self.parameter(params, p, name), given)
             # the numbers a file gives as they are checked at their own lines (a layer's walks)
-            problem = bsdf.out_of_range({p.name: values[p.name] for p in bsdf.params
-                                         if p.kind == "number" and p.pbrt and not p.from_pbrt and p.name in values})
-            if problem:
-                params.fail(next(p.pbrt for p in bsdf.params if p.name == problem[0]), problem[1])
+            error = out_of_range([p for p in bsdf.params if p.kind == "number" and p.pbrt and not p.from_pbrt], values)
+            if error:
+                self.fail(params, where, error, bsdf.params)
             try:
                 chosen = bsdf.from_pbrt(values, given, lambda text: warn(f"{where}: {text}"))
             except ValueError as e:
                 self.fail(params, where, e)
             return None if chosen is None else make(*chosen, where)
-        if kind == "mix":
-            return self._mix(params, where)
         warn(f"{where}: pathtrace has no {kind} material; it uses a diffuse one of albedo 0.5")
         return make("diffuse", {"rho_d": np.full(3, 0.5)}, where)
 
@@ -224,15 +192,14 @@ class MaterialMapper:
         if names is None:
             raise UserError(f'{where}: a mix material needs "string materials" [ "first" "second" ]')
         parts = [self.reader.named_material(n, where) for n in names]
-        amount = self.texture_input(params, "amount", 0.5, True)
+        values = read(BSDFS["blendbsdf"].params, "pbrt", lambda p, name: self.parameter(params, p, name))
         if any(p is None for p in parts):
             other = next((p for p in parts if p is not None), None)
             warn(f"{where}: pathtrace cannot mix a surface with an interface; it uses the other material alone")
             return other
         try:
-            mixed = blend(amount, parts)
+            mixed = blend(values.get("weight"), parts)
         except ValueError as e:
-            field, sep, problem = str(e).partition(": ")
-            raise UserError(f"{where}: amount: {problem}" if sep and field == "weight" else f"{where}: {e}") from None
+            self.fail(params, where, e, BSDFS["blendbsdf"].params)
         mixed.twosided = not transmits(mixed)
         return mixed

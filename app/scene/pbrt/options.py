@@ -13,7 +13,6 @@ from pathtrace.cameras import Camera
 from pathtrace.cameras.camera import FileCamera, frame_of
 from pathtrace.errors import UserError, warn
 from pathtrace.filters import PixelFilter
-from pathtrace.parameters import format_names
 from pathtrace.scene.pbrt.tokens import parameters, string
 from pathtrace.scene.meshes import MAX_COORDINATE
 from pathtrace.scene import settings
@@ -47,7 +46,7 @@ class OptionDirectives:
         try:
             camera.check()
         except ValueError as e:
-            raise refused(where, e, camera.parameters) from None
+            self.mapper.fail(params, where, e, camera.parameters)
         if params is not None:
             self.unused(params, "camera", kind)
         return camera
@@ -103,20 +102,18 @@ class OptionDirectives:
     def _integrator(self, tokens, offset):
         kind = string(tokens, "Integrator")
         params = parameters(tokens)
-        if kind in ("bdpt", "mlt", "sppm"):
-            self.settings.integrator = "bdpt"
-            if kind == "sppm":
-                # the paths photon mapping finds and BDPT does not, photons estimate
-                # (kernels/photons.cl), from pbrt-v4's initial search radius (SPPMIntegrator::Create)
-                radius = params.float("radius", 1.0)
-                if not 0 < radius <= MAX_COORDINATE:
-                    params.fail("radius", f"must be in (0, {MAX_COORDINATE:g}], got {radius}")
-                self.settings.photon_radius = radius
-                warn(f"{tokens.where(offset)}: pathtrace renders sppm with bdpt and caustic photons of radius {radius:g}")
-            elif kind == "mlt":
-                warn(f"{tokens.where(offset)}: pathtrace renders mlt with bdpt, the nearest method it has")
-        elif kind not in ("path", "volpath"):
-            warn(f"{tokens.where(offset)}: pathtrace renders with its path tracer instead of {kind}")
+        self.settings.integrator, note = settings.Integrator.types["pbrt"].get(
+            kind, ("path", f"pathtrace renders with its path tracer instead of {kind}"))
+        if kind == "sppm":
+            # the paths photon mapping finds and BDPT does not, photons estimate
+            # (kernels/photons.cl), from pbrt-v4's initial search radius (SPPMIntegrator::Create)
+            radius = params.float("radius", 1.0)
+            if not 0 < radius <= MAX_COORDINATE:
+                params.fail("radius", f"must be in (0, {MAX_COORDINATE:g}], got {radius}")
+            self.settings.photon_radius = radius
+            note = f"pathtrace renders sppm with bdpt and caustic photons of radius {radius:g}"
+        if note:
+            warn(f"{tokens.where(offset)}: {note}")
         values = self.read_declared(settings.Integrator, params, tokens.where(offset))
         self.settings.max_depth, self.settings.light_sampler = values["max_depth"], values["light_sampler"]
         if params.bool("regularize", False):
@@ -140,14 +137,6 @@ class OptionDirectives:
         if kind in ("mitchell", "lanczos"):
             params.ignore()
         self.unused(params, "filter", kind)
-
-
-def refused(where: str, error: ValueError, declared) -> UserError:
-    """A type's ValueError ("<field>: <problem>") as one line naming the field by its pbrt-v4
-    name among the `declared` Parameters."""
-    name, _, problem = str(error).partition(": ")
-    name = format_names(declared, "pbrt").get(name, name)
-    return UserError(f"{where}: '{name}' {problem}")
 
 
 OPTION_DIRECTIVES = {

@@ -17,6 +17,7 @@ an object, analytic shapes, are copied into world space at each instance."""
 
 import gc
 import gzip
+import math
 import os
 import re
 from dataclasses import replace
@@ -40,9 +41,8 @@ from pathtrace.scene.known_names import Unread
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, place_mesh
 from pathtrace.scene.mesh_shapes import MESH_SHAPES, MeshSource
 from pathtrace.scene.pbrt.materials import MaterialMapper, make
-from pathtrace.scene.pbrt.options import OPTION_DIRECTIVES, OptionDirectives, refused
+from pathtrace.scene.pbrt.options import OPTION_DIRECTIVES, OptionDirectives
 from pathtrace.scene.pbrt.state import MAX_FILE_BYTES, MAX_INCLUDE_DEPTH, STATE_DIRECTIVES, GraphicsStateDirectives
-from pathtrace.textures import Texture
 from pathtrace.scene.pbrt.tokens import Tokens, parameters, string
 from pathtrace.shapes import SHAPES, Shape
 
@@ -51,6 +51,11 @@ MESHES_BY_NAME = declared.by_format(MESH_SHAPES.values(), "pbrt")
 # a plymesh shape and its file name, as MeshFiles reads them ahead (PbrtReader.named_mesh_files)
 _PLYMESH = re.compile(r'Shape\s+"plymesh"')
 _FILENAME = re.compile(r'"string\s+filename"\s*\[?\s*"([^"]*)"')
+
+# pbrt-v4 takes any finite alpha (Shape::Create's "alpha", a float or a float texture): its
+# stochastic alpha test keeps a hit where the alpha is at least 1 and drops it where it is at
+# most 0, as kernels/masks.cl does
+ALPHA = replace(OPACITY, low=-math.inf, high=math.inf)
 
 
 class PbrtReader(GraphicsStateDirectives, OptionDirectives):
@@ -346,7 +351,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         if self.current_object is not None and parts[0][1] is not None:
             warn(f"{where}: pbrt-v4 has no area lights in instances; this shape does not emit")
             parts = [(None, None)]
-        alpha = self.alpha(params)
+        alpha = self.read_declared((ALPHA,), params, where).get("opacity", 1.0)
         self.unused(params, "shape", kind)
         group = None if self.current_object is None else self.objects[self.current_object]
         if shape is not None:
@@ -359,16 +364,6 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
             # no MeshFile: the file's faces were turned and its uvs flipped, which a converted
             # scene's reference to the file could not say (convert writes the mesh anew)
             self.builder.add_to(group, Mesh(name, vertices, part, normals, row, source, None, uvs, media))
-
-    def alpha(self, params):
-        """A shape's alpha: a number in range or a float texture, by the declaration of what any
-        material carries (app/materials/surface.py: OPACITY)."""
-        alpha = self.mapper.parameter(params, OPACITY, OPACITY.pbrt)
-        if alpha is None:
-            return 1.0
-        if not isinstance(alpha, Texture) and not OPACITY.low <= alpha <= OPACITY.high:
-            params.fail(OPACITY.pbrt, f"must lie in [{OPACITY.low:g}, {OPACITY.high:g}], got {alpha:g}")
-        return alpha
 
     def analytic_shape(self, kind, params, media, where) -> Shape:
         """An analytic shape (app/shapes/), its parameters read by their pbrt-v4 names
@@ -416,30 +411,27 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         return *place_mesh(vertices, faces, normals, self.state.ctm, self.state.reverse, True, where)[:3], uvs, source
 
     def read_declared(self, kind, params, where) -> dict:
-        """The values of the parameters a type `kind` declares (app/parameters.py) that a
-        directive gives, converted and in range, what it has and pathtrace has not read
-        (`unsupported`)."""
-        self.read_unsupported(params, kind)
-        try:
-            values = declared.read(kind.parameters, "pbrt", lambda p, name: self.mapper.parameter(params, p, name))
-            error = declared.out_of_range(kind.parameters, values)
-            if error:
-                raise error
-        except ValueError as e:
-            self.mapper.fail(params, where, e, kind.parameters)
-        return values
-
-    def read_unsupported(self, params, kind):
-        """Reads the parameters pbrt-v4's `kind` has and pathtrace has not (its `unsupported`),
-        with a warning of each given where the kind says why. A name declared with its type
-        ("string filename") is one value of that type, as pbrt-v4 reads it: another is a
-        parameter pbrt-v4 leaves unused, and refuses; a bare name is taken as the file writes it."""
-        for key, why in kind.unsupported.get("pbrt", {}).items():
+        """The values of the parameters that a type `kind` declares (app/parameters.py), or of a
+        tuple of Parameters, that a directive gives, converted and in range; of what pbrt-v4's
+        kind has and pathtrace has not (`unsupported`), a warning of each given where the kind
+        says why. A name declared with its type ("string filename") is one value of that type,
+        as pbrt-v4 reads it: another is a parameter pbrt-v4 leaves unused, and refuses; a bare
+        name is taken as the file writes it."""
+        fields = kind if isinstance(kind, tuple) else kind.parameters
+        for key, why in ({} if isinstance(kind, tuple) else kind.unsupported.get("pbrt", {})).items():
             expected, _, name = key.rpartition(" ")
             if params.type_of(name):
                 params.get(name, (expected,), 1) if expected else params.get(name, (params.type_of(name),), 0)
                 if why:
                     warn(f"{params.where(name)}: {why}; ignored")
+        try:
+            values = declared.read(fields, "pbrt", lambda p, name: self.mapper.parameter(params, p, name))
+            error = declared.out_of_range(fields, values)
+            if error:
+                raise error
+        except ValueError as e:
+            self.mapper.fail(params, where, e, fields)
+        return values
 
     def area_emission(self, vertices, faces, where, area=None):
         """The emitted radiance of a shape under an AreaLightSource, as [(faces, radiance)]
@@ -488,7 +480,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         try:
             light = cls.from_values(values)
         except ValueError as e:
-            raise refused(where, e, cls.parameters) from None
+            self.mapper.fail(params, where, e, cls.parameters)
         self.lights.append(light)
         self.unused(params, "light", kind)
 
