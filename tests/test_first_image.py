@@ -55,14 +55,17 @@ def test_a_row_is_timed_cold_from_empty_caches_then_warm(tmp_path):
 
 def test_the_obj_scene_is_a_row_bench_writes(tmp_path):
     """`meshes850-obj` (#55's "several hundred OBJ meshes"): 850 OBJ files bench writes, each
-    read from its file cold and the scene from its cache warm."""
+    read from its file cold and the scene from its cache warm; its XML's film is the rows' size,
+    so that Mitsuba renders it beside (here a stand-in)."""
     out = tmp_path / "obj.json"
     r = in_process("bench", "--first-image", "--scenes", "meshes850-obj", "--size", "16x9", "--repeats", "1",
-                   "--device", "cpu", "--json", out)
+                   "--device", "cpu", "--mitsuba", fake_mitsuba(tmp_path), "--mitsuba-variant", "scalar_rgb",
+                   "--json", out)
     assert r.returncode == 0, r.stderr
     row, = json.loads(out.read_text())["results"]
     assert (row["scene"], row["what"]) == ("meshes850-obj", "written by bench")
     assert row["cold_seconds"] > row["warm_seconds"] > 0 and row["cache_files_after"] > 0
+    assert row["mitsuba_cold_seconds"] > 0, r.stdout
 
 
 def test_mitsuba_is_timed_cold_in_a_fresh_home_then_warm(tmp_path, monkeypatch):

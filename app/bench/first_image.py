@@ -14,9 +14,9 @@ and imports included, and checks that the image was written:
   --repeats: a scene opened again.
 
 The rows: --scenes (by default pathtrace.bench.default_scenes.FIRST_IMAGE_SCENES): built-in scenes, `meshes850`
-(850 PLY tori in a Mitsuba XML file, pathtrace.bench.scenes.write_meshes, written with the rows'
-size) and the files `pathtrace bench` writes (pathtrace.bench.report.GENERATED_FILES); then each
---load-scene file.
+(850 PLY tori in a Mitsuba XML file, pathtrace.bench.scenes.write_meshes) and the files `pathtrace
+bench` writes (pathtrace.bench.report.GENERATED_FILES), each written with the rows' size; then
+each --load-scene file.
 With --mitsuba PYTHON, Mitsuba 3 loads and renders with 1 spp the row's XML (the scene's own file,
 or a twin written for a built-in one: pathtrace.bench.report.mitsuba_twin) in a fresh process of that
 Python (pathtrace.bench.mitsuba_timing), cold and then warm in the same way: Dr.Jit keeps its kernels
@@ -103,7 +103,7 @@ def rows(folder: Path, scenes, scene_files, size) -> list:
             _, xml, what, _ = write_meshes(where, size=size)
             found.append((name, str(where / xml), what))
         else:
-            found.append((name, scene_file(name, folder),
+            found.append((name, scene_file(name, folder, size),
                           "written by bench" if name in GENERATED_FILES else "built-in"))
     for f in scene_files:
         path = Path(f).resolve()

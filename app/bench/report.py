@@ -224,14 +224,17 @@ def format_traversal(r: Result) -> str:
             f"and {r.primitives_per_ray:.1f} primitives per ray")
 
 
-def scene_file(name: str, folder: Path) -> str:
-    """A scene name as load_scene takes it: one of GENERATED_FILES written into `folder`."""
+def scene_file(name: str, folder: Path, size: tuple = None) -> str:
+    """A scene name as load_scene takes it: one of GENERATED_FILES written into `folder`, with a
+    film of `size` pixels where it is given (so that Mitsuba, which renders the file as it is,
+    renders it at that size), else the file's own."""
     if name not in GENERATED_FILES:
         return name
     from pathtrace.bench.scenes import write_obj_meshes, write_textured_tori
     where = folder / name
     where.mkdir(exist_ok=True)
-    return str((write_textured_tori if name == "tori400-textured" else write_obj_meshes)(where))
+    write = write_textured_tori if name == "tori400-textured" else write_obj_meshes
+    return str(write(where) if size is None else write(where, size=size))
 
 
 def mitsuba_twin(scene, size: tuple, spp: int, folder: Path):

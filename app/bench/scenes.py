@@ -95,8 +95,9 @@ def torus_obj(nu=32, nv=16) -> str:
                     *("f " + " ".join("/".join(map(str, c)) for c in face) + "\n" for face in faces)])
 
 
-def write_obj_meshes(folder: Path, count: int = 850) -> Path:
-    """`meshes850-obj` (the module's docstring) in `folder`: its XML file."""
+def write_obj_meshes(folder: Path, count: int = 850, size: tuple = (64, 64)) -> Path:
+    """`meshes850-obj` (the module's docstring) in `folder`, with a film of `size` pixels: its
+    XML file."""
     text = torus_obj()
     side = int(np.ceil(np.sqrt(count)))
     shapes = []
@@ -107,13 +108,14 @@ def write_obj_meshes(folder: Path, count: int = 850) -> Path:
                       '<bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf></shape>')
     middle = side * 1.25
     path = folder / f"meshes{count}-obj.xml"
-    path.write_text(scene_xml((64, 64), (middle, side * 1.2, -side * 0.6), (middle, 0, middle), (0, 1, 0), 60, 1, 5,
+    path.write_text(scene_xml(size, (middle, side * 1.2, -side * 0.6), (middle, 0, middle), (0, 1, 0), 60, 1, 5,
                               1.0, shapes))
     return path
 
 
-def write_textured_tori(folder: Path, count: int = 400) -> Path:
-    """`tori400-textured` (the module's docstring) in `folder`: its XML file."""
+def write_textured_tori(folder: Path, count: int = 400, size: tuple = (1920, 1080)) -> Path:
+    """`tori400-textured` (the module's docstring) in `folder`, with a film of `size` pixels: its
+    XML file."""
     from PIL import Image
     points, normals, uvs, faces = torus()
     side = int(np.ceil(np.sqrt(count)))
@@ -145,6 +147,6 @@ def write_textured_tori(folder: Path, count: int = 400) -> Path:
                   '</emitter></shape>')
     middle = side * 1.25
     path = folder / f"tori{count}-textured.xml"
-    path.write_text(scene_xml((1920, 1080), (middle, side * 0.6, -side * 0.3), (middle, 0, middle * 0.8), (0, 1, 0),
+    path.write_text(scene_xml(size, (middle, side * 0.6, -side * 0.3), (middle, 0, middle * 0.8), (0, 1, 0),
                               50, 1, 5, (0.5, 0.6, 0.8), shapes))
     return path
