@@ -104,6 +104,8 @@ class CompiledScene:
         self.bvh: BVH = None
         self.tree_ended = None               # when build_tree ended (perf_counter), once it has
         self._tree_lock = threading.Lock()   # a device group's renderers ask for it at once
+        self._tree_tries = 0                 # builds of the tree begun, and the last one's error
+        self._tree_error = None
         # the corners as the kernels' triangle rows hold them (float4s, w filled below), gathered
         # from float32 vertices (half the bytes of float64 to move) by np.take, which is 3-4x
         # faster than NumPy's indexing with an array; whole 48-byte rows are then put in BVH
@@ -118,8 +120,11 @@ class CompiledScene:
     @property
     def light_plan(self) -> LightPlan:
         """What the kernels compile for the lights (light_plan): the light table's, or before the
-        tree, the plan of the primitives in the scene's order, which the table will have."""
-        if self.tree_ended is not None:
+        tree, the plan of the primitives in the scene's order, which the table will have. The
+        corners are taken once: a tree built meanwhile in another thread lets them go (after
+        its light table is made)."""
+        corners = self._corners
+        if corners is None:
             return LightPlan(self.lights.types, self.lights.tree)
         counts = [len(m.faces) for m in self.meshes]
         mesh_of = np.repeat(np.arange(len(self.meshes)), counts).astype(np.int64)
@@ -127,7 +132,7 @@ class CompiledScene:
         prim_material = np.concatenate([self.scene.sphere_material, mesh_material[mesh_of]]).astype(np.int64)
         is_shape = np.array([isinstance(m, Shape) for m in self.meshes], bool)
         shape_prims = self.num_spheres + np.flatnonzero(is_shape[mesh_of])
-        power, _ = self.emitted_power(self.scene.spheres, self._corners[:, :, :3], prim_material, shape_prims,
+        power, _ = self.emitted_power(self.scene.spheres, corners[:, :, :3], prim_material, shape_prims,
                                       [self.meshes[m] for m in mesh_of[shape_prims - self.num_spheres]])
         # the scene's radius, unknown before the tree's boxes, scales a light at infinity's power
         # (pi r^2 E) but not whether it emits, which is all the plan asks
@@ -136,14 +141,25 @@ class CompiledScene:
     def build_tree(self):
         """The BVH, and in its order the primitives' tables, where each primitive's media are
         and the light table: what the constructor leaves to this with tree=False. Once: a build
-        that fails can be tried again. Callers in other threads wait for the one building it;
-        the lock goes with what the build needs (a compiled scene is pickled for the farm)."""
+        that fails can be tried again. Callers in other threads wait for the one building it,
+        and where it fails, raise its error rather than build it again; the lock goes with what
+        the build needs (a compiled scene is pickled for the farm)."""
         lock = self._tree_lock
         if lock is None:
             return
+        tries = self._tree_tries
         with lock:
-            if self.tree_ended is None:
+            if self.tree_ended is not None:
+                return
+            if self._tree_tries != tries:        # one failed while this one waited
+                raise self._tree_error
+            self._tree_tries += 1
+            try:
                 self._build_tree()
+            except BaseException as e:
+                self._tree_error = e
+                raise
+            self._tree_error = None
 
     def _build_tree(self):
         scene, meshes, n_spheres, (queue, progress) = self.scene, self.meshes, self.num_spheres, self._build

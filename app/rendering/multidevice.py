@@ -13,7 +13,6 @@ and none is left finishing a long launch alone."""
 import math
 import threading
 import time
-from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
@@ -213,9 +212,25 @@ class DeviceGroup:
 
 
 def _each(call, items) -> list:
-    """[call(item) for item in items], each in a thread of its own (one item: in this one); the
-    first error raised is raised here."""
+    """[call(item) for item in items], each in a thread of its own (one item: in this one). The
+    first error raised, in time, is raised here once every call has ended; Ctrl-C is raised at
+    once, the threads (daemons) left to end with the process rather than keep it waiting for a
+    driver's build."""
     if len(items) == 1:
         return [call(items[0])]
-    with ThreadPoolExecutor(len(items)) as pool:
-        return list(pool.map(call, items))
+    results, errors = [None] * len(items), []
+
+    def run(k):
+        try:
+            results[k] = call(items[k])
+        except BaseException as e:
+            errors.append(e)
+    threads = [threading.Thread(target=run, args=(k,), daemon=True) for k in range(len(items))]
+    for t in threads:
+        t.start()
+    for t in threads:
+        while t.is_alive():
+            t.join(0.1)             # wakes for Ctrl-C, which only the main thread gets
+    if errors:
+        raise errors[0]
+    return results

@@ -2,6 +2,7 @@
 each add_samples() call adds samples per pixel. The command line, the benchmarks and the viewer
 all drive this API; it imports nothing from the window or the GUI."""
 
+import threading
 from dataclasses import replace
 
 import numpy as np
@@ -79,6 +80,10 @@ def variance_of(sum: np.ndarray, sum_sq: np.ndarray, samples: int) -> np.ndarray
     return np.maximum(sum_sq[..., :3] / n - m * m, 0.0).astype(np.float32)
 
 
+# held while a renderer sets its compiled scene's light sampler (Renderer.set_scene)
+_LIGHT_SAMPLER_LOCK = threading.Lock()
+
+
 class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
     def __init__(self, backend: Backend, scene, width: int = None, height: int = None, progress=None):
         """scene: a CompiledScene, or a Scene to compile (on this device, calling progress(fraction)
@@ -116,10 +121,11 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
         self.camera = self.scene.camera.copy()
         self.settings = self.scene.settings
         self.auto_plan, self.plan_seconds, self.plan_cached = None, {}, False  # "auto" chooses again
-        if self.compiled.light_sampler != self._light_sampler():
-            self.compiled.light_sampler = self._light_sampler()
-            if self.compiled.tree_ended is not None:     # given whole: its light table again
-                self.compiled.compile_lights()
+        with _LIGHT_SAMPLER_LOCK:    # a device group's renderers share the scene, made at once
+            if self.compiled.light_sampler != self._light_sampler():
+                self.compiled.light_sampler = self._light_sampler()
+                if self.compiled.tree_ended is not None:     # given whole: its light table again
+                    self.compiled.compile_lights()
         self.start_program()
         self.compiled.build_tree()
         self._select_program()
