@@ -120,22 +120,26 @@ def missing(parameters, values: dict) -> list:
 
 
 def out_of_range(parameters, values: dict) -> ValueError | None:
-    """The first of `values` outside its parameter's range [low, high] or not finite, as a type's
-    ValueError ("<name>: <problem>"), or None: the one range check of the readers' values (the
-    TOML reader's numbers are checked as its syntax reads them, its textures here). A texture is
-    checked by its bounds (Texture.bounds_as: a number's by their luminance, as the kernels read
-    it)."""
+    """The first of `values` outside its parameter's range [low, high] (a number or colour not
+    finite too), as a type's ValueError ("<name>: <problem>"), or None: the one range check of
+    the readers' values (the TOML reader's numbers are checked as its syntax reads them, its
+    textures here). A parameter of neither bound is not checked (the readers refuse NaN and inf
+    as they parse them). A texture is checked by its bounds (Texture.bounds_as: a number's by
+    their luminance, as the kernels read it); an integer as Python compares it (a file's integer
+    may be of any size)."""
     for p in parameters:
         value = values.get(p.name)
         if p.kind not in ("integer", "number", "color") or value is None or isinstance(value, str) or \
                 (p.low is None and p.high is None):
             continue
+        if p.kind == "integer":
+            if (p.low is None or value >= p.low) and (p.high is None or value <= p.high):
+                continue
+            return ValueError(f"{p.name}: must be in {p.low}..{p.high}, got {value}")
         low, high = value.bounds_as(p.kind) if hasattr(value, "bounds_as") else (np.min(value), np.max(value))
         if np.isfinite(low) and np.isfinite(high) and (p.low is None or low >= p.low) and \
                 (p.high is None or high <= p.high):
             continue
-        if p.kind == "integer":
-            return ValueError(f"{p.name}: must be in {p.low}..{p.high}, got {value}")
         bound = f"[{p.low:g}, " if p.low is not None else "(-inf, "
         bound += f"{p.high:g}]" if p.high is not None else "inf)"
         return ValueError(f"{p.name}: must lie in {bound}, got " + (f"{low:.4g}" if not low < high else

@@ -45,6 +45,8 @@ def _pfm(path, value):
     (HEAD + 'AreaLightSource "diffuse" "spectrum L" [ 400 0 700 0 ]\n' + TRIANGLE, "'L': the spectrum emits no"),
     (HEAD + 'Material "diffuse" "rgb reflectance" [ -1 0 0 ]\n' + TRIANGLE, "(from 'reflectance') must lie in [0, 1]"),
     (HEAD + TRIANGLE.replace("]\n", '] "float alpha" nan\n'), "s.pbrt:4: 'alpha': nan is not finite"),
+    (HEAD + 'Texture "a" "float" "imagemap" "string filename" "huge.pfm"\n' + TRIANGLE.replace("]\n", '] "texture alpha" "a"\n'),
+     "s.pbrt:5: 'alpha': must lie in [0, 1], got 3e+38"),      # a texture by its bounds
     (HEAD + 'Texture "t" "spectrum" "imagemap" "string filename" "huge.pfm"\n'
      'Material "diffuse" "texture reflectance" "t"\n' + TRIANGLE, "got 3e+38"),
 ])

@@ -78,6 +78,27 @@ def test_a_groups_renderers_are_made_at_once_and_build_one_tree(backend, scene, 
     assert group.samples == 2 and np.isfinite(group.mean()).all()
 
 
+def test_a_tree_that_fails_is_built_once_for_a_group_and_its_error_raised(backend, scene, monkeypatch):
+    """Both devices ask for the tree at once; its build fails: the one that waited raises that
+    error rather than building it again, and the group raises it."""
+    both_asked = threading.Barrier(2, timeout=30)
+    build_tree, tries = CompiledScene.build_tree, []
+
+    def asked_at_once(compiled):
+        both_asked.wait()
+        build_tree(compiled)
+
+    def failing(compiled):
+        time.sleep(0.2)          # long enough for the other to wait for it
+        tries.append(1)
+        raise RuntimeError("out of memory")
+    monkeypatch.setattr(CompiledScene, "build_tree", asked_at_once)
+    monkeypatch.setattr(CompiledScene, "_build_tree", failing)
+    with pytest.raises(RuntimeError, match="out of memory"):
+        DeviceGroup([backend, open_device(backend.device)], scene)
+    assert tries == [1]
+
+
 def test_slow_samples_are_split_into_bands_of_rows(backend, scene, monkeypatch):
     """The first sample is split into FIRST_BANDS launches of rows, and a sample slower than the
     launch budget into bands too (so that Ctrl-C never waits for a whole image's sample); the

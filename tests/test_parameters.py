@@ -38,6 +38,8 @@ def test_one_range_check_serves_every_kind_and_a_texture_by_its_bounds():
               Parameter("c", "color", 0.5, low=0.0), Parameter("free", "number", 0.0))
     assert out_of_range(params, {"n": 8, "x": 1.0, "c": [0, 2, 3], "free": -1e30}) is None
     assert str(out_of_range(params, {"n": 9})) == "n: must be in 1..8, got 9"
+    # a file's integer may be of any size (Mitsuba's are read by int()): compared, not a traceback
+    assert str(out_of_range(params, {"n": 10 ** 23})) == f"n: must be in 1..8, got {10 ** 23}"
     assert str(out_of_range(params, {"x": float("nan")})) == "x: must lie in [0, 1], got nan"
     assert str(out_of_range(params, {"c": [1, -2, 3]})) == "c: must lie in [0, inf), got from -2 to 3"
     # a number's texture by its luminance, as the kernels read it; a colour's by its channels

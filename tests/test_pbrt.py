@@ -163,18 +163,21 @@ def test_named_spectra_blackbodies_and_sampled_spectra(tmp_path):
     assert np.allclose(reflectance_rgb(constant), 0.4)
 
 
-def test_a_shapes_alpha_beyond_0_and_1_is_taken_as_pbrt_v4_takes_it(tmp_path):
-    """pbrt-v4 takes any finite alpha, a number or a texture: its stochastic test keeps every hit
-    where the alpha is at least 1 and none where it is at most 0 (GeometricPrimitive::Intersect),
-    as kernels/masks.cl does with the opacity; the reader refuses none of them."""
+def test_a_shapes_alpha_number_beyond_0_and_1_is_taken_as_pbrt_v4_takes_it(tmp_path):
+    """pbrt-v4 takes any alpha number: its stochastic test keeps every hit where the alpha is at
+    least 1 and none where it is at most 0 (GeometricPrimitive::Intersect), as an opacity
+    clamped to [0, 1] does (and which `convert` writes as TOML reads it); an alpha texture beyond
+    [0, 1] is refused as in every format."""
     def opacity(alpha, texture=""):
         s = scene(tmp_path, texture + FLOOR.replace("]\n", f"] {alpha}\n"))
         material = s.materials.get(s.meshes[0].material)
         return material.masked, material.opacity
-    assert opacity('"float alpha" 1.5') == (False, pytest.approx(1.0))              # opaque
-    assert opacity('"texture alpha" "a"', 'Texture "a" "float" "constant" "float value" 2\n')[0] is False
+    assert opacity('"float alpha" 1.5') == (False, 1.0)                   # every hit kept
     masked, cut = opacity('"float alpha" -0.5')
-    assert masked and cut.params["value"][0] <= 0                                  # never hit
+    assert masked and cut.params["value"][0] == 0                         # none kept
+    assert "'alpha': must lie in [0, 1], got from 0.5 to 2" in fails(
+        tmp_path, 'WorldBegin\nTexture "a" "float" "checkerboard" "float tex1" 2 "float tex2" 0.5\n'
+        + FLOOR.replace("]\n", '] "texture alpha" "a"\n'))
 
 
 def test_roughness_is_remapped_as_pbrt_remaps_it(tmp_path):

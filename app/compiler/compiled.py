@@ -104,7 +104,7 @@ class CompiledScene:
         self.bvh: BVH = None
         self.tree_ended = None               # when build_tree ended (perf_counter), once it has
         self._tree_lock = threading.Lock()   # a device group's renderers ask for it at once
-        self._tree_tries = 0                 # builds of the tree begun, and the last one's error
+        self._tree_tries = 0                 # builds of the tree ended, and the last one's error
         self._tree_error = None
         # the corners as the kernels' triangle rows hold them (float4s, w filled below), gathered
         # from float32 vertices (half the bytes of float64 to move) by np.take, which is 3-4x
@@ -151,14 +151,15 @@ class CompiledScene:
         with lock:
             if self.tree_ended is not None:
                 return
-            if self._tree_tries != tries:        # one failed while this one waited
+            if self._tree_tries != tries:        # one ended, failing, while this one waited
                 raise self._tree_error
-            self._tree_tries += 1
             try:
                 self._build_tree()
             except BaseException as e:
                 self._tree_error = e
                 raise
+            finally:
+                self._tree_tries += 1
             self._tree_error = None
 
     def _build_tree(self):

@@ -13,12 +13,16 @@ from pathtrace.textures import TEXTURES, Texture
 # Mitsuba 3 gives a field by a plugin wrapped round a nested BSDF: its Mitsuba name is the
 # plugin's, "plugin.property" for a property of it, the plugin alone for the plugin's presence (a
 # bool) or its one texture, whatever that texture's name (a bumpmap's)
+# pbrt-v4 takes any alpha number: its stochastic alpha test (GeometricPrimitive::Intersect) keeps
+# every hit at 1 or more and none at 0 or less, as an opacity clamped to [0, 1] does; an alpha
+# texture beyond [0, 1] is refused, as the opacity's range refuses one in every format
 SURFACE = (
     Parameter("Le", "color", 0.0, texture=True, doc="emitted radiance"),
     Parameter("emits_back", "bool", False, doc="its emission leaves its back too (pbrt-v4's two-sided area lights)"),
     Parameter("twosided", "bool", False, doc="the BSDF on both sides (not for one that transmits)", mitsuba="twosided"),
     Parameter("opacity", "number", 1.0, low=0.0, high=1.0, texture=True, mitsuba="mask.opacity", mitsuba_default=0.5,
-              pbrt="alpha", doc="an alpha mask: the probability that a ray meets the surface (a texture's luminance)"),
+              pbrt="alpha", from_pbrt=lambda alpha, given: alpha if isinstance(alpha, Texture) else min(max(alpha, 0.0), 1.0),
+              doc="an alpha mask: the probability that a ray meets the surface (a texture's luminance)"),
     Parameter("normal_map", "texture", optional=True, doc="tangent-space normals, 2 rgb - 1 (a bitmap, raw)",
               mitsuba="normalmap.normalmap"),
     Parameter("bump_map", "texture", optional=True, doc="heights: a bitmap, or a scale of one by a number",

@@ -68,8 +68,9 @@ class SceneOpening:
 
     def _build_progress(self, name: str):
         """A progress callback for a scene's BVH build, from the worker thread: the window, live
-        in its own thread, shows how far it is, and once it is built, that the kernels, which
-        began building beside it, may still be."""
+        in its own thread, shows how far it is, and once it is built, that the kernels are
+        coming (a new renderer's began building beside the tree; a scene opened over another
+        has its kernels built after its tree)."""
         def show(fraction):
             self._status = (f"building the BVH of {name}", fraction) if fraction < 1 else self._preparing(name)
         return show

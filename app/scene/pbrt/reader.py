@@ -17,7 +17,6 @@ an object, analytic shapes, are copied into world space at each instance."""
 
 import gc
 import gzip
-import math
 import os
 import re
 from dataclasses import replace
@@ -51,11 +50,6 @@ MESHES_BY_NAME = declared.by_format(MESH_SHAPES.values(), "pbrt")
 # a plymesh shape and its file name, as MeshFiles reads them ahead (PbrtReader.named_mesh_files)
 _PLYMESH = re.compile(r'Shape\s+"plymesh"')
 _FILENAME = re.compile(r'"string\s+filename"\s*\[?\s*"([^"]*)"')
-
-# pbrt-v4 takes any finite alpha (Shape::Create's "alpha", a float or a float texture): its
-# stochastic alpha test keeps a hit where the alpha is at least 1 and drops it where it is at
-# most 0, as kernels/masks.cl does
-ALPHA = replace(OPACITY, low=-math.inf, high=math.inf)
 
 
 class PbrtReader(GraphicsStateDirectives, OptionDirectives):
@@ -351,7 +345,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         if self.current_object is not None and parts[0][1] is not None:
             warn(f"{where}: pbrt-v4 has no area lights in instances; this shape does not emit")
             parts = [(None, None)]
-        alpha = self.read_declared((ALPHA,), params, where).get("opacity", 1.0)
+        alpha = self.read_declared((OPACITY,), params, where).get("opacity", 1.0)
         self.unused(params, "shape", kind)
         group = None if self.current_object is None else self.objects[self.current_object]
         if shape is not None:
