@@ -286,6 +286,20 @@ def test_an_equal_area_map_is_resampled_through_the_lights_transform(tmp_path):
     assert rows[0] > 10 and rows[h // 2:].max() == 0
 
 
+def test_pixel_filters_are_read_by_their_declared_names(tmp_path, capsys):
+    """xradius and yradius are one radius, their mean, with a warning where they differ; a
+    filter of negative lobes is pbrt-v4's default gaussian, its radii left unread (they do not
+    say the gaussian's)."""
+    from pathtrace.filters import PixelFilter
+    assert scene(tmp_path, FLOOR, 'PixelFilter "triangle" "float xradius" 1 "float yradius" 2').settings.filter == \
+        PixelFilter("tent", 1.5)
+    assert "one radius; it uses 1.5" in capsys.readouterr().err
+    assert scene(tmp_path, FLOOR, 'PixelFilter "mitchell" "float xradius" 1 "float yradius" 3').settings.filter == \
+        PixelFilter("gaussian", 1.5, 0.5) == scene(tmp_path, FLOOR).settings.filter
+    err = capsys.readouterr().err
+    assert "no mitchell filter" in err and "one radius" not in err
+
+
 def test_convert_writes_a_pbrt_scene_as_toml_that_reads_the_same(tmp_path):
     from pathtrace.scene.toml_writer import scene_toml
     s = load_scene(str(SCENES / "cbox.pbrt"))

@@ -12,7 +12,7 @@ from pathtrace import cameras
 from pathtrace.cameras import Camera
 from pathtrace.cameras.camera import FileCamera, frame_of
 from pathtrace.errors import UserError, warn
-from pathtrace.filters import PixelFilter
+from pathtrace import filters
 from pathtrace.scene.pbrt.tokens import parameters, string
 from pathtrace.scene.meshes import MAX_COORDINATE
 from pathtrace.scene import settings
@@ -123,19 +123,23 @@ class OptionDirectives:
         params.ignore()            # another integrator's settings: it is replaced whole, with its warning
 
     def _pixel_filter(self, tokens, offset):
+        """A filter by its type's declared pbrt-v4 names (app/filters.py); pbrt-v4's default for
+        one of negative lobes."""
         kind = string(tokens, "PixelFilter")
-        params = parameters(tokens)
-        where = tokens.where(offset)
+        params, where, given = parameters(tokens), tokens.where(offset), {}
         try:
-            self.filter = PixelFilter.from_pbrt(kind, params.float, lambda text: warn(f"{where}: {text}"))
+            found = filters.format_type("pbrt", kind, lambda text: warn(f"{where}: {text}"))
         except ValueError as e:
-            field, problem = str(e).split(": ", 1)
-            if field == "type":
-                tokens.fail(offset, problem)
-            raise UserError(f"{where}: '{field}' and 'yradius': {problem}" if field == "xradius" else
-                            f"{where}: '{field}': {problem}") from None
-        if kind in ("mitchell", "lanczos"):
+            tokens.fail(offset, str(e))
+        if found is None:
             params.ignore()
+            self.filter = filters.format_default("pbrt")
+            return
+        values = self.read_declared(found, params, where, given)
+        try:
+            self.filter = found.make(values, given, lambda text: warn(f"{where}: {text}"))
+        except ValueError as e:
+            self.mapper.fail(params, where, e, found.parameters)
         self.unused(params, "filter", kind)
 
 
