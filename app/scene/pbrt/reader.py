@@ -31,7 +31,7 @@ from pathtrace.io.files import check_regular_file
 from pathtrace import filters
 from pathtrace import parameters as declared
 from pathtrace.lights import DELTA_LIGHTS
-from pathtrace.lights.area import pbrt_radiance
+from pathtrace.lights.area import DiffuseAreaLight, pbrt_radiance
 from pathtrace.materials.surface import OPACITY
 from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.scene import transform
@@ -441,19 +441,14 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         if self.state.area_light is None or self.state.material is None:
             return [(None, None)], False
         params, light_where = self.state.area_light
-        if params.type_of("filename"):
-            params.string("filename")
-            warn(f"{light_where}: pathtrace's area lights have no image; it uses L "
-                 f"({', '.join(f'{c:g}' for c in params.spectrum('L', 1.0, 'illuminant'))})")
-        twosided = params.bool("twosided", False)
+        given = {}
+        self.read_declared(DiffuseAreaLight, params, light_where, given)
         try:
-            parts = pbrt_radiance(params.spectrum("L", 1.0, "illuminant"), params.float("scale", 1.0), twosided,
-                                  params.float("power", -1.0), vertices, faces, area,
-                                  lambda text: warn(f"{light_where}: {text}"))
+            parts = pbrt_radiance(given, vertices, faces, area, lambda text: warn(f"{light_where}: {text}"))
         except ValueError as e:
             self.mapper.fail(params, light_where, e)
         self.unused(params, "arealight", "diffuse")
-        return parts, twosided
+        return parts, given["twosided"]
 
     # -- lights --
 
