@@ -300,6 +300,13 @@ def test_pixel_filters_are_read_by_their_declared_names(tmp_path, capsys):
     assert "no mitchell filter" in err and "one radius" not in err
 
 
+def test_a_stratified_sampler_takes_xsamples_times_ysamples(tmp_path):
+    assert scene(tmp_path, FLOOR, 'Sampler "stratified" "integer xsamples" 2 "integer ysamples" 3').settings.spp == 6
+    assert scene(tmp_path, FLOOR, 'Sampler "stratified"').settings.spp == 16
+    assert scene(tmp_path, FLOOR, 'Sampler "halton" "integer pixelsamples" 8').settings.spp == 8
+    assert "s.pbrt:1: 'ysamples': must be in 1.." in fails(tmp_path, 'Sampler "stratified" "integer ysamples" 0\n')
+
+
 def test_convert_writes_a_pbrt_scene_as_toml_that_reads_the_same(tmp_path):
     from pathtrace.scene.toml_writer import scene_toml
     s = load_scene(str(SCENES / "cbox.pbrt"))

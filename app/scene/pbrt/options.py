@@ -81,22 +81,13 @@ class OptionDirectives:
         self.unused(params, "film", kind)
 
     def _sampler(self, tokens, offset):
-        """The samples per pixel: `pixelsamples` (16), or for a `stratified` sampler `xsamples`
-        times `ysamples` (4 each), as pbrt-v4's samplers take them (src/pbrt/samplers.cpp, the
-        samplers' Create). Their seeds, jitter and randomization are their own: warned of, as
-        any name not read."""
+        """The samples per pixel, as pbrt-v4's samplers take them (settings.Sampler: `pixelsamples`,
+        16; a stratified one's xsamples times ysamples). Their seeds, jitter and randomization are
+        their own: warned of, as any name not read."""
         kind = string(tokens, "Sampler")
         params = parameters(tokens)
-        if kind != "stratified":
-            self.settings.spp = self.read_declared(settings.Sampler, params, tokens.where(offset))["spp"]
-        else:
-            most, spp = settings.Sampler.parameters[0].high, 1
-            for name in ("xsamples", "ysamples"):
-                n = params.int(name, 4)
-                if not 1 <= n <= most // spp:
-                    params.fail(name, f"must be in 1..{most // spp} (samples per pixel at most {most} in all), got {n}")
-                spp *= n
-            self.settings.spp = spp
+        sampler = settings.SAMPLERS["pbrt"].get(kind, settings.Sampler)
+        self.settings.spp = self.read_declared(sampler, params, tokens.where(offset))["spp"]
         self.unused(params, "sampler", kind)
 
     def _integrator(self, tokens, offset):
