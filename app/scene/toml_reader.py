@@ -241,16 +241,12 @@ class _Reader(TomlValues):
 
     def environment(self, data):
         """[environment], by its declared parameters (app/scene/environment.py): a colour or a map."""
-        where = "environment"
-        self.table(data, where, {p.name for p in Environment.parameters if p.name})
-        if "map" in data and "color" in data:
-            self.fail(where, "give either 'color' or 'map', not both")
-        values = self.declared(Environment.parameters, data, where)
-        intensity, rotation = values.get("intensity", 1.0), values.get("rotation", 0.0) % 360.0   # wrapped in float64
-        if "map" in values:
-            return Environment.from_file(self.find_asset(values["map"]), intensity, rotation,
-                                         where=f"{self.label}: environment.map")
-        return Environment(Environment.constant(values.get("color", 1.0)).image, intensity, rotation)
+        self.table(data, "environment", {p.name for p in Environment.parameters if p.name})
+        try:
+            return Environment.from_values(self.declared(Environment.parameters, data, "environment"), self.find_asset,
+                                           f"{self.label}: environment")
+        except ValueError as e:
+            self.refuse("environment", e)
 
     def find_asset(self, name):
         """A map path is relative to the scene file; a bare name may also be a shipped map."""
