@@ -21,7 +21,7 @@ class DiffuseAreaLight:
         Parameter(None, "number", pbrt="scale", pbrt_default=1.0, doc="a factor on L"),
         Parameter(None, "bool", pbrt="twosided", pbrt_default=False, doc="whether it emits from both sides"),
         Parameter(None, "number", pbrt="power", pbrt_default=-1.0, doc="where positive, the power each shape emits"))
-    unsupported = {"pbrt": {"string filename": "pathtrace's area lights have no image; it uses L"}}
+    unsupported = {"pbrt": {"string filename": "pathtrace's area lights have no image (they emit L)"}}
 
 
 def pbrt_radiance(given: dict, vertices, faces, area, warn) -> list:
