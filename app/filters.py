@@ -1,19 +1,87 @@
 """Pixel filters: where in and around its pixel each sample lands, by filter importance sampling
-(kernels/camera.cl). Each type is a kernel file kernels/filters/<name>.cl, with Mitsuba 3's and
-pbrt-v4's parameters: box (radius 0.5), tent (pbrt-v4's triangle; radius 1, pbrt-v4's 2) and
-gaussian (stddev 0.5; radius 4 stddev, pbrt-v4's 1.5)."""
+(kernels/camera.cl). Each type is a kernel file kernels/filters/<name>.cl, declared here with its
+parameters in the three formats (app/parameters.py): box (radius 0.5), tent (pbrt-v4's
+triangle; radius 1, pbrt-v4's 2) and gaussian (stddev 0.5; radius 4 stddev, pbrt-v4's 1.5)."""
 
 import math
 from dataclasses import dataclass
 
 from pathtrace.device.features import GENERIC, choice_glue
 from pathtrace.errors import cut
+from pathtrace.parameters import Parameter, by_format, read
+from pathtrace.rendering.choices import FILTERS
 
-FILTERS = ("box", "tent", "gaussian")
-DEFAULT_RADIUS = {"box": 0.5, "tent": 1.0, "gaussian": None}    # gaussian: 4 stddev
-PBRT_RADIUS = {"box": 0.5, "triangle": 2.0, "gaussian": 1.5, "mitchell": 2.0, "lanczos": 4.0}   # pbrt-v4's defaults
 MAX_RADIUS = 32.0       # pixels: wider is no longer a pixel filter
 MIN_WIDTH = 1e-3        # pixels: the narrowest radius or stddev (float32 squares of less underflow)
+
+
+def _radius(default, pbrt_default, doc, **mitsuba) -> tuple:
+    """A type's radius, and pbrt-v4's xradius and yradius, of which pathtrace's one radius is the
+    mean (FilterType.make warns where they differ)."""
+    return (Parameter("radius", "number", default, optional=default is None, doc=doc, pbrt="xradius",
+                      pbrt_default=pbrt_default, from_pbrt=lambda x, given: (x + given["yradius"]) / 2, **mitsuba),
+            Parameter(None, "number", pbrt="yradius", pbrt_default=pbrt_default,
+                      doc="pathtrace's filters have one radius: the mean of xradius and yradius"))
+
+
+@dataclass(frozen=True)
+class FilterType:
+    """A filter type: its names in Mitsuba 3 and pbrt-v4 and its parameters (app/parameters.py),
+    which the readers read it by."""
+    name: str
+    formats: dict
+    parameters: tuple
+    doc: str
+    unsupported = {}
+
+    def make(self, values: dict, given: dict = None, warn=None) -> "PixelFilter":
+        """The filter of a file's values (app/parameters.py: read; `given`, by the format's
+        names), checked: raises ValueError("<field>: <problem>")."""
+        given = given or {}
+        if given.get("xradius") != given.get("yradius"):
+            warn(f"pathtrace's filters have one radius; it uses {values['radius']:g}")
+        try:
+            return PixelFilter(self.name, **values).check()
+        except ValueError as e:
+            field, _, problem = str(e).partition(": ")
+            if field == "radius" and "xradius" in given:
+                raise ValueError(f"'xradius' and 'yradius': {problem} (their mean)") from None
+            raise
+
+
+TYPES = {t.name: t for t in (     # in FILTERS' order (rendering/choices.py: the command line's)
+    FilterType("box", {"mitsuba": "box", "pbrt": "box"}, _radius(0.5, 0.5, "pixels (Mitsuba 3's box has 0.5)"),
+               "weight 1 within the radius: the pixel itself at 0.5"),
+    FilterType("tent", {"mitsuba": "tent", "pbrt": "triangle"}, _radius(1.0, 2.0, "pixels", mitsuba="radius"),
+               "weights 1 - |x| / radius per axis"),
+    FilterType("gaussian", {"mitsuba": "gaussian", "pbrt": "gaussian"},
+               (Parameter("stddev", "number", 0.5, doc="pixels", mitsuba="stddev", pbrt="sigma"),
+                *_radius(None, 1.5, "pixels; by default 4 stddev (Mitsuba 3's always)")),
+               "weights exp(-x^2 / (2 stddev^2)) less their value at the radius, per axis"))}
+# the formats' filters whose weights go negative, which filter importance sampling cannot follow:
+# pathtrace's gaussian of the format's defaults stands in, with a warning (Mitsuba 3: any it has not)
+NEGATIVE_LOBES = {"pbrt": ("mitchell", "lanczos")}
+
+
+def format_type(fmt: str, kind: str, warn) -> FilterType:
+    """The type of a filter of format fmt ("mitsuba", "pbrt") and type `kind`; where pathtrace has
+    none, None, with a warning of the gaussian that stands in. Raises ValueError for a type
+    pbrt-v4 has not."""
+    types = by_format(TYPES.values(), fmt)
+    if kind in types:
+        return types[kind]
+    if fmt == "pbrt" and kind not in NEGATIVE_LOBES[fmt]:
+        known = ", ".join([*types, *NEGATIVE_LOBES[fmt]])
+        raise ValueError(f"unknown pixel filter '{cut(kind)}' (pbrt-v4 has {known})")
+    warn(f"pathtrace has no {kind} filter (its weights go negative, which filter importance sampling cannot "
+         f"follow); it uses {'pbrt' if fmt == 'pbrt' else 'Mitsuba'}'s gaussian")
+    return None
+
+
+def format_default(fmt: str) -> "PixelFilter":
+    """The filter of a file of format fmt that gives none, and the one that stands in for a
+    filter of negative lobes: its gaussian, of its defaults."""
+    return TYPES["gaussian"].make(read(TYPES["gaussian"].parameters, fmt, lambda p, name: None))
 
 
 @dataclass(frozen=True)
@@ -24,7 +92,7 @@ class PixelFilter:
 
     def __post_init__(self):
         if self.radius is None and self.name in FILTERS:
-            default = 4 * self.stddev if self.name == "gaussian" else DEFAULT_RADIUS[self.name]
+            default = 4 * self.stddev if self.name == "gaussian" else TYPES[self.name].parameters[0].default
             object.__setattr__(self, "radius", default)
 
     def check(self) -> "PixelFilter":
@@ -36,40 +104,6 @@ class PixelFilter:
         if not MIN_WIDTH <= self.radius <= MAX_RADIUS:
             raise ValueError(f"radius: must be in [{MIN_WIDTH:g}, {MAX_RADIUS:g}] pixels, got {self.radius:g}")
         return self
-
-    @classmethod
-    def from_mitsuba(cls, kind: str, get, warn) -> "PixelFilter":
-        """Mitsuba 3's rfilter `kind` (get(name, default): a float property): its box (radius
-        0.5), tent (radius, 1) and gaussian (stddev 0.5, radius 4 stddev); the filters of
-        negative lobes become its gaussian, with a warning. Raises ValueError as check()."""
-        if kind not in FILTERS:
-            warn(f"pathtrace has no {kind} filter (its weights go negative, which filter importance sampling "
-                 "cannot follow); it uses Mitsuba's gaussian")
-            return cls("gaussian")
-        return cls(kind, get("radius", None) if kind == "tent" else None,
-                   get("stddev", 0.5) if kind == "gaussian" else 0.5).check()
-
-    @classmethod
-    def from_pbrt(cls, kind: str, get, warn) -> "PixelFilter":
-        """pbrt-v4's PixelFilter `kind` (get(name, default): a float parameter): box, triangle and
-        gaussian of their xradius and yradius (one radius, their mean, with a warning where they
-        differ) and the gaussian's sigma (src/pbrt/filters.cpp, the filters' Create); mitchell and
-        lanczos, of negative lobes, become its gaussian, with a warning. Raises ValueError
-        ("<pbrt name>: <problem>")."""
-        if kind not in PBRT_RADIUS:
-            raise ValueError(f"type: unknown pixel filter '{cut(kind)}' (pbrt-v4 has {', '.join(PBRT_RADIUS)})")
-        rx, ry = get("xradius", PBRT_RADIUS[kind]), get("yradius", PBRT_RADIUS[kind])
-        if rx != ry:
-            warn(f"pathtrace's filters have one radius; it uses {(rx + ry) / 2:g}")
-        if kind in ("mitchell", "lanczos"):
-            warn(f"pathtrace has no {kind} filter (its weights go negative); it uses pbrt's gaussian")
-            return cls("gaussian", 1.5, 0.5)
-        name = {"triangle": "tent"}.get(kind, kind)
-        try:
-            return cls(name, (rx + ry) / 2, get("sigma", 0.5) if kind == "gaussian" else 0.5).check()
-        except ValueError as e:
-            field, problem = str(e).split(": ", 1)
-            raise ValueError(f"{ {'radius': 'xradius', 'stddev': 'sigma'}[field]}: {problem}") from None
 
     def params(self) -> tuple:
         """RenderParams.filter (kernels/filters/<name>.cl)."""

@@ -150,6 +150,13 @@ def test_filters_refuse_what_they_cannot_be(bad, problem):
         PixelFilter(**bad).check()
 
 
+def test_the_filter_types_are_the_command_lines_in_its_order():
+    """The command line refuses a filter without loading the declarations (rendering/choices.py);
+    RenderParams.filter_type is an index into the one order."""
+    from pathtrace.filters import TYPES
+    assert tuple(TYPES) == FILTERS
+
+
 SPHERE = {"center": [0, 0, 0], "radius": 1, "material": {"type": "diffuse", "rho_d": 0.5}}
 
 

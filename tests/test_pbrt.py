@@ -289,6 +289,27 @@ def test_an_equal_area_map_is_resampled_through_the_lights_transform(tmp_path):
     assert rows[0] > 10 and rows[h // 2:].max() == 0
 
 
+def test_pixel_filters_are_read_by_their_declared_names(tmp_path, capsys):
+    """xradius and yradius are one radius, their mean, with a warning where they differ; a
+    filter of negative lobes is pbrt-v4's default gaussian, its radii left unread (they do not
+    say the gaussian's)."""
+    from pathtrace.filters import PixelFilter
+    assert scene(tmp_path, FLOOR, 'PixelFilter "triangle" "float xradius" 1 "float yradius" 2').settings.filter == \
+        PixelFilter("tent", 1.5)
+    assert "one radius; it uses 1.5" in capsys.readouterr().err
+    assert scene(tmp_path, FLOOR, 'PixelFilter "mitchell" "float xradius" 1 "float yradius" 3').settings.filter == \
+        PixelFilter("gaussian", 1.5, 0.5) == scene(tmp_path, FLOOR).settings.filter
+    err = capsys.readouterr().err
+    assert "no mitchell filter" in err and "one radius" not in err
+
+
+def test_a_stratified_sampler_takes_xsamples_times_ysamples(tmp_path):
+    assert scene(tmp_path, FLOOR, 'Sampler "stratified" "integer xsamples" 2 "integer ysamples" 3').settings.spp == 6
+    assert scene(tmp_path, FLOOR, 'Sampler "stratified"').settings.spp == 16
+    assert scene(tmp_path, FLOOR, 'Sampler "halton" "integer pixelsamples" 8').settings.spp == 8
+    assert "s.pbrt:1: 'ysamples': must be in 1.." in fails(tmp_path, 'Sampler "stratified" "integer ysamples" 0\n')
+
+
 def test_convert_writes_a_pbrt_scene_as_toml_that_reads_the_same(tmp_path):
     from pathtrace.scene.toml_writer import scene_toml
     s = load_scene(str(SCENES / "cbox.pbrt"))

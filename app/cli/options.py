@@ -5,8 +5,8 @@ import argparse
 from dataclasses import replace
 
 from pathtrace.errors import UserError, short, warn
-from pathtrace.rendering.choices import (INTEGRATORS, LIGHT_SAMPLERS, MAX_PATH_QUEUE, PATH_QUEUE_AUTO, RUSSIAN_ROULETTE,
-                                         TONEMAPS)
+from pathtrace.rendering.choices import (FILTERS, INTEGRATORS, LIGHT_SAMPLERS, MAX_PATH_QUEUE, PATH_QUEUE_AUTO,
+                                         RUSSIAN_ROULETTE, TONEMAPS)
 
 # The epilog of the commands that take a scene, written out only when help is shown: the names
 # of the built-in scenes come from their module, which no other command need import
@@ -144,7 +144,6 @@ def _path_queue(text: str) -> int:
 
 def _pixel_filter(text: str):
     from pathtrace.errors import did_you_mean
-    from pathtrace.filters import FILTERS, PixelFilter
     name, *numbers = text.split(":")
     if name not in FILTERS:         # worded as argparse words a bad choice of the other options
         raise argparse.ArgumentTypeError(f"invalid choice: {short(name)} (choose from "
@@ -155,6 +154,7 @@ def _pixel_filter(text: str):
         raise argparse.ArgumentTypeError(f"{short(text)}: radius and stddev must be numbers") from None
     if len(values) > (2 if name == "gaussian" else 1):
         raise argparse.ArgumentTypeError(f"{short(text)}: too many numbers for a {short(name)} filter")
+    from pathtrace.filters import PixelFilter
     try:
         return PixelFilter(name, *values).check()
     except ValueError as e:

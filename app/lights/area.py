@@ -6,16 +6,29 @@ import math
 import numpy as np
 
 from pathtrace.lights.light import MAX_RADIANCE
+from pathtrace.parameters import Parameter
 
 # the most material rows one `power` area light's triangles take (pbrt_radiance)
 MAX_POWER_ROWS = 256
 
 
-def pbrt_radiance(le, scale: float, twosided: bool, power: float, vertices, faces, area, warn) -> list:
-    """The emitted radiance of a shape under pbrt-v4's diffuse AreaLightSource of L `le` (rgb),
-    `scale`, `twosided` and `power` (none where not positive), as [(faces, radiance)] (faces an
-    index array of the mesh's, or None for all); `area`: an analytic shape's (None for a mesh).
-    Raises ValueError("<pbrt name>: <problem>").
+class DiffuseAreaLight:
+    """pbrt-v4's diffuse AreaLightSource, its parameters pbrt-v4's own (app/parameters.py), which
+    pbrt_radiance makes the emission of the shapes under it."""
+    formats = {"pbrt": "diffuse"}
+    parameters = (
+        Parameter(None, "color", spectrum="illuminant", pbrt="L", pbrt_default=(1.0, 1.0, 1.0), doc="its radiance"),
+        Parameter(None, "number", pbrt="scale", pbrt_default=1.0, doc="a factor on L"),
+        Parameter(None, "bool", pbrt="twosided", pbrt_default=False, doc="whether it emits from both sides"),
+        Parameter(None, "number", pbrt="power", pbrt_default=-1.0, doc="where positive, the power each shape emits"))
+    unsupported = {"pbrt": {"string filename": "pathtrace's area lights have no image (they emit L)"}}
+
+
+def pbrt_radiance(given: dict, vertices, faces, area, warn) -> list:
+    """The emitted radiance of a shape under pbrt-v4's diffuse AreaLightSource of the values
+    `given` by its declared names (DiffuseAreaLight: L as rgb, scale, twosided and power, none
+    where not positive), as [(faces, radiance)] (faces an index array of the mesh's, or None for
+    all); `area`: an analytic shape's (None for a mesh). Raises ValueError("<pbrt name>: <problem>").
 
     `power` is applied as pbrt-v4 applies it: a mesh is one DiffuseAreaLight per triangle
     (src/pbrt/scene.cpp, the area lights' loop over the shapes Shape::Create returns), and
@@ -25,7 +38,8 @@ def pbrt_radiance(le, scale: float, twosided: bool, power: float, vertices, face
     Cylinder::Area, src/pbrt/shapes.h, ignore the transform). An RGB L keeps its magnitude
     (scale /= SpectrumToPhotometric(L) sees only the colour space's illuminant), so L is not
     divided by its luminance. Triangles of one area share a radiance, and a material row."""
-    le = np.asarray(le, np.float64) * scale
+    scale, twosided, power = given["scale"], given["twosided"], given["power"]
+    le = np.asarray(given["L"], np.float64) * scale
     if np.any(le < 0):
         raise ValueError(f"{'scale' if scale < 0 else 'L'}: an emitted radiance must not be negative")
     if power <= 0:

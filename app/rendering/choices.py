@@ -14,4 +14,5 @@ PATH_QUEUE_AUTO = -1    # RenderSettings.path_queue "auto": chosen by trial rend
 # (Mitsuba 3's particle tracer).
 INTEGRATORS = ("path", "bdpt", "ptracer")
 LIGHT_SAMPLERS = ("auto", "power", "tree")   # how next-event estimation chooses a light (pathtrace.lights.table)
+FILTERS = ("box", "tent", "gaussian")    # the pixel filters, in RenderParams.filter_type's order (pathtrace.filters)
 TONEMAPS = ("standard", "aces")             # the tone curves of pathtrace.io.tonecurve

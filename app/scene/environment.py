@@ -56,6 +56,18 @@ class Environment:
         return cls(read_hdr(path, where), intensity, rotation, str(path))
 
     @classmethod
+    def from_values(cls, values: dict, find, where: str):
+        """pathtrace's [environment] of the values its declared names give (a map found by
+        find(name), or a colour), its rotation wrapped into [0, 360) (in float64). Raises
+        ValueError."""
+        if "map" in values and "color" in values:
+            raise ValueError("give either 'color' or 'map', not both")
+        intensity, rotation = values.get("intensity", 1.0), values.get("rotation", 0.0) % 360.0
+        if "map" in values:
+            return cls.from_file(find(values["map"]), intensity, rotation, where=f"{where}.map")
+        return cls(cls.constant(values.get("color", 1.0)).image, intensity, rotation)
+
+    @classmethod
     def from_mitsuba(cls, kind: str, values: dict, to_world, folder: Path, where: str, warn):
         """Mitsuba 3's `constant` or `envmap` emitter of the values its declared names give
         (mitsuba_plugins), its map turned by to_world() (read where there is a map). Raises ValueError("<Mitsuba name>: <problem>")."""

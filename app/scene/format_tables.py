@@ -1,7 +1,7 @@
 """The parameter tables of docs/scene-format.md, generated from the types' declarations
 (app/parameters.py): each block between `<!-- parameters: KIND -->` and `<!-- end parameters -->`
 is the tables of the types of KIND (lights, environment, materials, textures, media, shapes, cameras,
-surface: what any material carries, render: the [render] table), one per type, with a column for
+filters, surface: what any material carries, render: the [render] table), one per type, with a column for
 each format that has the type. `python -m pathtrace.scene.format_tables` rewrites the file;
 tests/test_parameters.py fails where the file and the declarations differ."""
 
@@ -41,6 +41,9 @@ def _types(kind: str) -> list:
                  " ".join(sys.modules[c.__module__].__doc__.split())
                  + ("" if c.importance else " BDPT cannot render through it yet (no importance)."), c.parameters)
                 for c in CAMERAS.values()]
+    if kind == "filters":
+        from pathtrace.filters import TYPES
+        return [(t.name, t.formats, t.doc, t.parameters) for t in TYPES.values()]
     if kind == "environment":
         return [(Environment.name, Environment.formats, Environment.doc, Environment.parameters)]
     if kind == "surface":

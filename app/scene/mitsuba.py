@@ -15,7 +15,7 @@ from pathtrace.cameras.camera import FileCamera, frame_of
 from pathtrace.cameras.perspective import PerspectiveCamera, vertical_fov
 from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError, short, warn
-from pathtrace.filters import FILTERS, PixelFilter
+from pathtrace import filters
 from pathtrace import parameters
 from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.materials import BSDFS, Material
@@ -126,7 +126,7 @@ class _Reader(XmlScene):
         if not (self.builder.spheres or self.builder.meshes or self.builder.shapes or self.builder.instance_object):
             raise UserError(f"{self.path}: the scene has no shapes pathtrace can render")
         self.warn_unread()
-        self.settings.filter = self.filter or PixelFilter("gaussian")      # Mitsuba's default
+        self.settings.filter = self.filter or filters.format_default("mitsuba")
         return self.builder.build(self.path.stem, camera=self.camera or self.default_camera(),
                                   environment=self.environment or Environment.constant((0, 0, 0)),
                                   settings=self.settings, source=str(self.path), lights=self.lights,
@@ -179,8 +179,6 @@ class _Reader(XmlScene):
                 self.settings.spp = self.declared(settings.Sampler, self.properties(child), child)["spp"]
             elif child.tag == "medium" or (child.tag == "ref" and self.resolve(child).tag == "medium"):
                 self.camera_medium = self.medium(child)       # Mitsuba 3: the sensor's one medium
-        if self.filter is None:
-            self.filter = PixelFilter("gaussian")     # Mitsuba's default
         m = self.get(props, "to_world", np.eye(4), ("transform",))
         frame = frame_of(m, x_right=False)        # Mitsuba's camera space has +x to the image's left
         sensor = FileCamera(lambda name, default=None, kind="float": self.get(props, name, default, (kind,)),
@@ -207,17 +205,18 @@ class _Reader(XmlScene):
             if child.tag == "rfilter":
                 self.filter = self.rfilter(child)
 
-    def rfilter(self, node) -> PixelFilter:
-        """Mitsuba's box, tent or gaussian filter (PixelFilter.from_mitsuba), or its gaussian for
-        one of negative lobes."""
+    def rfilter(self, node) -> filters.PixelFilter:
+        """A filter by its type's declared Mitsuba names (app/filters.py); its gaussian for one of
+        negative lobes."""
         props = self.properties(node)
-        if node.attrs.get("type") not in FILTERS:
+        kind = filters.format_type("mitsuba", node.attrs.get("type"), lambda text: warn(f"{node.where()}: {text}"))
+        if kind is None:
             props.ignore()
+            return filters.format_default("mitsuba")
         try:
-            return PixelFilter.from_mitsuba(node.attrs.get("type"), lambda name, default: self.get(
-                props, name, default, ("float",)), lambda text: warn(f"{node.where()}: {text}"))
+            return kind.make(self.declared(kind, props, node))
         except ValueError as e:
-            refuse(props, node, e)
+            refuse(props, node, e, format_names(kind.parameters, "mitsuba"))
 
     def emitter(self, node):
         kind = node.attrs.get("type")

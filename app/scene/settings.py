@@ -5,6 +5,8 @@ samples per pixel (<sampler>, Sampler) and the integrator's depth and light samp
 [render] table holds them all, with settings of pathtrace's own. Which integrator a format's
 type becomes is each reader's (it warns of the ones pathtrace replaces)."""
 
+from dataclasses import replace
+
 from pathtrace.parameters import Parameter, read
 from pathtrace.rendering.choices import INTEGRATORS, LIGHT_SAMPLERS
 from pathtrace.scene.description import RenderSettings
@@ -62,9 +64,32 @@ class Film(Element):
     unsupported = {"mitsuba": dict.fromkeys(("file_format", "component_format")), "pbrt": {"string filename": None}}
 
 
+def _pbrt_stratified(x, given):
+    """pbrt-v4's stratified sampler's samples per pixel: xsamples times ysamples."""
+    y, most = given["ysamples"], SETTING_RANGES["spp"][1]
+    for name, n in (("xsamples", x), ("ysamples", y)):
+        if not 1 <= n <= most:
+            raise ValueError(f"{name}: must be in 1..{most}, got {n}")
+    if x * y > most:
+        raise ValueError(f"xsamples: times ysamples must be at most {most} (samples per pixel), got {x * y}")
+    return x * y
+
+
 class Sampler(Element):
     parameters = (_integer("spp", doc="samples per pixel", mitsuba="sample_count", mitsuba_default=4,
                            pbrt="pixelsamples", pbrt_default=16),)
+
+
+class StratifiedSampler(Element):
+    """pbrt-v4's stratified sampler, which takes its samples per pixel (src/pbrt/samplers.cpp,
+    StratifiedSampler::Create) as xsamples times ysamples; its jitter is its own, warned of as
+    any name not read."""
+    parameters = (replace(Sampler.parameters[0], pbrt="xsamples", pbrt_default=4, from_pbrt=_pbrt_stratified),
+                  Parameter(None, "integer", pbrt="ysamples", pbrt_default=4, doc="its samples per pixel along y"))
+
+
+# each format's samplers that take their samples per pixel otherwise than Sampler does
+SAMPLERS = {"pbrt": {"stratified": StratifiedSampler}}
 
 
 class Integrator(Element):

@@ -184,22 +184,10 @@ class _Reader(TomlValues):
     def camera(self, data):
         """The [camera] table: the frame, and the parameters its type declares (app/cameras/)."""
         where = "camera"
-        if not isinstance(data, dict):
-            self.fail(where, f"must be a table, got {short(data)}")
-        kind = data.get("type", "perspective")
+        kind = self.kind_of(data, where, cameras.registry.toml_names(), default="perspective")
         cls = cameras.registry.toml_class(kind, data)
-        if cls is None:
-            self.not_one_of("camera.type", kind, cameras.registry.toml_names())
-        own = {p.name for p in cls.parameters}
-        common = {"type", "eye", "look_at", "up", "mirrored", "medium"}
-        for key in data:
-            if key not in common | own and any(key in {p.name for p in c.parameters} for c in cameras.CAMERAS.values()):
-                self.fail(f"camera.{key}", f"a {kind} camera has no {key}")
-        self.table(data, where, common | own)
-        absent = parameters.missing(cls.parameters, data)
-        if absent:
-            self.fail("camera", f"a {cls.type} camera needs {' and '.join(repr(p.name) for p in absent)}")
-        values = self.declared(cls.parameters, data, where)
+        values = self.typed(data, where, kind, cls, cameras.CAMERAS.values(), cls.type,
+                            {"eye", "look_at", "up", "mirrored", "medium"})
         cam = cls(self.vector(data, "eye", where), self.vector(data, "look_at", where),
                   self.vector(data, "up", where, default=(0, 1, 0)),
                   mirrored=self.boolean(data, "mirrored", where, False), **values)
@@ -253,16 +241,12 @@ class _Reader(TomlValues):
 
     def environment(self, data):
         """[environment], by its declared parameters (app/scene/environment.py): a colour or a map."""
-        where = "environment"
-        self.table(data, where, {p.name for p in Environment.parameters if p.name})
-        if "map" in data and "color" in data:
-            self.fail(where, "give either 'color' or 'map', not both")
-        values = self.declared(Environment.parameters, data, where)
-        intensity, rotation = values.get("intensity", 1.0), values.get("rotation", 0.0) % 360.0   # wrapped in float64
-        if "map" in values:
-            return Environment.from_file(self.find_asset(values["map"]), intensity, rotation,
-                                         where=f"{self.label}: environment.map")
-        return Environment(Environment.constant(values.get("color", 1.0)).image, intensity, rotation)
+        self.table(data, "environment", {p.name for p in Environment.parameters if p.name})
+        try:
+            return Environment.from_values(self.declared(Environment.parameters, data, "environment"), self.find_asset,
+                                           f"{self.label}: environment")
+        except ValueError as e:
+            self.refuse("environment", e)
 
     def find_asset(self, name):
         """A map path is relative to the scene file; a bare name may also be a shipped map."""
@@ -289,21 +273,29 @@ class _Reader(TomlValues):
         return s
 
     def pixel_filter(self, data) -> PixelFilter:
-        """render.filter: a name (box, tent, gaussian) or a table of type, radius and stddev."""
-        where = "render.filter"
-        if isinstance(data, str):
-            data = {"type": data}
-        self.table(data, where, {"type", "radius", "stddev"})
-        kind = data.get("type", "box")
-        if kind not in filters.FILTERS:
-            self.not_one_of(f"{where}.type", kind, filters.FILTERS)
-        if "stddev" in data and kind != "gaussian":
-            self.fail(f"{where}.stddev", f"a {kind} filter has no stddev")
-        radius = self.number(data, "radius", where) if "radius" in data else None
+        """render.filter: a name or a table of a type (app/filters.py) and its parameters."""
+        data = {"type": data} if isinstance(data, str) else data
+        kind = self.kind_of(data, "render.filter", filters.FILTERS, default="box")
         try:
-            return PixelFilter(kind, radius, self.number(data, "stddev", where, default=0.5)).check()
+            return filters.TYPES[kind].make(self.typed(data, "render.filter", kind, filters.TYPES[kind],
+                                                       filters.TYPES.values(), kind))
         except ValueError as e:
-            self.refuse(where, e)
+            self.refuse("render.filter", e)
+
+    def typed(self, data, where, kind, cls, types, name, common=frozenset()) -> dict:
+        """The values of a table of type `kind` (a camera's, a filter's), of the type `cls` among
+        `types` (registered as `name`: a perspective camera with a lens is a thinlens one), by its
+        declared parameters, besides `type` and the `common` keys: a key of another type's is
+        named so, as is one the type needs and the table lacks."""
+        noun, own = where.rpartition(".")[2], {"type", *common, *(p.name for p in cls.parameters if p.name)}
+        for key in data:
+            if key not in own and any(key in {p.name for p in c.parameters} for c in types):
+                self.fail(f"{where}.{key}", f"a {kind} {noun} has no {key}")
+        self.table(data, where, own)
+        absent = parameters.missing(cls.parameters, data)
+        if absent:
+            self.fail(where, f"a {name} {noun} needs {' and '.join(repr(p.name) for p in absent)}")
+        return self.declared(cls.parameters, data, where)
 
     def material_ref(self, builder, named, data, where):
         m = data.get("material")

@@ -58,11 +58,11 @@ class TomlValues:
             self.fail(key, f"must be an array of tables ([[{key}]]), got {type(value).__name__}")
         return value
 
-    def kind_of(self, data, where, kinds, key="type") -> str:
-        """The name among `kinds` that a table entry gives by `key`."""
+    def kind_of(self, data, where, kinds, key="type", default=None) -> str:
+        """The name among `kinds` that a table entry gives by `key` (`default` where it gives none)."""
         if not isinstance(data, dict):
             self.fail(where, f"must be a table, got {short(data)}")
-        kind = data.get(key)
+        kind = data.get(key, default)
         if not isinstance(kind, str) or kind not in kinds:
             self.not_one_of(f"{where}.{key}", kind, kinds)
         return kind

@@ -12,7 +12,7 @@ from pathtrace import cameras
 from pathtrace.cameras import Camera
 from pathtrace.cameras.camera import FileCamera, frame_of
 from pathtrace.errors import UserError, warn
-from pathtrace.filters import PixelFilter
+from pathtrace import filters
 from pathtrace.scene.pbrt.tokens import parameters, string
 from pathtrace.scene.meshes import MAX_COORDINATE
 from pathtrace.scene import settings
@@ -81,22 +81,13 @@ class OptionDirectives:
         self.unused(params, "film", kind)
 
     def _sampler(self, tokens, offset):
-        """The samples per pixel: `pixelsamples` (16), or for a `stratified` sampler `xsamples`
-        times `ysamples` (4 each), as pbrt-v4's samplers take them (src/pbrt/samplers.cpp, the
-        samplers' Create). Their seeds, jitter and randomization are their own: warned of, as
-        any name not read."""
+        """The samples per pixel, as pbrt-v4's samplers take them (settings.Sampler: `pixelsamples`,
+        16; a stratified one's xsamples times ysamples). Their seeds, jitter and randomization are
+        their own: warned of, as any name not read."""
         kind = string(tokens, "Sampler")
         params = parameters(tokens)
-        if kind != "stratified":
-            self.settings.spp = self.read_declared(settings.Sampler, params, tokens.where(offset))["spp"]
-        else:
-            most, spp = settings.Sampler.parameters[0].high, 1
-            for name in ("xsamples", "ysamples"):
-                n = params.int(name, 4)
-                if not 1 <= n <= most // spp:
-                    params.fail(name, f"must be in 1..{most // spp} (samples per pixel at most {most} in all), got {n}")
-                spp *= n
-            self.settings.spp = spp
+        sampler = settings.SAMPLERS["pbrt"].get(kind, settings.Sampler)
+        self.settings.spp = self.read_declared(sampler, params, tokens.where(offset))["spp"]
         self.unused(params, "sampler", kind)
 
     def _integrator(self, tokens, offset):
@@ -123,19 +114,23 @@ class OptionDirectives:
         params.ignore()            # another integrator's settings: it is replaced whole, with its warning
 
     def _pixel_filter(self, tokens, offset):
+        """A filter by its type's declared pbrt-v4 names (app/filters.py); pbrt-v4's default for
+        one of negative lobes."""
         kind = string(tokens, "PixelFilter")
-        params = parameters(tokens)
-        where = tokens.where(offset)
+        params, where, given = parameters(tokens), tokens.where(offset), {}
         try:
-            self.filter = PixelFilter.from_pbrt(kind, params.float, lambda text: warn(f"{where}: {text}"))
+            found = filters.format_type("pbrt", kind, lambda text: warn(f"{where}: {text}"))
         except ValueError as e:
-            field, problem = str(e).split(": ", 1)
-            if field == "type":
-                tokens.fail(offset, problem)
-            raise UserError(f"{where}: '{field}' and 'yradius': {problem}" if field == "xradius" else
-                            f"{where}: '{field}': {problem}") from None
-        if kind in ("mitchell", "lanczos"):
+            tokens.fail(offset, str(e))
+        if found is None:
             params.ignore()
+            self.filter = filters.format_default("pbrt")
+            return
+        values = self.read_declared(found, params, where, given)
+        try:
+            self.filter = found.make(values, given, lambda text: warn(f"{where}: {text}"))
+        except ValueError as e:
+            self.mapper.fail(params, where, e, found.parameters)
         self.unused(params, "filter", kind)
 
 

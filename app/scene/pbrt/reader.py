@@ -27,10 +27,10 @@ import numpy as np
 from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError, cut, warn
 from pathtrace.io.files import check_regular_file
-from pathtrace.filters import PixelFilter
+from pathtrace import filters
 from pathtrace import parameters as declared
 from pathtrace.lights import DELTA_LIGHTS
-from pathtrace.lights.area import pbrt_radiance
+from pathtrace.lights.area import DiffuseAreaLight, pbrt_radiance
 from pathtrace.materials.surface import OPACITY
 from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.scene import transform
@@ -59,7 +59,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         self.mapper = MaterialMapper(self)
         self.builder = SceneBuilder()
         self.settings = settings.defaults("pbrt")
-        self.filter = PixelFilter("gaussian", 1.5, 0.5)        # pbrt-v4's default
+        self.filter = filters.format_default("pbrt")
         self.camera_params = None
         self.environment = None
         self.lights = []
@@ -404,13 +404,14 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         uvs = None if uvs is None else np.column_stack([uvs[:, 0], 1 - uvs[:, 1]])
         return *place_mesh(vertices, faces, normals, self.state.ctm, self.state.reverse, True, where)[:3], uvs, source
 
-    def read_declared(self, kind, params, where) -> dict:
+    def read_declared(self, kind, params, where, given=None) -> dict:
         """The values of the parameters that a type `kind` declares (app/parameters.py), or of a
         tuple of Parameters, that a directive gives, converted and in range; of what pbrt-v4's
         kind has and pathtrace has not (`unsupported`), a warning of each given where the kind
         says why. A name declared with its type ("string filename") is one value of that type,
         as pbrt-v4 reads it: another is a parameter pbrt-v4 leaves unused, and refuses; a bare
-        name is taken as the file writes it."""
+        name is taken as the file writes it. `given` (app/parameters.py: read) is filled with
+        the values by pbrt-v4's names."""
         fields = kind if isinstance(kind, tuple) else kind.parameters
         for key, why in ({} if isinstance(kind, tuple) else kind.unsupported.get("pbrt", {})).items():
             expected, _, name = key.rpartition(" ")
@@ -419,7 +420,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
                 if why:
                     warn(f"{params.where(name)}: {why}; ignored")
         try:
-            values = declared.read(fields, "pbrt", lambda p, name: self.mapper.parameter(params, p, name))
+            values = declared.read(fields, "pbrt", lambda p, name: self.mapper.parameter(params, p, name), given)
             error = declared.out_of_range(fields, values)
             if error:
                 raise error
@@ -434,19 +435,14 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         if self.state.area_light is None or self.state.material is None:
             return [(None, None)], False
         params, light_where = self.state.area_light
-        if params.type_of("filename"):
-            params.string("filename")
-            warn(f"{light_where}: pathtrace's area lights have no image; it uses L "
-                 f"({', '.join(f'{c:g}' for c in params.spectrum('L', 1.0, 'illuminant'))})")
-        twosided = params.bool("twosided", False)
+        given = {}
+        self.read_declared(DiffuseAreaLight, params, light_where, given)
         try:
-            parts = pbrt_radiance(params.spectrum("L", 1.0, "illuminant"), params.float("scale", 1.0), twosided,
-                                  params.float("power", -1.0), vertices, faces, area,
-                                  lambda text: warn(f"{light_where}: {text}"))
+            parts = pbrt_radiance(given, vertices, faces, area, lambda text: warn(f"{light_where}: {text}"))
         except ValueError as e:
             self.mapper.fail(params, light_where, e)
         self.unused(params, "arealight", "diffuse")
-        return parts, twosided
+        return parts, given["twosided"]
 
     # -- lights --
 
