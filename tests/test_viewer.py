@@ -985,6 +985,31 @@ def _bad_scene_files(folder: Path) -> dict:
             "x" * 100_000: "File name too long", str(folder / "a\nb.toml"): "does not exist"}
 
 
+def test_a_scene_whose_kernels_or_uploads_fail_leaves_the_scene_the_window_had(viewer, monkeypatch):
+    """A scene read and its tree built, but refused by the renderer (here its materials' upload,
+    once): the renderer takes back the scene it had, seen from where the camera was, and renders
+    on; the panel says why in one line."""
+    settle(viewer)
+    viewer.renderer.set_camera(replace(viewer.renderer.camera, eye=viewer.renderer.camera.eye + 0.25))  # moved
+    before, camera, p = viewer.renderer.scene, viewer.renderer.camera.copy(), viewer.progressive
+    upload = Renderer._upload_materials
+    refused = []
+
+    def refuse_once(renderer):
+        if not refused:
+            refused.append(renderer.scene.name)
+            raise UserError("the device is out of memory")
+        upload(renderer)
+    monkeypatch.setattr(Renderer, "_upload_materials", refuse_once)
+    viewer.load_scene("cornell-box")
+    assert refused == ["cornell-box"] and viewer.error and "out of memory" in viewer.message
+    assert viewer.renderer.scene is before
+    np.testing.assert_array_equal(viewer.renderer.camera.eye, camera.eye)
+    passes = p.passes_done
+    frames_until(viewer, lambda: p.passes_done > passes, timeout=30)
+    assert p.passes_done > passes
+
+
 def test_the_file_field_shows_one_line_for_a_file_it_cannot_open_and_keeps_the_scene(viewer, tmp_path, capsys):
     """Each bad path typed in the panel's file field and opened as its button opens it (the panel
     sets requested_scene to the field's text, which the next frame opens through

@@ -38,7 +38,13 @@ class SceneOpening:
             renderer = Renderer(self.backend, compiled)
         else:
             compiled.build_tree()     # before the renderer lets its scene go: a build that fails leaves it
-            renderer.set_scene(compiled)
+            had, camera = renderer.compiled, renderer.camera
+            try:
+                renderer.set_scene(compiled)
+            except BaseException:     # its kernels or uploads: the scene it had, seen as it was
+                renderer.set_scene(had)
+                renderer.set_camera(camera)
+                raise
         self.requested_integrator = None if integrator == "path" else integrator
         return renderer
 
