@@ -283,7 +283,9 @@ def progressive(scene, spp=None, steps=None, size=None, device="auto", seed=None
     prepared = prepare(scene, device, build_progress, phases)
     prepared.update(scene, settings, bool(aovs))
     group = prepared.group
-    group.choose_queue_plans(steps[-1])     # path_queue "auto": for the whole render, not its first step
+    # path_queue "auto": chosen for the whole render, not its first step; its trials' samples kept
+    # where the first step has as many
+    group.choose_queue_plans(steps[-1], keep_up_to=steps[0])
     on_progress, close = _progress(progress, scene.name, settings, steps[-1])
     if on_progress:
         on_progress(0)
@@ -320,7 +322,11 @@ def render(scene, spp=None, size=None, device="auto", seed=None, max_depth=None,
     done (0 as the first samples start, after the scene is compiled); build_progress: a function called with the fraction of a large BVH build done;
     phases: a function called with (what, seconds) as each step before the first sample ends,
     where the scene was not compiled already: "compiled the scene (...)", "prepared the renderer"."""
-    for snapshot in progressive(scene, spp, None, size, device, seed, max_depth, rr, nee, aovs,
+    scene = scene if isinstance(scene, Scene) else load(scene)
+    # one snapshot, of the whole render: each step of progressive's would read the image back,
+    # and start its launches again from one sample
+    final = settings_for(scene, spp, size, seed, max_depth, rr, nee, integrator).spp
+    for snapshot in progressive(scene, spp, [final], size, device, seed, max_depth, rr, nee, aovs,
                                 progress, build_progress, phases, integrator):
         pass
     return {"image": snapshot.image, **snapshot.aovs} if snapshot.aovs else snapshot.image

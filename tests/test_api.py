@@ -293,17 +293,18 @@ def test_a_bad_path_queue_setting_is_one_user_error(value):
 
 @pytest.mark.specialised
 def test_auto_chooses_its_plan_for_the_whole_render(monkeypatch):
-    """A render's first snapshot has 1 spp; "auto" chooses for the render's samples, so that a
-    long render runs its trials (which a render shorter than them skips)."""
+    """"auto" chooses for the render's samples, so that a long render runs its trials (which a
+    render shorter than them skips), and render(), which takes one snapshot, of them all, has
+    the trials' samples kept (from index 0)."""
     from pathtrace.rendering.renderer import Renderer
     asked = []
     choose = Renderer.choose_queue_plan
-    monkeypatch.setattr(Renderer, "choose_queue_plan", lambda self, samples, trials=None:
-                        (asked.append(samples), choose(self, samples, trials)))
+    monkeypatch.setattr(Renderer, "choose_queue_plan", lambda self, samples, trials=None, first=None:
+                        (asked.append((samples, first)), choose(self, samples, trials, first)))
     scene = pathtrace.load_dict(small_scene())
     scene.settings.path_queue = pathtrace.PATH_QUEUE_AUTO
     render(scene, spp=200, max_depth=6)
-    assert asked and asked[0] == 200
+    assert asked and asked[0] == (200, 0)
 
 
 @pytest.mark.specialised

@@ -629,7 +629,7 @@ def test_kernels_that_count_more_samples_than_they_drew_write_no_image(tmp_path,
     """A pixel keeps at most the samples drawn; more is a program built wrongly for its device
     (NVIDIA's driver 580 and the generic program: docs/notes/performance-2026-11.md, 2026-11-30),
     whose image is wrong too: one line, a non-zero exit and no file (one pixel's count one over
-    here, found at the render's first step)."""
+    here, found as the render ends)."""
     from pathtrace.rendering.renderer import Renderer
     read_sum = Renderer.read_sum
 
@@ -642,6 +642,6 @@ def test_kernels_that_count_more_samples_than_they_drew_write_no_image(tmp_path,
     r = in_process("render", "simple", "-q", "--spp", "2", "--size", "8x8", "-o", out)
     errors = [line for line in r.stderr.splitlines() if "error" in line]
     assert r.returncode == 1 and not out.exists(), r.stderr
-    assert errors == ["pathtrace: error: simple: 1 pixels kept more samples than were drawn (up to 2 of 1): the "
+    assert errors == ["pathtrace: error: simple: 1 pixels kept more samples than were drawn (up to 3 of 2): the "
                       "kernels were built wrongly for this device; no image is given (pathtrace devices --check "
                       "tests the generic kernels; --program specialised avoids them)"], r.stderr

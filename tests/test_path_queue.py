@@ -170,6 +170,41 @@ def test_auto_trials_each_plan_and_keeps_the_fastest(backend, monkeypatch, tmp_p
         cost[cheapest] = 4.0
 
 
+def test_auto_keeps_its_trials_samples_where_asked(backend, monkeypatch, tmp_path):
+    """With `first`, the trials draw sample indices first, first + 1, ... and their samples stay:
+    the render goes on from them into the image of a fixed plan's render of as many samples.
+    Two devices' trials (a group asked to keep up to what they draw) take indices after one
+    another, so that no sample is drawn twice; asked to keep fewer, the trials' samples go."""
+    from pathtrace.device.opencl import open_device
+    from pathtrace.rendering.multidevice import DeviceGroup
+    monkeypatch.setenv("PATHTRACE_CACHE", str(tmp_path))       # no verdict of earlier trials
+    scene = load_scene("cornell-box").with_settings(max_depth=6, russian_roulette="off")
+    auto = scene.with_settings(path_queue=PATH_QUEUE_AUTO)
+    trials = queue_plans.TRIALS_SPP
+    r = Renderer(backend, auto, *SIZE)
+    r.choose_queue_plan(1000, trials=True, first=0)
+    assert r.samples == trials and r.auto_plan in queue_plans.AUTO_PLANS
+    r.add_samples(SPP)
+    r.finish()
+    assert_same_render(render(backend, scene, 0, trials + SPP), (r.read_sum(), r._read("sum_sq"), r))
+
+    choose = Renderer.choose_queue_plan       # trials on PoCL too, on each device (no verdict kept)
+    monkeypatch.setattr(Renderer, "choose_queue_plan",
+                        lambda self, samples, trials=None, first=None: choose(self, samples, True, first))
+    monkeypatch.setattr(queue_plans, "read_entry", lambda path: None)
+    group = DeviceGroup([backend, open_device(backend.device)], auto, *SIZE)
+    group.choose_queue_plans(1000, keep_up_to=2 * trials - 1)
+    assert group.samples == 0 and all(r.plan_seconds for r in group.renderers)
+    group = DeviceGroup([backend, open_device(backend.device)], auto, *SIZE)
+    group.choose_queue_plans(1000, keep_up_to=2 * trials)
+    assert group.samples_per_device() == [trials, trials]
+    group.render(2 * trials + SPP)
+    single = Renderer(backend, scene, *SIZE)
+    single.add_samples(2 * trials + SPP)
+    single.finish()
+    np.testing.assert_allclose(group.mean(), single.mean(), rtol=1e-5, atol=1e-6)
+
+
 def test_auto_leaves_out_a_queue_that_does_not_fit(backend, monkeypatch, tmp_path):
     """Where the queue's buffers would not fit in the device's memory, "auto" chooses among the
     other plans rather than refusing a render that fits without them."""

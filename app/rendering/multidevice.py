@@ -20,6 +20,7 @@ from pathtrace.compiler.compiled import CompiledScene, compile_scene
 from pathtrace.device.opencl import Backend
 from pathtrace.errors import UserError
 from pathtrace.rendering.launches import next_launch_size
+from pathtrace.rendering.queue_plans import TRIALS_SPP
 from pathtrace.rendering.renderer import Renderer, aov_means, variance_of
 
 
@@ -98,11 +99,15 @@ class DeviceGroup:
     def bvh_seconds(self) -> float:
         return self.compiled.bvh_seconds
 
-    def choose_queue_plans(self, spp: int):
+    def choose_queue_plans(self, spp: int, keep_up_to: int = 0):
         """With path_queue "auto", before a render of `spp` samples per pixel: each device's
-        launch plan, by its trial renders (Renderer.choose_queue_plan); until then, no queue."""
+        launch plan, by its trial renders (Renderer.choose_queue_plan); until then, no queue.
+        Where every device's trials together draw at most `keep_up_to` samples per pixel (the
+        render's first image has that many), their samples are kept: each device's trials draw
+        the indices after those already drawn, so that the render goes on from them."""
+        keep = keep_up_to >= TRIALS_SPP * len(self.renderers)
         for r in self.renderers:
-            r.choose_queue_plan(spp)
+            r.choose_queue_plan(spp, first=self.samples if keep else None)
 
     def queue_plans(self) -> list:
         """What path_queue "auto" chose on each device, in words (empty where it was not asked

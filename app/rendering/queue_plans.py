@@ -25,6 +25,7 @@ from pathtrace.rendering.choices import PATH_QUEUE_AUTO
 AUTO_PLANS = ((0, False), (1, True), (1, False))
 PLAN_NAMES = dict(zip(AUTO_PLANS, ("no queue", "queue", "queue unused")))
 TRIAL_SAMPLES = 16        # samples per pixel of each trial render of a plan (two rounds of trials)
+TRIALS_SPP = 2 * len(AUTO_PLANS) * TRIAL_SAMPLES     # what the trials draw in all
 
 
 class QueuePlans:
@@ -32,9 +33,10 @@ class QueuePlans:
 
     def _size_queue(self):
         """After a change of settings or plan: the continuation queue's buffers sized for whether
-        launches use it and sort it, and for its passes (which queue depth does not change)."""
+        launches use it and sort it, and for its passes (which queue depth does not change); the
+        image is kept (path_queue "auto" keeps its trials' samples)."""
         if self.width and self._queued_for != (self.queue_plan()[1], self.sorts_queue(), self.queue_passes()):
-            self._allocate_images(self.width, self.height, self.aovs)
+            self._place_queue(self._queue_buffers(self.width, self.height), check=True)
 
     def queue_plan(self) -> tuple:
         """(the queue depth the program is built with, whether launches use the queue): from
@@ -45,19 +47,23 @@ class QueuePlans:
             return self.auto_plan or AUTO_PLANS[0]
         return self.settings.path_queue, self.settings.path_queue > 0
 
-    def choose_queue_plan(self, samples: int, trials: bool = None):
+    def choose_queue_plan(self, samples: int, trials: bool = None, first: int = None):
         """With path_queue "auto", before a render of `samples` samples per pixel: renders
         TRIAL_SAMPLES samples per pixel with each of AUTO_PLANS, twice in turn, and keeps the
-        plan of the fastest trial (their seconds in plan_seconds). Then resets. The plans'
-        programs are built here, before the trials time anything; a plan whose queue does not fit
-        in the device's memory is left out. `trials` (default: on GPUs only): on other devices,
-        whose work-items run one after another, the queue only costs (docs/performance.md), so
-        they take no queue without trials; so does a render shorter than the trials."""
+        plan of the fastest trial (their seconds in plan_seconds). Then resets, unless `first`
+        is given: then the trials draw the sample indices first, first + 1, ... and their
+        samples stay in the image, which a render goes on from (the plans render the same
+        samples, to float rounding), rather than costing the render TRIALS_SPP samples more. The
+        plans' programs are built here, before the trials time anything; a plan whose queue does
+        not fit in the device's memory is left out. `trials` (default: on GPUs only): on other
+        devices, whose work-items run one after another, the queue only costs
+        (docs/performance.md), so they take no queue without trials; so does a render shorter
+        than the trials."""
         if self.settings.path_queue != PATH_QUEUE_AUTO or self.auto_plan is not None:
             return
         if trials is None:
             trials = bool(self.backend.device.device.type & cl.device_type.GPU)
-        if not trials or samples < 2 * len(AUTO_PLANS) * TRIAL_SAMPLES:
+        if not trials or samples < TRIALS_SPP:
             self.use_queue_plan(AUTO_PLANS[0])
             return
         verdict = self._plan_verdict_path()
@@ -67,7 +73,7 @@ class QueuePlans:
             self.use_queue_plan(tuple(json.loads(bytes(cached))))
             self.plan_cached = True
             return
-        seconds = {}
+        seconds, drawn = {}, 0
         for _ in range(2):
             for plan in AUTO_PLANS:
                 try:
@@ -75,16 +81,19 @@ class QueuePlans:
                 except UserError:      # its queue does not fit in the device's memory: no candidate
                     continue
                 self.switch_when_built(wait=True)      # trials time the plans' own programs
-                self.reset()
+                if first is None:
+                    self.reset()
                 self.finish()
                 start = time.perf_counter()
-                self.add_samples(TRIAL_SAMPLES)
+                self.add_samples(TRIAL_SAMPLES, None if first is None else first + drawn)
                 self.finish()
+                drawn += TRIAL_SAMPLES
                 seconds[plan] = min(seconds.get(plan, float("inf")), time.perf_counter() - start)
         self.plan_seconds = seconds
         self.use_queue_plan(min(seconds, key=seconds.get))
         write_entry(verdict, json.dumps(self.auto_plan).encode())
-        self.reset()
+        if first is None:
+            self.reset()
 
     def _plan_verdict_path(self) -> Path:
         """Where the trials' verdict for this scene's program, image size and device is kept, so

@@ -233,15 +233,7 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
     def _allocate_images(self, width: int, height: int, aovs: bool):
         nbytes = width * height * 16
         images = image_buffers(aovs)
-        capacity = max(self.queue_capacity(width, height), 1)       # (a buffer has bytes)
-        entries = self.record_bytes() * capacity
-        results = width * height * self.queue_samples(width, height) if self.queue_plan()[1] else 1
-        passes = self.queue_passes()
-        queue = {"queue": entries, "queue_next": entries, "counters": 4 * (passes + 2), "results": 16 * results}
-        sort = self.sorts_queue()
-        queue.update({name: 4 * (capacity if sort else 1) for name in SORT_BUFFERS})
-        queue.update(key_counts=4 * ((passes + 1) * self.sort_keys() if sort else 1),
-                     offsets=4 * (self.sort_keys() if sort else 1))
+        queue = self._queue_buffers(width, height)
         others = {name: b.size for name, b in self._buffers.items()
                   if name not in image_buffers(True) and name not in queue}
         what = f"the {width}x{height} image of {self.scene.name}"
@@ -258,10 +250,33 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
             self._buffers.pop(name, None)
         for name in images:
             self._buffers[name] = cl.Buffer(self.backend.context, cl.mem_flags.READ_WRITE, nbytes)
+        self._place_queue(queue)
+        self.reset()
+
+    def _queue_buffers(self, width: int, height: int) -> dict:
+        """The bytes of each of the continuation queue's buffers, for the launch plan and image
+        size: scratch of each launch, which no image keeps between launches."""
+        capacity = max(self.queue_capacity(width, height), 1)       # (a buffer has bytes)
+        entries = self.record_bytes() * capacity
+        results = width * height * self.queue_samples(width, height) if self.queue_plan()[1] else 1
+        passes = self.queue_passes()
+        queue = {"queue": entries, "queue_next": entries, "counters": 4 * (passes + 2), "results": 16 * results}
+        sort = self.sorts_queue()
+        queue.update({name: 4 * (capacity if sort else 1) for name in SORT_BUFFERS})
+        queue.update(key_counts=4 * ((passes + 1) * self.sort_keys() if sort else 1),
+                     offsets=4 * (self.sort_keys() if sort else 1))
+        return queue
+
+    def _place_queue(self, queue: dict, check: bool = False):
+        """The queue's buffers of `queue`'s sizes; `check`: first against the device's memory
+        with the other buffers as they are (a change of plan, the image kept)."""
+        if check:
+            others = {name: b.size for name, b in self._buffers.items() if name not in queue}
+            check_fits(self.backend.device.device, {**others, **queue},
+                       f"the {self.width}x{self.height} image of {self.scene.name}")
         for name, size in queue.items():
             self._buffers[name] = cl.Buffer(self.backend.context, cl.mem_flags.READ_WRITE, size)
-        self._queued_for = (self.queue_plan()[1], sort, passes)
-        self.reset()
+        self._queued_for = (self.queue_plan()[1], self.sorts_queue(), self.queue_passes())
 
     def queue_passes(self) -> int:
         """The passes of continue_paths that trace one vertex each, before the last, which traces
