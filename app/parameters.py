@@ -26,11 +26,12 @@ import numpy as np
 #            (app/textures/bitmap.py: read_image) into an Image, raw (8-bit values as linear,
 #            not sRGB) where the element's `raw` is true;
 #   texture  a texture, never a constant (a normal map);
-#   points, normals, pairs, integers
-#            arrays (a mesh's vertices, normals, texture coordinates and indices), as a format
-#            writes them out: pbrt-v4's point3, normal, point2 and integer arrays, flat.
+#   points, normals, pairs, integers, numbers
+#            arrays (a mesh's vertices, normals, texture coordinates and indices; a camera's
+#            screen window), as a format writes them out: pbrt-v4's point3, normal, point2,
+#            integer and float arrays, flat, of any length (the type checks it).
 KINDS = ("number", "integer", "bool", "string", "name", "color", "point", "vector", "image", "texture", "points",
-         "normals", "pairs", "integers")
+         "normals", "pairs", "integers", "numbers")
 FORMATS = ("toml", "mitsuba", "pbrt")
 # how a spectrum becomes rgb (app/scene/spectra.py): a reflectance (bounded by 1), an illuminant
 # (luminance 1, as pbrt-v4 normalises a light's spectrum) or unbounded (an IOR: its mean)

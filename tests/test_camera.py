@@ -234,3 +234,28 @@ def test_a_camera_refuses_the_fields_of_other_types_and_changes_type_keeping_its
     assert (type(lens), lens.vfov, lens.aperture_radius, lens.mirrored, lens.kernel) == (ThinLensCamera, 30.0, 0.3, True, "thinlens")
     np.testing.assert_array_equal(lens.eye, camera.eye)
     assert lens.as_type("thinlens", aperture_radius=0.0).kernel == "perspective"   # a pinhole compiles as one
+
+
+def test_a_camera_type_maps_the_values_a_format_gives_by_its_declarations():
+    """Camera.from_file, on what app/parameters.py's read gives of a type's parameters and
+    format_only (FILM and TO_WORLD the reader's): pbrt-v4's perspective with a lens is a thin
+    lens, its fov on the shorter axis; Mitsuba's fov on x of a 2:1 film, and its orthographic
+    view two to_world units across the film's width; a bad value names the format's parameter."""
+    from pathtrace.cameras.camera import FILM, TO_WORLD, frame_of
+    from pathtrace.parameters import read
+
+    def camera(cls, fmt, file, to_world=np.eye(4)):
+        given = {FILM: (200, 100), TO_WORLD: to_world}
+        values = read(cls.parameters + cls.format_only, fmt, lambda p, name: file.get(name), given)
+        return cls.from_file(fmt, values, given, frame_of(to_world, x_right=fmt == "pbrt"), None)
+    lens = camera(PerspectiveCamera, "pbrt", {"fov": 60.0, "lensradius": 0.5, "focaldistance": 3.0})
+    assert (type(lens), lens.vfov, lens.aperture_radius, lens.focus_distance) == \
+        (ThinLensCamera, pytest.approx(60.0), 0.5, 3.0)
+    assert camera(PerspectiveCamera, "pbrt", {}).vfov == pytest.approx(90.0)      # pbrt-v4's default, no lens
+    wide = camera(PerspectiveCamera, "mitsuba", {"fov": 90.0})
+    assert wide.vfov == pytest.approx(math.degrees(2 * math.atan(0.5)))
+    assert camera(OrthographicCamera, "mitsuba", {}, np.diag([2.0, 2.0, 2.0, 1.0])).height == pytest.approx(2.0)
+    with pytest.raises(ValueError, match=r"^screenwindow: takes x0 x1 y0 y1"):
+        camera(PerspectiveCamera, "pbrt", {"screenwindow": [0.0, 1.0, 0.0]})
+    with pytest.raises(ValueError, match=r"^fov_axis: must be x, y, diagonal, smaller or larger, got 'z'"):
+        camera(PerspectiveCamera, "mitsuba", {"fov": 30.0, "fov_axis": "z"})

@@ -201,6 +201,8 @@ WARNINGS = [
      "pathtrace's spot lights have no texture; ignored"),
     ('<sensor type="orthographic"><transform name="to_world"><scale x="2" y="3"/></transform></sensor>' + SPHERE,
      "to_world scales x and y differently"),
+    ('<sensor type="perspective"><float name="fov" value="30"/><string name="focal_length" value="35mm"/></sensor>'
+     + SPHERE, "Mitsuba 3 takes a fov or a focal_length, not both; pathtrace uses the fov"),
     ('<shape type="sphere"><bsdf type="null"/><medium type="homogeneous" name="interior"><phase type="rayleigh"/>'
      '</medium></shape>' + SPHERE, "pathtrace has no rayleigh phase function; it scatters isotropically instead"),
     (f'<volume type="gridvolume"/>{SPHERE}', "not supported; pathtrace ignores it"),
@@ -254,7 +256,7 @@ ERRORS = [
     ('<integrator type="path"><integer name="max_depth" value="2147483648"/></integrator>' + SPHERE, None,
      "must be -1 (unlimited) to 2147483647, got 2147483648"),
     ('<sensor type="perspective"><string name="focal_length" value="0mm"/></sensor>' + SPHERE, None,
-     "focal_length must be positive, got '0mm'"),
+     '<string name="focal_length">: focal_length: must be positive, got \'0mm\''),
     ('<shape type="sphere"><transform name="to_world"><rotate x="1e-300" angle="30"/></transform></shape>', None,
      "the rotation axis must be 3 numbers, not all (near) zero"),
     ('<sensor type="perspective"><transform name="to_world"><lookat origin="0,0,5" target="0,0,0" up="0,0,0"/>'
@@ -436,7 +438,11 @@ def test_thinlens_orthographic_and_filters_read_as_mitsuba_means_them(tmp_path):
      "beam_width: must be in [0, cutoff_angle = 10] degrees"),
     ('<emitter type="directional"><vector name="direction" x="0" y="0" z="0"/></emitter>', "direction: must not be zero"),
     ('<emitter type="point"><rgb name="intensity" value="1e30, 1, 1"/></emitter>', "intensity: must be three numbers in [0, 1e20]"),
-    ('<sensor type="thinlens"/>', "a thinlens camera needs an aperture_radius"),
+    ('<sensor type="perspective"><float name="fov" value="190"/></sensor>',
+     '<float name="fov">: fov: must lie in (0, 180) degrees, got 190'),
+    ('<sensor type="perspective"><string name="fov_axis" value="z"/></sensor>',
+     '<string name="fov_axis">: fov_axis: must be x, y, diagonal, smaller or larger, got \'z\''),
+    ('<sensor type="thinlens"/>', '<sensor type="thinlens">: a thinlens camera needs an aperture_radius'),
     ('<sensor type="thinlens"><float name="aperture_radius" value="-1"/></sensor>', "aperture_radius: must be in [0"),
     ('<sensor type="thinlens"><float name="aperture_radius" value="1"/><float name="focus_distance" value="0"/></sensor>',
      "focus_distance: must be in (0"),

@@ -1,20 +1,36 @@
 """The camera interface: what every projection shares, its frame (eye, look_at, up and whether
 the image is mirrored, which the viewer's moves and the readers' transforms set), and what each
 projection declares in its own module app/cameras/<type>.py beside its kernel file
-kernels/cameras/<kernel>.cl: its fields (app/parameters.py: their names in pathtrace's TOML,
-Mitsuba 3 and pbrt-v4, defaults and docs), their ranges, its rays, its packing into
-RenderParams and its readings of Mitsuba's and pbrt's cameras (through FileCamera, the readers'
-one view of a file's camera, and frame_of). app/cameras/registry.py finds the modules and
-generates the kernels' dispatch."""
+kernels/cameras/<kernel>.cl: its fields and the formats' parameters that map onto them
+(app/parameters.py: their names in pathtrace's TOML, Mitsuba 3 and pbrt-v4, defaults and docs),
+their ranges, its rays, its packing into RenderParams and its mapping of a Mitsuba or pbrt
+camera's values onto its fields (Camera.from_file; frame_of, the frame of the file's transform).
+app/cameras/registry.py finds the modules and generates the kernels' dispatch."""
 
 import dataclasses
 import math
 from dataclasses import dataclass, field
-from typing import Callable, ClassVar
+from typing import ClassVar
 
 import numpy as np
 
+from pathtrace.parameters import Parameter
+
 MAX_EXTENT = 1e30     # the largest aperture, focus distance or view height a file may give
+# what a reader adds to a file camera's `given` values (app/parameters.py: read), which the
+# mapping onto a type's fields needs: the film's (width, height) and the camera's transform to
+# the world (a 4 x 4 matrix: Mitsuba's to_world, the inverse of pbrt's camera CTM)
+FILM, TO_WORLD = "film", "to_world"
+
+# pbrt-v4's CameraBase parameters that frame the image (pbrt_screen_half_height), and the lens
+# of its perspective and orthographic cameras (src/pbrt/cameras.cpp, the cameras' Create)
+PBRT_SCREEN = (Parameter(None, "number", pbrt="frameaspectratio", doc="the screen window's aspect; by default "
+                         "the film's"),
+               Parameter(None, "numbers", pbrt="screenwindow", doc="x0 x1 y0 y1: the screen space the image "
+                         "spans, its height framing the image"))
+PBRT_LENS = (Parameter(None, "number", pbrt="lensradius", pbrt_default=0.0, doc="the lens's radius: above 0, a "
+                       "perspective camera is a thinlens one, and an orthographic one ignores it, with a warning"),
+             Parameter(None, "number", pbrt="focaldistance", pbrt_default=1e6, doc="the thin lens's focus_distance"))
 
 
 def check_range(name: str, value, low: float, high: float, open_low: bool = False, open_high: bool = False):
@@ -27,28 +43,10 @@ def check_range(name: str, value, low: float, high: float, open_low: bool = Fals
                          f"got {shown}")
 
 
-@dataclass
-class FileCamera:
-    """A scene file's camera as a camera type reads it (from_mitsuba, from_pbrt), whichever the
-    format: get(name, default=None, kind="float") its value by the format's name ("float",
-    "string" or "floats"; default where absent), has(name), fail(name, problem) (one line naming
-    the value, or the element where name is None), warn(text, name=None); the film's size, and
-    the camera's transform to the world (from which `frame_of` takes its frame)."""
-    get: Callable
-    has: Callable
-    fail: Callable
-    warn: Callable
-    width: int
-    height: int
-    to_world: np.ndarray
-
-    @property
-    def scale_x(self) -> float:
-        return float(np.linalg.norm(self.to_world[:3, 0]))
-
-    @property
-    def scale_y(self) -> float:
-        return float(np.linalg.norm(self.to_world[:3, 1]))
+def check_choice(name: str, value, choices: tuple):
+    """Raises ValueError("<name>: <problem>") where value is none of `choices`."""
+    if value not in choices:
+        raise ValueError(f"{name}: must be {', '.join(choices[:-1])} or {choices[-1]}, got {value!r}")
 
 
 def frame_of(world_from_camera: np.ndarray, x_right: bool) -> dict:
@@ -62,31 +60,33 @@ def frame_of(world_from_camera: np.ndarray, x_right: bool) -> dict:
                 mirrored=bool(side < 0 if x_right else side > 0))
 
 
-def pbrt_screen_half_height(camera) -> float:
+def pbrt_screen_half_height(given: dict, warn) -> float:
     """Half the image's height in pbrt's screen space, where the fov spans [-1, 1] (or an
-    orthographic camera one world unit each way), of a pbrt camera (FileCamera): pbrt-v4's CameraBase screen window (src/pbrt/cameras.cpp,
-    CameraBaseParameters / the cameras' Create: frame = frameaspectratio, else the film's x / y;
-    the window [-frame, frame] x [-1, 1] where frame > 1, else [-1, 1] x [-1/frame, 1/frame];
-    or the file's `screenwindow` x0 x1 y0 y1). pathtrace's image is centred and its pixels
-    square, so the window's height frames it; a window off centre or of another aspect than the
-    film's is taken so, with a warning."""
-    w, h = camera.width, camera.height
-    frame = camera.get("frameaspectratio", w / h)
+    orthographic camera one world unit each way), of a pbrt camera's `given` values (PBRT_SCREEN
+    and FILM): pbrt-v4's CameraBase screen window (src/pbrt/cameras.cpp, CameraBaseParameters /
+    the cameras' Create: frame = frameaspectratio, else the film's x / y; the window
+    [-frame, frame] x [-1, 1] where frame > 1, else [-1, 1] x [-1/frame, 1/frame]; or the file's
+    `screenwindow` x0 x1 y0 y1). pathtrace's image is centred and its pixels square, so the
+    window's height frames it; a window off centre or of another aspect than the film's is taken
+    so, with a warning (warn(text, the parameter's name)). Raises ValueError("<name>: <problem>")."""
+    w, h = given[FILM]
+    frame = given["frameaspectratio"]
+    frame = w / h if frame is None else frame
     if not frame > 0 or not math.isfinite(frame):
-        camera.fail("frameaspectratio", f"must be positive, got {frame:g}")
+        raise ValueError(f"frameaspectratio: must be positive, got {frame:g}")
     window = (-frame, frame, -1.0, 1.0) if frame > 1 else (-1.0, 1.0, -1 / frame, 1 / frame)
-    if camera.has("screenwindow"):
-        window = tuple(float(v) for v in camera.get("screenwindow", None, "floats"))
+    name = "frameaspectratio"
+    if given["screenwindow"] is not None:
+        window, name = tuple(float(v) for v in given["screenwindow"]), "screenwindow"
         if len(window) != 4 or not window[0] < window[1] or not window[2] < window[3]:
-            camera.fail("screenwindow", "takes x0 x1 y0 y1 with x0 < x1 and y0 < y1")
+            raise ValueError("screenwindow: takes x0 x1 y0 y1 with x0 < x1 and y0 < y1")
     x0, x1, y0, y1 = window
-    name = "screenwindow" if camera.has("screenwindow") else "frameaspectratio"
     if not math.isclose(x0, -x1, abs_tol=1e-6 * (x1 - x0)) or not math.isclose(y0, -y1, abs_tol=1e-6 * (y1 - y0)):
-        camera.warn(f"pathtrace's image is centred on the view; it uses a centred window of the same size, "
-                    f"[{-(x1 - x0) / 2:g} {(x1 - x0) / 2:g} {-(y1 - y0) / 2:g} {(y1 - y0) / 2:g}]", name)
+        warn(f"pathtrace's image is centred on the view; it uses a centred window of the same size, "
+             f"[{-(x1 - x0) / 2:g} {(x1 - x0) / 2:g} {-(y1 - y0) / 2:g} {(y1 - y0) / 2:g}]", name)
     if not math.isclose((x1 - x0) / (y1 - y0), w / h, rel_tol=1e-4):
-        camera.warn(f"a window of aspect {(x1 - x0) / (y1 - y0):g} on a film of {w / h:g} has pixels that are not "
-                    "square; pathtrace's are, and it frames the window's height", name)
+        warn(f"a window of aspect {(x1 - x0) / (y1 - y0):g} on a film of {w / h:g} has pixels that are not "
+             "square; pathtrace's are, and it frames the window's height", name)
     return (y1 - y0) / 2
 
 
@@ -114,8 +114,10 @@ class Camera:
     importance: ClassVar[bool] = False   # its kernel files define sample_<kernel>_importance, the
                                          # join of a light subpath to its lens (kernels/camera.cl):
                                          # bidirectional path tracing can render through it
-    mitsuba: ClassVar[str] = None        # the Mitsuba 3 sensor type it reads (from_mitsuba)
-    pbrt: ClassVar[str] = None           # the pbrt-v4 Camera type it reads (from_pbrt)
+    format_only: ClassVar[tuple] = ()    # the formats' parameters that are none of its fields
+                                         # (name None), which from_file maps onto them
+    mitsuba: ClassVar[str] = None        # the Mitsuba 3 sensor type it reads (from_file)
+    pbrt: ClassVar[str] = None           # the pbrt-v4 Camera type it reads (from_file)
     toml_aliases: ClassVar[tuple] = ()   # other TOML types that are this one where a table gives
                                          # its own fields (a perspective camera with a lens)
 
@@ -173,9 +175,19 @@ class Camera:
         (the view itself, eye, look_at and up, the readers check); a name must be one of its
         choices. A type checks its numbers' ranges on top of this."""
         for p in self.parameters:
-            if p.choices and getattr(self, p.name) not in p.choices:
-                raise ValueError(f"{p.name}: must be one of {', '.join(p.choices)}, got {getattr(self, p.name)!r}")
+            if p.choices:
+                check_choice(p.name, getattr(self, p.name), p.choices)
         return self
+
+    @classmethod
+    def from_file(cls, fmt: str, values: dict, given: dict, frame: dict, warn) -> "Camera":
+        """The camera, checked, of a Mitsuba 3 or pbrt-v4 camera (fmt "mitsuba", "pbrt") read by
+        the type's declarations (app/parameters.py: read, of parameters + format_only): `values`
+        by pathtrace's names, `given` by the format's with FILM and TO_WORLD, `frame` frame_of's;
+        warn(text, the format's name or None) says what it changes. Raises ValueError("<name>:
+        <problem>"), the name pathtrace's or the format's. A type whose fields the format's values
+        do not give as they are maps them here, before this."""
+        return cls(**frame, **values).check()
 
     def frame(self):
         """Unit forward, right (the image's) and up."""

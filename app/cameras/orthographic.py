@@ -6,7 +6,10 @@ import math
 from dataclasses import dataclass
 from typing import ClassVar
 
-from pathtrace.cameras.camera import MAX_EXTENT, Camera, check_range, pbrt_screen_half_height
+import numpy as np
+
+from pathtrace.cameras.camera import FILM, MAX_EXTENT, PBRT_LENS, PBRT_SCREEN, TO_WORLD, Camera, check_range, \
+    pbrt_screen_half_height
 from pathtrace.parameters import Parameter
 
 HEIGHT = Parameter("height", "number", 2.0, doc="the view's height, scene units (Mitsuba's and pbrt's come from "
@@ -19,6 +22,7 @@ class OrthographicCamera(Camera):
 
     type: ClassVar[str] = "orthographic"
     parameters: ClassVar[tuple] = (HEIGHT,)
+    format_only: ClassVar[tuple] = (*PBRT_SCREEN, *PBRT_LENS)
     sliders: ClassVar[dict] = {"height": (1e-3, 1e4, True)}
     kernels: ClassVar[tuple] = ("orthographic",)
     mitsuba: ClassVar[str] = "orthographic"
@@ -36,17 +40,18 @@ class OrthographicCamera(Camera):
         return self.eye + x * right + y * up, forward
 
     @classmethod
-    def from_mitsuba(cls, sensor, **frame):
-        # Mitsuba's orthographic view spans [-1, 1] across the film's width in camera space,
-        # scaled by to_world
-        if not math.isclose(sensor.scale_x, sensor.scale_y, rel_tol=1e-4):
-            sensor.warn("to_world scales x and y differently; pathtrace keeps the view's width")
-        return cls(**frame, height=2 * sensor.scale_x * sensor.height / sensor.width)
-
-    @classmethod
-    def from_pbrt(cls, camera, **frame):
-        # the screen window spans one world unit per unit, scaled by the transform
-        if camera.get("lensradius", 0.0) > 0:
-            camera.warn("pathtrace's orthographic camera has no lens; 'lensradius' is ignored")
-        camera.get("focaldistance", 1e6)
-        return cls(**frame, height=2.0 * camera.scale_y * pbrt_screen_half_height(camera))
+    def from_file(cls, fmt, values, given, frame, warn):
+        scale_x, scale_y = (float(np.linalg.norm(given[TO_WORLD][:3, i])) for i in (0, 1))
+        if fmt == "mitsuba":
+            # Mitsuba's orthographic view spans [-1, 1] across the film's width in camera space,
+            # scaled by to_world
+            if not math.isclose(scale_x, scale_y, rel_tol=1e-4):
+                warn("to_world scales x and y differently; pathtrace keeps the view's width")
+            width, height = given[FILM]
+            values["height"] = 2 * scale_x * height / width
+        else:
+            # the screen window spans one world unit per unit, scaled by the transform
+            if given["lensradius"] > 0:
+                warn("pathtrace's orthographic camera has no lens; 'lensradius' is ignored")
+            values["height"] = 2.0 * scale_y * pbrt_screen_half_height(given, warn)
+        return super().from_file(fmt, values, given, frame, warn)

@@ -20,6 +20,10 @@ def _discover() -> dict:
 CAMERAS = _discover()
 """type name -> Camera subclass, in name order."""
 
+FIELDS = tuple(p for cls in CAMERAS.values() for p in cls.parameters)
+"""Every type's fields' declarations, by which a reader names in its own terms the field of a
+type's ValueError (the type it read may have made another: pbrt's perspective, a thin lens)."""
+
 KERNELS = tuple(dict.fromkeys(k for cls in CAMERAS.values() for k in (cls.kernels or (cls.type,))))
 """Every camera kernel file's name; RenderParams.camera_type is an index into it."""
 

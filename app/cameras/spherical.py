@@ -45,10 +45,3 @@ class SphericalCamera(Camera):
             d = square_to_sphere(np.array([[u, v]]))[0]
         forward, right, up = self.frame()
         return self.eye, d[0] * right + d[1] * forward + d[2] * up
-
-    @classmethod
-    def from_pbrt(cls, camera, **frame):
-        mapping = camera.get("mapping", MAPPING.default, "string")
-        if mapping not in MAPPING.choices:
-            camera.fail("mapping", f"must be {' or '.join(MAPPING.choices)}, got {mapping!r}")
-        return cls(**frame, mapping=mapping)

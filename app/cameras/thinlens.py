@@ -7,8 +7,8 @@ is one."""
 from dataclasses import dataclass
 from typing import ClassVar
 
-from pathtrace.cameras.camera import MAX_EXTENT, check_range
-from pathtrace.cameras.perspective import PerspectiveCamera, mitsuba_vfov
+from pathtrace.cameras.camera import MAX_EXTENT, PBRT_SCREEN, check_range
+from pathtrace.cameras.perspective import MITSUBA_FOV, PerspectiveCamera
 from pathtrace.parameters import Parameter
 
 APERTURE = Parameter("aperture_radius", "number", 0.0, doc="the lens's radius, scene units (0: a pinhole)",
@@ -25,12 +25,13 @@ class ThinLensCamera(PerspectiveCamera):
 
     type: ClassVar[str] = "thinlens"
     parameters: ClassVar[tuple] = (*PerspectiveCamera.parameters, APERTURE, FOCUS)
+    format_only: ClassVar[tuple] = (*MITSUBA_FOV, *PBRT_SCREEN)     # pbrt's lens: APERTURE's and FOCUS's names
     sliders: ClassVar[dict] = {**PerspectiveCamera.sliders, "aperture_radius": (0.0, 10.0, True),
                                "focus_distance": (1e-3, 1e4, True)}
     kernels: ClassVar[tuple] = ("thinlens",)
     importance: ClassVar[bool] = True
     mitsuba: ClassVar[str] = "thinlens"
-    pbrt: ClassVar[str] = "perspective"         # with a lensradius (PerspectiveCamera.from_pbrt)
+    pbrt: ClassVar[str] = "perspective"         # with a lensradius (PerspectiveCamera.from_file)
     toml_aliases: ClassVar[tuple] = ("perspective",)
 
     @property
@@ -46,8 +47,7 @@ class ThinLensCamera(PerspectiveCamera):
         return (self.aperture_radius, self.focus_distance, 0.0, 0.0)
 
     @classmethod
-    def from_mitsuba(cls, sensor, **frame):
-        if not sensor.has("aperture_radius"):
-            sensor.fail(None, "a thinlens camera needs an aperture_radius")
-        return cls(**frame, vfov=mitsuba_vfov(sensor), aperture_radius=sensor.get("aperture_radius"),
-                   focus_distance=sensor.get("focus_distance", FOCUS.mitsuba_default))
+    def from_file(cls, fmt, values, given, frame, warn):
+        if "aperture_radius" not in values:     # Mitsuba 3's thinlens has no default
+            raise ValueError("a thinlens camera needs an aperture_radius")
+        return super().from_file(fmt, values, given, frame, warn)

@@ -39,7 +39,8 @@ def _types(kind: str) -> list:
     if kind == "cameras":
         return [(c.type, {f: getattr(c, f) for f in ("mitsuba", "pbrt") if getattr(c, f)},
                  " ".join(sys.modules[c.__module__].__doc__.split())
-                 + ("" if c.importance else " BDPT cannot render through it yet (no importance)."), c.parameters)
+                 + ("" if c.importance else " BDPT cannot render through it yet (no importance)."),
+                 c.parameters + c.format_only)
                 for c in CAMERAS.values()]
     if kind == "filters":
         from pathtrace.filters import TYPES

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 
 from pathtrace import cameras
-from pathtrace.cameras.camera import FileCamera, frame_of
+from pathtrace.cameras.camera import FILM, TO_WORLD, frame_of
 from pathtrace.cameras.perspective import PerspectiveCamera, vertical_fov
 from pathtrace.scene.environment import Environment
 from pathtrace.errors import UserError, short, warn
@@ -180,18 +180,15 @@ class _Reader(XmlScene):
             elif child.tag == "medium" or (child.tag == "ref" and self.resolve(child).tag == "medium"):
                 self.camera_medium = self.medium(child)       # Mitsuba 3: the sensor's one medium
         m = self.get(props, "to_world", np.eye(4), ("transform",))
-        frame = frame_of(m, x_right=False)        # Mitsuba's camera space has +x to the image's left
-        sensor = FileCamera(lambda name, default=None, kind="float": self.get(props, name, default, (kind,)),
-                            props.__contains__, lambda name, problem: fail(props.get(name, node) if name else node,
-                                                                           problem),
-                            lambda text, name=None: warn(f"{node.where()}: {text}"), self.settings.width,
-                            self.settings.height, m)
-        camera = cls.from_mitsuba(sensor, **frame)
+        given = {FILM: (self.settings.width, self.settings.height), TO_WORLD: m}
         try:
-            camera.check()
+            values = parameters.read(cls.parameters + cls.format_only, "mitsuba",
+                                     lambda p, name: self.parameter(props, p, name), given)
+            # Mitsuba's camera space has +x to the image's left
+            self.camera = cls.from_file("mitsuba", values, given, frame_of(m, x_right=False),
+                                        lambda text, name=None: warn(f"{(props[name] if name else node).where()}: {text}"))
         except ValueError as e:
-            refuse(props, node, e, format_names(camera.parameters, "mitsuba"))
-        self.camera = camera
+            refuse(props, node, e, format_names(cameras.registry.FIELDS, "mitsuba"))
 
     def film(self, node):
         props = self.properties(node)

@@ -19,7 +19,8 @@ from pathtrace.textures.bitmap import read_image
 
 BSDFS_BY_NAME = by_format(BSDFS.values(), "pbrt")
 # the parameter types of the array kinds (app/parameters.py)
-ARRAYS = {"points": ("point3",), "normals": ("normal", "normal3"), "pairs": ("point2",), "integers": ("integer",)}
+ARRAYS = {"points": ("point3",), "normals": ("normal", "normal3"), "pairs": ("point2",), "integers": ("integer",),
+          "numbers": ("float",)}
 TEXTURES_BY_NAME = by_format(TEXTURES.values(), "pbrt")
 
 

@@ -10,10 +10,10 @@ import numpy as np
 
 from pathtrace import cameras
 from pathtrace.cameras import Camera
-from pathtrace.cameras.camera import FileCamera, frame_of
-from pathtrace.errors import UserError, warn
+from pathtrace.cameras.camera import FILM, TO_WORLD, frame_of
+from pathtrace.errors import warn
 from pathtrace import filters
-from pathtrace.scene.pbrt.tokens import parameters, string
+from pathtrace.scene.pbrt.tokens import ParamList, parameters, string
 from pathtrace.scene.meshes import MAX_COORDINATE
 from pathtrace.scene import settings
 
@@ -31,41 +31,24 @@ class OptionDirectives:
         self.named_systems["camera"] = self.inverse(tokens.where(offset), "the camera")
 
     def make_camera(self) -> Camera:
-        """pathtrace's camera for pbrt's, once the film's size is known."""
-        if self.camera_params is None:
-            kind, params, where, ctm = "perspective", None, str(self.path), np.eye(4)
-        else:
-            kind, params, where, ctm, _ = self.camera_params
-        world_from_camera = np.linalg.inv(ctm)
-        frame = frame_of(world_from_camera, x_right=True)
+        """pathtrace's camera for pbrt's, once the film's size is known, by the camera types'
+        declared pbrt-v4 names (pbrt-v4's defaults where there is no Camera directive)."""
+        kind, params, where, ctm, _ = self.camera_params or ("perspective", ParamList(None), str(self.path),
+                                                             np.eye(4), -1)
         cls = cameras.registry.format_class("pbrt", kind)
         if cls is None:
             warn(f"{where}: pathtrace has no {kind} camera; it uses a perspective one of pbrt-v4's defaults")
-            kind, params, cls = "perspective", None, cameras.registry.format_class("pbrt", "perspective")
-        camera = cls.from_pbrt(self.file_camera(params, where, world_from_camera), **frame)
+            kind, params, cls = "perspective", ParamList(None), cameras.registry.format_class("pbrt", "perspective")
+        world_from_camera = np.linalg.inv(ctm)
+        given = {FILM: (self.settings.width, self.settings.height), TO_WORLD: world_from_camera}
+        values = self.read_declared(cls.parameters + cls.format_only, params, where, given)
         try:
-            camera.check()
+            camera = cls.from_file("pbrt", values, given, frame_of(world_from_camera, x_right=True),
+                                   lambda text, name=None: warn(f"{params.where(name) if name else where}: {text}"))
         except ValueError as e:
-            self.mapper.fail(params, where, e, camera.parameters)
-        if params is not None:
-            self.unused(params, "camera", kind)
+            self.mapper.fail(params, where, e, cameras.registry.FIELDS)
+        self.unused(params, "camera", kind)
         return camera
-
-    def file_camera(self, params, where, world_from_camera) -> FileCamera:
-        """The Camera directive's parameters as the camera types read them (pbrt-v4's defaults
-        where there is none), through the camera's transform."""
-        def get(name, default=None, kind="float"):
-            if params is None:
-                return default
-            return params.floats(name) if kind == "floats" else getattr(params, kind)(name, default)
-
-        def fail(name, problem):
-            if params is None:
-                raise UserError(f"{where}: '{name}' {problem}")
-            params.fail(name, problem)
-        return FileCamera(get, lambda name: params is not None and params.type_of(name) is not None, fail,
-                          lambda text, name=None: warn(f"{params.where(name) if name else where}: {text}"),
-                          self.settings.width, self.settings.height, world_from_camera)
 
     def _film(self, tokens, offset):
         kind = string(tokens, "Film")
