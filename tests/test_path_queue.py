@@ -205,6 +205,28 @@ def test_auto_keeps_its_trials_samples_where_asked(backend, monkeypatch, tmp_pat
     np.testing.assert_allclose(group.mean(), single.mean(), rtol=1e-5, atol=1e-6)
 
 
+def test_bench_keeps_autos_trials_in_its_first_round(backend, monkeypatch, tmp_path):
+    """`bench` times auto's trials in its first round, their samples kept as a render keeps them:
+    every round draws the row's samples, no more (the trials' 96 were thrown away)."""
+    from pathtrace.bench import report
+    monkeypatch.setenv("PATHTRACE_CACHE", str(tmp_path))       # no verdict of earlier trials
+    choose = Renderer.choose_queue_plan       # trials on PoCL too
+    monkeypatch.setattr(Renderer, "choose_queue_plan",
+                        lambda self, samples, trials=None, first=None: choose(self, samples, True, first))
+    drawn = []
+    add_samples = Renderer.add_samples
+
+    def counted(self, count=1, start=None, rows=None):
+        if self.width == SIZE[0]:       # a band of rows draws its share of the samples
+            drawn.append(count * (1 if rows is None else (rows[1] - rows[0]) / self.height))
+        return add_samples(self, count, start, rows)
+    monkeypatch.setattr(Renderer, "add_samples", counted)
+    spp = queue_plans.TRIALS_SPP + SPP
+    scene = load_scene("cornell-box").with_settings(path_queue=PATH_QUEUE_AUTO)
+    result = report.measure([backend], scene, "depth8", *SIZE, spp, (None, None), rounds=2)
+    assert sum(drawn) == pytest.approx(2 * spp) and len(result.render_rounds) == 2
+
+
 def test_auto_leaves_out_a_queue_that_does_not_fit(backend, monkeypatch, tmp_path):
     """Where the queue's buffers would not fit in the device's memory, "auto" chooses among the
     other plans rather than refusing a render that fits without them."""

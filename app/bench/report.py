@@ -35,7 +35,9 @@ from statistics import median
 from pathtrace.bench.default_scenes import TARGET_SCENES
 from pathtrace.device.opencl import build_program, choose_devices
 from pathtrace.errors import UserError
+from pathtrace.rendering.choices import PATH_QUEUE_AUTO
 from pathtrace.rendering.multidevice import DeviceGroup
+from pathtrace.rendering.queue_plans import AUTO_PLANS
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 
@@ -98,13 +100,19 @@ def measure(backends, scene, estimator, width, height, spp, builds, rounds: int 
     samples: pathtrace.rendering.multidevice); with rounds > 1, that many renders of the same samples,
     whose median counts."""
     scene = scene.with_settings(**estimator_settings(estimator))
-    # the scene's own kernels (pathtrace.device.features), built and launched once outside the timed region
+    # the scene's own kernels (pathtrace.device.features), built and launched once outside the
+    # timed region, and with path_queue "auto" each plan's, which its trials launch
+    plans = AUTO_PLANS if scene.settings.path_queue == PATH_QUEUE_AUTO else ()
     for backend in backends:
-        Renderer(backend, scene, 16, 16).add_samples(1)
+        r = Renderer(backend, scene, 16, 16)
+        r.add_samples(1)
+        for plan in plans:
+            r.use_queue_plan(plan)
+            r.switch_when_built(wait=True)
+            r.add_samples(1)
         backend.queue.finish()
     start = time.perf_counter()
     group = DeviceGroup(backends, scene, width, height)
-    group.choose_queue_plans(spp)   # path_queue "auto": its trial renders, like a build, before the render
     setup = time.perf_counter() - start
     times = []
     for k in range(rounds):
@@ -112,6 +120,9 @@ def measure(backends, scene, estimator, width, height, spp, builds, rounds: int 
             for renderer in group.renderers:
                 renderer.reset()
         rendering = time.perf_counter()
+        # path_queue "auto": its trials in the first round, their samples kept as a render keeps
+        # them (api.render), so that every round draws spp samples; later rounds take the plan
+        group.choose_queue_plans(spp, keep_up_to=spp)
         group.render(spp, launch_seconds=0.5)
         image = group.mean()
         times.append(time.perf_counter() - rendering)
