@@ -5,12 +5,17 @@ time goes on, with next-event estimation on and off, plotted on log-log axes (ma
 """
 
 import argparse
+import sys
 
-import matplotlib
 import numpy as np
 
 import pathtrace
 
+try:
+    import matplotlib
+except ImportError:
+    sys.exit("convergence.py: the plot needs matplotlib, which pathtrace does not install: "
+             ".venv/bin/python -m pip install matplotlib")
 matplotlib.use("Agg")           # files only, no window
 import matplotlib.pyplot as plt  # noqa: E402
 

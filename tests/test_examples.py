@@ -22,3 +22,16 @@ def test_example_writes_its_image(tmp_path, script, args):
                        cwd=tmp_path, capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr
     assert out.read_bytes()[:4] == b"\x89PNG" and f"wrote {out}" in r.stdout
+
+
+def test_the_convergence_plot_without_matplotlib_says_how_to_get_it(tmp_path):
+    """matplotlib is not among pathtrace's requirements: without it, one line saying how to
+    install it, not a traceback (a new user's run found one)."""
+    (tmp_path / "matplotlib.py").write_text("raise ImportError('no matplotlib here')\n")   # shadows it
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(tmp_path), os.environ.get("PYTHONPATH")]))}
+    r = subprocess.run([sys.executable, ROOT / "examples" / "convergence.py", "-o", tmp_path / "out.png"],
+                       cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
+    assert r.returncode == 1 and "Traceback" not in r.stderr, r.stderr
+    assert r.stderr.strip().splitlines() == [
+        "convergence.py: the plot needs matplotlib, which pathtrace does not install: "
+        ".venv/bin/python -m pip install matplotlib"]

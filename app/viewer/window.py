@@ -63,7 +63,8 @@ def no_display_message(scene: str = "simple") -> str:
     if not shutil.which("xvfb-run"):
         xvfb = f"sudo apt install xvfb, then {xvfb}"
     return (f"pathtrace view needs a display, and none was found. To render headless: "
-            f"{program} render {named} -o out.png   To run the viewer on a virtual display: {xvfb}")
+            f"{program} render {named} -o out.png --spp 16 (a first look in seconds; without --spp, the "
+            f"scene's own samples)   To run the viewer on a virtual display: {xvfb}")
 
 
 def require_display(scene: str = "simple"):
