@@ -38,12 +38,23 @@ def fake_mitsuba(tmp_path) -> Path:
     return python
 
 
-def test_a_row_is_timed_cold_from_empty_caches_then_warm(tmp_path):
+def first_image_row(tmp_path, scene: str, size: str, repeats: int, *options) -> tuple:
+    """`bench --first-image` of one scene on the CPU: (its one row from the JSON, the command's result)."""
     out = tmp_path / "first.json"
-    r = in_process("bench", "--first-image", "--scenes", "simple", "--size", "16x9", "--repeats", "1",
-                  "--device", "cpu", "--json", out)
+    r = in_process("bench", "--first-image", "--scenes", scene, "--size", size, "--repeats", str(repeats),
+                   "--device", "cpu", *options, "--json", out)
     assert r.returncode == 0, r.stderr
     row, = json.loads(out.read_text())["results"]
+    return row, r
+
+
+def with_mitsuba(tmp_path) -> tuple:
+    """The options that time a stand-in Mitsuba (fake_mitsuba) beside each row."""
+    return "--mitsuba", fake_mitsuba(tmp_path), "--mitsuba-variant", "scalar_rgb"
+
+
+def test_a_row_is_timed_cold_from_empty_caches_then_warm(tmp_path):
+    row, r = first_image_row(tmp_path, "simple", "16x9", 1)
     assert (row["scene"], row["what"], row["device"], row["width"], row["height"]) == ("simple", "built-in", "cpu", 16, 9)
     assert row["cold_seconds"] > 0 and row["warm_seconds"] > 0
     # the cold run's caches were empty before it, and it filled them (PoCL's programs here)
@@ -57,12 +68,7 @@ def test_the_obj_scene_is_a_row_bench_writes(tmp_path):
     """`meshes850-obj` (#55's "several hundred OBJ meshes"): 850 OBJ files bench writes, each
     read from its file cold and the scene from its cache warm; its XML's film is the rows' size,
     so that Mitsuba renders it beside (here a stand-in)."""
-    out = tmp_path / "obj.json"
-    r = in_process("bench", "--first-image", "--scenes", "meshes850-obj", "--size", "16x9", "--repeats", "1",
-                   "--device", "cpu", "--mitsuba", fake_mitsuba(tmp_path), "--mitsuba-variant", "scalar_rgb",
-                   "--json", out)
-    assert r.returncode == 0, r.stderr
-    row, = json.loads(out.read_text())["results"]
+    row, r = first_image_row(tmp_path, "meshes850-obj", "16x9", 1, *with_mitsuba(tmp_path))
     assert (row["scene"], row["what"]) == ("meshes850-obj", "written by bench")
     assert row["cold_seconds"] > row["warm_seconds"] > 0 and row["cache_files_after"] > 0
     assert row["mitsuba_cold_seconds"] > 0, r.stdout
@@ -73,12 +79,7 @@ def test_mitsuba_is_timed_cold_in_a_fresh_home_then_warm(tmp_path, monkeypatch):
     first left; the ratios are printed. pathtrace's own runs build the scene's program, which PoCL
     builds cold in a few seconds, where the generic program takes several times that."""
     monkeypatch.setenv("PATHTRACE_PROGRAM", "specialised")
-    out = tmp_path / "first.json"
-    r = in_process("bench", "--first-image", "--scenes", "cornell-box", "--size", "16x16", "--repeats", "2",
-                  "--device", "cpu", "--mitsuba", fake_mitsuba(tmp_path), "--mitsuba-variant", "scalar_rgb",
-                  "--json", out)
-    assert r.returncode == 0, r.stderr
-    row, = json.loads(out.read_text())["results"]
+    row, r = first_image_row(tmp_path, "cornell-box", "16x16", 2, *with_mitsuba(tmp_path))
     assert row["mitsuba_variant"] == "scalar_rgb" and row["mitsuba_cold_seconds"] > 0 and row["mitsuba_warm_seconds"] > 0
     runs = [json.loads(line) for line in (tmp_path / "runs.jsonl").read_text().splitlines()]
     assert [run["cached"] for run in runs] == [False, True, True] and len({run["home"] for run in runs}) == 1
