@@ -81,8 +81,11 @@ _backends = {}            # device specs -> opened backends, kept for the next r
 
 def open_devices(device="auto") -> list:
     """The backends for `device`: a spec as `--device` takes it ('auto', 'gpu', 'cpu', 'gpu:1',
-    an index, part of a name, or 'all') or a list of specs. Opened once and kept."""
+    an index, part of a name, or 'all') or a list of specs. Opened once and kept. A
+    DevicesOpening begun earlier gives its own, once opened."""
     from pathtrace.device.opencl import choose_devices
+    if isinstance(device, DevicesOpening):
+        return device.result()
     specs = (device,) if isinstance(device, str) else tuple(device) if isinstance(device, (list, tuple)) else ()
     if not specs or not all(isinstance(s, str) for s in specs):
         raise UserError(f"device: give a device spec such as 'auto', 'gpu', 'cpu:0' or a list of them, "
@@ -94,10 +97,11 @@ def open_devices(device="auto") -> list:
 
 class DevicesOpening:
     """open_devices(device) begun at once, in a thread of its own, with each device's BVH build
-    kernels built after it (pathtrace.compiler.bvh.builder_for), so that a command reads its
-    scene meanwhile: the drivers build programs with the GIL released, and a first start pays
-    for them beside the reading (PoCL's first build of the generic program takes 1.2 s on two
-    cores; NVIDIA's of the display's kernel, where no generic program is cached, 0.2 s)."""
+    kernels built after it (pathtrace.compiler.bvh.builder_for), so that a command reads and
+    compiles its scene meanwhile (prepare): the drivers start and build programs with the GIL
+    released (pathtrace.device.loader), and a first start pays for them beside the reading
+    (PoCL's first build of the generic program takes 1.2 s on two cores; NVIDIA's of the
+    display's kernel, where no generic program is cached, 0.2 s)."""
 
     def __init__(self, device="auto"):
         self.seconds = 0.0      # what the opening took, in its thread
@@ -119,6 +123,9 @@ class DevicesOpening:
     def result(self) -> list:
         """open_devices' backends, once opened, or its error."""
         return self._opened.result()
+
+    def done(self) -> bool:
+        return self._opened.done()
 
 
 @dataclass
@@ -176,21 +183,30 @@ class _Prepared:
     """A scene compiled and uploaded to a group of devices, with what it was compiled from, so
     that the next render uploads only what changed."""
 
-    def __init__(self, scene: Scene, backends: list, build_progress=None, phases=None):
+    def __init__(self, scene: Scene, device, build_progress=None, phases=None):
         from pathtrace.compiler.compiled import compile_scene
         from pathtrace.rendering.multidevice import DeviceGroup
-        self.backends = backends
-        self.geometry = _geometry_digest(scene)
         start = time.perf_counter()
-        # the tree is built by the first renderer, beside its program's build (Renderer.set_scene)
-        compiled = compile_scene(scene, backends[0].queue, build_progress, tree=False)
-        self.group = DeviceGroup(backends, compiled)
+        with ThreadPoolExecutor(1) as pool:
+            geometry = pool.submit(_geometry_digest, scene)     # hashlib releases the GIL
+            # compiled before the devices are asked for, so that it runs while they open
+            # (DevicesOpening), its tree too where the BVH cache holds it; else the first renderer
+            # builds the tree beside its program's build (Renderer.set_scene)
+            compiled = compile_scene(scene, None, build_progress, tree=False)
+            compiled.build_tree(cached_only=True)
+            asked = time.perf_counter()
+            self.backends = open_devices(device)
+            waited = time.perf_counter() - asked
+            self.group = DeviceGroup(self.backends, compiled)
+            self.geometry = geometry.result()
         if phases:
             # the renderers' construction includes building the kernels specialised to the
-            # scene, which it does not report on its own: what is left of it once the tree is built
-            phases(f"compiled the scene ({_contents(compiled)}, BVH in {compiled.bvh_seconds:.2f} s)",
-                   compiled.tree_ended - start)
-            phases(f"prepared the renderer{'s' * (len(backends) > 1)}", time.perf_counter() - compiled.tree_ended)
+            # scene, which it does not report on its own: what is left of it once the tree is
+            # built; the compiling's time leaves out the wait for the devices, which have a line
+            # of their own, where the tree was built after it
+            compiling = compiled.tree_ended - start - (waited if compiled.tree_ended > asked else 0.0)
+            phases(f"compiled the scene ({_contents(compiled)}, BVH in {compiled.bvh_seconds:.2f} s)", compiling)
+            phases(f"prepared the renderer{'s' * (len(self.backends) > 1)}", time.perf_counter() - compiled.tree_ended)
         self.environment = _environment_key(scene.environment)
         self.lights = _lights_key(scene.lights)
 
@@ -220,12 +236,11 @@ def prepare(scene: Scene, device="auto", build_progress=None, phases=None) -> _P
     with the scene (so that it goes when the scene goes); compiled anew if the scene's geometry
     changed or the devices differ. phases(what, seconds) is called as each step of making it
     ends: compiling the scene, then preparing the renderers."""
-    backends = open_devices(device)
     kept = scene.__dict__.get("_prepared")
-    if kept is not None and kept.backends == backends and kept.geometry == _geometry_digest(scene):
+    if kept is not None and kept.geometry == _geometry_digest(scene) and kept.backends == open_devices(device):
         return kept
     scene.__dict__.pop("_prepared", None)    # free the old buffers before making new ones
-    scene._prepared = _Prepared(scene, backends, build_progress, phases)
+    scene._prepared = _Prepared(scene, device, build_progress, phases)
     return scene._prepared
 
 
@@ -324,8 +339,8 @@ def render(scene, spp=None, size=None, device="auto", seed=None, max_depth=None,
     where the scene was not compiled already: "compiled the scene (...)", "prepared the renderer"."""
     scene = scene if isinstance(scene, Scene) else load(scene)
     # one snapshot, of the whole render: each step of progressive's would read the image back,
-    # and start its launches again from one sample
-    final = settings_for(scene, spp, size, seed, max_depth, rr, nee, integrator).spp
+    # and start its launches again from one sample (progressive checks both)
+    final = scene.settings.spp if spp is None else spp
     for snapshot in progressive(scene, spp, [final], size, device, seed, max_depth, rr, nee, aovs,
                                 progress, build_progress, phases, integrator):
         pass

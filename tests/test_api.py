@@ -406,3 +406,28 @@ def test_devices_open_in_a_thread_of_their_own_and_give_their_error_when_asked(m
     failing = api.DevicesOpening("no-such-device")
     with pytest.raises(UserError, match="no OpenCL device matches 'no-such-device'"):
         failing.result()
+
+
+def test_a_scene_compiles_while_its_devices_open(monkeypatch, tmp_path):
+    """render() given a DevicesOpening (what `pathtrace render` passes): the scene is compiled,
+    its tree read from the BVH cache, before the devices are asked for, so that it runs while
+    they open; the devices here open only once it has (30 s at most, else none)."""
+    import threading
+
+    from pathtrace import api
+    from pathtrace.compiler.compiled import CompiledScene
+    monkeypatch.setenv("PATHTRACE_BVH_CACHE", str(tmp_path))
+    pathtrace.render(pathtrace.load("spheres64k"), spp=1, size=(8, 8), device="cpu")    # fills the BVH cache
+    tree_first = threading.Event()
+    build_tree = CompiledScene.build_tree
+
+    def noting(compiled, queue=None, cached_only=False):
+        built = build_tree(compiled, queue, cached_only)
+        if built and cached_only:
+            tree_first.set()
+        return built
+    monkeypatch.setattr(CompiledScene, "build_tree", noting)
+    opened = api.open_devices("cpu")
+    monkeypatch.setattr(api, "open_devices", lambda device: opened if tree_first.wait(30) else [])
+    image = pathtrace.render(pathtrace.load("spheres64k"), spp=1, size=(8, 8), device=api.DevicesOpening("cpu"))
+    assert tree_first.is_set() and np.isfinite(image).all() and image.shape == (8, 8, 3)

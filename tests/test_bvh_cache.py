@@ -135,3 +135,25 @@ def test_a_mesh_renders_the_same_from_the_cache(tmp_path):
         entry, = (tmp_path / "bvh").glob("*.bvh")
         images.append((out.read_bytes(), entry.read_bytes()))
     assert images[0] == images[1]
+
+
+def test_a_scene_builds_its_tree_before_a_device_only_where_the_cache_holds_it(folder, monkeypatch):
+    """build_tree(cached_only=True), which a command calls while its devices open (api.prepare):
+    on a miss it builds nothing and leaves the tree to a device's build; on a hit it reads the
+    tree without a device, and the scene's tables are those of a scene compiled whole."""
+    from pathtrace.compiler import compiled as compiled_module
+    from pathtrace.scene import load_scene
+    scene = load_scene("spheres64k")
+    first = compiled_module.compile_scene(scene, None, tree=False)
+    monkeypatch.setattr(cache, "build_bvh", no_build)
+    assert first.build_tree(cached_only=True) is False
+    assert first.bvh is None and first.tree_ended is None and not folder.exists()
+    monkeypatch.undo()
+    monkeypatch.setenv("PATHTRACE_BVH_CACHE", str(folder))
+    whole = compiled_module.compile_scene(scene)         # builds the tree, and keeps it
+    assert first.build_tree() and same(first.bvh, whole.bvh)
+    monkeypatch.setattr(cache, "build_bvh", no_build)
+    again = compiled_module.compile_scene(scene, None, tree=False)
+    assert again.build_tree(cached_only=True) is True and again.tree_ended is not None
+    for name, array in whole.geometry_arrays().items():
+        assert np.array_equal(again.geometry_arrays()[name], array), name

@@ -246,7 +246,7 @@ def open_as_the_viewer_does(backend, scene):
             super().__setattr__(name, value)
     opening, statuses = Opening(), []
     opening.backend = backend
-    r = opening._open(scene)
+    r = opening._open(*opening._compile(scene))
     r.resize(SIZE, SIZE)
     # what the window said last: that the kernels, which the tree did not wait for, are coming
     assert statuses[-1][0].startswith("preparing the kernels for cornell-box")
@@ -262,11 +262,13 @@ def test_the_scenes_program_builds_beside_its_tree(backend, specialised, monkeyp
     asked, before_tree = threading.Event(), []
     build_tree, trees = CompiledScene.build_tree, []
 
-    def tree_after_the_build_began(compiled):
+    def tree_after_the_build_began(compiled, queue=None, cached_only=False):
+        if cached_only:           # the viewer's, before the device: cornell-box is not cached
+            return build_tree(compiled, queue, cached_only)
         if compiled.bvh is None:
             asked.wait(30)
         trees.append(compiled)
-        build_tree(compiled)
+        return build_tree(compiled, queue)
     monkeypatch.setattr(CompiledScene, "build_tree", tree_after_the_build_began)
 
     def build(features, tune):

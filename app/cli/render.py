@@ -36,19 +36,30 @@ def cmd_render(args):
     scene = apply_render_options(api.load(args.scene), args)
     phase(f"loaded {escape(scene.name)}")
     s = scene.settings
-    backends = opening.result()
-    for backend in backends:
-        print(f"device: {backend.device.describe()}", file=sys.stderr)
-    generic = all(b.built_generic(media=False) is not None for b in backends)    # open_device's
-    cached = "from the kernel cache, " if generic and all(b.opened.cached for b in backends) else ""
-    phase(f"opened the device{'s' * (len(backends) > 1)}" + (" and built the generic kernels" if generic else ""),
-          f" ({cached}beside the reading)", seconds=opening.seconds)
     pixels = s.width * s.height
     build_progress = BuildProgress(scene.name, args.quiet)
     bar = None
+    said = False
+
+    def say_devices():
+        """The devices and their opening's time, once they are open: the scene compiles while
+        they open (api.prepare), so this comes before or after its line."""
+        nonlocal said
+        if said:
+            return
+        said = True
+        backends = opening.result()
+        for backend in backends:
+            print(f"device: {backend.device.describe()}", file=sys.stderr)
+        generic = all(b.built_generic(media=False) is not None for b in backends)    # open_device's
+        cached = "from the kernel cache, " if generic and all(b.opened.cached for b in backends) else ""
+        phase(f"opened the device{'s' * (len(backends) > 1)}" + (" and built the generic kernels" if generic else ""),
+              f" ({cached}beside the reading)", seconds=opening.seconds)
 
     def prepared(what, seconds):
         build_progress.close()       # a bar left open would share its line with this one
+        if opening.done():
+            say_devices()
         phase(what, seconds=seconds)
 
     def progress(done):
@@ -60,6 +71,7 @@ def cmd_render(args):
         check_interrupt()
         if bar is None:
             build_progress.close()
+            say_devices()
             bar = tqdm(total=s.spp, desc=f"{scene.name} {s.width}x{s.height}", file=sys.stderr,
                        disable=args.quiet, dynamic_ncols=True, smoothing=0,
                        bar_format="{desc}: {percentage:3.0f}%|{bar}| {n}/{total} spp [{elapsed}<{remaining}{postfix}]")
@@ -68,7 +80,7 @@ def cmd_render(args):
         if elapsed > 0:
             bar.set_postfix_str(f"{done * pixels / elapsed / 1e6:.2f} Msamples/s", refresh=False)
     try:
-        result = api.render(scene, device=args.device or ["auto"], progress=progress,
+        result = api.render(scene, device=opening, progress=progress,
                             build_progress=build_progress, phases=prepared,
                             aovs=("albedo", "normal") if args.denoise or args.aov else ())
     except KeyboardInterrupt:

@@ -28,6 +28,7 @@ one launch per batch. The host only sorts the Morton codes, sums each pass's per
 splits the top; the tree stays on the device until its nodes are read back.
 """
 
+import threading
 from dataclasses import dataclass
 from typing import Callable
 
@@ -127,14 +128,16 @@ class Builder:
 
 
 _builders: dict = {}
+_builders_lock = threading.Lock()    # a command's devices open (api.DevicesOpening) beside its first build
 
 
 def builder_for(queue: cl.CommandQueue = None) -> Builder:
     """The builder on `queue`'s device, or, without one, on the first device (GPUs first) whose
-    platform builds it; made once per queue."""
-    if queue not in _builders:
-        _builders[queue] = Builder(queue) if queue is not None else _first_working_builder()
-    return _builders[queue]
+    platform builds it; made once per queue, by the first thread to ask."""
+    with _builders_lock:
+        if queue not in _builders:
+            _builders[queue] = Builder(queue) if queue is not None else _first_working_builder()
+        return _builders[queue]
 
 
 def _first_working_builder() -> Builder:

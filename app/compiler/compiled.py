@@ -5,15 +5,17 @@ uploads it. A scene's textures compile into their own tables (app/textures/table
 Primitives have one index space (kernels/types.h); prim_shape maps each back to the
 shape of the description it came from, so that users only ever see the description's shapes."""
 
+import os
 import threading
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
 import pyopencl as cl
 
 from pathtrace.compiler.bvh import BVH, column_max, column_min, primitive_boxes
-from pathtrace.compiler.bvh_cache import cached_bvh
+from pathtrace.compiler.bvh_cache import CACHED_ONLY, NotCached, cached_bvh
 from pathtrace.scene.environment import LUMINANCE
 from pathtrace.errors import UserError, format_bytes, short
 from pathtrace.device.features import FLAT_MAX, LONE_MAX, Features
@@ -53,11 +55,13 @@ BUILD_HOST_BYTES = 320
 
 class CompiledScene:
     def __init__(self, scene: Scene, queue: cl.CommandQueue = None, progress=None, tree: bool = True):
-        """queue: the device that builds the BVH (pathtrace.compiler.bvh.build_bvh, or pathtrace.compiler.bvh_cache reads it) and whose memory the scene
-        must fit; progress(fraction) is called as the BVH build goes. tree: whether the BVH is
-        built now. Without it, features() answers already (nothing it asks is changed by the
-        tree's order) and build_tree() does the rest, so that a scene's program can build beside
-        its tree (Renderer.set_scene): on a first start the two had run one after the other."""
+        """queue: the device that builds the BVH (pathtrace.compiler.bvh.build_bvh, or
+        pathtrace.compiler.bvh_cache reads it) and whose memory the scene must fit, or None
+        (each Renderer checks its own device's, and gives build_tree its queue);
+        progress(fraction) is called as the BVH build goes. tree: whether the BVH is built now.
+        Without it, features() answers already (nothing it asks is changed by the tree's order)
+        and build_tree() does the rest, so that a scene's program can build beside its tree
+        (Renderer.set_scene): on a first start the two had run one after the other."""
         self.scene = scene
         n_spheres = len(scene.spheres)
         instances = scene.instances
@@ -87,8 +91,7 @@ class CompiledScene:
         self.meshes = meshes
         self.num_spheres = n_spheres
         self.num_triangles = sum(len(m.faces) for m in meshes)
-        check_memory(scene.name, n_spheres, self.num_triangles, queue.device if queue else None,
-                     scene.materials.texel_bytes(), len(instances) if self.two_level else 0)
+        self.check_memory(queue.device if queue else None)
         # a few spheres beside many triangles stay out of the tree (LONE_MAX), in their order
         self.lone_spheres = n_spheres if n_spheres <= LONE_MAX and n_spheres + self.num_triangles > FLAT_MAX \
             and not self.two_level else 0
@@ -138,32 +141,43 @@ class CompiledScene:
         # (pi r^2 E) but not whether it emits, which is all the plan asks
         return light_plan(power, self.scene.lights, 1.0, self.light_sampler)
 
-    def build_tree(self):
+    def check_memory(self, device: cl.Device = None):
+        """check_memory for this scene: the host's memory, and `device`'s where it is given."""
+        check_memory(self.scene.name, self.num_spheres, self.num_triangles, device, self.scene.materials.texel_bytes(),
+                     len(self.scene.instances) if self.two_level else 0)
+
+    def build_tree(self, queue: cl.CommandQueue = None, cached_only: bool = False) -> bool:
         """The BVH, and in its order the primitives' tables, where each primitive's media are
-        and the light table: what the constructor leaves to this with tree=False. Once: a build
-        that fails can be tried again. Callers in other threads wait for the one building it,
-        and where it fails, raise its error rather than build it again; the lock goes with what
-        the build needs (a compiled scene is pickled for the farm)."""
+        and the light table: what the constructor leaves to this with tree=False. queue: the
+        device that builds the BVH where the cache does not hold it (default: the constructor's).
+        cached_only: only where the BVH cache holds every tree it needs, which needs no device,
+        so that a command compiles its scene while its devices open; returns whether the tree
+        is built. Once: a build that fails can be tried again. Callers in other threads wait for
+        the one building it, and where it fails, raise its error rather than build it again;
+        the lock goes with what the build needs (a compiled scene is pickled for the farm)."""
         lock = self._tree_lock
         if lock is None:
-            return
+            return True
         tries = self._tree_tries
         with lock:
             if self.tree_ended is not None:
-                return
+                return True
             if self._tree_tries != tries:        # one ended, failing, while this one waited
                 raise self._tree_error
             try:
-                self._build_tree()
+                self._build_tree(CACHED_ONLY if cached_only else queue or self._build[0])
+            except NotCached:
+                return False
             except BaseException as e:
                 self._tree_error = e
-                raise
-            finally:
                 self._tree_tries += 1
+                raise
+            self._tree_tries += 1
             self._tree_error = None
+            return True
 
-    def _build_tree(self):
-        scene, meshes, n_spheres, (queue, progress) = self.scene, self.meshes, self.num_spheres, self._build
+    def _build_tree(self, queue):
+        scene, meshes, n_spheres, progress = self.scene, self.meshes, self.num_spheres, self._build[1]
         corners = self._corners
         start = time.perf_counter()
         lo, hi = primitive_boxes(scene.spheres, corners[:, :, :3])
@@ -190,7 +204,7 @@ class CompiledScene:
 
         counts = [len(m.faces) for m in meshes]
         mesh_of = np.repeat(np.arange(len(meshes)), counts).astype(np.int64)
-        self.triangles = np.take(corners, triangle_order, axis=0).reshape(-1, 12).view(TRIANGLE).reshape(-1)
+        self.triangles = take_rows(corners, triangle_order).reshape(-1, 12).view(TRIANGLE).reshape(-1)
         # per-corner shading normals and texture coordinates, in BVH order, for the triangles of
         # meshes that have them; the others' index is -1
         self.normals, normal_index = corner_table(meshes, "normals", triangle_order)
@@ -381,6 +395,27 @@ def float4_rows(rows) -> np.ndarray:
     return out
 
 
+GATHER_PARTS = min(os.cpu_count() or 1, 8)
+GATHER_SPLIT = 1 << 18       # rows from which take_rows gathers in parts
+_gatherers = ThreadPoolExecutor(GATHER_PARTS, thread_name_prefix="gather") if GATHER_PARTS > 1 else None
+
+
+def take_rows(values: np.ndarray, indices: np.ndarray) -> np.ndarray:
+    """np.take(values, indices, axis=0) for valid indices, in parts on the host's cores where it
+    is large: a gather of a large scene's rows in BVH order waits on memory, and np.take releases
+    the GIL, so threads overlap the waits."""
+    n = len(indices)
+    if n < GATHER_SPLIT or _gatherers is None:
+        return np.take(values, indices, axis=0)
+    out = np.empty((n,) + values.shape[1:], values.dtype)
+    ends = np.linspace(0, n, GATHER_PARTS + 1).astype(np.int64)
+    # mode "clip": with "raise", np.take gathers into a buffer of its own and copies it to `out`
+    parts = [_gatherers.submit(np.take, values, indices[a:b], 0, out[a:b], "clip") for a, b in zip(ends, ends[1:])]
+    for part in parts:
+        part.result()
+    return out
+
+
 def shape_corners(shape: Shape) -> np.ndarray:
     """An analytic shape's record in the triangle range, (1, 3, 4): its world box's corners in
     the corners' places (lower, upper, lower), so that the BVH and the light tree see its box as
@@ -415,7 +450,7 @@ def corner_table(meshes: list, attribute: str, triangle_order: np.ndarray) -> tu
     has = np.concatenate([np.full(len(m.faces), getattr(m, attribute) is not None) for m in meshes])
     rank = np.cumsum(has) - 1
     with_it = has[triangle_order]
-    table = np.take(values, np.take(faces, rank[triangle_order[with_it]], axis=0), axis=0).reshape(-1, width)
+    table = take_rows(values, take_rows(faces, rank[triangle_order[with_it]]).reshape(-1)).reshape(-1, width)
     index = np.full(len(triangle_order), -1, np.int32)
     index[with_it] = np.arange(np.count_nonzero(with_it), dtype=np.int32) * 3
     return (table if len(table) else np.zeros((1, width), np.float32)), index

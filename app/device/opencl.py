@@ -13,6 +13,7 @@ import pyopencl as cl
 from pathtrace.io.cache_files import cache_dir, read_entry, write_entry
 from pathtrace.errors import UserError, format_bytes, short
 from pathtrace.device.features import Features
+from pathtrace.device.loader import new_context, start_drivers
 from pathtrace.device.occupancy import TUNING_RULE, build_for_occupancy, is_nvidia
 from pathtrace.device.programs import Programs, default_mode
 from pathtrace.resources import resource_dir
@@ -106,6 +107,7 @@ NO_DEVICE = f"no OpenCL device found: {HOW_TO_GET_ONE}"     # the one line where
 
 def list_devices() -> list[Device]:
     devices = []
+    start_drivers()
     try:
         platforms = cl.get_platforms()
     except cl.Error:
@@ -303,7 +305,7 @@ def open_device(device: Device, extra: str = "", use_cache: bool = True, mode: s
     scene's own build behind it), and PoCL's first build and launch of it take longer than a
     scene's own (cornell-box cold on two cores: 4.1 s to the first image, 3.0 s with its own).
     `pathtrace devices --check` (./install.sh runs it) builds the generic programs."""
-    context = cl.Context([device.device])
+    context = new_context(device.device)
     queue = cl.CommandQueue(context, properties=cl.command_queue_properties.PROFILING_ENABLE)
     mode = mode or default_mode()
     source, options, entry = _generic_build(device.device, extra, False, cache_dir())   # most scenes' (the viewer's first)

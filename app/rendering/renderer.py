@@ -126,8 +126,9 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
                 self.compiled.light_sampler = self._light_sampler()
                 if self.compiled.tree_ended is not None:     # given whole: its light table again
                     self.compiled.compile_lights()
+        self.compiled.check_memory(self.backend.device.device)
         self.start_program()
-        self.compiled.build_tree()
+        self.compiled.build_tree(self.backend.queue)
         self._select_program()
         self._size_queue()
         for name, array in self.compiled.geometry_arrays().items():

@@ -13,31 +13,39 @@ class SceneOpening:
     """The Viewer's opening of scenes (_in_background draws frames while they open)."""
 
     def _start(self, backend, scene) -> Renderer:
-        """In the worker thread: the device opened and the scene read, where they are functions
-        that do so, and the scene compiled for the device."""
+        """In the worker thread: the scene read and the device opened, where they are functions
+        that do so (the device opens in a thread of its own: api.DevicesOpening), the scene
+        compiled while it opens, then given to a renderer on it."""
         if callable(scene):
             self._status = ("reading the scene", None)
             scene = scene()
+        compiled = self._compile(scene)
         if callable(backend):
             self._status = ("opening the device", None)
             backend = backend()
         self.backend = backend
-        return self._open(scene)
+        return self._open(*compiled)
 
-    def _open(self, scene, renderer=None) -> Renderer:
-        """In the worker thread: the scene compiled and given to `renderer` (or a new one, which
-        starts the build of the scene's kernels and builds its BVH beside it: Renderer.set_scene),
-        the BVH's progress shown and then that the kernels are still building. A scene that asks
-        for BDPT or light tracing shows the path tracer's first images (the same image in
-        expectation) while their kernels build, then switches (app/viewer/integrators.py)."""
+    def _compile(self, scene) -> tuple:
+        """The scene compiled, with its tree where the BVH cache holds it (no device needed), for
+        the path tracer, and the integrator it asks for: a scene that asks for BDPT or light
+        tracing shows the path tracer's first images (the same image in expectation) while their
+        kernels build, then switches (app/viewer/integrators.py)."""
         integrator = scene.settings.integrator
         scene = scene.with_settings(integrator="path")
-        compiled = compile_scene(scene, self.backend.queue, self._build_progress(scene.name), tree=False)
-        self._status = self._preparing(scene.name)
+        compiled = compile_scene(scene, None, self._build_progress(scene.name), tree=False)
+        compiled.build_tree(cached_only=True)
+        return compiled, integrator
+
+    def _open(self, compiled, integrator: str, renderer=None) -> Renderer:
+        """In the worker thread: the compiled scene given to `renderer` (or a new one, which
+        starts the build of the scene's kernels and builds its BVH beside it: Renderer.set_scene),
+        the BVH's progress shown and then that the kernels are still building."""
+        self._status = self._preparing(compiled.scene.name)
         if renderer is None:
             renderer = Renderer(self.backend, compiled)
         else:
-            compiled.build_tree()     # before the renderer lets its scene go: a build that fails leaves it
+            compiled.build_tree(self.backend.queue)   # before the renderer lets its scene go: a build that fails leaves it
             had, camera = renderer.compiled, renderer.camera
             try:
                 renderer.set_scene(compiled)
@@ -53,7 +61,7 @@ class SceneOpening:
         printed, and the window keeps the scene it had. Call it between turns of the loop (the
         panel asks through requested_scene): it draws frames of its own as it goes."""
         try:
-            scene = self._in_background(lambda: self._open(load_scene(name), self.renderer),
+            scene = self._in_background(lambda: self._open(*self._compile(load_scene(name)), self.renderer),
                                         f"opening {name}").scene
             self.renderer.resize(scene.settings.width, scene.settings.height)
         except Exception as e:   # a viewer must outlive any bad file, ours or a library's error
