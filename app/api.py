@@ -10,7 +10,7 @@ or meshes) compiles it anew."""
 
 import hashlib
 import time
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, replace
 from pathlib import Path
 
@@ -96,36 +96,44 @@ def open_devices(device="auto") -> list:
 
 
 class DevicesOpening:
-    """open_devices(device) begun at once, in a thread of its own, with each device's BVH build
-    kernels built after it (pathtrace.compiler.bvh.builder_for), so that a command reads and
+    """open_devices(device) begun at once, in a thread of its own, so that a command reads and
     compiles its scene meanwhile (prepare): the drivers start and build programs with the GIL
-    released (pathtrace.device.loader), and a first start pays for them beside the reading
-    (PoCL's first build of the generic program takes 1.2 s on two cores; NVIDIA's of the
-    display's kernel, where no generic program is cached, 0.2 s)."""
+    released (pathtrace.device.loader). Once the devices are open, the thread builds their BVH
+    build kernels (pathtrace.compiler.bvh.builder_for), which a tree not in the cache needs,
+    while the scene's own program builds beside them (Renderer.set_scene): on a first start on
+    an H200 the two had been built one after the other (0.5-0.8 s, then 1.5-1.9 s)."""
 
     def __init__(self, device="auto"):
-        self.seconds = 0.0      # what the opening took, in its thread
+        self.seconds = 0.0      # what the opening took, in its thread (the builders' build not included)
+        self._opened = Future()
         pool = ThreadPoolExecutor(1, thread_name_prefix="open-devices")
-        self._opened = pool.submit(self._open, device)
-        pool.shutdown(wait=False)       # the thread ends with its work
+        pool.submit(self._open, device)
+        pool.shutdown(wait=False)       # the thread ends with its work; the interpreter waits for it
 
-    def _open(self, device) -> list:
+    def _open(self, device):
         from pathtrace.compiler.bvh import builder_for
         start = time.perf_counter()
         try:
             backends = open_devices(device)
+        except BaseException as e:
+            self.seconds = time.perf_counter() - start
+            self._opened.set_exception(e)
+            return
+        self.seconds = time.perf_counter() - start
+        self._opened.set_result(backends)
+        try:
             for backend in backends:
                 builder_for(backend.queue)
-            return backends
-        finally:
-            self.seconds = time.perf_counter() - start
+        except Exception:       # a tree's build asks again (builder_for keeps no failure), and says why
+            pass
 
     def result(self) -> list:
         """open_devices' backends, once opened, or its error."""
         return self._opened.result()
 
-    def done(self) -> bool:
-        return self._opened.done()
+    def opened(self) -> bool:
+        """Whether the devices are open (not failed, nor still opening)."""
+        return self._opened.done() and self._opened.exception() is None
 
 
 @dataclass
@@ -206,7 +214,8 @@ class _Prepared:
             # of their own, where the tree was built after it
             compiling = compiled.tree_ended - start - (waited if compiled.tree_ended > asked else 0.0)
             phases(f"compiled the scene ({_contents(compiled)}, BVH in {compiled.bvh_seconds:.2f} s)", compiling)
-            phases(f"prepared the renderer{'s' * (len(self.backends) > 1)}", time.perf_counter() - compiled.tree_ended)
+            preparing = time.perf_counter() - max(compiled.tree_ended, asked + waited)
+            phases(f"prepared the renderer{'s' * (len(self.backends) > 1)}", preparing)
         self.environment = _environment_key(scene.environment)
         self.lights = _lights_key(scene.lights)
 

@@ -394,14 +394,24 @@ def test_a_file_of_a_generic_name_is_named_after_its_folder(tmp_path, source, ge
 
 def test_devices_open_in_a_thread_of_their_own_and_give_their_error_when_asked(monkeypatch):
     """DevicesOpening (the render command's and the viewer's, begun before the scene is read):
-    the backends open_devices keeps, with their BVH build kernels built; a device that cannot
-    be opened is the same one line, raised where the backends are asked for."""
+    the backends open_devices keeps, given as soon as they are open, then their BVH build
+    kernels built in the same thread (here held until the backends are given); a device that
+    cannot be opened is the same one line, raised where the backends are asked for."""
+    import threading
+    import time
+
     from pathtrace import api
     from pathtrace.compiler import bvh
     monkeypatch.setattr(bvh, "_builders", {})        # none built by the tests before this one
+    held, builder_for = threading.Event(), bvh.builder_for
+    monkeypatch.setattr(bvh, "builder_for", lambda queue=None: builder_for(queue) if held.wait(30) else None)
     opening = api.DevicesOpening(DEVICE)
     backends = opening.result()
-    assert backends == api.open_devices(DEVICE) and opening.seconds > 0
+    assert backends == api.open_devices(DEVICE) and opening.seconds > 0 and not bvh._builders
+    held.set()
+    deadline = time.monotonic() + 30
+    while not all(b.queue in bvh._builders for b in backends) and time.monotonic() < deadline:
+        time.sleep(0.05)
     assert all(b.queue in bvh._builders for b in backends)
     failing = api.DevicesOpening("no-such-device")
     with pytest.raises(UserError, match="no OpenCL device matches 'no-such-device'"):

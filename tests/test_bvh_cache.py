@@ -157,3 +157,17 @@ def test_a_scene_builds_its_tree_before_a_device_only_where_the_cache_holds_it(f
     assert again.build_tree(cached_only=True) is True and again.tree_ended is not None
     for name, array in whole.geometry_arrays().items():
         assert np.array_equal(again.geometry_arrays()[name], array), name
+
+
+def test_large_gathers_work_in_a_forked_child():
+    """take_rows gathers in threads of its own: a child forked after a parent's gathers (a
+    farm's or a user's worker) gathers too, where a pool made in the parent would hang it."""
+    import multiprocessing
+
+    from pathtrace.compiler.compiled import GATHER_SPLIT, take_rows
+    values = np.arange(4 * GATHER_SPLIT, dtype=np.float32).reshape(-1, 4)
+    indices = np.random.default_rng(1).permutation(GATHER_SPLIT)
+    assert np.array_equal(take_rows(values, indices), values[indices])
+    with multiprocessing.get_context("fork").Pool(1) as pool:
+        child = pool.apply_async(take_rows, (values, indices)).get(timeout=60)
+    assert np.array_equal(child, values[indices])

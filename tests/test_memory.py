@@ -136,3 +136,15 @@ def test_an_address_space_limit_is_respected(tmp_path):
         "pathtrace: error: the 8000x8000 image of simple needs about"), r.stderr
     assert not list(tmp_path.iterdir())
     assert run("64x64").returncode == 0 and (tmp_path / "o.png").exists()
+
+
+def test_render_names_the_device_a_scene_does_not_fit(monkeypatch, capsys, tmp_path):
+    """The device's line, then the one error line: the scene compiles while the device opens, so
+    the refusal comes after the device is known."""
+    import pathtrace.device.opencl as opencl
+    monkeypatch.setattr(opencl, "check_fits", lambda device, buffers, name: (_ for _ in ()).throw(
+        UserError(f"{name} needs more than {device.name.strip()} has")))
+    code = cli.main(["render", "simple", "-o", str(tmp_path / "a.png"), "--size", "8x8", "--spp", "1", "-q"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 1 and err[0].startswith("device: ") and err[-1].startswith("pathtrace: error: simple needs more than")
+    assert not (tmp_path / "a.png").exists()

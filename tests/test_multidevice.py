@@ -190,3 +190,22 @@ def test_the_viewer_refuses_several_devices(capsys):
 def test_an_unmatched_nth_device_is_one_line(capsys):
     assert main(["render", "simple", "--device", "cpu:7", "-o", "x.png", "-q"]) == 1
     assert "no OpenCL device matches 'cpu:7'" in capsys.readouterr().err
+
+
+def test_every_device_is_checked_before_any_renderer_allocates(backend, scene, monkeypatch):
+    """A group whose second device cannot hold the scene is refused in one line before any of
+    its renderers is made: the renderers, made at once, would otherwise upload on the first."""
+    import pathtrace.device.opencl as opencl
+    from pathtrace.errors import UserError
+    checked, made, check_fits = [], [], opencl.check_fits
+
+    def second_refuses(device, buffers, name):
+        checked.append(device)
+        if len(checked) == 2:
+            raise UserError(f"{name} needs more memory than the second device has")
+        check_fits(device, buffers, name)
+    monkeypatch.setattr(opencl, "check_fits", second_refuses)
+    monkeypatch.setattr(Renderer, "__init__", lambda *args, **kwargs: made.append(args))
+    with pytest.raises(UserError, match="than the second device has"):
+        DeviceGroup([backend, open_device(backend.device)], scene)
+    assert len(checked) == 2 and made == []

@@ -4,6 +4,7 @@ waits for the device and sizes its launches to the frame budget, the panel fits,
 render size is the scene's, memory stays flat, and it closes cleanly."""
 
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -1033,3 +1034,58 @@ def test_the_file_field_shows_one_line_for_a_file_it_cannot_open_and_keeps_the_s
         passes = p.passes_done
         frames_until(viewer, lambda: p.passes_done > passes, timeout=30)
         assert p.passes_done > passes, f"the scene stopped rendering after {path[:80]!r}"
+
+
+def test_the_first_image_of_a_scene_says_how_long_it_took(viewer, capsys):
+    """Once per scene opened, on standard error: the seconds from the panel's asking for it to
+    the first frame that showed its image (scripts time the viewer by this line)."""
+    capsys.readouterr()
+    viewer.load_scene("cornell-box")
+    assert not capsys.readouterr().err.count("first image")      # not before a pass is shown
+    frames_until(viewer, lambda: viewer.opened_at is None, timeout=30)
+    said = [line for line in capsys.readouterr().err.splitlines() if line.startswith("first image")]
+    assert len(said) == 1 and re.fullmatch(r"first image of cornell-box in \d+\.\d\d s", said[0]), said
+    frames(viewer, 5)
+    assert "first image" not in capsys.readouterr().err
+    back_to_simple(viewer)
+    frames_until(viewer, lambda: viewer.opened_at is None, timeout=30)
+    assert [line for line in capsys.readouterr().err.splitlines() if line.startswith("first image of simple")]
+
+
+def test_a_scene_whose_tree_is_cached_opens_as_the_command_opens_it(display, backend, tmp_path, monkeypatch):
+    """`pathtrace view` hands the window functions that read the scene and open the device: a
+    tree read from the BVH cache before the device is open (its progress at 1) opens too."""
+    from pathtrace.compiler.compiled import compile_scene
+    from pathtrace.viewer.window import Viewer
+    monkeypatch.setenv("PATHTRACE_BVH_CACHE", str(tmp_path / "bvh"))
+    compile_scene(load_scene("spheres64k"), backend.queue)        # its tree in the cache
+    v = Viewer(lambda: backend, lambda: load_scene("spheres64k").with_settings(width=W, height=H), tmp_path / "shots")
+    try:
+        frames_until(v, lambda: v.renderer.samples >= 1, timeout=60)
+        assert v.renderer.scene.name == "spheres64k" and v.renderer.samples >= 1
+    finally:
+        v.close()
+
+
+def test_a_scene_too_large_for_the_device_is_refused_before_its_tree_is_built(viewer, monkeypatch):
+    """Opened from the panel over the scene shown: the device's check comes before the tree's
+    build on the device (only the cache, which needs no device, is asked before it)."""
+    import pathtrace.device.opencl as opencl
+    from pathtrace.compiler import compiled as compiled_module
+    from pathtrace.compiler.bvh_cache import CACHED_ONLY
+    check_fits, cached_bvh, asked = opencl.check_fits, compiled_module.cached_bvh, []
+
+    def refusing(device, buffers, name):
+        if name == "spheres8k":
+            raise UserError("spheres8k: too large for the test")
+        check_fits(device, buffers, name)
+
+    def noting(lo, hi, n, queue=None, progress=None):
+        asked.append(queue)
+        return cached_bvh(lo, hi, n, queue, progress)
+    monkeypatch.setattr(opencl, "check_fits", refusing)
+    monkeypatch.setattr(compiled_module, "cached_bvh", noting)
+    frames(viewer, 1)           # its window's contexts current, as the loop leaves them (another window's may be)
+    viewer.load_scene("spheres8k")
+    assert viewer.error and viewer.message == "spheres8k: too large for the test"
+    assert asked == [CACHED_ONLY] and viewer.renderer.scene.name == "simple"

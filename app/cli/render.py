@@ -58,7 +58,7 @@ def cmd_render(args):
 
     def prepared(what, seconds):
         build_progress.close()       # a bar left open would share its line with this one
-        if opening.done():
+        if opening.opened():
             say_devices()
         phase(what, seconds=seconds)
 
@@ -83,6 +83,10 @@ def cmd_render(args):
         result = api.render(scene, device=opening, progress=progress,
                             build_progress=build_progress, phases=prepared,
                             aovs=("albedo", "normal") if args.denoise or args.aov else ())
+    except UserError:              # the scene does not fit, or its kernels fail: on which device
+        if opening.opened():
+            say_devices()
+        raise
     except KeyboardInterrupt:
         done = 0 if bar is None else bar.n
         # the bars closed first (each ends its line), so that the message starts a line of its own

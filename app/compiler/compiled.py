@@ -8,7 +8,6 @@ shape of the description it came from, so that users only ever see the descripti
 import os
 import threading
 import time
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -395,24 +394,26 @@ def float4_rows(rows) -> np.ndarray:
     return out
 
 
-GATHER_PARTS = min(os.cpu_count() or 1, 8)
 GATHER_SPLIT = 1 << 18       # rows from which take_rows gathers in parts
-_gatherers = ThreadPoolExecutor(GATHER_PARTS, thread_name_prefix="gather") if GATHER_PARTS > 1 else None
 
 
 def take_rows(values: np.ndarray, indices: np.ndarray) -> np.ndarray:
-    """np.take(values, indices, axis=0) for valid indices, in parts on the host's cores where it
-    is large: a gather of a large scene's rows in BVH order waits on memory, and np.take releases
-    the GIL, so threads overlap the waits."""
-    n = len(indices)
-    if n < GATHER_SPLIT or _gatherers is None:
+    """np.take(values, indices, axis=0) for valid indices, in parts on up to eight of the host's
+    cores where it is large: a gather of a large scene's rows in BVH order waits on memory, and
+    np.take releases the GIL, so threads overlap the waits. Threads of its own, not a pool's: a
+    pool made at import outlives neither a fork nor the interpreter's shutdown."""
+    n, parts = len(indices), min(os.cpu_count() or 1, 8)
+    if n < GATHER_SPLIT or parts == 1:
         return np.take(values, indices, axis=0)
     out = np.empty((n,) + values.shape[1:], values.dtype)
-    ends = np.linspace(0, n, GATHER_PARTS + 1).astype(np.int64)
+    ends = np.linspace(0, n, parts + 1).astype(np.int64)
     # mode "clip": with "raise", np.take gathers into a buffer of its own and copies it to `out`
-    parts = [_gatherers.submit(np.take, values, indices[a:b], 0, out[a:b], "clip") for a, b in zip(ends, ends[1:])]
-    for part in parts:
-        part.result()
+    threads = [threading.Thread(target=np.take, args=(values, indices[a:b], 0, out[a:b], "clip"))
+               for a, b in zip(ends, ends[1:])]
+    for thread in threads:
+        thread.start()
+    for thread in threads:
+        thread.join()
     return out
 
 

@@ -5,16 +5,15 @@ pyopencl holds the GIL in clGetPlatformIDs, where the OpenCL loader starts every
 and in clCreateContext, where NVIDIA's driver makes a CUDA context: on an H200 (driver 580) they
 took 0.15 s and 0.13 s, during which no other Python thread ran, so the scene's reading "beside"
 the device's opening waited for them (docs/notes/performance-2026-11.md, 2026-11-30, fifteenth
-session). ctypes releases the GIL for the length of a foreign call. The loader is the one pyopencl
-is linked against (its wheel carries one); the vendors' drivers are loaded once per process, so a
-platform listed here is listed by pyopencl at once after. Where the loader cannot be found or a
-call fails, pyopencl makes the call itself: these are only faster."""
+session). ctypes releases the GIL for the length of a foreign call. The functions are the loader's
+that pyopencl's extension is linked against (its wheel carries one); the vendors' drivers are
+loaded once per process, so a platform listed here is listed by pyopencl at once after. Where
+the functions cannot be found or a call fails, pyopencl makes the call itself: these are only
+faster."""
 
 import ctypes
-import ctypes.util
 import functools
 import threading
-from pathlib import Path
 
 import pyopencl as cl
 
@@ -25,22 +24,11 @@ _started = False
 
 @functools.cache
 def opencl_library():
-    """The loader that pyopencl's extension has mapped into this process (Linux: /proc/self/maps),
-    else the system's, else None."""
+    """The loader's functions as pyopencl's extension resolves them (the dynamic linker looks
+    them up through its dependencies, which name the loader it was built with), or None where
+    they cannot be found so (Windows' lookup searches the extension alone)."""
     try:
-        for line in Path("/proc/self/maps").read_text().splitlines():
-            path = line.split(maxsplit=5)[-1]
-            if "libOpenCL" in Path(path).name:
-                return _load(path)
-    except OSError:
-        pass
-    name = ctypes.util.find_library("OpenCL")
-    return _load(name) if name else None
-
-
-def _load(path: str):
-    try:
-        lib = ctypes.CDLL(path)
+        lib = ctypes.CDLL(cl._cl.__file__)
         lib.clGetPlatformIDs.argtypes = [ctypes.c_uint32, ctypes.c_void_p, ctypes.POINTER(ctypes.c_uint32)]
         lib.clGetDeviceIDs.argtypes = [ctypes.c_void_p, ctypes.c_uint64, ctypes.c_uint32, ctypes.c_void_p,
                                        ctypes.POINTER(ctypes.c_uint32)]

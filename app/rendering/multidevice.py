@@ -87,6 +87,8 @@ class DeviceGroup:
         its uploads and clears its buffers beside the others."""
         compiled = scene if isinstance(scene, CompiledScene) \
             else compile_scene(scene, backends[0].queue, progress, tree=False)
+        for b in backends:       # every device, before any of them allocates
+            compiled.check_memory(b.device.device)
         self.renderers = _each(lambda b: Renderer(b, compiled, width, height), backends)
         self.compiled = compiled
 

@@ -2,6 +2,9 @@
 the renderer) in a worker thread while the window stays live. A part of the Viewer
 (app/viewer/window.py), which is one."""
 
+import sys
+import time
+
 from pathtrace.compiler.compiled import compile_scene
 from pathtrace.errors import UserError
 from pathtrace.rendering.renderer import Renderer
@@ -44,8 +47,9 @@ class SceneOpening:
         self._status = self._preparing(compiled.scene.name)
         if renderer is None:
             renderer = Renderer(self.backend, compiled)
-        else:
-            compiled.build_tree(self.backend.queue)   # before the renderer lets its scene go: a build that fails leaves it
+        else:       # checked and built before the renderer lets its scene go: a failure leaves it
+            compiled.check_memory(self.backend.device.device)
+            compiled.build_tree(self.backend.queue)
             had, camera = renderer.compiled, renderer.camera
             try:
                 renderer.set_scene(compiled)
@@ -60,6 +64,7 @@ class SceneOpening:
         """Opens a scene, at its own size; whatever goes wrong is shown in the panel and
         printed, and the window keeps the scene it had. Call it between turns of the loop (the
         panel asks through requested_scene): it draws frames of its own as it goes."""
+        started = time.perf_counter()
         try:
             scene = self._in_background(lambda: self._open(*self._compile(load_scene(name)), self.renderer),
                                         f"opening {name}").scene
@@ -70,8 +75,18 @@ class SceneOpening:
             return
         self.size = (scene.settings.width, scene.settings.height)
         self.selected = None
+        self.opened_at = started
         self._scene_opened(self.renderer.compiled)
         self.set_message(f"loaded {scene.name}")
+
+    def say_first_image(self, drawn: bool):
+        """After a frame that drew a new image: the first one of a scene opened says on standard
+        error how long it took from the window's start, or from the panel's asking for the
+        scene (bench-style scripts time the viewer by this line)."""
+        if drawn and self.opened_at is not None:
+            print(f"first image of {self.renderer.scene.name} in {time.perf_counter() - self.opened_at:.2f} s",
+                  file=sys.stderr)
+            self.opened_at = None
 
     def _scene_opened(self, compiled):
         """Movement at the scene's scale (the wheel changes it from there), and the panel's file
@@ -84,9 +99,13 @@ class SceneOpening:
         """A progress callback for a scene's BVH build, from the worker thread: the window, live
         in its own thread, shows how far it is, and once it is built, that the kernels are
         coming (a new renderer's began building beside the tree; a scene opened over another
-        has its kernels built after its tree)."""
+        has its kernels built after its tree). A tree read from the cache before the device is
+        open leaves the status as it is (_start: the device's opening comes next)."""
         def show(fraction):
-            self._status = (f"building the BVH of {name}", fraction) if fraction < 1 else self._preparing(name)
+            if fraction < 1:
+                self._status = (f"building the BVH of {name}", fraction)
+            elif hasattr(self, "backend"):
+                self._status = self._preparing(name)
         return show
 
     def _preparing(self, name: str) -> tuple:

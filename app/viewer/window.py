@@ -105,6 +105,7 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         the window then opens first, at a size fitted to DEFAULT_SIZE until the scene is read,
         and stays live, saying what it waits for, while they are called in a worker thread
         (reading the file, opening the device), the BVH builds and the kernels compile."""
+        self.opened_at = time.perf_counter()    # until the first image (SceneOpening.say_first_image)
         require_display()
         import glfw
         import moderngl
@@ -446,6 +447,7 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         if new_image or now < self._redraw_until or now - self._last_draw >= STATUS_INTERVAL:
             self._redraw()
             self._last_draw = now
+            self.say_first_image(new_image)
         spare = 1 / FRAME_RATE - (time.perf_counter() - now)
         if spare > 0:
             time.sleep(spare)
