@@ -493,11 +493,13 @@ def view(scene="simple", device: str = "auto", size=None, frames: int = None,
         frames = _integer("frames", frames, 1, 2**31 - 1)
 
     def read():
-        """The scene, read in the viewer's worker thread while its window says so."""
+        """The scene, read in a thread of its own while the window opens and says so."""
         given = scene if isinstance(scene, Scene) else scene() if callable(scene) else load(scene)
         return given if size is None else replace(given, settings=settings_for(given, size=size))
     opening = DevicesOpening(device)        # while the window opens and the scene is read
-    viewer = Viewer(lambda: opening.result()[0], read, screenshot_dir)
+    with ThreadPoolExecutor(1, thread_name_prefix="read-scene") as pool:
+        reading = pool.submit(read)         # beside the window's opening (0.2-0.4 s under Xvfb)
+        viewer = Viewer(lambda: opening.result()[0], reading.result, screenshot_dir)
     try:
         viewer.run(frames)
         if screenshot:

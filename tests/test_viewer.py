@@ -1036,15 +1036,20 @@ def test_the_file_field_shows_one_line_for_a_file_it_cannot_open_and_keeps_the_s
         assert p.passes_done > passes, f"the scene stopped rendering after {path[:80]!r}"
 
 
-def test_the_first_image_of_a_scene_says_how_long_it_took(viewer, capsys):
-    """Once per scene opened, on standard error: the seconds from the panel's asking for it to
-    the first frame that showed its image (scripts time the viewer by this line)."""
+def test_the_first_image_of_a_scene_is_a_preview_that_says_how_long_it_took(viewer, capsys):
+    """A scene's first image comes at a moving camera's preview size (a pass of a fraction of the
+    pixels), then the full size follows; once per scene opened, standard error says the seconds
+    from the panel's asking for it to the frame that showed it (scripts time the viewer by it)."""
+    frames(viewer, 1)           # its window's contexts current, as the loop leaves them (another window's may be)
     capsys.readouterr()
     viewer.load_scene("cornell-box")
     assert not capsys.readouterr().err.count("first image")      # not before a pass is shown
     frames_until(viewer, lambda: viewer.opened_at is None, timeout=30)
     said = [line for line in capsys.readouterr().err.splitlines() if line.startswith("first image")]
     assert len(said) == 1 and re.fullmatch(r"first image of cornell-box in \d+\.\d\d s", said[0]), said
+    assert viewer.renderer.width < viewer.size[0] and viewer.renderer.height < viewer.size[1]
+    settle(viewer)
+    assert (viewer.renderer.width, viewer.renderer.height) == viewer.size
     frames(viewer, 5)
     assert "first image" not in capsys.readouterr().err
     back_to_simple(viewer)

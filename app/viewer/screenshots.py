@@ -18,7 +18,13 @@ class Screenshots:
         finished first, so that every pixel holds the same samples. The image is read now; it is
         denoised and written in a thread of its own, so that the window stays live (Esc closes
         it at once) while a large image is denoised. Returns the future of the two paths (None
-        where writing failed, which the panel's message line then says)."""
+        where writing failed, which the panel's message line then says). Asked for before a
+        scene's first image (shown at a preview's size), it ends the preview with a pass at the
+        scene's size: a script's `view --frames N --screenshot` writes the scene's size."""
+        if self.opened_at is not None and self.scale != 1:
+            self.opened_at, self.scale = None, 1
+            self.renderer.resize(*self.size)
+            self.renderer.add_samples(1)
         self.progressive.finish_pass()
         r = self.renderer
         stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S-%f")[:-3]

@@ -441,7 +441,8 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         if self.controls.update(camera, dt, dx, dy, fast):
             self.renderer.set_camera(camera)
             self.last_move = now
-        self._set_resolution(now - self.last_move < REST_DELAY)
+        # a scene's first image at a moving camera's preview, which comes in a fraction of the time
+        self._set_resolution(now - self.last_move < REST_DELAY or self.opened_at is not None)
         self.progressive.step()
         new_image = self._update_image(now)
         if new_image or now < self._redraw_until or now - self._last_draw >= STATUS_INTERVAL:
