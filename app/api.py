@@ -9,6 +9,7 @@ the settings, the materials, the environment) is uploaded again; a change of geo
 or meshes) compiles it anew."""
 
 import hashlib
+import threading
 import time
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, replace
@@ -77,6 +78,7 @@ def programs_used(scene) -> list:
 
 
 _backends = {}            # device specs -> opened backends, kept for the next render
+_opening_lock = threading.Lock()    # a DevicesOpening's thread and a render's asking at once open once
 
 
 def open_devices(device="auto") -> list:
@@ -90,9 +92,10 @@ def open_devices(device="auto") -> list:
     if not specs or not all(isinstance(s, str) for s in specs):
         raise UserError(f"device: give a device spec such as 'auto', 'gpu', 'cpu:0' or a list of them, "
                         f"got {short(device)}")
-    if specs not in _backends:
-        _backends[specs] = choose_devices(list(specs))
-    return _backends[specs]
+    with _opening_lock:
+        if specs not in _backends:
+            _backends[specs] = choose_devices(list(specs))
+        return _backends[specs]
 
 
 class DevicesOpening:

@@ -441,3 +441,29 @@ def test_a_scene_compiles_while_its_devices_open(monkeypatch, tmp_path):
     monkeypatch.setattr(api, "open_devices", lambda device: opened if tree_first.wait(30) else [])
     image = pathtrace.render(pathtrace.load("spheres64k"), spp=1, size=(8, 8), device=api.DevicesOpening("cpu"))
     assert tree_first.is_set() and np.isfinite(image).all() and image.shape == (8, 8, 3)
+
+
+def test_a_device_spec_asked_for_twice_at_once_opens_once(monkeypatch):
+    """A DevicesOpening's thread and a render asking for the same spec at once: the devices are
+    opened once, the later call waiting for the first (a second opening would build its own
+    kernels on a second context)."""
+    import threading
+    import time
+
+    from pathtrace import api
+    from pathtrace.device import opencl
+    opened, choose_devices = [], opencl.choose_devices
+
+    def slow(specs, *args, **kwargs):
+        opened.append(specs)
+        time.sleep(0.3)
+        return choose_devices(specs, *args, **kwargs)
+    monkeypatch.setattr(opencl, "choose_devices", slow)
+    monkeypatch.setattr(api, "_backends", {})
+    got = []
+    threads = [threading.Thread(target=lambda: got.append(api.open_devices(DEVICE))) for _ in range(2)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert len(opened) == 1 and len(got) == 2 and got[0] is got[1]

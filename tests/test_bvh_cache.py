@@ -171,3 +171,27 @@ def test_large_gathers_work_in_a_forked_child():
     with multiprocessing.get_context("fork").Pool(1) as pool:
         child = pool.apply_async(take_rows, (values, indices)).get(timeout=60)
     assert np.array_equal(child, values[indices])
+
+
+def test_a_builder_being_built_is_seen_by_the_commands_exit(monkeypatch):
+    """While a device's builder kernels build (a DevicesOpening's thread builds them after the
+    devices are open), the console leaves past the interpreter's teardown, which would wait for
+    that thread (app/cli/console.py), as around a scene's program's build."""
+    import threading
+
+    from pathtrace.cli import console
+    from pathtrace.compiler import bvh
+    held, started = threading.Event(), threading.Event()
+
+    class Slow:
+        def __init__(self, queue):
+            started.set()
+            held.wait(30)
+    monkeypatch.setattr(bvh, "Builder", Slow)
+    monkeypatch.setattr(bvh, "_builders", {})
+    thread = threading.Thread(target=bvh.builder_for, args=("a queue",))
+    thread.start()
+    assert started.wait(30) and bvh.building() and console._building()
+    held.set()
+    thread.join()
+    assert not bvh.building()

@@ -1094,3 +1094,24 @@ def test_a_scene_too_large_for_the_device_is_refused_before_its_tree_is_built(vi
     viewer.load_scene("spheres8k")
     assert viewer.error and viewer.message == "spheres8k: too large for the test"
     assert asked == [CACHED_ONLY] and viewer.renderer.scene.name == "simple"
+
+
+@pytest.mark.parametrize("moment", ["before any pass", "at the first image's preview", "in the draft"])
+def test_a_screenshot_is_of_the_scenes_size_whatever_is_shown(viewer, moment):
+    """Before any pass (just after a scene opens), in the frame that showed the scene's first
+    image (a preview's size) and in the denoised draft after it (half the size): the screenshot
+    is of the scene's size, with a pass's samples, and the first image's line is still said."""
+    frames(viewer, 1)           # its window's contexts current, as the loop leaves them (another window's may be)
+    viewer.load_scene("cornell-box")
+    if moment != "before any pass":
+        frames_until(viewer, lambda: viewer.opened_at is None, timeout=30)
+    if moment == "in the draft":
+        frames_until(viewer, lambda: viewer.draft, timeout=30)
+    shown = (viewer.renderer.width, viewer.renderer.height)
+    png, exr = viewer.screenshot().result()
+    image = read_hdr(exr, "screenshot")
+    assert image.shape == (viewer.size[1], viewer.size[0], 3) and np.isfinite(image).all() and image.mean() > 0
+    assert (moment == "before any pass") == (shown == viewer.size)
+    frames_until(viewer, lambda: viewer.opened_at is None, timeout=30)
+    assert viewer.opened_at is None
+    back_to_simple(viewer)

@@ -131,6 +131,12 @@ _builders: dict = {}
 _builders_lock = threading.Lock()    # a command's devices open (api.DevicesOpening) beside its first build
 
 
+def building() -> bool:
+    """Whether a builder's kernels are being built (app/cli/console.py leaves past the
+    interpreter's teardown then, as around a scene's program's build)."""
+    return _builders_lock.locked()
+
+
 def builder_for(queue: cl.CommandQueue = None) -> Builder:
     """The builder on `queue`'s device, or, without one, on the first device (GPUs first) whose
     platform builds it; made once per queue, by the first thread to ask."""

@@ -18,15 +18,17 @@ class Screenshots:
         finished first, so that every pixel holds the same samples. The image is read now; it is
         denoised and written in a thread of its own, so that the window stays live (Esc closes
         it at once) while a large image is denoised. Returns the future of the two paths (None
-        where writing failed, which the panel's message line then says). Asked for before a
-        scene's first image (shown at a preview's size), it ends the preview with a pass at the
-        scene's size: a script's `view --frames N --screenshot` writes the scene's size."""
-        if self.opened_at is not None and self.scale != 1:
-            self.opened_at, self.scale = None, 1
-            self.renderer.resize(*self.size)
-            self.renderer.add_samples(1)
+        where writing failed, which the panel's message line then says). It is always of the
+        scene's size: where the image shown is a preview's (a move's, a scene's first) or a
+        draft's, or no pass has ended yet, a pass at the scene's size is rendered first (a
+        script's `view --frames N --screenshot` writes the scene's size whatever N)."""
         self.progressive.finish_pass()
         r = self.renderer
+        if self.scale != 1 or r.samples == 0:
+            self.scale, self.draft = 1, False
+            r.resize(*self.size)
+            r.add_samples(1)
+            r.finish()
         stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S-%f")[:-3]
         base = self.screenshot_dir / f"pathtrace-{r.scene.name}-{stamp}"
         noisy = r.mean()
