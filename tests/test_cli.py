@@ -120,7 +120,8 @@ def test_render_refuses_an_unknown_aov(tmp_path, value):
 
 BAD_FILES = [
     ("[camera\n", "not valid TOML"),
-    (GOOD + "\nfoo = 1\n", "unknown key 'foo'"),
+    (GOOD + "\nfoo = 1\n", "unknown key 'foo' (allowed: "),
+    (GOOD.replace("rho_d = 0.5 }", "rho_d = 0.5, twosidde = true }"), "unknown key 'twosidde'; did you mean 'twosided'? (allowed: "),
     (GOOD.replace("radius = 1", "radius = -1"), "spheres[0].radius: must be positive, got -1"),
     (GOOD.replace('rho_d = 0.5 }', 'rho_d = 0.5, rho_s = 0.7, n = 10 }').replace('"diffuse"', '"phong"'),
      "rho_d + rho_s must not exceed 1"),

@@ -206,6 +206,9 @@ WARNINGS = [
     ('<shape type="sphere"><bsdf type="null"/><medium type="homogeneous" name="interior"><phase type="rayleigh"/>'
      '</medium></shape>' + SPHERE, "pathtrace has no rayleigh phase function; it scatters isotropically instead"),
     (f'<volume type="gridvolume"/>{SPHERE}', "not supported; pathtrace ignores it"),
+    ('<shape type="sphere"><bsdf type="roughconductr"/></shape>',
+     "not supported; pathtrace uses a diffuse BSDF of albedo 0.5, 0.5, 0.5; did you mean 'roughconductor'?"),
+    ('<shape type="sphere"><bsdf type="hair"/></shape>', "pathtrace uses a diffuse BSDF of albedo 0.5, 0.5, 0.5"),
 ]
 
 
@@ -466,3 +469,8 @@ def test_a_non_uniformly_scaled_sphere_takes_the_x_scale_as_mitsuba_3(tmp_path, 
     scene = read_mitsuba_file(path)
     np.testing.assert_allclose(scene.spheres[0], [1, 0, 0, radius], rtol=1e-6)
     assert f"Mitsuba 3 renders it round, of radius |to_world (1, 0, 0)| = {radius:g}" in capsys.readouterr().err
+
+
+def test_an_unsupported_type_far_from_any_suggests_none(tmp_path, capsys):
+    read_mitsuba_file(write(tmp_path, '<shape type="sphere"><bsdf type="hair"/></shape>'))
+    assert "did you mean" not in capsys.readouterr().err

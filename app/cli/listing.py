@@ -43,7 +43,7 @@ def cmd_devices(args):
                     line += (f", and they render wrongly here ({wrong}); the kernel cache is not writable, so no "
                              "generic kernels are kept for renders to use")
                 else:
-                    line += f" and renders with them ({seconds:.2f} s)"
+                    line += f" and renders with them ({seconds:.2f} s, their first launches' compiling included)"
             except cl.Error as e:
                 line += f": cannot build the kernels: {build_error_line(e)}"
         print(line)

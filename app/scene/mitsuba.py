@@ -14,7 +14,7 @@ from pathtrace import cameras
 from pathtrace.cameras.camera import FILM, TO_WORLD, frame_of
 from pathtrace.cameras.perspective import PerspectiveCamera, vertical_fov
 from pathtrace.scene.environment import Environment
-from pathtrace.errors import UserError, short, warn
+from pathtrace.errors import UserError, did_you_mean, short, warn
 from pathtrace import filters
 from pathtrace import parameters
 from pathtrace.lights import DELTA_LIGHTS
@@ -332,8 +332,11 @@ class _Reader(XmlScene):
             self.color(props, "reflectance", 0.5, False) if "reflectance" in props else np.full(3, 0.5)
         albedo = np.clip(albedo, 0, 1)
         props.ignore()
+        # a type close to one pathtrace reads is likely a misspelling of it (Mitsuba 3 refuses
+        # a plugin it does not have), which this line would otherwise let render grey
+        supported = [*BSDFS_BY_NAME, *MITSUBA_WRAPPERS, "blendbsdf"]
         warn(f"{node.where()}: not supported; pathtrace uses a diffuse BSDF of albedo "
-             f"{', '.join(f'{c:.3g}' for c in albedo)}")
+             f"{', '.join(f'{c:.3g}' for c in albedo)}{did_you_mean(kind, supported, quoted=True)}")
         return Material("diffuse", {"rho_d": albedo})
 
     def nested_material(self, node, named=False) -> Material:

@@ -43,7 +43,8 @@ class TomlValues:
             self.fail(where, f"must be a table, got {type(data).__name__}")
         unknown = sorted(set(data) - set(allowed))
         if unknown:
-            self.fail(where, f"unknown key '{unknown[0]}' (allowed: {', '.join(sorted(allowed))})")
+            self.fail(where, f"unknown key '{unknown[0]}'{did_you_mean(unknown[0], allowed, quoted=True)} "
+                             f"(allowed: {', '.join(sorted(allowed))})")
         return data
 
     def named_tables(self, data, key) -> dict:

@@ -64,7 +64,7 @@ def no_display_message(scene: str = "simple") -> str:
         xvfb = f"sudo apt install xvfb, then {xvfb}"
     return (f"pathtrace view needs a display, and none was found. To render headless: "
             f"{program} render {named} -o out.png --spp 16 (a first look in seconds; without --spp, the "
-            f"scene's own samples)   To run the viewer on a virtual display: {xvfb}")
+            f"scene's own samples). To run the viewer on a virtual display: {xvfb}")
 
 
 def require_display(scene: str = "simple"):
@@ -155,6 +155,7 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         self.widgets = {}             # where the panel drew each labelled widget (panel.py)
         self.scale = 1                # the preview's divisor of the resolution (1: full)
         self.draft = False            # resting, at DRAFT_SCALE until its denoised image is shown
+        self.opening_preview = False  # the preview is a scene's first image's, not a move's
         self.clean = False            # a denoised image is shown, and the camera has not moved
         self.last_move = -1.0
         self.frame_times = deque(maxlen=FRAME_TIMES)   # seconds from one turn's start to the next's
@@ -441,8 +442,7 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         if self.controls.update(camera, dt, dx, dy, fast):
             self.renderer.set_camera(camera)
             self.last_move = now
-        # a scene's first image at a moving camera's preview, which comes in a fraction of the time
-        self._set_resolution(now - self.last_move < REST_DELAY or self.opened_at is not None)
+        self._set_resolution(now - self.last_move < REST_DELAY, opening=self.opened_at is not None)
         self.progressive.step()
         new_image = self._update_image(now)
         if new_image or now < self._redraw_until or now - self._last_draw >= STATUS_INTERVAL:
@@ -489,21 +489,23 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         """Whether the camera rests: the image is at full resolution, or at the draft's."""
         return self.scale == 1 or self.draft
 
-    def _set_resolution(self, moving: bool):
+    def _set_resolution(self, moving: bool, opening: bool = False):
         """Full resolution at rest; while moving, a preview coarse enough for a pass to take
         about MOVE_BUDGET, chosen when the move starts. Where that preview is at least as
         coarse as DRAFT_SCALE and the image is denoised, the camera's coming to rest first renders and
         denoises a draft at DRAFT_SCALE, which is shown until the full resolution's own
-        denoised image replaces it: on two cores a clean demo then appears in half the time."""
-        if moving:
+        denoised image replaces it: on two cores a clean demo then appears in half the time.
+        `opening`: a scene's first image is such a preview too (a fraction of a pass's time),
+        followed at once by the full resolution (the denoiser's first start took 5 s there)."""
+        if moving or opening:
             if self.resting:
                 self.scale = preview_scale(self.progressive.seconds_per_pixel, *self.size)
-            self.draft, self.clean = False, False
+            self.draft, self.clean, self.opening_preview = False, False, opening and not moving
         elif self.draft:
             drafted = self.denoised_at is not None and self.denoised_at[0] == self.renderer.resets
             if drafted or not self.denoise or self.denoise_error is not None:
                 self.scale, self.draft = 1, False
-        elif self.scale >= DRAFT_SCALE and self.denoise and self.denoise_error is None:
+        elif self.scale >= DRAFT_SCALE and self.denoise and self.denoise_error is None and not self.opening_preview:
             self.scale, self.draft = DRAFT_SCALE, True
         else:
             self.scale = 1
