@@ -198,6 +198,7 @@ def test_unreadable_environment_map(tmp_path, name, data):
     (["simple", "--rr=throughput", "--max-deph", "4"], "unrecognized arguments: --max-deph 4; did you mean --max-depth? "
                                                      "(see 'pathtrace render -h')\n"),
     (["simple", "--device", "no-such-device"], "--device: no OpenCL device matches 'no-such-device'"),
+    (["simple", "--device", ""], "--device: empty; give auto, gpu, cpu"),
     (["simple", "--size", "0x10"], "width and height must be 1 to 16384"),
     (["simple", "--size", "big"], "is not WIDTHxHEIGHT"),
     (["simple", "--spp", "0"], "out of range"),

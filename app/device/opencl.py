@@ -412,7 +412,11 @@ def choose_device(spec: str = "auto", extra: str = "", use_cache: bool = True,
     """--device: 'auto' (the first GPU whose platform builds our kernels, else a CPU), 'gpu',
     'cpu', 'gpu:N' or 'cpu:N' (the Nth of that kind, from 0), an index from `pathtrace
     devices`, or a fragment of a device or platform name.
-    A device whose platform cannot build the kernels is skipped with one line saying why."""
+    A device whose platform cannot build the kernels is skipped with one line saying why. An
+    empty spec is refused (as a fragment of a name it would match every device)."""
+    if not spec.strip():
+        raise UserError("--device: empty; give auto, gpu, cpu, gpu:N, cpu:N, an index from 'pathtrace devices' "
+                        "or part of a device's name")
     devices = list_devices()
     if not devices:
         raise UserError(NO_DEVICE)
