@@ -195,16 +195,12 @@ class _Prepared:
     that the next render uploads only what changed."""
 
     def __init__(self, scene: Scene, device, build_progress=None, phases=None):
-        from pathtrace.compiler.compiled import compile_scene
+        from pathtrace.compiler.compiled import compile_before_devices
         from pathtrace.rendering.multidevice import DeviceGroup
         start = time.perf_counter()
         with ThreadPoolExecutor(1) as pool:
             geometry = pool.submit(_geometry_digest, scene)     # hashlib releases the GIL
-            # compiled before the devices are asked for, so that it runs while they open
-            # (DevicesOpening), its tree too where the BVH cache holds it; else the first renderer
-            # builds the tree beside its program's build (Renderer.set_scene)
-            compiled = compile_scene(scene, None, build_progress, tree=False)
-            compiled.build_tree(cached_only=True)
+            compiled = compile_before_devices(scene, build_progress)     # while the devices open
             asked = time.perf_counter()
             self.backends = open_devices(device)
             waited = time.perf_counter() - asked

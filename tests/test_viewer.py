@@ -307,13 +307,13 @@ def test_opening_a_scene_says_what_it_is_busy_with(viewer, monkeypatch):
             drawn["kernels"].set()
         show(text, fraction)
     monkeypatch.setattr(viewer, "show_progress", shown)
-    compile_scene = opening.compile_scene
+    compile_before_devices = opening.compile_before_devices
 
-    def slow_compile(scene, queue, progress, tree=True):
+    def slow_compile(scene, progress):
         progress(0.5)
         assert drawn["bvh"].wait(30), "the window did not show the BVH build's progress"
-        return compile_scene(scene, queue, progress, tree=tree)
-    monkeypatch.setattr(opening, "compile_scene", slow_compile)
+        return compile_before_devices(scene, progress)
+    monkeypatch.setattr(opening, "compile_before_devices", slow_compile)
     set_scene = viewer.renderer.set_scene
 
     def slow_set_scene(compiled):
@@ -992,22 +992,26 @@ def _bad_scene_files(folder: Path) -> dict:
             "x" * 100_000: "File name too long", str(folder / "a\nb.toml"): "does not exist"}
 
 
-def test_a_scene_whose_kernels_or_uploads_fail_leaves_the_scene_the_window_had(viewer, monkeypatch):
-    """A scene read and its tree built, but refused by the renderer (here its materials' upload,
-    once): the renderer takes back the scene it had, seen from where the camera was, and renders
-    on; the panel says why in one line."""
+@pytest.mark.parametrize("failing", ["materials' upload", "tree's build"])
+def test_a_scene_whose_kernels_or_uploads_fail_leaves_the_scene_the_window_had(viewer, monkeypatch, failing):
+    """A scene read, but refused by the renderer (its materials' upload, or its tree's build on
+    the device, once): the renderer takes back the scene it had, seen from where the camera was,
+    and renders on; the panel says why in one line."""
+    from pathtrace.compiler.bvh_cache import CACHED_ONLY
+    from pathtrace.compiler.compiled import CompiledScene
     settle(viewer)
     viewer.renderer.set_camera(replace(viewer.renderer.camera, eye=viewer.renderer.camera.eye + 0.25))  # moved
     before, camera, p = viewer.renderer.scene, viewer.renderer.camera.copy(), viewer.progressive
-    upload = Renderer._upload_materials
-    refused = []
+    owner, name = (Renderer, "_upload_materials") if failing == "materials' upload" else (CompiledScene, "_build_tree")
+    original, refused = getattr(owner, name), []
 
-    def refuse_once(renderer):
-        if not refused:
-            refused.append(renderer.scene.name)
+    def refuse_once(target, *args):
+        if not refused and args[:1] != (CACHED_ONLY,):     # the tree's build on the device, not the cache's read
+            refused.append(target.scene.name)
             raise UserError("the device is out of memory")
-        upload(renderer)
-    monkeypatch.setattr(Renderer, "_upload_materials", refuse_once)
+        return original(target, *args)
+    monkeypatch.setattr(owner, name, refuse_once)
+    frames(viewer, 1)           # its window's contexts current, as the loop leaves them (another window's may be)
     viewer.load_scene("cornell-box")
     assert refused == ["cornell-box"] and viewer.error and "out of memory" in viewer.message
     assert viewer.renderer.scene is before

@@ -478,6 +478,15 @@ def compile_scene(scene: Scene, queue: cl.CommandQueue = None, progress=None, tr
     return CompiledScene(scene, queue, progress, tree)
 
 
+def compile_before_devices(scene: Scene, progress=None) -> CompiledScene:
+    """The scene compiled with no device, so that it runs while the devices open (api.prepare,
+    the viewer): its tree too where the BVH cache holds it, else the first renderer builds the
+    tree on its device, beside its program's build (Renderer.set_scene)."""
+    compiled = CompiledScene(scene, None, progress, tree=False)
+    compiled.build_tree(cached_only=True)
+    return compiled
+
+
 def check_memory(name: str, n_spheres: int, n_triangles: int, device: cl.Device = None, texel_bytes: int = 0,
                  n_instances: int = 0):
     """Refuses, with one line and before anything is allocated, a scene whose BVH build would not

@@ -5,7 +5,7 @@ the renderer) in a worker thread while the window stays live. A part of the View
 import sys
 import time
 
-from pathtrace.compiler.compiled import compile_scene
+from pathtrace.compiler.compiled import compile_before_devices
 from pathtrace.errors import UserError
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
@@ -36,20 +36,17 @@ class SceneOpening:
         kernels build, then switches (app/viewer/integrators.py)."""
         integrator = scene.settings.integrator
         scene = scene.with_settings(integrator="path")
-        compiled = compile_scene(scene, None, self._build_progress(scene.name), tree=False)
-        compiled.build_tree(cached_only=True)
-        return compiled, integrator
+        return compile_before_devices(scene, self._build_progress(scene.name)), integrator
 
     def _open(self, compiled, integrator: str, renderer=None) -> Renderer:
-        """In the worker thread: the compiled scene given to `renderer` (or a new one, which
-        starts the build of the scene's kernels and builds its BVH beside it: Renderer.set_scene),
-        the BVH's progress shown and then that the kernels are still building."""
+        """In the worker thread: the compiled scene given to `renderer` (or a new one): it checks
+        the device's memory, starts the build of the scene's kernels and builds its BVH beside
+        it (Renderer.set_scene), the BVH's progress shown and then that the kernels are still
+        building."""
         self._status = self._preparing(compiled.scene.name)
         if renderer is None:
             renderer = Renderer(self.backend, compiled)
-        else:       # checked and built before the renderer lets its scene go: a failure leaves it
-            compiled.check_memory(self.backend.device.device)
-            compiled.build_tree(self.backend.queue)
+        else:
             had, camera = renderer.compiled, renderer.camera
             try:
                 renderer.set_scene(compiled)
@@ -98,8 +95,7 @@ class SceneOpening:
     def _build_progress(self, name: str):
         """A progress callback for a scene's BVH build, from the worker thread: the window, live
         in its own thread, shows how far it is, and once it is built, that the kernels are
-        coming (a new renderer's began building beside the tree; a scene opened over another
-        has its kernels built after its tree). A tree read from the cache before the device is
+        coming (they began building beside the tree: Renderer.set_scene). A tree read from the cache before the device is
         open leaves the status as it is (_start: the device's opening comes next)."""
         def show(fraction):
             if fraction < 1:
