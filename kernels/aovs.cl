@@ -85,6 +85,7 @@ void trace_aovs(const SceneData *sc, const RenderParams *p, float3 o, float3 d, 
 /* Adds p.sample_count samples of albedo (rgb) and normal (xyz) to each pixel of rows
  * [row_start, row_end), for the same sample indices as the render kernels; albedo_sum's w
  * counts them, normal_sum's w sums the depth. */
+#ifdef ENTRY_AUX
 kernel void render_aovs(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *albedo_sum,
                         global float4 *normal_sum)
 {
@@ -109,3 +110,4 @@ kernel void render_aovs(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *
     albedo_sum[k] += (float4)(albedo_acc, (float)p.sample_count);
     normal_sum[k] += (float4)(normal_acc, depth_acc);
 }
+#endif

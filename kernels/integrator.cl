@@ -535,16 +535,24 @@ kernel void add_queued_paths(const RenderParams p, global float4 *sum, global fl
 #define COUNT_WORK_INTO(sc)
 #endif
 
-/* render: the report's estimator; render_nee: with next-event estimation */
+/* render: the report's estimator; render_nee: with next-event estimation. A program holds the
+ * ones its renders launch (app/device/features.py: KERNEL_SETS). */
+#ifdef ENTRY_RENDER
 RENDER_KERNEL(render, 0)
-RENDER_KERNEL(render_nee, 1)
 #ifdef PATH_QUEUE
 CONTINUE_KERNEL(continue_paths, 0)
+#endif
+#endif
+#ifdef ENTRY_RENDER_NEE
+RENDER_KERNEL(render_nee, 1)
+#ifdef PATH_QUEUE
 CONTINUE_KERNEL(continue_paths_nee, 1)
+#endif
 #endif
 
 /* The nearest primitive along one ray, or -1, and its distance (the viewer's picking and
  * focusing): hit[0] the primitive, hit[1] the distance's float bits. */
+#ifdef ENTRY_AUX
 kernel void pick(SCENE_KERNEL_ARGS, int num_spheres, int layout, float4 o, float4 d, global int *hit)
 {
     SceneData sc = SCENE_DATA(num_spheres, layout);
@@ -552,3 +560,4 @@ kernel void pick(SCENE_KERNEL_ARGS, int num_spheres, int layout, float4 o, float
     hit[0] = h.prim;
     hit[1] = as_int(h.t);
 }
+#endif

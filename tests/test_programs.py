@@ -16,6 +16,7 @@ from pathtrace.filters import PixelFilter
 from pathtrace.device.programs import Programs
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
+from pathtrace.scene.toml_reader import read_scene_dict
 from tests.stats import z_test
 
 SCENES = sorted(p for p in (Path(__file__).parent / "scenes").iterdir() if p.suffix in (".xml", ".pbrt"))
@@ -229,6 +230,75 @@ def test_without_the_generic_program_the_first_image_waits_for_one_untuned_build
     assert r.samples == SPP and r.generic_samples == 0
     same_image(r, render(specialised, scene))
 
+
+
+def kernels_of(r: Renderer) -> set:
+    return set(r.program.kernel_names.split(";"))
+
+
+def test_a_scenes_own_program_holds_the_kernels_its_passes_launch_and_no_others(specialised):
+    r = Renderer(specialised, load_scene("cornell-box"), SIZE, SIZE)
+    assert kernels_of(r) == {"render_nee"}
+    r.set_settings(nee=False)
+    assert kernels_of(r) == {"render"}
+    r.add_samples(16)
+    r.finish()
+    assert r.mean().max() > 0 and np.isfinite(r.mean()).all()
+    r.set_settings(integrator="bdpt")
+    assert {"render", "render_nee", "render_aovs", "pick"}.isdisjoint(kernels_of(r)) and "render_bdpt" in kernels_of(r)
+
+
+class AuxGated(GatedBuild):
+    """Builds scenes' render programs at once and their auxiliary programs once the gate opens."""
+
+    def __call__(self, features, tune):
+        return super().__call__(features, tune) if features.kernels == "aux" else \
+            self.backend.program_for(features, tune)
+
+
+def test_the_aovs_come_from_a_program_of_their_own_that_no_pass_waits_for(backend, specialised):
+    gated = AuxGated(specialised)
+    scene = load_scene("cornell-box")
+    r = Renderer(building_with(backend, gated, generic=False), scene, SIZE, SIZE)
+    r.set_aovs(True)
+    assert gated.started.wait(60)           # its build starts with the AOVs
+    for _ in range(2):
+        r.add_samples(4)
+    r.finish()
+    assert r.samples == 8 and r.aov_samples == 0     # passes went on without them
+    gated.gate.set()
+    late = r.read_aovs()                    # drawn now, for the first samples
+    assert r.aov_samples == 8
+    ref = Renderer(specialised, scene, SIZE, SIZE)
+    ref.set_aovs(True)
+    for _ in range(2):
+        ref.add_samples(4)
+    ref.finish()
+    assert ref.aov_samples == 8 and "render_aovs" not in kernels_of(ref)
+    for name, image in ref.read_aovs().items():
+        assert image.max() > 0 and np.allclose(late[name], image, rtol=1e-5, atol=1e-6), name
+
+
+def test_the_generic_program_draws_the_aovs_and_picks_while_the_scenes_own_builds_nothing_for_them(backend):
+    gated = AuxGated(backend)
+    r = Renderer(building_with(backend, gated), load_scene("cornell-box"), SIZE, SIZE)
+    r.set_aovs(True)
+    r.add_samples(4)
+    r.finish()
+    assert r.uses_generic_program and r.aov_samples == 4 and r.pick(r.camera.eye, r.camera.frame()[0]) is not None
+    assert not gated.started.is_set()
+
+
+def test_pick_finds_the_shape_along_a_ray_and_its_distance(specialised):
+    scene = read_scene_dict({"camera": {"eye": [0, 0, 5], "look_at": [0, 0, 0]},
+                             "materials": {"grey": {"type": "diffuse", "rho_d": 0.5}},
+                             "spheres": [{"center": [0, 0, 0], "radius": 1.0, "material": "grey", "name": "ball"}]})
+    r = Renderer(specialised, scene, SIZE, SIZE)
+    assert "pick" not in kernels_of(r)
+    shape = r.pick([0, 0, 5], [0, 0, -1])
+    assert shape.kind == "sphere" and shape.name == "ball"
+    assert r.hit_distance([0, 0, 5], [0, 0, -1]) == pytest.approx(4.0, rel=1e-5)
+    assert r.pick([0, 0, 5], [0, 0, 1]) is None and r.hit_distance([0, 3, 5], [0, 0, -1]) is None
 
 
 def open_as_render_does(backend, scene):

@@ -4,6 +4,18 @@ specialises the kernel program to a scene."""
 from dataclasses import dataclass
 
 GENERIC = "generic"
+
+KERNEL_SETS = {"all": ("ENTRY_RENDER", "ENTRY_RENDER_NEE", "ENTRY_AUX"), "render": ("ENTRY_RENDER",),
+               "render_nee": ("ENTRY_RENDER_NEE",), "aux": ("ENTRY_AUX",), "bdpt": ()}
+"""Which entry points a program holds (Features.kernels), by the defines that compile them in
+(kernels/integrator.cl, kernels/aovs.cl): a path tracer's pass launches one render kernel, by
+its estimator (render, or render_nee with next-event estimation, each with its continuation
+queue's kernels where it has a queue); the auxiliary kernels, render_aovs (the denoiser's albedo
+and normal) and pick (the viewer's), are launched by some renders only; BDPT's kernels come with
+its files (BDPT). A scene's own program holds what its passes launch and nothing more: on an
+H200 the program with both render kernels, the AOVs and pick built in 1.7-2.4 s, render_nee
+alone in 1.0-1.5 s (docs/notes/performance-2026-11.md, 2026-11-30, sixteenth session), and
+a first start waits for that build. The generic program holds them all."""
 """The camera, filter and Russian roulette rule of a generic program (Features.generic_program), which
 chooses them at run time."""
 
@@ -62,6 +74,7 @@ class Features:
                                            # integrator "ptracer"
     photons: bool = False                  # with bdpt: caustic photons (PHOTONS, kernels/photons.cl)
     generic: bool = False                  # renders any scene (Features.generic_program)
+    kernels: str = "all"                   # the entry points it holds: a key of KERNEL_SETS
 
     @staticmethod
     def generic_program(media: bool) -> "Features":
@@ -97,7 +110,7 @@ class Features:
                 + ((f"PATH_QUEUE={self.path_queue}",) if self.path_queue else ())
                 + (("PATH_SORT",) if self.path_sort else ())
                 + ((f"BDPT={self.bdpt}",) if self.bdpt else ()) + (("LIGHT_TRACING",) if self.light_tracing else ())
-                + (("PHOTONS",) if self.photons else ()))
+                + (("PHOTONS",) if self.photons else ()) + KERNEL_SETS[self.kernels])
 
 
 def choice_glue(signature: str, call: str, names: tuple, chosen: str, field: str) -> str:

@@ -29,7 +29,8 @@ BASIC_FILES = ("inlining.h", "types.h", "vector.cl", "color.cl", "rng.cl", "samp
 SHAPE_FILES = ("spawn.cl", "shapes/sphere_range.cl", "shapes/triangle.cl")
 BSDF_FILES = ("bsdf.cl", "fresnel.cl", "microfacet.cl", "coating.cl", "interface.cl", "phase.cl")
 MEDIA_FILES = ("media/homogeneous.cl", "volume.cl")
-LATER_FILES = ("path_queue.cl", "path_sort.cl", "integrator.cl", "aovs.cl", "display.cl")
+LATER_FILES = ("path_queue.cl", "path_sort.cl", "integrator.cl", "aovs.cl")
+DISPLAY_FILE = "display.cl"     # in the programs of every kernel (the generic ones, which the window uses)
 BDPT_FILES = ("bdpt_vertex.cl", "bdpt_subpaths.cl", "splats.cl", "photons.cl", "bdpt.cl")
 
 # No -cl-fast-relaxed-math: it implies finite math, and the kernels rely on INFINITY. Denormal
@@ -75,6 +76,7 @@ def kernel_source(extra: str = "", features: Features = Features()) -> str:
     texts += [(name, text if text is not None else (folder / name).read_text()) for name, text in parts]
     texts += [(name, (folder / name).read_text())
               for name in (*(MEDIA_FILES if features.media else ()), *LATER_FILES,
+                           *((DISPLAY_FILE,) if features.kernels == "all" else ()),
                            *(BDPT_FILES if features.bdpt else ()))]
     if extra:
         texts.append(("extra", extra))
@@ -345,7 +347,7 @@ def generic_refused(device: cl.Device, extra: str = "") -> bool:
 
 def display_source() -> str:
     """kernels/display.cl alone: the window's kernel, which needs nothing of the renderer's."""
-    return (resource_dir("kernels") / "display.cl").read_text()
+    return (resource_dir("kernels") / DISPLAY_FILE).read_text()
 
 
 def check_fits(device: cl.Device, buffers: dict, what: str):

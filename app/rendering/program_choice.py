@@ -65,13 +65,38 @@ class ProgramChoice:
         depth, and no light tree, since they choose lights by power (_light_sampler)."""
         features = replace(self.compiled.features(self.settings, self.camera),
                            traversal_stats=self.traversal_stats, divergence_stats=self.divergence_stats,
-                           path_queue=self.queue_plan()[0], path_sort=self.sorts_queue())
+                           path_queue=self.queue_plan()[0], path_sort=self.sorts_queue(),
+                           kernels="render_nee" if self.settings.nee else "render")
         if integrator == "path":
             return features
         bdpt.check(self.scene.name, features, integrator, self.compiled.lights)
         return replace(features, light_tree=False, bdpt=bdpt.depth(self.settings.max_depth),
                        light_tracing=integrator == "ptracer",
-                       photons=self.uses_photons(integrator))
+                       photons=self.uses_photons(integrator), kernels="bdpt")
+
+    def _aux_features(self) -> Features:
+        """The features of the scene's own auxiliary program (render_aovs and pick: Features.kernels
+        "aux"), which a pass's launches do not need: the integrator's, without what only its
+        render kernels use."""
+        return replace(self._features(self.settings.integrator), kernels="aux", path_queue=0, path_sort=False,
+                       traversal_stats=0, divergence_stats=0, bdpt=0, light_tracing=False, photons=False)
+
+    def aux_kernel(self, name: str, wait: bool = True):
+        """The kernel `name` of the auxiliary ones (render_aovs, pick) for this scene: from the
+        program rendering where it holds them (a generic one), else from the scene's own
+        auxiliary program, else, outside the specialised mode, from a generic program that is
+        built; else that own program's, waited for, or (not `wait`) None, its build started in
+        the background, untuned: no launch of them is long."""
+        if name in self._kernel_names:
+            return cl.Kernel(self.program, name)
+        features = self._aux_features()
+        program = self.backend.programs.built(features, tuned=False)
+        if program is None and self.backend.mode != "specialised":
+            program = self.backend.built_generic(features.media)
+        if program is None:
+            program = self.backend.programs.get(features, tuned=False) if wait \
+                else self.backend.programs.ready(features, tuned=False)
+        return cl.Kernel(program, name) if program is not None else None
 
     def integrator_ready(self, integrator: str) -> bool:
         """Whether set_settings(integrator=...) would switch without waiting for a build: the
@@ -90,16 +115,19 @@ class ProgramChoice:
             return
         self.program = program
         self.uses_generic_program = generic     # (pathtrace.device.programs)
-        self.kernels = {False: cl.Kernel(program, "render"), True: cl.Kernel(program, "render_nee")}
+        self._kernel_names = set(program.kernel_names.split(";"))
+        # a scene's own program holds the render kernel of its estimator (Features.kernels)
+        self.kernels = {nee: cl.Kernel(program, name) for nee, name in ((False, "render"), (True, "render_nee"))
+                        if name in self._kernel_names}
         # the queue's kernels are in a scene's program built with a queue depth, never in the
         # generic program, which renders without the queue until the scene's own is built
         queue = self.queue_plan()[0] and not generic
-        self.continue_kernels = {False: cl.Kernel(program, "continue_paths"),
-                                 True: cl.Kernel(program, "continue_paths_nee")} if queue else None
+        self.continue_kernels = {nee: cl.Kernel(program, name) for nee, name in
+                                 ((False, "continue_paths"), (True, "continue_paths_nee"))
+                                 if name in self._kernel_names} if queue else None
         self.add_queued = cl.Kernel(program, "add_queued_paths") if queue else None
         sort = queue and self.sorts_queue()
         self.sort_kernels = (cl.Kernel(program, "sort_offsets"), cl.Kernel(program, "sort_paths")) if sort else None
-        self.aov_kernel = cl.Kernel(program, "render_aovs")
         bidirectional = self.settings.integrator != "path"
         self.bdpt_kernels = (cl.Kernel(program, "render_bdpt"), cl.Kernel(program, "add_splats")) if bidirectional else None
         self.photon_kernel = cl.Kernel(program, "trace_photons") if self.uses_photons() else None

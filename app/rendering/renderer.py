@@ -102,6 +102,8 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
         self.samples = 0          # samples per pixel accumulated so far (whole passes)
         self.generic_samples = 0  # of which the generic program drew (pathtrace.device.programs)
         self.aovs = False         # whether the denoiser's albedo and normal are accumulated too
+        self.aov_samples = 0      # of which samples per pixel so far (their kernels may come later)
+        self._aov_kernel = None   # the AOVs' kernel where the pass under way draws them
         self.resets = 0           # how many times the image restarted (pathtrace.rendering.launches.Progressive)
         self.traversal_stats = 0  # Features.traversal_stats: set through count_traversal()
         self.divergence_stats = 0 # Features.divergence_stats: set through record_shading(),
@@ -176,7 +178,7 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
     def _nearest_hit(self, origin, direction) -> tuple:
         """(primitive, distance) of the nearest hit along a ray; primitive -1 where there is none."""
         out = cl.Buffer(self.backend.context, cl.mem_flags.WRITE_ONLY, 8)
-        kernel = cl.Kernel(self.program, "pick")
+        kernel = self.aux_kernel("pick")
         kernel(self.backend.queue, (1,), None, *self.scene_args(),
                np.int32(self.compiled.num_spheres), np.int32(self.compiled.layout), np.append(np.float32(origin), 0).astype(np.float32),
                np.append(np.float32(direction), 0).astype(np.float32), out)
@@ -230,6 +232,8 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
         resets."""
         if on != self.aovs:
             self._allocate_images(self.width, self.height, on)
+        if on:
+            self.aux_kernel("render_aovs", wait=False)      # their build started, where it is due
 
     def _allocate_images(self, width: int, height: int, aovs: bool):
         nbytes = width * height * 16
@@ -309,7 +313,7 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
             for name in image_buffers(self.aovs):
                 cl.enqueue_fill_buffer(self.backend.queue, self._buffers[name], np.float32(0), 0,
                                        self.width * self.height * 16)
-        self.samples = self.generic_samples = 0
+        self.samples = self.generic_samples = self.aov_samples = 0
         self.resets += 1
 
     # --- rendering -------------------------------------------------------------------------
@@ -357,14 +361,31 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
         params["row_start"], params["row_end"], params["sample_start"] = first, end, start
         add = self._add_bidirectional if self.bdpt_kernels is not None else self._add_paths
         events = add(params, count, start, global_size, local)
-        if self.aovs and self.samples < AOV_PASSES:
-            self.aov_kernel.set_args(*self.scene_args(), params, b["albedo_sum"], b["normal_sum"])
-            events.append(cl.enqueue_nd_range_kernel(self.backend.queue, self.aov_kernel, global_size, local))
+        if first == 0:      # a pass draws the AOVs in every band or in none
+            self._aov_kernel = self.aux_kernel("render_aovs", wait=False) \
+                if self.aovs and self.aov_samples < AOV_PASSES else None
+        if self._aov_kernel is not None:
+            events.append(self._add_aovs(self._aov_kernel, params, global_size, local))
         if end >= self.height:
+            self.aov_samples += count if self._aov_kernel is not None else 0
             self.samples += count
             self._build_due = True
             self.generic_samples += count if self.uses_generic_program else 0
         return events
+
+    def _add_aovs(self, kernel: cl.Kernel, params, global_size: tuple, local: tuple) -> cl.Event:
+        """Queues render_aovs over the rows and samples of `params`."""
+        kernel.set_args(*self.scene_args(), params, self._buffers["albedo_sum"], self._buffers["normal_sum"])
+        return cl.enqueue_nd_range_kernel(self.backend.queue, kernel, global_size, local)
+
+    def complete_aovs(self):
+        """Draws the AOVs of the first samples where no pass drew any, their kernels not being
+        built yet (add_samples does not wait for them): one launch, which waits."""
+        if self.aovs and self.aov_samples == 0 and self.samples > 0:
+            params = self.params(min(self.samples, AOV_PASSES))
+            params["row_start"], params["row_end"], params["sample_start"] = 0, self.height, 0
+            self._add_aovs(self.aux_kernel("render_aovs"), params, *self.launch_grid(self.height))
+            self.aov_samples = min(self.samples, AOV_PASSES)
 
     def launch_grid(self, rows: int) -> tuple:
         """(global size, local size) of the render launches over `rows` rows: a work-item per
@@ -486,6 +507,7 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
         and "normal", the mean shading normal (not renormalised; 0 where paths escaped), each
         (H, W, 3) float32; "depth", the mean distance from the camera to the first surface
         (0 where the camera ray escaped), (H, W) float32."""
+        self.complete_aovs()
         return aov_means(self.read_albedo_sum(), self.read_normal_sum())
 
     def read_albedo_sum(self) -> np.ndarray:

@@ -23,7 +23,7 @@ class Display:
         else "half")."""
         self.backend = backend
         self.mode = mode or ("sums" if backend.device.device.host_unified_memory else "half")
-        self._kernel = cl.Kernel(backend.opened.program, "mean_half4")   # in every program
+        self._kernel = cl.Kernel(backend.opened.program, "mean_half4")   # the display's or a generic program
         self._size = None
         self._pending = None           # (event, pixels) of the request in flight
 
