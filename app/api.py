@@ -239,16 +239,19 @@ class _Prepared:
         self.environment, self.lights = environment, lights
 
 
-def prepare(scene: Scene, device="auto", build_progress=None, phases=None) -> _Prepared:
+def prepare(scene: Scene, device="auto", build_progress=None, phases=None, settings=None) -> _Prepared:
     """The compiled, uploaded form of `scene` on `device` (open_devices), made once and kept
     with the scene (so that it goes when the scene goes); compiled anew if the scene's geometry
     changed or the devices differ. phases(what, seconds) is called as each step of making it
-    ends: compiling the scene, then preparing the renderers."""
+    ends: compiling the scene, then preparing the renderers. `settings`, those of the render it
+    is made for, in place of the scene's: the renderers' first programs are built for them (a
+    render's nee=False had a program built for the scene's NEE first)."""
     kept = scene.__dict__.get("_prepared")
     if kept is not None and kept.geometry == _geometry_digest(scene) and kept.backends == open_devices(device):
         return kept
     scene.__dict__.pop("_prepared", None)    # free the old buffers before making new ones
-    scene._prepared = _Prepared(scene, device, build_progress, phases)
+    made_for = scene if settings is None else replace(scene, settings=settings)
+    scene._prepared = _Prepared(made_for, device, build_progress, phases)
     return scene._prepared
 
 
@@ -303,7 +306,7 @@ def progressive(scene, spp=None, steps=None, size=None, device="auto", seed=None
     settings = settings_for(scene, spp, size, seed, max_depth, rr, nee, integrator)
     steps = _steps(steps, settings.spp)
     aovs = _aov_names(aovs)
-    prepared = prepare(scene, device, build_progress, phases)
+    prepared = prepare(scene, device, build_progress, phases, settings)
     prepared.update(scene, settings, bool(aovs))
     group = prepared.group
     # path_queue "auto": chosen for the whole render, not its first step; its trials' samples kept

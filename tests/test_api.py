@@ -336,6 +336,25 @@ def test_programs_used_says_where_the_generic_program_drew_samples(monkeypatch):
     assert pathtrace.programs_used(pathtrace.load_dict(small_scene())) == []
 
 
+@pytest.mark.specialised
+def test_a_renders_first_program_is_built_for_its_own_settings():
+    """render(nee=False) of a scene whose own settings say NEE: one program, the estimator's the
+    render asked for, where the group had been made with the scene's first."""
+    from dataclasses import replace
+    data = small_scene()
+    data["render"]["filter"] = {"type": "gaussian", "stddev": 0.4}    # programs no other test builds
+    scene = pathtrace.load_dict(data)
+    assert scene.settings.nee
+    render(scene, spp=2, nee=False)
+    r = scene._prepared.group.renderers[0]
+    assert r.program.kernel_names == "render" and not r.settings.nee
+    features = r.compiled.features(r.settings, r.camera)
+    for kernels in ("render_nee", "render"):
+        asked = replace(features, kernels=kernels)
+        assert (r.backend.programs.built(asked) is not None) == (kernels == "render")
+        assert not r.backend.programs.under_way(asked)
+
+
 def test_materials_meshes_lights_and_textures_read_as_mappings():
     """A notebook lists a scene's parts as it lists a dict's: keys, items, len, in."""
     scene = pathtrace.load("cornell-box")

@@ -248,6 +248,15 @@ def test_a_scenes_own_program_holds_the_kernels_its_passes_launch_and_no_others(
     assert {"render", "render_nee", "render_aovs", "pick"}.isdisjoint(kernels_of(r)) and "render_bdpt" in kernels_of(r)
 
 
+def test_the_viewers_programs_hold_every_kernel(specialised):
+    """A user may turn NEE, the denoiser or picking on at any moment: none waits for a build."""
+    r = Renderer(specialised, load_scene("cornell-box"), SIZE, SIZE, all_kernels=True)
+    every = {"render", "render_nee", "render_aovs", "pick"}
+    assert every <= kernels_of(r)
+    r.set_settings(integrator="bdpt")
+    assert every | {"render_bdpt"} <= kernels_of(r)
+
+
 class AuxGated(GatedBuild):
     """Builds scenes' render programs at once and their auxiliary programs once the gate opens."""
 
@@ -256,27 +265,24 @@ class AuxGated(GatedBuild):
             self.backend.program_for(features, tune)
 
 
-def test_the_aovs_come_from_a_program_of_their_own_that_no_pass_waits_for(backend, specialised):
+def test_the_aovs_come_from_a_program_of_their_own_built_beside_the_scenes(backend, specialised):
     gated = AuxGated(specialised)
     scene = load_scene("cornell-box")
     r = Renderer(building_with(backend, gated, generic=False), scene, SIZE, SIZE)
     r.set_aovs(True)
-    assert gated.started.wait(60)           # its build starts with the AOVs
-    for _ in range(2):
-        r.add_samples(4)
-    r.finish()
-    assert r.samples == 8 and r.aov_samples == 0     # passes went on without them
+    assert gated.started.wait(60)           # its build starts with the AOVs, before any pass
     gated.gate.set()
-    late = r.read_aovs()                    # drawn now, for the first samples
-    assert r.aov_samples == 8
-    ref = Renderer(specialised, scene, SIZE, SIZE)
+    ref = Renderer(specialised, scene, SIZE, SIZE, all_kernels=True)
     ref.set_aovs(True)
-    for _ in range(2):
-        ref.add_samples(4)
-    ref.finish()
-    assert ref.aov_samples == 8 and "render_aovs" not in kernels_of(ref)
-    for name, image in ref.read_aovs().items():
-        assert image.max() > 0 and np.allclose(late[name], image, rtol=1e-5, atol=1e-6), name
+    for renderer in (r, ref):
+        for _ in range(5):
+            renderer.add_samples(4)
+        renderer.finish()
+    assert "render_aovs" not in kernels_of(r)
+    aovs, expected = r.read_aovs(), ref.read_aovs()
+    assert r.read_albedo_sum()[..., 3].max() == 16           # over the first 16 samples
+    for name, image in expected.items():
+        assert image.max() > 0 and np.allclose(aovs[name], image, rtol=1e-5, atol=1e-6), name
 
 
 def test_the_generic_program_draws_the_aovs_and_picks_while_the_scenes_own_builds_nothing_for_them(backend):
@@ -285,8 +291,18 @@ def test_the_generic_program_draws_the_aovs_and_picks_while_the_scenes_own_build
     r.set_aovs(True)
     r.add_samples(4)
     r.finish()
-    assert r.uses_generic_program and r.aov_samples == 4 and r.pick(r.camera.eye, r.camera.frame()[0]) is not None
-    assert not gated.started.is_set()
+    assert r.uses_generic_program and r.read_aovs()["albedo"].max() > 0
+    assert r.pick(r.camera.eye, r.camera.frame()[0]) is not None and not gated.started.is_set()
+
+
+def test_aovs_turned_off_between_a_passs_bands_are_not_drawn(specialised):
+    r = Renderer(specialised, load_scene("cornell-box"), SIZE, SIZE)
+    r.set_aovs(True)
+    r.add_samples(1, rows=(0, SIZE // 2))
+    r.set_aovs(False)
+    r.add_samples(1, rows=(SIZE // 2, SIZE))
+    r.finish()
+    assert r.samples == 1 and np.isfinite(r.mean()).all()
 
 
 def test_pick_finds_the_shape_along_a_ray_and_its_distance(specialised):

@@ -4,6 +4,8 @@ specialises the kernel program to a scene."""
 from dataclasses import dataclass
 
 GENERIC = "generic"
+"""The camera, filter and Russian roulette rule of a generic program (Features.generic_program), which
+chooses them at run time."""
 
 KERNEL_SETS = {"all": ("ENTRY_RENDER", "ENTRY_RENDER_NEE", "ENTRY_AUX"), "render": ("ENTRY_RENDER",),
                "render_nee": ("ENTRY_RENDER_NEE",), "aux": ("ENTRY_AUX",), "bdpt": ()}
@@ -15,9 +17,9 @@ and normal) and pick (the viewer's), are launched by some renders only; BDPT's k
 its files (BDPT). A scene's own program holds what its passes launch and nothing more: on an
 H200 the program with both render kernels, the AOVs and pick built in 1.7-2.4 s, render_nee
 alone in 1.0-1.5 s (docs/notes/performance-2026-11.md, 2026-11-30, sixteenth session), and
-a first start waits for that build. The generic program holds them all."""
-"""The camera, filter and Russian roulette rule of a generic program (Features.generic_program), which
-chooses them at run time."""
+a first start waits for that build. The generic programs hold them all, as do the viewer's
+(Renderer's all_kernels: a user may turn next-event estimation, the denoiser or picking on at
+any moment, and none of them should wait for a build)."""
 
 
 @dataclass(frozen=True)

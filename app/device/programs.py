@@ -13,7 +13,8 @@ builds release Python's lock), started once the first pass is queued so that it 
 from the first image (Renderer.switch_when_built), and launches switch to it once it is there. Where the generic
 program is not built, the first image waits for one untuned build of the scene's own, and the
 tuned one (app/device/occupancy.py) follows in the background. Nothing else builds behind a first
-image: NVIDIA's driver takes minutes over the generic program on an H200, and a scene's build in
+image (but the AOVs' small program where a render asks for the AOVs: Renderer.aux_kernel):
+NVIDIA's driver takes minutes over the generic program on an H200, and a scene's build in
 another thread waited for it (docs/notes/performance-2026-11.md, 2026-11-28).
 
 Both programs draw the same estimator, each sample an unbiased estimate of the pixel, so the

@@ -188,8 +188,6 @@ class DeviceGroup:
 
     def read_aovs(self) -> dict:
         """The albedo, normal and depth over all devices (Renderer.read_aovs)."""
-        for r in self.renderers:
-            r.complete_aovs()
         return aov_means(self._merged(Renderer.read_albedo_sum), self._merged(Renderer.read_normal_sum))
 
     def mean(self) -> np.ndarray:

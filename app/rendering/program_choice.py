@@ -66,37 +66,38 @@ class ProgramChoice:
         features = replace(self.compiled.features(self.settings, self.camera),
                            traversal_stats=self.traversal_stats, divergence_stats=self.divergence_stats,
                            path_queue=self.queue_plan()[0], path_sort=self.sorts_queue(),
-                           kernels="render_nee" if self.settings.nee else "render")
+                           kernels="all" if self.all_kernels else "render_nee" if self.settings.nee else "render")
         if integrator == "path":
             return features
         bdpt.check(self.scene.name, features, integrator, self.compiled.lights)
         return replace(features, light_tree=False, bdpt=bdpt.depth(self.settings.max_depth),
                        light_tracing=integrator == "ptracer",
-                       photons=self.uses_photons(integrator), kernels="bdpt")
+                       photons=self.uses_photons(integrator), kernels=features.kernels if self.all_kernels else "bdpt")
 
     def _aux_features(self) -> Features:
         """The features of the scene's own auxiliary program (render_aovs and pick: Features.kernels
         "aux"), which a pass's launches do not need: the integrator's, without what only its
-        render kernels use."""
+        render kernels use (the queue, the counters, BDPT, the Russian roulette rule)."""
         return replace(self._features(self.settings.integrator), kernels="aux", path_queue=0, path_sort=False,
-                       traversal_stats=0, divergence_stats=0, bdpt=0, light_tracing=False, photons=False)
+                       traversal_stats=0, divergence_stats=0, bdpt=0, light_tracing=False, photons=False,
+                       russian_roulette="throughput")
 
-    def aux_kernel(self, name: str, wait: bool = True):
+    def aux_kernel(self, name: str, start_only: bool = False):
         """The kernel `name` of the auxiliary ones (render_aovs, pick) for this scene: from the
-        program rendering where it holds them (a generic one), else from the scene's own
-        auxiliary program, else, outside the specialised mode, from a generic program that is
-        built; else that own program's, waited for, or (not `wait`) None, its build started in
-        the background, untuned: no launch of them is long."""
+        program rendering where it holds them (a generic one, the viewer's), else from the
+        scene's own auxiliary program, else, outside the specialised mode, from a generic program
+        that is built; else that own program's, built now, untuned (no launch of them is long),
+        or with `start_only` its build started in the background (set_aovs) and None."""
         if name in self._kernel_names:
             return cl.Kernel(self.program, name)
         features = self._aux_features()
         program = self.backend.programs.built(features, tuned=False)
         if program is None and self.backend.mode != "specialised":
             program = self.backend.built_generic(features.media)
-        if program is None:
-            program = self.backend.programs.get(features, tuned=False) if wait \
-                else self.backend.programs.ready(features, tuned=False)
-        return cl.Kernel(program, name) if program is not None else None
+        if program is None and start_only:
+            self.backend.programs.start(features, tuned=False)
+            return None
+        return cl.Kernel(program if program is not None else self.backend.programs.get(features, tuned=False), name)
 
     def integrator_ready(self, integrator: str) -> bool:
         """Whether set_settings(integrator=...) would switch without waiting for a build: the
@@ -114,6 +115,7 @@ class ProgramChoice:
         if program is self.program:
             return
         self.program = program
+        self._aov_kernel = None                 # (Renderer.add_samples: aux_kernel's for this program)
         self.uses_generic_program = generic     # (pathtrace.device.programs)
         self._kernel_names = set(program.kernel_names.split(";"))
         # a scene's own program holds the render kernel of its estimator (Features.kernels)

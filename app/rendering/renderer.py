@@ -85,10 +85,14 @@ _LIGHT_SAMPLER_LOCK = threading.Lock()
 
 
 class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
-    def __init__(self, backend: Backend, scene, width: int = None, height: int = None, progress=None):
+    def __init__(self, backend: Backend, scene, width: int = None, height: int = None, progress=None,
+                 all_kernels: bool = False):
         """scene: a CompiledScene, or a Scene to compile (on this device, calling progress(fraction)
-        as its BVH build goes)."""
+        as its BVH build goes). all_kernels: its programs hold every kernel, both estimators', the
+        AOVs' and picking's, as the viewer's do (app/device/features.py: KERNEL_SETS); else they
+        hold what its passes launch, and the AOVs and picking come from a program of their own."""
         self.backend = backend
+        self.all_kernels = all_kernels
         self.program = None       # the kernels launches run (_select_program)
         self.uses_generic_program = False
         self._awaited = None      # the features of the scene's own program while it builds
@@ -102,8 +106,7 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
         self.samples = 0          # samples per pixel accumulated so far (whole passes)
         self.generic_samples = 0  # of which the generic program drew (pathtrace.device.programs)
         self.aovs = False         # whether the denoiser's albedo and normal are accumulated too
-        self.aov_samples = 0      # of which samples per pixel so far (their kernels may come later)
-        self._aov_kernel = None   # the AOVs' kernel where the pass under way draws them
+        self._aov_kernel = None   # their kernel, once a pass has drawn them (aux_kernel)
         self.resets = 0           # how many times the image restarted (pathtrace.rendering.launches.Progressive)
         self.traversal_stats = 0  # Features.traversal_stats: set through count_traversal()
         self.divergence_stats = 0 # Features.divergence_stats: set through record_shading(),
@@ -232,8 +235,8 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
         resets."""
         if on != self.aovs:
             self._allocate_images(self.width, self.height, on)
-        if on:
-            self.aux_kernel("render_aovs", wait=False)      # their build started, where it is due
+        if on:      # their program's build started, beside the scene's own, where it is due
+            self.aux_kernel("render_aovs", start_only=True)
 
     def _allocate_images(self, width: int, height: int, aovs: bool):
         nbytes = width * height * 16
@@ -313,7 +316,7 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
             for name in image_buffers(self.aovs):
                 cl.enqueue_fill_buffer(self.backend.queue, self._buffers[name], np.float32(0), 0,
                                        self.width * self.height * 16)
-        self.samples = self.generic_samples = self.aov_samples = 0
+        self.samples = self.generic_samples = 0
         self.resets += 1
 
     # --- rendering -------------------------------------------------------------------------
@@ -343,8 +346,8 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
 
     def add_samples(self, count: int = 1, start: int = None, rows: tuple = None) -> list:
         """Queues the launches that add `count` samples to every pixel (one per
-        MAX_LAUNCH_SAMPLES, and one for the albedo and normal, with set_aovs); returns their
-        events. The
+        MAX_LAUNCH_SAMPLES, and one for the albedo and normal over the first AOV_PASSES samples,
+        with set_aovs); returns their events. The
         samples are those of index start, start + 1, ... (default: the next ones of this
         renderer), so that several renderers can share one render's sample indices.
 
@@ -361,31 +364,16 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
         params["row_start"], params["row_end"], params["sample_start"] = first, end, start
         add = self._add_bidirectional if self.bdpt_kernels is not None else self._add_paths
         events = add(params, count, start, global_size, local)
-        if first == 0:      # a pass draws the AOVs in every band or in none
-            self._aov_kernel = self.aux_kernel("render_aovs", wait=False) \
-                if self.aovs and self.aov_samples < AOV_PASSES else None
-        if self._aov_kernel is not None:
-            events.append(self._add_aovs(self._aov_kernel, params, global_size, local))
+        if self.aovs and self.samples < AOV_PASSES:
+            if self._aov_kernel is None:     # (its program was started by set_aovs)
+                self._aov_kernel = self.aux_kernel("render_aovs")
+            self._aov_kernel.set_args(*self.scene_args(), params, b["albedo_sum"], b["normal_sum"])
+            events.append(cl.enqueue_nd_range_kernel(self.backend.queue, self._aov_kernel, global_size, local))
         if end >= self.height:
-            self.aov_samples += count if self._aov_kernel is not None else 0
             self.samples += count
             self._build_due = True
             self.generic_samples += count if self.uses_generic_program else 0
         return events
-
-    def _add_aovs(self, kernel: cl.Kernel, params, global_size: tuple, local: tuple) -> cl.Event:
-        """Queues render_aovs over the rows and samples of `params`."""
-        kernel.set_args(*self.scene_args(), params, self._buffers["albedo_sum"], self._buffers["normal_sum"])
-        return cl.enqueue_nd_range_kernel(self.backend.queue, kernel, global_size, local)
-
-    def complete_aovs(self):
-        """Draws the AOVs of the first samples where no pass drew any, their kernels not being
-        built yet (add_samples does not wait for them): one launch, which waits."""
-        if self.aovs and self.aov_samples == 0 and self.samples > 0:
-            params = self.params(min(self.samples, AOV_PASSES))
-            params["row_start"], params["row_end"], params["sample_start"] = 0, self.height, 0
-            self._add_aovs(self.aux_kernel("render_aovs"), params, *self.launch_grid(self.height))
-            self.aov_samples = min(self.samples, AOV_PASSES)
 
     def launch_grid(self, rows: int) -> tuple:
         """(global size, local size) of the render launches over `rows` rows: a work-item per
@@ -507,7 +495,6 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
         and "normal", the mean shading normal (not renormalised; 0 where paths escaped), each
         (H, W, 3) float32; "depth", the mean distance from the camera to the first surface
         (0 where the camera ray escaped), (H, W) float32."""
-        self.complete_aovs()
         return aov_means(self.read_albedo_sum(), self.read_normal_sum())
 
     def read_albedo_sum(self) -> np.ndarray:

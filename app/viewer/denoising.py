@@ -60,8 +60,8 @@ class Denoising:
                 future = self._worker.submit(self._denoise_job, *arrays)
                 self._denoising = (future, resets, samples)
             return
-        if self._denoising is not None or p.passes_done < 1 or r.aov_samples == 0:
-            return          # (the AOVs' kernels may still be building: Renderer.aux_kernel)
+        if self._denoising is not None or p.passes_done < 1:
+            return
         last = self.denoised_at[1] if self.denoised_at and self.denoised_at[0] == r.resets else 0
         if p.passes_done >= 2 * last:
             event, arrays = r.read_async(("sum", "albedo_sum", "normal_sum"))

@@ -45,7 +45,7 @@ class SceneOpening:
         building."""
         self._status = self._preparing(compiled.scene.name)
         if renderer is None:
-            renderer = Renderer(self.backend, compiled)
+            renderer = Renderer(self.backend, compiled, all_kernels=True)
         else:
             had, camera = renderer.compiled, renderer.camera
             try:
