@@ -1,6 +1,7 @@
 """The command line: renders, and one clear message with a non-zero exit for each bad input."""
 
 import os
+import re
 import shlex
 import stat
 import subprocess
@@ -251,6 +252,22 @@ def test_unwritable_output_folder(tmp_path):
 def test_devices_lists_the_cpu():
     r = in_process("devices", "--check")
     assert r.returncode == 0 and "builds the generic kernels" in r.stdout, r.stdout + r.stderr
+
+
+def test_the_checks_bvh_builds_leave_every_builder_kernel_compiled_for_pocl(tmp_path):
+    """devices --check builds two trees (warm_builder) so that a user's first new scene's tree
+    waits for none of PoCL's compiles: each of the builder's kernels, for a small grid and a
+    large one, is in a fresh PoCL cache afterwards."""
+    code = ("from pathtrace.cli.listing import warm_builder; from pathtrace.device.opencl import choose_device; "
+            "warm_builder(choose_device('cpu', log=lambda line: None))")
+    env = {**os.environ, "POCL_CACHE_DIR": str(tmp_path / "pocl"), "XDG_CACHE_HOME": str(tmp_path / "xdg")}
+    subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, check=True, capture_output=True)
+    kernels = [k for k in (tmp_path / "pocl").glob("*/*/*") if k.is_dir()]
+    built = {(k.name, "smallgrid" in v.name) for k in kernels for v in k.iterdir()}
+    names = {m for f in (ROOT / "kernels" / "build").glob("*.cl")
+             for m in re.findall(r"^kernel void (\w+)", f.read_text(), re.M)}
+    assert len(names) >= 10
+    assert {(name, small) for name in names for small in (False, True)} <= built, sorted(built)
 
 
 def test_ctrl_c_stops_cleanly_and_writes_nothing(tmp_path):

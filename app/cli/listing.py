@@ -44,6 +44,7 @@ def cmd_devices(args):
                              "generic kernels are kept for renders to use")
                 else:
                     line += f" and renders with them ({seconds:.2f} s, their first launches' compiling included)"
+                line += f"; builds two BVHs ({warm_builder(b):.2f} s)"
             except cl.Error as e:
                 line += f": cannot build the kernels: {build_error_line(e)}"
         print(line)
@@ -84,6 +85,23 @@ def warm_up(backend) -> tuple:
                 wrong = (f"{scene.name}: pixels kept {kept.min():.0f} to {kept.max():.0f} of "
                          f"{r.samples} samples")
     return time.perf_counter() - start, wrong
+
+
+def warm_builder(backend) -> float:
+    """Builds a BVH over 4,096 boxes and one over 262,144 on `backend`, so that the BVH builder's
+    kernels are built and in the drivers' caches before a user's first new scene needs a tree:
+    PoCL compiles each kernel at its first launch on a small grid and again on a large one (those
+    two sizes launch all twenty), 0.3-0.4 s of the first tree of a large scene after an install
+    on two cores (docs/notes/performance-2026-11.md, 2026-11-30, sixteenth session). The seconds
+    it took."""
+    import numpy as np
+    from pathtrace.compiler.bvh import build_bvh
+    start = time.perf_counter()
+    rng = np.random.default_rng(1)
+    for n in (4096, 262144):
+        lo = rng.random((n, 3), np.float32)
+        build_bvh(lo, lo + np.float32(0.01), num_spheres=0, queue=backend.queue)
+    return time.perf_counter() - start
 
 
 def fog():
