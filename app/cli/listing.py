@@ -115,7 +115,7 @@ def fog():
 def add_parser(sub):
     """The `devices` and `scenes` commands' parsers."""
     p = sub.add_parser("devices", help="list OpenCL platforms and devices")
-    p.add_argument("--check", action="store_true", help="also build the generic kernels on each and render with them once, which fills the drivers' caches (pathtrace.device.programs) and checks that each pixel kept its samples: where not, no render uses them")
+    p.add_argument("--check", action="store_true", help="also build the generic kernels on each and render with them once, which fills the drivers' caches (pathtrace.device.programs) and checks that each pixel kept its samples: where not, no render uses them; and build two BVHs, for the BVH builder's kernels")
     p.set_defaults(func=cmd_devices)
 
     p = sub.add_parser("scenes", help="list the built-in scenes")
