@@ -150,6 +150,20 @@ def test_key_moves_the_camera_and_resets_accumulation(viewer):
     assert viewer.scale == 1 and (viewer.renderer.width, viewer.renderer.height) == (W, H)
 
 
+def test_the_viewer_names_pyglfw_its_wheels_library_and_keeps_a_users():
+    """pyGLFW loads what PYGLFW_LIBRARY names instead of testing each library it finds in a
+    subprocess: the viewer names the wheel's, and leaves a user's setting as it is."""
+    code = ("import os, pathtrace.viewer; print(os.environ.get('PYGLFW_LIBRARY'), flush=True); "
+            "import glfw; print(glfw.get_version() >= (3, 0, 0))")
+    env = {k: v for k, v in os.environ.items() if not k.startswith("PYGLFW") and k != "XDG_SESSION_TYPE"}
+    named = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True)
+    library, works = named.stdout.split()
+    assert library.endswith(os.path.join("x11", "libglfw.so")) and os.path.isfile(library) and works == "True"
+    mine = subprocess.run([sys.executable, "-c", code], env={**env, "PYGLFW_LIBRARY": library + ".mine"},
+                          capture_output=True, text=True)
+    assert mine.stdout.split()[:1] == [library + ".mine"]
+
+
 def test_the_preview_is_as_coarse_as_a_pass_in_a_frame_needs():
     from pathtrace.viewer.window import MAX_PREVIEW_SCALE, MOVE_BUDGET, preview_scale
     pixel = MOVE_BUDGET / (640 * 360)           # a full pass takes exactly the budget
