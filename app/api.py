@@ -194,7 +194,7 @@ class _Prepared:
     """A scene compiled and uploaded to a group of devices, with what it was compiled from, so
     that the next render uploads only what changed."""
 
-    def __init__(self, scene: Scene, device, build_progress=None, phases=None):
+    def __init__(self, scene: Scene, device, build_progress=None, phases=None, settings=None, aovs: bool = False):
         from pathtrace.compiler.compiled import compile_before_devices
         from pathtrace.rendering.multidevice import DeviceGroup
         start = time.perf_counter()
@@ -204,7 +204,7 @@ class _Prepared:
             asked = time.perf_counter()
             self.backends = open_devices(device)
             waited = time.perf_counter() - asked
-            self.group = DeviceGroup(self.backends, compiled)
+            self.group = DeviceGroup(self.backends, compiled, settings=settings, aovs=aovs)
             self.geometry = geometry.result()
         if phases:
             # the renderers' construction includes building the kernels specialised to the
@@ -239,19 +239,20 @@ class _Prepared:
         self.environment, self.lights = environment, lights
 
 
-def prepare(scene: Scene, device="auto", build_progress=None, phases=None, settings=None) -> _Prepared:
+def prepare(scene: Scene, device="auto", build_progress=None, phases=None, settings=None,
+            aovs: bool = False) -> _Prepared:
     """The compiled, uploaded form of `scene` on `device` (open_devices), made once and kept
     with the scene (so that it goes when the scene goes); compiled anew if the scene's geometry
     changed or the devices differ. phases(what, seconds) is called as each step of making it
-    ends: compiling the scene, then preparing the renderers. `settings`, those of the render it
-    is made for, in place of the scene's: the renderers' first programs are built for them (a
-    render's nee=False had a program built for the scene's NEE first)."""
+    ends: compiling the scene, then preparing the renderers. `settings` (default: the scene's)
+    and `aovs`, those of the render it is made for: the renderers' first programs are built for
+    them, beside the tree (a render's nee=False had a program built for the scene's NEE first,
+    and its AOVs' after the tree)."""
     kept = scene.__dict__.get("_prepared")
     if kept is not None and kept.geometry == _geometry_digest(scene) and kept.backends == open_devices(device):
         return kept
     scene.__dict__.pop("_prepared", None)    # free the old buffers before making new ones
-    made_for = scene if settings is None else replace(scene, settings=settings)
-    scene._prepared = _Prepared(made_for, device, build_progress, phases)
+    scene._prepared = _Prepared(scene, device, build_progress, phases, settings, aovs)
     return scene._prepared
 
 
@@ -306,7 +307,7 @@ def progressive(scene, spp=None, steps=None, size=None, device="auto", seed=None
     settings = settings_for(scene, spp, size, seed, max_depth, rr, nee, integrator)
     steps = _steps(steps, settings.spp)
     aovs = _aov_names(aovs)
-    prepared = prepare(scene, device, build_progress, phases, settings)
+    prepared = prepare(scene, device, build_progress, phases, settings, bool(aovs))
     prepared.update(scene, settings, bool(aovs))
     group = prepared.group
     # path_queue "auto": chosen for the whole render, not its first step; its trials' samples kept

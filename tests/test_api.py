@@ -355,6 +355,22 @@ def test_a_renders_first_program_is_built_for_its_own_settings():
         assert not r.backend.programs.under_way(asked)
 
 
+def test_a_scenes_lights_reassigned_between_renders_are_rendered():
+    """The prepared renderers render the user's scene as it is at each render, not a copy of it
+    taken at the first."""
+    from pathtrace.lights import DELTA_LIGHTS
+    lamp = DELTA_LIGHTS["point"].from_values({"position": np.array([0.0, 1.0, 0.0]), "intensity": np.full(3, 50.0)})
+    scene = pathtrace.load("cornell-box")
+    dark = render(scene, spp=4, size=(16, 16))
+    scene.lights = [lamp]
+    lit = render(scene, spp=4, size=(16, 16))
+    fresh = pathtrace.load("cornell-box")
+    fresh.lights = [lamp]
+    expected = render(fresh, spp=4, size=(16, 16))
+    assert lit.mean() > 1.5 * dark.mean()
+    np.testing.assert_allclose(lit, expected, rtol=1e-5, atol=1e-6)
+
+
 def test_materials_meshes_lights_and_textures_read_as_mappings():
     """A notebook lists a scene's parts as it lists a dict's: keys, items, len, in."""
     scene = pathtrace.load("cornell-box")

@@ -270,6 +270,19 @@ def test_the_checks_bvh_builds_leave_every_builder_kernel_compiled_for_pocl(tmp_
     assert {(name, small) for name in names for small in (False, True)} <= built, sorted(built)
 
 
+def test_a_bvh_builder_that_fails_in_the_check_is_named_in_one_line(monkeypatch):
+    import pyopencl as cl
+    import pathtrace.compiler.bvh as bvh
+
+    def failing(*args, **kwargs):
+        raise cl.MemoryError("clEnqueueNDRangeKernel failed: OUT_OF_RESOURCES")
+    monkeypatch.setattr(bvh, "build_bvh", failing)
+    r = in_process("devices", "--check")
+    assert r.returncode == 0 and "renders with them" in r.stdout, r.stdout + r.stderr
+    assert "; cannot build the BVH builder: clEnqueueNDRangeKernel failed: OUT_OF_RESOURCES" in r.stdout
+    assert "cannot build the kernels" not in r.stdout and "Traceback" not in r.stderr
+
+
 def test_ctrl_c_stops_cleanly_and_writes_nothing(tmp_path):
     import signal
     import time

@@ -285,6 +285,25 @@ def test_the_aovs_come_from_a_program_of_their_own_built_beside_the_scenes(backe
         assert image.max() > 0 and np.allclose(aovs[name], image, rtol=1e-5, atol=1e-6), name
 
 
+def test_aovs_asked_with_the_scene_build_their_program_beside_its_tree(backend, specialised, monkeypatch):
+    """A render that asks for the AOVs from the start (api.prepare's aovs) has their program's
+    build started with the scene's own, before the tree, not after it."""
+    from pathtrace.compiler.compiled import CompiledScene
+    gated = AuxGated(specialised)
+    build_tree = CompiledScene.build_tree
+    order = []
+
+    def tree_after(compiled, queue=None, cached_only=False):
+        order.append(("tree", gated.started.is_set()))
+        return build_tree(compiled, queue, cached_only)
+    monkeypatch.setattr(CompiledScene, "build_tree", tree_after)
+    r = Renderer(building_with(backend, gated, generic=False), load_scene("cornell-box"), SIZE, SIZE, aovs=True)
+    gated.gate.set()
+    r.add_samples(4)
+    r.finish()
+    assert ("tree", True) in order and r.read_aovs()["albedo"].max() > 0
+
+
 def test_the_generic_program_draws_the_aovs_and_picks_while_the_scenes_own_builds_nothing_for_them(backend):
     gated = AuxGated(backend)
     r = Renderer(building_with(backend, gated), load_scene("cornell-box"), SIZE, SIZE)

@@ -8,6 +8,7 @@ import re
 import shutil
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from dataclasses import replace
@@ -162,6 +163,11 @@ def test_the_viewer_names_pyglfw_its_wheels_library_and_keeps_a_users():
     mine = subprocess.run([sys.executable, "-c", code], env={**env, "PYGLFW_LIBRARY": library + ".mine"},
                           capture_output=True, text=True)
     assert mine.stdout.split()[:1] == [library + ".mine"]
+    offered = Path(tempfile.mkdtemp()) / "libglfw.so.3"        # a user's own, which pyGLFW would weigh
+    offered.write_bytes(b"")
+    theirs = subprocess.run([sys.executable, "-c", code], env={**env, "LD_LIBRARY_PATH": str(offered.parent)},
+                            capture_output=True, text=True)
+    assert theirs.stdout.split()[:1] == ["None"]
 
 
 def test_the_preview_is_as_coarse_as_a_pass_in_a_frame_needs():

@@ -23,6 +23,7 @@ def cmd_devices(args):
         raise UserError(NO_DEVICE)
     for d in devices:
         line = f"[{d.index}] {d.describe()}, {d.device.max_compute_units} compute units"
+        b = None
         if args.check and generic_refused(d.device):
             line += (": its generic kernels rendered wrongly at an earlier check (a mark in the kernel cache, "
                      "which a new version or driver does not have): scenes render with their own kernels")
@@ -44,9 +45,13 @@ def cmd_devices(args):
                              "generic kernels are kept for renders to use")
                 else:
                     line += f" and renders with them ({seconds:.2f} s, their first launches' compiling included)"
-                line += f"; builds two BVHs ({warm_builder(b):.2f} s)"
             except cl.Error as e:
                 line += f": cannot build the kernels: {build_error_line(e)}"
+        if args.check:
+            try:
+                line += f"; builds two BVHs ({warm_builder(b or open_device(d, mode='specialised')):.2f} s)"
+            except cl.Error as e:
+                line += f"; cannot build the BVH builder: {build_error_line(e)}"
         print(line)
     return 0
 

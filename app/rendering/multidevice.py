@@ -80,16 +80,17 @@ class DeviceGroup:
     """Renderers of one compiled scene on several backends, driven together."""
 
     def __init__(self, backends: list[Backend], scene, width: int = None, height: int = None,
-                 progress=None):
+                 progress=None, settings=None, aovs: bool = False):
         """scene: a CompiledScene, or a Scene to compile on the first device (progress as for
-        Renderer), whose tree the first renderer to ask builds (Renderer.set_scene). The
+        Renderer), whose tree the first renderer to ask builds (Renderer.set_scene); settings and
+        aovs, the first render's, as Renderer takes them. The
         renderers are made at once, each in a thread: each device builds its program, takes
         its uploads and clears its buffers beside the others."""
         compiled = scene if isinstance(scene, CompiledScene) \
             else compile_scene(scene, backends[0].queue, progress, tree=False)
         for b in backends:       # every device, before any of them allocates
             compiled.check_memory(b.device.device)
-        self.renderers = _each(lambda b: Renderer(b, compiled, width, height), backends)
+        self.renderers = _each(lambda b: Renderer(b, compiled, width, height, settings=settings, aovs=aovs), backends)
         self.compiled = compiled
 
     @property

@@ -86,14 +86,17 @@ _LIGHT_SAMPLER_LOCK = threading.Lock()
 
 class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
     def __init__(self, backend: Backend, scene, width: int = None, height: int = None, progress=None,
-                 all_kernels: bool = False):
+                 all_kernels: bool = False, settings=None, aovs: bool = False):
         """scene: a CompiledScene, or a Scene to compile (on this device, calling progress(fraction)
         as its BVH build goes). all_kernels: its programs hold every kernel, both estimators', the
         AOVs' and picking's, as the viewer's do (app/device/features.py: KERNEL_SETS); else they
-        hold what its passes launch, and the AOVs and picking come from a program of their own."""
+        hold what its passes launch, and the AOVs and picking come from a program of their own.
+        settings (default: the scene's) and aovs (set_aovs) are the first render's, for which its
+        programs start building beside the tree (set_scene)."""
         self.backend = backend
         self.all_kernels = all_kernels
         self.program = None       # the kernels launches run (_select_program)
+        self._kernel_names = set()  # the names of its kernels
         self.uses_generic_program = False
         self._awaited = None      # the features of the scene's own program while it builds
         self._build_due = False   # whether a pass is drawn, after which that build may start
@@ -105,26 +108,27 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
         self.plan_cached = False  # whether it is the verdict of earlier trials (_plan_verdict_path)
         self.samples = 0          # samples per pixel accumulated so far (whole passes)
         self.generic_samples = 0  # of which the generic program drew (pathtrace.device.programs)
-        self.aovs = False         # whether the denoiser's albedo and normal are accumulated too
+        self.aovs = aovs          # whether the denoiser's albedo and normal are accumulated too
         self._aov_kernel = None   # their kernel, once a pass has drawn them (aux_kernel)
         self.resets = 0           # how many times the image restarted (pathtrace.rendering.launches.Progressive)
         self.traversal_stats = 0  # Features.traversal_stats: set through count_traversal()
         self.divergence_stats = 0 # Features.divergence_stats: set through record_shading(),
         self.shading_records = None   # with the buffer the launches record into
         self.pass_records = None      # and those of the passes of continue_paths
-        self.set_scene(scene, progress)
-        self.resize(width or self.scene.settings.width, height or self.scene.settings.height)
+        self.set_scene(scene, progress, settings)
+        self.resize(width or self.settings.width, height or self.settings.height)
 
     # --- what is rendered ------------------------------------------------------------------
-    def set_scene(self, scene, progress=None):
+    def set_scene(self, scene, progress=None, settings=None):
         """Uploads a compiled scene (compiling a Scene first, on this device); takes its camera and
-        settings; resets. Where the scene's tree is not built yet (compile_scene(tree=False)),
-        the scene's own program, if it is to be built, builds beside it (start_program)."""
+        settings (or `settings`); resets. Where the scene's tree is not built yet
+        (compile_scene(tree=False)), the scene's own program, if it is to be built, builds beside
+        it (start_program), and so does the AOVs' where they are on (aux_kernel)."""
         self.compiled = scene if isinstance(scene, CompiledScene) \
             else compile_scene(scene, self.backend.queue, progress, tree=False)
         self.scene: Scene = self.compiled.scene
         self.camera = self.scene.camera.copy()
-        self.settings = self.scene.settings
+        self.settings = settings if settings is not None else self.scene.settings
         self.auto_plan, self.plan_seconds, self.plan_cached = None, {}, False  # "auto" chooses again
         with _LIGHT_SAMPLER_LOCK:    # a device group's renderers share the scene, made at once
             if self.compiled.light_sampler != self._light_sampler():
@@ -133,6 +137,8 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
                     self.compiled.compile_lights()
         self.compiled.check_memory(self.backend.device.device)
         self.start_program()
+        if self.aovs and self.settings.integrator == "path":    # (BDPT's features need the tree)
+            self.aux_kernel("render_aovs", start_only=True)
         self.compiled.build_tree(self.backend.queue)
         self._select_program()
         self._size_queue()

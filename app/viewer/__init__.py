@@ -13,10 +13,11 @@ def _name_the_bundled_glfw():
     0.10 s, 0.057 s with the library named). On Linux its wheel carries the library, for X11 and
     for Wayland, and pyGLFW takes the one of the session's display server; that one is named to
     it here (PYGLFW_LIBRARY and PYGLFW_LIBRARY_VARIANT are pyGLFW's documented settings). A
-    user's own setting is kept, and nothing is named where the wheel has no library."""
+    user's own setting is kept, and nothing is named where the wheel has no library or where
+    LD_LIBRARY_PATH offers one of the user's, which pyGLFW would weigh by its version."""
     spec = importlib.util.find_spec("glfw")
     if not sys.platform.startswith("linux") or os.environ.get("PYGLFW_LIBRARY") or spec is None \
-            or not spec.submodule_search_locations:
+            or not spec.submodule_search_locations or _offered_by_ld_library_path():
         return
     variant = os.environ.get("PYGLFW_LIBRARY_VARIANT", "").lower()
     if variant not in ("wayland", "x11"):
@@ -24,6 +25,16 @@ def _name_the_bundled_glfw():
     library = os.path.join(spec.submodule_search_locations[0], variant, "libglfw.so")
     if os.path.isfile(library):
         os.environ["PYGLFW_LIBRARY"] = library
+
+
+def _offered_by_ld_library_path() -> bool:
+    for folder in filter(None, os.environ.get("LD_LIBRARY_PATH", "").split(":")):
+        try:
+            if any(name.startswith("libglfw") for name in os.listdir(folder)):
+                return True
+        except OSError:
+            continue
+    return False
 
 
 _name_the_bundled_glfw()
