@@ -98,7 +98,10 @@ class Builder:
                            ("types.h", "build/morton.cl", "build/ploc.cl", "build/collapse.cl"))
         options = [f"-DMAX_LEAF_SIZE={MAX_LEAF_SIZE}", f"-DMAX_DEPTH={MAX_DEPTH}",
                    f"-DTRAVERSAL_COST={TRAVERSAL_COST}f"]
-        self.program = build_cached(queue.context, queue.device, source, options).program
+        # untuned: its short, memory-bound launches gain nothing from register caps, whose
+        # trials doubled its build on an H200 (0.84-0.88 s against 0.41-0.44 s), on a cold
+        # start's path to a new scene's tree (docs/notes/performance-2026-11.md, sixteenth session)
+        self.program = build_cached(queue.context, queue.device, source, options, tune=False).program
         self.kernels = {k.function_name: k for k in self.program.all_kernels()}
 
     def launch(self, name: str, count: int, *args):
