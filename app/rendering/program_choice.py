@@ -86,10 +86,10 @@ class ProgramChoice:
         """The kernel `name` of the auxiliary ones (render_aovs, pick) for this scene: from the
         program rendering where it holds them (a generic one, the viewer's), else from the
         scene's own auxiliary program, else, outside the specialised mode, from a generic program
-        that is built; else that own program's, built now, untuned (no launch of them is long),
-        or with `start_only` its build started in the background (set_aovs) and None."""
+        that is built; else that own program's, built now, untuned (no launch of them is long).
+        With `start_only`, None, that build started in the background where it is due (set_aovs)."""
         if name in self._kernel_names:
-            return cl.Kernel(self.program, name)
+            return None if start_only else cl.Kernel(self.program, name)
         features = self._aux_features()
         program = self.backend.programs.built(features, tuned=False)
         if program is None and self.backend.mode != "specialised":
