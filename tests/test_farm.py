@@ -70,6 +70,41 @@ def test_farm_image_equals_the_one_process_render(cluster, start_actors, scenes,
     assert not np.allclose(sums[2], sums[3])
 
 
+def test_an_actor_keeps_each_jobs_sums_apart_and_hands_them_over_once(cluster, start_actors, scenes, backend):
+    """An actor's renderer holds one job's sums: batches of two frames of one scene, taking
+    turns on one actor, each reach their own frame, and a collect hands a job's sums over once."""
+    (actor, _), = start_actors(scenes, cpu_actors=1)
+    cameras = farm.orbit(scenes[0].scene.camera, 2, 90)
+    for job, start, count in [(0, 0, 5), (1, 0, 7), (0, 5, 3), (1, 7, 2)]:
+        assert ray.get(actor.render.remote(job, 0, cameras[job], start, count)) > 0
+    for job, spp in [(0, 8), (1, 9)]:
+        s, sq = ray.get(actor.collect.remote(job))
+        assert s[..., 3].min() == s[..., 3].max() == spp
+        ref = one_process(backend, scenes[0], cameras[job], spp)
+        np.testing.assert_allclose(s[..., :3], ref[..., :3], rtol=1e-5, atol=1e-5)
+        assert ray.get(actor.collect.remote(job)) is None
+
+
+def test_the_last_batches_are_shared_by_speed_so_that_the_actors_end_together():
+    """Farm.batch_size: far from the end an actor's batch is its BATCH_SECONDS size; near it, its
+    share of the samples left and of the others' pending work, in proportion to its speed."""
+    fast, slow = "fast", "slow"
+    speed = {fast: 300.0, slow: 100.0}
+    size = {fast: 300, slow: 100}
+    todo = [(0, 0, 10_000)]
+    assert farm.Farm.batch_size(fast, size, speed, todo, {}, 0) == 300
+    # 400 samples left, the slow actor busy for another half second (50 samples): 450 shared
+    # 3:1 between the fast one, which asks now, and the slow one
+    now = farm.time.perf_counter()
+    pending = {"ref": ("batch", slow, 0, [(0, 80)], now + 0.5)}
+    size = {fast: 1000, slow: 1000}
+    n = farm.Farm.batch_size(fast, size, speed, [(0, 100, 300)], pending, 100)
+    assert abs(n - 0.75 * 450) <= 2, n
+    # an actor not yet measured takes its first (small) batch, and no share of the others'
+    assert farm.Farm.batch_size("new", {"new": 1}, speed, todo, pending, 0) == 1
+    assert farm.Farm.batch_size(fast, size, speed, [], {}, 1) == 1
+
+
 def test_the_actors_splats_add_up_to_the_one_process_render(cluster, start_actors, backend):
     """Bidirectional path tracing through the farm: each actor's sums hold the light tracing
     splats of its own samples, wherever on the image they land, and the merged sums equal a
@@ -91,9 +126,10 @@ def test_killing_an_actor_mid_render_keeps_the_exact_samples(cluster, start_acto
     actors = start_actors(scenes, cpu_actors=3)
     f = farm.Farm(cluster, actors, scenes)
     victim = actors[1][0]
-    killed = []
+    killed, counted = [], []
 
     def kill_once(samples):
+        counted.append(samples)
         if not killed:
             cluster.kill(victim)
             killed.append(samples)
@@ -101,6 +137,8 @@ def test_killing_an_actor_mid_render_keeps_the_exact_samples(cluster, start_acto
     job = farm.Job(1, scenes[1].scene.camera, 120)
     (s,), _ = f.render([job], kill_once)
     assert killed and f.lost >= 1 and victim not in f.actors
+    # the progress takes back the dead actor's samples, which the others render again
+    assert sum(counted) == 120
     assert s[..., 3].min() == s[..., 3].max() == 120
     ref = one_process(backend, scenes[1], job.camera, 120)
     np.testing.assert_allclose(s[..., :3], ref[..., :3], rtol=1e-5, atol=1e-5)

@@ -1,14 +1,20 @@
 """A render farm on Ray (docs/farm.md): one actor per OpenCL device of a Ray cluster renders
-batches of sample indices, and the driver merges the sums.
+batches of sample indices into sums it keeps, and the driver merges each actor's sums once an
+image is done.
 
 What travels: the driver reads the scene files and compiles each scene once (meshes, maps and the
 BVH become arrays); the compiled scenes go to the cluster once, through Ray's object store, so
-workers need no files of their own. A batch is (job, first sample, count); its result is the
-batch's running sums, which the driver adds to the job's. A batch whose actor dies is issued
-again to another actor, and a batch's sums are added only when its result arrives, so every
-image has exactly the samples asked for, none twice. Because a sample's random numbers are keyed
-on its index (kernels/rng.cl), the image equals a one-device render of the same samples up to
-the order of float additions.
+workers need no files of their own. A batch is (job, first sample, count), and its answer is the
+device seconds it took; an actor adds its batches of a job to sums on its device and hands them
+over once, when the driver collects the finished job. A dead actor's batches not yet collected
+are issued again to the others, and sums are added only when collected, so every image has
+exactly the samples asked for, none twice. Because a sample's random numbers are keyed on its
+index (kernels/rng.cl), the image equals a one-device render of the same samples up to the order
+of float additions.
+
+Batches grow towards BATCH_SECONDS on each actor's measured speed; the last ones are cut so that
+every actor finishes at once (Farm.batch_size), as several devices in one process do
+(pathtrace.rendering.multidevice).
 
 Jobs are the stills of several scenes, or the frames of a camera orbit, all in one queue."""
 
@@ -68,18 +74,43 @@ def _actor_class(ray):
             backend = choose_device(device_spec, log=lambda line: None)
             self.device = backend.device.describe()
             self.renderers = [Renderer(backend, compiled) for compiled in scenes]
+            self.jobs = {}      # scene -> the job whose sums its renderer holds
+            self.aside = {}     # job -> (sum, sum_sq) read back from a renderer that went on to another job
 
         def describe(self) -> str:
             return self.device
 
-        def render(self, scene: int, camera: Camera, start: int, count: int):
-            """Samples start .. start+count-1 of every pixel: their (sum, sum_sq) arrays."""
+        def render(self, job: int, scene: int, camera: Camera, start: int, count: int) -> float:
+            """Adds samples start .. start+count-1 of every pixel to job `job`'s sums; returns
+            the seconds they took. A renderer holds one job's sums: another job's, if it held
+            them, are read back and kept here first."""
+            import time
             renderer = self.renderers[scene]
-            renderer.set_camera(camera)         # resets the sums
+            if self.jobs.get(scene) != job:
+                self._put_aside(scene)
+                renderer.set_camera(camera)     # resets the sums
+                self.jobs[scene] = job
+            t0 = time.perf_counter()
             renderer.choose_queue_plan(count)   # path_queue "auto": once, by trial renders
             renderer.add_samples(count, start)
             renderer.finish()
-            return renderer.read_sum(), renderer.read_sum_sq()
+            return time.perf_counter() - t0
+
+        def collect(self, job: int):
+            """Job `job`'s sums of the batches rendered since the last collect: (sum, sum_sq),
+            (H, W, 4) float32 each, or None where there were none. They are dropped here."""
+            for scene in [scene for scene, held in self.jobs.items() if held == job]:
+                self._put_aside(scene)
+            return self.aside.pop(job, None)
+
+        def _put_aside(self, scene: int):
+            job = self.jobs.pop(scene, None)
+            if job is None:
+                return
+            renderer = self.renderers[scene]
+            sums = renderer.read_sum(), renderer.read_sum_sq()
+            kept = self.aside.get(job)
+            self.aside[job] = sums if kept is None else (kept[0] + sums[0], kept[1] + sums[1])
 
     return DeviceActor
 
@@ -177,13 +208,14 @@ def _cause(error) -> str:
 
 
 class Farm:
-    """Renders jobs of `spp` samples on the live actors, re-issuing the batches of those that die."""
+    """Renders jobs of `spp` samples on the live actors, issuing again the batches of those that
+    die."""
 
     def __init__(self, ray, actors, scenes):
         self.ray = ray
         self.actors = dict(actors)          # actor -> device description
         self.scenes = scenes
-        self.lost = 0                       # batches re-issued because their actor died
+        self.lost = 0                       # batches issued again because their actor died
         self.started = len(self.actors)
 
     @property
@@ -192,53 +224,98 @@ class Farm:
         return self.started - len(self.actors)
 
     def render(self, jobs: list[Job], on_batch=None):
-        """The merged (sum, sum_sq) of each job, (H, W, 4) float64 each; on_batch(samples per
-        pixel) after each batch."""
+        """The merged (sum, sum_sq) of each job, (H, W, 4) float64 each. on_batch(samples per
+        pixel) after each batch an actor renders, and on_batch(-samples) for those of a dead
+        actor, which are rendered again."""
         ray = self.ray
         sizes = [self.scenes[job.scene].scene.settings for job in jobs]
         sums = [np.zeros((s.height, s.width, 4), np.float64) for s in sizes]
         sums_sq = [np.zeros_like(s) for s in sums]
         done = [0] * len(jobs)
-        # unissued ranges, in job order: (job, start, count)
+        # every range of samples is in one place: unissued (in job order), in a pending batch,
+        # held by its actor, or in a pending collect
         todo = collections.deque((j, 0, job.spp) for j, job in enumerate(jobs))
+        held = {actor: collections.defaultdict(list) for actor in self.actors}   # actor -> job -> ranges
+        pending = {}            # ref -> ("batch", actor, job, (range,), expected end) or ("collect", actor, job, ranges)
         size = {actor: 1 for actor in self.actors}      # next batch size of each actor
-        pending = {}                                    # result ref -> (actor, job, start, count, t0)
+        speed = {}              # actor -> samples per second, as last measured
+        report = on_batch or (lambda count: None)
 
         def issue(actor):
             if not todo:
                 return
             j, start, count = todo.popleft()
-            take = min(count, size[actor])
+            take = min(count, self.batch_size(actor, size, speed, todo, pending, count))
             if take < count:
                 todo.appendleft((j, start + take, count - take))
-            job = jobs[j]
-            ref = actor.render.remote(job.scene, job.camera, start, take)
-            pending[ref] = (actor, j, start, take, time.perf_counter())
+            ref = actor.render.remote(j, jobs[j].scene, jobs[j].camera, start, take)
+            ends = time.perf_counter() + take / speed[actor] if actor in speed else math.inf
+            pending[ref] = ("batch", actor, j, [(start, take)], ends)
+
+        def lose(ranges, rendered: bool):
+            """Puts a dead actor's ranges, (job, start, count) each, back in the queue; `rendered`:
+            their batches had been reported."""
+            for r in ranges:
+                todo.appendleft(r)
+                if rendered:
+                    report(-r[2])
+            self.lost += len(ranges)
 
         for actor in self.actors:
             issue(actor)
         while pending:
             ready, _ = ray.wait(list(pending), num_returns=1)
-            actor, j, start, count, t0 = pending.pop(ready[0])
+            kind, actor, j, ranges, *_ = pending.pop(ready[0])
             try:
-                s, sq = ray.get(ready[0])
+                answer = ray.get(ready[0])
             except ray.exceptions.RayError:
-                # the actor died (or its device failed): its batch goes back to the queue
-                self.lost += 1
-                self.actors.pop(actor, None)
-                todo.appendleft((j, start, count))
+                # the actor died (or its device failed): what it rendered or held goes back to
+                # the queue, to be rendered by the others
+                lose([(j, start, count) for start, count in ranges], kind == "collect")
+                if actor in self.actors:
+                    del self.actors[actor]
+                    lose([(jj, start, count) for jj, rs in held.pop(actor).items() for start, count in rs], True)
                 if not self.actors:
                     raise UserError("every farm worker died; nothing written") from None
                 for a in self.actors:
-                    if not any(p[0] is a for p in pending.values()):
+                    if not any(p[0] == "batch" and p[1] is a for p in pending.values()):
                         issue(a)
                 continue
-            sums[j] += s
-            sums_sq[j] += sq
-            done[j] += count
-            size[actor] = next_launch_size(count, time.perf_counter() - t0, BATCH_SECONDS)
-            if on_batch:
-                on_batch(count)
+            if kind == "collect":
+                if answer is not None:
+                    sums[j] += answer[0]
+                    sums_sq[j] += answer[1]
+                done[j] += sum(count for _, count in ranges)
+                continue
+            if actor not in self.actors:     # an answer after a failure of the same actor
+                lose([(j, *ranges[0])], False)
+                continue
+            (start, count), = ranges
+            held[actor][j].append((start, count))
+            speed[actor] = count / max(answer, 1e-9)
+            size[actor] = next_launch_size(count, answer, BATCH_SECONDS)
+            report(count)
+            if not any(t[0] == j for t in todo) and \
+                    not any(p[0] == "batch" and p[2] == j for p in pending.values()):
+                for a, jobs_held in held.items():     # the job is rendered: its sums come home
+                    if jobs_held.get(j):
+                        pending[a.collect.remote(j)] = ("collect", a, j, jobs_held.pop(j))
             issue(actor)
         assert done == [job.spp for job in jobs], done
         return sums, sums_sq
+
+    @staticmethod
+    def batch_size(actor, size, speed, todo, pending, count) -> int:
+        """Samples for `actor`'s next batch: `size[actor]`, towards BATCH_SECONDS at its measured
+        speed; near the end, its share of what is left, so that every actor finishes at once: the
+        unissued samples and the pending batches' remaining time shared in proportion to the
+        actors' speeds (an actor not yet measured takes none of it)."""
+        if actor not in speed:
+            return size[actor]
+        now = time.perf_counter()
+        left = sum(c for _, _, c in todo) + count
+        busy = sum(speed.get(p[1], 0.0) * max(min(p[4], now + BATCH_SECONDS) - now, 0.0)
+                   for p in pending.values() if p[0] == "batch")
+        total = sum(speed.get(p[1], 0.0) for p in pending.values() if p[0] == "batch") + speed[actor]
+        share = math.ceil(speed[actor] * (left + busy) / total)
+        return max(1, min(size[actor], share))
