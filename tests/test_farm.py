@@ -2,8 +2,11 @@
 the one-process render of the same samples, also when an actor is killed mid-render, and each
 bad input is one line."""
 
+import collections
+import random
 import subprocess
 import sys
+import types
 
 import numpy as np
 import pytest
@@ -209,3 +212,166 @@ def test_farm_render_from_the_command_line(tmp_path):
     images = [read_hdr(tmp_path / f"frame-{k}.pfm", "test") for k in range(3)]
     assert all(np.isfinite(i).all() and i.shape == (20, 32, 3) for i in images)
     assert not np.allclose(images[0], images[2])
+
+
+# --- Farm.render against a deterministic model of Ray: its actors run DeviceActor's own methods
+# on renderers whose sums say which samples of which camera they hold, and the model's scheduler
+# runs their calls, kills actors and fails calls at chosen random moments.
+
+class _ModelError(Exception):
+    pass
+
+
+class _ModelRenderer:
+    """Sums of one pixel: the samples' indices + 1, their squares, the camera (a number) per sample, and the count."""
+
+    def set_camera(self, camera):
+        self.camera, self.s = camera, np.zeros((1, 1, 4))
+
+    def add_samples(self, count, start):
+        i = np.arange(start, start + count) + 1.0
+        self.s += [i.sum(), (i * i).sum(), count * (1000 * self.camera + 1), count]
+
+    def choose_queue_plan(self, count):
+        pass
+
+    def finish(self):
+        pass
+
+    def read_sum(self):
+        return self.s.copy()
+
+    def read_sum_sq(self):
+        return 2 * self.s
+
+
+class _ModelCall:
+    def __init__(self, actor, method, args):
+        self.actor, self.method, self.args, self.state, self.result = actor, method, args, "queued", None
+
+
+class _ModelActor:
+    def __init__(self, model, impl, seconds_per_sample):
+        self.model, self.impl, self.seconds_per_sample = model, impl, seconds_per_sample
+        self.calls, self.dead = collections.deque(), False
+        self.render = types.SimpleNamespace(remote=lambda *a: self.call("render", a))
+        self.collect = types.SimpleNamespace(remote=lambda *a: self.call("collect", a))
+
+    def call(self, method, args):
+        c = _ModelCall(self, method, args)
+        if self.dead:
+            c.state = "failed"
+        else:
+            self.calls.append(c)
+        return c
+
+
+class _Model:
+    """Ray as Farm.render uses it (wait, get, kill), run in this process."""
+
+    def __init__(self, seed, actors, scenes, kills=0, failures=0):
+        self.rng = random.Random(seed)
+        self.kills, self.failures = kills, failures
+        self.exceptions = types.SimpleNamespace(RayError=_ModelError)
+        cls = farm._actor_class(types.SimpleNamespace(remote=lambda **_: (lambda c: c)))
+        self.actors = []
+        for _ in range(actors):
+            impl = object.__new__(cls)
+            impl.renderers, impl.jobs, impl.aside = [_ModelRenderer() for _ in range(scenes)], {}, {}
+            self.actors.append(_ModelActor(self, impl, self.rng.choice([1e-3, 3e-3, 1e-2])))
+
+    def kill(self, actor):
+        actor.dead = True
+        for c in actor.calls:
+            c.state = "failed"
+        actor.calls.clear()
+
+    def step(self) -> bool:
+        live = [a for a in self.actors if not a.dead]
+        if self.kills and live and self.rng.random() < 0.05:
+            self.kills -= 1
+            self.kill(self.rng.choice(live))
+            return True
+        busy = [a for a in live if a.calls]
+        if not busy:
+            return False
+        a = self.rng.choice(busy)
+        c = a.calls.popleft()
+        if self.failures and self.rng.random() < 0.05:      # the call fails, the actor lives on
+            self.failures -= 1
+            c.state = "failed"
+            return True
+        c.result = getattr(a.impl, c.method)(*c.args)
+        if c.method == "render":
+            c.result = c.args[4] * a.seconds_per_sample * self.rng.uniform(0.5, 1.5)
+        c.state = "done"
+        return True
+
+    def wait(self, calls, num_returns=1):
+        while True:
+            ready = [c for c in calls if c.state != "queued"]
+            if ready:
+                pick = self.rng.choice(ready)
+                return [pick], [c for c in calls if c is not pick]
+            assert self.step(), "the farm waits on calls that no actor will answer"
+
+    def get(self, call):
+        if call.state == "failed":
+            raise _ModelError(call.method)
+        return call.result
+
+
+def _model_scenes(n):
+    settings = types.SimpleNamespace(width=1, height=1)
+    return [types.SimpleNamespace(scene=types.SimpleNamespace(settings=settings)) for _ in range(n)]
+
+
+def _expected(job):
+    i = np.arange(job.spp) + 1.0
+    return np.array([i.sum(), (i * i).sum(), job.spp * (1000 * job.camera + 1), job.spp])
+
+
+@pytest.mark.parametrize("trouble", [dict(kills=4), dict(failures=3), dict(kills=2, failures=2)])
+def test_every_sample_once_whatever_dies_or_fails_and_when(trouble):
+    """Actors killed, and calls failing on living actors, at random moments of random renders
+    (1-4 actors, 1-5 jobs over 1-2 scenes): every job's sums hold each of its samples once, of
+    its own camera, and the progress adds up to what was asked; or, with every actor gone, the
+    one-line error."""
+    outcomes = collections.Counter()
+    for seed in range(300):
+        rng = random.Random(seed)
+        scenes = rng.choice([1, 2])
+        model = _Model(seed, rng.choice([1, 2, 3, 4]), scenes, **trouble)
+        jobs = [farm.Job(rng.randrange(scenes), camera, rng.choice([1, 2, 5, 17, 40]))
+                for camera in range(rng.randint(1, 5))]
+        f = farm.Farm(model, [(a, "model") for a in model.actors], _model_scenes(scenes))
+        reported = []
+        try:
+            sums, sums_sq = f.render(jobs, reported.append)
+        except UserError as e:
+            assert "every farm worker died" in str(e) and not f.actors
+            outcomes["all died"] += 1
+            continue
+        for job, s, sq in zip(jobs, sums, sums_sq):
+            np.testing.assert_array_equal(s[0, 0], _expected(job))
+            np.testing.assert_array_equal(sq[0, 0], 2 * _expected(job))
+        assert sum(reported) == sum(job.spp for job in jobs)
+        outcomes["rendered"] += 1
+    assert outcomes["rendered"] > 200, outcomes
+
+
+def test_a_second_render_after_one_cut_short_holds_its_own_samples_alone():
+    """A render stopped part-way (Ctrl-C reaches it through on_batch) leaves its sums on the
+    actors; the same farm's next render does not add them to its own."""
+    model = _Model(3, 2, 1)
+    f = farm.Farm(model, [(a, "model") for a in model.actors], _model_scenes(1))
+
+    def stop_at_the_third(count, calls=[]):
+        calls.append(count)
+        if len(calls) == 3:
+            raise KeyboardInterrupt
+    with pytest.raises(KeyboardInterrupt):
+        f.render([farm.Job(0, 7, 50)], stop_at_the_third)
+    job = farm.Job(0, 1, 20)
+    (s,), _ = f.render([job])
+    np.testing.assert_array_equal(s[0, 0], _expected(job))

@@ -5,12 +5,13 @@ image is done.
 What travels: the driver reads the scene files and compiles each scene once (meshes, maps and the
 BVH become arrays); the compiled scenes go to the cluster once, through Ray's object store, so
 workers need no files of their own. A batch is (job, first sample, count), and its answer is the
-device seconds it took; an actor adds its batches of a job to sums on its device and hands them
-over once, when the driver collects the finished job. A dead actor's batches not yet collected
-are issued again to the others, and sums are added only when collected, so every image has
-exactly the samples asked for, none twice. Because a sample's random numbers are keyed on its
-index (kernels/rng.cl), the image equals a one-device render of the same samples up to the order
-of float additions.
+seconds it took; an actor adds its batches of a job to sums it keeps and hands them over when
+the driver collects the finished job. A dead actor's batches not yet collected are issued again
+to the others, and sums are added only when collected, so every image has exactly the samples
+asked for, none twice. Because a sample's random numbers are keyed on its index (kernels/rng.cl),
+the image equals a one-device render of the same samples by the same program up to the order of
+float additions (an actor may draw its first batches with the generic program while its scene's
+own builds: pathtrace.device.programs; the two agree in expectation, not sample for sample).
 
 Batches grow towards BATCH_SECONDS on each actor's measured speed; the last ones are cut so that
 every actor finishes at once (Farm.batch_size), as several devices in one process do
@@ -80,10 +81,11 @@ def _actor_class(ray):
         def describe(self) -> str:
             return self.device
 
-        def render(self, job: int, scene: int, camera: Camera, start: int, count: int) -> float:
-            """Adds samples start .. start+count-1 of every pixel to job `job`'s sums; returns
-            the seconds they took. A renderer holds one job's sums: another job's, if it held
-            them, are read back and kept here first."""
+        def render(self, job, scene: int, camera: Camera, start: int, count: int) -> float:
+            """Adds samples start .. start+count-1 of every pixel to the sums of `job` (the
+            driver's key of it); returns the seconds they took. A renderer holds one job's sums
+            on its device: another job's, if it held them, are read back and kept in this
+            process's memory first."""
             import time
             renderer = self.renderers[scene]
             if self.jobs.get(scene) != job:
@@ -96,7 +98,7 @@ def _actor_class(ray):
             renderer.finish()
             return time.perf_counter() - t0
 
-        def collect(self, job: int):
+        def collect(self, job):
             """Job `job`'s sums of the batches rendered since the last collect: (sum, sum_sq),
             (H, W, 4) float32 each, or None where there were none. They are dropped here."""
             for scene in [scene for scene, held in self.jobs.items() if held == job]:
@@ -217,6 +219,7 @@ class Farm:
         self.scenes = scenes
         self.lost = 0                       # batches issued again because their actor died
         self.started = len(self.actors)
+        self.renders = 0                    # calls of render: with a job's index, its key on the actors
 
     @property
     def lost_workers(self) -> int:
@@ -228,6 +231,8 @@ class Farm:
         pixel) after each batch an actor renders, and on_batch(-samples) for those of a dead
         actor, which are rendered again."""
         ray = self.ray
+        self.renders += 1
+        key = self.renders      # an actor's sums of an earlier render, cut short, are not this one's
         sizes = [self.scenes[job.scene].scene.settings for job in jobs]
         sums = [np.zeros((s.height, s.width, 4), np.float64) for s in sizes]
         sums_sq = [np.zeros_like(s) for s in sums]
@@ -236,7 +241,7 @@ class Farm:
         # held by its actor, or in a pending collect
         todo = collections.deque((j, 0, job.spp) for j, job in enumerate(jobs))
         held = {actor: collections.defaultdict(list) for actor in self.actors}   # actor -> job -> ranges
-        pending = {}            # ref -> ("batch", actor, job, (range,), expected end) or ("collect", actor, job, ranges)
+        pending = {}            # ref -> ("batch", actor, job, [range], expected end) or ("collect", actor, job, ranges)
         size = {actor: 1 for actor in self.actors}      # next batch size of each actor
         speed = {}              # actor -> samples per second, as last measured
         report = on_batch or (lambda count: None)
@@ -248,7 +253,7 @@ class Farm:
             take = min(count, self.batch_size(actor, size, speed, todo, pending, count))
             if take < count:
                 todo.appendleft((j, start + take, count - take))
-            ref = actor.render.remote(j, jobs[j].scene, jobs[j].camera, start, take)
+            ref = actor.render.remote((key, j), jobs[j].scene, jobs[j].camera, start, take)
             ends = time.perf_counter() + take / speed[actor] if actor in speed else math.inf
             pending[ref] = ("batch", actor, j, [(start, take)], ends)
 
@@ -260,6 +265,11 @@ class Farm:
                 if rendered:
                     report(-r[2])
             self.lost += len(ranges)
+
+        def refill():
+            for a in self.actors:
+                if not any(p[0] == "batch" and p[1] is a for p in pending.values()):
+                    issue(a)
 
         for actor in self.actors:
             issue(actor)
@@ -275,11 +285,10 @@ class Farm:
                 if actor in self.actors:
                     del self.actors[actor]
                     lose([(jj, start, count) for jj, rs in held.pop(actor).items() for start, count in rs], True)
+                    ray.kill(actor)     # one whose device failed would hold it, and answer again
                 if not self.actors:
                     raise UserError("every farm worker died; nothing written") from None
-                for a in self.actors:
-                    if not any(p[0] == "batch" and p[1] is a for p in pending.values()):
-                        issue(a)
+                refill()
                 continue
             if kind == "collect":
                 if answer is not None:
@@ -289,6 +298,7 @@ class Farm:
                 continue
             if actor not in self.actors:     # an answer after a failure of the same actor
                 lose([(j, *ranges[0])], False)
+                refill()
                 continue
             (start, count), = ranges
             held[actor][j].append((start, count))
@@ -299,7 +309,7 @@ class Farm:
                     not any(p[0] == "batch" and p[2] == j for p in pending.values()):
                 for a, jobs_held in held.items():     # the job is rendered: its sums come home
                     if jobs_held.get(j):
-                        pending[a.collect.remote(j)] = ("collect", a, j, jobs_held.pop(j))
+                        pending[a.collect.remote((key, j))] = ("collect", a, j, jobs_held.pop(j))
             issue(actor)
         assert done == [job.spp for job in jobs], done
         return sums, sums_sq
