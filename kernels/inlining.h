@@ -17,7 +17,10 @@
  * called rather than inlined: NVIDIA's compiler inlined every kind into each of its call sites
  * in every kernel, a program that took its driver minutes to build (docs/notes/performance-2026-11.md,
  * 2026-11-28 evening). But for the textures that read no other (eval_leaf_texture,
- * app/textures/registry.py: called, NVIDIA's driver 580 built a program that miscounted). A
+ * app/textures/registry.py: called, NVIDIA's driver 580 built a program that miscounted), and
+ * the commonest BSDF and light (FAST_PATH of app/materials/registry.py and app/lights/registry.py),
+ * tested before the call and inlined, so that most scenes' vertices make no call
+ * (docs/notes/performance-2026-11.md, 2026-11-30, seventeenth session). A
  * scene's own program, which compiles only its kinds, and CPUs, whose calls pass a path's state
  * through memory, keep them inlined. */
 #if defined(GENERIC) && !defined(CPU_DEVICE)

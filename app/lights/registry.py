@@ -46,6 +46,11 @@ directional light's one direction is a delta). Lights at infinity leave a disk a
 count light subpaths from every light."""
 
 
+# The type a generic program samples inlined before its dispatch's call: the commonest, whose
+# call would cost most scenes a call per vertex
+FAST_PATH = "area"
+
+
 def kernel_parts(names=None, tree: bool = False, bidirectional: bool = False) -> list:
     """(name, source) of the light kernels of a program whose delta light types are `names`
     (None: all), in the order they compile: the tags, the interface, the light tree's traversal
@@ -61,9 +66,16 @@ def kernel_parts(names=None, tree: bool = False, bidirectional: bool = False) ->
         cases = "".join(f"    case LIGHT_{n.upper()}: return {call(n) if callable(call) else call.format(n)};\n"
                         for n in kinds)
         return f"    switch (l->type) {{\n{cases}    default: return {default};\n    }}\n"
-    dispatch = ("DISPATCH int sample_light_of_type(const SceneData *sc, const RenderParams *p, const global Light *l,\n"
-                "                         float3 x, float3 n, float2 u, LightSample *ls)\n{\n"
-                + switch("sample_{}_light(sc, p, l, x, n, u, ls)", "0") + "}\n")
+    # in a generic program, where the dispatch is a call (kernels/inlining.h: DISPATCH), FAST_PATH
+    # is tested first, inlined; a scene's own program compiles the #else, the dispatch alone
+    signature = ("int sample_light_of_type(const SceneData *sc, const RenderParams *p, const global Light *l,\n"
+                 "                         float3 x, float3 n, float2 u, LightSample *ls)")
+    body = "{\n" + switch("sample_{}_light(sc, p, l, x, n, u, ls)", "0") + "}\n"
+    dispatch = (f"#ifdef GENERIC\nDISPATCH {signature.replace('_of_type(', '_by_switch(')}\n{body}"
+                f"{signature}\n{{\n    if (l->type == LIGHT_{FAST_PATH.upper()})\n"
+                f"        return sample_{FAST_PATH}_light(sc, p, l, x, n, u, ls);\n"
+                "    return sample_light_by_switch(sc, p, l, x, n, u, ls);\n}\n"
+                f"#else\nDISPATCH {signature}\n{body}#endif\n")
     if bidirectional:
         emitters = [n for n in used if n in EMITTERS]
         dispatch += ("int emit_light_of_type(const SceneData *sc, const RenderParams *p, const global Light *l, float4 u,\n"

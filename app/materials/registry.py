@@ -36,21 +36,35 @@ def tag_source() -> str:
                           for name, b in BSDFS.items() for slot_name, slot in b.slots().items())
 
 
+# The type a generic program inlines before its dispatch's call (kernels/inlining.h: DISPATCH):
+# the commonest, whose call would cost most scenes a call per vertex
+FAST_PATH = "diffuse"
+
+
 def dispatch_source(names=None) -> str:
-    """The eval/pdf/sample dispatch of kernels/bsdf.cl over the types `names` (None: all)."""
+    """The eval/pdf/sample dispatch of kernels/bsdf.cl over the types `names` (None: all). In a
+    generic program, where the dispatch is a call (kernels/inlining.h), FAST_PATH is tested
+    first, inlined."""
     with_kernel = [n for n in _with_kernel(names) if not BSDFS[n].resolved_first]
     # a type whose every lobe is a delta has no eval or pdf (both 0): it provides sample only
     smooth = [n for n in with_kernel if not BSDFS[n].flags & DELTA]
 
-    def switch(types, call, default):
-        cases = "".join(f"    case BSDF_{n.upper()}: return {call.format(n)};\n" for n in types)
-        return f"    switch (m->type) {{\n{cases}    default: return {default};\n    }}\n"
-    return ("DISPATCH float3 eval_bsdf(MaterialRef m, float3 wo, float3 wi)\n{\n"
-            + switch(smooth, "eval_{}(m, wo, wi)", "(float3)(0.0f)") + "}\n"
-            + "DISPATCH float pdf_bsdf(MaterialRef m, float3 wo, float3 wi)\n{\n"
-            + switch(smooth, "pdf_{}(m, wo, wi)", "0.0f") + "}\n"
-            + "DISPATCH int sample_bsdf(MaterialRef m, float3 wo, float3 u, BSDFSample *s)\n{\n"
-            + switch(with_kernel, "sample_{}(m, wo, u, s)", "0") + "}\n")
+    def dispatch(signature, call, args, types, default):
+        cases = "".join(f"    case BSDF_{n.upper()}: return {call.format(n)}{args};\n" for n in types)
+        body = f"{{\n    switch (m->type) {{\n{cases}    default: return {default};\n    }}\n}}\n"
+        if FAST_PATH not in types:
+            return f"DISPATCH {signature}\n{body}"
+        # a scene's own program compiles the #else, the dispatch alone
+        name = signature.split("(")[0].split()[-1]
+        return (f"#ifdef GENERIC\nDISPATCH {signature.replace(name + '(', name + '_by_switch(')}\n{body}"
+                f"{signature}\n{{\n    if (m->type == BSDF_{FAST_PATH.upper()})\n"
+                f"        return {call.format(FAST_PATH)}{args};\n    return {name}_by_switch{args};\n}}\n"
+                f"#else\nDISPATCH {signature}\n{body}#endif\n")
+    return (dispatch("float3 eval_bsdf(MaterialRef m, float3 wo, float3 wi)", "eval_{}", "(m, wo, wi)", smooth,
+                     "(float3)(0.0f)")
+            + dispatch("float pdf_bsdf(MaterialRef m, float3 wo, float3 wi)", "pdf_{}", "(m, wo, wi)", smooth, "0.0f")
+            + dispatch("int sample_bsdf(MaterialRef m, float3 wo, float3 u, BSDFSample *s)", "sample_{}",
+                       "(m, wo, u, s)", with_kernel, "0"))
 
 
 def _with_kernel(names):
