@@ -201,6 +201,7 @@ def test_unreadable_environment_map(tmp_path, name, data):
     (["simple", "--device", "no-such-device"], "--device: no OpenCL device matches 'no-such-device'"),
     (["simple", "--device", ""], "--device: empty; give auto, gpu, cpu"),
     (["simple", "--size", "0x10"], "width and height must be 1 to 16384"),
+    (["simple", "--size", "-64x48"], "argument --size: '-64x48': width and height must be 1 to 16384"),
     (["simple", "--size", "big"], "is not WIDTHxHEIGHT"),
     (["simple", "--spp", "0"], "out of range"),
     (["simple", "--spp", "many"], "is not an integer"),

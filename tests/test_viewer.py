@@ -881,6 +881,11 @@ def test_without_a_display_it_says_how_to_render_headless(tmp_path):
                        text=True, timeout=60)      # the commands name the scene asked for
     assert r.returncode == 1 and "render cornell-box -o out.png" in r.stderr, r.stderr
     assert r.stderr.rstrip().endswith("-m pathtrace view cornell-box") and len(r.stderr.strip().splitlines()) == 1
+    # a scene that cannot be read is said first, not a headless command that would fail with it
+    r = subprocess.run([sys.executable, "-m", "pathtrace", "view", "cornel-box"], env=env, capture_output=True,
+                       text=True, timeout=60)
+    assert r.returncode == 1 and "did you mean cornell-box?" in r.stderr and "render cornel-box" not in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1, r.stderr
 
 
 def test_the_image_edges_do_not_wrap_round(viewer):

@@ -2,6 +2,7 @@
 
 import argparse
 import os
+import re
 import sys
 
 from pathtrace import __version__
@@ -28,6 +29,13 @@ class Parser(argparse.ArgumentParser):
 
     MESSAGE_LIMIT = 400
 
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        # a value that starts with a minus and a digit ('--size -64x48') is the option's value,
+        # which its type then refuses in one line; argparse took it for an unknown option and said
+        # "expected one argument". No option of pathtrace's starts so.
+        self._negative_number_matcher = re.compile(r"^-\d")
+
     def format_help(self):
         if self.epilog == SCENES_EPILOG:
             self.epilog = listing.epilog()
@@ -44,7 +52,6 @@ class Parser(argparse.ArgumentParser):
     def suggestion(self, message: str) -> str:
         """"; did you mean ...?" for an unknown option (among this parser's) or an invalid
         choice (among the argument's), where one is close to what was typed."""
-        import re
         choice = re.match(r"argument (\S+): invalid choice: '(.*)' \(choose from (.*)\)$", message)
         if choice:
             return did_you_mean(choice[2], re.findall(r"'([^']*)'", choice[3]))

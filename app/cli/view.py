@@ -10,7 +10,11 @@ def cmd_view(args):
         raise UserError("--device: the viewer renders on one device; give one (several are "
                         "for 'pathtrace render')")
     from pathtrace.viewer.window import require_display
-    require_display(args.scene)      # before any device work
+    try:
+        require_display(args.scene)      # before any device work
+    except UserError:
+        api.load(args.scene)             # a scene that cannot be read is the first thing to say
+        raise
     api.view(lambda: apply_render_options(api.load(args.scene), args), (args.device or ["auto"])[0],
              frames=args.frames, screenshot_dir=args.screenshot_dir, screenshot=args.screenshot)
     return 0
