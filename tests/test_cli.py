@@ -220,6 +220,16 @@ def test_bad_arguments_get_one_clear_message(tmp_path, args, message):
     assert not out.exists()
 
 
+def test_values_that_start_with_a_minus_are_the_options_values():
+    """'-.5' and '-2e1' are numbers, and '-64x48' a size its type refuses (test above): none is
+    taken for an option."""
+    from pathtrace.cli.main import build_parser
+    args = build_parser().parse_args(["render", "simple", "-o", "x.png", "--exposure", "-.5"])
+    assert args.exposure == -0.5
+    args = build_parser().parse_args(["farm", "render", "simple", "-o", "x.png", "--orbit", "-2e1"])
+    assert args.orbit == -20.0
+
+
 @pytest.mark.parametrize("name", ["no\nsuch\nscene", "no\x1b[31msuch", "x" * 5000])
 def test_a_scene_name_that_does_not_print_is_shown_on_one_line(tmp_path, name):
     """A name with a newline or an escape sequence, or one too long for the file system, is

@@ -886,6 +886,10 @@ def test_without_a_display_it_says_how_to_render_headless(tmp_path):
                        text=True, timeout=60)
     assert r.returncode == 1 and "did you mean cornell-box?" in r.stderr and "render cornel-box" not in r.stderr
     assert len(r.stderr.strip().splitlines()) == 1, r.stderr
+    # and it is only looked up, not made: a scene of a hundred million spheres gets the message at once
+    r = subprocess.run([sys.executable, "-m", "pathtrace", "view", "spheres100M"], env=env, capture_output=True,
+                       text=True, timeout=60)
+    assert r.returncode == 1 and "needs a display" in r.stderr, r.stderr
 
 
 def test_the_image_edges_do_not_wrap_round(viewer):

@@ -31,10 +31,11 @@ class Parser(argparse.ArgumentParser):
 
     def __init__(self, *args, **kwargs):
         super().__init__(*args, **kwargs)
-        # a value that starts with a minus and a digit ('--size -64x48') is the option's value,
-        # which its type then refuses in one line; argparse took it for an unknown option and said
-        # "expected one argument". No option of pathtrace's starts so.
-        self._negative_number_matcher = re.compile(r"^-\d")
+        # a value that starts with a minus and a digit ('--size -64x48', '--exposure -.5') is the
+        # option's value, which its type then refuses where it must, in one line; argparse took
+        # '-64x48' for an unknown option and said "expected one argument". No option of
+        # pathtrace's starts so.
+        self._negative_number_matcher = re.compile(r"^-\.?\d")
 
     def format_help(self):
         if self.epilog == SCENES_EPILOG:

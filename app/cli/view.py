@@ -5,6 +5,7 @@ from pathtrace.errors import UserError
 
 def cmd_view(args):
     from pathtrace import api
+    from pathtrace.scene import find_scene
 
     if args.device and len(args.device) > 1:
         raise UserError("--device: the viewer renders on one device; give one (several are "
@@ -13,7 +14,7 @@ def cmd_view(args):
     try:
         require_display(args.scene)      # before any device work
     except UserError:
-        api.load(args.scene)             # a scene that cannot be read is the first thing to say
+        find_scene(args.scene)           # a name that names no scene is the first thing to say
         raise
     api.view(lambda: apply_render_options(api.load(args.scene), args), (args.device or ["auto"])[0],
              frames=args.frames, screenshot_dir=args.screenshot_dir, screenshot=args.screenshot)

@@ -42,7 +42,19 @@ def load_scene(name_or_path: str) -> Scene:
         return cached_read(name_or_path, _read_scene)
 
 
+def find_scene(name_or_path: str):
+    """Raises, in one line, as load_scene would, where `name_or_path` names no scene file that
+    pathtrace reads and no built-in scene; reads and builds nothing (the viewer without a display
+    says so before it says how to render headless)."""
+    _reader(name_or_path)
+
+
 def _read_scene(name_or_path: str) -> Scene:
+    return _reader(name_or_path)()
+
+
+def _reader(name_or_path: str):
+    """What reads the scene `name_or_path`, a function of no arguments; or the one-line error."""
     if not str(name_or_path).strip():     # Path("") is the current folder, which no reader means
         raise UserError("no scene given: the scene's name or path is empty")
     path = Path(name_or_path)
@@ -54,20 +66,27 @@ def _read_scene(name_or_path: str) -> Scene:
     if not exists and (pbrt or path.suffix.lower() in (".xml", ".toml")):
         raise missing(path, "scene file")
     if path.suffix.lower() == ".xml":
-        from pathtrace.scene.mitsuba import read_mitsuba_file
-        return named(read_mitsuba_file(path), path)
+        def read_xml():
+            from pathtrace.scene.mitsuba import read_mitsuba_file
+            return named(read_mitsuba_file(path), path)
+        return read_xml
     if pbrt:
-        from pathtrace.scene.pbrt import read_pbrt_file
-        return named(read_pbrt_file(path), path)
+        def read_pbrt():
+            from pathtrace.scene.pbrt import read_pbrt_file
+            return named(read_pbrt_file(path), path)
+        return read_pbrt
     if exists:      # a file of a built-in scene's name is the file
         if path.is_file() and path.suffix.lower() != ".toml":
             raise UserError(f"{cut(shown(path), 100)}: not a scene file: pathtrace reads .toml (its own format), "
                             ".xml (Mitsuba 3) and .pbrt or .pbrt.gz (pbrt-v4)")
-        from pathtrace.scene.toml_reader import read_scene_file
-        return read_scene_file(path)        # which refuses a folder, a fifo or a device in one line
-    from pathtrace.scene.builtin import BUILTIN_SCENES, builtin_scene
-    scene = builtin_scene(name_or_path)
-    if scene is not None:
-        return scene
+
+        def read_toml():
+            from pathtrace.scene.toml_reader import read_scene_file
+            return read_scene_file(path)        # which refuses a folder, a fifo or a device in one line
+        return read_toml
+    from pathtrace.scene.builtin import BUILTIN_SCENES, builtin_maker
+    make = builtin_maker(name_or_path)
+    if make is not None:
+        return make
     raise UserError(f"{cut(shown(name_or_path), 100)}: neither a scene file nor a built-in scene"
                     f"{did_you_mean(str(name_or_path), BUILTIN_SCENES)} (built-ins: {', '.join(BUILTIN_SCENES)})")

@@ -92,17 +92,17 @@ def count_name(n: int) -> str:
         f"{n // 1_000_000}M" if n % 1_000_000 == 0 else str(n)
 
 
-def builtin_scene(name: str):
-    """A built-in scene by name, or None. Besides the named ones, 'spheresN' with N a count
-    (a k or M suffix allowed, e.g. spheres512k, spheres1M) and an optional '-diffuse' gives the
-    random-spheres scene of N spheres, and 'heightfieldN' a height field of about N triangles,
-    for scaling measurements."""
+def builtin_maker(name: str):
+    """What makes the built-in scene `name`, without making it, or None. Besides the named ones,
+    'spheresN' with N a count (a k or M suffix allowed, e.g. spheres512k, spheres1M) and an
+    optional '-diffuse' gives the random-spheres scene of N spheres, and 'heightfieldN' a height
+    field of about N triangles, for scaling measurements."""
     if name in BUILTIN_SCENES:
-        return BUILTIN_SCENES[name]()
+        return BUILTIN_SCENES[name]
     m = re.fullmatch(r"(spheres|heightfield)(\d+)([kM]?)(-diffuse)?", name)
     if m and 0 < int(m.group(2)) <= 100_000_000 and not (m.group(1) == "heightfield" and m.group(4)):
         n = int(m.group(2)) * {"": 1, "k": 1000, "M": 1_000_000}[m.group(3)]
-        return random_spheres(n, bool(m.group(4))) if m.group(1) == "spheres" else height_field(n)
+        return (lambda: random_spheres(n, bool(m.group(4)))) if m.group(1) == "spheres" else (lambda: height_field(n))
     return None
 
 
