@@ -86,7 +86,6 @@ def _actor_class(ray):
             driver's key of it); returns the seconds they took. A renderer holds one job's sums
             on its device: another job's, if it held them, are read back and kept in this
             process's memory first."""
-            import time
             renderer = self.renderers[scene]
             if self.jobs.get(scene) != job:
                 self._put_aside(scene)
