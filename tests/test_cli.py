@@ -476,6 +476,19 @@ def test_the_progress_bar_ends_with_the_real_rate(tmp_path):
     assert float(last.split("Msamples/s")[0].split()[-1]) > 0
 
 
+def test_a_progress_bar_in_a_log_is_redrawn_seldom(tmp_path):
+    """Standard error that is not a terminal (a log) gets a bar's first and last draws, and one
+    every LOG_INTERVAL between, not ten a second: a render of a second or more drew its bar
+    once or twice, where tqdm's own interval drew it at every few launches."""
+    from pathtrace.cli.progress import LOG_INTERVAL
+    r = in_process("render", "simple", "-o", tmp_path / "a.png", "--size", "160x90", "--spp", "1024")
+    assert r.returncode == 0, r.stderr
+    draws = [line for line in r.stderr.split("\r") if line.startswith("simple 160x90: ")]
+    seconds = float(draws[-1].split("[")[1].split("<")[0].split(":")[-1])
+    assert draws[-1].startswith("simple 160x90: 100%")
+    assert len(draws) <= 2 + seconds / LOG_INTERVAL + 1, (len(draws), seconds)
+
+
 def test_render_prints_each_phase_with_its_time_unless_quiet(tmp_path):
     """One line per phase, in order, around the progress bar; -q prints none of them (and still
     the device and what was written)."""

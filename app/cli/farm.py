@@ -5,7 +5,7 @@ import sys
 from pathtrace.cli.interrupts import FinalWrite, check_interrupt
 from pathtrace.cli.options import (SCENES_EPILOG, _finite, _int_range, add_output_options, add_render_options,
                                    apply_render_options)
-from pathtrace.cli.progress import BuildProgress
+from pathtrace.cli.progress import BuildProgress, redraw_interval
 from pathtrace.errors import UserError, cut, short
 
 def cmd_farm_render(args):
@@ -43,7 +43,7 @@ def cmd_farm_render(args):
             print(f"worker: {device}", file=sys.stderr)
         total = sum(job.spp for job in jobs)
         bar = tqdm(total=total, unit="spp", desc=f"farm: {len(jobs)} image{'s' * (len(jobs) > 1)}",
-                   file=sys.stderr, disable=args.quiet, dynamic_ncols=True)
+                   file=sys.stderr, disable=args.quiet, dynamic_ncols=True, mininterval=redraw_interval())
         start = time.perf_counter()
         renders = farm.Farm(ray, actors, compiled)
 

@@ -5,6 +5,17 @@ import sys
 import time
 
 PROGRESS_AFTER = 1.0    # seconds before a BVH build shows its progress
+LOG_INTERVAL = 10.0     # seconds between a bar's redraws where standard error is not a terminal
+
+
+def redraw_interval() -> float:
+    """tqdm's mininterval for a bar on standard error: its own 0.1 s on a terminal; in a file or
+    a pipe (a log), whose redraws all pile up in it, one every LOG_INTERVAL (the first and the
+    last are drawn whatever the interval)."""
+    try:
+        return 0.1 if sys.stderr.isatty() else LOG_INTERVAL
+    except (AttributeError, ValueError):       # no standard error, or a closed one
+        return LOG_INTERVAL
 
 
 class BuildProgress:
@@ -14,7 +25,8 @@ class BuildProgress:
     def __init__(self, name: str, quiet: bool):
         from tqdm import tqdm
         self.bar = tqdm(total=100, desc=f"{name}: building the BVH", unit="%", delay=PROGRESS_AFTER,
-                        file=sys.stderr, disable=quiet, bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed}")
+                        file=sys.stderr, disable=quiet, mininterval=redraw_interval(),
+                        bar_format="{desc}: {percentage:3.0f}%|{bar}| {elapsed}")
 
     def __call__(self, fraction: float):
         self.bar.update(100 * fraction - self.bar.n)

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from pathtrace.cli.interrupts import INTERRUPTED, FinalWrite, check_interrupt
 from pathtrace.cli.options import SCENES_EPILOG, _int_range, add_output_options, add_render_options, apply_render_options
-from pathtrace.cli.progress import BuildProgress, Phases
+from pathtrace.cli.progress import BuildProgress, Phases, redraw_interval
 from pathtrace.errors import UserError, escape, short
 
 def cmd_render(args):
@@ -73,7 +73,7 @@ def cmd_render(args):
             build_progress.close()
             say_devices()
             bar = tqdm(total=s.spp, desc=f"{scene.name} {s.width}x{s.height}", file=sys.stderr,
-                       disable=args.quiet, dynamic_ncols=True, smoothing=0,
+                       disable=args.quiet, dynamic_ncols=True, smoothing=0, mininterval=redraw_interval(),
                        bar_format="{desc}: {percentage:3.0f}%|{bar}| {n}/{total} spp [{elapsed}<{remaining}{postfix}]")
         bar.update(done - bar.n)
         elapsed = bar.format_dict["elapsed"]
