@@ -99,7 +99,7 @@ def test_the_last_batches_are_shared_by_speed_so_that_the_actors_end_together():
     # 400 samples left, the slow actor busy for another half second (50 samples): 450 shared
     # 3:1 between the fast one, which asks now, and the slow one
     now = farm.time.perf_counter()
-    pending = {"ref": ("batch", slow, 0, [(0, 80)], now + 0.5)}
+    pending = {"ref": farm._Call("batch", slow, 0, [(0, 80)], now + 0.5)}
     size = {fast: 1000, slow: 1000}
     n = farm.Farm.batch_size(fast, size, speed, [(0, 100, 300)], pending, 100)
     assert abs(n - 0.75 * 450) <= 2, n

@@ -12,6 +12,7 @@ import pkgutil
 from pathlib import Path
 
 from pathtrace.lights.light import DeltaLight
+from pathtrace.device.dispatch import dispatch_glue
 from pathtrace.device.slots import slot_accessor
 
 # the modules of app/lights that are the interface and its tables, not light types
@@ -66,16 +67,11 @@ def kernel_parts(names=None, tree: bool = False, bidirectional: bool = False) ->
         cases = "".join(f"    case LIGHT_{n.upper()}: return {call(n) if callable(call) else call.format(n)};\n"
                         for n in kinds)
         return f"    switch (l->type) {{\n{cases}    default: return {default};\n    }}\n"
-    # in a generic program, where the dispatch is a call (kernels/inlining.h: DISPATCH), FAST_PATH
-    # is tested first, inlined; a scene's own program compiles the #else, the dispatch alone
-    signature = ("int sample_light_of_type(const SceneData *sc, const RenderParams *p, const global Light *l,\n"
-                 "                         float3 x, float3 n, float2 u, LightSample *ls)")
-    body = "{\n" + switch("sample_{}_light(sc, p, l, x, n, u, ls)", "0") + "}\n"
-    dispatch = (f"#ifdef GENERIC\nDISPATCH {signature.replace('_of_type(', '_by_switch(')}\n{body}"
-                f"{signature}\n{{\n    if (l->type == LIGHT_{FAST_PATH.upper()})\n"
-                f"        return sample_{FAST_PATH}_light(sc, p, l, x, n, u, ls);\n"
-                "    return sample_light_by_switch(sc, p, l, x, n, u, ls);\n}\n"
-                f"#else\nDISPATCH {signature}\n{body}#endif\n")
+    # in a generic program FAST_PATH is sampled inlined before the dispatch's call (dispatch_glue)
+    dispatch = dispatch_glue("int sample_light_of_type(const SceneData *sc, const RenderParams *p, const global Light *l,\n"
+                             "                         float3 x, float3 n, float2 u, LightSample *ls)", "l->type",
+                             {f"LIGHT_{n.upper()}": f"sample_{n}_light(sc, p, l, x, n, u, ls)" for n in used}, "0",
+                             f"LIGHT_{FAST_PATH.upper()}")
     if bidirectional:
         emitters = [n for n in used if n in EMITTERS]
         dispatch += ("int emit_light_of_type(const SceneData *sc, const RenderParams *p, const global Light *l, float4 u,\n"

@@ -17,6 +17,7 @@ from pathtrace.materials.diffusetransmission import DiffuseTransmission
 from pathtrace.materials.layered import CoatedConductor, CoatedDiffuse
 from pathtrace.materials.plastic import Plastic, RoughPlastic
 from pathtrace.materials.principled import Principled
+from pathtrace.device.dispatch import dispatch_glue
 from pathtrace.device.slots import slot_accessor
 
 BSDFS = {cls.name: cls() for cls in (Black, Diffuse, Phong, Conductor, RoughConductor,
@@ -50,16 +51,8 @@ def dispatch_source(names=None) -> str:
     smooth = [n for n in with_kernel if not BSDFS[n].flags & DELTA]
 
     def dispatch(signature, call, args, types, default):
-        cases = "".join(f"    case BSDF_{n.upper()}: return {call.format(n)}{args};\n" for n in types)
-        body = f"{{\n    switch (m->type) {{\n{cases}    default: return {default};\n    }}\n}}\n"
-        if FAST_PATH not in types:
-            return f"DISPATCH {signature}\n{body}"
-        # a scene's own program compiles the #else, the dispatch alone
-        name = signature.split("(")[0].split()[-1]
-        return (f"#ifdef GENERIC\nDISPATCH {signature.replace(name + '(', name + '_by_switch(')}\n{body}"
-                f"{signature}\n{{\n    if (m->type == BSDF_{FAST_PATH.upper()})\n"
-                f"        return {call.format(FAST_PATH)}{args};\n    return {name}_by_switch{args};\n}}\n"
-                f"#else\nDISPATCH {signature}\n{body}#endif\n")
+        return dispatch_glue(signature, "m->type", {f"BSDF_{n.upper()}": f"{call.format(n)}{args}" for n in types},
+                             default, f"BSDF_{FAST_PATH.upper()}")
     return (dispatch("float3 eval_bsdf(MaterialRef m, float3 wo, float3 wi)", "eval_{}", "(m, wo, wi)", smooth,
                      "(float3)(0.0f)")
             + dispatch("float pdf_bsdf(MaterialRef m, float3 wo, float3 wi)", "pdf_{}", "(m, wo, wi)", smooth, "0.0f")

@@ -24,6 +24,7 @@ import math
 import socket
 import time
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 
@@ -208,6 +209,15 @@ def _cause(error) -> str:
     return lines[-1] if lines else type(error).__name__
 
 
+class _Call(NamedTuple):
+    """A call of an actor's that Farm.render awaits."""
+    kind: str               # "batch" (DeviceActor.render) or "collect"
+    actor: object
+    job: int
+    ranges: list            # (start, count): the job's samples it renders, or hands over
+    ends: float = math.inf  # a batch's expected end (perf_counter), at the actor's last speed
+
+
 class Farm:
     """Renders jobs of `spp` samples on the live actors, issuing again the batches of those that
     die."""
@@ -240,7 +250,7 @@ class Farm:
         # held by its actor, or in a pending collect
         todo = collections.deque((j, 0, job.spp) for j, job in enumerate(jobs))
         held = {actor: collections.defaultdict(list) for actor in self.actors}   # actor -> job -> ranges
-        pending = {}            # ref -> ("batch", actor, job, [range], expected end) or ("collect", actor, job, ranges)
+        pending = {}            # ref -> _Call
         size = {actor: 1 for actor in self.actors}      # next batch size of each actor
         speed = {}              # actor -> samples per second, as last measured
         report = on_batch or (lambda count: None)
@@ -254,7 +264,7 @@ class Farm:
                 todo.appendleft((j, start + take, count - take))
             ref = actor.render.remote((key, j), jobs[j].scene, jobs[j].camera, start, take)
             ends = time.perf_counter() + take / speed[actor] if actor in speed else math.inf
-            pending[ref] = ("batch", actor, j, [(start, take)], ends)
+            pending[ref] = _Call("batch", actor, j, [(start, take)], ends)
 
         def lose(ranges, rendered: bool):
             """Puts a dead actor's ranges, (job, start, count) each, back in the queue; `rendered`:
@@ -267,14 +277,14 @@ class Farm:
 
         def refill():
             for a in self.actors:
-                if not any(p[0] == "batch" and p[1] is a for p in pending.values()):
+                if not any(c.kind == "batch" and c.actor is a for c in pending.values()):
                     issue(a)
 
         for actor in self.actors:
             issue(actor)
         while pending:
             ready, _ = ray.wait(list(pending), num_returns=1)
-            kind, actor, j, ranges, *_ = pending.pop(ready[0])
+            kind, actor, j, ranges, _ = pending.pop(ready[0])
             try:
                 answer = ray.get(ready[0])
             except ray.exceptions.RayError:
@@ -305,10 +315,10 @@ class Farm:
             size[actor] = next_launch_size(count, answer, BATCH_SECONDS)
             report(count)
             if not any(t[0] == j for t in todo) and \
-                    not any(p[0] == "batch" and p[2] == j for p in pending.values()):
+                    not any(c.kind == "batch" and c.job == j for c in pending.values()):
                 for a, jobs_held in held.items():     # the job is rendered: its sums come home
                     if jobs_held.get(j):
-                        pending[a.collect.remote((key, j))] = ("collect", a, j, jobs_held.pop(j))
+                        pending[a.collect.remote((key, j))] = _Call("collect", a, j, jobs_held.pop(j))
             issue(actor)
         assert done == [job.spp for job in jobs], done
         return sums, sums_sq
@@ -323,8 +333,8 @@ class Farm:
             return size[actor]
         now = time.perf_counter()
         left = sum(c for _, _, c in todo) + count
-        busy = sum(speed.get(p[1], 0.0) * max(min(p[4], now + BATCH_SECONDS) - now, 0.0)
-                   for p in pending.values() if p[0] == "batch")
-        total = sum(speed.get(p[1], 0.0) for p in pending.values() if p[0] == "batch") + speed[actor]
+        batches = [c for c in pending.values() if c.kind == "batch"]
+        busy = sum(speed.get(c.actor, 0.0) * max(min(c.ends, now + BATCH_SECONDS) - now, 0.0) for c in batches)
+        total = sum(speed.get(c.actor, 0.0) for c in batches) + speed[actor]
         share = math.ceil(speed[actor] * (left + busy) / total)
         return max(1, min(size[actor], share))

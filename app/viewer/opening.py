@@ -95,8 +95,9 @@ class SceneOpening:
     def _build_progress(self, name: str):
         """A progress callback for a scene's BVH build, from the worker thread: the window, live
         in its own thread, shows how far it is, and once it is built, that the kernels are
-        coming (they began building beside the tree: Renderer.set_scene). A tree read from the cache before the device is
-        open leaves the status as it is (_start: the device's opening comes next)."""
+        coming (they began building beside the tree: Renderer.set_scene). A tree read from the
+        cache before the device is open leaves the status as it is (_start: the device's opening
+        comes next)."""
         def show(fraction):
             if fraction < 1:
                 self._status = (f"building the BVH of {name}", fraction)
