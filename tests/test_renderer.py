@@ -1,11 +1,12 @@
 """The progressive Renderer: determinism, seeds, resets, and the built-in scenes."""
 
 import numpy as np
+import pyopencl as cl
 import pytest
 
 from pathtrace.cameras import PerspectiveCamera
 from pathtrace.scene.environment import Environment
-from pathtrace.rendering.renderer import Renderer
+from pathtrace.rendering.renderer import Renderer, image_buffers
 from pathtrace.scene import RenderSettings, SceneBuilder, diffuse, load_scene
 from pathtrace.scene.builtin import BUILTIN_SCENES
 from tests.stats import z_test
@@ -47,6 +48,33 @@ def test_reset_restarts_the_average(simple):
     accumulate(simple, [4])
     simple.reset()
     assert simple.samples == 0 and np.all(simple.mean() == 0)
+
+
+def test_a_reset_image_handed_out_holds_zeros(simple):
+    """As a window's display reads it: through buffer(), after a reset and before any launch."""
+    accumulate(simple, [4])
+    simple.reset()
+    out = np.ones((simple.height, simple.width, 4), np.float32)
+    cl.enqueue_copy(simple.backend.queue, out, simple.buffer("sum"))
+    assert np.all(out == 0)
+
+
+def test_resets_in_a_row_clear_once_at_the_size_used(backend, monkeypatch):
+    """A viewer's renderer is made at the scene's size and resized to its first preview before
+    it launches: only the preview's images are cleared, once."""
+    cleared = []
+    fill = cl.enqueue_fill_buffer
+    monkeypatch.setattr(cl, "enqueue_fill_buffer", lambda queue, mem, pattern, offset, size, **kw: (
+        cleared.append((mem, size)), fill(queue, mem, pattern, offset, size, **kw))[1])
+    r = Renderer(backend, load_scene("simple"), 64, 48)
+    r.resize(16, 12)
+    r.reset()
+    r.add_samples(1)
+    r.finish()
+    images = [r.buffer(name) for name in image_buffers(r.aovs)]
+    assert not [size for _, size in cleared if size == 64 * 48 * 16]
+    assert sorted(id(mem) for mem, _ in cleared if any(mem is b for b in images)) == sorted(map(id, images))
+    assert r.samples == 1 and r.mean().mean() > 0
 
 
 @pytest.mark.parametrize("name", list(BUILTIN_SCENES))

@@ -3,7 +3,9 @@ the renderer) in a worker thread while the window stays live. A part of the View
 (app/viewer/window.py), which is one."""
 
 import sys
+import threading
 import time
+from typing import NamedTuple
 
 from pathtrace.compiler.compiled import compile_before_devices
 from pathtrace.errors import UserError
@@ -12,8 +14,36 @@ from pathtrace.scene import load_scene
 from pathtrace.viewer.controls import speed_for
 
 
+class Work(NamedTuple):
+    """Work in a thread of its own: its outcome ("value" or "error") once the thread ends."""
+    thread: threading.Thread
+    outcome: dict
+    started: float
+
+
 class SceneOpening:
-    """The Viewer's opening of scenes (_in_background draws frames while they open)."""
+    """The Viewer's opening of scenes (Viewer._wait draws frames while they open)."""
+
+    def _begin(self, work, text: str) -> Work:
+        """work() started in a worker thread, the window's status saying `text` until the work
+        says what it is doing (self._status); Viewer._wait waits for it."""
+        outcome = {}
+
+        def call():
+            try:
+                outcome["value"] = work()
+            except BaseException as e:     # handed to the waiting thread
+                outcome["error"] = e
+        self._status = (text, None)     # (text, fraction done or None), drawn by Viewer._wait
+        thread = threading.Thread(target=call, name="open", daemon=True)
+        thread.start()
+        return Work(thread, outcome, time.perf_counter())
+
+    @staticmethod
+    def _abandon(work: Work):
+        """Waits for work begun before the window failed to open: a driver's build cannot be
+        stopped, and a process (a notebook) that goes on should not have it running behind."""
+        work.thread.join()
 
     def _start(self, backend, scene) -> Renderer:
         """In the worker thread: the scene read and the device opened, where they are functions
@@ -63,8 +93,8 @@ class SceneOpening:
         panel asks through requested_scene): it draws frames of its own as it goes."""
         started = time.perf_counter()
         try:
-            scene = self._in_background(lambda: self._open(*self._compile(load_scene(name)), self.renderer),
-                                        f"opening {name}").scene
+            scene = self._wait(self._begin(lambda: self._open(*self._compile(load_scene(name)), self.renderer),
+                                           f"opening {name}")).scene
             self.renderer.resize(scene.settings.width, scene.settings.height)
         except Exception as e:   # a viewer must outlive any bad file, ours or a library's error
             self.set_message(str(e) if isinstance(e, UserError) else

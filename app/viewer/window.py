@@ -25,7 +25,7 @@ from pathtrace.resources import resource_dir
 from pathtrace.viewer.controls import FlyControls, pick_ray
 from pathtrace.viewer.denoising import DRAFT_SCALE, Denoising
 from pathtrace.viewer.integrators import IntegratorSwitch
-from pathtrace.viewer.opening import SceneOpening
+from pathtrace.viewer.opening import SceneOpening, Work
 from pathtrace.viewer.screenshots import Screenshots
 from pathtrace.viewer.panel import MARGIN, draw_help, draw_notice, draw_panel
 
@@ -102,11 +102,14 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         window_size (default: that size, fitted to the screen).
 
         `backend` and `scene` may be functions that return them (pathtrace view passes those):
-        the window then opens first, at a size fitted to DEFAULT_SIZE until the scene is read,
-        and stays live, saying what it waits for, while they are called in a worker thread
-        (reading the file, opening the device), the BVH builds and the kernels compile."""
+        the window then opens at a size fitted to DEFAULT_SIZE until the scene is read, and
+        stays live, saying what it waits for, while they are called in a worker thread begun
+        before it (reading the file, opening the device), the BVH builds and the kernels compile."""
         self.opened_at = time.perf_counter()    # until the first image (SceneOpening.say_first_image)
         require_display()
+        # the scene's reading, compiling and the device's opening need no window: they begin
+        # at once, beside the window's opening (0.3-0.5 s under Xvfb on two cores)
+        opening = self._begin(lambda: self._start(backend, scene), "opening the scene")
         import glfw
         import moderngl
         from imgui_bundle import imgui
@@ -114,6 +117,7 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
 
         self.glfw, self.imgui = glfw, imgui
         if not glfw.init():
+            self._abandon(opening)
             raise UserError(no_display_message())
         monitor = glfw.get_primary_monitor()
         screen = glfw.get_monitor_workarea(monitor)[2:] if monitor else DEFAULT_SIZE
@@ -129,6 +133,7 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         self.window = glfw.create_window(*window_size, title, None, None)
         if not self.window:
             glfw.terminate()
+            self._abandon(opening)
             raise UserError("pathtrace view: could not open an OpenGL 3.3 window on this display")
         glfw.make_context_current(self.window)
         glfw.swap_interval(0)
@@ -165,10 +170,9 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         self._last_draw = 0.0
         self._last_time = time.perf_counter()
         self._cursor = None
-        self._status = ("", None)     # (text, fraction done or None) of the work in the background
         self._init_display()
         try:
-            self.renderer = self._in_background(lambda: self._start(backend, scene), "opening the scene")
+            self.renderer = self._wait(opening)
         except BaseException:
             self._close_window()
             raise
@@ -356,40 +360,29 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         self.message, self.error = text, error
         print(f"pathtrace: {text}", file=sys.stderr)
 
-    def _in_background(self, work, text: str) -> Renderer:
-        """work()'s renderer (or its exception), work called in a worker thread while this one keeps
-        the window live: it draws what the work says it is doing (self._status, starting at
-        `text`) with the seconds spent, and the title says it too. A window closed meanwhile is
-        hidden at once; the work cannot be stopped halfway (a driver's compiler), so the close
-        takes effect when it ends. The title then names the scene shown."""
-        outcome = {}
-
-        def call():
-            try:
-                outcome["value"] = work()
-            except BaseException as e:     # handed to the caller below, in this thread
-                outcome["error"] = e
-        self._status = (text, None)
-        worker = threading.Thread(target=call, name="open", daemon=True)
-        started = time.perf_counter()
-        worker.start()
+    def _wait(self, work: Work) -> Renderer:
+        """The renderer that `work` (SceneOpening._begin) makes, or its exception, this thread
+        keeping the window live meanwhile: it draws what the work says it is doing
+        (self._status) with the seconds spent, and the title says it too. A window closed
+        meanwhile is hidden at once; the work cannot be stopped halfway (a driver's compiler), so
+        the close takes effect when it ends. The title then names the scene shown."""
         try:
-            while worker.is_alive():
+            while work.thread.is_alive():
                 said, fraction = self._status
-                waited = time.perf_counter() - started
+                waited = time.perf_counter() - work.started
                 self.show_progress(said + (f" ({waited:.0f} s)" if waited >= 1 and fraction is None else ""),
                                    fraction)
                 if self.glfw.window_should_close(self.window):
                     self.glfw.hide_window(self.window)
-                worker.join(1 / FRAME_RATE)
+                work.thread.join(1 / FRAME_RATE)
         finally:
-            worker.join()
-            shown = outcome.get("value") or getattr(self, "renderer", None)
+            work.thread.join()
+            shown = work.outcome.get("value") or getattr(self, "renderer", None)
             if shown is not None:
                 self.glfw.set_window_title(self.window, f"pathtrace - {shown.scene.name}")
-        if "error" in outcome:
-            raise outcome["error"]
-        return outcome["value"]
+        if "error" in work.outcome:
+            raise work.outcome["error"]
+        return work.outcome["value"]
 
     def show_progress(self, text: str, fraction: float = None):
         """One frame, outside the loop, that says what the window is busy with (a BVH build,
