@@ -51,12 +51,18 @@ def test_reset_restarts_the_average(simple):
 
 
 def test_a_reset_image_handed_out_holds_zeros(simple):
-    """As a window's display reads it: through buffer(), after a reset and before any launch."""
+    """As a window's display and denoiser read it, through buffer() and read_async(), after a
+    reset and before any launch."""
     accumulate(simple, [4])
     simple.reset()
     out = np.ones((simple.height, simple.width, 4), np.float32)
     cl.enqueue_copy(simple.backend.queue, out, simple.buffer("sum"))
     assert np.all(out == 0)
+    accumulate(simple, [4])
+    simple.reset()
+    event, (read,) = simple.read_async(("sum",))       # as the denoiser reads it
+    event.wait()
+    assert np.all(read == 0)
 
 
 def test_resets_in_a_row_clear_once_at_the_size_used(backend, monkeypatch):
@@ -75,6 +81,15 @@ def test_resets_in_a_row_clear_once_at_the_size_used(backend, monkeypatch):
     assert not [size for _, size in cleared if size == 64 * 48 * 16]
     assert sorted(id(mem) for mem, _ in cleared if any(mem is b for b in images)) == sorted(map(id, images))
     assert r.samples == 1 and r.mean().mean() > 0
+    def image_fills():
+        return sum(any(mem is b for b in images) for mem, _ in cleared)
+    before = image_fills()
+    r.reset()
+    r.finish()          # as a timed trial render waits for the clearing before its clock starts
+    assert image_fills() == before + len(images)
+    r.add_samples(1)
+    r.finish()
+    assert image_fills() == before + len(images)
 
 
 @pytest.mark.parametrize("name", list(BUILTIN_SCENES))

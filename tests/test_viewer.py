@@ -412,6 +412,31 @@ def test_the_scene_is_read_beside_the_windows_opening(display, backend, tmp_path
         v.close()
 
 
+def test_a_window_that_fails_to_open_stops_the_scenes_opening(display, backend, tmp_path, monkeypatch):
+    """The scene's opening, begun beside the window's, stops at its next step when the window
+    cannot be made: the window's error comes at once, and no renderer is made behind it."""
+    from pathtrace.viewer import opening
+    from pathtrace.viewer.window import Viewer
+    made = []
+    monkeypatch.setattr(opening, "Renderer", lambda *args, **kwargs: made.append(args))
+
+    def no_window(self, scene, size):
+        raise UserError("pathtrace view: could not open an OpenGL 3.3 window on this display")
+    monkeypatch.setattr(Viewer, "_open_window", no_window)
+    failed = threading.Event()
+
+    def read():
+        failed.wait(30)
+        return load_scene("simple")
+    with pytest.raises(UserError, match="could not open"):
+        Viewer(lambda: backend, read, tmp_path)
+    failed.set()
+    for thread in threading.enumerate():
+        if thread.name == "open":
+            thread.join(30)
+    assert not made
+
+
 def test_a_scene_that_fails_to_open_leaves_the_viewer_as_it_was(viewer, monkeypatch, capsys):
     import pathtrace.viewer.opening as opening
 

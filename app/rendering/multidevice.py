@@ -84,8 +84,8 @@ class DeviceGroup:
         """scene: a CompiledScene, or a Scene to compile on the first device (progress as for
         Renderer), whose tree the first renderer to ask builds (Renderer.set_scene); settings and
         aovs, the first render's, as Renderer takes them. The
-        renderers are made at once, each in a thread: each device builds its program, takes
-        its uploads and clears its buffers beside the others."""
+        renderers are made at once, each in a thread: each device builds its program and takes
+        its uploads beside the others."""
         compiled = scene if isinstance(scene, CompiledScene) \
             else compile_scene(scene, backends[0].queue, progress, tree=False)
         for b in backends:       # every device, before any of them allocates

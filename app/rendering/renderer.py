@@ -482,6 +482,9 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
         return -(-paths // QUEUE_GROUP) * QUEUE_GROUP
 
     def finish(self):
+        """Waits for the work queued to end, the clearing of the images a reset left among it
+        (so that a timed launch after reset() and finish() does not clear them)."""
+        self._clear_stale()
         self.backend.queue.finish()
 
     def buffer(self, name: str) -> cl.Buffer:

@@ -15,10 +15,16 @@ from pathtrace.viewer.controls import speed_for
 
 
 class Work(NamedTuple):
-    """Work in a thread of its own: its outcome ("value" or "error") once the thread ends."""
+    """Work in a thread of its own: its outcome ("value" or "error") once the thread ends, and
+    whether it is to stop at its next step (SceneOpening._abandon)."""
     thread: threading.Thread
     outcome: dict
     started: float
+    abandoned: threading.Event
+
+
+class Abandoned(Exception):
+    """The outcome of work abandoned before it ended."""
 
 
 class SceneOpening:
@@ -35,15 +41,22 @@ class SceneOpening:
             except BaseException as e:     # handed to the waiting thread
                 outcome["error"] = e
         self._status = (text, None)     # (text, fraction done or None), drawn by Viewer._wait
-        thread = threading.Thread(target=call, name="open", daemon=True)
-        thread.start()
-        return Work(thread, outcome, time.perf_counter())
+        self._work = Work(threading.Thread(target=call, name="open", daemon=True), outcome, time.perf_counter(),
+                          threading.Event())
+        self._work.thread.start()
+        return self._work
 
     @staticmethod
     def _abandon(work: Work):
-        """Waits for work begun before the window failed to open: a driver's build cannot be
-        stopped, and a process (a notebook) that goes on should not have it running behind."""
-        work.thread.join()
+        """Work begun before the window failed to open stops at its next step (_go_on): a
+        driver's build cannot be stopped halfway, and a process that goes on (a notebook) should
+        not have a renderer made behind it. The window's error is said at once, not after it."""
+        work.abandoned.set()
+
+    def _go_on(self):
+        """Between the steps of an opening: ends the work where it was abandoned."""
+        if self._work.abandoned.is_set():
+            raise Abandoned()
 
     def _start(self, backend, scene) -> Renderer:
         """In the worker thread: the scene read and the device opened, where they are functions
@@ -52,10 +65,12 @@ class SceneOpening:
         if callable(scene):
             self._status = ("reading the scene", None)
             scene = scene()
+        self._go_on()
         compiled = self._compile(scene)
         if callable(backend):
             self._status = ("opening the device", None)
             backend = backend()
+        self._go_on()
         self.backend = backend
         return self._open(*compiled)
 

@@ -107,42 +107,14 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         before it (reading the file, opening the device), the BVH builds and the kernels compile."""
         self.opened_at = time.perf_counter()    # until the first image (SceneOpening.say_first_image)
         require_display()
-        # the scene's reading, compiling and the device's opening need no window: they begin
-        # at once, beside the window's opening (0.3-0.5 s under Xvfb on two cores)
+        # the scene's opening needs no window: it begins beside the window's (0.3-0.5 s on Xvfb)
         opening = self._begin(lambda: self._start(backend, scene), "opening the scene")
-        import glfw
-        import moderngl
-        from imgui_bundle import imgui
-        from imgui_bundle.python_backends.glfw_backend import GlfwRenderer
-
-        self.glfw, self.imgui = glfw, imgui
-        if not glfw.init():
+        try:
+            screen, fitted = self._open_window(scene, window_size)
+            self._init_display()
+        except BaseException:
             self._abandon(opening)
-            raise UserError(no_display_message())
-        monitor = glfw.get_primary_monitor()
-        screen = glfw.get_monitor_workarea(monitor)[2:] if monitor else DEFAULT_SIZE
-        fitted = window_size is None
-        if fitted:
-            given = DEFAULT_SIZE if callable(scene) else (scene.settings.width, scene.settings.height)
-            window_size = fit_window(*given, screen)
-        glfw.window_hint(glfw.CONTEXT_VERSION_MAJOR, 3)
-        glfw.window_hint(glfw.CONTEXT_VERSION_MINOR, 3)
-        glfw.window_hint(glfw.OPENGL_PROFILE, glfw.OPENGL_CORE_PROFILE)
-        glfw.window_hint(glfw.OPENGL_FORWARD_COMPAT, True)
-        title = "pathtrace" if callable(scene) else f"pathtrace - {scene.name}"
-        self.window = glfw.create_window(*window_size, title, None, None)
-        if not self.window:
-            glfw.terminate()
-            self._abandon(opening)
-            raise UserError("pathtrace view: could not open an OpenGL 3.3 window on this display")
-        glfw.make_context_current(self.window)
-        glfw.swap_interval(0)
-        self.ctx = moderngl.create_context()
-        self.imgui_context = imgui.create_context()
-        imgui.set_current_context(self.imgui_context)   # create_context() leaves an existing one current
-        imgui.get_io().set_ini_filename("")
-        self.gui = GlfwRenderer(self.window)
-        self._chain_callbacks()
+            raise
 
         self.controls = FlyControls()
         self.exposure, self.tonemap = 0.0, "standard"
@@ -170,15 +142,15 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         self._last_draw = 0.0
         self._last_time = time.perf_counter()
         self._cursor = None
-        self._init_display()
         try:
             self.renderer = self._wait(opening)
         except BaseException:
+            self._abandon(opening)
             self._close_window()
             raise
         self._scene_opened(self.renderer.compiled)
         if fitted and callable(scene):
-            glfw.set_window_size(self.window, *fit_window(self.renderer.width, self.renderer.height, screen))
+            self.glfw.set_window_size(self.window, *fit_window(self.renderer.width, self.renderer.height, screen))
         self.size = (self.renderer.width, self.renderer.height)    # the full resolution
         self.progressive = Progressive(self.renderer, LAUNCH_BUDGET)
         self.display = Display(self.backend)
@@ -197,6 +169,42 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         self._last_upload = 0.0
 
     # --- set-up -----------------------------------------------------------------------------
+    def _open_window(self, scene, window_size) -> tuple:
+        """The window, its OpenGL context and its GUI; (the screen's work area, whether the
+        window's size is fitted to the image's)."""
+        import glfw
+        import moderngl
+        from imgui_bundle import imgui
+        from imgui_bundle.python_backends.glfw_backend import GlfwRenderer
+
+        self.glfw, self.imgui = glfw, imgui
+        if not glfw.init():
+            raise UserError(no_display_message())
+        monitor = glfw.get_primary_monitor()
+        screen = glfw.get_monitor_workarea(monitor)[2:] if monitor else DEFAULT_SIZE
+        fitted = window_size is None
+        if fitted:
+            given = DEFAULT_SIZE if callable(scene) else (scene.settings.width, scene.settings.height)
+            window_size = fit_window(*given, screen)
+        glfw.window_hint(glfw.CONTEXT_VERSION_MAJOR, 3)
+        glfw.window_hint(glfw.CONTEXT_VERSION_MINOR, 3)
+        glfw.window_hint(glfw.OPENGL_PROFILE, glfw.OPENGL_CORE_PROFILE)
+        glfw.window_hint(glfw.OPENGL_FORWARD_COMPAT, True)
+        title = "pathtrace" if callable(scene) else f"pathtrace - {scene.name}"
+        self.window = glfw.create_window(*window_size, title, None, None)
+        if not self.window:
+            glfw.terminate()
+            raise UserError("pathtrace view: could not open an OpenGL 3.3 window on this display")
+        glfw.make_context_current(self.window)
+        glfw.swap_interval(0)
+        self.ctx = moderngl.create_context()
+        self.imgui_context = imgui.create_context()
+        imgui.set_current_context(self.imgui_context)   # create_context() leaves an existing one current
+        imgui.get_io().set_ini_filename("")
+        self.gui = GlfwRenderer(self.window)
+        self._chain_callbacks()
+        return screen, fitted
+
     def _init_display(self):
         shaders = resource_dir("shaders")
         self.program = self.ctx.program(vertex_shader=(shaders / "display.vert").read_text(),
