@@ -242,9 +242,12 @@ def test_a_scene_name_that_does_not_print_is_shown_on_one_line(tmp_path, name):
 @pytest.mark.parametrize("output,message", [
     ("nofolder/o.png", "folder 'nofolder' does not exist"),
     ("o.tiff", "unknown image format"),
+    ("outdir/", "'outdir/' is a folder; give an image file's name, such as outdir/image.png"),
+    ("", "'' is empty; give an image file's name, such as image.png"),
 ])
 def test_bad_output_fails_before_rendering(tmp_path, output, message):
-    r = in_process("render", "simple", "-o", tmp_path / output if "/" not in output else output, "--spp", "1",
+    (tmp_path / "outdir").mkdir()
+    r = in_process("render", "simple", "-o", tmp_path / output if output and "/" not in output else output, "--spp", "1",
                   cwd=tmp_path)
     assert r.returncode == 1 and message in r.stderr, r.stderr
 

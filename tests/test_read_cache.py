@@ -53,6 +53,18 @@ def test_a_scene_read_again_comes_from_the_cache_with_its_warnings(scene_file, c
     assert "version 1.0.0" in warned and capsys.readouterr().err == warned
 
 
+def test_a_scene_named_otherwise_says_the_name_it_is_given(scene_file, monkeypatch, capsys):
+    """Read as s.xml from its folder, then by its absolute path from elsewhere: each scene
+    says the name it was given (its source, its warnings), not the first one's."""
+    path, _ = scene_file
+    monkeypatch.chdir(path.parent)
+    assert load_scene("s.xml").source == "s.xml"
+    capsys.readouterr()
+    monkeypatch.chdir(path.parent.parent)
+    again = load_scene(str(path))
+    assert again.source == str(path) and f"{path}:1:" in capsys.readouterr().err
+
+
 def test_a_changed_mesh_file_is_read_again(scene_file):
     path, parsed = scene_file
     first = load_scene(str(path))

@@ -140,8 +140,11 @@ def _write_exr(path: str, rgb: np.ndarray, layers: dict = {}):
 def check_writable(path: Path, what: str = "--output", formats=HDR_FORMATS + LDR_FORMATS):
     """Fails early, before any rendering, if `path` cannot be written (or, where `formats` is
     given, has none of those suffixes)."""
-    path = Path(path)
+    given, path = str(path), Path(path)
     name = cut(shown(path), 100)
+    if not given or given.endswith(os.sep) or path.is_dir():
+        raise UserError(f"{what}: '{cut(shown(given), 100)}' is {'a folder' if given else 'empty'}; "
+                        f"give an image file's name, such as {Path(given or '.', 'image.png')}")
     if formats and path.suffix.lower() not in formats:
         raise UserError(f"{what}: '{name}' has an unknown image format (use one of {', '.join(formats)})")
     try:

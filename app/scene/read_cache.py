@@ -48,9 +48,12 @@ def folder():
 
 
 def entry_path(where: Path, name: str) -> Path:
+    """A file's entry is the file's by the name it is given as, too: what was read holds paths
+    as given (the scene's source, its meshes' files, its warnings), which the same file named
+    otherwise, or from another folder, would tell wrongly."""
     path = Path(name)
     try:
-        key = f"file:{path.resolve()}" if path.is_file() else f"built-in:{name}"
+        key = f"file:{path.resolve()} as {name}" if path.is_file() else f"built-in:{name}"
     except (OSError, ValueError):         # a name no file can have: the reader says what is wrong
         key = f"built-in:{name}"
     return where / f"{hashlib.sha256(source_digest() + key.encode()).hexdigest()[:32]}.scene"
