@@ -142,7 +142,7 @@ def check_writable(path: Path, what: str = "--output", formats=HDR_FORMATS + LDR
     given, has none of those suffixes)."""
     given, path = str(path), Path(path)
     name = cut(shown(path), 100)
-    if not given or given.endswith(os.sep) or path.is_dir():
+    if not given or given.endswith(os.sep) or os.path.isdir(given):   # (isdir: False for any error)
         raise UserError(f"{what}: '{cut(shown(given), 100)}' is {'a folder' if given else 'empty'}; "
                         f"give an image file's name, such as {Path(given or '.', 'image.png')}")
     if formats and path.suffix.lower() not in formats:
