@@ -27,9 +27,7 @@
 #define LOG_FIELDS 5
 
 /* The shading codes (app/bench/divergence_stats.py: SHADING_NAMES) */
-#define SHADING_IDLE 0          /* did nothing: its path ended, or (PATH_SORT) waits in the queue
-                                   having traced its ray, whose vertex the kernel that takes it
-                                   records */
+#define SHADING_IDLE 0          /* did nothing: its path had ended */
 #define SHADING_TRACED 1        /* traced its ray and ended without shading (a medium's
                                    scattering at the last vertex) */
 #define SHADING_ESCAPED 2       /* met nothing: the environment is looked up */

@@ -132,9 +132,6 @@ PathRecord start_path(const RenderParams *p, float3 o, float3 d, Rng *rng)
     path.ratios.w = as_float(min((int)(next_uniform4(rng).x * 3.0f), 2));
 #endif
     path.rng = (uint4)(rng->key.xyz, rng->dim);
-#ifdef PATH_SORT
-    path.hit = (float4)(0.0f);                                   /* its ray not traced */
-#endif
     return path;
 }
 
@@ -154,8 +151,8 @@ PathRecord start_path(const RenderParams *p, float3 o, float3 d, Rng *rng)
  * others' lanes idle for every vertex they add (Laine, Karras and Aila 2013, "Megakernels
  * Considered Harmful"); gathered into a queue, the paths that go on fill whole warps, at the
  * cost of storing and loading them (docs/notes/performance-2026-11.md, 2026-11-26, says where that pays).
- * With PATH_SORT a path traces that ray first and waits with its hit, so that continue_paths can
- * take the queue's paths in the order of the material each will shade (kernels/path_sort.cl).
+ * With PATH_SORT continue_paths takes the queue's paths in the order of their rays' keys, so that
+ * a warp's rays start near one another and run alike through the tree (kernels/path_sort.cl).
  *
  * On CPUs it is inlined (CPU_INLINE), so that the start state stays in registers: PoCL left the call out of
  * line and passed the state through memory. NVIDIA's compiler keeps it out of line too, and GPUs
@@ -185,28 +182,10 @@ CPU_INLINE float3 trace_path(const SceneData *sc, const RenderParams *p, const P
     int hero = as_int(start->ratios.w);
     float3 ratios = start->ratios.xyz;
 #endif
-#ifdef PATH_SORT
-    int resumed = start->hit.w != 0.0f;     /* its first ray was traced before it waited */
-#endif
     for (int depth = as_int(start->throughput.w);; ++depth) {
-#ifdef PATH_SORT
-        LOG_ITERATION(sc);          /* the divergence stats build's record (kernels/divergence.cl) */
-        Hit hit;
-        if (resumed) {
-            hit = resumed_hit(start);
-            resumed = 0;
-        } else {
-            ++*rays;
-            hit = intersect_scene(sc, o, d, INFINITY, self);
-        }
-#endif
 #ifdef PATH_QUEUE
         if (depth == queue.depth && queue.capacity > 0) {
-#ifdef PATH_SORT
-            int2 left = PRIM_ID_PAIR(HIT_ID(hit));     /* what it hit, in place of what it left */
-#else
             int2 left = PRIM_ID_PAIR(self);
-#endif
             PathRecord r;
             r.o = (float4)(o, eta_scale);
             r.d = (float4)(d, pdf_prev);
@@ -218,26 +197,15 @@ CPU_INLINE float3 trace_path(const SceneData *sc, const RenderParams *p, const P
             r.ratios = (float4)(ratios, as_float(hero));
 #endif
             r.rng = (uint4)(rng->key.xyz, rng->dim);
-#ifdef PATH_SORT
-            r.hit = (float4)(hit.t, hit.b1, hit.b2, 1.0f);
-            int key = sort_key(sc, hit.prim);
-#else
-            int key = 0;
-#endif
-            if (enqueue_path(queue, &r, key)) {
-#ifdef PATH_SORT
-                LOG_SHADED(sc, SHADING_IDLE);   /* the kernel that takes it shades this vertex */
-#endif
+            if (enqueue_path(queue, &r, QUEUE_KEY(queue, d, self))) {
                 *queued = 1;
                 return radiance;
             }
         }
 #endif
-#ifndef PATH_SORT
         LOG_ITERATION(sc);
         ++*rays;
         Hit hit = intersect_scene(sc, o, d, INFINITY, self);
-#endif
 #ifdef MEDIA
         if (medium >= 0) {
             const global Medium *med = &sc->media[medium];
@@ -439,7 +407,7 @@ void render_pixel(const SceneData *sc, const RenderParams *p, global float4 *sum
 
 /* queue, counters, queue_capacity, results: PATH_QUEUE's continuation queue, which paths enter
  * before their vertex PATH_QUEUE + 1, its count being counters[0] (queue_capacity 0: no queue);
- * with PATH_SORT, two more: the queue's keys and their counts (SORT_KERNEL_ARGS,
+ * with PATH_SORT, three more: the queue's keys, their counts and cell size (SORT_KERNEL_ARGS,
  * kernels/path_sort.cl); in the divergence stats build, a last argument: the records' buffer
  * (kernels/divergence.cl) */
 #ifdef PATH_QUEUE
@@ -487,7 +455,7 @@ void continue_path(const SceneData *sc, const RenderParams *p, const global floa
 /* One work-item per path the launch could have queued; those beyond the paths in the queue end
  * at once (the host does not wait to read how many there are). With PATH_SORT, work-item i takes
  * the path in slot order[i] (CONTINUE_SORT_ARGS, kernels/path_sort.cl: sort_paths), so that
- * neighbouring work-items shade the same material. */
+ * neighbouring work-items trace like rays. */
 #define CONTINUE_KERNEL(name, nee)                                                               \
     kernel void name(SCENE_KERNEL_ARGS, const RenderParams p, const global float4 *queue,        \
                      global float4 *next, volatile global int *counters, int pass,                \

@@ -2,10 +2,10 @@
  * kernels/integrator.cl: trace_path queues paths, continue_paths takes them on): where a path
  * waits between two of its vertices, as a structure of arrays. */
 
-/* Where a path about to trace its ray to vertex `depth` waits instead (with PATH_SORT: having
- * traced it): `records` holds `capacity` paths, `count` counts those handed in (beyond capacity:
- * not taken, they go on). With PATH_SORT, keys[slot] is the sort key of the path in `slot`
- * (kernels/path_sort.cl) and key_counts[key] counts the paths of each key. */
+/* Where a path about to trace its ray to vertex `depth` waits instead: `records` holds
+ * `capacity` paths, `count` counts those handed in (beyond capacity: not taken, they go on). With
+ * PATH_SORT, keys[slot] is the sort key of the path in `slot` (kernels/path_sort.cl, its cells
+ * of 2^shift primitives) and key_counts[key] counts the paths of each key. */
 typedef struct {
     global float4 *records;
     volatile global int *count;
@@ -14,6 +14,7 @@ typedef struct {
 #ifdef PATH_SORT
     global int *keys;
     volatile global int *key_counts;
+    int shift;
 #endif
 } PathQueue;
 
@@ -35,9 +36,6 @@ void store_path(global float4 *records, int capacity, int slot, const PathRecord
     r[6 * capacity] = path->ratios;
 #endif
     r[7 * capacity] = as_float4(path->rng);
-#ifdef PATH_SORT
-    r[8 * capacity] = path->hit;
-#endif
 }
 
 PathRecord load_path(const global float4 *records, int capacity, int slot)
@@ -56,9 +54,6 @@ PathRecord load_path(const global float4 *records, int capacity, int slot)
     path.ratios = (float4)(1.0f);
 #endif
     path.rng = as_uint4(r[7 * capacity]);
-#ifdef PATH_SORT
-    path.hit = r[8 * capacity];
-#endif
     return path;
 }
 

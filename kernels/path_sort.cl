@@ -1,22 +1,20 @@
-/* Shading sorted by material (PATH_SORT, the render setting path_sort; app/device/features.py):
- * the continuation queue's paths (kernels/integrator.cl, PATH_QUEUE) are traced to their next
- * hit before they wait, keyed by the material row they will shade there, and counting-sorted by
- * that key between the passes of continue_paths, so that the work-items of a warp, taking
- * consecutive entries of the sorted order, shade one material's code and parameters together
- * rather than each a different one with the other lanes masked off. `pathtrace bench
- * --divergence` measured why: on Bitterli's classroom a warp shaded 2.7 to 3 BSDF types and 6 to
- * 7 material rows each iteration, a shading SIMD efficiency of 0.29 (docs/notes/
- * performance-2026-11.md, 2026-11-29). This is the wavefront design of Laine, Karras and Aila
- * 2013 ("Megakernels Considered Harmful", HPG: a queue per material, whose kernel runs on full
- * warps), of pbrt-v4's wavefront integrator (src/pbrt/wavefront/intersect.h:
- * EnqueueWorkAfterIntersection pushes each hit to the queue of its material's type;
- * surfscatter.cpp: EvaluateMaterialsAndBSDFs runs one kernel per type over its queue) and of
- * Cycles (intern/cycles/integrator/path_trace_work_gpu.cpp: compute_sorted_queued_paths, "array
- * of active paths, sorted by shader", through which the shading kernel takes its paths). As
- * Cycles does, the records stay where they were written and only an index array is sorted. The
- * key is the material row, finer than pbrt-v4's type: rows of one type differ in parameters and
- * textures, and bench --divergence counted 6 to 7 rows against 3 types a warp. A path's result
- * does not depend on which work-item traces it, so the sorted queue renders the unsorted one's
+/* The continuation queue sorted by ray (PATH_SORT, the render setting path_sort;
+ * app/device/features.py): the queue's paths (kernels/integrator.cl, PATH_QUEUE) wait before
+ * they trace their next ray, keyed by that ray, and are counting-sorted by key between the passes
+ * of continue_paths, so that the work-items of a warp, taking consecutive entries of the sorted
+ * order, trace rays that start near one another in like directions: their walks through the BVH
+ * visit the same nodes, loaded once for the warp, and end after like numbers of steps. The key
+ * is the ray's direction bin (24: the cube face of its largest component, and the quadrant
+ * within the face) and the primitive it leaves, whose index in the tree's order (the builder
+ * orders them so) is a place in the scene, in SORT_CELLS cells of 2^shift primitives. This is
+ * the ray reordering of Pharr et al. 1997 ("Rendering Complex Scenes with Memory-Coherent Ray
+ * Tracing") and of Garanzha and Loop 2010 (rays binned by origin and direction before a GPU
+ * traces them), in the queue of a wavefront (Laine, Karras and Aila 2013, "Megakernels
+ * Considered Harmful"). A first form keyed the queue by the material each path would shade next
+ * (pbrt-v4's and Cycles' wavefronts): its warps shaded one material, but on the H200 the
+ * classroom's renders took 3 % longer than the megakernel's, where keyed by ray they take 14 %
+ * less (docs/notes/performance-2026-11.md, 2026-11-30, eighteenth session). A path's result does
+ * not depend on which work-item traces it, so the sorted queue renders the unsorted one's
  * samples.
  *
  * The counting sort, per queue: the kernel that queues a path stores its key beside it and
@@ -27,24 +25,19 @@
 
 #ifdef PATH_SORT
 
-/* The key of a path whose ray hit primitive `prim` (-1: nothing): 0 for the environment, else
- * 1 + the material row it shades there (a blend's own row: the component it picks differs from
- * path to path). */
-int sort_key(const SceneData *sc, int prim)
+/* The key of a ray of direction d leaving primitive `self` (NO_PRIM: none) of a scene whose
+ * tree-ordered primitives fall in cells of 2^shift (app/rendering/path_sort.py: sort_shift):
+ * 1 + its direction bin (of SORT_DIRECTIONS, 24) times SORT_CELLS + its cell (SORT_DIRECTIONS and
+ * SORT_CELLS are build options: app/device/features.py). */
+int sort_key(int shift, float3 d, PrimId self)
 {
-    return prim < 0 ? 0 : sc->prim_material[prim] + 1;
-}
-
-/* The hit that path r found before it waited (kernels/types.h: PathRecord.hit). */
-Hit resumed_hit(const PathRecord *r)
-{
-    Hit h;
-    h.t = r->hit.x;
-    h.b1 = r->hit.y;
-    h.b2 = r->hit.z;
-    h.prim = as_int(r->prev_x.w);
-    SET_INSTANCE(&h, as_int(r->prev_n.w));
-    return h;
+    float3 a = fabs(d);
+    int axis = a.x >= a.y && a.x >= a.z ? 0 : a.y >= a.z ? 1 : 2;
+    float major = axis == 0 ? d.x : axis == 1 ? d.y : d.z;
+    float u = axis == 0 ? d.y : d.x, v = axis == 2 ? d.y : d.z;
+    int direction = (2 * axis + (major < 0.0f)) * 4 + (u < 0.0f) + 2 * (v < 0.0f);
+    int prim = PRIM_ID_PAIR(self).x;
+    return 1 + direction * SORT_CELLS + (prim < 0 ? 0 : min(prim >> shift, SORT_CELLS - 1));
 }
 
 /* offsets[k] = the sum of counts[pass * num_keys + j] over j < k, for the num_keys keys of the
@@ -89,14 +82,17 @@ kernel void sort_paths(const global int *keys, const global int *counters, int p
 }
 
 /* The render kernels' arguments: the queue's keys, the counts of each pass's keys (num_keys
- * each, the render launch's first); continue_paths' also the order sort_paths wrote. */
-#define SORT_KERNEL_ARGS , global int *keys, volatile global int *key_counts, int num_keys
+ * each, the render launch's first), the keys' cell size (sort_key); continue_paths' also the
+ * order sort_paths wrote. */
+#define SORT_KERNEL_ARGS , global int *keys, volatile global int *key_counts, int num_keys, int sort_shift
 #define CONTINUE_SORT_ARGS , const global int *order SORT_KERNEL_ARGS
-#define SORT_QUEUE(pass) , keys, key_counts + (pass) * num_keys
+#define SORT_QUEUE(pass) , keys, key_counts + (pass) * num_keys, sort_shift
 #define QUEUE_SLOT(i) order[i]
+#define QUEUE_KEY(queue, d, self) sort_key((queue).shift, d, self)
 #else
 #define SORT_KERNEL_ARGS
 #define CONTINUE_SORT_ARGS
 #define SORT_QUEUE(pass)
 #define QUEUE_SLOT(i) (i)
+#define QUEUE_KEY(queue, d, self) 0
 #endif

@@ -180,9 +180,6 @@ typedef struct {
     float4 prev_n;      /* xyz: the normal there; w: the instance that draws that primitive */
     float4 ratios;      /* with MEDIA, xyz: the channels' path densities over the hero's; w: the hero */
     uint4 rng;          /* its random numbers' key: pixel x, y, sample; w: the dimensions drawn */
-    float4 hit;         /* with PATH_SORT, once its ray is traced (w 1; 0: not yet): x the hit's
-                           distance, y and z its barycentric weights, and prev_x.w and prev_n.w
-                           hold the primitive hit in place of the one left */
 } PathRecord;
 
 /* A participating medium (kernels/media/homogeneous.cl documents its fields): homogeneous,

@@ -1,15 +1,15 @@
-"""Shading sorted by material (render setting path_sort, kernels/path_sort.cl PATH_SORT): the
-continuation queue's paths trace their ray before they wait, keyed by the material row they hit,
-and each pass of continue_paths takes them in the order of a counting sort by key. A path's
-random numbers travel with it, so the image is the megakernel's up to the order in which a
-pixel's samples are summed, and the rays traced are the same."""
+"""The continuation queue sorted by ray (render setting path_sort, kernels/path_sort.cl PATH_SORT):
+the queue's paths wait before they trace their next ray, keyed by its direction bin and the cell
+of the primitive it leaves, and each pass of continue_paths takes them in the order of a counting
+sort by key. A path's random numbers travel with it, so the image is the megakernel's up to the
+order in which a pixel's samples are summed, and the rays traced are the same."""
 
 import numpy as np
 import pyopencl as cl
 import pytest
 
 from pathtrace.bench.divergence_stats import divergence_stats
-from pathtrace.device.features import Features
+from pathtrace.device.features import SORT_CELLS, Features
 from pathtrace.rendering import renderer as renderer_module
 from pathtrace.rendering.choices import PATH_QUEUE_AUTO
 from pathtrace.rendering.renderer import Renderer
@@ -28,8 +28,8 @@ def sorted_render(backend, scene, path_queue=1, spp=SPP):
 @pytest.mark.parametrize("name, settings, depth", [
     ("material-spheres", dict(max_depth=6, russian_roulette="off"), 1),  # glass and metals
     ("teapot-textured", dict(max_depth=8, russian_roulette="off"), 2),   # textures
-    (str(SCENES / "media-fog.xml"), dict(max_depth=8, russian_roulette="off"), 1),   # media: a flight from the stored hit
-    (str(SCENES / "instances.xml"), dict(max_depth=8, russian_roulette="off"), 1),   # a two-level BVH: the hit's instance
+    (str(SCENES / "media-fog.xml"), dict(max_depth=8, russian_roulette="off"), 1),   # media: the medium the waiting ray crosses
+    (str(SCENES / "instances.xml"), dict(max_depth=8, russian_roulette="off"), 1),   # a two-level BVH: the instance the ray leaves
     (str(SCENES / "masks.xml"), dict(nee=False), 1),                     # alpha masks, the report's estimator
 ])
 def test_sorted_paths_render_the_megakernels_image(backend, name, settings, depth):
@@ -39,7 +39,7 @@ def test_sorted_paths_render_the_megakernels_image(backend, name, settings, dept
     assert_same_render(plain, sorted_render(backend, scene, depth))
 
 
-def test_paths_that_find_the_sorted_queue_full_go_on_from_their_hit(backend, monkeypatch):
+def test_paths_that_find_the_sorted_queue_full_go_on_where_they_are(backend, monkeypatch):
     scene = load_scene("material-spheres").with_settings(max_depth=6, russian_roulette="off")
     plain = render(backend, scene, 0)
     monkeypatch.setattr(renderer_module, "MAX_QUEUED", 16)
@@ -68,10 +68,21 @@ def read_ints(backend, r, name) -> np.ndarray:
     return out
 
 
+def ray_keys(d: np.ndarray, prims: np.ndarray, shift: int) -> np.ndarray:
+    """kernels/path_sort.cl's sort_key: 1 + the direction bin (the cube face of d's largest
+    component, the quadrant within it) times SORT_CELLS + the cell of the primitive left."""
+    a = np.abs(d)
+    axis = np.where((a[:, 0] >= a[:, 1]) & (a[:, 0] >= a[:, 2]), 0, np.where(a[:, 1] >= a[:, 2], 1, 2))
+    major = d[np.arange(len(d)), axis]
+    u, v = np.where(axis == 0, d[:, 1], d[:, 0]), np.where(axis == 2, d[:, 1], d[:, 2])
+    direction = (2 * axis + (major < 0)) * 4 + (u < 0) + 2 * (v < 0)
+    return 1 + direction * SORT_CELLS + np.where(prims < 0, 0, np.minimum(prims >> shift, SORT_CELLS - 1))
+
+
 def test_each_pass_takes_its_queue_in_the_order_of_the_keys(backend):
     """After a launch, `order` holds the sort of the queue that the last pass took: a permutation
     of its slots whose keys do not decrease, each key counted as often as it occurs, and each key
-    1 + the material row of the primitive stored as the path's hit (0: none)."""
+    the ray's that the path stored (its direction, the primitive it leaves), by sort_key's rule."""
     scene = load_scene("material-spheres").with_settings(max_depth=6, russian_roulette="off")
     _, _, r = sorted_render(backend, scene)
     k, capacity, keys_of = r.queue_passes(), r.queue_capacity(*SIZE), r.sort_keys()
@@ -81,39 +92,49 @@ def test_each_pass_takes_its_queue_in_the_order_of_the_keys(backend):
     keys = read_ints(backend, r, ("keys", "keys_next")[k % 2])[:count]
     assert np.array_equal(np.sort(order), np.arange(count))
     assert np.all(np.diff(keys[order]) >= 0)
-    assert len(np.unique(keys)) > 3                        # several materials waited
+    assert len(np.unique(keys)) > 20                       # rays of many directions and places waited
     counts = read_ints(backend, r, "key_counts")[k * keys_of:(k + 1) * keys_of]
     assert np.array_equal(counts, np.bincount(keys, minlength=keys_of))
     # the queue's structure of arrays (kernels/path_queue.cl: store_path): field f of slot s at f * capacity + s
-    fields = np.empty((r.record_bytes() // 16, capacity, 4), np.float32)
+    fields = np.empty((renderer_module.PATH_RECORD.itemsize // 16, capacity, 4), np.float32)
     cl.enqueue_copy(backend.queue, fields, r.buffer(("queue", "queue_next")[k % 2]))
-    prims = fields[renderer_module.PATH_RECORD.names.index("prev_x"), :count, 3].view(np.int32)
-    assert np.array_equal(keys, np.where(prims >= 0, r.compiled.prim_material[np.maximum(prims, 0)] + 1, 0))
+    names = renderer_module.PATH_RECORD.names
+    d = fields[names.index("d"), :count, :3]
+    prims = fields[names.index("prev_x"), :count, 3].view(np.int32)
+    assert r.sort_shift() == 0 and np.array_equal(keys, ray_keys(d, prims, r.sort_shift()))
 
 
-def test_sorting_shades_fewer_materials_per_warp(backend):
+def test_a_warp_of_a_sorted_pass_takes_rays_of_fewer_keys(backend):
     """The divergence records follow the queue's passes: the same paths, hence the same lanes at
-    each iteration and branch, as the megakernel's; sorted, a warp of the passes shades fewer
-    material rows and BSDF types an iteration than unsorted."""
+    each iteration and branch, as the megakernel's; and the 32 paths a warp of the last pass takes
+    have fewer keys and direction bins among them than 32 taken in the order they were queued."""
     scene = load_scene("material-spheres").with_settings(max_depth=5, russian_roulette="off")
     plain, queued, ordered = (divergence_stats(backend, scene.with_settings(path_queue=q, path_sort=s), 32, 24, 2)
                               for q, s in ((0, False), (1, False), (1, True)))
     lanes = [{b.name: b.lanes for b in s.branches} for s in (plain, queued, ordered)]
     assert lanes[0] == lanes[1] == lanes[2]
-    for k in range(1, 4):   # the passes shade vertices 2 to 4 (iterations 1 to 3); vertex 5 is the last, unshaded
-        a, b = ordered.per_iteration[k], queued.per_iteration[k]
-        assert a.distinct_materials < b.distinct_materials and a.distinct_bsdfs < b.distinct_bsdfs, (k, a, b)
-        assert a.shading_efficiency > b.shading_efficiency, (k, a, b)
+    _, _, r = sorted_render(backend, scene)
+    k = r.queue_passes()
+    count = min(int(read_ints(backend, r, "counters")[k]), r.queue_capacity(*SIZE))
+    keys = read_ints(backend, r, ("keys", "keys_next")[k % 2])[:count]
+    order = read_ints(backend, r, "order")[:count]
+    directions = (keys - 1) // SORT_CELLS
+    warps = range(0, count // 32 * 32, 32)
+    assert len(warps) >= 5
+    for of, ratio in ((keys, 0.8), (directions, 0.5)):     # here 12.4 against 22.7, 3.7 against 15.0
+        per_warp = np.mean([len(np.unique(of[w:w + 32])) for w in warps])
+        sorted_per_warp = np.mean([len(np.unique(of[order[w:w + 32]])) for w in warps])
+        assert sorted_per_warp < ratio * per_warp, (sorted_per_warp, per_warp)
 
 
-def test_the_setting_sizes_the_sort_and_the_hits(backend):
+def test_the_setting_sizes_the_sort(backend):
     scene = load_scene("cornell-box").with_settings(max_depth=5, russian_roulette="off", path_queue=1)
     r = Renderer(backend, scene, *SIZE)
     unsorted = r.buffer("queue").size
     assert r.buffer("order").size == 4
     r.set_settings(path_sort=True)
     capacity = r.queue_capacity(*SIZE)
-    assert r.buffer("queue").size == renderer_module.PATH_RECORD.itemsize * capacity == unsorted + 16 * capacity
+    assert r.buffer("queue").size == renderer_module.PATH_RECORD.itemsize * capacity == unsorted
     assert r.buffer("order").size == r.buffer("keys_next").size == 4 * capacity
     assert r.queue_passes() == 5 - 1 - 1          # vertices 2 to 4 shaded a pass each, then the last
     assert r.buffer("key_counts").size == 4 * r.sort_keys() * (r.queue_passes() + 1)
@@ -133,6 +154,16 @@ def test_auto_keeps_the_sorted_queues_verdict_apart(backend):
     r.set_settings(path_sort=True)
     assert not r.sorts_queue()                 # no plan chosen yet: no queue, no sort
     assert r._plan_verdict_path() != unsorted
+
+
+@pytest.mark.parametrize("primitives, shift", [(1, 0), (SORT_CELLS, 0), (SORT_CELLS + 1, 1), (103_830, 6),
+                                               (409_602, 8)])
+def test_a_keys_cells_hold_the_scenes_primitives_in_at_most_sort_cells(primitives, shift):
+    from types import SimpleNamespace
+    from pathtrace.rendering.path_sort import PathSort
+    holder = SimpleNamespace(compiled=SimpleNamespace(num_spheres=1, num_triangles=primitives - 1))
+    assert PathSort.sort_shift(holder) == shift
+    assert -(-primitives // 2 ** shift) <= SORT_CELLS
 
 
 def test_programs_without_the_setting_compile_no_sort():

@@ -41,7 +41,7 @@ The metrics (each a ratio of sums, hence a mean over warp-executions):
 With the continuation queue (path_queue), the render launch records the iterations before a
 path waits, and each pass of continue_paths those it traces: its work-items, a queue entry each,
 form warps as 1-D work-groups do (consecutive ids), so that the figures show how the queue's
-compaction, and with path_sort its sorting by material (kernels/path_sort.cl), regroup the
+compaction, and with path_sort its sorting by ray (kernels/path_sort.cl), regroup the
 paths. A pass's warp-iterations count as the iteration its paths are at, numbered from the
 camera ray as the megakernel's. Paths longer than the iterations recorded go on unrecorded (the
 kernels record one iteration more, which says how many: DivergenceStats.unrecorded)."""

@@ -125,8 +125,8 @@ def add_path_queue_option(p: argparse.ArgumentParser, auto: bool = True):
                         "faster on some scenes, slower on others: docs/performance.md); 0 = off, the default"
                         + ("; auto: on a GPU, chosen by trial renders before the render" if auto else ""))
     p.add_argument("--path-sort", action="store_true",
-                   help="with --path-queue: trace the queue's paths in the order of the material each "
-                        "shades next, so that a GPU's warps shade one material at a time (the same image; "
+                   help="with --path-queue: trace the queue's paths in the order of their rays (direction "
+                        "and place), so that a GPU's warps walk the BVH together (the same image; "
                         "docs/performance.md)")
 
 

@@ -4,6 +4,8 @@ specialises the kernel program to a scene."""
 from dataclasses import dataclass
 
 GENERIC = "generic"
+SORT_DIRECTIONS = 24      # with path_sort, a ray's key: its direction's bin (kernels/path_sort.cl)
+SORT_CELLS = 2048         # and the cell of the tree-ordered primitive it leaves
 """The camera, filter and Russian roulette rule of a generic program (Features.generic_program), which
 chooses them at run time."""
 
@@ -68,7 +70,7 @@ class Features:
                                            # continuation queue (PATH_QUEUE, kernels/integrator.cl;
                                            # the render setting path_queue); 0: no queue
     path_sort: bool = False                # with path_queue: the queue's paths are sorted by the
-                                           # material they shade next (PATH_SORT,
+                                           # ray they trace next (PATH_SORT,
                                            # kernels/path_sort.cl; the render setting path_sort)
     bdpt: int = 0                          # bidirectional path tracing (kernels/bdpt.cl) of paths
                                            # up to this depth (app/rendering/bdpt.py); 0: the path tracer alone
@@ -110,7 +112,8 @@ class Features:
                 + ((f"TRAVERSAL_STATS={self.traversal_stats}",) if self.traversal_stats else ())
                 + ((f"DIVERGENCE_STATS={self.divergence_stats}",) if self.divergence_stats else ())
                 + ((f"PATH_QUEUE={self.path_queue}",) if self.path_queue else ())
-                + (("PATH_SORT",) if self.path_sort else ())
+                + (("PATH_SORT", f"SORT_DIRECTIONS={SORT_DIRECTIONS}", f"SORT_CELLS={SORT_CELLS}")
+                   if self.path_sort else ())
                 + ((f"BDPT={self.bdpt}",) if self.bdpt else ()) + (("LIGHT_TRACING",) if self.light_tracing else ())
                 + (("PHOTONS",) if self.photons else ()) + KERNEL_SETS[self.kernels])
 

@@ -114,8 +114,8 @@ MEDIUM = np.dtype([
 
 PATH_RECORD = np.dtype([(name, np.float32, 4) for name in
                         ("o", "d", "throughput", "radiance", "prev_x", "prev_n", "ratios")]
-                       + [("rng", np.uint32, 4), ("hit", np.float32, 4)])   # kernels/types.h PathRecord: the
-                                                    # continuation queue's entries (hit: with PATH_SORT alone)
+                       + [("rng", np.uint32, 4)])   # kernels/types.h PathRecord: the continuation
+                                                    # queue's entries
 
 PHOTON = np.dtype([(name, np.float32, 4) for name in ("p", "beta", "wo", "n")])   # kernels/types.h Photon:
                                                     # a caustic photon (kernels/photons.cl)

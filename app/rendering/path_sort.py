@@ -1,11 +1,13 @@
-"""Shading sorted by material (the render setting path_sort, kernels/path_sort.cl): what the
-Renderer (app/rendering/renderer.py), which is one, keeps and launches to sort its continuation
-queue between the passes of continue_paths."""
+"""The continuation queue sorted by ray (the render setting path_sort, kernels/path_sort.cl): what
+the Renderer (app/rendering/renderer.py), which is one, keeps and launches to sort its queue
+between the passes of continue_paths."""
+
+import math
 
 import numpy as np
 import pyopencl as cl
 
-from pathtrace.device.types import PATH_RECORD
+from pathtrace.device.features import SORT_CELLS, SORT_DIRECTIONS
 
 SORT_BUFFERS = ("keys", "keys_next", "order")   # an int per queue entry: the two queues' keys and
                                                 # the sorted order of the queue a pass takes
@@ -16,19 +18,21 @@ class PathSort:
     """The Renderer's sorting of its queue (its buffers are allocated in Renderer._allocate_images)."""
 
     def sorts_queue(self) -> bool:
-        """Whether launches sort the continuation queue's paths by material (settings.path_sort,
+        """Whether launches sort the continuation queue's paths by ray (settings.path_sort,
         kernels/path_sort.cl): only where they use the queue, so that "auto"'s plans without it and
         BDPT build no sort."""
         return bool(self.settings.path_sort) and self.queue_plan()[1]
 
-    def record_bytes(self) -> int:
-        """Bytes of a queue entry: PATH_RECORD, less its hit where launches do not sort."""
-        return PATH_RECORD.itemsize - (0 if self.sorts_queue() else PATH_RECORD["hit"].itemsize)
-
     def sort_keys(self) -> int:
-        """The keys by which path_sort sorts (kernels/path_sort.cl: sort_key): the environment and
-        each material row."""
-        return len(self.compiled.materials) + 1
+        """The keys by which path_sort sorts (kernels/path_sort.cl: sort_key): the rays that leave
+        no surface, and each direction bin's cells."""
+        return 1 + SORT_DIRECTIONS * SORT_CELLS
+
+    def sort_shift(self) -> int:
+        """A key's cell holds 2^shift of the scene's tree-ordered primitives, so that they fill at
+        most SORT_CELLS cells."""
+        primitives = self.compiled.num_spheres + self.compiled.num_triangles
+        return max(0, math.ceil(math.log2(max(primitives, 1) / SORT_CELLS)))
 
     def _sort_queue(self, k: int, keys: cl.Buffer, capacity, size: tuple, local: tuple) -> list:
         """Queues the counting sort of the queue that pass k takes (kernels/path_sort.cl): its keys'

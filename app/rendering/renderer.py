@@ -45,9 +45,9 @@ QUEUE_POOL = 1 << 23      # pixel samples a launch with the queue renders (a few
                           # passes' cost per launch spread (docs/notes/performance-2026-11.md, 2026-11-26)
 QUEUE_GROUP = 64          # work-items per group of continue_paths (32 and 128 were no faster:
                           # docs/notes/performance-2026-11.md, 2026-11-26)
-MAX_QUEUED = 1 << 23      # entries of each of the two queues (PATH_RECORD, 128 bytes, 144 with
-                          # path_sort; at most a sixteenth of the device's memory); paths that find
-                          # one full go on where they are
+MAX_QUEUED = 1 << 23      # entries of each of the two queues (PATH_RECORD, 128 bytes; at most a
+                          # sixteenth of the device's memory); paths that find one full go on
+                          # where they are
 SORT_PASSES = 16          # with path_sort, the most passes of one vertex (queue_passes)
 
 
@@ -272,7 +272,7 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
         """The bytes of each of the continuation queue's buffers, for the launch plan and image
         size: scratch of each launch, which no image keeps between launches."""
         capacity = max(self.queue_capacity(width, height), 1)       # (a buffer has bytes)
-        entries = self.record_bytes() * capacity
+        entries = PATH_RECORD.itemsize * capacity
         results = width * height * self.queue_samples(width, height) if self.queue_plan()[1] else 1
         passes = self.queue_passes()
         queue = {"queue": entries, "queue_next": entries, "counters": 4 * (passes + 2), "results": 16 * results}
@@ -415,7 +415,8 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
                 for name in ("counters", "key_counts") if self.sort_kernels else ("counters",):
                     events.append(cl.enqueue_fill_buffer(self.backend.queue, b[name], np.int32(0), 0, b[name].size))
             records = (self.shading_records,) if self.divergence_stats else ()   # (kernels/divergence.cl)
-            sort = (b["keys"], b["key_counts"], np.int32(self.sort_keys())) if self.sort_kernels else ()
+            sort = (b["keys"], b["key_counts"], np.int32(self.sort_keys()), np.int32(self.sort_shift())) \
+                if self.sort_kernels else ()
             kernel.set_args(*self.scene_args(), launch, *sums, b["queue"], b["counters"], capacity, b["results"],
                             *sort, *records)
             events.append(cl.enqueue_nd_range_kernel(self.backend.queue, kernel, global_size, local))
@@ -465,7 +466,8 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
             sort = ()
             if self.sort_kernels:
                 events += self._sort_queue(k, keys[k % 2], capacity, size, (QUEUE_GROUP,))
-                sort = (b["order"], keys[(k + 1) % 2], b["key_counts"], np.int32(self.sort_keys()))
+                sort = (b["order"], keys[(k + 1) % 2], b["key_counts"], np.int32(self.sort_keys()),
+                        np.int32(self.sort_shift()))
             records = (self.pass_records[k],) if self.divergence_stats else ()   # (kernels/divergence.cl)
             follow.set_args(*self.scene_args(), launch, queues[k % 2], queues[(k + 1) % 2], b["counters"],
                             np.int32(k), capacity, np.int32(steps), b["results"], *sort, *records)

@@ -31,8 +31,8 @@ class RenderSettings:
                                   # (kernels/integrator.cl, PATH_QUEUE): the same image, sooner on
                                   # GPUs where few paths go on long; 0: no queue;
                                   # PATH_QUEUE_AUTO (pathtrace.rendering.choices): chosen by trial renders on GPUs
-    path_sort: bool = False       # the queue's paths traced on in the order of the material they
-                                  # shade next (kernels/path_sort.cl, PATH_SORT): the same image;
+    path_sort: bool = False       # the queue's paths traced on in the order of the ray each
+                                  # traces next (kernels/path_sort.cl, PATH_SORT): the same image;
                                   # only where launches use the queue
     integrator: str = "path"      # one of pathtrace.rendering.choices.INTEGRATORS
     photon_radius: float = 0.0    # with bdpt: caustic photons (kernels/photons.cl) gathered within
