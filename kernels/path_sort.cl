@@ -12,7 +12,7 @@
  * traces them), in the queue of a wavefront (Laine, Karras and Aila 2013, "Megakernels
  * Considered Harmful"). A first form keyed the queue by the material each path would shade next
  * (pbrt-v4's and Cycles' wavefronts): its warps shaded one material, but on the H200 the
- * classroom's renders took 3 % longer than the megakernel's, where keyed by ray they take 14 %
+ * classroom's renders took 3 % longer than the megakernel's, where keyed by ray they take 15 %
  * less (docs/notes/performance-2026-11.md, 2026-11-30, eighteenth session). A path's result does
  * not depend on which work-item traces it, so the sorted queue renders the unsorted one's
  * samples.
@@ -25,10 +25,14 @@
 
 #ifdef PATH_SORT
 
-/* The key of a ray of direction d leaving primitive `self` (NO_PRIM: none) of a scene whose
- * tree-ordered primitives fall in cells of 2^shift (app/rendering/path_sort.py: sort_shift):
- * 1 + its direction bin (of SORT_DIRECTIONS, 24) times SORT_CELLS + its cell (SORT_DIRECTIONS and
- * SORT_CELLS are build options: app/device/features.py). */
+#if SORT_DIRECTIONS != 24
+#error "sort_key makes 24 direction bins, for which the host sizes its counts (app/device/features.py)"
+#endif
+
+/* The key of a ray of direction d leaving primitive `self` (NO_PRIM: none, in cell 0) of a scene
+ * whose tree-ordered primitives fall in cells of 2^shift (app/rendering/path_sort.py:
+ * sort_shift): its direction bin (of SORT_DIRECTIONS) times SORT_CELLS + its cell (both build
+ * options: app/device/features.py). A NaN direction falls in a bin like any other. */
 int sort_key(int shift, float3 d, PrimId self)
 {
     float3 a = fabs(d);
@@ -37,7 +41,7 @@ int sort_key(int shift, float3 d, PrimId self)
     float u = axis == 0 ? d.y : d.x, v = axis == 2 ? d.y : d.z;
     int direction = (2 * axis + (major < 0.0f)) * 4 + (u < 0.0f) + 2 * (v < 0.0f);
     int prim = PRIM_ID_PAIR(self).x;
-    return 1 + direction * SORT_CELLS + (prim < 0 ? 0 : min(prim >> shift, SORT_CELLS - 1));
+    return direction * SORT_CELLS + (prim < 0 ? 0 : min(prim >> shift, SORT_CELLS - 1));
 }
 
 /* offsets[k] = the sum of counts[pass * num_keys + j] over j < k, for the num_keys keys of the

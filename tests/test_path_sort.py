@@ -12,6 +12,7 @@ from pathtrace.bench.divergence_stats import divergence_stats
 from pathtrace.device.features import SORT_CELLS, Features
 from pathtrace.rendering import renderer as renderer_module
 from pathtrace.rendering.choices import PATH_QUEUE_AUTO
+from pathtrace.rendering.path_sort import PathSort
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 from tests.commands import in_process
@@ -29,7 +30,7 @@ def sorted_render(backend, scene, path_queue=1, spp=SPP):
     ("material-spheres", dict(max_depth=6, russian_roulette="off"), 1),  # glass and metals
     ("teapot-textured", dict(max_depth=8, russian_roulette="off"), 2),   # textures
     (str(SCENES / "media-fog.xml"), dict(max_depth=8, russian_roulette="off"), 1),   # media: the medium the waiting ray crosses
-    (str(SCENES / "instances.xml"), dict(max_depth=8, russian_roulette="off"), 1),   # a two-level BVH: the instance the ray leaves
+    (str(SCENES / "instances.xml"), dict(max_depth=8, russian_roulette="off"), 1),   # instances (flattened: below)
     (str(SCENES / "masks.xml"), dict(nee=False), 1),                     # alpha masks, the report's estimator
 ])
 def test_sorted_paths_render_the_megakernels_image(backend, name, settings, depth):
@@ -37,6 +38,17 @@ def test_sorted_paths_render_the_megakernels_image(backend, name, settings, dept
     plain = render(backend, scene, 0)
     assert plain[0][..., 3].sum() == SIZE[0] * SIZE[1] * SPP
     assert_same_render(plain, sorted_render(backend, scene, depth))
+
+
+def test_a_two_level_scenes_sorted_paths_render_the_megakernels_image(backend, monkeypatch):
+    """Instances kept in a two-level BVH: a ray's key takes the primitive it leaves within its
+    object (kernels/path_sort.cl: sort_key)."""
+    from pathtrace.scene import instances
+    monkeypatch.setattr(instances, "FLATTEN_MAX", -1)
+    scene = load_scene(str(SCENES / "instances.xml")).with_settings(max_depth=8, russian_roulette="off")
+    plain = render(backend, scene, 0)
+    assert plain[2].compiled.two_level
+    assert_same_render(plain, sorted_render(backend, scene))
 
 
 def test_paths_that_find_the_sorted_queue_full_go_on_where_they_are(backend, monkeypatch):
@@ -69,20 +81,24 @@ def read_ints(backend, r, name) -> np.ndarray:
 
 
 def ray_keys(d: np.ndarray, prims: np.ndarray, shift: int) -> np.ndarray:
-    """kernels/path_sort.cl's sort_key: 1 + the direction bin (the cube face of d's largest
-    component, the quadrant within it) times SORT_CELLS + the cell of the primitive left."""
+    """kernels/path_sort.cl's sort_key: the direction bin (the cube face of d's largest component,
+    the quadrant within it) times SORT_CELLS + the cell of the primitive left."""
     a = np.abs(d)
     axis = np.where((a[:, 0] >= a[:, 1]) & (a[:, 0] >= a[:, 2]), 0, np.where(a[:, 1] >= a[:, 2], 1, 2))
     major = d[np.arange(len(d)), axis]
     u, v = np.where(axis == 0, d[:, 1], d[:, 0]), np.where(axis == 2, d[:, 1], d[:, 2])
     direction = (2 * axis + (major < 0)) * 4 + (u < 0) + 2 * (v < 0)
-    return 1 + direction * SORT_CELLS + np.where(prims < 0, 0, np.minimum(prims >> shift, SORT_CELLS - 1))
+    return direction * SORT_CELLS + np.where(prims < 0, 0, np.minimum(prims >> shift, SORT_CELLS - 1))
 
 
-def test_each_pass_takes_its_queue_in_the_order_of_the_keys(backend):
+@pytest.mark.parametrize("shift", [None, 3])
+def test_each_pass_takes_its_queue_in_the_order_of_the_keys(backend, monkeypatch, shift):
     """After a launch, `order` holds the sort of the queue that the last pass took: a permutation
     of its slots whose keys do not decrease, each key counted as often as it occurs, and each key
-    the ray's that the path stored (its direction, the primitive it leaves), by sort_key's rule."""
+    the ray's that the path stored (its direction, the primitive it leaves), by sort_key's rule:
+    with the scene's own cells (one primitive each here) and with cells of 8."""
+    if shift is not None:
+        monkeypatch.setattr(PathSort, "sort_shift", lambda self: shift)
     scene = load_scene("material-spheres").with_settings(max_depth=6, russian_roulette="off")
     _, _, r = sorted_render(backend, scene)
     k, capacity, keys_of = r.queue_passes(), r.queue_capacity(*SIZE), r.sort_keys()
@@ -101,7 +117,7 @@ def test_each_pass_takes_its_queue_in_the_order_of_the_keys(backend):
     names = renderer_module.PATH_RECORD.names
     d = fields[names.index("d"), :count, :3]
     prims = fields[names.index("prev_x"), :count, 3].view(np.int32)
-    assert r.sort_shift() == 0 and np.array_equal(keys, ray_keys(d, prims, r.sort_shift()))
+    assert r.sort_shift() == (shift or 0) and np.array_equal(keys, ray_keys(d, prims, r.sort_shift()))
 
 
 def test_a_warp_of_a_sorted_pass_takes_rays_of_fewer_keys(backend):
@@ -118,7 +134,7 @@ def test_a_warp_of_a_sorted_pass_takes_rays_of_fewer_keys(backend):
     count = min(int(read_ints(backend, r, "counters")[k]), r.queue_capacity(*SIZE))
     keys = read_ints(backend, r, ("keys", "keys_next")[k % 2])[:count]
     order = read_ints(backend, r, "order")[:count]
-    directions = (keys - 1) // SORT_CELLS
+    directions = keys // SORT_CELLS
     warps = range(0, count // 32 * 32, 32)
     assert len(warps) >= 5
     for of, ratio in ((keys, 0.8), (directions, 0.5)):     # here 12.4 against 22.7, 3.7 against 15.0
@@ -160,7 +176,6 @@ def test_auto_keeps_the_sorted_queues_verdict_apart(backend):
                                                (409_602, 8)])
 def test_a_keys_cells_hold_the_scenes_primitives_in_at_most_sort_cells(primitives, shift):
     from types import SimpleNamespace
-    from pathtrace.rendering.path_sort import PathSort
     holder = SimpleNamespace(compiled=SimpleNamespace(num_spheres=1, num_triangles=primitives - 1))
     assert PathSort.sort_shift(holder) == shift
     assert -(-primitives // 2 ** shift) <= SORT_CELLS

@@ -24,9 +24,9 @@ class PathSort:
         return bool(self.settings.path_sort) and self.queue_plan()[1]
 
     def sort_keys(self) -> int:
-        """The keys by which path_sort sorts (kernels/path_sort.cl: sort_key): the rays that leave
-        no surface, and each direction bin's cells."""
-        return 1 + SORT_DIRECTIONS * SORT_CELLS
+        """The keys by which path_sort sorts (kernels/path_sort.cl: sort_key): each direction bin's
+        cells."""
+        return SORT_DIRECTIONS * SORT_CELLS
 
     def sort_shift(self) -> int:
         """A key's cell holds 2^shift of the scene's tree-ordered primitives, so that they fill at

@@ -297,9 +297,8 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
         """The passes of continue_paths that trace one vertex each, before the last, which traces
         the paths to their ends: QUEUE_PASSES; with path_sort, one for every vertex its paths can
         shade past the render launch's and before max_depth (at most SORT_PASSES), since a pass
-        sorts its paths by the material of its first vertex alone, and the warps of the last pass
-        diverge again after it (docs/notes/performance-2026-11.md, 2026-11-29: shading sorted by
-        material)."""
+        sorts its paths by their first ray alone, and the warps of the last pass diverge again
+        after it (kernels/path_sort.cl)."""
         if not self.sorts_queue():
             return QUEUE_PASSES
         depth = self.settings.max_depth
