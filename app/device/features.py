@@ -4,10 +4,10 @@ specialises the kernel program to a scene."""
 from dataclasses import dataclass
 
 GENERIC = "generic"
-SORT_DIRECTIONS = 24      # with path_sort, a ray's key: its direction's bin (kernels/path_sort.cl)
-SORT_CELLS = 2048         # and the cell of the tree-ordered primitive it leaves
 """The camera, filter and Russian roulette rule of a generic program (Features.generic_program), which
 chooses them at run time."""
+SORT_DIRECTIONS = 24      # with path_sort, a ray's key: its direction's bin (kernels/path_sort.cl)
+SORT_CELLS = 2048         # and the cell of the tree-ordered primitive it leaves
 
 KERNEL_SETS = {"all": ("ENTRY_RENDER", "ENTRY_RENDER_NEE", "ENTRY_AUX"), "render": ("ENTRY_RENDER",),
                "render_nee": ("ENTRY_RENDER_NEE",), "aux": ("ENTRY_AUX",), "bdpt": ()}

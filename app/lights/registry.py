@@ -12,7 +12,7 @@ import pkgutil
 from pathlib import Path
 
 from pathtrace.lights.light import DeltaLight
-from pathtrace.device.dispatch import dispatch_glue
+from pathtrace.device.dispatch import dispatch_glue, switch_body
 from pathtrace.device.slots import slot_accessor
 
 # the modules of app/lights that are the interface and its tables, not light types
@@ -63,10 +63,6 @@ def kernel_parts(names=None, tree: bool = False, bidirectional: bool = False) ->
     tags += "".join(f"#define {n.upper()}_LIGHT_{s.name.upper()}(l) {slot_accessor(s.slot, 'l')}\n"
                     for n, cls in DELTA_LIGHTS.items() for s in cls.slots)
 
-    def switch(call, default, kinds=used):
-        cases = "".join(f"    case LIGHT_{n.upper()}: return {call(n) if callable(call) else call.format(n)};\n"
-                        for n in kinds)
-        return f"    switch (l->type) {{\n{cases}    default: return {default};\n    }}\n"
     # in a generic program FAST_PATH is sampled inlined before the dispatch's call (dispatch_glue)
     dispatch = dispatch_glue("int sample_light_of_type(const SceneData *sc, const RenderParams *p, const global Light *l,\n"
                              "                         float3 x, float3 n, float2 u, LightSample *ls)", "l->type",
@@ -75,11 +71,11 @@ def kernel_parts(names=None, tree: bool = False, bidirectional: bool = False) ->
     if bidirectional:
         emitters = [n for n in used if n in EMITTERS]
         dispatch += ("int emit_light_of_type(const SceneData *sc, const RenderParams *p, const global Light *l, float4 u,\n"
-                     "                       LightEmission *e)\n{\n"
-                     + switch("emit_{}_light(sc, p, l, u, e)", "0", emitters) + "}\n"
-                     "float pdf_emission_of_type(const SceneData *sc, const RenderParams *p, const global Light *l, float3 n,\n"
-                     "                            float3 w)\n{\n"
-                     + switch(lambda n: EMITTERS[n], "0.0f", emitters) + "}\n")
+                     "                       LightEmission *e)\n"
+                     + switch_body("l->type", {f"LIGHT_{n.upper()}": f"emit_{n}_light(sc, p, l, u, e)" for n in emitters}, "0")
+                     + "float pdf_emission_of_type(const SceneData *sc, const RenderParams *p, const global Light *l, float3 n,\n"
+                     "                            float3 w)\n"
+                     + switch_body("l->type", {f"LIGHT_{n.upper()}": EMITTERS[n] for n in emitters}, "0.0f"))
     files = [f"lights/{n}.cl" for n in used]
     here = "app/lights/registry.py: kernel_parts"
     return ([(here, tags), ("lights.cl", None)] + ([("light_tree.cl", None)] if tree else [])

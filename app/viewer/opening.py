@@ -30,9 +30,9 @@ class Abandoned(Exception):
 class SceneOpening:
     """The Viewer's opening of scenes (Viewer._wait draws frames while they open)."""
 
-    def _begin(self, work, text: str) -> Work:
-        """work() started in a worker thread, the window's status saying `text` until the work
-        says what it is doing (self._status); Viewer._wait waits for it."""
+    def _begin(self, work, text: str):
+        """work() started in a worker thread (self._work), the window's status saying `text` until
+        the work says what it is doing (self._status); Viewer._wait waits for it."""
         outcome = {}
 
         def call():
@@ -44,14 +44,12 @@ class SceneOpening:
         self._work = Work(threading.Thread(target=call, name="open", daemon=True), outcome, time.perf_counter(),
                           threading.Event())
         self._work.thread.start()
-        return self._work
 
-    @staticmethod
-    def _abandon(work: Work):
+    def _abandon(self):
         """Work begun before the window failed to open stops at its next step (_go_on): a
         driver's build cannot be stopped halfway, and a process that goes on (a notebook) should
         not have a renderer made behind it. The window's error is said at once, not after it."""
-        work.abandoned.set()
+        self._work.abandoned.set()
 
     def _go_on(self):
         """Between the steps of an opening: ends the work where it was abandoned."""
@@ -108,8 +106,8 @@ class SceneOpening:
         panel asks through requested_scene): it draws frames of its own as it goes."""
         started = time.perf_counter()
         try:
-            scene = self._wait(self._begin(lambda: self._open(*self._compile(load_scene(name)), self.renderer),
-                                           f"opening {name}")).scene
+            self._begin(lambda: self._open(*self._compile(load_scene(name)), self.renderer), f"opening {name}")
+            scene = self._wait().scene
             self.renderer.resize(scene.settings.width, scene.settings.height)
         except Exception as e:   # a viewer must outlive any bad file, ours or a library's error
             self.set_message(str(e) if isinstance(e, UserError) else

@@ -25,7 +25,7 @@ from pathtrace.resources import resource_dir
 from pathtrace.viewer.controls import FlyControls, pick_ray
 from pathtrace.viewer.denoising import DRAFT_SCALE, Denoising
 from pathtrace.viewer.integrators import IntegratorSwitch
-from pathtrace.viewer.opening import SceneOpening, Work
+from pathtrace.viewer.opening import SceneOpening
 from pathtrace.viewer.screenshots import Screenshots
 from pathtrace.viewer.panel import MARGIN, draw_help, draw_notice, draw_panel
 
@@ -108,12 +108,12 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         self.opened_at = time.perf_counter()    # until the first image (SceneOpening.say_first_image)
         require_display()
         # the scene's opening needs no window: it begins beside the window's (0.3-0.5 s on Xvfb)
-        opening = self._begin(lambda: self._start(backend, scene), "opening the scene")
+        self._begin(lambda: self._start(backend, scene), "opening the scene")
         try:
             screen, fitted = self._open_window(scene, window_size)
             self._init_display()
         except BaseException:
-            self._abandon(opening)
+            self._abandon()
             raise
 
         self.controls = FlyControls()
@@ -143,9 +143,8 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         self._last_time = time.perf_counter()
         self._cursor = None
         try:
-            self.renderer = self._wait(opening)
+            self.renderer = self._wait()
         except BaseException:
-            self._abandon(opening)
             self._close_window()
             raise
         self._scene_opened(self.renderer.compiled)
@@ -368,12 +367,13 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         self.message, self.error = text, error
         print(f"pathtrace: {text}", file=sys.stderr)
 
-    def _wait(self, work: Work) -> Renderer:
-        """The renderer that `work` (SceneOpening._begin) makes, or its exception, this thread
-        keeping the window live meanwhile: it draws what the work says it is doing
+    def _wait(self) -> Renderer:
+        """The renderer that the work begun last (SceneOpening._begin) makes, or its exception,
+        this thread keeping the window live meanwhile: it draws what the work says it is doing
         (self._status) with the seconds spent, and the title says it too. A window closed
         meanwhile is hidden at once; the work cannot be stopped halfway (a driver's compiler), so
         the close takes effect when it ends. The title then names the scene shown."""
+        work = self._work
         try:
             while work.thread.is_alive():
                 said, fraction = self._status
