@@ -244,12 +244,13 @@ def test_a_scene_name_that_does_not_print_is_shown_on_one_line(tmp_path, name):
     ("o.tiff", "unknown image format"),
     ("outdir/", "'outdir/' is a folder; give an image file's name, such as outdir/image.png"),
     ("", "'' is empty; give an image file's name, such as image.png"),
+    ("a\nb/", "'a\\nb/' is a folder; give an image file's name, such as a\\nb/image.png"),   # one line
 ])
 def test_bad_output_fails_before_rendering(tmp_path, output, message):
     (tmp_path / "outdir").mkdir()
     r = in_process("render", "simple", "-o", tmp_path / output if output and "/" not in output else output, "--spp", "1",
                   cwd=tmp_path)
-    assert r.returncode == 1 and message in r.stderr, r.stderr
+    assert r.returncode == 1 and message in r.stderr and r.stderr.count("\n") == 1, r.stderr
 
 
 def test_unwritable_output_folder(tmp_path):

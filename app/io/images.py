@@ -144,7 +144,7 @@ def check_writable(path: Path, what: str = "--output", formats=HDR_FORMATS + LDR
     name = cut(shown(path), 100)
     if not given or given.endswith(os.sep) or os.path.isdir(given):   # (isdir: False for any error)
         raise UserError(f"{what}: '{cut(shown(given), 100)}' is {'a folder' if given else 'empty'}; "
-                        f"give an image file's name, such as {Path(given or '.', 'image.png')}")
+                        f"give an image file's name, such as {cut(shown(Path(given or '.', 'image.png')), 100)}")
     if formats and path.suffix.lower() not in formats:
         raise UserError(f"{what}: '{name}' has an unknown image format (use one of {', '.join(formats)})")
     try:
