@@ -160,8 +160,10 @@ int extend_subpath(const SceneData *sc, const RenderParams *p, Vertex *path, int
             return k + 1;
         float3 wi = from_shading(&f, bs.wi);
         /* light arrives along -d on a light subpath, along wi on a camera subpath */
-        if (importance ? !carries_light(&f, flags & MATERIAL_TRANSMISSIVE, -d, wo, wi, bs.wi)
-                       : !carries_light(&f, flags & MATERIAL_TRANSMISSIVE, wi, bs.wi, -d, wo))
+        if (importance ? !carries_light(&f, flags & MATERIAL_TRANSMISSIVE, wi, bs.wi)
+                           || !PERTURBED_SIDES_AGREE(&f, -d, wo.z)
+                       : !carries_light(&f, flags & MATERIAL_TRANSMISSIVE, -d, wo)
+                           || !PERTURBED_SIDES_AGREE(&f, wi, bs.wi.z))
             return k + 1;
 #ifdef NORMAL_MAPS
         if (importance && turns_perturbed_normal(&s, wi) != turned)

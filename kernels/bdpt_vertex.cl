@@ -135,14 +135,15 @@ float correct_shading_normal(const Surface *s, float3 wo, float3 wi)
 }
 
 /* Whether the path tracer carries light through surface s (its material transmitting or not)
- * arriving along world direction `from` and leaving along `to`, a and b in s's shading frame:
- * the shading and geometric normals agree on the side light comes from (no light leaks, as the
- * path tracer tests its light's direction), and on the side towards the camera where s is
- * opaque, which the path tracer reaches from its front alone and whose BSDF is 0 below its
- * frame; a transmitting BSDF reads such a `to` as the other side, as the path tracer's does. */
-int carries_light(const Surface *s, int transmitting, float3 from, float3 a, float3 to, float3 b)
+ * leaving along world direction `to`, b in s's shading frame: where s is opaque, the shading
+ * and geometric normals agree on the side towards the camera, which the path tracer reaches
+ * from its front alone and where the BSDF is 0 below its frame; a transmitting BSDF reads such
+ * a `to` as the other side, as the path tracer's does. The side light comes from is the shading
+ * frame's alone, as the path tracer's (kernels/integrator.cl), but for Mitsuba's normal maps
+ * (PERTURBED_SIDES_AGREE). */
+int carries_light(const Surface *s, int transmitting, float3 to, float3 b)
 {
-    return dot(from, s->ng) * a.z > 0.0f && (transmitting || dot(to, s->ng) * b.z > 0.0f);
+    return transmitting || dot(to, s->ng) * b.z > 0.0f;
 }
 
 /* The BSDF of surface vertex v for light arriving along world direction `from` and leaving
@@ -157,7 +158,8 @@ float3 eval_scattering(const SceneData *sc, const Vertex *v, float3 from, float3
         return (float3)(eval_hg(phase_g(sc, v), to, from));
     SEEN_FROM(s, sc, v, to);
     float3 a = to_shading(s, from), b = to_shading(s, to);
-    if (!carries_light(s, VERTEX_MATERIAL(v)->flags & MATERIAL_TRANSMISSIVE, from, a, to, b))
+    if (!carries_light(s, VERTEX_MATERIAL(v)->flags & MATERIAL_TRANSMISSIVE, to, b)
+        || !PERTURBED_SIDES_AGREE(s, from, a.z))
         return (float3)(0.0f);
     float3 f = eval_bsdf(VERTEX_MATERIAL(v), b, a);
 #ifdef NORMAL_MAPS

@@ -41,8 +41,10 @@ typedef const global Material *MaterialRef;
  * turned for the side d sees (kernels/normal_maps.cl). */
 #ifdef NORMAL_MAPS
 #define FACE_PERTURBED_NORMAL(s, wo) face_perturbed_normal(s, wo)
+#define PERTURBED_SIDES_AGREE(s, w, wz) perturbed_sides_agree(s, w, wz)
 #else
 #define FACE_PERTURBED_NORMAL(s, wo)
+#define PERTURBED_SIDES_AGREE(s, w, wz) 1
 #endif
 #ifdef TEXTURES
 #define MATERIAL_AT(m, sc, s, d)                                                                  \

@@ -99,6 +99,15 @@ int turns_perturbed_normal(const Surface *s, float3 wo)
     return s->terminator > 0.0f && dot(wo, s->ns_unperturbed) * dot(wo, s->ns) <= 0.0f;
 }
 
+/* Whether Mitsuba's normal maps carry light along world direction w, whose cosine in s's
+ * perturbed frame is wz: the perturbed and the unperturbed shading normals put w on one side
+ * (Mitsuba 3's PerturbedBSDF tests it in eval, pdf and sample, src/bsdfs/normalmap.cpp); always
+ * for pbrt's maps (pbrt-v4 tests no side) and an unperturbed normal, whose terminator is 0. */
+int perturbed_sides_agree(const Surface *s, float3 w, float wz)
+{
+    return s->terminator <= 0.0f || dot(w, s->ns_unperturbed) * wz > 0.0f;
+}
+
 /* Turns s's perturbed normal m round about the unperturbed n: m.xy negated, 2 m.z n - m. */
 void turn_perturbed_normal(Surface *s)
 {

@@ -50,6 +50,7 @@ SCENES = {  # name: (width, height, spp per render, renders)
     "equal-area": (None, None, 1024, 16),
     "principled": (None, None, 1024, 16),
     "instances": (None, None, 1024, 16),
+    "glass-mesh": (None, None, 1024, 16),
 }
 XML_SCENES = OUT.parent / "scenes"
 MAX_DEPTH = 8

@@ -28,7 +28,8 @@ def test_references_are_present():
     assert {p.stem for p in REFERENCES} >= {"simple-diffuse", "spheres8k-diffuse", "cbox", "envmap-spheres", "meshes",
                                             "meshes-smaller", "meshes-larger", "textures", "masks", "normal-maps",
                                             "lights", "thinlens", "beckmann", "roughdielectric", "roughplastic", "metals", "media-sphere", "media-glass",
-                                            "media-fog", "anisotropic", "blend", "equal-area", "principled", "instances"} | NO_NEE
+                                            "media-fog", "anisotropic", "blend", "equal-area", "principled", "instances",
+                                            "glass-mesh"} | NO_NEE
 
 
 # Scenes lit by delta lights (point, spot, directional), "lights" and "media-fog", are compared
