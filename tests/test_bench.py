@@ -165,6 +165,22 @@ def test_bench_renders_the_generated_textured_scene_and_asks_mitsuba(tmp_path):
     assert len(r.stderr.strip().splitlines()) == 1 and "tori400-textured.xml" in r.stderr, r.stderr
 
 
+def test_the_generated_scene_of_seven_materials(tmp_path):
+    """`tori400-materials` is the textured tori under seven BSDF types in turn, each torus with
+    its own image where its material takes one; pathtrace reads them all as those types."""
+    from pathtrace.bench.report import scene_file
+    from pathtrace.scene import load_scene
+    from pathtrace.textures.texture import Texture
+    table = load_scene(scene_file("tori400-materials", tmp_path, (32, 18))).materials
+    materials = [table.get(k) for k in range(len(table))]
+    assert {m.type for m in materials} == {"diffuse", "roughplastic", "plastic", "roughconductor", "conductor",
+                                           "roughdielectric", "dielectric"}
+    # 400 tori, the k-th under the (k mod 7)-th material: 58 diffuse, 57 of each plastic, each
+    # with its image, and the ground's diffuse with the checkerboard's
+    textured = [m for m in materials if any(isinstance(v, Texture) for v in m.params.values())]
+    assert len(textured) == 58 + 57 + 57 + 1, len(textured)
+
+
 def test_bench_mitsuba_column_without_a_twin_or_a_python(tmp_path):
     """A scene a twin cannot say (simple's Phong spheres) gets a line saying so and the bench goes
     on; a Python that is not there is one error line."""

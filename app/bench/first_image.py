@@ -15,7 +15,7 @@ and imports included, and checks that the image was written:
 
 The rows: --scenes (by default pathtrace.bench.default_scenes.FIRST_IMAGE_SCENES): built-in scenes, `meshes850`
 (850 PLY tori in a Mitsuba XML file, pathtrace.bench.scenes.write_meshes) and the files `pathtrace
-bench` writes (pathtrace.bench.report.GENERATED_FILES), each written with the rows' size; then
+bench` writes (pathtrace.bench.default_scenes.GENERATED_FILES), each written with the rows' size; then
 each --load-scene file.
 With --mitsuba PYTHON, Mitsuba 3 loads and renders with 1 spp the row's XML (the scene's own file,
 or a twin written for a built-in one: pathtrace.bench.report.mitsuba_twin) in a fresh process of that
@@ -32,8 +32,8 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from pathtrace.bench.default_scenes import FIRST_IMAGE_SCENES
-from pathtrace.bench.report import GENERATED_FILES, mitsuba_twin, scene_file
+from pathtrace.bench.default_scenes import FIRST_IMAGE_SCENES, GENERATED_FILES
+from pathtrace.bench.report import mitsuba_twin, scene_file
 from pathtrace.bench.scenes import write_meshes
 from pathtrace.errors import UserError
 from pathtrace.io.files import shown

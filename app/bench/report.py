@@ -13,7 +13,8 @@ process of that Python (pathtrace.bench.mitsuba_timing), from the scene's own XM
 written by pathtrace.scene.mitsuba_writer: the same view, size, samples and depth, its render
 alone timed, beside pathtrace's render alone (the launches and the read-back, without the BVH
 build and uploads): the per-sample ratio of docs/benchmarks.md. Scenes that are files written
-on demand (pathtrace.bench.scenes: `tori400-textured`, `meshes850-obj`) are named like built-in ones.
+on demand (pathtrace.bench.scenes: `tori400-textured`, `tori400-materials`, `meshes850-obj`) are named like
+built-in ones.
 
 `pathtrace bench --builds` times BVH builds instead (app/compiler/bvh.py, on each device asked for): random
 spheres and a height field of triangles at 64k, 1M and 4M primitives, the median of three builds
@@ -29,10 +30,11 @@ import sys
 import tempfile
 import time
 from dataclasses import asdict, dataclass
+from functools import partial
 from pathlib import Path
 from statistics import median
 
-from pathtrace.bench.default_scenes import TARGET_SCENES
+from pathtrace.bench.default_scenes import GENERATED_FILES, TARGET_SCENES
 from pathtrace.device.opencl import build_program, choose_devices
 from pathtrace.errors import UserError
 from pathtrace.rendering.choices import PATH_QUEUE_AUTO
@@ -41,7 +43,6 @@ from pathtrace.rendering.queue_plans import AUTO_PLANS
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.scene import load_scene
 
-GENERATED_FILES = ("tori400-textured", "meshes850-obj")      # pathtrace.bench.scenes
 COMPARISON_DEPTH = 8
 ESTIMATORS = ("rr", "depth8", "rr+nee", "depth8+nee")
 
@@ -241,10 +242,11 @@ def scene_file(name: str, folder: Path, size: tuple = None) -> str:
     renders it at that size), else the file's own."""
     if name not in GENERATED_FILES:
         return name
-    from pathtrace.bench.scenes import write_obj_meshes, write_textured_tori
+    from pathtrace.bench.scenes import MATERIALS, write_obj_meshes, write_textured_tori
     where = folder / name
     where.mkdir(exist_ok=True)
-    write = write_textured_tori if name == "tori400-textured" else write_obj_meshes
+    write = {"tori400-textured": write_textured_tori, "meshes850-obj": write_obj_meshes,
+             "tori400-materials": partial(write_textured_tori, materials=MATERIALS)}[name]
     return str(write(where) if size is None else write(where, size=size))
 
 

@@ -11,7 +11,10 @@ and `pathtrace bench --scenes tori400-textured`).
   report's table (`--scenes meshes850-obj`), not of `bench --load`;
 - `tori400-textured`: 400 tori with uvs, each with its own 256x256 bitmap texture (a PNG file),
   on a textured ground, under a sky and a sphere lamp, in Mitsuba XML (which pathtrace reads too):
-  the "several hundred textured meshes" row of the mesh benchmarks."""
+  the "several hundred textured meshes" row of the mesh benchmarks;
+- `tori400-materials`: the same tori and images under seven materials in turn (MATERIALS: diffuse,
+  rough and smooth plastic over the image, rough and smooth metals, rough and smooth glass), as a
+  real interior mixes them: #59's "several hundred textured meshes with at least six materials"."""
 
 from pathlib import Path
 
@@ -113,9 +116,24 @@ def write_obj_meshes(folder: Path, count: int = 850, size: tuple = (64, 64)) -> 
     return path
 
 
-def write_textured_tori(folder: Path, count: int = 400, size: tuple = (1920, 1080)) -> Path:
+# The materials of `tori400-materials`, the k-th torus's the (k mod 7)-th, its image where the
+# material has one ({image}: the bitmap's file name)
+IMAGE = '<texture type="bitmap" name="{name}"><string name="filename" value="{{image}}"/></texture>'
+MATERIALS = (
+    '<bsdf type="diffuse">' + IMAGE.format(name="reflectance") + '</bsdf>',
+    '<bsdf type="roughplastic"><float name="alpha" value="0.15"/>' + IMAGE.format(name="diffuse_reflectance") + '</bsdf>',
+    '<bsdf type="plastic">' + IMAGE.format(name="diffuse_reflectance") + '</bsdf>',
+    '<bsdf type="roughconductor"><string name="material" value="Cu"/><float name="alpha" value="0.2"/></bsdf>',
+    '<bsdf type="conductor"><string name="material" value="Al"/></bsdf>',
+    '<bsdf type="roughdielectric"><float name="alpha" value="0.1"/><float name="int_ior" value="1.5"/></bsdf>',
+    '<bsdf type="dielectric"><float name="int_ior" value="1.5"/></bsdf>',
+)
+
+
+def write_textured_tori(folder: Path, count: int = 400, size: tuple = (1920, 1080), materials: tuple = None) -> Path:
     """`tori400-textured` (the module's docstring) in `folder`, with a film of `size` pixels: its
-    XML file."""
+    XML file. With `materials` (such as MATERIALS), `tori400-materials`: the k-th torus's BSDF is
+    the (k mod len(materials))-th, its image as the BSDF's `{image}` names it."""
     from PIL import Image
     points, normals, uvs, faces = torus()
     side = int(np.ceil(np.sqrt(count)))
@@ -131,9 +149,8 @@ def write_textured_tori(folder: Path, count: int = 400, size: tuple = (1920, 108
         Image.fromarray(np.uint8(255 * (a * mix + b * (1 - mix)))).save(folder / f"t{k:04d}.png", compress_level=1)
         (folder / f"torus{k:04d}.ply").write_bytes(ply_bytes(points + [k % side * 2.5, 0.35, k // side * 2.5],
                                                              faces, normals, uvs))
-        shapes.append(f'<shape type="ply"><string name="filename" value="torus{k:04d}.ply"/><bsdf type="diffuse">'
-                      f'<texture type="bitmap" name="reflectance"><string name="filename" value="t{k:04d}.png"/>'
-                      '</texture></bsdf></shape>')
+        bsdf = (materials[k % len(materials)] if materials else MATERIALS[0]).format(image=f"t{k:04d}.png")
+        shapes.append(f'<shape type="ply"><string name="filename" value="torus{k:04d}.ply"/>{bsdf}</shape>')
     check = np.where((np.floor(x * 8) + np.floor(y * 8)) % 2 == 0, 200, 60).astype(np.uint8)
     Image.fromarray(check).save(folder / "ground.png")
     extent = side * 2.5 + 2
@@ -146,7 +163,7 @@ def write_textured_tori(folder: Path, count: int = 400, size: tuple = (1920, 108
                   f'<float name="radius" value="{side * 0.1}"/><emitter type="area"><rgb name="radiance" value="30"/>'
                   '</emitter></shape>')
     middle = side * 1.25
-    path = folder / f"tori{count}-textured.xml"
+    path = folder / f"tori{count}-{'materials' if materials else 'textured'}.xml"
     path.write_text(scene_xml(size, (middle, side * 0.6, -side * 0.3), (middle, 0, middle * 0.8), (0, 1, 0),
                               50, 1, 5, (0.5, 0.6, 0.8), shapes))
     return path

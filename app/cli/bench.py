@@ -3,7 +3,7 @@
 import argparse
 import sys
 
-from pathtrace.bench.default_scenes import FIRST_IMAGE_SCENES, TARGET_SCENES
+from pathtrace.bench.default_scenes import FIRST_IMAGE_SCENES, GENERATED_FILES, TARGET_SCENES
 from pathtrace.cli.options import (PATH_SORT_ALONE, _count, _int_range, _size, add_path_queue_option,
                                    add_program_option)
 
@@ -106,7 +106,8 @@ def add_parser(sub):
                    help="as for render; repeat for several, or 'all' (default: auto)")
     add_program_option(p, "specialised")
     p.add_argument("--scenes", nargs="+", metavar="SCENE",
-                   help="built-in names or scene files (default: " + " ".join(TARGET_SCENES) + "; with "
+                   help="built-in names, scene files, or the scenes bench writes (" + " ".join(GENERATED_FILES)
+                        + ") (default: " + " ".join(TARGET_SCENES) + "; with "
                         "--first-image: " + " ".join(FIRST_IMAGE_SCENES) + "; with --load, the generated rows: "
                         "heightfield1M meshes850)")
     p.add_argument("--estimator", action="append", metavar="EST",
