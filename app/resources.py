@@ -3,6 +3,8 @@ them as pathtrace/kernels, pathtrace/shaders, pathtrace/assets) or beside it in 
 
 from pathlib import Path
 
+from pathtrace.errors import UserError
+
 _HERE = Path(__file__).resolve().parent
 
 
@@ -10,4 +12,4 @@ def resource_dir(name: str) -> Path:
     for candidate in (_HERE / name, _HERE.parent / name):
         if candidate.is_dir():
             return candidate
-    raise FileNotFoundError(f"pathtrace is incomplete: its '{name}' folder is missing")
+    raise UserError(f"pathtrace is incomplete: its '{name}' folder is missing (reinstall it: ./install.sh)")

@@ -372,6 +372,21 @@ def test_a_full_standard_output_gets_one_line():
     assert r.returncode == 1 and r.stderr == "pathtrace: error: cannot write the standard output (No space left on device)\n"
 
 
+def test_an_incomplete_install_says_what_is_missing(tmp_path):
+    """A copy of the package without its assets folder (an install that lost it) says so in
+    one line, not as a failure to write the standard output: only an OSError of the standard
+    output itself is reported as one."""
+    import shutil
+    shutil.copytree(ROOT / "app", tmp_path / "pathtrace", ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copytree(ROOT / "kernels", tmp_path / "kernels")
+    r = subprocess.run([sys.executable, "-m", "pathtrace", "bench", "--device", "cpu", "--no-cold", "--scenes",
+                        "simple", "--spp", "1", "--size", "8x8"], cwd=tmp_path, capture_output=True, text=True,
+                       timeout=120, env={**os.environ, "PYTHONPATH": str(tmp_path)})
+    assert r.returncode == 1, r.stderr
+    assert r.stderr.strip().splitlines() == ["pathtrace: error: pathtrace is incomplete: its 'assets' folder is missing "
+                                             "(reinstall it: ./install.sh)"], r.stderr
+
+
 def test_sigterm_stops_a_render_and_leaves_no_file(tmp_path):
     import signal
     import time

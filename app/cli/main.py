@@ -114,7 +114,7 @@ def main(argv=None) -> int:
               "scene may fit)", file=sys.stderr)
         return 1
     except OSError as e:
-        if e.filename is not None:
+        if e.filename is not None or e.errno is None:
             raise                       # not standard output: a fault of ours, shown as such
         sys.stdout = open(os.devnull, "w")   # so that the exit does not try the flush again
         print(f"pathtrace: error: cannot write the standard output ({e.strerror})", file=sys.stderr)
