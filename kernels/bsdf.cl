@@ -1,6 +1,7 @@
 /* The BSDF interface: every material type provides eval, pdf and sample in the local shading
  * frame (z the shading normal, wo and wi pointing away from the surface);
- * eval_bsdf, pdf_bsdf and sample_bsdf dispatch on the material's type tag. Adding a material
+ * eval_bsdf, pdf_bsdf and sample_bsdf dispatch on the material's type tag, and eval_pdf_bsdf
+ * gives a light sample both f and pdf from one switch (app/materials/registry.py: EVAL_PDF). Adding a material
  * takes its kernels/bsdfs/ file, its host BSDFType (app/materials: parameters, packing, checks)
  * and its entry in app/materials/registry.py, which gives each type its tag (BSDF_<NAME>) and
  * generates the dispatch (dispatch_source); the scene readers map their formats' names onto it

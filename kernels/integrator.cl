@@ -77,13 +77,14 @@ float3 sample_direct_light(const SceneData *sc, const RenderParams *p, MaterialR
     float3 wi = to_shading(s, ls.wi);
     if (ls.pdf <= 0.0f || !PERTURBED_SIDES_AGREE(s, ls.wi, wi.z))
         return (float3)(0.0f);
-    float3 f = eval_bsdf(m, wo, wi);
+    float pdf;
+    float3 f = eval_pdf_bsdf(m, wo, wi, &pdf);
     if (all(f == 0.0f))
         return (float3)(0.0f);
 #ifdef NORMAL_MAPS
     f *= shadow_terminator(s, ls.wi);
 #endif
-    float w = (ls.flags & LIGHT_DELTA) ? 1.0f : mis_weight(ls.pdf, go_on * pdf_bsdf(m, wo, wi));
+    float w = (ls.flags & LIGHT_DELTA) ? 1.0f : mis_weight(ls.pdf, go_on * pdf);
     float3 contribution = f * fabs(wi.z) * ls.le * (w / ls.pdf);
     float3 o = offset_ray_origin(s->p, s->offset, s->ng, ls.wi);
 #ifdef MEDIA

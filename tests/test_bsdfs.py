@@ -38,6 +38,12 @@ kernel void bsdf_pairs(global const Material *mat, global const float4 *wo, glob
 {
     int i = get_global_id(0);
     out[i] = (float4)(eval_bsdf(mat, wo[i].xyz, wi[i].xyz), pdf_bsdf(mat, wo[i].xyz, wi[i].xyz));
+    /* a light sample's f and pdf from one switch (eval_pdf_bsdf) must be the same, to rounding
+       (a compiler may contract the two inlined together otherwise), or the pair reads as NaN */
+    float pdf;
+    float3 f = eval_pdf_bsdf(mat, wo[i].xyz, wi[i].xyz, &pdf);
+    if (any(fabs(f - out[i].xyz) > 1e-5f * fabs(out[i].xyz)) || fabs(pdf - out[i].w) > 1e-5f * fabs(out[i].w))
+        out[i] = (float4)(NAN);
 }
 /* Per case c (material mat[c], outgoing wo[c]) and bin of ny x nphi: the integrals over the bin
  * of f |cos| (xyz) and of the pdf (w), by the midpoint rule on sub x sub cells. The bins are even
@@ -119,13 +125,14 @@ def as_vectors(w):
 
 def evaluate_pairs(kernels, m, wo, wi):
     """eval and pdf at each pair (wo[i], wi[i]), at most PAIRS of them (launched over PAIRS
-    work-items whatever their number: never an empty launch)."""
+    work-items whatever their number: never an empty launch), each the same by eval_pdf_bsdf."""
     def four(v):
         padded = np.zeros((PAIRS, 4), np.float32)
         padded[:len(v), :3], padded[len(v):, 2] = v[:, :3], 1.0
         return padded
     out = np.zeros((PAIRS, 4), np.float32)
     kernels(SOURCE)("bsdf_pairs", PAIRS, m, four(wo), four(wi), out)
+    assert not np.isnan(out).any(), "eval_pdf_bsdf differs from eval_bsdf and pdf_bsdf"
     return out[:len(wi), :3].astype(np.float64), out[:len(wi), 3].astype(np.float64)
 
 

@@ -17,7 +17,7 @@ from pathtrace.materials.diffusetransmission import DiffuseTransmission
 from pathtrace.materials.layered import CoatedConductor, CoatedDiffuse
 from pathtrace.materials.plastic import Plastic, RoughPlastic
 from pathtrace.materials.principled import Principled
-from pathtrace.device.dispatch import dispatch_glue
+from pathtrace.device.dispatch import dispatch_glue, switch_body
 from pathtrace.device.slots import slot_accessor
 
 BSDFS = {cls.name: cls() for cls in (Black, Diffuse, Phong, Conductor, RoughConductor,
@@ -42,6 +42,20 @@ def tag_source() -> str:
 FAST_PATH = "diffuse"
 
 
+# f and its pdf in one switch, for a light sample (kernels/integrator.cl): a warp whose lanes shade
+# several BSDFs runs each one's code once, where eval_bsdf and pdf_bsdf each run it. A generic
+# program, whose dispatch is a call on GPUs, makes the two calls it made before.
+EVAL_PDF = """float3 eval_pdf_bsdf(MaterialRef m, float3 wo, float3 wi, float *pdf)
+#ifdef GENERIC
+{{
+    *pdf = pdf_bsdf(m, wo, wi);
+    return eval_bsdf(m, wo, wi);
+}}
+#else
+{}#endif
+"""
+
+
 def dispatch_source(names=None) -> str:
     """The eval/pdf/sample dispatch of kernels/bsdf.cl over the types `names` (None: all). In a
     generic program, where the dispatch is a call (kernels/inlining.h), FAST_PATH is tested
@@ -56,6 +70,8 @@ def dispatch_source(names=None) -> str:
     return (dispatch("float3 eval_bsdf(MaterialRef m, float3 wo, float3 wi)", "eval_{}", "(m, wo, wi)", smooth,
                      "(float3)(0.0f)")
             + dispatch("float pdf_bsdf(MaterialRef m, float3 wo, float3 wi)", "pdf_{}", "(m, wo, wi)", smooth, "0.0f")
+            + EVAL_PDF.format(switch_body("m->type", {f"BSDF_{n.upper()}": f"(*pdf = pdf_{n}(m, wo, wi), eval_{n}(m, wo, wi))"
+                                                      for n in smooth}, "(*pdf = 0.0f, (float3)(0.0f))"))
             + dispatch("int sample_bsdf(MaterialRef m, float3 wo, float3 u, BSDFSample *s)", "sample_{}",
                        "(m, wo, u, s)", with_kernel, "0"))
 
