@@ -106,3 +106,16 @@ def test_a_failed_render_or_a_missing_image_is_one_line_naming_the_command(tmp_p
     from pathtrace.bench.load import best_time
     with pytest.raises(UserError, match=r"-c \.\.\. exited 0 but wrote no out\.exr$"):
         best_time([sys.executable, "-c", "pass"], 1, tmp_path, output=tmp_path / "out.exr")
+
+
+def test_the_timed_processes_read_the_packages_bytecode(tmp_path):
+    """Before timing, bench writes the package's bytecode (an install's first run does), so
+    that a timed start reads it rather than compiles every module, even where
+    PYTHONDONTWRITEBYTECODE keeps the timed processes from writing it."""
+    import importlib.util
+    import pathtrace.api
+    from pathtrace.bench.load import cache_bytecode
+    cached = Path(importlib.util.cache_from_source(pathtrace.api.__file__))
+    cached.unlink(missing_ok=True)
+    cache_bytecode()
+    assert cached.is_file() and cached.stat().st_size > 0

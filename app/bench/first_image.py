@@ -37,7 +37,7 @@ from pathtrace.bench.report import mitsuba_twin, scene_file
 from pathtrace.bench.scenes import write_meshes
 from pathtrace.errors import UserError
 from pathtrace.io.files import shown
-from pathtrace.bench.load import best_time
+from pathtrace.bench.load import best_time, cache_bytecode
 from pathtrace.bench.mitsuba_timing import mitsuba_load_command
 from pathtrace.scene import load_scene
 
@@ -118,6 +118,7 @@ def run(device: str, scenes, scene_files, size: tuple, repeats: int, mitsuba_pyt
     folder = Path(tempfile.mkdtemp(prefix="pathtrace-first-image-"))
     out = folder / "out.exr"
     results = []
+    cache_bytecode()
     try:
         for k, (name, scene, what) in enumerate(rows(folder, scenes, scene_files, size)):
             render = [sys.executable, "-m", "pathtrace", "render", scene, "--size", f"{size[0]}x{size[1]}",
