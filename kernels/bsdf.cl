@@ -45,7 +45,7 @@ typedef const global Material *MaterialRef;
 #define PERTURBED_SIDES_AGREE(s, w, wz) perturbed_sides_agree(s, w, wz)
 #else
 #define FACE_PERTURBED_NORMAL(s, wo)
-#define PERTURBED_SIDES_AGREE(s, w, wz) 1
+#define PERTURBED_SIDES_AGREE(s, w, wz) ((void)(wz), 1)
 #endif
 #ifdef TEXTURES
 #define MATERIAL_AT(m, sc, s, d)                                                                  \

@@ -64,7 +64,7 @@ kernel void record_rays(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *
     if (!(m->flags & MATERIAL_DELTA) && p.num_lights > 0) {
         LightSample ls = sample_light(&sc, &p, s.p, s.ns, next_bits4(&rng), &rng);
         float3 wi = to_shading(&s, ls.wi);
-        if (ls.pdf > 0.0f && any(eval_bsdf(m, wo, wi) != 0.0f)) {
+        if (ls.pdf > 0.0f && PERTURBED_SIDES_AGREE(&s, ls.wi, wi.z) && any(eval_bsdf(m, wo, wi) != 0.0f)) {
             float3 o = offset_ray_origin(s.p, s.offset, s.ng, ls.wi), d;
             float t_max = shadow_ray(o, &ls, &d);
             write_ray(rays, k + 4, o, t_max, d, hit.prim);
@@ -74,7 +74,8 @@ kernel void record_rays(SCENE_KERNEL_ARGS, const RenderParams p, global float4 *
     bs.eta = 1.0f;
     if (sample_bsdf(m, wo, next_uniform4(&rng).xyz, &bs)) {
         float3 wi = from_shading(&s, bs.wi);
-        write_ray(rays, k + 2, offset_ray_origin(s.p, s.offset, s.ng, wi), INFINITY, wi, hit.prim);
+        if (PERTURBED_SIDES_AGREE(&s, wi, bs.wi.z))
+            write_ray(rays, k + 2, offset_ray_origin(s.p, s.offset, s.ng, wi), INFINITY, wi, hit.prim);
     }
 }
 
