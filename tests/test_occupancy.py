@@ -75,6 +75,10 @@ class FakeProgram:
         cap = next((int(o.split("=")[1]) for o in options if o.startswith("-cl-nv-maxrregcount=")), None)
         spilled = self.spill_bytes if cap and cap < self.spills_below else 0
         self.log = report(cap or self.uncapped, spilled) if "-cl-nv-verbose" in options else ""
+        if self.log:    # as PyOpenCL warns of a build whose log is not empty
+            import warnings
+            import pyopencl
+            warnings.warn("non-empty compiler output", pyopencl.CompilerWarning)
         self.built.append(options)
         return self
 
@@ -165,3 +169,14 @@ def test_a_program_that_would_spill_much_for_20_warps_keeps_its_cap_without_spil
     options, builds = tune(monkeypatch, uncapped=157, spills_below=140, spill_bytes=4000)
     assert options == capped(144)
     assert builds == [["-DA", "-cl-nv-verbose"], capped(128), capped(96), capped(144)]
+
+
+def test_the_register_reports_raise_no_compiler_warning(monkeypatch):
+    """Each trial's log is ptxas's report, read for its registers: PyOpenCL's warning of a
+    non-empty log is not passed on to the user's terminal."""
+    import warnings
+    import pyopencl
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        tune(monkeypatch)
+    assert not [w for w in caught if issubclass(w.category, pyopencl.CompilerWarning)]

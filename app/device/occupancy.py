@@ -14,6 +14,7 @@ Other platforms build as they are."""
 import math
 import os
 import re
+import warnings
 
 import pyopencl as cl
 
@@ -83,6 +84,15 @@ def most_registers(warps: int, register_file: int = 65536, warp: int = 32) -> in
     return max(cap for cap in range(1, 256) if resident_warps(cap, register_file, warp) >= warps)
 
 
+def _build_reporting(context: cl.Context, device: cl.Device, source: str, options: list[str]) -> cl.Program:
+    """The program built with ptxas's report among `options`: its log is never empty, and is read
+    here, so PyOpenCL's warning of a non-empty log (which printed a line and its source to a
+    user's terminal) is not raised."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", cl.CompilerWarning)
+        return cl.Program(context, source).build(options=options, devices=[device])
+
+
 def build_for_occupancy(context: cl.Context, device: cl.Device, source: str, options: list[str]):
     """The program built with the options under which it keeps the most warps resident without
     spilling (or SPILLING_WARPS or LIGHT_WARPS, spilling: see above), and those options.
@@ -97,7 +107,7 @@ def build_for_occupancy(context: cl.Context, device: cl.Device, source: str, opt
     is keyed by them too, and without it the next start ran ptxas on the cached PTX again
     (docs/notes/performance-2026-11.md, 2026-11-25: a first start on NVIDIA)."""
     source += f"\nkernel void occupancy_probe_{os.urandom(8).hex()}(void) {{}}\n"
-    program = cl.Program(context, source).build(options=options + [REPORT], devices=[device])
+    program = _build_reporting(context, device, source, options + [REPORT])
     found = kernel_registers(program.get_build_info(device, cl.program_build_info.LOG))
     if not found:
         return program, options + [REPORT]
@@ -107,7 +117,7 @@ def build_for_occupancy(context: cl.Context, device: cl.Device, source: str, opt
 
     def build(cap):
         capped = options + [f"-cl-nv-maxrregcount={cap}", REPORT]
-        trial = cl.Program(context, source).build(options=capped, devices=[device])
+        trial = _build_reporting(context, device, source, capped)
         built[cap] = trial, capped, kernel_registers(trial.get_build_info(device, cl.program_build_info.LOG))
 
     def spilled(cap) -> int:
