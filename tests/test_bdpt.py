@@ -379,6 +379,41 @@ def test_bdpt_through_smooth_shaded_rough_glass_is_the_path_tracers(backend, tmp
     assert abs(z) < 4, (m.mean() / ref[..., :3].mean(), z)
 
 
+def arch_obj(path, segments=4, radius=0.6, length=1.6):
+    """An OBJ file of an open half-pipe, an arch over the z axis standing on y = 0, of few faces
+    whose vertex normals are the cylinder's: light reaches it from behind a face's plane yet in
+    front of its shading normal, and, the arch being open, nothing of it stands in the way."""
+    angles = np.pi * np.arange(segments + 1) / segments
+    points = [(radius * np.cos(a), radius * np.sin(a), z) for z in (-length / 2, length / 2) for a in angles]
+    n = segments + 1
+    lines = [f"v {x} {y} {z}" for x, y, z in points]
+    lines += [f"vn {np.cos(a)} {np.sin(a)} 0" for _ in range(2) for a in angles]
+    # counter-clockwise seen from outside
+    lines += [f"f {i + 1}//{i + 1} {i + 2}//{i + 2} {n + i + 2}//{n + i + 2} {n + i + 1}//{n + i + 1}"
+              for i in range(segments)]
+    path.write_text("\n".join(lines) + "\n")
+
+
+@pytest.mark.parametrize("twosided", [False, True], ids=["one-sided", "two-sided"])
+def test_bdpt_on_an_open_smooth_shaded_sheet_is_the_path_tracers(backend, tmp_path, twosided):
+    """A low-poly arch of diffuse (or two-sided diffuse) with smooth vertex normals, lit by a
+    lamp below its side, the image's mean: the path tracer carries light that arrives from
+    behind a face's plane but in front of its shading normal, as Mitsuba 3 and pbrt-v4 do
+    (kernels/integrator.cl), so BDPT's light subpaths must start such paths too."""
+    arch_obj(tmp_path / "arch.obj")
+    diffuse = {"type": "diffuse", "rho_d": RHO}
+    scene = read_scene_dict({
+        "camera": {"eye": [2.0, 0.2, 1.5], "look_at": [0.4, 0.1, 0], "up": [0, 1, 0], "vfov": 40},
+        "environment": {"color": 0}, "render": {"max_depth": 4, "russian_roulette": "off"},
+        "materials": {"arch": {"type": "twosided", "bsdf": diffuse} if twosided else diffuse, "lamp": LAMP},
+        "meshes": [{"file": "arch.obj", "material": "arch"}],
+        "spheres": [{"center": [0.8, -0.7, 0.3], "radius": 0.2, "material": "lamp"}]}, "arch", folder=tmp_path)
+    m = render_batches(backend, scene, "bdpt", 512, (32, 32), 8)[..., :3].mean(axis=(1, 2, 3))
+    ref, ref_v = _path_reference(backend, scene, 32768, (32, 32))
+    z = (m.mean() - ref[..., :3].mean()) / np.sqrt(m.var(ddof=1) / len(m) + ref_v[..., :3].sum() / ref[..., :3].size ** 2)
+    assert abs(z) < 4, (m.mean() / ref[..., :3].mean(), z)
+
+
 # -- BDPT against the path tracer on every scene file the tests hold --
 # Each file as it is (its lights, delta ones included, textures, media, instances, cameras), at
 # the small size of the NEE invariant over the same files (tests/scene_files.py), so that every
