@@ -12,4 +12,4 @@ def resource_dir(name: str) -> Path:
     for candidate in (_HERE / name, _HERE.parent / name):
         if candidate.is_dir():
             return candidate
-    raise UserError(f"pathtrace is incomplete: its '{name}' folder is missing (reinstall it: ./install.sh)")
+    raise UserError(f"pathtrace is incomplete: its '{name}' folder is missing; install it again (./install.sh in a checkout)")

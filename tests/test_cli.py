@@ -383,8 +383,8 @@ def test_an_incomplete_install_says_what_is_missing(tmp_path):
                         "simple", "--spp", "1", "--size", "8x8"], cwd=tmp_path, capture_output=True, text=True,
                        timeout=120, env={**os.environ, "PYTHONPATH": str(tmp_path)})
     assert r.returncode == 1, r.stderr
-    assert r.stderr.strip().splitlines() == ["pathtrace: error: pathtrace is incomplete: its 'assets' folder is missing "
-                                             "(reinstall it: ./install.sh)"], r.stderr
+    assert r.stderr.strip().splitlines() == ["pathtrace: error: pathtrace is incomplete: its 'assets' folder is missing; "
+                                             "install it again (./install.sh in a checkout)"], r.stderr
 
 
 def test_sigterm_stops_a_render_and_leaves_no_file(tmp_path):
