@@ -40,6 +40,8 @@ typedef const global Material *MaterialRef;
 /* Declares `m`, the MaterialRef of surface s's material (a Surface, kernels/bvh.cl), seen along
  * ray direction d, and completes s's shading frame (kernels/frame.cl), a perturbed normal
  * turned for the side d sees (kernels/normal_maps.cl). */
+/* PERTURBED_SIDES_AGREE (kernels/normal_maps.cl: perturbed_sides_agree) is 1 without normal maps,
+ * written so that a test using it has no constant operand, of which PoCL's compiler warns. */
 #ifdef NORMAL_MAPS
 #define FACE_PERTURBED_NORMAL(s, wo) face_perturbed_normal(s, wo)
 #define PERTURBED_SIDES_AGREE(s, w, wz) perturbed_sides_agree(s, w, wz)

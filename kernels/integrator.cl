@@ -10,10 +10,11 @@
  *
  * A direction's side is the shading frame's, as in pbrt-v4 and Mitsuba 3: where the shading
  * and geometric normals put it on different sides it is followed (its ray leaves on the
- * geometric side it points to), not dropped. Dropping it, pbrt-v3's guard against light leaks,
- * darkened glass meshes with smoothed normals by 0.6-5.7 % against Mitsuba 3 (tests/scenes/
- * glass-mesh.xml; docs/mitsuba.md). Mitsuba's normal and bump maps alone drop a direction that
- * the perturbed and unperturbed normals put on different sides, as Mitsuba 3 does. */
+ * geometric side it points to), not dropped: pbrt-v3's guard against light leaks, which dropped
+ * it, darkened smooth-shaded meshes against Mitsuba 3's renders (tests/scenes/glass-mesh.xml,
+ * open-sheet.xml; docs/mitsuba.md). Mitsuba's normal and bump maps alone drop a direction that
+ * the perturbed and unperturbed normals put on different sides, as Mitsuba 3 does
+ * (PERTURBED_SIDES_AGREE). */
 
 /* The safety bound on path length when Russian roulette alone ends paths (max_depth 0): only a
  * closed scene of albedo 1 could reach it. */

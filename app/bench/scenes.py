@@ -144,12 +144,14 @@ def write_textured_tori(folder: Path, count: int = 400, size: tuple = (1920, 108
         # each its own image: stripes and rings in two colours of its own
         a, b = rng.uniform(0.1, 0.9, (2, 3))
         f = rng.uniform(2, 12, 2)
-        mix = (0.5 + 0.5 * np.sin(2 * np.pi * (f[0] * x + 0.5 * np.sin(2 * np.pi * f[1] * y[:, :1]))))[..., None]
-        # the fastest zlib level: the default spent 5 s of the scene's writing on compression
-        Image.fromarray(np.uint8(255 * (a * mix + b * (1 - mix)))).save(folder / f"t{k:04d}.png", compress_level=1)
+        bsdf = materials[k % len(materials)] if materials else MATERIALS[0]
+        if "{image}" in bsdf:      # (a metal's or a glass's torus has none)
+            mix = (0.5 + 0.5 * np.sin(2 * np.pi * (f[0] * x + 0.5 * np.sin(2 * np.pi * f[1] * y[:, :1]))))[..., None]
+            # the fastest zlib level: the default spent 5 s of the scene's writing on compression
+            Image.fromarray(np.uint8(255 * (a * mix + b * (1 - mix)))).save(folder / f"t{k:04d}.png", compress_level=1)
         (folder / f"torus{k:04d}.ply").write_bytes(ply_bytes(points + [k % side * 2.5, 0.35, k // side * 2.5],
                                                              faces, normals, uvs))
-        bsdf = (materials[k % len(materials)] if materials else MATERIALS[0]).format(image=f"t{k:04d}.png")
+        bsdf = bsdf.format(image=f"t{k:04d}.png")
         shapes.append(f'<shape type="ply"><string name="filename" value="torus{k:04d}.ply"/>{bsdf}</shape>')
     check = np.where((np.floor(x * 8) + np.floor(y * 8)) % 2 == 0, 200, 60).astype(np.uint8)
     Image.fromarray(check).save(folder / "ground.png")
