@@ -180,3 +180,28 @@ def test_the_register_reports_raise_no_compiler_warning(monkeypatch):
         warnings.simplefilter("always")
         tune(monkeypatch)
     assert not [w for w in caught if issubclass(w.category, pyopencl.CompilerWarning)]
+
+
+def test_a_tuned_binary_read_from_the_cache_raises_no_compiler_warning(monkeypatch, tmp_path):
+    """A tuned binary is cached with the options it was built with, ptxas's report among them
+    (above), and rebuilt from the cache with them: that build's log is the report again, which
+    PyOpenCL's warning printed to the terminal of every start that read the cache."""
+    import warnings
+    import pyopencl
+    import pathtrace.device.opencl as opencl
+
+    class Binary(FakeProgram):
+        built = []
+
+        def __init__(self, context, devices, binaries):
+            assert binaries == [b"binary"]
+    monkeypatch.setattr(opencl.cl, "Program", Binary)
+    monkeypatch.setattr(opencl, "keeps_own_cache", lambda device: False)
+    monkeypatch.setattr(opencl, "is_nvidia", lambda device: True)
+    monkeypatch.setattr(opencl, "cache_entry", lambda *args: tmp_path / "entry.bin")
+    monkeypatch.setattr(opencl, "_read_cached", lambda path: (capped(96), b"binary"))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        result = opencl.build_cached(None, FakeDevice(), "kernel void k(void) {}", ["-DA"])
+    assert result.cached and Binary.built == [capped(96)]
+    assert not [w for w in caught if issubclass(w.category, pyopencl.CompilerWarning)]

@@ -84,13 +84,20 @@ def most_registers(warps: int, register_file: int = 65536, warp: int = 32) -> in
     return max(cap for cap in range(1, 256) if resident_warps(cap, register_file, warp) >= warps)
 
 
-def _build_reporting(context: cl.Context, device: cl.Device, source: str, options: list[str]) -> cl.Program:
-    """The program built with ptxas's report among `options`: its log is never empty, and is read
-    here, so PyOpenCL's warning of a non-empty log (which printed a line and its source to a
-    user's terminal) is not raised."""
+def build_quietly(program: cl.Program, options: list[str], devices=None) -> cl.Program:
+    """`program` built with `options`. Where they hold ptxas's report (REPORT: the tuned builds,
+    and a tuned binary rebuilt from the cache with the options it was made with), its log is
+    never empty and is pathtrace's to read, so PyOpenCL's warning of a non-empty log (which
+    printed a line and its source to a user's terminal) is not raised."""
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", cl.CompilerWarning)
-        return cl.Program(context, source).build(options=options, devices=[device])
+        if REPORT in options:
+            warnings.simplefilter("ignore", cl.CompilerWarning)
+        return program.build(options=options, devices=devices)
+
+
+def _build_reporting(context: cl.Context, device: cl.Device, source: str, options: list[str]) -> cl.Program:
+    """The program built with ptxas's report among `options` (build_quietly)."""
+    return build_quietly(cl.Program(context, source), options, [device])
 
 
 def build_for_occupancy(context: cl.Context, device: cl.Device, source: str, options: list[str]):

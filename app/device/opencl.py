@@ -14,7 +14,7 @@ from pathtrace.io.cache_files import cache_dir, read_entry, write_entry
 from pathtrace.errors import UserError, format_bytes, short
 from pathtrace.device.features import Features
 from pathtrace.device.loader import new_context, start_drivers
-from pathtrace.device.occupancy import TUNING_RULE, build_for_occupancy, is_nvidia
+from pathtrace.device.occupancy import TUNING_RULE, build_for_occupancy, build_quietly, is_nvidia
 from pathtrace.device.programs import Programs, default_mode
 from pathtrace.resources import resource_dir
 
@@ -187,7 +187,7 @@ def build_cached(context: cl.Context, device: cl.Device, source: str, options: l
     if cached is not None:
         built_with, binary = cached
         try:
-            program = cl.Program(context, [device], [binary]).build(options=built_with)
+            program = build_quietly(cl.Program(context, [device], [binary]), built_with)
             return BuildResult(program, time.perf_counter() - start, True)
         except cl.Error:
             pass   # a stale or foreign binary: rebuild from source below
