@@ -189,6 +189,9 @@ def test_unreadable_environment_map(tmp_path, name, data):
     (["missing.pbrt"], "error: scene file 'missing.pbrt' does not exist\n"),
     (["nosuchscene"], "neither a scene file nor a built-in scene (built-ins: simple,"),
     (["cornel-box"], "cornel-box: neither a scene file nor a built-in scene; did you mean cornell-box? (built-ins: "),
+    # a name written as a file's path is a file that is not there, with its folder's nearest scene file
+    (["tests/scenes/cbox.xm"], "error: scene file 'tests/scenes/cbox.xm' does not exist; did you mean 'cbox.xml'?\n"),
+    (["nowhere/cornell-box"], "error: scene file 'nowhere/cornell-box' does not exist\n"),
     (["simple", "--tonemap", "acse"], "invalid choice: 'acse' (choose from 'standard', 'aces'); did you mean aces? "
                                       "(see 'pathtrace render -h')\n"),
     (["simple", "--filter", "gausian:2"], "invalid choice: 'gausian' (choose from 'box', 'tent', 'gaussian'); did you "

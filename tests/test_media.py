@@ -423,4 +423,5 @@ vertices = [[0, 0, 0], [1, 0, 0], [1, 1, 0]]
 faces = [[0, 1, 2]]
 """)
     load_scene(str(path))
-    assert "bounds a medium but is not closed" in capsys.readouterr().err
+    lines = [line for line in capsys.readouterr().err.splitlines() if "bounds a medium but is not closed" in line]
+    assert len(lines) == 1 and f"warning: {path}:" in lines[0], lines     # the file (and line) that gives it

@@ -385,6 +385,24 @@ def test_bad_input_is_one_line_naming_the_file(tmp_path, text, expected):
     # a coated conductor's metal is pbrt-v4's conductor.eta, not a conductor's eta
     ('WorldBegin\nMaterial "coatedconductor" "rgb conductor.eta" [ 200 1 1 ]\n' + FLOOR,
      "s.pbrt:2: the coatedconductor material's eta (from 'conductor.eta') must lie in [0, 100]"),
+    # a type pbrt-v4 has not either ('%s: shape type unknown.' and the like: known_parameters.json's types)
+    ('WorldBegin\nShape "plymseh" "string filename" "x.ply"\n' + FLOOR,
+     "s.pbrt:2: pbrt-v4 has no shape type 'plymseh', and refuses it; did you mean 'plymesh'?"),
+    ('WorldBegin\nMaterial "difuse"\n' + FLOOR, "s.pbrt:2: pbrt-v4 has no material type 'difuse', and refuses it; "
+                                                "did you mean 'diffuse'?"),
+    ('WorldBegin\nLightSource "pont"\n' + FLOOR, "s.pbrt:2: pbrt-v4 has no light type 'pont'"),
+    ('Integrator "bdtp"\nWorldBegin\n' + FLOOR, "s.pbrt:1: pbrt-v4 has no integrator type 'bdtp', and refuses it; "
+                                                 "did you mean 'bdpt'?"),
+    ('Camera "perspectve"\nWorldBegin\n' + FLOOR, "s.pbrt:1: pbrt-v4 has no camera type 'perspectve'"),
+    ('Film "rbg"\nWorldBegin\n' + FLOOR, "s.pbrt:1: pbrt-v4 has no film type 'rbg'"),
+    # each integrator's own parameters, as pbrt-v4's Create() reads them
+    ('Integrator "bdpt" "integer maxdepht" 5\nWorldBegin\n' + FLOOR,
+     "s.pbrt:1: 'maxdepht' is not a parameter of pbrt-v4's bdpt integrator, which pbrt-v4 refuses; "
+     "did you mean 'maxdepth'?"),
+    ('Integrator "sppm" "float raduis" 0.1\nWorldBegin\n' + FLOOR,
+     "s.pbrt:1: 'raduis' is not a parameter of pbrt-v4's sppm integrator"),
+    ('Integrator "mlt" "string lightsampler" "power"\nWorldBegin\n' + FLOOR,
+     "s.pbrt:1: 'lightsampler' is not a parameter of pbrt-v4's mlt integrator"),
 ])
 def test_a_file_pbrt_v4_refuses_is_one_line_naming_the_line(tmp_path, text, expected):
     message = fails(tmp_path, text)

@@ -35,6 +35,9 @@ OPTIONS = [
     ("sampler zsobol", 'Sampler "zsobol"'),
     ("integrator volpath", 'Integrator "volpath"'),
     ("integrator path", 'Integrator "path"'),
+    ("integrator bdpt", 'Integrator "bdpt"'),
+    ("integrator mlt", 'Integrator "mlt"'),
+    ("integrator sppm", 'Integrator "sppm"'),
     ("filter triangle", 'PixelFilter "triangle"'),
     ("filter box", 'PixelFilter "box"'),
     ("filter gaussian", 'PixelFilter "gaussian"'),
@@ -169,3 +172,16 @@ def test_a_name_pbrt_v4_knows_and_pathtrace_does_not_read_is_warned_of_once_and_
                      f"pathtrace: warning: {tmp_path / 's.pbrt'}:6: 'twosided' is not a parameter pathtrace's "
                      "coateddiffuse material reads; ignored"], lines
 
+
+def test_what_a_bidirectional_integrator_has_and_pathtrace_does_not_is_warned_of(tmp_path, capsys, backend):
+    """pbrt-v4's bdpt reads 'visualizestrategies', which pathtrace renders without; its mlt reads
+    'chains', which a replacement by bdpt has no use for: warned of, not refused."""
+    (tmp_path / "s.pbrt").write_text('Integrator "bdpt" "integer maxdepth" 3 "bool visualizestrategies" true\n' + HEAD
+                                     + 'Shape "sphere"\n')
+    lines = warnings_of_a_scene_that_renders(tmp_path / "s.pbrt", capsys, backend)
+    assert lines == [f"pathtrace: warning: {tmp_path / 's.pbrt'}:1: 'visualizestrategies' is not a parameter "
+                     "pathtrace's bdpt integrator reads; ignored"], lines
+    (tmp_path / "s.pbrt").write_text('Integrator "mlt" "integer chains" 10\n' + HEAD + 'Shape "sphere"\n')
+    lines = warnings_of_a_scene_that_renders(tmp_path / "s.pbrt", capsys, backend)
+    assert f"pathtrace: warning: {tmp_path / 's.pbrt'}:1: 'chains' is not a parameter pathtrace's mlt integrator " \
+           "reads; ignored" in lines, lines

@@ -189,6 +189,9 @@ def apply_render_options(scene, args):
         raise UserError("--rr off needs --max-depth N (N >= 1), or paths would never end")
     if changes["path_sort"] and not changes["path_queue"]:
         raise UserError(PATH_SORT_ALONE)
+    if getattr(args, "photon_radius", None) and changes["integrator"] != "bdpt":
+        raise UserError(f"--photon-radius gathers bidirectional path tracing's caustic photons, and {scene.name} "
+                        f"renders with {changes['integrator']}: give --integrator bdpt too")
     if not changes["nee"] and scene.lights:
         warn(f"{scene.name}: its {len(scene.lights)} point, spot or directional light(s) are reached by "
              f"next-event estimation only; without it (--no-nee) they light nothing")

@@ -53,6 +53,9 @@ def _read_scene(name_or_path: str) -> Scene:
     return _reader(name_or_path)()
 
 
+SCENE_SUFFIXES = (".toml", ".xml", ".pbrt", ".pbrt.gz")     # what the readers read, by name
+
+
 def _reader(name_or_path: str):
     """What reads the scene `name_or_path`, a function of no arguments; or the one-line error."""
     if not str(name_or_path).strip():     # Path("") is the current folder, which no reader means
@@ -88,5 +91,17 @@ def _reader(name_or_path: str):
     make = builtin_maker(name_or_path)
     if make is not None:
         return make
+    if path.suffix or len(path.parts) > 1:      # written as a file's path, not a built-in's name
+        raise UserError(f"{missing(path, 'scene file')}{_nearest_scene_file(path)}")
     raise UserError(f"{cut(shown(name_or_path), 100)}: neither a scene file nor a built-in scene"
                     f"{did_you_mean(str(name_or_path), BUILTIN_SCENES)} (built-ins: {', '.join(BUILTIN_SCENES)})")
+
+
+def _nearest_scene_file(path: Path) -> str:
+    """"; did you mean X?" where the folder of a missing scene file holds one of a name close to
+    its (a misspelt extension: scene.pbr), else ""."""
+    try:
+        names = [p.name for p in path.parent.iterdir() if p.name.lower().endswith(SCENE_SUFFIXES)]
+    except OSError:
+        return ""
+    return did_you_mean(path.name, names, quoted=True)

@@ -191,13 +191,13 @@ class SceneBuilder:
         self.sphere_material.append(self.material(material))
         self.sphere_names.append(name or f"sphere {len(self.spheres) - 1}")
 
-    def add_mesh(self, mesh: Mesh):
+    def add_mesh(self, mesh: Mesh, where: str = None):
         """Adds a mesh; one that rays cross (a null or transmissive material) into a medium but
-        has no inside (an open mesh) is warned of: rays that pass its edges never enter or leave
-        the medium."""
+        has no inside (an open mesh) is warned of, at `where` (the file and line that give it):
+        rays that pass its edges never enter or leave the medium."""
         crossed = self.materials.rows[mesh.material]["flags"] & (NULL | TRANSMISSIVE)
         if mesh.media is not None and crossed and len(mesh.faces) and not is_closed(mesh.vertices, mesh.faces):
-            warn(f"mesh {mesh.name!r}{f' ({mesh.source})' if mesh.source else ''}: bounds a medium but is not "
+            warn(f"{where + ': ' if where else ''}mesh {mesh.name!r}{f' ({mesh.source})' if mesh.source else ''}: bounds a medium but is not "
                  "closed; rays that miss it never enter or leave the medium")
         self.meshes.append(mesh)
 
@@ -211,13 +211,13 @@ class SceneBuilder:
         else:
             self.shapes.append(shape)
 
-    def add_to(self, group: int | None, item):
+    def add_to(self, group: int | None, item, where: str = None):
         """Adds a Mesh or an analytic Shape to the object `group` (add_object's index), or to the
-        scene where it is None."""
+        scene where it is None; `where`: as for add_mesh."""
         if group is not None:
             (self.objects[group].meshes if isinstance(item, Mesh) else self.objects[group].shapes).append(item)
         else:
-            self.add_mesh(item) if isinstance(item, Mesh) else self.add_shape(item)
+            self.add_mesh(item, where) if isinstance(item, Mesh) else self.add_shape(item)
 
     def add_object(self, name: str) -> int:
         """A new, empty object (SceneObject) that instances may draw; its index."""

@@ -6,12 +6,15 @@ src/core/xml.cpp: 'unreferenced property'). So does pathtrace, where the rendere
 know the name for that type: a misspelt `radisu` is one line naming the file, the line, the
 type and the parameter, with the known name it is closest to. A name the renderer knows and
 pathtrace does not implement is warned of instead, once per name and type in a file, so that
-real scenes still load.
+real scenes still load. Types alike: a type the renderer has and pathtrace has not is warned of and
+replaced or left out, where the reader says; one the renderer has not either (a misspelt `difuse`)
+is refused, as the renderer refuses it (refuse_unknown_type).
 
 The lists, extracted from the renderers' sources and checked against them
 (tests/test_pbrt_parameter_names.py, tests/test_mitsuba_parameter_names.py), are
 app/scene/pbrt/known_parameters.json ('pbrt-v4') and app/scene/mitsuba_known_properties.json
-('mitsuba3'), keyed "category type" ("shape sphere", "bsdf diffuse")."""
+('mitsuba3'), keyed "category type" ("shape sphere", "bsdf diffuse"), and each file's 'types', the
+renderer's types per category."""
 
 import json
 from functools import cache
@@ -39,6 +42,17 @@ def known(fmt: str, key: str):
     """The names the renderer of fmt knows for the type `key`, or None where the list has no such
     type (a type pathtrace does not read, whose parameters are left out with it)."""
     return table(fmt).get(key)
+
+
+def refuse_unknown_type(fmt: str, category: str, kind: str, where: str):
+    """Refuses the type `kind` of the `category` ("shape", "bsdf") at `where` where the renderer of
+    fmt has no such type (UserError, with the type it is closest to); else nothing, whether
+    pathtrace has it or not."""
+    types = document(fmt)["types"].get(category)
+    if types is not None and kind not in types:
+        renderer = RENDERER[fmt]
+        raise UserError(f"{where}: {renderer} has no {category} type '{cut(kind)}', and refuses it"
+                        f"{did_you_mean(kind, types, quoted=True)}")
 
 
 class Unread:

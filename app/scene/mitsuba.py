@@ -14,7 +14,8 @@ from pathtrace import cameras
 from pathtrace.cameras.camera import FILM, TO_WORLD, frame_of
 from pathtrace.cameras.perspective import PerspectiveCamera, vertical_fov
 from pathtrace.scene.environment import Environment
-from pathtrace.errors import UserError, did_you_mean, short, warn
+from pathtrace.scene.known_names import refuse_unknown_type
+from pathtrace.errors import UserError, short, warn
 from pathtrace import filters
 from pathtrace import parameters
 from pathtrace.lights import DELTA_LIGHTS
@@ -97,6 +98,7 @@ class _Reader(XmlScene):
             if absent:
                 fail(node, f"a {kind} needs a {absent[0].mitsuba}")
         else:
+            refuse_unknown_type("mitsuba", "texture", kind, node.where())
             warn(f"{node.where()}: pathtrace has no {kind} texture; it uses a constant grey of 0.5 instead")
             props.ignore()
             kind, params = "constant", {"value": 0.5}
@@ -155,6 +157,7 @@ class _Reader(XmlScene):
         props = self.properties(node)
         self.settings.integrator = settings.Integrator.types["mitsuba"].get(kind, ("path",))[0]
         if kind not in settings.Integrator.types["mitsuba"]:
+            refuse_unknown_type("mitsuba", "integrator", kind, node.where())
             warn(f"{node.where()}: pathtrace renders with its path tracer instead")
             props.ignore()          # that integrator's own settings: only max_depth and rr_depth are read
         self.settings.max_depth = self.declared(settings.Integrator, props, node)["max_depth"]
@@ -176,6 +179,7 @@ class _Reader(XmlScene):
             if child.tag == "film":
                 self.film(child)
             elif child.tag == "sampler":
+                refuse_unknown_type("mitsuba", "sampler", child.attrs.get("type"), child.where())
                 self.settings.spp = self.declared(settings.Sampler, self.properties(child), child)["spp"]
             elif child.tag == "medium" or (child.tag == "ref" and self.resolve(child).tag == "medium"):
                 self.camera_medium = self.medium(child)       # Mitsuba 3: the sensor's one medium
@@ -194,6 +198,7 @@ class _Reader(XmlScene):
         props = self.properties(node)
         values = self.declared(settings.Film, props, node)
         self.settings.width, self.settings.height = values["width"], values["height"]
+        refuse_unknown_type("mitsuba", "film", node.attrs.get("type"), node.where())
         if node.attrs.get("type") not in ("hdrfilm", "specfilm", None):
             warn(f"{node.where()}: pathtrace writes the image format of the output file's name")
         if node.attrs.get("type") != "specfilm":    # whose channels are its sensitivity functions'
@@ -206,6 +211,7 @@ class _Reader(XmlScene):
         """A filter by its type's declared Mitsuba names (app/filters.py); its gaussian for one of
         negative lobes."""
         props = self.properties(node)
+        refuse_unknown_type("mitsuba", "rfilter", node.attrs.get("type"), node.where())
         kind = filters.format_type("mitsuba", node.attrs.get("type"), lambda text: warn(f"{node.where()}: {text}"))
         if kind is None:
             props.ignore()
@@ -233,6 +239,7 @@ class _Reader(XmlScene):
         elif kind in LIGHTS_BY_NAME:
             self.lights.append(self.delta_light(node, kind, props))
         else:
+            refuse_unknown_type("mitsuba", "emitter", kind, node.where())
             warn(f"{node.where()}: pathtrace has no {kind} emitters; it ignores this one")
             props.ignore()
 
@@ -328,15 +335,13 @@ class _Reader(XmlScene):
             return self.blend(node, props)
         if kind in BSDFS_BY_NAME:
             return self.mitsuba_material(node, kind, props)
+        refuse_unknown_type("mitsuba", "bsdf", kind, node.where())
         albedo = self.color(props, "base_color", None, False) if "base_color" in props else \
             self.color(props, "reflectance", 0.5, False) if "reflectance" in props else np.full(3, 0.5)
         albedo = np.clip(albedo, 0, 1)
         props.ignore()
-        # a type close to one pathtrace reads is likely a misspelling of it (Mitsuba 3 refuses
-        # a plugin it does not have), which this line would otherwise let render grey
-        supported = [*BSDFS_BY_NAME, *MITSUBA_WRAPPERS, "blendbsdf"]
         warn(f"{node.where()}: not supported; pathtrace uses a diffuse BSDF of albedo "
-             f"{', '.join(f'{c:.3g}' for c in albedo)}{did_you_mean(kind, supported, quoted=True)}")
+             f"{', '.join(f'{c:.3g}' for c in albedo)}")
         return Material("diffuse", {"rho_d": albedo})
 
     def nested_material(self, node, named=False) -> Material:
@@ -435,6 +440,7 @@ class _Reader(XmlScene):
         if id(node) in self.medium_rows:
             return self.medium_rows[id(node)]
         kind = node.attrs.get("type")
+        refuse_unknown_type("mitsuba", "medium", kind, node.where())
         if kind != "homogeneous":
             fail(node, f"pathtrace has homogeneous media only, not {short(kind)}")
         props = self.properties(node)
@@ -449,6 +455,7 @@ class _Reader(XmlScene):
             if phase.attrs.get("type") == "hg":
                 values["g"] = self.get(phase_props, "g", 0.8, ("float",))     # Mitsuba 3's default
             elif phase.attrs.get("type") != "isotropic":
+                refuse_unknown_type("mitsuba", "phase", phase.attrs.get("type"), phase.where())
                 phase_props.ignore()
                 warn(f"{phase.where()}: pathtrace has no {phase.attrs.get('type')} phase function; "
                      "it scatters isotropically instead")
@@ -539,6 +546,7 @@ class _Reader(XmlScene):
                 fail(node, f"the {kind} reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace")
             return self.builder.add_to(group, shape)
         if kind not in MESHES_BY_NAME:
+            refuse_unknown_type("mitsuba", "shape", kind, node.where())
             warn(f"{node.where()}: pathtrace has no {kind} shape; it ignores this one")
             props.ignore()
             return
@@ -557,7 +565,7 @@ class _Reader(XmlScene):
         origin = MeshFile(path, m, values.get("face_normals", False), flip, smoothed) if path and not turned else None
         self.builder.add_to(group, Mesh(name or (Path(path).stem if path else f"{kind} {len(self.builder.meshes)}"),
                                         vertices, faces, normals, material, origin.path if origin else "", origin, uvs,
-                                        interface))
+                                        interface), node.where())
 
 
 def read_mitsuba_file(path) -> Scene:

@@ -438,7 +438,7 @@ class _Reader(TomlValues):
                 where = f"meshes[{i}]"
                 if not isinstance(m, dict):
                     self.fail(where, f"must be a table, got {type(m).__name__}")
-                builder.add_mesh(self.mesh(m, where, self.material_ref(builder, rows, m, where)))
+                builder.add_mesh(self.mesh(m, where, self.material_ref(builder, rows, m, where)), f"{self.label}: {where}")
             self.instances(data, instances, builder, rows)
         camera = data.get("camera", {"eye": [0, 0, 5], "look_at": [0, 0, 0]})
         return builder.build(

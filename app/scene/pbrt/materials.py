@@ -8,6 +8,7 @@ from dataclasses import replace
 import numpy as np
 
 from pathtrace.errors import UserError, warn
+from pathtrace.scene.known_names import refuse_unknown_type
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.bsdf import TRANSMISSIVE
 from pathtrace.materials.surface import PBRT_MAPS, from_pbrt
@@ -182,6 +183,7 @@ class MaterialMapper:
             except ValueError as e:
                 self.fail(params, where, e)
             return None if chosen is None else make(*chosen, where)
+        refuse_unknown_type("pbrt", "material", kind, where)
         warn(f"{where}: pathtrace has no {kind} material; it uses a diffuse one of albedo 0.5")
         return make("diffuse", {"rho_d": np.full(3, 0.5)}, where)
 

@@ -16,6 +16,7 @@ from pathtrace import filters
 from pathtrace.scene.pbrt.tokens import ParamList, parameters, string
 from pathtrace.scene.meshes import MAX_COORDINATE
 from pathtrace.scene import settings
+from pathtrace.scene.known_names import known, refuse_unknown_type
 
 
 class OptionDirectives:
@@ -37,6 +38,7 @@ class OptionDirectives:
                                                              np.eye(4), -1)
         cls = cameras.registry.format_class("pbrt", kind)
         if cls is None:
+            refuse_unknown_type("pbrt", "camera", kind, where)
             warn(f"{where}: pathtrace has no {kind} camera; it uses a perspective one of pbrt-v4's defaults")
             kind, params, cls = "perspective", ParamList(None), cameras.registry.format_class("pbrt", "perspective")
         world_from_camera = np.linalg.inv(ctm)
@@ -59,6 +61,7 @@ class OptionDirectives:
             if params.type_of(name):
                 params.floats(name, ("float",) if name == "cropwindow" else ("integer",))
                 warn(f"{params.where(name)}: pathtrace renders the whole film; ignored")
+        refuse_unknown_type("pbrt", "film", kind, tokens.where(offset))
         if kind not in ("rgb", "gbuffer", "spectral"):
             warn(f"{tokens.where(offset)}: pathtrace has no {kind} film; it renders RGB")
         self.unused(params, "film", kind)
@@ -76,6 +79,7 @@ class OptionDirectives:
     def _integrator(self, tokens, offset):
         kind = string(tokens, "Integrator")
         params = parameters(tokens)
+        refuse_unknown_type("pbrt", "integrator", kind, tokens.where(offset))
         self.settings.integrator, note = settings.Integrator.types["pbrt"].get(
             kind, ("path", f"pathtrace renders with its path tracer instead of {kind}"))
         if kind == "sppm":
@@ -88,11 +92,15 @@ class OptionDirectives:
             note = f"pathtrace renders sppm with bdpt and caustic photons of radius {radius:g}"
         if note:
             warn(f"{tokens.where(offset)}: {note}")
-        values = self.read_declared(settings.Integrator, params, tokens.where(offset))
-        self.settings.max_depth, self.settings.light_sampler = values["max_depth"], values["light_sampler"]
-        if params.bool("regularize", False):
+        # what that integrator reads of pathtrace's settings (bdpt, mlt and sppm no light sampler)
+        names = known("pbrt", f"integrator {kind}")
+        taken = tuple(p for p in settings.Integrator.parameters if names is None or p.pbrt in names)
+        values = self.read_declared(taken, params, tokens.where(offset))
+        self.settings.max_depth = values["max_depth"]
+        self.settings.light_sampler = values.get("light_sampler", self.settings.light_sampler)
+        if names is not None and "regularize" in names and params.bool("regularize", False):
             warn(f"{params.where('regularize')}: pathtrace does not regularize; ignored")
-        if kind in ("path", "volpath"):
+        if names is not None:
             self.unused(params, "integrator", kind)
         params.ignore()            # another integrator's settings: it is replaced whole, with its warning
 

@@ -36,7 +36,7 @@ from pathtrace.scene.media import Medium, MediumInterface
 from pathtrace.scene import transform
 from pathtrace.scene.description import Mesh, Scene, SceneBuilder
 from pathtrace.scene import settings
-from pathtrace.scene.known_names import Unread
+from pathtrace.scene.known_names import Unread, refuse_unknown_type
 from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, place_mesh
 from pathtrace.scene.mesh_shapes import MESH_SHAPES, MeshSource
 from pathtrace.scene.pbrt.materials import MaterialMapper, make
@@ -309,6 +309,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         kind = string(tokens, "Shape")
         params = parameters(tokens)
         where = tokens.where(offset)
+        refuse_unknown_type("pbrt", "shape", kind, where)
         if self.current_object is not None:
             self.object_shapes[self.current_object].append((kind, params, where, self.state.copy()))
         else:
@@ -357,7 +358,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
             part = faces if subset is None else faces[subset]
             # no MeshFile: the file's faces were turned and its uvs flipped, which a converted
             # scene's reference to the file could not say (convert writes the mesh anew)
-            self.builder.add_to(group, Mesh(name, vertices, part, normals, row, source, None, uvs, media))
+            self.builder.add_to(group, Mesh(name, vertices, part, normals, row, source, None, uvs, media), where)
 
     def analytic_shape(self, kind, params, media, where) -> Shape:
         """An analytic shape (app/shapes/), its parameters read by their pbrt-v4 names
@@ -459,6 +460,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
             return
         cls = LIGHTS_BY_NAME.get(kind)
         if cls is None:
+            refuse_unknown_type("pbrt", "light", kind, where)
             params.ignore()
             warn(f"{where}: pathtrace has no {kind} light; it leaves it out")
             return
