@@ -35,7 +35,9 @@ from pathlib import Path
 from statistics import median
 
 from pathtrace.bench.default_scenes import GENERATED_FILES, TARGET_SCENES
-from pathtrace.device.opencl import build_program, choose_devices
+from pathtrace.device.features import Features
+from pathtrace.device.opencl import (build_program, built_before, cache_entry, choose_devices, kernel_source,
+                                     program_options)
 from pathtrace.errors import UserError
 from pathtrace.rendering.choices import PATH_QUEUE_AUTO
 from pathtrace.rendering.multidevice import DeviceGroup
@@ -61,7 +63,7 @@ class Result:
     mrays_per_s: float
     bvh_seconds: float
     build_cold_seconds: float       # None where not measured (bench --no-cold)
-    build_warm_seconds: float
+    build_warm_seconds: float | None
     render_seconds: float = 0.0     # of `seconds`, the launches and reading the image back (with
                                     # --rounds, the median round's)
     render_rounds: list = None      # with --rounds N > 1: each round's render seconds
@@ -141,12 +143,21 @@ def measure(backends, scene, estimator, width, height, spp, builds, rounds: int 
 
 
 def kernel_build_times(backend, cold: bool = True):
-    """Seconds to build the kernels without our binary cache (None unless `cold`: on NVIDIA's
-    OpenCL that build tunes register caps, app/device/occupancy.py, a minute on the H100) and from it."""
-    cold = build_program(backend.context, backend.device.device, use_cache=False).seconds if cold else None
-    build_program(backend.context, backend.device.device)          # fills the cache if empty
-    warm = build_program(backend.context, backend.device.device).seconds
-    return cold, warm
+    """Seconds to build the kernels of every feature without our binary cache (None unless `cold`:
+    on NVIDIA's OpenCL that build tunes register caps, app/device/occupancy.py, a minute on the
+    H100) and from it. Without `cold`, the second is None too where the cache does not hold
+    them: filling it would be the very build that `cold` off skips."""
+    device = backend.device.device
+    if cold:
+        cold = build_program(backend.context, device, use_cache=False).seconds
+        build_program(backend.context, device)          # fills the cache if empty
+    else:
+        cold = None
+        features = Features()
+        entry = cache_entry(device, kernel_source("", features), program_options(device, features), tune=True)
+        if not built_before(device, entry):
+            return None, None
+    return cold, build_program(backend.context, device).seconds
 
 
 def run(device_specs, scene_names, estimators, width, height, spp, together=False, cold=True,
@@ -408,7 +419,7 @@ def format_row(r: Result) -> str:
     return (f"{r.scene:<20} {r.device[:44]:<44} {r.estimator:<10} {f'{r.width}x{r.height}':>9} "
             f"{r.spp:>5} {r.seconds:>8.3f} {r.msamples_per_s:>10.1f} {r.mrays_per_s:>8.1f} "
             f"{r.bvh_seconds:>6.3f} {'-' if r.build_cold_seconds is None else f'{r.build_cold_seconds:.2f}':>8}"
-            f"/{r.build_warm_seconds:<8.3f}")
+            f"/{'-' if r.build_warm_seconds is None else f'{r.build_warm_seconds:.3f}':<8}")
 
 
 def write_json(path, results, argv):
