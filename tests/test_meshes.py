@@ -211,8 +211,9 @@ def test_a_binary_ply_shorter_than_its_header_says_is_refused(tmp_path):
     path.write_bytes(b"ply\nformat binary_little_endian 1.0\nelement vertex 1099511627776\nproperty float x\n"
                      b"property float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\n"
                      b"end_header\n" + b"\0" * 64)
-    with pytest.raises(UserError, match="short.ply: the PLY file holds 64 bytes of data where its header claims"):
-        read_mesh(path, "test")
+    with pytest.raises(UserError, match="^scene.xml:3: filename: .*short.ply: the PLY file holds 64 bytes of data "
+                                        "where its header claims"):      # the field that names it first
+        read_mesh(path, "scene.xml:3: filename")
 
 
 

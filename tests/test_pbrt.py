@@ -440,6 +440,7 @@ def test_convert_writes_turned_meshes_and_resampled_maps_beside_the_toml(tmp_pat
     r = in_process("convert", tmp_path / "s.pbrt", "-o", tmp_path / "out.toml")
     assert r.returncode == 0, r.stderr
     assert (tmp_path / "out.environment.exr").is_file() and list((tmp_path / "out.meshes").glob("*.ply"))
+    assert f"wrote 1 mesh to {tmp_path / 'out.meshes'}/" in r.stderr      # where they are, not only their name
     a, b = load_scene(str(tmp_path / "s.pbrt")), load_scene(str(tmp_path / "out.toml"))
     assert b.camera.mirrored and np.allclose(a.environment.image, b.environment.image)
     for name in ("vertices", "faces", "normals", "uvs"):

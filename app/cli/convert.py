@@ -55,7 +55,7 @@ def cmd_convert(args):
     if map_path:
         print(f"wrote {map_path}", file=sys.stderr)
     if meshes:
-        print(f"wrote {len(meshes)} meshes to {out.stem}.meshes/", file=sys.stderr)
+        print(f"wrote {len(meshes)} mesh{'' if len(meshes) == 1 else 'es'} to {out.with_name(out.stem + '.meshes')}/", file=sys.stderr)
     print(f"wrote {out}", file=sys.stderr)
     return 0
 
@@ -98,5 +98,7 @@ def add_parser(sub):
                        epilog=SCENES_EPILOG)
     p.add_argument("scene", help="a .xml, .pbrt or .toml scene file or a built-in scene name")
     p.add_argument("-o", "--output", required=True, metavar="FILE.toml",
-                   help="the TOML file to write (mesh files stay where they are, referenced)")
+                   help="the TOML file to write: mesh files the scene reads as they are stay where they "
+                        "are, referenced; meshes it changed on reading (a pbrt file's) or gave inline are "
+                        "written as PLY files into FILE.meshes/ beside it")
     p.set_defaults(func=cmd_convert)

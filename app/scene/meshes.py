@@ -54,11 +54,15 @@ def read_mesh(path: Path, where: str, warn=warn, degenerate=None) -> MeshData:
                         f"(use {', '.join(FORMATS)})")
     check_regular_file(path, where, "mesh file", MAX_FILE_BYTES)
     try:
-        if suffix == ".ply":
-            mesh = _read_ply(path)
-        elif suffix == ".ply.gz":           # pbrt-v4's plymesh takes them
-            with gzip.open(path) as f:
-                mesh = _read_ply(f, path)
+        if suffix in (".ply", ".ply.gz"):
+            try:
+                if suffix == ".ply":
+                    mesh = _read_ply(path)
+                else:                       # pbrt-v4's plymesh takes them
+                    with gzip.open(path) as f:
+                        mesh = _read_ply(f, path)
+            except UserError as e:          # the PLY reader's lines name the file: here, the field too
+                raise UserError(f"{where}: {e}") from None
         elif suffix == ".obj":
             mesh = _read_obj(path, f"{where}: {path}")
         else:
