@@ -14,9 +14,10 @@ Other platforms build as they are."""
 import math
 import os
 import re
-import warnings
 
 import pyopencl as cl
+
+from pathtrace.device.quiet_build import build_quietly
 
 REPORT = "-cl-nv-verbose"
 # Registers are allocated per warp in units of 256 (8 per thread) on every NVIDIA architecture
@@ -84,20 +85,10 @@ def most_registers(warps: int, register_file: int = 65536, warp: int = 32) -> in
     return max(cap for cap in range(1, 256) if resident_warps(cap, register_file, warp) >= warps)
 
 
-def build_quietly(program: cl.Program, options: list[str], devices=None) -> cl.Program:
-    """`program` built with `options`. Where they hold ptxas's report (REPORT: the tuned builds,
-    and a tuned binary rebuilt from the cache with the options it was made with), its log is
-    never empty and is pathtrace's to read, so PyOpenCL's warning of a non-empty log (which
-    printed a line and its source to a user's terminal) is not raised."""
-    with warnings.catch_warnings():
-        if REPORT in options:
-            warnings.simplefilter("ignore", cl.CompilerWarning)
-        return program.build(options=options, devices=devices)
-
-
 def _build_reporting(context: cl.Context, device: cl.Device, source: str, options: list[str]) -> cl.Program:
-    """The program built with ptxas's report among `options` (build_quietly)."""
-    return build_quietly(cl.Program(context, source), options, [device])
+    """The program built with ptxas's report among `options`, its log read here rather than
+    warned of (app/device/quiet_build.py)."""
+    return build_quietly(cl.Program(context, source), options, [device], report=True)
 
 
 def build_for_occupancy(context: cl.Context, device: cl.Device, source: str, options: list[str]):

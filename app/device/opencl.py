@@ -14,7 +14,8 @@ from pathtrace.io.cache_files import cache_dir, read_entry, write_entry
 from pathtrace.errors import UserError, format_bytes, short
 from pathtrace.device.features import Features
 from pathtrace.device.loader import new_context, start_drivers
-from pathtrace.device.occupancy import TUNING_RULE, build_for_occupancy, build_quietly, is_nvidia
+from pathtrace.device.occupancy import REPORT, TUNING_RULE, build_for_occupancy, is_nvidia
+from pathtrace.device.quiet_build import build_quietly
 from pathtrace.device.programs import Programs, default_mode
 from pathtrace.resources import resource_dir
 
@@ -187,14 +188,14 @@ def build_cached(context: cl.Context, device: cl.Device, source: str, options: l
     if cached is not None:
         built_with, binary = cached
         try:
-            program = build_quietly(cl.Program(context, [device], [binary]), built_with)
+            program = build_quietly(cl.Program(context, [device], [binary]), built_with, report=REPORT in built_with)
             return BuildResult(program, time.perf_counter() - start, True)
         except cl.Error:
             pass   # a stale or foreign binary: rebuild from source below
     if tune:
         program, options = build_for_occupancy(context, device, source, options)
     else:
-        program = cl.Program(context, source).build(options=options, devices=[device])
+        program = build_quietly(cl.Program(context, source), options, [device])
     seconds = time.perf_counter() - start
     if use_cache:
         binary = program.get_info(cl.program_info.BINARIES)[0]
