@@ -166,3 +166,28 @@ def test_a_shape_takes_its_bsdf_by_its_place_whatever_its_name(tmp_path, capsys)
     red, metal = (scene.materials.get(row) for row in scene.sphere_material)
     assert red.type == "diffuse" and np.allclose(red.params["rho_d"], [0.8, 0, 0]), red
     assert metal.type == "conductor", metal
+
+
+def test_every_type_the_reader_takes_is_mitsuba_3s():
+    """The reader refuses a type Mitsuba 3 has not (app/scene/known_names.py: refuse_unknown_type):
+    every type it takes must be in that list, or a scene using it would be refused (but Mitsuba
+    0.6's bdpt, which the integrators' table takes before any refusal)."""
+    from pathtrace import cameras, filters
+    from pathtrace.materials.surface import MITSUBA_WRAPPERS
+    from pathtrace.parameters import by_format
+    from pathtrace.scene import settings
+    from pathtrace.scene.environment import Environment
+    from pathtrace.shapes import SHAPES
+    types = MITSUBA["types"]
+    taken = {
+        "bsdf": [*mitsuba.BSDFS_BY_NAME, *MITSUBA_WRAPPERS, "blendbsdf"],
+        "texture": list(mitsuba.TEXTURES_BY_NAME),
+        "shape": [*mitsuba.MESHES_BY_NAME, *SHAPES, "instance", "shapegroup"],
+        "emitter": [*mitsuba.LIGHTS_BY_NAME, *Environment.mitsuba_plugins, "area"],
+        "sensor": [c.mitsuba for c in cameras.CAMERAS.values() if c.mitsuba],
+        "rfilter": list(by_format(filters.TYPES.values(), "mitsuba")),
+        "integrator": [k for k in settings.Integrator.types["mitsuba"] if k != "bdpt"],
+        "film": ["hdrfilm", "specfilm"], "medium": ["homogeneous"], "phase": ["hg", "isotropic"],
+    }
+    for category, names in taken.items():
+        assert set(names) <= set(types[category]), (category, sorted(set(names) - set(types[category])))

@@ -185,3 +185,23 @@ def test_what_a_bidirectional_integrator_has_and_pathtrace_does_not_is_warned_of
     lines = warnings_of_a_scene_that_renders(tmp_path / "s.pbrt", capsys, backend)
     assert f"pathtrace: warning: {tmp_path / 's.pbrt'}:1: 'chains' is not a parameter pathtrace's mlt integrator " \
            "reads; ignored" in lines, lines
+
+
+def test_every_type_the_reader_takes_is_pbrt_v4s():
+    """The reader refuses a type pbrt-v4 has not (app/scene/known_names.py: refuse_unknown_type):
+    every type it takes must be in that list, or a scene using it would be refused."""
+    from pathtrace import cameras
+    from pathtrace.scene import settings
+    from pathtrace.scene.pbrt.materials import BSDFS_BY_NAME
+    from pathtrace.shapes import SHAPES
+    types = PBRT["types"]
+    taken = {
+        "shape": [*pbrt_reader.MESHES_BY_NAME, *SHAPES],
+        "material": [*BSDFS_BY_NAME, "mix", "interface", "none", ""],
+        "light": [*pbrt_reader.LIGHTS_BY_NAME, "infinite"],
+        "camera": [c.pbrt for c in cameras.CAMERAS.values() if c.pbrt],
+        "integrator": list(settings.Integrator.types["pbrt"]),
+        "film": ["rgb", "gbuffer", "spectral"],
+    }
+    for category, names in taken.items():
+        assert set(names) <= set(types[category]), (category, sorted(set(names) - set(types[category])))

@@ -35,9 +35,7 @@ from pathlib import Path
 from statistics import median
 
 from pathtrace.bench.default_scenes import GENERATED_FILES, TARGET_SCENES
-from pathtrace.device.features import Features
-from pathtrace.device.opencl import (build_program, built_before, cache_entry, choose_devices, kernel_source,
-                                     program_options)
+from pathtrace.device.opencl import build_program, built_before, choose_devices, program_entry
 from pathtrace.errors import UserError
 from pathtrace.rendering.choices import PATH_QUEUE_AUTO
 from pathtrace.rendering.multidevice import DeviceGroup
@@ -153,9 +151,7 @@ def kernel_build_times(backend, cold: bool = True):
         build_program(backend.context, device)          # fills the cache if empty
     else:
         cold = None
-        features = Features()
-        entry = cache_entry(device, kernel_source("", features), program_options(device, features), tune=True)
-        if not built_before(device, entry):
+        if not built_before(device, program_entry(device)):
             return None, None
     return cold, build_program(backend.context, device).seconds
 

@@ -55,7 +55,7 @@ def cmd_convert(args):
     if map_path:
         print(f"wrote {map_path}", file=sys.stderr)
     if meshes:
-        print(f"wrote {len(meshes)} mesh{'' if len(meshes) == 1 else 'es'} to {out.with_name(out.stem + '.meshes')}/", file=sys.stderr)
+        print(f"wrote {len(meshes)} mesh{'' if len(meshes) == 1 else 'es'} to {folder}/", file=sys.stderr)
     print(f"wrote {out}", file=sys.stderr)
     return 0
 

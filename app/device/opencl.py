@@ -151,6 +151,11 @@ def build_program(context: cl.Context, device: cl.Device, extra: str = "",
                         use_cache, tune)
 
 
+def program_entry(device: cl.Device, features: Features = Features(), extra: str = "", tune: bool = True) -> Path:
+    """The cache entry of the program build_program builds for `features` (cache_entry)."""
+    return cache_entry(device, kernel_source(extra, features), program_options(device, features), tune)
+
+
 def cache_entry(device: cl.Device, source: str, options: list[str], tune: bool) -> Path:
     """Where the binary of a build is cached: keyed by the source, the options, whether it is
     tuned and under which rule (occupancy.TUNING_RULE), the exact device and driver and the

@@ -66,8 +66,10 @@ def _reader(name_or_path: str):
     except OSError as e:     # a name too long for the file system, say
         raise UserError(f"{cut(shown(path), 80)}: {e.strerror}") from None
     pbrt = path.name.lower().endswith((".pbrt", ".pbrt.gz"))
-    if not exists and (pbrt or path.suffix.lower() in (".xml", ".toml")):
-        raise missing(path, "scene file")
+    # a name written as a file's path (with a suffix or a folder; no built-in scene's name has
+    # either) is a file that is not there
+    if not exists and (path.suffix or len(path.parts) > 1):
+        raise UserError(f"{missing(path, 'scene file')}{_nearest_scene_file(path)}")
     if path.suffix.lower() == ".xml":
         def read_xml():
             from pathtrace.scene.mitsuba import read_mitsuba_file
@@ -91,8 +93,6 @@ def _reader(name_or_path: str):
     make = builtin_maker(name_or_path)
     if make is not None:
         return make
-    if path.suffix or len(path.parts) > 1:      # written as a file's path, not a built-in's name
-        raise UserError(f"{missing(path, 'scene file')}{_nearest_scene_file(path)}")
     raise UserError(f"{cut(shown(name_or_path), 100)}: neither a scene file nor a built-in scene"
                     f"{did_you_mean(str(name_or_path), BUILTIN_SCENES)} (built-ins: {', '.join(BUILTIN_SCENES)})")
 

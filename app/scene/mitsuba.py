@@ -98,7 +98,7 @@ class _Reader(XmlScene):
             if absent:
                 fail(node, f"a {kind} needs a {absent[0].mitsuba}")
         else:
-            refuse_unknown_type("mitsuba", "texture", kind, node.where())
+            self.refuse_unknown("texture", node)
             warn(f"{node.where()}: pathtrace has no {kind} texture; it uses a constant grey of 0.5 instead")
             props.ignore()
             kind, params = "constant", {"value": 0.5}
@@ -108,6 +108,17 @@ class _Reader(XmlScene):
             fail(node, str(e))
         self.textures[id(node)] = Texture(kind, params, node.attrs.get("id"))
         return self.textures[id(node)]
+
+    def refuse_unknown(self, category: str, node):
+        """In a Mitsuba 3 file, refuses an element of a type Mitsuba 3 has not either, or of none
+        (its parser's 'missing required attribute "type"'), as Mitsuba 3 refuses both
+        (app/scene/known_names.py); a file of another version may name that version's plugins,
+        which are warned of and replaced as before."""
+        if not self.version.startswith("3."):
+            return
+        if "type" not in node.attrs:
+            fail(node, "needs a type, as Mitsuba 3 requires")
+        refuse_unknown_type("mitsuba", category, node.attrs["type"], node.where())
 
     # -- the scene --
 
@@ -157,7 +168,7 @@ class _Reader(XmlScene):
         props = self.properties(node)
         self.settings.integrator = settings.Integrator.types["mitsuba"].get(kind, ("path",))[0]
         if kind not in settings.Integrator.types["mitsuba"]:
-            refuse_unknown_type("mitsuba", "integrator", kind, node.where())
+            self.refuse_unknown("integrator", node)
             warn(f"{node.where()}: pathtrace renders with its path tracer instead")
             props.ignore()          # that integrator's own settings: only max_depth and rr_depth are read
         self.settings.max_depth = self.declared(settings.Integrator, props, node)["max_depth"]
@@ -179,7 +190,7 @@ class _Reader(XmlScene):
             if child.tag == "film":
                 self.film(child)
             elif child.tag == "sampler":
-                refuse_unknown_type("mitsuba", "sampler", child.attrs.get("type"), child.where())
+                self.refuse_unknown("sampler", child)
                 self.settings.spp = self.declared(settings.Sampler, self.properties(child), child)["spp"]
             elif child.tag == "medium" or (child.tag == "ref" and self.resolve(child).tag == "medium"):
                 self.camera_medium = self.medium(child)       # Mitsuba 3: the sensor's one medium
@@ -195,10 +206,10 @@ class _Reader(XmlScene):
             refuse(props, node, e, format_names(cameras.registry.FIELDS, "mitsuba"))
 
     def film(self, node):
+        self.refuse_unknown("film", node)
         props = self.properties(node)
         values = self.declared(settings.Film, props, node)
         self.settings.width, self.settings.height = values["width"], values["height"]
-        refuse_unknown_type("mitsuba", "film", node.attrs.get("type"), node.where())
         if node.attrs.get("type") not in ("hdrfilm", "specfilm", None):
             warn(f"{node.where()}: pathtrace writes the image format of the output file's name")
         if node.attrs.get("type") != "specfilm":    # whose channels are its sensitivity functions'
@@ -211,7 +222,7 @@ class _Reader(XmlScene):
         """A filter by its type's declared Mitsuba names (app/filters.py); its gaussian for one of
         negative lobes."""
         props = self.properties(node)
-        refuse_unknown_type("mitsuba", "rfilter", node.attrs.get("type"), node.where())
+        self.refuse_unknown("rfilter", node)
         kind = filters.format_type("mitsuba", node.attrs.get("type"), lambda text: warn(f"{node.where()}: {text}"))
         if kind is None:
             props.ignore()
@@ -239,7 +250,7 @@ class _Reader(XmlScene):
         elif kind in LIGHTS_BY_NAME:
             self.lights.append(self.delta_light(node, kind, props))
         else:
-            refuse_unknown_type("mitsuba", "emitter", kind, node.where())
+            self.refuse_unknown("emitter", node)
             warn(f"{node.where()}: pathtrace has no {kind} emitters; it ignores this one")
             props.ignore()
 
@@ -335,7 +346,9 @@ class _Reader(XmlScene):
             return self.blend(node, props)
         if kind in BSDFS_BY_NAME:
             return self.mitsuba_material(node, kind, props)
-        refuse_unknown_type("mitsuba", "bsdf", kind, node.where())
+        if kind is None:       # in a file of any version: Mitsuba 3's 'missing required attribute "type"'
+            fail(node, "needs a type")
+        self.refuse_unknown("bsdf", node)
         albedo = self.color(props, "base_color", None, False) if "base_color" in props else \
             self.color(props, "reflectance", 0.5, False) if "reflectance" in props else np.full(3, 0.5)
         albedo = np.clip(albedo, 0, 1)
@@ -440,7 +453,7 @@ class _Reader(XmlScene):
         if id(node) in self.medium_rows:
             return self.medium_rows[id(node)]
         kind = node.attrs.get("type")
-        refuse_unknown_type("mitsuba", "medium", kind, node.where())
+        self.refuse_unknown("medium", node)
         if kind != "homogeneous":
             fail(node, f"pathtrace has homogeneous media only, not {short(kind)}")
         props = self.properties(node)
@@ -455,7 +468,7 @@ class _Reader(XmlScene):
             if phase.attrs.get("type") == "hg":
                 values["g"] = self.get(phase_props, "g", 0.8, ("float",))     # Mitsuba 3's default
             elif phase.attrs.get("type") != "isotropic":
-                refuse_unknown_type("mitsuba", "phase", phase.attrs.get("type"), phase.where())
+                self.refuse_unknown("phase", phase)
                 phase_props.ignore()
                 warn(f"{phase.where()}: pathtrace has no {phase.attrs.get('type')} phase function; "
                      "it scatters isotropically instead")
@@ -546,7 +559,7 @@ class _Reader(XmlScene):
                 fail(node, f"the {kind} reaches beyond {MAX_COORDINATE:g}, which float32 cannot trace")
             return self.builder.add_to(group, shape)
         if kind not in MESHES_BY_NAME:
-            refuse_unknown_type("mitsuba", "shape", kind, node.where())
+            self.refuse_unknown("shape", node)
             warn(f"{node.where()}: pathtrace has no {kind} shape; it ignores this one")
             props.ignore()
             return

@@ -259,12 +259,13 @@ class XmlScene:
         self.defaults = {}
         self.named = {}             # id -> Node
         self.props = {}             # id(Node) -> its Props (properties())
+        self.version = "3.0.0"      # the <scene>'s (elements())
 
     def elements(self) -> list:
         """The scene's top-level elements, its includes spliced and its $names substituted."""
         root = parse_xml(self.path, self.budget)
         self.substitute(root)
-        version = root.attrs.get("version", "3.0.0")
+        self.version = version = root.attrs.get("version", "3.0.0")
         if not version.startswith(("2.", "3.")):
             warn(f"{root.where()}: version {version}; pathtrace reads Mitsuba 3 scenes")
         nodes = self.expand(root)

@@ -55,15 +55,13 @@ class OptionDirectives:
     def _film(self, tokens, offset):
         kind = string(tokens, "Film")
         params = parameters(tokens)
+        refuse_unknown_type("pbrt", "film", kind, tokens.where(offset))     # pbrt-v4's rgb, gbuffer and spectral
         values = self.read_declared(settings.Film, params, tokens.where(offset))
         self.settings.width, self.settings.height = values["width"], values["height"]
         for name in ("cropwindow", "pixelbounds"):
             if params.type_of(name):
                 params.floats(name, ("float",) if name == "cropwindow" else ("integer",))
                 warn(f"{params.where(name)}: pathtrace renders the whole film; ignored")
-        refuse_unknown_type("pbrt", "film", kind, tokens.where(offset))
-        if kind not in ("rgb", "gbuffer", "spectral"):
-            warn(f"{tokens.where(offset)}: pathtrace has no {kind} film; it renders RGB")
         self.unused(params, "film", kind)
 
     def _sampler(self, tokens, offset):
