@@ -466,8 +466,8 @@ def test_a_scene_compiles_while_its_devices_open(monkeypatch, tmp_path):
     tree_first = threading.Event()
     build_tree = CompiledScene.build_tree
 
-    def noting(compiled, queue=None, cached_only=False):
-        built = build_tree(compiled, queue, cached_only)
+    def noting(compiled, queue=None, cached_only=False, when_bvh_built=None):
+        built = build_tree(compiled, queue, cached_only, when_bvh_built)
         if built and cached_only:
             tree_first.set()
         return built

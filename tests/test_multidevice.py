@@ -62,14 +62,14 @@ def test_a_groups_renderers_are_made_at_once_and_build_one_tree(backend, scene, 
     both_asked = threading.Barrier(2, timeout=30)
     build_tree, _build_tree, built = CompiledScene.build_tree, CompiledScene._build_tree, []
 
-    def asked_at_once(compiled, queue=None):
+    def asked_at_once(compiled, queue=None, when_bvh_built=None):
         both_asked.wait()
-        build_tree(compiled, queue)
+        build_tree(compiled, queue, when_bvh_built=when_bvh_built)
 
-    def counted(compiled, queue):
+    def counted(compiled, queue, when_bvh_built=None):
         time.sleep(0.2)          # long enough for the other to reach the tree meanwhile
         built.append(threading.current_thread().name)
-        _build_tree(compiled, queue)
+        _build_tree(compiled, queue, when_bvh_built)
     monkeypatch.setattr(CompiledScene, "build_tree", asked_at_once)
     monkeypatch.setattr(CompiledScene, "_build_tree", counted)
     group = DeviceGroup([backend, open_device(backend.device)], scene)
@@ -84,11 +84,11 @@ def test_a_tree_that_fails_is_built_once_for_a_group_and_its_error_raised(backen
     both_asked = threading.Barrier(2, timeout=30)
     build_tree, tries = CompiledScene.build_tree, []
 
-    def asked_at_once(compiled, queue=None):
+    def asked_at_once(compiled, queue=None, when_bvh_built=None):
         both_asked.wait()
-        build_tree(compiled, queue)
+        build_tree(compiled, queue, when_bvh_built=when_bvh_built)
 
-    def failing(compiled, queue):
+    def failing(compiled, queue, when_bvh_built=None):
         time.sleep(0.2)          # long enough for the other to wait for it
         tries.append(1)
         raise RuntimeError("out of memory")

@@ -293,9 +293,9 @@ def test_aovs_asked_with_the_scene_build_their_program_beside_its_tree(backend, 
     build_tree = CompiledScene.build_tree
     order = []
 
-    def tree_after(compiled, queue=None, cached_only=False):
+    def tree_after(compiled, queue=None, cached_only=False, when_bvh_built=None):
         order.append(("tree", gated.started.is_set()))
-        return build_tree(compiled, queue, cached_only)
+        return build_tree(compiled, queue, cached_only, when_bvh_built)
     monkeypatch.setattr(CompiledScene, "build_tree", tree_after)
     r = Renderer(building_with(backend, gated, generic=False), load_scene("cornell-box"), SIZE, SIZE, aovs=True)
     gated.gate.set()
@@ -367,13 +367,13 @@ def test_the_scenes_program_builds_beside_its_tree(backend, specialised, monkeyp
     asked, before_tree = threading.Event(), []
     build_tree, trees = CompiledScene.build_tree, []
 
-    def tree_after_the_build_began(compiled, queue=None, cached_only=False):
+    def tree_after_the_build_began(compiled, queue=None, cached_only=False, when_bvh_built=None):
         if cached_only:           # the viewer's, before the device: cornell-box is not cached
             return build_tree(compiled, queue, cached_only)
         if compiled.bvh is None:
             asked.wait(30)
         trees.append(compiled)
-        return build_tree(compiled, queue)
+        return build_tree(compiled, queue, when_bvh_built=when_bvh_built)
     monkeypatch.setattr(CompiledScene, "build_tree", tree_after_the_build_began)
 
     def build(features, tune):
@@ -512,3 +512,32 @@ def test_devices_check_refuses_a_generic_program_that_miscounts_samples(backend,
     assert r.returncode == 1 and len(errors) == 1 and "rendered wrongly" in errors[0] and not out.exists(), r.stderr
     monkeypatch.setenv("PATHTRACE_CACHE", str(tmp_path / "elsewhere"))
     assert not generic_refused(device) and backend.built_generic(False) is not None
+
+
+@pytest.mark.parametrize("nee", [True, False])
+def test_the_render_kernel_is_launched_ahead_on_pocl_doing_nothing(specialised, nee):
+    """On PoCL, which compiles a kernel at its first launch, the path tracer's kernel is launched
+    once ahead, as the tree's BVH is there, so that it compiles beside the host's work that follows
+    (Renderer.compile_ahead): that launch runs (its arguments are the kernel's), and the renders
+    after it are those of a renderer without it, bit for bit."""
+    scene = load_scene("cornell-box").with_settings(nee=nee)
+    r = Renderer(specialised, scene, SIZE, SIZE)
+    assert r.compile_ahead() is not None
+    r.launch_ahead(r._features("path"), nee)        # raises if the launch's arguments are not the kernel's
+    r.add_samples(16)
+    r.finish()
+    without = Renderer(specialised, scene, SIZE, SIZE)
+    without.compile_ahead = lambda: None
+    without.set_scene(scene)
+    without.add_samples(16)
+    without.finish()
+    np.testing.assert_array_equal(r.read_sum(), without.read_sum())
+
+
+def test_nothing_is_launched_ahead_where_the_first_pass_is_another_kernel(specialised):
+    """BDPT's, the continuation queue's, and the counting builds' first launches are other kernels."""
+    r = Renderer(specialised, load_scene("cornell-box"), SIZE, SIZE)
+    for changes in (dict(integrator="bdpt"), dict(path_queue=1)):
+        r.set_settings(**changes)
+        assert r.compile_ahead() is None, changes
+        r.set_settings(integrator="path", path_queue=0)

@@ -145,13 +145,14 @@ class CompiledScene:
         check_memory(self.scene.name, self.num_spheres, self.num_triangles, device, self.scene.materials.texel_bytes(),
                      len(self.scene.instances) if self.two_level else 0)
 
-    def build_tree(self, queue: cl.CommandQueue = None, cached_only: bool = False) -> bool:
+    def build_tree(self, queue: cl.CommandQueue = None, cached_only: bool = False, when_bvh_built=None) -> bool:
         """The BVH, and in its order the primitives' tables, where each primitive's media are
         and the light table: what the constructor leaves to this with tree=False. queue: the
         device that builds the BVH where the cache does not hold it (default: the constructor's).
         cached_only: only where the BVH cache holds every tree it needs, which needs no device,
         so that a command compiles its scene while its devices open; returns whether the tree
-        is built. Once: a build that fails can be tried again. Callers in other threads wait for
+        is built. when_bvh_built: called, where given, once the BVH is there and before the tables
+        in its order are made. Once: a build that fails can be tried again. Callers in other threads wait for
         the one building it, and where it fails, raise its error rather than build it again;
         the lock goes with what the build needs (a compiled scene is pickled for the farm)."""
         lock = self._tree_lock
@@ -164,7 +165,7 @@ class CompiledScene:
             if self._tree_tries != tries:        # one ended, failing, while this one waited
                 raise self._tree_error
             try:
-                self._build_tree(CACHED_ONLY if cached_only else queue or self._build[0])
+                self._build_tree(CACHED_ONLY if cached_only else queue or self._build[0], when_bvh_built)
             except NotCached:
                 return False
             except BaseException as e:
@@ -175,7 +176,7 @@ class CompiledScene:
             self._tree_error = None
             return True
 
-    def _build_tree(self, queue):
+    def _build_tree(self, queue, when_bvh_built=None):
         scene, meshes, n_spheres, progress = self.scene, self.meshes, self.num_spheres, self._build[1]
         corners = self._corners
         start = time.perf_counter()
@@ -196,6 +197,8 @@ class CompiledScene:
         self.radius = float(np.linalg.norm(column_max(hi) - column_min(lo)) / 2) if len(lo) else 1.0
         self.center = (column_max(hi) + column_min(lo)) / 2 if len(lo) else np.zeros(3)
         self.bvh_seconds = time.perf_counter() - start
+        if when_bvh_built is not None:
+            when_bvh_built()
 
         sphere_order = order[order < n_spheres]
         triangle_order = order[order >= n_spheres] - n_spheres

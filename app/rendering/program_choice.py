@@ -1,11 +1,17 @@
 """Which kernels render (the scene's own program, the generic one, or BDPT's) and the switch
 from one to another: a part of the Renderer (app/rendering/renderer.py), which is one."""
 
+import threading
 from dataclasses import replace
 
+import numpy as np
 import pyopencl as cl
 
+from pathtrace.compiler.compiled import SCENE_BUFFERS
 from pathtrace.device.features import Features
+from pathtrace.device.opencl import keeps_own_cache
+from pathtrace.device.programs import BUILD_THREAD
+from pathtrace.device.types import RENDER_PARAMS
 from pathtrace.errors import UserError
 from pathtrace.rendering import bdpt
 
@@ -133,6 +139,46 @@ class ProgramChoice:
         bidirectional = self.settings.integrator != "path"
         self.bdpt_kernels = (cl.Kernel(program, "render_bdpt"), cl.Kernel(program, "add_splats")) if bidirectional else None
         self.photon_kernel = cl.Kernel(program, "trace_photons") if self.uses_photons() else None
+
+    def compile_ahead(self):
+        """What starts the compile of the kernel that the first pass launches, ahead of it, on a
+        device that compiles a kernel at its first launch for each work-group size (PoCL), for
+        the path tracer without the queue or counts (the plan CPUs render with); else None.
+        Renderer.set_scene gives it to build_tree, which calls it once the tree's BVH is built:
+        PoCL compiles one kernel at a time in a process, and the builder's kernels are compiled
+        then, so the render kernel compiles beside the host's work that follows (the tree's
+        tables, the uploads) rather than after it, at the launch, which waits for that compile
+        rather than make another (docs/notes/performance-2026-12.md, twentieth session)."""
+        if not keeps_own_cache(self.backend.device.device) or self.settings.integrator != "path" \
+                or self.queue_plan()[0] or self.traversal_stats or self.divergence_stats:
+            return None
+        features, nee = self._features("path"), self.settings.nee
+
+        def run():
+            try:
+                self.launch_ahead(features, nee)
+            except Exception:       # (a build that failed says so where the render waits for it)
+                pass
+        return lambda: threading.Thread(target=run, name=BUILD_THREAD, daemon=True).start()
+
+    def launch_ahead(self, features: Features, nee: bool):
+        """A launch of one work-group of the path tracer's kernel of the program that renders
+        `features` (the generic one or the scene's own, waiting for its build), which does
+        nothing (its image has no width) but have the driver compile the kernel for the render
+        launches' work-group size; on its own queue, so that it waits for no launch of the tree's."""
+        program, _, awaited = self._choice(features)
+        if program is None:
+            program = self.backend.program_for(features, tuned=awaited is None)
+        kernel = cl.Kernel(program, "render_nee" if nee else "render")
+        context = self.backend.context
+        # kernels/integrator.cl, RENDER_KERNEL: the scene's buffers, the parameters, the sums, the
+        # queue and its counters, the queue's capacity, the results: buffers but two
+        args = [cl.Buffer(context, cl.mem_flags.READ_WRITE, 64)] * kernel.num_args
+        args[len(SCENE_BUFFERS)] = np.zeros((), RENDER_PARAMS)
+        args[-2] = np.int32(0)
+        kernel.set_args(*args)
+        _, group = self.launch_grid(1)
+        cl.enqueue_nd_range_kernel(cl.CommandQueue(context, self.backend.device.device), kernel, group, group).wait()
 
     def switch_when_built(self, wait: bool = False) -> bool:
         """Switches to the scene's own tuned program if it is built (with `wait`, once it is);

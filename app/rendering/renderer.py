@@ -140,7 +140,7 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
         self.start_program()
         if self.aovs and self.settings.integrator == "path":    # (BDPT's features need the tree)
             self.aux_kernel("render_aovs", start_only=True)
-        self.compiled.build_tree(self.backend.queue)
+        self.compiled.build_tree(self.backend.queue, when_bvh_built=self.compile_ahead())
         self._select_program()
         self._size_queue()
         for name, array in self.compiled.geometry_arrays().items():
