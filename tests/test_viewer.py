@@ -151,6 +151,28 @@ def test_key_moves_the_camera_and_resets_accumulation(viewer):
     assert viewer.scale == 1 and (viewer.renderer.width, viewer.renderer.height) == (W, H)
 
 
+def test_each_preview_pass_is_shown_while_a_key_is_held(viewer, monkeypatch):
+    """A preview pass that takes many turns of the loop (two cores, a slow device) reaches the
+    screen before the next move restarts the image: when every turn's move restarted it, nothing
+    new was shown until the key was let go."""
+    import pathtrace.viewer.window as window
+    settle(viewer)
+    monkeypatch.setattr(window, "MOVE_BUDGET", 0.25)     # a preview pass of about a quarter second
+    shown = set()
+    xdo("windowfocus", "--sync", window_id(viewer))
+    xdo("keydown", "w")
+    start = time.perf_counter()
+    while time.perf_counter() - start < 2.5:
+        viewer.frame()
+        if viewer._new_image:
+            shown.add(viewer.renderer.resets)
+    held = viewer.controls.held.copy()
+    xdo("keyup", "w")
+    frames_until(viewer, lambda: not viewer.controls.held)
+    assert "W" in held and len(shown) >= 3, shown     # the images of several moves, while it was held
+    settle(viewer)
+
+
 def test_the_viewer_names_pyglfw_its_wheels_library_and_keeps_a_users():
     """pyGLFW loads what PYGLFW_LIBRARY names instead of testing each library it finds in a
     subprocess: the viewer names the wheel's, and leaves a user's setting as it is."""

@@ -134,14 +134,12 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         self.draft = False            # resting, at DRAFT_SCALE until its denoised image is shown
         self.opening_preview = False  # the preview is a scene's first image's, not a move's
         self.clean = False            # a denoised image is shown, and the camera has not moved
-        self.last_move = -1.0
+        self.last_move, self.awaiting_pass = -1.0, False   # awaiting_pass: the last move's preview (frame)
         self.frame_times = deque(maxlen=FRAME_TIMES)   # seconds from one turn's start to the next's
         self.draws = 0                # how many times the window was redrawn
         self._events = 0              # input events so far (the callbacks count them)
-        self._redraw_until = 0.0
-        self._last_draw = 0.0
-        self._last_time = time.perf_counter()
-        self._cursor = None
+        self._redraw_until = self._last_draw = 0.0
+        self._last_time, self._cursor = time.perf_counter(), None
         try:
             self.renderer = self._wait()
         except BaseException:
@@ -164,8 +162,7 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         self.denoise_seconds = None   # how long the last denoise took
         self.denoise_error = None
         self._shown = None            # (resets, passes, rows) of the noisy image last requested
-        self._new_image = False
-        self._last_upload = 0.0
+        self._new_image, self._last_upload = False, 0.0
 
     # --- set-up -----------------------------------------------------------------------------
     def _open_window(self, scene, window_size) -> tuple:
@@ -433,17 +430,20 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         events = self._events
         glfw.poll_events()
         now = time.perf_counter()
-        dt, self._last_time = now - self._last_time, now
         if self._events != events:
             self.redraw_soon()
-
-        camera = self.renderer.camera
-        dx, dy = self._mouse_look()
-        fast = glfw.get_key(self.window, glfw.KEY_LEFT_SHIFT) == glfw.PRESS
-        if self.controls.update(camera, dt, dx, dy, fast):
-            self.renderer.set_camera(camera)
-            self.last_move = now
-        self._set_resolution(now - self.last_move < REST_DELAY, opening=self.opened_at is not None)
+        # after a move, input is read again once the preview's pass since is shown (its time and
+        # the mouse's travel add up meanwhile): read every turn, a move restarted a pass longer
+        # than a turn, and nothing was shown until the keys were let go (two cores)
+        self.awaiting_pass &= (self._shown or (None,))[0] != self.renderer.resets
+        if not self.awaiting_pass:
+            dt, self._last_time = now - self._last_time, now
+            camera, (dx, dy) = self.renderer.camera, self._mouse_look()
+            fast = glfw.get_key(self.window, glfw.KEY_LEFT_SHIFT) == glfw.PRESS
+            if self.controls.update(camera, dt, dx, dy, fast):
+                self.renderer.set_camera(camera)
+                self.last_move, self.awaiting_pass = now, True
+        self._set_resolution(self.awaiting_pass or now - self.last_move < REST_DELAY, opening=self.opened_at is not None)
         self.progressive.step()
         new_image = self._update_image(now)
         if new_image or now < self._redraw_until or now - self._last_draw >= STATUS_INTERVAL:
