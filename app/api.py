@@ -503,9 +503,12 @@ def view(scene="simple", device: str = "auto", size=None, frames: int = None,
     with ThreadPoolExecutor(1, thread_name_prefix="read-scene") as pool:
         reading = pool.submit(read)         # beside the window's opening (0.2-0.4 s under Xvfb)
         viewer = Viewer(lambda: opening.result()[0], reading.result, screenshot_dir)
+    written = None
     try:
         viewer.run(frames)
         if screenshot:
-            viewer.screenshot()
+            written = viewer.screenshot(raises=True)     # a failure is the command's, not the panel's
     finally:
         viewer.close()
+    if written is not None and written.exception() is not None:
+        raise written.exception()

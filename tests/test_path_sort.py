@@ -190,7 +190,7 @@ def test_the_sort_needs_the_queue(tmp_path):
     r = in_process("render", "cornell-box", "--size", "8x8", "--spp", "1", "--path-sort", "-q", "-o", tmp_path / "x.exr")
     assert r.returncode != 0 and not (tmp_path / "x.exr").exists()
     assert r.stderr.strip().splitlines()[-1].endswith("--path-sort sorts the continuation queue's paths: "
-                                                      "give --path-queue N (N >= 1) or auto too")
+                                                      "give --path-queue N (N >= 1) too")   # (view has no auto)
     r = in_process("bench", "--device", "cpu", "--scenes", "cornell-box", "--path-sort")
     assert r.returncode != 0 and "--path-sort sorts the continuation queue's paths" in r.stderr
 

@@ -917,6 +917,17 @@ def test_view_command_closes_cleanly(display, tmp_path, scene):
     assert len(list(tmp_path.glob("*.png"))) == 1 and len(list(tmp_path.glob("*.exr"))) == 1
 
 
+def test_a_screenshot_asked_for_that_cannot_be_written_fails_the_command(display, tmp_path):
+    """`view --screenshot` into a folder that cannot be made: one line, and a non-zero exit."""
+    (tmp_path / "file").write_text("not a folder")
+    r = subprocess.run([sys.executable, "-m", "pathtrace", "view", "simple", "--size", "32x18", "--frames", "2",
+                        "--screenshot", "--screenshot-dir", tmp_path / "file" / "shots"], capture_output=True,
+                       text=True, timeout=120)
+    lines = [line for line in r.stderr.splitlines() if "screenshot" in line]
+    assert r.returncode == 1 and len(lines) == 1 and lines[0].startswith("pathtrace: error: screenshot: "), r.stderr
+    assert "Traceback" not in r.stderr
+
+
 def test_api_view_opens_a_scene_made_in_python(display, tmp_path):
     """pathtrace.view() on a scene written as dicts, in a process of its own (as a script or a
     notebook calls it): the window renders it, and its screenshot shows the red ball."""

@@ -130,7 +130,7 @@ def add_path_queue_option(p: argparse.ArgumentParser, auto: bool = True):
                         "docs/performance.md)")
 
 
-PATH_SORT_ALONE = "--path-sort sorts the continuation queue's paths: give --path-queue N (N >= 1) or auto too"
+PATH_SORT_ALONE = "--path-sort sorts the continuation queue's paths: give --path-queue N (N >= 1) too"
 
 
 def _path_queue(text: str) -> int:
