@@ -488,7 +488,8 @@ def view(scene="simple", device: str = "auto", size=None, frames: int = None,
     returns a Scene) and returns when its window is closed, or after `frames` frames;
     screenshot: take one when closing. Needs a display. The window opens at once: the scene is
     read, the device opened and the kernels compiled while it says so."""
-    from pathtrace.viewer.window import Viewer, require_display
+    from pathtrace.viewer.needs_display import require_display
+    from pathtrace.viewer.window import Viewer
     if not isinstance(device, str):
         raise UserError("device: the viewer renders on one device; give one spec (several are for render)")
     require_display(scene if isinstance(scene, str) else "simple")    # before any device work

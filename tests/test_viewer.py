@@ -971,6 +971,12 @@ def test_without_a_display_it_says_how_to_render_headless(tmp_path):
     r = subprocess.run([sys.executable, "-m", "pathtrace", "view", "spheres100M"], env=env, capture_output=True,
                        text=True, timeout=60)
     assert r.returncode == 1 and "needs a display" in r.stderr, r.stderr
+    # a display named but gone (its server ended): the same one line, naming the scene, without
+    # pyGLFW's warning of GLFW's error
+    r = subprocess.run([sys.executable, "-m", "pathtrace", "view", "cornell-box"], env={**env, "DISPLAY": ":193"},
+                       capture_output=True, text=True, timeout=60)
+    assert r.returncode == 1 and "render cornell-box -o out.png" in r.stderr, r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1 and "GLFW" not in r.stderr, r.stderr
 
 
 def test_the_image_edges_do_not_wrap_round(viewer):

@@ -10,7 +10,7 @@ def cmd_view(args):
     if args.device and len(args.device) > 1:
         raise UserError("--device: the viewer renders on one device; give one (several are "
                         "for 'pathtrace render')")
-    from pathtrace.viewer.window import require_display
+    from pathtrace.viewer.needs_display import require_display
     try:
         require_display(args.scene)      # before any device work
     except UserError:

@@ -7,7 +7,6 @@ have doubled. The Viewer's parts: opening.py (scenes opened in the background), 
 screenshots.py."""
 
 import math
-import os
 import sys
 import threading
 import time
@@ -25,6 +24,7 @@ from pathtrace.resources import resource_dir
 from pathtrace.viewer.controls import FlyControls, pick_ray
 from pathtrace.viewer.denoising import DRAFT_SCALE, Denoising
 from pathtrace.viewer.integrators import IntegratorSwitch
+from pathtrace.viewer.needs_display import no_display_message, require_display
 from pathtrace.viewer.opening import SceneOpening
 from pathtrace.viewer.screenshots import Screenshots
 from pathtrace.viewer.panel import MARGIN, draw_help, draw_notice, draw_panel
@@ -48,29 +48,6 @@ DOCKED_SHARE = 1 / 3           # the panel docks beside the image only where the
                                # share of the window's width, or loses nothing by it (a portrait
                                # image in a landscape window); elsewhere it starts collapsed and
                                # floats over the image
-
-
-def no_display_message(scene: str = "simple") -> str:
-    """What to do without a display, with commands that paste as they are: this very program
-    (the virtual environment is rarely on PATH) on the scene asked for, and xvfb-run, or how to
-    install it."""
-    import shlex
-    import shutil
-    program = shlex.quote(sys.argv[0]) if os.path.basename(sys.argv[0]) == "pathtrace" \
-        else f"{shlex.quote(sys.executable)} -m pathtrace"
-    named = shlex.quote(scene)
-    xvfb = f'xvfb-run -s "-screen 0 1280x800x24" {program} view' + (f" {named}" if scene != "simple" else "")
-    if not shutil.which("xvfb-run"):
-        xvfb = f"sudo apt install xvfb, then {xvfb}"
-    return (f"pathtrace view needs a display, and none was found. To render headless: "
-            f"{program} render {named} -o out.png --spp 16 (a first look in seconds; without --spp, the "
-            f"scene's own samples). To run the viewer on a virtual display: {xvfb}")
-
-
-def require_display(scene: str = "simple"):
-    """On Linux a window needs an X11 or Wayland display; say so in one line, not a traceback."""
-    if sys.platform.startswith("linux") and not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
-        raise UserError(no_display_message(scene))
 
 
 def fit_window(width: int, height: int, screen: tuple) -> tuple:
