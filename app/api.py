@@ -508,7 +508,7 @@ def view(scene="simple", device: str = "auto", size=None, frames: int = None,
     try:
         viewer.run(frames)
         if screenshot:
-            written = viewer.screenshot(raises=True)     # a failure is the command's, not the panel's
+            written = viewer.screenshot(scripted=True)     # a failure is the command's, not the panel's
     finally:
         viewer.close()
     if written is not None and written.exception() is not None:

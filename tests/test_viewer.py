@@ -917,6 +917,22 @@ def test_view_command_closes_cleanly(display, tmp_path, scene):
     assert len(list(tmp_path.glob("*.png"))) == 1 and len(list(tmp_path.glob("*.exr"))) == 1
 
 
+def test_a_scripts_screenshot_waits_for_the_integrator_it_asked_for(viewer):
+    """`view --integrator bdpt --frames 2 --screenshot`: the frames end before BDPT's kernels are
+    built, and the screenshot waits for them, so that it is BDPT's image (it was the path
+    tracer's, the integrator the viewer renders with until then)."""
+    viewer.load_scene("cornell-box")
+    settle(viewer)
+    viewer.request_integrator("bdpt")
+    viewer.frame()
+    written = viewer.screenshot(scripted=True)
+    assert viewer.renderer.settings.integrator == "bdpt" and viewer.requested_integrator is None
+    assert len(written.result()) == 2
+    viewer.request_integrator("path")
+    frames_until(viewer, lambda: viewer.renderer.settings.integrator == "path")
+    back_to_simple(viewer)
+
+
 def test_a_screenshot_asked_for_that_cannot_be_written_fails_the_command(display, tmp_path):
     """`view --screenshot` into a folder that cannot be made: one line, and a non-zero exit."""
     (tmp_path / "file").write_text("not a folder")

@@ -2,6 +2,7 @@
 in a thread of their own. A part of the Viewer (app/viewer/window.py), which is one."""
 
 import datetime
+import time
 from pathlib import Path
 
 import numpy as np
@@ -12,17 +13,23 @@ from pathtrace.errors import UserError
 class Screenshots:
     """The Viewer's screenshots (its writer thread is made in Viewer.__init__)."""
 
-    def screenshot(self, raises: bool = False):
+    def screenshot(self, scripted: bool = False):
         """Writes the image as shown: tonemapped (PNG) and as radiance (EXR); where it is the
         denoised one, the EXR keeps the noisy one as its layer "noisy". The pass under way is
         finished first, so that every pixel holds the same samples. The image is read now; it is
         denoised and written in a thread of its own, so that the window stays live (Esc closes
         it at once) while a large image is denoised. Returns the future of the two paths (None
-        where writing failed, which the panel's message line then says; with `raises`, the
-        future raises the failure instead, for a script's `--screenshot`). It is always of the
+        where writing failed, which the panel's message line then says). `scripted`: a script's
+        `--screenshot`, whose failure the future raises, and which waits for the kernels of an
+        integrator asked for that are still building, so that it shows that one. It is always of the
         scene's size: where the image shown is a preview's (a move's, a scene's first) or a
         draft's, or no pass has ended yet, a pass at the scene's size is rendered first (a
         script's `view --frames N --screenshot` writes the scene's size whatever N)."""
+        while scripted and self.requested_integrator is not None:
+            if self.renderer.integrator_ready(self.requested_integrator):
+                self.switch_integrator()
+            else:
+                time.sleep(0.05)
         self.progressive.finish_pass()
         r = self.renderer
         if self.scale != 1 or r.samples == 0:
@@ -37,9 +44,9 @@ class Screenshots:
         aovs = r.read_aovs() if denoised else None
         look = (self.exposure, self.tonemap)
         self.set_message(f"saving {base.name} ({r.samples} spp{', denoised' if denoised else ''})")
-        return self._writer.submit(self._save_screenshot, base, noisy, aovs, look, r.samples, raises)
+        return self._writer.submit(self._save_screenshot, base, noisy, aovs, look, r.samples, scripted)
 
-    def _save_screenshot(self, base: Path, noisy: np.ndarray, aovs, look: tuple, samples: int, raises=False):
+    def _save_screenshot(self, base: Path, noisy: np.ndarray, aovs, look: tuple, samples: int, scripted=False):
         """In the screenshot thread: denoised where `aovs` are given, then both files written."""
         from pathtrace.io.images import Output, write_images
         shown, layers = noisy, {}
@@ -50,7 +57,7 @@ class Screenshots:
             base.parent.mkdir(parents=True, exist_ok=True)
             write_images(outputs, *look, what="screenshot")
         except (UserError, OSError) as e:
-            if raises:
+            if scripted:
                 raise UserError(f"screenshot: {e}") from None
             self.set_message(f"screenshot failed: {e}", error=True)
             return None
