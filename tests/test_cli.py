@@ -183,6 +183,16 @@ def test_unreadable_environment_map(tmp_path, name, data):
     assert "environment.map: '" in r.stderr and f"{name}' is not a readable HDR image" in r.stderr
 
 
+def test_a_missing_scene_files_near_name_is_of_its_folder_compared_without_extensions(tmp_path):
+    """The nearest scene file of a missing one's folder is offered where their names are close
+    without their extensions: not the folder's only scene file for any name ending alike."""
+    (tmp_path / "typo.xml").write_text("<scene/>")
+    for name, suggested in (("typ.xml", True), ("typo.xm", True), ("nope.xml", False)):
+        r = in_process("render", tmp_path / name, "-o", tmp_path / "o.png")
+        assert r.returncode != 0 and "does not exist" in r.stderr, r.stderr
+        assert ("did you mean 'typo.xml'?" in r.stderr) == suggested, (name, r.stderr)
+
+
 @pytest.mark.parametrize("args,message", [
     (["missing.toml"], "error: scene file 'missing.toml' does not exist\n"),
     (["missing.xml"], "error: scene file 'missing.xml' does not exist\n"),

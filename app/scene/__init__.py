@@ -99,9 +99,13 @@ def _reader(name_or_path: str):
 
 def _nearest_scene_file(path: Path) -> str:
     """"; did you mean X?" where the folder of a missing scene file holds one of a name close to
-    its (a misspelt extension: scene.pbr), else ""."""
+    its (a misspelt extension: scene.pbr), compared without their extensions, so that a folder's
+    only scene file is not offered for any name ending alike; else ""."""
     try:
         names = [p.name for p in path.parent.iterdir() if p.name.lower().endswith(SCENE_SUFFIXES)]
     except OSError:
         return ""
-    return did_you_mean(path.name, names, quoted=True)
+    import difflib
+    stems = {name.split(".")[0]: name for name in names}
+    close = difflib.get_close_matches(path.name.split(".")[0], list(stems), n=1)   # (did_you_mean's measure)
+    return f"; did you mean {stems[close[0]]!r}?" if close else ""
