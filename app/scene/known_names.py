@@ -49,7 +49,7 @@ def refuse_unknown_type(fmt: str, category: str, kind: str, where: str):
     fmt has no such type (UserError, with the type it is closest to); else nothing, whether
     pathtrace has it or not."""
     types = document(fmt)["types"].get(category)
-    if kind is not None and types is not None and kind not in types:
+    if types is not None and kind not in types:
         renderer = RENDERER[fmt]
         raise UserError(f"{where}: {renderer} has no {category} type '{cut(kind)}', and refuses it"
                         f"{did_you_mean(kind, types, quoted=True)}")

@@ -2,7 +2,6 @@
 in a thread of their own. A part of the Viewer (app/viewer/window.py), which is one."""
 
 import datetime
-import time
 from pathlib import Path
 
 import numpy as np
@@ -25,11 +24,9 @@ class Screenshots:
         scene's size: where the image shown is a preview's (a move's, a scene's first) or a
         draft's, or no pass has ended yet, a pass at the scene's size is rendered first (a
         script's `view --frames N --screenshot` writes the scene's size whatever N)."""
-        while scripted and self.requested_integrator is not None:
-            if self.renderer.integrator_ready(self.requested_integrator):
-                self.switch_integrator()
-            else:
-                time.sleep(0.05)
+        if scripted and self.requested_integrator is not None:    # (set_settings waits for its kernels)
+            self.renderer.set_settings(integrator=self.requested_integrator)
+            self.requested_integrator = None
         self.progressive.finish_pass()
         r = self.renderer
         if self.scale != 1 or r.samples == 0:
