@@ -2,19 +2,24 @@
 force over all primitives (exact t), on random spheres, triangle soups, meshes with coincident
 and degenerate triangles, mixed scenes, and every primitive at one point."""
 
+import os
 import re
+import subprocess
+import sys
 
 import numpy as np
+import pyopencl as cl
 import pytest
 
 import pathtrace.compiler.bvh as bvh_module
+import pathtrace.compiler.compiled as compiled_module
 
 from pathtrace.compiler.bvh import MAX_DEPTH, MAX_LEAF_SIZE, RADIUS, TRAVERSAL_COST, build_bvh, builder_for
 from pathtrace.compiler.compiled import compile_scene
 from pathtrace.device.features import LONE_MAX
 from pathtrace.resources import resource_dir
 from pathtrace.scene import Mesh, SceneBuilder, diffuse
-from tests.conftest import layout_features, scene_arrays
+from tests.conftest import ROOT, layout_features, scene_arrays
 
 SOURCE = """
 kernel void nearest(SCENE_KERNEL_ARGS, int num_spheres, int num_triangles,
@@ -495,3 +500,49 @@ def test_a_few_spheres_beside_triangles_stay_out_of_the_tree(backend, monkeypatc
     assert not any(d.startswith("LONE_SPHERES") for d in features.defines())
     np.testing.assert_allclose(lone, in_tree, rtol=1e-5, atol=1e-7)
     assert lone.mean() > 0
+
+
+def test_the_build_kernels_compiled_ahead_serve_every_launch_of_a_build(tmp_path):
+    """Builder.launch_ahead (PoCL) compiles each build kernel once, for grids of WHOLE_GRID
+    work-items, and a build after it in the process, whose launches are all smaller, compiles
+    nothing more: a fresh PoCL cache then holds one compile of each kernel, none of them the
+    `smallgrid` one that the same build alone compiles (tests/test_cli.py: warm_builder)."""
+    code = ("import numpy as np; from pathtrace.compiler.bvh import build_bvh, builder_for; "
+            "from pathtrace.device.opencl import choose_device; "
+            "q = choose_device('cpu', log=lambda line: None).queue; builder_for(q).launch_ahead(); "
+            "lo = np.random.default_rng(1).random((3000, 3), np.float32); "
+            "build_bvh(lo, lo + np.float32(0.01), num_spheres=0, queue=q)")
+    env = {**os.environ, "POCL_CACHE_DIR": str(tmp_path / "pocl"), "XDG_CACHE_HOME": str(tmp_path / "xdg")}
+    subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=env, check=True, capture_output=True)
+    compiled = [(k.name, v.name) for k in (tmp_path / "pocl").glob("*/*/*") if k.is_dir() for v in k.iterdir()]
+    names = {m for f in (ROOT / "kernels" / "build").glob("*.cl")
+             for m in re.findall(r"^kernel void (\w+)", f.read_text(), re.M)}
+    assert len(names) >= 10
+    assert sorted(name for name, _ in compiled) == sorted(names), compiled
+    assert not any("smallgrid" in variant for _, variant in compiled), compiled
+
+
+def test_an_expected_tree_has_every_builder_compile_ahead(backend, monkeypatch):
+    """expect_tree: the builders made before it and after it compile their kernels ahead."""
+    asked = []
+    monkeypatch.setattr(bvh_module, "_builders", {})
+    monkeypatch.setattr(bvh_module, "_tree_expected", False)
+    monkeypatch.setattr(bvh_module.Builder, "compile_ahead", lambda self: asked.append(self))
+    first = builder_for(backend.queue)
+    assert asked == []
+    bvh_module.expect_tree()
+    assert asked == [first]
+    second = builder_for(cl.CommandQueue(backend.context))
+    assert second is not first and asked[-1] is second
+
+
+def test_a_scene_compiled_before_its_devices_expects_its_tree_where_the_cache_lacks_it(monkeypatch):
+    """compile_before_devices says a tree will be built (expect_tree) for a scene of several
+    primitives that the BVH cache does not hold (it is off in the tests), not for a lone sphere,
+    whose tree needs no build kernels."""
+    expected = []
+    monkeypatch.setattr(compiled_module, "expect_tree", lambda: expected.append(True))
+    compiled_module.compile_before_devices(scene_of([[0, 0, 0, 1], [3, 0, 0, 1]], []))
+    assert expected == [True]
+    compiled_module.compile_before_devices(scene_of([[0, 0, 0, 1]], []))
+    assert expected == [True]

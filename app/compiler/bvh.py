@@ -28,6 +28,7 @@ one launch per batch. The host only sorts the Morton codes, sums each pass's per
 splits the top; the tree stays on the device until its nodes are read back.
 """
 
+import re
 import threading
 from dataclasses import dataclass
 from typing import Callable
@@ -46,6 +47,10 @@ TOP_CLUSTERS = 65536        # PLOC stops at min(N, TOP_CLUSTERS) clusters (see s
 MORTON_BITS = 21            # per axis: 63 bits in all
 MAX_BINS = 16
 GROUP = 256                 # SCAN_GROUP of kernels/build/ploc.cl; every build kernel uses it
+# PoCL compiles a kernel at its first launch for grids of at least 65,536 work-items per dimension,
+# a compile that serves smaller grids too; a smaller first launch compiles a `smallgrid` variant
+# that serves only those, and a larger launch after it compiles the kernel again
+WHOLE_GRID = 65536
 
 
 @dataclass
@@ -103,6 +108,48 @@ class Builder:
         # start's path to a new scene's tree (docs/notes/performance-2026-11.md, sixteenth session)
         self.program = build_cached(queue.context, queue.device, source, options, tune=False).program
         self.kernels = {k.function_name: k for k in self.program.all_kernels()}
+        # each kernel's arguments as words ("global const int2 *child"), for launch_ahead
+        self.signatures = {name: [a.split() for a in args.split(",")]
+                           for name, args in re.findall(r"kernel void (\w+)\(([^)]*)\)", source)}
+        self._ahead = False     # whether compile_ahead has begun
+
+    def compile_ahead(self):
+        """On a device that compiles a kernel at its first launch (PoCL, one kernel at a time in a
+        process), has every build kernel compiled now, in a build thread (launch_ahead), beside
+        the host's work before the tree (reading and compiling the scene), rather than each at
+        its first launch in the build, between the launches' work: a new scene of 870,400
+        triangles came 0.35 s sooner on two cores (docs/notes/performance-2026-12.md, twenty-first
+        session). A build's launch of a kernel whose compile is under way waits for it rather
+        than compile it again. Once per builder; a failure shows at the build's own launch."""
+        from pathtrace.device.opencl import keeps_own_cache
+        from pathtrace.device.programs import BUILD_THREAD
+
+        def run():
+            try:
+                self.launch_ahead()
+            except cl.Error:
+                pass
+        with _ahead_lock:
+            if self._ahead or not keeps_own_cache(self.queue.device):
+                return
+            self._ahead = True
+        threading.Thread(target=run, name=BUILD_THREAD, daemon=True).start()
+
+    def launch_ahead(self):
+        """Launches every build kernel once, on a queue of its own, over WHOLE_GRID work-items
+        that all return at once (their counts are 0), and waits for them: the kernels are then
+        compiled for the build's launches of every size."""
+        context = self.queue.context
+        queue = cl.CommandQueue(context, self.queue.device)
+        nbytes = WHOLE_GRID // GROUP * 16       # more than any kernel writes at counts of 0:
+        zeros = cl.Buffer(context, cl.mem_flags.READ_WRITE, nbytes)     # mark_merges' group sums
+        cl.enqueue_fill_buffer(queue, zeros, np.zeros(1, np.int32), 0, nbytes)
+        scalars = {"int": np.int32(0), "float4": np.zeros(4, np.float32)}
+        for name, args in self.signatures.items():
+            kernel = cl.Kernel(self.program, name)
+            kernel.set_args(*(zeros if "global" in arg else scalars[arg[0]] for arg in args))
+            cl.enqueue_nd_range_kernel(queue, kernel, (WHOLE_GRID,), (GROUP,))
+        queue.finish()
 
     def launch(self, name: str, count: int, *args):
         """Kernel `name` over `count` items, in work-groups of GROUP (the kernels skip the rest)."""
@@ -132,6 +179,8 @@ class Builder:
 
 _builders: dict = {}
 _builders_lock = threading.Lock()    # a command's devices open (api.DevicesOpening) beside its first build
+_ahead_lock = threading.Lock()
+_tree_expected = False      # expect_tree's flag
 
 
 def building() -> bool:
@@ -146,7 +195,21 @@ def builder_for(queue: cl.CommandQueue = None) -> Builder:
     with _builders_lock:
         if queue not in _builders:
             _builders[queue] = Builder(queue) if queue is not None else _first_working_builder()
-        return _builders[queue]
+        builder = _builders[queue]
+    if _tree_expected:
+        builder.compile_ahead()
+    return builder
+
+
+def expect_tree():
+    """Says that a tree the BVH cache lacks is about to be built (compile_before_devices): the
+    builders made now or later compile their kernels ahead (Builder.compile_ahead). The flag is
+    set before the builders are listed, and builder_for reads it after adding one, so that no
+    builder misses it."""
+    global _tree_expected
+    _tree_expected = True
+    for builder in list(_builders.values()):
+        builder.compile_ahead()
 
 
 def _first_working_builder() -> Builder:
