@@ -546,3 +546,18 @@ def test_a_scene_compiled_before_its_devices_expects_its_tree_where_the_cache_la
     assert expected == [True]
     compiled_module.compile_before_devices(scene_of([[0, 0, 0, 1]], []))
     assert expected == [True]
+
+
+def test_the_wait_for_the_kernels_ahead_ends_where_nothing_is_compiled_ahead(backend, monkeypatch):
+    """await_kernels_ahead returns at once where no tree is expected, and where one is on a device
+    that compiles its kernels at their build (not PoCL), whose builder launches nothing ahead."""
+    import pathtrace.device.opencl as opencl
+    monkeypatch.setattr(bvh_module, "_builders", {})
+    monkeypatch.setattr(bvh_module, "_tree_expected", False)
+    bvh_module.await_kernels_ahead(backend.queue)
+    assert not bvh_module._builders
+    monkeypatch.setattr(bvh_module, "_tree_expected", True)
+    monkeypatch.setattr(opencl, "keeps_own_cache", lambda device: False)
+    monkeypatch.setattr(bvh_module.Builder, "launch_ahead", lambda self: pytest.fail("launched ahead"))
+    bvh_module.await_kernels_ahead(backend.queue)
+    assert builder_for(backend.queue).ahead_done.is_set()

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import pathtrace.compiler.bvh as bvh_module
 from pathtrace.device.opencl import Backend
 from pathtrace.device.features import Features
 from pathtrace.filters import PixelFilter
@@ -541,3 +542,31 @@ def test_nothing_is_launched_ahead_where_the_first_pass_is_another_kernel(specia
         r.set_settings(**changes)
         assert r.compile_ahead() is None, changes
         r.set_settings(integrator="path", path_queue=0)
+
+
+def test_a_build_in_the_background_calls_what_comes_first_before_it():
+    """Programs.start(after=...): the build's thread calls after() first, and builds once it returns."""
+    order, gate = [], threading.Event()
+    programs = Programs(lambda features, tune: order.append("build"), "test", False)
+    programs.start(Features(), after=lambda: (gate.wait(30), order.append("after")))
+    assert programs.under_way(Features()) and order == []
+    gate.set()
+    programs.get(Features())
+    assert order == ["after", "build"]
+
+
+@pytest.mark.parametrize("expected", [True, False])
+def test_on_pocl_a_new_scenes_own_program_builds_after_its_trees_kernels(backend, monkeypatch, expected):
+    """PoCL compiles one thing at a time in a process: where a tree is expected (expect_tree), the
+    scene's own program, whose build starts beside the tree (start_program), waits for the tree's
+    build kernels, compiled ahead (await_kernels_ahead), which the first image needs first; where
+    none is, it builds at once."""
+    events = []
+    monkeypatch.setattr(bvh_module, "_builders", {})
+    monkeypatch.setattr(bvh_module, "_tree_expected", expected)
+    launch = bvh_module.Builder.launch_ahead
+    monkeypatch.setattr(bvh_module.Builder, "launch_ahead", lambda self: (launch(self), events.append("tree's kernels")))
+    auto = building_with(backend, lambda features, tune: (events.append("program"), backend.program_for(features, tune))[1],
+                         generic=False)
+    Renderer(auto, load_scene("cornell-box"), SIZE, SIZE)
+    assert events == (["tree's kernels", "program"] if expected else ["program"])

@@ -112,6 +112,7 @@ class Builder:
         self.signatures = {name: [a.split() for a in args.split(",")]
                            for name, args in re.findall(r"kernel void (\w+)\(([^)]*)\)", source)}
         self._ahead = False     # whether compile_ahead has begun
+        self.ahead_done = threading.Event()     # and ended
 
     def compile_ahead(self):
         """On a device that compiles a kernel at its first launch (PoCL, one kernel at a time in a
@@ -129,11 +130,16 @@ class Builder:
                 self.launch_ahead()
             except cl.Error:
                 pass
+            finally:
+                self.ahead_done.set()
         with _ahead_lock:
-            if self._ahead or not keeps_own_cache(self.queue.device):
+            if self._ahead:
                 return
             self._ahead = True
-        threading.Thread(target=run, name=BUILD_THREAD, daemon=True).start()
+        if keeps_own_cache(self.queue.device):
+            threading.Thread(target=run, name=BUILD_THREAD, daemon=True).start()
+        else:
+            self.ahead_done.set()
 
     def launch_ahead(self):
         """Launches every build kernel once, on a queue of its own, over WHOLE_GRID work-items
@@ -210,6 +216,21 @@ def expect_tree():
     _tree_expected = True
     for builder in list(_builders.values()):
         builder.compile_ahead()
+
+
+def await_kernels_ahead(queue: cl.CommandQueue):
+    """Where a tree is expected (expect_tree), waits for the kernels of the builder on `queue`'s
+    device to be compiled ahead, the builder made first if its device's opening has not made it:
+    PoCL compiles one thing at a time in a process, and a scene's program built before them
+    (0.4 s on two cores) delays the tree, which the first image needs first
+    (docs/notes/performance-2026-12.md, twenty-first session)."""
+    if not _tree_expected:
+        return
+    try:
+        builder = builder_for(queue)
+    except cl.Error:            # the tree's build says why
+        return
+    builder.ahead_done.wait()
 
 
 def _first_working_builder() -> Builder:

@@ -90,10 +90,11 @@ class Programs:
         """The program for `features`, built now if no build of it is under way or done."""
         return self._future(self._key(features, tuned)).result()
 
-    def start(self, features: Features, tuned: bool = True):
+    def start(self, features: Features, tuned: bool = True, after=None):
         """Starts the build of the program for `features` in the background, unless it is built
-        or under way."""
-        self._future(self._key(features, tuned), background=True)
+        or under way; its thread calls after() first, where given (a wait for what should be
+        compiled before it)."""
+        self._future(self._key(features, tuned), background=True, after=after)
 
     def ready(self, features: Features, tuned: bool = True):
         """The program for `features` if it is built, else None, its build started in the
@@ -127,7 +128,7 @@ class Programs:
         future = self._futures.get(self._key(features, tuned))
         return future is not None and future.done() and future.exception() is not None
 
-    def _future(self, key: tuple, background: bool = False) -> Future:
+    def _future(self, key: tuple, background: bool = False, after=None) -> Future:
         with self._lock:
             future = self._futures.get(key)
             if future is not None:
@@ -137,15 +138,17 @@ class Programs:
         if background:
             # a daemon thread: a process that ends before the build does neither waits for it
             # nor leaves a torn cache entry (app/io/cache_files.py writes whole files)
-            thread = threading.Thread(target=self._run, args=(key, future), daemon=True, name=BUILD_THREAD)
+            thread = threading.Thread(target=self._run, args=(key, future, after), daemon=True, name=BUILD_THREAD)
             thread.start()
         else:
             self._run(key, future)
             future.result()
         return future
 
-    def _run(self, key: tuple, future: Future):
+    def _run(self, key: tuple, future: Future, after=None):
         try:
+            if after is not None:
+                after()
             future.set_result(self._build(*key))
         except Exception as e:
             future.set_exception(e)

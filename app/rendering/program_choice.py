@@ -7,6 +7,7 @@ from dataclasses import replace
 import numpy as np
 import pyopencl as cl
 
+from pathtrace.compiler.bvh import await_kernels_ahead
 from pathtrace.compiler.compiled import SCENE_BUFFERS
 from pathtrace.device.features import Features
 from pathtrace.device.opencl import keeps_own_cache
@@ -63,7 +64,10 @@ class ProgramChoice:
         features = self._features("path")
         program, _, awaited = self._choice(features)
         if program is None:
-            self.backend.programs.start(features, tuned=awaited is None)
+            queue = self.backend.queue
+            tree_first = keeps_own_cache(queue.device) and self.compiled.tree_ended is None
+            self.backend.programs.start(features, tuned=awaited is None,
+                                        after=(lambda: await_kernels_ahead(queue)) if tree_first else None)
 
     def _features(self, integrator: str) -> Features:
         """What the scene's own program needs to render with these settings and `integrator`:
