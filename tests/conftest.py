@@ -52,6 +52,14 @@ def program_mode(request, monkeypatch):
         monkeypatch.setattr(backend, "mode", "specialised")
 
 
+@pytest.fixture(autouse=True)
+def no_tree_expected(monkeypatch):
+    """Each test starts without an earlier one's expectation of a tree (pathtrace.compiler.bvh:
+    expect_tree), under which the builders it makes would compile their kernels ahead."""
+    from pathtrace.compiler import bvh
+    monkeypatch.setattr(bvh, "_tree_expected", False)
+
+
 @pytest.fixture(scope="session")
 def backend():
     """The device the tests run on: PATHTRACE_TEST_DEVICE, else the first CPU."""

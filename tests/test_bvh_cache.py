@@ -189,7 +189,6 @@ def test_a_builder_being_built_is_seen_by_the_commands_exit(monkeypatch):
             held.wait(30)
     monkeypatch.setattr(bvh, "Builder", Slow)
     monkeypatch.setattr(bvh, "_builders", {})
-    monkeypatch.setattr(bvh, "_tree_expected", False)      # (an earlier test's scene expected one)
     thread = threading.Thread(target=bvh.builder_for, args=("a queue",))
     thread.start()
     assert started.wait(30) and bvh.building() and console._building()

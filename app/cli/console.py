@@ -30,7 +30,8 @@ def run():
 
 def _building() -> bool:
     """Whether a scene's program is still being built in the background (pathtrace.device.programs),
-    or the BVH builder's kernels (pathtrace.compiler.bvh, built after a device's opening): NVIDIA's
+    or the BVH builder's kernels (pathtrace.compiler.bvh, built after a device's opening, or
+    compiled ahead on PoCL in a build thread): NVIDIA's
     driver crashed the interpreter's teardown around a build under way (SIGSEGV after a render that
     had written its image), and the interpreter would wait for the builder's thread, so the command
     leaves past it, the build dropped. A module another thread is still importing has neither."""

@@ -110,7 +110,8 @@ class Builder:
         self.kernels = {k.function_name: k for k in self.program.all_kernels()}
         # each kernel's arguments as words ("global const int2 *child"), for launch_ahead
         self.signatures = {name: [a.split() for a in args.split(",")]
-                           for name, args in re.findall(r"kernel void (\w+)\(([^)]*)\)", source)}
+                           for name, args in re.findall(r"^kernel void (\w+)\(([^)]*)\)", source, re.M)}
+        assert self.signatures.keys() == self.kernels.keys(), "kernels/build/: a kernel launch_ahead cannot read"
         self._ahead = False     # whether compile_ahead has begun
         self.ahead_done = threading.Event()     # and ended
 
@@ -128,7 +129,7 @@ class Builder:
         def run():
             try:
                 self.launch_ahead()
-            except cl.Error:
+            except Exception:       # (the build's own launch says what is wrong)
                 pass
             finally:
                 self.ahead_done.set()
@@ -136,10 +137,13 @@ class Builder:
             if self._ahead:
                 return
             self._ahead = True
-        if keeps_own_cache(self.queue.device):
-            threading.Thread(target=run, name=BUILD_THREAD, daemon=True).start()
-        else:
-            self.ahead_done.set()
+        try:
+            if keeps_own_cache(self.queue.device):
+                threading.Thread(target=run, name=BUILD_THREAD, daemon=True).start()
+                return
+        except Exception:
+            pass
+        self.ahead_done.set()       # nothing compiles ahead: no one waits for it
 
     def launch_ahead(self):
         """Launches every build kernel once, on a queue of its own, over WHOLE_GRID work-items
@@ -147,12 +151,12 @@ class Builder:
         compiled for the build's launches of every size."""
         context = self.queue.context
         queue = cl.CommandQueue(context, self.queue.device)
-        nbytes = WHOLE_GRID // GROUP * 16       # more than any kernel writes at counts of 0:
-        zeros = cl.Buffer(context, cl.mem_flags.READ_WRITE, nbytes)     # mark_merges' group sums
+        nbytes = WHOLE_GRID // GROUP * 8        # what a kernel writes at counts of 0: mark_merges'
+        zeros = cl.Buffer(context, cl.mem_flags.READ_WRITE, nbytes)     # group sums, an int2 each
         cl.enqueue_fill_buffer(queue, zeros, np.zeros(1, np.int32), 0, nbytes)
         scalars = {"int": np.int32(0), "float4": np.zeros(4, np.float32)}
         for name, args in self.signatures.items():
-            kernel = cl.Kernel(self.program, name)
+            kernel = cl.Kernel(self.program, name)      # not self.kernels': the build sets their arguments
             kernel.set_args(*(zeros if "global" in arg else scalars[arg[0]] for arg in args))
             cl.enqueue_nd_range_kernel(queue, kernel, (WHOLE_GRID,), (GROUP,))
         queue.finish()
@@ -186,7 +190,7 @@ class Builder:
 _builders: dict = {}
 _builders_lock = threading.Lock()    # a command's devices open (api.DevicesOpening) beside its first build
 _ahead_lock = threading.Lock()
-_tree_expected = False      # expect_tree's flag
+_tree_expected = False      # expect_tree's flag, until a tree is built
 
 
 def building() -> bool:
@@ -218,6 +222,13 @@ def expect_tree():
         builder.compile_ahead()
 
 
+def tree_built():
+    """The expected tree is built (build_bvh): what is made later compiles nothing ahead, and a
+    program's build waits for nothing (await_kernels_ahead)."""
+    global _tree_expected
+    _tree_expected = False
+
+
 def await_kernels_ahead(queue: cl.CommandQueue):
     """Where a tree is expected (expect_tree), waits for the kernels of the builder on `queue`'s
     device to be compiled ahead, the builder made first if its device's opening has not made it:
@@ -228,7 +239,7 @@ def await_kernels_ahead(queue: cl.CommandQueue):
         return
     try:
         builder = builder_for(queue)
-    except cl.Error:            # the tree's build says why
+    except Exception:           # the tree's build says why
         return
     builder.ahead_done.wait()
 
@@ -321,7 +332,9 @@ def build_bvh(lo: np.ndarray, hi: np.ndarray, num_spheres: int = None,
         box = tree.boxes(a, a + 1)[0], tree.boxes(b, b + 1)[0]
         roots = tree.add([a], [b], [np.minimum(box[0][0], box[1][0])[:3]], [np.maximum(box[0][1], box[1][1])[:3]])
         report(1)
-    return _flatten(tree, int(roots[0]), num_spheres)
+    bvh = _flatten(tree, int(roots[0]), num_spheres)
+    tree_built()
+    return bvh
 
 
 def _build_kind(tree: _Tree, lo, hi, first: int, stop: int, report) -> int:

@@ -486,8 +486,8 @@ def compile_before_devices(scene: Scene, progress=None) -> CompiledScene:
     the viewer): its tree too where the BVH cache holds it, else the first renderer builds the
     tree on its device, beside its program's build (Renderer.set_scene)."""
     compiled = CompiledScene(scene, None, progress, tree=False)
-    if not compiled.build_tree(cached_only=True) and compiled.num_spheres + compiled.num_triangles > 1:
-        expect_tree()       # (a lone primitive's tree needs no build kernels)
+    if not compiled.build_tree(cached_only=True) and max(compiled.num_spheres, compiled.num_triangles) > 1:
+        expect_tree()       # (a kind's lone primitive needs no build kernels: build_bvh)
     return compiled
 
 

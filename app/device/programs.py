@@ -42,7 +42,9 @@ BUILD_THREAD = "pathtrace-build"
 
 
 def builds_under_way() -> bool:
-    """Whether a program is being built in the background in this process."""
+    """Whether a program is being built in the background in this process (or waits to be), or
+    kernels are being compiled ahead of their launches (pathtrace.compiler.bvh: Builder.compile_ahead;
+    ProgramChoice.compile_ahead)."""
     return any(t.name == BUILD_THREAD and t.is_alive() for t in threading.enumerate())
 
 
@@ -146,9 +148,12 @@ class Programs:
         return future
 
     def _run(self, key: tuple, future: Future, after=None):
-        try:
-            if after is not None:
+        if after is not None:
+            try:
                 after()
+            except Exception:       # a wait that failed holds the build back no longer
+                pass
+        try:
             future.set_result(self._build(*key))
         except Exception as e:
             future.set_exception(e)

@@ -64,10 +64,17 @@ class ProgramChoice:
         features = self._features("path")
         program, _, awaited = self._choice(features)
         if program is None:
-            queue = self.backend.queue
-            tree_first = keeps_own_cache(queue.device) and self.compiled.tree_ended is None
-            self.backend.programs.start(features, tuned=awaited is None,
-                                        after=(lambda: await_kernels_ahead(queue)) if tree_first else None)
+            self.backend.programs.start(features, tuned=awaited is None, after=self._tree_kernels_first())
+
+    def _tree_kernels_first(self):
+        """What a program's build in the background waits for first: on PoCL, which compiles one
+        thing at a time in a process, where the scene's tree is still to be built, the tree's
+        build kernels compiled ahead (await_kernels_ahead), which the first image needs first;
+        elsewhere nothing (None)."""
+        queue = self.backend.queue
+        if keeps_own_cache(queue.device) and self.compiled.tree_ended is None:
+            return lambda: await_kernels_ahead(queue)
+        return None
 
     def _features(self, integrator: str) -> Features:
         """What the scene's own program needs to render with these settings and `integrator`:
@@ -105,7 +112,7 @@ class ProgramChoice:
         if program is None and self.backend.mode != "specialised":
             program = self.backend.built_generic(features.media)
         if program is None and start_only:
-            self.backend.programs.start(features, tuned=False)
+            self.backend.programs.start(features, tuned=False, after=self._tree_kernels_first())
             return None
         return cl.Kernel(program if program is not None else self.backend.programs.get(features, tuned=False), name)
 
