@@ -294,20 +294,23 @@ ERRORS = [
      '</medium></shape>' + SPHERE, None, "Mitsuba 3 has no phase type 'hgg'"),
     # Mitsuba 3's parser: 'missing required attribute "type"'
     ('<shape type="sphere"><bsdf/></shape>', None, "<bsdf>: needs a type"),
-    (f'<sensor type="perspective"><film/></sensor>{SPHERE}', None, "<film>: needs a type, as Mitsuba 3 requires"),
-    (f'<emitter/>{SPHERE}', None, "<emitter>: needs a type, as Mitsuba 3 requires"),
+    (f'<sensor type="perspective"><film/></sensor>{SPHERE}', None, "<film>: needs a type"),
+    (f'<emitter/>{SPHERE}', None, "<emitter>: needs a type"),
 ]
 
 
 def test_a_scene_of_another_version_may_name_that_versions_plugins(tmp_path, capsys):
     """Types are refused as Mitsuba 3 refuses them in a Mitsuba 3 file only: Mitsuba 0.6's
-    phong or Mitsuba 2's plugins in a file of their version are warned of and replaced as before."""
+    phong or Mitsuba 2's plugins in a file of their version are warned of and replaced as before;
+    an element of no type is refused in any version."""
     body = '<shape type="sphere"><bsdf type="phong"/></shape><emitter type="sky"/>'
     with pytest.raises(UserError, match="Mitsuba 3 has no bsdf type 'phong'"):
         read_mitsuba_file(write(tmp_path, body))
     scene = read_mitsuba_file(write(tmp_path, body, header='<scene version="2.1.0">'))
     err = capsys.readouterr().err
     assert "pathtrace uses a diffuse BSDF" in err and "pathtrace has no sky emitters" in err and len(scene.spheres) == 1
+    with pytest.raises(UserError, match="<emitter>: needs a type"):     # as every version's parser requires
+        read_mitsuba_file(write(tmp_path, '<shape type="sphere"/><emitter/>', header='<scene version="2.1.0">'))
 
 
 @pytest.mark.parametrize("body,header,message", ERRORS, ids=[e[2][:30] for e in ERRORS])

@@ -124,22 +124,15 @@ class Builder:
         session). A build's launch of a kernel whose compile is under way waits for it rather
         than compile it again. Once per builder; a failure shows at the build's own launch."""
         from pathtrace.device.opencl import keeps_own_cache
-        from pathtrace.device.programs import BUILD_THREAD
+        from pathtrace.device.programs import in_build_thread
 
-        def run():
-            try:
-                self.launch_ahead()
-            except Exception:       # (the build's own launch says what is wrong)
-                pass
-            finally:
-                self.ahead_done.set()
         with _ahead_lock:
             if self._ahead:
                 return
             self._ahead = True
         try:
             if keeps_own_cache(self.queue.device):
-                threading.Thread(target=run, name=BUILD_THREAD, daemon=True).start()
+                in_build_thread(self.launch_ahead, then=self.ahead_done.set)
                 return
         except Exception:
             pass

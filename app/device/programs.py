@@ -48,6 +48,21 @@ def builds_under_way() -> bool:
     return any(t.name == BUILD_THREAD and t.is_alive() for t in threading.enumerate())
 
 
+def in_build_thread(work, then=None):
+    """Runs work() in a build thread, whose failure the launch or build that needs its result
+    says (work compiles ahead of that: pathtrace.compiler.bvh, Builder.compile_ahead;
+    ProgramChoice.compile_ahead), then then(), where given, either way."""
+    def run():
+        try:
+            work()
+        except Exception:
+            pass
+        finally:
+            if then is not None:
+                then()
+    threading.Thread(target=run, name=BUILD_THREAD, daemon=True).start()
+
+
 @atexit.register
 def _finish_builds():
     """A script or notebook that ends while a program builds waits for the build (which its

@@ -1,7 +1,6 @@
 """Which kernels render (the scene's own program, the generic one, or BDPT's) and the switch
 from one to another: a part of the Renderer (app/rendering/renderer.py), which is one."""
 
-import threading
 from dataclasses import replace
 
 import numpy as np
@@ -11,7 +10,7 @@ from pathtrace.compiler.bvh import await_kernels_ahead
 from pathtrace.compiler.compiled import SCENE_BUFFERS
 from pathtrace.device.features import Features
 from pathtrace.device.opencl import keeps_own_cache
-from pathtrace.device.programs import BUILD_THREAD
+from pathtrace.device.programs import in_build_thread
 from pathtrace.device.types import RENDER_PARAMS
 from pathtrace.errors import UserError
 from pathtrace.rendering import bdpt
@@ -164,13 +163,7 @@ class ProgramChoice:
                 or self.queue_plan()[0] or self.traversal_stats or self.divergence_stats:
             return None
         features, nee = self._features("path"), self.settings.nee
-
-        def run():
-            try:
-                self.launch_ahead(features, nee)
-            except Exception:       # (a build that failed says so where the render waits for it)
-                pass
-        return lambda: threading.Thread(target=run, name=BUILD_THREAD, daemon=True).start()
+        return lambda: in_build_thread(lambda: self.launch_ahead(features, nee))
 
     def launch_ahead(self, features: Features, nee: bool):
         """A launch of one work-group of the path tracer's kernel of the program that renders

@@ -110,15 +110,14 @@ class _Reader(XmlScene):
         return self.textures[id(node)]
 
     def refuse_unknown(self, category: str, node):
-        """In a Mitsuba 3 file, refuses an element of a type Mitsuba 3 has not either, or of none
-        (its parser's 'missing required attribute "type"'), as Mitsuba 3 refuses both
-        (app/scene/known_names.py); a file of another version may name that version's plugins,
-        which are warned of and replaced as before."""
-        if not self.version.startswith("3."):
-            return
+        """Refuses an element of no type, in a file of any version (Mitsuba's parser: 'missing
+        required attribute "type"'), and in a Mitsuba 3 file one of a type Mitsuba 3 has not
+        either, as Mitsuba 3 refuses it (app/scene/known_names.py); a file of another version
+        may name that version's plugins, which are warned of and replaced as before."""
         if "type" not in node.attrs:
-            fail(node, "needs a type, as Mitsuba 3 requires")
-        refuse_unknown_type("mitsuba", category, node.attrs["type"], node.where())
+            fail(node, "needs a type")
+        if self.version.startswith("3."):
+            refuse_unknown_type("mitsuba", category, node.attrs["type"], node.where())
 
     # -- the scene --
 
@@ -346,8 +345,6 @@ class _Reader(XmlScene):
             return self.blend(node, props)
         if kind in BSDFS_BY_NAME:
             return self.mitsuba_material(node, kind, props)
-        if kind is None:       # in a file of any version: Mitsuba 3's 'missing required attribute "type"'
-            fail(node, "needs a type")
         self.refuse_unknown("bsdf", node)
         albedo = self.color(props, "base_color", None, False) if "base_color" in props else \
             self.color(props, "reflectance", 0.5, False) if "reflectance" in props else np.full(3, 0.5)
