@@ -354,6 +354,24 @@ run()
     assert not list(tmp_path.iterdir())
 
 
+@pytest.mark.parametrize("users", [None, "2"])
+def test_the_console_loads_numpy_with_one_blas_thread(users):
+    """The entry point loads NumPy's OpenBLAS with one thread, where it would start one per core,
+    and leaves OPENBLAS_NUM_THREADS as it found it, for the programs a command starts; a user's
+    own setting stands."""
+    child = ("import os; from pathtrace.cli.console import _numpy_on_one_blas_thread as load; load(); "
+             "print(len(os.listdir('/proc/self/task')), os.environ.get('OPENBLAS_NUM_THREADS'))")
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    if users:
+        env["OPENBLAS_NUM_THREADS"] = users
+    r = subprocess.run([sys.executable, "-c", child], cwd=ROOT, capture_output=True, text=True, env=env, timeout=60)
+    threads, variable = r.stdout.split()
+    if users:
+        assert variable == users
+    else:
+        assert (int(threads), variable) == (1, "None"), r.stdout
+
+
 @pytest.mark.specialised     # the scene's own program, which is cached where the generic one is not
 def test_a_damaged_kernel_cache_is_rebuilt(tmp_path):
     """A truncated cache file (the first half of a valid one) crashed PoCL at every start. (PoCL

@@ -421,6 +421,30 @@ def test_mesh_files_whose_processes_fail_are_read_here(tmp_path, monkeypatch):
             assert all(np.array_equal(a, b) for a, b in zip(files.read(path, "shape"), read_mesh(path, "shape")))
 
 
+def test_reading_processes_load_numpy_with_one_blas_thread(tmp_path, monkeypatch):
+    """The reading processes start with OPENBLAS_NUM_THREADS=1, whatever this process has: 16 of
+    them each starting an OpenBLAS thread per core slowed the H200 machine's reading by a third."""
+    import subprocess
+    import pathtrace.scene.mesh_processes as mesh_processes
+    from pathtrace.bench.scenes import torus_obj
+    from pathtrace.scene.meshes import MeshFiles
+    read_ahead_in("processes", monkeypatch)
+    monkeypatch.setenv("OPENBLAS_NUM_THREADS", "4")
+    paths = [tmp_path / f"m{k}.obj" for k in range(2)]
+    for path in paths:
+        path.write_text(torus_obj(8, 4))
+    started = []
+
+    def popen(*args, **kwargs):
+        started.append(kwargs["env"])
+        return subprocess.Popen(*args, **kwargs)
+    monkeypatch.setattr(mesh_processes.subprocess, "Popen", popen)
+    with MeshFiles([(path, "shape") for path in paths]) as files:
+        for path in paths:
+            files.read(path, "shape")
+    assert started and all(env["OPENBLAS_NUM_THREADS"] == "1" for env in started)
+
+
 def test_mesh_files_whose_answers_fail_here_are_read_here_without_waiting(tmp_path, monkeypatch):
     """An error in this process while it takes a reading process's answers (here in noting the
     files' stamps) leaves none of the reads waiting: their files are read here."""

@@ -1,12 +1,14 @@
 """The console entry point (`pathtrace`, `python -m pathtrace`). It puts its signal handling in place
 before it imports the rest of the package (NumPy, PyOpenCL: about 0.2 s), so that Ctrl-C or
 SIGTERM during those imports ends the run with one line, as at any later moment, instead of a
-KeyboardInterrupt traceback."""
+KeyboardInterrupt traceback. It loads NumPy with one BLAS thread (_numpy_on_one_blas_thread)."""
 
 import os
 import sys
 
 from pathtrace.cli.interrupts import INTERRUPTED, install
+
+OPENBLAS_THREADS = "OPENBLAS_NUM_THREADS"
 
 
 def run():
@@ -16,6 +18,7 @@ def run():
     then; every temporary file is removed by then."""
     install()
     try:
+        _numpy_on_one_blas_thread()
         from pathtrace.cli.main import main
         code = main()
     except KeyboardInterrupt:        # main() reports its own; this is one during the imports
@@ -26,6 +29,23 @@ def run():
         sys.stderr.flush()
         os._exit(code)
     raise SystemExit(code)
+
+
+def _numpy_on_one_blas_thread():
+    """Imports NumPy with OPENBLAS_NUM_THREADS=1 unless the user set it, and takes the variable back
+    out, so that the programs a command starts (Mitsuba in `bench`) see the user's environment.
+    OpenBLAS starts a thread per core when it loads, each spinning for a while before it sleeps;
+    pathtrace calls BLAS on 3x3 and 4x4 matrices alone, and on the H200 machine's 16 cores those
+    spinning threads slowed the device's opening beside the scene's reading by half a second
+    (docs/notes/performance-2026-12.md, twenty-second session)."""
+    if OPENBLAS_THREADS in os.environ:
+        import numpy    # noqa: F401
+        return
+    os.environ[OPENBLAS_THREADS] = "1"
+    try:
+        import numpy    # noqa: F401
+    finally:
+        del os.environ[OPENBLAS_THREADS]
 
 
 def _building() -> bool:

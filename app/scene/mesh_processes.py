@@ -55,7 +55,10 @@ class Reading:
         """The answers of a process that reads `requests`, one per request, or [] where it fails.
         It imports pathtrace as this process did (sys.path, as PYTHONPATH), with nothing before
         it (-P), and the reading function by name rather than by running meshes.py as __main__,
-        whose import after its package's (which imports it) Python warns of."""
+        whose import after its package's (which imports it) Python warns of. NumPy's OpenBLAS
+        loads there with one thread: with a thread per core in each of 16 processes, spinning as
+        OpenBLAS's threads do once started, the H200 machine's reading took 1.6 s, not 1.1 s
+        (docs/notes/performance-2026-12.md, twenty-second session)."""
         try:
             with self._lock:
                 if self._closed:
@@ -63,7 +66,8 @@ class Reading:
                 process = subprocess.Popen(
                     [sys.executable, "-P", "-c", "from pathtrace.scene.meshes import serve_reading; serve_reading()"],
                     stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
-                    env={**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p)})
+                    env={**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p),
+                         "OPENBLAS_NUM_THREADS": "1"})
                 self._running.add(process)
             out, _ = process.communicate(pickle.dumps(requests))
             with self._lock:
