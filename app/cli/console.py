@@ -1,7 +1,9 @@
 """The console entry point (`pathtrace`, `python -m pathtrace`). It puts its signal handling in place
 before it imports the rest of the package (NumPy, PyOpenCL: about 0.2 s), so that Ctrl-C or
 SIGTERM during those imports ends the run with one line, as at any later moment, instead of a
-KeyboardInterrupt traceback. It loads NumPy with one BLAS thread (_numpy_on_one_blas_thread)."""
+KeyboardInterrupt traceback. NumPy loads with one BLAS thread (_numpy_on_one_blas_thread); then
+`render` and `view` start the OpenCL drivers while the rest is imported
+(pathtrace.device.loader: start_drivers_early)."""
 
 import os
 import sys
@@ -19,6 +21,9 @@ def run():
     install()
     try:
         _numpy_on_one_blas_thread()
+        if sys.argv[1:2] in (["render"], ["view"]):     # the commands that open a device at once
+            from pathtrace.device.loader import start_drivers_early
+            start_drivers_early()
         from pathtrace.cli.main import main
         code = main()
     except KeyboardInterrupt:        # main() reports its own; this is one during the imports
