@@ -83,12 +83,14 @@ def start_drivers_early():
 
 def _loader_beside_pyopencl():
     """The OpenCL loader that pyopencl's extension links, found without importing pyopencl: the
-    one its wheel carries (auditwheel puts it in pyopencl/.libs), else the system's. Where they
-    differ, the vendors' drivers, each loaded once per process, still start here."""
+    one its wheel carries (auditwheel puts it in pyopencl/.libs, or in pyopencl.libs beside it),
+    else the system's. Where they differ, the vendors' drivers, each loaded once per process,
+    still start here."""
     spec = importlib.util.find_spec("pyopencl")
     if spec is not None and spec.origin:
         package = os.path.dirname(os.path.abspath(spec.origin))
-        carried = sorted(Path(package).glob(".libs/libOpenCL*.so*"))
+        carried = sorted([*Path(package).glob(".libs/libOpenCL*.so*"),
+                          *Path(package).parent.glob("pyopencl.libs/libOpenCL*.so*")])
         if carried:
             # the carried loader finds the wheel's own drivers by this, and crashes without it;
             # pyopencl's import sets it so
