@@ -11,21 +11,14 @@ loaded once per process, so a platform listed here is listed by pyopencl at once
 the functions cannot be found or a call fails, pyopencl makes the call itself: these are only
 faster.
 
-`render` and `view` start the drivers once NumPy is imported, before pyopencl and the rest of
-the package (start_drivers_early, from the console's entry point), through the loader that
-pyopencl's wheel carries, found by its path: on the H200 machine those imports and the drivers'
-start had come one after the other. Begun before NumPy's import, the drivers' loading delayed
-it, and a mesh scene's warm start lost what a built-in scene's gained
-(docs/notes/performance-2026-12.md, twenty-second session). This module imports pyopencl only
-in the functions that need it."""
+`render` and `view` start the drivers in a thread once NumPy is imported, beside the rest of the
+package's imports (start_drivers_early, from the console's entry point): on the H200 machine
+those imports and the drivers' start had come one after the other (docs/notes/performance-2026-12.md,
+twenty-second session). So this module imports pyopencl only in the functions that need it."""
 
 import ctypes
-import ctypes.util
 import functools
-import importlib.util
-import os
 import threading
-from pathlib import Path
 
 ALL_DEVICE_TYPES = 0xFFFFFFFF
 _first_call = threading.Lock()
@@ -39,67 +32,46 @@ def opencl_library():
     they cannot be found so (Windows' lookup searches the extension alone)."""
     import pyopencl as cl
     try:
-        return _declared(ctypes.CDLL(cl._cl.__file__))
+        lib = ctypes.CDLL(cl._cl.__file__)
+        lib.clGetPlatformIDs.argtypes = [ctypes.c_uint32, ctypes.c_void_p, ctypes.POINTER(ctypes.c_uint32)]
+        lib.clGetDeviceIDs.argtypes = [ctypes.c_void_p, ctypes.c_uint64, ctypes.c_uint32, ctypes.c_void_p,
+                                       ctypes.POINTER(ctypes.c_uint32)]
+        lib.clCreateContext.argtypes = [ctypes.c_void_p, ctypes.c_uint32, ctypes.POINTER(ctypes.c_void_p),
+                                        ctypes.c_void_p, ctypes.c_void_p, ctypes.POINTER(ctypes.c_int32)]
+        lib.clCreateContext.restype = ctypes.c_void_p
+        return lib
     except (OSError, AttributeError):
         return None
-
-
-def _declared(lib):
-    """lib, the three functions' arguments declared."""
-    lib.clGetPlatformIDs.argtypes = [ctypes.c_uint32, ctypes.c_void_p, ctypes.POINTER(ctypes.c_uint32)]
-    lib.clGetDeviceIDs.argtypes = [ctypes.c_void_p, ctypes.c_uint64, ctypes.c_uint32, ctypes.c_void_p,
-                                   ctypes.POINTER(ctypes.c_uint32)]
-    lib.clCreateContext.argtypes = [ctypes.c_void_p, ctypes.c_uint32, ctypes.POINTER(ctypes.c_void_p),
-                                    ctypes.c_void_p, ctypes.c_void_p, ctypes.POINTER(ctypes.c_int32)]
-    lib.clCreateContext.restype = ctypes.c_void_p
-    return lib
 
 
 def start_drivers():
     """Lists every platform's devices through the loader, which starts their drivers, so that
     pyopencl's listing after it is quick. Once, the callers after the first waiting for it: the
     loader's first call is not safe beside another thread's (pyopencl's calls, holding the GIL,
-    were never made at once); a start under way in start_drivers_early's thread is waited for."""
+    were never made at once)."""
     global _started
     with _first_call:
         if not _started:
-            _list_through(opencl_library())
+            _list_through_loader()
             _started = True
 
 
 def start_drivers_early():
-    """start_drivers' listing begun in a thread of its own before pyopencl is imported, through
-    the loader beside pyopencl (_loader_beside_pyopencl). Not a daemon: a command that ends
-    before it (a bad scene file) waits for it, rather than tear the drivers down as they start."""
-    def listing():
-        with _first_call:
-            path = _loader_beside_pyopencl()
-            try:
-                _list_through(_declared(ctypes.CDLL(path)) if path else None)
-            except (OSError, AttributeError):
-                pass
-    threading.Thread(target=listing, name="start-drivers").start()
+    """start_drivers in a thread of its own, which imports pyopencl first: `render` and `view` call
+    it once NumPy is imported, so that pyopencl's import and the drivers' start run beside the
+    rest of the package's imports. Not a daemon: a command that ends before it (a bad scene
+    file) waits for it, rather than tear the drivers down as they start. What fails here (no
+    pyopencl) is said by the device's opening after."""
+    def start():
+        try:
+            start_drivers()
+        except Exception:
+            pass
+    threading.Thread(target=start, name="start-drivers").start()
 
 
-def _loader_beside_pyopencl():
-    """The OpenCL loader that pyopencl's extension links, found without importing pyopencl: the
-    one its wheel carries (auditwheel puts it in pyopencl/.libs, or in pyopencl.libs beside it),
-    else the system's. Where they differ, the vendors' drivers, each loaded once per process,
-    still start here."""
-    spec = importlib.util.find_spec("pyopencl")
-    if spec is not None and spec.origin:
-        package = os.path.dirname(os.path.abspath(spec.origin))
-        carried = sorted([*Path(package).glob(".libs/libOpenCL*.so*"),
-                          *Path(package).parent.glob("pyopencl.libs/libOpenCL*.so*")])
-        if carried:
-            # the carried loader finds the wheel's own drivers by this, and crashes without it;
-            # pyopencl's import sets it so
-            os.environ["PYOPENCL_HOME"] = package
-            return str(carried[0])
-    return ctypes.util.find_library("OpenCL")
-
-
-def _list_through(lib):
+def _list_through_loader():
+    lib = opencl_library()
     if lib is None:
         return
     count = ctypes.c_uint32()
