@@ -6,6 +6,7 @@ import shlex
 import stat
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -367,9 +368,35 @@ def test_the_console_loads_numpy_with_one_blas_thread(users):
     r = subprocess.run([sys.executable, "-c", child], cwd=ROOT, capture_output=True, text=True, env=env, timeout=60)
     threads, variable = r.stdout.split()
     if users:
-        assert variable == users
+        assert variable == users and (os.cpu_count() < 2 or int(threads) > 1), r.stdout
     else:
         assert (int(threads), variable) == (1, "None"), r.stdout
+
+
+@pytest.mark.parametrize("argv, code, says", [
+    (["render", "--help"], 0, "usage: pathtrace render"),
+    (["render", "cornell-box", "-o", "x.png", "--bogus"], 2, "unrecognized arguments: --bogus"),
+    (["render", "no-such-scene.xml", "-o", "x.png"], 1, "does not exist"),
+    (["scenes"], 0, "cornell-box")])
+def test_a_command_done_before_the_drivers_have_started_does_not_wait_for_them(tmp_path, argv, code, says):
+    """`render` and `view` start the OpenCL drivers early in a thread (app/device/loader.py:
+    start_drivers_early); a command that ends before it needs them (help, an option refused, a
+    missing scene) leaves at once, with its status and its output, not after a slow driver's
+    start (here one of 60 s); other commands start none."""
+    child = f"""
+import sys, time
+import pathtrace.device.loader as loader
+loader.start_drivers = lambda: (print("starting the drivers", file=sys.stderr, flush=True), time.sleep(60))
+sys.argv = ["pathtrace", *{argv!r}]
+from pathtrace.cli.console import run
+run()
+"""
+    start = time.perf_counter()
+    r = subprocess.run([sys.executable, "-c", child], cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert time.perf_counter() - start < 30 and r.returncode == code, (r.returncode, r.stderr[-2000:])
+    assert says in r.stdout + r.stderr and "Traceback" not in r.stderr
+    if argv[0] not in ("render", "view"):
+        assert "starting the drivers" not in r.stderr
 
 
 @pytest.mark.specialised     # the scene's own program, which is cached where the generic one is not

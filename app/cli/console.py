@@ -14,22 +14,29 @@ OPENBLAS_THREADS = "OPENBLAS_NUM_THREADS"
 
 
 def run():
-    """pathtrace.cli.main.main(), then the exit. After an interrupt, or with a kernel build under way
-    (_building), it leaves at once (os._exit), past the interpreter's teardown: tearing down PoCL
-    while it still winds down an interrupted launch aborted the process (std::terminate) now and
-    then; every temporary file is removed by then."""
+    """pathtrace.cli.main.main(), then the exit. After an interrupt, with a kernel build under way
+    (_building), or with the drivers still starting in their early thread (a command that ended
+    before it needed them: help, an option refused, no display), it leaves at once (os._exit),
+    past the interpreter's teardown: tearing down PoCL while it still winds down an interrupted
+    launch aborted the process (std::terminate) now and then; every temporary file is removed by
+    then."""
     install()
+    drivers = None
     try:
         _numpy_on_one_blas_thread()
         if sys.argv[1:2] in (["render"], ["view"]):     # the commands that open a device at once
             from pathtrace.device.loader import start_drivers_early
-            start_drivers_early()
+            drivers = start_drivers_early()
         from pathtrace.cli.main import main
         code = main()
     except KeyboardInterrupt:        # main() reports its own; this is one during the imports
         print("pathtrace: interrupted", file=sys.stderr)
         code = INTERRUPTED
-    if code == INTERRUPTED or _building():
+    except SystemExit as e:          # argparse's, after its help or its one line
+        if drivers is None or not drivers.is_alive():
+            raise
+        code = e.code if isinstance(e.code, int) else 0 if e.code is None else 1
+    if code == INTERRUPTED or _building() or drivers is not None and drivers.is_alive():
         sys.stdout.flush()
         sys.stderr.flush()
         os._exit(code)

@@ -56,18 +56,21 @@ def start_drivers():
             _started = True
 
 
-def start_drivers_early():
-    """start_drivers in a thread of its own, which imports pyopencl first: `render` and `view` call
-    it once NumPy is imported, so that pyopencl's import and the drivers' start run beside the
-    rest of the package's imports. Not a daemon: a command that ends before it (a bad scene
-    file) waits for it, rather than tear the drivers down as they start. What fails here (no
-    pyopencl) is said by the device's opening after."""
+def start_drivers_early() -> threading.Thread:
+    """start_drivers in a thread of its own, which imports pyopencl first, and the thread:
+    `render` and `view` call it once NumPy is imported, so that pyopencl's import and the
+    drivers' start run beside the rest of the package's imports. The console leaves past the
+    interpreter's teardown while it runs (pathtrace.cli.console); not a daemon, so that a
+    teardown that comes anyway waits for it rather than unload the drivers as they start. What
+    fails here (no pyopencl) is said by the device's opening after."""
     def start():
         try:
             start_drivers()
         except Exception:
             pass
-    threading.Thread(target=start, name="start-drivers").start()
+    thread = threading.Thread(target=start, name="start-drivers")
+    thread.start()
+    return thread
 
 
 def _list_through_loader():
