@@ -50,8 +50,11 @@ def builds_under_way() -> bool:
 
 def in_build_thread(work, then=None):
     """Runs work() in a build thread, whose failure the launch or build that needs its result
-    says (work compiles ahead of that: pathtrace.compiler.bvh, Builder.compile_ahead;
-    ProgramChoice.compile_ahead), then then(), where given, either way."""
+    says (a program's build in the background, Programs.start, or what compiles ahead of a
+    launch: pathtrace.compiler.bvh, Builder.compile_ahead; ProgramChoice.compile_ahead), then
+    then(), where given, either way. A daemon thread: a process that ends before the work does
+    neither waits for it nor leaves a torn cache entry (app/io/cache_files.py writes whole
+    files)."""
     def run():
         try:
             work()
@@ -153,10 +156,7 @@ class Programs:
             future = self._futures[key] = Future()
             future.set_running_or_notify_cancel()
         if background:
-            # a daemon thread: a process that ends before the build does neither waits for it
-            # nor leaves a torn cache entry (app/io/cache_files.py writes whole files)
-            thread = threading.Thread(target=self._run, args=(key, future, after), daemon=True, name=BUILD_THREAD)
-            thread.start()
+            in_build_thread(lambda: self._run(key, future, after))
         else:
             self._run(key, future)
             future.result()
