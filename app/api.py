@@ -104,7 +104,9 @@ class DevicesOpening:
     released (pathtrace.device.loader). Once the devices are open, the thread builds their BVH
     build kernels (pathtrace.compiler.bvh.builder_for), which a tree not in the cache needs,
     while the scene's own program builds beside them (Renderer.set_scene): on a first start on
-    an H200 the two had been built one after the other (0.5-0.8 s, then 1.5-1.9 s)."""
+    an H200 the two had been built one after the other (0.5-0.8 s, then 1.5-1.9 s). Where the
+    scene's tree is known by then to need no device (builder_wanted: the host built it, or the
+    cache held it), it builds none."""
 
     def __init__(self, device="auto"):
         self.seconds = 0.0      # what the opening took, in its thread (the builders' build not included)
@@ -114,7 +116,7 @@ class DevicesOpening:
         pool.shutdown(wait=False)       # the thread ends with its work; the interpreter waits for it
 
     def _open(self, device):
-        from pathtrace.compiler.bvh import builder_for
+        from pathtrace.compiler.bvh import builder_for, builder_wanted
         start = time.perf_counter()
         try:
             backends = open_devices(device)
@@ -125,7 +127,7 @@ class DevicesOpening:
         self.seconds = time.perf_counter() - start
         self._opened.set_result(backends)
         try:
-            for backend in backends:
+            for backend in backends if builder_wanted() else ():
                 builder_for(backend.queue)
         except Exception:       # a tree's build asks again (builder_for keeps no failure), and says why
             pass

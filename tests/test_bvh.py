@@ -12,10 +12,12 @@ import pyopencl as cl
 import pytest
 
 import pathtrace.compiler.bvh as bvh_module
+import pathtrace.compiler.bvh_cache as bvh_cache
 import pathtrace.compiler.compiled as compiled_module
 
 from pathtrace.compiler.bvh import MAX_DEPTH, MAX_LEAF_SIZE, RADIUS, TRAVERSAL_COST, build_bvh, builder_for
 from pathtrace.compiler.compiled import compile_scene
+from pathtrace.compiler.host_bvh import build_on_host
 from pathtrace.device.features import LONE_MAX
 from pathtrace.device.opencl import keeps_own_cache
 from pathtrace.resources import resource_dir
@@ -69,10 +71,13 @@ def scene_of(spheres=(), triangles=()):
     return b.build("test")
 
 
-@pytest.fixture(params=["default", "ploc"])
+@pytest.fixture(params=["host", "device", "ploc"])
 def top_work(request, monkeypatch):
-    """Each build test twice: as built (scenes this small are split whole by the binned SAH, PLOC
-    competing only for the top), and with PLOC clustering down to two clusters."""
+    """Each build test three times: built on the host (app/compiler/host_bvh.py), as scenes of
+    up to HOST_MAX primitives are; by the device's builder (scenes this small split whole by the
+    binned SAH, PLOC competing only for the top); and by the device's builder with PLOC
+    clustering down to two clusters. build_bvh is the device's builder whatever the parameter."""
+    monkeypatch.setattr(bvh_cache, "HOST_MAX", bvh_cache.MIN_PRIMITIVES - 1 if request.param == "host" else 0)
     if request.param == "ploc":
         monkeypatch.setattr(bvh_module, "TOP_CLUSTERS", 0)
     return request.param
@@ -129,6 +134,33 @@ def test_children_boxes_nest(top_work):
         used = (node == index[k]) & ~unused
         assert 2 <= used.sum() <= 4
         assert np.all(lo[used] >= lo[k]) and np.all(hi[used] <= hi[k])
+
+
+@pytest.mark.parametrize("n_spheres,n_triangles", [(1, 1), (0, 2), (32, 0), (30, 70), (0, 1000), (4096, 4096),
+                                                   (0, bvh_cache.MIN_PRIMITIVES - 1)])
+def test_a_tree_built_on_the_host_is_the_devices(backend, n_spheres, n_triangles, top_work):
+    """The host's tree is, byte for byte, the one the device's builder makes of the same boxes:
+    the same Morton order, PLOC's passes, binned split and collapse, and the same choice of top
+    (for 30 spheres and 70 triangles PLOC's top for the triangles, the split's for the spheres).
+    With PLOC down to two clusters ("ploc") too."""
+    rng = np.random.default_rng(n_spheres + 7 * n_triangles)
+    lo = rng.uniform(-10, 10, (n_spheres + n_triangles, 3)).astype(np.float32)
+    hi = lo + rng.uniform(0.01, 0.6, lo.shape).astype(np.float32)
+    host, device = build_on_host(lo, hi, n_spheres), build_bvh(lo, hi, n_spheres, backend.queue)
+    assert host.nodes.tobytes() == device.nodes.tobytes() and np.array_equal(host.order, device.order)
+    assert (host.depth, host.cost) == (device.depth, device.cost)
+
+
+def test_a_small_tree_needs_no_device(monkeypatch):
+    """A scene of at most HOST_MAX primitives is compiled with its tree and no device:
+    no builder is made (its program's build and, on PoCL, its kernels' compiles were most of a
+    small scene's cold start)."""
+    def no_builder(queue=None):
+        raise AssertionError("a builder was asked for")
+    monkeypatch.setattr(bvh_module, "builder_for", no_builder)
+    rng = np.random.default_rng(2)
+    c = compiled_module.compile_before_devices(scene_of(random_spheres(rng, 300), triangle_soup(rng, 700)))
+    assert c.tree_ended is not None and sorted(c.bvh.order.tolist()) == list(range(1000))
 
 
 def test_identical_boxes_still_split():
@@ -540,15 +572,24 @@ def test_an_expected_tree_has_every_builder_compile_ahead(backend, monkeypatch):
 
 
 def test_a_scene_compiled_before_its_devices_expects_its_tree_where_the_cache_lacks_it(monkeypatch):
-    """compile_before_devices says a tree will be built (expect_tree) for a scene of several
-    primitives that the BVH cache does not hold (it is off in the tests), not for a lone sphere,
-    whose tree needs no build kernels."""
+    """compile_before_devices says a tree will be built (expect_tree) for a scene of more than
+    HOST_MAX primitives that the BVH cache does not hold (it is off in the tests), not for one of
+    HOST_MAX, whose tree the host builds, nor a lone sphere; for those it says that the devices
+    need no builder in advance (no_device_tree, builder_wanted)."""
     expected = []
     monkeypatch.setattr(compiled_module, "expect_tree", lambda: expected.append(True))
-    compiled_module.compile_before_devices(scene_of([[0, 0, 0, 1], [3, 0, 0, 1]], []))
-    assert expected == [True]
+    for flag in ("_tree_without_device", "_tree_expected"):
+        monkeypatch.setattr(bvh_module, flag, False)
+    monkeypatch.setattr(bvh_module, "_builders", {})
+    rng = np.random.default_rng(4)
+    compiled_module.compile_before_devices(scene_of(random_spheres(rng, bvh_cache.HOST_MAX + 1), []))
+    assert expected == [True] and bvh_module.builder_wanted()
+    compiled_module.compile_before_devices(scene_of(random_spheres(rng, bvh_cache.HOST_MAX), []))
     compiled_module.compile_before_devices(scene_of([[0, 0, 0, 1]], []))
     assert expected == [True]
+    assert not bvh_module.builder_wanted()      # the devices' opening makes no builder
+    bvh_module.expect_tree()
+    assert bvh_module.builder_wanted()
 
 
 def test_the_wait_for_the_kernels_ahead_ends_where_nothing_is_compiled_ahead(backend, monkeypatch):

@@ -184,6 +184,7 @@ _builders: dict = {}
 _builders_lock = threading.Lock()    # a command's devices open (api.DevicesOpening) beside its first build
 _ahead_lock = threading.Lock()
 _tree_expected = False      # expect_tree's flag, until a tree is built
+_tree_without_device = False    # no_device_tree's flag, until a tree is expected
 
 
 def building() -> bool:
@@ -209,10 +210,26 @@ def expect_tree():
     builders made now or later compile their kernels ahead (Builder.compile_ahead). The flag is
     set before the builders are listed, and builder_for reads it after adding one, so that no
     builder misses it."""
-    global _tree_expected
-    _tree_expected = True
+    global _tree_expected, _tree_without_device
+    _tree_expected, _tree_without_device = True, False
     for builder in list(_builders.values()):
         builder.compile_ahead()
+
+
+def no_device_tree():
+    """Says that the scene's tree was had without a device (the host built it, or the BVH cache
+    held it; compile_before_devices): devices opening after this make no builder in advance
+    (builder_wanted), whose build an H200 made beside the scene's own program's on a cold start,
+    for nothing (docs/notes/performance-2026-12.md, twenty-third session)."""
+    global _tree_without_device
+    _tree_without_device = True
+
+
+def builder_wanted() -> bool:
+    """Whether opening devices should make their builders in advance (api.DevicesOpening): unless
+    the scene's tree is known to need none (no_device_tree). A builder not made in advance is
+    made by the first tree that needs it."""
+    return not _tree_without_device
 
 
 def tree_built():
@@ -249,22 +266,39 @@ def _first_working_builder() -> Builder:
     raise UserError(f"no OpenCL device can build the BVH: {HOW_TO_GET_ONE}")
 
 
-class _Tree:
-    """The binary tree on the device: primitives are nodes 0..n-1 and each new node gets the next
-    number. child: per node (left, right), -1 for primitives; box: per node two float4, lo then
-    hi; batches: (first node, count), each depending only on earlier ones."""
+class BinaryTree:
+    """What the device's tree (_Tree) and the host's (host_bvh.HostTree) number alike:
+    primitives are nodes 0..n-1 and each new node gets the next number, made in batches (first
+    node, count), each depending only on earlier ones."""
+
+    def __init__(self, n: int):
+        self.n = self.made = n
+        self.batches: list[tuple[int, int]] = []
+
+    def made_batch(self, count: int) -> np.ndarray:
+        self.batches.append((self.made, count))
+        self.made += count
+        return np.arange(self.made - count, self.made, dtype=np.int32)
+
+    def cut(self, mark):
+        """Takes back the nodes made since mark = (made, len(batches))."""
+        self.made, batches = mark
+        self.batches = self.batches[:batches]
+
+
+class _Tree(BinaryTree):
+    """The binary tree on the device. child: per node (left, right), -1 for primitives; box: per
+    node two float4, lo then hi."""
 
     def __init__(self, builder: Builder, lo: np.ndarray, hi: np.ndarray):
+        super().__init__(len(lo))
         self.b = builder
-        self.n = len(lo)
         size = 2 * self.n - 1
         self.child = builder.filled(np.int32(-1), 2 * size)
         self.box = builder.buffer(size * 32)
         boxes = np.zeros((self.n, 2, 4), np.float32)
         boxes[:, 0, :3], boxes[:, 1, :3] = lo, hi
         builder.write(self.box, boxes)
-        self.made = self.n
-        self.batches: list[tuple[int, int]] = []
 
     def add(self, left, right, lo, hi) -> np.ndarray:
         """New nodes made on the host, as one batch; returns their numbers."""
@@ -275,18 +309,26 @@ class _Tree:
         self.b.write(self.box, boxes, self.made)
         return self.made_batch(count)
 
-    def made_batch(self, count: int) -> np.ndarray:
-        self.batches.append((self.made, count))
-        self.made += count
-        return np.arange(self.made - count, self.made, dtype=np.int32)
-
     def boxes(self, first: int, stop: int) -> np.ndarray:
         return self.b.read(self.box, 2 * (stop - first), np.dtype((np.float32, 4)), 2 * first).reshape(-1, 2, 4)
 
-    def cut(self, mark):
-        """Takes back the nodes made since mark = (made, len(batches))."""
-        self.made, batches = mark
-        self.batches = self.batches[:batches]
+    def clusters(self, first: int, count: int, c_lo, scale) -> "_Clusters":
+        """PLOC's first clusters: the primitives first..first+count-1 in the order of their
+        Morton codes (c_lo and scale as kernels/build/morton.cl takes them)."""
+        b = self.b
+        codes = b.buffer(count * 8)
+        b.launch("morton_codes", count, self.box, np.int32(first), np.int32(count), c_lo, scale, codes)
+        # not a stable sort, but a deterministic one, and five times faster than NumPy's stable one
+        order = np.argsort(b.read(codes, count, np.uint64)).astype(np.int32)
+        order_buf = b.buffer(count * 4)
+        b.write(order_buf, order)
+        clusters = _Clusters(b, count)
+        b.launch("first_clusters", count, self.box, order_buf, np.int32(first), np.int32(count),
+                 clusters.node, clusters.box)
+        return clusters
+
+    def flatten(self, root: int, num_spheres: int) -> BVH:
+        return _flatten(self, root, num_spheres)
 
 
 def build_bvh(lo: np.ndarray, hi: np.ndarray, num_spheres: int = None,
@@ -308,9 +350,15 @@ def build_bvh(lo: np.ndarray, hi: np.ndarray, num_spheres: int = None,
         nodes["index"] = [0, -1, -1, -1]
         nodes["count"] = [1 if num_spheres else -1, 0, 0, 0]
         return BVH(nodes, np.zeros(1, np.int64), 1, 1.0)
-    builder = builder_for(queue)
-    tree = _Tree(builder, lo, hi)
-    merged = 0
+    bvh = build_tree(_Tree(builder_for(queue), lo, hi), lo, hi, num_spheres, progress)
+    tree_built()
+    return bvh
+
+
+def build_tree(tree, lo, hi, num_spheres: int, progress=None) -> BVH:
+    """Steps 1 to 3 over N >= 2 primitives (float32 boxes, finite) on `tree`, the device's
+    (_Tree) or the host's (pathtrace.compiler.host_bvh.HostTree), which do each step alike."""
+    n, merged = len(lo), 0
 
     def report(count):   # n - 1 merges in all, the join of the kinds' trees included
         nonlocal merged
@@ -325,37 +373,26 @@ def build_bvh(lo: np.ndarray, hi: np.ndarray, num_spheres: int = None,
         box = tree.boxes(a, a + 1)[0], tree.boxes(b, b + 1)[0]
         roots = tree.add([a], [b], [np.minimum(box[0][0], box[1][0])[:3]], [np.maximum(box[0][1], box[1][1])[:3]])
         report(1)
-    bvh = _flatten(tree, int(roots[0]), num_spheres)
-    tree_built()
-    return bvh
+    return tree.flatten(int(roots[0]), num_spheres)
 
 
 def _build_kind(tree: _Tree, lo, hi, first: int, stop: int, report) -> int:
     """Steps 1 and 2 over the primitives first..stop-1; returns the root."""
-    b, count = tree.b, stop - first
+    count = stop - first
     if count == 1:
         return first
     cen = lo[first:stop] + hi[first:stop]       # twice the centroids: the order is the same
     c_lo, c_hi = column_min(cen), column_max(cen)
     scale = np.divide((1 << MORTON_BITS) - 1, c_hi - c_lo, out=np.zeros(3, np.float32), where=c_hi > c_lo)
-    codes = b.buffer(count * 8)
-    b.launch("morton_codes", count, tree.box, np.int32(first), np.int32(count),
-             np.append(c_lo, 0).astype(np.float32), np.append(scale, 0).astype(np.float32), codes)
-    # not a stable sort, but a deterministic one, and five times faster than NumPy's stable one
-    order = np.argsort(b.read(codes, count, np.uint64)).astype(np.int32)
-    order_buf = b.buffer(count * 4)
-    b.write(order_buf, order)
-    clusters = _Clusters(b, count)
-    b.launch("first_clusters", count, tree.box, order_buf, np.int32(first), np.int32(count),
-             clusters.node, clusters.box)
+    clusters = tree.clusters(first, count, np.append(c_lo, 0).astype(np.float32),
+                             np.append(scale, 0).astype(np.float32))
     clusters.cluster(tree, max(2, min(count, TOP_CLUSTERS)), report)
+    node, boxes = clusters.read()
     if clusters.count == 1:
-        return int(b.read(clusters.node, 1, np.int32)[0])
+        return int(node[0])
     # two candidate tops over the remaining clusters; the one of smaller SAH cost is kept (the
     # clusters below are the same, so the sum of the new nodes' areas decides)
-    node = b.read(clusters.node, clusters.count, np.int32)
-    boxes = b.read(clusters.box, 2 * clusters.count, np.dtype((np.float32, 4))).reshape(-1, 2, 4)
-    levels, split_root = _split_top(node, boxes[:, 0, :3], boxes[:, 1, :3], tree.made)
+    levels, split_root = split_top(node, boxes[:, 0, :3], boxes[:, 1, :3], tree.made)
     split_area = sum(surface_area(lo_, hi_).astype(np.float64).sum() for _, _, lo_, hi_ in levels)
     mark = tree.made, len(tree.batches)
     cluster_root = clusters.cluster(tree, 1, report)
@@ -399,8 +436,13 @@ class _Clusters:
             report(merges)
         return tree.made - 1
 
+    def read(self):
+        """The clusters' nodes and boxes ((count, 2, 4): lo, hi)."""
+        return (self.b.read(self.node, self.count, np.int32),
+                self.b.read(self.box, 2 * self.count, np.dtype((np.float32, 4))).reshape(-1, 2, 4))
 
-def _split_top(clusters: np.ndarray, lo: np.ndarray, hi: np.ndarray, first_node: int):
+
+def split_top(clusters: np.ndarray, lo: np.ndarray, hi: np.ndarray, first_node: int):
     """Step 2's binned SAH split of the (two or more) clusters, nodes of the tree with boxes lo..hi,
     down to single clusters, level by level with whole-array operations. A segment gets as many
     bins as it has clusters, up to MAX_BINS, and one whose centroids coincide is halved by count.

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 import pyopencl as cl
 
-from pathtrace.compiler.bvh import BVH, column_max, column_min, expect_tree, primitive_boxes
+from pathtrace.compiler.bvh import BVH, column_max, column_min, expect_tree, no_device_tree, primitive_boxes
 from pathtrace.compiler.bvh_cache import CACHED_ONLY, NotCached, cached_bvh
 from pathtrace.scene.environment import LUMINANCE
 from pathtrace.errors import UserError, format_bytes, short
@@ -486,8 +486,10 @@ def compile_before_devices(scene: Scene, progress=None) -> CompiledScene:
     the viewer): its tree too where the BVH cache holds it, else the first renderer builds the
     tree on its device, beside its program's build (Renderer.set_scene)."""
     compiled = CompiledScene(scene, None, progress, tree=False)
-    if not compiled.build_tree(cached_only=True) and max(compiled.num_spheres, compiled.num_triangles) > 1:
-        expect_tree()       # (a kind's lone primitive needs no build kernels: build_bvh)
+    if compiled.build_tree(cached_only=True):
+        no_device_tree()
+    else:
+        expect_tree()
     return compiled
 
 

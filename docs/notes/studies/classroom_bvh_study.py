@@ -6,7 +6,7 @@ not changed):
 
 - main: PLOC, the binned top split and the SAH collapse (app/compiler/bvh.py);
 - radius16: PLOC's search radius 16 in place of 8;
-- binned: the binned SAH split (bvh._split_top) over every primitive, no PLOC;
+- binned: the binned SAH split (bvh.split_top) over every primitive, no PLOC;
 - sweep: a top-down SAH split that sweeps every primitive along each axis (the full-sweep build,
   MacDonald and Booth 1990, as pbrt-v4's largest-quality option), on the host, in Python: slow;
 - presplit-area:B and presplit-sah:B: references split before the build (Ernst and Greiner 2007,
@@ -119,10 +119,10 @@ def sweep_bvh(lo, hi, queue) -> bvh.BVH:
 
 
 def binned_bvh(lo, hi, queue) -> bvh.BVH:
-    """The builder's binned SAH split (bvh._split_top) over every primitive, without PLOC."""
+    """The builder's binned SAH split (bvh.split_top) over every primitive, without PLOC."""
     n = len(lo)
     tree = bvh._Tree(bvh.builder_for(queue), lo, hi)
-    levels, root = bvh._split_top(np.arange(n, dtype=np.int32), lo, hi, n)
+    levels, root = bvh.split_top(np.arange(n, dtype=np.int32), lo, hi, n)
     for level in levels:
         tree.add(*level)
     return bvh._flatten(tree, root, 0)
