@@ -109,6 +109,8 @@ class DevicesOpening:
     cache held it), it builds none."""
 
     def __init__(self, device="auto"):
+        from pathtrace.compiler.bvh import tree_unknown
+        tree_unknown()          # this opening's scene is yet to be compiled
         self.seconds = 0.0      # what the opening took, in its thread (the builders' build not included)
         self._opened = Future()
         pool = ThreadPoolExecutor(1, thread_name_prefix="open-devices")

@@ -55,9 +55,11 @@ def program_mode(request, monkeypatch):
 @pytest.fixture(autouse=True)
 def no_tree_expected(monkeypatch):
     """Each test starts without an earlier one's expectation of a tree (pathtrace.compiler.bvh:
-    expect_tree), under which the builders it makes would compile their kernels ahead."""
+    expect_tree), under which the builders it makes would compile their kernels ahead, or its
+    word that a tree needed no device (no_device_tree), under which devices open without them."""
     from pathtrace.compiler import bvh
     monkeypatch.setattr(bvh, "_tree_expected", False)
+    monkeypatch.setattr(bvh, "_tree_without_device", False)
 
 
 @pytest.fixture(scope="session")

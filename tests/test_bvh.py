@@ -138,11 +138,14 @@ def test_children_boxes_nest(top_work):
 
 @pytest.mark.parametrize("n_spheres,n_triangles", [(1, 1), (0, 2), (32, 0), (30, 70), (0, 1000), (4096, 4096),
                                                    (0, bvh_cache.MIN_PRIMITIVES - 1)])
-def test_a_tree_built_on_the_host_is_the_devices(backend, n_spheres, n_triangles, top_work):
+@pytest.mark.parametrize("ploc_only", [False, True])
+def test_a_tree_built_on_the_host_is_the_devices(backend, monkeypatch, n_spheres, n_triangles, ploc_only):
     """The host's tree is, byte for byte, the one the device's builder makes of the same boxes:
     the same Morton order, PLOC's passes, binned split and collapse, and the same choice of top
     (for 30 spheres and 70 triangles PLOC's top for the triangles, the split's for the spheres).
-    With PLOC down to two clusters ("ploc") too."""
+    With PLOC down to two clusters too."""
+    if ploc_only:
+        monkeypatch.setattr(bvh_module, "TOP_CLUSTERS", 0)
     rng = np.random.default_rng(n_spheres + 7 * n_triangles)
     lo = rng.uniform(-10, 10, (n_spheres + n_triangles, 3)).astype(np.float32)
     hi = lo + rng.uniform(0.01, 0.6, lo.shape).astype(np.float32)
@@ -161,6 +164,17 @@ def test_a_small_tree_needs_no_device(monkeypatch):
     rng = np.random.default_rng(2)
     c = compiled_module.compile_before_devices(scene_of(random_spheres(rng, 300), triangle_soup(rng, 700)))
     assert c.tree_ended is not None and sorted(c.bvh.order.tolist()) == list(range(1000))
+
+
+def test_a_devices_opening_forgets_the_last_scenes_tree(monkeypatch):
+    """A scene whose tree needed no device leaves no word for the next opening of devices, whose
+    own scene is yet to be compiled (api.DevicesOpening)."""
+    from pathtrace import api
+    monkeypatch.setattr(api, "open_devices", lambda device: [])
+    compiled_module.compile_before_devices(scene_of(random_spheres(np.random.default_rng(1), 10), []))
+    assert not bvh_module.builder_wanted()
+    api.DevicesOpening("cpu").result()
+    assert bvh_module.builder_wanted()
 
 
 def test_identical_boxes_still_split():

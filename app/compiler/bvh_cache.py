@@ -26,8 +26,8 @@ from pathtrace.device.types import BVH_NODE
 # a queue for cached_bvh that builds nothing: a tree not in the cache raises NotCached
 CACHED_ONLY = "cached only"
 MIN_PRIMITIVES = 16384      # where a build takes 0.07 s on two cores (64,000 spheres: 0.30 s; a read: < 0.01 s)
-# trees of at most this many primitives are built on the host, in at most about the 0.06 s a warm
-# device build takes on two cores (4,096: 0.06 s; 16,383: 0.19 s)
+# trees of at most this many primitives are built on the host, in about what a warm device build
+# takes on two quiet cores (4,096: 0.06 s; 16,383: 0.19 s)
 HOST_MAX = 4096
 MAX_BYTES = 1 << 30
 _HEADER = np.dtype([("nodes", "<i8"), ("primitives", "<i8"), ("depth", "<i8"), ("cost", "<f8")])

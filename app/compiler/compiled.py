@@ -149,8 +149,9 @@ class CompiledScene:
         """The BVH, and in its order the primitives' tables, where each primitive's media are
         and the light table: what the constructor leaves to this with tree=False. queue: the
         device that builds the BVH where the cache does not hold it (default: the constructor's).
-        cached_only: only where the BVH cache holds every tree it needs, which needs no device,
-        so that a command compiles its scene while its devices open; returns whether the tree
+        cached_only: only where every tree it needs is had without a device (the BVH cache holds
+        it, or the host builds it: pathtrace.compiler.bvh_cache.cached_bvh), so that a command
+        compiles its scene while its devices open; returns whether the tree
         is built. when_bvh_built: called, where given, once the BVH is there and before the tables
         in its order are made. Once: a build that fails can be tried again. Callers in other threads wait for
         the one building it, and where it fails, raise its error rather than build it again;
@@ -483,8 +484,9 @@ def compile_scene(scene: Scene, queue: cl.CommandQueue = None, progress=None, tr
 
 def compile_before_devices(scene: Scene, progress=None) -> CompiledScene:
     """The scene compiled with no device, so that it runs while the devices open (api.prepare,
-    the viewer): its tree too where the BVH cache holds it, else the first renderer builds the
-    tree on its device, beside its program's build (Renderer.set_scene)."""
+    the viewer): its tree too where the BVH cache holds it or the host builds it (no_device_tree),
+    else the first renderer builds the tree on its device, beside its program's build
+    (Renderer.set_scene; expect_tree)."""
     compiled = CompiledScene(scene, None, progress, tree=False)
     if compiled.build_tree(cached_only=True):
         no_device_tree()

@@ -21,7 +21,7 @@ def build_on_host(lo: np.ndarray, hi: np.ndarray, num_spheres: int = None, progr
     """build_bvh's tree (the same arguments but the device's queue), built on the host."""
     lo, hi = np.asarray(lo, np.float32), np.asarray(hi, np.float32)
     num_spheres = len(lo) if num_spheres is None else num_spheres
-    if len(lo) == 1 or not (np.isfinite(lo).all() and np.isfinite(hi).all()):
+    if len(lo) <= 1 or not (np.isfinite(lo).all() and np.isfinite(hi).all()):
         return build_bvh(lo, hi, num_spheres)       # a lone primitive's (no device), or its refusal
     return build_tree(HostTree(lo, hi), lo, hi, num_spheres, progress)
 
@@ -46,8 +46,8 @@ class HostTree(BinaryTree):
         return self.box[first:stop]
 
     def clusters(self, first: int, count: int, c_lo, scale) -> "HostClusters":
-        q = np.clip((self.box[first:first + count, 0] + self.box[first:first + count, 1] - c_lo) * scale,
-                    np.float32(0), np.float32(2097151)).astype(np.uint32)
+        q = (self.box[first:first + count, 0] + self.box[first:first + count, 1] - c_lo) * scale
+        q = np.fmin(np.fmax(q, np.float32(0)), np.float32(2097151)).astype(np.uint32)    # clamp's: NaN 0
         codes = _spread_bits(q[:, 0]) << np.uint64(2) | _spread_bits(q[:, 1]) << np.uint64(1) | _spread_bits(q[:, 2])
         order = first + np.argsort(codes).astype(np.int32)      # the device builder's sort
         return HostClusters(order, self.box[order])

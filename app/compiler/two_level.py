@@ -43,15 +43,17 @@ def build_two_level(scene, lo: np.ndarray, hi: np.ndarray, mesh_ends: list, mesh
     instances = scene.instances
     n_spheres = len(scene.spheres)
     tri_ends = n_spheres + np.cumsum([0] + [len(m.faces) for m in meshes])[mesh_ends]
-    trees, orders, depth = [], [], 0
-    # the scene's own shapes, then each object's: one tree each (None for an empty one)
+    # the scene's own shapes, then each object's: one tree each (None for an empty one), the
+    # largest built first: where only the cache's trees are asked for (CACHED_ONLY), one it lacks
+    # ends the build before the host has built the small ones for nothing
     spans = [(0, int(tri_ends[0]), n_spheres)] + [(int(a), int(b), 0) for a, b in zip(tri_ends[:-1], tri_ends[1:])]
-    for first, stop, spheres in spans:
-        tree = cached_bvh(lo[first:stop], hi[first:stop], spheres, queue) if stop > first else None
-        trees.append(tree)
-        if tree is not None:
-            orders.append(first + tree.order)
-            depth = max(depth, tree.depth)
+    trees = [None] * len(spans)
+    for k in sorted(range(len(spans)), key=lambda k: spans[k][0] - spans[k][1]):
+        first, stop, spheres = spans[k]
+        if stop > first:
+            trees[k] = cached_bvh(lo[first:stop], hi[first:stop], spheres, queue)
+    orders = [first + tree.order for (first, _, _), tree in zip(spans, trees) if tree is not None]
+    depth = max((tree.depth for tree in trees if tree is not None), default=0)
 
     # the instances: the scene's own shapes (if any, through the identity: object -1), then the
     # file's, whose objects have triangles

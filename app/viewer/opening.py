@@ -73,7 +73,7 @@ class SceneOpening:
         return self._open(*compiled)
 
     def _compile(self, scene) -> tuple:
-        """The scene compiled, with its tree where the BVH cache holds it (no device needed), for
+        """The scene compiled, with its tree where the BVH cache holds it or the host builds it, for
         the path tracer, and the integrator it asks for: a scene that asks for BDPT or light
         tracing shows the path tracer's first images (the same image in expectation) while their
         kernels build, then switches (app/viewer/integrators.py)."""
