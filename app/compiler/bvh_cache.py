@@ -8,8 +8,9 @@ this file, so that a changed builder or entry format never reads an old entry. A
 valid BVH over the same boxes. Entries are files of pathtrace.io.cache_files (a damaged one is built
 again and replaced), and the least recently used are removed once the entries exceed MAX_BYTES.
 Scenes of fewer than MIN_PRIMITIVES primitives build in a fraction of a second and are not
-cached; those of at most HOST_MAX are built on the host (app/compiler/host_bvh.py). The folder is cache_dir()/bvh, or the folder that
-PATHTRACE_BVH_CACHE names; PATHTRACE_BVH_CACHE=0 turns the cache off."""
+cached; those of at most HOST_MAX are built on the host (app/compiler/host_bvh.py). The folder is
+cache_dir()/bvh, or the folder that PATHTRACE_BVH_CACHE names; PATHTRACE_BVH_CACHE=0 turns the
+cache off."""
 
 import hashlib
 import os
