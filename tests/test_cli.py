@@ -744,6 +744,21 @@ run()
     assert not out.exists()
 
 
+@pytest.mark.parametrize("fails", ["the devices", "the scene"])
+def test_an_error_after_an_interrupt_ends_as_the_interrupt(tmp_path, monkeypatch, fails):
+    """A kernel build under way when SIGINT or SIGTERM arrives fails (PoCL's compiler, LLVM, removes
+    its temporary files on the signal), which is the interrupt's doing: the command ends as
+    interrupted (130), not with an error about the device. Here a device that cannot be opened,
+    inside the render, and a scene file that cannot be read, before it, stand for the failure."""
+    from pathtrace.cli import interrupts
+    monkeypatch.setattr(interrupts, "_interrupted", True)
+    out = tmp_path / "o.png"
+    scene, device = ("simple", "no-such-device") if fails == "the devices" else (tmp_path / "none.toml", "cpu")
+    r = in_process("render", scene, "--device", device, "-o", out, "--size", "8x6", "--spp", "1")
+    assert r.returncode == 130 and "interrupted" in r.stderr and "error" not in r.stderr, r.stderr
+    assert not out.exists()
+
+
 def test_a_pbrt_render_to_exr_imports_no_other_scene_reader_and_no_opencv(tmp_path):
     """What a command imports is part of the wait for its first image (docs/notes/performance-2026-11.md,
     2026-11-26): a pbrt-v4 scene rendered to EXR loads neither the other scene readers nor

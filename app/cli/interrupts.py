@@ -26,6 +26,13 @@ def check_interrupt():
         raise KeyboardInterrupt
 
 
+def interrupted() -> bool:
+    """Whether a SIGINT or SIGTERM has arrived: an error that follows is the interrupt's doing. A
+    kernel build under way fails when one arrives (PoCL's compiler, LLVM, removes its temporary
+    files on the signal, then hands it on), which is the interrupt, not a device that cannot build."""
+    return _interrupted
+
+
 def _unraisable(info, default=sys.unraisablehook):
     """Python's report of an exception it had to drop, silent for the interrupt (remembered by
     _interrupt): its traceback would precede the command's one line."""

@@ -7,7 +7,7 @@ import sys
 
 from pathtrace import __version__
 from pathtrace.cli import bench, convert, farm, listing, render, view
-from pathtrace.cli.interrupts import INTERRUPTED
+from pathtrace.cli.interrupts import INTERRUPTED, interrupted
 from pathtrace.cli.options import SCENES_EPILOG
 from pathtrace.errors import UserError, cut, did_you_mean
 
@@ -103,10 +103,10 @@ def main(argv=None) -> int:
         code = args.func(args)
         sys.stdout.flush()
         return code
-    except UserError as e:
-        print(f"pathtrace: error: {e}", file=sys.stderr)
-        return 1
-    except KeyboardInterrupt:
+    except (UserError, KeyboardInterrupt) as e:
+        if isinstance(e, UserError) and not interrupted():
+            print(f"pathtrace: error: {e}", file=sys.stderr)
+            return 1
         print("pathtrace: interrupted", file=sys.stderr)
         return INTERRUPTED
     except MemoryError:

@@ -5,7 +5,7 @@ import os
 import sys
 from pathlib import Path
 
-from pathtrace.cli.interrupts import INTERRUPTED, FinalWrite, check_interrupt
+from pathtrace.cli.interrupts import INTERRUPTED, FinalWrite, check_interrupt, interrupted
 from pathtrace.cli.options import SCENES_EPILOG, _int_range, add_output_options, add_render_options, apply_render_options
 from pathtrace.cli.progress import BuildProgress, Phases, redraw_interval
 from pathtrace.errors import UserError, escape, short
@@ -83,11 +83,11 @@ def cmd_render(args):
         result = api.render(scene, device=opening, progress=progress,
                             build_progress=build_progress, phases=prepared,
                             aovs=("albedo", "normal") if args.denoise or args.aov else ())
-    except UserError:              # the scene does not fit, or its kernels fail: on which device
-        if opening.opened():
-            say_devices()
-        raise
-    except KeyboardInterrupt:
+    except (UserError, KeyboardInterrupt) as e:
+        if isinstance(e, UserError) and not interrupted():   # the scene does not fit, or its kernels fail
+            if opening.opened():
+                say_devices()
+            raise
         done = 0 if bar is None else bar.n
         # the bars closed first (each ends its line), so that the message starts a line of its own
         build_progress.close()
