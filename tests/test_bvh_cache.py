@@ -66,11 +66,12 @@ def test_small_scenes_and_a_cache_turned_off_write_nothing(folder, monkeypatch):
     assert not folder.exists()
 
 
-@pytest.mark.parametrize("damage", ["truncated", "flipped", "empty", "fifo"])
-def test_a_damaged_entry_is_built_again_and_replaced(folder, damage):
-    lo, hi = boxes()
-    built = cache.cached_bvh(lo, hi)
-    entry, = folder.glob("*.bvh")
+DAMAGES = ["truncated", "flipped", "empty", "fifo"]
+
+
+def damage_entry(entry, damage: str):
+    """Replaces a cache entry by a damaged one: cut in half, one bit flipped, empty, or a FIFO,
+    which would block a reader that opened it."""
     data = entry.read_bytes()
     entry.unlink()
     if damage == "truncated":
@@ -81,6 +82,14 @@ def test_a_damaged_entry_is_built_again_and_replaced(folder, damage):
         entry.write_bytes(b"")
     else:
         os.mkfifo(entry)
+
+
+@pytest.mark.parametrize("damage", DAMAGES)
+def test_a_damaged_entry_is_built_again_and_replaced(folder, damage):
+    lo, hi = boxes()
+    built = cache.cached_bvh(lo, hi)
+    entry, = folder.glob("*.bvh")
+    damage_entry(entry, damage)
     assert cache.read_entry(entry, N) is None
     if damage == "fifo":
         entry.unlink()

@@ -19,7 +19,7 @@ def run():
     before it needed them: help, an option refused, no display), it leaves at once (os._exit),
     past the interpreter's teardown: tearing down PoCL while it still winds down an interrupted
     launch aborted the process (std::terminate) now and then; every temporary file is removed by
-    then."""
+    then, and the cache entries being written are written first."""
     install()
     drivers = None
     try:
@@ -39,6 +39,7 @@ def run():
     if code == INTERRUPTED or _building() or drivers is not None and drivers.is_alive():
         sys.stdout.flush()
         sys.stderr.flush()
+        _finish_cache_writes()
         os._exit(code)
     raise SystemExit(code)
 
@@ -58,6 +59,14 @@ def _numpy_on_one_blas_thread():
         import numpy    # noqa: F401
     finally:
         del os.environ[OPENBLAS_THREADS]
+
+
+def _finish_cache_writes():
+    """Waits for the geometry cache's writes under way (pathtrace.compiler.geometry_cache), which
+    a leaving past the interpreter's teardown would cut short, leaving their temporary files."""
+    wait = getattr(sys.modules.get("pathtrace.compiler.geometry_cache"), "wait_for_writes", None)
+    if wait is not None:
+        wait()
 
 
 def _building() -> bool:

@@ -15,6 +15,7 @@ import pyopencl as cl
 
 from pathtrace.compiler.bvh import BVH, column_max, column_min, expect_tree, no_device_tree, primitive_boxes
 from pathtrace.compiler.bvh_cache import CACHED_ONLY, NotCached, cached_bvh
+from pathtrace.compiler import geometry_cache
 from pathtrace.scene.environment import LUMINANCE
 from pathtrace.errors import UserError, format_bytes, short
 from pathtrace.device.features import FLAT_MAX, LONE_MAX, Features
@@ -112,9 +113,15 @@ class CompiledScene:
         # from float32 vertices (half the bytes of float64 to move) by np.take, which is 3-4x
         # faster than NumPy's indexing with an array; whole 48-byte rows are then put in BVH
         # order by one more np.take, 3x faster than a gather into the rows' xyz
-        self._corners = np.concatenate([np.take(float4_rows(m.vertices), m.faces, axis=0) if not isinstance(m, Shape)
-                                        else shape_corners(m) for m in meshes]) if meshes \
-            else np.zeros((0, 3, 4), np.float32)
+        # a large scene compiled before takes its tree and rows from the geometry cache, and its
+        # corners are not needed
+        start = time.perf_counter()
+        self._kept_path = geometry_cache.entry_path(self)
+        self._kept = geometry_cache.read_entry(self._kept_path) if self._kept_path else None
+        self._kept_seconds = time.perf_counter() - start
+        self._corners = None if self._kept else np.concatenate(
+            [np.take(float4_rows(m.vertices), m.faces, axis=0) if not isinstance(m, Shape)
+             else shape_corners(m) for m in meshes]) if meshes else np.zeros((0, 3, 4), np.float32)
         self.compile_materials()
         if tree:
             self.build_tree()
@@ -127,6 +134,8 @@ class CompiledScene:
         its light table is made)."""
         corners = self._corners
         if corners is None:
+            if self.tree_ended is None:      # the geometry cache holds the tree: no device needed
+                self.build_tree(cached_only=True)
             return LightPlan(self.lights.types, self.lights.tree)
         counts = [len(m.faces) for m in self.meshes]
         mesh_of = np.repeat(np.arange(len(self.meshes)), counts).astype(np.int64)
@@ -178,6 +187,27 @@ class CompiledScene:
             return True
 
     def _build_tree(self, queue, when_bvh_built=None):
+        if self._kept is None:
+            self._make_rows(queue, when_bvh_built)
+            if self._kept_path is not None:
+                geometry_cache.write_soon(self._kept_path, self)
+        else:
+            for name, value in self._kept.items():
+                setattr(self, name, value)
+            self.bvh_seconds = self._kept_seconds
+            if self._build[1]:
+                self._build[1](1.0)
+            if when_bvh_built is not None:
+                when_bvh_built()
+            self.shape_prims = np.zeros(0, np.int64)
+            self.instances = np.zeros(1, INSTANCE)
+        self.compile_lights()
+        self._corners = self._build = self._kept = None
+        self.tree_ended = time.perf_counter()
+        self._tree_lock = None
+
+    def _make_rows(self, queue, when_bvh_built=None):
+        """The tree, built or from the BVH cache, and the primitives' rows in its order."""
         scene, meshes, n_spheres, progress = self.scene, self.meshes, self.num_spheres, self._build[1]
         corners = self._corners
         start = time.perf_counter()
@@ -222,10 +252,6 @@ class CompiledScene:
         self.prim_material = np.concatenate([scene.sphere_material[sphere_order],
                                              mesh_material[mesh_of[triangle_order]] if meshes else []]).astype(np.int32)
         self.place_media(scene, sphere_order, mesh_of[triangle_order])
-        self.compile_lights()
-        self._corners = self._build = None
-        self.tree_ended = time.perf_counter()
-        self._tree_lock = None
 
     def place_shapes(self, triangle_mesh: np.ndarray) -> np.ndarray:
         """Points the records of the analytic shapes (rows of the triangle range whose mesh is a
