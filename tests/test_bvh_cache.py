@@ -4,6 +4,7 @@ foreign, blocking or unwritable entry or folder costs a build, never a wrong tre
 import os
 import subprocess
 import sys
+import time
 
 import numpy as np
 import pytest
@@ -115,6 +116,36 @@ def test_the_least_recently_used_entries_go_first(folder):
     cache.read_entry(entries[0], N)        # used: now the newest
     cache_files.prune(folder, "*.bvh", entries[0].stat().st_size + entries[2].stat().st_size)
     assert sorted(p.name for p in folder.glob("*.bvh")) == sorted(p.name for p in (entries[0], entries[2]))
+
+
+def test_writers_of_one_entry_at_once_each_write_a_file_of_their_own(tmp_path):
+    """Threads writing one entry at once (a scene compiled twice while its geometry's first write
+    goes on) each write a temporary file of their own, renamed whole over the entry: the entry is
+    one writer's payload, and no temporary file is left."""
+    import threading
+    payloads = [bytes([k]) * (1 << 22) for k in range(4)]
+    done = []
+    threads = [threading.Thread(target=lambda p=p: done.append(cache_files.write_entry(tmp_path / "e.bvh", p)))
+               for p in payloads]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert done == [True] * 4 and bytes(cache_files.read_entry(tmp_path / "e.bvh")) in payloads
+    assert [p.name for p in tmp_path.iterdir()] == ["e.bvh"]
+
+
+def test_a_write_cut_short_leaves_a_file_that_a_later_prune_removes(tmp_path):
+    """A process killed as it wrote (or leaving at an interrupt) leaves its temporary file: a
+    prune removes it once it has been unchanged for STALE_SECONDS, and not before (it may be a
+    write under way)."""
+    stale, fresh = tmp_path / f"a.bvh.x1{cache_files.TEMPORARY}", tmp_path / f"b.bvh.x2{cache_files.TEMPORARY}"
+    for f in (stale, fresh):
+        f.write_bytes(b"half")
+    old = time.time() - cache_files.STALE_SECONDS - 5
+    os.utime(stale, (old, old))
+    cache_files.prune(tmp_path, "*.bvh", 1 << 30)
+    assert [p.name for p in tmp_path.iterdir()] == [fresh.name]
 
 
 def test_a_mesh_renders_the_same_from_the_cache(tmp_path):

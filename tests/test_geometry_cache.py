@@ -60,7 +60,8 @@ def same(a, b):
     for name, array in a.material_arrays().items():
         assert np.array_equal(array, b.material_arrays()[name]), name
     assert (a.radius, a.lone_spheres, a.media_per_primitive) == (b.radius, b.lone_spheres, b.media_per_primitive)
-    assert np.array_equal(a.center, b.center) and np.array_equal(a.shape_prims, b.shape_prims)
+    assert a.center.dtype == b.center.dtype and np.array_equal(a.center, b.center)
+    assert np.array_equal(a.shape_prims, b.shape_prims)
     assert a.light_plan == b.light_plan
 
 
@@ -174,3 +175,12 @@ def test_a_command_leaving_at_once_waits_for_an_entry_being_written(folder, monk
     assert sorted(p.suffix for p in folder.iterdir()) == [".bvh", ".geometry"]
     entry, = folder.glob("*.geometry")
     assert geometry_cache.read_entry(entry) is not None
+
+
+def test_an_interrupt_ends_the_wait_for_an_entry(monkeypatch):
+    """A second Ctrl-C while a command waits for an entry's write ends the wait, with no traceback:
+    the user asked to stop (the write's temporary file is pruned later)."""
+    def interrupted():
+        raise KeyboardInterrupt
+    monkeypatch.setattr(geometry_cache, "wait_for_writes", interrupted)
+    console._finish_cache_writes()

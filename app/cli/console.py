@@ -19,7 +19,7 @@ def run():
     before it needed them: help, an option refused, no display), it leaves at once (os._exit),
     past the interpreter's teardown: tearing down PoCL while it still winds down an interrupted
     launch aborted the process (std::terminate) now and then; every temporary file is removed by
-    then, and the cache entries being written are written first."""
+    then, and the cache entries being written are written first unless the run was interrupted."""
     install()
     drivers = None
     try:
@@ -39,7 +39,8 @@ def run():
     if code == INTERRUPTED or _building() or drivers is not None and drivers.is_alive():
         sys.stdout.flush()
         sys.stderr.flush()
-        _finish_cache_writes()
+        if code != INTERRUPTED:
+            _finish_cache_writes()
         os._exit(code)
     raise SystemExit(code)
 
@@ -62,11 +63,16 @@ def _numpy_on_one_blas_thread():
 
 
 def _finish_cache_writes():
-    """Waits for the geometry cache's writes under way (pathtrace.compiler.geometry_cache), which
-    a leaving past the interpreter's teardown would cut short, leaving their temporary files."""
+    """Waits for the geometry cache's writes under way (pathtrace.compiler.geometry_cache), which a
+    leaving past the interpreter's teardown would cut short. An interrupt ends the wait: the
+    user asked to stop, and a write's temporary file left then is removed by a later write's
+    prune (pathtrace.io.cache_files)."""
     wait = getattr(sys.modules.get("pathtrace.compiler.geometry_cache"), "wait_for_writes", None)
-    if wait is not None:
-        wait()
+    try:
+        if wait is not None:
+            wait()
+    except KeyboardInterrupt:
+        pass
 
 
 def _building() -> bool:

@@ -8,11 +8,11 @@ An entry is keyed by the digest of everything the rows are made from (the sphere
 and media; each mesh's vertices, faces, normals, texture coordinates, material and media) and of the
 source that makes them (this file, app/compiler/compiled.py, app/scene/media.py, the device's types
 and the BVH builder's source), so that a changed scene or compiler never reads an old entry. Only
-scenes whose tree the BVH cache would keep are kept (at least bvh_cache.MIN_PRIMITIVES primitives),
-and not those with analytic shapes or a two-level tree, whose rows are made otherwise, nor an entry
-over half of MAX_BYTES (about 7 million triangles). Entries are files of pathtrace.io.cache_files (a
-damaged one is a miss) in the BVH cache's folder, which PATHTRACE_BVH_CACHE moves or turns off for
-both; the least recently used go once these entries exceed MAX_BYTES."""
+scenes of at least bvh_cache.MIN_PRIMITIVES primitives are kept, and not those with analytic shapes
+or a two-level tree, whose rows are made otherwise, nor an entry over half of MAX_BYTES (about 7
+million triangles). Entries are files of pathtrace.io.cache_files (a damaged one is a miss) in the
+BVH cache's folder, which PATHTRACE_BVH_CACHE moves or turns off for both; the least recently used
+go once these entries exceed MAX_BYTES."""
 
 import hashlib
 import os
@@ -100,7 +100,7 @@ def read_entry(path: Path) -> dict | None:
     except OSError:
         pass
     kept["bvh"] = BVH(kept.pop("nodes"), kept.pop("order"), int(header["depth"]), float(header["cost"]))
-    kept.update(radius=float(header["radius"]), center=header["center"].copy(),
+    kept.update(radius=float(header["radius"]), center=header["center"].astype(np.float32),
                 media_per_primitive=bool(header["media_per_primitive"]))
     return kept
 
@@ -109,7 +109,8 @@ def write_soon(path: Path, compiled):
     """Stores a CompiledScene's tree and rows at path in a thread of its own, so that a first
     image does not wait for it (870,400 triangles' entry is 133 MB: 0.3 s on two cores). The
     interpreter waits for it at its exit; a command that leaves past that (os._exit) calls
-    wait_for_writes first."""
+    wait_for_writes first. A write cut short leaves a temporary file, not an entry
+    (pathtrace.io.cache_files)."""
     arrays = [compiled.bvh.nodes, compiled.bvh.order] + [getattr(compiled, name) for name, _ in ARRAYS[2:]]
     header = np.zeros(1, _HEADER)
     header["rows"] = [len(a) for a in arrays]

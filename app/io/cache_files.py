@@ -12,10 +12,14 @@ entry still renders."""
 
 import os
 import stat
+import tempfile
+import time
 import zlib
 from pathlib import Path
 
 CHECKSUM_BYTES = 4
+TEMPORARY = ".tmp"          # the suffix of an entry's file while it is written
+STALE_SECONDS = 600         # a write's file unchanged this long is a write that ended unfinished
 
 
 def cache_dir() -> Path:
@@ -57,11 +61,15 @@ def read_entry(path: Path):
 def write_entry(path: Path, *chunks) -> bool:
     """Writes an entry whose payload is the chunks (bytes-like) end to end: to a temporary file
     renamed over path, so that the entry is whole or absent. False where the disk refuses it (a
-    read-only or full disk), leaving no partial file."""
-    tmp = path.with_suffix(f".tmp{os.getpid()}")
+    read-only or full disk), leaving no partial file. The temporary file's name is its writer's
+    alone (two threads may write one entry at once); one that a killed process left behind is
+    removed by a later prune."""
+    tmp = None
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        with open(tmp, "wb") as f:
+        handle, name = tempfile.mkstemp(TEMPORARY, path.name + ".", path.parent)
+        tmp = Path(name)
+        with open(handle, "wb") as f:
             f.write(checksum(chunks))
             for chunk in chunks:
                 f.write(chunk)
@@ -69,7 +77,8 @@ def write_entry(path: Path, *chunks) -> bool:
         return True
     except OSError:
         try:
-            tmp.unlink()
+            if tmp is not None:
+                tmp.unlink()
         except OSError:
             pass
         return False
@@ -77,11 +86,20 @@ def write_entry(path: Path, *chunks) -> bool:
 
 def prune(where: Path, pattern: str, limit: int):
     """Removes the least recently used entries of `where` that match `pattern` until the rest
-    take at most `limit` bytes (a read entry's time is touched: pathtrace.compiler.bvh_cache)."""
+    take at most `limit` bytes (a read entry's time is touched: pathtrace.compiler.bvh_cache),
+    and the temporary files of writes that ended STALE_SECONDS ago or more without their entry
+    (a process killed, or leaving at an interrupt, as it wrote)."""
     try:
         entries = [(e.stat().st_mtime, e.stat().st_size, e) for e in where.glob(pattern)]
+        unfinished = [(e.stat().st_mtime, e) for e in where.glob("*" + TEMPORARY)]
     except OSError:
         return
+    for changed, write in unfinished:
+        if changed < time.time() - STALE_SECONDS:
+            try:
+                write.unlink()
+            except OSError:
+                pass
     total = sum(size for _, size, _ in entries)
     for _, size, entry in sorted(entries, key=lambda e: e[0]):
         if total <= limit:
