@@ -183,18 +183,20 @@ def sample_beckmann_visible(wo, alpha, u1, u2):
     return m / np.linalg.norm(m, axis=-1, keepdims=True)
 
 
-def rough_dielectric_albedo(cos_theta, alpha, eta, nodes=None, beckmann=False):
+def rough_dielectric_albedo(cos_theta, alpha, eta, nodes=None, beckmann=False, transmitted=True):
     """The fractions of light arriving at cos_theta (an array) that a rough dielectric interface
     (GGX, or Beckmann, of relative IOR eta = n_inside / n_outside) reflects and transmits, as two arrays: over
     visible normals m, E[F(wi.m) G1(wr, m)] and E[(1 - F(wi.m)) G1(wt, m)], wr and wt the
     mirrored and refracted directions (none where they leave on the wrong side); their sum is
     below 1 by what the microfacets shadow. Gauss-Legendre quadrature over the sampling square;
-    total internal reflection (eta < 1) needs the finer rule."""
+    total internal reflection (eta < 1) needs the finer rule. Without `transmitted`, the second
+    array is not computed (None): a quarter of the time, which a scene's first reading waits for
+    per roughplastic roughness (rough_coating)."""
     nodes = nodes or (32 if eta > 1 else 128)
     x, w = np.polynomial.legendre.leggauss(nodes)
     u1, u2 = np.meshgrid(0.5 * x + 0.5, 0.5 * x + 0.5)
     weight = np.outer(0.5 * w, 0.5 * w)
-    reflected, transmitted = np.empty(len(cos_theta)), np.empty(len(cos_theta))
+    reflected, passing = np.empty(len(cos_theta)), np.empty(len(cos_theta)) if transmitted else None
     for i, c in enumerate(cos_theta):
         wi = np.array([np.sqrt(max(0.0, 1.0 - c * c)), 0.0, c])
         m = (sample_beckmann_visible if beckmann else sample_ggx_visible)(wi, alpha, u1, u2)
@@ -203,12 +205,13 @@ def rough_dielectric_albedo(cos_theta, alpha, eta, nodes=None, beckmann=False):
         wr = 2.0 * wi_m[..., None] * m - wi
         g1 = beckmann_g1 if beckmann else ggx_g1
         reflected[i] = np.sum(np.where(wr[..., 2] > 0, f * g1(wr, m, alpha), 0.0) * weight)
-        # Snell's law about m; under total internal reflection f = 1 and nothing passes
-        cos_t = np.sqrt(np.maximum(0.0, 1.0 - (1.0 - wi_m ** 2) / eta ** 2))
-        wt = -wi / eta + (wi_m / eta - cos_t)[..., None] * m
-        passed = (1.0 - f) * g1(wt, m, alpha)
-        transmitted[i] = np.sum(np.where(wt[..., 2] < 0, passed, 0.0) * weight)
-    return reflected, transmitted
+        if transmitted:
+            # Snell's law about m; under total internal reflection f = 1 and nothing passes
+            cos_t = np.sqrt(np.maximum(0.0, 1.0 - (1.0 - wi_m ** 2) / eta ** 2))
+            wt = -wi / eta + (wi_m / eta - cos_t)[..., None] * m
+            passed = (1.0 - f) * g1(wt, m, alpha)
+            passing[i] = np.sum(np.where(wt[..., 2] < 0, passed, 0.0) * weight)
+    return reflected, passing
 
 
 @lru_cache(maxsize=256)
@@ -221,5 +224,5 @@ def rough_coating(alpha: float, eta: float, beckmann: bool = False) -> tuple[np.
     keeps roughplastic the same material in both renderers."""
     _, transmittance = rough_dielectric_albedo(TABLE_COSINES, alpha, eta, beckmann=beckmann)
     mu = np.maximum(1e-6, np.linspace(0.0, 1.0, 64))
-    inside, _ = rough_dielectric_albedo(mu, alpha, 1.0 / eta, beckmann=beckmann)
+    inside, _ = rough_dielectric_albedo(mu, alpha, 1.0 / eta, beckmann=beckmann, transmitted=False)
     return transmittance, float(2.0 * np.mean(inside * mu))
