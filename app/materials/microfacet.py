@@ -102,12 +102,18 @@ TABLE_SIZE = 16
 TABLE_COSINES = np.maximum(1e-6, np.linspace(0.0, 1.0, TABLE_SIZE) ** 2)
 
 
+def _dot(v, m):
+    """The dot products of (..., 3) arrays, a component at a time: the sum np.sum(v * m, axis=-1)
+    makes, in its order, without the (..., 3) product."""
+    return v[..., 0] * m[..., 0] + v[..., 1] * m[..., 1] + v[..., 2] * m[..., 2]
+
+
 def ggx_g1(v, m, alpha):
     """Smith's G1(v, m) = 2 / (1 + sqrt(1 + a^2 tan^2 theta_v)); 0 where v sees m's back."""
     cos2 = v[..., 2] ** 2
     tan2 = np.maximum(0.0, 1.0 - cos2) / np.maximum(cos2, 1e-30)
     g = 2.0 / (1.0 + np.sqrt(1.0 + alpha * alpha * tan2))
-    return np.where(np.sum(v * m, axis=-1) * v[..., 2] > 0, g, 0.0)
+    return np.where(_dot(v, m) * v[..., 2] > 0, g, 0.0)
 
 
 def sample_ggx_visible(wo, alpha, u1, u2):
@@ -136,7 +142,7 @@ def beckmann_g1(v, m, alpha):
     xy = np.sqrt(v[..., 0] ** 2 + v[..., 1] ** 2)
     a = np.abs(v[..., 2]) / np.maximum(xy, 1e-30) / alpha
     g = np.where(a >= 1.6, 1.0, (3.535 * a + 2.181 * a * a) / (1.0 + 2.276 * a + 2.577 * a * a))
-    return np.where(np.sum(v * m, axis=-1) * v[..., 2] > 0, g, 0.0)
+    return np.where(_dot(v, m) * v[..., 2] > 0, g, 0.0)
 
 
 def erfinv_approx(x):
