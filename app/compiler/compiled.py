@@ -109,16 +109,16 @@ class CompiledScene:
         self._tree_lock = threading.Lock()   # a device group's renderers ask for it at once
         self._tree_tries = 0                 # builds of the tree ended, and the last one's error
         self._tree_error = None
-        # the corners as the kernels' triangle rows hold them (float4s, w filled below), gathered
-        # from float32 vertices (half the bytes of float64 to move) by np.take, which is 3-4x
-        # faster than NumPy's indexing with an array; whole 48-byte rows are then put in BVH
-        # order by one more np.take, 3x faster than a gather into the rows' xyz
         # a large scene compiled before takes its tree and rows from the geometry cache, and its
         # corners are not needed
         start = time.perf_counter()
         self._kept_path = geometry_cache.entry_path(self)
         self._kept = geometry_cache.read_entry(self._kept_path) if self._kept_path else None
         self._kept_seconds = time.perf_counter() - start
+        # the corners as the kernels' triangle rows hold them (float4s, w filled below), gathered
+        # from float32 vertices (half the bytes of float64 to move) by np.take, which is 3-4x
+        # faster than NumPy's indexing with an array; whole 48-byte rows are then put in BVH
+        # order by one more np.take, 3x faster than a gather into the rows' xyz
         self._corners = None if self._kept else np.concatenate(
             [np.take(float4_rows(m.vertices), m.faces, axis=0) if not isinstance(m, Shape)
              else shape_corners(m) for m in meshes]) if meshes else np.zeros((0, 3, 4), np.float32)
@@ -158,8 +158,8 @@ class CompiledScene:
         """The BVH, and in its order the primitives' tables, where each primitive's media are
         and the light table: what the constructor leaves to this with tree=False. queue: the
         device that builds the BVH where the cache does not hold it (default: the constructor's).
-        cached_only: only where every tree it needs is had without a device (the BVH cache holds
-        it, or the host builds it: pathtrace.compiler.bvh_cache.cached_bvh), so that a command
+        cached_only: only where every tree it needs is had without a device (the geometry or BVH
+        cache holds it, or the host builds it: pathtrace.compiler.bvh_cache.cached_bvh), so that a command
         compiles its scene while its devices open; returns whether the tree
         is built. when_bvh_built: called, where given, once the BVH is there and before the tables
         in its order are made. Once: a build that fails can be tried again. Callers in other threads wait for
