@@ -227,7 +227,7 @@ class _Prepared:
         compiled = self.group.compiled
         environment = _environment_key(scene.environment)
         rows, textures = compiled.material_source
-        materials_changed = not np.array_equal(scene.materials.rows, rows) or scene.materials.textures != textures
+        materials_changed = not _same_rows(scene.materials.rows, rows) or scene.materials.textures != textures
         lights = _lights_key(scene.lights)
         for r in self.group.renderers:
             if environment != self.environment:
@@ -290,6 +290,13 @@ def _geometry_digest(scene: Scene) -> bytes:
     h.update(repr([(s.kind, tuple(map(float, s.params)), np.asarray(s.to_world, np.float64).tolist(), s.material,
                     s.flip, s.texture_uv, s.media) for s in scene.shapes]).encode())
     return h.digest()
+
+
+def _same_rows(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two material tables hold the same bytes: compared field by field, a table of a
+    million materials (spheres1M) took 0.3 s of every render; bytes also find a NaN unchanged."""
+    return a.dtype == b.dtype and a.shape == b.shape and np.array_equal(
+        np.ascontiguousarray(a).view(np.uint8), np.ascontiguousarray(b).view(np.uint8))
 
 
 def _environment_key(environment):

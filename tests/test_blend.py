@@ -76,6 +76,23 @@ def test_only_scenes_with_a_blend_compile_its_choice_and_its_components_types(tm
     assert "BLEND" not in features('"red"').defines()
 
 
+def test_a_material_edit_changes_the_features_of_a_compiled_scene(tmp_path):
+    """features() keeps its materials' kinds for the table it was computed from (material_kinds)
+    and computes them again after an edit (update_materials): a blend put in the place of a
+    diffuse material brings its choice and its components' types."""
+    s = scene(tmp_path, '"red"')
+    compiled = CompiledScene(s)
+    before = compiled.features(s.settings, s.camera)
+    assert "BLEND" not in before.defines() and compiled.features(s.settings, s.camera) == before
+    row = next(i for i in range(len(s.materials)) if s.materials.rows["type"][i] == s.materials.rows["type"][
+        compiled.shape_materials[0]])
+    s.materials.set(row, Material("blendbsdf", {"weight": 0.5}, components=[
+        Material("diffuse", {"rho_d": 0.5}), Material("roughconductor", {"alpha": 0.2})]))
+    compiled.update_materials()
+    after = compiled.features(s.settings, s.camera)
+    assert "BLEND" in after.defines() and {"blendbsdf", "roughconductor"} <= set(after.bsdfs)
+
+
 @pytest.mark.parametrize("material,message", [
     ('{ type = "blendbsdf", weight = 1.5, bsdfs = ["red", "mirror"] }', "weight"),
     ('{ type = "blendbsdf", bsdfs = ["red"] }', "must be a list of two materials"),

@@ -307,6 +307,7 @@ class CompiledScene:
         except ValueError as e:
             raise UserError(f"{self.scene.source or self.scene.name}: {e}") from None
         self.materials = table.rows.copy()
+        self._material_kinds = None          # material_kinds, for this table
         self.materials["textures"] = self.textures.first[:len(table.rows)]
         check_radiance(self.scene)
 
@@ -368,14 +369,10 @@ class CompiledScene:
         """What the kernels need for this scene: which shapes (spheres, triangles), the material and
         light types it uses, and the Russian roulette rule, pixel filter and camera of its
         settings."""
-        rows = self.materials[reachable(self.materials, self.shape_materials)]
-        used = np.unique(rows["type"])
-        null_surfaces = bool(np.any(rows["flags"] & NULL))     # rays cross them (NULL_SURFACES)
-        variants = tuple(sorted({d for name, tag in TAGS.items() if tag in used
-                                 for d in BSDFS[name].defines(rows[rows["type"] == tag])}))
+        null_surfaces, variants, bsdfs = self.material_kinds()
         return Features(spheres=self.num_spheres > 0, triangles=self.num_triangles > 0,
                         shapes=self.shape_kinds,
-                        bsdf_defines=variants, bsdfs=tuple(name for name, tag in TAGS.items() if tag in used),
+                        bsdf_defines=variants, bsdfs=bsdfs,
                         textures=self.textures.types, masks=self.textures.masks,
                         normal_maps=self.textures.normal_maps, lights=self.light_plan.types,
                         light_tree=self.light_plan.tree, media=bool(self.scene.media) or null_surfaces,
@@ -384,6 +381,21 @@ class CompiledScene:
                         russian_roulette=settings.russian_roulette, instances=self.two_level,
                         lone_spheres=self.lone_spheres,
                         flat=(self.num_spheres, self.num_triangles) if self.flat else ())
+
+    def material_kinds(self) -> tuple:
+        """Whether the materials the shapes reach have null surfaces, their BSDFs' variant defines
+        and their BSDFs: computed once per material table (compile_materials), as a render asks
+        for its features several times (its program, its launch plan), and a table of a million
+        materials (spheres1M) took 0.5 s each time."""
+        if self._material_kinds is None:
+            found = reachable(self.materials, self.shape_materials)
+            rows = self.materials if len(found) == len(self.materials) else self.materials[found]
+            used = np.unique(rows["type"])
+            null_surfaces = bool(np.any(rows["flags"] & NULL))     # rays cross them (NULL_SURFACES)
+            variants = tuple(sorted({d for name, tag in TAGS.items() if tag in used
+                                     for d in BSDFS[name].defines(rows[rows["type"] == tag])}))
+            self._material_kinds = null_surfaces, variants, tuple(name for name, tag in TAGS.items() if tag in used)
+        return self._material_kinds
 
     @property
     def flat(self) -> bool:

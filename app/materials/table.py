@@ -182,8 +182,12 @@ def reachable(table_rows: np.ndarray, used) -> np.ndarray:
     """The rows `used` (indices of table_rows, one per primitive) and every row their blends
     choose from, in order."""
     found = np.flatnonzero(np.bincount(np.asarray(used, np.int64).ravel(), minlength=len(table_rows)))
+    blends = table_rows["type"] == TAGS["blendbsdf"]
     while True:
-        more = np.union1d(found, component_rows(table_rows[found]))
+        # the blends' rows alone are gathered: a table of a million materials (spheres1M) without
+        # blends had every row copied and sorted again, 0.3 s a call
+        chosen = found[blends[found]]
+        more = np.union1d(found, components_of(table_rows[chosen]).ravel()) if len(chosen) else found
         if len(more) == len(found):
             return found
         found = more
