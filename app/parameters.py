@@ -138,8 +138,12 @@ def out_of_range(parameters, values: dict) -> ValueError | None:
                 continue
             return ValueError(f"{p.name}: must be in {p.low}..{p.high}, got {value}")
         low, high = value.bounds_as(p.kind) if hasattr(value, "bounds_as") else (np.min(value), np.max(value))
-        if np.isfinite(low) and np.isfinite(high) and (p.low is None or low >= p.low) and \
-                (p.high is None or high <= p.high):
+        # compared as the kernels hold them, in float32: a value read back from a material's row
+        # (1e-06 is 9.9999997e-07 there) is within the bound it was checked against
+        with np.errstate(over="ignore"):
+            low32, high32 = np.float32(low), np.float32(high)
+        if np.isfinite(low32) and np.isfinite(high32) and (p.low is None or low32 >= np.float32(p.low)) and \
+                (p.high is None or high32 <= np.float32(p.high)):
             continue
         bound = f"[{p.low:g}, " if p.low is not None else "(-inf, "
         bound += f"{p.high:g}]" if p.high is not None else "inf)"

@@ -519,3 +519,47 @@ def test_a_material_table_is_compared_by_its_bytes():
     same_nan = rows.copy()
     assert _same_rows(rows, same_nan) and not _same_rows(table.rows, rows)
     assert not _same_rows(table.rows, table.rows[:2])
+
+
+@pytest.mark.parametrize("change,field", [
+    ({"rho_d": [2.0, 0.5, 0.5]}, "rho_d"), ({"rho_d": [-1.0, 0.5, 0.5]}, "rho_d"),
+    ({"rho_d": [np.inf, 0.5, 0.5]}, "rho_d"), ({"rho_d": [np.nan, 0.5, 0.5]}, "rho_d"),
+    ({"emission": [np.nan, 1.0, 1.0]}, "emission"), ({"emission": [-1.0, 1.0, 1.0]}, "emission"),
+    ({"blend": 2.0}, "rho_d"),
+])
+def test_a_material_changed_through_the_api_is_checked_as_a_file_is(change, field):
+    """A Material read from a scene, changed and set back (scene.materials[key] = m) is held to
+    its BSDF's declared ranges, as the readers hold a file's values: one UserError naming the
+    field, never a surface giving back more light than it receives or a NaN image."""
+    from pathtrace.materials import Material
+    scene = pathtrace.load("cornell-box")
+    m = scene.materials["white"]
+    if "emission" in change:
+        m.emission = np.array(change["emission"])
+    elif "blend" in change:
+        m = Material("blendbsdf", {"weight": 0.5}, components=(
+            Material("diffuse", {"rho_d": np.full(3, change["blend"])}), Material("diffuse", {"rho_d": np.full(3, 0.5)})))
+    else:
+        m.params = dict(m.params, rho_d=np.array(change["rho_d"]))
+    with pytest.raises(UserError) as e:
+        scene.materials["white"] = m
+    assert f"materials['white']: {field}:" in str(e.value) and "\n" not in str(e.value)
+
+
+def test_every_material_read_from_a_file_can_be_set_back_unchanged():
+    """The API's check compares as the kernels hold values, in float32: a value read back from
+    its row (a thickness of 1e-06 is 9.9999997e-07 there) is within the bound it was read under."""
+    for name in ("tests/scenes/meshes-larger.pbrt", "tests/scenes/roughplastic.xml", "materials", "cornell-box"):
+        scene = pathtrace.load(str(ROOT / name) if "/" in name else name)
+        for key in scene.materials.keys():
+            scene.materials[key] = scene.materials[key]
+
+
+def test_a_nan_emission_in_a_materials_row_is_named_as_not_a_number():
+    """A row changed beneath the API's checks (its packed array written directly) still stops at
+    the compile, with a line that says what the value is."""
+    from pathtrace.compiler.compiled import check_radiance
+    scene = pathtrace.load("cornell-box")
+    scene.materials.rows["emission"][scene.materials.index("light"), 0] = np.nan
+    with pytest.raises(UserError, match=r"material 'light': an emitted radiance that is not a number \(NaN\)$"):
+        check_radiance(scene)

@@ -508,8 +508,10 @@ def check_radiance(scene: Scene):
     if emission.size and not np.max(emission) <= MAX_RADIANCE:
         row = int(np.argmax(np.max(np.nan_to_num(emission, nan=np.inf), axis=1)))
         name = scene.materials.name_of(row) or f"#{row}"
-        raise UserError(f"{where}: material {short(name)}: an emitted radiance of {np.max(emission[row]):.3g} "
-                        f"is beyond {MAX_RADIANCE:g}, where the sums of samples overflow")
+        value = np.max(emission[row])
+        problem = (f"an emitted radiance of {value:.3g} is beyond {MAX_RADIANCE:g}, where the sums of samples overflow"
+                   if not np.isnan(value) else "an emitted radiance that is not a number (NaN)")
+        raise UserError(f"{where}: material {short(name)}: {problem}")
     if not brightest_env <= MAX_RADIANCE:
         source = "" if env.source == "constant" else f" (map {short(env.source)})"
         raise UserError(f"{where}: the environment's radiance times its intensity reaches {brightest_env:.3g}{source}, "

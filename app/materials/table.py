@@ -112,6 +112,19 @@ def surface_problem(material: Material) -> tuple | None:
     return None
 
 
+def value_problem(material: Material) -> ValueError | None:
+    """The first of a Material's values outside its BSDF's declared ranges, or an emission not
+    finite or negative, its blend components' included, as a ValueError ("<name>: <problem>"):
+    the check the readers make as they read, for a Material a user changed (the API's
+    `scene.materials[key] = m`)."""
+    emission = material.emission
+    if not isinstance(emission, Texture) and not np.all(np.isfinite(np.asarray(emission, np.float64)) &
+                                                        (np.asarray(emission, np.float64) >= 0)):
+        return ValueError(f"emission: must be finite and not negative, got {np.asarray(emission).tolist()}")
+    error = out_of_range(BSDFS[material.type].params, material.params) if material.type in BSDFS else None
+    return error or next((e for e in map(value_problem, material.components or ()) if e), None)
+
+
 def blend(weight, components: tuple) -> "Material":
     """A blendbsdf of two Materials, the second taken with probability `weight` (a number or a
     texture; None: the declared default), checked. Raises ValueError ("weight: <problem>", or
@@ -359,8 +372,11 @@ class MaterialTable:
             raise UserError(f"materials[{short(key)}]: give a pathtrace.Material (pathtrace.material({{...}}) "
                             f"makes one), got {short(material)}")
         try:
+            error = value_problem(material)
+            if error:
+                raise error
             self.set(self.index(key), material)
-        except ValueError as e:     # a parameter it lacks or left out (pack), a combination refused
+        except ValueError as e:     # a value out of range, a parameter it lacks or left out (pack), a combination refused
             raise UserError(f"materials[{short(key)}]: {e}") from None
 
     def keys(self) -> list:
