@@ -563,3 +563,13 @@ def test_a_nan_emission_in_a_materials_row_is_named_as_not_a_number():
     scene.materials.rows["emission"][scene.materials.index("light"), 0] = np.nan
     with pytest.raises(UserError, match=r"material 'light': an emitted radiance that is not a number \(NaN\)$"):
         check_radiance(scene)
+
+
+def test_a_misspelt_setting_is_refused():
+    """settings.sppp = 4 would change nothing: an AttributeError naming the settings there are,
+    as a camera's misspelt field gives."""
+    scene = pathtrace.load("simple")
+    with pytest.raises(AttributeError, match="render settings have no 'sppp'.*spp"):
+        scene.settings.sppp = 4
+    scene.settings.spp = 4
+    assert scene.settings.spp == 4

@@ -38,6 +38,12 @@ class RenderSettings:
     photon_radius: float = 0.0    # with bdpt: caustic photons (kernels/photons.cl) gathered within
                                   # this radius at the first pass, shrinking after; 0: none
 
+    def __setattr__(self, name, value):
+        # a misspelt setting (settings.sppp = 4) would change nothing: say so, as a camera does
+        if name not in self.__dataclass_fields__:
+            raise AttributeError(f"render settings have no {name!r} (they have: {', '.join(self.__dataclass_fields__)})")
+        super().__setattr__(name, value)
+
     @property
     def paths_end(self) -> bool:
         """Whether these settings end every path: without Russian roulette only max_depth
