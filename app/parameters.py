@@ -140,6 +140,8 @@ def out_of_range(parameters, values: dict) -> ValueError | None:
         low, high = value.bounds_as(p.kind) if hasattr(value, "bounds_as") else (np.min(value), np.max(value))
         # compared as the kernels hold them, in float32: a value read back from a material's row
         # (1e-06 is 9.9999997e-07 there) is within the bound it was checked against
+        # (a Python integer beyond any float, which the API may be given, as infinity)
+        low, high = (v if not isinstance(v, int) or abs(v) < 1e300 else (1 if v > 0 else -1) * np.inf for v in (low, high))
         with np.errstate(over="ignore"):
             low32, high32 = np.float32(low), np.float32(high)
         if np.isfinite(low32) and np.isfinite(high32) and (p.low is None or low32 >= np.float32(p.low)) and \

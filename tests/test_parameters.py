@@ -42,6 +42,12 @@ def test_one_range_check_serves_every_kind_and_a_texture_by_its_bounds():
     assert str(out_of_range(params, {"n": 10 ** 23})) == f"n: must be in 1..8, got {10 ** 23}"
     assert str(out_of_range(params, {"x": float("nan")})) == "x: must lie in [0, 1], got nan"
     assert str(out_of_range(params, {"c": [1, -2, 3]})) == "c: must lie in [0, inf), got from -2 to 3"
+    # compared in float32, as the kernels hold values: a bound read back from a row is within it,
+    # and what float32 cannot hold is not
+    tiny = (Parameter("t", "number", 0.5, low=1e-6, high=1e3),)
+    assert out_of_range(tiny, {"t": float(np.float32(1e-6))}) is None and float(np.float32(1e-6)) < 1e-6
+    assert str(out_of_range(params, {"c": [1, 1, 1e39]})) == "c: must lie in [0, inf), got from 1 to 1e+39"
+    assert str(out_of_range(params, {"x": 10 ** 400})) == "x: must lie in [0, 1], got inf"
     # a number's texture by its luminance, as the kernels read it; a colour's by its channels
     red = Texture("constant", {"value": np.array([5.0, 0.0, 0.0]), "to_uv": np.eye(3)})
     assert str(out_of_range(params, {"x": red})) == "x: must lie in [0, 1], got 1.063"
