@@ -53,6 +53,11 @@ class grouped_warnings:
             warn(messages[0] if len(messages) == 1 else f"{len(messages)} like this; the first: {messages[0]}")
 
 
+def with_article(word: str) -> str:
+    """The word after its indefinite article: "an orthographic", "a perspective"."""
+    return f"{'an' if word[:1].lower() in 'aeiou' else 'a'} {word}"
+
+
 def format_bytes(n: float) -> str:
     """A size for messages: '512 MB', '6.4 GB'."""
     for unit, size in (("GB", 1 << 30), ("MB", 1 << 20), ("kB", 1 << 10)):

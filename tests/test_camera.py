@@ -167,7 +167,7 @@ SPHERE = {"center": [0, 0, 0], "radius": 1, "material": {"type": "diffuse", "rho
     ({"aperture_radius": -0.1, "focus_distance": 2}, "camera.aperture_radius: must be in [0, 1e+30]"),
     ({"aperture_radius": 0.1, "focus_distance": 0}, "camera.focus_distance: must be in (0, 1e+30]"),
     ({"type": "orthographic", "height": 1e31}, "camera.height: must be in (0, 1e+30]"),
-    ({"type": "orthographic", "vfov": 30}, "camera.vfov: a orthographic camera has no vfov"),
+    ({"type": "orthographic", "vfov": 30}, "camera.vfov: an orthographic camera has no vfov"),
     ({"type": "fisheye"}, f"camera.type: must be one of {', '.join(toml_names())}, got 'fisheye'"),
     ({"type": ["perspective"]}, f"camera.type: must be one of {', '.join(toml_names())}, got ['perspective']")])
 def test_bad_cameras_are_one_line_naming_the_field(camera, problem):

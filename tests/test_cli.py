@@ -148,6 +148,10 @@ BAD_FILES = [
     (GOOD + "\nx = " + "[" * 1000 + "]" * 1000 + "\n", "nested too deeply"),
     (GOOD.replace('type = "diffuse"', 'type = ["diffuse"]'), "spheres[0].material.type: must be one of"),
     (GOOD.replace('material = { type = "diffuse", rho_d = 0.5 }', 'material = { type = {} }'), "spheres[0].material.type: must be one of"),
+    # a string where a texture may stand is a texture's name; a material is a name or a table
+    (GOOD.replace("rho_d = 0.5 }", 'rho_d = 0.5, Le = "glow" }'), "spheres[0].material.Le: no texture named 'glow'"),
+    (GOOD.replace('material = { type = "diffuse", rho_d = 0.5 }', "material = 3"),
+     "spheres[0].material: must be a material's name or a table, got 3"),
 ]
 
 

@@ -14,6 +14,7 @@ from typing import ClassVar
 
 import numpy as np
 
+from pathtrace.errors import with_article
 from pathtrace.parameters import Parameter
 
 MAX_EXTENT = 1e30     # the largest aperture, focus distance or view height a file may give
@@ -133,7 +134,7 @@ class Camera:
         # a field of another camera type set on this one would change nothing: say so
         names = [f.name for f in dataclasses.fields(self)]
         if name not in names:
-            raise AttributeError(f"a {self.type} camera has no {name!r} (its fields: {', '.join(names)}; "
+            raise AttributeError(f"{with_article(self.type)} camera has no {name!r} (its fields: {', '.join(names)}; "
                                  "Camera.as_type makes another type)")
         super().__setattr__(name, value)
 

@@ -14,7 +14,7 @@ from pathtrace.filters import PixelFilter
 from pathtrace.lights import DELTA_LIGHTS
 from pathtrace.rendering.choices import RUSSIAN_ROULETTE
 from pathtrace.scene.environment import Environment
-from pathtrace.errors import UserError, short
+from pathtrace.errors import UserError, short, with_article
 from pathtrace.materials import BSDFS, Material
 from pathtrace.materials.surface import SURFACE, dressed
 from pathtrace.materials.table import PERTURBATIONS, blend
@@ -150,7 +150,11 @@ class _Reader(TomlValues):
             if not isinstance(value, (dict, str)):
                 self.fail(key, f"must be a texture (a name or a table), got {short(value)}")
             return self.texture_value(value, key)
-        if param.texture and (isinstance(value, dict) or (isinstance(value, str) and value in self.texture_tables)):
+        # a string where a texture may stand, and no name or choice may, is a texture's name: one
+        # [textures] lacks is said to be so, not that a number was expected
+        names_a_texture = isinstance(value, str) and (value in self.texture_tables or not (
+            getattr(param, "names", None) or param.choices or param.kind in ("name", "string")))
+        if param.texture and (isinstance(value, dict) or names_a_texture):
             texture = self.texture_value(value, key)
             error = parameters.out_of_range((param,), {param.name: texture})
             if error:
@@ -290,11 +294,11 @@ class _Reader(TomlValues):
         noun, own = where.rpartition(".")[2], {"type", *common, *(p.name for p in cls.parameters if p.name)}
         for key in data:
             if key not in own and any(key in {p.name for p in c.parameters} for c in types):
-                self.fail(f"{where}.{key}", f"a {kind} {noun} has no {key}")
+                self.fail(f"{where}.{key}", f"{with_article(kind)} {noun} has no {key}")
         self.table(data, where, own)
         absent = parameters.missing(cls.parameters, data)
         if absent:
-            self.fail(where, f"a {name} {noun} needs {' and '.join(repr(p.name) for p in absent)}")
+            self.fail(where, f"{with_article(name)} {noun} needs {' and '.join(repr(p.name) for p in absent)}")
         return self.declared(cls.parameters, data, where)
 
     def material_ref(self, builder, named, data, where):
@@ -305,6 +309,8 @@ class _Reader(TomlValues):
             return named[m]
         if m is None:
             self.fail(where, "missing 'material'")
+        if not isinstance(m, dict):
+            self.fail(f"{where}.material", f"must be a material's name or a table, got {short(m)}")
         return builder.material(self.material(m, f"{where}.material"))
 
     def shape(self, data, where, builder, rows) -> Shape:
