@@ -325,6 +325,8 @@ def test_convert_writes_a_pbrt_scene_as_toml_that_reads_the_same(tmp_path):
 @pytest.mark.parametrize("text,expected", [
     ('Shape "trianglemesh" "point3 P" [ 0 0 0  1 0 0', "unterminated '['"),
     ('WorldBegin\nShape "trianglemesh\n', "s.pbrt:2: an unterminated string"),
+    ('WorldBegin\nMaterial "diffuse" "spectrum reflectance" [ "metal-Cu-eta"\nShape "sphere" "float radius" [ 1 ]\n',
+     "s.pbrt:2: 'reflectance': its '[' is not closed by a ']' before a list of numbers at line 3"),
     ('WorldBegin\nFrobnicate 1 2 3\n', "s.pbrt:2: unknown directive 'Frobnicate'"),
     ('Camera "perspective" "float fov" [ "wide" ]\nWorldBegin\n', "float values must be numbers"),
     ('LookAt 0 0 0  0 0 1  0 1\nWorldBegin\n', "expected a number"),

@@ -368,7 +368,10 @@ def _values(tokens: Tokens, ptype: str, name: str, offset: int):
             if kind == "end":
                 tokens.fail(offset, f"'{cut(name)}': an unterminated '['")
             if kind not in ("string", "word"):
-                tokens.fail(at, f"'{cut(name)}': unexpected {describe((kind, v, at))}")
+                # a list of strings holds no numbers and no list: its ']' is missing (the file
+                # went on to the next directive), which is told where the list began
+                tokens.fail(start, f"'{cut(name)}': its '[' is not closed by a ']' before "
+                                   f"{describe((kind, v, at))} at line {tokens.line(at)}")
             items.append((kind, v, at))
     elif kind in ("string", "word"):
         items = [(kind, value, at)]
