@@ -889,3 +889,16 @@ def test_bdpt_in_media_matches_mitsuba(backend, name):
     m, v = render(backend, scene, "bdpt", 48, (w, h))
     ok, p, threshold = z_test(m, v, ref["mean"].astype(np.float64), ref["var_of_mean"].astype(np.float64), block=4)
     assert ok, (p, threshold)
+
+
+def test_the_depth_warning_names_the_integrator_and_the_settings(capsys, monkeypatch):
+    """A depth beyond what a BDPT program holds is said once per value and integrator, naming
+    the integrator (light tracing's warning had said bdpt) and the render's settings, which a
+    command line sets as well as a scene."""
+    from pathtrace.rendering import bdpt
+    monkeypatch.setattr(bdpt, "_warned", set())
+    assert bdpt.depth(20, "ptracer") == bdpt.MAX_DEPTH and bdpt.depth(20, "ptracer") == bdpt.MAX_DEPTH
+    assert bdpt.depth(0, "bdpt") == bdpt.MAX_DEPTH and bdpt.depth(3, "bdpt") == 3
+    assert capsys.readouterr().err.splitlines() == [
+        f"pathtrace: warning: ptracer: paths end at depth {bdpt.MAX_DEPTH} (the render's settings ask for max_depth 20)",
+        f"pathtrace: warning: bdpt: paths end at depth {bdpt.MAX_DEPTH} (the render's settings ask for no limit)"]

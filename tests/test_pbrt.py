@@ -485,3 +485,17 @@ def test_coatedconductor_is_pbrts_layered_material(tmp_path):
     assert s.materials.rows[s.meshes[1].material]["flags"] & 2      # MATERIAL_DELTA
     assert "'nsamples': must lie in [1, 16], got 100" in fails(
         tmp_path, 'WorldBegin\nMaterial "coatedconductor" "integer nsamples" 100\n' + FLOOR)
+
+
+def test_unnamed_analytic_shapes_are_numbered_by_kind(tmp_path):
+    """Each reader's unnamed sphere, disk, ... is "<kind> N", counted by kind whichever range it
+    lands in: whole spheres go to the sphere range, where every one had been named "sphere 0"
+    (a helper's run of `convert`). The Mitsuba reader names them alike."""
+    (tmp_path / "s.pbrt").write_text(
+        'LookAt 0 0 5  0 0 0  0 1 0\nCamera "perspective"\nWorldBegin\nLightSource "point" "rgb I" [ 1 1 1 ]\n'
+        'Shape "sphere" "float radius" 1\nTranslate 3 0 0\nShape "sphere" "float radius" 1\n'
+        'Shape "disk" "float radius" 1\nShape "disk" "float radius" 2\n')
+    s = load_scene(str(tmp_path / "s.pbrt"))
+    assert list(s.sphere_names) == ["sphere 0", "sphere 1"] and [x.name for x in s.shapes] == ["disk 0", "disk 1"]
+    blend = load_scene(str(Path(__file__).parent / "scenes" / "blend.xml"))
+    assert list(blend.sphere_names) == [f"sphere {k}" for k in range(len(blend.spheres))]

@@ -76,7 +76,8 @@ def add_program_option(p: argparse.ArgumentParser, default: str):
     p.add_argument("--program", choices=PROGRAM_MODES,
                    help="which kernels render: auto (a generic program, built once and cached, until "
                         "the scene's own is built in the background), specialised (wait for the "
-                        "scene's own: repeatable renders) or generic (never build another); default "
+                        "scene's own: repeatable renders) or generic (never build another for the path tracer; "
+                        "bdpt and ptracer, which it does not hold, build their own); default "
                         f"{PROGRAM_ENV} if set, else {default}")
 
 

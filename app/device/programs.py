@@ -35,7 +35,8 @@ from pathtrace.device.features import Features
 PROGRAM_MODES = ("auto", "specialised", "generic")
 """auto: the generic program until the scene's own is built (in the background); specialised:
 wait for the scene's own program (repeatable renders; the tests marked `specialised`); generic:
-never build another (repeatable too, the tests' default; the generic program's speed, measured by
+never build another for the path tracer (BDPT and light tracing, which no generic program holds,
+build their own; repeatable too, the tests' default; the generic program's speed, measured by
 `pathtrace bench`)."""
 PROGRAM_ENV = "PATHTRACE_PROGRAM"    # the mode where no --program is given
 BUILD_THREAD = "pathtrace-build"

@@ -13,16 +13,16 @@ BDPT defaults to 5 bounces (depth 6)."""
 _warned = set()
 
 
-def depth(max_depth: int) -> int:
-    """The depth a BDPT program is built for: max_depth, or MAX_DEPTH where that asks for more
-    (0: no limit), said once per value. BDPT has no Russian roulette (pbrt-v4's has none):
-    paths end at this depth."""
+def depth(max_depth: int, integrator: str = "bdpt") -> int:
+    """The depth a BDPT program (bdpt's, or ptracer's) is built for: max_depth, or MAX_DEPTH where
+    that asks for more (0: no limit), said once per value and integrator. BDPT has no Russian
+    roulette (pbrt-v4's has none): paths end at this depth."""
     if 1 <= max_depth <= MAX_DEPTH:
         return max_depth
-    if max_depth not in _warned:
-        _warned.add(max_depth)
+    if (max_depth, integrator) not in _warned:
+        _warned.add((max_depth, integrator))
         asked = "no limit" if max_depth == 0 else f"max_depth {max_depth}"
-        warn(f"bdpt: paths end at depth {MAX_DEPTH} (the scene asks for {asked})")
+        warn(f"{integrator}: paths end at depth {MAX_DEPTH} (the render's settings ask for {asked})")
     return MAX_DEPTH
 
 

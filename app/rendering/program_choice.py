@@ -86,7 +86,7 @@ class ProgramChoice:
         if integrator == "path":
             return features
         bdpt.check(self.scene.name, features, integrator, self.compiled.lights)
-        return replace(features, light_tree=False, bdpt=bdpt.depth(self.settings.max_depth),
+        return replace(features, light_tree=False, bdpt=bdpt.depth(self.settings.max_depth, integrator),
                        light_tracing=integrator == "ptracer",
                        photons=self.uses_photons(integrator), kernels=features.kernels if self.all_kernels else "bdpt")
 

@@ -186,6 +186,14 @@ class SceneBuilder:
         self.sphere_media = []
         self.shapes = []
         self.objects, self.instance_object, self.instance_to_world = [], [], []
+        self.shapes_named = {}       # analytic shapes named so far, by kind (shape_name)
+
+    def shape_name(self, kind: str) -> str:
+        """A name for a reader's unnamed analytic shape of `kind`: "sphere 0", "sphere 1", ...,
+        numbered by kind whatever range it lands in (a whole sphere goes to the sphere range)."""
+        count = self.shapes_named.get(kind, 0)
+        self.shapes_named[kind] = count + 1
+        return f"{kind} {count}"
 
     def material(self, material) -> int:
         """A row for a Material (added) or an existing row index."""

@@ -544,7 +544,7 @@ class _Reader(XmlScene):
             problem = SHAPES[kind].check(values)
             if problem:
                 fail(node, f"the {kind}'s {problem}")
-            shape = Shape(name or f"{kind} {len(self.builder.shapes)}", kind, values, m @ local, material,
+            shape = Shape(name or self.builder.shape_name(kind), kind, values, m @ local, material,
                           flip=flip, texture_uv=texture_uv, media=interface)
             if SHAPES[kind].too_flat(shape):
                 # Mitsuba 3 would intersect it through a near-singular inverse; the kernels cannot

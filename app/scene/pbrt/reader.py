@@ -372,7 +372,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
             raise UserError(f"{where}: the {kind}'s {problem}")
         m = self.state.ctm
         values, local, texture_uv = k.from_pbrt(values)
-        shape = Shape(f"{kind} {len(self.builder.shapes)}", kind, values, m @ local, 0,
+        shape = Shape(self.builder.shape_name(kind), kind, values, m @ local, 0,
                       flip=self.state.reverse != transform.flips_handedness(m), texture_uv=texture_uv, media=media)
         lo, hi = shape.bounds(k)
         self.check_extent(np.abs(np.array([lo, hi])), where)
