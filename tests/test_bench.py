@@ -232,3 +232,18 @@ def test_no_cold_builds_nothing_the_cache_does_not_hold(backend, monkeypatch):
     monkeypatch.setattr(report, "built_before", lambda device, entry: True)
     assert report.kernel_build_times(backend, cold=False) == (None, 0.25) and len(built) == 1
     assert report.kernel_build_times(backend, cold=True) == (0.25, 0.25) and built[1] == {"use_cache": False}
+
+
+@pytest.mark.parametrize("args,message", [
+    (["--first-image", "--load"], "--first-image and --load time different things"),
+    (["--load", "--builds"], "--load and --builds time different things"),
+    (["--builds", "--denoise"], "--builds and --display or --denoise time different things"),
+    (["--load", "--size", "160x90"], "--size: bench --load times each scene's loading at 64x64"),
+    (["--load-scene", "x.toml", "--size", "160x90"], "--size: bench --load"),
+])
+def test_bench_modes_one_at_a_time_and_without_unused_options(args, message):
+    """bench's modes each print a table of their own: two at once, or --size given to --load,
+    which renders at 64x64 whatever it is told, is one line before any timed run (a helper's run
+    had --first-image --load time the first images alone, and --load take --size silently)."""
+    r = in_process("bench", *args)
+    assert r.returncode == 1 and message in r.stderr and len(r.stderr.splitlines()) == 1, r.stderr

@@ -9,7 +9,19 @@ from pathtrace.cli.options import (PATH_SORT_ALONE, _count, _int_range, _size, a
 
 def cmd_bench(args):
     from pathtrace.bench import report as bench
+    from pathtrace.errors import UserError
 
+    # each mode times something else, in a table of its own: one at a time, and none given an
+    # option it would not use (--load renders at 64x64, and had taken --size without a word)
+    modes = [flags for flags, on in ((("--first-image",), args.first_image), (("--load",), args.load),
+                                     (("--builds",), args.builds is not None),
+                                     (("--display", "--denoise"), args.display or args.denoise)) if on]
+    if len(modes) > 1:
+        raise UserError(f"{' or '.join(modes[0])} and {' or '.join(modes[1])} time different things, each in a "
+                        "table of its own: give one")
+    if args.size and (args.load or args.load_scene and not args.first_image):
+        raise UserError("--size: bench --load times each scene's loading at 64x64 (64x36 for the height field), "
+                        "whatever the size; leave --size out")
     timing_size = args.size or ((320, 180) if args.quick else (1280, 720))
     load_rows = None     # with --load, the generated rows --scenes names (before validate's default)
     if (args.load or args.load_scene) and not args.first_image and args.scenes:
