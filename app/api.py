@@ -8,7 +8,6 @@ stay on the device between renders, and only what changed since the last render 
 the settings, the materials, the environment) is uploaded again; a change of geometry (spheres
 or meshes) compiles it anew."""
 
-import hashlib
 import threading
 import time
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -202,14 +201,12 @@ class _Prepared:
         from pathtrace.compiler.compiled import compile_before_devices
         from pathtrace.rendering.multidevice import DeviceGroup
         start = time.perf_counter()
-        with ThreadPoolExecutor(1) as pool:
-            geometry = pool.submit(_geometry_digest, scene)     # hashlib releases the GIL
-            compiled = compile_before_devices(scene, build_progress)     # while the devices open
-            asked = time.perf_counter()
-            self.backends = open_devices(device)
-            waited = time.perf_counter() - asked
-            self.group = DeviceGroup(self.backends, compiled, settings=settings, aovs=aovs)
-            self.geometry = geometry.result()
+        compiled = compile_before_devices(scene, build_progress)     # while the devices open
+        self.geometry = compiled.geometry_digest
+        asked = time.perf_counter()
+        self.backends = open_devices(device)
+        waited = time.perf_counter() - asked
+        self.group = DeviceGroup(self.backends, compiled, settings=settings, aovs=aovs)
         if phases:
             # the renderers' construction includes building the kernels specialised to the
             # scene, which it does not report on its own: what is left of it once the tree is
@@ -252,8 +249,9 @@ def prepare(scene: Scene, device="auto", build_progress=None, phases=None, setti
     and `aovs`, those of the render it is made for: the renderers' first programs are built for
     them, beside the tree (a render's nee=False had a program built for the scene's NEE first,
     and its AOVs' after the tree)."""
+    from pathtrace.compiler.geometry_cache import geometry_digest
     kept = scene.__dict__.get("_prepared")
-    if kept is not None and kept.geometry == _geometry_digest(scene) and kept.backends == open_devices(device):
+    if kept is not None and kept.geometry == geometry_digest(scene) and kept.backends == open_devices(device):
         return kept
     scene.__dict__.pop("_prepared", None)    # free the old buffers before making new ones
     scene._prepared = _Prepared(scene, device, build_progress, phases, settings, aovs)
@@ -266,30 +264,6 @@ def _contents(compiled) -> str:
     counts = [(compiled.num_triangles - n_shapes, "triangle"), (compiled.num_spheres, "sphere"),
               (n_shapes, "analytic shape")]
     return ", ".join(f"{n:,} {what}{'s' * (n != 1)}" for n, what in counts if n) or "nothing"
-
-
-def _geometry_digest(scene: Scene) -> bytes:
-    """A digest of everything the BVH and the primitive arrays are built from."""
-    h = hashlib.blake2b(digest_size=16)
-    arrays = [scene.spheres, scene.sphere_material]
-    instances = scene.instances
-    if instances is not None:
-        arrays += [instances.object, instances.to_world]
-    objects = instances.objects if instances is not None else []
-    meshes = scene.meshes + [m for o in objects for m in o.meshes]
-    for m in meshes:
-        arrays += [m.vertices, m.faces, np.zeros(0) if m.normals is None else m.normals,
-                   np.zeros(0) if m.uvs is None else m.uvs, np.array([m.material])]
-    for a in arrays:
-        a = np.ascontiguousarray(a)
-        h.update(str((a.dtype.str, a.shape)).encode())
-        h.update(a.data)
-    # the media and what bounds them compile with the primitives (pathtrace.compiler.compiled)
-    h.update(repr((scene.media, scene.sphere_media, [m.media for m in meshes])).encode())
-    # analytic shapes (objects' are copied into scene.shapes)
-    h.update(repr([(s.kind, tuple(map(float, s.params)), np.asarray(s.to_world, np.float64).tolist(), s.material,
-                    s.flip, s.texture_uv, s.media) for s in scene.shapes]).encode())
-    return h.digest()
 
 
 def _same_rows(a: np.ndarray, b: np.ndarray) -> bool:

@@ -112,6 +112,7 @@ class CompiledScene:
         # a large scene compiled before takes its tree and rows from the geometry cache, and its
         # corners are not needed
         start = time.perf_counter()
+        self.geometry_digest = geometry_cache.geometry_digest(scene)
         self._kept_path = geometry_cache.entry_path(self)
         self._kept = geometry_cache.read_entry(self._kept_path) if self._kept_path else None
         self._kept_seconds = time.perf_counter() - start

@@ -26,7 +26,6 @@ from pathtrace.compiler.bvh import BVH
 from pathtrace.device.types import BVH_NODE, TRIANGLE
 from pathtrace.io import cache_files
 from pathtrace.resources import resource_dir
-from pathtrace.scene.media import packed_interfaces
 
 MAX_BYTES = 2 << 30
 # an entry's arrays, in its order, each with the type of its rows
@@ -54,30 +53,44 @@ def source_digest() -> bytes:
     return _source_digest
 
 
+def geometry_digest(scene) -> bytes:
+    """A digest of everything a scene's tree and primitive rows are made from: its spheres, their
+    materials and media, its meshes' arrays, materials and media, its instances and analytic
+    shapes. A CompiledScene holds its scene's (geometry_digest), by which a scene rendered again
+    in a process is compiled anew only where it changed (pathtrace.api.prepare), and which keys
+    this cache's entries."""
+    h = hashlib.sha256()
+    arrays = [scene.spheres, scene.sphere_material]
+    instances = scene.instances
+    if instances is not None:
+        arrays += [instances.object, instances.to_world]
+    objects = instances.objects if instances is not None else []
+    meshes = scene.meshes + [m for o in objects for m in o.meshes]
+    for m in meshes:
+        arrays += [m.vertices, m.faces, np.zeros(0) if m.normals is None else m.normals,
+                   np.zeros(0) if m.uvs is None else m.uvs, np.array([m.material])]
+    for a in arrays:
+        a = np.ascontiguousarray(a)
+        h.update(str((a.dtype.str, a.shape)).encode())
+        h.update(a.data)
+    # the media and what bounds them compile with the primitives (pathtrace.compiler.compiled)
+    h.update(repr((scene.media, scene.sphere_media, [m.media for m in meshes])).encode())
+    # analytic shapes (objects' are copied into scene.shapes)
+    h.update(repr([(s.kind, tuple(map(float, s.params)), np.asarray(s.to_world, np.float64).tolist(), s.material,
+                    s.flip, s.texture_uv, s.media) for s in scene.shapes]).encode())
+    return h.digest()[:16]
+
+
 def entry_path(compiled) -> Path | None:
     """Where a CompiledScene's entry is, or None where its geometry is not kept (too small, with
-    analytic shapes or a two-level tree, or the cache turned off)."""
-    where, scene = bvh_cache.folder(), compiled.scene
-    if where is None or scene.shapes or compiled.two_level \
+    analytic shapes or a two-level tree, or the cache turned off): named by the digest of its
+    scene's geometry (geometry_digest), the source and what the compile chose of it."""
+    where = bvh_cache.folder()
+    if where is None or compiled.scene.shapes or compiled.two_level \
             or compiled.num_spheres + compiled.num_triangles < bvh_cache.MIN_PRIMITIVES:
         return None
-    h = hashlib.sha256(source_digest())
-    meshes = compiled.meshes
-
-    def add(a):
-        a = np.ascontiguousarray(a)
-        h.update(f"{a.dtype.str}{a.shape}".encode())
-        h.update(a)
-
-    add(np.array([compiled.num_spheres, compiled.lone_spheres, len(meshes), bool(scene.media)], np.int64))
-    add(scene.spheres)
-    add(scene.sphere_material)
-    add(packed_interfaces(scene.sphere_media) if scene.sphere_media is not None else np.zeros(0))
-    add(np.array([m.material for m in meshes], np.int64))
-    add(packed_interfaces([m.media for m in meshes]))
-    for m in meshes:
-        for a in (m.vertices, m.faces, m.normals, m.uvs):
-            add(np.zeros(0, np.int8) if a is None else a)
+    h = hashlib.sha256(source_digest() + compiled.geometry_digest)
+    h.update(np.array([compiled.lone_spheres], np.int64).tobytes())
     return where / f"{h.hexdigest()[:32]}.geometry"
 
 
