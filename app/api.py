@@ -117,7 +117,7 @@ class DevicesOpening:
         pool.shutdown(wait=False)       # the thread ends with its work; the interpreter waits for it
 
     def _open(self, device):
-        from pathtrace.compiler.bvh import builder_for, builder_wanted
+        from pathtrace.compiler.bvh import builder_for, builder_wanted, tree_likely
         start = time.perf_counter()
         try:
             backends = open_devices(device)
@@ -129,7 +129,7 @@ class DevicesOpening:
         self._opened.set_result(backends)
         try:
             for backend in backends if builder_wanted() else ():
-                builder_for(backend.queue)
+                builder_for(backend.queue, ahead=tree_likely())
         except Exception:       # a tree's build asks again (builder_for keeps no failure), and says why
             pass
 

@@ -56,10 +56,12 @@ def program_mode(request, monkeypatch):
 def no_tree_expected(monkeypatch):
     """Each test starts without an earlier one's expectation of a tree (pathtrace.compiler.bvh:
     expect_tree), under which the builders it makes would compile their kernels ahead, or its
-    word that a tree needed no device (no_device_tree), under which devices open without them."""
+    word that a tree needed no device (no_device_tree), under which devices open without them,
+    or its reader's word that a scene was large (tree_likely)."""
     from pathtrace.compiler import bvh
     monkeypatch.setattr(bvh, "_tree_expected", False)
     monkeypatch.setattr(bvh, "_tree_without_device", False)
+    bvh.large_scene_named.clear()
 
 
 @pytest.fixture(scope="session")

@@ -439,7 +439,7 @@ def test_devices_open_in_a_thread_of_their_own_and_give_their_error_when_asked(m
     from pathtrace.compiler import bvh
     monkeypatch.setattr(bvh, "_builders", {})        # none built by the tests before this one
     held, builder_for = threading.Event(), bvh.builder_for
-    monkeypatch.setattr(bvh, "builder_for", lambda queue=None: builder_for(queue) if held.wait(30) else None)
+    monkeypatch.setattr(bvh, "builder_for", lambda queue=None, ahead=False: builder_for(queue, ahead) if held.wait(30) else None)
     opening = api.DevicesOpening(DEVICE)
     backends = opening.result()
     assert backends == api.open_devices(DEVICE) and opening.seconds > 0 and not bvh._builders

@@ -6,6 +6,8 @@ import os
 import re
 import subprocess
 import sys
+import threading
+import time
 
 import numpy as np
 import pyopencl as cl
@@ -175,6 +177,44 @@ def test_a_devices_opening_forgets_the_last_scenes_tree(monkeypatch):
     assert not bvh_module.builder_wanted()
     api.DevicesOpening("cpu").result()
     assert bvh_module.builder_wanted()
+
+
+def test_a_scene_of_large_mesh_files_has_the_opening_compile_the_builders_kernels_ahead(backend, tmp_path,
+                                                                                         monkeypatch):
+    """A reader that names LARGE_SCENE_BYTES of mesh files or more says, before its compile can,
+    that a tree is likely (tree_likely): a devices' opening that ends after that has its builder
+    compile its kernels ahead, beside the rest of the reading. A scene of fewer bytes says
+    nothing, and a new opening forgets the word."""
+    from pathtrace import api
+    from pathtrace.bench.scenes import write_obj_meshes
+    from pathtrace.scene import load_scene, meshes
+    one, two = tmp_path / "one", tmp_path / "two"
+    one.mkdir(), two.mkdir()
+    small, large = write_obj_meshes(one, count=1), write_obj_meshes(two, count=2)
+    monkeypatch.setattr(meshes, "LARGE_SCENE_BYTES", (one / "o0000.obj").stat().st_size + 1)
+    monkeypatch.setattr(bvh_module, "_builders", {})
+    asked = []
+    monkeypatch.setattr(bvh_module.Builder, "compile_ahead", lambda self: asked.append(self))
+    read = threading.Event()
+    monkeypatch.setattr(api, "open_devices", lambda device: [backend] if read.wait(30) else [])
+
+    def opened_after(path):
+        opening = api.DevicesOpening("cpu")
+        load_scene(str(path))
+        likely = bvh_module.tree_likely()
+        read.set()
+        opening.result()
+        deadline = time.monotonic() + 30
+        while backend.queue not in bvh_module._builders and time.monotonic() < deadline:
+            time.sleep(0.01)
+        read.clear()
+        return likely
+    assert not opened_after(small) and asked == []
+    monkeypatch.setattr(bvh_module, "_builders", {})
+    assert opened_after(large) and asked == [bvh_module._builders[backend.queue]]
+    api.DevicesOpening("cpu")
+    assert not bvh_module.tree_likely()
+    read.set()
 
 
 def test_identical_boxes_still_split():

@@ -38,6 +38,7 @@ import numpy as np
 import pyopencl as cl
 
 from pathtrace.device.types import BVH_NODE
+from pathtrace.scene.meshes import large_scene_named
 
 # these three reach kernels/build/collapse.cl as build options
 MAX_LEAF_SIZE = 4
@@ -194,14 +195,15 @@ def building() -> bool:
     return _builders_lock.locked()
 
 
-def builder_for(queue: cl.CommandQueue = None) -> Builder:
+def builder_for(queue: cl.CommandQueue = None, ahead: bool = False) -> Builder:
     """The builder on `queue`'s device, or, without one, on the first device (GPUs first) whose
-    platform builds it; made once per queue, by the first thread to ask."""
+    platform builds it; made once per queue, by the first thread to ask. Its kernels compile
+    ahead (Builder.compile_ahead) where a tree is expected, or where `ahead`."""
     with _builders_lock:
         if queue not in _builders:
             _builders[queue] = Builder(queue) if queue is not None else _first_working_builder()
         builder = _builders[queue]
-    if _tree_expected:
+    if _tree_expected or ahead:
         builder.compile_ahead()
     return builder
 
@@ -231,6 +233,17 @@ def tree_unknown():
     begun before its scene is compiled, makes builders unless that scene's tree needs none."""
     global _tree_without_device
     _tree_without_device = False
+    large_scene_named.clear()
+
+
+def tree_likely() -> bool:
+    """Whether the scene is likely to need a tree built on a device, before its compile knows
+    (expect_tree): its reader has named large mesh files (pathtrace.scene.meshes). A devices'
+    opening then has the builder's kernels compiled ahead beside the reading, which a new scene
+    of 870,400 triangles in 850 OBJ files spent 1.2 s on with one of two cores idle
+    (docs/notes/performance-2026-12.md, twenty-fifth session); a scene read from the scene
+    cache names none, and a small one's tree is built on the host."""
+    return _tree_expected or large_scene_named.is_set()
 
 
 def builder_wanted() -> bool:

@@ -32,6 +32,14 @@ MAX_TRIANGLES = 64_000_000          # ~6 GB of device memory (docs/performance.m
 MAX_COORDINATE = 1e18
 
 
+# set where a scene being read names LARGE_SCENE_BYTES of mesh files or more (MeshFiles.add): a tree
+# of more primitives than the host builds, which a new scene builds on a device, whose builder's
+# kernels a devices' opening then compiles beside the reading (pathtrace.compiler.bvh.tree_likely);
+# cleared as devices begin to open for the next scene (tree_unknown)
+large_scene_named = threading.Event()
+LARGE_SCENE_BYTES = 512 << 10
+
+
 class MeshData(NamedTuple):
     vertices: np.ndarray          # (V, 3) float64
     faces: np.ndarray             # (F, 3) int64
@@ -108,6 +116,7 @@ class MeshFiles:
         self.pool = None
         self.processes = None
         self.processed = {}    # path -> (where, Future) of its requests read in processes, not read() yet
+        self.named_bytes = 0   # the sizes of the files of the requests
         cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
         self.workers = min(cores, 32)
         self.add(requests)
@@ -120,6 +129,9 @@ class MeshFiles:
                 size = path.stat().st_size
             except (OSError, ValueError):      # read_mesh says what is wrong, when asked
                 continue
+            self.named_bytes += size
+            if self.named_bytes >= LARGE_SCENE_BYTES:
+                large_scene_named.set()
             if size >= self.LARGE:
                 self.waiting.setdefault(path, deque()).append(len(self.requests))
                 self.requests.append((path, where))
