@@ -27,13 +27,6 @@ def same(a, b):
             and a.depth == b.depth and a.cost == b.cost)
 
 
-def cached_bvh(*args, **kwargs):
-    """cache.cached_bvh, its entry's write (in a thread of its own) waited for."""
-    bvh = cache.cached_bvh(*args, **kwargs)
-    cache_files.wait_for_writes()
-    return bvh
-
-
 @pytest.fixture
 def folder(tmp_path, monkeypatch):
     monkeypatch.setenv("PATHTRACE_BVH_CACHE", str(tmp_path / "bvh"))
@@ -46,31 +39,31 @@ def no_build(*args):
 
 def test_a_tree_is_read_back_as_built_and_not_built_again(folder, monkeypatch):
     lo, hi = boxes()
-    built = cached_bvh(lo, hi, N // 2)
+    built = cache.cached_bvh(lo, hi, N // 2)
     assert same(built, build_bvh(lo, hi, N // 2))
     entry, = folder.glob("*.bvh")
     monkeypatch.setattr(cache, "build_bvh", no_build)
     progress = []
-    read = cached_bvh(lo, hi, N // 2, progress=progress.append)
+    read = cache.cached_bvh(lo, hi, N // 2, progress=progress.append)
     assert same(read, built) and read.nodes.flags.writeable and progress == [1.0]
 
 
 def test_the_key_is_the_boxes_and_the_spheres_count(folder):
     lo, hi = boxes()
-    cached_bvh(lo, hi, 0)
-    cached_bvh(lo, hi, N)            # the same boxes, the kinds split elsewhere
+    cache.cached_bvh(lo, hi, 0)
+    cache.cached_bvh(lo, hi, N)            # the same boxes, the kinds split elsewhere
     moved = lo.copy()
     moved[7, 1] = np.nextafter(moved[7, 1], np.float32(0))
-    cached_bvh(moved, hi, 0)         # one float's last bit
+    cache.cached_bvh(moved, hi, 0)         # one float's last bit
     assert len(list(folder.glob("*.bvh"))) == 3
 
 
 def test_small_scenes_and_a_cache_turned_off_write_nothing(folder, monkeypatch):
     lo, hi = boxes(n=N - 1)
-    cached_bvh(lo, hi)
+    cache.cached_bvh(lo, hi)
     assert not folder.exists()
     monkeypatch.setenv("PATHTRACE_BVH_CACHE", "0")
-    cached_bvh(*boxes())
+    cache.cached_bvh(*boxes())
     assert not folder.exists()
 
 
@@ -95,13 +88,13 @@ def damage_entry(entry, damage: str):
 @pytest.mark.parametrize("damage", DAMAGES)
 def test_a_damaged_entry_is_built_again_and_replaced(folder, damage):
     lo, hi = boxes()
-    built = cached_bvh(lo, hi)
+    built = cache.cached_bvh(lo, hi)
     entry, = folder.glob("*.bvh")
     damage_entry(entry, damage)
     assert cache.read_entry(entry, N) is None
     if damage == "fifo":
         entry.unlink()
-    assert same(cached_bvh(lo, hi), built)
+    assert same(cache.cached_bvh(lo, hi), built)
     assert cache.read_entry(entry, N) is not None
 
 
@@ -110,13 +103,13 @@ def test_an_unwritable_folder_still_builds_and_leaves_nothing(tmp_path, monkeypa
     blocked.write_text("not a folder")
     monkeypatch.setenv("PATHTRACE_BVH_CACHE", str(blocked / "bvh"))
     lo, hi = boxes()
-    assert same(cached_bvh(lo, hi), build_bvh(lo, hi))
+    assert same(cache.cached_bvh(lo, hi), build_bvh(lo, hi))
     assert [p.name for p in tmp_path.iterdir()] == ["file"]
 
 
 def test_the_least_recently_used_entries_go_first(folder):
     for seed in range(3):
-        cached_bvh(*boxes(seed))
+        cache.cached_bvh(*boxes(seed))
     entries = sorted(folder.glob("*.bvh"), key=lambda p: p.stat().st_mtime)
     for age, entry in enumerate(entries):
         os.utime(entry, (1000 + age, 1000 + age))

@@ -9,17 +9,9 @@ import pytest
 
 import pathtrace.scene.meshes as meshes
 import pathtrace.scene.read_cache as read_cache
-from pathtrace import scene as scenes
 from pathtrace.errors import UserError
-from pathtrace.io import cache_files
+from pathtrace.scene import load_scene
 from tests.conftest import ROOT
-
-def load_scene(name):
-    """scenes.load_scene, its entry's write (in a thread of its own) waited for."""
-    scene = scenes.load_scene(name)
-    cache_files.wait_for_writes()
-    return scene
-
 
 SCENE = """<scene version="1.0.0">
   <sensor type="perspective"><float name="fov" value="40"/>

@@ -113,10 +113,10 @@ def read_entry(path: Path, primitives: int):
 
 
 def write_entry(path: Path, bvh: BVH):
-    """Stores bvh at path (pathtrace.io.cache_files: whole or not at all, in a thread of its own),
-    then removes the oldest entries beyond MAX_BYTES."""
+    """Stores bvh at path (pathtrace.io.cache_files: whole or not at all), then removes the oldest
+    entries beyond MAX_BYTES."""
     header = np.zeros(1, _HEADER)
     header["nodes"], header["primitives"], header["depth"], header["cost"] = \
         len(bvh.nodes), len(bvh.order), bvh.depth, bvh.cost
-    cache_files.write_soon(path, [header, np.ascontiguousarray(bvh.nodes), bvh.order.astype(np.int32)], "*.bvh",
-                           MAX_BYTES)
+    if cache_files.write_entry(path, header, np.ascontiguousarray(bvh.nodes), bvh.order.astype(np.int32)):
+        cache_files.prune(path.parent, "*.bvh", MAX_BYTES)

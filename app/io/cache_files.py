@@ -13,7 +13,6 @@ entry still renders."""
 import os
 import stat
 import tempfile
-import threading
 import time
 import zlib
 from pathlib import Path
@@ -21,8 +20,6 @@ from pathlib import Path
 CHECKSUM_BYTES = 4
 TEMPORARY = ".tmp"          # the suffix of an entry's file while it is written
 STALE_SECONDS = 600         # a write's file unchanged this long is a write that ended unfinished
-
-_writes = []                # the threads of the writes under way (write_soon)
 
 
 def cache_dir() -> Path:
@@ -85,26 +82,6 @@ def write_entry(path: Path, *chunks) -> bool:
         except OSError:
             pass
         return False
-
-
-def write_soon(path: Path, chunks: list, pattern: str, limit: int):
-    """write_entry(path, *chunks), then prune(path.parent, pattern, limit), in a thread of its
-    own, so that a first image does not wait for a cache's entry (a new scene of 870,400 triangles
-    writes 230 MB of them). The chunks must not change until it is written. The interpreter waits
-    for the thread at its exit; a command that leaves past that (os._exit) calls wait_for_writes
-    first. A write cut short leaves a temporary file, not an entry."""
-    def write():
-        if write_entry(path, *chunks):
-            prune(path.parent, pattern, limit)
-    thread = threading.Thread(target=write, name=f"cache write ({path.suffix})")
-    _writes.append(thread)
-    thread.start()
-
-
-def wait_for_writes():
-    """Returns once the entries being written (write_soon) are written."""
-    while _writes:
-        _writes.pop().join()
 
 
 def prune(where: Path, pattern: str, limit: int):

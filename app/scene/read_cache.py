@@ -104,12 +104,12 @@ def _read_entry(path: Path):
 
 
 def _write_entry(path: Path, files: list, notes: list, scene):
-    """Stores the scene (whole or not at all, in a thread of its own) and removes the oldest
-    entries beyond MAX_BYTES. A scene that cannot be pickled (one holding objects made in Python
-    by the user) is not kept."""
+    """Stores the scene (whole or not at all) and removes the oldest entries beyond MAX_BYTES. A
+    scene that cannot be pickled (one holding objects made in Python by the user) is not kept."""
     try:
         head = pickle.dumps((sorted(set(files)), notes), protocol=pickle.HIGHEST_PROTOCOL)
         body = pickle.dumps(scene, protocol=pickle.HIGHEST_PROTOCOL)
     except (pickle.PicklingError, TypeError, AttributeError):
         return
-    cache_files.write_soon(path, [head, body], "*.scene", MAX_BYTES)
+    if cache_files.write_entry(path, head, body):
+        cache_files.prune(path.parent, "*.scene", MAX_BYTES)
