@@ -7,7 +7,6 @@ import re
 import subprocess
 import sys
 import threading
-import time
 
 import numpy as np
 import pyopencl as cl
@@ -198,23 +197,27 @@ def test_a_scene_of_large_mesh_files_has_the_opening_compile_the_builders_kernel
     read = threading.Event()
     monkeypatch.setattr(api, "open_devices", lambda device: [backend] if read.wait(30) else [])
 
+    def opening_ended():
+        """Joins the devices' opening threads: their builders are made and asked to compile ahead."""
+        for thread in threading.enumerate():
+            if thread.name.startswith("open-devices"):
+                thread.join(30)
+
     def opened_after(path):
-        opening = api.DevicesOpening("cpu")
+        api.DevicesOpening("cpu")
         load_scene(str(path))
         likely = bvh_module.tree_likely()
         read.set()
-        opening.result()
-        deadline = time.monotonic() + 30
-        while backend.queue not in bvh_module._builders and time.monotonic() < deadline:
-            time.sleep(0.01)
+        opening_ended()
         read.clear()
         return likely
-    assert not opened_after(small) and asked == []
+    assert not opened_after(small) and list(bvh_module._builders) == [backend.queue] and asked == []
     monkeypatch.setattr(bvh_module, "_builders", {})
     assert opened_after(large) and asked == [bvh_module._builders[backend.queue]]
     api.DevicesOpening("cpu")
     assert not bvh_module.tree_likely()
     read.set()
+    opening_ended()
 
 
 def test_identical_boxes_still_split():
