@@ -101,14 +101,14 @@ class DevicesOpening:
     """open_devices(device) begun at once, in a thread of its own, so that a command reads and
     compiles its scene meanwhile (prepare): the drivers start and build programs with the GIL
     released (pathtrace.device.loader). Once the devices are open, the thread builds their BVH
-    build kernels (pathtrace.compiler.bvh.builder_for), which a tree not in the cache needs,
+    build kernels (pathtrace.compiler.builder.builder_for), which a tree not in the cache needs,
     while the scene's own program builds beside them (Renderer.set_scene): on a first start on
     an H200 the two had been built one after the other (0.5-0.8 s, then 1.5-1.9 s). Where the
     scene's tree is known by then to need no device (builder_wanted: the host built it, or the
     cache held it), it builds none."""
 
     def __init__(self, device="auto"):
-        from pathtrace.compiler.bvh import tree_unknown
+        from pathtrace.compiler.builder import tree_unknown
         tree_unknown()          # this opening's scene is yet to be compiled
         self.seconds = 0.0      # what the opening took, in its thread (the builders' build not included)
         self._opened = Future()
@@ -117,7 +117,7 @@ class DevicesOpening:
         pool.shutdown(wait=False)       # the thread ends with its work; the interpreter waits for it
 
     def _open(self, device):
-        from pathtrace.compiler.bvh import builder_for, builder_wanted, tree_likely
+        from pathtrace.compiler.builder import builder_for, builder_wanted, tree_likely
         start = time.perf_counter()
         try:
             backends = open_devices(device)

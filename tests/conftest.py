@@ -54,14 +54,14 @@ def program_mode(request, monkeypatch):
 
 @pytest.fixture(autouse=True)
 def no_tree_expected(monkeypatch):
-    """Each test starts without an earlier one's expectation of a tree (pathtrace.compiler.bvh:
+    """Each test starts without an earlier one's expectation of a tree (pathtrace.compiler.builder:
     expect_tree), under which the builders it makes would compile their kernels ahead, or its
     word that a tree needed no device (no_device_tree), under which devices open without them,
     or its reader's word that a scene was large (tree_likely)."""
-    from pathtrace.compiler import bvh
-    monkeypatch.setattr(bvh, "_tree_expected", False)
-    monkeypatch.setattr(bvh, "_tree_without_device", False)
-    bvh.large_scene_named.clear()
+    from pathtrace.compiler import builder
+    monkeypatch.setattr(builder, "_tree_expected", False)
+    monkeypatch.setattr(builder, "_tree_without_device", False)
+    builder.large_scene_named.clear()
 
 
 @pytest.fixture(scope="session")

@@ -436,7 +436,7 @@ def test_devices_open_in_a_thread_of_their_own_and_give_their_error_when_asked(m
     import time
 
     from pathtrace import api
-    from pathtrace.compiler import bvh
+    from pathtrace.compiler import builder as bvh
     monkeypatch.setattr(bvh, "_builders", {})        # none built by the tests before this one
     held, builder_for = threading.Event(), bvh.builder_for
     monkeypatch.setattr(bvh, "builder_for", lambda queue=None, ahead=False: builder_for(queue, ahead) if held.wait(30) else None)

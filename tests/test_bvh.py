@@ -12,11 +12,13 @@ import numpy as np
 import pyopencl as cl
 import pytest
 
+import pathtrace.compiler.builder as builder_module
 import pathtrace.compiler.bvh as bvh_module
 import pathtrace.compiler.bvh_cache as bvh_cache
 import pathtrace.compiler.compiled as compiled_module
 
-from pathtrace.compiler.bvh import MAX_DEPTH, MAX_LEAF_SIZE, RADIUS, TRAVERSAL_COST, build_bvh, builder_for
+from pathtrace.compiler.builder import MAX_DEPTH, MAX_LEAF_SIZE, TRAVERSAL_COST, builder_for
+from pathtrace.compiler.bvh import RADIUS, build_bvh
 from pathtrace.compiler.compiled import compile_scene
 from pathtrace.compiler.host_bvh import build_on_host
 from pathtrace.device.features import LONE_MAX
@@ -173,9 +175,9 @@ def test_a_devices_opening_forgets_the_last_scenes_tree(monkeypatch):
     from pathtrace import api
     monkeypatch.setattr(api, "open_devices", lambda device: [])
     compiled_module.compile_before_devices(scene_of(random_spheres(np.random.default_rng(1), 10), []))
-    assert not bvh_module.builder_wanted()
+    assert not builder_module.builder_wanted()
     api.DevicesOpening("cpu").result()
-    assert bvh_module.builder_wanted()
+    assert builder_module.builder_wanted()
 
 
 def test_a_scene_of_large_mesh_files_has_the_opening_compile_the_builders_kernels_ahead(backend, tmp_path,
@@ -191,9 +193,9 @@ def test_a_scene_of_large_mesh_files_has_the_opening_compile_the_builders_kernel
     one.mkdir(), two.mkdir()
     small, large = write_obj_meshes(one, count=1), write_obj_meshes(two, count=2)
     monkeypatch.setattr(meshes, "LARGE_SCENE_BYTES", (one / "o0000.obj").stat().st_size + 1)
-    monkeypatch.setattr(bvh_module, "_builders", {})
+    monkeypatch.setattr(builder_module, "_builders", {})
     asked = []
-    monkeypatch.setattr(bvh_module.Builder, "compile_ahead", lambda self: asked.append(self))
+    monkeypatch.setattr(builder_module.Builder, "compile_ahead", lambda self: asked.append(self))
     read = threading.Event()
     monkeypatch.setattr(api, "open_devices", lambda device: [backend] if read.wait(30) else [])
 
@@ -206,16 +208,16 @@ def test_a_scene_of_large_mesh_files_has_the_opening_compile_the_builders_kernel
     def opened_after(path):
         api.DevicesOpening("cpu")
         load_scene(str(path))
-        likely = bvh_module.tree_likely()
+        likely = builder_module.tree_likely()
         read.set()
         opening_ended()
         read.clear()
         return likely
-    assert not opened_after(small) and list(bvh_module._builders) == [backend.queue] and asked == []
-    monkeypatch.setattr(bvh_module, "_builders", {})
-    assert opened_after(large) and asked == [bvh_module._builders[backend.queue]]
+    assert not opened_after(small) and list(builder_module._builders) == [backend.queue] and asked == []
+    monkeypatch.setattr(builder_module, "_builders", {})
+    assert opened_after(large) and asked == [builder_module._builders[backend.queue]]
     api.DevicesOpening("cpu")
-    assert not bvh_module.tree_likely()
+    assert not builder_module.tree_likely()
     read.set()
     opening_ended()
 
@@ -403,13 +405,13 @@ def test_the_build_reads_nothing_it_has_not_written(backend, monkeypatch, n, sph
     c = rng.uniform(-10, 10, (n, 3)).astype(np.float32)
     r = rng.uniform(0.01, 0.5, (n, 1)).astype(np.float32)
     clean = build_bvh(c - r, c + r, spheres, backend.queue)
-    buffer = bvh_module.Builder.buffer
+    buffer = builder_module.Builder.buffer
 
     def garbage(self, nbytes):
         buf = buffer(self, nbytes)
         cl.enqueue_copy(self.queue, buf, rng.integers(0, 256, max(int(nbytes), 4), dtype=np.uint8))
         return buf
-    monkeypatch.setattr(bvh_module.Builder, "buffer", garbage)
+    monkeypatch.setattr(builder_module.Builder, "buffer", garbage)
     dirty = build_bvh(c - r, c + r, spheres, backend.queue)
     assert clean.nodes.tobytes() == dirty.nodes.tobytes() and np.array_equal(clean.order, dirty.order)
 
@@ -599,7 +601,8 @@ def test_the_build_kernels_compiled_ahead_serve_every_launch_of_a_build(backend,
     `smallgrid` one that the same build alone compiles (tests/test_cli.py: warm_builder)."""
     if not keeps_own_cache(backend.device.device):
         pytest.skip("only PoCL compiles a kernel at its first launch; other drivers, at the build")
-    code = ("import numpy as np; from pathtrace.compiler.bvh import build_bvh, builder_for; "
+    code = ("import numpy as np; from pathtrace.compiler.builder import builder_for; "
+            "from pathtrace.compiler.bvh import build_bvh; "
             "from pathtrace.device.opencl import choose_device; "
             "q = choose_device('cpu', log=lambda line: None).queue; builder_for(q).launch_ahead(); "
             "lo = np.random.default_rng(1).random((3000, 3), np.float32); "
@@ -617,12 +620,12 @@ def test_the_build_kernels_compiled_ahead_serve_every_launch_of_a_build(backend,
 def test_an_expected_tree_has_every_builder_compile_ahead(backend, monkeypatch):
     """expect_tree: the builders made before it and after it compile their kernels ahead."""
     asked = []
-    monkeypatch.setattr(bvh_module, "_builders", {})
-    monkeypatch.setattr(bvh_module, "_tree_expected", False)
-    monkeypatch.setattr(bvh_module.Builder, "compile_ahead", lambda self: asked.append(self))
+    monkeypatch.setattr(builder_module, "_builders", {})
+    monkeypatch.setattr(builder_module, "_tree_expected", False)
+    monkeypatch.setattr(builder_module.Builder, "compile_ahead", lambda self: asked.append(self))
     first = builder_for(backend.queue)
     assert asked == []
-    bvh_module.expect_tree()
+    builder_module.expect_tree()
     assert asked == [first]
     second = builder_for(cl.CommandQueue(backend.context))
     assert second is not first and asked[-1] is second
@@ -636,43 +639,43 @@ def test_a_scene_compiled_before_its_devices_expects_its_tree_where_the_cache_la
     expected = []
     monkeypatch.setattr(compiled_module, "expect_tree", lambda: expected.append(True))
     for flag in ("_tree_without_device", "_tree_expected"):
-        monkeypatch.setattr(bvh_module, flag, False)
-    monkeypatch.setattr(bvh_module, "_builders", {})
+        monkeypatch.setattr(builder_module, flag, False)
+    monkeypatch.setattr(builder_module, "_builders", {})
     rng = np.random.default_rng(4)
     compiled_module.compile_before_devices(scene_of(random_spheres(rng, bvh_cache.HOST_MAX + 1), []))
-    assert expected == [True] and bvh_module.builder_wanted()
+    assert expected == [True] and builder_module.builder_wanted()
     compiled_module.compile_before_devices(scene_of(random_spheres(rng, bvh_cache.HOST_MAX), []))
     compiled_module.compile_before_devices(scene_of([[0, 0, 0, 1]], []))
     assert expected == [True]
-    assert not bvh_module.builder_wanted()      # the devices' opening makes no builder
-    bvh_module.expect_tree()
-    assert bvh_module.builder_wanted()
+    assert not builder_module.builder_wanted()      # the devices' opening makes no builder
+    builder_module.expect_tree()
+    assert builder_module.builder_wanted()
 
 
 def test_the_wait_for_the_kernels_ahead_ends_where_nothing_is_compiled_ahead(backend, monkeypatch):
     """await_kernels_ahead returns at once where no tree is expected, and where one is on a device
     that compiles its kernels at their build (not PoCL), whose builder launches nothing ahead."""
     import pathtrace.device.opencl as opencl
-    monkeypatch.setattr(bvh_module, "_builders", {})
-    monkeypatch.setattr(bvh_module, "_tree_expected", False)
-    bvh_module.await_kernels_ahead(backend.queue)
-    assert not bvh_module._builders
-    monkeypatch.setattr(bvh_module, "_tree_expected", True)
+    monkeypatch.setattr(builder_module, "_builders", {})
+    monkeypatch.setattr(builder_module, "_tree_expected", False)
+    builder_module.await_kernels_ahead(backend.queue)
+    assert not builder_module._builders
+    monkeypatch.setattr(builder_module, "_tree_expected", True)
     monkeypatch.setattr(opencl, "keeps_own_cache", lambda device: False)
     launched = []
-    monkeypatch.setattr(bvh_module.Builder, "launch_ahead", lambda self: launched.append(self))
-    bvh_module.await_kernels_ahead(backend.queue)
+    monkeypatch.setattr(builder_module.Builder, "launch_ahead", lambda self: launched.append(self))
+    builder_module.await_kernels_ahead(backend.queue)
     assert builder_for(backend.queue).ahead_done.is_set() and launched == []
 
 
 def test_a_built_tree_ends_the_expectation(backend, monkeypatch):
     """Once the expected tree is built, builders made later compile nothing ahead, and a
     program's build waits for nothing (await_kernels_ahead)."""
-    monkeypatch.setattr(bvh_module, "_builders", {})
-    bvh_module.expect_tree()
+    monkeypatch.setattr(builder_module, "_builders", {})
+    builder_module.expect_tree()
     lo = np.random.default_rng(3).random((100, 3), np.float32)
     build_bvh(lo, lo + np.float32(0.01), queue=backend.queue)
     asked = []
-    monkeypatch.setattr(bvh_module.Builder, "compile_ahead", lambda self: asked.append(self))
+    monkeypatch.setattr(builder_module.Builder, "compile_ahead", lambda self: asked.append(self))
     builder_for(cl.CommandQueue(backend.context))
-    assert not bvh_module._tree_expected and asked == []
+    assert not builder_module._tree_expected and asked == []

@@ -220,18 +220,18 @@ def test_a_builder_being_built_is_seen_by_the_commands_exit(monkeypatch):
     import threading
 
     from pathtrace.cli import console
-    from pathtrace.compiler import bvh
+    from pathtrace.compiler import builder
     held, started = threading.Event(), threading.Event()
 
     class Slow:
         def __init__(self, queue):
             started.set()
             held.wait(30)
-    monkeypatch.setattr(bvh, "Builder", Slow)
-    monkeypatch.setattr(bvh, "_builders", {})
-    thread = threading.Thread(target=bvh.builder_for, args=("a queue",))
+    monkeypatch.setattr(builder, "Builder", Slow)
+    monkeypatch.setattr(builder, "_builders", {})
+    thread = threading.Thread(target=builder.builder_for, args=("a queue",))
     thread.start()
-    assert started.wait(30) and bvh.building() and console._building()
+    assert started.wait(30) and builder.building() and console._building()
     held.set()
     thread.join()
-    assert not bvh.building()
+    assert not builder.building()

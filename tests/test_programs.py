@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import pathtrace.compiler.bvh as bvh_module
+import pathtrace.compiler.builder as builder_module
 from pathtrace.device.opencl import Backend
 from pathtrace.device.features import Features
 from pathtrace.filters import PixelFilter
@@ -562,10 +562,10 @@ def test_on_pocl_a_new_scenes_own_program_builds_after_its_trees_kernels(backend
     build kernels, compiled ahead (await_kernels_ahead), which the first image needs first; where
     none is, it builds at once."""
     events = []
-    monkeypatch.setattr(bvh_module, "_builders", {})
-    monkeypatch.setattr(bvh_module, "_tree_expected", expected)
-    launch = bvh_module.Builder.launch_ahead
-    monkeypatch.setattr(bvh_module.Builder, "launch_ahead", lambda self: (launch(self), events.append("tree's kernels")))
+    monkeypatch.setattr(builder_module, "_builders", {})
+    monkeypatch.setattr(builder_module, "_tree_expected", expected)
+    launch = builder_module.Builder.launch_ahead
+    monkeypatch.setattr(builder_module.Builder, "launch_ahead", lambda self: (launch(self), events.append("tree's kernels")))
     auto = building_with(backend, lambda features, tune: (events.append("program"), backend.program_for(features, tune))[1],
                          generic=False)
     Renderer(auto, load_scene("cornell-box"), SIZE, SIZE)

@@ -77,11 +77,11 @@ def _finish_cache_writes():
 
 def _building() -> bool:
     """Whether a scene's program is still being built in the background (pathtrace.device.programs),
-    or the BVH builder's kernels (pathtrace.compiler.bvh, built after a device's opening, or
+    or the BVH builder's kernels (pathtrace.compiler.builder, built after a device's opening, or
     compiled ahead on PoCL in a build thread): NVIDIA's
     driver crashed the interpreter's teardown around a build under way (SIGSEGV after a render that
     had written its image), and the interpreter would wait for the builder's thread, so the command
     leaves past it, the build dropped. A module another thread is still importing has neither."""
     checks = (getattr(sys.modules.get("pathtrace.device.programs"), "builds_under_way", None),
-              getattr(sys.modules.get("pathtrace.compiler.bvh"), "building", None))
+              getattr(sys.modules.get("pathtrace.compiler.builder"), "building", None))
     return any(check is not None and check() for check in checks)

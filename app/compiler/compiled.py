@@ -13,7 +13,8 @@ from dataclasses import dataclass
 import numpy as np
 import pyopencl as cl
 
-from pathtrace.compiler.bvh import BVH, column_max, column_min, expect_tree, no_device_tree, primitive_boxes
+from pathtrace.compiler.builder import expect_tree, no_device_tree
+from pathtrace.compiler.bvh import BVH, column_max, column_min, primitive_boxes
 from pathtrace.compiler.bvh_cache import CACHED_ONLY, NotCached, cached_bvh
 from pathtrace.compiler import geometry_cache
 from pathtrace.scene.environment import LUMINANCE

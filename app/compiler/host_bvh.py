@@ -11,7 +11,8 @@ open (compile_before_devices)."""
 
 import numpy as np
 
-from pathtrace.compiler.bvh import BVH, BinaryTree, MAX_DEPTH, MAX_LEAF_SIZE, RADIUS, TRAVERSAL_COST, build_bvh, build_tree
+from pathtrace.compiler.builder import MAX_DEPTH, MAX_LEAF_SIZE, TRAVERSAL_COST
+from pathtrace.compiler.bvh import BVH, BinaryTree, RADIUS, build_bvh, build_tree
 from pathtrace.device.types import BVH_NODE
 
 FLT_MAX = np.float32(np.finfo(np.float32).max)

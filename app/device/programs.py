@@ -44,7 +44,7 @@ BUILD_THREAD = "pathtrace-build"
 
 def builds_under_way() -> bool:
     """Whether a program is being built in the background in this process (or waits to be), or
-    kernels are being compiled ahead of their launches (pathtrace.compiler.bvh: Builder.compile_ahead;
+    kernels are being compiled ahead of their launches (pathtrace.compiler.builder: Builder.compile_ahead;
     ProgramChoice.compile_ahead)."""
     return any(t.name == BUILD_THREAD and t.is_alive() for t in threading.enumerate())
 
@@ -52,7 +52,7 @@ def builds_under_way() -> bool:
 def in_build_thread(work, then=None):
     """Runs work() in a build thread, whose failure the launch or build that needs its result
     says (a program's build in the background, Programs.start, or what compiles ahead of a
-    launch: pathtrace.compiler.bvh, Builder.compile_ahead; ProgramChoice.compile_ahead), then
+    launch: pathtrace.compiler.builder, Builder.compile_ahead; ProgramChoice.compile_ahead), then
     then(), where given, either way. A daemon thread: a process that ends before the work does
     neither waits for it nor leaves a torn cache entry (app/io/cache_files.py writes whole
     files)."""

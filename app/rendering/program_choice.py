@@ -6,7 +6,7 @@ from dataclasses import replace
 import numpy as np
 import pyopencl as cl
 
-from pathtrace.compiler.bvh import await_kernels_ahead
+from pathtrace.compiler.builder import await_kernels_ahead
 from pathtrace.compiler.compiled import SCENE_BUFFERS
 from pathtrace.device.features import Features
 from pathtrace.device.opencl import keeps_own_cache

@@ -34,7 +34,7 @@ MAX_COORDINATE = 1e18
 
 # set where a scene being read names LARGE_SCENE_BYTES of mesh files or more (MeshFiles.add): a tree
 # of more primitives than the host builds, which a new scene builds on a device, whose builder's
-# kernels a devices' opening then compiles beside the reading (pathtrace.compiler.bvh.tree_likely);
+# kernels a devices' opening then compiles beside the reading (pathtrace.compiler.builder.tree_likely);
 # cleared as devices begin to open for the next scene (tree_unknown)
 large_scene_named = threading.Event()
 LARGE_SCENE_BYTES = 512 << 10
