@@ -37,5 +37,8 @@ else
 fi
 # builds the generic kernels on each device and renders with them once, so that the drivers'
 # caches hold them before the first `pathtrace view` (app/device/programs.py)
-.venv/bin/pathtrace devices --check || echo "pathtrace: no OpenCL device builds the kernels yet (see above)"
-echo "pathtrace installed: .venv/bin/pathtrace"
+if .venv/bin/pathtrace devices --check; then
+    echo "pathtrace installed: .venv/bin/pathtrace"
+else
+    echo "pathtrace installed: .venv/bin/pathtrace, but it renders nothing until an OpenCL device builds its kernels (see above)"
+fi

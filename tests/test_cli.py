@@ -316,6 +316,21 @@ def test_a_bvh_builder_that_fails_in_the_check_is_named_in_one_line(monkeypatch)
     assert "cannot build the kernels" not in r.stdout and "Traceback" not in r.stderr
 
 
+def test_devices_check_fails_where_no_device_builds_the_kernels(monkeypatch):
+    """`devices --check` where no device builds the kernels: each device's line says why, and the
+    status is 1 with one line more, which install.sh reports ("no OpenCL device builds the kernels
+    yet"), not 0 for a set-up that renders nothing."""
+    import pyopencl as cl
+    import pathtrace.device.opencl as opencl
+
+    def failing(*args, **kwargs):
+        raise cl.RuntimeError("clBuildProgram failed: BUILD_PROGRAM_FAILURE")
+    monkeypatch.setattr(opencl, "open_device", failing)
+    r = in_process("devices", "--check")
+    assert r.returncode == 1 and "cannot build the kernels: " in r.stdout, r.stdout + r.stderr
+    assert r.stderr.splitlines()[-1] == "pathtrace: error: no OpenCL device here builds the kernels (the lines above say why)"
+
+
 def test_ctrl_c_stops_cleanly_and_writes_nothing(tmp_path):
     import signal
     import time

@@ -21,6 +21,7 @@ def cmd_devices(args):
     devices = list_devices()
     if not devices:
         raise UserError(NO_DEVICE)
+    building = 0        # the devices checked that build the kernels
     for d in devices:
         line = f"[{d.index}] {d.describe()}, {d.device.max_compute_units} compute units"
         b = None
@@ -34,6 +35,7 @@ def cmd_devices(args):
                 cached = b.built_generic(media=False) is not None and b.opened.cached
                 for media in (False, True):
                     b.generic(media)
+                building += 1
                 line += (f": builds the generic kernels, without media and with ({time.perf_counter() - start + b.opened.seconds:.2f} s"
                          f"{', cached' if cached else ''})")
                 seconds, wrong = warm_up(b)
@@ -53,6 +55,9 @@ def cmd_devices(args):
             except cl.Error as e:
                 line += f"; cannot build the BVH builder: {build_error_line(e)}"
         print(line)
+    if args.check and not building and not any(generic_refused(d.device) for d in devices):
+        # install.sh reports a set-up that renders nothing by this status
+        raise UserError("no OpenCL device here builds the kernels (the lines above say why)")
     return 0
 
 
