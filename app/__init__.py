@@ -5,7 +5,11 @@ denoise(), tonemap(), write(), show(), view() and devices(). Importing pathtrace
 nothing else: NumPy and PyOpenCL load with the first function used, and the viewer's GL and GUI
 packages only with view()."""
 
+from pathtrace.device.driver_caches import make_usable
+
 __version__ = "0.1.0"
+
+make_usable()       # PyOpenCL's and PoCL's caches, where they cannot be written
 
 # name -> the module that defines it, imported on first use (PEP 562)
 _EXPORTS = {

@@ -435,11 +435,16 @@ def test_a_damaged_kernel_cache_is_rebuilt(tmp_path):
     whole = {f: f.read_bytes() for f in sorted(env_cache.glob("*.bin"))}
     assert whole
     for damage in ("truncated", "garbage", "empty"):
-        for f, data in whole.items():
-            f.write_bytes({"truncated": data[: len(data) // 2], "garbage": os.urandom(len(data)), "empty": b""}[damage])
+        damaged = {f: {"truncated": data[: len(data) // 2], "garbage": os.urandom(len(data)), "empty": b""}[damage]
+                   for f, data in whole.items()}
+        for f, data in damaged.items():
+            f.write_bytes(data)
         r = run()
         assert r.returncode == 0, (damage, r.stderr)
-        assert all(len(f.read_bytes()) > 32 for f in whole), damage     # rebuilt and cached again
+        # the scene's program rebuilt and cached again; the BVH builder's, where this run made none
+        # (its opening ended after the host built the tree: pathtrace.compiler.builder), unread
+        rebuilt = {f for f in whole if f.read_bytes() != damaged[f] and len(f.read_bytes()) > 32}
+        assert rebuilt and all(f in rebuilt or f.read_bytes() == damaged[f] for f in whole), damage
 
 
 def test_a_full_standard_output_gets_one_line():

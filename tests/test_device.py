@@ -158,3 +158,20 @@ def test_a_device_opens_with_the_generic_program_only_where_it_renders_from_a_ca
     open_device(backend.device, mode="generic").generic(False)
     assert open_device(backend.device, mode="auto").built_generic(False) is not None
     assert open_device(backend.device, mode="specialised").built_generic(False) is None
+
+
+def test_a_start_with_no_writable_cache_still_renders(tmp_path):
+    """#55: with XDG_CACHE_HOME under a file, where no cache folder can be made (as in a read-only
+    home), a render still writes its image, with no traceback: PyOpenCL's cache is off and PoCL
+    compiles in a temporary folder, removed at the exit (app/device/driver_caches.py)."""
+    blocked = tmp_path / "file"
+    blocked.write_text("")
+    (tmp_path / "tmp").mkdir()
+    env = {k: v for k, v in os.environ.items() if k not in ("POCL_CACHE_DIR", "PYOPENCL_NO_CACHE", "PATHTRACE_CACHE",
+                                                             "PATHTRACE_BVH_CACHE", "PATHTRACE_SCENE_CACHE")}
+    env.update(XDG_CACHE_HOME=str(blocked / "cache"), TMPDIR=str(tmp_path / "tmp"))
+    out = tmp_path / "out.png"
+    r = subprocess.run([sys.executable, "-m", "pathtrace", "render", "cornell-box", "--size", "16x16", "--spp", "1",
+                        "--device", "cpu", "-o", out], env=env, capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr
+    assert out.stat().st_size > 0 and not any((tmp_path / "tmp").iterdir())

@@ -9,6 +9,7 @@ import os
 import sys
 
 from pathtrace.cli.interrupts import INTERRUPTED, install
+from pathtrace.device import driver_caches
 
 OPENBLAS_THREADS = "OPENBLAS_NUM_THREADS"
 
@@ -41,6 +42,7 @@ def run():
         sys.stderr.flush()
         if code != INTERRUPTED:
             _finish_cache_writes()
+        driver_caches.remove_temporary()
         os._exit(code)
     raise SystemExit(code)
 
