@@ -286,11 +286,15 @@ def progressive(scene, spp=None, steps=None, size=None, device="auto", seed=None
                 rr=None, nee=None, aovs=(), progress=False, build_progress=None, phases=None, integrator=None):
     """Renders `scene` (a Scene, or what load() takes) and yields a Snapshot each time the image
     reaches one of `steps` samples per pixel (default: 1, 2, 4, ... up to spp, and spp; spp
-    defaults to the scene's). Arguments as for render(). Stopping the iteration early stops the
+    defaults to the scene's). Given spp, no step may exceed it; without it, the last step is as
+    far as the render goes. Arguments as for render(). Stopping the iteration early stops the
     render."""
     scene = scene if isinstance(scene, Scene) else load(scene)
     settings = settings_for(scene, spp, size, seed, max_depth, rr, nee, integrator)
     steps = _steps(steps, settings.spp)
+    if spp is not None and steps[-1] > settings.spp:
+        raise UserError(f"steps: {steps[-1]} is more samples per pixel than spp ({settings.spp}); "
+                        "leave spp out for the steps alone to say how far to render")
     aovs = _aov_names(aovs)
     prepared = prepare(scene, device, build_progress, phases, settings, bool(aovs))
     prepared.update(scene, settings, bool(aovs))

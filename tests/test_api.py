@@ -117,6 +117,7 @@ def test_render_with_aovs():
     (dict(size=(20000, 10)), "size"), (dict(seed=-1), "seed"), (dict(rr="sometimes"), "rr"),
     (dict(rr="off", max_depth=0), "rr 'off' needs max_depth"), (dict(device="no-such-device"), "--device"),
     (dict(device=[3]), "device"), (dict(steps=[4, 2]), "steps"),
+    (dict(steps=[2, 8], spp=4), "steps: 8 is more samples per pixel than spp \\(4\\)"),
 ])
 def test_bad_arguments_are_one_line_user_errors(kwargs, message):
     scene = pathtrace.load_dict(small_scene())

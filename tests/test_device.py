@@ -175,3 +175,16 @@ def test_a_start_with_no_writable_cache_still_renders(tmp_path):
                         "--device", "cpu", "-o", out], env=env, capture_output=True, text=True, timeout=600)
     assert r.returncode == 0 and "Traceback" not in r.stderr, r.stderr
     assert out.stat().st_size > 0 and not any((tmp_path / "tmp").iterdir())
+
+
+def test_an_unwritable_pocl_cache_is_named_where_no_device_is_found(tmp_path):
+    """PoCL lists no device where it cannot write POCL_CACHE_DIR: the one line says that, not
+    how to install an OpenCL driver the machine has."""
+    blocked = tmp_path / "file"
+    blocked.write_text("")
+    r = subprocess.run([sys.executable, "-m", "pathtrace", "devices"], capture_output=True, text=True, timeout=120,
+                       env={**os.environ, "POCL_CACHE_DIR": str(blocked / "pocl"), "OCL_ICD_VENDORS": "/etc/OpenCL/vendors"})
+    if r.returncode == 0:       # a platform that lists devices without that cache (a GPU's): nothing to say
+        return
+    assert r.returncode == 1 and r.stderr.strip() == (f"pathtrace: error: no OpenCL device found: POCL_CACHE_DIR "
+                                                      f"({blocked / 'pocl'}) cannot be written, and PoCL lists none then")

@@ -169,7 +169,7 @@ def test_pbrt_shading_maps_perturb_as_pbrts_and_convert_keeps_it(tmp_path):
 
 
 def test_textures_nest_as_pbrt_nests_them(tmp_path):
-    """A mix of a checkerboard and a colour (tex_mix of ../shared/references/pbrt-v4), and a
+    """A mix of a checkerboard and a colour (tex_mix of tests/references/pbrt-v4), and a
     scale of a scale of a checkerboard of checkerboards: read as the trees they are."""
     s = scene(tmp_path, 'Texture "a" "spectrum" "checkerboard" "float uscale" 4 "float vscale" 4 '
                         '"rgb tex1" [ 0.8 0.8 0.8 ] "rgb tex2" [ 0.1 0.1 0.1 ]\n'

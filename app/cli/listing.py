@@ -15,12 +15,12 @@ def epilog() -> str:
 
 
 def cmd_devices(args):
-    from pathtrace.device.opencl import NO_DEVICE, build_error_line, generic_refused, list_devices, open_device
+    from pathtrace.device.opencl import build_error_line, generic_refused, list_devices, no_device, open_device
     import pyopencl as cl
 
     devices = list_devices()
     if not devices:
-        raise UserError(NO_DEVICE)
+        raise UserError(no_device())
     building = 0        # the devices checked that build the kernels
     for d in devices:
         line = f"[{d.index}] {d.describe()}, {d.device.max_compute_units} compute units"

@@ -3,6 +3,7 @@
 
 import functools
 import hashlib
+import os
 import sys
 import time
 from dataclasses import dataclass
@@ -105,7 +106,16 @@ class Device:
 
 HOW_TO_GET_ONE = ("for the CPU without root, pip install pocl-binary-distribution (pathtrace's extra [cpu]); "
                   "on Debian/Ubuntu, apt install pocl-opencl-icd; for a GPU, its vendor's OpenCL driver")
-NO_DEVICE = f"no OpenCL device found: {HOW_TO_GET_ONE}"     # the one line wherever none is found
+
+
+def no_device() -> str:
+    """The one line wherever no device is found; where PoCL's cache folder (POCL_CACHE_DIR) cannot
+    be written, PoCL lists no device at all, and the line says so first."""
+    from pathtrace.device.driver_caches import writable
+    folder = os.environ.get("POCL_CACHE_DIR")
+    if folder and not writable(folder):
+        return f"no OpenCL device found: POCL_CACHE_DIR ({folder}) cannot be written, and PoCL lists none then"
+    return f"no OpenCL device found: {HOW_TO_GET_ONE}"
 
 
 def list_devices() -> list[Device]:
@@ -427,7 +437,7 @@ def choose_device(spec: str = "auto", extra: str = "", use_cache: bool = True,
                         "or part of a device's name")
     devices = list_devices()
     if not devices:
-        raise UserError(NO_DEVICE)
+        raise UserError(no_device())
     candidates = [d for d in devices if _matches(spec, d, devices)]
     if not candidates:
         raise UserError(f"--device: no OpenCL device matches {short(spec)} "
