@@ -481,7 +481,7 @@ def test_sigterm_stops_a_render_and_leaves_no_file(tmp_path):
         line = p.stderr.readline()
     p.send_signal(signal.SIGTERM)
     _, err = p.communicate(timeout=60)
-    assert p.returncode == 130 and "nothing written" in err and "Traceback" not in err
+    assert p.returncode == 143 and "nothing written" in err and "Traceback" not in err     # 128 + SIGTERM
     assert not list(tmp_path.iterdir())
 
 
@@ -763,7 +763,7 @@ from pathtrace.cli.console import run
 run()
 """
     r = subprocess.run([sys.executable, "-c", child], cwd=ROOT, capture_output=True, text=True, timeout=120)
-    assert r.returncode == 130 and "nothing written" in r.stderr, r.stderr
+    assert r.returncode == 143 and "nothing written" in r.stderr, r.stderr      # 128 + SIGTERM
     assert "Traceback" not in r.stderr and "Exception ignored" not in r.stderr, r.stderr
     assert not out.exists()
 

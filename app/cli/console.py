@@ -8,7 +8,7 @@ KeyboardInterrupt traceback. NumPy loads with one BLAS thread (_numpy_on_one_bla
 import os
 import sys
 
-from pathtrace.cli.interrupts import INTERRUPTED, install
+from pathtrace.cli.interrupts import INTERRUPTED, TERMINATED, install, interrupted_status
 from pathtrace.device import driver_caches
 
 OPENBLAS_THREADS = "OPENBLAS_NUM_THREADS"
@@ -32,15 +32,16 @@ def run():
         code = main()
     except KeyboardInterrupt:        # main() reports its own; this is one during the imports
         print("pathtrace: interrupted", file=sys.stderr)
-        code = INTERRUPTED
+        code = interrupted_status()
     except SystemExit as e:          # argparse's, after its help or its one line
         if drivers is None or not drivers.is_alive():
             raise
         code = e.code if isinstance(e.code, int) else 0 if e.code is None else 1
-    if code == INTERRUPTED or _building() or drivers is not None and drivers.is_alive():
+    stopped = code in (INTERRUPTED, TERMINATED)
+    if stopped or _building() or drivers is not None and drivers.is_alive():
         sys.stdout.flush()
         sys.stderr.flush()
-        if code != INTERRUPTED:
+        if not stopped:
             _finish_cache_writes()
         driver_caches.remove_temporary()
         os._exit(code)

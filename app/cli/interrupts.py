@@ -4,9 +4,11 @@
 import signal
 import sys
 
-INTERRUPTED = 130          # the shell's exit status for a run ended by SIGINT
+INTERRUPTED = 130          # the shell's exit status for a run ended by SIGINT (128 + 2)
+TERMINATED = 143           # and by SIGTERM (128 + 15)
 
 _interrupted = False       # a SIGINT or SIGTERM arrived
+_signal = signal.SIGINT    # which (a KeyboardInterrupt no handler saw counts as SIGINT)
 
 
 def _interrupt(signum, frame):
@@ -15,8 +17,8 @@ def _interrupt(signum, frame):
     ran a weak reference's callback or a __del__ (a garbage collection between two launches), the
     exception is dropped ("Exception ignored in ...") and a render went on to its end; the
     commands' progress callbacks call check_interrupt after each launch."""
-    global _interrupted
-    _interrupted = True
+    global _interrupted, _signal
+    _interrupted, _signal = True, signum
     raise KeyboardInterrupt
 
 
@@ -31,6 +33,12 @@ def interrupted() -> bool:
     kernel build under way fails when one arrives (PoCL's compiler, LLVM, removes its temporary
     files on the signal, then hands it on), which is the interrupt, not a device that cannot build."""
     return _interrupted
+
+
+def interrupted_status() -> int:
+    """The exit status of a run a signal ended, 128 + its number as shells report it: INTERRUPTED
+    for SIGINT (Ctrl-C), TERMINATED for SIGTERM."""
+    return TERMINATED if _signal == signal.SIGTERM else INTERRUPTED
 
 
 def _unraisable(info, default=sys.unraisablehook):

@@ -7,7 +7,7 @@ import sys
 
 from pathtrace import __version__
 from pathtrace.cli import bench, convert, farm, listing, render, view
-from pathtrace.cli.interrupts import INTERRUPTED, interrupted
+from pathtrace.cli.interrupts import interrupted, interrupted_status
 from pathtrace.cli.options import SCENES_EPILOG
 from pathtrace.errors import UserError, cut, did_you_mean
 
@@ -108,7 +108,7 @@ def main(argv=None) -> int:
             print(f"pathtrace: error: {e}", file=sys.stderr)
             return 1
         print("pathtrace: interrupted", file=sys.stderr)
-        return INTERRUPTED
+        return interrupted_status()
     except MemoryError:
         print("pathtrace: error: out of memory (a smaller --size, fewer samples at once or a smaller "
               "scene may fit)", file=sys.stderr)

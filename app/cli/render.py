@@ -5,7 +5,7 @@ import os
 import sys
 from pathlib import Path
 
-from pathtrace.cli.interrupts import INTERRUPTED, FinalWrite, check_interrupt, interrupted
+from pathtrace.cli.interrupts import FinalWrite, check_interrupt, interrupted, interrupted_status
 from pathtrace.cli.options import SCENES_EPILOG, _int_range, add_output_options, add_render_options, apply_render_options
 from pathtrace.cli.progress import BuildProgress, Phases, redraw_interval
 from pathtrace.errors import UserError, escape, short
@@ -94,7 +94,7 @@ def cmd_render(args):
         if bar is not None:
             bar.close()
         print(f"pathtrace: interrupted at {done}/{s.spp} spp; nothing written", file=sys.stderr)
-        return INTERRUPTED
+        return interrupted_status()
     finally:
         build_progress.close()
         if bar is not None:
