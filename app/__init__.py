@@ -3,7 +3,8 @@
 The Python API (docs/python.md): load(), load_dict(), material(), render(), progressive(),
 denoise(), tonemap(), write(), show(), view() and devices(). Importing pathtrace imports
 nothing else: NumPy and PyOpenCL load with the first function used, and the viewer's GL and GUI
-packages only with view()."""
+packages only with view(). It makes PyOpenCL's and PoCL's own caches usable where their folders
+cannot be written (pathtrace.device.driver_caches)."""
 
 from pathtrace.device.driver_caches import make_usable
 

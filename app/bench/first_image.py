@@ -35,6 +35,7 @@ from pathlib import Path
 from pathtrace.bench.default_scenes import FIRST_IMAGE_SCENES, GENERATED_FILES
 from pathtrace.bench.report import mitsuba_twin, scene_file
 from pathtrace.bench.scenes import write_meshes
+from pathtrace.device.driver_caches import for_children
 from pathtrace.errors import UserError
 from pathtrace.io.files import shown
 from pathtrace.bench.load import best_time, cache_bytecode
@@ -77,8 +78,9 @@ def validate(args):
 
 
 def cache_env(caches: Path) -> dict:
-    """The environment of a render whose caches all lie in `caches`."""
-    env = {k: v for k, v in os.environ.items() if k not in PATHTRACE_CACHES}
+    """The environment of a render whose caches all lie in `caches` (not PyOpenCL's cache turned
+    off where this process's could not be written: pathtrace.device.driver_caches)."""
+    env = {k: v for k, v in for_children(dict(os.environ)).items() if k not in PATHTRACE_CACHES}
     return {**env, "XDG_CACHE_HOME": str(caches / "xdg"), "POCL_CACHE_DIR": str(caches / "pocl"),
             "CUDA_CACHE_PATH": str(caches / "nv")}
 

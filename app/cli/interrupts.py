@@ -81,4 +81,6 @@ class FinalWrite:
         for s, handler in self.saved.items():
             signal.signal(s, handler)
         if self.received is not None and kind is not KeyboardInterrupt:
+            global _interrupted, _signal
+            _interrupted, _signal = True, self.received
             raise KeyboardInterrupt

@@ -109,12 +109,13 @@ HOW_TO_GET_ONE = ("for the CPU without root, pip install pocl-binary-distributio
 
 
 def no_device() -> str:
-    """The one line wherever no device is found; where PoCL's cache folder (POCL_CACHE_DIR) cannot
-    be written, PoCL lists no device at all, and the line says so first."""
+    """The one line wherever no device is found; where POCL_CACHE_DIR cannot be written, where
+    PoCL lists no device at all, the line says so first."""
     from pathtrace.device.driver_caches import writable
     folder = os.environ.get("POCL_CACHE_DIR")
     if folder and not writable(folder):
-        return f"no OpenCL device found: POCL_CACHE_DIR ({folder}) cannot be written, and PoCL lists none then"
+        return (f"no OpenCL device found (PoCL lists none where POCL_CACHE_DIR, {folder}, cannot be written): "
+                + HOW_TO_GET_ONE)
     return f"no OpenCL device found: {HOW_TO_GET_ONE}"
 
 
