@@ -6,6 +6,8 @@ import os
 import subprocess
 import sys
 
+import pytest
+
 from pathtrace.device.opencl import build_cached
 
 SOURCE = "kernel void one(global int *a) { a[0] = 1; }"
@@ -177,15 +179,17 @@ def test_a_start_with_no_writable_cache_still_renders(tmp_path):
     assert out.stat().st_size > 0 and not any((tmp_path / "tmp").iterdir())
 
 
-def test_an_unwritable_pocl_cache_is_named_where_no_device_is_found(tmp_path):
+@pytest.mark.parametrize("command", [["devices"], ["render", "simple", "--device", "all", "--size", "8x8", "--spp", "1",
+                                                    "-o", "o.png"]])
+def test_an_unwritable_pocl_cache_is_named_where_no_device_is_found(tmp_path, command):
     """PoCL lists no device where it cannot write POCL_CACHE_DIR: the one line says that, not
-    how to install an OpenCL driver the machine has."""
+    how to install an OpenCL driver the machine has, nor that no device builds the kernels."""
     blocked = tmp_path / "file"
     blocked.write_text("")
-    r = subprocess.run([sys.executable, "-m", "pathtrace", "devices"], capture_output=True, text=True, timeout=120,
+    r = subprocess.run([sys.executable, "-m", "pathtrace", *command], cwd=tmp_path, capture_output=True, text=True, timeout=120,
                        env={**os.environ, "POCL_CACHE_DIR": str(blocked / "pocl"), "OCL_ICD_VENDORS": "/etc/OpenCL/vendors"})
     if r.returncode == 0:       # a platform that lists devices without that cache (a GPU's): nothing to say
         return
-    assert r.returncode == 1 and r.stderr.strip().startswith(
+    assert r.returncode == 1 and r.stderr.splitlines()[-1].startswith(
         f"pathtrace: error: no OpenCL device found (PoCL lists none where POCL_CACHE_DIR, {blocked / 'pocl'}, cannot "
         "be written): "), r.stderr

@@ -210,10 +210,13 @@ def await_kernels_ahead(queue: cl.CommandQueue):
 
 
 def _first_working_builder() -> Builder:
-    from pathtrace.device.opencl import HOW_TO_GET_ONE, list_devices
+    from pathtrace.device.opencl import HOW_TO_GET_ONE, list_devices, no_device
     from pathtrace.errors import UserError
 
-    for d in sorted(list_devices(), key=lambda d: d.kind != "GPU"):
+    devices = list_devices()
+    if not devices:
+        raise UserError(no_device())
+    for d in sorted(devices, key=lambda d: d.kind != "GPU"):
         try:
             return Builder(cl.CommandQueue(cl.Context([d.device])))
         except cl.Error:

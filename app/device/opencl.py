@@ -414,8 +414,10 @@ def choose_devices(specs: list[str], log=lambda line: print(line, file=sys.stder
     twice, as two independent queues), or 'all': every device that builds the kernels."""
     if "all" not in (s.lower() for s in specs):
         return [choose_device(spec, log=log) for spec in specs]
-    backends = []
-    for d in list_devices():
+    backends, devices = [], list_devices()
+    if not devices:
+        raise UserError(no_device())
+    for d in devices:
         try:
             backends.append(open_device(d))
         except cl.Error as e:
