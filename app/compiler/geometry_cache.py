@@ -16,7 +16,6 @@ go once these entries exceed MAX_BYTES."""
 
 import hashlib
 import os
-from concurrent.futures import ThreadPoolExecutor
 import threading
 from pathlib import Path
 
@@ -29,8 +28,6 @@ from pathtrace.io import cache_files
 from pathtrace.resources import resource_dir
 
 MAX_BYTES = 2 << 30
-DIGEST_RUN = 4 << 20        # bytes of a scene's arrays hashed in one thread (geometry_digest)
-DIGEST_THREADS = 8
 # an entry's arrays, in its order, each with the type of its rows
 ARRAYS = (("nodes", BVH_NODE), ("order", np.dtype(np.int64)), ("spheres", np.dtype((np.float32, 4))),
           ("triangles", TRIANGLE), ("normals", np.dtype((np.float32, 4))), ("uvs", np.dtype((np.float32, 2))),
@@ -61,10 +58,8 @@ def geometry_digest(scene) -> bytes:
     materials and media, its meshes' arrays, materials and media, its instances and analytic
     shapes. A CompiledScene holds its scene's (geometry_digest), by which a scene rendered again
     in a process is compiled anew only where it changed (pathtrace.api.prepare), and which keys
-    this cache's entries. The arrays are hashed in runs of about DIGEST_RUN bytes in threads
-    (hashlib lets go of the interpreter's lock over a large buffer), and the runs' digests hashed
-    together: meshes850-obj's 51 MB took 0.16 s in one thread on an H200 machine's host, whose
-    SHA-256 has no instructions of its own, on the path to a warm start's first image."""
+    this cache's entries."""
+    h = hashlib.sha256()
     arrays = [scene.spheres, scene.sphere_material]
     instances = scene.instances
     if instances is not None:
@@ -74,35 +69,16 @@ def geometry_digest(scene) -> bytes:
     for m in meshes:
         arrays += [m.vertices, m.faces, np.zeros(0) if m.normals is None else m.normals,
                    np.zeros(0) if m.uvs is None else m.uvs, np.array([m.material])]
-    runs, run, size = [], [], 0
     for a in arrays:
-        run.append(np.ascontiguousarray(a))
-        size += run[-1].nbytes
-        if size >= DIGEST_RUN:
-            runs.append(run)
-            run, size = [], 0
-    runs.append(run)
-    if len(runs) == 1:
-        digests = [_run_digest(runs[0])]
-    else:
-        with ThreadPoolExecutor(min(len(runs), DIGEST_THREADS, os.cpu_count() or 1)) as pool:
-            digests = list(pool.map(_run_digest, runs))
-    h = hashlib.sha256(b"".join(digests))
+        a = np.ascontiguousarray(a)
+        h.update(str((a.dtype.str, a.shape)).encode())
+        h.update(a.data)
     # the media and what bounds them compile with the primitives (pathtrace.compiler.compiled)
     h.update(repr((scene.media, scene.sphere_media, [m.media for m in meshes])).encode())
     # analytic shapes (objects' are copied into scene.shapes)
     h.update(repr([(s.kind, tuple(map(float, s.params)), np.asarray(s.to_world, np.float64).tolist(), s.material,
                     s.flip, s.texture_uv, s.media) for s in scene.shapes]).encode())
     return h.digest()[:16]
-
-
-def _run_digest(arrays: list) -> bytes:
-    """The SHA-256 of a run of arrays, each with its type and shape."""
-    h = hashlib.sha256()
-    for a in arrays:
-        h.update(str((a.dtype.str, a.shape)).encode())
-        h.update(a.data)
-    return h.digest()
 
 
 def entry_path(compiled) -> Path | None:
