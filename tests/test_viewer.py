@@ -1262,3 +1262,35 @@ def test_a_screenshot_is_of_the_scenes_size_whatever_is_shown(viewer, moment, mo
     frames_until(viewer, lambda: viewer.opened_at is None, timeout=30)
     assert viewer.opened_at is None
     back_to_simple(viewer)
+
+
+def test_input_while_a_scene_opens_waits_for_it(viewer, monkeypatch):
+    """P (a screenshot), R and a left click (a pick) while a scene the panel asked for opens:
+    its worker thread is setting the renderer's scene, which they would read half set (a
+    screenshot of the old image, a pick of the old scene's material, a traceback), so they are
+    ignored until the scene is open; the scene opens, with no shape picked."""
+    import pathtrace.viewer.opening as opening
+    settle(viewer)
+    glfw, read = viewer.glfw, opening.load_scene
+    monkeypatch.setattr(opening, "load_scene", lambda name: (time.sleep(0.3), read(name))[1])     # a slow file
+    called = []
+    monkeypatch.setattr(viewer, "screenshot", lambda *args, **kwargs: called.append("screenshot"))
+    monkeypatch.setattr(viewer, "reset_camera", lambda: called.append("reset"))
+    monkeypatch.setattr(viewer, "image_point", lambda x, y: (0.5, 0.5))      # the click lands on the image
+    monkeypatch.setattr(viewer, "_gui_has_mouse", lambda: False)
+    show, tried = viewer.show_progress, []
+
+    def user_presses(*args):
+        if not tried:
+            tried.append(viewer.loading)
+            viewer.on_key(glfw.KEY_P, glfw.PRESS, 0)
+            viewer.on_key(glfw.KEY_R, glfw.PRESS, 0)
+            viewer.on_key(glfw.KEY_W, glfw.PRESS, 0)
+            viewer.on_mouse_button(glfw.MOUSE_BUTTON_LEFT, glfw.PRESS, 0)
+        return show(*args)
+    monkeypatch.setattr(viewer, "show_progress", user_presses)
+    viewer.load_scene("simple")
+    assert tried == [True] and called == [] and "W" not in viewer.controls.held, called
+    assert viewer.selected is None and not viewer.loading and viewer.message == "loaded simple", viewer.message
+    viewer.on_key(glfw.KEY_R, glfw.PRESS, 0)        # once open, as before
+    assert called == ["reset"]

@@ -105,6 +105,7 @@ class SceneOpening:
         printed, and the window keeps the scene it had. Call it between turns of the loop (the
         panel asks through requested_scene): it draws frames of its own as it goes."""
         started = time.perf_counter()
+        self.selected = None          # the shape picked, of the scene the renderer is about to leave
         try:
             self._begin(lambda: self._open(*self._compile(load_scene(name)), self.renderer), f"opening {name}")
             scene = self._wait().scene

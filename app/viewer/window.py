@@ -83,6 +83,7 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         stays live, saying what it waits for, while they are called in a worker thread begun
         before it (reading the file, opening the device), the BVH builds and the kernels compile."""
         self.opened_at = time.perf_counter()    # until the first image (SceneOpening.say_first_image)
+        self.loading = True           # a scene is being opened (_wait): input that needs the renderer waits
         require_display()
         # the scene's opening needs no window: it begins beside the window's (0.3-0.5 s on Xvfb)
         self._begin(lambda: self._start(backend, scene), "opening the scene")
@@ -243,8 +244,10 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         glfw = self.glfw
         name = self.key_name(key)
         typing = self.imgui.get_io().want_text_input
-        free = not self.imgui.get_io().want_capture_keyboard
-        if action == glfw.PRESS and key in (glfw.KEY_F12, glfw.KEY_P) and not typing:
+        # while a scene opens, its worker thread sets the renderer's scene: a screenshot, R or a
+        # move then would read a scene half set, or none yet (the first)
+        free = not self.imgui.get_io().want_capture_keyboard and not self.loading
+        if action == glfw.PRESS and key in (glfw.KEY_F12, glfw.KEY_P) and not typing and not self.loading:
             self.screenshot()
         elif action == glfw.PRESS and key == glfw.KEY_ESCAPE:
             glfw.set_window_should_close(self.window, True)
@@ -264,7 +267,7 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         """A left click picks the shape under the cursor; with Ctrl, it focuses the lens there
         instead (focus_at)."""
         glfw = self.glfw
-        if self._gui_has_mouse():
+        if self._gui_has_mouse() or self.loading:
             return                                   # a click on the GUI never moves the camera
         if button == glfw.MOUSE_BUTTON_LEFT and action == glfw.PRESS:
             point = self.image_point(*glfw.get_cursor_pos(self.window))
@@ -348,6 +351,7 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         meanwhile is hidden at once; the work cannot be stopped halfway (a driver's compiler), so
         the close takes effect when it ends. The title then names the scene shown."""
         work = self._work
+        self.loading = True
         try:
             while work.thread.is_alive():
                 said, fraction = self._status
@@ -359,6 +363,7 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
                 work.thread.join(1 / FRAME_RATE)
         finally:
             work.thread.join()
+            self.loading = False
             shown = work.outcome.get("value") or getattr(self, "renderer", None)
             if shown is not None:
                 self.glfw.set_window_title(self.window, f"pathtrace - {shown.scene.name}")
