@@ -98,3 +98,29 @@ def test_a_reset_restarts_the_pass(backend, renderer):
     assert p.passes_done == 0
     p.finish_pass()
     assert np.all(r.read_sum()[..., 3] == r.samples)
+
+
+def test_the_samples_rate_is_the_last_passes_not_the_last_bands():
+    """The viewer's Msamples/s (Progressive.samples_per_second) is over the launches of the last
+    whole image's worth of samples: bands of sky rows render many times as fast as the scene's,
+    and the last band's speed alone read 1.6-17 Msamples/s where the device drew 3."""
+    from types import SimpleNamespace
+    done = cl.command_execution_status.COMPLETE
+    renderer = SimpleNamespace(width=10, height=10, resets=0)
+    p = Progressive(renderer, budget=1.0)
+
+    clock = [0]                 # the device's, in ns
+
+    def launch(rows, seconds):
+        """A finished launch of `rows` taking `seconds` on the device."""
+        first = SimpleNamespace(profile=SimpleNamespace(start=clock[0], end=0), command_execution_status=done)
+        clock[0] += int(seconds * 1e9)
+        last = SimpleNamespace(profile=SimpleNamespace(start=0, end=clock[0]), command_execution_status=done)
+        p._queued.append((first, last, rows, 1, 0))
+    assert p.samples_per_second == 0.0
+    for _ in range(3):          # passes of a cheap band (sky) and a dear one, 10 times its time
+        launch((0, 5), 0.001)
+        launch((5, 10), 0.010)
+        p._collect()
+    assert p.passes_done == 3 and p.samples_per_second == pytest.approx(100 / 0.011)
+    assert 1 / p.seconds_per_pixel == pytest.approx(50 / 0.010)      # the last band's, for sizing launches

@@ -32,6 +32,7 @@ class Progressive:
     def __init__(self, renderer, budget: float):
         self.renderer, self.budget = renderer, budget
         self.seconds_per_pixel = None   # device seconds per pixel and sample, as last measured
+        self._recent = deque()          # (pixel samples, device seconds) of the launches of the last pass or more
         self._queued = deque()          # (first event, last event, rows, spp, epoch)
         self.paused = False             # queue nothing new (the window's denoiser needs the CPU)
         self._restart()
@@ -50,6 +51,14 @@ class Progressive:
         """How far the pass under way is, in [0, 1)."""
         return self.rows_done / max(self.renderer.height, 1)
 
+    @property
+    def samples_per_second(self) -> float:
+        """Pixel samples per device second over the launches of the last whole image's worth of
+        samples (a band of sky rows alone renders many times as fast as one of the scene's), or
+        0 before the first launch ends."""
+        seconds = sum(s for _, s in self._recent)
+        return sum(p for p, _ in self._recent) / seconds if seconds else 0.0
+
     def step(self) -> bool:
         """Collects finished launches and queues new ones; never blocks. Returns whether any
         launch of the current image finished since the last call."""
@@ -66,7 +75,12 @@ class Progressive:
         while self._queued and self._queued[0][1].command_execution_status == cl.command_execution_status.COMPLETE:
             first, last, rows, spp, epoch = self._queued.popleft()
             pixels = (rows[1] - rows[0]) * self.renderer.width * spp
-            self.seconds_per_pixel = max(_device_seconds(first, last), 1e-9) / pixels
+            seconds = max(_device_seconds(first, last), 1e-9)
+            self.seconds_per_pixel = seconds / pixels
+            self._recent.append((pixels, seconds))
+            image = self.renderer.width * self.renderer.height
+            while len(self._recent) > 1 and sum(p for p, _ in self._recent) - self._recent[0][0] >= image:
+                self._recent.popleft()
             if epoch == self._epoch:
                 finished = True
                 whole = rows[1] >= self.renderer.height

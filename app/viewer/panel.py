@@ -140,9 +140,11 @@ def _status(imgui, v):
         imgui.set_item_tooltip(r.scene.source)
     imgui.text_wrapped(f"device: {v.backend.device.name}")
     imgui.set_item_tooltip(f"{v.backend.device.describe()}\ndisplay: {v.display_path}")
-    rate = 1e-6 / p.seconds_per_pixel if p.seconds_per_pixel else 0.0
     imgui.text_wrapped(f"{1 / max(frame, 1e-6):.0f} fps, {1000 * frame:.1f} ms/frame")
-    imgui.text_wrapped(f"{p.passes_done} spp + {p.progress:.0%} of the next, {rate:.2f} Msamples/s")
+    # short lines, each narrower than the panel whatever its figures, so that none wraps now and
+    # then and moves the widgets below it
+    imgui.text(f"{p.passes_done} spp + {p.progress:.0%} of the next")
+    imgui.text(f"{p.samples_per_second / 1e6:.2f} Msamples/s")
     size = f"{r.width}x{r.height}" + (f" ({'draft' if v.draft else 'preview'} 1/{v.scale} of {v.size[0]}x{v.size[1]})" if v.scale > 1 else "")
     imgui.text_wrapped(size)
     # always one line, so that nothing below moves when the denoiser starts or stops
@@ -305,9 +307,14 @@ def draw_notice(v, text: str, fraction: float = None, bottom: bool = False):
     flags = (imgui.WindowFlags_.always_auto_resize | imgui.WindowFlags_.no_title_bar
              | imgui.WindowFlags_.no_inputs | imgui.WindowFlags_.no_saved_settings)
     imgui.begin("notice", None, flags)
-    imgui.text(text + ("" if fraction is not None else " ..."))
+    # wrapped within the image's place: a long scene name's line ran under a docked panel and
+    # past the window's edge
+    wrap = max(width - 2 * MARGIN - 2 * imgui.get_style().window_padding.x, 100)
+    imgui.push_text_wrap_pos(wrap)
+    imgui.text_wrapped(text + ("" if fraction is not None else " ..."))
+    imgui.pop_text_wrap_pos()
     if fraction is not None:
-        imgui.progress_bar(fraction, (max(imgui.calc_text_size(text).x, 200), 0))
+        imgui.progress_bar(fraction, (min(max(imgui.calc_text_size(text).x, 200), wrap), 0))
     imgui.end()
     v.notice = text
 
