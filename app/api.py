@@ -492,7 +492,10 @@ def view(scene="simple", device: str = "auto", size=None, frames: int = None,
     opening = DevicesOpening(device)        # while the window opens and the scene is read
     with ThreadPoolExecutor(1, thread_name_prefix="read-scene") as pool:
         reading = pool.submit(read)         # beside the window's opening (0.2-0.4 s under Xvfb)
-        viewer = Viewer(lambda: opening.result()[0], reading.result, screenshot_dir)
+        # the window opens at the size asked for, where it is one (read() refuses another)
+        known = tuple(size) if isinstance(size, (tuple, list)) and len(size) == 2 and \
+            all(isinstance(v, int) and v > 0 for v in size) else None
+        viewer = Viewer(lambda: opening.result()[0], reading.result, screenshot_dir, image_size=known)
     written = None
     try:
         viewer.run(frames)

@@ -1294,3 +1294,17 @@ def test_input_while_a_scene_opens_waits_for_it(viewer, monkeypatch):
     assert viewer.selected is None and not viewer.loading and viewer.message == "loaded simple", viewer.message
     viewer.on_key(glfw.KEY_R, glfw.PRESS, 0)        # once open, as before
     assert called == ["reset"]
+
+
+def test_a_scene_opened_from_the_panel_takes_the_size_the_viewer_was_given(viewer, monkeypatch):
+    """`view --size WxH` holds for the scenes the panel opens too (a user sparing the device), not
+    only the first; without it a scene opens at its own size."""
+    settle(viewer)
+    monkeypatch.setattr(viewer, "image_size", (48, 32))
+    viewer.load_scene("simple")
+    assert viewer.message == "loaded simple" and viewer.size == (48, 32), viewer.message
+    assert (viewer.renderer.scene.settings.width, viewer.renderer.scene.settings.height) == (48, 32)
+    monkeypatch.setattr(viewer, "image_size", None)
+    viewer.load_scene("cornell-box")
+    own = load_scene("cornell-box").settings
+    assert viewer.size == (own.width, own.height), viewer.size

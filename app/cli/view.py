@@ -16,7 +16,7 @@ def cmd_view(args):
     except UserError:
         find_scene(args.scene)           # a name that names no scene is the first thing to say
         raise
-    api.view(lambda: apply_render_options(api.load(args.scene), args), (args.device or ["auto"])[0],
+    api.view(lambda: apply_render_options(api.load(args.scene), args), (args.device or ["auto"])[0], size=args.size,
              frames=args.frames, screenshot_dir=args.screenshot_dir, screenshot=args.screenshot)
     return 0
 

@@ -101,13 +101,20 @@ class SceneOpening:
         return renderer
 
     def load_scene(self, name: str):
-        """Opens a scene, at its own size; whatever goes wrong is shown in the panel and
-        printed, and the window keeps the scene it had. Call it between turns of the loop (the
-        panel asks through requested_scene): it draws frames of its own as it goes."""
+        """Opens a scene, at its own size or the one the viewer was given (view --size: a user
+        sparing the CPU or the GPU); whatever goes wrong is shown in the panel and printed, and
+        the window keeps the scene it had. Call it between turns of the loop (the panel asks
+        through requested_scene): it draws frames of its own as it goes."""
         started = time.perf_counter()
         self.selected = None          # the shape picked, of the scene the renderer is about to leave
+
+        def read():
+            scene = load_scene(name)
+            if self.image_size is None:
+                return scene
+            return scene.with_settings(width=self.image_size[0], height=self.image_size[1])
         try:
-            self._begin(lambda: self._open(*self._compile(load_scene(name)), self.renderer), f"opening {name}")
+            self._begin(lambda: self._open(*self._compile(read()), self.renderer), f"opening {name}")
             scene = self._wait().scene
             self.renderer.resize(scene.settings.width, scene.settings.height)
         except Exception as e:   # a viewer must outlive any bad file, ours or a library's error

@@ -262,11 +262,12 @@ def draw_panel(v):
         layout.check("built-in")
         if changed:
             v.requested_scene = names[current]
-        _, v.scene_file = imgui.input_text("file", v.scene_file)
+        # a file, or a built-in scene's name; Enter opens it as the button does
+        entered, v.scene_file = imgui.input_text("file", v.scene_file, imgui.InputTextFlags_.enter_returns_true)
         layout.check("file")
         opened = imgui.button("open file")
         layout.check("open file")
-        if opened:
+        if opened or entered:
             v.requested_scene = v.scene_file
 
     if layout.header("Speed", imgui.TreeNodeFlags_.default_open):

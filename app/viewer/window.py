@@ -74,21 +74,23 @@ def preview_scale(seconds_per_pixel: float, width: int, height: int) -> int:
 
 
 class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
-    def __init__(self, backend, scene, screenshot_dir="screenshots", window_size=None):
+    def __init__(self, backend, scene, screenshot_dir="screenshots", window_size=None, image_size=None):
         """Renders `scene` at its settings' size (pathtrace view --size sets it), in a window of
         window_size (default: that size, fitted to the screen).
 
         `backend` and `scene` may be functions that return them (pathtrace view passes those):
-        the window then opens at a size fitted to DEFAULT_SIZE until the scene is read, and
+        the window then opens at a size fitted to image_size, the size the scene will be rendered
+        at where it is known before it is read (view --size), else DEFAULT_SIZE, until it is read, and
         stays live, saying what it waits for, while they are called in a worker thread begun
         before it (reading the file, opening the device), the BVH builds and the kernels compile."""
         self.opened_at = time.perf_counter()    # until the first image (SceneOpening.say_first_image)
         self.loading = True           # a scene is being opened (_wait): input that needs the renderer waits
+        self.image_size = image_size  # view --size, which scenes opened from the panel take too
         require_display()
         # the scene's opening needs no window: it begins beside the window's (0.3-0.5 s on Xvfb)
         self._begin(lambda: self._start(backend, scene), "opening the scene")
         try:
-            screen, fitted = self._open_window(scene, window_size)
+            screen, fitted = self._open_window(scene, window_size, image_size)
             self._init_display()
         except BaseException:
             self._abandon()
@@ -143,7 +145,7 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         self._new_image, self._last_upload = False, 0.0
 
     # --- set-up -----------------------------------------------------------------------------
-    def _open_window(self, scene, window_size) -> tuple:
+    def _open_window(self, scene, window_size, image_size=None) -> tuple:
         """The window, its OpenGL context and its GUI; (the screen's work area, whether the
         window's size is fitted to the image's)."""
         import glfw
@@ -158,7 +160,7 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         screen = glfw.get_monitor_workarea(monitor)[2:] if monitor else DEFAULT_SIZE
         fitted = window_size is None
         if fitted:
-            given = DEFAULT_SIZE if callable(scene) else (scene.settings.width, scene.settings.height)
+            given = (image_size or DEFAULT_SIZE) if callable(scene) else (scene.settings.width, scene.settings.height)
             window_size = fit_window(*given, screen)
         glfw.window_hint(glfw.CONTEXT_VERSION_MAJOR, 3)
         glfw.window_hint(glfw.CONTEXT_VERSION_MINOR, 3)
