@@ -2,7 +2,8 @@
  * (a constant colour is a 1x1 map). Direction d maps to
  *     u = 1/2 + atan2(d.x, -d.z) / (2 pi) + rotation,   v = acos(d.y) / pi,
  * so the map's centre column lies along -z and its top row is straight up (+y). Lookups are
- * bilinear, wrap around in u, clamp in v, and keep the full HDR range. */
+ * bilinear, wrap around in u, clamp in v, and keep the full HDR range; the row at v is the
+ * host's mapping (texel centres, or Mitsuba 3's first and last rows at the poles). */
 
 float2 direction_to_latlong(float3 d, float rotation)
 {
@@ -18,7 +19,7 @@ float3 lookup_environment(const global float4 *env, const RenderParams *p, float
         return env[0].xyz * p->env_scale.xyz;
     float2 uv = direction_to_latlong(d, p->env_rotation);
     float x = uv.x * p->env_width - 0.5f;
-    float y = clamp(uv.y * p->env_height - 0.5f, 0.0f, (float)(p->env_height - 1));
+    float y = clamp(uv.y * p->env_row_scale + p->env_row_offset, 0.0f, (float)(p->env_height - 1));
     float fx = floor(x), fy = floor(y);
     float ax = x - fx, ay = y - fy;
     int x0 = ((int)fx + p->env_width) % p->env_width;

@@ -124,6 +124,8 @@ typedef struct {
     int env_width;
     int env_height;
     float env_rotation;  /* turn of the environment about +y, as a fraction of a full turn */
+    float env_row_scale; /* the map's row, in texels, at v = acos(y) / pi: v * env_row_scale + env_row_offset */
+    float env_row_offset;  /* (app/scene/environment.py: Environment.row_mapping) */
     int num_lights;      /* entries of the light table */
     float env_pick;      /* probability that next-event estimation samples the environment */
     int num_spheres;     /* the first triangle's primitive index */
@@ -137,6 +139,7 @@ typedef struct {
     int filter_type;     /* the pixel filter (app/filters.py: FILTERS index) */
     int rr_rule;         /* Russian roulette's rule (RR_OFF, RR_ALBEDO, RR_THROUGHPUT) */
     int layout;          /* the compiled scene's LAYOUT_* bits (kernels/scene.cl) */
+    int pad[2];          /* to the float4s' alignment, which the struct has anyway */
 } RenderParams;
 
 /* One entry of the light table: a light of type `type` (the LIGHT_* tags of

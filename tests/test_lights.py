@@ -32,6 +32,13 @@ kernel void env_sample(global const float *marginal, global const float *conditi
     float3 d = sample_environment_map(marginal, conditional, &p, u[i].x, u[i].y);
     out[i] = (float4)(d, pdf_environment_map(marginal, conditional, &p, d));
 }
+kernel void env_lookup(global const float4 *env, global const RenderParams *params, global const float4 *d,
+                       global float4 *out)
+{
+    int i = get_global_id(0);
+    RenderParams p = params[0];
+    out[i] = (float4)(lookup_environment(env, &p, d[i].xyz), 0.0f);
+}
 kernel void env_pdf(global const float *marginal, global const float *conditional,
                     global const RenderParams *params, global const float4 *d, global float *out)
 {
@@ -147,6 +154,7 @@ def env_params(env):
     p = np.zeros(1, RENDER_PARAMS)
     h, w, _ = env.image.shape
     p["env_width"], p["env_height"], p["env_rotation"] = w, h, env.rotation / 360.0
+    p["env_row_scale"], p["env_row_offset"] = env.row_mapping()
     return p
 
 
@@ -418,3 +426,24 @@ def test_the_light_tree_lowers_the_variance_of_many_lights_and_keeps_the_mean(ba
     (tree, var_tree, n_tree), (plain, var_plain, n_plain) = images["tree", True], images["tree", False]
     ok, p, threshold = z_test(tree, var_tree / n_tree, plain, var_plain / n_plain, block=4)
     assert ok, f"smallest p-value {p:.3g} below the Sidak threshold {threshold:.3g}"
+
+
+@pytest.mark.parametrize("rows", ["centres", "poles"])
+def test_a_maps_rows_lie_where_its_convention_puts_them(kernels, rows):
+    """A map whose every row holds its row's number, looked up down a meridian: pathtrace's rows
+    (and pbrt-v4's lat-long lookups) are texel centres, (r + 1/2) / H of the way from the zenith;
+    Mitsuba 3's envmap puts its first row at the zenith and its last at the nadir, r / (H - 1) of
+    the way (src/emitters/envmap.cpp: uv * (res - 1)), which its envmaps take (`rows = "poles"`).
+    A helper's render of a 32-row gradient beside Mitsuba 3's differed by up to half a row."""
+    h, w = 5, 4
+    image = np.repeat(np.arange(h, dtype=np.float32)[:, None, None], w, 1).repeat(3, 2)
+    env = Environment(image, rows=rows)
+    theta = np.linspace(0.0, np.pi, 41)
+    d = np.stack([np.sin(theta), np.cos(theta), 0 * theta, 0 * theta], -1).astype(np.float32)
+    out = np.zeros((len(d), 4), np.float32)
+    flat = np.concatenate([image, np.zeros((h, w, 1), np.float32)], -1).reshape(-1, 4)
+    params = env_params(env)
+    params["env_scale"] = 1.0
+    kernels(SOURCE)("env_lookup", len(d), flat, params, d, out)
+    row = theta / np.pi * (h - 1) if rows == "poles" else np.clip(theta / np.pi * h - 0.5, 0, h - 1)
+    np.testing.assert_allclose(out[:, 0], row, atol=2e-5)

@@ -163,6 +163,7 @@ def test_convert_writes_toml_that_reads_back_the_same_scene(tmp_path, name):
             assert x.type == y.type
             np.testing.assert_allclose(x.mean(), y.mean(), rtol=1e-6)
             np.testing.assert_allclose(x.params.get("to_uv", np.eye(3)), y.params.get("to_uv", np.eye(3)), rtol=1e-6)
+    assert a.environment.rows == b.environment.rows == ("poles" if name == "envmap-spheres" else "centres")
     if name == "meshes":     # file meshes stay references, relative to the TOML file
         text = out.read_text()
         assert 'file = "../' in text and "matrix = " in text

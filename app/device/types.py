@@ -72,6 +72,8 @@ RENDER_PARAMS = np.dtype([
     ("env_width", np.int32),
     ("env_height", np.int32),
     ("env_rotation", np.float32),
+    ("env_row_scale", np.float32),  # the map's row at v = acos(y) / pi: v * scale + offset (Environment.rows)
+    ("env_row_offset", np.float32),
     ("num_lights", np.int32),
     ("env_pick", np.float32),
     ("num_spheres", np.int32),
@@ -83,6 +85,7 @@ RENDER_PARAMS = np.dtype([
     ("filter_type", np.int32),
     ("rr_rule", np.int32),
     ("layout", np.int32),           # the compiled scene's LAYOUT_* bits (kernels/scene.cl)
+    ("pad", np.int32, 2),           # to the float4s' alignment, as the device pads the struct
 ])
 
 LIGHT = np.dtype([

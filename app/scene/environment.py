@@ -22,6 +22,7 @@ class Environment:
     rotation: float = 0.0      # degrees about +y
     source: str = "constant"   # a file path, or "constant"
     resampled: bool = False    # the image is not the file's (a pbrt equal-area map made lat-long)
+    rows: str = "centres"      # where its rows lie (ROWS; row_mapping)
 
     name = "environment"
     formats = {"mitsuba": ("constant", "envmap"), "pbrt": "infinite"}
@@ -35,15 +36,28 @@ class Environment:
                       "scene file (TOML: or a map of assets/envmaps)"),
         Parameter("intensity", "number", 1.0, low=0, mitsuba="scale", pbrt="scale", doc="a factor on it"),
         Parameter("rotation", "number", 0.0, doc="degrees about +y (Mitsuba 3's to_world and pbrt-v4's CTM turn it)"),
+        Parameter("rows", "name", "centres", choices=("centres", "poles"), mitsuba_default="poles",
+                  doc="a map's rows: each the band of 180 / H degrees about its centre, or, as Mitsuba 3's "
+                      "envmap reads them, the first and last centred on the poles, 180 / (H - 1) degrees apart"),
         Parameter(None, "number", pbrt="illuminance", pbrt_default=-1.0,
                   doc="where positive, the illuminance it gives an upward surface (pbrt-v4's Light::Create)"))
-    mitsuba_plugins = {"constant": ("color",), "envmap": ("map", "intensity")}     # which each emitter has
+    mitsuba_plugins = {"constant": ("color",), "envmap": ("map", "intensity", "rows")}     # which each emitter has
 
     def __repr__(self) -> str:
         from pathtrace.scene.named import vector
         h, w, _ = self.image.shape
         what = f"constant {vector(self.image[0, 0])}" if (h, w) == (1, 1) else f"{self.source} ({w}x{h})"
         return f"<Environment {what}, intensity {self.intensity:g}, rotation {self.rotation:g}>"
+
+    def row_mapping(self) -> tuple:
+        """(scale, offset): the map's row, in texels, at v = acos(y) / pi is v * scale + offset
+        (kernels/environment.cl), clamped to the first and last rows. "centres": row r covers v in
+        [r, r + 1] / H, its centre at (r + 1/2) / H, as pbrt-v4's lat-long lookups and pathtrace's
+        own maps; "poles": Mitsuba 3's envmap, row r at v = r / (H - 1), the first at the zenith
+        and the last at the nadir (src/emitters/envmap.cpp, eval_spectrum: uv * (res - 1), its
+        sampling's sin(y pi / (H - 1)) likewise)."""
+        h = self.image.shape[0]
+        return (h - 1.0, 0.0) if self.rows == "poles" and h > 1 else (float(h), -0.5)
 
     @classmethod
     def constant(cls, color, intensity=1.0):
@@ -64,7 +78,9 @@ class Environment:
             raise ValueError("give either 'color' or 'map', not both")
         intensity, rotation = values.get("intensity", 1.0), values.get("rotation", 0.0) % 360.0
         if "map" in values:
-            return cls.from_file(find(values["map"]), intensity, rotation, where=f"{where}.map")
+            environment = cls.from_file(find(values["map"]), intensity, rotation, where=f"{where}.map")
+            environment.rows = values.get("rows", "centres")
+            return environment
         return cls(cls.constant(values.get("color", 1.0)).image, intensity, rotation)
 
     @classmethod
@@ -77,8 +93,10 @@ class Environment:
             raise ValueError("filename: an envmap needs one")
         if values.get("intensity", 1.0) < 0:
             raise ValueError("scale: must not be negative")
-        return cls.from_file(folder / values["map"], values.get("intensity", 1.0),
-                             cls.mitsuba_rotation(to_world(), where, warn), where=where)
+        environment = cls.from_file(folder / values["map"], values.get("intensity", 1.0),
+                                    cls.mitsuba_rotation(to_world(), where, warn), where=where)
+        environment.rows = values.get("rows", "poles")
+        return environment
 
     @staticmethod
     def mitsuba_rotation(to_world: np.ndarray, where: str, warn) -> float:

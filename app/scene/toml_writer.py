@@ -132,6 +132,8 @@ def scene_toml(scene: Scene, out: Path) -> str:
         lines.append(f"color = {_value(_color(env.image[0, 0]))}")
     else:
         lines.append(f"map = {_value(rel(env.source))}")
+        if env.rows != "centres":
+            lines.append(f"rows = {_value(env.rows)}")
     lines += [f"intensity = {_value(env.intensity)}", f"rotation = {_value(env.rotation)}", "",
               "[render]", f"width = {s.width}", f"height = {s.height}", f"spp = {s.spp}",
               f"max_depth = {s.max_depth}", f"russian_roulette = {_value(s.russian_roulette)}",
