@@ -442,7 +442,7 @@ def test_a_window_that_fails_to_open_stops_the_scenes_opening(display, backend, 
     made = []
     monkeypatch.setattr(opening, "Renderer", lambda *args, **kwargs: made.append(args))
 
-    def no_window(self, scene, size):
+    def no_window(self, scene, *sizes):
         raise UserError("pathtrace view: could not open an OpenGL 3.3 window on this display")
     monkeypatch.setattr(Viewer, "_open_window", no_window)
     failed = threading.Event()
