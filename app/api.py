@@ -161,6 +161,13 @@ class Snapshot:
             (f", aovs {', '.join(self.aovs)}>" if self.aovs else ">")
 
 
+def checked_size(size) -> tuple:
+    """(width, height) of a size given as two integers in range, else a UserError."""
+    if not isinstance(size, (tuple, list)) or len(size) != 2:
+        raise UserError(f"size: give (width, height), got {short(size)}")
+    return tuple(_integer("size", v, *SETTING_RANGES["width"]) for v in size)
+
+
 def settings_for(scene: Scene, spp=None, size=None, seed=None, max_depth=None, rr=None, nee=None, integrator=None):
     """The scene's render settings with the given ones in their place, checked (the scene's
     own fields, which a user may have changed since loading, first)."""
@@ -170,9 +177,7 @@ def settings_for(scene: Scene, spp=None, size=None, seed=None, max_depth=None, r
     if spp is not None:
         changes["spp"] = _integer("spp", spp, *SETTING_RANGES["spp"])
     if size is not None:
-        if not isinstance(size, (tuple, list)) or len(size) != 2:
-            raise UserError(f"size: give (width, height), got {short(size)}")
-        changes["width"], changes["height"] = (_integer("size", v, *SETTING_RANGES["width"]) for v in size)
+        changes["width"], changes["height"] = checked_size(size)
     if seed is not None:
         changes["seed"] = _integer("seed", seed, *SETTING_RANGES["seed"])
     if max_depth is not None:
@@ -484,6 +489,8 @@ def view(scene="simple", device: str = "auto", size=None, frames: int = None,
     require_display(scene if isinstance(scene, str) else "simple")    # before any device work
     if frames is not None:
         frames = _integer("frames", frames, 1, 2**31 - 1)
+    if size is not None:
+        size = checked_size(size)           # before the window opens at it
 
     def read():
         """The scene, read in a thread of its own while the window opens and says so."""
@@ -492,10 +499,7 @@ def view(scene="simple", device: str = "auto", size=None, frames: int = None,
     opening = DevicesOpening(device)        # while the window opens and the scene is read
     with ThreadPoolExecutor(1, thread_name_prefix="read-scene") as pool:
         reading = pool.submit(read)         # beside the window's opening (0.2-0.4 s under Xvfb)
-        # the window opens at the size asked for, where it is one (read() refuses another)
-        known = tuple(size) if isinstance(size, (tuple, list)) and len(size) == 2 and \
-            all(isinstance(v, int) and v > 0 for v in size) else None
-        viewer = Viewer(lambda: opening.result()[0], reading.result, screenshot_dir, image_size=known)
+        viewer = Viewer(lambda: opening.result()[0], reading.result, screenshot_dir, image_size=size)
     written = None
     try:
         viewer.run(frames)

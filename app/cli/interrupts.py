@@ -17,9 +17,13 @@ def _interrupt(signum, frame):
     ran a weak reference's callback or a __del__ (a garbage collection between two launches), the
     exception is dropped ("Exception ignored in ...") and a render went on to its end; the
     commands' progress callbacks call check_interrupt after each launch."""
+    _remember(signum)
+    raise KeyboardInterrupt
+
+
+def _remember(signum):
     global _interrupted, _signal
     _interrupted, _signal = True, signum
-    raise KeyboardInterrupt
 
 
 def check_interrupt():
@@ -81,6 +85,5 @@ class FinalWrite:
         for s, handler in self.saved.items():
             signal.signal(s, handler)
         if self.received is not None and kind is not KeyboardInterrupt:
-            global _interrupted, _signal
-            _interrupted, _signal = True, self.received
+            _remember(self.received)
             raise KeyboardInterrupt

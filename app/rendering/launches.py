@@ -33,6 +33,7 @@ class Progressive:
         self.renderer, self.budget = renderer, budget
         self.seconds_per_pixel = None   # device seconds per pixel and sample, as last measured
         self._recent = deque()          # (pixel samples, device seconds) of the launches of the last pass or more
+        self._recent_pixels = self._recent_seconds = 0.0    # their sums
         self._queued = deque()          # (first event, last event, rows, spp, epoch)
         self.paused = False             # queue nothing new (the window's denoiser needs the CPU)
         self._restart()
@@ -56,8 +57,7 @@ class Progressive:
         """Pixel samples per device second over the launches of the last whole image's worth of
         samples (a band of sky rows alone renders many times as fast as one of the scene's), or
         0 before the first launch ends."""
-        seconds = sum(s for _, s in self._recent)
-        return sum(p for p, _ in self._recent) / seconds if seconds else 0.0
+        return self._recent_pixels / self._recent_seconds if self._recent else 0.0
 
     def step(self) -> bool:
         """Collects finished launches and queues new ones; never blocks. Returns whether any
@@ -78,9 +78,13 @@ class Progressive:
             seconds = max(_device_seconds(first, last), 1e-9)
             self.seconds_per_pixel = seconds / pixels
             self._recent.append((pixels, seconds))
+            self._recent_pixels += pixels
+            self._recent_seconds += seconds
             image = self.renderer.width * self.renderer.height
-            while len(self._recent) > 1 and sum(p for p, _ in self._recent) - self._recent[0][0] >= image:
-                self._recent.popleft()
+            while len(self._recent) > 1 and self._recent_pixels - self._recent[0][0] >= image:
+                old_pixels, old_seconds = self._recent.popleft()
+                self._recent_pixels -= old_pixels
+                self._recent_seconds -= old_seconds
             if epoch == self._epoch:
                 finished = True
                 whole = rows[1] >= self.renderer.height

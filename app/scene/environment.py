@@ -22,7 +22,7 @@ class Environment:
     rotation: float = 0.0      # degrees about +y
     source: str = "constant"   # a file path, or "constant"
     resampled: bool = False    # the image is not the file's (a pbrt equal-area map made lat-long)
-    rows: str = "centres"      # where its rows lie (ROWS; row_mapping)
+    rows: str = "centres"      # where a map's rows lie: "centres" or Mitsuba 3's "poles" (row_mapping)
 
     name = "environment"
     formats = {"mitsuba": ("constant", "envmap"), "pbrt": "infinite"}
@@ -65,9 +65,9 @@ class Environment:
         return cls(image=image, intensity=intensity, source="constant")
 
     @classmethod
-    def from_file(cls, path: Path, intensity=1.0, rotation=0.0, where="environment.map"):
+    def from_file(cls, path: Path, intensity=1.0, rotation=0.0, where="environment.map", rows="centres"):
         from pathtrace.io.images import read_hdr
-        return cls(read_hdr(path, where), intensity, rotation, str(path))
+        return cls(read_hdr(path, where), intensity, rotation, str(path), rows=rows)
 
     @classmethod
     def from_values(cls, values: dict, find, where: str):
@@ -78,9 +78,7 @@ class Environment:
             raise ValueError("give either 'color' or 'map', not both")
         intensity, rotation = values.get("intensity", 1.0), values.get("rotation", 0.0) % 360.0
         if "map" in values:
-            environment = cls.from_file(find(values["map"]), intensity, rotation, where=f"{where}.map")
-            environment.rows = values.get("rows", "centres")
-            return environment
+            return cls.from_file(find(values["map"]), intensity, rotation, f"{where}.map", values.get("rows", "centres"))
         return cls(cls.constant(values.get("color", 1.0)).image, intensity, rotation)
 
     @classmethod
@@ -93,10 +91,8 @@ class Environment:
             raise ValueError("filename: an envmap needs one")
         if values.get("intensity", 1.0) < 0:
             raise ValueError("scale: must not be negative")
-        environment = cls.from_file(folder / values["map"], values.get("intensity", 1.0),
-                                    cls.mitsuba_rotation(to_world(), where, warn), where=where)
-        environment.rows = values.get("rows", "poles")
-        return environment
+        return cls.from_file(folder / values["map"], values.get("intensity", 1.0),
+                             cls.mitsuba_rotation(to_world(), where, warn), where, values.get("rows", "poles"))
 
     @staticmethod
     def mitsuba_rotation(to_world: np.ndarray, where: str, warn) -> float:
