@@ -4,13 +4,14 @@ times the same command once they are built). Each row times `python -m pathtrace
 --size WxH --spp 1 -o OUT.exr` in fresh processes, from process start to exit, Python's start-up
 and imports included, and checks that the image was written:
 
-- cold: once, with every cache the render reads empty: a fresh XDG_CACHE_HOME, which holds
+- cold: the median of --repeats runs, each with every cache the render reads empty: a fresh XDG_CACHE_HOME, which holds
   pathtrace's kernel, BVH and scene caches (app/io/cache_files.py cache_dir, app/compiler/bvh_cache.py,
   app/scene/read_cache.py; PATHTRACE_CACHE, PATHTRACE_BVH_CACHE and PATHTRACE_SCENE_CACHE are
   unset), a fresh POCL_CACHE_DIR (PoCL's cache of the programs it
   built, which pathtrace relies on there in place of its own) and a fresh CUDA_CACHE_PATH (the
-  NVIDIA driver's cache of compiled kernels): a first start;
-- warm: the same command with the same folders, which the cold run filled, the best of
+  NVIDIA driver's cache of compiled kernels): a first start, whose time varies by a few tenths
+  of a second from run to run on a GPU's host (docs/benchmarks.md), so one run is not its figure;
+- warm: the same command with the same folders, which the last cold run filled, the best of
   --repeats: a scene opened again.
 
 The rows: --scenes (by default pathtrace.bench.default_scenes.FIRST_IMAGE_SCENES): built-in scenes, `meshes850`
@@ -27,6 +28,7 @@ gets no Mitsuba column, and a line says so."""
 import os
 import shutil
 import site
+import statistics
 import sys
 import tempfile
 from dataclasses import dataclass
@@ -38,7 +40,7 @@ from pathtrace.bench.scenes import write_meshes
 from pathtrace.device.driver_caches import for_children
 from pathtrace.errors import UserError
 from pathtrace.io.files import shown
-from pathtrace.bench.load import best_time, cache_bytecode
+from pathtrace.bench.load import best_time, cache_bytecode, run_times
 from pathtrace.bench.mitsuba_timing import mitsuba_load_command
 from pathtrace.scene import load_scene
 
@@ -55,14 +57,16 @@ class FirstImage:
     device: str                 # pathtrace's --device
     width: int
     height: int
-    cold_seconds: float         # command to image, every cache empty
-    warm_seconds: float         # the same with the caches the cold run filled, best of the repeats
+    cold_seconds: float         # command to image, every cache empty: the median of the repeats
+    warm_seconds: float         # the same with the caches the cold runs filled, best of the repeats
     cache_folder: str           # the cold run's caches (removed after the bench)
     cache_files_before: int     # files in it before the cold run
     cache_files_after: int      # and after it
     mitsuba_variant: str = ""
     mitsuba_cold_seconds: float = None
     mitsuba_warm_seconds: float = None
+    cold_runs: list = None      # each cold run's seconds, pathtrace's and Mitsuba's
+    mitsuba_cold_runs: list = None
 
 
 def validate(args):
@@ -128,9 +132,10 @@ def run(device: str, scenes, scene_files, size: tuple, repeats: int, mitsuba_pyt
             caches = folder / f"caches{k}"
             env = cache_env(caches)
             before = files_in(caches)
-            cold = best_time(render, 1, folder, env, out)
-            r = FirstImage(name, what, device, *size, cold, best_time(render, repeats, folder, env, out),
-                           str(caches), before, files_in(caches))
+            cold = run_times(render, repeats, folder, env, out, lambda: shutil.rmtree(caches, ignore_errors=True))
+            r = FirstImage(name, what, device, *size, statistics.median(cold),
+                           best_time(render, repeats, folder, env, out), str(caches), before, files_in(caches),
+                           cold_runs=cold)
             note = time_mitsuba(r, scene, folder / f"mitsuba{k}", mitsuba_python, variant, repeats) \
                 if mitsuba_python else ""
             log(format_row(r))
@@ -160,7 +165,9 @@ def time_mitsuba(r: FirstImage, scene_name: str, folder: Path, python: str, vari
     command = mitsuba_load_command(python, variant, xml, out)
     env = mitsuba_env(folder / "home")
     r.mitsuba_variant = variant
-    r.mitsuba_cold_seconds = best_time(command, 1, folder, env, out)
+    r.mitsuba_cold_runs = run_times(command, repeats, folder, env, out,
+                                    lambda: shutil.rmtree(env["HOME"], ignore_errors=True))
+    r.mitsuba_cold_seconds = statistics.median(r.mitsuba_cold_runs)
     r.mitsuba_warm_seconds = best_time(command, repeats, folder, env, out)
     return ""
 

@@ -59,13 +59,21 @@ def cache_bytecode():
 
 
 def best_time(command, repeats: int, cwd, env=None, output: Path = None) -> float:
-    """The shortest of `repeats` runs of `command`, from process start to exit; a failure is one
-    line naming the command and its last line of output. output: the image the command writes,
-    removed before each run; a run that leaves none fails too."""
+    """The shortest of `repeats` runs of `command` (run_times)."""
+    return min(run_times(command, repeats, cwd, env, output))
+
+
+def run_times(command, repeats: int, cwd, env=None, output: Path = None, before=None) -> list:
+    """The seconds of `repeats` runs of `command`, each from process start to exit; a failure is
+    one line naming the command and its last line of output. output: the image the command writes,
+    removed before each run; a run that leaves none fails too. before(): called before each run
+    (a cold run's caches emptied)."""
     times = []
     for _ in range(repeats):
         if output is not None:
             output.unlink(missing_ok=True)
+        if before is not None:
+            before()
         start = time.perf_counter()
         r = run_command(command, cwd, env)
         times.append(time.perf_counter() - start)
@@ -73,7 +81,7 @@ def best_time(command, repeats: int, cwd, env=None, output: Path = None) -> floa
             raise UserError(f"bench: {command_line(command)} failed: {last_line(r)}")
         if output is not None and not (output.is_file() and output.stat().st_size):
             raise UserError(f"bench: {command_line(command)} exited 0 but wrote no {shown(output.name)}")
-    return min(times)
+    return times
 
 
 def command_line(command, words: int = 7) -> str:

@@ -160,7 +160,8 @@ def add_parser(sub):
     p.add_argument("--load-scene", action="append", metavar="FILE",
                    help="with --load or --first-image, also time this scene file (repeatable)")
     p.add_argument("--repeats", type=_int_range(1, 100), default=3,
-                   help="with --load or --first-image, the best of this many runs (default 3)")
+                   help="with --load or --first-image, the best of this many runs (default 3); "
+                        "--first-image's cold figure is the median of as many runs from empty caches")
     p.add_argument("--rounds", type=_int_range(1, 100), default=1,
                    help="time each row's render this many times (and Mitsuba's, with --mitsuba) and "
                         "count the medians (default 1)")
