@@ -447,3 +447,33 @@ def test_a_maps_rows_lie_where_its_convention_puts_them(kernels, rows):
     kernels(SOURCE)("env_lookup", len(d), flat, params, d, out)
     row = theta / np.pi * (h - 1) if rows == "poles" else np.clip(theta / np.pi * h - 0.5, 0, h - 1)
     np.testing.assert_allclose(out[:, 0], row, atol=2e-5)
+
+
+ENVIRONMENT_ALONE = {
+    "toml": '[camera]\neye = [0, 0, 0]\nlook_at = [0, 0, 1]\n[environment]\ncolor = [0.2, 0.4, 0.8]\n'
+            '[render]\nwidth = 12\nheight = 8\n',
+    "xml": '<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm"><integer name="width" value="12"/>'
+           '<integer name="height" value="8"/></film></sensor>'
+           '<emitter type="constant"><rgb name="radiance" value="0.2, 0.4, 0.8"/></emitter></scene>',
+    "pbrt": 'Film "rgb" "integer xresolution" 12 "integer yresolution" 8\nCamera "perspective"\nWorldBegin\n'
+            'LightSource "infinite" "rgb L" [0.2 0.4 0.8]\n',
+}
+
+
+@pytest.mark.parametrize("integrator", ["path", "bdpt"])
+@pytest.mark.parametrize("suffix", sorted(ENVIRONMENT_ALONE))
+def test_a_scene_of_its_environment_alone_renders_it(tmp_path, capsys, suffix, integrator):
+    """A file with an environment and no shapes renders the environment, as Mitsuba 3 and pbrt-v4
+    render such a file (the readers refused it; the tree of no primitives is a root of four empty
+    slots, app/compiler/bvh.py), with one line saying there are no shapes: every pixel of a
+    constant sky is its radiance."""
+    import pathtrace
+    path = tmp_path / f"sky.{suffix}"
+    path.write_text(ENVIRONMENT_ALONE[suffix])
+    scene = pathtrace.load(str(path))
+    err = capsys.readouterr().err
+    assert err.count("the scene has no shapes; pathtrace renders its environment alone") == 1, err
+    assert len(scene.spheres) == len(scene.meshes) == len(scene.shapes) == 0
+    image = pathtrace.render(scene, spp=2, integrator=integrator)
+    assert image.shape == (8, 12, 3)
+    assert np.allclose(image, [0.2, 0.4, 0.8], rtol=1e-5), (image.min(axis=(0, 1)), image.max(axis=(0, 1)))

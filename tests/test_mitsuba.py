@@ -242,7 +242,6 @@ ERRORS = [
     ('<shape type="sphere"><bsdf type="diffuse"><rgb name="reflectance" value="1, 2"/></bsdf></shape>',
      None, "value must be 1 or 3 numbers"),
     ('<emitter type="envmap"><string name="filename" value="none.exr"/></emitter>' + SPHERE, None, "none.exr"),
-    ('<bsdf type="diffuse" id="x"/>', None, "the scene has no shapes pathtrace can render"),
     ('<shape type="sphere"><emitter type="area"><rgb name="radiance" value="-1"/></emitter></shape>',
      None, "a colour must not be negative"),
     ('<shape type="sphere"><bsdf type="diffuse"><rgb name="reflectance" value="1.5"/></bsdf></shape>',

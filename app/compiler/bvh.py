@@ -148,23 +148,27 @@ class _Tree(BinaryTree):
 
 def build_bvh(lo: np.ndarray, hi: np.ndarray, num_spheres: int = None,
               queue: cl.CommandQueue = None, progress: Callable[[float], None] = None) -> BVH:
-    """A BVH over N >= 1 primitives given by their boxes lo..hi ((N, 3) each, finite): spheres
+    """A BVH over the N primitives given by their boxes lo..hi ((N, 3) each, finite): spheres
     first (num_spheres of them; default: all), then triangles, which leaves keep apart. It is
     built on `queue`'s device (default: builder_for()'s); progress, if given, is called with the
-    fraction done after each PLOC pass."""
+    fraction done after each PLOC pass. Of no primitives (a scene of its environment alone, as
+    Mitsuba 3 renders one), a root whose four slots are empty, which no ray enters."""
     lo, hi = np.asarray(lo, np.float32), np.asarray(hi, np.float32)
     if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
         raise ValueError("build_bvh: primitive boxes must be finite")
     n = len(lo)
     num_spheres = n if num_spheres is None else num_spheres
-    if n == 1:   # a lone primitive: the root's first slot; the others empty (kernels/types.h)
+    if n <= 1:   # a lone primitive: the root's first slot; the others empty (kernels/types.h)
         nodes = np.zeros(1, BVH_NODE)
-        for axis, name in enumerate("xyz"):
-            nodes[f"lo_{name}"] = [np.nextafter(lo[0, axis], np.float32(-np.inf)), np.inf, np.inf, np.inf]
-            nodes[f"hi_{name}"] = [np.nextafter(hi[0, axis], np.float32(np.inf)), np.inf, np.inf, np.inf]
-        nodes["index"] = [0, -1, -1, -1]
-        nodes["count"] = [1 if num_spheres else -1, 0, 0, 0]
-        return BVH(nodes, np.zeros(1, np.int64), 1, 1.0)
+        for name in ("lo_x", "lo_y", "lo_z", "hi_x", "hi_y", "hi_z", "index"):
+            nodes[name] = np.inf if name != "index" else -1
+        if n:
+            for axis, name in enumerate("xyz"):
+                nodes[f"lo_{name}"][0, 0] = np.nextafter(lo[0, axis], np.float32(-np.inf))
+                nodes[f"hi_{name}"][0, 0] = np.nextafter(hi[0, axis], np.float32(np.inf))
+            nodes["index"][0, 0] = 0
+            nodes["count"][0, 0] = 1 if num_spheres else -1
+        return BVH(nodes, np.zeros(n, np.int64), 1, float(n))
     bvh = build_tree(_Tree(builder_for(queue), lo, hi), lo, hi, num_spheres, progress)
     tree_built()
     return bvh

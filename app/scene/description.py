@@ -259,6 +259,10 @@ class SceneBuilder:
             self.add_shape(replace(s, to_world=m @ np.asarray(s.to_world, np.float64)))
 
     def build(self, name, **kwargs) -> Scene:
+        if not (self.spheres or self.meshes or self.shapes or self.instance_object):
+            # Mitsuba 3 and pbrt-v4 render such a file: its environment alone (an HDR map looked
+            # at), or black
+            warn(f"{kwargs.get('source') or name}: the scene has no shapes; pathtrace renders its environment alone")
         if self.instance_object:
             from pathtrace.scene.instances import Instances
             kwargs["instances"] = Instances(self.objects, np.asarray(self.instance_object, np.int32),

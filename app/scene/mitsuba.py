@@ -135,8 +135,6 @@ class _Reader(XmlScene):
                     warn(f"{node.where()}: not supported; pathtrace ignores it")
                 else:
                     handler(node)
-        if not (self.builder.spheres or self.builder.meshes or self.builder.shapes or self.builder.instance_object):
-            raise UserError(f"{self.path}: the scene has no shapes pathtrace can render")
         self.warn_unread()
         self.settings.filter = self.filter or filters.format_default("mitsuba")
         return self.builder.build(self.path.stem, camera=self.camera or self.default_camera(),

@@ -423,8 +423,6 @@ class _Reader(TomlValues):
         for name, m in self.material_tables.items():
             rows[name] = builder.materials.add(self.material(m, f"materials.{name}"), name)
         spheres, meshes, shapes, instances = (self.array(data, key) for key in ("spheres", "meshes", "shapes", "instances"))
-        if not spheres and not meshes and not shapes and not instances:
-            self.fail("spheres", "the scene needs at least one [[spheres]], [[meshes]], [[shapes]] or [[instances]] entry")
         lights = self.array(data, "lights")
         for i, s in enumerate(spheres):
             where = f"spheres[{i}]"

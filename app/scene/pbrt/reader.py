@@ -100,8 +100,6 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
                  f"{self.dropped[1]} in the meshes that had any (pbrt-v4 never hits them)")
         if self.stack:
             warn(f"{self.path}: {len(self.stack)} AttributeBegin without AttributeEnd")
-        if not (self.builder.spheres or self.builder.meshes or self.builder.shapes or self.builder.instance_object):
-            raise UserError(f"{self.path}: the scene has no shapes pathtrace can render")
         self.settings.filter = self.filter
         for name, row in self.medium_rows.items():
             if self.media[row] is None:
