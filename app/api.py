@@ -279,7 +279,8 @@ def _same_rows(a: np.ndarray, b: np.ndarray) -> bool:
 
 
 def _environment_key(environment):
-    return id(environment), id(environment.image), float(environment.intensity), float(environment.rotation)
+    return (id(environment), id(environment.image), float(environment.intensity), float(environment.rotation),
+            tuple(environment.up))
 
 
 def _lights_key(lights) -> tuple:

@@ -1,14 +1,22 @@
 /* The environment: radiance arriving from infinitely far away, stored as a latitude-longitude map
- * (a constant colour is a 1x1 map). Direction d maps to
- *     u = 1/2 + atan2(d.x, -d.z) / (2 pi) + rotation,   v = acos(d.y) / pi,
- * so the map's centre column lies along -z and its top row is straight up (+y). Lookups are
+ * (a constant colour is a 1x1 map). A world direction d is first turned into the map's frame,
+ * m = F d (F: env_frame, the host's Environment.map_from_world: where the map's zenith lies and
+ * its turn about it), then maps to
+ *     u = 1/2 + atan2(m.x, -m.z) / (2 pi),   v = acos(m.y) / pi,
+ * so the map's centre column lies along its -z and its top row along its +y. Lookups are
  * bilinear, wrap around in u, clamp in v, and keep the full HDR range; the row at v is the
  * host's mapping (texel centres, or Mitsuba 3's first and last rows at the poles). */
 
-float2 direction_to_latlong(float3 d, float rotation)
+float3 to_map_frame(const RenderParams *p, float3 d)
 {
-    float u = 0.5f + atan2(d.x, -d.z) / (2.0f * PI_F) + rotation;
-    float v = acos(clamp(d.y, -1.0f, 1.0f)) / PI_F;
+    return (float3)(dot(p->env_frame[0].xyz, d), dot(p->env_frame[1].xyz, d), dot(p->env_frame[2].xyz, d));
+}
+
+/* (u, v) of a direction m in the map's frame */
+float2 direction_to_latlong(float3 m)
+{
+    float u = 0.5f + atan2(m.x, -m.z) / (2.0f * PI_F);
+    float v = acos(clamp(m.y, -1.0f, 1.0f)) / PI_F;
     return (float2)(u - floor(u), v);
 }
 
@@ -17,7 +25,7 @@ float3 lookup_environment(const global float4 *env, const RenderParams *p, float
     /* a constant colour needs no mapping: skips atan2 and acos for most rays of most scenes */
     if (p->env_width == 1 && p->env_height == 1)
         return env[0].xyz * p->env_scale.xyz;
-    float2 uv = direction_to_latlong(d, p->env_rotation);
+    float2 uv = direction_to_latlong(to_map_frame(p, d));
     float x = uv.x * p->env_width - 0.5f;
     float y = clamp(uv.y * p->env_row_scale + p->env_row_offset, 0.0f, (float)(p->env_height - 1));
     float fx = floor(x), fy = floor(y);
@@ -31,12 +39,14 @@ float3 lookup_environment(const global float4 *env, const RenderParams *p, float
     return mix(top, bottom, ay).xyz * p->env_scale.xyz;
 }
 
-/* The inverse of direction_to_latlong. */
-float3 latlong_to_direction(float u, float v, float rotation)
+/* The world direction of the map's (u, v): direction_to_latlong's inverse, turned back by F's
+ * transpose. */
+float3 latlong_to_direction(const RenderParams *p, float u, float v)
 {
-    float phi = u - rotation - 0.5f, theta = 0.5f * v;                 /* in turns */
+    float phi = u - 0.5f, theta = 0.5f * v;                 /* in turns */
     float sin_t = SIN_TURNS(theta);
-    return (float3)(sin_t * SIN_TURNS(phi), COS_TURNS(theta), -sin_t * COS_TURNS(phi));
+    float3 m = (float3)(sin_t * SIN_TURNS(phi), COS_TURNS(theta), -sin_t * COS_TURNS(phi));
+    return p->env_frame[0].xyz * m.x + p->env_frame[1].xyz * m.y + p->env_frame[2].xyz * m.z;
 }
 
 /* The interval i of a cdf of n intervals (cdf[0] = 0, cdf[n] = 1) with cdf[i] <= x < cdf[i+1];
@@ -61,10 +71,11 @@ int find_interval(const global float *cdf, int n, float x)
 float pdf_environment_map(const global float *marginal, const global float *conditional,
                           const RenderParams *p, float3 d)
 {
-    float sin_t = sqrt(max(0.0f, 1.0f - d.y * d.y));
+    float3 m = to_map_frame(p, d);
+    float sin_t = sqrt(max(0.0f, 1.0f - m.y * m.y));
     if (sin_t <= 0.0f)
         return 0.0f;
-    float2 uv = direction_to_latlong(d, p->env_rotation);
+    float2 uv = direction_to_latlong(m);
     int w = p->env_width, h = p->env_height;
     int row = min((int)(uv.y * h), h - 1), col = min((int)(uv.x * w), w - 1);
     const global float *c = conditional + row * (w + 1);
@@ -81,5 +92,5 @@ float3 sample_environment_map(const global float *marginal, const global float *
     const global float *c = conditional + row * (w + 1);
     int col = find_interval(c, w, u2);
     float u = (col + (u2 - c[col]) / (c[col + 1] - c[col])) / w;
-    return latlong_to_direction(u, v, p->env_rotation);
+    return latlong_to_direction(p, u, v);
 }

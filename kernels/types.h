@@ -115,6 +115,7 @@ typedef struct {
     float4 lens;       /* what else the camera type reads (app/cameras/: Camera.lens) */
     float4 filter;     /* the pixel filter's parameters (kernels/filters/<name>.cl) */
     float4 world;      /* the scene's bounding sphere: centre (xyz) and radius (w) */
+    float4 env_frame[3];   /* rows of the rotation from world directions to the map's own */
     int width;         /* image size in pixels */
     int height;
     uint sample_start; /* index of the first sample of this launch (keys the RNG) */
@@ -123,7 +124,6 @@ typedef struct {
     int max_depth;     /* longest path in vertices (1: emitters seen directly); 0: unlimited */
     int env_width;
     int env_height;
-    float env_rotation;  /* turn of the environment about +y, as a fraction of a full turn */
     float env_row_scale; /* the map's row, in texels, at v = acos(y) / pi: v * env_row_scale + env_row_offset */
     float env_row_offset;  /* (app/scene/environment.py: Environment.row_mapping) */
     int num_lights;      /* entries of the light table */
@@ -139,7 +139,7 @@ typedef struct {
     int filter_type;     /* the pixel filter (app/filters.py: FILTERS index) */
     int rr_rule;         /* Russian roulette's rule (RR_OFF, RR_ALBEDO, RR_THROUGHPUT) */
     int layout;          /* the compiled scene's LAYOUT_* bits (kernels/scene.cl) */
-    int pad[2];          /* to the float4s' alignment, which the struct has anyway */
+    int pad[3];          /* to the float4s' alignment, which the struct has anyway */
 } RenderParams;
 
 /* One entry of the light table: a light of type `type` (the LIGHT_* tags of

@@ -30,6 +30,7 @@ SCENES = {  # name: (width, height, spp per render, renders)
     # Mitsuba XML scenes of tests/scenes/, which Mitsuba loads itself (their size is theirs)
     "cbox": (None, None, 1024, 16),
     "envmap-spheres": (None, None, 1024, 16),
+    "envmap-tilted": (None, None, 1024, 16),
     "meshes": (None, None, 1024, 16),
     "meshes-smaller": (None, None, 1024, 16),
     "meshes-larger": (None, None, 1024, 16),

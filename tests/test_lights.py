@@ -153,7 +153,8 @@ def test_light_table_holds_spheres_triangles_and_the_environment():
 def env_params(env):
     p = np.zeros(1, RENDER_PARAMS)
     h, w, _ = env.image.shape
-    p["env_width"], p["env_height"], p["env_rotation"] = w, h, env.rotation / 360.0
+    p["env_width"], p["env_height"] = w, h
+    p["env_frame"][0, :, :3] = env.map_from_world()
     p["env_row_scale"], p["env_row_offset"] = env.row_mapping()
     return p
 
@@ -161,7 +162,9 @@ def env_params(env):
 @pytest.fixture(scope="module")
 def sunset():
     from pathtrace.resources import resource_dir
-    env = Environment.from_file(resource_dir("assets") / "envmaps" / "venice_sunset_1k.hdr", rotation=75.0)
+    # tilted, so that the densities are of world directions turned into the map's frame
+    env = Environment.from_file(resource_dir("assets") / "envmaps" / "venice_sunset_1k.hdr", rotation=75.0,
+                                up=tuple(np.array([0.3, 0.8, -0.5]) / np.linalg.norm([0.3, 0.8, -0.5])))
     env.image = env.image[::4, ::4].copy()     # 256 x 128: faster, just as peaked
     return env
 
@@ -447,6 +450,36 @@ def test_a_maps_rows_lie_where_its_convention_puts_them(kernels, rows):
     kernels(SOURCE)("env_lookup", len(d), flat, params, d, out)
     row = theta / np.pi * (h - 1) if rows == "poles" else np.clip(theta / np.pi * h - 0.5, 0, h - 1)
     np.testing.assert_allclose(out[:, 0], row, atol=2e-5)
+
+
+@pytest.mark.parametrize("up,rotation", [((0, 1, 0), 0.0), ((0, 1, 0), 75.0), ((0, 0, 1), 0.0), ((0, 0, 1), 30.0),
+                                         ((0.3, 0.8, -0.5), 200.0), ((0, -1, 0), 10.0), ((1, 0, 0), 90.0)])
+def test_a_maps_zenith_lies_up_and_its_centre_column_where_its_rotation_turns_it(kernels, up, rotation):
+    """The map's top row is seen looking `up`, its bottom row looking away from it, and its centre
+    column (u = 1/2, the map's own -z) in the direction a turn of `rotation` degrees about the
+    zenith and then the shortest turn from +y to up give it (Environment.up, rotation;
+    world_from_map): a map of 8 rows whose texels hold their row and column, looked up in those
+    directions through the kernel."""
+    from pathtrace.scene.environment import world_from_map
+    h, w = 8, 16
+    rows, cols = np.meshgrid(np.arange(h, dtype=np.float32), np.arange(w, dtype=np.float32), indexing="ij")
+    image = np.stack([rows, cols, np.zeros_like(rows)], -1)
+    up = tuple(np.array(up, float) / np.linalg.norm(up))
+    env = Environment(image, rotation=rotation, up=up)
+    place = world_from_map(up, rotation)
+    assert np.allclose(place @ [0, 1, 0], up) and np.allclose(place.T @ place, np.eye(3))
+    # the centre column at the horizon, a quarter turn either side, the zenith, the nadir
+    towards = [place @ v for v in ([0, 0, -1], [1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0])]
+    d = np.array([[*v, 0] for v in towards], np.float32)
+    out = np.zeros((len(d), 4), np.float32)
+    params = env_params(env)
+    params["env_scale"] = 1.0
+    flat = np.concatenate([image, np.zeros((h, w, 1), np.float32)], -1).reshape(-1, 4)
+    kernels(SOURCE)("env_lookup", len(d), flat, params, d, out)
+    # u = 1/2 + atan2(x, -z) / 2 pi in the map's frame: column u w - 1/2; rows (v h - 1/2), clamped
+    np.testing.assert_allclose(out[:3, 0], h / 2 - 0.5, atol=1e-4)
+    np.testing.assert_allclose(out[:3, 1], [w / 2 - 0.5, 3 * w / 4 - 0.5, w / 4 - 0.5], atol=1e-3)
+    np.testing.assert_allclose(out[3:, 0], [0, h - 1], atol=1e-4)
 
 
 ENVIRONMENT_ALONE = {

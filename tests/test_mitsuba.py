@@ -135,8 +135,8 @@ def test_a_mesh_whose_normals_oppose_its_winding_is_lit_on_its_normals_side(back
     assert np.allclose(r.mean(), 2.0 if lit else 0.0), (r.mean().min(), r.mean().max())
 
 
-@pytest.mark.parametrize("name", ["cbox", "meshes", "envmap-spheres", "textures", "masks", "normal-maps", "lights",
-                                  "thinlens", "anisotropic", "blend", "principled"])
+@pytest.mark.parametrize("name", ["cbox", "meshes", "envmap-spheres", "envmap-tilted", "textures", "masks", "normal-maps",
+                                  "lights", "thinlens", "anisotropic", "blend", "principled"])
 def test_convert_writes_toml_that_reads_back_the_same_scene(tmp_path, name):
     out = tmp_path / "sub" / f"{name}.toml"
     out.parent.mkdir()
@@ -163,7 +163,10 @@ def test_convert_writes_toml_that_reads_back_the_same_scene(tmp_path, name):
             assert x.type == y.type
             np.testing.assert_allclose(x.mean(), y.mean(), rtol=1e-6)
             np.testing.assert_allclose(x.params.get("to_uv", np.eye(3)), y.params.get("to_uv", np.eye(3)), rtol=1e-6)
-    assert a.environment.rows == b.environment.rows == ("poles" if name == "envmap-spheres" else "centres")
+    assert a.environment.rows == b.environment.rows == ("poles" if name.startswith("envmap") else "centres")
+    # a tilted map's up and rotation (its placement, to float32 text)
+    np.testing.assert_allclose(a.environment.map_from_world(), b.environment.map_from_world(), atol=1e-6)
+    assert (a.environment.up == (0, 1, 0)) == (name != "envmap-tilted")
     if name == "meshes":     # file meshes stay references, relative to the TOML file
         text = out.read_text()
         assert 'file = "../' in text and "matrix = " in text

@@ -63,6 +63,7 @@ RENDER_PARAMS = np.dtype([
     ("lens", np.float32, 4),        # what else the camera type reads (app/cameras/: Camera.lens)
     ("filter", np.float32, 4),      # the pixel filter's parameters (kernels/filters/)
     ("world", np.float32, 4),       # the scene's bounding sphere: centre, radius (CompiledScene)
+    ("env_frame", np.float32, (3, 4)),  # rows of the map-from-world rotation (Environment.map_from_world)
     ("width", np.int32),
     ("height", np.int32),
     ("sample_start", np.uint32),
@@ -71,7 +72,6 @@ RENDER_PARAMS = np.dtype([
     ("max_depth", np.int32),
     ("env_width", np.int32),
     ("env_height", np.int32),
-    ("env_rotation", np.float32),
     ("env_row_scale", np.float32),  # the map's row at v = acos(y) / pi: v * scale + offset (Environment.rows)
     ("env_row_offset", np.float32),
     ("num_lights", np.int32),
@@ -85,7 +85,7 @@ RENDER_PARAMS = np.dtype([
     ("filter_type", np.int32),
     ("rr_rule", np.int32),
     ("layout", np.int32),           # the compiled scene's LAYOUT_* bits (kernels/scene.cl)
-    ("pad", np.int32, 2),           # to the float4s' alignment, as the device pads the struct
+    ("pad", np.int32, 3),           # to the float4s' alignment, as the device pads the struct
 ])
 
 LIGHT = np.dtype([

@@ -346,7 +346,7 @@ class Renderer(ProgramChoice, QueuePlans, PathSort, PhotonPasses):
         p["max_depth"] = self.settings.max_depth
         h, w, _ = self.environment.image.shape
         p["env_width"], p["env_height"] = w, h
-        p["env_rotation"] = self.environment.rotation / 360.0
+        p["env_frame"][:, :3] = self.environment.map_from_world()
         p["env_row_scale"], p["env_row_offset"] = self.environment.row_mapping()
         p["num_lights"] = self.lights.count
         p["env_pick"] = self.lights.env_pick

@@ -1,8 +1,9 @@
-"""The environment: a constant colour or an HDR latitude-longitude map, with an intensity and a
-rotation about the up axis (kernels/environment.cl gives the mapping), and its parameters in the
-three formats: pathtrace's [environment], Mitsuba 3's `constant` and `envmap` emitters,
-pbrt-v4's `infinite` light (app/parameters.py; the readers place a map by the element's
-to_world or CTM, and pbrt-v4's equal-area square becomes a latitude-longitude map)."""
+"""The environment: a constant colour or an HDR latitude-longitude map, with an intensity and an
+orientation: the world direction of the map's zenith (`up`) and a turn about it (`rotation`)
+(kernels/environment.cl gives the mapping); and its parameters in the three formats:
+pathtrace's [environment], Mitsuba 3's `constant` and `envmap` emitters, pbrt-v4's `infinite`
+light (app/parameters.py; the readers place a map by the element's to_world or CTM, and pbrt-v4's
+equal-area square becomes a latitude-longitude map)."""
 
 import math
 from dataclasses import dataclass
@@ -15,14 +16,41 @@ from pathtrace.parameters import Parameter
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])   # Rec. 709 weights of linear R, G, B
 
 
+def world_from_map(up, rotation: float) -> np.ndarray:
+    """The rotation (3x3) that places a map in the world: a turn of `rotation` degrees about its
+    zenith (+y; R_y, counter-clockwise seen from above), then the shortest turn that takes +y to
+    `up` (a unit vector). Every rotation is one of these (split_rotation)."""
+    a = math.radians(rotation)
+    turn = np.array([[math.cos(a), 0.0, math.sin(a)], [0.0, 1.0, 0.0], [-math.sin(a), 0.0, math.cos(a)]])
+    return _shortest_turn(np.asarray(up, np.float64)) @ turn
+
+
+def split_rotation(r: np.ndarray) -> tuple:
+    """(up, rotation) of a rotation r (3x3) as world_from_map takes them: the shortest turn to
+    r's +y undone leaves +y where it was, so what is left is a turn about +y."""
+    up = r[:, 1] / np.linalg.norm(r[:, 1])
+    turn = _shortest_turn(up).T @ r
+    return tuple(float(c) for c in up), math.degrees(math.atan2(turn[0, 2], turn[0, 0])) % 360.0
+
+
+def _shortest_turn(up: np.ndarray) -> np.ndarray:
+    """The rotation by the least angle that takes +y to the unit vector up (Rodrigues' formula
+    about y x up), or for up = -y half a turn about +x."""
+    if up[1] < -1 + 1e-12:
+        return np.diag([1.0, -1.0, -1.0])
+    v = np.array([[0.0, up[0], 0.0], [-up[0], 0.0, -up[2]], [0.0, up[2], 0.0]])    # the cross matrix of y x up
+    return np.eye(3) + v + v @ v / (1.0 + up[1])
+
+
 @dataclass
 class Environment:
     image: np.ndarray          # (H, W, 3) float32 linear RGB radiance
     intensity: float = 1.0
-    rotation: float = 0.0      # degrees about +y
+    rotation: float = 0.0      # degrees about the map's zenith, turned first
     source: str = "constant"   # a file path, or "constant"
     resampled: bool = False    # the image is not the file's (a pbrt equal-area map made lat-long)
     rows: str = "centres"      # where a map's rows lie: "centres" or Mitsuba 3's "poles" (row_mapping)
+    up: tuple = (0.0, 1.0, 0.0)    # the world direction of the map's zenith (unit)
 
     name = "environment"
     formats = {"mitsuba": ("constant", "envmap"), "pbrt": "infinite"}
@@ -35,7 +63,10 @@ class Environment:
                   doc="an HDR latitude-longitude map (pbrt-v4's: an equal-area square), relative to the "
                       "scene file (TOML: or a map of assets/envmaps)"),
         Parameter("intensity", "number", 1.0, low=0, mitsuba="scale", pbrt="scale", doc="a factor on it"),
-        Parameter("rotation", "number", 0.0, doc="degrees about +y (Mitsuba 3's to_world and pbrt-v4's CTM turn it)"),
+        Parameter("rotation", "number", 0.0, doc="degrees about the map's zenith (Mitsuba 3's to_world and pbrt-v4's "
+                                                  "CTM place the map)"),
+        Parameter("up", "vector", (0.0, 1.0, 0.0), doc="the world direction the map's zenith (its top row) takes: "
+                                                       "[0, 0, 1] for a z-up scene's sky"),
         Parameter("rows", "name", "centres", choices=("centres", "poles"), mitsuba_default="poles",
                   doc="a map's rows: each the band of 180 / H degrees about its centre, or, as Mitsuba 3's "
                       "envmap reads them, the first and last centred on the poles, 180 / (H - 1) degrees apart"),
@@ -47,7 +78,13 @@ class Environment:
         from pathtrace.scene.named import vector
         h, w, _ = self.image.shape
         what = f"constant {vector(self.image[0, 0])}" if (h, w) == (1, 1) else f"{self.source} ({w}x{h})"
-        return f"<Environment {what}, intensity {self.intensity:g}, rotation {self.rotation:g}>"
+        up = "" if self.up == (0.0, 1.0, 0.0) else f", up {vector(self.up)}"
+        return f"<Environment {what}, intensity {self.intensity:g}, rotation {self.rotation:g}{up}>"
+
+    def map_from_world(self) -> np.ndarray:
+        """The rotation (3x3) from world directions to the map's own, in which the kernels map a
+        direction to the map (kernels/environment.cl): the inverse of world_from_map(up, rotation)."""
+        return world_from_map(self.up, self.rotation).T
 
     def row_mapping(self) -> tuple:
         """(scale, offset): the map's row, in texels, at v = acos(y) / pi is v * scale + offset
@@ -65,9 +102,10 @@ class Environment:
         return cls(image=image, intensity=intensity, source="constant")
 
     @classmethod
-    def from_file(cls, path: Path, intensity=1.0, rotation=0.0, where="environment.map", rows="centres"):
+    def from_file(cls, path: Path, intensity=1.0, rotation=0.0, where="environment.map", rows="centres",
+                  up=(0.0, 1.0, 0.0)):
         from pathtrace.io.images import read_hdr
-        return cls(read_hdr(path, where), intensity, rotation, str(path), rows=rows)
+        return cls(read_hdr(path, where), intensity, rotation, str(path), rows=rows, up=up)
 
     @classmethod
     def from_values(cls, values: dict, find, where: str):
@@ -77,9 +115,13 @@ class Environment:
         if "map" in values and "color" in values:
             raise ValueError("give either 'color' or 'map', not both")
         intensity, rotation = values.get("intensity", 1.0), values.get("rotation", 0.0) % 360.0
+        up = np.asarray(values.get("up", (0.0, 1.0, 0.0)), np.float64)
+        if not np.linalg.norm(up) > 0:
+            raise ValueError("up: must not be zero")
+        up = tuple(float(c) for c in up / np.linalg.norm(up))
         if "map" in values:
-            return cls.from_file(find(values["map"]), intensity, rotation, f"{where}.map", values.get("rows", "centres"))
-        return cls(cls.constant(values.get("color", 1.0)).image, intensity, rotation)
+            return cls.from_file(find(values["map"]), intensity, rotation, f"{where}.map", values.get("rows", "centres"), up)
+        return cls(cls.constant(values.get("color", 1.0)).image, intensity, rotation, up=up)
 
     @classmethod
     def from_mitsuba(cls, kind: str, values: dict, to_world, folder: Path, where: str, warn):
@@ -91,20 +133,25 @@ class Environment:
             raise ValueError("filename: an envmap needs one")
         if values.get("intensity", 1.0) < 0:
             raise ValueError("scale: must not be negative")
-        return cls.from_file(folder / values["map"], values.get("intensity", 1.0),
-                             cls.mitsuba_rotation(to_world(), where, warn), where, values.get("rows", "poles"))
+        up, rotation = cls.mitsuba_orientation(to_world(), where, warn)
+        return cls.from_file(folder / values["map"], values.get("intensity", 1.0), rotation, where,
+                             values.get("rows", "poles"), up)
 
     @staticmethod
-    def mitsuba_rotation(to_world: np.ndarray, where: str, warn) -> float:
-        """pathtrace's rotation about +y for a Mitsuba envmap's to_world: Mitsuba puts the map's
-        u = 0 at -z where pathtrace puts u = 1/2, half a turn apart; rotations about other axes
-        are not supported."""
+    def mitsuba_orientation(to_world: np.ndarray, where: str, warn) -> tuple:
+        """pathtrace's (up, rotation) for a Mitsuba envmap's to_world: Mitsuba maps the direction
+        to_world's inverse gives (src/emitters/envmap.cpp) and puts the map's u = 0 at -z where
+        pathtrace puts u = 1/2, so the map's placement is to_world times half a turn about +y.
+        A to_world that scales or shears is taken by its rotation (its polar decomposition), with a
+        warning; one that mirrors, or is singular, is left out, with a warning."""
         r = to_world[:3, :3]
-        if not np.allclose(r[1], [0, 1, 0], atol=1e-6) or not np.allclose(r[:, 1], [0, 1, 0], atol=1e-6) \
-                or abs(np.linalg.det(r) - 1) > 1e-6:
-            warn(f"{where}: pathtrace rotates maps about +y only; it ignores this to_world")
-            return 180.0
-        return (180.0 + math.degrees(math.atan2(r[0, 2], r[0, 0]))) % 360.0
+        u, sigma, vt = np.linalg.svd(r)
+        if not np.linalg.det(r) > 0 or not sigma[-1] > 1e-9 * sigma[0]:
+            warn(f"{where}: to_world mirrors the map or is singular; pathtrace leaves it out")
+            return (0.0, 1.0, 0.0), 180.0
+        if not np.allclose(sigma, sigma[0], rtol=1e-6):
+            warn(f"{where}: to_world scales or shears the map; pathtrace takes its rotation alone")
+        return split_rotation(u @ vt @ np.diag([-1.0, 1.0, -1.0]))
 
     @classmethod
     def from_pbrt(cls, values: dict, given: dict, resolve, inverse, where: str):
