@@ -431,7 +431,7 @@ def tonemap(image: np.ndarray, exposure: float = 0.0, curve: str = "standard") -
     what a .png output holds."""
     from pathtrace.io.tonecurve import to_8bit
     from pathtrace.io.tonecurve import tonemap as display
-    if curve not in TONEMAPS:
+    if not isinstance(curve, str) or curve not in TONEMAPS:      # an array's `in` is elementwise
         raise UserError(f"curve: give one of {', '.join(TONEMAPS)}, got {short(curve)}")
     if isinstance(exposure, bool) or not isinstance(exposure, (int, float, np.number)) or not -100 <= exposure <= 100:
         raise UserError(f"exposure: give stops from -100 to 100, got {short(exposure)}")

@@ -188,7 +188,7 @@ FIELDS = ["s.settings.width", "s.settings.height", "s.settings.spp", "s.settings
           "s.camera.eye", "s.camera.look_at", "s.camera.up", "s.camera.vfov", "s.camera",
           "s.spheres[0, 0]", "s.spheres[0, 3]", "s.meshes[0].faces[0, 1]", "s.meshes[0].vertices[1, 2]",
           "s.meshes[0].normals", "s.meshes[0].material", "s.sphere_material[0]", "s.materials[0]",
-          "s.environment.intensity", "s.environment.rotation"]
+          "s.environment.intensity", "s.environment.rotation", "s.environment.up"]
 ARGUMENTS = ["device", "aovs", "steps", "size", "spp", "seed", "max_depth", "rr", "nee"]
 CALLS = ["pathtrace.write({v}, np.zeros((2, 2, 3)))", "pathtrace.write('out.png', {v})",
          "pathtrace.write('out.exr', np.zeros((2, 2, 3)), exposure={v})", "pathtrace.tonemap({v})",

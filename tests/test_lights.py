@@ -453,7 +453,8 @@ def test_a_maps_rows_lie_where_its_convention_puts_them(kernels, rows):
 
 
 @pytest.mark.parametrize("up,rotation", [((0, 1, 0), 0.0), ((0, 1, 0), 75.0), ((0, 0, 1), 0.0), ((0, 0, 1), 30.0),
-                                         ((0.3, 0.8, -0.5), 200.0), ((0, -1, 0), 10.0), ((1, 0, 0), 90.0)])
+                                         ((0.3, 0.8, -0.5), 200.0), ((0, -1, 0), 10.0), ((1e-7, -1, 0), 10.0),
+                                         ((1, 0, 0), 90.0)])
 def test_a_maps_zenith_lies_up_and_its_centre_column_where_its_rotation_turns_it(kernels, up, rotation):
     """The map's top row is seen looking `up`, its bottom row looking away from it, and its centre
     column (u = 1/2, the map's own -z) in the direction a turn of `rotation` degrees about the
@@ -499,7 +500,8 @@ def test_a_scene_of_its_environment_alone_renders_it(tmp_path, capsys, suffix, i
     """A file with an environment and no shapes renders the environment, as Mitsuba 3 and pbrt-v4
     render such a file (the readers refused it; the tree of no primitives is a root of four empty
     slots, app/compiler/bvh.py), with one line saying there are no shapes: every pixel of a
-    constant sky is its radiance."""
+    constant sky is its radiance. A TOML file with neither shapes nor an [environment] (an empty
+    one, a truncated one) is refused rather than drawn as the default white sky."""
     import pathtrace
     path = tmp_path / f"sky.{suffix}"
     path.write_text(ENVIRONMENT_ALONE[suffix])
@@ -510,3 +512,8 @@ def test_a_scene_of_its_environment_alone_renders_it(tmp_path, capsys, suffix, i
     image = pathtrace.render(scene, spp=2, integrator=integrator)
     assert image.shape == (8, 12, 3)
     assert np.allclose(image, [0.2, 0.4, 0.8], rtol=1e-5), (image.min(axis=(0, 1)), image.max(axis=(0, 1)))
+    if suffix == "toml":
+        from pathtrace.errors import UserError
+        path.write_text("")
+        with pytest.raises(UserError, match="no \\[\\[spheres\\]\\].* and no \\[environment\\]: nothing to render"):
+            pathtrace.load(str(path))

@@ -22,7 +22,8 @@ def world_from_map(up, rotation: float) -> np.ndarray:
     `up` (a unit vector). Every rotation is one of these (split_rotation)."""
     a = math.radians(rotation)
     turn = np.array([[math.cos(a), 0.0, math.sin(a)], [0.0, 1.0, 0.0], [-math.sin(a), 0.0, math.cos(a)]])
-    return _shortest_turn(np.asarray(up, np.float64)) @ turn
+    up = np.asarray(up, np.float64)
+    return _shortest_turn(up / np.linalg.norm(up)) @ turn
 
 
 def split_rotation(r: np.ndarray) -> tuple:
@@ -35,11 +36,13 @@ def split_rotation(r: np.ndarray) -> tuple:
 
 def _shortest_turn(up: np.ndarray) -> np.ndarray:
     """The rotation by the least angle that takes +y to the unit vector up (Rodrigues' formula
-    about y x up), or for up = -y half a turn about +x."""
-    if up[1] < -1 + 1e-12:
+    about y x up), or for up = -y half a turn about +x. The factor (1 - cos) / sin^2 is written
+    1 / (1 + cos) where cos = up.y >= 0 and (1 - up.y) / (x^2 + z^2) below, where 1 + up.y cancels."""
+    sin2 = up[0] * up[0] + up[2] * up[2]
+    if up[1] < 0 and not sin2 > 0:
         return np.diag([1.0, -1.0, -1.0])
     v = np.array([[0.0, up[0], 0.0], [-up[0], 0.0, -up[2]], [0.0, up[2], 0.0]])    # the cross matrix of y x up
-    return np.eye(3) + v + v @ v / (1.0 + up[1])
+    return np.eye(3) + v + v @ v * (1.0 / (1.0 + up[1]) if up[1] >= 0 else (1.0 - up[1]) / sin2)
 
 
 @dataclass
@@ -78,7 +81,7 @@ class Environment:
         from pathtrace.scene.named import vector
         h, w, _ = self.image.shape
         what = f"constant {vector(self.image[0, 0])}" if (h, w) == (1, 1) else f"{self.source} ({w}x{h})"
-        up = "" if self.up == (0.0, 1.0, 0.0) else f", up {vector(self.up)}"
+        up = "" if tuple(self.up) == (0.0, 1.0, 0.0) else f", up {vector(self.up)}"
         return f"<Environment {what}, intensity {self.intensity:g}, rotation {self.rotation:g}{up}>"
 
     def map_from_world(self) -> np.ndarray:

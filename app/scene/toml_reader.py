@@ -423,6 +423,10 @@ class _Reader(TomlValues):
         for name, m in self.material_tables.items():
             rows[name] = builder.materials.add(self.material(m, f"materials.{name}"), name)
         spheres, meshes, shapes, instances = (self.array(data, key) for key in ("spheres", "meshes", "shapes", "instances"))
+        if not (spheres or meshes or shapes or instances or "environment" in data):
+            # a file that says nothing at all (a truncated one) is not a white sky
+            self.fail("spheres", "the scene has no [[spheres]], [[meshes]], [[shapes]] or [[instances]] entry and no "
+                                 "[environment]: nothing to render")
         lights = self.array(data, "lights")
         for i, s in enumerate(spheres):
             where = f"spheres[{i}]"
