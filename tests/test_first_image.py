@@ -132,3 +132,13 @@ def test_the_timed_processes_read_the_packages_bytecode(tmp_path, monkeypatch):
     load.cache_bytecode()
     assert cached.is_file() and cached.stat().st_size > 0
     assert Path(importlib.util.cache_from_source(str(package / "__init__.py"))).is_file()
+
+
+def test_a_file_named_among_the_scenes_is_a_files_row(tmp_path):
+    """A scene file given to --scenes, as to --load-scene, is labelled by its path's end, not as a
+    built-in scene (a reviewer's run found it called "built-in", its whole path as its name)."""
+    from pathtrace.bench.first_image import rows
+    xml = Path(__file__).parent / "scenes" / "cbox.xml"
+    found = rows(tmp_path, ["simple", str(xml)], [], (16, 9))
+    assert [(name, what) for name, _, what in found] == [("simple", "built-in"), ("cbox", "tests/scenes/cbox.xml")]
+    assert found[1][1] == str(xml.resolve())

@@ -102,7 +102,8 @@ def files_in(folder: Path) -> int:
 def rows(folder: Path, scenes, scene_files, size) -> list:
     """(name, the scene as `render` takes it, the scene in words) for each row."""
     found = []
-    for name in scenes:
+    scene_files = [*(name for name in scenes if Path(name).is_file()), *scene_files]    # a file named by --scenes too
+    for name in (name for name in scenes if not Path(name).is_file()):
         if name == MESHES:
             where = folder / MESHES
             where.mkdir()
