@@ -280,7 +280,7 @@ def _same_rows(a: np.ndarray, b: np.ndarray) -> bool:
 
 def _environment_key(environment):
     return (id(environment), id(environment.image), float(environment.intensity), float(environment.rotation),
-            tuple(environment.up))
+            tuple(environment.up), bool(environment.mirrored))
 
 
 def _lights_key(lights) -> tuple:

@@ -16,22 +16,29 @@ from pathtrace.parameters import Parameter
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])   # Rec. 709 weights of linear R, G, B
 
 
-def world_from_map(up, rotation: float) -> np.ndarray:
-    """The rotation (3x3) that places a map in the world: a turn of `rotation` degrees about its
-    zenith (+y; R_y, counter-clockwise seen from above), then the shortest turn that takes +y to
-    `up` (a unit vector). Every rotation is one of these (split_rotation)."""
+def world_from_map(up, rotation: float, mirrored: bool = False) -> np.ndarray:
+    """The orthogonal matrix (3x3) that places a map in the world: where `mirrored`, its x
+    negated (the map as a mirror shows it: u runs the other way about its centre column), then a
+    turn of `rotation` degrees about its zenith (+y; R_y, counter-clockwise seen from above),
+    then the shortest turn that takes +y to `up`. Every rotation, and every rotation after a
+    mirror, is one of these (split_rotation)."""
     a = math.radians(rotation)
     turn = np.array([[math.cos(a), 0.0, math.sin(a)], [0.0, 1.0, 0.0], [-math.sin(a), 0.0, math.cos(a)]])
+    if mirrored:
+        turn[:, 0] = -turn[:, 0]
     up = np.asarray(up, np.float64)
     return _shortest_turn(up / np.linalg.norm(up)) @ turn
 
 
 def split_rotation(r: np.ndarray) -> tuple:
-    """(up, rotation) of a rotation r (3x3) as world_from_map takes them: the shortest turn to
-    r's +y undone leaves +y where it was, so what is left is a turn about +y."""
+    """(up, rotation, mirrored) of an orthogonal r (3x3) as world_from_map takes them: a mirror
+    where r's determinant is negative, undone on the map's x; then the shortest turn to r's +y
+    undone leaves +y where it was, so what is left is a turn about +y."""
+    mirrored = bool(np.linalg.det(r) < 0)
+    r = r * [-1.0, 1.0, 1.0] if mirrored else r
     up = r[:, 1] / np.linalg.norm(r[:, 1])
     turn = _shortest_turn(up).T @ r
-    return tuple(float(c) for c in up), math.degrees(math.atan2(turn[0, 2], turn[0, 0])) % 360.0
+    return tuple(float(c) for c in up), math.degrees(math.atan2(turn[0, 2], turn[0, 0])) % 360.0, mirrored
 
 
 def _shortest_turn(up: np.ndarray) -> np.ndarray:
@@ -54,6 +61,7 @@ class Environment:
     resampled: bool = False    # the image is not the file's (a pbrt equal-area map made lat-long)
     rows: str = "centres"      # where a map's rows lie: "centres" or Mitsuba 3's "poles" (row_mapping)
     up: tuple = (0.0, 1.0, 0.0)    # the world direction of the map's zenith (unit)
+    mirrored: bool = False     # the map's u runs the other way (turned after the mirror)
 
     name = "environment"
     formats = {"mitsuba": ("constant", "envmap"), "pbrt": "infinite"}
@@ -70,6 +78,8 @@ class Environment:
                                                   "CTM place the map)"),
         Parameter("up", "vector", (0.0, 1.0, 0.0), doc="the world direction the map's zenith (its top row) takes: "
                                                        "[0, 0, 1] for a z-up scene's sky"),
+        Parameter("mirrored", "bool", False, doc="the map as a mirror shows it, its left and right swapped before it "
+                                                 "is turned (Mitsuba 3's to_world that mirrors)"),
         Parameter("rows", "name", "centres", choices=("centres", "poles"), mitsuba_default="poles",
                   doc="a map's rows: each the band of 180 / H degrees about its centre, or, as Mitsuba 3's "
                       "envmap reads them, the first and last centred on the poles, 180 / (H - 1) degrees apart"),
@@ -82,12 +92,14 @@ class Environment:
         h, w, _ = self.image.shape
         what = f"constant {vector(self.image[0, 0])}" if (h, w) == (1, 1) else f"{self.source} ({w}x{h})"
         up = "" if tuple(self.up) == (0.0, 1.0, 0.0) else f", up {vector(self.up)}"
-        return f"<Environment {what}, intensity {self.intensity:g}, rotation {self.rotation:g}{up}>"
+        return (f"<Environment {what}, intensity {self.intensity:g}, rotation {self.rotation:g}{up}"
+                + (", mirrored" if self.mirrored else "") + ">")
 
     def map_from_world(self) -> np.ndarray:
         """The rotation (3x3) from world directions to the map's own, in which the kernels map a
-        direction to the map (kernels/environment.cl): the inverse of world_from_map(up, rotation)."""
-        return world_from_map(self.up, self.rotation).T
+        direction to the map (kernels/environment.cl): the inverse of world_from_map(up, rotation,
+        mirrored), its transpose."""
+        return world_from_map(self.up, self.rotation, self.mirrored).T
 
     def row_mapping(self) -> tuple:
         """(scale, offset): the map's row, in texels, at v = acos(y) / pi is v * scale + offset
@@ -106,9 +118,9 @@ class Environment:
 
     @classmethod
     def from_file(cls, path: Path, intensity=1.0, rotation=0.0, where="environment.map", rows="centres",
-                  up=(0.0, 1.0, 0.0)):
+                  up=(0.0, 1.0, 0.0), mirrored=False):
         from pathtrace.io.images import read_hdr
-        return cls(read_hdr(path, where), intensity, rotation, str(path), rows=rows, up=up)
+        return cls(read_hdr(path, where), intensity, rotation, str(path), rows=rows, up=up, mirrored=mirrored)
 
     @classmethod
     def from_values(cls, values: dict, find, where: str):
@@ -121,10 +133,11 @@ class Environment:
         up = np.asarray(values.get("up", (0.0, 1.0, 0.0)), np.float64)
         if not np.linalg.norm(up) > 0:
             raise ValueError("up: must not be zero")
-        up = tuple(float(c) for c in up / np.linalg.norm(up))
+        up, mirrored = tuple(float(c) for c in up / np.linalg.norm(up)), values.get("mirrored", False)
         if "map" in values:
-            return cls.from_file(find(values["map"]), intensity, rotation, f"{where}.map", values.get("rows", "centres"), up)
-        return cls(cls.constant(values.get("color", 1.0)).image, intensity, rotation, up=up)
+            return cls.from_file(find(values["map"]), intensity, rotation, f"{where}.map", values.get("rows", "centres"),
+                                 up, mirrored)
+        return cls(cls.constant(values.get("color", 1.0)).image, intensity, rotation, up=up, mirrored=mirrored)
 
     @classmethod
     def from_mitsuba(cls, kind: str, values: dict, to_world, folder: Path, where: str, warn):
@@ -136,22 +149,23 @@ class Environment:
             raise ValueError("filename: an envmap needs one")
         if values.get("intensity", 1.0) < 0:
             raise ValueError("scale: must not be negative")
-        up, rotation = cls.mitsuba_orientation(to_world(), where, warn)
+        up, rotation, mirrored = cls.mitsuba_orientation(to_world(), where, warn)
         return cls.from_file(folder / values["map"], values.get("intensity", 1.0), rotation, where,
-                             values.get("rows", "poles"), up)
+                             values.get("rows", "poles"), up, mirrored)
 
     @staticmethod
     def mitsuba_orientation(to_world: np.ndarray, where: str, warn) -> tuple:
-        """pathtrace's (up, rotation) for a Mitsuba envmap's to_world: Mitsuba maps the direction
-        to_world's inverse gives (src/emitters/envmap.cpp) and puts the map's u = 0 at -z where
-        pathtrace puts u = 1/2, so the map's placement is to_world times half a turn about +y.
-        A to_world that scales or shears is taken by its rotation (its polar decomposition), with a
-        warning; one that mirrors, or is singular, is left out, with a warning."""
+        """pathtrace's (up, rotation, mirrored) for a Mitsuba envmap's to_world: Mitsuba maps the
+        direction to_world's inverse gives (src/emitters/envmap.cpp) and puts the map's u = 0 at -z
+        where pathtrace puts u = 1/2, so the map's placement is to_world times half a turn about +y.
+        A to_world that scales or shears is taken by its orthogonal part (its polar decomposition:
+        a rotation, or one after a mirror), with a warning; a singular one is left out, with a
+        warning."""
         r = to_world[:3, :3]
         u, sigma, vt = np.linalg.svd(r)
-        if not np.linalg.det(r) > 0 or not sigma[-1] > 1e-9 * sigma[0]:
-            warn(f"{where}: to_world mirrors the map or is singular; pathtrace leaves it out")
-            return (0.0, 1.0, 0.0), 180.0
+        if not sigma[-1] > 1e-9 * sigma[0]:
+            warn(f"{where}: to_world is singular; pathtrace leaves it out")
+            return (0.0, 1.0, 0.0), 180.0, False
         if not np.allclose(sigma, sigma[0], rtol=1e-6):
             warn(f"{where}: to_world scales or shears the map; pathtrace takes its rotation alone")
         return split_rotation(u @ vt @ np.diag([-1.0, 1.0, -1.0]))

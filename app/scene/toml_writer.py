@@ -136,6 +136,8 @@ def scene_toml(scene: Scene, out: Path) -> str:
             lines.append(f"rows = {_value(env.rows)}")
     if tuple(env.up) != (0.0, 1.0, 0.0):
         lines.append(f"up = {_value(list(env.up))}")
+    if env.mirrored:
+        lines.append("mirrored = true")
     lines += [f"intensity = {_value(env.intensity)}", f"rotation = {_value(env.rotation)}", "",
               "[render]", f"width = {s.width}", f"height = {s.height}", f"spp = {s.spp}",
               f"max_depth = {s.max_depth}", f"russian_roulette = {_value(s.russian_roulette)}",

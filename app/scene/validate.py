@@ -125,6 +125,8 @@ def _environment(environment):
     _number(f"{where}.rotation", environment.rotation, -1e9, 1e9)
     if not np.linalg.norm(_vector(f"{where}.up", environment.up)) > 0:
         raise UserError(f"{where}.up: must not be zero")
+    if not isinstance(environment.mirrored, (bool, np.bool_)):
+        raise UserError(f"{where}.mirrored: give True or False, got {short(environment.mirrored)}")
     image = environment.image
     if not isinstance(image, np.ndarray) or image.ndim != 3 or image.shape[2] < 3 or 0 in image.shape \
             or not np.all(np.isfinite(image)) or np.any(image < 0):
