@@ -11,6 +11,7 @@ from typing import Callable
 import numpy as np
 
 from pathtrace.parameters import Parameter
+from pathtrace.scene.loop_subdivision import LEVELS, loop_subdivide
 from pathtrace.scene.meshes import mitsuba_cube, mitsuba_rectangle, vertex_normals
 
 FLIP = Parameter("flip_normals", "bool", False, doc="its front turned round", mitsuba="flip_normals")
@@ -144,17 +145,20 @@ class BilinearMesh(TriangleMesh):
 
 
 class LoopSubdivision(TriangleMesh):
-    """pbrt-v4's Loop subdivision surface: its control mesh, with smooth normals."""
+    """pbrt-v4's Loop subdivision surface: its control mesh subdivided `levels` times and pushed to
+    the limit surface, with the limit's normals, as pbrt-v4 makes it (app/scene/loop_subdivision.py)."""
     name = "loopsubdiv"
     formats = {"pbrt": "loopsubdiv"}
-    parameters = TriangleMesh.parameters[:2]
-    unsupported = {"pbrt": {"integer levels": None}}
+    parameters = TriangleMesh.parameters[:2] + (
+        Parameter("levels", "integer", LEVELS, low=0, high=12, doc="how many times each triangle is split in four",
+                  pbrt="levels"),)
+    unsupported = {}         # pbrt-v4's loopsubdiv reads no tangents or ptex faces
 
     def triangles(self, values, source):
         vertices, polygons = self.polygons(values)
-        source.warn("pathtrace does not subdivide; the control mesh is rendered with smooth normals")
-        mesh = source.check(vertices, polygons, None, None)
-        return mesh._replace(normals=vertex_normals(mesh.vertices, mesh.faces)), "", True
+        control = source.check(vertices, polygons, None, None)
+        vertices, faces, normals = loop_subdivide(control.vertices, control.faces, values.get("levels", LEVELS))
+        return source.check(vertices, faces, normals, None), "", False
 
 
 MESH_SHAPES = {k.name: k() for k in (FileMesh, Rectangle, Cube, TriangleMesh, BilinearMesh, LoopSubdivision)}
