@@ -104,7 +104,7 @@ def test_the_reader_subdivides_levels_times(tmp_path):
                          mesh.vertices[mesh.faces[:, 2]] - mesh.vertices[mesh.faces[:, 0]])
         assert np.all(np.sum(wound * mesh.normals[mesh.faces].sum(axis=1), axis=1) > 0)
     for indices, problem in (("0 1 2  0 1 3  0 1 4", "shared by more than two triangles"),
-                             ("0 1 2  0 1 3", "run it the same way")):
+                             ("0 1 2  0 1 3", "run it the same way"), ("0 1 2  0 3 4", "a bow tie")):
         path = tmp_path / "bad.pbrt"
         path.write_text('WorldBegin\nShape "loopsubdiv" "point3 P" [ 0 0 0 1 0 0 0 1 0 0 0 1 1 1 1 ] '
                         f'"integer indices" [ {indices} ]\n')

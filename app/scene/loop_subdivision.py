@@ -23,7 +23,8 @@ def loop_subdivide(vertices: np.ndarray, faces: np.ndarray, levels: int = LEVELS
     """(vertices, faces, normals) of the control mesh (vertices (V, 3), faces (F, 3), wound
     consistently) subdivided `levels` times and pushed to the limit surface. Raises ValueError
     where an edge is shared by more than two faces or by two that run it the same way (pbrt-v4's
-    mesh walk needs a consistently wound manifold), or where the result would pass MAX_TRIANGLES."""
+    mesh walk needs a consistently wound manifold; nor can it walk a vertex where two fans of
+    triangles meet), or where the result would pass MAX_TRIANGLES."""
     p, f = np.asarray(vertices, np.float64), np.asarray(faces, np.int64)
     if len(f) << (2 * levels) > MAX_TRIANGLES:
         raise ValueError(f"levels: {levels} levels make {len(f) << (2 * levels):,} triangles of {len(f):,}, "
@@ -62,6 +63,9 @@ class _Edges:
         np.add.at(self.ring_sum, a, p[b])
         np.add.at(self.ring_sum, b, p[a])
         ba, bb = a[self.boundary_edge], b[self.boundary_edge]
+        if np.any(np.bincount(np.concatenate([ba, bb]), minlength=n) > 2):
+            raise ValueError("indices: a vertex joins fans of triangles that share no edge (a bow tie), which Loop "
+                             "subdivision cannot walk")
         self.boundary = np.zeros(n, bool)
         self.boundary[ba] = self.boundary[bb] = True
         self.boundary_sum = np.zeros((n, 3))
