@@ -87,6 +87,29 @@ def test_limit_normals_are_the_limit_surfaces_and_point_as_pbrts(mesh):
     assert np.all(along < -0.999), along.max()
 
 
+def test_every_control_triangle_is_subdivided_and_a_pinched_vertex_refused():
+    """A control triangle of zero area is subdivided as the rest (pbrt-v4 keeps it, and its
+    children have area: dropping it moved a neighbour's limit point by 0.08); a vertex where two
+    closed fans meet (two cones at one apex), which pbrt-v4 would walk half of, is refused, as are
+    a triangle that repeats a vertex and a negative level count."""
+    # a square fan, and a triangle of no area on its right edge (vertex 5 lies between 1 and 2)
+    v = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0.5, 0.5, 0], [1, 0.5, 0]], float)
+    f = np.array([[0, 1, 4], [1, 2, 4], [2, 3, 4], [3, 0, 4], [1, 5, 2]])
+    limit, faces, normals = loop_subdivide(v, f, 2)
+    assert len(faces) == 16 * len(f) and np.all(np.isfinite(limit)) and np.all(np.isfinite(normals))
+    apex = np.zeros((1, 3))
+    ring = np.array([[np.cos(a), np.sin(a), h] for h in (1, -1) for a in np.arange(3) * 2 * np.pi / 3])
+    cones = np.vstack([apex, ring])
+    faces = [[0, 1 + k, 1 + (k + 1) % 3] for k in range(3)] + [[1, 3, 2]] \
+        + [[0, 4 + (k + 1) % 3, 4 + k] for k in range(3)] + [[4, 5, 6]]
+    with pytest.raises(ValueError, match="a bow tie"):
+        loop_subdivide(cones, np.array(faces), 1)
+    with pytest.raises(ValueError, match="repeats a vertex"):
+        loop_subdivide(v, np.array([[0, 0, 1]]), 1)
+    with pytest.raises(ValueError, match="negative"):
+        loop_subdivide(v, f, -1)
+
+
 def test_the_reader_subdivides_levels_times(tmp_path):
     """pbrt-v4's `loopsubdiv`: 4^levels triangles of each (levels 3 by default), the limit's
     vertices and normals, faces wound to the normals as every pbrt mesh's are; a mesh its walk

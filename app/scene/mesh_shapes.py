@@ -156,8 +156,10 @@ class LoopSubdivision(TriangleMesh):
 
     def triangles(self, values, source):
         vertices, polygons = self.polygons(values)
-        control = source.check(vertices, polygons, None, None)
-        vertices, faces, normals = loop_subdivide(control.vertices, control.faces, values.get("levels", LEVELS))
+        if not np.all(np.isfinite(vertices)):
+            raise ValueError("vertices: not all finite")
+        # every control triangle, a degenerate one too, as pbrt-v4 subdivides them
+        vertices, faces, normals = loop_subdivide(vertices, polygons, values.get("levels", LEVELS))
         return source.check(vertices, faces, normals, None), "", False
 
 
