@@ -102,8 +102,9 @@ def files_in(folder: Path) -> int:
 def rows(folder: Path, scenes, scene_files, size) -> list:
     """(name, the scene as `render` takes it, the scene in words) for each row."""
     found = []
-    scene_files = [*(name for name in scenes if Path(name).is_file()), *scene_files]    # a file named by --scenes too
-    for name in (name for name in scenes if not Path(name).is_file()):
+    named_files = [name for name in scenes if Path(name).is_file()]     # a file named by --scenes too
+    scene_files = [*named_files, *scene_files]
+    for name in (name for name in scenes if name not in named_files):
         if name == MESHES:
             where = folder / MESHES
             where.mkdir()

@@ -160,8 +160,9 @@ def build_bvh(lo: np.ndarray, hi: np.ndarray, num_spheres: int = None,
     num_spheres = n if num_spheres is None else num_spheres
     if n <= 1:   # a lone primitive: the root's first slot; the others empty (kernels/types.h)
         nodes = np.zeros(1, BVH_NODE)
-        for name in ("lo_x", "lo_y", "lo_z", "hi_x", "hi_y", "hi_z", "index"):
-            nodes[name] = np.inf if name != "index" else -1
+        for name in ("lo_x", "lo_y", "lo_z", "hi_x", "hi_y", "hi_z"):
+            nodes[name] = np.inf
+        nodes["index"] = -1
         if n:
             for axis, name in enumerate("xyz"):
                 nodes[f"lo_{name}"][0, 0] = np.nextafter(lo[0, axis], np.float32(-np.inf))

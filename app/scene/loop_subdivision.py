@@ -39,12 +39,12 @@ def loop_subdivide(vertices: np.ndarray, faces: np.ndarray, levels: int = LEVELS
         raise ValueError(f"levels: {levels} levels make {len(f) << (2 * levels):,} triangles of {len(f):,}, "
                          f"more than {MAX_TRIANGLES:,}")
     edges = _Edges(p, f)
-    _Rings(f, edges, len(p)).check_fans(f, len(p))
+    _Rings(f, edges).check_fans()
     for _ in range(levels):
         p, f = _refine(p, f, edges)
         edges = _Edges(p, f)
     p = _limit_positions(p, edges)
-    return p, f, _limit_normals(p, _Rings(f, edges, len(p)), edges)
+    return p, f, _limit_normals(p, _Rings(f, edges), edges)
 
 
 def _sums(index: np.ndarray, values: np.ndarray, n: int) -> np.ndarray:
@@ -128,9 +128,10 @@ class _Rings:
     goes round a closed fan of a vertex that lies on the boundary elsewhere (a pinch) stops after
     as many steps as the vertex has faces (check_fans refuses it)."""
 
-    def __init__(self, f: np.ndarray, e: _Edges, n: int):
-        m = len(e.origin)
-        steps = int(np.bincount(f.reshape(-1)).max()) + 1
+    def __init__(self, f: np.ndarray, e: _Edges):
+        m, n = len(e.origin), len(e.valence)
+        self.corners = np.bincount(f.reshape(-1), minlength=n)      # the faces about each vertex
+        steps = int(self.corners.max()) + 1
         corner = np.arange(m)
         nxt, prev = corner - corner % 3 + (corner + 1) % 3, corner - corner % 3 + (corner + 2) % 3
         h = np.full(n, -1)
@@ -164,10 +165,10 @@ class _Rings:
         self.vertex, self.place, self.neighbour = np.concatenate(vertex), np.concatenate(place), np.concatenate(neighbour)
         self.count = np.bincount(self.vertex, minlength=n)
 
-    def check_fans(self, f: np.ndarray, n: int):
+    def check_fans(self):
         """Refuses a vertex whose faces are not the one fan the walk goes round (two cones at one
         apex, a triangle on a cone's tip): pbrt-v4 would walk one fan and leave the rest."""
-        if np.any(self.faces != np.bincount(f.reshape(-1), minlength=n)):
+        if np.any(self.faces != self.corners):
             raise ValueError("indices: a vertex joins fans of triangles that share no edge (a bow tie), which Loop "
                              "subdivision cannot walk")
 
