@@ -98,6 +98,31 @@ def press(viewer, button=1):
     frames(viewer, 2)
 
 
+def scroll_into_sight(viewer, label) -> int:
+    """Scrolls the panel until the widget `label` is inside it (where the panel is taller than
+    the window: a long device name wraps its status lines); the notches it took."""
+    xdo("windowfocus", "--sync", window_id(viewer))
+    xdo("mousemove", "--window", window_id(viewer), 60, 200)          # over the panel
+    frames(viewer, 2)
+    bottom = viewer.panel_rect[1] + viewer.panel_rect[3]
+    scrolls = 0
+    while viewer.widgets[label][3] > bottom - 10 and scrolls < 30:
+        before = viewer.widgets[label]
+        xdo("click", 5)           # each notch waited for: one seen late would move the slider after
+        frames_until(viewer, lambda: viewer.widgets.get(label) != before, timeout=10)
+        scrolls += 1
+    seen = []           # the widget where it has stayed for three frames: a late notch moves it
+    frames_until(viewer, lambda: seen.append(viewer.widgets[label]) or seen[-3:] == [seen[-1]] * 3)
+    return scrolls
+
+
+def scroll_back(viewer, scrolls):
+    xdo("mousemove", "--window", window_id(viewer), 60, 200)
+    for _ in range(scrolls):
+        xdo("click", 4)
+        frames(viewer, 1)
+
+
 def settle(viewer):
     """Lets the camera come to rest and the full resolution return (after the denoised draft,
     where there is one)."""
@@ -625,15 +650,16 @@ def test_the_rotation_slider_reaches_a_full_turn(viewer):
     v = viewer
     settle(v)
     env = v.renderer.environment
+    scrolls = scroll_into_sight(v, "env rotation")
     x0, y0, x1, y1 = v.widgets["env rotation"]
     label = v.imgui.calc_text_size("env rotation").x + v.imgui.get_style().item_inner_spacing.x
     resets = v.renderer.resets
-    xdo("windowfocus", "--sync", window_id(v))
     move(v, int(x1 - label - 24), int((y0 + y1) / 2))
     press(v)
     assert 300 < env.rotation < 360 and v.renderer.resets > resets      # (360 itself wraps to 0)
     env.rotation = 0.0
     v.renderer.reset()
+    scroll_back(v, scrolls)
 
 
 @pytest.mark.specialised
@@ -644,16 +670,7 @@ def test_the_speed_slider_turns_the_path_queue_on(viewer):
     settle(v)
     assert v.renderer.settings.path_queue == 0
     label = "path queue (0: off)"
-    xdo("windowfocus", "--sync", window_id(v))
-    xdo("mousemove", "--window", window_id(v), 60, 200)          # over the panel: scroll it into sight
-    frames(v, 2)
-    bottom = v.panel_rect[1] + v.panel_rect[3]
-    scrolls = 0
-    while v.widgets[label][3] > bottom - 10 and scrolls < 30:
-        before = v.widgets[label]
-        xdo("click", 5)           # each notch waited for: one seen late would move the slider after
-        frames_until(v, lambda: v.widgets.get(label) != before, timeout=10)
-        scrolls += 1
+    scrolls = scroll_into_sight(v, label)
     settings = v.renderer.settings
     for attempt in range(3):
         # the slider where it has stayed for three frames: a notch delivered late would move it
@@ -676,10 +693,7 @@ def test_the_speed_slider_turns_the_path_queue_on(viewer):
     frames_until(v, lambda: v.renderer.samples >= 2, timeout=300)     # its first launches compile on PoCL
     assert v.renderer.samples >= 2 and v.renderer.resets == resets
     v.renderer.set_settings(path_queue=0)
-    xdo("mousemove", "--window", window_id(v), 60, 200)
-    for _ in range(scrolls):
-        xdo("click", 4)
-        frames(v, 1)
+    scroll_back(v, scrolls)
 
 
 def test_the_panel_switches_the_integrator_once_its_kernels_are_built(viewer):
