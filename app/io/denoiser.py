@@ -11,6 +11,8 @@ device buffers are shared by every call."""
 import numpy as np
 
 QUALITIES = ("high", "balanced", "fast")   # OIDN's quality presets: slower is sharper
+GUIDES = ("albedo", "normal")              # OIDN's names of the guide images (OIDN_IMAGE_ALBEDO, _NORMAL)
+BORDER = 16                                # pixels mirrored about each edge (Denoiser.__call__)
 
 
 def _oidn():
@@ -45,7 +47,7 @@ class Denoiser:
         self._filter.set_bool("hdr", True)
         self._filter.set_quality({"high": oidn.OIDN_QUALITY_HIGH, "balanced": oidn.OIDN_QUALITY_BALANCED,
                                   "fast": oidn.OIDN_QUALITY_FAST}[quality])
-        self._size = None
+        self._bound = None          # (height, width, guides) of the buffers bound to the filter
         self._buffers = {}
 
     def close(self):
@@ -69,42 +71,54 @@ class Denoiser:
             from pathtrace.errors import UserError
             raise UserError(f"Open Image Denoise, {what}: {error}")
 
-    def _bind(self, height: int, width: int):
-        """Device buffers for the four images, bound to the filter (again when the size changes:
-        the old ones are released, or every size change kept four images' worth, 14 MB a camera
-        move in the viewer, whose draft and full sizes alternate)."""
-        if self._size == (height, width):
+    def _bind(self, height: int, width: int, guides: tuple):
+        """Device buffers for the colour, the output and the `guides` given ("albedo", "normal"),
+        bound to the filter, the guides not given unset (again when the size or the guides
+        change: the old buffers are released, or every size change kept four images' worth, 14
+        MB a camera move in the viewer, whose draft and full sizes alternate)."""
+        if self._bound == (height, width, guides):
             return
         oidn, nbytes = self._oidn, height * width * 12
-        old, self._buffers = self._buffers, {name: oidn.Buffer(self._device, nbytes)
-                                              for name in (oidn.OIDN_IMAGE_COLOR, oidn.OIDN_IMAGE_ALBEDO,
-                                                           oidn.OIDN_IMAGE_NORMAL, oidn.OIDN_IMAGE_OUTPUT)}
+        names = (oidn.OIDN_IMAGE_COLOR, *guides, oidn.OIDN_IMAGE_OUTPUT)
+        old, self._buffers = self._buffers, {name: oidn.Buffer(self._device, nbytes) for name in names}
         for name, buffer in self._buffers.items():
             self._filter.set_image(name, buffer, oidn.OIDN_FORMAT_FLOAT3, width, height)
+        for name in GUIDES:
+            if name not in guides:
+                self._filter.unset_image(name)
         for buffer in old.values():      # the filter now holds the new ones
             buffer.release()
         self._filter.commit()
         self._check("preparing the filter")
-        self._size = (height, width)
+        self._bound = (height, width, guides)
 
     def prepare(self, height: int, width: int):
-        """Runs once on black images of this size: OIDN's first run at a size is slower."""
+        """Runs once on black images of this size, with both guides: OIDN's first run at a size is
+        slower."""
         black = np.zeros((height, width, 3), np.float32)
         self(black, black, black)
 
-    def __call__(self, color: np.ndarray, albedo: np.ndarray, normal: np.ndarray) -> np.ndarray:
-        """The denoised (H, W, 3) float32 radiance, from the noisy radiance, the albedo in [0, 1]
-        and the normal (each (H, W, 3))."""
+    def __call__(self, color: np.ndarray, albedo: np.ndarray = None, normal: np.ndarray = None) -> np.ndarray:
+        """The denoised (H, W, 3) float32 radiance, from the noisy radiance and the guides given:
+        the albedo in [0, 1], and with it the normal (each (H, W, 3)). The images are denoised
+        with BORDER pixels mirrored about each edge, cut off again after: without them OIDN's
+        network (2.5, its CPU device) changed a flat grey image's pixels within 16 of the edges
+        by up to 78 %, and with them it left them within 0.3 %, and the demo, teapot-sky and
+        cornell-box scenes' 4-sample images came out 3-11 % nearer their 1024-sample ones
+        (relative MSE; tests/test_denoise.py)."""
         oidn = self._oidn
+        given = {oidn.OIDN_IMAGE_ALBEDO: albedo, oidn.OIDN_IMAGE_NORMAL: normal}
+        guides = tuple(name for name in GUIDES if given[name] is not None)
         h, w, _ = color.shape
-        self._bind(h, w)
-        nbytes = h * w * 12
-        for name, image in ((oidn.OIDN_IMAGE_COLOR, _finite_nonnegative(color)),
-                            (oidn.OIDN_IMAGE_ALBEDO, np.ascontiguousarray(albedo, np.float32)),
-                            (oidn.OIDN_IMAGE_NORMAL, np.ascontiguousarray(normal, np.float32))):
-            self._buffers[name].write(0, nbytes, image)
+        height, width = h + 2 * BORDER, w + 2 * BORDER
+        self._bind(height, width, guides)
+        nbytes = height * width * 12
+        images = [(oidn.OIDN_IMAGE_COLOR, _finite_nonnegative(color))] + [(name, given[name]) for name in guides]
+        for name, image in images:
+            mirrored = np.pad(np.asarray(image, np.float32), ((BORDER, BORDER), (BORDER, BORDER), (0, 0)), mode="reflect")
+            self._buffers[name].write(0, nbytes, np.ascontiguousarray(mirrored))
         self._filter.execute()
         self._check("denoising")
-        out = np.empty((h, w, 3), np.float32)
+        out = np.empty((height, width, 3), np.float32)
         self._buffers[oidn.OIDN_IMAGE_OUTPUT].read(0, nbytes, out)
-        return out
+        return out[BORDER:BORDER + h, BORDER:BORDER + w].copy()
