@@ -101,11 +101,9 @@ class Denoiser:
     def __call__(self, color: np.ndarray, albedo: np.ndarray = None, normal: np.ndarray = None) -> np.ndarray:
         """The denoised (H, W, 3) float32 radiance, from the noisy radiance and the guides given:
         the albedo in [0, 1], and with it the normal (each (H, W, 3)). The images are denoised
-        with BORDER pixels mirrored about each edge, cut off again after: without them OIDN's
-        network (2.5, its CPU device) changed a flat grey image's pixels within 16 of the edges
-        by up to 78 %, and with them it left them within 0.3 %, and the demo, teapot-sky and
-        cornell-box scenes' 4-sample images came out 3-11 % nearer their 1024-sample ones
-        (relative MSE; tests/test_denoise.py)."""
+        with BORDER pixels mirrored about each edge, cut off again after: OIDN alone moved a flat
+        grey image's pixels near the edges by up to 78 % (docs/notes/performance-2026-12.md,
+        2026-12-03)."""
         oidn = self._oidn
         given = {oidn.OIDN_IMAGE_ALBEDO: albedo, oidn.OIDN_IMAGE_NORMAL: normal}
         guides = tuple(name for name in GUIDES if given[name] is not None)
