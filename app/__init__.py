@@ -26,17 +26,23 @@ _EXPORTS = {
     "UserError": "pathtrace.errors",
 }
 
+# the subpackages that docs/python.md names as pathtrace's attributes (pathtrace.cameras.CAMERAS),
+# imported on first use too
+_SUBPACKAGES = ("cameras", "lights", "filters", "shapes", "materials", "textures", "scene")
+
 __all__ = sorted(_EXPORTS)
 
 
 def __getattr__(name):
-    if name not in _EXPORTS:
+    if name not in _EXPORTS and name not in _SUBPACKAGES:
         raise AttributeError(f"module 'pathtrace' has no attribute {name!r}")
     import importlib
+    if name in _SUBPACKAGES:
+        return importlib.import_module(f"pathtrace.{name}")     # which sets it in globals()
     value = getattr(importlib.import_module(_EXPORTS[name]), name)
     globals()[name] = value
     return value
 
 
 def __dir__():
-    return sorted(set(globals()) | set(_EXPORTS))
+    return sorted(set(globals()) | set(_EXPORTS) | set(_SUBPACKAGES))

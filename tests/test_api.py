@@ -48,6 +48,17 @@ def test_import_is_headless_and_lazy():
     assert r.stdout.split("\n")[:2] == ["[]", "[]"]
 
 
+def test_the_subpackages_docs_name_are_attributes_of_a_fresh_import():
+    """docs/python.md's pathtrace.cameras.CAMERAS, pathtrace.lights.PointLight and the like work
+    right after `import pathtrace`, as attributes imported on first use."""
+    code = ("import sys, pathtrace; assert 'pathtrace.cameras' not in sys.modules; "
+            "print('perspective' in pathtrace.cameras.CAMERAS, pathtrace.lights.PointLight.__name__, "
+            "pathtrace.filters.PixelFilter.__name__, pathtrace.shapes.Shape.__name__)")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split() == ["True", "PointLight", "PixelFilter", "Shape"]
+
+
 def test_public_names():
     for name in pathtrace.__all__:
         assert getattr(pathtrace, name) is not None
