@@ -87,7 +87,9 @@ def open_devices(device="auto") -> list:
     from pathtrace.device.opencl import choose_devices
     if isinstance(device, DevicesOpening):
         return device.result()
-    specs = (device,) if isinstance(device, str) else tuple(device) if isinstance(device, (list, tuple)) else ()
+    specs = tuple(device) if isinstance(device, (list, tuple)) else (device,)
+    # an index from `pathtrace devices` may be given as a number (Python's bool is none)
+    specs = tuple(str(s) if isinstance(s, int) and not isinstance(s, bool) else s for s in specs)
     if not specs or not all(isinstance(s, str) for s in specs):
         raise UserError(f"device: give a device spec such as 'auto', 'gpu', 'cpu:0' or a list of them, "
                         f"got {short(device)}")
@@ -485,6 +487,8 @@ def view(scene="simple", device: str = "auto", size=None, frames: int = None,
     read, the device opened and the kernels compiled while it says so."""
     from pathtrace.viewer.needs_display import require_display
     from pathtrace.viewer.window import Viewer
+    if isinstance(device, int) and not isinstance(device, bool):
+        device = str(device)            # an index from `pathtrace devices`
     if not isinstance(device, str):
         raise UserError("device: the viewer renders on one device; give one spec (several are for render)")
     require_display(scene if isinstance(scene, str) else "simple")    # before any device work

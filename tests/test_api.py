@@ -127,7 +127,8 @@ def test_render_with_aovs():
     (dict(spp=0), "spp"), (dict(spp=1.5), "spp"), (dict(size=(0, 10)), "size"), (dict(size=(10,)), "size"),
     (dict(size=(20000, 10)), "size"), (dict(seed=-1), "seed"), (dict(rr="sometimes"), "rr"),
     (dict(rr="off", max_depth=0), "rr 'off' needs max_depth"), (dict(device="no-such-device"), "--device"),
-    (dict(device=[3]), "device"), (dict(steps=[4, 2]), "steps"),
+    (dict(device=[2.5]), "device: give a device spec"), (dict(device=True), "device: give a device spec"),
+    (dict(steps=[4, 2]), "steps"),
     (dict(steps=[2, 8], spp=4), "steps: 8 is more samples per pixel than spp \\(4\\)"),
 ])
 def test_bad_arguments_are_one_line_user_errors(kwargs, message):
@@ -138,6 +139,13 @@ def test_bad_arguments_are_one_line_user_errors(kwargs, message):
         else:
             pathtrace.render(scene, **{"device": DEVICE, **kwargs})
     assert "\n" not in str(e.value)
+
+
+def test_a_device_index_may_be_a_number():
+    """device=0 is the index `pathtrace devices` lists, as device="0" is."""
+    scene = pathtrace.load_dict(small_scene())
+    np.testing.assert_array_equal(pathtrace.render(scene, spp=1, size=(8, 6), device=0),
+                                  pathtrace.render(scene, spp=1, size=(8, 6), device="0"))
 
 
 def test_a_changed_scene_is_rendered_without_compiling_it_again():
