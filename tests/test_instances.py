@@ -279,3 +279,20 @@ def test_bad_toml_instances_are_one_line(tmp_path, body, problem):
     with pytest.raises(UserError) as e:
         compile_scene(load_scene(str(tmp_path / "s.toml")))       # copied into the world or not
     assert problem in str(e.value) and "\n" not in str(e.value)
+
+
+def test_a_scene_of_instances_alone_has_bounds_round_them():
+    """Scene.bounds() takes the instances in: a box holding each instance's triangles in world
+    space (their copies'), the repr says so, one instance in the singular."""
+    b = SceneBuilder()
+    m = b.material(diffuse(0.5))
+    obj = b.add_object("tri")
+    b.objects[obj].meshes.append(Mesh("tri", np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], np.float32),
+                                      np.array([[0, 1, 2]], np.int32), None, m))
+    b.add_instance(obj, translation([5, 0, 0]))
+    scene = b.build("one")
+    lower, upper = scene.bounds()
+    corners = np.concatenate([mesh.vertices for mesh in instancing.flattened_meshes(scene.instances)])
+    assert np.all(lower <= corners.min(0)) and np.all(upper >= corners.max(0))
+    np.testing.assert_allclose([lower, upper], [[5, 0, 0], [6, 1, 0]])
+    assert "1 instance (1 triangles)" in repr(scene) and "empty" not in repr(scene)

@@ -127,7 +127,8 @@ class Scene:
         if len(self.shapes):
             parts.append(f"{len(self.shapes)} analytic shape{'' if len(self.shapes) == 1 else 's'}")
         if self.instances is not None and len(self.instances):
-            parts.append(f"{len(self.instances)} instances ({self.instances.triangle_count} triangles)")
+            n = len(self.instances)
+            parts.append(f"{n} instance{'' if n == 1 else 's'} ({self.instances.triangle_count} triangles)")
         parts += [f"{len(self.materials)} material{'' if len(self.materials) == 1 else 's'}",
                   f"{len(self.lights)} delta light{'' if len(self.lights) == 1 else 's'}"]
         if self.media:
@@ -139,8 +140,9 @@ class Scene:
                 f"{f'; from {self.source}' if self.source else ''}>")
 
     def bounds(self):
-        """(lower, upper) corners of the box round its spheres, meshes and analytic shapes (world
-        space; instances left out), or None where it has none."""
+        """(lower, upper) corners of the box round its spheres, meshes, analytic shapes and
+        instances (world space; an instance's as its object's box moved there, which may be
+        larger than its triangles'), or None where it has none."""
         lows, highs = [], []
         if len(self.spheres):
             centre, radius = self.spheres[:, :3], self.spheres[:, 3:4]
@@ -156,6 +158,13 @@ class Scene:
                 lo, hi = s.bounds(SHAPES[s.kind])
                 lows.append(lo)
                 highs.append(hi)
+        if self.instances is not None and len(self.instances):
+            from pathtrace.scene.instances import world_boxes
+            lo, hi = world_boxes(self.instances)
+            placed = np.all(lo <= hi, axis=1)           # not the empty objects' instances
+            if placed.any():
+                lows.append(lo[placed].min(0))
+                highs.append(hi[placed].max(0))
         return (np.min(lows, 0), np.max(highs, 0)) if lows else None
 
     @property
