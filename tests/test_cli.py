@@ -350,6 +350,20 @@ def test_ctrl_c_stops_cleanly_and_writes_nothing(tmp_path):
     assert not out.exists() and not list(tmp_path.iterdir())
 
 
+@pytest.mark.parametrize("quiet", [False, True])
+def test_an_interrupted_render_says_how_far_it_got(monkeypatch, tmp_path, quiet):
+    """The interrupt's line counts the samples done, with -q too (whose disabled bar counts none)."""
+    import pathtrace.api as api
+
+    def render(scene, progress=None, **kwargs):
+        progress(7)
+        raise KeyboardInterrupt
+    monkeypatch.setattr(api, "render", render)
+    r = in_process("render", "simple", "--spp", "100", "--size", "16x9", "-o", tmp_path / "o.png", *["-q"] * quiet)
+    assert r.returncode == 130 and "pathtrace: interrupted at 7/100 spp; nothing written" in r.stderr, r.stderr
+    assert not list(tmp_path.iterdir())
+
+
 @pytest.mark.parametrize("module", ["numpy", "pyopencl", "pathtrace.cli.main"])
 def test_ctrl_c_while_the_package_imports_gets_one_line(tmp_path, module):
     """SIGINT sent as the console entry point starts importing `module` (an audit hook fires at

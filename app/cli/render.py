@@ -38,7 +38,7 @@ def cmd_render(args):
     s = scene.settings
     pixels = s.width * s.height
     build_progress = BuildProgress(scene.name, args.quiet)
-    bar = None
+    bar, samples = None, 0         # the samples per pixel done (progress)
     said = False
 
     def say_devices():
@@ -67,7 +67,8 @@ def cmd_render(args):
         # the average since then (smoothing 0): the launches grow from one sample, so a smoothed
         # rate underestimates the time left; in samples per second always, as a fixed unit,
         # where tqdm would flip to seconds per sample
-        nonlocal bar
+        nonlocal bar, samples
+        samples = done               # the bar's own count stays 0 where -q disables it
         check_interrupt()
         if bar is None:
             build_progress.close()
@@ -88,7 +89,7 @@ def cmd_render(args):
             if opening.opened():
                 say_devices()
             raise
-        done = 0 if bar is None else bar.n
+        done = samples
         # the bars closed first (each ends its line), so that the message starts a line of its own
         build_progress.close()
         if bar is not None:
