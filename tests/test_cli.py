@@ -206,6 +206,8 @@ def test_a_missing_scene_files_near_name_is_of_its_folder_compared_without_exten
     (["cornel-box"], "cornel-box: neither a scene file nor a built-in scene; did you mean cornell-box? (built-ins: "),
     # a name written as a file's path is a file that is not there, with its folder's nearest scene file
     (["./tests/scenes/cbox.xm"], "/cbox.xm' does not exist; did you mean 'cbox.xml'?\n"),
+    # of the files of that name, the nearest whole name (cbox.pbrt and cbox.xml lie there)
+    (["./tests/scenes/cbox.pbrt.gz"], "/cbox.pbrt.gz' does not exist; did you mean 'cbox.pbrt'?\n"),
     (["nowhere/cornell-box"], "error: scene file 'nowhere/cornell-box' does not exist\n"),
     (["simple", "--tonemap", "acse"], "invalid choice: 'acse' (choose from 'standard', 'aces'); did you mean aces? "
                                       "(see 'pathtrace render -h')\n"),

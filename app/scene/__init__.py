@@ -100,12 +100,16 @@ def _reader(name_or_path: str):
 def _nearest_scene_file(path: Path) -> str:
     """"; did you mean X?" where the folder of a missing scene file holds one of a name close to
     its (a misspelt extension: scene.pbr), compared without their extensions, so that a folder's
-    only scene file is not offered for any name ending alike; else ""."""
+    only scene file is not offered for any name ending alike; of the files of that stem, the one
+    whose whole name is nearest (cbox.pbrt for cbox.pbrt.gz, beside cbox.xml); else ""."""
     try:
-        names = [p.name for p in path.parent.iterdir() if p.name.lower().endswith(SCENE_SUFFIXES)]
+        names = sorted(p.name for p in path.parent.iterdir() if p.name.lower().endswith(SCENE_SUFFIXES))
     except OSError:
         return ""
     import difflib
-    stems = {name.split(".")[0]: name for name in names}
-    close = difflib.get_close_matches(path.name.split(".")[0], list(stems), n=1)   # (did_you_mean's measure)
-    return f"; did you mean {stems[close[0]]!r}?" if close else ""
+    close = difflib.get_close_matches(path.name.split(".")[0], {name.split(".")[0] for name in names}, n=1)
+    if not close:                                   # (did_you_mean's measure)
+        return ""
+    alike = [name for name in names if name.split(".")[0] == close[0]]
+    nearest = max(alike, key=lambda name: difflib.SequenceMatcher(None, path.name, name).ratio())
+    return f"; did you mean {nearest!r}?"
