@@ -124,8 +124,8 @@ def add_parser(sub):
                         "heightfield1M meshes850)")
     p.add_argument("--estimator", action="append", metavar="EST",
                    help="rr (the report's), depth8 (comparison mode), or either with +nee "
-                        "(next-event estimation); repeatable; default: rr for the report's "
-                        "scenes, depth8 for -diffuse ones, both without NEE")
+                        "(next-event estimation); repeatable; default: depth8+nee for scenes of meshes, "
+                        "depth8 for -diffuse ones, rr for the report's other scenes")
     p.add_argument("--size", type=_size, metavar="WxH", help="default 1920x1080 (with --first-image 640x360)")
     p.add_argument("--spp", type=_int_range(1, 2**31 - 1), help="samples per pixel (default 1000)")
     p.add_argument("--together", action="store_true",
