@@ -43,6 +43,7 @@ def main():
     plt.title(f"simple-diffuse, {size[0]}x{size[1]}")
     plt.legend()
     plt.grid(True, which="both", alpha=0.3)
+    plt.tight_layout()               # the axis labels inside the figure
     plt.savefig(args.output, dpi=100)
     print(f"wrote {args.output}")
 
