@@ -88,19 +88,33 @@ def _read_with_opencv(path: Path):
 
 @contextlib.contextmanager
 def _quiet_c_library():
-    """Standard error (file descriptor 2) sent to /dev/null for the duration: OpenEXR's C
-    library prints its own lines about a damaged file (EXR_ERR_BAD_CHUNK_LEADER ...), before the
-    one line pathtrace gives."""
+    """Standard output and error sent to /dev/null for the duration, as file descriptors 1 and
+    2 and as Python's sys.stdout and sys.stderr: OpenEXR's C library prints its own lines about a
+    damaged file to standard error (EXR_ERR_BAD_CHUNK_LEADER ...) and its C++ layer to standard
+    output ("Warning: Exception raised reading pixel data ..."), before the one line pathtrace
+    gives. C's buffered output is flushed before the descriptors come back, or a line kept in
+    its buffer would be written at exit."""
+    import ctypes
     import sys
-    sys.stderr.flush()
-    saved = os.dup(2)
+    libc = ctypes.CDLL(None)
+    for stream in (sys.stdout, sys.stderr):
+        if stream is not None:          # (None under pythonw)
+            stream.flush()
+    libc.fflush(None)
+    saved = {fd: os.dup(fd) for fd in (1, 2)}
     try:
         with open(os.devnull, "w") as null:
-            os.dup2(null.fileno(), 2)
-        yield
+            for fd in saved:
+                os.dup2(null.fileno(), fd)
+            with contextlib.redirect_stdout(null), contextlib.redirect_stderr(null):
+                try:
+                    yield
+                finally:
+                    libc.fflush(None)
     finally:
-        os.dup2(saved, 2)
-        os.close(saved)
+        for fd, copy in saved.items():
+            os.dup2(copy, fd)
+            os.close(copy)
 
 
 def _read_exr(path: Path):
