@@ -213,12 +213,25 @@ float pdf_scattering(const SceneData *sc, const Vertex *v, float3 wo, float3 wi,
     return pdf;
 }
 
+/* The largest a squared ratio of densities, or a product of them, is taken to be: a product of
+ * two such stays finite in float. A vertex a hair from the one before has an area density
+ * of 1e10 and more, whose ratios squared overflow to infinity and, beside others that
+ * underflow to 0, gave products of inf * 0, NaN samples (Bitterli's coffee: 4 in 2.1 million);
+ * a ratio of 1e18 weighs a strategy at 1e-18 of its rival's, as good as 0. */
+#define MIS_RATIO_MAX 1e18f
+
 /* The ratio of two strategies' densities as pbrt's MISWeight takes it, a delta's 0 read as 1,
- * squared for the power heuristic. */
+ * squared for the power heuristic, at most MIS_RATIO_MAX. */
 float density_ratio2(float rev, float fwd)
 {
     float r = (rev != 0.0f ? rev : 1.0f) / (fwd != 0.0f ? fwd : 1.0f);
-    return r * r;
+    return fmin(r * r, MIS_RATIO_MAX);
+}
+
+/* A product of two of the weights' terms (each at most MIS_RATIO_MAX), at most MIS_RATIO_MAX. */
+float mis_product(float a, float b)
+{
+    return fmin(a * b, MIS_RATIO_MAX);
 }
 
 /* The power heuristic's weight of strategy (s, t) for the path made of light vertices
@@ -243,11 +256,11 @@ float bdpt_mis_weight(const Vertex *lt, int s, const Vertex *cam, int t, float4 
         if (!cam[t - 2].delta)
             sum += r;
         if (t > 2) {
-            r *= density_ratio2(rev.y, cam[t - 2].pdf_fwd);
+            r = mis_product(r, density_ratio2(rev.y, cam[t - 2].pdf_fwd));
             if (!cam[t - 2].delta && !cam[t - 3].delta)
                 sum += r;
             if (t > 3)
-                sum += r * cam[t - 3].mis_sum;
+                sum += mis_product(r, cam[t - 3].mis_sum);
         }
     }
     if (s > 0) {
@@ -255,11 +268,11 @@ float bdpt_mis_weight(const Vertex *lt, int s, const Vertex *cam, int t, float4 
         if (!(s > 1 ? lt[s - 2].delta : light_delta))
             sum += r;
         if (s > 1) {
-            r *= density_ratio2(rev.w, lt[s - 2].pdf_fwd);
+            r = mis_product(r, density_ratio2(rev.w, lt[s - 2].pdf_fwd));
             if (!lt[s - 2].delta && !(s > 2 ? lt[s - 3].delta : light_delta))
                 sum += r;
             if (s > 2)
-                sum += r * lt[s - 3].mis_sum;
+                sum += mis_product(r, lt[s - 3].mis_sum);
         }
     }
     return 1.0f / (1.0f + sum);
@@ -278,7 +291,7 @@ void sum_mis_ratios(Vertex *path, int n, int first, int delta_origin)
     float q = 0.0f;
     for (int k = first; k < n; ++k) {
         int counts = !path[k].delta && !(k > 0 ? path[k - 1].delta : delta_origin);
-        q = density_ratio2(path[k].pdf_rev, path[k].pdf_fwd) * (q + (counts ? 1.0f : 0.0f));
+        q = mis_product(density_ratio2(path[k].pdf_rev, path[k].pdf_fwd), q + (counts ? 1.0f : 0.0f));
         path[k].mis_sum = q;
     }
 }
