@@ -9,9 +9,19 @@ pushed to its place on the limit surface (gamma = 1 / (n + 3 / (8 beta)); on the
 tangents, which pbrt-v4 takes from the vertex's ordered ring of neighbours: on the shading side
 pbrt-v4 turns the surface to (app/scene/meshes.py: place_mesh winds the faces to it).
 
+The mesh's topology is pbrt-v4's: the control mesh's triangles are joined across an edge in the
+order they name it (the first two to name it, then the next two: a sheet whose triangles are
+listed twice, wound both ways, is a closed "pillow"), and each level's children are joined as
+their parents were, not by their corners' numbers. A new vertex is made once for each pair of
+corners that an edge joins (pbrt-v4's edgeVerts), from the first triangle that has that edge, and
+a vertex's ring is walked from the triangle pbrt-v4 starts at (SDVertex::startFace): where the
+two sides of a pillow share corners, each side's ring is its own.
+
 Everything is NumPy over the half-edges: half-edge 3 f + k runs from corner k of face f to corner
 k + 1, its twin is the one running back, and turning about a vertex is next(twin(h)) one way
 and twin(prev(h)) the other, as pbrt-v4's nextFace and prevFace."""
+
+from typing import NamedTuple
 
 import numpy as np
 
@@ -19,14 +29,21 @@ LEVELS = 3                 # pbrt-v4's default "levels"
 MAX_TRIANGLES = 1 << 25    # what the subdivided mesh may hold (4^levels times the control mesh's)
 
 
+class Topology(NamedTuple):
+    faces: np.ndarray      # (F, 3) corners
+    twin: np.ndarray       # (3F,) each half-edge's twin, -1 on the boundary
+    start: np.ndarray      # (V,) the half-edge leaving each vertex in the triangle its ring starts at, -1: none
+    boundary: np.ndarray   # (V,) whether its fan is open (pbrt-v4's SDVertex::boundary)
+
+
 def loop_subdivide(vertices: np.ndarray, faces: np.ndarray, levels: int = LEVELS) -> tuple:
     """(vertices, faces, normals) of the control mesh (vertices (V, 3), faces (F, 3), wound
     consistently) subdivided `levels` times and pushed to the limit surface. Its every triangle is
     kept, a degenerate one too (pbrt-v4 subdivides them, and their children have area). Raises
-    ValueError where a face repeats a vertex or names one the mesh has not, where an edge is
-    shared by more than two faces or by two that run it the same way, or where a vertex's faces
-    are not one fan about it (pbrt-v4's mesh walk needs a consistently wound manifold), or where
-    the result would pass MAX_TRIANGLES."""
+    ValueError where a face repeats a vertex or names one the mesh has not, where two faces joined
+    across an edge run it the same way, or where a vertex's faces are not one fan about it
+    (pbrt-v4's mesh walk needs a consistently wound manifold), or where the result would pass
+    MAX_TRIANGLES."""
     p, f = np.asarray(vertices, np.float64).reshape(-1, 3), np.asarray(faces, np.int64).reshape(-1, 3)
     if not len(f) or levels < 0:
         raise ValueError("indices: no triangles to subdivide" if not len(f) else f"levels: {levels} is negative")
@@ -38,13 +55,14 @@ def loop_subdivide(vertices: np.ndarray, faces: np.ndarray, levels: int = LEVELS
     if len(f) << (2 * levels) > MAX_TRIANGLES:
         raise ValueError(f"levels: {levels} levels make {len(f) << (2 * levels):,} triangles of {len(f):,}, "
                          f"more than {MAX_TRIANGLES:,}")
-    edges = _Edges(p, f)
-    _Rings(f, edges).check_fans()
+    topology = control_topology(f, len(p))
+    rings = _Rings(topology)
+    rings.check_fans()
     for _ in range(levels):
-        p, f = _refine(p, f, edges)
-        edges = _Edges(p, f)
-    p = _limit_positions(p, edges)
-    return p, f, _limit_normals(p, _Rings(f, edges), edges)
+        p, topology = refine(p, topology, rings)
+        rings = _Rings(topology)
+    p = _limit_positions(p, topology, rings)
+    return p, topology.faces, _limit_normals(p, topology, rings)
 
 
 def _sums(index: np.ndarray, values: np.ndarray, n: int) -> np.ndarray:
@@ -52,118 +70,149 @@ def _sums(index: np.ndarray, values: np.ndarray, n: int) -> np.ndarray:
     return np.stack([np.bincount(index, values[:, c], minlength=n) for c in range(3)], axis=1)
 
 
-class _Edges:
-    """The half-edges of a mesh: their origins, ends and twins (-1 on the boundary), each one's
-    undirected edge, and per vertex its neighbours' count and sum and its boundary neighbours' sum.
-    One sort of the half-edges by their undirected edge finds all of it: an edge's two half-edges
-    lie side by side there."""
+def _ends(f: np.ndarray) -> tuple:
+    """Each half-edge's origin and end."""
+    return f.reshape(-1), np.roll(f, -1, axis=1).reshape(-1)
 
-    def __init__(self, p: np.ndarray, f: np.ndarray):
-        n = len(p)
-        self.origin, self.end = f.reshape(-1), np.roll(f, -1, axis=1).reshape(-1)
-        key = np.minimum(self.origin, self.end) * n + np.maximum(self.origin, self.end)
-        order = np.argsort(key, kind="stable")
-        ordered = key[order]
-        first = np.ones(len(order), bool)
-        first[1:] = ordered[1:] != ordered[:-1]
-        starts = np.flatnonzero(first)
-        count = np.diff(np.append(starts, len(order)))
-        if np.any(count > 2):
-            raise ValueError("indices: an edge is shared by more than two triangles, which Loop subdivision cannot "
-                             "walk")
-        self.edge = np.empty(len(order), np.int64)
-        self.edge[order] = np.cumsum(first) - 1
-        pair = starts[count == 2]
-        a_half, b_half = order[pair], order[pair + 1]
-        if np.any(self.origin[a_half] == self.origin[b_half]):
-            raise ValueError("indices: two triangles that share an edge run it the same way (wound inconsistently)")
-        self.twin = np.full(len(order), -1)
-        self.twin[a_half], self.twin[b_half] = b_half, a_half
-        self.ends = ordered[starts]                          # each edge's a * n + b, a < b
-        a, b = self.ends // n, self.ends % n
-        self.boundary_edge = count == 1
-        both = np.concatenate([a, b])
-        self.valence = np.bincount(both, minlength=n)
-        self.ring_sum = _sums(both, np.concatenate([p[b], p[a]]), n)
-        ba, bb = a[self.boundary_edge], b[self.boundary_edge]
-        self.boundary = np.zeros(n, bool)
-        self.boundary[ba] = self.boundary[bb] = True
-        self.boundary_sum = _sums(np.concatenate([ba, bb]), np.concatenate([p[bb], p[ba]]), n)
+
+def control_topology(f: np.ndarray, n: int) -> Topology:
+    """The control mesh's topology as pbrt-v4 makes it: the half-edges of each pair of corners
+    joined two by two in the order the faces name them; each vertex's ring starting at the last
+    face that names it; a vertex is on the boundary where a half-edge without a twin meets it."""
+    origin, end = _ends(f)
+    key = np.minimum(origin, end) * n + np.maximum(origin, end)
+    order = np.argsort(key, kind="stable")
+    ordered = key[order]
+    first = np.ones(len(order), bool)
+    first[1:] = ordered[1:] != ordered[:-1]
+    rank = np.arange(len(order)) - np.maximum.accumulate(np.where(first, np.arange(len(order)), 0))
+    pairs = np.flatnonzero((rank % 2 == 0) & np.append(ordered[1:] == ordered[:-1], False))
+    a_half, b_half = order[pairs], order[pairs + 1]
+    if np.any(origin[a_half] == origin[b_half]):
+        raise ValueError("indices: two triangles that share an edge run it the same way (wound inconsistently)")
+    twin = np.full(len(order), -1)
+    twin[a_half], twin[b_half] = b_half, a_half
+    start = np.full(n, -1)
+    start[origin] = np.arange(len(origin))          # the last named (pbrt-v4's startFace)
+    open_halves = twin < 0
+    boundary = np.zeros(n, bool)
+    boundary[origin[open_halves]] = boundary[end[open_halves]] = True
+    return Topology(f, twin, start, boundary)
 
 
 def _beta(valence: np.ndarray) -> np.ndarray:
     return np.where(valence == 3, 3.0 / 16.0, 3.0 / (8.0 * np.maximum(valence, 1)))
 
 
-def _refine(p: np.ndarray, f: np.ndarray, e: _Edges) -> tuple:
-    """One level: the old vertices moved, then one new vertex per edge, in the edges' order; each
-    face's four children as pbrt-v4 orders them (a corner's child for each corner, then the middle)."""
-    n = len(p)
-    beta = _beta(e.valence)[:, None]
-    even = np.where(e.boundary[:, None], 0.75 * p + 0.125 * e.boundary_sum, (1 - e.valence[:, None] * beta) * p
-                    + beta * e.ring_sum)
-    a, b = e.ends // n, e.ends % n
-    facing = _sums(e.edge, p[np.roll(f, -2, axis=1).reshape(-1)], len(e.ends))     # each half-edge's opposite corner
-    odd = np.where(e.boundary_edge[:, None], 0.5 * (p[a] + p[b]), 0.375 * (p[a] + p[b]) + 0.125 * facing)
+def refine(p: np.ndarray, t: Topology, rings: "_Rings") -> tuple:
+    """One level: the old vertices moved, then a new vertex for each pair of corners an edge joins
+    (in the order the half-edges first name them); each face's four children as pbrt-v4 orders
+    them (a corner's child for each corner, then the middle), joined as their parents were."""
+    n, f = len(p), t.faces
+    ring_sum, boundary_sum = rings.sums(p)
+    beta = _beta(rings.valence)[:, None]
+    even = np.where(t.boundary[:, None], 0.75 * p + 0.125 * boundary_sum,
+                    (1 - rings.valence[:, None] * beta) * p + beta * ring_sum)
+    origin, end = _ends(f)
+    key = np.minimum(origin, end) * n + np.maximum(origin, end)
+    _, made_by, odd_of = np.unique(key, return_index=True, return_inverse=True)
+    h, across = made_by, t.twin[made_by]                 # the half-edge that makes each new vertex, its twin
+    opposite = np.roll(f, -2, axis=1).reshape(-1)          # each half-edge's corner facing it
+    a, b = p[origin[h]], p[end[h]]
+    inner = across >= 0
+    facing = p[opposite[h]] + p[opposite[np.where(inner, across, h)]]
+    odd = np.where(inner[:, None], 0.375 * (a + b) + 0.125 * facing, 0.5 * (a + b))
     v0, v1, v2 = f[:, 0], f[:, 1], f[:, 2]
-    o0, o1, o2 = (n + e.edge.reshape(-1, 3)[:, k] for k in range(3))     # the new vertices of edges 01, 12, 20
+    o0, o1, o2 = (n + odd_of.reshape(-1, 3)[:, k] for k in range(3))     # the new vertices of edges 01, 12, 20
     children = np.stack([np.stack([v0, o0, o2], 1), np.stack([o0, v1, o1], 1), np.stack([o2, o1, v2], 1),
                          np.stack([o0, o1, o2], 1)], 1).reshape(-1, 3)
-    return np.concatenate([even, odd]), children
+    # child c of face g is face 4 g + c; edge j of face g splits into its first half, edge j of
+    # child j, and its second, edge j of child j + 1; the first half of one side of an edge is
+    # the twin of the second half of the other (pbrt-v4's "update face neighbor pointers")
+    g = np.repeat(np.arange(len(f)), 3)
+    j = np.tile(np.arange(3), len(f))
+    first_half = 3 * (4 * g + j) + j
+    second_half = 3 * (4 * g + (j + 1) % 3) + j
+    twin = np.full(12 * len(f), -1)
+    joined = t.twin >= 0
+    other = t.twin[joined]
+    twin[first_half[joined]] = second_half[other]
+    twin[second_half[joined]] = first_half[other]
+    # the middle child's edge k joins edge (2, 0, 1)[k] of corner child (1, 2, 0)[k], its siblings
+    # (pbrt-v4: children[3]->f[j] = children[NEXT(j)])
+    faces4 = 4 * np.arange(len(f))[:, None]
+    middle = (3 * (faces4 + 3) + np.arange(3)).reshape(-1)
+    sibling = (3 * (faces4 + np.array([1, 2, 0])) + np.array([2, 0, 1])).reshape(-1)
+    twin[middle], twin[sibling] = sibling, middle
+    # an even vertex starts at its parent's start face's child at its corner, a new one at the
+    # middle child of the face that made it
+    parent = t.start
+    start_even = np.where(parent >= 0, 3 * (4 * (parent // 3) + parent % 3) + parent % 3, -1)
+    start_odd = 3 * (4 * (h // 3) + 3) + h % 3
+    return np.concatenate([even, odd]), Topology(children, twin, np.concatenate([start_even, start_odd]),
+                                                 np.concatenate([t.boundary, ~inner]))
 
 
-def _limit_positions(p: np.ndarray, e: _Edges) -> np.ndarray:
-    gamma = (1.0 / (e.valence + 3.0 / (8.0 * _beta(e.valence))))[:, None]
-    return np.where(e.boundary[:, None], 0.6 * p + 0.2 * e.boundary_sum, (1 - e.valence[:, None] * gamma) * p
-                    + gamma * e.ring_sum)
+def _limit_positions(p: np.ndarray, t: Topology, rings: "_Rings") -> np.ndarray:
+    ring_sum, boundary_sum = rings.sums(p)
+    gamma = (1.0 / (rings.valence + 3.0 / (8.0 * _beta(rings.valence))))[:, None]
+    return np.where(t.boundary[:, None], 0.6 * p + 0.2 * boundary_sum, (1 - rings.valence[:, None] * gamma) * p
+                    + gamma * ring_sum)
 
 
 class _Rings:
     """Each vertex's neighbours in pbrt-v4's order (SDVertex::oneRing), as flat arrays of (vertex,
-    place, neighbour): about an interior vertex face after face (h -> next(twin(h))) from any;
-    about a boundary vertex from the last face one way, its first neighbour that face's next
-    vertex and then each face's previous one going back (h -> twin(prev(h))). Each step takes only
-    the vertices still walking, so that the work is the rings' length, not the most neighbours
-    times the vertices; `count` is each ring's length and `faces` the faces walked. A walk that
-    goes round a closed fan of a vertex that lies on the boundary elsewhere (a pinch) stops after
-    as many steps as the vertex has faces (check_fans refuses it)."""
+    place, neighbour), walked from the vertex's start (Topology.start): about an interior vertex
+    face after face (h -> next(twin(h))); about a boundary vertex from the last face one way, its
+    first neighbour that face's next vertex and then each face's previous one going back (h ->
+    twin(prev(h))). Each step takes only the vertices still walking, so that the work is the
+    rings' length, not the most neighbours times the vertices; `valence` is each ring's length
+    (pbrt-v4's SDVertex::valence) and `faces` the faces walked. A walk that goes round a closed fan
+    of a vertex that lies on the boundary elsewhere (a pinch) stops after as many steps as the
+    vertex has faces (check_fans refuses it)."""
 
-    def __init__(self, f: np.ndarray, e: _Edges):
-        m, n = len(e.origin), len(e.valence)
-        self.corners = np.bincount(f.reshape(-1), minlength=n)      # the faces about each vertex
+    def __init__(self, t: Topology):
+        origin, end = _ends(t.faces)
+        m, n = len(origin), len(t.start)
+        self.corners = np.bincount(origin, minlength=n)          # the faces about each vertex
         steps = int(self.corners.max()) + 1
         corner = np.arange(m)
         nxt, prev = corner - corner % 3 + (corner + 1) % 3, corner - corner % 3 + (corner + 2) % 3
-        h = np.full(n, -1)
-        h[e.origin] = corner                     # an outgoing half-edge of each vertex (the last named)
-        walking = np.flatnonzero((h >= 0) & e.boundary)
+        h = t.start.copy()
+        walking = np.flatnonzero((h >= 0) & t.boundary)
         for _ in range(steps):                   # a boundary vertex's to the last face one way
-            on = e.twin[h[walking]] >= 0
+            on = t.twin[h[walking]] >= 0
             walking = walking[on]
-            h[walking] = nxt[e.twin[h[walking]]]
+            h[walking] = nxt[t.twin[h[walking]]]
         used = np.flatnonzero(h >= 0)
-        vertex, place, neighbour = [used], [np.zeros(len(used), np.int64)], [e.end[h[used]]]
+        vertex, place, neighbour = [used], [np.zeros(len(used), np.int64)], [end[h[used]]]
         start, walking, j = h.copy(), used, 1
         self.faces = np.zeros(n, np.int64)
         self.faces[used] = 1
         while len(walking) and j <= steps:
-            inner = walking[~e.boundary[walking]]
-            step = nxt[e.twin[h[inner]]]
+            inner = walking[~t.boundary[walking]]
+            step = nxt[t.twin[h[inner]]]
             on = step != start[inner]
             inner, step = inner[on], step[on]
             h[inner] = step
-            outer = walking[e.boundary[walking]]
+            outer = walking[t.boundary[walking]]
             vertex += [inner, outer]
             place += [np.full(len(inner) + len(outer), j)]
-            neighbour += [e.end[h[inner]], e.origin[prev[h[outer]]]]
-            back = e.twin[prev[h[outer]]]
+            neighbour += [end[h[inner]], origin[prev[h[outer]]]]
+            back = t.twin[prev[h[outer]]]
             outer, back = outer[back >= 0], back[back >= 0]
             h[outer] = back
             walking = np.concatenate([inner, outer])
             self.faces[walking] += 1
             j += 1
         self.vertex, self.place, self.neighbour = np.concatenate(vertex), np.concatenate(place), np.concatenate(neighbour)
-        self.count = np.bincount(self.vertex, minlength=n)
+        self.valence = np.bincount(self.vertex, minlength=n)
+
+    def sums(self, p: np.ndarray) -> tuple:
+        """Each vertex's sum of its ring's points, and of its first and last (on the boundary, its
+        two boundary neighbours: pbrt-v4's weightBoundary)."""
+        ring_sum = _sums(self.vertex, p[self.neighbour], len(self.valence))
+        return ring_sum, self.at(p, 0) + self.at(p, np.maximum(self.valence - 1, 0))
 
     def check_fans(self):
         """Refuses a vertex whose faces are not the one fan the walk goes round (two cones at one
@@ -175,18 +224,18 @@ class _Rings:
     def at(self, p: np.ndarray, j) -> np.ndarray:
         """Each vertex's neighbour at place j (an int, or one per vertex) of its ring: (V, 3), zero
         where its ring is shorter."""
-        j = np.broadcast_to(j, self.count.shape)
+        j = np.broadcast_to(j, self.valence.shape)
         chosen = self.place == j[self.vertex]
-        out = np.zeros((len(self.count), 3))
+        out = np.zeros((len(self.valence), 3))
         out[self.vertex[chosen]] = p[self.neighbour[chosen]]
         return out
 
 
-def _limit_normals(p: np.ndarray, rings: _Rings, e: _Edges) -> np.ndarray:
+def _limit_normals(p: np.ndarray, topology: Topology, rings: _Rings) -> np.ndarray:
     """Each vertex's normal S x T from its limit tangents, as pbrt-v4 computes them: about an
     interior vertex S and T are its ring weighted by cos and sin of 2 pi j / n; on the boundary S
     runs between its two boundary neighbours and T has weights by its count of neighbours."""
-    n, count = len(p), rings.count
+    n, count = len(p), rings.valence
     v, j, r = rings.vertex, rings.place, p[rings.neighbour]
     angle = 2 * np.pi * j / np.maximum(count[v], 1)
     s = _sums(v, np.cos(angle)[:, None] * r, n)
@@ -199,7 +248,7 @@ def _limit_normals(p: np.ndarray, rings: _Rings, e: _Edges) -> np.ndarray:
     t_boundary = -(np.sin(theta)[:, None] * (r0 + last) + _sums(v, weight[:, None] * r, n))
     for c, value in ((2, r0 + r1 - 2 * p), (3, r1 - p), (4, -r0 + 2 * r1 + 2 * r2 - r3 - 2 * p)):
         t_boundary = np.where((count == c)[:, None], value, t_boundary)
-    on = e.boundary & (count >= 2)
+    on = topology.boundary & (count >= 2)
     s = np.where(on[:, None], last - r0, s)
     t = np.where(on[:, None], t_boundary, t)
     normal = np.cross(s, t)
