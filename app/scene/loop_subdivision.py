@@ -105,9 +105,10 @@ def _beta(valence: np.ndarray) -> np.ndarray:
 
 
 def refine(p: np.ndarray, t: Topology, rings: "_Rings") -> tuple:
-    """One level: the old vertices moved, then a new vertex for each pair of corners an edge joins
-    (in the order the half-edges first name them); each face's four children as pbrt-v4 orders
-    them (a corner's child for each corner, then the middle), joined as their parents were."""
+    """One level: the old vertices moved, then a new vertex for each pair of corners an edge joins,
+    made from the first half-edge that names the pair and that half-edge's twin; each face's four
+    children as pbrt-v4 orders them (a corner's child for each corner, then the middle), joined as
+    their parents were."""
     n, f = len(p), t.faces
     ring_sum, boundary_sum = rings.sums(p)
     beta = _beta(rings.valence)[:, None]
