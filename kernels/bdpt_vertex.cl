@@ -213,12 +213,13 @@ float pdf_scattering(const SceneData *sc, const Vertex *v, float3 wo, float3 wi,
     return pdf;
 }
 
-/* The largest a squared ratio of densities, or a product of them, is taken to be: a product of
- * two such stays finite in float. A vertex a hair from the one before has an area density
- * of 1e10 and more, whose ratios squared overflow to infinity and, beside others that
- * underflow to 0, gave products of inf * 0, NaN samples (Bitterli's coffee: 4 in 2.1 million);
- * a ratio of 1e18 weighs a strategy at 1e-18 of its rival's, as good as 0. */
-#define MIS_RATIO_MAX 1e18f
+/* A squared ratio of densities, or a product of them, that overflows is taken as the largest
+ * float rather than infinity: a vertex a hair from the one before has an area density of 1e10
+ * and more, and an overflow's infinity beside an underflow's 0 gave a product of inf * 0, a NaN
+ * sample (Bitterli's coffee with BDPT: 4 in 2.1 million). Below the overflow every value is
+ * unchanged, so a path's weights still sum to 1 wherever the squares fit in a float (densities'
+ * ratios up to 1e19). */
+#define MIS_RATIO_MAX FLT_MAX
 
 /* The ratio of two strategies' densities as pbrt's MISWeight takes it, a delta's 0 read as 1,
  * squared for the power heuristic, at most MIS_RATIO_MAX. */
@@ -228,7 +229,7 @@ float density_ratio2(float rev, float fwd)
     return fmin(r * r, MIS_RATIO_MAX);
 }
 
-/* A product of two of the weights' terms (each at most MIS_RATIO_MAX), at most MIS_RATIO_MAX. */
+/* A product of two of the weights' terms, at most MIS_RATIO_MAX. */
 float mis_product(float a, float b)
 {
     return fmin(a * b, MIS_RATIO_MAX);

@@ -687,54 +687,69 @@ def test_the_mis_weights_of_a_path_sum_to_one(backend, make):
     assert all_strategies.all() if make in (cbox, sky_scene, normal_map_scene) else not all_strategies.all()
 
 
-EXTREME_WEIGHTS = """
-/* Work-item k: camera vertices 0-5 and light vertices 0-4 none of them a delta, their forward
- * and reverse densities dens[22 k .. 22 k + 20), the connection's four reverse densities after
- * them; out: the weights of strategies (3, 4), (0, 6), (1, 5) and (5, 2). */
-kernel void extreme_weights(global const float *dens, global float4 *out)
+PATH_WEIGHTS = """
+/* Work-item k: a path of N vertices, x0 the lens and x(N-1) on a light, none a delta, where
+ * pc[i] is the density of drawing x_i from the camera's side and pl[i] from the light's (the
+ * densities dens[2 N k ...]); out[N k + t - 1]: bdpt_mis_weight of strategy (N - t, t), the
+ * subpaths built as the renders build them. */
+#define N 6
+kernel void path_weights(global const float *dens, global float *out)
 {
     int k = get_global_id(0);
-    global const float *d = dens + 22 * k;
-    Vertex cam[6], lt[5];
-    for (int i = 0; i < 6; ++i) {
-        cam[i].delta = 0;
-        cam[i].pdf_fwd = d[2 * i];
-        cam[i].pdf_rev = d[2 * i + 1];
+    global const float *pc = dens + 2 * N * k, *pl = pc + N;
+    for (int t = 1; t <= N; ++t) {
+        int s = N - t;
+        Vertex cam[N], lt[N];
+        for (int i = 0; i < N; ++i) {
+            cam[i].delta = lt[i].delta = 0;
+            cam[i].pdf_fwd = pc[i];
+            cam[i].pdf_rev = pl[i];
+            lt[i].pdf_fwd = pl[N - 1 - i];
+            lt[i].pdf_rev = pc[N - 1 - i];
+        }
+        sum_mis_ratios(cam, t, 1, 0);
+        sum_mis_ratios(lt, s, 0, 0);
+        float4 rev = (float4)(t >= 1 ? pl[t - 1] : 0.0f, t >= 2 ? pl[t - 2] : 0.0f,
+                              t < N ? pc[t] : 0.0f, t + 1 < N ? pc[t + 1] : 0.0f);
+        out[N * k + t - 1] = bdpt_mis_weight(lt, s, cam, t, rev, pl[N - 1], 0);
     }
-    for (int i = 0; i < 5; ++i) {
-        lt[i].delta = 0;
-        lt[i].pdf_fwd = d[12 + 2 * i];
-        lt[i].pdf_rev = d[13 + 2 * i];
-    }
-    sum_mis_ratios(cam, 6, 1, 0);
-    sum_mis_ratios(lt, 5, 0, 0);
-    float4 rev = (float4)(d[2], d[5], d[14], d[17]);
-    out[k] = (float4)(bdpt_mis_weight(lt, 3, cam, 4, rev, d[20], 0), bdpt_mis_weight(lt, 0, cam, 6, rev, d[20], 0),
-                      bdpt_mis_weight(lt, 1, cam, 5, rev, d[21], 0), bdpt_mis_weight(lt, 5, cam, 2, rev, d[21], 0));
 }
 """
 
 
-def test_mis_weights_stay_numbers_at_extreme_densities(backend):
-    """Densities from 1e-30 to 1e30 (a vertex a hair from the one before has an area density
-    of 1e10 and more): every weight is a number in [0, 1]. Squared ratios overflowing to infinity
-    beside others underflowing to 0 made NaN weights (Bitterli's coffee with BDPT: 4 NaN samples
-    in 2.1 million), and ordinary densities keep the weights they had."""
+def test_mis_weights_are_the_power_heuristics_at_extreme_densities(backend):
+    """For a path of six vertices whose third and fourth lie a hair apart (each drawn from the
+    other at an area density D), the weights of its six strategies against the power heuristic
+    computed in float64 from the same densities: the same to 1e-5, summing to 1, up to D = 1e15;
+    beyond, where the squared ratios pass a float, numbers in [0, 1] (an overflow's infinity
+    times an underflow's 0 made NaN samples: Bitterli's coffee, 4 in 2.1 million)."""
     r = Renderer(backend, cbox().with_settings(integrator="bdpt"), 8, 8)
     features = replace(r.compiled.features(r.settings, r.camera), bdpt=5)
-    program = build_program(backend.context, backend.device.device, EXTREME_WEIGHTS, features=features).program
+    program = build_program(backend.context, backend.device.device, PATH_WEIGHTS, features=features).program
     rng = np.random.default_rng(5)
-    n = 4096
-    dens = (10.0 ** rng.uniform(-30, 30, (n, 22))).astype(np.float32)
-    dens[:64] = rng.uniform(0.5, 2.0, (64, 22))            # ordinary densities
-    out = np.zeros((n, 4), np.float32)
+    big = np.array([1.0, 1e4, 1e8, 1e10, 1e12, 1e15, 1e19, 1e25, 1e30, 1e35])
+    n = len(big) * 8
+    pc, pl = rng.uniform(0.3, 3.0, (2, n, 6))
+    pc[:, 0] = 1.0                                      # a pinhole's lens
+    d = np.repeat(big, 8)
+    pc[:, 3] *= d                                       # x3 drawn from x2 a hair away,
+    pl[:, 2] *= d / np.where(d > 1, rng.uniform(1e6, 1e9, n), 1.0)     # x2 from x3 at a grazing angle
+    dens = np.concatenate([pc, pl], axis=1).astype(np.float32)
+    out = np.zeros((n, 6), np.float32)
     mf = cl.mem_flags
     d_buf = cl.Buffer(backend.context, mf.READ_ONLY | mf.COPY_HOST_PTR, hostbuf=dens)
     o_buf = cl.Buffer(backend.context, mf.WRITE_ONLY, out.nbytes)
-    cl.Kernel(program, "extreme_weights")(backend.queue, (n,), None, d_buf, o_buf)
+    cl.Kernel(program, "path_weights")(backend.queue, (n,), None, d_buf, o_buf)
     cl.enqueue_copy(backend.queue, out, o_buf)
+    pc64, pl64 = dens[:, :6].astype(np.float64), dens[:, 6:].astype(np.float64)
+    # strategy t draws x0 .. x(t-1) from the camera and the rest from the light
+    logp = np.stack([np.log(pc64[:, :t]).sum(1) + np.log(pl64[:, t:]).sum(1) for t in range(1, 7)], axis=1)
+    q = np.exp(2 * (logp - logp.max(axis=1, keepdims=True)))
+    exact = q / q.sum(axis=1, keepdims=True)
     assert np.all(np.isfinite(out)) and out.min() >= 0 and out.max() <= 1, out[~np.isfinite(out).all(1)][:5]
-    assert 0 < out[:64].min() and out[:64].max() < 1            # no clamp reached: the weights as before
+    fits = d <= 1e15
+    np.testing.assert_allclose(out[fits], exact[fits], atol=1e-5)
+    np.testing.assert_allclose(out[fits].sum(axis=1), 1, atol=1e-5)
 
 
 def test_bdpt_and_light_tracing_agree_on_a_point_light_in_fog(backend):
