@@ -188,20 +188,6 @@ def test_unreadable_environment_map(tmp_path, name, data):
     assert "environment.map: '" in r.stderr and f"{name}' is not a readable HDR image" in r.stderr
 
 
-def test_a_cut_exr_map_prints_nothing_of_openexrs_own(tmp_path):
-    """An EXR cut in half: OpenEXR's C library writes lines to the standard error's descriptor and
-    its C++ layer one to the standard output's ("Warning: Exception raised reading pixel data"),
-    which only a process shows: none of them comes out, only pathtrace's line."""
-    from pathtrace.io.images import _write_exr
-    _write_exr(str(tmp_path / "full.exr"), np.random.default_rng(0).random((256, 512, 3)).astype(np.float32))
-    data = (tmp_path / "full.exr").read_bytes()
-    (tmp_path / "cut.exr").write_bytes(data[:len(data) // 2])
-    scene = write(tmp_path, GOOD.replace("color = 0.5", 'map = "cut.exr"'))
-    r = pathtrace("render", scene, "-o", tmp_path / "o.png", "--spp", "1", "--size", "8x4", "-q")
-    assert r.returncode == 1 and r.stdout == "", r.stdout
-    assert r.stderr.splitlines() == [f"pathtrace: error: {scene}: environment.map: '{tmp_path / 'cut.exr'}' is not a "
-                                     "readable HDR image (.hdr, .exr or .pfm)"], r.stderr
-
 
 def test_a_missing_scene_files_near_name_is_of_its_folder_compared_without_extensions(tmp_path):
     """The nearest scene file of a missing one's folder is offered where their names are close

@@ -116,6 +116,40 @@ def test_a_truncated_map_gets_our_line_only(tmp_path):
     assert "is not a readable HDR image" in r.stderr
 
 
+def test_a_cut_exr_map_prints_nothing_of_openexrs_own(tmp_path):
+    """An EXR cut in half: OpenEXR's C library writes lines to the standard error's descriptor and
+    its C++ layer one to the standard output's ("Warning: Exception raised reading pixel data"),
+    which only a process shows: none of them comes out, only pathtrace's line."""
+    from pathtrace.io.images import _write_exr
+    _write_exr(str(tmp_path / "full.exr"), np.random.default_rng(0).random((256, 512, 3)).astype(np.float32))
+    data = (tmp_path / "full.exr").read_bytes()
+    (tmp_path / "cut.exr").write_bytes(data[:len(data) // 2])
+    scene = write(tmp_path, GOOD.replace("color = 0.5", 'map = "cut.exr"'))
+    r = pathtrace("render", scene, "-o", tmp_path / "o.png", "--spp", "1", "--size", "8x4", "-q")
+    assert r.returncode == 1 and r.stdout == "", r.stdout
+    assert r.stderr.splitlines() == [f"pathtrace: error: {scene}: environment.map: '{tmp_path / 'cut.exr'}' is not a "
+                                     "readable HDR image (.hdr, .exr or .pfm)"], r.stderr
+
+
+@pytest.mark.parametrize("closed", [1, 2])
+def test_a_read_with_a_standard_descriptor_closed_keeps_the_other(tmp_path, closed):
+    """The quieting around OpenEXR's reads in a process whose standard output or error is
+    closed: the read succeeds, and the other descriptor still writes where it did (a copy of
+    standard output that took the closed descriptor 2 was quieted and restored as 1: the
+    process's output lost for good)."""
+    import subprocess
+    import sys
+    from pathtrace.io.images import _write_exr
+    _write_exr(str(tmp_path / "map.exr"), np.ones((8, 16, 3), np.float32))
+    other = 3 - closed
+    code = ("import os; from pathlib import Path; from pathtrace.io.images import read_hdr; "
+            f"shape = read_hdr(Path({str(tmp_path / 'map.exr')!r}), 'x').shape; "
+            f"os.write({other}, str(shape).encode() + b' after')")
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                       preexec_fn=lambda: os.close(closed))
+    assert r.returncode == 0 and (r.stdout, r.stderr)[other - 1] == "(8, 16, 3) after", (r.stdout, r.stderr)
+
+
 def test_an_exposure_beyond_100_stops_is_refused_before_rendering(tmp_path):
     r = pathtrace("render", "simple", "-o", tmp_path / "o.png", "--exposure", "1100")
     assert r.returncode == 2 and "1100.0 stops is out of range (must be -100 to 100)" in r.stderr

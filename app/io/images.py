@@ -13,6 +13,7 @@ import os
 import re
 import stat
 import tempfile
+import threading
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -86,35 +87,62 @@ def _read_with_opencv(path: Path):
     return np.ascontiguousarray(image[..., 2::-1], np.float32)
 
 
+_QUIET = threading.Lock()      # the standard descriptors are the process's: one quieting at a time
+
+
 @contextlib.contextmanager
 def _quiet_c_library():
-    """Standard output and error sent to /dev/null for the duration, as file descriptors 1 and
-    2 and as Python's sys.stdout and sys.stderr: OpenEXR's C library prints its own lines about a
-    damaged file to standard error (EXR_ERR_BAD_CHUNK_LEADER ...) and its C++ layer to standard
-    output ("Warning: Exception raised reading pixel data ..."), before the one line pathtrace
-    gives. C's buffered output is flushed before the descriptors come back, or a line kept in
-    its buffer would be written at exit."""
-    import ctypes
+    """Standard output and error (file descriptors 1 and 2) sent to /dev/null for the duration:
+    OpenEXR's C library prints its own lines about a damaged file to standard error
+    (EXR_ERR_BAD_CHUNK_LEADER ...) and its C++ layer to standard output ("Warning: Exception
+    raised reading pixel data ..."), before the one line pathtrace gives. C's buffered output is
+    flushed before the descriptors come back, or a line kept in its buffer would be written at
+    exit. A descriptor that is closed is left so."""
     import sys
-    libc = ctypes.CDLL(None)
-    for stream in (sys.stdout, sys.stderr):
-        if stream is not None:          # (None under pythonw)
-            stream.flush()
-    libc.fflush(None)
-    saved = {fd: os.dup(fd) for fd in (1, 2)}
+    with _QUIET:
+        for stream in (sys.stdout, sys.stderr):
+            if stream is not None:          # (None under pythonw)
+                stream.flush()
+        _flush_c_streams()
+        saved = {fd: copy for fd, copy in ((fd, _copy_above_standard(fd)) for fd in (1, 2)) if copy is not None}
+        try:
+            with open(os.devnull, "w") as null:
+                for fd in saved:
+                    os.dup2(null.fileno(), fd)
+            yield
+        finally:
+            _flush_c_streams()
+            for fd, copy in saved.items():
+                os.dup2(copy, fd)
+                os.close(copy)
+
+
+def _copy_above_standard(fd: int):
+    """A copy of descriptor fd numbered above 2 (a copy may take the number of a standard one
+    that is closed, which quieting would then reuse), or None where fd is closed."""
     try:
-        with open(os.devnull, "w") as null:
-            for fd in saved:
-                os.dup2(null.fileno(), fd)
-            with contextlib.redirect_stdout(null), contextlib.redirect_stderr(null):
-                try:
-                    yield
-                finally:
-                    libc.fflush(None)
-    finally:
-        for fd, copy in saved.items():
-            os.dup2(copy, fd)
-            os.close(copy)
+        os.fstat(fd)
+    except OSError:
+        return None
+    low = []
+    copy = os.dup(fd)
+    while copy <= 2:
+        low.append(copy)
+        copy = os.dup(fd)
+    for extra in low:
+        os.close(extra)
+    return copy
+
+
+def _flush_c_streams():
+    """C's fflush of every output stream, where the C library can be named (POSIX)."""
+    if os.name != "posix":
+        return
+    import ctypes
+    try:
+        ctypes.CDLL(None).fflush(None)
+    except (OSError, AttributeError):
+        pass
 
 
 def _read_exr(path: Path):
