@@ -8,6 +8,7 @@ stay on the device between renders, and only what changed since the last render 
 the settings, the materials, the environment) is uploaded again; a change of geometry (spheres
 or meshes) compiles it anew."""
 
+import operator
 import threading
 import time
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -87,9 +88,7 @@ def open_devices(device="auto") -> list:
     from pathtrace.device.opencl import choose_devices
     if isinstance(device, DevicesOpening):
         return device.result()
-    specs = tuple(device) if isinstance(device, (list, tuple)) else (device,)
-    # an index from `pathtrace devices` may be given as a number (Python's bool is none)
-    specs = tuple(str(s) if isinstance(s, int) and not isinstance(s, bool) else s for s in specs)
+    specs = tuple(_device_spec(s) for s in (device if isinstance(device, (list, tuple)) else (device,)))
     if not specs or not all(isinstance(s, str) for s in specs):
         raise UserError(f"device: give a device spec such as 'auto', 'gpu', 'cpu:0' or a list of them, "
                         f"got {short(device)}")
@@ -97,6 +96,17 @@ def open_devices(device="auto") -> list:
         if specs not in _backends:
             _backends[specs] = choose_devices(list(specs))
         return _backends[specs]
+
+
+def _device_spec(spec):
+    """A device spec, an index of `pathtrace devices` given as an integer (a NumPy one too, not
+    a bool) as the string --device takes; anything else as it is, for the caller to refuse."""
+    if isinstance(spec, bool) or isinstance(spec, str):
+        return spec
+    try:
+        return str(operator.index(spec))
+    except TypeError:
+        return spec
 
 
 class DevicesOpening:
@@ -487,8 +497,7 @@ def view(scene="simple", device: str = "auto", size=None, frames: int = None,
     read, the device opened and the kernels compiled while it says so."""
     from pathtrace.viewer.needs_display import require_display
     from pathtrace.viewer.window import Viewer
-    if isinstance(device, int) and not isinstance(device, bool):
-        device = str(device)            # an index from `pathtrace devices`
+    device = _device_spec(device)
     if not isinstance(device, str):
         raise UserError("device: the viewer renders on one device; give one spec (several are for render)")
     require_display(scene if isinstance(scene, str) else "simple")    # before any device work

@@ -142,10 +142,11 @@ def test_bad_arguments_are_one_line_user_errors(kwargs, message):
 
 
 def test_a_device_index_may_be_a_number():
-    """device=0 is the index `pathtrace devices` lists, as device="0" is."""
+    """device=0 (a NumPy integer too) is the index `pathtrace devices` lists, as device="0" is."""
     scene = pathtrace.load_dict(small_scene())
-    np.testing.assert_array_equal(pathtrace.render(scene, spp=1, size=(8, 6), device=0),
-                                  pathtrace.render(scene, spp=1, size=(8, 6), device="0"))
+    image = pathtrace.render(scene, spp=1, size=(8, 6), device="0")
+    for index in (0, np.int64(0), [0]):
+        np.testing.assert_array_equal(pathtrace.render(scene, spp=1, size=(8, 6), device=index), image)
 
 
 def test_a_changed_scene_is_rendered_without_compiling_it_again():

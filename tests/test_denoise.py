@@ -210,3 +210,15 @@ def test_an_image_without_guides_is_denoised_by_itself(demo):
     for out in repeated:
         np.testing.assert_array_equal(out, first)
     assert not np.array_equal(first, guided)
+
+
+def test_a_denoiser_whose_filter_refused_its_images_works_again():
+    """A normal without the albedo is a combination OIDN refuses (one line); the denoiser then
+    binds its images afresh at the next call rather than reuse the refused ones."""
+    from pathtrace.errors import UserError
+    grey = np.full((16, 16, 3), 0.5, np.float32)
+    with Denoiser("fast") as denoiser:
+        first = denoiser(grey, grey, grey)
+        with pytest.raises(UserError, match="^Open Image Denoise, preparing the filter: "):
+            denoiser(grey, None, grey)
+        np.testing.assert_array_equal(denoiser(grey, grey, grey), first)

@@ -295,4 +295,4 @@ def test_a_scene_of_instances_alone_has_bounds_round_them():
     corners = np.concatenate([mesh.vertices for mesh in instancing.flattened_meshes(scene.instances)])
     assert np.all(lower <= corners.min(0)) and np.all(upper >= corners.max(0))
     np.testing.assert_allclose([lower, upper], [[5, 0, 0], [6, 1, 0]])
-    assert "1 instance (1 triangles)" in repr(scene) and "empty" not in repr(scene)
+    assert "1 instance (1 triangle)" in repr(scene) and "empty" not in repr(scene)

@@ -11,7 +11,6 @@ device buffers are shared by every call."""
 import numpy as np
 
 QUALITIES = ("high", "balanced", "fast")   # OIDN's quality presets: slower is sharper
-GUIDES = ("albedo", "normal")              # OIDN's names of the guide images (OIDN_IMAGE_ALBEDO, _NORMAL)
 BORDER = 16                                # pixels mirrored about each edge (Denoiser.__call__)
 
 
@@ -78,12 +77,13 @@ class Denoiser:
         MB a camera move in the viewer, whose draft and full sizes alternate)."""
         if self._bound == (height, width, guides):
             return
+        self._bound = None              # until the filter takes the new ones (a failure leaves none bound)
         oidn, nbytes = self._oidn, height * width * 12
         names = (oidn.OIDN_IMAGE_COLOR, *guides, oidn.OIDN_IMAGE_OUTPUT)
         old, self._buffers = self._buffers, {name: oidn.Buffer(self._device, nbytes) for name in names}
         for name, buffer in self._buffers.items():
             self._filter.set_image(name, buffer, oidn.OIDN_FORMAT_FLOAT3, width, height)
-        for name in GUIDES:
+        for name in (oidn.OIDN_IMAGE_ALBEDO, oidn.OIDN_IMAGE_NORMAL):
             if name not in guides:
                 self._filter.unset_image(name)
         for buffer in old.values():      # the filter now holds the new ones
@@ -106,7 +106,7 @@ class Denoiser:
         2026-12-03)."""
         oidn = self._oidn
         given = {oidn.OIDN_IMAGE_ALBEDO: albedo, oidn.OIDN_IMAGE_NORMAL: normal}
-        guides = tuple(name for name in GUIDES if given[name] is not None)
+        guides = tuple(name for name, image in given.items() if image is not None)
         h, w, _ = color.shape
         height, width = h + 2 * BORDER, w + 2 * BORDER
         self._bind(height, width, guides)

@@ -122,15 +122,16 @@ class Scene:
         """One line: what it holds, where it is, the camera and the image it renders; never its
         arrays."""
         s, c = self.settings, self.camera
-        parts = [f"{len(self.spheres)} sphere{'' if len(self.spheres) == 1 else 's'}",
-                 f"{len(self.meshes)} mesh{'' if len(self.meshes) == 1 else 'es'} ({self.triangle_count} triangles)"]
+
+        def count(n, word, plural=None):
+            return f"{n} {word if n == 1 else plural or word + 's'}"
+        parts = [count(len(self.spheres), "sphere"),
+                 f"{count(len(self.meshes), 'mesh', 'meshes')} ({count(self.triangle_count, 'triangle')})"]
         if len(self.shapes):
-            parts.append(f"{len(self.shapes)} analytic shape{'' if len(self.shapes) == 1 else 's'}")
+            parts.append(count(len(self.shapes), "analytic shape"))
         if self.instances is not None and len(self.instances):
-            n = len(self.instances)
-            parts.append(f"{n} instance{'' if n == 1 else 's'} ({self.instances.triangle_count} triangles)")
-        parts += [f"{len(self.materials)} material{'' if len(self.materials) == 1 else 's'}",
-                  f"{len(self.lights)} delta light{'' if len(self.lights) == 1 else 's'}"]
+            parts.append(f"{count(len(self.instances), 'instance')} ({count(self.instances.triangle_count, 'triangle')})")
+        parts += [count(len(self.materials), "material"), count(len(self.lights), "delta light")]
         if self.media:
             parts.append(f"{len(self.media)} media")
         bounds = self.bounds()
