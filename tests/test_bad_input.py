@@ -158,7 +158,7 @@ def test_a_scene_changed_after_loading_is_checked_at_render_naming_the_field(cha
 
 
 @pytest.mark.parametrize("call,expected", [
-    (lambda: pathtrace.render(pathtrace.load_dict(BASE), device=0), "device:"),
+    (lambda: pathtrace.render(pathtrace.load_dict(BASE), device=2.5), "device:"),
     (lambda: pathtrace.render(pathtrace.load_dict(BASE), aovs=1), "aovs:"),
     (lambda: list(pathtrace.progressive(pathtrace.load_dict(BASE), steps=1)), "steps:"),
     (lambda: pathtrace.write(1, np.zeros((2, 2, 3))), "path:"),

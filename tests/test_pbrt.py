@@ -499,3 +499,20 @@ def test_unnamed_analytic_shapes_are_numbered_by_kind(tmp_path):
     assert list(s.sphere_names) == ["sphere 0", "sphere 1"] and [x.name for x in s.shapes] == ["disk 0", "disk 1"]
     blend = load_scene(str(Path(__file__).parent / "scenes" / "blend.xml"))
     assert list(blend.sphere_names) == [f"sphere {k}" for k in range(len(blend.spheres))]
+
+
+def test_named_materials_name_their_rows(tmp_path):
+    """A MakeNamedMaterial's name names its row of the scene's materials, as a Mitsuba bsdf's id
+    and a TOML table's key do (the viewer's pick showed "material #4" for the file's "Wood");
+    an anonymous Material's row has none, and a named one given an emission is a row of its own."""
+    (tmp_path / "s.pbrt").write_text(
+        'LookAt 0 0 5  0 0 0  0 1 0\nCamera "perspective"\nWorldBegin\n'
+        'MakeNamedMaterial "Wood" "string type" "diffuse" "rgb reflectance" [ 0.5 0.3 0.1 ]\n'
+        'NamedMaterial "Wood"\nShape "sphere" "float radius" 1\nTranslate 3 0 0\nShape "sphere" "float radius" 1\n'
+        'Material "conductor"\nShape "sphere" "float radius" 0.5\n'
+        'NamedMaterial "Wood"\nAreaLightSource "diffuse" "rgb L" [ 1 1 1 ]\nShape "sphere" "float radius" 0.2\n')
+    s = load_scene(str(tmp_path / "s.pbrt"))
+    wood = s.materials["Wood"]
+    assert wood.type == "diffuse" and np.allclose(wood.params["rho_d"], [0.5, 0.3, 0.1])
+    rows = list(s.sphere_material)
+    assert rows[0] == rows[1] == list(s.materials).index("Wood") and len(set(rows)) == 3

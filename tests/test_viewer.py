@@ -176,6 +176,37 @@ def test_key_moves_the_camera_and_resets_accumulation(viewer):
     assert viewer.scale == 1 and (viewer.renderer.width, viewer.renderer.height) == (W, H)
 
 
+def test_keys_over_the_panel_and_escape_in_a_field_leave_the_camera_and_the_window(viewer):
+    """With the cursor over the panel, W and Ctrl move nothing (the keys are the panel's: Ctrl +
+    click types a slider's value); Escape while a field is edited ends the edit, not the viewer."""
+    v = viewer
+    settle(v)
+    before_eye, resets = v.renderer.camera.eye.copy(), v.renderer.resets
+    xdo("windowfocus", "--sync", window_id(v))
+    move(v, 60, 200)                                   # over the panel, on no widget's text
+    for key in ("w", "ctrl"):
+        xdo("keydown", key)
+        frames(v, 5)
+        xdo("keyup", key)
+        frames(v, 2)
+    assert np.array_equal(v.renderer.camera.eye, before_eye) and v.renderer.resets == resets
+    saved = v.scene_file
+    scrolls = scroll_into_sight(v, "file")
+    try:
+        click_widget(v, "file")
+        frames_until(v, lambda: v.imgui.get_io().want_text_input)
+        assert v.imgui.get_io().want_text_input                # the field is being edited
+        xdo("key", "Escape")
+        frames_until(v, lambda: not v.imgui.get_io().want_text_input)
+        frames(v, 2)
+        assert not v.glfw.window_should_close(v.window) and not v.imgui.get_io().want_text_input
+    finally:
+        v.scene_file = saved
+        scroll_back(v, scrolls)
+    xdo("mousemove", "--window", window_id(v), 800, 300)
+    frames(v, 2)
+
+
 def test_each_preview_pass_is_shown_while_a_key_is_held(viewer, monkeypatch):
     """A preview pass that takes many turns of the loop (two cores, a slow device) reaches the
     screen before the next move restarts the image: when every turn's move restarted it, nothing

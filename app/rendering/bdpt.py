@@ -35,7 +35,7 @@ def check(name: str, features, integrator: str, lights):
     scene, kernels/lights.cl: leave_world_disk)."""
     if not supports_importance(features.camera):
         raise UserError(f"{name}: integrator {integrator}: the {features.camera} camera has no importance to join "
-                        "light subpaths to yet (render it with --integrator path)")
+                        "light subpaths to yet (the path tracer renders it)")
     if integrator == "ptracer" and lights.env_pick > 0:
         raise UserError(f"{name}: integrator ptracer: the environment, seen directly, is not reached by light "
-                        "tracing (render it with --integrator bdpt or path)")
+                        "tracing (BDPT and the path tracer render it)")

@@ -11,6 +11,7 @@ class IntegratorSwitch:
     requested_integrator = None   # the integrator the panel asked for, until its kernels are built
 
     def request_integrator(self, name: str):
+        self.clear_error()
         self.requested_integrator = None if name == self.renderer.settings.integrator else name
         self.redraw_soon()
 

@@ -24,6 +24,7 @@ MARGIN = 10                 # pixels between the panel and the window's edges
 WIDGET_MIN = 150            # the narrowest a widget may get, in pixels
 FLOAT_MAX = 3.4e38          # float32's largest value: the kernels' limit for any parameter
 INT_MAX = 2**31 - 1
+MESSAGE_LINES = 2           # the panel's message slot, in lines
 KEYS = (("W A S D", "move"), ("Q / E, Ctrl / Space", "down / up"), ("right mouse drag", "look around"),
         ("mouse wheel", "speed"), ("Shift", "move faster"), ("left click", "pick a shape"),
         ("Ctrl + left click", "focus the lens there"), ("R", "reset the camera to the scene's"),
@@ -147,18 +148,29 @@ def _status(imgui, v):
     imgui.text(f"{p.samples_per_second / 1e6:.2f} Msamples/s")
     size = f"{r.width}x{r.height}" + (f" ({'draft' if v.draft else 'preview'} 1/{v.scale} of {v.size[0]}x{v.size[1]})" if v.scale > 1 else "")
     imgui.text_wrapped(size)
-    # always one line, so that nothing below moves when the denoiser starts or stops
+    # short lines, and the message in a slot of MESSAGE_LINES lines whether there is one or not,
+    # so that nothing below moves as the denoiser starts or stops or a message comes and goes (a
+    # click meant for a widget landed on the one that had moved under the cursor); a longer
+    # message is cut, whole in its tooltip and in the terminal
     if not v.denoise:
-        imgui.text_wrapped("denoiser: off")
+        imgui.text("denoiser: off")
     elif v.denoised_at is not None and v.denoised_at[0] == r.resets and v.resting:
-        imgui.text_wrapped(f"denoised at {v.denoised_at[1]} spp in {v.denoise_seconds:.2f} s")
+        imgui.text(f"denoised at {v.denoised_at[1]} spp in {v.denoise_seconds:.2f} s")
     else:
-        imgui.text_wrapped("denoiser: waits for the camera to rest and a whole pass")
+        imgui.text("denoiser: waits for a rest")
+    line = imgui.get_text_line_height_with_spacing()
+    imgui.begin_child("message", (0, MESSAGE_LINES * line), imgui.ChildFlags_.none,
+                      imgui.WindowFlags_.no_scrollbar | imgui.WindowFlags_.no_scroll_with_mouse)
     if v.message:
+        text = ("error: " if v.error else "") + v.message
         if v.error:
-            imgui.text_colored((1.0, 0.45, 0.4, 1.0), "error:")
-            imgui.same_line()
-        imgui.text_wrapped(v.message)
+            imgui.push_style_color(imgui.Col_.text, (1.0, 0.45, 0.4, 1.0))
+        imgui.text_wrapped(text)
+        if v.error:
+            imgui.pop_style_color()
+    imgui.end_child()
+    if v.message:
+        imgui.set_item_tooltip(("error: " if v.error else "") + v.message)
 
 
 def draw_panel(v):
@@ -178,6 +190,9 @@ def draw_panel(v):
         (min(width_min, screen_w - 2 * MARGIN), min(100, screen_h)),
         (max(screen_w - 2 * MARGIN, 1), max(screen_h - 2 * MARGIN, 1)))
     v.panel_open = imgui.begin("pathtrace")[0]
+    if v.scroll_panel_up:
+        imgui.set_scroll_y(0)
+        v.scroll_panel_up = False
     layout = _Layout(imgui, v)
     imgui.push_item_width(-column)
     _status(imgui, v)
@@ -243,6 +258,7 @@ def draw_panel(v):
         if changed:
             camera = camera.as_type(types[index])
             r.set_camera(camera)
+            v.clear_error()
         # the sliders of the camera type's own fields (app/cameras/: Camera.sliders)
         for name, (low, high, log) in camera.sliders.items():
             label = name.replace("_", " ")

@@ -100,6 +100,7 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         self.exposure, self.tonemap = 0.0, "standard"
         self.screenshot_dir = Path(screenshot_dir)
         self.message, self.error = "", False    # the panel's last line, and whether it is an error
+        self.scroll_panel_up = False            # the panel scrolled to its top at the next frame
         self.scene_file = ""          # the panel's "open file" field
         self.selected = None
         self.show_help = False        # the keyboard help overlay (H)
@@ -232,9 +233,14 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         """Whether the mouse belongs to the panel: imgui says so (as of the last frame), or the
         cursor is over the panel now (an event can arrive before imgui has seen the cursor
         move there)."""
+        return self.imgui.get_io().want_capture_mouse or self._cursor_over_panel()
+
+    def _cursor_over_panel(self) -> bool:
+        """Whether the cursor is over the panel now, by where the window system says it is
+        (imgui keeps the last place it saw inside the window after the cursor has left it)."""
         x, y = self.glfw.get_cursor_pos(self.window)
         px, py, pw, ph = self.panel_rect
-        return self.imgui.get_io().want_capture_mouse or (px <= x < px + pw and py <= y < py + ph)
+        return px <= x < px + pw and py <= y < py + ph
 
     def key_name(self, key):
         glfw = self.glfw
@@ -246,12 +252,13 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         glfw = self.glfw
         name = self.key_name(key)
         typing = self.imgui.get_io().want_text_input
-        # while a scene opens, its worker thread sets the renderer's scene: a screenshot, R or a
-        # move then would read a scene half set, or none yet (the first)
-        free = not self.imgui.get_io().want_capture_keyboard and not self.loading
+        # keys go to the panel while the cursor is over it (README), and while a scene opens its
+        # worker thread sets the renderer's scene: a screenshot, R or a move then would read a
+        # scene half set, or none yet (the first)
+        free = not self.imgui.get_io().want_capture_keyboard and not self.loading and not self._cursor_over_panel()
         if action == glfw.PRESS and key in (glfw.KEY_F12, glfw.KEY_P) and not typing and not self.loading:
             self.screenshot()
-        elif action == glfw.PRESS and key == glfw.KEY_ESCAPE:
+        elif action == glfw.PRESS and key == glfw.KEY_ESCAPE and not typing:      # (Esc ends an edit)
             glfw.set_window_should_close(self.window, True)
             glfw.hide_window(self.window)      # gone at once, whatever close() then waits for
         elif action == glfw.PRESS and key == glfw.KEY_H and free:
@@ -341,9 +348,16 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         self.renderer.set_camera(self.renderer.scene.camera)
         self.last_move = time.perf_counter()
 
+    def clear_error(self):
+        """An error line gone once the user changes what it was about (a camera type BDPT could
+        not render, changed again)."""
+        if self.error:
+            self.message, self.error = "", False
+
     def set_message(self, text: str, error: bool = False):
         """The panel's status line; errors are also printed, for the terminal and its log."""
         self.message, self.error = text, error
+        self.scroll_panel_up = error        # an error at the panel's top, in sight however it was scrolled
         print(f"pathtrace: {text}", file=sys.stderr)
 
     def _wait(self) -> Renderer:

@@ -56,6 +56,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
     def __init__(self, path: Path):
         super().__init__(path)
         self.named_materials = {}
+        self.material_names = {}          # id(Material) -> its MakeNamedMaterial name, which names its row
         self.mapper = MaterialMapper(self)
         self.builder = SceneBuilder()
         self.settings = settings.defaults("pbrt")
@@ -178,6 +179,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         if kind is None:
             tokens.fail(offset, f"MakeNamedMaterial '{cut(name)}' needs a \"string type\"")
         self.named_materials[name] = self.mapper.material(kind, params, tokens.where(offset))
+        self.material_names[id(self.named_materials[name])] = name
         self.unused(params, "material", kind)
 
     def named_material(self, name, where):
@@ -296,7 +298,8 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         if emission is not None:
             return self.builder.material(replace(material, emission=emission, emits_back=emits_back))
         if id(material) not in self.material_rows:
-            self.material_rows[id(material)] = (self.builder.material(material), material)
+            row = self.builder.materials.add(material, self.material_names.get(id(material)))
+            self.material_rows[id(material)] = (row, material)
         return self.material_rows[id(material)][0]
 
     def check_extent(self, vertices, where):
