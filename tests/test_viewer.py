@@ -1361,3 +1361,22 @@ def test_a_scene_opened_from_the_panel_takes_the_size_the_viewer_was_given(viewe
     viewer.load_scene("cornell-box")
     own = load_scene("cornell-box").settings
     assert viewer.size == (own.width, own.height), viewer.size
+
+
+def test_a_cameras_fields_come_back_through_a_type_without_them(viewer):
+    """The panel's camera type: perspective at vfov 70, then spherical (no vfov), then thinlens
+    has vfov 70, not the default 45, and the same frame."""
+    v = viewer
+    settle(v)
+    scene_camera = v.renderer.camera.copy()
+    try:
+        camera = v.renderer.camera
+        camera.vfov = 70.0
+        v.renderer.set_camera(camera)
+        assert v.switch_camera_type("spherical").type == "spherical"
+        thin = v.switch_camera_type("thinlens")
+        assert thin.type == "thinlens" and thin.vfov == 70.0
+        assert np.array_equal(thin.eye, scene_camera.eye)
+    finally:
+        v.renderer.set_camera(scene_camera)
+        v.camera_fields = {}

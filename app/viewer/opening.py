@@ -140,6 +140,7 @@ class SceneOpening:
         """Movement at the scene's scale (the wheel changes it from there), and the panel's file
         field naming the scene's file, if it has one."""
         self.controls.speed = speed_for(compiled.scene.camera, compiled.radius)
+        self.camera_fields = {}       # (switch_camera_type) another scene's cameras' fields forgotten
         if compiled.scene.source:
             self.scene_file = compiled.scene.source
 

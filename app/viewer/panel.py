@@ -256,9 +256,7 @@ def draw_panel(v):
         changed, index = imgui.combo("camera type", types.index(camera.type), types)
         layout.check("camera type")
         if changed:
-            camera = camera.as_type(types[index])
-            r.set_camera(camera)
-            v.clear_error()
+            camera = v.switch_camera_type(types[index])
         # the sliders of the camera type's own fields (app/cameras/: Camera.sliders)
         for name, (low, high, log) in camera.sliders.items():
             label = name.replace("_", " ")

@@ -27,6 +27,7 @@ from pathtrace.viewer.integrators import IntegratorSwitch
 from pathtrace.viewer.needs_display import no_display_message, require_display
 from pathtrace.viewer.opening import SceneOpening
 from pathtrace.viewer.screenshots import Screenshots
+from pathtrace.cameras import CAMERAS
 from pathtrace.viewer.panel import MARGIN, draw_help, draw_notice, draw_panel
 
 LAUNCH_BUDGET = 1 / 120        # device seconds per launch: a reset waits for at most three
@@ -102,6 +103,7 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         self.message, self.error = "", False    # the panel's last line, and whether it is an error
         self.scroll_panel_up = False            # the panel scrolled to its top at the next frame
         self.scene_file = ""          # the panel's "open file" field
+        self.camera_fields = {}       # the camera sliders' last values, by field name (the panel's camera type)
         self.selected = None
         self.show_help = False        # the keyboard help overlay (H)
         self.show_panel = True        # the panel, shown or hidden by Tab
@@ -347,6 +349,18 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         """R: back to the scene's own camera."""
         self.renderer.set_camera(self.renderer.scene.camera)
         self.last_move = time.perf_counter()
+
+    def switch_camera_type(self, kind: str):
+        """The panel's camera type: a camera of type `kind` with this one's frame, its sliders'
+        fields as the cameras had them before (perspective's vfov through the spherical camera,
+        which has none); it returns it."""
+        camera = self.renderer.camera
+        self.camera_fields.update({name: getattr(camera, name) for name in camera.sliders})
+        camera = camera.as_type(kind, **{name: self.camera_fields[name] for name in CAMERAS[kind].sliders
+                                         if name in self.camera_fields})
+        self.renderer.set_camera(camera)
+        self.clear_error()
+        return self.renderer.camera
 
     def clear_error(self):
         """An error line gone once the user changes what it was about (a camera type BDPT could
