@@ -707,6 +707,8 @@ kernel void path_weights(global const float *dens, global float *out)
             lt[i].pdf_fwd = pl[N - 1 - i];
             lt[i].pdf_rev = pc[N - 1 - i];
         }
+        if (s == 1)                /* the sampled light point is no light subpath's: its density is origin_pdf's */
+            lt[0].pdf_fwd = 3.0f * pl[N - 1] + 0.5f;
         sum_mis_ratios(cam, t, 1, 0);
         sum_mis_ratios(lt, s, 0, 0);
         float4 rev = (float4)(t >= 1 ? pl[t - 1] : 0.0f, t >= 2 ? pl[t - 2] : 0.0f,

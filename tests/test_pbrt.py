@@ -320,6 +320,35 @@ def test_convert_writes_a_pbrt_scene_as_toml_that_reads_the_same(tmp_path):
     assert all(np.allclose(a, b) for a, b in zip(t.camera.basis(1.0), s.camera.basis(1.0)))
 
 
+
+def test_a_redefined_named_material_lends_its_name_to_no_other(tmp_path):
+    """A name's material redefined fifty times, then anonymous materials: none of their rows is
+    named after it (an id of a freed Material, taken by a new one, carried the old one's name)."""
+    text = 'LookAt 0 0 5  0 0 0  0 1 0\nCamera "perspective"\nWorldBegin\nLightSource "point" "rgb I" [ 5 5 5 ]\n'
+    for k in range(50):
+        text += (f'MakeNamedMaterial "A" "string type" "diffuse" "rgb reflectance" [ 0.5 0.5 {k / 100} ]\n'
+                 'AttributeBegin\nMaterial "conductor"\nShape "sphere" "float radius" 0.1\nAttributeEnd\n')
+    (tmp_path / "s.pbrt").write_text(text)
+    s = load_scene(str(tmp_path / "s.pbrt"))
+    assert "A" not in list(s.materials) and len(s.spheres) == 50
+
+def test_convert_writes_a_key_for_each_material_whatever_the_files_names(tmp_path):
+    """A named material called "material0" beside an anonymous row 0 (whose key convert makes up
+    as "material0"): each row a key of its own, the file's name kept, and the TOML reads back
+    with each shape's material (the second key of a name was invalid TOML)."""
+    from pathtrace.scene.toml_writer import scene_toml
+    (tmp_path / "s.pbrt").write_text(
+        'LookAt 0 0 5  0 0 0  0 1 0\nCamera "perspective"\nWorldBegin\nLightSource "point" "rgb I" [ 5 5 5 ]\n'
+        'Material "conductor"\nShape "sphere" "float radius" 1\n'
+        'MakeNamedMaterial "material0" "string type" "diffuse" "rgb reflectance" [ 0.1 0.8 0.1 ]\n'
+        'NamedMaterial "material0"\nTranslate 2.5 0 0\nShape "sphere" "float radius" 1\n')
+    s = load_scene(str(tmp_path / "s.pbrt"))
+    out = tmp_path / "s.toml"
+    out.write_text(scene_toml(s, out))
+    t = load_scene(str(out))
+    assert [t.materials[int(r)].type for r in t.sphere_material] == ["conductor", "diffuse"]
+    assert t.materials["material0"].type == "diffuse"
+
 # -- bad input: one line naming the file and line --
 
 @pytest.mark.parametrize("text,expected", [

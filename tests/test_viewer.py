@@ -762,7 +762,15 @@ def test_the_panel_switches_the_integrator_once_its_kernels_are_built(viewer):
     frames(v, 2)
     assert v.renderer.settings.integrator == "path" and v.requested_integrator is None
     assert v.error and "the orthographic camera has no importance" in v.message, v.message
+    # the refusal goes once the camera type changes (the panel's), another error stays
+    v.switch_camera_type(camera.type)
+    assert not v.error and v.message == ""
+    v.set_message("screenshot failed: a test", error=True)
+    v.switch_camera_type("orthographic")
+    assert v.error and v.message == "screenshot failed: a test"
+    v.set_message("")
     v.renderer.set_camera(camera)
+    v.camera_fields = {}
 
 
 def test_a_scene_that_asks_for_bdpt_shows_the_path_tracers_images_while_its_kernels_build(viewer, tmp_path):

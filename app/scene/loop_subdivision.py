@@ -93,7 +93,7 @@ def control_topology(f: np.ndarray, n: int) -> Topology:
     twin = np.full(len(order), -1)
     twin[a_half], twin[b_half] = b_half, a_half
     start = np.full(n, -1)
-    start[origin] = np.arange(len(origin))          # the last named (pbrt-v4's startFace)
+    np.maximum.at(start, origin, np.arange(len(origin)))      # the last named (pbrt-v4's startFace)
     open_halves = twin < 0
     boundary = np.zeros(n, bool)
     boundary[origin[open_halves]] = boundary[end[open_halves]] = True

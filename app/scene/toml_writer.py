@@ -17,6 +17,18 @@ from pathtrace.shapes import SHAPES, TextureUV
 from pathtrace.textures import Texture
 
 
+
+def _unique_name(preferred, fallback: str, taken: set) -> str:
+    """`preferred` where it is given and not taken, else `fallback`, numbered where that is taken
+    too; noted in `taken`."""
+    name = preferred if preferred and preferred not in taken else fallback
+    k = 2
+    while name in taken:
+        name, k = f"{fallback}_{k}", k + 1
+    taken.add(name)
+    return name
+
+
 def _value(v) -> str:
     if isinstance(v, (bool, np.bool_)):
         return "true" if v else "false"
@@ -151,9 +163,7 @@ def scene_toml(scene: Scene, out: Path) -> str:
     textures = scene.materials.all_textures()
     texture_names, taken = {}, set()
     for k, t in enumerate(textures):
-        name = t.name if t.name and t.name not in taken else f"texture{k}"
-        texture_names[id(t)] = name
-        taken.add(name)
+        texture_names[id(t)] = _unique_name(t.name, f"texture{k}", taken)
     if textures:      # inputs first, so that the file reads in order
         lines.append("[textures]")
         for t in sorted(textures, key=lambda t: not t.kind.leaf):
@@ -166,12 +176,16 @@ def scene_toml(scene: Scene, out: Path) -> str:
             lines.append(f"{json.dumps(name)} = {_inline(table)}")
         lines.append("")
     lines.append("[materials]")
-    names = {}
+    names, taken, given = {}, set(), {}
+    for name, row in scene.materials.names.items():
+        given.setdefault(row, name)                 # (as name_of, without a search per row)
     components = set(component_rows(scene.materials.rows).tolist())    # written inside their blends
-    for row in range(len(scene.materials)):
-        if row in components:
-            continue
-        names[row] = scene.materials.name_of(row) or f"material{row}"
+    rows = [row for row in range(len(scene.materials)) if row not in components]
+    # a file's names may be any, "material0" too: each row a key of its own (a second was invalid
+    # TOML), the named rows keeping their names first
+    for row in sorted(rows, key=lambda row: row not in given):
+        names[row] = _unique_name(given.get(row), f"material{row}", taken)
+    for row in rows:
         lines.append(f"{json.dumps(names[row])} = {_inline(material_table(scene.materials.get(row), texture_names))}")
     for i, sphere in enumerate(scene.spheres):
         lines += ["", "[[spheres]]", f"name = {_value(scene.sphere_name(i))}",

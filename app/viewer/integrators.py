@@ -11,7 +11,7 @@ class IntegratorSwitch:
     requested_integrator = None   # the integrator the panel asked for, until its kernels are built
 
     def request_integrator(self, name: str):
-        self.clear_error()
+        self.clear_error("integrator")
         self.requested_integrator = None if name == self.renderer.settings.integrator else name
         self.redraw_soon()
 
@@ -26,7 +26,7 @@ class IntegratorSwitch:
             ready = self.renderer.integrator_ready(name)
         except UserError as e:
             self.requested_integrator = None
-            self.set_message(str(e), error=True)
+            self.set_message(str(e), error=True, about="integrator")
             return
         if ready:
             self.requested_integrator = None

@@ -101,6 +101,7 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         self.exposure, self.tonemap = 0.0, "standard"
         self.screenshot_dir = Path(screenshot_dir)
         self.message, self.error = "", False    # the panel's last line, and whether it is an error
+        self.error_about = None                 # what that error is about (set_message, clear_error)
         self.scroll_panel_up = False            # the panel scrolled to its top at the next frame
         self.scene_file = ""          # the panel's "open file" field
         self.camera_fields = {}       # the camera sliders' last values, by field name (the panel's camera type)
@@ -359,18 +360,21 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         camera = camera.as_type(kind, **{name: self.camera_fields[name] for name in CAMERAS[kind].sliders
                                          if name in self.camera_fields})
         self.renderer.set_camera(camera)
-        self.clear_error()
+        self.clear_error("integrator")
         return self.renderer.camera
 
-    def clear_error(self):
-        """An error line gone once the user changes what it was about (a camera type BDPT could
-        not render, changed again)."""
-        if self.error:
+    def clear_error(self, about: str):
+        """The error line gone where it is `about` what the user has just changed again (an
+        integrator refused for the camera: another integrator or camera type); another error
+        stays."""
+        if self.error and self.error_about == about:
             self.message, self.error = "", False
 
-    def set_message(self, text: str, error: bool = False):
-        """The panel's status line; errors are also printed, for the terminal and its log."""
+    def set_message(self, text: str, error: bool = False, about: str = None):
+        """The panel's status line; errors are also printed, for the terminal and its log. `about`:
+        what an error is about, for clear_error."""
         self.message, self.error = text, error
+        self.error_about = about if error else None
         self.scroll_panel_up = error        # an error at the panel's top, in sight however it was scrolled
         print(f"pathtrace: {text}", file=sys.stderr)
 

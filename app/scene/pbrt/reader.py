@@ -56,7 +56,8 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
     def __init__(self, path: Path):
         super().__init__(path)
         self.named_materials = {}
-        self.material_names = {}          # id(Material) -> its MakeNamedMaterial name, which names its row
+        self.material_names = {}          # id(Material) -> (its MakeNamedMaterial name, which names its row,
+                                          # and the Material, kept so that its id stays its own)
         self.mapper = MaterialMapper(self)
         self.builder = SceneBuilder()
         self.settings = settings.defaults("pbrt")
@@ -179,7 +180,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         if kind is None:
             tokens.fail(offset, f"MakeNamedMaterial '{cut(name)}' needs a \"string type\"")
         self.named_materials[name] = self.mapper.material(kind, params, tokens.where(offset))
-        self.material_names[id(self.named_materials[name])] = name
+        self.material_names[id(self.named_materials[name])] = (name, self.named_materials[name])
         self.unused(params, "material", kind)
 
     def named_material(self, name, where):
@@ -298,7 +299,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         if emission is not None:
             return self.builder.material(replace(material, emission=emission, emits_back=emits_back))
         if id(material) not in self.material_rows:
-            row = self.builder.materials.add(material, self.material_names.get(id(material)))
+            row = self.builder.materials.add(material, self.material_names.get(id(material), (None,))[0])
             self.material_rows[id(material)] = (row, material)
         return self.material_rows[id(material)][0]
 
