@@ -21,13 +21,13 @@ from pathtrace.errors import UserError
 from pathtrace.rendering.launches import Progressive
 from pathtrace.rendering.renderer import Renderer
 from pathtrace.resources import resource_dir
+from pathtrace.viewer.camera_edits import CameraEdits
 from pathtrace.viewer.controls import FlyControls, pick_ray
 from pathtrace.viewer.denoising import DRAFT_SCALE, Denoising
 from pathtrace.viewer.integrators import IntegratorSwitch
 from pathtrace.viewer.needs_display import no_display_message, require_display
 from pathtrace.viewer.opening import SceneOpening
 from pathtrace.viewer.screenshots import Screenshots
-from pathtrace.cameras import CAMERAS
 from pathtrace.viewer.panel import MARGIN, draw_help, draw_notice, draw_panel
 
 LAUNCH_BUDGET = 1 / 120        # device seconds per launch: a reset waits for at most three
@@ -74,7 +74,7 @@ def preview_scale(seconds_per_pixel: float, width: int, height: int) -> int:
                    MAX_PREVIEW_SCALE))
 
 
-class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
+class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots, CameraEdits):
     def __init__(self, backend, scene, screenshot_dir="screenshots", window_size=None, image_size=None):
         """Renders `scene` at its settings' size (pathtrace view --size sets it), in a window of
         window_size (default: that size, fitted to the screen).
@@ -291,18 +291,6 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
                 else:
                     self.selected = self.renderer.pick(o, d)
 
-    def focus_at(self, origin, direction):
-        """Puts the plane in focus through the surface seen along a ray (a camera with a
-        focus_distance; the aperture stays as it is). Returns whether a surface was there."""
-        camera = self.renderer.camera
-        t = self.renderer.hit_distance(origin, direction)
-        if not hasattr(camera, "focus_distance") or t is None:
-            return False
-        forward = camera.frame()[0]
-        camera.focus_distance = float(t * np.dot(direction, forward))
-        self.renderer.set_camera(camera)
-        return True
-
     def image_area(self, width: int, height: int) -> tuple:
         """(x0, width) of the part of a window `width` wide (in pixels or points) that the image
         is fitted into: right of the panel where the panel is open and docked at the left edge
@@ -346,23 +334,6 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots):
         return delta
 
     # --- what changes the image ------------------------------------------------------------
-    def reset_camera(self):
-        """R: back to the scene's own camera."""
-        self.renderer.set_camera(self.renderer.scene.camera)
-        self.last_move = time.perf_counter()
-
-    def switch_camera_type(self, kind: str):
-        """The panel's camera type: a camera of type `kind` with this one's frame, its sliders'
-        fields as the cameras had them before (perspective's vfov through the spherical camera,
-        which has none); it returns it."""
-        camera = self.renderer.camera
-        self.camera_fields.update({name: getattr(camera, name) for name in camera.sliders})
-        camera = camera.as_type(kind, **{name: self.camera_fields[name] for name in CAMERAS[kind].sliders
-                                         if name in self.camera_fields})
-        self.renderer.set_camera(camera)
-        self.clear_error("integrator")
-        return self.renderer.camera
-
     def clear_error(self, about: str):
         """The error line gone where it is `about` what the user has just changed again (an
         integrator refused for the camera: another integrator or camera type); another error
