@@ -656,6 +656,29 @@ def test_coming_to_rest_shows_a_denoised_draft_first(viewer, monkeypatch):
     assert v.texture.size == (W, H) and not any(requests)     # nothing noisy once clean
 
 
+def resize_window(viewer, width, height):
+    viewer.glfw.set_window_size(viewer.window, width, height)
+    for _ in range(50):
+        frames(viewer, 1)
+        if viewer.glfw.get_framebuffer_size(viewer.window) == (width, height):
+            break
+    frames(viewer, 2)
+
+
+def test_a_docked_panel_follows_the_windows_height(viewer):
+    """The docked panel takes the window's new height as the window grows and shrinks (it kept
+    the height of the window it opened in, the image placed beside it)."""
+    from pathtrace.viewer.panel import MARGIN
+    settle(viewer)
+    assert viewer.panel_open and viewer.panel_rect[0] <= 2 * MARGIN
+    try:
+        for height in (H + 200, H):
+            resize_window(viewer, W, height)
+            assert abs(viewer.panel_rect[3] - (height - 2 * MARGIN)) <= 1, (viewer.panel_rect, height)
+    finally:
+        resize_window(viewer, W, H)
+
+
 def test_resizing_the_window_keeps_the_render_size(viewer):
     """The render size is the scene's; the window shows it whole, scaled, with bars."""
     from pathtrace.viewer.window import image_extent

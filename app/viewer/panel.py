@@ -158,8 +158,8 @@ def _status(imgui, v):
         imgui.text(f"denoised at {v.denoised_at[1]} spp in {v.denoise_seconds:.2f} s")
     else:
         imgui.text("denoiser: waits for a rest")
-    line = imgui.get_text_line_height_with_spacing()
-    imgui.begin_child("message", (0, MESSAGE_LINES * line), imgui.ChildFlags_.none,
+    # wrapped lines stand a text line apart: the slot holds MESSAGE_LINES of them and no part of the next
+    imgui.begin_child("message", (0, MESSAGE_LINES * imgui.get_text_line_height()), imgui.ChildFlags_.none,
                       imgui.WindowFlags_.no_scrollbar | imgui.WindowFlags_.no_scroll_with_mouse)
     if v.message:
         text = ("error: " if v.error else "") + v.message
@@ -186,6 +186,12 @@ def draw_panel(v):
     # too much of the window to it (a small window, a portrait image), the panel starts as its
     # title bar alone and floats over the image, which takes the window
     imgui.set_next_window_collapsed(not v.docks(screen_w, screen_h, width_min + 2 * MARGIN), imgui.Cond_.first_use_ever)
+    # docked at the left edge and open, it follows the window's height as the window is resized
+    # (it kept the height of the window it opened in, the image placed beside it)
+    x, _, w, h = v.panel_rect
+    if v.panel_screen not in (None, (screen_w, screen_h)) and v.panel_open and x <= 2 * MARGIN and h > 0:
+        imgui.set_next_window_size((w, screen_h - 2 * MARGIN), imgui.Cond_.always)
+    v.panel_screen = (screen_w, screen_h)
     imgui.set_next_window_size_constraints(
         (min(width_min, screen_w - 2 * MARGIN), min(100, screen_h)),
         (max(screen_w - 2 * MARGIN, 1), max(screen_h - 2 * MARGIN, 1)))

@@ -103,6 +103,7 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots, CameraEdits
         self.message, self.error = "", False    # the panel's last line, and whether it is an error
         self.error_about = None                 # what that error is about (set_message, clear_error)
         self.scroll_panel_up = False            # the panel scrolled to its top at the next frame
+        self.panel_screen = None                # the window's size (points) when the panel was last drawn
         self.scene_file = ""          # the panel's "open file" field
         self.camera_fields = {}       # the camera sliders' last values, by field name (the panel's camera type)
         self.selected = None
