@@ -90,5 +90,7 @@ def did_you_mean(given: str, choices, quoted=False) -> str:
 
 def short(value) -> str:
     """A value the user gave, for a message: its repr (quoted, escapes shown), cut to 60
-    characters."""
+    characters; a boolean as the scene formats write it (true, not Python's True)."""
+    if isinstance(value, bool):
+        return "true" if value else "false"
     return cut(repr(value))

@@ -224,6 +224,12 @@ def test_a_bad_shape_is_one_line_naming_the_field(tmp_path, kind):
     with pytest.raises(UserError) as e:
         load_scene(str(path))
     assert "shapes[0].kind" in str(e.value)
+    # a scale too small for the kernels' inverse is the file's line, also for a whole sphere (which
+    # the file keeps as its kind): it was refused at render as scene.shapes[0], with the matrix
+    path.write_text(f'[materials]\nm = {{type = "diffuse", rho_d = 0.5}}\n[[shapes]]\nkind = "{kind}"\n'
+                    'material = "m"\nscale = 1e-5\n')
+    with pytest.raises(UserError, match=f"bad.toml: shapes\\[0\\]: the transform shrinks or flattens the {kind}"):
+        load_scene(str(path))
 
 
 HIT_SOURCE = """

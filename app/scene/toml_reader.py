@@ -26,7 +26,7 @@ from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, place_
 from pathtrace.scene.mesh_shapes import MESH_SHAPES, MeshSource
 from pathtrace.scene.toml_values import TomlValues, as_toml
 from pathtrace.shapes import SHAPES, Shape, TextureUV
-from pathtrace.shapes.shape import MIN_DETERMINANT
+from pathtrace.shapes.shape import MIN_DETERMINANT, flattened
 from pathtrace.textures import TEXTURES, Texture, read_image
 
 # the scene-file types besides the registry's: "emitter" is a black BSDF with emission, and
@@ -328,7 +328,7 @@ class _Reader(TomlValues):
         shape = Shape(self.name(data, where, f"{kind} {where[7:-1]}"), kind, values, self.transform(data, where),
                       self.material_ref(builder, rows, data, where), self.boolean(data, "flip", where, False),
                       self.texture_uv(data, where), self.interface(data, where))
-        if k.too_flat(shape):
+        if flattened(shape.to_world):       # (kept as its kind: read_scene adds it with keep_kind)
             self.fail(where, f"the transform shrinks or flattens the {kind} beyond what the kernels can invert "
                              f"(|det| below {MIN_DETERMINANT:g})")
         if np.any(np.abs(np.array(shape.bounds(k))) > MAX_COORDINATE):

@@ -64,6 +64,8 @@ class TomlValues:
         if not isinstance(data, dict):
             self.fail(where, f"must be a table, got {short(data)}")
         kind = data.get(key, default)
+        if kind is None:
+            self.fail(where, f"missing '{key}' (one of {', '.join(kinds)})")
         if not isinstance(kind, str) or kind not in kinds:
             self.not_one_of(f"{where}.{key}", kind, kinds)
         return kind

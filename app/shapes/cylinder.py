@@ -16,9 +16,11 @@ class Cylinder(Quadric):
     doc = ("The wall at distance radius from the z axis, z_min to z_max, no caps, facing away from "
            "the axis; uv (phi / phi_max, (z - z_min) / (z_max - z_min)). Mitsuba's runs from p0 to p1.")
     parameters = (Parameter("radius", "number", 1.0, doc="distance from the z axis", pbrt="radius"),
-                  Parameter("z_min", "number", -1.0, doc="lower end on the z axis", pbrt="zmin"),
-                  Parameter("z_max", "number", 1.0, doc="upper end on the z axis", pbrt="zmax"),
-                  Parameter("phi_max", "number", 360.0, doc="the angle it spans, degrees", pbrt="phimax"))
+                  Parameter("z_min", "number", -1.0, pbrt="zmin",
+                            doc="one end on the z axis (the two in either order: pbrt-v4 orders them)"),
+                  Parameter("z_max", "number", 1.0, doc="the other end on the z axis", pbrt="zmax"),
+                  Parameter("phi_max", "number", 360.0, pbrt="phimax",
+                            doc="the angle it spans, degrees (more is 360: pbrt-v4 clamps it)"))
     angles = ("phi_max",)
     mitsuba_parameters = (Parameter(None, "number", doc="radius", mitsuba="radius", mitsuba_default=1.0),
                           Parameter(None, "point", doc="start of the axis", mitsuba="p0", mitsuba_default=(0.0, 0.0, 0.0)),

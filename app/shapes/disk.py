@@ -20,7 +20,8 @@ class Disk(Quadric):
     parameters = (Parameter("radius", "number", 1.0, doc="outer radius", pbrt="radius"),
                   Parameter("inner_radius", "number", 0.0, doc="inner radius: an annulus", pbrt="innerradius"),
                   Parameter("height", "number", 0.0, doc="its plane's z in object space", pbrt="height"),
-                  Parameter("phi_max", "number", 360.0, doc="the angle it spans, degrees", pbrt="phimax"))
+                  Parameter("phi_max", "number", 360.0, pbrt="phimax",
+                            doc="the angle it spans, degrees (more is 360: pbrt-v4 clamps it)"))
     angles = ("phi_max",)
     mitsuba_parameters = (Parameter(None, "bool", doc="its front turned round", mitsuba="flip_normals",
                                     mitsuba_default=False),)

@@ -26,7 +26,8 @@ class Sphere(ShapeKind):
                             "[-radius, radius])", pbrt="zmin", optional=True),
                   Parameter("z_max", "number", doc="upper cut on the z axis (default radius; clamped likewise)",
                             pbrt="zmax", optional=True),
-                  Parameter("phi_max", "number", 360.0, doc="the angle it spans, degrees", pbrt="phimax"))
+                  Parameter("phi_max", "number", 360.0, pbrt="phimax",
+                            doc="the angle it spans, degrees (more is 360: pbrt-v4 clamps it)"))
     angles = ("phi_max",)
     mitsuba_parameters = (Parameter(None, "point", doc="centre", mitsuba="center", mitsuba_default=(0.0, 0.0, 0.0)),
                           Parameter(None, "number", doc="radius", mitsuba="radius", mitsuba_default=1.0),

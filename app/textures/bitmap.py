@@ -198,7 +198,7 @@ class Bitmap(TextureType):
         if "file" in values:
             values["image"] = values.pop("file")
         if not isinstance(values.get("image"), Image):
-            raise ValueError("needs an image (read_image)")
+            raise ValueError("file: missing (a bitmap needs an image file)")
         for key, choices in (("wrap", WRAP_MODES), ("filter", FILTERS)):
             if values[key] not in choices:
                 raise ValueError(f"{key}: unknown {key} {values[key]!r} (known: {', '.join(choices)})")
