@@ -568,6 +568,11 @@ def test_shading_maps_in_scene_files(tmp_path):
                                ({"bump_map": {"type": "checkerboard"}}, "must be a bitmap texture")]:
         with pytest.raises(UserError, match=message):
             load_dict({**base, "materials": {"m": {"type": "diffuse", "rho_d": 0.5, **material}}}, folder=tmp_path)
+    # their defaults stated without a map are as good as left out
+    stated = load_dict({**base, "materials": {"m": {"type": "diffuse", "rho_d": 0.5, "bump_scale": 1,
+                                                    "perturbation": "mitsuba"}}}, folder=tmp_path)
+    plain = load_dict({**base, "materials": {"m": {"type": "diffuse", "rho_d": 0.5}}}, folder=tmp_path)
+    assert stated.materials.rows.tobytes() == plain.materials.rows.tobytes()
 
 
 # -- the command line and the viewer ----------------------------------------------------------

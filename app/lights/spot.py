@@ -71,6 +71,8 @@ class SpotLight(DeltaLight):
             if "direction" in values:
                 raise ValueError("give either 'direction' or 'look_at', not both")
             values["direction"] = np.asarray(values.pop("look_at")) - values.get("position", np.zeros(3))
+            if not np.any(values["direction"]):      # (named as the file gave it, not as the direction it makes)
+                raise ValueError("look_at: must differ from position")
         return values
 
     def check(self):

@@ -81,9 +81,11 @@ def dressed(material: Material, values: dict) -> Material:
     those with the BSDF and each other by table.surface_problem. Raises ValueError ("<name>:
     <problem>")."""
     maps = {"normal_map", "bump_map"} & set(values)
-    if "bump_scale" in values and "bump_map" not in values:
+    # a value for a map there is none of is refused, but not its default, which a file may state
+    defaults = {p.name: p.default for p in SURFACE}
+    if values.get("bump_scale", defaults["bump_scale"]) != defaults["bump_scale"] and "bump_map" not in values:
         raise ValueError("bump_scale: scales a bump_map, and there is none")
-    if "perturbation" in values and not maps:
+    if values.get("perturbation", defaults["perturbation"]) != defaults["perturbation"] and not maps:
         raise ValueError("perturbation: says how a normal_map or bump_map perturbs, and there is none")
     material = replace(material, **{FIELDS[k]: v for k, v in values.items() if k in FIELDS})
     error = out_of_range(SURFACE, values)
