@@ -212,7 +212,14 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots, CameraEdits
             return call
 
         def on_key(window, key, scancode, action, mods):
-            gui.keyboard_callback(window, key, scancode, action, mods)
+            # while text is typed, a character key's press reaches imgui as its character alone
+            # (the char callback), unless a modifier makes it a shortcut (Ctrl + A): imgui takes one
+            # of a frame's key presses interleaved with characters a frame (its input trickling),
+            # so that typing came in at a key a frame, ten a second in a heavy scene's frames
+            shortcut = mods & (glfw.MOD_CONTROL | glfw.MOD_ALT | glfw.MOD_SUPER)
+            typed = action != glfw.RELEASE and glfw.KEY_SPACE <= key <= glfw.KEY_GRAVE_ACCENT and not shortcut
+            if not (typed and self.imgui.get_io().want_text_input):
+                gui.keyboard_callback(window, key, scancode, action, mods)
             self.on_key(key, action, mods)
 
         def on_scroll(window, dx, dy):
