@@ -101,7 +101,7 @@ def open_devices(device="auto") -> list:
 def _device_spec(spec):
     """A device spec, an index of `pathtrace devices` given as an integer (a NumPy one too, not
     a bool) as the string --device takes; anything else as it is, for the caller to refuse."""
-    if isinstance(spec, bool) or isinstance(spec, str):
+    if isinstance(spec, (bool, str)):
         return spec
     try:
         return str(operator.index(spec))

@@ -113,8 +113,8 @@ class Denoiser:
         nbytes = height * width * 12
         images = [(oidn.OIDN_IMAGE_COLOR, _finite_nonnegative(color))] + [(name, given[name]) for name in guides]
         for name, image in images:
-            mirrored = np.pad(np.asarray(image, np.float32), ((BORDER, BORDER), (BORDER, BORDER), (0, 0)), mode="reflect")
-            self._buffers[name].write(0, nbytes, np.ascontiguousarray(mirrored))
+            edges = ((BORDER, BORDER), (BORDER, BORDER), (0, 0))
+            self._buffers[name].write(0, nbytes, np.pad(np.asarray(image, np.float32), edges, mode="reflect"))
         self._filter.execute()
         self._check("denoising")
         out = np.empty((height, width, 3), np.float32)

@@ -39,6 +39,7 @@ PBRT_MAPS = (
               doc="a float texture of heights along the normal (pathtrace's bump_map); the normal map wins"),
 )
 OPACITY = next(p for p in SURFACE if p.name == "opacity")
+DEFAULTS = {p.name: p.default for p in SURFACE}
 MITSUBA_WRAPPERS = tuple(dict.fromkeys(p.mitsuba.partition(".")[0] for p in SURFACE if p.mitsuba))
 FIELDS = {"Le": "emission", "emits_back": "emits_back", "twosided": "twosided", "opacity": "opacity",
           "normal_map": "normal_map", "bump_map": "bump_map", "perturbation": "perturbation"}
@@ -82,10 +83,9 @@ def dressed(material: Material, values: dict) -> Material:
     <problem>")."""
     maps = {"normal_map", "bump_map"} & set(values)
     # a value for a map there is none of is refused, but not its default, which a file may state
-    defaults = {p.name: p.default for p in SURFACE}
-    if values.get("bump_scale", defaults["bump_scale"]) != defaults["bump_scale"] and "bump_map" not in values:
+    if values.get("bump_scale", DEFAULTS["bump_scale"]) != DEFAULTS["bump_scale"] and "bump_map" not in values:
         raise ValueError("bump_scale: scales a bump_map, and there is none")
-    if values.get("perturbation", defaults["perturbation"]) != defaults["perturbation"] and not maps:
+    if values.get("perturbation", DEFAULTS["perturbation"]) != DEFAULTS["perturbation"] and not maps:
         raise ValueError("perturbation: says how a normal_map or bump_map perturbs, and there is none")
     material = replace(material, **{FIELDS[k]: v for k, v in values.items() if k in FIELDS})
     error = out_of_range(SURFACE, values)

@@ -130,7 +130,8 @@ class Scene:
         if len(self.shapes):
             parts.append(count(len(self.shapes), "analytic shape"))
         if self.instances is not None and len(self.instances):
-            parts.append(f"{count(len(self.instances), 'instance')} ({count(self.instances.triangle_count, 'triangle')})")
+            instances = self.instances
+            parts.append(f"{count(len(instances), 'instance')} ({count(instances.triangle_count, 'triangle')})")
         parts += [count(len(self.materials), "material"), count(len(self.lights), "delta light")]
         if self.media:
             parts.append(f"{len(self.media)} media")

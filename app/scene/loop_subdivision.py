@@ -75,12 +75,18 @@ def _ends(f: np.ndarray) -> tuple:
     return f.reshape(-1), np.roll(f, -1, axis=1).reshape(-1)
 
 
+def _pairs(f: np.ndarray, n: int) -> tuple:
+    """Each half-edge's origin and end, and its pair of corners as one number, the same for the
+    half-edges that run between the same two of the n vertices either way."""
+    origin, end = _ends(f)
+    return origin, end, np.minimum(origin, end) * n + np.maximum(origin, end)
+
+
 def control_topology(f: np.ndarray, n: int) -> Topology:
     """The control mesh's topology as pbrt-v4 makes it: the half-edges of each pair of corners
     joined two by two in the order the faces name them; each vertex's ring starting at the last
     face that names it; a vertex is on the boundary where a half-edge without a twin meets it."""
-    origin, end = _ends(f)
-    key = np.minimum(origin, end) * n + np.maximum(origin, end)
+    origin, end, key = _pairs(f, n)
     order = np.argsort(key, kind="stable")
     ordered = key[order]
     first = np.ones(len(order), bool)
@@ -114,8 +120,7 @@ def refine(p: np.ndarray, t: Topology, rings: "_Rings") -> tuple:
     beta = _beta(rings.valence)[:, None]
     even = np.where(t.boundary[:, None], 0.75 * p + 0.125 * boundary_sum,
                     (1 - rings.valence[:, None] * beta) * p + beta * ring_sum)
-    origin, end = _ends(f)
-    key = np.minimum(origin, end) * n + np.maximum(origin, end)
+    origin, end, key = _pairs(f, n)
     _, made_by, odd_of = np.unique(key, return_index=True, return_inverse=True)
     h, across = made_by, t.twin[made_by]                 # the half-edge that makes each new vertex, its twin
     opposite = np.roll(f, -2, axis=1).reshape(-1)          # each half-edge's corner facing it
