@@ -405,6 +405,34 @@ def test_mesh_files_hand_out_what_read_mesh_reads_in_the_order_asked(tmp_path, m
     assert capsys.readouterr().err.startswith("pathtrace: warning: shape 1: ")
 
 
+def test_mesh_files_on_two_cores_read_the_first_half_here(tmp_path, monkeypatch):
+    """On fewer than PROCESS_CORES cores, the later half of the OBJ files go to one other process
+    and this one reads the first half itself: each file as read_mesh reads it."""
+    import pathtrace.scene.mesh_processes as mesh_processes
+    from pathtrace.bench.scenes import torus_obj
+    from pathtrace.scene.meshes import MeshFiles
+    monkeypatch.setattr(MeshFiles, "MANY", 1)
+    monkeypatch.setattr(MeshFiles, "PROCESS_BYTES", 0)
+    monkeypatch.setattr(MeshFiles, "PROCESS_CORES", 3)
+    shares = []
+
+    class Recorded(mesh_processes.Reading):
+        def __init__(self, requests, processes):
+            shares.append(([path for path, _ in requests], processes))
+            super().__init__(requests, processes)
+    monkeypatch.setattr(mesh_processes, "Reading", Recorded)
+    paths = [tmp_path / f"m{k}.obj" for k in range(5)]
+    for k, path in enumerate(paths):
+        path.write_text(torus_obj(8 + k, 4))
+    with MeshFiles() as files:
+        files.workers = 2
+        files.add([(path, "shape") for path in paths])
+        assert shares == [(paths[2:], 1)]
+        for path in paths:
+            assert all(np.array_equal(a, b) for a, b in zip(files.read(path, "shape"), read_mesh(path, "shape")))
+        assert all(future.done() for future in files.processes.futures)
+
+
 def test_mesh_files_whose_processes_fail_are_read_here(tmp_path, monkeypatch):
     """A reading process that cannot start (or dies) leaves its files to this one: the same
     meshes, nothing else said."""

@@ -9,6 +9,7 @@ import os
 import threading
 import time
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 import pyopencl as cl
@@ -215,15 +216,16 @@ class CompiledScene:
         start = time.perf_counter()
         lo, hi = primitive_boxes(scene.spheres, corners[:, :, :3])
         self.instances = np.zeros(1, INSTANCE)
+        kept_elsewhere = partial(geometry_cache.keeps_tree, self)
         if self.two_level:
             two = build_two_level(scene, lo, hi, self._mesh_ends, meshes, queue, progress)
             self.bvh, self.instances, lo, hi = two.bvh, two.instances, two.lo, two.hi
             order = self.bvh.order
         elif self.lone_spheres:
-            self.bvh = cached_bvh(lo[n_spheres:], hi[n_spheres:], 0, queue, progress)
+            self.bvh = cached_bvh(lo[n_spheres:], hi[n_spheres:], 0, queue, progress, kept_elsewhere)
             order = np.concatenate([np.arange(n_spheres), n_spheres + self.bvh.order])
         else:
-            self.bvh = cached_bvh(lo, hi, n_spheres, queue, progress)
+            self.bvh = cached_bvh(lo, hi, n_spheres, queue, progress, kept_elsewhere)
             order = self.bvh.order
         # the scene's bounding sphere, by which a light at infinity's power is reckoned and from
         # whose disks its light subpaths leave (kernels/lights.cl: leave_world_disk)

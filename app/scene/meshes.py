@@ -97,10 +97,12 @@ class MeshFiles:
     lock in each operation on an array, and a small file's reading is hundreds of short ones,
     whose lock handovers between threads cost more than another core gives
     (docs/notes/performance-2026-11.md, 2026-11-28). Where there are MANY small OBJ files of
-    PROCESS_BYTES or more in all, and PROCESS_CORES cores or more, they are read in other
-    processes, all at once (pathtrace.scene.mesh_processes). Not binary PLY files, which NumPy
-    reads as views of their bytes, faster than the processes start (docs/notes/performance-2026-11.md,
-    2026-11-30: OBJ files read in other processes)."""
+    PROCESS_BYTES or more in all, they are read in other processes (pathtrace.scene.mesh_processes):
+    all of them, at once, on PROCESS_CORES cores or more; on fewer, the later half in one other
+    process while this one reads the first half, as two processes reading all of them, each
+    starting Python, lost to one (docs/notes/performance-2026-11.md, 2026-11-30: OBJ files read in
+    other processes; docs/notes/performance-2026-12.md, 2026-12-03). Not binary PLY files, which
+    NumPy reads as views of their bytes, faster than the processes start."""
 
     LARGE = 512 << 10
     MANY = 64
@@ -138,14 +140,16 @@ class MeshFiles:
             elif path.suffix.lower() == ".obj":
                 small_obj.append((path, where))
                 small_bytes += size
-        if len(small_obj) >= self.MANY and small_bytes >= self.PROCESS_BYTES and self.workers >= self.PROCESS_CORES \
-                and self.processes is None:
-            self._read_in_processes(small_obj)
+        if len(small_obj) >= self.MANY and small_bytes >= self.PROCESS_BYTES and self.processes is None:
+            if self.workers >= self.PROCESS_CORES:
+                self._read_in_processes(small_obj, self.workers)
+            elif self.workers >= 2:
+                self._read_in_processes(small_obj[len(small_obj) // 2:], 1)
         self._submit()
 
-    def _read_in_processes(self, requests):
+    def _read_in_processes(self, requests, processes: int):
         from pathtrace.scene.mesh_processes import Reading
-        self.processes = Reading(requests, self.workers)
+        self.processes = Reading(requests, processes)
         for (path, where), future in zip(requests, self.processes.futures):
             self.processed.setdefault(path, deque()).append((where, future))
 
