@@ -772,7 +772,8 @@ def test_a_camera_without_importance_is_one_line_for_bdpt(backend, kind):
     Camera.importance) is refused in one line, not rendered wrong."""
     scene = cbox()
     scene = replace(scene, camera=scene.camera.as_type(kind)).with_settings(integrator="bdpt")
-    with pytest.raises(UserError, match=f"integrator bdpt: the {kind} camera has no importance"):
+    with pytest.raises(UserError, match=f"^{ROOT / 'tests/scenes/cbox.xml'}: integrator bdpt: the {kind} camera "
+                                        "has no importance"):
         Renderer(backend, scene, 8, 8)
 
 

@@ -423,7 +423,7 @@ def choose_devices(specs: list[str], log=lambda line: print(line, file=sys.stder
         except cl.Error as e:
             log(f"skipping {d.describe()}: cannot build the kernels: {build_error_line(e)}")
     if not backends:
-        raise UserError("--device all: no OpenCL device can build the kernels "
+        raise UserError("device all: no OpenCL device can build the kernels "
                         "(see 'pathtrace devices --check')")
     return backends
 
@@ -436,14 +436,14 @@ def choose_device(spec: str = "auto", extra: str = "", use_cache: bool = True,
     A device whose platform cannot build the kernels is skipped with one line saying why. An
     empty spec is refused (as a fragment of a name it would match every device)."""
     if not spec.strip():
-        raise UserError("--device: empty; give auto, gpu, cpu, gpu:N, cpu:N, an index from 'pathtrace devices' "
+        raise UserError("device: empty; give auto, gpu, cpu, gpu:N, cpu:N, an index from 'pathtrace devices' "
                         "or part of a device's name")
     devices = list_devices()
     if not devices:
         raise UserError(no_device())
     candidates = [d for d in devices if _matches(spec, d, devices)]
     if not candidates:
-        raise UserError(f"--device: no OpenCL device matches {short(spec)} "
+        raise UserError(f"device: no OpenCL device matches {short(spec)} "
                         f"(see 'pathtrace devices'; {len(devices)} found)")
     candidates.sort(key=lambda d: d.kind != "GPU")   # stable: GPUs first, then listing order
     for d in candidates:
@@ -451,4 +451,4 @@ def choose_device(spec: str = "auto", extra: str = "", use_cache: bool = True,
             return open_device(d, extra, use_cache)
         except cl.Error as e:
             log(f"skipping {d.describe()}: cannot build the kernels: {build_error_line(e)}")
-    raise UserError(f"--device: no device matching {short(spec)} can build the kernels")
+    raise UserError(f"device: no device matching {short(spec)} can build the kernels")

@@ -7,6 +7,7 @@ them one at a time."""
 from dataclasses import replace
 
 from pathtrace.materials.table import PERTURBATIONS, Material, check_bump_map, scaled_bump_map, surface_problem
+from pathtrace.lights.light import MAX_RADIANCE
 from pathtrace.parameters import Parameter, out_of_range
 from pathtrace.textures import TEXTURES, Texture
 
@@ -17,7 +18,8 @@ from pathtrace.textures import TEXTURES, Texture
 # every hit at 1 or more and none at 0 or less, as an opacity clamped to [0, 1] does; an alpha
 # texture beyond [0, 1] is refused, as the opacity's range refuses one in every format
 SURFACE = (
-    Parameter("Le", "color", 0.0, texture=True, doc="emitted radiance"),
+    Parameter("Le", "color", 0.0, low=0.0, high=MAX_RADIANCE, texture=True,
+              doc="emitted radiance (beyond 1e20 the sums of samples overflow)"),
     Parameter("emits_back", "bool", False, doc="its emission leaves its back too (pbrt-v4's two-sided area lights)"),
     Parameter("twosided", "bool", False, doc="the BSDF on both sides (not for one that transmits)", mitsuba="twosided"),
     Parameter("opacity", "number", 1.0, low=0.0, high=1.0, texture=True, mitsuba="mask.opacity", mitsuba_default=0.5,

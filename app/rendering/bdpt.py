@@ -28,7 +28,7 @@ def depth(max_depth: int, integrator: str = "bdpt") -> int:
 
 def check(name: str, features, integrator: str, lights):
     """Raises a UserError, one line, for what `integrator` (bdpt or ptracer) cannot render yet
-    in a scene (its name) whose program needs `features` (app/device/features.py) and whose light table
+    in a scene (its file, or its name) whose program needs `features` (app/device/features.py) and whose light table
     is `lights`: a camera without importance (app/cameras/: Camera.importance); for light tracing
     alone, light from the environment, which the camera sees directly where nothing is in the
     way, and light tracing cannot join to the lens (its light subpaths leave a disk across the

@@ -85,7 +85,7 @@ class ProgramChoice:
                            kernels="all" if self.all_kernels else "render_nee" if self.settings.nee else "render")
         if integrator == "path":
             return features
-        bdpt.check(self.scene.name, features, integrator, self.compiled.lights)
+        bdpt.check(self.scene.source or self.scene.name, features, integrator, self.compiled.lights)
         return replace(features, light_tree=False, bdpt=bdpt.depth(self.settings.max_depth, integrator),
                        light_tracing=integrator == "ptracer",
                        photons=self.uses_photons(integrator), kernels=features.kernels if self.all_kernels else "bdpt")
