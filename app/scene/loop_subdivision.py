@@ -33,16 +33,17 @@ class Topology(NamedTuple):
     faces: np.ndarray      # (F, 3) corners
     twin: np.ndarray       # (3F,) each half-edge's twin, -1 on the boundary
     start: np.ndarray      # (V,) the half-edge leaving each vertex in the triangle its ring starts at, -1: none
-    boundary: np.ndarray   # (V,) whether its fan is open (pbrt-v4's SDVertex::boundary)
+    boundary: np.ndarray   # (V,) whether the fan its ring walks is open (pbrt-v4's SDVertex::boundary)
 
 
 def loop_subdivide(vertices: np.ndarray, faces: np.ndarray, levels: int = LEVELS) -> tuple:
     """(vertices, faces, normals) of the control mesh (vertices (V, 3), faces (F, 3), wound
     consistently) subdivided `levels` times and pushed to the limit surface. Its every triangle is
-    kept, a degenerate one too (pbrt-v4 subdivides them, and their children have area). Raises
-    ValueError where a face repeats a vertex or names one the mesh has not, where two faces joined
-    across an edge run it the same way, or where a vertex's faces are not one fan about it
-    (pbrt-v4's mesh walk needs a consistently wound manifold), or where the result would pass
+    kept, a degenerate one too (pbrt-v4 subdivides them, and their children have area). A vertex
+    whose faces are several fans (a bow tie, two cones at one apex, a third face on an edge) moves
+    by the one fan its ring walks, as pbrt-v4's does. Raises ValueError where a face repeats a
+    vertex or names one the mesh has not, where two faces joined across an edge run it the same
+    way (pbrt-v4's walk needs a consistently wound mesh), or where the result would pass
     MAX_TRIANGLES."""
     p, f = np.asarray(vertices, np.float64).reshape(-1, 3), np.asarray(faces, np.int64).reshape(-1, 3)
     if not len(f) or levels < 0:
@@ -57,7 +58,6 @@ def loop_subdivide(vertices: np.ndarray, faces: np.ndarray, levels: int = LEVELS
                          f"more than {MAX_TRIANGLES:,}")
     topology = control_topology(f, len(p))
     rings = _Rings(topology)
-    rings.check_fans()
     for _ in range(levels):
         p, topology = refine(p, topology, rings)
         rings = _Rings(topology)
@@ -85,7 +85,9 @@ def _pairs(f: np.ndarray, n: int) -> tuple:
 def control_topology(f: np.ndarray, n: int) -> Topology:
     """The control mesh's topology as pbrt-v4 makes it: the half-edges of each pair of corners
     joined two by two in the order the faces name them; each vertex's ring starting at the last
-    face that names it; a vertex is on the boundary where a half-edge without a twin meets it."""
+    face that names it; a vertex is on the boundary where the walk from that face about it, face
+    after face, meets an edge without a twin before it comes back (so that of a vertex where a
+    closed fan meets an open one, only the fan walked counts)."""
     origin, end, key = _pairs(f, n)
     order = np.argsort(key, kind="stable")
     ordered = key[order]
@@ -100,9 +102,16 @@ def control_topology(f: np.ndarray, n: int) -> Topology:
     twin[a_half], twin[b_half] = b_half, a_half
     start = np.full(n, -1)
     np.maximum.at(start, origin, np.arange(len(origin)))      # the last named (pbrt-v4's startFace)
-    open_halves = twin < 0
+    corner = np.arange(len(origin))
+    nxt = corner - corner % 3 + (corner + 1) % 3
     boundary = np.zeros(n, bool)
-    boundary[origin[open_halves]] = boundary[end[open_halves]] = True
+    h, walking = start.copy(), np.flatnonzero(start >= 0)
+    for _ in range(int(np.bincount(origin, minlength=n).max())):     # h -> next(twin(h)): the next face
+        across = twin[h[walking]]
+        boundary[walking[across < 0]] = True
+        walking, across = walking[across >= 0], across[across >= 0]
+        h[walking] = nxt[across]
+        walking = walking[h[walking] != start[walking]]
     return Topology(f, twin, start, boundary)
 
 
@@ -173,15 +182,12 @@ class _Rings:
     first neighbour that face's next vertex and then each face's previous one going back (h ->
     twin(prev(h))). Each step takes only the vertices still walking, so that the work is the
     rings' length, not the most neighbours times the vertices; `valence` is each ring's length
-    (pbrt-v4's SDVertex::valence) and `faces` the faces walked. A walk that goes round a closed fan
-    of a vertex that lies on the boundary elsewhere (a pinch) stops after as many steps as the
-    vertex has faces (check_fans refuses it)."""
+    (pbrt-v4's SDVertex::valence). A vertex of several fans walks the one its start face is in."""
 
     def __init__(self, t: Topology):
         origin, end = _ends(t.faces)
         m, n = len(origin), len(t.start)
-        self.corners = np.bincount(origin, minlength=n)          # the faces about each vertex
-        steps = int(self.corners.max()) + 1
+        steps = int(np.bincount(origin, minlength=n).max()) + 1   # the most faces about a vertex, and one
         corner = np.arange(m)
         nxt, prev = corner - corner % 3 + (corner + 1) % 3, corner - corner % 3 + (corner + 2) % 3
         h = t.start.copy()
@@ -193,8 +199,6 @@ class _Rings:
         used = np.flatnonzero(h >= 0)
         vertex, place, neighbour = [used], [np.zeros(len(used), np.int64)], [end[h[used]]]
         start, walking, j = h.copy(), used, 1
-        self.faces = np.zeros(n, np.int64)
-        self.faces[used] = 1
         while len(walking) and j <= steps:
             inner = walking[~t.boundary[walking]]
             step = nxt[t.twin[h[inner]]]
@@ -209,7 +213,6 @@ class _Rings:
             outer, back = outer[back >= 0], back[back >= 0]
             h[outer] = back
             walking = np.concatenate([inner, outer])
-            self.faces[walking] += 1
             j += 1
         self.vertex, self.place, self.neighbour = np.concatenate(vertex), np.concatenate(place), np.concatenate(neighbour)
         self.valence = np.bincount(self.vertex, minlength=n)
@@ -219,13 +222,6 @@ class _Rings:
         two boundary neighbours: pbrt-v4's weightBoundary)."""
         ring_sum = _sums(self.vertex, p[self.neighbour], len(self.valence))
         return ring_sum, self.at(p, 0) + self.at(p, np.maximum(self.valence - 1, 0))
-
-    def check_fans(self):
-        """Refuses a vertex whose faces are not the one fan the walk goes round (two cones at one
-        apex, a triangle on a cone's tip): pbrt-v4 would walk one fan and leave the rest."""
-        if np.any(self.faces != self.corners):
-            raise ValueError("indices: a vertex joins fans of triangles that share no edge (a bow tie), which Loop "
-                             "subdivision cannot walk")
 
     def at(self, p: np.ndarray, j) -> np.ndarray:
         """Each vertex's neighbour at place j (an int, or one per vertex) of its ring: (V, 3), zero
