@@ -236,3 +236,23 @@ def test_a_top_level_table_given_as_a_number_is_refused_naming_it(table):
     with pytest.raises(UserError) as e:
         pathtrace.load_dict({**BASE, table: 0})
     assert f"'scene': {table}: must be" in str(e.value), str(e.value)
+
+
+@pytest.mark.parametrize("le,expected", [
+    (1e25, "materials.lamp.Le: must be in [0, 1e+20], got 1e+25"),
+    ({"type": "mix", "tex1": 1.0, "tex2": 0.0, "amount": 1.5},
+     "materials.lamp.Le: the texture's values must lie in [0, 1e+20], got -0.5"),    # (1 - 1.5) 1 + 1.5 0
+    (1e20, None),
+])
+def test_an_emitters_radiance_is_checked_where_the_file_gives_it(le, expected):
+    """Radiance beyond 1e20 (where the sums of samples overflow) or below 0, a mix texture's
+    amount beyond [0, 1] extrapolating too, is refused naming the field that gives it; 1e20
+    itself, which the field's bound lets through in float32, renders."""
+    scene = {**BASE, "materials": {"lamp": {"type": "emitter", "Le": le}},
+             "spheres": [{"center": [0, 0, 0], "radius": 1, "material": "lamp"}]}
+    if expected is None:
+        assert np.isfinite(pathtrace.render(pathtrace.load_dict(scene, "hot"), spp=1, size=(4, 4), device="cpu")).all()
+        return
+    with pytest.raises(UserError) as e:
+        pathtrace.load_dict(scene, "hot")
+    assert str(e.value) == f"scene dict 'hot': {expected}"

@@ -150,9 +150,7 @@ def test_a_write_cut_short_leaves_a_file_that_a_later_prune_removes(tmp_path):
 
 def test_a_mesh_renders_the_same_from_the_cache(tmp_path):
     """From the command: the first render stores its scene's tree, the second reads it (its
-    folder's entry is the only one, and unchanged) and writes the same image. The scene has a
-    disk, an analytic shape, which the geometry cache does not keep (a mesh alone's tree is
-    kept there: tests/test_geometry_cache.py)."""
+    folder's entry is the only one, and unchanged) and writes the same image."""
     n = 190
     x, y = np.meshgrid(np.linspace(-1, 1, n), np.linspace(-1, 1, n))
     z = 0.1 * np.sin(4 * x) * np.cos(3 * y)
@@ -165,8 +163,7 @@ def test_a_mesh_renders_the_same_from_the_cache(tmp_path):
                    + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces))
     scene = tmp_path / "scene.toml"
     scene.write_text('[camera]\neye = [0, 2, 2.5]\nlook_at = [0, 0, 0]\n\n[[meshes]]\nfile = "field.obj"\n'
-                     'material = { type = "diffuse", rho_d = 0.6 }\n\n[[shapes]]\nkind = "disk"\n'
-                     'translate = [0, 0.5, 0]\nmaterial = { type = "diffuse", rho_d = 0.3 }\n')
+                     'material = { type = "diffuse", rho_d = 0.6 }\n')
     env = {**os.environ, "PATHTRACE_BVH_CACHE": str(tmp_path / "bvh")}
     images = []
     for k in range(2):

@@ -219,8 +219,8 @@ def test_a_missing_scene_files_near_name_is_of_its_folder_compared_without_exten
     (["simple", "--sppp", "4"], "unrecognized arguments: --sppp 4; did you mean --spp? (see 'pathtrace render -h')\n"),
     (["simple", "--rr=throughput", "--max-deph", "4"], "unrecognized arguments: --max-deph 4; did you mean --max-depth? "
                                                      "(see 'pathtrace render -h')\n"),
-    (["simple", "--device", "no-such-device"], "device: no OpenCL device matches 'no-such-device'"),
-    (["simple", "--device", ""], "device: empty; give auto, gpu, cpu"),
+    (["simple", "--device", "no-such-device"], "error: device: no OpenCL device matches 'no-such-device'"),
+    (["simple", "--device", ""], "error: device: empty; give auto, gpu, cpu"),
     (["simple", "--size", "0x10"], "width and height must be 1 to 16384"),
     (["simple", "--size", "-64x48"], "argument --size: '-64x48': width and height must be 1 to 16384"),
     (["simple", "--size", "big"], "is not WIDTHxHEIGHT"),

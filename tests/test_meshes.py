@@ -407,13 +407,16 @@ def test_mesh_files_hand_out_what_read_mesh_reads_in_the_order_asked(tmp_path, m
 
 def test_mesh_files_on_two_cores_read_the_first_half_here(tmp_path, monkeypatch):
     """On fewer than PROCESS_CORES cores, the later half of the OBJ files go to one other process
-    and this one reads the first half itself: each file as read_mesh reads it."""
+    and this one reads the first half itself: each file as read_mesh reads it. A file named in
+    both halves is read here (the process answers its share at once, and this one would wait
+    for all of it at that file); a later half of fewer than SHARE_BYTES goes to no process."""
     import pathtrace.scene.mesh_processes as mesh_processes
     from pathtrace.bench.scenes import torus_obj
     from pathtrace.scene.meshes import MeshFiles
     monkeypatch.setattr(MeshFiles, "MANY", 1)
     monkeypatch.setattr(MeshFiles, "PROCESS_BYTES", 0)
     monkeypatch.setattr(MeshFiles, "PROCESS_CORES", 3)
+    monkeypatch.setattr(MeshFiles, "SHARE_BYTES", 0)
     shares = []
 
     class Recorded(mesh_processes.Reading):
@@ -424,13 +427,20 @@ def test_mesh_files_on_two_cores_read_the_first_half_here(tmp_path, monkeypatch)
     paths = [tmp_path / f"m{k}.obj" for k in range(5)]
     for k, path in enumerate(paths):
         path.write_text(torus_obj(8 + k, 4))
+    named = paths + [paths[0]]                   # the first file named again, in the later half
+    with MeshFiles() as files:
+        files.workers = 2
+        files.add([(path, "shape") for path in named])
+        assert shares == [(paths[3:], 1)]
+        for path in named:
+            assert all(np.array_equal(a, b) for a, b in zip(files.read(path, "shape"), read_mesh(path, "shape")))
+        # each answered by the process (one that fails answers None, and its files are read here)
+        assert all(future.result()[0] is not None for future in files.processes.futures)
+    monkeypatch.setattr(MeshFiles, "SHARE_BYTES", sum(p.stat().st_size for p in paths[2:]) + 1)
     with MeshFiles() as files:
         files.workers = 2
         files.add([(path, "shape") for path in paths])
-        assert shares == [(paths[2:], 1)]
-        for path in paths:
-            assert all(np.array_equal(a, b) for a, b in zip(files.read(path, "shape"), read_mesh(path, "shape")))
-        assert all(future.done() for future in files.processes.futures)
+        assert files.processes is None and len(shares) == 1
 
 
 def test_mesh_files_whose_processes_fail_are_read_here(tmp_path, monkeypatch):

@@ -1344,9 +1344,9 @@ def test_a_scene_too_large_for_the_device_is_refused_before_its_tree_is_built(vi
             raise UserError("spheres8k: too large for the test")
         check_fits(device, buffers, name)
 
-    def noting(lo, hi, n, queue=None, progress=None, kept_elsewhere=None):
+    def noting(lo, hi, n, queue=None, progress=None):
         asked.append(queue)
-        return cached_bvh(lo, hi, n, queue, progress, kept_elsewhere)
+        return cached_bvh(lo, hi, n, queue, progress)
     monkeypatch.setattr(opencl, "check_fits", refusing)
     monkeypatch.setattr(compiled_module, "cached_bvh", noting)
     frames(viewer, 1)           # its window's contexts current, as the loop leaves them (another window's may be)

@@ -67,14 +67,11 @@ class NotCached(Exception):
     """cached_bvh's answer, with the queue CACHED_ONLY, for a tree the cache does not hold."""
 
 
-def cached_bvh(lo: np.ndarray, hi: np.ndarray, num_spheres: int = None, queue=None, progress=None,
-               kept_elsewhere=None) -> BVH:
+def cached_bvh(lo: np.ndarray, hi: np.ndarray, num_spheres: int = None, queue=None, progress=None) -> BVH:
     """build_bvh's tree (same arguments), read from the cache where an entry holds it; a tree
-    built is stored there, unless kept_elsewhere(tree) (the geometry cache's keeps_tree: storing
-    it twice cost a cold start of 870,400 triangles 0.2 s on two cores). With the queue
-    CACHED_ONLY, a tree the cache does not hold raises NotCached. A tree of at most HOST_MAX
-    primitives is built on the host, with no device (pathtrace.compiler.host_bvh), and none of
-    fewer than MIN_PRIMITIVES is stored."""
+    built is stored there. With the queue CACHED_ONLY, a tree the cache does not hold raises
+    NotCached. A tree of at most HOST_MAX primitives is built on the host, with no device
+    (pathtrace.compiler.host_bvh), and none of fewer than MIN_PRIMITIVES is stored."""
     n, where = len(lo), folder()
     if n <= HOST_MAX:
         return build_on_host(lo, hi, num_spheres, progress)
@@ -91,8 +88,7 @@ def cached_bvh(lo: np.ndarray, hi: np.ndarray, num_spheres: int = None, queue=No
     if queue is CACHED_ONLY:
         raise NotCached
     bvh = build_bvh(lo, hi, num_spheres, queue, progress)
-    if kept_elsewhere is None or not kept_elsewhere(bvh):
-        write_entry(path, bvh)
+    write_entry(path, bvh)
     return bvh
 
 

@@ -9,7 +9,6 @@ import os
 import threading
 import time
 from dataclasses import dataclass
-from functools import partial
 
 import numpy as np
 import pyopencl as cl
@@ -216,16 +215,15 @@ class CompiledScene:
         start = time.perf_counter()
         lo, hi = primitive_boxes(scene.spheres, corners[:, :, :3])
         self.instances = np.zeros(1, INSTANCE)
-        kept_elsewhere = partial(geometry_cache.keeps_tree, self)
         if self.two_level:
             two = build_two_level(scene, lo, hi, self._mesh_ends, meshes, queue, progress)
             self.bvh, self.instances, lo, hi = two.bvh, two.instances, two.lo, two.hi
             order = self.bvh.order
         elif self.lone_spheres:
-            self.bvh = cached_bvh(lo[n_spheres:], hi[n_spheres:], 0, queue, progress, kept_elsewhere)
+            self.bvh = cached_bvh(lo[n_spheres:], hi[n_spheres:], 0, queue, progress)
             order = np.concatenate([np.arange(n_spheres), n_spheres + self.bvh.order])
         else:
-            self.bvh = cached_bvh(lo, hi, n_spheres, queue, progress, kept_elsewhere)
+            self.bvh = cached_bvh(lo, hi, n_spheres, queue, progress)
             order = self.bvh.order
         # the scene's bounding sphere, by which a light at infinity's power is reckoned and from
         # whose disks its light subpaths leave (kernels/lights.cl: leave_world_disk)
@@ -509,7 +507,9 @@ def check_radiance(scene: Scene):
     env = scene.environment
     brightest_env = float(np.max(env.image)) * float(env.intensity)
     where = scene.source or scene.name
-    if emission.size and not np.max(emission) <= MAX_RADIANCE:
+    # the rows' float32, as the readers' bounds compare (pathtrace.parameters.out_of_range): 1e20
+    # given is 1.00000002e20 there
+    if emission.size and not np.max(emission) <= np.float32(MAX_RADIANCE):
         row = int(np.argmax(np.max(np.nan_to_num(emission, nan=np.inf), axis=1)))
         name = scene.materials.name_of(row) or f"#{row}"
         value = np.max(emission[row])

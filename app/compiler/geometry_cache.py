@@ -1,4 +1,4 @@
-"""Large scenes' compiled geometry kept on disk between runs, their BVHs with it: a scene rendered again
+"""Large scenes' compiled geometry kept on disk between runs, beside their BVHs: a scene rendered again
 takes its tree and its primitives' rows in the tree's order (triangles, the corners' normals and
 texture coordinates, each primitive's shape, material and media) from one entry, where it had
 gathered them from its meshes: on a warm start of 870,400 triangles, most of the 0.3-0.5 s its
@@ -94,24 +94,6 @@ def entry_path(compiled) -> Path | None:
     return where / f"{h.hexdigest()[:32]}.geometry"
 
 
-def keeps_tree(compiled, bvh: BVH) -> bool:
-    """Whether a CompiledScene's entry, with this tree, is to be written (write_soon): its tree is
-    then kept there alone, not in the BVH cache too (CompiledScene._make_rows; a scene whose
-    meshes change their materials, normals or texture coordinates, not their triangles, builds
-    its tree again). Its bytes counted at most (each primitive's media, which may be one
-    element for all)."""
-    return compiled._kept_path is not None and most_bytes(compiled, len(bvh.nodes)) <= MAX_BYTES // 2
-
-
-def most_bytes(compiled, nodes: int) -> int:
-    """The most bytes of a CompiledScene's entry arrays with a tree of `nodes` nodes."""
-    meshes, primitives = compiled.meshes, compiled.num_spheres + compiled.num_triangles
-    corners = {kind: 3 * sum(len(m.faces) for m in meshes if getattr(m, kind) is not None) or 1
-               for kind in ("normals", "uvs")}
-    return (nodes * BVH_NODE.itemsize + primitives * (8 + 3 * 4) + compiled.num_spheres * 16
-            + compiled.num_triangles * TRIANGLE.itemsize + corners["normals"] * 16 + corners["uvs"] * 8)
-
-
 def read_entry(path: Path) -> dict | None:
     """The arrays and values stored at path (by the names of ARRAYS, and bvh, radius, center and
     media_per_primitive), or None where there is none or it is damaged."""
@@ -149,7 +131,7 @@ def write_soon(path: Path, compiled):
     header["radius"], header["center"] = compiled.radius, compiled.center
     header["media_per_primitive"] = compiled.media_per_primitive
     chunks = [np.ascontiguousarray(a, row.base if row.subdtype else row) for a, (_, row) in zip(arrays, ARRAYS)]
-    if sum(c.nbytes for c in chunks) > MAX_BYTES // 2:      # would crowd out every other entry (keeps_tree)
+    if sum(c.nbytes for c in chunks) > MAX_BYTES // 2:      # would crowd out every other entry
         return
     thread = threading.Thread(target=_write, args=(path, header, chunks), name="geometry cache write")
     _writes.append(thread)

@@ -4,7 +4,7 @@ them: a small file's reading is hundreds of short NumPy operations, which thread
 time under the interpreter's lock (docs/notes/performance-2026-11.md, 2026-11-30: OBJ files
 read in other processes).
 
-Each process runs pathtrace.scene.meshes.serve_reading, given its share of the files (in the
+Each process runs serve_reading, given its share of the files (in the
 reader's order, pickled, on its standard input) and answering on its standard output with, per
 file, the mesh and its warning lines or its problem, and the stamps of the files it checked, which
 this process notes for the scene's cache (pathtrace.io.files.noted). Not multiprocessing: its
@@ -20,7 +20,8 @@ import sys
 import threading
 from concurrent.futures import Future, ThreadPoolExecutor
 
-from pathtrace.io.files import noted
+from pathtrace.errors import UserError
+from pathtrace.io.files import noted, noting_files
 
 
 class Reading:
@@ -64,7 +65,8 @@ class Reading:
                 if self._closed:
                     return []
                 process = subprocess.Popen(
-                    [sys.executable, "-P", "-c", "from pathtrace.scene.meshes import serve_reading; serve_reading()"],
+                    [sys.executable, "-P", "-c", "from pathtrace.scene.mesh_processes import serve_reading; "
+                     "from pathtrace.scene.meshes import read_mesh; serve_reading(read_mesh)"],
                     stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL,
                     env={**os.environ, "PYTHONPATH": os.pathsep.join(p for p in sys.path if p),
                          "OPENBLAS_NUM_THREADS": "1"})
@@ -84,3 +86,18 @@ class Reading:
             for process in self._running:
                 process.kill()
         self._pool.shutdown(wait=True)
+
+
+def serve_reading(read_mesh):
+    """A reading process's work: (path, where) requests from standard input; per request, the
+    mesh as read_mesh (pathtrace.scene.meshes) reads it and its warning lines, or its problem, and
+    the stamps of the files checked, to standard output."""
+    out = []
+    for path, where in pickle.load(sys.stdin.buffer):
+        notes = []
+        with noting_files() as files:
+            try:
+                out.append(((read_mesh(path, where, notes.append), notes), None, files))
+            except UserError as e:
+                out.append((None, e, files))
+    sys.stdout.buffer.write(pickle.dumps(out, protocol=pickle.HIGHEST_PROTOCOL))

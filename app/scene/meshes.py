@@ -9,8 +9,6 @@ reader and the glTF format place them (trimesh gives both with v = 0 at the bott
 import gzip
 import io
 import os
-import pickle
-import sys
 import threading
 import warnings
 from collections import deque
@@ -22,7 +20,7 @@ from typing import NamedTuple
 import numpy as np
 
 from pathtrace.errors import UserError, warn
-from pathtrace.io.files import check_regular_file, noting_files
+from pathtrace.io.files import check_regular_file
 from pathtrace.scene.transform import flips_handedness, transform_normals, transform_points
 
 FORMATS = (".ply", ".ply.gz", ".obj", ".stl", ".gltf", ".glb")
@@ -96,18 +94,16 @@ class MeshFiles:
     Only files of LARGE bytes or more are read ahead in threads: NumPy releases the interpreter's
     lock in each operation on an array, and a small file's reading is hundreds of short ones,
     whose lock handovers between threads cost more than another core gives
-    (docs/notes/performance-2026-11.md, 2026-11-28). Where there are MANY small OBJ files of
-    PROCESS_BYTES or more in all, they are read in other processes (pathtrace.scene.mesh_processes):
-    all of them, at once, on PROCESS_CORES cores or more; on fewer, the later half in one other
-    process while this one reads the first half, as two processes reading all of them, each
-    starting Python, lost to one (docs/notes/performance-2026-11.md, 2026-11-30: OBJ files read in
-    other processes; docs/notes/performance-2026-12.md, 2026-12-03). Not binary PLY files, which
-    NumPy reads as views of their bytes, faster than the processes start."""
+    (docs/notes/performance-2026-11.md, 2026-11-28). MANY small OBJ files of PROCESS_BYTES or more
+    in all are read in other processes (pathtrace.scene.mesh_processes): on PROCESS_CORES cores or
+    more all of them, else half (_share). Not binary PLY files, which NumPy reads as views of their
+    bytes, faster than the processes start (docs/notes/performance-2026-11.md, 2026-11-30)."""
 
     LARGE = 512 << 10
     MANY = 64
     PROCESS_BYTES = 32 << 20
     PROCESS_CORES = 4
+    SHARE_BYTES = 24 << 20
 
     def __init__(self, requests=()):
         self.requests = []
@@ -138,14 +134,27 @@ class MeshFiles:
                 self.waiting.setdefault(path, deque()).append(len(self.requests))
                 self.requests.append((path, where))
             elif path.suffix.lower() == ".obj":
-                small_obj.append((path, where))
+                small_obj.append((path, where, size))
                 small_bytes += size
         if len(small_obj) >= self.MANY and small_bytes >= self.PROCESS_BYTES and self.processes is None:
             if self.workers >= self.PROCESS_CORES:
-                self._read_in_processes(small_obj, self.workers)
+                self._read_in_processes([r[:2] for r in small_obj], self.workers)
             elif self.workers >= 2:
-                self._read_in_processes(small_obj[len(small_obj) // 2:], 1)
+                self._share(small_obj)
         self._submit()
+
+    def _share(self, requests):
+        """On two or three cores, where two processes each reading all of them, each starting
+        Python, lost to one: the later half of the small OBJ files (path, where, size) read in one
+        other process while this one reads the first, where that half holds SHARE_BYTES or more
+        (docs/notes/performance-2026-12.md, 2026-12-03: level at 32 MB in all, a loss where the
+        other core is busy). A file named in both halves is read here: the process answers its
+        whole share at once, which this one would wait for at the file's first read."""
+        half = len(requests) // 2
+        here = {path for path, _, _ in requests[:half]}
+        there = [r for r in requests[half:] if r[0] not in here]
+        if sum(size for _, _, size in there) >= self.SHARE_BYTES:
+            self._read_in_processes([r[:2] for r in there], 1)
 
     def _read_in_processes(self, requests, processes: int):
         from pathtrace.scene.mesh_processes import Reading
@@ -580,17 +589,3 @@ def write_ply(path: Path, vertices, faces, normals=None, uvs=None):
         + f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n"
     Path(path).write_bytes(header.encode() + records.tobytes() + triangles.tobytes())
 
-
-def serve_reading():
-    """A process's reading for another (pathtrace.scene.mesh_processes): (path, where) requests
-    from standard input; per request, the mesh and its warning lines or its problem, and the
-    stamps of the files checked, to standard output."""
-    out = []
-    for path, where in pickle.load(sys.stdin.buffer):
-        notes = []
-        with noting_files() as files:
-            try:
-                out.append(((read_mesh(path, where, notes.append), notes), None, files))
-            except UserError as e:
-                out.append((None, e, files))
-    sys.stdout.buffer.write(pickle.dumps(out, protocol=pickle.HIGHEST_PROTOCOL))

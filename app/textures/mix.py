@@ -23,6 +23,10 @@ class Mix(TextureType):
         return (1 - a) * input_mean(texture.params["tex1"]) + a * input_mean(texture.params["tex2"])
 
     def bounds(self, texture):
-        # for amounts in [0, 1]; others extrapolate, beyond these
-        (lo1, hi1), (lo2, hi2) = input_bounds(texture.params["tex1"]), input_bounds(texture.params["tex2"])
-        return np.minimum(lo1, lo2), np.maximum(hi1, hi2)
+        # (1 - a) t1 + a t2 is linear in each of a, t1 and t2, so its extremes are at the corners
+        # of their ranges: for amounts in [0, 1] the two textures' bounds, and beyond them an
+        # amount outside [0, 1] extrapolates (pbrt-v4's MixTexture does not clamp it)
+        ranges = [input_bounds(texture.params[name]) for name in ("tex1", "tex2")]
+        amounts = input_bounds(texture.params["amount"])
+        corners = [(1 - a[0]) * t1 + a[0] * t2 for a in amounts for t1 in ranges[0] for t2 in ranges[1]]
+        return np.min(corners, axis=0), np.max(corners, axis=0)
