@@ -242,14 +242,19 @@ def test_a_top_level_table_given_as_a_number_is_refused_naming_it(table):
     (1e25, "materials.lamp.Le: must be in [0, 1e+20], got 1e+25"),
     ({"type": "mix", "tex1": 1.0, "tex2": 0.0, "amount": 1.5},
      "materials.lamp.Le: the texture's values must lie in [0, 1e+20], got -0.5"),    # (1 - 1.5) 1 + 1.5 0
-    (1e20, None),
+    ({"type": "mix", "tex1": 2e20, "tex2": 2e20, "amount": 1e17},       # 2e20 whatever the amount
+     "materials.lamp.Le: the texture's values must lie in [0, 1e+20], got 2e+20"),
+    (1e20, None), ("environment", None),
 ])
 def test_an_emitters_radiance_is_checked_where_the_file_gives_it(le, expected):
     """Radiance beyond 1e20 (where the sums of samples overflow) or below 0, a mix texture's
     amount beyond [0, 1] extrapolating too, is refused naming the field that gives it; 1e20
-    itself, which the field's bound lets through in float32, renders."""
+    itself, which the field's bound lets through in float32, renders, from a lamp and from the
+    environment."""
     scene = {**BASE, "materials": {"lamp": {"type": "emitter", "Le": le}},
              "spheres": [{"center": [0, 0, 0], "radius": 1, "material": "lamp"}]}
+    if le == "environment":
+        scene = {**BASE, "environment": {"color": 1e20}}
     if expected is None:
         assert np.isfinite(pathtrace.render(pathtrace.load_dict(scene, "hot"), spp=1, size=(4, 4), device="cpu")).all()
         return

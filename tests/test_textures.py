@@ -162,6 +162,12 @@ def test_checkerboard_scale_and_mix(kernels):
                                plain * [2, 0.5, 1], rtol=1e-5, atol=1e-6)
     np.testing.assert_allclose(lookup(kernels, texture("mix", tex1=0.2, tex2=bitmap, amount=0.25), uv),
                                0.75 * 0.2 + 0.25 * plain, rtol=1e-5, atol=1e-6)
+    # an amount beyond [0, 1] extrapolates, as pbrt-v4's MixTexture does, within the host's bounds
+    beyond = texture("mix", tex1=0.2, tex2=bitmap, amount=-0.5)
+    values = lookup(kernels, beyond, uv)
+    np.testing.assert_allclose(values, 1.5 * 0.2 - 0.5 * plain, rtol=1e-5, atol=1e-6)
+    low, high = beyond.kind.bounds(beyond)
+    assert np.all(values >= low - 1e-6) and np.all(values <= high + 1e-6)
 
 
 def checker(st):

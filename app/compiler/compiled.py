@@ -507,8 +507,8 @@ def check_radiance(scene: Scene):
     env = scene.environment
     brightest_env = float(np.max(env.image)) * float(env.intensity)
     where = scene.source or scene.name
-    # the rows' float32, as the readers' bounds compare (pathtrace.parameters.out_of_range): 1e20
-    # given is 1.00000002e20 there
+    # in float32, as the readers' bounds compare (pathtrace.parameters.out_of_range): 1e20 given
+    # is 1.00000002e20 in the rows and the map
     if emission.size and not np.max(emission) <= np.float32(MAX_RADIANCE):
         row = int(np.argmax(np.max(np.nan_to_num(emission, nan=np.inf), axis=1)))
         name = scene.materials.name_of(row) or f"#{row}"
@@ -516,7 +516,7 @@ def check_radiance(scene: Scene):
         problem = (f"an emitted radiance of {value:.3g} is beyond {MAX_RADIANCE:g}, where the sums of samples overflow"
                    if not np.isnan(value) else "an emitted radiance that is not a number (NaN)")
         raise UserError(f"{where}: material {short(name)}: {problem}")
-    if not brightest_env <= MAX_RADIANCE:
+    if not brightest_env <= np.float32(MAX_RADIANCE):
         source = "" if env.source == "constant" else f" (map {short(env.source)})"
         raise UserError(f"{where}: the environment's radiance times its intensity reaches {brightest_env:.3g}{source}, "
                         f"beyond {MAX_RADIANCE:g}, where the sums of samples overflow")

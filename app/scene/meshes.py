@@ -153,7 +153,7 @@ class MeshFiles:
         half = len(requests) // 2
         here = {path for path, _, _ in requests[:half]}
         there = [r for r in requests[half:] if r[0] not in here]
-        if sum(size for _, _, size in there) >= self.SHARE_BYTES:
+        if there and sum(size for _, _, size in there) >= self.SHARE_BYTES:
             self._read_in_processes([r[:2] for r in there], 1)
 
     def _read_in_processes(self, requests, processes: int):

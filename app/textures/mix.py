@@ -20,7 +20,8 @@ class Mix(TextureType):
 
     def mean(self, texture):
         a = float(input_mean(texture.params["amount"])[0])
-        return (1 - a) * input_mean(texture.params["tex1"]) + a * input_mean(texture.params["tex2"])
+        tex1 = input_mean(texture.params["tex1"])
+        return tex1 + (input_mean(texture.params["tex2"]) - tex1) * a
 
     def bounds(self, texture):
         # (1 - a) t1 + a t2 is linear in each of a, t1 and t2, so its extremes are at the corners
@@ -28,5 +29,6 @@ class Mix(TextureType):
         # amount outside [0, 1] extrapolates (pbrt-v4's MixTexture does not clamp it)
         ranges = [input_bounds(texture.params[name]) for name in ("tex1", "tex2")]
         amounts = input_bounds(texture.params["amount"])
-        corners = [(1 - a[0]) * t1 + a[0] * t2 for a in amounts for t1 in ranges[0] for t2 in ranges[1]]
+        # (in the kernel's form, t1 + (t2 - t1) a, whose terms do not cancel where t1 = t2)
+        corners = [t1 + (t2 - t1) * a[0] for a in amounts for t1 in ranges[0] for t2 in ranges[1]]
         return np.min(corners, axis=0), np.max(corners, axis=0)

@@ -6,5 +6,7 @@
 float3 eval_mix(const SceneData *sc, const global Texture *t, float2 uv, const float3 *r)
 {
     float amount = eval_input(sc, t, MIX_INPUT_AMOUNT, uv, r).x;
-    return mix(eval_input(sc, t, MIX_INPUT_TEX1, uv, r), eval_input(sc, t, MIX_INPUT_TEX2, uv, r), amount);
+    float3 tex1 = eval_input(sc, t, MIX_INPUT_TEX1, uv, r);
+    /* OpenCL's mix() leaves an amount beyond [0, 1] undefined; pbrt-v4 extrapolates there */
+    return tex1 + (eval_input(sc, t, MIX_INPUT_TEX2, uv, r) - tex1) * amount;
 }
