@@ -43,7 +43,6 @@ def _pfm(path, value):
      + TRIANGLE.replace("-1 -1 0  1 -1 0  0 1 0", "0 0 0  1e-30 0 0  0 1e-30 0"), "'power' 100 over the shape's area of"),
     (HEAD + 'AreaLightSource "diffuse" "blackbody L" [ 1e-30 ]\n' + TRIANGLE, "'L': a blackbody of 1e-30 K emits no"),
     (HEAD + 'AreaLightSource "diffuse" "spectrum L" [ 400 0 700 0 ]\n' + TRIANGLE, "'L': the spectrum emits no"),
-    (HEAD + 'Material "diffuse" "rgb reflectance" [ -1 0 0 ]\n' + TRIANGLE, "(from 'reflectance') must lie in [0, 1]"),
     (HEAD + TRIANGLE.replace("]\n", '] "float alpha" nan\n'), "s.pbrt:4: 'alpha': nan is not finite"),
     (HEAD + 'Texture "a" "float" "imagemap" "string filename" "huge.pfm"\n' + TRIANGLE.replace("]\n", '] "texture alpha" "a"\n'),
      "s.pbrt:5: 'alpha': must lie in [0, 1], got 3e+38"),      # a texture by its bounds

@@ -545,3 +545,20 @@ def test_named_materials_name_their_rows(tmp_path):
     assert wood.type == "diffuse" and np.allclose(wood.params["rho_d"], [0.5, 0.3, 0.1])
     rows = list(s.sphere_material)
     assert rows[0] == rows[1] == list(s.materials).index("Wood") and len(set(rows)) == 3
+
+
+def test_reflectances_beyond_0_and_1_are_clamped_as_pbrt_clamps_them(tmp_path):
+    """pbrt-v4's diffuse, coateddiffuse and diffusetransmission materials clamp their
+    reflectances into [0, 1] where they evaluate them (DiffuseMaterial::GetBxDF's Clamp, as
+    CoatedDiffuse's reflectance and albedo, DiffuseTransmission's scale times each), so a file
+    that gives 1.2 renders in pbrt-v4, as 1: a constant is clamped as it is read."""
+    s = scene(tmp_path, 'Material "diffuse" "rgb reflectance" [1.2 0.5 -0.1]\n' + FLOOR
+              + 'Material "coateddiffuse" "rgb reflectance" [1.5 0.2 0.2] "rgb albedo" [2 0.5 0.5] '
+                '"float thickness" 0.1\n' + FLOOR
+              + 'Material "diffusetransmission" "rgb reflectance" [0.6 0.2 0.1] "rgb transmittance" [0 0 0] '
+                '"float scale" 2\n' + FLOOR)
+    diffuse, coated, transmitting = (s.materials.get(m.material) for m in s.meshes)
+    np.testing.assert_allclose(diffuse.params["rho_d"], [1, 0.5, 0])
+    np.testing.assert_allclose(coated.params["reflectance"], [1, 0.2, 0.2])
+    np.testing.assert_allclose(coated.params["albedo"], [1, 0.5, 0.5])
+    np.testing.assert_allclose(transmitting.params["reflectance"], [1, 0.4, 0.2])

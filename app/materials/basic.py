@@ -3,7 +3,7 @@ null, no surface at all."""
 
 import numpy as np
 
-from pathtrace.materials.bsdf import NULL, BSDFType, Param, check_sum_at_most_one
+from pathtrace.materials.bsdf import NULL, BSDFType, Param, check_sum_at_most_one, pbrt_clamped
 from pathtrace.device.slots import Slot, read_slot, write_slot
 
 
@@ -42,7 +42,7 @@ class Diffuse(BSDFType):
     formats = {"mitsuba": "diffuse", "pbrt": "diffuse"}
     # (low and high are integers for Mitsuba's message: "a reflectance must lie in [0, 1]")
     params = (Param("rho_d", "color", low=0, high=1, doc="albedo", slot="p0.xyz", mitsuba="reflectance",
-                    mitsuba_default=0.5, pbrt="reflectance", pbrt_default=0.5),)
+                    mitsuba_default=0.5, pbrt="reflectance", pbrt_default=0.5, from_pbrt=pbrt_clamped),)
     doc = "Lambertian, f = rho_d / pi"
 
     def continuation(self, values):

@@ -46,6 +46,15 @@ class Param(Parameter):
             object.__setattr__(self, "choices", tuple(self.names))
 
 
+def pbrt_clamped(value, given=None):
+    """A reflectance of pbrt-v4's, which its diffuse, coated and diffuse-transmission materials
+    clamp into [0, 1] where they evaluate it (src/pbrt/materials.h: DiffuseMaterial::GetBxDF's
+    Clamp(texEval(reflectance, ...), 0, 1), as CoatedDiffuse's reflectance and albedo): a
+    constant clamped here, so that a file pbrt-v4 renders renders; a texture as it is, whose
+    values must lie in [0, 1] (pathtrace evaluates it unclamped)."""
+    return value if isinstance(value, Texture) else np.clip(np.asarray(value, np.float64), 0.0, 1.0)
+
+
 def constant_of(value, kind: str, summary=Texture.mean):
     """A parameter's value where the host needs a constant: a texture's mean (or another
     summary), as a colour or, for a number, its luminance (the kernel's reading of a colour

@@ -3,20 +3,21 @@ transmission with their own colours; kernels/bsdfs/diffusetransmission.cl."""
 
 import numpy as np
 
-from pathtrace.materials.bsdf import TRANSMISSIVE, BSDFType, Param, check_sum_at_most_one
+from pathtrace.materials.bsdf import TRANSMISSIVE, BSDFType, Param, check_sum_at_most_one, pbrt_clamped
 from pathtrace.parameters import Parameter
 from pathtrace.textures.texture import Texture
 
 
 def _pbrt_scaled(value, given):
-    """pbrt-v4's DiffuseTransmissionMaterial: reflectance and transmittance times `scale`."""
+    """pbrt-v4's DiffuseTransmissionMaterial: reflectance and transmittance times `scale`,
+    clamped into [0, 1] as it evaluates them (pbrt_clamped)."""
     scale = given["scale"]
+    if not isinstance(value, Texture):
+        return pbrt_clamped(np.asarray(value, np.float64) * scale)
     if scale == 1.0:
         return value
-    if isinstance(value, Texture):
-        from pathtrace.textures.registry import TEXTURES
-        return Texture("scale", TEXTURES["scale"].complete({"tex": value, "scale": scale}))
-    return np.asarray(value, np.float64) * scale
+    from pathtrace.textures.registry import TEXTURES
+    return Texture("scale", TEXTURES["scale"].complete({"tex": value, "scale": scale}))
 
 
 class DiffuseTransmission(BSDFType):

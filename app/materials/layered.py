@@ -8,7 +8,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from pathtrace.materials.bsdf import DELTA, BSDFType, Param
+from pathtrace.materials.bsdf import DELTA, BSDFType, Param, pbrt_clamped
 from pathtrace.materials.conductor import METAL_PARAMS, RoughConductor, pbrt_metal, pbrt_metal_params, resolve_metal
 from pathtrace.materials.dielectric import PBRT_ETA, pbrt_eta
 from pathtrace.materials.microfacet import (GGX_PARAMS, PBRT_REMAP, SMOOTH_ALPHA, pbrt_alphas, pbrt_rough,
@@ -21,7 +21,7 @@ MAX_WALKS = 16            # nsamples: walks per estimate
 _LAYER_PARAMS = (       # pbrt-v4's names and defaults
     Param("thickness", "number", default=0.01, low=1e-6, high=1e3, pbrt="thickness",
           doc="the layer between coating and base, in units of its extinction (1 per unit)"),
-    Param("albedo", "color", default=0.0, high=1.0, pbrt="albedo",
+    Param("albedo", "color", default=0.0, high=1.0, pbrt="albedo", from_pbrt=pbrt_clamped,
           doc="the layer's single-scattering albedo; 0: it only absorbs"),
     Param("g", "number", default=0.0, low=-0.999, high=0.999, pbrt="g",
           doc="the layer's Henyey-Greenstein phase function's mean cosine"),
@@ -78,7 +78,8 @@ class CoatedDiffuse(BSDFType):
     estimated = True
     requires = LAYERED_FILES
     params = in_slots((
-        Param("reflectance", "color", default=0.5, high=1.0, doc="the base's albedo", slot="p0.xyz", pbrt="reflectance"),
+        Param("reflectance", "color", default=0.5, high=1.0, doc="the base's albedo", slot="p0.xyz", pbrt="reflectance",
+              from_pbrt=pbrt_clamped),
         _ALPHA,
         Param("eta", "number", default=1.5, low=1.0001, high=10.0, doc="the coating's IOR", pbrt_from="eta"),
     ) + _LAYER_PARAMS, alpha="p0.w", eta="p1.x", thickness="p1.y", g="p1.z", maxdepth="p1.w", albedo="p2.xyz",
