@@ -75,6 +75,17 @@ def _ends(f: np.ndarray) -> tuple:
     return f.reshape(-1), np.roll(f, -1, axis=1).reshape(-1)
 
 
+def _turns(m: int) -> tuple:
+    """Each of m half-edges' next and previous half-edge round its triangle."""
+    corner = np.arange(m)
+    return corner - corner % 3 + (corner + 1) % 3, corner - corner % 3 + (corner + 2) % 3
+
+
+def _most_faces(origin: np.ndarray, n: int) -> int:
+    """The most triangles about any of the n vertices (half-edges leave a vertex once per face)."""
+    return int(np.bincount(origin, minlength=n).max())
+
+
 def _pairs(f: np.ndarray, n: int) -> tuple:
     """Each half-edge's origin and end, and its pair of corners as one number, the same for the
     half-edges that run between the same two of the n vertices either way."""
@@ -102,11 +113,10 @@ def control_topology(f: np.ndarray, n: int) -> Topology:
     twin[a_half], twin[b_half] = b_half, a_half
     start = np.full(n, -1)
     np.maximum.at(start, origin, np.arange(len(origin)))      # the last named (pbrt-v4's startFace)
-    corner = np.arange(len(origin))
-    nxt = corner - corner % 3 + (corner + 1) % 3
+    nxt, _ = _turns(len(origin))
     boundary = np.zeros(n, bool)
     h, walking = start.copy(), np.flatnonzero(start >= 0)
-    for _ in range(int(np.bincount(origin, minlength=n).max())):     # h -> next(twin(h)): the next face
+    for _ in range(_most_faces(origin, n)):     # h -> next(twin(h)): the next face
         across = twin[h[walking]]
         boundary[walking[across < 0]] = True
         walking, across = walking[across >= 0], across[across >= 0]
@@ -187,9 +197,8 @@ class _Rings:
     def __init__(self, t: Topology):
         origin, end = _ends(t.faces)
         m, n = len(origin), len(t.start)
-        steps = int(np.bincount(origin, minlength=n).max()) + 1   # the most faces about a vertex, and one
-        corner = np.arange(m)
-        nxt, prev = corner - corner % 3 + (corner + 1) % 3, corner - corner % 3 + (corner + 2) % 3
+        steps = _most_faces(origin, n) + 1
+        nxt, prev = _turns(m)
         h = t.start.copy()
         walking = np.flatnonzero((h >= 0) & t.boundary)
         for _ in range(steps):                   # a boundary vertex's to the last face one way
