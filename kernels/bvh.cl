@@ -98,10 +98,25 @@ void intersect_spheres(const SceneData *sc, int first, int count, float3 o, floa
     }
 }
 
+/* A GENERIC program on a GPU tests a leaf's analytic shapes and alpha masks only where the scene
+ * has either (intersect_triangles below): skipped by the layout's bits within the loop, their
+ * branches still cost every scene registers in its hottest loop (docs/notes/performance-2026-12.md,
+ * 2026-12-03, thirtieth session). A scene's own program compiles the loop as it stands, and so
+ * does a CPU's generic program, which the second inlined loop made slower. */
+#if defined(GENERIC) && !defined(CPU_DEVICE)
+#define TRIANGLE_TESTS test_triangles
+#define SPECIAL_PARAM , int special
+#define SPECIAL(test) (special && (test))
+#else
+#define TRIANGLE_TESTS intersect_triangles
+#define SPECIAL_PARAM
+#define SPECIAL(test) test
+#endif
+
 /* `self`: the primitive the ray leaves (or NO_PRIM), which a plane cannot meet again: skipped.
  * `instance`: the instance drawing them. */
-CPU_INLINE void intersect_triangles(const SceneData *sc, int first, int count, float3 o, float3 d,
-                                    PrimId self, int instance, Hit *hit)
+CPU_INLINE void TRIANGLE_TESTS(const SceneData *sc, int first, int count, float3 o, float3 d,
+                               PrimId self, int instance, Hit *hit SPECIAL_PARAM)
 {
     float3 row_x, row_y, row_z;
     triangle_shear(d, &row_x, &row_y, &row_z);
@@ -110,7 +125,7 @@ CPU_INLINE void intersect_triangles(const SceneData *sc, int first, int count, f
 #ifdef SHAPES
         /* an analytic shape: a curved one may be met again by a ray leaving it, so `self` is not
            skipped; the offset origin keeps the ray off the surface it leaves, as a sphere's */
-        int kind = HAS_SHAPES(sc) ? SHAPE_KIND(&sc->triangles[i]) : 0;
+        int kind = SPECIAL(HAS_SHAPES(sc)) ? SHAPE_KIND(&sc->triangles[i]) : 0;
         if (kind) {
             float2 uv;
             float t = intersect_analytic(kind, SHAPE_ROWS(sc, &sc->triangles[i]), o, d, hit->t, &uv);
@@ -133,7 +148,7 @@ CPU_INLINE void intersect_triangles(const SceneData *sc, int first, int count, f
         float b1, b2;
         float t = intersect_triangle(&sc->triangles[i], o, row_x, row_y, row_z, hit->t, &b1, &b2);
 #ifdef ALPHA_MASKS
-        if (t < hit->t && HAS_MASKS(sc) && masked_out(sc, sc->num_spheres + i, (float2)(b1, b2), o + t * d, d))
+        if (t < hit->t && SPECIAL(HAS_MASKS(sc)) && masked_out(sc, sc->num_spheres + i, (float2)(b1, b2), o + t * d, d))
             continue;
 #endif
         if (t < hit->t) {
@@ -145,6 +160,17 @@ CPU_INLINE void intersect_triangles(const SceneData *sc, int first, int count, f
         }
     }
 }
+
+#if defined(GENERIC) && !defined(CPU_DEVICE)
+void intersect_triangles(const SceneData *sc, int first, int count, float3 o, float3 d,
+                         PrimId self, int instance, Hit *hit)
+{
+    if (HAS_SHAPES(sc) || HAS_MASKS(sc))
+        test_triangles(sc, first, count, o, d, self, instance, hit, 1);
+    else
+        test_triangles(sc, first, count, o, d, self, instance, hit, 0);
+}
+#endif
 
 /* The slots of a node that are leaves the ray enters (leaf: -1 there), as four bits. */
 uint leaf_bits(int4 leaf)

@@ -22,7 +22,13 @@
  * tested before the call and inlined, so that most scenes' vertices make no call
  * (docs/notes/performance-2026-11.md, 2026-11-30, seventeenth session). A
  * scene's own program, which compiles only its kinds, and CPUs, whose calls pass a path's state
- * through memory, keep them inlined. */
+ * through memory, keep them inlined.
+ * The analytic shapes' functions (kernels/shapes/analytic.cl) and the alpha masks' (kernels/masks.cl)
+ * are called in a generic program on a GPU too: inlined, they sat in the BVH walk's leaf loop and
+ * in the shading of every scene, which paid in registers for what most scenes lack (the layout's
+ * bits skip them at run time, not at compile time); called, with the leaf loop of a scene without
+ * either holding the triangle test alone (kernels/bvh.cl), a scene without them renders a fifth
+ * faster (docs/notes/performance-2026-12.md, 2026-12-03, thirtieth session). */
 #if defined(GENERIC) && !defined(CPU_DEVICE)
 #define DISPATCH __attribute__((noinline))
 #else

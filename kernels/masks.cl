@@ -12,7 +12,7 @@
 #define SLOT_OPACITY 16      /* the opacity's binding slot (app/materials/table.py) */
 
 /* The opacity of material m at uv: its opacity binding's value (the texture's luminance), or 1. */
-float opacity_at(const SceneData *sc, const global Material *m, float2 uv)
+DISPATCH float opacity_at(const SceneData *sc, const global Material *m, float2 uv)
 {
     for (int i = m->textures;; ++i) {
         TextureBinding b = sc->bindings[i];
@@ -25,7 +25,7 @@ float opacity_at(const SceneData *sc, const global Material *m, float2 uv)
 
 /* Whether the ray along d passes through primitive prim's surface at point p (a triangle's
  * barycentric weights b). */
-int masked_out(const SceneData *sc, int prim, float2 b, float3 p, float3 d)
+DISPATCH int masked_out(const SceneData *sc, int prim, float2 b, float3 p, float3 d)
 {
     const global Material *m = &sc->materials[sc->prim_material[prim]];
     if (!(m->flags & MATERIAL_MASKED))

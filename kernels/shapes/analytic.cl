@@ -14,13 +14,13 @@
 
 /* t of the nearest hit of o + t d (world space) with the shape in (0, t_max), or INFINITY; its
  * (u, v) to *uv. d stays unnormalised in the object's space, so t is the world's. */
-float intersect_analytic(int kind, const global float4 *f, float3 o, float3 d, float t_max, float2 *uv)
+DISPATCH float intersect_analytic(int kind, const global float4 *f, float3 o, float3 d, float t_max, float2 *uv)
 {
     return shape_intersect(kind, f, transform_point(f + 3, o), transform_vector(f + 3, d), t_max, uv);
 }
 
 /* The point of parameters uv in the world, its error bound and its unit normal on the front. */
-void analytic_surface(int kind, const global float4 *f, float2 uv, float3 *p, float3 *error, float3 *n)
+DISPATCH void analytic_surface(int kind, const global float4 *f, float2 uv, float3 *p, float3 *error, float3 *n)
 {
     float3 q, e, m, dpdu, dpdv;
     shape_point(kind, f, uv, &q, &e, &m, &dpdu, &dpdv);
@@ -30,19 +30,19 @@ void analytic_surface(int kind, const global float4 *f, float2 uv, float3 *p, fl
 }
 
 /* The parameters of world point p of the shape. */
-float2 analytic_params(int kind, const global float4 *f, float3 p)
+DISPATCH float2 analytic_params(int kind, const global float4 *f, float3 p)
 {
     return shape_uv(kind, f, transform_point(f + 3, p));
 }
 
 /* Texture coordinates of parameters uv. */
-float2 analytic_texture_uv(const global float4 *f, float2 uv)
+DISPATCH float2 analytic_texture_uv(const global float4 *f, float2 uv)
 {
     return texture_uv_map((int)f[7].y, uv);
 }
 
 /* dp/du and dp/dv in the world at world point p, along the texture coordinates' (u, v). */
-void analytic_derivatives(int kind, const global float4 *f, float3 p, float3 *dpdu, float3 *dpdv)
+DISPATCH void analytic_derivatives(int kind, const global float4 *f, float3 p, float3 *dpdu, float3 *dpdv)
 {
     float3 q, e, m, a, b;
     shape_point(kind, f, analytic_params(kind, f, p), &q, &e, &m, &a, &b);
@@ -52,7 +52,7 @@ void analytic_derivatives(int kind, const global float4 *f, float3 p, float3 *dp
 /* Density per world area, at parameters uv, of sample_analytic: the kind samples uniformly
  * over its object-space area A, which the transform stretches at a point of object normal m by
  * |det M| |M^-T m| (the normal's transform, the transpose of to_object's rows). */
-float analytic_pdf_area(int kind, const global float4 *f, float2 uv)
+DISPATCH float analytic_pdf_area(int kind, const global float4 *f, float2 uv)
 {
     float3 q, e, m, a, b;
     shape_point(kind, f, uv, &q, &e, &m, &a, &b);
@@ -62,7 +62,7 @@ float analytic_pdf_area(int kind, const global float4 *f, float2 uv)
 
 /* A point of the shape (world space) for next-event estimation and light paths, its
  * parameters, front normal, error bound and density per area. */
-float3 sample_analytic(int kind, const global float4 *f, float2 u, float2 *uv, float3 *n, float3 *error,
+DISPATCH float3 sample_analytic(int kind, const global float4 *f, float2 u, float2 *uv, float3 *n, float3 *error,
                        float *pdf_area)
 {
     float3 p;
@@ -74,7 +74,7 @@ float3 sample_analytic(int kind, const global float4 *f, float2 u, float2 *uv, f
 
 /* Density per solid angle, seen from x, of area sampling at point y of the shape, whose
  * emitting side (its front, or either with `both_sides`) faces direction -w from x. */
-float pdf_analytic_solid_angle(int kind, const global float4 *f, float3 x, float3 y, int both_sides)
+DISPATCH float pdf_analytic_solid_angle(int kind, const global float4 *f, float3 x, float3 y, int both_sides)
 {
     float2 uv = analytic_params(kind, f, y);
     float3 p, error, n;
