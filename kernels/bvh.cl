@@ -101,8 +101,9 @@ void intersect_spheres(const SceneData *sc, int first, int count, float3 o, floa
 /* A GENERIC program on a GPU tests a leaf's analytic shapes and alpha masks only where the scene
  * has either (intersect_triangles below): skipped by the layout's bits within the loop, their
  * branches still cost every scene registers in its hottest loop (docs/notes/performance-2026-12.md,
- * 2026-12-03, thirtieth session). A scene's own program compiles the loop as it stands, and so
- * does a CPU's generic program, which the second inlined loop made slower. */
+ * 2026-12-03, thirtieth session). A scene's own program compiles the loop as it stands, token
+ * for token (a wrapper alone once moved ptxas's allocation of one by 4.7 %: 2026-11-30,
+ * seventeenth session), and so does a CPU's generic program, which the second loop made slower. */
 #if defined(GENERIC) && !defined(CPU_DEVICE)
 #define TRIANGLE_TESTS test_triangles
 #define SPECIAL_PARAM , int special
@@ -192,7 +193,7 @@ uint leaf_bits(int4 leaf)
  * leaves' slots set to INFINITY, leaving the inner children's. NO_TRIANGLES (a build option for
  * scenes of spheres only) leaves the triangle code out, NO_SPHERES (for scenes of triangles
  * only) and LONE_SPHERES (whose tree holds triangles only: trace_ray) the sphere code. Sphere
- * leaves are short, so the four slots are tested unrolled; with triangles, one copy of the
+ * leaves are short, so the four slots are tested unrolled; with triangles, one call of the
  * (inlined) primitive tests in a loop over the leaves' bits keeps the kernel's registers down
  * (docs/notes/performance-2026-11.md, 2026-11-22: a 4-wide BVH). */
 CPU_INLINE float4 intersect_leaves(const SceneData *sc, float4 t, int4 count, int4 index, float3 o,
