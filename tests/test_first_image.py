@@ -60,17 +60,19 @@ def test_a_row_is_timed_cold_from_empty_caches_then_warm(tmp_path):
     # the cold run's caches were empty before it, and it filled them (PoCL's programs here)
     assert row["cache_files_before"] == 0 and row["cache_files_after"] > 0
     assert row["mitsuba_cold_seconds"] is None and row["mitsuba_warm_seconds"] is None
+    assert row["edited_seconds"] is None            # a built-in scene has no file to edit
     header, line = r.stdout.splitlines()
-    assert "cold s" in header and "warm s" in header and line.startswith("simple ")
+    assert "cold s" in header and "warm s" in header and "edited s" in header and line.startswith("simple ")
 
 
 def test_the_obj_scene_is_a_row_bench_writes(tmp_path):
     """`meshes850-obj` (#55's "several hundred OBJ meshes"): 850 OBJ files bench writes, each
-    read from its file cold and the scene from its cache warm; its XML's film is the rows' size,
-    so that Mitsuba renders it beside (here a stand-in)."""
+    read from its file cold, the scene from its cache warm, and again after its file changed;
+    its XML's film is the rows' size, so that Mitsuba renders it beside (here a stand-in)."""
     row, r = first_image_row(tmp_path, "meshes850-obj", "16x9", 1, *with_mitsuba(tmp_path))
     assert (row["scene"], row["what"]) == ("meshes850-obj", "written by bench")
     assert row["cold_seconds"] > row["warm_seconds"] > 0 and row["cache_files_after"] > 0
+    assert row["edited_seconds"] > 0
     assert row["mitsuba_cold_seconds"] > 0, r.stdout
 
 

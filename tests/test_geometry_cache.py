@@ -71,7 +71,7 @@ def no_gather(*args, **kwargs):
 
 def compiled_whole(s):
     c = compile_scene(s)
-    geometry_cache.wait_for_writes()
+    cache_files.wait_for_writes()
     return c
 
 
@@ -182,5 +182,5 @@ def test_an_interrupt_ends_the_wait_for_an_entry(monkeypatch):
     the user asked to stop (the write's temporary file is pruned later)."""
     def interrupted():
         raise KeyboardInterrupt
-    monkeypatch.setattr(geometry_cache, "wait_for_writes", interrupted)
+    monkeypatch.setattr(cache_files, "wait_for_writes", interrupted)
     console._finish_cache_writes()

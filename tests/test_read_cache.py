@@ -10,6 +10,7 @@ import pytest
 import pathtrace.scene.meshes as meshes
 import pathtrace.scene.read_cache as read_cache
 from pathtrace.errors import UserError
+from pathtrace.io import cache_files
 from pathtrace.scene import load_scene
 from tests.conftest import ROOT
 
@@ -39,6 +40,13 @@ def scene_file(tmp_path, monkeypatch):
     return tmp_path / "s.xml", parsed
 
 
+def load(path):
+    """The scene, once the meshes kept beside its entry are written (a thread writes them)."""
+    scene = load_scene(str(path))
+    cache_files.wait_for_writes()
+    return scene
+
+
 def same(a, b) -> bool:
     return repr(a) == repr(b) and len(a.meshes) == len(b.meshes) and all(
         np.array_equal(m.vertices, n.vertices) and np.array_equal(m.faces, n.faces) for m, n in zip(a.meshes, b.meshes))
@@ -46,9 +54,9 @@ def same(a, b) -> bool:
 
 def test_a_scene_read_again_comes_from_the_cache_with_its_warnings(scene_file, capsys):
     path, parsed = scene_file
-    first = load_scene(str(path))
+    first = load(path)
     warned = capsys.readouterr().err
-    again = load_scene(str(path))
+    again = load(path)
     assert len(parsed) == 1 and same(first, again)
     assert "version 1.0.0" in warned and capsys.readouterr().err == warned
 
@@ -61,36 +69,87 @@ def test_a_scene_named_otherwise_says_the_name_it_is_given(scene_file, monkeypat
     assert load_scene("s.xml").source == "s.xml"
     capsys.readouterr()
     monkeypatch.chdir(path.parent.parent)
-    again = load_scene(str(path))
+    again = load(path)
     assert again.source == str(path) and f"{path}:1:" in capsys.readouterr().err
 
 
 def test_a_changed_mesh_file_is_read_again(scene_file):
     path, parsed = scene_file
-    first = load_scene(str(path))
+    first = load(path)
     mesh = path.parent / "quad.obj"
     mesh.write_text(mesh.read_text().replace("v 1", "v 2", 1))
-    again = load_scene(str(path))
+    again = load(path)
     assert len(parsed) == 2 and not np.array_equal(first.meshes[0].vertices, again.meshes[0].vertices)
 
 
-def test_a_changed_scene_file_is_read_again(scene_file):
-    path, parsed = scene_file
-    load_scene(str(path))
+def edit(path, old, new):
+    """Changes the scene file, its time of last change moved on by a second."""
     stat = path.stat()
-    path.write_text(SCENE.replace('value="0.5"', 'value="0.25"'))
+    path.write_text(path.read_text().replace(old, new))
     os.utime(path, ns=(stat.st_atime_ns, stat.st_mtime_ns + 10**9))
-    assert load_scene(str(path)).materials[0].params["rho_d"][0] == pytest.approx(0.25)
-    assert len(parsed) == 2
+
+
+def test_a_changed_scene_file_is_read_again_its_unchanged_obj_file_from_the_entry(scene_file):
+    """The scene is read anew, and its OBJ file's mesh comes from the stale entry
+    (pathtrace.scene.mesh_cache), as it was read the first time, for that read and the next."""
+    path, parsed = scene_file
+    first = load(path)
+    edit(path, 'value="0.5"', 'value="0.25"')
+    again = load(path)
+    assert again.materials[0].params["rho_d"][0] == pytest.approx(0.25)
+    assert len(parsed) == 1 and same(first, again)
+    edit(path, 'value="0.25"', 'value="0.125"')
+    assert load(path).materials[0].params["rho_d"][0] == pytest.approx(0.125) and len(parsed) == 1
+
+
+def test_a_mesh_with_warnings_is_parsed_on_each_read_and_warns_each_time(scene_file, capsys):
+    """A mesh whose check dropped a degenerate triangle is not kept with the entry: its warning,
+    naming the scene's field, is told again when the changed scene is read."""
+    path, parsed = scene_file
+    mesh = path.parent / "quad.obj"
+    mesh.write_text(mesh.read_text() + "f 1 1 2\n")
+    load(path)
+    assert "degenerate" in capsys.readouterr().err
+    edit(path, 'value="0.5"', 'value="0.25"')
+    load(path)
+    assert len(parsed) == 2 and f"{path}:6:" in capsys.readouterr().err
+
+
+def test_meshes_read_by_another_process_are_kept_with_the_entry(scene_file, monkeypatch):
+    """A scene of many OBJ files, some read by another process (pathtrace.scene.mesh_processes):
+    after a change of its file, every mesh comes from the entry and no process is started."""
+    path, parsed = scene_file
+    names = [f"quad{k}.obj" for k in range(6)]
+    for name in names:
+        shutil.copy(path.parent / "quad.obj", path.parent / name)
+    shapes = "".join(f'<shape type="obj"><string name="filename" value="{n}"/></shape>' for n in names)
+    path.write_text(SCENE.replace("</scene>", shapes + "</scene>"))
+    monkeypatch.setattr(meshes.os, "sched_getaffinity", lambda _: {0, 1, 2, 3}, raising=False)
+    monkeypatch.setattr(meshes.MeshFiles, "MANY", 2)
+    monkeypatch.setattr(meshes.MeshFiles, "PROCESS_BYTES", 1)
+    readings, read_in_processes = [], meshes.MeshFiles._read_in_processes
+    monkeypatch.setattr(meshes.MeshFiles, "_read_in_processes",
+                        lambda self, requests, n: (readings.append(requests), read_in_processes(self, requests, n)))
+    first = load(path)
+    assert readings and len(readings[0]) == 7
+    edit(path, 'value="0.5"', 'value="0.25"')
+    again = load(path)
+    assert len(readings) == 1 and len(parsed) == 0 and same(first, again)
 
 
 def test_a_damaged_entry_is_read_again_and_replaced(scene_file):
+    """A damaged entry is a miss: the scene is read again (its mesh from the file kept beside the
+    entry, while that is whole) and stored anew."""
     path, parsed = scene_file
-    first = load_scene(str(path))
+    first = load(path)
     entry, = (path.parent / "cache").glob("*.scene")
     entry.write_bytes(entry.read_bytes()[:-10])
-    assert same(load_scene(str(path)), first) and len(parsed) == 2
-    assert same(load_scene(str(path)), first) and len(parsed) == 2
+    assert same(load(path), first) and len(parsed) == 1
+    kept, = (path.parent / "cache").glob("*.meshes")
+    for damaged in (entry, kept):
+        damaged.write_bytes(damaged.read_bytes()[:-10])
+    assert same(load(path), first) and len(parsed) == 2
+    assert same(load(path), first) and len(parsed) == 2
 
 
 def test_a_file_that_shadows_a_built_in_name_is_read_as_the_file(scene_file, monkeypatch):
@@ -109,7 +168,7 @@ def test_without_a_writable_folder_the_scene_is_still_read(scene_file, monkeypat
     blocker = path.parent / "blocker"
     blocker.write_text("")
     monkeypatch.setenv("PATHTRACE_SCENE_CACHE", str(blocker / "cache"))
-    assert same(load_scene(str(path)), load_scene(str(path))) and len(parsed) == 2
+    assert same(load(path), load(path)) and len(parsed) == 2
 
 
 def test_reading_a_scene_imports_no_pyopencl(tmp_path):

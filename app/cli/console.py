@@ -66,11 +66,11 @@ def _numpy_on_one_blas_thread():
 
 
 def _finish_cache_writes():
-    """Waits for the geometry cache's writes under way (pathtrace.compiler.geometry_cache), which a
-    leaving past the interpreter's teardown would cut short. An interrupt ends the wait: the
-    user asked to stop, and a write's temporary file left then is removed by a later write's
-    prune (pathtrace.io.cache_files)."""
-    wait = getattr(sys.modules.get("pathtrace.compiler.geometry_cache"), "wait_for_writes", None)
+    """Waits for the caches' writes under way (pathtrace.io.cache_files.write_soon: the geometry
+    cache's, the meshes kept beside the scene cache's entries), which a leaving past the
+    interpreter's teardown would cut short. An interrupt ends the wait: the user asked to stop,
+    and a write's temporary file left then is removed by a later write's prune."""
+    wait = getattr(sys.modules.get("pathtrace.io.cache_files"), "wait_for_writes", None)
     try:
         if wait is not None:
             wait()

@@ -16,7 +16,6 @@ go once these entries exceed MAX_BYTES."""
 
 import hashlib
 import os
-import threading
 from pathlib import Path
 
 import numpy as np
@@ -37,7 +36,6 @@ _HEADER = np.dtype([("rows", "<i8", len(ARRAYS)), ("depth", "<i8"), ("cost", "<f
                     ("center", "<f8", 3), ("media_per_primitive", "<i8")])
 
 _source_digest = None
-_writes = []        # the threads of the writes under way (write_soon)
 
 
 def source_digest() -> bytes:
@@ -119,11 +117,8 @@ def read_entry(path: Path) -> dict | None:
 
 
 def write_soon(path: Path, compiled):
-    """Stores a CompiledScene's tree and rows at path in a thread of its own, so that a first
-    image does not wait for it (870,400 triangles' entry is 133 MB: 0.3 s on two cores). The
-    interpreter waits for it at its exit; a command that leaves past that (os._exit) calls
-    wait_for_writes first. A write cut short leaves a temporary file, not an entry
-    (pathtrace.io.cache_files)."""
+    """Stores a CompiledScene's tree and rows at path in a thread of its own
+    (pathtrace.io.cache_files.write_soon): 870,400 triangles' entry is 133 MB, 0.3 s on two cores."""
     arrays = [compiled.bvh.nodes, compiled.bvh.order] + [getattr(compiled, name) for name, _ in ARRAYS[2:]]
     header = np.zeros(1, _HEADER)
     header["rows"] = [len(a) for a in arrays]
@@ -133,19 +128,4 @@ def write_soon(path: Path, compiled):
     chunks = [np.ascontiguousarray(a, row.base if row.subdtype else row) for a, (_, row) in zip(arrays, ARRAYS)]
     if sum(c.nbytes for c in chunks) > MAX_BYTES // 2:      # would crowd out every other entry
         return
-    thread = threading.Thread(target=_write, args=(path, header, chunks), name="geometry cache write")
-    _writes.append(thread)
-    thread.start()
-
-
-def _write(path: Path, header: np.ndarray, chunks: list):
-    """The entry whole or not at all (pathtrace.io.cache_files), then the oldest entries beyond
-    MAX_BYTES removed."""
-    if cache_files.write_entry(path, header, *chunks):
-        cache_files.prune(path.parent, "*.geometry", MAX_BYTES)
-
-
-def wait_for_writes():
-    """Returns once the entries being written are written."""
-    while _writes:
-        _writes.pop().join()
+    cache_files.write_soon(path, [header, *chunks], "*.geometry", MAX_BYTES)

@@ -13,6 +13,7 @@ entry still renders."""
 import os
 import stat
 import tempfile
+import threading
 import time
 import zlib
 from pathlib import Path
@@ -20,6 +21,7 @@ from pathlib import Path
 CHECKSUM_BYTES = 4
 TEMPORARY = ".tmp"          # the suffix of an entry's file while it is written
 STALE_SECONDS = 600         # a write's file unchanged this long is a write that ended unfinished
+_writes = []                # the threads of the writes under way (write_soon)
 
 
 def cache_dir() -> Path:
@@ -109,3 +111,24 @@ def prune(where: Path, pattern: str, limit: int):
             total -= size
         except OSError:
             pass
+
+
+def write_soon(path: Path, chunks: list, pattern: str, limit: int):
+    """write_entry(path, *chunks) in a thread of its own, then prune(path.parent, pattern, limit),
+    so that a first image does not wait for a large entry. The interpreter waits for it at its
+    exit; a command that leaves past that (os._exit) calls wait_for_writes first. A write cut
+    short leaves a temporary file, not an entry."""
+    thread = threading.Thread(target=_write_and_prune, args=(path, chunks, pattern, limit), name="cache write")
+    _writes.append(thread)
+    thread.start()
+
+
+def _write_and_prune(path: Path, chunks: list, pattern: str, limit: int):
+    if write_entry(path, *chunks):
+        prune(path.parent, pattern, limit)
+
+
+def wait_for_writes():
+    """Returns once the entries being written (write_soon) are written."""
+    while _writes:
+        _writes.pop().join()

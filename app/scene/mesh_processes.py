@@ -18,10 +18,12 @@ import pickle
 import subprocess
 import sys
 import threading
+from pathlib import Path
 from concurrent.futures import Future, ThreadPoolExecutor
 
 from pathtrace.errors import UserError
 from pathtrace.io.files import noted, noting_files
+from pathtrace.scene import mesh_cache
 
 
 class Reading:
@@ -41,16 +43,26 @@ class Reading:
     def _read(self, requests: list, futures: list):
         try:
             answers = self._in_a_process(requests)
-            for future, (result, problem, files) in zip(futures, answers):
+            for (path, _), future, (result, problem, files) in zip(requests, futures, answers):
                 noted(files)
                 if problem is not None:
                     future.set_exception(problem)
                 else:
                     future.set_result(result)
+                    self._keep(path, result, files)
         finally:          # whatever went wrong, no read waits: a file without an answer the reader reads itself
             for future in futures:
                 if not future.done():
                     future.set_result((None, []))
+
+    @staticmethod
+    def _keep(path, result: tuple, files: list):
+        """A mesh a process read without a warning, collected (pathtrace.scene.mesh_cache) under
+        the stamp the process read it at."""
+        mesh, notes = result
+        at = [s for s in files if s[0] == str(Path(path).absolute())]
+        if not notes and at:
+            mesh_cache.collect(at[0], mesh)
 
     def _in_a_process(self, requests: list) -> list:
         """The answers of a process that reads `requests`, one per request, or [] where it fails.

@@ -20,7 +20,8 @@ from typing import NamedTuple
 import numpy as np
 
 from pathtrace.errors import UserError, warn
-from pathtrace.io.files import check_regular_file
+from pathtrace.io.files import check_regular_file, stamp
+from pathtrace.scene import mesh_cache
 from pathtrace.scene.transform import flips_handedness, transform_normals, transform_points
 
 FORMATS = (".ply", ".ply.gz", ".obj", ".stl", ".gltf", ".glb")
@@ -59,6 +60,9 @@ def read_mesh(path: Path, where: str, warn=warn, degenerate=None) -> MeshData:
         raise UserError(f"{where}: {path}: unknown mesh format '{path.suffix}' "
                         f"(use {', '.join(FORMATS)})")
     check_regular_file(path, where, "mesh file", MAX_FILE_BYTES)
+    kept_as, kept = mesh_cache.find(path) if suffix == ".obj" else (None, None)
+    if kept is not None:
+        return kept
     try:
         if suffix in (".ply", ".ply.gz"):
             try:
@@ -80,7 +84,10 @@ def read_mesh(path: Path, where: str, warn=warn, degenerate=None) -> MeshData:
     except Exception as e:     # the parsers raise anything on a malformed file
         raise UserError(f"{where}: {path}: not a readable {suffix[1:].upper()} mesh "
                         f"({type(e).__name__}: {str(e).splitlines()[0] if str(e) else 'malformed'})") from None
-    return check_mesh(*mesh, where=f"{where}: {path}", warn=warn, degenerate=degenerate)
+    checked = check_mesh(*mesh, where=f"{where}: {path}", warn=warn, degenerate=degenerate)
+    if kept_as is not None and len(checked.faces) == len(mesh.faces):     # no triangle dropped: no warning
+        mesh_cache.collect(kept_as, checked)
+    return checked
 
 
 class MeshFiles:
@@ -124,16 +131,17 @@ class MeshFiles:
         for path, where in requests:
             path = Path(path)
             try:
-                size = path.stat().st_size
+                info = path.stat()
             except (OSError, ValueError):      # read_mesh says what is wrong, when asked
                 continue
+            size = info.st_size
             self.named_bytes += size
             if self.named_bytes >= LARGE_SCENE_BYTES:
                 large_scene_named.set()
             if size >= self.LARGE:
                 self.waiting.setdefault(path, deque()).append(len(self.requests))
                 self.requests.append((path, where))
-            elif path.suffix.lower() == ".obj":
+            elif path.suffix.lower() == ".obj" and not mesh_cache.holds(stamp(path, info)):   # a kept one is read here
                 small_obj.append((path, where, size))
                 small_bytes += size
         if len(small_obj) >= self.MANY and small_bytes >= self.PROCESS_BYTES and self.processes is None:

@@ -5,7 +5,9 @@ start took on the H200; #55).
 An entry holds the scene as read (pickled), the warnings its reading gave, which are told again
 when it is used, and a stamp (path, size, time of last change) of every file the reading checked
 (pathtrace.io.files.check_regular_file: the scene file, its includes, meshes, images). It is used
-only while every stamp still holds. It is keyed by the scene file's absolute path (a built-in
+only while every stamp still holds. Beside it, a file of the meshes of the scene's OBJ files
+(pathtrace.scene.mesh_cache) gives them to the scene's next read where the entry no longer
+holds. It is keyed by the scene file's absolute path (a built-in
 scene's name) and by the digest of pathtrace's Python source, so that a changed reader never
 reads an old entry. Scenes read in less than MIN_SECONDS are not kept. Entries are files of
 pathtrace.io.cache_files (a damaged one is a miss); the least recently used go once they exceed
@@ -22,9 +24,11 @@ from pathlib import Path
 from pathtrace.io import cache_files
 from pathtrace.errors import held_warnings, warn
 from pathtrace.io.files import noting_files, stamp
+from pathtrace.scene import mesh_cache
 
 MIN_SECONDS = 0.1
-MAX_BYTES = 2 << 30
+MAX_BYTES = 2 << 30         # of scenes, and again of the meshes kept beside them
+MESHES = ".meshes"          # the suffix of those meshes' files
 _source_digest = None
 
 
@@ -61,12 +65,14 @@ def entry_path(where: Path, name: str) -> Path:
 
 def cached_read(name: str, read):
     """read(name)'s scene, from the cache where an entry for it holds; a scene read slowly is
-    stored there. Within grouped_warnings(), as load_scene calls it."""
+    stored there, with the meshes of its OBJ files (pathtrace.scene.mesh_cache), which a read
+    after a change of the scene's file takes from its stale entry. Within grouped_warnings(), as
+    load_scene calls it."""
     where = folder()
     if where is None:
         return read(name)
     path = entry_path(where, name)
-    kept = _read_entry(path)
+    kept, meshes = _read_entry(path)
     if kept is not None:
         notes, scene = kept
         for note in notes:
@@ -74,42 +80,77 @@ def cached_read(name: str, read):
         return scene
     before = len(held_warnings())
     start = time.perf_counter()
-    with noting_files() as files:
+    with noting_files() as files, mesh_cache.reading(meshes) as found:
         scene = read(name)
     if time.perf_counter() - start >= MIN_SECONDS:
-        _write_entry(path, files, held_warnings()[before:], scene)
+        _write_entry(path, files, held_warnings()[before:], scene, found)
     return scene
 
 
 def _read_entry(path: Path):
-    """(warnings, scene) of the entry at path, or None where there is none, it is damaged, or a
-    file it was read from has changed since."""
+    """((warnings, scene), {}) of the entry at path; where there is none, it is damaged, or a file
+    it was read from has changed since, (None, the meshes kept beside it)."""
     data = cache_files.read_entry(path)
-    if data is None:
-        return None
     try:
+        if data is None:
+            return None, _kept_meshes(path)
         with io.BytesIO(data) as f:
             stamps, notes = pickle.load(f)
             for name, size, changed in stamps:
                 if stamp(name, os.stat(name)) != (name, size, changed):
-                    return None
+                    return None, _kept_meshes(path)
             scene = pickle.load(f)
     except (OSError, ValueError, EOFError, pickle.UnpicklingError, AttributeError, ImportError, TypeError):
-        return None            # a file gone, or an entry this pathtrace cannot read: a miss
+        return None, {}        # a file gone, or an entry this pathtrace cannot read: a miss
     try:
         os.utime(path)         # recently used: removed last
     except OSError:
         pass
-    return notes, scene
+    return (notes, scene), {}
 
 
-def _write_entry(path: Path, files: list, notes: list, scene):
-    """Stores the scene (whole or not at all) and removes the oldest entries beyond MAX_BYTES. A
-    scene that cannot be pickled (one holding objects made in Python by the user) is not kept."""
+def _kept_meshes(path: Path) -> dict:
+    """The meshes kept beside the entry at path ({stamp: mesh}, pathtrace.scene.mesh_cache), {}
+    where there are none or they are damaged. A file of their own, so that a scene read from its
+    entry reads none of them: its pickle's arrays are views of the file's bytes, read whole."""
+    data = cache_files.read_entry(path.with_suffix(MESHES))
+    try:
+        if data is None:
+            return {}
+        size = int.from_bytes(data[:8], "little")
+        arrays, offset = [], 8 + size
+        for _ in range(int.from_bytes(data[offset:offset + 8], "little")):
+            n = int.from_bytes(data[offset + 8:offset + 16], "little")
+            arrays.append(data[offset + 16:offset + 16 + n])
+            offset += 8 + n
+        return pickle.loads(data[8:8 + size], buffers=arrays)
+    except (ValueError, EOFError, pickle.UnpicklingError, AttributeError, ImportError, TypeError):
+        return {}
+
+
+def _write_meshes(path: Path, meshes: dict):
+    """Stores the meshes at path in a thread of their own (pathtrace.io.cache_files.write_soon),
+    their arrays written as they are (pickle's buffers out of band): a new scene's first image
+    does not wait for 50 MB of an 850-mesh scene's being copied and written."""
+    arrays = []
+    head = pickle.dumps(meshes, protocol=5, buffer_callback=arrays.append)
+    chunks = [len(head).to_bytes(8, "little"), head, len(arrays).to_bytes(8, "little")]
+    for a in arrays:
+        view = a.raw()
+        chunks += [view.nbytes.to_bytes(8, "little"), view]
+    cache_files.write_soon(path, chunks, "*" + MESHES, MAX_BYTES)
+
+
+def _write_entry(path: Path, files: list, notes: list, scene, meshes: dict):
+    """Stores the scene and, beside it, its OBJ files' meshes (each whole or not at all), and
+    removes the oldest entries beyond MAX_BYTES. A scene that cannot be pickled (one holding
+    objects made in Python by the user) is not kept."""
     try:
         head = pickle.dumps((sorted(set(files)), notes), protocol=pickle.HIGHEST_PROTOCOL)
         body = pickle.dumps(scene, protocol=pickle.HIGHEST_PROTOCOL)
     except (pickle.PicklingError, TypeError, AttributeError):
         return
+    if meshes:
+        _write_meshes(path.with_suffix(MESHES), meshes)
     if cache_files.write_entry(path, head, body):
         cache_files.prune(path.parent, "*.scene", MAX_BYTES)
