@@ -3,6 +3,7 @@ read the first time, with its warnings told again; a changed, gone or damaged fi
 
 import os
 import shutil
+import threading
 
 import numpy as np
 import pytest
@@ -11,7 +12,7 @@ import pathtrace.scene.meshes as meshes
 import pathtrace.scene.read_cache as read_cache
 from pathtrace.errors import UserError
 from pathtrace.io import cache_files
-from pathtrace.scene import load_scene
+from pathtrace.scene import load_scene, mesh_cache
 from tests.conftest import ROOT
 
 SCENE = """<scene version="1.0.0">
@@ -185,3 +186,45 @@ def test_reading_a_scene_imports_no_pyopencl(tmp_path):
         assert len(list(tmp_path.glob("*.scene"))) == cached
         r = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=120)
         assert r.stdout.strip() == "False", (r.stdout, r.stderr)
+
+
+def test_a_file_of_the_entry_gone_still_leaves_the_other_meshes_kept(scene_file):
+    """An edit that removes a mesh and its file: the entry no longer holds, and the remaining
+    OBJ file's mesh still comes from beside it."""
+    path, parsed = scene_file
+    shutil.copy(path.parent / "quad.obj", path.parent / "gone.obj")
+    path.write_text(SCENE.replace("</scene>", '<shape type="obj"><string name="filename" value="gone.obj"/></shape></scene>'))
+    load(path)
+    (path.parent / "gone.obj").unlink()
+    path.write_text(SCENE.replace('value="0.5"', 'value="0.25"'))
+    assert len(load(path).meshes) == 1 and len(parsed) == 2
+
+
+def test_meshes_larger_than_half_the_cache_are_not_kept(scene_file, monkeypatch):
+    """A scene's meshes above half of MAX_BYTES would crowd out every other scene's: not written,
+    and the other scenes' kept meshes stay."""
+    path, parsed = scene_file
+    monkeypatch.setattr(read_cache, "MAX_BYTES", 16 << 10)
+    load(path)
+    small, = (path.parent / "cache").glob("*.meshes")
+    for k in range(200):
+        shutil.copy(path.parent / "quad.obj", path.parent / f"q{k}.obj")
+    shapes = "".join(f'<shape type="obj"><string name="filename" value="q{k}.obj"/></shape>' for k in range(200))
+    (path.parent / "large.xml").write_text(SCENE.replace("</scene>", shapes + "</scene>"))
+    load(path.parent / "large.xml")
+    assert list((path.parent / "cache").glob("*.meshes")) == [small]
+
+
+def test_a_mesh_file_that_cannot_be_looked_at_is_left_to_its_reading(tmp_path):
+    assert mesh_cache.find(tmp_path / "none.obj") == (None, None)
+
+
+def test_a_write_begun_in_a_daemon_thread_is_waited_for_at_exit(tmp_path):
+    """The viewer reads scenes in a daemon thread; the writes it begins are not daemons, which the
+    interpreter would not wait for at its exit."""
+    started = threading.Thread(target=cache_files.write_soon, args=(tmp_path / "e", [b"x"], "*", 1 << 20), daemon=True)
+    started.start()
+    started.join()
+    writes = list(cache_files._writes)
+    cache_files.wait_for_writes()
+    assert writes and not any(w.daemon for w in writes) and (tmp_path / "e").is_file()

@@ -15,8 +15,9 @@ and imports included, and checks that the image was written:
   --repeats: a scene opened again;
 - edited: the same again, before each run the scene file's time of last change moved on by a
   second, so that its entry in the scene cache no longer holds: a scene opened again after an
-  edit of its file (the OBJ files' meshes come from beside the entry: app/scene/mesh_cache.py),
-  the best of --repeats; for the files bench writes alone, not a user's.
+  edit of its file, read again but for its OBJ files' meshes, which come from beside the entry
+  (app/scene/mesh_cache.py; a PLY file is read again), the best of --repeats; for the files
+  bench writes alone, not a user's.
 
 The rows: --scenes (by default pathtrace.bench.default_scenes.FIRST_IMAGE_SCENES): built-in scenes, `meshes850`
 (850 PLY tori in a Mitsuba XML file, pathtrace.bench.scenes.write_meshes) and the files `pathtrace

@@ -118,7 +118,9 @@ def write_soon(path: Path, chunks: list, pattern: str, limit: int):
     so that a first image does not wait for a large entry. The interpreter waits for it at its
     exit; a command that leaves past that (os._exit) calls wait_for_writes first. A write cut
     short leaves a temporary file, not an entry."""
-    thread = threading.Thread(target=_write_and_prune, args=(path, chunks, pattern, limit), name="cache write")
+    # not a daemon, whatever the thread that starts it (the viewer reads scenes in a daemon thread)
+    thread = threading.Thread(target=_write_and_prune, args=(path, chunks, pattern, limit), name="cache write",
+                              daemon=False)
     _writes.append(thread)
     thread.start()
 

@@ -7,7 +7,10 @@ performance-2026-12.md, 2026-12-03, thirty-first session).
 A scene's reading runs within `reading(kept)`: the meshes of its entry, by their files' stamps
 (pathtrace.io.files.stamp: absolute path, size, time of last change), are looked up (`kept`),
 and every OBJ file's mesh read meanwhile, in this process or in those that read for it
-(pathtrace.scene.mesh_processes), is collected for the next entry. A mesh is kept as read_mesh
+(pathtrace.scene.mesh_processes), is collected for the next entry. The readings under way are
+one list for the process's threads (those of MeshFiles read for a scene's reading too): two
+scenes read at once each collect the other's meshes as well, which costs their entries space,
+not a wrong mesh, a mesh being kept by its file's stamp. A mesh is kept as read_mesh
 returns it, checked, where its check reported nothing: a file with warnings (degenerate
 triangles dropped) is parsed on each read, so that they name the field referring to it each
 time. They are kept in one file per scene, beside its entry, not in one per mesh file: creating
@@ -45,19 +48,22 @@ def holds(at: tuple) -> bool:
 
 
 def find(path) -> tuple:
-    """(the stamp of the file at path, taken before its bytes are read; its mesh kept, or None)."""
-    at = stamp(path, os.stat(path))
+    """(the stamp of the file at path, taken before its bytes are read; its mesh kept, or None);
+    (None, None) where the file cannot be looked at now (its reading says why)."""
+    try:
+        at = stamp(path, os.stat(path))
+    except OSError:
+        return None, None
     return at, lookup(at)
 
 
 def lookup(at: tuple):
-    """The mesh kept of the file of stamp `at` (collected again for the next entry), or None."""
+    """The mesh kept of the file of stamp `at` (collected again for the next entries), or None."""
     with _lock:
-        for kept, found in _readings:
-            if at in kept:
-                found[at] = kept[at]
-                return kept[at]
-    return None
+        mesh = next((kept[at] for kept, _ in _readings if at in kept), None)
+    if mesh is not None:
+        collect(at, mesh)
+    return mesh
 
 
 def collect(at: tuple, mesh):

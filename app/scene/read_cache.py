@@ -21,6 +21,8 @@ import pickle
 import time
 from pathlib import Path
 
+import numpy as np
+
 from pathtrace.io import cache_files
 from pathtrace.errors import held_warnings, warn
 from pathtrace.io.files import noting_files, stamp
@@ -89,7 +91,7 @@ def cached_read(name: str, read):
 
 def _read_entry(path: Path):
     """((warnings, scene), {}) of the entry at path; where there is none, it is damaged, or a file
-    it was read from has changed since, (None, the meshes kept beside it)."""
+    it was read from has changed or gone since, (None, the meshes kept beside it)."""
     data = cache_files.read_entry(path)
     try:
         if data is None:
@@ -97,16 +99,24 @@ def _read_entry(path: Path):
         with io.BytesIO(data) as f:
             stamps, notes = pickle.load(f)
             for name, size, changed in stamps:
-                if stamp(name, os.stat(name)) != (name, size, changed):
+                try:
+                    holds = stamp(name, os.stat(name)) == (name, size, changed)
+                except OSError:
+                    holds = False
+                if not holds:
                     return None, _kept_meshes(path)
             scene = pickle.load(f)
-    except (OSError, ValueError, EOFError, pickle.UnpicklingError, AttributeError, ImportError, TypeError):
-        return None, {}        # a file gone, or an entry this pathtrace cannot read: a miss
-    try:
-        os.utime(path)         # recently used: removed last
-    except OSError:
-        pass
+    except (ValueError, EOFError, pickle.UnpicklingError, AttributeError, ImportError, TypeError):
+        return None, {}        # an entry this pathtrace cannot read: a miss
+    for used in (path, path.with_suffix(MESHES)):
+        try:
+            os.utime(used)     # recently used: removed last
+        except OSError:
+            pass
     return (notes, scene), {}
+
+
+ALIGNMENT = 64       # of the meshes' arrays in their file, as NumPy's own allocations are aligned
 
 
 def _kept_meshes(path: Path) -> dict:
@@ -114,30 +124,36 @@ def _kept_meshes(path: Path) -> dict:
     where there are none or they are damaged. A file of their own, so that a scene read from its
     entry reads none of them: its pickle's arrays are views of the file's bytes, read whole."""
     data = cache_files.read_entry(path.with_suffix(MESHES))
+    if data is None:
+        return {}
     try:
-        if data is None:
-            return {}
-        size = int.from_bytes(data[:8], "little")
-        arrays, offset = [], 8 + size
-        for _ in range(int.from_bytes(data[offset:offset + 8], "little")):
-            n = int.from_bytes(data[offset + 8:offset + 16], "little")
-            arrays.append(data[offset + 16:offset + 16 + n])
-            offset += 8 + n
-        return pickle.loads(data[8:8 + size], buffers=arrays)
-    except (ValueError, EOFError, pickle.UnpicklingError, AttributeError, ImportError, TypeError):
+        size, count = int.from_bytes(data[:8], "little"), int.from_bytes(data[8:16], "little")
+        index = np.frombuffer(data, np.uint64, 2 * count, 16 + size).reshape(-1, 2)
+        arrays = [data[int(start):int(start) + int(n)] for start, n in index]
+        return pickle.loads(data[16:16 + size], buffers=arrays)
+    except Exception:        # whatever a file that passed its checksum but not this pathtrace's reading holds
         return {}
 
 
 def _write_meshes(path: Path, meshes: dict):
     """Stores the meshes at path in a thread of their own (pathtrace.io.cache_files.write_soon),
-    their arrays written as they are (pickle's buffers out of band): a new scene's first image
-    does not wait for 50 MB of an 850-mesh scene's being copied and written."""
+    their arrays written as they are (pickle's buffers out of band), each at an ALIGNMENT in the
+    file: a new scene's first image does not wait for 50 MB of an 850-mesh scene's being copied
+    and written. Meshes of more than half of MAX_BYTES are not kept: they would crowd out every
+    other scene's."""
     arrays = []
     head = pickle.dumps(meshes, protocol=5, buffer_callback=arrays.append)
-    chunks = [len(head).to_bytes(8, "little"), head, len(arrays).to_bytes(8, "little")]
-    for a in arrays:
-        view = a.raw()
-        chunks += [view.nbytes.to_bytes(8, "little"), view]
+    views = [a.raw() for a in arrays]
+    if sum(v.nbytes for v in views) > MAX_BYTES // 2:
+        return
+    index = np.zeros((len(views), 2), np.uint64)
+    position = 16 + len(head) + index.nbytes       # in the payload, which follows the checksum
+    chunks = [len(head).to_bytes(8, "little"), len(views).to_bytes(8, "little"), head, index]
+    for k, v in enumerate(views):
+        pad = -(cache_files.CHECKSUM_BYTES + position) % ALIGNMENT
+        index[k] = position + pad, v.nbytes
+        chunks += [bytes(pad), v]
+        position += pad + v.nbytes
     cache_files.write_soon(path, chunks, "*" + MESHES, MAX_BYTES)
 
 
