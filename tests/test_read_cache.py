@@ -228,3 +228,14 @@ def test_a_write_begun_in_a_daemon_thread_is_waited_for_at_exit(tmp_path):
     writes = list(cache_files._writes)
     cache_files.wait_for_writes()
     assert writes and not any(w.daemon for w in writes) and (tmp_path / "e").is_file()
+
+
+def test_a_mesh_found_in_one_reading_is_collected_by_every_reading_under_way():
+    """Two scenes read at once (the viewer's thread and a notebook's, say): a mesh kept by one's
+    entry and looked up by the other's reading is in both entries' meshes next time."""
+    at, mesh = ("/a.obj", 1, 2), object()
+    with mesh_cache.reading({at: mesh}) as first, mesh_cache.reading({}) as second:
+        assert mesh_cache.holds(at) and mesh_cache.lookup(at) is mesh
+        mesh_cache.collect(("/b.obj", 3, 4), mesh)
+    assert set(first) == set(second) == {at, ("/b.obj", 3, 4)}
+    assert not mesh_cache.holds(at)
