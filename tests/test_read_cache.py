@@ -215,10 +215,6 @@ def test_meshes_larger_than_half_the_cache_are_not_kept(scene_file, monkeypatch)
     assert list((path.parent / "cache").glob("*.meshes")) == [small]
 
 
-def test_a_mesh_file_that_cannot_be_looked_at_is_left_to_its_reading(tmp_path):
-    assert mesh_cache.find(tmp_path / "none.obj") == (None, None)
-
-
 def test_a_write_begun_in_a_daemon_thread_is_waited_for_at_exit(tmp_path):
     """The viewer reads scenes in a daemon thread; the writes it begins are not daemons, which the
     interpreter would not wait for at its exit."""

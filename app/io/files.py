@@ -23,10 +23,10 @@ def missing(path, what: str, where: str = None) -> UserError:
     return UserError(f"{where + ': ' if where else ''}{what} '{cut(shown(path), 100)}' does not exist")
 
 
-def check_regular_file(path: Path, where: str, what: str, max_bytes: int):
+def check_regular_file(path: Path, where: str, what: str, max_bytes: int) -> tuple:
     """Refuses, in one line, a path that does not exist, is not a regular file (a folder, a FIFO,
     a device such as /dev/zero: reading one could hang or never end) or is larger than
-    max_bytes."""
+    max_bytes; else returns its stamp, taken before its bytes are read."""
     try:
         info = os.stat(path)
     except ValueError:                  # a NUL byte in the name
@@ -39,7 +39,9 @@ def check_regular_file(path: Path, where: str, what: str, max_bytes: int):
         raise UserError(f"{where}: {what} '{cut(shown(path), 100)}' is not a regular file")
     if info.st_size > max_bytes:
         raise UserError(f"{where}: {what} '{cut(shown(path), 100)}' is larger than {max_bytes >> 20} MB")
-    noted([stamp(path, info)])
+    checked = stamp(path, info)
+    noted([checked])
+    return checked
 
 
 def noted(stamps):

@@ -16,11 +16,8 @@ triangles dropped) is parsed on each read, so that they name the field referring
 time. They are kept in one file per scene, beside its entry, not in one per mesh file: creating
 hundreds of files had cost a new scene's start more than the parses it saves a later one."""
 
-import os
 import threading
 from contextlib import contextmanager
-
-from pathtrace.io.files import stamp
 
 _lock = threading.Lock()
 _readings = []           # the (kept, found) of the readings under way, in any thread
@@ -45,16 +42,6 @@ def holds(at: tuple) -> bool:
     """Whether a reading under way has the mesh kept of the file of stamp `at`."""
     with _lock:
         return any(at in kept for kept, _ in _readings)
-
-
-def find(path) -> tuple:
-    """(the stamp of the file at path, taken before its bytes are read; its mesh kept, or None);
-    (None, None) where the file cannot be looked at now (its reading says why)."""
-    try:
-        at = stamp(path, os.stat(path))
-    except OSError:
-        return None, None
-    return at, lookup(at)
 
 
 def lookup(at: tuple):

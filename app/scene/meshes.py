@@ -59,8 +59,9 @@ def read_mesh(path: Path, where: str, warn=warn, degenerate=None) -> MeshData:
     if suffix not in FORMATS:
         raise UserError(f"{where}: {path}: unknown mesh format '{path.suffix}' "
                         f"(use {', '.join(FORMATS)})")
-    check_regular_file(path, where, "mesh file", MAX_FILE_BYTES)
-    kept_as, kept = mesh_cache.find(path) if suffix == ".obj" else (None, None)
+    checked_at = check_regular_file(path, where, "mesh file", MAX_FILE_BYTES)
+    kept_as = checked_at if suffix == ".obj" else None       # OBJ meshes are kept (mesh_cache)
+    kept = None if kept_as is None else mesh_cache.lookup(kept_as)
     if kept is not None:
         return kept
     try:
