@@ -53,6 +53,7 @@ SCENES = {  # name: (width, height, spp per render, renders)
     "instances": (None, None, 1024, 16),
     "glass-mesh": (None, None, 1024, 16),
     "open-sheet": (None, None, 1024, 16),
+    "serialized": (None, None, 1024, 16),
 }
 XML_SCENES = OUT.parent / "scenes"
 MAX_DEPTH = 8

@@ -29,7 +29,7 @@ def test_references_are_present():
                                             "meshes-smaller", "meshes-larger", "textures", "masks", "normal-maps",
                                             "lights", "thinlens", "beckmann", "roughdielectric", "roughplastic", "metals", "media-sphere", "media-glass",
                                             "media-fog", "anisotropic", "blend", "equal-area", "principled", "instances",
-                                            "glass-mesh", "open-sheet"} | NO_NEE
+                                            "glass-mesh", "open-sheet", "serialized"} | NO_NEE
 
 
 # Scenes lit by delta lights (point, spot, directional), "lights" and "media-fog", are compared

@@ -12,7 +12,8 @@ import numpy as np
 
 from pathtrace.parameters import Parameter
 from pathtrace.scene.loop_subdivision import LEVELS, loop_subdivide
-from pathtrace.scene.meshes import mitsuba_cube, mitsuba_rectangle, vertex_normals
+from pathtrace.scene.meshes import check_mesh, mitsuba_cube, mitsuba_rectangle, vertex_normals
+from pathtrace.scene.serialized import read_serialized
 
 FLIP = Parameter("flip_normals", "bool", False, doc="its front turned round", mitsuba="flip_normals")
 
@@ -22,10 +23,12 @@ class MeshSource:
     """What a mesh shape needs of the reader of its element: read(name) -> (MeshData, path), the
     mesh file `name` relative to the scene file, read ahead (meshes.MeshFiles); check(vertices,
     faces, normals, uvs) -> MeshData, meshes.check_mesh naming the element; warn(text), a warning
-    naming it."""
+    naming it; locate(name) -> (path, where), the file `name` relative to the scene file and what
+    names the element, for a shape that reads its file itself."""
     read: Callable = None
     check: Callable = None
     warn: Callable = None
+    locate: Callable = None
 
 
 class MeshShape:
@@ -60,13 +63,35 @@ class FileMesh(MeshShape):
         name = values.get("file")
         if not name:
             raise ValueError("needs a filename" if name is None else "file: must be a file name, got ''")
-        (vertices, faces, normals, uvs), path = source.read(name)
+        (vertices, faces, normals, uvs), path = self.read(name, values, source)
         if values.get("face_normals"):
             normals = None
         smoothed = normals is None and values.get("smooth", False) and not values.get("face_normals")
         if smoothed:
             normals = vertex_normals(vertices, faces)
         return (vertices, faces, normals, uvs), path, smoothed
+
+    @staticmethod
+    def read(name, values, source) -> tuple:
+        """(MeshData, its file's path) of the file `name`."""
+        return source.read(name)
+
+
+class Serialized(FileMesh):
+    """Mitsuba's serialized mesh: mesh `shape_index` of the file (app/scene/serialized.py), as a
+    mesh file otherwise. No file path is given back: `convert` writes the mesh anew, as no other
+    format reads the file."""
+    name = "serialized"
+    formats = {"mitsuba": "serialized"}
+    parameters = (*FileMesh.parameters[:1],
+                  Parameter("shape_index", "integer", 0, low=0, high=2**32 - 1,
+                            doc="which of the file's meshes (from 0)", mitsuba="shape_index"),
+                  *FileMesh.parameters[1:])
+
+    @staticmethod
+    def read(name, values, source):
+        path, where = source.locate(name)
+        return check_mesh(*read_serialized(path, values.get("shape_index", 0), where), where=f"{where}: {path}"), ""
 
 
 class Rectangle(MeshShape):
@@ -163,4 +188,5 @@ class LoopSubdivision(TriangleMesh):
         return source.check(vertices, faces, normals, None), "", False
 
 
-MESH_SHAPES = {k.name: k() for k in (FileMesh, Rectangle, Cube, TriangleMesh, BilinearMesh, LoopSubdivision)}
+MESH_SHAPES = {k.name: k() for k in (FileMesh, Serialized, Rectangle, Cube, TriangleMesh, BilinearMesh,
+                                     LoopSubdivision)}

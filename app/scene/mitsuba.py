@@ -564,7 +564,8 @@ class _Reader(XmlScene):
             (vertices, faces, normals, uvs), path, smoothed = k.triangles(values, MeshSource(
                 lambda filename: (self.mesh_files.read(node.file.parent / filename, node.where()),
                                   str(node.file.parent / filename)),
-                lambda *mesh: check_mesh(*mesh, node.where())))
+                lambda *mesh: check_mesh(*mesh, node.where()),
+                locate=lambda filename: (node.file.parent / filename, node.where())))
         except ValueError as e:
             refuse(props, node, e, format_names(k.parameters, "mitsuba"))
         flip = values.get("flip_normals", False)

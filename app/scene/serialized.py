@@ -1,0 +1,94 @@
+"""Mitsuba's `.serialized` mesh files, read as Mitsuba 3 reads them (its src/shapes/serialized.cpp,
+whose documentation gives the format): little endian, a header of two uint16s (0x041C and the
+version, 3 or 4), then a zlib stream holding a uint32 of flags, in version 4 the shape's name
+(NUL-terminated), the vertex and triangle counts (uint64 each), the positions, the normals
+(flag 0x0001), the texture coordinates (0x0002) and the vertex colours (0x0008), in float32 or,
+with flag 0x2000, float64, and the triangles as uint32 triples. A file may hold several meshes
+one after the other, each with its header; the file ends with each mesh's offset (uint64, in
+version 3 uint32) and their count (uint32), by which `shape_index` finds its mesh.
+
+As Mitsuba 3 has it: texture coordinates as stored (no v flipped, unlike an OBJ file's `vt`),
+vertex colours skipped, and the face-normals flag (0x0010) not read: only the shape's
+`face_normals` drops the normals. Every problem is one line naming the element and the file."""
+
+import struct
+import zlib
+from pathlib import Path
+
+import numpy as np
+
+from pathtrace.errors import UserError
+from pathtrace.io.files import check_regular_file
+from pathtrace.scene.meshes import MAX_FILE_BYTES, MAX_TRIANGLES, MeshData
+
+MAGIC = 0x041C
+VERSIONS = (3, 4)
+HAS_NORMALS, HAS_UVS, HAS_COLORS, DOUBLE = 0x0001, 0x0002, 0x0008, 0x2000
+MAX_NAME = 4096         # bytes of a shape's name
+
+
+def read_serialized(path: Path, index: int, where: str) -> MeshData:
+    """The mesh `index` of the file at path, in its object's space; `where` names the element."""
+    check_regular_file(path, where, "mesh file", MAX_FILE_BYTES)
+    try:
+        data = Path(path).read_bytes()
+    except OSError as e:
+        raise UserError(f"{where}: {path}: cannot be read ({e.strerror})") from None
+    label = f"{where}: {path}"
+    if len(data) < 4 or struct.unpack_from("<H", data)[0] != MAGIC:
+        raise UserError(f"{label}: not a Mitsuba serialized mesh (it does not begin with 0x041C)")
+    version = struct.unpack_from("<H", data, 2)[0]
+    if version not in VERSIONS:
+        raise UserError(f"{label}: serialized format version {version}; Mitsuba 3 reads versions 3 and 4")
+    start = _mesh_offset(data, version, index, label) if index else 0
+    return _mesh(data, start + 4, version, label)
+
+
+def _mesh_offset(data: bytes, version: int, index: int, label: str) -> int:
+    """Where mesh `index` begins, from the dictionary at the file's end."""
+    width = 8 if version == 4 else 4
+    count = struct.unpack_from("<I", data, len(data) - 4)[0] if len(data) >= 8 else 0
+    if not 0 <= index < count or len(data) < 4 + width * count:
+        raise UserError(f"{label}: shape_index {index} is out of range: the file holds "
+                        f"{count if len(data) >= 4 + width * count else 'no readable count of'} meshes")
+    offset = struct.unpack_from("<Q" if width == 8 else "<I", data, len(data) - 4 - width * (count - index))[0]
+    if offset + 4 > len(data) or struct.unpack_from("<H", data, offset)[0] != MAGIC:
+        raise UserError(f"{label}: the offset of mesh {index} ({offset}) is not the start of a mesh")
+    return offset
+
+
+def _mesh(data: bytes, start: int, version: int, label: str) -> MeshData:
+    stream = zlib.decompressobj()
+    try:
+        head = stream.decompress(memoryview(data)[start:], 4 + MAX_NAME + 1 + 16)
+        flags = struct.unpack_from("<I", head)[0]
+        at = 4
+        if version == 4:
+            end = head.find(b"\0", at)
+            if end < 0:
+                raise UserError(f"{label}: the shape's name is not ended (or longer than {MAX_NAME} bytes)")
+            at = end + 1
+        vertex_count, face_count = struct.unpack_from("<QQ", head, at)
+        at += 16
+        if not 0 < face_count <= MAX_TRIANGLES or not 0 < vertex_count <= 3 * MAX_TRIANGLES:
+            raise UserError(f"{label}: {vertex_count} vertices and {face_count} triangles: pathtrace takes "
+                            f"1 to {MAX_TRIANGLES} triangles")
+        real = np.dtype("<f8" if flags & DOUBLE else "<f4")
+        fields = [("vertices", 3), *((("normals", 3),) if flags & HAS_NORMALS else ()),
+                  *((("uvs", 2),) if flags & HAS_UVS else ()), *((("colors", 3),) if flags & HAS_COLORS else ())]
+        size = sum(vertex_count * width * real.itemsize for _, width in fields) + face_count * 12
+        if size > MAX_FILE_BYTES:
+            raise UserError(f"{label}: the mesh's arrays would take {size >> 20} MB, more than pathtrace "
+                            f"reads ({MAX_FILE_BYTES >> 20} MB)")
+        need = size - (len(head) - at)
+        body = head[at:] + (stream.decompress(stream.unconsumed_tail, need) if need > 0 else b"")
+    except (zlib.error, struct.error) as e:
+        raise UserError(f"{label}: a damaged serialized mesh ({type(e).__name__}: {e})") from None
+    if len(body) < size:
+        raise UserError(f"{label}: the mesh ends early: {len(body)} bytes of the {size} that its counts need")
+    arrays, at = {}, 0
+    for name, width in fields:
+        arrays[name] = np.frombuffer(body, real, vertex_count * width, at).reshape(-1, width).astype(np.float64)
+        at += vertex_count * width * real.itemsize
+    faces = np.frombuffer(body, "<u4", face_count * 3, at).reshape(-1, 3).astype(np.int64)
+    return MeshData(arrays["vertices"], faces, arrays.get("normals"), arrays.get("uvs"))
