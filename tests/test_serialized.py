@@ -8,9 +8,11 @@ import zlib
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from pathtrace.errors import UserError
-from pathtrace.scene.meshes import read_mesh, vertex_normals
+from pathtrace.scene.meshes import check_mesh, read_mesh, vertex_normals
 from pathtrace.scene.mitsuba import read_mitsuba_file
 from pathtrace.scene.serialized import read_serialized
 from tests.serialized_files import SCENES, mesh_stream, serialized_file
@@ -89,3 +91,30 @@ def test_a_missing_file_and_a_negative_index_are_refused(tmp_path):
     (tmp_path / "m.serialized").unlink()
     with pytest.raises(UserError, match=r"s.xml:3: .*m.serialized"):
         read_mitsuba_file(path)
+
+
+VALID = serialized_file([mesh_stream(TORUS.vertices[:40], TORUS.faces[TORUS.faces.max(axis=1) < 40], uvs=TORUS.uvs[:40],
+                                     colors=TORUS.vertices[:40]), GOOD])
+
+
+@settings(max_examples=300, deadline=None)
+@given(damages=st.lists(st.tuples(st.sampled_from(["cut", "flip", "insert"]), st.integers(0, len(VALID) - 1),
+                                  st.integers(1, 255)), min_size=1, max_size=3), index=st.integers(0, 2))
+def test_a_damaged_file_reads_as_a_checked_mesh_or_one_line(tmp_path_factory, damages, index):
+    """Cut short, bytes flipped or inserted: a mesh that check_mesh passes, or a UserError of one
+    line; never another exception (zlib's, struct's, NumPy's) or a hang."""
+    data = bytearray(VALID)
+    for how, at, byte in damages:
+        at = min(at, max(len(data) - 1, 0))
+        if how == "cut":
+            data = data[:at]
+        elif how == "flip" and data:
+            data[at] ^= byte
+        elif how == "insert":
+            data[at:at] = bytes([byte]) * 8
+    path = tmp_path_factory.mktemp("damaged") / "m.serialized"
+    path.write_bytes(bytes(data))
+    try:
+        check_mesh(*read_serialized(path, index, "here"), where="here")
+    except UserError as e:
+        assert str(e).startswith("here") and "\n" not in str(e)
