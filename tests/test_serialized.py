@@ -41,6 +41,15 @@ def test_the_fixtures_read_back_as_written():
     assert torus.normals is None and torus.uvs is None
 
 
+@pytest.mark.parametrize("version", [3, 4])
+def test_shape_index_finds_its_mesh_among_many(tmp_path, version):
+    path = tmp_path / "many.serialized"
+    path.write_bytes(serialized_file([mesh_stream(OCTAHEDRON.vertices + k, OCTAHEDRON.faces, name=f"m{k}",
+                                                  version=version, double=True) for k in range(50)], version))
+    for k in (0, 1, 37, 49):
+        np.testing.assert_array_equal(read_serialized(path, k, "here").vertices, OCTAHEDRON.vertices + k)
+
+
 def test_the_scene_takes_each_shape_index_and_smooths_as_mitsuba():
     scene = read_mitsuba_file(SCENES / "serialized.xml")
     checker, octahedron, faceted = scene.meshes[1:4]

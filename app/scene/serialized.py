@@ -11,6 +11,7 @@ As Mitsuba 3 has it: texture coordinates as stored (no v flipped, unlike an OBJ 
 vertex colours skipped, and the face-normals flag (0x0010) not read: only the shape's
 `face_normals` drops the normals. Every problem is one line naming the element and the file."""
 
+import mmap
 import struct
 import zlib
 from pathlib import Path
@@ -25,51 +26,84 @@ MAGIC = 0x041C
 VERSIONS = (3, 4)
 HAS_NORMALS, HAS_UVS, HAS_COLORS, DOUBLE = 0x0001, 0x0002, 0x0008, 0x2000
 MAX_NAME = 4096         # bytes of a shape's name
+CHUNK = 1 << 20         # compressed bytes fed to zlib at a time
 
 
 def read_serialized(path: Path, index: int, where: str) -> MeshData:
-    """The mesh `index` of the file at path, in its object's space; `where` names the element."""
+    """The mesh `index` of the file at path, in its object's space; `where` names the element.
+    The file is mapped, not read: a scene's shapes often take their meshes from one large file,
+    and each reads only its own mesh's bytes and the dictionary."""
     check_regular_file(path, where, "mesh file", MAX_FILE_BYTES)
-    try:
-        data = Path(path).read_bytes()
-    except OSError as e:
-        raise UserError(f"{where}: {path}: cannot be read ({e.strerror})") from None
     label = f"{where}: {path}"
-    if len(data) < 4 or struct.unpack_from("<H", data)[0] != MAGIC:
+    try:
+        with open(path, "rb") as f:
+            if f.seek(0, 2) < 4:
+                raise UserError(f"{label}: not a Mitsuba serialized mesh (it does not begin with 0x041C)")
+            with mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as data:
+                return _read(data, index, label)
+    except OSError as e:
+        raise UserError(f"{label}: cannot be read ({e.strerror})") from None
+
+
+def _read(view: mmap.mmap, index: int, label: str) -> MeshData:
+    magic, version = struct.unpack_from("<HH", view)
+    if magic != MAGIC:
         raise UserError(f"{label}: not a Mitsuba serialized mesh (it does not begin with 0x041C)")
-    version = struct.unpack_from("<H", data, 2)[0]
     if version not in VERSIONS:
         raise UserError(f"{label}: serialized format version {version}; Mitsuba 3 reads versions 3 and 4")
-    start = _mesh_offset(data, version, index, label) if index else 0
-    return _mesh(data, start + 4, version, label)
+    start = _mesh_offset(view, version, index, label) if index else 0
+    return _mesh(_Inflater(view, start + 4), version, label)
 
 
-def _mesh_offset(data: bytes, version: int, index: int, label: str) -> int:
+def _mesh_offset(view: mmap.mmap, version: int, index: int, label: str) -> int:
     """Where mesh `index` begins, from the dictionary at the file's end."""
-    width = 8 if version == 4 else 4
-    count = struct.unpack_from("<I", data, len(data) - 4)[0] if len(data) >= 8 else 0
-    if not 0 <= index < count or len(data) < 4 + width * count:
+    width, size = (8 if version == 4 else 4), len(view)
+    count = struct.unpack_from("<I", view, size - 4)[0] if size >= 8 else 0
+    if not 0 <= index < count or size < 4 + width * count:
         raise UserError(f"{label}: shape_index {index} is out of range: the file holds "
-                        f"{count if len(data) >= 4 + width * count else 'no readable count of'} meshes")
-    offset = struct.unpack_from("<Q" if width == 8 else "<I", data, len(data) - 4 - width * (count - index))[0]
-    if offset + 4 > len(data) or struct.unpack_from("<H", data, offset)[0] != MAGIC:
+                        f"{count if size >= 4 + width * count else 'no readable count of'} meshes")
+    offset = struct.unpack_from("<Q" if width == 8 else "<I", view, size - 4 - width * (count - index))[0]
+    if offset + 4 > size or struct.unpack_from("<H", view, offset)[0] != MAGIC:
         raise UserError(f"{label}: the offset of mesh {index} ({offset}) is not the start of a mesh")
     return offset
 
 
-def _mesh(data: bytes, start: int, version: int, label: str) -> MeshData:
-    stream = zlib.decompressobj()
+class _Inflater:
+    """The zlib stream that begins at view[start], inflated as far as it is read, its input
+    copied a CHUNK at a time (a slice of a mapping is a copy, and holds no export of it)."""
+
+    def __init__(self, view: mmap.mmap, start: int):
+        self.view, self.at, self.stream, self.pending, self.kept = view, start, zlib.decompressobj(), b"", b""
+
+    def read(self, n: int) -> bytes:
+        """Up to n more bytes of the stream (fewer where it ends)."""
+        parts, got = [self.kept[:n]], min(len(self.kept), n)
+        self.kept = self.kept[n:]
+        while got < n and not self.stream.eof:
+            if not self.pending:
+                if self.at >= len(self.view):
+                    break
+                self.pending, self.at = self.view[self.at:self.at + CHUNK], self.at + CHUNK
+            piece = self.stream.decompress(self.pending, n - got)
+            self.pending = self.stream.unconsumed_tail
+            parts.append(piece)
+            got += len(piece)
+        return b"".join(parts)
+
+    def unread(self, data: bytes):
+        self.kept = data + self.kept
+
+
+def _mesh(stream: _Inflater, version: int, label: str) -> MeshData:
     try:
-        head = stream.decompress(memoryview(data)[start:], 4 + MAX_NAME + 1 + 16)
-        flags = struct.unpack_from("<I", head)[0]
-        at = 4
+        flags = struct.unpack("<I", stream.read(4))[0]
         if version == 4:
-            end = head.find(b"\0", at)
+            head = stream.read(MAX_NAME + 1)
+            end = head.find(b"\0")
             if end < 0:
                 raise UserError(f"{label}: the shape's name is not ended (or longer than {MAX_NAME} bytes)")
-            at = end + 1
-        vertex_count, face_count = struct.unpack_from("<QQ", head, at)
-        at += 16
+            stream.unread(head[end + 1:])
+        vertex_count, face_count = struct.unpack("<QQ", stream.read(16))
         if not 0 < face_count <= MAX_TRIANGLES or not 0 < vertex_count <= 3 * MAX_TRIANGLES:
             raise UserError(f"{label}: {vertex_count} vertices and {face_count} triangles: pathtrace takes "
                             f"1 to {MAX_TRIANGLES} triangles")
@@ -80,8 +114,7 @@ def _mesh(data: bytes, start: int, version: int, label: str) -> MeshData:
         if size > MAX_FILE_BYTES:
             raise UserError(f"{label}: the mesh's arrays would take {size >> 20} MB, more than pathtrace "
                             f"reads ({MAX_FILE_BYTES >> 20} MB)")
-        need = size - (len(head) - at)
-        body = head[at:] + (stream.decompress(stream.unconsumed_tail, need) if need > 0 else b"")
+        body = stream.read(size)
     except (zlib.error, struct.error) as e:
         raise UserError(f"{label}: a damaged serialized mesh ({type(e).__name__}: {e})") from None
     if len(body) < size:
