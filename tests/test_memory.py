@@ -20,7 +20,7 @@ SMALL_DEVICE = SimpleNamespace(name="Tiny GPU ", max_mem_alloc_size=1 << 20, glo
 
 
 def test_a_buffer_larger_than_the_largest_allocation_is_refused():
-    with pytest.raises(UserError, match=r"^big: its BVH need 2 MB in one buffer; Tiny GPU allocates at most 1 MB at once$"):
+    with pytest.raises(UserError, match=r"^big: its buffer 'BVH' needs 2 MB; Tiny GPU allocates at most 1 MB at once$"):
         check_fits(SMALL_DEVICE, {"BVH": 2 << 20, "spheres": 10}, "big")
 
 
@@ -32,7 +32,7 @@ def test_buffers_larger_together_than_global_memory_are_refused():
 
 def test_a_scene_too_large_for_the_device_is_refused_before_its_build():
     # 20000 spheres need at most 13333 4-wide BVH nodes of 128 bytes: 1.6 MB in one buffer
-    with pytest.raises(UserError, match="spheres20k: its BVH need 1.63 MB in one buffer"):
+    with pytest.raises(UserError, match="spheres20k: its buffer 'BVH' needs 1.63 MB;"):
         check_memory("spheres20k", 20000, 0, SMALL_DEVICE)
     check_memory("spheres8k", 8000, 0, SMALL_DEVICE)
 
@@ -46,7 +46,7 @@ def test_a_build_larger_than_the_host_memory_is_refused(monkeypatch):
 def test_an_image_too_large_for_the_device_is_refused(backend):
     r = Renderer(backend, load_scene("simple"), 8, 8)
     side = int((backend.device.device.max_mem_alloc_size // 16) ** 0.5) + 1
-    with pytest.raises(UserError, match=f"the {side}x{side} image of simple: its sum"):
+    with pytest.raises(UserError, match=f"the {side}x{side} image of simple: its buffer 'sum' needs"):
         r.resize(side, side)
     assert (r.width, r.height) == (8, 8)      # the renderer still works at its old size
     r.add_samples(1)

@@ -331,6 +331,19 @@ def test_obj_negative_indices_count_back_from_what_was_read_so_far():
                                         [[0, 0, 0], [1, 0, 0], [0, 1, 1]]]
 
 
+def test_an_obj_face_of_fewer_than_three_corners_is_skipped_with_a_warning_each_read(tmp_path, capsys):
+    """As a file cut short ends: the face is skipped (as trimesh's reader skipped it), and said so
+    on every read (the mesh is not kept for the next, app/scene/mesh_cache.py)."""
+    from pathtrace.scene import mesh_cache
+    path = tmp_path / "cut.obj"
+    path.write_bytes(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2\nf 2 4")
+    with mesh_cache.reading({}) as found:
+        mesh = read_mesh(path, "here")
+    assert mesh.faces.tolist() == [[0, 1, 2]] and found == {}
+    assert capsys.readouterr().err == f"pathtrace: warning: here: {path}: line 6: skipped 2 face(s) of fewer " \
+                                      "than three corners\n"
+
+
 def test_obj_layout_as_editors_write_it():
     """Comments, indentation, continued lines, CRLF, a byte order mark, other statements, colours
     after a v, w after a vt and a vt of u alone (v = 0) are read as the format has them."""

@@ -12,7 +12,7 @@ import pathtrace.scene.meshes as meshes
 import pathtrace.scene.read_cache as read_cache
 from pathtrace.errors import UserError
 from pathtrace.io import cache_files
-from pathtrace.scene import load_scene, mesh_cache
+from pathtrace.scene import load_scene, mesh_cache, obj
 from tests.conftest import ROOT
 
 SCENE = """<scene version="1.0.0">
@@ -36,8 +36,8 @@ def scene_file(tmp_path, monkeypatch):
     monkeypatch.setenv("PATHTRACE_SCENE_CACHE", str(tmp_path / "cache"))
     monkeypatch.setattr(read_cache, "MIN_SECONDS", 0.0)
     parsed = []
-    read_obj = meshes._read_obj
-    monkeypatch.setattr(meshes, "_read_obj", lambda *args: (parsed.append(args), read_obj(*args))[1])
+    parse = obj.parse_obj
+    monkeypatch.setattr(obj, "parse_obj", lambda *args: (parsed.append(args), parse(*args))[1])
     return tmp_path / "s.xml", parsed
 
 

@@ -373,7 +373,7 @@ def check_fits(device: cl.Device, buffers: dict, what: str):
     name = device.name.strip()
     largest = max(buffers, key=buffers.get)
     if buffers[largest] > device.max_mem_alloc_size:
-        raise UserError(f"{what}: its {largest} need {format_bytes(buffers[largest])} in one buffer; "
+        raise UserError(f"{what}: its buffer '{largest}' needs {format_bytes(buffers[largest])}; "
                         f"{name} allocates at most {format_bytes(device.max_mem_alloc_size)} at once")
     total = sum(buffers.values())
     if total > device.global_mem_size:

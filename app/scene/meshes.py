@@ -61,7 +61,7 @@ def read_mesh(path: Path, where: str, warn=warn, degenerate=None) -> MeshData:
                         f"(use {', '.join(FORMATS)})")
     checked_at = check_regular_file(path, where, "mesh file", MAX_FILE_BYTES)
     kept_as = checked_at if suffix == ".obj" else None       # OBJ meshes are kept (mesh_cache)
-    kept = None if kept_as is None else mesh_cache.lookup(kept_as)
+    kept, notes = None if kept_as is None else mesh_cache.lookup(kept_as), []
     if kept is not None:
         return kept
     try:
@@ -75,7 +75,8 @@ def read_mesh(path: Path, where: str, warn=warn, degenerate=None) -> MeshData:
             except UserError as e:          # the PLY reader's lines name the file: here, the field too
                 raise UserError(f"{where}: {e}") from None
         elif suffix == ".obj":
-            mesh = _read_obj(path, f"{where}: {path}")
+            from pathtrace.scene.obj import parse_obj
+            mesh = MeshData(*parse_obj(path.read_bytes(), f"{where}: {path}", notes.append))
         else:
             if suffix == ".gltf":
                 _check_gltf_buffers(path, f"{where}: {path}")
@@ -85,8 +86,10 @@ def read_mesh(path: Path, where: str, warn=warn, degenerate=None) -> MeshData:
     except Exception as e:     # the parsers raise anything on a malformed file
         raise UserError(f"{where}: {path}: not a readable {suffix[1:].upper()} mesh "
                         f"({type(e).__name__}: {str(e).splitlines()[0] if str(e) else 'malformed'})") from None
+    for note in notes:
+        warn(note)
     checked = check_mesh(*mesh, where=f"{where}: {path}", warn=warn, degenerate=degenerate)
-    if kept_as is not None and len(checked.faces) == len(mesh.faces):     # no triangle dropped: no warning
+    if kept_as is not None and len(checked.faces) == len(mesh.faces) and not notes:     # no warning
         mesh_cache.collect(kept_as, checked)
     return checked
 
@@ -501,11 +504,6 @@ def triangulate(polygons) -> np.ndarray:
         for k in range(1, n - 1):
             out.append(group[:, [0, k, k + 1]])
     return np.concatenate(out) if out else np.zeros((0, 3), np.int64)
-
-
-def _read_obj(path, where):
-    from pathtrace.scene.obj import parse_obj
-    return MeshData(*parse_obj(Path(path).read_bytes(), where))
 
 
 def _trimesh_uvs(visual):

@@ -6,8 +6,8 @@ v/vt/vn (an empty field, as in `1/` or `1/2/`, is taken as absent). Indices coun
 negative, back from the last element of their kind read so far (the format's rule); an index
 beyond what the file has read so far is refused. A polygon becomes a fan of triangles about its
 first corner (as trimesh's reader made it, so that a quad keeps its diagonal), and a face of
-fewer than three corners is skipped. Comments (`#`), indented lines, `\\` continuing a line and
-a UTF-8 byte order mark are taken as the format and editors have them; other statements (o,
+fewer than three corners is skipped, with a warning (a file cut short ends in one). Comments
+(`#`), indented lines, `\\` continuing a line and a UTF-8 byte order mark are taken as the format and editors have them; other statements (o,
 g, s, usemtl, mtllib, l, p, vp, ...) are ignored: the scene's material shades the mesh.
 
 A vertex is each distinct (v, vt, vn) triple that faces use, as trimesh and Mitsuba 3 split
@@ -43,9 +43,11 @@ def _digit(b):
     return (b - 48) < 10
 
 
-def parse_obj(data: bytes, where: str):
+def parse_obj(data: bytes, where: str, warn=None):
     """(vertices, faces, normals, uvs) of an OBJ file's bytes, normals and uvs None where the
-    file has none for some corner; `where` names the file in messages."""
+    file has none for some corner; `where` names the file in messages, and `warn` takes the line
+    that says how many faces of fewer than three corners were skipped (a file cut short ends in
+    one)."""
     lines = _Lines(data)
     problems = []
     tables = {}
@@ -59,6 +61,9 @@ def parse_obj(data: bytes, where: str):
     if problems:
         line, message = min(problems, key=lambda p: p[0])
         raise UserError(f"{where}: line {lines.number(line)}: {message}")
+    if len(faces.short) and warn is not None:
+        warn(f"{where}: line {lines.number(faces.short[0])}: skipped {len(faces.short)} face(s) of fewer than "
+             "three corners")
     return faces.mesh(tables["v"], tables["vt"], tables["vn"])
 
 
@@ -229,7 +234,7 @@ class _Faces:
     triangles of corners; or the first problem, (row of the file, message)."""
 
     def __init__(self, lines: _Lines):
-        self.problem = None
+        self.problem, self.short = None, ()
         text, ends = lines.contents("f")
         rows = lines.rows["f"]
         corners, stops = _tokens(text)
@@ -289,6 +294,7 @@ class _Faces:
                 message = f"face corner {what} the file does not have ({count} so far; OBJ counts from 1)"
             self.problem = (rows[np.searchsorted(ends, corners[k])], message)
             return
+        self.short = rows[count < 3]             # the lines of the faces skipped
         # each face a fan of triangles about its first corner
         if np.all(count == 3):
             self.triangles = None                # the corners, three by three
