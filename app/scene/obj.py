@@ -7,8 +7,9 @@ negative, back from the last element of their kind read so far (the format's rul
 beyond what the file has read so far is refused. A polygon becomes a fan of triangles about its
 first corner (as trimesh's reader made it, so that a quad keeps its diagonal), and a face of
 fewer than three corners is skipped, with a warning (a file cut short ends in one). Comments
-(`#`), indented lines, `\\` continuing a line and a UTF-8 byte order mark are taken as the format and editors have them; other statements (o,
-g, s, usemtl, mtllib, l, p, vp, ...) are ignored: the scene's material shades the mesh.
+(`#`), indented lines, `\\` continuing a line and a UTF-8 byte order mark are taken as the
+format and editors have them; other statements (o, g, s, usemtl, mtllib, l, p, vp, ...) are
+ignored: the scene's material shades the mesh.
 
 A vertex is each distinct (v, vt, vn) triple that faces use, as trimesh and Mitsuba 3 split
 them: the kernels take one normal and uv per vertex. Vertices no face uses are left out, and
