@@ -108,12 +108,29 @@ def test_argparses_own_messages_echo_values_short(tmp_path, args):
     assert not list(tmp_path.iterdir())
 
 
+def test_render_writes_the_depth_the_api_gives_to_hdr_outputs_only(tmp_path):
+    """--aov depth: the API's depth (the distance to the first surface) in each channel of an
+    HDR file beside the output; a PNG output is refused before rendering, nothing written."""
+    from pathtrace import api
+    from pathtrace.io.images import read_hdr
+    common = ("--size", "24x16", "--spp", "2", "-q")
+    r = in_process("render", "cornell-box", "-o", tmp_path / "c.exr", "--aov", "depth", *common)
+    assert r.returncode == 0, r.stderr
+    depth = read_hdr(tmp_path / "c.depth.exr", "test")
+    expected = api.render(api.load("cornell-box"), spp=2, size=(24, 16), aovs=("depth",))["depth"]
+    np.testing.assert_allclose(depth, np.repeat(expected[..., None], 3, -1), rtol=1e-6)
+    assert (depth > 0).mean() > 0.5               # the box, where camera rays meet it
+    r = in_process("render", "cornell-box", "-o", tmp_path / "c.png", "--aov", "depth", *common)
+    assert r.returncode == 1 and "--aov depth" in r.stderr.strip().splitlines()[-1]
+    assert not (tmp_path / "c.png").exists() and not (tmp_path / "c.depth.png").exists()
+
+
 def test_an_aov_named_twice_is_written_once():
     from pathtrace.cli.render import _aovs
     assert _aovs("normal, albedo,normal") == ("normal", "albedo")
 
 
-@pytest.mark.parametrize("value", ["depth", "albedo,foo", ","])
+@pytest.mark.parametrize("value", ["dpth", "albedo,foo", ","])
 def test_render_refuses_an_unknown_aov(tmp_path, value):
     r = in_process("render", "simple", "-o", tmp_path / "o.png", "--aov", value)
     assert r.returncode == 2 and "--aov" in r.stderr and "Traceback" not in r.stderr

@@ -17,8 +17,12 @@ def cmd_render(args):
     from pathtrace.io.files import shown
     from pathtrace.io.images import check_writable, write_images
 
+    from pathtrace.io.images import HDR_FORMATS
     written = {}
     for path in args.output:
+        if "depth" in (args.aov or ()) and Path(path).suffix.lower() not in HDR_FORMATS:
+            raise UserError(f"--aov depth: {short(str(path))}: a depth is a distance, not a colour; give an "
+                            f"output of {', '.join(HDR_FORMATS)}")
         for target in [path, *(aov_path(path, name) for name in args.aov or ())]:
             check_writable(target)
             key = os.path.realpath(target)
@@ -83,7 +87,8 @@ def cmd_render(args):
     try:
         result = api.render(scene, device=opening, progress=progress,
                             build_progress=build_progress, phases=prepared,
-                            aovs=("albedo", "normal") if args.denoise or args.aov else ())
+                            aovs=tuple(dict.fromkeys((*(("albedo", "normal") if args.denoise else ()),
+                                                      *(args.aov or ())))))
     except (UserError, KeyboardInterrupt) as e:
         if isinstance(e, UserError) and not interrupted():   # the scene does not fit, or its kernels fail
             if opening.opened():
@@ -119,14 +124,14 @@ def cmd_render(args):
     return 0
 
 
-AOVS = ("albedo", "normal")
+AOVS = ("albedo", "normal", "depth")
 
 
 def _aovs(text: str) -> tuple:
     names = tuple(dict.fromkeys(n.strip() for n in text.split(",") if n.strip()))   # each once
     unknown = [n for n in names if n not in AOVS]
     if unknown or not names:
-        raise argparse.ArgumentTypeError(f"{short(text)}: give albedo, normal or albedo,normal")
+        raise argparse.ArgumentTypeError(f"{short(text)}: give albedo, normal, depth or a list (albedo,normal)")
     return names
 
 
@@ -139,22 +144,25 @@ def aov_path(path: str, name: str) -> Path:
 def render_outputs(result, args, denoiser=None) -> list:
     """What `render` writes from api.render's result: the image (denoised by `denoiser` with
     --denoise; an EXR then keeps the noisy one as its layer "noisy") to every --output, and with
-    --aov the albedo and normal beside each (normals stored as n / 2 + 1/2 in PNG and JPEG, the
-    usual encoding)."""
+    --aov the albedo, normal and depth beside each (normals stored as n / 2 + 1/2 in PNG and
+    JPEG, the usual encoding; the depth, the distance from the camera to the first surface and 0
+    where the camera ray escaped, in each channel of an HDR file)."""
+    import numpy as np
+
     from pathtrace.io.images import HDR_FORMATS, Output
     noisy = result["image"] if isinstance(result, dict) else result
     image, layers = noisy, {}
-    if isinstance(result, dict):
-        albedo, normal = result["albedo"], result["normal"]
+    aovs = result if isinstance(result, dict) else {}
     if denoiser is not None:
-        image, layers = denoiser(noisy, albedo, normal), {"noisy": noisy}
+        image, layers = denoiser(noisy, aovs["albedo"], aovs["normal"]), {"noisy": noisy}
     outputs = []
     for path in args.output:
         suffix = Path(path).suffix.lower()
         hdr = suffix in HDR_FORMATS
         outputs.append(Output(Path(path), image, layers if suffix == ".exr" else {}))
         for name in args.aov or ():
-            aov = albedo if name == "albedo" else (normal if hdr else normal * 0.5 + 0.5)
+            aov = aovs[name] if name != "depth" else np.repeat(aovs[name][..., None], 3, -1)
+            aov = aov * 0.5 + 0.5 if name == "normal" and not hdr else aov
             outputs.append(Output(aov_path(path, name), aov, raw=True))
     return outputs
 
@@ -170,9 +178,9 @@ def add_parser(sub):
     p.add_argument("--denoise", action="store_true",
                    help="denoise with Intel Open Image Denoise, guided by the albedo and normal "
                         "(an .exr output keeps the noisy image as its layer 'noisy')")
-    p.add_argument("--aov", type=_aovs, metavar="albedo,normal",
-                   help="also write the denoiser's albedo and/or normal beside each output "
-                        "(out.png -> out.albedo.png, out.normal.png)")
+    p.add_argument("--aov", type=_aovs, metavar="albedo,normal,depth",
+                   help="also write the denoiser's albedo and normal, or the depth (HDR outputs only), beside "
+                        "each output (out.png -> out.albedo.png, out.normal.png; out.exr -> out.depth.exr)")
     add_output_options(p)
     add_render_options(p)
     p.set_defaults(func=cmd_render)
