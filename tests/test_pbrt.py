@@ -163,6 +163,24 @@ def test_named_spectra_blackbodies_and_sampled_spectra(tmp_path):
     assert np.allclose(reflectance_rgb(constant), 0.4)
 
 
+def test_a_reflectance_texture_beyond_1_is_clamped_where_it_is_evaluated(tmp_path):
+    """pbrt-v4 clamps a diffuse reflectance (and a coated one's, and diffuse transmission's
+    scaled colours) into [0, 1] as it evaluates it: a texture that may leave [0, 1] is wrapped in
+    a clamp texture, one that stays within is not (a scene of such textures compiles no clamp)."""
+    import shutil
+    shutil.copy(Path(__file__).parent / "scenes" / "textures" / "tiles.png", tmp_path / "tiles.png")
+    body = ('Texture "t" "spectrum" "imagemap" "string filename" "tiles.png" "float scale" {scale}\n'
+            'Material "{material}" "texture {name}" "t" {more}\nShape "sphere"\n')
+    for material, name, scale, clamped, more in (
+            ("diffuse", "reflectance", 2, True, ""), ("diffuse", "reflectance", 1, False, ""),
+            ("coateddiffuse", "reflectance", 3, True, ""),
+            ("diffusetransmission", "transmittance", 1.5, True, '"rgb reflectance" [0 0 0]')):
+        m = scene(tmp_path, body.format(scale=scale, material=material, name=name, more=more)).materials.get(0)
+        value = next(v for v in m.params.values() if hasattr(v, "kind"))
+        assert (value.type == "clamp") == clamped, (material, scale)
+        assert value.maximum().max() <= 1 and value.minimum().min() >= 0
+
+
 def test_a_shapes_alpha_number_beyond_0_and_1_is_taken_as_pbrt_v4_takes_it(tmp_path):
     """pbrt-v4 takes any alpha number: its stochastic test keeps every hit where the alpha is at
     least 1 and none where it is at most 0 (GeometricPrimitive::Intersect), as an opacity

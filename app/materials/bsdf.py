@@ -9,7 +9,7 @@ import numpy as np
 
 from pathtrace.parameters import Parameter
 from pathtrace.device.slots import read_slot, write_slot
-from pathtrace.textures.texture import LUMINANCE, Texture
+from pathtrace.textures.texture import KINDS, LUMINANCE, Texture
 
 # MATERIAL.flags bits, as kernels/types.h defines them
 TWOSIDED = 1        # the same BSDF on both sides
@@ -50,9 +50,14 @@ def pbrt_clamped(value, given=None):
     """A reflectance of pbrt-v4's, which its diffuse, coated and diffuse-transmission materials
     clamp into [0, 1] where they evaluate it (src/pbrt/materials.h: DiffuseMaterial::GetBxDF's
     Clamp(texEval(reflectance, ...), 0, 1), as CoatedDiffuse's reflectance and albedo): a
-    constant clamped here, so that a file pbrt-v4 renders renders; a texture as it is, whose
-    values must lie in [0, 1] (pathtrace evaluates it unclamped)."""
-    return value if isinstance(value, Texture) else np.clip(np.asarray(value, np.float64), 0.0, 1.0)
+    constant clamped here, so that a file pbrt-v4 renders renders; a texture whose values may
+    leave [0, 1] (an image texture's `scale` of 2) wrapped in a clamp texture
+    (app/textures/clamp.py), one that stays within as it is."""
+    if not isinstance(value, Texture):
+        return np.clip(np.asarray(value, np.float64), 0.0, 1.0)
+    if np.min(value.minimum()) >= 0.0 and np.max(value.maximum()) <= 1.0:
+        return value
+    return Texture("clamp", KINDS["clamp"].complete({"tex": value}))
 
 
 def constant_of(value, kind: str, summary=Texture.mean):

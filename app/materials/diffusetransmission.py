@@ -15,9 +15,9 @@ def _pbrt_scaled(value, given):
     if not isinstance(value, Texture):
         return pbrt_clamped(np.asarray(value, np.float64) * scale)
     if scale == 1.0:
-        return value
+        return pbrt_clamped(value)
     from pathtrace.textures.registry import TEXTURES
-    return Texture("scale", TEXTURES["scale"].complete({"tex": value, "scale": scale}))
+    return pbrt_clamped(Texture("scale", TEXTURES["scale"].complete({"tex": value, "scale": scale})))
 
 
 class DiffuseTransmission(BSDFType):

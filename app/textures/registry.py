@@ -9,12 +9,13 @@ mean and bounds) by its registration alone."""
 
 from pathtrace.textures.bitmap import Bitmap
 from pathtrace.textures.checkerboard import Checkerboard
+from pathtrace.textures.clamp import Clamp
 from pathtrace.textures.constant import Constant
 from pathtrace.textures.mix import Mix
 from pathtrace.textures.scale import Scale
 from pathtrace.textures.texture import KINDS
 
-TEXTURES = {cls.name: cls() for cls in (Constant, Bitmap, Checkerboard, Scale, Mix)}
+TEXTURES = {cls.name: cls() for cls in (Constant, Bitmap, Checkerboard, Scale, Mix, Clamp)}
 TAGS = {name: i for i, name in enumerate(TEXTURES)}
 KINDS.update(TEXTURES)         # what Texture.kind looks up
 # the registers of a texture program (kernels/texture.cl): enough for any chain, and for a tree of
