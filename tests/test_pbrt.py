@@ -179,6 +179,13 @@ def test_a_reflectance_texture_beyond_1_is_clamped_where_it_is_evaluated(tmp_pat
         value = next(v for v in m.params.values() if hasattr(v, "kind"))
         assert (value.type == "clamp") == clamped, (material, scale)
         assert value.maximum().max() <= 1 and value.minimum().min() >= 0
+    # an image inside a mix is clamped itself, as pbrt-v4's image texture clamps an albedo's rgb:
+    # 0.5 min(2 t, 1), not min(t, 1); the mix, within [0, 1], is not clamped again
+    m = scene(tmp_path, 'Texture "t" "spectrum" "imagemap" "string filename" "tiles.png" "float scale" 2\n'
+                        'Texture "m" "spectrum" "mix" "texture tex1" "t" "rgb tex2" [0 0 0] "float amount" 0.5\n'
+                        'Material "diffuse" "texture reflectance" "m"\nShape "sphere"\n').materials.get(0)
+    mix = m.params["rho_d"]
+    assert mix.type == "mix" and mix.params["tex1"].type == "clamp" and mix.params["tex1"].params["tex"].type == "scale"
 
 
 def test_a_shapes_alpha_number_beyond_0_and_1_is_taken_as_pbrt_v4_takes_it(tmp_path):

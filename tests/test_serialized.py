@@ -82,8 +82,14 @@ GOOD = mesh_stream(OCTAHEDRON.vertices, OCTAHEDRON.faces)
     (GOOD[:4] + zlib.compress(struct.pack("<I", 0x1000) + b"m\0" + struct.pack("<QQ", 6, 8) + b"\0" * 24), 0,
      "the mesh ends early: 24 bytes of the 168"),
     (GOOD[:4] + zlib.compress(struct.pack("<I", 0x1000) + b"m\0" + struct.pack("<QQ", 6, 0)), 0,
-     "6 vertices and 0 triangles"),
+     "a mesh of 0 triangles"),
     (GOOD[:4] + zlib.compress(struct.pack("<I", 0x1000) + b"m" * 5000), 0, "name is not ended"),
+    (GOOD[:4] + zlib.compress(struct.pack("<I", 0x1000) + b"m\0" + struct.pack("<Q", 6)), 0, "ends within its header"),
+    (GOOD[:4] + zlib.compress(struct.pack("<I", 0x1000) + b"m\0" + struct.pack("<QQ", 2**40, 8)), 0,
+     "a mesh of 1099511627776 vertices"),
+    (GOOD[:4] + zlib.compress(struct.pack("<I", 0x2003) + b"m\0" + struct.pack("<QQ", 10**8, 6 * 10**7)), 0,
+     "would take .* MB, more than pathtrace reads"),
+    (GOOD + struct.pack("<QI", 0, 99), 1, "dictionary of meshes .* is damaged: a count of 99"),
     (mesh_stream(OCTAHEDRON.vertices, OCTAHEDRON.faces + 10), 0, "face 0 refers to vertex"),
 ])
 def test_a_damaged_file_is_one_line_naming_the_element_and_the_file(tmp_path, data, index, message):

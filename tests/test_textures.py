@@ -172,9 +172,9 @@ def test_checkerboard_scale_and_mix(kernels):
 
 def test_clamp_clamps_after_the_filtering_as_pbrt_v4s_materials(kernels):
     """clamp(bilinear(2 x texels)), not the bilinear blend of clamped texels: between a texel of
-    0.3 and one of 0.9 (0.6 and 1.8 scaled) the value reaches 1 at three quarters of the way to the
-    first, where the blend of clamped texels would be 0.93. pbrt-v4 clamps the value it looks up
-    (DiffuseMaterial::GetBxDF)."""
+    0.3 and one of 0.9 (0.6 and 1.8 scaled) the value reaches 1 a third of the way from the first,
+    where the blend of clamped texels would be 0.73. pbrt-v4 clamps the value it looks up
+    (DiffuseMaterial::GetBxDF; SpectrumImageTexture::Evaluate)."""
     rng = np.random.default_rng(5)
     uv = rng.uniform(-2, 2, (400, 2))
     image = Image(rng.integers(0, 256, (4, 4, 3)).astype(np.uint8))
@@ -183,6 +183,9 @@ def test_clamp_clamps_after_the_filtering_as_pbrt_v4s_materials(kernels):
     clamped = lookup(kernels, texture("clamp", tex=scaled), uv)
     np.testing.assert_allclose(clamped, np.clip(plain, 0, 1), rtol=1e-5, atol=1e-6)
     assert np.any((plain > 1).any(1) & (plain < 1).any(1))      # points where channels straddle
+    for bounds in ({"low": 0.5, "high": 0.2}, {"high": texture("checkerboard")}):
+        with pytest.raises(ValueError, match="low must not exceed high|not textures"):
+            texture("clamp", tex=scaled, **bounds)
 
 
 def checker(st):

@@ -9,7 +9,7 @@ import numpy as np
 
 from pathtrace.parameters import Parameter
 from pathtrace.device.slots import read_slot, write_slot
-from pathtrace.textures.texture import KINDS, LUMINANCE, Texture
+from pathtrace.textures.texture import KINDS, LUMINANCE, Texture, deep
 
 # MATERIAL.flags bits, as kernels/types.h defines them
 TWOSIDED = 1        # the same BSDF on both sides
@@ -49,15 +49,38 @@ class Param(Parameter):
 def pbrt_clamped(value, given=None):
     """A reflectance of pbrt-v4's, which its diffuse, coated and diffuse-transmission materials
     clamp into [0, 1] where they evaluate it (src/pbrt/materials.h: DiffuseMaterial::GetBxDF's
-    Clamp(texEval(reflectance, ...), 0, 1), as CoatedDiffuse's reflectance and albedo): a
-    constant clamped here, so that a file pbrt-v4 renders renders; a texture whose values may
-    leave [0, 1] (an image texture's `scale` of 2) wrapped in a clamp texture
-    (app/textures/clamp.py), one that stays within as it is."""
+    Clamp(texEval(reflectance, ...), 0, 1), as CoatedDiffuse's reflectance and albedo), as its
+    image textures clamp an albedo's rgb after their scale (src/pbrt/textures.cpp,
+    SpectrumImageTexture::Evaluate: RGBAlbedoSpectrum(Clamp(rgb, 0, 1))): a constant clamped
+    here, so that a file pbrt-v4 renders renders; in a texture, each image (a bitmap, or the
+    scale of one that Bitmap.from_pbrt makes) whose values may leave [0, 1] wrapped in a clamp
+    texture (app/textures/clamp.py), and the whole where it still may (a scale of such images).
+    A texture that stays within is as it is, and a scene of such textures compiles no clamp."""
     if not isinstance(value, Texture):
         return np.clip(np.asarray(value, np.float64), 0.0, 1.0)
-    if np.min(value.minimum()) >= 0.0 and np.max(value.maximum()) <= 1.0:
-        return value
-    return Texture("clamp", KINDS["clamp"].complete({"tex": value}))
+    value = deep(lambda: _images_clamped(value))
+    return value if _within_0_1(value) else _clamped(value)
+
+
+def _within_0_1(texture: Texture) -> bool:
+    return np.min(texture.minimum()) >= 0.0 and np.max(texture.maximum()) <= 1.0
+
+
+def _clamped(texture: Texture) -> Texture:
+    return Texture("clamp", KINDS["clamp"].complete({"tex": texture}))
+
+
+def _images_clamped(texture: Texture) -> Texture:
+    """The texture, its images that may leave [0, 1] clamped (a copy where any is: the file's
+    named texture may stand elsewhere unclamped, as an emission)."""
+    p = texture.params
+    if texture.type == "bitmap" or texture.type == "scale" and isinstance(p["tex"], Texture) \
+            and p["tex"].type == "bitmap" and not isinstance(p["scale"], Texture):
+        return texture if _within_0_1(texture) else _clamped(texture)
+    inputs = {k: _images_clamped(v) for k, v in p.items() if isinstance(v, Texture)}
+    if all(v is p[k] for k, v in inputs.items()):
+        return texture
+    return Texture(texture.type, {**p, **inputs}, texture.name)
 
 
 def constant_of(value, kind: str, summary=Texture.mean):

@@ -59,9 +59,11 @@ def _mesh_offset(view: mmap.mmap, version: int, index: int, label: str) -> int:
     """Where mesh `index` begins, from the dictionary at the file's end."""
     width, size = (8 if version == 4 else 4), len(view)
     count = struct.unpack_from("<I", view, size - 4)[0] if size >= 8 else 0
-    if not 0 <= index < count or size < 4 + width * count:
-        raise UserError(f"{label}: shape_index {index} is out of range: the file holds "
-                        f"{count if size >= 4 + width * count else 'no readable count of'} meshes")
+    if size < 8 + width * count:
+        raise UserError(f"{label}: its dictionary of meshes (at the file's end) is damaged: a count of {count} "
+                        f"meshes in {size} bytes")
+    if not 0 <= index < count:
+        raise UserError(f"{label}: shape_index {index} is out of range: the file holds {count} meshes")
     offset = struct.unpack_from("<Q" if width == 8 else "<I", view, size - 4 - width * (count - index))[0]
     if offset + 4 > size or struct.unpack_from("<H", view, offset)[0] != MAGIC:
         raise UserError(f"{label}: the offset of mesh {index} ({offset}) is not the start of a mesh")
@@ -96,32 +98,40 @@ class _Inflater:
 
 def _mesh(stream: _Inflater, version: int, label: str) -> MeshData:
     try:
-        flags = struct.unpack("<I", stream.read(4))[0]
+        head = stream.read(4 + (MAX_NAME + 1 if version == 4 else 0) + 16)
+        at = 4
         if version == 4:
-            head = stream.read(MAX_NAME + 1)
-            end = head.find(b"\0")
+            end = head.find(b"\0", at)
             if end < 0:
                 raise UserError(f"{label}: the shape's name is not ended (or longer than {MAX_NAME} bytes)")
-            stream.unread(head[end + 1:])
-        vertex_count, face_count = struct.unpack("<QQ", stream.read(16))
-        if not 0 < face_count <= MAX_TRIANGLES or not 0 < vertex_count <= 3 * MAX_TRIANGLES:
-            raise UserError(f"{label}: {vertex_count} vertices and {face_count} triangles: pathtrace takes "
-                            f"1 to {MAX_TRIANGLES} triangles")
+            at = end + 1
+        if len(head) < at + 16:
+            raise UserError(f"{label}: the mesh ends within its header")
+        stream.unread(head[at + 16:])
+        flags, (vertex_count, face_count) = struct.unpack_from("<I", head)[0], struct.unpack_from("<QQ", head, at)
+        if not 0 < vertex_count <= 3 * MAX_TRIANGLES:
+            raise UserError(f"{label}: a mesh of {vertex_count} vertices: pathtrace takes 1 to {3 * MAX_TRIANGLES}")
+        if not 0 < face_count <= MAX_TRIANGLES:
+            raise UserError(f"{label}: a mesh of {face_count} triangles: pathtrace takes 1 to {MAX_TRIANGLES}")
         real = np.dtype("<f8" if flags & DOUBLE else "<f4")
         fields = [("vertices", 3), *((("normals", 3),) if flags & HAS_NORMALS else ()),
                   *((("uvs", 2),) if flags & HAS_UVS else ()), *((("colors", 3),) if flags & HAS_COLORS else ())]
         size = sum(vertex_count * width * real.itemsize for _, width in fields) + face_count * 12
-        if size > MAX_FILE_BYTES:
-            raise UserError(f"{label}: the mesh's arrays would take {size >> 20} MB, more than pathtrace "
+        # the arrays as read and as converted to float64 and int64 (a few MB of zlib's stream can
+        # claim gigabytes): bounded together
+        held = size + sum(vertex_count * width * 8 for name, width in fields if name != "colors") + face_count * 24
+        if held > MAX_FILE_BYTES:
+            raise UserError(f"{label}: the mesh's arrays would take {held >> 20} MB, more than pathtrace "
                             f"reads ({MAX_FILE_BYTES >> 20} MB)")
         body = stream.read(size)
-    except (zlib.error, struct.error) as e:
-        raise UserError(f"{label}: a damaged serialized mesh ({type(e).__name__}: {e})") from None
+    except zlib.error as e:
+        raise UserError(f"{label}: a damaged serialized mesh (zlib: {e})") from None
     if len(body) < size:
         raise UserError(f"{label}: the mesh ends early: {len(body)} bytes of the {size} that its counts need")
     arrays, at = {}, 0
     for name, width in fields:
-        arrays[name] = np.frombuffer(body, real, vertex_count * width, at).reshape(-1, width).astype(np.float64)
+        if name != "colors":            # skipped, as Mitsuba 3 skips them
+            arrays[name] = np.frombuffer(body, real, vertex_count * width, at).reshape(-1, width).astype(np.float64)
         at += vertex_count * width * real.itemsize
     faces = np.frombuffer(body, "<u4", face_count * 3, at).reshape(-1, 3).astype(np.int64)
     return MeshData(arrays["vertices"], faces, arrays.get("normals"), arrays.get("uvs"))
