@@ -136,7 +136,7 @@ def test_a_mesh_whose_normals_oppose_its_winding_is_lit_on_its_normals_side(back
 
 
 @pytest.mark.parametrize("name", ["cbox", "meshes", "envmap-spheres", "envmap-tilted", "textures", "masks", "normal-maps",
-                                  "lights", "thinlens", "anisotropic", "blend", "principled"])
+                                  "lights", "thinlens", "anisotropic", "blend", "principled", "serialized"])
 def test_convert_writes_toml_that_reads_back_the_same_scene(tmp_path, name):
     out = tmp_path / "sub" / f"{name}.toml"
     out.parent.mkdir()
