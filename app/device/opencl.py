@@ -443,8 +443,8 @@ def choose_device(spec: str = "auto", extra: str = "", use_cache: bool = True,
         raise UserError(no_device())
     candidates = [d for d in devices if _matches(spec, d, devices)]
     if not candidates:
-        raise UserError(f"device: no OpenCL device matches {short(spec)} "
-                        f"(see 'pathtrace devices'; {len(devices)} found)")
+        found = ", ".join(f"{d.name.strip()} ({d.kind})" for d in devices[:3]) + (", ..." if len(devices) > 3 else "")
+        raise UserError(f"device: no OpenCL device matches {short(spec)}; found {found} (see 'pathtrace devices')")
     candidates.sort(key=lambda d: d.kind != "GPU")   # stable: GPUs first, then listing order
     for d in candidates:
         try:
