@@ -15,9 +15,8 @@ def cmd_render(args):
 
     from pathtrace import api
     from pathtrace.io.files import shown
-    from pathtrace.io.images import check_writable, write_images
+    from pathtrace.io.images import HDR_FORMATS, check_writable, write_images
 
-    from pathtrace.io.images import HDR_FORMATS
     written = {}
     for path in args.output:
         if "depth" in (args.aov or ()) and Path(path).suffix.lower() not in HDR_FORMATS:

@@ -61,9 +61,10 @@ def read_mesh(path: Path, where: str, warn=warn, degenerate=None) -> MeshData:
                         f"(use {', '.join(FORMATS)})")
     checked_at = check_regular_file(path, where, "mesh file", MAX_FILE_BYTES)
     kept_as = checked_at if suffix == ".obj" else None       # OBJ meshes are kept (mesh_cache)
-    kept, notes = None if kept_as is None else mesh_cache.lookup(kept_as), []
+    kept = None if kept_as is None else mesh_cache.lookup(kept_as)
     if kept is not None:
         return kept
+    notes = []               # the parser's warnings, given once it has not failed
     try:
         if suffix in (".ply", ".ply.gz"):
             try:
