@@ -184,7 +184,7 @@ def test_clamp_clamps_after_the_filtering_as_pbrt_v4s_materials(kernels):
     np.testing.assert_allclose(clamped, np.clip(plain, 0, 1), rtol=1e-5, atol=1e-6)
     assert np.any((plain > 1).any(1) & (plain < 1).any(1))      # points where channels straddle
     for bounds in ({"low": 0.5, "high": 0.2}, {"high": texture("checkerboard")}):
-        with pytest.raises(ValueError, match="low must not exceed high|not textures"):
+        with pytest.raises(ValueError, match="low must not exceed high|high must be a number or three numbers"):
             texture("clamp", tex=scaled, **bounds)
 
 

@@ -15,21 +15,32 @@ class Clamp(TextureType):
     name = "clamp"
     doc = "tex clamped into [low, high] (as pbrt-v4's materials clamp a reflectance)"
     parameters = (Parameter("tex", "color", 1.0, texture=True, doc="the texture clamped"),
-                  Parameter("low", "color", 0.0, texture=True, doc="the lowest value, a constant"),
-                  Parameter("high", "color", 1.0, texture=True, doc="the highest value, a constant, not below low"))
+                  Parameter("low", "color", 0.0, doc="the lowest value"),
+                  Parameter("high", "color", 1.0, doc="the highest value, not below low"))
     # exact: in each channel the input lies wholly inside, above or below the bounds
     examples = ({"tex": Texture("checkerboard", {"color0": [1.5, 0.2, -0.5], "color1": [2.0, 0.4, -0.2]})},
                 {"tex": Texture("checkerboard", {"color0": 0.3, "color1": 0.7}), "low": 0.1, "high": [0.2, 0.8, 1.0]})
 
     def complete(self, params):
-        # constant bounds, whose order the kernel's clamp() needs (OpenCL leaves it undefined
-        # where low > high), and which make the bounds below exact
+        # constant bounds, in the order the kernel's clamp() needs (OpenCL leaves it undefined
+        # where low > high), which make the bounds below exact
         values = super().complete(params)
-        if isinstance(values["low"], Texture) or isinstance(values["high"], Texture):
-            raise ValueError("low and high must be numbers or three numbers, not textures")
+        for name in ("low", "high"):
+            try:
+                v = np.asarray(values[name], np.float64)
+            except (TypeError, ValueError):       # a texture, a string
+                v = np.zeros(0)
+            if v.size not in (1, 3) or not np.all(np.isfinite(v)):
+                raise ValueError(f"{name} must be a number or three numbers")
+            values[name] = np.broadcast_to(v.reshape(-1), 3).copy()
         if np.any(values["low"] > values["high"]):
             raise ValueError(f"low must not exceed high, got {values['low'].tolist()} and {values['high'].tolist()}")
         return values
+
+    def pack(self, texture, row, texels):
+        # beside the input's slot 0, the slots no input takes (kernels/textures/clamp.cl)
+        row["value"][1, :3] = texture.params["low"]
+        row["value"][2, :3] = texture.params["high"]
 
     def mean(self, texture):
         # exact where, in each channel, the input's values lie on one side of each bound;
