@@ -27,6 +27,7 @@ VERSIONS = (3, 4)
 HAS_NORMALS, HAS_UVS, HAS_COLORS, DOUBLE = 0x0001, 0x0002, 0x0008, 0x2000
 MAX_NAME = 4096         # bytes of a shape's name
 CHUNK = 1 << 20         # compressed bytes fed to zlib at a time
+NOT_SERIALIZED = "not a Mitsuba serialized mesh (it does not begin with 0x041C)"
 
 
 def read_serialized(path: Path, index: int, where: str) -> MeshData:
@@ -37,8 +38,8 @@ def read_serialized(path: Path, index: int, where: str) -> MeshData:
     label = f"{where}: {path}"
     try:
         with open(path, "rb") as f:
-            if f.seek(0, 2) < 4:
-                raise UserError(f"{label}: not a Mitsuba serialized mesh (it does not begin with 0x041C)")
+            if f.seek(0, 2) < 4:             # (an empty file cannot be mapped)
+                raise UserError(f"{label}: {NOT_SERIALIZED}")
             with mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as data:
                 return _read(data, index, label)
     except OSError as e:
@@ -48,7 +49,7 @@ def read_serialized(path: Path, index: int, where: str) -> MeshData:
 def _read(view: mmap.mmap, index: int, label: str) -> MeshData:
     magic, version = struct.unpack_from("<HH", view)
     if magic != MAGIC:
-        raise UserError(f"{label}: not a Mitsuba serialized mesh (it does not begin with 0x041C)")
+        raise UserError(f"{label}: {NOT_SERIALIZED}")
     if version not in VERSIONS:
         raise UserError(f"{label}: serialized format version {version}; Mitsuba 3 reads versions 3 and 4")
     start = _mesh_offset(view, version, index, label) if index else 0
