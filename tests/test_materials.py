@@ -253,20 +253,18 @@ def test_diffuse_transmission_is_r_over_pi_on_wos_side_and_t_over_pi_through(ker
     assert np.allclose(pdf, share * np.abs(grid[:, 2]) / np.pi, rtol=1e-4, atol=1e-7)
 
 
-def test_a_sheet_of_diffuse_transmission_in_a_white_furnace_is_white(backend):
-    """R + T = 1: a sphere of it under a uniform white sky is white from outside, as light
-    that enters bounces around inside and leaves; the mean is 1 to within the noise."""
-    scene = furnace_scene(None, material=Material("diffusetransmission", {"reflectance": 0.3,
-                                                                          "transmittance": 0.7}))
+@pytest.mark.parametrize("r, t", [(0.3, 0.7), (0.5, 0.7)])
+def test_a_ball_of_diffuse_transmission_in_a_white_furnace(backend, r, t):
+    """A sphere of it under a uniform sky of radiance 1: its inside is lit by T through the
+    surface and by R of its own light, L_in = T / (1 - R), and its outside sends out
+    R + T L_in = R + T^2 / (1 - R) in every direction. R + T = 1 gives 1 (light that enters
+    bounces around and leaves); R + T = 1.2, which pbrt-v4 renders as it is, gives 1.48."""
+    scene = furnace_scene(None, material=Material("diffusetransmission", {"reflectance": r, "transmittance": t}))
     for nee in (False, True):
-        mean, var, _ = render(backend, scene.with_settings(nee=nee), 64)
+        mean, var, _ = render(backend, scene.with_settings(nee=nee, max_depth=40), 64)
         center = mean[8:24, 16:32]
-        assert abs(center.mean() - 1.0) < 5 * np.sqrt(var[8:24, 16:32].mean() / center.size) + 2e-3
-
-
-def test_diffuse_transmission_refuses_more_than_it_receives():
-    with pytest.raises(ValueError, match="reflectance \\+ transmittance must not exceed 1"):
-        BSDFS["diffusetransmission"].complete({"reflectance": 0.6, "transmittance": 0.6})
+        expected = r + t * t / (1 - r)
+        assert abs(center.mean() - expected) < 5 * np.sqrt(var[8:24, 16:32].mean() / center.size) + 2e-3 * expected
 
 
 def test_a_two_sided_transmissive_material_is_refused_in_every_reader(tmp_path):

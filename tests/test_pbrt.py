@@ -576,14 +576,17 @@ def test_reflectances_beyond_0_and_1_are_clamped_as_pbrt_clamps_them(tmp_path):
     """pbrt-v4's diffuse, coateddiffuse and diffusetransmission materials clamp their
     reflectances into [0, 1] where they evaluate them (DiffuseMaterial::GetBxDF's Clamp, as
     CoatedDiffuse's reflectance and albedo, DiffuseTransmission's scale times each), so a file
-    that gives 1.2 renders in pbrt-v4, as 1: a constant is clamped as it is read."""
+    that gives 1.2 renders in pbrt-v4, as 1: a constant is clamped as it is read. Diffuse
+    transmission's two are clamped each, and may sum above 1, as pbrt-v4 renders them."""
     s = scene(tmp_path, 'Material "diffuse" "rgb reflectance" [1.2 0.5 -0.1]\n' + FLOOR
               + 'Material "coateddiffuse" "rgb reflectance" [1.5 0.2 0.2] "rgb albedo" [2 0.5 0.5] '
                 '"float thickness" 0.1\n' + FLOOR
-              + 'Material "diffusetransmission" "rgb reflectance" [0.6 0.2 0.1] "rgb transmittance" [0 0 0] '
+              + 'Material "diffusetransmission" "rgb reflectance" [0.6 0.2 0.1] "rgb transmittance" [0.7 0 0] '
                 '"float scale" 2\n' + FLOOR)
     diffuse, coated, transmitting = (s.materials.get(m.material) for m in s.meshes)
     np.testing.assert_allclose(diffuse.params["rho_d"], [1, 0.5, 0])
     np.testing.assert_allclose(coated.params["reflectance"], [1, 0.2, 0.2])
     np.testing.assert_allclose(coated.params["albedo"], [1, 0.5, 0.5])
     np.testing.assert_allclose(transmitting.params["reflectance"], [1, 0.4, 0.2])
+    # each clamped, not their sum: 1 + 1 in the red, which pbrt-v4 renders as it is
+    np.testing.assert_allclose(transmitting.params["transmittance"], [1, 0, 0])

@@ -3,7 +3,7 @@ transmission with their own colours; kernels/bsdfs/diffusetransmission.cl."""
 
 import numpy as np
 
-from pathtrace.materials.bsdf import TRANSMISSIVE, BSDFType, Param, check_sum_at_most_one, pbrt_clamped
+from pathtrace.materials.bsdf import TRANSMISSIVE, BSDFType, Param, pbrt_clamped
 from pathtrace.parameters import Parameter
 from pathtrace.textures.texture import Texture
 
@@ -33,11 +33,12 @@ class DiffuseTransmission(BSDFType):
     format_only = (Parameter(None, "number", pbrt="scale", pbrt_default=1.0,
                              doc="a factor on reflectance and transmittance"),)
     flags = TRANSMISSIVE
+    # R + T may exceed 1, as pbrt-v4's DiffuseTransmissionMaterial allows (it clamps each into [0, 1],
+    # not their sum): such a surface gives out more light than it receives, and a file pbrt-v4
+    # renders is rendered, not refused
     doc = ("Lambertian reflection and transmission, the same from either side (pbrt-v4's "
-           "diffusetransmission); reflectance + transmittance <= 1 in each channel")
-
-    def check(self, values):
-        return check_sum_at_most_one(values, "reflectance", "transmittance")
+           "diffusetransmission); reflectance + transmittance may exceed 1, as in pbrt-v4, where the "
+           "surface gives out more light than it receives")
 
     def continuation(self, values):
         return np.minimum(np.max(values["reflectance"] + values["transmittance"], axis=-1), 1.0)
