@@ -374,7 +374,8 @@ def test_bdpt_through_smooth_shaded_rough_glass_is_the_path_tracers(backend, tmp
                     "material": "floor"}, {"file": "sphere.obj", "material": "glass"}],
         "spheres": [{"center": [0.4, 2.0, -0.3], "radius": 0.3, "material": "lamp"}]}, "smooth-glass", folder=tmp_path)
     m = render_batches(backend, scene, "bdpt", 512, (32, 32), 8)[..., :3].mean(axis=(1, 2, 3))
-    ref, ref_v = _path_reference(backend, scene, 32768, (32, 32))
+    # the reference's variance is a seventh of BDPT's here: 16,384 samples widen the z's scale by 6 %
+    ref, ref_v = _path_reference(backend, scene, 16384, (32, 32))
     z = (m.mean() - ref[..., :3].mean()) / np.sqrt(m.var(ddof=1) / len(m) + ref_v[..., :3].sum() / ref[..., :3].size ** 2)
     assert abs(z) < 4, (m.mean() / ref[..., :3].mean(), z)
 
@@ -409,7 +410,8 @@ def test_bdpt_on_an_open_smooth_shaded_sheet_is_the_path_tracers(backend, tmp_pa
         "meshes": [{"file": "arch.obj", "material": "arch"}],
         "spheres": [{"center": [0.8, -0.7, 0.3], "radius": 0.2, "material": "lamp"}]}, "arch", folder=tmp_path)
     m = render_batches(backend, scene, "bdpt", 512, (32, 32), 8)[..., :3].mean(axis=(1, 2, 3))
-    ref, ref_v = _path_reference(backend, scene, 32768, (32, 32))
+    # the reference's variance is a fiftieth of BDPT's here: 8,192 samples widen the z's scale by 3 %
+    ref, ref_v = _path_reference(backend, scene, 8192, (32, 32))
     z = (m.mean() - ref[..., :3].mean()) / np.sqrt(m.var(ddof=1) / len(m) + ref_v[..., :3].sum() / ref[..., :3].size ** 2)
     assert abs(z) < 4, (m.mean() / ref[..., :3].mean(), z)
 
