@@ -43,6 +43,26 @@ def test_a_build_larger_than_the_host_memory_is_refused(monkeypatch):
         compiled.compile_scene(load_scene("spheres64k"))
 
 
+def test_a_generated_scene_too_large_to_make_is_refused_before_it_is_made(monkeypatch):
+    """spheres100M took 24 GB and the kernel's killer ended it, without a word: a generated
+    scene is checked before its arrays are made (making one takes more than its BVH build's
+    check, which runs once it is made), and its count is bounded with the k or M applied."""
+    import pathtrace.compiler.memory
+    from pathtrace.scene.builtin import MAKE_SPHERE_BYTES, builtin_maker
+    monkeypatch.setattr(pathtrace.compiler.memory, "available_host_memory", lambda: 10_000 * BUILD_HOST_BYTES)
+    with pytest.raises(UserError, match=r"^spheres20k: making 20,000 spheres and building their BVH needs about "):
+        load_scene("spheres20k")
+    with pytest.raises(UserError, match=r"^heightfield1M: making 1,000,000 triangles"):
+        load_scene("heightfield1M")
+    monkeypatch.setattr(pathtrace.compiler.memory, "available_host_memory",
+                        lambda: 20_000 * (MAKE_SPHERE_BYTES + BUILD_HOST_BYTES))
+    assert len(load_scene("spheres20k").spheres) == 20_000
+    assert builtin_maker("spheres100M") is not None and builtin_maker("spheres200M") is None
+    assert builtin_maker("spheres100000k") is not None and builtin_maker("spheres100001k") is None
+    with pytest.raises(UserError, match="generated: spheresN.-diffuse. and heightfieldN, N from 1 to 100M"):
+        load_scene("spheres0")
+
+
 def test_an_image_too_large_for_the_device_is_refused(backend):
     r = Renderer(backend, load_scene("simple"), 8, 8)
     side = int((backend.device.device.max_mem_alloc_size // 16) ** 0.5) + 1

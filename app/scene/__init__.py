@@ -89,12 +89,14 @@ def _reader(name_or_path: str):
             from pathtrace.scene.toml_reader import read_scene_file
             return read_scene_file(path)        # which refuses a folder, a fifo or a device in one line
         return read_toml
-    from pathtrace.scene.builtin import BUILTIN_SCENES, builtin_maker
+    from pathtrace.scene.builtin import BUILTIN_SCENES, MAX_GENERATED, builtin_maker
     make = builtin_maker(name_or_path)
     if make is not None:
         return make
     raise UserError(f"{cut(shown(name_or_path), 100)}: neither a scene file nor a built-in scene"
-                    f"{did_you_mean(str(name_or_path), BUILTIN_SCENES)} (built-ins: {', '.join(BUILTIN_SCENES)})")
+                    f"{did_you_mean(str(name_or_path), BUILTIN_SCENES)} (built-ins: {', '.join(BUILTIN_SCENES)}; "
+                    f"generated: spheresN[-diffuse] and heightfieldN, N from 1 to {MAX_GENERATED // 1_000_000}M, "
+                    "e.g. spheres512k)")
 
 
 def _nearest_scene_file(path: Path) -> str:

@@ -100,10 +100,37 @@ def builtin_maker(name: str):
     if name in BUILTIN_SCENES:
         return BUILTIN_SCENES[name]
     m = re.fullmatch(r"(spheres|heightfield)(\d+)([kM]?)(-diffuse)?", name)
-    if m and 0 < int(m.group(2)) <= 100_000_000 and not (m.group(1) == "heightfield" and m.group(4)):
-        n = int(m.group(2)) * {"": 1, "k": 1000, "M": 1_000_000}[m.group(3)]
-        return (lambda: random_spheres(n, bool(m.group(4)))) if m.group(1) == "spheres" else (lambda: height_field(n))
-    return None
+    if not m or (m.group(1) == "heightfield" and m.group(4)):
+        return None
+    n = int(m.group(2)) * {"": 1, "k": 1000, "M": 1_000_000}[m.group(3)]
+    if not 0 < n <= MAX_GENERATED:
+        return None
+    spheres = m.group(1) == "spheres"
+
+    def make():
+        _check_generation(name, n, "spheres" if spheres else "triangles",
+                          MAKE_SPHERE_BYTES if spheres else MAKE_TRIANGLE_BYTES)
+        return random_spheres(n, bool(m.group(4))) if spheres else height_field(n)
+    return make
+
+
+MAX_GENERATED = 100_000_000    # spheres or triangles of a generated scene (the k or M suffix applied)
+# The host memory that making a generated scene takes per primitive at its peak (measured:
+# 390 bytes a sphere, its own material row each, and 80 a triangle), besides its BVH build's
+MAKE_SPHERE_BYTES, MAKE_TRIANGLE_BYTES = 400, 100
+
+
+def _check_generation(name: str, n: int, what: str, per_primitive: int):
+    """Refuses, in one line and before anything is allocated, a generated scene that could not be
+    made and its BVH built in the host's available memory (app/compiler/compiled.py:
+    check_memory checks the build alone, once the scene is made)."""
+    from pathtrace.compiler.compiled import BUILD_HOST_BYTES
+    from pathtrace.compiler.memory import available_host_memory
+    from pathtrace.errors import UserError, format_bytes
+    available, needed = available_host_memory(), n * (per_primitive + BUILD_HOST_BYTES)
+    if available is not None and needed > available:
+        raise UserError(f"{name}: making {n:,} {what} and building their BVH needs about {format_bytes(needed)} of "
+                        f"memory; {format_bytes(available)} is available")
 
 
 BUILTIN_SCENES = {
