@@ -701,6 +701,17 @@ def test_an_output_name_too_long_for_the_file_system_is_one_line(tmp_path, comma
     assert list(tmp_path.iterdir()) == []
 
 
+def test_convert_refuses_to_write_over_the_scene_it_converts(tmp_path):
+    """A hand-written TOML file, comments and all, was replaced by its own conversion."""
+    scene = tmp_path / "s.toml"
+    scene.write_text("# mine\n[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\nmaterial = { type = \"diffuse\", rho_d = 0.5 }\n")
+    text = scene.read_text()
+    r = in_process("convert", scene, "-o", tmp_path / "." / "s.toml")
+    assert r.returncode == 1 and "is the scene being converted" in r.stderr and len(r.stderr.splitlines()) == 1
+    assert scene.read_text() == text and sorted(p.name for p in tmp_path.iterdir()) == ["s.toml"]
+    assert in_process("convert", scene, "-o", tmp_path / "t.toml").returncode == 0
+
+
 def test_outputs_that_are_not_regular_files_are_refused_and_kept(tmp_path):
     """A link to a device (as root, rename() replaced /dev/full itself), a FIFO, a folder."""
     (tmp_path / "full.png").symlink_to("/dev/full")

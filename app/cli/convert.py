@@ -10,6 +10,13 @@ from pathtrace.cli.interrupts import FinalWrite
 from pathtrace.cli.options import SCENES_EPILOG
 from pathtrace.errors import UserError
 
+def _same_file(a, b) -> bool:
+    try:
+        return os.path.samefile(a, b)
+    except (OSError, ValueError):        # either missing (or a name no file can have)
+        return False
+
+
 def cmd_convert(args):
     """All or nothing: the TOML and its side files (NAME.environment.exr, NAME.meshes/) are
     checked, then written under temporary names and renamed into place together, so that a
@@ -21,6 +28,8 @@ def cmd_convert(args):
     out = Path(args.output)
     if out.suffix.lower() != ".toml":
         raise UserError(f"--output: {out}: pathtrace writes scenes as .toml")
+    if _same_file(out, args.scene):      # a hand-written file would be replaced by its conversion
+        raise UserError(f"--output: {out}: is the scene being converted; give another file")
     scene = load(args.scene)
     check_writable(out, "--output", formats=None)
     env = scene.environment
