@@ -415,7 +415,12 @@ def denoise(image: np.ndarray, albedo: np.ndarray = None, normal: np.ndarray = N
 
 
 def _rgb(name: str, image, shape=None) -> np.ndarray:
-    """An (H, W, 3) float32 array from an image argument; (H, W) is taken as grey."""
+    """An (H, W, 3) float32 array from an image argument; (H, W) is taken as grey. An array of
+    integers is refused: it is a display image (tonemap's uint8), whose 0-255 would be taken as
+    radiance."""
+    if isinstance(image, np.ndarray) and image.dtype.kind in "biu":
+        raise UserError(f"{name}: an array of {image.dtype} is a display image, not radiance; give linear radiance "
+                        "as floats (what render returns), or write a uint8 image with an image library")
     try:
         with np.errstate(over="ignore"):          # beyond float32: infinite, refused below
             a = np.asarray(image, np.float32)

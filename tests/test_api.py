@@ -238,6 +238,9 @@ def test_tonemap_write_and_show(tmp_path):
                 lambda: pathtrace.write(tmp_path / "b.txt", image), lambda: pathtrace.show(np.zeros(3))):
         with pytest.raises(UserError):
             bad()
+    # tonemap's own uint8 output given back as radiance, 0-255 (a white image): refused
+    with pytest.raises(UserError, match="^image: an array of uint8 is a display image, not radiance"):
+        pathtrace.write(tmp_path / "b.png", srgb)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.exr", "a.png", "d.exr"]
 
 

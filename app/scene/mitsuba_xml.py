@@ -17,7 +17,7 @@ from xml.parsers import expat
 
 import numpy as np
 
-from pathtrace.errors import UserError, cut, short, warn
+from pathtrace.errors import UserError, cut, short, warn, with_article
 from pathtrace.scene import transform
 from pathtrace.scene.known_names import Unread
 
@@ -366,7 +366,7 @@ class XmlScene:
         if node.tag == "ref":
             node = self.resolve(node)
         if kinds and node.tag not in kinds:
-            fail(node, f"'{name}' must be a {' or '.join(kinds)}")
+            fail(node, f"'{name}' must be {with_article(' or '.join(kinds))}")
         return self.value(node)
 
     def check_reference_cycles(self):
