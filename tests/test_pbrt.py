@@ -503,6 +503,24 @@ def test_convert_writes_turned_meshes_and_resampled_maps_beside_the_toml(tmp_pat
         assert np.allclose(getattr(a.meshes[0], name), getattr(b.meshes[0], name)), name
 
 
+def test_convert_writes_an_inverted_imagemaps_texels_beside_the_toml(tmp_path):
+    """pbrt-v4's `invert` is baked into the texels as the file is read: convert once wrote the
+    original file's name, and the converted scene rendered the map uninverted (a new user's
+    run, 2026-12-03: mean 0.075 against 0.225). The texels go to an EXR file beside the TOML."""
+    import shutil
+    shutil.copy(Path(__file__).parent / "scenes" / "textures" / "tiles.png", tmp_path / "tiles.png")
+    (tmp_path / "s.pbrt").write_text(
+        'LookAt 0 2 5  0 0 0  0 1 0\nCamera "perspective"\nWorldBegin\n'
+        'Texture "t" "spectrum" "imagemap" "string filename" "tiles.png" "bool invert" true "float scale" 0.8\n'
+        'Material "diffuse" "texture reflectance" "t"\n' + FLOOR)
+    r = in_process("convert", tmp_path / "s.pbrt", "-o", tmp_path / "out.toml")
+    assert r.returncode == 0 and f"wrote {tmp_path / 'out.image0.exr'}" in r.stderr, r.stderr
+    a, b = (load_scene(str(tmp_path / n)).materials.get(0).params["rho_d"] for n in ("s.pbrt", "out.toml"))
+    image_a, image_b = (t.params["image"] if t.type == "bitmap" else t.params["tex"].params["image"] for t in (a, b))
+    assert image_b.path.endswith("out.image0.exr")
+    np.testing.assert_allclose(image_b.rgb(), image_a.rgb(), rtol=1e-6)
+
+
 def test_coateddiffuse_is_pbrts_layered_material(tmp_path):
     """pbrt-v4's coateddiffuse keeps its parameters (roughness remapped by default, maxdepth,
     nsamples, the layer's thickness, albedo and g); a roughness below pbrt's 1e-3 is smooth."""

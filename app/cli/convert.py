@@ -18,9 +18,10 @@ def _same_file(a, b) -> bool:
 
 
 def cmd_convert(args):
-    """All or nothing: the TOML and its side files (NAME.environment.exr, NAME.meshes/) are
-    checked, then written under temporary names and renamed into place together, so that a
-    failure (a read-only folder, a full disk, a FIFO where a file goes) leaves none of them."""
+    """All or nothing: the TOML and its side files (NAME.environment.exr, NAME.meshes/,
+    NAME.imageK.exr) are checked, then written under temporary names and renamed into place
+    together, so that a failure (a read-only folder, a full disk, a FIFO where a file goes)
+    leaves none of them."""
     from pathtrace.api import load
     from pathtrace.io.images import Staged, _write_exr, check_writable
     from pathtrace.scene.toml_writer import scene_toml
@@ -37,6 +38,9 @@ def cmd_convert(args):
     if map_path:             # the map as pathtrace reads it, beside the scene
         check_writable(map_path, "--output", formats=(".exr",))
     meshes = mesh_files(scene, out)
+    images = image_files(scene, out)
+    for path, _ in images:
+        check_writable(path, "--output", formats=(".exr",))
     folder = out.with_name(out.stem + ".meshes")
     if meshes and os.path.lexists(folder) and not folder.is_dir():
         raise UserError(f"--output: '{folder}' exists and is not a folder, where the meshes go")
@@ -52,6 +56,9 @@ def cmd_convert(args):
                 scene.environment = replace(env, source=str(map_path), resampled=False)
             for path, mesh in meshes:
                 staged.add(path, lambda tmp, m=mesh: write_mesh_file(tmp, m), "--output")
+            for path, image in images:
+                staged.add(path, lambda tmp, i=image: _write_exr(tmp, i.rgb()), "--output")
+                image.path = str(path)
             text = scene_toml(scene, out)
             staged.add(out, lambda tmp: write_text_file(tmp, text), "--output")
             with FinalWrite():
@@ -65,6 +72,8 @@ def cmd_convert(args):
         print(f"wrote {map_path}", file=sys.stderr)
     if meshes:
         print(f"wrote {len(meshes)} mesh{'' if len(meshes) == 1 else 'es'} to {folder}/", file=sys.stderr)
+    for path, _ in images:
+        print(f"wrote {path}", file=sys.stderr)
     print(f"wrote {out}", file=sys.stderr)
     return 0
 
@@ -87,6 +96,22 @@ def mesh_files(scene, out: Path, inline_faces: int = 1000) -> list:
         path = folder / f"{k:04d}.ply"
         found.append((path, mesh))
         mesh.file = MeshFile(str(path), np.eye(4))
+    return found
+
+
+def image_files(scene, out: Path) -> list:
+    """(path, image) of the textures' images that no file holds (a pbrt imagemap's `invert`,
+    baked into its texels), to be written beside the TOML as EXR files: NAME.imageK.exr. An
+    alpha channel, which an RGB EXR file cannot give back, is refused."""
+    found = []
+    for t in scene.materials.all_textures():
+        image = t.params.get("image") if t.type == "bitmap" else None
+        if image is None or image.path or any(image is i for _, i in found):
+            continue
+        if image.texels.shape[2] == 4:
+            raise UserError(f"texture {t.name or ''}: its texels, made in memory (an inverted imagemap), have an "
+                            "alpha channel, which convert cannot write out")
+        found.append((out.with_name(f"{out.stem}.image{len(found)}.exr"), image))
     return found
 
 

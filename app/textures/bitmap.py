@@ -165,7 +165,8 @@ def inverted(image: Image, scale: float) -> Image:
     values = image.linear_values()
     rgb = np.maximum(1.0 - scale * values[..., :3], 0.0)
     texels = np.concatenate([rgb, values[..., 3:]], axis=2) if values.shape[2] == 4 else rgb
-    return Image(np.ascontiguousarray(texels, np.float32), True, image.path)
+    # made in memory: no file holds these texels (convert writes them out: app/cli/convert.py)
+    return Image(np.ascontiguousarray(texels, np.float32), True)
 
 
 class Bitmap(TextureType):
