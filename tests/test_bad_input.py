@@ -67,6 +67,18 @@ def test_a_shape_or_an_instance_under_a_singular_transform_is_left_out_with_a_wa
     assert "2 like this" in lines[0] and "s.pbrt:11: " in lines[0] and "s.pbrt:13: " in lines[1], lines
 
 
+@pytest.mark.parametrize("singular", ['Scale 0 1 1\n', 'Transform [ 1 0 0 0  0 0 0 0  0 0 1 0  0 0 0 1 ]\n'],
+                         ids=["zero-scale", "singular-transform"])
+def test_a_zero_scale_or_a_singular_transform_is_taken_as_a_product_that_underflows(tmp_path, capsys, singular):
+    """pbrt-v4 takes both (it carries an inverse of infinities): as for factors whose product is
+    0, a camera under one is refused and a shape is left out with a warning, where the reader
+    refused the directive itself (a new user's run, 2026-12-03, against docs/pbrt.md)."""
+    assert "s.pbrt:3: the camera needs the current transform's inverse" in refusal(tmp_path, singular + HEAD + TRIANGLE)
+    (tmp_path / "s.pbrt").write_text(HEAD + TRIANGLE + 'AttributeBegin\n' + singular + TRIANGLE + 'AttributeEnd\n')
+    assert load_scene(str(tmp_path / "s.pbrt")).triangle_count == 1
+    assert "s.pbrt:7: the current transform is singular" in capsys.readouterr().err
+
+
 def test_warnings_alike_are_told_once_with_their_count(tmp_path, capsys):
     (tmp_path / "s.pbrt").write_text(HEAD + TRIANGLE + 'Shape "curve"\n' * 3000)
     load_scene(str(tmp_path / "s.pbrt"))

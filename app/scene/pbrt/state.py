@@ -84,8 +84,8 @@ class GraphicsStateDirectives:
 
     def _transform(self, tokens, offset, concat):
         m = numbers(tokens, 16, "Transform").reshape(4, 4).T
-        if abs(np.linalg.det(m[:3, :3])) < 1e-12 or np.any(m[3] != [0, 0, 0, 1]):
-            tokens.fail(offset, "a singular or projective transform")
+        if np.any(m[3] != [0, 0, 0, 1]):      # (a singular one flattens what follows: singular())
+            tokens.fail(offset, "a projective transform (its last row must be 0 0 0 1)")
         self.state.ctm = self.state.ctm @ m if concat else m
 
     def _lookat(self, tokens, offset):
@@ -205,17 +205,10 @@ def _rotate(self, tokens, offset):
     self.concat(transform.rotation(v[1:], v[0]))
 
 
-def _scale_directive(self, tokens, offset):
-    v = numbers(tokens, 3, "Scale")
-    if np.any(v == 0):
-        tokens.fail(offset, "Scale: a zero factor flattens everything after it")
-    self.concat(transform.scaling(v))
-
-
 STATE_DIRECTIVES = {
     "Identity": lambda self, tokens, offset: setattr(self.state, "ctm", np.eye(4)),
     "Translate": _three("Translate", transform.translation),
-    "Scale": _scale_directive,
+    "Scale": _three("Scale", transform.scaling),      # a zero factor flattens what follows: singular()
     "Rotate": _rotate,
     "LookAt": GraphicsStateDirectives._lookat,
     "Transform": lambda self, tokens, offset: self._transform(tokens, offset, False),
