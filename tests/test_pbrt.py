@@ -377,7 +377,13 @@ def test_convert_writes_a_key_for_each_material_whatever_the_files_names(tmp_pat
 # -- bad input: one line naming the file and line --
 
 @pytest.mark.parametrize("text,expected", [
-    ('Shape "trianglemesh" "point3 P" [ 0 0 0  1 0 0', "unterminated '['"),
+    ('WorldBegin\nShape "trianglemesh" "point3 P" [ 0 0 0  1 0 0', "unterminated '['"),
+    # pbrt-v4's blocks (src/pbrt/scene.cpp: VERIFY_OPTIONS, VERIFY_WORLD, EndOfFiles)
+    ('Shape "sphere"\nWorldBegin\n', 's.pbrt:1: the scene description must be inside the world block; "Shape"'),
+    ('WorldBegin\nCamera "perspective"\n', 's.pbrt:2: options cannot be set inside the world block; "Camera"'),
+    ('WorldBegin\nWorldBegin\n', 's.pbrt:2: options cannot be set inside the world block; "WorldBegin"'),
+    ('Camera "perspective"\n', "the file ends before WorldBegin"),
+    ('WorldBegin\nAttributeBegin\nShape "sphere"\n', "1 AttributeBegin without its end"),
     ('WorldBegin\nShape "trianglemesh\n', "s.pbrt:2: an unterminated string"),
     ('WorldBegin\nMaterial "diffuse" "spectrum reflectance" [ "metal-Cu-eta"\nShape "sphere" "float radius" [ 1 ]\n',
      "s.pbrt:2: 'reflectance': its '[' is not closed by a ']' before a list of numbers at line 3"),

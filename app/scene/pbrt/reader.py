@@ -41,7 +41,8 @@ from pathtrace.scene.meshes import MAX_COORDINATE, MeshFiles, check_mesh, place_
 from pathtrace.scene.mesh_shapes import MESH_SHAPES, MeshSource
 from pathtrace.scene.pbrt.materials import MaterialMapper, make
 from pathtrace.scene.pbrt.options import OPTION_DIRECTIVES, OptionDirectives
-from pathtrace.scene.pbrt.state import MAX_FILE_BYTES, MAX_INCLUDE_DEPTH, STATE_DIRECTIVES, GraphicsStateDirectives
+from pathtrace.scene.pbrt.state import (MAX_FILE_BYTES, MAX_INCLUDE_DEPTH, STATE_DIRECTIVES, GraphicsStateDirectives,
+                                        check_block)
 from pathtrace.scene.pbrt.tokens import Tokens, parameters, string
 from pathtrace.shapes import SHAPES, Shape
 
@@ -100,8 +101,13 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
             # triangle of zero area (src/pbrt/shapes.h), nor does its area light sample one
             warn(f"{self.path}: dropped {self.dropped[0]} degenerate triangle(s) of zero area, of "
                  f"{self.dropped[1]} in the meshes that had any (pbrt-v4 never hits them)")
+        # pbrt-v4 refuses both (BasicSceneBuilder::EndOfFiles)
+        if not self.in_world:
+            raise UserError(f"{self.path}: the file ends before WorldBegin (pbrt-v4 refuses it too)")
         if self.stack:
-            warn(f"{self.path}: {len(self.stack)} AttributeBegin without AttributeEnd")
+            kind = self.stack[-1][0]
+            raise UserError(f"{self.path}: {len(self.stack)} {'AttributeBegin' if kind == 'attribute' else 'TransformBegin'}"
+                            f" without its end")
         self.settings.filter = self.filter
         for name, row in self.medium_rows.items():
             if self.media[row] is None:
@@ -140,6 +146,7 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
             handler = DIRECTIVES.get(name)
             if handler is None:
                 tokens.fail(offset, f"unknown directive '{cut(name)}'")
+            check_block(self, name, tokens, offset)
             handler(self, tokens, offset)
         self.including.pop()
 

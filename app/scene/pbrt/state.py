@@ -44,6 +44,7 @@ class GraphicsStateDirectives:
         self.folder = self.path.parent
         self.state = GraphicsState()
         self.stack = []                   # saved states of AttributeBegin / TransformBegin
+        self.in_world = False             # past WorldBegin: the scene's block, not the options' (BLOCKS)
         self.named_systems = {}
         self.including = []
         self.includes = 0                 # Include directives read so far
@@ -112,6 +113,7 @@ class GraphicsStateDirectives:
         self.state.ctm = self.stack.pop()[1]
 
     def _world_begin(self, tokens, offset):
+        self.in_world = True
         self.state.ctm = np.eye(4)
         self.named_systems["world"] = np.eye(4)
 
@@ -203,6 +205,26 @@ def _rotate(self, tokens, offset):
     if np.linalg.norm(v[1:]) == 0:
         tokens.fail(offset, "Rotate: the axis is zero")
     self.concat(transform.rotation(v[1:], v[0]))
+
+
+# The directives pbrt-v4 takes in one block of the file only, before WorldBegin (the options)
+# or after it (the scene), and refuses in the other (src/pbrt/scene.cpp, BasicSceneBuilder:
+# VERIFY_OPTIONS and VERIFY_WORLD)
+OPTIONS_ONLY = frozenset(("Camera", "Sampler", "WorldBegin", "TransformTimes", "PixelFilter", "Film", "Accelerator",
+                          "Integrator"))
+WORLD_ONLY = frozenset(("ReverseOrientation", "AttributeBegin", "AttributeEnd", "LightSource", "Shape", "ObjectBegin",
+                        "ObjectEnd", "ObjectInstance", "Texture", "Material", "MakeNamedMaterial", "NamedMaterial",
+                        "AreaLightSource"))
+
+
+def check_block(reader, name: str, tokens, offset):
+    """Refuses a directive in the block pbrt-v4 refuses it in, as pbrt-v4 words it."""
+    if name in OPTIONS_ONLY and reader.in_world:
+        tokens.fail(offset, f'options cannot be set inside the world block; "{name}" is not allowed '
+                            "after WorldBegin (as in pbrt-v4)")
+    if name in WORLD_ONLY and not reader.in_world:
+        tokens.fail(offset, f'the scene description must be inside the world block; "{name}" is not allowed '
+                            "before WorldBegin (as in pbrt-v4)")
 
 
 STATE_DIRECTIVES = {
