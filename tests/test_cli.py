@@ -712,6 +712,19 @@ def test_convert_refuses_to_write_over_the_scene_it_converts(tmp_path):
     assert in_process("convert", scene, "-o", tmp_path / "t.toml").returncode == 0
 
 
+def test_convert_names_a_shipped_map_by_its_name_not_a_path_into_the_installation(tmp_path):
+    """`convert demo` wrote a path into the environment's site-packages, which breaks when it is
+    made again; the TOML reader finds a shipped map by its bare name. A file of that name beside
+    the output would hide it: then the path is written."""
+    from pathtrace.scene import load_scene
+    assert in_process("convert", "demo", "-o", tmp_path / "d.toml").returncode == 0
+    assert 'map = "venice_sunset_1k.hdr"' in (tmp_path / "d.toml").read_text()
+    assert np.array_equal(load_scene(str(tmp_path / "d.toml")).environment.image, load_scene("demo").environment.image)
+    (tmp_path / "venice_sunset_1k.hdr").write_bytes(b"")
+    assert in_process("convert", "demo", "-o", tmp_path / "e.toml").returncode == 0
+    assert 'map = "venice_sunset_1k.hdr"' not in (tmp_path / "e.toml").read_text()
+
+
 def test_outputs_that_are_not_regular_files_are_refused_and_kept(tmp_path):
     """A link to a device (as root, rename() replaced /dev/full itself), a FIFO, a folder."""
     (tmp_path / "full.png").symlink_to("/dev/full")

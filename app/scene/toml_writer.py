@@ -11,6 +11,7 @@ import numpy as np
 from pathtrace.materials import BSDFS
 from pathtrace.materials.table import component_rows
 from pathtrace.errors import UserError
+from pathtrace.resources import resource_dir
 from pathtrace.scene.description import Scene
 from pathtrace.scene.toml_values import MAX_INLINE
 from pathtrace.shapes import SHAPES, TextureUV
@@ -128,6 +129,12 @@ def _plain(value, rel):
     return np.asarray(value, np.float64).tolist() if isinstance(value, np.ndarray) else value
 
 
+def _shipped_map(source: str, out: Path) -> bool:
+    """Whether `source` is a map pathtrace ships, which no file beside `out` hides by its name."""
+    shipped = (resource_dir("assets") / "envmaps").resolve()
+    return Path(source).resolve().parent == shipped and not (Path(out).parent / Path(source).name).exists()
+
+
 def scene_toml(scene: Scene, out: Path) -> str:
     """The TOML text of a scene, its file references relative to `out`'s folder."""
     def rel(path):
@@ -142,6 +149,10 @@ def scene_toml(scene: Scene, out: Path) -> str:
     lines += ["", "[environment]"]
     if env.source == "constant":
         lines.append(f"color = {_value(_color(env.image[0, 0]))}")
+    elif _shipped_map(env.source, out):
+        # a shipped map by its bare name, which the TOML reader finds wherever pathtrace is
+        # installed (a path into the environment would break when it is made again)
+        lines.append(f"map = {_value(Path(env.source).name)}")
     else:
         lines.append(f"map = {_value(rel(env.source))}")
         if env.rows != "centres":
