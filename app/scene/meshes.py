@@ -84,9 +84,10 @@ def read_mesh(path: Path, where: str, warn=warn, degenerate=None) -> MeshData:
             mesh = _read_with_trimesh(path, suffix)
     except UserError:
         raise
-    except Exception as e:     # the parsers raise anything on a malformed file
+    except Exception as e:     # the parsers raise anything on a malformed file; a library's own slip says nothing
+        said = str(e) and not isinstance(e, (NameError, AttributeError, TypeError, AssertionError))   # (Unbound...)
         raise UserError(f"{where}: {path}: not a readable {suffix[1:].upper()} mesh "
-                        f"({type(e).__name__}: {str(e).splitlines()[0] if str(e) else 'malformed'})") from None
+                        f"({type(e).__name__ + ': ' + str(e).splitlines()[0] if said else 'malformed'})") from None
     for note in notes:
         warn(note)
     checked = check_mesh(*mesh, where=f"{where}: {path}", warn=warn, degenerate=degenerate)

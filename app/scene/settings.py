@@ -100,7 +100,8 @@ class Integrator(Element):
                          "bdpt": ("bdpt", None), "ptracer": ("ptracer", None)},     # Mitsuba 0.6's bdpt
              "pbrt": {"path": ("path", None), "volpath": ("path", None), "bdpt": ("bdpt", None),
                       "mlt": ("bdpt", "pathtrace renders mlt with bdpt, the nearest method it has"),
-                      "sppm": ("bdpt", None)}}     # its photons' radius a note of its own (pbrt/options.py)
+                      "sppm": ("bdpt", None),      # its photons' radius a note of its own (pbrt/options.py)
+                      "lightpath": ("ptracer", None)}}     # light tracing, as pbrt-v4's LightPathIntegrator
     parameters = (
         _integer("max_depth", doc="the longest path in vertices (1: emitters seen directly), 0 unlimited; "
                  "Mitsuba's -1 is unlimited, pbrt-v4's counts bounces (N + 1 vertices)", mitsuba="max_depth",

@@ -86,10 +86,13 @@ def read_image(path: Path, where: str, raw: bool = False, cache: dict = None) ->
 
     path = Path(path)
     suffix = path.suffix.lower()
-    if suffix not in LDR_FORMATS + HDR_FORMATS:
+    if suffix and suffix not in LDR_FORMATS + HDR_FORMATS:
         raise UserError(f"{where}: '{shown(path)}': unknown image format '{path.suffix}' "
                         f"(use {', '.join(LDR_FORMATS + HDR_FORMATS)})")
-    check_regular_file(path, where, "texture", MAX_FILE_BYTES)   # before realpath: a NUL byte
+    check_regular_file(path, where, "texture", MAX_FILE_BYTES)   # before realpath: a NUL byte; a folder
+    if not suffix:
+        raise UserError(f"{where}: '{shown(path)}': an image file's name needs its format's suffix "
+                        f"({', '.join(LDR_FORMATS + HDR_FORMATS)})")
     if cache is not None:
         key = (os.path.realpath(path), raw)
         if key not in cache:
