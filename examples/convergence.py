@@ -11,23 +11,29 @@ import numpy as np
 
 import pathtrace
 
-try:
-    import matplotlib
-except ImportError:
-    sys.exit("convergence.py: the plot needs matplotlib, which pathtrace does not install: "
-             ".venv/bin/python -m pip install matplotlib")
-matplotlib.use("Agg")           # files only, no window
-import matplotlib.pyplot as plt  # noqa: E402
+def parse_size(text: str) -> tuple:
+    """--size: WxH, each a positive integer."""
+    w, _, h = text.partition("x")
+    if not (w.isdigit() and h.isdigit() and int(w) > 0 and int(h) > 0):
+        raise argparse.ArgumentTypeError(f"{text!r} is not WxH, e.g. 240x180")
+    return int(w), int(h)
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])   # the first paragraph, whole
     parser.add_argument("-o", "--output", default="convergence.png")
-    parser.add_argument("--size", default="160x90")
+    parser.add_argument("--size", default="160x90", type=parse_size, help="WxH")
     parser.add_argument("--spp", type=int, default=256, help="samples of the longest run")
     parser.add_argument("--device", default="auto")
     args = parser.parse_args()
-    size = tuple(int(v) for v in args.size.split("x"))
+    size = args.size
+    try:                    # after the arguments, so that --help needs no matplotlib
+        import matplotlib
+    except ImportError:
+        sys.exit("convergence.py: the plot needs matplotlib, which pathtrace does not install: "
+                 ".venv/bin/python -m pip install matplotlib")
+    matplotlib.use("Agg")           # files only, no window
+    import matplotlib.pyplot as plt
 
     scene = pathtrace.load("simple-diffuse")
     # the reference: 8x the samples, with NEE and another seed, so that its noise is not the runs'
@@ -49,4 +55,7 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except pathtrace.UserError as e:       # one line, as pathtrace's own commands say it
+        sys.exit(f"{__file__.rpartition('/')[2]}: error: {e}")

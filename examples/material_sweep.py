@@ -5,6 +5,7 @@ renders (the scene is compiled once), the images tiled into one grid image.
 """
 
 import argparse
+import sys
 
 import numpy as np
 
@@ -26,14 +27,22 @@ SCENE = {
 }
 
 
+def parse_size(text: str) -> tuple:
+    """--size: WxH, each a positive integer."""
+    w, _, h = text.partition("x")
+    if not (w.isdigit() and h.isdigit() and int(w) > 0 and int(h) > 0):
+        raise argparse.ArgumentTypeError(f"{text!r} is not WxH, e.g. 240x180")
+    return int(w), int(h)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])   # the first paragraph, whole
     parser.add_argument("-o", "--output", default="sweep.png")
-    parser.add_argument("--size", default="240x180")
+    parser.add_argument("--size", default="240x180", type=parse_size, help="WxH")
     parser.add_argument("--spp", type=int, default=64)
     parser.add_argument("--device", default="auto")
     args = parser.parse_args()
-    width, height = (int(v) for v in args.size.split("x"))
+    width, height = args.size
 
     scene = pathtrace.load_dict(SCENE, "sweep")
     tiles = []
@@ -46,4 +55,7 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    try:
+        main()
+    except pathtrace.UserError as e:       # one line, as pathtrace's own commands say it
+        sys.exit(f"{__file__.rpartition('/')[2]}: error: {e}")

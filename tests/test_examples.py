@@ -35,3 +35,18 @@ def test_the_convergence_plot_without_matplotlib_says_how_to_get_it(tmp_path):
     assert r.stderr.strip().splitlines() == [
         "convergence.py: the plot needs matplotlib, which pathtrace does not install: "
         ".venv/bin/python -m pip install matplotlib"]
+
+
+def test_the_examples_say_a_bad_size_in_one_line_and_their_help_needs_no_plotting_library(tmp_path):
+    """`--size big` ended in a ValueError's traceback, and convergence.py --help asked for
+    matplotlib (a new user's run, 2026-12-03)."""
+    for name in ("material_sweep.py", "convergence.py"):
+        r = subprocess.run([sys.executable, ROOT / "examples" / name, "--size", "big"], capture_output=True, text=True,
+                           timeout=120)
+        assert r.returncode == 2 and r.stderr.strip().splitlines()[-1] == \
+            f"{name}: error: argument --size: 'big' is not WxH, e.g. 240x180", r.stderr
+    (tmp_path / "matplotlib.py").write_text("raise ImportError('no matplotlib here')\n")   # shadows it
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(tmp_path), os.environ.get("PYTHONPATH")]))}
+    r = subprocess.run([sys.executable, ROOT / "examples" / "convergence.py", "--help"], cwd=tmp_path, env=env,
+                       capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0 and "usage:" in r.stdout, r.stderr
