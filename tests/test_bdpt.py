@@ -807,7 +807,7 @@ def test_the_path_tracers_program_compiles_nothing_of_bdpt(backend):
     ("bdpt", "bdpt", 0, None), ("path", "path", 0, None),
     ('sppm" "float radius" [ 0.05 ]', "bdpt", 0.05, "renders sppm with bdpt and caustic photons of radius 0.05"),
     ('sppm"', "bdpt", 1.0, "renders sppm with bdpt and caustic photons of radius 1"),     # pbrt-v4's default
-    ("mlt", "bdpt", 0, "renders mlt with bdpt, the nearest method"), ("lightpath", "ptracer", 0, None)])
+    ("mlt", "bdpt", 0, "renders mlt with bdpt, the nearest method"), ("lightpath", "bdpt", 0, "renders lightpath with bdpt")])
 def test_a_pbrt_file_chooses_its_integrator(tmp_path, capsys, kind, integrator, radius, note):
     path = tmp_path / "s.pbrt"
     kind = kind if kind.startswith("sppm") else kind + '"'

@@ -101,7 +101,9 @@ class Integrator(Element):
              "pbrt": {"path": ("path", None), "volpath": ("path", None), "bdpt": ("bdpt", None),
                       "mlt": ("bdpt", "pathtrace renders mlt with bdpt, the nearest method it has"),
                       "sppm": ("bdpt", None),      # its photons' radius a note of its own (pbrt/options.py)
-                      "lightpath": ("ptracer", None)}}     # light tracing, as pbrt-v4's LightPathIntegrator
+                      # light tracing; pathtrace's (ptracer) leaves out an environment, which bdpt renders
+                      "lightpath": ("bdpt", "pathtrace renders lightpath with bdpt, whose light subpaths joined to "
+                                            "the camera are light tracing's")}}
     parameters = (
         _integer("max_depth", doc="the longest path in vertices (1: emitters seen directly), 0 unlimited; "
                  "Mitsuba's -1 is unlimited, pbrt-v4's counts bounces (N + 1 vertices)", mitsuba="max_depth",
