@@ -79,6 +79,18 @@ def test_a_zero_scale_or_a_singular_transform_is_taken_as_a_product_that_underfl
     assert "s.pbrt:7: the current transform is singular" in capsys.readouterr().err
 
 
+def test_a_light_with_directions_under_a_singular_transform_is_left_out_with_a_warning(tmp_path, capsys):
+    """Its directions went through the flattening matrix, and the line blamed a parameter the
+    file gave as non-zero ("'to': must not be zero"); a point light's position survives it."""
+    (tmp_path / "s.pbrt").write_text(
+        HEAD + TRIANGLE + 'AttributeBegin\nScale 1 1 0\n'
+        'LightSource "distant" "point3 from" [0 0 0] "point3 to" [0 0 1]\n'
+        'LightSource "point" "point3 from" [0 1 0]\nAttributeEnd\n')
+    s = load_scene(str(tmp_path / "s.pbrt"))
+    assert [light.name for light in s.lights] == ["point"]
+    assert "s.pbrt:7: the current transform is singular (it flattens the light's directions)" in capsys.readouterr().err
+
+
 def test_warnings_alike_are_told_once_with_their_count(tmp_path, capsys):
     (tmp_path / "s.pbrt").write_text(HEAD + TRIANGLE + 'Shape "curve"\n' * 3000)
     load_scene(str(tmp_path / "s.pbrt"))

@@ -723,6 +723,10 @@ def test_convert_names_a_shipped_map_by_its_name_not_a_path_into_the_installatio
     (tmp_path / "venice_sunset_1k.hdr").write_bytes(b"")
     assert in_process("convert", "demo", "-o", tmp_path / "e.toml").returncode == 0
     assert 'map = "venice_sunset_1k.hdr"' not in (tmp_path / "e.toml").read_text()
+    # a Mitsuba scene's shipped map keeps its rows at the poles (a review found them dropped)
+    xml = ROOT / "tests" / "scenes" / "envmap-spheres.xml"
+    assert in_process("convert", xml, "-o", tmp_path / "m.toml").returncode == 0
+    assert load_scene(str(tmp_path / "m.toml")).environment.rows == load_scene(str(xml)).environment.rows == "poles"
 
 
 def test_outputs_that_are_not_regular_files_are_refused_and_kept(tmp_path):

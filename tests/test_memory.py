@@ -55,7 +55,7 @@ def test_a_generated_scene_too_large_to_make_is_refused_before_it_is_made(monkey
     with pytest.raises(UserError, match=r"^heightfield1M: making 1,000,000 triangles"):
         load_scene("heightfield1M")
     monkeypatch.setattr(pathtrace.compiler.memory, "available_host_memory",
-                        lambda: 20_000 * (MAKE_SPHERE_BYTES + BUILD_HOST_BYTES))
+                        lambda: 20_000 * (MAKE_SPHERE_BYTES[1] + BUILD_HOST_BYTES))
     assert len(load_scene("spheres20k").spheres) == 20_000
     assert builtin_maker("spheres100M") is not None and builtin_maker("spheres200M") is None
     assert builtin_maker("spheres100000k") is not None and builtin_maker("spheres100001k") is None

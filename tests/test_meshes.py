@@ -163,6 +163,15 @@ def test_a_gltf_buffer_that_is_a_fifo_is_refused_without_opening_it(tmp_path):
         read_mesh(tmp_path / "m.gltf", "meshes[0].file")
 
 
+def test_a_mesh_librarys_own_slip_is_not_quoted(tmp_path):
+    """trimesh ends on a glTF whose primitive names a missing accessor in an UnboundLocalError
+    about its own variables (a new user's run, 2026-12-03): the line says the file is malformed."""
+    (tmp_path / "m.gltf").write_text('{"asset":{"version":"2.0"},"meshes":[{"primitives":[{"attributes":{"POSITION":5}}]}]}')
+    with pytest.raises(UserError) as e:
+        read_mesh(tmp_path / "m.gltf", "meshes[0].file")
+    assert str(e.value).endswith("m.gltf: not a readable GLTF mesh (malformed)"), str(e.value)
+
+
 def test_nan_indices_and_huge_coordinates_print_nothing_but_our_line(tmp_path):
     """NumPy's own warnings reached the terminal before pathtrace's line (a NaN face index cast
     to int, a cross product of 1e17 coordinates squared in float32)."""

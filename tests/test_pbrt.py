@@ -383,7 +383,10 @@ def test_convert_writes_a_key_for_each_material_whatever_the_files_names(tmp_pat
     ('WorldBegin\nCamera "perspective"\n', 's.pbrt:2: options cannot be set inside the world block; "Camera"'),
     ('WorldBegin\nWorldBegin\n', 's.pbrt:2: options cannot be set inside the world block; "WorldBegin"'),
     ('Camera "perspective"\n', "the file ends before WorldBegin"),
-    ('WorldBegin\nAttributeBegin\nShape "sphere"\n', "1 AttributeBegin without its end"),
+    ('WorldBegin\nAttributeBegin\nShape "sphere"\n', "s.pbrt:2: AttributeBegin without its end, as the file ends"),
+    ('WorldBegin\nObjectBegin "o"\nAttributeBegin\nObjectEnd\n',
+     "s.pbrt:4: ObjectEnd without ObjectBegin (the block open is the AttributeBegin of "),
+    ('TransformBegin\nWorldBegin\n', 's.pbrt:1: the scene description must be inside the world block; "TransformBegin"'),
     ('WorldBegin\nShape "trianglemesh\n', "s.pbrt:2: an unterminated string"),
     ('WorldBegin\nMaterial "diffuse" "spectrum reflectance" [ "metal-Cu-eta"\nShape "sphere" "float radius" [ 1 ]\n',
      "s.pbrt:2: 'reflectance': its '[' is not closed by a ']' before a list of numbers at line 3"),
@@ -416,6 +419,14 @@ def test_convert_writes_a_key_for_each_material_whatever_the_files_names(tmp_pat
 def test_bad_input_is_one_line_naming_the_file(tmp_path, text, expected):
     message = fails(tmp_path, text)
     assert "s.pbrt" in message and expected in message, message
+
+
+def test_transform_begin_and_end_save_and_restore_the_whole_state_as_pbrt_v4s_parser_takes_them(tmp_path, capsys):
+    """pbrt-v4's parser takes TransformBegin/End as AttributeBegin/End (src/pbrt/parser.cpp): the
+    material set inside is undone at the end, where pathtrace restored the transform alone."""
+    s = scene(tmp_path, 'TransformBegin\nTranslate 5 0 0\nMaterial "conductor"\nTransformEnd\nShape "sphere"\n')
+    assert s.materials.get(int(s.sphere_material[0])).type == "diffuse" and np.allclose(s.spheres[0, :3], 0)
+    assert "TransformBegin/End are deprecated in pbrt-v4" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("text,expected", [
@@ -465,6 +476,8 @@ def test_bad_input_is_one_line_naming_the_file(tmp_path, text, expected):
      "s.pbrt:1: 'raduis' is not a parameter of pbrt-v4's sppm integrator"),
     ('Integrator "mlt" "string lightsampler" "power"\nWorldBegin\n' + FLOOR,
      "s.pbrt:1: 'lightsampler' is not a parameter of pbrt-v4's mlt integrator"),
+    ('Integrator "lightpath" "string lightsampler" "bvh"\nWorldBegin\n' + FLOOR,
+     "s.pbrt:1: 'lightsampler' is not a parameter of pbrt-v4's lightpath integrator"),
 ])
 def test_a_file_pbrt_v4_refuses_is_one_line_naming_the_line(tmp_path, text, expected):
     message = fails(tmp_path, text)
@@ -513,8 +526,8 @@ def test_convert_writes_an_inverted_imagemaps_texels_beside_the_toml(tmp_path):
     """pbrt-v4's `invert` is baked into the texels as the file is read: convert once wrote the
     original file's name, and the converted scene rendered the map uninverted (a new user's
     run, 2026-12-03: mean 0.075 against 0.225). The texels go to an EXR file beside the TOML."""
-    import shutil
-    shutil.copy(Path(__file__).parent / "scenes" / "textures" / "tiles.png", tmp_path / "tiles.png")
+    from PIL import Image as PILImage      # with an alpha channel, which no texture reads: its rgb written
+    PILImage.open(Path(__file__).parent / "scenes" / "textures" / "tiles.png").convert("RGBA").save(tmp_path / "tiles.png")
     (tmp_path / "s.pbrt").write_text(
         'LookAt 0 2 5  0 0 0  0 1 0\nCamera "perspective"\nWorldBegin\n'
         'Texture "t" "spectrum" "imagemap" "string filename" "tiles.png" "bool invert" true "float scale" 0.8\n'

@@ -657,3 +657,14 @@ def test_an_images_summary_is_its_decoded_texels_mean_and_extremes(dtype, channe
     np.testing.assert_allclose(mean, rgb.mean(axis=0), rtol=1e-12)
     np.testing.assert_array_equal(low, rgb.min(axis=0))
     np.testing.assert_array_equal(high, rgb.max(axis=0))
+
+
+def test_an_image_file_that_is_a_folder_or_has_no_suffix_is_one_line(tmp_path):
+    """A folder named as a texture's file was refused as "unknown image format ''"."""
+    from pathtrace.textures.bitmap import read_image
+    (tmp_path / "maps").mkdir()
+    (tmp_path / "plain").write_bytes(b"x")
+    with pytest.raises(UserError, match=r"^t: texture '.*maps' is not a regular file$"):
+        read_image(tmp_path / "maps", "t")
+    with pytest.raises(UserError, match=r"^t: '.*plain': an image file's name needs its format's suffix \(.png"):
+        read_image(tmp_path / "plain", "t")

@@ -101,17 +101,13 @@ def mesh_files(scene, out: Path, inline_faces: int = 1000) -> list:
 
 def image_files(scene, out: Path) -> list:
     """(path, image) of the textures' images that no file holds (a pbrt imagemap's `invert`,
-    baked into its texels), to be written beside the TOML as EXR files: NAME.imageK.exr. An
-    alpha channel, which an RGB EXR file cannot give back, is refused."""
+    baked into its texels), to be written beside the TOML as EXR files: NAME.imageK.exr, their
+    rgb (no texture reads a bitmap's alpha: kernels/textures/bitmap.cl)."""
     found = []
     for t in scene.materials.all_textures():
         image = t.params.get("image") if t.type == "bitmap" else None
-        if image is None or image.path or any(image is i for _, i in found):
-            continue
-        if image.texels.shape[2] == 4:
-            raise UserError(f"texture {t.name or ''}: its texels, made in memory (an inverted imagemap), have an "
-                            "alpha channel, which convert cannot write out")
-        found.append((out.with_name(f"{out.stem}.image{len(found)}.exr"), image))
+        if image is not None and not image.path and not any(image is i for _, i in found):
+            found.append((out.with_name(f"{out.stem}.image{len(found)}.exr"), image))
     return found
 
 

@@ -109,25 +109,26 @@ def builtin_maker(name: str):
 
     def make():
         _check_generation(name, n, "spheres" if spheres else "triangles",
-                          MAKE_SPHERE_BYTES if spheres else MAKE_TRIANGLE_BYTES)
+                          *(MAKE_SPHERE_BYTES if spheres else MAKE_TRIANGLE_BYTES))
         return random_spheres(n, bool(m.group(4))) if spheres else height_field(n)
     return make
 
 
 MAX_GENERATED = 100_000_000    # spheres or triangles of a generated scene (the k or M suffix applied)
-# The host memory that making a generated scene takes per primitive at its peak (measured:
-# 390 bytes a sphere, its own material row each, and 80 a triangle), besides its BVH build's
-MAKE_SPHERE_BYTES, MAKE_TRIANGLE_BYTES = 400, 100
+# The host memory per primitive of making a generated scene: at its peak, and what the scene
+# keeps through its BVH build (tracemalloc, 2026-12-03: a sphere 450 and 287 bytes, its own
+# material row each; a triangle 82 and 18)
+MAKE_SPHERE_BYTES, MAKE_TRIANGLE_BYTES = (460, 290), (90, 20)
 
 
-def _check_generation(name: str, n: int, what: str, per_primitive: int):
+def _check_generation(name: str, n: int, what: str, peak: int, kept: int):
     """Refuses, in one line and before anything is allocated, a generated scene that could not be
-    made and its BVH built in the host's available memory (app/compiler/compiled.py:
-    check_memory checks the build alone, once the scene is made)."""
+    made, or kept while its BVH is built, in the host's available memory
+    (app/compiler/compiled.py: check_memory checks the build alone, once the scene is made)."""
     from pathtrace.compiler.compiled import BUILD_HOST_BYTES
     from pathtrace.compiler.memory import available_host_memory
     from pathtrace.errors import UserError, format_bytes
-    available, needed = available_host_memory(), n * (per_primitive + BUILD_HOST_BYTES)
+    available, needed = available_host_memory(), n * max(peak, kept + BUILD_HOST_BYTES)
     if available is not None and needed > available:
         raise UserError(f"{name}: making {n:,} {what} and building their BVH needs about {format_bytes(needed)} of "
                         f"memory; {format_bytes(available)} is available")

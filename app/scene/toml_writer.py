@@ -149,12 +149,10 @@ def scene_toml(scene: Scene, out: Path) -> str:
     lines += ["", "[environment]"]
     if env.source == "constant":
         lines.append(f"color = {_value(_color(env.image[0, 0]))}")
-    elif _shipped_map(env.source, out):
+    else:
         # a shipped map by its bare name, which the TOML reader finds wherever pathtrace is
         # installed (a path into the environment would break when it is made again)
-        lines.append(f"map = {_value(Path(env.source).name)}")
-    else:
-        lines.append(f"map = {_value(rel(env.source))}")
+        lines.append(f"map = {_value(Path(env.source).name if _shipped_map(env.source, out) else rel(env.source))}")
         if env.rows != "centres":
             lines.append(f"rows = {_value(env.rows)}")
     if tuple(env.up) != (0.0, 1.0, 0.0):

@@ -105,9 +105,8 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
         if not self.in_world:
             raise UserError(f"{self.path}: the file ends before WorldBegin (pbrt-v4 refuses it too)")
         if self.stack:
-            kind = self.stack[-1][0]
-            raise UserError(f"{self.path}: {len(self.stack)} {'AttributeBegin' if kind == 'attribute' else 'TransformBegin'}"
-                            f" without its end")
+            directive, _, where = self.stack[-1]
+            raise UserError(f"{where}: {directive} without its end, as the file ends (pbrt-v4 refuses it too)")
         self.settings.filter = self.filter
         for name, row in self.medium_rows.items():
             if self.media[row] is None:
@@ -472,6 +471,12 @@ class PbrtReader(GraphicsStateDirectives, OptionDirectives):
             refuse_unknown_type("pbrt", "light", kind, where)
             params.ignore()
             warn(f"{where}: pathtrace has no {kind} light; it leaves it out")
+            return
+        if self.singular() and any(p.kind == "vector" for p in cls.parameters):
+            # its directions flattened (or NaN in pbrt-v4), as a shape's surface: left out as a shape is
+            params.ignore()
+            warn(f"{where}: the current transform is singular (it flattens the light's directions); "
+                 "pathtrace leaves the light out")
             return
         values = self.read_declared(cls, params, where)
         for p in cls.parameters:

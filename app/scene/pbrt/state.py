@@ -44,7 +44,7 @@ class GraphicsStateDirectives:
         self.folder = self.path.parent
         self.state = GraphicsState()
         self.stack = []                   # saved states of AttributeBegin / TransformBegin
-        self.in_world = False             # past WorldBegin: the scene's block, not the options' (BLOCKS)
+        self.in_world = False             # past WorldBegin: the scene's block, not the options' (check_block)
         self.named_systems = {}
         self.including = []
         self.includes = 0                 # Include directives read so far
@@ -96,21 +96,24 @@ class GraphicsStateDirectives:
         except ValueError as e:
             tokens.fail(offset, f"LookAt: {e}")
 
-    def _attribute_begin(self, tokens, offset):
-        self.stack.append(("attribute", self.state.copy(), offset))
+    def _attribute_begin(self, tokens, offset, directive="AttributeBegin"):
+        """The graphics state saved, with where its block began (the stack's entries: the
+        directive, the state, file:line), for its end or the file's (reader.read)."""
+        self.stack.append((directive, self.state.copy(), tokens.where(offset)))
 
-    def _attribute_end(self, tokens, offset):
-        if not self.stack or self.stack[-1][0] != "attribute":
-            tokens.fail(offset, "AttributeEnd without AttributeBegin")
+    def _attribute_end(self, tokens, offset, directive="AttributeEnd"):
+        begun = ("ObjectBegin",) if directive == "ObjectEnd" else ("AttributeBegin", "TransformBegin")
+        if not self.stack or self.stack[-1][0] not in begun:
+            open_block = f" (the block open is the {self.stack[-1][0]} of {self.stack[-1][2]})" if self.stack else ""
+            tokens.fail(offset, f"{directive} without {begun[0]}{open_block}")
         self.state = self.stack.pop()[1]
 
     def _transform_begin(self, tokens, offset):
-        self.stack.append(("transform", self.state.ctm, offset))
-
-    def _transform_end(self, tokens, offset):
-        if not self.stack or self.stack[-1][0] != "transform":
-            tokens.fail(offset, "TransformEnd without TransformBegin")
-        self.state.ctm = self.stack.pop()[1]
+        # pbrt-v4's parser takes TransformBegin/End as AttributeBegin/End, the whole graphics
+        # state saved (src/pbrt/parser.cpp), with a warning that they are deprecated
+        self.once("TransformBegin", f"{tokens.where(offset)}: TransformBegin/End are deprecated in pbrt-v4, "
+                                    "which takes them as AttributeBegin/End; so does pathtrace")
+        self._attribute_begin(tokens, offset, "TransformBegin")
 
     def _world_begin(self, tokens, offset):
         self.in_world = True
@@ -168,7 +171,7 @@ class GraphicsStateDirectives:
         name = string(tokens, "ObjectBegin")
         if self.current_object is not None:
             tokens.fail(offset, "ObjectBegin inside another ObjectBegin")
-        self._attribute_begin(tokens, offset)
+        self._attribute_begin(tokens, offset, "ObjectBegin")
         self.current_object = name
         # its shapes are kept as read and made at its first ObjectInstance: a file of 100,000
         # objects never instanced costs their reading only (pbrt-v4 reads one in under a second)
@@ -178,8 +181,8 @@ class GraphicsStateDirectives:
     def _object_end(self, tokens, offset):
         if self.current_object is None:
             tokens.fail(offset, "ObjectEnd without ObjectBegin")
+        self._attribute_end(tokens, offset, "ObjectEnd")
         self.current_object = None
-        self._attribute_end(tokens, offset)
 
     def _reverse_orientation(self, tokens, offset):
         self.state.reverse = not self.state.reverse
@@ -214,7 +217,7 @@ OPTIONS_ONLY = frozenset(("Camera", "Sampler", "WorldBegin", "TransformTimes", "
                           "Integrator"))
 WORLD_ONLY = frozenset(("ReverseOrientation", "AttributeBegin", "AttributeEnd", "LightSource", "Shape", "ObjectBegin",
                         "ObjectEnd", "ObjectInstance", "Texture", "Material", "MakeNamedMaterial", "NamedMaterial",
-                        "AreaLightSource"))
+                        "AreaLightSource", "TransformBegin", "TransformEnd"))     # (the last two as AttributeBegin/End)
 
 
 def check_block(reader, name: str, tokens, offset):
@@ -244,11 +247,11 @@ STATE_DIRECTIVES = {
     "ColorSpace": GraphicsStateDirectives._ignored("ColorSpace", "pathtrace takes colours as linear sRGB", 1),
     "Option": GraphicsStateDirectives._option,
     "WorldBegin": GraphicsStateDirectives._world_begin,
-    "WorldEnd": lambda self, tokens, offset: None,          # pbrt-v3's; v4 accepts and ignores it
+    "WorldEnd": lambda self, tokens, offset: None,    # pbrt-v3's end, which pbrt-v4 refuses outside its formatter; taken
     "AttributeBegin": GraphicsStateDirectives._attribute_begin,
     "AttributeEnd": GraphicsStateDirectives._attribute_end,
     "TransformBegin": GraphicsStateDirectives._transform_begin,
-    "TransformEnd": GraphicsStateDirectives._transform_end,
+    "TransformEnd": lambda self, tokens, offset: self._attribute_end(tokens, offset, "TransformEnd"),
     "Attribute": GraphicsStateDirectives._ignored("Attribute", "each directive uses its own parameters and pbrt-v4's defaults", 1, True),
     "MediumInterface": GraphicsStateDirectives._medium_interface,
     "ObjectBegin": GraphicsStateDirectives._object_begin,
