@@ -9,6 +9,7 @@ the settings, the materials, the environment) is uploaded again; a change of geo
 or meshes) compiles it anew."""
 
 import operator
+import os
 import threading
 import time
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -17,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
-from pathtrace.errors import UserError, short, warn
+from pathtrace.errors import UserError, cut, short, warn
 from pathtrace.rendering.choices import INTEGRATORS, TONEMAPS
 from pathtrace.scene.description import Scene
 from pathtrace.scene.validate import SETTING_RANGES, check_scene, check_tables, russian_roulette
@@ -314,6 +315,7 @@ def progressive(scene, spp=None, steps=None, size=None, device="auto", seed=None
         raise UserError(f"steps: {steps[-1]} is more samples per pixel than spp ({settings.spp}); "
                         "leave spp out for the steps alone to say how far to render")
     aovs = _aov_names(aovs)
+    _check_callbacks(progress=progress, build_progress=build_progress, phases=phases)
     prepared = prepare(scene, device, build_progress, phases, settings, bool(aovs))
     prepared.update(scene, settings, bool(aovs))
     group = prepared.group
@@ -385,6 +387,15 @@ def _aov_names(aovs) -> tuple:
     if unknown:
         raise UserError(f"aovs: {short(unknown[0])} is not one of {', '.join(AOVS)}")
     return tuple(dict.fromkeys(names))
+
+
+def _check_callbacks(**given):
+    """The callback arguments: a function or None (progress also True or False), one line
+    naming the argument otherwise, not a TypeError from the middle of the render."""
+    for name, value in given.items():
+        if not (value is None or callable(value) or (name == "progress" and isinstance(value, bool))):
+            allowed = "True, False or a function" if name == "progress" else "a function or None"
+            raise UserError(f"{name}: give {allowed}, got {short(value)}")
 
 
 def _progress(progress, name: str, settings, total: int):
@@ -510,10 +521,14 @@ def view(scene="simple", device: str = "auto", size=None, frames: int = None,
         frames = _integer("frames", frames, 1, 2**31 - 1)
     if size is not None:
         size = checked_size(size)           # before the window opens at it
+    if screenshot and os.path.exists(screenshot_dir) and not os.path.isdir(screenshot_dir):
+        raise UserError(f"screenshot_dir: '{cut(str(screenshot_dir), 200)}' is a file, not a folder")   # not after the run
 
     def read():
         """The scene, read in a thread of its own while the window opens and says so."""
         given = scene if isinstance(scene, Scene) else scene() if callable(scene) else load(scene)
+        if not isinstance(given, Scene):
+            raise UserError(f"scene: the function gave no scene, but {short(given)}")
         return given if size is None else replace(given, settings=settings_for(given, size=size))
     opening = DevicesOpening(device)        # while the window opens and the scene is read
     with ThreadPoolExecutor(1, thread_name_prefix="read-scene") as pool:

@@ -130,6 +130,10 @@ def test_render_with_aovs():
     (dict(device=[2.5]), "device: give a device spec"), (dict(device=True), "device: give a device spec"),
     (dict(steps=[4, 2]), "steps"),
     (dict(steps=[2, 8], spp=4), "steps: 8 is more samples per pixel than spp \\(4\\)"),
+    # a callback that is not one: a TypeError from inside the render before
+    (dict(phases=5), "^phases: give a function or None, got 5$"),
+    (dict(build_progress="x"), "^build_progress: give a function or None, got 'x'$"),
+    (dict(progress=5), "^progress: give True, False or a function, got 5$"),
 ])
 def test_bad_arguments_are_one_line_user_errors(kwargs, message):
     scene = pathtrace.load_dict(small_scene())
@@ -147,6 +151,17 @@ def test_a_device_index_may_be_a_number():
     image = pathtrace.render(scene, spp=1, size=(8, 6), device="0")
     for index in (0, np.int64(0), [0]):
         np.testing.assert_array_equal(pathtrace.render(scene, spp=1, size=(8, 6), device=index), image)
+
+
+def test_a_filter_that_is_not_one_and_a_camera_type_that_is_none_are_one_line():
+    """A string as the settings' filter said "'str' object has no attribute 'check'"; an unknown
+    camera type was a bare KeyError (a new user's run, 2026-12-03)."""
+    scene = pathtrace.load_dict(small_scene())
+    with pytest.raises(UserError, match="^camera.as_type: no camera type 'bogus' \\(types: orthographic, perspective"):
+        scene.camera.as_type("bogus")
+    scene.settings.filter = "box"
+    with pytest.raises(UserError, match="^scene.settings.filter: give a pathtrace.filters.PixelFilter .*, got 'box'$"):
+        render(scene, spp=1, size=(8, 8))
 
 
 def test_a_changed_scene_is_rendered_without_compiling_it_again():
@@ -549,6 +564,7 @@ def test_a_material_table_is_compared_by_its_bytes():
     ({"rho_d": [2.0, 0.5, 0.5]}, "rho_d"), ({"rho_d": [-1.0, 0.5, 0.5]}, "rho_d"),
     ({"rho_d": [np.inf, 0.5, 0.5]}, "rho_d"), ({"rho_d": [np.nan, 0.5, 0.5]}, "rho_d"),
     ({"emission": [np.nan, 1.0, 1.0]}, "emission"), ({"emission": [-1.0, 1.0, 1.0]}, "emission"),
+    ({"emission": [1e39, 1.0, 1.0]}, "emission"),       # beyond float32: it blamed the scene's file
     ({"blend": 2.0}, "rho_d"),
 ])
 def test_a_material_changed_through_the_api_is_checked_as_a_file_is(change, field):

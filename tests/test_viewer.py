@@ -1080,6 +1080,25 @@ pathtrace.view(scene, device={os.environ.get("PATHTRACE_TEST_DEVICE", "cpu")!r},
     assert centre[0] > 4 * centre[1] and centre[0] > 4 * centre[2], centre
 
 
+def test_api_view_refuses_a_function_of_no_scene_and_a_screenshot_folder_that_is_a_file(display, tmp_path):
+    """Both ended in an AttributeError, or a line at the end of the whole session (a new
+    user's run, 2026-12-03): one UserError, the second before the window opens."""
+    (tmp_path / "afile").write_text("")
+    code = f"""
+import pathtrace
+for kwargs in (dict(scene=lambda: None), dict(scene="simple", screenshot=True, screenshot_dir={str(tmp_path / "afile")!r})):
+    try:
+        pathtrace.view(device={os.environ.get("PATHTRACE_TEST_DEVICE", "cpu")!r}, size=(32, 24), frames=3, **kwargs)
+    except pathtrace.UserError as e:
+        print(e)
+"""
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 0, r.stderr
+    lines = r.stdout.splitlines()
+    assert lines[0] == "scene: the function gave no scene, but None" and len(lines) == 2, r.stdout
+    assert lines[1].startswith("screenshot_dir: '") and lines[1].endswith("afile' is a file, not a folder"), r.stdout
+
+
 def test_without_a_display_it_says_how_to_render_headless(tmp_path):
     env = {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
     r = subprocess.run([sys.executable, "-m", "pathtrace", "view"], env=env, capture_output=True, text=True,

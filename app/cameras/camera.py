@@ -14,7 +14,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from pathtrace.errors import with_article
+from pathtrace.errors import UserError, short, with_article
 from pathtrace.parameters import Parameter
 
 MAX_EXTENT = 1e30     # the largest aperture, focus distance or view height a file may give
@@ -141,6 +141,8 @@ class Camera:
     def as_type(self, type_name: str, **fields) -> "Camera":
         """A camera of the registered type `type_name` with this one's frame, the fields the two
         types share, and `fields`."""
+        if type_name not in Camera.types():
+            raise UserError(f"camera.as_type: no camera type {short(type_name)} (types: {', '.join(Camera.types())})")
         cls = Camera.types()[type_name]
         theirs = {f.name for f in dataclasses.fields(cls)}
         shared = {f.name: getattr(self, f.name) for f in dataclasses.fields(self) if f.name in theirs}

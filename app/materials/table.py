@@ -117,10 +117,12 @@ def value_problem(material: Material) -> ValueError | None:
     finite or negative, its blend components' included, as a ValueError ("<name>: <problem>"):
     the check the readers make as they read, for a Material a user changed (the API's
     `scene.materials[key] = m`)."""
+    from pathtrace.lights.light import MAX_RADIANCE      # (pathtrace.lights imports this module)
     emission = material.emission
-    if not isinstance(emission, Texture) and not np.all(np.isfinite(np.asarray(emission, np.float64)) &
+    if not isinstance(emission, Texture) and not np.all((np.asarray(emission, np.float64) <= MAX_RADIANCE) &
                                                         (np.asarray(emission, np.float64) >= 0)):
-        return ValueError(f"emission: must be finite and not negative, got {np.asarray(emission).tolist()}")
+        # (NaN fails both) beyond MAX_RADIANCE the float32 sums of samples overflow, and the row's float32 cast
+        return ValueError(f"emission: must lie in [0, {MAX_RADIANCE:g}], got {np.asarray(emission).tolist()}")
     error = out_of_range(BSDFS[material.type].params, material.params) if material.type in BSDFS else None
     return error or next((e for e in map(value_problem, material.components or ()) if e), None)
 

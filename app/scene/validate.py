@@ -73,6 +73,10 @@ def _settings(s):
         raise UserError(f"{where}.path_sort: give True or False, got {short(s.path_sort)}")
     if not s.paths_end:
         raise UserError(f"{where}: russian_roulette 'off' needs max_depth >= 1, or paths would never end")
+    from pathtrace.filters import PixelFilter
+    if not isinstance(s.filter, PixelFilter):
+        raise UserError(f"{where}.filter: give a pathtrace.filters.PixelFilter (pathtrace.filters.TYPES['box'].make"
+                        f"({{}}), say), got {short(s.filter)}")
     try:
         s.filter.check()
     except (ValueError, TypeError, AttributeError) as e:
