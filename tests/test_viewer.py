@@ -1290,6 +1290,17 @@ def test_a_scene_whose_kernels_or_uploads_fail_leaves_the_scene_the_window_had(v
     assert p.passes_done > passes
 
 
+def test_a_message_longer_than_its_slot_says_it_is_cut():
+    """The slot cut a long error where it filled, so that it looked whole without the file's
+    name at its end (a new user's run, 2026-12-03): a cut message ends in " ..."."""
+    from pathtrace.viewer.panel import fitted
+    def fits(t):
+        return len(t) <= 24
+    assert fitted("error: no such file", fits) == "error: no such file"
+    assert fitted("error: mesh file 'a/b/missing.ply' does not exist", fits) == "error: mesh file ..."
+    assert fitted("x" * 100, fits) == "x" * 100 + " ..."        # one word longer than the slot: kept, marked
+
+
 def test_the_file_field_shows_one_line_for_a_file_it_cannot_open_and_keeps_the_scene(viewer, tmp_path, capsys):
     """Each bad path typed in the panel's file field and opened as its button opens it (the panel
     sets requested_scene to the field's text, which the next frame opens through

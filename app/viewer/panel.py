@@ -162,7 +162,9 @@ def _status(imgui, v):
     imgui.begin_child("message", (0, MESSAGE_LINES * imgui.get_text_line_height()), imgui.ChildFlags_.none,
                       imgui.WindowFlags_.no_scrollbar | imgui.WindowFlags_.no_scroll_with_mouse)
     if v.message:
-        text = ("error: " if v.error else "") + v.message
+        width, height = imgui.get_content_region_avail().x, MESSAGE_LINES * imgui.get_text_line_height_with_spacing()
+        text = fitted(("error: " if v.error else "") + v.message,
+                      lambda t: imgui.calc_text_size(t, wrap_width=width).y <= height)
         if v.error:
             imgui.push_style_color(imgui.Col_.text, (1.0, 0.45, 0.4, 1.0))
         imgui.text_wrapped(text)
@@ -171,6 +173,18 @@ def _status(imgui, v):
     imgui.end_child()
     if v.message:
         imgui.set_item_tooltip(("error: " if v.error else "") + v.message)
+
+
+def fitted(text: str, fits) -> str:
+    """`text`, or as many of its first words as fit with " ..." after them (fits(text): whether
+    a text fits the message slot), so that a cut message says it is cut: its end, often the
+    file's name, is in the tooltip and the terminal."""
+    if fits(text):
+        return text
+    words = text.split(" ")
+    while len(words) > 1 and not fits(" ".join(words) + " ..."):
+        words.pop()
+    return " ".join(words) + " ..."
 
 
 def draw_panel(v):
