@@ -235,3 +235,23 @@ def test_a_mesh_found_in_one_reading_is_collected_by_every_reading_under_way():
         mesh_cache.collect(("/b.obj", 3, 4), mesh)
     assert set(first) == set(second) == {at, ("/b.obj", 3, 4)}
     assert not mesh_cache.holds(at)
+
+
+def test_a_cache_variable_naming_a_file_is_said_once_and_the_render_goes_on(tmp_path, monkeypatch, capsys):
+    """PATHTRACE_BVH_CACHE, PATHTRACE_SCENE_CACHE or PATHTRACE_CACHE naming a file was passed over
+    without a word (a new user's run, 2026-12-03): one warning each, once."""
+    from pathtrace.io import cache_files
+    (tmp_path / "file").write_text("")
+    monkeypatch.setattr(cache_files, "_warned_folders", set())
+    for variable in ("PATHTRACE_BVH_CACHE", "PATHTRACE_SCENE_CACHE", "PATHTRACE_CACHE"):
+        monkeypatch.setenv(variable, str(tmp_path / "file"))
+    for _ in range(2):
+        cache_files.chosen_folder("PATHTRACE_BVH_CACHE", "bvh")
+        cache_files.chosen_folder("PATHTRACE_SCENE_CACHE", "scenes")
+        cache_files.cache_dir()
+    lines = capsys.readouterr().err.strip().splitlines()
+    assert sorted(line.split(":")[2].strip() for line in lines) == ["PATHTRACE_BVH_CACHE", "PATHTRACE_CACHE",
+                                                                     "PATHTRACE_SCENE_CACHE"], lines
+    assert all(line.endswith("is not a folder; pathtrace keeps nothing there") for line in lines)
+    monkeypatch.setenv("PATHTRACE_BVH_CACHE", "0")
+    assert cache_files.chosen_folder("PATHTRACE_BVH_CACHE", "bvh") is None

@@ -51,8 +51,7 @@ def builder_digest() -> bytes:
 
 def folder():
     """The cache's folder, or None where it is turned off."""
-    chosen = os.environ.get("PATHTRACE_BVH_CACHE", "")
-    return None if chosen == "0" else Path(chosen) if chosen else cache_files.cache_dir() / "bvh"
+    return cache_files.chosen_folder("PATHTRACE_BVH_CACHE", "bvh")
 
 
 def entry_key(lo: np.ndarray, hi: np.ndarray, num_spheres: int) -> str:

@@ -31,7 +31,32 @@ def cache_dir() -> Path:
     (api.DevicesOpening): the reading had waited for that import."""
     base = os.environ.get("PATHTRACE_CACHE") or os.path.join(
         os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "pathtrace")
+    if os.environ.get("PATHTRACE_CACHE"):
+        _warn_if_no_folder("PATHTRACE_CACHE", base)
     return Path(base)
+
+
+def chosen_folder(variable: str, default: str):
+    """The folder of a cache that the environment variable `variable` may name (0: the cache is
+    off, None), else cache_dir()/default."""
+    chosen = os.environ.get(variable, "")
+    if chosen == "0":
+        return None
+    if chosen:
+        _warn_if_no_folder(variable, chosen)
+    return Path(chosen) if chosen else cache_dir() / default
+
+
+_warned_folders = set()
+
+
+def _warn_if_no_folder(variable: str, path: str):
+    """One warning, once, where the variable names something that is no folder (a file): the
+    caches are then not kept, which pathtrace goes on without, as without a writable folder."""
+    if os.path.exists(path) and not os.path.isdir(path) and variable not in _warned_folders:
+        from pathtrace.errors import cut, warn
+        _warned_folders.add(variable)
+        warn(f"{variable}: '{cut(path, 200)}' is not a folder; pathtrace keeps nothing there")
 
 
 def checksum(chunks) -> bytes:

@@ -49,8 +49,7 @@ def source_digest() -> bytes:
 
 def folder():
     """The cache's folder, or None where it is turned off."""
-    chosen = os.environ.get("PATHTRACE_SCENE_CACHE", "")
-    return None if chosen == "0" else Path(chosen) if chosen else cache_files.cache_dir() / "scenes"
+    return cache_files.chosen_folder("PATHTRACE_SCENE_CACHE", "scenes")
 
 
 def entry_path(where: Path, name: str) -> Path:
