@@ -197,6 +197,9 @@ def test_output_names_must_tell_the_images_apart(tmp_path, capsys):
     assert "several images would share a name" in capsys.readouterr().err
     assert main(["farm", "render", "simple", "-o", str(tmp_path / "{nope}.png")]) == 1
     assert "only {name} and {frame}" in capsys.readouterr().err
+    # an orbit without frames was passed over without a word
+    assert main(["farm", "render", "simple", "--orbit", "90", "-o", str(tmp_path / "x.png")]) == 1
+    assert "--orbit: the turn of the frames' orbit; give --frames N too" in capsys.readouterr().err
 
 
 def test_farm_render_from_the_command_line(tmp_path):

@@ -23,9 +23,12 @@ def cmd_farm_render(args):
     scenes = [apply_render_options(load_scene(name), args) for name in args.scene]
     if args.frames and len(scenes) > 1:
         raise UserError("--frames: give one scene, whose camera the frames orbit")
+    if args.orbit is not None and not args.frames:
+        raise UserError("--orbit: the turn of the frames' orbit; give --frames N too")
     jobs = [farm.Job(i, scene.camera, scene.settings.spp) for i, scene in enumerate(scenes)]
     if args.frames:
-        jobs = [farm.Job(0, camera, jobs[0].spp) for camera in farm.orbit(scenes[0].camera, args.frames, args.orbit)]
+        jobs = [farm.Job(0, camera, jobs[0].spp)
+                for camera in farm.orbit(scenes[0].camera, args.frames, 360.0 if args.orbit is None else args.orbit)]
     for k, job in enumerate(jobs):
         job.output = farm_output(args.output, scenes[job.scene].name, k, len(jobs))
         check_writable(job.output)
@@ -94,7 +97,7 @@ def add_parser(sub):
     p.add_argument("--spp", type=_int_range(1, 2**31 - 1), help="samples per pixel (default: the scene's)")
     p.add_argument("--frames", type=_int_range(1), metavar="N",
                    help="render N frames of the camera orbiting its look-at point")
-    p.add_argument("--orbit", type=_finite, default=360.0, metavar="DEGREES",
+    p.add_argument("--orbit", type=_finite, metavar="DEGREES",
                    help="how far the --frames orbit turns (default 360)")
     p.add_argument("--address", metavar="ADDR",
                    help="the Ray cluster to join ('auto': the one 'ray start' began on this "
