@@ -1290,6 +1290,27 @@ def test_a_scene_whose_kernels_or_uploads_fail_leaves_the_scene_the_window_had(v
     assert p.passes_done > passes
 
 
+def test_while_a_scene_opens_from_the_panel_the_image_before_stays_under_the_notice(viewer, monkeypatch):
+    """The window went blank, the notice alone, for the seconds a scene opened from the file
+    field took (a new user's run, 2026-12-03: about 4 s for spheres1M)."""
+    from PIL import ImageGrab
+    settle(viewer)
+    x, y = viewer.glfw.get_window_pos(viewer.window)
+    w, h = viewer.glfw.get_window_size(viewer.window)
+    grabbed, show = [], viewer.show_progress
+
+    def grab(text, fraction=None):
+        show(text, fraction)
+        if not grabbed:
+            grabbed.append(np.asarray(ImageGrab.grab((x, y, x + w, y + h)), np.float64))
+    monkeypatch.setattr(viewer, "show_progress", grab)
+    viewer.load_scene("cornell-box")
+    x0, width = viewer.image_area(w, h)
+    shown = grabbed[0][h // 8:h * 7 // 8, x0 + width // 8:x0 + width * 7 // 8]
+    assert shown.mean() > 60, shown.mean()       # the sky of `simple`, not the blank window's 20
+    assert viewer.message == "loaded cornell-box"
+
+
 def test_a_message_longer_than_its_slot_says_it_is_cut():
     """The slot cut a long error where it filled, so that it looked whole without the file's
     name at its end (a new user's run, 2026-12-03): a cut message ends in " ..."."""

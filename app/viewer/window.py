@@ -394,8 +394,9 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots, CameraEdits
         glfw.poll_events()
         self.gui.process_inputs()
         fw, fh = glfw.get_framebuffer_size(self.window)
-        self.ctx.viewport = (0, 0, fw, fh)
-        self.ctx.clear(0.08, 0.08, 0.08)
+        # the image shown before, if any (a scene opened from the panel), under the notice, not a
+        # blank window; the panel waits, as the work changes the renderer it edits
+        self._draw(fw, fh)
         imgui.new_frame()
         draw_notice(self, text, fraction)
         imgui.render()
