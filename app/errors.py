@@ -90,7 +90,10 @@ def did_you_mean(given: str, choices, quoted=False) -> str:
 
 def short(value) -> str:
     """A value the user gave, for a message: its repr (quoted, escapes shown), cut to 60
-    characters; a boolean as the scene formats write it (true, not Python's True)."""
+    characters; a boolean as the scene formats write it (true, not Python's True), a NumPy
+    scalar as its number."""
+    if type(value).__module__ == "numpy" and hasattr(value, "item") and getattr(value, "ndim", None) == 0:
+        value = value.item()     # a NumPy scalar as the number it is, not NumPy's repr (np.int32(99))
     if isinstance(value, bool):
         return "true" if value else "false"
     return cut(repr(value))

@@ -164,6 +164,16 @@ def test_a_filter_that_is_not_one_and_a_camera_type_that_is_none_are_one_line():
         render(scene, spp=1, size=(8, 8))
 
 
+def test_a_numpy_number_is_shown_as_its_number_in_a_message():
+    """NumPy 2's repr gave "got np.int32(99)" (a new user's run, 2026-12-03)."""
+    from pathtrace.errors import short
+    assert (short(np.int32(99)), short(np.float64(1.5)), short(np.bool_(True))) == ("99", "1.5", "true")
+    scene = pathtrace.load_dict(small_scene())
+    scene.sphere_material[0] = np.int32(99)
+    with pytest.raises(UserError, match=r"^scene.sphere_material: material rows must be integers from 0 to \d+, got 99$"):
+        render(scene, spp=1, size=(8, 8))
+
+
 def test_a_changed_scene_is_rendered_without_compiling_it_again():
     """Camera, material, environment and settings changes reuse the compiled scene (its BVH
     stays) and give the image a fresh scene with those changes gives; moving geometry compiles
