@@ -10,19 +10,13 @@ import sys
 import numpy as np
 
 import pathtrace
-
-def parse_size(text: str) -> tuple:
-    """--size: WxH, each a positive integer."""
-    w, _, h = text.partition("x")
-    if not (w.isdigit() and h.isdigit() and int(w) > 0 and int(h) > 0):
-        raise argparse.ArgumentTypeError(f"{text!r} is not WxH, e.g. 240x180")
-    return int(w), int(h)
+from pathtrace.cli.options import image_size
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])   # the first paragraph, whole
     parser.add_argument("-o", "--output", default="convergence.png")
-    parser.add_argument("--size", default="160x90", type=parse_size, help="WxH")
+    parser.add_argument("--size", default="160x90", type=image_size, help="WxH")
     parser.add_argument("--spp", type=int, default=256, help="samples of the longest run")
     parser.add_argument("--device", default="auto")
     args = parser.parse_args()

@@ -10,6 +10,7 @@ import sys
 import numpy as np
 
 import pathtrace
+from pathtrace.cli.options import image_size
 
 ALPHAS = (0.02, 0.08, 0.2, 0.4, 0.7)         # GGX roughness, smooth to rough
 
@@ -27,18 +28,10 @@ SCENE = {
 }
 
 
-def parse_size(text: str) -> tuple:
-    """--size: WxH, each a positive integer."""
-    w, _, h = text.partition("x")
-    if not (w.isdigit() and h.isdigit() and int(w) > 0 and int(h) > 0):
-        raise argparse.ArgumentTypeError(f"{text!r} is not WxH, e.g. 240x180")
-    return int(w), int(h)
-
-
 def main():
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])   # the first paragraph, whole
     parser.add_argument("-o", "--output", default="sweep.png")
-    parser.add_argument("--size", default="240x180", type=parse_size, help="WxH")
+    parser.add_argument("--size", default="240x180", type=image_size, help="WxH")
     parser.add_argument("--spp", type=int, default=64)
     parser.add_argument("--device", default="auto")
     args = parser.parse_args()

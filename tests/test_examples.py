@@ -44,7 +44,7 @@ def test_the_examples_say_a_bad_size_in_one_line_and_their_help_needs_no_plottin
         r = subprocess.run([sys.executable, ROOT / "examples" / name, "--size", "big"], capture_output=True, text=True,
                            timeout=120)
         assert r.returncode == 2 and r.stderr.strip().splitlines()[-1] == \
-            f"{name}: error: argument --size: 'big' is not WxH, e.g. 240x180", r.stderr
+            f"{name}: error: argument --size: 'big' is not WIDTHxHEIGHT, e.g. 1920x1080", r.stderr
     (tmp_path / "matplotlib.py").write_text("raise ImportError('no matplotlib here')\n")   # shadows it
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [str(tmp_path), os.environ.get("PYTHONPATH")]))}
     r = subprocess.run([sys.executable, ROOT / "examples" / "convergence.py", "--help"], cwd=tmp_path, env=env,

@@ -4,7 +4,7 @@ import argparse
 import sys
 
 from pathtrace.bench.default_scenes import FIRST_IMAGE_SCENES, GENERATED_FILES, TARGET_SCENES
-from pathtrace.cli.options import (PATH_SORT_ALONE, _count, _int_range, _size, add_path_queue_option,
+from pathtrace.cli.options import (PATH_SORT_ALONE, _count, _int_range, add_path_queue_option, image_size,
                                    add_program_option)
 
 def cmd_bench(args):
@@ -126,7 +126,7 @@ def add_parser(sub):
                    help="rr (the report's), depth8 (comparison mode), or either with +nee "
                         "(next-event estimation); repeatable; default: depth8+nee for scenes of meshes, "
                         "depth8 for -diffuse ones, rr for the report's other scenes")
-    p.add_argument("--size", type=_size, metavar="WxH", help="default 1920x1080 (with --first-image 640x360)")
+    p.add_argument("--size", type=image_size, metavar="WxH", help="default 1920x1080 (with --first-image 640x360)")
     p.add_argument("--spp", type=_int_range(1, 2**31 - 1), help="samples per pixel (default 1000)")
     p.add_argument("--together", action="store_true",
                    help="render each scene on all the --device devices at once (one row per "

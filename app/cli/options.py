@@ -13,7 +13,8 @@ from pathtrace.rendering.choices import (FILTERS, INTEGRATORS, LIGHT_SAMPLERS, M
 SCENES_EPILOG = "(the scenes)"
 
 
-def _size(text):
+def image_size(text):
+    """--size: WIDTHxHEIGHT, each 1 to 16384 (the examples take it too)."""
     try:
         w, h = (int(v) for v in text.lower().split("x"))
     except ValueError:
@@ -91,7 +92,7 @@ def add_render_options(p: argparse.ArgumentParser, device: bool = True, queue_au
                             "from 'pathtrace devices', or part of a device name; render: repeat "
                             "to share the samples between devices, or 'all' for every device")
         add_program_option(p, "auto")
-    p.add_argument("--size", type=_size, metavar="WxH", help="image size (default: the scene's)")
+    p.add_argument("--size", type=image_size, metavar="WxH", help="image size (default: the scene's)")
     p.add_argument("--seed", type=_int_range(0, 2**32 - 1), help="random seed (default: the scene's)")
     p.add_argument("--max-depth", type=_int_range(0, 2**31 - 1), metavar="N",
                    help="longest path in vertices, 1 = emitters seen directly; 0 = unlimited")

@@ -53,7 +53,7 @@ _warned_folders = set()
 def _warn_if_no_folder(variable: str, path: str):
     """One warning, once, where the variable names something that is no folder (a file): the
     caches are then not kept, which pathtrace goes on without, as without a writable folder."""
-    if os.path.exists(path) and not os.path.isdir(path) and variable not in _warned_folders:
+    if variable not in _warned_folders and os.path.exists(path) and not os.path.isdir(path):
         from pathtrace.errors import cut, warn
         _warned_folders.add(variable)
         warn(f"{variable}: '{cut(path, 200)}' is not a folder; pathtrace keeps nothing there")

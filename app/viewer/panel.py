@@ -163,8 +163,10 @@ def _status(imgui, v):
                       imgui.WindowFlags_.no_scrollbar | imgui.WindowFlags_.no_scroll_with_mouse)
     if v.message:
         width, height = imgui.get_content_region_avail().x, MESSAGE_LINES * imgui.get_text_line_height_with_spacing()
-        text = fitted(("error: " if v.error else "") + v.message,
-                      lambda t: imgui.calc_text_size(t, wrap_width=width).y <= height)
+        key = (("error: " if v.error else "") + v.message, width, height)
+        if v.message_fitted[0] != key:       # measured once per message and width, not every frame
+            v.message_fitted = key, fitted(key[0], lambda t: imgui.calc_text_size(t, wrap_width=width).y <= height)
+        text = v.message_fitted[1]
         if v.error:
             imgui.push_style_color(imgui.Col_.text, (1.0, 0.45, 0.4, 1.0))
         imgui.text_wrapped(text)

@@ -101,6 +101,7 @@ class Viewer(SceneOpening, IntegratorSwitch, Denoising, Screenshots, CameraEdits
         self.exposure, self.tonemap = 0.0, "standard"
         self.screenshot_dir = Path(screenshot_dir)
         self.message, self.error = "", False    # the panel's last line, and whether it is an error
+        self.message_fitted = (None, "")          # (message, width, height): the message as its slot shows it (panel.fitted)
         self.error_about = None                 # what that error is about (set_message, clear_error)
         self.scroll_panel_up = False            # the panel scrolled to its top at the next frame
         self.panel_screen = None                # the window's size (points) when the panel was last drawn
